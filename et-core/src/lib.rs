@@ -1,0 +1,38 @@
+//! `et-core`: the part of et that runs everywhere, on the microcontroller as on the host.
+//! `no_std`, no allocation: every buffer is the caller's.
+//!
+//! Modules in pipeline order:
+//!
+//! - [`protocol`]: injection / measurement tables of SPEC §4 (adjacent, pseudo-polar, PP-PP,
+//!   opposite, and the general drive skip / measure skip form), selection masks, frame length
+//!   K, reciprocity-deduplicated feature sets, mux control words.
+//! - [`config`]: [`ScanConfig`], the one value that says how a scan is acquired.
+//! - [`frontend`]: the [`Frontend`] trait, the only hardware seam, and [`frontend::MuxLines`]
+//!   driving the muxes through embedded-hal 1.0.
+//! - [`extract`]: settle-then-median for one burst (Algorithm 1) and sub-section medians
+//!   (Algorithms 2-3).
+//! - [`scan`]: the scan engine, one protocol scan through a `Frontend` into V_m.
+//! - [`wire`]: [`wire::Frame`], [`wire::Command`], [`wire::Event`] in postcard + CRC-32 + COBS
+//!   packets, and the resynchronising [`wire::Accumulator`].
+//! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (SPEC §9).
+//! - [`stats`]: SNR, MAD (SPEC §3) and BVC (SPEC §7).
+//! - [`precision`], [`time`]: binary16 storage and the injected clock.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+
+pub mod config;
+pub mod extract;
+pub mod frontend;
+pub mod model;
+pub mod precision;
+pub mod protocol;
+pub mod scan;
+pub mod stats;
+pub mod time;
+pub mod wire;
+
+pub use config::ScanConfig;
+pub use frontend::{AdcScale, Frontend};
+pub use protocol::{ElectrodeId, Halving, Injection, Measurement, Protocol, ProtocolKind};
+pub use scan::{ScanReport, Scanner};
+pub use time::Micros;

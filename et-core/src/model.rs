@@ -1,0 +1,806 @@
+//! Discriminant analysis on the device (SPEC §9): QDA and LDA evaluated straight from a model
+//! blob, a byte slice the caller owns (in flash on the board), validated once before use.
+//!
+//! Features are picked from V_m by index, then standardised: z_j = (V_m\[idx_j] - mean_j) /
+//! scale_j. The model lives in z-space. Discriminants (SPEC §9, [5.6]-[5.7] as corrected there):
+//!
+//! ```text
+//! QDA: delta_c(z) = -1/2 |L_c^-1 (z - mu_c)|^2 - 1/2 log|Sigma_c| + log pi_c,  Sigma_c = L_c L_c^T
+//! LDA: delta_c(z) = z^T w_c - 1/2 mu_c^T Sigma^-1 mu_c + log pi_c,            w_c = Sigma^-1 mu_c
+//! ```
+//!
+//! The prediction is argmax_c delta_c, with the margin to the runner-up as a confidence.
+//!
+//! # Blob layout (little-endian, version 1)
+//!
+//! | bytes | field |
+//! | --- | --- |
+//! | 0..4 | magic `ETDA` |
+//! | 4..6 | version (u16) = [`MODEL_VERSION`] |
+//! | 6 | kind: 0 QDA, 1 LDA |
+//! | 7 | precision of the large tables: 0 f32, 1 f16 |
+//! | 8..10, 10..12, 12..14 | classes C, features p, frame length K the model expects (u16) |
+//! | 14 | electrodes L |
+//! | 15, 16, 18..22 | protocol tag (0 AD, 1 PP, 2 PP-PP, 3 opposite, 4 custom), drive skip, measure skip mask (u32) |
+//! | 17, 22..32 | reserved, zero |
+//! | then | feature index (u16 x p, zero-padded to 4 bytes); mean, scale (f32 x p each); class positions in mm (f32 x 2C: x, y); log prior (f32 x C); constant (f32 x C: -1/2 log det Sigma_c for QDA, -1/2 mu_c^T Sigma^-1 mu_c for LDA) |
+//! | then | QDA: class means mu_c (C x p), Cholesky factors L_c (C x p(p+1)/2, lower triangle packed by rows); LDA: weights w_c (C x p). In the stored precision, zero-padded to 4 bytes. |
+//! | last 4 | CRC-32 (ISO-HDLC) of everything before it |
+//!
+//! A full-covariance QDA with C = 49, p = 96 takes 931 KB in f32 and 466 KB in f16
+//! ([`model_len`]).
+
+use crate::config::ScanConfig;
+use crate::precision::{f16_to_f32, f32_to_f16};
+use crate::protocol::{Pattern, Protocol, ProtocolError, ProtocolKind, SkipSet};
+use crate::wire::crc32;
+
+/// The blob's first four bytes.
+pub const MODEL_MAGIC: [u8; 4] = *b"ETDA";
+/// The blob format version this build reads and writes.
+pub const MODEL_VERSION: u16 = 1;
+/// Header length in bytes.
+pub const HEADER_LEN: usize = 32;
+/// Smallest allowed ratio of the smallest to the largest Cholesky diagonal entry of a class:
+/// below it (condition number of Sigma_c above 1e10) f32 evaluation loses all precision, so
+/// the blob is refused at load time instead of giving meaningless discriminants.
+pub const MIN_PIVOT_RATIO: f32 = 1e-5;
+
+/// Quadratic or linear discriminant analysis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ModelKind {
+    /// One covariance per class [5.6].
+    Qda,
+    /// One pooled covariance [5.7].
+    Lda,
+}
+
+/// Storage precision of the large tables (class means, factors, weights).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Precision {
+    /// 4 bytes per value.
+    F32,
+    /// 2 bytes per value (IEEE binary16): half the flash, about 3 significant digits.
+    F16,
+}
+
+impl Precision {
+    fn bytes(self) -> usize {
+        match self {
+            Precision::F32 => 4,
+            Precision::F16 => 2,
+        }
+    }
+}
+
+/// Why a model blob is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ModelError {
+    /// Shorter than a header, or not the length its dimensions imply.
+    Length {
+        /// Bytes the header's dimensions imply (0 if the header itself is missing).
+        expected: usize,
+        /// Bytes given.
+        got: usize,
+    },
+    /// Not a model blob.
+    Magic,
+    /// A format version this build does not read.
+    Version {
+        /// The version found.
+        got: u16,
+    },
+    /// Unknown kind or precision byte, or reserved bytes not zero.
+    Header,
+    /// Fewer than 2 classes, no feature, or more features than the frame has.
+    Dimensions,
+    /// The protocol in the header is not valid.
+    Protocol(ProtocolError),
+    /// The header's frame length is not the protocol's K.
+    FrameLength {
+        /// K of the protocol.
+        expected: u16,
+        /// K in the header.
+        got: u16,
+    },
+    /// The CRC does not match: the blob is damaged.
+    Checksum,
+    /// A feature index points past the frame.
+    FeatureIndex {
+        /// Which feature.
+        feature: u16,
+    },
+    /// A stored value is NaN or infinite.
+    NonFinite,
+    /// A feature's scale is not positive.
+    Scale {
+        /// Which feature.
+        feature: u16,
+    },
+    /// A Cholesky factor has a diagonal entry that is not positive: the covariance is singular.
+    Singular {
+        /// Which class.
+        class: u16,
+    },
+    /// A class covariance is too ill-conditioned for f32 evaluation ([`MIN_PIVOT_RATIO`]).
+    IllConditioned {
+        /// Which class.
+        class: u16,
+    },
+    /// A table given to [`write_model`] has the wrong length, or the output is too short.
+    Table,
+}
+
+impl core::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ModelError::Length { expected, got } => {
+                write!(
+                    f,
+                    "model blob is {got} bytes, its header implies {expected}"
+                )
+            }
+            ModelError::Magic => write!(f, "not a model blob (bad magic)"),
+            ModelError::Version { got } => {
+                write!(
+                    f,
+                    "model format version {got}, this build reads {MODEL_VERSION}"
+                )
+            }
+            ModelError::Header => write!(
+                f,
+                "model header has an unknown kind, precision or reserved byte"
+            ),
+            ModelError::Dimensions => write!(f, "model needs >= 2 classes and 1..=K features"),
+            ModelError::Protocol(e) => write!(f, "model protocol: {e}"),
+            ModelError::FrameLength { expected, got } => {
+                write!(f, "model says K = {got}, its protocol has K = {expected}")
+            }
+            ModelError::Checksum => write!(f, "model blob CRC mismatch (damaged)"),
+            ModelError::FeatureIndex { feature } => {
+                write!(f, "feature {feature} indexes past the frame")
+            }
+            ModelError::NonFinite => write!(f, "model holds a NaN or infinite value"),
+            ModelError::Scale { feature } => {
+                write!(f, "feature {feature} has a non-positive scale")
+            }
+            ModelError::Singular { class } => write!(f, "class {class} has a singular covariance"),
+            ModelError::IllConditioned { class } => {
+                write!(
+                    f,
+                    "class {class} covariance is too ill-conditioned for f32 (regularise it)"
+                )
+            }
+            ModelError::Table => write!(f, "model tables have inconsistent lengths"),
+        }
+    }
+}
+
+impl core::error::Error for ModelError {}
+
+/// Why a frame could not be classified.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum EvalError {
+    /// The frame is not as long as the model's K.
+    FrameLength {
+        /// The model's K.
+        expected: usize,
+        /// The frame's length.
+        got: usize,
+    },
+    /// Scratch shorter than 2p.
+    Scratch {
+        /// Needed.
+        needed: usize,
+        /// Given.
+        given: usize,
+    },
+    /// A used voltage is NaN or infinite, or a discriminant overflowed.
+    NonFinite,
+}
+
+impl core::fmt::Display for EvalError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            EvalError::FrameLength { expected, got } => {
+                write!(f, "frame has {got} values, the model expects {expected}")
+            }
+            EvalError::Scratch { needed, given } => write!(f, "scratch of {given}, need {needed}"),
+            EvalError::NonFinite => write!(f, "non-finite voltage or discriminant"),
+        }
+    }
+}
+
+impl core::error::Error for EvalError {}
+
+/// Why a model does not fit a scan configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mismatch {
+    /// Different electrode count.
+    Electrodes,
+    /// Different protocol.
+    Protocol,
+}
+
+/// The classifier's answer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Decision {
+    /// argmax_c delta_c.
+    pub class: u16,
+    /// delta of the winner.
+    pub discriminant: f32,
+    /// delta of the winner minus delta of the runner-up (>= 0).
+    pub margin: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Layout {
+    feature_index: usize,
+    mean: usize,
+    scale: usize,
+    positions: usize,
+    log_prior: usize,
+    constant: usize,
+    vectors: usize,
+    factors: usize,
+    crc: usize,
+}
+
+fn pad4(n: usize) -> usize {
+    n.div_ceil(4) * 4
+}
+
+fn packed_len(p: usize) -> usize {
+    p * (p + 1) / 2
+}
+
+fn layout(kind: ModelKind, precision: Precision, classes: usize, p: usize) -> Layout {
+    let feature_index = HEADER_LEN;
+    let mean = feature_index + pad4(2 * p);
+    let scale = mean + 4 * p;
+    let positions = scale + 4 * p;
+    let log_prior = positions + 8 * classes;
+    let constant = log_prior + 4 * classes;
+    let vectors = constant + 4 * classes;
+    let b = precision.bytes();
+    let factors = vectors + b * classes * p;
+    let end = match kind {
+        ModelKind::Qda => factors + b * classes * packed_len(p),
+        ModelKind::Lda => factors,
+    };
+    Layout {
+        feature_index,
+        mean,
+        scale,
+        positions,
+        log_prior,
+        constant,
+        vectors,
+        factors,
+        crc: pad4(end),
+    }
+}
+
+/// Bytes of a blob with these dimensions (header, tables and CRC).
+#[must_use]
+pub fn model_len(kind: ModelKind, precision: Precision, classes: usize, features: usize) -> usize {
+    layout(kind, precision, classes, features).crc + 4
+}
+
+fn rd_u16(b: &[u8], at: usize) -> u16 {
+    u16::from_le_bytes([b[at], b[at + 1]])
+}
+
+fn rd_f32(b: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn protocol_tag(kind: ProtocolKind) -> (u8, Pattern) {
+    let tag = match kind {
+        ProtocolKind::Adjacent => 0,
+        ProtocolKind::PseudoPolar => 1,
+        ProtocolKind::PpPp => 2,
+        ProtocolKind::Opposite => 3,
+        ProtocolKind::Custom(_) => 4,
+    };
+    let pattern = match kind {
+        ProtocolKind::Custom(p) => p,
+        _ => Pattern {
+            drive_skip: 0,
+            measure_skips: SkipSet(0),
+        },
+    };
+    (tag, pattern)
+}
+
+/// A validated model blob, evaluated in place (nothing copied out of `bytes`).
+#[derive(Debug, Clone, Copy)]
+pub struct Model<'a> {
+    bytes: &'a [u8],
+    kind: ModelKind,
+    precision: Precision,
+    classes: usize,
+    features: usize,
+    frame_len: usize,
+    protocol: Protocol,
+    layout: Layout,
+}
+
+impl<'a> Model<'a> {
+    /// Validates `bytes` completely (header, length, CRC, indices, finiteness, positive scales,
+    /// positive and well-conditioned Cholesky diagonals) and wraps them.
+    ///
+    /// # Errors
+    /// The first [`ModelError`] found; nothing of a refused blob is ever used.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, ModelError> {
+        if bytes.len() < HEADER_LEN + 4 {
+            return Err(ModelError::Length {
+                expected: 0,
+                got: bytes.len(),
+            });
+        }
+        if bytes[..4] != MODEL_MAGIC {
+            return Err(ModelError::Magic);
+        }
+        let version = rd_u16(bytes, 4);
+        if version != MODEL_VERSION {
+            return Err(ModelError::Version { got: version });
+        }
+        let kind = match bytes[6] {
+            0 => ModelKind::Qda,
+            1 => ModelKind::Lda,
+            _ => return Err(ModelError::Header),
+        };
+        let precision = match bytes[7] {
+            0 => Precision::F32,
+            1 => Precision::F16,
+            _ => return Err(ModelError::Header),
+        };
+        if bytes[17] != 0 || bytes[22..32].iter().any(|&b| b != 0) {
+            return Err(ModelError::Header);
+        }
+        let classes = usize::from(rd_u16(bytes, 8));
+        let features = usize::from(rd_u16(bytes, 10));
+        let frame_len = rd_u16(bytes, 12);
+        let layout = layout(kind, precision, classes, features);
+        if bytes.len() != layout.crc + 4 {
+            return Err(ModelError::Length {
+                expected: layout.crc + 4,
+                got: bytes.len(),
+            });
+        }
+        let stored_crc = u32::from_le_bytes([
+            bytes[layout.crc],
+            bytes[layout.crc + 1],
+            bytes[layout.crc + 2],
+            bytes[layout.crc + 3],
+        ]);
+        if crc32(&bytes[..layout.crc]) != stored_crc {
+            return Err(ModelError::Checksum);
+        }
+        let electrodes = bytes[14];
+        let pattern = Pattern {
+            drive_skip: bytes[16],
+            measure_skips: SkipSet(u32::from_le_bytes([
+                bytes[18], bytes[19], bytes[20], bytes[21],
+            ])),
+        };
+        let protocol_kind = match bytes[15] {
+            0 => ProtocolKind::Adjacent,
+            1 => ProtocolKind::PseudoPolar,
+            2 => ProtocolKind::PpPp,
+            3 => ProtocolKind::Opposite,
+            4 => ProtocolKind::Custom(pattern),
+            _ => return Err(ModelError::Header),
+        };
+        let protocol = Protocol::new(protocol_kind, electrodes).map_err(ModelError::Protocol)?;
+        if usize::from(frame_len) != protocol.frame_len() {
+            return Err(ModelError::FrameLength {
+                expected: protocol.frame_len() as u16,
+                got: frame_len,
+            });
+        }
+        if classes < 2 || features == 0 || features > usize::from(frame_len) {
+            return Err(ModelError::Dimensions);
+        }
+        let model = Self {
+            bytes,
+            kind,
+            precision,
+            classes,
+            features,
+            frame_len: usize::from(frame_len),
+            protocol,
+            layout,
+        };
+        model.check_tables()?;
+        Ok(model)
+    }
+
+    fn check_tables(&self) -> Result<(), ModelError> {
+        let (c_n, p) = (self.classes, self.features);
+        for j in 0..p {
+            if usize::from(self.feature_index(j)) >= self.frame_len {
+                return Err(ModelError::FeatureIndex { feature: j as u16 });
+            }
+            if !self.mean(j).is_finite() || !self.scale(j).is_finite() {
+                return Err(ModelError::NonFinite);
+            }
+            if self.scale(j) <= 0.0 {
+                return Err(ModelError::Scale { feature: j as u16 });
+            }
+        }
+        for c in 0..c_n {
+            let [x, y] = self.position_mm(c as u16);
+            if !(x.is_finite()
+                && y.is_finite()
+                && self.log_prior(c).is_finite()
+                && self.constant(c).is_finite())
+            {
+                return Err(ModelError::NonFinite);
+            }
+            if (0..p).any(|j| !self.vector(c, j).is_finite()) {
+                return Err(ModelError::NonFinite);
+            }
+            if self.kind == ModelKind::Qda {
+                if (0..packed_len(p)).any(|i| !self.factor(c, i).is_finite()) {
+                    return Err(ModelError::NonFinite);
+                }
+                let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+                for r in 0..p {
+                    let d = self.factor(c, packed_len(r) + r);
+                    if d <= 0.0 {
+                        return Err(ModelError::Singular { class: c as u16 });
+                    }
+                    lo = lo.min(d);
+                    hi = hi.max(d);
+                }
+                if lo < MIN_PIVOT_RATIO * hi {
+                    return Err(ModelError::IllConditioned { class: c as u16 });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// QDA or LDA.
+    #[must_use]
+    pub fn kind(&self) -> ModelKind {
+        self.kind
+    }
+
+    /// Storage precision of the large tables.
+    #[must_use]
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Number of classes C.
+    #[must_use]
+    pub fn classes(&self) -> usize {
+        self.classes
+    }
+
+    /// Number of features p.
+    #[must_use]
+    pub fn features(&self) -> usize {
+        self.features
+    }
+
+    /// The frame length K the model expects.
+    #[must_use]
+    pub fn frame_len(&self) -> usize {
+        self.frame_len
+    }
+
+    /// The protocol the model was trained on.
+    #[must_use]
+    pub fn protocol(&self) -> &Protocol {
+        &self.protocol
+    }
+
+    /// Scratch length [`evaluate`](Self::evaluate) needs: 2p.
+    #[must_use]
+    pub fn scratch_len(&self) -> usize {
+        2 * self.features
+    }
+
+    /// The blob's bytes.
+    #[must_use]
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// Whether frames of `config` can be classified by this model.
+    ///
+    /// # Errors
+    /// Which of electrode count or protocol differs.
+    pub fn check_config(&self, config: &ScanConfig) -> Result<(), Mismatch> {
+        if config.electrodes != self.protocol.electrodes() {
+            return Err(Mismatch::Electrodes);
+        }
+        let theirs = config.protocol.pattern(config.electrodes);
+        if theirs != self.protocol.pattern() {
+            return Err(Mismatch::Protocol);
+        }
+        Ok(())
+    }
+
+    /// Frame index of feature `j`.
+    #[must_use]
+    pub fn feature_index(&self, j: usize) -> u16 {
+        rd_u16(self.bytes, self.layout.feature_index + 2 * j)
+    }
+
+    fn mean(&self, j: usize) -> f32 {
+        rd_f32(self.bytes, self.layout.mean + 4 * j)
+    }
+
+    fn scale(&self, j: usize) -> f32 {
+        rd_f32(self.bytes, self.layout.scale + 4 * j)
+    }
+
+    /// Position of class `c`'s centre on the sheet, in mm.
+    #[must_use]
+    pub fn position_mm(&self, c: u16) -> [f32; 2] {
+        let at = self.layout.positions + 8 * usize::from(c);
+        [rd_f32(self.bytes, at), rd_f32(self.bytes, at + 4)]
+    }
+
+    fn log_prior(&self, c: usize) -> f32 {
+        rd_f32(self.bytes, self.layout.log_prior + 4 * c)
+    }
+
+    fn constant(&self, c: usize) -> f32 {
+        rd_f32(self.bytes, self.layout.constant + 4 * c)
+    }
+
+    fn stored(&self, at: usize, i: usize) -> f32 {
+        match self.precision {
+            Precision::F32 => rd_f32(self.bytes, at + 4 * i),
+            Precision::F16 => f16_to_f32(rd_u16(self.bytes, at + 2 * i)),
+        }
+    }
+
+    /// mu_c (QDA) or w_c (LDA), component j.
+    fn vector(&self, c: usize, j: usize) -> f32 {
+        self.stored(self.layout.vectors, c * self.features + j)
+    }
+
+    /// Packed lower-triangular L_c, entry i (row r, column q at i = r(r+1)/2 + q).
+    fn factor(&self, c: usize, i: usize) -> f32 {
+        self.stored(self.layout.factors, c * packed_len(self.features) + i)
+    }
+
+    /// Picks and standardises the features of `v_m` into `z` (len p).
+    fn standardise(&self, v_m: &[f32], z: &mut [f32]) -> Result<(), EvalError> {
+        for (j, zj) in z.iter_mut().enumerate() {
+            let x = v_m[usize::from(self.feature_index(j))];
+            if !x.is_finite() {
+                return Err(EvalError::NonFinite);
+            }
+            *zj = (x - self.mean(j)) / self.scale(j);
+        }
+        Ok(())
+    }
+
+    fn discriminant(&self, c: usize, z: &[f32], work: &mut [f32]) -> f32 {
+        let p = self.features;
+        let quad_or_lin = match self.kind {
+            ModelKind::Qda => {
+                // Forward substitution L_c y = z - mu_c; the quadratic form is |y|^2.
+                let base = c * packed_len(p);
+                let mut q = 0.0f32;
+                for r in 0..p {
+                    let row = base + packed_len(r);
+                    let mut acc = z[r] - self.vector(c, r);
+                    for (k, yk) in work[..r].iter().enumerate() {
+                        acc -= self.stored(self.layout.factors, row + k) * yk;
+                    }
+                    let y = acc / self.stored(self.layout.factors, row + r);
+                    work[r] = y;
+                    q += y * y;
+                }
+                -0.5 * q
+            }
+            ModelKind::Lda => (0..p).map(|j| z[j] * self.vector(c, j)).sum(),
+        };
+        quad_or_lin + self.constant(c) + self.log_prior(c)
+    }
+
+    /// Every class's discriminant delta_c for frame `v_m`, into `out[..C]`.
+    ///
+    /// # Errors
+    /// [`EvalError`] for a frame of the wrong length, short scratch or `out`, or a
+    /// non-finite voltage or discriminant.
+    pub fn discriminants(
+        &self,
+        v_m: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), EvalError> {
+        if out.len() < self.classes {
+            return Err(EvalError::Scratch {
+                needed: self.classes,
+                given: out.len(),
+            });
+        }
+        self.each_discriminant(v_m, scratch, |c, d| out[c] = d)
+    }
+
+    fn each_discriminant(
+        &self,
+        v_m: &[f32],
+        scratch: &mut [f32],
+        mut visit: impl FnMut(usize, f32),
+    ) -> Result<(), EvalError> {
+        if v_m.len() != self.frame_len {
+            return Err(EvalError::FrameLength {
+                expected: self.frame_len,
+                got: v_m.len(),
+            });
+        }
+        let p = self.features;
+        if scratch.len() < 2 * p {
+            return Err(EvalError::Scratch {
+                needed: 2 * p,
+                given: scratch.len(),
+            });
+        }
+        let (z, work) = scratch.split_at_mut(p);
+        self.standardise(v_m, z)?;
+        for c in 0..self.classes {
+            let d = self.discriminant(c, z, work);
+            if !d.is_finite() {
+                return Err(EvalError::NonFinite);
+            }
+            visit(c, d);
+        }
+        Ok(())
+    }
+
+    /// Classifies frame `v_m` (K values): argmax_c delta_c and its margin to the runner-up.
+    /// `scratch` needs [`scratch_len`](Self::scratch_len) values.
+    ///
+    /// # Errors
+    /// As [`discriminants`](Self::discriminants).
+    pub fn evaluate(&self, v_m: &[f32], scratch: &mut [f32]) -> Result<Decision, EvalError> {
+        let (mut best, mut best_d, mut second_d) = (0usize, f32::NEG_INFINITY, f32::NEG_INFINITY);
+        self.each_discriminant(v_m, scratch, |c, d| {
+            if d > best_d {
+                second_d = best_d;
+                best_d = d;
+                best = c;
+            } else if d > second_d {
+                second_d = d;
+            }
+        })?;
+        Ok(Decision {
+            class: best as u16,
+            discriminant: best_d,
+            margin: best_d - second_d,
+        })
+    }
+}
+
+/// The tables of a trained model, in z-space, for [`write_model`]. Lengths: p for
+/// `feature_index`, `mean`, `scale`; C for `positions_mm`, `log_prior`, `constant`; C x p for
+/// `vectors` (mu_c for QDA, w_c for LDA, class-major); C x p(p+1)/2 for `factors` (QDA only,
+/// packed lower triangle by rows; empty for LDA).
+#[derive(Debug, Clone, Copy)]
+pub struct ModelTables<'t> {
+    /// QDA or LDA.
+    pub kind: ModelKind,
+    /// Storage precision of `vectors` and `factors`.
+    pub precision: Precision,
+    /// Electrode count L of the frames.
+    pub electrodes: u8,
+    /// Protocol of the frames.
+    pub protocol: ProtocolKind,
+    /// Frame index of each feature.
+    pub feature_index: &'t [u16],
+    /// Feature means (volts).
+    pub mean: &'t [f32],
+    /// Feature scales (volts, > 0).
+    pub scale: &'t [f32],
+    /// Class centres on the sheet (mm).
+    pub positions_mm: &'t [[f32; 2]],
+    /// log pi_c.
+    pub log_prior: &'t [f32],
+    /// QDA: -1/2 log|Sigma_c|; LDA: -1/2 mu_c^T Sigma^-1 mu_c.
+    pub constant: &'t [f32],
+    /// QDA: mu_c; LDA: w_c = Sigma^-1 mu_c.
+    pub vectors: &'t [f32],
+    /// QDA: L_c with Sigma_c = L_c L_c^T.
+    pub factors: &'t [f32],
+}
+
+/// Writes a model blob into `out` and returns its length; the result is checked with
+/// [`Model::parse`] before returning, so a blob that is written is a blob that loads.
+///
+/// # Errors
+/// [`ModelError::Table`] for inconsistent lengths or a short `out`, else what
+/// [`Model::parse`] finds.
+pub fn write_model(t: &ModelTables<'_>, out: &mut [u8]) -> Result<usize, ModelError> {
+    let p = t.feature_index.len();
+    let c_n = t.positions_mm.len();
+    let protocol = Protocol::new(t.protocol, t.electrodes).map_err(ModelError::Protocol)?;
+    let factors_len = match t.kind {
+        ModelKind::Qda => c_n * packed_len(p),
+        ModelKind::Lda => 0,
+    };
+    if t.mean.len() != p
+        || t.scale.len() != p
+        || t.log_prior.len() != c_n
+        || t.constant.len() != c_n
+        || t.vectors.len() != c_n * p
+        || t.factors.len() != factors_len
+        || p > usize::from(u16::MAX)
+        || c_n > usize::from(u16::MAX)
+    {
+        return Err(ModelError::Table);
+    }
+    let lay = layout(t.kind, t.precision, c_n, p);
+    let len = lay.crc + 4;
+    let out = out.get_mut(..len).ok_or(ModelError::Table)?;
+    out.fill(0);
+    out[..4].copy_from_slice(&MODEL_MAGIC);
+    out[4..6].copy_from_slice(&MODEL_VERSION.to_le_bytes());
+    out[6] = match t.kind {
+        ModelKind::Qda => 0,
+        ModelKind::Lda => 1,
+    };
+    out[7] = match t.precision {
+        Precision::F32 => 0,
+        Precision::F16 => 1,
+    };
+    out[8..10].copy_from_slice(&(c_n as u16).to_le_bytes());
+    out[10..12].copy_from_slice(&(p as u16).to_le_bytes());
+    out[12..14].copy_from_slice(&(protocol.frame_len() as u16).to_le_bytes());
+    out[14] = t.electrodes;
+    let (tag, pattern) = protocol_tag(t.protocol);
+    out[15] = tag;
+    out[16] = pattern.drive_skip;
+    out[18..22].copy_from_slice(&pattern.measure_skips.0.to_le_bytes());
+    let put_f32 = |out: &mut [u8], at: usize, v: &[f32]| {
+        for (i, x) in v.iter().enumerate() {
+            out[at + 4 * i..at + 4 * i + 4].copy_from_slice(&x.to_le_bytes());
+        }
+    };
+    let put_stored = |out: &mut [u8], at: usize, v: &[f32]| match t.precision {
+        Precision::F32 => put_f32(out, at, v),
+        Precision::F16 => {
+            for (i, x) in v.iter().enumerate() {
+                out[at + 2 * i..at + 2 * i + 2].copy_from_slice(&f32_to_f16(*x).to_le_bytes());
+            }
+        }
+    };
+    for (j, idx) in t.feature_index.iter().enumerate() {
+        out[lay.feature_index + 2 * j..lay.feature_index + 2 * j + 2]
+            .copy_from_slice(&idx.to_le_bytes());
+    }
+    put_f32(out, lay.mean, t.mean);
+    put_f32(out, lay.scale, t.scale);
+    for (c, [x, y]) in t.positions_mm.iter().enumerate() {
+        put_f32(out, lay.positions + 8 * c, &[*x, *y]);
+    }
+    put_f32(out, lay.log_prior, t.log_prior);
+    put_f32(out, lay.constant, t.constant);
+    put_stored(out, lay.vectors, t.vectors);
+    put_stored(out, lay.factors, t.factors);
+    let crc = crc32(&out[..lay.crc]);
+    out[lay.crc..].copy_from_slice(&crc.to_le_bytes());
+    Model::parse(out)?;
+    Ok(len)
+}
+
+#[cfg(test)]
+mod tests;

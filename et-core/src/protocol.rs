@@ -1,0 +1,942 @@
+//! Injection / measurement protocols (SPEC §4) as tables computed on the fly.
+//!
+//! Every protocol here is a case of one general form, the [`Pattern`]: inject current between
+//! electrode `i` and electrode `i + drive_skip + 1`, for every `i` in `0..L` (so each electrode
+//! takes its turn), and measure the differential voltage between `j` and `j + s + 1` for every
+//! measurement skip `s` in the pattern and every `j`. A measurement that touches a
+//! current-carrying electrode is dropped (the selection mask, SPEC §2-3); what remains, in
+//! injection-major order, is the frame vector V_m of length K.
+//!
+//! | protocol | drive skip | measure skips | K at L = 16 |
+//! | --- | --- | --- | --- |
+//! | [`ProtocolKind::Adjacent`] | 0 | {0} | L (L - 3) = 208 |
+//! | [`ProtocolKind::PseudoPolar`] | L/2 - 2 | {0} | L (L - 4) = 192 |
+//! | [`ProtocolKind::PpPp`] | L/2 - 2 | {0, L/2 - 2} | L (2L - 7) = 400 |
+//! | [`ProtocolKind::Opposite`] | L/2 - 1 | {0} | L (L - 4) = 192 |
+//!
+//! Two measurements carry the same information (up to sign) when they involve the same two
+//! electrode pairs: reversing the injection negates every voltage, and reciprocity (SPEC §4)
+//! says V(C,D) under current on (A,B) equals V(A,B) under current on (C,D).
+//! [`Protocol::features`] keeps one measurement of each such group when [`Halving::Reciprocity`]
+//! is asked for: for the opposite protocol that is p = L (L - 4) / 2 (96 at L = 16), the
+//! classifier's features (SPEC §9). Whether the halving was applied is always the caller's
+//! explicit choice.
+
+use serde::{Deserialize, Serialize};
+
+/// Fewest electrodes supported.
+pub const L_MIN: u8 = 4;
+/// Most electrodes supported (a pair of 16:1 muxes addresses 16; the tables go to 32).
+pub const L_MAX: u8 = 32;
+/// Most measurement skips in one [`Pattern`] (PP-PP uses two).
+pub const MAX_MEASURE_SKIPS: usize = 2;
+/// Longest frame vector V_m any valid protocol produces: L_MAX * L_MAX * MAX_MEASURE_SKIPS.
+pub const K_MAX: usize = L_MAX as usize * L_MAX as usize * MAX_MEASURE_SKIPS;
+/// Most candidate measurements for one injection (L_MAX per measurement skip).
+pub const CANDIDATES_MAX: usize = L_MAX as usize * MAX_MEASURE_SKIPS;
+/// Electrodes one 16:1 multiplexer can address (SPEC §2).
+pub const MUX_CHANNELS: u8 = 16;
+
+/// An electrode on the sheet boundary, numbered `0..L` around the boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ElectrodeId(pub u8);
+
+/// One current injection: the current enters the sheet at `source` and leaves at `sink`
+/// (the sink is the electrode the ground mux connects).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Injection {
+    /// Electrode connected to the current source.
+    pub source: ElectrodeId,
+    /// Electrode connected to ground.
+    pub sink: ElectrodeId,
+}
+
+impl Injection {
+    /// The same electrodes with the current flowing the other way (every voltage negates).
+    #[must_use]
+    pub const fn reversed(self) -> Self {
+        Self {
+            source: self.sink,
+            sink: self.source,
+        }
+    }
+
+    /// Whether `e` carries current in this injection.
+    #[must_use]
+    pub fn carries(self, e: ElectrodeId) -> bool {
+        self.source == e || self.sink == e
+    }
+}
+
+/// One differential measurement: V = phi(`positive`) - phi(`negative`), in volts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Measurement {
+    /// Electrode on the amplifier's + input.
+    pub positive: ElectrodeId,
+    /// Electrode on the amplifier's - input.
+    pub negative: ElectrodeId,
+}
+
+impl Measurement {
+    /// The same electrodes with the amplifier inputs swapped (the voltage negates).
+    #[must_use]
+    pub const fn reversed(self) -> Self {
+        Self {
+            positive: self.negative,
+            negative: self.positive,
+        }
+    }
+}
+
+/// A set of measurement skips, as a bit mask (bit `s` set = skip `s`, i.e. pairs `j, j + s + 1`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SkipSet(pub u32);
+
+impl SkipSet {
+    /// The set holding the single skip `s` (`s < 32`).
+    #[must_use]
+    pub const fn single(s: u8) -> Self {
+        Self(1 << s)
+    }
+
+    /// This set with skip `s` added (`s < 32`).
+    #[must_use]
+    pub const fn with(self, s: u8) -> Self {
+        Self(self.0 | (1 << s))
+    }
+
+    /// Number of skips in the set.
+    #[must_use]
+    pub const fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    /// Whether the set is empty.
+    #[must_use]
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The skips in ascending order.
+    pub fn iter(self) -> impl Iterator<Item = u8> {
+        (0..32u8).filter(move |s| self.0 & (1 << s) != 0)
+    }
+}
+
+/// The general "drive skip / measure skip" form of a protocol (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Pattern {
+    /// Inject between `i` and `i + drive_skip + 1`. Valid: `drive_skip + 1 <= L / 2`.
+    pub drive_skip: u8,
+    /// Measure between `j` and `j + s + 1` for each `s` here. Valid: `1..=MAX_MEASURE_SKIPS`
+    /// skips, each with `s + 1 <= L / 2`.
+    pub measure_skips: SkipSet,
+}
+
+/// A named protocol, or a general [`Pattern`]. Becomes a [`Protocol`] once the electrode count
+/// is known ([`Protocol::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ProtocolKind {
+    /// AD: inject between neighbours, measure neighbours. Most sensitive near the boundary.
+    Adjacent,
+    /// PP: inject between `i` and `i + L/2 - 1`, measure neighbours. Most current through the centre.
+    PseudoPolar,
+    /// PP-PP: inject as PP, measure neighbours and almost-opposite pairs. Best for several touches.
+    PpPp,
+    /// Opposite (polar): inject between `i` and `i + L/2`, measure neighbours. The classifier's
+    /// features come from it (SPEC §9).
+    Opposite,
+    /// Any other drive skip / measure skip combination.
+    Custom(Pattern),
+}
+
+impl ProtocolKind {
+    /// The four named protocols, in SPEC order.
+    pub const NAMED: [ProtocolKind; 4] = [
+        ProtocolKind::Adjacent,
+        ProtocolKind::PseudoPolar,
+        ProtocolKind::PpPp,
+        ProtocolKind::Opposite,
+    ];
+
+    /// The pattern this protocol follows on `l` electrodes (no validation: see [`Protocol::new`]).
+    #[must_use]
+    pub fn pattern(self, l: u8) -> Pattern {
+        let half = l / 2;
+        match self {
+            ProtocolKind::Adjacent => Pattern {
+                drive_skip: 0,
+                measure_skips: SkipSet::single(0),
+            },
+            ProtocolKind::PseudoPolar => Pattern {
+                drive_skip: half.saturating_sub(2),
+                measure_skips: SkipSet::single(0),
+            },
+            ProtocolKind::PpPp => Pattern {
+                drive_skip: half.saturating_sub(2),
+                measure_skips: SkipSet::single(0).with(half.saturating_sub(2)),
+            },
+            ProtocolKind::Opposite => Pattern {
+                drive_skip: half.saturating_sub(1),
+                measure_skips: SkipSet::single(0),
+            },
+            ProtocolKind::Custom(p) => p,
+        }
+    }
+
+    /// The short name used on the command line and in files (`adjacent`, `pseudo-polar`,
+    /// `pp-pp`, `opposite`, `custom`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ProtocolKind::Adjacent => "adjacent",
+            ProtocolKind::PseudoPolar => "pseudo-polar",
+            ProtocolKind::PpPp => "pp-pp",
+            ProtocolKind::Opposite => "opposite",
+            ProtocolKind::Custom(_) => "custom",
+        }
+    }
+
+    /// Parses a named protocol: the names of [`ProtocolKind::name`] plus the SPEC's
+    /// abbreviations `ad`, `pp`, `pppp`, `polar`. Case-insensitive.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        let eq = |s: &str| name.eq_ignore_ascii_case(s);
+        if eq("adjacent") || eq("ad") {
+            Some(ProtocolKind::Adjacent)
+        } else if eq("pseudo-polar") || eq("pseudopolar") || eq("pp") {
+            Some(ProtocolKind::PseudoPolar)
+        } else if eq("pp-pp") || eq("pppp") {
+            Some(ProtocolKind::PpPp)
+        } else if eq("opposite") || eq("polar") || eq("op") {
+            Some(ProtocolKind::Opposite)
+        } else {
+            None
+        }
+    }
+}
+
+/// Why a protocol cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ProtocolError {
+    /// The electrode count is odd or outside `L_MIN..=L_MAX`.
+    ElectrodeCount {
+        /// The count asked for.
+        electrodes: u8,
+    },
+    /// The drive skip puts the sink more than half way round (`drive_skip + 1 > L / 2`).
+    DriveSkip {
+        /// The skip asked for.
+        drive_skip: u8,
+    },
+    /// No measurement skip, more than [`MAX_MEASURE_SKIPS`], or one past half way round.
+    MeasureSkips {
+        /// The skip set asked for.
+        measure_skips: SkipSet,
+    },
+    /// The protocol leaves no usable measurement (every pair touches a current electrode).
+    Empty,
+    /// An electrode number the muxes cannot address (`>= MUX_CHANNELS`).
+    MuxRange {
+        /// The electrode asked for.
+        electrode: ElectrodeId,
+    },
+}
+
+impl core::fmt::Display for ProtocolError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ProtocolError::ElectrodeCount { electrodes } => write!(
+                f,
+                "electrode count {electrodes} is not supported: use an even number from {L_MIN} to {L_MAX}"
+            ),
+            ProtocolError::DriveSkip { drive_skip } => write!(
+                f,
+                "drive skip {drive_skip} reaches past the opposite electrode: use drive_skip + 1 <= L/2"
+            ),
+            ProtocolError::MeasureSkips { measure_skips } => write!(
+                f,
+                "measure skips {:#x} are not valid: give 1 to {MAX_MEASURE_SKIPS} skips, each with skip + 1 <= L/2",
+                measure_skips.0
+            ),
+            ProtocolError::Empty => write!(f, "the protocol leaves no usable measurement"),
+            ProtocolError::MuxRange { electrode } => write!(
+                f,
+                "electrode {} cannot be addressed by a {MUX_CHANNELS}:1 multiplexer",
+                electrode.0
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ProtocolError {}
+
+/// Whether to drop measurements that repeat another one up to sign (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Halving {
+    /// Keep every measurement of the frame (p = K).
+    None,
+    /// Keep the first measurement of each reciprocity / reversal group (p = L (L-4) / 2 for
+    /// the opposite protocol).
+    Reciprocity,
+}
+
+/// Sign relating two measurements that carry the same information.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Sign {
+    /// Same voltage.
+    Plus,
+    /// Negated voltage.
+    Minus,
+}
+
+impl Sign {
+    fn flip(self, by: bool) -> Self {
+        match (self, by) {
+            (s, false) => s,
+            (Sign::Plus, true) => Sign::Minus,
+            (Sign::Minus, true) => Sign::Plus,
+        }
+    }
+
+    /// +1.0 or -1.0.
+    #[must_use]
+    pub fn value(self) -> f32 {
+        match self {
+            Sign::Plus => 1.0,
+            Sign::Minus => -1.0,
+        }
+    }
+}
+
+/// One step of a scan: measurement number `k` of the frame vector V_m.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Step {
+    /// Index into V_m, `0..K`.
+    pub k: u16,
+    /// Which injection of the protocol (`0..L`).
+    pub injection_index: u8,
+    /// The injection.
+    pub injection: Injection,
+    /// The measurement.
+    pub measurement: Measurement,
+}
+
+/// A validated protocol for a known electrode count: the tables of SPEC §4.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Protocol {
+    kind: ProtocolKind,
+    electrodes: u8,
+    pattern: Pattern,
+    /// Selected measurements per injection (the same for every injection, by rotation).
+    per_injection: u16,
+}
+
+impl Protocol {
+    /// Builds the tables of `kind` on `electrodes` electrodes.
+    ///
+    /// # Errors
+    /// [`ProtocolError`] when the electrode count is odd or out of range, or the pattern's
+    /// skips do not fit it.
+    pub fn new(kind: ProtocolKind, electrodes: u8) -> Result<Self, ProtocolError> {
+        if !(L_MIN..=L_MAX).contains(&electrodes) || electrodes % 2 != 0 {
+            return Err(ProtocolError::ElectrodeCount { electrodes });
+        }
+        let half = electrodes / 2;
+        let pattern = kind.pattern(electrodes);
+        if pattern.drive_skip + 1 > half {
+            return Err(ProtocolError::DriveSkip {
+                drive_skip: pattern.drive_skip,
+            });
+        }
+        let skips = pattern.measure_skips;
+        if skips.is_empty() || skips.len() > MAX_MEASURE_SKIPS || skips.iter().any(|s| s + 1 > half)
+        {
+            return Err(ProtocolError::MeasureSkips {
+                measure_skips: skips,
+            });
+        }
+        let mut protocol = Self {
+            kind,
+            electrodes,
+            pattern,
+            per_injection: 0,
+        };
+        // The pattern is invariant under rotation, so every injection selects as many.
+        let per_injection = protocol.measurements(0).count();
+        if per_injection == 0 {
+            return Err(ProtocolError::Empty);
+        }
+        protocol.per_injection = per_injection as u16;
+        Ok(protocol)
+    }
+
+    /// The protocol's kind as given to [`Protocol::new`].
+    #[must_use]
+    pub fn kind(&self) -> ProtocolKind {
+        self.kind
+    }
+
+    /// Number of electrodes L.
+    #[must_use]
+    pub fn electrodes(&self) -> u8 {
+        self.electrodes
+    }
+
+    /// The general pattern this protocol follows.
+    #[must_use]
+    pub fn pattern(&self) -> Pattern {
+        self.pattern
+    }
+
+    /// Frame length K: the number of selected measurements over all injections.
+    #[must_use]
+    pub fn frame_len(&self) -> usize {
+        usize::from(self.electrodes) * self.measurements_per_injection()
+    }
+
+    /// Selected measurements per injection (K / L).
+    #[must_use]
+    pub fn measurements_per_injection(&self) -> usize {
+        usize::from(self.per_injection)
+    }
+
+    /// Number of injections per scan (always L: every electrode takes its turn).
+    #[must_use]
+    pub fn injection_count(&self) -> usize {
+        usize::from(self.electrodes)
+    }
+
+    fn electrode(&self, i: u32) -> ElectrodeId {
+        ElectrodeId((i % u32::from(self.electrodes)) as u8)
+    }
+
+    /// Injection number `i` (`0..L`): from `i` to `i + drive_skip + 1`.
+    ///
+    /// # Panics
+    /// If `i >= L`.
+    #[must_use]
+    pub fn injection(&self, i: u8) -> Injection {
+        assert!(i < self.electrodes, "injection index {i} out of range");
+        Injection {
+            source: self.electrode(u32::from(i)),
+            sink: self.electrode(u32::from(i) + u32::from(self.pattern.drive_skip) + 1),
+        }
+    }
+
+    /// All L injections in scan order.
+    pub fn injections(&self) -> impl Iterator<Item = Injection> + '_ {
+        (0..self.electrodes).map(|i| self.injection(i))
+    }
+
+    /// Every candidate measurement of injection `i`, selected or not, with its selection bit
+    /// (false = it touches a current-carrying electrode and is dropped). Candidates are ordered
+    /// by measurement skip, then by `j`; for a skip of exactly L/2 only `j < L/2` is a
+    /// candidate (the rest repeat those reversed).
+    ///
+    /// # Panics
+    /// If `i >= L`.
+    pub fn candidates(&self, i: u8) -> impl Iterator<Item = (Measurement, bool)> + '_ {
+        let injection = self.injection(i);
+        let l = self.electrodes;
+        self.pattern.measure_skips.iter().flat_map(move |s| {
+            let offset = u32::from(s) + 1;
+            let count = if offset == u32::from(l / 2) { l / 2 } else { l };
+            (0..count).map(move |j| {
+                let m = Measurement {
+                    positive: self.electrode(u32::from(j)),
+                    negative: self.electrode(u32::from(j) + offset),
+                };
+                let selected = !injection.carries(m.positive) && !injection.carries(m.negative);
+                (m, selected)
+            })
+        })
+    }
+
+    /// The selection mask of injection `i` over its [`candidates`](Self::candidates): bit `c`
+    /// set = candidate `c` is measured.
+    ///
+    /// # Panics
+    /// If `i >= L`.
+    #[must_use]
+    pub fn selection_mask(&self, i: u8) -> u64 {
+        self.candidates(i)
+            .enumerate()
+            .filter(|(_, (_, sel))| *sel)
+            .fold(0, |mask, (c, _)| mask | (1 << c))
+    }
+
+    /// The selected measurements of injection `i`, in frame order.
+    ///
+    /// # Panics
+    /// If `i >= L`.
+    pub fn measurements(&self, i: u8) -> impl Iterator<Item = Measurement> + '_ {
+        self.candidates(i).filter_map(|(m, sel)| sel.then_some(m))
+    }
+
+    /// Every step of one scan, in frame order (`k = 0..K`).
+    pub fn steps(&self) -> impl Iterator<Item = Step> + '_ {
+        (0..self.electrodes)
+            .flat_map(move |i| self.measurements(i).map(move |m| (i, m)))
+            .enumerate()
+            .map(move |(k, (i, m))| Step {
+                k: k as u16,
+                injection_index: i,
+                injection: self.injection(i),
+                measurement: m,
+            })
+    }
+
+    /// Step `k` of the scan, `None` past K.
+    #[must_use]
+    pub fn step(&self, k: usize) -> Option<Step> {
+        let per = self.measurements_per_injection();
+        let i = u8::try_from(k / per)
+            .ok()
+            .filter(|&i| i < self.electrodes)?;
+        let measurement = self.measurements(i).nth(k % per)?;
+        Some(Step {
+            k: k as u16,
+            injection_index: i,
+            injection: self.injection(i),
+            measurement,
+        })
+    }
+
+    /// The frame index of exactly this (injection, measurement) pair, if the protocol
+    /// measures it with these orientations.
+    #[must_use]
+    pub fn index_of(&self, injection: Injection, measurement: Measurement) -> Option<usize> {
+        let i = injection.source.0;
+        if i >= self.electrodes || self.injection(i) != injection {
+            return None;
+        }
+        self.measurements(i)
+            .position(|m| m == measurement)
+            .map(|pos| usize::from(i) * self.measurements_per_injection() + pos)
+    }
+
+    /// The measurements carrying the same information as step `k` (itself included), with
+    /// the sign relating their voltage to step `k`'s: the injection or the measurement
+    /// reversed, and injection and measurement swapped (reciprocity, SPEC §4).
+    pub fn equivalents(&self, k: usize) -> impl Iterator<Item = (usize, Sign)> + '_ {
+        let step = self.step(k);
+        step.into_iter().flat_map(move |step| {
+            let (a, b) = (step.injection, step.measurement);
+            // Swap roles: current on the measurement pair, measure on the injection pair.
+            let swapped_inj = Injection {
+                source: b.positive,
+                sink: b.negative,
+            };
+            let swapped_meas = Measurement {
+                positive: a.source,
+                negative: a.sink,
+            };
+            (0..8u8).filter_map(move |bits| {
+                let (swap, rev_inj, rev_meas) = (bits & 4 != 0, bits & 2 != 0, bits & 1 != 0);
+                let (inj, meas) = if swap {
+                    (swapped_inj, swapped_meas)
+                } else {
+                    (a, b)
+                };
+                let inj = if rev_inj { inj.reversed() } else { inj };
+                let meas = if rev_meas { meas.reversed() } else { meas };
+                let sign = Sign::Plus.flip(rev_inj ^ rev_meas);
+                self.index_of(inj, meas).map(|j| (j, sign))
+            })
+        })
+    }
+
+    /// The index of the first measurement of step `k`'s equivalence group and the sign that
+    /// relates the two: V_m\[k] = sign * V_m\[representative].
+    #[must_use]
+    pub fn representative(&self, k: usize) -> (usize, Sign) {
+        self.equivalents(k)
+            .min_by_key(|&(j, _)| j)
+            .unwrap_or((k, Sign::Plus))
+    }
+
+    /// Frame indices of the feature set, ascending: all of `0..K` for [`Halving::None`], or the
+    /// first of each reciprocity / reversal group for [`Halving::Reciprocity`].
+    pub fn features(&self, halving: Halving) -> impl Iterator<Item = usize> + '_ {
+        (0..self.frame_len()).filter(move |&k| match halving {
+            Halving::None => true,
+            Halving::Reciprocity => self.representative(k).0 == k,
+        })
+    }
+
+    /// Feature count p (see [`Protocol::features`]).
+    #[must_use]
+    pub fn feature_count(&self, halving: Halving) -> usize {
+        self.features(halving).count()
+    }
+}
+
+/// The 10 mux control lines for one injection (SPEC §2): two 16:1 multiplexers, one
+/// connecting the current source, one connecting ground, each with 4 address bits and an
+/// active-high enable.
+///
+/// Bit layout: bits 0-3 source address, bit 4 source enable, bits 5-8 sink address, bit 9
+/// sink enable. Line `n` of [`MuxWord::line`] is bit `n`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MuxWord(pub u16);
+
+impl MuxWord {
+    /// Number of control lines.
+    pub const LINES: usize = 10;
+    /// Both multiplexers disabled: no current flows.
+    pub const OFF: MuxWord = MuxWord(0);
+    const SOURCE_ENABLE: u16 = 1 << 4;
+    const SINK_ENABLE: u16 = 1 << 9;
+
+    /// The control word that routes `injection`.
+    ///
+    /// # Errors
+    /// [`ProtocolError::MuxRange`] for an electrode the 16:1 muxes cannot address.
+    pub fn for_injection(injection: Injection) -> Result<Self, ProtocolError> {
+        for e in [injection.source, injection.sink] {
+            if e.0 >= MUX_CHANNELS {
+                return Err(ProtocolError::MuxRange { electrode: e });
+            }
+        }
+        Ok(MuxWord(
+            u16::from(injection.source.0)
+                | Self::SOURCE_ENABLE
+                | (u16::from(injection.sink.0) << 5)
+                | Self::SINK_ENABLE,
+        ))
+    }
+
+    /// The same addresses with both enables low (break before make).
+    #[must_use]
+    pub fn disabled(self) -> Self {
+        MuxWord(self.0 & !(Self::SOURCE_ENABLE | Self::SINK_ENABLE))
+    }
+
+    /// The level of control line `n` (`0..10`).
+    #[must_use]
+    pub fn line(self, n: usize) -> bool {
+        n < Self::LINES && self.0 & (1 << n) != 0
+    }
+
+    /// The injection this word routes, if both muxes are enabled.
+    #[must_use]
+    pub fn injection(self) -> Option<Injection> {
+        (self.0 & Self::SOURCE_ENABLE != 0 && self.0 & Self::SINK_ENABLE != 0).then(|| Injection {
+            source: ElectrodeId((self.0 & 0xF) as u8),
+            sink: ElectrodeId(((self.0 >> 5) & 0xF) as u8),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn every_l() -> impl Iterator<Item = u8> {
+        (L_MIN..=L_MAX).step_by(2)
+    }
+
+    /// The named protocols that exist at `l`: all four, except opposite at L = 4, which has
+    /// K = L (L - 4) = 0 measurements (checked in `counts_match_the_formulas_for_every_l`).
+    fn all(l: u8) -> impl Iterator<Item = Protocol> {
+        ProtocolKind::NAMED
+            .into_iter()
+            .filter(move |&k| !(l == 4 && k == ProtocolKind::Opposite))
+            .map(move |k| Protocol::new(k, l).unwrap())
+    }
+
+    /// Brute-force count, independent of the candidate walk: for every injection, every
+    /// unordered electrode pair at a measured distance that avoids both injection electrodes.
+    fn brute_force_k(l: u8, pattern: Pattern) -> usize {
+        let mut k = 0;
+        for i in 0..l {
+            let (a, b) = (i, (i + pattern.drive_skip + 1) % l);
+            for x in 0..l {
+                for y in 0..l {
+                    let d = (y + l - x) % l;
+                    let wanted = pattern.measure_skips.iter().any(|s| {
+                        let off = s + 1;
+                        // Ordered pair (x, x + off); for off == L/2 count each unordered pair once.
+                        d == off && (off != l / 2 || x < l / 2)
+                    });
+                    if wanted && ![a, b].contains(&x) && ![a, b].contains(&y) {
+                        k += 1;
+                    }
+                }
+            }
+        }
+        k
+    }
+
+    #[test]
+    fn counts_match_the_formulas_for_every_l() {
+        for l in every_l() {
+            let lu = usize::from(l);
+            let ad = Protocol::new(ProtocolKind::Adjacent, l).unwrap();
+            assert_eq!(ad.frame_len(), lu * (lu - 3), "AD at L={l}");
+            match Protocol::new(ProtocolKind::Opposite, l) {
+                // L (L - 4) = 0 at L = 4: every adjacent pair touches one of the two electrodes.
+                Err(e) => assert!(l == 4 && e == ProtocolError::Empty, "L={l}: {e}"),
+                Ok(op) => {
+                    assert_eq!(op.frame_len(), lu * (lu - 4), "opposite at L={l}");
+                    assert_eq!(
+                        op.feature_count(Halving::Reciprocity),
+                        lu * (lu - 4) / 2,
+                        "p at L={l}"
+                    );
+                    assert_eq!(op.feature_count(Halving::None), lu * (lu - 4));
+                }
+            }
+            let pp = Protocol::new(ProtocolKind::PseudoPolar, l).unwrap();
+            let pppp = Protocol::new(ProtocolKind::PpPp, l).unwrap();
+            if l == 6 {
+                // The smallest L where every named protocol exists.
+                assert_eq!(pp.frame_len(), 12);
+            }
+            if l == 4 {
+                // L/2 - 1 = 1: pseudo-polar degenerates to adjacent, and PP-PP's two skips coincide.
+                assert_eq!(pp.pattern(), ad.pattern());
+                assert_eq!(pppp.frame_len(), ad.frame_len());
+            } else {
+                assert_eq!(pp.frame_len(), lu * (lu - 4), "PP at L={l}");
+                assert_eq!(pppp.frame_len(), lu * (2 * lu - 7), "PP-PP at L={l}");
+            }
+            for p in all(l) {
+                assert_eq!(
+                    p.frame_len(),
+                    brute_force_k(l, p.pattern()),
+                    "{:?} L={l}",
+                    p.kind()
+                );
+                assert_eq!(p.steps().count(), p.frame_len());
+                for i in 0..l {
+                    assert_eq!(p.measurements(i).count(), p.measurements_per_injection());
+                }
+                for (k, s) in p.steps().enumerate() {
+                    assert_eq!(p.step(k), Some(s));
+                }
+                assert_eq!(p.step(p.frame_len()), None);
+                assert!(p.frame_len() <= K_MAX);
+            }
+        }
+        // The SPEC's worked numbers at L = 16.
+        assert_eq!(
+            Protocol::new(ProtocolKind::Adjacent, 16)
+                .unwrap()
+                .frame_len(),
+            208
+        );
+        let op16 = Protocol::new(ProtocolKind::Opposite, 16).unwrap();
+        assert_eq!(op16.feature_count(Halving::Reciprocity), 96);
+        let op8 = Protocol::new(ProtocolKind::Opposite, 8).unwrap();
+        assert_eq!(op8.feature_count(Halving::Reciprocity), 16);
+        assert_eq!(op8.feature_count(Halving::None), 32);
+    }
+
+    #[test]
+    fn no_measurement_touches_a_current_carrying_electrode() {
+        for l in every_l() {
+            for p in all(l) {
+                for s in p.steps() {
+                    assert!(!s.injection.carries(s.measurement.positive), "{s:?}");
+                    assert!(!s.injection.carries(s.measurement.negative), "{s:?}");
+                    assert_ne!(s.measurement.positive, s.measurement.negative);
+                }
+                // And the mask drops exactly the candidates that do.
+                for i in 0..l {
+                    let inj = p.injection(i);
+                    for (c, (m, _)) in p.candidates(i).enumerate() {
+                        let touches = inj.carries(m.positive) || inj.carries(m.negative);
+                        assert_eq!(p.selection_mask(i) & (1 << c) == 0, touches);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_electrode_injects_and_sinks() {
+        for l in every_l() {
+            for p in all(l) {
+                for e in 0..l {
+                    let e = ElectrodeId(e);
+                    assert!(
+                        p.injections().any(|inj| inj.source == e),
+                        "{:?} L={l}",
+                        p.kind()
+                    );
+                    assert!(
+                        p.injections().any(|inj| inj.sink == e),
+                        "{:?} L={l}",
+                        p.kind()
+                    );
+                }
+                assert_eq!(p.injection_count(), usize::from(l));
+            }
+        }
+    }
+
+    #[test]
+    fn reciprocity_pairs_map_onto_each_other() {
+        for l in every_l() {
+            for p in all(l) {
+                let halved: Vec<usize> = p.features(Halving::Reciprocity).collect();
+                for k in 0..p.frame_len() {
+                    let (r, sign) = p.representative(k);
+                    assert!(r <= k);
+                    // The representative is kept, and maps back onto k with the same sign.
+                    assert!(halved.binary_search(&r).is_ok());
+                    let back = p.equivalents(r).find(|&(j, _)| j == k);
+                    assert_eq!(back, Some((k, sign)), "{:?} L={l} k={k}", p.kind());
+                    // The pair really is the same two electrode pairs.
+                    let (s, t) = (p.step(k).unwrap(), p.step(r).unwrap());
+                    let pairs = |s: Step| {
+                        let mut a = [s.injection.source.0, s.injection.sink.0];
+                        let mut b = [s.measurement.positive.0, s.measurement.negative.0];
+                        a.sort();
+                        b.sort();
+                        let mut both = [a, b];
+                        both.sort();
+                        both
+                    };
+                    assert_eq!(pairs(s), pairs(t));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn adjacent_halving_is_exact_reciprocity() {
+        // AD at L = 16: injection (i, i+1) measure (j, j+1) <-> injection (j, j+1) measure (i, i+1).
+        let p = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+        assert_eq!(p.feature_count(Halving::Reciprocity), 104);
+        let a = p.index_of(
+            Injection {
+                source: ElectrodeId(0),
+                sink: ElectrodeId(1),
+            },
+            Measurement {
+                positive: ElectrodeId(5),
+                negative: ElectrodeId(6),
+            },
+        );
+        let b = p.index_of(
+            Injection {
+                source: ElectrodeId(5),
+                sink: ElectrodeId(6),
+            },
+            Measurement {
+                positive: ElectrodeId(0),
+                negative: ElectrodeId(1),
+            },
+        );
+        let (a, b) = (a.unwrap(), b.unwrap());
+        assert_eq!(p.representative(b), (a, Sign::Plus));
+    }
+
+    #[test]
+    fn general_patterns_validate() {
+        let custom = |drive_skip, skips| {
+            ProtocolKind::Custom(Pattern {
+                drive_skip,
+                measure_skips: SkipSet(skips),
+            })
+        };
+        assert_eq!(
+            Protocol::new(custom(8, 1), 16),
+            Err(ProtocolError::DriveSkip { drive_skip: 8 })
+        );
+        assert!(matches!(
+            Protocol::new(custom(1, 0), 16),
+            Err(ProtocolError::MeasureSkips { .. })
+        ));
+        assert!(matches!(
+            Protocol::new(custom(1, 0b111), 16),
+            Err(ProtocolError::MeasureSkips { .. })
+        ));
+        assert!(matches!(
+            Protocol::new(custom(1, 1 << 8), 16),
+            Err(ProtocolError::MeasureSkips { .. })
+        ));
+        for l in [0, 2, 3, 5, 34, 255] {
+            assert_eq!(
+                Protocol::new(ProtocolKind::Adjacent, l),
+                Err(ProtocolError::ElectrodeCount { electrodes: l })
+            );
+        }
+        // Every valid custom pattern for every L agrees with brute force and stays under K_MAX.
+        for l in every_l() {
+            for d in 0..l / 2 {
+                for s1 in 0..l / 2 {
+                    for s2 in s1..l / 2 {
+                        let kind = custom(d, (1 << s1) | (1 << s2));
+                        match Protocol::new(kind, l) {
+                            Ok(p) => {
+                                assert_eq!(p.frame_len(), brute_force_k(l, p.pattern()));
+                                assert!(p.frame_len() <= K_MAX);
+                            }
+                            Err(e) => {
+                                assert_eq!(e, ProtocolError::Empty);
+                                assert_eq!(brute_force_k(l, kind.pattern(l)), 0);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn named_protocols_are_cases_of_the_general_form() {
+        for l in every_l() {
+            for named in all(l) {
+                let general = Protocol::new(ProtocolKind::Custom(named.pattern()), l).unwrap();
+                assert!(named.steps().eq(general.steps()));
+            }
+        }
+        for kind in ProtocolKind::NAMED {
+            assert_eq!(ProtocolKind::from_name(kind.name()), Some(kind));
+        }
+        assert_eq!(
+            ProtocolKind::from_name("PP"),
+            Some(ProtocolKind::PseudoPolar)
+        );
+        assert_eq!(ProtocolKind::from_name("nope"), None);
+    }
+
+    #[test]
+    fn mux_words_route_the_injection() {
+        let p = Protocol::new(ProtocolKind::Opposite, 16).unwrap();
+        for inj in p.injections() {
+            let w = MuxWord::for_injection(inj).unwrap();
+            assert_eq!(w.injection(), Some(inj));
+            assert_eq!(w.disabled().injection(), None);
+            assert!(w.0 < 1 << MuxWord::LINES);
+            let source_addr: u8 = (0..4).map(|b| u8::from(w.line(b)) << b).sum();
+            let sink_addr: u8 = (0..4).map(|b| u8::from(w.line(5 + b)) << b).sum();
+            assert_eq!((source_addr, sink_addr), (inj.source.0, inj.sink.0));
+            assert!(w.line(4) && w.line(9));
+        }
+        let p32 = Protocol::new(ProtocolKind::Adjacent, 32).unwrap();
+        assert_eq!(
+            MuxWord::for_injection(p32.injection(20)),
+            Err(ProtocolError::MuxRange {
+                electrode: ElectrodeId(20)
+            })
+        );
+    }
+}

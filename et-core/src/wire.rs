@@ -1,0 +1,471 @@
+//! The wire format between firmware and host.
+//!
+//! Device to host: [`Uplink`] ([`Frame`]s of V_m and [`Event`]s). Host to device: [`Command`].
+//! Every message travels as one packet:
+//!
+//! ```text
+//! 0x00 | COBS( WIRE_VERSION | postcard(message) | CRC-32(version | postcard) as u32 LE ) | 0x00
+//! ```
+//!
+//! COBS removes every 0x00 from the packet, so 0x00 always delimits: after garbage, a
+//! truncated packet or a flipped bit, the reader drops what it has and starts again at the
+//! next 0x00, losing only the damaged packet. The CRC-32 (ISO-HDLC, as in zlib) catches what
+//! postcard alone would decode into a wrong but valid message; the version byte lets a reader
+//! refuse a peer it does not understand instead of misreading it.
+//!
+//! The golden byte vectors in this module's tests are the compatibility contract between
+//! firmware and host: change them only together with [`WIRE_VERSION`].
+
+use heapless::Vec;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::config::ScanConfig;
+use crate::protocol::K_MAX;
+use crate::time::Micros;
+
+/// Version of the packet format and of every message type in it.
+pub const WIRE_VERSION: u8 = 1;
+/// Bytes of model blob in one [`Command::ModelChunk`].
+pub const MODEL_CHUNK: usize = 256;
+/// Largest postcard body of any message (a frame of K_MAX f32 plus its header, with room).
+pub const BODY_MAX: usize = 4 * K_MAX + 64;
+/// Largest packet on the wire, delimiters included: body + version + CRC, COBS overhead, two 0x00.
+pub const PACKET_MAX: usize = cobs_max_len(BODY_MAX + 5) + 2;
+/// Largest command packet (the firmware's receive buffer).
+pub const COMMAND_PACKET_MAX: usize = cobs_max_len(MODEL_CHUNK + 32) + 2;
+
+const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Frame flag: at least one measurement had samples on an ADC rail.
+pub const FLAG_RAIL: u8 = 1 << 0;
+/// Frame flag: one or more frames before this one were dropped (sequence gap is real).
+pub const FLAG_DROPPED_BEFORE: u8 = 1 << 1;
+/// Frame flag: V_m holds sub-section observations rather than a full-scan median.
+pub const FLAG_SUBSECTION: u8 = 1 << 2;
+
+/// One scan: the frame vector V_m and everything needed to interpret it (DESIGN.md: a frame
+/// always says which protocol, electrode count and settings produced it).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Sequence number, +1 per frame produced (gaps = frames lost).
+    pub seq: u32,
+    /// When the scan started, device clock.
+    pub timestamp: Micros,
+    /// Protocol, L and scan settings that produced V_m.
+    pub config: ScanConfig,
+    /// `FLAG_*` bits.
+    pub flags: u8,
+    /// Number of measurements with rail samples (0 unless [`FLAG_RAIL`]).
+    pub rail_count: u16,
+    /// V_m in volts, K values in protocol step order (208 for AD at L = 16).
+    pub voltages: Vec<f32, K_MAX>,
+}
+
+/// What the device reports besides frames.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// The on-chip classifier's answer for frame `seq` (SPEC §9).
+    Touch {
+        /// The frame classified.
+        seq: u32,
+        /// Winning class (index into the model's classes).
+        class: u16,
+        /// Discriminant of the winner minus the runner-up's (>= 0; larger = surer).
+        margin: f32,
+    },
+    /// Periodic health report.
+    Status(Status),
+    /// Answer to [`Command::Ping`].
+    Pong {
+        /// The nonce of the ping.
+        nonce: u32,
+    },
+    /// A command was carried out.
+    Ack {
+        /// Which command.
+        command: CommandTag,
+    },
+    /// A command was refused; the device goes on as before.
+    Refused {
+        /// Which command (or [`CommandTag::Unknown`] when it could not be decoded).
+        command: CommandTag,
+        /// Why.
+        reason: Refusal,
+    },
+}
+
+/// Device health, sent periodically as [`Event::Status`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Device clock now.
+    pub uptime: Micros,
+    /// Frames produced since boot.
+    pub frames: u32,
+    /// Frames dropped because the link was busy.
+    pub dropped: u32,
+    /// Frames with rail samples.
+    pub rail_frames: u32,
+    /// Packets received that failed to decode.
+    pub bad_commands: u32,
+    /// Bit e set = electrode e is suspected faulty (disconnected or shorted).
+    pub suspect_electrodes: u32,
+    /// Scanning now.
+    pub scanning: bool,
+    /// A validated model is loaded and classifying.
+    pub model_loaded: bool,
+}
+
+/// Host to device.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Command {
+    /// Use this scan configuration from the next scan on (validated before it is applied).
+    Configure(ScanConfig),
+    /// Start continuous scanning.
+    Start,
+    /// Stop scanning.
+    Stop,
+    /// Liveness check, answered with [`Event::Pong`].
+    Ping {
+        /// Echoed back.
+        nonce: u32,
+    },
+    /// Begin a model upload of `len` bytes whose CRC-32 is `crc`.
+    ModelBegin {
+        /// Total blob length in bytes.
+        len: u32,
+        /// CRC-32 (ISO-HDLC) of the whole blob.
+        crc: u32,
+    },
+    /// One chunk of the upload, at byte `offset`.
+    ModelChunk {
+        /// Offset of `data` in the blob.
+        offset: u32,
+        /// Up to [`MODEL_CHUNK`] bytes.
+        data: Vec<u8, MODEL_CHUNK>,
+    },
+    /// Verify the uploaded blob (length, CRC, model validation) and switch to it; the old model
+    /// stays in use if verification fails.
+    ModelCommit,
+    /// Stop classifying and forget the model.
+    ModelClear,
+}
+
+impl Command {
+    /// This command's tag, for [`Event::Ack`] and [`Event::Refused`].
+    #[must_use]
+    pub fn tag(&self) -> CommandTag {
+        match self {
+            Command::Configure(_) => CommandTag::Configure,
+            Command::Start => CommandTag::Start,
+            Command::Stop => CommandTag::Stop,
+            Command::Ping { .. } => CommandTag::Ping,
+            Command::ModelBegin { .. } => CommandTag::ModelBegin,
+            Command::ModelChunk { .. } => CommandTag::ModelChunk,
+            Command::ModelCommit => CommandTag::ModelCommit,
+            Command::ModelClear => CommandTag::ModelClear,
+        }
+    }
+}
+
+/// Names a [`Command`] without its data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[allow(missing_docs)]
+pub enum CommandTag {
+    Configure,
+    Start,
+    Stop,
+    Ping,
+    ModelBegin,
+    ModelChunk,
+    ModelCommit,
+    ModelClear,
+    /// The packet did not decode to any command.
+    Unknown,
+}
+
+/// Why the device refused a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refusal {
+    /// The packet failed to decode (see [`WireError`]).
+    Malformed(WireError),
+    /// The configuration is invalid.
+    BadConfig,
+    /// A model command out of order (chunk before begin, commit before all bytes came, ...).
+    UploadOrder,
+    /// The blob does not fit the device's model storage.
+    TooLarge,
+    /// The uploaded blob failed its CRC or model validation; the old model is kept.
+    BadModel,
+    /// The model does not match the current scan configuration.
+    ModelMismatch,
+}
+
+/// Device to host.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[allow(clippy::large_enum_variant)] // a Frame is the common case; boxing needs alloc.
+pub enum Uplink {
+    /// A scan.
+    Frame(Frame),
+    /// Anything else.
+    Event(Event),
+}
+
+/// Why a packet could not be encoded or decoded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum WireError {
+    /// The output buffer is too small for the packet.
+    BufferFull,
+    /// The packet is not valid COBS.
+    Cobs,
+    /// Shorter than version + CRC.
+    Short,
+    /// The CRC does not match: the packet was damaged.
+    Crc,
+    /// A version this reader does not understand.
+    Version {
+        /// The version byte received.
+        got: u8,
+    },
+    /// The CRC matched but the body is not a valid message.
+    Body,
+    /// The packet grew past the reader's buffer before its delimiter; it was dropped.
+    Overflow,
+}
+
+impl core::fmt::Display for WireError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            WireError::BufferFull => write!(f, "output buffer too small for the packet"),
+            WireError::Cobs => write!(f, "packet is not valid COBS"),
+            WireError::Short => write!(f, "packet too short"),
+            WireError::Crc => write!(f, "CRC mismatch (damaged packet)"),
+            WireError::Version { got } => {
+                write!(f, "wire version {got}, this build speaks {WIRE_VERSION}")
+            }
+            WireError::Body => write!(f, "CRC ok but the body is not a valid message"),
+            WireError::Overflow => write!(f, "packet longer than the receive buffer"),
+        }
+    }
+}
+
+impl core::error::Error for WireError {}
+
+/// Upper bound of COBS-encoding `n` bytes: one code byte per started run of 254.
+#[must_use]
+pub const fn cobs_max_len(n: usize) -> usize {
+    n + n / 254 + 1
+}
+
+/// Encodes `message` as one packet (both delimiters included) into `out`; returns its length.
+///
+/// # Errors
+/// [`WireError::BufferFull`] if `out` is too small (nothing useful is left in `out`).
+pub fn encode<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, WireError> {
+    // Serialise at the back of `out`, leaving room in front for the COBS overhead and the
+    // leading delimiter, then COBS-encode forward in place (the write position never passes
+    // the read position).
+    let n = out.len();
+    let head = 2 + n / 254 + 1;
+    if n < head + 6 {
+        return Err(WireError::BufferFull);
+    }
+    let body_start = head;
+    out[body_start] = WIRE_VERSION;
+    let used = postcard::to_slice(message, &mut out[body_start + 1..n - 4])
+        .map_err(|_| WireError::BufferFull)?
+        .len();
+    let body_end = body_start + 1 + used;
+    let crc = CRC32.checksum(&out[body_start..body_end]);
+    out[body_end..body_end + 4].copy_from_slice(&crc.to_le_bytes());
+    let raw_len = 1 + used + 4;
+    out[0] = 0;
+    let encoded = cobs_encode_forward(out, body_start, raw_len, 1)?;
+    let end = 1 + encoded;
+    if end >= n {
+        return Err(WireError::BufferFull);
+    }
+    out[end] = 0;
+    Ok(end + 1)
+}
+
+/// COBS-encodes `buf[src..src + len]` into `buf[dst..]`, `dst < src`, returning the encoded
+/// length. Safe in place because a block's code byte is written only after its data moved.
+fn cobs_encode_forward(
+    buf: &mut [u8],
+    src: usize,
+    len: usize,
+    dst: usize,
+) -> Result<usize, WireError> {
+    let mut w = dst; // next write position
+    let mut code_pos = w;
+    w += 1;
+    let mut code: u8 = 1;
+    for r in src..src + len {
+        if w > r {
+            return Err(WireError::BufferFull);
+        }
+        let byte = buf[r];
+        if byte == 0 {
+            buf[code_pos] = code;
+            code_pos = w;
+            w += 1;
+            code = 1;
+        } else {
+            buf[w] = byte;
+            w += 1;
+            code += 1;
+            if code == 0xFF {
+                buf[code_pos] = code;
+                code_pos = w;
+                w += 1;
+                code = 1;
+            }
+        }
+    }
+    if code_pos >= buf.len() {
+        return Err(WireError::BufferFull);
+    }
+    buf[code_pos] = code;
+    Ok(w - dst)
+}
+
+/// Decodes COBS in place (no delimiters in `buf`); returns the decoded length.
+fn cobs_decode_in_place(buf: &mut [u8]) -> Result<usize, WireError> {
+    let (mut r, mut w) = (0, 0);
+    while r < buf.len() {
+        let code = buf[r];
+        if code == 0 {
+            return Err(WireError::Cobs);
+        }
+        r += 1;
+        let run = usize::from(code) - 1;
+        if r + run > buf.len() {
+            return Err(WireError::Cobs);
+        }
+        for _ in 0..run {
+            let b = buf[r];
+            if b == 0 {
+                return Err(WireError::Cobs);
+            }
+            buf[w] = b;
+            w += 1;
+            r += 1;
+        }
+        // A code below 0xFF ends with an implied zero, unless it ends the packet.
+        if code != 0xFF && r < buf.len() {
+            buf[w] = 0;
+            w += 1;
+        }
+    }
+    Ok(w)
+}
+
+/// Decodes one packet's content (the bytes between two 0x00 delimiters, excluded), in place.
+///
+/// Never panics, whatever the bytes.
+///
+/// # Errors
+/// [`WireError::Cobs`], [`WireError::Short`], [`WireError::Crc`], [`WireError::Version`] or
+/// [`WireError::Body`], checked in that order.
+pub fn decode<T: DeserializeOwned>(packet: &mut [u8]) -> Result<T, WireError> {
+    let n = cobs_decode_in_place(packet)?;
+    let raw = &packet[..n];
+    if n < 5 {
+        return Err(WireError::Short);
+    }
+    let (body, crc) = raw.split_at(n - 4);
+    let crc = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
+    if CRC32.checksum(body) != crc {
+        return Err(WireError::Crc);
+    }
+    if body[0] != WIRE_VERSION {
+        return Err(WireError::Version { got: body[0] });
+    }
+    match postcard::take_from_bytes::<T>(&body[1..]) {
+        Ok((message, [])) => Ok(message),
+        _ => Err(WireError::Body),
+    }
+}
+
+/// CRC-32 (ISO-HDLC) of `bytes`: the checksum of packets, model uploads and model blobs.
+#[must_use]
+pub fn crc32(bytes: &[u8]) -> u32 {
+    CRC32.checksum(bytes)
+}
+
+/// Reassembles packets from a byte stream, one byte at a time, with resynchronisation: a
+/// packet that overflows the buffer or fails to decode is dropped and the reader carries on at
+/// the next 0x00. `N` is the buffer size ([`PACKET_MAX`] on the host, [`COMMAND_PACKET_MAX`]
+/// on the device).
+#[derive(Debug)]
+pub struct Accumulator<const N: usize> {
+    buf: [u8; N],
+    len: usize,
+    overflowed: bool,
+}
+
+impl<const N: usize> Default for Accumulator<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Accumulator<N> {
+    /// An empty accumulator.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; N],
+            len: 0,
+            overflowed: false,
+        }
+    }
+
+    /// Takes one byte; at a delimiter that ends a non-empty packet, decodes it.
+    ///
+    /// Returns `None` while a packet is in progress (or between two adjacent delimiters),
+    /// `Some(Ok(message))` for a good packet, `Some(Err(e))` for a dropped one.
+    pub fn feed<T: DeserializeOwned>(&mut self, byte: u8) -> Option<Result<T, WireError>> {
+        if byte != 0 {
+            if self.len < N {
+                self.buf[self.len] = byte;
+                self.len += 1;
+            } else {
+                self.overflowed = true;
+            }
+            return None;
+        }
+        let (len, overflowed) = (self.len, self.overflowed);
+        self.len = 0;
+        self.overflowed = false;
+        if overflowed {
+            return Some(Err(WireError::Overflow));
+        }
+        if len == 0 {
+            return None;
+        }
+        Some(decode(&mut self.buf[..len]))
+    }
+
+    /// Bytes of the packet in progress.
+    #[must_use]
+    pub fn pending(&self) -> usize {
+        self.len
+    }
+
+    /// Drops the packet in progress (e.g. after a reconnect).
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.overflowed = false;
+    }
+}
+
+#[cfg(test)]
+mod tests;
