@@ -351,7 +351,7 @@ impl Protocol {
     /// [`ProtocolError`] when the electrode count is odd or out of range, or the pattern's
     /// skips do not fit it.
     pub fn new(kind: ProtocolKind, electrodes: u8) -> Result<Self, ProtocolError> {
-        if !(L_MIN..=L_MAX).contains(&electrodes) || electrodes % 2 != 0 {
+        if !(L_MIN..=L_MAX).contains(&electrodes) || !electrodes.is_multiple_of(2) {
             return Err(ProtocolError::ElectrodeCount { electrodes });
         }
         let half = electrodes / 2;
@@ -635,7 +635,8 @@ impl MuxWord {
     /// The injection this word routes, if both muxes are enabled.
     #[must_use]
     pub fn injection(self) -> Option<Injection> {
-        (self.0 & Self::SOURCE_ENABLE != 0 && self.0 & Self::SINK_ENABLE != 0).then(|| Injection {
+        let enabled = self.0 & Self::SOURCE_ENABLE != 0 && self.0 & Self::SINK_ENABLE != 0;
+        enabled.then_some(Injection {
             source: ElectrodeId((self.0 & 0xF) as u8),
             sink: ElectrodeId(((self.0 >> 5) & 0xF) as u8),
         })

@@ -48,7 +48,7 @@ pub struct Snr {
 }
 
 fn shape(frames: &[f32], k: usize, min_frames: usize) -> Result<usize, StatsError> {
-    if k == 0 || frames.len() % k != 0 {
+    if k == 0 || !frames.len().is_multiple_of(k) {
         return Err(StatsError::Shape);
     }
     let n = frames.len() / k;

@@ -120,6 +120,7 @@ pub struct Status {
 
 /// Host to device.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[allow(clippy::large_enum_variant)] // ModelChunk's inline buffer; boxing needs alloc.
 pub enum Command {
     /// Use this scan configuration from the next scan on (validated before it is applied).
     Configure(ScanConfig),

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Runs every check and test of the et repository. Works on a fresh machine: it installs what
+# it needs (the thumbv7em-none-eabihf target, rustfmt and clippy) and is what CI (.ci/run) calls.
+# Usage: ./scripts/test.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+
+step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
+installed=$(rustup target list --installed)
+grep -qx thumbv7em-none-eabihf <<<"$installed" || rustup target add thumbv7em-none-eabihf
+components=$(rustup component list --installed)
+for c in rustfmt clippy; do
+  grep -q "^$c" <<<"$components" || rustup component add "$c"
+done
+
+step "format (cargo fmt --check)"
+cargo fmt --all -- --check
+(cd firmware && cargo fmt -- --check)
+
+step "lint (clippy, warnings are errors)"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "et-core builds no_std for the microcontroller (no default features)"
+cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
+
+step "firmware image (cd firmware && cargo build --release)"
+(cd firmware && cargo clippy --release -- -D warnings && cargo build --release)
+elf=target/thumbv7em-none-eabihf/release/et-firmware
+if command -v size >/dev/null; then
+  size -A "$elf" | awk '/^\.(vector_table|text|rodata|data) /{f+=$2} /^\.(data|bss|uninit) /{r+=$2}
+    END {printf "firmware image: flash %d of 1048576 bytes, static RAM %d of 131072 bytes\n", f, r}'
+fi
+
+step "tests (cargo test --workspace)"
+cargo test --workspace
