@@ -1,1 +1,96 @@
 //! Shared fixtures of the end-to-end tests.
+//!
+//! [`ScriptedSheet`] is a stand-in sensor for tests that need `et-core`'s pieces wired together
+//! before the simulator exists: each step's voltage is a fixed function of the step and of the
+//! touched class, plus a switching transient and deterministic noise. It is not a physical
+//! model (that is `et-sim`'s job) and must never be used to judge accuracy.
+
+use et_core::ScanConfig;
+use et_core::frontend::{AdcScale, Frontend};
+use et_core::protocol::{Injection, Measurement};
+
+/// A scripted sensor with `classes` touch positions.
+#[derive(Debug)]
+pub struct ScriptedSheet {
+    scale: AdcScale,
+    settle: usize,
+    selected: Option<(Injection, Measurement)>,
+    /// The touched class (0..classes) or `None` for no touch.
+    pub touch: Option<u16>,
+    /// Noise amplitude in ADC codes (uniform, +- this).
+    pub noise_codes: u16,
+    state: u64,
+}
+
+impl ScriptedSheet {
+    /// A sheet with a deterministic noise seed.
+    #[must_use]
+    pub fn new(seed: u64) -> Self {
+        Self {
+            scale: AdcScale::bipolar_16bit(5.0, 1),
+            settle: 0,
+            selected: None,
+            touch: None,
+            noise_codes: 3,
+            state: seed | 1,
+        }
+    }
+
+    fn noise(&mut self) -> i32 {
+        self.state ^= self.state << 13;
+        self.state ^= self.state >> 7;
+        self.state ^= self.state << 17;
+        let span = 2 * u64::from(self.noise_codes) + 1;
+        (self.state % span) as i32 - i32::from(self.noise_codes)
+    }
+
+    /// The noiseless code of a measurement under the current touch.
+    #[must_use]
+    pub fn level(&self, inj: Injection, m: Measurement) -> i32 {
+        let (a, b, c, d) = (
+            i32::from(inj.source.0),
+            i32::from(inj.sink.0),
+            i32::from(m.positive.0),
+            i32::from(m.negative.0),
+        );
+        let base = 33_000 + 40 * (c - d) * (1 + (a - b).abs());
+        let bump = self.touch.map_or(0, |t| {
+            let t = i32::from(t);
+            // Each class moves a different subset of measurements by a few hundred codes.
+            if (a + 2 * c + t) % 3 == 0 {
+                300 + 50 * t
+            } else {
+                -120
+            }
+        });
+        base + bump
+    }
+}
+
+impl Frontend for ScriptedSheet {
+    type Error = &'static str;
+
+    fn configure(&mut self, config: &ScanConfig) -> Result<AdcScale, Self::Error> {
+        self.settle = usize::from(config.settle_samples);
+        Ok(self.scale)
+    }
+
+    fn select(
+        &mut self,
+        injection: Injection,
+        measurement: Measurement,
+    ) -> Result<(), Self::Error> {
+        self.selected = Some((injection, measurement));
+        Ok(())
+    }
+
+    fn acquire(&mut self, samples: &mut [u16]) -> Result<(), Self::Error> {
+        let (inj, m) = self.selected.ok_or("acquire before select")?;
+        let level = self.level(inj, m);
+        for (n, s) in samples.iter_mut().enumerate() {
+            let transient = if n < self.settle { 4_000 } else { 0 };
+            *s = (level + transient + self.noise()).clamp(0, 65_535) as u16;
+        }
+        Ok(())
+    }
+}
