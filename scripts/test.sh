@@ -24,6 +24,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 
 step "et-core builds no_std for the microcontroller (no default features)"
 cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
+cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features --features defmt
 
 step "firmware image (cd firmware && cargo build --release)"
 (cd firmware && cargo clippy --release -- -D warnings && cargo build --release)

@@ -94,6 +94,37 @@ pub enum Event {
         /// Why.
         reason: Refusal,
     },
+    /// Something went wrong on the device while scanning or sending.
+    Fault(Fault),
+}
+
+/// A device-side error, reported as [`Event::Fault`] when it happens (the counters in
+/// [`Status`] keep the totals).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// The front end failed during scan `seq`; that frame was not sent.
+    Frontend {
+        /// The scan that failed.
+        seq: u32,
+    },
+    /// Frame `seq` had `measurements` measurements with samples on an ADC rail.
+    Saturated {
+        /// The frame.
+        seq: u32,
+        /// How many of its measurements.
+        measurements: u16,
+    },
+    /// Electrode `electrode` looks disconnected or shorted.
+    Electrode {
+        /// The electrode.
+        electrode: u8,
+    },
+    /// The link could not keep up: `dropped` frames were not sent since the last report.
+    Overflow {
+        /// Frames lost.
+        dropped: u32,
+    },
 }
 
 /// Device health, sent periodically as [`Event::Status`].

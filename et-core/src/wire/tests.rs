@@ -134,6 +134,13 @@ fn uplinks() -> StdVec<(&'static str, Uplink)> {
                 reason: Refusal::Malformed(WireError::Crc),
             }),
         ),
+        (
+            "fault",
+            Uplink::Event(Event::Fault(Fault::Saturated {
+                seq: 9,
+                measurements: 3,
+            })),
+        ),
     ]
 }
 
@@ -199,6 +206,7 @@ const GOLDEN: &[(&str, &[u8])] = &[
     ("pong", &[0, 9, 1, 1, 2, 42, 26, 121, 183, 113, 0]),
     ("ack", &[0, 9, 1, 1, 3, 6, 184, 36, 116, 90, 0]),
     ("refused", &[0, 5, 1, 1, 4, 8, 6, 3, 227, 204, 134, 95, 0]),
+    ("fault", &[0, 11, 1, 1, 5, 1, 9, 3, 64, 43, 41, 57, 0]),
     (
         "configure",
         &[
