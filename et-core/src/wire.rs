@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::ScanConfig;
 use crate::protocol::K_MAX;
+use crate::scan::ScanReport;
 use crate::time::Micros;
 
 /// Version of the packet format and of every message type in it.
@@ -60,6 +61,33 @@ pub struct Frame {
     pub rail_count: u16,
     /// V_m in volts, K values in protocol step order (208 for AD at L = 16).
     pub voltages: Vec<f32, K_MAX>,
+}
+
+impl Frame {
+    /// The frame of one scan: V_m from `voltages` (K values), the rail flag and count from
+    /// `report`. `flags` are extra `FLAG_*` bits (e.g. [`FLAG_SUBSECTION`]).
+    ///
+    /// # Errors
+    /// [`WireError::BufferFull`] if `voltages` is longer than [`K_MAX`].
+    pub fn from_scan(
+        seq: u32,
+        timestamp: Micros,
+        config: ScanConfig,
+        report: &ScanReport,
+        flags: u8,
+        voltages: &[f32],
+    ) -> Result<Self, WireError> {
+        let rail_count = report.rail.count() as u16;
+        let rail = if rail_count > 0 { FLAG_RAIL } else { 0 };
+        Ok(Self {
+            seq,
+            timestamp,
+            config,
+            flags: flags | rail,
+            rail_count,
+            voltages: Vec::from_slice(voltages).map_err(|_| WireError::BufferFull)?,
+        })
+    }
 }
 
 /// What the device reports besides frames.

@@ -6,7 +6,7 @@ use et_core::wire::{
     self, Accumulator, COMMAND_PACKET_MAX, Command, Event, FLAG_SUBSECTION, Frame, MODEL_CHUNK,
     PACKET_MAX, Uplink,
 };
-use et_core::{Micros, ScanConfig, Scanner};
+use et_core::{Micros, ScanConfig, ScanReport, Scanner};
 use et_tests::ScriptedSheet;
 
 const CLASSES: u16 = 4;
@@ -66,7 +66,8 @@ impl Device {
             subsections
         ];
         let mut obs = vec![0.0f32; subsections * k];
-        self.scanner
+        let report = self
+            .scanner
             .scan_subsections(
                 &mut self.sheet,
                 &mut burst,
@@ -77,18 +78,20 @@ impl Device {
             .expect("scan");
         let mut out = Vec::new();
         for o in obs.chunks(k) {
-            self.seq += 1;
-            let frame = Frame {
-                seq: self.seq,
-                timestamp: Micros(self.seq * 12_800),
-                config: *self.scanner.config(),
-                flags: FLAG_SUBSECTION,
-                rail_count: 0,
-                voltages: o.iter().copied().collect(),
-            };
-            out.extend(packet(&Uplink::Frame(frame)));
+            out.extend(packet(&Uplink::Frame(self.frame(
+                &report,
+                FLAG_SUBSECTION,
+                o,
+            ))));
         }
         out
+    }
+
+    fn frame(&mut self, report: &ScanReport, flags: u8, v_m: &[f32]) -> Frame {
+        self.seq += 1;
+        let t = Micros(self.seq * 12_800);
+        Frame::from_scan(self.seq, t, *self.scanner.config(), report, flags, v_m)
+            .expect("K <= K_MAX")
     }
 
     /// Live mode: one scan, its frame, and the on-chip class as a Touch event.
@@ -101,16 +104,7 @@ impl Device {
             .scan(&mut self.sheet, &mut burst, &mut v_m)
             .expect("scan");
         assert_eq!(report.rail.count(), 0);
-        self.seq += 1;
-        let frame = Frame {
-            seq: self.seq,
-            timestamp: Micros(self.seq * 12_800),
-            config: *self.scanner.config(),
-            flags: 0,
-            rail_count: 0,
-            voltages: v_m.iter().copied().collect(),
-        };
-        let mut out = packet(&Uplink::Frame(frame));
+        let mut out = packet(&Uplink::Frame(self.frame(&report, 0, &v_m)));
         if let Some(blob) = &self.model {
             let model = Model::parse(blob).expect("validated at commit");
             let mut scratch = vec![0.0; model.scratch_len()];

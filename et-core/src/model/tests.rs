@@ -80,7 +80,6 @@ fn inverse_logdet(a: &Mat) -> (Mat, f64) {
 
 /// A synthetic classification problem on opposite-protocol frames at L = 8 (K = 32, p = 16).
 struct Problem {
-    _protocol: Protocol,
     features: Vec<u16>,
     mean: Vec<f64>,
     scale: Vec<f64>,
@@ -191,7 +190,6 @@ fn problem(classes: usize, seed: u64, near_singular: bool) -> Problem {
     test_frames.push(vec![0.0; k]);
     test_frames.push(base.iter().map(|&v| (v * 1.5) as f32).collect());
     Problem {
-        _protocol: protocol,
         features,
         mean,
         scale,

@@ -562,3 +562,27 @@ fn every_single_bit_flip_of_every_golden_packet_is_refused() {
         }
     }
 }
+
+#[test]
+fn frames_from_a_scan_carry_its_rail_flags() {
+    let mut report = ScanReport::default();
+    let clean = Frame::from_scan(1, Micros(5), sample_config(), &report, 0, &[0.1; 4]).unwrap();
+    assert_eq!((clean.flags, clean.rail_count), (0, 0));
+    report.rail.set(2);
+    report.rail.set(3);
+    let f = Frame::from_scan(
+        2,
+        Micros(6),
+        sample_config(),
+        &report,
+        FLAG_SUBSECTION,
+        &[0.1; 4],
+    )
+    .unwrap();
+    assert_eq!((f.flags, f.rail_count), (FLAG_RAIL | FLAG_SUBSECTION, 2));
+    let too_long = [0.0; K_MAX + 1];
+    assert_eq!(
+        Frame::from_scan(3, Micros(7), sample_config(), &report, 0, &too_long),
+        Err(WireError::BufferFull)
+    );
+}
