@@ -167,12 +167,48 @@ impl Scanner {
         self.protocol.frame_len()
     }
 
-    fn check_len(needed: usize, given: usize) -> Result<(), ScanError<core::convert::Infallible>> {
+    fn check_len<E>(needed: usize, given: usize) -> Result<(), ScanError<E>> {
         if given < needed {
             Err(ScanError::Buffer { needed, given })
         } else {
             Ok(())
         }
+    }
+
+    /// The loop both scans share: for every step, select, acquire a burst of
+    /// `samples_per_step` codes, hand it to `extract` (which returns the step's rail count),
+    /// and account for it in the report.
+    fn walk<F: Frontend>(
+        &self,
+        frontend: &mut F,
+        burst: &mut [u16],
+        mut extract: impl FnMut(usize, &mut [u16]) -> Option<u16>,
+    ) -> Result<ScanReport, ScanError<F::Error>> {
+        let spp = usize::from(self.config.samples_per_step);
+        let settle = usize::from(self.config.settle_samples);
+        Self::check_len(spp, burst.len())?;
+        let mut report = ScanReport::default();
+        for step in self.protocol.steps() {
+            let k = usize::from(step.k);
+            frontend
+                .select(step.injection, step.measurement)
+                .map_err(ScanError::Frontend)?;
+            let burst = &mut burst[..spp];
+            frontend.acquire(burst).map_err(ScanError::Frontend)?;
+            // ScanConfig::validate guarantees settle < spp, and the callers check their
+            // sub-section counts, so this only fails on a broken invariant.
+            let rails = extract(k, burst).ok_or(ScanError::Subsections {
+                subsections: 1,
+                kept: spp - settle,
+            })?;
+            if rails > 0 {
+                report.rail.set(k);
+            }
+            report.rail_samples += u32::from(rails);
+            report.samples += spp as u32;
+            report.settle_dropped += settle as u32;
+        }
+        Ok(report)
     }
 
     /// Runs one scan (Algorithm 1) and writes V_m (volts, K values) into `v_m[..K]`.
@@ -187,27 +223,13 @@ impl Scanner {
         burst: &mut [u16],
         v_m: &mut [f32],
     ) -> Result<ScanReport, ScanError<F::Error>> {
-        let spp = usize::from(self.config.samples_per_step);
         let settle = usize::from(self.config.settle_samples);
-        Self::check_len(spp, burst.len()).map_err(widen)?;
-        Self::check_len(self.frame_len(), v_m.len()).map_err(widen)?;
-        let mut report = ScanReport::default();
-        for step in self.protocol.steps() {
-            let k = usize::from(step.k);
-            frontend
-                .select(step.injection, step.measurement)
-                .map_err(ScanError::Frontend)?;
-            let burst = &mut burst[..spp];
-            frontend.acquire(burst).map_err(ScanError::Frontend)?;
-            // settle < spp is guaranteed by ScanConfig::validate, so a median exists.
-            let e = settle_median(burst, settle, &self.scale).ok_or(ScanError::Subsections {
-                subsections: 1,
-                kept: spp.saturating_sub(settle),
-            })?;
+        Self::check_len(self.frame_len(), v_m.len())?;
+        self.walk(frontend, burst, |k, burst| {
+            let e = settle_median(burst, settle, &self.scale)?;
             v_m[k] = self.scale.volts(e.median_code);
-            report.account(k, e.rail_samples, spp, settle);
-        }
-        Ok(report)
+            Some(e.rail_samples)
+        })
     }
 
     /// Runs one scan and cuts every step's kept samples into `subsections` sub-sections whose
@@ -226,55 +248,22 @@ impl Scanner {
         scratch: &mut [Extracted],
         observations: &mut [f32],
     ) -> Result<ScanReport, ScanError<F::Error>> {
-        let spp = usize::from(self.config.samples_per_step);
         let settle = usize::from(self.config.settle_samples);
         let kept = usize::from(self.config.kept_samples());
         if subsections == 0 || subsections > kept {
             return Err(ScanError::Subsections { subsections, kept });
         }
         let k_len = self.frame_len();
-        Self::check_len(spp, burst.len()).map_err(widen)?;
-        Self::check_len(subsections, scratch.len()).map_err(widen)?;
-        Self::check_len(subsections * k_len, observations.len()).map_err(widen)?;
-        let mut report = ScanReport::default();
-        for step in self.protocol.steps() {
-            let k = usize::from(step.k);
-            frontend
-                .select(step.injection, step.measurement)
-                .map_err(ScanError::Frontend)?;
-            let burst = &mut burst[..spp];
-            frontend.acquire(burst).map_err(ScanError::Frontend)?;
-            let rails = subsection_medians(burst, settle, &self.scale, &mut scratch[..subsections])
-                .ok_or(ScanError::Subsections { subsections, kept })?;
-            for (s, e) in scratch[..subsections].iter().enumerate() {
+        Self::check_len(subsections, scratch.len())?;
+        Self::check_len(subsections * k_len, observations.len())?;
+        let scratch = &mut scratch[..subsections];
+        self.walk(frontend, burst, |k, burst| {
+            let rails = subsection_medians(burst, settle, &self.scale, scratch)?;
+            for (s, e) in scratch.iter().enumerate() {
                 observations[s * k_len + k] = self.scale.volts(e.median_code);
             }
-            report.account(k, rails, spp, settle);
-        }
-        Ok(report)
-    }
-}
-
-impl ScanReport {
-    fn account(&mut self, k: usize, rail_samples: u16, spp: usize, settle: usize) {
-        if rail_samples > 0 {
-            self.rail.set(k);
-        }
-        self.rail_samples += u32::from(rail_samples);
-        self.samples += spp as u32;
-        self.settle_dropped += settle as u32;
-    }
-}
-
-fn widen<E>(e: ScanError<core::convert::Infallible>) -> ScanError<E> {
-    match e {
-        ScanError::Config(c) => ScanError::Config(c),
-        ScanError::Scale => ScanError::Scale,
-        ScanError::Buffer { needed, given } => ScanError::Buffer { needed, given },
-        ScanError::Subsections { subsections, kept } => {
-            ScanError::Subsections { subsections, kept }
-        }
-        ScanError::Frontend(never) => match never {},
+            Some(rails)
+        })
     }
 }
 

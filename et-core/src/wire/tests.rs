@@ -76,12 +76,7 @@ fn ping_packet_matches_a_hand_derivation() {
 fn sample_config() -> ScanConfig {
     ScanConfig {
         electrodes: 4,
-        protocol: ProtocolKind::Adjacent,
-        samples_per_step: 50,
-        settle_samples: 25,
-        current_na: 32_000,
-        sample_rate_hz: 62_500,
-        gain: 1,
+        ..ScanConfig::REFERENCE
     }
 }
 
