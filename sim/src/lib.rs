@@ -1,6 +1,15 @@
-//! `et-sim`: the emulated fabric sheet.
+//! `et-sim`: the emulated fabric sheet that every test and the demo run against.
 //!
-//! Its resistor-network model of the sheet (deliberately not the host's finite elements),
-//! touches, electrodes, front end and noise arrive with the sim issue; the crate exists now so
-//! that the workspace has the shape DESIGN.md fixes. It depends on `et-core` only.
+//! Modules, from geometry to sensor:
+//!
+//! - [`shape`]: outlines (disc, rectangle, polygon).
+//! - [`network`]: the sheet as a resistor network with electrode contacts, factored once into
+//!   the electrodes' transfer impedance (deliberately not the host's finite elements).
+//! - [`band`]: the banded Cholesky the network is solved with.
+//!
+//! It depends on `et-core` only.
 #![forbid(unsafe_code)]
+
+pub mod band;
+pub mod network;
+pub mod shape;

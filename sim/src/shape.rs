@@ -1,0 +1,331 @@
+//! Sheet outlines (SPEC §1): disc, rectangle, any simple polygon. Lengths in metres, the
+//! origin at the sheet's centre for the disc and rectangle.
+
+use serde::{Deserialize, Serialize};
+
+/// The outline of a flat (or developable, see [`crate::sheet::Bend`]) sheet.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Shape {
+    /// A disc of this radius, centred on the origin.
+    Disc {
+        /// Radius in m.
+        radius: f64,
+    },
+    /// A rectangle centred on the origin.
+    Rectangle {
+        /// Extent along x in m.
+        width: f64,
+        /// Extent along y in m.
+        height: f64,
+    },
+    /// A simple polygon, vertices counter-clockwise (m).
+    Polygon {
+        /// Vertices `[x, y]` in m.
+        vertices: Vec<[f64; 2]>,
+    },
+}
+
+/// Why a shape is not usable.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ShapeError {
+    /// A size is not finite and positive.
+    Size {
+        /// Which field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A polygon needs at least 3 vertices, all finite, and a non-zero area.
+    Polygon(&'static str),
+}
+
+impl std::fmt::Display for ShapeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ShapeError::Size { field, value } => {
+                write!(f, "{field} = {value}: must be a positive length in metres")
+            }
+            ShapeError::Polygon(why) => write!(f, "polygon: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for ShapeError {}
+
+impl Shape {
+    /// Checks sizes and polygon sanity.
+    ///
+    /// # Errors
+    /// [`ShapeError`] naming the bad field.
+    pub fn validate(&self) -> Result<(), ShapeError> {
+        let positive = |field, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ShapeError::Size { field, value })
+            }
+        };
+        match self {
+            Shape::Disc { radius } => positive("radius", *radius),
+            Shape::Rectangle { width, height } => {
+                positive("width", *width)?;
+                positive("height", *height)
+            }
+            Shape::Polygon { vertices } => {
+                if vertices.len() < 3 {
+                    return Err(ShapeError::Polygon("needs at least 3 vertices"));
+                }
+                if vertices.iter().flatten().any(|v| !v.is_finite()) {
+                    return Err(ShapeError::Polygon("a vertex is not finite"));
+                }
+                if self.signed_area().abs() < 1e-12 {
+                    return Err(ShapeError::Polygon("zero area"));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn signed_area(&self) -> f64 {
+        match self {
+            Shape::Polygon { vertices } => {
+                let n = vertices.len();
+                (0..n)
+                    .map(|i| {
+                        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+                        a[0] * b[1] - b[0] * a[1]
+                    })
+                    .sum::<f64>()
+                    / 2.0
+            }
+            _ => self.area(),
+        }
+    }
+
+    /// Area in m^2.
+    #[must_use]
+    pub fn area(&self) -> f64 {
+        match self {
+            Shape::Disc { radius } => std::f64::consts::PI * radius * radius,
+            Shape::Rectangle { width, height } => width * height,
+            Shape::Polygon { .. } => self.signed_area().abs(),
+        }
+    }
+
+    /// Axis-aligned bounding box `[x_min, y_min, x_max, y_max]`.
+    #[must_use]
+    pub fn bounds(&self) -> [f64; 4] {
+        match self {
+            Shape::Disc { radius } => [-radius, -radius, *radius, *radius],
+            Shape::Rectangle { width, height } => {
+                [-width / 2.0, -height / 2.0, width / 2.0, height / 2.0]
+            }
+            Shape::Polygon { vertices } => vertices.iter().fold(
+                [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ],
+                |b, v| {
+                    [
+                        b[0].min(v[0]),
+                        b[1].min(v[1]),
+                        b[2].max(v[0]),
+                        b[3].max(v[1]),
+                    ]
+                },
+            ),
+        }
+    }
+
+    /// The smaller side of the bounding box: the length scale that sets the resolution.
+    #[must_use]
+    pub fn size(&self) -> f64 {
+        let b = self.bounds();
+        (b[2] - b[0]).min(b[3] - b[1])
+    }
+
+    /// Whether `p` is inside or on the outline (within `tol` metres).
+    #[must_use]
+    pub fn contains(&self, p: [f64; 2], tol: f64) -> bool {
+        match self {
+            Shape::Disc { radius } => p[0].hypot(p[1]) <= radius + tol,
+            Shape::Rectangle { width, height } => {
+                p[0].abs() <= width / 2.0 + tol && p[1].abs() <= height / 2.0 + tol
+            }
+            Shape::Polygon { vertices } => {
+                let n = vertices.len();
+                let mut inside = false;
+                for i in 0..n {
+                    let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+                    if segment_distance(p, a, b) <= tol {
+                        return true;
+                    }
+                    if (a[1] > p[1]) != (b[1] > p[1]) {
+                        let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                        if p[0] < x {
+                            inside = !inside;
+                        }
+                    }
+                }
+                inside
+            }
+        }
+    }
+
+    /// Perimeter length in m.
+    #[must_use]
+    pub fn perimeter(&self) -> f64 {
+        match self {
+            Shape::Disc { radius } => 2.0 * std::f64::consts::PI * radius,
+            _ => {
+                let v = self.corners();
+                (0..v.len()).map(|i| dist(v[i], v[(i + 1) % v.len()])).sum()
+            }
+        }
+    }
+
+    fn corners(&self) -> Vec<[f64; 2]> {
+        match self {
+            Shape::Disc { .. } => Vec::new(),
+            Shape::Rectangle { width, height } => {
+                let (w, h) = (width / 2.0, height / 2.0);
+                // Start at the middle of the bottom edge's left end so that electrode 0 sits
+                // on an edge, not a corner, for the usual counts.
+                vec![[-w, -h], [w, -h], [w, h], [-w, h]]
+            }
+            Shape::Polygon { vertices } => vertices.clone(),
+        }
+    }
+
+    /// The point at arc-length fraction `t` (wrapping, 0..1) of the perimeter, walking
+    /// counter-clockwise. For the disc, t = 0 is at angle 0 (+x); for polygons and rectangles,
+    /// at the first vertex (the rectangle's lower-left corner).
+    #[must_use]
+    pub fn boundary_point(&self, t: f64) -> [f64; 2] {
+        let t = t.rem_euclid(1.0);
+        match self {
+            Shape::Disc { radius } => {
+                let a = 2.0 * std::f64::consts::PI * t;
+                [radius * a.cos(), radius * a.sin()]
+            }
+            _ => {
+                let v = self.corners();
+                let mut s = t * self.perimeter();
+                for i in 0..v.len() {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    let l = dist(a, b);
+                    if s <= l || i + 1 == v.len() {
+                        let f = (s / l).clamp(0.0, 1.0);
+                        return [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
+                    }
+                    s -= l;
+                }
+                v[0]
+            }
+        }
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    dist(p, [a[0] + t * dx, a[1] + t * dy])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn containment_area_and_perimeter() {
+        let square = Shape::Rectangle {
+            width: 0.13,
+            height: 0.13,
+        };
+        let poly = Shape::Polygon {
+            vertices: vec![
+                [-0.065, -0.065],
+                [0.065, -0.065],
+                [0.065, 0.065],
+                [-0.065, 0.065],
+            ],
+        };
+        for s in [&square, &poly] {
+            s.validate().unwrap();
+            assert!((s.area() - 0.0169).abs() < 1e-12);
+            assert!((s.perimeter() - 0.52).abs() < 1e-12);
+            assert!(s.contains([0.0, 0.0], 0.0) && s.contains([0.065, 0.0], 1e-12));
+            assert!(!s.contains([0.07, 0.0], 1e-6));
+            let p = s.boundary_point(0.125);
+            assert!(
+                (p[0] - 0.0).abs() < 1e-12 && (p[1] + 0.065).abs() < 1e-12,
+                "{p:?}"
+            );
+        }
+        let disc = Shape::Disc { radius: 0.11 };
+        assert!((disc.boundary_point(0.25)[1] - 0.11).abs() < 1e-12);
+        assert!(disc.contains([0.0, 0.109], 0.0) && !disc.contains([0.08, 0.08], 0.0));
+        // An L-shape: the notch is outside.
+        let l = Shape::Polygon {
+            vertices: vec![
+                [0.0, 0.0],
+                [2.0, 0.0],
+                [2.0, 1.0],
+                [1.0, 1.0],
+                [1.0, 2.0],
+                [0.0, 2.0],
+            ],
+        };
+        assert!(l.contains([0.5, 1.5], 0.0) && !l.contains([1.5, 1.5], 0.0));
+        assert!((l.area() - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_shapes_name_the_field() {
+        assert_eq!(
+            Shape::Disc { radius: -1.0 }.validate(),
+            Err(ShapeError::Size {
+                field: "radius",
+                value: -1.0
+            })
+        );
+        assert!(matches!(
+            Shape::Rectangle {
+                width: 1.0,
+                height: f64::NAN
+            }
+            .validate(),
+            Err(ShapeError::Size {
+                field: "height",
+                ..
+            })
+        ));
+        assert!(
+            Shape::Polygon {
+                vertices: vec![[0.0, 0.0], [1.0, 1.0]]
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            Shape::Polygon {
+                vertices: vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]
+            }
+            .validate()
+            .is_err()
+        );
+    }
+}
