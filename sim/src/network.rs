@@ -379,7 +379,8 @@ impl Network {
         // the order of the sheet's conductance, far above 1e-12 of their contact's.
         for e in 1..l {
             let c_ee: f64 = self.contacts[e].nodes.iter().map(|&(_, gc)| gc).sum();
-            if !(s[(e - 1, e - 1)] > 1e-12 * c_ee) {
+            let pivot = s[(e - 1, e - 1)];
+            if pivot.is_nan() || pivot <= 1e-12 * c_ee {
                 return Err(NetworkError::Singular(format!(
                     "electrode {e} has no path through the sheet to electrode 0"
                 )));
@@ -437,10 +438,10 @@ pub fn place_contacts(
                 .copied()
                 .filter(|&n| d(n) <= width / 2.0 + 1e-12)
                 .collect();
-            if nodes.is_empty() {
-                if let Some(&nearest) = boundary.iter().min_by(|&&a, &&b| d(a).total_cmp(&d(b))) {
-                    nodes.push(nearest);
-                }
+            if nodes.is_empty()
+                && let Some(&nearest) = boundary.iter().min_by(|&&a, &&b| d(a).total_cmp(&d(b)))
+            {
+                nodes.push(nearest);
             }
             let z = z.max(CONTACT_MIN_RELATIVE * sheet_resistance);
             let g = 1.0 / (z * nodes.len() as f64);

@@ -60,7 +60,7 @@ fn kirchhoff_current_balance_at_every_node_and_electrode() {
             out[u] += c;
             out[w] -= c;
         }
-        let mut into_electrode = vec![0.0; 16];
+        let mut into_electrode = [0.0; 16];
         for (e, contact) in net.contacts.iter().enumerate() {
             for &(n, gc) in &contact.nodes {
                 let c = gc * (phi[n as usize] - v[e]);
