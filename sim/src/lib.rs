@@ -6,10 +6,14 @@
 //! - [`network`]: the sheet as a resistor network with electrode contacts, factored once into
 //!   the electrodes' transfer impedance (deliberately not the host's finite elements).
 //! - [`band`]: the banded Cholesky the network is solved with.
+//! - [`touch`]: touches, the piezoresistive law, and the conductance change they make.
+//! - [`fast`]: the fast path, a precomputed network updated per touch state (Woodbury).
 //!
 //! It depends on `et-core` only.
 #![forbid(unsafe_code)]
 
 pub mod band;
+pub mod fast;
 pub mod network;
 pub mod shape;
+pub mod touch;

@@ -453,6 +453,18 @@ pub fn place_contacts(
 }
 
 impl Solved {
+    /// The Cholesky factor of the banded block A.
+    #[must_use]
+    pub fn factor(&self) -> &BandCholesky {
+        &self.factor
+    }
+
+    /// W = A^-1 B, n x (L-1) column-major (column e-1 for electrode e).
+    #[must_use]
+    pub fn w(&self) -> &[f64] {
+        &self.w
+    }
+
     /// Node potentials (V, n values) for current `i` amps entering at electrode `a` and
     /// leaving at `b` (electrode 0 grounded): phi = -W V_E with V_E = Z I.
     #[must_use]
