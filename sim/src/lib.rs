@@ -8,6 +8,8 @@
 //! - [`band`]: the banded Cholesky the network is solved with.
 //! - [`touch`]: touches, the piezoresistive law, and the conductance change they make.
 //! - [`fast`]: the fast path, a precomputed network updated per touch state (Woodbury).
+//! - [`sheet`]: a sheet spec (outline, fabric, electrodes, resolution) built into a network;
+//!   noiseless frames for any protocol, with the current source's compliance.
 //!
 //! It depends on `et-core` only.
 #![forbid(unsafe_code)]
@@ -16,4 +18,5 @@ pub mod band;
 pub mod fast;
 pub mod network;
 pub mod shape;
+pub mod sheet;
 pub mod touch;

@@ -230,6 +230,53 @@ impl Shape {
     }
 }
 
+impl Shape {
+    /// Distance from `p` to the outline, m (whether `p` is inside or outside).
+    #[must_use]
+    pub fn distance_to_outline(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Shape::Disc { radius } => (p[0].hypot(p[1]) - radius).abs(),
+            _ => {
+                let v = self.corners();
+                (0..v.len())
+                    .map(|i| segment_distance(p, v[i], v[(i + 1) % v.len()]))
+                    .fold(f64::INFINITY, f64::min)
+            }
+        }
+    }
+
+    /// Arc-length fraction (0..1) of the outline point nearest to `p`: the inverse of
+    /// [`Shape::boundary_point`].
+    #[must_use]
+    pub fn arc_of(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Shape::Disc { .. } => (p[1].atan2(p[0]) / (2.0 * std::f64::consts::PI)).rem_euclid(1.0),
+            _ => {
+                let v = self.corners();
+                let total = self.perimeter();
+                let (mut best, mut best_d, mut walked) = (0.0, f64::INFINITY, 0.0);
+                for i in 0..v.len() {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    let l = dist(a, b);
+                    let t = if l > 0.0 {
+                        (((p[0] - a[0]) * (b[0] - a[0]) + (p[1] - a[1]) * (b[1] - a[1])) / (l * l))
+                            .clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    let d = dist(p, [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+                    if d < best_d {
+                        best_d = d;
+                        best = (walked + t * l) / total;
+                    }
+                    walked += l;
+                }
+                best.rem_euclid(1.0)
+            }
+        }
+    }
+}
+
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
@@ -275,8 +322,14 @@ mod tests {
                 "{p:?}"
             );
         }
+        for t in [0.0, 0.1, 0.37, 0.5, 0.93] {
+            for s in [&square, &poly] {
+                assert!((s.arc_of(s.boundary_point(t)) - t).abs() < 1e-12, "{t}");
+            }
+        }
         let disc = Shape::Disc { radius: 0.11 };
         assert!((disc.boundary_point(0.25)[1] - 0.11).abs() < 1e-12);
+        assert!((disc.arc_of(disc.boundary_point(0.8)) - 0.8).abs() < 1e-12);
         assert!(disc.contains([0.0, 0.109], 0.0) && !disc.contains([0.08, 0.08], 0.0));
         // An L-shape: the notch is outside.
         let l = Shape::Polygon {

@@ -1,0 +1,359 @@
+//! A sheet with its electrodes, ready to answer "what do the electrodes read for this touch
+//! state?" (SPEC §1-2), noiselessly. Noise, the ADC and timing are [`crate::frontend`]'s.
+
+use et_core::protocol::Protocol;
+use serde::{Deserialize, Serialize};
+
+use crate::fast::FastNetwork;
+use crate::network::{Grid, Network, NetworkError, Transfer, place_contacts};
+use crate::shape::{Shape, ShapeError};
+use crate::touch::{Inclusion, Piezo, Touch, edge_multipliers};
+
+/// Default sheet resistance of the PPy fabric, ohm per square (SPEC §1).
+pub const SHEET_RESISTANCE: f64 = 30e3;
+
+/// Where the electrodes are and how they touch the fabric.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ElectrodeSpec {
+    /// Electrode count L (4 to 32).
+    pub count: u8,
+    /// Width along the outline, m (a clip: about 5 mm).
+    pub width: f64,
+    /// Contact resistance of each electrode, ohm.
+    pub contact_ohm: f64,
+    /// Arc-length fraction of the outline where electrode 0 sits; the others follow equally
+    /// spaced, counter-clockwise. Default: half a pitch from the outline's start.
+    pub first: Option<f64>,
+    /// Explicit arc-length fractions, one per electrode (overrides `first`).
+    pub positions: Option<Vec<f64>>,
+}
+
+impl Default for ElectrodeSpec {
+    fn default() -> Self {
+        Self {
+            count: 16,
+            width: 0.005,
+            contact_ohm: 1_000.0,
+            first: None,
+            positions: None,
+        }
+    }
+}
+
+impl ElectrodeSpec {
+    /// The arc-length fraction of every electrode.
+    #[must_use]
+    pub fn arc_positions(&self) -> Vec<f64> {
+        if let Some(p) = &self.positions {
+            return p.clone();
+        }
+        let l = f64::from(self.count);
+        let first = self.first.unwrap_or(0.5 / l);
+        (0..self.count).map(|e| first + f64::from(e) / l).collect()
+    }
+}
+
+/// The physical sheet: outline, fabric, electrodes, and how finely to model it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SheetSpec {
+    /// Outline.
+    pub shape: Shape,
+    /// Sheet resistance, ohm per square.
+    #[serde(default = "default_rs")]
+    pub sheet_resistance: f64,
+    /// Electrodes.
+    #[serde(default)]
+    pub electrodes: ElectrodeSpec,
+    /// Grid spacing, m. Default: [`SheetSpec::default_resolution`].
+    #[serde(default)]
+    pub resolution: Option<f64>,
+    /// Pressure to conductance.
+    #[serde(default)]
+    pub piezo: Piezo,
+}
+
+fn default_rs() -> f64 {
+    SHEET_RESISTANCE
+}
+
+/// Why a sheet cannot be built.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SheetError {
+    /// The outline is not valid.
+    Shape(ShapeError),
+    /// A field is out of range.
+    Field {
+        /// The field's name, as in a scene file.
+        field: &'static str,
+        /// What is wrong.
+        why: String,
+    },
+    /// The network could not be built or solved.
+    Network(NetworkError),
+}
+
+impl std::fmt::Display for SheetError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SheetError::Shape(e) => write!(f, "sheet.shape: {e}"),
+            SheetError::Field { field, why } => write!(f, "{field}: {why}"),
+            SheetError::Network(e) => write!(f, "sheet: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for SheetError {}
+
+impl SheetSpec {
+    /// The grid spacing used when none is given: 48 cells across the smaller side, at least 4
+    /// per electrode pitch and 2 per electrode width, whichever is finest. Measured accuracy in
+    /// the README (`cargo test -p et-sim --release resolution -- --nocapture`).
+    #[must_use]
+    pub fn default_resolution(&self) -> f64 {
+        let pitch = self.shape.perimeter() / f64::from(self.electrodes.count.max(1));
+        (self.shape.size() / 48.0)
+            .min(pitch / 4.0)
+            .min(self.electrodes.width / 2.0)
+    }
+
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`SheetError`] naming the field.
+    pub fn validate(&self) -> Result<(), SheetError> {
+        self.shape.validate().map_err(SheetError::Shape)?;
+        let field = |field, why: String| Err(SheetError::Field { field, why });
+        if !(self.sheet_resistance.is_finite() && self.sheet_resistance > 0.0) {
+            return field(
+                "sheet.sheet_resistance",
+                format!(
+                    "{} must be positive (ohm per square)",
+                    self.sheet_resistance
+                ),
+            );
+        }
+        let e = &self.electrodes;
+        if !(4..=32).contains(&e.count) || !e.count.is_multiple_of(2) {
+            return field(
+                "sheet.electrodes.count",
+                format!("{} must be even, 4 to 32", e.count),
+            );
+        }
+        if !(e.width.is_finite() && e.width > 0.0) {
+            return field(
+                "sheet.electrodes.width",
+                format!("{} must be a positive length in m", e.width),
+            );
+        }
+        if !(e.contact_ohm.is_finite() && e.contact_ohm >= 0.0) {
+            return field(
+                "sheet.electrodes.contact_ohm",
+                format!("{} must be >= 0 ohm", e.contact_ohm),
+            );
+        }
+        if let Some(p) = &e.positions
+            && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
+        {
+            return field(
+                "sheet.electrodes.positions",
+                format!("need {} finite arc fractions", e.count),
+            );
+        }
+        if let Some(h) = self.resolution
+            && !(h.is_finite() && h > 0.0 && h <= self.shape.size() / 4.0)
+        {
+            return field(
+                "sheet.resolution",
+                format!("{h} m: use a positive spacing below a quarter of the sheet"),
+            );
+        }
+        let p = &self.piezo;
+        if !(p.gain.is_finite() && p.gain > -1.0 && p.half_pressure > 0.0 && p.exponent > 0.0) {
+            return field(
+                "sheet.piezo",
+                "gain > -1, half_pressure > 0 and exponent > 0".into(),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A built sheet: network, fast path and piezo law.
+#[derive(Debug)]
+pub struct Sheet {
+    spec: SheetSpec,
+    network: Network,
+    fast: FastNetwork,
+}
+
+impl Sheet {
+    /// Builds the network at the spec's resolution with electrodes moved along the outline by
+    /// `offsets` (m, one per electrode; empty for none) and solves the untouched sheet.
+    ///
+    /// # Errors
+    /// [`SheetError`] for an invalid spec or an unsolvable network (e.g. overlapping
+    /// electrodes at this resolution).
+    pub fn new(spec: &SheetSpec, offsets: &[f64]) -> Result<Self, SheetError> {
+        let network = build_network(spec, offsets)?;
+        let fast =
+            FastNetwork::new(&network, network.conductances(None)).map_err(SheetError::Network)?;
+        Ok(Self {
+            spec: spec.clone(),
+            network,
+            fast,
+        })
+    }
+
+    /// The spec it was built from.
+    #[must_use]
+    pub fn spec(&self) -> &SheetSpec {
+        &self.spec
+    }
+
+    /// The network.
+    #[must_use]
+    pub fn network(&self) -> &Network {
+        &self.network
+    }
+
+    /// Electrode count L.
+    #[must_use]
+    pub fn electrodes(&self) -> usize {
+        self.network.electrodes()
+    }
+
+    /// Transfer impedance with these touches on the sheet.
+    ///
+    /// # Errors
+    /// [`SheetError::Network`] if the update fails (non-finite input).
+    pub fn transfer(&self, touches: &[Touch]) -> Result<Transfer, SheetError> {
+        let incs: Vec<Inclusion> = touches
+            .iter()
+            .map(|t| Inclusion::of_touch(t, &self.spec.piezo))
+            .collect();
+        self.transfer_inclusions(&incs)
+    }
+
+    /// Transfer impedance with arbitrary conductivity inclusions.
+    ///
+    /// # Errors
+    /// [`SheetError::Network`] if the update fails.
+    pub fn transfer_inclusions(&self, inclusions: &[Inclusion]) -> Result<Transfer, SheetError> {
+        let changes = edge_multipliers(&self.network.grid, inclusions);
+        self.fast.transfer(&changes).map_err(SheetError::Network)
+    }
+}
+
+/// The network of `spec` (validated) with electrodes moved along the outline by `offsets`
+/// (m, one per electrode; empty for none), without the fast path's precomputation.
+///
+/// # Errors
+/// [`SheetError`] for an invalid spec or electrodes that cannot be placed.
+pub fn build_network(spec: &SheetSpec, offsets: &[f64]) -> Result<Network, SheetError> {
+    spec.validate()?;
+    let h = spec.resolution.unwrap_or_else(|| spec.default_resolution());
+    let grid = Grid::new(&spec.shape, h);
+    let perimeter = spec.shape.perimeter();
+    let positions: Vec<f64> = spec
+        .electrodes
+        .arc_positions()
+        .iter()
+        .enumerate()
+        .map(|(e, &t)| t + offsets.get(e).copied().unwrap_or(0.0) / perimeter)
+        .collect();
+    let z = vec![spec.electrodes.contact_ohm; positions.len()];
+    let contacts = place_contacts(
+        &spec.shape,
+        &grid,
+        &positions,
+        spec.electrodes.width,
+        &z,
+        spec.sheet_resistance,
+    );
+    Network::new(grid, contacts, 1.0 / spec.sheet_resistance).map_err(SheetError::Network)
+}
+
+/// Transfer impedance of `network` with `touches`, by a direct solve (no precomputation; the
+/// oracle for [`Sheet::transfer`], and the way to use networks too large to precompute).
+///
+/// # Errors
+/// [`SheetError::Network`] if the network cannot be solved.
+pub fn direct_transfer(
+    network: &Network,
+    piezo: &Piezo,
+    touches: &[Touch],
+) -> Result<Transfer, SheetError> {
+    let incs: Vec<Inclusion> = touches
+        .iter()
+        .map(|t| Inclusion::of_touch(t, piezo))
+        .collect();
+    let mut mult = vec![1.0; network.grid.edges.len()];
+    for (k, m) in edge_multipliers(&network.grid, &incs) {
+        mult[k] = m;
+    }
+    network
+        .solve(&network.conductances(Some(&mult)))
+        .map(|s| s.transfer)
+        .map_err(SheetError::Network)
+}
+
+/// The current source of SPEC §2: a Howland pump that delivers its set current only while
+/// the load stays below its compliance, V_out_max / (2 I); beyond, the current falls to
+/// V_out_max / (2 R_load).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Source {
+    /// Largest output voltage of the pump, V.
+    pub v_out_max: f64,
+    /// On-resistance of each multiplexer switch, ohm (in series with the load, twice).
+    pub mux_on_ohm: f64,
+}
+
+impl Default for Source {
+    /// 16 V supply (SPEC §2: 10 mW at 32 uA / 16 V), ADG1606 at 4.5 ohm.
+    fn default() -> Self {
+        Self {
+            v_out_max: 16.0,
+            mux_on_ohm: 4.5,
+        }
+    }
+}
+
+impl Source {
+    /// Current delivered into `load` ohms when `set` amps are asked for.
+    #[must_use]
+    pub fn current(&self, set: f64, load: f64) -> f64 {
+        let r = load + 2.0 * self.mux_on_ohm;
+        if r * 2.0 * set <= self.v_out_max {
+            set
+        } else {
+            self.v_out_max / (2.0 * r)
+        }
+    }
+}
+
+/// The noiseless frame V_m (volts, K values) of `protocol` for transfer `z` at current `amps`.
+#[must_use]
+pub fn frame(z: &Transfer, protocol: &Protocol, amps: f64, source: &Source) -> Vec<f64> {
+    protocol
+        .steps()
+        .map(|s| {
+            let (a, b) = (
+                usize::from(s.injection.source.0),
+                usize::from(s.injection.sink.0),
+            );
+            let (p, q) = (
+                usize::from(s.measurement.positive.0),
+                usize::from(s.measurement.negative.0),
+            );
+            let i = source.current(amps, z.load(a, b));
+            z.voltage(a, b, p, q, i)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests;
