@@ -10,13 +10,18 @@
 //! - [`fast`]: the fast path, a precomputed network updated per touch state (Woodbury).
 //! - [`sheet`]: a sheet spec (outline, fabric, electrodes, resolution) built into a network;
 //!   noiseless frames for any protocol, with the current source's compliance.
+//! - [`frontend`]: the acquisition chain as an `et_core::Frontend` (current jitter, settling,
+//!   noise, gain, ADC), and the fast path for whole noisy frames.
+//! - [`rng`]: the seedable generator that makes every run reproducible.
 //!
 //! It depends on `et-core` only.
 #![forbid(unsafe_code)]
 
 pub mod band;
 pub mod fast;
+pub mod frontend;
 pub mod network;
+pub mod rng;
 pub mod shape;
 pub mod sheet;
 pub mod touch;

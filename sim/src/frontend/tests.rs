@@ -1,0 +1,181 @@
+//! The simulated front end against the real scan engine.
+
+use super::*;
+use crate::shape::Shape;
+use crate::sheet::{ElectrodeSpec, SheetSpec};
+use crate::touch::Piezo;
+use et_core::protocol::ProtocolKind;
+use et_core::{Protocol, Scanner};
+
+pub(crate) fn sheet(resolution: Option<f64>) -> Arc<Sheet> {
+    let spec = SheetSpec {
+        shape: Shape::Rectangle {
+            width: 0.13,
+            height: 0.13,
+        },
+        sheet_resistance: 30e3,
+        electrodes: ElectrodeSpec::default(),
+        resolution,
+        piezo: Piezo::default(),
+    };
+    Arc::new(Sheet::new(&spec, &[]).unwrap())
+}
+
+fn column_stats(frames: &[Vec<f32>], k: usize) -> (f64, f64) {
+    let n = frames.len() as f64;
+    let mean = frames.iter().map(|f| f64::from(f[k])).sum::<f64>() / n;
+    let var = frames
+        .iter()
+        .map(|f| (f64::from(f[k]) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
+    (mean, var.sqrt())
+}
+
+#[test]
+fn scan_engine_through_the_sim_reproduces_the_fast_path() {
+    let sheet = sheet(Some(0.005));
+    let config = ScanConfig::REFERENCE;
+    let touch = Touch {
+        position: [0.02, 0.01],
+        radius: 0.0075,
+        pressure: 30e3,
+    };
+    let mut slow = SimFrontend::new(sheet.clone(), FrontendSpec::default(), 1).unwrap();
+    let mut fast = SimFrontend::new(sheet, FrontendSpec::default(), 2).unwrap();
+    slow.set_touches(&[touch]).unwrap();
+    fast.set_touches(&[touch]).unwrap();
+    let scanner = Scanner::new(config, &mut slow).unwrap();
+    let k = scanner.frame_len();
+    let n = 60;
+    let mut burst = vec![0u16; 50];
+    let mut scanned = Vec::new();
+    let mut quick = Vec::new();
+    for _ in 0..n {
+        let mut v = vec![0.0f32; k];
+        let report = scanner.scan(&mut slow, &mut burst, &mut v).unwrap();
+        assert_eq!(report.rail.count(), 0);
+        scanned.push(v);
+        quick.push(fast.fast_frame(&config).unwrap());
+    }
+    let ideal = slow.ideal_frame(scanner.protocol(), f64::from(config.current_amps()));
+    let lsb = f64::from(FrontendSpec::default().scale(1).volts_per_code);
+    let mut ratio_sum = 0.0;
+    for c in 0..k {
+        let (ms, ss) = column_stats(&scanned, c);
+        let (mf, sf) = column_stats(&quick, c);
+        let tol = 5.0 * ((ss * ss + sf * sf) / n as f64).sqrt() + lsb;
+        assert!(
+            (ms - mf).abs() <= tol,
+            "channel {c}: scan {ms:.6} fast {mf:.6} (tol {tol:.2e})"
+        );
+        assert!(
+            (ms - ideal[c]).abs() <= tol,
+            "channel {c}: scan {ms:.6} ideal {:.6}",
+            ideal[c]
+        );
+        ratio_sum += ss / sf;
+    }
+    let ratio = ratio_sum / k as f64;
+    assert!(
+        (0.8..1.25).contains(&ratio),
+        "noise of scan vs fast path: ratio {ratio}"
+    );
+}
+
+#[test]
+fn settling_matters_when_bursts_are_short() {
+    // The median ignores a transient that spoils only a few samples of a long burst; with
+    // short bursts and no t_s the transient takes the median with it.
+    let sheet = sheet(Some(0.008));
+    let quiet = FrontendSpec {
+        white_noise_v: 0.0,
+        current_noise: 0.0,
+        mains_v: 0.0,
+        ..FrontendSpec::default()
+    };
+    let mut fe = SimFrontend::new(sheet, quiet, 3).unwrap();
+    let mut err = |samples_per_step: u16, settle_samples: u16| {
+        let config = ScanConfig {
+            samples_per_step,
+            settle_samples,
+            ..ScanConfig::REFERENCE
+        };
+        let scanner = Scanner::new(config, &mut fe).unwrap();
+        let mut v = vec![0.0f32; scanner.frame_len()];
+        scanner.scan(&mut fe, &mut [0u16; 64], &mut v).unwrap();
+        let ideal = fe.ideal_frame(scanner.protocol(), 32e-6);
+        v.iter()
+            .zip(&ideal)
+            .map(|(a, b)| (f64::from(*a) - b).abs())
+            .fold(0.0, f64::max)
+    };
+    let lsb = f64::from(FrontendSpec::default().scale(1).volts_per_code);
+    let reference = err(50, 25);
+    let short_unsettled = err(12, 0);
+    let short_settled = err(12, 8);
+    assert!(
+        reference <= lsb,
+        "the reference t_s = 25 of 50 leaves {reference} V"
+    );
+    assert!(
+        short_unsettled > 20.0 * lsb,
+        "12 samples, t_s = 0: {short_unsettled} V"
+    );
+    assert!(
+        short_settled < short_unsettled / 3.0,
+        "t_s = 8 of 12: {short_settled} V vs {short_unsettled} V"
+    );
+}
+
+#[test]
+fn adc_rails_are_hit_and_flagged_at_high_gain() {
+    let sheet = sheet(Some(0.008));
+    let mut fe = SimFrontend::new(sheet, FrontendSpec::default(), 4).unwrap();
+    // Gain 100 puts +-50 mV full scale: the big channels next to the drive clip.
+    let config = ScanConfig {
+        gain: 100,
+        ..ScanConfig::REFERENCE
+    };
+    let scanner = Scanner::new(config, &mut fe).unwrap();
+    let mut v = vec![0.0f32; scanner.frame_len()];
+    let report = scanner.scan(&mut fe, &mut [0u16; 50], &mut v).unwrap();
+    let ideal = fe.ideal_frame(scanner.protocol(), 32e-6);
+    let clipped: Vec<usize> = (0..ideal.len())
+        .filter(|&c| ideal[c].abs() > 0.051)
+        .collect();
+    assert!(!clipped.is_empty());
+    for c in clipped {
+        assert!(
+            report.rail.get(c),
+            "channel {c} at {} V is flagged",
+            ideal[c]
+        );
+    }
+    assert!(v.iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn misuse_is_a_typed_error() {
+    let sheet = sheet(Some(0.01));
+    let mut fe = SimFrontend::new(sheet, FrontendSpec::default(), 5).unwrap();
+    assert_eq!(fe.acquire(&mut [0; 4]), Err(SimError::NotSelected));
+    let wrong = ScanConfig {
+        electrodes: 8,
+        ..ScanConfig::REFERENCE
+    };
+    assert!(matches!(fe.configure(&wrong), Err(SimError::Config(_))));
+    assert!(matches!(fe.fast_frame(&wrong), Err(SimError::Config(_))));
+    fe.configure(&ScanConfig::REFERENCE).unwrap();
+    let p = Protocol::new(ProtocolKind::Adjacent, 32).unwrap();
+    let s = p.step(500).unwrap();
+    assert!(matches!(
+        fe.select(s.injection, s.measurement),
+        Err(SimError::Electrode(_))
+    ));
+    let bad = FrontendSpec {
+        white_noise_v: -1.0,
+        ..FrontendSpec::default()
+    };
+    assert!(SimFrontend::new(fe.sheet().clone(), bad, 1).is_err());
+}
