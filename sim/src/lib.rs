@@ -12,6 +12,7 @@
 //!   noiseless frames for any protocol, with the current source's compliance.
 //! - [`frontend`]: the acquisition chain as an `et_core::Frontend` (current jitter, settling,
 //!   noise, gain, ADC), and the fast path for whole noisy frames.
+//! - [`scene`]: scene files (TOML) and the runner that turns them into frames with their truth.
 //! - [`rng`]: the seedable generator that makes every run reproducible.
 //!
 //! It depends on `et-core` only.
@@ -22,6 +23,7 @@ pub mod fast;
 pub mod frontend;
 pub mod network;
 pub mod rng;
+pub mod scene;
 pub mod shape;
 pub mod sheet;
 pub mod touch;

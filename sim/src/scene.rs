@@ -1,0 +1,497 @@
+//! Scenes: a TOML file that says everything the simulator needs (DESIGN.md, "Scenes"): the
+//! sheet and its electrodes, the scan settings, the front end, touches over time, and a seed.
+//! Every table refuses unknown keys, so a typo is an error naming the key, not a silent
+//! default. See `sim/scenes/*.toml` for examples of every geometry of SPEC §1 and the
+//! reference scenarios of SPEC §7.
+//!
+//! A scene costs what it asks for: the grid follows the sheet's size and electrodes (see
+//! [`SheetSpec::default_resolution`]), and nothing is simulated that the scene does not name.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use et_core::protocol::ProtocolKind;
+use et_core::wire::Frame;
+use et_core::{Micros, ScanConfig, Scanner};
+use serde::{Deserialize, Serialize};
+
+use crate::frontend::{FrontendSpec, SimError, SimFrontend};
+use crate::rng::Rng;
+use crate::sheet::{Sheet, SheetError, SheetSpec};
+use crate::touch::Touch;
+
+/// How a scene's frames are scanned.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScanSpec {
+    /// adjacent, pseudo-polar, pp-pp or opposite.
+    pub protocol: String,
+    /// Samples per injection step (S / L).
+    pub samples_per_step: u16,
+    /// t_s, samples dropped per step.
+    pub settle_samples: u16,
+    /// Injected current, uA.
+    pub current_ua: f64,
+    /// Sample rate per channel, Hz.
+    pub sample_rate_hz: u32,
+    /// PGIA gain.
+    pub gain: u8,
+}
+
+impl Default for ScanSpec {
+    /// The reference operating point of SPEC §3.
+    fn default() -> Self {
+        let r = ScanConfig::REFERENCE;
+        Self {
+            protocol: "adjacent".into(),
+            samples_per_step: r.samples_per_step,
+            settle_samples: r.settle_samples,
+            current_ua: f64::from(r.current_na) / 1e3,
+            sample_rate_hz: r.sample_rate_hz,
+            gain: r.gain,
+        }
+    }
+}
+
+/// Electrode movement of a frameless sheet: every electrode sits off its nominal place along
+/// the outline by a random amount (normal, this rms), drawn once per scene from the seed.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Movement {
+    /// Rms offset along the outline, m.
+    pub rms: f64,
+}
+
+/// How the fabric follows pressure: loading is quick, unloading slow (elastic return), and a
+/// pressed fabric stays a little more conductive than on the way in (hysteresis).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Dynamics {
+    /// Time constant while the pressure rises, s.
+    pub load_s: f64,
+    /// Time constant while it falls (slow elastic return), s.
+    pub unload_s: f64,
+    /// Fraction of the peak pressure the fabric keeps "remembering" while unloading.
+    pub hysteresis: f64,
+}
+
+impl Default for Dynamics {
+    fn default() -> Self {
+        Self {
+            load_s: 0.02,
+            unload_s: 0.3,
+            hysteresis: 0.1,
+        }
+    }
+}
+
+/// One touch over time. Before `start` and after `end` it is off (its effect then fades
+/// with the unloading dynamics); in between it moves linearly from `position` to `to`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TouchEvent {
+    /// Centre at `start`, m.
+    pub position: [f64; 2],
+    /// Centre at `end` (default: not moving), m.
+    #[serde(default)]
+    pub to: Option<[f64; 2]>,
+    /// Contact radius, m.
+    pub radius: f64,
+    /// Pressure while on, Pa.
+    pub pressure: f64,
+    /// When it lands, s (default 0).
+    #[serde(default)]
+    pub start: f64,
+    /// When it lifts, s (default: never).
+    #[serde(default)]
+    pub end: Option<f64>,
+}
+
+/// A whole scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// What the scene shows, for people.
+    #[serde(default)]
+    pub description: String,
+    /// Seed of every random draw (noise, electrode movement).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// The sheet.
+    pub sheet: SheetSpec,
+    /// Electrode movement (frameless sheets).
+    #[serde(default)]
+    pub movement: Movement,
+    /// Scan settings.
+    #[serde(default)]
+    pub scan: ScanSpec,
+    /// Front end and noise.
+    #[serde(default)]
+    pub frontend: FrontendSpec,
+    /// Pressure dynamics.
+    #[serde(default)]
+    pub dynamics: Dynamics,
+    /// Touches over time.
+    #[serde(default, rename = "touch")]
+    pub touches: Vec<TouchEvent>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// Why a scene cannot be used.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The file could not be read.
+    Io {
+        /// The file.
+        path: String,
+        /// The reason.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML or does not fit the scene format (the message names the
+    /// key and the line).
+    Parse {
+        /// The file.
+        path: String,
+        /// The parser's message.
+        message: String,
+    },
+    /// A value is out of range.
+    Invalid {
+        /// The file.
+        path: String,
+        /// The field and the reason.
+        message: String,
+    },
+    /// Simulation failed while running.
+    Run(String),
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SceneError::Io { path, source } => write!(f, "{path}: {source}"),
+            SceneError::Parse { path, message } => write!(f, "{path}: {message}"),
+            SceneError::Invalid { path, message } => write!(f, "{path}: {message}"),
+            SceneError::Run(why) => write!(f, "simulation: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file, and the field where one is at fault.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: name.clone(),
+            source,
+        })?;
+        Self::parse(&text, &name)
+    }
+
+    /// Parses and validates scene text; `name` is used in messages.
+    ///
+    /// # Errors
+    /// [`SceneError::Parse`] or [`SceneError::Invalid`].
+    pub fn parse(text: &str, name: &str) -> Result<Self, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: name.into(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        scene.validate().map_err(|message| SceneError::Invalid {
+            path: name.into(),
+            message,
+        })?;
+        Ok(scene)
+    }
+
+    /// Checks every value, returning "field: reason".
+    fn validate(&self) -> Result<(), String> {
+        self.sheet.validate().map_err(|e| e.to_string())?;
+        self.frontend.validate().map_err(|e| e.to_string())?;
+        self.scan_config()?;
+        if !(self.movement.rms.is_finite() && self.movement.rms >= 0.0) {
+            return Err(format!(
+                "movement.rms: {} must be >= 0 m",
+                self.movement.rms
+            ));
+        }
+        let d = &self.dynamics;
+        if !(d.load_s >= 0.0 && d.unload_s >= 0.0 && (0.0..1.0).contains(&d.hysteresis)) {
+            return Err("dynamics: load_s and unload_s >= 0 s, hysteresis in [0, 1)".into());
+        }
+        for (i, t) in self.touches.iter().enumerate() {
+            let at = |what: &str| format!("touch[{i}].{what}");
+            let inside = |p: [f64; 2]| self.sheet.shape.contains(p, 1e-9);
+            if !(t.radius.is_finite() && t.radius > 0.0) {
+                return Err(format!(
+                    "{}: {} must be a positive length in m",
+                    at("radius"),
+                    t.radius
+                ));
+            }
+            if !(t.pressure.is_finite() && t.pressure >= 0.0) {
+                return Err(format!(
+                    "{}: {} must be >= 0 Pa",
+                    at("pressure"),
+                    t.pressure
+                ));
+            }
+            if !t.position.iter().all(|v| v.is_finite()) || !inside(t.position) {
+                return Err(format!(
+                    "{}: {:?} is not on the sheet",
+                    at("position"),
+                    t.position
+                ));
+            }
+            if let Some(to) = t.to
+                && (!to.iter().all(|v| v.is_finite()) || !inside(to))
+            {
+                return Err(format!("{}: {:?} is not on the sheet", at("to"), to));
+            }
+            if !t.start.is_finite() || t.end.is_some_and(|e| !(e.is_finite() && e >= t.start)) {
+                return Err(format!("{}: need finite start <= end (s)", at("start")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The scan configuration the scene asks for.
+    ///
+    /// # Errors
+    /// "scan.field: reason".
+    pub fn scan_config(&self) -> Result<ScanConfig, String> {
+        let s = &self.scan;
+        let protocol = ProtocolKind::from_name(&s.protocol).ok_or_else(|| {
+            format!(
+                "scan.protocol: '{}' is not adjacent, pseudo-polar, pp-pp or opposite",
+                s.protocol
+            )
+        })?;
+        if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {
+            return Err(format!(
+                "scan.current_ua: {} must be in (0, 1000] uA",
+                s.current_ua
+            ));
+        }
+        let config = ScanConfig {
+            electrodes: self.sheet.electrodes.count,
+            protocol,
+            samples_per_step: s.samples_per_step,
+            settle_samples: s.settle_samples,
+            current_na: (s.current_ua * 1e3).round() as u32,
+            sample_rate_hz: s.sample_rate_hz,
+            gain: s.gain,
+        };
+        config.validate().map_err(|e| format!("scan: {e}"))?;
+        Ok(config)
+    }
+
+    /// The touches at time `t` as scheduled (before dynamics): on, positioned, at full pressure.
+    #[must_use]
+    pub fn scheduled(&self, t: f64) -> Vec<Option<Touch>> {
+        self.touches
+            .iter()
+            .map(|ev| {
+                let on = t >= ev.start && ev.end.is_none_or(|e| t < e);
+                on.then(|| {
+                    let f = match (ev.to, ev.end) {
+                        (Some(_), Some(end)) if end > ev.start => {
+                            ((t - ev.start) / (end - ev.start)).clamp(0.0, 1.0)
+                        }
+                        _ => 0.0,
+                    };
+                    let to = ev.to.unwrap_or(ev.position);
+                    Touch {
+                        position: [
+                            ev.position[0] + f * (to[0] - ev.position[0]),
+                            ev.position[1] + f * (to[1] - ev.position[1]),
+                        ],
+                        radius: ev.radius,
+                        pressure: ev.pressure,
+                    }
+                })
+            })
+            .collect()
+    }
+}
+
+/// The truth behind one simulated frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// Scene time at the start of the frame, s.
+    pub time: f64,
+    /// Touches as the fabric feels them (effective pressure after dynamics; touches still
+    /// relaxing after they lifted are included while their effect lasts).
+    pub touches: Vec<Touch>,
+}
+
+/// How much of the acquisition to simulate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Detail {
+    /// Every sample through the real scan engine (slow, exact).
+    Samples,
+    /// Whole frames with the same statistics ([`SimFrontend::fast_frame`]).
+    Frames,
+}
+
+/// A scene running: a sensor and a clock.
+#[derive(Debug)]
+pub struct Run {
+    scene: Scene,
+    config: ScanConfig,
+    frontend: SimFrontend,
+    scanner: Scanner,
+    seq: u32,
+    frame_period: f64,
+    /// Per touch event: effective pressure, peak pressure seen, last position.
+    state: Vec<(f64, f64, [f64; 2])>,
+}
+
+impl Run {
+    /// Builds the sheet (with electrode movement drawn from the seed) and the front end.
+    ///
+    /// # Errors
+    /// [`SceneError::Run`] if the sheet cannot be built (e.g. electrodes overlapping at the
+    /// chosen resolution).
+    pub fn new(scene: &Scene) -> Result<Self, SceneError> {
+        let config = scene.scan_config().map_err(SceneError::Run)?;
+        let mut rng = Rng::new(scene.seed);
+        let mut moves = rng.fork();
+        let offsets: Vec<f64> = (0..scene.sheet.electrodes.count)
+            .map(|_| scene.movement.rms * moves.normal())
+            .collect();
+        let sheet = Sheet::new(&scene.sheet, &offsets)
+            .map_err(|e: SheetError| SceneError::Run(e.to_string()))?;
+        let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())
+            .map_err(|e| SceneError::Run(e.to_string()))?;
+        let scanner =
+            Scanner::new(config, &mut frontend).map_err(|e| SceneError::Run(e.to_string()))?;
+        let frame_period = 1.0 / f64::from(config.frame_rate_hz());
+        let state = scene
+            .touches
+            .iter()
+            .map(|t| (0.0, 0.0, t.position))
+            .collect();
+        Ok(Self {
+            scene: scene.clone(),
+            config,
+            frontend,
+            scanner,
+            seq: 0,
+            frame_period,
+            state,
+        })
+    }
+
+    /// The scan configuration.
+    #[must_use]
+    pub fn config(&self) -> &ScanConfig {
+        &self.config
+    }
+
+    /// The sensor.
+    #[must_use]
+    pub fn frontend(&self) -> &SimFrontend {
+        &self.frontend
+    }
+
+    /// Seconds per frame.
+    #[must_use]
+    pub fn frame_period(&self) -> f64 {
+        self.frame_period
+    }
+
+    /// Advances the touch dynamics to time `t` (one frame period later than the last call).
+    fn touches_at(&mut self, t: f64) -> Vec<Touch> {
+        let d = self.scene.dynamics;
+        let dt = self.frame_period;
+        let scheduled = self.scene.scheduled(t);
+        let mut out = Vec::new();
+        for (ev, (state, target)) in self
+            .scene
+            .touches
+            .iter()
+            .zip(self.state.iter_mut().zip(scheduled))
+        {
+            let (p, peak, pos) = state;
+            let goal = target.map_or(0.0, |t| t.pressure);
+            if let Some(t) = target {
+                *pos = t.position;
+            }
+            let tau = if goal >= *p { d.load_s } else { d.unload_s };
+            *p = if tau > 0.0 {
+                goal + (*p - goal) * (-dt / tau).exp()
+            } else {
+                goal
+            };
+            *peak = if goal > 0.0 {
+                peak.max(*p)
+            } else {
+                *peak * (-dt / d.unload_s.max(1e-9)).exp()
+            };
+            // Hysteresis: on the way down the fabric feels a little of the peak it saw.
+            let felt = *p
+                + if goal < *p {
+                    d.hysteresis * (*peak - *p)
+                } else {
+                    0.0
+                };
+            if felt > 1e-3 * ev.pressure.max(1.0) {
+                out.push(Touch {
+                    position: *pos,
+                    radius: ev.radius,
+                    pressure: felt,
+                });
+            }
+        }
+        out
+    }
+
+    /// Simulates the next frame and says what was really on the sheet.
+    ///
+    /// # Errors
+    /// [`SceneError::Run`] if the simulation fails.
+    pub fn next_frame(&mut self, detail: Detail) -> Result<(Frame, Truth), SceneError> {
+        let t = f64::from(self.seq) * self.frame_period;
+        let touches = self.touches_at(t);
+        self.frontend
+            .set_touches(&touches)
+            .map_err(|e| SceneError::Run(e.to_string()))?;
+        let k = self.scanner.frame_len();
+        let (voltages, report) = match detail {
+            Detail::Frames => {
+                let v = self
+                    .frontend
+                    .fast_frame(&self.config)
+                    .map_err(|e: SimError| SceneError::Run(e.to_string()))?;
+                (v, et_core::ScanReport::default())
+            }
+            Detail::Samples => {
+                let mut v = vec![0.0f32; k];
+                let mut burst = vec![0u16; usize::from(self.config.samples_per_step)];
+                let r = self
+                    .scanner
+                    .scan(&mut self.frontend, &mut burst, &mut v)
+                    .map_err(|e| SceneError::Run(e.to_string()))?;
+                (v, r)
+            }
+        };
+        let micros = Micros((t * 1e6) as u32);
+        let frame = Frame::from_scan(self.seq, micros, self.config, &report, 0, &voltages)
+            .map_err(|e| SceneError::Run(e.to_string()))?;
+        self.seq += 1;
+        Ok((frame, Truth { time: t, touches }))
+    }
+}
+
+#[cfg(test)]
+mod tests;

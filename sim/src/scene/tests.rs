@@ -1,0 +1,187 @@
+//! Scene files: the shipped ones load and run; bad ones say which file and which field.
+
+use super::*;
+use std::path::PathBuf;
+
+fn scenes_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+const SMALL: &str = r#"
+seed = 9
+[sheet]
+shape = { kind = "rectangle", width = 0.13, height = 0.13 }
+electrodes = { count = 16 }
+resolution = 0.005
+[[touch]]
+position = [0.0, 0.0]
+radius = 0.0075
+pressure = 20e3
+"#;
+
+#[test]
+fn every_shipped_scene_loads_and_runs() {
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                !scene.description.is_empty(),
+                "{} has a description",
+                path.display()
+            );
+            let mut run = Run::new(&scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            for _ in 0..3 {
+                let (frame, _) = run.next_frame(Detail::Frames).unwrap();
+                assert!(frame.voltages.iter().all(|v| v.is_finite()));
+                assert_eq!(
+                    frame.voltages.len(),
+                    run.config().validate().unwrap().frame_len()
+                );
+            }
+            names.push(path.file_name().unwrap().to_string_lossy().to_string());
+        }
+    }
+    for geometry in [
+        "disc-22cm-16",
+        "square-13cm-16",
+        "square-13cm-8",
+        "square-17cm-16",
+        "strip-22x10-16",
+        "l-shape-16",
+    ] {
+        assert!(
+            names.iter().any(|n| n.starts_with(geometry)),
+            "{geometry} ships"
+        );
+    }
+    for reference in [
+        "disc-ref-x075",
+        "disc-ref-x050",
+        "disc-ref-x025",
+        "disc-ref-x000",
+        "disc-ref-two",
+    ] {
+        assert!(
+            names.iter().any(|n| n.starts_with(reference)),
+            "{reference} ships"
+        );
+    }
+}
+
+#[test]
+fn bad_scenes_name_the_file_and_the_field() {
+    let err = |text: &str| Scene::parse(text, "bad.toml").unwrap_err().to_string();
+    let typo = err(&SMALL.replace("radius = 0.0075", "radus = 0.0075"));
+    assert!(
+        typo.starts_with("bad.toml") && typo.contains("radus"),
+        "{typo}"
+    );
+    let count = err(&SMALL.replace("count = 16", "count = 7"));
+    assert!(
+        count.contains("sheet.electrodes.count") && count.contains("even"),
+        "{count}"
+    );
+    let off = err(&SMALL.replace("position = [0.0, 0.0]", "position = [0.5, 0.0]"));
+    assert!(
+        off.contains("touch[0].position") && off.contains("not on the sheet"),
+        "{off}"
+    );
+    let protocol = err(&format!("{SMALL}\n[scan]\nprotocol = \"spiral\"\n"));
+    assert!(protocol.contains("scan.protocol"), "{protocol}");
+    let settle = err(&format!("{SMALL}\n[scan]\nsettle_samples = 60\n"));
+    assert!(settle.contains("settle_samples"), "{settle}");
+    let shape = err(&SMALL.replace("width = 0.13, height", "width = -0.13, height"));
+    assert!(shape.contains("width"), "{shape}");
+    let not_toml = err("[sheet\nshape = 3");
+    assert!(not_toml.starts_with("bad.toml"), "{not_toml}");
+    let missing = Scene::load(Path::new("/nonexistent/scene.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(missing.contains("/nonexistent/scene.toml"), "{missing}");
+}
+
+#[test]
+fn runs_are_deterministic_from_the_seed() {
+    let scene = Scene::parse(SMALL, "small").unwrap();
+    let frames = |scene: &Scene| {
+        let mut run = Run::new(scene).unwrap();
+        (0..3)
+            .map(|_| run.next_frame(Detail::Frames).unwrap().0)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(frames(&scene), frames(&scene));
+    let other = Scene {
+        seed: 10,
+        ..scene.clone()
+    };
+    assert_ne!(frames(&scene), frames(&other));
+}
+
+#[test]
+fn electrode_movement_moves_the_frame() {
+    let still = Scene::parse(SMALL, "small").unwrap();
+    let moving = Scene {
+        movement: Movement { rms: 0.002 },
+        ..still.clone()
+    };
+    let quiet = |s: &Scene| {
+        let mut s = s.clone();
+        s.frontend.white_noise_v = 0.0;
+        s.frontend.current_noise = 0.0;
+        s.frontend.mains_v = 0.0;
+        Run::new(&s).unwrap().next_frame(Detail::Frames).unwrap().0
+    };
+    let (a, b) = (quiet(&still), quiet(&moving));
+    let diff: f32 = a
+        .voltages
+        .iter()
+        .zip(&b.voltages)
+        .map(|(x, y)| (x - y).abs())
+        .sum();
+    assert!(diff > 1e-3, "moved electrodes change the frame ({diff} V)");
+}
+
+#[test]
+fn touches_move_press_quickly_and_relax_slowly() {
+    let text = SMALL.replace(
+        "pressure = 20e3",
+        "pressure = 40e3\nstart = 0.1\nend = 0.6\nto = [0.04, 0.0]",
+    );
+    let scene = Scene::parse(&text, "swipe").unwrap();
+    let mut run = Run::new(&scene).unwrap();
+    let period = run.frame_period();
+    let mut history = Vec::new();
+    while (history.len() as f64) * period < 2.0 {
+        let (_, truth) = run.next_frame(Detail::Frames).unwrap();
+        history.push(truth);
+    }
+    let at = |t: f64| &history[(t / period) as usize];
+    assert!(
+        at(0.05).touches.is_empty(),
+        "nothing before the touch lands"
+    );
+    // 40 ms after landing (two load time constants) it presses at > 80 % of 40 kPa.
+    let landed = &at(0.14).touches[0];
+    assert!(landed.pressure > 0.8 * 40e3, "{}", landed.pressure);
+    // Half-way through it is half-way along.
+    let mid = &at(0.35).touches[0];
+    assert!((mid.position[0] - 0.02).abs() < 0.002, "{:?}", mid.position);
+    // After lifting at 0.6 s the effect fades slowly: still felt 100 ms later, more than a
+    // pure unloading decay would leave (hysteresis), and all but gone 1.4 s (4.7 tau) later.
+    let after = &at(0.7).touches;
+    assert!(
+        !after.is_empty() && after[0].pressure > 40e3 * (-0.1f64 / 0.3).exp() * 0.9,
+        "{after:?}"
+    );
+    assert!(
+        at(0.7).touches[0].position == at(0.59).touches[0].position,
+        "it lifts where it was"
+    );
+    let last = &history.last().unwrap().touches;
+    assert!(
+        last.is_empty() || last[0].pressure < 0.05 * 40e3,
+        "{last:?}"
+    );
+}
