@@ -4,6 +4,9 @@
 //!
 //! - [`tables`]: a protocol's tables (SPEC §4) as plain data for people and programs, behind
 //!   `et protocol`.
+//! - [`recording`]: the recording format (JSON Lines: header, then one frame per line), which
+//!   Python and MATLAB read without et; `et sim` writes it.
 #![forbid(unsafe_code)]
 
+pub mod recording;
 pub mod tables;

@@ -87,3 +87,84 @@ fn protocol_text_and_errors_teach() {
     let help = et(&["protocol", "--help"]);
     assert!(String::from_utf8_lossy(&help.stdout).contains("Examples:"));
 }
+
+#[test]
+fn sim_writes_a_recording_that_python_reads() {
+    let dir = std::env::temp_dir().join(format!("et-cli-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("touch.jsonl");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let run = et(&[
+        "sim",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "30",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(String::from_utf8_lossy(&run.stderr).contains("wrote 30 frames of 208 values"));
+    // Read back in Rust...
+    let rec = et_host::recording::read(&out).unwrap();
+    assert_eq!(rec.records.len(), 30);
+    // ...and with the documented Python reader (standard library only).
+    let py = Command::new("python3")
+        .arg(root.join("python/et_recording.py"))
+        .arg(&out)
+        .output()
+        .expect("python3 is needed for this test");
+    let text = String::from_utf8_lossy(&py.stdout);
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    assert!(
+        text.contains("frames 30")
+            && text.contains("K 208")
+            && text.contains("protocol adjacent L 16"),
+        "{text}"
+    );
+    // The touch lands at 0.05 s (frame 4 at 78 Hz): later frames carry it.
+    let touched: usize = text
+        .lines()
+        .find_map(|l| l.strip_prefix("touched "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(
+        touched,
+        rec.records
+            .iter()
+            .filter(|r| r.touches.as_ref().is_some_and(|t| !t.is_empty()))
+            .count()
+    );
+    assert!(touched >= 25);
+    // A bad scene names the file and the field.
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\nelectrodes = { count = 7 }\n",
+    )
+    .unwrap();
+    let err = et(&[
+        "sim",
+        "--scene",
+        bad.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!err.status.success());
+    let msg = String::from_utf8_lossy(&err.stderr);
+    assert!(
+        msg.contains("bad.toml") && msg.contains("sheet.electrodes.count"),
+        "{msg}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,11 +1,16 @@
 //! `et`: the command-line program of the et workspace.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
+use et_host::recording::{self, Header, Record, TouchRecord};
 use et_host::tables::ProtocolTables;
+use et_sim::scene::{Detail, Run, Scene};
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Touch sensing with electrical tomography: protocols, simulation, imaging and learning.
 #[derive(Debug, Parser)]
@@ -25,6 +30,36 @@ enum Command {
     ///   et protocol -l 16 --drive-skip 3 --measure-skip 0 --measure-skip 3
     #[command(verbatim_doc_comment)]
     Protocol(ProtocolArgs),
+    /// Simulate a scene: frames of the emulated fabric sheet, with the true touches, written
+    /// as a recording (JSON Lines; read it from Python with python/et_recording.py).
+    ///
+    /// Scenes are TOML files; sim/scenes/ has one for every geometry of the method and its
+    /// reference scenarios.
+    ///
+    /// Examples:
+    ///   et sim --scene sim/scenes/square-13cm-16.toml --frames 200 --out touch.jsonl
+    ///   et sim --scene sim/scenes/square-13cm-16-swipe.toml --frames 150 --out swipe.jsonl --samples
+    #[command(verbatim_doc_comment)]
+    Sim(SimArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct SimArgs {
+    /// The scene file (TOML).
+    #[arg(long)]
+    scene: PathBuf,
+    /// How many frames to simulate.
+    #[arg(long, default_value_t = 100)]
+    frames: u32,
+    /// Where to write the recording (.jsonl).
+    #[arg(long)]
+    out: PathBuf,
+    /// Simulate every ADC sample through the real scan engine (slower) instead of whole frames.
+    #[arg(long)]
+    samples: bool,
+    /// Override the scene's seed.
+    #[arg(long)]
+    seed: Option<u64>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -83,10 +118,64 @@ fn protocol(args: &ProtocolArgs) -> Result<()> {
     Ok(())
 }
 
+fn sim(args: &SimArgs) -> Result<()> {
+    let mut scene = Scene::load(&args.scene)?;
+    if let Some(seed) = args.seed {
+        scene.seed = seed;
+    }
+    let started = Instant::now();
+    let mut run = Run::new(&scene)?;
+    let setup = started.elapsed();
+    let header = Header::new(format!("sim:{}", args.scene.display()), run.config())?;
+    let mut writer = recording::Writer::create(&args.out, &header)?;
+    let detail = if args.samples {
+        Detail::Samples
+    } else {
+        Detail::Frames
+    };
+    let bar = ProgressBar::new(u64::from(args.frames)).with_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message("simulating");
+    let started = Instant::now();
+    for _ in 0..args.frames {
+        let (frame, truth) = run.next_frame(detail)?;
+        let touches = truth
+            .touches
+            .iter()
+            .map(|t| TouchRecord {
+                x: t.position[0],
+                y: t.position[1],
+                radius: t.radius,
+                pressure: t.pressure,
+            })
+            .collect();
+        writer.append(&Record::new(&frame, Some(touches)))?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    eprintln!(
+        "wrote {} frames of {} values ({} at L = {}, {:.1} s of scene time) to {} \
+         (sheet built in {:.2} s; {:.0} frames/s)",
+        args.frames,
+        header.frame_len,
+        header.protocol,
+        header.electrodes,
+        f64::from(args.frames) * run.frame_period(),
+        args.out.display(),
+        setup.as_secs_f64(),
+        f64::from(args.frames) / elapsed.max(1e-9)
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Protocol(args) => protocol(args),
+        Command::Sim(args) => sim(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

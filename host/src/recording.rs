@@ -1,0 +1,379 @@
+//! The recording format: JSON Lines (`.jsonl`), one JSON object per line.
+//!
+//! Line 1 is a [`Header`]: format name and version, where the frames come from, the scan
+//! configuration, K, and the measurement table (injection and measurement electrodes of every
+//! column), so a recording can be read without et. Every further line is one [`Record`]: a
+//! frame's sequence number, time, flags and V_m in volts, and, for simulated frames, the
+//! truth (the touches that were on the sheet).
+//!
+//! Why JSON Lines: Python reads it with the standard library (`python/et_recording.py`),
+//! MATLAB with `jsondecode` per line, pandas with `read_json(lines=True)`; and a line is
+//! flushed as soon as its frame arrives, so a crash or a pulled cable loses at most the frame
+//! in flight. A reader skips a truncated last line and says so.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use et_core::ScanConfig;
+use et_core::protocol::Protocol;
+use et_core::wire::Frame;
+use serde::{Deserialize, Serialize};
+
+/// The `format` value of a recording's header.
+pub const FORMAT: &str = "et-recording";
+/// The format version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// One column of V_m: which injection and which measurement produced it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Column {
+    /// Electrode the current enters.
+    pub source: u8,
+    /// Electrode the current leaves.
+    pub sink: u8,
+    /// Amplifier + input.
+    pub positive: u8,
+    /// Amplifier - input.
+    pub negative: u8,
+}
+
+/// The first line of a recording.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// [`VERSION`].
+    pub version: u32,
+    /// Where the frames come from (`sim:<scene file>`, `port:<path>`, ...).
+    pub source: String,
+    /// Electrode count L.
+    pub electrodes: u8,
+    /// Protocol name.
+    pub protocol: String,
+    /// Frame length K.
+    #[serde(rename = "K")]
+    pub frame_len: usize,
+    /// Scan settings.
+    pub config: ScanConfig,
+    /// What each of the K columns measures.
+    pub columns: Vec<Column>,
+}
+
+impl Header {
+    /// The header of frames produced with `config`.
+    ///
+    /// # Errors
+    /// If `config` is not a valid configuration.
+    pub fn new(
+        source: impl Into<String>,
+        config: &ScanConfig,
+    ) -> Result<Self, et_core::config::ConfigError> {
+        let protocol: Protocol = config.validate()?;
+        let columns = protocol
+            .steps()
+            .map(|s| Column {
+                source: s.injection.source.0,
+                sink: s.injection.sink.0,
+                positive: s.measurement.positive.0,
+                negative: s.measurement.negative.0,
+            })
+            .collect();
+        Ok(Self {
+            format: FORMAT.into(),
+            version: VERSION,
+            source: source.into(),
+            electrodes: config.electrodes,
+            protocol: config.protocol.name().into(),
+            frame_len: protocol.frame_len(),
+            config: *config,
+            columns,
+        })
+    }
+}
+
+/// A touch as recorded (metres, pascals).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TouchRecord {
+    /// Centre x, m.
+    pub x: f64,
+    /// Centre y, m.
+    pub y: f64,
+    /// Contact radius, m.
+    pub radius: f64,
+    /// Pressure the fabric feels, Pa.
+    pub pressure: f64,
+}
+
+/// One frame line.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    /// Sequence number.
+    pub seq: u32,
+    /// Device time of the frame, us.
+    pub t_us: u32,
+    /// Frame flags (`et_core::wire::FLAG_*`).
+    pub flags: u8,
+    /// Measurements with ADC rail samples.
+    pub rail_count: u16,
+    /// V_m, volts, K values.
+    pub voltages: Vec<f32>,
+    /// For simulated frames: the touches on the sheet.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub touches: Option<Vec<TouchRecord>>,
+}
+
+impl Record {
+    /// The record of `frame`, with the truth if known.
+    #[must_use]
+    pub fn new(frame: &Frame, touches: Option<Vec<TouchRecord>>) -> Self {
+        Self {
+            seq: frame.seq,
+            t_us: frame.timestamp.0,
+            flags: frame.flags,
+            rail_count: frame.rail_count,
+            voltages: frame.voltages.to_vec(),
+            touches,
+        }
+    }
+}
+
+/// Why a recording could not be written or read.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum RecordingError {
+    /// The file could not be created, written or read.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The reason.
+        source: std::io::Error,
+    },
+    /// A line is not what the format says.
+    Line {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl std::fmt::Display for RecordingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            RecordingError::Line {
+                path,
+                line,
+                message,
+            } => write!(f, "{}:{line}: {message}", path.display()),
+        }
+    }
+}
+
+impl std::error::Error for RecordingError {}
+
+/// Writes a recording line by line, flushing each line.
+#[derive(Debug)]
+pub struct Writer {
+    path: PathBuf,
+    out: BufWriter<File>,
+    k: usize,
+}
+
+impl Writer {
+    /// Creates (or truncates) `path` and writes the header.
+    ///
+    /// # Errors
+    /// [`RecordingError::Io`].
+    pub fn create(path: &Path, header: &Header) -> Result<Self, RecordingError> {
+        let io = |source| RecordingError::Io {
+            path: path.into(),
+            source,
+        };
+        let file = File::create(path).map_err(io)?;
+        let mut w = Self {
+            path: path.into(),
+            out: BufWriter::new(file),
+            k: header.frame_len,
+        };
+        w.line(header)?;
+        Ok(w)
+    }
+
+    fn line<T: Serialize>(&mut self, value: &T) -> Result<(), RecordingError> {
+        let io = |source| RecordingError::Io {
+            path: self.path.clone(),
+            source,
+        };
+        serde_json::to_writer(&mut self.out, value).map_err(|e| io(e.into()))?;
+        self.out.write_all(b"\n").map_err(io)?;
+        self.out.flush().map_err(io)
+    }
+
+    /// Appends one frame (flushed before returning).
+    ///
+    /// # Errors
+    /// [`RecordingError::Line`] if the frame's length is not the header's K;
+    /// [`RecordingError::Io`].
+    pub fn append(&mut self, record: &Record) -> Result<(), RecordingError> {
+        if record.voltages.len() != self.k {
+            return Err(RecordingError::Line {
+                path: self.path.clone(),
+                line: 0,
+                message: format!(
+                    "frame {} has {} values, the header says K = {}",
+                    record.seq,
+                    record.voltages.len(),
+                    self.k
+                ),
+            });
+        }
+        self.line(record)
+    }
+}
+
+/// A recording read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// The header.
+    pub header: Header,
+    /// The frames.
+    pub records: Vec<Record>,
+    /// Whether the last line was cut short (a crash while writing) and skipped.
+    pub truncated_tail: bool,
+}
+
+/// Reads a recording, checking the header and every frame's length.
+///
+/// # Errors
+/// [`RecordingError`] naming the file and line.
+pub fn read(path: &Path) -> Result<Recording, RecordingError> {
+    let io = |source| RecordingError::Io {
+        path: path.into(),
+        source,
+    };
+    let bad = |line, message: String| RecordingError::Line {
+        path: path.into(),
+        line,
+        message,
+    };
+    let file = File::open(path).map_err(io)?;
+    let lines: Vec<String> = BufReader::new(file)
+        .lines()
+        .collect::<Result<_, _>>()
+        .map_err(io)?;
+    let first = lines
+        .first()
+        .ok_or_else(|| bad(1, "empty file: no header".into()))?;
+    let header: Header = serde_json::from_str(first).map_err(|e| bad(1, format!("header: {e}")))?;
+    if header.format != FORMAT {
+        return Err(bad(
+            1,
+            format!("format '{}' is not {FORMAT}", header.format),
+        ));
+    }
+    if header.version != VERSION {
+        return Err(bad(
+            1,
+            format!("version {} (this build reads {VERSION})", header.version),
+        ));
+    }
+    let mut records = Vec::new();
+    let mut truncated_tail = false;
+    let last = lines.len();
+    for (i, text) in lines.iter().enumerate().skip(1) {
+        if text.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<Record>(text) {
+            Ok(r) if r.voltages.len() == header.frame_len => records.push(r),
+            Ok(r) => {
+                return Err(bad(
+                    i + 1,
+                    format!(
+                        "frame {} has {} values, K = {}",
+                        r.seq,
+                        r.voltages.len(),
+                        header.frame_len
+                    ),
+                ));
+            }
+            Err(e) if i + 1 == last && e.is_eof() => truncated_tail = true,
+            Err(e) => return Err(bad(i + 1, e.to_string())),
+        }
+    }
+    Ok(Recording {
+        header,
+        records,
+        truncated_tail,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use et_core::Micros;
+    use et_core::scan::ScanReport;
+
+    fn frame(seq: u32, k: usize) -> Frame {
+        let v: Vec<f32> = (0..k).map(|i| i as f32 * 1e-3 + seq as f32).collect();
+        Frame::from_scan(
+            seq,
+            Micros(seq * 12_800),
+            ScanConfig::REFERENCE,
+            &ScanReport::default(),
+            0,
+            &v,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn round_trip_and_a_cut_tail_loses_only_the_last_frame() {
+        let dir = std::env::temp_dir().join(format!("et-rec-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.jsonl");
+        let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+        assert_eq!((header.frame_len, header.columns.len()), (208, 208));
+        let mut w = Writer::create(&path, &header).unwrap();
+        let touches = Some(vec![TouchRecord {
+            x: 0.01,
+            y: -0.02,
+            radius: 0.0075,
+            pressure: 2e4,
+        }]);
+        for seq in 0..5 {
+            w.append(&Record::new(&frame(seq, 208), touches.clone()))
+                .unwrap();
+        }
+        assert!(
+            w.append(&Record::new(&frame(9, 10), None)).is_err(),
+            "wrong K refused"
+        );
+        drop(w);
+        let rec = read(&path).unwrap();
+        assert_eq!(rec.header, header);
+        assert_eq!(rec.records.len(), 5);
+        assert_eq!(rec.records[3].voltages, frame(3, 208).voltages.to_vec());
+        assert_eq!(rec.records[0].touches, touches);
+        assert!(!rec.truncated_tail);
+        // A crash mid-line: everything before it survives.
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.truncate(bytes.len() - 40);
+        std::fs::write(&path, &bytes).unwrap();
+        let cut = read(&path).unwrap();
+        assert_eq!(cut.records.len(), 4);
+        assert!(cut.truncated_tail);
+        // Damage elsewhere is an error naming the line.
+        let text = std::fs::read_to_string(dir.join("a.jsonl"))
+            .unwrap()
+            .replacen("\"seq\":1", "\"seq\":\"x\"", 1);
+        std::fs::write(&path, text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(err.contains("a.jsonl:3"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,64 @@
+"""Read an et recording (JSON Lines) with nothing but the Python standard library.
+
+    from et_recording import load
+    header, frames = load("touch.jsonl")
+    header["K"], header["protocol"], header["columns"][0]   # what each column measures
+    frames[0]["voltages"]                                  # V_m in volts, K values
+    frames[0].get("touches")                               # the truth, for simulated frames
+
+With numpy:  V = numpy.array([f["voltages"] for f in frames])   # shape (n_frames, K)
+With pandas: pandas.read_json("touch.jsonl", lines=True).iloc[1:]
+
+Run as a script for a summary:  python3 python/et_recording.py touch.jsonl
+"""
+
+import json
+import sys
+
+FORMAT = "et-recording"
+VERSION = 1
+
+
+def load(path):
+    """Return (header, frames). A last line cut short by a crash is skipped with a warning."""
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    if not lines:
+        raise ValueError(f"{path}: empty file, no header")
+    header = json.loads(lines[0])
+    if header.get("format") != FORMAT or header.get("version") != VERSION:
+        raise ValueError(f"{path}:1: not an {FORMAT} version {VERSION} header")
+    frames = []
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            frame = json.loads(line)
+        except json.JSONDecodeError:
+            if number == len(lines):
+                print(f"{path}:{number}: last line cut short, skipped", file=sys.stderr)
+                break
+            raise
+        if len(frame["voltages"]) != header["K"]:
+            raise ValueError(f"{path}:{number}: {len(frame['voltages'])} values, K = {header['K']}")
+        frames.append(frame)
+    return header, frames
+
+
+def main(argv):
+    if len(argv) != 2:
+        print("usage: python3 et_recording.py RECORDING.jsonl", file=sys.stderr)
+        return 2
+    header, frames = load(argv[1])
+    touched = sum(1 for f in frames if f.get("touches"))
+    peak = max((abs(v) for f in frames for v in f["voltages"]), default=0.0)
+    print(f"frames {len(frames)}")
+    print(f"K {header['K']}")
+    print(f"protocol {header['protocol']} L {header['electrodes']}")
+    print(f"touched {touched}")
+    print(f"peak_volts {peak:.6f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
