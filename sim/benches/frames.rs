@@ -50,7 +50,12 @@ fn fresh_touch_every_frame(bencher: divan::Bencher) {
 #[divan::bench]
 fn noise_only_repeat(bencher: divan::Bencher) {
     let mut fe = frontend();
-    fe.set_touches(&[Touch { position: [0.02, -0.01], radius: 0.0075, pressure: 20e3 }]).expect("touch");
+    fe.set_touches(&[Touch {
+        position: [0.02, -0.01],
+        radius: 0.0075,
+        pressure: 20e3,
+    }])
+    .expect("touch");
     bencher.bench_local(|| fe.fast_frame(&ScanConfig::REFERENCE).expect("frame"));
 }
 
