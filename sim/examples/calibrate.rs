@@ -56,6 +56,7 @@ fn main() {
         electrodes: ElectrodeSpec::default(),
         resolution: None,
         piezo: Piezo::default(),
+        bend: None,
     };
     let sheet = Arc::new(Sheet::new(&sheet_spec, &[]).expect("sheet"));
     let targets = [(32_000, 55.0f32, 0.5f32), (10_000, 49.0, 0.4)];

@@ -27,6 +27,7 @@ fn spec(h: Option<f64>) -> SheetSpec {
         },
         resolution: h,
         piezo: Piezo::default(),
+        bend: None,
     }
 }
 

@@ -165,6 +165,10 @@ pub struct SimFrontend {
     target: Option<f64>,
     /// Amplifier input at the end of the last sample, V (where the next transient starts).
     last: f64,
+    /// Per electrode, the chance that its contact is open at a step (1 = disconnected).
+    open: Vec<f64>,
+    /// The sheet's conductance relative to when it was built (temperature drift).
+    conductance_scale: f64,
 }
 
 impl SimFrontend {
@@ -175,6 +179,7 @@ impl SimFrontend {
     pub fn new(sheet: Arc<Sheet>, spec: FrontendSpec, seed: u64) -> Result<Self, SheetError> {
         spec.validate()?;
         let transfer = sheet.transfer(&[])?;
+        let electrodes = sheet.electrodes();
         Ok(Self {
             sheet,
             spec,
@@ -186,7 +191,44 @@ impl SimFrontend {
             injection: None,
             target: None,
             last: 0.0,
+            open: vec![0.0; electrodes],
+            conductance_scale: 1.0,
         })
+    }
+
+    /// Makes electrode `e`'s contact open at each step with probability `p` (1 = disconnected,
+    /// between 0 and 1 = intermittent, 0 = sound). An open drive electrode stops the current;
+    /// an open measurement electrode leaves the amplifier input floating to a rail.
+    ///
+    /// # Errors
+    /// [`SimError::Electrode`] for an electrode the sheet does not have, [`SimError::Config`]
+    /// for p outside [0, 1].
+    pub fn set_open(&mut self, e: u8, p: f64) -> Result<(), SimError> {
+        let slot = self
+            .open
+            .get_mut(usize::from(e))
+            .ok_or(SimError::Electrode(e))?;
+        if !(0.0..=1.0).contains(&p) {
+            return Err(SimError::Config(format!(
+                "open probability {p} is not in [0, 1]"
+            )));
+        }
+        *slot = p;
+        Ok(())
+    }
+
+    /// Scales the sheet's conductance (temperature drift): every voltage divides by `c`.
+    ///
+    /// # Errors
+    /// [`SimError::Config`] unless `c` is finite and positive.
+    pub fn set_conductance_scale(&mut self, c: f64) -> Result<(), SimError> {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(SimError::Config(format!(
+                "conductance scale {c} must be positive"
+            )));
+        }
+        self.conductance_scale = c;
+        Ok(())
     }
 
     /// The sheet.
@@ -219,8 +261,32 @@ impl SimFrontend {
     fn settled(&self, inj: Injection, meas: Measurement, amps: f64) -> f64 {
         let (a, b) = (usize::from(inj.source.0), usize::from(inj.sink.0));
         let (p, q) = (usize::from(meas.positive.0), usize::from(meas.negative.0));
-        let i = self.spec.source.current(amps, self.transfer.load(a, b));
-        self.transfer.voltage(a, b, p, q, i)
+        let c = self.conductance_scale;
+        let i = self.spec.source.current(amps, self.transfer.load(a, b) / c);
+        self.transfer.voltage(a, b, p, q, i) / c
+    }
+
+    /// Whether electrode `e`'s contact is open at this step (draws only for faulty ones).
+    fn is_open(&mut self, e: u8) -> bool {
+        match self.open.get(usize::from(e)).copied().unwrap_or(0.0) {
+            p if p >= 1.0 => true,
+            p if p > 0.0 => self.rng.uniform() < p,
+            _ => false,
+        }
+    }
+
+    /// The step's settled input with the contact faults of this step applied.
+    fn faulty(&mut self, inj: Injection, meas: Measurement, amps: f64, gain: u8) -> f64 {
+        let drive_open = self.is_open(inj.source.0) | self.is_open(inj.sink.0);
+        let probe_open = self.is_open(meas.positive.0) | self.is_open(meas.negative.0);
+        if probe_open {
+            // A floating input drifts beyond the positive rail.
+            1.5 * self.spec.adc_range_v / f64::from(gain.max(1))
+        } else if drive_open {
+            0.0
+        } else {
+            self.settled(inj, meas, amps)
+        }
     }
 
     fn mains(&self, t: f64) -> f64 {
@@ -255,8 +321,12 @@ impl SimFrontend {
                 self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
             }
             let mid = self.time + dt * (f64::from(config.settle_samples) + kept / 2.0);
-            let v = self.settled(step.injection, step.measurement, amps * self.jitter)
-                + median_sigma * self.rng.normal()
+            let v = self.faulty(
+                step.injection,
+                step.measurement,
+                amps * self.jitter,
+                config.gain,
+            ) + median_sigma * self.rng.normal()
                 + self.mains(mid);
             let code = (v / lsb * 2.0).round() / 2.0 + f64::from(scale.zero_code);
             let code = code.clamp(0.0, f64::from(scale.max_code()));
@@ -310,7 +380,7 @@ impl Frontend for SimFrontend {
             self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
         }
         let amps = f64::from(config.current_amps()) * self.jitter;
-        self.target = Some(self.settled(injection, measurement, amps));
+        self.target = Some(self.faulty(injection, measurement, amps, config.gain));
         Ok(())
     }
 

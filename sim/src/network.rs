@@ -237,6 +237,11 @@ pub struct Network {
     pub contacts: Vec<Contact>,
     /// Sheet conductance 1/R_s, S.
     pub sheet_conductance: f64,
+    /// Per-edge conductance multipliers of the untouched sheet (bending strain, ...); all 1
+    /// unless set with [`Network::with_base`].
+    pub base: Vec<f64>,
+    /// Pairs of electrodes shorted together (a fault), joined by [`CONTACT_MIN_RELATIVE`] R_s.
+    pub shorts: Vec<(usize, usize)>,
 }
 
 /// A factored network: everything needed for electrode potentials and node potentials.
@@ -290,11 +295,45 @@ impl Network {
                 *slot = e;
             }
         }
+        let base = vec![1.0; grid.edges.len()];
         Ok(Self {
             grid,
             contacts,
             sheet_conductance,
+            base,
+            shorts: Vec::new(),
         })
+    }
+
+    /// The same network with per-edge multipliers of the untouched sheet (one per edge).
+    ///
+    /// # Errors
+    /// [`NetworkError::Singular`] for a wrong count or a multiplier that is not finite and
+    /// positive.
+    pub fn with_base(mut self, base: Vec<f64>) -> Result<Self, NetworkError> {
+        if base.len() != self.grid.edges.len() || base.iter().any(|m| !(m.is_finite() && *m > 0.0))
+        {
+            return Err(NetworkError::Singular(
+                "base multipliers: one finite positive value per edge".into(),
+            ));
+        }
+        self.base = base;
+        Ok(self)
+    }
+
+    /// The same network with electrodes `a` and `b` shorted together.
+    ///
+    /// # Errors
+    /// [`NetworkError::Electrodes`] for an electrode that does not exist or a == b.
+    pub fn with_short(mut self, a: usize, b: usize) -> Result<Self, NetworkError> {
+        let l = self.contacts.len();
+        if a >= l || b >= l || a == b {
+            return Err(NetworkError::Electrodes(format!(
+                "cannot short electrodes {a} and {b}"
+            )));
+        }
+        self.shorts.push((a, b));
+        Ok(self)
     }
 
     /// Electrode count L.
@@ -303,14 +342,17 @@ impl Network {
         self.contacts.len()
     }
 
-    /// Conductance of every edge (S) for per-edge multipliers (`None` = uniform sheet).
+    /// Conductance of every edge (S) for per-edge multipliers on top of the base ones (`None` =
+    /// the untouched sheet).
     #[must_use]
     pub fn conductances(&self, multiplier: Option<&[f64]>) -> Vec<f64> {
         self.grid
             .edges
             .iter()
             .enumerate()
-            .map(|(k, e)| self.sheet_conductance * e.weight * multiplier.map_or(1.0, |m| m[k]))
+            .map(|(k, e)| {
+                self.sheet_conductance * e.weight * self.base[k] * multiplier.map_or(1.0, |m| m[k])
+            })
             .collect()
     }
 
@@ -372,6 +414,19 @@ impl Network {
                     .map(|&(node, gc)| -gc * wf[node as usize])
                     .sum();
                 s[(e - 1, f - 1)] -= bw;
+            }
+        }
+        // A short is a near-zero resistance between two electrode nodes: it adds to S like a
+        // resistor (electrode 0 is ground, so a short to it only adds to the other's diagonal).
+        let g_short = self.sheet_conductance / CONTACT_MIN_RELATIVE;
+        for &(a, b) in &self.shorts {
+            for (x, y) in [(a, b), (b, a)] {
+                if x > 0 {
+                    s[(x - 1, x - 1)] += g_short;
+                    if y > 0 {
+                        s[(x - 1, y - 1)] -= g_short;
+                    }
+                }
             }
         }
         // An electrode with no path to electrode 0 has S_ee at round-off level (the true value

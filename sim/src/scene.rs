@@ -107,6 +107,45 @@ pub struct TouchEvent {
     pub end: Option<f64>,
 }
 
+/// What is wrong with an electrode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FaultKind {
+    /// The contact is open for good.
+    Disconnected,
+    /// The contact opens now and then (`probability` per step).
+    Intermittent,
+    /// Shorted to electrode `with`.
+    Shorted,
+}
+
+/// An electrode fault.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fault {
+    /// The faulty electrode.
+    pub electrode: u8,
+    /// What is wrong.
+    pub kind: FaultKind,
+    /// For `shorted`: the other electrode.
+    #[serde(default)]
+    pub with: Option<u8>,
+    /// For `intermittent`: chance per step that the contact is open, (0, 1).
+    #[serde(default)]
+    pub probability: Option<f64>,
+}
+
+/// Temperature drift: the sheet's conductance changes by `per_kelvin` per kelvin while the
+/// temperature ramps at `kelvin_per_minute`. Simulated only when a scene asks for it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Drift {
+    /// Relative conductance change per kelvin (PPy fabric: about +0.01).
+    pub per_kelvin: f64,
+    /// Temperature ramp, K per minute.
+    pub kelvin_per_minute: f64,
+}
+
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -134,6 +173,12 @@ pub struct Scene {
     /// Touches over time.
     #[serde(default, rename = "touch")]
     pub touches: Vec<TouchEvent>,
+    /// Electrode faults.
+    #[serde(default, rename = "fault")]
+    pub faults: Vec<Fault>,
+    /// Temperature drift.
+    #[serde(default)]
+    pub drift: Option<Drift>,
 }
 
 fn default_seed() -> u64 {
@@ -227,6 +272,39 @@ impl Scene {
         let d = &self.dynamics;
         if !(d.load_s >= 0.0 && d.unload_s >= 0.0 && (0.0..1.0).contains(&d.hysteresis)) {
             return Err("dynamics: load_s and unload_s >= 0 s, hysteresis in [0, 1)".into());
+        }
+        let l = self.sheet.electrodes.count;
+        for (i, f) in self.faults.iter().enumerate() {
+            let at = |what: &str| format!("fault[{i}].{what}");
+            if f.electrode >= l {
+                return Err(format!(
+                    "{}: {} is not an electrode (0 to {})",
+                    at("electrode"),
+                    f.electrode,
+                    l - 1
+                ));
+            }
+            match f.kind {
+                FaultKind::Shorted if f.with.is_none_or(|w| w >= l || w == f.electrode) => {
+                    return Err(format!(
+                        "{}: a short needs another electrode, 0 to {}",
+                        at("with"),
+                        l - 1
+                    ));
+                }
+                FaultKind::Intermittent if f.probability.is_none_or(|p| !(p > 0.0 && p < 1.0)) => {
+                    return Err(format!(
+                        "{}: intermittent needs a probability in (0, 1)",
+                        at("probability")
+                    ));
+                }
+                _ => {}
+            }
+        }
+        if let Some(d) = &self.drift
+            && !(d.per_kelvin.is_finite() && d.kelvin_per_minute.is_finite())
+        {
+            return Err("drift: per_kelvin and kelvin_per_minute must be finite".into());
         }
         for (i, t) in self.touches.iter().enumerate() {
             let at = |what: &str| format!("touch[{i}].{what}");
@@ -369,10 +447,26 @@ impl Run {
         let offsets: Vec<f64> = (0..scene.sheet.electrodes.count)
             .map(|_| scene.movement.rms * moves.normal())
             .collect();
-        let sheet = Sheet::new(&scene.sheet, &offsets)
+        let shorts: Vec<(usize, usize)> = scene
+            .faults
+            .iter()
+            .filter(|f| f.kind == FaultKind::Shorted)
+            .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
+            .collect();
+        let sheet = Sheet::with_shorts(&scene.sheet, &offsets, &shorts)
             .map_err(|e: SheetError| SceneError::Run(e.to_string()))?;
         let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())
             .map_err(|e| SceneError::Run(e.to_string()))?;
+        for f in &scene.faults {
+            let p = match f.kind {
+                FaultKind::Disconnected => 1.0,
+                FaultKind::Intermittent => f.probability.unwrap_or(0.0),
+                FaultKind::Shorted => continue,
+            };
+            frontend
+                .set_open(f.electrode, p)
+                .map_err(|e| SceneError::Run(e.to_string()))?;
+        }
         let scanner =
             Scanner::new(config, &mut frontend).map_err(|e| SceneError::Run(e.to_string()))?;
         let frame_period = 1.0 / f64::from(config.frame_rate_hz());
@@ -466,6 +560,12 @@ impl Run {
         self.frontend
             .set_touches(&touches)
             .map_err(|e| SceneError::Run(e.to_string()))?;
+        if let Some(d) = self.scene.drift {
+            let c = (1.0 + d.per_kelvin * d.kelvin_per_minute * t / 60.0).max(1e-3);
+            self.frontend
+                .set_conductance_scale(c)
+                .map_err(|e| SceneError::Run(e.to_string()))?;
+        }
         let k = self.scanner.frame_len();
         let (voltages, report) = match detail {
             Detail::Frames => {

@@ -72,6 +72,55 @@ pub struct SheetSpec {
     /// Pressure to conductance.
     #[serde(default)]
     pub piezo: Piezo,
+    /// The sheet bent over a cylinder (SPEC §1: a 3 cm radius).
+    #[serde(default)]
+    pub bend: Option<Bend>,
+}
+
+/// Direction along the sheet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Axis {
+    /// Along x.
+    X,
+    /// Along y.
+    Y,
+}
+
+/// A sheet bent over a cylinder. Bending does not change a thin sheet's own geometry (a
+/// cylinder is developable), so the network stays the flat one; what changes is the strain:
+/// the fabric is stretched along the direction it curves by thickness / (2 radius), and a
+/// stretched yarn conducts less: conductance along `curves` is divided by
+/// 1 + gauge_factor x strain.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bend {
+    /// Cylinder radius, m.
+    pub radius: f64,
+    /// The direction in which the sheet curves.
+    pub curves: Axis,
+    /// Fabric thickness, m (SPEC §1: 0.38 mm).
+    #[serde(default = "default_thickness")]
+    pub thickness: f64,
+    /// Relative resistance change per unit strain.
+    #[serde(default = "default_gauge")]
+    pub gauge_factor: f64,
+}
+
+fn default_thickness() -> f64 {
+    0.38e-3
+}
+
+fn default_gauge() -> f64 {
+    3.0
+}
+
+impl Bend {
+    /// Conductance multiplier of resistors along the curving direction.
+    #[must_use]
+    pub fn multiplier(&self) -> f64 {
+        1.0 / (1.0 + self.gauge_factor * self.thickness / (2.0 * self.radius))
+    }
 }
 
 fn default_rs() -> f64 {
@@ -177,6 +226,18 @@ impl SheetSpec {
                 "gain > -1, half_pressure > 0 and exponent > 0".into(),
             );
         }
+        if let Some(b) = &self.bend
+            && !(b.radius.is_finite()
+                && b.radius > 0.0
+                && b.thickness > 0.0
+                && b.thickness < b.radius
+                && b.gauge_factor >= 0.0)
+        {
+            return field(
+                "sheet.bend",
+                "radius > thickness > 0 m and gauge_factor >= 0".into(),
+            );
+        }
         Ok(())
     }
 }
@@ -197,7 +258,22 @@ impl Sheet {
     /// [`SheetError`] for an invalid spec or an unsolvable network (e.g. overlapping
     /// electrodes at this resolution).
     pub fn new(spec: &SheetSpec, offsets: &[f64]) -> Result<Self, SheetError> {
-        let network = build_network(spec, offsets)?;
+        Self::with_shorts(spec, offsets, &[])
+    }
+
+    /// As [`Sheet::new`], with pairs of electrodes shorted together (a fault).
+    ///
+    /// # Errors
+    /// As [`Sheet::new`], and for a short naming an electrode the sheet does not have.
+    pub fn with_shorts(
+        spec: &SheetSpec,
+        offsets: &[f64],
+        shorts: &[(usize, usize)],
+    ) -> Result<Self, SheetError> {
+        let mut network = build_network(spec, offsets)?;
+        for &(a, b) in shorts {
+            network = network.with_short(a, b).map_err(SheetError::Network)?;
+        }
         let fast =
             FastNetwork::new(&network, network.conductances(None)).map_err(SheetError::Network)?;
         Ok(Self {
@@ -273,7 +349,25 @@ pub fn build_network(spec: &SheetSpec, offsets: &[f64]) -> Result<Network, Sheet
         &z,
         spec.sheet_resistance,
     );
-    Network::new(grid, contacts, 1.0 / spec.sheet_resistance).map_err(SheetError::Network)
+    let base: Vec<f64> = grid
+        .edges
+        .iter()
+        .map(|e| {
+            let (a, b) = (grid.nodes[e.u as usize], grid.nodes[e.v as usize]);
+            let along = if (b[0] - a[0]).abs() > (b[1] - a[1]).abs() {
+                Axis::X
+            } else {
+                Axis::Y
+            };
+            match spec.bend {
+                Some(bend) if bend.curves == along => bend.multiplier(),
+                _ => 1.0,
+            }
+        })
+        .collect();
+    Network::new(grid, contacts, 1.0 / spec.sheet_resistance)
+        .and_then(|n| n.with_base(base))
+        .map_err(SheetError::Network)
 }
 
 /// Transfer impedance of `network` with `touches`, by a direct solve (no precomputation; the

@@ -17,6 +17,7 @@ pub(crate) fn sheet(resolution: Option<f64>) -> Arc<Sheet> {
         electrodes: ElectrodeSpec::default(),
         resolution,
         piezo: Piezo::default(),
+        bend: None,
     };
     Arc::new(Sheet::new(&spec, &[]).unwrap())
 }

@@ -185,3 +185,91 @@ fn touches_move_press_quickly_and_relax_slowly() {
         "{last:?}"
     );
 }
+
+fn quiet(text: &str) -> Scene {
+    let mut s = Scene::parse(text, "quiet").unwrap();
+    s.frontend.white_noise_v = 0.0;
+    s.frontend.current_noise = 0.0;
+    s.frontend.mains_v = 0.0;
+    s
+}
+
+#[test]
+fn faults_show_in_the_frames_not_averaged_in() {
+    let text = format!(
+        "{SMALL}\n[[fault]]\nelectrode = 5\nkind = \"disconnected\"\n\n[[fault]]\nelectrode = 2\nkind = \"shorted\"\nwith = 3\n"
+    );
+    let scene = quiet(&text);
+    let mut run = Run::new(&scene).unwrap();
+    let protocol = run.config().validate().unwrap();
+    let (frame, _) = run.next_frame(Detail::Samples).unwrap();
+    assert!(frame.flags & et_core::wire::FLAG_RAIL != 0);
+    for step in protocol.steps() {
+        let k = usize::from(step.k);
+        let (inj, m) = (step.injection, step.measurement);
+        let probes_5 = m.positive.0 == 5 || m.negative.0 == 5;
+        let drives_5 = inj.source.0 == 5 || inj.sink.0 == 5;
+        let v = frame.voltages[k];
+        if probes_5 {
+            assert!(v > 4.9, "step {k} reads a floating electrode: {v} V");
+        } else if drives_5 {
+            assert!(
+                v.abs() < 1e-3,
+                "no current through a disconnected electrode: step {k} {v} V"
+            );
+        } else if (m.positive.0, m.negative.0) == (2, 3) {
+            assert!(
+                v.abs() < 1e-3,
+                "a shorted pair reads nothing: step {k} {v} V"
+            );
+        }
+    }
+    // Intermittent: some frames flag the electrode, some do not.
+    let text =
+        format!("{SMALL}\n[[fault]]\nelectrode = 9\nkind = \"intermittent\"\nprobability = 0.02\n");
+    let mut run = Run::new(&quiet(&text)).unwrap();
+    let flagged = (0..20)
+        .filter(|_| {
+            run.next_frame(Detail::Frames)
+                .unwrap()
+                .0
+                .voltages
+                .iter()
+                .any(|&v| v > 4.9)
+        })
+        .count();
+    assert!(flagged > 0 && flagged < 20, "{flagged} of 20 frames");
+    let bad = Scene::parse(
+        &format!("{SMALL}\n[[fault]]\nelectrode = 3\nkind = \"shorted\"\n"),
+        "bad.toml",
+    );
+    assert!(bad.unwrap_err().to_string().contains("fault[0].with"));
+}
+
+#[test]
+fn drift_scales_the_frame_over_time() {
+    // +10 % conductance per kelvin, 60 K per minute: after 1 s the sheet conducts 10 % more.
+    // No touch, so that only the drift changes the frame.
+    let untouched = &SMALL[..SMALL.find("[[touch]]").unwrap()];
+    let scene = quiet(&format!(
+        "{untouched}\n[drift]\nper_kelvin = 0.1\nkelvin_per_minute = 60.0\n"
+    ));
+    let mut run = Run::new(&scene).unwrap();
+    let (first, _) = run.next_frame(Detail::Frames).unwrap();
+    let n = (1.0 / run.frame_period()).round() as usize;
+    let mut last = first.clone();
+    let mut t = 0.0;
+    for _ in 0..n {
+        let (f, truth) = run.next_frame(Detail::Frames).unwrap();
+        last = f;
+        t = truth.time;
+    }
+    let want = 1.0 / (1.0 + 0.1 * t);
+    let lsb = 10.0 / 65_536.0;
+    for (a, b) in last.voltages.iter().zip(&first.voltages) {
+        assert!(
+            (f64::from(*a) - want * f64::from(*b)).abs() <= lsb,
+            "{a} vs {want} x {b}"
+        );
+    }
+}

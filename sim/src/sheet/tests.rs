@@ -18,6 +18,7 @@ fn square(side: f64, l: u8, resolution: Option<f64>) -> SheetSpec {
         },
         resolution,
         piezo: Piezo::default(),
+        bend: None,
     }
 }
 
@@ -259,4 +260,66 @@ fn resolution_trade_at_the_default_spacing() {
         dv_err < 0.03,
         "touch effect within 3 % of the finer network: {dv_err}"
     );
+}
+
+#[test]
+fn a_bent_sheet_conducts_less_along_its_curve() {
+    let flat = square(0.13, 16, Some(0.005));
+    let bend = Bend {
+        radius: 0.03,
+        curves: Axis::X,
+        thickness: 0.38e-3,
+        gauge_factor: 3.0,
+    };
+    let bent = SheetSpec {
+        bend: Some(bend),
+        ..flat.clone()
+    };
+    let (p, src) = (adjacent(16), Source::default());
+    let touch = Touch {
+        position: [0.01, 0.02],
+        radius: 0.0075,
+        pressure: 20e3,
+    };
+    let sheet = Sheet::new(&bent, &[]).unwrap();
+    let fast = frame(&sheet.transfer(&[touch]).unwrap(), &p, 32e-6, &src);
+    let net = build_network(&bent, &[]).unwrap();
+    let direct = frame(
+        &direct_transfer(&net, &Piezo::default(), &[touch]).unwrap(),
+        &p,
+        32e-6,
+        &src,
+    );
+    assert!(
+        bvc(&fast, &direct) < 1e-9,
+        "the fast path includes the bend"
+    );
+    let flat_frame = frame(
+        &Sheet::new(&flat, &[]).unwrap().transfer(&[touch]).unwrap(),
+        &p,
+        32e-6,
+        &src,
+    );
+    let norm = flat_frame.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let change = bvc(&fast, &flat_frame) / norm;
+    // Strain 0.38 mm / 6 cm = 0.63 %, gauge 3: x-resistors lose 1.9 % of their conductance.
+    assert!(
+        change > 1e-3 && change < 0.05,
+        "bending changes the frame by {change}"
+    );
+    assert!((bend.multiplier() - 1.0 / 1.019).abs() < 1e-12);
+    let bad = SheetSpec {
+        bend: Some(Bend {
+            radius: 1e-4,
+            ..bend
+        }),
+        ..flat
+    };
+    assert!(matches!(
+        bad.validate(),
+        Err(SheetError::Field {
+            field: "sheet.bend",
+            ..
+        })
+    ));
 }
