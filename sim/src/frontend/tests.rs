@@ -217,3 +217,42 @@ fn calibration_reproduces_the_reference_noise() {
     assert!((snr10 - 20.8).abs() < 2.0, "SNR at 10 uA: {snr10} dB");
     assert!(snr32 > snr10, "more current, more SNR");
 }
+
+#[test]
+fn one_microamp_is_quantisation_dominated_but_sane() {
+    // At 1 uA the far channels are a few ADC codes: frames stay finite, and the average of
+    // many frames still finds the right voltages (the noise dithers the quantiser).
+    let mut fe = SimFrontend::new(sheet(Some(0.008)), FrontendSpec::default(), 6).unwrap();
+    let config = ScanConfig {
+        current_na: 1_000,
+        ..ScanConfig::REFERENCE
+    };
+    let scanner = Scanner::new(config, &mut fe).unwrap();
+    let k = scanner.frame_len();
+    let n = 200;
+    let mut mean = vec![0.0f64; k];
+    let mut burst = [0u16; 50];
+    let mut v = vec![0.0f32; k];
+    for _ in 0..n {
+        scanner.scan(&mut fe, &mut burst, &mut v).unwrap();
+        assert!(v.iter().all(|x| x.is_finite()));
+        for (m, x) in mean.iter_mut().zip(&v) {
+            *m += f64::from(*x) / f64::from(n);
+        }
+    }
+    let ideal = fe.ideal_frame(scanner.protocol(), 1e-6);
+    let lsb = f64::from(FrontendSpec::default().scale(1).volts_per_code);
+    let worst = mean
+        .iter()
+        .zip(&ideal)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < lsb,
+        "mean of {n} frames within one code of the truth: {worst} V"
+    );
+    assert!(
+        ideal.iter().any(|x| x.abs() < 4.0 * lsb),
+        "some channels are a few codes"
+    );
+}
