@@ -6,7 +6,10 @@
 //!   `et protocol`.
 //! - [`recording`]: the recording format (JSON Lines: header, then one frame per line), which
 //!   Python and MATLAB read without et; `et sim` writes it.
+//! - [`learn`]: touch classification from raw voltages (SPEC §9): collection, QDA/LDA fitting
+//!   with shrinkage, cross-validation, export to the firmware's model blob.
 #![forbid(unsafe_code)]
 
+pub mod learn;
 pub mod recording;
 pub mod tables;

@@ -1,0 +1,160 @@
+//! The data-collection procedure of SPEC §9 (Algorithms 2-3), on the simulator.
+//!
+//! The sheet is divided into a grid of classes. The grid is visited T times; at each visit
+//! every class is pressed for S_num scans while the pressure is varied by hand (a random
+//! pressure per scan between `pressure_pa`), the finger landing a little off the class centre
+//! (`placement_mm`). Each scan's kept samples are cut into S_sub sub-sections whose medians
+//! each give one observation, so a class collects n_c = T S_num S_sub observations. The
+//! features are the frame values named by `feature_index` (the opposite protocol's
+//! reciprocity-halved set by default: p = L (L - 4) / 2).
+
+use std::sync::Arc;
+
+use et_core::extract::Extracted;
+use et_core::protocol::Halving;
+use et_core::{ScanConfig, Scanner};
+use et_sim::frontend::{FrontendSpec, SimFrontend};
+use et_sim::rng::Rng;
+use et_sim::sheet::{Sheet, SheetSpec};
+use et_sim::touch::Touch;
+use nalgebra::DMatrix;
+
+/// A labelled set of observations.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    /// n x p features (volts).
+    pub x: DMatrix<f64>,
+    /// Class of each observation.
+    pub y: Vec<u16>,
+    /// Where the finger really was for each observation, m.
+    pub positions: Vec<[f64; 2]>,
+    /// Class centres, m.
+    pub centres: Vec<[f64; 2]>,
+    /// Frame index of each feature.
+    pub feature_index: Vec<u16>,
+    /// The scan settings.
+    pub config: ScanConfig,
+}
+
+/// Class centres on a rows x cols grid over the sheet's bounding box, inset by `margin` m
+/// (cell centres, row-major from the lower left).
+#[must_use]
+pub fn grid(spec: &SheetSpec, rows: usize, cols: usize, margin: f64) -> Vec<[f64; 2]> {
+    let [x0, y0, x1, y1] = spec.shape.bounds();
+    let (w, h) = (
+        (x1 - x0 - 2.0 * margin) / cols as f64,
+        (y1 - y0 - 2.0 * margin) / rows as f64,
+    );
+    (0..rows)
+        .flat_map(|r| {
+            (0..cols).map(move |c| {
+                [
+                    x0 + margin + (c as f64 + 0.5) * w,
+                    y0 + margin + (r as f64 + 0.5) * h,
+                ]
+            })
+        })
+        .filter(|p| spec.shape.contains(*p, 0.0))
+        .collect()
+}
+
+/// How to collect.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// T: visits of the whole grid.
+    pub visits: usize,
+    /// S_num: scans per class per visit.
+    pub scans: usize,
+    /// S_sub: observations per scan.
+    pub subsections: usize,
+    /// Pressure range while pressing, Pa (SPEC §9: from below 10 kPa up).
+    pub pressure_pa: (f64, f64),
+    /// Finger radius, m.
+    pub radius: f64,
+    /// Rms landing error around the class centre, m.
+    pub placement: f64,
+    /// Rms electrode movement along the outline, m (frameless sheets): drawn anew at every
+    /// visit, since the sheet is handled between visits.
+    pub electrode_movement: f64,
+    /// Seed of the session (electrode movement, placement, pressure, noise).
+    pub seed: u64,
+}
+
+/// Why collection failed.
+pub type CollectError = String;
+
+/// Runs the procedure on a simulated sheet. Every visit draws its own electrode positions from
+/// `plan.seed`, so a second call with another seed is a "next day" test set.
+///
+/// # Errors
+/// A message if the sheet cannot be built or a scan fails.
+pub fn collect(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+) -> Result<Dataset, CollectError> {
+    let protocol = config.validate().map_err(|e| e.to_string())?;
+    let feature_index: Vec<u16> = protocol
+        .features(Halving::Reciprocity)
+        .map(|k| k as u16)
+        .collect();
+    let mut rng = Rng::new(plan.seed);
+    let k = protocol.frame_len();
+    let s_sub = plan.subsections;
+    let mut burst = vec![0u16; usize::from(config.samples_per_step)];
+    let mut scratch = vec![
+        Extracted {
+            median_code: 0.0,
+            rail_samples: 0
+        };
+        s_sub
+    ];
+    let mut obs = vec![0.0f32; s_sub * k];
+    let (mut rows, mut y, mut positions) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..plan.visits {
+        // A frameless sheet is handled between visits: its electrodes sit somewhere else
+        // within their movement each time.
+        let offsets: Vec<f64> = (0..spec.electrodes.count)
+            .map(|_| plan.electrode_movement * rng.normal())
+            .collect();
+        let sheet = Arc::new(Sheet::new(spec, &offsets).map_err(|e| e.to_string())?);
+        let mut fe =
+            SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
+        let scanner = Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+        for (c, centre) in centres.iter().enumerate() {
+            for _ in 0..plan.scans {
+                let position = [
+                    centre[0] + plan.placement * rng.normal(),
+                    centre[1] + plan.placement * rng.normal(),
+                ];
+                let (lo, hi) = plan.pressure_pa;
+                let pressure = lo + (hi - lo) * rng.uniform();
+                fe.set_touches(&[Touch {
+                    position,
+                    radius: plan.radius,
+                    pressure,
+                }])
+                .map_err(|e| e.to_string())?;
+                scanner
+                    .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
+                    .map_err(|e| e.to_string())?;
+                for o in obs.chunks(k) {
+                    rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
+                    y.push(c as u16);
+                    positions.push(position);
+                }
+            }
+        }
+    }
+    let x = DMatrix::from_row_slice(y.len(), feature_index.len(), &rows);
+    Ok(Dataset {
+        x,
+        y,
+        positions,
+        centres: centres.to_vec(),
+        feature_index,
+        config,
+    })
+}

@@ -1,0 +1,131 @@
+//! Evaluation (SPEC §9): stratified k-fold cross-validation, the confusion matrix, accuracy,
+//! the average Euclidean error AEE [5.9-5.11] and the plain mean position error.
+
+use nalgebra::DMatrix;
+
+use super::fit::{FitError, FitOptions, Fitted};
+
+/// Counts of (true class, predicted class).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Confusion {
+    /// Class count C.
+    pub classes: usize,
+    /// `counts[t * C + p]`: observations of true class t predicted as p.
+    pub counts: Vec<u32>,
+}
+
+impl Confusion {
+    /// An empty C x C matrix.
+    #[must_use]
+    pub fn new(classes: usize) -> Self {
+        Self {
+            classes,
+            counts: vec![0; classes * classes],
+        }
+    }
+
+    /// Counts one prediction.
+    pub fn add(&mut self, truth: u16, predicted: u16) {
+        self.counts[usize::from(truth) * self.classes + usize::from(predicted)] += 1;
+    }
+
+    /// Observations counted.
+    #[must_use]
+    pub fn total(&self) -> u32 {
+        self.counts.iter().sum()
+    }
+
+    /// Fraction predicted right.
+    #[must_use]
+    pub fn accuracy(&self) -> f64 {
+        let right: u32 = (0..self.classes)
+            .map(|c| self.counts[c * self.classes + c])
+            .sum();
+        f64::from(right) / f64::from(self.total().max(1))
+    }
+
+    /// AEE [5.10-5.11]: for each true class tr, EE_tr = sum over predicted c != tr of
+    /// d(tr, c) n_pred(c); AEE = sum_tr EE_tr / C. Units of `positions` (mm).
+    #[must_use]
+    pub fn aee(&self, positions: &[[f64; 2]]) -> f64 {
+        let c_n = self.classes;
+        let ee: f64 = (0..c_n)
+            .map(|tr| {
+                (0..c_n)
+                    .filter(|&c| c != tr)
+                    .map(|c| {
+                        dist(positions[tr], positions[c]) * f64::from(self.counts[tr * c_n + c])
+                    })
+                    .sum::<f64>()
+            })
+            .sum();
+        ee / c_n as f64
+    }
+
+    /// Mean distance between the true and the predicted class centre per prediction (units of
+    /// `positions`).
+    #[must_use]
+    pub fn mean_position_error(&self, positions: &[[f64; 2]]) -> f64 {
+        let c_n = self.classes;
+        let sum: f64 = (0..c_n)
+            .flat_map(|t| (0..c_n).map(move |p| (t, p)))
+            .map(|(t, p)| dist(positions[t], positions[p]) * f64::from(self.counts[t * c_n + p]))
+            .sum();
+        sum / f64::from(self.total().max(1))
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Stratified fold of every observation: within each class, observations are dealt to folds
+/// 0..k in a shuffled (seeded) order, so every fold holds about 1/k of every class.
+#[must_use]
+pub fn folds(y: &[u16], k: usize, seed: u64) -> Vec<usize> {
+    let mut rng = et_sim::rng::Rng::new(seed);
+    let classes = y.iter().map(|&c| usize::from(c) + 1).max().unwrap_or(0);
+    let mut fold = vec![0; y.len()];
+    for c in 0..classes {
+        let mut rows: Vec<usize> = (0..y.len()).filter(|&r| usize::from(y[r]) == c).collect();
+        for i in (1..rows.len()).rev() {
+            let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+            rows.swap(i, j);
+        }
+        for (i, r) in rows.into_iter().enumerate() {
+            fold[r] = i % k.max(1);
+        }
+    }
+    fold
+}
+
+/// k-fold cross-validation: fits on k-1 folds, predicts the held-out one, k times.
+///
+/// # Errors
+/// The first fold's [`FitError`] (e.g. a class with no observation outside the held-out fold).
+pub fn cross_validate(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    opts: &FitOptions,
+    k: usize,
+    seed: u64,
+) -> Result<Confusion, FitError> {
+    if k < 2 {
+        return Err(FitError::Shape(format!("{k} folds: use at least 2")));
+    }
+    let fold = folds(y, k, seed);
+    let mut confusion = Confusion::new(classes);
+    for f in 0..k {
+        let train: Vec<usize> = (0..y.len()).filter(|&r| fold[r] != f).collect();
+        let test: Vec<usize> = (0..y.len()).filter(|&r| fold[r] == f).collect();
+        let xt = DMatrix::from_fn(train.len(), x.ncols(), |i, j| x[(train[i], j)]);
+        let yt: Vec<u16> = train.iter().map(|&r| y[r]).collect();
+        let model = Fitted::fit(&xt, &yt, classes, opts)?;
+        for &r in &test {
+            let row: Vec<f64> = x.row(r).iter().copied().collect();
+            confusion.add(y[r], model.predict(&row));
+        }
+    }
+    Ok(confusion)
+}

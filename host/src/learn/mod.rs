@@ -1,0 +1,13 @@
+//! Learning touch positions from raw voltages (SPEC §9): collect labelled observations,
+//! fit QDA / LDA (with shrinkage), cross-validate, export the model blob the firmware runs.
+//!
+//! - [`collect`]: the data-collection procedure of Algorithms 2-3, on the simulator.
+//! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
+//! - [`cv`]: stratified k-fold cross-validation, confusion matrix, accuracy, AEE [5.9-5.11].
+
+pub mod collect;
+pub mod cv;
+pub mod fit;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,355 @@
+//! Learning: host fits against et-core's evaluation, degenerate training sets, CV and AEE, and
+//! the whole procedure on the simulator.
+
+use super::collect::{Plan, collect, grid};
+use super::cv::{Confusion, cross_validate};
+use super::fit::{FitError, FitOptions, Fitted, Target};
+use et_core::ScanConfig;
+use et_core::model::{Model, ModelKind, Precision};
+use et_core::protocol::{Halving, Protocol, ProtocolKind};
+use et_sim::frontend::FrontendSpec;
+use et_sim::rng::Rng;
+use et_sim::shape::Shape;
+use et_sim::sheet::{ElectrodeSpec, SheetSpec};
+use et_sim::touch::Piezo;
+use nalgebra::DMatrix;
+
+/// Opposite protocol at L = 8: K = 32 values, p = 16 features (reciprocity-halved).
+fn features() -> (Protocol, Vec<u16>) {
+    let p = Protocol::new(ProtocolKind::Opposite, 8).unwrap();
+    let f = p.features(Halving::Reciprocity).map(|k| k as u16).collect();
+    (p, f)
+}
+
+/// Gaussian classes with their own covariance, in volts.
+fn synthetic(classes: usize, per_class: usize, p: usize, seed: u64) -> (DMatrix<f64>, Vec<u16>) {
+    let mut rng = Rng::new(seed);
+    let mut rows = Vec::new();
+    let mut y = Vec::new();
+    for c in 0..classes {
+        let mean: Vec<f64> = (0..p).map(|_| 0.05 + 2e-3 * rng.normal()).collect();
+        let mix: Vec<Vec<f64>> = (0..p)
+            .map(|_| {
+                (0..p)
+                    .map(|_| (1.0 + c as f64) * 1e-4 * rng.normal())
+                    .collect()
+            })
+            .collect();
+        for _ in 0..per_class {
+            let e: Vec<f64> = (0..p).map(|_| rng.normal()).collect();
+            rows.extend((0..p).map(|i| mean[i] + (0..p).map(|j| mix[i][j] * e[j]).sum::<f64>()));
+            y.push(c as u16);
+        }
+    }
+    (DMatrix::from_row_slice(y.len(), p, &rows), y)
+}
+
+/// The frame (K values) holding observation `row` at the feature positions (zeros elsewhere).
+fn frame_of(x: &DMatrix<f64>, row: usize, index: &[u16], k: usize) -> Vec<f32> {
+    let mut v = vec![0.0f32; k];
+    for (j, &i) in index.iter().enumerate() {
+        v[usize::from(i)] = x[(row, j)] as f32;
+    }
+    v
+}
+
+#[test]
+fn host_and_chip_agree_on_the_exported_blob() {
+    let (protocol, index) = features();
+    let (x, y) = synthetic(4, 120, index.len(), 3);
+    for kind in [ModelKind::Qda, ModelKind::Lda] {
+        let model = Fitted::fit(
+            &x,
+            &y,
+            4,
+            &FitOptions {
+                kind,
+                ..FitOptions::default()
+            },
+        )
+        .unwrap();
+        let positions: Vec<[f32; 2]> = (0..4).map(|c| [10.0 * c as f32, 0.0]).collect();
+        // Stated tolerances, relative to the row's discriminant scale. Measured (this test with
+        // --nocapture): QDA f32 1.3e-6, f16 2.1e-3; LDA f32 4.8e-7, f16 2.3e-4.
+        for (precision, tol) in [(Precision::F32, 1e-5), (Precision::F16, 1e-2)] {
+            let blob = model
+                .to_blob(8, ProtocolKind::Opposite, &index, &positions, precision)
+                .unwrap();
+            let chip = Model::parse(&blob).unwrap();
+            let mut scratch = vec![0.0; chip.scratch_len()];
+            let mut d = vec![0.0f32; 4];
+            let mut disagree = 0;
+            let mut worst = 0.0f64;
+            for r in 0..x.nrows() {
+                // The chip sees f32 frames: give the host the same rounded values, so that
+                // what is compared is the model's storage and arithmetic.
+                let row: Vec<f64> = x.row(r).iter().map(|&v| f64::from(v as f32)).collect();
+                let host = model.discriminants(&row);
+                chip.discriminants(
+                    &frame_of(&x, r, &index, protocol.frame_len()),
+                    &mut scratch,
+                    &mut d,
+                )
+                .unwrap();
+                // Relative to the row's largest discriminant: the terms summed into a near
+                // class's delta are of that size, and f32 keeps ~7 digits of them.
+                let scale = host.iter().fold(1.0f64, |m, h| m.max(h.abs()));
+                for (h, c) in host.iter().zip(&d) {
+                    let err = (f64::from(*c) - h).abs() / scale;
+                    worst = worst.max(err);
+                    assert!(
+                        err <= tol,
+                        "{kind:?} {precision:?} row {r}: host {h} chip {c}"
+                    );
+                }
+                let on_chip = chip
+                    .evaluate(&frame_of(&x, r, &index, protocol.frame_len()), &mut scratch)
+                    .unwrap();
+                disagree += usize::from(on_chip.class != model.predict(&row));
+            }
+            println!(
+                "{kind:?} {precision:?}: worst discriminant error {worst:.2e} of the row's scale, {disagree} decisions differ"
+            );
+            // f32: every decision the same; f16: at most 1 % differ (near-ties).
+            let allowed = if precision == Precision::F32 {
+                0
+            } else {
+                x.nrows() / 100
+            };
+            assert!(
+                disagree <= allowed,
+                "{kind:?} {precision:?}: {disagree} decisions differ"
+            );
+        }
+    }
+}
+
+#[test]
+fn degenerate_training_sets_give_errors_or_regularised_fits() {
+    let p = 16;
+    // Fewer observations per class than features: singular without shrinkage.
+    let (x, y) = synthetic(3, 8, p, 5);
+    assert!(matches!(
+        Fitted::fit(&x, &y, 3, &FitOptions::default()),
+        Err(FitError::NotPositiveDefinite { .. })
+    ));
+    for target in [Target::Diagonal, Target::Pooled] {
+        // 24 observations in 3 classes: the pooled scatter has rank 21 >= 16, so both targets
+        // are positive definite and the shrunk fit works.
+        let shrunk = FitOptions {
+            shrinkage: 0.3,
+            target,
+            ..FitOptions::default()
+        };
+        let m = Fitted::fit(&x, &y, 3, &shrunk).unwrap();
+        let row: Vec<f64> = x.row(0).iter().copied().collect();
+        assert!(m.discriminants(&row).iter().all(|d| d.is_finite()));
+    }
+    // A constant feature (dead electrode) and a duplicated one.
+    let (mut x, y) = synthetic(3, 200, p, 6);
+    x.column_mut(4).fill(0.0123);
+    let dup = x.column(7).clone_owned();
+    x.column_mut(8).copy_from(&dup);
+    assert!(matches!(
+        Fitted::fit(&x, &y, 3, &FitOptions::default()),
+        Err(FitError::NotPositiveDefinite { .. })
+    ));
+    let m = Fitted::fit(
+        &x,
+        &y,
+        3,
+        &FitOptions {
+            shrinkage: 0.05,
+            ..FitOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        m.feature_scale[4], 1.0,
+        "a constant feature keeps a unit scale, no division by 0"
+    );
+    let acc = (0..x.nrows())
+        .filter(|&r| m.predict(&x.row(r).iter().copied().collect::<Vec<_>>()) == y[r])
+        .count();
+    assert!(acc as f64 / x.nrows() as f64 > 0.9);
+    // Bad input: typed errors.
+    let mut nan = x.clone();
+    nan[(5, 2)] = f64::NAN;
+    assert_eq!(
+        Fitted::fit(&nan, &y, 3, &FitOptions::default()).unwrap_err(),
+        FitError::NonFinite { row: 5, feature: 2 }
+    );
+    assert_eq!(
+        Fitted::fit(&x, &y, 4, &FitOptions::default()).unwrap_err(),
+        FitError::EmptyClass { class: 3 }
+    );
+    assert!(matches!(
+        Fitted::fit(&x, &y, 2, &FitOptions::default()),
+        Err(FitError::Shape(_))
+    ));
+    assert!(matches!(
+        Fitted::fit(&x, &y[1..], 3, &FitOptions::default()),
+        Err(FitError::Shape(_))
+    ));
+    assert!(matches!(
+        Fitted::fit(
+            &x,
+            &y,
+            3,
+            &FitOptions {
+                shrinkage: 2.0,
+                ..FitOptions::default()
+            }
+        ),
+        Err(FitError::Shrinkage(_))
+    ));
+}
+
+#[test]
+fn aee_and_mean_error_by_hand() {
+    // Three classes on a line 10 mm apart. Class 0: 8 right, 2 -> class 1 (10 mm each).
+    // Class 1: all right. Class 2: 1 -> class 0 (20 mm).
+    let mut c = Confusion::new(3);
+    for (t, p, n) in [(0, 0, 8), (0, 1, 2), (1, 1, 10), (2, 2, 9), (2, 0, 1)] {
+        for _ in 0..n {
+            c.add(t, p);
+        }
+    }
+    let pos = [[0.0, 0.0], [10.0, 0.0], [20.0, 0.0]];
+    assert_eq!(c.total(), 30);
+    assert!((c.accuracy() - 27.0 / 30.0).abs() < 1e-12);
+    // EE_0 = 2 x 10 = 20, EE_1 = 0, EE_2 = 1 x 20 = 20: AEE = 40 / 3.
+    assert!((c.aee(&pos) - 40.0 / 3.0).abs() < 1e-12);
+    assert!((c.mean_position_error(&pos) - 40.0 / 30.0).abs() < 1e-12);
+}
+
+#[test]
+fn cross_validation_on_separable_and_on_noise() {
+    let (x, y) = synthetic(3, 100, 6, 8);
+    let conf = cross_validate(&x, &y, 3, &FitOptions::default(), 10, 1).unwrap();
+    assert_eq!(
+        conf.total(),
+        300,
+        "every observation is tested exactly once"
+    );
+    assert!(conf.accuracy() > 0.95, "{}", conf.accuracy());
+    // Labels that carry no information: chance level, not a flattering number.
+    let mut rng = Rng::new(9);
+    let shuffled: Vec<u16> = (0..300).map(|_| (rng.next_u64() % 3) as u16).collect();
+    let noise = cross_validate(
+        &x,
+        &shuffled,
+        3,
+        &FitOptions {
+            shrinkage: 0.2,
+            ..FitOptions::default()
+        },
+        10,
+        1,
+    )
+    .unwrap();
+    assert!(noise.accuracy() < 0.5, "{}", noise.accuracy());
+}
+
+#[test]
+fn the_procedure_on_the_simulated_sheet() {
+    // A reduced run of SPEC §9 on the 13 x 13 cm, 16-electrode sheet: 3 x 3 classes, the
+    // opposite protocol's 96 features, T = 2 visits x 4 scans x 10 sub-sections = 80
+    // observations per class (fewer than features + 1: shrinkage needed), then a "next day" set
+    // with the electrodes moved again.
+    let spec = SheetSpec {
+        shape: Shape::Rectangle {
+            width: 0.13,
+            height: 0.13,
+        },
+        sheet_resistance: 30e3,
+        electrodes: ElectrodeSpec::default(),
+        resolution: Some(0.005),
+        piezo: Piezo::default(),
+        bend: None,
+    };
+    let config = ScanConfig {
+        protocol: ProtocolKind::Opposite,
+        samples_per_step: 200,
+        settle_samples: 40,
+        sample_rate_hz: 10_000,
+        ..ScanConfig::REFERENCE
+    };
+    let centres = grid(&spec, 3, 3, 0.01);
+    assert_eq!(centres.len(), 9);
+    let plan = Plan {
+        visits: 2,
+        scans: 4,
+        subsections: 10,
+        pressure_pa: (5e3, 60e3),
+        radius: 0.0075,
+        placement: 0.002,
+        electrode_movement: 0.0005,
+        seed: 1,
+    };
+    let train = collect(&spec, FrontendSpec::default(), config, &centres, &plan).unwrap();
+    assert_eq!((train.x.nrows(), train.x.ncols()), (9 * 80, 96));
+    let opts = FitOptions {
+        shrinkage: 0.2,
+        ..FitOptions::default()
+    };
+    let cv = cross_validate(&train.x, &train.y, 9, &opts, 10, 2).unwrap();
+    let model = Fitted::fit(&train.x, &train.y, 9, &opts).unwrap();
+    let next_day = collect(
+        &spec,
+        FrontendSpec::default(),
+        config,
+        &centres,
+        &Plan {
+            visits: 1,
+            scans: 2,
+            seed: 99,
+            ..plan
+        },
+    )
+    .unwrap();
+    let mut test = Confusion::new(9);
+    for r in 0..next_day.x.nrows() {
+        test.add(
+            next_day.y[r],
+            model.predict(&next_day.x.row(r).iter().copied().collect::<Vec<_>>()),
+        );
+    }
+    let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
+    println!(
+        "sim 3 x 3: CV accuracy {:.3}, next-day accuracy {:.3}, next-day AEE {:.1} mm",
+        cv.accuracy(),
+        test.accuracy(),
+        test.aee(&mm)
+    );
+    assert!(cv.accuracy() > 0.9, "CV {}", cv.accuracy());
+    assert!(test.accuracy() > 0.8, "next day {}", test.accuracy());
+    // The exported blob classifies the next-day frames like the host.
+    let positions: Vec<[f32; 2]> = mm.iter().map(|p| [p[0] as f32, p[1] as f32]).collect();
+    let blob = model
+        .to_blob(
+            16,
+            ProtocolKind::Opposite,
+            &train.feature_index,
+            &positions,
+            Precision::F32,
+        )
+        .unwrap();
+    let chip = Model::parse(&blob).unwrap();
+    assert_eq!(chip.check_config(&config), Ok(()));
+    let mut scratch = vec![0.0; chip.scratch_len()];
+    let k = config.validate().unwrap().frame_len();
+    let disagree = (0..next_day.x.nrows())
+        .filter(|&r| {
+            let row: Vec<f64> = next_day.x.row(r).iter().copied().collect();
+            let on_chip = chip
+                .evaluate(
+                    &frame_of(&next_day.x, r, &train.feature_index, k),
+                    &mut scratch,
+                )
+                .unwrap();
+            on_chip.class != model.predict(&row)
+        })
+        .count();
+    assert_eq!(disagree, 0);
+}
