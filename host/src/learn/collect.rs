@@ -30,6 +30,9 @@ pub struct Dataset {
     pub positions: Vec<[f64; 2]>,
     /// Class centres, m.
     pub centres: Vec<[f64; 2]>,
+    /// Visit of each observation (0..T): observations of one visit share the electrodes'
+    /// positions, so cross-validation that must generalise across sessions folds by visit.
+    pub visit: Vec<u16>,
     /// Frame index of each feature.
     pub feature_index: Vec<u16>,
     /// The scan settings.
@@ -112,8 +115,9 @@ pub fn collect(
         s_sub
     ];
     let mut obs = vec![0.0f32; s_sub * k];
-    let (mut rows, mut y, mut positions) = (Vec::new(), Vec::new(), Vec::new());
-    for _ in 0..plan.visits {
+    let (mut rows, mut y, mut positions, mut visit) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for v in 0..plan.visits {
         // A frameless sheet is handled between visits: its electrodes sit somewhere else
         // within their movement each time.
         let offsets: Vec<f64> = (0..spec.electrodes.count)
@@ -144,6 +148,7 @@ pub fn collect(
                     rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
                     y.push(c as u16);
                     positions.push(position);
+                    visit.push(v as u16);
                 }
             }
         }
@@ -154,6 +159,7 @@ pub fn collect(
         y,
         positions,
         centres: centres.to_vec(),
+        visit,
         feature_index,
         config,
     })

@@ -99,7 +99,92 @@ pub fn folds(y: &[u16], k: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
-/// k-fold cross-validation: fits on k-1 folds, predicts the held-out one, k times.
+/// Cross-validation over given folds: for each fold f, fits on the other folds and predicts
+/// fold f. With `fold` = the visit of each observation this is leave-one-visit-out, which
+/// measures what a new session (electrodes moved) will see.
+///
+/// # Errors
+/// The first [`FitError`].
+pub fn cross_validate_folds(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    opts: &FitOptions,
+    fold: &[usize],
+) -> Result<Confusion, FitError> {
+    if fold.len() != y.len() {
+        return Err(FitError::Shape(format!(
+            "{} folds for {} observations",
+            fold.len(),
+            y.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |m| m + 1);
+    if k < 2 {
+        return Err(FitError::Shape(
+            "cross-validation needs at least 2 folds".into(),
+        ));
+    }
+    let mut confusion = Confusion::new(classes);
+    for f in 0..k {
+        let train: Vec<usize> = (0..y.len()).filter(|&r| fold[r] != f).collect();
+        let test: Vec<usize> = (0..y.len()).filter(|&r| fold[r] == f).collect();
+        if test.is_empty() {
+            continue;
+        }
+        let xt = DMatrix::from_fn(train.len(), x.ncols(), |i, j| x[(train[i], j)]);
+        let yt: Vec<u16> = train.iter().map(|&r| y[r]).collect();
+        let model = Fitted::fit(&xt, &yt, classes, opts)?;
+        let mut row = vec![0.0; x.ncols()];
+        for &r in &test {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = x[(r, j)];
+            }
+            confusion.add(y[r], model.predict(&row));
+        }
+    }
+    Ok(confusion)
+}
+
+/// The shrinkage among `candidates` with the best cross-validated accuracy over `fold`
+/// (ties: the smaller shrinkage), with every candidate's accuracy. A candidate whose fit is
+/// not positive definite scores 0.
+///
+/// # Errors
+/// [`FitError::Shape`] for no candidates or bad folds.
+pub fn choose_shrinkage(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    base: &FitOptions,
+    candidates: &[f64],
+    fold: &[usize],
+) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+    let mut scores = Vec::new();
+    for &lambda in candidates {
+        let opts = FitOptions {
+            shrinkage: lambda,
+            ..*base
+        };
+        let acc = match cross_validate_folds(x, y, classes, &opts, fold) {
+            Ok(c) => c.accuracy(),
+            Err(FitError::NotPositiveDefinite { .. }) => 0.0,
+            Err(e) => return Err(e),
+        };
+        scores.push((lambda, acc));
+    }
+    let best = scores
+        .iter()
+        .copied()
+        .fold(None, |best: Option<(f64, f64)>, s| match best {
+            Some(b) if b.1 >= s.1 => Some(b),
+            _ => Some(s),
+        })
+        .ok_or_else(|| FitError::Shape("no shrinkage candidates".into()))?;
+    Ok((best.0, scores))
+}
+
+/// k-fold stratified cross-validation: fits on k-1 folds, predicts the held-out one, k times.
 ///
 /// # Errors
 /// The first fold's [`FitError`] (e.g. a class with no observation outside the held-out fold).
@@ -114,18 +199,5 @@ pub fn cross_validate(
     if k < 2 {
         return Err(FitError::Shape(format!("{k} folds: use at least 2")));
     }
-    let fold = folds(y, k, seed);
-    let mut confusion = Confusion::new(classes);
-    for f in 0..k {
-        let train: Vec<usize> = (0..y.len()).filter(|&r| fold[r] != f).collect();
-        let test: Vec<usize> = (0..y.len()).filter(|&r| fold[r] == f).collect();
-        let xt = DMatrix::from_fn(train.len(), x.ncols(), |i, j| x[(train[i], j)]);
-        let yt: Vec<u16> = train.iter().map(|&r| y[r]).collect();
-        let model = Fitted::fit(&xt, &yt, classes, opts)?;
-        for &r in &test {
-            let row: Vec<f64> = x.row(r).iter().copied().collect();
-            confusion.add(y[r], model.predict(&row));
-        }
-    }
-    Ok(confusion)
+    cross_validate_folds(x, y, classes, opts, &folds(y, k, seed))
 }
