@@ -378,3 +378,151 @@ fn the_procedure_on_the_simulated_sheet() {
         .count();
     assert_eq!(disagree, 0);
 }
+
+mod files {
+    use super::super::collect::Dataset;
+    use super::super::dataset::{import_csv, load_csv, save_csv};
+    use super::*;
+    use std::path::PathBuf;
+
+    fn tmp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("et-learn-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn small() -> Dataset {
+        let (x, y) = synthetic(3, 10, 5, 21);
+        let n = y.len();
+        Dataset {
+            x,
+            y,
+            positions: (0..n)
+                .map(|i| [0.001 * i as f64, -0.002 * i as f64])
+                .collect(),
+            centres: vec![[0.01, 0.02], [0.03, 0.04], [-0.05, 0.0]],
+            visit: (0..n).map(|i| (i % 2) as u16).collect(),
+            feature_index: vec![0, 1, 2, 4, 7],
+            config: ScanConfig {
+                protocol: ProtocolKind::Opposite,
+                electrodes: 8,
+                ..ScanConfig::REFERENCE
+            },
+        }
+    }
+
+    #[test]
+    fn datasets_round_trip_and_python_reads_them() {
+        let dir = tmp("rt");
+        let path = dir.join("d.csv");
+        let d = small();
+        save_csv(&d, &path, "synthetic, seed 21").unwrap();
+        let back = load_csv(&path).unwrap();
+        assert_eq!(back.x, d.x, "features round-trip exactly");
+        assert_eq!(
+            (&back.y, &back.visit, &back.feature_index, back.config),
+            (&d.y, &d.visit, &d.feature_index, d.config)
+        );
+        for (a, b) in back
+            .positions
+            .iter()
+            .zip(&d.positions)
+            .chain(back.centres.iter().zip(&d.centres))
+        {
+            assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
+        }
+        // Python, standard library only: skip '#' lines, read the header and the rows.
+        let script = "import csv,sys\n\
+rows=[r for r in csv.reader(l for l in open(sys.argv[1]) if not l.startswith('#'))]\n\
+h,data=rows[0],rows[1:]\n\
+li=h.index('label')\n\
+print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]))\n";
+        let out = std::process::Command::new("python3")
+            .arg("-c")
+            .arg(script)
+            .arg(&path)
+            .output()
+            .expect("python3");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let f: Vec<&str> = text.split_whitespace().collect();
+        let label_sum: usize = d.y.iter().map(|&v| usize::from(v)).sum();
+        assert_eq!(
+            f[..3],
+            [
+                d.x.nrows().to_string(),
+                (5 + 4).to_string(),
+                label_sum.to_string()
+            ]
+        );
+        assert_eq!(
+            f[3].parse::<f64>().unwrap(),
+            d.x[(3, 2)],
+            "Python reads the same value"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn csv_import_from_other_sensors() {
+        let dir = tmp("imp");
+        let one = dir.join("one.csv");
+        std::fs::write(&one, "a,b,c,label\n1,2,3,0\n4,5,6,1\n7,8,9,1\n").unwrap();
+        let imp = import_csv(&one, None).unwrap();
+        assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
+        assert_eq!(imp.labels, Some(vec![0, 1, 1]));
+        assert_eq!(imp.feature_names, ["a", "b", "c"]);
+        // Two parallel files, positions as targets, any channel count.
+        let feats = dir.join("feats.csv");
+        let targets = dir.join("targets.csv");
+        std::fs::write(
+            &feats,
+            "ch0,ch1,ch2,ch3,ch4,ch5,ch6\n1,2,3,4,5,6,7\n2,3,4,5,6,7,8\n",
+        )
+        .unwrap();
+        std::fs::write(&targets, "x,y\n10.5,20\n11,21\n").unwrap();
+        let imp = import_csv(&feats, Some(&targets)).unwrap();
+        assert_eq!(imp.x.ncols(), 7);
+        assert_eq!(imp.positions, Some(vec![[10.5, 20.0], [11.0, 21.0]]));
+        assert!(imp.labels.is_none());
+        // Errors name the file, the line and the column.
+        let err = |text: &str| {
+            std::fs::write(&one, text).unwrap();
+            import_csv(&one, None).unwrap_err().to_string()
+        };
+        let nan = err("a,b,label\n1,2,0\n1,NaN,1\n");
+        assert!(
+            nan.contains("one.csv:3") && nan.contains("column b") && nan.contains("finite"),
+            "{nan}"
+        );
+        let text = err("a,b,label\n1,2,0\n1,x,1\n");
+        assert!(
+            text.contains("one.csv:3") && text.contains("'x' is not a number"),
+            "{text}"
+        );
+        let short = err("a,b,label\n1,2,0\n1,1\n");
+        assert!(
+            short.contains("one.csv:3") && short.contains("2 values"),
+            "{short}"
+        );
+        let none = err("a,b\n1,2\n");
+        assert!(none.contains("no target"), "{none}");
+        let frac = err("a,label\n1,0.5\n");
+        assert!(frac.contains("column label"), "{frac}");
+        std::fs::write(&targets, "x,y\n1,2\n").unwrap();
+        let rows = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        assert!(
+            rows.contains("targets.csv") && rows.contains("1 rows"),
+            "{rows}"
+        );
+        let missing = import_csv(&dir.join("nope.csv"), None)
+            .unwrap_err()
+            .to_string();
+        assert!(missing.contains("nope.csv"), "{missing}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

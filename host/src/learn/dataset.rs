@@ -1,0 +1,442 @@
+//! Datasets on disk: CSV that Python and MATLAB read as they are.
+//!
+//! ```text
+//! # et-dataset 1
+//! # config: {"electrodes":16,"protocol":"Opposite",...}      (scan settings, JSON)
+//! # feature_index: 0 1 2 4 ...                                (frame index of each feature)
+//! # centres_mm: 9.3 9.3; 27.9 9.3; ...                        (class centres)
+//! # provenance: sim sheet 13 x 13 cm, seed 1, T=6 S_num=20 S_sub=20
+//! f0,f1,...,f95,label,x_mm,y_mm,visit
+//! 0.0123,...,3,27.1,8.8,0
+//! ```
+//!
+//! Python: `numpy.loadtxt(path, delimiter=",", comments="#", skiprows=...)` or the `csv`
+//! module skipping `#` lines; MATLAB: `readmatrix(path, "CommentStyle", "#")`.
+//!
+//! [`import_csv`] brings data from other sensors: any channel count, a header row, the
+//! columns named `label` (class) or `x` and `y` (position) are targets and all others are
+//! features; targets may also come from a second file with the same rows.
+
+use std::path::{Path, PathBuf};
+
+use et_core::ScanConfig;
+use nalgebra::DMatrix;
+
+use super::collect::Dataset;
+
+/// Why a dataset file could not be read or written.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum DatasetError {
+    /// The file could not be read or written.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The reason.
+        source: std::io::Error,
+    },
+    /// Something in the file is wrong.
+    Content {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (0 when not about one line).
+        line: usize,
+        /// Column name or number, where it is about one.
+        column: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl std::fmt::Display for DatasetError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DatasetError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            DatasetError::Content {
+                path,
+                line,
+                column,
+                message,
+            } => {
+                write!(f, "{}", path.display())?;
+                if *line > 0 {
+                    write!(f, ":{line}")?;
+                }
+                if let Some(c) = column {
+                    write!(f, ", column {c}")?;
+                }
+                write!(f, ": {message}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for DatasetError {}
+
+fn content(
+    path: &Path,
+    line: usize,
+    column: Option<String>,
+    message: impl Into<String>,
+) -> DatasetError {
+    DatasetError::Content {
+        path: path.into(),
+        line,
+        column,
+        message: message.into(),
+    }
+}
+
+/// Writes `data` as CSV (see the module docs), with a free-text `provenance` line.
+///
+/// # Errors
+/// [`DatasetError::Io`].
+pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(s, "# et-dataset 1");
+    let _ = writeln!(
+        s,
+        "# config: {}",
+        serde_json::to_string(&data.config).unwrap_or_default()
+    );
+    let idx: Vec<String> = data.feature_index.iter().map(u16::to_string).collect();
+    let _ = writeln!(s, "# feature_index: {}", idx.join(" "));
+    let centres: Vec<String> = data
+        .centres
+        .iter()
+        .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
+        .collect();
+    let _ = writeln!(s, "# centres_mm: {}", centres.join("; "));
+    let _ = writeln!(s, "# provenance: {}", provenance.replace('\n', " "));
+    let mut header: Vec<String> = (0..data.x.ncols()).map(|j| format!("f{j}")).collect();
+    header.extend(["label", "x_mm", "y_mm", "visit"].map(String::from));
+    let _ = writeln!(s, "{}", header.join(","));
+    for r in 0..data.x.nrows() {
+        for j in 0..data.x.ncols() {
+            let _ = write!(s, "{},", data.x[(r, j)]);
+        }
+        let p = data.positions[r];
+        let _ = writeln!(
+            s,
+            "{},{},{},{}",
+            data.y[r],
+            p[0] * 1e3,
+            p[1] * 1e3,
+            data.visit[r]
+        );
+    }
+    std::fs::write(path, s).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// Reads a dataset written by [`save_csv`].
+///
+/// # Errors
+/// [`DatasetError`] naming the file, line and column.
+pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let mut config: Option<ScanConfig> = None;
+    let mut feature_index = Vec::new();
+    let mut centres = Vec::new();
+    let mut lines = text.lines().enumerate().peekable();
+    match lines.next() {
+        Some((_, l)) if l.trim() == "# et-dataset 1" => {}
+        _ => {
+            return Err(content(
+                path,
+                1,
+                None,
+                "not an et dataset (expected '# et-dataset 1')",
+            ));
+        }
+    }
+    while let Some((i, l)) = lines.peek().copied() {
+        let Some(meta) = l.strip_prefix('#') else {
+            break;
+        };
+        lines.next();
+        let meta = meta.trim();
+        if let Some(json) = meta.strip_prefix("config:") {
+            config = Some(
+                serde_json::from_str(json.trim())
+                    .map_err(|e| content(path, i + 1, None, format!("config: {e}")))?,
+            );
+        } else if let Some(list) = meta.strip_prefix("feature_index:") {
+            feature_index = list
+                .split_whitespace()
+                .map(|v| {
+                    v.parse::<u16>()
+                        .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
+                })
+                .collect::<Result<_, _>>()?;
+        } else if let Some(list) = meta.strip_prefix("centres_mm:") {
+            for pair in list.split(';').filter(|p| !p.trim().is_empty()) {
+                let v: Vec<f64> = pair
+                    .split_whitespace()
+                    .map(|v| {
+                        v.parse::<f64>()
+                            .map_err(|e| content(path, i + 1, None, format!("centres_mm: {e}")))
+                    })
+                    .collect::<Result<_, _>>()?;
+                let [x, y] = v[..] else {
+                    return Err(content(
+                        path,
+                        i + 1,
+                        None,
+                        "centres_mm: each centre is 'x y'",
+                    ));
+                };
+                centres.push([x * 1e-3, y * 1e-3]);
+            }
+        }
+    }
+    let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
+    let rest: Vec<(usize, &str)> = lines.collect();
+    let table = parse_table(path, &rest)?;
+    let col = |name: &str| {
+        table
+            .names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| content(path, 0, Some(name.into()), "column missing"))
+    };
+    let (label, xc, yc, visit) = (col("label")?, col("x_mm")?, col("y_mm")?, col("visit")?);
+    let features: Vec<usize> = (0..table.names.len())
+        .filter(|&c| ![label, xc, yc, visit].contains(&c))
+        .collect();
+    if feature_index.len() != features.len() {
+        return Err(content(
+            path,
+            0,
+            None,
+            format!(
+                "{} feature columns, {} in feature_index",
+                features.len(),
+                feature_index.len()
+            ),
+        ));
+    }
+    let n = table.rows.len();
+    let x = DMatrix::from_fn(n, features.len(), |r, j| table.rows[r].1[features[j]]);
+    let int = |r: usize, c: usize, name: &str| {
+        let v = table.rows[r].1[c];
+        if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u16::MAX) {
+            Ok(v as u16)
+        } else {
+            Err(content(
+                path,
+                table.rows[r].0,
+                Some(name.into()),
+                format!("{v} is not a whole number"),
+            ))
+        }
+    };
+    let y = (0..n)
+        .map(|r| int(r, label, "label"))
+        .collect::<Result<Vec<_>, _>>()?;
+    let visit = (0..n)
+        .map(|r| int(r, visit, "visit"))
+        .collect::<Result<Vec<_>, _>>()?;
+    let positions = table
+        .rows
+        .iter()
+        .map(|(_, v)| [v[xc] * 1e-3, v[yc] * 1e-3])
+        .collect();
+    Ok(Dataset {
+        x,
+        y,
+        positions,
+        centres,
+        visit,
+        feature_index,
+        config,
+    })
+}
+
+struct Table {
+    names: Vec<String>,
+    /// (1-based line, values).
+    rows: Vec<(usize, Vec<f64>)>,
+}
+
+/// A header row then numeric rows; blank and `#` lines skipped. Every value finite.
+fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetError> {
+    let mut it = lines
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let (hl, header) = it
+        .next()
+        .ok_or_else(|| content(path, 0, None, "no header row"))?;
+    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+    if names.iter().any(String::is_empty) {
+        return Err(content(
+            path,
+            hl + 1,
+            None,
+            "empty column name in the header",
+        ));
+    }
+    let mut rows = Vec::new();
+    for &(i, l) in it {
+        let cells: Vec<&str> = l.split(',').collect();
+        if cells.len() != names.len() {
+            return Err(content(
+                path,
+                i + 1,
+                None,
+                format!(
+                    "{} values, the header has {} columns",
+                    cells.len(),
+                    names.len()
+                ),
+            ));
+        }
+        let values = cells
+            .iter()
+            .zip(&names)
+            .map(|(c, name)| match c.trim().parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                Ok(v) => Err(content(
+                    path,
+                    i + 1,
+                    Some(name.clone()),
+                    format!("{v} is not a finite number"),
+                )),
+                Err(_) => Err(content(
+                    path,
+                    i + 1,
+                    Some(name.clone()),
+                    format!("'{}' is not a number", c.trim()),
+                )),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        rows.push((i + 1, values));
+    }
+    if rows.is_empty() {
+        return Err(content(path, 0, None, "no data rows"));
+    }
+    Ok(Table { names, rows })
+}
+
+/// Data imported from other sensors.
+#[derive(Clone, Debug)]
+pub struct Imported {
+    /// n x p features.
+    pub x: DMatrix<f64>,
+    /// Feature column names.
+    pub feature_names: Vec<String>,
+    /// Class labels, if a `label` column was given.
+    pub labels: Option<Vec<u16>>,
+    /// Positions, if `x` and `y` columns were given (the files' units).
+    pub positions: Option<Vec<[f64; 2]>>,
+}
+
+/// Imports CSV with a header row: columns named `label`, `x`, `y` are targets, all others
+/// features (any count). Targets may instead come from `targets` (a second CSV with the same
+/// number of rows).
+///
+/// # Errors
+/// [`DatasetError`] naming the file, the line and the column: non-numbers, NaN or infinite
+/// values, rows of the wrong length, mismatched row counts, no features, no target.
+pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, DatasetError> {
+    let read = |p: &Path| {
+        std::fs::read_to_string(p).map_err(|source| DatasetError::Io {
+            path: p.into(),
+            source,
+        })
+    };
+    let text = read(features)?;
+    let lines: Vec<(usize, &str)> = text.lines().enumerate().collect();
+    let main = parse_table(features, &lines)?;
+    let target_text = targets.map(read).transpose()?;
+    let side = match (targets, &target_text) {
+        (Some(p), Some(t)) => {
+            let lines: Vec<(usize, &str)> = t.lines().enumerate().collect();
+            let table = parse_table(p, &lines)?;
+            if table.rows.len() != main.rows.len() {
+                return Err(content(
+                    p,
+                    0,
+                    None,
+                    format!(
+                        "{} rows, {} has {}",
+                        table.rows.len(),
+                        features.display(),
+                        main.rows.len()
+                    ),
+                ));
+            }
+            Some((p, table))
+        }
+        _ => None,
+    };
+    let is_target = |n: &str| ["label", "x", "y"].contains(&n);
+    let feature_cols: Vec<usize> = (0..main.names.len())
+        .filter(|&c| !is_target(&main.names[c]))
+        .collect();
+    if feature_cols.is_empty() {
+        return Err(content(features, 0, None, "no feature columns"));
+    }
+    let n = main.rows.len();
+    let x = DMatrix::from_fn(n, feature_cols.len(), |r, j| {
+        main.rows[r].1[feature_cols[j]]
+    });
+    let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
+    let find = |name: &str| ttable.names.iter().position(|c| c == name);
+    let labels = find("label")
+        .map(|c| {
+            ttable
+                .rows
+                .iter()
+                .map(|(line, v)| {
+                    let l = v[c];
+                    if l >= 0.0 && l.fract() == 0.0 && l <= f64::from(u16::MAX) {
+                        Ok(l as u16)
+                    } else {
+                        Err(content(
+                            tpath,
+                            *line,
+                            Some("label".into()),
+                            format!("{l} is not a class number"),
+                        ))
+                    }
+                })
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .transpose()?;
+    let positions = match (find("x"), find("y")) {
+        (Some(cx), Some(cy)) => Some(ttable.rows.iter().map(|(_, v)| [v[cx], v[cy]]).collect()),
+        (None, None) => None,
+        _ => {
+            return Err(content(
+                tpath,
+                0,
+                None,
+                "give both x and y columns, or neither",
+            ));
+        }
+    };
+    if labels.is_none() && positions.is_none() {
+        return Err(content(
+            tpath,
+            0,
+            None,
+            "no target: add a 'label' column or 'x' and 'y' columns",
+        ));
+    }
+    Ok(Imported {
+        x,
+        feature_names: feature_cols
+            .iter()
+            .map(|&c| main.names[c].clone())
+            .collect(),
+        labels,
+        positions,
+    })
+}
