@@ -122,7 +122,11 @@ pub struct Fitted {
     pub classes: Vec<ClassFit>,
 }
 
-fn check(x: &DMatrix<f64>, y: &[u16], classes: usize) -> Result<Vec<Vec<usize>>, FitError> {
+pub(crate) fn check(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+) -> Result<Vec<Vec<usize>>, FitError> {
     if x.nrows() == 0 || x.ncols() == 0 {
         return Err(FitError::Shape("no observations or no features".into()));
     }

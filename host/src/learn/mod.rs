@@ -4,12 +4,14 @@
 //! - [`collect`]: the data-collection procedure of Algorithms 2-3, on the simulator.
 //! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
 //! - [`cv`]: stratified k-fold cross-validation, confusion matrix, accuracy, AEE [5.9-5.11].
+//! - [`fastcv`]: the same cross-validation from sufficient statistics with exact pruning.
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
 //!   and import of other sensors' CSV.
 
 pub mod collect;
 pub mod cv;
 pub mod dataset;
+pub mod fastcv;
 pub mod fit;
 
 #[cfg(test)]

@@ -526,3 +526,51 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]))\n";
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
+
+#[test]
+fn fast_cross_validation_equals_refitting() {
+    use super::cv::{cross_validate_folds, folds};
+    use super::fastcv::cross_validate_fast;
+    let (x, y) = synthetic(6, 60, 10, 31);
+    let strat = folds(&y, 5, 3);
+    let by_block: Vec<usize> = (0..y.len()).map(|r| (r / 7) % 3).collect();
+    for opts in [
+        FitOptions::default(),
+        FitOptions {
+            shrinkage: 0.1,
+            target: Target::Pooled,
+            ..FitOptions::default()
+        },
+        FitOptions {
+            shrinkage: 0.3,
+            target: Target::Diagonal,
+            ..FitOptions::default()
+        },
+        FitOptions {
+            kind: ModelKind::Lda,
+            ..FitOptions::default()
+        },
+        FitOptions {
+            kind: ModelKind::Lda,
+            shrinkage: 0.2,
+            ..FitOptions::default()
+        },
+    ] {
+        for fold in [&strat, &by_block] {
+            let slow = cross_validate_folds(&x, &y, 6, &opts, fold).unwrap();
+            let fast = cross_validate_fast(&x, &y, 6, &opts, fold).unwrap();
+            assert_eq!(fast, slow, "{opts:?}");
+        }
+    }
+    // The same typed errors as a plain fit.
+    let (x, y) = synthetic(3, 8, 16, 5);
+    let fold: Vec<usize> = (0..y.len()).map(|r| r % 2).collect();
+    assert!(matches!(
+        cross_validate_fast(&x, &y, 3, &FitOptions::default(), &fold),
+        Err(FitError::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        cross_validate_fast(&x, &y, 3, &FitOptions::default(), &fold[1..]),
+        Err(FitError::Shape(_))
+    ));
+}

@@ -1,0 +1,83 @@
+//! Training speed (SPEC §10: the reference took 81 s to train QDA once on 49 classes x 2 400
+//! observations). Data: the SPEC §9 procedure on the simulated 13 x 13 cm, 16-electrode sheet
+//! (opposite protocol, p = 96), collected once before timing.
+//!
+//! Run: `cargo bench -p et-host --bench learn`
+
+use std::sync::LazyLock;
+
+use et_core::ScanConfig;
+use et_core::protocol::ProtocolKind;
+use et_host::learn::collect::{Dataset, Plan, collect, grid};
+use et_host::learn::cv::folds;
+use et_host::learn::fastcv::cross_validate_fast;
+use et_host::learn::fit::{FitOptions, Fitted};
+use et_sim::frontend::FrontendSpec;
+use et_sim::shape::Shape;
+use et_sim::sheet::{ElectrodeSpec, SheetSpec};
+use et_sim::touch::Piezo;
+
+fn main() {
+    divan::main();
+}
+
+static DATA: LazyLock<Dataset> = LazyLock::new(|| {
+    let spec = SheetSpec {
+        shape: Shape::Rectangle {
+            width: 0.13,
+            height: 0.13,
+        },
+        sheet_resistance: 30e3,
+        electrodes: ElectrodeSpec::default(),
+        resolution: None,
+        piezo: Piezo::default(),
+        bend: None,
+    };
+    let config = ScanConfig {
+        protocol: ProtocolKind::Opposite,
+        samples_per_step: 200,
+        settle_samples: 40,
+        sample_rate_hz: 10_000,
+        ..ScanConfig::REFERENCE
+    };
+    let plan = Plan {
+        visits: 6,
+        scans: 20,
+        subsections: 20,
+        pressure_pa: (5e3, 60e3),
+        radius: 0.0075,
+        placement: 0.002,
+        electrode_movement: 0.0005,
+        seed: 1,
+    };
+    let d = collect(
+        &spec,
+        FrontendSpec::default(),
+        config,
+        &grid(&spec, 7, 7, 0.0),
+        &plan,
+    )
+    .expect("collect");
+    assert_eq!((d.x.nrows(), d.x.ncols()), (49 * 2400, 96));
+    d
+});
+
+/// One QDA fit on 49 classes x 2 400 observations x 96 features.
+#[divan::bench(sample_count = 5)]
+fn qda_fit(bencher: divan::Bencher) {
+    let d = &*DATA;
+    bencher.bench(|| Fitted::fit(&d.x, &d.y, 49, &FitOptions::default()).expect("fit"));
+}
+
+/// One QDA fit plus stratified 10-fold cross-validation (what the done-means of the learning
+/// issue times).
+#[divan::bench(sample_count = 5)]
+fn qda_fit_and_10_fold_cv(bencher: divan::Bencher) {
+    let d = &*DATA;
+    let fold = folds(&d.y, 10, 1);
+    bencher.bench(|| {
+        let model = Fitted::fit(&d.x, &d.y, 49, &FitOptions::default()).expect("fit");
+        let cv = cross_validate_fast(&d.x, &d.y, 49, &FitOptions::default(), &fold).expect("cv");
+        (model.features(), cv.accuracy())
+    });
+}
