@@ -147,8 +147,8 @@ pub fn cross_validate_folds(
 }
 
 /// The shrinkage among `candidates` with the best cross-validated accuracy over `fold`
-/// (ties: the smaller shrinkage), with every candidate's accuracy. A candidate whose fit is
-/// not positive definite scores 0.
+/// (ties: the first), with every candidate's accuracy. A candidate whose fit is not positive
+/// definite scores 0.
 ///
 /// # Errors
 /// [`FitError::Shape`] for no candidates or bad folds.
@@ -160,13 +160,29 @@ pub fn choose_shrinkage(
     candidates: &[f64],
     fold: &[usize],
 ) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+    choose_shrinkage_with(
+        candidates,
+        |o| cross_validate_folds(x, y, classes, o, fold),
+        base,
+    )
+}
+
+/// [`choose_shrinkage`] with any cross-validation (e.g. [`super::fastcv::cross_validate_fast`]).
+///
+/// # Errors
+/// [`FitError::Shape`] for no candidates; the first error other than a singular fit.
+pub fn choose_shrinkage_with(
+    candidates: &[f64],
+    mut validate: impl FnMut(&FitOptions) -> Result<Confusion, FitError>,
+    base: &FitOptions,
+) -> Result<(f64, Vec<(f64, f64)>), FitError> {
     let mut scores = Vec::new();
     for &lambda in candidates {
         let opts = FitOptions {
             shrinkage: lambda,
             ..*base
         };
-        let acc = match cross_validate_folds(x, y, classes, &opts, fold) {
+        let acc = match validate(&opts) {
             Ok(c) => c.accuracy(),
             Err(FitError::NotPositiveDefinite { .. }) => 0.0,
             Err(e) => return Err(e),
