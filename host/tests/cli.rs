@@ -168,3 +168,131 @@ fn sim_writes_a_recording_that_python_reads() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn collect_train_eval_export_chain() {
+    let dir = std::env::temp_dir().join(format!("et-cli-learn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let (train, test, model) = (
+        dir.join("train.csv"),
+        dir.join("test.csv"),
+        dir.join("model.json"),
+    );
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let json = |text: String| -> serde_json::Value { serde_json::from_str(text.trim()).unwrap() };
+    let base = [
+        "collect",
+        "--scene",
+        &s(&scene),
+        "--grid",
+        "2x2",
+        "--scans",
+        "2",
+        "--subsections",
+        "5",
+    ];
+    let c = json(ok(et(&[
+        &base[..],
+        &["--visits", "2", "--out", &s(&train), "--json"],
+    ]
+    .concat())));
+    assert_eq!(
+        (
+            c["observations"].as_u64(),
+            c["features"].as_u64(),
+            c["classes"].as_u64()
+        ),
+        (Some(80), Some(96), Some(4))
+    );
+    ok(et(&[
+        &base[..],
+        &["--visits", "1", "--seed", "9", "--out", &s(&test)],
+    ]
+    .concat()));
+    let t = json(ok(et(&[
+        "train",
+        "--data",
+        &s(&train),
+        "--shrinkage",
+        "0.3",
+        "--folds",
+        "4",
+        "--out",
+        &s(&model),
+        "--json",
+    ])));
+    assert_eq!(t["classes"], 4);
+    assert!(t["cv_accuracy"].as_f64().unwrap() > 0.9, "{t}");
+    assert!(t["leave_one_visit_out_accuracy"].as_f64().is_some());
+    let e = json(ok(et(&[
+        "eval",
+        "--model",
+        &s(&model),
+        "--data",
+        &s(&test),
+        "--json",
+    ])));
+    assert_eq!(
+        e["observations"], 40,
+        "4 classes x 2 scans x 5 sub-sections"
+    );
+    let confusion: u64 = e["confusion"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap())
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert_eq!(confusion, 40);
+    for (precision, name) in [("f32", "m32.etm"), ("f16", "m16.etm")] {
+        let x = json(ok(et(&[
+            "export",
+            "--model",
+            &s(&model),
+            "--precision",
+            precision,
+            "--out",
+            &s(&dir.join(name)),
+            "--json",
+        ])));
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        assert_eq!(x["bytes"].as_u64(), Some(bytes.len() as u64));
+        let blob =
+            et_core::model::Model::parse(&bytes).expect("the exported blob loads in et-core");
+        assert_eq!((blob.classes(), blob.features()), (4, 96));
+    }
+    // Mistakes are explained.
+    let bad = et(&[
+        "train",
+        "--data",
+        &s(&train),
+        "--kind",
+        "svm",
+        "--out",
+        &s(&model),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("use qda or lda"));
+    let bad = et(&[
+        "collect",
+        "--scene",
+        &s(&scene),
+        "--grid",
+        "7",
+        "--out",
+        &s(&train),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("ROWSxCOLS"));
+    let bad = et(&["eval", "--model", &s(&train), "--data", &s(&test)]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("train.csv"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

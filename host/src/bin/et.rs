@@ -6,7 +6,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use et_core::model::{ModelKind, Precision};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
+use et_host::learn::fit::{FitOptions, Fitted, Target};
+use et_host::learn::model_file::ModelFile;
+use et_host::learn::{collect, cv, dataset, fastcv};
 use et_host::recording::{self, Header, Record, TouchRecord};
 use et_host::tables::ProtocolTables;
 use et_sim::scene::{Detail, Run, Scene};
@@ -41,6 +45,126 @@ enum Command {
     ///   et sim --scene sim/scenes/square-13cm-16-swipe.toml --frames 150 --out swipe.jsonl --samples
     #[command(verbatim_doc_comment)]
     Sim(SimArgs),
+    /// Collect a labelled training set on the simulated sheet, the SPEC §9 way: a grid of
+    /// touch classes, visited T times, S_num scans per class and visit with the pressure varied,
+    /// S_sub observations per scan; electrodes move between visits. Writes CSV.
+    ///
+    /// Examples:
+    ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
+    ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --visits 1 --scans 1 --seed 77 --out nextday.csv
+    #[command(verbatim_doc_comment)]
+    Collect(CollectArgs),
+    /// Train a QDA or LDA model on a collected training set (shrinkage chosen by
+    /// leave-one-visit-out cross-validation unless given), and cross-validate it.
+    ///
+    /// Example:
+    ///   et train --data train.csv --out model.json
+    #[command(verbatim_doc_comment)]
+    Train(TrainArgs),
+    /// Evaluate a trained model on a test set: accuracy, mean position error, AEE, confusion.
+    ///
+    /// Example:
+    ///   et eval --model model.json --data nextday.csv --json
+    #[command(verbatim_doc_comment)]
+    Eval(EvalArgs),
+    /// Export a trained model as the model blob the firmware evaluates (f32, or f16 at half
+    /// the flash), with its size and evaluation cost.
+    ///
+    /// Example:
+    ///   et export --model model.json --precision f16 --out model.etm
+    #[command(verbatim_doc_comment)]
+    Export(ExportArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct CollectArgs {
+    /// Scene file: the sheet, its electrodes and the front end (its touches are not used).
+    #[arg(long)]
+    scene: PathBuf,
+    /// Class grid, ROWSxCOLS (SPEC §9: 7x7 with a 15 mm target, 10x10 with 10 mm).
+    #[arg(long, default_value = "7x7")]
+    grid: String,
+    /// T: visits of the whole grid.
+    #[arg(long, default_value_t = 6)]
+    visits: usize,
+    /// S_num: scans per class and visit.
+    #[arg(long, default_value_t = 20)]
+    scans: usize,
+    /// S_sub: observations (sub-section medians) per scan.
+    #[arg(long, default_value_t = 20)]
+    subsections: usize,
+    /// Lowest pressure while pressing, kPa.
+    #[arg(long, default_value_t = 5.0)]
+    min_kpa: f64,
+    /// Highest pressure while pressing, kPa.
+    #[arg(long, default_value_t = 60.0)]
+    max_kpa: f64,
+    /// Finger (target) radius, mm.
+    #[arg(long, default_value_t = 7.5)]
+    radius_mm: f64,
+    /// Rms electrode movement between visits, mm.
+    #[arg(long, default_value_t = 0.5)]
+    movement_mm: f64,
+    /// Seed of the session.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Where to write the dataset (CSV).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct TrainArgs {
+    /// Training set (CSV from `et collect`).
+    #[arg(long)]
+    data: PathBuf,
+    /// qda or lda.
+    #[arg(long, default_value = "qda")]
+    kind: String,
+    /// Shrinkage in [0, 1], or "auto" (chosen by leave-one-visit-out cross-validation).
+    #[arg(long, default_value = "auto")]
+    shrinkage: String,
+    /// Folds of the reported stratified cross-validation.
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
+    /// Where to write the model (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct EvalArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Test set (CSV from `et collect`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Print JSON (with the confusion matrix).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct ExportArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// f32, or f16 (half the flash, about 3 significant digits).
+    #[arg(long, default_value = "f32")]
+    precision: String,
+    /// Where to write the blob.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -171,11 +295,327 @@ fn sim(args: &SimArgs) -> Result<()> {
     Ok(())
 }
 
+fn collect_cmd(args: &CollectArgs) -> Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    let (rows, cols) = args
+        .grid
+        .split_once('x')
+        .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
+        .filter(|&(r, c)| r > 0 && c > 0)
+        .with_context(|| format!("--grid '{}': write ROWSxCOLS, e.g. 7x7", args.grid))?;
+    if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
+        bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
+    }
+    if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
+        bail!("--visits, --scans and --subsections must be at least 1");
+    }
+    // SPEC §9 training scans: S = 3 200 samples at 10 kHz per scan, the opposite protocol.
+    let l = scene.sheet.electrodes.count;
+    let samples = (3_200 / u16::from(l)).max(2);
+    let config = et_core::ScanConfig {
+        electrodes: l,
+        protocol: et_core::ProtocolKind::Opposite,
+        samples_per_step: samples,
+        settle_samples: samples / 5,
+        sample_rate_hz: 10_000,
+        ..scene.scan_config().map_err(anyhow::Error::msg)?
+    };
+    let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
+    let plan = collect::Plan {
+        visits: 1,
+        scans: args.scans,
+        subsections: args.subsections,
+        pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
+        radius: args.radius_mm * 1e-3,
+        placement: args.radius_mm * 1e-3 / 4.0,
+        electrode_movement: args.movement_mm * 1e-3,
+        seed: args.seed,
+    };
+    let bar = ProgressBar::new(args.visits as u64).with_style(
+        ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let started = Instant::now();
+    let mut data: Option<collect::Dataset> = None;
+    for v in 0..args.visits {
+        let seed = args.seed.wrapping_mul(1_000).wrapping_add(v as u64);
+        let mut part = collect::collect(
+            &scene.sheet,
+            scene.frontend,
+            config,
+            &centres,
+            &collect::Plan {
+                seed,
+                ..plan.clone()
+            },
+        )
+        .map_err(anyhow::Error::msg)?;
+        part.visit.fill(v as u16);
+        data = Some(match data {
+            None => part,
+            Some(mut d) => {
+                let x = nalgebra::DMatrix::from_fn(
+                    d.x.nrows() + part.x.nrows(),
+                    d.x.ncols(),
+                    |r, c| {
+                        if r < d.x.nrows() {
+                            d.x[(r, c)]
+                        } else {
+                            part.x[(r - d.x.nrows(), c)]
+                        }
+                    },
+                );
+                d.x = x;
+                d.y.extend(part.y);
+                d.positions.extend(part.positions);
+                d.visit.extend(part.visit);
+                d
+            }
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let data = data.context("no visit collected")?;
+    let provenance = format!(
+        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, movement {} mm, seed {}",
+        args.scene.display(),
+        args.visits,
+        args.scans,
+        args.subsections,
+        args.min_kpa,
+        args.max_kpa,
+        args.radius_mm,
+        args.movement_mm,
+        args.seed
+    );
+    dataset::save_csv(&data, &args.out, &provenance)?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "observations": data.x.nrows(),
+        "features": data.x.ncols(),
+        "classes": centres.len(),
+        "seconds": started.elapsed().as_secs_f64(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "wrote {} observations of {} features, {} classes, to {} in {:.1} s",
+            data.x.nrows(),
+            data.x.ncols(),
+            centres.len(),
+            args.out.display(),
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn kind_of(name: &str) -> Result<ModelKind> {
+    match name {
+        "qda" => Ok(ModelKind::Qda),
+        "lda" => Ok(ModelKind::Lda),
+        other => bail!("--kind '{other}': use qda or lda"),
+    }
+}
+
+fn train_cmd(args: &TrainArgs) -> Result<()> {
+    let data = dataset::load_csv(&args.data)?;
+    let classes = data.centres.len();
+    let kind = kind_of(&args.kind)?;
+    // Shrink QDA toward the pooled covariance when that has full rank (n - C > p), else toward
+    // the diagonal: a rank-deficient target cannot make a class covariance definite.
+    let pooled_full_rank = data.x.nrows().saturating_sub(classes) > data.x.ncols();
+    let target = if kind == ModelKind::Qda && pooled_full_rank {
+        Target::Pooled
+    } else {
+        Target::Diagonal
+    };
+    let base = FitOptions {
+        kind,
+        shrinkage: 0.0,
+        target,
+    };
+    let visits = data
+        .visit
+        .iter()
+        .map(|&v| usize::from(v))
+        .max()
+        .unwrap_or(0)
+        + 1;
+    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
+    let strat = cv::folds(&data.y, args.folds.max(2), 1);
+    let (shrinkage, scores) = match args.shrinkage.as_str() {
+        "auto" => {
+            let fold = if visits >= 2 { &by_visit } else { &strat };
+            let (l, s) = cv::choose_shrinkage_with(
+                &[0.0, 0.01, 0.03, 0.1, 0.3, 1.0],
+                |o| fastcv::cross_validate_fast(&data.x, &data.y, classes, o, fold),
+                &base,
+            )?;
+            (l, s)
+        }
+        v => (
+            v.parse::<f64>()
+                .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
+            Vec::new(),
+        ),
+    };
+    let opts = FitOptions { shrinkage, ..base };
+    let model = Fitted::fit(&data.x, &data.y, classes, &opts)?;
+    let cv_conf = fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &strat)?;
+    let lovo = if visits >= 2 {
+        Some(fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &by_visit)?.accuracy())
+    } else {
+        None
+    };
+    let mm: Vec<[f64; 2]> = data
+        .centres
+        .iter()
+        .map(|c| [c[0] * 1e3, c[1] * 1e3])
+        .collect();
+    let file = ModelFile::new(
+        &model,
+        shrinkage,
+        data.config,
+        data.feature_index.clone(),
+        mm.clone(),
+    );
+    file.save(&args.out).map_err(anyhow::Error::msg)?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "kind": args.kind,
+        "shrinkage": shrinkage,
+        "shrinkage_scores": scores.iter().map(|(l, a)| serde_json::json!({"shrinkage": l, "accuracy": a})).collect::<Vec<_>>(),
+        "classes": classes,
+        "observations": data.x.nrows(),
+        "features": data.x.ncols(),
+        "cv_folds": args.folds.max(2),
+        "cv_accuracy": cv_conf.accuracy(),
+        "cv_mean_error_mm": cv_conf.mean_position_error(&mm),
+        "cv_aee_mm": cv_conf.aee(&mm),
+        "leave_one_visit_out_accuracy": lovo,
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "trained {} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
+            args.kind,
+            data.x.nrows(),
+            classes,
+            data.x.ncols(),
+            shrinkage,
+            args.folds.max(2),
+            100.0 * cv_conf.accuracy(),
+            cv_conf.mean_position_error(&mm),
+            lovo.map_or(String::new(), |a| format!(
+                ", leave-one-visit-out {:.1} %",
+                100.0 * a
+            )),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+fn eval_cmd(args: &EvalArgs) -> Result<()> {
+    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let data = dataset::load_csv(&args.data)?;
+    if data.feature_index != file.feature_index {
+        bail!(
+            "{}: its features are not the model's ({} vs {})",
+            args.data.display(),
+            data.feature_index.len(),
+            file.feature_index.len()
+        );
+    }
+    let model = file.fitted()?;
+    let classes = file.classes.len();
+    let mut conf = cv::Confusion::new(classes);
+    for r in 0..data.x.nrows() {
+        let label = data.y[r];
+        if usize::from(label) >= classes {
+            bail!(
+                "{}: observation {r} has class {label}, the model has {classes}",
+                args.data.display()
+            );
+        }
+        let row: Vec<f64> = data.x.row(r).iter().copied().collect();
+        conf.add(label, model.predict(&row));
+    }
+    let summary = serde_json::json!({
+        "observations": conf.total(),
+        "accuracy": conf.accuracy(),
+        "mean_error_mm": conf.mean_position_error(&file.centres_mm),
+        "aee_mm": conf.aee(&file.centres_mm),
+        "confusion": conf.counts.chunks(classes).map(<[u32]>::to_vec).collect::<Vec<_>>(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        println!(
+            "{} observations: accuracy {:.1} %, mean position error {:.2} mm, AEE {:.1} mm",
+            conf.total(),
+            100.0 * conf.accuracy(),
+            conf.mean_position_error(&file.centres_mm),
+            conf.aee(&file.centres_mm)
+        );
+    }
+    Ok(())
+}
+
+fn export_cmd(args: &ExportArgs) -> Result<()> {
+    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let precision = match args.precision.as_str() {
+        "f32" => Precision::F32,
+        "f16" => Precision::F16,
+        other => bail!("--precision '{other}': use f32 or f16"),
+    };
+    let blob = file.blob(precision)?;
+    std::fs::write(&args.out, &blob).with_context(|| format!("writing {}", args.out.display()))?;
+    let (c, p) = (file.classes.len(), file.feature_index.len());
+    // Multiply-adds per frame on the chip: QDA a forward substitution per class, LDA a dot.
+    let macs = if file.kind == "qda" {
+        c * (p * (p + 1) / 2 + p)
+    } else {
+        c * p
+    };
+    const FLASH: usize = 1 << 20;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "bytes": blob.len(),
+        "fits_stm32f405_flash": blob.len() < FLASH,
+        "multiply_adds_per_frame": macs,
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "wrote {} ({} bytes, {:.0} % of the STM32F405's 1 MiB flash{}); {} multiply-adds per frame",
+            args.out.display(),
+            blob.len(),
+            100.0 * blob.len() as f64 / FLASH as f64,
+            if blob.len() < FLASH {
+                ""
+            } else {
+                ": does NOT fit, use f16, LDA or fewer classes"
+            },
+            macs
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Protocol(args) => protocol(args),
         Command::Sim(args) => sim(args),
+        Command::Collect(args) => collect_cmd(args),
+        Command::Train(args) => train_cmd(args),
+        Command::Eval(args) => eval_cmd(args),
+        Command::Export(args) => export_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,6 +5,7 @@
 //! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
 //! - [`cv`]: stratified k-fold cross-validation, confusion matrix, accuracy, AEE [5.9-5.11].
 //! - [`fastcv`]: the same cross-validation from sufficient statistics with exact pruning.
+//! - [`model_file`]: trained models on disk (JSON), for `et train`, `et eval`, `et export`.
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
 //!   and import of other sensors' CSV.
 
@@ -13,6 +14,7 @@ pub mod cv;
 pub mod dataset;
 pub mod fastcv;
 pub mod fit;
+pub mod model_file;
 
 #[cfg(test)]
 mod tests;
