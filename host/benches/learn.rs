@@ -7,39 +7,20 @@
 use std::sync::LazyLock;
 
 use et_core::ScanConfig;
-use et_core::protocol::ProtocolKind;
-use et_host::learn::collect::{Dataset, Plan, collect, grid};
+use et_host::learn::collect::{Dataset, Plan, collect, grid, training_config};
 use et_host::learn::cv::folds;
 use et_host::learn::fastcv::cross_validate_fast;
 use et_host::learn::fit::{FitOptions, Fitted};
 use et_sim::frontend::FrontendSpec;
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeSpec, SheetSpec};
-use et_sim::touch::Piezo;
+use et_sim::sheet::SheetSpec;
 
 fn main() {
     divan::main();
 }
 
 static DATA: LazyLock<Dataset> = LazyLock::new(|| {
-    let spec = SheetSpec {
-        shape: Shape::Rectangle {
-            width: 0.13,
-            height: 0.13,
-        },
-        sheet_resistance: 30e3,
-        electrodes: ElectrodeSpec::default(),
-        resolution: None,
-        piezo: Piezo::default(),
-        bend: None,
-    };
-    let config = ScanConfig {
-        protocol: ProtocolKind::Opposite,
-        samples_per_step: 200,
-        settle_samples: 40,
-        sample_rate_hz: 10_000,
-        ..ScanConfig::REFERENCE
-    };
+    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let config = training_config(ScanConfig::REFERENCE);
     let plan = Plan {
         visits: 6,
         scans: 20,

@@ -14,25 +14,16 @@ use std::time::Instant;
 
 use et_core::ScanConfig;
 use et_core::model::ModelKind;
-use et_core::protocol::ProtocolKind;
-use et_host::learn::collect::{Plan, collect, grid};
+use et_host::learn::collect::{Plan, collect, grid, training_config};
 use et_host::learn::cv::{Confusion, choose_shrinkage_with};
 use et_host::learn::fastcv::cross_validate_fast;
 use et_host::learn::fit::{FitOptions, Fitted, Target};
 use et_sim::frontend::FrontendSpec;
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeSpec, SheetSpec};
-use et_sim::touch::Piezo;
+use et_sim::sheet::SheetSpec;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let base = ScanConfig {
-        protocol: ProtocolKind::Opposite,
-        samples_per_step: 200,
-        settle_samples: 40,
-        sample_rate_hz: 10_000,
-        ..ScanConfig::REFERENCE
-    };
+    let base = training_config(ScanConfig::REFERENCE);
     println!(
         "sheet         classes  model                 lambda  next_day_acc (min-max)  mean_err_mm  AEE_mm"
     );
@@ -42,20 +33,7 @@ fn main() {
         (0.13, 8, 7, 0.0075),
         (0.17, 16, 7, 0.0075),
     ] {
-        let spec = SheetSpec {
-            shape: Shape::Rectangle {
-                width: side,
-                height: side,
-            },
-            sheet_resistance: 30e3,
-            electrodes: ElectrodeSpec {
-                count: l,
-                ..ElectrodeSpec::default()
-            },
-            resolution: None,
-            piezo: Piezo::default(),
-            bend: None,
-        };
+        let spec = SheetSpec::rectangle(side, side, l);
         let config = ScanConfig {
             electrodes: l,
             ..base

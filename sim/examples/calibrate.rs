@@ -23,9 +23,7 @@ use std::sync::Arc;
 use et_core::ScanConfig;
 use et_core::stats::{mad, snr};
 use et_sim::frontend::{FrontendSpec, SimFrontend};
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeSpec, Sheet, SheetSpec};
-use et_sim::touch::Piezo;
+use et_sim::sheet::{Sheet, SheetSpec};
 
 const FRAMES: usize = 400;
 
@@ -47,17 +45,7 @@ fn measure(sheet: &Arc<Sheet>, spec: FrontendSpec, current_na: u32) -> (f32, f32
 }
 
 fn main() {
-    let sheet_spec = SheetSpec {
-        shape: Shape::Rectangle {
-            width: 0.13,
-            height: 0.13,
-        },
-        sheet_resistance: 30e3,
-        electrodes: ElectrodeSpec::default(),
-        resolution: None,
-        piezo: Piezo::default(),
-        bend: None,
-    };
+    let sheet_spec = SheetSpec::rectangle(0.13, 0.13, 16);
     let sheet = Arc::new(Sheet::new(&sheet_spec, &[]).expect("sheet"));
     let targets = [(32_000, 55.0f32, 0.5f32), (10_000, 49.0, 0.4)];
     let score = |spec: FrontendSpec| -> (f32, Vec<(f32, f32)>) {

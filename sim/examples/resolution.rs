@@ -7,7 +7,6 @@
 use std::time::Instant;
 
 use et_core::protocol::{Protocol, ProtocolKind};
-use et_sim::shape::Shape;
 use et_sim::sheet::{
     ElectrodeSpec, Sheet, SheetSpec, Source, build_network, direct_transfer, frame,
 };
@@ -15,19 +14,13 @@ use et_sim::touch::{Piezo, Touch};
 
 fn spec(h: Option<f64>) -> SheetSpec {
     SheetSpec {
-        shape: Shape::Rectangle {
-            width: 0.13,
-            height: 0.13,
-        },
-        sheet_resistance: 30e3,
         electrodes: ElectrodeSpec {
             count: 16,
             width: 0.0052,
             ..ElectrodeSpec::default()
         },
         resolution: h,
-        piezo: Piezo::default(),
-        bend: None,
+        ..SheetSpec::rectangle(0.13, 0.13, 16)
     }
 }
 

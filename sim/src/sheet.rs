@@ -157,6 +157,23 @@ impl std::fmt::Display for SheetError {
 impl std::error::Error for SheetError {}
 
 impl SheetSpec {
+    /// A flat `width` x `height` m rectangle of the default fabric (30 kohm/sq) with `electrodes`
+    /// default clips (5 mm, 1 kohm) equally spaced, at the default resolution.
+    #[must_use]
+    pub fn rectangle(width: f64, height: f64, electrodes: u8) -> Self {
+        Self {
+            shape: Shape::Rectangle { width, height },
+            sheet_resistance: SHEET_RESISTANCE,
+            electrodes: ElectrodeSpec {
+                count: electrodes,
+                ..ElectrodeSpec::default()
+            },
+            resolution: None,
+            piezo: Piezo::default(),
+            bend: None,
+        }
+    }
+
     /// The grid spacing used when none is given: 48 cells across the smaller side, at least 4
     /// per electrode pitch and 2 per electrode width, whichever is finest. Measured accuracy in
     /// the README (`cargo test -p et-sim --release resolution -- --nocapture`).

@@ -309,17 +309,7 @@ fn collect_cmd(args: &CollectArgs) -> Result<()> {
     if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
         bail!("--visits, --scans and --subsections must be at least 1");
     }
-    // SPEC §9 training scans: S = 3 200 samples at 10 kHz per scan, the opposite protocol.
-    let l = scene.sheet.electrodes.count;
-    let samples = (3_200 / u16::from(l)).max(2);
-    let config = et_core::ScanConfig {
-        electrodes: l,
-        protocol: et_core::ProtocolKind::Opposite,
-        samples_per_step: samples,
-        settle_samples: samples / 5,
-        sample_rate_hz: 10_000,
-        ..scene.scan_config().map_err(anyhow::Error::msg)?
-    };
+    let config = collect::training_config(scene.scan_config().map_err(anyhow::Error::msg)?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
     let plan = collect::Plan {
         visits: 1,

@@ -61,6 +61,21 @@ pub fn grid(spec: &SheetSpec, rows: usize, cols: usize, margin: f64) -> Vec<[f64
         .collect()
 }
 
+/// The scan settings of SPEC §9's training scans, on top of `base` (electrodes, current,
+/// gain): the opposite protocol, S = 3 200 samples per scan at 10 kHz (3 200 / L per step, a
+/// fifth of each dropped as settling).
+#[must_use]
+pub fn training_config(base: ScanConfig) -> ScanConfig {
+    let samples = (3_200 / u16::from(base.electrodes.max(1))).max(2);
+    ScanConfig {
+        protocol: et_core::ProtocolKind::Opposite,
+        samples_per_step: samples,
+        settle_samples: samples / 5,
+        sample_rate_hz: 10_000,
+        ..base
+    }
+}
+
 /// How to collect.
 #[derive(Clone, Debug)]
 pub struct Plan {

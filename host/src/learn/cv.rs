@@ -112,19 +112,7 @@ pub fn cross_validate_folds(
     opts: &FitOptions,
     fold: &[usize],
 ) -> Result<Confusion, FitError> {
-    if fold.len() != y.len() {
-        return Err(FitError::Shape(format!(
-            "{} folds for {} observations",
-            fold.len(),
-            y.len()
-        )));
-    }
-    let k = fold.iter().max().map_or(0, |m| m + 1);
-    if k < 2 {
-        return Err(FitError::Shape(
-            "cross-validation needs at least 2 folds".into(),
-        ));
-    }
+    let k = fold_count(fold, y.len())?;
     let mut confusion = Confusion::new(classes);
     for f in 0..k {
         let train: Vec<usize> = (0..y.len()).filter(|&r| fold[r] != f).collect();
@@ -144,6 +132,26 @@ pub fn cross_validate_folds(
         }
     }
     Ok(confusion)
+}
+
+/// The number of folds in `fold` (one entry per observation, values 0..k).
+///
+/// # Errors
+/// [`FitError::Shape`] if `fold` is not one entry per observation or holds fewer than 2 folds.
+pub(crate) fn fold_count(fold: &[usize], n: usize) -> Result<usize, FitError> {
+    if fold.len() != n {
+        return Err(FitError::Shape(format!(
+            "{} folds for {n} observations",
+            fold.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |m| m + 1);
+    if k < 2 {
+        return Err(FitError::Shape(
+            "cross-validation needs at least 2 folds".into(),
+        ));
+    }
+    Ok(k)
 }
 
 /// The shrinkage among `candidates` with the best cross-validated accuracy over `fold`

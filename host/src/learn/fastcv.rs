@@ -280,19 +280,7 @@ pub fn cross_validate_fast(
     fold: &[usize],
 ) -> Result<Confusion, FitError> {
     super::fit::check(x, y, classes)?;
-    if fold.len() != y.len() {
-        return Err(FitError::Shape(format!(
-            "{} folds for {} observations",
-            fold.len(),
-            y.len()
-        )));
-    }
-    let k = fold.iter().max().map_or(0, |m| m + 1);
-    if k < 2 {
-        return Err(FitError::Shape(
-            "cross-validation needs at least 2 folds".into(),
-        ));
-    }
+    let k = super::cv::fold_count(fold, y.len())?;
     let (n, p) = (x.nrows(), x.ncols());
     // Centre and scale globally once (no precision lost in the sums of outer products).
     let raw_mean: Vec<f64> = (0..p).map(|j| x.column(j).mean()).collect();

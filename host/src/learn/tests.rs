@@ -1,7 +1,7 @@
 //! Learning: host fits against et-core's evaluation, degenerate training sets, CV and AEE, and
 //! the whole procedure on the simulator.
 
-use super::collect::{Plan, collect, grid};
+use super::collect::{Plan, collect, grid, training_config};
 use super::cv::{Confusion, cross_validate};
 use super::fit::{FitError, FitOptions, Fitted, Target};
 use et_core::ScanConfig;
@@ -9,9 +9,7 @@ use et_core::model::{Model, ModelKind, Precision};
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
 use et_sim::frontend::FrontendSpec;
 use et_sim::rng::Rng;
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeSpec, SheetSpec};
-use et_sim::touch::Piezo;
+use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
 
 /// Opposite protocol at L = 8: K = 32 values, p = 16 features (reciprocity-halved).
@@ -258,23 +256,10 @@ fn the_procedure_on_the_simulated_sheet() {
     // observations per class (fewer than features + 1: shrinkage needed), then a "next day" set
     // with the electrodes moved again.
     let spec = SheetSpec {
-        shape: Shape::Rectangle {
-            width: 0.13,
-            height: 0.13,
-        },
-        sheet_resistance: 30e3,
-        electrodes: ElectrodeSpec::default(),
         resolution: Some(0.005),
-        piezo: Piezo::default(),
-        bend: None,
+        ..SheetSpec::rectangle(0.13, 0.13, 16)
     };
-    let config = ScanConfig {
-        protocol: ProtocolKind::Opposite,
-        samples_per_step: 200,
-        settle_samples: 40,
-        sample_rate_hz: 10_000,
-        ..ScanConfig::REFERENCE
-    };
+    let config = training_config(ScanConfig::REFERENCE);
     let centres = grid(&spec, 3, 3, 0.01);
     assert_eq!(centres.len(), 9);
     let plan = Plan {

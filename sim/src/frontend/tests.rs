@@ -1,23 +1,14 @@
 //! The simulated front end against the real scan engine.
 
 use super::*;
-use crate::shape::Shape;
-use crate::sheet::{ElectrodeSpec, SheetSpec};
-use crate::touch::Piezo;
+use crate::sheet::SheetSpec;
 use et_core::protocol::ProtocolKind;
 use et_core::{Protocol, Scanner};
 
 pub(crate) fn sheet(resolution: Option<f64>) -> Arc<Sheet> {
     let spec = SheetSpec {
-        shape: Shape::Rectangle {
-            width: 0.13,
-            height: 0.13,
-        },
-        sheet_resistance: 30e3,
-        electrodes: ElectrodeSpec::default(),
         resolution,
-        piezo: Piezo::default(),
-        bend: None,
+        ..SheetSpec::rectangle(0.13, 0.13, 16)
     };
     Arc::new(Sheet::new(&spec, &[]).unwrap())
 }
