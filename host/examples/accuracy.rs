@@ -23,7 +23,7 @@ use et_sim::sheet::SheetSpec;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let base = training_config(ScanConfig::REFERENCE);
+    let base = ScanConfig::REFERENCE;
     println!(
         "sheet         classes  model                 lambda  next_day_acc (min-max)  mean_err_mm  AEE_mm"
     );
@@ -34,10 +34,11 @@ fn main() {
         (0.17, 16, 7, 0.0075),
     ] {
         let spec = SheetSpec::rectangle(side, side, l);
-        let config = ScanConfig {
+        // SPEC §9's training scans for this electrode count (3 200 / L samples per step).
+        let config = training_config(ScanConfig {
             electrodes: l,
             ..base
-        };
+        });
         let centres = grid(&spec, n, n, 0.0);
         let classes = centres.len();
         let plan = Plan {
