@@ -15,7 +15,7 @@ use std::time::Instant;
 use et_core::ScanConfig;
 use et_core::model::ModelKind;
 use et_host::learn::collect::{Plan, collect, grid, training_config};
-use et_host::learn::cv::{Confusion, choose_shrinkage_with};
+use et_host::learn::cv::{Confusion, choose_shrinkage_with, evaluate};
 use et_host::learn::fastcv::cross_validate_fast;
 use et_host::learn::fit::{FitOptions, Fitted, Target};
 use et_sim::frontend::FrontendSpec;
@@ -127,13 +127,8 @@ fn main() {
             let mut all = Confusion::new(classes);
             let mut accs = Vec::new();
             for day in &days {
-                let mut conf = Confusion::new(classes);
-                for r in 0..day.x.nrows() {
-                    let row: Vec<f64> = day.x.row(r).iter().copied().collect();
-                    let p = model.predict(&row);
-                    conf.add(day.y[r], p);
-                    all.add(day.y[r], p);
-                }
+                let conf = evaluate(&model, &day.x, &day.y).expect("evaluate");
+                all.merge(&conf);
                 accs.push(conf.accuracy());
             }
             let (lo, hi) = accs

@@ -522,18 +522,8 @@ fn eval_cmd(args: &EvalArgs) -> Result<()> {
     }
     let model = file.fitted()?;
     let classes = file.classes.len();
-    let mut conf = cv::Confusion::new(classes);
-    for r in 0..data.x.nrows() {
-        let label = data.y[r];
-        if usize::from(label) >= classes {
-            bail!(
-                "{}: observation {r} has class {label}, the model has {classes}",
-                args.data.display()
-            );
-        }
-        let row: Vec<f64> = data.x.row(r).iter().copied().collect();
-        conf.add(label, model.predict(&row));
-    }
+    let conf =
+        cv::evaluate(&model, &data.x, &data.y).with_context(|| args.data.display().to_string())?;
     let summary = serde_json::json!({
         "observations": conf.total(),
         "accuracy": conf.accuracy(),

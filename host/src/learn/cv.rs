@@ -29,6 +29,20 @@ impl Confusion {
         self.counts[usize::from(truth) * self.classes + usize::from(predicted)] += 1;
     }
 
+    /// Adds another matrix's counts (same class count).
+    ///
+    /// # Panics
+    /// If the class counts differ.
+    pub fn merge(&mut self, other: &Confusion) {
+        assert_eq!(
+            self.classes, other.classes,
+            "confusion matrices of different sizes"
+        );
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            *a += b;
+        }
+    }
+
     /// Observations counted.
     #[must_use]
     pub fn total(&self) -> u32 {
@@ -77,6 +91,38 @@ impl Confusion {
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Predicts every observation (row of `x`) with `model` and counts it against its label.
+///
+/// # Errors
+/// [`FitError::Shape`] if `x` does not have the model's feature count, rows and labels differ
+/// in number, or a label is not one of the model's classes.
+pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion, FitError> {
+    let classes = model.classes.len();
+    if x.ncols() != model.features() || x.nrows() != y.len() {
+        return Err(FitError::Shape(format!(
+            "{} x {} observations with {} labels for a model of {} features",
+            x.nrows(),
+            x.ncols(),
+            y.len(),
+            model.features()
+        )));
+    }
+    let mut confusion = Confusion::new(classes);
+    let mut row = vec![0.0; x.ncols()];
+    for (r, &label) in y.iter().enumerate() {
+        if usize::from(label) >= classes {
+            return Err(FitError::Shape(format!(
+                "observation {r} has class {label}, the model has {classes}"
+            )));
+        }
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = x[(r, j)];
+        }
+        confusion.add(label, model.predict(&row));
+    }
+    Ok(confusion)
 }
 
 /// Stratified fold of every observation: within each class, observations are dealt to folds

@@ -333,9 +333,7 @@ pub fn cross_validate_fast(
     });
     let mut total = Confusion::new(classes);
     for r in results {
-        for (a, b) in total.counts.iter_mut().zip(r?.counts) {
-            *a += b;
-        }
+        total.merge(&r?);
     }
     Ok(total)
 }

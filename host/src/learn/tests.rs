@@ -293,13 +293,7 @@ fn the_procedure_on_the_simulated_sheet() {
         },
     )
     .unwrap();
-    let mut test = Confusion::new(9);
-    for r in 0..next_day.x.nrows() {
-        test.add(
-            next_day.y[r],
-            model.predict(&next_day.x.row(r).iter().copied().collect::<Vec<_>>()),
-        );
-    }
+    let test = super::cv::evaluate(&model, &next_day.x, &next_day.y).unwrap();
     let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
     println!(
         "sim 3 x 3: CV accuracy {:.3}, next-day accuracy {:.3}, next-day AEE {:.1} mm",
