@@ -11,6 +11,11 @@
 //!
 //! The prediction is argmax_c delta_c, with the margin to the runner-up as a confidence.
 //!
+//! A *referenced* model ([`FLAG_REFERENCED`]) was trained on V_m minus the untouched frame
+//! V_0 taken when the sheet was put down (a "tare", as difference imaging does, SPEC §6):
+//! this cancels what electrode movement between sessions does to the standing voltages. It is
+//! evaluated with [`Model::evaluate_referenced`], which subtracts V_0 before standardising.
+//!
 //! # Blob layout (little-endian, version 1)
 //!
 //! | bytes | field |
@@ -22,7 +27,8 @@
 //! | 8..10, 10..12, 12..14 | classes C, features p, frame length K the model expects (u16) |
 //! | 14 | electrodes L |
 //! | 15, 16, 18..22 | protocol tag (0 AD, 1 PP, 2 PP-PP, 3 opposite, 4 custom), drive skip, measure skip mask (u32) |
-//! | 17, 22..32 | reserved, zero |
+//! | 17 | flags: bit 0 [`FLAG_REFERENCED`], other bits zero |
+//! | 22..32 | reserved, zero |
 //! | then | feature index (u16 x p, zero-padded to 4 bytes); mean, scale (f32 x p each); class positions in mm (f32 x 2C: x, y); log prior (f32 x C); constant (f32 x C: -1/2 log det Sigma_c for QDA, -1/2 mu_c^T Sigma^-1 mu_c for LDA) |
 //! | then | QDA: class means mu_c (C x p), Cholesky factors L_c (C x p(p+1)/2, lower triangle packed by rows); LDA: weights w_c (C x p). In the stored precision, zero-padded to 4 bytes. |
 //! | last 4 | CRC-32 (ISO-HDLC) of everything before it |
@@ -39,6 +45,8 @@ use crate::wire::crc32;
 pub const MODEL_MAGIC: [u8; 4] = *b"ETDA";
 /// The blob format version this build reads and writes.
 pub const MODEL_VERSION: u16 = 1;
+/// Header flag (byte 17, bit 0): features are V_m - V_0, the frame minus the untouched frame.
+pub const FLAG_REFERENCED: u8 = 1;
 /// Header length in bytes.
 pub const HEADER_LEN: usize = 32;
 /// Smallest allowed ratio of the smallest to the largest Cholesky diagonal entry of a class:
@@ -203,6 +211,9 @@ pub enum EvalError {
     },
     /// A used voltage is NaN or infinite, or a discriminant overflowed.
     NonFinite,
+    /// A referenced model needs the untouched frame V_0 (K values) and got none or a frame
+    /// of the wrong length.
+    Untouched,
 }
 
 impl core::fmt::Display for EvalError {
@@ -213,6 +224,10 @@ impl core::fmt::Display for EvalError {
             }
             EvalError::Scratch { needed, given } => write!(f, "scratch of {given}, need {needed}"),
             EvalError::NonFinite => write!(f, "non-finite voltage or discriminant"),
+            EvalError::Untouched => write!(
+                f,
+                "the model is referenced: it needs the untouched frame (K values)"
+            ),
         }
     }
 }
@@ -332,6 +347,7 @@ pub struct Model<'a> {
     frame_len: usize,
     protocol: Protocol,
     layout: Layout,
+    referenced: bool,
 }
 
 impl<'a> Model<'a> {
@@ -364,7 +380,7 @@ impl<'a> Model<'a> {
             1 => Precision::F16,
             _ => return Err(ModelError::Header),
         };
-        if bytes[17] != 0 || bytes[22..32].iter().any(|&b| b != 0) {
+        if bytes[17] & !FLAG_REFERENCED != 0 || bytes[22..32].iter().any(|&b| b != 0) {
             return Err(ModelError::Header);
         }
         let classes = usize::from(rd_u16(bytes, 8));
@@ -420,6 +436,7 @@ impl<'a> Model<'a> {
             frame_len: usize::from(frame_len),
             protocol,
             layout,
+            referenced: bytes[17] & FLAG_REFERENCED != 0,
         };
         model.check_tables()?;
         Ok(model)
@@ -475,6 +492,13 @@ impl<'a> Model<'a> {
     #[must_use]
     pub fn kind(&self) -> ModelKind {
         self.kind
+    }
+
+    /// Whether the model classifies V_m - V_0 (see the module docs): evaluate it with
+    /// [`evaluate_referenced`](Self::evaluate_referenced).
+    #[must_use]
+    pub fn referenced(&self) -> bool {
+        self.referenced
     }
 
     /// Storage precision of the large tables.
@@ -580,10 +604,16 @@ impl<'a> Model<'a> {
         self.stored(self.layout.factors, c * packed_len(self.features) + i)
     }
 
-    /// Picks and standardises the features of `v_m` into `z` (len p).
-    fn standardise(&self, v_m: &[f32], z: &mut [f32]) -> Result<(), EvalError> {
+    /// Picks and standardises the features of `v_m` (minus `v_0` for a referenced model) into
+    /// `z` (len p).
+    fn standardise(&self, v_m: &[f32], v_0: &[f32], z: &mut [f32]) -> Result<(), EvalError> {
         for (j, zj) in z.iter_mut().enumerate() {
-            let x = v_m[usize::from(self.feature_index(j))];
+            let i = usize::from(self.feature_index(j));
+            let x = if self.referenced {
+                v_m[i] - v_0[i]
+            } else {
+                v_m[i]
+            };
             if !x.is_finite() {
                 return Err(EvalError::NonFinite);
             }
@@ -619,11 +649,27 @@ impl<'a> Model<'a> {
     /// Every class's discriminant delta_c for frame `v_m`, into `out[..C]`.
     ///
     /// # Errors
-    /// [`EvalError`] for a frame of the wrong length, short scratch or `out`, or a
-    /// non-finite voltage or discriminant.
+    /// [`EvalError`] for a frame of the wrong length, short scratch or `out`, a non-finite
+    /// voltage or discriminant, or a referenced model ([`EvalError::Untouched`]).
     pub fn discriminants(
         &self,
         v_m: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), EvalError> {
+        self.discriminants_referenced(v_m, None, scratch, out)
+    }
+
+    /// As [`discriminants`](Self::discriminants), with the untouched frame `v_0` (K values)
+    /// that a referenced model subtracts; an unreferenced model ignores it.
+    ///
+    /// # Errors
+    /// As [`discriminants`](Self::discriminants); [`EvalError::Untouched`] when a referenced
+    /// model gets no `v_0` or one of the wrong length.
+    pub fn discriminants_referenced(
+        &self,
+        v_m: &[f32],
+        v_0: Option<&[f32]>,
         scratch: &mut [f32],
         out: &mut [f32],
     ) -> Result<(), EvalError> {
@@ -633,12 +679,13 @@ impl<'a> Model<'a> {
                 given: out.len(),
             });
         }
-        self.each_discriminant(v_m, scratch, |c, d| out[c] = d)
+        self.each_discriminant(v_m, v_0, scratch, |c, d| out[c] = d)
     }
 
     fn each_discriminant(
         &self,
         v_m: &[f32],
+        v_0: Option<&[f32]>,
         scratch: &mut [f32],
         mut visit: impl FnMut(usize, f32),
     ) -> Result<(), EvalError> {
@@ -648,6 +695,11 @@ impl<'a> Model<'a> {
                 got: v_m.len(),
             });
         }
+        let v_0 = match v_0 {
+            _ if !self.referenced => v_m,
+            Some(v_0) if v_0.len() == self.frame_len => v_0,
+            _ => return Err(EvalError::Untouched),
+        };
         let p = self.features;
         if scratch.len() < 2 * p {
             return Err(EvalError::Scratch {
@@ -656,7 +708,7 @@ impl<'a> Model<'a> {
             });
         }
         let (z, work) = scratch.split_at_mut(p);
-        self.standardise(v_m, z)?;
+        self.standardise(v_m, v_0, z)?;
         for c in 0..self.classes {
             let d = self.discriminant(c, z, work);
             if !d.is_finite() {
@@ -673,8 +725,22 @@ impl<'a> Model<'a> {
     /// # Errors
     /// As [`discriminants`](Self::discriminants).
     pub fn evaluate(&self, v_m: &[f32], scratch: &mut [f32]) -> Result<Decision, EvalError> {
+        self.evaluate_referenced(v_m, None, scratch)
+    }
+
+    /// As [`evaluate`](Self::evaluate), with the untouched frame `v_0` (K values) that a
+    /// referenced model subtracts from `v_m`; an unreferenced model ignores it.
+    ///
+    /// # Errors
+    /// As [`discriminants_referenced`](Self::discriminants_referenced).
+    pub fn evaluate_referenced(
+        &self,
+        v_m: &[f32],
+        v_0: Option<&[f32]>,
+        scratch: &mut [f32],
+    ) -> Result<Decision, EvalError> {
         let (mut best, mut best_d, mut second_d) = (0usize, f32::NEG_INFINITY, f32::NEG_INFINITY);
-        self.each_discriminant(v_m, scratch, |c, d| {
+        self.each_discriminant(v_m, v_0, scratch, |c, d| {
             if d > best_d {
                 second_d = best_d;
                 best_d = d;
@@ -701,6 +767,8 @@ pub struct ModelTables<'t> {
     pub kind: ModelKind,
     /// Storage precision of `vectors` and `factors`.
     pub precision: Precision,
+    /// Trained on V_m - V_0 ([`FLAG_REFERENCED`]).
+    pub referenced: bool,
     /// Electrode count L of the frames.
     pub electrodes: u8,
     /// Protocol of the frames.
@@ -766,6 +834,7 @@ pub fn write_model(t: &ModelTables<'_>, out: &mut [u8]) -> Result<usize, ModelEr
     out[10..12].copy_from_slice(&(p as u16).to_le_bytes());
     out[12..14].copy_from_slice(&(protocol.frame_len() as u16).to_le_bytes());
     out[14] = t.electrodes;
+    out[17] = if t.referenced { FLAG_REFERENCED } else { 0 };
     let (tag, pattern) = protocol_tag(t.protocol);
     out[15] = tag;
     out[16] = pattern.drive_skip;

@@ -29,6 +29,8 @@ static DATA: LazyLock<Dataset> = LazyLock::new(|| {
         radius: 0.0075,
         placement: 0.002,
         electrode_movement: 0.0005,
+        poses: 1,
+        press_movement: 0.0,
         seed: 1,
     };
     let d = collect(

@@ -49,6 +49,8 @@ fn main() {
             radius,
             placement: radius / 4.0,
             electrode_movement: 0.0005,
+            poses: 1,
+            press_movement: 0.0,
             seed: 1,
         };
         let started = Instant::now();

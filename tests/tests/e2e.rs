@@ -230,6 +230,7 @@ fn fit(frames_by_class: &[Vec<Frame>]) -> Vec<u8> {
     let tables = ModelTables {
         kind: ModelKind::Qda,
         precision: Precision::F32,
+        referenced: false,
         electrodes: 8,
         protocol: ProtocolKind::Opposite,
         feature_index: &features,
@@ -357,6 +358,7 @@ fn a_model_for_another_protocol_is_refused() {
     let tables = ModelTables {
         kind: ModelKind::Lda,
         precision: Precision::F32,
+        referenced: false,
         electrodes: 8,
         protocol: ProtocolKind::Adjacent,
         feature_index: &features,

@@ -220,6 +220,7 @@ fn qda_blob(pr: &Problem, precision: Precision) -> Vec<u8> {
     let tables = ModelTables {
         kind: ModelKind::Qda,
         precision,
+        referenced: false,
         electrodes: 8,
         protocol: ProtocolKind::Opposite,
         feature_index: &pr.features,
@@ -340,6 +341,7 @@ fn lda_agrees_with_an_independent_f64_reference() {
     let tables = ModelTables {
         kind: ModelKind::Lda,
         precision: Precision::F32,
+        referenced: false,
         electrodes: 8,
         protocol: ProtocolKind::Opposite,
         feature_index: &pr.features,
@@ -489,6 +491,12 @@ fn corrupted_or_mismatched_blobs_are_refused() {
     let mut kind = blob.clone();
     kind[6] = 9;
     assert_eq!(Model::parse(&resign(kind)).unwrap_err(), ModelError::Header);
+    let mut flags = blob.clone();
+    flags[17] = 2; // an unknown flag
+    assert_eq!(
+        Model::parse(&resign(flags)).unwrap_err(),
+        ModelError::Header
+    );
     let mut idx = blob.clone();
     idx[HEADER_LEN..HEADER_LEN + 2].copy_from_slice(&32u16.to_le_bytes());
     assert_eq!(
@@ -591,6 +599,7 @@ fn writer_refuses_inconsistent_tables() {
     let t = ModelTables {
         kind: ModelKind::Lda,
         precision: Precision::F32,
+        referenced: false,
         electrodes: 8,
         protocol: ProtocolKind::Opposite,
         feature_index: &[0, 1],
@@ -618,4 +627,48 @@ fn writer_refuses_inconsistent_tables() {
     };
     assert_eq!(write_model(&t, &mut out[..10]), Err(ModelError::Table));
     assert!(write_model(&t, &mut out).is_ok());
+}
+
+#[test]
+fn a_referenced_model_classifies_the_frame_minus_the_untouched_frame() {
+    let pr = problem(5, 0x7a3e, false);
+    let plain = qda_blob(&pr, Precision::F32);
+    let mut blob = plain.clone();
+    blob[17] = FLAG_REFERENCED;
+    let n = blob.len() - 4;
+    let crc = crc32(&blob[..n]);
+    blob[n..].copy_from_slice(&crc.to_le_bytes());
+    let (plain, model) = (Model::parse(&plain).unwrap(), Model::parse(&blob).unwrap());
+    assert!(model.referenced() && !plain.referenced());
+    let mut scratch = vec![0.0; model.scratch_len()];
+    let (mut d, mut want) = (vec![0.0; 5], vec![0.0; 5]);
+    // An untouched frame with standing voltages of its own.
+    let v_0: Vec<f32> = (0..32).map(|i| 0.01 * i as f32 - 0.1).collect();
+    for v in &pr.test_frames {
+        let v_m: Vec<f32> = v.iter().zip(&v_0).map(|(a, b)| a + b).collect();
+        model
+            .discriminants_referenced(&v_m, Some(&v_0), &mut scratch, &mut d)
+            .unwrap();
+        plain.discriminants(v, &mut scratch, &mut want).unwrap();
+        for (g, w) in d.iter().zip(&want) {
+            assert!((g - w).abs() <= 1e-4 * w.abs().max(1.0), "{g} vs {w}");
+        }
+        // The unreferenced model ignores an untouched frame.
+        plain
+            .discriminants_referenced(v, Some(&v_0), &mut scratch, &mut d)
+            .unwrap();
+        assert_eq!(d, want);
+    }
+    let v = &pr.test_frames[0];
+    assert_eq!(model.evaluate(v, &mut scratch), Err(EvalError::Untouched));
+    assert_eq!(
+        model.evaluate_referenced(v, Some(&v_0[..31]), &mut scratch),
+        Err(EvalError::Untouched)
+    );
+    let mut bad = v_0.clone();
+    bad[usize::from(pr.features[0])] = f32::NAN;
+    assert_eq!(
+        model.evaluate_referenced(v, Some(&bad), &mut scratch),
+        Err(EvalError::NonFinite)
+    );
 }

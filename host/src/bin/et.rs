@@ -105,6 +105,13 @@ struct CollectArgs {
     /// Rms electrode movement between visits, mm.
     #[arg(long, default_value_t = 0.5)]
     movement_mm: f64,
+    /// Electrode poses within a visit: each press finds the electrodes in one of them (1 =
+    /// they stay put while the grid is visited).
+    #[arg(long, default_value_t = 1)]
+    poses: usize,
+    /// Rms movement of each pose around the visit's electrode positions, mm.
+    #[arg(long, default_value_t = 0.0)]
+    press_movement_mm: f64,
     /// Seed of the session.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -130,6 +137,12 @@ struct TrainArgs {
     /// Folds of the reported stratified cross-validation.
     #[arg(long, default_value_t = 10)]
     folds: usize,
+    /// Train on the frames as measured (SPEC §9 exactly) instead of each frame minus its
+    /// session's untouched frame. Referenced is the default when the dataset has untouched
+    /// frames: it cancels electrode movement between sessions, but on the board it needs an
+    /// untouched frame taken when the sheet is put down.
+    #[arg(long)]
+    raw: bool,
     /// Where to write the model (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -319,6 +332,8 @@ fn collect_cmd(args: &CollectArgs) -> Result<()> {
         radius: args.radius_mm * 1e-3,
         placement: args.radius_mm * 1e-3 / 4.0,
         electrode_movement: args.movement_mm * 1e-3,
+        poses: args.poses.max(1),
+        press_movement: args.press_movement_mm * 1e-3,
         seed: args.seed,
     };
     let bar = ProgressBar::new(args.visits as u64).with_style(
@@ -329,7 +344,7 @@ fn collect_cmd(args: &CollectArgs) -> Result<()> {
     let mut data: Option<collect::Dataset> = None;
     for v in 0..args.visits {
         let seed = args.seed.wrapping_mul(1_000).wrapping_add(v as u64);
-        let mut part = collect::collect(
+        let part = collect::collect(
             &scene.sheet,
             scene.frontend,
             config,
@@ -340,28 +355,10 @@ fn collect_cmd(args: &CollectArgs) -> Result<()> {
             },
         )
         .map_err(anyhow::Error::msg)?;
-        part.visit.fill(v as u16);
-        data = Some(match data {
-            None => part,
-            Some(mut d) => {
-                let x = nalgebra::DMatrix::from_fn(
-                    d.x.nrows() + part.x.nrows(),
-                    d.x.ncols(),
-                    |r, c| {
-                        if r < d.x.nrows() {
-                            d.x[(r, c)]
-                        } else {
-                            part.x[(r - d.x.nrows(), c)]
-                        }
-                    },
-                );
-                d.x = x;
-                d.y.extend(part.y);
-                d.positions.extend(part.positions);
-                d.visit.extend(part.visit);
-                d
-            }
-        });
+        match data.as_mut() {
+            None => data = Some(part),
+            Some(d) => d.append(part).map_err(anyhow::Error::msg)?,
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -410,9 +407,17 @@ fn kind_of(name: &str) -> Result<ModelKind> {
 }
 
 fn train_cmd(args: &TrainArgs) -> Result<()> {
-    let data = dataset::load_csv(&args.data)?;
+    let mut data = dataset::load_csv(&args.data)?;
     let classes = data.centres.len();
     let kind = kind_of(&args.kind)?;
+    let referenced = !args.raw && data.has_untouched();
+    if !args.raw && !referenced {
+        eprintln!(
+            "note: {} has no untouched frames, training on raw frames",
+            args.data.display()
+        );
+    }
+    data.x = data.features(referenced).map_err(anyhow::Error::msg)?;
     // Shrink QDA toward the pooled covariance when that has full rank (n - C > p), else toward
     // the diagonal: a rank-deficient target cannot make a class covariance definite.
     let pooled_full_rank = data.x.nrows().saturating_sub(classes) > data.x.ncols();
@@ -470,11 +475,13 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
         data.config,
         data.feature_index.clone(),
         mm.clone(),
+        referenced,
     );
     file.save(&args.out).map_err(anyhow::Error::msg)?;
     let summary = serde_json::json!({
         "out": args.out.display().to_string(),
         "kind": args.kind,
+        "referenced": referenced,
         "shrinkage": shrinkage,
         "shrinkage_scores": scores.iter().map(|(l, a)| serde_json::json!({"shrinkage": l, "accuracy": a})).collect::<Vec<_>>(),
         "classes": classes,
@@ -490,8 +497,13 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
         println!("{summary}");
     } else {
         eprintln!(
-            "trained {} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
+            "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
             args.kind,
+            if referenced {
+                " (referenced)"
+            } else {
+                " (raw frames)"
+            },
             data.x.nrows(),
             classes,
             data.x.ncols(),
@@ -522,8 +534,11 @@ fn eval_cmd(args: &EvalArgs) -> Result<()> {
     }
     let model = file.fitted()?;
     let classes = file.classes.len();
+    let x = data
+        .features(file.referenced)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
     let conf =
-        cv::evaluate(&model, &data.x, &data.y).with_context(|| args.data.display().to_string())?;
+        cv::evaluate(&model, &x, &data.y).with_context(|| args.data.display().to_string())?;
     let summary = serde_json::json!({
         "observations": conf.total(),
         "accuracy": conf.accuracy(),

@@ -35,8 +35,77 @@ pub struct Dataset {
     pub visit: Vec<u16>,
     /// Frame index of each feature.
     pub feature_index: Vec<u16>,
+    /// T x p: each visit's untouched frame (features, volts; the mean of one scan's
+    /// sub-section medians, taken when the sheet is put down, before any press).
+    pub baselines: DMatrix<f64>,
     /// The scan settings.
     pub config: ScanConfig,
+}
+
+impl Dataset {
+    /// Visits T (one more than the largest visit number; 0 when empty).
+    #[must_use]
+    pub fn visits(&self) -> usize {
+        self.visit
+            .iter()
+            .map(|&v| usize::from(v) + 1)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Whether every visit has its untouched frame, so referenced features exist.
+    #[must_use]
+    pub fn has_untouched(&self) -> bool {
+        self.baselines.nrows() >= self.visits() && self.baselines.ncols() == self.x.ncols()
+    }
+
+    /// The features a model trains on: `x` as measured, or (`referenced`) each observation
+    /// minus its visit's untouched frame (V_m - V_0, see `et_core::model`).
+    ///
+    /// # Errors
+    /// A message when `referenced` is asked of a dataset without untouched frames.
+    pub fn features(&self, referenced: bool) -> Result<DMatrix<f64>, String> {
+        if !referenced {
+            return Ok(self.x.clone());
+        }
+        if !self.has_untouched() {
+            return Err(format!(
+                "referenced features need an untouched frame per visit: {} visits, {} untouched frames",
+                self.visits(),
+                self.baselines.nrows()
+            ));
+        }
+        Ok(DMatrix::from_fn(self.x.nrows(), self.x.ncols(), |r, j| {
+            self.x[(r, j)] - self.baselines[(usize::from(self.visit[r]), j)]
+        }))
+    }
+
+    /// Appends `other` (same features) as further visits: its visit numbers and untouched
+    /// frames follow this set's.
+    ///
+    /// # Errors
+    /// A message when the feature sets differ.
+    pub fn append(&mut self, other: Dataset) -> Result<(), String> {
+        if other.feature_index != self.feature_index {
+            return Err("datasets with different features".into());
+        }
+        let shift = self.visits() as u16;
+        let stack = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
+            DMatrix::from_fn(a.nrows() + b.nrows(), a.ncols(), |r, c| {
+                if r < a.nrows() {
+                    a[(r, c)]
+                } else {
+                    b[(r - a.nrows(), c)]
+                }
+            })
+        };
+        self.x = stack(&self.x, &other.x);
+        self.baselines = stack(&self.baselines, &other.baselines);
+        self.y.extend(other.y);
+        self.positions.extend(other.positions);
+        self.visit.extend(other.visit.iter().map(|v| v + shift));
+        Ok(())
+    }
 }
 
 /// Class centres on a rows x cols grid over the sheet's bounding box, inset by `margin` m
@@ -94,6 +163,12 @@ pub struct Plan {
     /// Rms electrode movement along the outline, m (frameless sheets): drawn anew at every
     /// visit, since the sheet is handled between visits.
     pub electrode_movement: f64,
+    /// Electrode poses per visit: each press finds the electrodes in one of `poses` positions
+    /// (drawn once per visit around the visit's positions), since pressing a frameless sheet
+    /// pulls on its clips. 1 = the electrodes stay put within a visit.
+    pub poses: usize,
+    /// Rms movement of each pose around the visit's electrode positions, m.
+    pub press_movement: f64,
     /// Seed of the session (electrode movement, placement, pressure, noise).
     pub seed: u64,
 }
@@ -130,8 +205,8 @@ pub fn collect(
         s_sub
     ];
     let mut obs = vec![0.0f32; s_sub * k];
-    let (mut rows, mut y, mut positions, mut visit) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut rows, mut y, mut positions, mut visit, mut baselines) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for v in 0..plan.visits {
         // A frameless sheet is handled between visits: its electrodes sit somewhere else
         // within their movement each time.
@@ -142,6 +217,28 @@ pub fn collect(
         let mut fe =
             SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
         let scanner = Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+        // The untouched frame, as the sheet lies before the first press.
+        scanner
+            .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
+            .map_err(|e| e.to_string())?;
+        baselines.extend(feature_index.iter().map(|&i| {
+            obs.chunks(k)
+                .map(|o| f64::from(o[usize::from(i)]))
+                .sum::<f64>()
+                / s_sub as f64
+        }));
+        let mut poses = vec![fe];
+        for _ in 1..plan.poses {
+            let moved: Vec<f64> = offsets
+                .iter()
+                .map(|o| o + plan.press_movement * rng.normal())
+                .collect();
+            let sheet = Arc::new(Sheet::new(spec, &moved).map_err(|e| e.to_string())?);
+            let mut fe =
+                SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
+            Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+            poses.push(fe);
+        }
         for (c, centre) in centres.iter().enumerate() {
             for _ in 0..plan.scans {
                 let position = [
@@ -150,6 +247,8 @@ pub fn collect(
                 ];
                 let (lo, hi) = plan.pressure_pa;
                 let pressure = lo + (hi - lo) * rng.uniform();
+                let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
+                let fe = &mut poses[pose];
                 fe.set_touches(&[Touch {
                     position,
                     radius: plan.radius,
@@ -157,7 +256,7 @@ pub fn collect(
                 }])
                 .map_err(|e| e.to_string())?;
                 scanner
-                    .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
+                    .scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)
                     .map_err(|e| e.to_string())?;
                 for o in obs.chunks(k) {
                     rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
@@ -175,6 +274,7 @@ pub fn collect(
         positions,
         centres: centres.to_vec(),
         visit,
+        baselines: DMatrix::from_row_slice(plan.visits, feature_index.len(), &baselines),
         feature_index,
         config,
     })

@@ -5,6 +5,7 @@
 //! # config: {"electrodes":16,"protocol":"Opposite",...}      (scan settings, JSON)
 //! # feature_index: 0 1 2 4 ...                                (frame index of each feature)
 //! # centres_mm: 9.3 9.3; 27.9 9.3; ...                        (class centres)
+//! # untouched: 0.0121 ...; 0.0119 ...                        (optional: each visit's untouched frame, features in volts)
 //! # provenance: sim sheet 13 x 13 cm, seed 1, T=6 S_num=20 S_sub=20
 //! f0,f1,...,f95,label,x_mm,y_mm,visit
 //! 0.0123,...,3,27.1,8.8,0
@@ -108,6 +109,14 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
         .collect();
     let _ = writeln!(s, "# centres_mm: {}", centres.join("; "));
+    if data.baselines.nrows() > 0 {
+        let frames: Vec<String> = data
+            .baselines
+            .row_iter()
+            .map(|r| r.iter().map(f64::to_string).collect::<Vec<_>>().join(" "))
+            .collect();
+        let _ = writeln!(s, "# untouched: {}", frames.join("; "));
+    }
     let _ = writeln!(s, "# provenance: {}", provenance.replace('\n', " "));
     let mut header: Vec<String> = (0..data.x.ncols()).map(|j| format!("f{j}")).collect();
     header.extend(["label", "x_mm", "y_mm", "visit"].map(String::from));
@@ -144,6 +153,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let mut config: Option<ScanConfig> = None;
     let mut feature_index = Vec::new();
     let mut centres = Vec::new();
+    let mut untouched: Vec<Vec<f64>> = Vec::new();
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
         Some((_, l)) if l.trim() == "# et-dataset 1" => {}
@@ -175,6 +185,26 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
                         .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
                 })
                 .collect::<Result<_, _>>()?;
+        } else if let Some(list) = meta.strip_prefix("untouched:") {
+            for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
+                let v: Vec<f64> = frame
+                    .split_whitespace()
+                    .map(|v| {
+                        v.parse::<f64>()
+                            .ok()
+                            .filter(|v| v.is_finite())
+                            .ok_or_else(|| {
+                                content(
+                                    path,
+                                    i + 1,
+                                    None,
+                                    format!("untouched: '{v}' is not a finite number"),
+                                )
+                            })
+                    })
+                    .collect::<Result<_, _>>()?;
+                untouched.push(v);
+            }
         } else if let Some(list) = meta.strip_prefix("centres_mm:") {
             for pair in list.split(';').filter(|p| !p.trim().is_empty()) {
                 let v: Vec<f64> = pair
@@ -222,6 +252,19 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             ),
         ));
     }
+    if let Some(bad) = untouched.iter().position(|u| u.len() != features.len()) {
+        return Err(content(
+            path,
+            0,
+            None,
+            format!(
+                "untouched frame {bad} has {} values, the data {} features",
+                untouched[bad].len(),
+                features.len()
+            ),
+        ));
+    }
+    let baselines = DMatrix::from_fn(untouched.len(), features.len(), |r, j| untouched[r][j]);
     let n = table.rows.len();
     let x = DMatrix::from_fn(n, features.len(), |r, j| table.rows[r].1[features[j]]);
     let int = |r: usize, c: usize, name: &str| {
@@ -254,6 +297,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         positions,
         centres,
         visit,
+        baselines,
         feature_index,
         config,
     })

@@ -342,7 +342,8 @@ impl Fitted {
     }
 
     /// Exports to the et-core model blob the firmware evaluates. `feature_index` says which
-    /// frame value each feature is (p entries); `positions_mm` is each class's centre.
+    /// frame value each feature is (p entries); `positions_mm` is each class's centre;
+    /// `referenced`: the model was trained on V_m - V_0 (`et_core::model::FLAG_REFERENCED`).
     ///
     /// # Errors
     /// [`FitError::Export`] when the blob's own validation refuses the tables (e.g. a
@@ -354,6 +355,7 @@ impl Fitted {
         feature_index: &[u16],
         positions_mm: &[[f32; 2]],
         precision: Precision,
+        referenced: bool,
     ) -> Result<Vec<u8>, FitError> {
         let p = self.features();
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
@@ -375,6 +377,7 @@ impl Fitted {
         let tables = ModelTables {
             kind: self.kind,
             precision,
+            referenced,
             electrodes,
             protocol,
             feature_index,

@@ -41,6 +41,9 @@ pub struct ModelFile {
     pub shrinkage: f64,
     /// Scan settings of the frames it classifies.
     pub config: ScanConfig,
+    /// Trained on each frame minus its session's untouched frame (V_m - V_0).
+    #[serde(default)]
+    pub referenced: bool,
     /// Frame index of each feature.
     pub feature_index: Vec<u16>,
     /// Class centres, mm.
@@ -62,6 +65,7 @@ impl ModelFile {
         config: ScanConfig,
         feature_index: Vec<u16>,
         centres_mm: Vec<[f64; 2]>,
+        referenced: bool,
     ) -> Self {
         let p = model.features();
         Self {
@@ -73,6 +77,7 @@ impl ModelFile {
             },
             shrinkage,
             config,
+            referenced,
             feature_index,
             centres_mm,
             feature_mean: model.feature_mean.clone(),
@@ -178,6 +183,7 @@ impl ModelFile {
             &self.feature_index,
             &positions,
             precision,
+            self.referenced,
         )
     }
 
