@@ -8,8 +8,10 @@
 //!   Python and MATLAB read without et; `et sim` writes it.
 //! - [`learn`]: touch classification from raw voltages (SPEC §9): collection, QDA/LDA fitting
 //!   with shrinkage, cross-validation, export to the firmware's model blob.
+//! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
 pub mod learn;
+pub mod plot;
 pub mod recording;
 pub mod tables;

@@ -28,6 +28,10 @@ pub struct Dataset {
     pub y: Vec<u16>,
     /// Where the finger really was for each observation, m.
     pub positions: Vec<[f64; 2]>,
+    /// Pressure of each observation's touch, Pa (empty when not known).
+    pub pressure: Vec<f64>,
+    /// Nominal electrode centres on the sheet, m (empty when not known).
+    pub electrodes: Vec<[f64; 2]>,
     /// Class centres, m.
     pub centres: Vec<[f64; 2]>,
     /// Visit of each observation (0..T): observations of one visit share the electrodes'
@@ -103,6 +107,7 @@ impl Dataset {
         self.baselines = stack(&self.baselines, &other.baselines);
         self.y.extend(other.y);
         self.positions.extend(other.positions);
+        self.pressure.extend(other.pressure);
         self.visit.extend(other.visit.iter().map(|v| v + shift));
         Ok(())
     }
@@ -205,8 +210,14 @@ pub fn collect(
         s_sub
     ];
     let mut obs = vec![0.0f32; s_sub * k];
-    let (mut rows, mut y, mut positions, mut visit, mut baselines) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut rows, mut y, mut positions, mut visit, mut baselines, mut pressures) = (
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+    );
     for v in 0..plan.visits {
         // A frameless sheet is handled between visits: its electrodes sit somewhere else
         // within their movement each time.
@@ -262,6 +273,7 @@ pub fn collect(
                     rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
                     y.push(c as u16);
                     positions.push(position);
+                    pressures.push(pressure);
                     visit.push(v as u16);
                 }
             }
@@ -272,6 +284,13 @@ pub fn collect(
         x,
         y,
         positions,
+        pressure: pressures,
+        electrodes: spec
+            .electrodes
+            .arc_positions()
+            .iter()
+            .map(|&t| spec.shape.boundary_point(t))
+            .collect(),
         centres: centres.to_vec(),
         visit,
         baselines: DMatrix::from_row_slice(plan.visits, feature_index.len(), &baselines),

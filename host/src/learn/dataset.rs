@@ -5,10 +5,11 @@
 //! # config: {"electrodes":16,"protocol":"Opposite",...}      (scan settings, JSON)
 //! # feature_index: 0 1 2 4 ...                                (frame index of each feature)
 //! # centres_mm: 9.3 9.3; 27.9 9.3; ...                        (class centres)
+//! # electrodes_mm: 4.1 0; 12.2 0; ...                         (optional: nominal electrode centres)
 //! # untouched: 0.0121 ...; 0.0119 ...                        (optional: each visit's untouched frame, features in volts)
 //! # provenance: sim sheet 13 x 13 cm, seed 1, T=6 S_num=20 S_sub=20
-//! f0,f1,...,f95,label,x_mm,y_mm,visit
-//! 0.0123,...,3,27.1,8.8,0
+//! f0,f1,...,f95,label,x_mm,y_mm,visit,pressure_kpa            (pressure_kpa optional)
+//! 0.0123,...,3,27.1,8.8,0,23.5
 //! ```
 //!
 //! Python: `numpy.loadtxt(path, delimiter=",", comments="#", skiprows=...)` or the `csv`
@@ -109,6 +110,14 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
         .collect();
     let _ = writeln!(s, "# centres_mm: {}", centres.join("; "));
+    if !data.electrodes.is_empty() {
+        let e: Vec<String> = data
+            .electrodes
+            .iter()
+            .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
+            .collect();
+        let _ = writeln!(s, "# electrodes_mm: {}", e.join("; "));
+    }
     if data.baselines.nrows() > 0 {
         let frames: Vec<String> = data
             .baselines
@@ -120,13 +129,17 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
     let _ = writeln!(s, "# provenance: {}", provenance.replace('\n', " "));
     let mut header: Vec<String> = (0..data.x.ncols()).map(|j| format!("f{j}")).collect();
     header.extend(["label", "x_mm", "y_mm", "visit"].map(String::from));
+    let with_pressure = data.pressure.len() == data.x.nrows();
+    if with_pressure {
+        header.push("pressure_kpa".into());
+    }
     let _ = writeln!(s, "{}", header.join(","));
     for r in 0..data.x.nrows() {
         for j in 0..data.x.ncols() {
             let _ = write!(s, "{},", data.x[(r, j)]);
         }
         let p = data.positions[r];
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{},{},{},{}",
             data.y[r],
@@ -134,11 +147,54 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
             p[1] * 1e3,
             data.visit[r]
         );
+        if with_pressure {
+            let _ = write!(s, ",{}", data.pressure[r] * 1e-3);
+        }
+        s.push('\n');
     }
     std::fs::write(path, s).map_err(|source| DatasetError::Io {
         path: path.into(),
         source,
     })
+}
+
+/// Parses `x y; x y; ...` in mm (finite numbers) into metres.
+fn points_mm(
+    path: &Path,
+    line: usize,
+    field: &str,
+    list: &str,
+) -> Result<Vec<[f64; 2]>, DatasetError> {
+    list.split(';')
+        .filter(|p| !p.trim().is_empty())
+        .map(|pair| {
+            let v: Vec<f64> = pair
+                .split_whitespace()
+                .map(|v| {
+                    v.parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| {
+                            content(
+                                path,
+                                line,
+                                None,
+                                format!("{field}: '{v}' is not a finite number"),
+                            )
+                        })
+                })
+                .collect::<Result<_, _>>()?;
+            match v[..] {
+                [x, y] => Ok([x * 1e-3, y * 1e-3]),
+                _ => Err(content(
+                    path,
+                    line,
+                    None,
+                    format!("{field}: each point is 'x y'"),
+                )),
+            }
+        })
+        .collect()
 }
 
 /// Reads a dataset written by [`save_csv`].
@@ -154,6 +210,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let mut feature_index = Vec::new();
     let mut centres = Vec::new();
     let mut untouched: Vec<Vec<f64>> = Vec::new();
+    let mut electrodes = Vec::new();
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
         Some((_, l)) if l.trim() == "# et-dataset 1" => {}
@@ -205,25 +262,10 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
                     .collect::<Result<_, _>>()?;
                 untouched.push(v);
             }
+        } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
+            electrodes = points_mm(path, i + 1, "electrodes_mm", list)?;
         } else if let Some(list) = meta.strip_prefix("centres_mm:") {
-            for pair in list.split(';').filter(|p| !p.trim().is_empty()) {
-                let v: Vec<f64> = pair
-                    .split_whitespace()
-                    .map(|v| {
-                        v.parse::<f64>()
-                            .map_err(|e| content(path, i + 1, None, format!("centres_mm: {e}")))
-                    })
-                    .collect::<Result<_, _>>()?;
-                let [x, y] = v[..] else {
-                    return Err(content(
-                        path,
-                        i + 1,
-                        None,
-                        "centres_mm: each centre is 'x y'",
-                    ));
-                };
-                centres.push([x * 1e-3, y * 1e-3]);
-            }
+            centres = points_mm(path, i + 1, "centres_mm", list)?;
         }
     }
     let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
@@ -237,8 +279,9 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             .ok_or_else(|| content(path, 0, Some(name.into()), "column missing"))
     };
     let (label, xc, yc, visit) = (col("label")?, col("x_mm")?, col("y_mm")?, col("visit")?);
+    let pressure_col = table.names.iter().position(|n| n == "pressure_kpa");
     let features: Vec<usize> = (0..table.names.len())
-        .filter(|&c| ![label, xc, yc, visit].contains(&c))
+        .filter(|&c| ![label, xc, yc, visit].contains(&c) && Some(c) != pressure_col)
         .collect();
     if feature_index.len() != features.len() {
         return Err(content(
@@ -295,6 +338,10 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         x,
         y,
         positions,
+        pressure: pressure_col.map_or_else(Vec::new, |c| {
+            table.rows.iter().map(|(_, v)| v[c] * 1e3).collect()
+        }),
+        electrodes,
         centres,
         visit,
         baselines,

@@ -436,6 +436,8 @@ mod files {
                 .map(|i| [0.001 * i as f64, -0.002 * i as f64])
                 .collect(),
             centres: vec![[0.01, 0.02], [0.03, 0.04], [-0.05, 0.0]],
+            pressure: (0..n).map(|i| 1e3 * (5 + i) as f64).collect(),
+            electrodes: vec![[0.0, 0.0], [0.065, 0.0], [0.13, 0.065]],
             visit: (0..n).map(|i| (i % 2) as u16).collect(),
             baselines: DMatrix::from_fn(2, 5, |v, j| 0.01 * (v + 1) as f64 - 0.003 * j as f64),
             feature_index: vec![0, 1, 2, 4, 7],
@@ -456,6 +458,13 @@ mod files {
         let back = load_csv(&path).unwrap();
         assert_eq!(back.x, d.x, "features round-trip exactly");
         assert_eq!(back.baselines, d.baselines, "untouched frames too");
+        for (a, b) in back.pressure.iter().zip(&d.pressure) {
+            assert!((a - b).abs() < 1e-9);
+        }
+        assert_eq!(back.pressure.len(), d.pressure.len());
+        for (a, b) in back.electrodes.iter().zip(&d.electrodes) {
+            assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
+        }
         assert_eq!(back.features(true).unwrap(), d.features(true).unwrap());
         assert_eq!(
             (&back.y, &back.visit, &back.feature_index, back.config),
@@ -494,7 +503,7 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
             f[..3],
             [
                 d.x.nrows().to_string(),
-                (5 + 4).to_string(),
+                (5 + 5).to_string(),
                 label_sum.to_string()
             ]
         );

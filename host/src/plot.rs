@@ -1,0 +1,350 @@
+//! PNG plots: line/scatter charts (learning curves, error against distance) and heat maps
+//! with a colour bar (confusion matrices, images). Text uses the bundled DejaVu Sans
+//! (`host/assets`, its licence beside it), so plots look the same on every machine.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+/// Why a plot could not be written.
+#[derive(Debug)]
+pub struct PlotError {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for PlotError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.path.display(), self.message)
+    }
+}
+
+impl std::error::Error for PlotError {}
+
+fn fail(path: &Path, e: impl std::fmt::Display) -> PlotError {
+    PlotError {
+        path: path.into(),
+        message: e.to_string(),
+    }
+}
+
+fn fonts() -> Result<(), String> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            plotters::style::register_font(
+                "sans-serif",
+                FontStyle::Normal,
+                include_bytes!("../assets/DejaVuSans.ttf"),
+            )
+            .map_err(|_| "bundled font unreadable".to_string())
+        })
+        .clone()
+}
+
+/// One curve of a chart.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// (x, y) points; non-finite ones are left out.
+    pub points: Vec<(f64, f64)>,
+    /// Draw points only (a scatter), not a line through them.
+    pub scatter: bool,
+}
+
+/// Chart texts.
+#[derive(Clone, Copy, Debug)]
+pub struct Labels<'a> {
+    /// Title above the chart.
+    pub title: &'a str,
+    /// Horizontal axis, with unit.
+    pub x: &'a str,
+    /// Vertical axis, with unit.
+    pub y: &'a str,
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+fn range(values: impl Iterator<Item = f64>, zero: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if zero {
+        lo = lo.min(0.0);
+    }
+    if hi - lo < 1e-12 {
+        hi = lo + 1.0;
+    }
+    let pad = 0.05 * (hi - lo);
+    (if zero && lo == 0.0 { 0.0 } else { lo - pad }, hi + pad)
+}
+
+/// Writes a line or scatter chart of `series` to `path` (PNG, 800 x 520). The y axis starts
+/// at zero when every value is non-negative.
+///
+/// # Errors
+/// [`PlotError`] naming the file.
+pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), PlotError> {
+    fonts().map_err(|e| fail(path, e))?;
+    let all = || series.iter().flat_map(|s| s.points.iter());
+    let (x0, x1) = range(all().map(|p| p.0), false);
+    let nonneg = all().all(|p| !p.1.is_finite() || p.1 >= 0.0);
+    let (y0, y1) = range(all().map(|p| p.1), nonneg);
+    let root = BitMapBackend::new(path, (800, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(path, e))?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(labels.title, ("sans-serif", 22))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| fail(path, e))?;
+    c.configure_mesh()
+        .x_desc(labels.x)
+        .y_desc(labels.y)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()
+        .map_err(|e| fail(path, e))?;
+    for (i, s) in series.iter().enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
+        let drawn = if s.scatter {
+            c.draw_series(
+                pts.iter()
+                    .map(|&p| Circle::new(p, 3, colour.mix(0.6).filled())),
+            )
+            .map_err(|e| fail(path, e))?
+        } else {
+            c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+                .map_err(|e| fail(path, e))?;
+            c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                .map_err(|e| fail(path, e))?
+        };
+        drawn
+            .label(s.label.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], colour.filled()));
+    }
+    if series.iter().any(|s| !s.label.is_empty()) {
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(|e| fail(path, e))?;
+    }
+    root.present().map_err(|e| fail(path, e))
+}
+
+/// Viridis, from five stops (t in [0, 1]; outside is clamped).
+#[must_use]
+pub fn viridis(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    } * 4.0;
+    let i = (t.floor() as usize).min(3);
+    let f = t - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |x: f64, y: f64| (x + (y - x) * f) as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// A heat map of `values` (row-major, `rows` x `cols`, row 0 at the top) with a colour bar
+/// from `lo` to `hi` labelled `unit`, written to `path` (PNG). Non-finite cells are grey.
+///
+/// # Errors
+/// [`PlotError`] naming the file, or for a table of the wrong length.
+pub fn heatmap(
+    path: &Path,
+    labels: Labels<'_>,
+    values: &[f64],
+    (rows, cols): (usize, usize),
+    (lo, hi): (f64, f64),
+    unit: &str,
+) -> Result<(), PlotError> {
+    if values.len() != rows * cols || rows == 0 || cols == 0 {
+        return Err(fail(path, "heat map table of the wrong length"));
+    }
+    fonts().map_err(|e| fail(path, e))?;
+    let root = BitMapBackend::new(path, (760, 640)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(path, e))?;
+    let (main, bar) = root.split_horizontally(640);
+    let mut c = ChartBuilder::on(&main)
+        .caption(labels.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(54)
+        .build_cartesian_2d(0.0..cols as f64, rows as f64..0.0)
+        .map_err(|e| fail(path, e))?;
+    c.configure_mesh()
+        .disable_mesh()
+        .x_desc(labels.x)
+        .y_desc(labels.y)
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .draw()
+        .map_err(|e| fail(path, e))?;
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    c.draw_series((0..rows).flat_map(|r| {
+        (0..cols).map(move |q| {
+            let v = values[r * cols + q];
+            let colour = if v.is_finite() {
+                viridis((v - lo) / span)
+            } else {
+                RGBColor(160, 160, 160)
+            };
+            Rectangle::new(
+                [(q as f64, r as f64), (q as f64 + 1.0, r as f64 + 1.0)],
+                colour.filled(),
+            )
+        })
+    }))
+    .map_err(|e| fail(path, e))?;
+    let mut b = ChartBuilder::on(&bar)
+        .margin_top(46)
+        .margin_bottom(56)
+        .margin_right(8)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..1.0, lo..lo + span)
+        .map_err(|e| fail(path, e))?;
+    b.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc(unit)
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| fail(path, e))?;
+    let steps = 100;
+    b.draw_series((0..steps).map(|i| {
+        let (a, z) = (
+            lo + span * i as f64 / steps as f64,
+            lo + span * (i + 1) as f64 / steps as f64,
+        );
+        Rectangle::new(
+            [(0.0, a), (1.0, z)],
+            viridis(i as f64 / (steps - 1) as f64).filled(),
+        )
+    }))
+    .map_err(|e| fail(path, e))?;
+    root.present().map_err(|e| fail(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Decodes a PNG's size and RGB pixels with the `image` crate plotters writes with.
+    fn pixels(path: &Path) -> (u32, u32, Vec<u8>) {
+        let img = image::open(path).expect("a PNG").to_rgb8();
+        (img.width(), img.height(), img.into_raw())
+    }
+
+    #[test]
+    fn charts_and_heat_maps_are_real_pngs_with_what_was_drawn() {
+        let dir = std::env::temp_dir().join(format!("et-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let line = dir.join("line.png");
+        chart(
+            &line,
+            Labels {
+                title: "learning curve",
+                x: "n_c",
+                y: "accuracy (%)",
+            },
+            &[Series {
+                label: "QDA".into(),
+                points: vec![(10.0, 50.0), (100.0, 90.0), (f64::NAN, 1.0)],
+                scatter: false,
+            }],
+        )
+        .unwrap();
+        let (w, h, px) = pixels(&line);
+        assert_eq!((w, h), (800, 520));
+        // The first series' colour is on the canvas.
+        assert!(px.chunks(3).any(|p| p == [31, 119, 180]));
+        let map = dir.join("map.png");
+        heatmap(
+            &map,
+            Labels {
+                title: "t",
+                x: "predicted",
+                y: "true",
+            },
+            &[0.0, 1.0, 0.5, f64::INFINITY],
+            (2, 2),
+            (0.0, 1.0),
+            "fraction",
+        )
+        .unwrap();
+        let (w, _, px) = pixels(&map);
+        assert_eq!(w, 760);
+        // Both ends of the colour map and the grey of the non-finite cell appear.
+        for colour in [viridis(0.0), viridis(1.0), RGBColor(160, 160, 160)] {
+            assert!(
+                px.chunks(3).any(|p| p == [colour.0, colour.1, colour.2]),
+                "{colour:?}"
+            );
+        }
+        assert!(
+            heatmap(
+                &map,
+                Labels {
+                    title: "",
+                    x: "",
+                    y: ""
+                },
+                &[1.0],
+                (2, 2),
+                (0.0, 1.0),
+                ""
+            )
+            .is_err()
+        );
+        let bad = dir.join("no-such-dir").join("x.png");
+        let e = chart(
+            &bad,
+            Labels {
+                title: "",
+                x: "",
+                y: "",
+            },
+            &[],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("no-such-dir"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
