@@ -152,7 +152,7 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::LowerRight)
+            .position(SeriesLabelPosition::UpperLeft)
             .draw()
             .map_err(|e| fail(path, e))?;
     }

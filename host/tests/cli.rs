@@ -229,9 +229,23 @@ fn collect_train_eval_export_chain() {
         "4",
         "--out",
         &s(&model),
+        "--curve",
+        &s(&dir.join("curve.png")),
         "--json",
     ])));
     assert_eq!(t["classes"], 4);
+    assert_eq!(
+        t["referenced"], true,
+        "untouched frames were collected: {t}"
+    );
+    // Learning curve: n_c up to the 20 observations per class there are, as a PNG.
+    let curve = t["learning_curve"].as_array().unwrap();
+    assert_eq!(curve.last().unwrap()["n_c"], 20);
+    assert!(
+        std::fs::read(dir.join("curve.png"))
+            .unwrap()
+            .starts_with(b"\x89PNG")
+    );
     assert!(t["cv_accuracy"].as_f64().unwrap() > 0.9, "{t}");
     assert!(t["leave_one_visit_out_accuracy"].as_f64().is_some());
     let e = json(ok(et(&[
@@ -240,8 +254,17 @@ fn collect_train_eval_export_chain() {
         &s(&model),
         "--data",
         &s(&test),
+        "--plots",
+        &s(&dir.join("plots")),
         "--json",
     ])));
+    for png in ["confusion.png", "error-vs-distance.png"] {
+        let bytes = std::fs::read(dir.join("plots").join(png)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{png}");
+    }
+    let bands = e["by_distance_from_electrodes"].as_array().unwrap();
+    let counted: u64 = bands.iter().map(|b| b["count"].as_u64().unwrap()).sum();
+    assert_eq!(counted, 40, "every observation is in a distance band");
     assert_eq!(
         e["observations"], 40,
         "4 classes x 2 scans x 5 sub-sections"
@@ -270,6 +293,7 @@ fn collect_train_eval_export_chain() {
         let blob =
             et_core::model::Model::parse(&bytes).expect("the exported blob loads in et-core");
         assert_eq!((blob.classes(), blob.features()), (4, 96));
+        assert!(blob.referenced());
     }
     // Mistakes are explained.
     let bad = et(&[

@@ -10,7 +10,8 @@ use et_core::model::{ModelKind, Precision};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
 use et_host::learn::fit::{FitOptions, Fitted, Target};
 use et_host::learn::model_file::ModelFile;
-use et_host::learn::{collect, cv, dataset, fastcv};
+use et_host::learn::{analysis, collect, cv, dataset, fastcv};
+use et_host::plot;
 use et_host::recording::{self, Header, Record, TouchRecord};
 use et_host::tables::ProtocolTables;
 use et_sim::scene::{Detail, Run, Scene};
@@ -143,6 +144,10 @@ struct TrainArgs {
     /// untouched frame taken when the sheet is put down.
     #[arg(long)]
     raw: bool,
+    /// Also write a learning curve (PNG): held-out accuracy against observations per class
+    /// n_c (leave-one-visit-out when the set has several visits, else the k-fold CV).
+    #[arg(long, value_name = "PNG")]
+    curve: Option<PathBuf>,
     /// Where to write the model (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -159,7 +164,11 @@ struct EvalArgs {
     /// Test set (CSV from `et collect`).
     #[arg(long)]
     data: PathBuf,
-    /// Print JSON (with the confusion matrix).
+    /// Write plots into this directory: confusion.png (row-normalised confusion matrix) and
+    /// error-vs-distance.png (position error against distance from the nearest electrode).
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Print JSON (with the confusion matrix and accuracy by distance from the electrodes).
     #[arg(long)]
     json: bool,
 }
@@ -459,6 +468,64 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
     let opts = FitOptions { shrinkage, ..base };
     let model = Fitted::fit(&data.x, &data.y, classes, &opts)?;
     let cv_conf = fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &strat)?;
+    let curve = match &args.curve {
+        Some(png) => {
+            let fold = if visits >= 2 { &by_visit } else { &strat };
+            let largest = (0..classes)
+                .map(|c| data.y.iter().filter(|&&y| usize::from(y) == c).count())
+                .max()
+                .unwrap_or(0);
+            let sizes: Vec<usize> = [12, 24, 60, 120, 240, 480, 960, 1_200, 2_400, 4_800]
+                .into_iter()
+                .filter(|&n| n < largest)
+                .chain([largest])
+                .collect();
+            let bar = ProgressBar::new(sizes.len() as u64).with_style(
+                ProgressStyle::with_template("learning curve [{bar:30}] {pos}/{len}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let points = analysis::learning_curve(&data.y, classes, &sizes, |rows| {
+                bar.inc(1);
+                let ys: Vec<u16> = rows.iter().map(|&r| data.y[r]).collect();
+                let folds: Vec<usize> = rows.iter().map(|&r| fold[r]).collect();
+                fastcv::cross_validate_fast(
+                    &analysis::select_rows(&data.x, rows),
+                    &ys,
+                    classes,
+                    &opts,
+                    &folds,
+                )
+            });
+            bar.finish_and_clear();
+            plot::chart(
+                png,
+                plot::Labels {
+                    title: &format!(
+                        "learning curve: {} ({}), {} classes",
+                        args.kind,
+                        if visits >= 2 {
+                            "leave-one-visit-out"
+                        } else {
+                            "k-fold CV"
+                        },
+                        classes
+                    ),
+                    x: "observations per class n_c",
+                    y: "held-out accuracy (%)",
+                },
+                &[plot::Series {
+                    label: format!("shrinkage {shrinkage}"),
+                    points: points
+                        .iter()
+                        .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
+                        .collect(),
+                    scatter: false,
+                }],
+            )?;
+            Some(points)
+        }
+        None => None,
+    };
     let lovo = if visits >= 2 {
         Some(fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &by_visit)?.accuracy())
     } else {
@@ -492,6 +559,7 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
         "cv_mean_error_mm": cv_conf.mean_position_error(&mm),
         "cv_aee_mm": cv_conf.aee(&mm),
         "leave_one_visit_out_accuracy": lovo,
+        "learning_curve": curve,
     });
     if args.json {
         println!("{summary}");
@@ -539,11 +607,80 @@ fn eval_cmd(args: &EvalArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
     let conf =
         cv::evaluate(&model, &x, &data.y).with_context(|| args.data.display().to_string())?;
+    let electrodes_mm: Vec<[f64; 2]> = data
+        .electrodes
+        .iter()
+        .map(|e| [e[0] * 1e3, e[1] * 1e3])
+        .collect();
+    let outcomes = analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)?;
+    let bands = analysis::by_distance(&outcomes, 10.0);
+    if let Some(dir) = &args.plots {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let row_share: Vec<f64> = conf
+            .counts
+            .chunks(classes)
+            .flat_map(|row| {
+                let n = row.iter().sum::<u32>().max(1);
+                row.iter()
+                    .map(move |&v| 100.0 * f64::from(v) / f64::from(n))
+            })
+            .collect();
+        plot::heatmap(
+            &dir.join("confusion.png"),
+            plot::Labels {
+                title: &format!(
+                    "confusion: accuracy {:.1} % on {}",
+                    100.0 * conf.accuracy(),
+                    args.data.display()
+                ),
+                x: "predicted class",
+                y: "true class",
+            },
+            &row_share,
+            (classes, classes),
+            (0.0, 100.0),
+            "share of the true class (%)",
+        )?;
+        if electrodes_mm.is_empty() {
+            eprintln!(
+                "note: {} does not say where the electrodes are: no error-vs-distance plot",
+                args.data.display()
+            );
+        } else {
+            plot::chart(
+                &dir.join("error-vs-distance.png"),
+                plot::Labels {
+                    title: "position error against distance from the electrodes",
+                    x: "distance of the true class from the nearest electrode (mm)",
+                    y: "position error (mm)",
+                },
+                &[
+                    plot::Series {
+                        label: "observations".into(),
+                        points: outcomes
+                            .iter()
+                            .map(|o| (o.distance_mm, o.error_mm))
+                            .collect(),
+                        scatter: true,
+                    },
+                    plot::Series {
+                        label: "mean per 10 mm band".into(),
+                        points: bands
+                            .iter()
+                            .map(|b| (0.5 * (b.from_mm + b.to_mm), b.mean_error_mm))
+                            .collect(),
+                        scatter: false,
+                    },
+                ],
+            )?;
+        }
+    }
     let summary = serde_json::json!({
         "observations": conf.total(),
         "accuracy": conf.accuracy(),
         "mean_error_mm": conf.mean_position_error(&file.centres_mm),
         "aee_mm": conf.aee(&file.centres_mm),
+        "by_distance_from_electrodes": bands,
         "confusion": conf.counts.chunks(classes).map(<[u32]>::to_vec).collect::<Vec<_>>(),
     });
     if args.json {

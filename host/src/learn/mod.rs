@@ -1,6 +1,7 @@
 //! Learning touch positions from raw voltages (SPEC §9): collect labelled observations,
 //! fit QDA / LDA (with shrinkage), cross-validate, export the model blob the firmware runs.
 //!
+//! - [`analysis`]: error against distance from the electrodes, learning curves against n_c.
 //! - [`collect`]: the data-collection procedure of Algorithms 2-3, on the simulator.
 //! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
 //! - [`cv`]: stratified k-fold cross-validation, confusion matrix, accuracy, AEE [5.9-5.11].
@@ -9,6 +10,7 @@
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
 //!   and import of other sensors' CSV.
 
+pub mod analysis;
 pub mod collect;
 pub mod cv;
 pub mod dataset;
