@@ -181,6 +181,16 @@ pub struct Plan {
 /// Why collection failed.
 pub type CollectError = String;
 
+/// One press of the sheet: its label and its touches (the first touch's position and
+/// pressure are what the dataset records).
+#[derive(Clone, Debug)]
+pub struct Press {
+    /// Class (or, for touch-count sets, the number of touches).
+    pub label: u16,
+    /// The touches, at least one.
+    pub touches: Vec<Touch>,
+}
+
 /// Runs the procedure on a simulated sheet. Every visit draws its own electrode positions from
 /// `plan.seed`, so a second call with another seed is a "next day" test set.
 ///
@@ -192,6 +202,83 @@ pub fn collect(
     config: ScanConfig,
     centres: &[[f64; 2]],
     plan: &Plan,
+) -> Result<Dataset, CollectError> {
+    let grid_visit = |rng: &mut Rng| {
+        let mut presses = Vec::with_capacity(centres.len() * plan.scans);
+        for (c, centre) in centres.iter().enumerate() {
+            for _ in 0..plan.scans {
+                let position = [
+                    centre[0] + plan.placement * rng.normal(),
+                    centre[1] + plan.placement * rng.normal(),
+                ];
+                let (lo, hi) = plan.pressure_pa;
+                presses.push(Press {
+                    label: c as u16,
+                    touches: vec![Touch {
+                        position,
+                        radius: plan.radius,
+                        pressure: lo + (hi - lo) * rng.uniform(),
+                    }],
+                });
+            }
+        }
+        presses
+    };
+    collect_presses(spec, frontend, config, centres, plan, grid_visit)
+}
+
+/// `count` presses of `touches` fingers each, anywhere on the sheet (uniform over the outline
+/// kept `plan.radius` inside it), pressure uniform in `plan.pressure_pa`; labelled with the
+/// number of touches. For regression (continuous position, pressure) and touch counting.
+pub fn random_presses(
+    spec: &SheetSpec,
+    plan: &Plan,
+    count: usize,
+    touches: usize,
+) -> impl FnMut(&mut Rng) -> Vec<Press> {
+    let shape = spec.shape.clone();
+    let [x0, y0, x1, y1] = shape.bounds();
+    let (radius, (lo, hi)) = (plan.radius, plan.pressure_pa);
+    move |rng: &mut Rng| {
+        (0..count)
+            .map(|_| Press {
+                label: touches as u16,
+                touches: (0..touches)
+                    .map(|_| {
+                        let position = loop {
+                            let p = [
+                                x0 + (x1 - x0) * rng.uniform(),
+                                y0 + (y1 - y0) * rng.uniform(),
+                            ];
+                            if shape.contains(p, radius) {
+                                break p;
+                            }
+                        };
+                        Touch {
+                            position,
+                            radius,
+                            pressure: lo + (hi - lo) * rng.uniform(),
+                        }
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// The collection loop under [`collect`]: `plan.visits` visits (electrodes moved by
+/// `plan.electrode_movement`, an untouched frame first, then the presses `visit` draws, each
+/// scanned into `plan.subsections` observations, in one of `plan.poses` electrode poses).
+///
+/// # Errors
+/// A message if the sheet cannot be built or a scan fails.
+pub fn collect_presses(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
 ) -> Result<Dataset, CollectError> {
     let protocol = config.validate().map_err(|e| e.to_string())?;
     let feature_index: Vec<u16> = protocol
@@ -250,32 +337,22 @@ pub fn collect(
             Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
             poses.push(fe);
         }
-        for (c, centre) in centres.iter().enumerate() {
-            for _ in 0..plan.scans {
-                let position = [
-                    centre[0] + plan.placement * rng.normal(),
-                    centre[1] + plan.placement * rng.normal(),
-                ];
-                let (lo, hi) = plan.pressure_pa;
-                let pressure = lo + (hi - lo) * rng.uniform();
-                let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
-                let fe = &mut poses[pose];
-                fe.set_touches(&[Touch {
-                    position,
-                    radius: plan.radius,
-                    pressure,
-                }])
+        for press in visit_presses(&mut rng) {
+            let Some(first) = press.touches.first().copied() else {
+                return Err("a press without touches".into());
+            };
+            let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
+            let fe = &mut poses[pose];
+            fe.set_touches(&press.touches).map_err(|e| e.to_string())?;
+            scanner
+                .scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)
                 .map_err(|e| e.to_string())?;
-                scanner
-                    .scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)
-                    .map_err(|e| e.to_string())?;
-                for o in obs.chunks(k) {
-                    rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
-                    y.push(c as u16);
-                    positions.push(position);
-                    pressures.push(pressure);
-                    visit.push(v as u16);
-                }
+            for o in obs.chunks(k) {
+                rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
+                y.push(press.label);
+                positions.push(first.position);
+                pressures.push(first.pressure);
+                visit.push(v as u16);
             }
         }
     }

@@ -92,6 +92,34 @@ impl std::fmt::Display for FitError {
 
 impl std::error::Error for FitError {}
 
+/// Per-feature mean and standard deviation of the rows of `x` (n x p), the z-space every
+/// model here works in. A constant feature (a dead electrode) keeps unit scale rather than
+/// blow round-off up into a feature.
+#[must_use]
+pub fn standardisation(x: &DMatrix<f64>) -> (Vec<f64>, Vec<f64>) {
+    let (n, p) = (x.nrows(), x.ncols());
+    let feature_mean: Vec<f64> = (0..p).map(|j| x.column(j).mean()).collect();
+    let feature_scale: Vec<f64> = (0..p)
+        .map(|j| {
+            let sd = if n > 1 {
+                x.column(j).variance() * n as f64 / (n - 1) as f64
+            } else {
+                0.0
+            }
+            .sqrt();
+            // A constant feature (a dead electrode) has a round-off-sized spread: keep it
+            // at unit scale rather than blow round-off up into a feature.
+            let floor = 1e-9 * feature_mean[j].abs().max(f64::MIN_POSITIVE);
+            if sd > floor && sd.is_finite() {
+                sd
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    (feature_mean, feature_scale)
+}
+
 /// One class of a fitted model, in z-space.
 #[derive(Clone, Debug)]
 pub struct ClassFit {
@@ -192,25 +220,7 @@ impl Fitted {
         }
         let members = check(x, y, classes)?;
         let (n, p) = (x.nrows(), x.ncols());
-        let feature_mean: Vec<f64> = (0..p).map(|j| x.column(j).mean()).collect();
-        let feature_scale: Vec<f64> = (0..p)
-            .map(|j| {
-                let sd = if n > 1 {
-                    x.column(j).variance() * n as f64 / (n - 1) as f64
-                } else {
-                    0.0
-                }
-                .sqrt();
-                // A constant feature (a dead electrode) has a round-off-sized spread: keep it
-                // at unit scale rather than blow round-off up into a feature.
-                let floor = 1e-9 * feature_mean[j].abs().max(f64::MIN_POSITIVE);
-                if sd > floor && sd.is_finite() {
-                    sd
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let (feature_mean, feature_scale) = standardisation(x);
         let mut z = x.clone();
         for j in 0..p {
             let (m, s) = (feature_mean[j], feature_scale[j]);
