@@ -7,7 +7,8 @@
 //! Features are referenced (frame minus the visit's untouched frame). The class-based method
 //! uses a 10 x 10 grid collected the SPEC §9 way.
 //!
-//! Run: `cargo run --release -p et-host --example beyond [-- --quick]`
+//! Run: `cargo run --release -p et-host --example beyond [-- --quick] [--plots DIR]`
+//! (`--plots DIR`: also the error distributions as DIR/position-error-cdf.png.)
 
 use et_core::ScanConfig;
 use et_core::model::ModelKind;
@@ -19,6 +20,7 @@ use et_host::learn::fit::{FitOptions, Fitted, Target};
 use et_host::learn::regress::{
     IntensityByClass, KernelRidge, Ridge, Target3, choose_temperature, posterior_centre, summarise,
 };
+use et_host::plot::{self, Labels, Series};
 use et_sim::frontend::FrontendSpec;
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
@@ -28,6 +30,22 @@ fn targets(d: &Dataset) -> Vec<Target3> {
         .iter()
         .zip(&d.pressure)
         .map(|(p, kpa)| [p[0] * 1e3, p[1] * 1e3, kpa * 1e-3])
+        .collect()
+}
+
+/// (error mm, % of presses at or below it), the empirical CDF of the position error.
+fn cdf(pred: &[Target3], truth: &[Target3]) -> Vec<(f64, f64)> {
+    let mut e: Vec<f64> = pred
+        .iter()
+        .zip(truth)
+        .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]))
+        .collect();
+    e.sort_by(f64::total_cmp);
+    let n = e.len() as f64;
+    e.iter()
+        .enumerate()
+        .filter(|(i, _)| i % 4 == 0 || *i + 1 == e.len())
+        .map(|(i, v)| (*v, 100.0 * (i + 1) as f64 / n))
         .collect()
 }
 
@@ -82,6 +100,7 @@ fn main() {
     let (x, xt) = (train.features(true).unwrap(), test.features(true).unwrap());
     let (t, tt) = (targets(&train), targets(&test));
     let test_rows = rows(&xt);
+    let mut cdfs: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     println!(
         "Regression, next-day test of {} presses ({} training observations):",
         tt.len(),
@@ -93,6 +112,7 @@ fn main() {
     let ridge = Ridge::fit(&x, &t, 1e-4).expect("ridge");
     let pred: Vec<Target3> = test_rows.iter().map(|r| ridge.predict(r)).collect();
     let s = summarise(&pred, &tt, true);
+    cdfs.push(("linear ridge".to_string(), cdf(&pred, &tt)));
     println!(
         "linear ridge                             {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
         s.mean_mm,
@@ -124,6 +144,10 @@ fn main() {
         let krr = KernelRidge::fit(&xd, &t, m, width, lambda).expect("krr");
         let pred: Vec<Target3> = test_dir.iter().map(|r| krr.predict(r)).collect();
         let s = summarise(&pred, &tt, true);
+        cdfs.push((
+            format!("kernel ridge, direction, m = {m}, w = {width}"),
+            cdf(&pred, &tt),
+        ));
         println!(
             "kernel ridge, direction m={m:<5} w={width:<3} l={lambda:<6}  {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
             s.mean_mm,
@@ -190,6 +214,7 @@ fn main() {
         .collect();
     let qda_macs = centres.len() * (96 * 97 / 2 + 96);
     let s = summarise(&nearest, &tt, false);
+    cdfs.push(("QDA class centre".to_string(), cdf(&nearest, &tt)));
     println!(
         "{:<40} {:7.2}  {:9.2}  {:6.2}  {:>16}  {:>10}  {qda_macs:10}",
         "QDA class centre (10 x 10)", s.mean_mm, s.median_mm, s.p90_mm, "-", "-"
@@ -210,6 +235,10 @@ fn main() {
         })
         .collect();
     let s = summarise(&post, &tt, true);
+    cdfs.push((
+        format!("QDA posterior centres, T = {temperature}"),
+        cdf(&post, &tt),
+    ));
     println!(
         "{:<40} {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
         format!("QDA posterior centres, T = {temperature}"),
@@ -361,5 +390,32 @@ fn main() {
         100.0 * missed as f64 / 200.0,
         100.0 * false_two as f64 / 200.0
     );
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(dir) = args
+        .iter()
+        .position(|a| a == "--plots")
+        .and_then(|i| args.get(i + 1))
+    {
+        let dir = std::path::Path::new(dir);
+        std::fs::create_dir_all(dir).expect("plot directory");
+        let series: Vec<Series> = cdfs
+            .into_iter()
+            .map(|(label, points)| Series {
+                label,
+                points,
+                scatter: false,
+            })
+            .collect();
+        plot::chart(
+            &dir.join("position-error-cdf.png"),
+            Labels {
+                title: "continuous position, next day: cumulative distribution of the error",
+                x: "position error (mm)",
+                y: "share of presses with a smaller error (%)",
+            },
+            &series,
+        )
+        .expect("plot");
+    }
     eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
 }

@@ -48,7 +48,9 @@ enum Command {
     Sim(SimArgs),
     /// Collect a labelled training set on the simulated sheet, the SPEC §9 way: a grid of
     /// touch classes, visited T times, S_num scans per class and visit with the pressure varied,
-    /// S_sub observations per scan; electrodes move between visits. Writes CSV.
+    /// S_sub observations per scan; electrodes move between visits. Each visit starts with
+    /// an untouched frame (the sheet as it was put down), which referenced models subtract.
+    /// Writes CSV (Python: csv or numpy.loadtxt(comments="#"); MATLAB: readmatrix).
     ///
     /// Examples:
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
@@ -56,16 +58,20 @@ enum Command {
     #[command(verbatim_doc_comment)]
     Collect(CollectArgs),
     /// Train a QDA or LDA model on a collected training set (shrinkage chosen by
-    /// leave-one-visit-out cross-validation unless given), and cross-validate it.
+    /// leave-one-visit-out cross-validation unless given), and cross-validate it. By default
+    /// the model is referenced: it classifies each frame minus its session's untouched frame,
+    /// which cancels electrode movement between sessions (--raw: SPEC §9's raw frames).
     ///
-    /// Example:
+    /// Examples:
     ///   et train --data train.csv --out model.json
+    ///   et train --data train.csv --kind lda --out lda.json --curve learning-curve.png
     #[command(verbatim_doc_comment)]
     Train(TrainArgs),
     /// Evaluate a trained model on a test set: accuracy, mean position error, AEE, confusion.
     ///
-    /// Example:
-    ///   et eval --model model.json --data nextday.csv --json
+    /// Examples:
+    ///   et eval --model model.json --data nextday.csv
+    ///   et eval --model model.json --data nextday.csv --plots plots/ --json
     #[command(verbatim_doc_comment)]
     Eval(EvalArgs),
     /// Export a trained model as the model blob the firmware evaluates (f32, or f16 at half

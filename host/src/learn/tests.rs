@@ -623,3 +623,20 @@ fn fast_cross_validation_equals_refitting() {
         Err(FitError::Shape(_))
     ));
 }
+
+#[test]
+fn fisher_ranking_puts_the_separating_feature_first() {
+    // Feature 2 separates the classes, feature 0 is noise, feature 1 is constant.
+    let mut rng = Rng::new(8);
+    let mut rows = Vec::new();
+    let mut y = Vec::new();
+    for r in 0..90 {
+        let c = (r % 3) as u16;
+        rows.extend([rng.normal(), 1.0, 5.0 * f64::from(c) + rng.normal()]);
+        y.push(c);
+    }
+    let x = DMatrix::from_row_slice(90, 3, &rows);
+    let order = super::fit::fisher_ranking(&x, &y, 3);
+    assert_eq!(order[0], 2);
+    assert_eq!(order[2], 1, "a constant feature carries nothing");
+}
