@@ -202,7 +202,7 @@ fn on_chip(
     precision: Precision,
 ) -> String {
     let x = case.train.features(true).expect("features");
-    let xs = DMatrix::from_fn(x.nrows(), keep.len(), |r, j| x[(r, keep[j])]);
+    let xs = et_host::learn::analysis::select_columns(&x, keep);
     let target = if kind == ModelKind::Qda {
         Target::Pooled
     } else {

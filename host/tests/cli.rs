@@ -295,6 +295,39 @@ fn collect_train_eval_export_chain() {
         assert_eq!((blob.classes(), blob.features()), (4, 96));
         assert!(blob.referenced());
     }
+    // A feature-reduced model: trained on 20 of the 96, evaluated on the full test set, exported.
+    let small = dir.join("small.json");
+    let t = json(ok(et(&[
+        "train",
+        "--data",
+        &s(&train),
+        "--shrinkage",
+        "0.3",
+        "--features",
+        "20",
+        "--out",
+        &s(&small),
+        "--json",
+    ])));
+    assert_eq!(t["features"], 20);
+    let e = json(ok(et(&[
+        "eval",
+        "--model",
+        &s(&small),
+        "--data",
+        &s(&test),
+        "--json",
+    ])));
+    assert_eq!(e["observations"], 40);
+    ok(et(&[
+        "export",
+        "--model",
+        &s(&small),
+        "--out",
+        &s(&dir.join("small.etm")),
+    ]));
+    let bytes = std::fs::read(dir.join("small.etm")).unwrap();
+    assert_eq!(et_core::model::Model::parse(&bytes).unwrap().features(), 20);
     // Mistakes are explained.
     let bad = et(&[
         "train",

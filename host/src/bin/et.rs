@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use et_core::model::{ModelKind, Precision};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
-use et_host::learn::fit::{FitOptions, Fitted, Target};
+use et_host::learn::fit::{self, FitOptions, Fitted, Target};
 use et_host::learn::model_file::ModelFile;
 use et_host::learn::{analysis, collect, cv, dataset, fastcv};
 use et_host::plot;
@@ -154,6 +154,10 @@ struct TrainArgs {
     /// n_c (leave-one-visit-out when the set has several visits, else the k-fold CV).
     #[arg(long, value_name = "PNG")]
     curve: Option<PathBuf>,
+    /// Keep only this many features, those that separate the classes best (Fisher ratio):
+    /// QDA's size and cost grow with the square of the feature count.
+    #[arg(long)]
+    features: Option<usize>,
     /// Where to write the model (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -433,6 +437,17 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
         );
     }
     data.x = data.features(referenced).map_err(anyhow::Error::msg)?;
+    if let Some(keep) = args.features {
+        if keep == 0 || keep > data.x.ncols() {
+            bail!("--features {keep}: give 1 to {}", data.x.ncols());
+        }
+        // Keep the features with the largest Fisher ratio (a smaller model for the chip).
+        let mut kept = fit::fisher_ranking(&data.x, &data.y, classes);
+        kept.truncate(keep);
+        kept.sort_unstable();
+        data.x = analysis::select_columns(&data.x, &kept);
+        data.feature_index = kept.iter().map(|&j| data.feature_index[j]).collect();
+    }
     // Shrink QDA toward the pooled covariance when that has full rank (n - C > p), else toward
     // the diagonal: a rank-deficient target cannot make a class covariance definite.
     let pooled_full_rank = data.x.nrows().saturating_sub(classes) > data.x.ncols();
@@ -598,19 +613,28 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
 fn eval_cmd(args: &EvalArgs) -> Result<()> {
     let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
     let data = dataset::load_csv(&args.data)?;
-    if data.feature_index != file.feature_index {
-        bail!(
-            "{}: its features are not the model's ({} vs {})",
-            args.data.display(),
-            data.feature_index.len(),
-            file.feature_index.len()
-        );
-    }
+    // The model's features, found among the dataset's (a feature-reduced model uses a subset).
+    let columns = file
+        .feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .with_context(|| {
+            format!(
+                "{}: it lacks frame values the model uses (its {} features vs the model's {})",
+                args.data.display(),
+                data.feature_index.len(),
+                file.feature_index.len()
+            )
+        })?;
     let model = file.fitted()?;
     let classes = file.classes.len();
-    let x = data
-        .features(file.referenced)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let x = analysis::select_columns(
+        &data
+            .features(file.referenced)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?,
+        &columns,
+    );
     let conf =
         cv::evaluate(&model, &x, &data.y).with_context(|| args.data.display().to_string())?;
     let electrodes_mm: Vec<[f64; 2]> = data

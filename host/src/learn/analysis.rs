@@ -165,6 +165,12 @@ pub fn select_rows(x: &DMatrix<f64>, rows: &[usize]) -> DMatrix<f64> {
     DMatrix::from_fn(rows.len(), x.ncols(), |r, j| x[(rows[r], j)])
 }
 
+/// Columns `cols` of `x`.
+#[must_use]
+pub fn select_columns(x: &DMatrix<f64>, cols: &[usize]) -> DMatrix<f64> {
+    DMatrix::from_fn(x.nrows(), cols.len(), |r, j| x[(r, cols[j])])
+}
+
 /// Fits on `rows` of a training set and evaluates on a test set: the building block of a
 /// learning curve against a separate (next-day) test set.
 ///
