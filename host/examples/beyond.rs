@@ -18,7 +18,8 @@ use et_host::learn::collect::{
 use et_host::learn::cv::evaluate;
 use et_host::learn::fit::{FitOptions, Fitted, Target};
 use et_host::learn::regress::{
-    IntensityByClass, KernelRidge, Ridge, Target3, choose_temperature, posterior_centre, summarise,
+    IntensityByClass, KernelRidge, Ridge, Target3, choose_temperature, posterior_centre,
+    sorted_position_errors, summarise,
 };
 use et_host::plot::{self, Labels, Series};
 use et_sim::frontend::FrontendSpec;
@@ -35,12 +36,7 @@ fn targets(d: &Dataset) -> Vec<Target3> {
 
 /// (error mm, % of presses at or below it), the empirical CDF of the position error.
 fn cdf(pred: &[Target3], truth: &[Target3]) -> Vec<(f64, f64)> {
-    let mut e: Vec<f64> = pred
-        .iter()
-        .zip(truth)
-        .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]))
-        .collect();
-    e.sort_by(f64::total_cmp);
+    let e = sorted_position_errors(pred, truth);
     let n = e.len() as f64;
     e.iter()
         .enumerate()
@@ -132,53 +128,55 @@ fn main() {
     };
     let (xd, xtd) = (direction(&x), direction(&xt));
     let test_dir = rows(&xtd);
-    for (m, width, lambda) in [
-        (1000, 1.0, 1e-3),
-        (2000, 1.0, 1e-3),
-        (2000, 2.0, 1e-3),
-        (3000, 4.0, 1e-3),
+    let test_rows_owned = test_rows.clone();
+    for (features, train_x, test_x, settings) in [
+        (
+            "direction",
+            &xd,
+            &test_dir,
+            [
+                (1000, 1.0, 1e-3),
+                (2000, 1.0, 1e-3),
+                (2000, 2.0, 1e-3),
+                (3000, 4.0, 1e-3),
+            ],
+        ),
+        (
+            "raw",
+            &x,
+            &test_rows_owned,
+            [
+                (1000, 1.0, 1e-3),
+                (2000, 1.0, 1e-3),
+                (2000, 2.0, 1e-4),
+                (3000, 2.0, 1e-4),
+            ],
+        ),
     ] {
-        if m > t.len() {
-            continue;
+        for (m, width, lambda) in settings {
+            if m > t.len() {
+                continue;
+            }
+            let krr = KernelRidge::fit(train_x, &t, m, width, lambda).expect("krr");
+            let pred: Vec<Target3> = test_x.iter().map(|r| krr.predict(r)).collect();
+            let s = summarise(&pred, &tt, true);
+            if features == "direction" {
+                cdfs.push((
+                    format!("kernel ridge, direction, m = {m}, w = {width}"),
+                    cdf(&pred, &tt),
+                ));
+            }
+            println!(
+                "{:<40} {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
+                format!("kernel ridge, {features}, m={m} w={width} l={lambda}"),
+                s.mean_mm,
+                s.median_mm,
+                s.p90_mm,
+                s.pressure_mae_kpa,
+                s.pressure_r,
+                krr.cost()
+            );
         }
-        let krr = KernelRidge::fit(&xd, &t, m, width, lambda).expect("krr");
-        let pred: Vec<Target3> = test_dir.iter().map(|r| krr.predict(r)).collect();
-        let s = summarise(&pred, &tt, true);
-        cdfs.push((
-            format!("kernel ridge, direction, m = {m}, w = {width}"),
-            cdf(&pred, &tt),
-        ));
-        println!(
-            "kernel ridge, direction m={m:<5} w={width:<3} l={lambda:<6}  {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
-            s.mean_mm,
-            s.median_mm,
-            s.p90_mm,
-            s.pressure_mae_kpa,
-            s.pressure_r,
-            krr.cost()
-        );
-    }
-    for (m, width, lambda) in [
-        (1000, 1.0, 1e-3),
-        (2000, 1.0, 1e-3),
-        (2000, 2.0, 1e-4),
-        (3000, 2.0, 1e-4),
-    ] {
-        if m > t.len() {
-            continue;
-        }
-        let krr = KernelRidge::fit(&x, &t, m, width, lambda).expect("krr");
-        let pred: Vec<Target3> = test_rows.iter().map(|r| krr.predict(r)).collect();
-        let s = summarise(&pred, &tt, true);
-        println!(
-            "kernel ridge m={m:<5} width={width:<3} l={lambda:<6}  {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
-            s.mean_mm,
-            s.median_mm,
-            s.p90_mm,
-            s.pressure_mae_kpa,
-            s.pressure_r,
-            krr.cost()
-        );
     }
     // Class-based: QDA on a 10 x 10 grid (SPEC §9 collection), referenced.
     let centres = grid(&spec, 10, 10, 0.0);

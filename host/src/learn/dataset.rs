@@ -158,6 +158,25 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
     })
 }
 
+/// Parses whitespace-separated finite numbers of a `field`.
+fn numbers(path: &Path, line: usize, field: &str, text: &str) -> Result<Vec<f64>, DatasetError> {
+    text.split_whitespace()
+        .map(|v| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    content(
+                        path,
+                        line,
+                        None,
+                        format!("{field}: '{v}' is not a finite number"),
+                    )
+                })
+        })
+        .collect()
+}
+
 /// Parses `x y; x y; ...` in mm (finite numbers) into metres.
 fn points_mm(
     path: &Path,
@@ -167,32 +186,14 @@ fn points_mm(
 ) -> Result<Vec<[f64; 2]>, DatasetError> {
     list.split(';')
         .filter(|p| !p.trim().is_empty())
-        .map(|pair| {
-            let v: Vec<f64> = pair
-                .split_whitespace()
-                .map(|v| {
-                    v.parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| {
-                            content(
-                                path,
-                                line,
-                                None,
-                                format!("{field}: '{v}' is not a finite number"),
-                            )
-                        })
-                })
-                .collect::<Result<_, _>>()?;
-            match v[..] {
-                [x, y] => Ok([x * 1e-3, y * 1e-3]),
-                _ => Err(content(
-                    path,
-                    line,
-                    None,
-                    format!("{field}: each point is 'x y'"),
-                )),
-            }
+        .map(|pair| match numbers(path, line, field, pair)?[..] {
+            [x, y] => Ok([x * 1e-3, y * 1e-3]),
+            _ => Err(content(
+                path,
+                line,
+                None,
+                format!("{field}: each point is 'x y'"),
+            )),
         })
         .collect()
 }
@@ -244,23 +245,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
                 .collect::<Result<_, _>>()?;
         } else if let Some(list) = meta.strip_prefix("untouched:") {
             for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
-                let v: Vec<f64> = frame
-                    .split_whitespace()
-                    .map(|v| {
-                        v.parse::<f64>()
-                            .ok()
-                            .filter(|v| v.is_finite())
-                            .ok_or_else(|| {
-                                content(
-                                    path,
-                                    i + 1,
-                                    None,
-                                    format!("untouched: '{v}' is not a finite number"),
-                                )
-                            })
-                    })
-                    .collect::<Result<_, _>>()?;
-                untouched.push(v);
+                untouched.push(numbers(path, i + 1, "untouched", frame)?);
             }
         } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
             electrodes = points_mm(path, i + 1, "electrodes_mm", list)?;

@@ -342,15 +342,22 @@ pub struct ErrorSummary {
     pub pressure_r: f64,
 }
 
-/// Summarises predictions against truth (`pressure`: whether the third component counts).
+/// Position errors (mm) of predictions against truth, sorted ascending.
 #[must_use]
-pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
+pub fn sorted_position_errors(pred: &[Target3], truth: &[Target3]) -> Vec<f64> {
     let mut e: Vec<f64> = pred
         .iter()
         .zip(truth)
         .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]))
         .collect();
     e.sort_by(f64::total_cmp);
+    e
+}
+
+/// Summarises predictions against truth (`pressure`: whether the third component counts).
+#[must_use]
+pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
+    let e = sorted_position_errors(pred, truth);
     let q = |f: f64| {
         e.get(((e.len() as f64 - 1.0) * f).round() as usize)
             .copied()
