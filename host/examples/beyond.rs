@@ -34,7 +34,8 @@ fn targets(d: &Dataset) -> Vec<Target3> {
         .collect()
 }
 
-/// (error mm, % of presses at or below it), the empirical CDF of the position error.
+/// (error mm, % of presses at or below it), the empirical CDF of the position error up to
+/// 40 mm.
 fn cdf(pred: &[Target3], truth: &[Target3]) -> Vec<(f64, f64)> {
     let e = sorted_position_errors(pred, truth);
     let n = e.len() as f64;
@@ -42,6 +43,7 @@ fn cdf(pred: &[Target3], truth: &[Target3]) -> Vec<(f64, f64)> {
         .enumerate()
         .filter(|(i, _)| i % 4 == 0 || *i + 1 == e.len())
         .map(|(i, v)| (*v, 100.0 * (i + 1) as f64 / n))
+        .filter(|(v, _)| *v <= 40.0) // the plot's axis ends at 40 mm
         .collect()
 }
 
@@ -410,6 +412,7 @@ fn main() {
                 title: "continuous position, next day: cumulative distribution of the error",
                 x: "position error (mm)",
                 y: "share of presses with a smaller error (%)",
+                legend: plot::Legend::LowerRight,
             },
             &series,
         )

@@ -57,6 +57,18 @@ pub struct Series {
     pub scatter: bool,
 }
 
+/// Where a chart's legend goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Legend {
+    /// Upper left (curves that start low and rise to the right keep clear of it).
+    #[default]
+    UpperLeft,
+    /// Upper right.
+    UpperRight,
+    /// Lower right (for curves that rise early, such as distributions).
+    LowerRight,
+}
+
 /// Chart texts.
 #[derive(Clone, Copy, Debug)]
 pub struct Labels<'a> {
@@ -66,15 +78,19 @@ pub struct Labels<'a> {
     pub x: &'a str,
     /// Vertical axis, with unit.
     pub y: &'a str,
+    /// Legend position (charts only).
+    pub legend: Legend,
 }
 
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
 ];
 
 fn range(values: impl Iterator<Item = f64>, zero: bool) -> (f64, f64) {
@@ -138,9 +154,11 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
             )
             .map_err(|e| fail(path, e))?
         } else {
+            // Markers on short curves only; on long ones they would hide the line.
+            let marked = if pts.len() <= 30 { &pts[..] } else { &[] };
             c.draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
                 .map_err(|e| fail(path, e))?;
-            c.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+            c.draw_series(marked.iter().map(|&p| Circle::new(p, 4, colour.filled())))
                 .map_err(|e| fail(path, e))?
         };
         drawn
@@ -152,7 +170,11 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(match labels.legend {
+                Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+                Legend::UpperRight => SeriesLabelPosition::UpperRight,
+                Legend::LowerRight => SeriesLabelPosition::LowerRight,
+            })
             .draw()
             .map_err(|e| fail(path, e))?;
     }
@@ -283,6 +305,7 @@ mod tests {
                 title: "learning curve",
                 x: "n_c",
                 y: "accuracy (%)",
+                legend: Legend::UpperLeft,
             },
             &[Series {
                 label: "QDA".into(),
@@ -302,6 +325,7 @@ mod tests {
                 title: "t",
                 x: "predicted",
                 y: "true",
+                legend: Legend::UpperLeft,
             },
             &[0.0, 1.0, 0.5, f64::INFINITY],
             (2, 2),
@@ -324,7 +348,8 @@ mod tests {
                 Labels {
                     title: "",
                     x: "",
-                    y: ""
+                    y: "",
+                    legend: Legend::UpperLeft,
                 },
                 &[1.0],
                 (2, 2),
@@ -340,6 +365,7 @@ mod tests {
                 title: "",
                 x: "",
                 y: "",
+                legend: Legend::UpperLeft,
             },
             &[],
         )

@@ -533,6 +533,7 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
                     ),
                     x: "observations per class n_c",
                     y: "held-out accuracy (%)",
+                    legend: plot::Legend::UpperLeft,
                 },
                 &[plot::Series {
                     label: format!("shrinkage {shrinkage}"),
@@ -665,6 +666,7 @@ fn eval_cmd(args: &EvalArgs) -> Result<()> {
                 ),
                 x: "predicted class",
                 y: "true class",
+                legend: plot::Legend::UpperLeft,
             },
             &row_share,
             (classes, classes),
@@ -683,6 +685,7 @@ fn eval_cmd(args: &EvalArgs) -> Result<()> {
                     title: "position error against distance from the electrodes",
                     x: "distance of the true class from the nearest electrode (mm)",
                     y: "position error (mm)",
+                    legend: plot::Legend::UpperRight,
                 },
                 &[
                     plot::Series {
