@@ -1,6 +1,6 @@
 //! `et-host`: everything et runs on the computer.
 //!
-//! Modules (more arrive with their issues: `link`, `mesh`, `fem`, `recon`, `learn`, `viewer`):
+//! Modules (more arrive with their issues: `link`, `recon`, `viewer`):
 //!
 //! - [`tables`]: a protocol's tables (SPEC §4) as plain data for people and programs, behind
 //!   `et protocol`.
@@ -8,10 +8,14 @@
 //!   Python and MATLAB read without et; `et sim` writes it.
 //! - [`learn`]: touch classification from raw voltages (SPEC §9): collection, QDA/LDA fitting
 //!   with shrinkage, cross-validation, export to the firmware's model blob.
+//! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade).
+//! - [`fem`]: the forward model, P1 finite elements with the complete electrode model (SPEC §5).
 //! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
+pub mod fem;
 pub mod learn;
+pub mod mesh;
 pub mod plot;
 pub mod recording;
 pub mod tables;

@@ -188,7 +188,9 @@ impl Shape {
         }
     }
 
-    fn corners(&self) -> Vec<[f64; 2]> {
+    /// The outline's corners, counter-clockwise (none for the disc).
+    #[must_use]
+    pub fn corners(&self) -> Vec<[f64; 2]> {
         match self {
             Shape::Disc { .. } => Vec::new(),
             Shape::Rectangle { width, height } => {

@@ -1,0 +1,263 @@
+use super::*;
+use crate::mesh::{Mesh, MeshSize};
+use et_core::protocol::{Protocol, ProtocolKind};
+use et_sim::shape::Shape;
+use et_sim::sheet::SheetSpec;
+
+fn disc(l: u8, width: f64) -> SheetSpec {
+    let mut s = SheetSpec::rectangle(1.0, 1.0, l);
+    s.shape = Shape::Disc { radius: 1.0 };
+    s.electrodes.width = width;
+    s
+}
+
+fn uniform(h: f64) -> MeshSize {
+    MeshSize {
+        interior: h,
+        electrode: h,
+        min_angle_deg: 28.0,
+    }
+}
+
+/// max |frame - analytic| / max |analytic| for point electrodes on the unit disc, adjacent
+/// protocol, sigma = 1, 1 A: U(x) = (1 / pi) ln(|x - x_sink| / |x - x_source|) + const.
+fn point_error(h: f64) -> (f64, usize) {
+    // Width 4h: the boundary is sampled at h everywhere, so the mesh is quasi-uniform (the
+    // point model uses only the centre nodes).
+    let spec = disc(16, 4.0 * h);
+    let mesh = Mesh::of_sheet(&spec, uniform(h)).unwrap();
+    let triangles = mesh.triangles.len();
+    let at: Vec<[f64; 2]> = mesh.centre_nodes.iter().map(|&i| mesh.nodes[i]).collect();
+    let fwd = Forward::new(mesh, Electrodes::Point).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let sigma = vec![1.0; triangles];
+    let v = fwd.frame(&sigma, &protocol, 1.0).unwrap();
+    let u = |x: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (dist(x, b) / dist(x, a)).ln() / std::f64::consts::PI
+    };
+    let (mut worst, mut scale) = (0.0f64, 0.0f64);
+    for s in protocol.steps() {
+        let (a, b) = (
+            at[usize::from(s.injection.source.0)],
+            at[usize::from(s.injection.sink.0)],
+        );
+        let (p, q) = (
+            at[usize::from(s.measurement.positive.0)],
+            at[usize::from(s.measurement.negative.0)],
+        );
+        let exact = u(p, a, b) - u(q, a, b);
+        worst = worst.max((v[usize::from(s.k)] - exact).abs());
+        scale = scale.max(exact.abs());
+    }
+    (worst / scale, triangles)
+}
+
+#[test]
+fn point_electrodes_converge_to_the_disc_solution_at_second_order() {
+    let e: Vec<(f64, usize)> = [0.05, 0.025, 0.0125]
+        .iter()
+        .map(|&h| point_error(h))
+        .collect();
+    println!("point electrodes on the unit disc: (relative error, triangles) {e:?}");
+    for w in e.windows(2) {
+        let order = (w[0].0 / w[1].0).log2();
+        assert!(order > 1.7, "convergence order {order:.2}: {e:?}");
+    }
+    assert!(e[2].0 < 5e-3, "{e:?}");
+}
+
+fn cem_frame(h: f64) -> Vec<f64> {
+    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let mesh = Mesh::of_sheet(
+        &spec,
+        MeshSize {
+            interior: h,
+            electrode: h / 4.0,
+            min_angle_deg: 28.0,
+        },
+    )
+    .unwrap();
+    let n = mesh.triangles.len();
+    let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Opposite, 16).unwrap();
+    fwd.frame(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
+        .unwrap()
+}
+
+#[test]
+fn cem_voltages_converge_under_refinement() {
+    let frames: Vec<Vec<f64>> = [0.004, 0.002, 0.001]
+        .iter()
+        .map(|&h| cem_frame(h))
+        .collect();
+    let diff = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    let d: Vec<f64> = frames.windows(2).map(|w| diff(&w[0], &w[1])).collect();
+    let scale = frames[2].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!("CEM successive differences (V): {d:?}, frame scale {scale:.3e} V");
+    for w in d.windows(2) {
+        assert!(w[1] < 0.6 * w[0], "not converging: {d:?}");
+    }
+    assert!(d[1] < 1e-2 * scale, "{d:?}");
+}
+
+fn square_cem(z: f64) -> (Forward, usize) {
+    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 2_000)).unwrap();
+    let n = mesh.triangles.len();
+    (
+        Forward::new(mesh, Electrodes::Complete(vec![z; 8])).unwrap(),
+        n,
+    )
+}
+
+#[test]
+fn reciprocity_and_current_balance_hold() {
+    let (fwd, n) = square_cem(5.0);
+    // A contrast so that the test is not of a symmetric sheet only.
+    let sigma: Vec<f64> = (0..n)
+        .map(|t| {
+            if fwd.mesh().centroid(t)[0] > 0.02 {
+                1e-4
+            } else {
+                3e-5
+            }
+        })
+        .collect();
+    // Every pair pattern e_a - e_b.
+    let pairs: Vec<(usize, usize)> = (0..8)
+        .flat_map(|a| (0..8).map(move |b| (a, b)))
+        .filter(|(a, b)| a != b)
+        .collect();
+    let mut pats = DMatrix::zeros(8, pairs.len());
+    for (c, &(a, b)) in pairs.iter().enumerate() {
+        pats[(a, c)] = 1e-3;
+        pats[(b, c)] = -1e-3;
+    }
+    let sol = fwd.solve(&sigma, &pats).unwrap();
+    let col = |a: usize, b: usize| pairs.iter().position(|&p| p == (a, b)).unwrap();
+    let scale = sol.electrodes.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // Z(ab, pq) = Z(pq, ab).
+    for (a, b, p, q) in [(0, 1, 3, 5), (2, 6, 7, 4), (1, 5, 0, 3)] {
+        let u1 = sol.electrodes[(p, col(a, b))] - sol.electrodes[(q, col(a, b))];
+        let u2 = sol.electrodes[(a, col(p, q))] - sol.electrodes[(b, col(p, q))];
+        assert!((u1 - u2).abs() < 1e-9 * scale, "{u1} vs {u2}");
+    }
+    // The current through each electrode's contact equals the one prescribed.
+    let Electrodes::Complete(z) = &fwd.electrodes else {
+        unreachable!()
+    };
+    let m = fwd.mesh();
+    for c in 0..pats.ncols() {
+        for e in 0..8 {
+            let through: f64 = m.electrodes[e]
+                .iter()
+                .map(|&[a, b]| {
+                    let k = dist(m.nodes[a], m.nodes[b]) / z[e];
+                    k * (sol.electrodes[(e, c)] - 0.5 * (sol.nodes[(a, c)] + sol.nodes[(b, c)]))
+                })
+                .sum();
+            assert!(
+                (through - pats[(e, c)]).abs() < 1e-9 * 1e-3,
+                "electrode {e}: {through}"
+            );
+        }
+        assert!(sol.electrodes.column(c).sum().abs() < 1e-12 * scale.max(1.0));
+    }
+}
+
+#[test]
+fn extremes_give_finite_voltages_or_clear_errors() {
+    for z in [1e-9, 1e-3, 1e3, 1e6] {
+        let (fwd, n) = square_cem(z);
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        for contrast in [1e-3, 1.0, 1e3] {
+            let sigma: Vec<f64> = (0..n)
+                .map(|t| {
+                    if fwd.mesh().centroid(t)[1] > 0.0 {
+                        1e-4 * contrast
+                    } else {
+                        1e-4
+                    }
+                })
+                .collect();
+            let v = fwd.frame(&sigma, &protocol, 1e-5).unwrap();
+            assert!(v.iter().all(|x| x.is_finite()), "z {z} contrast {contrast}");
+        }
+    }
+    let (fwd, n) = square_cem(5.0);
+    let c = Forward::injection_currents(&Protocol::new(ProtocolKind::Adjacent, 8).unwrap(), 1e-3);
+    let mut bad = vec![1e-4; n];
+    bad[3] = f64::NAN;
+    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    bad[3] = 0.0;
+    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    assert!(matches!(
+        fwd.solve(&vec![1e-4; n - 1], &c),
+        Err(FemError::Input(_))
+    ));
+    let mut unbalanced = c.clone();
+    unbalanced[(0, 0)] += 1e-3;
+    assert!(matches!(
+        fwd.solve(&vec![1e-4; n], &unbalanced),
+        Err(FemError::Input(_))
+    ));
+    let p16 = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    assert!(matches!(
+        fwd.frame(&vec![1e-4; n], &p16, 1e-3),
+        Err(FemError::Input(_))
+    ));
+    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 500)).unwrap();
+    assert!(matches!(
+        Forward::new(mesh.clone(), Electrodes::Complete(vec![1.0; 7])),
+        Err(FemError::Input(_))
+    ));
+    assert!(matches!(
+        Forward::new(mesh, Electrodes::Complete(vec![0.0; 8])),
+        Err(FemError::Input(_))
+    ));
+}
+
+#[test]
+fn jacobian_columns_agree_with_finite_differences() {
+    for electrodes in [Electrodes::Complete(vec![5.0; 8]), Electrodes::Point] {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 600)).unwrap();
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, electrodes.clone()).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        let sigma: Vec<f64> = (0..n)
+            .map(|t| 1e-4 * (1.0 + 0.5 * ((t * 7) % 5) as f64))
+            .collect();
+        let (frame, jac) = fwd.jacobian(&sigma, &protocol, 1e-4).unwrap();
+        assert_eq!(frame, fwd.frame(&sigma, &protocol, 1e-4).unwrap());
+        // Columns of triangles near an electrode, in the middle and in a corner.
+        for t in [0, n / 3, n / 2, n - 1] {
+            let h = 1e-6 * sigma[t];
+            let mut up = sigma.clone();
+            up[t] += h;
+            let mut down = sigma.clone();
+            down[t] -= h;
+            let (fu, fd) = (
+                fwd.frame(&up, &protocol, 1e-4).unwrap(),
+                fwd.frame(&down, &protocol, 1e-4).unwrap(),
+            );
+            let col_scale = (0..frame.len()).fold(0.0f64, |m, k| m.max(jac[(k, t)].abs()));
+            for k in 0..frame.len() {
+                let fdiff = (fu[k] - fd[k]) / (2.0 * h);
+                let err = (fdiff - jac[(k, t)]).abs() / col_scale;
+                assert!(
+                    err < 1e-4,
+                    "{electrodes:?} triangle {t} row {k}: adjoint {} FD {fdiff}",
+                    jac[(k, t)]
+                );
+            }
+        }
+    }
+}
