@@ -10,6 +10,7 @@
 //!   with shrinkage, cross-validation, export to the firmware's model blob.
 //! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade).
 //! - [`fem`]: the forward model, P1 finite elements with the complete electrode model (SPEC §5).
+//! - [`recon`]: one-step Gauss-Newton difference imaging with NOSER, ROIs, SPEC §7 metrics.
 //! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
@@ -17,5 +18,6 @@ pub mod fem;
 pub mod learn;
 pub mod mesh;
 pub mod plot;
+pub mod recon;
 pub mod recording;
 pub mod tables;

@@ -1,0 +1,346 @@
+//! Difference imaging by one-step linearised Gauss-Newton (SPEC §6) and the image metrics of
+//! SPEC §7.
+//!
+//! With J the Jacobian at the background sigma_0 (K x T, [`crate::fem::Forward::jacobian`]) and
+//! the NOSER prior P = diag(J^T J)^s [3.9], the Tikhonov solution [3.8]
+//!
+//! ```text
+//! d_sigma = (J^T J + lambda P)^-1 J^T dV = P^-1 J^T (J P^-1 J^T + lambda I)^-1 dV
+//! ```
+//!
+//! is computed in its data-space form on the right (P is diagonal, so only a K x K system is
+//! factorised). **Normalisation of alpha:** lambda = alpha^2 tr(J P^-1 J^T) / K, so alpha is
+//! dimensionless and means the same for any mesh, current or protocol (alpha = 1: the
+//! regularisation is as large as the average data-space eigenvalue). The reconstruction matrix
+//! R (T x K) is built once; each frame then costs one matrix-vector product, onto the mesh or
+//! (cheaper) onto a pixel grid ([`PixelGrid`]).
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::mesh::Mesh;
+
+/// Why a reconstruction could not be set up or run.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ReconError {
+    /// A parameter out of range (alpha not finite or <= 0, s outside [0, 1], wrong lengths).
+    Parameter(String),
+    /// The data-space system is not positive definite (a Jacobian with NaN, or all zero).
+    Singular,
+    /// A frame holds NaN or infinite values.
+    NonFinite,
+}
+
+impl std::fmt::Display for ReconError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReconError::Parameter(why) => write!(f, "reconstruction: {why}"),
+            ReconError::Singular => write!(f, "reconstruction: the regularised system is singular"),
+            ReconError::NonFinite => write!(f, "reconstruction: a frame value is NaN or infinite"),
+        }
+    }
+}
+
+impl std::error::Error for ReconError {}
+
+/// The one-step Gauss-Newton reconstruction matrix of one (mesh, protocol, alpha, s).
+#[derive(Clone, Debug)]
+pub struct OneStep {
+    /// T x K: d_sigma = R dV.
+    pub matrix: DMatrix<f64>,
+    /// The alpha it was built with.
+    pub alpha: f64,
+    /// The NOSER exponent s.
+    pub s: f64,
+}
+
+impl OneStep {
+    /// Builds R from the Jacobian `jac` (K x T).
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for alpha not in (0, inf) or s not in [0, 1];
+    /// [`ReconError::Singular`] when the system cannot be factorised.
+    pub fn new(jac: &DMatrix<f64>, alpha: f64, s: f64) -> Result<Self, ReconError> {
+        if !(alpha.is_finite() && alpha > 0.0) {
+            return Err(ReconError::Parameter(format!(
+                "alpha = {alpha}: must be finite and > 0"
+            )));
+        }
+        if !(0.0..=1.0).contains(&s) {
+            return Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")));
+        }
+        if jac.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        let (k, t) = (jac.nrows(), jac.ncols());
+        // P = diag(J^T J)^s; a column that sees nothing gets the smallest positive weight.
+        let diag: Vec<f64> = (0..t).map(|c| jac.column(c).norm_squared()).collect();
+        let floor = diag
+            .iter()
+            .copied()
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if !floor.is_finite() {
+            return Err(ReconError::Singular);
+        }
+        let p_inv: Vec<f64> = diag.iter().map(|d| d.max(floor).powf(-s)).collect();
+        // A = J P^-1 J^T.
+        let jp = DMatrix::from_fn(k, t, |r, c| jac[(r, c)] * p_inv[c]);
+        let mut a = &jp * jac.transpose();
+        let lambda = alpha * alpha * a.trace() / k as f64;
+        for i in 0..k {
+            a[(i, i)] += lambda;
+        }
+        let chol = a.cholesky().ok_or(ReconError::Singular)?;
+        // R = P^-1 J^T A^-1 = (A^-1 J P^-1)^T.
+        let x = chol.solve(&jp);
+        let matrix = x.transpose();
+        if matrix.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        Ok(Self { matrix, alpha, s })
+    }
+
+    /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
+    pub fn reconstruct(&self, dv: &[f64]) -> Result<Vec<f64>, ReconError> {
+        if dv.len() != self.matrix.ncols() {
+            return Err(ReconError::Parameter(format!(
+                "{} values, the protocol has K = {}",
+                dv.len(),
+                self.matrix.ncols()
+            )));
+        }
+        if dv.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::NonFinite);
+        }
+        Ok((&self.matrix * DVector::from_column_slice(dv))
+            .as_slice()
+            .to_vec())
+    }
+}
+
+/// A pixel grid over a mesh: which triangle each pixel centre lies in.
+#[derive(Clone, Debug)]
+pub struct PixelGrid {
+    /// Pixels across.
+    pub width: usize,
+    /// Pixels down.
+    pub height: usize,
+    /// Lower-left corner and pixel size, m: pixel (i, j) (column i, row j from the bottom)
+    /// is centred at (x0 + (i + 1/2) size, y0 + (j + 1/2) size).
+    pub origin: [f64; 2],
+    /// Pixel size, m.
+    pub size: f64,
+    /// Triangle under each pixel (row-major from the bottom row), None outside the sheet.
+    pub triangle: Vec<Option<usize>>,
+}
+
+impl PixelGrid {
+    /// A grid `pixels` across the mesh's longer side.
+    #[must_use]
+    pub fn new(mesh: &Mesh, pixels: usize) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &mesh.nodes {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]) / pixels.max(1) as f64;
+        let width = ((hi[0] - lo[0]) / size).round().max(1.0) as usize;
+        let height = ((hi[1] - lo[1]) / size).round().max(1.0) as usize;
+        let mut triangle = vec![None; width * height];
+        // Each triangle claims the pixel centres inside it (barycentric test on its box).
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            let p = tri.map(|i| mesh.nodes[i]);
+            let bx = |d: usize, f: fn(f64, f64) -> f64| f(f(p[0][d], p[1][d]), p[2][d]);
+            let i0 = (((bx(0, f64::min) - lo[0]) / size - 0.5).ceil().max(0.0)) as usize;
+            let i1 = (((bx(0, f64::max) - lo[0]) / size - 0.5).floor().max(-1.0) + 1.0) as usize;
+            let j0 = (((bx(1, f64::min) - lo[1]) / size - 0.5).ceil().max(0.0)) as usize;
+            let j1 = (((bx(1, f64::max) - lo[1]) / size - 0.5).floor().max(-1.0) + 1.0) as usize;
+            let area2 = mesh.double_area(t);
+            for j in j0..j1.min(height) {
+                for i in i0..i1.min(width) {
+                    let c = [
+                        lo[0] + (i as f64 + 0.5) * size,
+                        lo[1] + (j as f64 + 0.5) * size,
+                    ];
+                    let w = |a: [f64; 2], b: [f64; 2]| {
+                        ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])) / area2
+                    };
+                    let eps = -1e-12;
+                    if w(p[0], p[1]) >= eps && w(p[1], p[2]) >= eps && w(p[2], p[0]) >= eps {
+                        triangle[j * width + i].get_or_insert(t);
+                    }
+                }
+            }
+        }
+        Self {
+            width,
+            height,
+            origin: lo,
+            size,
+            triangle,
+        }
+    }
+
+    /// Centre of pixel `index`, m.
+    #[must_use]
+    pub fn centre(&self, index: usize) -> [f64; 2] {
+        let (i, j) = (index % self.width, index / self.width);
+        [
+            self.origin[0] + (i as f64 + 0.5) * self.size,
+            self.origin[1] + (j as f64 + 0.5) * self.size,
+        ]
+    }
+
+    /// The reconstruction matrix onto the pixels (one row per pixel inside the sheet, in
+    /// pixel order): a live frame then costs pixels x K multiply-adds.
+    #[must_use]
+    pub fn project(&self, r: &OneStep) -> DMatrix<f32> {
+        let inside: Vec<usize> = self.triangle.iter().filter_map(|t| *t).collect();
+        DMatrix::from_fn(inside.len(), r.matrix.ncols(), |p, k| {
+            r.matrix[(inside[p], k)] as f32
+        })
+    }
+
+    /// Spreads per-triangle values onto the grid (None outside the sheet).
+    #[must_use]
+    pub fn image(&self, per_triangle: &[f64]) -> Vec<Option<f64>> {
+        self.triangle
+            .iter()
+            .map(|t| t.map(|t| per_triangle[t]))
+            .collect()
+    }
+}
+
+/// One connected region of an image above threshold.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Region {
+    /// Centroid of its pixels, m.
+    pub centroid: [f64; 2],
+    /// Area, m^2.
+    pub area: f64,
+    /// Largest value in it.
+    pub peak: f64,
+}
+
+/// The regions of interest (SPEC §6 [3.10]): pixels >= f max(image) (for a touch, which
+/// raises the conductivity), grouped into 4-connected regions, largest peak first.
+#[must_use]
+pub fn regions(grid: &PixelGrid, image: &[Option<f64>], f: f64) -> Vec<Region> {
+    let max = image
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !(max.is_finite() && max > 0.0) {
+        return Vec::new();
+    }
+    let keep: Vec<bool> = image
+        .iter()
+        .map(|v| v.is_some_and(|v| v >= f * max))
+        .collect();
+    let mut seen = vec![false; keep.len()];
+    let mut out = Vec::new();
+    for start in 0..keep.len() {
+        if !keep[start] || seen[start] {
+            continue;
+        }
+        let (mut stack, mut members) = (vec![start], Vec::new());
+        seen[start] = true;
+        while let Some(p) = stack.pop() {
+            members.push(p);
+            let (i, j) = (p % grid.width, p / grid.width);
+            let mut push = |q: usize| {
+                if keep[q] && !seen[q] {
+                    seen[q] = true;
+                    stack.push(q);
+                }
+            };
+            if i > 0 {
+                push(p - 1);
+            }
+            if i + 1 < grid.width {
+                push(p + 1);
+            }
+            if j > 0 {
+                push(p - grid.width);
+            }
+            if j + 1 < grid.height {
+                push(p + grid.width);
+            }
+        }
+        let n = members.len() as f64;
+        let mut c = [0.0; 2];
+        for &m in &members {
+            let p = grid.centre(m);
+            c[0] += p[0] / n;
+            c[1] += p[1] / n;
+        }
+        let peak = members
+            .iter()
+            .filter_map(|&m| image[m])
+            .fold(f64::NEG_INFINITY, f64::max);
+        out.push(Region {
+            centroid: c,
+            area: n * grid.size * grid.size,
+            peak,
+        });
+    }
+    out.sort_by(|a, b| b.peak.total_cmp(&a.peak));
+    out
+}
+
+/// SPEC §7's metrics of one image against the truth.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Metrics {
+    /// BVC = |V_1 - V_0|, V.
+    pub bvc: f64,
+    /// PE = |r_real - r_detected| / sheet size (largest extent).
+    pub pe: f64,
+    /// SE = |detected size - real size| / sheet area.
+    pub se: f64,
+    /// RNG = area of opposite-sign ringing / (sheet area - detected size).
+    pub rng: f64,
+}
+
+/// Metrics of `image` for a single object of area `object_area` (m^2) centred at `truth`,
+/// with ROI threshold `f`.
+#[must_use]
+pub fn metrics(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    f: f64,
+    dv: &[f64],
+    truth: [f64; 2],
+    object_area: f64,
+) -> Metrics {
+    let bvc = dv.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let pixel = grid.size * grid.size;
+    let sheet_area = image.iter().flatten().count() as f64 * pixel;
+    let extent = grid.width.max(grid.height) as f64 * grid.size;
+    let rois = regions(grid, image, f);
+    let detected: f64 = rois.iter().map(|r| r.area).sum();
+    let pe = rois.first().map_or(1.0, |r| {
+        (r.centroid[0] - truth[0]).hypot(r.centroid[1] - truth[1]) / extent
+    });
+    let max = image.iter().flatten().copied().fold(0.0f64, f64::max);
+    let ringing = image.iter().flatten().filter(|&&v| v <= -f * max).count() as f64 * pixel;
+    Metrics {
+        bvc,
+        pe,
+        se: (detected - object_area).abs() / sheet_area,
+        rng: if sheet_area > detected {
+            ringing / (sheet_area - detected)
+        } else {
+            0.0
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests;
