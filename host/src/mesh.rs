@@ -242,6 +242,27 @@ impl Mesh {
         })
     }
 
+    /// A mesh of about `triangles` triangles (within 10 % where a few re-meshings reach it):
+    /// [`MeshSize::for_count`], then the sizes scaled by the square root of the miss, since
+    /// the electrodes' grading adds triangles the count alone does not foresee.
+    ///
+    /// # Errors
+    /// As [`Mesh::of_sheet`].
+    pub fn with_about(spec: &SheetSpec, triangles: usize) -> Result<Self, MeshError> {
+        let mut size = MeshSize::for_count(spec, triangles);
+        let mut mesh = Self::of_sheet(spec, size)?;
+        for _ in 0..4 {
+            let ratio = mesh.triangles.len() as f64 / triangles.max(1) as f64;
+            if (ratio - 1.0).abs() < 0.1 {
+                break;
+            }
+            size.interior *= ratio.sqrt();
+            size.electrode *= ratio.sqrt();
+            mesh = Self::of_sheet(spec, size)?;
+        }
+        Ok(mesh)
+    }
+
     /// Twice the signed area of triangle `t` (positive: counter-clockwise), m^2.
     #[must_use]
     pub fn double_area(&self, t: usize) -> f64 {

@@ -73,17 +73,7 @@ impl OneStep {
             return Err(ReconError::Singular);
         }
         let (k, t) = (jac.nrows(), jac.ncols());
-        // P = diag(J^T J)^s; a column that sees nothing gets the smallest positive weight.
-        let diag: Vec<f64> = (0..t).map(|c| jac.column(c).norm_squared()).collect();
-        let floor = diag
-            .iter()
-            .copied()
-            .filter(|d| *d > 0.0)
-            .fold(f64::INFINITY, f64::min);
-        if !floor.is_finite() {
-            return Err(ReconError::Singular);
-        }
-        let p_inv: Vec<f64> = diag.iter().map(|d| d.max(floor).powf(-s)).collect();
+        let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
         // A = J P^-1 J^T.
         let jp = DMatrix::from_fn(k, t, |r, c| jac[(r, c)] * p_inv[c]);
         let mut a = &jp * jac.transpose();
@@ -120,6 +110,72 @@ impl OneStep {
             .as_slice()
             .to_vec())
     }
+}
+
+/// The NOSER weights P^-1 = diag(J^T J)^-s (a column that sees nothing gets the smallest
+/// positive weight's), or None when every column is zero.
+fn noser_inverse(jac: &DMatrix<f64>, s: f64) -> Option<Vec<f64>> {
+    let diag: Vec<f64> = (0..jac.ncols())
+        .map(|c| jac.column(c).norm_squared())
+        .collect();
+    let floor = diag
+        .iter()
+        .copied()
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    floor
+        .is_finite()
+        .then(|| diag.iter().map(|d| d.max(floor).powf(-s)).collect())
+}
+
+/// Generalised cross-validation of alpha for the frame difference `dv`: with A = J P^-1 J^T
+/// = U diag(e) U^T and c = U^T dv, GCV(lambda) = K sum_i (lambda c_i / (e_i + lambda))^2 /
+/// (sum_i lambda / (e_i + lambda))^2, lambda = alpha^2 tr(A) / K (this module's
+/// normalisation). Returns the candidate with the smallest GCV and every (alpha, GCV).
+///
+/// # Errors
+/// [`ReconError`] for bad parameters, a zero Jacobian or a non-finite frame.
+pub fn gcv_alpha(
+    jac: &DMatrix<f64>,
+    s: f64,
+    dv: &[f64],
+    candidates: &[f64],
+) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
+    if !(0.0..=1.0).contains(&s) || dv.len() != jac.nrows() || candidates.is_empty() {
+        return Err(ReconError::Parameter(
+            "s in [0, 1], K frame values, candidates".into(),
+        ));
+    }
+    if dv.iter().any(|v| !v.is_finite()) {
+        return Err(ReconError::NonFinite);
+    }
+    let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
+    let jp = DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| jac[(r, c)] * p_inv[c]);
+    let a = &jp * jac.transpose();
+    let k = a.nrows() as f64;
+    let trace = a.trace();
+    let eig = a.symmetric_eigen();
+    let c = eig.eigenvectors.transpose() * DVector::from_column_slice(dv);
+    let scores: Vec<(f64, f64)> = candidates
+        .iter()
+        .map(|&alpha| {
+            let lambda = alpha * alpha * trace / k;
+            let (mut num, mut den) = (0.0, 0.0);
+            for (e, ci) in eig.eigenvalues.iter().zip(c.iter()) {
+                let w = lambda / (e.max(0.0) + lambda);
+                num += (w * ci).powi(2);
+                den += w;
+            }
+            (alpha, k * num / (den * den).max(f64::MIN_POSITIVE))
+        })
+        .collect();
+    let best = scores
+        .iter()
+        .copied()
+        .filter(|s| s.1.is_finite())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .ok_or(ReconError::Singular)?;
+    Ok((best.0, scores))
 }
 
 /// A pixel grid over a mesh: which triangle each pixel centre lies in.

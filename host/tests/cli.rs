@@ -353,3 +353,42 @@ fn collect_train_eval_export_chain() {
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("train.csv"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn reconstruct_writes_an_image_and_finds_the_touch() {
+    let dir = std::env::temp_dir().join(format!("et-cli-recon-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let png = dir.join("x075.png");
+    let out = et(&[
+        "reconstruct",
+        "--scene",
+        root.join("sim/scenes/disc-ref-x075.toml").to_str().unwrap(),
+        "--triangles",
+        "3000",
+        "--out",
+        png.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    // The strongest region lies on the touch (82.5, 0) mm, radius 13.3 mm.
+    let c = &j["regions"][0]["centroid_mm"];
+    let (x, y) = (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
+    assert!((x - 82.5).hypot(y) < 13.3, "{j}");
+    assert!(j["alpha"].as_f64().unwrap() > 0.0);
+    let bad = et(&[
+        "reconstruct",
+        "--scene",
+        "no-such.toml",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("no-such.toml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -81,6 +81,47 @@ enum Command {
     ///   et export --model model.json --precision f16 --out model.etm
     #[command(verbatim_doc_comment)]
     Export(ExportArgs),
+    /// Image a scene's touches by one-step Gauss-Newton difference imaging (SPEC §6): mesh the
+    /// sheet, the complete electrode model's Jacobian at the untouched sheet, the NOSER
+    /// reconstruction matrix; then the simulator's frames without and with the touches (its
+    /// resistor network, not these finite elements) give the image, its regions and the
+    /// SPEC §7 metrics. Writes the image as PNG with a colour bar.
+    ///
+    /// Examples:
+    ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --out x050.png
+    ///   et reconstruct --scene sim/scenes/disc-ref-two.toml --alpha 0.01 --out two.png --json
+    #[command(verbatim_doc_comment)]
+    Reconstruct(ReconstructArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct ReconstructArgs {
+    /// Scene file: the sheet, its electrodes, the scan protocol and the touches.
+    #[arg(long)]
+    scene: PathBuf,
+    /// About how many triangles to mesh the sheet with.
+    #[arg(long, default_value_t = 8_000)]
+    triangles: usize,
+    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
+    /// chosen by generalised cross-validation on the frame.
+    #[arg(long, default_value = "auto")]
+    alpha: String,
+    /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
+    #[arg(long, default_value_t = 0.5)]
+    s: f64,
+    /// ROI threshold f (keep pixels >= f max); default per protocol as SPEC §6: adjacent
+    /// 0.10, pseudo-polar 0.08, PP-PP 0.05, others 0.10.
+    #[arg(long)]
+    threshold: Option<f64>,
+    /// Pixels across the image.
+    #[arg(long, default_value_t = 64)]
+    pixels: usize,
+    /// Where to write the image (PNG).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary (regions, metrics, timings).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -772,6 +813,153 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
+fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
+    use et_host::fem::{Electrodes, Forward};
+    use et_host::mesh::Mesh;
+    use et_host::recon::{OneStep, PixelGrid, metrics, regions};
+    let scene = Scene::load(&args.scene)?;
+    let config = scene.scan_config().map_err(anyhow::Error::msg)?;
+    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let amps = f64::from(config.current_amps());
+    let started = Instant::now();
+    let stage = |what: &str| eprintln!("{what:<34} {:>8.3} s", started.elapsed().as_secs_f64());
+    let mesh = Mesh::with_about(&scene.sheet, args.triangles)?;
+    let t_n = mesh.triangles.len();
+    stage(&format!("mesh ({t_n} triangles)"));
+    let grid = PixelGrid::new(&mesh, args.pixels.max(4));
+    let e = &scene.sheet.electrodes;
+    let fwd = Forward::new(
+        mesh,
+        Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)]),
+    )?;
+    let (_, jac) = fwd.jacobian(
+        &vec![1.0 / scene.sheet.sheet_resistance; t_n],
+        &protocol,
+        amps,
+    )?;
+    stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
+    // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at set-up)
+    // and one frame with the scene's touches.
+    let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&scene.sheet, &[])?);
+    let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, scene.seed)?;
+    let mut v0 = vec![0.0f64; protocol.frame_len()];
+    for _ in 0..10 {
+        for (a, b) in v0.iter_mut().zip(sim.fast_frame(&config)?) {
+            *a += f64::from(b) / 10.0;
+        }
+    }
+    let touches: Vec<et_sim::touch::Touch> = scene
+        .touches
+        .iter()
+        .map(|t| et_sim::touch::Touch {
+            position: t.position,
+            radius: t.radius,
+            pressure: t.pressure,
+        })
+        .collect();
+    sim.set_touches(&touches)?;
+    let v1 = sim.fast_frame(&config)?;
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
+    stage("simulated frames");
+    let alpha = match args.alpha.as_str() {
+        "auto" => {
+            let grid_alpha: Vec<f64> = (0..=25)
+                .map(|i| 10f64.powf(-4.0 + 0.2 * f64::from(i)))
+                .collect();
+            et_host::recon::gcv_alpha(&jac, args.s, &dv, &grid_alpha)?.0
+        }
+        v => v
+            .parse::<f64>()
+            .with_context(|| format!("--alpha '{v}': a number or auto"))?,
+    };
+    let recon = OneStep::new(&jac, alpha, args.s)?;
+    stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
+    let image = grid.image(&recon.reconstruct(&dv)?);
+    let f = args.threshold.unwrap_or(match config.protocol {
+        ProtocolKind::PseudoPolar => 0.08,
+        ProtocolKind::PpPp => 0.05,
+        _ => 0.10,
+    });
+    let rois = regions(&grid, &image, f);
+    let m = scene.touches.first().map(|t| {
+        metrics(
+            &grid,
+            &image,
+            f,
+            &dv,
+            t.position,
+            std::f64::consts::PI * t.radius * t.radius,
+        )
+    });
+    // The image with row 0 at the top, in units of the background conductivity.
+    let sigma0 = 1.0 / scene.sheet.sheet_resistance;
+    let rows: Vec<f64> = (0..grid.height)
+        .rev()
+        .flat_map(|j| (0..grid.width).map(move |i| j * grid.width + i))
+        .map(|p| image[p].map_or(f64::NAN, |v| v / sigma0))
+        .collect();
+    let hi = rows
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    plot::heatmap(
+        &args.out,
+        plot::Labels {
+            title: &format!(
+                "{}: {} regions (f = {f})",
+                args.scene
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+                rois.len()
+            ),
+            x: "x (pixels)",
+            y: "y (pixels, top = largest y)",
+            legend: plot::Legend::UpperLeft,
+        },
+        &rows,
+        (grid.height, grid.width),
+        (-hi, hi.max(f64::MIN_POSITIVE)),
+        "conductivity change / background",
+    )?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "triangles": t_n,
+        "protocol": format!("{:?}", config.protocol),
+        "alpha": alpha,
+        "s": args.s,
+        "threshold": f,
+        "regions": rois.iter().map(|r| serde_json::json!({
+            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            "area_mm2": r.area * 1e6,
+            "peak": r.peak,
+        })).collect::<Vec<_>>(),
+        "touches_mm": scene.touches.iter().map(|t| [t.position[0] * 1e3, t.position[1] * 1e3]).collect::<Vec<_>>(),
+        "metrics_first_touch": m,
+        "seconds": started.elapsed().as_secs_f64(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        for (i, r) in rois.iter().enumerate().take(5) {
+            eprintln!(
+                "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
+                r.centroid[0] * 1e3,
+                r.centroid[1] * 1e3,
+                r.area * 1e6
+            );
+        }
+        if let Some(m) = m {
+            eprintln!(
+                "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
+                m.pe, m.se, m.rng, m.bvc
+            );
+        }
+        eprintln!("wrote {}", args.out.display());
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -781,6 +969,7 @@ fn main() -> ExitCode {
         Command::Train(args) => train_cmd(args),
         Command::Eval(args) => eval_cmd(args),
         Command::Export(args) => export_cmd(args),
+        Command::Reconstruct(args) => reconstruct_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

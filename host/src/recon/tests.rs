@@ -166,3 +166,38 @@ fn parameters_and_frames_are_checked() {
         assert!((a - b).abs() < 1e-6, "{a} vs {b}");
     }
 }
+
+#[test]
+fn gcv_prefers_little_regularisation_for_clean_data_and_much_for_noise() {
+    let mut rng = et_sim::rng::Rng::new(4);
+    let (k, t) = (30, 80);
+    // A smoothing operator: singular values decaying like a tomography Jacobian's.
+    let jac = DMatrix::from_fn(k, t, |r, c| {
+        let (x, y) = (r as f64 / k as f64, c as f64 / t as f64);
+        (-(x - y).powi(2) * 40.0).exp() * (1.0 + 0.1 * rng.normal())
+    });
+    let truth = DVector::from_fn(t, |c, _| if (30..40).contains(&c) { 1.0 } else { 0.0 });
+    let clean: Vec<f64> = (&jac * &truth).iter().copied().collect();
+    let candidates: Vec<f64> = (0..=20)
+        .map(|i| 10f64.powf(-5.0 + 0.3 * f64::from(i)))
+        .collect();
+    let (a_clean, _) = gcv_alpha(&jac, 0.5, &clean, &candidates).unwrap();
+    let noise: Vec<f64> = (0..k).map(|_| rng.normal()).collect();
+    let (a_noise, scores) = gcv_alpha(&jac, 0.5, &noise, &candidates).unwrap();
+    assert!(
+        a_clean < a_noise,
+        "clean {a_clean}, noise {a_noise}: {scores:?}"
+    );
+    assert_eq!(a_noise, *candidates.last().unwrap(), "{scores:?}");
+    // Mixed: an interior choice.
+    let mixed: Vec<f64> = clean.iter().zip(&noise).map(|(c, n)| c + 0.3 * n).collect();
+    let (a_mixed, _) = gcv_alpha(&jac, 0.5, &mixed, &candidates).unwrap();
+    assert!(
+        a_mixed > a_clean && a_mixed < a_noise,
+        "{a_clean} {a_mixed} {a_noise}"
+    );
+    assert!(matches!(
+        gcv_alpha(&jac, 0.5, &clean[..5], &candidates),
+        Err(ReconError::Parameter(_))
+    ));
+}
