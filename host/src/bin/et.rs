@@ -92,6 +92,28 @@ enum Command {
     ///   et reconstruct --scene sim/scenes/disc-ref-two.toml --alpha 0.01 --out two.png --json
     #[command(verbatim_doc_comment)]
     Reconstruct(ReconstructArgs),
+    /// Boundary voltages of a scene by the finite elements (complete electrode model): the
+    /// scene's protocol and current, the untouched sheet and the sheet with its touches (each
+    /// touch's disc at the conductance its pressure gives), V_0, V_1 and their difference.
+    ///
+    /// Examples:
+    ///   et forward --scene sim/scenes/disc-ref-x050.toml
+    ///   et forward --scene sim/scenes/square-13cm-16.toml --triangles 30000 --json > v.json
+    #[command(verbatim_doc_comment)]
+    Forward(ForwardArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct ForwardArgs {
+    /// Scene file.
+    #[arg(long)]
+    scene: PathBuf,
+    /// About how many triangles to mesh the sheet with.
+    #[arg(long, default_value_t = 8_000)]
+    triangles: usize,
+    /// Print JSON (all K values of V_0 and V_1, in volts).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -813,6 +835,78 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
+fn forward_cmd(args: &ForwardArgs) -> Result<()> {
+    use et_host::fem::{Electrodes, Forward};
+    use et_host::mesh::Mesh;
+    let scene = Scene::load(&args.scene)?;
+    let config = scene.scan_config().map_err(anyhow::Error::msg)?;
+    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let started = Instant::now();
+    let mesh = Mesh::with_about(&scene.sheet, args.triangles)?;
+    let sigma0 = 1.0 / scene.sheet.sheet_resistance;
+    // Each touch multiplies the conductivity of the triangles whose centroid it covers.
+    let sigma1: Vec<f64> = (0..mesh.triangles.len())
+        .map(|t| {
+            let c = mesh.centroid(t);
+            scene.touches.iter().fold(sigma0, |s, touch| {
+                let inside =
+                    (c[0] - touch.position[0]).hypot(c[1] - touch.position[1]) <= touch.radius;
+                if inside {
+                    s * scene.sheet.piezo.multiplier(touch.pressure)
+                } else {
+                    s
+                }
+            })
+        })
+        .collect();
+    let t_n = mesh.triangles.len();
+    let e = &scene.sheet.electrodes;
+    let fwd = Forward::new(
+        mesh,
+        Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)]),
+    )?;
+    let amps = f64::from(config.current_amps());
+    let v0 = fwd.frame(&vec![sigma0; t_n], &protocol, amps)?;
+    let v1 = fwd.frame(&sigma1, &protocol, amps)?;
+    let bvc = v1
+        .iter()
+        .zip(&v0)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "triangles": t_n,
+                "protocol": format!("{:?}", config.protocol),
+                "current_a": amps,
+                "v0": v0,
+                "v1": v1,
+                "bvc": bvc,
+                "seconds": started.elapsed().as_secs_f64(),
+            })
+        );
+    } else {
+        println!(
+            "{} triangles, {:?} protocol, K = {}, {:.1} uA",
+            t_n,
+            config.protocol,
+            v0.len(),
+            amps * 1e6
+        );
+        println!("    k        V_0 (V)        V_1 (V)     V_1 - V_0 (V)");
+        for (k, (a, b)) in v0.iter().zip(&v1).enumerate() {
+            println!("{k:5} {a:14.6e} {b:14.6e} {:14.6e}", b - a);
+        }
+        println!(
+            "BVC |V_1 - V_0| = {bvc:.4e} V ({:.2} s)",
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
 fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     use et_host::fem::{Electrodes, Forward};
     use et_host::mesh::Mesh;
@@ -970,6 +1064,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => eval_cmd(args),
         Command::Export(args) => export_cmd(args),
         Command::Reconstruct(args) => reconstruct_cmd(args),
+        Command::Forward(args) => forward_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
