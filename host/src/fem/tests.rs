@@ -276,11 +276,24 @@ fn finite_elements_and_the_simulators_resistor_network_agree() {
         let mesh = Mesh::with_about(&sc.sheet, 20_000).unwrap();
         let n = mesh.triangles.len();
         let e = &sc.sheet.electrodes;
-        let fwd = Forward::new(mesh, Electrodes::Complete(vec![e.contact_ohm * e.width; 16])).unwrap();
-        let v_fem = fwd.frame(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, 32e-6).unwrap();
+        let fwd = Forward::new(
+            mesh,
+            Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
+        )
+        .unwrap();
+        let v_fem = fwd
+            .frame(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, 32e-6)
+            .unwrap();
         let scale = v_fem.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = v_fem.iter().zip(&v_sim).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        println!("{name}: largest difference {:.2} % of the largest voltage", 100.0 * worst / scale);
+        let worst = v_fem
+            .iter()
+            .zip(&v_sim)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "{name}: largest difference {:.2} % of the largest voltage",
+            100.0 * worst / scale
+        );
         assert!(worst < 0.05 * scale, "{name}: {worst} of {scale}");
     }
 }
