@@ -306,6 +306,8 @@ impl Mesh {
     }
 }
 
+mod import;
+
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }

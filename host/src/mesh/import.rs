@@ -1,0 +1,418 @@
+//! Meshes users bring: Gmsh ASCII `.msh` (format 2.2) and plain CSV.
+//!
+//! Gmsh: triangles are the 3-node triangle elements (type 2); electrodes are the 2-node line
+//! elements (type 1), grouped by physical tag: the distinct tags in ascending order are
+//! electrodes 0, 1, ... (give each electrode its own physical curve). Coordinates are taken as
+//! metres. Gmsh 4 files are refused with the hint to save as 2.2 (`gmsh -format msh22`).
+//!
+//! CSV: `nodes.csv` (x,y per row, m), `triangles.csv` (three 0-based node indices per row),
+//! `electrodes.csv` (one row per electrode: its boundary node indices in order along it). A
+//! header row is allowed in each (a first row that is not numeric is skipped).
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use super::{Mesh, MeshError, dist};
+
+fn bad(path: &Path, line: usize, why: impl std::fmt::Display) -> MeshError {
+    MeshError::Spec(format!("{}:{line}: {why}", path.display()))
+}
+
+fn read(path: &Path) -> Result<String, MeshError> {
+    std::fs::read_to_string(path).map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
+}
+
+/// Rows of comma-separated values, each `width` long if given; a non-numeric first row is a
+/// header.
+fn csv_rows<T: std::str::FromStr>(
+    path: &Path,
+    width: Option<usize>,
+) -> Result<Vec<Vec<T>>, MeshError> {
+    let text = read(path)?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let v: Result<Vec<T>, _> = line.split(',').map(|x| x.trim().parse::<T>()).collect();
+        match v {
+            Ok(v) if width.is_none_or(|w| v.len() == w) => out.push(v),
+            Err(_) if i == 0 => {}
+            _ => {
+                let what = width.map_or("a list of".to_string(), |w| w.to_string());
+                return Err(bad(path, i + 1, format!("expected {what} numbers")));
+            }
+        }
+    }
+    Ok(out)
+}
+
+impl Mesh {
+    /// Reads a Gmsh 2.2 ASCII mesh (see the module docs).
+    ///
+    /// # Errors
+    /// [`MeshError::Spec`] naming the file and line, or what [`Mesh::from_parts`] finds.
+    pub fn from_gmsh(path: &Path) -> Result<Self, MeshError> {
+        let text = read(path)?;
+        let lines: Vec<&str> = text.lines().collect();
+        let find = |tag: &str| lines.iter().position(|l| l.trim() == tag);
+        let fmt =
+            find("$MeshFormat").ok_or_else(|| bad(path, 1, "no $MeshFormat: not a Gmsh file"))?;
+        let head: Vec<&str> = lines
+            .get(fmt + 1)
+            .map(|l| l.split_whitespace().collect())
+            .unwrap_or_default();
+        let version = head.first().copied().unwrap_or("");
+        if !version.starts_with("2.") {
+            return Err(bad(
+                path,
+                fmt + 2,
+                format!(
+                    "Gmsh format {version}: only 2.2 ASCII is read; save with `gmsh -format msh22`"
+                ),
+            ));
+        }
+        if head.get(1) != Some(&"0") {
+            return Err(bad(path, fmt + 2, "binary Gmsh file: save as ASCII"));
+        }
+        let count = |i: usize| -> Result<usize, MeshError> {
+            lines
+                .get(i)
+                .and_then(|l| l.trim().parse().ok())
+                .ok_or_else(|| bad(path, i + 1, "expected a count"))
+        };
+        let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, "no $Nodes section"))?;
+        let n = count(nodes_at + 1)?;
+        let mut ids = HashMap::new();
+        let mut nodes = Vec::with_capacity(n);
+        for i in 0..n {
+            let ln = nodes_at + 2 + i;
+            let v: Result<Vec<f64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
+                l.split_whitespace().map(str::parse).collect()
+            });
+            match v {
+                Ok(v) if v.len() >= 3 && v[1..3].iter().all(|x| x.is_finite()) => {
+                    ids.insert(v[0] as i64, nodes.len());
+                    nodes.push([v[1], v[2]]);
+                }
+                _ => return Err(bad(path, ln + 1, "node line: id x y z")),
+            }
+        }
+        let el_at = find("$Elements").ok_or_else(|| bad(path, 0, "no $Elements section"))?;
+        let m = count(el_at + 1)?;
+        let mut triangles = Vec::new();
+        let mut by_tag: BTreeMap<i64, Vec<[usize; 2]>> = BTreeMap::new();
+        for i in 0..m {
+            let ln = el_at + 2 + i;
+            let v: Result<Vec<i64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
+                l.split_whitespace().map(str::parse).collect()
+            });
+            let v = match v {
+                Ok(v) if v.len() >= 3 => v,
+                _ => {
+                    return Err(bad(
+                        path,
+                        ln + 1,
+                        "element line: id type ntags tags... nodes",
+                    ));
+                }
+            };
+            let (kind, ntags) = (v[1], usize::try_from(v[2]).unwrap_or(0));
+            let tags = v.get(3..3 + ntags).unwrap_or(&[]);
+            let conn = v.get(3 + ntags..).unwrap_or(&[]);
+            let node = |id: i64| {
+                ids.get(&id)
+                    .copied()
+                    .ok_or_else(|| bad(path, ln + 1, format!("node {id} is not in $Nodes")))
+            };
+            match (kind, conn.len()) {
+                (2, 3) => triangles.push([node(conn[0])?, node(conn[1])?, node(conn[2])?]),
+                (1, 2) => {
+                    let tag = *tags.first().ok_or_else(|| {
+                        bad(path, ln + 1, "a line element without a physical tag")
+                    })?;
+                    by_tag
+                        .entry(tag)
+                        .or_default()
+                        .push([node(conn[0])?, node(conn[1])?]);
+                }
+                _ => {} // points, quadrangles and higher orders are not used
+            }
+        }
+        Self::from_parts(nodes, triangles, by_tag.into_values().collect())
+    }
+
+    /// Reads a mesh from three CSV files (see the module docs).
+    ///
+    /// # Errors
+    /// [`MeshError::Spec`] naming the file and line, or what [`Mesh::from_parts`] finds.
+    pub fn from_csv(nodes: &Path, triangles: &Path, electrodes: &Path) -> Result<Self, MeshError> {
+        let xy: Vec<Vec<f64>> = csv_rows(nodes, Some(2))?;
+        if let Some(i) = xy.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
+            return Err(bad(nodes, i + 1, "non-finite coordinate"));
+        }
+        let tri: Vec<Vec<usize>> = csv_rows(triangles, Some(3))?;
+        let el: Vec<Vec<usize>> = csv_rows(electrodes, None)?;
+        Self::from_parts(
+            xy.iter().map(|r| [r[0], r[1]]).collect(),
+            tri.iter().map(|r| [r[0], r[1], r[2]]).collect(),
+            el.iter()
+                .map(|r| r.windows(2).map(|w| [w[0], w[1]]).collect())
+                .collect(),
+        )
+    }
+
+    /// A mesh from its parts, checked: indices in range, triangles turned counter-clockwise,
+    /// degenerate triangles (area below 1e-12 of the mean) refused, every electrode with an
+    /// edge; an electrode's centre node is its node nearest the mean of its nodes.
+    ///
+    /// # Errors
+    /// [`MeshError::Spec`] or [`MeshError::EmptyElectrode`].
+    pub fn from_parts(
+        nodes: Vec<[f64; 2]>,
+        mut triangles: Vec<[usize; 3]>,
+        electrodes: Vec<Vec<[usize; 2]>>,
+    ) -> Result<Self, MeshError> {
+        let n = nodes.len();
+        if triangles.is_empty() {
+            return Err(MeshError::Spec("no triangles".into()));
+        }
+        if electrodes.len() < 2 {
+            return Err(MeshError::Spec(format!(
+                "{} electrodes: need at least 2",
+                electrodes.len()
+            )));
+        }
+        if let Some(t) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+            return Err(MeshError::Spec(format!(
+                "triangle {t} names a node past the {n} nodes"
+            )));
+        }
+        if electrodes.iter().flatten().flatten().any(|&i| i >= n) {
+            return Err(MeshError::Spec(format!(
+                "an electrode names a node past the {n} nodes"
+            )));
+        }
+        let area2 = |t: &[usize; 3]| {
+            let [a, b, c] = t.map(|i| nodes[i]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+        };
+        let mean = triangles.iter().map(|t| area2(t).abs()).sum::<f64>() / triangles.len() as f64;
+        for (i, t) in triangles.iter_mut().enumerate() {
+            let a = area2(t);
+            if a.is_nan() || a.abs() <= 1e-12 * mean {
+                return Err(MeshError::Spec(format!(
+                    "triangle {i} is degenerate (area {:.3e} m^2)",
+                    0.5 * a.abs()
+                )));
+            }
+            if a < 0.0 {
+                t.swap(1, 2);
+            }
+        }
+        if let Some(l) = electrodes.iter().position(Vec::is_empty) {
+            return Err(MeshError::EmptyElectrode { electrode: l });
+        }
+        let centre_nodes = electrodes
+            .iter()
+            .map(|edges| {
+                let mut v: Vec<usize> = edges.iter().flatten().copied().collect();
+                v.sort_unstable();
+                v.dedup();
+                let k = v.len() as f64;
+                let c = v.iter().fold([0.0, 0.0], |s, &i| {
+                    [s[0] + nodes[i][0] / k, s[1] + nodes[i][1] / k]
+                });
+                v.iter()
+                    .copied()
+                    .min_by(|&a, &b| dist(nodes[a], c).total_cmp(&dist(nodes[b], c)))
+                    .unwrap_or(0)
+            })
+            .collect();
+        Ok(Self {
+            nodes,
+            triangles,
+            electrodes,
+            centre_nodes,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fem::{Electrodes, Forward};
+    use crate::mesh::MeshSize;
+    use et_core::protocol::{Protocol, ProtocolKind};
+    use et_sim::sheet::SheetSpec;
+
+    fn tmp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("et-mesh-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// `mesh` as Gmsh 2.2 (1-based ids, electrodes as physical lines 101, 102, ...,
+    /// triangles written clockwise for the reader to turn).
+    fn to_gmsh(mesh: &Mesh) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
+        let _ = writeln!(s, "{}", mesh.nodes.len());
+        for (i, p) in mesh.nodes.iter().enumerate() {
+            let _ = writeln!(s, "{} {} {} 0", i + 1, p[0], p[1]);
+        }
+        let lines: Vec<(usize, [usize; 2])> = mesh
+            .electrodes
+            .iter()
+            .enumerate()
+            .flat_map(|(l, e)| e.iter().map(move |&x| (l, x)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "$EndNodes\n$Elements\n{}",
+            lines.len() + mesh.triangles.len()
+        );
+        let mut id = 1;
+        for (l, [a, b]) in &lines {
+            let _ = writeln!(s, "{id} 1 2 {} 1 {} {}", 101 + l, a + 1, b + 1);
+            id += 1;
+        }
+        for t in &mesh.triangles {
+            let _ = writeln!(s, "{id} 2 2 1 1 {} {} {}", t[0] + 1, t[2] + 1, t[1] + 1);
+            id += 1;
+        }
+        s.push_str("$EndElements\n");
+        s
+    }
+
+    /// An electrode's nodes in order along it.
+    fn chain(edges: &[[usize; 2]]) -> Vec<usize> {
+        let mut c = vec![edges[0][0], edges[0][1]];
+        let mut left: Vec<[usize; 2]> = edges[1..].to_vec();
+        while let Some(i) = left
+            .iter()
+            .position(|e| e.contains(c.last().unwrap()) || e.contains(&c[0]))
+        {
+            let e = left.remove(i);
+            let last = *c.last().unwrap();
+            match () {
+                () if e[0] == last => c.push(e[1]),
+                () if e[1] == last => c.push(e[0]),
+                () if e[0] == c[0] => c.insert(0, e[1]),
+                () => c.insert(0, e[0]),
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn gmsh_and_csv_meshes_give_the_same_voltages_as_the_original() {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 800)).unwrap();
+        let dir = tmp("rt");
+        let msh = dir.join("m.msh");
+        std::fs::write(&msh, to_gmsh(&mesh)).unwrap();
+        let g = Mesh::from_gmsh(&msh).unwrap();
+        let write = |name: &str, rows: Vec<String>| {
+            let p = dir.join(name);
+            std::fs::write(&p, rows.join("\n")).unwrap();
+            p
+        };
+        let nodes = write(
+            "nodes.csv",
+            std::iter::once("x,y".to_string())
+                .chain(mesh.nodes.iter().map(|p| format!("{},{}", p[0], p[1])))
+                .collect(),
+        );
+        let tris = write(
+            "triangles.csv",
+            mesh.triangles
+                .iter()
+                .map(|t| format!("{},{},{}", t[0], t[1], t[2]))
+                .collect(),
+        );
+        let els = write(
+            "electrodes.csv",
+            mesh.electrodes
+                .iter()
+                .map(|e| {
+                    chain(e)
+                        .iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+                .collect(),
+        );
+        let c = Mesh::from_csv(&nodes, &tris, &els).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        let frame = |m: Mesh| {
+            let n = m.triangles.len();
+            Forward::new(m, Electrodes::Complete(vec![5.0; 8]))
+                .unwrap()
+                .frame(&vec![1e-4; n], &protocol, 1e-4)
+                .unwrap()
+        };
+        let (v, vg, vc) = (frame(mesh), frame(g), frame(c));
+        for k in 0..v.len() {
+            let tol = 1e-9 * v[k].abs().max(1e-3);
+            assert!(
+                (v[k] - vg[k]).abs() < tol,
+                "gmsh row {k}: {} vs {}",
+                v[k],
+                vg[k]
+            );
+            assert!(
+                (v[k] - vc[k]).abs() < tol,
+                "csv row {k}: {} vs {}",
+                v[k],
+                vc[k]
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
+        let dir = tmp("bad");
+        let p = dir.join("v4.msh");
+        std::fs::write(&p, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n").unwrap();
+        let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+        assert!(e.contains("v4.msh:2") && e.contains("msh22"), "{e}");
+        let p = dir.join("n.msh");
+        std::fs::write(
+            &p,
+            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 x 1 0\n$EndNodes\n",
+        )
+        .unwrap();
+        let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+        assert!(e.contains("n.msh:7"), "{e}");
+        let p = dir.join("t.csv");
+        std::fs::write(&p, "a,b,c\n0,1,2\n0,1\n").unwrap();
+        let e = Mesh::from_csv(&p, &p, &p).unwrap_err().to_string();
+        assert!(e.contains("t.csv:2"), "{e}");
+        // A sliver of zero area is refused; one of tiny area keeps finite potentials.
+        let nodes = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.0]];
+        let tris = vec![[0, 4, 1], [0, 1, 2], [0, 2, 3]];
+        let flat = Mesh::from_parts(
+            nodes.clone(),
+            tris.clone(),
+            vec![vec![[0, 4]], vec![[2, 3]]],
+        );
+        assert!(matches!(flat, Err(MeshError::Spec(m)) if m.contains("degenerate")));
+        let mut thin = nodes;
+        thin[4] = [0.5, -1e-7];
+        let m = Mesh::from_parts(thin, tris, vec![vec![[0, 4], [4, 1]], vec![[2, 3]]]).unwrap();
+        let fwd = Forward::new(m, Electrodes::Complete(vec![1.0, 1.0])).unwrap();
+        let c = nalgebra::DMatrix::from_column_slice(2, 1, &[1e-3, -1e-3]);
+        let sol = fwd.solve(&[1.0, 1.0, 1.0], &c).unwrap();
+        assert!(sol.nodes.iter().all(|v| v.is_finite()));
+        let out_of_range = Mesh::from_parts(
+            vec![[0.0, 0.0]; 3],
+            vec![[0, 1, 5]],
+            vec![vec![[0, 1]], vec![[1, 2]]],
+        );
+        assert!(matches!(out_of_range, Err(MeshError::Spec(_))));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
