@@ -201,3 +201,61 @@ fn gcv_prefers_little_regularisation_for_clean_data_and_much_for_noise() {
         Err(ReconError::Parameter(_))
     ));
 }
+
+#[test]
+fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
+    // Data from the simulator's resistor network (not these finite elements).
+    let sc = scene("disc-ref-x050.toml");
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let amps = 32e-6;
+    let (v0, v1) = sim_frames(&sc, &protocol, amps);
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+    let mesh = Mesh::with_about(&sc.sheet, 2_000).unwrap();
+    let e = &sc.sheet.electrodes;
+    let n = mesh.triangles.len();
+    let grid = PixelGrid::new(&mesh, 32);
+    let fwd = Forward::new(
+        mesh,
+        Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
+    )
+    .unwrap();
+    let sigma_0 = vec![1.0 / sc.sheet.sheet_resistance; n];
+    let opts = GaussNewton {
+        alpha: 0.03,
+        s: 0.5,
+        iterations: 4,
+    };
+    let its = gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), opts).unwrap();
+    let norms: Vec<f64> = its.iter().map(|i| i.1).collect();
+    let bvc = dv.iter().map(|v| v * v).sum::<f64>().sqrt();
+    println!("residual norms {norms:?} of |dV| = {bvc:.3e}");
+    assert!(
+        norms[0] < 0.5 * bvc,
+        "the first step explains most of dV: {norms:?}"
+    );
+    assert!(norms[3] < norms[0], "iterating fits better: {norms:?}");
+    // The touch is still where it is, and every conductivity finite and positive.
+    let last = &its[3].0;
+    assert!(last.iter().all(|v| v.is_finite() && *v > 0.0));
+    let d: Vec<f64> = last.iter().zip(&sigma_0).map(|(a, b)| a - b).collect();
+    let rois = regions(&grid, &grid.image(&d), 0.1);
+    let t = &sc.touches[0];
+    let off = (rois[0].centroid[0] - t.position[0]).hypot(rois[0].centroid[1] - t.position[1]);
+    assert!(off < t.radius, "{:?}", rois[0]);
+    let bad = GaussNewton {
+        alpha: -1.0,
+        ..opts
+    };
+    assert!(gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), bad).is_err());
+    assert!(
+        gauss_newton(
+            &fwd,
+            &protocol,
+            amps,
+            &sigma_0,
+            Data::Difference(&dv[..5]),
+            opts
+        )
+        .is_err()
+    );
+}
