@@ -135,7 +135,7 @@ pub fn gauss_newton(
         s,
         iterations,
     } = options;
-    if !(alpha.is_finite() && alpha > 0.0) || !(0.0..=1.0).contains(&s) {
+    if !(alpha.is_finite() && alpha > 0.0 && (0.0..=1.0).contains(&s)) {
         return Err(ReconError::Parameter(format!(
             "alpha = {alpha} (> 0), s = {s} (in [0, 1])"
         )));
