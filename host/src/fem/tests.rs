@@ -297,3 +297,17 @@ fn finite_elements_and_the_simulators_resistor_network_agree() {
         assert!(worst < 0.05 * scale, "{name}: {worst} of {scale}");
     }
 }
+
+#[test]
+fn four_to_thirty_two_electrodes() {
+    for l in [4u8, 8, 16, 32] {
+        let spec = SheetSpec::rectangle(0.13, 0.13, l);
+        let mesh = Mesh::with_about(&spec, 3_000).unwrap();
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, Electrodes::Complete(vec![5.0; usize::from(l)])).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, l).unwrap();
+        let (v, jac) = fwd.jacobian(&vec![3e-5; n], &protocol, 32e-6).unwrap();
+        assert_eq!(v.len(), protocol.frame_len());
+        assert!(v.iter().chain(jac.iter()).all(|x| x.is_finite()), "L = {l}");
+    }
+}
