@@ -72,17 +72,9 @@ impl OneStep {
         if jac.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
-        let (k, t) = (jac.nrows(), jac.ncols());
-        let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
-        // A = J P^-1 J^T.
-        let jp = DMatrix::from_fn(k, t, |r, c| jac[(r, c)] * p_inv[c]);
-        let mut a = &jp * jac.transpose();
-        let lambda = alpha * alpha * a.trace() / k as f64;
-        for i in 0..k {
-            a[(i, i)] += lambda;
-        }
-        let chol = a.cholesky().ok_or(ReconError::Singular)?;
-        // R = P^-1 J^T A^-1 = (A^-1 J P^-1)^T.
+        let (jp, a) = data_space(jac, s)?;
+        let chol = regularised(a, alpha)?;
+        // R = P^-1 J^T (A + lambda I)^-1 = ((A + lambda I)^-1 J P^-1)^T.
         let x = chol.solve(&jp);
         let matrix = x.transpose();
         if matrix.iter().any(|v| !v.is_finite()) {
@@ -164,16 +156,9 @@ pub fn gauss_newton(
         let (v, jac) = forward.jacobian(&sigma, protocol, amps).map_err(fem)?;
         let r: Vec<f64> = target.iter().zip(&v).map(|(t, v)| t - v).collect();
         let d: Vec<f64> = sigma.iter().zip(sigma_0).map(|(a, b)| a - b).collect();
-        let p_inv = noser_inverse(&jac, s).ok_or(ReconError::Singular)?;
-        let (k, t) = (jac.nrows(), jac.ncols());
-        let jp = DMatrix::from_fn(k, t, |a, b| jac[(a, b)] * p_inv[b]);
-        let mut a = &jp * jac.transpose();
-        let lambda = alpha * alpha * a.trace() / k as f64;
-        for i in 0..k {
-            a[(i, i)] += lambda;
-        }
+        let (jp, a) = data_space(&jac, s)?;
         let rhs = DVector::from_vec(r) + &jac * DVector::from_column_slice(&d);
-        let y = a.cholesky().ok_or(ReconError::Singular)?.solve(&rhs);
+        let y = regularised(a, alpha)?.solve(&rhs);
         let step = jp.transpose() * y;
         for (i, sg) in sigma.iter_mut().enumerate() {
             *sg = (sigma_0[i] + step[i]).max(1e-3 * sigma_0[i]);
@@ -208,6 +193,28 @@ pub enum Data<'a> {
     Difference(&'a [f64]),
     /// V (absolute imaging: the model must match the hardware's absolute voltages).
     Absolute(&'a [f64]),
+}
+
+/// J P^-1 (K x T) and A = J P^-1 J^T (K x K) for the NOSER prior of exponent `s`.
+fn data_space(jac: &DMatrix<f64>, s: f64) -> Result<(DMatrix<f64>, DMatrix<f64>), ReconError> {
+    let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
+    let jp = DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| jac[(r, c)] * p_inv[c]);
+    let a = &jp * jac.transpose();
+    Ok((jp, a))
+}
+
+/// The Cholesky factor of A + lambda I, lambda = alpha^2 tr(A) / K (the module's
+/// normalisation).
+fn regularised(
+    mut a: DMatrix<f64>,
+    alpha: f64,
+) -> Result<nalgebra::Cholesky<f64, nalgebra::Dyn>, ReconError> {
+    let k = a.nrows();
+    let lambda = alpha * alpha * a.trace() / k as f64;
+    for i in 0..k {
+        a[(i, i)] += lambda;
+    }
+    a.cholesky().ok_or(ReconError::Singular)
 }
 
 /// The NOSER weights P^-1 = diag(J^T J)^-s (a column that sees nothing gets the smallest
@@ -247,9 +254,7 @@ pub fn gcv_alpha(
     if dv.iter().any(|v| !v.is_finite()) {
         return Err(ReconError::NonFinite);
     }
-    let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
-    let jp = DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| jac[(r, c)] * p_inv[c]);
-    let a = &jp * jac.transpose();
+    let (_, a) = data_space(jac, s)?;
     let k = a.nrows() as f64;
     let trace = a.trace();
     let eig = a.symmetric_eigen();
