@@ -259,3 +259,29 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
         .is_err()
     );
 }
+
+#[test]
+fn dynamic_selection_on_the_reference_scenes() {
+    use crate::dynamic::{Selector, Settings};
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let first = scene("disc-ref-x000.toml");
+    let s = setup(&first, &protocol, 32e-6);
+    // d_c: the 22 cm disc's centre-to-electrode distance.
+    let settings = Settings::new([0.0, 0.0], 0.11);
+    for (name, expect) in [
+        ("disc-ref-x000.toml", Some(ProtocolKind::PseudoPolar)),
+        ("disc-ref-x025.toml", Some(ProtocolKind::PseudoPolar)),
+        ("disc-ref-x075.toml", None),
+        ("disc-ref-two.toml", Some(ProtocolKind::PpPp)),
+    ] {
+        let sc = scene(name);
+        let (v0, v1) = sim_frames(&sc, &protocol, 32e-6);
+        let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+        let image = s.grid.image(&s.recon.reconstruct(&dv).unwrap());
+        let rois = regions(&s.grid, &image, 0.1);
+        let mut sel = Selector::new(settings);
+        let switched: Vec<ProtocolKind> = (0..3).filter_map(|_| sel.step(&rois)).collect();
+        println!("{name}: {} regions, switches {switched:?}", rois.len());
+        assert_eq!(switched.first().copied(), expect, "{name}: {rois:?}");
+    }
+}
