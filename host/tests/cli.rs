@@ -392,3 +392,65 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("no-such.toml"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn reconstruct_images_recorded_frames() {
+    let dir = std::env::temp_dir().join(format!("et-cli-recon-rec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
+    let rec = dir.join("swipe.jsonl");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let out = et(&[
+        "sim",
+        "--scene",
+        &s(&scene),
+        "--frames",
+        "25",
+        "--out",
+        &s(&rec),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = dir.join("f20.png");
+    let args = |frame: &str| {
+        vec![
+            "reconstruct".to_string(),
+            "--scene".into(),
+            s(&scene),
+            "--frames".into(),
+            s(&rec),
+            "--reference".into(),
+            "5".into(),
+            "--frame".into(),
+            frame.into(),
+            "--triangles".into(),
+            "3000".into(),
+            "--out".into(),
+            s(&png),
+            "--json".into(),
+        ]
+    };
+    let a = args("20");
+    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // The strongest region lies on the recorded touch (7 mm finger).
+    let t = &j["touches_mm"][0];
+    let c = &j["regions"][0]["centroid_mm"];
+    let d = (c[0].as_f64().unwrap() - t[0].as_f64().unwrap())
+        .hypot(c[1].as_f64().unwrap() - t[1].as_f64().unwrap());
+    assert!(d < 10.0, "{j}");
+    // A frame inside the reference is refused with a reason.
+    let a = args("3");
+    let bad = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("reference"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -90,6 +90,7 @@ enum Command {
     /// Examples:
     ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --out x050.png
     ///   et reconstruct --scene sim/scenes/disc-ref-two.toml --alpha 0.01 --out two.png --json
+    ///   et reconstruct --scene sim/scenes/square-13cm-16-swipe.toml --frames swipe.jsonl --frame 60 --out f60.png
     #[command(verbatim_doc_comment)]
     Reconstruct(ReconstructArgs),
     /// Boundary voltages of a scene by the finite elements (complete electrode model): the
@@ -138,6 +139,16 @@ struct ReconstructArgs {
     /// Pixels across the image.
     #[arg(long, default_value_t = 64)]
     pixels: usize,
+    /// Image recorded frames (from `et sim`, later from the board) instead of simulating
+    /// the scene's touches; the scene still gives the sheet and electrodes.
+    #[arg(long, value_name = "JSONL")]
+    frames: Option<PathBuf>,
+    /// With --frames: average the first N frames as the untouched reference V_0.
+    #[arg(long, default_value_t = 1)]
+    reference: usize,
+    /// With --frames: which frame to image (0-based; default the last).
+    #[arg(long)]
+    frame: Option<usize>,
     /// Where to write the image (PNG).
     #[arg(long)]
     out: PathBuf,
@@ -912,7 +923,18 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     use et_host::mesh::Mesh;
     use et_host::recon::{OneStep, PixelGrid, metrics, regions};
     let scene = Scene::load(&args.scene)?;
-    let config = scene.scan_config().map_err(anyhow::Error::msg)?;
+    let recording = args.frames.as_deref().map(recording::read).transpose()?;
+    let config = match &recording {
+        Some(r) => r.header.config,
+        None => scene.scan_config().map_err(anyhow::Error::msg)?,
+    };
+    if config.electrodes != scene.sheet.electrodes.count {
+        bail!(
+            "the frames are of {} electrodes, the scene's sheet has {}",
+            config.electrodes,
+            scene.sheet.electrodes.count
+        );
+    }
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let amps = f64::from(config.current_amps());
     let started = Instant::now();
@@ -932,29 +954,63 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         amps,
     )?;
     stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
-    // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at set-up)
-    // and one frame with the scene's touches.
-    let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&scene.sheet, &[])?);
-    let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, scene.seed)?;
-    let mut v0 = vec![0.0f64; protocol.frame_len()];
-    for _ in 0..10 {
-        for (a, b) in v0.iter_mut().zip(sim.fast_frame(&config)?) {
-            *a += f64::from(b) / 10.0;
+    // V_0 and V_1, with the truth (centre, radius) where known.
+    let (v0, v1, truth): (Vec<f64>, Vec<f32>, Vec<([f64; 2], f64)>) = match &recording {
+        Some(r) => {
+            let n = r.records.len();
+            let reference = args.reference.clamp(1, n.max(1));
+            let frame = args.frame.unwrap_or(n.saturating_sub(1));
+            if n == 0 || frame >= n || frame < reference {
+                bail!(
+                    "{}: {n} frames; need the reference frames 0..{reference} and a later --frame",
+                    args.frames
+                        .as_deref()
+                        .map(|p| p.display().to_string())
+                        .unwrap_or_default()
+                );
+            }
+            let mut v0 = vec![0.0f64; protocol.frame_len()];
+            for rec in &r.records[..reference] {
+                for (a, b) in v0.iter_mut().zip(&rec.voltages) {
+                    *a += f64::from(*b) / reference as f64;
+                }
+            }
+            let rec = &r.records[frame];
+            let truth = rec
+                .touches
+                .iter()
+                .flatten()
+                .map(|t| ([t.x, t.y], t.radius))
+                .collect();
+            (v0, rec.voltages.clone(), truth)
         }
-    }
-    let touches: Vec<et_sim::touch::Touch> = scene
-        .touches
-        .iter()
-        .map(|t| et_sim::touch::Touch {
-            position: t.position,
-            radius: t.radius,
-            pressure: t.pressure,
-        })
-        .collect();
-    sim.set_touches(&touches)?;
-    let v1 = sim.fast_frame(&config)?;
+        None => {
+            // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
+            // set-up) and one frame with the scene's touches.
+            let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&scene.sheet, &[])?);
+            let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, scene.seed)?;
+            let mut v0 = vec![0.0f64; protocol.frame_len()];
+            for _ in 0..10 {
+                for (a, b) in v0.iter_mut().zip(sim.fast_frame(&config)?) {
+                    *a += f64::from(b) / 10.0;
+                }
+            }
+            let touches: Vec<et_sim::touch::Touch> = scene
+                .touches
+                .iter()
+                .map(|t| et_sim::touch::Touch {
+                    position: t.position,
+                    radius: t.radius,
+                    pressure: t.pressure,
+                })
+                .collect();
+            sim.set_touches(&touches)?;
+            let truth = touches.iter().map(|t| (t.position, t.radius)).collect();
+            (v0, sim.fast_frame(&config)?, truth)
+        }
+    };
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
-    stage("simulated frames");
+    stage("frames");
     let alpha = match args.alpha.as_str() {
         "auto" => {
             let grid_alpha: Vec<f64> = (0..=25)
@@ -975,14 +1031,14 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         _ => 0.10,
     });
     let rois = regions(&grid, &image, f);
-    let m = scene.touches.first().map(|t| {
+    let m = truth.first().map(|&(centre, radius)| {
         metrics(
             &grid,
             &image,
             f,
             &dv,
-            t.position,
-            std::f64::consts::PI * t.radius * t.radius,
+            centre,
+            std::f64::consts::PI * radius * radius,
         )
     });
     // The image with row 0 at the top, in units of the background conductivity.
@@ -1028,7 +1084,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             "area_mm2": r.area * 1e6,
             "peak": r.peak,
         })).collect::<Vec<_>>(),
-        "touches_mm": scene.touches.iter().map(|t| [t.position[0] * 1e3, t.position[1] * 1e3]).collect::<Vec<_>>(),
+        "touches_mm": truth.iter().map(|(c, _)| [c[0] * 1e3, c[1] * 1e3]).collect::<Vec<_>>(),
         "metrics_first_touch": m,
         "seconds": started.elapsed().as_secs_f64(),
     });
