@@ -918,6 +918,9 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     Ok(())
 }
 
+/// A touch's centre (m) and radius (m), where known.
+type Truth = ([f64; 2], f64);
+
 fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     use et_host::fem::{Electrodes, Forward};
     use et_host::mesh::Mesh;
@@ -955,7 +958,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     )?;
     stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
     // V_0 and V_1, with the truth (centre, radius) where known.
-    let (v0, v1, truth): (Vec<f64>, Vec<f32>, Vec<([f64; 2], f64)>) = match &recording {
+    let (v0, v1, truth): (Vec<f64>, Vec<f32>, Vec<Truth>) = match &recording {
         Some(r) => {
             let n = r.records.len();
             let reference = args.reference.clamp(1, n.max(1));
