@@ -454,3 +454,109 @@ fn reconstruct_images_recorded_frames() {
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("reference"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A structured 13 x 13 cm mesh (16 x 16 cells, each split in two) with 16 one-edge
+/// electrodes around the boundary, as Gmsh 2.2 text.
+fn square_msh() -> String {
+    use std::fmt::Write as _;
+    let (n, h) = (16usize, 0.13 / 16.0);
+    let id = |i: usize, j: usize| j * (n + 1) + i + 1;
+    let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
+    let _ = writeln!(s, "{}", (n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            let _ = writeln!(
+                s,
+                "{} {} {} 0",
+                id(i, j),
+                -0.065 + i as f64 * h,
+                -0.065 + j as f64 * h
+            );
+        }
+    }
+    // Boundary walk, counter-clockwise from the lower-left corner: 64 edges.
+    let mut walk = Vec::new();
+    walk.extend((0..n).map(|i| (id(i, 0), id(i + 1, 0))));
+    walk.extend((0..n).map(|j| (id(n, j), id(n, j + 1))));
+    walk.extend((0..n).map(|i| (id(n - i, n), id(n - i - 1, n))));
+    walk.extend((0..n).map(|j| (id(0, n - j), id(0, n - j - 1))));
+    let electrodes: Vec<(usize, usize)> = (0..16).map(|e| walk[4 * e + 2]).collect();
+    let _ = writeln!(s, "$EndNodes\n$Elements\n{}", 16 + 2 * n * n);
+    let mut k = 1;
+    for (e, (a, b)) in electrodes.iter().enumerate() {
+        let _ = writeln!(s, "{k} 1 2 {} 1 {a} {b}", e + 1);
+        k += 1;
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let _ = writeln!(
+                s,
+                "{k} 2 2 1 1 {} {} {}",
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1)
+            );
+            let _ = writeln!(
+                s,
+                "{} 2 2 1 1 {} {} {}",
+                k + 1,
+                id(i, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            );
+            k += 2;
+        }
+    }
+    s.push_str("$EndElements\n");
+    s
+}
+
+#[test]
+fn forward_and_reconstruct_take_an_imported_mesh() {
+    let dir = std::env::temp_dir().join(format!("et-cli-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let msh = dir.join("square.msh");
+    std::fs::write(&msh, square_msh()).unwrap();
+    let (sc, m) = (scene.to_str().unwrap(), msh.to_str().unwrap());
+    let out = et(&["forward", "--scene", sc, "--mesh", m, "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["triangles"], 512);
+    let v0 = j["v0"].as_array().unwrap();
+    assert_eq!(v0.len(), 208);
+    assert!(v0.iter().all(|v| v.as_f64().is_some_and(f64::is_finite)));
+    let png = dir.join("r.png");
+    let out = et(&[
+        "reconstruct",
+        "--scene",
+        sc,
+        "--mesh",
+        m,
+        "--iterations",
+        "2",
+        "--alpha",
+        "0.3",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Mistakes are explained: wrong electrode count, a list that is not three files.
+    let disc = root.join("sim/scenes/square-13cm-8.toml");
+    let bad = et(&["forward", "--scene", disc.to_str().unwrap(), "--mesh", m]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("16 electrodes"));
+    let bad = et(&["forward", "--scene", sc, "--mesh", "a.csv,b.csv"]);
+    assert!(
+        String::from_utf8_lossy(&bad.stderr).contains("nodes.csv,triangles.csv,electrodes.csv")
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

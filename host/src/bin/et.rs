@@ -112,6 +112,10 @@ struct ForwardArgs {
     /// About how many triangles to mesh the sheet with.
     #[arg(long, default_value_t = 8_000)]
     triangles: usize,
+    /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
+    /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<String>,
     /// Print JSON (all K values of V_0 and V_1, in volts).
     #[arg(long)]
     json: bool,
@@ -125,6 +129,14 @@ struct ReconstructArgs {
     /// About how many triangles to mesh the sheet with.
     #[arg(long, default_value_t = 8_000)]
     triangles: usize,
+    /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
+    /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<String>,
+    /// Gauss-Newton iterations: 1 is the one-step reconstruction; more refit the data
+    /// (slower, for when accuracy matters more than speed).
+    #[arg(long, default_value_t = 1)]
+    iterations: usize,
     /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
     /// chosen by generalised cross-validation on the frame.
     #[arg(long, default_value = "auto")]
@@ -848,12 +860,11 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
 
 fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     use et_host::fem::{Electrodes, Forward};
-    use et_host::mesh::Mesh;
     let scene = Scene::load(&args.scene)?;
     let config = scene.scan_config().map_err(anyhow::Error::msg)?;
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
-    let mesh = Mesh::with_about(&scene.sheet, args.triangles)?;
+    let mesh = scene_mesh(&scene, args.mesh.as_deref(), args.triangles)?;
     let sigma0 = 1.0 / scene.sheet.sheet_resistance;
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
     let sigma1: Vec<f64> = (0..mesh.triangles.len())
@@ -918,12 +929,33 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     Ok(())
 }
 
+/// The mesh of a command: `file` (Gmsh `.msh`, or three CSV files separated by commas) or
+/// the scene's sheet meshed to about `triangles`; its electrode count must be the sheet's.
+fn scene_mesh(scene: &Scene, file: Option<&str>, triangles: usize) -> Result<et_host::mesh::Mesh> {
+    use et_host::mesh::Mesh;
+    let mesh = match file {
+        None => Mesh::with_about(&scene.sheet, triangles)?,
+        Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
+            [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
+            [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
+            _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
+        },
+    };
+    if mesh.electrodes.len() != usize::from(scene.sheet.electrodes.count) {
+        bail!(
+            "the mesh has {} electrodes, the scene's sheet {}",
+            mesh.electrodes.len(),
+            scene.sheet.electrodes.count
+        );
+    }
+    Ok(mesh)
+}
+
 /// A touch's centre (m) and radius (m), where known.
 type Truth = ([f64; 2], f64);
 
 fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     use et_host::fem::{Electrodes, Forward};
-    use et_host::mesh::Mesh;
     use et_host::recon::{OneStep, PixelGrid, metrics, regions};
     let scene = Scene::load(&args.scene)?;
     let recording = args.frames.as_deref().map(recording::read).transpose()?;
@@ -942,7 +974,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let amps = f64::from(config.current_amps());
     let started = Instant::now();
     let stage = |what: &str| eprintln!("{what:<34} {:>8.3} s", started.elapsed().as_secs_f64());
-    let mesh = Mesh::with_about(&scene.sheet, args.triangles)?;
+    let mesh = scene_mesh(&scene, args.mesh.as_deref(), args.triangles)?;
     let t_n = mesh.triangles.len();
     stage(&format!("mesh ({t_n} triangles)"));
     let grid = PixelGrid::new(&mesh, args.pixels.max(4));
@@ -1025,9 +1057,32 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             .parse::<f64>()
             .with_context(|| format!("--alpha '{v}': a number or auto"))?,
     };
-    let recon = OneStep::new(&jac, alpha, args.s)?;
-    stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
-    let image = grid.image(&recon.reconstruct(&dv)?);
+    let image = if args.iterations <= 1 {
+        let recon = OneStep::new(&jac, alpha, args.s)?;
+        stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
+        grid.image(&recon.reconstruct(&dv)?)
+    } else {
+        let sigma0 = vec![1.0 / scene.sheet.sheet_resistance; t_n];
+        let its = et_host::recon::gauss_newton(
+            &fwd,
+            &protocol,
+            amps,
+            &sigma0,
+            et_host::recon::Data::Difference(&dv),
+            et_host::recon::GaussNewton {
+                alpha,
+                s: args.s,
+                iterations: args.iterations,
+            },
+        )?;
+        let (last, norm) = its.last().cloned().context("no iteration")?;
+        stage(&format!(
+            "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {norm:.3e} V)",
+            args.iterations
+        ));
+        let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
+        grid.image(&d)
+    };
     let f = args.threshold.unwrap_or(match config.protocol {
         ProtocolKind::PseudoPolar => 0.08,
         ProtocolKind::PpPp => 0.05,
