@@ -204,7 +204,8 @@ pub fn viridis(t: f64) -> RGBColor {
 }
 
 /// A heat map of `values` (row-major, `rows` x `cols`, row 0 at the top) with a colour bar
-/// from `lo` to `hi` labelled `unit`, written to `path` (PNG). Non-finite cells are grey.
+/// from `lo` to `hi` labelled `unit`, written to `path` (PNG), axes in cell indices (row 0 at
+/// the top). Non-finite cells are grey.
 ///
 /// # Errors
 /// [`PlotError`] naming the file, or for a table of the wrong length.
@@ -213,6 +214,36 @@ pub fn heatmap(
     labels: Labels<'_>,
     values: &[f64],
     (rows, cols): (usize, usize),
+    (lo, hi): (f64, f64),
+    unit: &str,
+) -> Result<(), PlotError> {
+    let extent = Extent {
+        x: (0.0, cols as f64),
+        y: (0.0, rows as f64),
+    };
+    heatmap_over(path, labels, values, (rows, cols), extent, (lo, hi), unit)
+}
+
+/// What a heat map's axes span: x from left to right edge, y from the top edge to the bottom
+/// edge (so an image with y up has y = (top, bottom) = (max, min)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Extent {
+    /// (left, right).
+    pub x: (f64, f64),
+    /// (top, bottom).
+    pub y: (f64, f64),
+}
+
+/// As [`heatmap`], with axes in the units of `extent` (e.g. mm on the sheet).
+///
+/// # Errors
+/// [`PlotError`] naming the file, or for a table of the wrong length.
+pub fn heatmap_over(
+    path: &Path,
+    labels: Labels<'_>,
+    values: &[f64],
+    (rows, cols): (usize, usize),
+    extent: Extent,
     (lo, hi): (f64, f64),
     unit: &str,
 ) -> Result<(), PlotError> {
@@ -228,7 +259,7 @@ pub fn heatmap(
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(54)
-        .build_cartesian_2d(0.0..cols as f64, rows as f64..0.0)
+        .build_cartesian_2d(extent.x.0..extent.x.1, extent.y.1..extent.y.0)
         .map_err(|e| fail(path, e))?;
     c.configure_mesh()
         .disable_mesh()
@@ -247,10 +278,12 @@ pub fn heatmap(
             } else {
                 RGBColor(160, 160, 160)
             };
-            Rectangle::new(
-                [(q as f64, r as f64), (q as f64 + 1.0, r as f64 + 1.0)],
-                colour.filled(),
-            )
+            let (w, h) = (
+                (extent.x.1 - extent.x.0) / cols as f64,
+                (extent.y.1 - extent.y.0) / rows as f64,
+            );
+            let (x, y) = (extent.x.0 + q as f64 * w, extent.y.0 + r as f64 * h);
+            Rectangle::new([(x, y), (x + w, y + h)], colour.filled())
         })
     }))
     .map_err(|e| fail(path, e))?;

@@ -1111,7 +1111,18 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         .copied()
         .filter(|v| v.is_finite())
         .fold(0.0f64, |m, v| m.max(v.abs()));
-    plot::heatmap(
+    let mm = |v: f64| v * 1e3;
+    let extent = plot::Extent {
+        x: (
+            mm(grid.origin[0]),
+            mm(grid.origin[0] + grid.width as f64 * grid.size),
+        ),
+        y: (
+            mm(grid.origin[1] + grid.height as f64 * grid.size),
+            mm(grid.origin[1]),
+        ),
+    };
+    plot::heatmap_over(
         &args.out,
         plot::Labels {
             title: &format!(
@@ -1121,12 +1132,13 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                     .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
                 rois.len()
             ),
-            x: "x (pixels)",
-            y: "y (pixels, top = largest y)",
+            x: "x (mm)",
+            y: "y (mm)",
             legend: plot::Legend::UpperLeft,
         },
         &rows,
         (grid.height, grid.width),
+        extent,
         (-hi, hi.max(f64::MIN_POSITIVE)),
         "conductivity change / background",
     )?;
