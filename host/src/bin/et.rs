@@ -104,11 +104,9 @@ enum Command {
     Forward(ForwardArgs),
 }
 
+/// How a command gets its mesh.
 #[derive(Debug, clap::Args)]
-struct ForwardArgs {
-    /// Scene file.
-    #[arg(long)]
-    scene: PathBuf,
+struct MeshArgs {
     /// About how many triangles to mesh the sheet with.
     #[arg(long, default_value_t = 8_000)]
     triangles: usize,
@@ -116,6 +114,15 @@ struct ForwardArgs {
     /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
     #[arg(long, value_name = "FILE")]
     mesh: Option<String>,
+}
+
+#[derive(Debug, clap::Args)]
+struct ForwardArgs {
+    /// Scene file.
+    #[arg(long)]
+    scene: PathBuf,
+    #[command(flatten)]
+    mesh: MeshArgs,
     /// Print JSON (all K values of V_0 and V_1, in volts).
     #[arg(long)]
     json: bool,
@@ -126,13 +133,8 @@ struct ReconstructArgs {
     /// Scene file: the sheet, its electrodes, the scan protocol and the touches.
     #[arg(long)]
     scene: PathBuf,
-    /// About how many triangles to mesh the sheet with.
-    #[arg(long, default_value_t = 8_000)]
-    triangles: usize,
-    /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
-    /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
-    #[arg(long, value_name = "FILE")]
-    mesh: Option<String>,
+    #[command(flatten)]
+    mesh: MeshArgs,
     /// Gauss-Newton iterations: 1 is the one-step reconstruction; more refit the data
     /// (slower, for when accuracy matters more than speed).
     #[arg(long, default_value_t = 1)]
@@ -864,7 +866,7 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let config = scene.scan_config().map_err(anyhow::Error::msg)?;
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
-    let mesh = scene_mesh(&scene, args.mesh.as_deref(), args.triangles)?;
+    let mesh = scene_mesh(&scene, &args.mesh)?;
     let sigma0 = 1.0 / scene.sheet.sheet_resistance;
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
     let sigma1: Vec<f64> = (0..mesh.triangles.len())
@@ -929,12 +931,12 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     Ok(())
 }
 
-/// The mesh of a command: `file` (Gmsh `.msh`, or three CSV files separated by commas) or
-/// the scene's sheet meshed to about `triangles`; its electrode count must be the sheet's.
-fn scene_mesh(scene: &Scene, file: Option<&str>, triangles: usize) -> Result<et_host::mesh::Mesh> {
+/// The mesh of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas) or
+/// the scene's sheet meshed to about `--triangles`; its electrode count must be the sheet's.
+fn scene_mesh(scene: &Scene, args: &MeshArgs) -> Result<et_host::mesh::Mesh> {
     use et_host::mesh::Mesh;
-    let mesh = match file {
-        None => Mesh::with_about(&scene.sheet, triangles)?,
+    let mesh = match args.mesh.as_deref() {
+        None => Mesh::with_about(&scene.sheet, args.triangles)?,
         Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
             [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
             [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
@@ -974,7 +976,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let amps = f64::from(config.current_amps());
     let started = Instant::now();
     let stage = |what: &str| eprintln!("{what:<34} {:>8.3} s", started.elapsed().as_secs_f64());
-    let mesh = scene_mesh(&scene, args.mesh.as_deref(), args.triangles)?;
+    let mesh = scene_mesh(&scene, &args.mesh)?;
     let t_n = mesh.triangles.len();
     stage(&format!("mesh ({t_n} triangles)"));
     let grid = PixelGrid::new(&mesh, args.pixels.max(4));
