@@ -133,7 +133,8 @@ pub fn gauss_newton(
         )));
     }
     let fem = |e: crate::fem::FemError| ReconError::Parameter(e.to_string());
-    let v0 = forward.frame(sigma_0, protocol, amps).map_err(fem)?;
+    // One factorisation per iterate: the Jacobian solve also gives the frame.
+    let (v0, jac0) = forward.jacobian(sigma_0, protocol, amps).map_err(fem)?;
     let target: Vec<f64> = match data {
         Data::Difference(dv) => dv.iter().zip(&v0).map(|(d, v)| d + v).collect(),
         Data::Absolute(v) => v.to_vec(),
@@ -152,8 +153,8 @@ pub fn gauss_newton(
     // target above already is V_0(model) + dV, so both cases compare F(sigma) with target.
     let mut sigma = sigma_0.to_vec();
     let mut out = Vec::with_capacity(iterations);
-    for _ in 0..iterations {
-        let (v, jac) = forward.jacobian(&sigma, protocol, amps).map_err(fem)?;
+    let (mut v, mut jac) = (v0, jac0);
+    for it in 0..iterations {
         let r: Vec<f64> = target.iter().zip(&v).map(|(t, v)| t - v).collect();
         let d: Vec<f64> = sigma.iter().zip(sigma_0).map(|(a, b)| a - b).collect();
         let (jp, a) = data_space(&jac, s)?;
@@ -163,7 +164,12 @@ pub fn gauss_newton(
         for (i, sg) in sigma.iter_mut().enumerate() {
             *sg = (sigma_0[i] + step[i]).max(1e-3 * sigma_0[i]);
         }
-        let v = forward.frame(&sigma, protocol, amps).map_err(fem)?;
+        // The next step needs the Jacobian here; the last one only the frame.
+        if it + 1 < iterations {
+            (v, jac) = forward.jacobian(&sigma, protocol, amps).map_err(fem)?;
+        } else {
+            v = forward.frame(&sigma, protocol, amps).map_err(fem)?;
+        }
         let norm = target
             .iter()
             .zip(&v)
