@@ -14,6 +14,8 @@
 //! - [`scan`]: the scan engine, one protocol scan through a `Frontend` into V_m.
 //! - [`wire`]: [`wire::Frame`], [`wire::Command`], [`wire::Event`] in postcard + CRC-32 + COBS
 //!   packets, and the resynchronising [`wire::Accumulator`].
+//! - [`device`]: the firmware's logic without its hardware: commands, model upload into two
+//!   slots with verification, frames, on-chip classification, health counters.
 //! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (SPEC §9).
 //! - [`stats`]: SNR, MAD (SPEC §3) and BVC (SPEC §7).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
@@ -21,6 +23,7 @@
 #![deny(missing_docs)]
 
 pub mod config;
+pub mod device;
 pub mod extract;
 pub mod frontend;
 pub mod model;

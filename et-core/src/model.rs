@@ -357,6 +357,31 @@ impl<'a> Model<'a> {
     /// # Errors
     /// The first [`ModelError`] found; nothing of a refused blob is ever used.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, ModelError> {
+        let model = Self::parse_header(bytes)?;
+        let crc_at = model.layout.crc;
+        let stored_crc = u32::from_le_bytes([
+            bytes[crc_at],
+            bytes[crc_at + 1],
+            bytes[crc_at + 2],
+            bytes[crc_at + 3],
+        ]);
+        if crc32(&bytes[..crc_at]) != stored_crc {
+            return Err(ModelError::Checksum);
+        }
+        model.check_tables()?;
+        Ok(model)
+    }
+
+    /// Re-opens a blob that already passed [`parse`](Self::parse) and has not changed since,
+    /// checking only its header (magic, version, kind, dimensions, protocol, length): O(1)
+    /// instead of a pass over every table. The firmware uses it per frame on the model it
+    /// verified at upload, which lives in storage it never writes while the model is active.
+    /// Evaluation stays memory-safe on any bytes; only a blob that skipped `parse` could give
+    /// wrong classes or a panic on an out-of-range feature index.
+    ///
+    /// # Errors
+    /// The header's [`ModelError`]s.
+    pub fn parse_header(bytes: &'a [u8]) -> Result<Self, ModelError> {
         if bytes.len() < HEADER_LEN + 4 {
             return Err(ModelError::Length {
                 expected: 0,
@@ -393,15 +418,6 @@ impl<'a> Model<'a> {
                 got: bytes.len(),
             });
         }
-        let stored_crc = u32::from_le_bytes([
-            bytes[layout.crc],
-            bytes[layout.crc + 1],
-            bytes[layout.crc + 2],
-            bytes[layout.crc + 3],
-        ]);
-        if crc32(&bytes[..layout.crc]) != stored_crc {
-            return Err(ModelError::Checksum);
-        }
         let electrodes = bytes[14];
         let pattern = Pattern {
             drive_skip: bytes[16],
@@ -427,7 +443,7 @@ impl<'a> Model<'a> {
         if classes < 2 || features == 0 || features > usize::from(frame_len) {
             return Err(ModelError::Dimensions);
         }
-        let model = Self {
+        Ok(Self {
             bytes,
             kind,
             precision,
@@ -437,9 +453,7 @@ impl<'a> Model<'a> {
             protocol,
             layout,
             referenced: bytes[17] & FLAG_REFERENCED != 0,
-        };
-        model.check_tables()?;
-        Ok(model)
+        })
     }
 
     fn check_tables(&self) -> Result<(), ModelError> {

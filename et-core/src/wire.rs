@@ -211,6 +211,9 @@ pub enum Command {
     ModelCommit,
     /// Stop classifying and forget the model.
     ModelClear,
+    /// Take the next frame as the untouched frame V_0 that a referenced model subtracts (the
+    /// sheet must not be touched while it is taken). Acknowledged once V_0 is stored.
+    Tare,
 }
 
 impl Command {
@@ -226,6 +229,7 @@ impl Command {
             Command::ModelChunk { .. } => CommandTag::ModelChunk,
             Command::ModelCommit => CommandTag::ModelCommit,
             Command::ModelClear => CommandTag::ModelClear,
+            Command::Tare => CommandTag::Tare,
         }
     }
 }
@@ -245,6 +249,7 @@ pub enum CommandTag {
     ModelClear,
     /// The packet did not decode to any command.
     Unknown,
+    Tare,
 }
 
 /// Why the device refused a command.
@@ -263,6 +268,8 @@ pub enum Refusal {
     BadModel,
     /// The model does not match the current scan configuration.
     ModelMismatch,
+    /// The model storage failed (erase or write); the old model is kept.
+    Storage,
 }
 
 /// Device to host.

@@ -171,6 +171,7 @@ fn commands() -> StdVec<(&'static str, Command)> {
         ),
         ("model_commit", Command::ModelCommit),
         ("model_clear", Command::ModelClear),
+        ("tare", Command::Tare),
     ]
 }
 
@@ -228,6 +229,9 @@ const GOLDEN: &[(&str, &[u8])] = &[
     ),
     ("model_commit", &[0, 7, 1, 6, 139, 134, 161, 177, 0]),
     ("model_clear", &[0, 7, 1, 7, 29, 182, 166, 198, 0]),
+    // Added in place without a version change: a new variant at the end leaves every older
+    // packet's bytes as they were (derived with Python's zlib.crc32 and a COBS by hand).
+    ("tare", &[0, 7, 1, 8, 140, 171, 25, 86, 0]),
 ];
 
 #[test]

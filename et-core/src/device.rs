@@ -1,0 +1,452 @@
+//! The device's logic, apart from its hardware: what the firmware does with each command and
+//! each scan. The firmware only moves bytes and samples; everything that decides lives here,
+//! where it is tested on the host.
+//!
+//! [`Device`] holds the scan configuration, the run state, the model upload and the active
+//! model, the untouched frame V_0 of a referenced model, and the health counters of
+//! [`Status`]. Per received packet the firmware calls [`Device::handle_packet`] and sends the
+//! reply; per scan it calls [`Device::frame`] and sends the frame and, when a model is active,
+//! the [`Event::Touch`] of the on-chip classification (SPEC §9).
+//!
+//! Models are uploaded into one of two slots of a [`ModelStore`] (flash on the board, RAM under
+//! QEMU): the upload always goes to the slot that is not active, and only a blob that passes
+//! its CRC-32, [`Model::parse`] and matches the scan configuration replaces the old model. A
+//! failed or abandoned upload leaves the old model classifying.
+
+use heapless::Vec;
+
+use crate::config::ScanConfig;
+use crate::model::Model;
+use crate::protocol::{K_MAX, L_MAX, Protocol};
+use crate::scan::ScanReport;
+use crate::time::Micros;
+use crate::wire::{
+    self, Command, CommandTag, Event, FLAG_DROPPED_BEFORE, Fault, Frame, Refusal, Status,
+    WireError,
+};
+
+/// Where model blobs are kept: two slots of [`capacity`](ModelStore::capacity) bytes.
+pub trait ModelStore {
+    /// What the storage can fail with.
+    type Error: core::fmt::Debug;
+    /// Bytes one slot holds (the largest model this device accepts).
+    fn capacity(&self) -> usize;
+    /// Makes slot `slot` (0 or 1) writable from offset 0 (flash: erases its sectors).
+    ///
+    /// # Errors
+    /// When the storage fails.
+    fn erase(&mut self, slot: usize) -> Result<(), Self::Error>;
+    /// Writes `data` at byte `offset` of slot `slot`; offsets only grow between erases.
+    ///
+    /// # Errors
+    /// When the storage fails.
+    fn write(&mut self, slot: usize, offset: usize, data: &[u8]) -> Result<(), Self::Error>;
+    /// The whole of slot `slot` (`capacity` bytes).
+    fn read(&self, slot: usize) -> &[u8];
+}
+
+/// A [`ModelStore`] in RAM: two slots of `N` bytes (the QEMU image and host tests).
+#[derive(Debug, Clone)]
+pub struct RamStore<const N: usize> {
+    slots: [[u8; N]; 2],
+}
+
+impl<const N: usize> RamStore<N> {
+    /// Two empty slots.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            slots: [[0xff; N]; 2],
+        }
+    }
+}
+
+impl<const N: usize> Default for RamStore<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A write outside a slot of a [`RamStore`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutOfRange;
+
+impl<const N: usize> ModelStore for RamStore<N> {
+    type Error = OutOfRange;
+    fn capacity(&self) -> usize {
+        N
+    }
+    fn erase(&mut self, slot: usize) -> Result<(), OutOfRange> {
+        self.slots.get_mut(slot).ok_or(OutOfRange)?.fill(0xff);
+        Ok(())
+    }
+    fn write(&mut self, slot: usize, offset: usize, data: &[u8]) -> Result<(), OutOfRange> {
+        let end = offset.checked_add(data.len()).ok_or(OutOfRange)?;
+        let slot = self.slots.get_mut(slot).ok_or(OutOfRange)?;
+        slot.get_mut(offset..end)
+            .ok_or(OutOfRange)?
+            .copy_from_slice(data);
+        Ok(())
+    }
+    fn read(&self, slot: usize) -> &[u8] {
+        self.slots.get(slot).map_or(&[], |s| &s[..])
+    }
+}
+
+/// An upload in progress.
+#[derive(Debug, Clone, Copy)]
+struct Upload {
+    slot: usize,
+    len: usize,
+    crc: u32,
+    received: usize,
+    /// Length of the last chunk written (a resent chunk is acknowledged again).
+    last_chunk: usize,
+}
+
+/// A model that passed verification: `len` bytes at the start of `slot`.
+#[derive(Debug, Clone, Copy)]
+struct Active {
+    slot: usize,
+    len: usize,
+}
+
+/// A rail hit on at least this share of the measurements that probe an electrode makes it a
+/// suspect (disconnected), in percent. An open probe rails every measurement it takes part in;
+/// its neighbours share half of theirs with it, so the threshold sits well above one half.
+pub const SUSPECT_RAIL_PERCENT: usize = 90;
+
+/// The device's state machine (see the module docs).
+#[derive(Debug)]
+pub struct Device<S> {
+    store: S,
+    config: ScanConfig,
+    protocol: Protocol,
+    /// The scan task has not yet picked up `config`.
+    reconfigure: bool,
+    scanning: bool,
+    upload: Option<Upload>,
+    active: Option<Active>,
+    /// V_0 for referenced models (empty until tared).
+    reference: Vec<f32, K_MAX>,
+    tare_pending: bool,
+    seq: u32,
+    dropped_since_last: bool,
+    status: Status,
+    scratch: [f32; 2 * K_MAX],
+}
+
+/// What one scan produces for the link: the frame and, with a model active, its class.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// The frame to send.
+    pub frame: Frame,
+    /// [`Event::Touch`] from the on-chip classifier, [`Event::Fault`] for a newly suspected
+    /// electrode, or an [`Event::Ack`] of [`Command::Tare`] once V_0 is stored.
+    pub events: Vec<Event, 3>,
+}
+
+impl<S: ModelStore> Device<S> {
+    /// A stopped device with `config` (which must be valid: it is the firmware's default).
+    ///
+    /// # Errors
+    /// The configuration's error if it is invalid.
+    pub fn new(store: S, config: ScanConfig) -> Result<Self, crate::config::ConfigError> {
+        let protocol = config.validate()?;
+        Ok(Self {
+            store,
+            config,
+            protocol,
+            reconfigure: true,
+            scanning: false,
+            upload: None,
+            active: None,
+            reference: Vec::new(),
+            tare_pending: false,
+            seq: 0,
+            dropped_since_last: false,
+            status: Status::default(),
+            scratch: [0.0; 2 * K_MAX],
+        })
+    }
+
+    /// The configuration scans use.
+    #[must_use]
+    pub fn config(&self) -> &ScanConfig {
+        &self.config
+    }
+
+    /// Whether the scan task should scan.
+    #[must_use]
+    pub fn scanning(&self) -> bool {
+        self.scanning
+    }
+
+    /// The new configuration, once, after it changed (the scan task rebuilds its
+    /// [`Scanner`](crate::Scanner) with it); `None` when nothing changed.
+    pub fn take_reconfigure(&mut self) -> Option<ScanConfig> {
+        core::mem::take(&mut self.reconfigure).then_some(self.config)
+    }
+
+    /// The health report as of `uptime`.
+    #[must_use]
+    pub fn status(&self, uptime: Micros) -> Status {
+        Status {
+            uptime,
+            scanning: self.scanning,
+            model_loaded: self.active.is_some(),
+            ..self.status
+        }
+    }
+
+    /// The active model, if any.
+    #[must_use]
+    pub fn model(&self) -> Option<Model<'_>> {
+        let a = self.active?;
+        Model::parse_header(self.store.read(a.slot).get(..a.len)?).ok()
+    }
+
+    /// The model storage.
+    #[must_use]
+    pub fn store(&self) -> &S {
+        &self.store
+    }
+
+    /// Decodes one received packet (delimiters stripped, decoded in place) and handles it; the
+    /// reply is always an event to send (a refusal for a packet that does not decode).
+    pub fn handle_packet(&mut self, packet: &mut [u8]) -> Option<Event> {
+        self.handle_decoded(wire::decode(packet))
+    }
+
+    /// Handles the outcome of decoding one packet (from [`wire::Accumulator::feed`]). Returns
+    /// the reply, or `None` for [`Command::Tare`], whose acknowledgement comes with the frame
+    /// that becomes V_0.
+    pub fn handle_decoded(&mut self, packet: Result<Command, WireError>) -> Option<Event> {
+        match packet {
+            Ok(command) => self.handle(command),
+            Err(e) => {
+                self.status.bad_commands = self.status.bad_commands.saturating_add(1);
+                Some(Event::Refused {
+                    command: CommandTag::Unknown,
+                    reason: Refusal::Malformed(e),
+                })
+            }
+        }
+    }
+
+    /// Carries out `command`; returns the reply (see [`handle_decoded`](Self::handle_decoded)).
+    pub fn handle(&mut self, command: Command) -> Option<Event> {
+        let tag = command.tag();
+        let outcome = match command {
+            Command::Configure(config) => self.configure(config),
+            Command::Start => {
+                self.scanning = true;
+                Ok(())
+            }
+            Command::Stop => {
+                self.scanning = false;
+                Ok(())
+            }
+            Command::Ping { nonce } => return Some(Event::Pong { nonce }),
+            Command::ModelBegin { len, crc } => self.begin(len as usize, crc),
+            Command::ModelChunk { offset, data } => self.chunk(offset as usize, &data),
+            Command::ModelCommit => self.commit(),
+            Command::ModelClear => {
+                self.active = None;
+                Ok(())
+            }
+            Command::Tare => {
+                self.tare_pending = true;
+                return None;
+            }
+        };
+        Some(match outcome {
+            Ok(()) => Event::Ack { command: tag },
+            Err(reason) => {
+                self.status.bad_commands = self.status.bad_commands.saturating_add(1);
+                Event::Refused {
+                    command: tag,
+                    reason,
+                }
+            }
+        })
+    }
+
+    fn configure(&mut self, config: ScanConfig) -> Result<(), Refusal> {
+        self.protocol = config.validate().map_err(|_| Refusal::BadConfig)?;
+        if config != self.config {
+            // V_0 belongs to the old configuration; suspicions are re-earned under the new one.
+            self.reference.clear();
+            self.status.suspect_electrodes = 0;
+        }
+        self.config = config;
+        self.reconfigure = true;
+        Ok(())
+    }
+
+    fn begin(&mut self, len: usize, crc: u32) -> Result<(), Refusal> {
+        self.upload = None;
+        if len > self.store.capacity() {
+            return Err(Refusal::TooLarge);
+        }
+        let slot = self.active.map_or(0, |a| 1 - a.slot);
+        self.store.erase(slot).map_err(|_| Refusal::Storage)?;
+        self.upload = Some(Upload {
+            slot,
+            len,
+            crc,
+            received: 0,
+            last_chunk: 0,
+        });
+        Ok(())
+    }
+
+    fn chunk(&mut self, offset: usize, data: &[u8]) -> Result<(), Refusal> {
+        let up = self.upload.as_mut().ok_or(Refusal::UploadOrder)?;
+        // The previous chunk again (its acknowledgement was lost): accept it if it is the same.
+        if up.last_chunk > 0 && offset + up.last_chunk == up.received && data.len() == up.last_chunk
+        {
+            let written = &self.store.read(up.slot)[offset..up.received];
+            return if written == data {
+                Ok(())
+            } else {
+                Err(Refusal::UploadOrder)
+            };
+        }
+        if offset != up.received || data.is_empty() {
+            return Err(Refusal::UploadOrder);
+        }
+        if offset + data.len() > up.len {
+            return Err(Refusal::TooLarge);
+        }
+        if self.store.write(up.slot, offset, data).is_err() {
+            self.upload = None;
+            return Err(Refusal::Storage);
+        }
+        up.received += data.len();
+        up.last_chunk = data.len();
+        Ok(())
+    }
+
+    fn commit(&mut self) -> Result<(), Refusal> {
+        let up = self.upload.ok_or(Refusal::UploadOrder)?;
+        if up.received != up.len {
+            return Err(Refusal::UploadOrder);
+        }
+        self.upload = None;
+        let bytes = &self.store.read(up.slot)[..up.len];
+        if wire::crc32(bytes) != up.crc {
+            return Err(Refusal::BadModel);
+        }
+        let model = Model::parse(bytes).map_err(|_| Refusal::BadModel)?;
+        if model.check_config(&self.config).is_err() {
+            return Err(Refusal::ModelMismatch);
+        }
+        self.active = Some(Active {
+            slot: up.slot,
+            len: up.len,
+        });
+        Ok(())
+    }
+
+    /// Records that a frame was produced but could not be sent (the link was busy): it counts
+    /// in [`Status::dropped`] and the next frame carries [`FLAG_DROPPED_BEFORE`].
+    pub fn dropped(&mut self) {
+        self.status.dropped = self.status.dropped.saturating_add(1);
+        self.dropped_since_last = true;
+    }
+
+    /// Turns one scan under the current configuration into the frame to send, and classifies
+    /// it with the active model. `v_m` holds the scan's K voltages; `flags` are extra frame
+    /// flags (e.g. [`wire::FLAG_SUBSECTION`]).
+    ///
+    /// # Errors
+    /// [`WireError::BufferFull`] if `v_m` is longer than [`K_MAX`].
+    pub fn frame(
+        &mut self,
+        timestamp: Micros,
+        report: &ScanReport,
+        v_m: &[f32],
+        flags: u8,
+    ) -> Result<Output, WireError> {
+        let seq = self.seq;
+        self.seq = self.seq.wrapping_add(1);
+        let dropped = if core::mem::take(&mut self.dropped_since_last) {
+            FLAG_DROPPED_BEFORE
+        } else {
+            0
+        };
+        let frame = Frame::from_scan(seq, timestamp, self.config, report, flags | dropped, v_m)?;
+        self.status.frames = self.status.frames.saturating_add(1);
+        let mut events = Vec::new();
+        if frame.rail_count > 0 {
+            self.status.rail_frames = self.status.rail_frames.saturating_add(1);
+            let suspects = self.suspects(report);
+            let new = suspects & !self.status.suspect_electrodes;
+            self.status.suspect_electrodes |= suspects;
+            if new != 0 {
+                let electrode = new.trailing_zeros() as u8;
+                let _ = events.push(Event::Fault(Fault::Electrode { electrode }));
+            }
+        }
+        if self.tare_pending && v_m.len() == self.protocol.frame_len() {
+            self.tare_pending = false;
+            self.reference.clear();
+            let _ = self.reference.extend_from_slice(v_m);
+            let _ = events.push(Event::Ack {
+                command: CommandTag::Tare,
+            });
+        }
+        if let Some(touch) = self.classify(seq, v_m) {
+            let _ = events.push(touch);
+        }
+        Ok(Output { frame, events })
+    }
+
+    fn classify(&mut self, seq: u32, v_m: &[f32]) -> Option<Event> {
+        let a = self.active?;
+        let model = Model::parse_header(self.store.read(a.slot).get(..a.len)?).ok()?;
+        model.check_config(&self.config).ok()?;
+        let v_0 = match model.referenced() {
+            // A referenced model waits for Command::Tare.
+            true if self.reference.is_empty() => return None,
+            true => Some(&self.reference[..]),
+            false => None,
+        };
+        let decision = model
+            .evaluate_referenced(v_m, v_0, &mut self.scratch)
+            .ok()?;
+        Some(Event::Touch {
+            seq,
+            class: decision.class,
+            margin: decision.margin,
+        })
+    }
+
+    /// Electrodes whose measurements hit a rail on at least [`SUSPECT_RAIL_PERCENT`] of the
+    /// steps that probe them (an open probe floats to a rail). Bit e = electrode e.
+    fn suspects(&self, report: &ScanReport) -> u32 {
+        let mut probed = [0u16; L_MAX as usize];
+        let mut railed = [0u16; L_MAX as usize];
+        for step in self.protocol.steps() {
+            let hit = report.rail.get(usize::from(step.k));
+            for e in [step.measurement.positive.0, step.measurement.negative.0] {
+                let e = usize::from(e);
+                probed[e] += 1;
+                railed[e] += u16::from(hit);
+            }
+        }
+        let mut bits = 0u32;
+        for e in 0..usize::from(self.protocol.electrodes()) {
+            if probed[e] > 0
+                && usize::from(railed[e]) * 100 >= SUSPECT_RAIL_PERCENT * usize::from(probed[e])
+            {
+                bits |= 1 << e;
+            }
+        }
+        bits
+    }
+}
+
+#[cfg(test)]
+mod tests;
