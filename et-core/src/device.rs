@@ -21,8 +21,7 @@ use crate::protocol::{K_MAX, L_MAX, Protocol};
 use crate::scan::ScanReport;
 use crate::time::Micros;
 use crate::wire::{
-    self, Command, CommandTag, Event, FLAG_DROPPED_BEFORE, Fault, Frame, Refusal, Status,
-    WireError,
+    self, Command, CommandTag, Event, FLAG_DROPPED_BEFORE, Fault, Frame, Refusal, Status, WireError,
 };
 
 /// Where model blobs are kept: two slots of [`capacity`](ModelStore::capacity) bytes.
@@ -43,6 +42,22 @@ pub trait ModelStore {
     fn write(&mut self, slot: usize, offset: usize, data: &[u8]) -> Result<(), Self::Error>;
     /// The whole of slot `slot` (`capacity` bytes).
     fn read(&self, slot: usize) -> &[u8];
+}
+
+impl<S: ModelStore + ?Sized> ModelStore for &mut S {
+    type Error = S::Error;
+    fn capacity(&self) -> usize {
+        (**self).capacity()
+    }
+    fn erase(&mut self, slot: usize) -> Result<(), Self::Error> {
+        (**self).erase(slot)
+    }
+    fn write(&mut self, slot: usize, offset: usize, data: &[u8]) -> Result<(), Self::Error> {
+        (**self).write(slot, offset, data)
+    }
+    fn read(&self, slot: usize) -> &[u8] {
+        (**self).read(slot)
+    }
 }
 
 /// A [`ModelStore`] in RAM: two slots of `N` bytes (the QEMU image and host tests).
@@ -111,6 +126,9 @@ struct Active {
     len: usize,
 }
 
+/// Most features an on-chip model may use (its evaluation scratch is 2 p values).
+pub const FEATURES_MAX: usize = 512;
+
 /// A rail hit on at least this share of the measurements that probe an electrode makes it a
 /// suspect (disconnected), in percent. An open probe rails every measurement it takes part in;
 /// its neighbours share half of theirs with it, so the threshold sits well above one half.
@@ -133,7 +151,7 @@ pub struct Device<S> {
     seq: u32,
     dropped_since_last: bool,
     status: Status,
-    scratch: [f32; 2 * K_MAX],
+    scratch: [f32; 2 * FEATURES_MAX],
 }
 
 /// What one scan produces for the link: the frame and, with a model active, its class.
@@ -166,7 +184,7 @@ impl<S: ModelStore> Device<S> {
             seq: 0,
             dropped_since_last: false,
             status: Status::default(),
-            scratch: [0.0; 2 * K_MAX],
+            scratch: [0.0; 2 * FEATURES_MAX],
         })
     }
 
@@ -186,6 +204,12 @@ impl<S: ModelStore> Device<S> {
     /// [`Scanner`](crate::Scanner) with it); `None` when nothing changed.
     pub fn take_reconfigure(&mut self) -> Option<ScanConfig> {
         core::mem::take(&mut self.reconfigure).then_some(self.config)
+    }
+
+    /// The sequence number the next frame will carry.
+    #[must_use]
+    pub fn next_seq(&self) -> u32 {
+        self.seq
     }
 
     /// The health report as of `uptime`.
@@ -339,6 +363,9 @@ impl<S: ModelStore> Device<S> {
             return Err(Refusal::BadModel);
         }
         let model = Model::parse(bytes).map_err(|_| Refusal::BadModel)?;
+        if model.features() > FEATURES_MAX {
+            return Err(Refusal::TooLarge);
+        }
         if model.check_config(&self.config).is_err() {
             return Err(Refusal::ModelMismatch);
         }

@@ -16,6 +16,7 @@
 //!   packets, and the resynchronising [`wire::Accumulator`].
 //! - [`device`]: the firmware's logic without its hardware: commands, model upload into two
 //!   slots with verification, frames, on-chip classification, health counters.
+//! - [`emulated`]: a sheet given by transfer impedances, the `Frontend` of the QEMU image.
 //! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (SPEC §9).
 //! - [`stats`]: SNR, MAD (SPEC §3) and BVC (SPEC §7).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
@@ -24,6 +25,7 @@
 
 pub mod config;
 pub mod device;
+pub mod emulated;
 pub mod extract;
 pub mod frontend;
 pub mod model;

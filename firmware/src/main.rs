@@ -1,105 +1,292 @@
 //! et firmware for the STM32F405 (RTIC 2).
 //!
-//! Wiring only: protocol tables, mux control words, framing and (later) scanning and
-//! classification all come from `et-core`, where they are tested on the host. Today the image
-//! brings the board up, parks both multiplexers (no current flows), blinks the status LED and
-//! sends an `Event::Status` packet over USART2 every `STATUS_PERIOD_MS`.
+//! Wiring only: the scan engine, framing, command handling, model upload and classification
+//! are `et_core` (`Scanner`, `wire`, `device::Device`), tested on the host. This file moves
+//! bytes and samples between them and the peripherals:
+//!
+//! | task | priority | does |
+//! | --- | --- | --- |
+//! | `usart2` (interrupt) | 2 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
+//! | `scan` | 1 | rebuilds the `Scanner` on a new configuration, scans, sends the frame and its events, paces to the frame rate, sends a status event every `STATUS_PERIOD_MS` |
+//! | `commands` | 1 | reassembles packets from `rx` (resynchronising after garbage), hands them to `Device`, sends the reply |
+//!
+//! The two priority-1 tasks share the `Device` and the transmit queue (their locks cost
+//! nothing: RTIC runs them one at a time). A frame that does not fit the transmit queue is dropped and
+//! counted (`Status::dropped`, `FLAG_DROPPED_BEFORE` on the next one); the scan never waits for
+//! the link.
+//!
+//! The `qemu` feature builds the same application for QEMU's netduinoplus2: internal clock,
+//! model slots in RAM, and the sheet of `qemu_sheet.rs` as the front end (DESIGN.md).
 #![no_std]
 #![no_main]
 
 use panic_halt as _;
 
 mod board;
+#[cfg(feature = "qemu")]
+mod qemu_sheet;
+#[cfg(not(feature = "qemu"))]
+mod store;
 
-#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI0])]
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI0, EXTI1])]
 mod app {
     use crate::board;
-    use embedded_io::Write as _;
-    use et_core::Micros;
-    use et_core::frontend::MuxLines;
-    use et_core::wire::{self, Event, Status, Uplink};
+    use embedded_hal_nb::serial::{Read as _, Write as _};
+    use et_core::device::Device;
+    use et_core::protocol::K_MAX;
+    use et_core::wire::{self, COMMAND_PACKET_MAX, Command, Event, Fault, PACKET_MAX, Uplink};
+    use et_core::{Micros, ScanConfig, Scanner};
+    use heapless::spsc::{Consumer, Producer, Queue};
     use rtic_monotonics::systick::prelude::*;
-    use stm32f4xx_hal::gpio::{Output, PA5};
-    use stm32f4xx_hal::pac::{TIM2, USART2};
-    use stm32f4xx_hal::rcc::Config;
-    use stm32f4xx_hal::serial::Tx;
-    use stm32f4xx_hal::timer::Delay;
+    use serde::Serialize;
+    use stm32f4xx_hal::pac::{self, USART2};
+    use stm32f4xx_hal::rcc::RccExt as _;
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, RxListen as _, Serial, Tx};
+    use stm32f4xx_hal::serial::{TxISR as _, TxListen as _};
     // The HAL prelude brings its own fugit extension traits; alias them so they do not clash
     // with rtic-monotonics' (DESIGN.md, "Known API frictions").
-    use stm32f4xx_hal::prelude::{_fugit_RateExtU32 as _, _stm32f4xx_hal_gpio_GpioExt as _};
-    use stm32f4xx_hal::prelude::{
-        _stm32f4xx_hal_serial_SerialExt as _, _stm32f4xx_hal_timer_TimerExt as _,
-    };
-    use stm32f4xx_hal::rcc::RccExt as _;
+    use stm32f4xx_hal::prelude::_stm32f4xx_hal_gpio_GpioExt as _;
     use stm32f4xx_hal::time::U32Ext as _;
 
     systick_monotonic!(Mono, 1_000);
 
+    /// Bytes waiting to go out: two reference frames and their events.
+    const TX_QUEUE: usize = 2048;
+    /// Bytes received and not yet decoded: a few command packets.
+    const RX_QUEUE: usize = 1024;
+
     #[shared]
-    struct Shared {}
+    struct Shared {
+        device: Device<board::Store>,
+        tx: Producer<'static, u8>,
+    }
 
     #[local]
     struct Local {
-        led: PA5<Output>,
-        tx: Tx<USART2>,
-        mux: MuxLines<board::MuxPin, Delay<TIM2, 1_000_000>>,
+        serial_tx: Tx<USART2>,
+        serial_rx: Rx<USART2>,
+        tx_out: Consumer<'static, u8>,
+        rx_in: Producer<'static, u8>,
+        rx_out: Consumer<'static, u8>,
+        sensor: board::Sensor,
     }
 
-    #[init]
+    #[init(local = [
+        txq: Queue<u8, TX_QUEUE> = Queue::new(),
+        rxq: Queue<u8, RX_QUEUE> = Queue::new(),
+        #[cfg(feature = "qemu")]
+        slots: board::Slots = board::Slots::new(),
+    ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
-        let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(board::SYSCLK_HZ.Hz()));
+        let mut rcc = dp.RCC.freeze(board::clocks());
         Mono::start(cx.core.SYST, board::SYSCLK_HZ);
 
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        let led = gpioa.pa5.into_push_pull_output();
-        let tx = dp
-            .USART2
-            .tx(gpioa.pa2, board::BAUD.bps(), &mut rcc)
-            .unwrap_or_else(|_| panic!());
+        let serial: Serial<USART2> = Serial::new(
+            dp.USART2,
+            (gpioa.pa2, gpioa.pa3),
+            SerialConfig::default().baudrate(board::BAUD.bps()),
+            &mut rcc,
+        )
+        .unwrap_or_else(|_| panic!("USART2 set-up"));
+        let (serial_tx, mut serial_rx) = serial.split();
+        serial_rx.listen();
 
-        let lines = [
-            gpioc.pc0.into_push_pull_output().erase(),
-            gpioc.pc1.into_push_pull_output().erase(),
-            gpioc.pc2.into_push_pull_output().erase(),
-            gpioc.pc3.into_push_pull_output().erase(),
-            gpioc.pc4.into_push_pull_output().erase(),
-            gpioc.pc5.into_push_pull_output().erase(),
-            gpioc.pc6.into_push_pull_output().erase(),
-            gpioc.pc7.into_push_pull_output().erase(),
-            gpioc.pc8.into_push_pull_output().erase(),
-            gpioc.pc9.into_push_pull_output().erase(),
-        ];
-        let delay = dp.TIM2.delay_us(&mut rcc);
-        // GPIO writes cannot fail on this chip (the error type is Infallible).
-        let Ok(mux) = MuxLines::new(lines, delay, board::MUX_SETTLE_NS);
+        let sensor = board::sensor(gpioc, dp.TIM2, &mut rcc);
+        #[cfg(feature = "qemu")]
+        let store = cx.local.slots;
+        #[cfg(not(feature = "qemu"))]
+        let store = board::store(dp.FLASH);
+        let device = Device::new(store, board::DEFAULT_CONFIG)
+            .unwrap_or_else(|_| panic!("the default configuration is valid"));
 
-        heartbeat::spawn().ok();
-        (Shared {}, Local { led, tx, mux })
+        let (tx, tx_out) = cx.local.txq.split();
+        let (rx_in, rx_out) = cx.local.rxq.split();
+        scan::spawn().ok();
+        commands::spawn().ok();
+        (
+            Shared { device, tx },
+            Local {
+                serial_tx,
+                serial_rx,
+                tx_out,
+                rx_in,
+                rx_out,
+                sensor,
+            },
+        )
     }
 
-    /// Blinks and reports status; the scan task replaces the idle mux with real scanning.
-    #[task(priority = 1, local = [led, tx, mux, buf: [u8; 64] = [0; 64]])]
-    async fn heartbeat(cx: heartbeat::Context) {
-        let heartbeat::LocalResources {
-            led, tx, mux, buf, ..
-        } = cx.local;
-        let Ok(()) = mux.off();
-        let start = Mono::now();
-        loop {
-            led.toggle();
-            let uptime = Micros((Mono::now() - start).as_micros());
-            let status = Uplink::Event(Event::Status(Status {
-                uptime,
-                ..Status::default()
-            }));
-            if let Ok(n) = wire::encode(&status, buf) {
-                // A failed write loses one status packet; the next one follows.
-                let _ = tx.write_all(&buf[..n]);
-            }
-            Mono::delay(board::STATUS_PERIOD_MS.millis()).await;
+    /// Encodes `message` and queues it whole, or not at all (returns false when the queue is
+    /// too full or the message does not encode).
+    fn send<T: Serialize>(tx: &mut Producer<'static, u8>, message: &T, buf: &mut [u8]) -> bool {
+        let Ok(n) = wire::encode(message, buf) else {
+            return false;
+        };
+        if tx.capacity() - tx.len() < n {
+            return false;
         }
+        for &b in &buf[..n] {
+            // Room was checked above; only this task produces.
+            let _ = tx.enqueue(b);
+        }
+        rtic::pend(pac::Interrupt::USART2);
+        true
+    }
+
+    fn uptime() -> Micros {
+        Micros(Mono::now().duration_since_epoch().as_micros())
+    }
+
+    /// The serial port: received bytes into `rx_in`, queued bytes out while TXE is set.
+    #[task(binds = USART2, priority = 2, local = [serial_tx, serial_rx, tx_out, rx_in])]
+    fn usart2(cx: usart2::Context) {
+        let usart2::LocalResources {
+            serial_tx,
+            serial_rx,
+            tx_out,
+            rx_in,
+            ..
+        } = cx.local;
+        loop {
+            match serial_rx.read() {
+                // A full queue loses the byte: the packet it belonged to fails its CRC and is
+                // refused, the host resends.
+                Ok(byte) => {
+                    let _ = rx_in.enqueue(byte);
+                }
+                Err(nb::Error::WouldBlock) => break,
+                // Overrun, framing or noise: the flags are cleared by the read; the damaged
+                // packet is refused by its CRC.
+                Err(nb::Error::Other(_)) => {}
+            }
+        }
+        while serial_tx.is_tx_empty() {
+            let Some(byte) = tx_out.dequeue() else { break };
+            let _ = serial_tx.write(byte);
+        }
+        if tx_out.is_empty() {
+            serial_tx.unlisten();
+        } else {
+            serial_tx.listen();
+        }
+    }
+
+    /// Command packets in, replies out (DESIGN.md: a bad command is refused, the scan goes on).
+    #[task(priority = 1, shared = [device, tx], local = [
+        rx_out,
+        packets: wire::Accumulator<COMMAND_PACKET_MAX> = wire::Accumulator::new(),
+        buf: [u8; 64] = [0; 64],
+    ])]
+    async fn commands(cx: commands::Context) {
+        let commands::LocalResources {
+            rx_out,
+            packets,
+            buf,
+            ..
+        } = cx.local;
+        let mut shared = cx.shared;
+        loop {
+            (&mut shared.device, &mut shared.tx).lock(|device, tx| {
+                while let Some(byte) = rx_out.dequeue() {
+                    if let Some(decoded) = packets.feed::<Command>(byte)
+                        && let Some(reply) = device.handle_decoded(decoded)
+                    {
+                        send(tx, &Uplink::Event(reply), buf);
+                    }
+                }
+            });
+            Mono::delay(1.millis()).await;
+        }
+    }
+
+    /// Scans continuously while started, at the configured frame rate.
+    #[task(priority = 1, shared = [device, tx], local = [
+        sensor,
+        burst: [u16; et_core::config::SAMPLES_PER_STEP_MAX as usize] =
+            [0; et_core::config::SAMPLES_PER_STEP_MAX as usize],
+        v_m: [f32; K_MAX] = [0.0; K_MAX],
+        packet: [u8; PACKET_MAX] = [0; PACKET_MAX],
+    ])]
+    async fn scan(cx: scan::Context) {
+        let scan::LocalResources {
+            sensor,
+            burst,
+            v_m,
+            packet,
+            ..
+        } = cx.local;
+        let mut shared = cx.shared;
+        let mut scanner: Option<Scanner> = None;
+        let mut last_status = Mono::now();
+        loop {
+            let start = Mono::now();
+            let period_ms = (&mut shared.device, &mut shared.tx)
+                .lock(|device, tx| scan_once(device, tx, &mut scanner, sensor, burst, v_m, packet));
+            let now = Mono::now();
+            if (now - last_status).as_millis() >= board::STATUS_PERIOD_MS {
+                last_status = now;
+                (&mut shared.device, &mut shared.tx).lock(|device, tx| {
+                    let status = device.status(uptime());
+                    send(tx, &Uplink::Event(Event::Status(status)), packet);
+                });
+            }
+            Mono::delay_until(start + period_ms.millis()).await;
+        }
+    }
+
+    /// Picks up a new configuration, and scans once if started; returns how long to wait
+    /// before the next scan, in ms.
+    fn scan_once(
+        device: &mut Device<board::Store>,
+        tx: &mut Producer<'static, u8>,
+        scanner: &mut Option<Scanner>,
+        sensor: &mut board::Sensor,
+        burst: &mut [u16],
+        v_m: &mut [f32],
+        packet: &mut [u8],
+    ) -> u32 {
+        if let Some(config) = device.take_reconfigure() {
+            *scanner = Scanner::new(config, sensor).ok();
+            if scanner.is_none() {
+                let fault = Fault::Frontend {
+                    seq: device.next_seq(),
+                };
+                send(tx, &Uplink::Event(Event::Fault(fault)), packet);
+            }
+        }
+        let (true, Some(scanner)) = (device.scanning(), scanner.as_ref()) else {
+            return 10;
+        };
+        let k = scanner.frame_len();
+        board::before_scan(sensor, device.next_seq());
+        let timestamp = uptime();
+        match scanner.scan(sensor, burst, &mut v_m[..k]) {
+            Ok(report) => {
+                if let Ok(out) = device.frame(timestamp, &report, &v_m[..k], 0) {
+                    if !send(tx, &Uplink::Frame(out.frame), packet) {
+                        device.dropped();
+                    }
+                    for event in out.events {
+                        send(tx, &Uplink::Event(event), packet);
+                    }
+                }
+            }
+            Err(_) => {
+                let fault = Fault::Frontend {
+                    seq: device.next_seq(),
+                };
+                send(tx, &Uplink::Event(Event::Fault(fault)), packet);
+            }
+        }
+        frame_period_ms(scanner.config())
+    }
+
+    /// One frame's duration at `config`'s rate in ms, at least 1 (the tick).
+    fn frame_period_ms(config: &ScanConfig) -> u32 {
+        ((1e3 / config.frame_rate_hz().max(1e-3)) as u32).max(1)
     }
 
     /// Sleeps between interrupts (the default busy loop would burn a host core under QEMU).

@@ -13,12 +13,14 @@
 //! - [`frontend`]: the acquisition chain as an `et_core::Frontend` (current jitter, settling,
 //!   noise, gain, ADC), and the fast path for whole noisy frames.
 //! - [`scene`]: scene files (TOML) and the runner that turns them into frames with their truth.
+//! - [`emulated`]: the tables of the sheet compiled into the firmware's QEMU image.
 //! - [`rng`]: the seedable generator that makes every run reproducible.
 //!
 //! It depends on `et-core` only.
 #![forbid(unsafe_code)]
 
 pub mod band;
+pub mod emulated;
 pub mod fast;
 pub mod frontend;
 pub mod network;

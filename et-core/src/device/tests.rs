@@ -92,7 +92,11 @@ fn touches(out: &Output) -> StdVec<u16> {
 fn ping_start_stop_and_configure() {
     assert_eq!(config().validate().unwrap().frame_len(), K);
     let mut d = device();
-    assert_eq!(d.take_reconfigure(), Some(config()), "the default is picked up once");
+    assert_eq!(
+        d.take_reconfigure(),
+        Some(config()),
+        "the default is picked up once"
+    );
     assert_eq!(d.take_reconfigure(), None);
     assert_eq!(
         d.handle(Command::Ping { nonce: 7 }),
@@ -112,7 +116,11 @@ fn ping_start_stop_and_configure() {
         d.handle(Command::Configure(bad)),
         refused(CommandTag::Configure, Refusal::BadConfig)
     );
-    assert_eq!(d.config(), &config(), "a refused configuration changes nothing");
+    assert_eq!(
+        d.config(),
+        &config(),
+        "a refused configuration changes nothing"
+    );
     assert_eq!(d.take_reconfigure(), None);
     assert_eq!(d.status(Micros(0)).bad_commands, 1);
 
@@ -120,10 +128,7 @@ fn ping_start_stop_and_configure() {
         protocol: ProtocolKind::PseudoPolar,
         ..config()
     };
-    assert_eq!(
-        d.handle(Command::Configure(pp)),
-        ack(CommandTag::Configure)
-    );
+    assert_eq!(d.handle(Command::Configure(pp)), ack(CommandTag::Configure));
     assert_eq!(d.take_reconfigure(), Some(pp));
 }
 
@@ -155,9 +160,11 @@ fn an_uploaded_model_classifies_every_frame() {
     let mut d = device();
     let b = blob(false, ProtocolKind::Opposite);
     let replies = upload(&mut d, &b, wire::crc32(&b));
-    assert!(replies[..replies.len() - 1]
-        .iter()
-        .all(|r| matches!(r, Some(Event::Ack { .. }))));
+    assert!(
+        replies[..replies.len() - 1]
+            .iter()
+            .all(|r| matches!(r, Some(Event::Ack { .. })))
+    );
     assert_eq!(replies.last().unwrap(), &ack(CommandTag::ModelCommit));
     assert!(d.status(Micros(0)).model_loaded);
     let report = ScanReport::default();
