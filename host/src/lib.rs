@@ -1,6 +1,6 @@
 //! `et-host`: everything et runs on the computer.
 //!
-//! Modules (more arrive with their issues: `link`, `recon`, `viewer`):
+//! Modules (more arrive with their issues: `viewer`):
 //!
 //! - [`tables`]: a protocol's tables (SPEC §4) as plain data for people and programs, behind
 //!   `et protocol`.
@@ -8,6 +8,8 @@
 //!   Python and MATLAB read without et; `et sim` writes it.
 //! - [`learn`]: touch classification from raw voltages (SPEC §9): collection, QDA/LDA fitting
 //!   with shrinkage, cross-validation, export to the firmware's model blob.
+//! - [`link`]: the serial link to the firmware: packet decoding with resync and counters,
+//!   commands with replies and timeouts, model upload, reconnect after a pulled cable.
 //! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade).
 //! - [`fem`]: the forward model, P1 finite elements with the complete electrode model (SPEC §5).
 //! - [`recon`]: one-step Gauss-Newton difference imaging with NOSER, ROIs, SPEC §7 metrics.
@@ -18,6 +20,7 @@
 pub mod dynamic;
 pub mod fem;
 pub mod learn;
+pub mod link;
 pub mod mesh;
 pub mod plot;
 pub mod recon;

@@ -51,8 +51,7 @@ impl QemuSheet {
     /// [`SceneError`] if the scene or a network solve fails.
     pub fn new() -> Result<Self, SceneError> {
         let scene = Scene::parse(SCENE, "square-13cm-16.toml")?;
-        let sheet =
-            Sheet::new(&scene.sheet, &[]).map_err(|e| SceneError::Run(e.to_string()))?;
+        let sheet = Sheet::new(&scene.sheet, &[]).map_err(|e| SceneError::Run(e.to_string()))?;
         let transfers = states()
             .iter()
             .map(|touches| sheet.transfer(touches))
@@ -90,7 +89,9 @@ impl QemuSheet {
              //! image's sheet. Regenerate with\n\
              //! `ET_UPDATE_QEMU_SHEET=1 cargo test -p et-sim qemu_sheet_is_current`.\n\n",
         );
-        s.push_str(&format!("/// Electrode count L.\npub const ELECTRODES: u8 = {l};\n"));
+        s.push_str(&format!(
+            "/// Electrode count L.\npub const ELECTRODES: u8 = {l};\n"
+        ));
         s.push_str(&format!(
             "/// Frames scanned per touch state.\npub const FRAMES_PER_STATE: u32 = {FRAMES_PER_STATE};\n"
         ));
@@ -141,7 +142,11 @@ mod tests {
         let base = q.ideal_frame(0, &p, 32e-6);
         for s in 1..q.transfers.len() {
             let f = q.ideal_frame(s, &p, 32e-6);
-            let change = f.iter().zip(&base).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let change = f
+                .iter()
+                .zip(&base)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(change > 5e-3, "state {s} moves a voltage by {change} V");
         }
     }

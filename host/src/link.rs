@@ -1,0 +1,447 @@
+//! The serial link to the firmware: packets in, commands out (DESIGN.md, "The data, end to
+//! end").
+//!
+//! - [`Decoder`] turns a byte stream into [`Uplink`] messages with the resynchronising
+//!   [`Accumulator`]: after garbage, truncation or a flipped bit it drops the damaged packet and
+//!   carries on at the next 0x00. [`Counters`] say what was lost: damaged packets, packets of
+//!   another wire version, and frames missing from the sequence numbers.
+//! - [`Link`] owns a serial port (opened by path with `serialport`; [`list_ports`] names
+//!   them). A reader thread decodes everything the device sends; when the port fails (a pulled
+//!   cable) it closes it and reopens the same path every [`RECONNECT_EVERY`] until the device
+//!   is back, counting [`Counters::reconnects`]. [`Link::request`] sends a command and waits
+//!   for its reply with a timeout, keeping the frames that arrive meanwhile;
+//!   [`Link::upload_model`] sends a model blob in chunks and commits it.
+
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use et_core::wire::{
+    self, Accumulator, Command, CommandTag, Event, MODEL_CHUNK, PACKET_MAX, Refusal, Uplink,
+    WireError,
+};
+use serde::Serialize;
+
+/// The firmware's baud rate (`firmware/src/board.rs`).
+pub const DEFAULT_BAUD: u32 = 921_600;
+/// How often the reader tries to reopen a port that failed.
+pub const RECONNECT_EVERY: Duration = Duration::from_millis(200);
+/// How long one read waits before the reader checks whether it should stop.
+const READ_TIMEOUT: Duration = Duration::from_millis(20);
+
+/// What the link has seen since it was opened.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Counters {
+    /// Bytes received.
+    pub bytes: u64,
+    /// Frames decoded.
+    pub frames: u64,
+    /// Events decoded.
+    pub events: u64,
+    /// Packets dropped as damaged (COBS, CRC, body, overflow).
+    pub corrupt: u64,
+    /// Packets of a wire version this build does not speak.
+    pub wrong_version: u64,
+    /// Frames missing from the sequence (a gap in `seq`: lost on the wire or dropped by the
+    /// device).
+    pub lost_frames: u64,
+    /// Times the port failed and was opened again.
+    pub reconnects: u64,
+}
+
+/// Byte stream to messages, with resynchronisation and counters (see the module docs).
+#[derive(Debug)]
+pub struct Decoder {
+    packets: Box<Accumulator<PACKET_MAX>>,
+    counters: Counters,
+    next_seq: Option<u32>,
+}
+
+impl Default for Decoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Decoder {
+    /// A decoder at the start of a stream.
+    #[must_use]
+    pub fn new() -> Self {
+        Self {
+            packets: Box::new(Accumulator::new()),
+            counters: Counters::default(),
+            next_seq: None,
+        }
+    }
+
+    /// Decodes `bytes`, appending every good message to `out`.
+    pub fn feed(&mut self, bytes: &[u8], out: &mut Vec<Uplink>) {
+        self.counters.bytes += bytes.len() as u64;
+        for &b in bytes {
+            match self.packets.feed::<Uplink>(b) {
+                None => {}
+                Some(Ok(message)) => {
+                    self.count(&message);
+                    out.push(message);
+                }
+                Some(Err(WireError::Version { .. })) => self.counters.wrong_version += 1,
+                Some(Err(_)) => self.counters.corrupt += 1,
+            }
+        }
+    }
+
+    fn count(&mut self, message: &Uplink) {
+        match message {
+            Uplink::Frame(f) => {
+                self.counters.frames += 1;
+                if let Some(want) = self.next_seq
+                    && f.seq > want
+                {
+                    self.counters.lost_frames += u64::from(f.seq - want);
+                }
+                self.next_seq = Some(f.seq.wrapping_add(1));
+            }
+            Uplink::Event(_) => self.counters.events += 1,
+        }
+    }
+
+    /// Forgets a packet in progress (after a reconnect: its first half came from before).
+    pub fn resync(&mut self) {
+        self.packets.clear();
+    }
+
+    /// The counters so far.
+    #[must_use]
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+}
+
+/// What can go wrong on the link.
+#[derive(Debug)]
+pub enum LinkError {
+    /// The port could not be opened.
+    Open {
+        /// The port's path.
+        path: String,
+        /// Why.
+        source: serialport::Error,
+    },
+    /// Writing to the port failed (the cable may be out: the reader reconnects).
+    Write(std::io::Error),
+    /// The port is closed right now (waiting to reconnect).
+    Disconnected,
+    /// No reply within the timeout.
+    Timeout {
+        /// What was waited for.
+        waiting_for: String,
+    },
+    /// The device refused a command.
+    Refused {
+        /// The command.
+        command: CommandTag,
+        /// The device's reason.
+        reason: Refusal,
+    },
+    /// A message could not be encoded (a bug: commands always fit).
+    Encode(WireError),
+}
+
+impl std::fmt::Display for LinkError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinkError::Open { path, source } => write!(
+                f,
+                "cannot open serial port {path}: {source} (`et ports` lists the ports)"
+            ),
+            LinkError::Write(e) => write!(f, "writing to the serial port: {e}"),
+            LinkError::Disconnected => {
+                write!(
+                    f,
+                    "the serial port is disconnected (waiting for it to come back)"
+                )
+            }
+            LinkError::Timeout { waiting_for } => {
+                write!(
+                    f,
+                    "no answer from the device while waiting for {waiting_for}"
+                )
+            }
+            LinkError::Refused { command, reason } => {
+                write!(f, "the device refused {command:?}: {reason:?}")
+            }
+            LinkError::Encode(e) => write!(f, "encoding a command: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for LinkError {}
+
+/// The serial ports this machine has (paths), for `et ports` and the viewer's list.
+///
+/// # Errors
+/// When the system cannot be asked.
+pub fn list_ports() -> Result<Vec<String>, serialport::Error> {
+    Ok(serialport::available_ports()?
+        .into_iter()
+        .map(|p| p.port_name)
+        .collect())
+}
+
+type Port = Box<dyn serialport::SerialPort>;
+
+fn open(path: &str, baud: u32) -> Result<Port, serialport::Error> {
+    serialport::new(path, baud).timeout(READ_TIMEOUT).open()
+}
+
+/// A device on a serial port (see the module docs).
+#[derive(Debug)]
+pub struct Link {
+    path: String,
+    writer: Arc<Mutex<Option<Port>>>,
+    counters: Arc<Mutex<Counters>>,
+    incoming: Receiver<Uplink>,
+    pending: VecDeque<Uplink>,
+    stop: Arc<AtomicBool>,
+    reader: Option<JoinHandle<()>>,
+}
+
+impl Link {
+    /// Opens the port at `path` at `baud` and starts reading.
+    ///
+    /// # Errors
+    /// [`LinkError::Open`] if the port cannot be opened.
+    pub fn open(path: &str, baud: u32) -> Result<Self, LinkError> {
+        let port = open(path, baud).map_err(|source| LinkError::Open {
+            path: path.to_string(),
+            source,
+        })?;
+        let writer = port.try_clone().map_err(|source| LinkError::Open {
+            path: path.to_string(),
+            source,
+        })?;
+        let writer = Arc::new(Mutex::new(Some(writer)));
+        let counters = Arc::new(Mutex::new(Counters::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, incoming) = mpsc::channel();
+        let reader = Reader {
+            path: path.to_string(),
+            baud,
+            writer: Arc::clone(&writer),
+            counters: Arc::clone(&counters),
+            stop: Arc::clone(&stop),
+            out: tx,
+        };
+        let reader = std::thread::Builder::new()
+            .name(format!("et-link {path}"))
+            .spawn(move || reader.run(port))
+            .map_err(|e| LinkError::Open {
+                path: path.to_string(),
+                source: e.into(),
+            })?;
+        Ok(Self {
+            path: path.to_string(),
+            writer,
+            counters,
+            incoming,
+            pending: VecDeque::new(),
+            stop,
+            reader: Some(reader),
+        })
+    }
+
+    /// The port's path.
+    #[must_use]
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// What the link has seen so far.
+    #[must_use]
+    pub fn counters(&self) -> Counters {
+        *self.counters.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Sends raw bytes (tests use it to send damaged packets).
+    ///
+    /// # Errors
+    /// [`LinkError::Disconnected`] while the port is closed, [`LinkError::Write`] when writing
+    /// fails.
+    pub fn send_bytes(&self, bytes: &[u8]) -> Result<(), LinkError> {
+        let mut writer = self.writer.lock().unwrap_or_else(|e| e.into_inner());
+        let port = writer.as_mut().ok_or(LinkError::Disconnected)?;
+        port.write_all(bytes).map_err(LinkError::Write)?;
+        port.flush().map_err(LinkError::Write)
+    }
+
+    /// Sends `command` without waiting for its reply.
+    ///
+    /// # Errors
+    /// As [`send_bytes`](Self::send_bytes).
+    pub fn send(&self, command: &Command) -> Result<(), LinkError> {
+        let mut buf = [0u8; wire::COMMAND_PACKET_MAX];
+        let n = wire::encode(command, &mut buf).map_err(LinkError::Encode)?;
+        self.send_bytes(&buf[..n])
+    }
+
+    /// The next message from the device (kept ones first), waiting at most `timeout`.
+    ///
+    /// # Errors
+    /// [`LinkError::Timeout`] when nothing came.
+    pub fn next(&mut self, timeout: Duration) -> Result<Uplink, LinkError> {
+        if let Some(m) = self.pending.pop_front() {
+            return Ok(m);
+        }
+        self.incoming
+            .recv_timeout(timeout)
+            .map_err(|_| LinkError::Timeout {
+                waiting_for: "a message".into(),
+            })
+    }
+
+    /// Sends `command` and waits up to `timeout` for its reply: `Pong` for a ping, the
+    /// acknowledgement otherwise. Messages that arrive meanwhile are kept for [`next`](Self::next).
+    ///
+    /// # Errors
+    /// [`LinkError::Refused`] with the device's reason, [`LinkError::Timeout`], or a send error.
+    pub fn request(&mut self, command: &Command, timeout: Duration) -> Result<Event, LinkError> {
+        let tag = command.tag();
+        self.send(command)?;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let message = match self.incoming.recv_timeout(left) {
+                Ok(m) => m,
+                Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => {
+                    return Err(LinkError::Timeout {
+                        waiting_for: format!("the reply to {tag:?}"),
+                    });
+                }
+            };
+            match (&message, command) {
+                (Uplink::Event(Event::Pong { nonce }), Command::Ping { nonce: sent })
+                    if nonce == sent =>
+                {
+                    return Ok(Event::Pong { nonce: *nonce });
+                }
+                (Uplink::Event(e @ Event::Ack { command }), _) if *command == tag => {
+                    return Ok(e.clone());
+                }
+                (Uplink::Event(Event::Refused { command, reason }), _)
+                    if *command == tag || *command == CommandTag::Unknown =>
+                {
+                    return Err(LinkError::Refused {
+                        command: *command,
+                        reason: *reason,
+                    });
+                }
+                _ => self.pending.push_back(message),
+            }
+        }
+    }
+
+    /// Uploads a model blob: begin (the device erases a slot: allow for `erase_timeout`),
+    /// chunks of [`MODEL_CHUNK`] bytes, commit. The device verifies it (CRC, model checks, scan
+    /// configuration) before it replaces the old model.
+    ///
+    /// # Errors
+    /// The first refusal or timeout; the device keeps its old model.
+    pub fn upload_model(
+        &mut self,
+        blob: &[u8],
+        timeout: Duration,
+        erase_timeout: Duration,
+    ) -> Result<(), LinkError> {
+        let len = u32::try_from(blob.len()).map_err(|_| LinkError::Refused {
+            command: CommandTag::ModelBegin,
+            reason: Refusal::TooLarge,
+        })?;
+        let crc = wire::crc32(blob);
+        self.request(&Command::ModelBegin { len, crc }, erase_timeout)?;
+        for (i, chunk) in blob.chunks(MODEL_CHUNK).enumerate() {
+            let data = heapless::Vec::from_slice(chunk)
+                .map_err(|_| LinkError::Encode(WireError::BufferFull))?;
+            let offset = (i * MODEL_CHUNK) as u32;
+            self.request(&Command::ModelChunk { offset, data }, timeout)?;
+        }
+        self.request(&Command::ModelCommit, timeout)?;
+        Ok(())
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(reader) = self.reader.take() {
+            let _ = reader.join();
+        }
+    }
+}
+
+/// The reader thread's state.
+struct Reader {
+    path: String,
+    baud: u32,
+    writer: Arc<Mutex<Option<Port>>>,
+    counters: Arc<Mutex<Counters>>,
+    stop: Arc<AtomicBool>,
+    out: Sender<Uplink>,
+}
+
+impl Reader {
+    fn run(self, port: Port) {
+        let mut decoder = Decoder::new();
+        let mut port = Some(port);
+        let mut buf = vec![0u8; 4096];
+        let mut messages = Vec::new();
+        let mut reconnects = 0;
+        while !self.stop.load(Ordering::Relaxed) {
+            let Some(p) = port.as_mut() else {
+                std::thread::sleep(RECONNECT_EVERY);
+                port = self.reopen();
+                if port.is_some() {
+                    reconnects += 1;
+                    decoder.resync();
+                }
+                continue;
+            };
+            match p.read(&mut buf) {
+                Ok(0) => {}
+                Ok(n) => decoder.feed(&buf[..n], &mut messages),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(_) => {
+                    // The cable is out (or the device reset): close and try again later.
+                    port = None;
+                    *self.writer.lock().unwrap_or_else(|e| e.into_inner()) = None;
+                }
+            }
+            {
+                let mut c = self.counters.lock().unwrap_or_else(|e| e.into_inner());
+                *c = Counters {
+                    reconnects,
+                    ..decoder.counters()
+                };
+            }
+            for m in messages.drain(..) {
+                if self.out.send(m).is_err() {
+                    return;
+                }
+            }
+        }
+    }
+
+    fn reopen(&self) -> Option<Port> {
+        let port = open(&self.path, self.baud).ok()?;
+        let writer = port.try_clone().ok()?;
+        *self.writer.lock().unwrap_or_else(|e| e.into_inner()) = Some(writer);
+        Some(port)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,269 @@
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::thread;
+
+use et_core::ScanConfig;
+use et_core::ScanReport;
+use et_core::device::{Device, RamStore};
+use et_core::wire::{COMMAND_PACKET_MAX, Frame};
+use serialport::{SerialPort, TTYPort};
+
+use super::*;
+
+fn packet<T: Serialize>(m: &T) -> Vec<u8> {
+    let mut buf = vec![0u8; PACKET_MAX];
+    let n = wire::encode(m, &mut buf).unwrap();
+    buf.truncate(n);
+    buf
+}
+
+fn frame(seq: u32) -> Uplink {
+    Uplink::Frame(Frame {
+        seq,
+        timestamp: et_core::Micros(seq * 1000),
+        config: ScanConfig::REFERENCE,
+        flags: 0,
+        rail_count: 0,
+        voltages: heapless::Vec::from_slice(&[0.25, -0.5, f32::from(seq as u16)]).unwrap(),
+    })
+}
+
+#[test]
+fn decoder_resyncs_counts_damage_and_sequence_gaps() {
+    let mut stream = Vec::new();
+    stream.extend(b"boot garbage \x01\x02");
+    stream.extend(packet(&frame(0)));
+    let mut flipped = packet(&frame(1));
+    flipped[6] ^= 0x01;
+    stream.extend(flipped);
+    let truncated = packet(&frame(2));
+    stream.extend(&truncated[..truncated.len() / 2]);
+    stream.extend(packet(&frame(3)));
+    stream.extend(packet(&Uplink::Event(Event::Pong { nonce: 9 })));
+    // Another wire version: valid COBS and CRC, version byte 2.
+    let mut other = vec![2u8, 1, 2];
+    let crc = wire::crc32(&other);
+    other.extend(crc.to_le_bytes());
+    let mut cobs = Vec::new();
+    cobs.push(0u8);
+    cobs.push((other.len() + 1) as u8);
+    cobs.extend(&other);
+    cobs.push(0);
+    assert!(!other.contains(&0));
+    stream.extend(cobs);
+    stream.extend(packet(&frame(7)));
+
+    // Fed in awkward pieces: the result does not depend on how reads split the stream.
+    for piece in [1usize, 3, 64, stream.len()] {
+        let mut d = Decoder::new();
+        let mut out = Vec::new();
+        for chunk in stream.chunks(piece) {
+            d.feed(chunk, &mut out);
+        }
+        let seqs: Vec<u32> = out
+            .iter()
+            .filter_map(|m| match m {
+                Uplink::Frame(f) => Some(f.seq),
+                Uplink::Event(_) => None,
+            })
+            .collect();
+        assert_eq!(seqs, [0, 3, 7], "piece {piece}");
+        assert_eq!(
+            out[1..3],
+            [frame(3), Uplink::Event(Event::Pong { nonce: 9 })]
+        );
+        let c = d.counters();
+        // The garbage before the first 0x00 and the flipped frame; the truncated frame ran
+        // into frame 3's leading 0x00 and died with it as one damaged packet.
+        assert_eq!((c.corrupt, c.wrong_version), (3, 1), "piece {piece}: {c:?}");
+        assert_eq!((c.frames, c.events, c.lost_frames), (3, 1, 2 + 3));
+        assert_eq!(c.bytes, stream.len() as u64);
+    }
+}
+
+/// A device on the master side of a pty: the real `et_core::device::Device` answering
+/// commands, and a frame every 2 ms while started.
+struct FakeDevice {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<TTYPort>>,
+}
+
+impl FakeDevice {
+    fn start(mut master: TTYPort) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&stop);
+        let thread = thread::spawn(move || {
+            master.set_timeout(Duration::from_millis(2)).unwrap();
+            let mut device = Device::new(RamStore::<4096>::new(), ScanConfig::REFERENCE).unwrap();
+            let mut packets = Box::new(Accumulator::<COMMAND_PACKET_MAX>::new());
+            let mut buf = [0u8; 512];
+            let v_m = vec![0.01f32; 208];
+            while !flag.load(Ordering::Relaxed) {
+                if let Ok(n) = master.read(&mut buf) {
+                    for &b in &buf[..n] {
+                        if let Some(d) = packets.feed::<Command>(b)
+                            && let Some(reply) = device.handle_decoded(d)
+                        {
+                            let _ = master.write_all(&packet(&Uplink::Event(reply)));
+                        }
+                    }
+                }
+                if device.scanning() {
+                    let out = device
+                        .frame(et_core::Micros(0), &ScanReport::default(), &v_m, 0)
+                        .unwrap();
+                    let _ = master.write_all(&packet(&Uplink::Frame(out.frame)));
+                }
+            }
+            master
+        });
+        Self {
+            stop,
+            thread: Some(thread),
+        }
+    }
+
+    /// Stops the device and gives its end of the cable back.
+    fn stop(mut self) -> TTYPort {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.take().unwrap().join().unwrap()
+    }
+}
+
+/// A pty pair reached through a stable symlink in `dir` (as /dev/serial/by-id is).
+fn cable(dir: &Path) -> (TTYPort, PathBuf) {
+    let (master, slave) = TTYPort::pair().unwrap();
+    let target = slave.name().unwrap();
+    // The slave end must stay open until the link has opened it, or the pty hangs up.
+    std::mem::forget(slave);
+    let link = dir.join("et-device");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(target, &link).unwrap();
+    (master, link)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("et-link-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn frames(link: &mut Link, n: usize) -> Vec<Frame> {
+    let mut out = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while out.len() < n && Instant::now() < deadline {
+        if let Ok(Uplink::Frame(f)) = link.next(Duration::from_millis(100)) {
+            out.push(f);
+        }
+    }
+    assert_eq!(out.len(), n, "frames within 10 s");
+    out
+}
+
+#[test]
+fn commands_get_their_replies_over_a_pty() {
+    let dir = temp_dir("commands");
+    let (master, path) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let mut link = Link::open(path.to_str().unwrap(), DEFAULT_BAUD).unwrap();
+    let t = Duration::from_secs(2);
+    assert_eq!(
+        link.request(&Command::Ping { nonce: 42 }, t).unwrap(),
+        Event::Pong { nonce: 42 }
+    );
+    let bad = ScanConfig {
+        electrodes: 3,
+        ..ScanConfig::REFERENCE
+    };
+    match link.request(&Command::Configure(bad), t) {
+        Err(LinkError::Refused { reason, .. }) => assert_eq!(reason, Refusal::BadConfig),
+        other => panic!("{other:?}"),
+    }
+    // Garbage into the device's input is refused, and the link goes on.
+    link.send_bytes(&[0, 1, 2, 3, 0]).unwrap();
+    assert!(matches!(
+        link.next(t),
+        Ok(Uplink::Event(Event::Refused {
+            command: CommandTag::Unknown,
+            ..
+        }))
+    ));
+    link.request(&Command::Start, t).unwrap();
+    let got = frames(&mut link, 20);
+    assert!(got.windows(2).all(|w| w[1].seq == w[0].seq + 1));
+    // A request while frames stream: they are kept, not lost.
+    link.request(&Command::Ping { nonce: 1 }, t).unwrap();
+    let more = frames(&mut link, 5);
+    assert_eq!(
+        more[0].seq,
+        got[19].seq + 1,
+        "no frame lost around the request"
+    );
+    // An upload the device refuses (not a model) reports the refusal.
+    match link.upload_model(&[1, 2, 3, 4, 5, 6, 7, 8], t, t) {
+        Err(LinkError::Refused { command, reason }) => {
+            assert_eq!(
+                (command, reason),
+                (CommandTag::ModelCommit, Refusal::BadModel)
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(link.counters().corrupt, 0);
+    assert_eq!(link.counters().lost_frames, 0);
+    drop(link);
+    device.stop();
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
+    let dir = temp_dir("pulled");
+    let (master, path) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let mut link = Link::open(path.to_str().unwrap(), DEFAULT_BAUD).unwrap();
+    let t = Duration::from_secs(2);
+    link.request(&Command::Start, t).unwrap();
+    let before = frames(&mut link, 10);
+    // Pull: the device's end goes away.
+    drop(device.stop());
+    thread::sleep(Duration::from_millis(300));
+    assert!(matches!(
+        link.send(&Command::Stop),
+        Err(LinkError::Disconnected | LinkError::Write(_))
+    ));
+    // Plug back in (a new pty behind the same name): the link reopens it by itself.
+    let (master, _) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while link.counters().reconnects == 0 && Instant::now() < deadline {
+        thread::sleep(Duration::from_millis(50));
+    }
+    assert_eq!(link.counters().reconnects, 1);
+    link.request(&Command::Start, t).unwrap();
+    // First what the old device sent before the pull (kept, in order), then the new one's
+    // frames from seq 0.
+    let after = frames(&mut link, 60);
+    let restart = after
+        .iter()
+        .position(|f| f.seq == 0)
+        .expect("the new device's first frame");
+    let seqs: Vec<u32> = before
+        .iter()
+        .chain(&after[..restart])
+        .map(|f| f.seq)
+        .collect();
+    assert!(
+        seqs.windows(2).all(|w| w[1] == w[0] + 1),
+        "nothing lost before the pull"
+    );
+    assert!(
+        after[restart..]
+            .windows(2)
+            .all(|w| w[1].seq == w[0].seq + 1)
+    );
+    drop(link);
+    device.stop();
+    let _ = std::fs::remove_dir_all(dir);
+}
