@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every check and test of the et repository. Works on a fresh machine: it installs what
-# it needs (the thumbv7em-none-eabihf target, rustfmt and clippy) and is what CI (.ci/run) calls.
+# it needs (the thumbv7em-none-eabihf target, rustfmt, clippy, and Debian's qemu-system-arm)
+# and is what CI (.ci/run) calls.
 # Usage: ./scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,6 +16,15 @@ for c in rustfmt clippy; do
   grep -q "^$c" <<<"$components" || rustup component add "$c"
 done
 
+step "qemu-system-arm (the firmware image's end-to-end test boots it)"
+if ! command -v qemu-system-arm >/dev/null; then
+  export DEBIAN_FRONTEND=noninteractive
+  sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get install -y --no-install-recommends qemu-system-arm >/dev/null \
+    || { $sudo apt-get update >/dev/null && $sudo apt-get install -y --no-install-recommends qemu-system-arm >/dev/null; }
+fi
+qemu-system-arm --version | head -1
+
 step "format (cargo fmt --check)"
 cargo fmt --all -- --check
 (cd firmware && cargo fmt -- --check)
@@ -27,7 +37,8 @@ cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
 cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features --features defmt
 
 step "firmware image (cd firmware && cargo build --release)"
-(cd firmware && cargo clippy --release -- -D warnings && cargo build --release)
+(cd firmware && cargo clippy --release -- -D warnings && cargo build --release \
+  && cargo clippy --profile qemu --features qemu -- -D warnings)
 elf=target/thumbv7em-none-eabihf/release/et-firmware
 if command -v size >/dev/null; then
   size -A "$elf" | awk '/^\.(vector_table|text|rodata|data) /{f+=$2} /^\.(data|bss|uninit) /{r+=$2}

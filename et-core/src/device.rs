@@ -383,14 +383,17 @@ impl<S: ModelStore> Device<S> {
         self.dropped_since_last = true;
     }
 
-    /// Turns one scan under the current configuration into the frame to send, and classifies
-    /// it with the active model. `v_m` holds the scan's K voltages; `flags` are extra frame
-    /// flags (e.g. [`wire::FLAG_SUBSECTION`]).
+    /// Turns one scan made under `config` into the frame to send, and classifies it with the
+    /// active model. `v_m` holds the scan's K voltages; `flags` are extra frame flags (e.g.
+    /// [`wire::FLAG_SUBSECTION`]). A scan under a configuration that has changed since it
+    /// started (a `Configure` arrived meanwhile) is sent as what it is, without classification
+    /// or tare.
     ///
     /// # Errors
     /// [`WireError::BufferFull`] if `v_m` is longer than [`K_MAX`].
     pub fn frame(
         &mut self,
+        config: &ScanConfig,
         timestamp: Micros,
         report: &ScanReport,
         v_m: &[f32],
@@ -403,7 +406,8 @@ impl<S: ModelStore> Device<S> {
         } else {
             0
         };
-        let frame = Frame::from_scan(seq, timestamp, self.config, report, flags | dropped, v_m)?;
+        let frame = Frame::from_scan(seq, timestamp, *config, report, flags | dropped, v_m)?;
+        let current = *config == self.config;
         self.status.frames = self.status.frames.saturating_add(1);
         let mut events = Vec::new();
         if frame.rail_count > 0 {
@@ -415,6 +419,9 @@ impl<S: ModelStore> Device<S> {
                 let electrode = new.trailing_zeros() as u8;
                 let _ = events.push(Event::Fault(Fault::Electrode { electrode }));
             }
+        }
+        if !current {
+            return Ok(Output { frame, events });
         }
         if self.tare_pending && v_m.len() == self.protocol.frame_len() {
             self.tare_pending = false;

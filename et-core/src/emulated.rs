@@ -65,7 +65,7 @@ impl<'t> EmulatedSheet<'t> {
         seed: u32,
     ) -> Result<Self, EmulatedError> {
         let l = usize::from(electrodes);
-        if l == 0 || z.is_empty() || z.len() % (l * l) != 0 {
+        if l == 0 || z.is_empty() || !z.len().is_multiple_of(l * l) {
             return Err(EmulatedError::Tables);
         }
         Ok(Self {

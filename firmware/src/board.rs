@@ -25,9 +25,9 @@ pub const STATUS_PERIOD_MS: u32 = 500;
 pub const DEFAULT_CONFIG: ScanConfig = ScanConfig::REFERENCE;
 
 #[cfg(feature = "qemu")]
-pub use emulated::{SYSCLK_HZ, Sensor, Slots, Store, before_scan, clocks, sensor};
+pub use emulated::{SYSTICK_HZ, Sensor, Slots, Store, before_scan, clocks, sensor};
 #[cfg(not(feature = "qemu"))]
-pub use real::{SYSCLK_HZ, Sensor, Store, before_scan, clocks, sensor, store};
+pub use real::{SYSTICK_HZ, Sensor, Store, before_scan, clocks, sensor, store};
 
 #[cfg(not(feature = "qemu"))]
 mod real {
@@ -49,6 +49,9 @@ mod real {
 
     /// System clock: HSI (16 MHz internal, no crystal needed) through the PLL.
     pub const SYSCLK_HZ: u32 = 168_000_000;
+
+    /// SysTick counts the core clock.
+    pub const SYSTICK_HZ: u32 = SYSCLK_HZ;
 
     /// The clock tree.
     pub fn clocks() -> Config {
@@ -129,10 +132,11 @@ mod emulated {
     use stm32f4xx_hal::pac::TIM2;
     use stm32f4xx_hal::rcc::{Config, Rcc};
 
-    /// System clock: HSI at 16 MHz without the PLL (QEMU hangs in the PLL set-up).
-    pub const SYSCLK_HZ: u32 = 16_000_000;
+    /// QEMU's SysTick counts at the netduinoplus2's nominal 168 MHz whatever the clock set-up
+    /// says (it does not emulate the RCC), so the monotonic is started at that rate.
+    pub const SYSTICK_HZ: u32 = 168_000_000;
 
-    /// The clock tree.
+    /// The clock tree: HSI at 16 MHz without the PLL (QEMU hangs in the PLL set-up).
     pub fn clocks() -> Config {
         Config::hsi()
     }

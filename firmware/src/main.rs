@@ -6,14 +6,15 @@
 //!
 //! | task | priority | does |
 //! | --- | --- | --- |
-//! | `usart2` (interrupt) | 2 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
+//! | `usart2` (interrupt) | 3 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
+//! | `commands` | 2 | reassembles packets from `rx` (resynchronising after garbage), hands them to `Device`, sends the reply |
 //! | `scan` | 1 | rebuilds the `Scanner` on a new configuration, scans, sends the frame and its events, paces to the frame rate, sends a status event every `STATUS_PERIOD_MS` |
-//! | `commands` | 1 | reassembles packets from `rx` (resynchronising after garbage), hands them to `Device`, sends the reply |
 //!
-//! The two priority-1 tasks share the `Device` and the transmit queue (their locks cost
-//! nothing: RTIC runs them one at a time). A frame that does not fit the transmit queue is dropped and
-//! counted (`Status::dropped`, `FLAG_DROPPED_BEFORE` on the next one); the scan never waits for
-//! the link.
+//! The scan samples without holding the `Device`, so commands are answered during a scan; it
+//! locks the device and the transmit queue only to turn the scan into a frame. A frame that
+//! does not fit the transmit queue is dropped and counted (`Status::dropped`,
+//! `FLAG_DROPPED_BEFORE` on the next one); the scan never waits for the link. Replies and
+//! events are small and go out first when the queue is short of room for a frame.
 //!
 //! The `qemu` feature builds the same application for QEMU's netduinoplus2: internal clock,
 //! model slots in RAM, and the sheet of `qemu_sheet.rs` as the front end (DESIGN.md).
@@ -37,6 +38,7 @@ mod app {
     use et_core::wire::{self, COMMAND_PACKET_MAX, Command, Event, Fault, PACKET_MAX, Uplink};
     use et_core::{Micros, ScanConfig, Scanner};
     use heapless::spsc::{Consumer, Producer, Queue};
+    use rtic::Mutex as _;
     use rtic_monotonics::systick::prelude::*;
     use serde::Serialize;
     use stm32f4xx_hal::pac::{self, USART2};
@@ -80,7 +82,7 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
         let mut rcc = dp.RCC.freeze(board::clocks());
-        Mono::start(cx.core.SYST, board::SYSCLK_HZ);
+        Mono::start(cx.core.SYST, board::SYSTICK_HZ);
 
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
@@ -141,7 +143,7 @@ mod app {
     }
 
     /// The serial port: received bytes into `rx_in`, queued bytes out while TXE is set.
-    #[task(binds = USART2, priority = 2, local = [serial_tx, serial_rx, tx_out, rx_in])]
+    #[task(binds = USART2, priority = 3, local = [serial_tx, serial_rx, tx_out, rx_in])]
     fn usart2(cx: usart2::Context) {
         let usart2::LocalResources {
             serial_tx,
@@ -175,7 +177,7 @@ mod app {
     }
 
     /// Command packets in, replies out (DESIGN.md: a bad command is refused, the scan goes on).
-    #[task(priority = 1, shared = [device, tx], local = [
+    #[task(priority = 2, shared = [device, tx], local = [
         rx_out,
         packets: wire::Accumulator<COMMAND_PACKET_MAX> = wire::Accumulator::new(),
         buf: [u8; 64] = [0; 64],
@@ -202,7 +204,8 @@ mod app {
         }
     }
 
-    /// Scans continuously while started, at the configured frame rate.
+    /// Scans continuously while started, at the configured frame rate. The scan itself runs
+    /// without holding the device, so commands are handled while it samples.
     #[task(priority = 1, shared = [device, tx], local = [
         sensor,
         burst: [u16; et_core::config::SAMPLES_PER_STEP_MAX as usize] =
@@ -223,8 +226,36 @@ mod app {
         let mut last_status = Mono::now();
         loop {
             let start = Mono::now();
-            let period_ms = (&mut shared.device, &mut shared.tx)
-                .lock(|device, tx| scan_once(device, tx, &mut scanner, sensor, burst, v_m, packet));
+            let (reconfigure, scanning, seq) = shared
+                .device
+                .lock(|d| (d.take_reconfigure(), d.scanning(), d.next_seq()));
+            if let Some(config) = reconfigure {
+                scanner = Scanner::new(config, sensor).ok();
+                if scanner.is_none() {
+                    fault(&mut shared, seq, packet);
+                }
+            }
+            let mut period_ms = 10;
+            if let (true, Some(scanner)) = (scanning, scanner.as_ref()) {
+                period_ms = frame_period_ms(scanner.config());
+                let k = scanner.frame_len();
+                board::before_scan(sensor, seq);
+                let timestamp = uptime();
+                match scanner.scan(sensor, burst, &mut v_m[..k]) {
+                    Ok(report) => (&mut shared.device, &mut shared.tx).lock(|device, tx| {
+                        let config = scanner.config();
+                        if let Ok(out) = device.frame(config, timestamp, &report, &v_m[..k], 0) {
+                            if !send(tx, &Uplink::Frame(out.frame), packet) {
+                                device.dropped();
+                            }
+                            for event in out.events {
+                                send(tx, &Uplink::Event(event), packet);
+                            }
+                        }
+                    }),
+                    Err(_) => fault(&mut shared, seq, packet),
+                }
+            }
             let now = Mono::now();
             if (now - last_status).as_millis() >= board::STATUS_PERIOD_MS {
                 last_status = now;
@@ -237,51 +268,10 @@ mod app {
         }
     }
 
-    /// Picks up a new configuration, and scans once if started; returns how long to wait
-    /// before the next scan, in ms.
-    fn scan_once(
-        device: &mut Device<board::Store>,
-        tx: &mut Producer<'static, u8>,
-        scanner: &mut Option<Scanner>,
-        sensor: &mut board::Sensor,
-        burst: &mut [u16],
-        v_m: &mut [f32],
-        packet: &mut [u8],
-    ) -> u32 {
-        if let Some(config) = device.take_reconfigure() {
-            *scanner = Scanner::new(config, sensor).ok();
-            if scanner.is_none() {
-                let fault = Fault::Frontend {
-                    seq: device.next_seq(),
-                };
-                send(tx, &Uplink::Event(Event::Fault(fault)), packet);
-            }
-        }
-        let (true, Some(scanner)) = (device.scanning(), scanner.as_ref()) else {
-            return 10;
-        };
-        let k = scanner.frame_len();
-        board::before_scan(sensor, device.next_seq());
-        let timestamp = uptime();
-        match scanner.scan(sensor, burst, &mut v_m[..k]) {
-            Ok(report) => {
-                if let Ok(out) = device.frame(timestamp, &report, &v_m[..k], 0) {
-                    if !send(tx, &Uplink::Frame(out.frame), packet) {
-                        device.dropped();
-                    }
-                    for event in out.events {
-                        send(tx, &Uplink::Event(event), packet);
-                    }
-                }
-            }
-            Err(_) => {
-                let fault = Fault::Frontend {
-                    seq: device.next_seq(),
-                };
-                send(tx, &Uplink::Event(Event::Fault(fault)), packet);
-            }
-        }
-        frame_period_ms(scanner.config())
+    /// Reports that the front end failed at scan `seq`.
+    fn fault(shared: &mut scan::SharedResources<'_>, seq: u32, packet: &mut [u8]) {
+        let event = Uplink::Event(Event::Fault(Fault::Frontend { seq }));
+        shared.tx.lock(|tx| send(tx, &event, packet));
     }
 
     /// One frame's duration at `config`'s rate in ms, at least 1 (the tick).

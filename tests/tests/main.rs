@@ -3,5 +3,7 @@
 //! - `e2e`: the pieces of `et-core` wired as firmware and host wire them: scan engine -> frames
 //!   over a damaged byte stream -> host model fit -> model upload in chunks -> on-device
 //!   classification -> touch events back. New end-to-end scenarios go here.
+//! - `qemu`: the real firmware image booted in QEMU, driven over a pty by the host link.
 
 mod e2e;
+mod qemu;

@@ -169,14 +169,18 @@ fn an_uploaded_model_classifies_every_frame() {
     assert!(d.status(Micros(0)).model_loaded);
     let report = ScanReport::default();
     for class in [2, 0, 1] {
-        let out = d.frame(Micros(1), &report, &frame_of(class), 0).unwrap();
+        let out = d
+            .frame(&config(), Micros(1), &report, &frame_of(class), 0)
+            .unwrap();
         assert_eq!(touches(&out), [class as u16]);
     }
     assert_eq!(d.status(Micros(0)).frames, 3);
 
     // Clearing stops classification.
     assert_eq!(d.handle(Command::ModelClear), ack(CommandTag::ModelClear));
-    let out = d.frame(Micros(1), &report, &frame_of(1), 0).unwrap();
+    let out = d
+        .frame(&config(), Micros(1), &report, &frame_of(1), 0)
+        .unwrap();
     assert!(touches(&out).is_empty());
 }
 
@@ -209,7 +213,9 @@ fn a_bad_upload_keeps_the_old_model() {
         replies.last().unwrap(),
         &refused(CommandTag::ModelCommit, Refusal::ModelMismatch)
     );
-    let out = d.frame(Micros(1), &report, &frame_of(2), 0).unwrap();
+    let out = d
+        .frame(&config(), Micros(1), &report, &frame_of(2), 0)
+        .unwrap();
     assert_eq!(touches(&out), [2], "the first model still classifies");
 
     // Out of order and oversized.
@@ -256,7 +262,9 @@ fn a_bad_upload_keeps_the_old_model() {
         d.handle(Command::ModelCommit),
         refused(CommandTag::ModelCommit, Refusal::UploadOrder)
     );
-    let out = d.frame(Micros(1), &report, &frame_of(0), 0).unwrap();
+    let out = d
+        .frame(&config(), Micros(1), &report, &frame_of(0), 0)
+        .unwrap();
     assert_eq!(touches(&out), [0], "the first model survived all of it");
 }
 
@@ -290,13 +298,13 @@ fn a_referenced_model_waits_for_the_tare() {
     // V_0 has a large standing voltage on feature 1: raw, frame_of(0) would read as class 1.
     let mut v_0 = vec![0.0; K];
     v_0[1] = 5.0;
-    let out = d.frame(Micros(1), &report, &v_0, 0).unwrap();
+    let out = d.frame(&config(), Micros(1), &report, &v_0, 0).unwrap();
     assert!(out.events.is_empty(), "no class before the tare");
     assert_eq!(d.handle(Command::Tare), None, "acknowledged with a frame");
-    let out = d.frame(Micros(2), &report, &v_0, 0).unwrap();
+    let out = d.frame(&config(), Micros(2), &report, &v_0, 0).unwrap();
     assert_eq!(out.events[0], ack(CommandTag::Tare).unwrap());
     let v: StdVec<f32> = frame_of(0).iter().zip(&v_0).map(|(a, b)| a + b).collect();
-    let out = d.frame(Micros(3), &report, &v, 0).unwrap();
+    let out = d.frame(&config(), Micros(3), &report, &v, 0).unwrap();
     assert_eq!(touches(&out), [0]);
     // A new configuration forgets V_0 (it was taken under the old one).
     let pp = ScanConfig {
@@ -304,8 +312,36 @@ fn a_referenced_model_waits_for_the_tare() {
         ..config()
     };
     d.handle(Command::Configure(pp));
-    let out = d.frame(Micros(4), &report, &v, 0).unwrap();
+    let out = d.frame(&pp, Micros(4), &report, &v, 0).unwrap();
     assert!(touches(&out).is_empty());
+}
+
+#[test]
+fn a_scan_under_a_superseded_configuration_is_sent_but_not_classified() {
+    let mut d = device();
+    let b = blob(false, ProtocolKind::Opposite);
+    upload(&mut d, &b, wire::crc32(&b));
+    let report = ScanReport::default();
+    let slower = ScanConfig {
+        samples_per_step: 80,
+        ..config()
+    };
+    // The scan started under config(); Configure(slower) arrived while it ran.
+    d.handle(Command::Configure(slower));
+    let out = d
+        .frame(&config(), Micros(1), &report, &frame_of(1), 0)
+        .unwrap();
+    assert_eq!(
+        out.frame.config,
+        config(),
+        "labelled with what it was scanned under"
+    );
+    assert!(touches(&out).is_empty());
+    // The model matches the new configuration too (same protocol): the next scan classifies.
+    let out = d
+        .frame(&slower, Micros(2), &report, &frame_of(1), 0)
+        .unwrap();
+    assert_eq!(touches(&out), [1]);
 }
 
 #[test]
@@ -313,17 +349,20 @@ fn sequence_numbers_and_dropped_frames() {
     let mut d = device();
     let report = ScanReport::default();
     let v = frame_of(0);
-    let a = d.frame(Micros(1), &report, &v, 0).unwrap().frame;
+    let a = d.frame(&config(), Micros(1), &report, &v, 0).unwrap().frame;
     d.dropped();
-    let b = d.frame(Micros(2), &report, &v, 0).unwrap().frame;
-    let c = d.frame(Micros(3), &report, &v, 0).unwrap().frame;
+    let b = d.frame(&config(), Micros(2), &report, &v, 0).unwrap().frame;
+    let c = d.frame(&config(), Micros(3), &report, &v, 0).unwrap().frame;
     assert_eq!((a.seq, b.seq, c.seq), (0, 1, 2));
     assert_eq!(a.flags & FLAG_DROPPED_BEFORE, 0);
     assert_ne!(b.flags & FLAG_DROPPED_BEFORE, 0);
     assert_eq!(c.flags & FLAG_DROPPED_BEFORE, 0);
     assert_eq!(d.status(Micros(0)).dropped, 1);
     assert_eq!(a.config, config());
-    assert!(d.frame(Micros(4), &report, &[0.0; K_MAX + 1], 0).is_err());
+    assert!(
+        d.frame(&config(), Micros(4), &report, &[0.0; K_MAX + 1], 0)
+            .is_err()
+    );
 }
 
 #[test]
@@ -338,21 +377,27 @@ fn an_open_probe_electrode_is_suspected_and_its_neighbours_are_not() {
                 report.rail.set(usize::from(step.k));
             }
         }
-        let out = d2.frame(Micros(1), &report, &[0.0; K], 0).unwrap();
+        let out = d2
+            .frame(&config(), Micros(1), &report, &[0.0; K], 0)
+            .unwrap();
         assert_eq!(
             out.events.as_slice(),
             &[Event::Fault(Fault::Electrode { electrode: open })]
         );
         assert_eq!(d2.status(Micros(0)).suspect_electrodes, 1 << open);
         // Reported once, counted every frame.
-        let out = d2.frame(Micros(2), &report, &[0.0; K], 0).unwrap();
+        let out = d2
+            .frame(&config(), Micros(2), &report, &[0.0; K], 0)
+            .unwrap();
         assert!(out.events.is_empty());
         assert_eq!(d2.status(Micros(0)).rail_frames, 2);
     }
     // One saturated measurement is a rail frame, not a suspect.
     let mut report = ScanReport::default();
     report.rail.set(3);
-    let out = d.frame(Micros(1), &report, &[0.0; K], 0).unwrap();
+    let out = d
+        .frame(&config(), Micros(1), &report, &[0.0; K], 0)
+        .unwrap();
     assert!(out.events.is_empty());
     assert_eq!(out.frame.rail_count, 1);
     assert_eq!(d.status(Micros(0)).suspect_electrodes, 0);

@@ -111,7 +111,13 @@ impl FakeDevice {
                 }
                 if device.scanning() {
                     let out = device
-                        .frame(et_core::Micros(0), &ScanReport::default(), &v_m, 0)
+                        .frame(
+                            &ScanConfig::REFERENCE,
+                            et_core::Micros(0),
+                            &ScanReport::default(),
+                            &v_m,
+                            0,
+                        )
                         .unwrap();
                     let _ = master.write_all(&packet(&Uplink::Frame(out.frame)));
                 }
