@@ -324,6 +324,31 @@ impl core::fmt::Display for WireError {
 
 impl core::error::Error for WireError {}
 
+/// Largest postcard encoding of a [`Frame`]'s fields other than its voltages, with the
+/// [`Uplink`] tag and the voltage count (varints at their widest).
+pub const FRAME_HEADER_MAX: usize = 48;
+
+/// Largest packet of a frame with `k` voltages, delimiters included (bytes on the wire).
+#[must_use]
+pub const fn frame_packet_max(k: usize) -> usize {
+    // version byte + header + k f32 + CRC-32, COBS-encoded, between two 0x00.
+    cobs_max_len(1 + FRAME_HEADER_MAX + 4 * k + 4) + 2
+}
+
+/// Bytes on the wire per frame besides the frame: one [`Event::Touch`] (at most 16 bytes as a
+/// packet) when a model classifies, and a share of the status events.
+pub const EVENTS_PER_FRAME_MAX: usize = 24;
+
+/// The link's load under `config` at `baud` (8N1: 10 bits per byte): bytes per second that
+/// frames and their events need at the configuration's frame rate, over the bytes per second
+/// the line carries. Above 1 the device drops frames (and counts them).
+#[must_use]
+pub fn link_load(config: &ScanConfig, baud: u32) -> Option<f32> {
+    let k = config.validate().ok()?.frame_len();
+    let per_frame = (frame_packet_max(k) + EVENTS_PER_FRAME_MAX) as f32;
+    Some(per_frame * config.frame_rate_hz() / (baud as f32 / 10.0))
+}
+
 /// Upper bound of COBS-encoding `n` bytes: one code byte per started run of 254.
 #[must_use]
 pub const fn cobs_max_len(n: usize) -> usize {

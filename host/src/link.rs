@@ -27,7 +27,7 @@ use et_core::wire::{
 use serde::Serialize;
 
 /// The firmware's baud rate (`firmware/src/board.rs`).
-pub const DEFAULT_BAUD: u32 = 921_600;
+pub const DEFAULT_BAUD: u32 = 2_000_000;
 /// How often the reader tries to reopen a port that failed.
 pub const RECONNECT_EVERY: Duration = Duration::from_millis(200);
 /// How long one read waits before the reader checks whether it should stop.

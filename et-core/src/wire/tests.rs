@@ -294,6 +294,14 @@ fn largest_frame_fits_packet_max_and_reference_frame_size_is_known() {
     };
     let packet = encode_vec(&Uplink::Frame(big.clone()));
     assert!(packet.len() <= PACKET_MAX);
+    assert!(packet.len() <= frame_packet_max(K_MAX), "FRAME_HEADER_MAX is an upper bound");
+    let mut custom = big.clone();
+    custom.config.protocol = ProtocolKind::Custom(Pattern {
+        drive_skip: u8::MAX,
+        measure_skips: SkipSet(u32::MAX),
+    });
+    custom.voltages.truncate(3);
+    assert!(encode_vec(&Uplink::Frame(custom)).len() <= frame_packet_max(3));
     assert_eq!(
         decode_packet::<Uplink>(&packet),
         vec![Ok(Uplink::Frame(big))]
