@@ -50,7 +50,10 @@ fn every_protocol(l: u8) -> Vec<ProtocolKind> {
 #[test]
 fn every_supported_configuration_fits_the_link_with_margin() {
     let baud = firmware_baud();
-    assert_eq!(baud, DEFAULT_BAUD, "host and firmware must agree on the rate");
+    assert_eq!(
+        baud, DEFAULT_BAUD,
+        "host and firmware must agree on the rate"
+    );
     let mut worst = (0.0f32, ProtocolKind::Adjacent, 0u8);
     let mut checked = 0;
     for l in (L_MIN..=BOARD_ELECTRODES_MAX).step_by(2) {
@@ -79,7 +82,10 @@ fn every_supported_configuration_fits_the_link_with_margin() {
     assert!(worst.0 <= 0.8, "worst load {worst:?}");
     // The reference point itself (AD, L = 16, 78 Hz) leaves most of the line free.
     let reference = link_load(&ScanConfig::REFERENCE, baud).unwrap();
-    println!("reference (AD, L = 16) link load: {:.0} %", 100.0 * reference);
+    println!(
+        "reference (AD, L = 16) link load: {:.0} %",
+        100.0 * reference
+    );
     assert!(reference < 0.5, "reference load {reference}");
     // At the old 921 600 baud the worst case did not fit: the test can fail.
     assert!(link_load(&worst_config(worst.1, worst.2), 921_600).unwrap() > 1.0);

@@ -402,3 +402,85 @@ fn an_open_probe_electrode_is_suspected_and_its_neighbours_are_not() {
     assert_eq!(out.frame.rail_count, 1);
     assert_eq!(d.status(Micros(0)).suspect_electrodes, 0);
 }
+
+/// Valid command packets to mutate: every kind, with the delimiters.
+fn command_packets() -> StdVec<StdVec<u8>> {
+    let b = blob(false, ProtocolKind::Opposite);
+    let commands = [
+        Command::Ping { nonce: 3 },
+        Command::Start,
+        Command::Stop,
+        Command::Configure(config()),
+        Command::ModelBegin {
+            len: b.len() as u32,
+            crc: wire::crc32(&b),
+        },
+        Command::ModelChunk {
+            offset: 0,
+            data: Vec::from_slice(&b[..CHUNK]).unwrap(),
+        },
+        Command::ModelCommit,
+        Command::ModelClear,
+        Command::Tare,
+    ];
+    commands
+        .iter()
+        .map(|c| {
+            let mut buf = [0u8; wire::COMMAND_PACKET_MAX];
+            let n = encode(c, &mut buf).unwrap();
+            buf[..n].to_vec()
+        })
+        .collect()
+}
+
+proptest::proptest! {
+    // Cases from PROPTEST_CASES (256 by default). The fuzzing run of the README:
+    // PROPTEST_CASES=1000000 cargo test --release -p et-core fuzz_
+
+    /// The firmware's command path (accumulator, decoder, device) on damaged streams: valid
+    /// packets with bit flips, cuts and garbage between them. It never panics, every reply is
+    /// an answer to a command or a refusal, and a scan afterwards still makes a frame.
+    #[test]
+    fn fuzz_command_decoder(
+        picks in proptest::collection::vec(0usize..9, 0..12),
+        flips in proptest::collection::vec((0usize..4096, 0u8..8), 0..6),
+        cuts in proptest::collection::vec(0usize..4096, 0..3),
+        garbage in proptest::collection::vec(proptest::num::u8::ANY, 0..64),
+        at in 0usize..4096,
+    ) {
+        let packets = command_packets();
+        let mut stream: StdVec<u8> = picks.iter().flat_map(|&i| packets[i].clone()).collect();
+        if !stream.is_empty() {
+            for (i, bit) in &flips {
+                let i = i % stream.len();
+                stream[i] ^= 1 << bit;
+            }
+            for c in &cuts {
+                let c = c % stream.len();
+                stream.remove(c);
+                if stream.is_empty() {
+                    break;
+                }
+            }
+        }
+        let at = if stream.is_empty() { 0 } else { at % stream.len() };
+        stream.splice(at..at, garbage);
+        let mut d = device();
+        let mut packets_in = wire::Accumulator::<{ wire::COMMAND_PACKET_MAX }>::new();
+        for b in stream {
+            if let Some(decoded) = packets_in.feed::<Command>(b)
+                && let Some(reply) = d.handle_decoded(decoded)
+            {
+                let answer = matches!(
+                    reply,
+                    Event::Ack { .. } | Event::Refused { .. } | Event::Pong { .. }
+                );
+                proptest::prop_assert!(answer, "unexpected reply {:?}", reply);
+            }
+        }
+        let config = *d.config();
+        let k = config.validate().unwrap().frame_len();
+        let out = d.frame(&config, Micros(0), &ScanReport::default(), &vec![0.0; k], 0).unwrap();
+        proptest::prop_assert_eq!(out.frame.voltages.len(), k);
+    }
+}

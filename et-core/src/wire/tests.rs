@@ -294,7 +294,10 @@ fn largest_frame_fits_packet_max_and_reference_frame_size_is_known() {
     };
     let packet = encode_vec(&Uplink::Frame(big.clone()));
     assert!(packet.len() <= PACKET_MAX);
-    assert!(packet.len() <= frame_packet_max(K_MAX), "FRAME_HEADER_MAX is an upper bound");
+    assert!(
+        packet.len() <= frame_packet_max(K_MAX),
+        "FRAME_HEADER_MAX is an upper bound"
+    );
     let mut custom = big.clone();
     custom.config.protocol = ProtocolKind::Custom(Pattern {
         drive_skip: u8::MAX,
