@@ -385,3 +385,62 @@ fn the_firmware_image_scans_classifies_and_obeys_in_qemu() {
         "{counters:?}"
     );
 }
+
+/// Builds `et` and returns its path.
+fn build_et() -> PathBuf {
+    let status = Process::new(env!("CARGO"))
+        .args(["build", "-p", "et-host", "--bin", "et"])
+        .current_dir(repo())
+        .status()
+        .expect("run cargo for et");
+    assert!(status.success(), "et did not build");
+    let profile = if cfg!(debug_assertions) {
+        "debug"
+    } else {
+        "release"
+    };
+    repo().join("target").join(profile).join("et")
+}
+
+/// `et record` from the QEMU board, killed with SIGKILL mid-stream: every frame in the file
+/// before the kill is whole and in sequence (at most the frame in flight is lost).
+#[test]
+fn a_killed_recorder_loses_at_most_the_frame_in_flight() {
+    let image = build_image();
+    let et = build_et();
+    let dir = std::env::temp_dir().join(format!("et-qemu-record-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("session.jsonl");
+    let mut qemu = Qemu::boot(&image);
+    let mut recorder = Process::new(et)
+        .args(["record", "--port", &qemu.pty, "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Let the recorder open the port before the CPU runs.
+    std::thread::sleep(Duration::from_millis(300));
+    qemu.run();
+    let lines = |p: &Path| std::fs::read_to_string(p).map_or(0, |t| t.lines().count());
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    while lines(&out) < 60 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the recorder wrote {} lines",
+            lines(&out)
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    recorder.kill().unwrap(); // SIGKILL: no chance to flush anything more
+    recorder.wait().unwrap();
+    let recording = et_host::recording::read(&out).unwrap();
+    assert_eq!(recording.header.config, ScanConfig::REFERENCE);
+    assert!(recording.records.len() >= 59);
+    let seqs: Vec<u32> = recording.records.iter().map(|r| r.seq).collect();
+    assert!(
+        seqs.windows(2).all(|w| w[1] == w[0] + 1),
+        "every frame before the kill is there: {seqs:?}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

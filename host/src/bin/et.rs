@@ -102,6 +102,45 @@ enum Command {
     ///   et forward --scene sim/scenes/square-13cm-16.toml --triangles 30000 --json > v.json
     #[command(verbatim_doc_comment)]
     Forward(ForwardArgs),
+    /// List the serial ports of this machine (for --port).
+    ///
+    /// Example:
+    ///   et ports
+    #[command(verbatim_doc_comment)]
+    Ports,
+    /// Record frames from a board on a serial port into a recording (JSON Lines, one frame per
+    /// line, flushed as it arrives: a crash or a pulled cable loses at most the frame in
+    /// flight). Starts the scan, records until --frames or --seconds or Ctrl-C, and rides out a
+    /// pulled cable (the port is reopened when it comes back). A change of configuration on
+    /// the board continues in FILE-2.jsonl, FILE-3.jsonl, ...
+    ///
+    /// Examples:
+    ///   et record --port /dev/ttyUSB0 --out session.jsonl --seconds 60
+    ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
+    #[command(verbatim_doc_comment)]
+    Record(RecordArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct RecordArgs {
+    /// The board's serial port (`et ports` lists them).
+    #[arg(long)]
+    port: String,
+    /// Where to write the recording (.jsonl).
+    #[arg(long)]
+    out: PathBuf,
+    /// Baud rate (the firmware's is the default).
+    #[arg(long, default_value_t = et_host::link::DEFAULT_BAUD)]
+    baud: u32,
+    /// Stop after this many frames.
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Stop after this many seconds.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Do not send Start (the board is already scanning).
+    #[arg(long)]
+    no_start: bool,
 }
 
 /// How a command gets its mesh.
@@ -1182,6 +1221,109 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     Ok(())
 }
 
+fn ports_cmd() -> Result<()> {
+    let ports = et_host::link::list_ports().context("listing serial ports")?;
+    if ports.is_empty() {
+        println!("no serial ports found (is the board plugged in?)");
+    }
+    for p in ports {
+        println!("{p}");
+    }
+    Ok(())
+}
+
+/// `FILE.jsonl` for part 1, `FILE-2.jsonl`, `FILE-3.jsonl`, ... after configuration changes.
+fn part_path(out: &std::path::Path, part: u32) -> PathBuf {
+    if part == 1 {
+        return out.to_path_buf();
+    }
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = out
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    out.with_file_name(format!("{stem}-{part}{ext}"))
+}
+
+fn record_cmd(args: &RecordArgs) -> Result<()> {
+    use et_core::wire::{Command as Cmd, Uplink};
+    use et_host::link::Link;
+    use std::time::Duration;
+
+    let mut link = Link::open(&args.port, args.baud)?;
+    if !args.no_start {
+        // A board that is still booting loses what it is sent: try a few times.
+        let mut started = Err(anyhow::anyhow!("no answer"));
+        for _ in 0..5 {
+            match link.request(&Cmd::Start, Duration::from_secs(1)) {
+                Ok(_) => {
+                    started = Ok(());
+                    break;
+                }
+                Err(e) => started = Err(e.into()),
+            }
+        }
+        started.with_context(|| format!("starting the scan on {}", args.port))?;
+    }
+    let deadline = args
+        .seconds
+        .map(|s| Instant::now() + Duration::from_secs_f64(s));
+    let bar = ProgressBar::new_spinner().with_style(
+        ProgressStyle::with_template("{spinner} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    let (mut part, mut written) = (0u32, 0u64);
+    let mut writer: Option<(et_core::ScanConfig, recording::Writer)> = None;
+    while args.frames.is_none_or(|n| written < n) && deadline.is_none_or(|d| Instant::now() < d) {
+        let frame = match link.next(Duration::from_millis(200)) {
+            Ok(Uplink::Frame(f)) => f,
+            Ok(Uplink::Event(_)) | Err(_) => {
+                let c = link.counters();
+                bar.set_message(format!(
+                    "{written} frames, {} lost, {} damaged packets, {} reconnects",
+                    c.lost_frames, c.corrupt, c.reconnects
+                ));
+                bar.tick();
+                continue;
+            }
+        };
+        if writer
+            .as_ref()
+            .is_none_or(|(config, _)| *config != frame.config)
+        {
+            part += 1;
+            let path = part_path(&args.out, part);
+            let header = Header::new(format!("port:{}", args.port), &frame.config)?;
+            let w = recording::Writer::create(&path, &header)?;
+            bar.println(format!(
+                "recording {} ({} electrodes, {}) into {}",
+                args.port,
+                frame.config.electrodes,
+                frame.config.protocol.name(),
+                path.display()
+            ));
+            writer = Some((frame.config, w));
+        }
+        if let Some((_, w)) = writer.as_mut() {
+            w.append(&Record::new(&frame, None))?;
+        }
+        written += 1;
+        if written % 25 == 0 {
+            let c = link.counters();
+            bar.set_message(format!(
+                "{written} frames, {} lost, {} damaged packets, {} reconnects",
+                c.lost_frames, c.corrupt, c.reconnects
+            ));
+        }
+    }
+    bar.finish_and_clear();
+    let c = link.counters();
+    println!(
+        "{written} frames recorded; {} lost on the way, {} damaged packets dropped, {} reconnects",
+        c.lost_frames, c.corrupt, c.reconnects
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -1193,6 +1335,8 @@ fn main() -> ExitCode {
         Command::Export(args) => export_cmd(args),
         Command::Reconstruct(args) => reconstruct_cmd(args),
         Command::Forward(args) => forward_cmd(args),
+        Command::Ports => ports_cmd(),
+        Command::Record(args) => record_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
