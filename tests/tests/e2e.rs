@@ -1,5 +1,6 @@
 //! Scan, wire, upload, classify: everything `et-core` does, wired end to end.
 
+use et_core::device::{self, RamStore};
 use et_core::model::{Model, ModelKind, ModelTables, Precision, model_len, write_model};
 use et_core::protocol::{Halving, ProtocolKind};
 use et_core::wire::{
@@ -28,29 +29,25 @@ fn packet<T: serde::Serialize>(m: &T) -> Vec<u8> {
     buf
 }
 
-/// The device side: scans and classifies, talks only in packets.
+/// The device side as the firmware wires it: the scan engine on a scripted sheet, and
+/// `et_core::device::Device` for commands, frames, model upload and on-chip classes.
 struct Device {
     sheet: ScriptedSheet,
     scanner: Scanner,
-    seq: u32,
+    device: Box<device::Device<RamStore<16384>>>,
     commands: Box<Accumulator<COMMAND_PACKET_MAX>>,
-    upload: Vec<u8>,
-    upload_crc: u32,
-    model: Option<Vec<u8>>,
 }
 
 impl Device {
     fn new() -> Self {
         let mut sheet = ScriptedSheet::new(0xfeed);
         let scanner = Scanner::new(config(), &mut sheet).expect("valid config");
+        let device = Box::new(device::Device::new(RamStore::new(), config()).expect("valid"));
         Self {
             sheet,
             scanner,
-            seq: 0,
+            device,
             commands: Box::default(),
-            upload: Vec::new(),
-            upload_crc: 0,
-            model: None,
         }
     }
 
@@ -78,20 +75,23 @@ impl Device {
             .expect("scan");
         let mut out = Vec::new();
         for o in obs.chunks(k) {
-            out.extend(packet(&Uplink::Frame(self.frame(
-                &report,
-                FLAG_SUBSECTION,
-                o,
-            ))));
+            out.extend(self.frame(&report, FLAG_SUBSECTION, o));
         }
         out
     }
 
-    fn frame(&mut self, report: &ScanReport, flags: u8, v_m: &[f32]) -> Frame {
-        self.seq += 1;
-        let t = Micros(self.seq * 12_800);
-        Frame::from_scan(self.seq, t, *self.scanner.config(), report, flags, v_m)
-            .expect("K <= K_MAX")
+    /// The frame's packet and its events' packets.
+    fn frame(&mut self, report: &ScanReport, flags: u8, v_m: &[f32]) -> Vec<u8> {
+        let t = Micros(self.device.next_seq() * 12_800);
+        let out = self
+            .device
+            .frame(self.scanner.config(), t, report, v_m, flags)
+            .expect("K <= K_MAX");
+        let mut bytes = packet(&Uplink::Frame(out.frame));
+        for e in out.events {
+            bytes.extend(packet(&Uplink::Event(e)));
+        }
+        bytes
     }
 
     /// Live mode: one scan, its frame, and the on-chip class as a Touch event.
@@ -104,72 +104,20 @@ impl Device {
             .scan(&mut self.sheet, &mut burst, &mut v_m)
             .expect("scan");
         assert_eq!(report.rail.count(), 0);
-        let mut out = packet(&Uplink::Frame(self.frame(&report, 0, &v_m)));
-        if let Some(blob) = &self.model {
-            let model = Model::parse(blob).expect("validated at commit");
-            let mut scratch = vec![0.0; model.scratch_len()];
-            let d = model.evaluate(&v_m, &mut scratch).expect("finite");
-            out.extend(packet(&Uplink::Event(Event::Touch {
-                seq: self.seq,
-                class: d.class,
-                margin: d.margin,
-            })));
-        }
-        out
+        self.frame(&report, 0, &v_m)
     }
 
     /// Feeds command bytes; returns reply packets.
     fn receive(&mut self, bytes: &[u8]) -> Vec<u8> {
         let mut replies = Vec::new();
         for &b in bytes {
-            let Some(result) = self.commands.feed::<Command>(b) else {
-                continue;
-            };
-            let reply = match result {
-                Err(e) => Event::Refused {
-                    command: wire::CommandTag::Unknown,
-                    reason: wire::Refusal::Malformed(e),
-                },
-                Ok(cmd) => self.execute(cmd),
-            };
-            replies.extend(packet(&Uplink::Event(reply)));
+            if let Some(result) = self.commands.feed::<Command>(b)
+                && let Some(reply) = self.device.handle_decoded(result)
+            {
+                replies.extend(packet(&Uplink::Event(reply)));
+            }
         }
         replies
-    }
-
-    fn execute(&mut self, cmd: Command) -> Event {
-        let tag = cmd.tag();
-        let refuse = |reason| Event::Refused {
-            command: tag,
-            reason,
-        };
-        match cmd {
-            Command::ModelBegin { len, crc } => {
-                self.upload = vec![0; len as usize];
-                self.upload_crc = crc;
-            }
-            Command::ModelChunk { offset, data } => {
-                let at = offset as usize;
-                let Some(dst) = self.upload.get_mut(at..at + data.len()) else {
-                    return refuse(wire::Refusal::UploadOrder);
-                };
-                dst.copy_from_slice(&data);
-            }
-            Command::ModelCommit => {
-                if wire::crc32(&self.upload) != self.upload_crc {
-                    return refuse(wire::Refusal::BadModel);
-                }
-                match Model::parse(&self.upload) {
-                    Ok(m) if m.check_config(self.scanner.config()).is_ok() => {}
-                    Ok(_) => return refuse(wire::Refusal::ModelMismatch),
-                    Err(_) => return refuse(wire::Refusal::BadModel),
-                }
-                self.model = Some(std::mem::take(&mut self.upload));
-            }
-            Command::Ping { nonce } => return Event::Pong { nonce },
-            _ => {}
-        }
-        Event::Ack { command: tag }
     }
 }
 
@@ -315,7 +263,7 @@ fn scan_stream_upload_and_classify_on_device() {
         })
     );
     assert_eq!(
-        device.model.as_deref(),
+        device.device.model().map(|m| m.bytes()),
         Some(&blob[..]),
         "the device holds exactly the host's blob"
     );
@@ -390,5 +338,5 @@ fn a_model_for_another_protocol_is_refused() {
             reason: wire::Refusal::ModelMismatch
         })
     );
-    assert!(device.model.is_none());
+    assert!(device.device.model().is_none());
 }
