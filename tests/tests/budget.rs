@@ -4,6 +4,8 @@
 //! at least 20 % to spare, and the host opens the port at the firmware's rate.
 
 use et_core::ScanConfig;
+use et_core::device::FEATURES_MAX;
+use et_core::model::{ModelKind, Precision, model_len};
 use et_core::protocol::{L_MIN, Pattern, ProtocolKind, SkipSet};
 use et_core::wire::link_load;
 use et_host::link::DEFAULT_BAUD;
@@ -97,4 +99,60 @@ fn worst_config(protocol: ProtocolKind, electrodes: u8) -> ScanConfig {
         protocol,
         ..ScanConfig::REFERENCE
     }
+}
+
+/// Bytes of one model slot in the board's flash (`firmware/src/store.rs`).
+const SLOT_BYTES: usize = 384 * 1024;
+
+/// The most features a model of `classes` classes can use and still fit a flash slot (and the
+/// device's evaluation limit).
+fn largest_p(kind: ModelKind, precision: Precision, classes: usize) -> usize {
+    (1..=FEATURES_MAX)
+        .take_while(|&p| model_len(kind, precision, classes, p) <= SLOT_BYTES)
+        .last()
+        .unwrap_or(0)
+}
+
+#[test]
+fn largest_models_that_fit_a_flash_slot() {
+    let slot = firmware_slot_bytes();
+    assert_eq!(
+        slot, SLOT_BYTES,
+        "firmware/src/store.rs changed its slot size"
+    );
+    for classes in [49, 100] {
+        for (kind, precision) in [
+            (ModelKind::Qda, Precision::F32),
+            (ModelKind::Qda, Precision::F16),
+            (ModelKind::Lda, Precision::F32),
+            (ModelKind::Lda, Precision::F16),
+        ] {
+            let p = largest_p(kind, precision, classes);
+            println!(
+                "{classes} classes, {kind:?} {precision:?}: up to p = {p} ({} bytes)",
+                model_len(kind, precision, classes, p)
+            );
+            assert!(p >= 40, "{classes} {kind:?} {precision:?}: p = {p}");
+        }
+    }
+    // The README's 100-class QDA with 48 Fisher-ranked features in f16 (95.2 % next-day) fits.
+    assert!(model_len(ModelKind::Qda, Precision::F16, 100, 48) <= SLOT_BYTES);
+    // The full-covariance QDA of DESIGN.md (49 classes, p = 96, f32) does not fit a slot.
+    assert!(model_len(ModelKind::Qda, Precision::F32, 49, 96) > SLOT_BYTES);
+}
+
+/// `pub const SLOT_BYTES: usize = ...;` of firmware/src/store.rs.
+fn firmware_slot_bytes() -> usize {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/src/store.rs");
+    let text = std::fs::read_to_string(path).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("pub const SLOT_BYTES: usize = "))
+        .expect("store.rs defines SLOT_BYTES");
+    let expr = line
+        .trim_start_matches("pub const SLOT_BYTES: usize = ")
+        .trim_end_matches(';');
+    expr.split('*')
+        .map(|f| f.trim().replace('_', "").parse::<usize>().unwrap())
+        .product()
 }
