@@ -42,7 +42,7 @@ step "firmware image (cd firmware && cargo build --release)"
 elf=target/thumbv7em-none-eabihf/release/et-firmware
 if command -v size >/dev/null; then
   size -A "$elf" | awk '/^\.(vector_table|text|rodata|data) /{f+=$2} /^\.(data|bss|uninit) /{r+=$2}
-    END {printf "firmware image: flash %d of 1048576 bytes, static RAM %d of 131072 bytes\n", f, r}'
+    END {printf "firmware image: flash %d of 262144 bytes (program region), static RAM %d of 131072 bytes\n", f, r}'
 fi
 
 step "tests (cargo test --workspace)"

@@ -21,6 +21,7 @@
 #![no_std]
 #![no_main]
 
+use defmt_rtt as _;
 use panic_halt as _;
 
 mod board;
@@ -106,6 +107,12 @@ mod app {
 
         let (tx, tx_out) = cx.local.txq.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
+        defmt::info!(
+            "et firmware {=str} up: {} at {=u32} baud",
+            env!("CARGO_PKG_VERSION"),
+            board::DEFAULT_CONFIG,
+            board::BAUD
+        );
         scan::spawn().ok();
         commands::spawn().ok();
         (
@@ -196,6 +203,13 @@ mod app {
                     if let Some(decoded) = packets.feed::<Command>(byte)
                         && let Some(reply) = device.handle_decoded(decoded)
                     {
+                        match &reply {
+                            Event::Refused { command, reason } => {
+                                defmt::warn!("refused {}: {}", command, reason);
+                            }
+                            Event::Ack { command } => defmt::debug!("done: {}", command),
+                            _ => {}
+                        }
                         send(tx, &Uplink::Event(reply), buf);
                     }
                 }
@@ -232,7 +246,10 @@ mod app {
             if let Some(config) = reconfigure {
                 scanner = Scanner::new(config, sensor).ok();
                 if scanner.is_none() {
+                    defmt::error!("the front end refused {}", config);
                     fault(&mut shared, seq, packet);
+                } else {
+                    defmt::info!("scanning with {}", config);
                 }
             }
             let mut period_ms = 10;
@@ -246,14 +263,23 @@ mod app {
                         let config = scanner.config();
                         if let Ok(out) = device.frame(config, timestamp, &report, &v_m[..k], 0) {
                             if !send(tx, &Uplink::Frame(out.frame), packet) {
+                                defmt::debug!("link busy: frame dropped");
                                 device.dropped();
+                            }
+                            for event in out.events.iter() {
+                                if let Event::Fault(f) = event {
+                                    defmt::warn!("{}", f);
+                                }
                             }
                             for event in out.events {
                                 send(tx, &Uplink::Event(event), packet);
                             }
                         }
                     }),
-                    Err(_) => fault(&mut shared, seq, packet),
+                    Err(e) => {
+                        defmt::error!("scan {=u32} failed: {}", seq, defmt::Debug2Format(&e));
+                        fault(&mut shared, seq, packet);
+                    }
                 }
             }
             let now = Mono::now();
