@@ -15,12 +15,15 @@
 //! potentials are shifted so that sum_l U_l = 0 (SPEC §5's reference). The point model injects
 //! each electrode's current at its centre node and reads the potential there (ground: the
 //! last electrode's node). One sparse Cholesky factorisation (faer, AMD ordering) serves every
-//! injection.
+//! injection. The sparsity pattern, its ordering and the symbolic factorisation are made once
+//! in [`Forward::new`]; a solve at a new conductivity only fills in the values and redoes the
+//! numeric factorisation (DESIGN.md: "keep the symbolic step").
 
 use et_core::protocol::Protocol;
 use faer::Side;
 use faer::linalg::solvers::SolveCore;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use nalgebra::DMatrix;
 
 use crate::mesh::{Mesh, dist};
@@ -66,6 +69,25 @@ pub struct Solution {
     pub electrodes: DMatrix<f64>,
 }
 
+/// Where one entry of the system matrix comes from.
+#[derive(Clone, Copy, Debug)]
+enum Entry {
+    /// sigma_t times entry k of triangle t's unit stiffness.
+    Stiffness { t: usize, k: usize },
+    /// A contact term (independent of sigma).
+    Fixed(f64),
+}
+
+/// The system's sparsity, fixed per mesh and electrode model: its entries, their order in CSC
+/// storage, and the symbolic Cholesky factorisation (AMD ordering, elimination tree).
+#[derive(Clone, Debug)]
+struct Pattern {
+    entries: Vec<Entry>,
+    symbolic: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+    llt: SymbolicLlt<usize>,
+}
+
 /// The forward operator of one mesh and electrode model.
 #[derive(Clone, Debug)]
 pub struct Forward {
@@ -73,6 +95,77 @@ pub struct Forward {
     electrodes: Electrodes,
     /// Per triangle, the 3 x 3 stiffness of unit conductivity (row-major).
     local: Vec<[f64; 9]>,
+    pattern: Pattern,
+}
+
+/// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
+/// grounded unknown (the last electrode, or its centre node in the point model).
+fn grounded(mesh: &Mesh, electrodes: &Electrodes, full: usize) -> Option<usize> {
+    let (n, l) = (mesh.nodes.len(), mesh.electrodes.len());
+    match electrodes {
+        Electrodes::Complete(_) => (full < n + l - 1).then_some(full),
+        Electrodes::Point => match full.cmp(&mesh.centre_nodes[l - 1]) {
+            std::cmp::Ordering::Less => Some(full),
+            std::cmp::Ordering::Equal => None,
+            std::cmp::Ordering::Greater => Some(full - 1),
+        },
+    }
+}
+
+/// Every entry of the system matrix with its place, then the pattern and its symbolic
+/// factorisation.
+fn make_pattern(
+    mesh: &Mesh,
+    electrodes: &Electrodes,
+    triangles: usize,
+) -> Result<Pattern, FemError> {
+    let n = mesh.nodes.len();
+    let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+    let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * triangles);
+    let mut entries = Vec::with_capacity(places.capacity());
+    let mut put = |i: usize, j: usize, entry: Entry| {
+        if let (Some(a), Some(b)) = (grounded(mesh, electrodes, i), grounded(mesh, electrodes, j)) {
+            places.push(Pair::new(a, b));
+            entries.push(entry);
+        }
+    };
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for i in 0..3 {
+            for j in 0..3 {
+                put(tri[i], tri[j], Entry::Stiffness { t, k: 3 * i + j });
+            }
+        }
+    }
+    if let Electrodes::Complete(z) = electrodes {
+        for (e, edges) in mesh.electrodes.iter().enumerate() {
+            for &[a, b] in edges {
+                let len = dist(mesh.nodes[a], mesh.nodes[b]);
+                let k = len / z[e];
+                put(a, a, Entry::Fixed(k / 3.0));
+                put(b, b, Entry::Fixed(k / 3.0));
+                put(a, b, Entry::Fixed(k / 6.0));
+                put(b, a, Entry::Fixed(k / 6.0));
+                for v in [a, b] {
+                    put(v, n + e, Entry::Fixed(-k / 2.0));
+                    put(n + e, v, Entry::Fixed(-k / 2.0));
+                }
+                put(n + e, n + e, Entry::Fixed(k));
+            }
+        }
+    }
+    let size = match electrodes {
+        Electrodes::Complete(_) => n + mesh.electrodes.len() - 1,
+        Electrodes::Point => n - 1,
+    };
+    let (symbolic, argsort) =
+        SymbolicSparseColMat::try_new_from_indices(size, size, &places).map_err(|e| fail(&e))?;
+    let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).map_err(|e| fail(&e))?;
+    Ok(Pattern {
+        entries,
+        symbolic,
+        argsort,
+        llt,
+    })
 }
 
 impl Forward {
@@ -118,11 +211,19 @@ impl Forward {
                 Ok(m)
             })
             .collect::<Result<Vec<_>, _>>()?;
+        let pattern = make_pattern(&mesh, &electrodes, local.len())?;
         Ok(Self {
             mesh,
             electrodes,
             local,
+            pattern,
         })
+    }
+
+    /// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
+    /// grounded unknown.
+    fn grounded(&self, full: usize) -> Option<usize> {
+        grounded(&self.mesh, &self.electrodes, full)
     }
 
     /// The mesh.
@@ -173,53 +274,25 @@ impl Forward {
             }
         }
         let size = self.size();
-        // Index in the grounded system, None for the grounded unknown.
-        let ground_node = self.mesh.centre_nodes[l - 1];
-        let idx = |full: usize| -> Option<usize> {
-            match self.electrodes {
-                Electrodes::Complete(_) => (full < n + l - 1).then_some(full),
-                Electrodes::Point => match full.cmp(&ground_node) {
-                    std::cmp::Ordering::Less => Some(full),
-                    std::cmp::Ordering::Equal => None,
-                    std::cmp::Ordering::Greater => Some(full - 1),
-                },
-            }
-        };
-        let mut trips: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(9 * sigma.len());
-        let mut put = |i: usize, j: usize, v: f64| {
-            if let (Some(a), Some(b)) = (idx(i), idx(j)) {
-                trips.push(Triplet::new(a, b, v));
-            }
-        };
-        for (t, tri) in self.mesh.triangles.iter().enumerate() {
-            for i in 0..3 {
-                for j in 0..3 {
-                    put(tri[i], tri[j], sigma[t] * self.local[t][3 * i + j]);
-                }
-            }
-        }
-        if let Electrodes::Complete(z) = &self.electrodes {
-            for (e, edges) in self.mesh.electrodes.iter().enumerate() {
-                for &[a, b] in edges {
-                    let len = dist(self.mesh.nodes[a], self.mesh.nodes[b]);
-                    let k = len / z[e];
-                    put(a, a, k / 3.0);
-                    put(b, b, k / 3.0);
-                    put(a, b, k / 6.0);
-                    put(b, a, k / 6.0);
-                    for v in [a, b] {
-                        put(v, n + e, -k / 2.0);
-                        put(n + e, v, -k / 2.0);
-                    }
-                    put(n + e, n + e, k);
-                }
-            }
-        }
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trips)
-            .map_err(|e| FemError::Factorisation(format!("{e:?}")))?;
-        let llt = a
-            .sp_cholesky(Side::Lower)
-            .map_err(|e| FemError::Factorisation(format!("{e:?}")))?;
+        let idx = |full: usize| self.grounded(full);
+        let values: Vec<f64> = self
+            .pattern
+            .entries
+            .iter()
+            .map(|e| match *e {
+                Entry::Stiffness { t, k } => sigma[t] * self.local[t][k],
+                Entry::Fixed(v) => v,
+            })
+            .collect();
+        let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+        let a = SparseColMat::new_from_argsort(
+            self.pattern.symbolic.clone(),
+            &self.pattern.argsort,
+            &values,
+        )
+        .map_err(|e| fail(&e))?;
+        let llt = Llt::try_new_with_symbolic(self.pattern.llt.clone(), a.as_ref(), Side::Lower)
+            .map_err(|e| fail(&e))?;
         let m = currents.ncols();
         let mut rhs = faer::Mat::<f64>::zeros(size, m);
         for c in 0..m {
