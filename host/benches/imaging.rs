@@ -67,3 +67,26 @@ fn live_frame_onto_32x32_pixels() -> f32 {
     let dv32: DVector<f32> = dv.map(|v| v as f32);
     (pix * divan::black_box(&dv32)).sum()
 }
+
+static FORWARD: LazyLock<(Forward, DMatrix<f64>, Vec<f64>)> = LazyLock::new(|| {
+    let spec = disc();
+    let mesh = Mesh::with_about(&spec, 8_000).expect("mesh");
+    let n = mesh.triangles.len();
+    let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).expect("forward");
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("protocol");
+    let currents = Forward::injection_currents(&protocol, 32e-6);
+    let sigma = (0..n)
+        .map(|t| (1.0 + 0.5 * (t as f64 * 0.01).sin()) / spec.sheet_resistance)
+        .collect();
+    (fwd, currents, sigma)
+});
+
+/// One forward solve (16 injections) at a new conductivity on the 8 000-triangle mesh: the
+/// per-iterate cost of iterative Gauss-Newton besides its Jacobian's lead fields.
+#[divan::bench(sample_count = 20, sample_size = 1)]
+fn forward_solve_at_a_new_conductivity() -> f64 {
+    let (fwd, currents, sigma) = &*FORWARD;
+    let sol = fwd.solve(divan::black_box(sigma), currents).expect("solve");
+    sol.electrodes[(0, 0)]
+}
