@@ -208,6 +208,98 @@ impl<P: OutputPin, D: DelayNs> MuxLines<P, D> {
     }
 }
 
+/// A burst of scans of every electrode's potential, as a board that samples all electrodes in
+/// parallel delivers it: `scans` rounds of `channels` single-ended codes of a unipolar
+/// `bits`-bit ADC, interleaved (code of channel c in scan i at `i * channels + c`). A
+/// measurement is the difference of two channels; [`difference`](Self::difference) gives its
+/// burst on the [`difference_scale`], so the scan engine (settle, median, rail flags) runs on it
+/// unchanged.
+#[derive(Debug, Clone, Copy)]
+pub struct ParallelBurst<'a> {
+    codes: &'a [u16],
+    channels: usize,
+    bits: u8,
+}
+
+/// Why a [`ParallelBurst`] refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BurstError {
+    /// No channels, bits outside 1..=15, or codes not a whole number of scans.
+    Shape,
+    /// A probe channel outside the burst.
+    Channel,
+    /// The output holds fewer samples than the burst has scans.
+    Output,
+}
+
+/// The scale of [`ParallelBurst::difference`] codes for a `bits`-bit single-ended ADC of
+/// `volts_per_code` (gain included): one bit more, zero at 2^bits.
+#[must_use]
+pub fn difference_scale(bits: u8, volts_per_code: f32) -> AdcScale {
+    AdcScale {
+        bits: bits + 1,
+        zero_code: f32::from(1u16 << bits),
+        volts_per_code,
+    }
+}
+
+impl<'a> ParallelBurst<'a> {
+    /// Wraps `codes` of `channels` interleaved channels.
+    ///
+    /// # Errors
+    /// [`BurstError::Shape`].
+    pub fn new(codes: &'a [u16], channels: usize, bits: u8) -> Result<Self, BurstError> {
+        if channels == 0 || !(1..=15).contains(&bits) || !codes.len().is_multiple_of(channels) {
+            return Err(BurstError::Shape);
+        }
+        Ok(Self {
+            codes,
+            channels,
+            bits,
+        })
+    }
+
+    /// Scans in the burst.
+    #[must_use]
+    pub fn scans(&self) -> usize {
+        self.codes.len() / self.channels
+    }
+
+    /// Writes the burst of V_p - V_q into `out[..scans]` as [`difference_scale`] codes:
+    /// `code_p - code_q + 2^bits`. A sample where either input sits on a rail of its ADC
+    /// (0 or 2^bits - 1) goes to the matching rail of the difference scale (the positive one
+    /// when p is high or q low), so the scan engine flags it; no other difference reaches a
+    /// rail.
+    ///
+    /// # Errors
+    /// [`BurstError::Channel`] for a probe outside the burst, [`BurstError::Output`] for a short
+    /// `out`.
+    pub fn difference(&self, p: usize, q: usize, out: &mut [u16]) -> Result<(), BurstError> {
+        if p >= self.channels || q >= self.channels {
+            return Err(BurstError::Channel);
+        }
+        let out = out.get_mut(..self.scans()).ok_or(BurstError::Output)?;
+        let top = (1u16 << self.bits) - 1;
+        let zero = 1u16 << self.bits;
+        let high = (1u16 << (self.bits + 1)) - 1;
+        for (i, o) in out.iter_mut().enumerate() {
+            let (a, b) = (
+                self.codes[i * self.channels + p].min(top),
+                self.codes[i * self.channels + q].min(top),
+            );
+            *o = if a == top || b == 0 {
+                high
+            } else if a == 0 || b == top {
+                0
+            } else {
+                a + zero - b
+            };
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,4 +399,66 @@ mod tests {
             .is_valid()
         );
     }
+
+    /// Interleaved codes of 3 channels over `scans` scans: channel c reads `base[c] + i`.
+    fn interleaved(base: [u16; 3], scans: usize) -> std::vec::Vec<u16> {
+        (0..scans)
+            .flat_map(|i| base.map(|b| b + i as u16))
+            .collect()
+    }
+
+    #[test]
+    fn parallel_bursts_give_differences_on_their_scale() {
+        let codes = interleaved([2000, 1500, 3000], 4);
+        let burst = ParallelBurst::new(&codes, 3, 12).unwrap();
+        assert_eq!(burst.scans(), 4);
+        let mut out = [0u16; 4];
+        burst.difference(0, 1, &mut out).unwrap();
+        assert_eq!(out, [4096 + 500; 4]);
+        burst.difference(1, 2, &mut out).unwrap();
+        assert_eq!(out, [4096 - 1500; 4]);
+        let scale = difference_scale(12, 3.3 / 4096.0);
+        assert!((scale.volts(f32::from(out[0])) - (-1500.0 * 3.3 / 4096.0)).abs() < 1e-6);
+        assert_eq!(scale.max_code(), 8191);
+        // Rails of either input become rails of the difference, with the right sign.
+        let codes = [4095, 10, 2000, 0, 2000, 2000, 100, 4095, 7];
+        let burst = ParallelBurst::new(&codes, 3, 12).unwrap();
+        let mut out = [0u16; 3];
+        // Scans: [4095, 10, 2000], [0, 2000, 2000], [100, 4095, 7].
+        burst.difference(0, 2, &mut out).unwrap();
+        assert_eq!(out, [8191, 0, 4096 + 93]);
+        assert_eq!(out.map(|c| scale.at_rail(c)), [true, true, false]);
+        burst.difference(2, 1, &mut out).unwrap();
+        assert_eq!(out, [4096 + 1990, 4096, 0], "q high: the negative rail");
+        burst.difference(1, 0, &mut out).unwrap();
+        assert_eq!(out, [0, 8191, 8191], "q high, q low, p high");
+        // Shapes.
+        assert_eq!(
+            ParallelBurst::new(&codes[..8], 3, 12).err(),
+            Some(BurstError::Shape)
+        );
+        assert_eq!(ParallelBurst::new(&codes, 0, 12).err(), Some(BurstError::Shape));
+        assert_eq!(ParallelBurst::new(&codes, 3, 16).err(), Some(BurstError::Shape));
+        assert_eq!(burst.difference(3, 0, &mut out), Err(BurstError::Channel));
+        assert_eq!(burst.difference(0, 1, &mut out[..2]), Err(BurstError::Output));
+    }
+
+    #[test]
+    fn no_difference_of_inputs_off_the_rails_lands_on_a_rail() {
+        let bits = 6u8;
+        let top = (1u16 << bits) - 1;
+        for a in 1..top {
+            for b in 1..top {
+                let codes = [a, b];
+                let mut out = [0u16; 1];
+                ParallelBurst::new(&codes, 2, bits)
+                    .unwrap()
+                    .difference(0, 1, &mut out)
+                    .unwrap();
+                assert!(!difference_scale(bits, 1.0).at_rail(out[0]), "{a} {b}");
+                assert_eq!(i32::from(out[0]) - 64, i32::from(a) - i32::from(b));
+            }
+        }
+    }
+
 }
