@@ -437,10 +437,19 @@ mod tests {
             ParallelBurst::new(&codes[..8], 3, 12).err(),
             Some(BurstError::Shape)
         );
-        assert_eq!(ParallelBurst::new(&codes, 0, 12).err(), Some(BurstError::Shape));
-        assert_eq!(ParallelBurst::new(&codes, 3, 16).err(), Some(BurstError::Shape));
+        assert_eq!(
+            ParallelBurst::new(&codes, 0, 12).err(),
+            Some(BurstError::Shape)
+        );
+        assert_eq!(
+            ParallelBurst::new(&codes, 3, 16).err(),
+            Some(BurstError::Shape)
+        );
         assert_eq!(burst.difference(3, 0, &mut out), Err(BurstError::Channel));
-        assert_eq!(burst.difference(0, 1, &mut out[..2]), Err(BurstError::Output));
+        assert_eq!(
+            burst.difference(0, 1, &mut out[..2]),
+            Err(BurstError::Output)
+        );
     }
 
     #[test]
@@ -460,5 +469,4 @@ mod tests {
             }
         }
     }
-
 }

@@ -3,14 +3,18 @@
 //!
 //! | signal | pin | notes |
 //! | --- | --- | --- |
-//! | source mux A0..A3, EN | PC0..PC3, PC4 | ADG1606 #1, to the Howland current source |
-//! | sink mux A0..A3, EN | PC5..PC8, PC9 | ADG1606 #2, to ground |
-//! | serial TX / RX | PA2 / PA3 (USART2) | to the host, 2 000 000 baud, 8N1 |
-//! | status LED | PA5 | not driven yet |
-//! | PGIA output to ADC | PA0 (ADC1 IN0) | sampling: not yet (see [`Sensor`]) |
+//! | electrode 0..7 potential | PA0..PA7 (ADC1 IN0..IN7) | unity-gain buffers, 0 to 3.3 V |
+//! | electrode 8, 9 | PB0, PB1 (IN8, IN9) | |
+//! | electrode 10..15 | PC0..PC5 (IN10..IN15) | |
+//! | source mux A0..A3, EN | PB4..PB7, PB8 | ADG1606 #1, to the Howland current source |
+//! | sink mux A0..A3, EN | PB9, PB12..PB14, PB15 | ADG1606 #2, to ground |
+//! | serial TX / RX | PA9 / PA10 (USART1) | to the host, 2 000 000 baud, 8N1 |
 //!
-//! The mux lines are driven by `et_core::frontend::MuxLines` (break-before-make, settle delay):
-//! the firmware only hands it the pins.
+//! Sampling: ADC1 scans the L electrodes on every TIM2 update (the sample rate), DMA2 stream 0
+//! stores the burst (`sampler.rs`); a measurement is the difference of two electrodes. The
+//! mux lines are driven by `et_core::frontend::MuxLines` (break-before-make, settle delay,
+//! TIM5 as the delay). JTAG's PB3/PB4 are free once the mux takes PB4: debug with SWD
+//! (PA13/PA14).
 
 use et_core::ScanConfig;
 
@@ -18,7 +22,7 @@ use et_core::ScanConfig;
 /// (L = 16, PP-PP, two measurements per step position, at 78 Hz) needs 66 % of it with its
 /// touch events; the reference adjacent frame 36 %. At 921 600 baud the largest frames did not fit
 /// (`tests/tests/budget.rs`). USB-serial adapters with FT232R, FT232H, CP2102N or CH340 chips
-/// run at 2 Mbaud; USART2's clock (42 MHz) divides to it exactly.
+/// run at 2 Mbaud; USART1's clock (84 MHz) divides to it exactly.
 pub const BAUD: u32 = 2_000_000;
 
 /// How often a status event goes out, in ms.
@@ -27,28 +31,26 @@ pub const STATUS_PERIOD_MS: u32 = 500;
 /// The configuration after reset (SPEC §3's reference point: L = 16, adjacent, 78 Hz).
 pub const DEFAULT_CONFIG: ScanConfig = ScanConfig::REFERENCE;
 
+#[cfg(not(feature = "qemu"))]
+pub use crate::sampler::BURST_MAX;
 #[cfg(feature = "qemu")]
 pub use emulated::{SYSTICK_HZ, Sensor, Slots, Store, before_scan, clocks, sensor};
 #[cfg(not(feature = "qemu"))]
-pub use real::{SYSTICK_HZ, Sensor, Store, before_scan, clocks, sensor, store};
+pub use real::{SYSTICK_HZ, Sensor, SensorParts, Store, before_scan, clocks, sensor, store};
 
 #[cfg(not(feature = "qemu"))]
 mod real {
-    use stm32f4xx_hal::gpio::{AnyPin, Output};
-
-    /// Settling wait after a mux switch, in ns: the PGIA settles in about 8 us (SPEC §2).
-    pub const MUX_SETTLE_NS: u32 = 8_000;
-
-    /// One mux control line.
-    pub type MuxPin = AnyPin<Output>;
-    use et_core::frontend::{AdcScale, Frontend, MuxError, MuxLines};
-    use et_core::{Injection, Measurement, ScanConfig};
-    use stm32f4xx_hal::gpio::gpioc;
-    use stm32f4xx_hal::pac::{FLASH, TIM2};
+    use crate::sampler::{self, BURST_MAX, MuxPin};
+    use et_core::frontend::MuxLines;
+    use stm32f4xx_hal::gpio::{Analog, AnyPin};
+    use stm32f4xx_hal::pac::{ADC_COMMON, ADC1, DMA2, FLASH, TIM2, TIM5};
     use stm32f4xx_hal::prelude::_fugit_RateExtU32 as _;
     use stm32f4xx_hal::prelude::_stm32f4xx_hal_timer_TimerExt as _;
-    use stm32f4xx_hal::rcc::{Config, Rcc};
-    use stm32f4xx_hal::timer::Delay;
+    use stm32f4xx_hal::rcc::{Config, Enable, Rcc, Reset};
+
+    /// Settling wait after a mux switch, in ns: the buffers and the source settle in about
+    /// 8 us (SPEC §2).
+    pub const MUX_SETTLE_NS: u32 = 8_000;
 
     /// System clock: HSI (16 MHz internal, no crystal needed) through the PLL.
     pub const SYSCLK_HZ: u32 = 168_000_000;
@@ -56,9 +58,16 @@ mod real {
     /// SysTick counts the core clock.
     pub const SYSTICK_HZ: u32 = SYSCLK_HZ;
 
-    /// The clock tree.
+    /// TIM2's clock: APB1 at 42 MHz, doubled for the timers.
+    const TIM2_HZ: u32 = 84_000_000;
+
+    /// The clock tree: 168 MHz core, APB1 42 MHz (USART1 on APB2 at 84 MHz divides to 2 Mbaud
+    /// exactly).
     pub fn clocks() -> Config {
-        Config::hsi().sysclk(SYSCLK_HZ.Hz())
+        Config::hsi()
+            .sysclk(SYSCLK_HZ.Hz())
+            .pclk1(42.MHz())
+            .pclk2(84.MHz())
     }
 
     /// Model storage: two flash slots.
@@ -69,57 +78,53 @@ mod real {
         crate::store::FlashStore::new(flash)
     }
 
-    /// Why the board's front end failed.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    pub enum SensorError {
-        /// A mux line refused its level (cannot happen on this chip: GPIO is infallible).
-        Mux,
-        /// ADC sampling is not written yet: the board scans produce `Fault::Frontend`.
-        NoAdc,
-    }
+    /// The board's front end.
+    pub type Sensor = sampler::Sensor;
 
-    /// The board's front end: the muxes route the current; sampling the PGIA by ADC and DMA is
-    /// the part still to come, so `acquire` refuses (every scan reports `Fault::Frontend`
-    /// rather than sending made-up voltages).
-    pub struct Sensor {
-        mux: MuxLines<MuxPin, Delay<TIM2, 1_000_000>>,
-    }
-
-    impl Frontend for Sensor {
-        type Error = SensorError;
-        fn configure(&mut self, config: &ScanConfig) -> Result<AdcScale, SensorError> {
-            Ok(AdcScale::bipolar_16bit(5.0, config.gain))
-        }
-        fn select(&mut self, injection: Injection, _: Measurement) -> Result<(), SensorError> {
-            self.mux
-                .route(injection)
-                .map_err(|_: MuxError<_>| SensorError::Mux)
-        }
-        fn acquire(&mut self, _: &mut [u16]) -> Result<(), SensorError> {
-            let Ok(()) = self.mux.off();
-            Err(SensorError::NoAdc)
-        }
+    /// What the front end is made of.
+    pub struct SensorParts {
+        /// Electrode inputs in electrode order (their analog mode is all that matters).
+        pub analog: [AnyPin<Analog>; 16],
+        /// The mux lines in `MuxWord` order.
+        pub mux: [MuxPin; 10],
+        /// The ADC.
+        pub adc: ADC1,
+        /// The ADCs' common registers.
+        pub common: ADC_COMMON,
+        /// The DMA controller.
+        pub dma: DMA2,
+        /// The sample-rate timer.
+        pub trigger: TIM2,
+        /// The mux settling delay.
+        pub delay: TIM5,
     }
 
     /// The front end on its pins, muxes off.
-    pub fn sensor(gpioc: gpioc::Parts, tim2: TIM2, rcc: &mut Rcc) -> Sensor {
-        let lines = [
-            gpioc.pc0.into_push_pull_output().erase(),
-            gpioc.pc1.into_push_pull_output().erase(),
-            gpioc.pc2.into_push_pull_output().erase(),
-            gpioc.pc3.into_push_pull_output().erase(),
-            gpioc.pc4.into_push_pull_output().erase(),
-            gpioc.pc5.into_push_pull_output().erase(),
-            gpioc.pc6.into_push_pull_output().erase(),
-            gpioc.pc7.into_push_pull_output().erase(),
-            gpioc.pc8.into_push_pull_output().erase(),
-            gpioc.pc9.into_push_pull_output().erase(),
-        ];
-        let delay = tim2.delay_us(rcc);
+    pub fn sensor(
+        parts: SensorParts,
+        rcc: &mut Rcc,
+        burst: &'static mut [u16; BURST_MAX],
+    ) -> Sensor {
+        let SensorParts {
+            analog,
+            mux,
+            adc,
+            common,
+            dma,
+            trigger,
+            delay,
+        } = parts;
+        let _ = analog; // in analog mode from here on
+        ADC1::enable(rcc);
+        ADC1::reset(rcc);
+        DMA2::enable(rcc);
+        TIM2::enable(rcc);
+        TIM2::reset(rcc);
+        let delay = delay.delay_us(rcc);
         // GPIO writes cannot fail on this chip (the error type is Infallible).
-        let Ok(mut mux) = MuxLines::new(lines, delay, MUX_SETTLE_NS);
+        let Ok(mut mux) = MuxLines::new(mux, delay, MUX_SETTLE_NS);
         let Ok(()) = mux.off();
-        Sensor { mux }
+        sampler::Sensor::new(mux, adc, &common, dma, trigger, TIM2_HZ, burst)
     }
 
     /// Before scan `seq`: nothing to do on the board.
@@ -131,9 +136,7 @@ mod emulated {
     use crate::qemu_sheet;
     use et_core::device::RamStore;
     use et_core::emulated::EmulatedSheet;
-    use stm32f4xx_hal::gpio::gpioc;
-    use stm32f4xx_hal::pac::TIM2;
-    use stm32f4xx_hal::rcc::{Config, Rcc};
+    use stm32f4xx_hal::rcc::Config;
 
     /// QEMU's SysTick counts at the netduinoplus2's nominal 168 MHz whatever the clock set-up
     /// says (it does not emulate the RCC), so the monotonic is started at that rate.
@@ -157,7 +160,7 @@ mod emulated {
     pub type Sensor = EmulatedSheet<'static>;
 
     /// The sheet of `qemu_sheet.rs`.
-    pub fn sensor(_: gpioc::Parts, _: TIM2, _: &mut Rcc) -> Sensor {
+    pub fn sensor() -> Sensor {
         EmulatedSheet::new(
             qemu_sheet::ELECTRODES,
             &qemu_sheet::Z,

@@ -6,7 +6,7 @@
 //!
 //! | task | priority | does |
 //! | --- | --- | --- |
-//! | `usart2` (interrupt) | 3 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
+//! | `usart1` (interrupt) | 3 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
 //! | `commands` | 2 | reassembles packets from `rx` (resynchronising after garbage), hands them to `Device`, sends the reply |
 //! | `scan` | 1 | rebuilds the `Scanner` on a new configuration, scans, sends the frame and its events, paces to the frame rate, sends a status event every `STATUS_PERIOD_MS` |
 //!
@@ -28,6 +28,8 @@ mod board;
 #[cfg(feature = "qemu")]
 mod qemu_sheet;
 #[cfg(not(feature = "qemu"))]
+mod sampler;
+#[cfg(not(feature = "qemu"))]
 mod store;
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI0, EXTI1])]
@@ -42,7 +44,7 @@ mod app {
     use rtic::Mutex as _;
     use rtic_monotonics::systick::prelude::*;
     use serde::Serialize;
-    use stm32f4xx_hal::pac::{self, USART2};
+    use stm32f4xx_hal::pac::{self, USART1};
     use stm32f4xx_hal::rcc::RccExt as _;
     use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, RxListen as _, Serial, Tx};
     use stm32f4xx_hal::serial::{TxISR as _, TxListen as _};
@@ -66,8 +68,8 @@ mod app {
 
     #[local]
     struct Local {
-        serial_tx: Tx<USART2>,
-        serial_rx: Rx<USART2>,
+        serial_tx: Tx<USART1>,
+        serial_rx: Rx<USART1>,
         tx_out: Consumer<'static, u8>,
         rx_in: Producer<'static, u8>,
         rx_out: Consumer<'static, u8>,
@@ -79,6 +81,8 @@ mod app {
         rxq: Queue<u8, RX_QUEUE> = Queue::new(),
         #[cfg(feature = "qemu")]
         slots: board::Slots = board::Slots::new(),
+        #[cfg(not(feature = "qemu"))]
+        burst: [u16; board::BURST_MAX] = [0; board::BURST_MAX],
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
@@ -86,18 +90,69 @@ mod app {
         Mono::start(cx.core.SYST, board::SYSTICK_HZ);
 
         let gpioa = dp.GPIOA.split(&mut rcc);
+        let gpiob = dp.GPIOB.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        let serial: Serial<USART2> = Serial::new(
-            dp.USART2,
-            (gpioa.pa2, gpioa.pa3),
+        let serial: Serial<USART1> = Serial::new(
+            dp.USART1,
+            (gpioa.pa9, gpioa.pa10),
             SerialConfig::default().baudrate(board::BAUD.bps()),
             &mut rcc,
         )
-        .unwrap_or_else(|_| panic!("USART2 set-up"));
+        .unwrap_or_else(|_| panic!("USART1 set-up"));
         let (serial_tx, mut serial_rx) = serial.split();
         serial_rx.listen();
 
-        let sensor = board::sensor(gpioc, dp.TIM2, &mut rcc);
+        #[cfg(feature = "qemu")]
+        let sensor = {
+            let _ = (gpiob, gpioc);
+            board::sensor()
+        };
+        #[cfg(not(feature = "qemu"))]
+        let sensor = {
+            let analog = [
+                gpioa.pa0.into_analog().erase(),
+                gpioa.pa1.into_analog().erase(),
+                gpioa.pa2.into_analog().erase(),
+                gpioa.pa3.into_analog().erase(),
+                gpioa.pa4.into_analog().erase(),
+                gpioa.pa5.into_analog().erase(),
+                gpioa.pa6.into_analog().erase(),
+                gpioa.pa7.into_analog().erase(),
+                gpiob.pb0.into_analog().erase(),
+                gpiob.pb1.into_analog().erase(),
+                gpioc.pc0.into_analog().erase(),
+                gpioc.pc1.into_analog().erase(),
+                gpioc.pc2.into_analog().erase(),
+                gpioc.pc3.into_analog().erase(),
+                gpioc.pc4.into_analog().erase(),
+                gpioc.pc5.into_analog().erase(),
+            ];
+            let mux = [
+                gpiob.pb4.into_push_pull_output().erase(),
+                gpiob.pb5.into_push_pull_output().erase(),
+                gpiob.pb6.into_push_pull_output().erase(),
+                gpiob.pb7.into_push_pull_output().erase(),
+                gpiob.pb8.into_push_pull_output().erase(),
+                gpiob.pb9.into_push_pull_output().erase(),
+                gpiob.pb12.into_push_pull_output().erase(),
+                gpiob.pb13.into_push_pull_output().erase(),
+                gpiob.pb14.into_push_pull_output().erase(),
+                gpiob.pb15.into_push_pull_output().erase(),
+            ];
+            board::sensor(
+                board::SensorParts {
+                    analog,
+                    mux,
+                    adc: dp.ADC1,
+                    common: dp.ADC_COMMON,
+                    dma: dp.DMA2,
+                    trigger: dp.TIM2,
+                    delay: dp.TIM5,
+                },
+                &mut rcc,
+                cx.local.burst,
+            )
+        };
         #[cfg(feature = "qemu")]
         let store = cx.local.slots;
         #[cfg(not(feature = "qemu"))]
@@ -141,7 +196,7 @@ mod app {
             // Room was checked above; only this task produces.
             let _ = tx.enqueue(b);
         }
-        rtic::pend(pac::Interrupt::USART2);
+        rtic::pend(pac::Interrupt::USART1);
         true
     }
 
@@ -150,9 +205,9 @@ mod app {
     }
 
     /// The serial port: received bytes into `rx_in`, queued bytes out while TXE is set.
-    #[task(binds = USART2, priority = 3, local = [serial_tx, serial_rx, tx_out, rx_in])]
-    fn usart2(cx: usart2::Context) {
-        let usart2::LocalResources {
+    #[task(binds = USART1, priority = 3, local = [serial_tx, serial_rx, tx_out, rx_in])]
+    fn usart1(cx: usart1::Context) {
+        let usart1::LocalResources {
             serial_tx,
             serial_rx,
             tx_out,

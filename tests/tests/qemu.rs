@@ -1,7 +1,7 @@
 //! The firmware image in QEMU, end to end (issue: "the test that proves the image works").
 //!
 //! Builds the `qemu` image (`cd firmware && cargo build --profile qemu --features qemu`), boots
-//! it on QEMU's netduinoplus2 with USART2 on a pty, attaches `et_host::link::Link` to the pty
+//! it on QEMU's netduinoplus2 with USART1 on a pty, attaches `et_host::link::Link` to the pty
 //! and checks, against the simulator's resistor network (`et_sim::emulated::QemuSheet`):
 //!
 //! 1. frames decode, in sequence, and match the sheet's noiseless voltages within the noise;
@@ -48,7 +48,7 @@ fn build_image() -> PathBuf {
     repo().join("target/thumbv7em-none-eabihf/qemu/et-firmware")
 }
 
-/// QEMU, paused, with its monitor on stdin/stdout and USART2 on a pty.
+/// QEMU, paused, with its monitor on stdin/stdout and USART1 (the first serial port) on a pty.
 struct Qemu {
     child: Child,
     monitor: ChildStdin,
@@ -60,9 +60,7 @@ impl Qemu {
         let mut child = Process::new("timeout")
             .arg(QEMU_LIFETIME_S.to_string())
             .args(["qemu-system-arm", "-M", "netduinoplus2", "-display", "none"])
-            .args([
-                "-monitor", "stdio", "-serial", "null", "-serial", "pty", "-S",
-            ])
+            .args(["-monitor", "stdio", "-serial", "pty", "-S"])
             .arg("-kernel")
             .arg(image)
             .stdin(Stdio::piped())
@@ -70,18 +68,18 @@ impl Qemu {
             .stderr(Stdio::inherit())
             .spawn()
             .expect("qemu-system-arm (./scripts/test.sh installs it)");
-        let monitor = child.stdin.take().unwrap();
+        let mut monitor = child.stdin.take().unwrap();
+        // Ask the monitor where the pty is (its own "redirected to" notice is buffered).
+        writeln!(monitor, "info chardev").unwrap();
         let mut out = BufReader::new(child.stdout.take().unwrap());
         let mut pty = None;
         let mut line = String::new();
         while pty.is_none() {
             line.clear();
             assert!(out.read_line(&mut line).unwrap() > 0, "QEMU exited early");
-            // "char device redirected to /dev/pts/3 (label serial1)"
-            if let Some(rest) = line.split("redirected to ").nth(1)
-                && line.contains("serial1")
-            {
-                pty = rest.split_whitespace().next().map(str::to_string);
+            // "serial0: filename=pty:/dev/pts/3"
+            if let Some(rest) = line.trim().strip_prefix("serial0: filename=pty:") {
+                pty = Some(rest.to_string());
             }
         }
         // Keep draining the monitor's output so QEMU never blocks on it.
