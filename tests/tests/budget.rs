@@ -13,19 +13,23 @@ use et_host::link::DEFAULT_BAUD;
 /// The board's mux is 16:1 (SPEC §2).
 const BOARD_ELECTRODES_MAX: u8 = 16;
 
-/// `pub const BAUD: u32 = ...;` of firmware/src/board.rs.
-fn firmware_baud() -> u32 {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/src/board.rs");
-    let text = std::fs::read_to_string(path).unwrap();
+/// The value of `pub const NAME: TYPE = A * B ...;` in a firmware source file: the firmware is
+/// its own workspace, so its constants are read from the source.
+fn firmware_const(file: &str, declaration: &str) -> usize {
+    let path = format!("{}/../firmware/src/{file}", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).unwrap();
     let line = text
         .lines()
-        .find(|l| l.starts_with("pub const BAUD: u32 = "))
-        .expect("board.rs defines BAUD");
-    line.trim_start_matches("pub const BAUD: u32 = ")
-        .trim_end_matches(';')
-        .replace('_', "")
-        .parse()
-        .unwrap()
+        .find_map(|l| l.strip_prefix(declaration))
+        .unwrap_or_else(|| panic!("{path} defines `{declaration}`"));
+    line.trim_end_matches(';')
+        .split('*')
+        .map(|f| f.trim().replace('_', "").parse::<usize>().unwrap())
+        .product()
+}
+
+fn firmware_baud() -> u32 {
+    firmware_const("board.rs", "pub const BAUD: u32 = ") as u32
 }
 
 fn every_protocol(l: u8) -> Vec<ProtocolKind> {
@@ -141,18 +145,6 @@ fn largest_models_that_fit_a_flash_slot() {
     assert!(model_len(ModelKind::Qda, Precision::F32, 49, 96) > SLOT_BYTES);
 }
 
-/// `pub const SLOT_BYTES: usize = ...;` of firmware/src/store.rs.
 fn firmware_slot_bytes() -> usize {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/src/store.rs");
-    let text = std::fs::read_to_string(path).unwrap();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("pub const SLOT_BYTES: usize = "))
-        .expect("store.rs defines SLOT_BYTES");
-    let expr = line
-        .trim_start_matches("pub const SLOT_BYTES: usize = ")
-        .trim_end_matches(';');
-    expr.split('*')
-        .map(|f| f.trim().replace('_', "").parse::<usize>().unwrap())
-        .product()
+    firmware_const("store.rs", "pub const SLOT_BYTES: usize = ")
 }
