@@ -442,3 +442,60 @@ fn a_killed_recorder_loses_at_most_the_frame_in_flight() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `et upload` to the QEMU board: a model for another protocol is refused (and the command
+/// says so), the right one is verified and classifies.
+#[test]
+fn et_upload_sends_a_model_the_board_verifies() {
+    let sheet = QemuSheet::new().unwrap();
+    let image = build_image();
+    let et = build_et();
+    let dir = std::env::temp_dir().join(format!("et-qemu-upload-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let reference = ScanConfig::REFERENCE;
+    let (_, _, blob) = train(&sheet, &reference);
+    let (_, _, wrong) = train(
+        &sheet,
+        &ScanConfig {
+            protocol: ProtocolKind::PseudoPolar,
+            ..reference
+        },
+    );
+    let (good, bad) = (dir.join("model.bin"), dir.join("pp.bin"));
+    std::fs::write(&good, &blob).unwrap();
+    std::fs::write(&bad, &wrong).unwrap();
+    let mut qemu = Qemu::boot(&image);
+    let pty = qemu.pty.clone();
+    let upload = |path: &Path| {
+        Process::new(&et)
+            .args(["upload", "--port", &pty, "--blob"])
+            .arg(path)
+            .output()
+            .unwrap()
+    };
+    qemu.run();
+    let refused = upload(&bad);
+    assert!(!refused.status.success());
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert!(message.contains("ModelMismatch"), "{message}");
+    let accepted = upload(&good);
+    assert!(
+        accepted.status.success(),
+        "{}",
+        String::from_utf8_lossy(&accepted.stderr)
+    );
+    assert!(String::from_utf8_lossy(&accepted.stdout).contains("the board verified it"));
+    let mut link = Link::open(&qemu.pty, DEFAULT_BAUD).unwrap();
+    link.request(&Command::Start, REPLY).unwrap();
+    let (frames, events) = collect(&mut link, 20);
+    let touches = events
+        .iter()
+        .filter(|e| matches!(e, Event::Touch { .. }))
+        .count();
+    assert!(
+        touches >= frames.len() - 2,
+        "{touches} classes for {} frames",
+        frames.len()
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

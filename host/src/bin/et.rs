@@ -119,6 +119,32 @@ enum Command {
     ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
     #[command(verbatim_doc_comment)]
     Record(RecordArgs),
+    /// Upload a model blob (from `et export`) to the board over its serial port. The board
+    /// verifies it (CRC, model checks, scan configuration) before it replaces the old model;
+    /// a refused upload leaves the old one classifying. A referenced model needs the untouched
+    /// frame V_0: add --tare (with the sheet untouched and the board scanning).
+    ///
+    /// Examples:
+    ///   et export --model model.json --precision f16 --out model.bin
+    ///   et upload --port /dev/ttyUSB0 --blob model.bin --tare
+    #[command(verbatim_doc_comment)]
+    Upload(UploadArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct UploadArgs {
+    /// The board's serial port (`et ports` lists them).
+    #[arg(long)]
+    port: String,
+    /// The model blob (`et export --out`).
+    #[arg(long)]
+    blob: PathBuf,
+    /// Baud rate (the firmware's is the default).
+    #[arg(long, default_value_t = et_host::link::DEFAULT_BAUD)]
+    baud: u32,
+    /// Then take the next frame as V_0 (the sheet must not be touched).
+    #[arg(long)]
+    tare: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -873,22 +899,23 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
     } else {
         c * p
     };
-    const FLASH: usize = 1 << 20;
+    // One model slot of the board's flash (firmware/src/store.rs).
+    const SLOT: usize = 384 * 1024;
     let summary = serde_json::json!({
         "out": args.out.display().to_string(),
         "bytes": blob.len(),
-        "fits_stm32f405_flash": blob.len() < FLASH,
+        "fits_model_slot": blob.len() <= SLOT,
         "multiply_adds_per_frame": macs,
     });
     if args.json {
         println!("{summary}");
     } else {
         eprintln!(
-            "wrote {} ({} bytes, {:.0} % of the STM32F405's 1 MiB flash{}); {} multiply-adds per frame",
+            "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",
             args.out.display(),
             blob.len(),
-            100.0 * blob.len() as f64 / FLASH as f64,
-            if blob.len() < FLASH {
+            100.0 * blob.len() as f64 / SLOT as f64,
+            if blob.len() <= SLOT {
                 ""
             } else {
                 ": does NOT fit, use f16, LDA or fewer classes"
@@ -1251,18 +1278,9 @@ fn record_cmd(args: &RecordArgs) -> Result<()> {
 
     let mut link = Link::open(&args.port, args.baud)?;
     if !args.no_start {
-        // A board that is still booting loses what it is sent: try a few times.
-        let mut started = Err(anyhow::anyhow!("no answer"));
-        for _ in 0..5 {
-            match link.request(&Cmd::Start, Duration::from_secs(1)) {
-                Ok(_) => {
-                    started = Ok(());
-                    break;
-                }
-                Err(e) => started = Err(e.into()),
-            }
-        }
-        started.with_context(|| format!("starting the scan on {}", args.port))?;
+        wait_for_board(&mut link)?;
+        link.request(&Cmd::Start, Duration::from_secs(1))
+            .with_context(|| format!("starting the scan on {}", args.port))?;
     }
     let deadline = args
         .seconds
@@ -1324,6 +1342,58 @@ fn record_cmd(args: &RecordArgs) -> Result<()> {
     Ok(())
 }
 
+/// Pings until the board answers (one that is still booting loses what it is sent).
+fn wait_for_board(link: &mut et_host::link::Link) -> Result<()> {
+    use std::time::Duration;
+    let mut last = None;
+    for nonce in 0..5 {
+        match link.request(
+            &et_core::wire::Command::Ping { nonce },
+            Duration::from_secs(1),
+        ) {
+            Ok(_) => return Ok(()),
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(anyhow::anyhow!(
+        "no answer from the board on {}: {}",
+        link.path(),
+        last.map_or_else(String::new, |e| e.to_string())
+    ))
+}
+
+fn upload_cmd(args: &UploadArgs) -> Result<()> {
+    use std::time::Duration;
+    let blob =
+        std::fs::read(&args.blob).with_context(|| format!("reading {}", args.blob.display()))?;
+    let model = et_core::model::Model::parse(&blob)
+        .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e:?}", args.blob.display()))?;
+    let mut link = et_host::link::Link::open(&args.port, args.baud)?;
+    wait_for_board(&mut link)?;
+    let started = Instant::now();
+    // Flash erase of a 384 KiB slot takes a few seconds.
+    link.upload_model(&blob, Duration::from_secs(2), Duration::from_secs(15))
+        .with_context(|| format!("uploading {}", args.blob.display()))?;
+    println!(
+        "uploaded {} ({} bytes, {} classes, {} features) in {:.1} s; the board verified it",
+        args.blob.display(),
+        blob.len(),
+        model.classes(),
+        model.features(),
+        started.elapsed().as_secs_f64()
+    );
+    if args.tare {
+        link.request(&et_core::wire::Command::Tare, Duration::from_secs(2))
+            .context("taring (is the board scanning? `et record` starts it)")?;
+        println!("V_0 taken: the board classifies every frame from now on");
+    } else if model.referenced() {
+        println!(
+            "this model is referenced: it classifies once the board has V_0 (run again with --tare)"
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -1337,6 +1407,7 @@ fn main() -> ExitCode {
         Command::Forward(args) => forward_cmd(args),
         Command::Ports => ports_cmd(),
         Command::Record(args) => record_cmd(args),
+        Command::Upload(args) => upload_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
