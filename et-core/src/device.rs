@@ -126,6 +126,13 @@ struct Active {
     len: usize,
 }
 
+/// The verified model in `active`'s slot, reopened by its header only (it passed
+/// [`Model::parse`] at commit and its slot is not written while it is active).
+fn active_model<S: ModelStore>(store: &S, active: Option<Active>) -> Option<Model<'_>> {
+    let a = active?;
+    Model::parse_header(store.read(a.slot).get(..a.len)?).ok()
+}
+
 /// Most features an on-chip model may use (its evaluation scratch is 2 p values).
 pub const FEATURES_MAX: usize = 512;
 
@@ -226,8 +233,7 @@ impl<S: ModelStore> Device<S> {
     /// The active model, if any.
     #[must_use]
     pub fn model(&self) -> Option<Model<'_>> {
-        let a = self.active?;
-        Model::parse_header(self.store.read(a.slot).get(..a.len)?).ok()
+        active_model(&self.store, self.active)
     }
 
     /// The model storage.
@@ -438,8 +444,8 @@ impl<S: ModelStore> Device<S> {
     }
 
     fn classify(&mut self, seq: u32, v_m: &[f32]) -> Option<Event> {
-        let a = self.active?;
-        let model = Model::parse_header(self.store.read(a.slot).get(..a.len)?).ok()?;
+        // Borrows only the store, so the scratch below stays free to borrow mutably.
+        let model = active_model(&self.store, self.active)?;
         model.check_config(&self.config).ok()?;
         let v_0 = match model.referenced() {
             // A referenced model waits for Command::Tare.

@@ -151,14 +151,14 @@ impl Frontend for EmulatedSheet<'_> {
         for s in samples.iter_mut() {
             let noise = sigma * (self.uniform() + self.uniform() + self.uniform() + self.uniform());
             let code = (volts + noise) / scale.volts_per_code + scale.zero_code;
-            *s = libm_round(code).clamp(0.0, max) as u16;
+            *s = round_half_away(code).clamp(0.0, max) as u16;
         }
         Ok(())
     }
 }
 
-/// Round half away from zero without std (`f32::round` needs std or libm).
-fn libm_round(x: f32) -> f32 {
+/// Rounds half away from zero (`f32::round` is not in `core`).
+fn round_half_away(x: f32) -> f32 {
     let t = x as i64 as f32;
     if x - t >= 0.5 {
         t + 1.0

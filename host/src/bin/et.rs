@@ -1295,11 +1295,7 @@ fn record_cmd(args: &RecordArgs) -> Result<()> {
         let frame = match link.next(Duration::from_millis(200)) {
             Ok(Uplink::Frame(f)) => f,
             Ok(Uplink::Event(_)) | Err(_) => {
-                let c = link.counters();
-                bar.set_message(format!(
-                    "{written} frames, {} lost, {} damaged packets, {} reconnects",
-                    c.lost_frames, c.corrupt, c.reconnects
-                ));
+                bar.set_message(link_progress(written, &link.counters()));
                 bar.tick();
                 continue;
             }
@@ -1326,20 +1322,20 @@ fn record_cmd(args: &RecordArgs) -> Result<()> {
         }
         written += 1;
         if written % 25 == 0 {
-            let c = link.counters();
-            bar.set_message(format!(
-                "{written} frames, {} lost, {} damaged packets, {} reconnects",
-                c.lost_frames, c.corrupt, c.reconnects
-            ));
+            bar.set_message(link_progress(written, &link.counters()));
         }
     }
     bar.finish_and_clear();
-    let c = link.counters();
-    println!(
-        "{written} frames recorded; {} lost on the way, {} damaged packets dropped, {} reconnects",
-        c.lost_frames, c.corrupt, c.reconnects
-    );
+    println!("recorded {}", link_progress(written, &link.counters()));
     Ok(())
+}
+
+/// "N frames, lost, damaged, reconnects": what a recording session has seen of the link.
+fn link_progress(written: u64, c: &et_host::link::Counters) -> String {
+    format!(
+        "{written} frames, {} lost on the way, {} damaged packets dropped, {} reconnects",
+        c.lost_frames, c.corrupt, c.reconnects
+    )
 }
 
 /// Pings until the board answers (one that is still booting loses what it is sent).
