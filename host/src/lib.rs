@@ -13,12 +13,15 @@
 //! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade).
 //! - [`fem`]: the forward model, P1 finite elements with the complete electrode model (SPEC §5).
 //! - [`recon`]: one-step Gauss-Newton difference imaging with NOSER, ROIs, SPEC §7 metrics.
+//! - [`imaging`]: the imaging pipeline strung together (set-up, a scene's simulated frames,
+//!   pictures), as `et reconstruct` and `et demo` use it.
 //! - [`dynamic`]: dynamic protocol selection (SPEC §8) as a state machine over the ROIs.
 //! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
 pub mod dynamic;
 pub mod fem;
+pub mod imaging;
 pub mod learn;
 pub mod link;
 pub mod mesh;

@@ -382,6 +382,18 @@ impl PixelGrid {
     }
 }
 
+/// The ROI threshold f of SPEC §6 [3.10] the reference study used for a protocol: 0.10 for
+/// adjacent (and opposite, which it did not report), 0.08 for pseudo-polar, 0.05 for PP-PP.
+#[must_use]
+pub fn default_threshold(kind: et_core::protocol::ProtocolKind) -> f64 {
+    use et_core::protocol::ProtocolKind;
+    match kind {
+        ProtocolKind::PseudoPolar => 0.08,
+        ProtocolKind::PpPp => 0.05,
+        _ => 0.10,
+    }
+}
+
 /// One connected region of an image above threshold.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Region {

@@ -8,9 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use et_core::model::{ModelKind, Precision};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
-use et_host::learn::fit::{self, FitOptions, Fitted, Target};
 use et_host::learn::model_file::ModelFile;
-use et_host::learn::{analysis, collect, cv, dataset, fastcv};
+use et_host::learn::{analysis, collect, dataset, fastcv, pipeline};
 use et_host::plot;
 use et_host::recording::{self, Header, Record, TouchRecord};
 use et_host::tables::ProtocolTables;
@@ -589,62 +588,34 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
             args.data.display()
         );
     }
-    data.x = data.features(referenced).map_err(anyhow::Error::msg)?;
-    if let Some(keep) = args.features {
-        if keep == 0 || keep > data.x.ncols() {
-            bail!("--features {keep}: give 1 to {}", data.x.ncols());
-        }
-        // Keep the features with the largest Fisher ratio (a smaller model for the chip).
-        let mut kept = fit::fisher_ranking(&data.x, &data.y, classes);
-        kept.truncate(keep);
-        kept.sort_unstable();
-        data.x = analysis::select_columns(&data.x, &kept);
-        data.feature_index = kept.iter().map(|&j| data.feature_index[j]).collect();
-    }
-    // Shrink QDA toward the pooled covariance when that has full rank (n - C > p), else toward
-    // the diagonal: a rank-deficient target cannot make a class covariance definite.
-    let pooled_full_rank = data.x.nrows().saturating_sub(classes) > data.x.ncols();
-    let target = if kind == ModelKind::Qda && pooled_full_rank {
-        Target::Pooled
-    } else {
-        Target::Diagonal
-    };
-    let base = FitOptions {
-        kind,
-        shrinkage: 0.0,
-        target,
-    };
-    let visits = data
-        .visit
-        .iter()
-        .map(|&v| usize::from(v))
-        .max()
-        .unwrap_or(0)
-        + 1;
-    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
-    let strat = cv::folds(&data.y, args.folds.max(2), 1);
-    let (shrinkage, scores) = match args.shrinkage.as_str() {
-        "auto" => {
-            let fold = if visits >= 2 { &by_visit } else { &strat };
-            let (l, s) = cv::choose_shrinkage_with(
-                &[0.0, 0.01, 0.03, 0.1, 0.3, 1.0],
-                |o| fastcv::cross_validate_fast(&data.x, &data.y, classes, o, fold),
-                &base,
-            )?;
-            (l, s)
-        }
-        v => (
+    pipeline::prepare(&mut data, referenced, args.features)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let shrinkage = match args.shrinkage.as_str() {
+        "auto" => None,
+        v => Some(
             v.parse::<f64>()
                 .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
-            Vec::new(),
         ),
     };
-    let opts = FitOptions { shrinkage, ..base };
-    let model = Fitted::fit(&data.x, &data.y, classes, &opts)?;
-    let cv_conf = fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &strat)?;
+    let trained = pipeline::train(
+        &data,
+        &pipeline::TrainOptions {
+            kind,
+            shrinkage,
+            folds: args.folds,
+        },
+    )?;
+    let (model, opts, cv_conf, lovo) = (
+        &trained.model,
+        trained.options,
+        &trained.cv,
+        trained.leave_one_visit_out,
+    );
+    let (shrinkage, scores) = (opts.shrinkage, &trained.shrinkage_scores);
+    let visits = data.visits();
     let curve = match &args.curve {
         Some(png) => {
-            let fold = if visits >= 2 { &by_visit } else { &strat };
+            let fold = &trained.selection_folds;
             let largest = (0..classes)
                 .map(|c| data.y.iter().filter(|&&y| usize::from(y) == c).count())
                 .max()
@@ -701,18 +672,13 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
         }
         None => None,
     };
-    let lovo = if visits >= 2 {
-        Some(fastcv::cross_validate_fast(&data.x, &data.y, classes, &opts, &by_visit)?.accuracy())
-    } else {
-        None
-    };
     let mm: Vec<[f64; 2]> = data
         .centres
         .iter()
         .map(|c| [c[0] * 1e3, c[1] * 1e3])
         .collect();
     let file = ModelFile::new(
-        &model,
+        model,
         shrinkage,
         data.config,
         data.feature_index.clone(),
@@ -767,98 +733,28 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
 fn eval_cmd(args: &EvalArgs) -> Result<()> {
     let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
     let data = dataset::load_csv(&args.data)?;
-    // The model's features, found among the dataset's (a feature-reduced model uses a subset).
-    let columns = file
-        .feature_index
-        .iter()
-        .map(|i| data.feature_index.iter().position(|d| d == i))
-        .collect::<Option<Vec<usize>>>()
-        .with_context(|| {
-            format!(
-                "{}: it lacks frame values the model uses (its {} features vs the model's {})",
-                args.data.display(),
-                data.feature_index.len(),
-                file.feature_index.len()
-            )
-        })?;
-    let model = file.fitted()?;
     let classes = file.classes.len();
-    let x = analysis::select_columns(
-        &data
-            .features(file.referenced)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?,
-        &columns,
-    );
-    let conf =
-        cv::evaluate(&model, &x, &data.y).with_context(|| args.data.display().to_string())?;
-    let electrodes_mm: Vec<[f64; 2]> = data
-        .electrodes
-        .iter()
-        .map(|e| [e[0] * 1e3, e[1] * 1e3])
-        .collect();
-    let outcomes = analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)?;
-    let bands = analysis::by_distance(&outcomes, 10.0);
+    let tested = pipeline::test(&file, &data)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let (conf, bands) = (&tested.confusion, &tested.bands);
     if let Some(dir) = &args.plots {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let row_share: Vec<f64> = conf
-            .counts
-            .chunks(classes)
-            .flat_map(|row| {
-                let n = row.iter().sum::<u32>().max(1);
-                row.iter()
-                    .map(move |&v| 100.0 * f64::from(v) / f64::from(n))
-            })
-            .collect();
-        plot::heatmap(
+        pipeline::plot_confusion(
             &dir.join("confusion.png"),
-            plot::Labels {
-                title: &format!(
-                    "confusion: accuracy {:.1} % on {}",
-                    100.0 * conf.accuracy(),
-                    args.data.display()
-                ),
-                x: "predicted class",
-                y: "true class",
-                legend: plot::Legend::UpperLeft,
-            },
-            &row_share,
-            (classes, classes),
-            (0.0, 100.0),
-            "share of the true class (%)",
+            conf,
+            &format!(
+                "confusion: accuracy {:.1} % on {}",
+                100.0 * conf.accuracy(),
+                args.data.display()
+            ),
         )?;
-        if electrodes_mm.is_empty() {
+        if tested.outcomes.is_empty() {
             eprintln!(
                 "note: {} does not say where the electrodes are: no error-vs-distance plot",
                 args.data.display()
             );
         } else {
-            plot::chart(
-                &dir.join("error-vs-distance.png"),
-                plot::Labels {
-                    title: "position error against distance from the electrodes",
-                    x: "distance of the true class from the nearest electrode (mm)",
-                    y: "position error (mm)",
-                    legend: plot::Legend::UpperRight,
-                },
-                &[
-                    plot::Series {
-                        label: "observations".into(),
-                        points: outcomes
-                            .iter()
-                            .map(|o| (o.distance_mm, o.error_mm))
-                            .collect(),
-                        scatter: true,
-                    },
-                    plot::Series {
-                        label: "mean per 10 mm band".into(),
-                        points: bands
-                            .iter()
-                            .map(|b| (0.5 * (b.from_mm + b.to_mm), b.mean_error_mm))
-                            .collect(),
-                        scatter: false,
-                    },
-                ],
-            )?;
+            pipeline::plot_error_vs_distance(&dir.join("error-vs-distance.png"), &tested)?;
         }
     }
     let summary = serde_json::json!({
@@ -1019,12 +915,9 @@ fn scene_mesh(scene: &Scene, args: &MeshArgs) -> Result<et_host::mesh::Mesh> {
     Ok(mesh)
 }
 
-/// A touch's centre (m) and radius (m), where known.
-type Truth = ([f64; 2], f64);
-
 fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
-    use et_host::fem::{Electrodes, Forward};
-    use et_host::recon::{OneStep, PixelGrid, metrics, regions};
+    use et_host::imaging::{Imager, Truth, scene_frames};
+    use et_host::recon::{OneStep, default_threshold, metrics, regions};
     let scene = Scene::load(&args.scene)?;
     let recording = args.frames.as_deref().map(recording::read).transpose()?;
     let config = match &recording {
@@ -1045,17 +938,9 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let mesh = scene_mesh(&scene, &args.mesh)?;
     let t_n = mesh.triangles.len();
     stage(&format!("mesh ({t_n} triangles)"));
-    let grid = PixelGrid::new(&mesh, args.pixels.max(4));
-    let e = &scene.sheet.electrodes;
-    let fwd = Forward::new(
-        mesh,
-        Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)]),
-    )?;
-    let (_, jac) = fwd.jacobian(
-        &vec![1.0 / scene.sheet.sheet_resistance; t_n],
-        &protocol,
-        amps,
-    )?;
+    let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;
+    let jac = imager.jacobian(&protocol, amps)?;
+    let grid = &imager.grid;
     stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
     // V_0 and V_1, with the truth (centre, radius) where known.
     let (v0, v1, truth): (Vec<f64>, Vec<f32>, Vec<Truth>) = match &recording {
@@ -1090,26 +975,8 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         None => {
             // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
             // set-up) and one frame with the scene's touches.
-            let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&scene.sheet, &[])?);
-            let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, scene.seed)?;
-            let mut v0 = vec![0.0f64; protocol.frame_len()];
-            for _ in 0..10 {
-                for (a, b) in v0.iter_mut().zip(sim.fast_frame(&config)?) {
-                    *a += f64::from(b) / 10.0;
-                }
-            }
-            let touches: Vec<et_sim::touch::Touch> = scene
-                .touches
-                .iter()
-                .map(|t| et_sim::touch::Touch {
-                    position: t.position,
-                    radius: t.radius,
-                    pressure: t.pressure,
-                })
-                .collect();
-            sim.set_touches(&touches)?;
-            let truth = touches.iter().map(|t| (t.position, t.radius)).collect();
-            (v0, sim.fast_frame(&config)?, truth)
+            let f = scene_frames(&scene, &config, 10)?;
+            (f.v0, f.v1, f.truth)
         }
     };
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
@@ -1130,9 +997,9 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
         grid.image(&recon.reconstruct(&dv)?)
     } else {
-        let sigma0 = vec![1.0 / scene.sheet.sheet_resistance; t_n];
+        let sigma0 = imager.background();
         let its = et_host::recon::gauss_newton(
-            &fwd,
+            &imager.forward,
             &protocol,
             amps,
             &sigma0,
@@ -1151,15 +1018,11 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
         grid.image(&d)
     };
-    let f = args.threshold.unwrap_or(match config.protocol {
-        ProtocolKind::PseudoPolar => 0.08,
-        ProtocolKind::PpPp => 0.05,
-        _ => 0.10,
-    });
-    let rois = regions(&grid, &image, f);
+    let f = args.threshold.unwrap_or(default_threshold(config.protocol));
+    let rois = regions(grid, &image, f);
     let m = truth.first().map(|&(centre, radius)| {
         metrics(
-            &grid,
+            grid,
             &image,
             f,
             &dv,
@@ -1167,48 +1030,16 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             std::f64::consts::PI * radius * radius,
         )
     });
-    // The image with row 0 at the top, in units of the background conductivity.
-    let sigma0 = 1.0 / scene.sheet.sheet_resistance;
-    let rows: Vec<f64> = (0..grid.height)
-        .rev()
-        .flat_map(|j| (0..grid.width).map(move |i| j * grid.width + i))
-        .map(|p| image[p].map_or(f64::NAN, |v| v / sigma0))
-        .collect();
-    let hi = rows
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    let mm = |v: f64| v * 1e3;
-    let extent = plot::Extent {
-        x: (
-            mm(grid.origin[0]),
-            mm(grid.origin[0] + grid.width as f64 * grid.size),
-        ),
-        y: (
-            mm(grid.origin[1] + grid.height as f64 * grid.size),
-            mm(grid.origin[1]),
-        ),
-    };
-    plot::heatmap_over(
+    imager.write_png(
         &args.out,
-        plot::Labels {
-            title: &format!(
-                "{}: {} regions (f = {f})",
-                args.scene
-                    .file_name()
-                    .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
-                rois.len()
-            ),
-            x: "x (mm)",
-            y: "y (mm)",
-            legend: plot::Legend::UpperLeft,
-        },
-        &rows,
-        (grid.height, grid.width),
-        extent,
-        (-hi, hi.max(f64::MIN_POSITIVE)),
-        "conductivity change / background",
+        &format!(
+            "{}: {} regions (f = {f})",
+            args.scene
+                .file_name()
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+            rois.len()
+        ),
+        &image,
     )?;
     let summary = serde_json::json!({
         "out": args.out.display().to_string(),

@@ -7,6 +7,8 @@
 //! - [`cv`]: stratified k-fold cross-validation, confusion matrix, accuracy, AEE [5.9-5.11].
 //! - [`fastcv`]: the same cross-validation from sufficient statistics with exact pruning.
 //! - [`model_file`]: trained models on disk (JSON), for `et train`, `et eval`, `et export`.
+//! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
+//!   test, plots), as `et train`, `et eval` and `et demo` do them.
 //! - [`regress`]: continuous position and pressure by regression (linear ridge, kernel ridge,
 //!   posterior-weighted class centres).
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
@@ -19,6 +21,7 @@ pub mod dataset;
 pub mod fastcv;
 pub mod fit;
 pub mod model_file;
+pub mod pipeline;
 pub mod regress;
 
 #[cfg(test)]

@@ -1,0 +1,245 @@
+//! Training and testing as `et train`, `et eval` and `et demo` do them, in one place: features
+//! from a dataset (referenced or raw, optionally the best p by Fisher ratio), the shrinkage
+//! chosen by cross-validation (leave-one-visit-out when there are several visits), the fit,
+//! its cross-validated accuracy, and a test on another session's data.
+
+use std::path::Path;
+
+use et_core::model::ModelKind;
+use nalgebra::DMatrix;
+
+use super::analysis::{self, Band, Outcome};
+use super::collect::Dataset;
+use super::cv::{self, Confusion};
+use super::fastcv::cross_validate_fast;
+use super::fit::{self, FitError, FitOptions, Fitted, Target};
+use super::model_file::ModelFile;
+use crate::plot::{self, PlotError};
+
+/// The shrinkage candidates tried when it is chosen by cross-validation.
+pub const SHRINKAGE_CANDIDATES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
+
+/// Replaces `data.x` by the features a model is trained on: each frame minus its session's
+/// untouched frame when `referenced`, then (with `keep`) only the `keep` features of largest
+/// Fisher ratio, in frame order (a smaller model for the chip). `data.feature_index` follows.
+///
+/// # Errors
+/// A message when referencing is impossible (no untouched frames) or `keep` is 0 or too large.
+pub fn prepare(data: &mut Dataset, referenced: bool, keep: Option<usize>) -> Result<(), String> {
+    data.x = data.features(referenced)?;
+    if let Some(keep) = keep {
+        if keep == 0 || keep > data.x.ncols() {
+            return Err(format!("keep 1 to {} features, not {keep}", data.x.ncols()));
+        }
+        let mut kept = fit::fisher_ranking(&data.x, &data.y, data.centres.len());
+        kept.truncate(keep);
+        kept.sort_unstable();
+        data.x = analysis::select_columns(&data.x, &kept);
+        data.feature_index = kept.iter().map(|&j| data.feature_index[j]).collect();
+    }
+    Ok(())
+}
+
+/// How to train.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrainOptions {
+    /// QDA or LDA.
+    pub kind: ModelKind,
+    /// A fixed shrinkage in [0, 1], or None to choose among [`SHRINKAGE_CANDIDATES`].
+    pub shrinkage: Option<f64>,
+    /// k of the stratified k-fold cross-validation that is reported (SPEC §9: 10).
+    pub folds: usize,
+}
+
+/// A trained model and how well it cross-validates.
+#[derive(Clone, Debug)]
+pub struct Trained {
+    /// The fit on every observation.
+    pub model: Fitted,
+    /// Its options (shrinkage included).
+    pub options: FitOptions,
+    /// (candidate, cross-validated accuracy) when the shrinkage was chosen.
+    pub shrinkage_scores: Vec<(f64, f64)>,
+    /// Stratified k-fold confusion.
+    pub cv: Confusion,
+    /// Leave-one-visit-out accuracy, when there are at least two visits.
+    pub leave_one_visit_out: Option<f64>,
+    /// The folds the shrinkage was chosen on (by visit, or stratified): learning curves reuse
+    /// them.
+    pub selection_folds: Vec<usize>,
+}
+
+/// Fits a model on `data` (features already [`prepare`]d). QDA shrinks toward the pooled
+/// covariance when that has full rank (n - C > p), else toward the diagonal, since a
+/// rank-deficient target cannot make a class covariance definite; LDA toward the diagonal.
+///
+/// # Errors
+/// [`FitError`] from fitting or cross-validation.
+pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError> {
+    let classes = data.centres.len();
+    let (x, y) = (&data.x, &data.y);
+    let pooled_full_rank = x.nrows().saturating_sub(classes) > x.ncols();
+    let target = if options.kind == ModelKind::Qda && pooled_full_rank {
+        Target::Pooled
+    } else {
+        Target::Diagonal
+    };
+    let base = FitOptions {
+        kind: options.kind,
+        shrinkage: 0.0,
+        target,
+    };
+    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
+    let several_visits = data.visits() >= 2;
+    let strat = cv::folds(y, options.folds.max(2), 1);
+    let selection_folds = if several_visits {
+        by_visit.clone()
+    } else {
+        strat.clone()
+    };
+    let (shrinkage, shrinkage_scores) = match options.shrinkage {
+        Some(l) => (l, Vec::new()),
+        None => cv::choose_shrinkage_with(
+            &SHRINKAGE_CANDIDATES,
+            |o| cross_validate_fast(x, y, classes, o, &selection_folds),
+            &base,
+        )?,
+    };
+    let opts = FitOptions { shrinkage, ..base };
+    let model = Fitted::fit(x, y, classes, &opts)?;
+    let cv = cross_validate_fast(x, y, classes, &opts, &strat)?;
+    let leave_one_visit_out = if several_visits {
+        Some(cross_validate_fast(x, y, classes, &opts, &by_visit)?.accuracy())
+    } else {
+        None
+    };
+    Ok(Trained {
+        model,
+        options: opts,
+        shrinkage_scores,
+        cv,
+        leave_one_visit_out,
+        selection_folds,
+    })
+}
+
+/// A model's results on a test set.
+#[derive(Clone, Debug)]
+pub struct Tested {
+    /// The confusion matrix.
+    pub confusion: Confusion,
+    /// Per observation: distance from the electrodes and position error (empty when the
+    /// dataset does not say where the electrodes are).
+    pub outcomes: Vec<Outcome>,
+    /// Mean error per 10 mm band of distance from the electrodes.
+    pub bands: Vec<Band>,
+}
+
+/// Tests `file`'s model on `data` (raw frames as collected: the model's own features are
+/// taken from it, referenced if the model is).
+///
+/// # Errors
+/// A message when the dataset lacks the model's features or untouched frames, or does not
+/// match its classes.
+pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, String> {
+    // The model's features, found among the dataset's (a feature-reduced model uses a subset).
+    let columns = file
+        .feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or_else(|| {
+            format!(
+                "it lacks frame values the model uses (its {} features vs the model's {})",
+                data.feature_index.len(),
+                file.feature_index.len()
+            )
+        })?;
+    let model = file.fitted().map_err(|e| e.to_string())?;
+    let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
+    let confusion = cv::evaluate(&model, &x, &data.y).map_err(|e| e.to_string())?;
+    let electrodes_mm: Vec<[f64; 2]> = data
+        .electrodes
+        .iter()
+        .map(|e| [e[0] * 1e3, e[1] * 1e3])
+        .collect();
+    let outcomes = if electrodes_mm.is_empty() {
+        Vec::new()
+    } else {
+        analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)
+            .map_err(|e| e.to_string())?
+    };
+    let bands = analysis::by_distance(&outcomes, 10.0);
+    Ok(Tested {
+        confusion,
+        outcomes,
+        bands,
+    })
+}
+
+/// Writes the confusion matrix as a heat map (each true class's row as shares, %).
+///
+/// # Errors
+/// [`PlotError`] naming the file.
+pub fn plot_confusion(path: &Path, confusion: &Confusion, title: &str) -> Result<(), PlotError> {
+    let classes = confusion.classes;
+    let row_share: Vec<f64> = confusion
+        .counts
+        .chunks(classes.max(1))
+        .flat_map(|row| {
+            let n = row.iter().sum::<u32>().max(1);
+            row.iter()
+                .map(move |&v| 100.0 * f64::from(v) / f64::from(n))
+        })
+        .collect();
+    plot::heatmap(
+        path,
+        plot::Labels {
+            title,
+            x: "predicted class",
+            y: "true class",
+            legend: plot::Legend::UpperLeft,
+        },
+        &row_share,
+        (classes, classes),
+        (0.0, 100.0),
+        "share of the true class (%)",
+    )
+}
+
+/// Writes position error against distance from the electrodes: every observation, and the
+/// mean per band.
+///
+/// # Errors
+/// [`PlotError`] naming the file.
+pub fn plot_error_vs_distance(path: &Path, tested: &Tested) -> Result<(), PlotError> {
+    plot::chart(
+        path,
+        plot::Labels {
+            title: "position error against distance from the electrodes",
+            x: "distance of the true class from the nearest electrode (mm)",
+            y: "position error (mm)",
+            legend: plot::Legend::UpperRight,
+        },
+        &[
+            plot::Series {
+                label: "observations".into(),
+                points: tested
+                    .outcomes
+                    .iter()
+                    .map(|o| (o.distance_mm, o.error_mm))
+                    .collect(),
+                scatter: true,
+            },
+            plot::Series {
+                label: "mean per 10 mm band".into(),
+                points: tested
+                    .bands
+                    .iter()
+                    .map(|b| (0.5 * (b.from_mm + b.to_mm), b.mean_error_mm))
+                    .collect(),
+                scatter: false,
+            },
+        ],
+    )
+}
