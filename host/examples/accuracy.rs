@@ -24,9 +24,7 @@ use et_sim::frontend::FrontendSpec;
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
 
-/// One model slot of the board's flash (firmware/src/store.rs): uploads go to the slot not in
-/// use, so a model must fit one slot.
-const SLOT: usize = 384 * 1024;
+use et_host::learn::pipeline::MODEL_SLOT_BYTES as SLOT;
 
 struct Case {
     name: String,

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use et_core::ScanConfig;
 use et_core::protocol::Protocol;
 use et_sim::scene::Scene;
-use et_sim::sheet::SheetSpec;
+use et_sim::sheet::{Sheet, SheetSpec};
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 
@@ -216,9 +216,31 @@ pub fn scene_frames(
     config: &ScanConfig,
     reference: usize,
 ) -> Result<SceneFrames, ImagingError> {
-    let sheet = Arc::new(et_sim::sheet::Sheet::new(&scene.sheet, &[]).map_err(sim_error)?);
-    let mut sim =
-        et_sim::frontend::SimFrontend::new(sheet, scene.frontend, scene.seed).map_err(sim_error)?;
+    scene_frames_on(&simulated_sheet(scene)?, scene, config, reference)
+}
+
+/// The scene's sheet as the simulator's resistor network (the expensive part of
+/// [`scene_frames`], shared by scenes with the same sheet).
+///
+/// # Errors
+/// [`ImagingError::Sim`] if the sheet cannot be built.
+pub fn simulated_sheet(scene: &Scene) -> Result<Arc<Sheet>, ImagingError> {
+    Ok(Arc::new(Sheet::new(&scene.sheet, &[]).map_err(sim_error)?))
+}
+
+/// [`scene_frames`] on a sheet already built by [`simulated_sheet`] (from a scene with the
+/// same sheet).
+///
+/// # Errors
+/// [`ImagingError::Sim`] if the configuration is invalid.
+pub fn scene_frames_on(
+    sheet: &Arc<Sheet>,
+    scene: &Scene,
+    config: &ScanConfig,
+    reference: usize,
+) -> Result<SceneFrames, ImagingError> {
+    let mut sim = et_sim::frontend::SimFrontend::new(Arc::clone(sheet), scene.frontend, scene.seed)
+        .map_err(sim_error)?;
     let n = reference.max(1);
     let mut v0 = Vec::new();
     for _ in 0..n {

@@ -16,9 +16,11 @@
 //! - [`imaging`]: the imaging pipeline strung together (set-up, a scene's simulated frames,
 //!   pictures), as `et reconstruct` and `et demo` use it.
 //! - [`dynamic`]: dynamic protocol selection (SPEC §8) as a state machine over the ROIs.
+//! - [`demo`]: `et demo`, the whole method on the simulated sheet into a report folder.
 //! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
+pub mod demo;
 pub mod dynamic;
 pub mod fem;
 pub mod imaging;

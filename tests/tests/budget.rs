@@ -105,8 +105,9 @@ fn worst_config(protocol: ProtocolKind, electrodes: u8) -> ScanConfig {
     }
 }
 
-/// Bytes of one model slot in the board's flash (`firmware/src/store.rs`).
-const SLOT_BYTES: usize = 384 * 1024;
+/// Bytes of one model slot in the board's flash (`firmware/src/store.rs`), as the host
+/// checks models against it.
+const SLOT_BYTES: usize = et_host::learn::pipeline::MODEL_SLOT_BYTES;
 
 /// The most features a model of `classes` classes can use and still fit a flash slot (and the
 /// device's evaluation limit).

@@ -26,6 +26,18 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The whole method on the simulated sheet, no hardware needed: collect a training set,
+    /// train and cross-validate QDA, test it on next-day sessions and on the chip's model
+    /// blob, image SPEC §7's reference scenarios with every protocol, and sweep mesh size
+    /// against accuracy and time. Writes a report folder (index.md with PNG figures, and
+    /// summary.json) and prints where it is. About 1 to 2 minutes in a release build.
+    ///
+    /// Examples:
+    ///   et demo
+    ///   et demo --out /tmp/report --json
+    ///   et demo --quick            (small sizes: a 10-second smoke test)
+    #[command(verbatim_doc_comment)]
+    Demo(DemoArgs),
     /// Print a protocol's tables: injection pairs, measurement pairs, K and p (SPEC §4).
     ///
     /// Examples:
@@ -128,6 +140,19 @@ enum Command {
     ///   et upload --port /dev/ttyUSB0 --blob model.bin --tare
     #[command(verbatim_doc_comment)]
     Upload(UploadArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct DemoArgs {
+    /// The report folder (created; its files are overwritten).
+    #[arg(long, default_value = "et-demo-report")]
+    out: PathBuf,
+    /// Small sizes everywhere: checks the whole pipeline in seconds, numbers not to quote.
+    #[arg(long)]
+    quick: bool,
+    /// Print the summary as JSON on stdout (progress stays on stderr).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -796,7 +821,7 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
         c * p
     };
     // One model slot of the board's flash (firmware/src/store.rs).
-    const SLOT: usize = 384 * 1024;
+    const SLOT: usize = pipeline::MODEL_SLOT_BYTES;
     let summary = serde_json::json!({
         "out": args.out.display().to_string(),
         "bytes": blob.len(),
@@ -1221,9 +1246,29 @@ fn upload_cmd(args: &UploadArgs) -> Result<()> {
     Ok(())
 }
 
+fn demo_cmd(args: &DemoArgs) -> Result<()> {
+    let command = std::iter::once("et".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let report = et_host::demo::run(&et_host::demo::Options {
+        out: args.out.clone(),
+        quick: args.quick,
+        progress: !args.json,
+        command,
+    })?;
+    if args.json {
+        println!("{}", report.summary);
+    } else {
+        eprintln!("\nreport: {}", report.index.display());
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Demo(args) => demo_cmd(args),
         Command::Protocol(args) => protocol(args),
         Command::Sim(args) => sim(args),
         Command::Collect(args) => collect_cmd(args),

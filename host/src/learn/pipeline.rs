@@ -16,6 +16,10 @@ use super::fit::{self, FitError, FitOptions, Fitted, Target};
 use super::model_file::ModelFile;
 use crate::plot::{self, PlotError};
 
+/// One model slot of the board's flash (`firmware/src/store.rs`): uploads go to the slot not
+/// in use, so a model must fit one slot.
+pub const MODEL_SLOT_BYTES: usize = 384 * 1024;
+
 /// The shrinkage candidates tried when it is chosen by cross-validation.
 pub const SHRINKAGE_CANDIDATES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
 
@@ -242,4 +246,68 @@ pub fn plot_error_vs_distance(path: &Path, tested: &Tested) -> Result<(), PlotEr
             },
         ],
     )
+}
+
+/// How an exported blob did on a test set, evaluated by et-core as the firmware does it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OnChip {
+    /// Observations classified right.
+    pub right: usize,
+    /// Observations.
+    pub total: usize,
+    /// Observations where the chip's class differs from the f64 host model's.
+    pub disagree: usize,
+}
+
+/// Classifies every observation of `data` with `blob` through `et_core::model` (frames as
+/// f32 V_m, and each visit's untouched frame as V_0 for a referenced model), and compares
+/// with `file`'s f64 model.
+///
+/// # Errors
+/// A message when the blob does not parse, the dataset lacks the model's features, or a
+/// frame is not finite.
+pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, String> {
+    let chip = et_core::model::Model::parse(blob).map_err(|e| format!("model blob: {e:?}"))?;
+    let host = file.fitted().map_err(|e| e.to_string())?;
+    let columns = file
+        .feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or("the dataset lacks frame values the model uses")?;
+    let xs = analysis::select_columns(&data.features(file.referenced)?, &columns);
+    // A whole frame (K values) with the dataset's features in their frame positions.
+    let k = chip.frame_len();
+    let frame = |m: &DMatrix<f64>, r: usize| {
+        let mut v = vec![0.0f32; k];
+        for (j, &i) in data.feature_index.iter().enumerate() {
+            if let Some(slot) = v.get_mut(usize::from(i)) {
+                *slot = m[(r, j)] as f32;
+            }
+        }
+        v
+    };
+    let mut scratch = vec![0.0f32; chip.scratch_len()];
+    let mut out = OnChip {
+        right: 0,
+        total: 0,
+        disagree: 0,
+    };
+    let mut row = vec![0.0; xs.ncols()];
+    for r in 0..data.x.nrows() {
+        let v_m = frame(&data.x, r);
+        let v_0 = file
+            .referenced
+            .then(|| frame(&data.baselines, usize::from(data.visit[r])));
+        let d = chip
+            .evaluate_referenced(&v_m, v_0.as_deref(), &mut scratch)
+            .map_err(|e| format!("observation {r}: {e:?}"))?;
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = xs[(r, j)];
+        }
+        out.disagree += usize::from(d.class != host.predict(&row));
+        out.right += usize::from(d.class == data.y[r]);
+        out.total += 1;
+    }
+    Ok(out)
 }
