@@ -10,6 +10,8 @@
 //!   with shrinkage, cross-validation, export to the firmware's model blob.
 //! - [`link`]: the serial link to the firmware: packet decoding with resync and counters,
 //!   commands with replies and timeouts, model upload, reconnect after a pulled cable.
+//! - [`live`]: live touch sensing from any source (simulator, recording, board): images,
+//!   touch events, frame-rate / SNR / BVC monitoring; behind `et view` and `et stream`.
 //! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade).
 //! - [`fem`]: the forward model, P1 finite elements with the complete electrode model (SPEC §5).
 //! - [`recon`]: one-step Gauss-Newton difference imaging with NOSER, ROIs, SPEC §7 metrics.
@@ -26,6 +28,7 @@ pub mod fem;
 pub mod imaging;
 pub mod learn;
 pub mod link;
+pub mod live;
 pub mod mesh;
 pub mod plot;
 pub mod recon;

@@ -432,6 +432,16 @@ pub struct Run {
     frame_period: f64,
     /// Per touch event: effective pressure, peak pressure seen, last position.
     state: Vec<(f64, f64, [f64; 2])>,
+    /// Touches added live (a pointer pressing the sheet in the viewer), on top of the
+    /// scene's, without dynamics.
+    extra: Vec<Touch>,
+    /// Scene time at frame `seq_base` (the clock restarts its count when the frame period
+    /// changes), s.
+    clock_base: f64,
+    seq_base: u32,
+    /// While held, the scene's own touches wait; their timeline starts at release.
+    held: bool,
+    released_at: f64,
 }
 
 impl Run {
@@ -483,7 +493,53 @@ impl Run {
             seq: 0,
             frame_period,
             state,
+            extra: Vec::new(),
+            clock_base: 0.0,
+            seq_base: 0,
+            held: false,
+            released_at: 0.0,
         })
+    }
+
+    /// Scene time of the next frame, s.
+    fn clock(&self) -> f64 {
+        self.clock_base + f64::from(self.seq - self.seq_base) * self.frame_period
+    }
+
+    /// Holds the scene's own touches back (`true`) until released (`false`); their timeline
+    /// then starts at the release, so a live display can take its untouched reference first.
+    pub fn hold_scene(&mut self, held: bool) {
+        if self.held && !held {
+            self.released_at = self.clock();
+        }
+        self.held = held;
+    }
+
+    /// Scans with `config` from the next frame on (another protocol, say), as a device
+    /// obeying `Configure` would.
+    ///
+    /// # Errors
+    /// [`SceneError::Run`] for a configuration the sheet cannot scan.
+    pub fn set_config(&mut self, config: ScanConfig) -> Result<(), SceneError> {
+        let scanner =
+            Scanner::new(config, &mut self.frontend).map_err(|e| SceneError::Run(e.to_string()))?;
+        self.scanner = scanner;
+        self.config = config;
+        self.clock_base = self.clock();
+        self.seq_base = self.seq;
+        self.frame_period = 1.0 / f64::from(config.frame_rate_hz());
+        Ok(())
+    }
+
+    /// Touches pressed live on top of the scene's own from the next frame on (empty: none).
+    pub fn set_extra_touches(&mut self, touches: Vec<Touch>) {
+        self.extra = touches;
+    }
+
+    /// The scene this run plays.
+    #[must_use]
+    pub fn scene(&self) -> &Scene {
+        &self.scene
     }
 
     /// The scan configuration.
@@ -555,8 +611,13 @@ impl Run {
     /// # Errors
     /// [`SceneError::Run`] if the simulation fails.
     pub fn next_frame(&mut self, detail: Detail) -> Result<(Frame, Truth), SceneError> {
-        let t = f64::from(self.seq) * self.frame_period;
-        let touches = self.touches_at(t);
+        let t = self.clock();
+        let mut touches = if self.held {
+            Vec::new()
+        } else {
+            self.touches_at(t - self.released_at)
+        };
+        touches.extend(self.extra.iter().copied());
         self.frontend
             .set_touches(&touches)
             .map_err(|e| SceneError::Run(e.to_string()))?;

@@ -130,6 +130,18 @@ enum Command {
     ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
     #[command(verbatim_doc_comment)]
     Record(RecordArgs),
+    /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
+    /// class, position, intensity, confidence, timestamp, one line per touched frame. From
+    /// the simulator (the default; its scene's touches), a recording (--replay) or a board
+    /// (--port). The first 20 frames, with the sheet untouched, make the reference V_0.
+    ///
+    /// Examples:
+    ///   et stream --json --frames 300
+    ///   et stream --json --scene sim/scenes/square-13cm-16-swipe.toml --model model.json
+    ///   et stream --json --replay session.jsonl
+    ///   et stream --json --port /dev/ttyUSB0 --model model.json | my-robot
+    #[command(verbatim_doc_comment)]
+    Stream(StreamArgs),
     /// Upload a model blob (from `et export`) to the board over its serial port. The board
     /// verifies it (CRC, model checks, scan configuration) before it replaces the old model;
     /// a refused upload leaves the old one classifying. A referenced model needs the untouched
@@ -153,6 +165,64 @@ struct DemoArgs {
     /// Print the summary as JSON on stdout (progress stays on stderr).
     #[arg(long)]
     json: bool,
+}
+
+/// Where live frames come from (`et stream`, `et view`).
+#[derive(Debug, Clone, clap::Args)]
+struct SourceArgs {
+    /// The scene to simulate; with --replay or --port, the sheet they were made on (its
+    /// shape and electrodes, for imaging). Default: the 13 x 13 cm, 16-electrode sheet.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Replay a recording (JSON Lines from `et sim` or `et record`).
+    #[arg(long, conflicts_with = "port")]
+    replay: Option<PathBuf>,
+    /// A board's serial port (`et ports` lists them).
+    #[arg(long)]
+    port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = et_host::link::DEFAULT_BAUD)]
+    baud: u32,
+    /// A trained model (`et train`) to classify each touch with on the host.
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+impl SourceArgs {
+    fn spec(&self) -> et_host::live::SourceSpec {
+        use et_host::live::SourceSpec;
+        match (&self.replay, &self.port) {
+            (Some(path), _) => SourceSpec::Replay(path.clone()),
+            (None, Some(port)) => SourceSpec::Port(port.clone(), self.baud),
+            (None, None) => SourceSpec::Sim,
+        }
+    }
+
+    fn classifier(&self) -> Result<Option<et_host::live::Classifier>> {
+        self.model
+            .as_deref()
+            .map(|p| {
+                let file = ModelFile::load(p).map_err(anyhow::Error::msg)?;
+                et_host::live::Classifier::new(file)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+            })
+            .transpose()
+    }
+}
+
+#[derive(Debug, clap::Args)]
+struct StreamArgs {
+    #[command(flatten)]
+    source: SourceArgs,
+    /// JSON lines on stdout (the only output format; the flag says so in scripts).
+    #[arg(long)]
+    json: bool,
+    /// Stop after this many frames (default: run until Ctrl-C or the end of a recording).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Simulate as fast as possible instead of in real time.
+    #[arg(long)]
+    fast: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -1246,6 +1316,74 @@ fn upload_cmd(args: &UploadArgs) -> Result<()> {
     Ok(())
 }
 
+fn stream_cmd(args: &StreamArgs) -> Result<()> {
+    use et_host::live::{Processor, Settings, Source, open_source};
+    use std::io::Write as _;
+    let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())
+        .map_err(anyhow::Error::msg)?;
+    let mut processor = Processor::new(&sheet, Settings::default()).map_err(anyhow::Error::msg)?;
+    processor.classifier = args.source.classifier()?;
+    if let Some(c) = &processor.classifier {
+        // The model classifies frames of the configuration it was trained on.
+        source.configure(c.file.config).map_err(|e| {
+            anyhow::anyhow!(
+                "the model was trained on {} frames and the source cannot scan them: {e}",
+                c.file.config.protocol.name()
+            )
+        })?;
+    }
+    if let Source::Replay(r) = &mut source {
+        r.looping = false;
+    }
+    if !args.json {
+        eprintln!("note: et stream prints JSON lines (--json); streaming them anyway");
+    }
+    eprintln!(
+        "streaming touch events from the {} (the first {} frames are the untouched reference)",
+        source.describe(),
+        Settings::default().reference_frames
+    );
+    let limit = args.frames.unwrap_or(u64::MAX);
+    let mut seen = 0u64;
+    let mut stdout = std::io::stdout().lock();
+    while seen < limit {
+        let frames = source.poll(64, !args.fast).map_err(anyhow::Error::msg)?;
+        if frames.is_empty() {
+            if let Source::Replay(r) = &source
+                && r.position >= r.len()
+            {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            continue;
+        }
+        for frame in frames {
+            if seen >= limit {
+                break;
+            }
+            seen += 1;
+            let out = match processor.process(frame) {
+                Ok(o) => o,
+                Err(e) => {
+                    eprintln!("skipped: {e}");
+                    continue;
+                }
+            };
+            if let Some(event) = out.event {
+                let line = serde_json::to_string(&event)?;
+                if writeln!(stdout, "{line}")
+                    .and_then(|()| stdout.flush())
+                    .is_err()
+                {
+                    // The reader went away (a closed pipe): stop quietly.
+                    return Ok(());
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn demo_cmd(args: &DemoArgs) -> Result<()> {
     let command = std::iter::once("et".to_string())
         .chain(std::env::args().skip(1))
@@ -1280,6 +1418,7 @@ fn main() -> ExitCode {
         Command::Ports => ports_cmd(),
         Command::Record(args) => record_cmd(args),
         Command::Upload(args) => upload_cmd(args),
+        Command::Stream(args) => stream_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,239 @@
+use super::*;
+
+fn sim() -> (Source, SheetSpec) {
+    open_source(&SourceSpec::Sim, None).unwrap()
+}
+
+/// Frames of the default sheet, untouched (the scene's own touch comes after LEAD_S).
+fn press_at(source: &mut Source, position: Option<[f64; 2]>) {
+    let Source::Sim(s) = source else {
+        panic!("not the simulator")
+    };
+    s.press(
+        position
+            .map(|p| Touch {
+                position: p,
+                radius: 0.0075,
+                pressure: 20e3,
+            })
+            .into_iter()
+            .collect(),
+    );
+}
+
+#[test]
+fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
+    let (mut source, sheet) = sim();
+    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    let settings = p.settings();
+    // The reference frames.
+    for i in 0..settings.reference_frames {
+        let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+        assert_eq!(out.referencing, Some((i + 1, settings.reference_frames)));
+        assert!(out.event.is_none());
+    }
+    assert!(p.v0().is_some());
+    // Untouched (still inside the lead time): the image's energy is noise.
+    for _ in 0..15 {
+        let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+        assert!(
+            out.event.is_none(),
+            "a touch on the untouched sheet: {:?}",
+            out.event
+        );
+    }
+    // Pressed at three places: each is a touch, imaged where it is.
+    for at in [[0.03, 0.02], [-0.035, -0.03], [0.0, 0.04]] {
+        press_at(&mut source, Some(at));
+        let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+        let e = out.event.expect("the press is a touch");
+        let off = (e.position_mm[0] - at[0] * 1e3).hypot(e.position_mm[1] - at[1] * 1e3);
+        println!(
+            "press at {at:?}: intensity {:.1}, {off:.1} mm off, {} regions",
+            e.intensity, e.regions
+        );
+        assert!(e.intensity > settings.touch_factor, "{e:?}");
+        assert!(off < 15.0, "{e:?}");
+        assert_eq!(e.regions, 1, "{e:?}");
+        assert!(e.class.is_none() && e.confidence.is_none());
+    }
+    press_at(&mut source, None);
+}
+
+#[test]
+fn a_configuration_change_takes_a_new_reference() {
+    let (mut source, sheet) = sim();
+    let mut p = Processor::new(
+        &sheet,
+        Settings {
+            reference_frames: 3,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    for _ in 0..4 {
+        p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    }
+    let config = ScanConfig {
+        protocol: ProtocolKind::PseudoPolar,
+        ..source.config().unwrap()
+    };
+    source.configure(config).unwrap();
+    let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    assert_eq!(out.frame.config.protocol, ProtocolKind::PseudoPolar);
+    assert_eq!(out.referencing, Some((1, 3)));
+    // Frames of the wrong length and with NaN are refused, not imaged.
+    let mut bad = out.frame.clone();
+    bad.voltages.pop();
+    assert!(p.process(bad).is_err());
+    let mut nan = out.frame;
+    nan.voltages[3] = f32::NAN;
+    assert!(p.process(nan).is_err());
+}
+
+#[test]
+fn a_replay_plays_pauses_and_seeks() {
+    let dir = std::env::temp_dir().join(format!("et-live-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("r.jsonl");
+    // Six frames from the simulator, recorded.
+    let (mut source, sheet) = sim();
+    let frames: Vec<LiveFrame> = (0..6)
+        .map(|_| source.poll(1, false).unwrap().remove(0))
+        .collect();
+    let header = recording::Header::new("test", &frames[0].config).unwrap();
+    let mut w = recording::Writer::create(&path, &header).unwrap();
+    for f in &frames {
+        w.append(&recording::Record {
+            seq: f.seq,
+            t_us: f.t_us,
+            flags: 0,
+            rail_count: 0,
+            voltages: f.voltages.clone(),
+            touches: None,
+        })
+        .unwrap();
+    }
+    drop(w);
+    let mut r = ReplaySource::open(&path, sheet.clone()).unwrap();
+    assert_eq!(r.len(), 6);
+    assert_eq!(r.next_frame().unwrap().voltages, frames[0].voltages);
+    r.paused = true;
+    assert!(r.next_frame().is_none());
+    r.paused = false;
+    r.seek(4);
+    assert_eq!(r.next_frame().unwrap().seq, frames[4].seq);
+    r.seek(100);
+    assert_eq!(r.position, 5);
+    r.next_frame();
+    // At the end: loops, or stops.
+    assert_eq!(r.next_frame().unwrap().seq, frames[0].seq);
+    r.looping = false;
+    r.seek(5);
+    r.next_frame();
+    assert!(r.next_frame().is_none());
+    // A recording of another electrode count is refused with the file named.
+    let small = SheetSpec::rectangle(0.13, 0.13, 8);
+    let e = ReplaySource::open(&path, small).unwrap_err();
+    assert!(e.contains("r.jsonl") && e.contains("16"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_monitor_counts_gaps_and_measures_snr() {
+    let (mut source, sheet) = sim();
+    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    let mut m = Monitor::default();
+    for i in 0..30 {
+        let mut f = source.poll(1, false).unwrap().remove(0);
+        if i >= 10 {
+            f.seq += 5; // five frames lost after the tenth
+        }
+        m.add(&p.process(f).unwrap());
+    }
+    assert_eq!(m.gaps, 5);
+    assert_eq!(m.frames, 30);
+    let k = m.snr_db.len();
+    assert_eq!(k, 208);
+    let finite: Vec<f64> = m.snr_db.iter().copied().filter(|v| v.is_finite()).collect();
+    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+    // The simulator's calibrated noise gives about 30 dB on the adjacent protocol (README).
+    assert!((20.0..40.0).contains(&mean), "mean SNR {mean} dB");
+}
+
+/// A model trained on the simulator (3 x 3 classes) classifies live presses: the source is
+/// switched to the model's configuration, and every class centre pressed comes out as its class.
+#[test]
+fn a_trained_model_classifies_live_presses() {
+    use crate::learn::{collect, pipeline};
+    let scene = default_scene().unwrap();
+    let config = collect::training_config(scene.scan_config().unwrap());
+    let centres = collect::grid(&scene.sheet, 3, 3, 0.0);
+    let plan = collect::Plan {
+        visits: 2,
+        scans: 3,
+        subsections: 20,
+        pressure_pa: (5e3, 60e3),
+        radius: 0.0075,
+        placement: 0.002,
+        electrode_movement: 0.0005,
+        poses: 1,
+        press_movement: 0.0,
+        seed: 5,
+    };
+    let mut data = collect::collect(&scene.sheet, scene.frontend, config, &centres, &plan).unwrap();
+    pipeline::prepare(&mut data, true, None).unwrap();
+    let t = pipeline::train(
+        &data,
+        &pipeline::TrainOptions {
+            kind: et_core::model::ModelKind::Qda,
+            shrinkage: None,
+            folds: 5,
+        },
+    )
+    .unwrap();
+    let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
+    let file = ModelFile::new(
+        &t.model,
+        t.options.shrinkage,
+        config,
+        data.feature_index.clone(),
+        mm,
+        true,
+    );
+
+    let (mut source, sheet) = sim();
+    source.configure(file.config).unwrap();
+    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    p.classifier = Some(Classifier::new(file).unwrap());
+    for _ in 0..p.settings().reference_frames {
+        p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    }
+    for (c, centre) in centres.iter().enumerate() {
+        press_at(&mut source, Some(*centre));
+        let e = p
+            .process(source.poll(1, false).unwrap().remove(0))
+            .unwrap()
+            .event
+            .expect("a touch");
+        println!("class {c}: {:?} confidence {:?}", e.class, e.confidence);
+        assert_eq!(e.class, Some(c as u16), "{e:?}");
+        let conf = e.confidence.unwrap();
+        assert!(conf > 0.5 && conf <= 1.0, "{e:?}");
+        // The posterior-weighted position lies near the class centre.
+        let off = (e.position_mm[0] - centre[0] * 1e3).hypot(e.position_mm[1] - centre[1] * 1e3);
+        assert!(off < 20.0, "{e:?}");
+    }
+    // Frames of another configuration are not classified by it.
+    let other = ScanConfig {
+        protocol: ProtocolKind::Adjacent,
+        ..config
+    };
+    assert!(
+        p.classifier
+            .as_ref()
+            .unwrap()
+            .classify(&other, &[0.0; 208], &[0.0; 208])
+            .is_none()
+    );
+}
