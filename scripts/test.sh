@@ -30,7 +30,7 @@ cargo fmt --all -- --check
 (cd firmware && cargo fmt -- --check)
 
 step "lint (clippy, warnings are errors)"
-cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy --workspace --all-targets --features et-host/viewer -- -D warnings
 
 step "et-core builds no_std for the microcontroller (no default features)"
 cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
@@ -45,5 +45,5 @@ if command -v size >/dev/null; then
     END {printf "firmware image: flash %d of 262144 bytes (program region), static RAM %d of 131072 bytes\n", f, r}'
 fi
 
-step "tests (cargo test --workspace)"
-cargo test --workspace
+step "tests (cargo test --workspace --features et-host/viewer)"
+cargo test --workspace --features et-host/viewer

@@ -112,6 +112,12 @@ impl Selector {
         }
     }
 
+    /// Its settings.
+    #[must_use]
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
     /// The protocol being scanned.
     #[must_use]
     pub fn current(&self) -> ProtocolKind {

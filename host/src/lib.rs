@@ -1,6 +1,6 @@
 //! `et-host`: everything et runs on the computer.
 //!
-//! Modules (more arrive with their issues: `viewer`):
+//! Modules:
 //!
 //! - [`tables`]: a protocol's tables (SPEC §4) as plain data for people and programs, behind
 //!   `et protocol`.
@@ -19,6 +19,7 @@
 //!   pictures), as `et reconstruct` and `et demo` use it.
 //! - [`dynamic`]: dynamic protocol selection (SPEC §8) as a state machine over the ROIs.
 //! - [`demo`]: `et demo`, the whole method on the simulated sheet into a report folder.
+//! - `viewer` (cargo feature `viewer`): `et view`, the egui window over [`live`].
 //! - [`plot`]: PNG charts and heat maps with a colour bar.
 #![forbid(unsafe_code)]
 
@@ -34,3 +35,5 @@ pub mod plot;
 pub mod recon;
 pub mod recording;
 pub mod tables;
+#[cfg(feature = "viewer")]
+pub mod viewer;

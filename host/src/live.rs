@@ -395,8 +395,9 @@ pub enum SourceSpec {
     Port(String, u32),
 }
 
-/// Opens `spec`. `scene` is the scene file to simulate, or the sheet a recording or a board
-/// uses (None: the default 13 x 13 cm, 16-electrode sheet). Returns the source and the sheet.
+/// Opens `spec`. `scene` is the scene file to simulate (with its touches), or the sheet a
+/// recording or a board uses (None: the default 13 x 13 cm, 16-electrode sheet, untouched
+/// until something presses it). Returns the source and the sheet.
 ///
 /// # Errors
 /// A message naming the file or port.
@@ -406,7 +407,11 @@ pub fn open_source(spec: &SourceSpec, scene: Option<&Path>) -> Result<(Source, S
             Scene::load(p).map_err(|e| e.to_string())?,
             p.display().to_string(),
         ),
-        None => (default_scene()?, crate::demo::DEFAULT_SCENE.0.to_string()),
+        None => {
+            let mut scene = default_scene()?;
+            scene.touches.clear();
+            (scene, crate::demo::DEFAULT_SCENE.0.to_string())
+        }
     };
     let sheet = scene.sheet.clone();
     let source = match spec {

@@ -130,14 +130,28 @@ enum Command {
     ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
     #[command(verbatim_doc_comment)]
     Record(RecordArgs),
-    /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
-    /// class, position, intensity, confidence, timestamp, one line per touched frame. From
-    /// the simulator (the default; its scene's touches), a recording (--replay) or a board
-    /// (--port). The first 20 frames, with the sheet untouched, make the reference V_0.
+    /// Open the viewer: the live image with its colour bar and ROI outline, the class grid
+    /// with the recognised class lit and the position marker, protocol (or automatic),
+    /// alpha and threshold, plots of frame rate, BVC and per-channel SNR, link health, and the
+    /// training wizard. Press the simulated sheet with the mouse. Needs the `viewer` feature:
+    ///   cargo run --release -p et-host --features viewer -- view
     ///
     /// Examples:
-    ///   et stream --json --frames 300
-    ///   et stream --json --scene sim/scenes/square-13cm-16-swipe.toml --model model.json
+    ///   et view                                   (the simulated 13 x 13 cm sheet)
+    ///   et view --scene sim/scenes/disc-22cm-16.toml
+    ///   et view --replay session.jsonl
+    ///   et view --port /dev/ttyUSB0 --model model.json
+    #[command(verbatim_doc_comment)]
+    View(ViewArgs),
+    /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
+    /// class, position, intensity, confidence, timestamp, one line per touched frame. From
+    /// a simulated scene (--scene; its touches start once the reference is taken), a
+    /// recording (--replay) or a board (--port). The first 20 frames, with the sheet
+    /// untouched, make the reference V_0.
+    ///
+    /// Examples:
+    ///   et stream --json --scene sim/scenes/square-13cm-16-swipe.toml --frames 300
+    ///   et stream --json --scene sim/scenes/square-13cm-16.toml --model model.json
     ///   et stream --json --replay session.jsonl
     ///   et stream --json --port /dev/ttyUSB0 --model model.json | my-robot
     #[command(verbatim_doc_comment)]
@@ -208,6 +222,16 @@ impl SourceArgs {
             })
             .transpose()
     }
+}
+
+#[derive(Debug, clap::Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    source: SourceArgs,
+    /// For documentation: once V_0 is taken, press the simulated sheet at (30, 25) mm, save
+    /// the window as this PNG, and close.
+    #[arg(long, value_name = "PNG")]
+    screenshot: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -1316,6 +1340,25 @@ fn upload_cmd(args: &UploadArgs) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "viewer")]
+fn view_cmd(args: &ViewArgs) -> Result<()> {
+    et_host::viewer::run(et_host::viewer::Options {
+        scene: args.source.scene.clone(),
+        source: args.source.spec(),
+        model: args.source.model.clone(),
+        realtime: true,
+        screenshot: args.screenshot.clone(),
+    })
+    .map_err(anyhow::Error::msg)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn view_cmd(_: &ViewArgs) -> Result<()> {
+    bail!(
+        "this et was built without the viewer; build it with the `viewer` feature:\n  cargo run --release -p et-host --features viewer -- view"
+    )
+}
+
 fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
     use std::io::Write as _;
@@ -1419,6 +1462,7 @@ fn main() -> ExitCode {
         Command::Record(args) => record_cmd(args),
         Command::Upload(args) => upload_cmd(args),
         Command::Stream(args) => stream_cmd(args),
+        Command::View(args) => view_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

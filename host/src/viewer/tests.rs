@@ -1,0 +1,347 @@
+//! The viewer driven headless through its real interface (egui_kittest: widgets found by
+//! their labels, clicked, the state checked).
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+
+use super::*;
+
+fn harness(options: Options) -> Harness<'static, Viewer> {
+    let viewer = Viewer::new(options).unwrap();
+    Harness::builder()
+        .with_size(vec2(1280.0, 800.0))
+        .with_max_steps(10_000)
+        .build_ui_state(|ui, v: &mut Viewer| v.ui(ui), viewer)
+}
+
+fn sim_options() -> Options {
+    Options {
+        scene: None,
+        source: SourceSpec::Sim,
+        model: None,
+        realtime: false,
+        screenshot: None,
+    }
+}
+
+/// Steps until the reference is taken (one simulated frame per step).
+fn settle(h: &mut Harness<'static, Viewer>) {
+    for _ in 0..60 {
+        h.step();
+        if h.state()
+            .last
+            .as_ref()
+            .is_some_and(|o| o.referencing.is_none())
+        {
+            return;
+        }
+    }
+    panic!("no reference after 60 frames: {}", h.state().status);
+}
+
+#[test]
+fn protocol_buttons_switch_the_scan_and_take_a_new_reference() {
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    assert_eq!(
+        h.state()
+            .source
+            .as_ref()
+            .unwrap()
+            .config()
+            .unwrap()
+            .protocol,
+        ProtocolKind::Adjacent
+    );
+    for (label, kind) in [
+        ("PP", ProtocolKind::PseudoPolar),
+        ("PP-PP", ProtocolKind::PpPp),
+        ("opposite", ProtocolKind::Opposite),
+        ("AD", ProtocolKind::Adjacent),
+    ] {
+        h.get_by_label(label).click();
+        h.step();
+        h.step();
+        let v = h.state();
+        assert_eq!(v.protocol, ProtocolChoice::Fixed(kind));
+        let last = v.last.as_ref().unwrap();
+        assert_eq!(last.frame.config.protocol, kind, "{label}");
+        // A new V_0 for the new protocol.
+        assert!(last.referencing.is_some(), "{label}");
+    }
+    // Automatic: starts on AD.
+    h.get_by_label("automatic").click();
+    h.step();
+    assert_eq!(h.state().protocol, ProtocolChoice::Automatic);
+    assert_eq!(
+        h.state()
+            .source
+            .as_ref()
+            .unwrap()
+            .config()
+            .unwrap()
+            .protocol,
+        ProtocolKind::Adjacent
+    );
+}
+
+#[test]
+fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
+    let mut h = harness(sim_options());
+    h.get_by_label("automatic").click();
+    settle(&mut h);
+    // A press in the middle of the sheet (SPEC §8: central, switch to PP).
+    h.state_mut().press(vec![Touch {
+        position: [0.005, 0.0],
+        radius: 0.0075,
+        pressure: 30e3,
+    }]);
+    let mut switched = false;
+    for _ in 0..20 {
+        h.step();
+        if h.state()
+            .source
+            .as_ref()
+            .unwrap()
+            .config()
+            .unwrap()
+            .protocol
+            == ProtocolKind::PseudoPolar
+        {
+            switched = true;
+            break;
+        }
+    }
+    assert!(switched, "{}", h.state().status);
+}
+
+#[test]
+fn pressing_the_simulated_sheet_shows_the_touch_where_it_is() {
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    h.state_mut().press(vec![Touch {
+        position: [0.03, -0.03],
+        radius: 0.0075,
+        pressure: 30e3,
+    }]);
+    h.step();
+    h.step();
+    let e = h
+        .state()
+        .last
+        .as_ref()
+        .unwrap()
+        .event
+        .clone()
+        .expect("a touch");
+    let off = (e.position_mm[0] - 30.0).hypot(e.position_mm[1] + 30.0);
+    assert!(off < 15.0, "{e:?}");
+    // The touch panel says so.
+    assert!(h.query_by_label_contains("intensity z =").is_some());
+    h.state_mut().press(Vec::new());
+    h.step();
+    h.step();
+    assert!(h.state().last.as_ref().unwrap().event.is_none());
+    assert!(h.query_by_label("no touch").is_some());
+}
+
+#[test]
+fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
+    // A recording of the simulator to switch to.
+    let dir = std::env::temp_dir().join(format!("et-viewer-src-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("s.jsonl");
+    write_recording(&path, 30);
+
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    h.get_by_label("Recording").click();
+    h.step();
+    // No path yet: refused with a hint, the simulator keeps running.
+    h.get_by_label("Open").click();
+    h.step();
+    assert!(h.state().status.contains("path"), "{}", h.state().status);
+    assert!(matches!(h.state().source, Some(Source::Sim(_))));
+    // A path that does not exist: the error names it.
+    h.state_mut().replay_path = dir.join("missing.jsonl").display().to_string();
+    h.get_by_label("Open").click();
+    h.step();
+    assert!(
+        h.state().status.contains("missing.jsonl"),
+        "{}",
+        h.state().status
+    );
+    // The recording.
+    h.state_mut().replay_path = path.display().to_string();
+    h.get_by_label("Open").click();
+    h.step();
+    assert!(
+        matches!(h.state().source, Some(Source::Replay(_))),
+        "{}",
+        h.state().status
+    );
+    assert!(h.query_all_by_label_contains("recording:").count() >= 1);
+    // And back to the simulator.
+    h.get_by_label("Simulated sheet").click();
+    h.step();
+    h.get_by_label("Open").click();
+    h.step();
+    assert!(matches!(h.state().source, Some(Source::Sim(_))));
+    // A recording cannot change its protocol: the status says why.
+    h.state_mut().replay_path = path.display().to_string();
+    h.get_by_label("Recording").click();
+    h.step();
+    h.get_by_label("Open").click();
+    h.step();
+    h.get_by_label("PP").click();
+    h.step();
+    assert!(
+        h.state().status.contains("recorded"),
+        "{}",
+        h.state().status
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn write_recording(path: &std::path::Path, frames: usize) {
+    let (mut source, _) = open_source(&SourceSpec::Sim, None).unwrap();
+    let first = source.poll(1, false).unwrap().remove(0);
+    let header = crate::recording::Header::new("test", &first.config).unwrap();
+    let mut w = crate::recording::Writer::create(path, &header).unwrap();
+    let mut f = first;
+    for i in 0..frames {
+        if i > 0 {
+            f = source.poll(1, false).unwrap().remove(0);
+        }
+        w.append(&crate::recording::Record {
+            seq: f.seq,
+            t_us: f.t_us,
+            flags: 0,
+            rail_count: 0,
+            voltages: f.voltages.clone(),
+            touches: None,
+        })
+        .unwrap();
+    }
+}
+
+#[test]
+fn replay_pauses_and_seeks() {
+    let dir = std::env::temp_dir().join(format!("et-viewer-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("r.jsonl");
+    write_recording(&path, 40);
+    let mut h = harness(Options {
+        scene: None,
+        source: SourceSpec::Replay(path.clone()),
+        model: None,
+        realtime: false,
+        screenshot: None,
+    });
+    for _ in 0..5 {
+        h.step();
+    }
+    let position = |h: &Harness<'static, Viewer>| match &h.state().source {
+        Some(Source::Replay(r)) => r.position,
+        _ => panic!("not a replay"),
+    };
+    let playing = position(&h);
+    assert!(playing >= 5, "{playing}");
+    h.get_by_label("Pause").click();
+    h.step();
+    let paused_at = position(&h);
+    for _ in 0..5 {
+        h.step();
+    }
+    assert_eq!(position(&h), paused_at, "paused, yet frames came");
+    // Seek with the slider (through accesskit, as a screen reader would).
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "frame")
+        .set_value_accesskit(30.0);
+    h.step();
+    assert_eq!(position(&h), 30);
+    h.get_by_label("Play").click();
+    h.step();
+    h.step();
+    assert!(position(&h) > 30);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_wizard_collects_trains_and_the_model_classifies() {
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    h.get_by_label("Open the training wizard").click();
+    h.step();
+    {
+        let w = &mut h.state_mut().wizard;
+        w.rows = 2;
+        w.cols = 2;
+        w.visits = 2;
+        w.frames_per_press = 8;
+    }
+    h.step();
+    h.get_by_label("Start").click();
+    // Press every cell of every visit with the simulator's help.
+    let mut presses = 0;
+    for _ in 0..400 {
+        h.step();
+        if h.state().wizard.step == wizard::Step::Ready {
+            break;
+        }
+        if let Some(b) = h.query_by_label("Press for me (simulated)") {
+            b.click();
+            presses += 1;
+            // The click lands on the next step; the step after shows the new state.
+            h.step();
+        }
+    }
+    assert_eq!(
+        h.state().wizard.step,
+        wizard::Step::Ready,
+        "{}",
+        h.state().wizard.message
+    );
+    assert_eq!(presses, 8, "2 x 2 cells, 2 visits");
+    assert_eq!(h.state().wizard.observations(), 4 * 2 * 8);
+    h.get_by_label("Train").click();
+    h.step();
+    h.step();
+    let w = &h.state().wizard;
+    assert_eq!(w.step, wizard::Step::Trained, "{}", w.message);
+    let acc = w.trained.as_ref().unwrap().cv.accuracy();
+    assert!(acc > 0.9, "cross-validated accuracy {acc}");
+    assert!(
+        h.query_all_by_label_contains("cross-validated accuracy")
+            .count()
+            >= 1
+    );
+    // Without a board, export is disabled; the model can be used here.
+    h.get_by_label("Use this model").click();
+    h.step();
+    assert!(h.state().processor.classifier.is_some());
+    // The wizard scans the opposite protocol, as the model expects: press each cell and
+    // the class grid lights that cell.
+    let sheet = crate::live::default_scene().unwrap().sheet;
+    let centres = crate::learn::collect::grid(&sheet, 2, 2, 0.0);
+    for (c, centre) in centres.iter().enumerate() {
+        h.state_mut().press(vec![Touch {
+            position: *centre,
+            radius: 0.0075,
+            pressure: 30e3,
+        }]);
+        h.step();
+        h.step();
+        let last = h.state().last.as_ref().unwrap();
+        let e = last.event.clone().unwrap_or_else(|| {
+            panic!(
+                "no touch: referencing {:?}, frame {:?} {:?}, status {}",
+                last.referencing,
+                last.frame.config.protocol,
+                last.frame.truth,
+                h.state().status
+            )
+        });
+        assert_eq!(e.class, Some(c as u16), "{e:?}");
+        assert!(h.query_by_label(&format!("class {c}")).is_some());
+    }
+}

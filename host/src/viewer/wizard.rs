@@ -1,0 +1,578 @@
+//! The training wizard: SPEC §9's collection done by hand, one cell at a time.
+//!
+//! Setup (grid, visits, frames per press) → for each visit: V_0 of the untouched sheet, then
+//! each cell pressed in turn (the simulator can press for you) while its frames are recorded →
+//! QDA trained on referenced frames with the shrinkage chosen by leave-one-visit-out →
+//! cross-validated accuracy and confusion → the model used here, saved, or sent to the board.
+//! Frames are taken with the opposite protocol, whose independent voltages are SPEC §9's
+//! features.
+
+use std::path::PathBuf;
+
+use eframe::egui::{self, Color32, Rect, Sense, Stroke, StrokeKind, pos2, vec2};
+use et_core::ScanConfig;
+use et_core::model::{ModelKind, Precision};
+use et_core::protocol::{Halving, ProtocolKind};
+use et_sim::sheet::SheetSpec;
+use et_sim::touch::Touch;
+use nalgebra::DMatrix;
+
+use crate::learn::collect::{self, Dataset};
+use crate::learn::cv::Confusion;
+use crate::learn::model_file::ModelFile;
+use crate::learn::pipeline::{self, MODEL_SLOT_BYTES, TrainOptions};
+use crate::live::{Output, Processor, Source};
+
+/// What the wizard asks of the viewer.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Request {
+    /// Scan with this configuration (and take V_0 anew).
+    Configure(ScanConfig),
+    /// Press the simulated sheet (empty: release).
+    Press(Vec<Touch>),
+    /// Classify with this model from now on.
+    UseModel(Box<ModelFile>),
+    /// Send this blob to the board.
+    Upload(Vec<u8>),
+}
+
+/// Where the wizard is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Step {
+    /// Choosing the grid.
+    Setup,
+    /// Taking V_0 of visit `visit`.
+    Reference {
+        /// Visit (0-based).
+        visit: usize,
+    },
+    /// Waiting for cell `cell` of visit `visit` to be pressed.
+    Press {
+        /// Visit (0-based).
+        visit: usize,
+        /// Cell (row-major from the lower left).
+        cell: usize,
+    },
+    /// Recording the frames of a press.
+    Recording {
+        /// Visit (0-based).
+        visit: usize,
+        /// Cell.
+        cell: usize,
+        /// Frames recorded of this press.
+        frames: usize,
+    },
+    /// Everything collected.
+    Ready,
+    /// Trained.
+    Trained,
+}
+
+/// The outcome of training.
+#[derive(Clone, Debug)]
+pub struct Trained {
+    /// The model.
+    pub file: ModelFile,
+    /// Stratified k-fold cross-validation.
+    pub cv: Confusion,
+    /// Leave-one-visit-out accuracy (several visits).
+    pub leave_one_visit_out: Option<f64>,
+}
+
+/// The wizard's state.
+#[derive(Clone, Debug)]
+pub struct Wizard {
+    /// The window is shown.
+    pub open: bool,
+    /// Rows of the class grid.
+    pub rows: usize,
+    /// Columns of the class grid.
+    pub cols: usize,
+    /// Visits T of the whole grid.
+    pub visits: usize,
+    /// Frames recorded per press (observations per class and visit).
+    pub frames_per_press: usize,
+    /// Where it is.
+    pub step: Step,
+    /// After training.
+    pub trained: Option<Trained>,
+    /// Where "Save" writes the model (JSON) and its blob (`.etm` beside it).
+    pub save_path: String,
+    /// What just happened.
+    pub message: String,
+    config: Option<ScanConfig>,
+    centres: Vec<[f64; 2]>,
+    electrodes: Vec<[f64; 2]>,
+    feature_index: Vec<u16>,
+    rows_x: Vec<f64>,
+    y: Vec<u16>,
+    visit_of: Vec<u16>,
+    baselines: Vec<f64>,
+    seed: u64,
+}
+
+impl Default for Wizard {
+    fn default() -> Self {
+        Self {
+            open: false,
+            rows: 3,
+            cols: 3,
+            visits: 2,
+            frames_per_press: 10,
+            step: Step::Setup,
+            trained: None,
+            save_path: "model.json".into(),
+            message: String::new(),
+            config: None,
+            centres: Vec::new(),
+            electrodes: Vec::new(),
+            feature_index: Vec::new(),
+            rows_x: Vec::new(),
+            y: Vec::new(),
+            visit_of: Vec::new(),
+            baselines: Vec::new(),
+            seed: 1,
+        }
+    }
+}
+
+impl Wizard {
+    /// Classes of the grid.
+    #[must_use]
+    pub fn classes(&self) -> usize {
+        self.rows * self.cols
+    }
+
+    /// Observations recorded so far.
+    #[must_use]
+    pub fn observations(&self) -> usize {
+        self.y.len()
+    }
+
+    /// Starts collecting on `sheet` with `base`'s scan settings and the opposite protocol.
+    ///
+    /// # Errors
+    /// A message when the opposite protocol does not exist for this sheet.
+    pub fn start(&mut self, sheet: &SheetSpec, base: ScanConfig) -> Result<Request, String> {
+        let config = ScanConfig {
+            protocol: ProtocolKind::Opposite,
+            ..base
+        };
+        let protocol = config.validate().map_err(|e| e.to_string())?;
+        self.feature_index = protocol
+            .features(Halving::Reciprocity)
+            .map(|k| k as u16)
+            .collect();
+        self.centres = collect::grid(sheet, self.rows, self.cols, 0.0);
+        self.electrodes = sheet
+            .electrodes
+            .arc_positions()
+            .iter()
+            .map(|&t| sheet.shape.boundary_point(t))
+            .collect();
+        self.rows_x.clear();
+        self.y.clear();
+        self.visit_of.clear();
+        self.baselines.clear();
+        self.trained = None;
+        self.config = Some(config);
+        self.step = Step::Reference { visit: 0 };
+        self.message = "keep the sheet untouched: taking V_0".into();
+        Ok(Request::Configure(config))
+    }
+
+    /// The simulated press of `cell`: near its centre (a quarter finger radius off, as a
+    /// hand lands), at 5 to 60 kPa.
+    fn simulated_press(&mut self, cell: usize) -> Request {
+        let mut rng = et_sim::rng::Rng::new(self.seed);
+        self.seed = self.seed.wrapping_add(1);
+        let c = self.centres[cell];
+        let radius = 0.0075;
+        Request::Press(vec![Touch {
+            position: [
+                c[0] + radius / 4.0 * rng.normal(),
+                c[1] + radius / 4.0 * rng.normal(),
+            ],
+            radius,
+            pressure: 5e3 + 55e3 * rng.uniform(),
+        }])
+    }
+
+    /// Takes one processed frame; returns what the viewer must do next, in order.
+    pub fn observe(&mut self, out: &Output, processor: &Processor) -> Vec<Request> {
+        let Some(config) = self.config else {
+            return Vec::new();
+        };
+        if out.frame.config != config || out.referencing.is_some() {
+            return Vec::new();
+        }
+        match self.step.clone() {
+            Step::Reference { visit } => {
+                let Some(v0) = processor.v0() else {
+                    return Vec::new();
+                };
+                self.baselines
+                    .extend(self.feature_index.iter().map(|&i| v0[usize::from(i)]));
+                self.step = Step::Press { visit, cell: 0 };
+                self.message = format!(
+                    "visit {} of {}: press the highlighted cell",
+                    visit + 1,
+                    self.visits
+                );
+                Vec::new()
+            }
+            Step::Recording {
+                visit,
+                cell,
+                frames,
+            } => {
+                if out.event.is_none() {
+                    return Vec::new();
+                }
+                self.rows_x.extend(
+                    self.feature_index
+                        .iter()
+                        .map(|&i| f64::from(out.frame.voltages[usize::from(i)])),
+                );
+                self.y.push(cell as u16);
+                self.visit_of.push(visit as u16);
+                let frames = frames + 1;
+                if frames < self.frames_per_press {
+                    self.step = Step::Recording {
+                        visit,
+                        cell,
+                        frames,
+                    };
+                    return Vec::new();
+                }
+                // This press is done: release, then the next cell, visit or training.
+                if cell + 1 < self.classes() {
+                    self.step = Step::Press {
+                        visit,
+                        cell: cell + 1,
+                    };
+                    self.message = "lift the finger, then press the next cell".into();
+                    vec![Request::Press(Vec::new())]
+                } else if visit + 1 < self.visits {
+                    self.step = Step::Reference { visit: visit + 1 };
+                    self.message =
+                        "visit done: lift the finger, the sheet may be moved; taking V_0".into();
+                    // Released, then a new V_0 for the new visit (the configuration is
+                    // re-sent, which tares).
+                    vec![Request::Press(Vec::new()), Request::Configure(config)]
+                } else {
+                    self.step = Step::Ready;
+                    self.message = format!("{} observations collected: train", self.observations());
+                    vec![Request::Press(Vec::new())]
+                }
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// The dataset collected so far.
+    ///
+    /// # Errors
+    /// A message when nothing was collected.
+    pub fn dataset(&self) -> Result<Dataset, String> {
+        let config = self.config.ok_or("the wizard has not started")?;
+        let p = self.feature_index.len();
+        if self.y.is_empty() || p == 0 {
+            return Err("no observations yet".into());
+        }
+        let visits = self.baselines.len() / p;
+        Ok(Dataset {
+            x: DMatrix::from_row_slice(self.y.len(), p, &self.rows_x),
+            positions: self
+                .y
+                .iter()
+                .map(|&c| self.centres[usize::from(c)])
+                .collect(),
+            y: self.y.clone(),
+            pressure: Vec::new(),
+            electrodes: self.electrodes.clone(),
+            centres: self.centres.clone(),
+            visit: self.visit_of.clone(),
+            feature_index: self.feature_index.clone(),
+            baselines: DMatrix::from_row_slice(visits, p, &self.baselines),
+            config,
+        })
+    }
+
+    /// Trains QDA on the referenced observations (shrinkage by cross-validation).
+    ///
+    /// # Errors
+    /// A message when the data cannot be fitted.
+    pub fn train(&mut self) -> Result<(), String> {
+        let mut data = self.dataset()?;
+        pipeline::prepare(&mut data, true, None)?;
+        let per_class = self.y.len() / self.classes().max(1);
+        let t = pipeline::train(
+            &data,
+            &TrainOptions {
+                kind: ModelKind::Qda,
+                shrinkage: None,
+                folds: per_class.clamp(2, 10),
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        let mm = self
+            .centres
+            .iter()
+            .map(|c| [c[0] * 1e3, c[1] * 1e3])
+            .collect();
+        let file = ModelFile::new(
+            &t.model,
+            t.options.shrinkage,
+            data.config,
+            data.feature_index.clone(),
+            mm,
+            true,
+        );
+        self.message = format!(
+            "cross-validated accuracy {:.1} % (shrinkage {})",
+            100.0 * t.cv.accuracy(),
+            t.options.shrinkage
+        );
+        self.trained = Some(Trained {
+            file,
+            cv: t.cv,
+            leave_one_visit_out: t.leave_one_visit_out,
+        });
+        self.step = Step::Trained;
+        Ok(())
+    }
+
+    /// The model blob for the board: f32 if it fits a slot, else f16.
+    fn blob(&self) -> Result<Vec<u8>, String> {
+        let t = self.trained.as_ref().ok_or("train first")?;
+        let b = t.file.blob(Precision::F32).map_err(|e| e.to_string())?;
+        if b.len() <= MODEL_SLOT_BYTES {
+            return Ok(b);
+        }
+        let b = t.file.blob(Precision::F16).map_err(|e| e.to_string())?;
+        if b.len() <= MODEL_SLOT_BYTES {
+            Ok(b)
+        } else {
+            Err(format!(
+                "the model needs {} bytes, a slot holds {MODEL_SLOT_BYTES}: use a smaller grid",
+                b.len()
+            ))
+        }
+    }
+
+    /// The wizard's window contents.
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        source: Option<&Source>,
+        sheet: &SheetSpec,
+    ) -> Vec<Request> {
+        let mut requests = Vec::new();
+        let simulated = matches!(source, Some(Source::Sim(_)));
+        match self.step.clone() {
+            Step::Setup => {
+                ui.label("A class grid over the sheet; each cell is pressed in turn, every visit.");
+                egui::Grid::new("wizard-setup").show(ui, |ui| {
+                    ui.label("rows");
+                    ui.add(egui::DragValue::new(&mut self.rows).range(1..=10));
+                    ui.end_row();
+                    ui.label("columns");
+                    ui.add(egui::DragValue::new(&mut self.cols).range(1..=10));
+                    ui.end_row();
+                    ui.label("visits");
+                    ui.add(egui::DragValue::new(&mut self.visits).range(1..=6));
+                    ui.end_row();
+                    ui.label("frames per press");
+                    ui.add(egui::DragValue::new(&mut self.frames_per_press).range(2..=100));
+                    ui.end_row();
+                });
+                if ui.button("Start").clicked() {
+                    match source.and_then(Source::config) {
+                        Some(base) => match self.start(sheet, base) {
+                            Ok(r) => requests.push(r),
+                            Err(e) => self.message = e,
+                        },
+                        None => self.message = "no frames yet: open a source first".into(),
+                    }
+                }
+            }
+            Step::Reference { visit } => {
+                ui.label(format!(
+                    "Visit {} of {}: keep the sheet untouched (taking V_0).",
+                    visit + 1,
+                    self.visits
+                ));
+            }
+            Step::Press { visit, cell } => {
+                ui.label(format!(
+                    "Visit {} of {}: press cell {} (row {}, column {}), highlighted below.",
+                    visit + 1,
+                    self.visits,
+                    cell + 1,
+                    cell / self.cols + 1,
+                    cell % self.cols + 1
+                ));
+                self.grid(ui, Some(cell));
+                if simulated {
+                    if ui.button("Press for me (simulated)").clicked() {
+                        requests.push(self.simulated_press(cell));
+                        self.step = Step::Recording {
+                            visit,
+                            cell,
+                            frames: 0,
+                        };
+                    }
+                } else if ui.button("Record this press").clicked() {
+                    self.step = Step::Recording {
+                        visit,
+                        cell,
+                        frames: 0,
+                    };
+                }
+            }
+            Step::Recording {
+                visit,
+                cell,
+                frames,
+            } => {
+                ui.label(format!(
+                    "Visit {} of {}, cell {}: {frames} of {} frames (keep pressing, vary the pressure)",
+                    visit + 1,
+                    self.visits,
+                    cell + 1,
+                    self.frames_per_press
+                ));
+                self.grid(ui, Some(cell));
+            }
+            Step::Ready => {
+                ui.label(format!(
+                    "{} observations of {} classes over {} visits.",
+                    self.observations(),
+                    self.classes(),
+                    self.visits
+                ));
+                if ui.button("Train").clicked()
+                    && let Err(e) = self.train()
+                {
+                    self.message = e;
+                }
+            }
+            Step::Trained => {
+                if let Some(t) = &self.trained {
+                    ui.label(format!(
+                        "cross-validated accuracy: {:.1} %",
+                        100.0 * t.cv.accuracy()
+                    ));
+                    if let Some(a) = t.leave_one_visit_out {
+                        ui.label(format!("leave-one-visit-out: {:.1} %", 100.0 * a));
+                    }
+                    confusion(ui, &t.cv);
+                }
+                ui.horizontal(|ui| {
+                    if ui.button("Use this model").clicked()
+                        && let Some(t) = &self.trained
+                    {
+                        requests.push(Request::UseModel(Box::new(t.file.clone())));
+                    }
+                    let board = matches!(source, Some(Source::Port(_)));
+                    if ui
+                        .add_enabled(board, egui::Button::new("Export to the board"))
+                        .on_disabled_hover_text("open the board's serial port first")
+                        .clicked()
+                    {
+                        match self.blob() {
+                            Ok(b) => requests.push(Request::Upload(b)),
+                            Err(e) => self.message = e,
+                        }
+                    }
+                });
+                ui.horizontal(|ui| {
+                    ui.add(egui::TextEdit::singleline(&mut self.save_path));
+                    if ui.button("Save").clicked() {
+                        self.message = self.save();
+                    }
+                });
+                if ui.button("Start again").clicked() {
+                    self.step = Step::Setup;
+                }
+            }
+        }
+        if !self.message.is_empty() {
+            ui.separator();
+            ui.label(&self.message);
+        }
+        requests
+    }
+
+    /// Saves the model (JSON) and its blob beside it; says what it did.
+    fn save(&self) -> String {
+        let Some(t) = &self.trained else {
+            return "train first".into();
+        };
+        let path = PathBuf::from(self.save_path.trim());
+        if let Err(e) = t.file.save(&path) {
+            return e;
+        }
+        let blob_path = path.with_extension("etm");
+        match self
+            .blob()
+            .and_then(|b| std::fs::write(&blob_path, b).map_err(|e| e.to_string()))
+        {
+            Ok(()) => format!("saved {} and {}", path.display(), blob_path.display()),
+            Err(e) => format!("saved {}; blob: {e}", path.display()),
+        }
+    }
+
+    /// The class grid, one cell highlighted.
+    fn grid(&self, ui: &mut egui::Ui, lit: Option<usize>) {
+        let cell = 22.0;
+        let (rect, _) = ui.allocate_exact_size(
+            vec2(self.cols as f32 * cell, self.rows as f32 * cell),
+            Sense::hover(),
+        );
+        let painter = ui.painter_at(rect);
+        for k in 0..self.classes() {
+            let (r, c) = (k / self.cols, k % self.cols);
+            // Row 0 at the bottom, as on the sheet.
+            let min = pos2(
+                rect.min.x + c as f32 * cell,
+                rect.max.y - (r + 1) as f32 * cell,
+            );
+            let box_ = Rect::from_min_size(min, vec2(cell, cell)).shrink(1.0);
+            if lit == Some(k) {
+                painter.rect_filled(box_, 2.0, Color32::from_rgb(255, 80, 60));
+            }
+            painter.rect_stroke(
+                box_,
+                2.0,
+                Stroke::new(1.0, Color32::GRAY),
+                StrokeKind::Inside,
+            );
+        }
+    }
+}
+
+/// A confusion matrix as shades (rows: true class, columns: predicted).
+fn confusion(ui: &mut egui::Ui, c: &Confusion) {
+    let n = c.classes;
+    let side = (240.0 / n.max(1) as f32).clamp(3.0, 24.0);
+    let (rect, _) = ui.allocate_exact_size(vec2(n as f32 * side, n as f32 * side), Sense::hover());
+    let painter = ui.painter_at(rect);
+    for (t, row) in c.counts.chunks(n.max(1)).enumerate() {
+        let total = row.iter().sum::<u32>().max(1);
+        for (p, &v) in row.iter().enumerate() {
+            let share = v as f32 / total as f32;
+            let shade = (255.0 * (1.0 - share)) as u8;
+            painter.rect_filled(
+                Rect::from_min_size(
+                    pos2(rect.min.x + p as f32 * side, rect.min.y + t as f32 * side),
+                    vec2(side, side),
+                ),
+                0.0,
+                Color32::from_rgb(shade, shade, 255),
+            );
+        }
+    }
+    ui.label("confusion: rows true class, columns predicted");
+}
