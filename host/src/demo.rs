@@ -969,11 +969,7 @@ pub fn mesh_sweep(
     let sheet = simulated_sheet(&scene)?;
     let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, 1)?;
     let v0 = sim.ideal_frame(&protocol, amps);
-    sim.set_touches(&[et_sim::touch::Touch {
-        position: t.position,
-        radius: t.radius,
-        pressure: t.pressure,
-    }])?;
+    sim.set_touches(&[t.touch()])?;
     let dv: Vec<f64> = sim
         .ideal_frame(&protocol, amps)
         .iter()

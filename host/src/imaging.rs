@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use et_core::ScanConfig;
 use et_core::protocol::Protocol;
-use et_sim::scene::Scene;
+use et_sim::scene::{Scene, TouchEvent};
 use et_sim::sheet::{Sheet, SheetSpec};
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
@@ -250,15 +250,7 @@ pub fn scene_frames_on(
             *a += f64::from(b) / n as f64;
         }
     }
-    let touches: Vec<Touch> = scene
-        .touches
-        .iter()
-        .map(|t| Touch {
-            position: t.position,
-            radius: t.radius,
-            pressure: t.pressure,
-        })
-        .collect();
+    let touches: Vec<Touch> = scene.touches.iter().map(TouchEvent::touch).collect();
     sim.set_touches(&touches).map_err(sim_error)?;
     Ok(SceneFrames {
         v0,

@@ -915,4 +915,4 @@ pub enum ProtocolChoice {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

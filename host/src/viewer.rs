@@ -838,12 +838,9 @@ fn pitch_mm(centres: &[[f64; 2]]) -> f64 {
     if best.is_finite() { best } else { 10.0 }
 }
 
-/// A small line plot with its title and last value.
-fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
-    let last = points
-        .last()
-        .map_or(String::from("-"), |p| format!("{:.2}", p.1));
-    ui.label(format!("{title}: {last}"));
+/// A plot's caption and its framed area, the full width and 60 points high.
+fn plot_area(ui: &mut egui::Ui, caption: &str) -> (Rect, egui::Painter) {
+    ui.label(caption);
     let (rect, _) = ui.allocate_exact_size(vec2(ui.available_width(), 60.0), Sense::hover());
     let painter = ui.painter_at(rect);
     painter.rect_stroke(
@@ -852,6 +849,15 @@ fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
         Stroke::new(1.0, Color32::from_gray(90)),
         StrokeKind::Inside,
     );
+    (rect, painter)
+}
+
+/// A small line plot with its title and last value.
+fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
+    let last = points
+        .last()
+        .map_or(String::from("-"), |p| format!("{:.2}", p.1));
+    let (rect, painter) = plot_area(ui, &format!("{title}: {last}"));
     let finite: Vec<(f64, f64)> = points
         .iter()
         .copied()
@@ -890,15 +896,7 @@ fn bars(ui: &mut egui::Ui, title: &str, values: &[f64]) {
     } else {
         finite.iter().sum::<f64>() / finite.len() as f64
     };
-    ui.label(format!("{title}: mean {mean:.1}"));
-    let (rect, _) = ui.allocate_exact_size(vec2(ui.available_width(), 60.0), Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_stroke(
-        rect,
-        2.0,
-        Stroke::new(1.0, Color32::from_gray(90)),
-        StrokeKind::Inside,
-    );
+    let (rect, painter) = plot_area(ui, &format!("{title}: mean {mean:.1}"));
     let hi = finite.iter().copied().fold(1.0f64, f64::max);
     let w = rect.width() / values.len().max(1) as f32;
     for (i, v) in values.iter().enumerate() {

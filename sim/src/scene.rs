@@ -107,6 +107,19 @@ pub struct TouchEvent {
     pub end: Option<f64>,
 }
 
+impl TouchEvent {
+    /// The touch at its start position and full pressure (its timing ignored): a still
+    /// picture of the scene.
+    #[must_use]
+    pub fn touch(&self) -> Touch {
+        Touch {
+            position: self.position,
+            radius: self.radius,
+            pressure: self.pressure,
+        }
+    }
+}
+
 /// What is wrong with an electrode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -1,5 +1,27 @@
 use super::*;
 
+/// Writes `n` frames of the untouched default sheet as a recording at `path`; returns them.
+pub(crate) fn write_sim_recording(path: &Path, n: usize) -> Vec<LiveFrame> {
+    let (mut source, _) = sim();
+    let frames: Vec<LiveFrame> = (0..n)
+        .map(|_| source.poll(1, false).unwrap().remove(0))
+        .collect();
+    let header = recording::Header::new("test", &frames[0].config).unwrap();
+    let mut w = recording::Writer::create(path, &header).unwrap();
+    for f in &frames {
+        w.append(&recording::Record {
+            seq: f.seq,
+            t_us: f.t_us,
+            flags: 0,
+            rail_count: 0,
+            voltages: f.voltages.clone(),
+            touches: None,
+        })
+        .unwrap();
+    }
+    frames
+}
+
 fn sim() -> (Source, SheetSpec) {
     open_source(&SourceSpec::Sim, None).unwrap()
 }
@@ -97,24 +119,8 @@ fn a_replay_plays_pauses_and_seeks() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("r.jsonl");
     // Six frames from the simulator, recorded.
-    let (mut source, sheet) = sim();
-    let frames: Vec<LiveFrame> = (0..6)
-        .map(|_| source.poll(1, false).unwrap().remove(0))
-        .collect();
-    let header = recording::Header::new("test", &frames[0].config).unwrap();
-    let mut w = recording::Writer::create(&path, &header).unwrap();
-    for f in &frames {
-        w.append(&recording::Record {
-            seq: f.seq,
-            t_us: f.t_us,
-            flags: 0,
-            rail_count: 0,
-            voltages: f.voltages.clone(),
-            touches: None,
-        })
-        .unwrap();
-    }
-    drop(w);
+    let frames = write_sim_recording(&path, 6);
+    let sheet = sim().1;
     let mut r = ReplaySource::open(&path, sheet.clone()).unwrap();
     assert_eq!(r.len(), 6);
     assert_eq!(r.next_frame().unwrap().voltages, frames[0].voltages);

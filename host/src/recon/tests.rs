@@ -22,11 +22,7 @@ fn sim_frames(sc: &Scene, protocol: &Protocol, amps: f64) -> (Vec<f64>, Vec<f64>
     let touches: Vec<Touch> = sc
         .touches
         .iter()
-        .map(|t| Touch {
-            position: t.position,
-            radius: t.radius,
-            pressure: t.pressure,
-        })
+        .map(et_sim::scene::TouchEvent::touch)
         .collect();
     fe.set_touches(&touches).unwrap();
     (v0, fe.ideal_frame(protocol, amps))

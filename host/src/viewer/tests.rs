@@ -24,6 +24,17 @@ fn sim_options() -> Options {
     }
 }
 
+/// The protocol the source scans now.
+fn scanning(h: &Harness<'static, Viewer>) -> ProtocolKind {
+    h.state()
+        .source
+        .as_ref()
+        .unwrap()
+        .config()
+        .unwrap()
+        .protocol
+}
+
 /// Steps until the reference is taken (one simulated frame per step).
 fn settle(h: &mut Harness<'static, Viewer>) {
     for _ in 0..60 {
@@ -43,16 +54,7 @@ fn settle(h: &mut Harness<'static, Viewer>) {
 fn protocol_buttons_switch_the_scan_and_take_a_new_reference() {
     let mut h = harness(sim_options());
     settle(&mut h);
-    assert_eq!(
-        h.state()
-            .source
-            .as_ref()
-            .unwrap()
-            .config()
-            .unwrap()
-            .protocol,
-        ProtocolKind::Adjacent
-    );
+    assert_eq!(scanning(&h), ProtocolKind::Adjacent);
     for (label, kind) in [
         ("PP", ProtocolKind::PseudoPolar),
         ("PP-PP", ProtocolKind::PpPp),
@@ -73,16 +75,7 @@ fn protocol_buttons_switch_the_scan_and_take_a_new_reference() {
     h.get_by_label("automatic").click();
     h.step();
     assert_eq!(h.state().protocol, ProtocolChoice::Automatic);
-    assert_eq!(
-        h.state()
-            .source
-            .as_ref()
-            .unwrap()
-            .config()
-            .unwrap()
-            .protocol,
-        ProtocolKind::Adjacent
-    );
+    assert_eq!(scanning(&h), ProtocolKind::Adjacent);
 }
 
 #[test]
@@ -99,15 +92,7 @@ fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
     let mut switched = false;
     for _ in 0..20 {
         h.step();
-        if h.state()
-            .source
-            .as_ref()
-            .unwrap()
-            .config()
-            .unwrap()
-            .protocol
-            == ProtocolKind::PseudoPolar
-        {
+        if scanning(&h) == ProtocolKind::PseudoPolar {
             switched = true;
             break;
         }
@@ -204,25 +189,7 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
 }
 
 fn write_recording(path: &std::path::Path, frames: usize) {
-    let (mut source, _) = open_source(&SourceSpec::Sim, None).unwrap();
-    let first = source.poll(1, false).unwrap().remove(0);
-    let header = crate::recording::Header::new("test", &first.config).unwrap();
-    let mut w = crate::recording::Writer::create(path, &header).unwrap();
-    let mut f = first;
-    for i in 0..frames {
-        if i > 0 {
-            f = source.poll(1, false).unwrap().remove(0);
-        }
-        w.append(&crate::recording::Record {
-            seq: f.seq,
-            t_us: f.t_us,
-            flags: 0,
-            rail_count: 0,
-            voltages: f.voltages.clone(),
-            touches: None,
-        })
-        .unwrap();
-    }
+    crate::live::tests::write_sim_recording(path, frames);
 }
 
 #[test]
