@@ -3,9 +3,10 @@
 //! constrained Delaunay triangulation and quality refinement by `spade`.
 //!
 //! Sizes are in metres. The boundary is sampled finer under the electrodes (where the
-//! complete electrode model's current concentrates) than elsewhere, and the refinement's
-//! angle limit grades the elements from there into the interior, so a mesh is fine only
-//! where the scene needs it.
+//! complete electrode model's current concentrates) than elsewhere, regions of interest
+//! ([`Refinement`]: a touch, or a region an image found) are seeded with a lattice of their
+//! own spacing, and the refinement's angle limit grades the elements from there into the
+//! interior, so a mesh is fine only where the scene needs it.
 
 use et_sim::sheet::SheetSpec;
 use spade::{
@@ -48,6 +49,31 @@ impl MeshSize {
             interior: h,
             electrode: h / 4.0,
             min_angle_deg: 28.0,
+        }
+    }
+}
+
+/// A disc of the sheet meshed finer than the rest (a touch, or a region of interest an
+/// image found): edges of about `edge` inside, graded into the coarser interior around it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refinement {
+    /// Centre, m.
+    pub centre: [f64; 2],
+    /// Radius, m.
+    pub radius: f64,
+    /// Edge length inside, m.
+    pub edge: f64,
+}
+
+impl Refinement {
+    /// What a touch of `radius` (m) at `centre` needs: its disc and a margin of half its
+    /// radius, at a quarter of its radius, so the edge of the pressed area is resolved.
+    #[must_use]
+    pub fn touch(centre: [f64; 2], radius: f64) -> Self {
+        Self {
+            centre,
+            radius: 1.5 * radius,
+            edge: 0.25 * radius,
         }
     }
 }
@@ -98,6 +124,35 @@ impl Mesh {
     /// # Errors
     /// [`MeshError`] for bad sizes, overlapping electrodes or a failed triangulation.
     pub fn of_sheet(spec: &SheetSpec, size: MeshSize) -> Result<Self, MeshError> {
+        Self::refined(spec, size, &[])
+    }
+
+    /// As [`Mesh::of_sheet`], and finer in `regions`: each is seeded with a triangular
+    /// lattice of its edge length (points closer than half an edge to the outline are left
+    /// to the boundary sampling), and the quality refinement grades away from it.
+    ///
+    /// # Errors
+    /// As [`Mesh::of_sheet`]; a region with a non-finite or non-positive radius or edge is
+    /// [`MeshError::Spec`], as is one that would add more than a million points.
+    pub fn refined(
+        spec: &SheetSpec,
+        size: MeshSize,
+        regions: &[Refinement],
+    ) -> Result<Self, MeshError> {
+        for r in regions {
+            let ok = |v: f64| v.is_finite() && v > 0.0;
+            if !(ok(r.radius) && ok(r.edge) && r.centre.iter().all(|c| c.is_finite())) {
+                return Err(MeshError::Spec(format!(
+                    "a refinement needs a finite centre and a positive radius and edge: {r:?}"
+                )));
+            }
+            if (r.radius / r.edge).powi(2) > 1e6 {
+                return Err(MeshError::Spec(format!(
+                    "a refinement of radius {} m at edge {} m adds over a million points",
+                    r.radius, r.edge
+                )));
+            }
+        }
         spec.shape
             .validate()
             .map_err(|e| MeshError::Spec(e.to_string()))?;
@@ -187,6 +242,26 @@ impl Mesh {
                 cdt.add_constraint(a, b);
             }
         }
+        for r in regions {
+            let h = r.edge.min(size.interior);
+            let rows = (r.radius / (h * 0.75f64.sqrt())).ceil() as i64;
+            for j in -rows..=rows {
+                let y = j as f64 * h * 0.75f64.sqrt();
+                let shift = if j % 2 == 0 { 0.0 } else { 0.5 * h };
+                let cols = (r.radius / h).ceil() as i64 + 1;
+                for i in -cols..=cols {
+                    let x = i as f64 * h + shift;
+                    let p = [r.centre[0] + x, r.centre[1] + y];
+                    if x.hypot(y) <= r.radius
+                        && spec.shape.contains(p, 0.0)
+                        && spec.shape.distance_to_outline(p) > 0.5 * h.max(h_e)
+                    {
+                        cdt.insert(Point2::new(p[0], p[1]))
+                            .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
+                    }
+                }
+            }
+        }
         let max_area = 3f64.sqrt() / 4.0 * size.interior * size.interior;
         let result = cdt.refine(
             RefinementParameters::<f64>::new()
@@ -249,8 +324,22 @@ impl Mesh {
     /// # Errors
     /// As [`Mesh::of_sheet`].
     pub fn with_about(spec: &SheetSpec, triangles: usize) -> Result<Self, MeshError> {
+        Self::with_about_refined(spec, triangles, &[])
+    }
+
+    /// As [`Mesh::with_about`], with `regions` refined as in [`Mesh::refined`]: the same
+    /// budget of triangles, spent where the regions need it (the interior elsewhere is
+    /// coarser to pay for them).
+    ///
+    /// # Errors
+    /// As [`Mesh::refined`].
+    pub fn with_about_refined(
+        spec: &SheetSpec,
+        triangles: usize,
+        regions: &[Refinement],
+    ) -> Result<Self, MeshError> {
         let mut size = MeshSize::for_count(spec, triangles);
-        let mut mesh = Self::of_sheet(spec, size)?;
+        let mut mesh = Self::refined(spec, size, regions)?;
         for _ in 0..4 {
             let ratio = mesh.triangles.len() as f64 / triangles.max(1) as f64;
             if (ratio - 1.0).abs() < 0.1 {
@@ -258,7 +347,7 @@ impl Mesh {
             }
             size.interior *= ratio.sqrt();
             size.electrode *= ratio.sqrt();
-            mesh = Self::of_sheet(spec, size)?;
+            mesh = Self::refined(spec, size, regions)?;
         }
         Ok(mesh)
     }
@@ -372,6 +461,56 @@ mod tests {
                 "{n} triangles for {target}"
             );
             check(&mesh, spec, 25.0);
+        }
+    }
+
+    #[test]
+    fn refined_regions_get_their_edge_and_the_mesh_stays_valid() {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        // One region inside, one that the outline cuts.
+        let inner = Refinement {
+            centre: [0.02, 0.01],
+            radius: 0.015,
+            edge: 0.002,
+        };
+        let cut = Refinement::touch([0.06, -0.06], 0.01);
+        let mesh = Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[inner, cut]).unwrap();
+        check(&mesh, &spec, 25.0);
+        let longest = |t: usize| {
+            let p = mesh.triangles[t].map(|i| mesh.nodes[i]);
+            (0..3)
+                .map(|k| dist(p[k], p[(k + 1) % 3]))
+                .fold(0.0, f64::max)
+        };
+        let (mut inside, mut far) = (Vec::new(), Vec::new());
+        for t in 0..mesh.triangles.len() {
+            let c = mesh.centroid(t);
+            let d = dist(c, inner.centre);
+            if d < 0.8 * inner.radius {
+                inside.push(longest(t));
+            } else if d > 0.04 && spec.shape.distance_to_outline(c) > 0.015 {
+                far.push(longest(t));
+            }
+        }
+        let max_inside = inside.iter().copied().fold(0.0, f64::max);
+        let mean_far = far.iter().sum::<f64>() / far.len() as f64;
+        assert!(max_inside < 1.5 * inner.edge, "{max_inside}");
+        assert!(mean_far > 2.0 * inner.edge, "{mean_far}");
+        for bad in [
+            Refinement { edge: 0.0, ..inner },
+            Refinement {
+                radius: f64::NAN,
+                ..inner
+            },
+            Refinement {
+                edge: 1e-6,
+                ..inner
+            },
+        ] {
+            assert!(matches!(
+                Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[bad]),
+                Err(MeshError::Spec(_))
+            ));
         }
     }
 

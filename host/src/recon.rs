@@ -405,6 +405,17 @@ pub struct Region {
     pub peak: f64,
 }
 
+impl Region {
+    /// The mesh refinement this region asks for: a disc of its area, widened as
+    /// [`Refinement::touch`] widens a touch (to re-mesh where an image found something).
+    ///
+    /// [`Refinement::touch`]: crate::mesh::Refinement::touch
+    #[must_use]
+    pub fn refinement(&self) -> crate::mesh::Refinement {
+        crate::mesh::Refinement::touch(self.centroid, (self.area / std::f64::consts::PI).sqrt())
+    }
+}
+
 /// The regions of interest (SPEC §6 [3.10]): pixels >= f max(image) (for a touch, which
 /// raises the conductivity), grouped into 4-connected regions, largest peak first.
 #[must_use]

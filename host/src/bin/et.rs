@@ -102,11 +102,14 @@ enum Command {
     ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --out x050.png
     ///   et reconstruct --scene sim/scenes/disc-ref-two.toml --alpha 0.01 --out two.png --json
     ///   et reconstruct --scene sim/scenes/square-13cm-16-swipe.toml --frames swipe.jsonl --frame 60 --out f60.png
+    ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --refine 55,0,25 --out x050-roi.png
     #[command(verbatim_doc_comment)]
     Reconstruct(ReconstructArgs),
     /// Boundary voltages of a scene by the finite elements (complete electrode model): the
     /// scene's protocol and current, the untouched sheet and the sheet with its touches (each
     /// touch's disc at the conductance its pressure gives), V_0, V_1 and their difference.
+    /// The mesh is refined at the touches (a quarter of their radius), so their edges are
+    /// resolved within the triangle budget.
     ///
     /// Examples:
     ///   et forward --scene sim/scenes/disc-ref-x050.toml
@@ -297,6 +300,11 @@ struct MeshArgs {
     /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
     #[arg(long, value_name = "FILE")]
     mesh: Option<String>,
+    /// Mesh a disc of the sheet finer: centre x, y and radius R in mm, edges of R/6 inside
+    /// (repeat for several; the triangle budget stays the same). `et forward` refines at the
+    /// scene's touches by itself.
+    #[arg(long, value_name = "X,Y,R", allow_hyphen_values = true)]
+    refine: Vec<String>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -947,7 +955,7 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let config = scene.scan_config().map_err(anyhow::Error::msg)?;
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
-    let mesh = scene_mesh(&scene, &args.mesh)?;
+    let mesh = scene_mesh(&scene, &args.mesh, true)?;
     let sigma0 = 1.0 / scene.sheet.sheet_resistance;
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
     let sigma1: Vec<f64> = (0..mesh.triangles.len())
@@ -1014,10 +1022,38 @@ fn forward_cmd(args: &ForwardArgs) -> Result<()> {
 
 /// The mesh of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas) or
 /// the scene's sheet meshed to about `--triangles`; its electrode count must be the sheet's.
-fn scene_mesh(scene: &Scene, args: &MeshArgs) -> Result<et_host::mesh::Mesh> {
-    use et_host::mesh::Mesh;
+fn scene_mesh(scene: &Scene, args: &MeshArgs, at_touches: bool) -> Result<et_host::mesh::Mesh> {
+    use et_host::mesh::{Mesh, Refinement};
+    let mut regions = Vec::new();
+    for r in &args.refine {
+        let v: Vec<f64> = r
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .ok()
+            .filter(|v: &Vec<f64>| v.len() == 3)
+            .with_context(|| {
+                format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
+            })?;
+        regions.push(Refinement {
+            centre: [v[0] * 1e-3, v[1] * 1e-3],
+            radius: v[2] * 1e-3,
+            edge: v[2] * 1e-3 / 6.0,
+        });
+    }
+    if at_touches {
+        regions.extend(
+            scene
+                .touches
+                .iter()
+                .map(|t| Refinement::touch(t.position, t.radius)),
+        );
+    }
+    if args.mesh.is_some() && !args.refine.is_empty() {
+        bail!("--refine meshes the scene's sheet; it cannot change an imported --mesh");
+    }
     let mesh = match args.mesh.as_deref() {
-        None => Mesh::with_about(&scene.sheet, args.triangles)?,
+        None => Mesh::with_about_refined(&scene.sheet, args.triangles, &regions)?,
         Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
             [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
             [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
@@ -1053,8 +1089,8 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let amps = f64::from(config.current_amps());
     let started = Instant::now();
-    let stage = |what: &str| eprintln!("{what:<34} {:>8.3} s", started.elapsed().as_secs_f64());
-    let mesh = scene_mesh(&scene, &args.mesh)?;
+    let stage = |what: &str| eprintln!("{what:<40} {:>8.3} s", started.elapsed().as_secs_f64());
+    let mesh = scene_mesh(&scene, &args.mesh, false)?;
     let t_n = mesh.triangles.len();
     stage(&format!("mesh ({t_n} triangles)"));
     let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;

@@ -311,3 +311,51 @@ fn four_to_thirty_two_electrodes() {
         assert!(v.iter().chain(jac.iter()).all(|x| x.is_finite()), "L = {l}");
     }
 }
+
+/// The change a touch (radius `r` m at `c`, conductivity x 5) makes to the adjacent frame of
+/// the 13 cm square on `mesh`, V; the touch covers the triangles whose centroid it holds.
+fn touch_change(mesh: Mesh, c: [f64; 2], r: f64) -> Vec<f64> {
+    let sigma0: Vec<f64> = vec![1.0 / 30e3; mesh.triangles.len()];
+    let sigma1: Vec<f64> = (0..mesh.triangles.len())
+        .map(|t| {
+            let p = mesh.centroid(t);
+            if (p[0] - c[0]).hypot(p[1] - c[1]) <= r {
+                5.0 * sigma0[t]
+            } else {
+                sigma0[t]
+            }
+        })
+        .collect();
+    let fwd = Forward::new(mesh, Electrodes::Complete(vec![5.0 * 0.005; 16])).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let v0 = fwd.frame(&sigma0, &protocol, 32e-6).unwrap();
+    let v1 = fwd.frame(&sigma1, &protocol, 32e-6).unwrap();
+    v1.iter().zip(&v0).map(|(a, b)| a - b).collect()
+}
+
+#[test]
+fn refining_at_a_touch_spends_the_same_triangles_better() {
+    use crate::mesh::Refinement;
+    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let (c, r) = ([0.025, -0.015], 0.008);
+    // The reference is uniformly fine, so it does not favour the refined mesh.
+    let reference = touch_change(Mesh::with_about(&spec, 100_000).unwrap(), c, r);
+    let error = |dv: &[f64]| {
+        let num: f64 = dv
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
+        (num / reference.iter().map(|b| b * b).sum::<f64>()).sqrt()
+    };
+    let uniform = Mesh::with_about(&spec, 2_000).unwrap();
+    let refined = Mesh::with_about_refined(&spec, 2_000, &[Refinement::touch(c, r)]).unwrap();
+    let (n_u, n_r) = (uniform.triangles.len(), refined.triangles.len());
+    let (e_u, e_r) = (
+        error(&touch_change(uniform, c, r)),
+        error(&touch_change(refined, c, r)),
+    );
+    eprintln!("uniform {n_u} triangles: {e_u:.4}; refined {n_r}: {e_r:.4}");
+    assert!(n_r < n_u * 11 / 10, "{n_r} against {n_u}");
+    assert!(e_r < 0.5 * e_u, "refined {e_r} against uniform {e_u}");
+}
