@@ -406,7 +406,7 @@ fn reconstruct_images_recorded_frames() {
         "--scene",
         &s(&scene),
         "--frames",
-        "25",
+        "60",
         "--out",
         &s(&rec),
     ]);
@@ -415,7 +415,7 @@ fn reconstruct_images_recorded_frames() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let png = dir.join("f20.png");
+    let png = dir.join("f50.png");
     let args = |frame: &str| {
         vec![
             "reconstruct".to_string(),
@@ -434,7 +434,7 @@ fn reconstruct_images_recorded_frames() {
             "--json".into(),
         ]
     };
-    let a = args("20");
+    let a = args("50");
     let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(
         out.status.success(),

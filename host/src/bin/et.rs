@@ -348,8 +348,9 @@ struct ReconstructArgs {
     /// the scene's touches; the scene still gives the sheet and electrodes.
     #[arg(long, value_name = "JSONL")]
     frames: Option<PathBuf>,
-    /// With --frames: average the first N frames as the untouched reference V_0.
-    #[arg(long, default_value_t = 1)]
+    /// With --frames: average the first N frames as the untouched reference V_0 (as
+    /// `et stream` and `et view` do; record them with the sheet untouched).
+    #[arg(long, default_value_t = 20)]
     reference: usize,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long)]
@@ -853,6 +854,13 @@ fn train_cmd(args: &TrainArgs) -> Result<()> {
             )),
             args.out.display()
         );
+        let fit = pipeline::features_that_fit(kind, classes, data.x.ncols());
+        if fit < data.x.ncols() {
+            eprintln!(
+                "note: for the board, this model is too big for a model slot even in f16; \
+                 train with --features {fit} (the most that fit for {classes} classes) or fewer classes"
+            );
+        }
     }
     Ok(())
 }
@@ -939,9 +947,19 @@ fn export_cmd(args: &ExportArgs) -> Result<()> {
             blob.len(),
             100.0 * blob.len() as f64 / SLOT as f64,
             if blob.len() <= SLOT {
-                ""
+                String::new()
             } else {
-                ": does NOT fit, use f16, LDA or fewer classes"
+                let kind = kind_of(&file.kind)?;
+                if precision == Precision::F32
+                    && et_core::model::model_len(kind, Precision::F16, c, p) <= SLOT
+                {
+                    ": does NOT fit; --precision f16 does".to_string()
+                } else {
+                    format!(
+                        ": does NOT fit; retrain with et train --features {} (the most that fit in f16) or fewer classes",
+                        pipeline::features_that_fit(kind, c, p)
+                    )
+                }
             },
             macs
         );

@@ -20,6 +20,19 @@ use crate::plot::{self, PlotError};
 /// in use, so a model must fit one slot.
 pub const MODEL_SLOT_BYTES: usize = 384 * 1024;
 
+/// The most features (at most `max`) a `kind` model of `classes` classes can keep and still
+/// fit one model slot of the board in f16 (0 when not even one feature fits).
+#[must_use]
+pub fn features_that_fit(kind: ModelKind, classes: usize, max: usize) -> usize {
+    (1..=max)
+        .rev()
+        .find(|&p| {
+            et_core::model::model_len(kind, et_core::model::Precision::F16, classes, p)
+                <= MODEL_SLOT_BYTES
+        })
+        .unwrap_or(0)
+}
+
 /// The shrinkage candidates tried when it is chosen by cross-validation.
 pub const SHRINKAGE_CANDIDATES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
 

@@ -640,3 +640,29 @@ fn fisher_ranking_puts_the_separating_feature_first() {
     assert_eq!(order[0], 2);
     assert_eq!(order[2], 1, "a constant feature carries nothing");
 }
+
+#[test]
+fn the_features_that_fit_a_slot_are_the_most_that_do() {
+    use super::pipeline::{MODEL_SLOT_BYTES, features_that_fit};
+    let len = |kind, classes, p| et_core::model::model_len(kind, Precision::F16, classes, p);
+    for (kind, classes) in [
+        (ModelKind::Qda, 49),
+        (ModelKind::Qda, 100),
+        (ModelKind::Qda, 9),
+    ] {
+        let p = features_that_fit(kind, classes, 96);
+        assert!(
+            p > 0 && len(kind, classes, p) <= MODEL_SLOT_BYTES,
+            "{classes}: {p}"
+        );
+        assert!(
+            p == 96 || len(kind, classes, p + 1) > MODEL_SLOT_BYTES,
+            "{classes}: {p}"
+        );
+    }
+    // 49 classes cannot keep all 96 (the README's budget), 9 can; LDA keeps all.
+    assert!(features_that_fit(ModelKind::Qda, 49, 96) < 96);
+    assert_eq!(features_that_fit(ModelKind::Qda, 9, 96), 96);
+    assert_eq!(features_that_fit(ModelKind::Lda, 49, 96), 96);
+    assert_eq!(features_that_fit(ModelKind::Qda, 1_000_000, 96), 0);
+}

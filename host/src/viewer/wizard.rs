@@ -305,7 +305,16 @@ impl Wizard {
     /// A message when the data cannot be fitted.
     pub fn train(&mut self) -> Result<(), String> {
         let mut data = self.dataset()?;
-        pipeline::prepare(&mut data, true, None)?;
+        // Keep the features that separate the classes best when all of them would not fit
+        // a model slot of the board (f16).
+        let all = data.feature_index.len();
+        let fit = pipeline::features_that_fit(ModelKind::Qda, self.classes(), all);
+        if fit == 0 {
+            return Err(
+                "too many classes for a model slot of the board: use a smaller grid".into(),
+            );
+        }
+        pipeline::prepare(&mut data, true, (fit < all).then_some(fit))?;
         let per_class = self.y.len() / self.classes().max(1);
         let t = pipeline::train(
             &data,
@@ -330,9 +339,15 @@ impl Wizard {
             true,
         );
         self.message = format!(
-            "cross-validated accuracy {:.1} % (shrinkage {})",
+            "cross-validated accuracy {:.1} % (shrinkage {}, {} of {all} features{})",
             100.0 * t.cv.accuracy(),
-            t.options.shrinkage
+            t.options.shrinkage,
+            data.feature_index.len(),
+            if fit < all {
+                ": the ones that separate the classes best, so the model fits the board"
+            } else {
+                ""
+            }
         );
         self.trained = Some(Trained {
             file,
