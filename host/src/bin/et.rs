@@ -18,7 +18,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 /// Touch sensing with electrical tomography: protocols, simulation, imaging and learning.
 #[derive(Debug, Parser)]
-#[command(name = "et", version, about, long_about = None)]
+#[command(
+    name = "et",
+    version,
+    about,
+    long_about = None,
+    after_help = "Start here: `et demo` runs the whole method on the simulated sheet (no hardware) \
+                  and writes a report. Every command's --help has examples."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -26,6 +33,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run the whole method on the simulated sheet into a report folder (no hardware).
+    ///
     /// The whole method on the simulated sheet, no hardware needed: collect a training set,
     /// train and cross-validate QDA, test it on next-day sessions and on the chip's model
     /// blob, image SPEC §7's reference scenarios with every protocol, and sweep mesh size
@@ -46,6 +55,8 @@ enum Command {
     ///   et protocol -l 16 --drive-skip 3 --measure-skip 0 --measure-skip 3
     #[command(verbatim_doc_comment)]
     Protocol(ProtocolArgs),
+    /// Simulate a scene into a recording of frames (JSON Lines).
+    ///
     /// Simulate a scene: frames of the emulated fabric sheet, with the true touches, written
     /// as a recording (JSON Lines; read it from Python with python/et_recording.py).
     ///
@@ -57,6 +68,8 @@ enum Command {
     ///   et sim --scene sim/scenes/square-13cm-16-swipe.toml --frames 150 --out swipe.jsonl --samples
     #[command(verbatim_doc_comment)]
     Sim(SimArgs),
+    /// Collect a labelled training set on the simulated sheet (SPEC §9), as CSV.
+    ///
     /// Collect a labelled training set on the simulated sheet, the SPEC §9 way: a grid of
     /// touch classes, visited T times, S_num scans per class and visit with the pressure varied,
     /// S_sub observations per scan; electrodes move between visits. Each visit starts with
@@ -68,6 +81,8 @@ enum Command {
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --visits 1 --scans 1 --seed 77 --out nextday.csv
     #[command(verbatim_doc_comment)]
     Collect(CollectArgs),
+    /// Train a QDA or LDA touch classifier and cross-validate it.
+    ///
     /// Train a QDA or LDA model on a collected training set (shrinkage chosen by
     /// leave-one-visit-out cross-validation unless given), and cross-validate it. By default
     /// the model is referenced: it classifies each frame minus its session's untouched frame,
@@ -85,6 +100,8 @@ enum Command {
     ///   et eval --model model.json --data nextday.csv --plots plots/ --json
     #[command(verbatim_doc_comment)]
     Eval(EvalArgs),
+    /// Export a trained model as the board's model blob.
+    ///
     /// Export a trained model as the model blob the firmware evaluates (f32, or f16 at half
     /// the flash), with its size and evaluation cost.
     ///
@@ -92,6 +109,8 @@ enum Command {
     ///   et export --model model.json --precision f16 --out model.etm
     #[command(verbatim_doc_comment)]
     Export(ExportArgs),
+    /// Image touches (a scene's, or recorded frames) by one-step Gauss-Newton, as PNG + metrics.
+    ///
     /// Image a scene's touches by one-step Gauss-Newton difference imaging (SPEC §6): mesh the
     /// sheet, the complete electrode model's Jacobian at the untouched sheet, the NOSER
     /// reconstruction matrix; then the simulator's frames without and with the touches (its
@@ -105,6 +124,8 @@ enum Command {
     ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --refine 55,0,25 --out x050-roi.png
     #[command(verbatim_doc_comment)]
     Reconstruct(ReconstructArgs),
+    /// Boundary voltages of a scene by the finite elements.
+    ///
     /// Boundary voltages of a scene by the finite elements (complete electrode model): the
     /// scene's protocol and current, the untouched sheet and the sheet with its touches (each
     /// touch's disc at the conductance its pressure gives), V_0, V_1 and their difference.
@@ -122,6 +143,8 @@ enum Command {
     ///   et ports
     #[command(verbatim_doc_comment)]
     Ports,
+    /// Record frames from a board into a recording (JSON Lines).
+    ///
     /// Record frames from a board on a serial port into a recording (JSON Lines, one frame per
     /// line, flushed as it arrives: a crash or a pulled cable loses at most the frame in
     /// flight). Starts the scan, records until --frames or --seconds or Ctrl-C, and rides out a
@@ -133,6 +156,8 @@ enum Command {
     ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
     #[command(verbatim_doc_comment)]
     Record(RecordArgs),
+    /// Open the viewer: live image, class grid, plots, training wizard (feature `viewer`).
+    ///
     /// Open the viewer: the live image with its colour bar and ROI outline, the class grid
     /// with the recognised class lit and the position marker, protocol (or automatic),
     /// alpha and threshold, plots of frame rate, BVC and per-channel SNR, link health, and the
@@ -146,6 +171,8 @@ enum Command {
     ///   et view --port /dev/ttyUSB0 --model model.json
     #[command(verbatim_doc_comment)]
     View(ViewArgs),
+    /// Print touch events as JSON lines for other programs.
+    ///
     /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
     /// class, position, intensity, confidence, timestamp, one line per touched frame. From
     /// a simulated scene (--scene; its touches start once the reference is taken), a
@@ -159,6 +186,8 @@ enum Command {
     ///   et stream --json --port /dev/ttyUSB0 --model model.json | my-robot
     #[command(verbatim_doc_comment)]
     Stream(StreamArgs),
+    /// Upload a model blob to the board (which verifies it before using it).
+    ///
     /// Upload a model blob (from `et export`) to the board over its serial port. The board
     /// verifies it (CRC, model checks, scan configuration) before it replaces the old model;
     /// a refused upload leaves the old one classifying. A referenced model needs the untouched
