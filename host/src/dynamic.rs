@@ -3,9 +3,12 @@
 //! pseudo-polar, several regions switch to PP-PP, a region near the boundary stays adjacent.
 //!
 //! The two questions SPEC §8 leaves open, answered here:
-//! - *Several ROIs*: a region counts when its peak reaches `peak_ratio` of the strongest
-//!   region's and its area reaches `min_area` ([`significant`]): ringing and noise specks do
-//!   not.
+//! - *Several ROIs*: the image's regions of interest are split at their saddles
+//!   ([`crate::recon::touches`]: under noise the alpha that suits the data joins two touches
+//!   over a saddle far above the threshold), a peak counts only when it stands out of its
+//!   pixel's noise ([`crate::recon::above_noise`]), and then when it reaches `peak_ratio` of
+//!   the strongest's and its area reaches `min_area` ([`significant`]): ringing and noise
+//!   specks do not.
 //! - *A wrong first detection*: a switch happens only after the same decision holds for
 //!   `confirm` consecutive frames, and after `lost` frames without any touch the selector
 //!   returns to adjacent. A wrong switch therefore needs a wrong decision held for `confirm`
@@ -124,8 +127,8 @@ impl Selector {
         self.current
     }
 
-    /// Feeds one frame's regions (as [`crate::recon::regions`] returns them, or empty when
-    /// no touch was detected); returns the new protocol when the scan should switch.
+    /// Feeds one frame's regions (the touches of [`crate::recon::touches`] above the noise,
+    /// or [`crate::recon::regions`]; empty when no touch was detected); returns the new protocol when the scan should switch.
     pub fn step(&mut self, regions: &[Region]) -> Option<ProtocolKind> {
         let wanted = decide(&significant(regions, &self.settings), &self.settings);
         let Some(wanted) = wanted else {
@@ -166,6 +169,7 @@ mod tests {
             centroid: [x, y],
             area: 4e-4,
             peak,
+            peak_pixel: 0,
         }
     }
 

@@ -189,6 +189,9 @@ pub struct SceneFrames {
     pub v0: Vec<f64>,
     /// V_1: one frame with the scene's touches, V.
     pub v1: Vec<f32>,
+    /// The noise of dV per channel, from the reference frames' spread
+    /// ([`crate::recon::dv_variance`]), V^2.
+    pub var: Vec<f64>,
     /// The touches.
     pub truth: Vec<Truth>,
 }
@@ -242,19 +245,22 @@ pub fn scene_frames_on(
     let mut sim = et_sim::frontend::SimFrontend::new(Arc::clone(sheet), scene.frontend, scene.seed)
         .map_err(sim_error)?;
     let n = reference.max(1);
-    let mut v0 = Vec::new();
+    let mut frames = Vec::with_capacity(n);
     for _ in 0..n {
         let frame = sim.fast_frame(config).map_err(sim_error)?;
-        v0.resize(frame.len(), 0.0);
-        for (a, b) in v0.iter_mut().zip(frame) {
-            *a += f64::from(b) / n as f64;
-        }
+        frames.push(frame.into_iter().map(f64::from).collect::<Vec<f64>>());
     }
+    let k = frames[0].len();
+    let v0: Vec<f64> = (0..k)
+        .map(|c| frames.iter().map(|f| f[c]).sum::<f64>() / n as f64)
+        .collect();
+    let var = crate::recon::dv_variance(&frames);
     let touches: Vec<Touch> = scene.touches.iter().map(TouchEvent::touch).collect();
     sim.set_touches(&touches).map_err(sim_error)?;
     Ok(SceneFrames {
         v0,
         v1: sim.fast_frame(config).map_err(sim_error)?,
+        var,
         truth: touches.iter().map(|t| (t.position, t.radius)).collect(),
     })
 }

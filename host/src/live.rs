@@ -28,7 +28,9 @@ use crate::learn::model_file::ModelFile;
 use crate::learn::regress::posterior_centre;
 use crate::link::{Counters, Link};
 use crate::mesh::Mesh;
-use crate::recon::{OneStep, PixelGrid, Region, default_threshold, regions};
+use crate::recon::{
+    OneStep, PROMINENCE, PixelGrid, Region, above_noise, default_threshold, touches,
+};
 use crate::recording::{self, Recording};
 
 /// One frame as the live pipeline sees it.
@@ -441,8 +443,9 @@ pub struct TouchEvent {
     pub intensity: f64,
     /// The model's posterior of its class (0 to 1), when there is a model.
     pub confidence: Option<f64>,
-    /// Touches in the image: regions with half the strongest peak and a quarter fingertip's
-    /// area (`dynamic::significant`).
+    /// Touches in the image: its regions split at their saddles (`recon::touches`), above
+    /// the touch factor times their noise, with half the strongest peak and a quarter
+    /// fingertip's area (`dynamic::significant`).
     pub regions: usize,
 }
 
@@ -553,7 +556,8 @@ pub struct Output {
     pub referencing: Option<(usize, usize)>,
     /// Conductivity change per pixel (None outside the sheet), S per square.
     pub image: Vec<Option<f64>>,
-    /// Regions of the image above the threshold (only when touched), strongest first.
+    /// The touches in the image (only when touched): regions above the threshold split at
+    /// their saddles, each above the touch factor times its noise; strongest first.
     pub regions: Vec<Region>,
     /// BVC = |V_m - V_0|, V.
     pub bvc: f64,
@@ -776,8 +780,18 @@ impl Processor {
         for (&p, v) in self.inside.iter().zip(values.iter()) {
             image[p] = Some(f64::from(*v));
         }
+        // The touches: regions split at their saddles, each standing out of its pixel's
+        // noise by the touch factor.
         let rois = if touched {
-            regions(&self.imager.grid, &image, threshold)
+            let mut sd = vec![None; image.len()];
+            for (&p, v) in self.inside.iter().zip(&pixel_sd) {
+                sd[p] = Some(*v);
+            }
+            above_noise(
+                &touches(&self.imager.grid, &image, threshold, PROMINENCE),
+                &sd,
+                self.settings.touch_factor,
+            )
         } else {
             Vec::new()
         };

@@ -1119,7 +1119,9 @@ fn scene_mesh(scene: &Scene, args: &MeshArgs, at_touches: bool) -> Result<et_hos
 
 fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     use et_host::imaging::{Imager, Truth, scene_frames};
-    use et_host::recon::{OneStep, default_threshold, metrics, regions};
+    use et_host::recon::{
+        OneStep, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
+    };
     let scene = Scene::load(&args.scene)?;
     let recording = args.frames.as_deref().map(recording::read).transpose()?;
     let config = match &recording {
@@ -1144,8 +1146,8 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let jac = imager.jacobian(&protocol, amps)?;
     let grid = &imager.grid;
     stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
-    // V_0 and V_1, with the truth (centre, radius) where known.
-    let (v0, v1, truth): (Vec<f64>, Vec<f32>, Vec<Truth>) = match &recording {
+    // V_0 and V_1, with the truth (centre, radius) where known, and dV's noise variance.
+    let (v0, v1, truth, var): (Vec<f64>, Vec<f32>, Vec<Truth>, Vec<f64>) = match &recording {
         Some(r) => {
             let n = r.records.len();
             let reference = args.reference.clamp(1, n.max(1));
@@ -1159,12 +1161,14 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                         .unwrap_or_default()
                 );
             }
-            let mut v0 = vec![0.0f64; protocol.frame_len()];
-            for rec in &r.records[..reference] {
-                for (a, b) in v0.iter_mut().zip(&rec.voltages) {
-                    *a += f64::from(*b) / reference as f64;
-                }
-            }
+            let frames: Vec<Vec<f64>> = r.records[..reference]
+                .iter()
+                .map(|rec| rec.voltages.iter().map(|&v| f64::from(v)).collect())
+                .collect();
+            let v0: Vec<f64> = (0..protocol.frame_len())
+                .map(|c| frames.iter().map(|f| f[c]).sum::<f64>() / reference as f64)
+                .collect();
+            let var = et_host::recon::dv_variance(&frames);
             let rec = &r.records[frame];
             let truth = rec
                 .touches
@@ -1172,13 +1176,13 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                 .flatten()
                 .map(|t| ([t.x, t.y], t.radius))
                 .collect();
-            (v0, rec.voltages.clone(), truth)
+            (v0, rec.voltages.clone(), truth, var)
         }
         None => {
             // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
             // set-up) and one frame with the scene's touches.
             let f = scene_frames(&scene, &config, 10)?;
-            (f.v0, f.v1, f.truth)
+            (f.v0, f.v1, f.truth, f.var)
         }
     };
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
@@ -1194,10 +1198,14 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             .parse::<f64>()
             .with_context(|| format!("--alpha '{v}': a number or auto"))?,
     };
-    let image = if args.iterations <= 1 {
+    // The image, and its noise where the one-step matrix gives it.
+    let (image, sd) = if args.iterations <= 1 {
         let recon = OneStep::new(&jac, alpha, args.s)?;
         stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
-        grid.image(&recon.reconstruct(&dv)?)
+        (
+            grid.image(&recon.reconstruct(&dv)?),
+            grid.image(&recon.noise_sd(&var)?),
+        )
     } else {
         let sigma0 = imager.background();
         let its = et_host::recon::gauss_newton(
@@ -1218,10 +1226,11 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             args.iterations
         ));
         let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-        grid.image(&d)
+        (grid.image(&d), Vec::new())
     };
     let f = args.threshold.unwrap_or(default_threshold(config.protocol));
     let rois = regions(grid, &image, f);
+    let found = above_noise(&touches(grid, &image, f, PROMINENCE), &sd, TOUCH_Z);
     let m = truth.first().map(|&(centre, radius)| {
         metrics(
             grid,
@@ -1255,6 +1264,12 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             "area_mm2": r.area * 1e6,
             "peak": r.peak,
         })).collect::<Vec<_>>(),
+        "found_touches": found.iter().map(|r| serde_json::json!({
+            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            "area_mm2": r.area * 1e6,
+            "peak": r.peak,
+            "z": sd.get(r.peak_pixel).copied().flatten().map(|sd| r.peak / sd),
+        })).collect::<Vec<_>>(),
         "touches_mm": truth.iter().map(|(c, _)| [c[0] * 1e3, c[1] * 1e3]).collect::<Vec<_>>(),
         "metrics_first_touch": m,
         "seconds": started.elapsed().as_secs_f64(),
@@ -1268,6 +1283,20 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                 r.centroid[0] * 1e3,
                 r.centroid[1] * 1e3,
                 r.area * 1e6
+            );
+        }
+        for (i, r) in found.iter().enumerate() {
+            eprintln!(
+                "touch {i}: at ({:.1}, {:.1}) mm{}",
+                r.centroid[0] * 1e3,
+                r.centroid[1] * 1e3,
+                sd.get(r.peak_pixel)
+                    .copied()
+                    .flatten()
+                    .map_or(String::new(), |sd| format!(
+                        ", {:.1} x its noise",
+                        r.peak / sd
+                    ))
             );
         }
         if let Some(m) = m {

@@ -281,3 +281,187 @@ fn dynamic_selection_on_the_reference_scenes() {
         assert_eq!(switched.first().copied(), expect, "{name}: {rois:?}");
     }
 }
+
+/// A `w` x `h` grid of 1 mm pixels (origin at 0) with every pixel on the sheet.
+fn plain_grid(w: usize, h: usize) -> PixelGrid {
+    PixelGrid {
+        width: w,
+        height: h,
+        origin: [0.0, 0.0],
+        size: 1e-3,
+        triangle: vec![Some(0); w * h],
+    }
+}
+
+/// Gaussian bumps (centre in pixels, height, sigma in pixels) plus `ripple` x cos along x.
+fn bumps(g: &PixelGrid, list: &[([f64; 2], f64, f64)], ripple: f64) -> Vec<Option<f64>> {
+    (0..g.width * g.height)
+        .map(|p| {
+            let (i, j) = ((p % g.width) as f64, (p / g.width) as f64);
+            let v: f64 = list
+                .iter()
+                .map(|&(c, a, s)| {
+                    a * (-((i - c[0]).powi(2) + (j - c[1]).powi(2)) / (2.0 * s * s)).exp()
+                })
+                .sum();
+            Some(v + ripple * (std::f64::consts::TAU * i / 5.0).cos())
+        })
+        .collect()
+}
+
+#[test]
+fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
+    let g = plain_grid(40, 20);
+    // Two bumps 10 px apart, sigma 3 px: the saddle is at about half the peaks, far above
+    // f max, so the threshold alone sees one region.
+    let two = bumps(
+        &g,
+        &[([15.0, 10.0], 1.0, 3.0), ([25.0, 10.0], 0.9, 3.0)],
+        0.0,
+    );
+    assert_eq!(regions(&g, &two, 0.05).len(), 1);
+    let t = touches(&g, &two, 0.05, PROMINENCE);
+    assert_eq!(t.len(), 2, "{t:?}");
+    for (r, x) in t.iter().zip([15.5e-3, 25.5e-3]) {
+        assert!((r.centroid[0] - x).abs() < 1.5e-3, "{t:?}");
+        assert!((r.centroid[1] - 10.5e-3).abs() < 0.5e-3, "{t:?}");
+    }
+    assert!((t[0].peak - 1.0).abs() < 0.01 && (t[1].peak - 0.9).abs() < 0.01);
+    // Every pixel of the region of interest goes to one of the two.
+    let area: f64 = t.iter().map(|r| r.area).sum();
+    assert!((area - regions(&g, &two, 0.05)[0].area).abs() < 1e-12);
+    // Closer together the dip is too shallow: one touch.
+    let close = bumps(
+        &g,
+        &[([18.0, 10.0], 1.0, 3.0), ([23.0, 10.0], 0.9, 3.0)],
+        0.0,
+    );
+    assert_eq!(touches(&g, &close, 0.05, PROMINENCE).len(), 1);
+    // One peak: the threshold's region (its centroid from the half-peak core, here the
+    // same by symmetry).
+    let one = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.0);
+    let (t, r) = (touches(&g, &one, 0.1, PROMINENCE), regions(&g, &one, 0.1));
+    assert_eq!(t.len(), 1);
+    assert_eq!(
+        (t[0].area, t[0].peak, t[0].peak_pixel),
+        (r[0].area, r[0].peak, r[0].peak_pixel)
+    );
+    assert!((0..2).all(|d| (t[0].centroid[d] - r[0].centroid[d]).abs() < 1e-9));
+    // One peak with a ripple: the ripple's little peaks on the touch's flank stay part of it
+    // (those far out, where the ripple is most of the value, are at most specks).
+    let rippled = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.02);
+    let t = touches(&g, &rippled, 0.1, PROMINENCE);
+    let strong: Vec<_> = t.iter().filter(|r| r.peak >= 0.5 * t[0].peak).collect();
+    assert_eq!(strong.len(), 1, "{t:?}");
+    assert!(
+        strong[0].area > 0.8 * regions(&g, &one, 0.1)[0].area,
+        "{t:?}"
+    );
+    // Nothing positive, nothing found; missing pixels are skipped.
+    assert!(touches(&g, &vec![Some(-1.0); 800], 0.1, PROMINENCE).is_empty());
+    let mut holes = two.clone();
+    for p in (0..800).step_by(7) {
+        holes[p] = None;
+    }
+    assert!(!touches(&g, &holes, 0.05, PROMINENCE).is_empty());
+}
+
+#[test]
+fn two_touches_under_noise_are_two_peaks_at_the_alpha_gcv_picks() {
+    // The simulator's calibrated noise, V_0 from 10 frames, alpha by GCV: the threshold
+    // joins the two touches, their peaks do not.
+    let sc = scene("disc-ref-two.toml");
+    let config = sc.scan_config().unwrap();
+    let protocol = config.validate().unwrap();
+    let amps = f64::from(config.current_amps());
+    let frames = crate::imaging::scene_frames(&sc, &config, 10).unwrap();
+    let dv = frames.dv();
+    let mesh = Mesh::of_sheet(&sc.sheet, MeshSize::for_count(&sc.sheet, 3_000)).unwrap();
+    let z =
+        vec![sc.sheet.electrodes.contact_ohm * sc.sheet.electrodes.width; mesh.electrodes.len()];
+    let grid = PixelGrid::new(&mesh, 48);
+    let n = mesh.triangles.len();
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let (_, jac) = fwd
+        .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, amps)
+        .unwrap();
+    let candidates: Vec<f64> = (0..=25)
+        .map(|i| 10f64.powf(-4.0 + 0.2 * f64::from(i)))
+        .collect();
+    let (alpha, _) = gcv_alpha(&jac, 0.5, &dv, &candidates).unwrap();
+    let recon = OneStep::new(&jac, alpha, 0.5).unwrap();
+    let image = grid.image(&recon.reconstruct(&dv).unwrap());
+    let sd = grid.image(&recon.noise_sd(&frames.var).unwrap());
+    let f = default_threshold(ProtocolKind::PpPp);
+    let rois = regions(&grid, &image, f);
+    let found = touches(&grid, &image, f, PROMINENCE);
+    let counted = above_noise(&found, &sd, TOUCH_Z);
+    println!("alpha {alpha}: regions {rois:?}\ntouches {found:?}\nabove noise {counted:?}");
+    assert_eq!(
+        rois.iter().filter(|r| r.peak >= 0.5 * rois[0].peak).count(),
+        1,
+        "the threshold joins them: {rois:?}"
+    );
+    assert_eq!(counted.len(), 2, "{counted:?}");
+    // The other peaks in the image are noise.
+    assert!(found.len() > 2, "{found:?}");
+    for (c, r) in &frames.truth {
+        assert!(
+            counted
+                .iter()
+                .any(|g| (g.centroid[0] - c[0]).hypot(g.centroid[1] - c[1]) < *r),
+            "no touch found within {r} m of {c:?}: {counted:?}"
+        );
+    }
+}
+
+#[test]
+fn noise_of_an_image_by_hand_and_by_sampling() {
+    // dv_variance: sample variance x (1 + 1/n), the spread of one frame minus the mean of n.
+    let frames = vec![vec![1.0, 0.0], vec![3.0, 0.0], vec![2.0, 0.0]];
+    let var = dv_variance(&frames);
+    assert!((var[0] - 1.0 * (1.0 + 1.0 / 3.0)).abs() < 1e-12 && var[1] == 0.0);
+    assert_eq!(dv_variance(&frames[..1]), vec![0.0, 0.0]);
+    // noise_sd: sqrt(sum_k R_tk^2 var_k), and it matches the spread of R n over samples.
+    let jac = DMatrix::from_fn(5, 7, |r, c| ((r * 7 + c) as f64 * 0.37).sin() + 0.1);
+    let recon = OneStep::new(&jac, 0.3, 0.5).unwrap();
+    let var_dv: Vec<f64> = (0..5).map(|k| 1e-6 * (k + 1) as f64).collect();
+    let sd = recon.noise_sd(&var_dv).unwrap();
+    for t in 0..7 {
+        let by_hand: f64 = (0..5)
+            .map(|k| recon.matrix[(t, k)].powi(2) * var_dv[k])
+            .sum::<f64>()
+            .sqrt();
+        assert!((sd[t] - by_hand).abs() <= 1e-12 * by_hand);
+    }
+    let mut rng = et_sim::rng::Rng::new(5);
+    let samples = 20_000;
+    let mut sum_sq = [0.0; 7];
+    for _ in 0..samples {
+        let n: Vec<f64> = var_dv.iter().map(|v| v.sqrt() * rng.normal()).collect();
+        for (s, x) in sum_sq.iter_mut().zip(recon.reconstruct(&n).unwrap()) {
+            *s += x * x / samples as f64;
+        }
+    }
+    for t in 0..7 {
+        assert!((sum_sq[t].sqrt() / sd[t] - 1.0).abs() < 0.03, "{t}");
+    }
+    assert!(recon.noise_sd(&var_dv[..4]).is_err());
+    // Regions where the noise is unknown are kept; others need TOUCH_Z.
+    let r = |peak, peak_pixel| Region {
+        centroid: [0.0, 0.0],
+        area: 1e-4,
+        peak,
+        peak_pixel,
+    };
+    let sd_img = vec![Some(1.0), Some(0.0), None, Some(1.0)];
+    let kept = above_noise(
+        &[r(6.0, 0), r(1.0, 1), r(1.0, 2), r(4.0, 3)],
+        &sd_img,
+        TOUCH_Z,
+    );
+    assert_eq!(
+        kept.iter().map(|g| g.peak_pixel).collect::<Vec<_>>(),
+        vec![0, 1, 2]
+    );
+}
