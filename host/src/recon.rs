@@ -388,6 +388,28 @@ impl PixelGrid {
         ]
     }
 
+    /// The 4 neighbours of pixel `index` (left, right, below, above; None off the grid).
+    #[must_use]
+    pub fn neighbours(&self, index: usize) -> [Option<usize>; 4] {
+        let (i, j) = (index % self.width, index / self.width);
+        [
+            (i > 0).then(|| index - 1),
+            (i + 1 < self.width).then(|| index + 1),
+            (j > 0).then(|| index - self.width),
+            (j + 1 < self.height).then(|| index + self.width),
+        ]
+    }
+
+    /// Mean of the centres of `pixels`, m ([0, 0] for none).
+    #[must_use]
+    pub fn centroid(&self, pixels: &[usize]) -> [f64; 2] {
+        let n = pixels.len().max(1) as f64;
+        pixels.iter().fold([0.0; 2], |c, &p| {
+            let x = self.centre(p);
+            [c[0] + x[0] / n, c[1] + x[1] / n]
+        })
+    }
+
     /// The reconstruction matrix onto the pixels (one row per pixel inside the sheet, in
     /// pixel order): a live frame then costs pixels x K multiply-adds.
     #[must_use]
@@ -406,6 +428,16 @@ impl PixelGrid {
             .map(|t| t.map(|t| per_triangle[t]))
             .collect()
     }
+}
+
+/// The largest value of an image when it is positive and finite.
+fn positive_max(image: &[Option<f64>]) -> Option<f64> {
+    let max = image
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    (max.is_finite() && max > 0.0).then_some(max)
 }
 
 /// The ROI threshold f of SPEC §6 [3.10] the reference study used for a protocol: 0.10 for
@@ -448,14 +480,9 @@ impl Region {
 /// raises the conductivity), grouped into 4-connected regions, largest peak first.
 #[must_use]
 pub fn regions(grid: &PixelGrid, image: &[Option<f64>], f: f64) -> Vec<Region> {
-    let max = image
-        .iter()
-        .flatten()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
-    if !(max.is_finite() && max > 0.0) {
+    let Some(max) = positive_max(image) else {
         return Vec::new();
-    }
+    };
     let keep: Vec<bool> = image
         .iter()
         .map(|v| v.is_some_and(|v| v >= f * max))
@@ -470,40 +497,20 @@ pub fn regions(grid: &PixelGrid, image: &[Option<f64>], f: f64) -> Vec<Region> {
         seen[start] = true;
         while let Some(p) = stack.pop() {
             members.push(p);
-            let (i, j) = (p % grid.width, p / grid.width);
-            let mut push = |q: usize| {
+            for q in grid.neighbours(p).into_iter().flatten() {
                 if keep[q] && !seen[q] {
                     seen[q] = true;
                     stack.push(q);
                 }
-            };
-            if i > 0 {
-                push(p - 1);
             }
-            if i + 1 < grid.width {
-                push(p + 1);
-            }
-            if j > 0 {
-                push(p - grid.width);
-            }
-            if j + 1 < grid.height {
-                push(p + grid.width);
-            }
-        }
-        let n = members.len() as f64;
-        let mut c = [0.0; 2];
-        for &m in &members {
-            let p = grid.centre(m);
-            c[0] += p[0] / n;
-            c[1] += p[1] / n;
         }
         let (peak_pixel, peak) = members.iter().filter_map(|&m| Some((m, image[m]?))).fold(
             (start, f64::NEG_INFINITY),
             |a, b| if b.1 > a.1 { b } else { a },
         );
         out.push(Region {
-            centroid: c,
-            area: n * grid.size * grid.size,
+            centroid: grid.centroid(&members),
+            area: members.len() as f64 * grid.size * grid.size,
             peak,
             peak_pixel,
         });
@@ -530,14 +537,9 @@ pub const PROMINENCE: f64 = 0.25;
 /// flank it shares with a neighbour does not pull it over. Largest peak first.
 #[must_use]
 pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64) -> Vec<Region> {
-    let max = image
-        .iter()
-        .flatten()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
-    if !(max.is_finite() && max > 0.0) {
+    let Some(max) = positive_max(image) else {
         return Vec::new();
-    }
+    };
     let mut order: Vec<(usize, f64)> = image
         .iter()
         .enumerate()
@@ -558,15 +560,8 @@ pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64)
     // Pairs of regions already found to be separate touches (by root).
     let mut apart: Vec<(usize, usize)> = Vec::new();
     for &(p, v) in &order {
-        let (i, j) = (p % grid.width, p / grid.width);
         let mut near: Vec<usize> = Vec::with_capacity(4);
-        let neighbours = [
-            (i > 0).then(|| p - 1),
-            (i + 1 < grid.width).then(|| p + 1),
-            (j > 0).then(|| p - grid.width),
-            (j + 1 < grid.height).then(|| p + grid.width),
-        ];
-        for q in neighbours.into_iter().flatten() {
+        for q in grid.neighbours(p).into_iter().flatten() {
             if flooded[q] {
                 let r = root(&mut parent, q);
                 if !near.contains(&r) {
@@ -619,15 +614,8 @@ pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64)
                 .copied()
                 .filter(|&q| image[q].is_some_and(|v| v >= 0.5 * peak[r]))
                 .collect();
-            let k = core.len() as f64;
-            let mut c = [0.0; 2];
-            for &q in &core {
-                let x = grid.centre(q);
-                c[0] += x[0] / k;
-                c[1] += x[1] / k;
-            }
             Region {
-                centroid: c,
+                centroid: grid.centroid(&core),
                 area: m.len() as f64 * grid.size * grid.size,
                 peak: peak[r],
                 peak_pixel: r,
