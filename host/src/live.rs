@@ -244,6 +244,34 @@ impl PortSource {
         })
     }
 
+    /// Puts a model on the board: uploads `blob` (the board verifies it before it replaces
+    /// its model; erasing a slot takes seconds) and, for a referenced model, has the board
+    /// take V_0 from its next frames, so the sheet must be untouched. Returns what happened,
+    /// for people.
+    ///
+    /// # Errors
+    /// A message when the blob is not a model, or the board refuses or does not answer
+    /// (it then keeps its old model).
+    pub fn install_model(&mut self, blob: &[u8]) -> Result<String, String> {
+        let model = et_core::model::Model::parse(blob)
+            .map_err(|e| format!("not a valid model blob: {e:?}"))?;
+        self.link
+            .upload_model(blob, Duration::from_secs(2), Duration::from_secs(15))
+            .map_err(|e| format!("upload failed: {e}"))?;
+        let loaded = format!(
+            "the board verified and loaded the model ({} bytes, {} classes)",
+            blob.len(),
+            model.classes()
+        );
+        if !model.referenced() {
+            return Ok(loaded);
+        }
+        self.link
+            .request(&Command::Tare, Duration::from_secs(2))
+            .map_err(|e| format!("{loaded}, but taking V_0 failed: {e}"))?;
+        Ok(format!("{loaded} and took V_0: it classifies every frame"))
+    }
+
     /// Everything that arrived, without waiting: frames (each with its on-chip class when
     /// the board sent one), and status and problems kept for [`Source::health`].
     fn drain(&mut self) -> Vec<LiveFrame> {

@@ -336,17 +336,7 @@ impl Viewer {
             },
             wizard::Request::Upload(blob) => {
                 self.status = match self.source.as_mut() {
-                    Some(Source::Port(p)) => match p.link.upload_model(
-                        &blob,
-                        std::time::Duration::from_secs(2),
-                        std::time::Duration::from_secs(10),
-                    ) {
-                        Ok(()) => format!(
-                            "the board verified and loaded the model ({} bytes)",
-                            blob.len()
-                        ),
-                        Err(e) => format!("upload failed: {e}"),
-                    },
+                    Some(Source::Port(p)) => p.install_model(&blob).unwrap_or_else(|e| e),
                     _ => "export to a board needs a board: open its serial port first".into(),
                 };
             }

@@ -499,3 +499,67 @@ fn et_upload_sends_a_model_the_board_verifies() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The viewer's board source (`live::Source::Port`): the wizard's "Export to the board" goes
+/// through `PortSource::install_model`; a model for another protocol is refused with the
+/// board's reason, the right one is verified, and the frames the source delivers carry the
+/// chip's classes, which name the sheet's state.
+#[test]
+fn the_live_board_source_installs_a_model_and_delivers_the_chips_classes() {
+    use et_host::live::{PortSource, Source};
+    let sheet = QemuSheet::new().unwrap();
+    let image = build_image();
+    let reference = ScanConfig::REFERENCE;
+    let (_, _, blob) = train(&sheet, &reference);
+    let (_, _, wrong) = train(
+        &sheet,
+        &ScanConfig {
+            protocol: ProtocolKind::PseudoPolar,
+            ..reference
+        },
+    );
+    let mut qemu = Qemu::boot(&image);
+    qemu.run();
+    let mut port = PortSource::open(&qemu.pty, DEFAULT_BAUD).unwrap();
+    let refused = port.install_model(&wrong).unwrap_err();
+    assert!(refused.contains("ModelMismatch"), "{refused}");
+    assert!(port.install_model(&blob[..blob.len() / 2]).is_err());
+    let done = port.install_model(&blob).unwrap();
+    assert!(done.contains("verified"), "{done}");
+    let mut source = Source::Port(Box::new(port));
+    let (mut frames, started) = (Vec::new(), std::time::Instant::now());
+    // The frames that queued up during the upload come first.
+    let classified = |frames: &[et_host::live::LiveFrame]| {
+        frames.iter().filter(|f| f.chip_class.is_some()).count()
+    };
+    while classified(&frames) < 30 && started.elapsed() < Duration::from_secs(60) {
+        frames.extend(source.poll(256, false).unwrap());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Frames queued before the commit's acknowledgement come unclassified; after the first
+    // classified one, every frame has its class, and the class is the sheet's state.
+    let first = frames
+        .iter()
+        .position(|f| f.chip_class.is_some())
+        .expect("classified frames");
+    let after = &frames[first..];
+    assert!(
+        after.len() >= 20,
+        "only {} frames after the upload",
+        after.len()
+    );
+    let classified = classified(after);
+    assert!(
+        classified >= after.len() - 1,
+        "{classified} of {}",
+        after.len()
+    );
+    let right = after
+        .iter()
+        .filter(|f| {
+            f.chip_class
+                .is_some_and(|(c, _)| usize::from(c) == sheet.state_of(f.seq))
+        })
+        .count();
+    assert!(right * 100 >= classified * 95, "{right}/{classified} right");
+}

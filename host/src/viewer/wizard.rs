@@ -493,6 +493,9 @@ impl Wizard {
                     let board = matches!(source, Some(Source::Port(_)));
                     if ui
                         .add_enabled(board, egui::Button::new("Export to the board"))
+                        .on_hover_text(
+                            "with the sheet untouched: the board takes V_0 after the upload",
+                        )
                         .on_disabled_hover_text("open the board's serial port first")
                         .clicked()
                     {
