@@ -755,7 +755,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
             // (estimated from the reference frames), then SPEC §8's significance.
             let sd = imager.grid.image(&recon.noise_sd(&frames.var)?);
             let counted = significant(
-                &above_noise(&touches(&imager.grid, &image, f, PROMINENCE), &sd, TOUCH_Z),
+                &above_noise(&touches(&imager.grid, &image, &sd, f, PROMINENCE), TOUCH_Z),
                 &settings,
             );
             let png = format!("imaging/{name}-{}.png", kind.name());
@@ -850,7 +850,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
          reference study (0.10 AD and opposite, 0.08 PP, 0.05 PP-PP). Colour: conductivity \
          change over the background. Touches: the regions of interest split at their saddles \
          (a peak stands apart when the dip below it is a quarter of the image's maximum, \
-         `recon::touches`), kept when their peak is 5 times its pixel's noise (the noise from \
+         `recon::touches`), kept when they reach 5 times their pixels' noise (the noise from \
          the spread of the reference frames through the reconstruction matrix, \
          `recon::above_noise`), and when their peak reaches half the strongest's and their area \
          a quarter of a 10 mm fingertip's (`dynamic::significant`). The \"regions\" columns \

@@ -170,6 +170,7 @@ mod tests {
             area: 4e-4,
             peak,
             peak_pixel: 0,
+            z: None,
         }
     }
 

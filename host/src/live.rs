@@ -4,8 +4,8 @@
 //! - [`Source`]: where frames come from, a simulated scene (which a pointer can press), a
 //!   recording (replay with pause and seek) or a board on a serial port.
 //! - [`Processor`]: V_0 from the first untouched frames, then per frame dV = V_m - V_0, the
-//!   one-step image onto a pixel grid (SPEC §6), its regions, and a [`TouchEvent`] when the
-//!   frame departs from V_0 by more than the noise allows; with a trained model also the class,
+//!   one-step image onto a pixel grid (SPEC §6), its touches (regions split at their saddles),
+//!   and a [`TouchEvent`] when a touch stands out of the image's noise; with a trained model also the class,
 //!   its posterior and the posterior-weighted position (SPEC §9, §11).
 //! - [`Monitor`]: frame rate, per-channel SNR and BVC over time, and lost frames.
 
@@ -539,8 +539,8 @@ pub struct Settings {
     pub s: f64,
     /// ROI threshold f; None: SPEC §6's value for the protocol.
     pub threshold: Option<f64>,
-    /// A frame is a touch when the image's strongest pixel exceeds this many times its
-    /// noise on the untouched sheet.
+    /// A frame is a touch when one of the image's touches (`recon::touches`) peaks at more
+    /// than this many times its pixel's noise on the untouched sheet.
     pub touch_factor: f64,
     /// Untouched frames averaged into V_0 after a start, a configuration change or a tare.
     pub reference_frames: usize,
@@ -803,26 +803,25 @@ impl Processor {
             .filter(|(_, sd)| **sd > 0.0)
             .map(|(v, sd)| f64::from(*v) / sd)
             .fold(0.0, f64::max);
-        let touched = intensity > self.settings.touch_factor;
         let mut image = vec![None; self.imager.grid.triangle.len()];
         for (&p, v) in self.inside.iter().zip(values.iter()) {
             image[p] = Some(f64::from(*v));
         }
-        // The touches: regions split at their saddles, each standing out of its pixel's
-        // noise by the touch factor.
-        let rois = if touched {
+        // The touches: regions split at their saddles, each reaching the touch factor times
+        // its pixels' noise somewhere. A frame is touched when one does.
+        let rois = if intensity > self.settings.touch_factor {
             let mut sd = vec![None; image.len()];
             for (&p, v) in self.inside.iter().zip(&pixel_sd) {
                 sd[p] = Some(*v);
             }
             above_noise(
-                &touches(&self.imager.grid, &image, threshold, PROMINENCE),
-                &sd,
+                &touches(&self.imager.grid, &image, &sd, threshold, PROMINENCE),
                 self.settings.touch_factor,
             )
         } else {
             Vec::new()
         };
+        let touched = !rois.is_empty();
         let event = touched.then(|| {
             let model = self
                 .classifier

@@ -463,6 +463,8 @@ pub struct Region {
     pub peak: f64,
     /// The pixel (index into the image) where it peaks.
     pub peak_pixel: usize,
+    /// Its largest value over its pixel's noise, where [`touches`] was given the noise.
+    pub z: Option<f64>,
 }
 
 impl Region {
@@ -513,6 +515,7 @@ pub fn regions(grid: &PixelGrid, image: &[Option<f64>], f: f64) -> Vec<Region> {
             area: members.len() as f64 * grid.size * grid.size,
             peak,
             peak_pixel,
+            z: None,
         });
     }
     out.sort_by(|a, b| b.peak.total_cmp(&a.peak));
@@ -534,9 +537,17 @@ pub const PROMINENCE: f64 = 0.25;
 /// the higher one (so ripples and noise on a touch's flank stay part of it). Later pixels
 /// join their highest-peaked neighbouring region. Each touch's area is its share of the
 /// region of interest; its centroid is that of its pixels at or above half its peak, so the
-/// flank it shares with a neighbour does not pull it over. Largest peak first.
+/// flank it shares with a neighbour does not pull it over. With `sd`, the standard deviation
+/// of each pixel's noise ([`OneStep::noise_sd`] on the grid; empty when unknown), each touch
+/// also gets its largest value over noise, `z`, for [`above_noise`]. Largest peak first.
 #[must_use]
-pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64) -> Vec<Region> {
+pub fn touches(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    sd: &[Option<f64>],
+    f: f64,
+    prominence: f64,
+) -> Vec<Region> {
     let Some(max) = positive_max(image) else {
         return Vec::new();
     };
@@ -619,6 +630,12 @@ pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64)
                 area: m.len() as f64 * grid.size * grid.size,
                 peak: peak[r],
                 peak_pixel: r,
+                z: m.iter()
+                    .filter_map(|&q| {
+                        let sd = sd.get(q).copied().flatten().filter(|&sd| sd > 0.0)?;
+                        Some(image[q]? / sd)
+                    })
+                    .reduce(f64::max),
             }
         })
         .collect();
@@ -630,17 +647,13 @@ pub fn touches(grid: &PixelGrid, image: &[Option<f64>], f: f64, prominence: f64)
 /// its pixel (see [`above_noise`]; noise alone stays below about 3.5 on the simulator).
 pub const TOUCH_Z: f64 = 5.0;
 
-/// The regions whose peak is at least `z` times its pixel's noise `sd` (an image of the
-/// noise's standard deviation, as [`OneStep::noise_sd`] makes it); where the noise is
-/// unknown (missing or zero) a region is kept.
+/// The regions that reach at least `z` times their pixels' noise somewhere (their `z`, from
+/// [`touches`]); a region whose noise is unknown is kept.
 #[must_use]
-pub fn above_noise(regions: &[Region], sd: &[Option<f64>], z: f64) -> Vec<Region> {
+pub fn above_noise(regions: &[Region], z: f64) -> Vec<Region> {
     regions
         .iter()
-        .filter(|r| match sd.get(r.peak_pixel).copied().flatten() {
-            Some(sd) if sd > 0.0 => r.peak >= z * sd,
-            _ => true,
-        })
+        .filter(|r| r.z.is_none_or(|v| v >= z))
         .cloned()
         .collect()
 }

@@ -1230,7 +1230,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     };
     let f = args.threshold.unwrap_or(default_threshold(config.protocol));
     let rois = regions(grid, &image, f);
-    let found = above_noise(&touches(grid, &image, f, PROMINENCE), &sd, TOUCH_Z);
+    let found = above_noise(&touches(grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
     let m = truth.first().map(|&(centre, radius)| {
         metrics(
             grid,
@@ -1268,7 +1268,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
             "area_mm2": r.area * 1e6,
             "peak": r.peak,
-            "z": sd.get(r.peak_pixel).copied().flatten().map(|sd| r.peak / sd),
+            "z": r.z,
         })).collect::<Vec<_>>(),
         "touches_mm": truth.iter().map(|(c, _)| [c[0] * 1e3, c[1] * 1e3]).collect::<Vec<_>>(),
         "metrics_first_touch": m,
@@ -1290,13 +1290,7 @@ fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                 "touch {i}: at ({:.1}, {:.1}) mm{}",
                 r.centroid[0] * 1e3,
                 r.centroid[1] * 1e3,
-                sd.get(r.peak_pixel)
-                    .copied()
-                    .flatten()
-                    .map_or(String::new(), |sd| format!(
-                        ", {:.1} x its noise",
-                        r.peak / sd
-                    ))
+                r.z.map_or(String::new(), |z| format!(", {z:.1} x its noise"))
             );
         }
         if let Some(m) = m {

@@ -320,7 +320,7 @@ fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
         0.0,
     );
     assert_eq!(regions(&g, &two, 0.05).len(), 1);
-    let t = touches(&g, &two, 0.05, PROMINENCE);
+    let t = touches(&g, &two, &[], 0.05, PROMINENCE);
     assert_eq!(t.len(), 2, "{t:?}");
     for (r, x) in t.iter().zip([15.5e-3, 25.5e-3]) {
         assert!((r.centroid[0] - x).abs() < 1.5e-3, "{t:?}");
@@ -336,11 +336,14 @@ fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
         &[([18.0, 10.0], 1.0, 3.0), ([23.0, 10.0], 0.9, 3.0)],
         0.0,
     );
-    assert_eq!(touches(&g, &close, 0.05, PROMINENCE).len(), 1);
+    assert_eq!(touches(&g, &close, &[], 0.05, PROMINENCE).len(), 1);
     // One peak: the threshold's region (its centroid from the half-peak core, here the
     // same by symmetry).
     let one = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.0);
-    let (t, r) = (touches(&g, &one, 0.1, PROMINENCE), regions(&g, &one, 0.1));
+    let (t, r) = (
+        touches(&g, &one, &[], 0.1, PROMINENCE),
+        regions(&g, &one, 0.1),
+    );
     assert_eq!(t.len(), 1);
     assert_eq!(
         (t[0].area, t[0].peak, t[0].peak_pixel),
@@ -350,7 +353,7 @@ fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
     // One peak with a ripple: the ripple's little peaks on the touch's flank stay part of it
     // (those far out, where the ripple is most of the value, are at most specks).
     let rippled = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.02);
-    let t = touches(&g, &rippled, 0.1, PROMINENCE);
+    let t = touches(&g, &rippled, &[], 0.1, PROMINENCE);
     let strong: Vec<_> = t.iter().filter(|r| r.peak >= 0.5 * t[0].peak).collect();
     assert_eq!(strong.len(), 1, "{t:?}");
     assert!(
@@ -358,12 +361,12 @@ fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
         "{t:?}"
     );
     // Nothing positive, nothing found; missing pixels are skipped.
-    assert!(touches(&g, &vec![Some(-1.0); 800], 0.1, PROMINENCE).is_empty());
+    assert!(touches(&g, &vec![Some(-1.0); 800], &[], 0.1, PROMINENCE).is_empty());
     let mut holes = two.clone();
     for p in (0..800).step_by(7) {
         holes[p] = None;
     }
-    assert!(!touches(&g, &holes, 0.05, PROMINENCE).is_empty());
+    assert!(!touches(&g, &holes, &[], 0.05, PROMINENCE).is_empty());
 }
 
 #[test]
@@ -394,8 +397,8 @@ fn two_touches_under_noise_are_two_peaks_at_the_alpha_gcv_picks() {
     let sd = grid.image(&recon.noise_sd(&frames.var).unwrap());
     let f = default_threshold(ProtocolKind::PpPp);
     let rois = regions(&grid, &image, f);
-    let found = touches(&grid, &image, f, PROMINENCE);
-    let counted = above_noise(&found, &sd, TOUCH_Z);
+    let found = touches(&grid, &image, &sd, f, PROMINENCE);
+    let counted = above_noise(&found, TOUCH_Z);
     println!("alpha {alpha}: regions {rois:?}\ntouches {found:?}\nabove noise {counted:?}");
     assert_eq!(
         rois.iter().filter(|r| r.peak >= 0.5 * rois[0].peak).count(),
@@ -447,21 +450,17 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
         assert!((sum_sq[t].sqrt() / sd[t] - 1.0).abs() < 0.03, "{t}");
     }
     assert!(recon.noise_sd(&var_dv[..4]).is_err());
-    // Regions where the noise is unknown are kept; others need TOUCH_Z.
-    let r = |peak, peak_pixel| Region {
-        centroid: [0.0, 0.0],
-        area: 1e-4,
-        peak,
-        peak_pixel,
-    };
-    let sd_img = vec![Some(1.0), Some(0.0), None, Some(1.0)];
-    let kept = above_noise(
-        &[r(6.0, 0), r(1.0, 1), r(1.0, 2), r(4.0, 3)],
-        &sd_img,
-        TOUCH_Z,
-    );
-    assert_eq!(
-        kept.iter().map(|g| g.peak_pixel).collect::<Vec<_>>(),
-        vec![0, 1, 2]
-    );
+    // Touches are given their largest value over noise; unknown noise keeps a region.
+    let g = plain_grid(4, 1);
+    let image = vec![Some(1.0), Some(6.0), Some(1.0), Some(4.0)];
+    let sd_img = vec![Some(1.0), Some(2.0), None, Some(0.5)];
+    let t = touches(&g, &image, &sd_img, 0.1, PROMINENCE);
+    assert_eq!(t.len(), 2, "{t:?}");
+    // The peak at 6 has z = 3 there, but its neighbour 1 / 1 is less: z = 3; the peak at 4
+    // has z = 8.
+    assert_eq!((t[0].z, t[1].z), (Some(3.0), Some(8.0)));
+    assert_eq!(above_noise(&t, TOUCH_Z).len(), 1);
+    let unknown = touches(&g, &image, &[], 0.1, PROMINENCE);
+    assert!(unknown.iter().all(|r| r.z.is_none()));
+    assert_eq!(above_noise(&unknown, TOUCH_Z).len(), 2);
 }
