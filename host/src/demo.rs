@@ -762,7 +762,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
             imager.write_png(
                 &out.join(&png),
                 &format!(
-                    "{name}, {}: {} regions (f = {f})",
+                    "{name}, {}: {} touches (f = {f})",
                     short(kind),
                     counted.len()
                 ),
@@ -853,7 +853,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
          `recon::touches`), kept when they reach 5 times their pixels' noise (the noise from \
          the spread of the reference frames through the reconstruction matrix, \
          `recon::above_noise`), and when their peak reaches half the strongest's and their area \
-         a quarter of a 10 mm fingertip's (`dynamic::significant`). The \"regions\" columns \
+         a quarter of a 10 mm fingertip's (`dynamic::significant`). The \"touches\" columns \
          count these touches.\n",
         imager.triangles()
     );
@@ -876,7 +876,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
     }
     let _ = writeln!(
         md,
-        "\n| scene | protocol | alpha | regions | distance of each touch from the nearest region | PE | SE | RNG | BVC |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        "\n| scene | protocol | alpha | touches | distance of each true touch from the nearest found | PE | SE | RNG | BVC |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for r in &rows {
         let offsets: Vec<String> = r["touch_offsets_mm"]
@@ -915,7 +915,7 @@ fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKe
         md,
         "\nPE and SE are of the first touch; SE counts every region above the threshold.\n\n\
          **Dynamic protocol selection (SPEC §8)** on the AD image of each scene (xi = 0.5):\n\n\
-         | scene | regions on AD | SPEC §8 switches to |\n| --- | --- | --- |"
+         | scene | touches on AD | SPEC §8 switches to |\n| --- | --- | --- |"
     );
     for (name, d, n) in &decisions {
         let _ = writeln!(
