@@ -343,14 +343,9 @@ fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<Learning
     let plan = Plan {
         visits: 1,
         scans: sizes.scans,
-        subsections: 20,
-        pressure_pa: (5e3, 60e3),
         radius,
         placement: radius / 4.0,
-        electrode_movement: 0.0005,
-        poses: 1,
-        press_movement: 0.0,
-        seed: 1,
+        ..Plan::default()
     };
     let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");
     let mut train: Option<Dataset> = None;

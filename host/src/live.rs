@@ -573,6 +573,19 @@ struct Reference {
     sum: Vec<f64>,
     sum_sq: Vec<f64>,
     count: usize,
+    /// What the complete reference gives, made once (and again when alpha or s change).
+    noise: Option<Noise>,
+}
+
+/// V_0, the noise of dV per channel, and each pixel's noise through the projection built
+/// with (alpha, s).
+#[derive(Clone, Debug)]
+struct Noise {
+    alpha: f64,
+    s: f64,
+    v0: Vec<f64>,
+    var_dv: Vec<f64>,
+    pixel_sd: Vec<f64>,
 }
 
 /// One frame processed.
@@ -739,6 +752,7 @@ impl Processor {
                 sum: vec![0.0; k],
                 sum_sq: vec![0.0; k],
                 count: 0,
+                noise: None,
             }),
         };
         if reference.count < needed {
@@ -763,43 +777,65 @@ impl Processor {
                 frame,
             });
         }
-        let n = reference.count as f64;
-        let v0: Vec<f64> = reference.sum.iter().map(|s| s / n).collect();
+        let config = frame.config;
+        self.projection(&config)?;
+        let projection = &self.projection.as_ref().ok_or("no reconstruction")?.3;
+        let reference = self.reference.as_mut().ok_or("no reference")?;
+        let Settings { alpha, s, .. } = self.settings;
+        if !reference
+            .noise
+            .as_ref()
+            .is_some_and(|n| n.alpha == alpha && n.s == s)
+        {
+            let n = reference.count as f64;
+            let v0: Vec<f64> = reference.sum.iter().map(|s| s / n).collect();
+            // Channel variances of an untouched frame's dV.
+            let var_dv: Vec<f64> = reference
+                .sum_sq
+                .iter()
+                .zip(&v0)
+                .map(|(q, m)| (q / n - m * m).max(0.0) * n / (n - 1.0).max(1.0) * (1.0 + 1.0 / n))
+                .collect();
+            // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
+            // filters the noise the data carry, so a touch stands out better here than in
+            // |dV|.
+            let pixel_sd: Vec<f64> = projection
+                .row_iter()
+                .map(|row| {
+                    row.iter()
+                        .zip(&var_dv)
+                        .map(|(p, v)| f64::from(*p) * f64::from(*p) * v)
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            reference.noise = Some(Noise {
+                alpha,
+                s,
+                v0,
+                var_dv,
+                pixel_sd,
+            });
+        }
+        let Noise {
+            v0,
+            var_dv,
+            pixel_sd,
+            ..
+        } = reference.noise.as_ref().ok_or("no reference")?;
         let dv: Vec<f64> = frame
             .voltages
             .iter()
-            .zip(&v0)
+            .zip(v0)
             .map(|(a, b)| f64::from(*a) - b)
             .collect();
         let bvc = dv.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let reference = self.reference.as_ref().ok_or("no reference")?;
-        // Channel variances of an untouched frame's dV.
-        let var_dv: Vec<f64> = reference
-            .sum_sq
-            .iter()
-            .zip(&v0)
-            .map(|(q, m)| (q / n - m * m).max(0.0) * n / (n - 1.0).max(1.0) * (1.0 + 1.0 / n))
-            .collect();
-        let config = frame.config;
         let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        let projection = self.projection(&config)?;
         let values = projection * nalgebra::DVector::from_vec(dv32);
-        // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
-        // filters the noise the data carry, so a touch stands out better here than in |dV|.
-        let pixel_sd: Vec<f64> = projection
-            .row_iter()
-            .map(|row| {
-                row.iter()
-                    .zip(&var_dv)
-                    .map(|(p, v)| f64::from(*p) * f64::from(*p) * v)
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = values
             .iter()
-            .zip(&pixel_sd)
+            .zip(pixel_sd)
             .filter(|(_, sd)| **sd > 0.0)
             .map(|(v, sd)| f64::from(*v) / sd)
             .fold(0.0, f64::max);
@@ -811,7 +847,7 @@ impl Processor {
         // its pixels' noise somewhere. A frame is touched when one does.
         let rois = if intensity > self.settings.touch_factor {
             let mut sd = vec![None; image.len()];
-            for (&p, v) in self.inside.iter().zip(&pixel_sd) {
+            for (&p, v) in self.inside.iter().zip(pixel_sd) {
                 sd[p] = Some(*v);
             }
             above_noise(
@@ -826,7 +862,7 @@ impl Processor {
             let model = self
                 .classifier
                 .as_ref()
-                .and_then(|c| c.classify(&config, &frame.voltages, &v0));
+                .and_then(|c| c.classify(&config, &frame.voltages, v0));
             let chip = frame.chip_class.map(|c| c.0);
             let image_position = rois.first().map_or([f64::NAN; 2], |r| {
                 [r.centroid[0] * 1e3, r.centroid[1] * 1e3]

@@ -609,13 +609,16 @@ pub fn touches(
             }
         }
     }
+    // Each region's pixels, by root (a noisy image has many small regions).
+    let mut slot = vec![usize::MAX; image.len()];
     let mut members: Vec<(usize, Vec<usize>)> = Vec::new();
     for &(p, _) in &order {
         let r = root(&mut parent, p);
-        match members.iter_mut().find(|(q, _)| *q == r) {
-            Some((_, m)) => m.push(p),
-            None => members.push((r, vec![p])),
+        if slot[r] == usize::MAX {
+            slot[r] = members.len();
+            members.push((r, Vec::new()));
         }
+        members[slot[r]].1.push(p);
     }
     let mut out: Vec<Region> = members
         .into_iter()

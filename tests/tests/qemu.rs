@@ -211,6 +211,17 @@ fn train(sheet: &QemuSheet, config: &ScanConfig) -> (Fitted, Vec<u16>, Vec<u8>) 
     (fitted, index, blob)
 }
 
+/// Blobs of a model for the board's reference configuration and of one for pseudo-polar
+/// frames, which the board must refuse.
+fn right_and_wrong_blobs(sheet: &QemuSheet) -> (Vec<u8>, Vec<u8>) {
+    let reference = ScanConfig::REFERENCE;
+    let pp = ScanConfig {
+        protocol: ProtocolKind::PseudoPolar,
+        ..reference
+    };
+    (train(sheet, &reference).2, train(sheet, &pp).2)
+}
+
 #[test]
 fn the_firmware_image_scans_classifies_and_obeys_in_qemu() {
     let sheet = QemuSheet::new().unwrap();
@@ -452,15 +463,7 @@ fn et_upload_sends_a_model_the_board_verifies() {
     let et = build_et();
     let dir = std::env::temp_dir().join(format!("et-qemu-upload-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let reference = ScanConfig::REFERENCE;
-    let (_, _, blob) = train(&sheet, &reference);
-    let (_, _, wrong) = train(
-        &sheet,
-        &ScanConfig {
-            protocol: ProtocolKind::PseudoPolar,
-            ..reference
-        },
-    );
+    let (blob, wrong) = right_and_wrong_blobs(&sheet);
     let (good, bad) = (dir.join("model.bin"), dir.join("pp.bin"));
     std::fs::write(&good, &blob).unwrap();
     std::fs::write(&bad, &wrong).unwrap();
@@ -509,15 +512,7 @@ fn the_live_board_source_installs_a_model_and_delivers_the_chips_classes() {
     use et_host::live::{PortSource, Source};
     let sheet = QemuSheet::new().unwrap();
     let image = build_image();
-    let reference = ScanConfig::REFERENCE;
-    let (_, _, blob) = train(&sheet, &reference);
-    let (_, _, wrong) = train(
-        &sheet,
-        &ScanConfig {
-            protocol: ProtocolKind::PseudoPolar,
-            ..reference
-        },
-    );
+    let (blob, wrong) = right_and_wrong_blobs(&sheet);
     let mut qemu = Qemu::boot(&image);
     qemu.run();
     let mut port = PortSource::open(&qemu.pty, DEFAULT_BAUD).unwrap();

@@ -178,6 +178,26 @@ pub struct Plan {
     pub seed: u64,
 }
 
+impl Default for Plan {
+    /// SPEC §9's collection: T = 6 visits x S_num = 20 scans x S_sub = 20 observations,
+    /// pressed from 5 to 60 kPa with a 7.5 mm finger landing within 2 mm rms, electrodes
+    /// moving 0.5 mm rms between visits and staying put within one; seed 1.
+    fn default() -> Self {
+        Self {
+            visits: 6,
+            scans: 20,
+            subsections: 20,
+            pressure_pa: (5e3, 60e3),
+            radius: 0.0075,
+            placement: 0.002,
+            electrode_movement: 0.0005,
+            poses: 1,
+            press_movement: 0.0,
+            seed: 1,
+        }
+    }
+}
+
 /// Why collection failed.
 pub type CollectError = String;
 

@@ -273,13 +273,7 @@ fn the_procedure_on_the_simulated_sheet() {
         visits: 2,
         scans: 4,
         subsections: 10,
-        pressure_pa: (5e3, 60e3),
-        radius: 0.0075,
-        placement: 0.002,
-        electrode_movement: 0.0005,
-        poses: 1,
-        press_movement: 0.0,
-        seed: 1,
+        ..Plan::default()
     };
     let train = collect(&spec, FrontendSpec::default(), config, &centres, &plan).unwrap();
     assert_eq!((train.x.nrows(), train.x.ncols()), (9 * 80, 96));

@@ -178,14 +178,8 @@ fn a_trained_model_classifies_live_presses() {
     let plan = collect::Plan {
         visits: 2,
         scans: 3,
-        subsections: 20,
-        pressure_pa: (5e3, 60e3),
-        radius: 0.0075,
-        placement: 0.002,
-        electrode_movement: 0.0005,
-        poses: 1,
-        press_movement: 0.0,
         seed: 5,
+        ..collect::Plan::default()
     };
     let mut data = collect::collect(&scene.sheet, scene.frontend, config, &centres, &plan).unwrap();
     pipeline::prepare(&mut data, true, None).unwrap();
