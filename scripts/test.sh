@@ -45,5 +45,5 @@ if command -v size >/dev/null; then
     END {printf "firmware image: flash %d of 262144 bytes (program region), static RAM %d of 131072 bytes\n", f, r}'
 fi
 
-step "tests (cargo test --workspace --features et-host/viewer)"
-cargo test --workspace --features et-host/viewer
+step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
+ET_REQUIRE_QEMU=1 cargo test --workspace --features et-host/viewer

@@ -5,12 +5,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::protocol::{Protocol, ProtocolError, ProtocolKind};
 
-/// Longest burst one step may acquire (samples per injection, S / L in SPEC §3).
+/// Longest burst one step may acquire (samples per injection, S / L in docs/method.md §3).
 pub const SAMPLES_PER_STEP_MAX: u16 = 4096;
-/// Largest current the Howland source is asked for, in nA (SPEC §2 uses 10 000 to 32 000).
+/// Largest current the Howland source is asked for, in nA (docs/method.md §2 uses 10 000 to 32 000).
 pub const CURRENT_NA_MAX: u32 = 1_000_000;
 
-/// How one scan is acquired (SPEC §3, Algorithm 1).
+/// How one scan is acquired (docs/method.md §3, Algorithm 1).
 ///
 /// The reference operating point ([`ScanConfig::REFERENCE`]) is L = 16, adjacent, 62.5 kS/s per
 /// channel, 50 samples per injection of which t_s = 25 are dropped, 32 uA: 78 Hz.
@@ -19,14 +19,14 @@ pub const CURRENT_NA_MAX: u32 = 1_000_000;
 pub struct ScanConfig {
     /// Electrode count L (even, 4 to 32).
     pub electrodes: u8,
-    /// Injection / measurement protocol (SPEC §4).
+    /// Injection / measurement protocol (docs/method.md §4).
     pub protocol: ProtocolKind,
-    /// Samples acquired per step, S / L (SPEC §3), `1..=SAMPLES_PER_STEP_MAX`.
+    /// Samples acquired per step, S / L (docs/method.md §3), `1..=SAMPLES_PER_STEP_MAX`.
     pub samples_per_step: u16,
     /// t_s: samples dropped at the start of each step while the front end settles.
     /// Must leave at least one sample: `settle_samples < samples_per_step`.
     pub settle_samples: u16,
-    /// Injected current I in nA (10 000 to 32 000 in SPEC §2), `1..=CURRENT_NA_MAX`.
+    /// Injected current I in nA (10 000 to 32 000 in docs/method.md §2), `1..=CURRENT_NA_MAX`.
     pub current_na: u32,
     /// ADC sample rate per channel in Hz (62 500 at the reference point).
     pub sample_rate_hz: u32,
@@ -35,7 +35,7 @@ pub struct ScanConfig {
 }
 
 impl ScanConfig {
-    /// The reference operating point of SPEC §3: 78 Hz at L = 16.
+    /// The reference operating point of docs/method.md §3: 78 Hz at L = 16.
     pub const REFERENCE: ScanConfig = ScanConfig {
         electrodes: 16,
         protocol: ProtocolKind::Adjacent,

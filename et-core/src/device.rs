@@ -6,7 +6,7 @@
 //! model, the untouched frame V_0 of a referenced model, and the health counters of
 //! [`Status`]. Per received packet the firmware calls [`Device::handle_packet`] and sends the
 //! reply; per scan it calls [`Device::frame`] and sends the frame and, when a model is active,
-//! the [`Event::Touch`] of the on-chip classification (SPEC §9).
+//! the [`Event::Touch`] of the on-chip classification (docs/method.md §9).
 //!
 //! Models are uploaded into one of two slots of a [`ModelStore`] (flash on the board, RAM under
 //! QEMU): the upload always goes to the slot that is not active, and only a blob that passes

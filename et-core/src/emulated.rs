@@ -1,5 +1,5 @@
 //! A sheet compiled into the firmware image: the [`Frontend`] the QEMU build scans, since QEMU
-//! has no ADC (DESIGN.md, "QEMU runs the real firmware image").
+//! has no ADC (docs/design.md, "QEMU runs the real firmware image").
 //!
 //! The sheet is described by transfer impedances, one L x L matrix per touch state, that the
 //! simulator's resistor network computes at build time (`et_sim::emulated`). A sheet is linear,

@@ -1,4 +1,4 @@
-//! One voltage from one burst (SPEC §3, Algorithm 1): drop the first t_s samples (the switching
+//! One voltage from one burst (docs/method.md §3, Algorithm 1): drop the first t_s samples (the switching
 //! transient), take the median of the rest. The median, not the mean, so that spikes do not
 //! move the result; samples on an ADC rail are counted so that the caller can flag them.
 

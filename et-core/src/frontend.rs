@@ -2,7 +2,7 @@
 //!
 //! One trait, [`Frontend`], with several implementations: the board (firmware), the simulated
 //! sheet (`sim`), and wrappers (fault injection, recording). Where real pins and delays are
-//! involved, [`MuxLines`] drives the two 16:1 multiplexers of SPEC §2 through embedded-hal 1.0
+//! involved, [`MuxLines`] drives the two 16:1 multiplexers of docs/method.md §2 through embedded-hal 1.0
 //! [`OutputPin`]s and a [`DelayNs`], so a board's `Frontend` is mostly wiring.
 
 use embedded_hal::delay::DelayNs;
@@ -28,7 +28,7 @@ pub struct AdcScale {
 }
 
 impl AdcScale {
-    /// The reference board's ADC (SPEC §2): 16 bits over +-5 V, divided by the PGIA `gain`.
+    /// The reference board's ADC (docs/method.md §2): 16 bits over +-5 V, divided by the PGIA `gain`.
     #[must_use]
     pub fn bipolar_16bit(range_volts: f32, gain: u8) -> Self {
         Self {
@@ -128,7 +128,7 @@ pub enum MuxError<E> {
     Range(ProtocolError),
 }
 
-/// The 10 mux control lines of SPEC §2 on embedded-hal pins, with the settling delay after
+/// The 10 mux control lines of docs/method.md §2 on embedded-hal pins, with the settling delay after
 /// each switch.
 ///
 /// `lines[n]` carries bit `n` of the [`MuxWord`]: 0-3 source address, 4 source enable, 5-8

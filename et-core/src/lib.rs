@@ -3,7 +3,7 @@
 //!
 //! Modules in pipeline order:
 //!
-//! - [`protocol`]: injection / measurement tables of SPEC §4 (adjacent, pseudo-polar, PP-PP,
+//! - [`protocol`]: injection / measurement tables of docs/method.md §4 (adjacent, pseudo-polar, PP-PP,
 //!   opposite, and the general drive skip / measure skip form), selection masks, frame length
 //!   K, reciprocity-deduplicated feature sets, mux control words.
 //! - [`config`]: [`ScanConfig`], the one value that says how a scan is acquired.
@@ -17,12 +17,14 @@
 //! - [`device`]: the firmware's logic without its hardware: commands, model upload into two
 //!   slots with verification, frames, on-chip classification, health counters.
 //! - [`emulated`]: a sheet given by transfer impedances, the `Frontend` of the QEMU image.
-//! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (SPEC §9).
-//! - [`stats`]: SNR, MAD (SPEC §3) and BVC (SPEC §7).
+//! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (docs/method.md §9).
+//! - [`stats`]: SNR, MAD (docs/method.md §3) and BVC (docs/method.md §7).
+//! - [`board`]: the constants the board and the host share (baud rate, model slot size).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod board;
 pub mod config;
 pub mod device;
 pub mod emulated;

@@ -1,8 +1,8 @@
-//! Discriminant analysis on the device (SPEC §9): QDA and LDA evaluated straight from a model
+//! Discriminant analysis on the device (docs/method.md §9): QDA and LDA evaluated straight from a model
 //! blob, a byte slice the caller owns (in flash on the board), validated once before use.
 //!
 //! Features are picked from V_m by index, then standardised: z_j = (V_m\[idx_j] - mean_j) /
-//! scale_j. The model lives in z-space. Discriminants (SPEC §9, [5.6]-[5.7] as corrected there):
+//! scale_j. The model lives in z-space. Discriminants (docs/method.md §9, [5.6]-[5.7] as corrected there):
 //!
 //! ```text
 //! QDA: delta_c(z) = -1/2 |L_c^-1 (z - mu_c)|^2 - 1/2 log|Sigma_c| + log pi_c,  Sigma_c = L_c L_c^T
@@ -12,7 +12,7 @@
 //! The prediction is argmax_c delta_c, with the margin to the runner-up as a confidence.
 //!
 //! A *referenced* model ([`FLAG_REFERENCED`]) was trained on V_m minus the untouched frame
-//! V_0 taken when the sheet was put down (a "tare", as difference imaging does, SPEC §6):
+//! V_0 taken when the sheet was put down (a "tare", as difference imaging does, docs/method.md §6):
 //! this cancels what electrode movement between sessions does to the standing voltages. It is
 //! evaluated with [`Model::evaluate_referenced`], which subtracts V_0 before standardising.
 //!

@@ -1,10 +1,10 @@
-//! Injection / measurement protocols (SPEC §4) as tables computed on the fly.
+//! Injection / measurement protocols (docs/method.md §4) as tables computed on the fly.
 //!
 //! Every protocol here is a case of one general form, the [`Pattern`]: inject current between
 //! electrode `i` and electrode `i + drive_skip + 1`, for every `i` in `0..L` (so each electrode
 //! takes its turn), and measure the differential voltage between `j` and `j + s + 1` for every
 //! measurement skip `s` in the pattern and every `j`. A measurement that touches a
-//! current-carrying electrode is dropped (the selection mask, SPEC §2-3); what remains, in
+//! current-carrying electrode is dropped (the selection mask, docs/method.md §2-3); what remains, in
 //! injection-major order, is the frame vector V_m of length K.
 //!
 //! | protocol | drive skip | measure skips | K at L = 16 |
@@ -15,11 +15,11 @@
 //! | [`ProtocolKind::Opposite`] | L/2 - 1 | {0} | L (L - 4) = 192 |
 //!
 //! Two measurements carry the same information (up to sign) when they involve the same two
-//! electrode pairs: reversing the injection negates every voltage, and reciprocity (SPEC §4)
+//! electrode pairs: reversing the injection negates every voltage, and reciprocity (docs/method.md §4)
 //! says V(C,D) under current on (A,B) equals V(A,B) under current on (C,D).
 //! [`Protocol::features`] keeps one measurement of each such group when [`Halving::Reciprocity`]
 //! is asked for: for the opposite protocol that is p = L (L - 4) / 2 (96 at L = 16), the
-//! classifier's features (SPEC §9). Whether the halving was applied is always the caller's
+//! classifier's features (docs/method.md §9). Whether the halving was applied is always the caller's
 //! explicit choice.
 
 use serde::{Deserialize, Serialize};
@@ -34,7 +34,7 @@ pub const MAX_MEASURE_SKIPS: usize = 2;
 pub const K_MAX: usize = L_MAX as usize * L_MAX as usize * MAX_MEASURE_SKIPS;
 /// Most candidate measurements for one injection (L_MAX per measurement skip).
 pub const CANDIDATES_MAX: usize = L_MAX as usize * MAX_MEASURE_SKIPS;
-/// Electrodes one 16:1 multiplexer can address (SPEC §2).
+/// Electrodes one 16:1 multiplexer can address (docs/method.md §2).
 pub const MUX_CHANNELS: u8 = 16;
 
 /// An electrode on the sheet boundary, numbered `0..L` around the boundary.
@@ -150,14 +150,14 @@ pub enum ProtocolKind {
     /// PP-PP: inject as PP, measure neighbours and almost-opposite pairs. Best for several touches.
     PpPp,
     /// Opposite (polar): inject between `i` and `i + L/2`, measure neighbours. The classifier's
-    /// features come from it (SPEC §9).
+    /// features come from it (docs/method.md §9).
     Opposite,
     /// Any other drive skip / measure skip combination.
     Custom(Pattern),
 }
 
 impl ProtocolKind {
-    /// The four named protocols, in SPEC order.
+    /// The four named protocols, in the order of docs/method.md §4.
     pub const NAMED: [ProtocolKind; 4] = [
         ProtocolKind::Adjacent,
         ProtocolKind::PseudoPolar,
@@ -203,7 +203,7 @@ impl ProtocolKind {
         }
     }
 
-    /// Parses a named protocol: the names of [`ProtocolKind::name`] plus the SPEC's
+    /// Parses a named protocol: the names of [`ProtocolKind::name`] plus the method's
     /// abbreviations `ad`, `pp`, `pppp`, `polar`. Case-insensitive.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Self> {
@@ -333,7 +333,7 @@ pub struct Step {
     pub measurement: Measurement,
 }
 
-/// A validated protocol for a known electrode count: the tables of SPEC §4.
+/// A validated protocol for a known electrode count: the tables of docs/method.md §4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Protocol {
@@ -530,7 +530,7 @@ impl Protocol {
 
     /// The measurements carrying the same information as step `k` (itself included), with
     /// the sign relating their voltage to step `k`'s: the injection or the measurement
-    /// reversed, and injection and measurement swapped (reciprocity, SPEC §4).
+    /// reversed, and injection and measurement swapped (reciprocity, docs/method.md §4).
     pub fn equivalents(&self, k: usize) -> impl Iterator<Item = (usize, Sign)> + '_ {
         let step = self.step(k);
         step.into_iter().flat_map(move |step| {
@@ -584,7 +584,7 @@ impl Protocol {
     }
 }
 
-/// The 10 mux control lines for one injection (SPEC §2): two 16:1 multiplexers, one
+/// The 10 mux control lines for one injection (docs/method.md §2): two 16:1 multiplexers, one
 /// connecting the current source, one connecting ground, each with 4 address bits and an
 /// active-high enable.
 ///
@@ -734,7 +734,7 @@ mod tests {
                 assert!(p.frame_len() <= K_MAX);
             }
         }
-        // The SPEC's worked numbers at L = 16.
+        // The method's worked numbers at L = 16.
         assert_eq!(
             Protocol::new(ProtocolKind::Adjacent, 16)
                 .unwrap()

@@ -1,4 +1,4 @@
-//! The scan engine (SPEC §3, Algorithm 1): one scan of a protocol through a [`Frontend`].
+//! The scan engine (docs/method.md §3, Algorithm 1): one scan of a protocol through a [`Frontend`].
 //!
 //! For every step k of the protocol: select the injection and measurement, acquire
 //! `samples_per_step` samples, drop the first t_s, take the median of the rest, convert it to

@@ -1,4 +1,5 @@
-//! Signal statistics of repeated frames (SPEC §3) and of a frame difference (SPEC §7).
+//! Signal statistics of repeated frames (SNR, MAD; docs/method.md §3), the reference frame
+//! V_0 and the noise of dV, and the boundary voltage change of a frame difference (BVC, §7).
 //!
 //! `frames` is always row-major: `n` frames of `k` values each (`frames[f * k + i]` is channel
 //! i of frame f). Sums are accumulated in f64.
@@ -69,7 +70,7 @@ fn mean_var(frames: &[f32], k: usize, n: usize, i: usize) -> (f64, f64) {
     (mean, var)
 }
 
-/// SNR per channel = 20 log10(|E\[V_i]| / sqrt(Var(V_i))), averaged over channels (SPEC §3:
+/// SNR per channel = 20 log10(|E\[V_i]| / sqrt(Var(V_i))), averaged over channels (docs/method.md §3:
 /// the printed [3.1] has the ratio upside down; signal over noise is what is meant and what
 /// gives the 45 to 60 dB band).
 ///
@@ -98,7 +99,7 @@ pub fn snr(frames: &[f32], k: usize) -> Result<Snr, StatsError> {
 }
 
 /// Mean absolute deviation of repeated frames: the mean over channels and frames of
-/// |V_i - E\[V_i]|, in the frames' unit (volts). SPEC §3 reference: 0.5 mV at 32 uA.
+/// |V_i - E\[V_i]|, in the frames' unit (volts). docs/method.md §3 reference: 0.5 mV at 32 uA.
 ///
 /// # Errors
 /// [`StatsError`] for a bad shape, fewer than 2 frames or non-finite values.
@@ -137,6 +138,76 @@ pub fn bvc(v1: &[f32], v0: &[f32]) -> Result<f32, StatsError> {
         })
         .sum();
     Ok(sqrt(sq) as f32)
+}
+
+/// BVC = ||dV|| of a frame difference already formed (dV = V_1 - V_0, V), as
+/// [`bvc`] gives from the two frames.
+#[must_use]
+pub fn bvc_dv(dv: &[f64]) -> f64 {
+    sqrt(dv.iter().map(|v| v * v).sum())
+}
+
+/// Checks that `frames` all have `k` finite values and returns their count.
+fn frame_count<F: AsRef<[T]>, T: Copy + Into<f64>>(
+    frames: &[F],
+    k: usize,
+) -> Result<f64, StatsError> {
+    for f in frames {
+        let f = f.as_ref();
+        if f.len() != k {
+            return Err(StatsError::Shape);
+        }
+        if f.iter().any(|&v| !v.into().is_finite()) {
+            return Err(StatsError::NonFinite);
+        }
+    }
+    Ok(frames.len() as f64)
+}
+
+/// V_0, the reference of difference imaging and of referenced models: the mean of each
+/// channel over `frames` (untouched frames of K values each, V) into `v0` (K values). This
+/// is the one place et averages reference frames.
+///
+/// # Errors
+/// [`StatsError::TooFewFrames`] for no frame, [`StatsError::Shape`] when a frame's length
+/// is not `v0.len()`, [`StatsError::NonFinite`].
+pub fn reference<F: AsRef<[T]>, T: Copy + Into<f64>>(
+    frames: &[F],
+    v0: &mut [f64],
+) -> Result<(), StatsError> {
+    if frames.is_empty() {
+        return Err(StatsError::TooFewFrames { frames: 0 });
+    }
+    let n = frame_count(frames, v0.len())?;
+    for (c, out) in v0.iter_mut().enumerate() {
+        *out = frames.iter().map(|f| f.as_ref()[c].into()).sum::<f64>() / n;
+    }
+    Ok(())
+}
+
+/// The variance of each channel of dV = V_1 - V_0 when V_0 is the mean of `frames`
+/// (untouched, V, [`reference`]) and V_1 one more frame of the same noise: the sample
+/// variance x (1 + 1/n), V^2, into `var` (K values). With fewer than two frames the noise
+/// is unknown and every value is 0.
+///
+/// # Errors
+/// [`StatsError::Shape`] when a frame's length is not `var.len()`, [`StatsError::NonFinite`].
+pub fn dv_variance<F: AsRef<[T]>, T: Copy + Into<f64>>(
+    frames: &[F],
+    var: &mut [f64],
+) -> Result<(), StatsError> {
+    let n = frame_count(frames, var.len())?;
+    if frames.len() < 2 {
+        var.fill(0.0);
+        return Ok(());
+    }
+    for (c, out) in var.iter_mut().enumerate() {
+        let x = |f: &F| -> f64 { f.as_ref()[c].into() };
+        let mean = frames.iter().map(x).sum::<f64>() / n;
+        let ss: f64 = frames.iter().map(|f| (x(f) - mean) * (x(f) - mean)).sum();
+        *out = ss / (n - 1.0) * (1.0 + 1.0 / n);
+    }
+    Ok(())
 }
 
 /// log10 without std: log2 by exponent/mantissa split and a series, good to ~1e-12.
@@ -265,5 +336,32 @@ mod tests {
         let s = snr(&[1.0, 5.0, 1.1, 5.0, 0.9, 5.0], 2).unwrap();
         assert_eq!((s.channels, s.excluded), (1, 1));
         assert!(s.mean_db.is_finite());
+    }
+
+    #[test]
+    fn reference_and_dv_variance_of_known_frames() {
+        let frames: [[f32; 2]; 3] = [[1.0, -2.0], [2.0, -2.0], [3.0, -2.0]];
+        let mut v0 = [0.0; 2];
+        reference(&frames, &mut v0).unwrap();
+        assert_eq!(v0, [2.0, -2.0]);
+        let mut var = [9.0; 2];
+        dv_variance(&frames, &mut var).unwrap();
+        // Sample variance 1 (n - 1 = 2) times (1 + 1/3); the constant channel has none.
+        assert!(
+            (var[0] - 4.0 / 3.0).abs() < 1e-12 && var[1] == 0.0,
+            "{var:?}"
+        );
+        dv_variance(&frames[..1], &mut var).unwrap();
+        assert_eq!(var, [0.0, 0.0]);
+        assert_eq!(
+            reference::<[f32; 2], f32>(&[], &mut v0),
+            Err(StatsError::TooFewFrames { frames: 0 })
+        );
+        assert_eq!(reference(&frames, &mut [0.0; 3]), Err(StatsError::Shape));
+        assert_eq!(
+            reference(&[[f64::NAN, 0.0]], &mut v0),
+            Err(StatsError::NonFinite)
+        );
+        assert!((bvc_dv(&[3.0, -4.0]) - 5.0).abs() < 1e-15);
     }
 }

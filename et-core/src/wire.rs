@@ -45,7 +45,7 @@ pub const FLAG_DROPPED_BEFORE: u8 = 1 << 1;
 /// Frame flag: V_m holds sub-section observations rather than a full-scan median.
 pub const FLAG_SUBSECTION: u8 = 1 << 2;
 
-/// One scan: the frame vector V_m and everything needed to interpret it (DESIGN.md: a frame
+/// One scan: the frame vector V_m and everything needed to interpret it (docs/design.md: a frame
 /// always says which protocol, electrode count and settings produced it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
@@ -94,7 +94,7 @@ impl Frame {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
-    /// The on-chip classifier's answer for frame `seq` (SPEC §9).
+    /// The on-chip classifier's answer for frame `seq` (docs/method.md §9).
     Touch {
         /// The frame classified.
         seq: u32,

@@ -1,5 +1,5 @@
 //! The board: pin map, clocks, the front end and the model storage of the STM32F405 that
-//! drives the mux PCB (SPEC §2), and their QEMU stand-ins.
+//! drives the mux PCB (docs/method.md §2), and their QEMU stand-ins.
 //!
 //! | signal | pin | notes |
 //! | --- | --- | --- |
@@ -18,17 +18,13 @@
 
 use et_core::ScanConfig;
 
-/// Serial link speed, 8N1 (200 000 bytes/s). The busiest configuration the board can run
-/// (L = 16, PP-PP, two measurements per step position, at 78 Hz) needs 66 % of it with its
-/// touch events; the reference adjacent frame 36 %. At 921 600 baud the largest frames did not fit
-/// (`tests/tests/budget.rs`). USB-serial adapters with FT232R, FT232H, CP2102N or CH340 chips
-/// run at 2 Mbaud; USART1's clock (84 MHz) divides to it exactly.
-pub const BAUD: u32 = 2_000_000;
+/// Serial link speed, 8N1: `et_core::board::BAUD` (the host opens the port at the same).
+pub use et_core::board::BAUD;
 
 /// How often a status event goes out, in ms.
 pub const STATUS_PERIOD_MS: u32 = 500;
 
-/// The configuration after reset (SPEC §3's reference point: L = 16, adjacent, 78 Hz).
+/// The configuration after reset (docs/method.md §3's reference point: L = 16, adjacent, 78 Hz).
 pub const DEFAULT_CONFIG: ScanConfig = ScanConfig::REFERENCE;
 
 #[cfg(not(feature = "qemu"))]
@@ -49,7 +45,7 @@ mod real {
     use stm32f4xx_hal::rcc::{Config, Enable, Rcc, Reset};
 
     /// Settling wait after a mux switch, in ns: the buffers and the source settle in about
-    /// 8 us (SPEC §2).
+    /// 8 us (docs/method.md §2).
     pub const MUX_SETTLE_NS: u32 = 8_000;
 
     /// System clock: HSI (16 MHz internal, no crystal needed) through the PLL.

@@ -17,7 +17,7 @@
 //! events are small and go out first when the queue is short of room for a frame.
 //!
 //! The `qemu` feature builds the same application for QEMU's netduinoplus2: internal clock,
-//! model slots in RAM, and the sheet of `qemu_sheet.rs` as the front end (DESIGN.md).
+//! model slots in RAM, and the sheet of `qemu_sheet.rs` as the front end (docs/design.md).
 #![no_std]
 #![no_main]
 
@@ -49,7 +49,7 @@ mod app {
     use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, RxListen as _, Serial, Tx};
     use stm32f4xx_hal::serial::{TxISR as _, TxListen as _};
     // The HAL prelude brings its own fugit extension traits; alias them so they do not clash
-    // with rtic-monotonics' (DESIGN.md, "Known API frictions").
+    // with rtic-monotonics' (the HAL and rtic-monotonics bring two fugit versions).
     use stm32f4xx_hal::prelude::_stm32f4xx_hal_gpio_GpioExt as _;
     use stm32f4xx_hal::time::U32Ext as _;
 
@@ -238,7 +238,7 @@ mod app {
         }
     }
 
-    /// Command packets in, replies out (DESIGN.md: a bad command is refused, the scan goes on).
+    /// Command packets in, replies out (docs/design.md: a bad command is refused, the scan goes on).
     #[task(priority = 2, shared = [device, tx], local = [
         rx_out,
         packets: wire::Accumulator<COMMAND_PACKET_MAX> = wire::Accumulator::new(),

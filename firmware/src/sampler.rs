@@ -3,7 +3,7 @@
 //! and DMA2 stream 0 (channel 0) moves the codes into RAM. One burst of `samples_per_step`
 //! scans per injection; the measurements of that injection are differences of two channels of
 //! the same burst (`et_core::frontend::ParallelBurst`), the reference board's "all channels of
-//! an injection in parallel" (SPEC §2, §3: 16 channels x 62.5 kS/s = 1 MS/s aggregate).
+//! an injection in parallel" (docs/method.md §2, §3: 16 channels x 62.5 kS/s = 1 MS/s aggregate).
 //!
 //! Register-level on purpose: the burst length changes with the configuration, which the
 //! HAL's fixed-size DMA transfers do not allow. Not runnable under QEMU (no ADC there).

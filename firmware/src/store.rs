@@ -1,4 +1,4 @@
-//! Model storage on the board: two slots in the upper half of the flash (DESIGN.md: uploads go
+//! Model storage on the board: two slots in the upper half of the flash (docs/design.md: uploads go
 //! to the slot that is not active, so a failed upload never destroys the working model).
 //!
 //! | slot | sectors | address | size |
@@ -14,8 +14,8 @@ use et_core::device::ModelStore;
 use stm32f4xx_hal::flash::{Error, FlashExt as _};
 use stm32f4xx_hal::pac::FLASH;
 
-/// Bytes per slot.
-pub const SLOT_BYTES: usize = 384 * 1024;
+/// Bytes per slot (`et_core::board::MODEL_SLOT_BYTES`, as the host sizes models).
+pub use et_core::board::MODEL_SLOT_BYTES as SLOT_BYTES;
 /// Offset of slot 0 from the start of flash.
 const SLOT0: usize = 0x4_0000;
 /// First sector of each slot.

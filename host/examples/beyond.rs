@@ -1,27 +1,27 @@
-//! Beyond classes (SPEC §11) on the simulated 13 x 13 cm, 16-electrode sheet: continuous
+//! Beyond classes (docs/method.md §11) on the simulated 13 x 13 cm, 16-electrode sheet: continuous
 //! position and pressure by regression, and telling one touch from two.
 //!
 //! Training: T = 6 visits (electrodes moved 0.5 mm rms between them), 400 presses per visit
 //! anywhere on the sheet (10 mm fingertip, 5 to 60 kPa), 5 sub-section observations each.
 //! Test: a "next day" visit (electrodes moved again) of 400 new presses, one observation each.
 //! Features are referenced (frame minus the visit's untouched frame). The class-based method
-//! uses a 10 x 10 grid collected the SPEC §9 way.
+//! uses a 10 x 10 grid collected the docs/method.md §9 way.
 //!
 //! Run: `cargo run --release -p et-host --example beyond [-- --quick] [--plots DIR]`
 //! (`--plots DIR`: also the error distributions as DIR/position-error-cdf.png.)
 
 use et_core::ScanConfig;
 use et_core::model::ModelKind;
-use et_host::learn::collect::{
+use et_host::plot::{self, Labels, Series};
+use et_learn::collect::{
     Dataset, Plan, collect, collect_presses, grid, random_presses, training_config,
 };
-use et_host::learn::cv::evaluate;
-use et_host::learn::fit::{FitOptions, Fitted, Target};
-use et_host::learn::regress::{
+use et_learn::cv::evaluate;
+use et_learn::fit::{FitOptions, Fitted, Target};
+use et_learn::regress::{
     IntensityByClass, KernelRidge, Ridge, Target3, choose_temperature, posterior_centre,
     sorted_position_errors, summarise,
 };
-use et_host::plot::{self, Labels, Series};
 use et_sim::frontend::FrontendSpec;
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
@@ -180,7 +180,7 @@ fn main() {
             );
         }
     }
-    // Class-based: QDA on a 10 x 10 grid (SPEC §9 collection), referenced.
+    // Class-based: QDA on a 10 x 10 grid (docs/method.md §9 collection), referenced.
     let centres = grid(&spec, 10, 10, 0.0);
     let grid_train = collect(
         &spec,

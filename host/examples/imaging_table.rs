@@ -1,6 +1,6 @@
 //! The speed/accuracy table of imaging: mesh size against forward error, position error (PE)
 //! and set-up time; one-step against iterative Gauss-Newton. 22 cm disc, 16 electrodes,
-//! adjacent protocol, complete electrode model; the touch is SPEC §7's at x = 0.5 (noiseless
+//! adjacent protocol, complete electrode model; the touch is docs/method.md §7's at x = 0.5 (noiseless
 //! frames from the simulator's resistor network, so the reconstruction never sees its own
 //! model's data). The same sweep as `et demo`'s, at larger sizes (reference mesh 128 000
 //! triangles, meshes up to 32 000).

@@ -1,4 +1,4 @@
-//! The serial link to the firmware: packets in, commands out (DESIGN.md, "The data, end to
+//! The serial link to the firmware: packets in, commands out (docs/design.md, "The data, end to
 //! end").
 //!
 //! - [`Decoder`] turns a byte stream into [`Uplink`] messages with the resynchronising
@@ -26,8 +26,6 @@ use et_core::wire::{
 };
 use serde::Serialize;
 
-/// The firmware's baud rate (`firmware/src/board.rs`).
-pub const DEFAULT_BAUD: u32 = 2_000_000;
 /// How often the reader tries to reopen a port that failed.
 pub const RECONNECT_EVERY: Duration = Duration::from_millis(200);
 /// How long one read waits before the reader checks whether it should stop.

@@ -8,6 +8,12 @@ use std::sync::OnceLock;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
+mod learning;
+mod sheet;
+
+pub use learning::{confusion, error_vs_distance};
+pub use sheet::sheet_image;
+
 /// Why a plot could not be written.
 #[derive(Debug)]
 pub struct PlotError {

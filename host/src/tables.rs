@@ -14,7 +14,7 @@ pub struct InjectionRow {
     pub source: u8,
     /// Electrode connected to ground.
     pub sink: u8,
-    /// The 10-line mux control word (SPEC §2), absent when an electrode is past 15.
+    /// The 10-line mux control word (docs/method.md §2), absent when an electrode is past 15.
     pub mux_word: Option<u16>,
     /// Bit c set = candidate measurement c is kept (see `et_core::protocol::Protocol::candidates`).
     pub selection_mask: u64,
@@ -38,7 +38,7 @@ pub struct ProtocolTables {
     /// Frame length K.
     #[serde(rename = "K")]
     pub frame_len: usize,
-    /// Feature count with reciprocity halving (the classifier's p, SPEC §9).
+    /// Feature count with reciprocity halving (the classifier's p, docs/method.md §9).
     pub p_halved: usize,
     /// Feature count without halving (= K).
     pub p_full: usize,

@@ -338,7 +338,7 @@ fn collect_train_eval_export_chain() {
         "--out",
         &s(&model),
     ]);
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("use qda or lda"));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("[possible values: qda, lda]"));
     let bad = et(&[
         "collect",
         "--scene",

@@ -1,4 +1,4 @@
-//! Calibrates the simulated front end's noise to the reference hardware (SPEC §3): the
+//! Calibrates the simulated front end's noise to the reference hardware (docs/method.md §3): the
 //! adjacent protocol on the 13 x 13 cm, 16-electrode sheet reads about 55 dB SNR and 0.5 mV
 //! MAD at 32 uA, and 49 dB and 0.4 mV at 10 uA.
 //!

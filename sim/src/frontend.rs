@@ -1,4 +1,4 @@
-//! The simulated acquisition chain (SPEC §2-3), as an [`et_core::Frontend`]: the real scan
+//! The simulated acquisition chain (docs/method.md §2-3), as an [`et_core::Frontend`]: the real scan
 //! engine runs against it sample by sample.
 //!
 //! Per step: the Howland source drives the injection (its current jitters a little from one
@@ -64,7 +64,7 @@ impl Default for FrontendSpec {
 
 /// Calibrated white noise per sample, V rms: with [`CALIBRATED_CURRENT_NOISE`] and
 /// [`CALIBRATED_MAINS_V`] the adjacent protocol on the 13 x 13 cm, 16-electrode sheet shows
-/// the reference MAD of 0.50 mV at 32 uA and 0.40 mV at 10 uA (SPEC §3). Fitted by
+/// the reference MAD of 0.50 mV at 32 uA and 0.40 mV at 10 uA (docs/method.md §3). Fitted by
 /// `cargo run --release -p et-sim --example calibrate`; checked by the `calibration` test.
 pub const CALIBRATED_WHITE_NOISE_V: f64 = 1.7e-3;
 /// Calibrated relative current jitter between injections (see [`CALIBRATED_WHITE_NOISE_V`]).

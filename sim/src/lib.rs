@@ -13,6 +13,8 @@
 //! - [`frontend`]: the acquisition chain as an `et_core::Frontend` (current jitter, settling,
 //!   noise, gain, ADC), and the fast path for whole noisy frames.
 //! - [`scene`]: scene files (TOML) and the runner that turns them into frames with their truth.
+//! - [`still`]: a still scene's frames (V_0, the noise of dV, one touched frame), as imaging
+//!   uses them.
 //! - [`emulated`]: the tables of the sheet compiled into the firmware's QEMU image.
 //! - [`rng`]: the seedable generator that makes every run reproducible.
 //!
@@ -28,4 +30,5 @@ pub mod rng;
 pub mod scene;
 pub mod shape;
 pub mod sheet;
+pub mod still;
 pub mod touch;

@@ -1,4 +1,4 @@
-//! The sheet as a resistor network (SPEC §1: "a fine resistor network is a faithful model").
+//! The sheet as a resistor network (docs/method.md §1: "a fine resistor network is a faithful model").
 //!
 //! Nodes sit on a rectangular grid (spacing hx, hy) inside the outline. Neighbouring nodes are
 //! joined by a resistor whose conductance is the sheet conductance 1/R_s times the length of

@@ -1,8 +1,8 @@
-//! Scenes: a TOML file that says everything the simulator needs (DESIGN.md, "Scenes"): the
+//! Scenes: a TOML file that says everything the simulator needs (docs/design.md, "Scenes"): the
 //! sheet and its electrodes, the scan settings, the front end, touches over time, and a seed.
 //! Every table refuses unknown keys, so a typo is an error naming the key, not a silent
-//! default. See `sim/scenes/*.toml` for examples of every geometry of SPEC §1 and the
-//! reference scenarios of SPEC §7.
+//! default. See `sim/scenes/*.toml` for examples of every geometry of docs/method.md §1 and the
+//! reference scenarios of docs/method.md §7.
 //!
 //! A scene costs what it asks for: the grid follows the sheet's size and electrodes (see
 //! [`SheetSpec::default_resolution`]), and nothing is simulated that the scene does not name.
@@ -39,7 +39,7 @@ pub struct ScanSpec {
 }
 
 impl Default for ScanSpec {
-    /// The reference operating point of SPEC §3.
+    /// The reference operating point of docs/method.md §3.
     fn default() -> Self {
         let r = ScanConfig::REFERENCE;
         Self {

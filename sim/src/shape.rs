@@ -1,4 +1,4 @@
-//! Sheet outlines (SPEC §1): disc, rectangle, any simple polygon. Lengths in metres, the
+//! Sheet outlines (docs/method.md §1): disc, rectangle, any simple polygon. Lengths in metres, the
 //! origin at the sheet's centre for the disc and rectangle.
 
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,5 @@
 //! A sheet with its electrodes, ready to answer "what do the electrodes read for this touch
-//! state?" (SPEC §1-2), noiselessly. Noise, the ADC and timing are [`crate::frontend`]'s.
+//! state?" (docs/method.md §1-2), noiselessly. Noise, the ADC and timing are [`crate::frontend`]'s.
 
 use et_core::protocol::Protocol;
 use serde::{Deserialize, Serialize};
@@ -9,7 +9,7 @@ use crate::network::{Grid, Network, NetworkError, Transfer, place_contacts};
 use crate::shape::{Shape, ShapeError};
 use crate::touch::{Inclusion, Piezo, Touch, edge_multipliers};
 
-/// Default sheet resistance of the PPy fabric, ohm per square (SPEC §1).
+/// Default sheet resistance of the PPy fabric, ohm per square (docs/method.md §1).
 pub const SHEET_RESISTANCE: f64 = 30e3;
 
 /// Where the electrodes are and how they touch the fabric.
@@ -72,7 +72,7 @@ pub struct SheetSpec {
     /// Pressure to conductance.
     #[serde(default)]
     pub piezo: Piezo,
-    /// The sheet bent over a cylinder (SPEC §1: a 3 cm radius).
+    /// The sheet bent over a cylinder (docs/method.md §1: a 3 cm radius).
     #[serde(default)]
     pub bend: Option<Bend>,
 }
@@ -99,7 +99,7 @@ pub struct Bend {
     pub radius: f64,
     /// The direction in which the sheet curves.
     pub curves: Axis,
-    /// Fabric thickness, m (SPEC §1: 0.38 mm).
+    /// Fabric thickness, m (docs/method.md §1: 0.38 mm).
     #[serde(default = "default_thickness")]
     pub thickness: f64,
     /// Relative resistance change per unit strain.
@@ -411,7 +411,7 @@ pub fn direct_transfer(
         .map_err(SheetError::Network)
 }
 
-/// The current source of SPEC §2: a Howland pump that delivers its set current only while
+/// The current source of docs/method.md §2: a Howland pump that delivers its set current only while
 /// the load stays below its compliance, V_out_max / (2 I); beyond, the current falls to
 /// V_out_max / (2 R_load).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -424,7 +424,7 @@ pub struct Source {
 }
 
 impl Default for Source {
-    /// 16 V supply (SPEC §2: 10 mW at 32 uA / 16 V), ADG1606 at 4.5 ohm.
+    /// 16 V supply (docs/method.md §2: 10 mW at 32 uA / 16 V), ADG1606 at 4.5 ohm.
     fn default() -> Self {
         Self {
             v_out_max: 16.0,

@@ -1,4 +1,4 @@
-//! Touches (SPEC §1): pressing the fabric raises its local conductance, non-linearly in the
+//! Touches (docs/method.md §1): pressing the fabric raises its local conductance, non-linearly in the
 //! pressure.
 //!
 //! A touch is a disc of contact (centre, radius) at a pressure. The piezoresistive law maps
@@ -16,7 +16,7 @@ use crate::network::Grid;
 pub struct Touch {
     /// Centre `[x, y]`, m.
     pub position: [f64; 2],
-    /// Contact radius, m (a fingertip: 5 to 8 mm; SPEC §7's target of 1.46 % of a 22 cm disc:
+    /// Contact radius, m (a fingertip: 5 to 8 mm; docs/method.md §7's target of 1.46 % of a 22 cm disc:
     /// 13 mm).
     pub radius: f64,
     /// Contact pressure, Pa (gentle: below 10 kPa; medium: 10 to 100 kPa).

@@ -1,36 +1,17 @@
-//! The serial link budget (DESIGN.md, "Link budget"): every configuration the board supports
+//! The serial link budget (docs/design.md, "Link budget"): every configuration the board supports
 //! (L = 4 to 16 electrodes, every protocol including every general pattern, at the reference
 //! timing of 78 Hz at L = 16 or faster at fewer electrodes) fits the firmware's baud rate with
-//! at least 20 % to spare, and the host opens the port at the firmware's rate.
+//! at least 20 % to spare, at the one rate firmware and host share (`et_core::board::BAUD`).
 
 use et_core::ScanConfig;
+use et_core::board::BAUD;
 use et_core::device::FEATURES_MAX;
 use et_core::model::{ModelKind, Precision, model_len};
 use et_core::protocol::{L_MIN, Pattern, ProtocolKind, SkipSet};
 use et_core::wire::link_load;
-use et_host::link::DEFAULT_BAUD;
 
-/// The board's mux is 16:1 (SPEC §2).
+/// The board's mux is 16:1 (docs/method.md §2).
 const BOARD_ELECTRODES_MAX: u8 = 16;
-
-/// The value of `pub const NAME: TYPE = A * B ...;` in a firmware source file: the firmware is
-/// its own workspace, so its constants are read from the source.
-fn firmware_const(file: &str, declaration: &str) -> usize {
-    let path = format!("{}/../firmware/src/{file}", env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(&path).unwrap();
-    let line = text
-        .lines()
-        .find_map(|l| l.strip_prefix(declaration))
-        .unwrap_or_else(|| panic!("{path} defines `{declaration}`"));
-    line.trim_end_matches(';')
-        .split('*')
-        .map(|f| f.trim().replace('_', "").parse::<usize>().unwrap())
-        .product()
-}
-
-fn firmware_baud() -> u32 {
-    firmware_const("board.rs", "pub const BAUD: u32 = ") as u32
-}
 
 fn every_protocol(l: u8) -> Vec<ProtocolKind> {
     let mut kinds = vec![
@@ -55,11 +36,8 @@ fn every_protocol(l: u8) -> Vec<ProtocolKind> {
 
 #[test]
 fn every_supported_configuration_fits_the_link_with_margin() {
-    let baud = firmware_baud();
-    assert_eq!(
-        baud, DEFAULT_BAUD,
-        "host and firmware must agree on the rate"
-    );
+    // The firmware configures its USART from `et_core::board::BAUD`, the host opens ports at it.
+    let baud = BAUD;
     let mut worst = (0.0f32, ProtocolKind::Adjacent, 0u8);
     let mut checked = 0;
     for l in (L_MIN..=BOARD_ELECTRODES_MAX).step_by(2) {
@@ -105,9 +83,7 @@ fn worst_config(protocol: ProtocolKind, electrodes: u8) -> ScanConfig {
     }
 }
 
-/// Bytes of one model slot in the board's flash (`firmware/src/store.rs`), as the host
-/// checks models against it.
-const SLOT_BYTES: usize = et_host::learn::pipeline::MODEL_SLOT_BYTES;
+use et_core::board::MODEL_SLOT_BYTES as SLOT_BYTES;
 
 /// The most features a model of `classes` classes can use and still fit a flash slot (and the
 /// device's evaluation limit).
@@ -120,11 +96,6 @@ fn largest_p(kind: ModelKind, precision: Precision, classes: usize) -> usize {
 
 #[test]
 fn largest_models_that_fit_a_flash_slot() {
-    let slot = firmware_slot_bytes();
-    assert_eq!(
-        slot, SLOT_BYTES,
-        "firmware/src/store.rs changed its slot size"
-    );
     for classes in [49, 100] {
         for (kind, precision) in [
             (ModelKind::Qda, Precision::F32),
@@ -142,10 +113,6 @@ fn largest_models_that_fit_a_flash_slot() {
     }
     // The README's 100-class QDA with 48 Fisher-ranked features in f16 (95.2 % next-day) fits.
     assert!(model_len(ModelKind::Qda, Precision::F16, 100, 48) <= SLOT_BYTES);
-    // The full-covariance QDA of DESIGN.md (49 classes, p = 96, f32) does not fit a slot.
+    // The full-covariance QDA of docs/design.md (49 classes, p = 96, f32) does not fit a slot.
     assert!(model_len(ModelKind::Qda, Precision::F32, 49, 96) > SLOT_BYTES);
-}
-
-fn firmware_slot_bytes() -> usize {
-    firmware_const("store.rs", "pub const SLOT_BYTES: usize = ")
 }

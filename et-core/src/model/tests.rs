@@ -1,6 +1,6 @@
 //! Model blob and discriminant tests. The blob is built from an f64 fit done here (Cholesky
 //! route, as a trainer would); the reference discriminants are computed independently (Gauss-
-//! Jordan inverse and LU determinant in f64), straight from SPEC §9's formulas.
+//! Jordan inverse and LU determinant in f64), straight from docs/method.md §9's formulas.
 
 use super::*;
 use crate::protocol::Halving;
@@ -584,7 +584,7 @@ fn f16_storage_halves_the_size_and_keeps_the_decisions() {
 
 #[test]
 fn sizes_of_the_reference_models() {
-    // DESIGN.md: a full-covariance QDA for 49 classes at p = 96 in f32 is about 0.93 MB.
+    // docs/design.md: a full-covariance QDA for 49 classes at p = 96 in f32 is about 0.93 MB.
     let qda49 = model_len(ModelKind::Qda, Precision::F32, 49, 96);
     assert!((930_000..935_000).contains(&qda49), "{qda49}");
     assert!(model_len(ModelKind::Qda, Precision::F16, 49, 96) < 470_000);

@@ -1,3 +1,4 @@
+use super::report::civil_date;
 use super::*;
 
 #[test]
@@ -75,14 +76,14 @@ fn the_quick_demo_writes_a_complete_report() {
         }
     }
     // The x = 0.75 target, imaged with adjacent (the protocol for a touch near the
-    // boundary, SPEC §8), is found within its radius.
+    // boundary, docs/method.md §8), is found within its radius.
     let near = images
         .iter()
         .find(|im| im["scene"] == "disc-ref-x075" && im["protocol"] == "adjacent")
         .unwrap();
     assert_eq!(near["found_within_radius"][0], true, "{near}");
 
-    // Every single touch is found within its radius by the protocol SPEC §8 picks for it
+    // Every single touch is found within its radius by the protocol docs/method.md §8 picks for it
     // from the adjacent image (adjacent near the edge, pseudo-polar towards the centre).
     let chosen = &on_disk["imaging"]["single_touches_found_with_chosen_protocol"];
     assert_eq!(chosen, &serde_json::json!([4, 4]));

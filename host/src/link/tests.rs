@@ -172,7 +172,7 @@ fn commands_get_their_replies_over_a_pty() {
     let dir = temp_dir("commands");
     let (master, path) = cable(&dir);
     let device = FakeDevice::start(master);
-    let mut link = Link::open(path.to_str().unwrap(), DEFAULT_BAUD).unwrap();
+    let mut link = Link::open(path.to_str().unwrap(), et_core::board::BAUD).unwrap();
     let t = Duration::from_secs(2);
     assert_eq!(
         link.request(&Command::Ping { nonce: 42 }, t).unwrap(),
@@ -228,7 +228,7 @@ fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
     let dir = temp_dir("pulled");
     let (master, path) = cable(&dir);
     let device = FakeDevice::start(master);
-    let mut link = Link::open(path.to_str().unwrap(), DEFAULT_BAUD).unwrap();
+    let mut link = Link::open(path.to_str().unwrap(), et_core::board::BAUD).unwrap();
     let t = Duration::from_secs(2);
     link.request(&Command::Start, t).unwrap();
     let before = frames(&mut link, 10);

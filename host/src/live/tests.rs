@@ -171,7 +171,7 @@ fn the_monitor_counts_gaps_and_measures_snr() {
 /// switched to the model's configuration, and every class centre pressed comes out as its class.
 #[test]
 fn a_trained_model_classifies_live_presses() {
-    use crate::learn::{collect, pipeline};
+    use et_learn::{collect, pipeline};
     let scene = default_scene().unwrap();
     let config = collect::training_config(scene.scan_config().unwrap());
     let centres = collect::grid(&scene.sheet, 3, 3, 0.0);

@@ -83,7 +83,7 @@ fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
     let mut h = harness(sim_options());
     h.get_by_label("automatic").click();
     settle(&mut h);
-    // A press in the middle of the sheet (SPEC §8: central, switch to PP).
+    // A press in the middle of the sheet (docs/method.md §8: central, switch to PP).
     h.state_mut().press(vec![Touch {
         position: [0.005, 0.0],
         radius: 0.0075,
@@ -289,7 +289,7 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
     // The wizard scans the opposite protocol, as the model expects: press each cell and
     // the class grid lights that cell.
     let sheet = crate::live::default_scene().unwrap().sheet;
-    let centres = crate::learn::collect::grid(&sheet, 2, 2, 0.0);
+    let centres = et_learn::collect::grid(&sheet, 2, 2, 0.0);
     for (c, centre) in centres.iter().enumerate() {
         h.state_mut().press(vec![Touch {
             position: *centre,

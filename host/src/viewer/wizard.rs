@@ -1,10 +1,10 @@
-//! The training wizard: SPEC §9's collection done by hand, one cell at a time.
+//! The training wizard: docs/method.md §9's collection done by hand, one cell at a time.
 //!
 //! Setup (grid, visits, frames per press) → for each visit: V_0 of the untouched sheet, then
 //! each cell pressed in turn (the simulator can press for you) while its frames are recorded →
 //! QDA trained on referenced frames with the shrinkage chosen by leave-one-visit-out →
 //! cross-validated accuracy and confusion → the model used here, saved, or sent to the board.
-//! Frames are taken with the opposite protocol, whose independent voltages are SPEC §9's
+//! Frames are taken with the opposite protocol, whose independent voltages are docs/method.md §9's
 //! features.
 
 use std::path::PathBuf;
@@ -17,11 +17,12 @@ use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 
-use crate::learn::collect::{self, Dataset};
-use crate::learn::cv::Confusion;
-use crate::learn::model_file::ModelFile;
-use crate::learn::pipeline::{self, MODEL_SLOT_BYTES, TrainOptions};
 use crate::live::{Output, Processor, Source};
+use et_core::board::MODEL_SLOT_BYTES;
+use et_learn::collect::{self, Dataset};
+use et_learn::cv::Confusion;
+use et_learn::model_file::ModelFile;
+use et_learn::pipeline::{self, TrainOptions};
 
 /// What the wizard asks of the viewer.
 #[derive(Clone, Debug, PartialEq)]

@@ -192,7 +192,7 @@ fn measured(fe: &mut SimFrontend, current_na: u32, n: usize) -> (f32, f32) {
 
 #[test]
 fn calibration_reproduces_the_reference_noise() {
-    // SPEC §3: 0.5 mV MAD at 32 uA, 0.4 mV at 10 uA, adjacent protocol, reference scan
+    // docs/method.md §3: 0.5 mV MAD at 32 uA, 0.4 mV at 10 uA, adjacent protocol, reference scan
     // settings, on the default 13 x 13 cm 16-electrode sheet, through the sample-level path.
     let mut fe = SimFrontend::new(sheet(None), FrontendSpec::default(), 11).unwrap();
     let (mad32, snr32) = measured(&mut fe, 32_000, 200);

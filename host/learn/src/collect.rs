@@ -1,0 +1,397 @@
+//! The data-collection procedure of docs/method.md §9 (Algorithms 2-3), on the simulator.
+//!
+//! The sheet is divided into a grid of classes. The grid is visited T times; at each visit
+//! every class is pressed for S_num scans while the pressure is varied by hand (a random
+//! pressure per scan between `pressure_pa`), the finger landing a little off the class centre
+//! (`placement_mm`). Each scan's kept samples are cut into S_sub sub-sections whose medians
+//! each give one observation, so a class collects n_c = T S_num S_sub observations. The
+//! features are the frame values named by `feature_index` (the opposite protocol's
+//! reciprocity-halved set by default: p = L (L - 4) / 2).
+
+use std::sync::Arc;
+
+use et_core::extract::Extracted;
+use et_core::protocol::Halving;
+use et_core::{ScanConfig, Scanner};
+use et_sim::frontend::{FrontendSpec, SimFrontend};
+use et_sim::rng::Rng;
+use et_sim::sheet::{Sheet, SheetSpec};
+use et_sim::touch::Touch;
+use nalgebra::DMatrix;
+
+/// A labelled set of observations.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    /// n x p features (volts).
+    pub x: DMatrix<f64>,
+    /// Class of each observation.
+    pub y: Vec<u16>,
+    /// Where the finger really was for each observation, m.
+    pub positions: Vec<[f64; 2]>,
+    /// Pressure of each observation's touch, Pa (empty when not known).
+    pub pressure: Vec<f64>,
+    /// Nominal electrode centres on the sheet, m (empty when not known).
+    pub electrodes: Vec<[f64; 2]>,
+    /// Class centres, m.
+    pub centres: Vec<[f64; 2]>,
+    /// Visit of each observation (0..T): observations of one visit share the electrodes'
+    /// positions, so cross-validation that must generalise across sessions folds by visit.
+    pub visit: Vec<u16>,
+    /// Frame index of each feature.
+    pub feature_index: Vec<u16>,
+    /// T x p: each visit's untouched frame (features, volts; the mean of one scan's
+    /// sub-section medians, taken when the sheet is put down, before any press).
+    pub baselines: DMatrix<f64>,
+    /// The scan settings.
+    pub config: ScanConfig,
+}
+
+impl Dataset {
+    /// Visits T (one more than the largest visit number; 0 when empty).
+    #[must_use]
+    pub fn visits(&self) -> usize {
+        self.visit
+            .iter()
+            .map(|&v| usize::from(v) + 1)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Whether every visit has its untouched frame, so referenced features exist.
+    #[must_use]
+    pub fn has_untouched(&self) -> bool {
+        self.baselines.nrows() >= self.visits() && self.baselines.ncols() == self.x.ncols()
+    }
+
+    /// The features a model trains on: `x` as measured, or (`referenced`) each observation
+    /// minus its visit's untouched frame (V_m - V_0, see `et_core::model`).
+    ///
+    /// # Errors
+    /// A message when `referenced` is asked of a dataset without untouched frames.
+    pub fn features(&self, referenced: bool) -> Result<DMatrix<f64>, String> {
+        if !referenced {
+            return Ok(self.x.clone());
+        }
+        if !self.has_untouched() {
+            return Err(format!(
+                "referenced features need an untouched frame per visit: {} visits, {} untouched frames",
+                self.visits(),
+                self.baselines.nrows()
+            ));
+        }
+        Ok(DMatrix::from_fn(self.x.nrows(), self.x.ncols(), |r, j| {
+            self.x[(r, j)] - self.baselines[(usize::from(self.visit[r]), j)]
+        }))
+    }
+
+    /// Appends `other` (same features) as further visits: its visit numbers and untouched
+    /// frames follow this set's.
+    ///
+    /// # Errors
+    /// A message when the feature sets differ.
+    pub fn append(&mut self, other: Dataset) -> Result<(), String> {
+        if other.feature_index != self.feature_index {
+            return Err("datasets with different features".into());
+        }
+        let shift = self.visits() as u16;
+        let stack = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
+            DMatrix::from_fn(a.nrows() + b.nrows(), a.ncols(), |r, c| {
+                if r < a.nrows() {
+                    a[(r, c)]
+                } else {
+                    b[(r - a.nrows(), c)]
+                }
+            })
+        };
+        self.x = stack(&self.x, &other.x);
+        self.baselines = stack(&self.baselines, &other.baselines);
+        self.y.extend(other.y);
+        self.positions.extend(other.positions);
+        self.pressure.extend(other.pressure);
+        self.visit.extend(other.visit.iter().map(|v| v + shift));
+        Ok(())
+    }
+}
+
+/// Class centres on a rows x cols grid over the sheet's bounding box, inset by `margin` m
+/// (cell centres, row-major from the lower left).
+#[must_use]
+pub fn grid(spec: &SheetSpec, rows: usize, cols: usize, margin: f64) -> Vec<[f64; 2]> {
+    let [x0, y0, x1, y1] = spec.shape.bounds();
+    let (w, h) = (
+        (x1 - x0 - 2.0 * margin) / cols as f64,
+        (y1 - y0 - 2.0 * margin) / rows as f64,
+    );
+    (0..rows)
+        .flat_map(|r| {
+            (0..cols).map(move |c| {
+                [
+                    x0 + margin + (c as f64 + 0.5) * w,
+                    y0 + margin + (r as f64 + 0.5) * h,
+                ]
+            })
+        })
+        .filter(|p| spec.shape.contains(*p, 0.0))
+        .collect()
+}
+
+/// The scan settings of docs/method.md §9's training scans, on top of `base` (electrodes, current,
+/// gain): the opposite protocol, S = 3 200 samples per scan at 10 kHz (3 200 / L per step, a
+/// fifth of each dropped as settling).
+#[must_use]
+pub fn training_config(base: ScanConfig) -> ScanConfig {
+    let samples = (3_200 / u16::from(base.electrodes.max(1))).max(2);
+    ScanConfig {
+        protocol: et_core::ProtocolKind::Opposite,
+        samples_per_step: samples,
+        settle_samples: samples / 5,
+        sample_rate_hz: 10_000,
+        ..base
+    }
+}
+
+/// How to collect.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// T: visits of the whole grid.
+    pub visits: usize,
+    /// S_num: scans per class per visit.
+    pub scans: usize,
+    /// S_sub: observations per scan.
+    pub subsections: usize,
+    /// Pressure range while pressing, Pa (docs/method.md §9: from below 10 kPa up).
+    pub pressure_pa: (f64, f64),
+    /// Finger radius, m.
+    pub radius: f64,
+    /// Rms landing error around the class centre, m.
+    pub placement: f64,
+    /// Rms electrode movement along the outline, m (frameless sheets): drawn anew at every
+    /// visit, since the sheet is handled between visits.
+    pub electrode_movement: f64,
+    /// Electrode poses per visit: each press finds the electrodes in one of `poses` positions
+    /// (drawn once per visit around the visit's positions), since pressing a frameless sheet
+    /// pulls on its clips. 1 = the electrodes stay put within a visit.
+    pub poses: usize,
+    /// Rms movement of each pose around the visit's electrode positions, m.
+    pub press_movement: f64,
+    /// Seed of the session (electrode movement, placement, pressure, noise).
+    pub seed: u64,
+}
+
+impl Default for Plan {
+    /// docs/method.md §9's collection: T = 6 visits x S_num = 20 scans x S_sub = 20 observations,
+    /// pressed from 5 to 60 kPa with a 7.5 mm finger landing within 2 mm rms, electrodes
+    /// moving 0.5 mm rms between visits and staying put within one; seed 1.
+    fn default() -> Self {
+        Self {
+            visits: 6,
+            scans: 20,
+            subsections: 20,
+            pressure_pa: (5e3, 60e3),
+            radius: 0.0075,
+            placement: 0.002,
+            electrode_movement: 0.0005,
+            poses: 1,
+            press_movement: 0.0,
+            seed: 1,
+        }
+    }
+}
+
+/// Why collection failed.
+pub type CollectError = String;
+
+/// One press of the sheet: its label and its touches (the first touch's position and
+/// pressure are what the dataset records).
+#[derive(Clone, Debug)]
+pub struct Press {
+    /// Class (or, for touch-count sets, the number of touches).
+    pub label: u16,
+    /// The touches, at least one.
+    pub touches: Vec<Touch>,
+}
+
+/// Runs the procedure on a simulated sheet. Every visit draws its own electrode positions from
+/// `plan.seed`, so a second call with another seed is a "next day" test set.
+///
+/// # Errors
+/// A message if the sheet cannot be built or a scan fails.
+pub fn collect(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+) -> Result<Dataset, CollectError> {
+    let grid_visit = |rng: &mut Rng| {
+        let mut presses = Vec::with_capacity(centres.len() * plan.scans);
+        for (c, centre) in centres.iter().enumerate() {
+            for _ in 0..plan.scans {
+                let position = [
+                    centre[0] + plan.placement * rng.normal(),
+                    centre[1] + plan.placement * rng.normal(),
+                ];
+                let (lo, hi) = plan.pressure_pa;
+                presses.push(Press {
+                    label: c as u16,
+                    touches: vec![Touch {
+                        position,
+                        radius: plan.radius,
+                        pressure: lo + (hi - lo) * rng.uniform(),
+                    }],
+                });
+            }
+        }
+        presses
+    };
+    collect_presses(spec, frontend, config, centres, plan, grid_visit)
+}
+
+/// `count` presses of `touches` fingers each, anywhere on the sheet (uniform over the outline
+/// kept `plan.radius` inside it), pressure uniform in `plan.pressure_pa`; labelled with the
+/// number of touches. For regression (continuous position, pressure) and touch counting.
+pub fn random_presses(
+    spec: &SheetSpec,
+    plan: &Plan,
+    count: usize,
+    touches: usize,
+) -> impl FnMut(&mut Rng) -> Vec<Press> {
+    let shape = spec.shape.clone();
+    let [x0, y0, x1, y1] = shape.bounds();
+    let (radius, (lo, hi)) = (plan.radius, plan.pressure_pa);
+    move |rng: &mut Rng| {
+        (0..count)
+            .map(|_| Press {
+                label: touches as u16,
+                touches: (0..touches)
+                    .map(|_| {
+                        let position = loop {
+                            let p = [
+                                x0 + (x1 - x0) * rng.uniform(),
+                                y0 + (y1 - y0) * rng.uniform(),
+                            ];
+                            if shape.contains(p, radius) {
+                                break p;
+                            }
+                        };
+                        Touch {
+                            position,
+                            radius,
+                            pressure: lo + (hi - lo) * rng.uniform(),
+                        }
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// The collection loop under [`collect`]: `plan.visits` visits (electrodes moved by
+/// `plan.electrode_movement`, an untouched frame first, then the presses `visit` draws, each
+/// scanned into `plan.subsections` observations, in one of `plan.poses` electrode poses).
+///
+/// # Errors
+/// A message if the sheet cannot be built or a scan fails.
+pub fn collect_presses(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
+) -> Result<Dataset, CollectError> {
+    let protocol = config.validate().map_err(|e| e.to_string())?;
+    let feature_index: Vec<u16> = protocol
+        .features(Halving::Reciprocity)
+        .map(|k| k as u16)
+        .collect();
+    let mut rng = Rng::new(plan.seed);
+    let k = protocol.frame_len();
+    let s_sub = plan.subsections;
+    let mut burst = vec![0u16; usize::from(config.samples_per_step)];
+    let mut scratch = vec![
+        Extracted {
+            median_code: 0.0,
+            rail_samples: 0
+        };
+        s_sub
+    ];
+    let mut obs = vec![0.0f32; s_sub * k];
+    let (mut rows, mut y, mut positions, mut visit, mut baselines, mut pressures) = (
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+    );
+    for v in 0..plan.visits {
+        // A frameless sheet is handled between visits: its electrodes sit somewhere else
+        // within their movement each time.
+        let offsets: Vec<f64> = (0..spec.electrodes.count)
+            .map(|_| plan.electrode_movement * rng.normal())
+            .collect();
+        let sheet = Arc::new(Sheet::new(spec, &offsets).map_err(|e| e.to_string())?);
+        let mut fe =
+            SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
+        let scanner = Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+        // The untouched frame, as the sheet lies before the first press.
+        scanner
+            .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
+            .map_err(|e| e.to_string())?;
+        baselines.extend(feature_index.iter().map(|&i| {
+            obs.chunks(k)
+                .map(|o| f64::from(o[usize::from(i)]))
+                .sum::<f64>()
+                / s_sub as f64
+        }));
+        let mut poses = vec![fe];
+        for _ in 1..plan.poses {
+            let moved: Vec<f64> = offsets
+                .iter()
+                .map(|o| o + plan.press_movement * rng.normal())
+                .collect();
+            let sheet = Arc::new(Sheet::new(spec, &moved).map_err(|e| e.to_string())?);
+            let mut fe =
+                SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
+            Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+            poses.push(fe);
+        }
+        for press in visit_presses(&mut rng) {
+            let Some(first) = press.touches.first().copied() else {
+                return Err("a press without touches".into());
+            };
+            let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
+            let fe = &mut poses[pose];
+            fe.set_touches(&press.touches).map_err(|e| e.to_string())?;
+            scanner
+                .scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)
+                .map_err(|e| e.to_string())?;
+            for o in obs.chunks(k) {
+                rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
+                y.push(press.label);
+                positions.push(first.position);
+                pressures.push(first.pressure);
+                visit.push(v as u16);
+            }
+        }
+    }
+    let x = DMatrix::from_row_slice(y.len(), feature_index.len(), &rows);
+    Ok(Dataset {
+        x,
+        y,
+        positions,
+        pressure: pressures,
+        electrodes: spec
+            .electrodes
+            .arc_positions()
+            .iter()
+            .map(|&t| spec.shape.boundary_point(t))
+            .collect(),
+        centres: centres.to_vec(),
+        visit,
+        baselines: DMatrix::from_row_slice(plan.visits, feature_index.len(), &baselines),
+        feature_index,
+        config,
+    })
+}

@@ -1,0 +1,273 @@
+//! Evaluation (docs/method.md §9): stratified k-fold cross-validation, the confusion matrix, accuracy,
+//! the average Euclidean error AEE [5.9-5.11] and the plain mean position error.
+
+use nalgebra::DMatrix;
+
+use super::fit::{FitError, FitOptions, Fitted};
+
+/// Counts of (true class, predicted class).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Confusion {
+    /// Class count C.
+    pub classes: usize,
+    /// `counts[t * C + p]`: observations of true class t predicted as p.
+    pub counts: Vec<u32>,
+}
+
+impl Confusion {
+    /// An empty C x C matrix.
+    #[must_use]
+    pub fn new(classes: usize) -> Self {
+        Self {
+            classes,
+            counts: vec![0; classes * classes],
+        }
+    }
+
+    /// Counts one prediction.
+    pub fn add(&mut self, truth: u16, predicted: u16) {
+        self.counts[usize::from(truth) * self.classes + usize::from(predicted)] += 1;
+    }
+
+    /// Adds another matrix's counts (same class count).
+    ///
+    /// # Panics
+    /// If the class counts differ.
+    pub fn merge(&mut self, other: &Confusion) {
+        assert_eq!(
+            self.classes, other.classes,
+            "confusion matrices of different sizes"
+        );
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            *a += b;
+        }
+    }
+
+    /// Observations counted.
+    #[must_use]
+    pub fn total(&self) -> u32 {
+        self.counts.iter().sum()
+    }
+
+    /// Fraction predicted right.
+    #[must_use]
+    pub fn accuracy(&self) -> f64 {
+        let right: u32 = (0..self.classes)
+            .map(|c| self.counts[c * self.classes + c])
+            .sum();
+        f64::from(right) / f64::from(self.total().max(1))
+    }
+
+    /// AEE [5.10-5.11]: for each true class tr, EE_tr = sum over predicted c != tr of
+    /// d(tr, c) n_pred(c); AEE = sum_tr EE_tr / C. Units of `positions` (mm).
+    #[must_use]
+    pub fn aee(&self, positions: &[[f64; 2]]) -> f64 {
+        let c_n = self.classes;
+        let ee: f64 = (0..c_n)
+            .map(|tr| {
+                (0..c_n)
+                    .filter(|&c| c != tr)
+                    .map(|c| {
+                        dist(positions[tr], positions[c]) * f64::from(self.counts[tr * c_n + c])
+                    })
+                    .sum::<f64>()
+            })
+            .sum();
+        ee / c_n as f64
+    }
+
+    /// Mean distance between the true and the predicted class centre per prediction (units of
+    /// `positions`).
+    #[must_use]
+    pub fn mean_position_error(&self, positions: &[[f64; 2]]) -> f64 {
+        let c_n = self.classes;
+        let sum: f64 = (0..c_n)
+            .flat_map(|t| (0..c_n).map(move |p| (t, p)))
+            .map(|(t, p)| dist(positions[t], positions[p]) * f64::from(self.counts[t * c_n + p]))
+            .sum();
+        sum / f64::from(self.total().max(1))
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Predicts every observation (row of `x`) with `model` and counts it against its label.
+///
+/// # Errors
+/// [`FitError::Shape`] if `x` does not have the model's feature count, rows and labels differ
+/// in number, or a label is not one of the model's classes.
+pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion, FitError> {
+    let classes = model.classes.len();
+    if x.ncols() != model.features() || x.nrows() != y.len() {
+        return Err(FitError::Shape(format!(
+            "{} x {} observations with {} labels for a model of {} features",
+            x.nrows(),
+            x.ncols(),
+            y.len(),
+            model.features()
+        )));
+    }
+    let mut confusion = Confusion::new(classes);
+    let mut row = vec![0.0; x.ncols()];
+    for (r, &label) in y.iter().enumerate() {
+        if usize::from(label) >= classes {
+            return Err(FitError::Shape(format!(
+                "observation {r} has class {label}, the model has {classes}"
+            )));
+        }
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = x[(r, j)];
+        }
+        confusion.add(label, model.predict(&row));
+    }
+    Ok(confusion)
+}
+
+/// Stratified fold of every observation: within each class, observations are dealt to folds
+/// 0..k in a shuffled (seeded) order, so every fold holds about 1/k of every class.
+#[must_use]
+pub fn folds(y: &[u16], k: usize, seed: u64) -> Vec<usize> {
+    let mut rng = et_sim::rng::Rng::new(seed);
+    let classes = y.iter().map(|&c| usize::from(c) + 1).max().unwrap_or(0);
+    let mut fold = vec![0; y.len()];
+    for c in 0..classes {
+        let mut rows: Vec<usize> = (0..y.len()).filter(|&r| usize::from(y[r]) == c).collect();
+        for i in (1..rows.len()).rev() {
+            let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+            rows.swap(i, j);
+        }
+        for (i, r) in rows.into_iter().enumerate() {
+            fold[r] = i % k.max(1);
+        }
+    }
+    fold
+}
+
+/// Cross-validation over given folds: for each fold f, fits on the other folds and predicts
+/// fold f. With `fold` = the visit of each observation this is leave-one-visit-out, which
+/// measures what a new session (electrodes moved) will see.
+///
+/// # Errors
+/// The first [`FitError`].
+pub fn cross_validate_folds(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    opts: &FitOptions,
+    fold: &[usize],
+) -> Result<Confusion, FitError> {
+    let k = fold_count(fold, y.len())?;
+    let mut confusion = Confusion::new(classes);
+    for f in 0..k {
+        let train: Vec<usize> = (0..y.len()).filter(|&r| fold[r] != f).collect();
+        let test: Vec<usize> = (0..y.len()).filter(|&r| fold[r] == f).collect();
+        if test.is_empty() {
+            continue;
+        }
+        let xt = DMatrix::from_fn(train.len(), x.ncols(), |i, j| x[(train[i], j)]);
+        let yt: Vec<u16> = train.iter().map(|&r| y[r]).collect();
+        let model = Fitted::fit(&xt, &yt, classes, opts)?;
+        let mut row = vec![0.0; x.ncols()];
+        for &r in &test {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = x[(r, j)];
+            }
+            confusion.add(y[r], model.predict(&row));
+        }
+    }
+    Ok(confusion)
+}
+
+/// The number of folds in `fold` (one entry per observation, values 0..k).
+///
+/// # Errors
+/// [`FitError::Shape`] if `fold` is not one entry per observation or holds fewer than 2 folds.
+pub(crate) fn fold_count(fold: &[usize], n: usize) -> Result<usize, FitError> {
+    if fold.len() != n {
+        return Err(FitError::Shape(format!(
+            "{} folds for {n} observations",
+            fold.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |m| m + 1);
+    if k < 2 {
+        return Err(FitError::Shape(
+            "cross-validation needs at least 2 folds".into(),
+        ));
+    }
+    Ok(k)
+}
+
+/// The shrinkage among `candidates` with the best cross-validated accuracy over `fold`
+/// (ties: the first), with every candidate's accuracy. A candidate whose fit is not positive
+/// definite scores 0.
+///
+/// # Errors
+/// [`FitError::Shape`] for no candidates or bad folds.
+pub fn choose_shrinkage(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    base: &FitOptions,
+    candidates: &[f64],
+    fold: &[usize],
+) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+    choose_shrinkage_with(
+        candidates,
+        |o| cross_validate_folds(x, y, classes, o, fold),
+        base,
+    )
+}
+
+/// [`choose_shrinkage`] with any cross-validation (e.g. [`super::fastcv::cross_validate_fast`]).
+///
+/// # Errors
+/// [`FitError::Shape`] for no candidates; the first error other than a singular fit.
+pub fn choose_shrinkage_with(
+    candidates: &[f64],
+    mut validate: impl FnMut(&FitOptions) -> Result<Confusion, FitError>,
+    base: &FitOptions,
+) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+    let mut scores = Vec::new();
+    for &lambda in candidates {
+        let opts = FitOptions {
+            shrinkage: lambda,
+            ..*base
+        };
+        let acc = match validate(&opts) {
+            Ok(c) => c.accuracy(),
+            Err(FitError::NotPositiveDefinite { .. }) => 0.0,
+            Err(e) => return Err(e),
+        };
+        scores.push((lambda, acc));
+    }
+    let best = scores
+        .iter()
+        .copied()
+        .fold(None, |best: Option<(f64, f64)>, s| match best {
+            Some(b) if b.1 >= s.1 => Some(b),
+            _ => Some(s),
+        })
+        .ok_or_else(|| FitError::Shape("no shrinkage candidates".into()))?;
+    Ok((best.0, scores))
+}
+
+/// k-fold stratified cross-validation: fits on k-1 folds, predicts the held-out one, k times.
+///
+/// # Errors
+/// The first fold's [`FitError`] (e.g. a class with no observation outside the held-out fold).
+pub fn cross_validate(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+    opts: &FitOptions,
+    k: usize,
+    seed: u64,
+) -> Result<Confusion, FitError> {
+    if k < 2 {
+        return Err(FitError::Shape(format!("{k} folds: use at least 2")));
+    }
+    cross_validate_folds(x, y, classes, opts, &folds(y, k, seed))
+}

@@ -1,0 +1,449 @@
+//! Fitting QDA and LDA (docs/method.md §9) on the host, in f64, and exporting to the et-core model blob.
+//!
+//! Observations are standardised with the training set's mean and standard deviation per
+//! feature; the model lives in that z-space (as the blob does). Class covariances can be shrunk
+//! toward a target so that the fit keeps working when a class has fewer observations than
+//! features, or features are constant or duplicated (a dead electrode):
+//! Sigma_c(lambda) = (1 - lambda) S_c + lambda T, with T the pooled covariance or nu I
+//! (nu = trace(S_c) / p, or 1 where that is 0).
+
+use et_core::model::{ModelKind, ModelTables, Precision, model_len, write_model};
+use et_core::protocol::ProtocolKind;
+use nalgebra::{DMatrix, DVector};
+
+/// What a class covariance is shrunk toward.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// The pooled (LDA) covariance.
+    Pooled,
+    /// A multiple of the identity with the same average variance.
+    Diagonal,
+}
+
+/// How to fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FitOptions {
+    /// QDA (one covariance per class) or LDA (pooled) [5.6-5.7].
+    pub kind: ModelKind,
+    /// Shrinkage lambda in [0, 1]; 0 = the plain docs/method.md §9 estimate.
+    pub shrinkage: f64,
+    /// What to shrink toward.
+    pub target: Target,
+}
+
+impl Default for FitOptions {
+    /// Plain QDA, as docs/method.md §9.
+    fn default() -> Self {
+        Self {
+            kind: ModelKind::Qda,
+            shrinkage: 0.0,
+            target: Target::Diagonal,
+        }
+    }
+}
+
+/// Why a fit failed.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FitError {
+    /// No observations, a label outside 0..classes, or rows and labels of different counts.
+    Shape(String),
+    /// A value is NaN or infinite.
+    NonFinite {
+        /// Row of the observation.
+        row: usize,
+        /// Feature.
+        feature: usize,
+    },
+    /// A class has no observation.
+    EmptyClass {
+        /// The class.
+        class: u16,
+    },
+    /// A covariance is not positive definite: too few observations, constant or duplicated
+    /// features. Use shrinkage (FitOptions::shrinkage > 0).
+    NotPositiveDefinite {
+        /// The class (LDA: 0).
+        class: u16,
+    },
+    /// Shrinkage outside [0, 1].
+    Shrinkage(f64),
+    /// The blob could not be written.
+    Export(String),
+}
+
+impl std::fmt::Display for FitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FitError::Shape(why) => write!(f, "training data: {why}"),
+            FitError::NonFinite { row, feature } => {
+                write!(f, "observation {row}, feature {feature} is NaN or infinite")
+            }
+            FitError::EmptyClass { class } => write!(f, "class {class} has no observation"),
+            FitError::NotPositiveDefinite { class } => write!(
+                f,
+                "class {class}: covariance not positive definite (too few observations or constant/duplicated features); fit with shrinkage"
+            ),
+            FitError::Shrinkage(l) => write!(f, "shrinkage {l} is not in [0, 1]"),
+            FitError::Export(why) => write!(f, "model export: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for FitError {}
+
+/// Per-feature mean and standard deviation of the rows of `x` (n x p), the z-space every
+/// model here works in. A constant feature (a dead electrode) keeps unit scale rather than
+/// blow round-off up into a feature.
+#[must_use]
+pub fn standardisation(x: &DMatrix<f64>) -> (Vec<f64>, Vec<f64>) {
+    let (n, p) = (x.nrows(), x.ncols());
+    let feature_mean: Vec<f64> = (0..p).map(|j| x.column(j).mean()).collect();
+    let feature_scale: Vec<f64> = (0..p)
+        .map(|j| {
+            let sd = if n > 1 {
+                x.column(j).variance() * n as f64 / (n - 1) as f64
+            } else {
+                0.0
+            }
+            .sqrt();
+            // A constant feature (a dead electrode) has a round-off-sized spread: keep it
+            // at unit scale rather than blow round-off up into a feature.
+            let floor = 1e-9 * feature_mean[j].abs().max(f64::MIN_POSITIVE);
+            if sd > floor && sd.is_finite() {
+                sd
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    (feature_mean, feature_scale)
+}
+
+/// Features ranked by their Fisher ratio (variance of the class means over the mean
+/// within-class variance), best first: a feature-reduced model keeps the first p'.
+#[must_use]
+pub fn fisher_ranking(x: &DMatrix<f64>, y: &[u16], classes: usize) -> Vec<usize> {
+    let p = x.ncols();
+    let mut count = vec![0usize; classes];
+    let mut sum = DMatrix::<f64>::zeros(classes, p);
+    let mut sq = DMatrix::<f64>::zeros(classes, p);
+    for (r, &c) in y.iter().enumerate() {
+        let c = usize::from(c);
+        if c >= classes {
+            continue;
+        }
+        count[c] += 1;
+        for j in 0..p {
+            sum[(c, j)] += x[(r, j)];
+            sq[(c, j)] += x[(r, j)] * x[(r, j)];
+        }
+    }
+    let used: Vec<usize> = (0..classes).filter(|&c| count[c] > 0).collect();
+    let ratio = |j: usize| {
+        let means: Vec<f64> = used
+            .iter()
+            .map(|&c| sum[(c, j)] / count[c] as f64)
+            .collect();
+        let grand = means.iter().sum::<f64>() / means.len().max(1) as f64;
+        let between = means.iter().map(|m| (m - grand).powi(2)).sum::<f64>();
+        let within = used
+            .iter()
+            .zip(&means)
+            .map(|(&c, m)| (sq[(c, j)] / count[c] as f64 - m * m).max(0.0))
+            .sum::<f64>();
+        if within > 0.0 { between / within } else { 0.0 }
+    };
+    let mut order: Vec<(usize, f64)> = (0..p).map(|j| (j, ratio(j))).collect();
+    order.sort_by(|a, b| b.1.total_cmp(&a.1));
+    order.into_iter().map(|(j, _)| j).collect()
+}
+
+/// One class of a fitted model, in z-space.
+#[derive(Clone, Debug)]
+pub struct ClassFit {
+    /// Observations.
+    pub count: usize,
+    /// Mean mu_c.
+    pub mean: DVector<f64>,
+    /// log pi_c = log(n_c / n) [5.5].
+    pub log_prior: f64,
+    /// QDA: lower Cholesky factor of Sigma_c. LDA: empty.
+    pub factor: DMatrix<f64>,
+    /// QDA: log |Sigma_c|. LDA: mu_c^T Sigma^-1 mu_c.
+    pub log_det_or_quad: f64,
+    /// LDA: w_c = Sigma^-1 mu_c. QDA: empty.
+    pub weights: DVector<f64>,
+}
+
+/// A fitted discriminant model.
+#[derive(Clone, Debug)]
+pub struct Fitted {
+    /// QDA or LDA.
+    pub kind: ModelKind,
+    /// Feature means of the training set.
+    pub feature_mean: Vec<f64>,
+    /// Feature standard deviations of the training set (1 for a constant feature).
+    pub feature_scale: Vec<f64>,
+    /// Per class.
+    pub classes: Vec<ClassFit>,
+}
+
+pub(crate) fn check(
+    x: &DMatrix<f64>,
+    y: &[u16],
+    classes: usize,
+) -> Result<Vec<Vec<usize>>, FitError> {
+    if x.nrows() == 0 || x.ncols() == 0 {
+        return Err(FitError::Shape("no observations or no features".into()));
+    }
+    if x.nrows() != y.len() {
+        return Err(FitError::Shape(format!(
+            "{} rows but {} labels",
+            x.nrows(),
+            y.len()
+        )));
+    }
+    for r in 0..x.nrows() {
+        for c in 0..x.ncols() {
+            if !x[(r, c)].is_finite() {
+                return Err(FitError::NonFinite { row: r, feature: c });
+            }
+        }
+    }
+    let mut members = vec![Vec::new(); classes];
+    for (r, &label) in y.iter().enumerate() {
+        members
+            .get_mut(usize::from(label))
+            .ok_or_else(|| {
+                FitError::Shape(format!("label {label} at row {r} is not below {classes}"))
+            })?
+            .push(r);
+    }
+    if let Some(c) = members.iter().position(Vec::is_empty) {
+        return Err(FitError::EmptyClass { class: c as u16 });
+    }
+    Ok(members)
+}
+
+fn shrink(s: &DMatrix<f64>, lambda: f64, target: Target, pooled: &DMatrix<f64>) -> DMatrix<f64> {
+    if lambda == 0.0 {
+        return s.clone();
+    }
+    let p = s.nrows();
+    let t = match target {
+        Target::Pooled => pooled.clone(),
+        Target::Diagonal => {
+            let nu = s.trace() / p as f64;
+            DMatrix::identity(p, p) * if nu > 0.0 { nu } else { 1.0 }
+        }
+    };
+    s * (1.0 - lambda) + t * lambda
+}
+
+impl Fitted {
+    /// Fits a model to observations `x` (n x p, raw features such as volts) with labels `y`
+    /// (0..classes).
+    ///
+    /// # Errors
+    /// [`FitError`]: bad shapes, non-finite values, empty classes, or a covariance that is
+    /// not positive definite without enough shrinkage.
+    pub fn fit(
+        x: &DMatrix<f64>,
+        y: &[u16],
+        classes: usize,
+        opts: &FitOptions,
+    ) -> Result<Self, FitError> {
+        if !(0.0..=1.0).contains(&opts.shrinkage) {
+            return Err(FitError::Shrinkage(opts.shrinkage));
+        }
+        let members = check(x, y, classes)?;
+        let (n, p) = (x.nrows(), x.ncols());
+        let (feature_mean, feature_scale) = standardisation(x);
+        let mut z = x.clone();
+        for j in 0..p {
+            let (m, s) = (feature_mean[j], feature_scale[j]);
+            z.column_mut(j).apply(|v| *v = (*v - m) / s);
+        }
+        // Class means and scatter matrices.
+        let mut means = Vec::with_capacity(classes);
+        let mut scatters = Vec::with_capacity(classes);
+        let mut pooled = DMatrix::<f64>::zeros(p, p);
+        for rows in &members {
+            let zc = DMatrix::from_fn(rows.len(), p, |i, j| z[(rows[i], j)]);
+            let mean = DVector::from_fn(p, |j, _| zc.column(j).mean());
+            let mut centred = zc;
+            for mut row in centred.row_iter_mut() {
+                row -= mean.transpose();
+            }
+            let scatter = centred.transpose() * &centred;
+            pooled += &scatter;
+            means.push(mean);
+            scatters.push(scatter);
+        }
+        let dof = n.saturating_sub(classes).max(1);
+        let pooled = pooled / dof as f64; // [5.3]
+        let log_prior = |count: usize| (count as f64 / n as f64).ln(); // [5.5]
+        let classes_fit = match opts.kind {
+            ModelKind::Qda => members
+                .iter()
+                .zip(means)
+                .zip(scatters)
+                .enumerate()
+                .map(|(c, ((rows, mean), scatter))| {
+                    let s = scatter / (rows.len().saturating_sub(1).max(1)) as f64;
+                    let sigma = shrink(&s, opts.shrinkage, opts.target, &pooled);
+                    let chol = sigma
+                        .cholesky()
+                        .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?;
+                    let factor = chol.l();
+                    if (0..p).any(|i| factor[(i, i)] <= 0.0 || !factor[(i, i)].is_finite()) {
+                        return Err(FitError::NotPositiveDefinite { class: c as u16 });
+                    }
+                    let log_det = 2.0 * (0..p).map(|i| factor[(i, i)].ln()).sum::<f64>();
+                    Ok(ClassFit {
+                        count: rows.len(),
+                        mean,
+                        log_prior: log_prior(rows.len()),
+                        factor,
+                        log_det_or_quad: log_det,
+                        weights: DVector::zeros(0),
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+            ModelKind::Lda => {
+                let sigma = shrink(&pooled, opts.shrinkage, Target::Diagonal, &pooled);
+                let chol = sigma
+                    .cholesky()
+                    .ok_or(FitError::NotPositiveDefinite { class: 0 })?;
+                members
+                    .iter()
+                    .zip(means)
+                    .map(|(rows, mean)| {
+                        let w = chol.solve(&mean);
+                        let quad = mean.dot(&w);
+                        ClassFit {
+                            count: rows.len(),
+                            mean,
+                            log_prior: log_prior(rows.len()),
+                            factor: DMatrix::zeros(0, 0),
+                            log_det_or_quad: quad,
+                            weights: w,
+                        }
+                    })
+                    .collect()
+            }
+        };
+        Ok(Self {
+            kind: opts.kind,
+            feature_mean,
+            feature_scale,
+            classes: classes_fit,
+        })
+    }
+
+    /// Feature count p.
+    #[must_use]
+    pub fn features(&self) -> usize {
+        self.feature_mean.len()
+    }
+
+    /// delta_c for every class of one raw observation (p values) [5.6-5.7].
+    ///
+    /// # Panics
+    /// If `x.len()` is not p.
+    #[must_use]
+    pub fn discriminants(&self, x: &[f64]) -> Vec<f64> {
+        assert_eq!(x.len(), self.features());
+        let z = DVector::from_iterator(
+            x.len(),
+            x.iter()
+                .zip(&self.feature_mean)
+                .zip(&self.feature_scale)
+                .map(|((v, m), s)| (v - m) / s),
+        );
+        self.classes
+            .iter()
+            .map(|c| match self.kind {
+                ModelKind::Qda => {
+                    let d = &z - &c.mean;
+                    let y = c
+                        .factor
+                        .solve_lower_triangular(&d)
+                        .unwrap_or_else(|| DVector::from_element(d.len(), f64::INFINITY));
+                    -0.5 * y.norm_squared() - 0.5 * c.log_det_or_quad + c.log_prior
+                }
+                ModelKind::Lda => z.dot(&c.weights) - 0.5 * c.log_det_or_quad + c.log_prior,
+            })
+            .collect()
+    }
+
+    /// argmax_c delta_c.
+    ///
+    /// # Panics
+    /// If `x.len()` is not p.
+    #[must_use]
+    pub fn predict(&self, x: &[f64]) -> u16 {
+        let d = self.discriminants(x);
+        (0..d.len())
+            .max_by(|&a, &b| d[a].total_cmp(&d[b]))
+            .unwrap_or(0) as u16
+    }
+
+    /// Exports to the et-core model blob the firmware evaluates. `feature_index` says which
+    /// frame value each feature is (p entries); `positions_mm` is each class's centre;
+    /// `referenced`: the model was trained on V_m - V_0 (`et_core::model::FLAG_REFERENCED`).
+    ///
+    /// # Errors
+    /// [`FitError::Export`] when the blob's own validation refuses the tables (e.g. a
+    /// covariance too ill-conditioned for f32, or values out of f16 range).
+    pub fn to_blob(
+        &self,
+        electrodes: u8,
+        protocol: ProtocolKind,
+        feature_index: &[u16],
+        positions_mm: &[[f32; 2]],
+        precision: Precision,
+        referenced: bool,
+    ) -> Result<Vec<u8>, FitError> {
+        let p = self.features();
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        let (mut vectors, mut factors, mut constant) = (Vec::new(), Vec::new(), Vec::new());
+        for c in &self.classes {
+            match self.kind {
+                ModelKind::Qda => {
+                    vectors.extend(c.mean.iter().map(|&v| v as f32));
+                    for r in 0..p {
+                        for q in 0..=r {
+                            factors.push(c.factor[(r, q)] as f32);
+                        }
+                    }
+                }
+                ModelKind::Lda => vectors.extend(c.weights.iter().map(|&v| v as f32)),
+            }
+            constant.push((-0.5 * c.log_det_or_quad) as f32);
+        }
+        let tables = ModelTables {
+            kind: self.kind,
+            precision,
+            referenced,
+            electrodes,
+            protocol,
+            feature_index,
+            mean: &f32s(&self.feature_mean),
+            scale: &f32s(&self.feature_scale),
+            positions_mm,
+            log_prior: &self
+                .classes
+                .iter()
+                .map(|c| c.log_prior as f32)
+                .collect::<Vec<_>>(),
+            constant: &constant,
+            vectors: &vectors,
+            factors: &factors,
+        };
+        let mut out = vec![0u8; model_len(self.kind, precision, self.classes.len(), p)];
+        write_model(&tables, &mut out).map_err(|e| FitError::Export(e.to_string()))?;
+        Ok(out)
+    }
+}

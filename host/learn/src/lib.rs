@@ -1,0 +1,33 @@
+//! `et-learn`: touch positions learnt from raw voltages (docs/method.md §9). It owns fitting,
+//! cross-validation, regression, datasets and model files; it has no command line and no
+//! plotting.
+//!
+//! Modules in the order a model is made:
+//!
+//! - [`collect`]: the data-collection procedure (§9.4) on the simulated sheet.
+//! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
+//!   and import of other sensors' CSV.
+//! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
+//! - [`cv`]: stratified and leave-one-visit-out cross-validation, confusion matrix, accuracy,
+//!   AEE (§9.5).
+//! - [`fastcv`]: the same cross-validation from sufficient statistics with exact pruning.
+//! - [`analysis`]: error against distance from the electrodes, learning curves against n_c.
+//! - [`regress`]: continuous position and pressure by regression (linear ridge, kernel ridge,
+//!   posterior-weighted class centres).
+//! - [`model_file`]: trained models on disk (JSON).
+//! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
+//!   test, the chip's blob through et-core), as `et train`, `et eval` and `et demo` do them.
+#![forbid(unsafe_code)]
+
+pub mod analysis;
+pub mod collect;
+pub mod cv;
+pub mod dataset;
+pub mod fastcv;
+pub mod fit;
+pub mod model_file;
+pub mod pipeline;
+pub mod regress;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,248 @@
+//! A trained model on disk (JSON): the f64 tables of a [`Fitted`] model plus what it needs to
+//! be used and exported: feature indices, class centres, the scan configuration, and how it
+//! was trained. `et train` writes it; `et eval` and `et export` read it.
+
+use std::path::Path;
+
+use et_core::ScanConfig;
+use et_core::model::{ModelKind, Precision};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::fit::{ClassFit, FitError, Fitted};
+
+/// One class as stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClassRecord {
+    /// Training observations.
+    pub count: usize,
+    /// Mean in z-space.
+    pub mean: Vec<f64>,
+    /// log pi_c.
+    pub log_prior: f64,
+    /// QDA: lower Cholesky factor packed by rows; LDA: empty.
+    pub factor: Vec<f64>,
+    /// QDA: log|Sigma_c|; LDA: mu^T Sigma^-1 mu.
+    pub log_det_or_quad: f64,
+    /// LDA: w_c; QDA: empty.
+    pub weights: Vec<f64>,
+}
+
+/// Which discriminant a model file holds, as its `kind` field spells it; also the values of
+/// `et train --kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// Quadratic discriminant analysis: one covariance per class (docs/method.md §9.2).
+    Qda,
+    /// Linear discriminant analysis: one pooled covariance.
+    Lda,
+}
+
+impl Kind {
+    /// The name in files and on the command line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Qda => "qda",
+            Kind::Lda => "lda",
+        }
+    }
+}
+
+impl From<Kind> for ModelKind {
+    fn from(kind: Kind) -> Self {
+        match kind {
+            Kind::Qda => ModelKind::Qda,
+            Kind::Lda => ModelKind::Lda,
+        }
+    }
+}
+
+impl From<ModelKind> for Kind {
+    fn from(kind: ModelKind) -> Self {
+        match kind {
+            ModelKind::Qda => Kind::Qda,
+            ModelKind::Lda => Kind::Lda,
+        }
+    }
+}
+
+/// A model file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always "et-model".
+    pub format: String,
+    /// 1.
+    pub version: u32,
+    /// QDA or LDA (`"qda"` or `"lda"` in the file).
+    pub kind: Kind,
+    /// Shrinkage used.
+    pub shrinkage: f64,
+    /// Scan settings of the frames it classifies.
+    pub config: ScanConfig,
+    /// Trained on each frame minus its session's untouched frame (V_m - V_0).
+    #[serde(default)]
+    pub referenced: bool,
+    /// Frame index of each feature.
+    pub feature_index: Vec<u16>,
+    /// Class centres, mm.
+    pub centres_mm: Vec<[f64; 2]>,
+    /// Feature standardisation.
+    pub feature_mean: Vec<f64>,
+    /// Feature standardisation.
+    pub feature_scale: Vec<f64>,
+    /// Per class.
+    pub classes: Vec<ClassRecord>,
+}
+
+impl ModelFile {
+    /// Wraps a fitted model.
+    #[must_use]
+    pub fn new(
+        model: &Fitted,
+        shrinkage: f64,
+        config: ScanConfig,
+        feature_index: Vec<u16>,
+        centres_mm: Vec<[f64; 2]>,
+        referenced: bool,
+    ) -> Self {
+        let p = model.features();
+        Self {
+            format: "et-model".into(),
+            version: 1,
+            kind: model.kind.into(),
+            shrinkage,
+            config,
+            referenced,
+            feature_index,
+            centres_mm,
+            feature_mean: model.feature_mean.clone(),
+            feature_scale: model.feature_scale.clone(),
+            classes: model
+                .classes
+                .iter()
+                .map(|c| ClassRecord {
+                    count: c.count,
+                    mean: c.mean.iter().copied().collect(),
+                    log_prior: c.log_prior,
+                    factor: if c.factor.nrows() == p {
+                        (0..p)
+                            .flat_map(|r| (0..=r).map(move |q| (r, q)))
+                            .map(|(r, q)| c.factor[(r, q)])
+                            .collect()
+                    } else {
+                        Vec::new()
+                    },
+                    log_det_or_quad: c.log_det_or_quad,
+                    weights: c.weights.iter().copied().collect(),
+                })
+                .collect(),
+        }
+    }
+
+    /// The fitted model back.
+    ///
+    /// # Errors
+    /// [`FitError::Shape`] for an inconsistent file.
+    pub fn fitted(&self) -> Result<Fitted, FitError> {
+        let kind = ModelKind::from(self.kind);
+        let p = self.feature_mean.len();
+        if self.feature_scale.len() != p
+            || self.feature_index.len() != p
+            || self.centres_mm.len() != self.classes.len()
+        {
+            return Err(FitError::Shape(
+                "feature or class tables of different lengths".into(),
+            ));
+        }
+        let classes = self
+            .classes
+            .iter()
+            .map(|c| {
+                let packed = p * (p + 1) / 2;
+                let ok = c.mean.len() == p
+                    && match kind {
+                        ModelKind::Qda => c.factor.len() == packed,
+                        ModelKind::Lda => c.weights.len() == p,
+                    };
+                if !ok {
+                    return Err(FitError::Shape("a class table has the wrong length".into()));
+                }
+                let mut factor = DMatrix::zeros(
+                    if kind == ModelKind::Qda { p } else { 0 },
+                    if kind == ModelKind::Qda { p } else { 0 },
+                );
+                if kind == ModelKind::Qda {
+                    let mut i = 0;
+                    for r in 0..p {
+                        for q in 0..=r {
+                            factor[(r, q)] = c.factor[i];
+                            i += 1;
+                        }
+                    }
+                }
+                Ok(ClassFit {
+                    count: c.count,
+                    mean: DVector::from_vec(c.mean.clone()),
+                    log_prior: c.log_prior,
+                    factor,
+                    log_det_or_quad: c.log_det_or_quad,
+                    weights: DVector::from_vec(c.weights.clone()),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Fitted {
+            kind,
+            feature_mean: self.feature_mean.clone(),
+            feature_scale: self.feature_scale.clone(),
+            classes,
+        })
+    }
+
+    /// The et-core blob at `precision`.
+    ///
+    /// # Errors
+    /// [`FitError`] from [`Fitted::to_blob`].
+    pub fn blob(&self, precision: Precision) -> Result<Vec<u8>, FitError> {
+        let positions: Vec<[f32; 2]> = self
+            .centres_mm
+            .iter()
+            .map(|c| [c[0] as f32, c[1] as f32])
+            .collect();
+        self.fitted()?.to_blob(
+            self.config.electrodes,
+            self.config.protocol,
+            &self.feature_index,
+            &positions,
+            precision,
+            self.referenced,
+        )
+    }
+
+    /// Writes JSON.
+    ///
+    /// # Errors
+    /// An I/O error naming the file.
+    pub fn save(&self, path: &Path) -> Result<(), String> {
+        let text = serde_json::to_string(self).map_err(|e| e.to_string())?;
+        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Reads JSON.
+    ///
+    /// # Errors
+    /// A message naming the file.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let m: ModelFile =
+            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+        if m.format != "et-model" || m.version != 1 {
+            return Err(format!(
+                "{}: not an et-model version 1 file",
+                path.display()
+            ));
+        }
+        Ok(m)
+    }
+}

@@ -1,0 +1,254 @@
+//! Training and testing as `et train`, `et eval` and `et demo` do them, in one place: features
+//! from a dataset (referenced or raw, optionally the best p by Fisher ratio), the shrinkage
+//! chosen by cross-validation (leave-one-visit-out when there are several visits), the fit,
+//! its cross-validated accuracy, and a test on another session's data.
+
+use et_core::model::ModelKind;
+use nalgebra::DMatrix;
+
+use super::analysis::{self, Band, Outcome};
+use super::collect::Dataset;
+use super::cv::{self, Confusion};
+use super::fastcv::cross_validate_fast;
+use super::fit::{self, FitError, FitOptions, Fitted, Target};
+use super::model_file::ModelFile;
+
+use et_core::board::MODEL_SLOT_BYTES;
+
+/// The most features (at most `max`) a `kind` model of `classes` classes can keep and still
+/// fit one model slot of the board in f16 (0 when not even one feature fits).
+#[must_use]
+pub fn features_that_fit(kind: ModelKind, classes: usize, max: usize) -> usize {
+    (1..=max)
+        .rev()
+        .find(|&p| {
+            et_core::model::model_len(kind, et_core::model::Precision::F16, classes, p)
+                <= MODEL_SLOT_BYTES
+        })
+        .unwrap_or(0)
+}
+
+/// The shrinkage candidates tried when it is chosen by cross-validation.
+pub const SHRINKAGE_CANDIDATES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
+
+/// Replaces `data.x` by the features a model is trained on: each frame minus its session's
+/// untouched frame when `referenced`, then (with `keep`) only the `keep` features of largest
+/// Fisher ratio, in frame order (a smaller model for the chip). `data.feature_index` follows.
+///
+/// # Errors
+/// A message when referencing is impossible (no untouched frames) or `keep` is 0 or too large.
+pub fn prepare(data: &mut Dataset, referenced: bool, keep: Option<usize>) -> Result<(), String> {
+    data.x = data.features(referenced)?;
+    if let Some(keep) = keep {
+        if keep == 0 || keep > data.x.ncols() {
+            return Err(format!("keep 1 to {} features, not {keep}", data.x.ncols()));
+        }
+        let mut kept = fit::fisher_ranking(&data.x, &data.y, data.centres.len());
+        kept.truncate(keep);
+        kept.sort_unstable();
+        data.x = analysis::select_columns(&data.x, &kept);
+        data.feature_index = kept.iter().map(|&j| data.feature_index[j]).collect();
+    }
+    Ok(())
+}
+
+/// How to train.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrainOptions {
+    /// QDA or LDA.
+    pub kind: ModelKind,
+    /// A fixed shrinkage in [0, 1], or None to choose among [`SHRINKAGE_CANDIDATES`].
+    pub shrinkage: Option<f64>,
+    /// k of the stratified k-fold cross-validation that is reported (docs/method.md §9: 10).
+    pub folds: usize,
+}
+
+/// A trained model and how well it cross-validates.
+#[derive(Clone, Debug)]
+pub struct Trained {
+    /// The fit on every observation.
+    pub model: Fitted,
+    /// Its options (shrinkage included).
+    pub options: FitOptions,
+    /// (candidate, cross-validated accuracy) when the shrinkage was chosen.
+    pub shrinkage_scores: Vec<(f64, f64)>,
+    /// Stratified k-fold confusion.
+    pub cv: Confusion,
+    /// Leave-one-visit-out accuracy, when there are at least two visits.
+    pub leave_one_visit_out: Option<f64>,
+    /// The folds the shrinkage was chosen on (by visit, or stratified): learning curves reuse
+    /// them.
+    pub selection_folds: Vec<usize>,
+}
+
+/// Fits a model on `data` (features already [`prepare`]d). QDA shrinks toward the pooled
+/// covariance when that has full rank (n - C > p), else toward the diagonal, since a
+/// rank-deficient target cannot make a class covariance definite; LDA toward the diagonal.
+///
+/// # Errors
+/// [`FitError`] from fitting or cross-validation.
+pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError> {
+    let classes = data.centres.len();
+    let (x, y) = (&data.x, &data.y);
+    let pooled_full_rank = x.nrows().saturating_sub(classes) > x.ncols();
+    let target = if options.kind == ModelKind::Qda && pooled_full_rank {
+        Target::Pooled
+    } else {
+        Target::Diagonal
+    };
+    let base = FitOptions {
+        kind: options.kind,
+        shrinkage: 0.0,
+        target,
+    };
+    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
+    let several_visits = data.visits() >= 2;
+    let strat = cv::folds(y, options.folds.max(2), 1);
+    let selection_folds = if several_visits {
+        by_visit.clone()
+    } else {
+        strat.clone()
+    };
+    let (shrinkage, shrinkage_scores) = match options.shrinkage {
+        Some(l) => (l, Vec::new()),
+        None => cv::choose_shrinkage_with(
+            &SHRINKAGE_CANDIDATES,
+            |o| cross_validate_fast(x, y, classes, o, &selection_folds),
+            &base,
+        )?,
+    };
+    let opts = FitOptions { shrinkage, ..base };
+    let model = Fitted::fit(x, y, classes, &opts)?;
+    let cv = cross_validate_fast(x, y, classes, &opts, &strat)?;
+    let leave_one_visit_out = if several_visits {
+        Some(cross_validate_fast(x, y, classes, &opts, &by_visit)?.accuracy())
+    } else {
+        None
+    };
+    Ok(Trained {
+        model,
+        options: opts,
+        shrinkage_scores,
+        cv,
+        leave_one_visit_out,
+        selection_folds,
+    })
+}
+
+/// A model's results on a test set.
+#[derive(Clone, Debug)]
+pub struct Tested {
+    /// The confusion matrix.
+    pub confusion: Confusion,
+    /// Per observation: distance from the electrodes and position error (empty when the
+    /// dataset does not say where the electrodes are).
+    pub outcomes: Vec<Outcome>,
+    /// Mean error per 10 mm band of distance from the electrodes.
+    pub bands: Vec<Band>,
+}
+
+/// Tests `file`'s model on `data` (raw frames as collected: the model's own features are
+/// taken from it, referenced if the model is).
+///
+/// # Errors
+/// A message when the dataset lacks the model's features or untouched frames, or does not
+/// match its classes.
+pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, String> {
+    // The model's features, found among the dataset's (a feature-reduced model uses a subset).
+    let columns = file
+        .feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or_else(|| {
+            format!(
+                "it lacks frame values the model uses (its {} features vs the model's {})",
+                data.feature_index.len(),
+                file.feature_index.len()
+            )
+        })?;
+    let model = file.fitted().map_err(|e| e.to_string())?;
+    let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
+    let confusion = cv::evaluate(&model, &x, &data.y).map_err(|e| e.to_string())?;
+    let electrodes_mm: Vec<[f64; 2]> = data
+        .electrodes
+        .iter()
+        .map(|e| [e[0] * 1e3, e[1] * 1e3])
+        .collect();
+    let outcomes = if electrodes_mm.is_empty() {
+        Vec::new()
+    } else {
+        analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)
+            .map_err(|e| e.to_string())?
+    };
+    let bands = analysis::by_distance(&outcomes, 10.0);
+    Ok(Tested {
+        confusion,
+        outcomes,
+        bands,
+    })
+}
+
+/// How an exported blob did on a test set, evaluated by et-core as the firmware does it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OnChip {
+    /// Observations classified right.
+    pub right: usize,
+    /// Observations.
+    pub total: usize,
+    /// Observations where the chip's class differs from the f64 host model's.
+    pub disagree: usize,
+}
+
+/// Classifies every observation of `data` with `blob` through `et_core::model` (frames as
+/// f32 V_m, and each visit's untouched frame as V_0 for a referenced model), and compares
+/// with `file`'s f64 model.
+///
+/// # Errors
+/// A message when the blob does not parse, the dataset lacks the model's features, or a
+/// frame is not finite.
+pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, String> {
+    let chip = et_core::model::Model::parse(blob).map_err(|e| format!("model blob: {e:?}"))?;
+    let host = file.fitted().map_err(|e| e.to_string())?;
+    let columns = file
+        .feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or("the dataset lacks frame values the model uses")?;
+    let xs = analysis::select_columns(&data.features(file.referenced)?, &columns);
+    // A whole frame (K values) with the dataset's features in their frame positions.
+    let k = chip.frame_len();
+    let frame = |m: &DMatrix<f64>, r: usize| {
+        let mut v = vec![0.0f32; k];
+        for (j, &i) in data.feature_index.iter().enumerate() {
+            if let Some(slot) = v.get_mut(usize::from(i)) {
+                *slot = m[(r, j)] as f32;
+            }
+        }
+        v
+    };
+    let mut scratch = vec![0.0f32; chip.scratch_len()];
+    let mut out = OnChip {
+        right: 0,
+        total: 0,
+        disagree: 0,
+    };
+    let mut row = vec![0.0; xs.ncols()];
+    for r in 0..data.x.nrows() {
+        let v_m = frame(&data.x, r);
+        let v_0 = file
+            .referenced
+            .then(|| frame(&data.baselines, usize::from(data.visit[r])));
+        let d = chip
+            .evaluate_referenced(&v_m, v_0.as_deref(), &mut scratch)
+            .map_err(|e| format!("observation {r}: {e:?}"))?;
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = xs[(r, j)];
+        }
+        out.disagree += usize::from(d.class != host.predict(&row));
+        out.right += usize::from(d.class == data.y[r]);
+        out.total += 1;
+    }
+    Ok(out)
+}

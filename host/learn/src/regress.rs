@@ -1,0 +1,506 @@
+//! Beyond classes (docs/method.md §11): continuous touch position (x, y) and touch intensity (pressure)
+//! by regression from the (referenced) features, and several methods to compare:
+//!
+//! - [`Ridge`]: linear ridge regression, (x, y, p) = W z + b. Tiny (3 p weights) and trivially
+//!   cheap on the chip.
+//! - [`KernelRidge`]: Gaussian-kernel ridge regression on m training observations. Smooth and
+//!   non-linear; its cost is m kernel evaluations of p features per frame.
+//! - [`posterior_centre`]: the class centres weighted by a classifier's posteriors (softmax of
+//!   the discriminants), so a class model interpolates between its grid cells.
+//!
+//! Targets are in mm and kPa; features are volts (standardised inside each model).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::fit::{FitError, Fitted, standardisation};
+
+/// Targets per observation: x (mm), y (mm), pressure (kPa).
+pub type Target3 = [f64; 3];
+
+fn standardise(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> DMatrix<f64> {
+    DMatrix::from_fn(x.nrows(), x.ncols(), |r, j| {
+        (x[(r, j)] - mean[j]) / scale[j]
+    })
+}
+
+fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
+    if x.nrows() != t.len() || x.nrows() < 2 || x.ncols() == 0 {
+        return Err(FitError::Shape(format!(
+            "{} observations of {} features with {} targets",
+            x.nrows(),
+            x.ncols(),
+            t.len()
+        )));
+    }
+    for (r, row) in x.row_iter().enumerate() {
+        if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+            return Err(FitError::NonFinite { row: r, feature: j });
+        }
+        if t[r].iter().any(|v| !v.is_finite()) {
+            return Err(FitError::Shape(format!(
+                "observation {r}: non-finite target"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn target_mean(t: &[Target3]) -> Target3 {
+    let mut m = [0.0; 3];
+    for row in t {
+        for k in 0..3 {
+            m[k] += row[k] / t.len() as f64;
+        }
+    }
+    m
+}
+
+/// Linear ridge regression in z-space.
+#[derive(Clone, Debug)]
+pub struct Ridge {
+    mean: Vec<f64>,
+    scale: Vec<f64>,
+    /// p x 3 weights.
+    weights: DMatrix<f64>,
+    intercept: Target3,
+}
+
+impl Ridge {
+    /// Fits (Z^T Z + lambda n I) W = Z^T (T - mean T).
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data, or a system that is not positive
+    /// definite (lambda = 0 with collinear features).
+    pub fn fit(x: &DMatrix<f64>, t: &[Target3], lambda: f64) -> Result<Self, FitError> {
+        check(x, t)?;
+        let (mean, scale) = standardisation(x);
+        let z = standardise(x, &mean, &scale);
+        let intercept = target_mean(t);
+        let tc = DMatrix::from_fn(t.len(), 3, |r, k| t[r][k] - intercept[k]);
+        let mut a = z.transpose() * &z;
+        for j in 0..a.nrows() {
+            a[(j, j)] += lambda * x.nrows() as f64;
+        }
+        let chol = a
+            .cholesky()
+            .ok_or(FitError::NotPositiveDefinite { class: 0 })?;
+        let weights = chol.solve(&(z.transpose() * tc));
+        Ok(Self {
+            mean,
+            scale,
+            weights,
+            intercept,
+        })
+    }
+
+    /// Predicts one observation (p features, volts).
+    #[must_use]
+    pub fn predict(&self, x: &[f64]) -> Target3 {
+        let mut out = self.intercept;
+        for (j, &v) in x.iter().enumerate() {
+            let z = (v - self.mean[j]) / self.scale[j];
+            for (k, o) in out.iter_mut().enumerate() {
+                *o += z * self.weights[(j, k)];
+            }
+        }
+        out
+    }
+
+    /// Multiply-adds per prediction.
+    #[must_use]
+    pub fn cost(&self) -> usize {
+        3 * self.weights.nrows()
+    }
+}
+
+/// Gaussian-kernel ridge regression: f(z) = mean T + sum_i alpha_i exp(-gamma |z - z_i|^2).
+#[derive(Clone, Debug)]
+pub struct KernelRidge {
+    mean: Vec<f64>,
+    scale: Vec<f64>,
+    /// m x p training observations in z-space.
+    support: DMatrix<f64>,
+    /// m x 3.
+    alpha: DMatrix<f64>,
+    gamma: f64,
+    intercept: Target3,
+}
+
+impl KernelRidge {
+    /// Fits on at most `m` observations spread evenly over the rows, with kernel width from
+    /// the median squared distance between them (gamma = `width` / median) and ridge
+    /// `lambda`: (K + lambda I) alpha = T - mean T.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data, or a singular system.
+    pub fn fit(
+        x: &DMatrix<f64>,
+        t: &[Target3],
+        m: usize,
+        width: f64,
+        lambda: f64,
+    ) -> Result<Self, FitError> {
+        check(x, t)?;
+        let n = x.nrows();
+        let m = m.clamp(2, n);
+        let rows: Vec<usize> = (0..m).map(|i| i * n / m).collect();
+        let (mean, scale) = standardisation(x);
+        let sub = DMatrix::from_fn(m, x.ncols(), |r, j| x[(rows[r], j)]);
+        let support = standardise(&sub, &mean, &scale);
+        let sq = |a: usize, b: usize| (support.row(a) - support.row(b)).norm_squared();
+        let mut d2: Vec<f64> = (0..m.min(400))
+            .flat_map(|a| ((a + 1)..m.min(400)).map(move |b| (a, b)))
+            .map(|(a, b)| sq(a, b))
+            .collect();
+        d2.sort_by(f64::total_cmp);
+        let median = d2.get(d2.len() / 2).copied().unwrap_or(1.0).max(1e-12);
+        let gamma = width / median;
+        let mut k = DMatrix::from_fn(m, m, |a, b| (-gamma * sq(a, b)).exp());
+        for i in 0..m {
+            k[(i, i)] += lambda;
+        }
+        let ts: Vec<Target3> = rows.iter().map(|&r| t[r]).collect();
+        let intercept = target_mean(&ts);
+        let tc = DMatrix::from_fn(m, 3, |r, c| ts[r][c] - intercept[c]);
+        let alpha = k
+            .cholesky()
+            .ok_or(FitError::NotPositiveDefinite { class: 0 })?
+            .solve(&tc);
+        Ok(Self {
+            mean,
+            scale,
+            support,
+            alpha,
+            gamma,
+            intercept,
+        })
+    }
+
+    /// Predicts one observation (p features, volts).
+    #[must_use]
+    pub fn predict(&self, x: &[f64]) -> Target3 {
+        let z = DVector::from_iterator(
+            x.len(),
+            x.iter()
+                .enumerate()
+                .map(|(j, &v)| (v - self.mean[j]) / self.scale[j]),
+        );
+        let mut out = self.intercept;
+        for (i, s) in self.support.row_iter().enumerate() {
+            let d2: f64 = s.iter().zip(z.iter()).map(|(a, b)| (a - b) * (a - b)).sum();
+            let w = (-self.gamma * d2).exp();
+            for (k, o) in out.iter_mut().enumerate() {
+                *o += w * self.alpha[(i, k)];
+            }
+        }
+        out
+    }
+
+    /// Multiply-adds per prediction (distances, then the weighted sum), ignoring the exp.
+    #[must_use]
+    pub fn cost(&self) -> usize {
+        self.support.nrows() * (self.support.ncols() + 3)
+    }
+}
+
+/// Posterior-weighted class centre: sum_c w_c centre_c with w the softmax of the model's
+/// discriminants divided by `temperature` (1 = the posteriors P(c | x); larger spreads the
+/// weight over neighbouring cells), in the units of `centres_mm`.
+#[must_use]
+pub fn posterior_centre(
+    model: &Fitted,
+    x: &[f64],
+    centres_mm: &[[f64; 2]],
+    temperature: f64,
+) -> [f64; 2] {
+    let d = model.discriminants(x);
+    let top = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let t = if temperature > 0.0 { temperature } else { 1.0 };
+    let w: Vec<f64> = d.iter().map(|v| ((v - top) / t).exp()).collect();
+    let total: f64 = w.iter().sum();
+    let mut p = [0.0; 2];
+    for (wc, c) in w.iter().zip(centres_mm) {
+        p[0] += wc / total * c[0];
+        p[1] += wc / total * c[1];
+    }
+    p
+}
+
+/// The temperature of [`posterior_centre`] with the smallest mean position error on a
+/// validation set (`x` rows, true positions in mm), from `candidates`. Choose it on data the
+/// test never sees.
+#[must_use]
+pub fn choose_temperature(
+    model: &Fitted,
+    x: &DMatrix<f64>,
+    truth_mm: &[[f64; 2]],
+    centres_mm: &[[f64; 2]],
+    candidates: &[f64],
+) -> f64 {
+    let rows: Vec<Vec<f64>> = x.row_iter().map(|r| r.iter().copied().collect()).collect();
+    let err = |t: f64| {
+        rows.iter()
+            .zip(truth_mm)
+            .map(|(r, p)| {
+                let q = posterior_centre(model, r, centres_mm, t);
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            })
+            .sum::<f64>()
+    };
+    candidates
+        .iter()
+        .copied()
+        .map(|t| (t, err(t)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(1.0, |(t, _)| t)
+}
+
+/// Touch intensity from the size of the touch's signature, calibrated per class: pressure
+/// (kPa) = a_c + b_c u + c_c u^2 with u = ln |x| (x referenced features, volts), fitted by
+/// least squares on each class's observations. Three numbers per class on the chip.
+#[derive(Clone, Debug)]
+pub struct IntensityByClass {
+    /// Per class (a, b, c).
+    pub coefficients: Vec<[f64; 3]>,
+}
+
+impl IntensityByClass {
+    /// Fits per class; a class with fewer than 3 observations, or a singular fit, takes the
+    /// pooled fit.
+    ///
+    /// # Errors
+    /// [`FitError::Shape`] for mismatched lengths or labels, [`FitError::NotPositiveDefinite`]
+    /// when even the pooled fit is singular (all signatures the same size).
+    pub fn fit(
+        x: &DMatrix<f64>,
+        y: &[u16],
+        pressure_kpa: &[f64],
+        classes: usize,
+    ) -> Result<Self, FitError> {
+        if x.nrows() != y.len() || y.len() != pressure_kpa.len() {
+            return Err(FitError::Shape(
+                "rows, labels and pressures differ in number".into(),
+            ));
+        }
+        let u: Vec<f64> = x.row_iter().map(|r| r.norm().max(1e-300).ln()).collect();
+        let solve = |rows: &[usize]| -> Option<[f64; 3]> {
+            let mut a = nalgebra::Matrix3::<f64>::zeros();
+            let mut b = nalgebra::Vector3::<f64>::zeros();
+            for &r in rows {
+                let f = nalgebra::Vector3::new(1.0, u[r], u[r] * u[r]);
+                a += f * f.transpose();
+                b += f * pressure_kpa[r];
+            }
+            let s = a.cholesky()?.solve(&b);
+            s.iter().all(|v| v.is_finite()).then(|| [s[0], s[1], s[2]])
+        };
+        let all: Vec<usize> = (0..y.len()).collect();
+        let pooled = solve(&all).ok_or(FitError::NotPositiveDefinite { class: 0 })?;
+        let mut coefficients = vec![pooled; classes];
+        for (c, k) in coefficients.iter_mut().enumerate() {
+            let rows: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|&r| usize::from(y[r]) == c)
+                .collect();
+            if rows.len() >= 3
+                && let Some(s) = solve(&rows)
+            {
+                *k = s;
+            }
+        }
+        if let Some(r) = y.iter().position(|&c| usize::from(c) >= classes) {
+            return Err(FitError::Shape(format!(
+                "observation {r}: class {} of {classes}",
+                y[r]
+            )));
+        }
+        Ok(Self { coefficients })
+    }
+
+    /// Pressure (kPa) of referenced features `x` pressed at class `class`.
+    #[must_use]
+    pub fn predict(&self, x: &[f64], class: u16) -> f64 {
+        let u = x.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-300).ln();
+        let [a, b, c] = self.coefficients[usize::from(class).min(self.coefficients.len() - 1)];
+        a + b * u + c * u * u
+    }
+}
+
+/// Error statistics of a set of predictions.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ErrorSummary {
+    /// Mean position error, mm.
+    pub mean_mm: f64,
+    /// Median position error, mm.
+    pub median_mm: f64,
+    /// 90th percentile position error, mm.
+    pub p90_mm: f64,
+    /// Mean absolute pressure error, kPa (NaN-free: 0 when not predicted).
+    pub pressure_mae_kpa: f64,
+    /// Correlation of predicted and true pressure (0 when not predicted).
+    pub pressure_r: f64,
+}
+
+/// Position errors (mm) of predictions against truth, sorted ascending.
+#[must_use]
+pub fn sorted_position_errors(pred: &[Target3], truth: &[Target3]) -> Vec<f64> {
+    let mut e: Vec<f64> = pred
+        .iter()
+        .zip(truth)
+        .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]))
+        .collect();
+    e.sort_by(f64::total_cmp);
+    e
+}
+
+/// Summarises predictions against truth (`pressure`: whether the third component counts).
+#[must_use]
+pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
+    let e = sorted_position_errors(pred, truth);
+    let q = |f: f64| {
+        e.get(((e.len() as f64 - 1.0) * f).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    let n = pred.len().max(1) as f64;
+    let (mae, r) = if pressure && pred.len() > 1 {
+        let mae = pred
+            .iter()
+            .zip(truth)
+            .map(|(p, t)| (p[2] - t[2]).abs())
+            .sum::<f64>()
+            / n;
+        let (mp, mt) = (
+            pred.iter().map(|p| p[2]).sum::<f64>() / n,
+            truth.iter().map(|t| t[2]).sum::<f64>() / n,
+        );
+        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+        for (p, t) in pred.iter().zip(truth) {
+            sxy += (p[2] - mp) * (t[2] - mt);
+            sxx += (p[2] - mp).powi(2);
+            syy += (t[2] - mt).powi(2);
+        }
+        let r = if sxx > 0.0 && syy > 0.0 {
+            sxy / (sxx * syy).sqrt()
+        } else {
+            0.0
+        };
+        (mae, r)
+    } else {
+        (0.0, 0.0)
+    };
+    ErrorSummary {
+        mean_mm: e.iter().sum::<f64>() / n,
+        median_mm: q(0.5),
+        p90_mm: q(0.9),
+        pressure_mae_kpa: mae,
+        pressure_r: r,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth non-linear map from 2-D positions to 6 "voltages", like a sheet's.
+    fn data(n: usize, seed: u64) -> (DMatrix<f64>, Vec<Target3>) {
+        let mut rng = et_sim::rng::Rng::new(seed);
+        let mut t = Vec::new();
+        let x = DMatrix::from_fn(n, 6, |_, _| 0.0);
+        let mut x = x;
+        for r in 0..n {
+            let (a, b, p) = (rng.uniform(), rng.uniform(), 5.0 + 50.0 * rng.uniform());
+            t.push([100.0 * a, 100.0 * b, p]);
+            let s = p / 55.0;
+            let f = [a, b, (a * b), (3.0 * a).sin(), (2.0 * b).cos(), a * a];
+            for j in 0..6 {
+                x[(r, j)] = s * f[j] + 1e-4 * rng.normal();
+            }
+        }
+        (x, t)
+    }
+
+    #[test]
+    fn ridge_recovers_a_linear_map_exactly() {
+        let mut rng = et_sim::rng::Rng::new(5);
+        let x = DMatrix::from_fn(200, 4, |_, _| rng.normal());
+        let t: Vec<Target3> = (0..200)
+            .map(|r| {
+                let v = x.row(r);
+                [2.0 * v[0] - v[1] + 3.0, v[2] * 0.5, 10.0 + v[3]]
+            })
+            .collect();
+        let m = Ridge::fit(&x, &t, 0.0).unwrap();
+        for r in 0..200 {
+            let row: Vec<f64> = x.row(r).iter().copied().collect();
+            let p = m.predict(&row);
+            for k in 0..3 {
+                assert!((p[k] - t[r][k]).abs() < 1e-9, "{p:?} {:?}", t[r]);
+            }
+        }
+        assert_eq!(m.cost(), 12);
+    }
+
+    #[test]
+    fn kernel_ridge_beats_linear_on_a_non_linear_map() {
+        let (x, t) = data(1500, 1);
+        let (xt, tt) = data(300, 2);
+        let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
+            x.row_iter().map(|r| r.iter().copied().collect()).collect()
+        };
+        let lin = Ridge::fit(&x, &t, 1e-6).unwrap();
+        let krr = KernelRidge::fit(&x, &t, 800, 1.0, 1e-3).unwrap();
+        let pl: Vec<Target3> = rows(&xt).iter().map(|r| lin.predict(r)).collect();
+        let pk: Vec<Target3> = rows(&xt).iter().map(|r| krr.predict(r)).collect();
+        let (sl, sk) = (summarise(&pl, &tt, true), summarise(&pk, &tt, true));
+        assert!(sk.mean_mm < 0.5 * sl.mean_mm, "kernel {sk:?} linear {sl:?}");
+        assert!(sk.pressure_r > 0.9, "{sk:?}");
+    }
+
+    #[test]
+    fn intensity_by_class_recovers_each_class_calibration() {
+        // Class c: pressure = (1 + c) + 2 u + 0.5 u^2 with u = ln |x|.
+        let mut rng = et_sim::rng::Rng::new(3);
+        let (mut rows, mut y, mut kpa) = (Vec::new(), Vec::new(), Vec::new());
+        for r in 0..60 {
+            let c = (r % 3) as u16;
+            let u: f64 = -6.0 + 2.0 * rng.uniform();
+            let dir = [0.6, 0.8];
+            rows.extend(dir.iter().map(|d| d * u.exp()));
+            y.push(c);
+            kpa.push(f64::from(c) + 1.0 + 2.0 * u + 0.5 * u * u);
+        }
+        let x = DMatrix::from_row_slice(60, 2, &rows);
+        let m = IntensityByClass::fit(&x, &y, &kpa, 3).unwrap();
+        for (r, &c) in y.iter().enumerate() {
+            let row: Vec<f64> = x.row(r).iter().copied().collect();
+            assert!((m.predict(&row, c) - kpa[r]).abs() < 1e-6);
+        }
+        assert!(matches!(
+            IntensityByClass::fit(&x, &y[..5], &kpa, 3),
+            Err(FitError::Shape(_))
+        ));
+    }
+
+    #[test]
+    fn bad_input_is_refused() {
+        let x = DMatrix::from_element(3, 2, 1.0);
+        assert!(matches!(
+            Ridge::fit(&x, &[[0.0; 3]; 2], 0.1),
+            Err(FitError::Shape(_))
+        ));
+        let mut y = x.clone();
+        y[(1, 1)] = f64::NAN;
+        assert!(matches!(
+            KernelRidge::fit(&y, &[[0.0; 3]; 3], 3, 1.0, 0.1),
+            Err(FitError::NonFinite { row: 1, feature: 1 })
+        ));
+        let s = summarise(
+            &[[0.0, 0.0, 1.0], [3.0, 4.0, 2.0]],
+            &[[0.0; 3], [0.0; 3]],
+            false,
+        );
+        assert_eq!((s.mean_mm, s.p90_mm, s.pressure_r), (2.5, 5.0, 0.0));
+    }
+}

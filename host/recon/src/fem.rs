@@ -1,0 +1,444 @@
+//! The forward model (docs/method.md §5): P1 finite elements on a [`Mesh`] with the complete electrode
+//! model, or point electrodes, for a piecewise-constant sheet conductivity.
+//!
+//! Complete electrode model, unknowns u (nodes) and U (electrodes), with sheet conductivity
+//! sigma (S per square, one value per triangle) and contact impedance z_l (ohm m, i.e. a
+//! contact resistance R_l spread over the electrode's width w_l has z_l = R_l w_l):
+//!
+//! ```text
+//! [ A_M + A_Z   A_W ] [u]   [0]     A_M[i,j] = sum_T sigma_T int_T grad phi_i . grad phi_j
+//! [ A_W^T       A_D ] [U] = [I]     A_Z[i,j] = sum_l 1/z_l int_{e_l} phi_i phi_j
+//!                                   A_W[i,l] = -1/z_l int_{e_l} phi_i,  A_D[l,l] = |e_l| / z_l
+//! ```
+//!
+//! The last electrode is grounded (U_{L-1} = 0) to make the system positive definite, then all
+//! potentials are shifted so that sum_l U_l = 0 (docs/method.md §5's reference). The point model injects
+//! each electrode's current at its centre node and reads the potential there (ground: the
+//! last electrode's node). One sparse Cholesky factorisation (faer, AMD ordering) serves every
+//! injection. The sparsity pattern, its ordering and the symbolic factorisation are made once
+//! in [`Forward::new`]; a solve at a new conductivity only fills in the values and redoes the
+//! numeric factorisation (docs/design.md: "keep the symbolic step").
+
+use et_core::protocol::Protocol;
+use faer::Side;
+use faer::linalg::solvers::SolveCore;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
+use nalgebra::DMatrix;
+
+use crate::mesh::{Mesh, dist};
+
+/// How electrodes meet the sheet.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Electrodes {
+    /// The complete electrode model with these contact impedances z_l, ohm m (one per
+    /// electrode, > 0).
+    Complete(Vec<f64>),
+    /// Point electrodes at the electrodes' centre nodes.
+    Point,
+}
+
+/// Why a forward solve failed.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FemError {
+    /// Wrong lengths, or non-finite or non-positive conductivities or impedances.
+    Input(String),
+    /// The system could not be factorised (disconnected mesh, or values so extreme that it
+    /// is not numerically positive definite).
+    Factorisation(String),
+}
+
+impl std::fmt::Display for FemError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FemError::Input(why) => write!(f, "forward model input: {why}"),
+            FemError::Factorisation(why) => write!(f, "forward model: factorisation failed: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for FemError {}
+
+/// Potentials for several current patterns.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// n x m node potentials, V (one column per pattern).
+    pub nodes: DMatrix<f64>,
+    /// L x m electrode potentials, V (sum over electrodes 0 in each column).
+    pub electrodes: DMatrix<f64>,
+}
+
+/// Where one entry of the system matrix comes from.
+#[derive(Clone, Copy, Debug)]
+enum Entry {
+    /// sigma_t times entry k of triangle t's unit stiffness.
+    Stiffness { t: usize, k: usize },
+    /// A contact term (independent of sigma).
+    Fixed(f64),
+}
+
+/// The system's sparsity, fixed per mesh and electrode model: its entries, their order in CSC
+/// storage, and the symbolic Cholesky factorisation (AMD ordering, elimination tree).
+#[derive(Clone, Debug)]
+struct Pattern {
+    entries: Vec<Entry>,
+    symbolic: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+    llt: SymbolicLlt<usize>,
+}
+
+/// The forward operator of one mesh and electrode model.
+#[derive(Clone, Debug)]
+pub struct Forward {
+    mesh: Mesh,
+    electrodes: Electrodes,
+    /// Per triangle, the 3 x 3 stiffness of unit conductivity (row-major).
+    local: Vec<[f64; 9]>,
+    pattern: Pattern,
+}
+
+/// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
+/// grounded unknown (the last electrode, or its centre node in the point model).
+fn grounded(mesh: &Mesh, electrodes: &Electrodes, full: usize) -> Option<usize> {
+    let (n, l) = (mesh.nodes.len(), mesh.electrodes.len());
+    match electrodes {
+        Electrodes::Complete(_) => (full < n + l - 1).then_some(full),
+        Electrodes::Point => match full.cmp(&mesh.centre_nodes[l - 1]) {
+            std::cmp::Ordering::Less => Some(full),
+            std::cmp::Ordering::Equal => None,
+            std::cmp::Ordering::Greater => Some(full - 1),
+        },
+    }
+}
+
+/// Every entry of the system matrix with its place, then the pattern and its symbolic
+/// factorisation.
+fn make_pattern(
+    mesh: &Mesh,
+    electrodes: &Electrodes,
+    triangles: usize,
+) -> Result<Pattern, FemError> {
+    let n = mesh.nodes.len();
+    let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+    let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * triangles);
+    let mut entries = Vec::with_capacity(places.capacity());
+    let mut put = |i: usize, j: usize, entry: Entry| {
+        if let (Some(a), Some(b)) = (grounded(mesh, electrodes, i), grounded(mesh, electrodes, j)) {
+            places.push(Pair::new(a, b));
+            entries.push(entry);
+        }
+    };
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for i in 0..3 {
+            for j in 0..3 {
+                put(tri[i], tri[j], Entry::Stiffness { t, k: 3 * i + j });
+            }
+        }
+    }
+    if let Electrodes::Complete(z) = electrodes {
+        for (e, edges) in mesh.electrodes.iter().enumerate() {
+            for &[a, b] in edges {
+                let len = dist(mesh.nodes[a], mesh.nodes[b]);
+                let k = len / z[e];
+                put(a, a, Entry::Fixed(k / 3.0));
+                put(b, b, Entry::Fixed(k / 3.0));
+                put(a, b, Entry::Fixed(k / 6.0));
+                put(b, a, Entry::Fixed(k / 6.0));
+                for v in [a, b] {
+                    put(v, n + e, Entry::Fixed(-k / 2.0));
+                    put(n + e, v, Entry::Fixed(-k / 2.0));
+                }
+                put(n + e, n + e, Entry::Fixed(k));
+            }
+        }
+    }
+    let size = match electrodes {
+        Electrodes::Complete(_) => n + mesh.electrodes.len() - 1,
+        Electrodes::Point => n - 1,
+    };
+    let (symbolic, argsort) =
+        SymbolicSparseColMat::try_new_from_indices(size, size, &places).map_err(|e| fail(&e))?;
+    let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).map_err(|e| fail(&e))?;
+    Ok(Pattern {
+        entries,
+        symbolic,
+        argsort,
+        llt,
+    })
+}
+
+impl Forward {
+    /// Prepares the forward model.
+    ///
+    /// # Errors
+    /// [`FemError::Input`] for impedances of the wrong count or not finite and positive, or a
+    /// mesh with a degenerate triangle.
+    pub fn new(mesh: Mesh, electrodes: Electrodes) -> Result<Self, FemError> {
+        let l = mesh.electrodes.len();
+        if let Electrodes::Complete(z) = &electrodes
+            && (z.len() != l || z.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+        {
+            return Err(FemError::Input(format!(
+                "{} contact impedances for {l} electrodes, each finite and > 0",
+                z.len()
+            )));
+        }
+        if l < 2 {
+            return Err(FemError::Input("at least 2 electrodes".into()));
+        }
+        let local = (0..mesh.triangles.len())
+            .map(|t| {
+                let [a, b, c] = mesh.triangles[t].map(|i| mesh.nodes[i]);
+                let area2 = mesh.double_area(t);
+                if !(area2.is_finite() && area2 > 0.0) {
+                    return Err(FemError::Input(format!("triangle {t} is degenerate")));
+                }
+                // grad phi_k = (y_{k+1} - y_{k+2}, x_{k+2} - x_{k+1}) / (2 area).
+                let p = [a, b, c];
+                let g: Vec<[f64; 2]> = (0..3)
+                    .map(|k| {
+                        let (q, r) = (p[(k + 1) % 3], p[(k + 2) % 3]);
+                        [(q[1] - r[1]) / area2, (r[0] - q[0]) / area2]
+                    })
+                    .collect();
+                let mut m = [0.0; 9];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        m[3 * i + j] = 0.5 * area2 * (g[i][0] * g[j][0] + g[i][1] * g[j][1]);
+                    }
+                }
+                Ok(m)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let pattern = make_pattern(&mesh, &electrodes, local.len())?;
+        Ok(Self {
+            mesh,
+            electrodes,
+            local,
+            pattern,
+        })
+    }
+
+    /// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
+    /// grounded unknown.
+    fn grounded(&self, full: usize) -> Option<usize> {
+        grounded(&self.mesh, &self.electrodes, full)
+    }
+
+    /// The mesh.
+    #[must_use]
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Unknowns of the (grounded) system.
+    fn size(&self) -> usize {
+        match self.electrodes {
+            Electrodes::Complete(_) => self.mesh.nodes.len() + self.mesh.electrodes.len() - 1,
+            Electrodes::Point => self.mesh.nodes.len() - 1,
+        }
+    }
+
+    /// Solves for the current patterns `currents` (L x m, A, each column summing to 0) at
+    /// sheet conductivity `sigma` (S per square, one per triangle).
+    ///
+    /// # Errors
+    /// [`FemError`] for bad input or a failed factorisation.
+    pub fn solve(&self, sigma: &[f64], currents: &DMatrix<f64>) -> Result<Solution, FemError> {
+        let (n, l) = (self.mesh.nodes.len(), self.mesh.electrodes.len());
+        if sigma.len() != self.mesh.triangles.len() {
+            return Err(FemError::Input(format!(
+                "{} conductivities for {} triangles",
+                sigma.len(),
+                self.mesh.triangles.len()
+            )));
+        }
+        if let Some(t) = sigma.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(FemError::Input(format!(
+                "conductivity of triangle {t} is {}",
+                sigma[t]
+            )));
+        }
+        if currents.nrows() != l || currents.iter().any(|v| !v.is_finite()) {
+            return Err(FemError::Input(format!(
+                "currents must be {l} x m and finite"
+            )));
+        }
+        for (c, col) in currents.column_iter().enumerate() {
+            let scale = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if col.sum().abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+                return Err(FemError::Input(format!(
+                    "pattern {c}: currents do not sum to 0"
+                )));
+            }
+        }
+        let size = self.size();
+        let idx = |full: usize| self.grounded(full);
+        let values: Vec<f64> = self
+            .pattern
+            .entries
+            .iter()
+            .map(|e| match *e {
+                Entry::Stiffness { t, k } => sigma[t] * self.local[t][k],
+                Entry::Fixed(v) => v,
+            })
+            .collect();
+        let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+        let a = SparseColMat::new_from_argsort(
+            self.pattern.symbolic.clone(),
+            &self.pattern.argsort,
+            &values,
+        )
+        .map_err(|e| fail(&e))?;
+        let llt = Llt::try_new_with_symbolic(self.pattern.llt.clone(), a.as_ref(), Side::Lower)
+            .map_err(|e| fail(&e))?;
+        let m = currents.ncols();
+        let mut rhs = faer::Mat::<f64>::zeros(size, m);
+        for c in 0..m {
+            for e in 0..l {
+                let full = match self.electrodes {
+                    Electrodes::Complete(_) => n + e,
+                    Electrodes::Point => self.mesh.centre_nodes[e],
+                };
+                if let Some(i) = idx(full) {
+                    rhs[(i, c)] += currents[(e, c)];
+                }
+            }
+        }
+        llt.solve_in_place_with_conj(faer::Conj::No, rhs.as_mut());
+        let value = |full: usize, c: usize| idx(full).map_or(0.0, |i| rhs[(i, c)]);
+        let mut nodes = DMatrix::from_fn(n, m, &value);
+        let mut electrodes = DMatrix::from_fn(l, m, |e, c| match self.electrodes {
+            Electrodes::Complete(_) => value(n + e, c),
+            Electrodes::Point => value(self.mesh.centre_nodes[e], c),
+        });
+        for c in 0..m {
+            let mean = electrodes.column(c).mean();
+            electrodes.column_mut(c).add_scalar_mut(-mean);
+            nodes.column_mut(c).add_scalar_mut(-mean);
+        }
+        if nodes
+            .iter()
+            .chain(electrodes.iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(FemError::Factorisation("non-finite potentials".into()));
+        }
+        Ok(Solution { nodes, electrodes })
+    }
+
+    /// The L x L current patterns of `protocol`'s injections (`amps` from source to sink).
+    #[must_use]
+    pub fn injection_currents(protocol: &Protocol, amps: f64) -> DMatrix<f64> {
+        let l = usize::from(protocol.electrodes());
+        let mut c = DMatrix::zeros(l, l);
+        for (i, inj) in protocol.injections().enumerate() {
+            c[(usize::from(inj.source.0), i)] += amps;
+            c[(usize::from(inj.sink.0), i)] -= amps;
+        }
+        c
+    }
+
+    /// The frame V_m (K values, V) of `protocol` at conductivity `sigma` and current `amps`:
+    /// U_positive - U_negative of each measurement.
+    ///
+    /// # Errors
+    /// [`FemError`] as [`Forward::solve`], or a protocol for another electrode count.
+    pub fn frame(
+        &self,
+        sigma: &[f64],
+        protocol: &Protocol,
+        amps: f64,
+    ) -> Result<Vec<f64>, FemError> {
+        if usize::from(protocol.electrodes()) != self.mesh.electrodes.len() {
+            return Err(FemError::Input(format!(
+                "protocol for {} electrodes, mesh has {}",
+                protocol.electrodes(),
+                self.mesh.electrodes.len()
+            )));
+        }
+        let sol = self.solve(sigma, &Self::injection_currents(protocol, amps))?;
+        Ok(protocol
+            .steps()
+            .map(|s| {
+                let i = usize::from(s.injection_index);
+                sol.electrodes[(usize::from(s.measurement.positive.0), i)]
+                    - sol.electrodes[(usize::from(s.measurement.negative.0), i)]
+            })
+            .collect())
+    }
+}
+
+impl Forward {
+    /// The frame of `protocol` and its Jacobian with respect to each triangle's conductivity
+    /// (K x T, V per S/sq), by the adjoint method: with u_i the potentials of injection i at
+    /// `amps` and v_pq those of a unit current from p to q (the measurement's lead field),
+    /// dV_k / dsigma_t = -int_T grad u_i . grad v_pq = -u_i|_T^T K_T v_pq|_T. One
+    /// factorisation serves the injections and the lead fields; no inverse is formed.
+    ///
+    /// # Errors
+    /// As [`Forward::frame`].
+    pub fn jacobian(
+        &self,
+        sigma: &[f64],
+        protocol: &Protocol,
+        amps: f64,
+    ) -> Result<(Vec<f64>, DMatrix<f64>), FemError> {
+        let l = self.mesh.electrodes.len();
+        if usize::from(protocol.electrodes()) != l {
+            return Err(FemError::Input(format!(
+                "protocol for {} electrodes, mesh has {l}",
+                protocol.electrodes()
+            )));
+        }
+        let steps: Vec<_> = protocol.steps().collect();
+        let mut pairs: Vec<(usize, usize)> = steps
+            .iter()
+            .map(|s| {
+                (
+                    usize::from(s.measurement.positive.0),
+                    usize::from(s.measurement.negative.0),
+                )
+            })
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let inj = Self::injection_currents(protocol, amps);
+        let mut currents = DMatrix::zeros(l, l + pairs.len());
+        currents.columns_mut(0, l).copy_from(&inj);
+        for (m, &(p, q)) in pairs.iter().enumerate() {
+            currents[(p, l + m)] = 1.0;
+            currents[(q, l + m)] = -1.0;
+        }
+        let sol = self.solve(sigma, &currents)?;
+        let t_n = self.mesh.triangles.len();
+        let mut frame = Vec::with_capacity(steps.len());
+        let mut jac = DMatrix::zeros(steps.len(), t_n);
+        for (k, s) in steps.iter().enumerate() {
+            let i = usize::from(s.injection_index);
+            let (p, q) = (
+                usize::from(s.measurement.positive.0),
+                usize::from(s.measurement.negative.0),
+            );
+            frame.push(sol.electrodes[(p, i)] - sol.electrodes[(q, i)]);
+            let m = l + pairs.binary_search(&(p, q)).unwrap_or(0);
+            for (t, tri) in self.mesh.triangles.iter().enumerate() {
+                let u = tri.map(|a| sol.nodes[(a, i)]);
+                let v = tri.map(|a| sol.nodes[(a, m)]);
+                let kt = &self.local[t];
+                let mut acc = 0.0;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        acc += u[a] * kt[3 * a + b] * v[b];
+                    }
+                }
+                jac[(k, t)] = -acc;
+            }
+        }
+        Ok((frame, jac))
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,361 @@
+use super::*;
+use crate::mesh::{Mesh, MeshSize};
+use et_core::protocol::{Protocol, ProtocolKind};
+use et_sim::shape::Shape;
+use et_sim::sheet::SheetSpec;
+
+fn disc(l: u8, width: f64) -> SheetSpec {
+    let mut s = SheetSpec::rectangle(1.0, 1.0, l);
+    s.shape = Shape::Disc { radius: 1.0 };
+    s.electrodes.width = width;
+    s
+}
+
+fn uniform(h: f64) -> MeshSize {
+    MeshSize {
+        interior: h,
+        electrode: h,
+        min_angle_deg: 28.0,
+    }
+}
+
+/// max |frame - analytic| / max |analytic| for point electrodes on the unit disc, adjacent
+/// protocol, sigma = 1, 1 A: U(x) = (1 / pi) ln(|x - x_sink| / |x - x_source|) + const.
+fn point_error(h: f64) -> (f64, usize) {
+    // Width 4h: the boundary is sampled at h everywhere, so the mesh is quasi-uniform (the
+    // point model uses only the centre nodes).
+    let spec = disc(16, 4.0 * h);
+    let mesh = Mesh::of_sheet(&spec, uniform(h)).unwrap();
+    let triangles = mesh.triangles.len();
+    let at: Vec<[f64; 2]> = mesh.centre_nodes.iter().map(|&i| mesh.nodes[i]).collect();
+    let fwd = Forward::new(mesh, Electrodes::Point).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let sigma = vec![1.0; triangles];
+    let v = fwd.frame(&sigma, &protocol, 1.0).unwrap();
+    let u = |x: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (dist(x, b) / dist(x, a)).ln() / std::f64::consts::PI
+    };
+    let (mut worst, mut scale) = (0.0f64, 0.0f64);
+    for s in protocol.steps() {
+        let (a, b) = (
+            at[usize::from(s.injection.source.0)],
+            at[usize::from(s.injection.sink.0)],
+        );
+        let (p, q) = (
+            at[usize::from(s.measurement.positive.0)],
+            at[usize::from(s.measurement.negative.0)],
+        );
+        let exact = u(p, a, b) - u(q, a, b);
+        worst = worst.max((v[usize::from(s.k)] - exact).abs());
+        scale = scale.max(exact.abs());
+    }
+    (worst / scale, triangles)
+}
+
+#[test]
+fn point_electrodes_converge_to_the_disc_solution_at_second_order() {
+    let e: Vec<(f64, usize)> = [0.05, 0.025, 0.0125]
+        .iter()
+        .map(|&h| point_error(h))
+        .collect();
+    println!("point electrodes on the unit disc: (relative error, triangles) {e:?}");
+    for w in e.windows(2) {
+        let order = (w[0].0 / w[1].0).log2();
+        assert!(order > 1.7, "convergence order {order:.2}: {e:?}");
+    }
+    assert!(e[2].0 < 5e-3, "{e:?}");
+}
+
+fn cem_frame(h: f64) -> Vec<f64> {
+    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let mesh = Mesh::of_sheet(
+        &spec,
+        MeshSize {
+            interior: h,
+            electrode: h / 4.0,
+            min_angle_deg: 28.0,
+        },
+    )
+    .unwrap();
+    let n = mesh.triangles.len();
+    let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Opposite, 16).unwrap();
+    fwd.frame(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
+        .unwrap()
+}
+
+#[test]
+fn cem_voltages_converge_under_refinement() {
+    let frames: Vec<Vec<f64>> = [0.004, 0.002, 0.001]
+        .iter()
+        .map(|&h| cem_frame(h))
+        .collect();
+    let diff = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    let d: Vec<f64> = frames.windows(2).map(|w| diff(&w[0], &w[1])).collect();
+    let scale = frames[2].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!("CEM successive differences (V): {d:?}, frame scale {scale:.3e} V");
+    for w in d.windows(2) {
+        assert!(w[1] < 0.6 * w[0], "not converging: {d:?}");
+    }
+    assert!(d[1] < 1e-2 * scale, "{d:?}");
+}
+
+fn square_cem(z: f64) -> (Forward, usize) {
+    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 2_000)).unwrap();
+    let n = mesh.triangles.len();
+    (
+        Forward::new(mesh, Electrodes::Complete(vec![z; 8])).unwrap(),
+        n,
+    )
+}
+
+#[test]
+fn reciprocity_and_current_balance_hold() {
+    let (fwd, n) = square_cem(5.0);
+    // A contrast so that the test is not of a symmetric sheet only.
+    let sigma: Vec<f64> = (0..n)
+        .map(|t| {
+            if fwd.mesh().centroid(t)[0] > 0.02 {
+                1e-4
+            } else {
+                3e-5
+            }
+        })
+        .collect();
+    // Every pair pattern e_a - e_b.
+    let pairs: Vec<(usize, usize)> = (0..8)
+        .flat_map(|a| (0..8).map(move |b| (a, b)))
+        .filter(|(a, b)| a != b)
+        .collect();
+    let mut pats = DMatrix::zeros(8, pairs.len());
+    for (c, &(a, b)) in pairs.iter().enumerate() {
+        pats[(a, c)] = 1e-3;
+        pats[(b, c)] = -1e-3;
+    }
+    let sol = fwd.solve(&sigma, &pats).unwrap();
+    let col = |a: usize, b: usize| pairs.iter().position(|&p| p == (a, b)).unwrap();
+    let scale = sol.electrodes.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // Z(ab, pq) = Z(pq, ab).
+    for (a, b, p, q) in [(0, 1, 3, 5), (2, 6, 7, 4), (1, 5, 0, 3)] {
+        let u1 = sol.electrodes[(p, col(a, b))] - sol.electrodes[(q, col(a, b))];
+        let u2 = sol.electrodes[(a, col(p, q))] - sol.electrodes[(b, col(p, q))];
+        assert!((u1 - u2).abs() < 1e-9 * scale, "{u1} vs {u2}");
+    }
+    // The current through each electrode's contact equals the one prescribed.
+    let Electrodes::Complete(z) = &fwd.electrodes else {
+        unreachable!()
+    };
+    let m = fwd.mesh();
+    for c in 0..pats.ncols() {
+        for e in 0..8 {
+            let through: f64 = m.electrodes[e]
+                .iter()
+                .map(|&[a, b]| {
+                    let k = dist(m.nodes[a], m.nodes[b]) / z[e];
+                    k * (sol.electrodes[(e, c)] - 0.5 * (sol.nodes[(a, c)] + sol.nodes[(b, c)]))
+                })
+                .sum();
+            assert!(
+                (through - pats[(e, c)]).abs() < 1e-9 * 1e-3,
+                "electrode {e}: {through}"
+            );
+        }
+        assert!(sol.electrodes.column(c).sum().abs() < 1e-12 * scale.max(1.0));
+    }
+}
+
+#[test]
+fn extremes_give_finite_voltages_or_clear_errors() {
+    for z in [1e-9, 1e-3, 1e3, 1e6] {
+        let (fwd, n) = square_cem(z);
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        for contrast in [1e-3, 1.0, 1e3] {
+            let sigma: Vec<f64> = (0..n)
+                .map(|t| {
+                    if fwd.mesh().centroid(t)[1] > 0.0 {
+                        1e-4 * contrast
+                    } else {
+                        1e-4
+                    }
+                })
+                .collect();
+            let v = fwd.frame(&sigma, &protocol, 1e-5).unwrap();
+            assert!(v.iter().all(|x| x.is_finite()), "z {z} contrast {contrast}");
+        }
+    }
+    let (fwd, n) = square_cem(5.0);
+    let c = Forward::injection_currents(&Protocol::new(ProtocolKind::Adjacent, 8).unwrap(), 1e-3);
+    let mut bad = vec![1e-4; n];
+    bad[3] = f64::NAN;
+    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    bad[3] = 0.0;
+    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    assert!(matches!(
+        fwd.solve(&vec![1e-4; n - 1], &c),
+        Err(FemError::Input(_))
+    ));
+    let mut unbalanced = c.clone();
+    unbalanced[(0, 0)] += 1e-3;
+    assert!(matches!(
+        fwd.solve(&vec![1e-4; n], &unbalanced),
+        Err(FemError::Input(_))
+    ));
+    let p16 = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    assert!(matches!(
+        fwd.frame(&vec![1e-4; n], &p16, 1e-3),
+        Err(FemError::Input(_))
+    ));
+    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 500)).unwrap();
+    assert!(matches!(
+        Forward::new(mesh.clone(), Electrodes::Complete(vec![1.0; 7])),
+        Err(FemError::Input(_))
+    ));
+    assert!(matches!(
+        Forward::new(mesh, Electrodes::Complete(vec![0.0; 8])),
+        Err(FemError::Input(_))
+    ));
+}
+
+#[test]
+fn jacobian_columns_agree_with_finite_differences() {
+    for electrodes in [Electrodes::Complete(vec![5.0; 8]), Electrodes::Point] {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 600)).unwrap();
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, electrodes.clone()).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        let sigma: Vec<f64> = (0..n)
+            .map(|t| 1e-4 * (1.0 + 0.5 * ((t * 7) % 5) as f64))
+            .collect();
+        let (frame, jac) = fwd.jacobian(&sigma, &protocol, 1e-4).unwrap();
+        assert_eq!(frame, fwd.frame(&sigma, &protocol, 1e-4).unwrap());
+        // Columns of triangles near an electrode, in the middle and in a corner.
+        for t in [0, n / 3, n / 2, n - 1] {
+            let h = 1e-6 * sigma[t];
+            let mut up = sigma.clone();
+            up[t] += h;
+            let mut down = sigma.clone();
+            down[t] -= h;
+            let (fu, fd) = (
+                fwd.frame(&up, &protocol, 1e-4).unwrap(),
+                fwd.frame(&down, &protocol, 1e-4).unwrap(),
+            );
+            let col_scale = (0..frame.len()).fold(0.0f64, |m, k| m.max(jac[(k, t)].abs()));
+            for k in 0..frame.len() {
+                let fdiff = (fu[k] - fd[k]) / (2.0 * h);
+                let err = (fdiff - jac[(k, t)]).abs() / col_scale;
+                assert!(
+                    err < 1e-4,
+                    "{electrodes:?} triangle {t} row {k}: adjoint {} FD {fdiff}",
+                    jac[(k, t)]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn finite_elements_and_the_simulators_resistor_network_agree() {
+    // Two independent models of the same untouched sheet (scene file): the simulator's
+    // resistor network and these finite elements.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
+    for name in ["disc-22cm-16.toml", "square-13cm-16.toml"] {
+        let sc = et_sim::scene::Scene::load(&root.join(name)).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+        let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&sc.sheet, &[]).unwrap());
+        let sim = et_sim::frontend::SimFrontend::new(sheet, sc.frontend, 1).unwrap();
+        let v_sim = sim.ideal_frame(&protocol, 32e-6);
+        let mesh = Mesh::with_about(&sc.sheet, 20_000).unwrap();
+        let n = mesh.triangles.len();
+        let e = &sc.sheet.electrodes;
+        let fwd = Forward::new(
+            mesh,
+            Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
+        )
+        .unwrap();
+        let v_fem = fwd
+            .frame(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, 32e-6)
+            .unwrap();
+        let scale = v_fem.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = v_fem
+            .iter()
+            .zip(&v_sim)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "{name}: largest difference {:.2} % of the largest voltage",
+            100.0 * worst / scale
+        );
+        assert!(worst < 0.05 * scale, "{name}: {worst} of {scale}");
+    }
+}
+
+#[test]
+fn four_to_thirty_two_electrodes() {
+    for l in [4u8, 8, 16, 32] {
+        let spec = SheetSpec::rectangle(0.13, 0.13, l);
+        let mesh = Mesh::with_about(&spec, 3_000).unwrap();
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, Electrodes::Complete(vec![5.0; usize::from(l)])).unwrap();
+        let protocol = Protocol::new(ProtocolKind::Adjacent, l).unwrap();
+        let (v, jac) = fwd.jacobian(&vec![3e-5; n], &protocol, 32e-6).unwrap();
+        assert_eq!(v.len(), protocol.frame_len());
+        assert!(v.iter().chain(jac.iter()).all(|x| x.is_finite()), "L = {l}");
+    }
+}
+
+/// The change a touch (radius `r` m at `c`, conductivity x 5) makes to the adjacent frame of
+/// the 13 cm square on `mesh`, V; the touch covers the triangles whose centroid it holds.
+fn touch_change(mesh: Mesh, c: [f64; 2], r: f64) -> Vec<f64> {
+    let sigma0: Vec<f64> = vec![1.0 / 30e3; mesh.triangles.len()];
+    let sigma1: Vec<f64> = (0..mesh.triangles.len())
+        .map(|t| {
+            let p = mesh.centroid(t);
+            if (p[0] - c[0]).hypot(p[1] - c[1]) <= r {
+                5.0 * sigma0[t]
+            } else {
+                sigma0[t]
+            }
+        })
+        .collect();
+    let fwd = Forward::new(mesh, Electrodes::Complete(vec![5.0 * 0.005; 16])).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let v0 = fwd.frame(&sigma0, &protocol, 32e-6).unwrap();
+    let v1 = fwd.frame(&sigma1, &protocol, 32e-6).unwrap();
+    v1.iter().zip(&v0).map(|(a, b)| a - b).collect()
+}
+
+#[test]
+fn refining_at_a_touch_spends_the_same_triangles_better() {
+    use crate::mesh::Refinement;
+    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let (c, r) = ([0.025, -0.015], 0.008);
+    // The reference is uniformly fine, so it does not favour the refined mesh.
+    let reference = touch_change(Mesh::with_about(&spec, 100_000).unwrap(), c, r);
+    let error = |dv: &[f64]| {
+        let num: f64 = dv
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
+        (num / reference.iter().map(|b| b * b).sum::<f64>()).sqrt()
+    };
+    let uniform = Mesh::with_about(&spec, 2_000).unwrap();
+    let refined = Mesh::with_about_refined(&spec, 2_000, &[Refinement::touch(c, r)]).unwrap();
+    let (n_u, n_r) = (uniform.triangles.len(), refined.triangles.len());
+    let (e_u, e_r) = (
+        error(&touch_change(uniform, c, r)),
+        error(&touch_change(refined, c, r)),
+    );
+    eprintln!("uniform {n_u} triangles: {e_u:.4}; refined {n_r}: {e_r:.4}");
+    assert!(n_r < n_u * 11 / 10, "{n_r} against {n_u}");
+    assert!(e_r < 0.5 * e_u, "refined {e_r} against uniform {e_u}");
+}

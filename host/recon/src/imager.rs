@@ -1,0 +1,70 @@
+//! One sheet's imaging set-up, shared by every caller: the forward model about the
+//! background conductivity and the pixel grid images are drawn on.
+
+use et_core::protocol::Protocol;
+use et_sim::sheet::SheetSpec;
+use nalgebra::DMatrix;
+
+use crate::fem::{Electrodes, FemError, Forward};
+use crate::mesh::Mesh;
+use crate::pixels::PixelGrid;
+
+/// The forward model of one sheet about its background conductivity, and the pixel grid
+/// images are drawn on. One `Imager` serves every protocol (a Jacobian per protocol).
+pub struct Imager {
+    /// Finite elements with the complete electrode model (docs/method.md §5).
+    pub forward: Forward,
+    /// The pixels images are drawn on.
+    pub grid: PixelGrid,
+    /// Background conductivity sigma_0 = 1 / sheet resistance, S per square.
+    pub sigma0: f64,
+}
+
+impl std::fmt::Debug for Imager {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Imager")
+            .field("triangles", &self.triangles())
+            .field("grid", &(self.grid.width, self.grid.height))
+            .field("sigma0", &self.sigma0)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Imager {
+    /// The complete electrode model of `sheet` on `mesh` (contact impedance z = contact
+    /// resistance x electrode width, ohm m), a grid `pixels` across.
+    ///
+    /// # Errors
+    /// [`FemError`] if the forward model cannot be built.
+    pub fn new(sheet: &SheetSpec, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
+        let grid = PixelGrid::new(&mesh, pixels.max(4));
+        let e = &sheet.electrodes;
+        let z = vec![e.contact_ohm * e.width; usize::from(e.count)];
+        Ok(Self {
+            forward: Forward::new(mesh, Electrodes::Complete(z))?,
+            grid,
+            sigma0: 1.0 / sheet.sheet_resistance,
+        })
+    }
+
+    /// Triangles of the mesh.
+    #[must_use]
+    pub fn triangles(&self) -> usize {
+        self.forward.mesh().triangles.len()
+    }
+
+    /// The background conductivity on every triangle.
+    #[must_use]
+    pub fn background(&self) -> Vec<f64> {
+        vec![self.sigma0; self.triangles()]
+    }
+
+    /// The K x T Jacobian of `protocol`'s frame at the background, `amps` injected (V per
+    /// S per square).
+    ///
+    /// # Errors
+    /// [`FemError`] if the solve fails.
+    pub fn jacobian(&self, protocol: &Protocol, amps: f64) -> Result<DMatrix<f64>, FemError> {
+        Ok(self.forward.jacobian(&self.background(), protocol, amps)?.1)
+    }
+}

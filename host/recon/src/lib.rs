@@ -1,0 +1,44 @@
+//! `et-recon`: imaging a sheet from its boundary voltages. It owns the meshes, the forward
+//! model, the reconstruction and what is read off an image; it has no command line, no file
+//! formats of its own beyond mesh import, and no plotting.
+//!
+//! Modules in pipeline order (section numbers refer to `docs/method.md`):
+//!
+//! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade), refined at
+//!   regions of interest; [`mesh::import`] reads Gmsh and CSV meshes.
+//! - [`fem`]: the forward model (§5), P1 finite elements with the complete electrode model or
+//!   point electrodes, the Jacobian by the adjoint method.
+//! - [`imager`]: one sheet's forward model at its background and its pixel grid, the set-up
+//!   every caller shares.
+//! - [`onestep`]: one-step Gauss-Newton with the NOSER prior (§6), the reconstruction matrix
+//!   and the noise it carries from dV to each pixel.
+//! - [`gcv`]: alpha by generalised cross-validation (§6.3).
+//! - [`gauss_newton`]: iterative Gauss-Newton (§6.4).
+//! - [`pixels`]: pixel grids over a mesh.
+//! - [`touches`]: regions of interest and touches, split at their saddles and kept above
+//!   their noise (§6.5).
+//! - [`metrics`]: the image metrics SE, PE, RNG and BVC against the truth (§7).
+//! - [`select`]: choosing the protocol from the image (§8), as a state machine.
+//!
+//! The simulator's resistor network is never used here (`et-sim` only lends the sheet's
+//! description), so tests against simulated frames do not commit the inverse crime.
+#![forbid(unsafe_code)]
+
+pub mod fem;
+pub mod gauss_newton;
+pub mod gcv;
+pub mod imager;
+pub mod mesh;
+pub mod metrics;
+pub mod onestep;
+pub mod pixels;
+pub mod select;
+pub mod touches;
+
+pub use gauss_newton::{Data, GaussNewton, gauss_newton};
+pub use gcv::{default_alphas, gcv_alpha};
+pub use imager::Imager;
+pub use metrics::{Metrics, metrics};
+pub use onestep::{OneStep, ReconError};
+pub use pixels::PixelGrid;
+pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

@@ -1,0 +1,532 @@
+//! Triangle meshes of a sheet for the finite elements (docs/method.md §5): the outline sampled with
+//! every corner and every electrode end as a vertex, electrodes as runs of boundary edges,
+//! constrained Delaunay triangulation and quality refinement by `spade`.
+//!
+//! Sizes are in metres. The boundary is sampled finer under the electrodes (where the
+//! complete electrode model's current concentrates) than elsewhere, regions of interest
+//! ([`Refinement`]: a touch, or a region an image found) are seeded with a lattice of their
+//! own spacing, and the refinement's angle limit grades the elements from there into the
+//! interior, so a mesh is fine only where the scene needs it.
+
+use et_sim::sheet::SheetSpec;
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
+
+/// A triangle mesh with electrodes on its boundary.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    /// Node coordinates, m.
+    pub nodes: Vec<[f64; 2]>,
+    /// Triangles as node indices, counter-clockwise.
+    pub triangles: Vec<[usize; 3]>,
+    /// Per electrode, the boundary edges (node pairs) under it.
+    pub electrodes: Vec<Vec<[usize; 2]>>,
+    /// Per electrode, the node at its centre (the point-electrode model's node).
+    pub centre_nodes: Vec<usize>,
+}
+
+/// How fine to mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshSize {
+    /// Largest edge length in the interior, m.
+    pub interior: f64,
+    /// Boundary edge length under electrodes, m (at most a quarter of the electrode width
+    /// is used whatever is given).
+    pub electrode: f64,
+    /// Smallest angle the refinement aims for, degrees (spade guarantees up to about 30).
+    pub min_angle_deg: f64,
+}
+
+impl MeshSize {
+    /// About `triangles` triangles on `spec`'s outline, electrodes sampled 4 times finer
+    /// than the interior.
+    #[must_use]
+    pub fn for_count(spec: &SheetSpec, triangles: usize) -> Self {
+        // An equilateral triangle of edge h has area h^2 sqrt(3)/4.
+        let h = (4.0 * spec.shape.area() / (3f64.sqrt() * triangles.max(1) as f64)).sqrt();
+        Self {
+            interior: h,
+            electrode: h / 4.0,
+            min_angle_deg: 28.0,
+        }
+    }
+}
+
+/// A disc of the sheet meshed finer than the rest (a touch, or a region of interest an
+/// image found): edges of about `edge` inside, graded into the coarser interior around it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refinement {
+    /// Centre, m.
+    pub centre: [f64; 2],
+    /// Radius, m.
+    pub radius: f64,
+    /// Edge length inside, m.
+    pub edge: f64,
+}
+
+impl Refinement {
+    /// What a touch of `radius` (m) at `centre` needs: its disc and a margin of half its
+    /// radius, at a quarter of its radius, so the edge of the pressed area is resolved.
+    #[must_use]
+    pub fn touch(centre: [f64; 2], radius: f64) -> Self {
+        Self {
+            centre,
+            radius: 1.5 * radius,
+            edge: 0.25 * radius,
+        }
+    }
+}
+
+/// Why a mesh could not be made or read.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// A size or the sheet spec is unusable.
+    Spec(String),
+    /// Two electrodes overlap on the outline.
+    Overlap {
+        /// The first of the two.
+        electrode: usize,
+    },
+    /// The triangulation failed (a degenerate outline).
+    Triangulation(String),
+    /// An electrode has no boundary edge.
+    EmptyElectrode {
+        /// Which.
+        electrode: usize,
+    },
+}
+
+impl std::fmt::Display for MeshError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MeshError::Spec(why) => write!(f, "mesh: {why}"),
+            MeshError::Overlap { electrode } => {
+                write!(
+                    f,
+                    "electrodes {electrode} and the next overlap on the outline"
+                )
+            }
+            MeshError::Triangulation(why) => write!(f, "triangulation failed: {why}"),
+            MeshError::EmptyElectrode { electrode } => {
+                write!(f, "electrode {electrode} covers no boundary edge")
+            }
+        }
+    }
+}
+
+impl std::error::Error for MeshError {}
+
+impl Mesh {
+    /// Meshes `spec`'s outline with its electrodes (width `spec.electrodes.width`).
+    ///
+    /// # Errors
+    /// [`MeshError`] for bad sizes, overlapping electrodes or a failed triangulation.
+    pub fn of_sheet(spec: &SheetSpec, size: MeshSize) -> Result<Self, MeshError> {
+        Self::refined(spec, size, &[])
+    }
+
+    /// As [`Mesh::of_sheet`], and finer in `regions`: each is seeded with a triangular
+    /// lattice of its edge length (points closer than half an edge to the outline are left
+    /// to the boundary sampling), and the quality refinement grades away from it.
+    ///
+    /// # Errors
+    /// As [`Mesh::of_sheet`]; a region with a non-finite or non-positive radius or edge is
+    /// [`MeshError::Spec`], as is one that would add more than a million points.
+    pub fn refined(
+        spec: &SheetSpec,
+        size: MeshSize,
+        regions: &[Refinement],
+    ) -> Result<Self, MeshError> {
+        for r in regions {
+            let ok = |v: f64| v.is_finite() && v > 0.0;
+            if !(ok(r.radius) && ok(r.edge) && r.centre.iter().all(|c| c.is_finite())) {
+                return Err(MeshError::Spec(format!(
+                    "a refinement needs a finite centre and a positive radius and edge: {r:?}"
+                )));
+            }
+            if (r.radius / r.edge).powi(2) > 1e6 {
+                return Err(MeshError::Spec(format!(
+                    "a refinement of radius {} m at edge {} m adds over a million points",
+                    r.radius, r.edge
+                )));
+            }
+        }
+        spec.shape
+            .validate()
+            .map_err(|e| MeshError::Spec(e.to_string()))?;
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if !(ok(size.interior) && ok(size.electrode) && size.min_angle_deg.is_finite()) {
+            return Err(MeshError::Spec(format!(
+                "sizes must be finite and positive: {size:?}"
+            )));
+        }
+        let perimeter = spec.shape.perimeter();
+        let half = 0.5 * spec.electrodes.width / perimeter;
+        if !(half > 0.0 && half.is_finite()) {
+            return Err(MeshError::Spec("electrode width must be positive".into()));
+        }
+        let centres = spec.electrodes.arc_positions();
+        // Electrode intervals in arc fraction [start, end), end may pass 1.
+        let mut spans: Vec<(f64, f64)> = centres
+            .iter()
+            .map(|&t| {
+                let t = t.rem_euclid(1.0);
+                (t - half, t + half)
+            })
+            .collect();
+        let mut order: Vec<usize> = (0..spans.len()).collect();
+        order.sort_by(|&a, &b| spans[a].0.total_cmp(&spans[b].0));
+        for w in 0..order.len() {
+            let (a, b) = (order[w], order[(w + 1) % order.len()]);
+            let next_start = spans[b].0 + if w + 1 == order.len() { 1.0 } else { 0.0 };
+            if spans[a].1 >= next_start {
+                return Err(MeshError::Overlap { electrode: a });
+            }
+        }
+        for s in &mut spans {
+            if s.0 < 0.0 {
+                *s = (s.0 + 1.0, s.1 + 1.0);
+            }
+        }
+        // Breakpoints: corners and electrode ends, in arc order.
+        let mut breaks: Vec<(f64, bool)> = spec
+            .shape
+            .corners()
+            .iter()
+            .map(|&c| (spec.shape.arc_of(c), false))
+            .collect();
+        for (&(a, b), &c) in spans.iter().zip(&centres) {
+            breaks.push((a.rem_euclid(1.0), true));
+            breaks.push((c.rem_euclid(1.0), true)); // a node at the centre: the point model's
+            breaks.push((b.rem_euclid(1.0), false));
+        }
+        breaks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        breaks.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-12);
+        let under = |t: f64| {
+            spans.iter().any(|&(a, b)| {
+                let t = if t < a { t + 1.0 } else { t };
+                t >= a && t <= b
+            })
+        };
+        let h_e = size.electrode.min(spec.electrodes.width / 4.0);
+        let mut ts: Vec<f64> = Vec::new();
+        for i in 0..breaks.len() {
+            let a = breaks[i].0;
+            let b = if i + 1 == breaks.len() {
+                breaks[0].0 + 1.0
+            } else {
+                breaks[i + 1].0
+            };
+            let h = if under(0.5 * (a + b)) {
+                h_e
+            } else {
+                size.interior
+            };
+            let n = ((b - a) * perimeter / h).ceil().max(1.0) as usize;
+            ts.extend((0..n).map(|k| a + (b - a) * k as f64 / n as f64));
+        }
+        let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+        let mut handles = Vec::with_capacity(ts.len());
+        for &t in &ts {
+            let p = spec.shape.boundary_point(t);
+            handles.push(
+                cdt.insert(Point2::new(p[0], p[1]))
+                    .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?,
+            );
+        }
+        for i in 0..handles.len() {
+            let (a, b) = (handles[i], handles[(i + 1) % handles.len()]);
+            if a != b {
+                cdt.add_constraint(a, b);
+            }
+        }
+        for r in regions {
+            let h = r.edge.min(size.interior);
+            let rows = (r.radius / (h * 0.75f64.sqrt())).ceil() as i64;
+            for j in -rows..=rows {
+                let y = j as f64 * h * 0.75f64.sqrt();
+                let shift = if j % 2 == 0 { 0.0 } else { 0.5 * h };
+                let cols = (r.radius / h).ceil() as i64 + 1;
+                for i in -cols..=cols {
+                    let x = i as f64 * h + shift;
+                    let p = [r.centre[0] + x, r.centre[1] + y];
+                    if x.hypot(y) <= r.radius
+                        && spec.shape.contains(p, 0.0)
+                        && spec.shape.distance_to_outline(p) > 0.5 * h.max(h_e)
+                    {
+                        cdt.insert(Point2::new(p[0], p[1]))
+                            .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
+                    }
+                }
+            }
+        }
+        let max_area = 3f64.sqrt() / 4.0 * size.interior * size.interior;
+        let result = cdt.refine(
+            RefinementParameters::<f64>::new()
+                .exclude_outer_faces(true)
+                .with_max_allowed_area(max_area)
+                .with_angle_limit(AngleLimit::from_deg(size.min_angle_deg.clamp(0.0, 30.0)))
+                .with_max_additional_vertices(50_000_000),
+        );
+        let nodes: Vec<[f64; 2]> = cdt
+            .vertices()
+            .map(|v| [v.position().x, v.position().y])
+            .collect();
+        let triangles: Vec<[usize; 3]> = cdt
+            .inner_faces()
+            .filter(|f| !result.excluded_faces.contains(&f.fix()))
+            .map(|f| f.vertices().map(|v| v.fix().index()))
+            .collect();
+        // The node nearest each electrode's centre (for the point-electrode model).
+        let centre_nodes: Vec<usize> = centres
+            .iter()
+            .map(|&t| {
+                let c = spec.shape.boundary_point(t);
+                (0..nodes.len())
+                    .min_by(|&a, &b| dist(nodes[a], c).total_cmp(&dist(nodes[b], c)))
+                    .unwrap_or(0)
+            })
+            .collect();
+        let mut electrodes = vec![Vec::new(); spans.len()];
+        for e in cdt.undirected_edges() {
+            if !e.is_constraint_edge() {
+                continue;
+            }
+            let [a, b] = e.vertices();
+            let (pa, pb) = (a.position(), b.position());
+            let mid = spec
+                .shape
+                .arc_of([0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y)]);
+            if let Some(l) = spans.iter().position(|&(s, t)| {
+                let m = if mid < s { mid + 1.0 } else { mid };
+                m > s && m < t
+            }) {
+                electrodes[l].push([a.fix().index(), b.fix().index()]);
+            }
+        }
+        if let Some(l) = electrodes.iter().position(Vec::is_empty) {
+            return Err(MeshError::EmptyElectrode { electrode: l });
+        }
+        Ok(Self {
+            nodes,
+            triangles,
+            electrodes,
+            centre_nodes,
+        })
+    }
+
+    /// A mesh of about `triangles` triangles (within 10 % where a few re-meshings reach it):
+    /// [`MeshSize::for_count`], then the sizes scaled by the square root of the miss, since
+    /// the electrodes' grading adds triangles the count alone does not foresee.
+    ///
+    /// # Errors
+    /// As [`Mesh::of_sheet`].
+    pub fn with_about(spec: &SheetSpec, triangles: usize) -> Result<Self, MeshError> {
+        Self::with_about_refined(spec, triangles, &[])
+    }
+
+    /// As [`Mesh::with_about`], with `regions` refined as in [`Mesh::refined`]: the same
+    /// budget of triangles, spent where the regions need it (the interior elsewhere is
+    /// coarser to pay for them).
+    ///
+    /// # Errors
+    /// As [`Mesh::refined`].
+    pub fn with_about_refined(
+        spec: &SheetSpec,
+        triangles: usize,
+        regions: &[Refinement],
+    ) -> Result<Self, MeshError> {
+        let mut size = MeshSize::for_count(spec, triangles);
+        let mut mesh = Self::refined(spec, size, regions)?;
+        for _ in 0..4 {
+            let ratio = mesh.triangles.len() as f64 / triangles.max(1) as f64;
+            if (ratio - 1.0).abs() < 0.1 {
+                break;
+            }
+            size.interior *= ratio.sqrt();
+            size.electrode *= ratio.sqrt();
+            mesh = Self::refined(spec, size, regions)?;
+        }
+        Ok(mesh)
+    }
+
+    /// Twice the signed area of triangle `t` (positive: counter-clockwise), m^2.
+    #[must_use]
+    pub fn double_area(&self, t: usize) -> f64 {
+        let [a, b, c] = self.triangles[t].map(|i| self.nodes[i]);
+        (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+    }
+
+    /// Centroid of triangle `t`, m.
+    #[must_use]
+    pub fn centroid(&self, t: usize) -> [f64; 2] {
+        let [a, b, c] = self.triangles[t].map(|i| self.nodes[i]);
+        [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0]
+    }
+
+    /// Total length of electrode `l`'s edges, m.
+    #[must_use]
+    pub fn electrode_length(&self, l: usize) -> f64 {
+        self.electrodes[l]
+            .iter()
+            .map(|&[a, b]| dist(self.nodes[a], self.nodes[b]))
+            .sum()
+    }
+
+    /// Smallest interior angle over all triangles, degrees.
+    #[must_use]
+    pub fn min_angle_deg(&self) -> f64 {
+        self.triangles
+            .iter()
+            .flat_map(|t| {
+                let p = t.map(|i| self.nodes[i]);
+                (0..3).map(move |k| {
+                    let (a, b, c) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+                    let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+                    (u[0] * v[1] - u[1] * v[0])
+                        .abs()
+                        .atan2(u[0] * v[0] + u[1] * v[1])
+                        .to_degrees()
+                })
+            })
+            .fold(180.0, f64::min)
+    }
+}
+
+mod import;
+
+pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use et_sim::shape::Shape;
+
+    fn check(mesh: &Mesh, spec: &SheetSpec, min_angle: f64) {
+        let area: f64 = (0..mesh.triangles.len())
+            .map(|t| 0.5 * mesh.double_area(t))
+            .sum();
+        assert!(
+            (0..mesh.triangles.len()).all(|t| mesh.double_area(t) > 0.0),
+            "counter-clockwise"
+        );
+        // The disc's polygonal boundary loses a little area (chords).
+        assert!(
+            (area - spec.shape.area()).abs() < 0.01 * spec.shape.area(),
+            "{area}"
+        );
+        assert!(
+            mesh.min_angle_deg() >= min_angle,
+            "{}",
+            mesh.min_angle_deg()
+        );
+        for l in 0..mesh.electrodes.len() {
+            let len = mesh.electrode_length(l);
+            assert!(
+                (len - spec.electrodes.width).abs() < 0.01 * spec.electrodes.width,
+                "electrode {l}: {len}"
+            );
+            // The centre node lies on the electrode.
+            let c = mesh.centre_nodes[l];
+            assert!(mesh.electrodes[l].iter().any(|e| e.contains(&c)));
+        }
+    }
+
+    #[test]
+    fn meshes_of_every_outline_are_valid_and_graded() {
+        let mut disc = SheetSpec::rectangle(0.22, 0.22, 16);
+        disc.shape = Shape::Disc { radius: 0.11 };
+        let square = SheetSpec::rectangle(0.13, 0.13, 16);
+        let mut star = SheetSpec::rectangle(0.1, 0.1, 8);
+        star.shape = Shape::Polygon {
+            vertices: (0..10)
+                .map(|k| {
+                    let a = std::f64::consts::PI * k as f64 / 5.0;
+                    let r = if k % 2 == 0 { 0.06 } else { 0.035 };
+                    [r * a.cos(), r * a.sin()]
+                })
+                .collect(),
+        };
+        star.electrodes.width = 0.003;
+        for (spec, target) in [(&disc, 8_000usize), (&square, 8_000), (&star, 2_000)] {
+            let mesh = Mesh::of_sheet(spec, MeshSize::for_count(spec, target)).unwrap();
+            let n = mesh.triangles.len();
+            // Grading adds triangles near the electrodes; the count stays near the target.
+            assert!(
+                n > target / 2 && n < 3 * target,
+                "{n} triangles for {target}"
+            );
+            check(&mesh, spec, 25.0);
+        }
+    }
+
+    #[test]
+    fn refined_regions_get_their_edge_and_the_mesh_stays_valid() {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        // One region inside, one that the outline cuts.
+        let inner = Refinement {
+            centre: [0.02, 0.01],
+            radius: 0.015,
+            edge: 0.002,
+        };
+        let cut = Refinement::touch([0.06, -0.06], 0.01);
+        let mesh = Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[inner, cut]).unwrap();
+        check(&mesh, &spec, 25.0);
+        let longest = |t: usize| {
+            let p = mesh.triangles[t].map(|i| mesh.nodes[i]);
+            (0..3)
+                .map(|k| dist(p[k], p[(k + 1) % 3]))
+                .fold(0.0, f64::max)
+        };
+        let (mut inside, mut far) = (Vec::new(), Vec::new());
+        for t in 0..mesh.triangles.len() {
+            let c = mesh.centroid(t);
+            let d = dist(c, inner.centre);
+            if d < 0.8 * inner.radius {
+                inside.push(longest(t));
+            } else if d > 0.04 && spec.shape.distance_to_outline(c) > 0.015 {
+                far.push(longest(t));
+            }
+        }
+        let max_inside = inside.iter().copied().fold(0.0, f64::max);
+        let mean_far = far.iter().sum::<f64>() / far.len() as f64;
+        assert!(max_inside < 1.5 * inner.edge, "{max_inside}");
+        assert!(mean_far > 2.0 * inner.edge, "{mean_far}");
+        for bad in [
+            Refinement { edge: 0.0, ..inner },
+            Refinement {
+                radius: f64::NAN,
+                ..inner
+            },
+            Refinement {
+                edge: 1e-6,
+                ..inner
+            },
+        ] {
+            assert!(matches!(
+                Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[bad]),
+                Err(MeshError::Spec(_))
+            ));
+        }
+    }
+
+    #[test]
+    fn bad_specs_are_refused() {
+        let mut s = SheetSpec::rectangle(0.13, 0.13, 16);
+        s.electrodes.width = 0.04; // 16 x 4 cm on a 52 cm outline: they overlap
+        assert!(matches!(
+            Mesh::of_sheet(&s, MeshSize::for_count(&s, 1000)),
+            Err(MeshError::Overlap { .. })
+        ));
+        let s = SheetSpec::rectangle(0.13, 0.13, 16);
+        let bad = MeshSize {
+            interior: f64::NAN,
+            ..MeshSize::for_count(&s, 1000)
+        };
+        assert!(matches!(Mesh::of_sheet(&s, bad), Err(MeshError::Spec(_))));
+    }
+}

@@ -1,0 +1,467 @@
+use crate::fem::{Electrodes, Forward};
+use crate::gauss_newton::*;
+use crate::gcv::*;
+use crate::mesh::{Mesh, MeshSize};
+use crate::metrics::*;
+use crate::onestep::*;
+use crate::pixels::*;
+use crate::touches::*;
+use et_core::protocol::{Protocol, ProtocolKind};
+use et_sim::frontend::SimFrontend;
+use et_sim::scene::Scene;
+use et_sim::sheet::Sheet;
+use et_sim::touch::Touch;
+use std::sync::Arc;
+
+fn scene(name: &str) -> Scene {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
+    Scene::load(&root.join(name)).unwrap()
+}
+
+/// Noiseless simulator frames (resistor network, not these finite elements) without and with
+/// the scene's touches.
+fn sim_frames(sc: &Scene, protocol: &Protocol, amps: f64) -> (Vec<f64>, Vec<f64>) {
+    let sheet = Arc::new(Sheet::new(&sc.sheet, &[]).unwrap());
+    let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
+    let v0 = fe.ideal_frame(protocol, amps);
+    let touches: Vec<Touch> = sc
+        .touches
+        .iter()
+        .map(et_sim::scene::TouchEvent::touch)
+        .collect();
+    fe.set_touches(&touches).unwrap();
+    (v0, fe.ideal_frame(protocol, amps))
+}
+
+struct Setup {
+    grid: PixelGrid,
+    recon: OneStep,
+}
+
+fn setup(sc: &Scene, protocol: &Protocol, amps: f64) -> Setup {
+    // alpha = 0.1 (this module's normalisation) merges the two PP-PP touches of the
+    // reference scene into one central blob; 0.03 and below separates them.
+    setup_with(sc, protocol, amps, 0.03, 0.5)
+}
+
+fn setup_with(sc: &Scene, protocol: &Protocol, amps: f64, alpha: f64, s: f64) -> Setup {
+    let mesh = Mesh::of_sheet(&sc.sheet, MeshSize::for_count(&sc.sheet, 3_000)).unwrap();
+    let z =
+        vec![sc.sheet.electrodes.contact_ohm * sc.sheet.electrodes.width; mesh.electrodes.len()];
+    let grid = PixelGrid::new(&mesh, 32);
+    let n = mesh.triangles.len();
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let (_, jac) = fwd
+        .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], protocol, amps)
+        .unwrap();
+    Setup {
+        grid,
+        recon: OneStep::new(&jac, alpha, s).unwrap(),
+    }
+}
+
+#[test]
+fn a_single_touch_is_found_within_its_radius() {
+    let amps = 32e-6;
+    for kind in [ProtocolKind::Adjacent, ProtocolKind::Opposite] {
+        let protocol = Protocol::new(kind, 16).unwrap();
+        let mut st: Option<Setup> = None;
+        for name in [
+            "disc-ref-x000.toml",
+            "disc-ref-x025.toml",
+            "disc-ref-x050.toml",
+            "disc-ref-x075.toml",
+        ] {
+            let sc = scene(name);
+            let s = st.get_or_insert_with(|| setup(&sc, &protocol, amps));
+            let (v0, v1) = sim_frames(&sc, &protocol, amps);
+            let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+            let image = s.grid.image(&s.recon.reconstruct(&dv).unwrap());
+            let rois = regions(&s.grid, &image, 0.1);
+            let t = &sc.touches[0];
+            let c = rois[0].centroid;
+            let off = (c[0] - t.position[0]).hypot(c[1] - t.position[1]);
+            println!(
+                "{kind:?} {name}: ROI centroid {c:.4?}, {:.1} mm from the touch (radius {:.1} mm), {} regions",
+                off * 1e3,
+                t.radius * 1e3,
+                rois.len()
+            );
+            assert!(
+                off < t.radius,
+                "{kind:?} {name}: centroid {c:?} is {off} m off"
+            );
+            let m = metrics(
+                &s.grid,
+                &image,
+                0.1,
+                &dv,
+                t.position,
+                std::f64::consts::PI * t.radius * t.radius,
+            );
+            assert!(
+                m.pe < 0.1 && m.bvc > 0.0 && m.se.is_finite() && m.rng.is_finite(),
+                "{m:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn two_touches_are_two_regions_with_pp_pp() {
+    let sc = scene("disc-ref-two.toml");
+    let protocol = Protocol::new(ProtocolKind::PpPp, 16).unwrap();
+    let (v0, v1) = sim_frames(&sc, &protocol, 32e-6);
+    let s = setup(&sc, &protocol, 32e-6);
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+    let image = s.grid.image(&s.recon.reconstruct(&dv).unwrap());
+    // docs/method.md §6: f = 0.05 for PP-PP.
+    let rois = regions(&s.grid, &image, 0.05);
+    println!("PP-PP, two touches: {rois:?}");
+    assert!(rois.len() >= 2, "{rois:?}");
+    // The two strongest regions sit one on each touch.
+    for t in &sc.touches {
+        let near = rois[..2].iter().any(|r| {
+            (r.centroid[0] - t.position[0]).hypot(r.centroid[1] - t.position[1]) < t.radius
+        });
+        assert!(near, "no region on the touch at {:?}: {rois:?}", t.position);
+    }
+}
+
+#[test]
+fn parameters_and_frames_are_checked() {
+    let jac = DMatrix::from_fn(4, 6, |r, c| {
+        ((r + 2 * c) as f64).sin() + if r == c { 2.0 } else { 0.0 }
+    });
+    for (alpha, s) in [(0.0, 0.5), (f64::NAN, 0.5), (1.0, 1.5), (1.0, -0.1)] {
+        assert!(matches!(
+            OneStep::new(&jac, alpha, s),
+            Err(ReconError::Parameter(_))
+        ));
+    }
+    assert_eq!(
+        OneStep::new(&DMatrix::zeros(4, 6), 1.0, 0.5).unwrap_err(),
+        ReconError::Singular
+    );
+    // Alpha from 1e-8 to 1e4: finite matrices.
+    for alpha in [1e-8, 1e-3, 1.0, 1e4] {
+        let r = OneStep::new(&jac, alpha, 1.0).unwrap();
+        assert!(r.matrix.iter().all(|v| v.is_finite()), "alpha {alpha}");
+        let d = r.reconstruct(&[1.0, -1.0, 0.5, 0.0]).unwrap();
+        assert!(d.iter().all(|v| v.is_finite()));
+    }
+    let r = OneStep::new(&jac, 0.5, 0.5).unwrap();
+    assert!(matches!(
+        r.reconstruct(&[1.0; 3]),
+        Err(ReconError::Parameter(_))
+    ));
+    assert_eq!(
+        r.reconstruct(&[1.0, f64::NAN, 0.0, 0.0]),
+        Err(ReconError::NonFinite)
+    );
+    // Small alpha approaches the minimum-norm solution: J R dv = dv for K < T.
+    let r = OneStep::new(&jac, 1e-6, 0.0).unwrap();
+    let dv = [0.3, -0.2, 0.1, 0.4];
+    let back = &jac * DVector::from_vec(r.reconstruct(&dv).unwrap());
+    for (a, b) in back.iter().zip(dv) {
+        assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+    }
+}
+
+#[test]
+fn gcv_prefers_little_regularisation_for_clean_data_and_much_for_noise() {
+    let mut rng = et_sim::rng::Rng::new(4);
+    let (k, t) = (30, 80);
+    // A smoothing operator: singular values decaying like a tomography Jacobian's.
+    let jac = DMatrix::from_fn(k, t, |r, c| {
+        let (x, y) = (r as f64 / k as f64, c as f64 / t as f64);
+        (-(x - y).powi(2) * 40.0).exp() * (1.0 + 0.1 * rng.normal())
+    });
+    let truth = DVector::from_fn(t, |c, _| if (30..40).contains(&c) { 1.0 } else { 0.0 });
+    let clean: Vec<f64> = (&jac * &truth).iter().copied().collect();
+    let candidates: Vec<f64> = (0..=20)
+        .map(|i| 10f64.powf(-5.0 + 0.3 * f64::from(i)))
+        .collect();
+    let (a_clean, _) = gcv_alpha(&jac, 0.5, &clean, &candidates).unwrap();
+    let noise: Vec<f64> = (0..k).map(|_| rng.normal()).collect();
+    let (a_noise, scores) = gcv_alpha(&jac, 0.5, &noise, &candidates).unwrap();
+    assert!(
+        a_clean < a_noise,
+        "clean {a_clean}, noise {a_noise}: {scores:?}"
+    );
+    assert_eq!(a_noise, *candidates.last().unwrap(), "{scores:?}");
+    // Mixed: an interior choice.
+    let mixed: Vec<f64> = clean.iter().zip(&noise).map(|(c, n)| c + 0.3 * n).collect();
+    let (a_mixed, _) = gcv_alpha(&jac, 0.5, &mixed, &candidates).unwrap();
+    assert!(
+        a_mixed > a_clean && a_mixed < a_noise,
+        "{a_clean} {a_mixed} {a_noise}"
+    );
+    assert!(matches!(
+        gcv_alpha(&jac, 0.5, &clean[..5], &candidates),
+        Err(ReconError::Parameter(_))
+    ));
+}
+
+#[test]
+fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
+    // Data from the simulator's resistor network (not these finite elements).
+    let sc = scene("disc-ref-x050.toml");
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let amps = 32e-6;
+    let (v0, v1) = sim_frames(&sc, &protocol, amps);
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+    let mesh = Mesh::with_about(&sc.sheet, 2_000).unwrap();
+    let e = &sc.sheet.electrodes;
+    let n = mesh.triangles.len();
+    let grid = PixelGrid::new(&mesh, 32);
+    let fwd = Forward::new(
+        mesh,
+        Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
+    )
+    .unwrap();
+    let sigma_0 = vec![1.0 / sc.sheet.sheet_resistance; n];
+    let opts = GaussNewton {
+        alpha: 0.03,
+        s: 0.5,
+        iterations: 4,
+    };
+    let its = gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), opts).unwrap();
+    let norms: Vec<f64> = its.iter().map(|i| i.1).collect();
+    let bvc = et_core::stats::bvc_dv(&dv);
+    println!("residual norms {norms:?} of |dV| = {bvc:.3e}");
+    assert!(
+        norms[0] < 0.5 * bvc,
+        "the first step explains most of dV: {norms:?}"
+    );
+    assert!(norms[3] < norms[0], "iterating fits better: {norms:?}");
+    // The touch is still where it is, and every conductivity finite and positive.
+    let last = &its[3].0;
+    assert!(last.iter().all(|v| v.is_finite() && *v > 0.0));
+    let d: Vec<f64> = last.iter().zip(&sigma_0).map(|(a, b)| a - b).collect();
+    let rois = regions(&grid, &grid.image(&d), 0.1);
+    let t = &sc.touches[0];
+    let off = (rois[0].centroid[0] - t.position[0]).hypot(rois[0].centroid[1] - t.position[1]);
+    assert!(off < t.radius, "{:?}", rois[0]);
+    let bad = GaussNewton {
+        alpha: -1.0,
+        ..opts
+    };
+    assert!(gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), bad).is_err());
+    assert!(
+        gauss_newton(
+            &fwd,
+            &protocol,
+            amps,
+            &sigma_0,
+            Data::Difference(&dv[..5]),
+            opts
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn dynamic_selection_on_the_reference_scenes() {
+    use crate::select::{Selector, Settings};
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let first = scene("disc-ref-x000.toml");
+    let s = setup(&first, &protocol, 32e-6);
+    // d_c: the 22 cm disc's centre-to-electrode distance.
+    let settings = Settings::new([0.0, 0.0], 0.11);
+    for (name, expect) in [
+        ("disc-ref-x000.toml", Some(ProtocolKind::PseudoPolar)),
+        ("disc-ref-x025.toml", Some(ProtocolKind::PseudoPolar)),
+        ("disc-ref-x075.toml", None),
+        ("disc-ref-two.toml", Some(ProtocolKind::PpPp)),
+    ] {
+        let sc = scene(name);
+        let (v0, v1) = sim_frames(&sc, &protocol, 32e-6);
+        let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+        let image = s.grid.image(&s.recon.reconstruct(&dv).unwrap());
+        let rois = regions(&s.grid, &image, 0.1);
+        let mut sel = Selector::new(settings);
+        let switched: Vec<ProtocolKind> = (0..3).filter_map(|_| sel.step(&rois)).collect();
+        println!("{name}: {} regions, switches {switched:?}", rois.len());
+        assert_eq!(switched.first().copied(), expect, "{name}: {rois:?}");
+    }
+}
+
+/// A `w` x `h` grid of 1 mm pixels (origin at 0) with every pixel on the sheet.
+fn plain_grid(w: usize, h: usize) -> PixelGrid {
+    PixelGrid {
+        width: w,
+        height: h,
+        origin: [0.0, 0.0],
+        size: 1e-3,
+        triangle: vec![Some(0); w * h],
+    }
+}
+
+/// Gaussian bumps (centre in pixels, height, sigma in pixels) plus `ripple` x cos along x.
+fn bumps(g: &PixelGrid, list: &[([f64; 2], f64, f64)], ripple: f64) -> Vec<Option<f64>> {
+    (0..g.width * g.height)
+        .map(|p| {
+            let (i, j) = ((p % g.width) as f64, (p / g.width) as f64);
+            let v: f64 = list
+                .iter()
+                .map(|&(c, a, s)| {
+                    a * (-((i - c[0]).powi(2) + (j - c[1]).powi(2)) / (2.0 * s * s)).exp()
+                })
+                .sum();
+            Some(v + ripple * (std::f64::consts::TAU * i / 5.0).cos())
+        })
+        .collect()
+}
+
+#[test]
+fn touches_split_two_peaks_over_a_high_saddle_and_keep_one_peak_whole() {
+    let g = plain_grid(40, 20);
+    // Two bumps 10 px apart, sigma 3 px: the saddle is at about half the peaks, far above
+    // f max, so the threshold alone sees one region.
+    let two = bumps(
+        &g,
+        &[([15.0, 10.0], 1.0, 3.0), ([25.0, 10.0], 0.9, 3.0)],
+        0.0,
+    );
+    assert_eq!(regions(&g, &two, 0.05).len(), 1);
+    let t = touches(&g, &two, &[], 0.05, PROMINENCE);
+    assert_eq!(t.len(), 2, "{t:?}");
+    for (r, x) in t.iter().zip([15.5e-3, 25.5e-3]) {
+        assert!((r.centroid[0] - x).abs() < 1.5e-3, "{t:?}");
+        assert!((r.centroid[1] - 10.5e-3).abs() < 0.5e-3, "{t:?}");
+    }
+    assert!((t[0].peak - 1.0).abs() < 0.01 && (t[1].peak - 0.9).abs() < 0.01);
+    // Every pixel of the region of interest goes to one of the two.
+    let area: f64 = t.iter().map(|r| r.area).sum();
+    assert!((area - regions(&g, &two, 0.05)[0].area).abs() < 1e-12);
+    // Closer together the dip is too shallow: one touch.
+    let close = bumps(
+        &g,
+        &[([18.0, 10.0], 1.0, 3.0), ([23.0, 10.0], 0.9, 3.0)],
+        0.0,
+    );
+    assert_eq!(touches(&g, &close, &[], 0.05, PROMINENCE).len(), 1);
+    // One peak: the threshold's region (its centroid from the half-peak core, here the
+    // same by symmetry).
+    let one = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.0);
+    let (t, r) = (
+        touches(&g, &one, &[], 0.1, PROMINENCE),
+        regions(&g, &one, 0.1),
+    );
+    assert_eq!(t.len(), 1);
+    assert_eq!(
+        (t[0].area, t[0].peak, t[0].peak_pixel),
+        (r[0].area, r[0].peak, r[0].peak_pixel)
+    );
+    assert!((0..2).all(|d| (t[0].centroid[d] - r[0].centroid[d]).abs() < 1e-9));
+    // One peak with a ripple: the ripple's little peaks on the touch's flank stay part of it
+    // (those far out, where the ripple is most of the value, are at most specks).
+    let rippled = bumps(&g, &[([20.0, 10.0], 1.0, 4.0)], 0.02);
+    let t = touches(&g, &rippled, &[], 0.1, PROMINENCE);
+    let strong: Vec<_> = t.iter().filter(|r| r.peak >= 0.5 * t[0].peak).collect();
+    assert_eq!(strong.len(), 1, "{t:?}");
+    assert!(
+        strong[0].area > 0.8 * regions(&g, &one, 0.1)[0].area,
+        "{t:?}"
+    );
+    // Nothing positive, nothing found; missing pixels are skipped.
+    assert!(touches(&g, &vec![Some(-1.0); 800], &[], 0.1, PROMINENCE).is_empty());
+    let mut holes = two.clone();
+    for p in (0..800).step_by(7) {
+        holes[p] = None;
+    }
+    assert!(!touches(&g, &holes, &[], 0.05, PROMINENCE).is_empty());
+}
+
+#[test]
+fn two_touches_under_noise_are_two_peaks_at_the_alpha_gcv_picks() {
+    // The simulator's calibrated noise, V_0 from 10 frames, alpha by GCV: the threshold
+    // joins the two touches, their peaks do not.
+    let sc = scene("disc-ref-two.toml");
+    let config = sc.scan_config().unwrap();
+    let protocol = config.validate().unwrap();
+    let amps = f64::from(config.current_amps());
+    let frames = et_sim::still::scene_frames(&sc, &config, 10).unwrap();
+    let dv = frames.dv();
+    let mesh = Mesh::of_sheet(&sc.sheet, MeshSize::for_count(&sc.sheet, 3_000)).unwrap();
+    let z =
+        vec![sc.sheet.electrodes.contact_ohm * sc.sheet.electrodes.width; mesh.electrodes.len()];
+    let grid = PixelGrid::new(&mesh, 48);
+    let n = mesh.triangles.len();
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let (_, jac) = fwd
+        .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, amps)
+        .unwrap();
+    let candidates: Vec<f64> = (0..=25)
+        .map(|i| 10f64.powf(-4.0 + 0.2 * f64::from(i)))
+        .collect();
+    let (alpha, _) = gcv_alpha(&jac, 0.5, &dv, &candidates).unwrap();
+    let recon = OneStep::new(&jac, alpha, 0.5).unwrap();
+    let image = grid.image(&recon.reconstruct(&dv).unwrap());
+    let sd = grid.image(&recon.noise_sd(&frames.var).unwrap());
+    let f = default_threshold(ProtocolKind::PpPp);
+    let rois = regions(&grid, &image, f);
+    let found = touches(&grid, &image, &sd, f, PROMINENCE);
+    let counted = above_noise(&found, TOUCH_Z);
+    println!("alpha {alpha}: regions {rois:?}\ntouches {found:?}\nabove noise {counted:?}");
+    assert_eq!(
+        rois.iter().filter(|r| r.peak >= 0.5 * rois[0].peak).count(),
+        1,
+        "the threshold joins them: {rois:?}"
+    );
+    assert_eq!(counted.len(), 2, "{counted:?}");
+    // The other peaks in the image are noise.
+    assert!(found.len() > 2, "{found:?}");
+    for (c, r) in &frames.truth {
+        assert!(
+            counted
+                .iter()
+                .any(|g| (g.centroid[0] - c[0]).hypot(g.centroid[1] - c[1]) < *r),
+            "no touch found within {r} m of {c:?}: {counted:?}"
+        );
+    }
+}
+
+#[test]
+fn noise_of_an_image_by_hand_and_by_sampling() {
+    // (The variance of dV itself is et_core::stats::dv_variance, tested there.)
+    // noise_sd: sqrt(sum_k R_tk^2 var_k), and it matches the spread of R n over samples.
+    let jac = DMatrix::from_fn(5, 7, |r, c| ((r * 7 + c) as f64 * 0.37).sin() + 0.1);
+    let recon = OneStep::new(&jac, 0.3, 0.5).unwrap();
+    let var_dv: Vec<f64> = (0..5).map(|k| 1e-6 * (k + 1) as f64).collect();
+    let sd = recon.noise_sd(&var_dv).unwrap();
+    for t in 0..7 {
+        let by_hand: f64 = (0..5)
+            .map(|k| recon.matrix[(t, k)].powi(2) * var_dv[k])
+            .sum::<f64>()
+            .sqrt();
+        assert!((sd[t] - by_hand).abs() <= 1e-12 * by_hand);
+    }
+    let mut rng = et_sim::rng::Rng::new(5);
+    let samples = 20_000;
+    let mut sum_sq = [0.0; 7];
+    for _ in 0..samples {
+        let n: Vec<f64> = var_dv.iter().map(|v| v.sqrt() * rng.normal()).collect();
+        for (s, x) in sum_sq.iter_mut().zip(recon.reconstruct(&n).unwrap()) {
+            *s += x * x / samples as f64;
+        }
+    }
+    for t in 0..7 {
+        assert!((sum_sq[t].sqrt() / sd[t] - 1.0).abs() < 0.03, "{t}");
+    }
+    assert!(recon.noise_sd(&var_dv[..4]).is_err());
+    // Touches are given their largest value over noise; unknown noise keeps a region.
+    let g = plain_grid(4, 1);
+    let image = vec![Some(1.0), Some(6.0), Some(1.0), Some(4.0)];
+    let sd_img = vec![Some(1.0), Some(2.0), None, Some(0.5)];
+    let t = touches(&g, &image, &sd_img, 0.1, PROMINENCE);
+    assert_eq!(t.len(), 2, "{t:?}");
+    // The peak at 6 has z = 3 there, but its neighbour 1 / 1 is less: z = 3; the peak at 4
+    // has z = 8.
+    assert_eq!((t[0].z, t[1].z), (Some(3.0), Some(8.0)));
+    assert_eq!(above_noise(&t, TOUCH_Z).len(), 1);
+    let unknown = touches(&g, &image, &[], 0.1, PROMINENCE);
+    assert!(unknown.iter().all(|r| r.z.is_none()));
+    assert_eq!(above_noise(&unknown, TOUCH_Z).len(), 2);
+}

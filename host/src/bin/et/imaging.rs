@@ -1,0 +1,386 @@
+//! `et forward` and `et reconstruct`: the finite elements and one-step imaging of a scene.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use et_host::recording;
+use et_sim::scene::Scene;
+
+/// How a command gets its mesh.
+#[derive(Debug, clap::Args)]
+pub(crate) struct MeshArgs {
+    /// About how many triangles to mesh the sheet with.
+    #[arg(long, default_value_t = 8_000)]
+    triangles: usize,
+    /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
+    /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<String>,
+    /// Mesh a disc of the sheet finer: centre x, y and radius R in mm, edges of R/6 inside
+    /// (repeat for several; the triangle budget stays the same). `et forward` refines at the
+    /// scene's touches by itself.
+    #[arg(long, value_name = "X,Y,R", allow_hyphen_values = true)]
+    refine: Vec<String>,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ForwardArgs {
+    /// Scene file.
+    #[arg(long)]
+    scene: PathBuf,
+    #[command(flatten)]
+    mesh: MeshArgs,
+    /// Print JSON (all K values of V_0 and V_1, in volts).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ReconstructArgs {
+    /// Scene file: the sheet, its electrodes, the scan protocol and the touches.
+    #[arg(long)]
+    scene: PathBuf,
+    #[command(flatten)]
+    mesh: MeshArgs,
+    /// Gauss-Newton iterations: 1 is the one-step reconstruction; more refit the data
+    /// (slower, for when accuracy matters more than speed).
+    #[arg(long, default_value_t = 1)]
+    iterations: usize,
+    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
+    /// chosen by generalised cross-validation on the frame.
+    #[arg(long, default_value = "auto")]
+    alpha: String,
+    /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
+    #[arg(long, default_value_t = 0.5)]
+    s: f64,
+    /// ROI threshold f (keep pixels >= f max); default per protocol as docs/method.md §6: adjacent
+    /// 0.10, pseudo-polar 0.08, PP-PP 0.05, others 0.10.
+    #[arg(long)]
+    threshold: Option<f64>,
+    /// Pixels across the image.
+    #[arg(long, default_value_t = 64)]
+    pixels: usize,
+    /// Image recorded frames (from `et sim`, later from the board) instead of simulating
+    /// the scene's touches; the scene still gives the sheet and electrodes.
+    #[arg(long, value_name = "JSONL")]
+    frames: Option<PathBuf>,
+    /// With --frames: average the first N frames as the untouched reference V_0 (as
+    /// `et stream` and `et view` do; record them with the sheet untouched).
+    #[arg(long, default_value_t = 20)]
+    reference: usize,
+    /// With --frames: which frame to image (0-based; default the last).
+    #[arg(long)]
+    frame: Option<usize>,
+    /// Where to write the image (PNG).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary (regions, metrics, timings).
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
+    use et_recon::fem::{Electrodes, Forward};
+    let scene = Scene::load(&args.scene)?;
+    let config = scene.scan_config().map_err(anyhow::Error::msg)?;
+    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let started = Instant::now();
+    let mesh = scene_mesh(&scene, &args.mesh, true)?;
+    let sigma0 = 1.0 / scene.sheet.sheet_resistance;
+    // Each touch multiplies the conductivity of the triangles whose centroid it covers.
+    let sigma1: Vec<f64> = (0..mesh.triangles.len())
+        .map(|t| {
+            let c = mesh.centroid(t);
+            scene.touches.iter().fold(sigma0, |s, touch| {
+                let inside =
+                    (c[0] - touch.position[0]).hypot(c[1] - touch.position[1]) <= touch.radius;
+                if inside {
+                    s * scene.sheet.piezo.multiplier(touch.pressure)
+                } else {
+                    s
+                }
+            })
+        })
+        .collect();
+    let t_n = mesh.triangles.len();
+    let e = &scene.sheet.electrodes;
+    let fwd = Forward::new(
+        mesh,
+        Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)]),
+    )?;
+    let amps = f64::from(config.current_amps());
+    let v0 = fwd.frame(&vec![sigma0; t_n], &protocol, amps)?;
+    let v1 = fwd.frame(&sigma1, &protocol, amps)?;
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+    let bvc = et_core::stats::bvc_dv(&dv);
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "triangles": t_n,
+                "protocol": format!("{:?}", config.protocol),
+                "current_a": amps,
+                "v0": v0,
+                "v1": v1,
+                "bvc": bvc,
+                "seconds": started.elapsed().as_secs_f64(),
+            })
+        );
+    } else {
+        println!(
+            "{} triangles, {:?} protocol, K = {}, {:.1} uA",
+            t_n,
+            config.protocol,
+            v0.len(),
+            amps * 1e6
+        );
+        println!("    k        V_0 (V)        V_1 (V)     V_1 - V_0 (V)");
+        for (k, (a, b)) in v0.iter().zip(&v1).enumerate() {
+            println!("{k:5} {a:14.6e} {b:14.6e} {:14.6e}", b - a);
+        }
+        println!(
+            "BVC |V_1 - V_0| = {bvc:.4e} V ({:.2} s)",
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// The mesh of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas) or
+/// the scene's sheet meshed to about `--triangles`; its electrode count must be the sheet's.
+pub(crate) fn scene_mesh(
+    scene: &Scene,
+    args: &MeshArgs,
+    at_touches: bool,
+) -> Result<et_recon::mesh::Mesh> {
+    use et_recon::mesh::{Mesh, Refinement};
+    let mut regions = Vec::new();
+    for r in &args.refine {
+        let v: Vec<f64> = r
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .ok()
+            .filter(|v: &Vec<f64>| v.len() == 3)
+            .with_context(|| {
+                format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
+            })?;
+        regions.push(Refinement {
+            centre: [v[0] * 1e-3, v[1] * 1e-3],
+            radius: v[2] * 1e-3,
+            edge: v[2] * 1e-3 / 6.0,
+        });
+    }
+    if at_touches {
+        regions.extend(
+            scene
+                .touches
+                .iter()
+                .map(|t| Refinement::touch(t.position, t.radius)),
+        );
+    }
+    if args.mesh.is_some() && !args.refine.is_empty() {
+        bail!("--refine meshes the scene's sheet; it cannot change an imported --mesh");
+    }
+    let mesh = match args.mesh.as_deref() {
+        None => Mesh::with_about_refined(&scene.sheet, args.triangles, &regions)?,
+        Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
+            [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
+            [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
+            _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
+        },
+    };
+    if mesh.electrodes.len() != usize::from(scene.sheet.electrodes.count) {
+        bail!(
+            "the mesh has {} electrodes, the scene's sheet {}",
+            mesh.electrodes.len(),
+            scene.sheet.electrodes.count
+        );
+    }
+    Ok(mesh)
+}
+
+pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
+    use et_recon::Imager;
+    use et_recon::{
+        OneStep, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
+    };
+    use et_sim::still::{Truth, scene_frames};
+    let scene = Scene::load(&args.scene)?;
+    let recording = args.frames.as_deref().map(recording::read).transpose()?;
+    let config = match &recording {
+        Some(r) => r.header.config,
+        None => scene.scan_config().map_err(anyhow::Error::msg)?,
+    };
+    if config.electrodes != scene.sheet.electrodes.count {
+        bail!(
+            "the frames are of {} electrodes, the scene's sheet has {}",
+            config.electrodes,
+            scene.sheet.electrodes.count
+        );
+    }
+    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let amps = f64::from(config.current_amps());
+    let started = Instant::now();
+    let stage = |what: &str| eprintln!("{what:<40} {:>8.3} s", started.elapsed().as_secs_f64());
+    let mesh = scene_mesh(&scene, &args.mesh, false)?;
+    let t_n = mesh.triangles.len();
+    stage(&format!("mesh ({t_n} triangles)"));
+    let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;
+    let jac = imager.jacobian(&protocol, amps)?;
+    let grid = &imager.grid;
+    stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
+    // V_0 and V_1, with the truth (centre, radius) where known, and dV's noise variance.
+    let (v0, v1, truth, var): (Vec<f64>, Vec<f32>, Vec<Truth>, Vec<f64>) = match &recording {
+        Some(r) => {
+            let n = r.records.len();
+            let reference = args.reference.clamp(1, n.max(1));
+            let frame = args.frame.unwrap_or(n.saturating_sub(1));
+            if n == 0 || frame >= n || frame < reference {
+                bail!(
+                    "{}: {n} frames; need the reference frames 0..{reference} and a later --frame",
+                    args.frames
+                        .as_deref()
+                        .map(|p| p.display().to_string())
+                        .unwrap_or_default()
+                );
+            }
+            let frames: Vec<&[f32]> = r.records[..reference]
+                .iter()
+                .map(|rec| rec.voltages.as_slice())
+                .collect();
+            let k = protocol.frame_len();
+            let (mut v0, mut var) = (vec![0.0; k], vec![0.0; k]);
+            et_core::stats::reference(&frames, &mut v0)?;
+            et_core::stats::dv_variance(&frames, &mut var)?;
+            let rec = &r.records[frame];
+            let truth = rec
+                .touches
+                .iter()
+                .flatten()
+                .map(|t| ([t.x, t.y], t.radius))
+                .collect();
+            (v0, rec.voltages.clone(), truth, var)
+        }
+        None => {
+            // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
+            // set-up) and one frame with the scene's touches.
+            let f = scene_frames(&scene, &config, 10)?;
+            (f.v0, f.v1, f.truth, f.var)
+        }
+    };
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
+    stage("frames");
+    let alpha = match args.alpha.as_str() {
+        "auto" => et_recon::gcv_alpha(&jac, args.s, &dv, &et_recon::default_alphas())?.0,
+        v => v
+            .parse::<f64>()
+            .with_context(|| format!("--alpha '{v}': a number or auto"))?,
+    };
+    // The image, and its noise where the one-step matrix gives it.
+    let (image, sd) = if args.iterations <= 1 {
+        let recon = OneStep::new(&jac, alpha, args.s)?;
+        stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
+        (
+            grid.image(&recon.reconstruct(&dv)?),
+            grid.image(&recon.noise_sd(&var)?),
+        )
+    } else {
+        let sigma0 = imager.background();
+        let its = et_recon::gauss_newton(
+            &imager.forward,
+            &protocol,
+            amps,
+            &sigma0,
+            et_recon::Data::Difference(&dv),
+            et_recon::GaussNewton {
+                alpha,
+                s: args.s,
+                iterations: args.iterations,
+            },
+        )?;
+        let (last, norm) = its.last().cloned().context("no iteration")?;
+        stage(&format!(
+            "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {norm:.3e} V)",
+            args.iterations
+        ));
+        let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
+        (grid.image(&d), Vec::new())
+    };
+    let f = args.threshold.unwrap_or(default_threshold(config.protocol));
+    let rois = regions(grid, &image, f);
+    let found = above_noise(&touches(grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
+    let m = truth.first().map(|&(centre, radius)| {
+        metrics(
+            grid,
+            &image,
+            f,
+            &dv,
+            centre,
+            std::f64::consts::PI * radius * radius,
+        )
+    });
+    et_host::plot::sheet_image(
+        &imager,
+        &args.out,
+        &format!(
+            "{}: {} regions (f = {f})",
+            args.scene
+                .file_name()
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+            rois.len()
+        ),
+        &image,
+    )?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "triangles": t_n,
+        "protocol": format!("{:?}", config.protocol),
+        "alpha": alpha,
+        "s": args.s,
+        "threshold": f,
+        "regions": rois.iter().map(|r| serde_json::json!({
+            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            "area_mm2": r.area * 1e6,
+            "peak": r.peak,
+        })).collect::<Vec<_>>(),
+        "found_touches": found.iter().map(|r| serde_json::json!({
+            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            "area_mm2": r.area * 1e6,
+            "peak": r.peak,
+            "z": r.z,
+        })).collect::<Vec<_>>(),
+        "touches_mm": truth.iter().map(|(c, _)| [c[0] * 1e3, c[1] * 1e3]).collect::<Vec<_>>(),
+        "metrics_first_touch": m,
+        "seconds": started.elapsed().as_secs_f64(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        for (i, r) in rois.iter().enumerate().take(5) {
+            eprintln!(
+                "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
+                r.centroid[0] * 1e3,
+                r.centroid[1] * 1e3,
+                r.area * 1e6
+            );
+        }
+        for (i, r) in found.iter().enumerate() {
+            eprintln!(
+                "touch {i}: at ({:.1}, {:.1}) mm{}",
+                r.centroid[0] * 1e3,
+                r.centroid[1] * 1e3,
+                r.z.map_or(String::new(), |z| format!(", {z:.1} x its noise"))
+            );
+        }
+        if let Some(m) = m {
+            eprintln!(
+                "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
+                m.pe, m.se, m.rng, m.bvc
+            );
+        }
+        eprintln!("wrote {}", args.out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,512 @@
+//! `et collect`, `et train`, `et eval`, `et export`: touch classification from raw voltages.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use et_core::model::{ModelKind, Precision};
+use et_host::plot;
+use et_learn::model_file::{Kind, ModelFile};
+use et_learn::{analysis, collect, dataset, fastcv, pipeline};
+use et_sim::scene::Scene;
+use indicatif::{ProgressBar, ProgressStyle};
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct CollectArgs {
+    /// Scene file: the sheet, its electrodes and the front end (its touches are not used).
+    #[arg(long)]
+    scene: PathBuf,
+    /// Class grid, ROWSxCOLS (docs/method.md §9: 7x7 with a 15 mm target, 10x10 with 10 mm).
+    #[arg(long, default_value = "7x7")]
+    grid: String,
+    /// T: visits of the whole grid.
+    #[arg(long, default_value_t = 6)]
+    visits: usize,
+    /// S_num: scans per class and visit.
+    #[arg(long, default_value_t = 20)]
+    scans: usize,
+    /// S_sub: observations (sub-section medians) per scan.
+    #[arg(long, default_value_t = 20)]
+    subsections: usize,
+    /// Lowest pressure while pressing, kPa.
+    #[arg(long, default_value_t = 5.0)]
+    min_kpa: f64,
+    /// Highest pressure while pressing, kPa.
+    #[arg(long, default_value_t = 60.0)]
+    max_kpa: f64,
+    /// Finger (target) radius, mm.
+    #[arg(long, default_value_t = 7.5)]
+    radius_mm: f64,
+    /// Rms electrode movement between visits, mm.
+    #[arg(long, default_value_t = 0.5)]
+    movement_mm: f64,
+    /// Electrode poses within a visit: each press finds the electrodes in one of them (1 =
+    /// they stay put while the grid is visited).
+    #[arg(long, default_value_t = 1)]
+    poses: usize,
+    /// Rms movement of each pose around the visit's electrode positions, mm.
+    #[arg(long, default_value_t = 0.0)]
+    press_movement_mm: f64,
+    /// Seed of the session.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Where to write the dataset (CSV).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct TrainArgs {
+    /// Training set (CSV from `et collect`).
+    #[arg(long)]
+    data: PathBuf,
+    /// The discriminant: qda (a covariance per class) or lda (one pooled covariance).
+    #[arg(long, value_enum, default_value_t = KindArg::Qda)]
+    kind: KindArg,
+    /// Shrinkage in [0, 1], or "auto" (chosen by leave-one-visit-out cross-validation).
+    #[arg(long, default_value = "auto")]
+    shrinkage: String,
+    /// Folds of the reported stratified cross-validation.
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
+    /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
+    /// session's untouched frame. Referenced is the default when the dataset has untouched
+    /// frames: it cancels electrode movement between sessions, but on the board it needs an
+    /// untouched frame taken when the sheet is put down.
+    #[arg(long)]
+    raw: bool,
+    /// Also write a learning curve (PNG): held-out accuracy against observations per class
+    /// n_c (leave-one-visit-out when the set has several visits, else the k-fold CV).
+    #[arg(long, value_name = "PNG")]
+    curve: Option<PathBuf>,
+    /// Keep only this many features, those that separate the classes best (Fisher ratio):
+    /// QDA's size and cost grow with the square of the feature count.
+    #[arg(long)]
+    features: Option<usize>,
+    /// Where to write the model (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct EvalArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Test set (CSV from `et collect`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Write plots into this directory: confusion.png (row-normalised confusion matrix) and
+    /// error-vs-distance.png (position error against distance from the nearest electrode).
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Print JSON (with the confusion matrix and accuracy by distance from the electrodes).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ExportArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// f32, or f16 (half the flash, about 3 significant digits).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
+    precision: PrecisionArg,
+    /// Where to write the blob.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    let (rows, cols) = args
+        .grid
+        .split_once('x')
+        .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
+        .filter(|&(r, c)| r > 0 && c > 0)
+        .with_context(|| format!("--grid '{}': write ROWSxCOLS, e.g. 7x7", args.grid))?;
+    if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
+        bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
+    }
+    if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
+        bail!("--visits, --scans and --subsections must be at least 1");
+    }
+    let config = collect::training_config(scene.scan_config().map_err(anyhow::Error::msg)?);
+    let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
+    let plan = collect::Plan {
+        visits: 1,
+        scans: args.scans,
+        subsections: args.subsections,
+        pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
+        radius: args.radius_mm * 1e-3,
+        placement: args.radius_mm * 1e-3 / 4.0,
+        electrode_movement: args.movement_mm * 1e-3,
+        poses: args.poses.max(1),
+        press_movement: args.press_movement_mm * 1e-3,
+        seed: args.seed,
+    };
+    let bar = ProgressBar::new(args.visits as u64).with_style(
+        ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let started = Instant::now();
+    let mut data: Option<collect::Dataset> = None;
+    for v in 0..args.visits {
+        let seed = args.seed.wrapping_mul(1_000).wrapping_add(v as u64);
+        let part = collect::collect(
+            &scene.sheet,
+            scene.frontend,
+            config,
+            &centres,
+            &collect::Plan {
+                seed,
+                ..plan.clone()
+            },
+        )
+        .map_err(anyhow::Error::msg)?;
+        match data.as_mut() {
+            None => data = Some(part),
+            Some(d) => d.append(part).map_err(anyhow::Error::msg)?,
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let data = data.context("no visit collected")?;
+    let provenance = format!(
+        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, movement {} mm, seed {}",
+        args.scene.display(),
+        args.visits,
+        args.scans,
+        args.subsections,
+        args.min_kpa,
+        args.max_kpa,
+        args.radius_mm,
+        args.movement_mm,
+        args.seed
+    );
+    dataset::save_csv(&data, &args.out, &provenance)?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "observations": data.x.nrows(),
+        "features": data.x.ncols(),
+        "classes": centres.len(),
+        "seconds": started.elapsed().as_secs_f64(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "wrote {} observations of {} features, {} classes, to {} in {:.1} s",
+            data.x.nrows(),
+            data.x.ncols(),
+            centres.len(),
+            args.out.display(),
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// `--kind`: which discriminant to train.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum KindArg {
+    /// Quadratic discriminant analysis: a covariance per class.
+    Qda,
+    /// Linear discriminant analysis: one pooled covariance.
+    Lda,
+}
+
+impl From<KindArg> for Kind {
+    fn from(kind: KindArg) -> Self {
+        match kind {
+            KindArg::Qda => Kind::Qda,
+            KindArg::Lda => Kind::Lda,
+        }
+    }
+}
+
+/// `--precision`: how the blob stores its tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum PrecisionArg {
+    /// 4 bytes per value.
+    F32,
+    /// 2 bytes per value (IEEE binary16).
+    F16,
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F16 => Precision::F16,
+        }
+    }
+}
+
+pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
+    let mut data = dataset::load_csv(&args.data)?;
+    let classes = data.centres.len();
+    let kind = ModelKind::from(Kind::from(args.kind));
+    let referenced = !args.raw && data.has_untouched();
+    if !args.raw && !referenced {
+        eprintln!(
+            "note: {} has no untouched frames, training on raw frames",
+            args.data.display()
+        );
+    }
+    pipeline::prepare(&mut data, referenced, args.features)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let shrinkage = match args.shrinkage.as_str() {
+        "auto" => None,
+        v => Some(
+            v.parse::<f64>()
+                .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
+        ),
+    };
+    let trained = pipeline::train(
+        &data,
+        &pipeline::TrainOptions {
+            kind,
+            shrinkage,
+            folds: args.folds,
+        },
+    )?;
+    let (model, opts, cv_conf, lovo) = (
+        &trained.model,
+        trained.options,
+        &trained.cv,
+        trained.leave_one_visit_out,
+    );
+    let (shrinkage, scores) = (opts.shrinkage, &trained.shrinkage_scores);
+    let visits = data.visits();
+    let curve = match &args.curve {
+        Some(png) => {
+            let fold = &trained.selection_folds;
+            let largest = (0..classes)
+                .map(|c| data.y.iter().filter(|&&y| usize::from(y) == c).count())
+                .max()
+                .unwrap_or(0);
+            let sizes: Vec<usize> = [12, 24, 60, 120, 240, 480, 960, 1_200, 2_400, 4_800]
+                .into_iter()
+                .filter(|&n| n < largest)
+                .chain([largest])
+                .collect();
+            let bar = ProgressBar::new(sizes.len() as u64).with_style(
+                ProgressStyle::with_template("learning curve [{bar:30}] {pos}/{len}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let points = analysis::learning_curve(&data.y, classes, &sizes, |rows| {
+                bar.inc(1);
+                let ys: Vec<u16> = rows.iter().map(|&r| data.y[r]).collect();
+                let folds: Vec<usize> = rows.iter().map(|&r| fold[r]).collect();
+                fastcv::cross_validate_fast(
+                    &analysis::select_rows(&data.x, rows),
+                    &ys,
+                    classes,
+                    &opts,
+                    &folds,
+                )
+            });
+            bar.finish_and_clear();
+            plot::chart(
+                png,
+                plot::Labels {
+                    title: &format!(
+                        "learning curve: {} ({}), {} classes",
+                        Kind::from(args.kind).name(),
+                        if visits >= 2 {
+                            "leave-one-visit-out"
+                        } else {
+                            "k-fold CV"
+                        },
+                        classes
+                    ),
+                    x: "observations per class n_c",
+                    y: "held-out accuracy (%)",
+                    legend: plot::Legend::UpperLeft,
+                },
+                &[plot::Series {
+                    label: format!("shrinkage {shrinkage}"),
+                    points: points
+                        .iter()
+                        .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
+                        .collect(),
+                    scatter: false,
+                }],
+            )?;
+            Some(points)
+        }
+        None => None,
+    };
+    let mm: Vec<[f64; 2]> = data
+        .centres
+        .iter()
+        .map(|c| [c[0] * 1e3, c[1] * 1e3])
+        .collect();
+    let file = ModelFile::new(
+        model,
+        shrinkage,
+        data.config,
+        data.feature_index.clone(),
+        mm.clone(),
+        referenced,
+    );
+    file.save(&args.out).map_err(anyhow::Error::msg)?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "kind": Kind::from(args.kind).name(),
+        "referenced": referenced,
+        "shrinkage": shrinkage,
+        "shrinkage_scores": scores.iter().map(|(l, a)| serde_json::json!({"shrinkage": l, "accuracy": a})).collect::<Vec<_>>(),
+        "classes": classes,
+        "observations": data.x.nrows(),
+        "features": data.x.ncols(),
+        "cv_folds": args.folds.max(2),
+        "cv_accuracy": cv_conf.accuracy(),
+        "cv_mean_error_mm": cv_conf.mean_position_error(&mm),
+        "cv_aee_mm": cv_conf.aee(&mm),
+        "leave_one_visit_out_accuracy": lovo,
+        "learning_curve": curve,
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
+            Kind::from(args.kind).name(),
+            if referenced {
+                " (referenced)"
+            } else {
+                " (raw frames)"
+            },
+            data.x.nrows(),
+            classes,
+            data.x.ncols(),
+            shrinkage,
+            args.folds.max(2),
+            100.0 * cv_conf.accuracy(),
+            cv_conf.mean_position_error(&mm),
+            lovo.map_or(String::new(), |a| format!(
+                ", leave-one-visit-out {:.1} %",
+                100.0 * a
+            )),
+            args.out.display()
+        );
+        let fit = pipeline::features_that_fit(kind, classes, data.x.ncols());
+        if fit < data.x.ncols() {
+            eprintln!(
+                "note: for the board, this model is too big for a model slot even in f16; \
+                 train with --features {fit} (the most that fit for {classes} classes) or fewer classes"
+            );
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
+    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let data = dataset::load_csv(&args.data)?;
+    let classes = file.classes.len();
+    let tested = pipeline::test(&file, &data)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let (conf, bands) = (&tested.confusion, &tested.bands);
+    if let Some(dir) = &args.plots {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        plot::confusion(
+            &dir.join("confusion.png"),
+            conf,
+            &format!(
+                "confusion: accuracy {:.1} % on {}",
+                100.0 * conf.accuracy(),
+                args.data.display()
+            ),
+        )?;
+        if tested.outcomes.is_empty() {
+            eprintln!(
+                "note: {} does not say where the electrodes are: no error-vs-distance plot",
+                args.data.display()
+            );
+        } else {
+            plot::error_vs_distance(&dir.join("error-vs-distance.png"), &tested)?;
+        }
+    }
+    let summary = serde_json::json!({
+        "observations": conf.total(),
+        "accuracy": conf.accuracy(),
+        "mean_error_mm": conf.mean_position_error(&file.centres_mm),
+        "aee_mm": conf.aee(&file.centres_mm),
+        "by_distance_from_electrodes": bands,
+        "confusion": conf.counts.chunks(classes).map(<[u32]>::to_vec).collect::<Vec<_>>(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        println!(
+            "{} observations: accuracy {:.1} %, mean position error {:.2} mm, AEE {:.1} mm",
+            conf.total(),
+            100.0 * conf.accuracy(),
+            conf.mean_position_error(&file.centres_mm),
+            conf.aee(&file.centres_mm)
+        );
+    }
+    Ok(())
+}
+
+pub(crate) fn export_cmd(args: &ExportArgs) -> Result<()> {
+    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let precision = Precision::from(args.precision);
+    let blob = file.blob(precision)?;
+    std::fs::write(&args.out, &blob).with_context(|| format!("writing {}", args.out.display()))?;
+    let (c, p) = (file.classes.len(), file.feature_index.len());
+    // Multiply-adds per frame on the chip: QDA a forward substitution per class, LDA a dot.
+    let macs = if file.kind == Kind::Qda {
+        c * (p * (p + 1) / 2 + p)
+    } else {
+        c * p
+    };
+    // One model slot of the board's flash (firmware/src/store.rs).
+    const SLOT: usize = et_core::board::MODEL_SLOT_BYTES;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(),
+        "bytes": blob.len(),
+        "fits_model_slot": blob.len() <= SLOT,
+        "multiply_adds_per_frame": macs,
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",
+            args.out.display(),
+            blob.len(),
+            100.0 * blob.len() as f64 / SLOT as f64,
+            if blob.len() <= SLOT {
+                String::new()
+            } else {
+                let kind = ModelKind::from(file.kind);
+                if precision == Precision::F32
+                    && et_core::model::model_len(kind, Precision::F16, c, p) <= SLOT
+                {
+                    ": does NOT fit; --precision f16 does".to_string()
+                } else {
+                    format!(
+                        ": does NOT fit; retrain with et train --features {} (the most that fit in f16) or fewer classes",
+                        pipeline::features_that_fit(kind, c, p)
+                    )
+                }
+            },
+            macs
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,161 @@
+//! `et view` and `et stream`: live sensing from the simulator, a recording or a board.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use et_learn::model_file::ModelFile;
+
+/// Where live frames come from (`et stream`, `et view`).
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct SourceArgs {
+    /// The scene to simulate; with --replay or --port, the sheet they were made on (its
+    /// shape and electrodes, for imaging). Default: the 13 x 13 cm, 16-electrode sheet.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Replay a recording (JSON Lines from `et sim` or `et record`).
+    #[arg(long, conflicts_with = "port")]
+    replay: Option<PathBuf>,
+    /// A board's serial port (`et ports` lists them).
+    #[arg(long)]
+    port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = et_core::board::BAUD)]
+    baud: u32,
+    /// A trained model (`et train`) to classify each touch with on the host.
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+impl SourceArgs {
+    fn spec(&self) -> et_host::live::SourceSpec {
+        use et_host::live::SourceSpec;
+        match (&self.replay, &self.port) {
+            (Some(path), _) => SourceSpec::Replay(path.clone()),
+            (None, Some(port)) => SourceSpec::Port(port.clone(), self.baud),
+            (None, None) => SourceSpec::Sim,
+        }
+    }
+
+    fn classifier(&self) -> Result<Option<et_host::live::Classifier>> {
+        self.model
+            .as_deref()
+            .map(|p| {
+                let file = ModelFile::load(p).map_err(anyhow::Error::msg)?;
+                et_host::live::Classifier::new(file)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+            })
+            .transpose()
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ViewArgs {
+    #[command(flatten)]
+    source: SourceArgs,
+    /// For documentation: once V_0 is taken, press the simulated sheet at (30, 25) mm, save
+    /// the window as this PNG, and close.
+    #[arg(long, value_name = "PNG")]
+    screenshot: Option<PathBuf>,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct StreamArgs {
+    #[command(flatten)]
+    source: SourceArgs,
+    /// JSON lines on stdout (the only output format; the flag says so in scripts).
+    #[arg(long)]
+    json: bool,
+    /// Stop after this many frames (default: run until Ctrl-C or the end of a recording).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Simulate as fast as possible instead of in real time.
+    #[arg(long)]
+    fast: bool,
+}
+
+#[cfg(feature = "viewer")]
+pub(crate) fn view_cmd(args: &ViewArgs) -> Result<()> {
+    et_host::viewer::run(et_host::viewer::Options {
+        scene: args.source.scene.clone(),
+        source: args.source.spec(),
+        model: args.source.model.clone(),
+        realtime: true,
+        screenshot: args.screenshot.clone(),
+    })
+    .map_err(anyhow::Error::msg)
+}
+
+#[cfg(not(feature = "viewer"))]
+pub(crate) fn view_cmd(_: &ViewArgs) -> Result<()> {
+    anyhow::bail!(
+        "this et was built without the viewer; build it with the `viewer` feature:\n  cargo run --release -p et-host --features viewer -- view"
+    )
+}
+
+pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
+    use et_host::live::{Processor, Settings, Source, open_source};
+    use std::io::Write as _;
+    let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())
+        .map_err(anyhow::Error::msg)?;
+    let mut processor = Processor::new(&sheet, Settings::default()).map_err(anyhow::Error::msg)?;
+    processor.classifier = args.source.classifier()?;
+    if let Some(c) = &processor.classifier {
+        // The model classifies frames of the configuration it was trained on.
+        source.configure(c.file.config).map_err(|e| {
+            anyhow::anyhow!(
+                "the model was trained on {} frames and the source cannot scan them: {e}",
+                c.file.config.protocol.name()
+            )
+        })?;
+    }
+    if let Source::Replay(r) = &mut source {
+        r.looping = false;
+    }
+    if !args.json {
+        eprintln!("note: et stream prints JSON lines (--json); streaming them anyway");
+    }
+    eprintln!(
+        "streaming touch events from the {} (the first {} frames are the untouched reference)",
+        source.describe(),
+        Settings::default().reference_frames
+    );
+    let limit = args.frames.unwrap_or(u64::MAX);
+    let mut seen = 0u64;
+    let mut stdout = std::io::stdout().lock();
+    while seen < limit {
+        let frames = source.poll(64, !args.fast).map_err(anyhow::Error::msg)?;
+        if frames.is_empty() {
+            if let Source::Replay(r) = &source
+                && r.position >= r.len()
+            {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            continue;
+        }
+        for frame in frames {
+            if seen >= limit {
+                break;
+            }
+            seen += 1;
+            let out = match processor.process(frame) {
+                Ok(o) => o,
+                Err(e) => {
+                    eprintln!("skipped: {e}");
+                    continue;
+                }
+            };
+            if let Some(event) = out.event {
+                let line = serde_json::to_string(&event)?;
+                if writeln!(stdout, "{line}")
+                    .and_then(|()| stdout.flush())
+                    .is_err()
+                {
+                    // The reader went away (a closed pipe): stop quietly.
+                    return Ok(());
+                }
+            }
+        }
+    }
+    Ok(())
+}

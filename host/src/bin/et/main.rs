@@ -1,0 +1,224 @@
+//! `et`: the command-line program of the et workspace.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod board;
+mod demo;
+mod imaging;
+mod learn;
+mod live;
+mod protocol;
+mod sim;
+
+/// Touch sensing with electrical tomography: protocols, simulation, imaging and learning.
+#[derive(Debug, Parser)]
+#[command(
+    name = "et",
+    version,
+    about,
+    long_about = None,
+    after_help = "Start here: `et demo` runs the whole method on the simulated sheet (no hardware) \
+                  and writes a report. Every command's --help has examples."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the whole method on the simulated sheet into a report folder (no hardware).
+    ///
+    /// The whole method on the simulated sheet, no hardware needed: collect a training set,
+    /// train and cross-validate QDA, test it on next-day sessions and on the chip's model
+    /// blob, image docs/method.md §7's reference scenarios with every protocol::protocol, and sweep mesh size
+    /// against accuracy and time. Writes a report folder (index.md with PNG figures, and
+    /// summary.json) and prints where it is. About 1 to 2 minutes in a release build.
+    ///
+    /// Examples:
+    ///   et demo
+    ///   et demo --out /tmp/report --json
+    ///   et demo --quick            (small sizes: a 10-second smoke test)
+    #[command(verbatim_doc_comment)]
+    Demo(demo::DemoArgs),
+    /// Print a protocol's tables: injection pairs, measurement pairs, K and p (docs/method.md §4).
+    ///
+    /// Examples:
+    ///   et protocol --electrodes 16 --protocol adjacent
+    ///   et protocol -l 16 -p opposite --json > opposite16.json
+    ///   et protocol -l 16 --drive-skip 3 --measure-skip 0 --measure-skip 3
+    #[command(verbatim_doc_comment)]
+    Protocol(protocol::ProtocolArgs),
+    /// Simulate a scene into a recording of frames (JSON Lines).
+    ///
+    /// Simulate a scene: frames of the emulated fabric sheet, with the true touches, written
+    /// as a recording (JSON Lines; read it from Python with python/et_recording.py).
+    ///
+    /// Scenes are TOML files; sim/scenes/ has one for every geometry of the method and its
+    /// reference scenarios.
+    ///
+    /// Examples:
+    ///   et sim --scene sim/scenes/square-13cm-16.toml --frames 200 --out touch.jsonl
+    ///   et sim --scene sim/scenes/square-13cm-16-swipe.toml --frames 150 --out swipe.jsonl --samples
+    #[command(verbatim_doc_comment)]
+    Sim(sim::SimArgs),
+    /// Collect a labelled training set on the simulated sheet (docs/method.md §9), as CSV.
+    ///
+    /// Collect a labelled training set on the simulated sheet, the docs/method.md §9 way: a grid of
+    /// touch classes, visited T times, S_num scans per class and visit with the pressure varied,
+    /// S_sub observations per scan; electrodes move between visits. Each visit starts with
+    /// an untouched frame (the sheet as it was put down), which referenced models subtract.
+    /// Writes CSV (Python: csv or numpy.loadtxt(comments="#"); MATLAB: readmatrix).
+    ///
+    /// Examples:
+    ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
+    ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --visits 1 --scans 1 --seed 77 --out nextday.csv
+    #[command(verbatim_doc_comment)]
+    Collect(learn::CollectArgs),
+    /// Train a QDA or LDA touch classifier and cross-validate it.
+    ///
+    /// Train a QDA or LDA model on a collected training set (shrinkage chosen by
+    /// leave-one-visit-out cross-validation unless given), and cross-validate it. By default
+    /// the model is referenced: it classifies each frame minus its session's untouched frame,
+    /// which cancels electrode movement between sessions (--raw: docs/method.md §9's raw frames).
+    ///
+    /// Examples:
+    ///   et train --data train.csv --out model.json
+    ///   et train --data train.csv --kind lda --out lda.json --curve learning-curve.png
+    #[command(verbatim_doc_comment)]
+    Train(learn::TrainArgs),
+    /// Evaluate a trained model on a test set: accuracy, mean position error, AEE, confusion.
+    ///
+    /// Examples:
+    ///   et eval --model model.json --data nextday.csv
+    ///   et eval --model model.json --data nextday.csv --plots plots/ --json
+    #[command(verbatim_doc_comment)]
+    Eval(learn::EvalArgs),
+    /// Export a trained model as the board's model blob.
+    ///
+    /// Export a trained model as the model blob the firmware evaluates (f32, or f16 at half
+    /// the flash), with its size and evaluation cost.
+    ///
+    /// Example:
+    ///   et export --model model.json --precision f16 --out model.etm
+    #[command(verbatim_doc_comment)]
+    Export(learn::ExportArgs),
+    /// Image touches (a scene's, or recorded frames) by one-step Gauss-Newton, as PNG + metrics.
+    ///
+    /// Image a scene's touches by one-step Gauss-Newton difference imaging (docs/method.md §6): mesh the
+    /// sheet, the complete electrode model's Jacobian at the untouched sheet, the NOSER
+    /// reconstruction matrix; then the simulator's frames without and with the touches (its
+    /// resistor network, not these finite elements) give the image, its regions and the
+    /// docs/method.md §7 metrics. Writes the image as PNG with a colour bar.
+    ///
+    /// Examples:
+    ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --out x050.png
+    ///   et reconstruct --scene sim/scenes/disc-ref-two.toml --alpha 0.01 --out two.png --json
+    ///   et reconstruct --scene sim/scenes/square-13cm-16-swipe.toml --frames swipe.jsonl --frame 60 --out f60.png
+    ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --refine 55,0,25 --out x050-roi.png
+    #[command(verbatim_doc_comment)]
+    Reconstruct(imaging::ReconstructArgs),
+    /// Boundary voltages of a scene by the finite elements.
+    ///
+    /// Boundary voltages of a scene by the finite elements (complete electrode model): the
+    /// scene's protocol and current, the untouched sheet and the sheet with its touches (each
+    /// touch's disc at the conductance its pressure gives), V_0, V_1 and their difference.
+    /// The mesh is refined at the touches (a quarter of their radius), so their edges are
+    /// resolved within the triangle budget.
+    ///
+    /// Examples:
+    ///   et forward --scene sim/scenes/disc-ref-x050.toml
+    ///   et forward --scene sim/scenes/square-13cm-16.toml --triangles 30000 --json > v.json
+    #[command(verbatim_doc_comment)]
+    Forward(imaging::ForwardArgs),
+    /// List the serial ports of this machine (for --port).
+    ///
+    /// Example:
+    ///   et ports
+    #[command(verbatim_doc_comment)]
+    Ports,
+    /// Record frames from a board into a recording (JSON Lines).
+    ///
+    /// Record frames from a board on a serial port into a recording (JSON Lines, one frame per
+    /// line, flushed as it arrives: a crash or a pulled cable loses at most the frame in
+    /// flight). Starts the scan, records until --frames or --seconds or Ctrl-C, and rides out a
+    /// pulled cable (the port is reopened when it comes back). A change of configuration on
+    /// the board continues in FILE-2.jsonl, FILE-3.jsonl, ...
+    ///
+    /// Examples:
+    ///   et record --port /dev/ttyUSB0 --out session.jsonl --seconds 60
+    ///   et record --port /dev/serial/by-id/usb-FTDI_FT232R-if00-port0 --out s.jsonl --frames 500
+    #[command(verbatim_doc_comment)]
+    Record(board::RecordArgs),
+    /// Open the viewer: live image, class grid, plots, training wizard (feature `viewer`).
+    ///
+    /// Open the viewer: the live image with its colour bar and ROI outline, the class grid
+    /// with the recognised class lit and the position marker, protocol (or automatic),
+    /// alpha and threshold, plots of frame rate, BVC and per-channel SNR, link health, and the
+    /// training wizard. Press the simulated sheet with the mouse. Needs the `viewer` feature:
+    ///   cargo run --release -p et-host --features viewer -- view
+    ///
+    /// Examples:
+    ///   et view                                   (the simulated 13 x 13 cm sheet)
+    ///   et view --scene sim/scenes/disc-22cm-16.toml
+    ///   et view --replay session.jsonl
+    ///   et view --port /dev/ttyUSB0 --model model.json
+    #[command(verbatim_doc_comment)]
+    View(live::ViewArgs),
+    /// Print touch events as JSON lines for other programs.
+    ///
+    /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
+    /// class, position, intensity, confidence, timestamp, one line per touched frame. From
+    /// a simulated scene (--scene; its touches start once the reference is taken), a
+    /// recording (--replay) or a board (--port). The first 20 frames, with the sheet
+    /// untouched, make the reference V_0.
+    ///
+    /// Examples:
+    ///   et stream --json --scene sim/scenes/square-13cm-16-swipe.toml --frames 300
+    ///   et stream --json --scene sim/scenes/square-13cm-16.toml --model model.json
+    ///   et stream --json --replay session.jsonl
+    ///   et stream --json --port /dev/ttyUSB0 --model model.json | my-robot
+    #[command(verbatim_doc_comment)]
+    Stream(live::StreamArgs),
+    /// Upload a model blob to the board (which verifies it before using it).
+    ///
+    /// Upload a model blob (from `et export`) to the board over its serial port. The board
+    /// verifies it (CRC, model checks, scan configuration) before it replaces the old model;
+    /// a refused upload leaves the old one classifying. A referenced model needs the untouched
+    /// frame V_0: add --tare (with the sheet untouched and the board scanning).
+    ///
+    /// Examples:
+    ///   et export --model model.json --precision f16 --out model.bin
+    ///   et upload --port /dev/ttyUSB0 --blob model.bin --tare
+    #[command(verbatim_doc_comment)]
+    Upload(board::UploadArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Demo(args) => demo::run(args),
+        Command::Protocol(args) => protocol::run(args),
+        Command::Sim(args) => sim::run(args),
+        Command::Collect(args) => learn::collect_cmd(args),
+        Command::Train(args) => learn::train_cmd(args),
+        Command::Eval(args) => learn::eval_cmd(args),
+        Command::Export(args) => learn::export_cmd(args),
+        Command::Reconstruct(args) => imaging::reconstruct_cmd(args),
+        Command::Forward(args) => imaging::forward_cmd(args),
+        Command::Ports => board::ports_cmd(),
+        Command::Record(args) => board::record_cmd(args),
+        Command::Upload(args) => board::upload_cmd(args),
+        Command::Stream(args) => live::stream_cmd(args),
+        Command::View(args) => live::view_cmd(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,61 @@
+//! `et protocol`: a protocol's tables for people and programs.
+
+use anyhow::{Context, Result, bail};
+use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
+use et_host::tables::ProtocolTables;
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ProtocolArgs {
+    /// Electrode count L: even, 4 to 32.
+    #[arg(short = 'l', long, default_value_t = 16)]
+    electrodes: u8,
+    /// adjacent (ad), pseudo-polar (pp), pp-pp, or opposite (polar). Ignored with --drive-skip.
+    #[arg(short, long, default_value = "adjacent")]
+    protocol: String,
+    /// General form: inject between i and i + drive_skip + 1 (needs --measure-skip).
+    #[arg(long, requires = "measure_skip")]
+    drive_skip: Option<u8>,
+    /// General form: measure between j and j + s + 1; give once or twice.
+    #[arg(long)]
+    measure_skip: Vec<u8>,
+    /// Print JSON (all tables, machine-readable) instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
+    let kind = match args.drive_skip {
+        Some(drive_skip) => {
+            let mut skips = SkipSet(0);
+            for &s in &args.measure_skip {
+                if s >= 32 {
+                    bail!("--measure-skip {s} is too large: use a skip below L/2");
+                }
+                skips = skips.with(s);
+            }
+            ProtocolKind::Custom(Pattern {
+                drive_skip,
+                measure_skips: skips,
+            })
+        }
+        None => {
+            if !args.measure_skip.is_empty() {
+                bail!("--measure-skip needs --drive-skip (the general form)");
+            }
+            ProtocolKind::from_name(&args.protocol).with_context(|| {
+                format!(
+                    "unknown protocol '{}': use adjacent, pseudo-polar, pp-pp or opposite",
+                    args.protocol
+                )
+            })?
+        }
+    };
+    let protocol = Protocol::new(kind, args.electrodes)?;
+    let tables = ProtocolTables::new(&protocol);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&tables)?);
+    } else {
+        print!("{}", tables.to_text());
+    }
+    Ok(())
+}

@@ -1,0 +1,422 @@
+//! Frames in, images and touch events out: V_0 and the noise from untouched frames, the one-step
+//! image on pixels, touches above their noise, and a trained model's class and position.
+
+use super::*;
+
+/// What a touch looks like to a downstream program (`et stream --json` prints these).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TouchEvent {
+    /// Device time of the frame, us.
+    pub t_us: u32,
+    /// Frame sequence number.
+    pub seq: u32,
+    /// The class (a trained model's, or the board's), when there is a model.
+    pub class: Option<u16>,
+    /// Position on the sheet, mm: the model's posterior-weighted class centre, else the
+    /// strongest image region's centroid.
+    pub position_mm: [f64; 2],
+    /// The image's strongest pixel over that pixel's noise on the untouched sheet (a z-score:
+    /// noise alone stays below about 3.5 on the simulator; a 20 kPa press reaches 8 to 11).
+    pub intensity: f64,
+    /// The model's posterior of its class (0 to 1), when there is a model.
+    pub confidence: Option<f64>,
+    /// Touches in the image: its regions split at their saddles (`recon::touches`), above
+    /// the touch factor times their noise, with half the strongest peak and a quarter
+    /// fingertip's area (`dynamic::significant`).
+    pub regions: usize,
+}
+
+/// A trained model the host evaluates on each frame.
+#[derive(Clone, Debug)]
+pub struct Classifier {
+    /// As trained.
+    pub file: ModelFile,
+    fitted: Fitted,
+}
+
+impl Classifier {
+    /// Wraps a model file.
+    ///
+    /// # Errors
+    /// A message if the file's model is inconsistent.
+    pub fn new(file: ModelFile) -> Result<Self, String> {
+        let fitted = file.fitted().map_err(|e| e.to_string())?;
+        Ok(Self { file, fitted })
+    }
+
+    /// Class, its posterior and the posterior-weighted centre (mm) of a frame, given V_0.
+    /// None when the model is for another configuration.
+    #[must_use]
+    pub fn classify(
+        &self,
+        config: &ScanConfig,
+        v: &[f32],
+        v0: &[f64],
+    ) -> Option<(u16, f64, [f64; 2])> {
+        if *config != self.file.config {
+            return None;
+        }
+        let x: Vec<f64> = self
+            .file
+            .feature_index
+            .iter()
+            .map(|&i| {
+                let i = usize::from(i);
+                let m = f64::from(*v.get(i)?);
+                Some(if self.file.referenced {
+                    m - v0.get(i)?
+                } else {
+                    m
+                })
+            })
+            .collect::<Option<_>>()?;
+        let d = self.fitted.discriminants(&x);
+        let top = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
+        let class = d.iter().position(|&v| v == top)?;
+        let centre = posterior_centre(&self.fitted, &x, &self.file.centres_mm, 1.0);
+        Some((class as u16, 1.0 / total, centre))
+    }
+}
+
+/// Settings of the live pipeline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Tikhonov alpha (dimensionless, as `recon::OneStep`).
+    pub alpha: f64,
+    /// NOSER exponent s.
+    pub s: f64,
+    /// ROI threshold f; None: docs/method.md §6's value for the protocol.
+    pub threshold: Option<f64>,
+    /// A frame is a touch when one of the image's touches (`recon::touches`) peaks at more
+    /// than this many times its pixel's noise on the untouched sheet.
+    pub touch_factor: f64,
+    /// Untouched frames averaged into V_0 after a start, a configuration change or a tare.
+    pub reference_frames: usize,
+    /// Triangles of the imaging mesh.
+    pub triangles: usize,
+    /// Pixels across the image.
+    pub pixels: usize,
+}
+
+impl Default for Settings {
+    /// alpha 0.3 (about what GCV picks on the simulator's noisy frames), s = 0.5, 5 x the
+    /// noise for a touch, 20 reference frames, 3 000 triangles, 48 pixels.
+    fn default() -> Self {
+        Self {
+            alpha: 0.3,
+            s: 0.5,
+            threshold: None,
+            touch_factor: 5.0,
+            reference_frames: 20,
+            triangles: 3_000,
+            pixels: 48,
+        }
+    }
+}
+
+/// V_0 and the noise of the untouched frames.
+#[derive(Clone, Debug)]
+pub(super) struct Reference {
+    pub(super) config: ScanConfig,
+    /// The untouched frames so far, V.
+    pub(super) frames: Vec<Vec<f32>>,
+    /// What the complete reference gives, made once (and again when alpha or s change).
+    pub(super) noise: Option<Noise>,
+}
+
+/// V_0, the noise of dV per channel, and each pixel's noise through the projection built
+/// with (alpha, s).
+#[derive(Clone, Debug)]
+pub(super) struct Noise {
+    pub(super) alpha: f64,
+    pub(super) s: f64,
+    pub(super) v0: Vec<f64>,
+    pub(super) var_dv: Vec<f64>,
+    pub(super) pixel_sd: Vec<f64>,
+}
+
+/// One frame processed.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The frame.
+    pub frame: LiveFrame,
+    /// Reference frames collected so far and needed; the image waits until they are in.
+    pub referencing: Option<(usize, usize)>,
+    /// Conductivity change per pixel (None outside the sheet), S per square.
+    pub image: Vec<Option<f64>>,
+    /// The touches in the image (only when touched): regions above the threshold split at
+    /// their saddles, each above the touch factor times its noise; strongest first.
+    pub regions: Vec<Region>,
+    /// BVC = |V_m - V_0|, V.
+    pub bvc: f64,
+    /// The expected |V_m - V_0| of an untouched frame (from the reference frames), V.
+    pub noise: f64,
+    /// The touch, when the frame is one.
+    pub event: Option<TouchEvent>,
+    /// ROI threshold used.
+    pub threshold: f64,
+}
+
+/// The live pipeline for one sheet (see the module docs).
+pub struct Processor {
+    imager: Imager,
+    /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
+    settings: Settings,
+    jacobians: Vec<(ScanConfig, DMatrix<f64>)>,
+    /// (configuration, alpha, s) and the pixel projection of its one-step matrix.
+    projection: Option<(ScanConfig, f64, f64, DMatrix<f32>)>,
+    inside: Vec<usize>,
+    reference: Option<Reference>,
+    /// The model evaluated on each touched frame.
+    pub classifier: Option<Classifier>,
+}
+
+impl std::fmt::Debug for Processor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Processor")
+            .field("imager", &self.imager)
+            .field("settings", &self.settings)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Processor {
+    /// The pipeline for `sheet`.
+    ///
+    /// # Errors
+    /// A message if the sheet cannot be meshed or modelled.
+    pub fn new(sheet: &SheetSpec, settings: Settings) -> Result<Self, String> {
+        let mesh = Mesh::with_about(sheet, settings.triangles).map_err(|e| e.to_string())?;
+        let imager = Imager::new(sheet, mesh, settings.pixels).map_err(|e| e.to_string())?;
+        let inside = imager
+            .grid
+            .triangle
+            .iter()
+            .enumerate()
+            .filter_map(|(p, t)| t.map(|_| p))
+            .collect();
+        Ok(Self {
+            imager,
+            settings,
+            jacobians: Vec::new(),
+            projection: None,
+            inside,
+            reference: None,
+            classifier: None,
+        })
+    }
+
+    /// The pixel grid images are on.
+    #[must_use]
+    pub fn grid(&self) -> &PixelGrid {
+        &self.imager.grid
+    }
+
+    /// The imager (mesh, forward model, grid), for writing pictures.
+    #[must_use]
+    pub fn imager(&self) -> &Imager {
+        &self.imager
+    }
+
+    /// The settings.
+    #[must_use]
+    pub fn settings(&self) -> Settings {
+        self.settings
+    }
+
+    /// New settings; the reconstruction matrix is rebuilt on the next frame if alpha or s
+    /// changed. Mesh and pixel changes need a new `Processor`.
+    pub fn set_settings(&mut self, settings: Settings) {
+        self.settings = settings;
+    }
+
+    /// Forgets V_0: the next `reference_frames` frames (the sheet untouched) make a new one.
+    pub fn tare(&mut self) {
+        self.reference = None;
+    }
+
+    /// V_0, when complete.
+    #[must_use]
+    pub fn v0(&self) -> Option<Vec<f64>> {
+        let r = self.reference.as_ref()?;
+        if r.frames.len() < self.settings.reference_frames.max(1) {
+            return None;
+        }
+        let mut v0 = vec![0.0; r.frames.first().map_or(0, Vec::len)];
+        stats::reference(&r.frames, &mut v0).ok()?;
+        Some(v0)
+    }
+
+    fn projection(&mut self, config: &ScanConfig) -> Result<&DMatrix<f32>, String> {
+        let Settings { alpha, s, .. } = self.settings;
+        let fresh =
+            matches!(&self.projection, Some((c, a, e, _)) if c == config && *a == alpha && *e == s);
+        if !fresh {
+            if !self.jacobians.iter().any(|(c, _)| c == config) {
+                let protocol = config.validate().map_err(|e| e.to_string())?;
+                let amps = f64::from(config.current_amps());
+                let jac = self
+                    .imager
+                    .jacobian(&protocol, amps)
+                    .map_err(|e| e.to_string())?;
+                self.jacobians.push((*config, jac));
+            }
+            let jac = &self
+                .jacobians
+                .iter()
+                .find(|(c, _)| c == config)
+                .ok_or("no Jacobian")?
+                .1;
+            let one = OneStep::new(jac, alpha, s).map_err(|e| e.to_string())?;
+            self.projection = Some((*config, alpha, s, self.imager.grid.project(&one)));
+        }
+        Ok(&self.projection.as_ref().ok_or("no reconstruction")?.3)
+    }
+
+    /// Processes one frame.
+    ///
+    /// # Errors
+    /// A message for a frame of the wrong length or with non-finite values, or when the
+    /// reconstruction cannot be built.
+    pub fn process(&mut self, frame: LiveFrame) -> Result<Output, String> {
+        let k = frame.voltages.len();
+        let protocol = frame.config.validate().map_err(|e| e.to_string())?;
+        if k != protocol.frame_len() {
+            return Err(format!(
+                "frame {}: {k} values, its protocol has {}",
+                frame.seq,
+                protocol.frame_len()
+            ));
+        }
+        if frame.voltages.iter().any(|v| !v.is_finite()) {
+            return Err(format!("frame {}: a value is not finite", frame.seq));
+        }
+        let threshold = self
+            .settings
+            .threshold
+            .unwrap_or_else(|| default_threshold(frame.config.protocol));
+        let needed = self.settings.reference_frames.max(1);
+        let reference = match &mut self.reference {
+            Some(r) if r.config == frame.config => r,
+            slot => slot.insert(Reference {
+                config: frame.config,
+                frames: Vec::with_capacity(needed),
+                noise: None,
+            }),
+        };
+        if reference.frames.len() < needed {
+            reference.frames.push(frame.voltages.clone());
+            return Ok(Output {
+                referencing: Some((reference.frames.len(), needed)),
+                image: vec![None; self.imager.grid.triangle.len()],
+                regions: Vec::new(),
+                bvc: 0.0,
+                noise: 0.0,
+                event: None,
+                threshold,
+                frame,
+            });
+        }
+        let config = frame.config;
+        self.projection(&config)?;
+        let projection = &self.projection.as_ref().ok_or("no reconstruction")?.3;
+        let reference = self.reference.as_mut().ok_or("no reference")?;
+        let Settings { alpha, s, .. } = self.settings;
+        if !reference
+            .noise
+            .as_ref()
+            .is_some_and(|n| n.alpha == alpha && n.s == s)
+        {
+            // V_0 and the channel variances of an untouched frame's dV.
+            let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
+            stats::reference(&reference.frames, &mut v0).map_err(|e| e.to_string())?;
+            stats::dv_variance(&reference.frames, &mut var_dv).map_err(|e| e.to_string())?;
+            // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
+            // filters the noise the data carry, so a touch stands out better here than in
+            // |dV|.
+            let pixel_sd = noise_sd(projection, &var_dv);
+            reference.noise = Some(Noise {
+                alpha,
+                s,
+                v0,
+                var_dv,
+                pixel_sd,
+            });
+        }
+        let Noise {
+            v0,
+            var_dv,
+            pixel_sd,
+            ..
+        } = reference.noise.as_ref().ok_or("no reference")?;
+        let dv: Vec<f64> = frame
+            .voltages
+            .iter()
+            .zip(v0)
+            .map(|(a, b)| f64::from(*a) - b)
+            .collect();
+        let bvc = stats::bvc_dv(&dv);
+        let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+        let values = projection * nalgebra::DVector::from_vec(dv32);
+        // The strongest pixel in units of its own noise (a touch raises the conductivity).
+        let intensity = values
+            .iter()
+            .zip(pixel_sd)
+            .filter(|(_, sd)| **sd > 0.0)
+            .map(|(v, sd)| f64::from(*v) / sd)
+            .fold(0.0, f64::max);
+        let mut image = vec![None; self.imager.grid.triangle.len()];
+        for (&p, v) in self.inside.iter().zip(values.iter()) {
+            image[p] = Some(f64::from(*v));
+        }
+        // The touches: regions split at their saddles, each reaching the touch factor times
+        // its pixels' noise somewhere. A frame is touched when one does.
+        let rois = if intensity > self.settings.touch_factor {
+            let mut sd = vec![None; image.len()];
+            for (&p, v) in self.inside.iter().zip(pixel_sd) {
+                sd[p] = Some(*v);
+            }
+            above_noise(
+                &touches(&self.imager.grid, &image, &sd, threshold, PROMINENCE),
+                self.settings.touch_factor,
+            )
+        } else {
+            Vec::new()
+        };
+        let touched = !rois.is_empty();
+        let event = touched.then(|| {
+            let model = self
+                .classifier
+                .as_ref()
+                .and_then(|c| c.classify(&config, &frame.voltages, v0));
+            let chip = frame.chip_class.map(|c| c.0);
+            let image_position = rois.first().map_or([f64::NAN; 2], |r| {
+                [r.centroid[0] * 1e3, r.centroid[1] * 1e3]
+            });
+            TouchEvent {
+                t_us: frame.t_us,
+                seq: frame.seq,
+                class: chip.or(model.map(|m| m.0)),
+                position_mm: model.map_or(image_position, |m| m.2),
+                intensity,
+                confidence: model.map(|m| m.1),
+                regions: et_recon::select::significant(
+                    &rois,
+                    &et_recon::select::Settings::new([0.0, 0.0], 1.0),
+                )
+                .len(),
+            }
+        });
+        Ok(Output {
+            frame,
+            referencing: None,
+            image,
+            regions: rois,
+            bvc,
+            noise: var_dv.iter().sum::<f64>().sqrt(),
+            event,
+            threshold,
+        })
+    }
+}

@@ -1,0 +1,408 @@
+//! Where frames come from: the simulator (which a pointer can press), a recording (replay with
+//! pause and seek) or a board on a serial port.
+
+use super::*;
+
+/// The default sheet of the simulator and of boards whose sheet is not given: 13 x 13 cm, 16
+/// electrodes (docs/method.md §1).
+///
+/// # Errors
+/// Never for the compiled-in scene (a message otherwise).
+pub fn default_scene() -> Result<Scene, String> {
+    let (name, text) = crate::demo::DEFAULT_SCENE;
+    Scene::parse(text, name).map_err(|e| e.to_string())
+}
+
+/// A simulated scene, running in real time, that a pointer can press.
+#[derive(Debug)]
+pub struct SimSource {
+    /// The scene's name.
+    pub name: String,
+    run: Run,
+    started: Instant,
+    produced: u64,
+}
+
+impl SimSource {
+    /// Frames the sheet lies untouched before the scene's own touches start, so that the
+    /// reference V_0 is taken on an untouched sheet (as a user puts a sheet down): twice
+    /// the default reference.
+    pub const LEAD_FRAMES: u64 = 40;
+
+    /// Starts `scene`, its touches held back for [`Self::LEAD_FRAMES`] frames.
+    ///
+    /// # Errors
+    /// A message if the sheet cannot be built.
+    pub fn new(scene: &Scene, name: impl Into<String>) -> Result<Self, String> {
+        let mut run = Run::new(scene).map_err(|e| e.to_string())?;
+        run.hold_scene(true);
+        Ok(Self {
+            name: name.into(),
+            run,
+            started: Instant::now(),
+            produced: 0,
+        })
+    }
+
+    /// Presses the sheet with `touches` (in addition to the scene's own) from the next frame.
+    pub fn press(&mut self, touches: Vec<Touch>) {
+        self.run.set_extra_touches(touches);
+    }
+
+    /// The next frame, whatever the clock says.
+    ///
+    /// # Errors
+    /// A message if the simulation fails.
+    pub fn next_frame(&mut self) -> Result<LiveFrame, String> {
+        if self.produced == Self::LEAD_FRAMES {
+            self.run.hold_scene(false);
+        }
+        let (frame, truth) = self
+            .run
+            .next_frame(Detail::Frames)
+            .map_err(|e| e.to_string())?;
+        self.produced += 1;
+        Ok(LiveFrame {
+            seq: frame.seq,
+            t_us: frame.timestamp.0,
+            config: frame.config,
+            voltages: frame.voltages.to_vec(),
+            truth: Some(truth.touches),
+            chip_class: None,
+        })
+    }
+}
+
+/// A recording played back, with pause and seek.
+#[derive(Debug)]
+pub struct ReplaySource {
+    /// The file.
+    pub name: String,
+    /// Its frames.
+    pub recording: Recording,
+    /// The sheet it was recorded on (for imaging).
+    pub sheet: SheetSpec,
+    /// Index of the next frame to play.
+    pub position: usize,
+    /// Paused: no frames come.
+    pub paused: bool,
+    /// Start again at the end.
+    pub looping: bool,
+}
+
+impl ReplaySource {
+    /// Reads `path`; `sheet` is the sheet it was recorded on.
+    ///
+    /// # Errors
+    /// The recording's error, naming the file.
+    pub fn open(path: &Path, sheet: SheetSpec) -> Result<Self, String> {
+        let recording = recording::read(path).map_err(|e| e.to_string())?;
+        if recording.header.electrodes != sheet.electrodes.count {
+            return Err(format!(
+                "{}: frames of {} electrodes, the sheet has {}",
+                path.display(),
+                recording.header.electrodes,
+                sheet.electrodes.count
+            ));
+        }
+        Ok(Self {
+            name: path.display().to_string(),
+            recording,
+            sheet,
+            position: 0,
+            paused: false,
+            looping: true,
+        })
+    }
+
+    /// Frames in the recording.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.recording.records.len()
+    }
+
+    /// Whether the recording has no frames.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.recording.records.is_empty()
+    }
+
+    /// Plays from frame `index` next (clamped to the recording).
+    pub fn seek(&mut self, index: usize) {
+        self.position = index.min(self.len().saturating_sub(1));
+    }
+
+    /// The frame at the play position, advancing it (None when paused or at the end).
+    pub fn next_frame(&mut self) -> Option<LiveFrame> {
+        if self.paused {
+            return None;
+        }
+        if self.position >= self.len() {
+            if !self.looping || self.is_empty() {
+                return None;
+            }
+            self.position = 0;
+        }
+        let r = &self.recording.records[self.position];
+        self.position += 1;
+        Some(LiveFrame {
+            seq: r.seq,
+            t_us: r.t_us,
+            config: self.recording.header.config,
+            voltages: r.voltages.clone(),
+            truth: r.touches.as_ref().map(|ts| {
+                ts.iter()
+                    .map(|t| Touch {
+                        position: [t.x, t.y],
+                        radius: t.radius,
+                        pressure: t.pressure,
+                    })
+                    .collect()
+            }),
+            chip_class: None,
+        })
+    }
+}
+
+/// A board on a serial port.
+#[derive(Debug)]
+pub struct PortSource {
+    /// The port's path.
+    pub path: String,
+    /// The link.
+    pub link: Link,
+    /// The board's latest status report.
+    pub status: Option<et_core::wire::Status>,
+    /// The board's latest refusal or fault, for people.
+    pub last_problem: Option<String>,
+    /// Frames waiting for their on-chip class.
+    pending: VecDeque<LiveFrame>,
+}
+
+impl PortSource {
+    /// Opens `path` and starts the scan.
+    ///
+    /// # Errors
+    /// A message if the port cannot be opened or the board does not answer.
+    pub fn open(path: &str, baud: u32) -> Result<Self, String> {
+        let mut link = Link::open(path, baud).map_err(|e| e.to_string())?;
+        link.request(&Command::Start, Duration::from_secs(2))
+            .map_err(|e| format!("{path}: {e}"))?;
+        Ok(Self {
+            path: path.to_string(),
+            link,
+            status: None,
+            last_problem: None,
+            pending: VecDeque::new(),
+        })
+    }
+
+    /// Puts a model on the board: uploads `blob` (the board verifies it before it replaces
+    /// its model; erasing a slot takes seconds) and, for a referenced model, has the board
+    /// take V_0 from its next frames, so the sheet must be untouched. Returns what happened,
+    /// for people.
+    ///
+    /// # Errors
+    /// A message when the blob is not a model, or the board refuses or does not answer
+    /// (it then keeps its old model).
+    pub fn install_model(&mut self, blob: &[u8]) -> Result<String, String> {
+        let model = et_core::model::Model::parse(blob)
+            .map_err(|e| format!("not a valid model blob: {e:?}"))?;
+        self.link
+            .upload_model(blob, Duration::from_secs(2), Duration::from_secs(15))
+            .map_err(|e| format!("upload failed: {e}"))?;
+        let loaded = format!(
+            "the board verified and loaded the model ({} bytes, {} classes)",
+            blob.len(),
+            model.classes()
+        );
+        if !model.referenced() {
+            return Ok(loaded);
+        }
+        self.link
+            .request(&Command::Tare, Duration::from_secs(2))
+            .map_err(|e| format!("{loaded}, but taking V_0 failed: {e}"))?;
+        Ok(format!("{loaded} and took V_0: it classifies every frame"))
+    }
+
+    /// Everything that arrived, without waiting: frames (each with its on-chip class when
+    /// the board sent one), and status and problems kept for [`Source::health`].
+    fn drain(&mut self) -> Vec<LiveFrame> {
+        while let Ok(m) = self.link.next(Duration::ZERO) {
+            match m {
+                Uplink::Frame(f) => self.pending.push_back(LiveFrame {
+                    seq: f.seq,
+                    t_us: f.timestamp.0,
+                    config: f.config,
+                    voltages: f.voltages.to_vec(),
+                    truth: None,
+                    chip_class: None,
+                }),
+                Uplink::Event(Event::Touch { seq, class, margin }) => {
+                    if let Some(f) = self.pending.iter_mut().find(|f| f.seq == seq) {
+                        f.chip_class = Some((class, margin));
+                    }
+                }
+                Uplink::Event(Event::Status(s)) => self.status = Some(s),
+                Uplink::Event(Event::Refused { command, reason }) => {
+                    self.last_problem = Some(format!("the board refused {command:?}: {reason:?}"));
+                }
+                Uplink::Event(Event::Fault(f)) => {
+                    self.last_problem = Some(format!("the board reports {f:?}"));
+                }
+                Uplink::Event(_) => {}
+            }
+        }
+        // A frame's class follows it at once; keep the newest frame back one poll for it.
+        let keep = usize::from(self.pending.back().is_some_and(|f| f.chip_class.is_none()));
+        let n = self.pending.len().saturating_sub(keep);
+        self.pending.drain(..n).collect()
+    }
+}
+
+/// Where frames come from.
+#[derive(Debug)]
+pub enum Source {
+    /// The simulator.
+    Sim(Box<SimSource>),
+    /// A recording.
+    Replay(Box<ReplaySource>),
+    /// A board.
+    Port(Box<PortSource>),
+}
+
+/// How a source is doing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Health {
+    /// Frames that never arrived (sequence gaps, as the receiver saw them).
+    pub lost: u64,
+    /// Frames the board dropped because the link was busy.
+    pub dropped: u64,
+    /// Damaged packets.
+    pub corrupt: u64,
+    /// Reconnections after a pulled cable.
+    pub reconnects: u64,
+}
+
+impl Source {
+    /// What it is, for people.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match self {
+            Source::Sim(s) => format!("simulated sheet: {}", s.name),
+            Source::Replay(r) => format!("recording: {}", r.name),
+            Source::Port(p) => format!("board on {}", p.path),
+        }
+    }
+
+    /// Frames available now (at most `max`). The simulator produces frames at its frame rate
+    /// in real time (`realtime`) or one per call; a recording one per call while playing.
+    ///
+    /// # Errors
+    /// A message when the simulator fails.
+    pub fn poll(&mut self, max: usize, realtime: bool) -> Result<Vec<LiveFrame>, String> {
+        match self {
+            Source::Sim(s) => {
+                let due = if realtime {
+                    let period = s.run.frame_period().max(1e-4);
+                    let should = (s.started.elapsed().as_secs_f64() / period) as u64 + 1;
+                    (should.saturating_sub(s.produced) as usize).min(max)
+                } else {
+                    max.min(1)
+                };
+                (0..due).map(|_| s.next_frame()).collect()
+            }
+            Source::Replay(r) => Ok(r.next_frame().into_iter().collect()),
+            Source::Port(p) => {
+                let mut frames = p.drain();
+                let n = frames.len().saturating_sub(max);
+                Ok(frames.split_off(n))
+            }
+        }
+    }
+
+    /// The scan configuration frames come with now (a board's once it has sent a frame).
+    #[must_use]
+    pub fn config(&self) -> Option<ScanConfig> {
+        match self {
+            Source::Sim(s) => Some(*s.run.config()),
+            Source::Replay(r) => Some(r.recording.header.config),
+            Source::Port(p) => p.pending.back().map(|f| f.config),
+        }
+    }
+
+    /// Switches the scan to `config` (a board is sent `Configure`). A recording cannot
+    /// change what it recorded.
+    ///
+    /// # Errors
+    /// A message saying why not.
+    pub fn configure(&mut self, config: ScanConfig) -> Result<(), String> {
+        match self {
+            Source::Sim(s) => s.run.set_config(config).map_err(|e| e.to_string()),
+            Source::Replay(r) if r.recording.header.config == config => Ok(()),
+            Source::Replay(_) => Err("a recording plays the protocol it was recorded with".into()),
+            Source::Port(p) => p
+                .link
+                .request(&Command::Configure(config), Duration::from_secs(2))
+                .map(|_| ())
+                .map_err(|e| e.to_string()),
+        }
+    }
+
+    /// Link counters (a board), or nothing lost (a simulator or a file).
+    #[must_use]
+    pub fn health(&self) -> Health {
+        match self {
+            Source::Port(p) => {
+                let c: Counters = p.link.counters();
+                Health {
+                    lost: c.lost_frames,
+                    dropped: p.status.map_or(0, |s| u64::from(s.dropped)),
+                    corrupt: c.corrupt,
+                    reconnects: c.reconnects,
+                }
+            }
+            _ => Health::default(),
+        }
+    }
+}
+
+/// Which source to open.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SourceSpec {
+    /// The simulator, on the scene.
+    Sim,
+    /// A recording (JSON Lines, from `et sim` or `et record`) made on the scene's sheet.
+    Replay(std::path::PathBuf),
+    /// A board on this serial port at this baud rate, its sheet the scene's.
+    Port(String, u32),
+}
+
+/// Opens `spec`. `scene` is the scene file to simulate (with its touches), or the sheet a
+/// recording or a board uses (None: the default 13 x 13 cm, 16-electrode sheet, untouched
+/// until something presses it). Returns the source and the sheet.
+///
+/// # Errors
+/// A message naming the file or port.
+pub fn open_source(spec: &SourceSpec, scene: Option<&Path>) -> Result<(Source, SheetSpec), String> {
+    let (scene, name) = match scene {
+        Some(p) => (
+            Scene::load(p).map_err(|e| e.to_string())?,
+            p.display().to_string(),
+        ),
+        None => {
+            let mut scene = default_scene()?;
+            scene.touches.clear();
+            (scene, crate::demo::DEFAULT_SCENE.0.to_string())
+        }
+    };
+    let sheet = scene.sheet.clone();
+    let source = match spec {
+        SourceSpec::Sim => Source::Sim(Box::new(SimSource::new(&scene, name)?)),
+        SourceSpec::Replay(path) => {
+            Source::Replay(Box::new(ReplaySource::open(path, sheet.clone())?))
+        }
+        SourceSpec::Port(path, baud) => Source::Port(Box::new(PortSource::open(path, *baud)?)),
+    };
+    Ok((source, sheet))
+}

@@ -1,0 +1,151 @@
+//! The top bar (sources) and the side panel (protocol, alpha, thresholds, tare, the wizard).
+
+use super::*;
+
+impl Viewer {
+    pub(super) fn source_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("Source:");
+            ui.selectable_value(&mut self.source_kind, SourceKind::Sim, "Simulated sheet");
+            ui.selectable_value(&mut self.source_kind, SourceKind::Replay, "Recording");
+            ui.selectable_value(&mut self.source_kind, SourceKind::Port, "Board");
+            match self.source_kind {
+                SourceKind::Sim => {}
+                SourceKind::Replay => {
+                    ui.label("File:");
+                    ui.add(
+                        egui::TextEdit::singleline(&mut self.replay_path)
+                            .hint_text("session.jsonl"),
+                    );
+                }
+                SourceKind::Port => {
+                    egui::ComboBox::from_label("Port")
+                        .selected_text(if self.port.is_empty() {
+                            "(none)"
+                        } else {
+                            &self.port
+                        })
+                        .show_ui(ui, |ui| {
+                            for p in &self.ports {
+                                ui.selectable_value(&mut self.port, p.clone(), p);
+                            }
+                        });
+                    if ui.button("Refresh").clicked() {
+                        match crate::link::list_ports() {
+                            Ok(p) => {
+                                self.status = format!("{} serial ports", p.len());
+                                self.ports = p;
+                            }
+                            Err(e) => self.status = format!("cannot list serial ports: {e}"),
+                        }
+                    }
+                }
+            }
+            if ui.button("Open").clicked() {
+                self.open_chosen_source();
+            }
+            ui.separator();
+            ui.label(
+                self.source
+                    .as_ref()
+                    .map_or("no source".into(), Source::describe),
+            );
+        });
+    }
+
+    pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Protocol");
+        let mut choice = self.protocol;
+        ui.horizontal_wrapped(|ui| {
+            for c in [
+                ProtocolChoice::Fixed(ProtocolKind::Adjacent),
+                ProtocolChoice::Fixed(ProtocolKind::PseudoPolar),
+                ProtocolChoice::Fixed(ProtocolKind::PpPp),
+                ProtocolChoice::Fixed(ProtocolKind::Opposite),
+                ProtocolChoice::Automatic,
+            ] {
+                ui.selectable_value(&mut choice, c, protocol_label(c));
+            }
+        });
+        if choice != self.protocol {
+            self.choose_protocol(choice);
+        }
+        if let Some(config) = self.source.as_ref().and_then(Source::config) {
+            ui.label(format!("scanning: {}", config.protocol.name()));
+        }
+        ui.separator();
+        ui.heading("Imaging");
+        let mut s = self.processor.settings();
+        ui.add(
+            egui::Slider::new(&mut s.alpha, 1e-3..=10.0)
+                .logarithmic(true)
+                .text("alpha"),
+        );
+        let mut auto = s.threshold.is_none();
+        ui.checkbox(&mut auto, "threshold per protocol (docs/method.md §6)");
+        let mut f = s
+            .threshold
+            .unwrap_or(self.last.as_ref().map_or(0.1, |o| o.threshold));
+        ui.add_enabled(
+            !auto,
+            egui::Slider::new(&mut f, 0.01..=0.9).text("threshold f"),
+        );
+        s.threshold = (!auto).then_some(f);
+        ui.add(egui::Slider::new(&mut s.touch_factor, 2.0..=20.0).text("touch at z >"));
+        if s != self.processor.settings() {
+            self.processor.set_settings(s);
+        }
+        if ui.button("Tare (sheet untouched)").clicked() {
+            self.processor.tare();
+            self.status = "taking V_0: keep the sheet untouched".into();
+        }
+        if let Some(Source::Replay(r)) = self.source.as_mut() {
+            ui.separator();
+            ui.heading("Replay");
+            let label = if r.paused { "Play" } else { "Pause" };
+            if ui.button(label).clicked() {
+                r.paused = !r.paused;
+            }
+            let mut at = r.position;
+            let last = r.len().saturating_sub(1);
+            if ui
+                .add(egui::Slider::new(&mut at, 0..=last).text("frame"))
+                .changed()
+            {
+                r.seek(at);
+            }
+            ui.checkbox(&mut r.looping, "loop");
+        }
+        ui.separator();
+        ui.heading("Touch");
+        match self.last.as_ref().and_then(|o| o.event.as_ref()) {
+            Some(e) => {
+                ui.label(format!(
+                    "at ({:.0}, {:.0}) mm",
+                    e.position_mm[0], e.position_mm[1]
+                ));
+                ui.label(format!("intensity z = {:.1}", e.intensity));
+                if let Some(c) = e.class {
+                    ui.label(format!("class {c}"));
+                }
+                if let Some(p) = e.confidence {
+                    ui.label(format!("confidence {:.0} %", 100.0 * p));
+                }
+                ui.label(format!("{} region(s)", e.regions));
+            }
+            None => {
+                ui.label(match self.last.as_ref().and_then(|o| o.referencing) {
+                    Some((n, of)) => format!("taking V_0: {n} of {of} frames"),
+                    None => "no touch".into(),
+                });
+            }
+        }
+        ui.separator();
+        if ui.button("Open the training wizard").clicked() {
+            self.wizard.open = true;
+        }
+        if self.processor.classifier.is_some() {
+            ui.label("a model classifies each touch");
+        }
+    }
+}

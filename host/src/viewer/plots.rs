@@ -1,0 +1,129 @@
+//! The small plots: frame rate and BVC over time, SNR per channel.
+
+use super::*;
+
+impl Viewer {
+    pub(super) fn plots(&mut self, ui: &mut egui::Ui) {
+        ui.set_width(260.0);
+        ui.heading("Signal");
+        let rate: Vec<(f64, f64)> = self.monitor.rate.iter().copied().collect();
+        sparkline(ui, "frames/s", &rate);
+        let bvc: Vec<(f64, f64)> = self
+            .monitor
+            .bvc
+            .iter()
+            .map(|&(t, v)| (t, v * 1e3))
+            .collect();
+        sparkline(ui, "BVC |V_m - V_0| (mV)", &bvc);
+        bars(ui, "SNR per channel (dB)", &self.monitor.snr_db);
+        ui.separator();
+        ui.heading("Link health");
+        let h: Health = self.source.as_ref().map(Source::health).unwrap_or_default();
+        egui::Grid::new("health").show(ui, |ui| {
+            for (name, v) in [
+                ("frames", self.monitor.frames),
+                ("lost (gaps)", h.lost.max(self.monitor.gaps)),
+                ("dropped by board", h.dropped),
+                ("corrupt packets", h.corrupt),
+                ("reconnects", h.reconnects),
+            ] {
+                ui.label(name);
+                ui.label(v.to_string());
+                ui.end_row();
+            }
+        });
+        if let Some(Source::Port(p)) = &self.source {
+            if let Some(s) = p.status {
+                ui.label(format!(
+                    "board: {}scanning, model {}",
+                    if s.scanning { "" } else { "not " },
+                    if s.model_loaded { "loaded" } else { "none" }
+                ));
+                if s.suspect_electrodes != 0 {
+                    ui.colored_label(
+                        Color32::from_rgb(220, 80, 60),
+                        format!("suspect electrodes: {:016b}", s.suspect_electrodes),
+                    );
+                }
+            }
+            if let Some(problem) = &p.last_problem {
+                ui.label(problem);
+            }
+        }
+    }
+}
+
+/// A plot's caption and its framed area, the full width and 60 points high.
+fn plot_area(ui: &mut egui::Ui, caption: &str) -> (Rect, egui::Painter) {
+    ui.label(caption);
+    let (rect, _) = ui.allocate_exact_size(vec2(ui.available_width(), 60.0), Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_stroke(
+        rect,
+        2.0,
+        Stroke::new(1.0, Color32::from_gray(90)),
+        StrokeKind::Inside,
+    );
+    (rect, painter)
+}
+
+/// A small line plot with its title and last value.
+fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
+    let last = points
+        .last()
+        .map_or(String::from("-"), |p| format!("{:.2}", p.1));
+    let (rect, painter) = plot_area(ui, &format!("{title}: {last}"));
+    let finite: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    if finite.len() < 2 {
+        return;
+    }
+    let (x0, x1) = (
+        finite[0].0,
+        finite[finite.len() - 1].0.max(finite[0].0 + 1e-9),
+    );
+    let (lo, hi) = finite
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.1), b.max(p.1))
+        });
+    let (lo, hi) = (lo.min(0.0), hi.max(lo + 1e-12));
+    let line: Vec<Pos2> = finite
+        .iter()
+        .map(|p| {
+            pos2(
+                rect.min.x + ((p.0 - x0) / (x1 - x0)) as f32 * rect.width(),
+                rect.max.y - ((p.1 - lo) / (hi - lo)) as f32 * (rect.height() - 4.0) - 2.0,
+            )
+        })
+        .collect();
+    painter.line(line, Stroke::new(1.5, Color32::from_rgb(90, 170, 255)));
+}
+
+/// Bars, one per channel, with the mean in the title.
+fn bars(ui: &mut egui::Ui, title: &str, values: &[f64]) {
+    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let mean = if finite.is_empty() {
+        f64::NAN
+    } else {
+        finite.iter().sum::<f64>() / finite.len() as f64
+    };
+    let (rect, painter) = plot_area(ui, &format!("{title}: mean {mean:.1}"));
+    let hi = finite.iter().copied().fold(1.0f64, f64::max);
+    let w = rect.width() / values.len().max(1) as f32;
+    for (i, v) in values.iter().enumerate() {
+        if !v.is_finite() {
+            continue;
+        }
+        let h = (v.max(0.0) / hi) as f32 * (rect.height() - 2.0);
+        let x = rect.min.x + i as f32 * w;
+        painter.rect_filled(
+            Rect::from_min_max(pos2(x, rect.max.y - h), pos2(x + w.max(1.0), rect.max.y)),
+            0.0,
+            Color32::from_rgb(120, 200, 140),
+        );
+    }
+}

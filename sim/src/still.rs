@@ -1,0 +1,139 @@
+//! A still scene's frames, as imaging and its tests use them: V_0 averaged over untouched
+//! frames (as captured at set-up), the noise of dV from their spread, and one frame with
+//! every touch of the scene pressed.
+
+use std::sync::Arc;
+
+use et_core::ScanConfig;
+use et_core::stats::{self, StatsError};
+
+use crate::frontend::{SimError, SimFrontend};
+use crate::scene::{Scene, TouchEvent};
+use crate::sheet::{Sheet, SheetError};
+use crate::touch::Touch;
+
+/// Why a still scene's frames could not be made.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum StillError {
+    /// The sheet could not be built.
+    Sheet(SheetError),
+    /// The front end refused the configuration.
+    Frontend(SimError),
+    /// The reference frames could not be averaged (non-finite values).
+    Stats(StatsError),
+}
+
+impl std::fmt::Display for StillError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StillError::Sheet(e) => write!(f, "simulated sheet: {e}"),
+            StillError::Frontend(e) => write!(f, "simulated front end: {e}"),
+            StillError::Stats(e) => write!(f, "reference frames: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for StillError {}
+
+impl From<SheetError> for StillError {
+    fn from(e: SheetError) -> Self {
+        Self::Sheet(e)
+    }
+}
+
+impl From<SimError> for StillError {
+    fn from(e: SimError) -> Self {
+        Self::Frontend(e)
+    }
+}
+
+impl From<StatsError> for StillError {
+    fn from(e: StatsError) -> Self {
+        Self::Stats(e)
+    }
+}
+
+/// A touch's centre (m) and radius (m).
+pub type Truth = ([f64; 2], f64);
+
+/// The simulator's frames of a still scene.
+#[derive(Clone, Debug)]
+pub struct SceneFrames {
+    /// V_0: the untouched sheet, mean of the reference frames, V.
+    pub v0: Vec<f64>,
+    /// V_1: one frame with the scene's touches, V.
+    pub v1: Vec<f32>,
+    /// The noise of dV per channel, from the reference frames' spread
+    /// ([`et_core::stats::dv_variance`]), V^2.
+    pub var: Vec<f64>,
+    /// The touches.
+    pub truth: Vec<Truth>,
+}
+
+impl SceneFrames {
+    /// dV = V_1 - V_0, V.
+    #[must_use]
+    pub fn dv(&self) -> Vec<f64> {
+        self.v1
+            .iter()
+            .zip(&self.v0)
+            .map(|(a, b)| f64::from(*a) - b)
+            .collect()
+    }
+}
+
+/// Noisy frames of `scene` scanned with `config`: V_0 the mean of `reference` untouched
+/// frames (as captured at set-up), V_1 one frame with every touch of the scene pressed at
+/// once (their start and end times ignored).
+///
+/// # Errors
+/// [`StillError`] if the sheet cannot be built or the configuration is invalid.
+pub fn scene_frames(
+    scene: &Scene,
+    config: &ScanConfig,
+    reference: usize,
+) -> Result<SceneFrames, StillError> {
+    scene_frames_on(&simulated_sheet(scene)?, scene, config, reference)
+}
+
+/// The scene's sheet as the simulator's resistor network (the expensive part of
+/// [`scene_frames`], shared by scenes with the same sheet).
+///
+/// # Errors
+/// [`StillError`] if the sheet cannot be built.
+pub fn simulated_sheet(scene: &Scene) -> Result<Arc<Sheet>, StillError> {
+    Ok(Arc::new(Sheet::new(&scene.sheet, &[])?))
+}
+
+/// [`scene_frames`] on a sheet already built by [`simulated_sheet`] (from a scene with the
+/// same sheet).
+///
+/// # Errors
+/// [`StillError`] if the configuration is invalid.
+pub fn scene_frames_on(
+    sheet: &Arc<Sheet>,
+    scene: &Scene,
+    config: &ScanConfig,
+    reference: usize,
+) -> Result<SceneFrames, StillError> {
+    let mut sim = SimFrontend::new(Arc::clone(sheet), scene.frontend, scene.seed)?;
+    let n = reference.max(1);
+    let mut frames = Vec::with_capacity(n);
+    for _ in 0..n {
+        let frame = sim.fast_frame(config)?;
+        frames.push(frame);
+    }
+    let k = frames[0].len();
+    let (mut v0, mut var) = (vec![0.0; k], vec![0.0; k]);
+    stats::reference(&frames, &mut v0)?;
+    stats::dv_variance(&frames, &mut var)?;
+    let touches: Vec<Touch> = scene.touches.iter().map(TouchEvent::touch).collect();
+    sim.set_touches(&touches)?;
+    Ok(SceneFrames {
+        v0,
+        v1: sim.fast_frame(config)?,
+        var,
+        truth: touches.iter().map(|t| (t.position, t.radius)).collect(),
+    })
+}
