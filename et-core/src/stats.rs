@@ -204,7 +204,13 @@ pub fn dv_variance<F: AsRef<[T]>, T: Copy + Into<f64>>(
     for (c, out) in var.iter_mut().enumerate() {
         let x = |f: &F| -> f64 { f.as_ref()[c].into() };
         let mean = frames.iter().map(x).sum::<f64>() / n;
-        let ss: f64 = frames.iter().map(|f| (x(f) - mean) * (x(f) - mean)).sum();
+        let ss: f64 = frames
+            .iter()
+            .map(|f| {
+                let d = x(f) - mean;
+                d * d
+            })
+            .sum();
         *out = ss / (n - 1.0) * (1.0 + 1.0 / n);
     }
     Ok(())

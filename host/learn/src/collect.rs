@@ -339,12 +339,10 @@ pub fn collect_presses(
         scanner
             .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
             .map_err(|e| e.to_string())?;
-        baselines.extend(feature_index.iter().map(|&i| {
-            obs.chunks(k)
-                .map(|o| f64::from(o[usize::from(i)]))
-                .sum::<f64>()
-                / s_sub as f64
-        }));
+        let untouched: Vec<&[f32]> = obs.chunks(k).collect();
+        let mut v0 = vec![0.0; k];
+        et_core::stats::reference(&untouched, &mut v0).map_err(|e| e.to_string())?;
+        baselines.extend(feature_index.iter().map(|&i| v0[usize::from(i)]));
         let mut poses = vec![fe];
         for _ in 1..plan.poses {
             let moved: Vec<f64> = offsets
