@@ -17,6 +17,7 @@
 use crate::config::ScanConfig;
 use crate::frontend::{AdcScale, Frontend};
 use crate::protocol::{Injection, Measurement};
+use crate::rng::Rng;
 
 /// ADC input range of the emulated board, +-V at unity gain (the reference board's).
 pub const RANGE_V: f32 = 5.0;
@@ -46,7 +47,7 @@ pub struct EmulatedSheet<'t> {
     z: &'t [f32],
     state: usize,
     noise_v: f32,
-    rng: u32,
+    rng: Rng,
     amps: f32,
     scale: Option<AdcScale>,
     volts: Option<f32>,
@@ -62,7 +63,7 @@ impl<'t> EmulatedSheet<'t> {
         electrodes: u8,
         z: &'t [f32],
         noise_v: f32,
-        seed: u32,
+        seed: u64,
     ) -> Result<Self, EmulatedError> {
         let l = usize::from(electrodes);
         if l == 0 || z.is_empty() || !z.len().is_multiple_of(l * l) {
@@ -73,7 +74,7 @@ impl<'t> EmulatedSheet<'t> {
             z,
             state: 0,
             noise_v,
-            rng: seed | 1,
+            rng: Rng::new(seed),
             amps: 0.0,
             scale: None,
             volts: None,
@@ -96,14 +97,9 @@ impl<'t> EmulatedSheet<'t> {
         self.z[self.state * l * l + e * l + f]
     }
 
-    /// A uniform draw in [-0.5, 0.5) (xorshift32).
+    /// A uniform draw in [-0.5, 0.5).
     fn uniform(&mut self) -> f32 {
-        let mut x = self.rng;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.rng = x;
-        (x >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        self.rng.uniform_f32() - 0.5
     }
 }
 

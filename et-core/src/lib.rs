@@ -20,8 +20,9 @@
 //! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (docs/method.md §9).
 //! - [`stats`]: SNR, MAD (docs/method.md §3) and BVC (docs/method.md §7).
 //! - [`board`]: the constants the board and the host share (baud rate, model slot size).
+//! - [`rng`]: the one seedable pseudo-random generator (simulator, QEMU sheet, folds, tests).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
-#![cfg_attr(not(test), no_std)]
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![deny(missing_docs)]
 
 pub mod board;
@@ -33,6 +34,7 @@ pub mod frontend;
 pub mod model;
 pub mod precision;
 pub mod protocol;
+pub mod rng;
 pub mod scan;
 pub mod stats;
 pub mod time;

@@ -80,11 +80,9 @@ mod tests {
     fn encoding_rounds_like_the_half_crate() {
         // A deterministic sweep over f32 bit patterns, dense enough to hit every exponent and
         // the rounding boundaries (ties included, via the low mantissa bits).
-        let mut x: u32 = 0x1234_5678;
+        let mut rng = crate::rng::Rng::new(0x1234_5678);
         for i in 0..2_000_000u32 {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
+            let x = rng.next_u32();
             let bits = if i % 4 == 0 {
                 x & 0xffff_e000 | 0x1000
             } else {

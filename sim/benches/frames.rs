@@ -5,9 +5,9 @@
 
 use std::sync::{Arc, LazyLock};
 
+use et_core::rng::Rng;
 use et_core::{ScanConfig, Scanner};
 use et_sim::frontend::{FrontendSpec, SimFrontend};
-use et_sim::rng::Rng;
 use et_sim::scene::Scene;
 use et_sim::sheet::Sheet;
 use et_sim::touch::Touch;

@@ -165,13 +165,8 @@ mod tests {
         // A random SPD band matrix (diagonally dominant), checked against nalgebra's dense solve.
         let (n, b) = (40, 6);
         let mut a = BandMatrix::zeros(n, b);
-        let mut seed = 12345u64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % 1000) as f64 / 1000.0 - 0.5
-        };
+        let mut rng = et_core::rng::Rng::new(12345);
+        let mut rnd = || rng.uniform() - 0.5;
         for i in 0..n {
             for j in i.saturating_sub(b)..i {
                 a.add(i, j, rnd());

@@ -20,9 +20,9 @@ use et_core::protocol::{Injection, Measurement, Protocol};
 use serde::{Deserialize, Serialize};
 
 use crate::network::Transfer;
-use crate::rng::Rng;
 use crate::sheet::{Sheet, SheetError, Source};
 use crate::touch::Touch;
+use et_core::rng::Rng;
 
 /// The front end's parameters. Defaults are the calibrated reference hardware (see
 /// `README.md`, "Calibration").

@@ -16,7 +16,6 @@
 //! - [`still`]: a still scene's frames (V_0, the noise of dV, one touched frame), as imaging
 //!   uses them.
 //! - [`emulated`]: the tables of the sheet compiled into the firmware's QEMU image.
-//! - [`rng`]: the seedable generator that makes every run reproducible.
 //!
 //! It depends on `et-core` only.
 #![forbid(unsafe_code)]
@@ -26,7 +25,6 @@ pub mod emulated;
 pub mod fast;
 pub mod frontend;
 pub mod network;
-pub mod rng;
 pub mod scene;
 pub mod shape;
 pub mod sheet;

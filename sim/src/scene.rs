@@ -16,9 +16,9 @@ use et_core::{Micros, ScanConfig, Scanner};
 use serde::{Deserialize, Serialize};
 
 use crate::frontend::{FrontendSpec, SimError, SimFrontend};
-use crate::rng::Rng;
 use crate::sheet::{Sheet, SheetError, SheetSpec};
 use crate::touch::Touch;
+use et_core::rng::Rng;
 
 /// How a scene's frames are scanned.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -8,6 +8,7 @@
 use et_core::ScanConfig;
 use et_core::frontend::{AdcScale, Frontend};
 use et_core::protocol::{Injection, Measurement};
+use et_core::rng::Rng;
 
 /// A scripted sensor with `classes` touch positions.
 #[derive(Debug)]
@@ -19,7 +20,7 @@ pub struct ScriptedSheet {
     pub touch: Option<u16>,
     /// Noise amplitude in ADC codes (uniform, +- this).
     pub noise_codes: u16,
-    state: u64,
+    rng: Rng,
 }
 
 impl ScriptedSheet {
@@ -32,16 +33,13 @@ impl ScriptedSheet {
             selected: None,
             touch: None,
             noise_codes: 3,
-            state: seed | 1,
+            rng: Rng::new(seed),
         }
     }
 
     fn noise(&mut self) -> i32 {
-        self.state ^= self.state << 13;
-        self.state ^= self.state >> 7;
-        self.state ^= self.state << 17;
         let span = 2 * u64::from(self.noise_codes) + 1;
-        (self.state % span) as i32 - i32::from(self.noise_codes)
+        (self.rng.next_u64() % span) as i32 - i32::from(self.noise_codes)
     }
 
     /// The noiseless code of a measurement under the current touch.

@@ -23,11 +23,11 @@ use et_core::ScanConfig;
 use et_core::board::BAUD;
 use et_core::model::{Model, Precision};
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
+use et_core::rng::Rng;
 use et_core::wire::{self, Command, CommandTag, Event, Frame, Refusal, Uplink};
 use et_host::link::{Link, LinkError};
 use et_learn::fit::{FitOptions, Fitted, fisher_ranking};
 use et_sim::emulated::QemuSheet;
-use et_sim::rng::Rng;
 use nalgebra::DMatrix;
 
 /// Seconds QEMU may live: `timeout` kills it even if this test hangs.

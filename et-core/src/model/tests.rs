@@ -4,22 +4,9 @@
 
 use super::*;
 use crate::protocol::Halving;
+use crate::rng::Rng;
 use std::vec;
 use std::vec::Vec;
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.next().max(1e-300), self.next());
-        (-2.0 * u.ln()).sqrt() * (2.0 * core::f64::consts::PI * v).cos()
-    }
-}
 
 type Mat = Vec<Vec<f64>>;
 
@@ -98,7 +85,7 @@ fn problem(classes: usize, seed: u64, near_singular: bool) -> Problem {
         .map(|k| k as u16)
         .collect();
     let (k, p) = (protocol.frame_len(), features.len());
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     // Class c: frame = base + offset_c + A_c * noise, volts.
     let base: Vec<f64> = (0..k).map(|_| 0.05 + 0.02 * rng.normal()).collect();
     let mut frames_by_class = Vec::new();

@@ -12,9 +12,9 @@ use std::sync::Arc;
 
 use et_core::extract::Extracted;
 use et_core::protocol::Halving;
+use et_core::rng::Rng;
 use et_core::{ScanConfig, Scanner};
 use et_sim::frontend::{FrontendSpec, SimFrontend};
-use et_sim::rng::Rng;
 use et_sim::sheet::{Sheet, SheetSpec};
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;

@@ -129,7 +129,7 @@ pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion
 /// 0..k in a shuffled (seeded) order, so every fold holds about 1/k of every class.
 #[must_use]
 pub fn folds(y: &[u16], k: usize, seed: u64) -> Vec<usize> {
-    let mut rng = et_sim::rng::Rng::new(seed);
+    let mut rng = et_core::rng::Rng::new(seed);
     let classes = y.iter().map(|&c| usize::from(c) + 1).max().unwrap_or(0);
     let mut fold = vec![0; y.len()];
     for c in 0..classes {

@@ -405,7 +405,7 @@ mod tests {
 
     /// A smooth non-linear map from 2-D positions to 6 "voltages", like a sheet's.
     fn data(n: usize, seed: u64) -> (DMatrix<f64>, Vec<Target3>) {
-        let mut rng = et_sim::rng::Rng::new(seed);
+        let mut rng = et_core::rng::Rng::new(seed);
         let mut t = Vec::new();
         let x = DMatrix::from_fn(n, 6, |_, _| 0.0);
         let mut x = x;
@@ -423,7 +423,7 @@ mod tests {
 
     #[test]
     fn ridge_recovers_a_linear_map_exactly() {
-        let mut rng = et_sim::rng::Rng::new(5);
+        let mut rng = et_core::rng::Rng::new(5);
         let x = DMatrix::from_fn(200, 4, |_, _| rng.normal());
         let t: Vec<Target3> = (0..200)
             .map(|r| {
@@ -461,7 +461,7 @@ mod tests {
     #[test]
     fn intensity_by_class_recovers_each_class_calibration() {
         // Class c: pressure = (1 + c) + 2 u + 0.5 u^2 with u = ln |x|.
-        let mut rng = et_sim::rng::Rng::new(3);
+        let mut rng = et_core::rng::Rng::new(3);
         let (mut rows, mut y, mut kpa) = (Vec::new(), Vec::new(), Vec::new());
         for r in 0..60 {
             let c = (r % 3) as u16;

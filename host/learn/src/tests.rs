@@ -7,8 +7,8 @@ use super::fit::{FitError, FitOptions, Fitted, Target};
 use et_core::ScanConfig;
 use et_core::model::{Model, ModelKind, Precision};
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
+use et_core::rng::Rng;
 use et_sim::frontend::FrontendSpec;
-use et_sim::rng::Rng;
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
 

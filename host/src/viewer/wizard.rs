@@ -185,7 +185,7 @@ impl Wizard {
     /// The simulated press of `cell`: near its centre (a quarter finger radius off, as a
     /// hand lands), at 5 to 60 kPa.
     fn simulated_press(&mut self, cell: usize) -> Request {
-        let mut rng = et_sim::rng::Rng::new(self.seed);
+        let mut rng = et_core::rng::Rng::new(self.seed);
         self.seed = self.seed.wrapping_add(1);
         let c = self.centres[cell];
         let radius = 0.0075;

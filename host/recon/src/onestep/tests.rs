@@ -170,7 +170,7 @@ fn parameters_and_frames_are_checked() {
 
 #[test]
 fn gcv_prefers_little_regularisation_for_clean_data_and_much_for_noise() {
-    let mut rng = et_sim::rng::Rng::new(4);
+    let mut rng = et_core::rng::Rng::new(4);
     let (k, t) = (30, 80);
     // A smoothing operator: singular values decaying like a tomography Jacobian's.
     let jac = DMatrix::from_fn(k, t, |r, c| {
@@ -438,7 +438,7 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
             .sqrt();
         assert!((sd[t] - by_hand).abs() <= 1e-12 * by_hand);
     }
-    let mut rng = et_sim::rng::Rng::new(5);
+    let mut rng = et_core::rng::Rng::new(5);
     let samples = 20_000;
     let mut sum_sq = [0.0; 7];
     for _ in 0..samples {
