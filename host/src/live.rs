@@ -14,31 +14,37 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use et_core::ScanConfig;
+use et_core::config::ConfigError;
 use et_core::protocol::ProtocolKind;
 use et_core::stats;
 use et_core::wire::{Command, Event, Uplink};
-use et_sim::scene::{Detail, Run, Scene};
+use et_sim::scene::{Detail, Run, Scene, SceneError};
 use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use crate::link::{Counters, Link};
+use crate::link::{Counters, Link, LinkError};
 use crate::recording::{self, Recording};
-use et_learn::fit::Fitted;
+use et_learn::fit::{FitError, Fitted};
 use et_learn::model_file::ModelFile;
 use et_learn::regress::posterior_centre;
 use et_recon::Imager;
-use et_recon::mesh::Mesh;
+use et_recon::fem::FemError;
+use et_recon::mesh::{Mesh, MeshError};
 use et_recon::onestep::noise_sd;
-use et_recon::{OneStep, PROMINENCE, PixelGrid, Region, above_noise, default_threshold, touches};
+use et_recon::{
+    OneStep, PROMINENCE, PixelGrid, ReconError, Region, above_noise, default_threshold, touches,
+};
 
 mod monitor;
 mod processor;
 mod source;
 
 pub use monitor::Monitor;
-pub use processor::{Classifier, Output, Processor, Settings, TouchEvent};
+pub use processor::{
+    Classification, Classifier, Output, Processor, Referencing, Settings, TouchEvent,
+};
 pub use source::{
     Health, PortSource, ReplaySource, SimSource, Source, SourceSpec, default_scene, open_source,
 };
@@ -56,8 +62,17 @@ pub struct LiveFrame {
     pub voltages: Vec<f32>,
     /// The true touches, when the source knows them (simulated or recorded from the sim).
     pub truth: Option<Vec<Touch>>,
-    /// The board's own class for this frame (`Event::Touch`) and its margin.
-    pub chip_class: Option<(u16, f32)>,
+    /// The board's own class for this frame (`Event::Touch`).
+    pub chip_class: Option<ChipClass>,
+}
+
+/// The class a board found for a frame, as its `Event::Touch` says.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChipClass {
+    /// The class.
+    pub class: u16,
+    /// How far its discriminant leads the runner-up's (nats).
+    pub margin: f32,
 }
 
 /// The protocols the live pipeline offers, plus automatic selection (docs/method.md §8).
@@ -68,6 +83,124 @@ pub enum ProtocolChoice {
     /// `dynamic::Selector` picks from the regions.
     Automatic,
 }
+
+/// Why the live pipeline could not open a source, talk to a board or process a frame.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum LiveError {
+    /// The scene file could not be read, or its simulation failed.
+    Scene(SceneError),
+    /// The recording could not be read.
+    Recording(recording::RecordingError),
+    /// A recording made with another electrode count than the sheet it is played on.
+    OtherSheet {
+        /// The recording.
+        path: std::path::PathBuf,
+        /// Electrodes in its frames.
+        recorded: u8,
+        /// Electrodes of the sheet.
+        sheet: u8,
+    },
+    /// The serial port could not be opened, or the board refused or did not answer.
+    Link {
+        /// The port.
+        port: String,
+        /// What went wrong.
+        error: LinkError,
+    },
+    /// Bytes that are not a model blob.
+    Blob(et_core::model::ModelError),
+    /// The board loaded the model but could not take V_0 for it.
+    Tare(LinkError),
+    /// A recording plays the protocol it was recorded with.
+    Recorded,
+    /// A scan configuration the board cannot scan.
+    Config(ConfigError),
+    /// A frame whose value count is not its protocol's K.
+    FrameLength {
+        /// The frame's sequence number.
+        seq: u32,
+        /// Values in it.
+        got: usize,
+        /// K of its protocol.
+        expected: usize,
+    },
+    /// A frame with a NaN or infinite value.
+    NonFinite {
+        /// The frame's sequence number.
+        seq: u32,
+    },
+    /// The sheet could not be meshed.
+    Mesh(MeshError),
+    /// The forward model or Jacobian failed.
+    Fem(FemError),
+    /// The one-step reconstruction matrix could not be built.
+    Recon(ReconError),
+    /// The model file's tables are not a usable model.
+    Model(FitError),
+    /// The reference frames could not be averaged.
+    Stats(stats::StatsError),
+}
+
+impl std::fmt::Display for LiveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LiveError::Scene(e) => write!(f, "{e}"),
+            LiveError::Recording(e) => write!(f, "{e}"),
+            LiveError::OtherSheet {
+                path,
+                recorded,
+                sheet,
+            } => write!(
+                f,
+                "{}: frames of {recorded} electrodes, the sheet has {sheet}",
+                path.display()
+            ),
+            LiveError::Link { port, error } => write!(f, "{port}: {error}"),
+            LiveError::Blob(e) => write!(f, "not a valid model blob: {e}"),
+            LiveError::Tare(e) => write!(
+                f,
+                "the board verified and loaded the model, but taking V_0 failed: {e}"
+            ),
+            LiveError::Recorded => {
+                write!(f, "a recording plays the protocol it was recorded with")
+            }
+            LiveError::Config(e) => write!(f, "scan configuration: {e}"),
+            LiveError::FrameLength { seq, got, expected } => {
+                write!(f, "frame {seq}: {got} values, its protocol has {expected}")
+            }
+            LiveError::NonFinite { seq } => write!(f, "frame {seq}: a value is not finite"),
+            LiveError::Mesh(e) => write!(f, "mesh: {e}"),
+            LiveError::Fem(e) => write!(f, "forward model: {e}"),
+            LiveError::Recon(e) => write!(f, "reconstruction: {e}"),
+            LiveError::Model(e) => write!(f, "model: {e}"),
+            LiveError::Stats(e) => write!(f, "reference frames: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for LiveError {}
+
+macro_rules! from_errors {
+    ($($variant:ident($ty:ty)),* $(,)?) => {
+        $(impl From<$ty> for LiveError {
+            fn from(e: $ty) -> Self {
+                LiveError::$variant(e)
+            }
+        })*
+    };
+}
+
+from_errors!(
+    Scene(SceneError),
+    Recording(recording::RecordingError),
+    Config(ConfigError),
+    Mesh(MeshError),
+    Fem(FemError),
+    Recon(ReconError),
+    Model(FitError),
+    Stats(stats::StatsError),
+);
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -24,10 +24,10 @@ use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
 
 use crate::live::{
-    Classifier, Health, Monitor, Output, Processor, ProtocolChoice, Settings, Source, SourceSpec,
-    open_source,
+    Classifier, Health, LiveError, Monitor, Output, Processor, ProtocolChoice, Settings, Source,
+    SourceSpec, open_source,
 };
-use et_learn::model_file::ModelFile;
+use et_learn::model_file::{ModelFile, ModelFileError};
 use et_recon::select::{Selector, Settings as DynamicSettings};
 
 mod controls;
@@ -120,13 +120,17 @@ impl Viewer {
     /// Opens the first source and builds the pipeline.
     ///
     /// # Errors
-    /// A message when the scene, the model or the first source cannot be opened.
-    pub fn new(options: Options) -> Result<Self, String> {
+    /// [`ViewerError`] when the scene, the model or the first source cannot be opened.
+    pub fn new(options: Options) -> Result<Self, ViewerError> {
         let (source, sheet) = open_source(&options.source, options.scene.as_deref())?;
         let mut processor = Processor::new(&sheet, Settings::default())?;
         if let Some(path) = &options.model {
             let file = ModelFile::load(path)?;
-            processor.classifier = Some(Classifier::new(file)?);
+            let classifier = Classifier::new(file).map_err(|error| ViewerError::Model {
+                path: path.clone(),
+                error,
+            })?;
+            processor.classifier = Some(classifier);
         }
         let source_kind = match &options.source {
             SourceSpec::Sim => SourceKind::Sim,
@@ -209,7 +213,7 @@ impl Viewer {
                             self.sheet = sheet;
                         }
                         Err(e) => {
-                            self.status = e;
+                            self.status = e.to_string();
                             return;
                         }
                     }
@@ -226,7 +230,7 @@ impl Viewer {
                     self.protocol = ProtocolChoice::Fixed(config.protocol);
                 }
             }
-            Err(e) => self.status = e,
+            Err(e) => self.status = e.to_string(),
         }
     }
 
@@ -246,7 +250,7 @@ impl Viewer {
                     config.protocol.name()
                 );
             }
-            Err(e) => self.status = e,
+            Err(e) => self.status = e.to_string(),
         }
     }
 
@@ -283,7 +287,7 @@ impl Viewer {
         let frames = match source.poll(16, self.options.realtime) {
             Ok(f) => f,
             Err(e) => {
-                self.status = e;
+                self.status = e.to_string();
                 return;
             }
         };
@@ -335,11 +339,13 @@ impl Viewer {
                     self.processor.classifier = Some(c);
                     self.status = "the trained model now classifies each touch".into();
                 }
-                Err(e) => self.status = e,
+                Err(e) => self.status = e.to_string(),
             },
             wizard::Request::Upload(blob) => {
                 self.status = match self.source.as_mut() {
-                    Some(Source::Port(p)) => p.install_model(&blob).unwrap_or_else(|e| e),
+                    Some(Source::Port(p)) => {
+                        p.install_model(&blob).unwrap_or_else(|e| e.to_string())
+                    }
                     _ => "export to a board needs a board: open its serial port first".into(),
                 };
             }
@@ -433,8 +439,9 @@ impl eframe::App for Viewer {
 /// Opens the window and runs until it is closed.
 ///
 /// # Errors
-/// A message when the window cannot be created (no display, no OpenGL).
-pub fn run(options: Options) -> Result<(), String> {
+/// [`ViewerError`] when the sources cannot be opened or the window cannot be created (no
+/// display, no OpenGL).
+pub fn run(options: Options) -> Result<(), ViewerError> {
     let viewer = Viewer::new(options)?;
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -442,9 +449,55 @@ pub fn run(options: Options) -> Result<(), String> {
             .with_title("et view"),
         ..Default::default()
     };
-    eframe::run_native("et view", native, Box::new(|_cc| Ok(Box::new(viewer)))).map_err(|e| {
-        format!("cannot open the window: {e} (is there a display? try DISPLAY=:0 or xvfb-run)")
-    })
+    eframe::run_native("et view", native, Box::new(|_cc| Ok(Box::new(viewer))))
+        .map_err(|e| ViewerError::Window(e.to_string()))
+}
+
+/// Why the viewer could not start.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ViewerError {
+    /// The scene, recording or port could not be opened, or the sheet not modelled.
+    Live(LiveError),
+    /// The model file could not be read.
+    ModelFile(ModelFileError),
+    /// The model file's tables are not a usable model.
+    Model {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: et_learn::fit::FitError,
+    },
+    /// The window could not be created.
+    Window(String),
+}
+
+impl std::fmt::Display for ViewerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ViewerError::Live(e) => write!(f, "{e}"),
+            ViewerError::ModelFile(e) => write!(f, "{e}"),
+            ViewerError::Model { path, error } => write!(f, "{}: {error}", path.display()),
+            ViewerError::Window(e) => write!(
+                f,
+                "cannot open the window: {e} (is there a display? try DISPLAY=:0 or xvfb-run)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ViewerError {}
+
+impl From<LiveError> for ViewerError {
+    fn from(e: LiveError) -> Self {
+        Self::Live(e)
+    }
+}
+
+impl From<ModelFileError> for ViewerError {
+    fn from(e: ModelFileError) -> Self {
+        Self::ModelFile(e)
+    }
 }
 
 #[cfg(test)]

@@ -51,12 +51,11 @@ impl QemuSheet {
     /// [`SceneError`] if the scene or a network solve fails.
     pub fn new() -> Result<Self, SceneError> {
         let scene = Scene::parse(SCENE, "square-13cm-16.toml")?;
-        let sheet = Sheet::new(&scene.sheet, &[]).map_err(|e| SceneError::Run(e.to_string()))?;
+        let sheet = Sheet::new(&scene.sheet, &[])?;
         let transfers = states()
             .iter()
             .map(|touches| sheet.transfer(touches))
-            .collect::<Result<_, _>>()
-            .map_err(|e| SceneError::Run(e.to_string()))?;
+            .collect::<Result<_, _>>()?;
         Ok(Self { sheet, transfers })
     }
 

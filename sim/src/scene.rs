@@ -11,7 +11,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use et_core::protocol::ProtocolKind;
-use et_core::wire::Frame;
+use et_core::scan::ScanError;
+use et_core::wire::{Frame, WireError};
 use et_core::{Micros, ScanConfig, Scanner};
 use serde::{Deserialize, Serialize};
 
@@ -221,11 +222,53 @@ pub enum SceneError {
     Invalid {
         /// The file.
         path: String,
-        /// The field and the reason.
-        message: String,
+        /// The field at fault and why.
+        error: FieldError,
     },
-    /// Simulation failed while running.
-    Run(String),
+    /// The sheet could not be built or solved (e.g. electrodes overlapping at the resolution).
+    Sheet(SheetError),
+    /// The simulated acquisition chain refused a request.
+    Sim(SimError),
+    /// The scan engine refused the configuration or a scan failed.
+    Scan(ScanError<SimError>),
+    /// A frame could not be encoded.
+    Wire(WireError),
+}
+
+/// A scene value out of range: the field as written in a scene file, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldError {
+    /// The field, e.g. `scan.current_ua` or `touch[2].radius`.
+    pub field: String,
+    /// What is wrong with its value.
+    pub reason: String,
+}
+
+impl FieldError {
+    fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for FieldError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.field, self.reason)
+    }
+}
+
+impl std::error::Error for FieldError {}
+
+impl From<SheetError> for FieldError {
+    fn from(e: SheetError) -> Self {
+        match e {
+            SheetError::Field { field, why } => Self::new(field, why),
+            SheetError::Shape(e) => Self::new("sheet.shape", e.to_string()),
+            SheetError::Network(e) => Self::new("sheet", e.to_string()),
+        }
+    }
 }
 
 impl std::fmt::Display for SceneError {
@@ -233,9 +276,36 @@ impl std::fmt::Display for SceneError {
         match self {
             SceneError::Io { path, source } => write!(f, "{path}: {source}"),
             SceneError::Parse { path, message } => write!(f, "{path}: {message}"),
-            SceneError::Invalid { path, message } => write!(f, "{path}: {message}"),
-            SceneError::Run(why) => write!(f, "simulation: {why}"),
+            SceneError::Invalid { path, error } => write!(f, "{path}: {error}"),
+            SceneError::Sheet(e) => write!(f, "simulation: {e}"),
+            SceneError::Sim(e) => write!(f, "simulation: {e}"),
+            SceneError::Scan(e) => write!(f, "simulation: scan: {e}"),
+            SceneError::Wire(e) => write!(f, "simulation: frame: {e}"),
         }
+    }
+}
+
+impl From<SheetError> for SceneError {
+    fn from(e: SheetError) -> Self {
+        Self::Sheet(e)
+    }
+}
+
+impl From<SimError> for SceneError {
+    fn from(e: SimError) -> Self {
+        Self::Sim(e)
+    }
+}
+
+impl From<ScanError<SimError>> for SceneError {
+    fn from(e: ScanError<SimError>) -> Self {
+        Self::Scan(e)
+    }
+}
+
+impl From<WireError> for SceneError {
+    fn from(e: WireError) -> Self {
+        Self::Wire(e)
     }
 }
 
@@ -264,51 +334,51 @@ impl Scene {
             path: name.into(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        scene.validate().map_err(|message| SceneError::Invalid {
+        scene.validate().map_err(|error| SceneError::Invalid {
             path: name.into(),
-            message,
+            error,
         })?;
         Ok(scene)
     }
 
-    /// Checks every value, returning "field: reason".
-    fn validate(&self) -> Result<(), String> {
-        self.sheet.validate().map_err(|e| e.to_string())?;
-        self.frontend.validate().map_err(|e| e.to_string())?;
+    /// Checks every value, naming the field at fault.
+    fn validate(&self) -> Result<(), FieldError> {
+        self.sheet.validate()?;
+        self.frontend.validate()?;
         self.scan_config()?;
         if !(self.movement.rms.is_finite() && self.movement.rms >= 0.0) {
-            return Err(format!(
-                "movement.rms: {} must be >= 0 m",
-                self.movement.rms
+            return Err(FieldError::new(
+                "movement.rms",
+                format!("{} must be >= 0 m", self.movement.rms),
             ));
         }
         let d = &self.dynamics;
         if !(d.load_s >= 0.0 && d.unload_s >= 0.0 && (0.0..1.0).contains(&d.hysteresis)) {
-            return Err("dynamics: load_s and unload_s >= 0 s, hysteresis in [0, 1)".into());
+            return Err(FieldError::new(
+                "dynamics",
+                "load_s and unload_s >= 0 s, hysteresis in [0, 1)",
+            ));
         }
         let l = self.sheet.electrodes.count;
         for (i, f) in self.faults.iter().enumerate() {
             let at = |what: &str| format!("fault[{i}].{what}");
             if f.electrode >= l {
-                return Err(format!(
-                    "{}: {} is not an electrode (0 to {})",
+                return Err(FieldError::new(
                     at("electrode"),
-                    f.electrode,
-                    l - 1
+                    format!("{} is not an electrode (0 to {})", f.electrode, l - 1),
                 ));
             }
             match f.kind {
                 FaultKind::Shorted if f.with.is_none_or(|w| w >= l || w == f.electrode) => {
-                    return Err(format!(
-                        "{}: a short needs another electrode, 0 to {}",
+                    return Err(FieldError::new(
                         at("with"),
-                        l - 1
+                        format!("a short needs another electrode, 0 to {}", l - 1),
                     ));
                 }
                 FaultKind::Intermittent if f.probability.is_none_or(|p| !(p > 0.0 && p < 1.0)) => {
-                    return Err(format!(
-                        "{}: intermittent needs a probability in (0, 1)",
-                        at("probability")
+                    return Err(FieldError::new(
+                        at("probability"),
+                        "intermittent needs a probability in (0, 1)",
                     ));
                 }
                 _ => {}
@@ -317,39 +387,42 @@ impl Scene {
         if let Some(d) = &self.drift
             && !(d.per_kelvin.is_finite() && d.kelvin_per_minute.is_finite())
         {
-            return Err("drift: per_kelvin and kelvin_per_minute must be finite".into());
+            return Err(FieldError::new(
+                "drift",
+                "per_kelvin and kelvin_per_minute must be finite",
+            ));
         }
         for (i, t) in self.touches.iter().enumerate() {
             let at = |what: &str| format!("touch[{i}].{what}");
             let inside = |p: [f64; 2]| self.sheet.shape.contains(p, 1e-9);
             if !(t.radius.is_finite() && t.radius > 0.0) {
-                return Err(format!(
-                    "{}: {} must be a positive length in m",
+                return Err(FieldError::new(
                     at("radius"),
-                    t.radius
+                    format!("{} must be a positive length in m", t.radius),
                 ));
             }
             if !(t.pressure.is_finite() && t.pressure >= 0.0) {
-                return Err(format!(
-                    "{}: {} must be >= 0 Pa",
+                return Err(FieldError::new(
                     at("pressure"),
-                    t.pressure
+                    format!("{} must be >= 0 Pa", t.pressure),
                 ));
             }
             if !t.position.iter().all(|v| v.is_finite()) || !inside(t.position) {
-                return Err(format!(
-                    "{}: {:?} is not on the sheet",
+                return Err(FieldError::new(
                     at("position"),
-                    t.position
+                    format!("{:?} is not on the sheet", t.position),
                 ));
             }
             if let Some(to) = t.to
                 && (!to.iter().all(|v| v.is_finite()) || !inside(to))
             {
-                return Err(format!("{}: {:?} is not on the sheet", at("to"), to));
+                return Err(FieldError::new(
+                    at("to"),
+                    format!("{to:?} is not on the sheet"),
+                ));
             }
             if !t.start.is_finite() || t.end.is_some_and(|e| !(e.is_finite() && e >= t.start)) {
-                return Err(format!("{}: need finite start <= end (s)", at("start")));
+                return Err(FieldError::new(at("start"), "need finite start <= end (s)"));
             }
         }
         Ok(())
@@ -358,19 +431,22 @@ impl Scene {
     /// The scan configuration the scene asks for.
     ///
     /// # Errors
-    /// "scan.field: reason".
-    pub fn scan_config(&self) -> Result<ScanConfig, String> {
+    /// [`FieldError`] naming the `scan.` field at fault.
+    pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
         let s = &self.scan;
         let protocol = ProtocolKind::from_name(&s.protocol).ok_or_else(|| {
-            format!(
-                "scan.protocol: '{}' is not adjacent, pseudo-polar, pp-pp or opposite",
-                s.protocol
+            FieldError::new(
+                "scan.protocol",
+                format!(
+                    "'{}' is not adjacent, pseudo-polar, pp-pp or opposite",
+                    s.protocol
+                ),
             )
         })?;
         if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {
-            return Err(format!(
-                "scan.current_ua: {} must be in (0, 1000] uA",
-                s.current_ua
+            return Err(FieldError::new(
+                "scan.current_ua",
+                format!("{} must be in (0, 1000] uA", s.current_ua),
             ));
         }
         let config = ScanConfig {
@@ -382,7 +458,9 @@ impl Scene {
             sample_rate_hz: s.sample_rate_hz,
             gain: s.gain,
         };
-        config.validate().map_err(|e| format!("scan: {e}"))?;
+        config
+            .validate()
+            .map_err(|e| FieldError::new("scan", e.to_string()))?;
         Ok(config)
     }
 
@@ -461,10 +539,13 @@ impl Run {
     /// Builds the sheet (with electrode movement drawn from the seed) and the front end.
     ///
     /// # Errors
-    /// [`SceneError::Run`] if the sheet cannot be built (e.g. electrodes overlapping at the
+    /// [`SceneError`] if the sheet cannot be built (e.g. electrodes overlapping at the
     /// chosen resolution).
     pub fn new(scene: &Scene) -> Result<Self, SceneError> {
-        let config = scene.scan_config().map_err(SceneError::Run)?;
+        let config = scene.scan_config().map_err(|error| SceneError::Invalid {
+            path: "scene".into(),
+            error,
+        })?;
         let mut rng = Rng::new(scene.seed);
         let mut moves = rng.fork();
         let offsets: Vec<f64> = (0..scene.sheet.electrodes.count)
@@ -476,22 +557,17 @@ impl Run {
             .filter(|f| f.kind == FaultKind::Shorted)
             .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
             .collect();
-        let sheet = Sheet::with_shorts(&scene.sheet, &offsets, &shorts)
-            .map_err(|e: SheetError| SceneError::Run(e.to_string()))?;
-        let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())
-            .map_err(|e| SceneError::Run(e.to_string()))?;
+        let sheet = Sheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
+        let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())?;
         for f in &scene.faults {
             let p = match f.kind {
                 FaultKind::Disconnected => 1.0,
                 FaultKind::Intermittent => f.probability.unwrap_or(0.0),
                 FaultKind::Shorted => continue,
             };
-            frontend
-                .set_open(f.electrode, p)
-                .map_err(|e| SceneError::Run(e.to_string()))?;
+            frontend.set_open(f.electrode, p)?;
         }
-        let scanner =
-            Scanner::new(config, &mut frontend).map_err(|e| SceneError::Run(e.to_string()))?;
+        let scanner = Scanner::new(config, &mut frontend)?;
         let frame_period = 1.0 / f64::from(config.frame_rate_hz());
         let state = scene
             .touches
@@ -532,10 +608,9 @@ impl Run {
     /// obeying `Configure` would.
     ///
     /// # Errors
-    /// [`SceneError::Run`] for a configuration the sheet cannot scan.
+    /// [`SceneError`] for a configuration the sheet cannot scan.
     pub fn set_config(&mut self, config: ScanConfig) -> Result<(), SceneError> {
-        let scanner =
-            Scanner::new(config, &mut self.frontend).map_err(|e| SceneError::Run(e.to_string()))?;
+        let scanner = Scanner::new(config, &mut self.frontend)?;
         self.scanner = scanner;
         self.config = config;
         self.clock_base = self.clock();
@@ -622,7 +697,7 @@ impl Run {
     /// Simulates the next frame and says what was really on the sheet.
     ///
     /// # Errors
-    /// [`SceneError::Run`] if the simulation fails.
+    /// [`SceneError`] if the simulation fails.
     pub fn next_frame(&mut self, detail: Detail) -> Result<(Frame, Truth), SceneError> {
         let t = self.clock();
         let mut touches = if self.held {
@@ -631,37 +706,26 @@ impl Run {
             self.touches_at(t - self.released_at)
         };
         touches.extend(self.extra.iter().copied());
-        self.frontend
-            .set_touches(&touches)
-            .map_err(|e| SceneError::Run(e.to_string()))?;
+        self.frontend.set_touches(&touches)?;
         if let Some(d) = self.scene.drift {
             let c = (1.0 + d.per_kelvin * d.kelvin_per_minute * t / 60.0).max(1e-3);
-            self.frontend
-                .set_conductance_scale(c)
-                .map_err(|e| SceneError::Run(e.to_string()))?;
+            self.frontend.set_conductance_scale(c)?;
         }
         let k = self.scanner.frame_len();
         let (voltages, report) = match detail {
             Detail::Frames => {
-                let v = self
-                    .frontend
-                    .fast_frame(&self.config)
-                    .map_err(|e: SimError| SceneError::Run(e.to_string()))?;
+                let v = self.frontend.fast_frame(&self.config)?;
                 (v, et_core::ScanReport::default())
             }
             Detail::Samples => {
                 let mut v = vec![0.0f32; k];
                 let mut burst = vec![0u16; usize::from(self.config.samples_per_step)];
-                let r = self
-                    .scanner
-                    .scan(&mut self.frontend, &mut burst, &mut v)
-                    .map_err(|e| SceneError::Run(e.to_string()))?;
+                let r = self.scanner.scan(&mut self.frontend, &mut burst, &mut v)?;
                 (v, r)
             }
         };
         let micros = Micros((t * 1e6) as u32);
-        let frame = Frame::from_scan(self.seq, micros, self.config, &report, 0, &voltages)
-            .map_err(|e| SceneError::Run(e.to_string()))?;
+        let frame = Frame::from_scan(self.seq, micros, self.config, &report, 0, &voltages)?;
         self.seq += 1;
         Ok((frame, Truth { time: t, touches }))
     }

@@ -13,9 +13,10 @@ use std::sync::Arc;
 use et_core::extract::Extracted;
 use et_core::protocol::Halving;
 use et_core::rng::Rng;
+use et_core::scan::ScanError;
 use et_core::{ScanConfig, Scanner};
-use et_sim::frontend::{FrontendSpec, SimFrontend};
-use et_sim::sheet::{Sheet, SheetSpec};
+use et_sim::frontend::{FrontendSpec, SimError, SimFrontend};
+use et_sim::sheet::{Sheet, SheetError, SheetSpec};
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 
@@ -67,17 +68,17 @@ impl Dataset {
     /// minus its visit's untouched frame (V_m - V_0, see `et_core::model`).
     ///
     /// # Errors
-    /// A message when `referenced` is asked of a dataset without untouched frames.
-    pub fn features(&self, referenced: bool) -> Result<DMatrix<f64>, String> {
+    /// [`DataError::NoUntouched`] when `referenced` is asked of a dataset without untouched
+    /// frames.
+    pub fn features(&self, referenced: bool) -> Result<DMatrix<f64>, DataError> {
         if !referenced {
             return Ok(self.x.clone());
         }
         if !self.has_untouched() {
-            return Err(format!(
-                "referenced features need an untouched frame per visit: {} visits, {} untouched frames",
-                self.visits(),
-                self.baselines.nrows()
-            ));
+            return Err(DataError::NoUntouched {
+                visits: self.visits(),
+                untouched: self.baselines.nrows(),
+            });
         }
         Ok(DMatrix::from_fn(self.x.nrows(), self.x.ncols(), |r, j| {
             self.x[(r, j)] - self.baselines[(usize::from(self.visit[r]), j)]
@@ -88,10 +89,13 @@ impl Dataset {
     /// frames follow this set's.
     ///
     /// # Errors
-    /// A message when the feature sets differ.
-    pub fn append(&mut self, other: Dataset) -> Result<(), String> {
+    /// [`DataError::DifferentFeatures`] when the feature sets differ.
+    pub fn append(&mut self, other: Dataset) -> Result<(), DataError> {
         if other.feature_index != self.feature_index {
-            return Err("datasets with different features".into());
+            return Err(DataError::DifferentFeatures {
+                this: self.feature_index.len(),
+                other: other.feature_index.len(),
+            });
         }
         let shift = self.visits() as u16;
         let stack = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
@@ -199,7 +203,61 @@ impl Default for Plan {
 }
 
 /// Why collection failed.
-pub type CollectError = String;
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum CollectError {
+    /// The scan configuration is not valid for the sheet.
+    Config(et_core::config::ConfigError),
+    /// The simulated sheet could not be built or pressed.
+    Sheet(SheetError),
+    /// A scan failed.
+    Scan(ScanError<SimError>),
+    /// The untouched frames could not be averaged into V_0.
+    Stats(et_core::stats::StatsError),
+    /// A press without touches.
+    EmptyPress {
+        /// Its label.
+        label: u16,
+    },
+}
+
+impl std::fmt::Display for CollectError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CollectError::Config(e) => write!(f, "scan configuration: {e}"),
+            CollectError::Sheet(e) => write!(f, "{e}"),
+            CollectError::Scan(e) => write!(f, "scan: {e}"),
+            CollectError::Stats(e) => write!(f, "untouched frames: {e}"),
+            CollectError::EmptyPress { label } => write!(f, "press {label} has no touches"),
+        }
+    }
+}
+
+impl std::error::Error for CollectError {}
+
+impl From<et_core::config::ConfigError> for CollectError {
+    fn from(e: et_core::config::ConfigError) -> Self {
+        Self::Config(e)
+    }
+}
+
+impl From<SheetError> for CollectError {
+    fn from(e: SheetError) -> Self {
+        Self::Sheet(e)
+    }
+}
+
+impl From<ScanError<SimError>> for CollectError {
+    fn from(e: ScanError<SimError>) -> Self {
+        Self::Scan(e)
+    }
+}
+
+impl From<et_core::stats::StatsError> for CollectError {
+    fn from(e: et_core::stats::StatsError) -> Self {
+        Self::Stats(e)
+    }
+}
 
 /// One press of the sheet: its label and its touches (the first touch's position and
 /// pressure are what the dataset records).
@@ -215,7 +273,7 @@ pub struct Press {
 /// `plan.seed`, so a second call with another seed is a "next day" test set.
 ///
 /// # Errors
-/// A message if the sheet cannot be built or a scan fails.
+/// [`CollectError`] if the sheet cannot be built or a scan fails.
 pub fn collect(
     spec: &SheetSpec,
     frontend: FrontendSpec,
@@ -291,7 +349,7 @@ pub fn random_presses(
 /// scanned into `plan.subsections` observations, in one of `plan.poses` electrode poses).
 ///
 /// # Errors
-/// A message if the sheet cannot be built or a scan fails.
+/// [`CollectError`] if the sheet cannot be built or a scan fails.
 pub fn collect_presses(
     spec: &SheetSpec,
     frontend: FrontendSpec,
@@ -300,7 +358,7 @@ pub fn collect_presses(
     plan: &Plan,
     mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
 ) -> Result<Dataset, CollectError> {
-    let protocol = config.validate().map_err(|e| e.to_string())?;
+    let protocol = config.validate()?;
     let feature_index: Vec<u16> = protocol
         .features(Halving::Reciprocity)
         .map(|k| k as u16)
@@ -331,17 +389,14 @@ pub fn collect_presses(
         let offsets: Vec<f64> = (0..spec.electrodes.count)
             .map(|_| plan.electrode_movement * rng.normal())
             .collect();
-        let sheet = Arc::new(Sheet::new(spec, &offsets).map_err(|e| e.to_string())?);
-        let mut fe =
-            SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
-        let scanner = Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+        let sheet = Arc::new(Sheet::new(spec, &offsets)?);
+        let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
+        let scanner = Scanner::new(config, &mut fe)?;
         // The untouched frame, as the sheet lies before the first press.
-        scanner
-            .scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)
-            .map_err(|e| e.to_string())?;
+        scanner.scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
         let untouched: Vec<&[f32]> = obs.chunks(k).collect();
         let mut v0 = vec![0.0; k];
-        et_core::stats::reference(&untouched, &mut v0).map_err(|e| e.to_string())?;
+        et_core::stats::reference(&untouched, &mut v0)?;
         baselines.extend(feature_index.iter().map(|&i| v0[usize::from(i)]));
         let mut poses = vec![fe];
         for _ in 1..plan.poses {
@@ -349,22 +404,19 @@ pub fn collect_presses(
                 .iter()
                 .map(|o| o + plan.press_movement * rng.normal())
                 .collect();
-            let sheet = Arc::new(Sheet::new(spec, &moved).map_err(|e| e.to_string())?);
-            let mut fe =
-                SimFrontend::new(sheet, frontend, rng.next_u64()).map_err(|e| e.to_string())?;
-            Scanner::new(config, &mut fe).map_err(|e| e.to_string())?;
+            let sheet = Arc::new(Sheet::new(spec, &moved)?);
+            let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
+            Scanner::new(config, &mut fe)?;
             poses.push(fe);
         }
         for press in visit_presses(&mut rng) {
             let Some(first) = press.touches.first().copied() else {
-                return Err("a press without touches".into());
+                return Err(CollectError::EmptyPress { label: press.label });
             };
             let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
             let fe = &mut poses[pose];
-            fe.set_touches(&press.touches).map_err(|e| e.to_string())?;
-            scanner
-                .scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)
-                .map_err(|e| e.to_string())?;
+            fe.set_touches(&press.touches)?;
+            scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
             for o in obs.chunks(k) {
                 rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
                 y.push(press.label);
@@ -393,3 +445,61 @@ pub fn collect_presses(
         config,
     })
 }
+
+/// Why a dataset cannot give what was asked of it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum DataError {
+    /// Referenced features (V_m - V_0) need an untouched frame V_0 per visit.
+    NoUntouched {
+        /// Visits in the dataset.
+        visits: usize,
+        /// Untouched frames it holds.
+        untouched: usize,
+    },
+    /// Two datasets to be joined hold different features.
+    DifferentFeatures {
+        /// Features of the set appended to.
+        this: usize,
+        /// Features of the set appended.
+        other: usize,
+    },
+    /// The dataset lacks frame values a model uses.
+    MissingFeatures {
+        /// Features in the dataset.
+        dataset: usize,
+        /// Features the model uses.
+        model: usize,
+    },
+    /// A feature count to keep of 0 or more than there are.
+    Keep {
+        /// Asked for.
+        keep: usize,
+        /// Available.
+        available: usize,
+    },
+}
+
+impl std::fmt::Display for DataError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DataError::NoUntouched { visits, untouched } => write!(
+                f,
+                "referenced features need an untouched frame per visit: {visits} visits, {untouched} untouched frames"
+            ),
+            DataError::DifferentFeatures { this, other } => write!(
+                f,
+                "datasets with different features ({this} and {other} frame values)"
+            ),
+            DataError::MissingFeatures { dataset, model } => write!(
+                f,
+                "it lacks frame values the model uses (its {dataset} features vs the model's {model})"
+            ),
+            DataError::Keep { keep, available } => {
+                write!(f, "keep 1 to {available} features, not {keep}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for DataError {}

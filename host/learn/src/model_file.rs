@@ -2,7 +2,7 @@
 //! be used and exported: feature indices, class centres, the scan configuration, and how it
 //! was trained. `et train` writes it; `et eval` and `et export` read it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use et_core::ScanConfig;
 use et_core::model::{ModelKind, Precision};
@@ -223,26 +223,73 @@ impl ModelFile {
     /// Writes JSON.
     ///
     /// # Errors
-    /// An I/O error naming the file.
-    pub fn save(&self, path: &Path) -> Result<(), String> {
-        let text = serde_json::to_string(self).map_err(|e| e.to_string())?;
-        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+    /// [`ModelFileError::Io`] naming the file.
+    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
+        let text = serde_json::to_string(self).map_err(|source| ModelFileError::Json {
+            path: path.into(),
+            source,
+        })?;
+        std::fs::write(path, text).map_err(|source| ModelFileError::Io {
+            path: path.into(),
+            source,
+        })
     }
 
     /// Reads JSON.
     ///
     /// # Errors
-    /// A message naming the file.
-    pub fn load(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let m: ModelFile =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    /// [`ModelFileError`] naming the file (and for JSON, the line and column).
+    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+            path: path.into(),
+            source,
+        })?;
+        let m: ModelFile = serde_json::from_str(&text).map_err(|source| ModelFileError::Json {
+            path: path.into(),
+            source,
+        })?;
         if m.format != "et-model" || m.version != 1 {
-            return Err(format!(
-                "{}: not an et-model version 1 file",
-                path.display()
-            ));
+            return Err(ModelFileError::Format { path: path.into() });
         }
         Ok(m)
     }
 }
+
+/// Why a model file could not be read or written.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ModelFileError {
+    /// The file could not be read or written.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The reason.
+        source: std::io::Error,
+    },
+    /// Not JSON, or a field missing or of the wrong type (the message names it and the line).
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error.
+        source: serde_json::Error,
+    },
+    /// JSON, but not `"format": "et-model"`, `"version": 1`.
+    Format {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+impl std::fmt::Display for ModelFileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ModelFileError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            ModelFileError::Json { path, source } => write!(f, "{}: {source}", path.display()),
+            ModelFileError::Format { path } => {
+                write!(f, "{}: not an et-model version 1 file", path.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for ModelFileError {}

@@ -7,7 +7,7 @@ use et_core::model::ModelKind;
 use nalgebra::DMatrix;
 
 use super::analysis::{self, Band, Outcome};
-use super::collect::Dataset;
+use super::collect::{DataError, Dataset};
 use super::cv::{self, Confusion};
 use super::fastcv::cross_validate_fast;
 use super::fit::{self, FitError, FitOptions, Fitted, Target};
@@ -36,12 +36,16 @@ pub const SHRINKAGE_CANDIDATES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
 /// Fisher ratio, in frame order (a smaller model for the chip). `data.feature_index` follows.
 ///
 /// # Errors
-/// A message when referencing is impossible (no untouched frames) or `keep` is 0 or too large.
-pub fn prepare(data: &mut Dataset, referenced: bool, keep: Option<usize>) -> Result<(), String> {
+/// [`DataError`] when referencing is impossible (no untouched frames) or `keep` is 0 or too
+/// large.
+pub fn prepare(data: &mut Dataset, referenced: bool, keep: Option<usize>) -> Result<(), DataError> {
     data.x = data.features(referenced)?;
     if let Some(keep) = keep {
         if keep == 0 || keep > data.x.ncols() {
-            return Err(format!("keep 1 to {} features, not {keep}", data.x.ncols()));
+            return Err(DataError::Keep {
+                keep,
+                available: data.x.ncols(),
+            });
         }
         let mut kept = fit::fisher_ranking(&data.x, &data.y, data.centres.len());
         kept.truncate(keep);
@@ -151,25 +155,14 @@ pub struct Tested {
 /// taken from it, referenced if the model is).
 ///
 /// # Errors
-/// A message when the dataset lacks the model's features or untouched frames, or does not
-/// match its classes.
-pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, String> {
-    // The model's features, found among the dataset's (a feature-reduced model uses a subset).
-    let columns = file
-        .feature_index
-        .iter()
-        .map(|i| data.feature_index.iter().position(|d| d == i))
-        .collect::<Option<Vec<usize>>>()
-        .ok_or_else(|| {
-            format!(
-                "it lacks frame values the model uses (its {} features vs the model's {})",
-                data.feature_index.len(),
-                file.feature_index.len()
-            )
-        })?;
-    let model = file.fitted().map_err(|e| e.to_string())?;
+/// [`UseError::Data`] when the dataset lacks the model's features or untouched frames,
+/// [`UseError::Model`] when the model's tables are not usable, [`UseError::Fit`] when the
+/// dataset does not match its classes.
+pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
+    let columns = model_columns(file, data)?;
+    let model = file.fitted().map_err(UseError::Model)?;
     let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
-    let confusion = cv::evaluate(&model, &x, &data.y).map_err(|e| e.to_string())?;
+    let confusion = cv::evaluate(&model, &x, &data.y)?;
     let electrodes_mm: Vec<[f64; 2]> = data
         .electrodes
         .iter()
@@ -178,8 +171,7 @@ pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, String> {
     let outcomes = if electrodes_mm.is_empty() {
         Vec::new()
     } else {
-        analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)
-            .map_err(|e| e.to_string())?
+        analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)?
     };
     let bands = analysis::by_distance(&outcomes, 10.0);
     Ok(Tested {
@@ -205,17 +197,12 @@ pub struct OnChip {
 /// with `file`'s f64 model.
 ///
 /// # Errors
-/// A message when the blob does not parse, the dataset lacks the model's features, or a
-/// frame is not finite.
-pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, String> {
-    let chip = et_core::model::Model::parse(blob).map_err(|e| format!("model blob: {e:?}"))?;
-    let host = file.fitted().map_err(|e| e.to_string())?;
-    let columns = file
-        .feature_index
-        .iter()
-        .map(|i| data.feature_index.iter().position(|d| d == i))
-        .collect::<Option<Vec<usize>>>()
-        .ok_or("the dataset lacks frame values the model uses")?;
+/// [`UseError::Blob`] when the blob does not parse, [`UseError::Data`] when the dataset lacks
+/// the model's features, [`UseError::Frame`] when a frame cannot be classified (not finite).
+pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, UseError> {
+    let chip = et_core::model::Model::parse(blob).map_err(UseError::Blob)?;
+    let host = file.fitted().map_err(UseError::Model)?;
+    let columns = model_columns(file, data)?;
     let xs = analysis::select_columns(&data.features(file.referenced)?, &columns);
     // A whole frame (K values) with the dataset's features in their frame positions.
     let k = chip.frame_len();
@@ -242,7 +229,7 @@ pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, 
             .then(|| frame(&data.baselines, usize::from(data.visit[r])));
         let d = chip
             .evaluate_referenced(&v_m, v_0.as_deref(), &mut scratch)
-            .map_err(|e| format!("observation {r}: {e:?}"))?;
+            .map_err(|error| UseError::Frame { row: r, error })?;
         for (j, v) in row.iter_mut().enumerate() {
             *v = xs[(r, j)];
         }
@@ -251,4 +238,64 @@ pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, 
         out.total += 1;
     }
     Ok(out)
+}
+
+/// The dataset's columns holding `file`'s features, in the model's order (a feature-reduced
+/// model uses a subset).
+fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataError> {
+    file.feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or(DataError::MissingFeatures {
+            dataset: data.feature_index.len(),
+            model: file.feature_index.len(),
+        })
+}
+
+/// Why a model could not be used on a dataset; says which of the two is at fault.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum UseError {
+    /// The dataset does not hold what the model needs.
+    Data(DataError),
+    /// The model file's tables are not a usable model.
+    Model(FitError),
+    /// Evaluation on the dataset failed (e.g. a class the model does not know).
+    Fit(FitError),
+    /// The exported blob does not parse.
+    Blob(et_core::model::ModelError),
+    /// The chip's evaluation refused an observation.
+    Frame {
+        /// The observation (0-based row).
+        row: usize,
+        /// Why.
+        error: et_core::model::EvalError,
+    },
+}
+
+impl std::fmt::Display for UseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            UseError::Data(e) => write!(f, "data: {e}"),
+            UseError::Model(e) => write!(f, "model: {e}"),
+            UseError::Fit(e) => write!(f, "{e}"),
+            UseError::Blob(e) => write!(f, "model blob: {e}"),
+            UseError::Frame { row, error } => write!(f, "observation {row}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for UseError {}
+
+impl From<DataError> for UseError {
+    fn from(e: DataError) -> Self {
+        Self::Data(e)
+    }
+}
+
+impl From<FitError> for UseError {
+    fn from(e: FitError) -> Self {
+        Self::Fit(e)
+    }
 }

@@ -53,7 +53,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
     let mut two = Vec::new();
     let mut decisions = Vec::new();
     for kind in ProtocolKind::NAMED {
-        let base = scenes[0].1.scan_config().map_err(|e| anyhow!(e))?;
+        let base = scenes[0].1.scan_config()?;
         let config = ScanConfig {
             protocol: kind,
             ..base

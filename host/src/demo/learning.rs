@@ -14,7 +14,7 @@ pub(super) struct LearningKey {
 
 pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<LearningKey>> {
     let scene = load(DEFAULT_SCENE)?;
-    let config = collect::training_config(scene.scan_config().map_err(|e| anyhow!(e))?);
+    let config = collect::training_config(scene.scan_config()?);
     // docs/method.md §9: 49 classes with a 15 mm target on the 13 cm sheet.
     let (rows, radius) = (7, 0.0075);
     let centres = collect::grid(&scene.sheet, rows, rows, 0.0);
@@ -38,11 +38,10 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
                 seed: 1_000 + v as u64,
                 ..plan.clone()
             },
-        )
-        .map_err(|e| anyhow!(e))?;
+        )?;
         match train.as_mut() {
             None => train = Some(part),
-            Some(d) => d.append(part).map_err(|e| anyhow!(e))?,
+            Some(d) => d.append(part)?,
         }
         bar.inc(1);
     }
@@ -54,15 +53,18 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
             seed: 77 + d as u64,
             ..plan.clone()
         };
-        days.push(
-            collect::collect(&scene.sheet, scene.frontend, config, &centres, &day)
-                .map_err(|e| anyhow!(e))?,
-        );
+        days.push(collect::collect(
+            &scene.sheet,
+            scene.frontend,
+            config,
+            &centres,
+            &day,
+        )?);
         bar.inc(1);
     }
     let mut next_day = days.remove(0);
     for d in days {
-        next_day.append(d).map_err(|e| anyhow!(e))?;
+        next_day.append(d)?;
     }
     let n_c = train.x.nrows() / classes;
     steps.done(
@@ -79,7 +81,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
     let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
     let fit = |referenced: bool, kind: ModelKind, shrinkage: Option<f64>, keep: Option<usize>| {
         let mut data = train.clone();
-        pipeline::prepare(&mut data, referenced, keep).map_err(|e| anyhow!(e))?;
+        pipeline::prepare(&mut data, referenced, keep)?;
         let t = pipeline::train(
             &data,
             &TrainOptions {
@@ -96,7 +98,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
             mm.clone(),
             referenced,
         );
-        let tested = pipeline::test(&file, &next_day).map_err(|e| anyhow!(e))?;
+        let tested = pipeline::test(&file, &next_day)?;
         anyhow::Ok((t, file, tested))
     };
     let (qda, qda_file, qda_test) = fit(true, ModelKind::Qda, None, None)?;
@@ -106,9 +108,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
     bar.inc(1);
     let (lda, _, lda_test) = fit(true, ModelKind::Lda, None, None)?;
     steps.done(&bar, "trained QDA and LDA, cross-validated");
-    qda_file
-        .save(&out.join("learning/model.json"))
-        .map_err(|e| anyhow!(e))?;
+    qda_file.save(&out.join("learning/model.json"))?;
 
     // The trade: features kept (Fisher ranking) against accuracy and the chip's model size.
     let p_all = train.x.ncols();
@@ -135,7 +135,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
             let blob = file.blob(Precision::F16)?;
             std::fs::write(out.join("learning/model.etm"), &blob)
                 .context("writing learning/model.etm")?;
-            let r = pipeline::on_chip(file, &blob, &next_day).map_err(|e| anyhow!(e))?;
+            let r = pipeline::on_chip(file, &blob, &next_day)?;
             Ok((*p, *f16, r))
         })
         .transpose()?;

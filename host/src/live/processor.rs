@@ -38,21 +38,16 @@ impl Classifier {
     /// Wraps a model file.
     ///
     /// # Errors
-    /// A message if the file's model is inconsistent.
-    pub fn new(file: ModelFile) -> Result<Self, String> {
-        let fitted = file.fitted().map_err(|e| e.to_string())?;
+    /// [`FitError`] if the file's tables are not a usable model.
+    pub fn new(file: ModelFile) -> Result<Self, FitError> {
+        let fitted = file.fitted()?;
         Ok(Self { file, fitted })
     }
 
-    /// Class, its posterior and the posterior-weighted centre (mm) of a frame, given V_0.
-    /// None when the model is for another configuration.
+    /// The class of a frame V (K values, V) given V_0, its posterior and the
+    /// posterior-weighted centre. None when the model is for another configuration.
     #[must_use]
-    pub fn classify(
-        &self,
-        config: &ScanConfig,
-        v: &[f32],
-        v0: &[f64],
-    ) -> Option<(u16, f64, [f64; 2])> {
+    pub fn classify(&self, config: &ScanConfig, v: &[f32], v0: &[f64]) -> Option<Classification> {
         if *config != self.file.config {
             return None;
         }
@@ -75,7 +70,78 @@ impl Classifier {
         let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
         let class = d.iter().position(|&v| v == top)?;
         let centre = posterior_centre(&self.fitted, &x, &self.file.centres_mm, 1.0);
-        Some((class as u16, 1.0 / total, centre))
+        Some(Classification {
+            class: class as u16,
+            posterior: 1.0 / total,
+            centre_mm: centre,
+        })
+    }
+}
+
+/// What a model says of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Classification {
+    /// The most probable class.
+    pub class: u16,
+    /// Its posterior probability (0 to 1).
+    pub posterior: f64,
+    /// The class centres weighted by their posteriors, mm: a position between the cells.
+    pub centre_mm: [f64; 2],
+}
+
+/// Reference frames collected so far of those needed before images start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Referencing {
+    /// Untouched frames averaged so far.
+    pub frames: usize,
+    /// Frames V_0 needs ([`Settings::reference_frames`]).
+    pub needed: usize,
+}
+
+/// The pixel projection of the one-step matrix for one configuration and (alpha, s).
+struct Projection {
+    config: ScanConfig,
+    alpha: f64,
+    s: f64,
+    /// Pixels inside the sheet x K.
+    matrix: DMatrix<f32>,
+}
+
+impl Projection {
+    /// The projection in `slot` if it is for `config` and `(alpha, s)`, else a new one put
+    /// there (with the configuration's Jacobian, kept in `jacobians` for the next alpha or s).
+    fn current<'p>(
+        slot: &'p mut Option<Projection>,
+        imager: &Imager,
+        jacobians: &mut Vec<(ScanConfig, DMatrix<f64>)>,
+        config: &ScanConfig,
+        (alpha, s): (f64, f64),
+    ) -> Result<&'p Projection, LiveError> {
+        let kept = slot
+            .take()
+            .filter(|p| p.config == *config && p.alpha == alpha && p.s == s);
+        let projection = match kept {
+            Some(p) => p,
+            None => {
+                let at = match jacobians.iter().position(|(c, _)| c == config) {
+                    Some(at) => at,
+                    None => {
+                        let protocol = config.validate()?;
+                        let amps = f64::from(config.current_amps());
+                        jacobians.push((*config, imager.jacobian(&protocol, amps)?));
+                        jacobians.len() - 1
+                    }
+                };
+                let one = OneStep::new(&jacobians[at].1, alpha, s)?;
+                Projection {
+                    config: *config,
+                    alpha,
+                    s,
+                    matrix: imager.grid.project(&one),
+                }
+            }
+        };
+        Ok(slot.insert(projection))
     }
 }
 
@@ -142,7 +208,7 @@ pub struct Output {
     /// The frame.
     pub frame: LiveFrame,
     /// Reference frames collected so far and needed; the image waits until they are in.
-    pub referencing: Option<(usize, usize)>,
+    pub referencing: Option<Referencing>,
     /// Conductivity change per pixel (None outside the sheet), S per square.
     pub image: Vec<Option<f64>>,
     /// The touches in the image (only when touched): regions above the threshold split at
@@ -164,8 +230,7 @@ pub struct Processor {
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
     jacobians: Vec<(ScanConfig, DMatrix<f64>)>,
-    /// (configuration, alpha, s) and the pixel projection of its one-step matrix.
-    projection: Option<(ScanConfig, f64, f64, DMatrix<f32>)>,
+    projection: Option<Projection>,
     inside: Vec<usize>,
     reference: Option<Reference>,
     /// The model evaluated on each touched frame.
@@ -185,10 +250,10 @@ impl Processor {
     /// The pipeline for `sheet`.
     ///
     /// # Errors
-    /// A message if the sheet cannot be meshed or modelled.
-    pub fn new(sheet: &SheetSpec, settings: Settings) -> Result<Self, String> {
-        let mesh = Mesh::with_about(sheet, settings.triangles).map_err(|e| e.to_string())?;
-        let imager = Imager::new(sheet, mesh, settings.pixels).map_err(|e| e.to_string())?;
+    /// [`LiveError::Mesh`] or [`LiveError::Fem`] if the sheet cannot be meshed or modelled.
+    pub fn new(sheet: &SheetSpec, settings: Settings) -> Result<Self, LiveError> {
+        let mesh = Mesh::with_about(sheet, settings.triangles)?;
+        let imager = Imager::new(sheet, mesh, settings.pixels)?;
         let inside = imager
             .grid
             .triangle
@@ -248,49 +313,23 @@ impl Processor {
         Some(v0)
     }
 
-    fn projection(&mut self, config: &ScanConfig) -> Result<&DMatrix<f32>, String> {
-        let Settings { alpha, s, .. } = self.settings;
-        let fresh =
-            matches!(&self.projection, Some((c, a, e, _)) if c == config && *a == alpha && *e == s);
-        if !fresh {
-            if !self.jacobians.iter().any(|(c, _)| c == config) {
-                let protocol = config.validate().map_err(|e| e.to_string())?;
-                let amps = f64::from(config.current_amps());
-                let jac = self
-                    .imager
-                    .jacobian(&protocol, amps)
-                    .map_err(|e| e.to_string())?;
-                self.jacobians.push((*config, jac));
-            }
-            let jac = &self
-                .jacobians
-                .iter()
-                .find(|(c, _)| c == config)
-                .ok_or("no Jacobian")?
-                .1;
-            let one = OneStep::new(jac, alpha, s).map_err(|e| e.to_string())?;
-            self.projection = Some((*config, alpha, s, self.imager.grid.project(&one)));
-        }
-        Ok(&self.projection.as_ref().ok_or("no reconstruction")?.3)
-    }
-
     /// Processes one frame.
     ///
     /// # Errors
-    /// A message for a frame of the wrong length or with non-finite values, or when the
+    /// [`LiveError`] for a frame of the wrong length or with non-finite values, or when the
     /// reconstruction cannot be built.
-    pub fn process(&mut self, frame: LiveFrame) -> Result<Output, String> {
+    pub fn process(&mut self, frame: LiveFrame) -> Result<Output, LiveError> {
         let k = frame.voltages.len();
-        let protocol = frame.config.validate().map_err(|e| e.to_string())?;
+        let protocol = frame.config.validate()?;
         if k != protocol.frame_len() {
-            return Err(format!(
-                "frame {}: {k} values, its protocol has {}",
-                frame.seq,
-                protocol.frame_len()
-            ));
+            return Err(LiveError::FrameLength {
+                seq: frame.seq,
+                got: k,
+                expected: protocol.frame_len(),
+            });
         }
         if frame.voltages.iter().any(|v| !v.is_finite()) {
-            return Err(format!("frame {}: a value is not finite", frame.seq));
+            return Err(LiveError::NonFinite { seq: frame.seq });
         }
         let threshold = self
             .settings
@@ -308,7 +347,10 @@ impl Processor {
         if reference.frames.len() < needed {
             reference.frames.push(frame.voltages.clone());
             return Ok(Output {
-                referencing: Some((reference.frames.len(), needed)),
+                referencing: Some(Referencing {
+                    frames: reference.frames.len(),
+                    needed,
+                }),
                 image: vec![None; self.imager.grid.triangle.len()],
                 regions: Vec::new(),
                 bvc: 0.0,
@@ -319,37 +361,41 @@ impl Processor {
             });
         }
         let config = frame.config;
-        self.projection(&config)?;
-        let projection = &self.projection.as_ref().ok_or("no reconstruction")?.3;
-        let reference = self.reference.as_mut().ok_or("no reference")?;
         let Settings { alpha, s, .. } = self.settings;
-        if !reference
-            .noise
-            .as_ref()
-            .is_some_and(|n| n.alpha == alpha && n.s == s)
-        {
-            // V_0 and the channel variances of an untouched frame's dV.
-            let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
-            stats::reference(&reference.frames, &mut v0).map_err(|e| e.to_string())?;
-            stats::dv_variance(&reference.frames, &mut var_dv).map_err(|e| e.to_string())?;
-            // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
-            // filters the noise the data carry, so a touch stands out better here than in
-            // |dV|.
-            let pixel_sd = noise_sd(projection, &var_dv);
-            reference.noise = Some(Noise {
-                alpha,
-                s,
-                v0,
-                var_dv,
-                pixel_sd,
-            });
-        }
+        let projection = &Projection::current(
+            &mut self.projection,
+            &self.imager,
+            &mut self.jacobians,
+            &config,
+            (alpha, s),
+        )?
+        .matrix;
+        let noise = match &mut reference.noise {
+            Some(n) if n.alpha == alpha && n.s == s => n,
+            slot => {
+                // V_0 and the channel variances of an untouched frame's dV.
+                let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
+                stats::reference(&reference.frames, &mut v0)?;
+                stats::dv_variance(&reference.frames, &mut var_dv)?;
+                // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
+                // filters the noise the data carry, so a touch stands out better here than in
+                // |dV|.
+                let pixel_sd = noise_sd(projection, &var_dv);
+                slot.insert(Noise {
+                    alpha,
+                    s,
+                    v0,
+                    var_dv,
+                    pixel_sd,
+                })
+            }
+        };
         let Noise {
             v0,
             var_dv,
             pixel_sd,
             ..
-        } = reference.noise.as_ref().ok_or("no reference")?;
+        } = &*noise;
         let dv: Vec<f64> = frame
             .voltages
             .iter()
@@ -390,17 +436,17 @@ impl Processor {
                 .classifier
                 .as_ref()
                 .and_then(|c| c.classify(&config, &frame.voltages, v0));
-            let chip = frame.chip_class.map(|c| c.0);
+            let chip = frame.chip_class.map(|c| c.class);
             let image_position = rois.first().map_or([f64::NAN; 2], |r| {
                 [r.centroid[0] * 1e3, r.centroid[1] * 1e3]
             });
             TouchEvent {
                 t_us: frame.t_us,
                 seq: frame.seq,
-                class: chip.or(model.map(|m| m.0)),
-                position_mm: model.map_or(image_position, |m| m.2),
+                class: chip.or(model.map(|m| m.class)),
+                position_mm: model.map_or(image_position, |m| m.centre_mm),
                 intensity,
-                confidence: model.map(|m| m.1),
+                confidence: model.map(|m| m.posterior),
                 regions: et_recon::select::significant(
                     &rois,
                     &et_recon::select::Settings::new([0.0, 0.0], 1.0),

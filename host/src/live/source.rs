@@ -7,10 +7,10 @@ use super::*;
 /// electrodes (docs/method.md §1).
 ///
 /// # Errors
-/// Never for the compiled-in scene (a message otherwise).
-pub fn default_scene() -> Result<Scene, String> {
+/// Never for the compiled-in scene ([`SceneError`] otherwise).
+pub fn default_scene() -> Result<Scene, SceneError> {
     let (name, text) = crate::demo::DEFAULT_SCENE;
-    Scene::parse(text, name).map_err(|e| e.to_string())
+    Scene::parse(text, name)
 }
 
 /// A simulated scene, running in real time, that a pointer can press.
@@ -32,9 +32,9 @@ impl SimSource {
     /// Starts `scene`, its touches held back for [`Self::LEAD_FRAMES`] frames.
     ///
     /// # Errors
-    /// A message if the sheet cannot be built.
-    pub fn new(scene: &Scene, name: impl Into<String>) -> Result<Self, String> {
-        let mut run = Run::new(scene).map_err(|e| e.to_string())?;
+    /// [`SceneError`] if the sheet cannot be built.
+    pub fn new(scene: &Scene, name: impl Into<String>) -> Result<Self, SceneError> {
+        let mut run = Run::new(scene)?;
         run.hold_scene(true);
         Ok(Self {
             name: name.into(),
@@ -52,15 +52,12 @@ impl SimSource {
     /// The next frame, whatever the clock says.
     ///
     /// # Errors
-    /// A message if the simulation fails.
-    pub fn next_frame(&mut self) -> Result<LiveFrame, String> {
+    /// [`SceneError`] if the simulation fails.
+    pub fn next_frame(&mut self) -> Result<LiveFrame, SceneError> {
         if self.produced == Self::LEAD_FRAMES {
             self.run.hold_scene(false);
         }
-        let (frame, truth) = self
-            .run
-            .next_frame(Detail::Frames)
-            .map_err(|e| e.to_string())?;
+        let (frame, truth) = self.run.next_frame(Detail::Frames)?;
         self.produced += 1;
         Ok(LiveFrame {
             seq: frame.seq,
@@ -94,16 +91,16 @@ impl ReplaySource {
     /// Reads `path`; `sheet` is the sheet it was recorded on.
     ///
     /// # Errors
-    /// The recording's error, naming the file.
-    pub fn open(path: &Path, sheet: SheetSpec) -> Result<Self, String> {
-        let recording = recording::read(path).map_err(|e| e.to_string())?;
+    /// [`LiveError::Recording`] naming the file, [`LiveError::OtherSheet`] when its frames
+    /// are of another electrode count than `sheet`.
+    pub fn open(path: &Path, sheet: SheetSpec) -> Result<Self, LiveError> {
+        let recording = recording::read(path)?;
         if recording.header.electrodes != sheet.electrodes.count {
-            return Err(format!(
-                "{}: frames of {} electrodes, the sheet has {}",
-                path.display(),
-                recording.header.electrodes,
-                sheet.electrodes.count
-            ));
+            return Err(LiveError::OtherSheet {
+                path: path.into(),
+                recorded: recording.header.electrodes,
+                sheet: sheet.electrodes.count,
+            });
         }
         Ok(Self {
             name: path.display().to_string(),
@@ -183,11 +180,15 @@ impl PortSource {
     /// Opens `path` and starts the scan.
     ///
     /// # Errors
-    /// A message if the port cannot be opened or the board does not answer.
-    pub fn open(path: &str, baud: u32) -> Result<Self, String> {
-        let mut link = Link::open(path, baud).map_err(|e| e.to_string())?;
+    /// [`LiveError::Link`] if the port cannot be opened or the board does not answer.
+    pub fn open(path: &str, baud: u32) -> Result<Self, LiveError> {
+        let at = |error| LiveError::Link {
+            port: path.to_string(),
+            error,
+        };
+        let mut link = Link::open(path, baud).map_err(at)?;
         link.request(&Command::Start, Duration::from_secs(2))
-            .map_err(|e| format!("{path}: {e}"))?;
+            .map_err(at)?;
         Ok(Self {
             path: path.to_string(),
             link,
@@ -203,14 +204,17 @@ impl PortSource {
     /// for people.
     ///
     /// # Errors
-    /// A message when the blob is not a model, or the board refuses or does not answer
-    /// (it then keeps its old model).
-    pub fn install_model(&mut self, blob: &[u8]) -> Result<String, String> {
-        let model = et_core::model::Model::parse(blob)
-            .map_err(|e| format!("not a valid model blob: {e:?}"))?;
+    /// [`LiveError::Blob`] when the blob is not a model, [`LiveError::Link`] when the board
+    /// refuses or does not answer (it then keeps its old model), [`LiveError::Tare`] when it
+    /// loaded the model but could not take V_0.
+    pub fn install_model(&mut self, blob: &[u8]) -> Result<String, LiveError> {
+        let model = et_core::model::Model::parse(blob).map_err(LiveError::Blob)?;
         self.link
             .upload_model(blob, Duration::from_secs(2), Duration::from_secs(15))
-            .map_err(|e| format!("upload failed: {e}"))?;
+            .map_err(|error| LiveError::Link {
+                port: self.path.clone(),
+                error,
+            })?;
         let loaded = format!(
             "the board verified and loaded the model ({} bytes, {} classes)",
             blob.len(),
@@ -221,7 +225,7 @@ impl PortSource {
         }
         self.link
             .request(&Command::Tare, Duration::from_secs(2))
-            .map_err(|e| format!("{loaded}, but taking V_0 failed: {e}"))?;
+            .map_err(LiveError::Tare)?;
         Ok(format!("{loaded} and took V_0: it classifies every frame"))
     }
 
@@ -240,7 +244,7 @@ impl PortSource {
                 }),
                 Uplink::Event(Event::Touch { seq, class, margin }) => {
                     if let Some(f) = self.pending.iter_mut().find(|f| f.seq == seq) {
-                        f.chip_class = Some((class, margin));
+                        f.chip_class = Some(ChipClass { class, margin });
                     }
                 }
                 Uplink::Event(Event::Status(s)) => self.status = Some(s),
@@ -299,8 +303,8 @@ impl Source {
     /// in real time (`realtime`) or one per call; a recording one per call while playing.
     ///
     /// # Errors
-    /// A message when the simulator fails.
-    pub fn poll(&mut self, max: usize, realtime: bool) -> Result<Vec<LiveFrame>, String> {
+    /// [`SceneError`] when the simulator fails.
+    pub fn poll(&mut self, max: usize, realtime: bool) -> Result<Vec<LiveFrame>, SceneError> {
         match self {
             Source::Sim(s) => {
                 let due = if realtime {
@@ -335,17 +339,20 @@ impl Source {
     /// change what it recorded.
     ///
     /// # Errors
-    /// A message saying why not.
-    pub fn configure(&mut self, config: ScanConfig) -> Result<(), String> {
+    /// [`LiveError`] saying why not.
+    pub fn configure(&mut self, config: ScanConfig) -> Result<(), LiveError> {
         match self {
-            Source::Sim(s) => s.run.set_config(config).map_err(|e| e.to_string()),
+            Source::Sim(s) => Ok(s.run.set_config(config)?),
             Source::Replay(r) if r.recording.header.config == config => Ok(()),
-            Source::Replay(_) => Err("a recording plays the protocol it was recorded with".into()),
+            Source::Replay(_) => Err(LiveError::Recorded),
             Source::Port(p) => p
                 .link
                 .request(&Command::Configure(config), Duration::from_secs(2))
                 .map(|_| ())
-                .map_err(|e| e.to_string()),
+                .map_err(|error| LiveError::Link {
+                    port: p.path.clone(),
+                    error,
+                }),
         }
     }
 
@@ -383,13 +390,13 @@ pub enum SourceSpec {
 /// until something presses it). Returns the source and the sheet.
 ///
 /// # Errors
-/// A message naming the file or port.
-pub fn open_source(spec: &SourceSpec, scene: Option<&Path>) -> Result<(Source, SheetSpec), String> {
+/// [`LiveError`] naming the file or port.
+pub fn open_source(
+    spec: &SourceSpec,
+    scene: Option<&Path>,
+) -> Result<(Source, SheetSpec), LiveError> {
     let (scene, name) = match scene {
-        Some(p) => (
-            Scene::load(p).map_err(|e| e.to_string())?,
-            p.display().to_string(),
-        ),
+        Some(p) => (Scene::load(p)?, p.display().to_string()),
         None => {
             let mut scene = default_scene()?;
             scene.touches.clear();

@@ -51,7 +51,13 @@ fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
     // The reference frames.
     for i in 0..settings.reference_frames {
         let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
-        assert_eq!(out.referencing, Some((i + 1, settings.reference_frames)));
+        assert_eq!(
+            out.referencing,
+            Some(Referencing {
+                frames: i + 1,
+                needed: settings.reference_frames
+            })
+        );
         assert!(out.event.is_none());
     }
     assert!(p.v0().is_some());
@@ -103,7 +109,13 @@ fn a_configuration_change_takes_a_new_reference() {
     source.configure(config).unwrap();
     let out = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
     assert_eq!(out.frame.config.protocol, ProtocolKind::PseudoPolar);
-    assert_eq!(out.referencing, Some((1, 3)));
+    assert_eq!(
+        out.referencing,
+        Some(Referencing {
+            frames: 1,
+            needed: 3
+        })
+    );
     // Frames of the wrong length and with NaN are refused, not imaged.
     let mut bad = out.frame.clone();
     bad.voltages.pop();
@@ -140,7 +152,7 @@ fn a_replay_plays_pauses_and_seeks() {
     assert!(r.next_frame().is_none());
     // A recording of another electrode count is refused with the file named.
     let small = SheetSpec::rectangle(0.13, 0.13, 8);
-    let e = ReplaySource::open(&path, small).unwrap_err();
+    let e = ReplaySource::open(&path, small).unwrap_err().to_string();
     assert!(e.contains("r.jsonl") && e.contains("16"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

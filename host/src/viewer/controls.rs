@@ -135,7 +135,7 @@ impl Viewer {
             }
             None => {
                 ui.label(match self.last.as_ref().and_then(|o| o.referencing) {
-                    Some((n, of)) => format!("taking V_0: {n} of {of} frames"),
+                    Some(r) => format!("taking V_0: {} of {} frames", r.frames, r.needed),
                     None => "no touch".into(),
                 });
             }

@@ -153,13 +153,13 @@ impl Wizard {
     /// Starts collecting on `sheet` with `base`'s scan settings and the opposite protocol.
     ///
     /// # Errors
-    /// A message when the opposite protocol does not exist for this sheet.
-    pub fn start(&mut self, sheet: &SheetSpec, base: ScanConfig) -> Result<Request, String> {
+    /// [`WizardError::Config`] when the opposite protocol does not exist for this sheet.
+    pub fn start(&mut self, sheet: &SheetSpec, base: ScanConfig) -> Result<Request, WizardError> {
         let config = ScanConfig {
             protocol: ProtocolKind::Opposite,
             ..base
         };
-        let protocol = config.validate().map_err(|e| e.to_string())?;
+        let protocol = config.validate().map_err(WizardError::Config)?;
         self.feature_index = protocol
             .features(Halving::Reciprocity)
             .map(|k| k as u16)
@@ -274,13 +274,12 @@ impl Wizard {
     /// The dataset collected so far.
     ///
     /// # Errors
-    /// A message when nothing was collected.
-    pub fn dataset(&self) -> Result<Dataset, String> {
-        let config = self.config.ok_or("the wizard has not started")?;
+    /// [`WizardError::Empty`] when nothing was collected.
+    pub fn dataset(&self) -> Result<Dataset, WizardError> {
         let p = self.feature_index.len();
-        if self.y.is_empty() || p == 0 {
-            return Err("no observations yet".into());
-        }
+        let Some(config) = self.config.filter(|_| !self.y.is_empty() && p > 0) else {
+            return Err(WizardError::Empty);
+        };
         let visits = self.baselines.len() / p;
         Ok(Dataset {
             x: DMatrix::from_row_slice(self.y.len(), p, &self.rows_x),
@@ -303,19 +302,18 @@ impl Wizard {
     /// Trains QDA on the referenced observations (shrinkage by cross-validation).
     ///
     /// # Errors
-    /// A message when the data cannot be fitted.
-    pub fn train(&mut self) -> Result<(), String> {
+    /// [`WizardError`] when the data cannot be fitted.
+    pub fn train(&mut self) -> Result<(), WizardError> {
         let mut data = self.dataset()?;
         // Keep the features that separate the classes best when all of them would not fit
         // a model slot of the board (f16).
         let all = data.feature_index.len();
         let fit = pipeline::features_that_fit(ModelKind::Qda, self.classes(), all);
         if fit == 0 {
-            return Err(
-                "too many classes for a model slot of the board: use a smaller grid".into(),
-            );
+            return Err(WizardError::TooManyClasses);
         }
-        pipeline::prepare(&mut data, true, (fit < all).then_some(fit))?;
+        pipeline::prepare(&mut data, true, (fit < all).then_some(fit))
+            .map_err(WizardError::Data)?;
         let per_class = self.y.len() / self.classes().max(1);
         let t = pipeline::train(
             &data,
@@ -325,7 +323,7 @@ impl Wizard {
                 folds: per_class.clamp(2, 10),
             },
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(WizardError::Fit)?;
         let mm = self
             .centres
             .iter()
@@ -360,20 +358,17 @@ impl Wizard {
     }
 
     /// The model blob for the board: f32 if it fits a slot, else f16.
-    fn blob(&self) -> Result<Vec<u8>, String> {
-        let t = self.trained.as_ref().ok_or("train first")?;
-        let b = t.file.blob(Precision::F32).map_err(|e| e.to_string())?;
+    fn blob(&self) -> Result<Vec<u8>, WizardError> {
+        let t = self.trained.as_ref().ok_or(WizardError::NotTrained)?;
+        let b = t.file.blob(Precision::F32).map_err(WizardError::Fit)?;
         if b.len() <= MODEL_SLOT_BYTES {
             return Ok(b);
         }
-        let b = t.file.blob(Precision::F16).map_err(|e| e.to_string())?;
+        let b = t.file.blob(Precision::F16).map_err(WizardError::Fit)?;
         if b.len() <= MODEL_SLOT_BYTES {
             Ok(b)
         } else {
-            Err(format!(
-                "the model needs {} bytes, a slot holds {MODEL_SLOT_BYTES}: use a smaller grid",
-                b.len()
-            ))
+            Err(WizardError::TooLarge { bytes: b.len() })
         }
     }
 
@@ -407,7 +402,7 @@ impl Wizard {
                     match source.and_then(Source::config) {
                         Some(base) => match self.start(sheet, base) {
                             Ok(r) => requests.push(r),
-                            Err(e) => self.message = e,
+                            Err(e) => self.message = e.to_string(),
                         },
                         None => self.message = "no frames yet: open a source first".into(),
                     }
@@ -471,7 +466,7 @@ impl Wizard {
                 if ui.button("Train").clicked()
                     && let Err(e) = self.train()
                 {
-                    self.message = e;
+                    self.message = e.to_string();
                 }
             }
             Step::Trained => {
@@ -502,7 +497,7 @@ impl Wizard {
                     {
                         match self.blob() {
                             Ok(b) => requests.push(Request::Upload(b)),
-                            Err(e) => self.message = e,
+                            Err(e) => self.message = e.to_string(),
                         }
                     }
                 });
@@ -531,14 +526,16 @@ impl Wizard {
         };
         let path = PathBuf::from(self.save_path.trim());
         if let Err(e) = t.file.save(&path) {
-            return e;
+            return e.to_string();
         }
         let blob_path = path.with_extension("etm");
-        match self
-            .blob()
-            .and_then(|b| std::fs::write(&blob_path, b).map_err(|e| e.to_string()))
-        {
-            Ok(()) => format!("saved {} and {}", path.display(), blob_path.display()),
+        match self.blob().map(|b| std::fs::write(&blob_path, b)) {
+            Ok(Err(e)) => format!(
+                "saved {}; blob: {}: {e}",
+                path.display(),
+                blob_path.display()
+            ),
+            Ok(Ok(())) => format!("saved {} and {}", path.display(), blob_path.display()),
             Err(e) => format!("saved {}; blob: {e}", path.display()),
         }
     }
@@ -595,3 +592,48 @@ fn confusion(ui: &mut egui::Ui, c: &Confusion) {
     }
     ui.label("confusion: rows true class, columns predicted");
 }
+
+/// Why the wizard cannot go on.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum WizardError {
+    /// The sheet cannot be scanned with the opposite protocol.
+    Config(et_core::config::ConfigError),
+    /// Nothing collected yet.
+    Empty,
+    /// Even one feature per class would not fit a model slot of the board.
+    TooManyClasses,
+    /// The collected set cannot give the features.
+    Data(et_learn::collect::DataError),
+    /// The fit failed.
+    Fit(et_learn::fit::FitError),
+    /// No model trained yet.
+    NotTrained,
+    /// The model is larger than a slot, even in f16.
+    TooLarge {
+        /// Its size, bytes.
+        bytes: usize,
+    },
+}
+
+impl std::fmt::Display for WizardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WizardError::Config(e) => write!(f, "the opposite protocol: {e}"),
+            WizardError::Empty => write!(f, "no observations yet"),
+            WizardError::TooManyClasses => write!(
+                f,
+                "too many classes for a model slot of the board: use a smaller grid"
+            ),
+            WizardError::Data(e) => write!(f, "{e}"),
+            WizardError::Fit(e) => write!(f, "{e}"),
+            WizardError::NotTrained => write!(f, "train first"),
+            WizardError::TooLarge { bytes } => write!(
+                f,
+                "the model needs {bytes} bytes, a slot holds {MODEL_SLOT_BYTES}: use a smaller grid"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for WizardError {}

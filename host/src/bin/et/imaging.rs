@@ -83,7 +83,7 @@ pub(crate) struct ReconstructArgs {
 pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     use et_recon::fem::{Electrodes, Forward};
     let scene = Scene::load(&args.scene)?;
-    let config = scene.scan_config().map_err(anyhow::Error::msg)?;
+    let config = scene.scan_config()?;
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
     let mesh = scene_mesh(&scene, &args.mesh, true)?;
@@ -211,7 +211,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
     let recording = args.frames.as_deref().map(recording::read).transpose()?;
     let config = match &recording {
         Some(r) => r.header.config,
-        None => scene.scan_config().map_err(anyhow::Error::msg)?,
+        None => scene.scan_config()?,
     };
     if config.electrodes != scene.sheet.electrodes.count {
         bail!(

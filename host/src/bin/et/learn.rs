@@ -141,7 +141,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
     if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
         bail!("--visits, --scans and --subsections must be at least 1");
     }
-    let config = collect::training_config(scene.scan_config().map_err(anyhow::Error::msg)?);
+    let config = collect::training_config(scene.scan_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
     let plan = collect::Plan {
         visits: 1,
@@ -172,11 +172,10 @@ pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
                 seed,
                 ..plan.clone()
             },
-        )
-        .map_err(anyhow::Error::msg)?;
+        )?;
         match data.as_mut() {
             None => data = Some(part),
-            Some(d) => d.append(part).map_err(anyhow::Error::msg)?,
+            Some(d) => d.append(part)?,
         }
         bar.inc(1);
     }
@@ -361,7 +360,7 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
         mm.clone(),
         referenced,
     );
-    file.save(&args.out).map_err(anyhow::Error::msg)?;
+    file.save(&args.out)?;
     let summary = serde_json::json!({
         "out": args.out.display().to_string(),
         "kind": Kind::from(args.kind).name(),
@@ -414,11 +413,17 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
 }
 
 pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
-    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let file = ModelFile::load(&args.model)?;
     let data = dataset::load_csv(&args.data)?;
     let classes = file.classes.len();
-    let tested = pipeline::test(&file, &data)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
+    let tested = pipeline::test(&file, &data).map_err(|e| {
+        // Name the file at fault: the model's tables, or the data.
+        let blamed = match e {
+            pipeline::UseError::Model(_) => &args.model,
+            _ => &args.data,
+        };
+        anyhow::anyhow!("{}: {e}", blamed.display())
+    })?;
     let (conf, bands) = (&tested.confusion, &tested.bands);
     if let Some(dir) = &args.plots {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -463,7 +468,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
 }
 
 pub(crate) fn export_cmd(args: &ExportArgs) -> Result<()> {
-    let file = ModelFile::load(&args.model).map_err(anyhow::Error::msg)?;
+    let file = ModelFile::load(&args.model)?;
     let precision = Precision::from(args.precision);
     let blob = file.blob(precision)?;
     std::fs::write(&args.out, &blob).with_context(|| format!("writing {}", args.out.display()))?;

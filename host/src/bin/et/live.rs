@@ -40,7 +40,7 @@ impl SourceArgs {
         self.model
             .as_deref()
             .map(|p| {
-                let file = ModelFile::load(p).map_err(anyhow::Error::msg)?;
+                let file = ModelFile::load(p)?;
                 et_host::live::Classifier::new(file)
                     .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
             })
@@ -81,8 +81,8 @@ pub(crate) fn view_cmd(args: &ViewArgs) -> Result<()> {
         model: args.source.model.clone(),
         realtime: true,
         screenshot: args.screenshot.clone(),
-    })
-    .map_err(anyhow::Error::msg)
+    })?;
+    Ok(())
 }
 
 #[cfg(not(feature = "viewer"))]
@@ -95,9 +95,8 @@ pub(crate) fn view_cmd(_: &ViewArgs) -> Result<()> {
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
     use std::io::Write as _;
-    let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())
-        .map_err(anyhow::Error::msg)?;
-    let mut processor = Processor::new(&sheet, Settings::default()).map_err(anyhow::Error::msg)?;
+    let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
+    let mut processor = Processor::new(&sheet, Settings::default())?;
     processor.classifier = args.source.classifier()?;
     if let Some(c) = &processor.classifier {
         // The model classifies frames of the configuration it was trained on.
@@ -123,7 +122,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let mut seen = 0u64;
     let mut stdout = std::io::stdout().lock();
     while seen < limit {
-        let frames = source.poll(64, !args.fast).map_err(anyhow::Error::msg)?;
+        let frames = source.poll(64, !args.fast)?;
         if frames.is_empty() {
             if let Source::Replay(r) = &source
                 && r.position >= r.len()
