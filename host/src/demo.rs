@@ -25,7 +25,6 @@ use et_core::protocol::{Protocol, ProtocolKind};
 use et_sim::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
-use serde_json::json;
 
 use crate::plot;
 use et_core::board::MODEL_SLOT_BYTES;
@@ -95,6 +94,20 @@ pub struct Options {
     pub progress: bool,
     /// The command line, for the report.
     pub command: String,
+}
+
+/// `summary.json`: the run, then each section's numbers.
+#[derive(Serialize)]
+struct Summary<'a> {
+    command: &'a str,
+    quick: bool,
+    sizes: Sizes,
+    machine: &'a str,
+    date_utc: String,
+    seconds: f64,
+    learning: &'a serde_json::Value,
+    imaging: &'a serde_json::Value,
+    sweep: &'a serde_json::Value,
 }
 
 /// Sizes of one run.
@@ -190,17 +203,17 @@ pub fn run(options: &Options) -> Result<Report> {
     let sweep = sweep(out, &sizes, &steps).context("the speed/accuracy sweep")?;
     let seconds = started.elapsed().as_secs_f64();
     let machine = machine();
-    let summary = json!({
-        "command": options.command,
-        "quick": options.quick,
-        "sizes": sizes,
-        "machine": machine,
-        "date_utc": today_utc(),
-        "seconds": seconds,
-        "learning": learning.json,
-        "imaging": imaging.json,
-        "sweep": sweep.json,
-    });
+    let summary = serde_json::to_value(Summary {
+        command: &options.command,
+        quick: options.quick,
+        sizes,
+        machine: &machine,
+        date_utc: today_utc(),
+        seconds,
+        learning: &learning.json,
+        imaging: &imaging.json,
+        sweep: &sweep.json,
+    })?;
     let json_path = out.join("summary.json");
     std::fs::write(&json_path, serde_json::to_string_pretty(&summary)?)
         .with_context(|| format!("writing {}", json_path.display()))?;

@@ -68,7 +68,7 @@ fn protocol_text_and_errors_teach() {
     let unknown = et(&["protocol", "-p", "spiral"]);
     assert!(
         String::from_utf8_lossy(&unknown.stderr)
-            .contains("use adjacent, pseudo-polar, pp-pp or opposite")
+            .contains("possible values: adjacent, pseudo-polar, pp-pp, opposite")
     );
     let general = et(&[
         "protocol",

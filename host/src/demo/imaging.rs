@@ -15,6 +15,53 @@ pub(super) struct ImagingKey {
     pub(super) two: Vec<&'static str>,
 }
 
+/// One image of the section (`summary.json`'s "imaging"."images").
+#[derive(Serialize)]
+struct ImageRow {
+    scene: &'static str,
+    /// The protocol's name (`adjacent`, ...).
+    protocol: &'static str,
+    /// alpha chosen by GCV.
+    alpha: f64,
+    /// The ROI threshold f.
+    threshold: f64,
+    /// Touches counted (kept regions).
+    regions: usize,
+    /// For each true touch: the distance to the nearest counted touch, mm.
+    touch_offsets_mm: Vec<f64>,
+    /// For each true touch: whether that distance is within its radius.
+    found_within_radius: Vec<bool>,
+    metrics: et_recon::metrics::Metrics,
+    /// The picture, relative to the report.
+    png: String,
+}
+
+/// The protocol docs/method.md §8 chooses from one scene's adjacent image.
+#[derive(Serialize)]
+struct Decision {
+    scene: &'static str,
+    regions_on_adjacent: usize,
+    /// None: no touch seen.
+    #[serde(serialize_with = "protocol_name")]
+    switch_to: Option<ProtocolKind>,
+}
+
+fn protocol_name<S: serde::Serializer>(k: &Option<ProtocolKind>, s: S) -> Result<S::Ok, S::Error> {
+    k.map(ProtocolKind::name).serialize(s)
+}
+
+/// `summary.json`'s "imaging".
+#[derive(Serialize)]
+struct ImagingSummary<'a> {
+    triangles: usize,
+    single_touches_found: (usize, usize),
+    single_touches_found_as_one_touch: (usize, usize),
+    single_touches_found_with_chosen_protocol: (usize, usize),
+    two_touches_found_by: &'a [&'static str],
+    images: &'a [ImageRow],
+    dynamic: &'a [Decision],
+}
+
 /// Short names for the protocols, as the report shows them.
 pub(super) fn short(kind: ProtocolKind) -> &'static str {
     match kind {
@@ -27,7 +74,7 @@ pub(super) fn short(kind: ProtocolKind) -> &'static str {
 }
 
 pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<ImagingKey>> {
-    let scenes: Vec<(&str, Scene)> = REFERENCE_SCENES
+    let scenes: Vec<(&'static str, Scene)> = REFERENCE_SCENES
         .iter()
         .map(|&s| Ok((s.0.trim_end_matches(".toml"), load(s)?)))
         .collect::<Result<_>>()?;
@@ -124,40 +171,38 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 two.push(short(kind));
             }
             if kind == ProtocolKind::Adjacent {
-                decisions.push((
-                    *name,
-                    et_recon::select::decide(&counted, &settings),
-                    counted.len(),
-                ));
+                decisions.push(Decision {
+                    scene: name,
+                    regions_on_adjacent: counted.len(),
+                    switch_to: et_recon::select::decide(&counted, &settings),
+                });
             }
-            rows.push(json!({
-                "scene": name,
-                "protocol": kind.name(),
-                "alpha": alpha,
-                "threshold": f,
-                "regions": counted.len(),
-                "touch_offsets_mm": per_touch.iter().map(|t| t.0 * 1e3).collect::<Vec<_>>(),
-                "found_within_radius": per_touch.iter().map(|t| t.1).collect::<Vec<_>>(),
-                "metrics": m,
-                "png": png,
-            }));
+            rows.push(ImageRow {
+                scene: name,
+                protocol: kind.name(),
+                alpha,
+                threshold: f,
+                regions: counted.len(),
+                touch_offsets_mm: per_touch.iter().map(|t| t.0 * 1e3).collect(),
+                found_within_radius: per_touch.iter().map(|t| t.1).collect(),
+                metrics: m,
+                png,
+            });
             bar.inc(1);
         }
     }
     steps.done(&bar, "imaged 5 scenes x 4 protocols");
     // Each single touch, imaged with the protocol docs/method.md §8 chose for it.
     let mut chosen = (0, 0);
-    for (name, kind, _) in &decisions {
+    for d in &decisions {
         let found = rows.iter().find(|r| {
-            r["scene"] == *name
-                && kind.is_some_and(|k| r["protocol"] == k.name())
-                && r["found_within_radius"]
-                    .as_array()
-                    .is_some_and(|a| a.len() == 1)
+            r.scene == d.scene
+                && d.switch_to.is_some_and(|k| r.protocol == k.name())
+                && r.found_within_radius.len() == 1
         });
         if let Some(r) = found {
             chosen.1 += 1;
-            chosen.0 += usize::from(r["found_within_radius"][0] == true);
+            chosen.0 += usize::from(r.found_within_radius[0]);
         }
     }
 
@@ -200,67 +245,69 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         "\n| scene | protocol | alpha | touches | distance of each true touch from the nearest found | PE | SE | RNG | BVC |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for r in &rows {
-        let offsets: Vec<String> = r["touch_offsets_mm"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .zip(r["found_within_radius"].as_array().into_iter().flatten())
-            .map(|(o, ok)| {
+        let offsets: Vec<String> = r
+            .touch_offsets_mm
+            .iter()
+            .zip(&r.found_within_radius)
+            .map(|(o, &within)| {
                 format!(
-                    "{:.1} mm{}",
-                    o.as_f64().unwrap_or(f64::NAN),
-                    if ok.as_bool() == Some(true) {
-                        " (within)"
-                    } else {
-                        " (outside)"
-                    }
+                    "{o:.1} mm{}",
+                    if within { " (within)" } else { " (outside)" }
                 )
             })
             .collect();
-        let m = &r["metrics"];
+        let m = &r.metrics;
         let _ = writeln!(
             md,
             "| {} | {} | {:.3} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2e} V |",
-            r["scene"].as_str().unwrap_or(""),
-            r["protocol"].as_str().unwrap_or(""),
-            r["alpha"].as_f64().unwrap_or(f64::NAN),
-            r["regions"],
+            r.scene,
+            r.protocol,
+            r.alpha,
+            r.regions,
             offsets.join(", "),
-            m["pe"].as_f64().unwrap_or(f64::NAN),
-            m["se"].as_f64().unwrap_or(f64::NAN),
-            m["rng"].as_f64().unwrap_or(f64::NAN),
-            m["bvc"].as_f64().unwrap_or(f64::NAN),
+            m.pe,
+            m.se,
+            m.rng,
+            m.bvc,
         );
     }
     let _ = writeln!(
         md,
-        "\nPE and SE are of the first touch; SE counts every region above the threshold.\n\n\
+        "\nHow to read the table: *alpha* is the regularisation weight (larger: smoother, \
+         less noisy images), picked by generalised cross-validation (GCV) on each frame. The \
+         metrics are docs/method.md §7's, of the first touch: *PE*, position error, the \
+         distance from the true centre to the centroid of the region of interest (ROI: the \
+         pixels above f times the image's maximum) over the sheet's largest extent; *SE*, \
+         shape error, the difference between the ROI's area and the touch's over the sheet's \
+         area (SE counts every region above the threshold); *RNG*, ringing, the area of \
+         opposite-sign change over the area outside the ROI (all three: 0 is best); *BVC*, \
+         the boundary voltage change |V_m - V_0| the touch makes (larger: easier to see).\n\n\
          **Dynamic protocol selection (docs/method.md §8)** on the AD image of each scene (xi = 0.5):\n\n\
          | scene | touches on AD | docs/method.md §8 switches to |\n| --- | --- | --- |"
     );
-    for (name, d, n) in &decisions {
+    for d in &decisions {
         let _ = writeln!(
             md,
-            "| {name} | {n} | {} |",
-            match d {
+            "| {} | {} | {} |",
+            d.scene,
+            d.regions_on_adjacent,
+            match d.switch_to {
                 None => "no touch seen".to_string(),
                 Some(ProtocolKind::Adjacent) => "stays on AD".to_string(),
-                Some(k) => short(*k).to_string(),
+                Some(k) => short(k).to_string(),
             }
         );
     }
     md.push('\n');
-    let json = json!({
-        "triangles": imager.triangles(),
-        "single_touches_found": single,
-        "single_touches_found_as_one_touch": one_touch,
-        "single_touches_found_with_chosen_protocol": chosen,
-        "two_touches_found_by": two,
-        "images": rows,
-        "dynamic": decisions.iter().map(|(n, d, c)| json!({
-            "scene": n, "regions_on_adjacent": c, "switch_to": d.map(ProtocolKind::name),
-        })).collect::<Vec<_>>(),
-    });
+    let json = serde_json::to_value(ImagingSummary {
+        triangles: imager.triangles(),
+        single_touches_found: single,
+        single_touches_found_as_one_touch: one_touch,
+        single_touches_found_with_chosen_protocol: chosen,
+        two_touches_found_by: &two,
+        images: &rows,
+        dynamic: &decisions,
+    })?;
     Ok(Section {
         markdown: md,
         json,

@@ -9,10 +9,117 @@ pub(super) struct LearningKey {
     /// None when docs/method.md §9's raw-frame QDA cannot be fitted (too few observations per class).
     pub(super) raw: Option<f64>,
     pub(super) cv: f64,
-    pub(super) chip: Option<(usize, usize, f64)>,
+    pub(super) chip: Option<ChipCheck>,
 }
 
+/// The section: collect, train and test ([`measure`]), then its figures and text.
 pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<LearningKey>> {
+    let results = measure(out, sizes, steps)?;
+    figures(&out.join("learning"), &results)?;
+    Ok(Section {
+        markdown: markdown(&results, sizes),
+        json: serde_json::to_value(&results)?,
+        key: LearningKey {
+            next_day: results.qda.next_day_accuracy,
+            raw: results.raw_qda_next_day_accuracy,
+            cv: results.qda.cv_accuracy,
+            chip: results.chip,
+        },
+    })
+}
+
+/// What the learning section measured (`summary.json`'s "learning").
+#[derive(Serialize)]
+pub(super) struct Learning {
+    scene: &'static str,
+    #[serde(skip)]
+    description: String,
+    classes: usize,
+    /// Grid rows (= columns).
+    #[serde(skip)]
+    rows: usize,
+    /// Finger radius, m.
+    #[serde(skip)]
+    radius: f64,
+    observations_per_class: usize,
+    next_day_observations: usize,
+    /// Features of a whole (reciprocity-halved) frame.
+    #[serde(skip)]
+    features: usize,
+    qda: QdaResult,
+    lda_next_day_accuracy: f64,
+    raw_qda_next_day_accuracy: Option<f64>,
+    /// Each model's row of the report's table.
+    models: Vec<ModelRow>,
+    features_trade: Vec<TradePoint>,
+    chip: Option<ChipCheck>,
+    /// The QDA's next-day test, for the figures.
+    #[serde(skip)]
+    qda_test: pipeline::Tested,
+}
+
+/// The referenced QDA, the section's model.
+#[derive(Serialize)]
+struct QdaResult {
+    shrinkage: f64,
+    cv_accuracy: f64,
+    leave_one_visit_out: Option<f64>,
+    next_day_accuracy: f64,
+    next_day_mean_error_mm: f64,
+    by_distance: Vec<et_learn::analysis::Band>,
+}
+
+/// One model trained and tested.
+#[derive(Serialize)]
+struct ModelRow {
+    name: &'static str,
+    /// None when the model cannot be fitted.
+    result: Option<ModelResult>,
+    /// Why it cannot be fitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+}
+
+#[derive(Serialize)]
+struct ModelResult {
+    shrinkage: f64,
+    cv_accuracy: f64,
+    leave_one_visit_out: Option<f64>,
+    next_day_accuracy: f64,
+    next_day_mean_error_mm: f64,
+    /// docs/method.md §9's AEE per next-day session, mm.
+    aee_mm: f64,
+}
+
+/// A feature count kept, its next-day accuracy and its blob sizes.
+#[derive(Serialize)]
+struct TradePoint {
+    features: usize,
+    next_day_accuracy: f64,
+    f16_bytes: usize,
+    f32_bytes: usize,
+}
+
+/// The chip's model run through et-core on the next-day frames.
+#[derive(Clone, Copy, Serialize)]
+pub(super) struct ChipCheck {
+    pub(super) features: usize,
+    pub(super) bytes: usize,
+    pub(super) right: usize,
+    pub(super) total: usize,
+    pub(super) disagree_with_host: usize,
+}
+
+impl ChipCheck {
+    pub(super) fn accuracy(&self) -> f64 {
+        self.right as f64 / self.total.max(1) as f64
+    }
+}
+
+/// Collects the training and next-day sets, trains QDA (referenced and raw) and LDA, tests
+/// them the next day, trades features for size, and checks the chip's model in et-core; the
+/// model and blob are written into `out/learning`.
+fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     let scene = load(DEFAULT_SCENE)?;
     let config = collect::training_config(scene.scan_config()?);
     // docs/method.md §9: 49 classes with a 15 mm target on the 13 cm sheet.
@@ -123,20 +230,34 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
         let (_, file, tested) = fit(true, ModelKind::Qda, Some(qda.options.shrinkage), Some(p))?;
         let f16 = file.blob(Precision::F16)?.len();
         let f32 = file.blob(Precision::F32)?.len();
-        trade.push((p, tested.confusion.accuracy(), f16, f32, file));
+        trade.push((
+            TradePoint {
+                features: p,
+                next_day_accuracy: tested.confusion.accuracy(),
+                f16_bytes: f16,
+                f32_bytes: f32,
+            },
+            file,
+        ));
         bar.inc(1);
     }
     // The chip's model: the most features whose f16 blob fits a slot, run through et-core.
     let chip = trade
         .iter()
-        .filter(|t| t.2 <= MODEL_SLOT_BYTES)
-        .max_by_key(|t| t.0)
-        .map(|(p, _, f16, _, file)| -> Result<_> {
+        .filter(|(t, _)| t.f16_bytes <= MODEL_SLOT_BYTES)
+        .max_by_key(|(t, _)| t.features)
+        .map(|(t, file)| -> Result<_> {
             let blob = file.blob(Precision::F16)?;
             std::fs::write(out.join("learning/model.etm"), &blob)
                 .context("writing learning/model.etm")?;
             let r = pipeline::on_chip(file, &blob, &next_day)?;
-            Ok((*p, *f16, r))
+            Ok(ChipCheck {
+                features: t.features,
+                bytes: t.f16_bytes,
+                right: r.right,
+                total: r.total,
+                disagree_with_host: r.disagree,
+            })
         })
         .transpose()?;
     steps.done(
@@ -144,18 +265,72 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
         "feature trade curve; the chip's model checked in et-core",
     );
 
-    // Figures.
-    let dir = out.join("learning");
+    let row = |name, t: &pipeline::Trained, tested: &pipeline::Tested| ModelRow {
+        name,
+        result: Some(ModelResult {
+            shrinkage: t.options.shrinkage,
+            cv_accuracy: t.cv.accuracy(),
+            leave_one_visit_out: t.leave_one_visit_out,
+            next_day_accuracy: tested.confusion.accuracy(),
+            next_day_mean_error_mm: tested.confusion.mean_position_error(&mm),
+            aee_mm: tested.confusion.aee(&mm) / sizes.days as f64,
+        }),
+        error: None,
+    };
+    let mut models = vec![
+        row("QDA, referenced frames (V_m - V_0)", &qda, &qda_test),
+        row("LDA, referenced frames", &lda, &lda_test),
+    ];
+    let raw_name = "QDA on raw frames (docs/method.md §9 as published)";
+    models.push(match &raw {
+        Ok((t, _, tested)) => row(raw_name, t, tested),
+        Err(e) => ModelRow {
+            name: raw_name,
+            result: None,
+            error: Some(e.to_string()),
+        },
+    });
+    Ok(Learning {
+        scene: DEFAULT_SCENE.0,
+        description: scene.description.clone(),
+        classes,
+        rows,
+        radius,
+        observations_per_class: n_c,
+        next_day_observations: next_day.x.nrows(),
+        features: p_all,
+        qda: QdaResult {
+            shrinkage: qda.options.shrinkage,
+            cv_accuracy: qda.cv.accuracy(),
+            leave_one_visit_out: qda.leave_one_visit_out,
+            next_day_accuracy: qda_test.confusion.accuracy(),
+            next_day_mean_error_mm: qda_test.confusion.mean_position_error(&mm),
+            by_distance: qda_test.bands.clone(),
+        },
+        lda_next_day_accuracy: lda_test.confusion.accuracy(),
+        raw_qda_next_day_accuracy: raw.as_ref().ok().map(|(_, _, t)| t.confusion.accuracy()),
+        models,
+        features_trade: trade.into_iter().map(|(t, _)| t).collect(),
+        chip,
+        qda_test,
+    })
+}
+
+/// The section's figures: the next day's confusion and error against distance, and the
+/// feature trade (accuracy, and the blob's size against a flash slot).
+fn figures(dir: &Path, r: &Learning) -> Result<()> {
+    let tested = &r.qda_test;
     plot::confusion(
         &dir.join("confusion.png"),
-        &qda_test.confusion,
+        &tested.confusion,
         &format!(
             "next day: accuracy {:.1} %, {} observations",
-            100.0 * qda_test.confusion.accuracy(),
-            qda_test.confusion.total()
+            100.0 * tested.confusion.accuracy(),
+            tested.confusion.total()
         ),
     )?;
-    plot::error_vs_distance(&dir.join("error-vs-distance.png"), &qda_test)?;
+    plot::error_vs_distance(&dir.join("error-vs-distance.png"), tested)?;
+    let trade = &r.features_trade;
     plot::chart(
         &dir.join("features.png"),
         plot::Labels {
@@ -165,11 +340,16 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
             legend: plot::Legend::LowerRight,
         },
         &[plot::Series {
-            label: format!("{classes} classes"),
-            points: trade.iter().map(|t| (t.0 as f64, 100.0 * t.1)).collect(),
+            label: format!("{} classes", r.classes),
+            points: trade
+                .iter()
+                .map(|t| (t.features as f64, 100.0 * t.next_day_accuracy))
+                .collect(),
             scatter: false,
         }],
     )?;
+    let kib = |b: usize| b as f64 / 1024.0;
+    let slot = kib(MODEL_SLOT_BYTES);
     plot::chart(
         &dir.join("model-size.png"),
         plot::Labels {
@@ -183,7 +363,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
                 label: "f32".into(),
                 points: trade
                     .iter()
-                    .map(|t| (t.0 as f64, t.3 as f64 / 1024.0))
+                    .map(|t| (t.features as f64, kib(t.f32_bytes)))
                     .collect(),
                 scatter: false,
             },
@@ -191,82 +371,85 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
                 label: "f16".into(),
                 points: trade
                     .iter()
-                    .map(|t| (t.0 as f64, t.2 as f64 / 1024.0))
+                    .map(|t| (t.features as f64, kib(t.f16_bytes)))
                     .collect(),
                 scatter: false,
             },
             plot::Series {
                 label: "one slot".into(),
                 points: vec![
-                    (trade[0].0 as f64, MODEL_SLOT_BYTES as f64 / 1024.0),
-                    (p_all as f64, MODEL_SLOT_BYTES as f64 / 1024.0),
+                    (trade.first().map_or(0.0, |t| t.features as f64), slot),
+                    (r.features as f64, slot),
                 ],
                 scatter: false,
             },
         ],
     )?;
+    Ok(())
+}
 
-    // Text.
-    let raw_acc = raw.as_ref().ok().map(|(_, _, t)| t.confusion.accuracy());
-    let lovo = qda.leave_one_visit_out.unwrap_or(f64::NAN);
+/// The section's text: the set-up, the models' table, error by distance, the chip's model.
+fn markdown(r: &Learning, sizes: &Sizes) -> String {
+    let (classes, rows) = (r.classes, r.rows);
     let mut md = String::from("## 1. Touch classification (docs/method.md §9)\n\n");
     let _ = writeln!(
         md,
         "Sheet: `{}` ({}). {classes} classes ({rows} x {rows} grid), finger radius {:.1} mm, \
          pressure 5 to 60 kPa. Training: T = {} visits x S_num = {} scans x S_sub = 20 \
-         sub-section medians = {n_c} observations per class, electrodes moved 0.5 mm rms \
+         sub-section medians = {} observations per class, electrodes moved 0.5 mm rms \
          between visits, the untouched frame taken at the start of each visit. Test: {} next-day \
          session(s), 20 observations per class each, electrodes moved again.\n",
-        DEFAULT_SCENE.0,
-        scene.description,
-        radius * 1e3,
+        r.scene,
+        r.description,
+        r.radius * 1e3,
         sizes.visits,
         sizes.scans,
+        r.observations_per_class,
         sizes.days
     );
     let _ = writeln!(
         md,
         "| model | shrinkage | 10-fold CV | leave-one-visit-out | next day | mean error | AEE |\n| --- | --- | --- | --- | --- | --- | --- |"
     );
-    let row = |md: &mut String, name: &str, t: &pipeline::Trained, tested: &pipeline::Tested| {
-        let _ = writeln!(
-            md,
-            "| {name} | {} | {:.1} % | {} | **{:.1} %** | {:.2} mm | {:.1} mm |",
-            t.options.shrinkage,
-            100.0 * t.cv.accuracy(),
-            t.leave_one_visit_out
-                .map_or("-".into(), |a| format!("{:.1} %", 100.0 * a)),
-            100.0 * tested.confusion.accuracy(),
-            tested.confusion.mean_position_error(&mm),
-            tested.confusion.aee(&mm) / sizes.days as f64,
-        );
-    };
-    row(
-        &mut md,
-        "QDA, referenced frames (V_m - V_0)",
-        &qda,
-        &qda_test,
-    );
-    row(&mut md, "LDA, referenced frames", &lda, &lda_test);
-    match &raw {
-        Ok((t, _, tested)) => row(
-            &mut md,
-            "QDA on raw frames (docs/method.md §9 as published)",
-            t,
-            tested,
-        ),
-        Err(e) => {
-            let _ = writeln!(
-                md,
-                "| QDA on raw frames (docs/method.md §9) | - | cannot be fitted: {e} | | | | |"
-            );
+    for m in &r.models {
+        match (&m.result, &m.error) {
+            (Some(t), _) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {:.1} % | {} | **{:.1} %** | {:.2} mm | {:.1} mm |",
+                    m.name,
+                    t.shrinkage,
+                    100.0 * t.cv_accuracy,
+                    t.leave_one_visit_out
+                        .map_or("-".into(), |a| format!("{:.1} %", 100.0 * a)),
+                    100.0 * t.next_day_accuracy,
+                    t.next_day_mean_error_mm,
+                    t.aee_mm,
+                );
+            }
+            (None, e) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | - | cannot be fitted: {} | | | | |",
+                    m.name,
+                    e.as_deref().unwrap_or("")
+                );
+            }
         }
     }
     let _ = writeln!(
         md,
         "\nReferencing each frame to its session's untouched frame is what survives the \
          electrodes moving between sessions; the raw-frame model learns the training \
-         sessions' electrode positions. AEE is docs/method.md §9's [5.9-5.11], per session.\n"
+         sessions' electrode positions.\n\n\
+         How to read the table: *shrinkage* is the weight that pulls each class's covariance \
+         toward a common one (0: none), chosen by leave-one-visit-out cross-validation; \
+         *10-fold CV* and *leave-one-visit-out* are accuracies on held-out training \
+         observations (random folds, or a whole session held out); *next day* is the accuracy \
+         on sessions the model never saw; *mean error* is the mean distance between the true \
+         and the predicted class centre over all next-day observations (0 when right); *AEE*, \
+         the aggregated estimation error of docs/method.md §9 [5.9-5.11], is the distances of \
+         the wrong decisions summed and divided by the number of classes, per session.\n"
     );
     let _ = writeln!(
         md,
@@ -276,7 +459,7 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
         md,
         "Mean next-day error by distance from the nearest electrode:\n\n| distance | observations | accuracy | mean error |\n| --- | --- | --- | --- |"
     );
-    for b in &qda_test.bands {
+    for b in &r.qda.by_distance {
         let _ = writeln!(
             md,
             "| {:.0} to {:.0} mm | {} | {:.1} % | {:.2} mm |",
@@ -289,76 +472,48 @@ pub(super) fn learning(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Secti
     }
     let _ = writeln!(
         md,
-        "\n### The model on the chip\n\nA QDA of {classes} classes over all {p_all} features \
+        "\n### The model on the chip\n\nA QDA of {classes} classes over all {} features \
          needs {:.0} KiB in f32: more than a flash slot (384 KiB). Keeping the features of \
          largest Fisher ratio trades accuracy for size:\n\n| features | next day | f16 blob | f32 blob |\n| --- | --- | --- | --- |",
-        trade.last().map_or(0.0, |t| t.3 as f64 / 1024.0)
+        r.features,
+        r.features_trade
+            .last()
+            .map_or(0.0, |t| t.f32_bytes as f64 / 1024.0)
     );
-    for t in &trade {
-        let fits = |b: usize| {
-            if b <= MODEL_SLOT_BYTES {
-                format!("{:.0} KiB", b as f64 / 1024.0)
-            } else {
-                format!("{:.0} KiB (too big)", b as f64 / 1024.0)
-            }
-        };
+    let fits = |b: usize| {
+        if b <= MODEL_SLOT_BYTES {
+            format!("{:.0} KiB", b as f64 / 1024.0)
+        } else {
+            format!("{:.0} KiB (too big)", b as f64 / 1024.0)
+        }
+    };
+    for t in &r.features_trade {
         let _ = writeln!(
             md,
             "| {} | {:.1} % | {} | {} |",
-            t.0,
-            100.0 * t.1,
-            fits(t.2),
-            fits(t.3)
+            t.features,
+            100.0 * t.next_day_accuracy,
+            fits(t.f16_bytes),
+            fits(t.f32_bytes)
         );
     }
-    if let Some((p, bytes, r)) = &chip {
+    if let Some(c) = &r.chip {
         let _ = writeln!(
             md,
-            "\n`learning/model.etm` ({p} features, f16, {bytes} bytes) classified every next-day \
+            "\n`learning/model.etm` ({} features, f16, {} bytes) classified every next-day \
              frame through `et_core::model`, as the firmware does: **{:.1} %** right, {} of {} \
              decisions differ from the f64 host model. Upload it with \
              `et upload --port PORT --blob learning/model.etm`.\n",
-            100.0 * r.right as f64 / r.total.max(1) as f64,
-            r.disagree,
-            r.total
+            c.features,
+            c.bytes,
+            100.0 * c.accuracy(),
+            c.disagree_with_host,
+            c.total
         );
     }
     let _ = writeln!(
         md,
         "![features](learning/features.png)\n\n![model size](learning/model-size.png)\n"
     );
-    let json = json!({
-        "scene": DEFAULT_SCENE.0,
-        "classes": classes,
-        "observations_per_class": n_c,
-        "next_day_observations": next_day.x.nrows(),
-        "qda": {
-            "shrinkage": qda.options.shrinkage,
-            "cv_accuracy": qda.cv.accuracy(),
-            "leave_one_visit_out": lovo,
-            "next_day_accuracy": qda_test.confusion.accuracy(),
-            "next_day_mean_error_mm": qda_test.confusion.mean_position_error(&mm),
-            "by_distance": qda_test.bands,
-        },
-        "lda_next_day_accuracy": lda_test.confusion.accuracy(),
-        "raw_qda_next_day_accuracy": raw_acc,
-        "features_trade": trade.iter().map(|t| json!({
-            "features": t.0, "next_day_accuracy": t.1, "f16_bytes": t.2, "f32_bytes": t.3,
-        })).collect::<Vec<_>>(),
-        "chip": chip.as_ref().map(|(p, bytes, r)| json!({
-            "features": p, "bytes": bytes, "right": r.right, "total": r.total, "disagree_with_host": r.disagree,
-        })),
-    });
-    Ok(Section {
-        markdown: md,
-        json,
-        key: LearningKey {
-            next_day: qda_test.confusion.accuracy(),
-            raw: raw_acc,
-            cv: qda.cv.accuracy(),
-            chip: chip
-                .as_ref()
-                .map(|(p, b, r)| (*p, *b, r.right as f64 / r.total.max(1) as f64)),
-        },
-    })
+    md
 }

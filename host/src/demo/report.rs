@@ -35,11 +35,13 @@ pub(super) fn summary_table(
         "| 10-fold cross-validation (training set) | {:.1} % | |",
         100.0 * l.cv
     );
-    if let Some((p, bytes, acc)) = l.chip {
+    if let Some(c) = l.chip {
         let _ = writeln!(
             s,
-            "| on the chip: {p} features, f16, {bytes} bytes, through et-core | {:.1} % | |",
-            100.0 * acc
+            "| on the chip: {} features, f16, {} bytes, through et-core | {:.1} % | |",
+            c.features,
+            c.bytes,
+            100.0 * c.accuracy()
         );
     }
     let i = &imaging.key;

@@ -115,18 +115,16 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
     let bvc = et_core::stats::bvc_dv(&dv);
     if args.json {
-        println!(
-            "{}",
-            serde_json::json!({
-                "triangles": t_n,
-                "protocol": format!("{:?}", config.protocol),
-                "current_a": amps,
-                "v0": v0,
-                "v1": v1,
-                "bvc": bvc,
-                "seconds": started.elapsed().as_secs_f64(),
-            })
-        );
+        let summary = ForwardSummary {
+            triangles: t_n,
+            protocol: format!("{:?}", config.protocol),
+            current_a: amps,
+            v0: &v0,
+            v1: &v1,
+            bvc,
+            seconds: started.elapsed().as_secs_f64(),
+        };
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         println!(
             "{} triangles, {:?} protocol, K = {}, {:.1} uA",
@@ -333,30 +331,24 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         ),
         &image,
     )?;
-    let summary = serde_json::json!({
-        "out": args.out.display().to_string(),
-        "triangles": t_n,
-        "protocol": format!("{:?}", config.protocol),
-        "alpha": alpha,
-        "s": args.s,
-        "threshold": f,
-        "regions": rois.iter().map(|r| serde_json::json!({
-            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
-            "area_mm2": r.area * 1e6,
-            "peak": r.peak,
-        })).collect::<Vec<_>>(),
-        "found_touches": found.iter().map(|r| serde_json::json!({
-            "centroid_mm": [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
-            "area_mm2": r.area * 1e6,
-            "peak": r.peak,
-            "z": r.z,
-        })).collect::<Vec<_>>(),
-        "touches_mm": truth.iter().map(|(c, _)| [c[0] * 1e3, c[1] * 1e3]).collect::<Vec<_>>(),
-        "metrics_first_touch": m,
-        "seconds": started.elapsed().as_secs_f64(),
-    });
+    let summary = ReconstructSummary {
+        out: &args.out,
+        triangles: t_n,
+        protocol: format!("{:?}", config.protocol),
+        alpha,
+        s: args.s,
+        threshold: f,
+        regions: rois.iter().map(RegionSummary::of).collect(),
+        found_touches: found.iter().map(RegionSummary::of).collect(),
+        touches_mm: truth
+            .iter()
+            .map(|(c, _)| [c[0] * 1e3, c[1] * 1e3])
+            .collect(),
+        metrics_first_touch: m.as_ref(),
+        seconds: started.elapsed().as_secs_f64(),
+    };
     if args.json {
-        println!("{summary}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         for (i, r) in rois.iter().enumerate().take(5) {
             eprintln!(
@@ -383,4 +375,59 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
         eprintln!("wrote {}", args.out.display());
     }
     Ok(())
+}
+
+/// `et forward --json`.
+#[derive(serde::Serialize)]
+struct ForwardSummary<'a> {
+    triangles: usize,
+    protocol: String,
+    current_a: f64,
+    /// The untouched frame, V (K values).
+    v0: &'a [f64],
+    /// The touched frame, V.
+    v1: &'a [f64],
+    /// |V_1 - V_0|, V.
+    bvc: f64,
+    seconds: f64,
+}
+
+/// `et reconstruct --json`.
+#[derive(serde::Serialize)]
+struct ReconstructSummary<'a> {
+    out: &'a std::path::Path,
+    triangles: usize,
+    protocol: String,
+    alpha: f64,
+    s: f64,
+    threshold: f64,
+    /// Every region above the threshold.
+    regions: Vec<RegionSummary>,
+    /// The touches: regions split at their saddles, above TOUCH_Z times their noise.
+    found_touches: Vec<RegionSummary>,
+    /// The scene's touches, mm.
+    touches_mm: Vec<[f64; 2]>,
+    metrics_first_touch: Option<&'a et_recon::metrics::Metrics>,
+    seconds: f64,
+}
+
+/// A region of the image, in mm.
+#[derive(serde::Serialize)]
+struct RegionSummary {
+    centroid_mm: [f64; 2],
+    area_mm2: f64,
+    peak: f64,
+    /// Its peak over its pixels' noise (a z-score); null when the noise is not known.
+    z: Option<f64>,
+}
+
+impl RegionSummary {
+    fn of(r: &et_recon::Region) -> Self {
+        Self {
+            centroid_mm: [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            area_mm2: r.area * 1e6,
+            peak: r.peak,
+            z: r.z,
+        }
+    }
 }

@@ -194,15 +194,15 @@ pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
         args.seed
     );
     dataset::save_csv(&data, &args.out, &provenance)?;
-    let summary = serde_json::json!({
-        "out": args.out.display().to_string(),
-        "observations": data.x.nrows(),
-        "features": data.x.ncols(),
-        "classes": centres.len(),
-        "seconds": started.elapsed().as_secs_f64(),
-    });
+    let summary = CollectSummary {
+        out: &args.out,
+        observations: data.x.nrows(),
+        features: data.x.ncols(),
+        classes: centres.len(),
+        seconds: started.elapsed().as_secs_f64(),
+    };
     if args.json {
-        println!("{summary}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "wrote {} observations of {} features, {} classes, to {} in {:.1} s",
@@ -361,24 +361,30 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
         referenced,
     );
     file.save(&args.out)?;
-    let summary = serde_json::json!({
-        "out": args.out.display().to_string(),
-        "kind": Kind::from(args.kind).name(),
-        "referenced": referenced,
-        "shrinkage": shrinkage,
-        "shrinkage_scores": scores.iter().map(|(l, a)| serde_json::json!({"shrinkage": l, "accuracy": a})).collect::<Vec<_>>(),
-        "classes": classes,
-        "observations": data.x.nrows(),
-        "features": data.x.ncols(),
-        "cv_folds": args.folds.max(2),
-        "cv_accuracy": cv_conf.accuracy(),
-        "cv_mean_error_mm": cv_conf.mean_position_error(&mm),
-        "cv_aee_mm": cv_conf.aee(&mm),
-        "leave_one_visit_out_accuracy": lovo,
-        "learning_curve": curve,
-    });
+    let summary = TrainSummary {
+        out: &args.out,
+        kind: Kind::from(args.kind),
+        referenced,
+        shrinkage,
+        shrinkage_scores: scores
+            .iter()
+            .map(|&(shrinkage, accuracy)| ShrinkageScore {
+                shrinkage,
+                accuracy,
+            })
+            .collect(),
+        classes,
+        observations: data.x.nrows(),
+        features: data.x.ncols(),
+        cv_folds: args.folds.max(2),
+        cv_accuracy: cv_conf.accuracy(),
+        cv_mean_error_mm: cv_conf.mean_position_error(&mm),
+        cv_aee_mm: cv_conf.aee(&mm),
+        leave_one_visit_out_accuracy: lovo,
+        learning_curve: curve.as_deref(),
+    };
     if args.json {
-        println!("{summary}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
@@ -445,16 +451,16 @@ pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
             plot::error_vs_distance(&dir.join("error-vs-distance.png"), &tested)?;
         }
     }
-    let summary = serde_json::json!({
-        "observations": conf.total(),
-        "accuracy": conf.accuracy(),
-        "mean_error_mm": conf.mean_position_error(&file.centres_mm),
-        "aee_mm": conf.aee(&file.centres_mm),
-        "by_distance_from_electrodes": bands,
-        "confusion": conf.counts.chunks(classes).map(<[u32]>::to_vec).collect::<Vec<_>>(),
-    });
+    let summary = EvalSummary {
+        observations: conf.total(),
+        accuracy: conf.accuracy(),
+        mean_error_mm: conf.mean_position_error(&file.centres_mm),
+        aee_mm: conf.aee(&file.centres_mm),
+        by_distance_from_electrodes: bands,
+        confusion: conf.counts.chunks(classes).collect(),
+    };
     if args.json {
-        println!("{summary}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         println!(
             "{} observations: accuracy {:.1} %, mean position error {:.2} mm, AEE {:.1} mm",
@@ -481,14 +487,14 @@ pub(crate) fn export_cmd(args: &ExportArgs) -> Result<()> {
     };
     // One model slot of the board's flash (firmware/src/store.rs).
     const SLOT: usize = et_core::board::MODEL_SLOT_BYTES;
-    let summary = serde_json::json!({
-        "out": args.out.display().to_string(),
-        "bytes": blob.len(),
-        "fits_model_slot": blob.len() <= SLOT,
-        "multiply_adds_per_frame": macs,
-    });
+    let summary = ExportSummary {
+        out: &args.out,
+        bytes: blob.len(),
+        fits_model_slot: blob.len() <= SLOT,
+        multiply_adds_per_frame: macs,
+    };
     if args.json {
-        println!("{summary}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",
@@ -514,4 +520,62 @@ pub(crate) fn export_cmd(args: &ExportArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `et collect --json`.
+#[derive(serde::Serialize)]
+struct CollectSummary<'a> {
+    out: &'a std::path::Path,
+    observations: usize,
+    features: usize,
+    classes: usize,
+    seconds: f64,
+}
+
+/// `et train --json`.
+#[derive(serde::Serialize)]
+struct TrainSummary<'a> {
+    out: &'a std::path::Path,
+    kind: Kind,
+    referenced: bool,
+    shrinkage: f64,
+    /// Cross-validated accuracy of each shrinkage tried (empty when it was given).
+    shrinkage_scores: Vec<ShrinkageScore>,
+    classes: usize,
+    observations: usize,
+    features: usize,
+    cv_folds: usize,
+    cv_accuracy: f64,
+    cv_mean_error_mm: f64,
+    cv_aee_mm: f64,
+    leave_one_visit_out_accuracy: Option<f64>,
+    learning_curve: Option<&'a [analysis::CurvePoint]>,
+}
+
+/// One shrinkage tried and its cross-validated accuracy.
+#[derive(serde::Serialize)]
+struct ShrinkageScore {
+    shrinkage: f64,
+    accuracy: f64,
+}
+
+/// `et eval --json`.
+#[derive(serde::Serialize)]
+struct EvalSummary<'a> {
+    observations: u32,
+    accuracy: f64,
+    mean_error_mm: f64,
+    aee_mm: f64,
+    by_distance_from_electrodes: &'a [analysis::Band],
+    /// Rows: true class; columns: predicted class.
+    confusion: Vec<&'a [u32]>,
+}
+
+/// `et export --json`.
+#[derive(serde::Serialize)]
+struct ExportSummary<'a> {
+    out: &'a std::path::Path,
+    bytes: usize,
+    fits_model_slot: bool,
+    multiply_adds_per_frame: usize,
 }

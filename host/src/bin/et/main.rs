@@ -33,7 +33,7 @@ enum Command {
     ///
     /// The whole method on the simulated sheet, no hardware needed: collect a training set,
     /// train and cross-validate QDA, test it on next-day sessions and on the chip's model
-    /// blob, image docs/method.md §7's reference scenarios with every protocol::protocol, and sweep mesh size
+    /// blob, image docs/method.md §7's reference scenarios with every protocol, and sweep mesh size
     /// against accuracy and time. Writes a report folder (index.md with PNG figures, and
     /// summary.json) and prints where it is. About 1 to 2 minutes in a release build.
     ///
@@ -91,6 +91,16 @@ enum Command {
     Train(learn::TrainArgs),
     /// Evaluate a trained model on a test set: accuracy, mean position error, AEE, confusion.
     ///
+    /// Evaluate a trained model on a test set (collected on another day). It reports:
+    ///   accuracy             the share of observations given their true class
+    ///   mean position error  the distance between the true and the predicted class centre,
+    ///                        averaged over every observation (0 when right), mm
+    ///   AEE                  aggregated estimation error (docs/method.md §9): the distances
+    ///                        of the wrong decisions summed, over the number of classes, mm
+    ///   confusion            counts per (true class, predicted class)
+    /// and the same by distance from the nearest electrode (where on the sheet the model is
+    /// weaker).
+    ///
     /// Examples:
     ///   et eval --model model.json --data nextday.csv
     ///   et eval --model model.json --data nextday.csv --plots plots/ --json
@@ -112,6 +122,16 @@ enum Command {
     /// reconstruction matrix; then the simulator's frames without and with the touches (its
     /// resistor network, not these finite elements) give the image, its regions and the
     /// docs/method.md §7 metrics. Writes the image as PNG with a colour bar.
+    ///
+    /// alpha is the regularisation weight (larger: smoother, less noisy images; default:
+    /// chosen per frame by generalised cross-validation, GCV); s the NOSER exponent that
+    /// weights the prior by the sensitivity. The region of interest (ROI) is the pixels above
+    /// f times the image's maximum; a touch is an ROI peak split at its saddles whose height
+    /// reaches z = 5 times its pixels' noise. Metrics, of the first touch (0 is best):
+    ///   PE   position error: true centre to ROI centroid, over the sheet's largest extent
+    ///   SE   shape error: |ROI area - touch area| over the sheet's area
+    ///   RNG  ringing: area of opposite-sign change over the area outside the ROI
+    ///   BVC  boundary voltage change |V_m - V_0|, V (larger: the touch is easier to see)
     ///
     /// Examples:
     ///   et reconstruct --scene sim/scenes/disc-ref-x050.toml --out x050.png
@@ -170,7 +190,9 @@ enum Command {
     /// Print touch events as JSON lines for other programs.
     ///
     /// Print touch events as JSON lines for downstream programs (a robot, a game, a logger):
-    /// class, position, intensity, confidence, timestamp, one line per touched frame. From
+    /// class, position, intensity (the image's strongest pixel in units of its noise on the
+    /// untouched sheet, a z-score), confidence (the model's posterior), timestamp, one line per
+    /// touched frame. From
     /// a simulated scene (--scene; its touches start once the reference is taken), a
     /// recording (--replay) or a board (--port). The first 20 frames, with the sheet
     /// untouched, make the reference V_0.

@@ -1,6 +1,6 @@
 //! `et protocol`: a protocol's tables for people and programs.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
 use et_host::tables::ProtocolTables;
 
@@ -9,9 +9,9 @@ pub(crate) struct ProtocolArgs {
     /// Electrode count L: even, 4 to 32.
     #[arg(short = 'l', long, default_value_t = 16)]
     electrodes: u8,
-    /// adjacent (ad), pseudo-polar (pp), pp-pp, or opposite (polar). Ignored with --drive-skip.
-    #[arg(short, long, default_value = "adjacent")]
-    protocol: String,
+    /// The protocol (docs/method.md §4). Ignored with --drive-skip.
+    #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolArg::Adjacent)]
+    protocol: ProtocolArg,
     /// General form: inject between i and i + drive_skip + 1 (needs --measure-skip).
     #[arg(long, requires = "measure_skip")]
     drive_skip: Option<u8>,
@@ -42,12 +42,7 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
             if !args.measure_skip.is_empty() {
                 bail!("--measure-skip needs --drive-skip (the general form)");
             }
-            ProtocolKind::from_name(&args.protocol).with_context(|| {
-                format!(
-                    "unknown protocol '{}': use adjacent, pseudo-polar, pp-pp or opposite",
-                    args.protocol
-                )
-            })?
+            ProtocolKind::from(args.protocol)
         }
     };
     let protocol = Protocol::new(kind, args.electrodes)?;
@@ -58,4 +53,34 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
         print!("{}", tables.to_text());
     }
     Ok(())
+}
+
+/// `--protocol`: the named protocols of docs/method.md §4.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum ProtocolArg {
+    /// AD: inject and measure between neighbouring electrodes (most sensitive near the edge).
+    #[value(alias = "ad")]
+    Adjacent,
+    /// PP: inject between electrodes one short of opposite, measure between neighbours.
+    #[value(alias = "pp", alias = "pseudopolar")]
+    PseudoPolar,
+    /// PP-PP: inject one short of opposite; measure between neighbours and one short of
+    /// opposite.
+    #[value(alias = "pppp")]
+    PpPp,
+    /// Inject between opposite electrodes, measure between neighbours (most sensitive in the
+    /// middle).
+    #[value(alias = "polar", alias = "op")]
+    Opposite,
+}
+
+impl From<ProtocolArg> for ProtocolKind {
+    fn from(p: ProtocolArg) -> Self {
+        match p {
+            ProtocolArg::Adjacent => ProtocolKind::Adjacent,
+            ProtocolArg::PseudoPolar => ProtocolKind::PseudoPolar,
+            ProtocolArg::PpPp => ProtocolKind::PpPp,
+            ProtocolArg::Opposite => ProtocolKind::Opposite,
+        }
+    }
 }
