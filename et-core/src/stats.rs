@@ -80,12 +80,12 @@ pub fn snr(frames: &[f32], k: usize) -> Result<Snr, StatsError> {
     let n = shape(frames, k, 2)?;
     let (mut sum, mut channels, mut excluded) = (0.0f64, 0usize, 0usize);
     for i in 0..k {
-        let (mean, var) = mean_var(frames, k, n, i);
-        if var > 0.0 && mean != 0.0 {
-            sum += 20.0 * libm_log10(mean.abs() / sqrt(var));
-            channels += 1;
-        } else {
-            excluded += 1;
+        match snr_of_channel(frames, k, n, i) {
+            Some(db) => {
+                sum += db;
+                channels += 1;
+            }
+            None => excluded += 1,
         }
     }
     if channels == 0 {
@@ -96,6 +96,29 @@ pub fn snr(frames: &[f32], k: usize) -> Result<Snr, StatsError> {
         channels,
         excluded,
     })
+}
+
+/// The SNR of each channel, dB, into `out` (k values): as [`snr`] before the average, None
+/// for a channel without noise or with a zero mean.
+///
+/// # Errors
+/// [`StatsError`] for a bad shape, fewer than 2 frames, non-finite values, or `out` not of
+/// length `k`.
+pub fn channel_snr(frames: &[f32], k: usize, out: &mut [Option<f64>]) -> Result<(), StatsError> {
+    let n = shape(frames, k, 2)?;
+    if out.len() != k {
+        return Err(StatsError::Shape);
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = snr_of_channel(frames, k, n, i);
+    }
+    Ok(())
+}
+
+/// 20 log10(|E\[V_i]| / sqrt(Var V_i)) of channel `i`, None without noise or signal.
+fn snr_of_channel(frames: &[f32], k: usize, n: usize, i: usize) -> Option<f64> {
+    let (mean, var) = mean_var(frames, k, n, i);
+    (var > 0.0 && mean != 0.0).then(|| 20.0 * libm_log10(mean.abs() / sqrt(var)))
 }
 
 /// Mean absolute deviation of repeated frames: the mean over channels and frames of
@@ -307,6 +330,17 @@ mod tests {
             "{s:?} want {want}"
         );
         assert_eq!((s.channels, s.excluded), (2, 0));
+        // Per channel: each its own value; a constant channel has none.
+        let with_flat: Vec<f32> = frames.chunks(2).flat_map(|f| [f[0], f[1], 0.5]).collect();
+        let mut per = [None; 3];
+        channel_snr(&with_flat, 3, &mut per).unwrap();
+        assert!((per[0].unwrap() - (40.0 - corr)).abs() < 1e-3, "{per:?}");
+        assert!((per[1].unwrap() - (20.0 - corr)).abs() < 1e-3, "{per:?}");
+        assert_eq!(per[2], None);
+        assert_eq!(
+            channel_snr(&with_flat, 3, &mut per[..2]),
+            Err(StatsError::Shape)
+        );
         // Larger noise, lower SNR: the sign is the right way round.
         let noisy: Vec<f32> = frames
             .iter()

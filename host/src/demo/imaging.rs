@@ -278,7 +278,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
          metrics are docs/method.md §7's, of the first touch: *PE*, position error, the \
          distance from the true centre to the centroid of the region of interest (ROI: the \
          pixels above f times the image's maximum) over the sheet's largest extent; *SE*, \
-         shape error, the difference between the ROI's area and the touch's over the sheet's \
+         size error, the difference between the ROI's area and the touch's over the sheet's \
          area (SE counts every region above the threshold); *RNG*, ringing, the area of \
          opposite-sign change over the area outside the ROI (all three: 0 is best); *BVC*, \
          the boundary voltage change |V_m - V_0| the touch makes (larger: easier to see).\n\n\

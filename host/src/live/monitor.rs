@@ -9,9 +9,13 @@ pub struct Monitor {
     pub rate: VecDeque<(f64, f64)>,
     /// (frame time s, BVC V).
     pub bvc: VecDeque<(f64, f64)>,
-    /// Per-channel SNR over the last `WINDOW` frames, dB (20 log10 |mean| / std).
-    pub snr_db: Vec<f64>,
-    recent: VecDeque<Vec<f32>>,
+    /// Per-channel SNR over the last `WINDOW` frames, dB (`et_core::stats::channel_snr`); None
+    /// for a channel without noise (below one ADC code) or signal.
+    pub snr_db: Vec<Option<f64>>,
+    /// The last `WINDOW` frames, row-major (K values each).
+    recent: VecDeque<f32>,
+    /// K of the frames in `recent`.
+    k: usize,
     arrivals: VecDeque<f64>,
     started: Option<Instant>,
     last_seq: Option<u32>,
@@ -49,37 +53,18 @@ impl Monitor {
         if out.referencing.is_none() {
             push(&mut self.bvc, (f64::from(out.frame.t_us) * 1e-6, out.bvc));
         }
-        if self
-            .recent
-            .front()
-            .is_some_and(|f| f.len() != out.frame.voltages.len())
-        {
+        let k = out.frame.voltages.len();
+        if k != self.k {
             self.recent.clear();
+            self.k = k;
         }
-        self.recent.push_back(out.frame.voltages.clone());
-        if self.recent.len() > Self::WINDOW {
-            self.recent.pop_front();
+        self.recent.extend(&out.frame.voltages);
+        while self.recent.len() > Self::WINDOW * k {
+            self.recent.drain(..k);
         }
-        let n = self.recent.len();
-        if n >= 2 {
-            let k = out.frame.voltages.len();
-            self.snr_db = (0..k)
-                .map(|i| {
-                    let mean = self.recent.iter().map(|f| f64::from(f[i])).sum::<f64>() / n as f64;
-                    let var = self
-                        .recent
-                        .iter()
-                        .map(|f| (f64::from(f[i]) - mean).powi(2))
-                        .sum::<f64>()
-                        / (n - 1) as f64;
-                    if var > 0.0 {
-                        20.0 * (mean.abs() / var.sqrt()).log10()
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect();
-        }
+        self.snr_db.resize(k, None);
+        // A frame window with too few frames (or a non-finite value) keeps the last SNR.
+        let _ = stats::channel_snr(self.recent.make_contiguous(), k, &mut self.snr_db);
     }
 }
 

@@ -104,8 +104,8 @@ fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
 }
 
 /// Bars, one per channel, with the mean in the title.
-fn bars(ui: &mut egui::Ui, title: &str, values: &[f64]) {
-    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+fn bars(ui: &mut egui::Ui, title: &str, values: &[Option<f64>]) {
+    let finite: Vec<f64> = values.iter().flatten().copied().collect();
     let mean = if finite.is_empty() {
         f64::NAN
     } else {
@@ -115,9 +115,9 @@ fn bars(ui: &mut egui::Ui, title: &str, values: &[f64]) {
     let hi = finite.iter().copied().fold(1.0f64, f64::max);
     let w = rect.width() / values.len().max(1) as f32;
     for (i, v) in values.iter().enumerate() {
-        if !v.is_finite() {
+        let Some(v) = v else {
             continue;
-        }
+        };
         let h = (v.max(0.0) / hi) as f32 * (rect.height() - 2.0);
         let x = rect.min.x + i as f32 * w;
         painter.rect_filled(

@@ -129,7 +129,7 @@ enum Command {
     /// f times the image's maximum; a touch is an ROI peak split at its saddles whose height
     /// reaches z = 5 times its pixels' noise. Metrics, of the first touch (0 is best):
     ///   PE   position error: true centre to ROI centroid, over the sheet's largest extent
-    ///   SE   shape error: |ROI area - touch area| over the sheet's area
+    ///   SE   size error: |ROI area - touch area| over the sheet's area
     ///   RNG  ringing: area of opposite-sign change over the area outside the ROI
     ///   BVC  boundary voltage change |V_m - V_0|, V (larger: the touch is easier to see)
     ///
