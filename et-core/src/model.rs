@@ -269,45 +269,68 @@ struct Layout {
     crc: usize,
 }
 
-fn pad4(n: usize) -> usize {
-    n.div_ceil(4) * 4
-}
-
 fn packed_len(p: usize) -> usize {
     p * (p + 1) / 2
 }
 
-fn layout(kind: ModelKind, precision: Precision, classes: usize, p: usize) -> Layout {
-    let feature_index = HEADER_LEN;
+/// The tables' offsets for C = `classes` and p = `features`, or None when the blob would not
+/// be addressable with `usize_max` as the largest address (`usize::MAX`; the tests pass
+/// `u32::MAX` to check the board's 32-bit arithmetic on a 64-bit host). The sizes are summed
+/// in u64, where no u16 C and p can overflow (at most about 2^49), so a crafted header can
+/// never wrap the length into something that looks valid.
+fn layout_within(
+    kind: ModelKind,
+    precision: Precision,
+    classes: usize,
+    features: usize,
+    usize_max: u64,
+) -> Option<Layout> {
+    let (c, p) = (u64::try_from(classes).ok()?, u64::try_from(features).ok()?);
+    if c > u64::from(u16::MAX) || p > u64::from(u16::MAX) {
+        return None;
+    }
+    let pad4 = |n: u64| n.div_ceil(4) * 4;
+    let b = precision.bytes() as u64;
+    let feature_index = HEADER_LEN as u64;
     let mean = feature_index + pad4(2 * p);
     let scale = mean + 4 * p;
     let positions = scale + 4 * p;
-    let log_prior = positions + 8 * classes;
-    let constant = log_prior + 4 * classes;
-    let vectors = constant + 4 * classes;
-    let b = precision.bytes();
-    let factors = vectors + b * classes * p;
+    let log_prior = positions + 8 * c;
+    let constant = log_prior + 4 * c;
+    let vectors = constant + 4 * c;
+    let factors = vectors + b * c * p;
     let end = match kind {
-        ModelKind::Qda => factors + b * classes * packed_len(p),
+        ModelKind::Qda => factors + b * c * (p * (p + 1) / 2),
         ModelKind::Lda => factors,
     };
-    Layout {
-        feature_index,
-        mean,
-        scale,
-        positions,
-        log_prior,
-        constant,
-        vectors,
-        factors,
-        crc: pad4(end),
+    let crc = pad4(end);
+    // The CRC's 4 bytes must be addressable too.
+    if crc + 4 > usize_max {
+        return None;
     }
+    let at = |n: u64| usize::try_from(n).ok();
+    Some(Layout {
+        feature_index: at(feature_index)?,
+        mean: at(mean)?,
+        scale: at(scale)?,
+        positions: at(positions)?,
+        log_prior: at(log_prior)?,
+        constant: at(constant)?,
+        vectors: at(vectors)?,
+        factors: at(factors)?,
+        crc: at(crc)?,
+    })
 }
 
-/// Bytes of a blob with these dimensions (header, tables and CRC).
+fn layout(kind: ModelKind, precision: Precision, classes: usize, p: usize) -> Option<Layout> {
+    layout_within(kind, precision, classes, p, usize::MAX as u64)
+}
+
+/// Bytes of a blob with these dimensions (header, tables and CRC); `usize::MAX` when C or p
+/// exceed the format's u16 fields or the blob could not be addressed, so it never fits.
 #[must_use]
 pub fn model_len(kind: ModelKind, precision: Precision, classes: usize, features: usize) -> usize {
-    layout(kind, precision, classes, features).crc + 4
+    layout(kind, precision, classes, features).map_or(usize::MAX, |l| l.crc + 4)
 }
 
 fn rd_u16(b: &[u8], at: usize) -> u16 {
@@ -411,7 +434,11 @@ impl<'a> Model<'a> {
         let classes = usize::from(rd_u16(bytes, 8));
         let features = usize::from(rd_u16(bytes, 10));
         let frame_len = rd_u16(bytes, 12);
-        let layout = layout(kind, precision, classes, features);
+        // Dimensions before any arithmetic on them.
+        if classes < 2 || features == 0 || features > usize::from(frame_len) {
+            return Err(ModelError::Dimensions);
+        }
+        let layout = layout(kind, precision, classes, features).ok_or(ModelError::Dimensions)?;
         if bytes.len() != layout.crc + 4 {
             return Err(ModelError::Length {
                 expected: layout.crc + 4,
@@ -439,9 +466,6 @@ impl<'a> Model<'a> {
                 expected: protocol.frame_len() as u16,
                 got: frame_len,
             });
-        }
-        if classes < 2 || features == 0 || features > usize::from(frame_len) {
-            return Err(ModelError::Dimensions);
         }
         Ok(Self {
             bytes,
@@ -830,7 +854,7 @@ pub fn write_model(t: &ModelTables<'_>, out: &mut [u8]) -> Result<usize, ModelEr
     {
         return Err(ModelError::Table);
     }
-    let lay = layout(t.kind, t.precision, c_n, p);
+    let lay = layout(t.kind, t.precision, c_n, p).ok_or(ModelError::Table)?;
     let len = lay.crc + 4;
     let out = out.get_mut(..len).ok_or(ModelError::Table)?;
     out.fill(0);

@@ -281,6 +281,24 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
             format!("version {} (this build reads {VERSION})", header.version),
         ));
     }
+    // The header must agree with itself: every reader takes K and L from the configuration.
+    let protocol = header
+        .config
+        .validate()
+        .map_err(|e| bad(1, format!("header config: {e}")))?;
+    if header.frame_len != protocol.frame_len() || header.electrodes != header.config.electrodes {
+        return Err(bad(
+            1,
+            format!(
+                "header says K = {} on {} electrodes, its config ({} on {}) gives K = {}",
+                header.frame_len,
+                header.electrodes,
+                header.config.protocol.name(),
+                header.config.electrodes,
+                protocol.frame_len()
+            ),
+        ));
+    }
     let mut records = Vec::new();
     let mut truncated_tail = false;
     let last = lines.len();
@@ -374,6 +392,30 @@ mod tests {
         std::fs::write(&path, text).unwrap();
         let err = read(&path).unwrap_err().to_string();
         assert!(err.contains("a.jsonl:3"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A header whose K disagrees with its own protocol (frames of 100 values under an
+    /// adjacent 16-electrode config, K = 208) is refused at line 1; `et reconstruct` used to
+    /// take K from the config and panic on the frames.
+    #[test]
+    fn a_header_that_contradicts_its_protocol_is_refused() {
+        let dir = std::env::temp_dir().join(format!("et-rec-k-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("k.jsonl");
+        let mut header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+        header.frame_len = 100;
+        header.columns.truncate(100);
+        let mut text = serde_json::to_string(&header).unwrap();
+        text.push('\n');
+        text.push_str(&serde_json::to_string(&Record::new(&frame(0, 100), None)).unwrap());
+        text.push('\n');
+        std::fs::write(&path, text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("k.jsonl:1") && err.contains("K = 208"),
+            "{err}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

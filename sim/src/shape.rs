@@ -83,6 +83,11 @@ impl Shape {
                 if self.signed_area().abs() < 1e-12 {
                     return Err(ShapeError::Polygon("zero area"));
                 }
+                if !is_simple(vertices) {
+                    return Err(ShapeError::Polygon(
+                        "edges cross or touch (the outline must be a simple polygon)",
+                    ));
+                }
                 Ok(())
             }
         }
@@ -294,9 +299,109 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     dist(p, [a[0] + t * dx, a[1] + t * dy])
 }
 
+/// Whether the closed polyline `v` is a simple polygon: no two edges meet except neighbours at
+/// their shared vertex (so no crossing, no touching, no repeated vertex). O(n^2): outlines have
+/// tens of vertices.
+fn is_simple(v: &[[f64; 2]]) -> bool {
+    let n = v.len();
+    let edge = |i: usize| (v[i], v[(i + 1) % n]);
+    (0..n).all(|i| {
+        (i + 1..n).all(|j| {
+            let neighbours = j == i + 1 || (i == 0 && j == n - 1);
+            let (a, b) = edge(i);
+            let (c, d) = edge(j);
+            if neighbours {
+                // Neighbours share one vertex; they must not fold back onto each other.
+                let (shared, p, q) = if j == i + 1 { (b, a, d) } else { (a, b, c) };
+                !(orient(p, shared, q) == 0.0 && dot(p, shared, q) > 0.0)
+            } else {
+                !segments_meet(a, b, c, d)
+            }
+        })
+    })
+}
+
+/// Twice the signed area of the triangle (a, b, c).
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// (p - o) . (q - o): positive when p and q lie on the same side of o.
+fn dot(p: [f64; 2], o: [f64; 2], q: [f64; 2]) -> f64 {
+    (p[0] - o[0]) * (q[0] - o[0]) + (p[1] - o[1]) * (q[1] - o[1])
+}
+
+/// Whether the closed segments ab and cd share a point.
+fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let on = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        r[0] >= p[0].min(q[0])
+            && r[0] <= p[0].max(q[0])
+            && r[1] >= p[1].min(q[1])
+            && r[1] <= p[1].max(q[1])
+    };
+    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
+    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    (d1 == 0.0 && on(c, d, a))
+        || (d2 == 0.0 && on(c, d, b))
+        || (d3 == 0.0 && on(a, b, c))
+        || (d4 == 0.0 && on(a, b, d))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Outlines the mesher cannot take are refused: a bow tie (edges cross; its signed area
+    /// is 0 only when symmetric, so an asymmetric one passed the area check and panicked the
+    /// mesher), a figure eight touching at a vertex, a spike folding back on its edge. Simple
+    /// outlines, convex or not, pass.
+    #[test]
+    fn only_simple_polygons_are_outlines() {
+        let poly = |v: &[[f64; 2]]| Shape::Polygon {
+            vertices: v.to_vec(),
+        };
+        for (shape, what) in [
+            (
+                poly(&[[0.0, 0.0], [0.1, 0.1], [0.1, 0.0], [0.0, 0.12]]),
+                "bow tie",
+            ),
+            (
+                poly(&[
+                    [0.0, 0.0],
+                    [0.1, 0.0],
+                    [0.05, 0.05],
+                    [0.1, 0.1],
+                    [0.0, 0.1],
+                    [0.05, 0.05],
+                ]),
+                "figure eight",
+            ),
+            (
+                poly(&[[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.1, 0.05], [0.0, 0.1]]),
+                "spike back along an edge",
+            ),
+        ] {
+            assert!(shape.signed_area().abs() >= 1e-12, "{what}: area");
+            assert!(
+                matches!(shape.validate(), Err(ShapeError::Polygon(_))),
+                "{what}"
+            );
+        }
+        let l_shape = poly(&[
+            [0.0, 0.0],
+            [0.1, 0.0],
+            [0.1, 0.05],
+            [0.05, 0.05],
+            [0.05, 0.1],
+            [0.0, 0.1],
+        ]);
+        l_shape.validate().unwrap();
+    }
 
     #[test]
     fn containment_area_and_perimeter() {

@@ -92,3 +92,45 @@ impl Frontend for ScriptedSheet {
         Ok(())
     }
 }
+
+/// A QDA blob header (PP-PP on 32 electrodes, the longest frame) whose table sizes wrap 32-bit
+/// arithmetic to a length under `max_len`: the blob has that wrapped length and a valid CRC,
+/// the attack on the board's old unchecked layout. A sound parser refuses it.
+///
+/// # Panics
+/// If no class count and feature count wrap under `max_len` (there are many for 16 KiB).
+#[must_use]
+pub fn wrapping_qda_blob(max_len: usize) -> Vec<u8> {
+    use et_core::model::{HEADER_LEN, MODEL_MAGIC, MODEL_VERSION};
+    use et_core::protocol::{Protocol, ProtocolKind};
+    // The layout as 32-bit code without overflow checks computed it (f32 tables).
+    let wrapped_len = |c: u32, p: u32| -> u32 {
+        let pad4 = |n: u32| n.div_ceil(4).wrapping_mul(4);
+        let packed = p.wrapping_mul(p + 1) / 2;
+        let end = (HEADER_LEN as u32 + pad4(2 * p) + 8 * p)
+            .wrapping_add(16u32.wrapping_mul(c))
+            .wrapping_add(4u32.wrapping_mul(c).wrapping_mul(p))
+            .wrapping_add(4u32.wrapping_mul(c).wrapping_mul(packed));
+        pad4(end).wrapping_add(4)
+    };
+    let k = Protocol::new(ProtocolKind::PpPp, 32)
+        .map(|p| p.frame_len() as u32)
+        .unwrap_or(0);
+    let (c, p, len) = (1..=k)
+        .rev()
+        .flat_map(|p| (2..=u32::from(u16::MAX)).map(move |c| (c, p)))
+        .map(|(c, p)| (c, p, wrapped_len(c, p) as usize))
+        .find(|&(_, _, len)| (HEADER_LEN + 4..=max_len).contains(&len))
+        .expect("a wrapping header");
+    let mut blob = vec![0u8; len];
+    blob[..4].copy_from_slice(&MODEL_MAGIC);
+    blob[4..6].copy_from_slice(&MODEL_VERSION.to_le_bytes());
+    blob[8..10].copy_from_slice(&(c as u16).to_le_bytes());
+    blob[10..12].copy_from_slice(&(p as u16).to_le_bytes());
+    blob[12..14].copy_from_slice(&(k as u16).to_le_bytes());
+    blob[14] = 32;
+    blob[15] = 2;
+    let crc = et_core::wire::crc32(&blob[..len - 4]);
+    blob[len - 4..].copy_from_slice(&crc.to_le_bytes());
+    blob
+}

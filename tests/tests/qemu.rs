@@ -433,6 +433,35 @@ fn the_firmware_image_scans_classifies_and_obeys_in_qemu() {
 }
 
 /// Builds `et` and returns its path.
+/// A blob whose header sizes wrap the board's 32-bit arithmetic into a length it holds,
+/// with a valid CRC: the board must refuse it and keep answering (before the layout was
+/// checked it read past the blob and halted).
+#[test]
+fn the_board_refuses_a_blob_whose_sizes_wrap_32_bit_arithmetic() {
+    let Some(image) = image_or_skip("the_board_refuses_a_blob_whose_sizes_wrap_32_bit_arithmetic")
+    else {
+        return;
+    };
+    let blob = et_tests::wrapping_qda_blob(16 * 1024);
+    let mut qemu = Qemu::boot(&image);
+    let mut link = Link::open(&qemu.pty, BAUD).unwrap();
+    qemu.run();
+    assert_eq!(
+        link.request(&Command::Ping { nonce: 1 }, REPLY).unwrap(),
+        Event::Pong { nonce: 1 }
+    );
+    let refused = link.upload_model(&blob, REPLY, REPLY);
+    assert!(
+        matches!(refused, Err(LinkError::Refused { .. })),
+        "{refused:?}"
+    );
+    assert_eq!(
+        link.request(&Command::Ping { nonce: 2 }, REPLY).unwrap(),
+        Event::Pong { nonce: 2 },
+        "the board still answers"
+    );
+}
+
 fn build_et() -> PathBuf {
     let status = Process::new(env!("CARGO"))
         .args(["build", "-p", "et-host", "--bin", "et"])

@@ -659,3 +659,169 @@ fn a_referenced_model_classifies_the_frame_minus_the_untouched_frame() {
         Err(EvalError::NonFinite)
     );
 }
+
+/// The smallest blob there is, byte for byte: LDA, f32, C = 2, p = 1, adjacent on 4 electrodes
+/// (K = 4). The expected bytes were written from the layout table in the module docs by a
+/// separate Python script (struct.pack, zlib.crc32 for the CRC-32/ISO-HDLC), not by this code:
+/// a change to the format must change this test and the version.
+#[test]
+fn golden_bytes_of_the_blob_format() {
+    let tables = ModelTables {
+        kind: ModelKind::Lda,
+        precision: Precision::F32,
+        referenced: false,
+        electrodes: 4,
+        protocol: ProtocolKind::Adjacent,
+        feature_index: &[2],
+        mean: &[0.5],
+        scale: &[2.0],
+        positions_mm: &[[10.0, 20.0], [30.0, 40.0]],
+        log_prior: &[-0.5, -1.5],
+        constant: &[0.25, -0.75],
+        vectors: &[1.0, -2.0],
+        factors: &[],
+    };
+    let golden = [
+        "45544441010001000200010004000400",
+        "00000000000000000000000000000000",
+        "020000000000003f0000004000002041",
+        "0000a0410000f04100002042000000bf",
+        "0000c0bf0000803e000040bf0000803f",
+        "000000c0fe569615",
+    ]
+    .concat();
+    let want: Vec<u8> = (0..golden.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&golden[i..i + 2], 16).unwrap())
+        .collect();
+    assert_eq!(model_len(ModelKind::Lda, Precision::F32, 2, 1), want.len());
+    let mut blob = vec![0u8; want.len()];
+    write_model(&tables, &mut blob).unwrap();
+    assert_eq!(blob, want);
+    let model = Model::parse(&want).unwrap();
+    assert_eq!((model.classes(), model.features()), (2, 1));
+}
+
+/// Header fields whose table sizes wrap 32-bit arithmetic: on the board (usize = u32) the old
+/// unchecked layout turned such a QDA header into a small length that a crafted blob could
+/// match, and the table checks then read past it. The layout now sums in u64 and refuses what
+/// the address space cannot hold; checked here with the board's usize::MAX.
+#[test]
+fn sizes_that_wrap_on_the_32_bit_board_are_refused() {
+    // The old arithmetic, as the board computed it.
+    let old_len_u32 = |c: u32, p: u32| -> u32 {
+        let pad4 = |n: u32| n.div_ceil(4).wrapping_mul(4);
+        let b = 4u32;
+        let mut at = HEADER_LEN as u32 + pad4(2 * p) + 8 * p;
+        at = at.wrapping_add(16u32.wrapping_mul(c));
+        at = at.wrapping_add(b.wrapping_mul(c).wrapping_mul(p));
+        at = at.wrapping_add(b.wrapping_mul(c).wrapping_mul(p * (p + 1) / 2));
+        pad4(at).wrapping_add(4)
+    };
+    // PP-PP on 32 electrodes has the longest frame; find a class count whose wrapped length is
+    // under a model slot (384 KiB).
+    let k = Protocol::new(ProtocolKind::PpPp, 32).unwrap().frame_len() as u32;
+    let (c, p) = (2..=u32::from(u16::MAX))
+        .flat_map(|c| [(c, k), (c, k - 1), (c, k / 2)])
+        .find(|&(c, p)| (64..384 * 1024).contains(&old_len_u32(c, p)))
+        .expect("a wrapping header exists");
+    let true_len = model_len(ModelKind::Qda, Precision::F32, c as usize, p as usize) as u64;
+    assert!(true_len > u64::from(u32::MAX), "{c} x {p}: {true_len}");
+    assert_eq!(
+        layout_within(
+            ModelKind::Qda,
+            Precision::F32,
+            c as usize,
+            p as usize,
+            u64::from(u32::MAX)
+        ),
+        None
+    );
+    // A blob of the wrapped length with that header and a valid CRC is refused, not read.
+    let mut blob = vec![0u8; old_len_u32(c, p) as usize];
+    blob[..4].copy_from_slice(&MODEL_MAGIC);
+    blob[4..6].copy_from_slice(&MODEL_VERSION.to_le_bytes());
+    blob[8..10].copy_from_slice(&(c as u16).to_le_bytes());
+    blob[10..12].copy_from_slice(&(p as u16).to_le_bytes());
+    blob[12..14].copy_from_slice(&(k as u16).to_le_bytes());
+    blob[14] = 32;
+    blob[15] = 2;
+    let n = blob.len();
+    let crc = crate::wire::crc32(&blob[..n - 4]);
+    blob[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    assert!(matches!(
+        Model::parse(&blob),
+        Err(ModelError::Length { .. } | ModelError::Dimensions)
+    ));
+}
+
+mod never_panics {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A valid QDA blob (C = 3, p = 4, opposite on 8 electrodes) to mutate.
+    fn valid_blob() -> Vec<u8> {
+        let (c_n, p) = (3, 4);
+        let factors: Vec<f32> = (0..c_n)
+            .flat_map(|_| (0..p).flat_map(|r| (0..=r).map(move |q| if q == r { 1.0 } else { 0.1 })))
+            .collect();
+        let tables = ModelTables {
+            kind: ModelKind::Qda,
+            precision: Precision::F16,
+            referenced: true,
+            electrodes: 8,
+            protocol: ProtocolKind::Opposite,
+            feature_index: &[0, 3, 7, 11],
+            mean: &[0.1; 4],
+            scale: &[1.0; 4],
+            positions_mm: &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            log_prior: &[-1.1; 3],
+            constant: &[0.0; 3],
+            vectors: &[0.5; 12],
+            factors: &factors,
+        };
+        let mut blob = vec![0u8; model_len(ModelKind::Qda, Precision::F16, c_n, p)];
+        write_model(&tables, &mut blob).unwrap();
+        Model::parse(&blob).unwrap();
+        blob
+    }
+
+    /// Parses `bytes` and, if accepted, evaluates a frame with it: neither may panic.
+    fn parse_and_use(bytes: &[u8]) {
+        if let Ok(m) = Model::parse(bytes) {
+            let v = vec![0.01f32; m.frame_len()];
+            let mut scratch = vec![0.0f32; m.scratch_len()];
+            let _ = m.evaluate_referenced(&v, Some(&v), &mut scratch);
+        }
+        let _ = Model::parse_header(bytes);
+    }
+
+    proptest! {
+        /// Any bytes at all.
+        #[test]
+        fn on_any_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
+            parse_and_use(&bytes);
+        }
+
+        /// A valid blob with bytes overwritten, its CRC made valid again (so the checks after
+        /// the CRC see the damage), and perhaps cut short.
+        #[test]
+        fn on_damaged_blobs_with_valid_crcs(
+            edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..8),
+            cut in proptest::option::of(any::<usize>()),
+        ) {
+            let mut blob = valid_blob();
+            for (at, v) in edits {
+                let i = at % blob.len();
+                blob[i] = v;
+            }
+            let n = blob.len();
+            let crc = crate::wire::crc32(&blob[..n - 4]);
+            blob[n - 4..].copy_from_slice(&crc.to_le_bytes());
+            if let Some(cut) = cut {
+                blob.truncate(cut % (n + 1));
+            }
+            parse_and_use(&blob);
+        }
+    }
+}
