@@ -30,14 +30,24 @@ impl std::fmt::Debug for Imager {
     }
 }
 
+/// The most pixels across an image: 512 x 512 cells, whose live projection (cells x K in
+/// f32) stays under half a gigabyte for every protocol on 16 electrodes.
+pub const MAX_PIXELS: usize = 512;
+
 impl Imager {
     /// The complete electrode model of `sheet` on `mesh` (contact impedance z = contact
     /// resistance x electrode width, ohm m), a grid `pixels` across.
     ///
     /// # Errors
-    /// [`FemError`] if the forward model cannot be built.
+    /// [`FemError::Input`] for `pixels` outside 4 to [`MAX_PIXELS`]; [`FemError`] if the
+    /// forward model cannot be built.
     pub fn new(sheet: &SheetSpec, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
-        let grid = PixelGrid::new(&mesh, pixels.max(4));
+        if !(4..=MAX_PIXELS).contains(&pixels) {
+            return Err(FemError::Input(format!(
+                "{pixels} pixels across: use 4 to {MAX_PIXELS}"
+            )));
+        }
+        let grid = PixelGrid::new(&mesh, pixels);
         let e = &sheet.electrodes;
         let z = vec![e.contact_ohm * e.width; usize::from(e.count)];
         Ok(Self {

@@ -94,6 +94,21 @@ fn bad_scenes_name_the_file_and_the_field() {
     assert!(settle.contains("settle_samples"), "{settle}");
     let shape = err(&SMALL.replace("width = 0.13, height", "width = -0.13, height"));
     assert!(shape.contains("width"), "{shape}");
+    // Too fine a grid for memory is refused by name, not by an allocation abort.
+    let fine = err(&SMALL.replace("resolution = 0.005", "resolution = 0.0005"));
+    assert!(
+        fine.contains("sheet.resolution") && fine.contains("at most 12000"),
+        "{fine}"
+    );
+    // An outline whose edges cross is refused before the sheet is built.
+    let bow_tie = err(&SMALL.replace(
+        r#"shape = { kind = "rectangle", width = 0.13, height = 0.13 }"#,
+        r#"shape = { kind = "polygon", vertices = [[0.0, 0.0], [0.1, 0.1], [0.1, 0.0], [0.0, 0.12]] }"#,
+    ));
+    assert!(
+        bow_tie.contains("sheet.shape") && bow_tie.contains("simple"),
+        "{bow_tie}"
+    );
     let not_toml = err("[sheet\nshape = 3");
     assert!(not_toml.starts_with("bad.toml"), "{not_toml}");
     let missing = Scene::load(Path::new("/nonexistent/scene.toml"))

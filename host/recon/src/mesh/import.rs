@@ -83,6 +83,15 @@ impl Mesh {
         };
         let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, "no $Nodes section"))?;
         let n = count(nodes_at + 1)?;
+        // A count is believed only as far as the file holds lines for it.
+        let room = lines.len().saturating_sub(nodes_at + 2);
+        if n > room {
+            return Err(bad(
+                path,
+                nodes_at + 2,
+                format!("$Nodes claims {n} nodes; the file has {room} lines after it"),
+            ));
+        }
         let mut ids = HashMap::new();
         let mut nodes = Vec::with_capacity(n);
         for i in 0..n {
@@ -100,6 +109,14 @@ impl Mesh {
         }
         let el_at = find("$Elements").ok_or_else(|| bad(path, 0, "no $Elements section"))?;
         let m = count(el_at + 1)?;
+        let room = lines.len().saturating_sub(el_at + 2);
+        if m > room {
+            return Err(bad(
+                path,
+                el_at + 2,
+                format!("$Elements claims {m} elements; the file has {room} lines after it"),
+            ));
+        }
         let mut triangles = Vec::new();
         let mut by_tag: BTreeMap<i64, Vec<[usize; 2]>> = BTreeMap::new();
         for i in 0..m {
@@ -118,8 +135,8 @@ impl Mesh {
                 }
             };
             let (kind, ntags) = (v[1], usize::try_from(v[2]).unwrap_or(0));
-            let tags = v.get(3..3 + ntags).unwrap_or(&[]);
-            let conn = v.get(3 + ntags..).unwrap_or(&[]);
+            let tags = v.get(3..3usize.saturating_add(ntags)).unwrap_or(&[]);
+            let conn = v.get(3usize.saturating_add(ntags)..).unwrap_or(&[]);
             let node = |id: i64| {
                 ids.get(&id)
                     .copied()
@@ -387,6 +404,26 @@ mod tests {
         .unwrap();
         let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
         assert!(e.contains("n.msh:7"), "{e}");
+        // Counts beyond what the file holds are refused before anything is allocated (10^18
+        // nodes was a capacity-overflow panic, 10^10 an allocation abort).
+        for (section, count) in [("Nodes", "1000000000000000000"), ("Nodes", "10000000000")] {
+            let p = dir.join("huge.msh");
+            std::fs::write(
+                &p,
+                format!("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n${section}\n{count}\n1 0 0 0\n"),
+            )
+            .unwrap();
+            let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+            assert!(e.contains("huge.msh:5") && e.contains(count), "{e}");
+        }
+        let p = dir.join("huge-el.msh");
+        std::fs::write(
+            &p,
+            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n99999999999\n1 2 3 1 1 1 1\n",
+        )
+        .unwrap();
+        let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+        assert!(e.contains("99999999999 elements"), "{e}");
         let p = dir.join("t.csv");
         std::fs::write(&p, "a,b,c\n0,1,2\n0,1\n").unwrap();
         let e = Mesh::from_csv(&p, &p, &p).unwrap_err().to_string();

@@ -465,3 +465,19 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
     assert!(unknown.iter().all(|r| r.z.is_none()));
     assert_eq!(above_noise(&unknown, TOUCH_Z).len(), 2);
 }
+
+/// Pixel counts are bounded before anything is allocated (`--pixels 100000` was an
+/// allocation abort: 10^10 cells).
+#[test]
+fn pixel_counts_outside_the_documented_range_are_refused() {
+    let sheet = et_sim::sheet::SheetSpec::rectangle(0.13, 0.13, 16);
+    let mesh = Mesh::with_about(&sheet, 500).unwrap();
+    for pixels in [0, 3, crate::imager::MAX_PIXELS + 1, 100_000] {
+        let e = crate::Imager::new(&sheet, mesh.clone(), pixels).unwrap_err();
+        assert!(
+            matches!(&e, crate::fem::FemError::Input(m) if m.contains("4 to 512")),
+            "{pixels}: {e}"
+        );
+    }
+    assert!(crate::Imager::new(&sheet, mesh, 4).is_ok());
+}

@@ -58,7 +58,7 @@ pub(crate) struct ReconstructArgs {
     /// 0.10, pseudo-polar 0.08, PP-PP 0.05, others 0.10.
     #[arg(long)]
     threshold: Option<f64>,
-    /// Pixels across the image.
+    /// Pixels across the image (4 to 512).
     #[arg(long, default_value_t = 64)]
     pixels: usize,
     /// Image recorded frames (from `et sim`, later from the board) instead of simulating
