@@ -70,6 +70,10 @@ pub enum FitError {
     Shrinkage(f64),
     /// The blob could not be written.
     Export(String),
+    /// The tables fail the checks the board makes on a model (et-core's `Model::parse` on
+    /// the f32 blob: a value not finite in f32, a scale not positive, a singular or
+    /// ill-conditioned class covariance, a feature outside the frame).
+    Invalid(et_core::model::ModelError),
 }
 
 impl std::fmt::Display for FitError {
@@ -86,6 +90,7 @@ impl std::fmt::Display for FitError {
             ),
             FitError::Shrinkage(l) => write!(f, "shrinkage {l} is not in [0, 1]"),
             FitError::Export(why) => write!(f, "model export: {why}"),
+            FitError::Invalid(e) => write!(f, "not a usable model: {e}"),
         }
     }
 }

@@ -220,6 +220,19 @@ impl ModelFile {
         )
     }
 
+    /// Checks that the tables are a model the board would accept, with the board's own
+    /// validation: the f32 blob through `et_core::model::Model::parse`. Every reader of model
+    /// files goes through [`load`](Self::load), which calls this, so `et eval`, `et stream`,
+    /// `et view` and `et export` accept and refuse the same files.
+    ///
+    /// # Errors
+    /// [`FitError`]: inconsistent tables, or [`FitError::Invalid`] with the check that failed.
+    pub fn validate(&self) -> Result<(), FitError> {
+        let blob = self.blob(Precision::F32)?;
+        et_core::model::Model::parse(&blob).map_err(FitError::Invalid)?;
+        Ok(())
+    }
+
     /// Writes JSON.
     ///
     /// # Errors
@@ -251,6 +264,10 @@ impl ModelFile {
         if m.format != "et-model" || m.version != 1 {
             return Err(ModelFileError::Format { path: path.into() });
         }
+        m.validate().map_err(|error| ModelFileError::Invalid {
+            path: path.into(),
+            error,
+        })?;
         Ok(m)
     }
 }
@@ -278,6 +295,13 @@ pub enum ModelFileError {
         /// The file.
         path: PathBuf,
     },
+    /// The tables are not a usable model ([`ModelFile::validate`]).
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: FitError,
+    },
 }
 
 impl std::fmt::Display for ModelFileError {
@@ -288,6 +312,7 @@ impl std::fmt::Display for ModelFileError {
             ModelFileError::Format { path } => {
                 write!(f, "{}: not an et-model version 1 file", path.display())
             }
+            ModelFileError::Invalid { path, error } => write!(f, "{}: {error}", path.display()),
         }
     }
 }

@@ -661,3 +661,36 @@ fn the_features_that_fit_a_slot_are_the_most_that_do() {
     assert_eq!(features_that_fit(ModelKind::Lda, 49, 96), 96);
     assert_eq!(features_that_fit(ModelKind::Qda, 1_000_000, 96), 0);
 }
+
+/// One validation for every reader of model files: a model with a Cholesky factor of 1e308
+/// (finite in f64, infinite in f32) used to give class 0 with confidence 1.0 in `et stream`
+/// and an unexplained accuracy in `et eval` while `et export` refused it; now loading it fails,
+/// naming the file and the check.
+#[test]
+fn a_corrupt_model_file_is_refused_on_load() {
+    use crate::model_file::{ModelFile, ModelFileError};
+    let (x, y) = synthetic(3, 40, 4, 31);
+    let model = Fitted::fit(&x, &y, 3, &FitOptions::default()).unwrap();
+    let file = ModelFile::new(
+        &model,
+        0.0,
+        et_core::ScanConfig::REFERENCE,
+        vec![0, 1, 2, 3],
+        vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]],
+        false,
+    );
+    let dir = std::env::temp_dir().join(format!("et-model-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("m.json");
+    file.save(&path).unwrap();
+    ModelFile::load(&path).unwrap();
+    let mut bad = file.clone();
+    bad.classes[1].factor[0] = 1e308;
+    bad.save(&path).unwrap();
+    let e = ModelFile::load(&path).unwrap_err();
+    assert!(
+        matches!(&e, ModelFileError::Invalid { .. }) && e.to_string().contains("m.json"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -360,6 +360,14 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
         mm.clone(),
         referenced,
     );
+    // What every reader of model files checks (et eval, stream, view, export): refuse to
+    // write a model they would refuse.
+    file.validate().with_context(|| {
+        format!(
+            "the trained model is not usable (shrinkage {shrinkage}); train with a larger \
+             --shrinkage (e.g. 0.1) or more observations per class"
+        )
+    })?;
     file.save(&args.out)?;
     let summary = TrainSummary {
         out: &args.out,
