@@ -702,57 +702,29 @@ fn golden_bytes_of_the_blob_format() {
     assert_eq!((model.classes(), model.features()), (2, 1));
 }
 
-/// Header fields whose table sizes wrap 32-bit arithmetic: on the board (usize = u32) the old
-/// unchecked layout turned such a QDA header into a small length that a crafted blob could
-/// match, and the table checks then read past it. The layout now sums in u64 and refuses what
-/// the address space cannot hold; checked here with the board's usize::MAX.
+/// Header fields whose table sizes pass 4 GiB: on the board (usize = u32) the old unchecked
+/// layout wrapped such a QDA header's length into one a crafted blob could match, and the
+/// table checks then read past it (`tests/tests/qemu.rs` uploads one to the firmware image).
+/// The layout now sums in u64 and refuses what the address space cannot hold; checked here
+/// with the board's usize::MAX, on any host.
 #[test]
-fn sizes_that_wrap_on_the_32_bit_board_are_refused() {
-    // The old arithmetic, as the board computed it.
-    let old_len_u32 = |c: u32, p: u32| -> u32 {
-        let pad4 = |n: u32| n.div_ceil(4).wrapping_mul(4);
-        let b = 4u32;
-        let mut at = HEADER_LEN as u32 + pad4(2 * p) + 8 * p;
-        at = at.wrapping_add(16u32.wrapping_mul(c));
-        at = at.wrapping_add(b.wrapping_mul(c).wrapping_mul(p));
-        at = at.wrapping_add(b.wrapping_mul(c).wrapping_mul(p * (p + 1) / 2));
-        pad4(at).wrapping_add(4)
-    };
-    // PP-PP on 32 electrodes has the longest frame; find a class count whose wrapped length is
-    // under a model slot (384 KiB).
-    let k = Protocol::new(ProtocolKind::PpPp, 32).unwrap().frame_len() as u32;
-    let (c, p) = (2..=u32::from(u16::MAX))
-        .flat_map(|c| [(c, k), (c, k - 1), (c, k / 2)])
-        .find(|&(c, p)| (64..384 * 1024).contains(&old_len_u32(c, p)))
-        .expect("a wrapping header exists");
-    let true_len = model_len(ModelKind::Qda, Precision::F32, c as usize, p as usize) as u64;
-    assert!(true_len > u64::from(u32::MAX), "{c} x {p}: {true_len}");
+fn sizes_beyond_the_32_bit_address_space_are_refused() {
+    let k = Protocol::new(ProtocolKind::PpPp, 32).unwrap().frame_len();
+    let (c, p) = (usize::from(u16::MAX), k);
+    let true_len = model_len(ModelKind::Qda, Precision::F32, c, p) as u64;
+    assert!(true_len > u64::from(u32::MAX), "{true_len}");
+    let on_board = |c, p| layout_within(ModelKind::Qda, Precision::F32, c, p, u64::from(u32::MAX));
+    assert_eq!(on_board(c, p), None);
+    // Small models are unaffected: the same layout as the host's.
     assert_eq!(
-        layout_within(
-            ModelKind::Qda,
-            Precision::F32,
-            c as usize,
-            p as usize,
-            u64::from(u32::MAX)
-        ),
-        None
+        on_board(49, 96),
+        layout(ModelKind::Qda, Precision::F32, 49, 96)
     );
-    // A blob of the wrapped length with that header and a valid CRC is refused, not read.
-    let mut blob = vec![0u8; old_len_u32(c, p) as usize];
-    blob[..4].copy_from_slice(&MODEL_MAGIC);
-    blob[4..6].copy_from_slice(&MODEL_VERSION.to_le_bytes());
-    blob[8..10].copy_from_slice(&(c as u16).to_le_bytes());
-    blob[10..12].copy_from_slice(&(p as u16).to_le_bytes());
-    blob[12..14].copy_from_slice(&(k as u16).to_le_bytes());
-    blob[14] = 32;
-    blob[15] = 2;
-    let n = blob.len();
-    let crc = crate::wire::crc32(&blob[..n - 4]);
-    blob[n - 4..].copy_from_slice(&crc.to_le_bytes());
-    assert!(matches!(
-        Model::parse(&blob),
-        Err(ModelError::Length { .. } | ModelError::Dimensions)
-    ));
+    // Counts beyond the format's u16 fields never fit.
+    assert_eq!(
+        model_len(ModelKind::Lda, Precision::F32, 2, 1 << 16),
+        usize::MAX
+    );
 }
 
 mod never_panics {

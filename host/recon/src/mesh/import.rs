@@ -75,23 +75,25 @@ impl Mesh {
         if head.get(1) != Some(&"0") {
             return Err(bad(path, fmt + 2, "binary Gmsh file: save as ASCII"));
         }
-        let count = |i: usize| -> Result<usize, MeshError> {
-            lines
+        // The count on line index `i`, believed only as far as the file holds lines for it
+        // (nothing is allocated for a count the file cannot back).
+        let count = |i: usize, what: &str| -> Result<usize, MeshError> {
+            let n: usize = lines
                 .get(i)
                 .and_then(|l| l.trim().parse().ok())
-                .ok_or_else(|| bad(path, i + 1, "expected a count"))
+                .ok_or_else(|| bad(path, i + 1, "expected a count"))?;
+            let room = lines.len().saturating_sub(i + 1);
+            if n > room {
+                return Err(bad(
+                    path,
+                    i + 1,
+                    format!("{n} {what} claimed; the file has {room} lines after the count"),
+                ));
+            }
+            Ok(n)
         };
         let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, "no $Nodes section"))?;
-        let n = count(nodes_at + 1)?;
-        // A count is believed only as far as the file holds lines for it.
-        let room = lines.len().saturating_sub(nodes_at + 2);
-        if n > room {
-            return Err(bad(
-                path,
-                nodes_at + 2,
-                format!("$Nodes claims {n} nodes; the file has {room} lines after it"),
-            ));
-        }
+        let n = count(nodes_at + 1, "nodes")?;
         let mut ids = HashMap::new();
         let mut nodes = Vec::with_capacity(n);
         for i in 0..n {
@@ -108,15 +110,7 @@ impl Mesh {
             }
         }
         let el_at = find("$Elements").ok_or_else(|| bad(path, 0, "no $Elements section"))?;
-        let m = count(el_at + 1)?;
-        let room = lines.len().saturating_sub(el_at + 2);
-        if m > room {
-            return Err(bad(
-                path,
-                el_at + 2,
-                format!("$Elements claims {m} elements; the file has {room} lines after it"),
-            ));
-        }
+        let m = count(el_at + 1, "elements")?;
         let mut triangles = Vec::new();
         let mut by_tag: BTreeMap<i64, Vec<[usize; 2]>> = BTreeMap::new();
         for i in 0..m {
