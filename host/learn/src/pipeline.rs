@@ -83,21 +83,109 @@ pub struct Trained {
     /// The folds the shrinkage was chosen on (by visit, or stratified): learning curves reuse
     /// them.
     pub selection_folds: Vec<usize>,
+    /// Where the recipe changed because the data are too few (empty normally).
+    pub fallbacks: Vec<Fallback>,
+}
+
+/// What [`train`] did differently from the usual recipe because the data are too few, said
+/// aloud by `et train` and the report.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(tag = "fallback", rename_all = "snake_case")]
+pub enum Fallback {
+    /// QDA shrinks toward the diagonal instead of the pooled covariance: some cross-validation
+    /// fold trains on `rows` observations, too few for a pooled covariance of full rank
+    /// (needs more than `features` + `classes`).
+    DiagonalTarget {
+        /// Fewest observations any fold trains on.
+        rows: usize,
+        /// p.
+        features: usize,
+        /// C.
+        classes: usize,
+    },
+    /// The shrinkage was chosen by stratified k-fold instead of leave-one-visit-out, because no
+    /// candidate fits on every visit's complement (`reason`).
+    KFoldSelection {
+        /// Why leave-one-visit-out could not choose.
+        reason: String,
+    },
+    /// Leave-one-visit-out accuracy is not reported (`reason`).
+    NoLeaveOneVisitOut {
+        /// Why.
+        reason: String,
+    },
+}
+
+impl std::fmt::Display for Fallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fallback::DiagonalTarget {
+                rows,
+                features,
+                classes,
+            } => write!(
+                f,
+                "shrinking toward the diagonal, not the pooled covariance: a cross-validation fold \
+                 trains on only {rows} observations, and a pooled covariance of {features} \
+                 features over {classes} classes needs more than {}",
+                features + classes
+            ),
+            Fallback::KFoldSelection { reason } => write!(
+                f,
+                "shrinkage chosen by stratified k-fold, not leave-one-visit-out ({reason}); \
+                 k-fold mixes visits, so expect a new session to score lower than it says"
+            ),
+            Fallback::NoLeaveOneVisitOut { reason } => {
+                write!(f, "no leave-one-visit-out accuracy ({reason})")
+            }
+        }
+    }
+}
+
+/// Fewest rows any fold of `fold` trains on (all of them outside the fold); `n` for no folds.
+fn fewest_training_rows(fold: &[usize]) -> usize {
+    let n = fold.len();
+    let k = fold.iter().max().map_or(0, |&f| f + 1);
+    let mut held = vec![0usize; k];
+    for &f in fold {
+        held[f] += 1;
+    }
+    held.iter().map(|&h| n - h).min().unwrap_or(n)
 }
 
 /// Fits a model on `data` (features already [`prepare`]d). QDA shrinks toward the pooled
-/// covariance when that has full rank (n - C > p), else toward the diagonal, since a
-/// rank-deficient target cannot make a class covariance definite; LDA toward the diagonal.
+/// covariance when that has full rank (n - C > p) in every fold it is cross-validated on, else
+/// toward the diagonal, since a rank-deficient target cannot make a class covariance definite;
+/// LDA toward the diagonal. The shrinkage is chosen by leave-one-visit-out when there are
+/// several visits and some candidate fits on every visit's complement, else by stratified
+/// k-fold; each such fallback is listed in [`Trained::fallbacks`].
 ///
 /// # Errors
 /// [`FitError`] from fitting or cross-validation.
 pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError> {
     let classes = data.centres.len();
     let (x, y) = (&data.x, &data.y);
-    let pooled_full_rank = x.nrows().saturating_sub(classes) > x.ncols();
-    let target = if options.kind == ModelKind::Qda && pooled_full_rank {
+    let p = x.ncols();
+    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
+    let several_visits = data.visits() >= 2;
+    let strat = cv::folds(y, options.folds.max(2), 1);
+    let mut fallbacks = Vec::new();
+    let mut rows = fewest_training_rows(&strat);
+    if several_visits {
+        rows = rows.min(fewest_training_rows(&by_visit));
+    }
+    let target = if options.kind != ModelKind::Qda {
+        Target::Diagonal
+    } else if rows.saturating_sub(classes) > p {
         Target::Pooled
     } else {
+        if x.nrows().saturating_sub(classes) > p {
+            fallbacks.push(Fallback::DiagonalTarget {
+                rows,
+                features: p,
+                classes,
+            });
+        }
         Target::Diagonal
     };
     let base = FitOptions {
@@ -105,27 +193,49 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
         shrinkage: 0.0,
         target,
     };
-    let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
-    let several_visits = data.visits() >= 2;
-    let strat = cv::folds(y, options.folds.max(2), 1);
-    let selection_folds = if several_visits {
-        by_visit.clone()
-    } else {
-        strat.clone()
-    };
-    let (shrinkage, shrinkage_scores) = match options.shrinkage {
-        Some(l) => (l, Vec::new()),
+    let choose = |folds: &[usize]| match options.shrinkage {
+        Some(l) => Ok((l, Vec::new())),
         None => cv::choose_shrinkage_with(
             &SHRINKAGE_CANDIDATES,
-            |o| cross_validate_fast(x, y, classes, o, &selection_folds),
+            |o| cross_validate_fast(x, y, classes, o, folds),
             &base,
-        )?,
+        ),
+    };
+    // Leave-one-visit-out chooses when some candidate fits on every visit's complement (a
+    // failing candidate scores 0); otherwise stratified k-fold does.
+    let by_visit_choice = if several_visits {
+        match choose(&by_visit) {
+            Ok((_, ref scores)) if !scores.is_empty() && scores.iter().all(|&(_, a)| a == 0.0) => {
+                Err("no shrinkage candidate fits on one visit's complement".to_string())
+            }
+            Ok(choice) => Ok(choice),
+            Err(e) => Err(e.to_string()),
+        }
+    } else {
+        Err(String::new())
+    };
+    let ((shrinkage, shrinkage_scores), selection_folds) = match by_visit_choice {
+        Ok(choice) => (choice, by_visit.clone()),
+        Err(reason) => {
+            if several_visits && options.shrinkage.is_none() {
+                fallbacks.push(Fallback::KFoldSelection { reason });
+            }
+            (choose(&strat)?, strat.clone())
+        }
     };
     let opts = FitOptions { shrinkage, ..base };
     let model = Fitted::fit(x, y, classes, &opts)?;
     let cv = cross_validate_fast(x, y, classes, &opts, &strat)?;
     let leave_one_visit_out = if several_visits {
-        Some(cross_validate_fast(x, y, classes, &opts, &by_visit)?.accuracy())
+        match cross_validate_fast(x, y, classes, &opts, &by_visit) {
+            Ok(c) => Some(c.accuracy()),
+            Err(e) => {
+                fallbacks.push(Fallback::NoLeaveOneVisitOut {
+                    reason: e.to_string(),
+                });
+                None
+            }
+        }
     } else {
         None
     };
@@ -136,6 +246,7 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
         cv,
         leave_one_visit_out,
         selection_folds,
+        fallbacks,
     })
 }
 

@@ -694,3 +694,65 @@ fn a_corrupt_model_file_is_refused_on_load() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A two-visit set with fewer observations per visit than features: QDA's pooled target has
+/// full rank on all rows but not on one visit, so leave-one-visit-out used to fail at every
+/// shrinkage ("covariance not positive definite"). Training falls back and says so.
+#[test]
+fn two_visit_training_sets_fall_back_and_say_so() {
+    use super::pipeline::{Fallback, TrainOptions, train};
+    let (classes, per_class, p) = (5, 8, 20);
+    let (x, y) = synthetic(classes, per_class, p, 41);
+    let n = y.len();
+    assert!(
+        n - classes > p && n / 2 - classes < p,
+        "the case under test"
+    );
+    let data = super::collect::Dataset {
+        x,
+        y,
+        positions: vec![[0.0, 0.0]; n],
+        pressure: Vec::new(),
+        electrodes: Vec::new(),
+        centres: (0..classes).map(|c| [0.01 * c as f64, 0.0]).collect(),
+        visit: (0..n).map(|i| (i % 2) as u16).collect(),
+        baselines: DMatrix::zeros(2, p),
+        feature_index: (0..p as u16).collect(),
+        config: ScanConfig::REFERENCE,
+    };
+    let options = TrainOptions {
+        kind: ModelKind::Qda,
+        shrinkage: None,
+        folds: 10,
+    };
+    let t = train(&data, &options).expect("a two-visit set trains");
+    assert_eq!(t.options.target, Target::Diagonal);
+    assert!(t.options.shrinkage > 0.0);
+    assert!(
+        t.fallbacks
+            .iter()
+            .any(|f| matches!(f, Fallback::DiagonalTarget { rows: 20, .. })),
+        "{:?}",
+        t.fallbacks
+    );
+    assert!(t.fallbacks[0].to_string().contains("diagonal"));
+    let lovo = t.leave_one_visit_out.expect("leave-one-visit-out reported");
+    assert!(lovo > 1.0 / classes as f64, "better than chance: {lovo}");
+
+    // Visit 1 holds every observation of class 0: holding it out leaves class 0 nothing to
+    // train on, so leave-one-visit-out cannot score; k-fold chooses, and both are said.
+    let mut data = data;
+    for (i, v) in data.visit.iter_mut().enumerate() {
+        *v = u16::from(data.y[i] == 0 || i % 2 == 1);
+    }
+    let t = train(&data, &options).expect("trains by k-fold");
+    assert!(
+        t.fallbacks
+            .iter()
+            .any(|f| matches!(f, Fallback::KFoldSelection { .. })),
+        "{:?}",
+        t.fallbacks
+    );
+    assert!(t.leave_one_visit_out.is_none());
+    assert!(t.cv.accuracy() > 1.0 / classes as f64);
+}

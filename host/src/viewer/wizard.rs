@@ -348,6 +348,9 @@ impl Wizard {
                 ""
             }
         );
+        for f in &t.fallbacks {
+            self.message.push_str(&format!("\nnote: {f}"));
+        }
         self.trained = Some(Trained {
             file,
             cv: t.cv,

@@ -389,8 +389,12 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
         cv_mean_error_mm: cv_conf.mean_position_error(&mm),
         cv_aee_mm: cv_conf.aee(&mm),
         leave_one_visit_out_accuracy: lovo,
+        fallbacks: &trained.fallbacks,
         learning_curve: curve.as_deref(),
     };
+    for f in &trained.fallbacks {
+        eprintln!("note: {f}");
+    }
     if args.json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {
@@ -557,6 +561,8 @@ struct TrainSummary<'a> {
     cv_mean_error_mm: f64,
     cv_aee_mm: f64,
     leave_one_visit_out_accuracy: Option<f64>,
+    /// Where training changed its recipe because the data are too few (empty normally).
+    fallbacks: &'a [pipeline::Fallback],
     learning_curve: Option<&'a [analysis::CurvePoint]>,
 }
 
