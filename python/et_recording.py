@@ -5,6 +5,10 @@
     header["K"], header["protocol"], header["columns"][0]   # what each column measures
     frames[0]["voltages"]                                  # V_m in volts, K values
     frames[0].get("touches")                               # the truth, for simulated frames
+    frames[0].get("invalid", [])                           # columns the board sent as NaN/inf
+
+JSON has no NaN: a value the board sent as NaN or infinite is written as null; load() turns it
+into float("nan") and the frame lists its columns in "invalid".
 
 With numpy:  V = numpy.array([f["voltages"] for f in frames])   # shape (n_frames, K)
 With pandas: pandas.read_json("touch.jsonl", lines=True).iloc[1:]
@@ -13,6 +17,7 @@ Run as a script for a summary:  python3 python/et_recording.py touch.jsonl
 """
 
 import json
+import math
 import sys
 
 FORMAT = "et-recording"
@@ -41,6 +46,8 @@ def load(path):
             raise
         if len(frame["voltages"]) != header["K"]:
             raise ValueError(f"{path}:{number}: {len(frame['voltages'])} values, K = {header['K']}")
+        frame["voltages"] = [math.nan if v is None else v for v in frame["voltages"]]
+        frame["invalid"] = [i for i, v in enumerate(frame["voltages"]) if not math.isfinite(v)]
         frames.append(frame)
     return header, frames
 
@@ -51,11 +58,13 @@ def main(argv):
         return 2
     header, frames = load(argv[1])
     touched = sum(1 for f in frames if f.get("touches"))
-    peak = max((abs(v) for f in frames for v in f["voltages"]), default=0.0)
+    peak = max((abs(v) for f in frames for v in f["voltages"] if math.isfinite(v)), default=0.0)
+    invalid = sum(1 for f in frames if f["invalid"])
     print(f"frames {len(frames)}")
     print(f"K {header['K']}")
     print(f"protocol {header['protocol']} L {header['electrodes']}")
     print(f"touched {touched}")
+    print(f"invalid_frames {invalid}")
     print(f"peak_volts {peak:.6f}")
     return 0
 

@@ -85,8 +85,12 @@ pub const REFERENCE_SCENES: [(&str, &str); 5] = [
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// The report folder (created; files in it are overwritten).
+    /// The report folder (created; an existing one that is not empty is refused unless
+    /// `force`).
     pub out: PathBuf,
+    /// Replace an existing report (its index.md and summary.json are removed first, so a
+    /// run stopped midway never leaves an old index beside new figures).
+    pub force: bool,
     /// Small sizes everywhere (a smoke test, about 10 s): fewer scans and visits, coarser
     /// meshes. The numbers are then not the ones to quote.
     pub quick: bool,
@@ -190,6 +194,15 @@ pub fn run(options: &Options) -> Result<Report> {
     let started = Instant::now();
     let sizes = if options.quick { QUICK } else { FULL };
     let out = &options.out;
+    crate::output::check(out, &[], options.force)?;
+    for stale in ["index.md", "summary.json"] {
+        match std::fs::remove_file(out.join(stale)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("removing {}", out.join(stale).display()));
+            }
+            _ => {}
+        }
+    }
     for dir in ["", "learning", "imaging", "sweep"] {
         std::fs::create_dir_all(out.join(dir))
             .with_context(|| format!("creating {}", out.join(dir).display()))?;
@@ -215,8 +228,11 @@ pub fn run(options: &Options) -> Result<Report> {
         sweep: &sweep.json,
     })?;
     let json_path = out.join("summary.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&summary)?)
-        .with_context(|| format!("writing {}", json_path.display()))?;
+    let json = serde_json::to_string_pretty(&summary)?;
+    crate::output::write(&json_path, |partial| {
+        anyhow::Ok(std::fs::write(partial, &json)?)
+    })
+    .with_context(|| format!("writing {}", json_path.display()))?;
     let mut page = String::new();
     let _ = writeln!(page, "# et demo report\n");
     let _ = writeln!(
@@ -242,7 +258,11 @@ pub fn run(options: &Options) -> Result<Report> {
     page.push_str(&imaging.markdown);
     page.push_str(&sweep.markdown);
     let index = out.join("index.md");
-    std::fs::write(&index, page).with_context(|| format!("writing {}", index.display()))?;
+    // Last, and whole: an index.md exists only beside a complete report.
+    crate::output::write(&index, |partial| {
+        anyhow::Ok(std::fs::write(partial, &page)?)
+    })
+    .with_context(|| format!("writing {}", index.display()))?;
     Ok(Report { index, summary })
 }
 

@@ -9,6 +9,10 @@
 //!   commands with replies and timeouts, model upload, reconnect after a pulled cable.
 //! - [`recording`]: the recording format (JSON Lines: header, then one frame per line), which
 //!   Python and MATLAB read without et; `et sim` and `et record` write it.
+//! - [`recorder`]: `et record`: frames from a board into recording parts, through pulled
+//!   cables, idle boards and damaged frames.
+//! - [`output`]: where commands write: never onto an input, never over an existing file
+//!   without `--force`, complete files only (written aside, then renamed).
 //! - [`tables`]: a protocol's tables (docs/method.md §4) as plain data, behind `et protocol`.
 //! - [`live`]: live touch sensing from any source (simulator, recording, board): images,
 //!   touch events, frame-rate / SNR / BVC monitoring; behind `et view` and `et stream`.
@@ -20,7 +24,9 @@
 pub mod demo;
 pub mod link;
 pub mod live;
+pub mod output;
 pub mod plot;
+pub mod recorder;
 pub mod recording;
 pub mod tables;
 #[cfg(feature = "viewer")]

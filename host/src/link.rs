@@ -258,6 +258,15 @@ impl Link {
         &self.path
     }
 
+    /// Whether the port is open right now (false between a pulled cable and its return).
+    #[must_use]
+    pub fn connected(&self) -> bool {
+        self.writer
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .is_some()
+    }
+
     /// What the link has seen so far.
     #[must_use]
     pub fn counters(&self) -> Counters {
@@ -438,6 +447,85 @@ impl Reader {
         let writer = port.try_clone().ok()?;
         *self.writer.lock().unwrap_or_else(|e| e.into_inner()) = Some(writer);
         Some(port)
+    }
+}
+
+/// A change on the link that people should hear about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkChange {
+    /// The port went away (cable pulled, board reset): waiting for it to come back.
+    Vanished,
+    /// The port is back (Start sent again when the [`Keepalive`] sends it).
+    Back,
+    /// No frame for [`Keepalive::SILENCE`] while connected: Start sent again (a board that
+    /// came back idle).
+    Restarted,
+}
+
+impl std::fmt::Display for LinkChange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LinkChange::Vanished => "the port went away; waiting for it to come back",
+            LinkChange::Back => "the port is back",
+            LinkChange::Restarted => "no frames for a second: sent Start again",
+        })
+    }
+}
+
+/// Keeps a board scanning across pulled cables and resets: notices when the port vanishes
+/// and comes back, and (when it may send commands) sends Start again to a board that is
+/// silent. Call [`frame`](Self::frame) for every frame and [`check`](Self::check) often.
+#[derive(Debug)]
+pub struct Keepalive {
+    send_start: bool,
+    connected: bool,
+    reconnects: u64,
+    quiet_since: Instant,
+}
+
+impl Keepalive {
+    /// How long a connected board may send nothing before Start is sent again.
+    pub const SILENCE: Duration = Duration::from_secs(1);
+
+    /// Watches `link`; `send_start` = false only listens (the board is started by someone
+    /// else).
+    #[must_use]
+    pub fn new(link: &Link, send_start: bool) -> Self {
+        Self {
+            send_start,
+            connected: link.connected(),
+            reconnects: link.counters().reconnects,
+            quiet_since: Instant::now(),
+        }
+    }
+
+    /// A frame arrived.
+    pub fn frame(&mut self) {
+        self.quiet_since = Instant::now();
+    }
+
+    /// Looks at the link; sends Start where needed. Returns what changed, if anything.
+    pub fn check(&mut self, link: &Link) -> Option<LinkChange> {
+        let now = Instant::now();
+        let (connected, reconnects) = (link.connected(), link.counters().reconnects);
+        let change = if reconnects != self.reconnects {
+            self.reconnects = reconnects;
+            self.connected = connected;
+            Some(LinkChange::Back)
+        } else if self.connected && !connected {
+            self.connected = false;
+            return Some(LinkChange::Vanished);
+        } else if connected && now.duration_since(self.quiet_since) >= Self::SILENCE {
+            Some(LinkChange::Restarted)
+        } else {
+            None
+        }?;
+        if self.send_start {
+            // Start is idempotent on the board; a failed send is retried after SILENCE.
+            let _ = link.send(&Command::Start);
+        }
+        self.quiet_since = now;
+        (change == LinkChange::Back || self.send_start).then_some(change)
     }
 }
 

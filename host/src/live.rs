@@ -24,7 +24,7 @@ use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use crate::link::{Counters, Link, LinkError};
+use crate::link::{Counters, Keepalive, Link, LinkChange, LinkError};
 use crate::recording::{self, Recording};
 use et_learn::fit::{FitError, Fitted};
 use et_learn::model_file::ModelFile;

@@ -116,8 +116,14 @@ pub struct Record {
     pub flags: u8,
     /// Measurements with ADC rail samples.
     pub rail_count: u16,
-    /// V_m, volts, K values.
+    /// V_m, volts, K values. JSON has no NaN: a value the board sent as NaN or infinite is
+    /// written as `null` and read back as NaN (Python's `None`, MATLAB's `NaN`), and its
+    /// column is listed in `invalid`.
+    #[serde(deserialize_with = "volts_or_null")]
     pub voltages: Vec<f32>,
+    /// Columns (0-based) whose value was not finite; absent when every value is.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub invalid: Vec<usize>,
     /// For simulated frames: the touches on the sheet.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub touches: Option<Vec<TouchRecord>>,
@@ -133,9 +139,25 @@ impl Record {
             flags: frame.flags,
             rail_count: frame.rail_count,
             voltages: frame.voltages.to_vec(),
+            invalid: invalid_columns(&frame.voltages),
             touches,
         }
     }
+}
+
+/// The columns of `v` that are NaN or infinite.
+fn invalid_columns(v: &[f32]) -> Vec<usize> {
+    v.iter()
+        .enumerate()
+        .filter(|(_, x)| !x.is_finite())
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// Reads V_m with `null` (a non-finite value on writing) as NaN.
+fn volts_or_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::Error> {
+    let v: Vec<Option<f32>> = Deserialize::deserialize(d)?;
+    Ok(v.into_iter().map(|x| x.unwrap_or(f32::NAN)).collect())
 }
 
 /// Why a recording could not be written or read.
@@ -158,6 +180,14 @@ pub enum RecordingError {
         /// What is wrong.
         message: String,
     },
+    /// The file may not be written (it exists, or it is an input).
+    Output(crate::output::OutputError),
+}
+
+impl From<crate::output::OutputError> for RecordingError {
+    fn from(e: crate::output::OutputError) -> Self {
+        RecordingError::Output(e)
+    }
 }
 
 impl std::fmt::Display for RecordingError {
@@ -169,6 +199,7 @@ impl std::fmt::Display for RecordingError {
                 line,
                 message,
             } => write!(f, "{}:{line}: {message}", path.display()),
+            RecordingError::Output(e) => e.fmt(f),
         }
     }
 }
@@ -194,6 +225,34 @@ impl Writer {
             source,
         };
         let file = File::create(path).map_err(io)?;
+        Self::start(path, file, header)
+    }
+
+    /// Creates `path`, refusing an existing file ([`crate::output::OutputError::Exists`]),
+    /// and writes the header. For recordings that stream (`et record`), which cannot be
+    /// written aside and renamed at the end: a crash must leave every frame so far.
+    ///
+    /// # Errors
+    /// [`RecordingError::Output`] when `path` exists, [`RecordingError::Io`].
+    pub fn create_new(path: &Path, header: &Header) -> Result<Self, RecordingError> {
+        let file = File::options()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|source| {
+                if source.kind() == std::io::ErrorKind::AlreadyExists {
+                    RecordingError::Output(crate::output::OutputError::Exists { out: path.into() })
+                } else {
+                    RecordingError::Io {
+                        path: path.into(),
+                        source,
+                    }
+                }
+            })?;
+        Self::start(path, file, header)
+    }
+
+    fn start(path: &Path, file: File, header: &Header) -> Result<Self, RecordingError> {
         let mut w = Self {
             path: path.into(),
             out: BufWriter::new(file),
@@ -231,7 +290,15 @@ impl Writer {
                 ),
             });
         }
-        self.line(record)
+        let invalid = invalid_columns(&record.voltages);
+        if record.invalid == invalid {
+            self.line(record)
+        } else {
+            self.line(&Record {
+                invalid,
+                ..record.clone()
+            })
+        }
     }
 }
 
@@ -246,7 +313,9 @@ pub struct Recording {
     pub truncated_tail: bool,
 }
 
-/// Reads a recording, checking the header and every frame's length.
+/// Reads a recording, checking the header and every frame's length. A frame with non-finite
+/// values (`null` in the file) is kept, with NaN there and its columns in `invalid`: readers
+/// that image or classify refuse that frame, not the recording.
 ///
 /// # Errors
 /// [`RecordingError`] naming the file and line.
@@ -307,7 +376,11 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
             continue;
         }
         match serde_json::from_str::<Record>(text) {
-            Ok(r) if r.voltages.len() == header.frame_len => records.push(r),
+            Ok(mut r) if r.voltages.len() == header.frame_len => {
+                // What the values say, not what the line claims.
+                r.invalid = invalid_columns(&r.voltages);
+                records.push(r);
+            }
             Ok(r) => {
                 return Err(bad(
                     i + 1,
@@ -392,6 +465,56 @@ mod tests {
         std::fs::write(&path, text).unwrap();
         let err = read(&path).unwrap_err().to_string();
         assert!(err.contains("a.jsonl:3"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A NaN or infinite value from the board used to be written as `null` and then refused
+    /// the whole recording (here and in Python). It is kept: NaN, flagged in `invalid`.
+    #[test]
+    fn a_frame_with_nan_or_inf_stays_readable_and_flagged() {
+        let dir = std::env::temp_dir().join(format!("et-rec-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("nan.jsonl");
+        let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+        let mut w = Writer::create(&path, &header).unwrap();
+        let mut bad = frame(1, 208);
+        bad.voltages[3] = f32::NAN;
+        bad.voltages[7] = f32::INFINITY;
+        for f in [frame(0, 208), bad, frame(2, 208)] {
+            w.append(&Record::new(&f, None)).unwrap();
+        }
+        drop(w);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains("null") && text.contains("\"invalid\":[3,7]"),
+            "{text}"
+        );
+        let rec = read(&path).unwrap();
+        assert_eq!(rec.records.len(), 3);
+        let r = &rec.records[1];
+        assert!(r.voltages[3].is_nan() && r.voltages[7].is_nan());
+        assert_eq!(r.voltages[4], frame(1, 208).voltages[4]);
+        assert_eq!(r.invalid, vec![3, 7]);
+        assert!(rec.records[0].invalid.is_empty() && rec.records[2].invalid.is_empty());
+        // The standard-library Python reader reads it too (NaN for null).
+        let py = std::process::Command::new("python3")
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../python/et_recording.py"
+            ))
+            .arg(&path)
+            .output()
+            .expect("python3");
+        let out = String::from_utf8_lossy(&py.stdout);
+        assert!(
+            py.status.success(),
+            "{out}{}",
+            String::from_utf8_lossy(&py.stderr)
+        );
+        assert!(
+            out.contains("frames 3") && out.contains("invalid_frames 1"),
+            "{out}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -159,6 +159,7 @@ fn sim_writes_a_recording_that_python_reads() {
         bad.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--force",
     ]);
     assert!(!err.status.success());
     let msg = String::from_utf8_lossy(&err.stderr);
@@ -347,6 +348,7 @@ fn collect_train_eval_export_chain() {
         "7",
         "--out",
         &s(&train),
+        "--force",
     ]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("ROWSxCOLS"));
     let bad = et(&["eval", "--model", &s(&train), "--data", &s(&test)]);
@@ -388,6 +390,7 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
         "no-such.toml",
         "--out",
         png.to_str().unwrap(),
+        "--force",
     ]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("no-such.toml"));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -449,7 +452,8 @@ fn reconstruct_images_recorded_frames() {
         .hypot(c[1].as_f64().unwrap() - t[1].as_f64().unwrap());
     assert!(d < 10.0, "{j}");
     // A frame inside the reference is refused with a reason.
-    let a = args("3");
+    let mut a = args("3");
+    a.push("--force".into());
     let bad = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("reference"));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -559,4 +563,90 @@ fn forward_and_reconstruct_take_an_imported_mesh() {
         String::from_utf8_lossy(&bad.stderr).contains("nodes.csv,triangles.csv,electrodes.csv")
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Outputs never overwrite a command's own input (even with --force), and never an existing
+/// file unless --force; a refused command leaves every file as it was.
+#[test]
+fn outputs_refuse_inputs_and_existing_files_without_force() {
+    let dir = std::env::temp_dir().join(format!("et-cli-overwrite-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    std::fs::copy(root.join("sim/scenes/square-13cm-16.toml"), p("s.toml")).unwrap();
+    let refused = |args: &[&str], what: &str, file: &str| {
+        let before = std::fs::read(file).unwrap();
+        let out = et(args);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(
+            !out.status.success() && err.contains(what),
+            "{args:?}: {err}"
+        );
+        assert_eq!(std::fs::read(file).unwrap(), before, "{file} untouched");
+    };
+    let input = "this is the input";
+    let exists = "already exists; refusing to overwrite it (--force replaces it)";
+    // et sim onto its scene; then onto an earlier recording.
+    let sim = ["sim", "--scene", &p("s.toml"), "--frames", "2", "--out"];
+    refused(&[&sim[..], &[&p("s.toml")]].concat(), input, &p("s.toml"));
+    refused(
+        &[&sim[..], &[&p("s.toml"), "--force"]].concat(),
+        input,
+        &p("s.toml"),
+    );
+    assert!(et(&[&sim[..], &[&p("r.jsonl")]].concat()).status.success());
+    refused(
+        &[&sim[..], &[&p("r.jsonl")]].concat(),
+        exists,
+        &p("r.jsonl"),
+    );
+    assert!(
+        et(&[&sim[..], &[&p("r.jsonl"), "--force"]].concat())
+            .status
+            .success()
+    );
+    // A dataset, a model, a blob: none onto its input.
+    let collect = [
+        "collect",
+        "--scene",
+        &p("s.toml"),
+        "--grid",
+        "2x2",
+        "--visits",
+        "2",
+        "--scans",
+        "2",
+        "--subsections",
+        "10",
+        "--out",
+        &p("d.csv"),
+    ];
+    let c = et(&collect);
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    refused(&collect, exists, &p("d.csv"));
+    refused(
+        &["train", "--data", &p("d.csv"), "--out", &p("d.csv")],
+        input,
+        &p("d.csv"),
+    );
+    let t = et(&["train", "--data", &p("d.csv"), "--out", &p("m.json")]);
+    assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
+    refused(
+        &["train", "--data", &p("d.csv"), "--out", &p("m.json")],
+        exists,
+        &p("m.json"),
+    );
+    refused(
+        &["export", "--model", &p("m.json"), "--out", &p("m.json")],
+        input,
+        &p("m.json"),
+    );
+    // No partial files are left beside the outputs.
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains("partial")), "{names:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

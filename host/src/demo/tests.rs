@@ -22,11 +22,23 @@ fn the_quick_demo_writes_a_complete_report() {
     let report = run(&Options {
         out: dir.clone(),
         quick: true,
+        force: false,
         progress: false,
         command: "et demo --quick".into(),
     })
     .unwrap();
     assert_eq!(report.index, dir.join("index.md"));
+    // An older report is not overwritten without being asked (it is refused before any work).
+    let again = run(&Options {
+        out: dir.clone(),
+        quick: true,
+        force: false,
+        progress: false,
+        command: "et demo --quick".into(),
+    });
+    let e = format!("{:#}", again.expect_err("refused"));
+    assert!(e.contains("already exists") && e.contains("--force"), "{e}");
+    assert!(report.index.exists(), "the old report is left alone");
     let page = std::fs::read_to_string(&report.index).unwrap();
     let figures: Vec<&str> = page
         .split("![")

@@ -83,14 +83,19 @@ fn decoder_resyncs_counts_damage_and_sequence_gaps() {
 }
 
 /// A device on the master side of a pty: the real `et_core::device::Device` answering
-/// commands, and a frame every 2 ms while started.
+/// commands, and a frame every 2 ms while started (each passed through `mangle` first: a
+/// faulty board).
 struct FakeDevice {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<TTYPort>>,
 }
 
 impl FakeDevice {
-    fn start(mut master: TTYPort) -> Self {
+    fn start(master: TTYPort) -> Self {
+        Self::start_mangling(master, |_| {})
+    }
+
+    fn start_mangling(mut master: TTYPort, mangle: fn(&mut Frame)) -> Self {
         let stop = Arc::new(AtomicBool::new(false));
         let flag = Arc::clone(&stop);
         let thread = thread::spawn(move || {
@@ -110,7 +115,7 @@ impl FakeDevice {
                     }
                 }
                 if device.scanning() {
-                    let out = device
+                    let mut out = device
                         .frame(
                             &ScanConfig::REFERENCE,
                             et_core::Micros(0),
@@ -119,6 +124,7 @@ impl FakeDevice {
                             0,
                         )
                         .unwrap();
+                    mangle(&mut out.frame);
                     let _ = master.write_all(&packet(&Uplink::Frame(out.frame)));
                 }
             }
@@ -269,6 +275,84 @@ fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
             .windows(2)
             .all(|w| w[1].seq == w[0].seq + 1)
     );
+    drop(link);
+    device.stop();
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// `et record` through a faulty board and a pulled cable: a frame with the wrong value count
+/// is skipped and counted (it used to end the recording), a NaN is kept and flagged (it used
+/// to make the file unreadable), and a board that comes back idle after the replug is sent
+/// Start again (the recording used to stall forever).
+#[test]
+fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
+    use crate::link::LinkChange;
+    use crate::recorder::{Notice, Plan, record};
+    let dir = temp_dir("record");
+    let (master, path) = cable(&dir);
+    let mangle: fn(&mut Frame) = |f| match f.seq {
+        3 => f.voltages.truncate(100),
+        5 => f.voltages[2] = f32::NAN,
+        _ => {}
+    };
+    let device = FakeDevice::start_mangling(master, mangle);
+    let mut link = Link::open(path.to_str().unwrap(), et_core::board::BAUD).unwrap();
+    link.request(&Command::Start, Duration::from_secs(2))
+        .unwrap();
+    let out = dir.join("session.jsonl");
+    let plan = Plan {
+        out: out.clone(),
+        frames: Some(400),
+        duration: Some(Duration::from_secs(20)),
+        send_start: true,
+        force: false,
+    };
+    let recorder = thread::spawn(move || {
+        let mut notices = Vec::new();
+        let tally = record(&mut link, &plan, |n| notices.push(n)).unwrap();
+        (tally, notices)
+    });
+    // Pull the cable after ~100 frames; plug in a board that has just booted (not scanning).
+    thread::sleep(Duration::from_millis(200));
+    drop(device.stop());
+    thread::sleep(Duration::from_millis(600));
+    let (master, _) = cable(&dir);
+    let device = FakeDevice::start_mangling(master, mangle);
+    let (tally, notices) = recorder.join().unwrap();
+    device.stop();
+    assert_eq!(tally.written, 400, "{tally}");
+    assert_eq!((tally.skipped, tally.flagged), (2, 2), "{tally}");
+    assert_eq!(tally.link.reconnects, 1);
+    for change in [LinkChange::Vanished, LinkChange::Back] {
+        assert!(
+            notices.contains(&Notice::Link(change)),
+            "{change:?}: {notices:?}"
+        );
+    }
+    assert!(notices.contains(&Notice::Skipped {
+        seq: 3,
+        got: 100,
+        expected: 208
+    }));
+    // One part, every frame readable, the NaN flagged.
+    let rec = crate::recording::read(&out).unwrap();
+    assert_eq!(rec.records.len(), 400);
+    assert_eq!(rec.records.iter().filter(|r| r.invalid == [2]).count(), 2);
+    assert!(!dir.join("session-2.jsonl").exists());
+    // Recording onto it again is refused before anything is sent.
+    let (master, _) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let mut link = Link::open(path.to_str().unwrap(), et_core::board::BAUD).unwrap();
+    let again = Plan {
+        out: out.clone(),
+        frames: Some(1),
+        duration: None,
+        send_start: false,
+        force: false,
+    };
+    let e = record(&mut link, &again, |_| {}).unwrap_err().to_string();
+    assert!(e.contains("already exists"), "{e}");
+    assert_eq!(crate::recording::read(&out).unwrap().records.len(), 400);
     drop(link);
     device.stop();
     let _ = std::fs::remove_dir_all(dir);

@@ -174,6 +174,10 @@ pub struct PortSource {
     pub last_problem: Option<String>,
     /// Frames waiting for their on-chip class.
     pending: VecDeque<LiveFrame>,
+    /// Watches the port and restarts a board that comes back idle.
+    keepalive: Keepalive,
+    /// Link changes not yet taken by [`Source::link_changes`].
+    changes: Vec<LinkChange>,
 }
 
 impl PortSource {
@@ -189,12 +193,15 @@ impl PortSource {
         let mut link = Link::open(path, baud).map_err(at)?;
         link.request(&Command::Start, Duration::from_secs(2))
             .map_err(at)?;
+        let keepalive = Keepalive::new(&link, true);
         Ok(Self {
             path: path.to_string(),
             link,
             status: None,
             last_problem: None,
             pending: VecDeque::new(),
+            keepalive,
+            changes: Vec::new(),
         })
     }
 
@@ -232,6 +239,11 @@ impl PortSource {
     /// Everything that arrived, without waiting: frames (each with its on-chip class when
     /// the board sent one), and status and problems kept for [`Source::health`].
     fn drain(&mut self) -> Vec<LiveFrame> {
+        if let Some(change) = self.keepalive.check(&self.link) {
+            self.last_problem = Some(format!("{}: {change}", self.path));
+            self.changes.push(change);
+        }
+        let before = self.pending.len();
         while let Ok(m) = self.link.next(Duration::ZERO) {
             match m {
                 Uplink::Frame(f) => self.pending.push_back(LiveFrame {
@@ -256,6 +268,9 @@ impl PortSource {
                 }
                 Uplink::Event(_) => {}
             }
+        }
+        if self.pending.len() > before {
+            self.keepalive.frame();
         }
         // A frame's class follows it at once; keep the newest frame back one poll for it.
         let keep = usize::from(self.pending.back().is_some_and(|f| f.chip_class.is_none()));
@@ -353,6 +368,15 @@ impl Source {
                     port: p.path.clone(),
                     error,
                 }),
+        }
+    }
+
+    /// What changed on a board's link since the last call (the port vanished, came back, a
+    /// silent board was restarted); nothing for a simulator or a file.
+    pub fn link_changes(&mut self) -> Vec<LinkChange> {
+        match self {
+            Source::Port(p) => std::mem::take(&mut p.changes),
+            _ => Vec::new(),
         }
     }
 

@@ -15,6 +15,7 @@ pub(crate) fn write_sim_recording(path: &Path, n: usize) -> Vec<LiveFrame> {
             flags: 0,
             rail_count: 0,
             voltages: f.voltages.clone(),
+            invalid: Vec::new(),
             touches: None,
         })
         .unwrap();

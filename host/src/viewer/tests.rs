@@ -282,6 +282,26 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
             .count()
             >= 1
     );
+    // Saving over an existing file asks first (a second Save replaces it), whole files only.
+    let dir = std::env::temp_dir().join(format!("et-wizard-save-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("model.json");
+    std::fs::write(&path, "an older model").unwrap();
+    h.state_mut().wizard.save_path = path.display().to_string();
+    h.get_by_label("Save").click();
+    h.step();
+    assert!(h.state().wizard.message.contains("Save again to replace"));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "an older model");
+    h.get_by_label("Save").click();
+    h.step();
+    assert!(
+        h.state().wizard.message.starts_with("saved"),
+        "{}",
+        h.state().wizard.message
+    );
+    et_learn::model_file::ModelFile::load(&path).unwrap();
+    assert!(dir.join("model.etm").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
     // Without a board, export is disabled; the model can be used here.
     h.get_by_label("Use this model").click();
     h.step();

@@ -99,6 +99,8 @@ pub struct Wizard {
     pub trained: Option<Trained>,
     /// Where "Save" writes the model (JSON) and its blob (`.etm` beside it).
     pub save_path: String,
+    /// The existing file the user was warned about: a second Save replaces it.
+    replace_confirmed: Option<PathBuf>,
     /// What just happened.
     pub message: String,
     config: Option<ScanConfig>,
@@ -123,6 +125,7 @@ impl Default for Wizard {
             step: Step::Setup,
             trained: None,
             save_path: "model.json".into(),
+            replace_confirmed: None,
             message: String::new(),
             config: None,
             centres: Vec::new(),
@@ -522,24 +525,46 @@ impl Wizard {
         requests
     }
 
-    /// Saves the model (JSON) and its blob beside it; says what it did.
-    fn save(&self) -> String {
+    /// Saves the model (JSON) and its blob beside it; says what it did. Existing files are
+    /// replaced only on a second Save (the first one says so); each file is written whole
+    /// (aside, then renamed).
+    fn save(&mut self) -> String {
         let Some(t) = &self.trained else {
             return "train first".into();
         };
         let path = PathBuf::from(self.save_path.trim());
-        if let Err(e) = t.file.save(&path) {
+        let blob_path = path.with_extension("etm");
+        let existing: Vec<String> = [&path, &blob_path]
+            .into_iter()
+            .filter(|p| p.exists())
+            .map(|p| p.display().to_string())
+            .collect();
+        if !existing.is_empty() && self.replace_confirmed.as_ref() != Some(&path) {
+            self.replace_confirmed = Some(path);
+            return format!(
+                "{} already exist(s): Save again to replace, or change the name",
+                existing.join(" and ")
+            );
+        }
+        self.replace_confirmed = None;
+        type Failure = Box<dyn std::error::Error>;
+        let saved =
+            crate::output::write(&path, |partial| t.file.save(partial).map_err(Failure::from));
+        if let Err(e) = saved {
             return e.to_string();
         }
-        let blob_path = path.with_extension("etm");
-        match self.blob().map(|b| std::fs::write(&blob_path, b)) {
-            Ok(Err(e)) => format!(
+        let blob = self.blob().map_err(Failure::from).and_then(|b| {
+            crate::output::write(&blob_path, |partial| {
+                std::fs::write(partial, b).map_err(Failure::from)
+            })
+        });
+        match blob {
+            Err(e) => format!(
                 "saved {}; blob: {}: {e}",
                 path.display(),
                 blob_path.display()
             ),
-            Ok(Ok(())) => format!("saved {} and {}", path.display(), blob_path.display()),
-            Err(e) => format!("saved {}; blob: {e}", path.display()),
+            Ok(()) => format!("saved {} and {}", path.display(), blob_path.display()),
         }
     }
 

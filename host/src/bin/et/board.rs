@@ -4,7 +4,6 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use et_host::recording::{self, Header, Record};
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(Debug, clap::Args)]
@@ -56,83 +55,57 @@ pub(crate) fn ports_cmd() -> Result<()> {
     Ok(())
 }
 
-/// `FILE.jsonl` for part 1, `FILE-2.jsonl`, `FILE-3.jsonl`, ... after configuration changes.
-pub(crate) fn part_path(out: &std::path::Path, part: u32) -> PathBuf {
-    if part == 1 {
-        return out.to_path_buf();
-    }
-    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
-    let ext = out
-        .extension()
-        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
-    out.with_file_name(format!("{stem}-{part}{ext}"))
-}
-
-pub(crate) fn record_cmd(args: &RecordArgs) -> Result<()> {
-    use et_core::wire::{Command as Cmd, Uplink};
+pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
     use et_host::link::Link;
+    use et_host::recorder::{self, Notice, Plan};
     use std::time::Duration;
 
+    let plan = Plan {
+        out: args.out.clone(),
+        frames: args.frames,
+        duration: args.seconds.map(Duration::from_secs_f64),
+        send_start: !args.no_start,
+        force,
+    };
+    // Refuse an existing recording before the board is touched.
+    crate::output::check(&plan.out, &[], force)?;
     let mut link = Link::open(&args.port, args.baud)?;
     if !args.no_start {
         wait_for_board(&mut link)?;
-        link.request(&Cmd::Start, Duration::from_secs(1))
+        link.request(&et_core::wire::Command::Start, Duration::from_secs(1))
             .with_context(|| format!("starting the scan on {}", args.port))?;
     }
-    let deadline = args
-        .seconds
-        .map(|s| Instant::now() + Duration::from_secs_f64(s));
     let bar = ProgressBar::new_spinner().with_style(
         ProgressStyle::with_template("{spinner} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
-    let (mut part, mut written) = (0u32, 0u64);
-    let mut writer: Option<(et_core::ScanConfig, recording::Writer)> = None;
-    while args.frames.is_none_or(|n| written < n) && deadline.is_none_or(|d| Instant::now() < d) {
-        let frame = match link.next(Duration::from_millis(200)) {
-            Ok(Uplink::Frame(f)) => f,
-            Ok(Uplink::Event(_)) | Err(_) => {
-                bar.set_message(link_progress(written, &link.counters()));
-                bar.tick();
-                continue;
+    let mut skipped_shown = 0u32;
+    let tally = recorder::record(&mut link, &plan, |notice| match notice {
+        Notice::Part { path, config } => bar.println(format!(
+            "recording {} ({} electrodes, {}) into {}",
+            args.port,
+            config.electrodes,
+            config.protocol.name(),
+            path.display()
+        )),
+        Notice::Skipped { seq, got, expected } => {
+            // The first few in full; the rest are counted in the summary.
+            skipped_shown += 1;
+            if skipped_shown <= 5 {
+                bar.println(format!(
+                    "skipped frame {seq}: {got} values, its configuration has K = {expected}"
+                ));
             }
-        };
-        if writer
-            .as_ref()
-            .is_none_or(|(config, _)| *config != frame.config)
-        {
-            part += 1;
-            let path = part_path(&args.out, part);
-            let header = Header::new(format!("port:{}", args.port), &frame.config)?;
-            let w = recording::Writer::create(&path, &header)?;
-            bar.println(format!(
-                "recording {} ({} electrodes, {}) into {}",
-                args.port,
-                frame.config.electrodes,
-                frame.config.protocol.name(),
-                path.display()
-            ));
-            writer = Some((frame.config, w));
         }
-        if let Some((_, w)) = writer.as_mut() {
-            w.append(&Record::new(&frame, None))?;
+        Notice::Link(change) => bar.println(format!("{}: {change}", args.port)),
+        Notice::Progress(t) => {
+            bar.set_message(t.to_string());
+            bar.tick();
         }
-        written += 1;
-        if written % 25 == 0 {
-            bar.set_message(link_progress(written, &link.counters()));
-        }
-    }
+    })?;
     bar.finish_and_clear();
-    println!("recorded {}", link_progress(written, &link.counters()));
+    println!("recorded {tally}");
     Ok(())
-}
-
-/// "N frames, lost, damaged, reconnects": what a recording session has seen of the link.
-pub(crate) fn link_progress(written: u64, c: &et_host::link::Counters) -> String {
-    format!(
-        "{written} frames, {} lost on the way, {} damaged packets dropped, {} reconnects",
-        c.lost_frames, c.corrupt, c.reconnects
-    )
 }
 
 /// Pings until the board answers (one that is still booting loses what it is sent).

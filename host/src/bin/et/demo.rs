@@ -6,7 +6,7 @@ use anyhow::Result;
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct DemoArgs {
-    /// The report folder (created; its files are overwritten).
+    /// The report folder (created; an existing report is replaced only with --force).
     #[arg(long, default_value = "et-demo-report")]
     out: PathBuf,
     /// Small sizes everywhere: checks the whole pipeline in seconds, numbers not to quote.
@@ -17,7 +17,7 @@ pub(crate) struct DemoArgs {
     json: bool,
 }
 
-pub(crate) fn run(args: &DemoArgs) -> Result<()> {
+pub(crate) fn run(args: &DemoArgs, force: bool) -> Result<()> {
     let command = std::iter::once("et".to_string())
         .chain(std::env::args().skip(1))
         .collect::<Vec<_>>()
@@ -25,6 +25,7 @@ pub(crate) fn run(args: &DemoArgs) -> Result<()> {
     let report = et_host::demo::run(&et_host::demo::Options {
         out: args.out.clone(),
         quick: args.quick,
+        force,
         progress: !args.json,
         command,
     })?;

@@ -199,7 +199,10 @@ pub(crate) fn scene_mesh(
     Ok(mesh)
 }
 
-pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
+pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(args.frames.as_deref());
+    crate::output::check(&args.out, &inputs, force)?;
     use et_recon::Imager;
     use et_recon::{
         OneStep, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
@@ -242,6 +245,25 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
                         .as_deref()
                         .map(|p| p.display().to_string())
                         .unwrap_or_default()
+                );
+            }
+            let path = args
+                .frames
+                .as_deref()
+                .unwrap_or(std::path::Path::new(""))
+                .display();
+            if let Some((i, rec)) = r.records[..reference]
+                .iter()
+                .chain([&r.records[frame]])
+                .enumerate()
+                .find(|(_, rec)| !rec.invalid.is_empty())
+            {
+                bail!(
+                    "{path}: frame {} (seq {}) has non-finite values (null in the file) in \
+                     columns {:?}; choose other frames with --reference and --frame",
+                    if i < reference { i } else { frame },
+                    rec.seq,
+                    rec.invalid
                 );
             }
             let frames: Vec<&[f32]> = r.records[..reference]
@@ -319,18 +341,20 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs) -> Result<()> {
             std::f64::consts::PI * radius * radius,
         )
     });
-    et_host::plot::sheet_image(
-        &imager,
-        &args.out,
-        &format!(
-            "{}: {} regions (f = {f})",
-            args.scene
-                .file_name()
-                .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
-            rois.len()
-        ),
-        &image,
-    )?;
+    crate::output::write(&args.out, |partial| {
+        et_host::plot::sheet_image(
+            &imager,
+            partial,
+            &format!(
+                "{}: {} regions (f = {f})",
+                args.scene
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+                rois.len()
+            ),
+            &image,
+        )
+    })?;
     let summary = ReconstructSummary {
         out: &args.out,
         triangles: t_n,

@@ -9,6 +9,8 @@ use et_host::plot;
 use et_learn::model_file::{Kind, ModelFile};
 use et_learn::{analysis, collect, dataset, fastcv, pipeline};
 use et_sim::scene::Scene;
+
+use crate::output;
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(Debug, clap::Args)]
@@ -127,7 +129,8 @@ pub(crate) struct ExportArgs {
     json: bool,
 }
 
-pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
+pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
+    output::check(&args.out, &[&args.scene], force)?;
     let scene = Scene::load(&args.scene)?;
     let (rows, cols) = args
         .grid
@@ -193,7 +196,9 @@ pub(crate) fn collect_cmd(args: &CollectArgs) -> Result<()> {
         args.movement_mm,
         args.seed
     );
-    dataset::save_csv(&data, &args.out, &provenance)?;
+    output::write(&args.out, |partial| {
+        dataset::save_csv(&data, partial, &provenance)
+    })?;
     let summary = CollectSummary {
         out: &args.out,
         observations: data.x.nrows(),
@@ -252,7 +257,11 @@ impl From<PrecisionArg> for Precision {
     }
 }
 
-pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
+pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
+    output::check(&args.out, &[&args.data], force)?;
+    if let Some(png) = &args.curve {
+        output::check(png, &[&args.data, &args.out], force)?;
+    }
     let mut data = dataset::load_csv(&args.data)?;
     let classes = data.centres.len();
     let kind = ModelKind::from(Kind::from(args.kind));
@@ -317,32 +326,34 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
                 )
             });
             bar.finish_and_clear();
-            plot::chart(
-                png,
-                plot::Labels {
-                    title: &format!(
-                        "learning curve: {} ({}), {} classes",
-                        Kind::from(args.kind).name(),
-                        if visits >= 2 {
-                            "leave-one-visit-out"
-                        } else {
-                            "k-fold CV"
-                        },
-                        classes
-                    ),
-                    x: "observations per class n_c",
-                    y: "held-out accuracy (%)",
-                    legend: plot::Legend::UpperLeft,
-                },
-                &[plot::Series {
-                    label: format!("shrinkage {shrinkage}"),
-                    points: points
-                        .iter()
-                        .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
-                        .collect(),
-                    scatter: false,
-                }],
-            )?;
+            output::write(png, |partial| {
+                plot::chart(
+                    partial,
+                    plot::Labels {
+                        title: &format!(
+                            "learning curve: {} ({}), {} classes",
+                            Kind::from(args.kind).name(),
+                            if visits >= 2 {
+                                "leave-one-visit-out"
+                            } else {
+                                "k-fold CV"
+                            },
+                            classes
+                        ),
+                        x: "observations per class n_c",
+                        y: "held-out accuracy (%)",
+                        legend: plot::Legend::UpperLeft,
+                    },
+                    &[plot::Series {
+                        label: format!("shrinkage {shrinkage}"),
+                        points: points
+                            .iter()
+                            .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
+                            .collect(),
+                        scatter: false,
+                    }],
+                )
+            })?;
             Some(points)
         }
         None => None,
@@ -368,7 +379,7 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
              --shrinkage (e.g. 0.1) or more observations per class"
         )
     })?;
-    file.save(&args.out)?;
+    output::write(&args.out, |partial| file.save(partial))?;
     let summary = TrainSummary {
         out: &args.out,
         kind: Kind::from(args.kind),
@@ -430,7 +441,16 @@ pub(crate) fn train_cmd(args: &TrainArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
+pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
+    let plots = args
+        .plots
+        .as_ref()
+        .map(|dir| (dir.join("confusion.png"), dir.join("error-vs-distance.png")));
+    if let Some((a, b)) = &plots {
+        for png in [a, b] {
+            output::check(png, &[&args.model, &args.data], force)?;
+        }
+    }
     let file = ModelFile::load(&args.model)?;
     let data = dataset::load_csv(&args.data)?;
     let classes = file.classes.len();
@@ -443,24 +463,25 @@ pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
         anyhow::anyhow!("{}: {e}", blamed.display())
     })?;
     let (conf, bands) = (&tested.confusion, &tested.bands);
-    if let Some(dir) = &args.plots {
+    if let (Some(dir), Some((confusion_png, error_png))) = (&args.plots, &plots) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        plot::confusion(
-            &dir.join("confusion.png"),
-            conf,
-            &format!(
-                "confusion: accuracy {:.1} % on {}",
-                100.0 * conf.accuracy(),
-                args.data.display()
-            ),
-        )?;
+        let title = format!(
+            "confusion: accuracy {:.1} % on {}",
+            100.0 * conf.accuracy(),
+            args.data.display()
+        );
+        output::write(confusion_png, |partial| {
+            plot::confusion(partial, conf, &title)
+        })?;
         if tested.outcomes.is_empty() {
             eprintln!(
                 "note: {} does not say where the electrodes are: no error-vs-distance plot",
                 args.data.display()
             );
         } else {
-            plot::error_vs_distance(&dir.join("error-vs-distance.png"), &tested)?;
+            output::write(error_png, |partial| {
+                plot::error_vs_distance(partial, &tested)
+            })?;
         }
     }
     let summary = EvalSummary {
@@ -485,11 +506,14 @@ pub(crate) fn eval_cmd(args: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn export_cmd(args: &ExportArgs) -> Result<()> {
+pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
+    output::check(&args.out, &[&args.model], force)?;
     let file = ModelFile::load(&args.model)?;
     let precision = Precision::from(args.precision);
     let blob = file.blob(precision)?;
-    std::fs::write(&args.out, &blob).with_context(|| format!("writing {}", args.out.display()))?;
+    output::write(&args.out, |partial| {
+        std::fs::write(partial, &blob).with_context(|| format!("writing {}", args.out.display()))
+    })?;
     let (c, p) = (file.classes.len(), file.feature_index.len());
     // Multiply-adds per frame on the chip: QDA a forward substitution per class, LDA a dot.
     let macs = if file.kind == Kind::Qda {

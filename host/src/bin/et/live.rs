@@ -74,7 +74,15 @@ pub(crate) struct StreamArgs {
 }
 
 #[cfg(feature = "viewer")]
-pub(crate) fn view_cmd(args: &ViewArgs) -> Result<()> {
+pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
+    if let Some(png) = &args.screenshot {
+        let inputs: Vec<&std::path::Path> =
+            [&args.source.scene, &args.source.replay, &args.source.model]
+                .into_iter()
+                .filter_map(|p| p.as_deref())
+                .collect();
+        crate::output::check(png, &inputs, force)?;
+    }
     et_host::viewer::run(et_host::viewer::Options {
         scene: args.source.scene.clone(),
         source: args.source.spec(),
@@ -86,7 +94,7 @@ pub(crate) fn view_cmd(args: &ViewArgs) -> Result<()> {
 }
 
 #[cfg(not(feature = "viewer"))]
-pub(crate) fn view_cmd(_: &ViewArgs) -> Result<()> {
+pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
     anyhow::bail!(
         "this et was built without the viewer; build it with the `viewer` feature:\n  cargo run --release -p et-host --features viewer -- view"
     )
@@ -123,6 +131,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
+        for change in source.link_changes() {
+            eprintln!("{}: {change}", source.describe());
+        }
         if frames.is_empty() {
             if let Source::Replay(r) = &source
                 && r.position >= r.len()

@@ -9,6 +9,7 @@ mod demo;
 mod imaging;
 mod learn;
 mod live;
+mod output;
 mod protocol;
 mod sim;
 
@@ -25,6 +26,10 @@ mod sim;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Replace output files and report folders that exist (never a command's own input;
+    /// without it, et refuses to overwrite anything).
+    #[arg(long, global = true)]
+    force: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -220,21 +225,22 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let force = cli.force;
     let result = match &cli.command {
-        Command::Demo(args) => demo::run(args),
+        Command::Demo(args) => demo::run(args, force),
         Command::Protocol(args) => protocol::run(args),
-        Command::Sim(args) => sim::run(args),
-        Command::Collect(args) => learn::collect_cmd(args),
-        Command::Train(args) => learn::train_cmd(args),
-        Command::Eval(args) => learn::eval_cmd(args),
-        Command::Export(args) => learn::export_cmd(args),
-        Command::Reconstruct(args) => imaging::reconstruct_cmd(args),
+        Command::Sim(args) => sim::run(args, force),
+        Command::Collect(args) => learn::collect_cmd(args, force),
+        Command::Train(args) => learn::train_cmd(args, force),
+        Command::Eval(args) => learn::eval_cmd(args, force),
+        Command::Export(args) => learn::export_cmd(args, force),
+        Command::Reconstruct(args) => imaging::reconstruct_cmd(args, force),
         Command::Forward(args) => imaging::forward_cmd(args),
         Command::Ports => board::ports_cmd(),
-        Command::Record(args) => board::record_cmd(args),
+        Command::Record(args) => board::record_cmd(args, force),
         Command::Upload(args) => board::upload_cmd(args),
         Command::Stream(args) => live::stream_cmd(args),
-        Command::View(args) => live::view_cmd(args),
+        Command::View(args) => live::view_cmd(args, force),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -27,7 +27,8 @@ pub(crate) struct SimArgs {
     seed: Option<u64>,
 }
 
-pub(crate) fn run(args: &SimArgs) -> Result<()> {
+pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
+    crate::output::check(&args.out, &[&args.scene], force)?;
     let mut scene = Scene::load(&args.scene)?;
     if let Some(seed) = args.seed {
         scene.seed = seed;
@@ -36,7 +37,6 @@ pub(crate) fn run(args: &SimArgs) -> Result<()> {
     let mut run = Run::new(&scene)?;
     let setup = started.elapsed();
     let header = Header::new(format!("sim:{}", args.scene.display()), run.config())?;
-    let mut writer = recording::Writer::create(&args.out, &header)?;
     let detail = if args.samples {
         Detail::Samples
     } else {
@@ -48,21 +48,26 @@ pub(crate) fn run(args: &SimArgs) -> Result<()> {
     );
     bar.set_message("simulating");
     let started = Instant::now();
-    for _ in 0..args.frames {
-        let (frame, truth) = run.next_frame(detail)?;
-        let touches = truth
-            .touches
-            .iter()
-            .map(|t| TouchRecord {
-                x: t.position[0],
-                y: t.position[1],
-                radius: t.radius,
-                pressure: t.pressure,
-            })
-            .collect();
-        writer.append(&Record::new(&frame, Some(touches)))?;
-        bar.inc(1);
-    }
+    // Written aside and renamed when complete: Ctrl-C leaves no half recording.
+    crate::output::write(&args.out, |partial| {
+        let mut writer = recording::Writer::create(partial, &header)?;
+        for _ in 0..args.frames {
+            let (frame, truth) = run.next_frame(detail)?;
+            let touches = truth
+                .touches
+                .iter()
+                .map(|t| TouchRecord {
+                    x: t.position[0],
+                    y: t.position[1],
+                    radius: t.radius,
+                    pressure: t.pressure,
+                })
+                .collect();
+            writer.append(&Record::new(&frame, Some(touches)))?;
+            bar.inc(1);
+        }
+        anyhow::Ok(())
+    })?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
     eprintln!(

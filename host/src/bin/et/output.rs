@@ -1,0 +1,13 @@
+//! The output policy of `et_host::output` with anyhow errors, for every command that writes.
+
+use std::path::Path;
+
+pub(crate) use et_host::output::check;
+
+/// Writes `out` by `save` aside and renames it when complete (`et_host::output::write`).
+pub(crate) fn write<T, E: Into<anyhow::Error>>(
+    out: &Path,
+    save: impl FnOnce(&Path) -> Result<T, E>,
+) -> anyhow::Result<T> {
+    et_host::output::write(out, |partial| save(partial).map_err(Into::into))
+}
