@@ -311,6 +311,84 @@ impl From<WireError> for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// The deepest nesting of `[` and `{` a scene may have (a scene needs 3).
+pub const MAX_NESTING: usize = 32;
+
+/// The largest scene text read, bytes (the shipped scenes are under 1 kB; parsing TOML takes
+/// up to about 100 times its size in memory).
+pub const MAX_SCENE_BYTES: usize = 1 << 20;
+
+/// Checks that brackets and braces outside strings and comments never nest deeper than
+/// `max`. The TOML parser recovers from an unclosed inline table by recursing, one stack frame
+/// per `{`, so a damaged file of a few tens of kilobytes (`b = {` repeated) overflowed the stack
+/// and aborted; this bounds the recursion before the parser sees the text. A closer only
+/// closes its own kind (`{ ]` stays open, as the parser keeps it), so the count is never less
+/// than the parser's depth; in a valid file it is exactly the nesting.
+///
+/// # Errors
+/// The line where the nesting goes too deep, for people.
+fn nesting_within(text: &str, max: usize) -> Result<(), String> {
+    let b = text.as_bytes();
+    let (mut i, mut line) = (0, 1usize);
+    let mut open: Vec<u8> = Vec::new();
+    // Skips to just past `close` (a string's end), counting lines; escapes in basic strings.
+    let skip = |mut i: usize, close: &[u8], escapes: bool, one_line: bool, line: &mut usize| {
+        while i < b.len() {
+            if b[i..].starts_with(close) {
+                return i + close.len();
+            }
+            match b[i] {
+                b'\\' if escapes => i += 1,
+                b'\n' if one_line => return i,
+                b'\n' => *line += 1,
+                _ => {}
+            }
+            i += 1;
+        }
+        i
+    };
+    while i < b.len() {
+        match b[i] {
+            b'#' => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'\n' => line += 1,
+            b'"' | b'\'' => {
+                let q = b[i];
+                let triple = b[i..].starts_with(&[q, q, q]);
+                let (open, close): (usize, &[u8]) = if triple {
+                    (3, if q == b'"' { b"\"\"\"" } else { b"'''" })
+                } else {
+                    (1, if q == b'"' { b"\"" } else { b"'" })
+                };
+                i = skip(i + open, close, q == b'"', !triple, &mut line);
+                continue;
+            }
+            c @ (b'[' | b'{') => {
+                open.push(c);
+                if open.len() > max {
+                    return Err(format!(
+                        "line {line}: brackets and braces nest deeper than {max} (an unclosed \
+                         '{{' or '['?)"
+                    ));
+                }
+            }
+            b']' if open.last() == Some(&b'[') => {
+                open.pop();
+            }
+            b'}' if open.last() == Some(&b'{') => {
+                open.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
 impl Scene {
     /// Reads and validates a scene file.
     ///
@@ -330,6 +408,22 @@ impl Scene {
     /// # Errors
     /// [`SceneError::Parse`] or [`SceneError::Invalid`].
     pub fn parse(text: &str, name: &str) -> Result<Self, SceneError> {
+        if text.len() > MAX_SCENE_BYTES {
+            return Err(SceneError::Parse {
+                path: name.into(),
+                message: format!(
+                    "{} bytes: a scene is at most {MAX_SCENE_BYTES} bytes (scenes are a few \
+                     hundred)",
+                    text.len()
+                ),
+            });
+        }
+        if let Err(message) = nesting_within(text, MAX_NESTING) {
+            return Err(SceneError::Parse {
+                path: name.into(),
+                message,
+            });
+        }
         let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
             path: name.into(),
             message: e.to_string().trim_end().to_string(),

@@ -475,8 +475,8 @@ fn arb_damage() -> impl Strategy<Value = Damage> {
     ]
 }
 
+// Cases from PROPTEST_CASES (256 by default), like every property test of the workspace.
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     #[test]
     fn frames_round_trip(frame in arb_frame()) {

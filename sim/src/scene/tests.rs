@@ -117,6 +117,39 @@ fn bad_scenes_name_the_file_and_the_field() {
     assert!(missing.contains("/nonexistent/scene.toml"), "{missing}");
 }
 
+/// An unclosed inline table repeated (`b = {` after a table header, 3 000 times: 30 kB)
+/// overflowed the TOML parser's stack and aborted the process (found by the parser fuzzer).
+/// It is refused by line; brackets inside strings and comments do not count.
+#[test]
+fn runaway_nesting_is_refused_not_a_stack_overflow() {
+    let deep = format!("seed = 1\n{}", "[a]\nb = {\n".repeat(3000));
+    // On a small stack, as a test thread or a viewer thread has.
+    let e = std::thread::Builder::new()
+        .stack_size(256 * 1024)
+        .spawn(move || Scene::parse(&deep, "deep.toml").unwrap_err().to_string())
+        .unwrap()
+        .join()
+        .unwrap();
+    assert!(
+        e.contains("deep.toml: line 66") && e.contains("nest deeper than 32"),
+        "{e}"
+    );
+    // Brackets in strings, multi-line strings and comments are not nesting.
+    let noise = "{[".repeat(100);
+    for description in [
+        format!(r#""{noise}\"{noise}""#),
+        format!("'{noise}'"),
+        format!(
+            r#""""
+{noise}\"{noise}""""#
+        ),
+        format!("'''\n{noise}\n'{noise}'''"),
+    ] {
+        let text = format!("# {noise}\ndescription = {description}\n{SMALL}");
+        Scene::parse(&text, "noisy.toml").unwrap_or_else(|e| panic!("{text}: {e}"));
+    }
+}
+
 #[test]
 fn runs_are_deterministic_from_the_seed() {
     let scene = Scene::parse(SMALL, "small").unwrap();

@@ -1,0 +1,401 @@
+//! Every file parser of et on damaged files: no panic, no abort, and no allocation beyond a
+//! small multiple of the file's size.
+//!
+//! Each case takes a valid file (a scene, a dataset, a foreign CSV and its targets, a model,
+//! a recording, a Gmsh mesh, a CSV mesh) and damages it: bit flips, deletions, repeated
+//! stretches (files that grow), extreme tokens inserted or put in place of a number (counts of
+//! 10^20, 1e308, NaN, -1, a byte-order mark, stray separators, section names), truncation.
+//! The parser reads it from disk as `et` would.
+//!
+//! Its own test binary: the peak-tracking allocator counts the whole process, so one test
+//! runs the parsers one after the other. Cases per parser from PROPTEST_CASES (default
+//! 2 000); the long run of docs/guide.md:
+//!
+//! ```sh
+//! PROPTEST_CASES=1000000 cargo test --release -p et-tests --test fuzz -- --nocapture
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use et_core::ScanConfig;
+use et_core::model::ModelKind;
+use et_core::protocol::ProtocolKind;
+use et_core::rng::Rng;
+use et_host::recording::{Header, Record, Writer};
+use et_learn::fit::{FitOptions, Fitted, Target};
+use et_learn::model_file::ModelFile;
+use nalgebra::DMatrix;
+use peak_alloc::PeakAlloc;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+
+#[global_allocator]
+static ALLOC: PeakAlloc = PeakAlloc;
+
+/// Allowed peak allocation while parsing a file of `len` bytes: a multiple of it plus a
+/// constant for the parser's fixed tables and buffers. The TOML parser is the hungriest: about
+/// 100 bytes per byte of a file of many short keys (scenes are capped at 1 MiB for it).
+fn allowance(len: usize) -> usize {
+    128 * len + (4 << 20)
+}
+
+/// Tokens that break parsers.
+const NASTY: &[&str] = &[
+    "",
+    "0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "NaN",
+    "inf",
+    "-inf",
+    "18446744073709551615",
+    "100000000000000000000",
+    "4294967296",
+    "65536",
+    "2147483648",
+    "3.5",
+    "\u{feff}",
+    "\r\n",
+    "\n",
+    ",",
+    ";",
+    "#",
+    " ",
+    "\"",
+    "{",
+    "}",
+    "[",
+    "]",
+    "=",
+    "null",
+    "true",
+    "\u{0}",
+    "\u{fffd}",
+    "$Nodes",
+    "$EndNodes",
+    "$Elements",
+    "$EndElements",
+    "$MeshFormat",
+];
+
+#[derive(Clone, Debug)]
+enum Edit {
+    Flip(usize, u8),
+    Delete(usize, usize),
+    Repeat(usize, usize, usize),
+    Insert(usize, usize),
+    /// The number at or after the position becomes a nasty token.
+    Replace(usize, usize),
+    Cut(usize),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    let token = 0..NASTY.len();
+    prop_oneof![
+        2 => (any::<usize>(), 0u8..8).prop_map(|(i, b)| Edit::Flip(i, b)),
+        1 => (any::<usize>(), 1usize..32).prop_map(|(i, n)| Edit::Delete(i, n)),
+        1 => (any::<usize>(), 1usize..80, 1usize..3000).prop_map(|(i, n, k)| Edit::Repeat(i, n, k)),
+        2 => (any::<usize>(), token.clone()).prop_map(|(i, t)| Edit::Insert(i, t)),
+        4 => (any::<usize>(), token).prop_map(|(i, t)| Edit::Replace(i, t)),
+        1 => any::<usize>().prop_map(Edit::Cut),
+    ]
+}
+
+fn apply(seed: &[u8], edits: &[Edit]) -> Vec<u8> {
+    let mut b = seed.to_vec();
+    for e in edits {
+        let at = |i: usize, len: usize| if len == 0 { 0 } else { i % len };
+        match *e {
+            Edit::Flip(i, bit) if !b.is_empty() => {
+                let i = at(i, b.len());
+                b[i] ^= 1 << bit;
+            }
+            Edit::Delete(i, n) if !b.is_empty() => {
+                let i = at(i, b.len());
+                let end = (i + n).min(b.len());
+                b.drain(i..end);
+            }
+            Edit::Repeat(i, n, k) if !b.is_empty() => {
+                let i = at(i, b.len());
+                let end = (i + n).min(b.len());
+                let stretch = b[i..end].to_vec();
+                let grown: Vec<u8> = std::iter::repeat_n(stretch, k).flatten().collect();
+                b.splice(end..end, grown);
+            }
+            Edit::Insert(i, t) => {
+                let i = at(i, b.len() + 1);
+                b.splice(i..i, NASTY[t].bytes());
+            }
+            Edit::Replace(i, t) if !b.is_empty() => {
+                let start = at(i, b.len());
+                if let Some(s) = (start..b.len()).find(|&j| b[j].is_ascii_digit()) {
+                    let e = (s..b.len())
+                        .find(|&j| !(b[j].is_ascii_digit() || b"eE.+-".contains(&b[j])))
+                        .unwrap_or(b.len());
+                    b.splice(s..e, NASTY[t].bytes());
+                }
+            }
+            Edit::Cut(i) => {
+                let i = at(i, b.len() + 1);
+                b.truncate(i);
+            }
+            _ => {}
+        }
+    }
+    b
+}
+
+/// One parser under test: seed files (one or more, each fuzzed in turn) and how to read them.
+struct Parser {
+    name: &'static str,
+    /// The files as the parser finds them on disk, valid.
+    seeds: Vec<Vec<u8>>,
+    /// Reads the files at these paths (as many as seeds); Ok or a typed error, never a panic.
+    parse: Box<dyn Fn(&[PathBuf]) -> bool>,
+}
+
+fn scratch() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("et-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn small_config() -> ScanConfig {
+    ScanConfig {
+        electrodes: 8,
+        protocol: ProtocolKind::Adjacent,
+        ..ScanConfig::REFERENCE
+    }
+}
+
+/// A structured square mesh, `n` x `n` cells, 4 electrodes (one boundary edge each), as Gmsh
+/// 2.2 text and as the three CSV files.
+fn square_mesh(n: usize) -> (String, [String; 3]) {
+    use std::fmt::Write as _;
+    let h = 0.1 / n as f64;
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    let mut msh = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
+    let mut nodes = String::from("x,y\n");
+    let _ = writeln!(msh, "{}", (n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 * h, j as f64 * h);
+            let _ = writeln!(msh, "{} {x} {y} 0", id(i, j) + 1);
+            let _ = writeln!(nodes, "{x},{y}");
+        }
+    }
+    let edges = [
+        (id(1, 0), id(2, 0)),
+        (id(n, 1), id(n, 2)),
+        (id(n - 1, n), id(n - 2, n)),
+        (id(0, n - 1), id(0, n - 2)),
+    ];
+    let mut electrodes = String::new();
+    let _ = writeln!(msh, "$EndNodes\n$Elements\n{}", 4 + 2 * n * n);
+    let mut k = 1;
+    for (e, (a, b)) in edges.iter().enumerate() {
+        let _ = writeln!(msh, "{k} 1 2 {} 1 {} {}", e + 1, a + 1, b + 1);
+        let _ = writeln!(electrodes, "{a},{b}");
+        k += 1;
+    }
+    let mut triangles = String::new();
+    for j in 0..n {
+        for i in 0..n {
+            for t in [
+                [id(i, j), id(i + 1, j), id(i + 1, j + 1)],
+                [id(i, j), id(i + 1, j + 1), id(i, j + 1)],
+            ] {
+                let _ = writeln!(msh, "{k} 2 2 1 1 {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+                let _ = writeln!(triangles, "{},{},{}", t[0], t[1], t[2]);
+                k += 1;
+            }
+        }
+    }
+    msh.push_str("$EndElements\n");
+    (msh, [nodes, triangles, electrodes])
+}
+
+fn model_json(dir: &Path) -> Vec<u8> {
+    let mut rng = Rng::new(5);
+    let (classes, per, p) = (3, 12, 4);
+    let y: Vec<u16> = (0..classes * per).map(|r| (r / per) as u16).collect();
+    let x = DMatrix::from_fn(y.len(), p, |r, _| {
+        f64::from(y[r]) * 0.01 + 1e-3 * rng.normal()
+    });
+    let fitted = Fitted::fit(
+        &x,
+        &y,
+        classes,
+        &FitOptions {
+            kind: ModelKind::Qda,
+            shrinkage: 0.1,
+            target: Target::Diagonal,
+        },
+    )
+    .unwrap();
+    let file = ModelFile::new(
+        &fitted,
+        0.1,
+        small_config(),
+        vec![0, 3, 7, 20],
+        vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]],
+        true,
+    );
+    let path = dir.join("seed-model.json");
+    file.save(&path).unwrap();
+    std::fs::read(path).unwrap()
+}
+
+fn recording(dir: &Path) -> Vec<u8> {
+    let config = small_config();
+    let header = Header::new("fuzz", &config).unwrap();
+    let path = dir.join("seed.jsonl");
+    let mut w = Writer::create(&path, &header).unwrap();
+    for seq in 0..3u32 {
+        let k = header.frame_len;
+        w.append(&Record {
+            seq,
+            t_us: seq * 1000,
+            flags: 0,
+            rail_count: 0,
+            voltages: (0..k).map(|i| i as f32 * 1e-3).collect(),
+            invalid: Vec::new(),
+            touches: None,
+        })
+        .unwrap();
+    }
+    drop(w);
+    std::fs::read(path).unwrap()
+}
+
+const DATASET: &str = "# et-dataset 1
+# config: {\"electrodes\":8,\"protocol\":\"Adjacent\",\"samples_per_step\":200,\"settle_samples\":40,\"current_na\":32000,\"sample_rate_hz\":10000,\"gain\":1}
+# feature_index: 0 3 7
+# centres_mm: 0 0; 10 10
+# electrodes_mm: -50 0; 50 0; 0 50; 0 -50
+# untouched: 0.1 0.2 0.3; 0.1 0.2 0.31
+label,x_mm,y_mm,visit,pressure_kpa,v0,v3,v7
+0,0.5,-0.2,0,20,0.11,0.2,0.3
+1,9.5,10.2,0,25,0.1,0.22,0.3
+0,0.1,0.3,1,30,0.12,0.2,0.29
+1,10.1,9.9,1,35,0.1,0.21,0.33
+";
+
+fn parsers() -> Vec<Parser> {
+    let dir = scratch();
+    let (msh, [nodes, triangles, electrodes]) = square_mesh(3);
+    let scene = include_str!("../../sim/scenes/square-13cm-16-swipe.toml");
+    vec![
+        Parser {
+            name: "scene TOML",
+            seeds: vec![scene.into()],
+            parse: Box::new(|p| et_sim::scene::Scene::load(&p[0]).is_ok()),
+        },
+        Parser {
+            name: "dataset CSV",
+            seeds: vec![DATASET.into()],
+            parse: Box::new(|p| et_learn::dataset::load_csv(&p[0]).is_ok()),
+        },
+        Parser {
+            name: "foreign CSV + targets",
+            seeds: vec![
+                "\u{feff}a,b,c,label\r\n1.5E-05,2,3,0\r\n4,5,6,1\r\n7,8,9,0\r\n\r\n".into(),
+                "x,y\n0.1,0.2\n0.3,0.4\n0.5,0.6\n".into(),
+            ],
+            parse: Box::new(|p| et_learn::dataset::import_csv(&p[0], Some(&p[1])).is_ok()),
+        },
+        Parser {
+            name: "model JSON",
+            seeds: vec![model_json(&dir)],
+            parse: Box::new(|p| ModelFile::load(&p[0]).is_ok()),
+        },
+        Parser {
+            name: "recording JSONL",
+            seeds: vec![recording(&dir)],
+            parse: Box::new(|p| et_host::recording::read(&p[0]).is_ok()),
+        },
+        Parser {
+            name: "Gmsh 2.2",
+            seeds: vec![msh.into()],
+            parse: Box::new(|p| et_recon::mesh::Mesh::from_gmsh(&p[0]).is_ok()),
+        },
+        Parser {
+            name: "CSV mesh",
+            seeds: vec![nodes.into(), triangles.into(), electrodes.into()],
+            parse: Box::new(|p| et_recon::mesh::Mesh::from_csv(&p[0], &p[1], &p[2]).is_ok()),
+        },
+    ]
+}
+
+#[test]
+fn every_parser_survives_damaged_files_in_bounded_memory() {
+    let cases: u32 = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2_000);
+    let dir = scratch();
+    for target in parsers() {
+        let paths: Vec<PathBuf> = (0..target.seeds.len())
+            .map(|i| dir.join(format!("case-{i}")))
+            .collect();
+        let write = |files: &[Vec<u8>]| {
+            for (p, b) in paths.iter().zip(files) {
+                std::fs::write(p, b).unwrap();
+            }
+        };
+        eprintln!("fuzzing {}", target.name);
+        // The seeds are valid: damage starts from files the parser accepts.
+        write(&target.seeds);
+        assert!((target.parse)(&paths), "{}: the seed parses", target.name);
+        let started = Instant::now();
+        let accepted = std::cell::Cell::new(0u64);
+        // The largest peak allocation seen, and the size of the input that caused it.
+        let largest = std::cell::Cell::new((0usize, 0usize));
+        let mut runner = TestRunner::new(Config {
+            cases,
+            failure_persistence: None,
+            ..Config::default()
+        });
+        let strategy = (
+            0..target.seeds.len(),
+            proptest::collection::vec(edit(), 1..6),
+        );
+        let result = runner.run(&strategy, |(which, edits)| {
+            let mut files = target.seeds.clone();
+            files[which] = apply(&files[which], &edits);
+            write(&files);
+            let len: usize = files.iter().map(Vec::len).sum();
+            let before = ALLOC.current_usage();
+            ALLOC.reset_peak_usage();
+            let ok = (target.parse)(&paths);
+            let peak = ALLOC.peak_usage().saturating_sub(before);
+            accepted.set(accepted.get() + u64::from(ok));
+            if peak > largest.get().0 {
+                largest.set((peak, len));
+            }
+            prop_assert!(
+                peak <= allowance(len),
+                "{}: {peak} bytes allocated for a {len}-byte input",
+                target.name
+            );
+            Ok(())
+        });
+        if let Err(e) = result {
+            panic!("{}: {e}", target.name);
+        }
+        let (peak, len) = largest.get();
+        println!(
+            "{:<22} {cases:>8} damaged inputs, {:>7} accepted, no panic; largest peak \
+             allocation {:.2} MB (for a {:.1} kB input); {:.1} s",
+            target.name,
+            accepted.get(),
+            peak as f64 / 1e6,
+            len as f64 / 1e3,
+            started.elapsed().as_secs_f64(),
+        );
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
