@@ -13,6 +13,9 @@
 //! its CRC-32, [`Model::parse`] and matches the scan configuration replaces the old model. A
 //! failed or abandoned upload leaves the old model classifying.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use heapless::Vec;
 
 use crate::config::ScanConfig;
@@ -336,8 +339,8 @@ impl<S: ModelStore> Device<S> {
         // The previous chunk again (its acknowledgement was lost): accept it if it is the same.
         if up.last_chunk > 0 && offset + up.last_chunk == up.received && data.len() == up.last_chunk
         {
-            let written = &self.store.read(up.slot)[offset..up.received];
-            return if written == data {
+            let written = self.store.read(up.slot).get(offset..up.received);
+            return if written == Some(data) {
                 Ok(())
             } else {
                 Err(Refusal::UploadOrder)
@@ -364,7 +367,11 @@ impl<S: ModelStore> Device<S> {
             return Err(Refusal::UploadOrder);
         }
         self.upload = None;
-        let bytes = &self.store.read(up.slot)[..up.len];
+        let bytes = self
+            .store
+            .read(up.slot)
+            .get(..up.len)
+            .ok_or(Refusal::BadModel)?;
         if wire::crc32(bytes) != up.crc {
             return Err(Refusal::BadModel);
         }
@@ -472,15 +479,16 @@ impl<S: ModelStore> Device<S> {
             let hit = report.rail.get(usize::from(step.k));
             for e in [step.measurement.positive.0, step.measurement.negative.0] {
                 let e = usize::from(e);
-                probed[e] += 1;
-                railed[e] += u16::from(hit);
+                if let (Some(p), Some(r)) = (probed.get_mut(e), railed.get_mut(e)) {
+                    *p += 1;
+                    *r += u16::from(hit);
+                }
             }
         }
         let mut bits = 0u32;
-        for e in 0..usize::from(self.protocol.electrodes()) {
-            if probed[e] > 0
-                && usize::from(railed[e]) * 100 >= SUSPECT_RAIL_PERCENT * usize::from(probed[e])
-            {
+        let electrodes = usize::from(self.protocol.electrodes());
+        for (e, (&p, &r)) in probed.iter().zip(&railed).enumerate().take(electrodes) {
+            if p > 0 && usize::from(r) * 100 >= SUSPECT_RAIL_PERCENT * usize::from(p) {
                 bits |= 1 << e;
             }
         }
@@ -489,4 +497,5 @@ impl<S: ModelStore> Device<S> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

@@ -36,6 +36,9 @@
 //! A full-covariance QDA with C = 49, p = 96 takes 931 KB in f32 and 466 KB in f16
 //! ([`model_len`]).
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use crate::config::ScanConfig;
 use crate::precision::{f16_to_f32, f32_to_f16};
 use crate::protocol::{Pattern, Protocol, ProtocolError, ProtocolKind, SkipSet};
@@ -333,12 +336,18 @@ pub fn model_len(kind: ModelKind, precision: Precision, classes: usize, features
     layout(kind, precision, classes, features).map_or(usize::MAX, |l| l.crc + 4)
 }
 
+/// The u16 at `at`, or 0 past the end (a blob that passed `Model::parse` has every table).
 fn rd_u16(b: &[u8], at: usize) -> u16 {
-    u16::from_le_bytes([b[at], b[at + 1]])
+    b.get(at..)
+        .and_then(<[u8]>::first_chunk)
+        .map_or(0, |c| u16::from_le_bytes(*c))
 }
 
+/// The f32 at `at`, or NaN past the end (which every check refuses).
 fn rd_f32(b: &[u8], at: usize) -> f32 {
-    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+    b.get(at..)
+        .and_then(<[u8]>::first_chunk)
+        .map_or(f32::NAN, |c| f32::from_le_bytes(*c))
 }
 
 fn protocol_tag(kind: ProtocolKind) -> (u8, Pattern) {
@@ -381,14 +390,9 @@ impl<'a> Model<'a> {
     /// The first [`ModelError`] found; nothing of a refused blob is ever used.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, ModelError> {
         let model = Self::parse_header(bytes)?;
-        let crc_at = model.layout.crc;
-        let stored_crc = u32::from_le_bytes([
-            bytes[crc_at],
-            bytes[crc_at + 1],
-            bytes[crc_at + 2],
-            bytes[crc_at + 3],
-        ]);
-        if crc32(&bytes[..crc_at]) != stored_crc {
+        // parse_header checked the length: the CRC is the last 4 bytes.
+        let (body, stored_crc) = bytes.split_last_chunk::<4>().ok_or(ModelError::Checksum)?;
+        if crc32(body) != u32::from_le_bytes(*stored_crc) {
             return Err(ModelError::Checksum);
         }
         model.check_tables()?;
@@ -405,35 +409,38 @@ impl<'a> Model<'a> {
     /// # Errors
     /// The header's [`ModelError`]s.
     pub fn parse_header(bytes: &'a [u8]) -> Result<Self, ModelError> {
+        let too_short = ModelError::Length {
+            expected: 0,
+            got: bytes.len(),
+        };
         if bytes.len() < HEADER_LEN + 4 {
-            return Err(ModelError::Length {
-                expected: 0,
-                got: bytes.len(),
-            });
+            return Err(too_short);
         }
-        if bytes[..4] != MODEL_MAGIC {
+        // The header as a fixed array: every index below is checked at compile time.
+        let h: &[u8; HEADER_LEN] = bytes.first_chunk().ok_or(too_short)?;
+        if h[..4] != MODEL_MAGIC {
             return Err(ModelError::Magic);
         }
-        let version = rd_u16(bytes, 4);
+        let version = rd_u16(h, 4);
         if version != MODEL_VERSION {
             return Err(ModelError::Version { got: version });
         }
-        let kind = match bytes[6] {
+        let kind = match h[6] {
             0 => ModelKind::Qda,
             1 => ModelKind::Lda,
             _ => return Err(ModelError::Header),
         };
-        let precision = match bytes[7] {
+        let precision = match h[7] {
             0 => Precision::F32,
             1 => Precision::F16,
             _ => return Err(ModelError::Header),
         };
-        if bytes[17] & !FLAG_REFERENCED != 0 || bytes[22..32].iter().any(|&b| b != 0) {
+        if h[17] & !FLAG_REFERENCED != 0 || h[22..32].iter().any(|&b| b != 0) {
             return Err(ModelError::Header);
         }
-        let classes = usize::from(rd_u16(bytes, 8));
-        let features = usize::from(rd_u16(bytes, 10));
-        let frame_len = rd_u16(bytes, 12);
+        let classes = usize::from(rd_u16(h, 8));
+        let features = usize::from(rd_u16(h, 10));
+        let frame_len = rd_u16(h, 12);
         // Dimensions before any arithmetic on them.
         if classes < 2 || features == 0 || features > usize::from(frame_len) {
             return Err(ModelError::Dimensions);
@@ -445,14 +452,12 @@ impl<'a> Model<'a> {
                 got: bytes.len(),
             });
         }
-        let electrodes = bytes[14];
+        let electrodes = h[14];
         let pattern = Pattern {
-            drive_skip: bytes[16],
-            measure_skips: SkipSet(u32::from_le_bytes([
-                bytes[18], bytes[19], bytes[20], bytes[21],
-            ])),
+            drive_skip: h[16],
+            measure_skips: SkipSet(u32::from_le_bytes([h[18], h[19], h[20], h[21]])),
         };
-        let protocol_kind = match bytes[15] {
+        let protocol_kind = match h[15] {
             0 => ProtocolKind::Adjacent,
             1 => ProtocolKind::PseudoPolar,
             2 => ProtocolKind::PpPp,
@@ -476,7 +481,7 @@ impl<'a> Model<'a> {
             frame_len: usize::from(frame_len),
             protocol,
             layout,
-            referenced: bytes[17] & FLAG_REFERENCED != 0,
+            referenced: h[17] & FLAG_REFERENCED != 0,
         })
     }
 
@@ -647,11 +652,14 @@ impl<'a> Model<'a> {
     fn standardise(&self, v_m: &[f32], v_0: &[f32], z: &mut [f32]) -> Result<(), EvalError> {
         for (j, zj) in z.iter_mut().enumerate() {
             let i = usize::from(self.feature_index(j));
-            let x = if self.referenced {
-                v_m[i] - v_0[i]
-            } else {
-                v_m[i]
+            // In range for a blob that passed `parse` (indices < K = the frame's length).
+            let (Some(&m), Some(&o)) = (v_m.get(i), v_0.get(i)) else {
+                return Err(EvalError::FrameLength {
+                    expected: i + 1,
+                    got: v_m.len().min(v_0.len()),
+                });
             };
+            let x = if self.referenced { m - o } else { m };
             if !x.is_finite() {
                 return Err(EvalError::NonFinite);
             }
@@ -665,21 +673,29 @@ impl<'a> Model<'a> {
         let quad_or_lin = match self.kind {
             ModelKind::Qda => {
                 // Forward substitution L_c y = z - mu_c; the quadratic form is |y|^2.
+                // z and work hold p values each (checked by the caller).
                 let base = c * packed_len(p);
                 let mut q = 0.0f32;
-                for r in 0..p {
+                for (r, zr) in z.iter().enumerate().take(p) {
                     let row = base + packed_len(r);
-                    let mut acc = z[r] - self.vector(c, r);
-                    for (k, yk) in work[..r].iter().enumerate() {
+                    let mut acc = zr - self.vector(c, r);
+                    for (k, yk) in work.iter().take(r).enumerate() {
                         acc -= self.stored(self.layout.factors, row + k) * yk;
                     }
                     let y = acc / self.stored(self.layout.factors, row + r);
-                    work[r] = y;
+                    if let Some(w) = work.get_mut(r) {
+                        *w = y;
+                    }
                     q += y * y;
                 }
                 -0.5 * q
             }
-            ModelKind::Lda => (0..p).map(|j| z[j] * self.vector(c, j)).sum(),
+            ModelKind::Lda => z
+                .iter()
+                .take(p)
+                .enumerate()
+                .map(|(j, zj)| zj * self.vector(c, j))
+                .sum(),
         };
         quad_or_lin + self.constant(c) + self.log_prior(c)
     }
@@ -717,7 +733,11 @@ impl<'a> Model<'a> {
                 given: out.len(),
             });
         }
-        self.each_discriminant(v_m, v_0, scratch, |c, d| out[c] = d)
+        self.each_discriminant(v_m, v_0, scratch, |c, d| {
+            if let Some(o) = out.get_mut(c) {
+                *o = d;
+            }
+        })
     }
 
     fn each_discriminant(
@@ -835,6 +855,9 @@ pub struct ModelTables<'t> {
 /// # Errors
 /// [`ModelError::Table`] for inconsistent lengths or a short `out`, else what
 /// [`Model::parse`] finds.
+// Writes our own tables into `out[..len]`, whose length is checked first; nothing read here
+// comes from a file or the wire, and the result is re-read by `Model::parse`.
+#[allow(clippy::indexing_slicing)]
 pub fn write_model(t: &ModelTables<'_>, out: &mut [u8]) -> Result<usize, ModelError> {
     let p = t.feature_index.len();
     let c_n = t.positions_mm.len();
@@ -910,4 +933,5 @@ pub fn write_model(t: &ModelTables<'_>, out: &mut [u8]) -> Result<usize, ModelEr
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

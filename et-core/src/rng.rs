@@ -8,6 +8,8 @@
 #[derive(Clone, Debug)]
 pub struct Rng {
     s: [u64; 4],
+    /// Read only by the normal draw (feature `std`).
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     spare: Option<f64>,
 }
 

@@ -16,6 +16,9 @@
 //! The golden byte vectors in this module's tests are the compatibility contract between
 //! firmware and host: change them only together with [`WIRE_VERSION`].
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use heapless::Vec;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -359,6 +362,9 @@ pub const fn cobs_max_len(n: usize) -> usize {
 ///
 /// # Errors
 /// [`WireError::BufferFull`] if `out` is too small (nothing useful is left in `out`).
+// Writes our own message into `out`, whose length is checked before each index; nothing here
+// comes from the wire (the property tests encode every message shape).
+#[allow(clippy::indexing_slicing)]
 pub fn encode<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, WireError> {
     // Serialise at the back of `out`, leaving room in front for the COBS overhead and the
     // leading delimiter, then COBS-encode forward in place (the write position never passes
@@ -389,6 +395,9 @@ pub fn encode<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, WireEr
 
 /// COBS-encodes `buf[src..src + len]` into `buf[dst..]`, `dst < src`, returning the encoded
 /// length. Safe in place because a block's code byte is written only after its data moved.
+// Our own bytes, in bounds that `encode` checked (and the write position never passes the
+// read position, checked per byte).
+#[allow(clippy::indexing_slicing)]
 fn cobs_encode_forward(
     buf: &mut [u8],
     src: usize,
@@ -430,29 +439,29 @@ fn cobs_encode_forward(
 
 /// Decodes COBS in place (no delimiters in `buf`); returns the decoded length.
 fn cobs_decode_in_place(buf: &mut [u8]) -> Result<usize, WireError> {
+    // The write position w never passes the read position r.
     let (mut r, mut w) = (0, 0);
-    while r < buf.len() {
-        let code = buf[r];
+    while let Some(&code) = buf.get(r) {
         if code == 0 {
             return Err(WireError::Cobs);
         }
         r += 1;
-        let run = usize::from(code) - 1;
-        if r + run > buf.len() {
+        let end = r + usize::from(code) - 1;
+        if end > buf.len() {
             return Err(WireError::Cobs);
         }
-        for _ in 0..run {
-            let b = buf[r];
+        while r < end {
+            let b = buf.get(r).copied().ok_or(WireError::Cobs)?;
             if b == 0 {
                 return Err(WireError::Cobs);
             }
-            buf[w] = b;
+            *buf.get_mut(w).ok_or(WireError::Cobs)? = b;
             w += 1;
             r += 1;
         }
         // A code below 0xFF ends with an implied zero, unless it ends the packet.
         if code != 0xFF && r < buf.len() {
-            buf[w] = 0;
+            *buf.get_mut(w).ok_or(WireError::Cobs)? = 0;
             w += 1;
         }
     }
@@ -468,19 +477,20 @@ fn cobs_decode_in_place(buf: &mut [u8]) -> Result<usize, WireError> {
 /// [`WireError::Body`], checked in that order.
 pub fn decode<T: DeserializeOwned>(packet: &mut [u8]) -> Result<T, WireError> {
     let n = cobs_decode_in_place(packet)?;
-    let raw = &packet[..n];
-    if n < 5 {
+    let raw = packet.get(..n).ok_or(WireError::Cobs)?;
+    let Some((body, crc)) = raw.split_last_chunk::<4>() else {
         return Err(WireError::Short);
-    }
-    let (body, crc) = raw.split_at(n - 4);
-    let crc = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
-    if CRC32.checksum(body) != crc {
+    };
+    let [version, content @ ..] = body else {
+        return Err(WireError::Short);
+    };
+    if CRC32.checksum(body) != u32::from_le_bytes(*crc) {
         return Err(WireError::Crc);
     }
-    if body[0] != WIRE_VERSION {
-        return Err(WireError::Version { got: body[0] });
+    if *version != WIRE_VERSION {
+        return Err(WireError::Version { got: *version });
     }
-    match postcard::take_from_bytes::<T>(&body[1..]) {
+    match postcard::take_from_bytes::<T>(content) {
         Ok((message, [])) => Ok(message),
         _ => Err(WireError::Body),
     }
@@ -526,11 +536,12 @@ impl<const N: usize> Accumulator<N> {
     /// `Some(Ok(message))` for a good packet, `Some(Err(e))` for a dropped one.
     pub fn feed<T: DeserializeOwned>(&mut self, byte: u8) -> Option<Result<T, WireError>> {
         if byte != 0 {
-            if self.len < N {
-                self.buf[self.len] = byte;
-                self.len += 1;
-            } else {
-                self.overflowed = true;
+            match self.buf.get_mut(self.len) {
+                Some(slot) => {
+                    *slot = byte;
+                    self.len += 1;
+                }
+                None => self.overflowed = true,
             }
             return None;
         }
@@ -543,7 +554,11 @@ impl<const N: usize> Accumulator<N> {
         if len == 0 {
             return None;
         }
-        Some(decode(&mut self.buf[..len]))
+        Some(
+            self.buf
+                .get_mut(..len)
+                .map_or(Err(WireError::Overflow), decode),
+        )
     }
 
     /// Bytes of the packet in progress.
@@ -560,4 +575,5 @@ impl<const N: usize> Accumulator<N> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

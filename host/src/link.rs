@@ -12,6 +12,9 @@
 //!   for its reply with a timeout, keeping the frames that arrive meanwhile;
 //!   [`Link::upload_model`] sends a model blob in chunks and commits it.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::collections::VecDeque;
 use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -292,7 +295,7 @@ impl Link {
     pub fn send(&self, command: &Command) -> Result<(), LinkError> {
         let mut buf = [0u8; wire::COMMAND_PACKET_MAX];
         let n = wire::encode(command, &mut buf).map_err(LinkError::Encode)?;
-        self.send_bytes(&buf[..n])
+        self.send_bytes(buf.get(..n).unwrap_or_default())
     }
 
     /// The next message from the device (kept ones first), waiting at most `timeout`.
@@ -418,7 +421,7 @@ impl Reader {
             };
             match p.read(&mut buf) {
                 Ok(0) => {}
-                Ok(n) => decoder.feed(&buf[..n], &mut messages),
+                Ok(n) => decoder.feed(buf.get(..n).unwrap_or_default(), &mut messages),
                 Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                 Err(_) => {
@@ -530,4 +533,5 @@ impl Keepalive {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

@@ -4,6 +4,9 @@
 //! with non-finite values is kept and flagged (see [`crate::recording`]); a pulled cable is
 //! waited for, and a board that comes back idle is sent Start again ([`Keepalive`]).
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 

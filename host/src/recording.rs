@@ -11,6 +11,9 @@
 //! flushed as soon as its frame arrives, so a crash or a pulled cable loses at most the frame
 //! in flight. A reader skips a truncated last line and says so.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -404,6 +407,7 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
     use et_core::Micros;

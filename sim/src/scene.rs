@@ -7,6 +7,9 @@
 //! A scene costs what it asks for: the grid follows the sheet's size and electrodes (see
 //! [`SheetSpec::default_resolution`]), and nothing is simulated that the scene does not name.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::path::Path;
 use std::sync::Arc;
 
@@ -329,15 +332,17 @@ pub const MAX_SCENE_BYTES: usize = 1 << 20;
 /// The line where the nesting goes too deep, for people.
 fn nesting_within(text: &str, max: usize) -> Result<(), String> {
     let b = text.as_bytes();
+    let at = |i: usize| b.get(i).copied();
+    let from = |i: usize| b.get(i..).unwrap_or_default();
     let (mut i, mut line) = (0, 1usize);
     let mut open: Vec<u8> = Vec::new();
     // Skips to just past `close` (a string's end), counting lines; escapes in basic strings.
     let skip = |mut i: usize, close: &[u8], escapes: bool, one_line: bool, line: &mut usize| {
-        while i < b.len() {
-            if b[i..].starts_with(close) {
+        while let Some(c) = at(i) {
+            if from(i).starts_with(close) {
                 return i + close.len();
             }
-            match b[i] {
+            match c {
                 b'\\' if escapes => i += 1,
                 b'\n' if one_line => return i,
                 b'\n' => *line += 1,
@@ -347,27 +352,27 @@ fn nesting_within(text: &str, max: usize) -> Result<(), String> {
         }
         i
     };
-    while i < b.len() {
-        match b[i] {
+    while let Some(c) = at(i) {
+        match c {
             b'#' => {
-                while i < b.len() && b[i] != b'\n' {
+                while at(i).is_some_and(|c| c != b'\n') {
                     i += 1;
                 }
                 continue;
             }
             b'\n' => line += 1,
             b'"' | b'\'' => {
-                let q = b[i];
-                let triple = b[i..].starts_with(&[q, q, q]);
-                let (open, close): (usize, &[u8]) = if triple {
-                    (3, if q == b'"' { b"\"\"\"" } else { b"'''" })
-                } else {
-                    (1, if q == b'"' { b"\"" } else { b"'" })
+                let triple = from(i).starts_with(&[c, c, c]);
+                let (skipped, close): (usize, &[u8]) = match (c, triple) {
+                    (b'"', true) => (3, b"\"\"\""),
+                    (_, true) => (3, b"'''"),
+                    (b'"', false) => (1, b"\""),
+                    (_, false) => (1, b"'"),
                 };
-                i = skip(i + open, close, q == b'"', !triple, &mut line);
+                i = skip(i + skipped, close, c == b'"', !triple, &mut line);
                 continue;
             }
-            c @ (b'[' | b'{') => {
+            b'[' | b'{' => {
                 open.push(c);
                 if open.len() > max {
                     return Err(format!(
@@ -826,4 +831,5 @@ impl Run {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

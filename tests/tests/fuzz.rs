@@ -154,7 +154,7 @@ struct Parser {
     /// The files as the parser finds them on disk, valid.
     seeds: Vec<Vec<u8>>,
     /// Reads the files at these paths (as many as seeds); Ok or a typed error, never a panic.
-    parse: Box<dyn Fn(&[PathBuf]) -> bool>,
+    parse: fn(&[PathBuf]) -> bool,
 }
 
 fn scratch() -> PathBuf {
@@ -292,12 +292,12 @@ fn parsers() -> Vec<Parser> {
         Parser {
             name: "scene TOML",
             seeds: vec![scene.into()],
-            parse: Box::new(|p| et_sim::scene::Scene::load(&p[0]).is_ok()),
+            parse: |p| et_sim::scene::Scene::load(&p[0]).is_ok(),
         },
         Parser {
             name: "dataset CSV",
             seeds: vec![DATASET.into()],
-            parse: Box::new(|p| et_learn::dataset::load_csv(&p[0]).is_ok()),
+            parse: |p| et_learn::dataset::load_csv(&p[0]).is_ok(),
         },
         Parser {
             name: "foreign CSV + targets",
@@ -305,27 +305,27 @@ fn parsers() -> Vec<Parser> {
                 "\u{feff}a,b,c,label\r\n1.5E-05,2,3,0\r\n4,5,6,1\r\n7,8,9,0\r\n\r\n".into(),
                 "x,y\n0.1,0.2\n0.3,0.4\n0.5,0.6\n".into(),
             ],
-            parse: Box::new(|p| et_learn::dataset::import_csv(&p[0], Some(&p[1])).is_ok()),
+            parse: |p| et_learn::dataset::import_csv(&p[0], Some(&p[1])).is_ok(),
         },
         Parser {
             name: "model JSON",
             seeds: vec![model_json(&dir)],
-            parse: Box::new(|p| ModelFile::load(&p[0]).is_ok()),
+            parse: |p| ModelFile::load(&p[0]).is_ok(),
         },
         Parser {
             name: "recording JSONL",
             seeds: vec![recording(&dir)],
-            parse: Box::new(|p| et_host::recording::read(&p[0]).is_ok()),
+            parse: |p| et_host::recording::read(&p[0]).is_ok(),
         },
         Parser {
             name: "Gmsh 2.2",
             seeds: vec![msh.into()],
-            parse: Box::new(|p| et_recon::mesh::Mesh::from_gmsh(&p[0]).is_ok()),
+            parse: |p| et_recon::mesh::Mesh::from_gmsh(&p[0]).is_ok(),
         },
         Parser {
             name: "CSV mesh",
             seeds: vec![nodes.into(), triangles.into(), electrodes.into()],
-            parse: Box::new(|p| et_recon::mesh::Mesh::from_csv(&p[0], &p[1], &p[2]).is_ok()),
+            parse: |p| et_recon::mesh::Mesh::from_csv(&p[0], &p[1], &p[2]).is_ok(),
         },
     ]
 }

@@ -19,6 +19,9 @@
 //! columns named `label` (class) or `x` and `y` (position) are targets and all others are
 //! features; targets may also come from a second file with the same rows.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::path::{Path, PathBuf};
 
 use et_core::ScanConfig;
@@ -134,21 +137,18 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         header.push("pressure_kpa".into());
     }
     let _ = writeln!(s, "{}", header.join(","));
-    for r in 0..data.x.nrows() {
-        for j in 0..data.x.ncols() {
-            let _ = write!(s, "{},", data.x[(r, j)]);
+    let rows = data
+        .x
+        .row_iter()
+        .zip(&data.positions)
+        .zip(data.y.iter().zip(&data.visit));
+    for (r, ((features, p), (label, visit))) in rows.enumerate() {
+        for v in &features {
+            let _ = write!(s, "{v},");
         }
-        let p = data.positions[r];
-        let _ = write!(
-            s,
-            "{},{},{},{}",
-            data.y[r],
-            p[0] * 1e3,
-            p[1] * 1e3,
-            data.visit[r]
-        );
-        if with_pressure {
-            let _ = write!(s, ",{}", data.pressure[r] * 1e-3);
+        let _ = write!(s, "{label},{},{},{visit}", p[0] * 1e3, p[1] * 1e3);
+        if let Some(kpa) = data.pressure.get(r).filter(|_| with_pressure) {
+            let _ = write!(s, ",{}", kpa * 1e-3);
         }
         s.push('\n');
     }
@@ -280,52 +280,43 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             ),
         ));
     }
-    if let Some(bad) = untouched.iter().position(|u| u.len() != features.len()) {
+    if let Some((bad, u)) = untouched
+        .iter()
+        .enumerate()
+        .find(|(_, u)| u.len() != features.len())
+    {
         return Err(content(
             path,
             0,
             None,
             format!(
                 "untouched frame {bad} has {} values, the data {} features",
-                untouched[bad].len(),
+                u.len(),
                 features.len()
             ),
         ));
     }
-    let baselines = DMatrix::from_fn(untouched.len(), features.len(), |r, j| untouched[r][j]);
-    let n = table.rows.len();
-    let x = DMatrix::from_fn(n, features.len(), |r, j| table.rows[r].1[features[j]]);
-    let int = |r: usize, c: usize, name: &str| {
-        let v = table.rows[r].1[c];
-        if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u16::MAX) {
-            Ok(v as u16)
-        } else {
-            Err(content(
-                path,
-                table.rows[r].0,
-                Some(name.into()),
-                format!("{v} is not a whole number"),
-            ))
-        }
-    };
-    let y = (0..n)
-        .map(|r| int(r, label, "label"))
-        .collect::<Result<Vec<_>, _>>()?;
-    let visit = (0..n)
-        .map(|r| int(r, visit, "visit"))
-        .collect::<Result<Vec<_>, _>>()?;
-    let positions = table
-        .rows
-        .iter()
-        .map(|(_, v)| [v[xc] * 1e-3, v[yc] * 1e-3])
+    let p = features.len();
+    let baselines =
+        DMatrix::from_row_iterator(untouched.len(), p, untouched.iter().flatten().copied());
+    let column = |c| table.column(path, c);
+    let x = table.matrix(path, &features)?;
+    let y = table.whole(path, label)?;
+    let visit = table.whole(path, visit)?;
+    let positions = column(xc)?
+        .into_iter()
+        .zip(column(yc)?)
+        .map(|(x, y)| [x * 1e-3, y * 1e-3])
         .collect();
+    let pressure = match pressure_col {
+        Some(c) => column(c)?.into_iter().map(|kpa| kpa * 1e3).collect(),
+        None => Vec::new(),
+    };
     Ok(Dataset {
         x,
         y,
         positions,
-        pressure: pressure_col.map_or_else(Vec::new, |c| {
-            table.rows.iter().map(|(_, v)| v[c] * 1e3).collect()
-        }),
+        pressure,
         electrodes,
         centres,
         visit,
@@ -337,8 +328,51 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
 
 struct Table {
     names: Vec<String>,
-    /// (1-based line, values).
+    /// (1-based line, values): every row has a value for every name (`parse_table` checks).
     rows: Vec<(usize, Vec<f64>)>,
+}
+
+impl Table {
+    /// Column `c` of every row.
+    fn column(&self, path: &Path, c: usize) -> Result<Vec<f64>, DatasetError> {
+        self.rows
+            .iter()
+            .map(|(line, v)| {
+                v.get(c).copied().ok_or_else(|| {
+                    content(path, *line, self.names.get(c).cloned(), "missing value")
+                })
+            })
+            .collect()
+    }
+
+    /// Columns `cols`, as an n x cols.len() matrix.
+    fn matrix(&self, path: &Path, cols: &[usize]) -> Result<DMatrix<f64>, DatasetError> {
+        let mut x = DMatrix::zeros(self.rows.len(), cols.len());
+        for (j, &c) in cols.iter().enumerate() {
+            x.set_column(j, &nalgebra::DVector::from_vec(self.column(path, c)?));
+        }
+        Ok(x)
+    }
+
+    /// Column `c` as whole numbers 0..=65535 (class labels, visits).
+    fn whole(&self, path: &Path, c: usize) -> Result<Vec<u16>, DatasetError> {
+        self.column(path, c)?
+            .into_iter()
+            .zip(&self.rows)
+            .map(|(v, (line, _))| {
+                if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u16::MAX) {
+                    Ok(v as u16)
+                } else {
+                    Err(content(
+                        path,
+                        *line,
+                        self.names.get(c).cloned(),
+                        format!("{v} is not a whole number from 0 to 65535"),
+                    ))
+                }
+            })
+            .collect()
+    }
 }
 
 /// A header row then numeric rows; blank and `#` lines skipped. Every value finite.
@@ -454,40 +488,24 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
     };
     let is_target = |n: &str| ["label", "x", "y"].contains(&n);
     let feature_cols: Vec<usize> = (0..main.names.len())
-        .filter(|&c| !is_target(&main.names[c]))
+        .filter(|&c| main.names.get(c).is_some_and(|n| !is_target(n)))
         .collect();
     if feature_cols.is_empty() {
         return Err(content(features, 0, None, "no feature columns"));
     }
-    let n = main.rows.len();
-    let x = DMatrix::from_fn(n, feature_cols.len(), |r, j| {
-        main.rows[r].1[feature_cols[j]]
-    });
+    let x = main.matrix(features, &feature_cols)?;
     let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
     let find = |name: &str| ttable.names.iter().position(|c| c == name);
-    let labels = find("label")
-        .map(|c| {
-            ttable
-                .rows
-                .iter()
-                .map(|(line, v)| {
-                    let l = v[c];
-                    if l >= 0.0 && l.fract() == 0.0 && l <= f64::from(u16::MAX) {
-                        Ok(l as u16)
-                    } else {
-                        Err(content(
-                            tpath,
-                            *line,
-                            Some("label".into()),
-                            format!("{l} is not a class number"),
-                        ))
-                    }
-                })
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .transpose()?;
+    let labels = find("label").map(|c| ttable.whole(tpath, c)).transpose()?;
     let positions = match (find("x"), find("y")) {
-        (Some(cx), Some(cy)) => Some(ttable.rows.iter().map(|(_, v)| [v[cx], v[cy]]).collect()),
+        (Some(cx), Some(cy)) => Some(
+            ttable
+                .column(tpath, cx)?
+                .into_iter()
+                .zip(ttable.column(tpath, cy)?)
+                .map(|(x, y)| [x, y])
+                .collect(),
+        ),
         (None, None) => None,
         _ => {
             return Err(content(
@@ -510,7 +528,7 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
         x,
         feature_names: feature_cols
             .iter()
-            .map(|&c| main.names[c].clone())
+            .filter_map(|&c| main.names.get(c).cloned())
             .collect(),
         labels,
         positions,

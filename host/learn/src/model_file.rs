@@ -2,6 +2,9 @@
 //! be used and exported: feature indices, class centres, the scan configuration, and how it
 //! was trained. `et train` writes it; `et eval` and `et export` read it.
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::path::{Path, PathBuf};
 
 use et_core::ScanConfig;
@@ -129,7 +132,7 @@ impl ModelFile {
                     factor: if c.factor.nrows() == p {
                         (0..p)
                             .flat_map(|r| (0..=r).map(move |q| (r, q)))
-                            .map(|(r, q)| c.factor[(r, q)])
+                            .map(|(r, q)| c.factor.get((r, q)).copied().unwrap_or(0.0))
                             .collect()
                     } else {
                         Vec::new()
@@ -169,19 +172,15 @@ impl ModelFile {
                 if !ok {
                     return Err(FitError::Shape("a class table has the wrong length".into()));
                 }
-                let mut factor = DMatrix::zeros(
-                    if kind == ModelKind::Qda { p } else { 0 },
-                    if kind == ModelKind::Qda { p } else { 0 },
-                );
-                if kind == ModelKind::Qda {
-                    let mut i = 0;
-                    for r in 0..p {
-                        for q in 0..=r {
-                            factor[(r, q)] = c.factor[i];
-                            i += 1;
-                        }
+                // The packed lower triangle, row by row (its length was checked above).
+                let n = if kind == ModelKind::Qda { p } else { 0 };
+                let factor = DMatrix::from_fn(n, n, |r, q| {
+                    if q <= r {
+                        c.factor.get(r * (r + 1) / 2 + q).copied().unwrap_or(0.0)
+                    } else {
+                        0.0
                     }
-                }
+                });
                 Ok(ClassFit {
                     count: c.count,
                     mean: DVector::from_vec(c.mean.clone()),

@@ -9,6 +9,9 @@
 //! `electrodes.csv` (one row per electrode: its boundary node indices in order along it). A
 //! header row is allowed in each (a first row that is not numeric is skipped).
 
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -101,10 +104,10 @@ impl Mesh {
             let v: Result<Vec<f64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
                 l.split_whitespace().map(str::parse).collect()
             });
-            match v {
-                Ok(v) if v.len() >= 3 && v[1..3].iter().all(|x| x.is_finite()) => {
-                    ids.insert(v[0] as i64, nodes.len());
-                    nodes.push([v[1], v[2]]);
+            match v.as_deref() {
+                Ok(&[id, x, y, ..]) if x.is_finite() && y.is_finite() => {
+                    ids.insert(id as i64, nodes.len());
+                    nodes.push([x, y]);
                 }
                 _ => return Err(bad(path, ln + 1, "node line: id x y z")),
             }
@@ -118,8 +121,10 @@ impl Mesh {
             let v: Result<Vec<i64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
                 l.split_whitespace().map(str::parse).collect()
             });
-            let v = match v {
-                Ok(v) if v.len() >= 3 => v,
+            let (kind, ntags, rest) = match v.as_deref() {
+                Ok(&[_, kind, ntags, ref rest @ ..]) => {
+                    (kind, usize::try_from(ntags).unwrap_or(0), rest)
+                }
                 _ => {
                     return Err(bad(
                         path,
@@ -128,24 +133,20 @@ impl Mesh {
                     ));
                 }
             };
-            let (kind, ntags) = (v[1], usize::try_from(v[2]).unwrap_or(0));
-            let tags = v.get(3..3usize.saturating_add(ntags)).unwrap_or(&[]);
-            let conn = v.get(3usize.saturating_add(ntags)..).unwrap_or(&[]);
+            let tags = rest.get(..ntags).unwrap_or(&[]);
+            let conn = rest.get(ntags..).unwrap_or(&[]);
             let node = |id: i64| {
                 ids.get(&id)
                     .copied()
                     .ok_or_else(|| bad(path, ln + 1, format!("node {id} is not in $Nodes")))
             };
-            match (kind, conn.len()) {
-                (2, 3) => triangles.push([node(conn[0])?, node(conn[1])?, node(conn[2])?]),
-                (1, 2) => {
+            match (kind, conn) {
+                (2, &[a, b, c]) => triangles.push([node(a)?, node(b)?, node(c)?]),
+                (1, &[a, b]) => {
                     let tag = *tags.first().ok_or_else(|| {
                         bad(path, ln + 1, "a line element without a physical tag")
                     })?;
-                    by_tag
-                        .entry(tag)
-                        .or_default()
-                        .push([node(conn[0])?, node(conn[1])?]);
+                    by_tag.entry(tag).or_default().push([node(a)?, node(b)?]);
                 }
                 _ => {} // points, quadrangles and higher orders are not used
             }
@@ -164,13 +165,36 @@ impl Mesh {
         }
         let tri: Vec<Vec<usize>> = csv_rows(triangles, Some(3))?;
         let el: Vec<Vec<usize>> = csv_rows(electrodes, None)?;
-        Self::from_parts(
-            xy.iter().map(|r| [r[0], r[1]]).collect(),
-            tri.iter().map(|r| [r[0], r[1], r[2]]).collect(),
-            el.iter()
-                .map(|r| r.windows(2).map(|w| [w[0], w[1]]).collect())
-                .collect(),
-        )
+        // csv_rows gave each row its width; a row that is not is refused, not indexed.
+        let width = |path: &Path, i: usize| bad(path, i + 1, "wrong number of values");
+        let xy = xy
+            .iter()
+            .enumerate()
+            .map(|(i, r)| match r[..] {
+                [x, y] => Ok([x, y]),
+                _ => Err(width(nodes, i)),
+            })
+            .collect::<Result<_, _>>()?;
+        let tri = tri
+            .iter()
+            .enumerate()
+            .map(|(i, r)| match r[..] {
+                [a, b, c] => Ok([a, b, c]),
+                _ => Err(width(triangles, i)),
+            })
+            .collect::<Result<_, _>>()?;
+        let el = el
+            .iter()
+            .map(|r| {
+                r.windows(2)
+                    .filter_map(|w| match *w {
+                        [a, b] => Some([a, b]),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect();
+        Self::from_parts(xy, tri, el)
     }
 
     /// A mesh from its parts, checked: indices in range, triangles turned counter-clockwise,
@@ -204,8 +228,10 @@ impl Mesh {
                 "an electrode names a node past the {n} nodes"
             )));
         }
+        // Indices are in range (checked above); NaN otherwise, which is refused as degenerate.
+        let at = |i: usize| nodes.get(i).copied().unwrap_or([f64::NAN; 2]);
         let area2 = |t: &[usize; 3]| {
-            let [a, b, c] = t.map(|i| nodes[i]);
+            let [a, b, c] = t.map(at);
             (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
         };
         let mean = triangles.iter().map(|t| area2(t).abs()).sum::<f64>() / triangles.len() as f64;
@@ -231,12 +257,13 @@ impl Mesh {
                 v.sort_unstable();
                 v.dedup();
                 let k = v.len() as f64;
-                let c = v.iter().fold([0.0, 0.0], |s, &i| {
-                    [s[0] + nodes[i][0] / k, s[1] + nodes[i][1] / k]
+                let c = v.iter().fold([0.0, 0.0], |[sx, sy], &i| {
+                    let [x, y] = at(i);
+                    [sx + x / k, sy + y / k]
                 });
                 v.iter()
                     .copied()
-                    .min_by(|&a, &b| dist(nodes[a], c).total_cmp(&dist(nodes[b], c)))
+                    .min_by(|&a, &b| dist(at(a), c).total_cmp(&dist(at(b), c)))
                     .unwrap_or(0)
             })
             .collect();
@@ -250,6 +277,7 @@ impl Mesh {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
     use crate::fem::{Electrodes, Forward};
