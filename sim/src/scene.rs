@@ -321,75 +321,45 @@ pub const MAX_NESTING: usize = 32;
 /// up to about 100 times its size in memory).
 pub const MAX_SCENE_BYTES: usize = 1 << 20;
 
-/// Checks that brackets and braces outside strings and comments never nest deeper than
-/// `max`. The TOML parser recovers from an unclosed inline table by recursing, one stack frame
-/// per `{`, so a damaged file of a few tens of kilobytes (`b = {` repeated) overflowed the stack
-/// and aborted; this bounds the recursion before the parser sees the text. A closer only
-/// closes its own kind (`{ ]` stays open, as the parser keeps it), so the count is never less
-/// than the parser's depth; in a valid file it is exactly the nesting.
+/// Checks that brackets and braces never nest deeper than `max`, counted on the tokens of the
+/// TOML parser's own lexer (so strings and comments are what the parser thinks they are). The
+/// parser recovers from an unclosed inline table by recursing, one stack frame per `{`, so a
+/// damaged file of a few tens of kilobytes (`b = {` repeated) overflowed the stack and aborted;
+/// this bounds the recursion before the parser runs. A closer only closes its own kind (`{ ]`
+/// stays open, as the parser keeps it), so the count is never below the parser's depth; in a
+/// valid file it is exactly the nesting.
 ///
 /// # Errors
 /// The line where the nesting goes too deep, for people.
 fn nesting_within(text: &str, max: usize) -> Result<(), String> {
-    let b = text.as_bytes();
-    let at = |i: usize| b.get(i).copied();
-    let from = |i: usize| b.get(i..).unwrap_or_default();
-    let (mut i, mut line) = (0, 1usize);
-    let mut open: Vec<u8> = Vec::new();
-    // Skips to just past `close` (a string's end), counting lines; escapes in basic strings.
-    let skip = |mut i: usize, close: &[u8], escapes: bool, one_line: bool, line: &mut usize| {
-        while let Some(c) = at(i) {
-            if from(i).starts_with(close) {
-                return i + close.len();
-            }
-            match c {
-                b'\\' if escapes => i += 1,
-                b'\n' if one_line => return i,
-                b'\n' => *line += 1,
-                _ => {}
-            }
-            i += 1;
-        }
-        i
-    };
-    while let Some(c) = at(i) {
-        match c {
-            b'#' => {
-                while at(i).is_some_and(|c| c != b'\n') {
-                    i += 1;
-                }
-                continue;
-            }
-            b'\n' => line += 1,
-            b'"' | b'\'' => {
-                let triple = from(i).starts_with(&[c, c, c]);
-                let (skipped, close): (usize, &[u8]) = match (c, triple) {
-                    (b'"', true) => (3, b"\"\"\""),
-                    (_, true) => (3, b"'''"),
-                    (b'"', false) => (1, b"\""),
-                    (_, false) => (1, b"'"),
-                };
-                i = skip(i + skipped, close, c == b'"', !triple, &mut line);
-                continue;
-            }
-            b'[' | b'{' => {
-                open.push(c);
+    use toml_parser::lexer::TokenKind;
+    let mut open: Vec<TokenKind> = Vec::new();
+    for token in toml_parser::Source::new(text).lex() {
+        match token.kind() {
+            kind @ (TokenKind::LeftSquareBracket | TokenKind::LeftCurlyBracket) => {
+                open.push(kind);
                 if open.len() > max {
+                    let at = token.span().start();
+                    let line = 1 + text
+                        .as_bytes()
+                        .iter()
+                        .take(at)
+                        .filter(|&&b| b == b'\n')
+                        .count();
                     return Err(format!(
                         "line {line}: brackets and braces nest deeper than {max} (an unclosed \
                          '{{' or '['?)"
                     ));
                 }
             }
-            b']' if open.last() == Some(&b'[') => {
+            TokenKind::RightSquareBracket if open.last() == Some(&TokenKind::LeftSquareBracket) => {
                 open.pop();
             }
-            b'}' if open.last() == Some(&b'{') => {
+            TokenKind::RightCurlyBracket if open.last() == Some(&TokenKind::LeftCurlyBracket) => {
                 open.pop();
             }
             _ => {}
         }
-        i += 1;
     }
     Ok(())
 }

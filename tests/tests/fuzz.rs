@@ -2,7 +2,7 @@
 //! small multiple of the file's size.
 //!
 //! Each case takes a valid file (a scene, a dataset, a foreign CSV and its targets, a model,
-//! a recording, a Gmsh mesh, a CSV mesh) and damages it: bit flips, deletions, repeated
+//! a model blob, a recording, a Gmsh mesh, a CSV mesh) and damages it: bit flips, deletions, repeated
 //! stretches (files that grow), extreme tokens inserted or put in place of a number (counts of
 //! 10^20, 1e308, NaN, -1, a byte-order mark, stray separators, section names), truncation.
 //! The parser reads it from disk as `et` would.
@@ -218,7 +218,8 @@ fn square_mesh(n: usize) -> (String, [String; 3]) {
     (msh, [nodes, triangles, electrodes])
 }
 
-fn model_json(dir: &Path) -> Vec<u8> {
+/// A small QDA model, as `et train` writes it.
+fn model(dir: &Path) -> ModelFile {
     let mut rng = Rng::new(5);
     let (classes, per, p) = (3, 12, 4);
     let y: Vec<u16> = (0..classes * per).map(|r| (r / per) as u16).collect();
@@ -246,6 +247,12 @@ fn model_json(dir: &Path) -> Vec<u8> {
     );
     let path = dir.join("seed-model.json");
     file.save(&path).unwrap();
+    ModelFile::load(&path).unwrap()
+}
+
+fn model_json(dir: &Path) -> Vec<u8> {
+    let path = dir.join("seed-model.json");
+    model(dir).save(&path).unwrap();
     std::fs::read(path).unwrap()
 }
 
@@ -311,6 +318,11 @@ fn parsers() -> Vec<Parser> {
             name: "model JSON",
             seeds: vec![model_json(&dir)],
             parse: |p| ModelFile::load(&p[0]).is_ok(),
+        },
+        Parser {
+            name: "model blob",
+            seeds: vec![model(&dir).blob(et_core::model::Precision::F16).unwrap()],
+            parse: |p| std::fs::read(&p[0]).is_ok_and(|b| et_core::model::Model::parse(&b).is_ok()),
         },
         Parser {
             name: "recording JSONL",

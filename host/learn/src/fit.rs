@@ -447,7 +447,16 @@ impl Fitted {
             vectors: &vectors,
             factors: &factors,
         };
-        let mut out = vec![0u8; model_len(self.kind, precision, self.classes.len(), p)];
+        // model_len is usize::MAX when C or p exceed the format's u16 fields: refuse before
+        // allocating.
+        let len = model_len(self.kind, precision, self.classes.len(), p);
+        if len == usize::MAX {
+            return Err(FitError::Export(format!(
+                "{} classes x {p} features do not fit the blob format (at most 65 535 each)",
+                self.classes.len()
+            )));
+        }
+        let mut out = vec![0u8; len];
         write_model(&tables, &mut out).map_err(|e| FitError::Export(e.to_string()))?;
         Ok(out)
     }

@@ -756,3 +756,36 @@ fn two_visit_training_sets_fall_back_and_say_so() {
     assert!(t.leave_one_visit_out.is_none());
     assert!(t.cv.accuracy() > 1.0 / classes as f64);
 }
+
+/// A model with more classes than the blob's u16 field holds is refused before anything is
+/// allocated (its length used to be usize::MAX, an allocation abort).
+#[test]
+fn a_model_too_big_for_the_blob_format_is_refused_not_allocated() {
+    use super::fit::ClassFit;
+    use nalgebra::DVector;
+    let class = ClassFit {
+        count: 1,
+        mean: DVector::from_element(1, 0.0),
+        log_prior: 0.0,
+        factor: DMatrix::zeros(0, 0),
+        log_det_or_quad: 0.0,
+        weights: DVector::from_element(1, 1.0),
+    };
+    let fitted = Fitted {
+        kind: ModelKind::Lda,
+        feature_mean: vec![0.0],
+        feature_scale: vec![1.0],
+        classes: vec![class; 70_000],
+    };
+    let e = fitted
+        .to_blob(
+            8,
+            ProtocolKind::Adjacent,
+            &[0],
+            &vec![[0.0, 0.0]; 70_000],
+            Precision::F32,
+            false,
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("70000 classes"), "{e}");
+}

@@ -134,6 +134,22 @@ fn runaway_nesting_is_refused_not_a_stack_overflow() {
         e.contains("deep.toml: line 66") && e.contains("nest deeper than 32"),
         "{e}"
     );
+    // A wrong closer does not close: `{ ... ]` stays open for the parser too.
+    let crossed = format!("seed = 1\n{}", "[a]\nb = { c = ]\n".repeat(3000));
+    let e = Scene::parse(&crossed, "crossed.toml").unwrap_err().to_string();
+    assert!(e.contains("nest deeper than 32"), "{e}");
+    // The parser's lexer, not a hand-written one, decides what is a string: after `shape"`
+    // the quote belongs to the key's atom, so the `{` is real (found by the fuzzer).
+    let quoted = format!(
+        "seed = 1\n{}",
+        "[sheet]\nshape\"= { kind touch, return)\"\nseed = 7\n\n".repeat(3000)
+    );
+    let e = Scene::parse(&quoted, "quoted.toml").unwrap_err().to_string();
+    assert!(e.contains("nest deeper than 32"), "{e}");
+    // Size is capped before parsing.
+    let huge = format!("{SMALL}{}", "# padding\n".repeat(MAX_SCENE_BYTES / 10));
+    let e = Scene::parse(&huge, "huge.toml").unwrap_err().to_string();
+    assert!(e.contains("a scene is at most 1048576 bytes"), "{e}");
     // Brackets in strings, multi-line strings and comments are not nesting.
     let noise = "{[".repeat(100);
     for description in [
