@@ -136,7 +136,9 @@ fn runaway_nesting_is_refused_not_a_stack_overflow() {
     );
     // A wrong closer does not close: `{ ... ]` stays open for the parser too.
     let crossed = format!("seed = 1\n{}", "[a]\nb = { c = ]\n".repeat(3000));
-    let e = Scene::parse(&crossed, "crossed.toml").unwrap_err().to_string();
+    let e = Scene::parse(&crossed, "crossed.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("nest deeper than 32"), "{e}");
     // The parser's lexer, not a hand-written one, decides what is a string: after `shape"`
     // the quote belongs to the key's atom, so the `{` is real (found by the fuzzer).
@@ -144,7 +146,9 @@ fn runaway_nesting_is_refused_not_a_stack_overflow() {
         "seed = 1\n{}",
         "[sheet]\nshape\"= { kind touch, return)\"\nseed = 7\n\n".repeat(3000)
     );
-    let e = Scene::parse(&quoted, "quoted.toml").unwrap_err().to_string();
+    let e = Scene::parse(&quoted, "quoted.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("nest deeper than 32"), "{e}");
     // Size is capped before parsing.
     let huge = format!("{SMALL}{}", "# padding\n".repeat(MAX_SCENE_BYTES / 10));
