@@ -650,3 +650,21 @@ fn outputs_refuse_inputs_and_existing_files_without_force() {
     assert!(!names.iter().any(|n| n.contains("partial")), "{names:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic
+/// ("failed printing to stdout: Broken pipe").
+#[test]
+fn a_closed_pipe_ends_et_quietly() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args(["protocol", "-l", "32", "-p", "pp-pp", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // 105 kB of JSON: more than a pipe holds, so et is still writing when the reader goes.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("panicked"), "{err}");
+}

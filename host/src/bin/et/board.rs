@@ -47,10 +47,10 @@ pub(crate) struct RecordArgs {
 pub(crate) fn ports_cmd() -> Result<()> {
     let ports = et_host::link::list_ports().context("listing serial ports")?;
     if ports.is_empty() {
-        println!("no serial ports found (is the board plugged in?)");
+        out!("no serial ports found (is the board plugged in?)");
     }
     for p in ports {
-        println!("{p}");
+        out!("{p}");
     }
     Ok(())
 }
@@ -104,7 +104,7 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
         }
     })?;
     bar.finish_and_clear();
-    println!("recorded {tally}");
+    out!("recorded {tally}");
     Ok(())
 }
 
@@ -140,7 +140,7 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     // Flash erase of a 384 KiB slot takes a few seconds.
     link.upload_model(&blob, Duration::from_secs(2), Duration::from_secs(15))
         .with_context(|| format!("uploading {}", args.blob.display()))?;
-    println!(
+    out!(
         "uploaded {} ({} bytes, {} classes, {} features) in {:.1} s; the board verified it",
         args.blob.display(),
         blob.len(),
@@ -151,9 +151,9 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     if args.tare {
         link.request(&et_core::wire::Command::Tare, Duration::from_secs(2))
             .context("taring (is the board scanning? `et record` starts it)")?;
-        println!("V_0 taken: the board classifies every frame from now on");
+        out!("V_0 taken: the board classifies every frame from now on");
     } else if model.referenced() {
-        println!(
+        out!(
             "this model is referenced: it classifies once the board has V_0 (run again with --tare)"
         );
     }

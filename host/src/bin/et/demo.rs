@@ -30,7 +30,7 @@ pub(crate) fn run(args: &DemoArgs, force: bool) -> Result<()> {
         command,
     })?;
     if args.json {
-        println!("{}", report.summary);
+        out!("{}", report.summary);
     } else {
         eprintln!("\nreport: {}", report.index.display());
     }

@@ -124,20 +124,20 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
             bvc,
             seconds: started.elapsed().as_secs_f64(),
         };
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
-        println!(
+        out!(
             "{} triangles, {:?} protocol, K = {}, {:.1} uA",
             t_n,
             config.protocol,
             v0.len(),
             amps * 1e6
         );
-        println!("    k        V_0 (V)        V_1 (V)     V_1 - V_0 (V)");
+        out!("    k        V_0 (V)        V_1 (V)     V_1 - V_0 (V)");
         for (k, (a, b)) in v0.iter().zip(&v1).enumerate() {
-            println!("{k:5} {a:14.6e} {b:14.6e} {:14.6e}", b - a);
+            out!("{k:5} {a:14.6e} {b:14.6e} {:14.6e}", b - a);
         }
-        println!(
+        out!(
             "BVC |V_1 - V_0| = {bvc:.4e} V ({:.2} s)",
             started.elapsed().as_secs_f64()
         );
@@ -372,7 +372,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         seconds: started.elapsed().as_secs_f64(),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
         for (i, r) in rois.iter().enumerate().take(5) {
             eprintln!(

@@ -207,7 +207,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         seconds: started.elapsed().as_secs_f64(),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "wrote {} observations of {} features, {} classes, to {} in {:.1} s",
@@ -407,7 +407,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         eprintln!("note: {f}");
     }
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
@@ -493,9 +493,9 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         confusion: conf.counts.chunks(classes).collect(),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
-        println!(
+        out!(
             "{} observations: accuracy {:.1} %, mean position error {:.2} mm, AEE {:.1} mm",
             conf.total(),
             100.0 * conf.accuracy(),
@@ -530,7 +530,7 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
         multiply_adds_per_frame: macs,
     };
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
             "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",

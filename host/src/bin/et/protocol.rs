@@ -48,9 +48,9 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
     let protocol = Protocol::new(kind, args.electrodes)?;
     let tables = ProtocolTables::new(&protocol);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&tables)?);
+        out!("{}", serde_json::to_string_pretty(&tables)?);
     } else {
-        print!("{}", tables.to_text());
+        out!("{}", tables.to_text().trim_end_matches('\n'));
     }
     Ok(())
 }
