@@ -250,6 +250,7 @@ impl Mesh {
         if let Some(l) = electrodes.iter().position(Vec::is_empty) {
             return Err(MeshError::EmptyElectrode { electrode: l });
         }
+        check_topology(n, &triangles, &electrodes)?;
         let centre_nodes = electrodes
             .iter()
             .map(|edges| {
@@ -274,6 +275,64 @@ impl Mesh {
             centre_nodes,
         })
     }
+}
+
+/// What the finite elements need of a mesh's topology, each with its cause named: every
+/// triangle once (a repeated one doubles its conductance), every node in a triangle (an unused
+/// node makes the system singular), and every electrode edge an edge of exactly one triangle,
+/// the boundary (an edge inside the mesh, or nodes out of order along an electrode, changed
+/// the voltages by up to 84 % without a word).
+fn check_topology(
+    n: usize,
+    triangles: &[[usize; 3]],
+    electrodes: &[Vec<[usize; 2]>],
+) -> Result<(), MeshError> {
+    let mut seen: HashMap<[usize; 3], usize> = HashMap::with_capacity(triangles.len());
+    let mut edges: HashMap<[usize; 2], u32> = HashMap::with_capacity(2 * triangles.len());
+    let mut used = vec![false; n];
+    let edge = |a: usize, b: usize| [a.min(b), a.max(b)];
+    for (i, t) in triangles.iter().enumerate() {
+        let mut key = *t;
+        key.sort_unstable();
+        if let Some(j) = seen.insert(key, i) {
+            return Err(MeshError::Spec(format!(
+                "triangle {i} repeats triangle {j}"
+            )));
+        }
+        let [a, b, c] = *t;
+        for v in [a, b, c] {
+            if let Some(u) = used.get_mut(v) {
+                *u = true;
+            }
+        }
+        for e in [edge(a, b), edge(b, c), edge(c, a)] {
+            *edges.entry(e).or_default() += 1;
+        }
+    }
+    if let Some(v) = used.iter().position(|&u| !u) {
+        return Err(MeshError::Spec(format!(
+            "node {v} is in no triangle (an unused node leaves the system singular)"
+        )));
+    }
+    for (l, el) in electrodes.iter().enumerate() {
+        for &[a, b] in el {
+            match edges.get(&edge(a, b)) {
+                Some(1) => {}
+                Some(_) => {
+                    return Err(MeshError::Spec(format!(
+                        "electrode {l}: edge ({a}, {b}) is inside the mesh, not on its boundary"
+                    )));
+                }
+                None => {
+                    return Err(MeshError::Spec(format!(
+                        "electrode {l}: nodes {a} and {b} share no triangle edge (list an \
+                         electrode's nodes in order along the boundary)"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -472,6 +531,43 @@ mod tests {
             vec![vec![[0, 1]], vec![[1, 2]]],
         );
         assert!(matches!(out_of_range, Err(MeshError::Spec(_))));
+        // Topology: each fault named (they were accepted and changed the voltages).
+        let square = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let two = vec![[0, 1, 2], [0, 2, 3]];
+        let good = vec![vec![[0, 1]], vec![[2, 3]]];
+        Mesh::from_parts(square.clone(), two.clone(), good.clone()).unwrap();
+        let cases: [(Vec<[f64; 2]>, Vec<[usize; 3]>, Vec<Vec<[usize; 2]>>, &str); 4] = [
+            (
+                square.clone(),
+                vec![[0, 1, 2], [0, 2, 3], [2, 0, 1]],
+                good.clone(),
+                "triangle 2 repeats triangle 0",
+            ),
+            (
+                [square.clone(), vec![[2.0, 2.0]]].concat(),
+                two.clone(),
+                good.clone(),
+                "node 4 is in no triangle",
+            ),
+            (
+                square.clone(),
+                two.clone(),
+                vec![vec![[0, 2]], vec![[2, 3]]],
+                "edge (0, 2) is inside the mesh",
+            ),
+            (
+                square,
+                two,
+                vec![vec![[1, 3]], vec![[2, 3]]],
+                "nodes 1 and 3 share no triangle edge",
+            ),
+        ];
+        for (nodes, tris, electrodes, what) in cases {
+            let e = Mesh::from_parts(nodes, tris, electrodes)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(what), "{what}: {e}");
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
