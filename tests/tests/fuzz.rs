@@ -14,6 +14,9 @@
 //! ```sh
 //! PROPTEST_CASES=1000000 cargo test --release -p et-tests --test fuzz -- --nocapture
 //! ```
+//!
+//! `ET_FUZZ_PARSERS` picks parsers by name (comma-separated parts of the names printed, e.g.
+//! `ET_FUZZ_PARSERS=scene,mesh`), to spread a long run over several processes.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -349,7 +352,15 @@ fn every_parser_survives_damaged_files_in_bounded_memory() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(2_000);
     let dir = scratch();
-    for target in parsers() {
+    let only: Vec<String> = std::env::var("ET_FUZZ_PARSERS")
+        .map(|v| v.split(',').map(|s| s.trim().to_lowercase()).collect())
+        .unwrap_or_default();
+    for target in parsers().into_iter().filter(|t| {
+        only.is_empty()
+            || only
+                .iter()
+                .any(|o| !o.is_empty() && t.name.to_lowercase().contains(o.as_str()))
+    }) {
         let paths: Vec<PathBuf> = (0..target.seeds.len())
             .map(|i| dir.join(format!("case-{i}")))
             .collect();
