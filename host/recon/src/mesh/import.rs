@@ -536,33 +536,38 @@ mod tests {
         let two = vec![[0, 1, 2], [0, 2, 3]];
         let good = vec![vec![[0, 1]], vec![[2, 3]]];
         Mesh::from_parts(square.clone(), two.clone(), good.clone()).unwrap();
-        let cases: [(Vec<[f64; 2]>, Vec<[usize; 3]>, Vec<Vec<[usize; 2]>>, &str); 4] = [
+        type Parts = (Vec<[f64; 2]>, Vec<[usize; 3]>, Vec<Vec<[usize; 2]>>);
+        let cases: [(Parts, &str); 4] = [
             (
-                square.clone(),
-                vec![[0, 1, 2], [0, 2, 3], [2, 0, 1]],
-                good.clone(),
+                (
+                    square.clone(),
+                    vec![[0, 1, 2], [0, 2, 3], [2, 0, 1]],
+                    good.clone(),
+                ),
                 "triangle 2 repeats triangle 0",
             ),
             (
-                [square.clone(), vec![[2.0, 2.0]]].concat(),
-                two.clone(),
-                good.clone(),
+                (
+                    [square.clone(), vec![[2.0, 2.0]]].concat(),
+                    two.clone(),
+                    good.clone(),
+                ),
                 "node 4 is in no triangle",
             ),
             (
-                square.clone(),
-                two.clone(),
-                vec![vec![[0, 2]], vec![[2, 3]]],
+                (
+                    square.clone(),
+                    two.clone(),
+                    vec![vec![[0, 2]], vec![[2, 3]]],
+                ),
                 "edge (0, 2) is inside the mesh",
             ),
             (
-                square,
-                two,
-                vec![vec![[1, 3]], vec![[2, 3]]],
+                (square, two, vec![vec![[1, 3]], vec![[2, 3]]]),
                 "nodes 1 and 3 share no triangle edge",
             ),
         ];
-        for (nodes, tris, electrodes, what) in cases {
+        for ((nodes, tris, electrodes), what) in cases {
             let e = Mesh::from_parts(nodes, tris, electrodes)
                 .unwrap_err()
                 .to_string();
