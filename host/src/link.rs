@@ -518,7 +518,10 @@ impl Keepalive {
         } else if self.connected && !connected {
             self.connected = false;
             return Some(LinkChange::Vanished);
-        } else if connected && now.duration_since(self.quiet_since) >= Self::SILENCE {
+        } else if self.send_start
+            && connected
+            && now.duration_since(self.quiet_since) >= Self::SILENCE
+        {
             Some(LinkChange::Restarted)
         } else {
             None
@@ -528,7 +531,7 @@ impl Keepalive {
             let _ = link.send(&Command::Start);
         }
         self.quiet_since = now;
-        (change == LinkChange::Back || self.send_start).then_some(change)
+        Some(change)
     }
 }
 
