@@ -222,6 +222,23 @@ impl ProtocolKind {
     }
 }
 
+/// The name people read: [`ProtocolKind::name`] for the named protocols, the drive skip and
+/// measure skips for a general pattern (`drive skip 3, measure skips 0 7`).
+impl core::fmt::Display for ProtocolKind {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ProtocolKind::Custom(p) => {
+                write!(f, "drive skip {}, measure skips", p.drive_skip)?;
+                for s in p.measure_skips.iter() {
+                    write!(f, " {s}")?;
+                }
+                Ok(())
+            }
+            named => f.write_str(named.name()),
+        }
+    }
+}
+
 /// Why a protocol cannot be built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -646,6 +663,17 @@ impl MuxWord {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn protocols_display_as_people_name_them() {
+        assert_eq!(ProtocolKind::PpPp.to_string(), "pp-pp");
+        assert_eq!(ProtocolKind::Adjacent.to_string(), "adjacent");
+        let custom = ProtocolKind::Custom(Pattern {
+            drive_skip: 3,
+            measure_skips: SkipSet::single(0).with(7),
+        });
+        assert_eq!(custom.to_string(), "drive skip 3, measure skips 0 7");
+    }
 
     fn every_l() -> impl Iterator<Item = u8> {
         (L_MIN..=L_MAX).step_by(2)

@@ -27,6 +27,26 @@ pub struct ElectrodeSpec {
     pub first: Option<f64>,
     /// Explicit arc-length fractions, one per electrode (overrides `first`).
     pub positions: Option<Vec<f64>>,
+    /// How et's finite elements model the electrodes when imaging (the simulator always
+    /// models the contact over its width, as the fabric has it).
+    pub model: ElectrodeModel,
+}
+
+/// How the imaging's finite elements model an electrode (docs/method.md §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ElectrodeModel {
+    /// The complete electrode model: current spreads over the electrode's width through its
+    /// contact resistance, and the electrode reads one potential.
+    #[default]
+    Complete,
+    /// Point electrodes: current enters and potential is read at the node at the electrode's
+    /// centre (width and contact resistance do not enter the image's model). Cheaper, and
+    /// adequate where electrodes are narrow against their spacing.
+    Point,
+    /// The shunt model: ideal electrodes without contact resistance, every point under an
+    /// electrode at its potential (the complete model's limit of zero contact resistance).
+    Shunt,
 }
 
 impl Default for ElectrodeSpec {
@@ -37,6 +57,7 @@ impl Default for ElectrodeSpec {
             contact_ohm: 1_000.0,
             first: None,
             positions: None,
+            model: ElectrodeModel::Complete,
         }
     }
 }

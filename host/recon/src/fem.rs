@@ -27,6 +27,7 @@ use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use nalgebra::DMatrix;
 
 use crate::mesh::{Mesh, dist};
+use et_sim::sheet::ElectrodeModel;
 
 /// How electrodes meet the sheet.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,7 +37,46 @@ pub enum Electrodes {
     Complete(Vec<f64>),
     /// Point electrodes at the electrodes' centre nodes.
     Point,
+    /// The shunt model: perfectly conducting electrodes without contact resistance (every
+    /// node under electrode l is at its potential U_l; current enters through the sheet at the
+    /// electrode's edges). The complete model's limit z -> 0.
+    Shunt,
 }
+
+impl Electrodes {
+    /// The model a sheet asks for (`sheet.electrodes.model`), with the complete model's
+    /// contact impedances z_l = contact resistance x width (ohm m).
+    ///
+    /// # Errors
+    /// [`FemError::ContactTooSmall`] when the complete model's contact resistance is under
+    /// [`MIN_CONTACT_RATIO`] of the sheet resistance: its system cannot be factorised
+    /// accurately in f64 (the shunt model is that limit).
+    pub fn of_sheet(spec: &et_sim::sheet::SheetSpec) -> Result<Self, FemError> {
+        let e = &spec.electrodes;
+        Ok(match e.model {
+            ElectrodeModel::Point => Electrodes::Point,
+            ElectrodeModel::Shunt => Electrodes::Shunt,
+            ElectrodeModel::Complete => {
+                let ratio = e.contact_ohm / spec.sheet_resistance;
+                if !(ratio >= MIN_CONTACT_RATIO) {
+                    return Err(FemError::ContactTooSmall {
+                        contact_ohm: e.contact_ohm,
+                        sheet_ohm: spec.sheet_resistance,
+                    });
+                }
+                Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)])
+            }
+        })
+    }
+}
+
+/// The smallest contact resistance the complete electrode model takes, as a fraction of the
+/// sheet resistance (ohm per square). There its frames differ from the shunt model's (the
+/// limit of zero contact) by about 1e-7 of their size; below it the contact terms (1/z) swamp
+/// the sheet's in the system matrix and round-off grows (1e-6 at 1e-9, a failed
+/// factorisation at 1e-15: `the_shunt_model_is_the_complete_models_limit`), so the shunt
+/// model is the accurate choice.
+pub const MIN_CONTACT_RATIO: f64 = 1e-6;
 
 /// Why a forward solve failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,6 +87,14 @@ pub enum FemError {
     /// The system could not be factorised (disconnected mesh, or values so extreme that it
     /// is not numerically positive definite).
     Factorisation(String),
+    /// The complete model's contact resistance is too small against the sheet's
+    /// ([`MIN_CONTACT_RATIO`]).
+    ContactTooSmall {
+        /// The contact resistance, ohm.
+        contact_ohm: f64,
+        /// The sheet resistance, ohm per square.
+        sheet_ohm: f64,
+    },
 }
 
 impl std::fmt::Display for FemError {
@@ -54,6 +102,17 @@ impl std::fmt::Display for FemError {
         match self {
             FemError::Input(why) => write!(f, "forward model input: {why}"),
             FemError::Factorisation(why) => write!(f, "forward model: factorisation failed: {why}"),
+            FemError::ContactTooSmall {
+                contact_ohm,
+                sheet_ohm,
+            } => write!(
+                f,
+                "contact resistance {contact_ohm:e} ohm is too small for the complete electrode \
+                 model on a sheet of {sheet_ohm:e} ohm/sq (under {MIN_CONTACT_RATIO:e} of it, its \
+                 system cannot be solved accurately): give sheet.electrodes.contact_ohm >= {:e}, \
+                 or model = \"shunt\" for ideal contacts",
+                MIN_CONTACT_RATIO * sheet_ohm
+            ),
         }
     }
 }
@@ -93,23 +152,58 @@ struct Pattern {
 pub struct Forward {
     mesh: Mesh,
     electrodes: Electrodes,
+    /// The grounded system's unknown of each node, then each electrode ([`unknowns`]).
+    unknown: Vec<Option<usize>>,
+    /// Unknowns of the grounded system.
+    size: usize,
     /// Per triangle, the 3 x 3 stiffness of unit conductivity (row-major).
     local: Vec<[f64; 9]>,
     pattern: Pattern,
 }
 
-/// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
-/// grounded unknown (the last electrode, or its centre node in the point model).
-fn grounded(mesh: &Mesh, electrodes: &Electrodes, full: usize) -> Option<usize> {
+/// The unknown of each full index (nodes 0..n, then electrodes n..n+L) in the grounded
+/// system, `None` for the grounded one, and the system's size. Complete model: every node and
+/// electrode its own unknown, the last electrode grounded. Point model: an electrode is its
+/// centre node's unknown, the last one grounded. Shunt model: the nodes under electrode l
+/// are electrode l's unknown, the last electrode grounded.
+fn unknowns(mesh: &Mesh, electrodes: &Electrodes) -> Result<(Vec<Option<usize>>, usize), FemError> {
     let (n, l) = (mesh.nodes.len(), mesh.electrodes.len());
-    match electrodes {
-        Electrodes::Complete(_) => (full < n + l - 1).then_some(full),
-        Electrodes::Point => match full.cmp(&mesh.centre_nodes[l - 1]) {
-            std::cmp::Ordering::Less => Some(full),
-            std::cmp::Ordering::Equal => None,
-            std::cmp::Ordering::Greater => Some(full - 1),
-        },
+    let mut owner: Vec<Option<usize>> = vec![None; n]; // electrode of a node (point, shunt)
+    for e in 0..l {
+        let nodes: Vec<usize> = match electrodes {
+            Electrodes::Complete(_) => continue,
+            Electrodes::Point => vec![mesh.centre_nodes[e]],
+            Electrodes::Shunt => mesh.electrodes[e].iter().flatten().copied().collect(),
+        };
+        for i in nodes {
+            match owner[i] {
+                Some(other) if other != e => {
+                    return Err(FemError::Input(format!(
+                        "node {i} belongs to electrodes {other} and {e}"
+                    )));
+                }
+                _ => owner[i] = Some(e),
+            }
+        }
     }
+    let mut map = vec![None; n + l];
+    let mut next = 0;
+    for (i, slot) in map.iter_mut().enumerate().take(n) {
+        if owner[i].is_none() {
+            *slot = Some(next);
+            next += 1;
+        }
+    }
+    for e in 0..l - 1 {
+        map[n + e] = Some(next + e);
+    }
+    let size = next + l - 1;
+    for i in 0..n {
+        if let Some(e) = owner[i] {
+            map[i] = map[n + e];
+        }
+    }
+    Ok((map, size))
 }
 
 /// Every entry of the system matrix with its place, then the pattern and its symbolic
@@ -117,14 +211,15 @@ fn grounded(mesh: &Mesh, electrodes: &Electrodes, full: usize) -> Option<usize> 
 fn make_pattern(
     mesh: &Mesh,
     electrodes: &Electrodes,
-    triangles: usize,
+    unknown: &[Option<usize>],
+    size: usize,
 ) -> Result<Pattern, FemError> {
     let n = mesh.nodes.len();
     let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
-    let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * triangles);
+    let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * mesh.triangles.len());
     let mut entries = Vec::with_capacity(places.capacity());
     let mut put = |i: usize, j: usize, entry: Entry| {
-        if let (Some(a), Some(b)) = (grounded(mesh, electrodes, i), grounded(mesh, electrodes, j)) {
+        if let (Some(a), Some(b)) = (unknown[i], unknown[j]) {
             places.push(Pair::new(a, b));
             entries.push(entry);
         }
@@ -153,10 +248,6 @@ fn make_pattern(
             }
         }
     }
-    let size = match electrodes {
-        Electrodes::Complete(_) => n + mesh.electrodes.len() - 1,
-        Electrodes::Point => n - 1,
-    };
     let (symbolic, argsort) =
         SymbolicSparseColMat::try_new_from_indices(size, size, &places).map_err(|e| fail(&e))?;
     let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).map_err(|e| fail(&e))?;
@@ -187,6 +278,14 @@ impl Forward {
         if l < 2 {
             return Err(FemError::Input("at least 2 electrodes".into()));
         }
+        if !matches!(electrodes, Electrodes::Point)
+            && let Some(e) = mesh.electrodes.iter().position(Vec::is_empty)
+        {
+            return Err(FemError::Input(format!(
+                "electrode {e} is a single node (a point electrode): image with \
+                 electrodes.model = \"point\""
+            )));
+        }
         let local = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.triangles[t].map(|i| mesh.nodes[i]);
@@ -211,19 +310,16 @@ impl Forward {
                 Ok(m)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let pattern = make_pattern(&mesh, &electrodes, local.len())?;
+        let (unknown, size) = unknowns(&mesh, &electrodes)?;
+        let pattern = make_pattern(&mesh, &electrodes, &unknown, size)?;
         Ok(Self {
             mesh,
             electrodes,
+            unknown,
+            size,
             local,
             pattern,
         })
-    }
-
-    /// Index of a full unknown (node, then electrode) in the grounded system; `None` for the
-    /// grounded unknown.
-    fn grounded(&self, full: usize) -> Option<usize> {
-        grounded(&self.mesh, &self.electrodes, full)
     }
 
     /// The mesh.
@@ -232,12 +328,10 @@ impl Forward {
         &self.mesh
     }
 
-    /// Unknowns of the (grounded) system.
-    fn size(&self) -> usize {
-        match self.electrodes {
-            Electrodes::Complete(_) => self.mesh.nodes.len() + self.mesh.electrodes.len() - 1,
-            Electrodes::Point => self.mesh.nodes.len() - 1,
-        }
+    /// The electrode model.
+    #[must_use]
+    pub fn electrodes(&self) -> &Electrodes {
+        &self.electrodes
     }
 
     /// Solves for the current patterns `currents` (L x m, A, each column summing to 0) at
@@ -273,8 +367,8 @@ impl Forward {
                 )));
             }
         }
-        let size = self.size();
-        let idx = |full: usize| self.grounded(full);
+        let size = self.size;
+        let idx = |full: usize| self.unknown[full];
         let values: Vec<f64> = self
             .pattern
             .entries
@@ -297,11 +391,7 @@ impl Forward {
         let mut rhs = faer::Mat::<f64>::zeros(size, m);
         for c in 0..m {
             for e in 0..l {
-                let full = match self.electrodes {
-                    Electrodes::Complete(_) => n + e,
-                    Electrodes::Point => self.mesh.centre_nodes[e],
-                };
-                if let Some(i) = idx(full) {
+                if let Some(i) = idx(n + e) {
                     rhs[(i, c)] += currents[(e, c)];
                 }
             }
@@ -309,10 +399,7 @@ impl Forward {
         llt.solve_in_place_with_conj(faer::Conj::No, rhs.as_mut());
         let value = |full: usize, c: usize| idx(full).map_or(0.0, |i| rhs[(i, c)]);
         let mut nodes = DMatrix::from_fn(n, m, &value);
-        let mut electrodes = DMatrix::from_fn(l, m, |e, c| match self.electrodes {
-            Electrodes::Complete(_) => value(n + e, c),
-            Electrodes::Point => value(self.mesh.centre_nodes[e], c),
-        });
+        let mut electrodes = DMatrix::from_fn(l, m, |e, c| value(n + e, c));
         for c in 0..m {
             let mean = electrodes.column(c).mean();
             electrodes.column_mut(c).add_scalar_mut(-mean);

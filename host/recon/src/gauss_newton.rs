@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 
-use crate::onestep::{ReconError, data_space, regularised};
+use crate::onestep::{DataSpace, ReconError};
 
 /// Iterative Gauss-Newton for when accuracy matters more than speed. Minimises
 /// |r(sigma)|^2 + lambda |sigma - sigma_0|^2_P, P = diag(J^T J)^s at each iterate, with the
@@ -58,10 +58,10 @@ pub fn gauss_newton(
     for it in 0..iterations {
         let r: Vec<f64> = target.iter().zip(&v).map(|(t, v)| t - v).collect();
         let d: Vec<f64> = sigma.iter().zip(sigma_0).map(|(a, b)| a - b).collect();
-        let (jp, a) = data_space(&jac, s)?;
+        let space = DataSpace::new(&jac, s)?;
         let rhs = DVector::from_vec(r) + &jac * DVector::from_column_slice(&d);
-        let y = regularised(a, alpha)?.solve(&rhs);
-        let step = jp.transpose() * y;
+        let y = space.solve(alpha, rhs.as_slice())?;
+        let step = space.back_project(&y);
         for (i, sg) in sigma.iter_mut().enumerate() {
             *sg = (sigma_0[i] + step[i]).max(1e-3 * sigma_0[i]);
         }

@@ -12,7 +12,7 @@ use crate::pixels::PixelGrid;
 /// The forward model of one sheet about its background conductivity, and the pixel grid
 /// images are drawn on. One `Imager` serves every protocol (a Jacobian per protocol).
 pub struct Imager {
-    /// Finite elements with the complete electrode model (docs/method.md §5).
+    /// Finite elements with the sheet's electrode model (docs/method.md §5).
     pub forward: Forward,
     /// The pixels images are drawn on.
     pub grid: PixelGrid,
@@ -35,8 +35,9 @@ impl std::fmt::Debug for Imager {
 pub const MAX_PIXELS: usize = 512;
 
 impl Imager {
-    /// The complete electrode model of `sheet` on `mesh` (contact impedance z = contact
-    /// resistance x electrode width, ohm m), a grid `pixels` across.
+    /// The forward model of `sheet` on `mesh` with the sheet's electrode model
+    /// ([`Electrodes::of_sheet`]: complete with z = contact resistance x electrode width,
+    /// ohm m, point or shunt), a grid `pixels` across.
     ///
     /// # Errors
     /// [`FemError::Input`] for `pixels` outside 4 to [`MAX_PIXELS`]; [`FemError`] if the
@@ -48,10 +49,8 @@ impl Imager {
             )));
         }
         let grid = PixelGrid::new(&mesh, pixels);
-        let e = &sheet.electrodes;
-        let z = vec![e.contact_ohm * e.width; usize::from(e.count)];
         Ok(Self {
-            forward: Forward::new(mesh, Electrodes::Complete(z))?,
+            forward: Forward::new(mesh, Electrodes::of_sheet(sheet)?)?,
             grid,
             sigma0: 1.0 / sheet.sheet_resistance,
         })

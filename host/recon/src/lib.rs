@@ -39,6 +39,6 @@ pub use gauss_newton::{Data, GaussNewton, gauss_newton};
 pub use gcv::{default_alphas, gcv_alpha};
 pub use imager::Imager;
 pub use metrics::{Metrics, metrics};
-pub use onestep::{OneStep, ReconError};
+pub use onestep::{DataSpace, OneStep, ReconError};
 pub use pixels::PixelGrid;
 pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

@@ -15,6 +15,9 @@
 //! R (T x K) is built once; each frame then costs one matrix-vector product, onto the mesh or
 //! (cheaper) onto a pixel grid ([`crate::pixels::PixelGrid`]).
 
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::linalg::solvers::{Llt, SolveCore};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use nalgebra::{DMatrix, DVector};
 
 /// Why a reconstruction could not be set up or run.
@@ -41,6 +44,208 @@ impl std::fmt::Display for ReconError {
 
 impl std::error::Error for ReconError {}
 
+/// The data-space quantities of one (Jacobian, NOSER exponent s), computed once and shared by
+/// alpha's automatic choice ([`DataSpace::gcv`]) and the reconstruction matrix
+/// ([`DataSpace::one_step`]): J P^-1 (K x T) and A = J P^-1 J^T (K x K). Built with BLAS-3
+/// kernels (faer): A as a symmetric rank-T update of its lower triangle, R by a Cholesky
+/// factorisation of A + lambda I and a blocked triangular solve on J P^-1; no inverse is formed.
+#[derive(Clone, Debug)]
+pub struct DataSpace {
+    /// J P^-1, K x T (V per S/sq, divided by the prior).
+    jp: Mat<f64>,
+    /// A = J P^-1 J^T, K x K (lower triangle filled; upper mirrored).
+    a: Mat<f64>,
+    /// tr(A), V^2 per (S/sq)^2 (the scale of lambda).
+    trace: f64,
+    /// The NOSER exponent s.
+    s: f64,
+    /// Eigenvalues and eigenvectors of A, made on first use (GCV).
+    eigen: std::sync::OnceLock<Option<(Vec<f64>, Mat<f64>)>>,
+}
+
+impl DataSpace {
+    /// J P^-1 and A for the Jacobian `jac` (K x T) and NOSER exponent `s`.
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for s outside [0, 1]; [`ReconError::Singular`] for a
+    /// Jacobian with non-finite values or all zero.
+    pub fn new(jac: &DMatrix<f64>, s: f64) -> Result<Self, ReconError> {
+        if !(0.0..=1.0).contains(&s) {
+            return Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")));
+        }
+        if jac.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        let (k, t) = jac.shape();
+        let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
+        let j = MatRef::from_column_major_slice(jac.as_slice(), k, t);
+        // B = J P^-1/2, so A = B B^T (symmetric rank-T update), then J P^-1 = B P^-1/2.
+        let mut jp = Mat::from_fn(k, t, |r, c| j[(r, c)] * p_inv[c].sqrt());
+        let mut a = Mat::<f64>::zeros(k, k);
+        triangular::matmul(
+            a.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            jp.as_ref(),
+            BlockStructure::Rectangular,
+            jp.transpose(),
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        );
+        for r in 0..k {
+            for c in r + 1..k {
+                a[(r, c)] = a[(c, r)];
+            }
+        }
+        for (c, w) in p_inv.iter().enumerate() {
+            let w = w.sqrt();
+            jp.col_mut(c).iter_mut().for_each(|v| *v *= w);
+        }
+        let trace = (0..k).map(|i| a[(i, i)]).sum();
+        Ok(Self {
+            jp,
+            a,
+            trace,
+            s,
+            eigen: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// K, the frame length.
+    #[must_use]
+    pub fn frame_len(&self) -> usize {
+        self.a.nrows()
+    }
+
+    /// lambda = alpha^2 tr(A) / K, the module's normalisation.
+    #[must_use]
+    pub fn lambda(&self, alpha: f64) -> f64 {
+        alpha * alpha * self.trace / self.frame_len() as f64
+    }
+
+    /// The Cholesky factor of A + lambda I.
+    fn regularised(&self, alpha: f64) -> Result<Llt<f64>, ReconError> {
+        let lambda = self.lambda(alpha);
+        let mut m = self.a.clone();
+        for i in 0..m.nrows() {
+            m[(i, i)] += lambda;
+        }
+        m.llt(Side::Lower).map_err(|_| ReconError::Singular)
+    }
+
+    /// The one-step reconstruction matrix R = P^-1 J^T (A + lambda I)^-1 at `alpha`.
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for alpha not in (0, inf); [`ReconError::Singular`] when
+    /// A + lambda I cannot be factorised.
+    pub fn one_step(&self, alpha: f64) -> Result<OneStep, ReconError> {
+        check_alpha(alpha)?;
+        let llt = self.regularised(alpha)?;
+        let (k, t) = self.jp.shape();
+        // R^T = (A + lambda I)^-1 J P^-1 (K x T), solved in place in R's own storage (T x K,
+        // column-major: R^T is its row-major view).
+        let mut matrix = DMatrix::<f64>::zeros(t, k);
+        {
+            let mut rt = MatMut::from_column_major_slice_mut(matrix.as_mut_slice(), t, k);
+            let mut rt = rt.as_mut().transpose_mut();
+            rt.copy_from(&self.jp);
+            llt.solve_in_place_with_conj(faer::Conj::No, rt);
+        }
+        if matrix.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        Ok(OneStep {
+            matrix,
+            alpha,
+            s: self.s,
+        })
+    }
+
+    /// (A + lambda I)^-1 `rhs` for one vector of K values (iterative Gauss-Newton's step).
+    pub(crate) fn solve(&self, alpha: f64, rhs: &[f64]) -> Result<Vec<f64>, ReconError> {
+        let llt = self.regularised(alpha)?;
+        let mut x = Mat::from_fn(rhs.len(), 1, |r, _| rhs[r]);
+        llt.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
+        Ok((0..rhs.len()).map(|r| x[(r, 0)]).collect())
+    }
+
+    /// P^-1 J^T `y` (T values) for K values `y`.
+    pub(crate) fn back_project(&self, y: &[f64]) -> Vec<f64> {
+        (0..self.jp.ncols())
+            .map(|c| self.jp.col(c).iter().zip(y).map(|(a, b)| a * b).sum())
+            .collect()
+    }
+
+    /// Generalised cross-validation of alpha for the frame difference `dv` (docs/method.md
+    /// (6.1)): with A = U diag(e) U^T and c = U^T dv, GCV(lambda) = K sum_i (lambda c_i /
+    /// (e_i + lambda))^2 / (sum_i lambda / (e_i + lambda))^2. Returns the candidate with the
+    /// smallest GCV and every (alpha, GCV). A's eigendecomposition is made once and kept.
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for a frame of the wrong length or no candidates;
+    /// [`ReconError::NonFinite`] for a frame with NaN/inf; [`ReconError::Singular`] when A
+    /// has no eigendecomposition or no candidate scores finitely.
+    pub fn gcv(
+        &self,
+        dv: &[f64],
+        candidates: &[f64],
+    ) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
+        let k = self.frame_len();
+        if dv.len() != k || candidates.is_empty() {
+            return Err(ReconError::Parameter(format!(
+                "{} frame values for K = {k}, and at least one candidate alpha",
+                dv.len()
+            )));
+        }
+        if dv.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::NonFinite);
+        }
+        let (e, u) = self
+            .eigen
+            .get_or_init(|| {
+                let evd = self.a.self_adjoint_eigen(Side::Lower).ok()?;
+                let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+                Some((e, evd.U().to_owned()))
+            })
+            .as_ref()
+            .ok_or(ReconError::Singular)?;
+        let c: Vec<f64> = (0..k)
+            .map(|i| u.col(i).iter().zip(dv).map(|(a, b)| a * b).sum())
+            .collect();
+        let scores: Vec<(f64, f64)> = candidates
+            .iter()
+            .map(|&alpha| {
+                let lambda = self.lambda(alpha);
+                let (mut num, mut den) = (0.0, 0.0);
+                for (e, ci) in e.iter().zip(&c) {
+                    let w = lambda / (e.max(0.0) + lambda);
+                    num += (w * ci).powi(2);
+                    den += w;
+                }
+                (alpha, k as f64 * num / (den * den).max(f64::MIN_POSITIVE))
+            })
+            .collect();
+        let best = scores
+            .iter()
+            .copied()
+            .filter(|s| s.1.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .ok_or(ReconError::Singular)?;
+        Ok((best.0, scores))
+    }
+}
+
+fn check_alpha(alpha: f64) -> Result<(), ReconError> {
+    if alpha.is_finite() && alpha > 0.0 {
+        Ok(())
+    } else {
+        Err(ReconError::Parameter(format!(
+            "alpha = {alpha}: must be finite and > 0"
+        )))
+    }
+}
+
 /// The one-step Gauss-Newton reconstruction matrix of one (mesh, protocol, alpha, s).
 #[derive(Clone, Debug)]
 pub struct OneStep {
@@ -53,32 +258,15 @@ pub struct OneStep {
 }
 
 impl OneStep {
-    /// Builds R from the Jacobian `jac` (K x T).
+    /// Builds R from the Jacobian `jac` (K x T): [`DataSpace::new`] then
+    /// [`DataSpace::one_step`] (use those to choose alpha by GCV on the same data space).
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for alpha not in (0, inf) or s not in [0, 1];
     /// [`ReconError::Singular`] when the system cannot be factorised.
     pub fn new(jac: &DMatrix<f64>, alpha: f64, s: f64) -> Result<Self, ReconError> {
-        if !(alpha.is_finite() && alpha > 0.0) {
-            return Err(ReconError::Parameter(format!(
-                "alpha = {alpha}: must be finite and > 0"
-            )));
-        }
-        if !(0.0..=1.0).contains(&s) {
-            return Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")));
-        }
-        if jac.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::Singular);
-        }
-        let (jp, a) = data_space(jac, s)?;
-        let chol = regularised(a, alpha)?;
-        // R = P^-1 J^T (A + lambda I)^-1 = ((A + lambda I)^-1 J P^-1)^T.
-        let x = chol.solve(&jp);
-        let matrix = x.transpose();
-        if matrix.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::Singular);
-        }
-        Ok(Self { matrix, alpha, s })
+        check_alpha(alpha)?;
+        DataSpace::new(jac, s)?.one_step(alpha)
     }
 
     /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
@@ -139,31 +327,6 @@ pub fn noise_sd<T: nalgebra::Scalar + Copy + Into<f64>>(
                 .sqrt()
         })
         .collect()
-}
-
-/// J P^-1 (K x T) and A = J P^-1 J^T (K x K) for the NOSER prior of exponent `s`.
-pub(crate) fn data_space(
-    jac: &DMatrix<f64>,
-    s: f64,
-) -> Result<(DMatrix<f64>, DMatrix<f64>), ReconError> {
-    let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
-    let jp = DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| jac[(r, c)] * p_inv[c]);
-    let a = &jp * jac.transpose();
-    Ok((jp, a))
-}
-
-/// The Cholesky factor of A + lambda I, lambda = alpha^2 tr(A) / K (the module's
-/// normalisation).
-pub(crate) fn regularised(
-    mut a: DMatrix<f64>,
-    alpha: f64,
-) -> Result<nalgebra::Cholesky<f64, nalgebra::Dyn>, ReconError> {
-    let k = a.nrows();
-    let lambda = alpha * alpha * a.trace() / k as f64;
-    for i in 0..k {
-        a[(i, i)] += lambda;
-    }
-    a.cholesky().ok_or(ReconError::Singular)
 }
 
 /// The NOSER weights P^-1 = diag(J^T J)^-s (a column that sees nothing gets the smallest

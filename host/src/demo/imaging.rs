@@ -108,14 +108,16 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         let protocol = config.validate().map_err(|e| anyhow!("{e}"))?;
         let amps = f64::from(config.current_amps());
         let jac = imager.jacobian(&protocol, amps)?;
+        // One data space per protocol: GCV and the matrix of every scene share it.
+        let space = et_recon::DataSpace::new(&jac, 0.5)?;
         bar.inc(1);
         let f = default_threshold(kind);
         for (name, scene) in &scenes {
             let frames = scene_frames_on(&sheet, scene, &config, 10)?;
             let dv = frames.dv();
             // alpha by generalised cross-validation on the frame, as `et reconstruct`.
-            let alpha = et_recon::gcv_alpha(&jac, 0.5, &dv, &et_recon::default_alphas())?.0;
-            let recon = OneStep::new(&jac, alpha, 0.5)?;
+            let alpha = space.gcv(&dv, &et_recon::default_alphas())?.0;
+            let recon = space.one_step(alpha)?;
             let image = imager.grid.image(&recon.reconstruct(&dv)?);
             let rois = regions(&imager.grid, &image, f);
             // Touches: the regions split at their saddles, standing out of the noise

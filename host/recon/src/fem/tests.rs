@@ -359,3 +359,60 @@ fn refining_at_a_touch_spends_the_same_triangles_better() {
     assert!(n_r < n_u * 11 / 10, "{n_r} against {n_u}");
     assert!(e_r < 0.5 * e_u, "refined {e_r} against uniform {e_u}");
 }
+
+/// The shunt model is the complete model's limit of zero contact resistance: the complete
+/// model's frame approaches it in proportion to z, down to MIN_CONTACT_RATIO; reciprocity
+/// holds for it; a contact resistance below the limit is refused by name.
+#[test]
+fn the_shunt_model_is_the_complete_models_limit() {
+    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 2_000)).unwrap();
+    let n = mesh.triangles.len();
+    let sigma = vec![1.0 / spec.sheet_resistance; n];
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+    let shunt = Forward::new(mesh.clone(), Electrodes::Shunt).unwrap();
+    let v_s = shunt.frame(&sigma, &protocol, 1e-4).unwrap();
+    let scale = v_s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let w = spec.electrodes.width;
+    let mut diffs = Vec::new();
+    // Down to the limit the difference falls with z; below it round-off takes over (at
+    // 1e-9 it was 10 x the difference at 1e-6, at 1e-15 the factorisation failed).
+    for ratio in [1e-2, 1e-3, 1e-4, MIN_CONTACT_RATIO] {
+        let z = ratio * spec.sheet_resistance * w;
+        let fwd = Forward::new(mesh.clone(), Electrodes::Complete(vec![z; 8])).unwrap();
+        let v = fwd.frame(&sigma, &protocol, 1e-4).unwrap();
+        let d = v
+            .iter()
+            .zip(&v_s)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        diffs.push((ratio, d / scale));
+    }
+    println!("complete vs shunt (contact / sheet resistance, relative difference): {diffs:?}");
+    for w in diffs.windows(2) {
+        assert!(w[1].1 < w[0].1 * (w[1].0 / w[0].0) * 3.0, "{diffs:?}");
+    }
+    // Reciprocity for the shunt model.
+    let mut pats = DMatrix::zeros(8, 2);
+    pats[(0, 0)] = 1.0;
+    pats[(1, 0)] = -1.0;
+    pats[(3, 1)] = 1.0;
+    pats[(6, 1)] = -1.0;
+    let sol = shunt.solve(&sigma, &pats).unwrap();
+    let (u1, u2) = (
+        sol.electrodes[(3, 0)] - sol.electrodes[(6, 0)],
+        sol.electrodes[(0, 1)] - sol.electrodes[(1, 1)],
+    );
+    assert!((u1 - u2).abs() < 1e-9 * u1.abs(), "{u1} vs {u2}");
+    // Every node under an electrode is at its potential.
+    for (e, edges) in mesh.electrodes.iter().enumerate() {
+        for &i in edges.iter().flatten() {
+            assert!((sol.nodes[(i, 0)] - sol.electrodes[(e, 0)]).abs() < 1e-12 * u1.abs());
+        }
+    }
+    let mut tiny = spec.clone();
+    tiny.electrodes.contact_ohm = 1e-11;
+    let e = Electrodes::of_sheet(&tiny).unwrap_err();
+    assert!(matches!(e, FemError::ContactTooSmall { .. }), "{e}");
+    assert!(e.to_string().contains("shunt"), "{e}");
+}

@@ -2,12 +2,17 @@
 //!
 //! Gmsh: triangles are the 3-node triangle elements (type 2); electrodes are the 2-node line
 //! elements (type 1), grouped by physical tag: the distinct tags in ascending order are
-//! electrodes 0, 1, ... (give each electrode its own physical curve). Coordinates are taken as
+//! electrodes 0, 1, ... (give each electrode its own physical curve). A physical point (a
+//! 1-node element, type 15) is a point electrode at that node. Coordinates are taken as
 //! metres. Gmsh 4 files are refused with the hint to save as 2.2 (`gmsh -format msh22`).
 //!
 //! CSV: `nodes.csv` (x,y per row, m), `triangles.csv` (three 0-based node indices per row),
-//! `electrodes.csv` (one row per electrode: its boundary node indices in order along it). A
-//! header row is allowed in each (a first row that is not numeric is skipped).
+//! `electrodes.csv` (one row per electrode: its boundary node indices in order along it; a
+//! single index is a point electrode at that node). A header row is allowed in each (a first
+//! row that is not numeric is skipped).
+//!
+//! A point electrode has no edges (`Mesh::electrodes` is empty for it) and its node as its
+//! centre node: only the point model images with it.
 
 // Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -148,6 +153,13 @@ impl Mesh {
                     })?;
                     by_tag.entry(tag).or_default().push([node(a)?, node(b)?]);
                 }
+                (15, &[a]) => {
+                    // A physical point: a point electrode (written as the edge [a, a]).
+                    if let Some(&tag) = tags.first() {
+                        let a = node(a)?;
+                        by_tag.entry(tag).or_default().push([a, a]);
+                    }
+                }
                 _ => {} // points, quadrangles and higher orders are not used
             }
         }
@@ -185,13 +197,15 @@ impl Mesh {
             .collect::<Result<_, _>>()?;
         let el = el
             .iter()
-            .map(|r| {
-                r.windows(2)
+            .map(|r| match r[..] {
+                [a] => vec![[a, a]], // a point electrode
+                _ => r
+                    .windows(2)
                     .filter_map(|w| match *w {
                         [a, b] => Some([a, b]),
                         _ => None,
                     })
-                    .collect()
+                    .collect(),
             })
             .collect();
         Self::from_parts(xy, tri, el)
@@ -199,7 +213,9 @@ impl Mesh {
 
     /// A mesh from its parts, checked: indices in range, triangles turned counter-clockwise,
     /// degenerate triangles (area below 1e-12 of the mean) refused, every electrode with an
-    /// edge; an electrode's centre node is its node nearest the mean of its nodes.
+    /// edge or a single node (written as the edge `[i, i]`: a point electrode, stored with no
+    /// edges) on the boundary; an electrode's centre node is its node nearest the mean of its
+    /// nodes.
     ///
     /// # Errors
     /// [`MeshError::Spec`] or [`MeshError::EmptyElectrode`].
@@ -250,10 +266,41 @@ impl Mesh {
         if let Some(l) = electrodes.iter().position(Vec::is_empty) {
             return Err(MeshError::EmptyElectrode { electrode: l });
         }
-        check_topology(n, &triangles, &electrodes)?;
+        // Point electrodes: only [i, i] entries, all the same node.
+        let point: Vec<Option<usize>> = electrodes
+            .iter()
+            .map(|el| {
+                let first = el.first()?[0];
+                el.iter()
+                    .all(|&[a, b]| a == first && b == first)
+                    .then_some(first)
+            })
+            .collect();
+        if let Some(l) = (0..electrodes.len()).find(|&l| {
+            point.get(l).copied().flatten().is_none()
+                && electrodes
+                    .get(l)
+                    .is_some_and(|el| el.iter().any(|&[a, b]| a == b))
+        }) {
+            return Err(MeshError::Spec(format!(
+                "electrode {l} mixes a single node with edges: give one node (a point \
+                 electrode) or its nodes in order along the boundary"
+            )));
+        }
+        let mut electrodes = electrodes;
+        for (el, p) in electrodes.iter_mut().zip(&point) {
+            if p.is_some() {
+                el.clear();
+            }
+        }
+        check_topology(n, &triangles, &electrodes, &point)?;
         let centre_nodes = electrodes
             .iter()
-            .map(|edges| {
+            .zip(&point)
+            .map(|(edges, p)| {
+                if let Some(i) = *p {
+                    return i;
+                }
                 let mut v: Vec<usize> = edges.iter().flatten().copied().collect();
                 v.sort_unstable();
                 v.dedup();
@@ -286,6 +333,7 @@ fn check_topology(
     n: usize,
     triangles: &[[usize; 3]],
     electrodes: &[Vec<[usize; 2]>],
+    point: &[Option<usize>],
 ) -> Result<(), MeshError> {
     let mut seen: HashMap<[usize; 3], usize> = HashMap::with_capacity(triangles.len());
     let mut edges: HashMap<[usize; 2], u32> = HashMap::with_capacity(2 * triangles.len());
@@ -313,6 +361,26 @@ fn check_topology(
         return Err(MeshError::Spec(format!(
             "node {v} is in no triangle (an unused node leaves the system singular)"
         )));
+    }
+    let mut boundary = vec![false; n];
+    for (e, &count) in &edges {
+        if count == 1 {
+            for &v in e {
+                if let Some(b) = boundary.get_mut(v) {
+                    *b = true;
+                }
+            }
+        }
+    }
+    let on_boundary = |v: usize| boundary.get(v).copied().unwrap_or(false);
+    for (l, p) in point.iter().enumerate() {
+        if let Some(v) = *p
+            && !on_boundary(v)
+        {
+            return Err(MeshError::Spec(format!(
+                "electrode {l}: node {v} is inside the mesh, not on its boundary"
+            )));
+        }
     }
     for (l, el) in electrodes.iter().enumerate() {
         for &[a, b] in el {
@@ -467,6 +535,97 @@ mod tests {
                 vc[k]
             );
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// One-node electrodes (a CSV row of one index, a Gmsh physical point) are point
+    /// electrodes: the same voltages as the point model on the original mesh; the complete
+    /// model refuses them by name; a node inside the mesh, or a node mixed with edges, is
+    /// refused.
+    #[test]
+    fn one_node_electrodes_are_point_electrodes() {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 800)).unwrap();
+        let dir = tmp("point");
+        let write = |name: &str, text: String| {
+            let p = dir.join(name);
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let rows = |v: &mut dyn Iterator<Item = String>| v.collect::<Vec<_>>().join("\n");
+        let nodes = write(
+            "nodes.csv",
+            rows(&mut mesh.nodes.iter().map(|p| format!("{},{}", p[0], p[1]))),
+        );
+        let tris = write(
+            "triangles.csv",
+            rows(
+                &mut mesh
+                    .triangles
+                    .iter()
+                    .map(|t| format!("{},{},{}", t[0], t[1], t[2])),
+            ),
+        );
+        let els = write(
+            "electrodes.csv",
+            rows(&mut mesh.centre_nodes.iter().map(usize::to_string)),
+        );
+        let c = Mesh::from_csv(&nodes, &tris, &els).unwrap();
+        assert!(c.electrodes.iter().all(Vec::is_empty));
+        assert_eq!(c.centre_nodes, mesh.centre_nodes);
+        // Gmsh: the same electrodes as physical points.
+        let mut g = to_gmsh(&Mesh {
+            electrodes: vec![Vec::new(); 8],
+            ..mesh.clone()
+        });
+        let points: String = mesh
+            .centre_nodes
+            .iter()
+            .enumerate()
+            .map(|(l, &i)| format!("{} 15 2 {} 1 {}\n", 900_000 + l, 201 + l, i + 1))
+            .collect();
+        let count = mesh.triangles.len();
+        g = g.replacen(
+            &format!("$Elements\n{count}\n"),
+            &format!("$Elements\n{}\n{points}", count + 8),
+            1,
+        );
+        let g = Mesh::from_gmsh(&write("p.msh", g)).unwrap();
+        assert_eq!(g.centre_nodes, mesh.centre_nodes);
+        let protocol = Protocol::new(ProtocolKind::Adjacent, 8).unwrap();
+        let frame = |m: Mesh| {
+            let n = m.triangles.len();
+            Forward::new(m, Electrodes::Point)
+                .unwrap()
+                .frame(&vec![1e-4; n], &protocol, 1e-4)
+                .unwrap()
+        };
+        let v = frame(mesh.clone());
+        for other in [frame(c.clone()), frame(g)] {
+            for (a, b) in v.iter().zip(&other) {
+                assert!((a - b).abs() < 1e-9 * a.abs().max(1e-3), "{a} vs {b}");
+            }
+        }
+        let e = Forward::new(c, Electrodes::Complete(vec![5.0; 8])).unwrap_err();
+        assert!(e.to_string().contains("point"), "{e}");
+        // A node inside the mesh (not on the boundary), and a node mixed with edges.
+        let inner = (0..mesh.nodes.len())
+            .find(|&i| spec.shape.distance_to_outline(mesh.nodes[i]) > 0.01)
+            .unwrap();
+        let mut bad: Vec<String> = mesh.centre_nodes.iter().map(usize::to_string).collect();
+        bad[3] = inner.to_string();
+        let e = Mesh::from_csv(&nodes, &tris, &write("bad.csv", bad.join("\n"))).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("electrode 3: node {inner} is inside")),
+            "{e}"
+        );
+        let mut electrodes: Vec<Vec<[usize; 2]>> =
+            mesh.centre_nodes.iter().map(|&i| vec![[i, i]]).collect();
+        electrodes[2].push(mesh.electrodes[2][0]);
+        let e =
+            Mesh::from_parts(mesh.nodes.clone(), mesh.triangles.clone(), electrodes).unwrap_err();
+        assert!(e.to_string().contains("electrode 2 mixes"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -481,3 +481,43 @@ fn pixel_counts_outside_the_documented_range_are_refused() {
     }
     assert!(crate::Imager::new(&sheet, mesh, 4).is_ok());
 }
+
+/// The data-space matrix (BLAS-3, Cholesky of the K x K system) equals the primal form
+/// (J^T J + lambda P)^-1 J^T solved in the T x T space, and GCV from A's eigendecomposition
+/// equals K |(I - J R) dv|^2 / tr(I - J R)^2 computed from that matrix.
+#[test]
+fn the_data_space_matrix_equals_the_primal_form_and_gcv_its_definition() {
+    let mut rng = et_core::rng::Rng::new(11);
+    let (k, t) = (23, 57);
+    let jac = DMatrix::from_fn(k, t, |r, c| {
+        (-(r as f64 / k as f64 - c as f64 / t as f64).powi(2) * 20.0).exp() + 0.05 * rng.normal()
+    });
+    let dv: Vec<f64> = (0..k).map(|_| rng.normal()).collect();
+    for (alpha, s) in [(0.01, 0.5), (0.3, 1.0), (2.0, 0.0)] {
+        let space = DataSpace::new(&jac, s).unwrap();
+        let r = space.one_step(alpha).unwrap().matrix;
+        let p = DVector::from_fn(t, |c, _| jac.column(c).norm_squared().powf(s));
+        let a = jac.transpose() * &jac;
+        let trace: f64 = (0..t).map(|c| jac.column(c).norm_squared() / p[c]).sum();
+        let lambda = alpha * alpha * trace / k as f64;
+        let primal = (a + DMatrix::from_diagonal(&(p * lambda)))
+            .cholesky()
+            .unwrap()
+            .solve(&jac.transpose());
+        let scale = primal.amax();
+        assert!(
+            (&r - &primal).amax() < 1e-9 * scale,
+            "alpha {alpha}, s {s}: {:e}",
+            (&r - &primal).amax() / scale
+        );
+        let influence = DMatrix::identity(k, k) - &jac * &r;
+        let res = &influence * DVector::from_column_slice(&dv);
+        let by_definition = k as f64 * res.norm_squared() / influence.trace().powi(2);
+        let (_, scores) = space.gcv(&dv, &[alpha]).unwrap();
+        assert!(
+            (scores[0].1 - by_definition).abs() < 1e-9 * by_definition,
+            "{} vs {by_definition}",
+            scores[0].1
+        );
+    }
+}

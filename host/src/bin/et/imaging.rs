@@ -104,11 +104,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         })
         .collect();
     let t_n = mesh.triangles.len();
-    let e = &scene.sheet.electrodes;
-    let fwd = Forward::new(
-        mesh,
-        Electrodes::Complete(vec![e.contact_ohm * e.width; usize::from(e.count)]),
-    )?;
+    let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet)?)?;
     let amps = f64::from(config.current_amps());
     let v0 = fwd.frame(&vec![sigma0; t_n], &protocol, amps)?;
     let v1 = fwd.frame(&sigma1, &protocol, amps)?;
@@ -117,7 +113,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     if args.json {
         let summary = ForwardSummary {
             triangles: t_n,
-            protocol: format!("{:?}", config.protocol),
+            protocol: config.protocol.to_string(),
             current_a: amps,
             v0: &v0,
             v1: &v1,
@@ -127,7 +123,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
         out!(
-            "{} triangles, {:?} protocol, K = {}, {:.1} uA",
+            "{} triangles, {} protocol, K = {}, {:.1} uA",
             t_n,
             config.protocol,
             v0.len(),
@@ -205,7 +201,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     crate::output::check(&args.out, &inputs, force)?;
     use et_recon::Imager;
     use et_recon::{
-        OneStep, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
+        PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
     };
     use et_sim::still::{Truth, scene_frames};
     let scene = Scene::load(&args.scene)?;
@@ -224,14 +220,21 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let amps = f64::from(config.current_amps());
     let started = Instant::now();
-    let stage = |what: &str| eprintln!("{what:<40} {:>8.3} s", started.elapsed().as_secs_f64());
+    // Each stage's time, printed as it ends (stderr) and kept for --json.
+    let mut lap = Instant::now();
+    let mut stage = |what: &str| {
+        let dt = lap.elapsed().as_secs_f64();
+        eprintln!("{what:<44} {dt:>8.3} s");
+        lap = Instant::now();
+        dt
+    };
     let mesh = scene_mesh(&scene, &args.mesh, false)?;
     let t_n = mesh.triangles.len();
-    stage(&format!("mesh ({t_n} triangles)"));
+    let t_mesh = stage(&format!("mesh ({t_n} triangles)"));
     let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;
     let jac = imager.jacobian(&protocol, amps)?;
     let grid = &imager.grid;
-    stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
+    let t_forward = stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
     // V_0 and V_1, with the truth (centre, radius) where known, and dV's noise variance.
     let (v0, v1, truth, var): (Vec<f64>, Vec<f32>, Vec<Truth>, Vec<f64>) = match &recording {
         Some(r) => {
@@ -292,19 +295,24 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     };
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
     stage("frames");
+    let space = et_recon::DataSpace::new(&jac, args.s)?;
     let alpha = match args.alpha.as_str() {
-        "auto" => et_recon::gcv_alpha(&jac, args.s, &dv, &et_recon::default_alphas())?.0,
+        "auto" => space.gcv(&dv, &et_recon::default_alphas())?.0,
         v => v
             .parse::<f64>()
             .with_context(|| format!("--alpha '{v}': a number or auto"))?,
     };
     // The image, and its noise where the one-step matrix gives it.
-    let (image, sd) = if args.iterations <= 1 {
-        let recon = OneStep::new(&jac, alpha, args.s)?;
-        stage(&format!("reconstruction matrix (alpha {alpha:.3e})"));
+    let (image, sd, t_one_step, t_frame) = if args.iterations <= 1 {
+        let recon = space.one_step(alpha)?;
+        let t_one_step = stage(&format!("one-step matrix (alpha {alpha:.3e})"));
+        let image = grid.image(&recon.reconstruct(&dv)?);
+        let t_frame = stage("one frame imaged");
         (
-            grid.image(&recon.reconstruct(&dv)?),
+            image,
             grid.image(&recon.noise_sd(&var)?),
+            Some(t_one_step),
+            t_frame,
         )
     } else {
         let sigma0 = imager.background();
@@ -321,12 +329,20 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             },
         )?;
         let (last, norm) = its.last().cloned().context("no iteration")?;
-        stage(&format!(
+        let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
+        let image = grid.image(&d);
+        let t_frame = stage(&format!(
             "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {norm:.3e} V)",
             args.iterations
         ));
-        let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-        (grid.image(&d), Vec::new())
+        (image, Vec::new(), None, t_frame)
+    };
+    let timings_s = Timings {
+        mesh: t_mesh,
+        forward_jacobian: t_forward,
+        one_step: t_one_step,
+        setup: t_mesh + t_forward + t_one_step.unwrap_or(0.0),
+        frame: t_frame,
     };
     let f = args.threshold.unwrap_or(default_threshold(config.protocol));
     let rois = regions(grid, &image, f);
@@ -358,7 +374,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let summary = ReconstructSummary {
         out: &args.out,
         triangles: t_n,
-        protocol: format!("{:?}", config.protocol),
+        protocol: config.protocol.to_string(),
         alpha,
         s: args.s,
         threshold: f,
@@ -369,6 +385,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             .map(|(c, _)| [c[0] * 1e3, c[1] * 1e3])
             .collect(),
         metrics_first_touch: m.as_ref(),
+        timings_s,
         seconds: started.elapsed().as_secs_f64(),
     };
     if args.json {
@@ -432,7 +449,26 @@ struct ReconstructSummary<'a> {
     /// The scene's touches, mm.
     touches_mm: Vec<[f64; 2]>,
     metrics_first_touch: Option<&'a et_recon::metrics::Metrics>,
+    timings_s: Timings,
+    /// Wall time of the whole command, s.
     seconds: f64,
+}
+
+/// `et reconstruct`'s stage times, s.
+#[derive(serde::Serialize)]
+struct Timings {
+    /// Meshing the sheet (or reading --mesh).
+    mesh: f64,
+    /// The forward model, its factorisation, the frame and the Jacobian at the background.
+    forward_jacobian: f64,
+    /// The one-step matrix (with GCV's eigendecomposition under --alpha auto); null with
+    /// --iterations above 1, which builds no matrix.
+    one_step: Option<f64>,
+    /// mesh + forward_jacobian + one_step: what a live session pays once.
+    setup: f64,
+    /// Imaging one frame: the matrix applied to dV and drawn on the pixels (with
+    /// --iterations above 1, the whole iterative fit).
+    frame: f64,
 }
 
 /// A region of the image, in mm.
