@@ -1,6 +1,8 @@
-//! Imaging speed (issue: mesh + forward + Jacobian + reconstruction matrix for a 16-electrode
-//! disc, adjacent protocol, complete electrode model, at about 8 000 and 30 000 triangles; a
-//! live frame). One core: faer runs sequentially, nalgebra is single-threaded.
+//! Imaging speed: mesh + forward + Jacobian + one-step matrix for a 16-electrode disc
+//! (adjacent protocol, complete electrode model) at about 2 000, 8 000 and 30 000 triangles,
+//! and 32 electrodes PP-PP at 8 000; the one-step matrix alone; a live frame onto the mesh
+//! against reading its matrix once (the memory-bandwidth limit) and onto a 32 x 32 grid. One
+//! core: faer runs sequentially, nalgebra is single-threaded.
 //!
 //! Run: `cargo bench -p et-recon --bench imaging`
 
@@ -18,8 +20,8 @@ fn main() {
     divan::main();
 }
 
-fn disc() -> SheetSpec {
-    let mut s = SheetSpec::rectangle(0.22, 0.22, 16);
+fn disc(electrodes: u8) -> SheetSpec {
+    let mut s = SheetSpec::rectangle(0.22, 0.22, electrodes);
     s.shape = Shape::Disc { radius: 0.11 };
     s.electrodes.width = 0.006;
     s
@@ -28,21 +30,55 @@ fn disc() -> SheetSpec {
 /// Everything a reconstruction needs, from the sheet spec: the mesh, the forward model at the
 /// background, the Jacobian and the one-step matrix. Returns the triangle count.
 fn set_up(triangles: usize) -> (usize, OneStep, Mesh) {
-    let spec = disc();
+    set_up_with(triangles, 16, ProtocolKind::Adjacent)
+}
+
+fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (DMatrix<f64>, Mesh) {
+    let spec = disc(electrodes);
     let mesh = Mesh::with_about(&spec, triangles).expect("mesh");
     let n = mesh.triangles.len();
-    let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];
-    let fwd = Forward::new(mesh.clone(), Electrodes::Complete(z)).expect("forward");
-    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("protocol");
+    let fwd = Forward::new(mesh.clone(), Electrodes::of_sheet(&spec).expect("z")).expect("forward");
+    let protocol = Protocol::new(kind, electrodes).expect("protocol");
     let (_, jac) = fwd
         .jacobian(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
         .expect("jacobian");
-    (n, OneStep::new(&jac, 0.03, 0.5).expect("recon"), mesh)
+    (jac, mesh)
+}
+
+fn set_up_with(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (usize, OneStep, Mesh) {
+    let (jac, mesh) = jacobian(triangles, electrodes, kind);
+    (
+        mesh.triangles.len(),
+        OneStep::new(&jac, 0.03, 0.5).expect("recon"),
+        mesh,
+    )
 }
 
 #[divan::bench(args = [2_000, 8_000, 30_000], sample_count = 5, sample_size = 1)]
 fn set_up_mesh_forward_jacobian_matrix(triangles: usize) -> usize {
     set_up(triangles).0
+}
+
+/// 32 electrodes, PP-PP, 8 000 triangles.
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn set_up_32_electrodes_pp_pp_8000() -> usize {
+    set_up_with(8_000, 32, ProtocolKind::PpPp).0
+}
+
+/// The one-step matrix alone (data space, its Cholesky and the solve), 16 electrodes
+/// adjacent, from the Jacobian.
+#[divan::bench(args = [8_000, 30_000], sample_count = 5, sample_size = 1)]
+fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
+    let (jac, _) = jacobian(triangles, 16, ProtocolKind::Adjacent);
+    bencher.bench(|| OneStep::new(divan::black_box(&jac), 0.03, 0.5).expect("recon"));
+}
+
+/// Reading the live matrix once (a sum of its entries): the memory-bandwidth limit a live
+/// frame onto the mesh is measured against.
+#[divan::bench]
+fn read_the_mesh_matrix_once() -> f64 {
+    let (r, _, _) = &*LIVE;
+    divan::black_box(&r.matrix).as_slice().iter().sum()
 }
 
 static LIVE: LazyLock<(OneStep, DMatrix<f32>, DVector<f64>)> = LazyLock::new(|| {

@@ -58,7 +58,7 @@ impl Electrodes {
             ElectrodeModel::Shunt => Electrodes::Shunt,
             ElectrodeModel::Complete => {
                 let ratio = e.contact_ohm / spec.sheet_resistance;
-                if !(ratio >= MIN_CONTACT_RATIO) {
+                if ratio.is_nan() || ratio < MIN_CONTACT_RATIO {
                     return Err(FemError::ContactTooSmall {
                         contact_ohm: e.contact_ohm,
                         sheet_ohm: spec.sheet_resistance,

@@ -3,18 +3,27 @@
 
 use nalgebra::DVector;
 
-use crate::onestep::{DataSpace, ReconError};
+use crate::onestep::{DataSpace, ReconError, noser_inverse};
 
 /// Iterative Gauss-Newton for when accuracy matters more than speed. Minimises
-/// |r(sigma)|^2 + lambda |sigma - sigma_0|^2_P, P = diag(J^T J)^s at each iterate, with the
-/// residual r = dV - (F(sigma) - F(sigma_0)) for difference data (`dv` = V_1 - V_0: model
-/// errors common to both frames cancel) or r = V - F(sigma) for absolute data
-/// ([`Data::Absolute`]). Each step, in data-space form with d = sigma - sigma_0:
-/// sigma += P^-1 J^T (J P^-1 J^T + lambda I)^-1 (r + J d) - d, the conductivity kept above
-/// 1e-3 sigma_0. Returns the iterates' conductivities (per triangle) and residual norms.
+/// Phi(sigma) = |r(sigma)|^2 + lambda |sigma - sigma_0|^2_P, with the prior P = diag(J_0^T
+/// J_0)^s and lambda (normalised by alpha as [`crate::onestep`]) both of the background's
+/// Jacobian J_0, so every iterate lowers one and the same objective; with the residual r = dV - (F(sigma) - F(sigma_0)) for difference data (`dv` =
+/// V_1 - V_0: model errors common to both frames cancel) or r = V - F(sigma) for absolute
+/// data ([`Data::Absolute`]). Each step, in data-space form with d = sigma - sigma_0:
+/// sigma_full = sigma_0 + P^-1 J^T (J P^-1 J^T + lambda I)^-1 (r + J d), the conductivity kept
+/// above 1e-3 sigma_0; then a backtracking line search takes the longest of the steps 1, 1/2,
+/// 1/4, ... (at most [`LINE_SEARCH_HALVINGS`] halvings) towards sigma_full that lowers Phi, so
+/// the objective never grows. When none does the fit stops ([`Stop::NoDescent`]) with the
+/// iterates so far.
+///
+/// With `var_dv` (each channel's noise variance, V^2; empty when unknown) every iterate
+/// carries the noise of each triangle's value, linearised at the step that made it
+/// ([`crate::onestep::noise_sd`] of that step's reconstruction matrix).
 ///
 /// # Errors
-/// [`ReconError`] for bad parameters, or a failed forward solve.
+/// [`ReconError`] for bad parameters or a failed forward solve; [`ReconError::NoDescent`]
+/// when even the first step cannot lower the objective (nothing was fitted).
 pub fn gauss_newton(
     forward: &crate::fem::Forward,
     protocol: &et_core::protocol::Protocol,
@@ -22,7 +31,8 @@ pub fn gauss_newton(
     sigma_0: &[f64],
     data: Data<'_>,
     options: GaussNewton,
-) -> Result<Vec<(Vec<f64>, f64)>, ReconError> {
+    var_dv: &[f64],
+) -> Result<Fit, ReconError> {
     let GaussNewton {
         alpha,
         s,
@@ -50,36 +60,128 @@ pub fn gauss_newton(
     if target.iter().any(|v| !v.is_finite()) {
         return Err(ReconError::NonFinite);
     }
+    let residual = |v: &[f64]| -> Vec<f64> { target.iter().zip(v).map(|(t, v)| t - v).collect() };
+    let norm2 = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     // For difference data the model is F(sigma) - F(sigma_0) + V_0(measured); the
     // target above already is V_0(model) + dV, so both cases compare F(sigma) with target.
     let mut sigma = sigma_0.to_vec();
-    let mut out = Vec::with_capacity(iterations);
+    let mut iterates = Vec::with_capacity(iterations);
     let (mut v, mut jac) = (v0, jac0);
+    let mut stop = Stop::Iterations;
+    // The background's prior and lambda, kept for every iterate.
+    let p_inv = noser_inverse(&jac, s).ok_or(ReconError::Singular)?;
+    // lambda = alpha^2 tr(J_0 P^-1 J_0^T) / K, the normalisation of `crate::onestep`.
+    let trace: f64 = (0..jac.ncols())
+        .map(|c| jac.column(c).norm_squared() * p_inv[c])
+        .sum();
+    let lambda = alpha * alpha * trace / jac.nrows() as f64;
+    let prior = |sg: &[f64]| -> f64 {
+        sg.iter()
+            .zip(sigma_0)
+            .zip(&p_inv)
+            .map(|((a, b), w)| (a - b).powi(2) / w)
+            .sum::<f64>()
+    };
     for it in 0..iterations {
-        let r: Vec<f64> = target.iter().zip(&v).map(|(t, v)| t - v).collect();
+        let r = residual(&v);
         let d: Vec<f64> = sigma.iter().zip(sigma_0).map(|(a, b)| a - b).collect();
-        let space = DataSpace::new(&jac, s)?;
-        let rhs = DVector::from_vec(r) + &jac * DVector::from_column_slice(&d);
-        let y = space.solve(alpha, rhs.as_slice())?;
-        let step = space.back_project(&y);
-        for (i, sg) in sigma.iter_mut().enumerate() {
-            *sg = (sigma_0[i] + step[i]).max(1e-3 * sigma_0[i]);
+        if jac.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
         }
-        // The next step needs the Jacobian here; the last one only the frame.
+        let space = DataSpace::with_prior(&jac, s, &p_inv);
+        let phi_now = norm2(&r) + lambda * prior(&sigma);
+        let rhs = DVector::from_vec(r) + &jac * DVector::from_column_slice(&d);
+        let y = space.solve(lambda, rhs.as_slice())?;
+        let full: Vec<f64> = space
+            .back_project(&y)
+            .iter()
+            .zip(sigma_0)
+            .map(|(st, s0)| (s0 + st).max(1e-3 * s0))
+            .collect();
+        // Backtracking: the longest step towards `full` that lowers Phi.
+        let mut accepted = None;
+        let mut t = 1.0;
+        for _ in 0..=LINE_SEARCH_HALVINGS {
+            let trial: Vec<f64> = sigma
+                .iter()
+                .zip(&full)
+                .map(|(a, b)| a + t * (b - a))
+                .collect();
+            let v_trial = forward.frame(&trial, protocol, amps).map_err(fem)?;
+            let phi = norm2(&residual(&v_trial)) + lambda * prior(&trial);
+            if phi < phi_now {
+                accepted = Some((trial, v_trial, phi));
+                break;
+            }
+            t *= 0.5;
+        }
+        let Some((trial, v_trial, phi)) = accepted else {
+            if it == 0 {
+                return Err(ReconError::NoDescent { iteration: 0 });
+            }
+            stop = Stop::NoDescent { iteration: it };
+            break;
+        };
+        let noise_sd = if var_dv.is_empty() {
+            Vec::new()
+        } else {
+            crate::onestep::noise_sd(&space.matrix(lambda)?, var_dv)
+        };
+        sigma = trial;
+        v = v_trial;
+        iterates.push(Iterate {
+            residual: norm2(&residual(&v)).sqrt(),
+            objective: phi,
+            step: t,
+            sigma: sigma.clone(),
+            noise_sd,
+        });
+        // The next step needs the Jacobian here.
         if it + 1 < iterations {
             (v, jac) = forward.jacobian(&sigma, protocol, amps).map_err(fem)?;
-        } else {
-            v = forward.frame(&sigma, protocol, amps).map_err(fem)?;
         }
-        let norm = target
-            .iter()
-            .zip(&v)
-            .map(|(t, v)| (t - v).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        out.push((sigma.clone(), norm));
     }
-    Ok(out)
+    Ok(Fit { iterates, stop })
+}
+
+/// How many times the line search halves the step before it gives up.
+pub const LINE_SEARCH_HALVINGS: usize = 12;
+
+/// One iterate of [`gauss_newton`].
+#[derive(Clone, Debug)]
+pub struct Iterate {
+    /// Conductivity per triangle, S per square.
+    pub sigma: Vec<f64>,
+    /// |target - F(sigma)|, V.
+    pub residual: f64,
+    /// Phi(sigma), V^2 (the background's prior and lambda: comparable across iterates).
+    pub objective: f64,
+    /// The step length the line search took (1: the full Gauss-Newton step).
+    pub step: f64,
+    /// Each triangle's noise, S per square (empty without noise variances).
+    pub noise_sd: Vec<f64>,
+}
+
+/// Why [`gauss_newton`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// It ran the iterations asked for.
+    Iterations,
+    /// No step towards the next Gauss-Newton point lowered the objective at this iteration
+    /// (0-based): the iterates so far are returned, the last the best.
+    NoDescent {
+        /// The iteration that found no descent.
+        iteration: usize,
+    },
+}
+
+/// The iterates of [`gauss_newton`] and why it stopped.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// One per completed iteration, each with a lower objective than the one before.
+    pub iterates: Vec<Iterate>,
+    /// Why it stopped.
+    pub stop: Stop,
 }
 
 /// Settings of [`gauss_newton`].

@@ -35,7 +35,7 @@ pub mod pixels;
 pub mod select;
 pub mod touches;
 
-pub use gauss_newton::{Data, GaussNewton, gauss_newton};
+pub use gauss_newton::{Data, Fit, GaussNewton, Iterate, Stop, gauss_newton};
 pub use gcv::{default_alphas, gcv_alpha};
 pub use imager::Imager;
 pub use metrics::{Metrics, metrics};

@@ -30,6 +30,13 @@ pub enum ReconError {
     Singular,
     /// A frame holds NaN or infinite values.
     NonFinite,
+    /// Iterative Gauss-Newton found no step that lowers its objective at this iteration
+    /// (the linearisation does not describe the data: a smaller alpha than the data bear, or
+    /// a model far from the sheet).
+    NoDescent {
+        /// The iteration (0-based).
+        iteration: usize,
+    },
 }
 
 impl std::fmt::Display for ReconError {
@@ -38,6 +45,11 @@ impl std::fmt::Display for ReconError {
             ReconError::Parameter(why) => write!(f, "reconstruction: {why}"),
             ReconError::Singular => write!(f, "reconstruction: the regularised system is singular"),
             ReconError::NonFinite => write!(f, "reconstruction: a frame value is NaN or infinite"),
+            ReconError::NoDescent { iteration } => write!(
+                f,
+                "iterative Gauss-Newton: no step lowers the misfit at iteration {iteration}; \
+                 try a larger alpha"
+            ),
         }
     }
 }
@@ -59,6 +71,8 @@ pub struct DataSpace {
     trace: f64,
     /// The NOSER exponent s.
     s: f64,
+    /// The prior's diagonal P = diag(J^T J)^s (T values).
+    p: Vec<f64>,
     /// Eigenvalues and eigenvectors of A, made on first use (GCV).
     eigen: std::sync::OnceLock<Option<(Vec<f64>, Mat<f64>)>>,
 }
@@ -76,8 +90,14 @@ impl DataSpace {
         if jac.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
-        let (k, t) = jac.shape();
         let p_inv = noser_inverse(jac, s).ok_or(ReconError::Singular)?;
+        Ok(Self::with_prior(jac, s, &p_inv))
+    }
+
+    /// As [`DataSpace::new`] with the prior's inverse P^-1 given (`p_inv`, T positive values):
+    /// iterative Gauss-Newton keeps the background's prior at every iterate.
+    pub(crate) fn with_prior(jac: &DMatrix<f64>, s: f64, p_inv: &[f64]) -> Self {
+        let (k, t) = jac.shape();
         let j = MatRef::from_column_major_slice(jac.as_slice(), k, t);
         // B = J P^-1/2, so A = B B^T (symmetric rank-T update), then J P^-1 = B P^-1/2.
         let mut jp = Mat::from_fn(k, t, |r, c| j[(r, c)] * p_inv[c].sqrt());
@@ -103,13 +123,20 @@ impl DataSpace {
             jp.col_mut(c).iter_mut().for_each(|v| *v *= w);
         }
         let trace = (0..k).map(|i| a[(i, i)]).sum();
-        Ok(Self {
+        Self {
             jp,
             a,
             trace,
             s,
+            p: p_inv.iter().map(|w| 1.0 / w).collect(),
             eigen: std::sync::OnceLock::new(),
-        })
+        }
+    }
+
+    /// The prior's diagonal P (T values, one per triangle).
+    #[must_use]
+    pub fn prior(&self) -> &[f64] {
+        &self.p
     }
 
     /// K, the frame length.
@@ -125,8 +152,7 @@ impl DataSpace {
     }
 
     /// The Cholesky factor of A + lambda I.
-    fn regularised(&self, alpha: f64) -> Result<Llt<f64>, ReconError> {
-        let lambda = self.lambda(alpha);
+    fn regularised(&self, lambda: f64) -> Result<Llt<f64>, ReconError> {
         let mut m = self.a.clone();
         for i in 0..m.nrows() {
             m[(i, i)] += lambda;
@@ -141,7 +167,16 @@ impl DataSpace {
     /// A + lambda I cannot be factorised.
     pub fn one_step(&self, alpha: f64) -> Result<OneStep, ReconError> {
         check_alpha(alpha)?;
-        let llt = self.regularised(alpha)?;
+        Ok(OneStep {
+            matrix: self.matrix(self.lambda(alpha))?,
+            alpha,
+            s: self.s,
+        })
+    }
+
+    /// R = P^-1 J^T (A + lambda I)^-1 (T x K) at an absolute `lambda`.
+    pub(crate) fn matrix(&self, lambda: f64) -> Result<DMatrix<f64>, ReconError> {
+        let llt = self.regularised(lambda)?;
         let (k, t) = self.jp.shape();
         // R^T = (A + lambda I)^-1 J P^-1 (K x T), solved in place in R's own storage (T x K,
         // column-major: R^T is its row-major view).
@@ -155,16 +190,12 @@ impl DataSpace {
         if matrix.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
-        Ok(OneStep {
-            matrix,
-            alpha,
-            s: self.s,
-        })
+        Ok(matrix)
     }
 
-    /// (A + lambda I)^-1 `rhs` for one vector of K values (iterative Gauss-Newton's step).
-    pub(crate) fn solve(&self, alpha: f64, rhs: &[f64]) -> Result<Vec<f64>, ReconError> {
-        let llt = self.regularised(alpha)?;
+    /// (A + lambda I)^-1 `rhs` at an absolute `lambda` for one vector of K values (iterative Gauss-Newton's step).
+    pub(crate) fn solve(&self, lambda: f64, rhs: &[f64]) -> Result<Vec<f64>, ReconError> {
+        let llt = self.regularised(lambda)?;
         let mut x = Mat::from_fn(rhs.len(), 1, |r, _| rhs[r]);
         llt.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
         Ok((0..rhs.len()).map(|r| x[(r, 0)]).collect())
@@ -331,7 +362,7 @@ pub fn noise_sd<T: nalgebra::Scalar + Copy + Into<f64>>(
 
 /// The NOSER weights P^-1 = diag(J^T J)^-s (a column that sees nothing gets the smallest
 /// positive weight's), or None when every column is zero.
-fn noser_inverse(jac: &DMatrix<f64>, s: f64) -> Option<Vec<f64>> {
+pub(crate) fn noser_inverse(jac: &DMatrix<f64>, s: f64) -> Option<Vec<f64>> {
     let diag: Vec<f64> = (0..jac.ncols())
         .map(|c| jac.column(c).norm_squared())
         .collect();

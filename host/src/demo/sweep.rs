@@ -104,9 +104,10 @@ pub fn mesh_sweep(
                     s: 0.5,
                     iterations: 4,
                 },
+                &[],
             )?;
-            let last = its.last().context("no iteration")?;
-            let d: Vec<f64> = last.0.iter().map(|v| v - imager.sigma0).collect();
+            let last = its.iterates.last().context("no iteration")?;
+            let d: Vec<f64> = last.sigma.iter().map(|v| v - imager.sigma0).collect();
             Some((pe(&imager, &d), t0.elapsed().as_secs_f64()))
         } else {
             None

@@ -226,8 +226,18 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
         s: 0.5,
         iterations: 4,
     };
-    let its = gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), opts).unwrap();
-    let norms: Vec<f64> = its.iter().map(|i| i.1).collect();
+    let fit = gauss_newton(
+        &fwd,
+        &protocol,
+        amps,
+        &sigma_0,
+        Data::Difference(&dv),
+        opts,
+        &[],
+    )
+    .unwrap();
+    let its = &fit.iterates;
+    let norms: Vec<f64> = its.iter().map(|i| i.residual).collect();
     let bvc = et_core::stats::bvc_dv(&dv);
     println!("residual norms {norms:?} of |dV| = {bvc:.3e}");
     assert!(
@@ -236,7 +246,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
     );
     assert!(norms[3] < norms[0], "iterating fits better: {norms:?}");
     // The touch is still where it is, and every conductivity finite and positive.
-    let last = &its[3].0;
+    let last = &its[3].sigma;
     assert!(last.iter().all(|v| v.is_finite() && *v > 0.0));
     let d: Vec<f64> = last.iter().zip(&sigma_0).map(|(a, b)| a - b).collect();
     let rois = regions(&grid, &grid.image(&d), 0.1);
@@ -247,7 +257,18 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
         alpha: -1.0,
         ..opts
     };
-    assert!(gauss_newton(&fwd, &protocol, amps, &sigma_0, Data::Difference(&dv), bad).is_err());
+    assert!(
+        gauss_newton(
+            &fwd,
+            &protocol,
+            amps,
+            &sigma_0,
+            Data::Difference(&dv),
+            bad,
+            &[]
+        )
+        .is_err()
+    );
     assert!(
         gauss_newton(
             &fwd,
@@ -255,7 +276,8 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
             amps,
             &sigma_0,
             Data::Difference(&dv[..5]),
-            opts
+            opts,
+            &[]
         )
         .is_err()
     );
@@ -519,5 +541,60 @@ fn the_data_space_matrix_equals_the_primal_form_and_gcv_its_definition() {
             "{} vs {by_definition}",
             scores[0].1
         );
+    }
+}
+
+/// Too little regularisation (alpha 1e-6) made full Gauss-Newton steps diverge (residual
+/// 1.05e2 V against |dV| = 7e-3 V after 5 iterations): the line search keeps every iterate's
+/// objective below the one before, so the residual stays below |dV|; every iterate carries
+/// its noise, so touches can be scored.
+#[test]
+fn iterative_gauss_newton_does_not_diverge_and_scores_its_noise() {
+    let sc = scene("disc-ref-x050.toml");
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let amps = 32e-6;
+    let (v0, v1) = sim_frames(&sc, &protocol, amps);
+    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+    let mesh = Mesh::with_about(&sc.sheet, 2_000).unwrap();
+    let n = mesh.triangles.len();
+    let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet).unwrap()).unwrap();
+    let sigma_0 = vec![1.0 / sc.sheet.sheet_resistance; n];
+    let bvc = et_core::stats::bvc_dv(&dv);
+    let var = vec![(1e-3 * bvc).powi(2) / dv.len() as f64; dv.len()];
+    for alpha in [1e-6, 0.03] {
+        let opts = GaussNewton {
+            alpha,
+            s: 0.5,
+            iterations: 5,
+        };
+        let fit = gauss_newton(
+            &fwd,
+            &protocol,
+            amps,
+            &sigma_0,
+            Data::Difference(&dv),
+            opts,
+            &var,
+        )
+        .unwrap();
+        let summary: Vec<(f64, f64, f64)> = fit
+            .iterates
+            .iter()
+            .map(|i| (i.residual, i.objective, i.step))
+            .collect();
+        println!(
+            "alpha {alpha}: (residual, objective, step) {summary:?}, {:?}",
+            fit.stop
+        );
+        assert!(!fit.iterates.is_empty());
+        for w in fit.iterates.windows(2) {
+            assert!(w[1].objective < w[0].objective, "{summary:?}");
+        }
+        for i in &fit.iterates {
+            assert!(i.residual < bvc, "{summary:?} against |dV| = {bvc:e}");
+            assert_eq!(i.noise_sd.len(), n);
+            assert!(i.noise_sd.iter().all(|v| v.is_finite() && *v > 0.0));
+            assert!(i.sigma.iter().all(|v| v.is_finite() && *v > 0.0));
+        }
     }
 }

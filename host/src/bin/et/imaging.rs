@@ -316,7 +316,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         )
     } else {
         let sigma0 = imager.background();
-        let its = et_recon::gauss_newton(
+        let fit = et_recon::gauss_newton(
             &imager.forward,
             &protocol,
             amps,
@@ -327,15 +327,26 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
                 s: args.s,
                 iterations: args.iterations,
             },
+            &var,
         )?;
-        let (last, norm) = its.last().cloned().context("no iteration")?;
-        let d: Vec<f64> = last.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
+        let last = fit.iterates.last().context("no iteration")?;
+        let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
         let image = grid.image(&d);
+        let steps: Vec<String> = fit.iterates.iter().map(|i| format!("{}", i.step)).collect();
         let t_frame = stage(&format!(
-            "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {norm:.3e} V)",
-            args.iterations
+            "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {:.3e} V, step lengths {})",
+            fit.iterates.len(),
+            last.residual,
+            steps.join(" ")
         ));
-        (image, Vec::new(), None, t_frame)
+        if let et_recon::Stop::NoDescent { iteration } = fit.stop {
+            eprintln!(
+                "note: stopped at iteration {iteration} of {}: no step lowered the misfit \
+                 (the image is the last iterate that did; a larger --alpha may fit further)",
+                args.iterations
+            );
+        }
+        (image, grid.image(&last.noise_sd), None, t_frame)
     };
     let timings_s = Timings {
         mesh: t_mesh,
