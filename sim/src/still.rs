@@ -65,7 +65,8 @@ pub struct SceneFrames {
     /// V_1: one frame with the scene's touches, V.
     pub v1: Vec<f32>,
     /// The noise of dV per channel, from the reference frames' spread
-    /// ([`et_core::stats::dv_variance`]), V^2.
+    /// ([`et_core::stats::dv_variance`]) and at least the ADC's rounding (q^2 / 6 for a code
+    /// of q volts: V_1's and V_0's uniform rounding errors), V^2.
     pub var: Vec<f64>,
     /// The touches.
     pub truth: Vec<Truth>,
@@ -128,6 +129,12 @@ pub fn scene_frames_on(
     let (mut v0, mut var) = (vec![0.0; k], vec![0.0; k]);
     stats::reference(&frames, &mut v0)?;
     stats::dv_variance(&frames, &mut var)?;
+    // At least the ADC's rounding: V_1 and V_0 each off by a uniform error of one code, so
+    // frames without noise (identical reference frames) still carry their quantisation.
+    let q = f64::from(scene.frontend.scale(config.gain).volts_per_code);
+    for v in &mut var {
+        *v = v.max(q * q / 6.0);
+    }
     let touches: Vec<Touch> = scene.touches.iter().map(TouchEvent::touch).collect();
     sim.set_touches(&touches)?;
     Ok(SceneFrames {

@@ -105,7 +105,7 @@ fn live_frame_onto_32x32_pixels() -> f32 {
 }
 
 static FORWARD: LazyLock<(Forward, DMatrix<f64>, Vec<f64>)> = LazyLock::new(|| {
-    let spec = disc();
+    let spec = disc(16);
     let mesh = Mesh::with_about(&spec, 8_000).expect("mesh");
     let n = mesh.triangles.len();
     let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];

@@ -115,14 +115,16 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         for (name, scene) in &scenes {
             let frames = scene_frames_on(&sheet, scene, &config, 10)?;
             let dv = frames.dv();
-            // alpha by generalised cross-validation on the frame, as `et reconstruct`.
-            let alpha = space.gcv(&dv, &et_recon::default_alphas())?.0;
+            // alpha by generalised cross-validation on the frame, no closer than its noise, as
+            // `et reconstruct`.
+            let var = et_recon::onestep::imaging_variance(&frames.var, &dv);
+            let alpha = space.choose_alpha(&dv, &var, &et_recon::default_alphas())?;
             let recon = space.one_step(alpha)?;
             let image = imager.grid.image(&recon.reconstruct(&dv)?);
             let rois = regions(&imager.grid, &image, f);
             // Touches: the regions split at their saddles, standing out of the noise
             // (estimated from the reference frames), then docs/method.md §8's significance.
-            let sd = imager.grid.image(&recon.noise_sd(&frames.var)?);
+            let sd = imager.grid.image(&recon.noise_sd(&var)?);
             let counted = significant(
                 &above_noise(&touches(&imager.grid, &image, &sd, f, PROMINENCE), TOUCH_Z),
                 &settings,

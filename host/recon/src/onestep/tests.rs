@@ -598,3 +598,50 @@ fn iterative_gauss_newton_does_not_diverge_and_scores_its_noise() {
         }
     }
 }
+
+/// Frames without noise (the simulator's resistor network, noiseless): GCV alone runs to the
+/// smallest alpha and the model's mismatch images into a ring of spurious peaks; with the
+/// model's error counted as noise (`imaging_variance`) and the discrepancy floor
+/// (`choose_alpha`), exactly the true touches are found, each within its radius.
+#[test]
+fn noise_free_frames_find_exactly_the_true_touches() {
+    for (name, kind) in [
+        ("disc-ref-x050.toml", ProtocolKind::Adjacent),
+        ("disc-ref-x075.toml", ProtocolKind::Adjacent),
+        ("disc-ref-two.toml", ProtocolKind::PpPp),
+    ] {
+        let sc = scene(name);
+        let protocol = Protocol::new(kind, 16).unwrap();
+        let amps = 32e-6;
+        let (v0, v1) = sim_frames(&sc, &protocol, amps);
+        let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
+        let mesh = Mesh::with_about(&sc.sheet, 4_000).unwrap();
+        let grid = PixelGrid::new(&mesh, 64);
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet).unwrap()).unwrap();
+        let (_, jac) = fwd
+            .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, amps)
+            .unwrap();
+        let space = DataSpace::new(&jac, 0.5).unwrap();
+        let var = imaging_variance(&vec![0.0; dv.len()], &dv);
+        let alpha = space
+            .choose_alpha(&dv, &var, &crate::gcv::default_alphas())
+            .unwrap();
+        let (gcv_only, _) = space.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
+        let recon = space.one_step(alpha).unwrap();
+        let image = grid.image(&recon.reconstruct(&dv).unwrap());
+        let sd = grid.image(&recon.noise_sd(&var).unwrap());
+        let f = default_threshold(kind);
+        let found = above_noise(&touches(&grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
+        let at: Vec<[f64; 2]> = found.iter().map(|r| r.centroid).collect();
+        println!("{name}: alpha {alpha:.3} (GCV alone {gcv_only:.1e}), touches at {at:?}");
+        assert_eq!(found.len(), sc.touches.len(), "{name}: {at:?}");
+        for t in &sc.touches {
+            let near = at
+                .iter()
+                .map(|c| (c[0] - t.position[0]).hypot(c[1] - t.position[1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(near < t.radius, "{name}: {near} from {:?}", t.position);
+        }
+    }
+}

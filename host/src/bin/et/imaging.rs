@@ -48,7 +48,8 @@ pub(crate) struct ReconstructArgs {
     #[arg(long, default_value_t = 1)]
     iterations: usize,
     /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
-    /// chosen by generalised cross-validation on the frame.
+    /// chosen by generalised cross-validation on the frame, never fitting it closer than
+    /// its noise (the discrepancy principle as a floor).
     #[arg(long, default_value = "auto")]
     alpha: String,
     /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
@@ -294,10 +295,12 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         }
     };
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
+    // What imaging cannot explain: the frames' noise and the model's own error.
+    let var = et_recon::onestep::imaging_variance(&var, &dv);
     stage("frames");
     let space = et_recon::DataSpace::new(&jac, args.s)?;
     let alpha = match args.alpha.as_str() {
-        "auto" => space.gcv(&dv, &et_recon::default_alphas())?.0,
+        "auto" => space.choose_alpha(&dv, &var, &et_recon::default_alphas())?,
         v => v
             .parse::<f64>()
             .with_context(|| format!("--alpha '{v}': a number or auto"))?,
