@@ -35,8 +35,8 @@ use et_recon::Imager;
 use et_recon::mesh::Mesh;
 use et_recon::select::{Settings, significant};
 use et_recon::{
-    Data, GaussNewton, OneStep, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics,
-    regions, touches,
+    Data, GaussNewton, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions,
+    touches,
 };
 use et_sim::still::{scene_frames_on, simulated_sheet};
 

@@ -30,11 +30,11 @@ use et_learn::fit::{FitError, Fitted};
 use et_learn::model_file::ModelFile;
 use et_learn::regress::posterior_centre;
 use et_recon::Imager;
-use et_recon::fem::FemError;
+use et_recon::fem::{FemError, TransferJacobian};
 use et_recon::mesh::{Mesh, MeshError};
 use et_recon::onestep::noise_sd;
 use et_recon::{
-    OneStep, PROMINENCE, PixelGrid, ReconError, Region, above_noise, default_threshold, touches,
+    DataSpace, PROMINENCE, PixelGrid, ReconError, Region, above_noise, default_threshold, touches,
 };
 
 mod monitor;

@@ -9,9 +9,9 @@
 use std::sync::LazyLock;
 
 use et_core::protocol::{Protocol, ProtocolKind};
-use et_recon::fem::{Electrodes, Forward};
+use et_recon::fem::{Electrodes, Forward, TransferJacobian};
 use et_recon::mesh::Mesh;
-use et_recon::{OneStep, PixelGrid};
+use et_recon::{DataSpace, OneStep, PixelGrid};
 use et_sim::shape::Shape;
 use et_sim::sheet::SheetSpec;
 use nalgebra::{DMatrix, DVector};
@@ -33,25 +33,24 @@ fn set_up(triangles: usize) -> (usize, OneStep, Mesh) {
     set_up_with(triangles, 16, ProtocolKind::Adjacent)
 }
 
-fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (DMatrix<f64>, Mesh) {
+fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (TransferJacobian, Mesh) {
     let spec = disc(electrodes);
     let mesh = Mesh::with_about(&spec, triangles).expect("mesh");
     let n = mesh.triangles.len();
     let fwd = Forward::new(mesh.clone(), Electrodes::of_sheet(&spec).expect("z")).expect("forward");
     let protocol = Protocol::new(kind, electrodes).expect("protocol");
-    let (_, jac) = fwd
-        .jacobian(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
+    let jac = fwd
+        .transfer_jacobian(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
         .expect("jacobian");
     (jac, mesh)
 }
 
 fn set_up_with(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (usize, OneStep, Mesh) {
     let (jac, mesh) = jacobian(triangles, electrodes, kind);
-    (
-        mesh.triangles.len(),
-        OneStep::new(&jac, 0.03, 0.5).expect("recon"),
-        mesh,
-    )
+    let one = DataSpace::factored(&jac, 0.5)
+        .and_then(|d| d.one_step(0.03))
+        .expect("recon");
+    (mesh.triangles.len(), one, mesh)
 }
 
 #[divan::bench(args = [2_000, 8_000, 30_000], sample_count = 5, sample_size = 1)]
@@ -70,38 +69,58 @@ fn set_up_32_electrodes_pp_pp_8000() -> usize {
 #[divan::bench(args = [8_000, 30_000], sample_count = 5, sample_size = 1)]
 fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
     let (jac, _) = jacobian(triangles, 16, ProtocolKind::Adjacent);
-    bencher.bench(|| OneStep::new(divan::black_box(&jac), 0.03, 0.5).expect("recon"));
+    bencher.bench(|| {
+        DataSpace::factored(divan::black_box(&jac), 0.5)
+            .and_then(|d| d.one_step(0.03))
+            .expect("recon")
+    });
 }
 
-/// Reading the live matrix once (a sum of its entries): the memory-bandwidth limit a live
-/// frame onto the mesh is measured against.
-#[divan::bench]
-fn read_the_mesh_matrix_once() -> f64 {
-    let (r, _, _) = &*LIVE;
-    divan::black_box(&r.matrix).as_slice().iter().sum()
-}
-
-static LIVE: LazyLock<(OneStep, DMatrix<f32>, DVector<f64>)> = LazyLock::new(|| {
+static LIVE: LazyLock<(OneStep, [DMatrix<f32>; 2], DVector<f64>)> = LazyLock::new(|| {
     let (_, r, mesh) = set_up(8_000);
-    let grid = PixelGrid::new(&mesh, 32);
-    let pix = grid.project(&r);
-    let dv = DVector::from_fn(r.matrix.ncols(), |k, _| (k as f64 * 0.37).sin() * 1e-4);
+    let pix = [32, 64].map(|n| PixelGrid::new(&mesh, n).project(&r));
+    let dv = DVector::from_fn(r.frame_len(), |k, _| (k as f64 * 0.37).sin() * 1e-4);
     (r, pix, dv)
 });
 
-/// A live frame onto the 8 000-triangle mesh (f64).
+/// A live frame onto the 8 000-triangle mesh (f64, the factored matrix: r = 120).
 #[divan::bench]
 fn live_frame_onto_the_mesh() -> f64 {
     let (r, _, dv) = &*LIVE;
-    (&r.matrix * divan::black_box(dv)).sum()
+    r.reconstruct(divan::black_box(dv.as_slice()))
+        .expect("frame")
+        .iter()
+        .sum()
 }
 
-/// A live frame onto a 32 x 32 pixel grid (f32).
+/// Reading as many f64 as the live frame's factors hold, r (T + K) with r = 120, once (a sum
+/// in eight lanes, so that it vectorises): the memory-bandwidth limit a live frame onto the
+/// mesh is measured against.
 #[divan::bench]
-fn live_frame_onto_32x32_pixels() -> f32 {
+fn read_the_factors_once(bencher: divan::Bencher) {
+    let (r, _, _) = &*LIVE;
+    let data = vec![1.0f64; 120 * (r.triangles() + r.frame_len())];
+    bencher.bench(|| {
+        let mut lanes = [0.0f64; 8];
+        for chunk in divan::black_box(&data).chunks_exact(8) {
+            for (l, v) in lanes.iter_mut().zip(chunk) {
+                *l += v;
+            }
+        }
+        lanes.iter().sum::<f64>()
+    });
+}
+
+/// A live frame onto a 32 x 32 and a 64 x 64 pixel grid (f32, pixels inside x K).
+#[divan::bench(args = [0, 1])]
+fn live_frame_onto_pixels_32_64(bencher: divan::Bencher, which: usize) {
     let (_, pix, dv) = &*LIVE;
-    let dv32: DVector<f32> = dv.map(|v| v as f32);
-    (pix * divan::black_box(&dv32)).sum()
+    let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+    let mut out = vec![0.0f32; pix[which].nrows()];
+    bencher.bench_local(|| {
+        PixelGrid::apply(&pix[which], divan::black_box(&dv32), &mut out).expect("sizes");
+        out[0]
+    });
 }
 
 static FORWARD: LazyLock<(Forward, DMatrix<f64>, Vec<f64>)> = LazyLock::new(|| {

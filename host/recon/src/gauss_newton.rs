@@ -125,7 +125,7 @@ pub fn gauss_newton(
         let noise_sd = if var_dv.is_empty() {
             Vec::new()
         } else {
-            crate::onestep::noise_sd(&space.matrix(lambda)?, var_dv)
+            space.at_lambda(lambda, alpha)?.noise_sd(var_dv)?
         };
         sigma = trial;
         v = v_trial;

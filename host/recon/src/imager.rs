@@ -68,6 +68,21 @@ impl Imager {
         vec![self.sigma0; self.triangles()]
     }
 
+    /// The Jacobian of `protocol`'s frame at the background in factored form (J = M G over
+    /// the transfer impedances, [`crate::fem::TransferJacobian`]), `amps` injected: what
+    /// [`crate::onestep::DataSpace::factored`] takes.
+    ///
+    /// # Errors
+    /// [`FemError`] if the solve fails.
+    pub fn transfer_jacobian(
+        &self,
+        protocol: &Protocol,
+        amps: f64,
+    ) -> Result<crate::fem::TransferJacobian, FemError> {
+        self.forward
+            .transfer_jacobian(&self.background(), protocol, amps)
+    }
+
     /// The K x T Jacobian of `protocol`'s frame at the background, `amps` injected (V per
     /// S per square).
     ///

@@ -11,14 +11,22 @@
 //! is computed in its data-space form on the right (P is diagonal, so only a K x K system is
 //! factorised). **Normalisation of alpha:** lambda = alpha^2 tr(J P^-1 J^T) / K, so alpha is
 //! dimensionless and means the same for any mesh, current or protocol (alpha = 1: the
-//! regularisation is as large as the average data-space eigenvalue). The reconstruction matrix
-//! R (T x K) is built once; each frame then costs one matrix-vector product, onto the mesh or
-//! (cheaper) onto a pixel grid ([`crate::pixels::PixelGrid`]).
+//! regularisation is as large as the average data-space eigenvalue).
+//!
+//! The Jacobian is used factored, J = M G over the r = L (L - 1) / 2 transfer impedances
+//! ([`crate::fem::TransferJacobian`]): the frame's K values are combinations of r numbers, so
+//! every large product costs r instead of K (16 electrodes: r = 120, K = 208 adjacent; 32
+//! electrodes PP-PP: r = 496, K = 1 824). The reconstruction R (T x K) = (G P^-1)^T X^T is
+//! built once as its two factors; each frame then costs two matrix-vector products onto the
+//! mesh, about the time of reading the factors once, or one product onto a pixel grid
+//! ([`crate::pixels::PixelGrid`]). Speeds: `cargo bench -p et-recon --bench imaging`,
+//! docs/measurements.md.
 
+use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::{Llt, SolveCore};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// Why a reconstruction could not be set up or run.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,14 +66,18 @@ impl std::error::Error for ReconError {}
 
 /// The data-space quantities of one (Jacobian, NOSER exponent s), computed once and shared by
 /// alpha's automatic choice ([`DataSpace::gcv`]) and the reconstruction matrix
-/// ([`DataSpace::one_step`]): J P^-1 (K x T) and A = J P^-1 J^T (K x K). Built with BLAS-3
-/// kernels (faer): A as a symmetric rank-T update of its lower triangle, R by a Cholesky
-/// factorisation of A + lambda I and a blocked triangular solve on J P^-1; no inverse is formed.
+/// ([`DataSpace::one_step`]). The Jacobian is kept factored, J = M G (K x r sparse times
+/// r x T: [`crate::fem::TransferJacobian`]; a dense J is M = I, G = J), so the products cost r,
+/// the transfer impedances, not K, the frame length: G P^-1 (r x T), H = G P^-1 G^T (r x r, a
+/// symmetric rank-T update of its lower triangle: faer's BLAS-3 kernel) and A = M H M^T =
+/// J P^-1 J^T (K x K).
 #[derive(Clone, Debug)]
 pub struct DataSpace {
-    /// J P^-1, K x T (V per S/sq, divided by the prior).
-    jp: Mat<f64>,
-    /// A = J P^-1 J^T, K x K (lower triangle filled; upper mirrored).
+    /// M: K rows of (column of G, coefficient).
+    combination: Vec<Vec<(usize, f64)>>,
+    /// G P^-1, r x T.
+    gp: Mat<f64>,
+    /// A = J P^-1 J^T, K x K (full).
     a: Mat<f64>,
     /// tr(A), V^2 per (S/sq)^2 (the scale of lambda).
     trace: f64,
@@ -78,15 +90,13 @@ pub struct DataSpace {
 }
 
 impl DataSpace {
-    /// J P^-1 and A for the Jacobian `jac` (K x T) and NOSER exponent `s`.
+    /// The data space of the dense Jacobian `jac` (K x T) and NOSER exponent `s`.
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for s outside [0, 1]; [`ReconError::Singular`] for a
     /// Jacobian with non-finite values or all zero.
     pub fn new(jac: &DMatrix<f64>, s: f64) -> Result<Self, ReconError> {
-        if !(0.0..=1.0).contains(&s) {
-            return Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")));
-        }
+        check_s(s)?;
         if jac.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
@@ -94,37 +104,98 @@ impl DataSpace {
         Ok(Self::with_prior(jac, s, &p_inv))
     }
 
+    /// The data space of a factored Jacobian (the fast way: [`crate::Imager::transfer_jacobian`]).
+    ///
+    /// # Errors
+    /// As [`DataSpace::new`].
+    pub fn factored(jac: &crate::fem::TransferJacobian, s: f64) -> Result<Self, ReconError> {
+        check_s(s)?;
+        let g = &jac.g;
+        if g.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        // diag(J^T J)_t = |M g_t|^2.
+        let diag: Vec<f64> = (0..g.ncols())
+            .map(|t| {
+                let col = g.column(t);
+                jac.combination
+                    .iter()
+                    .map(|row| row.iter().map(|&(p, c)| c * col[p]).sum::<f64>().powi(2))
+                    .sum()
+            })
+            .collect();
+        let p_inv = noser_weights(&diag, s).ok_or(ReconError::Singular)?;
+        let g = MatRef::from_column_major_slice(g.as_slice(), g.nrows(), g.ncols());
+        Ok(Self::build(jac.combination.clone(), g, s, &p_inv))
+    }
+
     /// As [`DataSpace::new`] with the prior's inverse P^-1 given (`p_inv`, T positive values):
     /// iterative Gauss-Newton keeps the background's prior at every iterate.
     pub(crate) fn with_prior(jac: &DMatrix<f64>, s: f64, p_inv: &[f64]) -> Self {
         let (k, t) = jac.shape();
-        let j = MatRef::from_column_major_slice(jac.as_slice(), k, t);
-        // B = J P^-1/2, so A = B B^T (symmetric rank-T update), then J P^-1 = B P^-1/2.
-        let mut jp = Mat::from_fn(k, t, |r, c| j[(r, c)] * p_inv[c].sqrt());
-        let mut a = Mat::<f64>::zeros(k, k);
+        let identity = (0..k).map(|i| vec![(i, 1.0)]).collect();
+        Self::build(
+            identity,
+            MatRef::from_column_major_slice(jac.as_slice(), k, t),
+            s,
+            p_inv,
+        )
+    }
+
+    fn build(
+        combination: Vec<Vec<(usize, f64)>>,
+        g: MatRef<'_, f64>,
+        s: f64,
+        p_inv: &[f64],
+    ) -> Self {
+        let (r, t) = g.shape();
+        let k = combination.len();
+        // B = G P^-1/2, so H = B B^T (symmetric rank-T update), then G P^-1 = B P^-1/2.
+        let root: Vec<f64> = p_inv.iter().map(|w| w.sqrt()).collect();
+        let mut gp = Mat::<f64>::zeros(r, t);
+        for (c, w) in root.iter().enumerate() {
+            gp.col_mut(c)
+                .iter_mut()
+                .zip(g.col(c).iter())
+                .for_each(|(d, v)| *d = v * w);
+        }
+        let mut h = Mat::<f64>::zeros(r, r);
         triangular::matmul(
-            a.as_mut(),
+            h.as_mut(),
             BlockStructure::TriangularLower,
             Accum::Replace,
-            jp.as_ref(),
+            gp.as_ref(),
             BlockStructure::Rectangular,
-            jp.transpose(),
+            gp.transpose(),
             BlockStructure::Rectangular,
             1.0,
             Par::Seq,
         );
-        for r in 0..k {
-            for c in r + 1..k {
-                a[(r, c)] = a[(c, r)];
+        for i in 0..r {
+            for j in i + 1..r {
+                h[(i, j)] = h[(j, i)];
             }
         }
-        for (c, w) in p_inv.iter().enumerate() {
-            let w = w.sqrt();
-            jp.col_mut(c).iter_mut().for_each(|v| *v *= w);
+        for (c, w) in root.iter().enumerate() {
+            gp.col_mut(c).iter_mut().for_each(|v| *v *= w);
         }
+        // A = M H M^T: MH (K x r), then A[i, j] = sum over row j of M of MH[i, p] c.
+        let mh = Mat::from_fn(k, r, |i, col| {
+            combination[i]
+                .iter()
+                .map(|&(p, c)| c * h[(p, col)])
+                .sum::<f64>()
+        });
+        let a = Mat::from_fn(k, k, |i, j| {
+            combination[j]
+                .iter()
+                .map(|&(p, c)| c * mh[(i, p)])
+                .sum::<f64>()
+        });
         let trace = (0..k).map(|i| a[(i, i)]).sum();
         Self {
-            jp,
+            combination,
+            gp,
             a,
             trace,
             s,
@@ -160,40 +231,42 @@ impl DataSpace {
         m.llt(Side::Lower).map_err(|_| ReconError::Singular)
     }
 
-    /// The one-step reconstruction matrix R = P^-1 J^T (A + lambda I)^-1 at `alpha`.
+    /// The one-step reconstruction R = P^-1 J^T (A + lambda I)^-1 at `alpha`, factored.
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for alpha not in (0, inf); [`ReconError::Singular`] when
     /// A + lambda I cannot be factorised.
     pub fn one_step(&self, alpha: f64) -> Result<OneStep, ReconError> {
         check_alpha(alpha)?;
+        self.at_lambda(self.lambda(alpha), alpha)
+    }
+
+    /// R = P^-1 J^T (A + lambda I)^-1 = (G P^-1)^T X^T with X = (A + lambda I)^-1 M (K x r,
+    /// one Cholesky solve with r right-hand sides) at an absolute `lambda`.
+    pub(crate) fn at_lambda(&self, lambda: f64, alpha: f64) -> Result<OneStep, ReconError> {
+        let llt = self.regularised(lambda)?;
+        let (k, r) = (self.frame_len(), self.gp.nrows());
+        let mut x = Mat::<f64>::zeros(k, r);
+        for (i, row) in self.combination.iter().enumerate() {
+            for &(p, c) in row {
+                x[(i, p)] += c;
+            }
+        }
+        llt.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
+        let xt = x.transpose().to_owned();
+        if xt.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+            return Err(ReconError::Singular);
+        }
         Ok(OneStep {
-            matrix: self.matrix(self.lambda(alpha))?,
+            gp: self.gp.clone(),
+            xt,
             alpha,
             s: self.s,
         })
     }
 
-    /// R = P^-1 J^T (A + lambda I)^-1 (T x K) at an absolute `lambda`.
-    pub(crate) fn matrix(&self, lambda: f64) -> Result<DMatrix<f64>, ReconError> {
-        let llt = self.regularised(lambda)?;
-        let (k, t) = self.jp.shape();
-        // R^T = (A + lambda I)^-1 J P^-1 (K x T), solved in place in R's own storage (T x K,
-        // column-major: R^T is its row-major view).
-        let mut matrix = DMatrix::<f64>::zeros(t, k);
-        {
-            let mut rt = MatMut::from_column_major_slice_mut(matrix.as_mut_slice(), t, k);
-            let mut rt = rt.as_mut().transpose_mut();
-            rt.copy_from(&self.jp);
-            llt.solve_in_place_with_conj(faer::Conj::No, rt);
-        }
-        if matrix.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::Singular);
-        }
-        Ok(matrix)
-    }
-
-    /// (A + lambda I)^-1 `rhs` at an absolute `lambda` for one vector of K values (iterative Gauss-Newton's step).
+    /// (A + lambda I)^-1 `rhs` at an absolute `lambda` for one vector of K values (iterative
+    /// Gauss-Newton's step).
     pub(crate) fn solve(&self, lambda: f64, rhs: &[f64]) -> Result<Vec<f64>, ReconError> {
         let llt = self.regularised(lambda)?;
         let mut x = Mat::from_fn(rhs.len(), 1, |r, _| rhs[r]);
@@ -201,10 +274,16 @@ impl DataSpace {
         Ok((0..rhs.len()).map(|r| x[(r, 0)]).collect())
     }
 
-    /// P^-1 J^T `y` (T values) for K values `y`.
+    /// P^-1 J^T `y` (T values) for K values `y`: (G P^-1)^T (M^T y).
     pub(crate) fn back_project(&self, y: &[f64]) -> Vec<f64> {
-        (0..self.jp.ncols())
-            .map(|c| self.jp.col(c).iter().zip(y).map(|(a, b)| a * b).sum())
+        let mut w = vec![0.0; self.gp.nrows()];
+        for (row, yk) in self.combination.iter().zip(y) {
+            for &(p, c) in row {
+                w[p] += c * yk;
+            }
+        }
+        (0..self.gp.ncols())
+            .map(|t| self.gp.col(t).iter().zip(&w).map(|(a, b)| a * b).sum())
             .collect()
     }
 
@@ -328,6 +407,14 @@ impl DataSpace {
     }
 }
 
+fn check_s(s: f64) -> Result<(), ReconError> {
+    if (0.0..=1.0).contains(&s) {
+        Ok(())
+    } else {
+        Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")))
+    }
+}
+
 fn check_alpha(alpha: f64) -> Result<(), ReconError> {
     if alpha.is_finite() && alpha > 0.0 {
         Ok(())
@@ -338,11 +425,15 @@ fn check_alpha(alpha: f64) -> Result<(), ReconError> {
     }
 }
 
-/// The one-step Gauss-Newton reconstruction matrix of one (mesh, protocol, alpha, s).
+/// The one-step Gauss-Newton reconstruction R = P^-1 J^T (A + lambda I)^-1 (T x K) of one
+/// (mesh, protocol, alpha, s), kept as its factors R = (G P^-1)^T X^T: a frame costs r (T + K)
+/// instead of T K, and [`OneStep::matrix`] multiplies it out when a caller wants R itself.
 #[derive(Clone, Debug)]
 pub struct OneStep {
-    /// T x K: d_sigma = R dV.
-    pub matrix: DMatrix<f64>,
+    /// G P^-1, r x T.
+    gp: Mat<f64>,
+    /// X^T = M^T (A + lambda I)^-1, r x K.
+    xt: Mat<f64>,
     /// The alpha it was built with.
     pub alpha: f64,
     /// The NOSER exponent s.
@@ -350,7 +441,7 @@ pub struct OneStep {
 }
 
 impl OneStep {
-    /// Builds R from the Jacobian `jac` (K x T): [`DataSpace::new`] then
+    /// Builds R from the dense Jacobian `jac` (K x T): [`DataSpace::new`] then
     /// [`DataSpace::one_step`] (use those to choose alpha by GCV on the same data space).
     ///
     /// # Errors
@@ -361,40 +452,119 @@ impl OneStep {
         DataSpace::new(jac, s)?.one_step(alpha)
     }
 
+    /// K, the frame length.
+    #[must_use]
+    pub fn frame_len(&self) -> usize {
+        self.xt.ncols()
+    }
+
+    /// T, the triangles.
+    #[must_use]
+    pub fn triangles(&self) -> usize {
+        self.gp.ncols()
+    }
+
+    /// R (T x K) multiplied out.
+    #[must_use]
+    pub fn matrix(&self) -> DMatrix<f64> {
+        let (t, k) = (self.triangles(), self.frame_len());
+        let mut m = DMatrix::<f64>::zeros(t, k);
+        matmul(
+            MatMut::from_column_major_slice_mut(m.as_mut_slice(), t, k),
+            Accum::Replace,
+            self.gp.transpose(),
+            self.xt.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        m
+    }
+
+    /// The rows of R for `triangles` (each a triangle index), in f32: the matrix a pixel grid
+    /// images with.
+    #[must_use]
+    pub fn rows_f32(&self, triangles: &[usize]) -> DMatrix<f32> {
+        let r = self.gp.nrows();
+        let g = Mat::from_fn(triangles.len(), r, |i, j| self.gp[(j, triangles[i])]);
+        let mut out = Mat::<f64>::zeros(triangles.len(), self.frame_len());
+        matmul(
+            out.as_mut(),
+            Accum::Replace,
+            g.as_ref(),
+            self.xt.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        DMatrix::from_fn(triangles.len(), self.frame_len(), |i, k| out[(i, k)] as f32)
+    }
+
     /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
     pub fn reconstruct(&self, dv: &[f64]) -> Result<Vec<f64>, ReconError> {
-        if dv.len() != self.matrix.ncols() {
-            return Err(ReconError::Parameter(format!(
-                "{} values, the protocol has K = {}",
-                dv.len(),
-                self.matrix.ncols()
-            )));
-        }
+        self.check_len(dv.len(), "values")?;
         if dv.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::NonFinite);
         }
-        Ok((&self.matrix * DVector::from_column_slice(dv))
-            .as_slice()
-            .to_vec())
+        // y = X^T dv (r), then the image (G P^-1)^T y (T): two matrix-vector products.
+        let dv = MatRef::from_column_major_slice(dv, dv.len(), 1);
+        let mut y = Mat::<f64>::zeros(self.xt.nrows(), 1);
+        matmul(
+            y.as_mut(),
+            Accum::Replace,
+            self.xt.as_ref(),
+            dv,
+            1.0,
+            Par::Seq,
+        );
+        let mut image = vec![0.0; self.triangles()];
+        matmul(
+            MatMut::from_column_major_slice_mut(&mut image, self.triangles(), 1),
+            Accum::Replace,
+            self.gp.transpose(),
+            y.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        Ok(image)
+    }
+
+    fn check_len(&self, n: usize, what: &str) -> Result<(), ReconError> {
+        if n == self.frame_len() {
+            Ok(())
+        } else {
+            Err(ReconError::Parameter(format!(
+                "{n} {what}, the protocol has K = {}",
+                self.frame_len()
+            )))
+        }
     }
 
     /// The standard deviation of each triangle's value when dV carries independent noise of
-    /// variance `var_dv` per channel (V^2): [`noise_sd`] of the matrix. Same units as an image.
+    /// variance `var_dv` per channel (V^2): sqrt(sum_k R_tk^2 var_k), the norm of triangle t's
+    /// column of diag(sqrt var) X (G P^-1) (one product of the factors). Same units as an
+    /// image.
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
-        if var_dv.len() != self.matrix.ncols() {
-            return Err(ReconError::Parameter(format!(
-                "{} variances, the protocol has K = {}",
-                var_dv.len(),
-                self.matrix.ncols()
-            )));
-        }
-        Ok(noise_sd(&self.matrix, var_dv))
+        self.check_len(var_dv.len(), "variances")?;
+        let w = Mat::from_fn(self.frame_len(), self.xt.nrows(), |k, j| {
+            self.xt[(j, k)] * var_dv[k].max(0.0).sqrt()
+        });
+        let mut wg = Mat::<f64>::zeros(self.frame_len(), self.triangles());
+        matmul(
+            wg.as_mut(),
+            Accum::Replace,
+            w.as_ref(),
+            self.gp.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        Ok((0..self.triangles())
+            .map(|t| wg.col(t).iter().map(|v| v * v).sum::<f64>().sqrt())
+            .collect())
     }
 }
 
@@ -447,6 +617,11 @@ pub(crate) fn noser_inverse(jac: &DMatrix<f64>, s: f64) -> Option<Vec<f64>> {
     let diag: Vec<f64> = (0..jac.ncols())
         .map(|c| jac.column(c).norm_squared())
         .collect();
+    noser_weights(&diag, s)
+}
+
+/// P^-1 = diag^-s from diag(J^T J) (`diag`, T values), as [`noser_inverse`].
+fn noser_weights(diag: &[f64], s: f64) -> Option<Vec<f64>> {
     let floor = diag
         .iter()
         .copied()

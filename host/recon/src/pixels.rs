@@ -3,7 +3,7 @@
 use nalgebra::DMatrix;
 
 use crate::mesh::Mesh;
-use crate::onestep::OneStep;
+use crate::onestep::{OneStep, ReconError};
 
 /// A pixel grid over a mesh: which triangle each pixel centre lies in.
 #[derive(Clone, Debug)]
@@ -107,9 +107,32 @@ impl PixelGrid {
     #[must_use]
     pub fn project(&self, r: &OneStep) -> DMatrix<f32> {
         let inside: Vec<usize> = self.triangle.iter().filter_map(|t| *t).collect();
-        DMatrix::from_fn(inside.len(), r.matrix.ncols(), |p, k| {
-            r.matrix[(inside[p], k)] as f32
-        })
+        r.rows_f32(&inside)
+    }
+
+    /// A live frame onto the pixels: `projection` ([`PixelGrid::project`], pixels x K) times
+    /// `dv` (K values, V) with faer's f32 kernel, into `out` (one value per pixel inside).
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] when `dv` does not hold K values or `out` not one per row.
+    pub fn apply(projection: &DMatrix<f32>, dv: &[f32], out: &mut [f32]) -> Result<(), ReconError> {
+        let (p, k) = projection.shape();
+        if dv.len() != k || out.len() != p {
+            return Err(ReconError::Parameter(format!(
+                "{} values into {} pixels for a projection of {p} x {k}",
+                dv.len(),
+                out.len()
+            )));
+        }
+        faer::linalg::matmul::matmul(
+            faer::MatMut::from_column_major_slice_mut(out, p, 1),
+            faer::Accum::Replace,
+            faer::MatRef::from_column_major_slice(projection.as_slice(), p, k),
+            faer::MatRef::from_column_major_slice(dv, k, 1),
+            1.0,
+            faer::Par::Seq,
+        );
+        Ok(())
     }
 
     /// Spreads per-triangle values onto the grid (None outside the sheet).

@@ -107,9 +107,9 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         };
         let protocol = config.validate().map_err(|e| anyhow!("{e}"))?;
         let amps = f64::from(config.current_amps());
-        let jac = imager.jacobian(&protocol, amps)?;
+        let jac = imager.transfer_jacobian(&protocol, amps)?;
         // One data space per protocol: GCV and the matrix of every scene share it.
-        let space = et_recon::DataSpace::new(&jac, 0.5)?;
+        let space = et_recon::DataSpace::factored(&jac, 0.5)?;
         bar.inc(1);
         let f = default_threshold(kind);
         for (name, scene) in &scenes {

@@ -68,10 +68,11 @@ pub fn mesh_sweep(
     for &target in triangles {
         let started = Instant::now();
         let imager = Imager::new(&scene.sheet, Mesh::with_about(&scene.sheet, target)?, 64)?;
-        let (v, jac) = imager
+        let jac = imager
             .forward
-            .jacobian(&imager.background(), &protocol, amps)?;
-        let one = OneStep::new(&jac, 0.03, 0.5)?;
+            .transfer_jacobian(&imager.background(), &protocol, amps)?;
+        let one = et_recon::DataSpace::factored(&jac, 0.5)?.one_step(0.03)?;
+        let v = jac.frame;
         let setup_s = started.elapsed().as_secs_f64();
         let forward_error = v
             .iter()

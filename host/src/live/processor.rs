@@ -113,7 +113,7 @@ impl Projection {
     fn current<'p>(
         slot: &'p mut Option<Projection>,
         imager: &Imager,
-        jacobians: &mut Vec<(ScanConfig, DMatrix<f64>)>,
+        jacobians: &mut Vec<(ScanConfig, TransferJacobian)>,
         config: &ScanConfig,
         (alpha, s): (f64, f64),
     ) -> Result<&'p Projection, LiveError> {
@@ -128,11 +128,11 @@ impl Projection {
                     None => {
                         let protocol = config.validate()?;
                         let amps = f64::from(config.current_amps());
-                        jacobians.push((*config, imager.jacobian(&protocol, amps)?));
+                        jacobians.push((*config, imager.transfer_jacobian(&protocol, amps)?));
                         jacobians.len() - 1
                     }
                 };
-                let one = OneStep::new(&jacobians[at].1, alpha, s)?;
+                let one = DataSpace::factored(&jacobians[at].1, s)?.one_step(alpha)?;
                 Projection {
                     config: *config,
                     alpha,
@@ -229,7 +229,7 @@ pub struct Processor {
     imager: Imager,
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
-    jacobians: Vec<(ScanConfig, DMatrix<f64>)>,
+    jacobians: Vec<(ScanConfig, TransferJacobian)>,
     projection: Option<Projection>,
     inside: Vec<usize>,
     reference: Option<Reference>,
@@ -404,7 +404,8 @@ impl Processor {
             .collect();
         let bvc = stats::bvc_dv(&dv);
         let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        let values = projection * nalgebra::DVector::from_vec(dv32);
+        let mut values = vec![0.0f32; projection.nrows()];
+        PixelGrid::apply(projection, &dv32, &mut values)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = values
             .iter()

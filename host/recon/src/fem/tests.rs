@@ -236,7 +236,10 @@ fn jacobian_columns_agree_with_finite_differences() {
             .map(|t| 1e-4 * (1.0 + 0.5 * ((t * 7) % 5) as f64))
             .collect();
         let (frame, jac) = fwd.jacobian(&sigma, &protocol, 1e-4).unwrap();
-        assert_eq!(frame, fwd.frame(&sigma, &protocol, 1e-4).unwrap());
+        let direct = fwd.frame(&sigma, &protocol, 1e-4).unwrap();
+        for (a, b) in frame.iter().zip(&direct) {
+            assert!((a - b).abs() < 1e-12 * b.abs().max(1e-3), "{a} vs {b}");
+        }
         // Columns of triangles near an electrode, in the middle and in a corner.
         for t in [0, n / 3, n / 2, n - 1] {
             let h = 1e-6 * sigma[t];

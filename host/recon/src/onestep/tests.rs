@@ -11,6 +11,7 @@ use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
 use et_sim::sheet::Sheet;
 use et_sim::touch::Touch;
+use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 fn scene(name: &str) -> Scene {
@@ -146,7 +147,7 @@ fn parameters_and_frames_are_checked() {
     // Alpha from 1e-8 to 1e4: finite matrices.
     for alpha in [1e-8, 1e-3, 1.0, 1e4] {
         let r = OneStep::new(&jac, alpha, 1.0).unwrap();
-        assert!(r.matrix.iter().all(|v| v.is_finite()), "alpha {alpha}");
+        assert!(r.matrix().iter().all(|v| v.is_finite()), "alpha {alpha}");
         let d = r.reconstruct(&[1.0, -1.0, 0.5, 0.0]).unwrap();
         assert!(d.iter().all(|v| v.is_finite()));
     }
@@ -453,9 +454,10 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
     let recon = OneStep::new(&jac, 0.3, 0.5).unwrap();
     let var_dv: Vec<f64> = (0..5).map(|k| 1e-6 * (k + 1) as f64).collect();
     let sd = recon.noise_sd(&var_dv).unwrap();
+    let m = recon.matrix();
     for t in 0..7 {
         let by_hand: f64 = (0..5)
-            .map(|k| recon.matrix[(t, k)].powi(2) * var_dv[k])
+            .map(|k| m[(t, k)].powi(2) * var_dv[k])
             .sum::<f64>()
             .sqrt();
         assert!((sd[t] - by_hand).abs() <= 1e-12 * by_hand);
@@ -517,7 +519,7 @@ fn the_data_space_matrix_equals_the_primal_form_and_gcv_its_definition() {
     let dv: Vec<f64> = (0..k).map(|_| rng.normal()).collect();
     for (alpha, s) in [(0.01, 0.5), (0.3, 1.0), (2.0, 0.0)] {
         let space = DataSpace::new(&jac, s).unwrap();
-        let r = space.one_step(alpha).unwrap().matrix;
+        let r = space.one_step(alpha).unwrap().matrix();
         let p = DVector::from_fn(t, |c, _| jac.column(c).norm_squared().powf(s));
         let a = jac.transpose() * &jac;
         let trace: f64 = (0..t).map(|c| jac.column(c).norm_squared() / p[c]).sum();
@@ -642,6 +644,68 @@ fn noise_free_frames_find_exactly_the_true_touches() {
                 .map(|c| (c[0] - t.position[0]).hypot(c[1] - t.position[1]))
                 .fold(f64::INFINITY, f64::min);
             assert!(near < t.radius, "{name}: {near} from {:?}", t.position);
+        }
+    }
+}
+
+/// The factored data space (J = M G over the transfer impedances) gives the same one-step
+/// matrix, noise and GCV as the dense Jacobian, for complete and point electrodes and a
+/// protocol whose K exceeds r (PP-PP) and one whose K is below it (opposite at L = 8).
+#[test]
+fn the_factored_data_space_equals_the_dense_one() {
+    use et_sim::sheet::ElectrodeModel;
+    for (model, kind) in [
+        (ElectrodeModel::Complete, ProtocolKind::Adjacent),
+        (ElectrodeModel::Complete, ProtocolKind::PpPp),
+        (ElectrodeModel::Point, ProtocolKind::Opposite),
+    ] {
+        let mut spec = et_sim::sheet::SheetSpec::rectangle(0.13, 0.13, 8);
+        spec.electrodes.model = model;
+        let mesh = Mesh::with_about(&spec, 600).unwrap();
+        let n = mesh.triangles.len();
+        let fwd = Forward::new(mesh, Electrodes::of_sheet(&spec).unwrap()).unwrap();
+        let protocol = Protocol::new(kind, 8).unwrap();
+        let sigma: Vec<f64> = (0..n)
+            .map(|t| 1e-4 * (1.0 + 0.3 * ((t % 7) as f64)))
+            .collect();
+        let tj = fwd.transfer_jacobian(&sigma, &protocol, 1e-4).unwrap();
+        assert_eq!(tj.pairs(), 28);
+        let dense = tj.dense();
+        let frame = fwd.frame(&sigma, &protocol, 1e-4).unwrap();
+        let scale = frame.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in tj.frame.iter().zip(&frame) {
+            assert!((a - b).abs() < 1e-10 * scale, "{a} vs {b}");
+        }
+        let (f, d) = (
+            DataSpace::factored(&tj, 0.5).unwrap(),
+            DataSpace::new(&dense, 0.5).unwrap(),
+        );
+        let (rf, rd) = (
+            f.one_step(0.05).unwrap().matrix(),
+            d.one_step(0.05).unwrap().matrix(),
+        );
+        let amax = rd.amax();
+        assert!(
+            (&rf - &rd).amax() < 1e-7 * amax,
+            "{kind:?}: {:e}",
+            (&rf - &rd).amax() / amax
+        );
+        let dv: Vec<f64> = (0..frame.len())
+            .map(|k| (k as f64 * 0.7).sin() * 1e-5)
+            .collect();
+        let var = vec![1e-14; frame.len()];
+        let (a1, s1) = f.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
+        let (a2, s2) = d.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
+        assert_eq!(a1, a2);
+        for (x, y) in s1.iter().zip(&s2) {
+            assert!((x.1 - y.1).abs() <= 1e-7 * y.1, "{x:?} {y:?}");
+        }
+        let (nf, nd) = (
+            f.one_step(0.05).unwrap().noise_sd(&var).unwrap(),
+            d.one_step(0.05).unwrap().noise_sd(&var).unwrap(),
+        );
+        for (x, y) in nf.iter().zip(&nd) {
+            assert!((x - y).abs() <= 1e-7 * y.max(1e-30), "{x} vs {y}");
         }
     }
 }

@@ -233,9 +233,13 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let t_n = mesh.triangles.len();
     let t_mesh = stage(&format!("mesh ({t_n} triangles)"));
     let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;
-    let jac = imager.jacobian(&protocol, amps)?;
+    let jac = imager.transfer_jacobian(&protocol, amps)?;
     let grid = &imager.grid;
-    let t_forward = stage(&format!("forward + Jacobian (K = {})", jac.nrows()));
+    let t_forward = stage(&format!(
+        "forward + Jacobian (K = {}, r = {})",
+        jac.frame.len(),
+        jac.pairs()
+    ));
     // V_0 and V_1, with the truth (centre, radius) where known, and dV's noise variance.
     let (v0, v1, truth, var): (Vec<f64>, Vec<f32>, Vec<Truth>, Vec<f64>) = match &recording {
         Some(r) => {
@@ -298,7 +302,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     // What imaging cannot explain: the frames' noise and the model's own error.
     let var = et_recon::onestep::imaging_variance(&var, &dv);
     stage("frames");
-    let space = et_recon::DataSpace::new(&jac, args.s)?;
+    let space = et_recon::DataSpace::factored(&jac, args.s)?;
     let alpha = match args.alpha.as_str() {
         "auto" => space.choose_alpha(&dv, &var, &et_recon::default_alphas())?,
         v => v
