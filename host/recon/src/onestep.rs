@@ -85,8 +85,30 @@ pub struct DataSpace {
     s: f64,
     /// The prior's diagonal P = diag(J^T J)^s (T values).
     p: Vec<f64>,
-    /// Eigenvalues and eigenvectors of A, made on first use (GCV).
-    eigen: std::sync::OnceLock<Option<(Vec<f64>, Mat<f64>)>>,
+    /// H = G P^-1 G^T, r x r.
+    h: Mat<f64>,
+    /// A's spectrum, made on first use (GCV).
+    eigen: std::sync::OnceLock<Option<Spectrum>>,
+}
+
+/// A's nonzero eigenvalues e_i and how to get c = U^T dv for their eigenvectors U.
+#[derive(Clone, Debug)]
+enum Spectrum {
+    /// From the r x r problem: with H = C C^T and F = M C (so A = F F^T), the eigenpairs
+    /// (V, E) of F^T F = C^T M^T M C give A's nonzero eigenvalues E and c = W^T (M^T dv) with
+    /// W = C V E^-1/2 (r x q); A's other K - q eigenvalues are 0.
+    Compact { e: Vec<f64>, w: Mat<f64> },
+    /// All K eigenpairs of A (when H cannot be factorised): c = U^T dv.
+    Full { e: Vec<f64>, u: Mat<f64> },
+}
+
+/// A's spectrum seen by a frame: the nonzero eigenvalues, c = U^T dv for them, and the part
+/// of dv in A's null space (|dv_0|^2, V^2, and the null space's dimension).
+struct Seen<'a> {
+    e: &'a [f64],
+    c: Vec<f64>,
+    null_norm2: f64,
+    null_dim: usize,
 }
 
 impl DataSpace {
@@ -200,6 +222,7 @@ impl DataSpace {
             trace,
             s,
             p: p_inv.iter().map(|w| 1.0 / w).collect(),
+            h,
             eigen: std::sync::OnceLock::new(),
         }
     }
@@ -287,27 +310,122 @@ impl DataSpace {
             .collect()
     }
 
-    /// A's eigenvalues e and the coefficients c = U^T dv (the eigendecomposition made once).
-    fn spectrum(&self, dv: &[f64]) -> Result<(&[f64], Vec<f64>), ReconError> {
-        let (e, u) = self
+    /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
+    /// `dv`.
+    fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
+        let spectrum = self
             .eigen
-            .get_or_init(|| {
-                let evd = self.a.self_adjoint_eigen(Side::Lower).ok()?;
-                let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
-                Some((e, evd.U().to_owned()))
-            })
+            .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
             .as_ref()
             .ok_or(ReconError::Singular)?;
-        let c = (0..e.len())
-            .map(|i| u.col(i).iter().zip(dv).map(|(a, b)| a * b).sum())
-            .collect();
-        Ok((e, c))
+        let k = self.frame_len();
+        let (e, c) = match spectrum {
+            Spectrum::Compact { e, w } => {
+                let mut mtdv = vec![0.0; w.nrows()];
+                for (row, d) in self.combination.iter().zip(dv) {
+                    for &(p, coef) in row {
+                        mtdv[p] += coef * d;
+                    }
+                }
+                let c: Vec<f64> = (0..e.len())
+                    .map(|i| w.col(i).iter().zip(&mtdv).map(|(a, b)| a * b).sum())
+                    .collect();
+                (e, c)
+            }
+            Spectrum::Full { e, u } => {
+                let c = (0..e.len())
+                    .map(|i| u.col(i).iter().zip(dv).map(|(a, b)| a * b).sum())
+                    .collect();
+                (e, c)
+            }
+        };
+        let total: f64 = dv.iter().map(|v| v * v).sum();
+        let seen: f64 = c.iter().map(|v| v * v).sum();
+        Ok(Seen {
+            e,
+            null_norm2: (total - seen).max(0.0),
+            null_dim: k.saturating_sub(e.len()),
+            c,
+        })
+    }
+
+    /// [`Spectrum::Compact`] (None if an eigendecomposition fails). H is semidefinite and
+    /// often nearly singular (transfer impedances whose sensitivities nearly coincide), so
+    /// its square root is taken from its own eigendecomposition, C = Q Lambda^1/2 over its
+    /// eigenvalues above 1e-13 of the largest, not from a Cholesky factor.
+    fn compact_spectrum(&self) -> Option<Spectrum> {
+        let r = self.h.nrows();
+        let hevd = self.h.self_adjoint_eigen(Side::Lower).ok()?;
+        let lambda: Vec<f64> = hevd.S().column_vector().iter().copied().collect();
+        let top = lambda.iter().copied().fold(0.0f64, f64::max);
+        let kept: Vec<usize> = (0..r).filter(|&i| lambda[i] > 1e-13 * top).collect();
+        let q = hevd.U();
+        let c = Mat::from_fn(r, kept.len(), |i, j| {
+            q[(i, kept[j])] * lambda[kept[j]].sqrt()
+        });
+        // N = M^T M.
+        let mut n = Mat::<f64>::zeros(r, r);
+        for row in &self.combination {
+            for &(p, a) in row {
+                for &(q, b) in row {
+                    n[(p, q)] += a * b;
+                }
+            }
+        }
+        let m = c.ncols();
+        let mut nc = Mat::<f64>::zeros(r, m);
+        matmul(
+            nc.as_mut(),
+            Accum::Replace,
+            n.as_ref(),
+            c.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        let mut small = Mat::<f64>::zeros(m, m);
+        matmul(
+            small.as_mut(),
+            Accum::Replace,
+            c.transpose(),
+            nc.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        let evd = small.self_adjoint_eigen(Side::Lower).ok()?;
+        let all: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+        let top = all.iter().copied().fold(0.0f64, f64::max);
+        let keep: Vec<usize> = (0..m).filter(|&i| all[i] > 1e-12 * top).collect();
+        let v = evd.U();
+        let vq = Mat::from_fn(m, keep.len(), |i, j| v[(i, keep[j])] / all[keep[j]].sqrt());
+        let mut w = Mat::<f64>::zeros(r, keep.len());
+        matmul(
+            w.as_mut(),
+            Accum::Replace,
+            c.as_ref(),
+            vq.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        Some(Spectrum::Compact {
+            e: keep.iter().map(|&i| all[i]).collect(),
+            w,
+        })
+    }
+
+    /// [`Spectrum::Full`]: every eigenpair of A (K x K).
+    fn full_spectrum(&self) -> Option<Spectrum> {
+        let evd = self.a.self_adjoint_eigen(Side::Lower).ok()?;
+        Some(Spectrum::Full {
+            e: evd.S().column_vector().iter().copied().collect(),
+            u: evd.U().to_owned(),
+        })
     }
 
     /// Generalised cross-validation of alpha for the frame difference `dv` (docs/method.md
     /// (6.1)): with A = U diag(e) U^T and c = U^T dv, GCV(lambda) = K sum_i (lambda c_i /
     /// (e_i + lambda))^2 / (sum_i lambda / (e_i + lambda))^2. Returns the candidate with the
-    /// smallest GCV and every (alpha, GCV). A's eigendecomposition is made once and kept.
+    /// smallest GCV and every (alpha, GCV). A's spectrum is made once and kept, from the r x r
+    /// problem of the factored Jacobian (its K - q zero eigenvalues in closed form).
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for a frame of the wrong length or no candidates;
@@ -328,13 +446,14 @@ impl DataSpace {
         if dv.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::NonFinite);
         }
-        let (e, c) = self.spectrum(dv)?;
+        let seen = self.spectrum(dv)?;
         let scores: Vec<(f64, f64)> = candidates
             .iter()
             .map(|&alpha| {
                 let lambda = self.lambda(alpha);
-                let (mut num, mut den) = (0.0, 0.0);
-                for (e, ci) in e.iter().zip(&c) {
+                // Null-space components are left whole (weight 1).
+                let (mut num, mut den) = (seen.null_norm2, seen.null_dim as f64);
+                for (e, ci) in seen.e.iter().zip(&seen.c) {
                     let w = lambda / (e.max(0.0) + lambda);
                     num += (w * ci).powi(2);
                     den += w;
@@ -356,15 +475,18 @@ impl DataSpace {
     /// |dv - J R dv|^2 at each candidate alpha, V^2 (the residual of the one-step image),
     /// from A's eigendecomposition.
     fn residuals(&self, dv: &[f64], candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
-        let (e, c) = self.spectrum(dv)?;
+        let seen = self.spectrum(dv)?;
         Ok(candidates
             .iter()
             .map(|&alpha| {
                 let lambda = self.lambda(alpha);
-                e.iter()
-                    .zip(&c)
-                    .map(|(e, ci)| (lambda * ci / (e.max(0.0) + lambda)).powi(2))
-                    .sum()
+                seen.null_norm2
+                    + seen
+                        .e
+                        .iter()
+                        .zip(&seen.c)
+                        .map(|(e, ci)| (lambda * ci / (e.max(0.0) + lambda)).powi(2))
+                        .sum::<f64>()
             })
             .collect())
     }
@@ -542,28 +664,37 @@ impl OneStep {
     }
 
     /// The standard deviation of each triangle's value when dV carries independent noise of
-    /// variance `var_dv` per channel (V^2): sqrt(sum_k R_tk^2 var_k), the norm of triangle t's
-    /// column of diag(sqrt var) X (G P^-1) (one product of the factors). Same units as an
-    /// image.
+    /// variance `var_dv` per channel (V^2): sqrt(sum_k R_tk^2 var_k) = |W g_t| with W =
+    /// diag(sqrt var) X (K x r) and g_t triangle t's column of G P^-1, computed as |R_W g_t|
+    /// through W's QR factor R_W (r x r: the cost is r^2 T, not K r T, and a norm of a vector
+    /// keeps its accuracy). Same units as an image.
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
         self.check_len(var_dv.len(), "variances")?;
-        let w = Mat::from_fn(self.frame_len(), self.xt.nrows(), |k, j| {
+        let r = self.xt.nrows();
+        let w = Mat::from_fn(self.frame_len(), r, |k, j| {
             self.xt[(j, k)] * var_dv[k].max(0.0).sqrt()
         });
-        let mut wg = Mat::<f64>::zeros(self.frame_len(), self.triangles());
+        let qr = w.qr();
+        let thin = qr.thin_R();
+        let upper = Mat::from_fn(
+            thin.nrows(),
+            r,
+            |i, j| if i <= j { thin[(i, j)] } else { 0.0 },
+        );
+        let mut y = Mat::<f64>::zeros(upper.nrows(), self.triangles());
         matmul(
-            wg.as_mut(),
+            y.as_mut(),
             Accum::Replace,
-            w.as_ref(),
+            upper.as_ref(),
             self.gp.as_ref(),
             1.0,
             Par::Seq,
         );
         Ok((0..self.triangles())
-            .map(|t| wg.col(t).iter().map(|v| v * v).sum::<f64>().sqrt())
+            .map(|t| y.col(t).iter().map(|v| v * v).sum::<f64>().sqrt())
             .collect())
     }
 }
