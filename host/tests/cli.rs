@@ -384,6 +384,16 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
     let (x, y) = (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
     assert!((x - 82.5).hypot(y) < 13.3, "{j}");
     assert!(j["alpha"].as_f64().unwrap() > 0.0);
+    // Stage times: set-up is the first three, every one a non-negative number.
+    let t = &j["timings_s"];
+    let stage = |k: &str| t[k].as_f64().unwrap_or(-1.0);
+    for k in ["mesh", "forward_jacobian", "one_step", "setup", "frame"] {
+        assert!(stage(k) >= 0.0, "{k}: {t}");
+    }
+    let sum = stage("mesh") + stage("forward_jacobian") + stage("one_step");
+    assert!((stage("setup") - sum).abs() < 1e-9, "{t}");
+    assert_eq!(j["protocol"], "adjacent");
+    assert_eq!(j["touch_matches"].as_array().map(Vec::len), Some(1), "{j}");
     let bad = et(&[
         "reconstruct",
         "--scene",

@@ -24,6 +24,7 @@
 //! description), so tests against simulated frames do not commit the inverse crime.
 #![forbid(unsafe_code)]
 
+pub mod exact;
 pub mod fem;
 pub mod gauss_newton;
 pub mod gcv;
@@ -38,7 +39,7 @@ pub mod touches;
 pub use gauss_newton::{Data, Fit, GaussNewton, Iterate, Stop, gauss_newton};
 pub use gcv::{default_alphas, gcv_alpha};
 pub use imager::Imager;
-pub use metrics::{Metrics, metrics};
+pub use metrics::{Metrics, TouchMatch, match_touches, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
 pub use pixels::PixelGrid;
 pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

@@ -49,3 +49,57 @@ pub fn metrics(
         },
     }
 }
+
+/// One true touch matched to the found touch nearest it (docs/method.md §7's PE and SE for
+/// each of several touches).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TouchMatch {
+    /// The true centre, m.
+    pub truth: [f64; 2],
+    /// Index into the found touches of the nearest one; `None` when nothing was found.
+    pub found: Option<usize>,
+    /// PE = distance to it / sheet size (largest extent); 1 when nothing was found.
+    pub pe: f64,
+    /// SE = |its area - the true area| / sheet area; 1 when nothing was found.
+    pub se: f64,
+}
+
+/// Each true touch (centre, radius in m) matched to the nearest of the `found` touches
+/// ([`crate::touches::touches`] on `grid`'s image), with its own PE and SE. Several true touches
+/// may match the same found one (two touches imaged as one: both PEs then show it); the found
+/// touches no true touch matched are the false ones (`found.len()` minus the distinct matches).
+#[must_use]
+pub fn match_touches(
+    grid: &PixelGrid,
+    found: &[crate::touches::Region],
+    truth: &[([f64; 2], f64)],
+) -> Vec<TouchMatch> {
+    let extent = grid.width.max(grid.height) as f64 * grid.size;
+    let pixel = grid.size * grid.size;
+    let sheet_area = grid.triangle.iter().flatten().count() as f64 * pixel;
+    truth
+        .iter()
+        .map(|&(centre, radius)| {
+            let dist = |r: &crate::touches::Region| {
+                (r.centroid[0] - centre[0]).hypot(r.centroid[1] - centre[1])
+            };
+            let nearest =
+                (0..found.len()).min_by(|&a, &b| dist(&found[a]).total_cmp(&dist(&found[b])));
+            match nearest {
+                Some(i) => TouchMatch {
+                    truth: centre,
+                    found: Some(i),
+                    pe: dist(&found[i]) / extent,
+                    se: (found[i].area - std::f64::consts::PI * radius * radius).abs()
+                        / sheet_area.max(f64::MIN_POSITIVE),
+                },
+                None => TouchMatch {
+                    truth: centre,
+                    found: None,
+                    pe: 1.0,
+                    se: 1.0,
+                },
+            }
+        })
+        .collect()
+}

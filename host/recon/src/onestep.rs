@@ -373,39 +373,15 @@ impl DataSpace {
             }
         }
         let m = c.ncols();
-        let mut nc = Mat::<f64>::zeros(r, m);
-        matmul(
-            nc.as_mut(),
-            Accum::Replace,
-            n.as_ref(),
-            c.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        let mut small = Mat::<f64>::zeros(m, m);
-        matmul(
-            small.as_mut(),
-            Accum::Replace,
-            c.transpose(),
-            nc.as_ref(),
-            1.0,
-            Par::Seq,
-        );
+        let nc = product(n.as_ref(), c.as_ref());
+        let small = product(c.transpose(), nc.as_ref());
         let evd = small.self_adjoint_eigen(Side::Lower).ok()?;
         let all: Vec<f64> = evd.S().column_vector().iter().copied().collect();
         let top = all.iter().copied().fold(0.0f64, f64::max);
         let keep: Vec<usize> = (0..m).filter(|&i| all[i] > 1e-12 * top).collect();
         let v = evd.U();
         let vq = Mat::from_fn(m, keep.len(), |i, j| v[(i, keep[j])] / all[keep[j]].sqrt());
-        let mut w = Mat::<f64>::zeros(r, keep.len());
-        matmul(
-            w.as_mut(),
-            Accum::Replace,
-            c.as_ref(),
-            vq.as_ref(),
-            1.0,
-            Par::Seq,
-        );
+        let w = product(c.as_ref(), vq.as_ref());
         Some(Spectrum::Compact {
             e: keep.iter().map(|&i| all[i]).collect(),
             w,
@@ -529,6 +505,13 @@ impl DataSpace {
     }
 }
 
+/// a b, one core (faer's blocked kernel).
+fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    out
+}
+
 fn check_s(s: f64) -> Result<(), ReconError> {
     if (0.0..=1.0).contains(&s) {
         Ok(())
@@ -608,15 +591,7 @@ impl OneStep {
     pub fn rows_f32(&self, triangles: &[usize]) -> DMatrix<f32> {
         let r = self.gp.nrows();
         let g = Mat::from_fn(triangles.len(), r, |i, j| self.gp[(j, triangles[i])]);
-        let mut out = Mat::<f64>::zeros(triangles.len(), self.frame_len());
-        matmul(
-            out.as_mut(),
-            Accum::Replace,
-            g.as_ref(),
-            self.xt.as_ref(),
-            1.0,
-            Par::Seq,
-        );
+        let out = product(g.as_ref(), self.xt.as_ref());
         DMatrix::from_fn(triangles.len(), self.frame_len(), |i, k| out[(i, k)] as f32)
     }
 
@@ -631,15 +606,7 @@ impl OneStep {
         }
         // y = X^T dv (r), then the image (G P^-1)^T y (T): two matrix-vector products.
         let dv = MatRef::from_column_major_slice(dv, dv.len(), 1);
-        let mut y = Mat::<f64>::zeros(self.xt.nrows(), 1);
-        matmul(
-            y.as_mut(),
-            Accum::Replace,
-            self.xt.as_ref(),
-            dv,
-            1.0,
-            Par::Seq,
-        );
+        let y = product(self.xt.as_ref(), dv);
         let mut image = vec![0.0; self.triangles()];
         matmul(
             MatMut::from_column_major_slice_mut(&mut image, self.triangles(), 1),
@@ -684,15 +651,7 @@ impl OneStep {
             r,
             |i, j| if i <= j { thin[(i, j)] } else { 0.0 },
         );
-        let mut y = Mat::<f64>::zeros(upper.nrows(), self.triangles());
-        matmul(
-            y.as_mut(),
-            Accum::Replace,
-            upper.as_ref(),
-            self.gp.as_ref(),
-            1.0,
-            Par::Seq,
-        );
+        let y = product(upper.as_ref(), self.gp.as_ref());
         Ok((0..self.triangles())
             .map(|t| y.col(t).iter().map(|v| v * v).sum::<f64>().sqrt())
             .collect())

@@ -365,16 +365,20 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let f = args.threshold.unwrap_or(default_threshold(config.protocol));
     let rois = regions(grid, &image, f);
     let found = above_noise(&touches(grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
-    let m = truth.first().map(|&(centre, radius)| {
-        metrics(
-            grid,
-            &image,
-            f,
-            &dv,
-            centre,
-            std::f64::consts::PI * radius * radius,
-        )
-    });
+    // docs/method.md §7's metrics are for one object; with several, each true touch is
+    // matched to its nearest found touch instead.
+    let m = (truth.len() == 1)
+        .then(|| truth[0])
+        .map(|(centre, radius)| {
+            metrics(
+                grid,
+                &image,
+                f,
+                &dv,
+                centre,
+                std::f64::consts::PI * radius * radius,
+            )
+        });
     crate::output::write(&args.out, |partial| {
         et_host::plot::sheet_image(
             &imager,
@@ -402,7 +406,16 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             .iter()
             .map(|(c, _)| [c[0] * 1e3, c[1] * 1e3])
             .collect(),
-        metrics_first_touch: m.as_ref(),
+        metrics: m.as_ref(),
+        touch_matches: et_recon::match_touches(grid, &found, &truth)
+            .iter()
+            .map(|t| TouchMatchSummary {
+                truth_mm: [t.truth[0] * 1e3, t.truth[1] * 1e3],
+                found: t.found,
+                pe: t.pe,
+                se: t.se,
+            })
+            .collect(),
         timings_s,
         seconds: started.elapsed().as_secs_f64(),
     };
@@ -430,6 +443,18 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
                 "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
                 m.pe, m.se, m.rng, m.bvc
             );
+        }
+        if truth.len() > 1 {
+            for t in et_recon::match_touches(grid, &found, &truth) {
+                eprintln!(
+                    "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
+                    t.truth[0] * 1e3,
+                    t.truth[1] * 1e3,
+                    t.found.map_or("not found".into(), |i| format!("touch {i}")),
+                    t.pe,
+                    t.se
+                );
+            }
         }
         eprintln!("wrote {}", args.out.display());
     }
@@ -466,10 +491,23 @@ struct ReconstructSummary<'a> {
     found_touches: Vec<RegionSummary>,
     /// The scene's touches, mm.
     touches_mm: Vec<[f64; 2]>,
-    metrics_first_touch: Option<&'a et_recon::metrics::Metrics>,
+    /// docs/method.md §7's PE, SE, RNG and BVC, for a scene with one touch (null otherwise).
+    metrics: Option<&'a et_recon::metrics::Metrics>,
+    /// Each true touch and the found touch nearest it, with its own PE and SE.
+    touch_matches: Vec<TouchMatchSummary>,
     timings_s: Timings,
     /// Wall time of the whole command, s.
     seconds: f64,
+}
+
+/// A true touch matched to the nearest found one.
+#[derive(serde::Serialize)]
+struct TouchMatchSummary {
+    truth_mm: [f64; 2],
+    /// Index into `found_touches`; null when none was found.
+    found: Option<usize>,
+    pe: f64,
+    se: f64,
 }
 
 /// `et reconstruct`'s stage times, s.
