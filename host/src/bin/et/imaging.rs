@@ -379,6 +379,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
                 std::f64::consts::PI * radius * radius,
             )
         });
+    let matches = et_recon::match_touches(grid, &found, &truth);
     crate::output::write(&args.out, |partial| {
         et_host::plot::sheet_image(
             &imager,
@@ -407,7 +408,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             .map(|(c, _)| [c[0] * 1e3, c[1] * 1e3])
             .collect(),
         metrics: m.as_ref(),
-        touch_matches: et_recon::match_touches(grid, &found, &truth)
+        touch_matches: matches
             .iter()
             .map(|t| TouchMatchSummary {
                 truth_mm: [t.truth[0] * 1e3, t.truth[1] * 1e3],
@@ -445,7 +446,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             );
         }
         if truth.len() > 1 {
-            for t in et_recon::match_touches(grid, &found, &truth) {
+            for t in &matches {
                 eprintln!(
                     "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
                     t.truth[0] * 1e3,
