@@ -13,6 +13,8 @@
 //! - [`onestep`]: one-step Gauss-Newton with the NOSER prior (§6), the reconstruction matrix
 //!   and the noise it carries from dV to each pixel.
 //! - [`gcv`]: alpha by generalised cross-validation (§6.3).
+//! - [`greit`]: GREIT, the consensus linear reconstruction onto pixels, and its figures of
+//!   merit over a grid of targets (§6.6).
 //! - [`gauss_newton`]: iterative Gauss-Newton (§6.4).
 //! - [`pixels`]: pixel grids over a mesh.
 //! - [`touches`]: regions of interest and touches, split at their saddles and kept above
@@ -28,6 +30,7 @@ pub mod exact;
 pub mod fem;
 pub mod gauss_newton;
 pub mod gcv;
+pub mod greit;
 pub mod imager;
 pub mod mesh;
 pub mod metrics;
@@ -38,8 +41,9 @@ pub mod touches;
 
 pub use gauss_newton::{Data, Fit, GaussNewton, Iterate, Stop, gauss_newton};
 pub use gcv::{default_alphas, gcv_alpha};
+pub use greit::{Greit, GreitOptions, Regularisation};
 pub use imager::Imager;
-pub use metrics::{Metrics, TouchMatch, match_touches, metrics};
+pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
 pub use pixels::PixelGrid;
 pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

@@ -103,3 +103,72 @@ pub fn match_touches(
         })
         .collect()
 }
+
+/// GREIT's figures of merit of the image of one small target (Adler et al. 2009, the
+/// consensus figures; docs/method.md §6.6). The "quarter set" is the pixels at or above a
+/// quarter of the image's largest value.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Merit {
+    /// Amplitude response: the image's sum over the sheet (value x pixel area) over the
+    /// target's (contrast x area). Its spread over the sheet is what GREIT keeps small.
+    pub amplitude: f64,
+    /// Position error: from the target's centre to the quarter set's centroid, m.
+    pub position_error: f64,
+    /// Resolution: sqrt(quarter set's area / sheet's area).
+    pub resolution: f64,
+    /// Shape deformation: the share of the quarter set outside the circle of its own area
+    /// about its centroid.
+    pub shape_deformation: f64,
+    /// Ringing: the opposite-sign sum outside that circle over the sum inside it.
+    pub ringing: f64,
+}
+
+/// [`Merit`] of `image` (on `grid`, None outside the sheet) of a target of `contrast` (S per
+/// square) and `area` (m^2) centred at `centre` (m). None for an image with no positive value.
+#[must_use]
+pub fn merit(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    centre: [f64; 2],
+    contrast: f64,
+    area: f64,
+) -> Option<Merit> {
+    let max = image.iter().flatten().copied().fold(0.0f64, f64::max);
+    if max <= 0.0 || !max.is_finite() {
+        return None;
+    }
+    let pixel = grid.size * grid.size;
+    let inside: Vec<(usize, f64)> = image
+        .iter()
+        .enumerate()
+        .filter_map(|(p, v)| v.map(|v| (p, v)))
+        .collect();
+    let quarter: Vec<usize> = inside
+        .iter()
+        .filter(|(_, v)| *v >= 0.25 * max)
+        .map(|(p, _)| *p)
+        .collect();
+    let c = grid.centroid(&quarter);
+    let q_area = quarter.len() as f64 * pixel;
+    let r_q = (q_area / std::f64::consts::PI).sqrt();
+    let within = |p: usize| {
+        let x = grid.centre(p);
+        (x[0] - c[0]).hypot(x[1] - c[1]) <= r_q
+    };
+    let outside_circle = quarter.iter().filter(|&&p| !within(p)).count();
+    let (mut in_sum, mut opposite) = (0.0, 0.0);
+    for &(p, v) in &inside {
+        if within(p) {
+            in_sum += v;
+        } else if v < 0.0 {
+            opposite -= v;
+        }
+    }
+    Some(Merit {
+        amplitude: inside.iter().map(|(_, v)| v).sum::<f64>() * pixel / (contrast * area),
+        position_error: (c[0] - centre[0]).hypot(c[1] - centre[1]),
+        resolution: (q_area / (inside.len() as f64 * pixel)).sqrt(),
+        shape_deformation: outside_circle as f64 / quarter.len().max(1) as f64,
+        ringing: if in_sum > 0.0 { opposite / in_sum } else { 0.0 },
+    })
+}

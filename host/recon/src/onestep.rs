@@ -151,6 +151,31 @@ impl DataSpace {
         Ok(Self::build(jac.combination.clone(), g, s, &p_inv))
     }
 
+    /// The data space of a factored Jacobian with the prior's inverse P^-1 given (`p_inv`, T
+    /// positive values; GREIT's covariance of the conductivity, [`crate::greit`]). Its `s` is 0.
+    ///
+    /// # Errors
+    /// [`ReconError::Singular`] for a Jacobian with non-finite values;
+    /// [`ReconError::Parameter`] for `p_inv` not of T positive finite values.
+    pub(crate) fn factored_with_prior(
+        jac: &crate::fem::TransferJacobian,
+        p_inv: &[f64],
+    ) -> Result<Self, ReconError> {
+        let g = &jac.g;
+        if g.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::Singular);
+        }
+        if p_inv.len() != g.ncols() || p_inv.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(ReconError::Parameter(format!(
+                "a prior of {} positive values for {} triangles",
+                p_inv.len(),
+                g.ncols()
+            )));
+        }
+        let g = MatRef::from_column_major_slice(g.as_slice(), g.nrows(), g.ncols());
+        Ok(Self::build(jac.combination.clone(), g, 0.0, p_inv))
+    }
+
     /// As [`DataSpace::new`] with the prior's inverse P^-1 given (`p_inv`, T positive values):
     /// iterative Gauss-Newton keeps the background's prior at every iterate.
     pub(crate) fn with_prior(jac: &DMatrix<f64>, s: f64, p_inv: &[f64]) -> Self {
@@ -299,15 +324,64 @@ impl DataSpace {
 
     /// P^-1 J^T `y` (T values) for K values `y`: (G P^-1)^T (M^T y).
     pub(crate) fn back_project(&self, y: &[f64]) -> Vec<f64> {
+        let w = self.m_transpose(y);
+        (0..self.gp.ncols())
+            .map(|t| self.gp.col(t).iter().zip(&w).map(|(a, b)| a * b).sum())
+            .collect()
+    }
+
+    /// G P^-1 (r x T).
+    pub(crate) fn gp(&self) -> MatRef<'_, f64> {
+        self.gp.as_ref()
+    }
+
+    /// tr(A) / K, lambda's scale (V^2 per (S/sq)^2).
+    pub(crate) fn lambda_scale(&self) -> f64 {
+        self.trace / self.frame_len() as f64
+    }
+
+    /// M^T `y` (r values) for K values `y`.
+    pub(crate) fn m_transpose(&self, y: &[f64]) -> Vec<f64> {
         let mut w = vec![0.0; self.gp.nrows()];
         for (row, yk) in self.combination.iter().zip(y) {
             for &(p, c) in row {
                 w[p] += c * yk;
             }
         }
-        (0..self.gp.ncols())
-            .map(|t| self.gp.col(t).iter().zip(&w).map(|(a, b)| a * b).sum())
-            .collect()
+        w
+    }
+
+    /// A's eigenpairs with eigenvalues above 1e-12 of the largest: (e, U), U K x q with
+    /// orthonormal columns (from the r x r problem when H factorises, as GCV's spectrum).
+    ///
+    /// # Errors
+    /// [`ReconError::Singular`] when A has no eigendecomposition.
+    pub(crate) fn eigenpairs(&self) -> Result<(Vec<f64>, Mat<f64>), ReconError> {
+        let spectrum = self
+            .eigen
+            .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
+            .as_ref()
+            .ok_or(ReconError::Singular)?;
+        let k = self.frame_len();
+        Ok(match spectrum {
+            Spectrum::Compact { e, w } => {
+                let u = Mat::from_fn(k, e.len(), |i, j| {
+                    self.combination[i]
+                        .iter()
+                        .map(|&(p, c)| c * w[(p, j)])
+                        .sum::<f64>()
+                });
+                (e.clone(), u)
+            }
+            Spectrum::Full { e, u } => {
+                let top = e.iter().copied().fold(0.0f64, f64::max);
+                let keep: Vec<usize> = (0..e.len()).filter(|&i| e[i] > 1e-12 * top).collect();
+                (
+                    keep.iter().map(|&i| e[i]).collect(),
+                    Mat::from_fn(k, keep.len(), |i, j| u[(i, keep[j])]),
+                )
+            }
+        })
     }
 
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
@@ -321,12 +395,7 @@ impl DataSpace {
         let k = self.frame_len();
         let (e, c) = match spectrum {
             Spectrum::Compact { e, w } => {
-                let mut mtdv = vec![0.0; w.nrows()];
-                for (row, d) in self.combination.iter().zip(dv) {
-                    for &(p, coef) in row {
-                        mtdv[p] += coef * d;
-                    }
-                }
+                let mtdv = self.m_transpose(dv);
                 let c: Vec<f64> = (0..e.len())
                     .map(|i| w.col(i).iter().zip(&mtdv).map(|(a, b)| a * b).sum())
                     .collect();
@@ -505,8 +574,22 @@ impl DataSpace {
     }
 }
 
+/// `gp` (r x T) times the sparse D^T (T x N; D's rows are (column of gp, weight)): r x N.
+pub(crate) fn map_columns(gp: MatRef<'_, f64>, d: &[Vec<(usize, f64)>]) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(gp.nrows(), d.len());
+    for (row, entries) in d.iter().enumerate() {
+        for &(t, w) in entries {
+            out.col_mut(row)
+                .iter_mut()
+                .zip(gp.col(t).iter())
+                .for_each(|(a, b)| *a += w * b);
+        }
+    }
+    out
+}
+
 /// a b, one core (faer's blocked kernel).
-fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+pub(crate) fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
     matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
     out
@@ -555,6 +638,13 @@ impl OneStep {
     pub fn new(jac: &DMatrix<f64>, alpha: f64, s: f64) -> Result<Self, ReconError> {
         check_alpha(alpha)?;
         DataSpace::new(jac, s)?.one_step(alpha)
+    }
+
+    /// This reconstruction with G P^-1 replaced by `gp` (r x N): R = gp^T X^T, whose N
+    /// "triangles" are gp's columns (GREIT's pixels, [`crate::greit`]).
+    pub(crate) fn with_columns(self, gp: Mat<f64>) -> OneStep {
+        debug_assert_eq!(gp.nrows(), self.gp.nrows());
+        OneStep { gp, ..self }
     }
 
     /// K, the frame length.
