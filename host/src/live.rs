@@ -34,7 +34,8 @@ use et_recon::fem::{FemError, TransferJacobian};
 use et_recon::mesh::{Mesh, MeshError};
 use et_recon::onestep::noise_sd;
 use et_recon::{
-    DataSpace, PROMINENCE, PixelGrid, ReconError, Region, above_noise, default_threshold, touches,
+    DataSpace, Greit, GreitOptions, PROMINENCE, PixelGrid, ReconError, Region, above_noise,
+    default_threshold, touches,
 };
 
 mod monitor;
@@ -43,7 +44,7 @@ mod source;
 
 pub use monitor::Monitor;
 pub use processor::{
-    Classification, Classifier, Output, Processor, Referencing, Settings, TouchEvent,
+    Classification, Classifier, Method, Output, Processor, Referencing, Settings, TouchEvent,
 };
 pub use source::{
     Health, PortSource, ReplaySource, SimSource, Source, SourceSpec, default_scene, open_source,

@@ -46,6 +46,8 @@ pub struct Options {
     pub source: SourceSpec,
     /// A trained model to classify with.
     pub model: Option<PathBuf>,
+    /// The reconstruction to image with (switchable in the side panel).
+    pub method: crate::live::Method,
     /// Simulate in real time (false: one frame per drawn frame, for tests).
     pub realtime: bool,
     /// For documentation: once V_0 is taken, press the simulated sheet at (30, 25) mm, save
@@ -123,7 +125,13 @@ impl Viewer {
     /// [`ViewerError`] when the scene, the model or the first source cannot be opened.
     pub fn new(options: Options) -> Result<Self, ViewerError> {
         let (source, sheet) = open_source(&options.source, options.scene.as_deref())?;
-        let mut processor = Processor::new(&sheet, Settings::default())?;
+        let mut processor = Processor::new(
+            &sheet,
+            Settings {
+                method: options.method,
+                ..Settings::default()
+            },
+        )?;
         if let Some(path) = &options.model {
             let file = ModelFile::load(path)?;
             let classifier = Classifier::new(file).map_err(|error| ViewerError::Model {

@@ -406,6 +406,60 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `--method greit` images the touch where it is, at the noise figure asked for, and is one
+/// matrix (no --iterations).
+#[test]
+fn reconstruct_with_greit() {
+    let dir = std::env::temp_dir().join(format!("et-cli-greit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let png = dir.join("greit.png");
+    let scene = root.join("sim/scenes/disc-ref-x050.toml");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "reconstruct",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--triangles",
+            "3000",
+            "--method",
+            "greit",
+            "--out",
+            png.to_str().unwrap(),
+            "--force",
+            "--json",
+        ];
+        a.extend_from_slice(extra);
+        et(&a)
+    };
+    let out = args(&["--noise-figure", "0.4"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["method"], "greit");
+    assert!(
+        (j["noise_figure"].as_f64().unwrap() - 0.4).abs() < 1e-3,
+        "{j}"
+    );
+    assert!(j["timings_s"]["one_step"].as_f64().unwrap() >= 0.0, "{j}");
+    // The touch (55, 0) mm, radius 13.3 mm.
+    let m = &j["touch_matches"][0];
+    assert_eq!(m["found"], 0, "{j}");
+    let c = &j["found_touches"][0]["centroid_mm"];
+    let (x, y) = (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
+    assert!((x - 55.0).hypot(y) < 13.3, "{j}");
+    // A fixed alpha is used as given.
+    let j: serde_json::Value = serde_json::from_slice(&args(&["--alpha", "0.2"]).stdout).unwrap();
+    assert!((j["alpha"].as_f64().unwrap() - 0.2).abs() < 1e-12, "{j}");
+    let bad = args(&["--iterations", "3"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--method gn"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn reconstruct_images_recorded_frames() {
     let dir = std::env::temp_dir().join(format!("et-cli-recon-rec-{}", std::process::id()));

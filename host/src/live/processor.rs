@@ -98,9 +98,31 @@ pub struct Referencing {
     pub needed: usize,
 }
 
-/// The pixel projection of the one-step matrix for one configuration and (alpha, s).
+/// The reconstruction the live pipeline images with (docs/method.md §6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// One-step Gauss-Newton with the NOSER prior (alpha, s).
+    #[default]
+    Gn,
+    /// GREIT at the consensus noise figure (alpha and s are not used).
+    Greit,
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::Gn => "one-step Gauss-Newton",
+            Method::Greit => "GREIT",
+        })
+    }
+}
+
+/// The pixel projection of the reconstruction matrix for one configuration, method and
+/// (alpha, s).
 struct Projection {
     config: ScanConfig,
+    method: Method,
     alpha: f64,
     s: f64,
     /// Pixels inside the sheet x K.
@@ -115,11 +137,11 @@ impl Projection {
         imager: &Imager,
         jacobians: &mut Vec<(ScanConfig, TransferJacobian)>,
         config: &ScanConfig,
-        (alpha, s): (f64, f64),
+        (method, alpha, s): (Method, f64, f64),
     ) -> Result<&'p Projection, LiveError> {
         let kept = slot
             .take()
-            .filter(|p| p.config == *config && p.alpha == alpha && p.s == s);
+            .filter(|p| p.config == *config && p.method == method && p.alpha == alpha && p.s == s);
         let projection = match kept {
             Some(p) => p,
             None => {
@@ -132,12 +154,21 @@ impl Projection {
                         jacobians.len() - 1
                     }
                 };
-                let one = DataSpace::factored(&jacobians[at].1, s)?.one_step(alpha)?;
+                let jac = &jacobians[at].1;
+                let matrix = match method {
+                    Method::Gn => imager
+                        .grid
+                        .project(&DataSpace::factored(jac, s)?.one_step(alpha)?),
+                    Method::Greit => {
+                        Greit::new(imager, jac, &GreitOptions::default())?.projection()
+                    }
+                };
                 Projection {
                     config: *config,
+                    method,
                     alpha,
                     s,
-                    matrix: imager.grid.project(&one),
+                    matrix,
                 }
             }
         };
@@ -148,6 +179,8 @@ impl Projection {
 /// Settings of the live pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
+    /// The reconstruction.
+    pub method: Method,
     /// Tikhonov alpha (dimensionless, as `recon::OneStep`).
     pub alpha: f64,
     /// NOSER exponent s.
@@ -166,10 +199,12 @@ pub struct Settings {
 }
 
 impl Default for Settings {
-    /// alpha 0.3 (about what GCV picks on the simulator's noisy frames), s = 0.5, 5 x the
-    /// noise for a touch, 20 reference frames, 3 000 triangles, 48 pixels.
+    /// One-step Gauss-Newton, alpha 0.3 (about what GCV picks on the simulator's noisy
+    /// frames), s = 0.5, 5 x the noise for a touch, 20 reference frames, 3 000 triangles, 48
+    /// pixels.
     fn default() -> Self {
         Self {
+            method: Method::Gn,
             alpha: 0.3,
             s: 0.5,
             threshold: None,
@@ -195,6 +230,7 @@ pub(super) struct Reference {
 /// with (alpha, s).
 #[derive(Clone, Debug)]
 pub(super) struct Noise {
+    pub(super) method: Method,
     pub(super) alpha: f64,
     pub(super) s: f64,
     pub(super) v0: Vec<f64>,
@@ -290,8 +326,8 @@ impl Processor {
         self.settings
     }
 
-    /// New settings; the reconstruction matrix is rebuilt on the next frame if alpha or s
-    /// changed. Mesh and pixel changes need a new `Processor`.
+    /// New settings; the reconstruction matrix is rebuilt on the next frame if the method,
+    /// alpha or s changed. Mesh and pixel changes need a new `Processor`.
     pub fn set_settings(&mut self, settings: Settings) {
         self.settings = settings;
     }
@@ -361,17 +397,19 @@ impl Processor {
             });
         }
         let config = frame.config;
-        let Settings { alpha, s, .. } = self.settings;
+        let Settings {
+            method, alpha, s, ..
+        } = self.settings;
         let projection = &Projection::current(
             &mut self.projection,
             &self.imager,
             &mut self.jacobians,
             &config,
-            (alpha, s),
+            (method, alpha, s),
         )?
         .matrix;
         let noise = match &mut reference.noise {
-            Some(n) if n.alpha == alpha && n.s == s => n,
+            Some(n) if n.method == method && n.alpha == alpha && n.s == s => n,
             slot => {
                 // V_0 and the channel variances of an untouched frame's dV.
                 let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
@@ -382,6 +420,7 @@ impl Processor {
                 // |dV|.
                 let pixel_sd = noise_sd(projection, &var_dv);
                 slot.insert(Noise {
+                    method,
                     alpha,
                     s,
                     v0,

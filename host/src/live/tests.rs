@@ -46,8 +46,21 @@ fn press_at(source: &mut Source, position: Option<[f64; 2]>) {
 
 #[test]
 fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
+    for method in [Method::Gn, Method::Greit] {
+        untouched_then_pressed(method);
+    }
+}
+
+fn untouched_then_pressed(method: Method) {
     let (mut source, sheet) = sim();
-    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    let mut p = Processor::new(
+        &sheet,
+        Settings {
+            method,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
     let settings = p.settings();
     // The reference frames.
     for i in 0..settings.reference_frames {
@@ -78,7 +91,7 @@ fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
         let e = out.event.expect("the press is a touch");
         let off = (e.position_mm[0] - at[0] * 1e3).hypot(e.position_mm[1] - at[1] * 1e3);
         println!(
-            "press at {at:?}: intensity {:.1}, {off:.1} mm off, {} regions",
+            "{method}: press at {at:?}: intensity {:.1}, {off:.1} mm off, {} regions",
             e.intensity, e.regions
         );
         assert!(e.intensity > settings.touch_factor, "{e:?}");

@@ -76,7 +76,13 @@ impl Viewer {
         ui.separator();
         ui.heading("Imaging");
         let mut s = self.processor.settings();
-        ui.add(
+        ui.horizontal(|ui| {
+            for m in [crate::live::Method::Gn, crate::live::Method::Greit] {
+                ui.selectable_value(&mut s.method, m, m.to_string());
+            }
+        });
+        ui.add_enabled(
+            s.method == crate::live::Method::Gn,
             egui::Slider::new(&mut s.alpha, 1e-3..=10.0)
                 .logarithmic(true)
                 .text("alpha"),

@@ -19,6 +19,7 @@ fn sim_options() -> Options {
         scene: None,
         source: SourceSpec::Sim,
         model: None,
+        method: crate::live::Method::Gn,
         realtime: false,
         screenshot: None,
     }
@@ -130,6 +131,42 @@ fn pressing_the_simulated_sheet_shows_the_touch_where_it_is() {
     assert!(h.query_by_label("no touch").is_some());
 }
 
+/// The GREIT button images with GREIT (alpha's slider off), and a press shows where it is.
+#[test]
+fn greit_images_a_press_where_it_is() {
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    h.get_by_label("GREIT").click();
+    h.step();
+    assert_eq!(
+        h.state().processor.settings().method,
+        crate::live::Method::Greit
+    );
+    h.state_mut().press(vec![Touch {
+        position: [0.03, -0.03],
+        radius: 0.0075,
+        pressure: 30e3,
+    }]);
+    h.step();
+    h.step();
+    let e = h
+        .state()
+        .last
+        .as_ref()
+        .unwrap()
+        .event
+        .clone()
+        .expect("a touch");
+    let off = (e.position_mm[0] - 30.0).hypot(e.position_mm[1] + 30.0);
+    assert!(off < 15.0, "{e:?}");
+    h.get_by_label("one-step Gauss-Newton").click();
+    h.step();
+    assert_eq!(
+        h.state().processor.settings().method,
+        crate::live::Method::Gn
+    );
+}
+
 #[test]
 fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
     // A recording of the simulator to switch to.
@@ -202,6 +239,7 @@ fn replay_pauses_and_seeks() {
         scene: None,
         source: SourceSpec::Replay(path.clone()),
         model: None,
+        method: crate::live::Method::Gn,
         realtime: false,
         screenshot: None,
     });

@@ -36,6 +36,16 @@ pub(crate) struct ForwardArgs {
     json: bool,
 }
 
+/// `et reconstruct --method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum Method {
+    /// Gauss-Newton with the NOSER prior, one step or --iterations.
+    Gn,
+    /// GREIT.
+    Greit,
+}
+
 #[derive(Debug, clap::Args)]
 pub(crate) struct ReconstructArgs {
     /// Scene file: the sheet, its electrodes, the scan protocol and the touches.
@@ -47,11 +57,25 @@ pub(crate) struct ReconstructArgs {
     /// (slower, for when accuracy matters more than speed).
     #[arg(long, default_value_t = 1)]
     iterations: usize,
+    /// The reconstruction: gn, one-step (or iterative) Gauss-Newton with the NOSER prior,
+    /// or greit, the consensus linear reconstruction (GREIT: desired images of small targets
+    /// over the sheet, lambda set by the noise figure). docs/method.md §6.
+    #[arg(long, value_enum, default_value_t = Method::Gn)]
+    method: Method,
     /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
-    /// chosen by generalised cross-validation on the frame, never fitting it closer than
-    /// its noise (the discrepancy principle as a floor).
+    /// for gn chosen by generalised cross-validation on the frame, never fitting it closer
+    /// than its noise (the discrepancy principle as a floor); for greit set by
+    /// --noise-figure.
     #[arg(long, default_value = "auto")]
     alpha: String,
+    /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
+    /// target at the centre; larger is sharper and noisier; 0.5 is the consensus value).
+    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE)]
+    noise_figure: f64,
+    /// GREIT: the radius of the desired image of a small target, mm (default: 5 % of the
+    /// sheet's longer side; at least one pixel).
+    #[arg(long)]
+    radius_mm: Option<f64>,
     /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
     #[arg(long, default_value_t = 0.5)]
     s: f64,
@@ -302,58 +326,98 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     // What imaging cannot explain: the frames' noise and the model's own error.
     let var = et_recon::onestep::imaging_variance(&var, &dv);
     stage("frames");
-    let space = et_recon::DataSpace::factored(&jac, args.s)?;
-    let alpha = match args.alpha.as_str() {
-        "auto" => space.choose_alpha(&dv, &var, &et_recon::default_alphas())?,
-        v => v
-            .parse::<f64>()
-            .with_context(|| format!("--alpha '{v}': a number or auto"))?,
+    let fixed_alpha = match args.alpha.as_str() {
+        "auto" => None,
+        v => Some(
+            v.parse::<f64>()
+                .with_context(|| format!("--alpha '{v}': a number or auto"))?,
+        ),
     };
-    // The image, and its noise where the one-step matrix gives it.
-    let (image, sd, t_one_step, t_frame) = if args.iterations <= 1 {
-        let recon = space.one_step(alpha)?;
-        let t_one_step = stage(&format!("one-step matrix (alpha {alpha:.3e})"));
-        let image = grid.image(&recon.reconstruct(&dv)?);
-        let t_frame = stage("one frame imaged");
-        (
-            image,
-            grid.image(&recon.noise_sd(&var)?),
-            Some(t_one_step),
-            t_frame,
-        )
-    } else {
-        let sigma0 = imager.background();
-        let fit = et_recon::gauss_newton(
-            &imager.forward,
-            &protocol,
-            amps,
-            &sigma0,
-            et_recon::Data::Difference(&dv),
-            et_recon::GaussNewton {
-                alpha,
-                s: args.s,
-                iterations: args.iterations,
-            },
-            &var,
-        )?;
-        let last = fit.iterates.last().context("no iteration")?;
-        let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-        let image = grid.image(&d);
-        let steps: Vec<String> = fit.iterates.iter().map(|i| format!("{}", i.step)).collect();
-        let t_frame = stage(&format!(
-            "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {:.3e} V, step lengths {})",
-            fit.iterates.len(),
-            last.residual,
-            steps.join(" ")
-        ));
-        if let et_recon::Stop::NoDescent { iteration } = fit.stop {
-            eprintln!(
-                "note: stopped at iteration {iteration} of {}: no step lowered the misfit \
-                 (the image is the last iterate that did; a larger --alpha may fit further)",
+    let mut noise_figure = None;
+    // The image, and its noise where the reconstruction matrix gives it.
+    let (alpha, image, sd, t_one_step, t_frame) = if args.method == Method::Greit {
+        if args.iterations > 1 {
+            bail!(
+                "--iterations {} is for --method gn: GREIT is one matrix",
                 args.iterations
             );
         }
-        (image, grid.image(&last.noise_sd), None, t_frame)
+        let options = et_recon::GreitOptions {
+            radius: args.radius_mm.map(|r| r * 1e-3),
+            regularisation: match fixed_alpha {
+                Some(a) => et_recon::Regularisation::Alpha(a),
+                None => et_recon::Regularisation::NoiseFigure(args.noise_figure),
+            },
+        };
+        let greit = et_recon::Greit::new(&imager, &jac, &options)?;
+        noise_figure = Some(greit.noise_figure);
+        let t_matrix = stage(&format!(
+            "GREIT matrix (alpha {:.3e}, noise figure {:.3}, radius {:.1} mm)",
+            greit.alpha,
+            greit.noise_figure,
+            greit.radius * 1e3
+        ));
+        let image = greit.image(&dv)?;
+        let t_frame = stage("one frame imaged");
+        (
+            greit.alpha,
+            image,
+            greit.noise_sd(&var)?,
+            Some(t_matrix),
+            t_frame,
+        )
+    } else {
+        let space = et_recon::DataSpace::factored(&jac, args.s)?;
+        let alpha = match fixed_alpha {
+            None => space.choose_alpha(&dv, &var, &et_recon::default_alphas())?,
+            Some(a) => a,
+        };
+        let (image, sd, t_one_step, t_frame) = if args.iterations <= 1 {
+            let recon = space.one_step(alpha)?;
+            let t_one_step = stage(&format!("one-step matrix (alpha {alpha:.3e})"));
+            let image = grid.image(&recon.reconstruct(&dv)?);
+            let t_frame = stage("one frame imaged");
+            (
+                image,
+                grid.image(&recon.noise_sd(&var)?),
+                Some(t_one_step),
+                t_frame,
+            )
+        } else {
+            let sigma0 = imager.background();
+            let fit = et_recon::gauss_newton(
+                &imager.forward,
+                &protocol,
+                amps,
+                &sigma0,
+                et_recon::Data::Difference(&dv),
+                et_recon::GaussNewton {
+                    alpha,
+                    s: args.s,
+                    iterations: args.iterations,
+                },
+                &var,
+            )?;
+            let last = fit.iterates.last().context("no iteration")?;
+            let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
+            let image = grid.image(&d);
+            let steps: Vec<String> = fit.iterates.iter().map(|i| format!("{}", i.step)).collect();
+            let t_frame = stage(&format!(
+                "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {:.3e} V, step lengths {})",
+                fit.iterates.len(),
+                last.residual,
+                steps.join(" ")
+            ));
+            if let et_recon::Stop::NoDescent { iteration } = fit.stop {
+                eprintln!(
+                    "note: stopped at iteration {iteration} of {}: no step lowered the misfit \
+                 (the image is the last iterate that did; a larger --alpha may fit further)",
+                    args.iterations
+                );
+            }
+            (image, grid.image(&last.noise_sd), None, t_frame)
+        };
+        (alpha, image, sd, t_one_step, t_frame)
     };
     let timings_s = Timings {
         mesh: t_mesh,
@@ -398,7 +462,9 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         out: &args.out,
         triangles: t_n,
         protocol: config.protocol.to_string(),
+        method: args.method,
         alpha,
+        noise_figure,
         s: args.s,
         threshold: f,
         regions: rois.iter().map(RegionSummary::of).collect(),
@@ -483,7 +549,11 @@ struct ReconstructSummary<'a> {
     out: &'a std::path::Path,
     triangles: usize,
     protocol: String,
+    /// "gn" or "greit".
+    method: Method,
     alpha: f64,
+    /// GREIT's noise figure of the matrix made; null for gn.
+    noise_figure: Option<f64>,
     s: f64,
     threshold: f64,
     /// Every region above the threshold.
@@ -518,8 +588,9 @@ struct Timings {
     mesh: f64,
     /// The forward model, its factorisation, the frame and the Jacobian at the background.
     forward_jacobian: f64,
-    /// The one-step matrix (with GCV's eigendecomposition under --alpha auto); null with
-    /// --iterations above 1, which builds no matrix.
+    /// The reconstruction matrix: one-step Gauss-Newton's (with GCV's eigendecomposition
+    /// under --alpha auto) or GREIT's (with its noise-figure search); null with --iterations
+    /// above 1, which builds no matrix.
     one_step: Option<f64>,
     /// mesh + forward_jacobian + one_step: what a live session pays once.
     setup: f64,

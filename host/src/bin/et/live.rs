@@ -24,6 +24,10 @@ pub(crate) struct SourceArgs {
     /// A trained model (`et train`) to classify each touch with on the host.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// The reconstruction the images are made with: gn (one-step Gauss-Newton, alpha 0.3)
+    /// or greit (GREIT at the consensus noise figure 0.5). docs/method.md §6.
+    #[arg(long, value_enum, default_value_t = et_host::live::Method::Gn)]
+    method: et_host::live::Method,
 }
 
 impl SourceArgs {
@@ -87,6 +91,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
         scene: args.source.scene.clone(),
         source: args.source.spec(),
         model: args.source.model.clone(),
+        method: args.source.method,
         realtime: true,
         screenshot: args.screenshot.clone(),
     })?;
@@ -104,7 +109,13 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
     use std::io::Write as _;
     let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
-    let mut processor = Processor::new(&sheet, Settings::default())?;
+    let mut processor = Processor::new(
+        &sheet,
+        Settings {
+            method: args.source.method,
+            ..Settings::default()
+        },
+    )?;
     processor.classifier = args.source.classifier()?;
     if let Some(c) = &processor.classifier {
         // The model classifies frames of the configuration it was trained on.
