@@ -1,6 +1,7 @@
 //! Imaging speed: mesh + forward + Jacobian + one-step matrix for a 16-electrode disc
 //! (adjacent protocol, complete electrode model) at about 2 000, 8 000 and 30 000 triangles,
-//! and 32 electrodes PP-PP at 8 000; the one-step matrix alone; a live frame onto the mesh
+//! and 32 electrodes PP-PP at 8 000; GREIT's set-up at 2 000 and 8 000; the one-step matrix
+//! alone; a live frame onto the mesh
 //! against reading its matrix once (the memory-bandwidth limit) and onto a 32 x 32 grid. One
 //! core: faer runs sequentially, nalgebra is single-threaded.
 //!
@@ -62,6 +63,23 @@ fn set_up_mesh_forward_jacobian_matrix(triangles: usize) -> usize {
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn set_up_32_electrodes_pp_pp_8000() -> usize {
     set_up_with(8_000, 32, ProtocolKind::PpPp).0
+}
+
+/// GREIT's full set-up at the consensus noise figure: mesh, forward model, Jacobian, the
+/// desired images, the noise-figure search and the matrix onto a 64 x 64 grid (16 electrodes,
+/// adjacent).
+#[divan::bench(args = [2_000, 8_000], sample_count = 5, sample_size = 1)]
+fn set_up_greit_64_pixels(triangles: usize) -> usize {
+    let spec = disc(16);
+    let mesh = Mesh::with_about(&spec, triangles).expect("mesh");
+    let imager = et_recon::Imager::new(&spec, mesh, 64).expect("imager");
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("protocol");
+    let jac = imager
+        .transfer_jacobian(&protocol, 32e-6)
+        .expect("jacobian");
+    let greit =
+        et_recon::Greit::new(&imager, &jac, &et_recon::GreitOptions::default()).expect("greit");
+    greit.frame_len()
 }
 
 /// The one-step matrix alone (data space, its Cholesky and the solve), 16 electrodes

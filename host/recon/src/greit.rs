@@ -168,11 +168,11 @@ impl Greit {
         let alpha = (lambda / scale).sqrt();
         let recon = space.at_lambda(lambda, alpha)?.with_columns(zt);
         // The noise figure of the matrix made (by its definition, on R itself).
-        let img = recon.reconstruct(&h)?;
-        let sd = recon.noise_sd(&vec![1.0; h.len()])?;
-        let snr_in = h.iter().map(|v| v * v).sum::<f64>() / h.len().max(1) as f64;
-        let snr_out =
-            img.iter().map(|v| v * v).sum::<f64>() / sd.iter().map(|v| v * v).sum::<f64>();
+        let measured = noise_figure(
+            &h,
+            &recon.reconstruct(&h)?,
+            &recon.noise_sd(&vec![1.0; h.len()])?,
+        );
         Ok(Self {
             inside,
             grid_len: grid.triangle.len(),
@@ -180,7 +180,7 @@ impl Greit {
             radius,
             lambda,
             alpha,
-            noise_figure: snr_in / snr_out,
+            noise_figure: measured,
         })
     }
 
@@ -226,9 +226,22 @@ impl Greit {
     }
 }
 
-/// The noise figure's target data h = J x (K values): x = 1 S per square on the triangles
-/// within `radius` of the sheet's centre of area (the nearest triangle if none).
-fn centre_target(imager: &Imager, jac: &TransferJacobian, radius: f64) -> Vec<f64> {
+/// The noise figure NF = SNR_in / SNR_out of a linear reconstruction (the consensus
+/// definition, as EIDORS' `calc_noise_figure`, with white noise of one variance on every
+/// channel): SNR_in = mean_k h_k^2, SNR_out = sum_p img_p^2 / sum_p sd_p^2, for the target's
+/// data `h` ([`centre_target`]), its image `image` (per pixel of equal area, or the
+/// reconstruction's own values) and each value's noise `sd` under unit-variance noise.
+#[must_use]
+pub fn noise_figure(h: &[f64], image: &[f64], sd: &[f64]) -> f64 {
+    let snr_in = h.iter().map(|v| v * v).sum::<f64>() / h.len().max(1) as f64;
+    let snr_out = image.iter().map(|v| v * v).sum::<f64>() / sd.iter().map(|v| v * v).sum::<f64>();
+    snr_in / snr_out
+}
+
+/// The noise figure's target data h = J x (K values, V): x = 1 S per square on the triangles
+/// within `radius` (m) of the sheet's centre of area (the nearest triangle if none).
+#[must_use]
+pub fn centre_target(imager: &Imager, jac: &TransferJacobian, radius: f64) -> Vec<f64> {
     let mesh = imager.forward.mesh();
     let t_n = mesh.triangles.len();
     let area: Vec<f64> = (0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect();
