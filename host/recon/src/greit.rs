@@ -296,6 +296,13 @@ pub struct MeritSummary {
     pub ringing_mean: f64,
 }
 
+/// A linear reconstruction as [`figures_of_merit`] takes it: the frame difference (K values,
+/// V) to an image on the grid (None outside the sheet).
+pub type ImageOf<'a> = dyn Fn(&[f64]) -> Result<Vec<Option<f64>>, ReconError> + 'a;
+
+/// One target's centre (m) and the figures of merit of its image.
+pub type TargetMerit = ([f64; 2], crate::metrics::Merit);
+
 /// Images `n` x `n` targets over the sheet (disc targets of radius `target_radius`, m, whose
 /// disc lies inside the sheet: the triangles whose centroid is within the radius, contrast 1
 /// S per square, data J x from the linearised model) with `image_of` (the frame difference
@@ -309,8 +316,8 @@ pub fn figures_of_merit(
     jac: &TransferJacobian,
     n: usize,
     target_radius: f64,
-    image_of: &dyn Fn(&[f64]) -> Result<Vec<Option<f64>>, ReconError>,
-) -> Result<(MeritSummary, Vec<([f64; 2], crate::metrics::Merit)>), ReconError> {
+    image_of: &ImageOf<'_>,
+) -> Result<(MeritSummary, Vec<TargetMerit>), ReconError> {
     let mesh = imager.forward.mesh();
     let grid = &imager.grid;
     let (w, h) = (
