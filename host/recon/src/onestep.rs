@@ -351,17 +351,21 @@ impl DataSpace {
         w
     }
 
+    /// A's spectrum, made on first use and kept.
+    fn eigen(&self) -> Result<&Spectrum, ReconError> {
+        self.eigen
+            .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
+            .as_ref()
+            .ok_or(ReconError::Singular)
+    }
+
     /// A's eigenpairs with eigenvalues above 1e-12 of the largest: (e, U), U K x q with
     /// orthonormal columns (from the r x r problem when H factorises, as GCV's spectrum).
     ///
     /// # Errors
     /// [`ReconError::Singular`] when A has no eigendecomposition.
     pub(crate) fn eigenpairs(&self) -> Result<(Vec<f64>, Mat<f64>), ReconError> {
-        let spectrum = self
-            .eigen
-            .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
-            .as_ref()
-            .ok_or(ReconError::Singular)?;
+        let spectrum = self.eigen()?;
         let k = self.frame_len();
         Ok(match spectrum {
             Spectrum::Compact { e, w } => {
@@ -387,11 +391,7 @@ impl DataSpace {
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
     /// `dv`.
     fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
-        let spectrum = self
-            .eigen
-            .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
-            .as_ref()
-            .ok_or(ReconError::Singular)?;
+        let spectrum = self.eigen()?;
         let k = self.frame_len();
         let (e, c) = match spectrum {
             Spectrum::Compact { e, w } => {
