@@ -1,6 +1,6 @@
 use super::*;
 use crate::mesh::Mesh;
-use crate::metrics::{match_touches, merit};
+use crate::metrics::{assert_found_exactly, merit};
 use crate::onestep::imaging_variance;
 use crate::touches::{PROMINENCE, TOUCH_Z, above_noise, default_threshold, touches};
 use et_core::protocol::{Protocol, ProtocolKind};
@@ -260,19 +260,7 @@ fn greit_finds_exactly_the_true_touches_on_noise_free_frames() {
             sc.touches.iter().map(|t| (t.position, t.radius)).collect();
         let at: Vec<[f64; 2]> = found.iter().map(|r| r.centroid).collect();
         println!("{name}: alpha {:.3e}, touches at {at:.4?}", g.alpha);
-        assert_eq!(found.len(), truth.len(), "{name}: {at:?}");
-        let matches = match_touches(&imager.grid, &found, &truth);
-        let mut which: Vec<usize> = matches.iter().filter_map(|m| m.found).collect();
-        which.sort_unstable();
-        which.dedup();
-        assert_eq!(which.len(), truth.len(), "{name}: {matches:?}");
-        for t in &sc.touches {
-            let near = at
-                .iter()
-                .map(|c| (c[0] - t.position[0]).hypot(c[1] - t.position[1]))
-                .fold(f64::INFINITY, f64::min);
-            assert!(near < t.radius, "{name}: {near} from {:?}", t.position);
-        }
+        assert_found_exactly(name, &imager.grid, &found, &truth);
     }
 }
 

@@ -640,15 +640,10 @@ fn noise_free_frames_find_exactly_the_true_touches() {
         let found = above_noise(&touches(&grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
         let at: Vec<[f64; 2]> = found.iter().map(|r| r.centroid).collect();
         println!("{name}: alpha {alpha:.3} (GCV alone {gcv_only:.1e}), touches at {at:?}");
-        assert_eq!(found.len(), sc.touches.len(), "{name}: {at:?}");
         // Each true touch matched to its own found touch, PE within the touch's radius.
         let truth: Vec<([f64; 2], f64)> =
             sc.touches.iter().map(|t| (t.position, t.radius)).collect();
-        let matches = match_touches(&grid, &found, &truth);
-        let mut which: Vec<usize> = matches.iter().filter_map(|m| m.found).collect();
-        which.sort_unstable();
-        which.dedup();
-        assert_eq!(which.len(), truth.len(), "{name}: {matches:?}");
+        let matches = assert_found_exactly(name, &grid, &found, &truth);
         let extent = grid.width.max(grid.height) as f64 * grid.size;
         for (m, t) in matches.iter().zip(&sc.touches) {
             // (SE is not bounded here: the one-step image is blurred, and a touch split off
@@ -657,13 +652,6 @@ fn noise_free_frames_find_exactly_the_true_touches() {
                 m.pe * extent < t.radius && (0.0..=1.0).contains(&m.se),
                 "{name}: {m:?}"
             );
-        }
-        for t in &sc.touches {
-            let near = at
-                .iter()
-                .map(|c| (c[0] - t.position[0]).hypot(c[1] - t.position[1]))
-                .fold(f64::INFINITY, f64::min);
-            assert!(near < t.radius, "{name}: {near} from {:?}", t.position);
         }
     }
 }
