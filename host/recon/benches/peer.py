@@ -1,8 +1,11 @@
 """The Python peer's side of `cargo bench -p et-recon --bench peer`: pyeit 1.2.4 doing the
 same work as et on a 16-electrode disc (point electrodes, adjacent drive and measurement, 208
 values a frame) at each mesh size h0 given on the command line. Prints one JSON object a line:
-the triangle count and each stage's seconds (median of the frame loops). Run it with one BLAS
-thread (OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1) to compare one core with one core."""
+the triangle count, the frame's error against the exact solution (point electrodes on the
+unit disc, in closed form: the largest difference over the largest value, and the relative L2
+error) and each stage's seconds (median of the frame loops). With `--accuracy` first, only
+the mesh, the forward solve and the error. Run it with one BLAS thread (OMP_NUM_THREADS=1
+OPENBLAS_NUM_THREADS=1) to compare one core with one core."""
 import json
 import statistics
 import sys
@@ -31,11 +34,38 @@ def per_call(f, n=200):
     return statistics.median(times)
 
 
-for h0 in map(float, sys.argv[1:]):
+def exact_frame(m, p):
+    """The exact adjacent frame of point electrodes at pyeit's electrode nodes (unit disc,
+    sigma = 1, 1 A): u(x) = ln(|x - sink| / |x - source|) / pi, as et's exact.rs."""
+    at = m.node[m.el_pos, :2]
+    u = lambda x, a, b: np.log(np.linalg.norm(x - at[b]) / np.linalg.norm(x - at[a])) / np.pi
+    return np.array(
+        [
+            u(at[i], a, b) - u(at[j], a, b)
+            for (a, b), pairs in zip(p.ex_mat, p.meas_mat)
+            for i, j in pairs
+        ]
+    )
+
+
+def errors(v, exact):
+    d = v - exact
+    return {
+        "error_max": float(np.abs(d).max() / np.abs(exact).max()),
+        "error_l2": float(np.linalg.norm(d) / np.linalg.norm(exact)),
+    }
+
+
+accuracy_only = sys.argv[1:2] == ["--accuracy"]
+for h0 in map(float, sys.argv[2 if accuracy_only else 1 :]):
     m, t_mesh = timed(lambda: mesh.create(16, h0=h0))
     p = protocol.create(16, dist_exc=1, step_meas=1, parser_meas="std")
     fwd = EITForward(m, p)
     v0, t_forward = timed(fwd.solve_eit)
+    err = errors(v0, exact_frame(m, p))
+    if accuracy_only:
+        print(json.dumps({"h0": h0, "triangles": int(m.element.shape[0]), **err}), flush=True)
+        continue
     # A touch: the elements within 0.15 of (0.5, 0) ten times as conductive.
     c = m.elem_centers[:, :2]
     perm = np.where(np.hypot(c[:, 0] - 0.5, c[:, 1]) < 0.15, 10.0, 1.0)
@@ -56,6 +86,7 @@ for h0 in map(float, sys.argv[1:]):
                 "h0": h0,
                 "triangles": int(m.element.shape[0]),
                 "values": int(len(v0)),
+                **err,
                 "mesh": t_mesh,
                 "forward": t_forward,
                 "one_step_setup": t_one_step,

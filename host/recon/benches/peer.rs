@@ -6,6 +6,9 @@
 //! reconstruction matrix with lambda fixed) and a frame onto the triangles; GREIT's set-up
 //! (the same, onto 64 x 64 pixels, lambda fixed: the same work as pyeit's) and a frame. Set-up
 //! stages are the median of 3 runs on et's side, one on pyeit's; frames the median of 200.
+//! Then accuracy at equal element count: each side's adjacent frame against the exact
+//! solution (point electrodes in closed form, `et_recon::exact`), both norms, at pyeit's
+//! h0 = 0.1 to 0.015 (about 700 to 32 000 triangles).
 //!
 //! Run: `cargo bench -p et-recon --bench peer` (set `ET_PEER_PYTHON` to an interpreter with
 //! pyeit installed, e.g. a venv's `bin/python`; default `python3`). Without pyeit it says so
@@ -15,6 +18,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_recon::exact::unit_disc_error;
 use et_recon::mesh::Mesh;
 use et_recon::{DataSpace, Greit, GreitOptions, Imager, Regularisation};
 use et_sim::shape::Shape;
@@ -82,6 +86,27 @@ fn et_side(triangles: usize) -> (usize, [f64; 5]) {
     (count, [each(0), each(1), each(2), each(3), each(4)])
 }
 
+/// Runs the peer's script with `args`, one BLAS thread; its JSON lines.
+fn peer(python: &str, args: &[&str]) -> Vec<serde_json::Value> {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peer.py");
+    let out = Command::new(python)
+        .arg(&script)
+        .args(args)
+        .env("OMP_NUM_THREADS", "1")
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .env("MKL_NUM_THREADS", "1")
+        .output()
+        .expect("run the peer");
+    if !out.status.success() {
+        eprintln!("{}", String::from_utf8_lossy(&out.stderr));
+        std::process::exit(1);
+    }
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("the peer's JSON"))
+        .collect()
+}
+
 fn main() {
     let python = std::env::var("ET_PEER_PYTHON").unwrap_or_else(|_| "python3".into());
     let has_pyeit = Command::new(&python)
@@ -95,24 +120,10 @@ fn main() {
         );
         return;
     }
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peer.py");
-    let out = Command::new(&python)
-        .arg(&script)
-        .args(["0.06", "0.03"])
-        .env("OMP_NUM_THREADS", "1")
-        .env("OPENBLAS_NUM_THREADS", "1")
-        .env("MKL_NUM_THREADS", "1")
-        .output()
-        .expect("run the peer");
-    if !out.status.success() {
-        eprintln!("{}", String::from_utf8_lossy(&out.stderr));
-        std::process::exit(1);
-    }
     println!(
         "| stage | pyeit triangles | pyeit, s | et triangles | et, s | pyeit / et |\n| --- | --- | --- | --- | --- | --- |"
     );
-    for line in String::from_utf8_lossy(&out.stdout).lines() {
-        let peer: serde_json::Value = serde_json::from_str(line).expect("the peer's JSON");
+    for peer in peer(&python, &["0.06", "0.03"]) {
         let n = peer["triangles"].as_u64().expect("triangles") as usize;
         let (ours_n, ours) = et_side(n);
         let keys = [
@@ -136,4 +147,31 @@ fn main() {
             );
         }
     }
+    println!(
+        "\n| pyeit triangles | pyeit max / L2 error | et triangles | et max / L2 error | pyeit / et (max, L2) |\n| --- | --- | --- | --- | --- |"
+    );
+    let sizes = ["--accuracy", "0.1", "0.06", "0.04", "0.03", "0.02", "0.015"];
+    let mut log_ratios = Vec::new();
+    for peer in peer(&python, &sizes) {
+        let n = peer["triangles"].as_u64().expect("triangles") as usize;
+        let (max, l2) = (peer["error_max"].as_f64(), peer["error_l2"].as_f64());
+        let (max, l2) = (max.expect("error_max"), l2.expect("error_l2"));
+        let et = unit_disc_error(ElectrodeModel::Point, n).expect("et's error");
+        println!(
+            "| {n} | {max:.2e} / {l2:.2e} | {} | {:.2e} / {:.2e} | {:.1} / {:.1} |",
+            et.triangles,
+            et.max,
+            et.l2,
+            max / et.max,
+            l2 / et.l2
+        );
+        log_ratios.push([(max / et.max).ln(), (l2 / et.l2).ln()]);
+    }
+    let mean =
+        |i: usize| (log_ratios.iter().map(|r| r[i]).sum::<f64>() / log_ratios.len() as f64).exp();
+    println!(
+        "\ngeometric mean of pyeit / et over the sizes: max error {:.2}, L2 error {:.2}",
+        mean(0),
+        mean(1)
+    );
 }

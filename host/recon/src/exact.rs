@@ -152,17 +152,43 @@ pub fn cem_disc(
     u.iter().all(|v| v.is_finite()).then_some(u)
 }
 
-/// The relative error (largest difference over the largest value) of the adjacent frame of
-/// electrode model `model` on the unit disc (16 electrodes of width 0.1, contact 0.05 ohm m, sigma = 1,
-/// 1 A), meshed to about `triangles`, against the exact solution (this module: the point
-/// model in closed form, the complete model as a Fourier series extrapolated in its modes).
+/// How far a finite-element frame is from the exact one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameError {
+    /// The largest difference over the largest exact value.
+    pub max: f64,
+    /// The relative L2 error: |V_h - V| / |V| over the frame's values.
+    pub l2: f64,
+    /// Triangles in the mesh.
+    pub triangles: usize,
+}
+
+impl FrameError {
+    /// Both norms of `frame`'s difference from `exact`.
+    #[must_use]
+    pub fn of(frame: &[f64], exact: &[f64], triangles: usize) -> Self {
+        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+        let diff = || frame.iter().zip(exact).map(|(a, b)| a - b);
+        let largest = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, |m, x| m.max(x.abs()));
+        Self {
+            max: largest(&mut diff()) / largest(&mut exact.iter().copied()),
+            l2: norm(&mut diff()) / norm(&mut exact.iter().copied()),
+            triangles,
+        }
+    }
+}
+
+/// The error of the adjacent frame of electrode model `model` on the unit disc (16
+/// electrodes of width 0.1, contact 0.05 ohm m, sigma = 1, 1 A), meshed to about
+/// `triangles`, against the exact solution (this module: the point model in closed form,
+/// the complete model as a Fourier series extrapolated in its modes).
 ///
 /// `None` if a mesh, forward model or series cannot be made (it can for the defaults).
 #[must_use]
 pub fn unit_disc_error(
     model: et_sim::sheet::ElectrodeModel,
     triangles: usize,
-) -> Option<(f64, usize)> {
+) -> Option<FrameError> {
     let mut spec = et_sim::sheet::SheetSpec::rectangle(1.0, 1.0, 16);
     spec.shape = et_sim::shape::Shape::Disc { radius: 1.0 };
     spec.electrodes.width = 0.1;
@@ -208,13 +234,7 @@ pub fn unit_disc_error(
                 .collect()
         }
     };
-    let scale = exact.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let worst = v
-        .iter()
-        .zip(&exact)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    Some((worst / scale, n))
+    Some(FrameError::of(&v, &exact, n))
 }
 
 #[cfg(test)]

@@ -37,6 +37,14 @@ pub struct MeshSize {
     pub electrode: f64,
     /// Smallest angle the refinement aims for, degrees (spade guarantees up to about 30).
     pub min_angle_deg: f64,
+    /// Point electrodes: how many rings of the regular fan around each electrode's node
+    /// (0: none; at most one fewer than the boundary edges either side of the node). Ring k
+    /// has radius k d (d the boundary edge there) and 3 k edges, so the fan's triangles are
+    /// nearly equilateral and every electrode sees the same mesh, mirror-symmetric about its
+    /// normal: the discretisation error of the point source's singularity, which dominates
+    /// the voltages of the other electrodes, is then 2 to 3 times smaller at the same count
+    /// of triangles (docs/measurements.md, "Convergence"). Ignored by the complete model.
+    pub fan_rings: usize,
 }
 
 impl MeshSize {
@@ -50,6 +58,7 @@ impl MeshSize {
             interior: h,
             electrode: h / 4.0,
             min_angle_deg: 28.0,
+            fan_rings: 3,
         }
     }
 }
@@ -228,6 +237,10 @@ impl Mesh {
         } else {
             size.electrode.min(spec.electrodes.width)
         };
+        // Point electrodes: each side of a node is cut into the same number of pieces, so its
+        // fan's rings end on outline nodes.
+        let half_len = half * perimeter;
+        let pieces = (half_len / h_e * (1.0 - 1e-9)).ceil().max(1.0);
         let mut ts: Vec<f64> = Vec::new();
         for i in 0..breaks.len() {
             let a = breaks[i].0;
@@ -241,7 +254,12 @@ impl Mesh {
             } else {
                 size.interior
             };
-            let n = ((b - a) * perimeter / h).ceil().max(1.0) as usize;
+            let len = (b - a) * perimeter;
+            let n = if point && (len - half_len).abs() < 1e-9 * half_len {
+                pieces
+            } else {
+                (len / h * (1.0 - 1e-9)).ceil().max(1.0)
+            } as usize;
             ts.extend((0..n).map(|k| a + (b - a) * k as f64 / n as f64));
         }
         let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
@@ -257,6 +275,16 @@ impl Mesh {
             let (a, b) = (handles[i], handles[(i + 1) % handles.len()]);
             if a != b {
                 cdt.add_constraint(a, b);
+            }
+        }
+        if point {
+            let d = half_len / pieces;
+            let rings = size.fan_rings.min(pieces as usize - 1);
+            for &t in &centres {
+                for p in fan(&spec.shape, t, d, rings) {
+                    cdt.insert(Point2::new(p[0], p[1]))
+                        .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
+                }
             }
         }
         for r in regions {
@@ -353,8 +381,9 @@ impl Mesh {
     /// A mesh of about `triangles` triangles: within 10 % where a search over the sizes
     /// reaches it, else the closest found. The interior edge and the electrodes' edge (a
     /// quarter of it) are scaled together, bracketing the count; when the electrodes' grading
-    /// alone needs more triangles than the budget (coarse meshes of many electrodes), the
-    /// refinement's smallest angle is relaxed from 28 towards 15 degrees, so budgets from
+    /// alone needs more triangles than the budget (coarse meshes of many electrodes), point
+    /// electrodes' fans lose rings, then the refinement's smallest angle is relaxed from 28
+    /// towards 15 degrees, so budgets from
     /// 200 triangles up are met within 15 % on the reference sheets (`cargo run --release -p
     /// et-recon --example mesh_budget`).
     ///
@@ -378,9 +407,18 @@ impl Mesh {
         let target = triangles.max(1) as f64;
         let miss = |m: &Mesh| (m.triangles.len() as f64 / target).ln().abs();
         let mut best: Option<Mesh> = None;
-        for angle in [28.0, 25.0, 20.0, 15.0] {
+        let point = spec.electrodes.model == ElectrodeModel::Point;
+        let full = MeshSize::for_count(spec, triangles).fan_rings;
+        // Fewer fan rings first (they are accuracy, not quality), then smaller angles.
+        let tries = (0..=full)
+            .rev()
+            .filter(|&r| point || r == 0)
+            .map(|r| (r, 28.0))
+            .chain([25.0, 20.0, 15.0].map(|a| (0, a)));
+        for (fan_rings, angle) in tries {
             let base = MeshSize {
                 min_angle_deg: angle,
+                fan_rings,
                 ..MeshSize::for_count(spec, triangles)
             };
             // Scale s of both edge lengths; the count falls roughly as s^-2. `fine` and
@@ -465,6 +503,47 @@ impl Mesh {
     }
 }
 
+/// The regular fan around a point electrode at arc fraction `t` of `shape`'s outline: rings
+/// k = 1..=`rings` of radius k `d` (m) about the electrode's node, ring k cut into 3 k equal
+/// arcs whose inner points (the ends lie on the outline, which is sampled at `d` there) are
+/// returned. Points outside the sheet or within 0.3 d of its outline (a curved or cornered
+/// outline) are left out.
+fn fan(shape: &et_sim::shape::Shape, t: f64, d: f64, rings: usize) -> Vec<[f64; 2]> {
+    let c = shape.boundary_point(t);
+    let (a, b) = (
+        shape.boundary_point(t - 1e-7),
+        shape.boundary_point(t + 1e-7),
+    );
+    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+    if rings == 0 || len.is_nan() || len <= 0.0 {
+        return Vec::new();
+    }
+    let tangent = [(b[0] - a[0]) / len, (b[1] - a[1]) / len];
+    // The normal pointing into the sheet.
+    let mut normal = [-tangent[1], tangent[0]];
+    if !shape.contains(
+        [c[0] + 1e-3 * d * normal[0], c[1] + 1e-3 * d * normal[1]],
+        0.0,
+    ) {
+        normal = [-normal[0], -normal[1]];
+    }
+    let mut points = Vec::new();
+    for k in 1..=rings {
+        let rho = k as f64 * d;
+        for j in 1..3 * k {
+            let (sin, cos) = (std::f64::consts::PI * j as f64 / (3 * k) as f64).sin_cos();
+            let p = [
+                c[0] + rho * (cos * tangent[0] + sin * normal[0]),
+                c[1] + rho * (cos * tangent[1] + sin * normal[1]),
+            ];
+            if shape.contains(p, 0.0) && shape.distance_to_outline(p) > 0.3 * d {
+                points.push(p);
+            }
+        }
+    }
+    points
+}
+
 mod import;
 
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -497,7 +576,8 @@ mod tests {
         for l in 0..mesh.electrodes.len() {
             let len = mesh.electrode_length(l);
             assert!(
-                (len - spec.electrodes.width).abs() < 0.01 * spec.electrodes.width,
+                spec.electrodes.model == ElectrodeModel::Point
+                    || (len - spec.electrodes.width).abs() < 0.01 * spec.electrodes.width,
                 "electrode {l}: {len}"
             );
             // The centre node lies on the electrode.
@@ -630,6 +710,83 @@ mod tests {
         for (l, &t) in sheets[4].electrodes.arc_positions().iter().enumerate() {
             let c = sheets[4].shape.boundary_point(t);
             assert!(dist(mesh.nodes[mesh.centre_nodes[l]], c) < 1e-12);
+        }
+    }
+
+    /// Every point electrode sits at the centre of the same regular fan, mirror-symmetric
+    /// about the electrode's normal, of nearly equilateral triangles.
+    #[test]
+    fn point_electrodes_sit_in_regular_symmetric_fans() {
+        let mut spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        spec.electrodes.model = ElectrodeModel::Point;
+        let size = MeshSize::for_count(&spec, 8_000);
+        let mesh = Mesh::of_sheet(&spec, size).unwrap();
+        check(&mesh, &spec, 25.0);
+        let plain = Mesh::of_sheet(
+            &spec,
+            MeshSize {
+                fan_rings: 0,
+                ..size
+            },
+        )
+        .unwrap();
+        let d = size.electrode;
+        let fan_radius = 3.0 * d * (1.0 + 1e-9);
+        let near = |m: &Mesh, c: [f64; 2]| -> Vec<[f64; 2]> {
+            m.nodes
+                .iter()
+                .copied()
+                .filter(|&p| dist(p, c) <= fan_radius)
+                .collect()
+        };
+        for (l, &c) in mesh.centre_nodes.iter().enumerate() {
+            let c = mesh.nodes[c];
+            // On the square every electrode lies on a straight side: the normal is an axis.
+            let on_vertical_side = (c[0].abs() - 0.065).abs() < 1e-9;
+            let mirror = |p: [f64; 2]| {
+                if on_vertical_side {
+                    [p[0], 2.0 * c[1] - p[1]]
+                } else {
+                    [2.0 * c[0] - p[0], p[1]]
+                }
+            };
+            let fan = near(&mesh, c);
+            // Rings 1, 2, 3 (2 + 5 + 8 inner points), the 7 outline nodes and the centre.
+            assert!(
+                fan.len() >= 1 + 6 + 15,
+                "electrode {l}: {} nodes",
+                fan.len()
+            );
+            for &p in &fan {
+                assert!(
+                    fan.iter().any(|&q| dist(q, mirror(p)) < 1e-9 * d),
+                    "electrode {l}: no mirror image of {p:?}"
+                );
+            }
+            // Without the fan, the same size leaves the electrode's neighbourhood irregular.
+            let bare = near(&plain, c);
+            assert!(bare.len() < fan.len(), "electrode {l}");
+        }
+        // Its triangles are near equilateral: no angle below 40 or above 80 degrees (the
+        // refinement alone guarantees 28 and 124).
+        let centres: Vec<[f64; 2]> = mesh.centre_nodes.iter().map(|&c| mesh.nodes[c]).collect();
+        for t in &mesh.triangles {
+            let p = t.map(|i| mesh.nodes[i]);
+            let in_fan = centres
+                .iter()
+                .any(|&c| p.iter().all(|&q| dist(q, c) <= fan_radius));
+            if in_fan {
+                for k in 0..3 {
+                    let (a, b, o) = (p[(k + 1) % 3], p[(k + 2) % 3], p[k]);
+                    let (u, v) = ([a[0] - o[0], a[1] - o[1]], [b[0] - o[0], b[1] - o[1]]);
+                    let angle = (u[0] * v[0] + u[1] * v[1])
+                        .atan2(u[0] * v[1] - u[1] * v[0])
+                        .abs()
+                        .to_degrees();
+                    let angle = 90.0 - angle; // atan2(dot, cross) is 90 degrees off
+                    assert!((39.9..80.1).contains(&angle.abs()), "{p:?}: {angle}");
+                }
+            }
         }
     }
 
