@@ -21,7 +21,6 @@ use et_core::wire::{Command, Event, Uplink};
 use et_sim::scene::{Detail, Run, Scene, SceneError};
 use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
-use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::link::{Counters, Keepalive, Link, LinkChange, LinkError};
@@ -32,10 +31,9 @@ use et_learn::regress::posterior_centre;
 use et_recon::Imager;
 use et_recon::fem::{FemError, TransferJacobian};
 use et_recon::mesh::{Mesh, MeshError};
-use et_recon::onestep::noise_sd;
 use et_recon::{
-    DataSpace, Greit, GreitOptions, PROMINENCE, PixelGrid, ReconError, Region, above_noise,
-    default_threshold, touches,
+    DataSpace, Greit, GreitOptions, PROMINENCE, PixelGrid, PixelOperator, ReconError, Region,
+    above_noise, default_threshold, touches,
 };
 
 mod monitor;

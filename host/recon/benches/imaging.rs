@@ -12,7 +12,7 @@ use std::sync::LazyLock;
 use et_core::protocol::{Protocol, ProtocolKind};
 use et_recon::fem::{Electrodes, Forward, TransferJacobian};
 use et_recon::mesh::Mesh;
-use et_recon::{DataSpace, OneStep, PixelGrid};
+use et_recon::{DataSpace, OneStep, PixelGrid, PixelOperator};
 use et_sim::shape::Shape;
 use et_sim::sheet::SheetSpec;
 use nalgebra::{DMatrix, DVector};
@@ -94,7 +94,7 @@ fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
     });
 }
 
-static LIVE: LazyLock<(OneStep, [DMatrix<f32>; 2], DVector<f64>)> = LazyLock::new(|| {
+static LIVE: LazyLock<(OneStep, [PixelOperator; 2], DVector<f64>)> = LazyLock::new(|| {
     let (_, r, mesh) = set_up(8_000);
     let pix = [32, 64].map(|n| PixelGrid::new(&mesh, n).project(&r));
     let dv = DVector::from_fn(r.frame_len(), |k, _| (k as f64 * 0.37).sin() * 1e-4);
@@ -129,15 +129,36 @@ fn read_the_factors_once(bencher: divan::Bencher) {
     });
 }
 
-/// A live frame onto a 32 x 32 and a 64 x 64 pixel grid (f32, pixels inside x K).
+/// A live frame onto a 32 x 32 and a 64 x 64 pixel grid (f32, the thin factors: pixels
+/// inside x q and q x K).
 #[divan::bench(args = [0, 1])]
 fn live_frame_onto_pixels_32_64(bencher: divan::Bencher, which: usize) {
     let (_, pix, dv) = &*LIVE;
     let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-    let mut out = vec![0.0f32; pix[which].nrows()];
+    let mut out = vec![0.0f32; pix[which].pixels()];
     bencher.bench_local(|| {
-        PixelGrid::apply(&pix[which], divan::black_box(&dv32), &mut out).expect("sizes");
+        pix[which]
+            .apply(divan::black_box(&dv32), &mut out)
+            .expect("sizes");
         out[0]
+    });
+}
+
+/// Reading as many f32 as the 32 x 32 and 64 x 64 frames' factors hold, q (pixels + K), once
+/// (a sum in sixteen lanes): their memory-bandwidth limit.
+#[divan::bench(args = [0, 1])]
+fn read_the_pixel_factors_once(bencher: divan::Bencher, which: usize) {
+    let (_, pix, _) = &*LIVE;
+    let p = &pix[which];
+    let data = vec![1.0f32; p.rank() * (p.pixels() + p.frame_len())];
+    bencher.bench_local(|| {
+        let mut lanes = [0.0f32; 16];
+        for chunk in divan::black_box(&data).chunks_exact(16) {
+            for (l, v) in lanes.iter_mut().zip(chunk) {
+                *l += v;
+            }
+        }
+        lanes.iter().sum::<f32>()
     });
 }
 

@@ -19,7 +19,7 @@ use crate::onestep::{DataSpace, ReconError, noser_inverse};
 ///
 /// With `var_dv` (each channel's noise variance, V^2; empty when unknown) every iterate
 /// carries the noise of each triangle's value, linearised at the step that made it
-/// ([`crate::onestep::noise_sd`] of that step's reconstruction matrix).
+/// ([`OneStep::noise_sd`](crate::OneStep::noise_sd) of that step's reconstruction matrix).
 ///
 /// # Errors
 /// [`ReconError`] for bad parameters or a failed forward solve; [`ReconError::NoDescent`]

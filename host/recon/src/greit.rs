@@ -32,12 +32,11 @@
 //! costs pixels x q.
 
 use faer::Mat;
-use nalgebra::DMatrix;
 
 use crate::fem::TransferJacobian;
 use crate::imager::Imager;
 use crate::onestep::{DataSpace, OneStep, ReconError, map_columns, product};
-use crate::pixels::PixelGrid;
+use crate::pixels::{PixelGrid, PixelOperator};
 
 /// The consensus noise figure (Adler et al. 2009).
 pub const NOISE_FIGURE: f64 = 0.5;
@@ -190,12 +189,12 @@ impl Greit {
         self.recon.frame_len()
     }
 
-    /// R (pixels inside the sheet x K, in [`PixelGrid::project`]'s order) in f32: the
-    /// matrix a live frame is imaged with ([`PixelGrid::apply`]).
+    /// R (pixels inside the sheet x K, in [`PixelGrid::project`]'s order) as the
+    /// [`PixelOperator`] a live frame is imaged with.
     #[must_use]
-    pub fn projection(&self) -> DMatrix<f32> {
+    pub fn projection(&self) -> PixelOperator {
         let all: Vec<usize> = (0..self.inside.len()).collect();
-        self.recon.rows_f32(&all)
+        self.recon.pixel_operator(&all)
     }
 
     /// The image of the frame difference `dv` (K values, V) on the grid, S per square (None

@@ -16,7 +16,7 @@
 //! - [`greit`]: GREIT, the consensus linear reconstruction onto pixels, and its figures of
 //!   merit over a grid of targets (§6.6).
 //! - [`gauss_newton`]: iterative Gauss-Newton (§6.4).
-//! - [`pixels`]: pixel grids over a mesh.
+//! - [`pixels`]: pixel grids over a mesh and the reconstruction onto them in thin factors.
 //! - [`touches`]: regions of interest and touches, split at their saddles and kept above
 //!   their noise (§6.5).
 //! - [`metrics`]: the image metrics SE, PE, RNG and BVC against the truth (§7).
@@ -45,5 +45,5 @@ pub use greit::{Greit, GreitOptions, Regularisation};
 pub use imager::Imager;
 pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
-pub use pixels::PixelGrid;
+pub use pixels::{PixelGrid, PixelOperator};
 pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

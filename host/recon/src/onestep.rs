@@ -28,6 +28,8 @@ use faer::linalg::solvers::{Llt, SolveCore};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
+use crate::pixels::PixelOperator;
+
 /// Why a reconstruction could not be set up or run.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
@@ -675,14 +677,13 @@ impl OneStep {
         m
     }
 
-    /// The rows of R for `triangles` (each a triangle index), in f32: the matrix a pixel grid
-    /// images with.
+    /// The rows of R for `triangles` (each a triangle index; a pixel grid's pixels) as a
+    /// [`PixelOperator`], from R's factors.
     #[must_use]
-    pub fn rows_f32(&self, triangles: &[usize]) -> DMatrix<f32> {
+    pub fn pixel_operator(&self, triangles: &[usize]) -> PixelOperator {
         let r = self.gp.nrows();
         let g = Mat::from_fn(triangles.len(), r, |i, j| self.gp[(j, triangles[i])]);
-        let out = product(g.as_ref(), self.xt.as_ref());
-        DMatrix::from_fn(triangles.len(), self.frame_len(), |i, k| out[(i, k)] as f32)
+        PixelOperator::from_factors(g.as_ref(), self.xt.as_ref())
     }
 
     /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
@@ -765,29 +766,6 @@ pub fn imaging_variance(var_dv: &[f64], dv: &[f64]) -> Vec<f64> {
         .iter()
         .zip(dv)
         .map(|(v, d)| v.max(0.0) + (MODEL_ERROR * d).powi(2))
-        .collect()
-}
-
-/// The noise each row of a reconstruction matrix `r` (rows x K: triangles, or pixels of a
-/// projection) carries when dV has independent noise of variance `var_dv` per channel (V^2,
-/// [`et_core::stats::dv_variance`]): sqrt(sum_k R_tk^2 var_k), in the image's units. Extra
-/// channels on either side are ignored; negative variances count as 0.
-#[must_use]
-pub fn noise_sd<T: nalgebra::Scalar + Copy + Into<f64>>(
-    r: &DMatrix<T>,
-    var_dv: &[f64],
-) -> Vec<f64> {
-    r.row_iter()
-        .map(|row| {
-            row.iter()
-                .zip(var_dv)
-                .map(|(&p, v)| {
-                    let p: f64 = p.into();
-                    p * p * v.max(0.0)
-                })
-                .sum::<f64>()
-                .sqrt()
-        })
         .collect()
 }
 

@@ -125,8 +125,8 @@ struct Projection {
     method: Method,
     alpha: f64,
     s: f64,
-    /// Pixels inside the sheet x K.
-    matrix: DMatrix<f32>,
+    /// Pixels inside the sheet x K, in thin factors.
+    matrix: PixelOperator,
 }
 
 impl Projection {
@@ -418,7 +418,7 @@ impl Processor {
                 // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
                 // filters the noise the data carry, so a touch stands out better here than in
                 // |dV|.
-                let pixel_sd = noise_sd(projection, &var_dv);
+                let pixel_sd = projection.noise_sd(&var_dv)?;
                 slot.insert(Noise {
                     method,
                     alpha,
@@ -443,8 +443,8 @@ impl Processor {
             .collect();
         let bvc = stats::bvc_dv(&dv);
         let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        let mut values = vec![0.0f32; projection.nrows()];
-        PixelGrid::apply(projection, &dv32, &mut values)?;
+        let mut values = vec![0.0f32; projection.pixels()];
+        projection.apply(&dv32, &mut values)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = values
             .iter()

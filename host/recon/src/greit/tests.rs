@@ -8,7 +8,7 @@ use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
 use et_sim::sheet::Sheet;
 use et_sim::touch::Touch;
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 fn scene(name: &str) -> Scene {
@@ -108,7 +108,7 @@ fn greit_equals_its_dense_formula() {
         )
         .unwrap();
         let r = dense_r(&imager, &jac, g.radius, g.lambda);
-        let p = g.projection();
+        let p = g.projection().dense();
         let top = r.amax();
         let worst = r
             .iter()

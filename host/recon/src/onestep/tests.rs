@@ -717,3 +717,60 @@ fn the_factored_data_space_equals_the_dense_one() {
         }
     }
 }
+
+/// The pixel operator's thin factors multiply out to R's pixel rows, keep exactly P's
+/// numerical rank (an SVD of the dense rows: K / 2 independent values for adjacent by
+/// reciprocity, fewer than r), image a frame as the dense product does, carry each pixel's
+/// noise as its definition, and refuse wrong lengths.
+#[test]
+fn the_pixel_operator_equals_the_dense_pixel_rows_at_their_rank() {
+    let sc = scene("disc-ref-x050.toml");
+    for kind in [ProtocolKind::Adjacent, ProtocolKind::Opposite] {
+        let protocol = Protocol::new(kind, 16).unwrap();
+        let Setup { grid, recon } = setup(&sc, &protocol, 32e-6);
+        let op = grid.project(&recon);
+        let r = recon.matrix();
+        let inside: Vec<usize> = grid.triangle.iter().filter_map(|t| *t).collect();
+        let p = DMatrix::from_fn(inside.len(), r.ncols(), |i, k| r[(inside[i], k)]);
+        let top = p.amax();
+        let dense = op.dense();
+        let worst = p
+            .iter()
+            .zip(dense.iter())
+            .map(|(a, b)| (a - f64::from(*b)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-5 * top, "{kind:?}: {worst:e} of {top:e}");
+        let sv = p.singular_values();
+        let rank = sv.iter().filter(|&&s| s > 1e-7 * sv.max()).count();
+        println!("{kind:?}: rank {} of K = {}, r = 120", op.rank(), p.ncols());
+        assert_eq!(op.rank(), rank, "{kind:?}");
+        assert!(op.rank() <= 120 && op.rank() < p.ncols(), "{kind:?}");
+        // A frame, and the noise of each pixel.
+        let k = p.ncols();
+        let dv: Vec<f64> = (0..k)
+            .map(|i| ((i * 37 % 11) as f64 - 5.0) * 1e-4)
+            .collect();
+        let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+        let mut out = vec![0.0f32; op.pixels()];
+        op.apply(&dv32, &mut out).unwrap();
+        let want = &p * DVector::from_column_slice(&dv);
+        for (a, b) in want.iter().zip(&out) {
+            assert!((a - f64::from(*b)).abs() < 1e-5 * want.amax(), "{kind:?}");
+        }
+        let var: Vec<f64> = (0..k).map(|i| 1e-8 * (1.0 + (i % 5) as f64)).collect();
+        let sd = op.noise_sd(&var).unwrap();
+        for (row, s) in sd.iter().enumerate() {
+            let want: f64 = (0..k)
+                .map(|c| p[(row, c)].powi(2) * var[c])
+                .sum::<f64>()
+                .sqrt();
+            assert!(
+                (s - want).abs() <= 1e-4 * want,
+                "{kind:?} pixel {row}: {s} vs {want}"
+            );
+        }
+        assert!(op.apply(&dv32[1..], &mut out).is_err());
+        assert!(op.apply(&dv32, &mut out[1..]).is_err());
+        assert!(op.noise_sd(&var[1..]).is_err());
+    }
+}
