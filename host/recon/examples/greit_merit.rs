@@ -146,6 +146,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let gcv = space.choose_alpha(&dv, &var, &et_recon::default_alphas())?;
         let gn = space.one_step(gcv)?;
         let greit = Greit::new(&imager, &jac, &GreitOptions::default())?;
+        let adaptive = Greit::new(
+            &imager,
+            &jac,
+            &GreitOptions {
+                radius: None,
+                regularisation: et_recon::Regularisation::Alpha(Greit::choose_alpha(
+                    &imager, &jac, &dv, &var,
+                )?),
+            },
+        )?;
         let methods = [
             (
                 "one-step GN",
@@ -158,6 +168,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 greit.alpha,
                 greit.image(&dv)?,
                 greit.noise_sd(&var)?,
+            ),
+            (
+                "GREIT, alpha by GCV",
+                adaptive.alpha,
+                adaptive.image(&dv)?,
+                adaptive.noise_sd(&var)?,
             ),
         ];
         for (method, alpha, image, sd) in methods {

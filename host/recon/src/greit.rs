@@ -183,6 +183,39 @@ impl Greit {
         })
     }
 
+    /// alpha for GREIT chosen by the frame rather than by the noise figure: generalised
+    /// cross-validation on GREIT's own data space (the area prior), never fitting `dv` closer
+    /// than its noise `var_dv` ([`DataSpace::choose_alpha`] over
+    /// [`crate::default_alphas`]). Pass it as [`Regularisation::Alpha`]. The noise figure
+    /// holds one lambda for every frame; a touch where the protocol sees little (the centre,
+    /// for adjacent drive) then may not stand above its noise, where a frame-chosen lambda
+    /// smooths more and finds it (docs/measurements.md, "GREIT").
+    ///
+    /// # Errors
+    /// As [`DataSpace::choose_alpha`]; [`ReconError::Parameter`] for a Jacobian of another
+    /// mesh.
+    pub fn choose_alpha(
+        imager: &Imager,
+        jac: &TransferJacobian,
+        dv: &[f64],
+        var_dv: &[f64],
+    ) -> Result<f64, ReconError> {
+        let mesh = imager.forward.mesh();
+        let t_n = mesh.triangles.len();
+        if jac.g.ncols() != t_n {
+            return Err(ReconError::Parameter(format!(
+                "a Jacobian of {} triangles for a mesh of {t_n}",
+                jac.g.ncols()
+            )));
+        }
+        let area: Vec<f64> = (0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect();
+        DataSpace::factored_with_prior(jac, &area)?.choose_alpha(
+            dv,
+            var_dv,
+            &crate::default_alphas(),
+        )
+    }
+
     /// K, the frame length.
     #[must_use]
     pub fn frame_len(&self) -> usize {

@@ -62,10 +62,12 @@ pub(crate) struct ReconstructArgs {
     /// over the sheet, lambda set by the noise figure). docs/method.md §6.
     #[arg(long, value_enum, default_value_t = Method::Gn)]
     method: Method,
-    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or "auto":
-    /// for gn chosen by generalised cross-validation on the frame, never fitting it closer
-    /// than its noise (the discrepancy principle as a floor); for greit set by
-    /// --noise-figure.
+    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), "auto" or
+    /// "gcv". For gn both choose it by generalised cross-validation on the frame, never
+    /// fitting it closer than its noise (the discrepancy principle as a floor); for greit
+    /// "auto" sets it by --noise-figure (one lambda for every frame, the consensus rule) and
+    /// "gcv" by cross-validation on this frame (finds touches where the protocol sees little,
+    /// as the centre for adjacent drive; places others less closely).
     #[arg(long, default_value = "auto")]
     alpha: String,
     /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
@@ -327,10 +329,10 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let var = et_recon::onestep::imaging_variance(&var, &dv);
     stage("frames");
     let fixed_alpha = match args.alpha.as_str() {
-        "auto" => None,
+        "auto" | "gcv" => None,
         v => Some(
             v.parse::<f64>()
-                .with_context(|| format!("--alpha '{v}': a number or auto"))?,
+                .with_context(|| format!("--alpha '{v}': a number, auto or gcv"))?,
         ),
     };
     let mut noise_figure = None;
@@ -346,6 +348,9 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             radius: args.radius_mm.map(|r| r * 1e-3),
             regularisation: match fixed_alpha {
                 Some(a) => et_recon::Regularisation::Alpha(a),
+                None if args.alpha == "gcv" => et_recon::Regularisation::Alpha(
+                    et_recon::Greit::choose_alpha(&imager, &jac, &dv, &var)?,
+                ),
                 None => et_recon::Regularisation::NoiseFigure(args.noise_figure),
             },
         };
