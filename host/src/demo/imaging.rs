@@ -31,7 +31,10 @@ struct ImageRow {
     touch_offsets_mm: Vec<f64>,
     /// For each true touch: whether that distance is within its radius.
     found_within_radius: Vec<bool>,
+    /// docs/method.md §7's metrics of the image against its first touch.
     metrics: et_recon::metrics::Metrics,
+    /// Each true touch matched to the nearest counted touch, with its own PE and SE.
+    touch_matches: Vec<et_recon::TouchMatch>,
     /// The picture, relative to the report.
     png: String,
 }
@@ -140,16 +143,17 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 ),
                 &image,
             )?;
-            // Each touch: the nearest significant region's centroid, and whether it lies
-            // within the touch's radius.
-            let per_touch: Vec<(f64, bool)> = frames
-                .truth
+            // Each touch: the nearest counted touch (its own PE and SE), and whether its
+            // centroid lies within the touch's radius.
+            let touch_matches = et_recon::match_touches(&imager.grid, &counted, &frames.truth);
+            let per_touch: Vec<(f64, bool)> = touch_matches
                 .iter()
-                .map(|&(c, r)| {
-                    let off = counted
-                        .iter()
-                        .map(|g| (g.centroid[0] - c[0]).hypot(g.centroid[1] - c[1]))
-                        .fold(f64::INFINITY, f64::min);
+                .zip(&frames.truth)
+                .map(|(m, &(c, r))| {
+                    let off = m.found.map_or(f64::INFINITY, |i| {
+                        let g = counted[i].centroid;
+                        (g[0] - c[0]).hypot(g[1] - c[1])
+                    });
                     (off, off < r)
                 })
                 .collect();
@@ -190,6 +194,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 touch_offsets_mm: per_touch.iter().map(|t| t.0 * 1e3).collect(),
                 found_within_radius: per_touch.iter().map(|t| t.1).collect(),
                 metrics: m,
+                touch_matches,
                 png,
             });
             bar.inc(1);
@@ -261,16 +266,29 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             })
             .collect();
         let m = &r.metrics;
+        // Several touches: each one's PE and SE against the nearest found touch.
+        let each = |f: fn(&et_recon::TouchMatch) -> f64, single: f64| {
+            if r.touch_matches.len() > 1 {
+                let v: Vec<String> = r
+                    .touch_matches
+                    .iter()
+                    .map(|t| format!("{:.3}", f(t)))
+                    .collect();
+                v.join(", ")
+            } else {
+                format!("{single:.3}")
+            }
+        };
         let _ = writeln!(
             md,
-            "| {} | {} | {:.3} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2e} V |",
+            "| {} | {} | {:.3} | {} | {} | {} | {} | {:.3} | {:.2e} V |",
             r.scene,
             r.protocol,
             r.alpha,
             r.regions,
             offsets.join(", "),
-            m.pe,
-            m.se,
+            each(|t| t.pe, m.pe),
+            each(|t| t.se, m.se),
             m.rng,
             m.bvc,
         );
@@ -279,11 +297,13 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         md,
         "\nHow to read the table: *alpha* is the regularisation weight (larger: smoother, \
          less noisy images), picked by generalised cross-validation (GCV) on each frame. The \
-         metrics are docs/method.md §7's, of the first touch: *PE*, position error, the \
+         metrics are docs/method.md §7's: *PE*, position error, the \
          distance from the true centre to the centroid of the region of interest (ROI: the \
          pixels above f times the image's maximum) over the sheet's largest extent; *SE*, \
          size error, the difference between the ROI's area and the touch's over the sheet's \
-         area (SE counts every region above the threshold); *RNG*, ringing, the area of \
+         area (SE counts every region above the threshold); with two touches, PE and SE are \
+         given for each, against the nearest counted touch's centroid and area \
+         (`recon::match_touches`); *RNG*, ringing, the area of \
          opposite-sign change over the area outside the ROI (all three: 0 is best); *BVC*, \
          the boundary voltage change |V_m - V_0| the touch makes (larger: easier to see).\n\n\
          **Dynamic protocol selection (docs/method.md §8)** on the AD image of each scene (xi = 0.5):\n\n\

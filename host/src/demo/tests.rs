@@ -94,6 +94,16 @@ fn the_quick_demo_writes_a_complete_report() {
         .find(|im| im["scene"] == "disc-ref-x075" && im["protocol"] == "adjacent")
         .unwrap();
     assert_eq!(near["found_within_radius"][0], true, "{near}");
+    // The two touches, imaged with PP-PP: each true touch matched to its own found touch,
+    // with its own PE.
+    let two = images
+        .iter()
+        .find(|im| im["scene"] == "disc-ref-two" && im["protocol"] == "pp-pp")
+        .unwrap();
+    let m = two["touch_matches"].as_array().unwrap();
+    assert_eq!(m.len(), 2, "{two}");
+    assert!(m.iter().all(|t| t["pe"].as_f64().unwrap() < 0.1), "{two}");
+    assert_ne!(m[0]["found"], m[1]["found"], "{two}");
 
     // Every single touch is found within its radius by the protocol docs/method.md §8 picks for it
     // from the adjacent image (adjacent near the edge, pseudo-polar towards the centre).
