@@ -381,9 +381,9 @@ impl Mesh {
     /// A mesh of about `triangles` triangles: within 10 % where a search over the sizes
     /// reaches it, else the closest found. The interior edge and the electrodes' edge (a
     /// quarter of it) are scaled together, bracketing the count; when the electrodes' grading
-    /// alone needs more triangles than the budget (coarse meshes of many electrodes), point
-    /// electrodes' fans lose rings, then the refinement's smallest angle is relaxed from 28
-    /// towards 15 degrees, so budgets from
+    /// alone needs more triangles than the budget (coarse meshes of many electrodes), the
+    /// refinement's smallest angle is relaxed from 28 to 20 degrees, then point electrodes'
+    /// fans lose rings, then the angle goes down to 15 degrees, so budgets from
     /// 200 triangles up are met within 15 % on the reference sheets (`cargo run --release -p
     /// et-recon --example mesh_budget`).
     ///
@@ -408,13 +408,20 @@ impl Mesh {
         let miss = |m: &Mesh| (m.triangles.len() as f64 / target).ln().abs();
         let mut best: Option<Mesh> = None;
         let point = spec.electrodes.model == ElectrodeModel::Point;
-        let full = MeshSize::for_count(spec, triangles).fan_rings;
-        // Fewer fan rings first (they are accuracy, not quality), then smaller angles.
-        let tries = (0..=full)
+        // A fan of k rings holds about 3 k^2 triangles: at most 40 % of the budget.
+        let electrodes = spec.electrodes.arc_positions().len().max(1) as f64;
+        let affordable = (0.4 * target / (3.0 * electrodes)).sqrt().floor() as usize;
+        let full = MeshSize::for_count(spec, triangles)
+            .fan_rings
+            .min(affordable);
+        // Smaller angles down to 20 degrees before fewer fan rings (at a small budget the
+        // rings buy more accuracy than the angle: `cargo bench -p et-recon --bench peer`),
+        // then 15 degrees without rings.
+        let rings = if point { full } else { 0 };
+        let tries = (0..=rings)
             .rev()
-            .filter(|&r| point || r == 0)
-            .map(|r| (r, 28.0))
-            .chain([25.0, 20.0, 15.0].map(|a| (0, a)));
+            .flat_map(|r| [28.0, 25.0, 20.0].map(|a| (r, a)))
+            .chain([(0, 15.0)]);
         for (fan_rings, angle) in tries {
             let base = MeshSize {
                 min_angle_deg: angle,
