@@ -15,9 +15,11 @@
 //! Python: `numpy.loadtxt(path, delimiter=",", comments="#", skiprows=...)` or the `csv`
 //! module skipping `#` lines; MATLAB: `readmatrix(path, "CommentStyle", "#")`.
 //!
-//! [`import_csv`] brings data from other sensors: any channel count, a header row, the
-//! columns named `label` (class) or `x` and `y` (position) are targets and all others are
-//! features; targets may also come from a second file with the same rows.
+//! [`import_csv`] brings data from other sensors: any channel count, a header row or none,
+//! a UTF-8 byte-order mark, CRLF line ends; the columns named `label` (class) or `x` and `y`
+//! (position) are targets and all others are features; targets may also come from a second
+//! file with the same rows (without a header: one column is a label, two or more are x, y and
+//! what follows, e.g. z or force, unused).
 
 // Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -328,6 +330,8 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
 
 struct Table {
     names: Vec<String>,
+    /// Whether the names came from a header row (else they are the column numbers, 1-based).
+    header: bool,
     /// (1-based line, values): every row has a value for every name (`parse_table` checks).
     rows: Vec<(usize, Vec<f64>)>,
 }
@@ -375,15 +379,23 @@ impl Table {
     }
 }
 
-/// A header row then numeric rows; blank and `#` lines skipped. Every value finite.
+/// An optional header row (taken as one when any of its cells is not a number), then numeric
+/// rows; blank and `#` lines skipped. Every value finite.
 fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetError> {
     let mut it = lines
         .iter()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let (hl, header) = it
-        .next()
-        .ok_or_else(|| content(path, 0, None, "no header row"))?;
-    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .peekable();
+    let &&(hl, first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
+    let header = first.split(',').any(|c| c.trim().parse::<f64>().is_err());
+    let names: Vec<String> = if header {
+        it.next();
+        first.split(',').map(|s| s.trim().to_string()).collect()
+    } else {
+        (1..=first.split(',').count())
+            .map(|c| c.to_string())
+            .collect()
+    };
     if names.iter().any(String::is_empty) {
         return Err(content(
             path,
@@ -431,7 +443,21 @@ fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetErr
     if rows.is_empty() {
         return Err(content(path, 0, None, "no data rows"));
     }
-    Ok(Table { names, rows })
+    Ok(Table {
+        names,
+        header,
+        rows,
+    })
+}
+
+/// The lines of `text`, without a leading UTF-8 byte-order mark (CRLF ends are handled by
+/// `lines`).
+fn text_lines(text: &str) -> Vec<(usize, &str)> {
+    text.strip_prefix('\u{feff}')
+        .unwrap_or(text)
+        .lines()
+        .enumerate()
+        .collect()
 }
 
 /// Data imported from other sensors.
@@ -445,15 +471,21 @@ pub struct Imported {
     pub labels: Option<Vec<u16>>,
     /// Positions, if `x` and `y` columns were given (the files' units).
     pub positions: Option<Vec<[f64; 2]>>,
+    /// Which columns were taken as what, in words (for the user to check).
+    pub description: String,
 }
 
-/// Imports CSV with a header row: columns named `label`, `x`, `y` are targets, all others
-/// features (any count). Targets may instead come from `targets` (a second CSV with the same
-/// number of rows).
+/// Imports CSV from any sensor. A header row is optional (a first row with a cell that is not
+/// a number is one); a UTF-8 byte-order mark, CRLF line ends and blank lines are allowed.
+/// Columns named `label`, `x`, `y` (any case) are targets, all others features (any count).
+/// Targets may instead come from `targets`, a second CSV with the same number of rows: named
+/// as above, or without a header one column (a label) or two and more (x, y, and what
+/// follows unused).
 ///
 /// # Errors
 /// [`DatasetError`] naming the file, the line and the column: non-numbers, NaN or infinite
-/// values, rows of the wrong length, mismatched row counts, no features, no target.
+/// values, rows of the wrong length, mismatched row counts, no features, no target (a file
+/// without a header and no targets file has none).
 pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, DatasetError> {
     let read = |p: &Path| {
         std::fs::read_to_string(p).map_err(|source| DatasetError::Io {
@@ -462,13 +494,11 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
         })
     };
     let text = read(features)?;
-    let lines: Vec<(usize, &str)> = text.lines().enumerate().collect();
-    let main = parse_table(features, &lines)?;
+    let main = parse_table(features, &text_lines(&text))?;
     let target_text = targets.map(read).transpose()?;
     let side = match (targets, &target_text) {
         (Some(p), Some(t)) => {
-            let lines: Vec<(usize, &str)> = t.lines().enumerate().collect();
-            let table = parse_table(p, &lines)?;
+            let table = parse_table(p, &text_lines(t))?;
             if table.rows.len() != main.rows.len() {
                 return Err(content(
                     p,
@@ -486,18 +516,30 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
         }
         _ => None,
     };
-    let is_target = |n: &str| ["label", "x", "y"].contains(&n);
+    let is_target = |n: &str| ["label", "x", "y"].contains(&n.to_ascii_lowercase().as_str());
+    // Without a header every column of the features file is a feature.
     let feature_cols: Vec<usize> = (0..main.names.len())
-        .filter(|&c| main.names.get(c).is_some_and(|n| !is_target(n)))
+        .filter(|&c| !main.header || main.names.get(c).is_some_and(|n| !is_target(n)))
         .collect();
     if feature_cols.is_empty() {
         return Err(content(features, 0, None, "no feature columns"));
     }
     let x = main.matrix(features, &feature_cols)?;
     let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
-    let find = |name: &str| ttable.names.iter().position(|c| c == name);
-    let labels = find("label").map(|c| ttable.whole(tpath, c)).transpose()?;
-    let positions = match (find("x"), find("y")) {
+    let named = |name: &str| {
+        ttable
+            .names
+            .iter()
+            .position(|c| c.eq_ignore_ascii_case(name))
+    };
+    // A targets file without a header: one column is a label, more are x, y, ...
+    let (label_col, x_col, y_col) = match (side.is_some(), ttable.header, ttable.names.len()) {
+        (true, false, 1) => (Some(0), None, None),
+        (true, false, _) => (None, Some(0), Some(1)),
+        _ => (named("label"), named("x"), named("y")),
+    };
+    let labels = label_col.map(|c| ttable.whole(tpath, c)).transpose()?;
+    let positions = match (x_col, y_col) {
         (Some(cx), Some(cy)) => Some(
             ttable
                 .column(tpath, cx)?
@@ -521,10 +563,59 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
             tpath,
             0,
             None,
-            "no target: add a 'label' column or 'x' and 'y' columns",
+            if ttable.header {
+                "no target: add a 'label' column or 'x' and 'y' columns"
+            } else {
+                "no target: without a header row every column is a feature; name the targets \
+                 (label, or x and y) in a header row, or give them in a second file"
+            },
         ));
     }
+    let file = |p: &Path| {
+        p.file_name()
+            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+    };
+    let header_note = |t: &Table| {
+        if t.header {
+            "header row"
+        } else {
+            "no header row"
+        }
+    };
+    let mut description = format!(
+        "{}: {} rows, {} feature columns ({}), {}",
+        file(features),
+        main.rows.len(),
+        feature_cols.len(),
+        match (feature_cols.first(), feature_cols.last()) {
+            (Some(&a), Some(&b)) if !main.header => format!("columns {} to {}", a + 1, b + 1),
+            _ =>
+                feature_cols
+                    .iter()
+                    .filter_map(|&c| main.names.get(c).cloned())
+                    .take(3)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+                    + if feature_cols.len() > 3 { ", ..." } else { "" },
+        },
+        header_note(&main)
+    );
+    let taken: Vec<String> = [("label", label_col), ("x", x_col), ("y", y_col)]
+        .iter()
+        .filter_map(|&(what, c)| c.map(|c| format!("{what} from column {}", c + 1)))
+        .collect();
+    let used = taken.len();
+    description += &format!(
+        "; targets in {} ({}): {}",
+        file(tpath),
+        header_note(ttable),
+        taken.join(", ")
+    );
+    if side.is_some() && ttable.names.len() > used {
+        description += &format!(" ({} more columns not used)", ttable.names.len() - used);
+    }
     Ok(Imported {
+        description,
         x,
         feature_names: feature_cols
             .iter()

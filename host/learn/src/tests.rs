@@ -568,6 +568,66 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         assert!(missing.contains("nope.csv"), "{missing}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
+
+    /// What real files carry: a byte-order mark, no header row, CRLF line ends, `1.5E-05`,
+    /// blank trailing lines, and targets as x, y, z in a second headerless file.
+    #[test]
+    fn csv_import_of_foreign_files() {
+        let dir = tmp("foreign");
+        let feats = dir.join("f.csv");
+        let targets = dir.join("t.csv");
+        std::fs::write(&feats, "\u{feff}1.5E-05,2,3\r\n4,5,6\r\n7,8,9\r\n\r\n\r\n").unwrap();
+        std::fs::write(
+            &targets,
+            "\u{feff}0.01,0.02,0.003\r\n0.04,0.05,0.006\r\n0.07,0.08,0.009\r\n",
+        )
+        .unwrap();
+        let imp = import_csv(&feats, Some(&targets)).unwrap();
+        // The first row is data, not a header.
+        assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
+        assert_eq!(imp.x[(0, 0)], 1.5e-5);
+        assert_eq!(
+            imp.positions,
+            Some(vec![[0.01, 0.02], [0.04, 0.05], [0.07, 0.08]])
+        );
+        assert!(imp.labels.is_none());
+        let d = &imp.description;
+        assert!(
+            d.contains("f.csv: 3 rows, 3 feature columns (columns 1 to 3), no header row")
+                && d.contains("x from column 1, y from column 2 (1 more columns not used)"),
+            "{d}"
+        );
+        // One headerless column of targets is a label.
+        std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
+        assert_eq!(
+            import_csv(&feats, Some(&targets)).unwrap().labels,
+            Some(vec![2, 0, 1])
+        );
+        // A byte-order mark before a header's `label` leaves it the label (it was read as a
+        // feature named "\u{feff}label", the target leaking into the inputs); names in any
+        // case.
+        std::fs::write(&feats, "\u{feff}label,a,b\n0,1,2\n1,3,4\n").unwrap();
+        let imp = import_csv(&feats, None).unwrap();
+        assert_eq!(imp.labels, Some(vec![0, 1]));
+        assert_eq!(imp.feature_names, ["a", "b"]);
+        std::fs::write(&feats, "a,X,Y\n1,2,3\n4,5,6\n").unwrap();
+        let imp = import_csv(&feats, None).unwrap();
+        assert_eq!(imp.positions, Some(vec![[2.0, 3.0], [5.0, 6.0]]));
+        assert_eq!(imp.feature_names, ["a"]);
+        // Without a header and without a targets file there is no target: say what to do.
+        std::fs::write(&feats, "1,2\n3,4\n").unwrap();
+        let e = import_csv(&feats, None).unwrap_err().to_string();
+        assert!(e.contains("header row") && e.contains("second file"), "{e}");
+        // A headerless file's errors name the column by number.
+        std::fs::write(&feats, "1,2\n3,inf\n").unwrap();
+        std::fs::write(&targets, "0\n1\n").unwrap();
+        let e = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        assert!(
+            e.contains("f.csv:2, column 2") && e.contains("finite"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
 
 #[test]
