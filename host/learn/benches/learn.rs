@@ -11,8 +11,10 @@ use et_learn::collect::{Dataset, Plan, collect, grid, training_config};
 use et_learn::cv::folds;
 use et_learn::fastcv::cross_validate_fast;
 use et_learn::fit::{FitOptions, Fitted};
+use et_learn::regress::{KernelRidge, Target3};
 use et_sim::frontend::FrontendSpec;
 use et_sim::sheet::SheetSpec;
+use nalgebra::DMatrix;
 
 fn main() {
     divan::main();
@@ -53,4 +55,34 @@ fn qda_fit_and_10_fold_cv(bencher: divan::Bencher) {
         let cv = cross_validate_fast(&d.x, &d.y, 49, &FitOptions::default(), &fold).expect("cv");
         (model.features(), cv.accuracy())
     });
+}
+
+/// 2 000 training rows of 192 features (another sensor's table: 16 electrodes, opposite drive
+/// in both polarities, 12 measurements each) and 500 rows to predict; a smooth non-linear map
+/// to (x, y, pressure). Random data: the times do not depend on the values.
+static TABLE: LazyLock<(DMatrix<f64>, Vec<Target3>, DMatrix<f64>)> = LazyLock::new(|| {
+    let mut rng = et_core::rng::Rng::new(7);
+    let mut rows = |n: usize| DMatrix::from_fn(n, 192, |_, _| rng.normal());
+    let (x, test) = (rows(2_000), rows(500));
+    let t = x
+        .row_iter()
+        .map(|r| [r[0].sin() * 40.0, (r[1] * r[2]).tanh() * 40.0, r[3].abs()])
+        .collect();
+    (x, t, test)
+});
+
+/// Kernel ridge (Gaussian kernel) fitted on all 2 000 rows: the kernel matrix and its
+/// Cholesky factor.
+#[divan::bench(sample_count = 5)]
+fn kernel_ridge_fit_2000x192(bencher: divan::Bencher) {
+    let (x, t, _) = &*TABLE;
+    bencher.bench(|| KernelRidge::fit(x, t, 2_000, 0.5, 1e-2).expect("fit"));
+}
+
+/// Kernel ridge predicting 500 rows at once.
+#[divan::bench(sample_count = 10)]
+fn kernel_ridge_predict_500(bencher: divan::Bencher) {
+    let (x, t, test) = &*TABLE;
+    let krr = KernelRidge::fit(x, t, 2_000, 0.5, 1e-2).expect("fit");
+    bencher.bench(|| krr.predict_many(test));
 }
