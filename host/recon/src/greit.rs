@@ -38,6 +38,20 @@ use crate::imager::Imager;
 use crate::onestep::{DataSpace, OneStep, ReconError, map_columns, product};
 use crate::pixels::{PixelGrid, PixelOperator};
 
+/// The area of each of `imager`'s triangles, m^2 (GREIT's prior S_x), once `jac` is checked
+/// to be of the same mesh.
+fn triangle_areas(imager: &Imager, jac: &TransferJacobian) -> Result<Vec<f64>, ReconError> {
+    let mesh = imager.forward.mesh();
+    let t_n = mesh.triangles.len();
+    if jac.g.ncols() != t_n {
+        return Err(ReconError::Parameter(format!(
+            "a Jacobian of {} triangles for a mesh of {t_n}",
+            jac.g.ncols()
+        )));
+    }
+    Ok((0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect())
+}
+
 /// The consensus noise figure (Adler et al. 2009).
 pub const NOISE_FIGURE: f64 = 0.5;
 
@@ -107,14 +121,7 @@ impl Greit {
         jac: &TransferJacobian,
         options: &GreitOptions,
     ) -> Result<Self, ReconError> {
-        let mesh = imager.forward.mesh();
-        let t_n = mesh.triangles.len();
-        if jac.g.ncols() != t_n {
-            return Err(ReconError::Parameter(format!(
-                "a Jacobian of {} triangles for a mesh of {t_n}",
-                jac.g.ncols()
-            )));
-        }
+        let area = triangle_areas(imager, jac)?;
         let grid = &imager.grid;
         let extent = grid.size * grid.width.max(grid.height) as f64;
         let radius = options.radius.unwrap_or(RADIUS_SHARE * extent);
@@ -135,7 +142,6 @@ impl Greit {
             }
             _ => {}
         }
-        let area: Vec<f64> = (0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect();
         let space = DataSpace::factored_with_prior(jac, &area)?;
         let (inside, d) = desired(grid, imager, radius);
         // Z^T = (D Sigma_x G^T)^T, r x pixels: R = Z M^T (A + lambda I)^-1.
@@ -200,16 +206,7 @@ impl Greit {
         dv: &[f64],
         var_dv: &[f64],
     ) -> Result<f64, ReconError> {
-        let mesh = imager.forward.mesh();
-        let t_n = mesh.triangles.len();
-        if jac.g.ncols() != t_n {
-            return Err(ReconError::Parameter(format!(
-                "a Jacobian of {} triangles for a mesh of {t_n}",
-                jac.g.ncols()
-            )));
-        }
-        let area: Vec<f64> = (0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect();
-        DataSpace::factored_with_prior(jac, &area)?.choose_alpha(
+        DataSpace::factored_with_prior(jac, &triangle_areas(imager, jac)?)?.choose_alpha(
             dv,
             var_dv,
             &crate::default_alphas(),
