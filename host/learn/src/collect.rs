@@ -219,6 +219,8 @@ pub enum CollectError {
         /// Its label.
         label: u16,
     },
+    /// A built-in scene could not be read, or its data referenced (the reason).
+    Scene(String),
 }
 
 impl std::fmt::Display for CollectError {
@@ -229,6 +231,7 @@ impl std::fmt::Display for CollectError {
             CollectError::Scan(e) => write!(f, "scan: {e}"),
             CollectError::Stats(e) => write!(f, "untouched frames: {e}"),
             CollectError::EmptyPress { label } => write!(f, "press {label} has no touches"),
+            CollectError::Scene(m) => write!(f, "scene: {m}"),
         }
     }
 }
@@ -356,13 +359,36 @@ pub fn collect_presses(
     config: ScanConfig,
     centres: &[[f64; 2]],
     plan: &Plan,
+    visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
+) -> Result<Dataset, CollectError> {
+    collect_presses_with(
+        spec,
+        frontend,
+        config,
+        centres,
+        plan,
+        Halving::Reciprocity,
+        visit_presses,
+    )
+}
+
+/// [`collect_presses`] keeping the frame values `halving` names (all of them with
+/// [`Halving::None`]: 192 for 16 electrodes opposite, as a board that reads both polarities
+/// records them).
+///
+/// # Errors
+/// [`CollectError`] if the sheet cannot be built or a scan fails.
+pub fn collect_presses_with(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    halving: Halving,
     mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
 ) -> Result<Dataset, CollectError> {
     let protocol = config.validate()?;
-    let feature_index: Vec<u16> = protocol
-        .features(Halving::Reciprocity)
-        .map(|k| k as u16)
-        .collect();
+    let feature_index: Vec<u16> = protocol.features(halving).map(|k| k as u16).collect();
     let mut rng = Rng::new(plan.seed);
     let k = protocol.frame_len();
     let s_sub = plan.subsections;

@@ -16,10 +16,11 @@
 //! module skipping `#` lines; MATLAB: `readmatrix(path, "CommentStyle", "#")`.
 //!
 //! [`import_csv`] brings data from other sensors: any channel count, a header row or none,
-//! a UTF-8 byte-order mark, CRLF line ends; the columns named `label` (class) or `x` and `y`
-//! (position) are targets and all others are features; targets may also come from a second
-//! file with the same rows (without a header: one column is a label, two or more are x, y and
-//! what follows, e.g. z or force, unused).
+//! a UTF-8 byte-order mark, CRLF line ends; the columns named `label` (class, any text) or `x`
+//! and `y` (position, and `z`, `force` or `pressure` as a third target) are targets and all
+//! others are features; targets may also come from a second file with the same rows (without
+//! a header: one column is a label, two or more are x, y and a third target, e.g. z or force;
+//! further columns unused).
 
 // Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -257,7 +258,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     }
     let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
     let rest: Vec<(usize, &str)> = lines.collect();
-    let table = parse_table(path, &rest)?;
+    let table = parse_table(path, &rest, &|_, _| false)?;
     let col = |name: &str| {
         table
             .names
@@ -332,8 +333,11 @@ struct Table {
     names: Vec<String>,
     /// Whether the names came from a header row (else they are the column numbers, 1-based).
     header: bool,
-    /// (1-based line, values): every row has a value for every name (`parse_table` checks).
+    /// (1-based line, values): every row has a value for every name (`parse_table` checks);
+    /// NaN in a text column.
     rows: Vec<(usize, Vec<f64>)>,
+    /// Per column: its cells as written, for the columns that may hold text (class labels).
+    text: Vec<Option<Vec<String>>>,
 }
 
 impl Table {
@@ -342,11 +346,29 @@ impl Table {
         self.rows
             .iter()
             .map(|(line, v)| {
-                v.get(c).copied().ok_or_else(|| {
-                    content(path, *line, self.names.get(c).cloned(), "missing value")
+                v.get(c).copied().filter(|v| v.is_finite()).ok_or_else(|| {
+                    content(
+                        path,
+                        *line,
+                        self.names.get(c).cloned(),
+                        "missing or not a finite number",
+                    )
                 })
             })
             .collect()
+    }
+
+    /// Column `c` as written (labels: any text, numbers as their text).
+    fn text_column(&self, path: &Path, c: usize) -> Result<Vec<String>, DatasetError> {
+        match self.text.get(c) {
+            Some(Some(t)) => Ok(t.clone()),
+            _ => Err(content(
+                path,
+                0,
+                self.names.get(c).cloned(),
+                "not kept as text",
+            )),
+        }
     }
 
     /// Columns `cols`, as an n x cols.len() matrix.
@@ -379,15 +401,30 @@ impl Table {
     }
 }
 
-/// An optional header row (taken as one when any of its cells is not a number), then numeric
-/// rows; blank and `#` lines skipped. Every value finite.
-fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetError> {
+/// Whether a cell reads as a number.
+fn is_number(cell: &str) -> bool {
+    cell.trim().parse::<f64>().is_ok()
+}
+
+/// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
+/// The first row is a header when it has a cell that is not a number, unless the second row
+/// has text in exactly the same columns (a headerless file with text labels). `text_ok(name,
+/// columns)` says which columns may hold text (kept as written besides their numbers).
+fn parse_table(
+    path: &Path,
+    lines: &[(usize, &str)],
+    text_ok: &dyn Fn(&str, usize) -> bool,
+) -> Result<Table, DatasetError> {
     let mut it = lines
         .iter()
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
         .peekable();
     let &&(hl, first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
-    let header = first.split(',').any(|c| c.trim().parse::<f64>().is_err());
+    let texts = |l: &str| -> Vec<bool> { l.split(',').map(|c| !is_number(c)).collect() };
+    let first_text = texts(first);
+    let second_text = it.clone().nth(1).map(|&(_, l)| texts(l));
+    let header =
+        first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
         it.next();
         first.split(',').map(|s| s.trim().to_string()).collect()
@@ -404,6 +441,8 @@ fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetErr
             "empty column name in the header",
         ));
     }
+    let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
+    let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();
     for &(i, l) in it {
         let cells: Vec<&str> = l.split(',').collect();
@@ -413,31 +452,48 @@ fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetErr
                 i + 1,
                 None,
                 format!(
-                    "{} values, the header has {} columns",
+                    "{} values, {} has {} columns",
                     cells.len(),
+                    if header {
+                        "the header"
+                    } else {
+                        "the first row"
+                    },
                     names.len()
                 ),
             ));
         }
-        let values = cells
-            .iter()
-            .zip(&names)
-            .map(|(c, name)| match c.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                Ok(v) => Err(content(
-                    path,
-                    i + 1,
-                    Some(name.clone()),
-                    format!("{v} is not a finite number"),
-                )),
-                Err(_) => Err(content(
-                    path,
-                    i + 1,
-                    Some(name.clone()),
-                    format!("'{}' is not a number", c.trim()),
-                )),
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut values = Vec::with_capacity(cells.len());
+        for ((c, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
+            let cell = c.trim();
+            if let Some(t) = t {
+                if cell.is_empty() {
+                    return Err(content(path, i + 1, Some(name.clone()), "empty label"));
+                }
+                t.push(cell.to_string());
+                values.push(cell.parse::<f64>().unwrap_or(f64::NAN));
+                continue;
+            }
+            values.push(match cell.parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                Ok(v) => {
+                    return Err(content(
+                        path,
+                        i + 1,
+                        Some(name.clone()),
+                        format!("{v} is not a finite number"),
+                    ));
+                }
+                Err(_) => {
+                    return Err(content(
+                        path,
+                        i + 1,
+                        Some(name.clone()),
+                        format!("'{cell}' is not a number"),
+                    ));
+                }
+            });
+        }
         rows.push((i + 1, values));
     }
     if rows.is_empty() {
@@ -447,6 +503,7 @@ fn parse_table(path: &Path, lines: &[(usize, &str)]) -> Result<Table, DatasetErr
         names,
         header,
         rows,
+        text,
     })
 }
 
@@ -465,22 +522,29 @@ fn text_lines(text: &str) -> Vec<(usize, &str)> {
 pub struct Imported {
     /// n x p features.
     pub x: DMatrix<f64>,
-    /// Feature column names.
+    /// Feature column names (column numbers, 1-based, without a header row).
     pub feature_names: Vec<String>,
-    /// Class labels, if a `label` column was given.
-    pub labels: Option<Vec<u16>>,
+    /// Class labels as written (any text: `3`, `left-palm`), if a label column was given.
+    pub labels: Option<Vec<String>>,
     /// Positions, if `x` and `y` columns were given (the files' units).
     pub positions: Option<Vec<[f64; 2]>>,
+    /// A third target beside x and y (z, force, pressure: the column after y in a headerless
+    /// targets file, or a column named `z`, `force` or `pressure`), with its name.
+    pub third: Option<(String, Vec<f64>)>,
     /// Which columns were taken as what, in words (for the user to check).
     pub description: String,
 }
 
+/// Names a third target column may have, besides the column after y in a headerless file.
+const THIRD_NAMES: [&str; 4] = ["z", "force", "pressure", "pressure_kpa"];
+
 /// Imports CSV from any sensor. A header row is optional (a first row with a cell that is not
 /// a number is one); a UTF-8 byte-order mark, CRLF line ends and blank lines are allowed.
-/// Columns named `label`, `x`, `y` (any case) are targets, all others features (any count).
-/// Targets may instead come from `targets`, a second CSV with the same number of rows: named
-/// as above, or without a header one column (a label) or two and more (x, y, and what
-/// follows unused).
+/// Columns named `label`, `x`, `y` and `z`, `force` or `pressure` (any case) are targets, all
+/// others features (any count). Targets may instead come from `targets`, a second CSV with the
+/// same number of rows: named as above, or without a header one column (a label) or two and
+/// more (x, y, then a third target such as z or force; further columns unused). Labels may be
+/// any text.
 ///
 /// # Errors
 /// [`DatasetError`] naming the file, the line and the column: non-numbers, NaN or infinite
@@ -493,12 +557,17 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
             source,
         })
     };
+    let label_text = |name: &str, _: usize| name.eq_ignore_ascii_case("label");
     let text = read(features)?;
-    let main = parse_table(features, &text_lines(&text))?;
+    let main = parse_table(features, &text_lines(&text), &label_text)?;
     let target_text = targets.map(read).transpose()?;
     let side = match (targets, &target_text) {
         (Some(p), Some(t)) => {
-            let table = parse_table(p, &text_lines(t))?;
+            // Without a header, one column is a label and may be text.
+            let label_or_only = |name: &str, columns: usize| {
+                name.eq_ignore_ascii_case("label") || (columns == 1 && name == "1")
+            };
+            let table = parse_table(p, &text_lines(t), &label_or_only)?;
             if table.rows.len() != main.rows.len() {
                 return Err(content(
                     p,
@@ -516,7 +585,10 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
         }
         _ => None,
     };
-    let is_target = |n: &str| ["label", "x", "y"].contains(&n.to_ascii_lowercase().as_str());
+    let is_target = |n: &str| {
+        let n = n.to_ascii_lowercase();
+        ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
+    };
     // Without a header every column of the features file is a feature.
     let feature_cols: Vec<usize> = (0..main.names.len())
         .filter(|&c| !main.header || main.names.get(c).is_some_and(|n| !is_target(n)))
@@ -532,13 +604,21 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
             .iter()
             .position(|c| c.eq_ignore_ascii_case(name))
     };
-    // A targets file without a header: one column is a label, more are x, y, ...
-    let (label_col, x_col, y_col) = match (side.is_some(), ttable.header, ttable.names.len()) {
-        (true, false, 1) => (Some(0), None, None),
-        (true, false, _) => (None, Some(0), Some(1)),
-        _ => (named("label"), named("x"), named("y")),
-    };
-    let labels = label_col.map(|c| ttable.whole(tpath, c)).transpose()?;
+    // A targets file without a header: one column is a label, more are x, y, (z), ...
+    let (label_col, x_col, y_col, third_col) =
+        match (side.is_some(), ttable.header, ttable.names.len()) {
+            (true, false, 1) => (Some(0), None, None, None),
+            (true, false, n) => (None, Some(0), Some(1), (n > 2).then_some(2)),
+            _ => (
+                named("label"),
+                named("x"),
+                named("y"),
+                THIRD_NAMES.iter().find_map(|n| named(n)),
+            ),
+        };
+    let labels = label_col
+        .map(|c| ttable.text_column(tpath, c))
+        .transpose()?;
     let positions = match (x_col, y_col) {
         (Some(cx), Some(cy)) => Some(
             ttable
@@ -557,6 +637,18 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
                 "give both x and y columns, or neither",
             ));
         }
+    };
+    let third = match third_col {
+        Some(c) if positions.is_some() => Some((
+            ttable
+                .names
+                .get(c)
+                .filter(|_| ttable.header)
+                .cloned()
+                .unwrap_or_else(|| "z".into()),
+            ttable.column(tpath, c)?,
+        )),
+        _ => None,
     };
     if labels.is_none() && positions.is_none() {
         return Err(content(
@@ -600,10 +692,19 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
         },
         header_note(&main)
     );
-    let taken: Vec<String> = [("label", label_col), ("x", x_col), ("y", y_col)]
-        .iter()
-        .filter_map(|&(what, c)| c.map(|c| format!("{what} from column {}", c + 1)))
-        .collect();
+    let third_name = third.as_ref().map(|(n, _)| n.as_str());
+    let taken: Vec<String> = [
+        ("label", label_col),
+        ("x", x_col),
+        ("y", y_col),
+        (
+            third_name.unwrap_or("z"),
+            third_col.filter(|_| third.is_some()),
+        ),
+    ]
+    .iter()
+    .filter_map(|&(what, c)| c.map(|c| format!("{what} from column {}", c + 1)))
+    .collect();
     let used = taken.len();
     description += &format!(
         "; targets in {} ({}): {}",
@@ -623,5 +724,6 @@ pub fn import_csv(features: &Path, targets: Option<&Path>) -> Result<Imported, D
             .collect(),
         labels,
         positions,
+        third,
     })
 }

@@ -15,6 +15,11 @@
 //! - [`regress`]: continuous position and pressure by regression (linear ridge, kernel ridge,
 //!   posterior-weighted class centres).
 //! - [`model_file`]: trained models on disk (JSON).
+//! - [`standin`]: another lab's e-skin data set made on the simulated sheet, in its own
+//!   file format (what the tabular path is tested on).
+//! - [`tabular`]: any sensor's table (features and targets from CSV): QDA, LDA, ridge, kernel
+//!   ridge and k nearest neighbours with hyperparameters by cross-validation inside the
+//!   training rows, the model file, evaluation.
 //! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
 //!   test, the chip's blob through et-core), as `et train`, `et eval` and `et demo` do them.
 #![forbid(unsafe_code)]
@@ -28,6 +33,8 @@ pub mod fit;
 pub mod model_file;
 pub mod pipeline;
 pub mod regress;
+pub mod standin;
+pub mod tabular;
 
 #[cfg(test)]
 mod tests;

@@ -110,7 +110,6 @@ impl ModelFile {
         centres_mm: Vec<[f64; 2]>,
         referenced: bool,
     ) -> Self {
-        let p = model.features();
         Self {
             format: "et-model".into(),
             version: 1,
@@ -122,25 +121,7 @@ impl ModelFile {
             centres_mm,
             feature_mean: model.feature_mean.clone(),
             feature_scale: model.feature_scale.clone(),
-            classes: model
-                .classes
-                .iter()
-                .map(|c| ClassRecord {
-                    count: c.count,
-                    mean: c.mean.iter().copied().collect(),
-                    log_prior: c.log_prior,
-                    factor: if c.factor.nrows() == p {
-                        (0..p)
-                            .flat_map(|r| (0..=r).map(move |q| (r, q)))
-                            .map(|(r, q)| c.factor.get((r, q)).copied().unwrap_or(0.0))
-                            .collect()
-                    } else {
-                        Vec::new()
-                    },
-                    log_det_or_quad: c.log_det_or_quad,
-                    weights: c.weights.iter().copied().collect(),
-                })
-                .collect(),
+            classes: class_records(model),
         }
     }
 
@@ -151,52 +132,12 @@ impl ModelFile {
     pub fn fitted(&self) -> Result<Fitted, FitError> {
         let kind = ModelKind::from(self.kind);
         let p = self.feature_mean.len();
-        if self.feature_scale.len() != p
-            || self.feature_index.len() != p
-            || self.centres_mm.len() != self.classes.len()
-        {
+        if self.feature_index.len() != p || self.centres_mm.len() != self.classes.len() {
             return Err(FitError::Shape(
                 "feature or class tables of different lengths".into(),
             ));
         }
-        let classes = self
-            .classes
-            .iter()
-            .map(|c| {
-                let packed = p * (p + 1) / 2;
-                let ok = c.mean.len() == p
-                    && match kind {
-                        ModelKind::Qda => c.factor.len() == packed,
-                        ModelKind::Lda => c.weights.len() == p,
-                    };
-                if !ok {
-                    return Err(FitError::Shape("a class table has the wrong length".into()));
-                }
-                // The packed lower triangle, row by row (its length was checked above).
-                let n = if kind == ModelKind::Qda { p } else { 0 };
-                let factor = DMatrix::from_fn(n, n, |r, q| {
-                    if q <= r {
-                        c.factor.get(r * (r + 1) / 2 + q).copied().unwrap_or(0.0)
-                    } else {
-                        0.0
-                    }
-                });
-                Ok(ClassFit {
-                    count: c.count,
-                    mean: DVector::from_vec(c.mean.clone()),
-                    log_prior: c.log_prior,
-                    factor,
-                    log_det_or_quad: c.log_det_or_quad,
-                    weights: DVector::from_vec(c.weights.clone()),
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok(Fitted {
-            kind,
-            feature_mean: self.feature_mean.clone(),
-            feature_scale: self.feature_scale.clone(),
-            classes,
-        })
+        fitted_from_records(kind, &self.feature_mean, &self.feature_scale, &self.classes)
     }
 
     /// The et-core blob at `precision`.
@@ -269,6 +210,86 @@ impl ModelFile {
         })?;
         Ok(m)
     }
+}
+
+/// A fitted model's classes as stored: QDA's lower Cholesky factor packed by rows.
+#[must_use]
+pub fn class_records(model: &Fitted) -> Vec<ClassRecord> {
+    let p = model.features();
+    model
+        .classes
+        .iter()
+        .map(|c| ClassRecord {
+            count: c.count,
+            mean: c.mean.iter().copied().collect(),
+            log_prior: c.log_prior,
+            factor: if c.factor.nrows() == p {
+                (0..p)
+                    .flat_map(|r| (0..=r).map(move |q| (r, q)))
+                    .map(|(r, q)| c.factor.get((r, q)).copied().unwrap_or(0.0))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            log_det_or_quad: c.log_det_or_quad,
+            weights: c.weights.iter().copied().collect(),
+        })
+        .collect()
+}
+
+/// The fitted model from its standardisation and stored classes.
+///
+/// # Errors
+/// [`FitError::Shape`] for tables of inconsistent lengths.
+pub fn fitted_from_records(
+    kind: ModelKind,
+    feature_mean: &[f64],
+    feature_scale: &[f64],
+    records: &[ClassRecord],
+) -> Result<Fitted, FitError> {
+    let p = feature_mean.len();
+    if feature_scale.len() != p || records.is_empty() {
+        return Err(FitError::Shape(
+            "feature or class tables of different lengths".into(),
+        ));
+    }
+    let classes = records
+        .iter()
+        .map(|c| {
+            let packed = p * (p + 1) / 2;
+            let ok = c.mean.len() == p
+                && match kind {
+                    ModelKind::Qda => c.factor.len() == packed,
+                    ModelKind::Lda => c.weights.len() == p,
+                };
+            if !ok {
+                return Err(FitError::Shape("a class table has the wrong length".into()));
+            }
+            // The packed lower triangle, row by row (its length was checked above).
+            let n = if kind == ModelKind::Qda { p } else { 0 };
+            let factor = DMatrix::from_fn(n, n, |r, q| {
+                if q <= r {
+                    c.factor.get(r * (r + 1) / 2 + q).copied().unwrap_or(0.0)
+                } else {
+                    0.0
+                }
+            });
+            Ok(ClassFit {
+                count: c.count,
+                mean: DVector::from_vec(c.mean.clone()),
+                log_prior: c.log_prior,
+                factor,
+                log_det_or_quad: c.log_det_or_quad,
+                weights: DVector::from_vec(c.weights.clone()),
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Fitted {
+        kind,
+        feature_mean: feature_mean.to_vec(),
+        feature_scale: feature_scale.to_vec(),
+        classes,
+    })
 }
 
 /// Why a model file could not be read or written.

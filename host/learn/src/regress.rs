@@ -61,11 +61,11 @@ fn target_mean(t: &[Target3]) -> Target3 {
 /// Linear ridge regression in z-space.
 #[derive(Clone, Debug)]
 pub struct Ridge {
-    mean: Vec<f64>,
-    scale: Vec<f64>,
+    pub(crate) mean: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
     /// p x 3 weights.
-    weights: DMatrix<f64>,
-    intercept: Target3,
+    pub(crate) weights: DMatrix<f64>,
+    pub(crate) intercept: Target3,
 }
 
 impl Ridge {
@@ -96,6 +96,77 @@ impl Ridge {
         })
     }
 
+    /// [`fit`](Self::fit) at each of `lambdas` from one Gram matrix Z^T Z (the cost of one
+    /// fit plus a p x p Cholesky per lambda): a ridge path for cross-validation. A lambda whose
+    /// system is not positive definite gives `None`.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data.
+    pub fn fit_path(
+        x: &DMatrix<f64>,
+        t: &[Target3],
+        lambdas: &[f64],
+    ) -> Result<Vec<Option<Self>>, FitError> {
+        check(x, t)?;
+        let (mean, scale) = standardisation(x);
+        let z = standardise(x, &mean, &scale);
+        let intercept = target_mean(t);
+        let tc = DMatrix::from_fn(t.len(), 3, |r, k| t[r][k] - intercept[k]);
+        let zf = Mat::from_fn(z.nrows(), z.ncols(), |r, j| z[(r, j)]);
+        let mut gram = Mat::<f64>::zeros(z.ncols(), z.ncols());
+        matmul(
+            gram.as_mut(),
+            Accum::Replace,
+            zf.transpose(),
+            zf.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        let zt = z.transpose() * tc;
+        Ok(lambdas
+            .iter()
+            .map(|&lambda| {
+                let a = DMatrix::from_fn(gram.nrows(), gram.ncols(), |i, j| {
+                    gram[(i, j)]
+                        + if i == j {
+                            lambda * x.nrows() as f64
+                        } else {
+                            0.0
+                        }
+                });
+                let weights = a.cholesky()?.solve(&zt);
+                weights.iter().all(|v| v.is_finite()).then(|| Self {
+                    mean: mean.clone(),
+                    scale: scale.clone(),
+                    weights,
+                    intercept,
+                })
+            })
+            .collect())
+    }
+
+    /// The p rows of 3 weights.
+    pub(crate) fn weight_rows(&self) -> Vec<[f64; 3]> {
+        self.weights
+            .row_iter()
+            .map(|w| [w[0], w[1], w[2]])
+            .collect()
+    }
+
+    /// Predicts every row of `x` (n x p, volts).
+    #[must_use]
+    pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
+        let mut row = vec![0.0; x.ncols()];
+        (0..x.nrows())
+            .map(|r| {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = x[(r, j)];
+                }
+                self.predict(&row)
+            })
+            .collect()
+    }
+
     /// Predicts one observation (p features, volts).
     #[must_use]
     pub fn predict(&self, x: &[f64]) -> Target3 {
@@ -116,10 +187,24 @@ impl Ridge {
     }
 }
 
+/// The rows of an m x 3 matrix.
+pub(crate) fn rows3(m: &Mat<f64>) -> Vec<[f64; 3]> {
+    (0..m.nrows())
+        .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
+        .collect()
+}
+
+/// The rows of a matrix.
+pub(crate) fn rows_of(m: &Mat<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
 /// Squared distances between the rows of `a` (m x p) and of `b` (n x p), m x n:
 /// |a_i|^2 + |b_j|^2 - 2 a_i . b_j, the cross term one matrix product (one core), clamped at 0
 /// against rounding.
-fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
+pub(crate) fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
     let norms = |m: &Mat<f64>| -> Vec<f64> {
         (0..m.nrows())
             .map(|i| (0..m.ncols()).map(|j| m[(i, j)] * m[(i, j)]).sum())
@@ -146,14 +231,14 @@ fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
 /// Gaussian-kernel ridge regression: f(z) = mean T + sum_i alpha_i exp(-gamma |z - z_i|^2).
 #[derive(Clone, Debug)]
 pub struct KernelRidge {
-    mean: Vec<f64>,
-    scale: Vec<f64>,
+    pub(crate) mean: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
     /// m x p training observations in z-space.
-    support: Mat<f64>,
+    pub(crate) support: Mat<f64>,
     /// m x 3.
-    alpha: Mat<f64>,
-    gamma: f64,
-    intercept: Target3,
+    pub(crate) alpha: Mat<f64>,
+    pub(crate) gamma: f64,
+    pub(crate) intercept: Target3,
 }
 
 impl KernelRidge {
@@ -171,43 +256,73 @@ impl KernelRidge {
         width: f64,
         lambda: f64,
     ) -> Result<Self, FitError> {
+        Self::fit_grid(x, t, m, &[width], &[lambda])?
+            .pop()
+            .flatten()
+            .ok_or(FitError::NotPositiveDefinite { class: 0 })
+    }
+
+    /// [`fit`](Self::fit) at every (width, lambda) of `widths` x `lambdas` (width-major), the
+    /// distances computed once: a grid for cross-validation. A pair whose system is singular
+    /// gives `None`.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data.
+    pub fn fit_grid(
+        x: &DMatrix<f64>,
+        t: &[Target3],
+        m: usize,
+        widths: &[f64],
+        lambdas: &[f64],
+    ) -> Result<Vec<Option<Self>>, FitError> {
         check(x, t)?;
         let n = x.nrows();
         let m = m.clamp(2, n);
         let rows: Vec<usize> = (0..m).map(|i| i * n / m).collect();
         let (mean, scale) = standardisation(x);
         let support = Mat::from_fn(m, x.ncols(), |r, j| (x[(rows[r], j)] - mean[j]) / scale[j]);
-        let mut k = squared_distances(&support, &support);
+        let d2 = squared_distances(&support, &support);
         let first = m.min(400);
-        let mut d2: Vec<f64> = (0..first)
+        let mut pairs: Vec<f64> = (0..first)
             .flat_map(|a| ((a + 1)..first).map(move |b| (a, b)))
-            .map(|(a, b)| k[(a, b)])
+            .map(|(a, b)| d2[(a, b)])
             .collect();
-        d2.sort_by(f64::total_cmp);
-        let median = d2.get(d2.len() / 2).copied().unwrap_or(1.0).max(1e-12);
-        let gamma = width / median;
-        for b in 0..m {
-            for (a, v) in k.col_mut(b).iter_mut().enumerate() {
-                *v = (-gamma * *v).exp() + if a == b { lambda } else { 0.0 };
-            }
-        }
+        pairs.sort_by(f64::total_cmp);
+        let median = pairs
+            .get(pairs.len() / 2)
+            .copied()
+            .unwrap_or(1.0)
+            .max(1e-12);
         let ts: Vec<Target3> = rows.iter().map(|&r| t[r]).collect();
         let intercept = target_mean(&ts);
-        let mut alpha = Mat::from_fn(m, 3, |r, c| ts[r][c] - intercept[c]);
-        k.llt(Side::Lower)
-            .map_err(|_| FitError::NotPositiveDefinite { class: 0 })?
-            .solve_in_place_with_conj(faer::Conj::No, alpha.as_mut());
-        if (0..m).any(|r| (0..3).any(|c| !alpha[(r, c)].is_finite())) {
-            return Err(FitError::NotPositiveDefinite { class: 0 });
+        let mut fits = Vec::with_capacity(widths.len() * lambdas.len());
+        for &width in widths {
+            let gamma = width / median;
+            let kernel = Mat::from_fn(m, m, |a, b| (-gamma * d2[(a, b)]).exp());
+            for &lambda in lambdas {
+                let mut k = kernel.clone();
+                for i in 0..m {
+                    k[(i, i)] += lambda;
+                }
+                let mut alpha = Mat::from_fn(m, 3, |r, c| ts[r][c] - intercept[c]);
+                let solved = match k.llt(Side::Lower) {
+                    Ok(llt) => {
+                        llt.solve_in_place_with_conj(faer::Conj::No, alpha.as_mut());
+                        (0..m).all(|r| (0..3).all(|c| alpha[(r, c)].is_finite()))
+                    }
+                    Err(_) => false,
+                };
+                fits.push(solved.then(|| Self {
+                    mean: mean.clone(),
+                    scale: scale.clone(),
+                    support: support.clone(),
+                    alpha,
+                    gamma,
+                    intercept,
+                }));
+            }
         }
-        Ok(Self {
-            mean,
-            scale,
-            support,
-            alpha,
-            gamma,
-            intercept,
-        })
+        Ok(fits)
     }
 
     /// Predicts one observation (p features, volts).
@@ -264,6 +379,119 @@ impl KernelRidge {
     #[must_use]
     pub fn cost(&self) -> usize {
         self.support.nrows() * (self.support.ncols() + 3)
+    }
+}
+
+/// How the k nearest neighbours' targets are averaged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weighting {
+    /// Each neighbour counts the same.
+    Uniform,
+    /// Each neighbour counts 1 / its distance (an exact match takes all the weight).
+    Distance,
+}
+
+/// k-nearest-neighbour regression in z-space: the mean (or inverse-distance weighted mean) of
+/// the targets of the k training observations nearest to a frame.
+#[derive(Clone, Debug)]
+pub struct Knn {
+    pub(crate) mean: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
+    /// m x p training observations in z-space.
+    pub(crate) support: Mat<f64>,
+    /// Their targets.
+    pub(crate) targets: Vec<Target3>,
+    pub(crate) k: usize,
+    pub(crate) weighting: Weighting,
+}
+
+impl Knn {
+    /// Keeps the (standardised) observations.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data, or k = 0.
+    pub fn fit(
+        x: &DMatrix<f64>,
+        t: &[Target3],
+        k: usize,
+        weighting: Weighting,
+    ) -> Result<Self, FitError> {
+        check(x, t)?;
+        if k == 0 {
+            return Err(FitError::Shape("k = 0 neighbours".into()));
+        }
+        let (mean, scale) = standardisation(x);
+        let support = Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
+            (x[(r, j)] - mean[j]) / scale[j]
+        });
+        Ok(Self {
+            mean,
+            scale,
+            support,
+            targets: t.to_vec(),
+            k: k.min(x.nrows()),
+            weighting,
+        })
+    }
+
+    /// For every row of `x` (n x p, volts), its `k_max` nearest training observations as
+    /// (squared distance, index), nearest first: the distances as one matrix product.
+    #[must_use]
+    pub fn neighbours(&self, x: &DMatrix<f64>, k_max: usize) -> Vec<Vec<(f64, usize)>> {
+        let z = Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
+            (x[(r, j)] - self.mean[j]) / self.scale[j]
+        });
+        let d2 = squared_distances(&z, &self.support);
+        let k = k_max.clamp(1, self.support.nrows());
+        (0..x.nrows())
+            .map(|r| {
+                let mut row: Vec<(f64, usize)> = (0..d2.ncols()).map(|j| (d2[(r, j)], j)).collect();
+                row.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+                row.truncate(k);
+                row.sort_by(|a, b| a.0.total_cmp(&b.0));
+                row
+            })
+            .collect()
+    }
+
+    /// The prediction from `near` (a row of [`neighbours`](Self::neighbours)) with `k`
+    /// neighbours and `weighting`.
+    #[must_use]
+    pub fn combine(&self, near: &[(f64, usize)], k: usize, weighting: Weighting) -> Target3 {
+        let near = near.get(..k.min(near.len())).unwrap_or(near);
+        let weights: Vec<f64> = match weighting {
+            Weighting::Uniform => vec![1.0; near.len()],
+            Weighting::Distance => {
+                if let Some(&(_, i)) = near.iter().find(|(d, _)| *d <= 1e-24) {
+                    return self.targets[i];
+                }
+                near.iter().map(|(d, _)| 1.0 / d.sqrt()).collect()
+            }
+        };
+        let total: f64 = weights.iter().sum();
+        let mut out = [0.0; 3];
+        for (w, &(_, i)) in weights.iter().zip(near) {
+            for c in 0..3 {
+                out[c] += w / total * self.targets[i][c];
+            }
+        }
+        out
+    }
+
+    /// Predicts every row of `x` (n x p, volts).
+    #[must_use]
+    pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
+        self.neighbours(x, self.k)
+            .iter()
+            .map(|near| self.combine(near, self.k, self.weighting))
+            .collect()
+    }
+
+    /// Multiply-adds per prediction (distances to every stored observation).
+    #[must_use]
+    pub fn cost(&self) -> usize {
+        self.support.nrows() * self.support.ncols()
     }
 }
 

@@ -517,7 +517,7 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         std::fs::write(&one, "a,b,c,label\n1,2,3,0\n4,5,6,1\n7,8,9,1\n").unwrap();
         let imp = import_csv(&one, None).unwrap();
         assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
-        assert_eq!(imp.labels, Some(vec![0, 1, 1]));
+        assert_eq!(imp.labels, Some(["0", "1", "1"].map(String::from).to_vec()));
         assert_eq!(imp.feature_names, ["a", "b", "c"]);
         // Two parallel files, positions as targets, any channel count.
         let feats = dir.join("feats.csv");
@@ -554,8 +554,12 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         );
         let none = err("a,b\n1,2\n");
         assert!(none.contains("no target"), "{none}");
-        let frac = err("a,label\n1,0.5\n");
-        assert!(frac.contains("column label"), "{frac}");
+        // Labels are any text, kept as written.
+        std::fs::write(&one, "a,label\n1,0.5\n2,left palm\n").unwrap();
+        assert_eq!(
+            import_csv(&one, None).unwrap().labels,
+            Some(["0.5", "left palm"].map(String::from).to_vec())
+        );
         std::fs::write(&targets, "x,y\n1,2\n").unwrap();
         let rows = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
         assert!(
@@ -594,21 +598,35 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         let d = &imp.description;
         assert!(
             d.contains("f.csv: 3 rows, 3 feature columns (columns 1 to 3), no header row")
-                && d.contains("x from column 1, y from column 2 (1 more columns not used)"),
+                && d.contains("x from column 1, y from column 2, z from column 3"),
             "{d}"
         );
-        // One headerless column of targets is a label.
+        assert_eq!(
+            imp.third,
+            Some(("z".to_string(), vec![0.003, 0.006, 0.009]))
+        );
+        // One headerless column of targets is a label, names too.
         std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
         assert_eq!(
             import_csv(&feats, Some(&targets)).unwrap().labels,
-            Some(vec![2, 0, 1])
+            Some(["2", "0", "1"].map(String::from).to_vec())
         );
+        std::fs::write(&targets, "left\nright\nleft\n").unwrap();
+        assert_eq!(
+            import_csv(&feats, Some(&targets)).unwrap().labels,
+            Some(["left", "right", "left"].map(String::from).to_vec())
+        );
+        // A headerless features file whose last column is text labels (no header taken).
+        std::fs::write(&feats, "1,2,up\n3,4,down\n").unwrap();
+        std::fs::write(&targets, "0.1,0.2\n0.3,0.4\n").unwrap();
+        let e = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        assert!(e.contains("f.csv:1, column 3") && e.contains("'up'"), "{e}");
         // A byte-order mark before a header's `label` leaves it the label (it was read as a
         // feature named "\u{feff}label", the target leaking into the inputs); names in any
         // case.
         std::fs::write(&feats, "\u{feff}label,a,b\n0,1,2\n1,3,4\n").unwrap();
         let imp = import_csv(&feats, None).unwrap();
-        assert_eq!(imp.labels, Some(vec![0, 1]));
+        assert_eq!(imp.labels, Some(["0", "1"].map(String::from).to_vec()));
         assert_eq!(imp.feature_names, ["a", "b"]);
         std::fs::write(&feats, "a,X,Y\n1,2,3\n4,5,6\n").unwrap();
         let imp = import_csv(&feats, None).unwrap();

@@ -1,0 +1,152 @@
+//! A stand-in for another lab's sensor, in that lab's file format, made on the simulated
+//! sheet: what `et train --features F.csv --targets T.csv` is tested on and what the
+//! comparison with scikit-learn runs.
+//!
+//! The shape follows a published kind of e-skin data set: 16 electrodes, the opposite
+//! protocol read in both polarities without reciprocity halving (16 x 12 = 192 values per
+//! row), each row one press anywhere in an 80 mm disc, the values pressed minus unpressed in
+//! board units (ADC codes); the targets x, y, z in metres in a robot's frame (the sheet lies
+//! at z = 50 mm, centred at (350, -120) mm; z falls with the press's depth) in a second file.
+//! Both files start with a UTF-8 byte-order mark and have no header row. Rows are in time
+//! order: several sessions, the electrodes moved between sessions and a little from press to
+//! press, the unpressed frame taken once per session (so drift is in the data), pressure
+//! uniform from 5 to 60 kPa, fingertips of 6 to 9 mm radius.
+
+use std::io::Write as _;
+use std::path::Path;
+
+use et_core::protocol::Halving;
+use et_core::rng::Rng;
+use et_sim::scene::Scene;
+use et_sim::touch::Touch;
+use nalgebra::DMatrix;
+
+use super::collect::{CollectError, Plan, Press, collect_presses_with, training_config};
+
+/// The sheet: a 100 mm disc of the 30 kOhm fabric with 16 clip electrodes.
+const SCENE: &str = r#"
+description = "stand-in e-skin: 100 mm disc, 16 electrodes, opposite protocol"
+[sheet]
+shape = { kind = "disc", radius = 0.05 }
+sheet_resistance = 30e3
+electrodes = { count = 16, width = 0.004, contact_ohm = 1000 }
+[scan]
+protocol = "opposite"
+current_ua = 32
+"#;
+
+/// Where the sheet sits in the robot's frame, m.
+pub const SHEET_ORIGIN_M: [f64; 3] = [0.35, -0.12, 0.05];
+/// Presses land uniformly in a disc of this radius, m.
+pub const PRESS_DISC_RADIUS_M: f64 = 0.04;
+/// Board units: ADC codes per volt (16 bits over +-5 V).
+pub const CODES_PER_VOLT: f64 = 65_536.0 / 10.0;
+
+/// The stand-in data: features in board units and targets in metres, rows in time order.
+#[derive(Clone, Debug)]
+pub struct StandIn {
+    /// n x 192 pressed-minus-unpressed values, ADC codes.
+    pub features: DMatrix<f64>,
+    /// x, y, z in metres in the robot's frame.
+    pub targets_m: Vec<[f64; 3]>,
+}
+
+/// `presses` rows over `sessions` sessions (at least 1), from `seed`.
+///
+/// # Errors
+/// [`CollectError`] if the simulated sheet cannot be built or scanned.
+pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, CollectError> {
+    let scene = Scene::parse(SCENE, "stand-in").map_err(|e| CollectError::Scene(e.to_string()))?;
+    let config = training_config(
+        scene
+            .scan_config()
+            .map_err(|e| CollectError::Scene(e.to_string()))?,
+    );
+    let sessions = sessions.max(1);
+    let per_session = presses.div_ceil(sessions);
+    let plan = Plan {
+        visits: sessions,
+        scans: 1,
+        subsections: 1,
+        pressure_pa: (5e3, 60e3),
+        radius: 0.0075,
+        placement: 0.0,
+        electrode_movement: 0.0005,
+        poses: 4,
+        press_movement: 0.0002,
+        seed,
+    };
+    let draw = |rng: &mut Rng| -> Vec<Press> {
+        (0..per_session)
+            .map(|_| {
+                // Uniform in the disc: radius by the square root.
+                let (r, a) = (
+                    PRESS_DISC_RADIUS_M * rng.uniform().sqrt(),
+                    std::f64::consts::TAU * rng.uniform(),
+                );
+                Press {
+                    label: 0,
+                    touches: vec![Touch {
+                        position: [r * a.cos(), r * a.sin()],
+                        radius: 0.006 + 0.003 * rng.uniform(),
+                        pressure: 5e3 + 55e3 * rng.uniform(),
+                    }],
+                }
+            })
+            .collect()
+    };
+    let data = collect_presses_with(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        &[],
+        &plan,
+        Halving::None,
+        draw,
+    )?;
+    let n = presses.min(data.x.nrows());
+    let features = data
+        .features(true)
+        .map_err(|e| CollectError::Scene(e.to_string()))?;
+    let features = DMatrix::from_fn(n, features.ncols(), |r, j| {
+        features[(r, j)] * CODES_PER_VOLT
+    });
+    let targets_m = (0..n)
+        .map(|r| {
+            let p = data.positions[r];
+            let depth = 0.002 * data.pressure[r] / 60e3;
+            [
+                SHEET_ORIGIN_M[0] + p[0],
+                SHEET_ORIGIN_M[1] + p[1],
+                SHEET_ORIGIN_M[2] - depth,
+            ]
+        })
+        .collect();
+    Ok(StandIn {
+        features,
+        targets_m,
+    })
+}
+
+impl StandIn {
+    /// Writes the two files as the other lab's tools do: a UTF-8 byte-order mark, no header,
+    /// CRLF line ends, numbers like `1.5E-05`.
+    ///
+    /// # Errors
+    /// The I/O error.
+    pub fn write(&self, features: &Path, targets: &Path) -> std::io::Result<()> {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(features)?);
+        f.write_all("\u{feff}".as_bytes())?;
+        for row in self.features.row_iter() {
+            let cells: Vec<String> = row.iter().map(|v| format!("{v:.6E}")).collect();
+            write!(f, "{}\r\n", cells.join(","))?;
+        }
+        f.flush()?;
+        let mut t = std::io::BufWriter::new(std::fs::File::create(targets)?);
+        t.write_all("\u{feff}".as_bytes())?;
+        for p in &self.targets_m {
+            write!(t, "{:.6E},{:.6E},{:.6E}\r\n", p[0], p[1], p[2])?;
+        }
+        t.flush()
+    }
+}
