@@ -11,7 +11,7 @@ use plotters::style::FontStyle;
 mod learning;
 mod sheet;
 
-pub use learning::{confusion, error_vs_distance};
+pub use learning::{confusion, error_map, error_vs_distance, predicted_vs_true};
 pub use sheet::sheet_image;
 
 /// Why a plot could not be written.

@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
 use et_learn::model_file::{Kind, ModelFile};
+use et_learn::tabular::{self, Choice, Method};
 use et_learn::{analysis, collect, dataset, fastcv, pipeline};
 use et_sim::scene::Scene;
 
@@ -62,18 +63,38 @@ pub(crate) struct CollectArgs {
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct TrainArgs {
-    /// Training set (CSV from `et collect`).
+    /// Training set: an et dataset (CSV from `et collect`).
+    #[arg(
+        long,
+        required_unless_present = "features",
+        conflicts_with = "features"
+    )]
+    data: Option<PathBuf>,
+    #[command(flatten)]
+    table: crate::tabular::TableArgs,
+    /// The model. On --data: qda (a covariance per class) or lda (one pooled covariance);
+    /// default qda. On --features: also ridge, kernel-ridge (RBF), knn, or auto (every
+    /// method that fits the targets, the best by cross-validation); default auto.
+    #[arg(long, value_enum)]
+    kind: Option<KindArg>,
+    /// Classes from positions (--features only): ROWSxCOLS cells over the targets' bounding
+    /// box, cells without training rows dropped.
+    #[arg(long, value_name = "ROWSxCOLS")]
+    grid: Option<String>,
+    /// Shrinkage in [0, 1], or "auto" (--data: chosen by leave-one-visit-out
+    /// cross-validation when the set has several visits, else by stratified k-fold; the
+    /// summary says which). With --features it is always chosen by cross-validation.
     #[arg(long)]
-    data: PathBuf,
-    /// The discriminant: qda (a covariance per class) or lda (one pooled covariance).
-    #[arg(long, value_enum, default_value_t = KindArg::Qda)]
-    kind: KindArg,
-    /// Shrinkage in [0, 1], or "auto" (chosen by leave-one-visit-out cross-validation).
-    #[arg(long, default_value = "auto")]
-    shrinkage: String,
-    /// Folds of the reported stratified cross-validation.
-    #[arg(long, default_value_t = 10)]
-    folds: usize,
+    shrinkage: Option<String>,
+    /// Folds of the cross-validation: the reported one on --data (default 10), the one that
+    /// chooses hyperparameters on --features (default 5).
+    #[arg(long)]
+    folds: Option<usize>,
+    /// How --features rows are dealt to folds: shuffled (stratified by class), or blocks
+    /// (contiguous, in file order: for recordings in time order, where a shuffled split
+    /// flatters a model).
+    #[arg(long, value_enum, default_value_t = CvArg::Shuffled)]
+    cv: CvArg,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched
     /// frames: it cancels electrode movement between sessions, but on the board it needs an
@@ -84,10 +105,10 @@ pub(crate) struct TrainArgs {
     /// n_c (leave-one-visit-out when the set has several visits, else the k-fold CV).
     #[arg(long, value_name = "PNG")]
     curve: Option<PathBuf>,
-    /// Keep only this many features, those that separate the classes best (Fisher ratio):
-    /// QDA's size and cost grow with the square of the feature count.
-    #[arg(long)]
-    features: Option<usize>,
+    /// Keep only this many features (--data), those that separate the classes best (Fisher
+    /// ratio): QDA's size and cost grow with the square of the feature count.
+    #[arg(long, value_name = "N")]
+    keep: Option<usize>,
     /// Where to write the model (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -101,11 +122,19 @@ pub(crate) struct EvalArgs {
     /// Model (JSON from `et train`).
     #[arg(long)]
     model: PathBuf,
-    /// Test set (CSV from `et collect`).
-    #[arg(long)]
-    data: PathBuf,
-    /// Write plots into this directory: confusion.png (row-normalised confusion matrix) and
-    /// error-vs-distance.png (position error against distance from the nearest electrode).
+    /// Test set: an et dataset (CSV from `et collect`), for models trained with --data.
+    #[arg(
+        long,
+        required_unless_present = "features",
+        conflicts_with = "features"
+    )]
+    data: Option<PathBuf>,
+    #[command(flatten)]
+    table: crate::tabular::TableArgs,
+    /// Write plots into this directory. --data: confusion.png (row-normalised confusion
+    /// matrix) and error-vs-distance.png (position error against distance from the nearest
+    /// electrode). --features: error-map.png (each true position coloured by its error) and
+    /// predicted-vs-true.png.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
     /// Print JSON (with the confusion matrix and accuracy by distance from the electrodes).
@@ -132,12 +161,7 @@ pub(crate) struct ExportArgs {
 pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     output::check(&args.out, &[&args.scene], force)?;
     let scene = Scene::load(&args.scene)?;
-    let (rows, cols) = args
-        .grid
-        .split_once('x')
-        .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
-        .filter(|&(r, c)| r > 0 && c > 0)
-        .with_context(|| format!("--grid '{}': write ROWSxCOLS, e.g. 7x7", args.grid))?;
+    let (rows, cols) = parse_grid(&args.grid, "--grid")?;
     if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
         bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
     }
@@ -221,22 +245,30 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// `--kind`: which discriminant to train.
+/// `--kind`: which model to train.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum KindArg {
     /// Quadratic discriminant analysis: a covariance per class.
     Qda,
     /// Linear discriminant analysis: one pooled covariance.
     Lda,
+    /// Linear ridge regression of the position (--features).
+    Ridge,
+    /// Gaussian-kernel (RBF) ridge regression of the position (--features).
+    KernelRidge,
+    /// k nearest neighbours' mean position (--features).
+    Knn,
+    /// Every method that fits the targets, the best by cross-validation (--features).
+    Auto,
 }
 
-impl From<KindArg> for Kind {
-    fn from(kind: KindArg) -> Self {
-        match kind {
-            KindArg::Qda => Kind::Qda,
-            KindArg::Lda => Kind::Lda,
-        }
-    }
+/// `--cv`: how rows are dealt to folds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum CvArg {
+    /// At random (stratified by class).
+    Shuffled,
+    /// Contiguous blocks in file order.
+    Blocks,
 }
 
 /// `--precision`: how the blob stores its tables.
@@ -258,23 +290,74 @@ impl From<PrecisionArg> for Precision {
 }
 
 pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
-    output::check(&args.out, &[&args.data], force)?;
-    if let Some(png) = &args.curve {
-        output::check(png, &[&args.data, &args.out], force)?;
+    let Some(data_path) = &args.data else {
+        if args.curve.is_some() || args.keep.is_some() || args.raw {
+            bail!("--curve, --keep and --raw apply to et datasets (--data)");
+        }
+        if args.shrinkage.as_deref().is_some_and(|s| s != "auto") {
+            bail!("--shrinkage: with --features it is chosen by cross-validation; leave it out");
+        }
+        let choice = match args.kind.unwrap_or(KindArg::Auto) {
+            KindArg::Qda => Choice::One(Method::Qda),
+            KindArg::Lda => Choice::One(Method::Lda),
+            KindArg::Ridge => Choice::One(Method::Ridge),
+            KindArg::KernelRidge => Choice::One(Method::KernelRidge),
+            KindArg::Knn => Choice::One(Method::Knn),
+            KindArg::Auto => Choice::Auto,
+        };
+        let grid = args
+            .grid
+            .as_deref()
+            .map(|g| parse_grid(g, "--grid"))
+            .transpose()?;
+        return crate::tabular::train(
+            &args.table,
+            choice,
+            &tabular::TrainOptions {
+                folds: args.folds.unwrap_or(5),
+                scheme: match args.cv {
+                    CvArg::Shuffled => tabular::CvScheme::Shuffled,
+                    CvArg::Blocks => tabular::CvScheme::Blocks,
+                },
+                grid,
+                seed: 1,
+            },
+            &args.out,
+            args.json,
+            force,
+        );
+    };
+    let kind = match args.kind.unwrap_or(KindArg::Qda) {
+        KindArg::Qda => Kind::Qda,
+        KindArg::Lda => Kind::Lda,
+        other => bail!(
+            "--kind {}: et datasets (--data) train qda or lda for the board; regressors take \
+             any sensor's table (--features)",
+            format!("{other:?}").to_lowercase()
+        ),
+    };
+    if args.grid.is_some() || args.cv != CvArg::Shuffled {
+        bail!("--grid and --cv apply to any sensor's table (--features)");
     }
-    let mut data = dataset::load_csv(&args.data)?;
+    let data_arg = data_path;
+    output::check(&args.out, &[data_arg], force)?;
+    if let Some(png) = &args.curve {
+        output::check(png, &[data_arg, &args.out], force)?;
+    }
+    let folds = args.folds.unwrap_or(10);
+    let mut data = dataset::load_csv(data_arg)?;
     let classes = data.centres.len();
-    let kind = ModelKind::from(Kind::from(args.kind));
+    let kind = ModelKind::from(kind);
     let referenced = !args.raw && data.has_untouched();
     if !args.raw && !referenced {
         eprintln!(
             "note: {} has no untouched frames, training on raw frames",
-            args.data.display()
+            data_arg.display()
         );
     }
-    pipeline::prepare(&mut data, referenced, args.features)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.data.display()))?;
-    let shrinkage = match args.shrinkage.as_str() {
+    pipeline::prepare(&mut data, referenced, args.keep)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", data_arg.display()))?;
+    let shrinkage = match args.shrinkage.as_deref().unwrap_or("auto") {
         "auto" => None,
         v => Some(
             v.parse::<f64>()
@@ -286,7 +369,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         &pipeline::TrainOptions {
             kind,
             shrinkage,
-            folds: args.folds,
+            folds,
         },
     )?;
     let (model, opts, cv_conf, lovo) = (
@@ -332,7 +415,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
                     plot::Labels {
                         title: &format!(
                             "learning curve: {} ({}), {} classes",
-                            Kind::from(args.kind).name(),
+                            Kind::from(kind).name(),
                             if visits >= 2 {
                                 "leave-one-visit-out"
                             } else {
@@ -382,7 +465,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     output::write(&args.out, |partial| file.save(partial))?;
     let summary = TrainSummary {
         out: &args.out,
-        kind: Kind::from(args.kind),
+        kind: Kind::from(kind),
         referenced,
         shrinkage,
         shrinkage_scores: scores
@@ -395,7 +478,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         classes,
         observations: data.x.nrows(),
         features: data.x.ncols(),
-        cv_folds: args.folds.max(2),
+        cv_folds: folds.max(2),
         cv_accuracy: cv_conf.accuracy(),
         cv_mean_error_mm: cv_conf.mean_position_error(&mm),
         cv_aee_mm: cv_conf.aee(&mm),
@@ -411,7 +494,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     } else {
         eprintln!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
-            Kind::from(args.kind).name(),
+            Kind::from(kind).name(),
             if referenced {
                 " (referenced)"
             } else {
@@ -421,7 +504,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             classes,
             data.x.ncols(),
             shrinkage,
-            args.folds.max(2),
+            folds.max(2),
             100.0 * cv_conf.accuracy(),
             cv_conf.mean_position_error(&mm),
             lovo.map_or(String::new(), |a| format!(
@@ -434,7 +517,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         if fit < data.x.ncols() {
             eprintln!(
                 "note: for the board, this model is too big for a model slot even in f16; \
-                 train with --features {fit} (the most that fit for {classes} classes) or fewer classes"
+                 train with --keep {fit} (the most that fit for {classes} classes) or fewer classes"
             );
         }
     }
@@ -442,23 +525,47 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
 }
 
 pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
+    let text = std::fs::read_to_string(&args.model)
+        .with_context(|| format!("reading {}", args.model.display()))?;
+    let table_model = tabular::is_table_model(&text);
+    let Some(data_arg) = &args.data else {
+        if !table_model {
+            bail!(
+                "{}: a board model (trained on an et dataset): evaluate it with --data",
+                args.model.display()
+            );
+        }
+        return crate::tabular::eval(
+            &args.model,
+            &args.table,
+            args.plots.as_deref(),
+            args.json,
+            force,
+        );
+    };
+    if table_model {
+        bail!(
+            "{}: trained on a sensor's table: evaluate it with --features (and --targets)",
+            args.model.display()
+        );
+    }
     let plots = args
         .plots
         .as_ref()
         .map(|dir| (dir.join("confusion.png"), dir.join("error-vs-distance.png")));
     if let Some((a, b)) = &plots {
         for png in [a, b] {
-            output::check(png, &[&args.model, &args.data], force)?;
+            output::check(png, &[&args.model, data_arg], force)?;
         }
     }
     let file = ModelFile::load(&args.model)?;
-    let data = dataset::load_csv(&args.data)?;
+    let data = dataset::load_csv(data_arg)?;
     let classes = file.classes.len();
     let tested = pipeline::test(&file, &data).map_err(|e| {
         // Name the file at fault: the model's tables, or the data.
         let blamed = match e {
             pipeline::UseError::Model(_) => &args.model,
-            _ => &args.data,
+            _ => data_arg,
         };
         anyhow::anyhow!("{}: {e}", blamed.display())
     })?;
@@ -468,7 +575,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         let title = format!(
             "confusion: accuracy {:.1} % on {}",
             100.0 * conf.accuracy(),
-            args.data.display()
+            data_arg.display()
         );
         output::write(confusion_png, |partial| {
             plot::confusion(partial, conf, &title)
@@ -476,7 +583,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         if tested.outcomes.is_empty() {
             eprintln!(
                 "note: {} does not say where the electrodes are: no error-vs-distance plot",
-                args.data.display()
+                data_arg.display()
             );
         } else {
             output::write(error_png, |partial| {
@@ -547,7 +654,7 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
                     ": does NOT fit; --precision f16 does".to_string()
                 } else {
                     format!(
-                        ": does NOT fit; retrain with et train --features {} (the most that fit in f16) or fewer classes",
+                        ": does NOT fit; retrain with et train --keep {} (the most that fit in f16) or fewer classes",
                         pipeline::features_that_fit(kind, c, p)
                     )
                 }
@@ -616,4 +723,12 @@ struct ExportSummary<'a> {
     bytes: usize,
     fits_model_slot: bool,
     multiply_adds_per_frame: usize,
+}
+
+/// `ROWSxCOLS`, both at least 1.
+fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
+    text.split_once('x')
+        .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
+        .filter(|&(r, c)| r > 0 && c > 0)
+        .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))
 }

@@ -28,6 +28,7 @@ mod live;
 mod output;
 mod protocol;
 mod sim;
+mod tabular;
 
 /// Touch sensing with electrical tomography: protocols, simulation, imaging and learning.
 #[derive(Debug, Parser)]
@@ -98,16 +99,25 @@ enum Command {
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --visits 1 --scans 1 --seed 77 --out nextday.csv
     #[command(verbatim_doc_comment)]
     Collect(learn::CollectArgs),
-    /// Train a QDA or LDA touch classifier and cross-validate it.
+    /// Train a touch model (classes or positions) and cross-validate it.
     ///
-    /// Train a QDA or LDA model on a collected training set (shrinkage chosen by
-    /// leave-one-visit-out cross-validation unless given), and cross-validate it. By default
-    /// the model is referenced: it classifies each frame minus its session's untouched frame,
+    /// On an et dataset (--data, from et collect): a QDA or LDA classifier for the board
+    /// (shrinkage chosen by leave-one-visit-out cross-validation unless given). By default the
+    /// model is referenced: it classifies each frame minus its session's untouched frame,
     /// which cancels electrode movement between sessions (--raw: docs/method.md §9's raw frames).
+    ///
+    /// On any sensor's data (--features F.csv, optionally --targets T.csv with the same rows):
+    /// qda, lda (class labels, or --grid RxC cells made from positions), ridge, kernel-ridge,
+    /// knn (positions x, y and an optional z or force), or auto (tries them by
+    /// cross-validation and says which won). Hyperparameters are chosen by cross-validation
+    /// inside the training rows (--rows A..B; --cv blocks for recordings in time order) and
+    /// printed. Files may have a UTF-8 byte-order mark, a header row or none, CRLF ends.
     ///
     /// Examples:
     ///   et train --data train.csv --out model.json
     ///   et train --data train.csv --kind lda --out lda.json --curve learning-curve.png
+    ///   et train --features F.csv --targets T.csv --unit m --rows 0..2000 --kind auto --out m.json
+    ///   et train --features F.csv --targets T.csv --unit m --grid 7x7 --kind lda --out cells.json
     #[command(verbatim_doc_comment)]
     Train(learn::TrainArgs),
     /// Evaluate a trained model on a test set: accuracy, mean position error, AEE, confusion.
@@ -122,9 +132,14 @@ enum Command {
     /// and the same by distance from the nearest electrode (where on the sheet the model is
     /// weaker).
     ///
+    /// A model trained on any sensor's data (--features) is evaluated on --features and
+    /// --targets files of the same shape: mean, median and 90th-percentile position error
+    /// (mm), accuracy for classes, and fit and predict times.
+    ///
     /// Examples:
     ///   et eval --model model.json --data nextday.csv
     ///   et eval --model model.json --data nextday.csv --plots plots/ --json
+    ///   et eval --model m.json --features F.csv --targets T.csv --unit m --rows 2000..2500 --json
     #[command(verbatim_doc_comment)]
     Eval(learn::EvalArgs),
     /// Export a trained model as the board's model blob.

@@ -1,0 +1,287 @@
+//! `et train` and `et eval` on any sensor's table (`--features F.csv [--targets T.csv]`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use et_host::plot;
+use et_learn::tabular::{self, Choice, RowRange, Table, TableModel, TrainOptions, Unit};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::output;
+
+/// The table a command reads.
+#[derive(Debug, clap::Args)]
+pub(crate) struct TableArgs {
+    /// Features from any sensor (CSV): one row per observation, any channel count; a header
+    /// row is optional, a UTF-8 byte-order mark and CRLF are fine. Columns named label, x, y
+    /// (and z, force or pressure) are targets, the rest features.
+    #[arg(long, value_name = "CSV")]
+    features: Option<PathBuf>,
+    /// Targets in a second CSV with the same rows: named columns as above, or without a
+    /// header one column (a class label, any text) or x, y and an optional third (z or
+    /// force).
+    #[arg(long, value_name = "CSV", requires = "features")]
+    targets: Option<PathBuf>,
+    /// Unit of the positions in the files (reports are in mm).
+    #[arg(long, value_enum, default_value_t = UnitArg::Mm, requires = "features")]
+    unit: UnitArg,
+    /// Only rows A..B (0-based, B excluded; A.. or ..B), e.g. the first 80 % to train and
+    /// the rest to test: a chronological split (real presses drift: a random split
+    /// flatters a model).
+    #[arg(long, value_name = "A..B", requires = "features")]
+    rows: Option<RowRange>,
+}
+
+/// `--unit`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum UnitArg {
+    /// Metres.
+    M,
+    /// Millimetres.
+    Mm,
+}
+
+impl TableArgs {
+    /// The table, its rows selected, with what was taken as what printed.
+    fn load(&self) -> Result<Table> {
+        let features = self
+            .features
+            .as_ref()
+            .context("give --features (and --targets)")?;
+        if !features.exists()
+            && features
+                .to_str()
+                .is_some_and(|s| s.parse::<usize>().is_ok())
+        {
+            bail!(
+                "--features {}: --features takes a CSV file; to keep only N features of an et \
+                 dataset use --keep N",
+                features.display()
+            );
+        }
+        let unit = match self.unit {
+            UnitArg::M => Unit::M,
+            UnitArg::Mm => Unit::Mm,
+        };
+        let table = Table::import(features, self.targets.as_deref(), unit)?;
+        eprintln!("read {}", table.description);
+        Ok(match self.rows {
+            Some(r) => {
+                let t = table.select(r)?;
+                eprintln!("using rows {r} ({} rows)", t.rows());
+                t
+            }
+            None => table,
+        })
+    }
+
+    fn inputs(&self) -> Vec<&Path> {
+        self.features
+            .iter()
+            .chain(self.targets.iter())
+            .map(PathBuf::as_path)
+            .collect()
+    }
+}
+
+/// A progress bar for the stages of a long training.
+fn bar() -> ProgressBar {
+    let bar = ProgressBar::new(1).with_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    if !console_is_interactive() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    bar
+}
+
+fn console_is_interactive() -> bool {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal()
+}
+
+/// Formats hyperparameters as `name=value, ...`.
+fn hyper(h: &std::collections::BTreeMap<String, f64>) -> String {
+    h.iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+pub(crate) fn train(
+    args: &TableArgs,
+    choice: Choice,
+    opts: &TrainOptions,
+    out: &Path,
+    json: bool,
+    force: bool,
+) -> Result<()> {
+    output::check(out, &args.inputs(), force)?;
+    let table = args.load()?;
+    let bar = bar();
+    let mut last = String::new();
+    let mut progress = |what: &str, done: usize, of: usize| {
+        if what != last {
+            if !last.is_empty() && !console_is_interactive() {
+                eprintln!("{last}: done");
+            }
+            last = what.to_string();
+            bar.set_message(what.to_string());
+            bar.set_length(of as u64);
+        }
+        bar.set_position(done as u64);
+    };
+    let model = tabular::train(&table, choice, opts, &mut progress)?;
+    bar.finish_and_clear();
+    output::write(out, |partial| model.save(partial))?;
+    let best = model
+        .search
+        .iter()
+        .find(|c| c.method == model.method && c.hyperparameters == model.hyperparameters);
+    if json {
+        out!(
+            "{}",
+            serde_json::to_string(&serde_json::json!({
+                "out": out,
+                "method": model.method,
+                "hyperparameters": model.hyperparameters,
+                "cv_folds": model.cv_folds,
+                "cv_scheme": model.cv_scheme,
+                "cv_mean_error_mm": best.and_then(|b| b.cv_mean_error_mm),
+                "cv_accuracy": best.and_then(|b| b.cv_accuracy),
+                "candidates": model.search,
+                "rows": model.trained_rows,
+                "features": model.features(),
+                "classes": model.classes.as_ref().map(|c| c.names.len()),
+                "fit_seconds": model.fit_seconds,
+                "source": model.source,
+            }))?
+        );
+        return Ok(());
+    }
+    // The best of each method tried, then the winner.
+    let mut methods: Vec<tabular::Method> = model.search.iter().map(|c| c.method).collect();
+    methods.dedup();
+    for m in &methods {
+        let best_of = model
+            .search
+            .iter()
+            .filter(|c| c.method == *m)
+            .min_by(|a, b| score(a).total_cmp(&score(b)));
+        if let Some(c) = best_of {
+            eprintln!(
+                "  {:<13} {}  ({})",
+                m.name(),
+                describe(c),
+                hyper(&c.hyperparameters)
+            );
+        }
+    }
+    eprintln!(
+        "trained {} on rows {}..{} ({} features{}), {}-fold {} cross-validation {}; chose {}; \
+         {:.1} s; wrote {}",
+        model.method.name(),
+        model.trained_rows[0],
+        model.trained_rows[1],
+        model.features(),
+        model
+            .classes
+            .as_ref()
+            .map_or(String::new(), |c| format!(", {} classes", c.names.len())),
+        model.cv_folds,
+        match model.cv_scheme {
+            tabular::CvScheme::Shuffled => "shuffled",
+            tabular::CvScheme::Blocks => "blocks",
+        },
+        best.map_or("-".into(), describe),
+        hyper(&model.hyperparameters),
+        model.fit_seconds,
+        out.display()
+    );
+    Ok(())
+}
+
+/// Smaller is better.
+fn score(c: &tabular::Candidate) -> f64 {
+    match (c.cv_mean_error_mm, c.cv_accuracy) {
+        (_, Some(a)) => 1.0 - a,
+        (Some(e), None) => e,
+        (None, None) => f64::INFINITY,
+    }
+}
+
+fn describe(c: &tabular::Candidate) -> String {
+    match (c.cv_mean_error_mm, c.cv_accuracy) {
+        (_, Some(a)) => format!("accuracy {:.1} %", 100.0 * a),
+        (Some(e), None) => format!("mean error {e:.2} mm"),
+        (None, None) => "could not be fitted".into(),
+    }
+}
+
+pub(crate) fn eval(
+    model_path: &Path,
+    args: &TableArgs,
+    plots: Option<&Path>,
+    json: bool,
+    force: bool,
+) -> Result<()> {
+    let pngs = plots.map(|d| (d.join("error-map.png"), d.join("predicted-vs-true.png")));
+    if let Some((a, b)) = &pngs {
+        let mut inputs = args.inputs();
+        inputs.push(model_path);
+        for png in [a, b] {
+            output::check(png, &inputs, force)?;
+        }
+    }
+    let model = TableModel::load(model_path)?;
+    let table = args.load()?;
+    let e = tabular::evaluate(&model, &table).map_err(|e| {
+        anyhow::anyhow!(
+            "{} with {}: {e}",
+            model_path.display(),
+            args.features
+                .as_deref()
+                .map_or_else(String::new, |p| p.display().to_string())
+        )
+    })?;
+    if let (Some(dir), Some((map, scatter))) = (plots, &pngs) {
+        if e.pairs.is_empty() {
+            eprintln!("note: no positions to plot (the rows or the model have none)");
+        } else {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            let title = format!("{} on {} rows", model.method.name(), e.observations);
+            output::write(map, |partial| plot::error_map(partial, &e.pairs, &title))?;
+            output::write(scatter, |partial| {
+                plot::predicted_vs_true(partial, &e.pairs, &title)
+            })?;
+        }
+    }
+    if json {
+        out!("{}", serde_json::to_string(&e)?);
+        return Ok(());
+    }
+    let mut parts = Vec::new();
+    if let Some(a) = e.accuracy {
+        parts.push(format!("accuracy {:.1} %", 100.0 * a));
+    }
+    if let (Some(m), Some(md), Some(p90)) = (e.mean_error_mm, e.median_error_mm, e.p90_error_mm) {
+        parts.push(format!(
+            "position error mean {m:.2} mm, median {md:.2} mm, 90th percentile {p90:.2} mm"
+        ));
+    }
+    if let Some(c) = e.mean_predictor_error_mm {
+        parts.push(format!("(always guessing the training mean: {c:.2} mm)"));
+    }
+    if let Some(d3) = e.mean_error_3d_mm {
+        parts.push(format!("with z: {d3:.2} mm"));
+    }
+    out!(
+        "{} rows, {}: {}; predicted in {:.1} ms",
+        e.observations,
+        model.method.name(),
+        parts.join(", "),
+        1e3 * e.predict_seconds
+    );
+    Ok(())
+}
