@@ -1,0 +1,34 @@
+//! Writes the stand-in e-skin data set (`et_learn::standin`) in its foreign format:
+//! `features.csv` (n x 192, board units) and `targets.csv` (x, y, z in metres), both with a
+//! byte-order mark and no header, for trying `et train --features` and for the comparison
+//! with scikit-learn on the same rows.
+//!
+//! Usage: cargo run --release -p et-learn --example standin -- DIR [ROWS] [SESSIONS] [SEED]
+//! (defaults: 2500 rows over 5 sessions, seed 1).
+
+use std::path::PathBuf;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let dir = PathBuf::from(
+        args.next()
+            .ok_or("usage: standin DIR [ROWS] [SESSIONS] [SEED]")?,
+    );
+    let rows: usize = args.next().map_or(Ok(2_500), |v| v.parse())?;
+    let sessions: usize = args.next().map_or(Ok(5), |v| v.parse())?;
+    let seed: u64 = args.next().map_or(Ok(1), |v| v.parse())?;
+    std::fs::create_dir_all(&dir)?;
+    let started = std::time::Instant::now();
+    let data = et_learn::standin::make(rows, sessions, seed)?;
+    let (f, t) = (dir.join("features.csv"), dir.join("targets.csv"));
+    data.write(&f, &t)?;
+    eprintln!(
+        "wrote {} and {} ({} rows x {} features, {sessions} sessions, seed {seed}) in {:.1} s",
+        f.display(),
+        t.display(),
+        data.features.nrows(),
+        data.features.ncols(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
