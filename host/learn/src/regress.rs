@@ -26,6 +26,13 @@ fn standardise(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> DMatrix<f64> {
     })
 }
 
+/// The rows of `x` (n x p) in z-space, as faer's matrix for the kernel products.
+fn z_space(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> Mat<f64> {
+    Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
+        (x[(r, j)] - mean[j]) / scale[j]
+    })
+}
+
 fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
     if x.nrows() != t.len() || x.nrows() < 2 || x.ncols() == 0 {
         return Err(FitError::Shape(format!(
@@ -280,7 +287,7 @@ impl KernelRidge {
         let m = m.clamp(2, n);
         let rows: Vec<usize> = (0..m).map(|i| i * n / m).collect();
         let (mean, scale) = standardisation(x);
-        let support = Mat::from_fn(m, x.ncols(), |r, j| (x[(rows[r], j)] - mean[j]) / scale[j]);
+        let support = z_space(&x.select_rows(&rows), &mean, &scale);
         let d2 = squared_distances(&support, &support);
         let first = m.min(400);
         let mut pairs: Vec<f64> = (0..first)
@@ -352,16 +359,21 @@ impl KernelRidge {
     /// matrix product, then the kernel times alpha as another (one core).
     #[must_use]
     pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
-        let z = Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
-            (x[(r, j)] - self.mean[j]) / self.scale[j]
+        self.predict_from_distances(&self.distances(x))
+    }
+
+    /// Squared z-space distances from the rows of `x` (n x p, volts) to the support, n x m.
+    /// Every fit of [`fit_grid`](Self::fit_grid) shares them: compute once, predict many.
+    pub(crate) fn distances(&self, x: &DMatrix<f64>) -> Mat<f64> {
+        squared_distances(&z_space(x, &self.mean, &self.scale), &self.support)
+    }
+
+    /// Predictions from [`distances`](Self::distances).
+    pub(crate) fn predict_from_distances(&self, d2: &Mat<f64>) -> Vec<Target3> {
+        let k = Mat::from_fn(d2.nrows(), d2.ncols(), |i, j| {
+            (-self.gamma * d2[(i, j)]).exp()
         });
-        let mut k = squared_distances(&z, &self.support);
-        for j in 0..k.ncols() {
-            for v in k.col_mut(j).iter_mut() {
-                *v = (-self.gamma * *v).exp();
-            }
-        }
-        let mut out = Mat::<f64>::zeros(x.nrows(), 3);
+        let mut out = Mat::<f64>::zeros(d2.nrows(), 3);
         matmul(
             out.as_mut(),
             Accum::Replace,
@@ -370,7 +382,7 @@ impl KernelRidge {
             1.0,
             Par::Seq,
         );
-        (0..x.nrows())
+        (0..d2.nrows())
             .map(|r| std::array::from_fn(|c| out[(r, c)] + self.intercept[c]))
             .collect()
     }
@@ -422,9 +434,7 @@ impl Knn {
             return Err(FitError::Shape("k = 0 neighbours".into()));
         }
         let (mean, scale) = standardisation(x);
-        let support = Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
-            (x[(r, j)] - mean[j]) / scale[j]
-        });
+        let support = z_space(x, &mean, &scale);
         Ok(Self {
             mean,
             scale,
@@ -439,10 +449,7 @@ impl Knn {
     /// (squared distance, index), nearest first: the distances as one matrix product.
     #[must_use]
     pub fn neighbours(&self, x: &DMatrix<f64>, k_max: usize) -> Vec<Vec<(f64, usize)>> {
-        let z = Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
-            (x[(r, j)] - self.mean[j]) / self.scale[j]
-        });
-        let d2 = squared_distances(&z, &self.support);
+        let d2 = squared_distances(&z_space(x, &self.mean, &self.scale), &self.support);
         let k = k_max.clamp(1, self.support.nrows());
         (0..x.nrows())
             .map(|r| {

@@ -264,8 +264,7 @@ impl Table {
         if end > n || range.start >= end {
             return Err(usage(format!("--rows {range}: the data has rows 0..{n}")));
         }
-        let pick = |r: std::ops::Range<usize>| r;
-        let rows = pick(range.start..end);
+        let rows = range.start..end;
         Ok(Self {
             x: self.x.rows(rows.start, rows.len()).into_owned(),
             feature_names: self.feature_names.clone(),
@@ -643,14 +642,13 @@ pub fn train(
     let mut search: Vec<Candidate> = Vec::new();
     for &method in &methods {
         let found = if method.is_classifier() {
-            let (labels, info) = classes.as_ref().ok_or_else(|| {
+            let (labels, _) = classes.as_ref().ok_or_else(|| {
                 usage(format!(
                     "{} needs class labels: give a label column, or make classes from the \
                      positions with a grid (--grid 7x7)",
                     method.name()
                 ))
             })?;
-            let _ = info;
             search_classifier(table, method, labels, opts, progress)?
         } else {
             let t = targets.as_ref().ok_or_else(|| {
@@ -857,9 +855,12 @@ fn search_regressor(
                 .map(|m| m.map(|m| m.predict_many(&xv)))
                 .collect(),
             Method::KernelRidge => {
-                KernelRidge::fit_grid(&xt, &tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?
-                    .into_iter()
-                    .map(|m| m.map(|m| m.predict_many(&xv)))
+                let fits =
+                    KernelRidge::fit_grid(&xt, &tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
+                // Every fit of the grid shares the support: the held-out rows' distances once.
+                let d2 = fits.iter().flatten().next().map(|m| m.distances(&xv));
+                fits.into_iter()
+                    .map(|m| Some(m?.predict_from_distances(d2.as_ref()?)))
                     .collect()
             }
             Method::Knn => {
