@@ -1,0 +1,101 @@
+"""scikit-learn's side of the table in docs/measurements.md ("Your own sensor's data: et beside
+scikit-learn"): the same stand-in rows, the same chronological split, each regressor with its
+hyperparameters chosen by 5-fold cross-validation inside the training rows, timed on one core.
+
+Make the stand-in and run (one BLAS thread, one core):
+
+    cargo run --release -p et-learn --example standin -- /tmp/si 2500
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 \
+        python host/learn/benches/tabular_sklearn.py /tmp/si [--kinds ridge,knn,...]
+
+Prints one row per kind: the search + fit time, the time to predict the 500 test rows, and the
+test rows' mean / median / 90th-percentile position error in mm (x, y; targets are in metres).
+"""
+import sys
+import time
+
+import numpy as np
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+from sklearn.kernel_ridge import KernelRidge
+from sklearn.linear_model import Ridge
+from sklearn.model_selection import GridSearchCV, KFold
+from sklearn.neighbors import KNeighborsRegressor
+from sklearn.neural_network import MLPRegressor
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+
+
+def load(path):
+    # The stand-in's files carry a byte-order mark, no header and CRLF line ends.
+    return np.loadtxt(path, delimiter=",", encoding="utf-8-sig", ndmin=2)
+
+
+def candidates(features, median):
+    # et's kernel widths: gamma = w / (median squared distance between standardised rows).
+    return {
+        "ridge": (Ridge(), {"ridge__alpha": np.logspace(-4, 4, 9)}),
+        "kernel-ridge": (
+            KernelRidge(kernel="rbf"),
+            {
+                "kernelridge__alpha": [1e-4, 1e-3, 1e-2, 1e-1],
+                "kernelridge__gamma": [w / median for w in (0.25, 0.5, 1.0, 2.0)],
+            },
+        ),
+        "knn": (
+            KNeighborsRegressor(),
+            {"kneighborsregressor__n_neighbors": [1, 2, 3, 5, 8, 12, 20, 30],
+             "kneighborsregressor__weights": ["uniform", "distance"]},
+        ),
+        "mlp": (
+            MLPRegressor(hidden_layer_sizes=(64, 64), max_iter=500, early_stopping=True,
+                         random_state=0),
+            {"mlpregressor__alpha": [1e-4, 1e-2]},
+        ),
+        "gp-ard": (
+            GaussianProcessRegressor(
+                ConstantKernel() * RBF(length_scale=np.full(features, np.sqrt(features)))
+                + WhiteKernel(1e-2),
+                normalize_y=True, random_state=0),
+            None,
+        ),
+    }
+
+
+def main():
+    folder = sys.argv[1] if len(sys.argv) > 1 else "/tmp/si"
+    kinds = None
+    if "--kinds" in sys.argv:
+        kinds = sys.argv[sys.argv.index("--kinds") + 1].split(",")
+    x = load(f"{folder}/features.csv")
+    t = load(f"{folder}/targets.csv") * 1000.0  # m -> mm
+    train, test = slice(0, 2000), slice(2000, 2500)
+    print(f"{x.shape[0]} rows x {x.shape[1]} features; train rows 0..2000, test rows 2000..2500")
+    print(f"{'kind':<14}{'search+fit s':>13}{'predict ms':>12}{'mean mm':>9}{'median mm':>11}{'p90 mm':>8}  chosen")
+    z = StandardScaler().fit(x[train]).transform(x[train])[:400]
+    d2 = ((z[:, None, :] - z[None, :, :]) ** 2).sum(-1)[np.triu_indices(len(z), 1)]
+    for name, (model, grid) in candidates(x.shape[1], np.median(d2)).items():
+        if kinds and name not in kinds:
+            continue
+        pipe = make_pipeline(StandardScaler(), model)
+        start = time.perf_counter()
+        if grid is None:
+            pipe.fit(x[train], t[train])
+            chosen = ""
+        else:
+            search = GridSearchCV(pipe, grid, cv=KFold(5, shuffle=True, random_state=0),
+                                  scoring="neg_mean_squared_error")
+            search.fit(x[train], t[train])
+            pipe = search.best_estimator_
+            chosen = ", ".join(f"{k.split('__')[1]}={v}" for k, v in search.best_params_.items())
+        fit = time.perf_counter() - start
+        start = time.perf_counter()
+        p = pipe.predict(x[test])
+        predict = time.perf_counter() - start
+        e = np.hypot(*(p[:, :2] - t[test][:, :2]).T)
+        print(f"{name:<14}{fit:>13.2f}{predict * 1e3:>12.1f}{e.mean():>9.2f}{np.median(e):>11.2f}"
+              f"{np.percentile(e, 90):>8.2f}  {chosen}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
