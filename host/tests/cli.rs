@@ -341,7 +341,7 @@ fn collect_train_eval_export_chain() {
     ]);
     assert!(
         String::from_utf8_lossy(&bad.stderr)
-            .contains("[possible values: qda, lda, ridge, kernel-ridge, knn, auto]")
+            .contains("[possible values: qda, lda, ridge, kernel-ridge, knn, gp, auto]")
     );
     let bad = et(&[
         "collect",
@@ -818,7 +818,7 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     let tr = json(ok(train(&["--kind", "auto"], &auto)));
     let method = tr["method"].as_str().unwrap().to_string();
     assert!(
-        ["ridge", "knn", "kernel-ridge"].contains(&method.as_str()),
+        ["ridge", "knn", "kernel-ridge", "gp"].contains(&method.as_str()),
         "{tr}"
     );
     assert_eq!(tr["rows"], serde_json::json!([0, 240]));
@@ -851,6 +851,7 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
         ("ridge", vec![]),
         ("knn", vec![]),
         ("kernel-ridge", vec![]),
+        ("gp", vec![]),
         ("lda", vec!["--grid", "3x3"]),
         ("qda", vec!["--grid", "3x3", "--cv", "blocks"]),
     ] {

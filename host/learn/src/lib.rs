@@ -30,6 +30,7 @@ pub mod cv;
 pub mod dataset;
 pub mod fastcv;
 pub mod fit;
+pub mod gp;
 pub mod model_file;
 pub mod pipeline;
 pub mod regress;

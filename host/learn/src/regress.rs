@@ -27,13 +27,13 @@ fn standardise(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> DMatrix<f64> {
 }
 
 /// The rows of `x` (n x p) in z-space, as faer's matrix for the kernel products.
-fn z_space(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> Mat<f64> {
+pub(crate) fn z_space(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> Mat<f64> {
     Mat::from_fn(x.nrows(), x.ncols(), |r, j| {
         (x[(r, j)] - mean[j]) / scale[j]
     })
 }
 
-fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
+pub(crate) fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
     if x.nrows() != t.len() || x.nrows() < 2 || x.ncols() == 0 {
         return Err(FitError::Shape(format!(
             "{} observations of {} features with {} targets",
@@ -55,7 +55,7 @@ fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
     Ok(())
 }
 
-fn target_mean(t: &[Target3]) -> Target3 {
+pub(crate) fn target_mean(t: &[Target3]) -> Target3 {
     let mut m = [0.0; 3];
     for row in t {
         for k in 0..3 {
@@ -208,6 +208,22 @@ pub(crate) fn rows_of(m: &Mat<f64>) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The median of the squared distances `d2` (m x m) between the first 400 rows, the scale
+/// kernel widths are measured in (at least 1e-12).
+pub(crate) fn median_pair(d2: &Mat<f64>) -> f64 {
+    let first = d2.nrows().min(400);
+    let mut pairs: Vec<f64> = (0..first)
+        .flat_map(|a| ((a + 1)..first).map(move |b| (a, b)))
+        .map(|(a, b)| d2[(a, b)])
+        .collect();
+    pairs.sort_by(f64::total_cmp);
+    pairs
+        .get(pairs.len() / 2)
+        .copied()
+        .unwrap_or(1.0)
+        .max(1e-12)
+}
+
 /// e^(-a), the Gaussian kernel's weight for a = gamma |z - z_i|^2 >= 0; to 2 ulp of the exact
 /// value, 0 below the smallest normal number (a > 708), NaN for NaN.
 ///
@@ -335,17 +351,7 @@ impl KernelRidge {
         let (mean, scale) = standardisation(x);
         let support = z_space(&x.select_rows(&rows), &mean, &scale);
         let d2 = squared_distances(&support, &support);
-        let first = m.min(400);
-        let mut pairs: Vec<f64> = (0..first)
-            .flat_map(|a| ((a + 1)..first).map(move |b| (a, b)))
-            .map(|(a, b)| d2[(a, b)])
-            .collect();
-        pairs.sort_by(f64::total_cmp);
-        let median = pairs
-            .get(pairs.len() / 2)
-            .copied()
-            .unwrap_or(1.0)
-            .max(1e-12);
+        let median = median_pair(&d2);
         let ts: Vec<Target3> = rows.iter().map(|&r| t[r]).collect();
         let intercept = target_mean(&ts);
         let mut fits = Vec::with_capacity(widths.len() * lambdas.len());

@@ -28,6 +28,7 @@ use super::cv::{self, Confusion};
 use super::dataset::{DatasetError, import_csv};
 use super::fastcv::cross_validate_fast;
 use super::fit::{FitError, FitOptions, Fitted, Target};
+use super::gp::{Gp, GpOptions};
 use super::model_file::{ClassRecord, class_records, fitted_from_records};
 use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summarise};
 
@@ -286,7 +287,8 @@ impl Table {
     }
 
     /// Targets as (x mm, y mm, third or 0), when the table has positions.
-    fn targets(&self) -> Option<Vec<Target3>> {
+    #[must_use]
+    pub fn targets(&self) -> Option<Vec<Target3>> {
         let p = self.positions_mm.as_ref()?;
         Some(
             p.iter()
@@ -318,6 +320,9 @@ pub enum Method {
     KernelRidge,
     /// k nearest neighbours (positions), k and weighting by cross-validation.
     Knn,
+    /// Gaussian process with one length scale per feature (positions), every hyperparameter
+    /// learned by marginal likelihood (`gp`).
+    Gp,
 }
 
 impl Method {
@@ -330,6 +335,7 @@ impl Method {
             Method::Ridge => "ridge",
             Method::KernelRidge => "kernel-ridge",
             Method::Knn => "knn",
+            Method::Gp => "gp",
         }
     }
 
@@ -507,6 +513,21 @@ pub enum Tables {
         /// Targets' training mean.
         intercept: [f64; 3],
     },
+    /// (x, y, third) = intercept + sum_i alpha_i exp(-1/2 sum_l ((z_l - s_il) / l_l)^2).
+    Gp {
+        /// The learned length scale l_l of each feature (z-space units).
+        length_scales: Vec<f64>,
+        /// The learned signal and noise variances (standardised positions' units).
+        signal_variance: f64,
+        /// (as above)
+        noise_variance: f64,
+        /// m support rows s_i (z-space).
+        support: Vec<Vec<f64>>,
+        /// m rows of 3 weights.
+        alpha: Vec<[f64; 3]>,
+        /// Targets' training mean.
+        intercept: [f64; 3],
+    },
     /// The (weighted) mean target of the k nearest support rows.
     Knn {
         /// k.
@@ -608,6 +629,8 @@ pub const KRR_SUPPORT: usize = 3_000;
 const KRR_SEARCH_SUPPORT: usize = 1_200;
 /// k-nearest-neighbour candidates.
 const KNN_KS: [usize; 8] = [1, 2, 3, 5, 8, 12, 20, 30];
+/// The Gaussian process's learning rows, iterations and support.
+const GP: GpOptions = GpOptions::DEFAULT;
 
 /// Trains `choice` on `table` (all its rows: select the training rows first), hyperparameters
 /// by `opts.folds`-fold cross-validation inside them.
@@ -635,7 +658,7 @@ pub fn train(
     let methods: Vec<Method> = match choice {
         Choice::One(m) => vec![m],
         Choice::Auto if targets.is_some() && opts.grid.is_none() => {
-            vec![Method::Ridge, Method::Knn, Method::KernelRidge]
+            vec![Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp]
         }
         Choice::Auto => vec![Method::Lda, Method::Qda],
     };
@@ -670,7 +693,7 @@ pub fn train(
     let mut last_error = None;
     for best in ranked {
         progress(&format!("fitting {}", best.method.name()), 0, 1);
-        match fit_final(table, best, targets.as_deref(), classes.as_ref()) {
+        match fit_final(table, best, targets.as_deref(), classes.as_ref(), progress) {
             Ok(f) => {
                 fitted = Some((best.clone(), f));
                 break;
@@ -686,6 +709,25 @@ pub fn train(
         })
     })?;
     progress(&format!("fitting {}", best.method.name()), 1, 1);
+    let mut hyperparameters = best.hyperparameters.clone();
+    if let Tables::Gp {
+        length_scales,
+        signal_variance,
+        noise_variance,
+        ..
+    } = &tables
+    {
+        let mut sorted = length_scales.clone();
+        sorted.sort_by(f64::total_cmp);
+        hyperparameters.extend([
+            ("signal_variance".to_string(), *signal_variance),
+            ("noise_variance".to_string(), *noise_variance),
+            (
+                "length_scale_median".to_string(),
+                sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
+            ),
+        ]);
+    }
     Ok(TableModel {
         format: "et-table-model".into(),
         version: 1,
@@ -700,7 +742,7 @@ pub fn train(
         } else {
             None
         },
-        hyperparameters: best.hyperparameters.clone(),
+        hyperparameters,
         search,
         cv_folds: opts.folds,
         cv_scheme: opts.scheme,
@@ -831,17 +873,37 @@ fn search_regressor(
             .iter()
             .flat_map(|&k| [0.0, 1.0].map(|d| params(&[("k", k as f64), ("distance_weighted", d)])))
             .collect(),
+        Method::Gp => vec![params(&[
+            ("learn_rows", GP.learn_rows.min(n) as f64),
+            ("iterations", GP.iterations as f64),
+        ])],
         Method::Qda | Method::Lda => return Err(usage("not a regressor")),
     };
     // Out-of-fold predictions of every candidate.
     let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
-    let what = format!(
-        "cross-validating {} ({} candidates)",
-        method.name(),
-        grid.len()
-    );
+    // Progress steps per fold: the Gaussian process reports each of its iterations, and says
+    // beforehand how long its folds and final fit will take.
+    let steps = if method == Method::Gp {
+        GP.iterations
+    } else {
+        1
+    };
+    let what = if method == Method::Gp {
+        format!(
+            "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
+            opts.folds,
+            Gp::estimate_seconds(x, &GP, opts.folds + 1)
+        )
+    } else {
+        format!(
+            "cross-validating {} ({} candidates)",
+            method.name(),
+            grid.len()
+        )
+    };
+    let total = opts.folds * steps;
     for f in 0..opts.folds {
-        progress(&what, f, opts.folds);
+        progress(&what, f * steps, total);
         let train: Vec<usize> = (0..n).filter(|&r| fold.get(r) != Some(&f)).collect();
         let test: Vec<usize> = (0..n).filter(|&r| fold.get(r) == Some(&f)).collect();
         if test.is_empty() || train.len() < 2 {
@@ -879,6 +941,14 @@ fn search_regressor(
                     })
                     .collect()
             }
+            Method::Gp => {
+                let mut step = |done: usize, _: usize| progress(&what, f * steps + done, total);
+                vec![
+                    Gp::fit(&xt, &tt, &GP, &mut step)
+                        .ok()
+                        .map(|m| m.predict_many(&xv)),
+                ]
+            }
             Method::Qda | Method::Lda => Vec::new(),
         };
         for (c, p) in fold_pred.into_iter().enumerate() {
@@ -892,7 +962,7 @@ fn search_regressor(
             }
         }
     }
-    progress(&what, opts.folds, opts.folds);
+    progress(&what, total, total);
     Ok(grid
         .into_iter()
         .zip(pred)
@@ -1041,6 +1111,7 @@ fn fit_final(
     best: &Candidate,
     targets: Option<&[Target3]>,
     classes: Option<&(Labels, ClassInfo)>,
+    progress: Progress<'_>,
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
     let need_targets = || targets.ok_or_else(|| usage("this method needs positions"));
@@ -1094,6 +1165,38 @@ fn fit_final(
                 },
                 m.mean,
                 m.scale,
+            )
+        }
+        Method::Gp => {
+            let what = "fitting gp (learning its length scales on every training row)";
+            let mut step = |done: usize, of: usize| progress(what, done, of);
+            let m = Gp::fit(&table.x, need_targets()?, &GP, &mut step)?;
+            let k = &m.predictor;
+            // The predictor's scales are the features' spreads times the length scales.
+            let scale = k
+                .scale
+                .iter()
+                .zip(&m.length_scales)
+                .map(|(s, l)| s / l)
+                .collect();
+            (
+                Tables::Gp {
+                    support: (0..k.support.nrows())
+                        .map(|i| {
+                            (k.support.row(i).iter())
+                                .zip(&m.length_scales)
+                                .map(|(v, l)| v * l)
+                                .collect()
+                        })
+                        .collect(),
+                    alpha: regress::rows3(&k.alpha),
+                    intercept: k.intercept,
+                    length_scales: m.length_scales,
+                    signal_variance: m.signal_variance,
+                    noise_variance: m.noise_variance,
+                },
+                k.mean.clone(),
+                scale,
             )
         }
         Method::Knn => {
@@ -1254,6 +1357,49 @@ impl TableModel {
                     }),
                     support,
                     gamma: *gamma,
+                    intercept: *intercept,
+                })
+            }
+            Tables::Gp {
+                length_scales,
+                signal_variance,
+                noise_variance,
+                support,
+                alpha,
+                intercept,
+            } => {
+                method_ok(Method::Gp)?;
+                let support = matrix(support, "gp support")?;
+                if alpha.len() != support.nrows() || length_scales.len() != p {
+                    return Err(
+                        "gp: one alpha row per support row, one length scale per feature".into(),
+                    );
+                }
+                finite3(alpha, "gp alpha")?;
+                finite3(&[*intercept], "gp intercept")?;
+                let positive = |v: f64| v.is_finite() && v > 0.0;
+                if !(length_scales.iter().all(|&l| positive(l))
+                    && positive(*signal_variance)
+                    && positive(*noise_variance))
+                {
+                    return Err("gp: length scales and variances must be positive".into());
+                }
+                // The posterior mean is kernel ridge in the length-scaled space.
+                Ready::KernelRidge(KernelRidge {
+                    mean: self.feature_mean.clone(),
+                    scale: self
+                        .feature_scale
+                        .iter()
+                        .zip(length_scales)
+                        .map(|(s, l)| s * l)
+                        .collect(),
+                    alpha: Mat::from_fn(alpha.len(), 3, |i, c| {
+                        alpha.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
+                    }),
+                    support: Mat::from_fn(support.nrows(), p, |i, j| {
+                        support[(i, j)] / length_scales.get(j).copied().unwrap_or(1.0)
+                    }),
+                    gamma: 0.5,
                     intercept: *intercept,
                 })
             }
@@ -1514,14 +1660,25 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
 }
 
 impl TableModel {
+    /// The search's candidate that was chosen (what cross-validation said of it). Its
+    /// hyperparameters are among the model's, which may add learned ones (the Gaussian
+    /// process's variances).
+    #[must_use]
+    pub fn chosen(&self) -> Option<&Candidate> {
+        self.search.iter().find(|c| {
+            c.method == self.method
+                && (c.hyperparameters.iter()).all(|(k, v)| self.hyperparameters.get(k) == Some(v))
+        })
+    }
+
     /// The mean training position, mm (regressors: their intercept or targets' mean; classes:
     /// the count-weighted class positions), when known.
     #[must_use]
     pub fn training_mean_position(&self) -> Option<[f64; 2]> {
         match &self.tables {
-            Tables::Ridge { intercept, .. } | Tables::KernelRidge { intercept, .. } => {
-                Some([intercept[0], intercept[1]])
-            }
+            Tables::Ridge { intercept, .. }
+            | Tables::KernelRidge { intercept, .. }
+            | Tables::Gp { intercept, .. } => Some([intercept[0], intercept[1]]),
             Tables::Knn { targets, .. } => {
                 let n = targets.len().max(1) as f64;
                 Some(
@@ -1605,7 +1762,7 @@ mod tests {
         let test_rows = STANDIN.select("300..".parse().unwrap()).unwrap();
         assert_eq!(test_rows.first_row, 300);
         let dir = tmp("regressors");
-        for method in [Method::Ridge, Method::Knn, Method::KernelRidge] {
+        for method in [Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp] {
             let model = train(&train_rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
             assert_eq!(model.method, method);
             assert_eq!(model.trained_rows, [0, 300]);
@@ -1645,7 +1802,7 @@ mod tests {
         assert_eq!(model.method, best.1);
         let tried: std::collections::HashSet<Method> =
             model.search.iter().map(|c| c.method).collect();
-        assert_eq!(tried.len(), 3);
+        assert_eq!(tried.len(), 4);
     }
 
     /// Classes made from positions on a grid: QDA and LDA beat chance on later presses, and

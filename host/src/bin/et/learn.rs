@@ -73,7 +73,8 @@ pub(crate) struct TrainArgs {
     #[command(flatten)]
     table: crate::tabular::TableArgs,
     /// The model. On --data: qda (a covariance per class) or lda (one pooled covariance);
-    /// default qda. On --features: also ridge, kernel-ridge (RBF), knn, or auto (every
+    /// default qda. On --features: also ridge, kernel-ridge (RBF), knn, gp (a Gaussian
+    /// process learning a length scale per feature), or auto (every
     /// method that fits the targets, the best by cross-validation); default auto.
     #[arg(long, value_enum)]
     kind: Option<KindArg>,
@@ -258,6 +259,9 @@ pub(crate) enum KindArg {
     KernelRidge,
     /// k nearest neighbours' mean position (--features).
     Knn,
+    /// Gaussian process with a length scale per feature, learned by marginal likelihood
+    /// (--features): slower (it shows how long), learns which channels matter.
+    Gp,
     /// Every method that fits the targets, the best by cross-validation (--features).
     Auto,
 }
@@ -303,6 +307,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             KindArg::Ridge => Choice::One(Method::Ridge),
             KindArg::KernelRidge => Choice::One(Method::KernelRidge),
             KindArg::Knn => Choice::One(Method::Knn),
+            KindArg::Gp => Choice::One(Method::Gp),
             KindArg::Auto => Choice::Auto,
         };
         let grid = args

@@ -108,7 +108,7 @@ enum Command {
     ///
     /// On any sensor's data (--features F.csv, optionally --targets T.csv with the same rows):
     /// qda, lda (class labels, or --grid RxC cells made from positions), ridge, kernel-ridge,
-    /// knn (positions x, y and an optional z or force), or auto (tries them by
+    /// knn, gp (positions x, y and an optional z or force), or auto (tries them by
     /// cross-validation and says which won). Hyperparameters are chosen by cross-validation
     /// inside the training rows (--rows A..B; --cv blocks for recordings in time order) and
     /// printed. Files may have a UTF-8 byte-order mark, a header row or none, CRLF ends.

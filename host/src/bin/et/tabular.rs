@@ -87,7 +87,7 @@ impl TableArgs {
 /// A progress bar for the stages of a long training.
 fn bar() -> ProgressBar {
     let bar = ProgressBar::new(1).with_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed})")
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed}, {eta} left)")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     if !console_is_interactive() {
@@ -135,10 +135,7 @@ pub(crate) fn train(
     let model = tabular::train(&table, choice, opts, &mut progress)?;
     bar.finish_and_clear();
     output::write(out, |partial| model.save(partial))?;
-    let best = model
-        .search
-        .iter()
-        .find(|c| c.method == model.method && c.hyperparameters == model.hyperparameters);
+    let best = model.chosen();
     if json {
         out!(
             "{}",
