@@ -83,8 +83,33 @@ pub struct Trained {
     /// The folds the shrinkage was chosen on (by visit, or stratified): learning curves reuse
     /// them.
     pub selection_folds: Vec<usize>,
+    /// How the shrinkage was chosen.
+    pub chosen_by: ChosenBy,
     /// Where the recipe changed because the data are too few (empty normally).
     pub fallbacks: Vec<Fallback>,
+}
+
+/// How [`train`] chose the shrinkage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ChosenBy {
+    /// It was given.
+    Given,
+    /// Leave-one-visit-out cross-validation.
+    LeaveOneVisitOut,
+    /// Stratified k-fold cross-validation, with k folds (one visit, or leave-one-visit-out
+    /// could not choose).
+    KFold(usize),
+}
+
+impl std::fmt::Display for ChosenBy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ChosenBy::Given => write!(f, "given"),
+            ChosenBy::LeaveOneVisitOut => write!(f, "chosen by leave-one-visit-out"),
+            ChosenBy::KFold(k) => write!(f, "chosen by stratified {k}-fold"),
+        }
+    }
 }
 
 /// What [`train`] did differently from the usual recipe because the data are too few, said
@@ -114,6 +139,13 @@ pub enum Fallback {
         /// Why.
         reason: String,
     },
+    /// QDA's chosen shrinkage was 1 toward the pooled covariance: every class has the pooled
+    /// covariance, which is LDA (the same decisions); the LDA is what was fitted, C times
+    /// smaller.
+    QdaIsLda {
+        /// C.
+        classes: usize,
+    },
 }
 
 impl std::fmt::Display for Fallback {
@@ -138,6 +170,12 @@ impl std::fmt::Display for Fallback {
             Fallback::NoLeaveOneVisitOut { reason } => {
                 write!(f, "no leave-one-visit-out accuracy ({reason})")
             }
+            Fallback::QdaIsLda { classes } => write!(
+                f,
+                "qda's best shrinkage is 1 toward the pooled covariance: every class then has \
+                 the pooled covariance, which is lda (the same decisions); saved the lda, one \
+                 covariance instead of {classes}"
+            ),
         }
     }
 }
@@ -214,16 +252,31 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
     } else {
         Err(String::new())
     };
-    let ((shrinkage, shrinkage_scores), selection_folds) = match by_visit_choice {
-        Ok(choice) => (choice, by_visit.clone()),
+    let ((shrinkage, shrinkage_scores), selection_folds, chosen_by) = match by_visit_choice {
+        Ok(choice) => (choice, by_visit.clone(), ChosenBy::LeaveOneVisitOut),
         Err(reason) => {
             if several_visits && options.shrinkage.is_none() {
                 fallbacks.push(Fallback::KFoldSelection { reason });
             }
-            (choose(&strat)?, strat.clone())
+            let k = options.folds.max(2);
+            (choose(&strat)?, strat.clone(), ChosenBy::KFold(k))
         }
     };
-    let opts = FitOptions { shrinkage, ..base };
+    let chosen_by = if options.shrinkage.is_some() {
+        ChosenBy::Given
+    } else {
+        chosen_by
+    };
+    let opts = if options.kind == ModelKind::Qda && target == Target::Pooled && shrinkage >= 1.0 {
+        fallbacks.push(Fallback::QdaIsLda { classes });
+        FitOptions {
+            kind: ModelKind::Lda,
+            shrinkage: 0.0,
+            target: Target::Diagonal,
+        }
+    } else {
+        FitOptions { shrinkage, ..base }
+    };
     let model = Fitted::fit(x, y, classes, &opts)?;
     let cv = cross_validate_fast(x, y, classes, &opts, &strat)?;
     let leave_one_visit_out = if several_visits {
@@ -246,6 +299,7 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
         cv,
         leave_one_visit_out,
         selection_folds,
+        chosen_by,
         fallbacks,
     })
 }

@@ -599,6 +599,10 @@ pub struct TableModel {
     pub source: String,
     /// Seconds the training took (search and final fit).
     pub fit_seconds: f64,
+    /// What the training changed from the request, and why (e.g. a QDA saved as the LDA it
+    /// equals); absent when nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
     /// The fitted tables.
     pub tables: Tables,
 }
@@ -692,16 +696,18 @@ pub fn train(
     let mut fitted = None;
     let mut last_error = None;
     for best in ranked {
+        let lda = as_lda_if_equal(best, table.x.ncols(), classes.as_ref().map(|(l, _)| l));
+        let best = lda.as_ref().unwrap_or(best);
         progress(&format!("fitting {}", best.method.name()), 0, 1);
         match fit_final(table, best, targets.as_deref(), classes.as_ref(), progress) {
             Ok(f) => {
-                fitted = Some((best.clone(), f));
+                fitted = Some((best.clone(), f, lda.is_some()));
                 break;
             }
             Err(e) => last_error = Some(e),
         }
     }
-    let (best, (tables, mean, scale)) = fitted.ok_or_else(|| {
+    let (best, (tables, mean, scale), qda_is_lda) = fitted.ok_or_else(|| {
         last_error.unwrap_or_else(|| {
             TabularError::Fit(FitError::Shape(
                 "no candidate could be fitted in cross-validation".into(),
@@ -709,6 +715,16 @@ pub fn train(
         })
     })?;
     progress(&format!("fitting {}", best.method.name()), 1, 1);
+    let note = qda_is_lda.then(|| {
+        // Its cross-validation is the QDA's: the same classifier in every fold.
+        search.push(best.clone());
+        format!(
+            "qda's best shrinkage is 1 toward the pooled covariance: every class then has the \
+             pooled covariance, which is lda (the same decisions); saved the lda, one \
+             covariance instead of {}",
+            classes.as_ref().map_or(0, |(l, _)| l.names.len())
+        )
+    });
     let mut hyperparameters = best.hyperparameters.clone();
     if let Tables::Gp {
         length_scales,
@@ -749,7 +765,25 @@ pub fn train(
         trained_rows: [table.first_row, table.first_row + n],
         source: table.description.clone(),
         fit_seconds: started.elapsed().as_secs_f64(),
+        note,
         tables,
+    })
+}
+
+/// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
+/// in every fold as on all rows: that is LDA at shrinkage 0, as that LDA candidate (scored
+/// as the QDA was), C times smaller. `None` for any other candidate.
+fn as_lda_if_equal(c: &Candidate, p: usize, labels: Option<&Labels>) -> Option<Candidate> {
+    let full = c
+        .hyperparameters
+        .get("shrinkage")
+        .is_some_and(|&s| s >= 1.0);
+    (c.method == Method::Qda && full && shrink_target(p, labels?) == Target::Pooled).then(|| {
+        Candidate {
+            method: Method::Lda,
+            hyperparameters: params(&[("shrinkage", 0.0)]),
+            ..c.clone()
+        }
     })
 }
 
@@ -1823,7 +1857,49 @@ mod tests {
             let e = evaluate(&model, &test_rows).unwrap();
             assert!(e.accuracy.unwrap() > 3.0 / 9.0, "{method:?}: {e:?}");
             assert!(e.mean_error_mm.unwrap() < e.mean_predictor_error_mm.unwrap());
+            // A QDA whose best shrinkage is 1 toward the pooled covariance is kept as the LDA
+            // it equals, and says so; any other stays QDA.
+            let best = |m: Method| {
+                model
+                    .search
+                    .iter()
+                    .filter(|c| c.method == m)
+                    .min_by(|a, b| a.loss().total_cmp(&b.loss()))
+                    .unwrap()
+                    .hyperparameters["shrinkage"]
+            };
+            if method == Method::Qda && best(Method::Qda) >= 1.0 {
+                assert_eq!(model.method, Method::Lda);
+                assert_eq!(model.chosen().unwrap().hyperparameters["shrinkage"], 0.0);
+                assert!(model.note.as_ref().unwrap().contains("lda"));
+                eprintln!("QDA-IS-LDA case exercised");
+            } else {
+                assert_eq!(model.method, method);
+                assert!(model.note.is_none());
+            }
         }
+    }
+
+    /// The substitution itself: only QDA, only at full shrinkage, only toward the pooled
+    /// covariance (enough rows for it to have full rank).
+    #[test]
+    fn qda_at_full_pooled_shrinkage_is_the_lda() {
+        let names: Vec<String> = (0..40).map(|i| ["a", "b"][i % 2].to_string()).collect();
+        let labels = Labels::from_text(&names).unwrap();
+        let qda = |s: f64| Candidate {
+            method: Method::Qda,
+            hyperparameters: params(&[("shrinkage", s)]),
+            cv_mean_error_mm: None,
+            cv_accuracy: Some(0.9),
+        };
+        let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
+        assert_eq!((lda.method, lda.cv_accuracy), (Method::Lda, Some(0.9)));
+        assert_eq!(lda.hyperparameters["shrinkage"], 0.0);
+        assert!(as_lda_if_equal(&qda(0.3), 5, Some(&labels)).is_none());
+        // 40 rows, 2 classes, 40 features: the pooled covariance is singular, the target is
+        // the diagonal, and QDA at 1 is not LDA.
+        assert!(as_lda_if_equal(&qda(1.0), 40, Some(&labels)).is_none());
+        assert!(as_lda_if_equal(&qda(1.0), 5, None).is_none());
     }
 
     #[test]

@@ -804,6 +804,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         folds: 10,
     };
     let t = train(&data, &options).expect("a two-visit set trains");
+    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::LeaveOneVisitOut);
     assert_eq!(t.options.target, Target::Diagonal);
     assert!(t.options.shrinkage > 0.0);
     assert!(
@@ -832,6 +833,8 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         t.fallbacks
     );
     assert!(t.leave_one_visit_out.is_none());
+    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::KFold(10));
+    assert_eq!(t.chosen_by.to_string(), "chosen by stratified 10-fold");
     assert!(t.cv.accuracy() > 1.0 / classes as f64);
 }
 
@@ -866,4 +869,70 @@ fn a_model_too_big_for_the_blob_format_is_refused_not_allocated() {
         )
         .unwrap_err();
     assert!(e.to_string().contains("70000 classes"), "{e}");
+}
+
+/// QDA shrunk all the way to the pooled covariance is LDA: trained so, the LDA is what is
+/// kept (one covariance, not C), it is said, and it decides every row as that QDA does.
+#[test]
+fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
+    use super::pipeline::{Fallback, TrainOptions, train};
+    let (classes, per_class, p) = (6, 40, 8);
+    let (x, y) = synthetic(classes, per_class, p, 17);
+    let n = y.len();
+    let data = super::collect::Dataset {
+        x: x.clone(),
+        y: y.clone(),
+        positions: vec![[0.0, 0.0]; n],
+        pressure: Vec::new(),
+        electrodes: Vec::new(),
+        centres: (0..classes).map(|c| [0.01 * c as f64, 0.0]).collect(),
+        visit: vec![0; n],
+        baselines: DMatrix::zeros(1, p),
+        feature_index: (0..p as u16).collect(),
+        config: ScanConfig::REFERENCE,
+    };
+    let options = TrainOptions {
+        kind: ModelKind::Qda,
+        shrinkage: Some(1.0),
+        folds: 5,
+    };
+    let t = train(&data, &options).unwrap();
+    assert_eq!((t.options.kind, t.options.shrinkage), (ModelKind::Lda, 0.0));
+    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::Given);
+    assert_eq!(t.model.kind, ModelKind::Lda);
+    let note = t
+        .fallbacks
+        .iter()
+        .find(|f| matches!(f, Fallback::QdaIsLda { classes: 6 }))
+        .expect("said");
+    assert!(note.to_string().contains("lda"), "{note}");
+    let qda = Fitted::fit(
+        &x,
+        &y,
+        classes,
+        &FitOptions {
+            kind: ModelKind::Qda,
+            shrinkage: 1.0,
+            target: Target::Pooled,
+        },
+    )
+    .unwrap();
+    let differ = x
+        .row_iter()
+        .filter(|r| {
+            let row: Vec<f64> = r.iter().copied().collect();
+            qda.predict(&row) != t.model.predict(&row)
+        })
+        .count();
+    assert_eq!(differ, 0, "of {n} rows");
+    // A smaller shrinkage stays QDA.
+    let t = train(
+        &data,
+        &TrainOptions {
+            shrinkage: Some(0.5),
+            ..options
+        },
+    )
+    .unwrap();
+    assert_eq!(t.model.kind, ModelKind::Qda);
 }

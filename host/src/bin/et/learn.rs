@@ -384,6 +384,8 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         trained.leave_one_visit_out,
     );
     let (shrinkage, scores) = (opts.shrinkage, &trained.shrinkage_scores);
+    // What was fitted: qda shrunk fully toward the pooled covariance is saved as the lda.
+    let kind = opts.kind;
     let visits = data.visits();
     let curve = match &args.curve {
         Some(png) => {
@@ -473,6 +475,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         kind: Kind::from(kind),
         referenced,
         shrinkage,
+        shrinkage_chosen_by: trained.chosen_by,
         shrinkage_scores: scores
             .iter()
             .map(|&(shrinkage, accuracy)| ShrinkageScore {
@@ -498,7 +501,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
         eprintln!(
-            "trained {}{} on {} observations ({} classes, {} features), shrinkage {}: {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
+            "trained {}{} on {} observations ({} classes, {} features), shrinkage {} ({}): {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
             Kind::from(kind).name(),
             if referenced {
                 " (referenced)"
@@ -509,6 +512,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             classes,
             data.x.ncols(),
             shrinkage,
+            trained.chosen_by,
             folds.max(2),
             100.0 * cv_conf.accuracy(),
             cv_conf.mean_position_error(&mm),
@@ -687,6 +691,8 @@ struct TrainSummary<'a> {
     kind: Kind,
     referenced: bool,
     shrinkage: f64,
+    /// "given", "leave-one-visit-out" or {"k-fold": k}.
+    shrinkage_chosen_by: pipeline::ChosenBy,
     /// Cross-validated accuracy of each shrinkage tried (empty when it was given).
     shrinkage_scores: Vec<ShrinkageScore>,
     classes: usize,

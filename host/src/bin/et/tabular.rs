@@ -153,9 +153,13 @@ pub(crate) fn train(
                 "classes": model.classes.as_ref().map(|c| c.names.len()),
                 "fit_seconds": model.fit_seconds,
                 "source": model.source,
+                "note": model.note,
             }))?
         );
         return Ok(());
+    }
+    if let Some(note) = &model.note {
+        eprintln!("note: {note}");
     }
     // The best of each method tried, then the winner.
     let mut methods: Vec<tabular::Method> = model.search.iter().map(|c| c.method).collect();
