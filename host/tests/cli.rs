@@ -263,6 +263,38 @@ fn collect_train_eval_export_chain() {
         let bytes = std::fs::read(dir.join("plots").join(png)).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"), "{png}");
     }
+    // The same test set as NumPy arrays (same seed): the same evaluation.
+    let npz = dir.join("test.npz");
+    ok(et(&[
+        &base[..],
+        &["--visits", "1", "--seed", "9", "--out", &s(&npz)],
+    ]
+    .concat()));
+    assert!(
+        std::fs::read(&npz).unwrap().starts_with(b"PK\x03\x04"),
+        "a zip"
+    );
+    let en = json(ok(et(&[
+        "eval",
+        "--model",
+        &s(&model),
+        "--data",
+        &s(&npz),
+        "--json",
+    ])));
+    assert_eq!(
+        (&en["accuracy"], &en["confusion"]),
+        (&e["accuracy"], &e["confusion"])
+    );
+    let (a, b) = (en["mean_error_mm"].as_f64(), e["mean_error_mm"].as_f64());
+    assert!((a.unwrap() - b.unwrap()).abs() < 1e-9, "{a:?} {b:?}");
+    // The error from where the finger really was (the dataset keeps it), beside the
+    // centre-to-centre one.
+    let from_truth = ["mean_error_mm", "median_error_mm", "p90_error_mm"]
+        .map(|k| e[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {e}")));
+    assert!(from_truth.iter().all(|v| v.is_finite() && *v >= 0.0), "{e}");
+    assert!(from_truth[2] >= from_truth[1], "p90 below the median: {e}");
+    assert!(e["mean_cell_error_mm"].as_f64().is_some(), "{e}");
     let bands = e["by_distance_from_electrodes"].as_array().unwrap();
     let counted: u64 = bands.iter().map(|b| b["count"].as_u64().unwrap()).sum();
     assert_eq!(counted, 40, "every observation is in a distance band");

@@ -294,6 +294,15 @@ label,x_mm,y_mm,visit,pressure_kpa,v0,v3,v7
 1,10.1,9.9,1,35,0.1,0.21,0.33
 ";
 
+/// The [`DATASET`] seed as an `.npz` archive.
+fn dataset_npz(dir: &std::path::Path) -> Vec<u8> {
+    let (csv, npz) = (dir.join("seed-dataset.csv"), dir.join("seed-dataset.npz"));
+    std::fs::write(&csv, DATASET).unwrap();
+    let data = et_learn::dataset::load_csv(&csv).unwrap();
+    et_learn::dataset::save_npz(&data, &npz, "fuzz seed").unwrap();
+    std::fs::read(&npz).unwrap()
+}
+
 fn parsers() -> Vec<Parser> {
     let dir = scratch();
     let (msh, [nodes, triangles, electrodes]) = square_mesh(3);
@@ -308,6 +317,11 @@ fn parsers() -> Vec<Parser> {
             name: "dataset CSV",
             seeds: vec![DATASET.into()],
             parse: |p| et_learn::dataset::load_csv(&p[0]).is_ok(),
+        },
+        Parser {
+            name: "dataset NPZ",
+            seeds: vec![dataset_npz(&dir)],
+            parse: |p| et_learn::dataset::load_npz(&p[0]).is_ok(),
         },
         Parser {
             name: "foreign CSV + targets",

@@ -1,4 +1,6 @@
-//! Datasets on disk: CSV that Python and MATLAB read as they are.
+//! Datasets on disk: CSV that Python and MATLAB read as they are, or the same content as a
+//! NumPy `.npz` archive that loads at disk speed ([`save_npz`], [`load_npz`]; [`save`] and
+//! [`load`] choose by the file's extension).
 //!
 //! ```text
 //! # et-dataset 1
@@ -31,6 +33,7 @@ use et_core::ScanConfig;
 use nalgebra::DMatrix;
 
 use super::collect::Dataset;
+use super::npz;
 
 /// Why a dataset file could not be read or written.
 #[derive(Debug)]
@@ -327,6 +330,179 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         feature_index,
         config,
     })
+}
+
+/// Writes `data` as a NumPy `.npz` archive with the same content as [`save_csv`], in SI units
+/// (the names say so) and at disk speed:
+///
+/// | array | shape, type | content |
+/// | --- | --- | --- |
+/// | `format` | text | `et-dataset 1` |
+/// | `x` | n x p, float64 | features, volts |
+/// | `label` | n, uint16 | class |
+/// | `position_m` | n x 2, float64 | where the finger pressed, m |
+/// | `visit` | n, uint16 | visit (session) of each row |
+/// | `pressure_pa` | n or 0, float64 | pressure of each touch, Pa (empty when unknown) |
+/// | `feature_index` | p, uint16 | frame index of each feature |
+/// | `centres_m` | C x 2, float64 | class centres, m |
+/// | `electrodes_m` | L x 2, float64 | nominal electrode centres, m (0 rows when unknown) |
+/// | `untouched` | T x p, float64 | each visit's untouched frame, volts |
+/// | `config` | text | the scan settings, JSON |
+/// | `provenance` | text | what made it |
+///
+/// Python: `d = numpy.load(path); d["x"], d["label"], json.loads(str(d["config"]))`.
+///
+/// # Errors
+/// [`DatasetError::Io`], or [`DatasetError::Content`] for a set over 4 GiB.
+pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    let mut w = npz::Writer::new();
+    w.text("format", "et-dataset 1");
+    w.matrix("x", &data.x);
+    w.u16s("label", &data.y);
+    w.pairs("position_m", &data.positions);
+    w.u16s("visit", &data.visit);
+    w.f64s("pressure_pa", &data.pressure);
+    w.u16s("feature_index", &data.feature_index);
+    w.pairs("centres_m", &data.centres);
+    w.pairs("electrodes_m", &data.electrodes);
+    w.matrix("untouched", &data.baselines);
+    w.text(
+        "config",
+        &serde_json::to_string(&data.config).unwrap_or_default(),
+    );
+    w.text("provenance", provenance);
+    let bytes = w
+        .finish()
+        .map_err(|e| content(path, 0, None, e.to_string()))?;
+    std::fs::write(path, bytes).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// Reads a dataset written by [`save_npz`] (or by numpy with the same arrays).
+///
+/// # Errors
+/// [`DatasetError`] naming the file and the array at fault.
+pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
+    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let bad = |e: npz::NpzError| content(path, 0, None, e.to_string());
+    let z = npz::Npz::read(bytes).map_err(bad)?;
+    let fault = |array: &str, message: String| {
+        content(path, 0, None, format!("array '{array}': {message}"))
+    };
+    if z.text("format").map_err(bad)? != "et-dataset 1" {
+        return Err(fault("format", "not an et dataset ('et-dataset 1')".into()));
+    }
+    let config: ScanConfig = serde_json::from_str(&z.text("config").map_err(bad)?)
+        .map_err(|e| fault("config", e.to_string()))?;
+    let x = z.matrix("x").map_err(bad)?;
+    let (n, p) = x.shape();
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(fault(
+            "x",
+            format!("row {}, column {} is not a finite number", i % n, i / n),
+        ));
+    }
+    let pairs = |name: &str, rows: Option<usize>| {
+        let m = z.matrix(name).map_err(bad)?;
+        if m.ncols() != 2 || rows.is_some_and(|r| r != m.nrows()) {
+            return Err(fault(
+                name,
+                format!(
+                    "shape {} x {}, expected {} x 2",
+                    m.nrows(),
+                    m.ncols(),
+                    rows.map_or("any".into(), |r| r.to_string())
+                ),
+            ));
+        }
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(fault(
+                name,
+                "holds a value that is not a finite number".into(),
+            ));
+        }
+        Ok(m.column(0)
+            .iter()
+            .zip(m.column(1).iter())
+            .map(|(&x, &y)| [x, y])
+            .collect::<Vec<_>>())
+    };
+    let rows = |name: &str, len: usize, want: usize| {
+        if len == want {
+            Ok(())
+        } else {
+            Err(fault(name, format!("{len} values, x has {want} rows")))
+        }
+    };
+    let y = z.whole("label").map_err(bad)?;
+    rows("label", y.len(), n)?;
+    let visit = z.whole("visit").map_err(bad)?;
+    rows("visit", visit.len(), n)?;
+    let pressure = z.vector("pressure_pa").map_err(bad)?;
+    if !pressure.is_empty() {
+        rows("pressure_pa", pressure.len(), n)?;
+    }
+    let feature_index = z.whole("feature_index").map_err(bad)?;
+    if feature_index.len() != p {
+        return Err(fault(
+            "feature_index",
+            format!("{} values, x has {p} columns", feature_index.len()),
+        ));
+    }
+    let baselines = z.matrix("untouched").map_err(bad)?;
+    if baselines.nrows() > 0 && baselines.ncols() != p {
+        return Err(fault(
+            "untouched",
+            format!("{} columns, x has {p}", baselines.ncols()),
+        ));
+    }
+    Ok(Dataset {
+        positions: pairs("position_m", Some(n))?,
+        centres: pairs("centres_m", None)?,
+        electrodes: pairs("electrodes_m", None)?,
+        x,
+        y,
+        pressure,
+        visit,
+        baselines,
+        feature_index,
+        config,
+    })
+}
+
+/// Whether `path` names an `.npz` dataset (else CSV).
+fn is_npz(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
+}
+
+/// Writes `data` as `.npz` when `path` ends so ([`save_npz`]), else as CSV ([`save_csv`]).
+///
+/// # Errors
+/// As those.
+pub fn save(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    if is_npz(path) {
+        save_npz(data, path, provenance)
+    } else {
+        save_csv(data, path, provenance)
+    }
+}
+
+/// Reads an `.npz` dataset when `path` ends so ([`load_npz`]), else CSV ([`load_csv`]).
+///
+/// # Errors
+/// As those.
+pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
+    if is_npz(path) {
+        load_npz(path)
+    } else {
+        load_csv(path)
+    }
 }
 
 struct Table {

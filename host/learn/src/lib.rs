@@ -32,6 +32,7 @@ pub mod fastcv;
 pub mod fit;
 pub mod gp;
 pub mod model_file;
+pub mod npz;
 pub mod pipeline;
 pub mod regress;
 pub mod standin;

@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 use super::analysis::{self, Band, Outcome};
 use super::collect::{DataError, Dataset};
 use super::cv::{self, Confusion};
-use super::fastcv::cross_validate_fast;
+use super::fastcv::{Partition, Prepared};
 use super::fit::{self, FitError, FitOptions, Fitted, Target};
 use super::model_file::ModelFile;
 
@@ -231,24 +231,33 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
         shrinkage: 0.0,
         target,
     };
-    let choose = |folds: &[usize]| match options.shrinkage {
+    // Centred once; each fold partition's sufficient statistics once, for every candidate
+    // and for the final cross-validations.
+    let prepared = Prepared::new(x, y, classes)?;
+    let strat_part = prepared.partition(&strat)?;
+    let visit_part = several_visits.then(|| prepared.partition(&by_visit));
+    let choose = |part: &Partition| match options.shrinkage {
         Some(l) => Ok((l, Vec::new())),
         None => cv::choose_shrinkage_with(
             &SHRINKAGE_CANDIDATES,
-            |o| cross_validate_fast(x, y, classes, o, folds),
+            |o| prepared.cross_validate(part, o),
             &base,
         ),
     };
     // Leave-one-visit-out chooses when some candidate fits on every visit's complement (a
     // failing candidate scores 0); otherwise stratified k-fold does.
-    let by_visit_choice = if several_visits {
-        match choose(&by_visit) {
-            Ok((_, ref scores)) if !scores.is_empty() && scores.iter().all(|&(_, a)| a == 0.0) => {
-                Err("no shrinkage candidate fits on one visit's complement".to_string())
-            }
-            Ok(choice) => Ok(choice),
+    let by_visit_choice = if let Some(part) = &visit_part {
+        match part {
+            Ok(part) => choose(part).map_err(|e| e.to_string()),
             Err(e) => Err(e.to_string()),
         }
+        .and_then(|(l, scores)| {
+            if !scores.is_empty() && scores.iter().all(|&(_, a)| a == 0.0) {
+                Err("no shrinkage candidate fits on one visit's complement".to_string())
+            } else {
+                Ok((l, scores))
+            }
+        })
     } else {
         Err(String::new())
     };
@@ -259,7 +268,7 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
                 fallbacks.push(Fallback::KFoldSelection { reason });
             }
             let k = options.folds.max(2);
-            (choose(&strat)?, strat.clone(), ChosenBy::KFold(k))
+            (choose(&strat_part)?, strat.clone(), ChosenBy::KFold(k))
         }
     };
     let chosen_by = if options.shrinkage.is_some() {
@@ -277,20 +286,29 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
     } else {
         FitOptions { shrinkage, ..base }
     };
-    let model = Fitted::fit(x, y, classes, &opts)?;
-    let cv = cross_validate_fast(x, y, classes, &opts, &strat)?;
-    let leave_one_visit_out = if several_visits {
-        match cross_validate_fast(x, y, classes, &opts, &by_visit) {
-            Ok(c) => Some(c.accuracy()),
-            Err(e) => {
-                fallbacks.push(Fallback::NoLeaveOneVisitOut {
-                    reason: e.to_string(),
-                });
-                None
-            }
+    // The model itself on one thread while the cross-validations use the others.
+    let (model, cv, leave_one_visit_out) = std::thread::scope(|scope| {
+        let model = scope.spawn(|| Fitted::fit(x, y, classes, &opts));
+        let cv = prepared.cross_validate(&strat_part, &opts);
+        let lovo = visit_part.as_ref().map(|part| match part {
+            Ok(part) => prepared.cross_validate(part, &opts),
+            Err(e) => Err(e.clone()),
+        });
+        let model = model
+            .join()
+            .unwrap_or_else(|_| Err(FitError::Shape("the fit panicked".into())));
+        (model, cv, lovo)
+    });
+    let (model, cv) = (model?, cv?);
+    let leave_one_visit_out = match leave_one_visit_out {
+        Some(Ok(c)) => Some(c.accuracy()),
+        Some(Err(e)) => {
+            fallbacks.push(Fallback::NoLeaveOneVisitOut {
+                reason: e.to_string(),
+            });
+            None
         }
-    } else {
-        None
+        None => None,
     };
     Ok(Trained {
         model,
@@ -314,6 +332,10 @@ pub struct Tested {
     pub outcomes: Vec<Outcome>,
     /// Mean error per 10 mm band of distance from the electrodes.
     pub bands: Vec<Band>,
+    /// Per observation: the distance from where the finger really was to the predicted
+    /// class's centre, mm (what a regressor's error compares with; not 0 when the class is
+    /// right). Empty when the dataset has no positions.
+    pub errors_from_truth_mm: Vec<f64>,
 }
 
 /// Tests `file`'s model on `data` (raw frames as collected: the model's own features are
@@ -339,10 +361,27 @@ pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
         analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)?
     };
     let bands = analysis::by_distance(&outcomes, 10.0);
+    let errors_from_truth_mm = if data.positions.len() == x.nrows() {
+        let mut row = vec![0.0; x.ncols()];
+        (0..x.nrows())
+            .zip(&data.positions)
+            .map(|(r, truth)| {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = x[(r, j)];
+                }
+                let c = file.centres_mm.get(usize::from(model.predict(&row)))?;
+                Some((c[0] - truth[0] * 1e3).hypot(c[1] - truth[1] * 1e3))
+            })
+            .collect::<Option<Vec<f64>>>()
+            .unwrap_or_default()
+    } else {
+        Vec::new()
+    };
     Ok(Tested {
         confusion,
         outcomes,
         bands,
+        errors_from_truth_mm,
     })
 }
 

@@ -716,15 +716,26 @@ pub fn sorted_position_errors(pred: &[Target3], truth: &[Target3]) -> Vec<f64> {
     e
 }
 
-/// Summarises predictions against truth (`pressure`: whether the third component counts).
+/// Mean, median and 90th percentile (nearest rank) of `sorted` (ascending); zeros for none.
 #[must_use]
-pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
-    let e = sorted_position_errors(pred, truth);
+pub fn mean_median_p90(sorted: &[f64]) -> [f64; 3] {
     let q = |f: f64| {
-        e.get(((e.len() as f64 - 1.0) * f).round() as usize)
+        sorted
+            .get(((sorted.len() as f64 - 1.0) * f).round() as usize)
             .copied()
             .unwrap_or(0.0)
     };
+    [
+        sorted.iter().sum::<f64>() / sorted.len().max(1) as f64,
+        q(0.5),
+        q(0.9),
+    ]
+}
+
+/// Summarises predictions against truth (`pressure`: whether the third component counts).
+#[must_use]
+pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
+    let [mean_mm, median_mm, p90_mm] = mean_median_p90(&sorted_position_errors(pred, truth));
     let n = pred.len().max(1) as f64;
     let (mae, r) = if pressure && pred.len() > 1 {
         let mae = pred
@@ -753,9 +764,9 @@ pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSu
         (0.0, 0.0)
     };
     ErrorSummary {
-        mean_mm: e.iter().sum::<f64>() / n,
-        median_mm: q(0.5),
-        p90_mm: q(0.9),
+        mean_mm,
+        median_mm,
+        p90_mm,
         pressure_mae_kpa: mae,
         pressure_r: r,
     }

@@ -410,7 +410,7 @@ fn the_procedure_on_the_simulated_sheet() {
 
 mod files {
     use super::super::collect::Dataset;
-    use super::super::dataset::{import_csv, load_csv, save_csv};
+    use super::super::dataset::{import_csv, load, load_csv, save_csv, save_npz};
     use super::*;
     use std::path::PathBuf;
 
@@ -507,6 +507,72 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
             "Python reads the same value"
         );
         assert_eq!(f[4].parse::<f64>().unwrap(), d.baselines[(1, 4)]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn npz_datasets_round_trip_and_python_reads_them() {
+        let dir = tmp("npz");
+        let path = dir.join("d.npz");
+        let d = small();
+        save_npz(&d, &path, "synthetic, seed 21").unwrap();
+        let back = load(&path).unwrap();
+        assert_eq!(
+            (&back.x, &back.baselines, &back.positions, &back.centres),
+            (&d.x, &d.baselines, &d.positions, &d.centres),
+            "bit for bit"
+        );
+        assert_eq!(
+            (&back.y, &back.visit, &back.feature_index, back.config),
+            (&d.y, &d.visit, &d.feature_index, d.config)
+        );
+        assert_eq!(
+            (&back.pressure, &back.electrodes),
+            (&d.pressure, &d.electrodes)
+        );
+        // Python's standard library alone reads it: a zip of .npy files.
+        let script = "import zipfile,ast,struct,sys,json\n\
+z=zipfile.ZipFile(sys.argv[1]); assert z.testzip() is None\n\
+def arr(n): b=z.read(n+'.npy'); l=struct.unpack('<H',b[8:10])[0]; return ast.literal_eval(b[10:10+l].decode()),b[10+l:]\n\
+h,x=arr('x'); r,c=h['shape']; v=struct.unpack('<%dd'%(r*c),x)\n\
+h2,lab=arr('label'); h3,cfg=arr('config')\n\
+print(r,c,h['fortran_order'],v[2*r+3],sum(struct.unpack('<%dH'%r,lab)),json.loads(cfg.decode('utf-32-le').rstrip(chr(0)))['electrodes'])\n\
+import importlib.util\n\
+if importlib.util.find_spec('numpy') is None: print('no-numpy')\n\
+else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(a['label'].sum()), a['position_m'].shape, json.loads(str(a['config']))['electrodes'])\n";
+        let out = std::process::Command::new("python3")
+            .arg("-c")
+            .arg(script)
+            .arg(&path)
+            .output()
+            .expect("python3");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let mut lines = text.lines();
+        let label_sum: usize = d.y.iter().map(|&v| usize::from(v)).sum();
+        let n = d.x.nrows();
+        assert_eq!(
+            lines.next().unwrap(),
+            format!("{n} 5 True {:?} {label_sum} 8", d.x[(3, 2)]),
+        );
+        let numpy = lines.next().unwrap();
+        if numpy != "no-numpy" {
+            assert_eq!(
+                numpy,
+                format!("{:?} {label_sum} ({n}, 2) 8", d.x[(3, 2)]),
+                "numpy.load reads the same values"
+            );
+        }
+        // A damaged archive is an error naming the file, not a panic.
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.truncate(bytes.len() / 2);
+        std::fs::write(&path, bytes).unwrap();
+        let e = load(&path).unwrap_err().to_string();
+        assert!(e.contains("d.npz"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -681,6 +747,39 @@ fn fast_cross_validation_equals_refitting() {
             let slow = cross_validate_folds(&x, &y, 6, &opts, fold).unwrap();
             let fast = cross_validate_fast(&x, &y, 6, &opts, fold).unwrap();
             assert_eq!(fast, slow, "{opts:?}");
+        }
+    }
+    // More features than the block's leading product (16) covers, and folds of more rows
+    // than one block (256): bounds, continued substitutions and blocks all take part, and one
+    // prepared set serves every fold partition and option.
+    let (x, y) = synthetic(8, 200, 24, 37);
+    let mut rng = Rng::new(38);
+    let x = x.map(|v| v + 2e-3 * rng.normal()); // classes overlap: some decisions are close
+    let prepared = super::fastcv::Prepared::new(&x, &y, 8).unwrap();
+    for fold in [
+        folds(&y, 5, 3),
+        (0..y.len()).map(|r| (r / 50) % 4).collect(),
+    ] {
+        let part = prepared.partition(&fold).unwrap();
+        for opts in [
+            FitOptions::default(),
+            FitOptions {
+                shrinkage: 0.3,
+                target: Target::Pooled,
+                ..FitOptions::default()
+            },
+        ] {
+            let slow = cross_validate_folds(&x, &y, 8, &opts, &fold).unwrap();
+            assert!(
+                slow.accuracy() < 1.0,
+                "some rows are hard: {}",
+                slow.accuracy()
+            );
+            assert_eq!(
+                prepared.cross_validate(&part, &opts).unwrap(),
+                slow,
+                "{opts:?}"
+            );
         }
     }
     // The same typed errors as a plain fit.
