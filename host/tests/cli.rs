@@ -878,6 +878,30 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
             "{png}"
         );
     }
+    // Every row's prediction as CSV: the error recomputed from it and the targets file (BOM,
+    // no header, metres) is the one reported.
+    let pred = dir.join("pred.csv");
+    let ev = json(ok(eval(&auto, &["--predictions", &s(&pred)])));
+    let text = std::fs::read_to_string(&pred).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("row,x_mm,y_mm,z_mm"), "{text}");
+    let truth: Vec<Vec<f64>> = std::fs::read_to_string(&t)
+        .unwrap()
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| l.split(',').map(|v| v.trim().parse().unwrap()).collect())
+        .collect();
+    let mut sum = 0.0;
+    for (i, line) in lines.enumerate() {
+        let v: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+        assert_eq!(v[0] as usize, 240 + i, "rows numbered as in the file");
+        let r = &truth[240 + i];
+        sum += (v[1] - 1e3 * r[0]).hypot(v[2] - 1e3 * r[1]);
+    }
+    let mean = sum / 60.0;
+    let reported = ev["mean_error_mm"].as_f64().unwrap();
+    assert!((mean - reported).abs() < 1e-3, "{mean} vs {reported}");
     // Every kind.
     for (kind, extra) in [
         ("ridge", vec![]),
@@ -897,6 +921,12 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
         if kind == "lda" || kind == "qda" {
             assert_eq!(tr["classes"], 9);
             assert!(ev["accuracy"].as_f64().is_some(), "{ev}");
+            ok(eval(&out, &["--predictions", &s(&pred), "--force"]));
+            let text = std::fs::read_to_string(&pred).unwrap();
+            assert!(
+                text.starts_with("row,class,x_mm,y_mm,z_mm\n240,r"),
+                "{text}"
+            );
         }
     }
     // Mistakes are explained.

@@ -1587,6 +1587,9 @@ pub struct Evaluation {
     /// Per row: true and predicted (x, y) in mm, where both exist (for plots).
     #[serde(skip)]
     pub pairs: Vec<([f64; 2], [f64; 2])>,
+    /// Every row's prediction, in row order.
+    #[serde(skip)]
+    pub predictions: Vec<Prediction>,
 }
 
 /// Evaluates `model` on `table`: position errors when the rows have positions, accuracy for
@@ -1690,6 +1693,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         fit_seconds: model.fit_seconds,
         predict_seconds,
         pairs,
+        predictions: pred,
     })
 }
 

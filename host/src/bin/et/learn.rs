@@ -141,6 +141,12 @@ pub(crate) struct EvalArgs {
     /// predicted-vs-true.png.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// --features: also write every row's prediction to this CSV (`row`: the row's 0-based
+    /// index in the file; `class` for classifiers; `x_mm`, `y_mm`; the third target where
+    /// predicted), for Python's `csv` or `numpy.loadtxt(path, delimiter=",", skiprows=1)`
+    /// and MATLAB's `readtable`.
+    #[arg(long, value_name = "CSV", requires = "features")]
+    predictions: Option<PathBuf>,
     /// Print JSON (with the confusion matrix and accuracy by distance from the electrodes).
     #[arg(long)]
     json: bool,
@@ -551,6 +557,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
             &args.model,
             &args.table,
             args.plots.as_deref(),
+            args.predictions.as_deref(),
             args.json,
             force,
         );

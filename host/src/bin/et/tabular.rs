@@ -224,16 +224,20 @@ pub(crate) fn eval(
     model_path: &Path,
     args: &TableArgs,
     plots: Option<&Path>,
+    predictions: Option<&Path>,
     json: bool,
     force: bool,
 ) -> Result<()> {
     let pngs = plots.map(|d| (d.join("error-map.png"), d.join("predicted-vs-true.png")));
+    let mut inputs = args.inputs();
+    inputs.push(model_path);
     if let Some((a, b)) = &pngs {
-        let mut inputs = args.inputs();
-        inputs.push(model_path);
         for png in [a, b] {
             output::check(png, &inputs, force)?;
         }
+    }
+    if let Some(csv) = predictions {
+        output::check(csv, &inputs, force)?;
     }
     let model = TableModel::load(model_path)?;
     let table = args.load()?;
@@ -257,6 +261,11 @@ pub(crate) fn eval(
                 plot::predicted_vs_true(partial, &e.pairs, &title)
             })?;
         }
+    }
+    if let Some(csv) = predictions {
+        output::write(csv, |partial| {
+            std::fs::write(partial, predictions_csv(&model, &e, table.first_row))
+        })?;
     }
     if json {
         out!("{}", serde_json::to_string(&e)?);
@@ -285,4 +294,54 @@ pub(crate) fn eval(
         1e3 * e.predict_seconds
     );
     Ok(())
+}
+
+/// Every row's prediction as CSV: `row` (0-based, in the file), `class` (classifiers: the
+/// user's name), `x_mm`, `y_mm`, and the third target when predicted (`z_mm`, or its own
+/// name and unit).
+fn predictions_csv(model: &TableModel, e: &tabular::Evaluation, first_row: usize) -> String {
+    use std::fmt::Write as _;
+    let names = model.classes.as_ref().map(|c| &c.names);
+    let mut header = vec!["row"];
+    if names.is_some() {
+        header.push("class");
+    }
+    header.extend(["x_mm", "y_mm"]);
+    // The third target: a length in mm when named z, else in the file's own unit.
+    let third = model.third.as_ref().map(|t| {
+        if t.eq_ignore_ascii_case("z") {
+            "z_mm".to_string()
+        } else {
+            t.clone()
+        }
+    });
+    if let Some(third) = &third {
+        header.push(third);
+    }
+    let mut s = header.join(",");
+    s.push('\n');
+    for (i, p) in e.predictions.iter().enumerate() {
+        let _ = write!(s, "{}", first_row + i);
+        if let Some(names) = names {
+            let name = p.class.and_then(|c| names.get(usize::from(c)));
+            // Names are the user's text: quoted when they hold a comma or a quote.
+            let name = name.map_or_else(String::new, |n| {
+                if n.contains([',', '"', '\n']) {
+                    format!("\"{}\"", n.replace('"', "\"\""))
+                } else {
+                    n.clone()
+                }
+            });
+            let _ = write!(s, ",{name}");
+        }
+        let t = p.target;
+        let cell = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v:.4}"));
+        let _ = write!(s, ",{},{}", cell(t.map(|t| t[0])), cell(t.map(|t| t[1])));
+        if third.is_some() {
+            let v = t.map_or_else(String::new, |t| t[2].to_string());
+            let _ = write!(s, ",{v}");
+        }
+        s.push('\n');
+    }
+    s
 }
