@@ -302,6 +302,20 @@ impl SimFrontend {
     /// # Errors
     /// [`SimError::Config`] for an invalid configuration.
     pub fn fast_frame(&mut self, config: &ScanConfig) -> Result<Vec<f32>, SimError> {
+        Ok(self.fast_frame_with_report(config)?.0)
+    }
+
+    /// [`SimFrontend::fast_frame`] with the scan engine's report: a measurement whose value
+    /// lands on an ADC rail is flagged in `rail`, as the sample path flags it, with all its
+    /// kept samples counted in `rail_samples` (the median is on the rail only when most of
+    /// them are).
+    ///
+    /// # Errors
+    /// [`SimError::Config`] for an invalid configuration.
+    pub fn fast_frame_with_report(
+        &mut self,
+        config: &ScanConfig,
+    ) -> Result<(Vec<f32>, et_core::ScanReport), SimError> {
         let protocol = config
             .validate()
             .map_err(|e| SimError::Config(e.to_string()))?;
@@ -314,8 +328,12 @@ impl SimFrontend {
         let amps = f64::from(config.current_amps());
         let lsb = f64::from(scale.volts_per_code);
         let mut out = Vec::with_capacity(protocol.frame_len());
+        let mut report = et_core::ScanReport::default();
+        let k = protocol.frame_len() as u32;
+        report.samples = k * u32::from(config.samples_per_step);
+        report.settle_dropped = k * u32::from(config.settle_samples);
         let mut injection = None;
-        for step in protocol.steps() {
+        for (i, step) in protocol.steps().enumerate() {
             if injection != Some(step.injection) {
                 injection = Some(step.injection);
                 self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
@@ -329,11 +347,16 @@ impl SimFrontend {
             ) + median_sigma * self.rng.normal()
                 + self.mains(mid);
             let code = (v / lsb * 2.0).round() / 2.0 + f64::from(scale.zero_code);
-            let code = code.clamp(0.0, f64::from(scale.max_code()));
+            let max = f64::from(scale.max_code());
+            if !(code > 0.0 && code < max) {
+                report.rail.set(i);
+                report.rail_samples += u32::from(config.kept_samples());
+            }
+            let code = code.clamp(0.0, max);
             out.push(scale.volts(code as f32));
             self.time += dt * spp;
         }
-        Ok(out)
+        Ok((out, report))
     }
 
     fn check_electrodes(&self, config: &ScanConfig) -> Result<(), SimError> {

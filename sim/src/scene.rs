@@ -782,10 +782,7 @@ impl Run {
         }
         let k = self.scanner.frame_len();
         let (voltages, report) = match detail {
-            Detail::Frames => {
-                let v = self.frontend.fast_frame(&self.config)?;
-                (v, et_core::ScanReport::default())
-            }
+            Detail::Frames => self.frontend.fast_frame_with_report(&self.config)?,
             Detail::Samples => {
                 let mut v = vec![0.0f32; k];
                 let mut burst = vec![0u16; usize::from(self.config.samples_per_step)];
@@ -793,7 +790,9 @@ impl Run {
                 (v, r)
             }
         };
-        let micros = Micros((t * 1e6) as u32);
+        // The board's microsecond counter: 32 bits that wrap every 71.6 minutes (readers
+        // take differences with `Micros::since`), not a value that stops at the top.
+        let micros = Micros(((t * 1e6) as u64 & u64::from(u32::MAX)) as u32);
         let frame = Frame::from_scan(self.seq, micros, self.config, &report, 0, &voltages)?;
         self.seq += 1;
         Ok((frame, Truth { time: t, touches }))

@@ -420,6 +420,22 @@ mod files {
         dir
     }
 
+    /// What `python3 -c script path` prints (it must succeed).
+    fn python(script: &str, path: &std::path::Path) -> String {
+        let out = std::process::Command::new("python3")
+            .arg("-c")
+            .arg(script)
+            .arg(path)
+            .output()
+            .expect("python3");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    }
+
     fn small() -> Dataset {
         let (x, y) = synthetic(3, 10, 5, 21);
         let n = y.len();
@@ -479,18 +495,7 @@ h,data=rows[0],rows[1:]\n\
 li=h.index('label')\n\
 u=[l.split(':',1)[1].split(';') for l in open(sys.argv[1]) if l.startswith('# untouched:')][0]\n\
 print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float(u[1].split()[4]))\n";
-        let out = std::process::Command::new("python3")
-            .arg("-c")
-            .arg(script)
-            .arg(&path)
-            .output()
-            .expect("python3");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8(out.stdout).unwrap();
+        let text = python(script, &path);
         let f: Vec<&str> = text.split_whitespace().collect();
         let label_sum: usize = d.y.iter().map(|&v| usize::from(v)).sum();
         assert_eq!(
@@ -540,18 +545,7 @@ print(r,c,h['fortran_order'],v[2*r+3],sum(struct.unpack('<%dH'%r,lab)),json.load
 import importlib.util\n\
 if importlib.util.find_spec('numpy') is None: print('no-numpy')\n\
 else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(a['label'].sum()), a['position_m'].shape, json.loads(str(a['config']))['electrodes'])\n";
-        let out = std::process::Command::new("python3")
-            .arg("-c")
-            .arg(script)
-            .arg(&path)
-            .output()
-            .expect("python3");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8(out.stdout).unwrap();
+        let text = python(script, &path);
         let mut lines = text.lines();
         let label_sum: usize = d.y.iter().map(|&v| usize::from(v)).sum();
         let n = d.x.nrows();

@@ -137,7 +137,7 @@ fn adc_rails_are_hit_and_flagged_at_high_gain() {
         .filter(|&c| ideal[c].abs() > 0.051)
         .collect();
     assert!(!clipped.is_empty());
-    for c in clipped {
+    for &c in &clipped {
         assert!(
             report.rail.get(c),
             "channel {c} at {} V is flagged",
@@ -145,6 +145,25 @@ fn adc_rails_are_hit_and_flagged_at_high_gain() {
         );
     }
     assert!(v.iter().all(|x| x.is_finite()));
+    // The fast path flags the same channels (it used to flag none).
+    let (fast, fast_report) = fe.fast_frame_with_report(&config).unwrap();
+    for &c in &clipped {
+        assert!(fast_report.rail.get(c), "fast path: channel {c} flagged");
+    }
+    let unclipped = (0..ideal.len()).filter(|&c| ideal[c].abs() < 0.045);
+    for c in unclipped {
+        assert!(
+            !fast_report.rail.get(c),
+            "channel {c} at {} V is not",
+            ideal[c]
+        );
+    }
+    assert_eq!(
+        fast_report.rail_samples,
+        fast_report.rail.count() as u32 * u32::from(config.kept_samples())
+    );
+    assert_eq!(fast_report.samples, report.samples);
+    assert!(fast.iter().all(|x| x.is_finite()));
 }
 
 #[test]

@@ -315,6 +315,29 @@ fn faults_show_in_the_frames_not_averaged_in() {
 }
 
 #[test]
+fn timestamps_keep_advancing_past_the_counters_wrap() {
+    // The 32-bit microsecond counter wraps after 2^32 us = 71.6 minutes; frames beyond it
+    // keep their spacing (it used to stop at the top).
+    let mut run = Run::new(&quiet(SMALL)).unwrap();
+    let period = run.frame_period();
+    run.seq = (4_294.0 / period) as u32;
+    let times: Vec<et_core::time::Micros> = (0..(4.0 / period) as usize)
+        .map(|_| run.next_frame(Detail::Frames).unwrap().0.timestamp)
+        .collect();
+    assert!(
+        times.windows(2).any(|w| w[1].0 < w[0].0),
+        "the counter wrapped"
+    );
+    for w in times.windows(2) {
+        let step = f64::from(w[1].since(w[0])) * 1e-6;
+        assert!(
+            (step - period).abs() < 2e-6,
+            "{step} s between frames, not {period}"
+        );
+    }
+}
+
+#[test]
 fn drift_scales_the_frame_over_time() {
     // +10 % conductance per kelvin, 60 K per minute: after 1 s the sheet conducts 10 % more.
     // No touch, so that only the drift changes the frame.
