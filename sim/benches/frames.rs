@@ -73,3 +73,17 @@ fn sample_level_fresh_touch(bencher: divan::Bencher) {
         v[0]
     });
 }
+
+/// The transfer impedance for one touch of radius `r` m (30 kPa, mid-sheet): the fast path's
+/// low-rank update for small touches, a fresh solve of the touched network above
+/// `et_sim::sheet::FAST_UPDATE_MAX_NODES` nodes under the touch (a palm); the threshold
+/// sits where the two cost the same.
+#[divan::bench(args = [0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05])]
+fn touch_size(bencher: divan::Bencher, r: f64) {
+    let touch = Touch {
+        position: [0.0, 0.0],
+        radius: r,
+        pressure: 30e3,
+    };
+    bencher.bench_local(|| SHEET.transfer(&[touch]).expect("transfer"));
+}

@@ -69,6 +69,19 @@ impl FastNetwork {
         &self.base
     }
 
+    /// How many nodes the changed edges join (the size of the update's dense solve).
+    #[must_use]
+    pub fn touched_nodes(&self, changes: &[(usize, f64)]) -> usize {
+        let mut nodes: Vec<u32> = changes
+            .iter()
+            .filter_map(|&(k, _)| self.ends.get(k))
+            .flat_map(|&(u, v)| [u, v])
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes.len()
+    }
+
     /// The transfer impedance with edge `k`'s conductance multiplied by `m` for every
     /// `(k, m)` in `changes` (from [`crate::touch::edge_multipliers`]).
     ///

@@ -464,10 +464,14 @@ impl Scene {
         for (i, t) in self.touches.iter().enumerate() {
             let at = |what: &str| format!("touch[{i}].{what}");
             let inside = |p: [f64; 2]| self.sheet.shape.contains(p, 1e-9);
-            if !(t.radius.is_finite() && t.radius > 0.0) {
+            let size = self.sheet.shape.size();
+            if !(t.radius.is_finite() && t.radius > 0.0 && t.radius <= size) {
                 return Err(FieldError::new(
                     at("radius"),
-                    format!("{} must be a positive length in m", t.radius),
+                    format!(
+                        "{} must be a positive length in m, at most the sheet's size ({size} m)",
+                        t.radius
+                    ),
                 ));
             }
             if !(t.pressure.is_finite() && t.pressure >= 0.0) {

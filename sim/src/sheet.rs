@@ -280,10 +280,21 @@ impl SheetSpec {
             );
         }
         let p = &self.piezo;
-        if !(p.gain.is_finite() && p.gain > -1.0 && p.half_pressure > 0.0 && p.exponent > 0.0) {
+        if !(p.gain.is_finite()
+            && p.gain > -1.0
+            && p.gain <= crate::touch::MAX_MULTIPLIER - 1.0
+            && p.half_pressure.is_finite()
+            && p.half_pressure > 0.0
+            && p.exponent.is_finite()
+            && p.exponent > 0.0)
+        {
             return field(
                 "sheet.piezo",
-                "gain > -1, half_pressure > 0 and exponent > 0".into(),
+                format!(
+                    "gain in (-1, {:e}] (beyond, the pressed fabric is a perfect conductor \
+                     already), half_pressure > 0 and exponent > 0, all finite",
+                    crate::touch::MAX_MULTIPLIER - 1.0
+                ),
             );
         }
         if let Some(b) = &self.bend
@@ -301,6 +312,11 @@ impl SheetSpec {
         Ok(())
     }
 }
+
+/// Nodes under a touch above which a fresh solve of the touched network is cheaper than the
+/// fast path's low-rank update (whose dense solve costs the cube of the nodes). Measured with
+/// `cargo bench -p et-sim --bench frames -- touch_size` (see there).
+pub const FAST_UPDATE_MAX_NODES: usize = 400;
 
 /// A built sheet: network, fast path and piezo law.
 #[derive(Debug)]
@@ -379,7 +395,23 @@ impl Sheet {
     /// [`SheetError::Network`] if the update fails.
     pub fn transfer_inclusions(&self, inclusions: &[Inclusion]) -> Result<Transfer, SheetError> {
         let changes = edge_multipliers(&self.network.grid, inclusions);
-        self.fast.transfer(&changes).map_err(SheetError::Network)
+        if self.fast.touched_nodes(&changes) <= FAST_UPDATE_MAX_NODES {
+            return self.fast.transfer(&changes).map_err(SheetError::Network);
+        }
+        // A large touch (a palm, a forearm): the update's dense solve would grow with the
+        // cube of the nodes under it, so the touched network is solved afresh (banded
+        // Cholesky), a cost that does not depend on the touch's size.
+        let mut g = self.network.conductances(None);
+        for &(k, m) in &changes {
+            if let Some(gk) = g.get_mut(k) {
+                *gk *= m;
+            }
+        }
+        Ok(self
+            .network
+            .solve(&g)
+            .map_err(SheetError::Network)?
+            .transfer)
     }
 }
 

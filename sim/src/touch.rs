@@ -54,10 +54,17 @@ impl Piezo {
         if p.is_nan() || p <= 0.0 {
             return 1.0;
         }
-        let x = (p / self.half_pressure).powf(self.exponent);
-        1.0 + self.gain * x / (1.0 + x)
+        // x / (1 + x) with x = (p / p_half)^n, written so that a steep law (large n) saturates
+        // to 0 or 1 instead of dividing infinity by infinity.
+        1.0 + self.gain / (1.0 + (self.half_pressure / p).powf(self.exponent))
     }
 }
+
+/// The largest conductance multiplier the simulator applies: a touched region 10^6 times more
+/// conductive than the fabric is a perfect conductor to within 10^-6 of the boundary voltages,
+/// and larger ratios only cost the update its precision (a gain of 10^15 once gave a 13 V
+/// change where a perfect conductor gives 24 mV). Larger multipliers act as this one.
+pub const MAX_MULTIPLIER: f64 = 1e6;
 
 /// A disc of the sheet whose conductance is multiplied by `multiplier` at its centre, with a
 /// smooth edge (full effect to 0.8 r, cos^2 taper to nothing at 1.2 r).
@@ -119,7 +126,7 @@ pub fn edge_multipliers(grid: &Grid, inclusions: &[Inclusion]) -> Vec<(usize, f6
             }
         }
         if m != 1.0 {
-            out.push((k, m));
+            out.push((k, m.min(MAX_MULTIPLIER)));
         }
     }
     out
@@ -135,6 +142,14 @@ mod tests {
         assert_eq!(p.multiplier(0.0), 1.0);
         assert_eq!(p.multiplier(-5.0), 1.0);
         assert_eq!(p.multiplier(f64::NAN), 1.0);
+        // A steep law is a step, not NaN.
+        let steep = Piezo {
+            exponent: 500.0,
+            ..p
+        };
+        assert_eq!(steep.multiplier(60e3), 1.0 + p.gain);
+        assert_eq!(steep.multiplier(15e3), 1.0);
+        assert!((steep.multiplier(30e3) - (1.0 + p.gain / 2.0)).abs() < 1e-12);
         let mut last = 1.0;
         for kpa in [1.0, 5.0, 10.0, 20.0, 50.0, 100.0, 1000.0] {
             let m = p.multiplier(kpa * 1e3);

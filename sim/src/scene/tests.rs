@@ -88,6 +88,18 @@ fn bad_scenes_name_the_file_and_the_field() {
         off.contains("touch[0].position") && off.contains("not on the sheet"),
         "{off}"
     );
+    // A touch larger than the sheet used to hang; a steep pressure law gave NaN that blamed
+    // a triangle.
+    let huge = err(&SMALL.replace("radius = 0.0075", "radius = 1e308"));
+    assert!(
+        huge.contains("touch[0].radius") && huge.contains("sheet's size"),
+        "{huge}"
+    );
+    let piezo = err(&SMALL.replace("[[touch]]", "[sheet.piezo]\ngain = 1e15\n\n[[touch]]"));
+    assert!(
+        piezo.contains("sheet.piezo") && piezo.contains("gain"),
+        "{piezo}"
+    );
     let protocol = err(&format!("{SMALL}\n[scan]\nprotocol = \"spiral\"\n"));
     assert!(protocol.contains("scan.protocol"), "{protocol}");
     let settle = err(&format!("{SMALL}\n[scan]\nsettle_samples = 60\n"));

@@ -125,6 +125,53 @@ fn extremes_give_finite_sane_frames() {
         assert!(v.iter().all(|x| x.is_finite()));
         assert!(bvc(&v, &v0) > 1e-4, "contrast {contrast} is visible");
     }
+    // Beyond 1e6 the touch is a perfect conductor: 1e15 gives what 1e6 gives (it
+    // once gave a 13 V change, 500 times the ceiling), and 1e3 is already most of the way.
+    let at = |contrast: f64| {
+        let inc = Inclusion {
+            position: [0.02, 0.02],
+            radius: 0.01,
+            multiplier: contrast,
+        };
+        frame(
+            &sheet.transfer_inclusions(&[inc]).unwrap(),
+            &adjacent(16),
+            32e-6,
+            &src,
+        )
+    };
+    let (v3, v6, v15) = (at(1e3), at(1e6), at(1e15));
+    for (a, b) in v15.iter().zip(&v6) {
+        assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-3), "{a} vs {b}");
+    }
+    let change = |v: &[f64]| {
+        v.iter()
+            .zip(&v0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    };
+    assert!(change(&v3) <= change(&v6) * 1.001 && change(&v3) > 0.9 * change(&v6));
+    // A palm (5 cm) is solved afresh, not by the low-rank update: the same as the oracle.
+    let palm = Inclusion {
+        position: [0.0, 0.0],
+        radius: 0.05,
+        multiplier: 3.0,
+    };
+    let changes = crate::touch::edge_multipliers(&sheet.network().grid, &[palm]);
+    assert!(
+        changes.len() > 2 * super::FAST_UPDATE_MAX_NODES,
+        "{}",
+        changes.len()
+    );
+    let mut g = sheet.network().conductances(None);
+    for &(k, m) in &changes {
+        g[k] *= m;
+    }
+    let oracle = sheet.network().solve(&g).unwrap().transfer;
+    let got = sheet.transfer_inclusions(&[palm]).unwrap();
+    for (a, b) in got.z.iter().zip(&oracle.z) {
+        assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{a} vs {b}");
+    }
     // Contact impedance 0 .. 1e6 ohm: finite; at 1 Mohm the source hits its compliance
     // (load > 16 V / 64 uA = 250 kohm) and the frame shrinks with the current, keeping its shape.
     let frames: Vec<Vec<f64>> = [0.0, 1e3, 1e6]
