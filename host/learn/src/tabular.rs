@@ -228,7 +228,7 @@ impl Table {
             };
             (name, v)
         });
-        let description = format!(
+        let mut description = format!(
             "{}; positions in {}",
             imported.description,
             match unit {
@@ -236,6 +236,25 @@ impl Table {
                 Unit::Mm => "mm",
             }
         );
+        // Positions in metres read as mm span less than a millimetre: say so.
+        if let (Unit::Mm, Some(p)) = (unit, &imported.positions) {
+            let span = |i: usize| {
+                let (lo, hi) = p
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                        let v = q.get(i).copied().unwrap_or(0.0);
+                        (l.min(v), h.max(v))
+                    });
+                hi - lo
+            };
+            let widest = span(0).max(span(1));
+            if widest > 0.0 && widest < 1.0 {
+                description.push_str(&format!(
+                    "; note: the positions span only {widest:.3} mm: if they are in metres, \
+                     give --unit m"
+                ));
+            }
+        }
         Ok(Self {
             x: imported.x,
             feature_names: imported.feature_names,
@@ -1789,6 +1808,18 @@ mod tests {
         assert_eq!(name, "z");
         assert!(z.iter().all(|&z| z <= cz && z >= cz - 2.01), "{}", z[0]);
         assert!(t.description.contains("no header row") && t.description.contains("m (read"));
+        assert!(!t.description.contains("--unit m"));
+        // The same metres read as the default mm span a fraction of a millimetre: said.
+        let dir = tmp("unit");
+        let (f, tf) = (dir.join("features.csv"), dir.join("targets.csv"));
+        standin::make(40, 1, 3).unwrap().write(&f, &tf).unwrap();
+        let as_mm = Table::import(&f, Some(&tf), Unit::Mm).unwrap();
+        assert!(
+            as_mm.description.contains("give --unit m"),
+            "{}",
+            as_mm.description
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// Each regressor, trained on the first 300 rows (a chronological split), places the last
