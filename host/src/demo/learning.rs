@@ -72,7 +72,7 @@ struct QdaResult {
 /// One model trained and tested.
 #[derive(Serialize)]
 struct ModelRow {
-    name: &'static str,
+    name: String,
     /// None when the model cannot be fitted.
     result: Option<ModelResult>,
     /// Why it cannot be fitted.
@@ -227,7 +227,9 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     let bar = steps.bar(keeps.len(), "features against accuracy and size");
     let mut trade = Vec::new();
     for &p in &keeps {
-        let (_, file, tested) = fit(true, ModelKind::Qda, Some(qda.options.shrinkage), Some(p))?;
+        // What the main model is (a qda whose best shrinkage is full toward the pooled
+        // covariance was saved as the lda it equals).
+        let (_, file, tested) = fit(true, qda.options.kind, Some(qda.options.shrinkage), Some(p))?;
         let f16 = file.blob(Precision::F16)?.len();
         let f32 = file.blob(Precision::F32)?.len();
         trade.push((
@@ -265,8 +267,18 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         "feature trade curve; the chip's model checked in et-core",
     );
 
-    let row = |name, t: &pipeline::Trained, tested: &pipeline::Tested| ModelRow {
-        name,
+    let row = |name: &str, t: &pipeline::Trained, tested: &pipeline::Tested| ModelRow {
+        name: if t
+            .fallbacks
+            .iter()
+            .any(|f| matches!(f, pipeline::Fallback::QdaIsLda { .. }))
+        {
+            format!(
+                "{name}, saved as the LDA it equals (best shrinkage: 1 toward the pooled covariance)"
+            )
+        } else {
+            name.to_string()
+        },
         result: Some(ModelResult {
             shrinkage: t.options.shrinkage,
             cv_accuracy: t.cv.accuracy(),
@@ -285,7 +297,7 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     models.push(match &raw {
         Ok((t, _, tested)) => row(raw_name, t, tested),
         Err(e) => ModelRow {
-            name: raw_name,
+            name: raw_name.to_string(),
             result: None,
             error: Some(e.to_string()),
         },
