@@ -24,37 +24,35 @@ pub struct Outcome {
     pub error_mm: f64,
 }
 
-/// Predicts every row of `x` and reports, per observation, how far its class lies from the
-/// electrodes and how far off the prediction was. `centres_mm` and `electrodes_mm` in mm.
+/// Per observation, how far its class lies from the electrodes and how far off its
+/// prediction `predicted` (one class per label in `y`) was. `centres_mm` and `electrodes_mm`
+/// in mm.
 ///
 /// # Errors
-/// [`FitError::Shape`] for a feature count or label the model does not have.
+/// [`FitError::Shape`] for a label or prediction that is not one of the classes, or counts
+/// that differ.
 pub fn outcomes(
-    model: &Fitted,
-    x: &DMatrix<f64>,
+    predicted: &[u16],
     y: &[u16],
     centres_mm: &[[f64; 2]],
     electrodes_mm: &[[f64; 2]],
 ) -> Result<Vec<Outcome>, FitError> {
-    if x.ncols() != model.features()
-        || x.nrows() != y.len()
-        || centres_mm.len() != model.classes.len()
-    {
+    if predicted.len() != y.len() {
         return Err(FitError::Shape(
-            "observations, labels and class centres do not match the model".into(),
+            "predictions and labels differ in number".into(),
         ));
     }
-    let mut row = vec![0.0; x.ncols()];
     y.iter()
+        .zip(predicted)
         .enumerate()
-        .map(|(r, &label)| {
-            let t = *centres_mm
-                .get(usize::from(label))
-                .ok_or_else(|| FitError::Shape(format!("observation {r}: class {label}")))?;
-            for (j, v) in row.iter_mut().enumerate() {
-                *v = x[(r, j)];
-            }
-            let p = centres_mm[usize::from(model.predict(&row))];
+        .map(|(r, (&label, &p))| {
+            let class = |c: u16| {
+                centres_mm
+                    .get(usize::from(c))
+                    .copied()
+                    .ok_or_else(|| FitError::Shape(format!("observation {r}: class {c}")))
+            };
+            let (t, p) = (class(label)?, class(p)?);
             Ok(Outcome {
                 distance_mm: electrode_distance(t, electrodes_mm),
                 error_mm: (t[0] - p[0]).hypot(t[1] - p[1]),

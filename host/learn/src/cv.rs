@@ -99,28 +99,53 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 /// [`FitError::Shape`] if `x` does not have the model's feature count, rows and labels differ
 /// in number, or a label is not one of the model's classes.
 pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion, FitError> {
-    let classes = model.classes.len();
-    if x.ncols() != model.features() || x.nrows() != y.len() {
+    confusion_of(model.classes.len(), y, &predict_rows(model, x)?)
+}
+
+/// The model's class for every observation (row of `x`).
+///
+/// # Errors
+/// [`FitError::Shape`] if `x` does not have the model's feature count.
+pub fn predict_rows(model: &Fitted, x: &DMatrix<f64>) -> Result<Vec<u16>, FitError> {
+    if x.ncols() != model.features() {
         return Err(FitError::Shape(format!(
-            "{} x {} observations with {} labels for a model of {} features",
+            "{} x {} observations for a model of {} features",
             x.nrows(),
             x.ncols(),
-            y.len(),
             model.features()
         )));
     }
-    let mut confusion = Confusion::new(classes);
     let mut row = vec![0.0; x.ncols()];
-    for (r, &label) in y.iter().enumerate() {
+    Ok((0..x.nrows())
+        .map(|r| {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = x[(r, j)];
+            }
+            model.predict(&row)
+        })
+        .collect())
+}
+
+/// Counts `predicted` against the labels `y` (one each, labels in 0..classes).
+///
+/// # Errors
+/// [`FitError::Shape`] if they differ in number or a label is not one of the classes.
+pub fn confusion_of(classes: usize, y: &[u16], predicted: &[u16]) -> Result<Confusion, FitError> {
+    if predicted.len() != y.len() {
+        return Err(FitError::Shape(format!(
+            "{} observations with {} labels",
+            predicted.len(),
+            y.len()
+        )));
+    }
+    let mut confusion = Confusion::new(classes);
+    for (r, (&label, &p)) in y.iter().zip(predicted).enumerate() {
         if usize::from(label) >= classes {
             return Err(FitError::Shape(format!(
                 "observation {r} has class {label}, the model has {classes}"
             )));
         }
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = x[(r, j)];
-        }
-        confusion.add(label, model.predict(&row));
+        confusion.add(label, p);
     }
     Ok(confusion)
 }

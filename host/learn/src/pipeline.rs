@@ -349,7 +349,9 @@ pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
     let columns = model_columns(file, data)?;
     let model = file.fitted().map_err(UseError::Model)?;
     let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
-    let confusion = cv::evaluate(&model, &x, &data.y)?;
+    // One prediction per observation serves the confusion, the bands and the errors.
+    let predicted = cv::predict_rows(&model, &x)?;
+    let confusion = cv::confusion_of(model.classes.len(), &data.y, &predicted)?;
     let electrodes_mm: Vec<[f64; 2]> = data
         .electrodes
         .iter()
@@ -358,18 +360,15 @@ pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
     let outcomes = if electrodes_mm.is_empty() {
         Vec::new()
     } else {
-        analysis::outcomes(&model, &x, &data.y, &file.centres_mm, &electrodes_mm)?
+        analysis::outcomes(&predicted, &data.y, &file.centres_mm, &electrodes_mm)?
     };
     let bands = analysis::by_distance(&outcomes, 10.0);
-    let errors_from_truth_mm = if data.positions.len() == x.nrows() {
-        let mut row = vec![0.0; x.ncols()];
-        (0..x.nrows())
+    let errors_from_truth_mm = if data.positions.len() == predicted.len() {
+        predicted
+            .iter()
             .zip(&data.positions)
-            .map(|(r, truth)| {
-                for (j, v) in row.iter_mut().enumerate() {
-                    *v = x[(r, j)];
-                }
-                let c = file.centres_mm.get(usize::from(model.predict(&row)))?;
+            .map(|(&c, truth)| {
+                let c = file.centres_mm.get(usize::from(c))?;
                 Some((c[0] - truth[0] * 1e3).hypot(c[1] - truth[1] * 1e3))
             })
             .collect::<Option<Vec<f64>>>()
