@@ -7,7 +7,7 @@ pub const ELECTRODES: u8 = 16;
 /// Frames scanned per touch state.
 pub const FRAMES_PER_STATE: u32 = 4;
 /// White noise per sample, V rms.
-pub const NOISE_V: f32 = 1.7e-3;
+pub const NOISE_V: f32 = 4.9e-5;
 /// Z, ohms: 5 states of L x L, row-major.
 #[rustfmt::skip]
 pub static Z: [f32; 1280] = [

@@ -62,11 +62,8 @@ fn main() {
         subsections: 5,
         pressure_pa: (5e3, 60e3),
         radius: 0.005,
-        placement: 0.00125,
-        electrode_movement: 0.0005,
-        poses: 1,
-        press_movement: 0.0,
-        seed: 1,
+        target_radius: 0.005,
+        ..Plan::default()
     };
     let presses = if quick { 150 } else { 400 };
     let next_day = Plan {

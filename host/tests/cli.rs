@@ -492,8 +492,8 @@ fn reconstruct_with_greit() {
     let bad = args(&["--iterations", "3"]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--method gn"));
-    // The central touch, which adjacent drive sees least: the noise figure's lambda leaves
-    // it below its noise, lambda chosen by the frame (--alpha gcv) smooths more and finds it.
+    // The central touch, which adjacent drive sees least: at the calibrated noise both the
+    // noise figure's lambda and the one chosen by the frame (--alpha gcv) find it.
     let centre = root.join("sim/scenes/disc-ref-x000.toml");
     let run = |alpha: &str| -> serde_json::Value {
         let out = et(&[
@@ -518,12 +518,11 @@ fn reconstruct_with_greit() {
         );
         serde_json::from_slice(&out.stdout).unwrap()
     };
-    let (fixed, chosen) = (run("auto"), run("gcv"));
-    assert!(fixed["touch_matches"][0]["found"].is_null(), "{fixed}");
-    let m = &chosen["touch_matches"][0];
-    assert_eq!(m["found"], 0, "{chosen}");
-    assert!(m["pe"].as_f64().unwrap() < 0.1, "{chosen}");
-    assert!(chosen["alpha"].as_f64().unwrap() > fixed["alpha"].as_f64().unwrap());
+    for j in [run("auto"), run("gcv")] {
+        let m = &j["touch_matches"][0];
+        assert_eq!(m["found"], 0, "{j}");
+        assert!(m["pe"].as_f64().unwrap() < 0.1, "{j}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

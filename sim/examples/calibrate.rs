@@ -1,101 +1,83 @@
-//! Calibrates the simulated front end's noise to the reference hardware (docs/method.md §3): the
-//! adjacent protocol on the 13 x 13 cm, 16-electrode sheet reads about 55 dB SNR and 0.5 mV
-//! MAD at 32 uA, and 49 dB and 0.4 mV at 10 uA.
+//! Calibrates the simulated front end's two noise layers to the reference hardware and prints
+//! the fitted parameters with what they give (docs/calibration.md, `et_sim::calibration`).
 //!
-//! Noise model (per sample at the amplifier input): white noise sigma_w, mains hum of
-//! amplitude A, and a relative jitter sigma_I of the current from one injection to the next.
-//! After the median of the 25 kept samples, a frame value carries
-//! sigma_k^2 = (sqrt(pi/2) sigma_w / 5)^2 + A^2 / 2 + (sigma_I V_k)^2: a floor that does not
-//! depend on the current, and a part that grows with the signal.
+//! On the 13 x 13 cm, 16-electrode sheet, untouched, adjacent protocol at the reference scan
+//! settings and PGIA gain 8:
 //!
-//! The two reference figures cannot both hold for this sheet: at 32 uA a 30 kohm/sq, 13 cm
-//! sheet gives adjacent differential voltages whose dB-average is about 17 mV, so 0.5 mV of
-//! frame noise means about 30 dB, not 55 dB (55 dB at that noise needs channels 20 times
-//! larger). We calibrate to the noise the reference states (MAD 0.5 / 0.4 mV) and report the
-//! SNR that follows: the conservative choice, since results on the simulator are then
-//! pessimistic rather than flattering. The program grid-searches (sigma_w, sigma_I) with
-//! A = 0.3 mV, scoring |dMAD| / 0.05 mV at both currents, and prints the best fit.
+//! - frame to frame: SNR 55 dB at 32 uA and 49 dB at 10 uA (per channel over repeated frames,
+//!   averaged over channels), fitted by the white noise per sample and the current jitter the
+//!   readings see (the ADC's 0.5 code and 10 uV of hum fixed);
+//! - between measurement sets: MAD 0.5 mV at 32 uA and 0.4 mV at 10 uA (each set's mean frame
+//!   against the mean over sets), fitted by each electrode's junction potential and the
+//!   sheet's conductance, on sets whose electrodes were also put down again
+//!   (`--movement-mm`, default `CALIBRATION_MOVEMENT_M`, 0.1).
 //!
-//! Run: `cargo run --release -p et-sim --example calibrate`
+//! Run: `cargo run --release -p et-sim --example calibrate [-- --movement-mm 0.1]`
 
 use std::sync::Arc;
 
-use et_core::ScanConfig;
-use et_core::stats::{mad, snr};
-use et_sim::frontend::{FrontendSpec, SimFrontend};
-use et_sim::sheet::{Sheet, SheetSpec};
+use et_sim::calibration::{
+    MAD_V, SNR_DB, fit_frame_layer, fit_set_layer, frame_snr, replaced_sheets, set_mad, sheet_spec,
+};
+use et_sim::frontend::{FrontendSpec, SetSpread};
+use et_sim::sheet::Sheet;
 
 const FRAMES: usize = 400;
+const SETS: usize = 40;
+const FRAMES_PER_SET: usize = 10;
 
-fn measure(sheet: &Arc<Sheet>, spec: FrontendSpec, current_na: u32) -> (f32, f32) {
-    let config = ScanConfig {
-        current_na,
-        ..ScanConfig::REFERENCE
-    };
-    let mut fe = SimFrontend::new(sheet.clone(), spec, 42).expect("valid spec");
-    let k = config.validate().expect("valid").frame_len();
-    let mut frames = Vec::with_capacity(FRAMES * k);
-    for _ in 0..FRAMES {
-        frames.extend(fe.fast_frame(&config).expect("frame"));
-    }
-    (
-        snr(&frames, k).expect("snr").mean_db,
-        mad(&frames, k).expect("mad") * 1e3,
-    )
-}
-
-fn main() {
-    let sheet_spec = SheetSpec::rectangle(0.13, 0.13, 16);
-    let sheet = Arc::new(Sheet::new(&sheet_spec, &[]).expect("sheet"));
-    let targets = [(32_000, 55.0f32, 0.5f32), (10_000, 49.0, 0.4)];
-    let score = |spec: FrontendSpec| -> (f32, Vec<(f32, f32)>) {
-        let got: Vec<(f32, f32)> = targets
-            .iter()
-            .map(|&(i, _, _)| measure(&sheet, spec, i))
-            .collect();
-        let s = targets
-            .iter()
-            .zip(&got)
-            .map(|(&(_, _, mad_t), &(_, mad_g))| (mad_g - mad_t).abs() / 0.05)
-            .sum();
-        (s, got)
-    };
-    let now = FrontendSpec::default();
-    let (s, got) = score(now);
-    println!(
-        "defaults: white {:.2} mV, jitter {:.2} %, mains {:.2} mV -> 32 uA {:.1} dB {:.3} mV, 10 uA {:.1} dB {:.3} mV (score {s:.2})",
-        now.white_noise_v * 1e3,
-        now.current_noise * 100.0,
-        now.mains_v * 1e3,
-        got[0].0,
-        got[0].1,
-        got[1].0,
-        got[1].1
-    );
-    let mut best = (f32::INFINITY, now, got);
-    for w in (10..=40).map(|i| f64::from(i) * 0.1e-3) {
-        for j in (0..=40).map(|i| f64::from(i) * 0.5e-3) {
-            let spec = FrontendSpec {
-                white_noise_v: w,
-                current_noise: j,
-                mains_v: 0.3e-3,
-                ..now
-            };
-            let (s, got) = score(spec);
-            if s < best.0 {
-                best = (s, spec, got);
-            }
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let movement = match args.iter().position(|a| a == "--movement-mm") {
+        Some(i) => {
+            args.get(i + 1)
+                .ok_or("--movement-mm needs a value")?
+                .parse::<f64>()?
+                * 1e-3
         }
+        None => et_sim::frontend::CALIBRATION_MOVEMENT_M,
+    };
+    let spec = sheet_spec();
+    let sheet = Arc::new(Sheet::new(&spec, &[])?);
+    let defaults = FrontendSpec::default();
+    let sets = replaced_sheets(&spec, movement, SETS, 5)?;
+    let show = |name: &str, fe: FrontendSpec| -> Result<(), Box<dyn std::error::Error>> {
+        println!(
+            "{name}: white noise {:.1} uV, current jitter {:.3} %, junction potential {:.1} uV, conductance {:.2} %",
+            fe.white_noise_v * 1e6,
+            fe.current_noise * 100.0,
+            fe.sets.contact_potential_v * 1e6,
+            fe.sets.conductance * 100.0
+        );
+        for ((na, db), (_, v)) in SNR_DB.iter().zip(MAD_V) {
+            println!(
+                "  {:>2} uA: SNR {:.2} dB (reference {db}), MAD between sets {:.3} mV (reference {})",
+                na / 1000,
+                frame_snr(&sheet, fe, *na, FRAMES, 42)?,
+                set_mad(&sets, fe, *na, FRAMES_PER_SET, 1_000)? * 1e3,
+                v * 1e3
+            );
+        }
+        Ok(())
+    };
+    show("defaults", defaults)?;
+    let none = FrontendSpec {
+        sets: SetSpread {
+            contact_potential_v: 0.0,
+            conductance: 0.0,
+        },
+        ..defaults
+    };
+    for ((na, _), _) in SNR_DB.iter().zip(MAD_V) {
+        println!(
+            "  re-placement alone ({:.2} mm rms) at {:>2} uA: MAD {:.3} mV",
+            movement * 1e3,
+            na / 1000,
+            set_mad(&sets, none, *na, FRAMES_PER_SET, 1_000)? * 1e3
+        );
     }
-    let (s, spec, got) = best;
-    println!(
-        "best:     white {:.2} mV, jitter {:.2} %, mains {:.2} mV -> 32 uA {:.1} dB {:.3} mV, 10 uA {:.1} dB {:.3} mV (score {s:.2})",
-        spec.white_noise_v * 1e3,
-        spec.current_noise * 100.0,
-        spec.mains_v * 1e3,
-        got[0].0,
-        got[0].1,
-        got[1].0,
-        got[1].1
-    );
+    let frame = fit_frame_layer(&sheet, defaults, FRAMES)?;
+    let fitted = fit_set_layer(&sets, frame, FRAMES_PER_SET)?;
+    show("fitted", fitted)?;
+    Ok(())
 }

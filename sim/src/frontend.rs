@@ -1,15 +1,26 @@
 //! The simulated acquisition chain (docs/method.md §2-3), as an [`et_core::Frontend`]: the real scan
 //! engine runs against it sample by sample.
 //!
-//! Per step: the Howland source drives the injection (its current jitters a little from one
-//! injection to the next, and it saturates at its compliance); the instrumentation amplifier
-//! sees the measurement pair's voltage, reached through a first-order switching transient
-//! from whatever it showed before; white noise and mains hum add on; the PGIA gain scales it;
-//! the ADC quantises and clips at its rails.
+//! Noise comes in two layers (docs/calibration.md):
 //!
-//! [`SimFrontend::fast_frame`] gives whole frames with the same statistics without the sample
-//! detail: the settled value, the median's share of the white noise, the mains value at the
-//! step, the current jitter, and the quantisation.
+//! - **Frame to frame**, within one measurement set. Per step the Howland source drives the
+//!   injection (the readings see a small relative jitter of its current from one injection to
+//!   the next: the source and the ADC share one voltage reference, so the ratiometric reading
+//!   cancels most of the source's own jitter; it saturates at its compliance); the
+//!   instrumentation amplifier sees the measurement pair's voltage, reached through a
+//!   first-order switching transient from whatever it showed before; the amplifier's white
+//!   noise and the mains hum its common-mode rejection lets through add on; the PGIA gain
+//!   scales it; the ADC adds its own transition noise (a fraction of a code, the dither that
+//!   keeps a median of codes unbiased), quantises, and clips at its rails.
+//! - **Between measurement sets** ([`SetSpread`], drawn by [`SetSpread::draw`] and applied by
+//!   [`SimFrontend::set_state`]): each electrode's DC junction potential (clip on PPy) and the
+//!   sheet's conductance (temperature, humidity) differ from one set to the next. Electrode
+//!   re-placement, the third part, is the sheet's (`et_sim::sheet::Sheet::new`'s offsets).
+//!
+//! [`SimFrontend::fast_frame`] gives whole frames with the same statistics without the
+//! settling transient: per step the settled value, the current jitter, the mains value
+//! mid-step, and the median of the step's kept samples, each with its white and ADC noise and
+//! quantised (drawn sample by sample, so that the median of codes is the scan engine's).
 
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -24,8 +35,8 @@ use crate::sheet::{Sheet, SheetError, Source};
 use crate::touch::Touch;
 use et_core::rng::Rng;
 
-/// The front end's parameters. Defaults are the calibrated reference hardware (see
-/// `README.md`, "Calibration").
+/// The front end's parameters. Defaults are the calibrated reference hardware
+/// (docs/calibration.md).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FrontendSpec {
@@ -37,14 +48,21 @@ pub struct FrontendSpec {
     pub adc_range_v: f64,
     /// White noise per sample at the amplifier input, V rms.
     pub white_noise_v: f64,
-    /// Relative rms jitter of the injected current from one injection to the next.
+    /// The ADC's own noise per sample (transition and reference noise), codes rms: the dither
+    /// that keeps the median of a burst from sticking to one code.
+    pub adc_noise_codes: f64,
+    /// Relative rms jitter of the current from one injection to the next, as the readings
+    /// see it (what the ratiometric measurement leaves of the source's jitter).
     pub current_noise: f64,
-    /// Mains hum amplitude at the amplifier input, V.
+    /// Mains hum amplitude at the amplifier input, V (what the amplifier's common-mode
+    /// rejection lets through).
     pub mains_v: f64,
     /// Mains frequency, Hz.
     pub mains_hz: f64,
     /// Time constant of the settling transient after each switch, us.
     pub settle_tau_us: f64,
+    /// How one measurement set differs from the next.
+    pub sets: SetSpread,
 }
 
 impl Default for FrontendSpec {
@@ -54,23 +72,103 @@ impl Default for FrontendSpec {
             adc_bits: 16,
             adc_range_v: 5.0,
             white_noise_v: CALIBRATED_WHITE_NOISE_V,
+            adc_noise_codes: ADC_NOISE_CODES,
             current_noise: CALIBRATED_CURRENT_NOISE,
-            mains_v: CALIBRATED_MAINS_V,
+            mains_v: MAINS_V,
             mains_hz: 50.0,
             settle_tau_us: 50.0,
+            sets: SetSpread::default(),
         }
     }
 }
 
-/// Calibrated white noise per sample, V rms: with [`CALIBRATED_CURRENT_NOISE`] and
-/// [`CALIBRATED_MAINS_V`] the adjacent protocol on the 13 x 13 cm, 16-electrode sheet shows
-/// the reference MAD of 0.50 mV at 32 uA and 0.40 mV at 10 uA (docs/method.md §3). Fitted by
-/// `cargo run --release -p et-sim --example calibrate`; checked by the `calibration` test.
-pub const CALIBRATED_WHITE_NOISE_V: f64 = 1.7e-3;
-/// Calibrated relative current jitter between injections (see [`CALIBRATED_WHITE_NOISE_V`]).
-pub const CALIBRATED_CURRENT_NOISE: f64 = 8.5e-3;
-/// Calibrated mains hum amplitude, V (fixed, not fitted: typical pickup of a fabric sheet).
-pub const CALIBRATED_MAINS_V: f64 = 0.3e-3;
+/// Calibrated white noise per sample at the amplifier input, V rms. With
+/// [`CALIBRATED_CURRENT_NOISE`] it gives the reference's frame-to-frame SNR on the adjacent
+/// protocol of the 13 x 13 cm, 16-electrode sheet: 55 dB at 32 uA, 49 dB at 10 uA
+/// (docs/method.md §3, at PGIA gain [`CALIBRATION_GAIN`]). Fitted by
+/// `cargo run --release -p et-sim --example calibrate`; checked by the `calibration` tests.
+pub const CALIBRATED_WHITE_NOISE_V: f64 = 49e-6;
+/// Calibrated relative current jitter between injections, as the readings see it (see
+/// [`CALIBRATED_WHITE_NOISE_V`]).
+pub const CALIBRATED_CURRENT_NOISE: f64 = 1.08e-3;
+/// The ADC's transition noise, codes rms (not fitted: typical of a 16-bit SAR converter).
+pub const ADC_NOISE_CODES: f64 = 0.5;
+/// Mains hum at the amplifier input, V (not fitted: about 0.3 V of common-mode hum on a
+/// body-worn sheet, rejected by an instrumentation amplifier's 90 dB).
+pub const MAINS_V: f64 = 10e-6;
+/// The PGIA gain the calibration is read at: the adjacent protocol's largest reading at
+/// 32 uA (0.3 V on the 13 cm sheet) then uses about half the ADC's range. At gain 1 a code
+/// (153 uV) is five times the reference's frame noise, and a median of codes cannot resolve
+/// below it.
+pub const CALIBRATION_GAIN: u8 = 8;
+/// Calibrated rms of each electrode's DC junction potential between measurement sets, V:
+/// with [`CALIBRATED_SET_CONDUCTANCE`] and [`CALIBRATION_MOVEMENT_M`] of electrode
+/// re-placement it gives the reference's MAD between sets, 0.5 mV at 32 uA and 0.4 mV at
+/// 10 uA (docs/method.md §3).
+pub const CALIBRATED_CONTACT_POTENTIAL_V: f64 = 0.33e-3;
+/// Electrode re-placement between measurement sets the set layer is calibrated with, m rms
+/// along the outline (clips put back on a frameless sheet; more than about 0.13 mm alone
+/// would exceed the reference's MAD at 32 uA).
+pub const CALIBRATION_MOVEMENT_M: f64 = 0.1e-3;
+/// Calibrated relative rms of the sheet's conductance between measurement sets (see
+/// [`CALIBRATED_CONTACT_POTENTIAL_V`]).
+pub const CALIBRATED_SET_CONDUCTANCE: f64 = 1.4e-3;
+
+/// How one measurement set differs from the next (sets taken at different times, the sheet
+/// put down again): the part of the reference's MAD "among different measurement sets" that
+/// the front end and the sheet's state own. Electrode re-placement is the sheet's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SetSpread {
+    /// Rms of each electrode's DC junction potential (clip on PPy fabric), V: it adds to
+    /// every reading of a pair, whatever the current.
+    pub contact_potential_v: f64,
+    /// Relative rms of the sheet's conductance (temperature, humidity): every voltage of a
+    /// set scales by one factor.
+    pub conductance: f64,
+}
+
+impl Default for SetSpread {
+    fn default() -> Self {
+        Self {
+            contact_potential_v: CALIBRATED_CONTACT_POTENTIAL_V,
+            conductance: CALIBRATED_SET_CONDUCTANCE,
+        }
+    }
+}
+
+/// One measurement set's state: what [`SetSpread::draw`] drew.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetState {
+    /// Each electrode's DC junction potential, V.
+    pub contact_potentials_v: Vec<f64>,
+    /// The sheet's conductance relative to nominal.
+    pub conductance_scale: f64,
+}
+
+impl SetSpread {
+    /// Draws a set for a sheet of `electrodes` (the conductance log-normal, so positive).
+    #[must_use]
+    pub fn draw(&self, electrodes: usize, rng: &mut Rng) -> SetState {
+        SetState {
+            contact_potentials_v: (0..electrodes)
+                .map(|_| self.contact_potential_v * rng.normal())
+                .collect(),
+            conductance_scale: (self.conductance * rng.normal()).exp(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), SheetError> {
+        let ok = |x: f64| x.is_finite() && x >= 0.0;
+        if !(ok(self.contact_potential_v) && ok(self.conductance) && self.conductance <= 1.0) {
+            return Err(SheetError::Field {
+                field: "frontend.sets",
+                why: "contact_potential_v must be >= 0 V and conductance between 0 and 1".into(),
+            });
+        }
+        Ok(())
+    }
+}
 
 impl FrontendSpec {
     /// Checks every field.
@@ -91,12 +189,17 @@ impl FrontendSpec {
         if !(self.adc_range_v.is_finite() && self.adc_range_v > 0.0) {
             return bad("frontend.adc_range_v", "must be a positive voltage");
         }
-        if !(nonneg(self.white_noise_v) && nonneg(self.current_noise) && nonneg(self.mains_v)) {
+        if !(nonneg(self.white_noise_v)
+            && nonneg(self.adc_noise_codes)
+            && nonneg(self.current_noise)
+            && nonneg(self.mains_v))
+        {
             return bad(
                 "frontend noise",
-                "white_noise_v, current_noise and mains_v must be >= 0",
+                "white_noise_v, adc_noise_codes, current_noise and mains_v must be >= 0",
             );
         }
+        self.sets.validate()?;
         if !(nonneg(self.mains_hz) && nonneg(self.settle_tau_us)) {
             return bad("frontend", "mains_hz and settle_tau_us must be >= 0");
         }
@@ -110,6 +213,31 @@ impl FrontendSpec {
             );
         }
         Ok(())
+    }
+
+    /// This front end without noise of either layer (no white, ADC, current or mains noise, no
+    /// junction potentials, nominal conductance): what tests compare against exact values.
+    #[must_use]
+    pub fn without_noise(self) -> Self {
+        Self {
+            white_noise_v: 0.0,
+            adc_noise_codes: 0.0,
+            current_noise: 0.0,
+            mains_v: 0.0,
+            sets: SetSpread {
+                contact_potential_v: 0.0,
+                conductance: 0.0,
+            },
+            ..self
+        }
+    }
+
+    /// The noise of one sample at PGIA gain `gain`, referred to the amplifier input, V rms:
+    /// the amplifier's white noise and the ADC's, a code being smaller at higher gain.
+    #[must_use]
+    pub fn sample_noise_v(&self, gain: u8) -> f64 {
+        let lsb = f64::from(self.scale(gain).volts_per_code);
+        self.white_noise_v.hypot(self.adc_noise_codes * lsb)
     }
 
     /// The ADC scale at PGIA gain `gain`.
@@ -169,6 +297,10 @@ pub struct SimFrontend {
     open: Vec<f64>,
     /// The sheet's conductance relative to when it was built (temperature drift).
     conductance_scale: f64,
+    /// This measurement set's state (junction potentials, conductance).
+    set: SetState,
+    /// The kept samples of one step (fast path).
+    burst: Vec<f64>,
 }
 
 impl SimFrontend {
@@ -193,6 +325,11 @@ impl SimFrontend {
             last: 0.0,
             open: vec![0.0; electrodes],
             conductance_scale: 1.0,
+            set: SetState {
+                contact_potentials_v: vec![0.0; electrodes],
+                conductance_scale: 1.0,
+            },
+            burst: Vec::new(),
         })
     }
 
@@ -231,6 +368,27 @@ impl SimFrontend {
         Ok(())
     }
 
+    /// Puts the front end in measurement set `set` (junction potentials and conductance, see
+    /// [`SetSpread::draw`]); a new front end starts in the nominal set (no junction
+    /// potentials, nominal conductance).
+    ///
+    /// # Errors
+    /// [`SimError::Config`] for a potential per electrode of another count, a non-finite
+    /// potential or a conductance that is not finite and positive.
+    pub fn set_state(&mut self, set: &SetState) -> Result<(), SimError> {
+        if set.contact_potentials_v.len() != self.open.len()
+            || set.contact_potentials_v.iter().any(|v| !v.is_finite())
+            || !(set.conductance_scale.is_finite() && set.conductance_scale > 0.0)
+        {
+            return Err(SimError::Config(format!(
+                "a measurement set needs {} finite junction potentials and a positive conductance",
+                self.open.len()
+            )));
+        }
+        self.set = set.clone();
+        Ok(())
+    }
+
     /// The sheet.
     #[must_use]
     pub fn sheet(&self) -> &Arc<Sheet> {
@@ -252,18 +410,24 @@ impl SimFrontend {
         self.time
     }
 
-    /// The noiseless, settled frame of `protocol` at `amps` for the current touch state (V).
+    /// The noiseless, settled frame of `protocol` at `amps` for the current touch state and
+    /// measurement set (V).
     #[must_use]
     pub fn ideal_frame(&self, protocol: &Protocol, amps: f64) -> Vec<f64> {
-        crate::sheet::frame(&self.transfer, protocol, amps, &self.spec.source)
+        protocol
+            .steps()
+            .map(|s| self.settled(s.injection, s.measurement, amps))
+            .collect()
     }
 
     fn settled(&self, inj: Injection, meas: Measurement, amps: f64) -> f64 {
         let (a, b) = (usize::from(inj.source.0), usize::from(inj.sink.0));
         let (p, q) = (usize::from(meas.positive.0), usize::from(meas.negative.0));
-        let c = self.conductance_scale;
+        let c = self.conductance_scale * self.set.conductance_scale;
         let i = self.spec.source.current(amps, self.transfer.load(a, b) / c);
-        self.transfer.voltage(a, b, p, q, i) / c
+        let e = &self.set.contact_potentials_v;
+        let junction = e.get(p).copied().unwrap_or(0.0) - e.get(q).copied().unwrap_or(0.0);
+        self.transfer.voltage(a, b, p, q, i) / c + junction
     }
 
     /// Whether electrode `e`'s contact is open at this step (draws only for faulty ones).
@@ -293,11 +457,13 @@ impl SimFrontend {
         self.spec.mains_v * (2.0 * PI * self.spec.mains_hz * t).sin()
     }
 
-    /// One whole frame with the statistics of the scan engine's output, without simulating
-    /// samples: per step the settled voltage (with this injection's current jitter), the
-    /// median's share of the white noise (sqrt(pi/2) sigma / sqrt(kept) for a median of
-    /// Gaussian samples), the mains value mid-step, and quantisation to half an ADC code (the
-    /// median of an even count can end in .5). The clock advances as a real scan would.
+    /// One whole frame with the statistics of the scan engine's output, without the settling
+    /// transient: per step the settled voltage (with this injection's current jitter), the
+    /// mains value mid-step, and the median of the kept samples' noise (white and ADC), each
+    /// sample quantised. Rounding is monotone, so the median of the codes is the rounded
+    /// median of the noisy values (the mean of the two middle ones for an even count): the
+    /// kept samples are drawn, the middle picked, then rounded. The clock advances as a real
+    /// scan would.
     ///
     /// # Errors
     /// [`SimError::Config`] for an invalid configuration.
@@ -324,7 +490,7 @@ impl SimFrontend {
         let dt = 1.0 / f64::from(config.sample_rate_hz);
         let kept = f64::from(config.kept_samples());
         let spp = f64::from(config.samples_per_step);
-        let median_sigma = self.spec.white_noise_v * (PI / 2.0).sqrt() / kept.sqrt();
+        let sigma = self.spec.sample_noise_v(config.gain);
         let amps = f64::from(config.current_amps());
         let lsb = f64::from(scale.volts_per_code);
         let mut out = Vec::with_capacity(protocol.frame_len());
@@ -344,10 +510,13 @@ impl SimFrontend {
                 step.measurement,
                 amps * self.jitter,
                 config.gain,
-            ) + median_sigma * self.rng.normal()
-                + self.mains(mid);
-            let code = (v / lsb * 2.0).round() / 2.0 + f64::from(scale.zero_code);
+            ) + self.mains(mid);
             let max = f64::from(scale.max_code());
+            let to_code = |x: f64| ((v + x) / lsb + f64::from(scale.zero_code)).round();
+            let code = match self.median_noise(config.kept_samples(), sigma) {
+                (lo, None) => to_code(lo),
+                (lo, Some(hi)) => (to_code(lo) + to_code(hi)) / 2.0,
+            };
             if !(code > 0.0 && code < max) {
                 report.rail.set(i);
                 report.rail_samples += u32::from(config.kept_samples());
@@ -357,6 +526,25 @@ impl SimFrontend {
             self.time += dt * spp;
         }
         Ok((out, report))
+    }
+
+    /// The middle of `n` draws of N(0, sigma^2): the median for odd `n`, the two middle values
+    /// for even `n`.
+    fn median_noise(&mut self, n: u16, sigma: f64) -> (f64, Option<f64>) {
+        let n = usize::from(n.max(1));
+        self.burst.clear();
+        for _ in 0..n {
+            self.burst.push(sigma * self.rng.normal());
+        }
+        let half = n / 2;
+        let (below, mid, _) = self.burst.select_nth_unstable_by(half, f64::total_cmp);
+        let mid = *mid;
+        if n % 2 == 1 {
+            (mid, None)
+        } else {
+            let lo = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (lo, Some(mid))
+        }
     }
 
     fn check_electrodes(&self, config: &ScanConfig) -> Result<(), SimError> {
@@ -424,12 +612,12 @@ impl Frontend for SimFrontend {
         } else {
             0.0
         };
+        let sigma = self.spec.sample_noise_v(config.gain);
         let mut gap = self.last - target;
         for s in samples.iter_mut() {
             self.time += dt;
             gap *= decay;
-            let v =
-                target + gap + self.spec.white_noise_v * self.rng.normal() + self.mains(self.time);
+            let v = target + gap + sigma * self.rng.normal() + self.mains(self.time);
             *s = (v / lsb + zero).round().clamp(0.0, top) as u16;
         }
         self.last = target + gap;

@@ -12,6 +12,7 @@
 //!   noiseless frames for any protocol, with the current source's compliance.
 //! - [`frontend`]: the acquisition chain as an `et_core::Frontend` (current jitter, settling,
 //!   noise, gain, ADC), and the fast path for whole noisy frames.
+//! - [`calibration`]: the front end's noise fitted to the reference hardware's SNR and MAD.
 //! - [`scene`]: scene files (TOML) and the runner that turns them into frames with their truth.
 //! - [`still`]: a still scene's frames (V_0, the noise of dV, one touched frame), as imaging
 //!   uses them.
@@ -21,6 +22,7 @@
 #![forbid(unsafe_code)]
 
 pub mod band;
+pub mod calibration;
 pub mod emulated;
 pub mod fast;
 pub mod frontend;

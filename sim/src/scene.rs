@@ -609,7 +609,8 @@ pub struct Run {
 }
 
 impl Run {
-    /// Builds the sheet (with electrode movement drawn from the seed) and the front end.
+    /// Builds the sheet (with electrode movement drawn from the seed) and the front end in
+    /// one measurement set (junction potentials and conductance drawn from the seed).
     ///
     /// # Errors
     /// [`SceneError`] if the sheet cannot be built (e.g. electrodes overlapping at the
@@ -632,6 +633,12 @@ impl Run {
             .collect();
         let sheet = Sheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
         let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())?;
+        // A scene is one measurement set: its junction potentials and conductance.
+        let set = scene
+            .frontend
+            .sets
+            .draw(usize::from(scene.sheet.electrodes.count), &mut moves);
+        frontend.set_state(&set)?;
         for f in &scene.faults {
             let p = match f.kind {
                 FaultKind::Disconnected => 1.0,

@@ -173,8 +173,9 @@ fn deviation(frame: &Frame, ideal: &[f64]) -> (f64, f64) {
     (max, rms)
 }
 
-/// Checks every frame against its state's noiseless frame: within the noise of a median of 25
-/// samples at 1.7 mV (about 0.45 mV rms), and nearer its own state than any other.
+/// Checks every frame against its state's noiseless frame: within a few ADC codes (the image adds
+/// the calibrated 49 uV per sample and quantises at gain 1, a 153 uV code), and nearer its own
+/// state than any other.
 fn check_against_sheet(sheet: &QemuSheet, frames: &[Frame], config: &ScanConfig) {
     let protocol = config.validate().unwrap();
     let amps = f64::from(config.current_amps());

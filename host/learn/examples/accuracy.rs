@@ -56,11 +56,10 @@ fn collect_case(
         subsections: 20,
         pressure_pa: (5e3, 60e3),
         radius,
-        placement: radius / 4.0,
-        electrode_movement: 0.0005,
+        target_radius: radius,
         poses,
         press_movement: press,
-        seed: 1,
+        ..Plan::default()
     };
     let started = Instant::now();
     let fe = FrontendSpec::default();

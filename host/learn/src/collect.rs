@@ -2,8 +2,10 @@
 //!
 //! The sheet is divided into a grid of classes. The grid is visited T times; at each visit
 //! every class is pressed for S_num scans while the pressure is varied by hand (a random
-//! pressure per scan between `pressure_pa`), the finger landing a little off the class centre
-//! (`placement_mm`). Each scan's kept samples are cut into S_sub sub-sections whose medians
+//! pressure per scan between `pressure_pa`), the finger landing anywhere in the class's target
+//! (`target_radius`) with a contact radius that differs from press to press (`radius_spread`).
+//! The fabric still holds part of each press at the next (`creep`), and the front end drifts
+//! during a visit (`drift`). Each scan's kept samples are cut into S_sub sub-sections whose medians
 //! each give one observation, so a class collects n_c = T S_num S_sub observations. The
 //! features are the frame values named by `feature_index` (the opposite protocol's
 //! reciprocity-halved set by default: p = L (L - 4) / 2).
@@ -15,7 +17,7 @@ use et_core::protocol::Halving;
 use et_core::rng::Rng;
 use et_core::scan::ScanError;
 use et_core::{ScanConfig, Scanner};
-use et_sim::frontend::{FrontendSpec, SimError, SimFrontend};
+use et_sim::frontend::{FrontendSpec, SetState, SimError, SimFrontend};
 use et_sim::sheet::{Sheet, SheetError, SheetSpec};
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
@@ -165,12 +167,25 @@ pub struct Plan {
     pub subsections: usize,
     /// Pressure range while pressing, Pa (docs/method.md §9: from below 10 kPa up).
     pub pressure_pa: (f64, f64),
-    /// Finger radius, m.
+    /// Finger contact radius, m (the median over presses).
     pub radius: f64,
-    /// Rms landing error around the class centre, m.
-    pub placement: f64,
+    /// Relative rms of the contact radius from press to press (log-normal): fingers differ,
+    /// and a finger pressed flatter or harder touches more fabric.
+    pub radius_spread: f64,
+    /// Radius of the target the finger's centre lands in, uniformly, m (the marked spot of a
+    /// class: docs/method.md §9's 15 mm target for 49 classes is 7.5 mm).
+    pub target_radius: f64,
+    /// Fraction of a press's pressure the fabric still holds where it was pressed when the
+    /// next press comes (slow elastic return, hysteresis), 0 to 1.
+    pub creep: f64,
+    /// How far the front end's state (junction potentials, conductance) moves during one
+    /// visit, as a fraction of the spread between measurement sets: 0 = constant within a
+    /// visit; 1 = by the visit's end as far as another set.
+    pub drift: f64,
     /// Rms electrode movement along the outline, m (frameless sheets): drawn anew at every
-    /// visit, since the sheet is handled between visits.
+    /// visit, since the clips are put back between visits (the re-placement the front end's
+    /// noise calibration assumes, `et_sim::frontend::CALIBRATION_MOVEMENT_M`). Each visit is
+    /// also a measurement set of the front end's `sets` (junction potentials, conductance).
     pub electrode_movement: f64,
     /// Electrode poses per visit: each press finds the electrodes in one of `poses` positions
     /// (drawn once per visit around the visit's positions), since pressing a frameless sheet
@@ -184,8 +199,10 @@ pub struct Plan {
 
 impl Default for Plan {
     /// docs/method.md §9's collection: T = 6 visits x S_num = 20 scans x S_sub = 20 observations,
-    /// pressed from 5 to 60 kPa with a 7.5 mm finger landing within 2 mm rms, electrodes
-    /// moving 0.5 mm rms between visits and staying put within one; seed 1.
+    /// pressed from 5 to 60 kPa with a 7.5 mm finger (15 % spread) landing anywhere in its
+    /// 15 mm target, a tenth of each press's pressure still held at the next, the front end
+    /// drifting half a set's spread during a visit, electrodes put back 0.1 mm rms off
+    /// between visits and staying put within one; seed 1. docs/calibration.md says why.
     fn default() -> Self {
         Self {
             visits: 6,
@@ -193,8 +210,11 @@ impl Default for Plan {
             subsections: 20,
             pressure_pa: (5e3, 60e3),
             radius: 0.0075,
-            placement: 0.002,
-            electrode_movement: 0.0005,
+            radius_spread: 0.15,
+            target_radius: 0.0075,
+            creep: 0.1,
+            drift: 0.5,
+            electrode_movement: et_sim::frontend::CALIBRATION_MOVEMENT_M,
             poses: 1,
             press_movement: 0.0,
             seed: 1,
@@ -212,6 +232,8 @@ pub enum CollectError {
     Sheet(SheetError),
     /// A scan failed.
     Scan(ScanError<SimError>),
+    /// The simulated front end refused a request.
+    Sim(SimError),
     /// The untouched frames could not be averaged into V_0.
     Stats(et_core::stats::StatsError),
     /// A press without touches.
@@ -229,6 +251,7 @@ impl std::fmt::Display for CollectError {
             CollectError::Config(e) => write!(f, "scan configuration: {e}"),
             CollectError::Sheet(e) => write!(f, "{e}"),
             CollectError::Scan(e) => write!(f, "scan: {e}"),
+            CollectError::Sim(e) => write!(f, "simulated front end: {e}"),
             CollectError::Stats(e) => write!(f, "untouched frames: {e}"),
             CollectError::EmptyPress { label } => write!(f, "press {label} has no touches"),
             CollectError::Scene(m) => write!(f, "scene: {m}"),
@@ -288,16 +311,17 @@ pub fn collect(
         let mut presses = Vec::with_capacity(centres.len() * plan.scans);
         for (c, centre) in centres.iter().enumerate() {
             for _ in 0..plan.scans {
-                let position = [
-                    centre[0] + plan.placement * rng.normal(),
-                    centre[1] + plan.placement * rng.normal(),
-                ];
+                // Uniform over the target disc: radius sqrt(u), angle uniform.
+                let (rho, phi) = (
+                    plan.target_radius * rng.uniform().sqrt(),
+                    std::f64::consts::TAU * rng.uniform(),
+                );
                 let (lo, hi) = plan.pressure_pa;
                 presses.push(Press {
                     label: c as u16,
                     touches: vec![Touch {
-                        position,
-                        radius: plan.radius,
+                        position: [centre[0] + rho * phi.cos(), centre[1] + rho * phi.sin()],
+                        radius: plan.radius * (plan.radius_spread * rng.normal()).exp(),
                         pressure: lo + (hi - lo) * rng.uniform(),
                     }],
                 });
@@ -309,7 +333,8 @@ pub fn collect(
 }
 
 /// `count` presses of `touches` fingers each, anywhere on the sheet (uniform over the outline
-/// kept `plan.radius` inside it), pressure uniform in `plan.pressure_pa`; labelled with the
+/// kept `plan.radius` inside it), pressure uniform in `plan.pressure_pa`, contact radius
+/// spread by `plan.radius_spread`; labelled with the
 /// number of touches. For regression (continuous position, pressure) and touch counting.
 pub fn random_presses(
     spec: &SheetSpec,
@@ -319,7 +344,7 @@ pub fn random_presses(
 ) -> impl FnMut(&mut Rng) -> Vec<Press> {
     let shape = spec.shape.clone();
     let [x0, y0, x1, y1] = shape.bounds();
-    let (radius, (lo, hi)) = (plan.radius, plan.pressure_pa);
+    let (radius, spread, (lo, hi)) = (plan.radius, plan.radius_spread, plan.pressure_pa);
     move |rng: &mut Rng| {
         (0..count)
             .map(|_| Press {
@@ -337,7 +362,7 @@ pub fn random_presses(
                         };
                         Touch {
                             position,
-                            radius,
+                            radius: radius * (spread * rng.normal()).exp(),
                             pressure: lo + (hi - lo) * rng.uniform(),
                         }
                     })
@@ -416,7 +441,13 @@ pub fn collect_presses_with(
             .map(|_| plan.electrode_movement * rng.normal())
             .collect();
         let sheet = Arc::new(Sheet::new(spec, &offsets)?);
+        // Each visit is a measurement set: the junction potentials and the sheet's
+        // conductance differ from the last.
+        let set = frontend
+            .sets
+            .draw(usize::from(spec.electrodes.count), &mut rng);
         let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
+        fe.set_state(&set).map_err(CollectError::Sim)?;
         let scanner = Scanner::new(config, &mut fe)?;
         // The untouched frame, as the sheet lies before the first press.
         scanner.scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
@@ -432,16 +463,39 @@ pub fn collect_presses_with(
                 .collect();
             let sheet = Arc::new(Sheet::new(spec, &moved)?);
             let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
+            fe.set_state(&set).map_err(CollectError::Sim)?;
             Scanner::new(config, &mut fe)?;
             poses.push(fe);
         }
-        for press in visit_presses(&mut rng) {
+        // Where the front end's state heads during the visit (a fraction `drift` of the way
+        // to another set by its end).
+        let heading = frontend
+            .sets
+            .draw(usize::from(spec.electrodes.count), &mut rng);
+        let presses = visit_presses(&mut rng);
+        let count = presses.len().max(1) as f64;
+        let mut remnants: Vec<Touch> = Vec::new();
+        for (i, press) in presses.into_iter().enumerate() {
             let Some(first) = press.touches.first().copied() else {
                 return Err(CollectError::EmptyPress { label: press.label });
             };
             let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
             let fe = &mut poses[pose];
-            fe.set_touches(&press.touches)?;
+            fe.set_state(&drifted(&set, &heading, plan.drift * i as f64 / count))
+                .map_err(CollectError::Sim)?;
+            // The fabric still holds part of the last press where it was.
+            let mut touches = press.touches.clone();
+            touches.extend(remnants.iter().copied());
+            fe.set_touches(&touches)?;
+            remnants = press
+                .touches
+                .iter()
+                .filter(|_| plan.creep > 0.0)
+                .map(|t| Touch {
+                    pressure: plan.creep * t.pressure,
+                    ..*t
+                })
+                .collect();
             scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
             for o in obs.chunks(k) {
                 rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
@@ -470,6 +524,20 @@ pub fn collect_presses_with(
         feature_index,
         config,
     })
+}
+
+/// The set `start` moved a fraction `f` of the way to `heading`'s deviation from nominal:
+/// junction potentials add `f` of `heading`'s, the conductance multiplies by its `f`th power.
+fn drifted(start: &SetState, heading: &SetState, f: f64) -> SetState {
+    SetState {
+        contact_potentials_v: start
+            .contact_potentials_v
+            .iter()
+            .zip(&heading.contact_potentials_v)
+            .map(|(a, d)| a + f * d)
+            .collect(),
+        conductance_scale: start.conductance_scale * heading.conductance_scale.powf(f),
+    }
 }
 
 /// Why a dataset cannot give what was asked of it.

@@ -20,6 +20,8 @@
 //! - [`tabular`]: any sensor's table (features and targets from CSV): QDA, LDA, ridge, kernel
 //!   ridge and k nearest neighbours with hyperparameters by cross-validation inside the
 //!   training rows, the model file, evaluation.
+//! - [`reference`]: the reference's six published accuracies and the procedure that measures
+//!   them on the simulator (the calibration's table).
 //! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
 //!   test, the chip's blob through et-core), as `et train`, `et eval` and `et demo` do them.
 #![forbid(unsafe_code)]
@@ -34,6 +36,7 @@ pub mod gp;
 pub mod model_file;
 pub mod npz;
 pub mod pipeline;
+pub mod reference;
 pub mod regress;
 pub mod standin;
 pub mod tabular;

@@ -70,7 +70,11 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
         subsections: 1,
         pressure_pa: (5e3, 60e3),
         radius: 0.0075,
-        placement: 0.0,
+        // The stand-in's own presses (below) carry their variety; the collection adds none.
+        radius_spread: 0.0,
+        target_radius: 0.0,
+        creep: 0.0,
+        drift: 0.0,
         electrode_movement: 0.0005,
         poses: 4,
         press_movement: 0.0002,

@@ -130,7 +130,7 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         visits: 1,
         scans: sizes.scans,
         radius,
-        placement: radius / 4.0,
+        target_radius: radius,
         ..Plan::default()
     };
     let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");

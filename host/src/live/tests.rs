@@ -189,8 +189,9 @@ fn the_monitor_counts_gaps_and_measures_snr() {
     assert_eq!(k, 208);
     let finite: Vec<f64> = m.snr_db.iter().flatten().copied().collect();
     let mean = finite.iter().sum::<f64>() / finite.len() as f64;
-    // The simulator's calibrated noise gives about 30 dB on the adjacent protocol (README).
-    assert!((20.0..40.0).contains(&mean), "mean SNR {mean} dB");
+    // The default scene is the calibration's operating point (adjacent, 32 uA, gain 8), whose
+    // frame-to-frame SNR is the reference's 55 dB (docs/calibration.md); 30 frames estimate it.
+    assert!((52.0..58.0).contains(&mean), "mean SNR {mean} dB");
 }
 
 /// A model trained on the simulator (3 x 3 classes) classifies live presses: the source is
@@ -201,9 +202,16 @@ fn a_trained_model_classifies_live_presses() {
     let scene = default_scene().unwrap();
     let config = collect::training_config(scene.scan_config().unwrap());
     let centres = collect::grid(&scene.sheet, 3, 3, 0.0);
+    // A wiring test on 6 presses per class (2 visits x 3 scans): too few to span the
+    // press-to-press variety of contact radius, the fabric's creep and the front end's drift
+    // within a visit (each class is pressed at one time of the visit), so those are off here;
+    // what they cost is measured by the accuracy tables on the reference's 120 presses.
     let plan = collect::Plan {
         visits: 2,
         scans: 3,
+        drift: 0.0,
+        creep: 0.0,
+        radius_spread: 0.0,
         seed: 5,
         ..collect::Plan::default()
     };

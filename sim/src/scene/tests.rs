@@ -208,9 +208,7 @@ fn electrode_movement_moves_the_frame() {
     };
     let quiet = |s: &Scene| {
         let mut s = s.clone();
-        s.frontend.white_noise_v = 0.0;
-        s.frontend.current_noise = 0.0;
-        s.frontend.mains_v = 0.0;
+        s.frontend = s.frontend.without_noise();
         Run::new(&s).unwrap().next_frame(Detail::Frames).unwrap().0
     };
     let (a, b) = (quiet(&still), quiet(&moving));
@@ -268,9 +266,7 @@ fn touches_move_press_quickly_and_relax_slowly() {
 
 fn quiet(text: &str) -> Scene {
     let mut s = Scene::parse(text, "quiet").unwrap();
-    s.frontend.white_noise_v = 0.0;
-    s.frontend.current_noise = 0.0;
-    s.frontend.mains_v = 0.0;
+    s.frontend = s.frontend.without_noise();
     s
 }
 

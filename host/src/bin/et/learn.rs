@@ -37,11 +37,22 @@ pub(crate) struct CollectArgs {
     /// Highest pressure while pressing, kPa.
     #[arg(long, default_value_t = 60.0)]
     max_kpa: f64,
-    /// Finger (target) radius, mm.
+    /// Finger contact radius (the median over presses), mm; the finger's centre lands
+    /// anywhere in a target of this radius around the class centre.
     #[arg(long, default_value_t = 7.5)]
     radius_mm: f64,
-    /// Rms electrode movement between visits, mm.
-    #[arg(long, default_value_t = 0.5)]
+    /// Relative rms of the contact radius from press to press (0.15: 15 %).
+    #[arg(long, default_value_t = collect::Plan::default().radius_spread)]
+    radius_spread: f64,
+    /// Fraction of a press's pressure the fabric still holds at the next press (0 to 1).
+    #[arg(long, default_value_t = collect::Plan::default().creep)]
+    creep: f64,
+    /// How far the front end drifts during a visit, as a fraction of the spread between
+    /// measurement sets (0 to 1).
+    #[arg(long, default_value_t = collect::Plan::default().drift)]
+    drift: f64,
+    /// Rms electrode movement between visits (clips put back), mm.
+    #[arg(long, default_value_t = collect::Plan::default().electrode_movement * 1e3)]
     movement_mm: f64,
     /// Electrode poses within a visit: each press finds the electrodes in one of them (1 =
     /// they stay put while the grid is visited).
@@ -175,6 +186,15 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
         bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
     }
+    if !(args.radius_spread.is_finite() && (0.0..=1.0).contains(&args.radius_spread)) {
+        bail!("--radius-spread: a relative spread between 0 and 1");
+    }
+    if !(0.0..=1.0).contains(&args.creep) || !(0.0..=1.0).contains(&args.drift) {
+        bail!("--creep and --drift: fractions between 0 and 1");
+    }
+    if !(args.movement_mm.is_finite() && args.movement_mm >= 0.0) {
+        bail!("--movement-mm: at least 0");
+    }
     if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
         bail!("--visits, --scans and --subsections must be at least 1");
     }
@@ -186,7 +206,10 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         subsections: args.subsections,
         pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
         radius: args.radius_mm * 1e-3,
-        placement: args.radius_mm * 1e-3 / 4.0,
+        radius_spread: args.radius_spread,
+        target_radius: args.radius_mm * 1e-3,
+        creep: args.creep,
+        drift: args.drift,
         electrode_movement: args.movement_mm * 1e-3,
         poses: args.poses.max(1),
         press_movement: args.press_movement_mm * 1e-3,

@@ -1,0 +1,187 @@
+//! The reference's touch-classification figures (docs/method.md §10) and the procedure that
+//! measures them on the simulator (docs/method.md §9, docs/calibration.md): a class grid over
+//! the sheet, T = 6 visits of S_num scans x S_sub = 20 observations, plain QDA on the raw
+//! frames (the opposite protocol's reciprocity-halved features), tested on "next day"
+//! sessions of 20 observations per class. Training accuracy is 10-fold cross-validation on
+//! the training set.
+
+use et_core::ScanConfig;
+use et_sim::frontend::{CALIBRATION_GAIN, FrontendSpec};
+use et_sim::sheet::SheetSpec;
+
+use crate::collect::{CollectError, Plan, collect, grid, training_config};
+use crate::cv::evaluate;
+use crate::fastcv::cross_validate_fast;
+use crate::fit::{FitError, FitOptions, Fitted};
+
+/// One published figure: a sheet, an electrode count, a class grid and the reference's
+/// next-day accuracy there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Case {
+    /// Side of the square sheet, m.
+    pub side: f64,
+    /// Electrodes L.
+    pub electrodes: u8,
+    /// Classes per side (7: 49 classes, 10: 100).
+    pub grid: usize,
+    /// The reference's next-day accuracy, 0 to 1.
+    pub reference: f64,
+}
+
+impl Case {
+    /// The fingertip's contact radius and its target's radius, m: the reference's 15 mm
+    /// target for 49 classes, 10 mm for 100.
+    #[must_use]
+    pub fn radius(&self) -> f64 {
+        if self.grid <= 7 { 0.0075 } else { 0.005 }
+    }
+
+    /// Classes C.
+    #[must_use]
+    pub fn classes(&self) -> usize {
+        self.grid * self.grid
+    }
+
+    /// "13 cm, L = 16, 49 classes".
+    #[must_use]
+    pub fn name(&self) -> String {
+        format!(
+            "{:.0} cm, L = {}, {} classes",
+            self.side * 100.0,
+            self.electrodes,
+            self.classes()
+        )
+    }
+}
+
+/// The six published figures of docs/method.md §10 (QDA on raw frames, next day).
+pub const CASES: [Case; 6] = [
+    Case {
+        side: 0.13,
+        electrodes: 16,
+        grid: 7,
+        reference: 0.916,
+    },
+    Case {
+        side: 0.13,
+        electrodes: 16,
+        grid: 10,
+        reference: 0.778,
+    },
+    Case {
+        side: 0.17,
+        electrodes: 16,
+        grid: 7,
+        reference: 0.887,
+    },
+    Case {
+        side: 0.17,
+        electrodes: 16,
+        grid: 10,
+        reference: 0.806,
+    },
+    Case {
+        side: 0.13,
+        electrodes: 8,
+        grid: 7,
+        reference: 0.690,
+    },
+    Case {
+        side: 0.13,
+        electrodes: 8,
+        grid: 10,
+        reference: 0.299,
+    },
+];
+
+/// What the procedure measured for one case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outcome {
+    /// Next-day accuracy over all test sessions, 0 to 1.
+    pub next_day: f64,
+    /// 10-fold cross-validated accuracy on the training set, 0 to 1.
+    pub training: f64,
+}
+
+/// Why a case could not be measured.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ReferenceError {
+    /// Collecting the data failed.
+    Collect(CollectError),
+    /// Plain QDA could not be fitted (too few observations for the features).
+    Fit(FitError),
+}
+
+impl std::fmt::Display for ReferenceError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReferenceError::Collect(e) => write!(f, "collecting: {e}"),
+            ReferenceError::Fit(e) => write!(f, "fitting plain QDA: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ReferenceError {}
+
+impl From<CollectError> for ReferenceError {
+    fn from(e: CollectError) -> Self {
+        Self::Collect(e)
+    }
+}
+
+impl From<FitError> for ReferenceError {
+    fn from(e: FitError) -> Self {
+        Self::Fit(e)
+    }
+}
+
+/// Runs the procedure for `case`: `plan` (its visits, scans, sub-sections, variability and
+/// seed; radius and target set from the case) for training, `days` next-day sessions of one
+/// scan per class (seeds 77, 78, ...) for the test, all through `frontend` at the
+/// calibration's gain.
+///
+/// # Errors
+/// [`ReferenceError`] when collection or the fit fails.
+pub fn measure(
+    case: &Case,
+    frontend: FrontendSpec,
+    plan: &Plan,
+    days: usize,
+) -> Result<Outcome, ReferenceError> {
+    let spec = SheetSpec::rectangle(case.side, case.side, case.electrodes);
+    let config = training_config(ScanConfig {
+        electrodes: case.electrodes,
+        gain: CALIBRATION_GAIN,
+        ..ScanConfig::REFERENCE
+    });
+    let centres = grid(&spec, case.grid, case.grid, 0.0);
+    let plan = Plan {
+        radius: case.radius(),
+        target_radius: case.radius(),
+        ..plan.clone()
+    };
+    let train = collect(&spec, frontend, config, &centres, &plan)?;
+    let opts = FitOptions::default();
+    let folds: Vec<usize> = (0..train.y.len()).map(|i| i % 10).collect();
+    let training = cross_validate_fast(&train.x, &train.y, centres.len(), &opts, &folds)?;
+    let model = Fitted::fit(&train.x, &train.y, centres.len(), &opts)?;
+    let (mut right, mut total) = (0.0, 0.0);
+    for d in 0..days {
+        let day = Plan {
+            visits: 1,
+            scans: 1,
+            seed: 77 + d as u64,
+            ..plan.clone()
+        };
+        let test = collect(&spec, frontend, config, &centres, &day)?;
+        let c = evaluate(&model, &test.x, &test.y)?;
+        let n = test.y.len() as f64;
+        right += c.accuracy() * n;
+        total += n;
+    }
+    Ok(Outcome {
+        next_day: if total > 0.0 { right / total } else { 0.0 },
+        training: training.accuracy(),
+    })
+}
