@@ -78,6 +78,14 @@ impl From<et_core::stats::StatsError> for CalibrationError {
     }
 }
 
+/// K, the frame length of `config`.
+fn frame_len(config: &ScanConfig) -> Result<usize, CalibrationError> {
+    Ok(config
+        .validate()
+        .map_err(|e| SimError::Config(e.to_string()))?
+        .frame_len())
+}
+
 /// `frames` frames of one measurement set, flattened (fast path).
 fn frames_of(
     fe: &mut SimFrontend,
@@ -104,10 +112,7 @@ pub fn frame_snr(
 ) -> Result<f64, CalibrationError> {
     let config = config(current_na);
     let mut fe = SimFrontend::new(sheet.clone(), spec, seed)?;
-    let k = config
-        .validate()
-        .map_err(|e| SimError::Config(e.to_string()))?
-        .frame_len();
+    let k = frame_len(&config)?;
     let all = frames_of(&mut fe, &config, frames)?;
     Ok(f64::from(snr(&all, k)?.mean_db))
 }
@@ -149,10 +154,7 @@ pub fn set_mad(
     seed: u64,
 ) -> Result<f64, CalibrationError> {
     let config = config(current_na);
-    let k = config
-        .validate()
-        .map_err(|e| SimError::Config(e.to_string()))?
-        .frame_len();
+    let k = frame_len(&config)?;
     let mut means = Vec::with_capacity(sets.len() * k);
     for (s, sheet) in sets.iter().enumerate() {
         let mut rng = Rng::new(seed.wrapping_add(s as u64));

@@ -6,7 +6,8 @@
 //! Run: `cargo run --release -p et-learn --example calibration_table [-- --scans 20]`
 //! (`--scans`: S_num per class and visit, 20 as the reference; fewer is a quicker proxy:
 //! 5 gives 600 observations per class. `--creep`, `--drift`, `--radius-spread`,
-//! `--movement-mm` override the collection's defaults.)
+//! `--movement-mm`, `--poses`, `--press-movement-mm`, `--press-junction-uv` override the
+//! collection's defaults.)
 
 use std::time::Instant;
 
@@ -28,15 +29,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         drift: arg("--drift").unwrap_or(d.drift),
         radius_spread: arg("--radius-spread").unwrap_or(d.radius_spread),
         electrode_movement: arg("--movement-mm").map_or(d.electrode_movement, |m| m * 1e-3),
+        poses: arg("--poses").map_or(d.poses, |p| p as usize),
+        press_movement: arg("--press-movement-mm").map_or(d.press_movement, |m| m * 1e-3),
+        press_junction: arg("--press-junction-uv").map_or(d.press_junction, |v| v * 1e-6),
         ..d
     };
     println!(
-        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm",
+        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm, {} poses {} mm, press junction {} uV",
         plan.scans,
         plan.creep,
         plan.drift,
         plan.radius_spread,
-        plan.electrode_movement * 1e3
+        plan.electrode_movement * 1e3,
+        plan.poses,
+        plan.press_movement * 1e3,
+        plan.press_junction * 1e6
     );
     println!("| case | reference | simulator, next day | difference | training (10-fold) |");
     println!("| --- | --- | --- | --- | --- |");

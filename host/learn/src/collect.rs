@@ -193,6 +193,10 @@ pub struct Plan {
     pub poses: usize,
     /// Rms movement of each pose around the visit's electrode positions, m.
     pub press_movement: f64,
+    /// Rms change of each electrode's junction potential at every press, V: pressing a
+    /// frameless sheet tugs on its clips, and a clip's contact potential moves with its
+    /// contact pressure.
+    pub press_junction: f64,
     /// Seed of the session (electrode movement, placement, pressure, noise).
     pub seed: u64,
 }
@@ -217,6 +221,7 @@ impl Default for Plan {
             electrode_movement: et_sim::frontend::CALIBRATION_MOVEMENT_M,
             poses: 1,
             press_movement: 0.0,
+            press_junction: 0.0,
             seed: 1,
         }
     }
@@ -481,8 +486,11 @@ pub fn collect_presses_with(
             };
             let pose = (rng.uniform() * poses.len() as f64) as usize % poses.len();
             let fe = &mut poses[pose];
-            fe.set_state(&drifted(&set, &heading, plan.drift * i as f64 / count))
-                .map_err(CollectError::Sim)?;
+            let mut state = drifted(&set, &heading, plan.drift * i as f64 / count);
+            for e in &mut state.contact_potentials_v {
+                *e += plan.press_junction * rng.normal();
+            }
+            fe.set_state(&state).map_err(CollectError::Sim)?;
             // The fabric still holds part of the last press where it was.
             let mut touches = press.touches.clone();
             touches.extend(remnants.iter().copied());

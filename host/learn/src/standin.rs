@@ -78,6 +78,7 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
         electrode_movement: 0.0005,
         poses: 4,
         press_movement: 0.0002,
+        press_junction: 0.0,
         seed,
     };
     let draw = |rng: &mut Rng| -> Vec<Press> {

@@ -408,15 +408,21 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
         md,
         "Sheet: `{}` ({}). {classes} classes ({rows} x {rows} grid), finger radius {:.1} mm, \
          pressure 5 to 60 kPa. Training: T = {} visits x S_num = {} scans x S_sub = 20 \
-         sub-section medians = {} observations per class, electrodes moved 0.5 mm rms \
-         between visits, the untouched frame taken at the start of each visit. Test: {} next-day \
-         session(s), 20 observations per class each, electrodes moved again.\n",
+         sub-section medians = {} observations per class; each visit a new measurement set \
+         (clips put back {:.1} mm rms off, junction potentials and conductance redrawn, \
+         docs/calibration.md) with the untouched frame taken at its start; each press lands \
+         anywhere in its target, radius spread {:.0} %, creep {}, drift {} within a visit. \
+         Test: {} next-day session(s), 20 observations per class each, a new set again.\n",
         r.scene,
         r.description,
         r.radius * 1e3,
         sizes.visits,
         sizes.scans,
         r.observations_per_class,
+        Plan::default().electrode_movement * 1e3,
+        Plan::default().radius_spread * 100.0,
+        Plan::default().creep,
+        Plan::default().drift,
         sizes.days
     );
     let _ = writeln!(

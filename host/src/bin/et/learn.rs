@@ -213,6 +213,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         electrode_movement: args.movement_mm * 1e-3,
         poses: args.poses.max(1),
         press_movement: args.press_movement_mm * 1e-3,
+        press_junction: collect::Plan::default().press_junction,
         seed: args.seed,
     };
     let bar = ProgressBar::new(args.visits as u64).with_style(
