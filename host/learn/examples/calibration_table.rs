@@ -7,13 +7,14 @@
 //! (`--scans`: S_num per class and visit, 20 as the reference; fewer is a quicker proxy:
 //! 5 gives 600 observations per class. `--creep`, `--drift`, `--radius-spread`,
 //! `--movement-mm`, `--poses`, `--press-movement-mm`, `--press-junction-uv` override the
-//! collection's defaults.)
+//! collection's defaults; `--junction-uv` and `--conductance` the front end's spread between
+//! sets, as `cargo run --release -p et-sim --example calibrate -- --movement-mm M` fits it.)
 
 use std::time::Instant;
 
 use et_learn::collect::Plan;
 use et_learn::reference::{CASES, measure};
-use et_sim::frontend::FrontendSpec;
+use et_sim::frontend::{FrontendSpec, SetSpread};
 
 fn arg(name: &str) -> Option<f64> {
     let args: Vec<String> = std::env::args().collect();
@@ -45,13 +46,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         plan.press_movement * 1e3,
         plan.press_junction * 1e6
     );
+    let f = FrontendSpec::default();
+    let frontend = FrontendSpec {
+        sets: SetSpread {
+            contact_potential_v: arg("--junction-uv")
+                .map_or(f.sets.contact_potential_v, |v| v * 1e-6),
+            conductance: arg("--conductance").unwrap_or(f.sets.conductance),
+        },
+        ..f
+    };
+    println!(
+        "between sets: junction potential {} uV, conductance {}",
+        frontend.sets.contact_potential_v * 1e6,
+        frontend.sets.conductance
+    );
     println!("| case | reference | simulator, next day | difference | training (10-fold) |");
     println!("| --- | --- | --- | --- | --- |");
     let started = Instant::now();
     let mut worst: f64 = 0.0;
     for case in CASES {
         let t = Instant::now();
-        let o = measure(&case, FrontendSpec::default(), &plan, 3)?;
+        let o = measure(&case, frontend, &plan, 3)?;
         let diff = 100.0 * (o.next_day - case.reference);
         worst = worst.max(diff.abs());
         println!(

@@ -29,10 +29,10 @@ pub struct Case {
 }
 
 impl Case {
-    /// The fingertip's contact radius and its target's radius, m: the reference's 15 mm
-    /// target for 49 classes, 10 mm for 100.
+    /// The radius of each class's target, m: the reference's 15 mm target for 49 classes,
+    /// 10 mm for 100 (the finger's centre lands anywhere in it).
     #[must_use]
-    pub fn radius(&self) -> f64 {
+    pub fn target_radius(&self) -> f64 {
         if self.grid <= 7 { 0.0075 } else { 0.005 }
     }
 
@@ -136,8 +136,8 @@ impl From<FitError> for ReferenceError {
     }
 }
 
-/// Runs the procedure for `case`: `plan` (its visits, scans, sub-sections, variability and
-/// seed; radius and target set from the case) for training, `days` next-day sessions of one
+/// Runs the procedure for `case`: `plan` (its visits, scans, sub-sections, finger, variability
+/// and seed; the target's radius set from the case) for training, `days` next-day sessions of one
 /// scan per class (seeds 77, 78, ...) for the test, all through `frontend` at the
 /// calibration's gain.
 ///
@@ -156,9 +156,9 @@ pub fn measure(
         ..ScanConfig::REFERENCE
     });
     let centres = grid(&spec, case.grid, case.grid, 0.0);
+    // The same fingertip presses both grids; only the target it aims at shrinks.
     let plan = Plan {
-        radius: case.radius(),
-        target_radius: case.radius(),
+        target_radius: case.target_radius(),
         ..plan.clone()
     };
     let train = collect(&spec, frontend, config, &centres, &plan)?;
