@@ -99,6 +99,14 @@ pub trait Frontend {
     /// # Errors
     /// When sampling fails (timeout, DMA error, ...).
     fn acquire(&mut self, samples: &mut [u16]) -> Result<(), Self::Error>;
+
+    /// Whether the current source was in compliance during the selected step: its load
+    /// needed more than V_out_max / (2 I), so it delivered less than the set current and the
+    /// readings are smaller than the protocol expects. A front end that cannot tell (the
+    /// reference board has no monitor on the pump's output) says `false`.
+    fn in_compliance(&self) -> bool {
+        false
+    }
 }
 
 impl<F: Frontend + ?Sized> Frontend for &mut F {
@@ -115,6 +123,9 @@ impl<F: Frontend + ?Sized> Frontend for &mut F {
     }
     fn acquire(&mut self, samples: &mut [u16]) -> Result<(), Self::Error> {
         (**self).acquire(samples)
+    }
+    fn in_compliance(&self) -> bool {
+        (**self).in_compliance()
     }
 }
 

@@ -63,6 +63,9 @@ pub struct ScanReport {
     pub samples: u32,
     /// Samples dropped as settling transient (`K * t_s`).
     pub settle_dropped: u32,
+    /// Measurements taken while the current source was in compliance
+    /// ([`Frontend::in_compliance`]): their readings are too small.
+    pub compliance_steps: u32,
 }
 
 /// Why a scan failed.
@@ -205,6 +208,7 @@ impl Scanner {
                 report.rail.set(k);
             }
             report.rail_samples += u32::from(rails);
+            report.compliance_steps += u32::from(frontend.in_compliance());
             report.samples += spp as u32;
             report.settle_dropped += settle as u32;
         }

@@ -47,6 +47,10 @@ pub const FLAG_RAIL: u8 = 1 << 0;
 pub const FLAG_DROPPED_BEFORE: u8 = 1 << 1;
 /// Frame flag: V_m holds sub-section observations rather than a full-scan median.
 pub const FLAG_SUBSECTION: u8 = 1 << 2;
+/// Frame flag: the current source was in compliance for at least one measurement (its load
+/// too high for the set current: a contact come loose, a dry electrode), so V_m is smaller
+/// than the protocol expects.
+pub const FLAG_COMPLIANCE: u8 = 1 << 3;
 
 /// One scan: the frame vector V_m and everything needed to interpret it (docs/design.md: a frame
 /// always says which protocol, electrode count and settings produced it).
@@ -67,8 +71,8 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// The frame of one scan: V_m from `voltages` (K values), the rail flag and count from
-    /// `report`. `flags` are extra `FLAG_*` bits (e.g. [`FLAG_SUBSECTION`]).
+    /// The frame of one scan: V_m from `voltages` (K values), the rail flag and count and the
+    /// compliance flag from `report`. `flags` are extra `FLAG_*` bits (e.g. [`FLAG_SUBSECTION`]).
     ///
     /// # Errors
     /// [`WireError::BufferFull`] if `voltages` is longer than [`K_MAX`].
@@ -82,11 +86,16 @@ impl Frame {
     ) -> Result<Self, WireError> {
         let rail_count = report.rail.count() as u16;
         let rail = if rail_count > 0 { FLAG_RAIL } else { 0 };
+        let compliance = if report.compliance_steps > 0 {
+            FLAG_COMPLIANCE
+        } else {
+            0
+        };
         Ok(Self {
             seq,
             timestamp,
             config,
-            flags: flags | rail,
+            flags: flags | rail | compliance,
             rail_count,
             voltages: Vec::from_slice(voltages).map_err(|_| WireError::BufferFull)?,
         })

@@ -57,6 +57,8 @@ pub struct LiveFrame {
     pub t_us: u32,
     /// What produced it.
     pub config: ScanConfig,
+    /// The frame's `et_core::wire::FLAG_*` bits (rail, compliance, ...).
+    pub flags: u8,
     /// V_m, V (K values).
     pub voltages: Vec<f32>,
     /// The true touches, when the source knows them (simulated or recorded from the sim).

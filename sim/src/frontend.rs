@@ -291,6 +291,8 @@ pub struct SimFrontend {
     injection: Option<Injection>,
     /// Settled voltage of the selected step, V at the input.
     target: Option<f64>,
+    /// Whether the source is in compliance at the selected step.
+    compliance: bool,
     /// Amplifier input at the end of the last sample, V (where the next transient starts).
     last: f64,
     /// Per electrode, the chance that its contact is open at a step (1 = disconnected).
@@ -322,6 +324,7 @@ impl SimFrontend {
             jitter: 1.0,
             injection: None,
             target: None,
+            compliance: false,
             last: 0.0,
             open: vec![0.0; electrodes],
             conductance_scale: 1.0,
@@ -420,6 +423,13 @@ impl SimFrontend {
             .collect()
     }
 
+    /// Whether the source cannot drive `amps` through injection `inj`'s load (compliance).
+    fn limited(&self, inj: Injection, amps: f64) -> bool {
+        let (a, b) = (usize::from(inj.source.0), usize::from(inj.sink.0));
+        let c = self.conductance_scale * self.set.conductance_scale;
+        self.spec.source.current(amps, self.transfer.load(a, b) / c) < amps
+    }
+
     fn settled(&self, inj: Injection, meas: Measurement, amps: f64) -> f64 {
         let (a, b) = (usize::from(inj.source.0), usize::from(inj.sink.0));
         let (p, q) = (usize::from(meas.positive.0), usize::from(meas.negative.0));
@@ -439,18 +449,21 @@ impl SimFrontend {
         }
     }
 
-    /// The step's settled input with the contact faults of this step applied.
-    fn faulty(&mut self, inj: Injection, meas: Measurement, amps: f64, gain: u8) -> f64 {
+    /// The step's settled input with the contact faults of this step applied, and whether the
+    /// source is in compliance (its load too high, or a drive contact open: an infinite load).
+    fn faulty(&mut self, inj: Injection, meas: Measurement, amps: f64, gain: u8) -> (f64, bool) {
         let drive_open = self.is_open(inj.source.0) | self.is_open(inj.sink.0);
         let probe_open = self.is_open(meas.positive.0) | self.is_open(meas.negative.0);
-        if probe_open {
+        let compliance = drive_open || self.limited(inj, amps);
+        let v = if probe_open {
             // A floating input drifts beyond the positive rail.
             1.5 * self.spec.adc_range_v / f64::from(gain.max(1))
         } else if drive_open {
             0.0
         } else {
             self.settled(inj, meas, amps)
-        }
+        };
+        (v, compliance)
     }
 
     fn mains(&self, t: f64) -> f64 {
@@ -474,7 +487,8 @@ impl SimFrontend {
     /// [`SimFrontend::fast_frame`] with the scan engine's report: a measurement whose value
     /// lands on an ADC rail is flagged in `rail`, as the sample path flags it, with all its
     /// kept samples counted in `rail_samples` (the median is on the rail only when most of
-    /// them are).
+    /// them are); measurements whose injection drove the source into compliance are counted
+    /// in `compliance_steps`.
     ///
     /// # Errors
     /// [`SimError::Config`] for an invalid configuration.
@@ -505,12 +519,14 @@ impl SimFrontend {
                 self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
             }
             let mid = self.time + dt * (f64::from(config.settle_samples) + kept / 2.0);
-            let v = self.faulty(
+            let (v, compliance) = self.faulty(
                 step.injection,
                 step.measurement,
                 amps * self.jitter,
                 config.gain,
-            ) + self.mains(mid);
+            );
+            report.compliance_steps += u32::from(compliance);
+            let v = v + self.mains(mid);
             let max = f64::from(scale.max_code());
             let to_code = |x: f64| ((v + x) / lsb + f64::from(scale.zero_code)).round();
             let code = match self.median_noise(config.kept_samples(), sigma) {
@@ -591,8 +607,13 @@ impl Frontend for SimFrontend {
             self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
         }
         let amps = f64::from(config.current_amps()) * self.jitter;
-        self.target = Some(self.faulty(injection, measurement, amps, config.gain));
+        let (v, compliance) = self.faulty(injection, measurement, amps, config.gain);
+        (self.target, self.compliance) = (Some(v), compliance);
         Ok(())
+    }
+
+    fn in_compliance(&self) -> bool {
+        self.compliance
     }
 
     fn acquire(&mut self, samples: &mut [u16]) -> Result<(), SimError> {

@@ -23,6 +23,11 @@ pub struct Monitor {
     pub gaps: u64,
     /// Frames seen.
     pub frames: u64,
+    /// Frames with readings on an ADC rail (`et_core::wire::FLAG_RAIL`).
+    pub rail_frames: u64,
+    /// Frames scanned with the current source in compliance (`et_core::wire::FLAG_COMPLIANCE`):
+    /// a drive contact too resistive or open, readings too small.
+    pub compliance_frames: u64,
 }
 
 impl Monitor {
@@ -39,6 +44,8 @@ impl Monitor {
             .elapsed()
             .as_secs_f64();
         self.frames += 1;
+        self.rail_frames += u64::from(out.frame.flags & et_core::wire::FLAG_RAIL != 0);
+        self.compliance_frames += u64::from(out.frame.flags & et_core::wire::FLAG_COMPLIANCE != 0);
         if let Some(last) = self.last_seq
             && out.frame.seq > last.wrapping_add(1)
         {

@@ -63,6 +63,7 @@ impl SimSource {
             seq: frame.seq,
             t_us: frame.timestamp.0,
             config: frame.config,
+            flags: frame.flags,
             voltages: frame.voltages.to_vec(),
             truth: Some(truth.touches),
             chip_class: None,
@@ -146,6 +147,7 @@ impl ReplaySource {
             seq: r.seq,
             t_us: r.t_us,
             config: self.recording.header.config,
+            flags: r.flags,
             voltages: r.voltages.clone(),
             truth: r.touches.as_ref().map(|ts| {
                 ts.iter()
@@ -250,6 +252,7 @@ impl PortSource {
                     seq: f.seq,
                     t_us: f.timestamp.0,
                     config: f.config,
+                    flags: f.flags,
                     voltages: f.voltages.to_vec(),
                     truth: None,
                     chip_class: None,

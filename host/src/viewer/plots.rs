@@ -26,6 +26,8 @@ impl Viewer {
                 ("dropped by board", h.dropped),
                 ("corrupt packets", h.corrupt),
                 ("reconnects", h.reconnects),
+                ("on an ADC rail", self.monitor.rail_frames),
+                ("source in compliance", self.monitor.compliance_frames),
             ] {
                 ui.label(name);
                 ui.label(v.to_string());

@@ -371,3 +371,50 @@ fn one_microamp_is_quantisation_dominated_but_sane() {
         "some channels are a few codes"
     );
 }
+
+#[test]
+fn a_source_in_compliance_is_flagged_in_the_frame_by_both_paths() {
+    // Contacts of 1 Mohm put the drive load above 16 V / (2 x 32 uA) = 250 kohm: every
+    // injection is in compliance. 1 kohm (the default clip) is not.
+    let config = ScanConfig::REFERENCE;
+    let frame_of = |contact_ohm: f64, open: Option<u8>| {
+        let base = SheetSpec::rectangle(0.13, 0.13, 16);
+        let spec = SheetSpec {
+            resolution: Some(0.01),
+            electrodes: crate::sheet::ElectrodeSpec {
+                contact_ohm,
+                ..base.electrodes
+            },
+            ..base
+        };
+        let sheet = Arc::new(Sheet::new(&spec, &[]).unwrap());
+        let mut fe = SimFrontend::new(sheet, FrontendSpec::default(), 3).unwrap();
+        if let Some(e) = open {
+            fe.set_open(e, 1.0).unwrap();
+        }
+        let scanner = Scanner::new(config, &mut fe).unwrap();
+        let mut burst = vec![0u16; usize::from(config.samples_per_step)];
+        let mut v = vec![0.0f32; scanner.frame_len()];
+        let report = scanner.scan(&mut fe, &mut burst, &mut v).unwrap();
+        let (_, fast) = fe.fast_frame_with_report(&config).unwrap();
+        let frame =
+            et_core::wire::Frame::from_scan(0, et_core::Micros(0), config, &report, 0, &v).unwrap();
+        (report.compliance_steps, fast.compliance_steps, frame.flags)
+    };
+    let k = 208;
+    let (scan, fast, flags) = frame_of(1e6, None);
+    assert_eq!((scan, fast), (k, k), "every step in compliance at 1 Mohm");
+    assert_ne!(flags & et_core::wire::FLAG_COMPLIANCE, 0);
+    let (scan, fast, flags) = frame_of(1e3, None);
+    assert_eq!((scan, fast), (0, 0), "none at 1 kohm");
+    assert_eq!(flags & et_core::wire::FLAG_COMPLIANCE, 0);
+    // An open drive contact is an infinite load: the steps that drive through electrode 5
+    // (AD: injections 4-5 and 5-6, 13 measurements each) are in compliance.
+    let (scan, fast, flags) = frame_of(1e3, Some(5));
+    assert_eq!(
+        (scan, fast),
+        (26, 26),
+        "the two injections through the open contact"
+    );
+    assert_ne!(flags & et_core::wire::FLAG_COMPLIANCE, 0);
+}

@@ -48,11 +48,14 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     );
     bar.set_message("simulating");
     let started = Instant::now();
+    let (mut rail, mut compliance) = (0u32, 0u32);
     // Written aside and renamed when complete: Ctrl-C leaves no half recording.
     crate::output::write(&args.out, |partial| {
         let mut writer = recording::Writer::create(partial, &header)?;
         for _ in 0..args.frames {
             let (frame, truth) = run.next_frame(detail)?;
+            rail += u32::from(frame.flags & et_core::wire::FLAG_RAIL != 0);
+            compliance += u32::from(frame.flags & et_core::wire::FLAG_COMPLIANCE != 0);
             let touches = truth
                 .touches
                 .iter()
@@ -82,5 +85,19 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
         setup.as_secs_f64(),
         f64::from(args.frames) / elapsed.max(1e-9)
     );
+    if rail > 0 {
+        eprintln!(
+            "warning: {rail} frames have readings on an ADC rail (flagged in the recording): \
+             lower the scene's gain or current"
+        );
+    }
+    if compliance > 0 {
+        eprintln!(
+            "warning: in {compliance} frames the current source was in compliance (flagged in \
+             the recording): the drive load is above V_out_max / (2 I), from contacts too \
+             resistive or open, so those readings are too small; lower the current or fix \
+             the contacts"
+        );
+    }
     Ok(())
 }
