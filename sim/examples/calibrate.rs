@@ -9,10 +9,10 @@
 //!   readings see (the ADC's 0.5 code and 10 uV of hum fixed);
 //! - between measurement sets: MAD 0.5 mV at 32 uA and 0.4 mV at 10 uA (each set's mean frame
 //!   against the mean over sets), fitted by each electrode's junction potential and the
-//!   sheet's conductance, on sets whose electrodes were also put down again
-//!   (`--movement-mm`, default `CALIBRATION_MOVEMENT_M`, 0.1).
+//!   sheet's conductance, the sheet staying mounted between sets (`--movement-mm M`: its
+//!   clips put back M mm rms off between sets instead; default `CALIBRATION_MOVEMENT_M`, 0).
 //!
-//! Run: `cargo run --release -p et-sim --example calibrate [-- --movement-mm 0.1]`
+//! Run: `cargo run --release -p et-sim --example calibrate [-- --movement-mm 0]`
 
 use std::sync::Arc;
 
@@ -23,7 +23,7 @@ use et_sim::frontend::{FrontendSpec, SetSpread};
 use et_sim::sheet::Sheet;
 
 const FRAMES: usize = 400;
-const SETS: usize = 40;
+const SETS: usize = 120;
 const FRAMES_PER_SET: usize = 10;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -118,7 +118,8 @@ pub fn frame_snr(
 }
 
 /// `count` sheets of `spec` whose electrodes were put down again, each `movement` m rms off
-/// its place along the outline (drawn from `seed`).
+/// its place along the outline (drawn from `seed`); with no movement, one sheet `count` times
+/// (the sheet stayed mounted).
 ///
 /// # Errors
 /// [`SheetError`] if a sheet cannot be built.
@@ -128,6 +129,10 @@ pub fn replaced_sheets(
     count: usize,
     seed: u64,
 ) -> Result<Vec<Arc<Sheet>>, SheetError> {
+    if movement == 0.0 {
+        let sheet = Arc::new(Sheet::new(spec, &[])?);
+        return Ok(vec![sheet; count]);
+    }
     let mut rng = Rng::new(seed);
     (0..count)
         .map(|_| {
@@ -222,8 +227,8 @@ pub fn fit_frame_layer(
     with_jitter(j)
 }
 
-/// Fits the set layer (junction potentials, conductance) of `base` to [`MAD_V`] on the
-/// re-placed `sets`: the junction potentials, independent of the current, set the 10 uA
+/// Fits the set layer (junction potentials, conductance) of `base` to [`MAD_V`] on `sets`
+/// (one sheet per set: the same sheet when it stays mounted, or re-placed ones): the junction potentials, independent of the current, set the 10 uA
 /// MAD; the conductance adds to the 32 uA one in proportion to the current. Nested
 /// bisections: the conductance on [0, 5 %], and for each the junction potential on
 /// [0, 2 mV] that gives 0.4 mV at 10 uA. When re-placement alone exceeds a MAD, the

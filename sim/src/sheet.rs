@@ -340,6 +340,19 @@ impl Sheet {
         Self::with_shorts(spec, offsets, &[])
     }
 
+    /// As [`Sheet::new`], with the fabric's conductance uneven over the sheet by `field`.
+    ///
+    /// # Errors
+    /// As [`Sheet::new`], and [`SheetError::Field`] for a field that is not finite.
+    pub fn uneven(
+        spec: &SheetSpec,
+        offsets: &[f64],
+        field: &Unevenness,
+    ) -> Result<Self, SheetError> {
+        let network = build_network_with(spec, offsets, Some(field))?;
+        Self::of_network(spec, network)
+    }
+
     /// As [`Sheet::new`], with pairs of electrodes shorted together (a fault).
     ///
     /// # Errors
@@ -353,6 +366,10 @@ impl Sheet {
         for &(a, b) in shorts {
             network = network.with_short(a, b).map_err(SheetError::Network)?;
         }
+        Self::of_network(spec, network)
+    }
+
+    fn of_network(spec: &SheetSpec, network: Network) -> Result<Self, SheetError> {
         let fast =
             FastNetwork::new(&network, network.conductances(None)).map_err(SheetError::Network)?;
         Ok(Self {
@@ -424,7 +441,25 @@ impl Sheet {
 /// # Errors
 /// [`SheetError`] for an invalid spec or electrodes that cannot be placed.
 pub fn build_network(spec: &SheetSpec, offsets: &[f64]) -> Result<Network, SheetError> {
+    build_network_with(spec, offsets, None)
+}
+
+/// [`build_network`] with the fabric's conductance uneven by `field` (none: uniform).
+fn build_network_with(
+    spec: &SheetSpec,
+    offsets: &[f64],
+    field: Option<&Unevenness>,
+) -> Result<Network, SheetError> {
     spec.validate()?;
+    if let Some(f) = field
+        && !f.coefficients.iter().all(|a| a.is_finite())
+    {
+        return Err(SheetError::Field {
+            field: "unevenness",
+            why: "the field's coefficients must be finite".into(),
+        });
+    }
+    let bounds = spec.shape.bounds();
     let h = spec.resolution.unwrap_or_else(|| spec.default_resolution());
     let grid = Grid::new(&spec.shape, h);
     let perimeter = spec.shape.perimeter();
@@ -454,15 +489,70 @@ pub fn build_network(spec: &SheetSpec, offsets: &[f64]) -> Result<Network, Sheet
             } else {
                 Axis::Y
             };
-            match spec.bend {
+            let bent = match spec.bend {
                 Some(bend) if bend.curves == along => bend.multiplier(),
                 _ => 1.0,
-            }
+            };
+            let middle = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+            bent * field.map_or(1.0, |f| f.multiplier(middle, bounds))
         })
         .collect();
     Network::new(grid, contacts, 1.0 / spec.sheet_resistance)
         .and_then(|n| n.with_base(base))
         .map_err(SheetError::Network)
+}
+
+/// The fabric's conductance, uneven over the sheet and smooth: relative to nominal it is
+/// exp(sum a_ij cos(i pi u) cos(j pi v)) over 0 <= i, j <= 2 except i = j = 0, with u, v the
+/// position scaled to 0..1 across the sheet's bounding box. The constant mode is left out: the
+/// sheet's mean conductance is the front end's (`frontend::SetSpread::conductance`). A knitted
+/// fabric is not uniform, and it does not stay so: it relaxes unevenly where it was stretched
+/// or pressed, and temperature and humidity vary across it, so each measurement set finds a
+/// slightly different field.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Unevenness {
+    /// a_ij in the order (0,1) (0,2) (1,0) (1,1) (1,2) (2,0) (2,1) (2,2): natural-log units.
+    pub coefficients: [f64; 8],
+}
+
+impl Unevenness {
+    /// The modes (i, j) in the order of [`Unevenness::coefficients`].
+    pub const MODES: [(u8, u8); 8] = [
+        (0, 1),
+        (0, 2),
+        (1, 0),
+        (1, 1),
+        (1, 2),
+        (2, 0),
+        (2, 1),
+        (2, 2),
+    ];
+
+    /// A field with every coefficient drawn normal with rms `rms`.
+    #[must_use]
+    pub fn draw(rms: f64, rng: &mut et_core::rng::Rng) -> Self {
+        let mut coefficients = [0.0; 8];
+        for a in &mut coefficients {
+            *a = rms * rng.normal();
+        }
+        Self { coefficients }
+    }
+
+    /// The conductance multiplier at `p` (m) on a sheet with bounding box `bounds`
+    /// ([x0, y0, x1, y1], m).
+    #[must_use]
+    pub fn multiplier(&self, p: [f64; 2], bounds: [f64; 4]) -> f64 {
+        let [x0, y0, x1, y1] = bounds;
+        let u = (p[0] - x0) / (x1 - x0).max(f64::MIN_POSITIVE);
+        let v = (p[1] - y0) / (y1 - y0).max(f64::MIN_POSITIVE);
+        let pi = std::f64::consts::PI;
+        let exponent: f64 = Self::MODES
+            .iter()
+            .zip(&self.coefficients)
+            .map(|(&(i, j), a)| a * (f64::from(i) * pi * u).cos() * (f64::from(j) * pi * v).cos())
+            .sum();
+        exponent.exp()
+    }
 }
 
 /// Transfer impedance of `network` with `touches`, by a direct solve (no precomputation; the

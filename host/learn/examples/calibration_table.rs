@@ -15,6 +15,7 @@ use std::time::Instant;
 use et_learn::collect::Plan;
 use et_learn::reference::{CASES, measure};
 use et_sim::frontend::{FrontendSpec, SetSpread};
+use et_sim::touch::Piezo;
 
 fn arg(name: &str) -> Option<f64> {
     let args: Vec<String> = std::env::args().collect();
@@ -33,10 +34,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         poses: arg("--poses").map_or(d.poses, |p| p as usize),
         press_movement: arg("--press-movement-mm").map_or(d.press_movement, |m| m * 1e-3),
         press_junction: arg("--press-junction-uv").map_or(d.press_junction, |v| v * 1e-6),
+        unevenness: arg("--unevenness").unwrap_or(d.unevenness),
+        wobble: arg("--wobble").unwrap_or(d.wobble),
+        wobble_s: arg("--wobble-s").unwrap_or(d.wobble_s),
         ..d
     };
     println!(
-        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm, {} poses {} mm, press junction {} uV",
+        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm, {} poses {} mm, press junction {} uV, unevenness {}, hand wobble {} over {} s",
         plan.scans,
         plan.creep,
         plan.drift,
@@ -44,7 +48,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         plan.electrode_movement * 1e3,
         plan.poses,
         plan.press_movement * 1e3,
-        plan.press_junction * 1e6
+        plan.press_junction * 1e6,
+        plan.unevenness,
+        plan.wobble,
+        plan.wobble_s
     );
     let f = FrontendSpec::default();
     let frontend = FrontendSpec {
@@ -60,13 +67,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         frontend.sets.contact_potential_v * 1e6,
         frontend.sets.conductance
     );
+    let piezo = Piezo {
+        gain: arg("--piezo-gain").unwrap_or(Piezo::default().gain),
+        ..Piezo::default()
+    };
+    println!(
+        "fabric: conductance x{:.2} at 5 kPa, x{:.2} at 20 kPa, x{:.2} at 60 kPa",
+        piezo.multiplier(5e3),
+        piezo.multiplier(20e3),
+        piezo.multiplier(60e3)
+    );
     println!("| case | reference | simulator, next day | difference | training (10-fold) |");
     println!("| --- | --- | --- | --- | --- |");
     let started = Instant::now();
     let mut worst: f64 = 0.0;
     for case in CASES {
         let t = Instant::now();
-        let o = measure(&case, frontend, &plan, 3)?;
+        let o = measure(&case, frontend, piezo, &plan, 3)?;
         let diff = 100.0 * (o.next_day - case.reference);
         worst = worst.max(diff.abs());
         println!(

@@ -79,6 +79,9 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
         poses: 4,
         press_movement: 0.0002,
         press_junction: 0.0,
+        unevenness: 0.0,
+        wobble: 0.0,
+        wobble_s: 0.1,
         seed,
     };
     let draw = |rng: &mut Rng| -> Vec<Press> {

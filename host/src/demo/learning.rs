@@ -409,9 +409,11 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
         "Sheet: `{}` ({}). {classes} classes ({rows} x {rows} grid), finger radius {:.1} mm, \
          pressure 5 to 60 kPa. Training: T = {} visits x S_num = {} scans x S_sub = 20 \
          sub-section medians = {} observations per class; each visit a new measurement set \
-         (clips put back {:.1} mm rms off, junction potentials and conductance redrawn, \
+         (the sheet left mounted, junction potentials and conductance redrawn, \
          docs/calibration.md) with the untouched frame taken at its start; each press lands \
-         anywhere in its target, radius spread {:.0} %, creep {}, drift {} within a visit. \
+         anywhere in its target, radius spread {:.0} %, the hand's force wandering {:.0} % \
+         rms, the clips' junction potentials moving {:.0} uV at each press, creep {}, drift \
+         {} within a visit. \
          Test: {} next-day session(s), 20 observations per class each, a new set again.\n",
         r.scene,
         r.description,
@@ -419,8 +421,9 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
         sizes.visits,
         sizes.scans,
         r.observations_per_class,
-        Plan::default().electrode_movement * 1e3,
         Plan::default().radius_spread * 100.0,
+        Plan::default().wobble * 100.0,
+        Plan::default().press_junction * 1e6,
         Plan::default().creep,
         Plan::default().drift,
         sizes.days
@@ -457,9 +460,10 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
     }
     let _ = writeln!(
         md,
-        "\nReferencing each frame to its session's untouched frame is what survives the \
-         electrodes moving between sessions; the raw-frame model learns the training \
-         sessions' electrode positions.\n\n\
+        "\nReferencing each frame to its session's untouched frame removes what moves from one \
+         session to the next (the clips' junction potentials, the sheet's conductance); the \
+         raw-frame model must have seen the next session's shift among its training \
+         sessions'.\n\n\
          How to read the table: *shrinkage* is the weight that pulls each class's covariance \
          toward a common one (0: none), chosen by leave-one-visit-out cross-validation; \
          *10-fold CV* and *leave-one-visit-out* are accuracies on held-out training \

@@ -203,8 +203,9 @@ fn a_trained_model_classifies_live_presses() {
     let config = collect::training_config(scene.scan_config().unwrap());
     let centres = collect::grid(&scene.sheet, 3, 3, 0.0);
     // A wiring test on 6 presses per class (2 visits x 3 scans): too few to span the
-    // press-to-press variety of contact radius, the fabric's creep and the front end's drift
-    // within a visit (each class is pressed at one time of the visit), so those are off here;
+    // press-to-press variety of contact radius, the hand's force, the clips' junction
+    // potentials, the fabric's creep and the front end's drift within a visit (each class is
+    // pressed at one time of the visit), so those are off here;
     // what they cost is measured by the accuracy tables on the reference's 120 presses.
     let plan = collect::Plan {
         visits: 2,
@@ -212,6 +213,8 @@ fn a_trained_model_classifies_live_presses() {
         drift: 0.0,
         creep: 0.0,
         radius_spread: 0.0,
+        wobble: 0.0,
+        press_junction: 0.0,
         seed: 5,
         ..collect::Plan::default()
     };

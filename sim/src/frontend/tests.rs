@@ -234,10 +234,10 @@ fn calibration_reproduces_the_reference_snr() {
 #[test]
 fn calibration_reproduces_the_reference_mad_between_sets() {
     // docs/method.md §3: 0.5 mV at 32 uA and 0.4 mV at 10 uA among measurement sets: each set
-    // a re-placed sheet in its own junction potentials and conductance, its mean frame of 10
-    // scans (sample-level path) against the mean over sets; draws other than the fit's.
+    // the sheet (still mounted) in its own junction potentials and conductance, its mean frame
+    // of 10 scans (sample-level path) against the mean over sets; draws other than the fit's.
     let spec = crate::calibration::sheet_spec();
-    let sets = crate::calibration::replaced_sheets(&spec, CALIBRATION_MOVEMENT_M, 40, 99).unwrap();
+    let sets = crate::calibration::replaced_sheets(&spec, CALIBRATION_MOVEMENT_M, 120, 99).unwrap();
     for (na, reference) in crate::calibration::MAD_V {
         let mut means = Vec::new();
         let mut k = 0;
@@ -417,4 +417,97 @@ fn a_source_in_compliance_is_flagged_in_the_frame_by_both_paths() {
         "the two injections through the open contact"
     );
     assert_ne!(flags & et_core::wire::FLAG_COMPLIANCE, 0);
+}
+
+#[test]
+fn a_hand_wobbles_the_touch_per_injection_and_leaves_the_untouched_sheet_alone() {
+    let sheet = sheet(Some(0.01));
+    let config = ScanConfig {
+        gain: CALIBRATION_GAIN,
+        ..ScanConfig::REFERENCE
+    };
+    let spec = FrontendSpec::default().without_noise();
+    // One injection lasts S/L = 50 samples at 62.5 kHz, 0.8 ms: with a 2 ms correlation time
+    // consecutive injections correlate by exp(-0.4) = 0.67.
+    let hand = Hand {
+        wobble: 0.3,
+        correlation_s: 2e-3,
+    };
+    let frames = |touches: &[Touch], hand: Option<Hand>, n: usize| {
+        let mut fe = SimFrontend::new(sheet.clone(), spec, 9).unwrap();
+        if let Some(h) = hand {
+            fe.set_hand(h).unwrap();
+        }
+        fe.set_touches(touches).unwrap();
+        (0..n)
+            .map(|_| fe.fast_frame(&config).unwrap())
+            .collect::<Vec<_>>()
+    };
+    // Untouched: the hand changes nothing.
+    assert_eq!(frames(&[], Some(hand), 3), frames(&[], None, 3));
+    let touch = Touch {
+        position: [0.02, 0.01],
+        radius: 0.0075,
+        pressure: 30e3,
+    };
+    let v0 = &frames(&[], None, 1)[0];
+    let steady = &frames(&[touch], None, 1)[0];
+    let delta: Vec<f64> = steady
+        .iter()
+        .zip(v0)
+        .map(|(a, b)| f64::from(a - b))
+        .collect();
+    // Per injection, the reading the touch changes most: (V - V_0) / delta is 1 + the hand.
+    let protocol = config.validate().unwrap();
+    let mut best: Vec<Option<usize>> = vec![None; 16];
+    for (k, s) in protocol.steps().enumerate() {
+        let slot = &mut best[usize::from(s.injection.source.0)];
+        if slot.is_none_or(|b| delta[k].abs() > delta[b].abs()) {
+            *slot = Some(k);
+        }
+    }
+    let best: Vec<usize> = best.into_iter().flatten().collect();
+    assert!(best.iter().all(|&k| delta[k].abs() > 1e-4), "{delta:?}");
+    let factors: Vec<Vec<f64>> = frames(&[touch], Some(hand), 300)
+        .iter()
+        .map(|f| {
+            best.iter()
+                .map(|&k| f64::from(f[k] - v0[k]) / delta[k])
+                .collect()
+        })
+        .collect();
+    let all: Vec<f64> = factors.iter().flatten().copied().collect();
+    let n = all.len() as f64;
+    let mean = all.iter().sum::<f64>() / n;
+    let var = all.iter().map(|f| (f - mean).powi(2)).sum::<f64>() / n;
+    assert!((mean - 1.0).abs() < 0.05, "mean factor {mean}");
+    assert!(
+        (var.sqrt() - 0.3).abs() < 0.05,
+        "rms of the hand {}",
+        var.sqrt()
+    );
+    let lag1 = factors
+        .iter()
+        .flat_map(|f| f.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)))
+        .collect::<Vec<_>>();
+    let r = lag1.iter().sum::<f64>() / lag1.len() as f64 / var;
+    assert!((r - (-0.4f64).exp()).abs() < 0.1, "lag-1 correlation {r}");
+    // A hand that is not a hand is refused.
+    let mut fe = SimFrontend::new(sheet.clone(), spec, 9).unwrap();
+    for bad in [
+        Hand {
+            wobble: -0.1,
+            ..hand
+        },
+        Hand {
+            correlation_s: 0.0,
+            ..hand
+        },
+        Hand {
+            wobble: f64::NAN,
+            ..hand
+        },
+    ] {
+        assert!(matches!(fe.set_hand(bad), Err(SimError::Config(_))));
+    }
 }

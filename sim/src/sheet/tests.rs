@@ -370,3 +370,39 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
         })
     ));
 }
+
+#[test]
+fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
+    let spec = square(0.13, 16, Some(0.01));
+    let (p, src) = (adjacent(16), Source::default());
+    let flat = Sheet::uneven(&spec, &[], &Unevenness::default()).unwrap();
+    let plain = Sheet::new(&spec, &[]).unwrap();
+    let f0 = frame(&plain.transfer(&[]).unwrap(), &p, 32e-6, &src);
+    assert_eq!(frame(&flat.transfer(&[]).unwrap(), &p, 32e-6, &src), f0);
+    let mut rng = et_core::rng::Rng::new(4);
+    let field = Unevenness::draw(0.05, &mut rng);
+    let uneven = Sheet::uneven(&spec, &[], &field).unwrap();
+    let z = uneven.transfer(&[]).unwrap();
+    // Reciprocity: driving a-b and reading p-q equals driving p-q and reading a-b.
+    for (a, b, q, r) in [(0, 1, 5, 6), (2, 3, 9, 10), (0, 8, 4, 12)] {
+        let there = z.voltage(a, b, q, r, 1e-3);
+        let back = z.voltage(q, r, a, b, 1e-3);
+        assert!(
+            (there - back).abs() < 1e-9 * there.abs().max(1e-12),
+            "{there} vs {back}"
+        );
+    }
+    let f1 = frame(&z, &p, 32e-6, &src);
+    let change = bvc(&f1, &f0) / bvc(&f0, &vec![0.0; f0.len()]);
+    assert!(
+        change > 1e-3 && change < 0.2,
+        "a 5 % field moves the frame by {change}"
+    );
+    let bad = Unevenness {
+        coefficients: [f64::NAN; 8],
+    };
+    assert!(matches!(
+        Sheet::uneven(&spec, &[], &bad),
+        Err(SheetError::Field { .. })
+    ));
+}

@@ -37,10 +37,14 @@ pub(crate) struct CollectArgs {
     /// Highest pressure while pressing, kPa.
     #[arg(long, default_value_t = 60.0)]
     max_kpa: f64,
-    /// Finger contact radius (the median over presses), mm; the finger's centre lands
-    /// anywhere in a target of this radius around the class centre.
+    /// Finger contact radius (the median over presses), mm.
     #[arg(long, default_value_t = 7.5)]
     radius_mm: f64,
+    /// Radius of the target the finger's centre lands in (uniformly) around each class
+    /// centre, mm (default: the finger's radius; the method's 10 mm targets for 100 classes
+    /// are 5).
+    #[arg(long)]
+    target_mm: Option<f64>,
     /// Relative rms of the contact radius from press to press (0.15: 15 %).
     #[arg(long, default_value_t = collect::Plan::default().radius_spread)]
     radius_spread: f64,
@@ -61,6 +65,13 @@ pub(crate) struct CollectArgs {
     /// Rms movement of each pose around the visit's electrode positions, mm.
     #[arg(long, default_value_t = 0.0)]
     press_movement_mm: f64,
+    /// Rms change of each clip's junction potential at every press (pressing tugs on the
+    /// clips), uV.
+    #[arg(long, default_value_t = collect::Plan::default().press_junction * 1e6)]
+    press_junction_uv: f64,
+    /// Relative rms of the hand's force about each press's pressure while a scan runs.
+    #[arg(long, default_value_t = collect::Plan::default().wobble)]
+    wobble: f64,
     /// Seed of the session.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -195,6 +206,16 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     if !(args.movement_mm.is_finite() && args.movement_mm >= 0.0) {
         bail!("--movement-mm: at least 0");
     }
+    let target_mm = args.target_mm.unwrap_or(args.radius_mm);
+    if !(target_mm.is_finite() && target_mm >= 0.0) {
+        bail!("--target-mm: at least 0");
+    }
+    if !(args.press_junction_uv.is_finite() && args.press_junction_uv >= 0.0) {
+        bail!("--press-junction-uv: at least 0");
+    }
+    if !(args.wobble.is_finite() && (0.0..=1.0).contains(&args.wobble)) {
+        bail!("--wobble: a relative rms between 0 and 1");
+    }
     if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
         bail!("--visits, --scans and --subsections must be at least 1");
     }
@@ -207,13 +228,16 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
         radius: args.radius_mm * 1e-3,
         radius_spread: args.radius_spread,
-        target_radius: args.radius_mm * 1e-3,
+        target_radius: target_mm * 1e-3,
         creep: args.creep,
         drift: args.drift,
         electrode_movement: args.movement_mm * 1e-3,
         poses: args.poses.max(1),
         press_movement: args.press_movement_mm * 1e-3,
-        press_junction: collect::Plan::default().press_junction,
+        press_junction: args.press_junction_uv * 1e-6,
+        unevenness: collect::Plan::default().unevenness,
+        wobble: args.wobble,
+        wobble_s: collect::Plan::default().wobble_s,
         seed: args.seed,
     };
     let bar = ProgressBar::new(args.visits as u64).with_style(
@@ -243,7 +267,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     bar.finish_and_clear();
     let data = data.context("no visit collected")?;
     let provenance = format!(
-        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, movement {} mm, seed {}",
+        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, target {} mm, movement {} mm, press junction {} uV, wobble {}, seed {}",
         args.scene.display(),
         args.visits,
         args.scans,
@@ -251,7 +275,10 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         args.min_kpa,
         args.max_kpa,
         args.radius_mm,
+        target_mm,
         args.movement_mm,
+        args.press_junction_uv,
+        args.wobble,
         args.seed
     );
     output::write(&args.out, |partial| {
