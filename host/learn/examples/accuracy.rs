@@ -1,15 +1,16 @@
 //! Touch classification accuracy on the simulated sheet, the docs/method.md §9 way: a class grid,
 //! T = 6 visits x S_num = 20 scans x S_sub = 20 sub-sections (2 400 observations per class)
-//! with the electrodes moving between visits (0.5 mm rms) and the pressure varied by hand
-//! (5 to 60 kPa); then three "next day" sessions (20 observations per class each, electrodes
-//! moved again, unknown pressure).
+//! on the calibrated simulator (docs/calibration.md: each visit a measurement set, presses
+//! varying as a hand's, one 7.5 mm fingertip aiming at 15 mm targets for 49 classes and 10 mm
+//! for 100, PGIA gain 8); then three "next day" sessions (20 observations per class each, a
+//! new set again, unknown pressure).
 //!
 //! Models: QDA exactly as docs/method.md §9 on the raw frames; the best shrinkage on raw frames; and
 //! QDA / LDA on *referenced* frames (each frame minus its session's untouched frame), the
 //! shrinkage chosen by leave-one-visit-out cross-validation on the training set only. Then
 //! the reduced variants that fit the STM32F405, evaluated by et-core on the exported blobs.
 //!
-//! Run: `cargo run --release -p et-host --example accuracy [-- --quick]`
+//! Run: `cargo run --release -p et-learn --example accuracy [-- --quick]`
 //! (`--quick`: S_num = 5, for a fast look.)
 
 use std::time::Instant;
@@ -20,7 +21,7 @@ use et_learn::collect::{Dataset, Plan, collect, grid, training_config};
 use et_learn::cv::{Confusion, choose_shrinkage_with, evaluate};
 use et_learn::fastcv::cross_validate_fast;
 use et_learn::fit::{FitOptions, Fitted, Target, fisher_ranking};
-use et_sim::frontend::FrontendSpec;
+use et_sim::frontend::{CALIBRATION_GAIN, FrontendSpec};
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
 
@@ -38,7 +39,7 @@ fn collect_case(
     side: f64,
     l: u8,
     n: usize,
-    radius: f64,
+    target: f64,
     scans: usize,
     poses: usize,
     press: f64,
@@ -47,6 +48,7 @@ fn collect_case(
     // docs/method.md §9's training scans for this electrode count (3 200 / L samples per step).
     let config = training_config(ScanConfig {
         electrodes: l,
+        gain: CALIBRATION_GAIN,
         ..ScanConfig::REFERENCE
     });
     let centres = grid(&spec, n, n, 0.0);
@@ -55,8 +57,7 @@ fn collect_case(
         scans,
         subsections: 20,
         pressure_pa: (5e3, 60e3),
-        radius,
-        target_radius: radius,
+        target_radius: target,
         poses,
         press_movement: press,
         ..Plan::default()
@@ -271,7 +272,7 @@ fn main() {
     );
     println!("| --- | --- | --- | --- | --- | --- | --- |");
     let mut reduced = Vec::new();
-    for (side, l, n, radius, poses, press) in [
+    for (side, l, n, target, poses, press) in [
         (0.13, 16u8, 7usize, 0.0075, 1, 0.0),
         (0.13, 16, 10, 0.005, 1, 0.0),
         (0.13, 8, 7, 0.0075, 1, 0.0),
@@ -280,7 +281,7 @@ fn main() {
         (0.17, 16, 10, 0.005, 1, 0.0),
         (0.13, 16, 10, 0.005, 6, 0.0003),
     ] {
-        let case = collect_case(side, l, n, radius, scans, poses, press);
+        let case = collect_case(side, l, n, target, scans, poses, press);
         row(
             &case,
             "raw, QDA (docs/method.md §9)",
