@@ -396,10 +396,12 @@ impl SimFrontend {
         Ok(())
     }
 
-    /// Moves the hand's force on by one injection of `config`: S/L samples, the time a
-    /// front end that samples every electrode at once (as the reference's does) spends on an
-    /// injection, whatever order this simulator steps the measurements in.
-    fn step_hand(&mut self, config: &ScanConfig) {
+    /// What changes when a new injection starts (both frame paths): the current's jitter is
+    /// drawn anew and the hand's force moves on by one injection of `config`: S/L samples,
+    /// the time a front end that samples every electrode at once (as the reference's does)
+    /// spends on an injection, whatever order this simulator steps the measurements in.
+    fn start_injection(&mut self, config: &ScanConfig) {
+        self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
         let w = self.hand.wobble;
         if w == 0.0 {
             return;
@@ -600,8 +602,7 @@ impl SimFrontend {
         for (i, step) in protocol.steps().enumerate() {
             if injection != Some(step.injection) {
                 injection = Some(step.injection);
-                self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
-                self.step_hand(config);
+                self.start_injection(config);
             }
             let mid = self.time + dt * (f64::from(config.settle_samples) + kept / 2.0);
             let (v, compliance) = self.faulty(
@@ -689,8 +690,7 @@ impl Frontend for SimFrontend {
         }
         if self.injection != Some(injection) {
             self.injection = Some(injection);
-            self.jitter = 1.0 + self.spec.current_noise * self.rng.normal();
-            self.step_hand(&config);
+            self.start_injection(&config);
         }
         let amps = f64::from(config.current_amps()) * self.jitter;
         let (v, compliance) = self.faulty(injection, measurement, amps, config.gain);

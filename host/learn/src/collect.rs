@@ -217,7 +217,7 @@ impl Default for Plan {
     /// 15 mm target, the hand's force wandering 20 % rms over 0.1 s, each press moving the
     /// clips' junction potentials 15 uV rms, a tenth of each press's pressure still held at
     /// the next, the front end drifting half a set's spread during a visit, the sheet staying
-    /// mounted; seed 1. docs/calibration.md says why (the last two press parameters were
+    /// mounted; seed 1. docs/calibration.md says why (the wobble and the press junction were
     /// fitted to the reference's accuracies there).
     fn default() -> Self {
         Self {
