@@ -418,6 +418,7 @@ impl Viewer {
                 position: [0.03, 0.025],
                 radius: 0.0075,
                 pressure: 30e3,
+                footprint: Default::default(),
             }]);
         }
         if self.shot_frames == 80 {

@@ -32,6 +32,7 @@ fn random_touch(rng: &mut Rng) -> Touch {
         position: [0.11 * (rng.uniform() - 0.5), 0.11 * (rng.uniform() - 0.5)],
         radius: 0.005 + 0.003 * rng.uniform(),
         pressure: 5e3 + 95e3 * rng.uniform(),
+        footprint: Default::default(),
     }
 }
 
@@ -54,6 +55,7 @@ fn noise_only_repeat(bencher: divan::Bencher) {
         position: [0.02, -0.01],
         radius: 0.0075,
         pressure: 20e3,
+        footprint: Default::default(),
     }])
     .expect("touch");
     bencher.bench_local(|| fe.fast_frame(&ScanConfig::REFERENCE).expect("frame"));
@@ -84,6 +86,7 @@ fn touch_size(bencher: divan::Bencher, r: f64) {
         position: [0.0, 0.0],
         radius: r,
         pressure: 30e3,
+        footprint: Default::default(),
     };
     bencher.bench_local(|| SHEET.transfer(&[touch]).expect("transfer"));
 }

@@ -36,6 +36,7 @@ fn main() {
         position: [0.021, -0.013],
         radius: 0.0075,
         pressure: 20e3,
+        footprint: Default::default(),
     };
     let default_h = spec(None).default_resolution();
     println!("spacing_mm  nodes  build_s  touch_update_us  frame_err_%  dV_err_%");

@@ -31,6 +31,7 @@ pub fn states() -> Vec<Vec<Touch>> {
             position,
             radius: 0.0075,
             pressure: 40e3,
+            footprint: Default::default(),
         }]);
     }
     states

@@ -186,11 +186,13 @@ mod tests {
                     position: [0.02, -0.01],
                     radius: 0.012,
                     multiplier: contrast,
+                    footprint: Default::default(),
                 },
                 Inclusion {
                     position: [-0.04, 0.03],
                     radius: 0.008,
                     multiplier: contrast.sqrt(),
+                    footprint: Default::default(),
                 },
             ];
             let changes = edge_multipliers(&net.grid, &incs);

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::frontend::{FrontendSpec, SimError, SimFrontend};
 use crate::sheet::{Sheet, SheetError, SheetSpec};
-use crate::touch::Touch;
+use crate::touch::{Footprint, Touch};
 use et_core::rng::Rng;
 
 /// How a scene's frames are scanned.
@@ -103,6 +103,10 @@ pub struct TouchEvent {
     pub radius: f64,
     /// Pressure while on, Pa.
     pub pressure: f64,
+    /// The contact's shape (default a disc; `footprint = { elongation = 1.5, angle = 1.57 }`
+    /// for a finger pressed at a slant, its long axis along `angle` rad from +x).
+    #[serde(default)]
+    pub footprint: Footprint,
     /// When it lands, s (default 0).
     #[serde(default)]
     pub start: f64,
@@ -120,6 +124,7 @@ impl TouchEvent {
             position: self.position,
             radius: self.radius,
             pressure: self.pressure,
+            footprint: self.footprint,
         }
     }
 }
@@ -474,6 +479,17 @@ impl Scene {
                     ),
                 ));
             }
+            if !t.footprint.is_valid() {
+                return Err(FieldError::new(
+                    at("footprint"),
+                    format!(
+                        "elongation {} must be in [1, {}] and angle {} rad finite",
+                        t.footprint.elongation,
+                        crate::touch::MAX_ELONGATION,
+                        t.footprint.angle
+                    ),
+                ));
+            }
             if !(t.pressure.is_finite() && t.pressure >= 0.0) {
                 return Err(FieldError::new(
                     at("pressure"),
@@ -559,6 +575,7 @@ impl Scene {
                         ],
                         radius: ev.radius,
                         pressure: ev.pressure,
+                        footprint: ev.footprint,
                     }
                 })
             })
@@ -768,6 +785,7 @@ impl Run {
                     position: *pos,
                     radius: ev.radius,
                     pressure: felt,
+                    footprint: ev.footprint,
                 });
             }
         }

@@ -37,10 +37,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         unevenness: arg("--unevenness").unwrap_or(d.unevenness),
         wobble: arg("--wobble").unwrap_or(d.wobble),
         wobble_s: arg("--wobble-s").unwrap_or(d.wobble_s),
+        elongation: arg("--elongation").unwrap_or(d.elongation),
         ..d
     };
     println!(
-        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm, {} poses {} mm, press junction {} uV, unevenness {}, hand wobble {} over {} s",
+        "S_num {}, creep {}, drift {}, radius spread {}, re-placement {} mm, {} poses {} mm, press junction {} uV, unevenness {}, hand wobble {} over {} s, elongation up to {}",
         plan.scans,
         plan.creep,
         plan.drift,
@@ -51,7 +52,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         plan.press_junction * 1e6,
         plan.unevenness,
         plan.wobble,
-        plan.wobble_s
+        plan.wobble_s,
+        plan.elongation
     );
     let f = FrontendSpec::default();
     let frontend = FrontendSpec {

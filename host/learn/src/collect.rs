@@ -19,7 +19,7 @@ use et_core::scan::ScanError;
 use et_core::{ScanConfig, Scanner};
 use et_sim::frontend::{FrontendSpec, Hand, SetState, SimError, SimFrontend};
 use et_sim::sheet::{Sheet, SheetError, SheetSpec, Unevenness};
-use et_sim::touch::Touch;
+use et_sim::touch::{Footprint, Touch};
 use nalgebra::DMatrix;
 
 /// A labelled set of observations.
@@ -207,6 +207,13 @@ pub struct Plan {
     pub wobble: f64,
     /// Correlation time of the hand's force, s.
     pub wobble_s: f64,
+    /// Largest elongation of the contact ([`Footprint`]): each press's is drawn uniformly
+    /// between 1 (the finger straight down) and this (the finger at its flattest). 1 = every
+    /// contact a disc.
+    pub elongation: f64,
+    /// Direction the finger points on the sheet, rad from +x (pi / 2: the hand comes from the
+    /// -y edge), and its rms from press to press, rad. Used when `elongation` > 1.
+    pub finger_angle: (f64, f64),
     /// Seed of the session (electrode movement, placement, pressure, noise).
     pub seed: u64,
 }
@@ -237,7 +244,27 @@ impl Default for Plan {
             unevenness: 0.0,
             wobble: 0.2,
             wobble_s: 0.1,
+            elongation: 1.0,
+            finger_angle: (std::f64::consts::FRAC_PI_2, 0.35),
             seed: 1,
+        }
+    }
+}
+
+impl Plan {
+    /// One press's contact shape: a disc when `elongation` is 1 (drawing nothing, so that
+    /// sessions without footprints keep their random streams), else an ellipse of elongation
+    /// uniform in [1, `elongation`] along the finger's direction.
+    #[must_use]
+    pub fn footprint(&self, rng: &mut Rng) -> Footprint {
+        if self.elongation <= 1.0 {
+            return Footprint::ROUND;
+        }
+        let (direction, spread) = self.finger_angle;
+        Footprint {
+            elongation: 1.0
+                + (self.elongation.min(et_sim::touch::MAX_ELONGATION) - 1.0) * rng.uniform(),
+            angle: direction + spread * rng.normal(),
         }
     }
 }
@@ -343,6 +370,7 @@ pub fn collect(
                         position: [centre[0] + rho * phi.cos(), centre[1] + rho * phi.sin()],
                         radius: plan.radius * (plan.radius_spread * rng.normal()).exp(),
                         pressure: lo + (hi - lo) * rng.uniform(),
+                        footprint: plan.footprint(rng),
                     }],
                 });
             }
@@ -365,6 +393,7 @@ pub fn random_presses(
     let shape = spec.shape.clone();
     let [x0, y0, x1, y1] = shape.bounds();
     let (radius, spread, (lo, hi)) = (plan.radius, plan.radius_spread, plan.pressure_pa);
+    let plan = plan.clone();
     move |rng: &mut Rng| {
         (0..count)
             .map(|_| Press {
@@ -384,6 +413,7 @@ pub fn random_presses(
                             position,
                             radius: radius * (spread * rng.normal()).exp(),
                             pressure: lo + (hi - lo) * rng.uniform(),
+                            footprint: plan.footprint(rng),
                         }
                     })
                     .collect(),

@@ -82,6 +82,8 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
         unevenness: 0.0,
         wobble: 0.0,
         wobble_s: 0.1,
+        elongation: 1.0,
+        finger_angle: (0.0, 0.0),
         seed,
     };
     let draw = |rng: &mut Rng| -> Vec<Press> {
@@ -98,6 +100,7 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
                         position: [r * a.cos(), r * a.sin()],
                         radius: 0.006 + 0.003 * rng.uniform(),
                         pressure: 5e3 + 55e3 * rng.uniform(),
+                        footprint: Default::default(),
                     }],
                 }
             })

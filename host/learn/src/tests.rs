@@ -1029,3 +1029,31 @@ fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
     .unwrap();
     assert_eq!(t.model.kind, ModelKind::Qda);
 }
+
+#[test]
+fn press_footprints_follow_the_plan_and_round_ones_draw_nothing() {
+    let round = Plan::default();
+    let (mut a, mut b) = (Rng::new(5), Rng::new(5));
+    assert_eq!(round.footprint(&mut a), et_sim::touch::Footprint::ROUND);
+    assert_eq!(a.uniform(), b.uniform(), "a disc draws nothing");
+    let slanted = Plan {
+        elongation: 1.6,
+        ..round
+    };
+    let n = 20_000;
+    let draws: Vec<_> = (0..n).map(|_| slanted.footprint(&mut a)).collect();
+    assert!(draws.iter().all(|f| f.is_valid() && f.elongation <= 1.6));
+    let mean =
+        |v: &dyn Fn(&et_sim::touch::Footprint) -> f64| draws.iter().map(v).sum::<f64>() / n as f64;
+    // Elongation uniform on [1, 1.6]: mean 1.3, sd 0.6 / sqrt(12).
+    let e = mean(&|f| f.elongation);
+    assert!((e - 1.3).abs() < 4.0 * 0.173 / (n as f64).sqrt(), "{e}");
+    let (direction, spread) = slanted.finger_angle;
+    let angle = mean(&|f| f.angle);
+    let rms = mean(&|f| (f.angle - direction).powi(2)).sqrt();
+    assert!(
+        (angle - direction).abs() < 4.0 * spread / (n as f64).sqrt(),
+        "{angle}"
+    );
+    assert!((rms / spread - 1.0).abs() < 0.03, "{rms}");
+}

@@ -155,6 +155,7 @@ impl ReplaySource {
                         position: [t.x, t.y],
                         radius: t.radius,
                         pressure: t.pressure,
+                        footprint: Default::default(),
                     })
                     .collect()
             }),

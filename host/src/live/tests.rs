@@ -38,6 +38,7 @@ fn press_at(source: &mut Source, position: Option<[f64; 2]>) {
                 position: p,
                 radius: 0.0075,
                 pressure: 20e3,
+                footprint: Default::default(),
             })
             .into_iter()
             .collect(),

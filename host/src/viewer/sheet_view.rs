@@ -189,6 +189,7 @@ impl Viewer {
                         position: at,
                         radius: 0.0075,
                         pressure: 20e3,
+                        footprint: Default::default(),
                     }]);
                     self.pressing = true;
                 }

@@ -89,6 +89,7 @@ fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
         position: [0.005, 0.0],
         radius: 0.0075,
         pressure: 30e3,
+        footprint: Default::default(),
     }]);
     let mut switched = false;
     for _ in 0..20 {
@@ -109,6 +110,7 @@ fn pressing_the_simulated_sheet_shows_the_touch_where_it_is() {
         position: [0.03, -0.03],
         radius: 0.0075,
         pressure: 30e3,
+        footprint: Default::default(),
     }]);
     h.step();
     h.step();
@@ -146,6 +148,7 @@ fn greit_images_a_press_where_it_is() {
         position: [0.03, -0.03],
         radius: 0.0075,
         pressure: 30e3,
+        footprint: Default::default(),
     }]);
     h.step();
     h.step();
@@ -353,6 +356,7 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
             position: *centre,
             radius: 0.0075,
             pressure: 30e3,
+            footprint: Default::default(),
         }]);
         h.step();
         h.step();

@@ -199,6 +199,7 @@ impl Wizard {
             ],
             radius,
             pressure: 5e3 + 55e3 * rng.uniform(),
+            footprint: Default::default(),
         }])
     }
 

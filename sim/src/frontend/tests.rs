@@ -38,6 +38,7 @@ fn scan_engine_through_the_sim_reproduces_the_fast_path() {
         position: [0.02, 0.01],
         radius: 0.0075,
         pressure: 30e3,
+        footprint: Default::default(),
     };
     let mut slow = SimFrontend::new(sheet.clone(), FrontendSpec::default(), 1).unwrap();
     let mut fast = SimFrontend::new(sheet, FrontendSpec::default(), 2).unwrap();
@@ -449,6 +450,7 @@ fn a_hand_wobbles_the_touch_per_injection_and_leaves_the_untouched_sheet_alone()
         position: [0.02, 0.01],
         radius: 0.0075,
         pressure: 30e3,
+        footprint: Default::default(),
     };
     let v0 = &frames(&[], None, 1)[0];
     let steady = &frames(&[touch], None, 1)[0];

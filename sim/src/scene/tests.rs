@@ -95,6 +95,14 @@ fn bad_scenes_name_the_file_and_the_field() {
         huge.contains("touch[0].radius") && huge.contains("sheet's size"),
         "{huge}"
     );
+    let flat = err(&SMALL.replace(
+        "radius = 0.0075",
+        "radius = 0.0075\nfootprint = { elongation = 0.5, angle = 0.0 }",
+    ));
+    assert!(
+        flat.contains("touch[0].footprint") && flat.contains("elongation"),
+        "{flat}"
+    );
     let piezo = err(&SMALL.replace("[[touch]]", "[sheet.piezo]\ngain = 1e15\n\n[[touch]]"));
     assert!(
         piezo.contains("sheet.piezo") && piezo.contains("gain"),

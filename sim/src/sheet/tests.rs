@@ -1,6 +1,7 @@
 //! Sheet-level physics: what a touch does to the frame, the extremes, and the resolution trade.
 
 use super::*;
+use crate::touch::Footprint;
 use et_core::protocol::ProtocolKind;
 use std::time::Instant;
 
@@ -45,6 +46,7 @@ fn touching_raises_conductance_and_bvc_grows_with_pressure() {
             position: [0.01, -0.02],
             radius: 0.0075,
             pressure: kpa * 1e3,
+            footprint: Default::default(),
         };
         let changes = edge_multipliers(
             &sheet.network().grid,
@@ -64,6 +66,7 @@ fn touching_raises_conductance_and_bvc_grows_with_pressure() {
         position: [0.0, -0.06],
         radius: 0.0075,
         pressure: 50e3,
+        footprint: Default::default(),
     };
     assert!(sheet.transfer(&[t]).unwrap().load(0, 1) <= sheet.transfer(&[]).unwrap().load(0, 1));
 }
@@ -80,6 +83,7 @@ fn bvc_shrinks_with_distance_from_the_electrodes() {
             position: [0.003, y],
             radius: 0.0075,
             pressure: 20e3,
+            footprint: Default::default(),
         };
         let b = bvc(&frame(&sheet.transfer(&[t]).unwrap(), &p, 32e-6, &src), &v0);
         assert!(b < last, "BVC at y = {y}: {b} >= {last}");
@@ -115,6 +119,7 @@ fn extremes_give_finite_sane_frames() {
             position: [0.02, 0.02],
             radius: 0.01,
             multiplier: contrast,
+            footprint: Default::default(),
         };
         let v = frame(
             &sheet.transfer_inclusions(&[inc]).unwrap(),
@@ -132,6 +137,7 @@ fn extremes_give_finite_sane_frames() {
             position: [0.02, 0.02],
             radius: 0.01,
             multiplier: contrast,
+            footprint: Default::default(),
         };
         frame(
             &sheet.transfer_inclusions(&[inc]).unwrap(),
@@ -156,6 +162,7 @@ fn extremes_give_finite_sane_frames() {
         position: [0.0, 0.0],
         radius: 0.05,
         multiplier: 3.0,
+        footprint: Default::default(),
     };
     let changes = crate::touch::edge_multipliers(&sheet.network().grid, &[palm]);
     assert!(
@@ -232,6 +239,7 @@ fn sheets_from_1_cm_to_1_m_give_the_same_frame() {
                 position: [0.1 * side, -0.2 * side],
                 radius: 0.08 * side,
                 multiplier: 3.0,
+                footprint: Default::default(),
             };
             frame(
                 &sheet.transfer_inclusions(&[inc]).unwrap(),
@@ -255,6 +263,7 @@ fn refinement_error(h: f64) -> (f64, f64) {
         position: [0.021, -0.013],
         radius: 0.0075,
         pressure: 20e3,
+        footprint: Default::default(),
     };
     let (p, src) = (adjacent(16), Source::default());
     let run = |h: f64| {
@@ -327,6 +336,7 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
         position: [0.01, 0.02],
         radius: 0.0075,
         pressure: 20e3,
+        footprint: Default::default(),
     };
     let sheet = Sheet::new(&bent, &[]).unwrap();
     let fast = frame(&sheet.transfer(&[touch]).unwrap(), &p, 32e-6, &src);
@@ -405,4 +415,57 @@ fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
         Sheet::uneven(&spec, &[], &bad),
         Err(SheetError::Field { .. })
     ));
+}
+
+/// An elliptic footprint: a half turn is the same ellipse, elongation 1 is the disc, the fast
+/// update agrees with a direct solve, its orientation shows in the frame, and on the square
+/// sheet an ellipse along x at the centre is the one along y seen after a quarter turn (the
+/// electrodes relabelled by L / 4; the grid is symmetric, so to rounding).
+#[test]
+fn an_elliptic_touch_is_symmetric_where_the_ellipse_is() {
+    let spec = square(0.13, 16, Some(0.0025));
+    let sheet = Sheet::new(&spec, &[]).unwrap();
+    let touch = |elongation: f64, angle: f64| Touch {
+        position: [0.0, 0.0],
+        radius: 0.01,
+        pressure: 40e3,
+        footprint: Footprint { elongation, angle },
+    };
+    let z = |t: Touch| sheet.transfer(&[t]).unwrap();
+    // Every four-electrode voltage between neighbours (drive d, d + 1; measure m, m + 1),
+    // with the electrodes relabelled by `shift`.
+    let l = 16;
+    let frame = |z: &crate::network::Transfer, shift: usize| -> Vec<f64> {
+        let e = |i: usize| (i + shift) % l;
+        (0..l * l)
+            .map(|k| {
+                let (d, m) = (k / l, k % l);
+                z.voltage(e(d), e(d + 1), e(m), e(m + 1), 1.0)
+            })
+            .collect()
+    };
+    let diff = |a: &[f64], b: &[f64]| bvc(a, b) / a.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let (along_x, along_y) = (
+        z(touch(2.0, 0.0)),
+        z(touch(2.0, std::f64::consts::FRAC_PI_2)),
+    );
+    let (fx, fy) = (frame(&along_x, 0), frame(&along_y, 0));
+    let disc = frame(&z(touch(1.0, 0.0)), 0);
+    assert!(diff(&frame(&z(touch(2.0, std::f64::consts::PI)), 0), &fx) < 1e-12);
+    assert!(diff(&frame(&z(touch(1.0, 0.7)), 0), &disc) < 1e-12);
+    let untouched = frame(&sheet.transfer(&[]).unwrap(), 0);
+    let (shape, touched) = (diff(&fx, &fy), diff(&disc, &untouched));
+    assert!(
+        shape > 0.05 * touched,
+        "orientation {shape:.2e}, touch {touched:.2e}"
+    );
+    let net = build_network(&spec, &[]).unwrap();
+    let direct = direct_transfer(&net, &spec.piezo, &[touch(2.0, 0.6)]).unwrap();
+    assert!(diff(&frame(&direct, 0), &frame(&z(touch(2.0, 0.6)), 0)) < 1e-9);
+    // Quarter turn: the y ellipse's sheet seen with electrode e relabelled e + L / 4.
+    let (a, b) = (diff(&fx, &frame(&along_y, 4)), diff(&fx, &fy));
+    assert!(
+        a < 1e-9 * b.max(1e-3),
+        "turned {a:.2e} against unturned {b:.2e}"
+    );
 }

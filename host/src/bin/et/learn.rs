@@ -72,6 +72,11 @@ pub(crate) struct CollectArgs {
     /// Relative rms of the hand's force about each press's pressure while a scan runs.
     #[arg(long, default_value_t = collect::Plan::default().wobble)]
     wobble: f64,
+    /// Largest elongation of the finger's contact (long over short axis; each press draws one
+    /// between 1 and this): 1 presses discs, about 1.5 a finger pressed at a slant, its long
+    /// axis along +y (the hand coming from the bottom edge), 20 degrees rms.
+    #[arg(long, default_value_t = collect::Plan::default().elongation)]
+    elongation: f64,
     /// Seed of the session.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -216,6 +221,12 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     if !(args.wobble.is_finite() && (0.0..=1.0).contains(&args.wobble)) {
         bail!("--wobble: a relative rms between 0 and 1");
     }
+    if !(1.0..=et_sim::touch::MAX_ELONGATION).contains(&args.elongation) {
+        bail!(
+            "--elongation: between 1 (a disc) and {}",
+            et_sim::touch::MAX_ELONGATION
+        );
+    }
     if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
         bail!("--visits, --scans and --subsections must be at least 1");
     }
@@ -238,6 +249,8 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         unevenness: collect::Plan::default().unevenness,
         wobble: args.wobble,
         wobble_s: collect::Plan::default().wobble_s,
+        elongation: args.elongation,
+        finger_angle: collect::Plan::default().finger_angle,
         seed: args.seed,
     };
     let bar = ProgressBar::new(args.visits as u64).with_style(
@@ -267,7 +280,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     bar.finish_and_clear();
     let data = data.context("no visit collected")?;
     let provenance = format!(
-        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, target {} mm, movement {} mm, press junction {} uV, wobble {}, seed {}",
+        "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, target {} mm, movement {} mm, press junction {} uV, wobble {}, elongation up to {}, seed {}",
         args.scene.display(),
         args.visits,
         args.scans,
@@ -279,6 +292,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         args.movement_mm,
         args.press_junction_uv,
         args.wobble,
+        args.elongation,
         args.seed
     );
     output::write(&args.out, |partial| {
