@@ -86,13 +86,16 @@ enum Command {
     ///   et sim --scene sim/scenes/square-13cm-16-swipe.toml --frames 150 --out swipe.jsonl --samples
     #[command(verbatim_doc_comment)]
     Sim(sim::SimArgs),
-    /// Collect a labelled training set on the simulated sheet (docs/method.md §9), as CSV.
+    /// Collect a labelled training set on the simulated sheet (docs/method.md §9), as CSV or .npz.
     ///
     /// Collect a labelled training set on the simulated sheet, the docs/method.md §9 way: a grid of
     /// touch classes, visited T times, S_num scans per class and visit with the pressure varied,
-    /// S_sub observations per scan; electrodes move between visits. Each visit starts with
-    /// an untouched frame (the sheet as it was put down), which referenced models subtract.
-    /// Writes CSV (Python: csv or numpy.loadtxt(comments="#"); MATLAB: readmatrix).
+    /// S_sub observations per scan. Each visit is a measurement set (the clips' junction
+    /// potentials and the sheet's conductance drawn anew, docs/calibration.md) and starts with
+    /// an untouched frame, which referenced models subtract. Each press varies as a hand's do
+    /// (where in its target it lands, its size, the force wandering during the scan).
+    /// Writes CSV (Python: csv or numpy.loadtxt(comments="#"); MATLAB: readmatrix), or NumPy
+    /// arrays when --out ends in .npz.
     ///
     /// Examples:
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
