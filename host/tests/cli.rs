@@ -9,6 +9,22 @@ fn et(args: &[&str]) -> std::process::Output {
         .expect("run et")
 }
 
+/// What a Python script of the repository prints for one file (it must succeed).
+fn python_script(script: &std::path::Path, file: &std::path::Path) -> String {
+    let py = Command::new("python3")
+        .arg(script)
+        .arg(file)
+        .output()
+        .expect("python3 is needed for this test");
+    assert!(
+        py.status.success(),
+        "{}: {}",
+        script.display(),
+        String::from_utf8_lossy(&py.stderr)
+    );
+    String::from_utf8_lossy(&py.stdout).into_owned()
+}
+
 #[test]
 fn protocol_json_reports_k_and_p_for_every_l() {
     for l in (4..=32).step_by(2) {
@@ -114,17 +130,7 @@ fn sim_writes_a_recording_that_python_reads() {
     let rec = et_host::recording::read(&out).unwrap();
     assert_eq!(rec.records.len(), 30);
     // ...and with the documented Python reader (standard library only).
-    let py = Command::new("python3")
-        .arg(root.join("python/et_recording.py"))
-        .arg(&out)
-        .output()
-        .expect("python3 is needed for this test");
-    let text = String::from_utf8_lossy(&py.stdout);
-    assert!(
-        py.status.success(),
-        "{}",
-        String::from_utf8_lossy(&py.stderr)
-    );
+    let text = python_script(&root.join("python/et_recording.py"), &out);
     assert!(
         text.contains("frames 30")
             && text.contains("K 208")
@@ -146,6 +152,25 @@ fn sim_writes_a_recording_that_python_reads() {
             .count()
     );
     assert!(touched >= 25);
+    // Its touches streamed for another program: positions to 0.1 mm, not 15 decimals.
+    let stream = et(&["stream", "--json", "--replay", out.to_str().unwrap()]);
+    assert!(
+        stream.status.success(),
+        "{}",
+        String::from_utf8_lossy(&stream.stderr)
+    );
+    let events: Vec<serde_json::Value> = String::from_utf8_lossy(&stream.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object a line"))
+        .collect();
+    assert!(!events.is_empty(), "the replayed touch is streamed");
+    for e in &events {
+        for v in e["position_mm"].as_array().unwrap() {
+            let text = v.to_string();
+            let decimals = text.split_once('.').map_or(0, |(_, d)| d.len());
+            assert!(decimals <= 1, "{text} in {e}");
+        }
+    }
     // A bad scene names the file and the field.
     let bad = dir.join("bad.toml");
     std::fs::write(
@@ -168,6 +193,53 @@ fn sim_writes_a_recording_that_python_reads() {
         "{msg}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The dataset as Python users read it: `python/et_dataset.py` (standard library), and the
+/// numpy recipe its docstring gives, run as written (with the file's path) where numpy is
+/// installed.
+fn python_reads_the_dataset(root: &std::path::Path, csv: &std::path::Path) {
+    let reader = root.join("python/et_dataset.py");
+    let text = python_script(&reader, csv);
+    assert!(
+        text.contains("observations 80")
+            && text.contains("features 96")
+            && text.contains("classes 4"),
+        "{text}"
+    );
+    let has_numpy = Command::new("python3")
+        .args(["-c", "import numpy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_numpy {
+        eprintln!("numpy not installed: the docstring's numpy recipe is not run");
+        return;
+    }
+    let doc = std::fs::read_to_string(&reader).unwrap();
+    let recipe: String = doc
+        .lines()
+        .skip_while(|l| !l.starts_with("With numpy"))
+        .skip(1)
+        .skip_while(|l| l.trim().is_empty())
+        .take_while(|l| !l.trim().is_empty())
+        .map(|l| format!("{}\n", l.strip_prefix("    ").unwrap_or(l)))
+        .collect::<String>()
+        .replace("\"train.csv\"", &format!("{:?}", csv.to_str().unwrap()));
+    assert!(recipe.contains("numpy.loadtxt"), "{recipe}");
+    let run = Command::new("python3")
+        .args([
+            "-c",
+            &format!("{recipe}print(x.shape, sorted(int(v) for v in set(label)))"),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{recipe}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let shape = String::from_utf8_lossy(&run.stdout);
+    assert!(shape.contains("(80, 96) [0, 1, 2, 3]"), "{shape}");
 }
 
 #[test]
@@ -215,6 +287,7 @@ fn collect_train_eval_export_chain() {
         ),
         (Some(80), Some(96), Some(4))
     );
+    python_reads_the_dataset(&root, &train);
     ok(et(&[
         &base[..],
         &["--visits", "1", "--seed", "9", "--out", &s(&test)],

@@ -201,6 +201,35 @@ fn fewest_training_rows(fold: &[usize]) -> usize {
 /// # Errors
 /// [`FitError`] from fitting or cross-validation.
 pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError> {
+    train_reporting(data, options, |_| {})
+}
+
+/// A stage of [`train`], as it starts (for a progress display).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stage {
+    /// Centring the data and each fold partition's sufficient statistics.
+    Statistics,
+    /// Cross-validating shrinkage candidate `index` (0-based) of `of`, by leave-one-visit-out
+    /// or by k-fold when `by_visit` is false.
+    Candidate {
+        index: usize,
+        of: usize,
+        shrinkage: f64,
+        by_visit: bool,
+    },
+    /// The final fit beside its k-fold and leave-one-visit-out cross-validations.
+    Final,
+}
+
+/// [`train`], calling `report` as each [`Stage`] starts.
+///
+/// # Errors
+/// As [`train`].
+pub fn train_reporting(
+    data: &Dataset,
+    options: &TrainOptions,
+    report: impl Fn(Stage),
+) -> Result<Trained, FitError> {
     let classes = data.centres.len();
     let (x, y) = (&data.x, &data.y);
     let p = x.ncols();
@@ -233,22 +262,35 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
     };
     // Centred once; each fold partition's sufficient statistics once, for every candidate
     // and for the final cross-validations.
+    report(Stage::Statistics);
     let prepared = Prepared::new(x, y, classes)?;
     let strat_part = prepared.partition(&strat)?;
     let visit_part = several_visits.then(|| prepared.partition(&by_visit));
-    let choose = |part: &Partition| match options.shrinkage {
+    let choose = |part: &Partition, by_visit: bool| match options.shrinkage {
         Some(l) => Ok((l, Vec::new())),
-        None => cv::choose_shrinkage_with(
-            &SHRINKAGE_CANDIDATES,
-            |o| prepared.cross_validate(part, o),
-            &base,
-        ),
+        None => {
+            let mut index = 0;
+            cv::choose_shrinkage_with(
+                &SHRINKAGE_CANDIDATES,
+                |o| {
+                    report(Stage::Candidate {
+                        index,
+                        of: SHRINKAGE_CANDIDATES.len(),
+                        shrinkage: o.shrinkage,
+                        by_visit,
+                    });
+                    index += 1;
+                    prepared.cross_validate(part, o)
+                },
+                &base,
+            )
+        }
     };
     // Leave-one-visit-out chooses when some candidate fits on every visit's complement (a
     // failing candidate scores 0); otherwise stratified k-fold does.
     let by_visit_choice = if let Some(part) = &visit_part {
         match part {
-            Ok(part) => choose(part).map_err(|e| e.to_string()),
+            Ok(part) => choose(part, true).map_err(|e| e.to_string()),
             Err(e) => Err(e.to_string()),
         }
         .and_then(|(l, scores)| {
@@ -268,7 +310,11 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
                 fallbacks.push(Fallback::KFoldSelection { reason });
             }
             let k = options.folds.max(2);
-            (choose(&strat_part)?, strat.clone(), ChosenBy::KFold(k))
+            (
+                choose(&strat_part, false)?,
+                strat.clone(),
+                ChosenBy::KFold(k),
+            )
         }
     };
     let chosen_by = if options.shrinkage.is_some() {
@@ -287,6 +333,7 @@ pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError
         FitOptions { shrinkage, ..base }
     };
     // The model itself on one thread while the cross-validations use the others.
+    report(Stage::Final);
     let (model, cv, leave_one_visit_out) = std::thread::scope(|scope| {
         let model = scope.spawn(|| Fitted::fit(x, y, classes, &opts));
         let cv = prepared.cross_validate(&strat_part, &opts);

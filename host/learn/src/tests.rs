@@ -898,6 +898,23 @@ fn two_visit_training_sets_fall_back_and_say_so() {
     };
     let t = train(&data, &options).expect("a two-visit set trains");
     assert_eq!(t.chosen_by, super::pipeline::ChosenBy::LeaveOneVisitOut);
+    // The progress a command shows: statistics, the six candidates by visit, the final fit.
+    let stages = |data: &super::collect::Dataset| {
+        let seen = std::cell::RefCell::new(Vec::new());
+        super::pipeline::train_reporting(data, &options, |s| seen.borrow_mut().push(s)).unwrap();
+        seen.into_inner()
+    };
+    let seen = stages(&data);
+    let n_candidates = super::pipeline::SHRINKAGE_CANDIDATES.len();
+    assert_eq!(seen.len(), n_candidates + 2, "{seen:?}");
+    assert_eq!(seen[0], super::pipeline::Stage::Statistics);
+    assert_eq!(seen[n_candidates + 1], super::pipeline::Stage::Final);
+    for (i, s) in seen[1..=n_candidates].iter().enumerate() {
+        assert!(
+            matches!(s, super::pipeline::Stage::Candidate { index, of, by_visit: true, .. } if *index == i && *of == n_candidates),
+            "{s:?}"
+        );
+    }
     assert_eq!(t.options.target, Target::Diagonal);
     assert!(t.options.shrinkage > 0.0);
     assert!(
@@ -926,6 +943,22 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         t.fallbacks
     );
     assert!(t.leave_one_visit_out.is_none());
+    // k-fold chose: its six candidates show, then the final fit.
+    let seen = stages(&data);
+    let by_kfold = seen
+        .iter()
+        .filter(|s| {
+            matches!(
+                s,
+                super::pipeline::Stage::Candidate {
+                    by_visit: false,
+                    ..
+                }
+            )
+        })
+        .count();
+    assert_eq!(by_kfold, n_candidates, "{seen:?}");
+    assert_eq!(seen.last(), Some(&super::pipeline::Stage::Final));
     assert_eq!(t.chosen_by, super::pipeline::ChosenBy::KFold(10));
     assert_eq!(t.chosen_by.to_string(), "chosen by stratified 10-fold");
     assert!(t.cv.accuracy() > 1.0 / classes as f64);

@@ -424,6 +424,14 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         output::check(png, &[data_arg, &args.out], force)?;
     }
     let folds = args.folds.unwrap_or(10);
+    // Each stage on one line that updates in place, with the time so far (stderr, and only
+    // on a terminal: scripts and --json see nothing of it).
+    let spinner = ProgressBar::new_spinner().with_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    spinner.set_message(format!("reading {}", data_arg.display()));
     let mut data = dataset::load(data_arg)?;
     let classes = data.centres.len();
     let kind = ModelKind::from(kind);
@@ -443,14 +451,43 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
                 .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
         ),
     };
-    let trained = pipeline::train(
+    spinner.set_message(format!(
+        "preparing {} observations x {} features",
+        data.x.nrows(),
+        data.x.ncols()
+    ));
+    let trained = pipeline::train_reporting(
         &data,
         &pipeline::TrainOptions {
             kind,
             shrinkage,
             folds,
         },
-    )?;
+        |stage| {
+            spinner.set_message(match stage {
+                pipeline::Stage::Statistics => "each fold's statistics".to_string(),
+                pipeline::Stage::Candidate {
+                    index,
+                    of,
+                    shrinkage,
+                    by_visit,
+                } => format!(
+                    "choosing the shrinkage: {shrinkage} ({} of {of}), {}",
+                    index + 1,
+                    if by_visit {
+                        "leave-one-visit-out".to_string()
+                    } else {
+                        format!("{folds}-fold")
+                    }
+                ),
+                pipeline::Stage::Final => format!(
+                    "fitting the model beside its {folds}-fold and leave-one-visit-out cross-validations"
+                ),
+            });
+        },
+    );
+    spinner.finish_and_clear();
+    let trained = trained?;
     let (model, opts, cv_conf, lovo) = (
         &trained.model,
         trained.options,

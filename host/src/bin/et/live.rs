@@ -101,7 +101,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
 #[cfg(not(feature = "viewer"))]
 pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
     anyhow::bail!(
-        "this et was built without the viewer; build it with the `viewer` feature:\n  cargo run --release -p et-host --features viewer -- view"
+        "this et was built without the viewer (--no-default-features); build it with its default features:\n  cargo run --release -p et-host --bin et -- view"
     )
 }
 

@@ -94,8 +94,9 @@ enum Command {
     /// potentials and the sheet's conductance drawn anew, docs/calibration.md) and starts with
     /// an untouched frame, which referenced models subtract. Each press varies as a hand's do
     /// (where in its target it lands, its size, the force wandering during the scan).
-    /// Writes CSV (Python: csv or numpy.loadtxt(comments="#"); MATLAB: readmatrix), or NumPy
-    /// arrays when --out ends in .npz.
+    /// Writes CSV ('#' lines, a row of column names, then the rows; Python:
+    /// python/et_dataset.py, whose docstring also gives the numpy recipe), or NumPy arrays
+    /// when --out ends in .npz (numpy.load).
     ///
     /// Examples:
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
@@ -216,8 +217,8 @@ enum Command {
     /// Open the viewer: the live image with its colour bar and ROI outline, the class grid
     /// with the recognised class lit and the position marker, protocol (or automatic),
     /// alpha and threshold, plots of frame rate, BVC and per-channel SNR, link health, and the
-    /// training wizard. Press the simulated sheet with the mouse. Needs the `viewer` feature:
-    ///   cargo run --release -p et-host --features viewer -- view
+    /// training wizard. Press the simulated sheet with the mouse. Needs the `viewer` feature
+    /// (on by default; a build with --no-default-features has no viewer).
     ///
     /// Examples:
     ///   et view                                   (the simulated 13 x 13 cm sheet)
