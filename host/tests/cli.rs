@@ -152,8 +152,22 @@ fn sim_writes_a_recording_that_python_reads() {
             .count()
     );
     assert!(touched >= 25);
-    // Its touches streamed for another program: positions to 0.1 mm, not 15 decimals.
-    let stream = et(&["stream", "--json", "--replay", out.to_str().unwrap()]);
+    // A swipe's touches streamed for another program (the finger lands after the 20 frames
+    // that make V_0): positions to 0.1 mm, not 15 decimals.
+    let swipe = dir.join("swipe.jsonl");
+    let run = et(&[
+        "sim",
+        "--scene",
+        root.join("sim/scenes/square-13cm-16-swipe.toml")
+            .to_str()
+            .unwrap(),
+        "--frames",
+        "50",
+        "--out",
+        swipe.to_str().unwrap(),
+    ]);
+    assert!(run.status.success());
+    let stream = et(&["stream", "--json", "--replay", swipe.to_str().unwrap()]);
     assert!(
         stream.status.success(),
         "{}",
