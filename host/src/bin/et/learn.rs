@@ -424,26 +424,6 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         output::check(png, &[data_arg, &args.out], force)?;
     }
     let folds = args.folds.unwrap_or(10);
-    // Each stage on one line that updates in place, with the time so far (stderr, and only
-    // on a terminal: scripts and --json see nothing of it).
-    let spinner = ProgressBar::new_spinner().with_style(
-        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    spinner.set_message(format!("reading {}", data_arg.display()));
-    let mut data = dataset::load(data_arg)?;
-    let classes = data.centres.len();
-    let kind = ModelKind::from(kind);
-    let referenced = !args.raw && data.has_untouched();
-    if !args.raw && !referenced {
-        eprintln!(
-            "note: {} has no untouched frames, training on raw frames",
-            data_arg.display()
-        );
-    }
-    pipeline::prepare(&mut data, referenced, args.keep)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", data_arg.display()))?;
     let shrinkage = match args.shrinkage.as_deref().unwrap_or("auto") {
         "auto" => None,
         v => Some(
@@ -451,11 +431,37 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
                 .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
         ),
     };
+    // Each stage on one line that updates in place, with the time so far (stderr, and only
+    // on a terminal: scripts and --json see nothing of it). Cleared on every way out.
+    let spinner = ProgressBar::new_spinner().with_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let cleared = |e: anyhow::Error| {
+        spinner.finish_and_clear();
+        e
+    };
+    spinner.set_message(format!("reading {}", data_arg.display()));
+    let mut data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
+    let classes = data.centres.len();
+    let kind = ModelKind::from(kind);
+    let referenced = !args.raw && data.has_untouched();
+    if !args.raw && !referenced {
+        spinner.suspend(|| {
+            eprintln!(
+                "note: {} has no untouched frames, training on raw frames",
+                data_arg.display()
+            );
+        });
+    }
     spinner.set_message(format!(
         "preparing {} observations x {} features",
         data.x.nrows(),
         data.x.ncols()
     ));
+    pipeline::prepare(&mut data, referenced, args.keep)
+        .map_err(|e| cleared(anyhow::anyhow!("{}: {e}", data_arg.display())))?;
     let trained = pipeline::train_reporting(
         &data,
         &pipeline::TrainOptions {
