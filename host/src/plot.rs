@@ -187,6 +187,79 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
     root.present().map_err(|e| fail(path, e))
 }
 
+/// The colour of `v` on a scale from `lo` to `hi`: [`diverging`] centred on zero when the
+/// scale spans zero (a signed quantity: white is no change), else [`viridis`].
+#[must_use]
+pub fn colour_map(v: f64, (lo, hi): (f64, f64)) -> RGBColor {
+    if lo < 0.0 && hi > 0.0 {
+        diverging(0.5 + 0.5 * v / lo.abs().max(hi))
+    } else {
+        viridis((v - lo) / if hi > lo { hi - lo } else { 1.0 })
+    }
+}
+
+/// Red-white-blue for signed values (t in [0, 1], 0.5 white: the value zero; outside is
+/// clamped): blue below zero, red above, as ColorBrewer's RdBu reversed.
+#[must_use]
+pub fn diverging(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (33.0, 102.0, 172.0),
+        (146.0, 197.0, 222.0),
+        (247.0, 247.0, 247.0),
+        (244.0, 165.0, 130.0),
+        (178.0, 24.0, 43.0),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.5
+    } * 4.0;
+    let i = (t.floor() as usize).min(3);
+    let f = t - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |x: f64, y: f64| (x + (y - x) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Round tick values between `lo` and `hi` (inclusive), about `about` of them, spaced 1, 2 or
+/// 5 times a power of ten; with the spacing. Empty for an empty or non-finite range.
+#[must_use]
+pub fn nice_ticks(lo: f64, hi: f64, about: usize) -> (Vec<f64>, f64) {
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return (Vec::new(), 0.0);
+    }
+    let raw = (hi - lo) / about.max(1) as f64;
+    let power = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * power)
+        .find(|s| *s >= 0.7 * raw)
+        .unwrap_or(10.0 * power);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    let ticks = (first..=last).map(|k| k as f64 * step).collect();
+    (ticks, step)
+}
+
+/// A tick label: as many decimals as the spacing needs (none for whole steps); zero is "0".
+#[must_use]
+pub fn tick_label(v: f64, step: f64) -> String {
+    let decimals = if step >= 1.0 || step <= 0.0 {
+        0
+    } else {
+        (-step.log10()).ceil() as usize
+    };
+    let s = format!("{v:.decimals$}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        "0".into()
+    } else {
+        s
+    }
+}
+
 /// Viridis, from five stops (t in [0, 1]; outside is clamped).
 #[must_use]
 pub fn viridis(t: f64) -> RGBColor {
@@ -280,7 +353,7 @@ pub fn heatmap_over(
         (0..cols).map(move |q| {
             let v = values[r * cols + q];
             let colour = if v.is_finite() {
-                viridis((v - lo) / span)
+                colour_map(v, (lo, hi))
             } else {
                 RGBColor(160, 160, 160)
             };
@@ -316,7 +389,7 @@ pub fn heatmap_over(
         );
         Rectangle::new(
             [(0.0, a), (1.0, z)],
-            viridis(i as f64 / (steps - 1) as f64).filled(),
+            colour_map(0.5 * (a + z), (lo, hi)).filled(),
         )
     }))
     .map_err(|e| fail(path, e))?;
@@ -411,5 +484,32 @@ mod tests {
         .unwrap_err();
         assert!(e.to_string().contains("no-such-dir"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn ticks_are_round_inside_the_range_and_labelled_without_minus_zero() {
+        let (t, step) = nice_ticks(-62.5, 62.5, 6);
+        assert_eq!(step, 20.0);
+        assert_eq!(t, [-60.0, -40.0, -20.0, 0.0, 20.0, 40.0, 60.0]);
+        let labels: Vec<String> = t.iter().map(|&v| tick_label(v, step)).collect();
+        assert_eq!(labels[3], "0");
+        assert_eq!(labels[0], "-60");
+        let (t, step) = nice_ticks(-0.37, 0.37, 4);
+        assert_eq!(step, 0.2);
+        assert!(t.iter().all(|v| v.abs() <= 0.37));
+        assert_eq!(tick_label(-1e-17, step), "0");
+        assert_eq!(tick_label(0.4, step), "0.4");
+        assert!(nice_ticks(1.0, 1.0, 5).0.is_empty());
+        assert!(nice_ticks(f64::NAN, 1.0, 5).0.is_empty());
+    }
+
+    #[test]
+    fn the_diverging_map_is_white_at_zero_and_opposite_at_the_ends() {
+        assert_eq!(diverging(0.5), RGBColor(247, 247, 247));
+        let (lo, hi) = (diverging(0.0), diverging(1.0));
+        assert!(lo.2 > lo.0, "blue below zero: {lo:?}");
+        assert!(hi.0 > hi.2, "red above zero: {hi:?}");
+        assert_eq!(diverging(-3.0), lo);
+        assert_eq!(diverging(f64::NAN), diverging(0.5));
     }
 }

@@ -35,6 +35,8 @@ mod plots;
 mod sheet_view;
 pub mod wizard;
 
+pub use sheet_view::Drawn;
+
 use wizard::Wizard;
 
 /// How the viewer starts.
@@ -50,9 +52,12 @@ pub struct Options {
     pub method: crate::live::Method,
     /// Simulate in real time (false: one frame per drawn frame, for tests).
     pub realtime: bool,
-    /// For documentation: once V_0 is taken, press the simulated sheet at (30, 25) mm, save
-    /// the window as this PNG a second later, and close.
+    /// For documentation: once V_0 is taken (and `press` is pressed), save the window as
+    /// this PNG and close.
     pub screenshot: Option<PathBuf>,
+    /// With `screenshot`: press the simulated sheet here (mm, a 7.5 mm fingertip at 30 kPa)
+    /// once V_0 is taken. None presses nothing (a scene's own touches, a recording's frames).
+    pub press: Option<[f64; 2]>,
 }
 
 /// Which kind of source the top bar is set to.
@@ -95,6 +100,12 @@ pub struct Viewer {
     pub wizard: Wizard,
     pressing: bool,
     shot_frames: u32,
+    /// Outline every pixel above f max (noise specks too), not only the found touches'.
+    pub show_specks: bool,
+    /// What the sheet view drew last.
+    pub drawn: Drawn,
+    /// The labels the small plots' axes drew last.
+    pub plot_axes: Vec<String>,
 }
 
 impl std::fmt::Debug for Viewer {
@@ -179,6 +190,9 @@ impl Viewer {
             wizard: Wizard::default(),
             pressing: false,
             shot_frames: 0,
+            show_specks: false,
+            drawn: Drawn::default(),
+            plot_axes: Vec::new(),
             options,
         };
         if let Some(config) = viewer.source.as_ref().and_then(Source::config) {
@@ -413,9 +427,11 @@ impl Viewer {
             return;
         }
         self.shot_frames += 1;
-        if self.shot_frames == 5 {
+        if self.shot_frames == 5
+            && let Some([x, y]) = self.options.press
+        {
             self.press(vec![Touch {
-                position: [0.03, 0.025],
+                position: [x * 1e-3, y * 1e-3],
                 radius: 0.0075,
                 pressure: 30e3,
                 footprint: Default::default(),

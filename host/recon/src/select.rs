@@ -171,6 +171,7 @@ mod tests {
             peak,
             peak_pixel: 0,
             z: None,
+            pixels: Vec::new(),
         }
     }
 

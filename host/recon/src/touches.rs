@@ -39,6 +39,9 @@ pub struct Region {
     pub peak_pixel: usize,
     /// Its largest value over its pixel's noise, where [`touches`] was given the noise.
     pub z: Option<f64>,
+    /// Its pixels (indices into the image), to draw its outline; not serialised.
+    #[serde(skip)]
+    pub pixels: Vec<usize>,
 }
 
 impl Region {
@@ -90,6 +93,7 @@ pub fn regions(grid: &PixelGrid, image: &[Option<f64>], f: f64) -> Vec<Region> {
             peak,
             peak_pixel,
             z: None,
+            pixels: members,
         });
     }
     out.sort_by(|a, b| b.peak.total_cmp(&a.peak));
@@ -213,6 +217,7 @@ pub fn touches(
                         Some(image[q]? / sd)
                     })
                     .reduce(f64::max),
+                pixels: m,
             }
         })
         .collect();

@@ -277,6 +277,9 @@ pub struct Output {
     /// The touches in the image (only when touched): regions above the threshold split at
     /// their saddles, each above the touch factor times its noise; strongest first.
     pub regions: Vec<Region>,
+    /// Of `regions`, those counted as touches (`TouchEvent::regions`): with half the strongest
+    /// peak and a quarter fingertip's area (`dynamic::significant`); strongest first.
+    pub touches: Vec<Region>,
     /// BVC = |V_m - V_0|, V.
     pub bvc: f64,
     /// The expected |V_m - V_0| of an untouched frame (from the reference frames), V.
@@ -416,6 +419,7 @@ impl Processor {
                 }),
                 image: vec![None; self.imager.grid.triangle.len()],
                 regions: Vec::new(),
+                touches: Vec::new(),
                 bvc: 0.0,
                 noise: 0.0,
                 event: None,
@@ -498,6 +502,8 @@ impl Processor {
             Vec::new()
         };
         let touched = !rois.is_empty();
+        let kept =
+            et_recon::select::significant(&rois, &et_recon::select::Settings::new([0.0, 0.0], 1.0));
         let event = touched.then(|| {
             let model = self
                 .classifier
@@ -514,11 +520,7 @@ impl Processor {
                 position_mm: model.map_or(image_position, |m| m.centre_mm),
                 intensity,
                 confidence: model.map(|m| m.posterior),
-                regions: et_recon::select::significant(
-                    &rois,
-                    &et_recon::select::Settings::new([0.0, 0.0], 1.0),
-                )
-                .len(),
+                regions: kept.len(),
             }
         });
         Ok(Output {
@@ -526,6 +528,7 @@ impl Processor {
             referencing: None,
             image,
             regions: rois,
+            touches: kept,
             bvc,
             noise: var_dv.iter().sum::<f64>().sqrt(),
             event,

@@ -97,7 +97,10 @@ impl Viewer {
             egui::Slider::new(&mut f, 0.01..=0.9).text("threshold f"),
         );
         s.threshold = (!auto).then_some(f);
-        ui.add(egui::Slider::new(&mut s.touch_factor, 2.0..=20.0).text("touch at z >"));
+        ui.add(egui::Slider::new(&mut s.touch_factor, 2.0..=20.0).text("touch at z >"))
+            .on_hover_text("a touch peaks this many times its pixels' noise (z) or more");
+        ui.checkbox(&mut self.show_specks, "outline every pixel >= f max")
+            .on_hover_text("noise specks too; off: only the found touches are outlined");
         if s != self.processor.settings() {
             self.processor.set_settings(s);
         }
@@ -115,11 +118,17 @@ impl Viewer {
             let mut at = r.position;
             let last = r.len().saturating_sub(1);
             if ui
-                .add(egui::Slider::new(&mut at, 0..=last).text("frame"))
+                .add(
+                    egui::Slider::new(&mut at, 0..=last)
+                        .show_value(false)
+                        .text("seek"),
+                )
                 .changed()
             {
                 r.seek(at);
             }
+            // The frame shown is the last one played (position counts those).
+            ui.label(format!("frame {} of {}", r.position, r.len()));
             ui.checkbox(&mut r.looping, "loop");
         }
         ui.separator();

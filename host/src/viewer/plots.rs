@@ -7,15 +7,16 @@ impl Viewer {
         ui.set_width(260.0);
         ui.heading("Signal");
         let rate: Vec<(f64, f64)> = self.monitor.rate.iter().copied().collect();
-        sparkline(ui, "frames/s", &rate);
+        let mut axes = sparkline(ui, "frames/s", &rate);
         let bvc: Vec<(f64, f64)> = self
             .monitor
             .bvc
             .iter()
             .map(|&(t, v)| (t, v * 1e3))
             .collect();
-        sparkline(ui, "BVC |V_m - V_0| (mV)", &bvc);
-        bars(ui, "SNR per channel (dB)", &self.monitor.snr_db);
+        axes.extend(sparkline(ui, "BVC |V_m - V_0| (mV)", &bvc));
+        axes.extend(bars(ui, "SNR per channel (dB)", &self.monitor.snr_db));
+        self.plot_axes = axes;
         ui.separator();
         ui.heading("Link health");
         let h: Health = self.source.as_ref().map(Source::health).unwrap_or_default();
@@ -55,33 +56,89 @@ impl Viewer {
     }
 }
 
-/// A plot's caption and its framed area, the full width and 60 points high.
-fn plot_area(ui: &mut egui::Ui, caption: &str) -> (Rect, egui::Painter) {
-    ui.label(caption);
-    let (rect, _) = ui.allocate_exact_size(vec2(ui.available_width(), 60.0), Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_stroke(
-        rect,
-        2.0,
-        Stroke::new(1.0, Color32::from_gray(90)),
-        StrokeKind::Inside,
-    );
-    (rect, painter)
+/// A plot: its caption, and its framed area (the full width, 60 points high) with room for
+/// the axis labels to its left and below.
+struct Plot {
+    rect: Rect,
+    painter: egui::Painter,
+    /// The labels drawn on the axes.
+    labels: Vec<String>,
 }
 
-/// A small line plot with its title and last value.
-fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
+impl Plot {
+    fn new(ui: &mut egui::Ui, caption: &str) -> Self {
+        ui.label(caption);
+        let (outer, _) = ui.allocate_exact_size(vec2(ui.available_width(), 78.0), Sense::hover());
+        let painter = ui.painter_at(outer);
+        let rect = Rect::from_min_max(outer.min + vec2(40.0, 2.0), outer.max - vec2(4.0, 16.0));
+        painter.rect_stroke(
+            rect,
+            2.0,
+            Stroke::new(1.0, Color32::from_gray(90)),
+            StrokeKind::Inside,
+        );
+        Self {
+            rect,
+            painter,
+            labels: Vec::new(),
+        }
+    }
+
+    /// A label at `at`, kept in `labels`.
+    fn label(&mut self, at: Pos2, anchor: Align2, text: String) {
+        self.painter.text(
+            at,
+            anchor,
+            &text,
+            FontId::proportional(10.0),
+            Color32::from_gray(170),
+        );
+        self.labels.push(text);
+    }
+
+    /// The y axis from `lo` (bottom) to `hi` (top): both ends labelled.
+    fn y_axis(&mut self, lo: f64, hi: f64) {
+        let step = crate::plot::nice_ticks(lo, hi, 4).1.max(f64::MIN_POSITIVE);
+        let (top, bottom) = (self.rect.min, self.rect.left_bottom());
+        self.label(
+            top - vec2(3.0, 0.0),
+            Align2::RIGHT_TOP,
+            crate::plot::tick_label(hi, step),
+        );
+        self.label(
+            bottom - vec2(3.0, 0.0),
+            Align2::RIGHT_BOTTOM,
+            crate::plot::tick_label(lo, step),
+        );
+    }
+
+    /// The x axis: a label under each end and the quantity in the middle.
+    fn x_axis(&mut self, left: String, middle: &str, right: String) {
+        let y = self.rect.max.y + 1.0;
+        self.label(pos2(self.rect.min.x, y), Align2::LEFT_TOP, left);
+        self.label(
+            pos2(self.rect.center().x, y),
+            Align2::CENTER_TOP,
+            middle.to_string(),
+        );
+        self.label(pos2(self.rect.max.x, y), Align2::RIGHT_TOP, right);
+    }
+}
+
+/// A small line plot of (time s, value) with its title and last value; time runs to now at
+/// the right.
+fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) -> Vec<String> {
     let last = points
         .last()
         .map_or(String::from("-"), |p| format!("{:.2}", p.1));
-    let (rect, painter) = plot_area(ui, &format!("{title}: {last}"));
+    let mut plot = Plot::new(ui, &format!("{title}: {last}"));
     let finite: Vec<(f64, f64)> = points
         .iter()
         .copied()
         .filter(|p| p.0.is_finite() && p.1.is_finite())
         .collect();
     if finite.len() < 2 {
-        return;
+        return plot.labels;
     }
     let (x0, x1) = (
         finite[0].0,
@@ -93,6 +150,7 @@ fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
             (a.min(p.1), b.max(p.1))
         });
     let (lo, hi) = (lo.min(0.0), hi.max(lo + 1e-12));
+    let rect = plot.rect;
     let line: Vec<Pos2> = finite
         .iter()
         .map(|p| {
@@ -102,19 +160,24 @@ fn sparkline(ui: &mut egui::Ui, title: &str, points: &[(f64, f64)]) {
             )
         })
         .collect();
-    painter.line(line, Stroke::new(1.5, Color32::from_rgb(90, 170, 255)));
+    plot.painter
+        .line(line, Stroke::new(1.5, Color32::from_rgb(90, 170, 255)));
+    plot.y_axis(lo, hi);
+    plot.x_axis(format!("-{:.0} s", x1 - x0), "time", "now".into());
+    plot.labels
 }
 
 /// Bars, one per channel, with the mean in the title.
-fn bars(ui: &mut egui::Ui, title: &str, values: &[Option<f64>]) {
+fn bars(ui: &mut egui::Ui, title: &str, values: &[Option<f64>]) -> Vec<String> {
     let finite: Vec<f64> = values.iter().flatten().copied().collect();
     let mean = if finite.is_empty() {
         f64::NAN
     } else {
         finite.iter().sum::<f64>() / finite.len() as f64
     };
-    let (rect, painter) = plot_area(ui, &format!("{title}: mean {mean:.1}"));
+    let mut plot = Plot::new(ui, &format!("{title}: mean {mean:.1}"));
     let hi = finite.iter().copied().fold(1.0f64, f64::max);
+    let rect = plot.rect;
     let w = rect.width() / values.len().max(1) as f32;
     for (i, v) in values.iter().enumerate() {
         let Some(v) = v else {
@@ -122,10 +185,15 @@ fn bars(ui: &mut egui::Ui, title: &str, values: &[Option<f64>]) {
         };
         let h = (v.max(0.0) / hi) as f32 * (rect.height() - 2.0);
         let x = rect.min.x + i as f32 * w;
-        painter.rect_filled(
+        plot.painter.rect_filled(
             Rect::from_min_max(pos2(x, rect.max.y - h), pos2(x + w.max(1.0), rect.max.y)),
             0.0,
             Color32::from_rgb(120, 200, 140),
         );
     }
+    if !values.is_empty() {
+        plot.y_axis(0.0, hi);
+        plot.x_axis("1".into(), "channel k", values.len().to_string());
+    }
+    plot.labels
 }

@@ -22,6 +22,7 @@ fn sim_options() -> Options {
         method: crate::live::Method::Gn,
         realtime: false,
         screenshot: None,
+        press: None,
     }
 }
 
@@ -245,6 +246,7 @@ fn replay_pauses_and_seeks() {
         method: crate::live::Method::Gn,
         realtime: false,
         screenshot: None,
+        press: None,
     });
     for _ in 0..5 {
         h.step();
@@ -263,10 +265,13 @@ fn replay_pauses_and_seeks() {
     }
     assert_eq!(position(&h), paused_at, "paused, yet frames came");
     // Seek with the slider (through accesskit, as a screen reader would).
-    h.get_by_role_and_label(egui::accesskit::Role::Slider, "frame")
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "seek")
         .set_value_accesskit(30.0);
     h.step();
     assert_eq!(position(&h), 30);
+    // The frame counter says where the replay is, out of how many.
+    h.step();
+    assert!(h.query_by_label("frame 30 of 40").is_some());
     h.get_by_label("Play").click();
     h.step();
     h.step();
@@ -373,4 +378,154 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
         assert_eq!(e.class, Some(c as u16), "{e:?}");
         assert!(h.query_by_label(&format!("class {c}")).is_some());
     }
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../sim/scenes")
+        .join(name)
+}
+
+/// Steps until the frame is a touch (at most `n` frames).
+fn until_touched(h: &mut Harness<'static, Viewer>, n: usize) -> crate::live::TouchEvent {
+    for _ in 0..n {
+        h.step();
+        if let Some(e) = h.state().last.as_ref().and_then(|o| o.event.clone()) {
+            // One more frame so that the view draws what this one found.
+            h.step();
+            return e;
+        }
+    }
+    panic!("no touch after {n} frames: {}", h.state().status);
+}
+
+#[test]
+fn the_sheet_is_drawn_in_mm_with_numbered_electrodes_a_labelled_colour_bar_and_plot_axes() {
+    let mut h = harness(sim_options());
+    settle(&mut h);
+    h.step();
+    let v = h.state();
+    let d = &v.drawn;
+    // The axes: round mm on both, zero among them (the sheet is centred on the origin), and
+    // every tick inside the image's extent.
+    let b = v.sheet.shape.bounds();
+    for (ticks, (lo, hi)) in [(&d.ticks_mm.0, (b[0], b[2])), (&d.ticks_mm.1, (b[1], b[3]))] {
+        assert!(ticks.len() >= 3, "{ticks:?}");
+        assert!(ticks.contains(&"0".to_string()), "{ticks:?}");
+        for t in ticks {
+            let mm: f64 = t.parse().unwrap();
+            assert_eq!(mm.fract(), 0.0, "{t}");
+            assert!(
+                mm >= lo * 1e3 - 5.0 && mm <= hi * 1e3 + 5.0,
+                "{t} outside {lo}..{hi} m"
+            );
+        }
+    }
+    // Every electrode, numbered from 0 as `et protocol` counts, on the outline.
+    let count = usize::from(v.sheet.electrodes.count);
+    assert_eq!(d.electrodes.len(), count);
+    for (k, (e, at)) in d.electrodes.iter().enumerate() {
+        assert_eq!(*e, k);
+        let off = v
+            .sheet
+            .shape
+            .distance_to_outline([at[0] * 1e-3, at[1] * 1e-3]);
+        assert!(off < 1e-6, "electrode {e} {off} m off the outline");
+    }
+    // The colour bar: captioned, ticks symmetric about a zero in the middle.
+    assert_eq!(d.colour_bar.0, "Δσ/σ0");
+    let ticks = &d.colour_bar.1;
+    assert!(
+        ticks.contains(&"0".to_string()) || ticks.contains(&"0.0".to_string()),
+        "{ticks:?}"
+    );
+    let values: Vec<f64> = ticks.iter().map(|t| t.parse().unwrap()).collect();
+    let mut mirrored: Vec<f64> = values.iter().map(|v| -v).collect();
+    mirrored.reverse();
+    assert_eq!(values, mirrored, "{ticks:?}");
+    // The small plots' axes: time to now, channels 1..K.
+    let axes = &v.plot_axes;
+    for label in ["time", "now", "channel k", "1"] {
+        assert!(axes.iter().any(|a| a == label), "{label} not in {axes:?}");
+    }
+    let k = v.last.as_ref().unwrap().frame.voltages.len();
+    assert!(axes.contains(&k.to_string()), "{k} not in {axes:?}");
+}
+
+#[test]
+fn two_touches_get_two_numbered_markers_and_outlines_and_specks_only_on_request() {
+    let mut h = harness(Options {
+        scene: Some(scene("disc-ref-two.toml")),
+        ..sim_options()
+    });
+    settle(&mut h);
+    until_touched(&mut h, 30);
+    let d = h.state().drawn.clone();
+    assert_eq!(d.truth, 2, "{d:?}");
+    assert_eq!(d.touches.len(), 2, "{d:?}");
+    assert_eq!(d.outlines, 2, "one outline per found touch: {d:?}");
+    assert!(!d.specks);
+    assert_eq!(
+        d.touches.iter().map(|t| t.0).collect::<Vec<_>>(),
+        [1, 2],
+        "numbered from the strongest"
+    );
+    // Each marker sits on a true touch (the scene's are 110 mm apart).
+    let truth = h
+        .state()
+        .last
+        .as_ref()
+        .unwrap()
+        .frame
+        .truth
+        .clone()
+        .unwrap();
+    for (n, at) in &d.touches {
+        let off = truth
+            .iter()
+            .map(|t| (t.position[0] * 1e3 - at[0]).hypot(t.position[1] * 1e3 - at[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            off < 15.0,
+            "touch {n} at {at:?} is {off:.1} mm from the truth"
+        );
+    }
+    // The panel agrees with the picture.
+    assert!(h.query_by_label("2 region(s)").is_some());
+    // The specks' outline on request.
+    h.get_by_label("outline every pixel >= f max").click();
+    h.step();
+    h.step();
+    assert!(h.state().show_specks);
+    assert!(h.state().drawn.specks);
+}
+
+#[test]
+fn a_screenshot_presses_only_where_asked() {
+    let shot = Some(std::env::temp_dir().join("et-never-written.png"));
+    // Asked: a press at (30, 25) mm shows there, with one outline and one marker.
+    let mut h = harness(Options {
+        screenshot: shot.clone(),
+        press: Some([30.0, 25.0]),
+        ..sim_options()
+    });
+    settle(&mut h);
+    until_touched(&mut h, 20);
+    let d = h.state().drawn.clone();
+    assert_eq!((d.touches.len(), d.outlines, d.truth), (1, 1, 1), "{d:?}");
+    let at = d.touches[0].1;
+    assert!((at[0] - 30.0).hypot(at[1] - 25.0) < 10.0, "{at:?}");
+    // Not asked: the untouched default sheet stays untouched.
+    let mut h = harness(Options {
+        screenshot: shot,
+        press: None,
+        ..sim_options()
+    });
+    settle(&mut h);
+    for _ in 0..20 {
+        h.step();
+    }
+    let d = &h.state().drawn;
+    assert!(h.state().last.as_ref().unwrap().event.is_none());
+    assert_eq!((d.touches.len(), d.outlines, d.truth), (0, 0, 0), "{d:?}");
 }

@@ -56,10 +56,31 @@ impl SourceArgs {
 pub(crate) struct ViewArgs {
     #[command(flatten)]
     source: SourceArgs,
-    /// For documentation: once V_0 is taken, press the simulated sheet at (30, 25) mm, save
-    /// the window as this PNG, and close.
+    /// For documentation: once V_0 is taken (and --press is pressed), save the window as
+    /// this PNG a second later, and close. Runs under Xvfb too:
+    /// `xvfb-run -a -s "-screen 0 1280x800x24" et view --screenshot view.png`.
     #[arg(long, value_name = "PNG")]
     screenshot: Option<PathBuf>,
+    /// With --screenshot: press the simulated sheet at X,Y mm (a 7.5 mm fingertip, 30 kPa)
+    /// once V_0 is taken. Without it nothing is pressed: a scene's own touches, or a
+    /// recording's frames, are what the picture shows.
+    #[arg(long, value_name = "X,Y", requires = "screenshot", value_parser = parse_point_mm)]
+    press: Option<[f64; 2]>,
+}
+
+/// "X,Y" in mm (finite numbers).
+fn parse_point_mm(s: &str) -> std::result::Result<[f64; 2], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y] = parts[..] else {
+        return Err(format!("'{s}': give the point as X,Y in mm, e.g. 30,25"));
+    };
+    let number = |v: &str| {
+        v.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("'{v}' is not a number of mm"))
+    };
+    Ok([number(x)?, number(y)?])
 }
 
 #[derive(Debug, clap::Args)]
@@ -87,6 +108,9 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
                 .collect();
         crate::output::check(png, &inputs, force)?;
     }
+    if args.press.is_some() && args.source.spec() != et_host::live::SourceSpec::Sim {
+        anyhow::bail!("--press presses the simulated sheet: drop --replay / --port, or --press");
+    }
     et_host::viewer::run(et_host::viewer::Options {
         scene: args.source.scene.clone(),
         source: args.source.spec(),
@@ -94,6 +118,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
         method: args.source.method,
         realtime: true,
         screenshot: args.screenshot.clone(),
+        press: args.press,
     })?;
     Ok(())
 }
