@@ -257,6 +257,7 @@ pub fn run(options: &Options) -> Result<Report> {
     page.push_str(&learning.markdown);
     page.push_str(&imaging.markdown);
     page.push_str(&sweep.markdown);
+    page.push_str(report::GLOSSARY);
     let index = out.join("index.md");
     // Last, and whole: an index.md exists only beside a complete report.
     crate::output::write(&index, |partial| {

@@ -12,7 +12,7 @@ mod learning;
 mod sheet;
 
 pub use learning::{confusion, error_map, error_vs_distance, predicted_vs_true};
-pub use sheet::sheet_image;
+pub use sheet::{SheetMarks, half_range, sheet_image};
 
 /// Why a plot could not be written.
 #[derive(Debug)]
@@ -127,8 +127,19 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
     fonts().map_err(|e| fail(path, e))?;
     let all = || series.iter().flat_map(|s| s.points.iter());
     let (x0, x1) = range(all().map(|p| p.0), false);
-    let nonneg = all().all(|p| !p.1.is_finite() || p.1 >= 0.0);
-    let (y0, y1) = range(all().map(|p| p.1), nonneg);
+    // From zero when the data come near it (the lowest non-negative value under half the
+    // highest), else fitted to the data.
+    let finite_y = || all().map(|p| p.1).filter(|v| v.is_finite());
+    let (lowest, highest) = finite_y().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    let from_zero = lowest >= 0.0 && lowest < 0.5 * highest;
+    let (y0, mut y1) = range(finite_y(), from_zero);
+    // Room at the top for a legend in an upper corner, so that it covers no point.
+    let labelled = series.iter().filter(|s| !s.label.is_empty()).count();
+    if labelled > 0 && labels.legend != Legend::LowerRight {
+        y1 += (y1 - y0) * (0.04 + 0.075 * labelled as f64);
+    }
     let root = BitMapBackend::new(path, (800, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(path, e))?;
     let mut c = ChartBuilder::on(&root)
@@ -141,6 +152,8 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
     c.configure_mesh()
         .x_desc(labels.x)
         .y_desc(labels.y)
+        .x_label_formatter(&axis_labels(x0, x1))
+        .y_label_formatter(&axis_labels(y0, y1))
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
         .draw()
@@ -300,7 +313,66 @@ pub fn heatmap(
         x: (0.0, cols as f64),
         y: (0.0, rows as f64),
     };
-    heatmap_over(path, labels, values, (rows, cols), extent, (lo, hi), unit)
+    heatmap_over(
+        path,
+        labels,
+        values,
+        (rows, cols),
+        extent,
+        (lo, hi),
+        unit,
+        &Overlay::default(),
+    )
+}
+
+/// What is drawn over a heat map, in its axes' units.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mark {
+    /// A polyline.
+    Line {
+        /// Its points.
+        points: Vec<(f64, f64)>,
+        /// Its colour.
+        colour: RGBColor,
+        /// Its width, pixels.
+        width: u32,
+    },
+    /// A cross with its label (a number) beside it.
+    Cross {
+        /// Its centre.
+        at: (f64, f64),
+        /// The label.
+        label: String,
+    },
+}
+
+/// Marks over a heat map and the line under it that says what they are.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overlay {
+    /// The marks.
+    pub marks: Vec<Mark>,
+    /// Under the x axis: what the marks are (empty: nothing).
+    pub key: String,
+}
+
+/// Labels for an axis spanning `lo..hi`: integers without decimals, others with as many as a
+/// tenth of the span needs and no trailing zeros ("0.05", "0.15", "96", "2000", never "-0").
+fn axis_labels(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let span = (hi - lo).abs();
+    let decimals = if span > 0.0 && span.is_finite() {
+        ((-(span / 10.0).log10()).ceil().max(0.0) as usize + 1).min(9)
+    } else {
+        1
+    };
+    move |v: &f64| {
+        let s = format!("{v:.decimals$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        if s == "-0" { "0".into() } else { s }
+    }
 }
 
 /// What a heat map's axes span: x from left to right edge, y from the top edge to the bottom
@@ -325,13 +397,24 @@ pub fn heatmap_over(
     extent: Extent,
     (lo, hi): (f64, f64),
     unit: &str,
+    overlay: &Overlay,
 ) -> Result<(), PlotError> {
     if values.len() != rows * cols || rows == 0 || cols == 0 {
         return Err(fail(path, "heat map table of the wrong length"));
     }
     fonts().map_err(|e| fail(path, e))?;
-    let root = BitMapBackend::new(path, (760, 640)).into_drawing_area();
+    let key_height = if overlay.key.is_empty() { 0 } else { 26 };
+    let root = BitMapBackend::new(path, (780, 640 + key_height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(path, e))?;
+    let (root, key) = root.split_vertically(640);
+    if !overlay.key.is_empty() {
+        key.draw(&Text::new(
+            overlay.key.clone(),
+            (66, 2),
+            ("sans-serif", 14).into_font().color(&BLACK),
+        ))
+        .map_err(|e| fail(path, e))?;
+    }
     let (main, bar) = root.split_horizontally(640);
     let mut c = ChartBuilder::on(&main)
         .caption(labels.title, ("sans-serif", 20))
@@ -344,6 +427,8 @@ pub fn heatmap_over(
         .disable_mesh()
         .x_desc(labels.x)
         .y_desc(labels.y)
+        .x_label_formatter(&axis_labels(extent.x.0, extent.x.1))
+        .y_label_formatter(&axis_labels(extent.y.0, extent.y.1))
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
         .draw()
@@ -366,6 +451,32 @@ pub fn heatmap_over(
         })
     }))
     .map_err(|e| fail(path, e))?;
+    for mark in &overlay.marks {
+        match mark {
+            Mark::Line {
+                points,
+                colour,
+                width,
+            } => c
+                .draw_series(std::iter::once(PathElement::new(
+                    points.clone(),
+                    colour.stroke_width(*width),
+                )))
+                .map(|_| ()),
+            Mark::Cross { at, label } => c
+                .draw_series(std::iter::once(
+                    EmptyElement::at(*at)
+                        + Cross::new((0, 0), 8, BLACK.stroke_width(3))
+                        + Text::new(
+                            label.clone(),
+                            (9, -24),
+                            ("sans-serif", 18).into_font().color(&BLACK),
+                        ),
+                ))
+                .map(|_| ()),
+        }
+        .map_err(|e| fail(path, e))?;
+    }
     let mut b = ChartBuilder::on(&bar)
         .margin_top(46)
         .margin_bottom(56)
@@ -373,9 +484,11 @@ pub fn heatmap_over(
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..1.0, lo..lo + span)
         .map_err(|e| fail(path, e))?;
+    let bar_label = axis_labels(lo, hi);
     b.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
+        .y_label_formatter(&bar_label)
         .y_desc(unit)
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 14))
@@ -446,7 +559,7 @@ mod tests {
         )
         .unwrap();
         let (w, _, px) = pixels(&map);
-        assert_eq!(w, 760);
+        assert_eq!(w, 780);
         // Both ends of the colour map and the grey of the non-finite cell appear.
         for colour in [viridis(0.0), viridis(1.0), RGBColor(160, 160, 160)] {
             assert!(
@@ -511,5 +624,17 @@ mod tests {
         assert!(hi.0 > hi.2, "red above zero: {hi:?}");
         assert_eq!(diverging(-3.0), lo);
         assert_eq!(diverging(f64::NAN), diverging(0.5));
+    }
+
+    #[test]
+    fn axis_labels_need_no_more_decimals_than_the_span_and_no_minus_zero() {
+        let seconds = axis_labels(0.0, 0.22);
+        let labels: Vec<String> = [0.0, 0.05, 0.1, 0.15, 0.2].iter().map(&seconds).collect();
+        assert_eq!(labels, ["0", "0.05", "0.1", "0.15", "0.2"]);
+        let triangles = axis_labels(1000.0, 16200.0);
+        assert_eq!(triangles(&2000.0), "2000");
+        let mm = axis_labels(-110.0, 110.0);
+        assert_eq!(mm(&-1e-13), "0");
+        assert_eq!(mm(&-20.0), "-20");
     }
 }

@@ -102,6 +102,8 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
     let mut one_touch = (0, 0);
     let mut two = Vec::new();
     let mut decisions = Vec::new();
+    // (scene, file, title, marks, image), drawn once every protocol has imaged each scene.
+    let mut pictures = Vec::new();
     for kind in ProtocolKind::NAMED {
         let base = scenes[0].1.scan_config()?;
         let config = ScanConfig {
@@ -133,16 +135,25 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 &settings,
             );
             let png = format!("imaging/{name}-{}.png", kind.name());
-            plot::sheet_image(
-                &imager,
-                &out.join(&png),
-                &format!(
-                    "{name}, {}: {} touches (f = {f})",
+            pictures.push((
+                *name,
+                png.clone(),
+                format!(
+                    "{name}, {}: {} found (f = {f})",
                     short(kind),
-                    counted.len()
+                    match counted.len() {
+                        1 => "1 touch".to_string(),
+                        n => format!("{n} touches"),
+                    }
                 ),
-                &image,
-            )?;
+                plot::SheetMarks {
+                    truth: frames.truth.clone(),
+                    found: counted.iter().map(|g| g.centroid).collect(),
+                    roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
+                    half_range: Some(plot::half_range(&imager, &image)),
+                },
+                image.clone(),
+            ));
             // Each touch: the nearest counted touch (its own PE and SE), and whether its
             // centroid lies within the touch's radius.
             let touch_matches = et_recon::match_touches(&imager.grid, &counted, &frames.truth);
@@ -200,6 +211,19 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             bar.inc(1);
         }
     }
+    // One colour scale per scene (a row of the report's table): its protocols' largest change.
+    for (scene, png, title, marks, image) in &pictures {
+        let row = pictures
+            .iter()
+            .filter(|p| p.0 == *scene)
+            .filter_map(|p| p.3.half_range)
+            .fold(0.0, f64::max);
+        let marks = plot::SheetMarks {
+            half_range: Some(row),
+            ..marks.clone()
+        };
+        plot::sheet_image(&imager, &out.join(png), title, image, &marks)?;
+    }
     steps.done(&bar, "imaged 5 scenes x 4 protocols");
     // Each single touch, imaged with the protocol docs/method.md §8 chose for it.
     let mut chosen = (0, 0);
@@ -249,6 +273,16 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         }
         let _ = writeln!(md);
     }
+    let _ = writeln!(
+        md,
+        "\nHow to read these images: colour is the conductivity change over the untouched \
+         sheet's (red: more conductive, where pressed; blue: less; white: no change). Each row \
+         (scene) shares one colour scale, symmetric about zero and set by the row's largest \
+         change, so the four protocols compare by colour. Green circle: the true touch; black \
+         cross numbered 1, 2: the touches found (1 the strongest); black outline: the ROI, the \
+         pixels at or above f times the image's maximum, on which PE and SE are measured. Grey \
+         is outside the sheet."
+    );
     let _ = writeln!(
         md,
         "\n| scene | protocol | alpha | touches | distance of each true touch from the nearest found | PE | SE | RNG | BVC |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"

@@ -475,7 +475,17 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
     );
     let _ = writeln!(
         md,
-        "![confusion](learning/confusion.png)\n\n![error against distance](learning/error-vs-distance.png)\n"
+        "![confusion](learning/confusion.png)\n\n\
+         How to read this: a row is the class pressed, a column the class the model answered \
+         (classes numbered row by row over the grid); each row's cells are shares of its \
+         observations and sum to 100 %. A perfect model lights only the diagonal; a lit cell \
+         beside it is a neighbouring target taken for the one pressed.\n\n\
+         ![error against distance](learning/error-vs-distance.png)\n\n\
+         How to read this: each blue dot is one next-day observation (they overlap: a right \
+         answer sits at 0 mm, a wrong one at the distance between the two class centres); the \
+         orange line is the mean of each 10 mm band of distance from the nearest electrode. \
+         The middle of the sheet, far from every electrode, is where the boundary voltages \
+         change least for a press.\n"
     );
     let _ = writeln!(
         md,
@@ -535,7 +545,14 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
     }
     let _ = writeln!(
         md,
-        "![features](learning/features.png)\n\n![model size](learning/model-size.png)\n"
+        "![features](learning/features.png)\n\n\
+         How to read this: the same QDA trained on the p features of largest Fisher ratio \
+         (the spread of the class means over the spread within the classes), tested on the \
+         next-day sessions; the vertical axis spans the data, not 0 to 100 %.\n\n\
+         ![model size](learning/model-size.png)\n\n\
+         How to read this: the blob `et export` writes for the board, by the number of features \
+         kept and the precision of its tables; a model fits the board when its line is under \
+         the flash slot's (it grows as 49 classes x p^2 / 2 numbers).\n"
     );
     md
 }

@@ -130,3 +130,32 @@ pub(super) fn civil_date(days: u64) -> String {
     let y = yoe + era * 400 + i64::from(m <= 2);
     format!("{y:04}-{m:02}-{d:02}")
 }
+
+/// The report's last section: every abbreviation and symbol it uses, with the section of
+/// docs/method.md that defines it.
+pub(super) const GLOSSARY: &str = "## Glossary\n\n\
+The method's sections are in `docs/method.md` of the et repository.\n\n\
+| term | meaning | method |\n\
+| --- | --- | --- |\n\
+| AD, PP, PP-PP, opposite | the protocols: current between adjacent electrodes (i, i+1); pseudo-polar, between electrodes one short of opposite (i, i + L/2 - 1); PP drive read on adjacent and on pseudo-polar pairs; between opposite electrodes (i, i + L/2) | §4 |\n\
+| K | measurements per frame (the length of V_m) | §3, §4 |\n\
+| V_m, V_0 | a frame of boundary voltages, V; the untouched sheet's frame (the mean of the reference frames) | §3 |\n\
+| BVC | boundary voltage change, the length of V_m - V_0, V: how much a touch changes the boundary | §7 |\n\
+| CEM | the complete electrode model: electrodes with width and contact resistance | §5 |\n\
+| NOSER | the prior that weighs each element by its own sensitivity, to the power s | §6.2 |\n\
+| s (`--s`) | NOSER's exponent: 0 weighs every element alike, 1 fully by its sensitivity; 0.5 here | §6.2 |\n\
+| alpha | the regularisation weight: larger gives smoother, quieter, blurrier images | §6.2, §6.3 |\n\
+| GCV | generalised cross-validation, the rule that picks alpha from the frame itself | §6.3 |\n\
+| ROI | region of interest: the pixels at or above f times the image's maximum | §6.5 |\n\
+| f | the ROI threshold, a share of the image's maximum (0.10 AD and opposite, 0.08 PP, 0.05 PP-PP) | §6.5 |\n\
+| z | a pixel's value over its noise (its standard deviation on the untouched sheet); a touch reaches z = 5 | §6.5 |\n\
+| PE | position error: from the true centre to the ROI's centroid, over the sheet's largest extent | §7 |\n\
+| SE | size error: the ROI's area less the touch's, over the sheet's area | §7 |\n\
+| RNG | ringing: the area of opposite-sign change over the area outside the ROI | §7 |\n\
+| xi | how near the centre a single touch must be for §8 to switch to PP (a share of d_c, the centre's distance to the outline) | §8 |\n\
+| QDA, LDA | quadratic and linear discriminant analysis: a Gaussian per class, with its own or one shared covariance | §9.2 |\n\
+| p | features: the measurements the classifier uses (reciprocity halves K) | §9.1 |\n\
+| shrinkage | lambda, the weight pulling each class's covariance toward a target, the pooled covariance or a multiple of the identity (0: none); chosen by cross-validation | §9.2 |\n\
+| S_num, S_sub, T | scans per visit, sub-section medians per scan, visits: S_num x S_sub x T observations per class | §9.4 |\n\
+| AEE | aggregated estimation error: the distances of the wrong decisions, summed and divided by the number of classes | §9.5 |\n\
+| Fisher ratio | a feature's spread of class means over its spread within the classes (`et train --keep` keeps the largest) | - |\n";

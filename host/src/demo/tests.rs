@@ -48,12 +48,26 @@ fn the_quick_demo_writes_a_complete_report() {
             Some(&s[start..start + s[start..].find(')')?])
         })
         .collect();
-    // 5 scenes x 4 protocols, 4 learning figures, 2 sweep figures.
-    assert_eq!(figures.len(), 26, "{figures:?}");
+    // 5 scenes x 4 protocols, 4 learning figures, 3 sweep figures.
+    assert_eq!(figures.len(), 27, "{figures:?}");
     for f in &figures {
         let img = image::open(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         assert!(img.width() >= 600 && img.height() >= 400, "{f}");
+        // Every image of the sheet shows the truth (green circles) and the ROI's outline
+        // (black), over a map white at zero.
+        if f.starts_with("imaging/") {
+            let px = img.to_rgb8();
+            for colour in [[0u8, 150, 80], [0, 0, 0], [247, 247, 247]] {
+                assert!(
+                    px.pixels().any(|p| p.0 == colour),
+                    "{f}: no pixel of {colour:?}"
+                );
+            }
+        }
     }
+    // Each figure is explained, and the report ends with its glossary.
+    assert!(page.matches("How to read this").count() >= 7, "{page}");
+    assert!(page.contains("## Glossary") && page.contains("| NOSER |"));
     let on_disk: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     // The file is the summary returned (floats printed to 17 digits may differ in the last).

@@ -1,13 +1,42 @@
-//! Images of the sheet: a conductivity change on the pixel grid, with its colour bar.
+//! Images of the sheet: a conductivity change on the pixel grid, with its colour bar, the
+//! true touches, the touches found and the region of interest.
 
 use std::path::Path;
 
 use et_recon::Imager;
+use plotters::style::RGBColor;
 
-use super::PlotError;
+use super::{Mark, Overlay, PlotError};
+
+/// What is drawn over a sheet image besides the image.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SheetMarks {
+    /// The true touches: centre (m) and radius (m), drawn as green circles.
+    pub truth: Vec<([f64; 2], f64)>,
+    /// The touches found, strongest first: their centroids (m), drawn as crosses numbered
+    /// from 1.
+    pub found: Vec<[f64; 2]>,
+    /// The region of interest's pixels (indices into the grid), outlined in black.
+    pub roi: Vec<usize>,
+    /// The colour scale's half-range in units of the background (None: this image's largest
+    /// |value|). Give several images the same to compare them by colour.
+    pub half_range: Option<f64>,
+}
+
+/// The largest |value| of `image` in units of the background (0 for an empty image).
+#[must_use]
+pub fn half_range(imager: &Imager, image: &[Option<f64>]) -> f64 {
+    image
+        .iter()
+        .flatten()
+        .map(|v| (v / imager.sigma0).abs())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max)
+}
 
 /// Writes `image` (one value per pixel of `imager`'s grid, None outside the sheet, S per
-/// square) as a PNG in units of the background, with a symmetric colour bar and axes in mm.
+/// square) as a PNG in units of the background, on a colour map centred on zero, with axes in
+/// mm and `marks` over it (a line under the axis says what they are).
 ///
 /// # Errors
 /// [`PlotError`] naming the file.
@@ -16,6 +45,7 @@ pub fn sheet_image(
     path: &Path,
     title: &str,
     image: &[Option<f64>],
+    marks: &SheetMarks,
 ) -> Result<(), PlotError> {
     let grid = &imager.grid;
     // Row 0 at the top.
@@ -24,11 +54,10 @@ pub fn sheet_image(
         .flat_map(|j| (0..grid.width).map(move |i| j * grid.width + i))
         .map(|p| image[p].map_or(f64::NAN, |v| v / imager.sigma0))
         .collect();
-    let hi = rows
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let hi = marks
+        .half_range
+        .unwrap_or_else(|| half_range(imager, image))
+        .max(f64::MIN_POSITIVE);
     let mm = |v: f64| v * 1e3;
     let extent = super::Extent {
         x: (
@@ -40,6 +69,69 @@ pub fn sheet_image(
             mm(grid.origin[1]),
         ),
     };
+    let mut overlay = Overlay::default();
+    // The ROI's outline: each edge between one of its pixels and one outside it.
+    let mut member = vec![false; grid.width * grid.height];
+    for &p in &marks.roi {
+        if let Some(m) = member.get_mut(p) {
+            *m = true;
+        }
+    }
+    let is = |i: isize, j: isize| {
+        i >= 0
+            && j >= 0
+            && (i as usize) < grid.width
+            && (j as usize) < grid.height
+            && member[j as usize * grid.width + i as usize]
+    };
+    let corner = |i: isize, j: isize| {
+        (
+            mm(grid.origin[0] + i as f64 * grid.size),
+            mm(grid.origin[1] + j as f64 * grid.size),
+        )
+    };
+    for j in 0..grid.height as isize {
+        for i in 0..grid.width as isize {
+            if !is(i, j) {
+                continue;
+            }
+            for (ni, nj, a, b) in [
+                (i - 1, j, corner(i, j), corner(i, j + 1)),
+                (i + 1, j, corner(i + 1, j), corner(i + 1, j + 1)),
+                (i, j - 1, corner(i, j), corner(i + 1, j)),
+                (i, j + 1, corner(i, j + 1), corner(i + 1, j + 1)),
+            ] {
+                if !is(ni, nj) {
+                    overlay.marks.push(Mark::Line {
+                        points: vec![a, b],
+                        colour: RGBColor(0, 0, 0),
+                        width: 2,
+                    });
+                }
+            }
+        }
+    }
+    for &(c, r) in &marks.truth {
+        overlay.marks.push(Mark::Line {
+            points: (0..=72)
+                .map(|k| {
+                    let a = f64::from(k) * std::f64::consts::TAU / 72.0;
+                    (mm(c[0] + r * a.cos()), mm(c[1] + r * a.sin()))
+                })
+                .collect(),
+            colour: RGBColor(0, 150, 80),
+            width: 3,
+        });
+    }
+    for (n, g) in marks.found.iter().enumerate() {
+        overlay.marks.push(Mark::Cross {
+            at: (mm(g[0]), mm(g[1])),
+            label: (n + 1).to_string(),
+        });
+    }
+    overlay.key = "green circle: true touch;  + numbered: touch found (1 strongest);  \
+                   black outline: ROI, pixels >= f max"
+        .into();
     super::heatmap_over(
         path,
         super::Labels {
@@ -51,7 +143,8 @@ pub fn sheet_image(
         &rows,
         (grid.height, grid.width),
         extent,
-        (-hi, hi.max(f64::MIN_POSITIVE)),
+        (-hi, hi),
         "conductivity change / background",
+        &overlay,
     )
 }

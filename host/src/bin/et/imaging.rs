@@ -454,13 +454,22 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             &imager,
             partial,
             &format!(
-                "{}: {} regions (f = {f})",
+                "{}: {} found (f = {f})",
                 args.scene
                     .file_name()
                     .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
-                rois.len()
+                match found.len() {
+                    1 => "1 touch".to_string(),
+                    n => format!("{n} touches"),
+                }
             ),
             &image,
+            &et_host::plot::SheetMarks {
+                truth: truth.clone(),
+                found: found.iter().map(|g| g.centroid).collect(),
+                roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
+                half_range: None,
+            },
         )
     })?;
     let summary = ReconstructSummary {
