@@ -2,16 +2,18 @@
 
     from et_dataset import load
     meta, names, rows = load("train.csv")
-    meta["config"]["protocol"], meta["centres_mm"][0]   # the '#' lines, parsed
-    names[:3], names[-5:]        # f0 f1 f2 ... label x_mm y_mm visit pressure_kpa
+    meta["config"]["protocol"], meta["centres_m"][0]    # the '#' lines, parsed
+    names[:3], names[-5:]        # f0 f1 f2 ... label x_m y_m visit pressure_pa
     rows[0][names.index("label")]
 
-The file: '#' lines first (format, scan configuration, feature indices, class centres and
-electrode positions in mm, each visit's untouched frame in volts, provenance), then one row of
-column names, then one row per observation. Feature columns f0.. are frame values in volts
-(V_m, not referenced: subtract the row's visit's untouched frame for V_m - V_0); label is the
-class (0-based, row-major over the grid); x_mm, y_mm where the finger really pressed; visit
-the 0-based session; pressure_kpa the press's pressure.
+Every number in the file is in SI units (volts, metres, pascals; its '# units:' line says
+so). The file: '#' lines first (format, units, scan configuration, feature indices, class
+centres and electrode positions in m, each visit's untouched frame in volts, provenance), then
+one row of column names, then one row per observation. Feature columns f0.. are frame values in
+volts (V_m, not referenced: subtract the row's visit's untouched frame for V_m - V_0); label is
+the class (0-based, row-major over the grid); x_m, y_m where the finger really pressed; visit
+the 0-based session; pressure_pa the press's pressure. Version 1 files (x_mm, y_mm,
+pressure_kpa, centres_mm, electrodes_mm) are read too, as written (mm, kPa).
 
 With numpy (the '#' lines and the names row are not numbers, so skip them first):
 
@@ -33,7 +35,7 @@ Run as a script for a summary:  python3 python/et_dataset.py train.csv
 import json
 import sys
 
-FORMAT = "# et-dataset 1"
+FORMATS = ("# et-dataset 2", "# et-dataset 1")
 
 
 def _numbers(text):
@@ -45,8 +47,8 @@ def load(path):
     meta = {}
     with open(path, encoding="utf-8-sig") as f:
         first = f.readline().rstrip("\r\n")
-        if first != FORMAT:
-            raise ValueError(f"{path}:1: not an et data set (expected {FORMAT!r})")
+        if first not in FORMATS:
+            raise ValueError(f"{path}:1: not an et data set (expected {FORMATS[0]!r})")
         number = 1
         for line in f:
             number += 1
@@ -58,7 +60,8 @@ def load(path):
                     meta[key] = json.loads(value)
                 elif key == "feature_index":
                     meta[key] = [int(v) for v in value.split()]
-                elif key in ("centres_mm", "electrodes_mm", "untouched"):
+                elif key in ("centres_m", "electrodes_m", "centres_mm", "electrodes_mm",
+                             "untouched"):
                     meta[key] = [_numbers(part) for part in value.split(";") if part.strip()]
                 else:
                     meta[key] = value

@@ -5,7 +5,11 @@
     header["K"], header["protocol"], header["columns"][0]   # what each column measures
     frames[0]["voltages"]                                  # V_m in volts, K values
     frames[0].get("touches")                               # the truth, for simulated frames
+    header.get("units")                                    # SI: m, Pa (recordings before it too)
     frames[0].get("invalid", [])                           # columns the board sent as NaN/inf
+
+Every number is SI (the header's "units" says so): voltages in V, the truth's x, y and radius in
+m and its pressure in Pa, t_us in microseconds.
 
 JSON has no NaN: a value the board sent as NaN or infinite is written as null; load() turns it
 into float("nan") and the frame lists its columns in "invalid".

@@ -4,7 +4,8 @@
 //! configuration, K, and the measurement table (injection and measurement electrodes of every
 //! column), so a recording can be read without et. Every further line is one [`Record`]: a
 //! frame's sequence number, time, flags and V_m in volts, and, for simulated frames, the
-//! truth (the touches that were on the sheet).
+//! truth (the touches that were on the sheet: centre and radius in metres, pressure in
+//! pascals). The header's `units` says so: every number in the file is SI.
 //!
 //! Why JSON Lines: Python reads it with the standard library (`python/et_recording.py`),
 //! MATLAB with `jsondecode` per line, pandas with `read_json(lines=True)`; and a line is
@@ -28,6 +29,14 @@ pub const FORMAT: &str = "et-recording";
 /// The format version this build writes and reads.
 pub const VERSION: u32 = 1;
 
+/// What a recording's numbers are in: SI, as every et file.
+pub const UNITS: &str =
+    "SI: voltages in V, touch positions and radii in m, pressure in Pa; t_us in microseconds";
+
+fn units() -> String {
+    UNITS.into()
+}
+
 /// One column of V_m: which injection and which measurement produced it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Column {
@@ -48,6 +57,10 @@ pub struct Header {
     pub format: String,
     /// [`VERSION`].
     pub version: u32,
+    /// What the numbers are in, for whoever opens the file ([`UNITS`]; files written before
+    /// it was added read as the same).
+    #[serde(default = "units")]
+    pub units: String,
     /// Where the frames come from (`sim:<scene file>`, `port:<path>`, ...).
     pub source: String,
     /// Electrode count L.
@@ -85,6 +98,7 @@ impl Header {
         Ok(Self {
             format: FORMAT.into(),
             version: VERSION,
+            units: UNITS.into(),
             source: source.into(),
             electrodes: config.electrodes,
             protocol: config.protocol.name().into(),
@@ -449,8 +463,20 @@ mod tests {
             "wrong K refused"
         );
         drop(w);
+        // The header says what the numbers are in.
+        let first = std::fs::read_to_string(&path).unwrap();
+        let first: serde_json::Value = serde_json::from_str(first.lines().next().unwrap()).unwrap();
+        assert!(
+            first["units"].as_str().unwrap().starts_with("SI"),
+            "{first}"
+        );
         let rec = read(&path).unwrap();
         assert_eq!(rec.header, header);
+        // A header written before `units` existed reads as the same.
+        let mut old = serde_json::to_value(&header).unwrap();
+        old.as_object_mut().unwrap().remove("units");
+        let old: Header = serde_json::from_value(old).unwrap();
+        assert_eq!(old, header);
         assert_eq!(rec.records.len(), 5);
         assert_eq!(rec.records[3].voltages, frame(3, 208).voltages.to_vec());
         assert_eq!(rec.records[0].touches, touches);

@@ -943,6 +943,17 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     assert_eq!(tr["features"], 192);
     assert!(tr["cv_mean_error_mm"].as_f64().unwrap() > 0.0);
     assert!(!tr["hyperparameters"].as_object().unwrap().is_empty());
+    // Printed to 4 significant digits (the model file keeps them all).
+    for (k, v) in tr["hyperparameters"].as_object().unwrap() {
+        let digits: String = format!("{:e}", v.as_f64().unwrap())
+            .split('e')
+            .next()
+            .unwrap()
+            .chars()
+            .filter(char::is_ascii_digit)
+            .collect();
+        assert!(digits.len() <= 4, "{k} = {v}");
+    }
     let plots = dir.join("plots");
     let ev = json(ok(eval(&auto, &["--plots", &s(&plots)])));
     for key in [

@@ -3,16 +3,21 @@
 //! [`load`] choose by the file's extension).
 //!
 //! ```text
-//! # et-dataset 1
+//! # et-dataset 2
+//! # units: SI: features and untouched in V, positions and centres in m, pressure in Pa
 //! # config: {"electrodes":16,"protocol":"Opposite",...}      (scan settings, JSON)
 //! # feature_index: 0 1 2 4 ...                                (frame index of each feature)
-//! # centres_mm: 9.3 9.3; 27.9 9.3; ...                        (class centres)
-//! # electrodes_mm: 4.1 0; 12.2 0; ...                         (optional: nominal electrode centres)
-//! # untouched: 0.0121 ...; 0.0119 ...                        (optional: each visit's untouched frame, features in volts)
+//! # centres_m: 0.0093 0.0093; 0.0279 0.0093; ...              (class centres)
+//! # electrodes_m: 0.0041 0; 0.0122 0; ...                     (optional: nominal electrode centres)
+//! # untouched: 0.0121 ...; 0.0119 ...                        (optional: each visit's untouched frame, V)
 //! # provenance: sim sheet 13 x 13 cm, seed 1, T=6 S_num=20 S_sub=20
-//! f0,f1,...,f95,label,x_mm,y_mm,visit,pressure_kpa            (pressure_kpa optional)
-//! 0.0123,...,3,27.1,8.8,0,23.5
+//! f0,f1,...,f95,label,x_m,y_m,visit,pressure_pa               (pressure_pa optional)
+//! 0.0123,...,3,0.0271,0.0088,0,23500
 //! ```
+//!
+//! Every number in the file is in SI units, as in the `.npz` and the recordings (mm and kPa
+//! are for what people read: plots, reports, printed positions). Version 1 files (`x_mm`,
+//! `y_mm`, `pressure_kpa`, `centres_mm`, `electrodes_mm`) are read as well, converted.
 //!
 //! Python: `numpy.loadtxt(path, delimiter=",", comments="#", skiprows=...)` or the `csv`
 //! module skipping `#` lines; MATLAB: `readmatrix(path, "CommentStyle", "#")`.
@@ -105,7 +110,8 @@ fn content(
 pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
     use std::fmt::Write as _;
     let mut s = String::new();
-    let _ = writeln!(s, "# et-dataset 1");
+    let _ = writeln!(s, "{FORMAT_2}");
+    let _ = writeln!(s, "{UNITS}");
     let _ = writeln!(
         s,
         "# config: {}",
@@ -116,16 +122,16 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
     let centres: Vec<String> = data
         .centres
         .iter()
-        .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
+        .map(|c| format!("{} {}", c[0], c[1]))
         .collect();
-    let _ = writeln!(s, "# centres_mm: {}", centres.join("; "));
+    let _ = writeln!(s, "# centres_m: {}", centres.join("; "));
     if !data.electrodes.is_empty() {
         let e: Vec<String> = data
             .electrodes
             .iter()
-            .map(|c| format!("{} {}", c[0] * 1e3, c[1] * 1e3))
+            .map(|c| format!("{} {}", c[0], c[1]))
             .collect();
-        let _ = writeln!(s, "# electrodes_mm: {}", e.join("; "));
+        let _ = writeln!(s, "# electrodes_m: {}", e.join("; "));
     }
     if data.baselines.nrows() > 0 {
         let frames: Vec<String> = data
@@ -137,10 +143,10 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
     }
     let _ = writeln!(s, "# provenance: {}", provenance.replace('\n', " "));
     let mut header: Vec<String> = (0..data.x.ncols()).map(|j| format!("f{j}")).collect();
-    header.extend(["label", "x_mm", "y_mm", "visit"].map(String::from));
+    header.extend(["label", "x_m", "y_m", "visit"].map(String::from));
     let with_pressure = data.pressure.len() == data.x.nrows();
     if with_pressure {
-        header.push("pressure_kpa".into());
+        header.push("pressure_pa".into());
     }
     let _ = writeln!(s, "{}", header.join(","));
     let rows = data
@@ -152,9 +158,9 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         for v in &features {
             let _ = write!(s, "{v},");
         }
-        let _ = write!(s, "{label},{},{},{visit}", p[0] * 1e3, p[1] * 1e3);
-        if let Some(kpa) = data.pressure.get(r).filter(|_| with_pressure) {
-            let _ = write!(s, ",{}", kpa * 1e-3);
+        let _ = write!(s, "{label},{},{},{visit}", p[0], p[1]);
+        if let Some(pa) = data.pressure.get(r).filter(|_| with_pressure) {
+            let _ = write!(s, ",{pa}");
         }
         s.push('\n');
     }
@@ -183,17 +189,26 @@ fn numbers(path: &Path, line: usize, field: &str, text: &str) -> Result<Vec<f64>
         .collect()
 }
 
-/// Parses `x y; x y; ...` in mm (finite numbers) into metres.
-fn points_mm(
+/// The first line of a dataset file: the format and its version.
+const FORMAT_2: &str = "# et-dataset 2";
+/// Version 1: positions in mm and pressure in kPa (still read).
+const FORMAT_1: &str = "# et-dataset 1";
+/// The second line: what the numbers are in.
+const UNITS: &str =
+    "# units: SI: features and untouched in V, positions and centres in m, pressure in Pa";
+
+/// Parses `x y; x y; ...` (finite numbers) into metres, `per_unit` metres to the file's unit.
+fn points(
     path: &Path,
     line: usize,
     field: &str,
     list: &str,
+    per_unit: f64,
 ) -> Result<Vec<[f64; 2]>, DatasetError> {
     list.split(';')
         .filter(|p| !p.trim().is_empty())
         .map(|pair| match numbers(path, line, field, pair)?[..] {
-            [x, y] => Ok([x * 1e-3, y * 1e-3]),
+            [x, y] => Ok([x * per_unit, y * per_unit]),
             _ => Err(content(
                 path,
                 line,
@@ -220,13 +235,13 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let mut electrodes = Vec::new();
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
-        Some((_, l)) if l.trim() == "# et-dataset 1" => {}
+        Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
         _ => {
             return Err(content(
                 path,
                 1,
                 None,
-                "not an et dataset (expected '# et-dataset 1')",
+                format!("not an et dataset (expected '{FORMAT_2}', or version 1)"),
             ));
         }
     }
@@ -253,10 +268,14 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
                 untouched.push(numbers(path, i + 1, "untouched", frame)?);
             }
+        } else if let Some(list) = meta.strip_prefix("electrodes_m:") {
+            electrodes = points(path, i + 1, "electrodes_m", list, 1.0)?;
+        } else if let Some(list) = meta.strip_prefix("centres_m:") {
+            centres = points(path, i + 1, "centres_m", list, 1.0)?;
         } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
-            electrodes = points_mm(path, i + 1, "electrodes_mm", list)?;
+            electrodes = points(path, i + 1, "electrodes_mm", list, 1e-3)?;
         } else if let Some(list) = meta.strip_prefix("centres_mm:") {
-            centres = points_mm(path, i + 1, "centres_mm", list)?;
+            centres = points(path, i + 1, "centres_mm", list, 1e-3)?;
         }
     }
     let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
@@ -269,8 +288,15 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             .position(|n| n == name)
             .ok_or_else(|| content(path, 0, Some(name.into()), "column missing"))
     };
-    let (label, xc, yc, visit) = (col("label")?, col("x_mm")?, col("y_mm")?, col("visit")?);
-    let pressure_col = table.names.iter().position(|n| n == "pressure_kpa");
+    // SI columns, or version 1's mm and kPa (metres and pascals per the file's unit).
+    let either = |si: &str, old: &str, per_unit: f64| match col(si) {
+        Ok(c) => Ok((c, 1.0)),
+        Err(e) => col(old).map(|c| (c, per_unit)).map_err(|_| e),
+    };
+    let (label, visit) = (col("label")?, col("visit")?);
+    let ((xc, x_unit), (yc, y_unit)) = (either("x_m", "x_mm", 1e-3)?, either("y_m", "y_mm", 1e-3)?);
+    let pressure = either("pressure_pa", "pressure_kpa", 1e3).ok();
+    let pressure_col = pressure.map(|p| p.0);
     let features: Vec<usize> = (0..table.names.len())
         .filter(|&c| ![label, xc, yc, visit].contains(&c) && Some(c) != pressure_col)
         .collect();
@@ -312,10 +338,10 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let positions = column(xc)?
         .into_iter()
         .zip(column(yc)?)
-        .map(|(x, y)| [x * 1e-3, y * 1e-3])
+        .map(|(x, y)| [x * x_unit, y * y_unit])
         .collect();
-    let pressure = match pressure_col {
-        Some(c) => column(c)?.into_iter().map(|kpa| kpa * 1e3).collect(),
+    let pressure = match pressure {
+        Some((c, unit)) => column(c)?.into_iter().map(|p| p * unit).collect(),
         None => Vec::new(),
     };
     Ok(Dataset {
@@ -337,7 +363,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
 ///
 /// | array | shape, type | content |
 /// | --- | --- | --- |
-/// | `format` | text | `et-dataset 1` |
+/// | `format` | text | `et-dataset 1` (the `.npz` was SI from the start) |
 /// | `x` | n x p, float64 | features, volts |
 /// | `label` | n, uint16 | class |
 /// | `position_m` | n x 2, float64 | where the finger pressed, m |

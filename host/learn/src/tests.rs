@@ -515,6 +515,79 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// The file says its units (SI), and a version 1 file (mm, kPa) of the same data reads
+    /// back to the same dataset.
+    #[test]
+    fn dataset_files_are_si_and_version_1_files_still_read() {
+        let dir = tmp("units");
+        let (si, old) = (dir.join("si.csv"), dir.join("v1.csv"));
+        let d = small();
+        save_csv(&d, &si, "units").unwrap();
+        let text = std::fs::read_to_string(&si).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("# et-dataset 2"));
+        assert!(lines.next().unwrap().starts_with("# units: SI"), "{text}");
+        let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
+        assert!(
+            header.ends_with("label,x_m,y_m,visit,pressure_pa"),
+            "{header}"
+        );
+        // The same file as version 1 wrote it: positions and centres in mm, pressure in kPa.
+        let scale = |list: &str| {
+            list.split(';')
+                .map(|pt| {
+                    pt.split_whitespace()
+                        .map(|v| (v.parse::<f64>().unwrap() * 1e3).to_string())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        let mut v1 = String::from("# et-dataset 1\n");
+        let mut in_table = false;
+        for line in text.lines().skip(1) {
+            if line.starts_with("# units:") {
+                continue;
+            } else if let Some(list) = line.strip_prefix("# centres_m: ") {
+                v1 += &format!("# centres_mm: {}\n", scale(list));
+            } else if let Some(list) = line.strip_prefix("# electrodes_m: ") {
+                v1 += &format!("# electrodes_mm: {}\n", scale(list));
+            } else if line.starts_with('#') {
+                v1 += &format!("{line}\n");
+            } else if !in_table {
+                in_table = true;
+                v1 += &line.replace("x_m,y_m,visit,pressure_pa", "x_mm,y_mm,visit,pressure_kpa");
+                v1.push('\n');
+            } else {
+                let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+                let n = cells.len();
+                for (c, factor) in [(n - 4, 1e3), (n - 3, 1e3), (n - 1, 1e-3)] {
+                    cells[c] = (cells[c].parse::<f64>().unwrap() * factor).to_string();
+                }
+                v1 += &cells.join(",");
+                v1.push('\n');
+            }
+        }
+        std::fs::write(&old, v1).unwrap();
+        let (a, b) = (load_csv(&si).unwrap(), load_csv(&old).unwrap());
+        assert_eq!((&a.x, &a.y, &a.visit), (&b.x, &b.y, &b.visit));
+        let close = |p: &[[f64; 2]], q: &[[f64; 2]]| {
+            p.len() == q.len()
+                && p.iter()
+                    .zip(q)
+                    .all(|(u, v)| (u[0] - v[0]).abs() < 1e-12 && (u[1] - v[1]).abs() < 1e-12)
+        };
+        assert!(close(&a.positions, &b.positions));
+        assert!(close(&a.centres, &b.centres) && close(&a.electrodes, &b.electrodes));
+        assert!(close(&a.centres, &d.centres), "SI in, SI out");
+        assert_eq!(a.pressure.len(), b.pressure.len());
+        for (p, q) in a.pressure.iter().zip(&b.pressure) {
+            assert!((p - q).abs() < 1e-9 * p.abs().max(1.0), "{p} Pa, {q} Pa");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn npz_datasets_round_trip_and_python_reads_them() {
         let dir = tmp("npz");

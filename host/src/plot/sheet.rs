@@ -129,7 +129,7 @@ pub fn sheet_image(
             label: (n + 1).to_string(),
         });
     }
-    overlay.key = "green circle: true touch;  + numbered: touch found (1 strongest);  \
+    overlay.key = "green circle: true touch;  x numbered: touch found (1 strongest);  \
                    black outline: ROI, pixels >= f max"
         .into();
     super::heatmap_over(

@@ -266,8 +266,8 @@ impl Viewer {
                         StrokeKind::Inside,
                     );
                     painter.text(
-                        cell.center_top() - vec2(0.0, 2.0),
-                        Align2::CENTER_BOTTOM,
+                        cell.center_bottom() + vec2(0.0, 2.0),
+                        Align2::CENTER_TOP,
                         format!("class {k}"),
                         small.clone(),
                         Color32::from_rgb(120, 60, 200),
@@ -395,6 +395,19 @@ impl Viewer {
             },
             "electrode",
         );
+        if self.processor.classifier.is_some() {
+            entry(
+                &|p: Pos2| {
+                    painter.rect_stroke(
+                        Rect::from_center_size(p, vec2(10.0, 10.0)),
+                        1.0,
+                        Stroke::new(2.0, Color32::from_rgb(120, 60, 200)),
+                        StrokeKind::Inside,
+                    );
+                },
+                "the model's class",
+            );
+        }
         self.drawn = drawn;
         // Pressing the simulated sheet with the mouse.
         if matches!(self.source, Some(Source::Sim(_))) {

@@ -104,9 +104,32 @@ fn console_is_interactive() -> bool {
 /// Formats hyperparameters as `name=value, ...`.
 fn hyper(h: &std::collections::BTreeMap<String, f64>) -> String {
     h.iter()
-        .map(|(k, v)| format!("{k}={v}"))
+        .map(|(k, v)| format!("{k}={}", significant(*v)))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// `v` to 4 significant digits, for printing (the model file keeps every digit).
+fn significant(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = 10f64.powi(3 - v.abs().log10().floor() as i32);
+    (v * scale).round() / scale
+}
+
+/// Every non-integer number of `v` to 4 significant digits (what `--json` prints).
+fn rounded(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Number(n) if n.is_f64() => n
+            .as_f64()
+            .and_then(|f| serde_json::Number::from_f64(significant(f)))
+            .map_or(Value::Null, Value::Number),
+        Value::Array(a) => Value::Array(a.into_iter().map(rounded).collect()),
+        Value::Object(o) => Value::Object(o.into_iter().map(|(k, v)| (k, rounded(v))).collect()),
+        other => other,
+    }
 }
 
 pub(crate) fn train(
@@ -139,7 +162,7 @@ pub(crate) fn train(
     if json {
         out!(
             "{}",
-            serde_json::to_string(&serde_json::json!({
+            serde_json::to_string(&rounded(serde_json::json!({
                 "out": out,
                 "method": model.method,
                 "hyperparameters": model.hyperparameters,
@@ -154,7 +177,7 @@ pub(crate) fn train(
                 "fit_seconds": model.fit_seconds,
                 "source": model.source,
                 "note": model.note,
-            }))?
+            })))?
         );
         return Ok(());
     }
