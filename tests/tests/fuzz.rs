@@ -294,6 +294,18 @@ label,x_mm,y_mm,visit,pressure_kpa,v0,v3,v7
 1,10.1,9.9,1,35,0.1,0.21,0.33
 ";
 
+/// The [`DATASET`] seed as this build writes it (version 2, SI).
+fn dataset_csv(dir: &std::path::Path) -> Vec<u8> {
+    let (old, new) = (
+        dir.join("seed-dataset-1.csv"),
+        dir.join("seed-dataset-2.csv"),
+    );
+    std::fs::write(&old, DATASET).unwrap();
+    let data = et_learn::dataset::load_csv(&old).unwrap();
+    et_learn::dataset::save_csv(&data, &new, "fuzz seed").unwrap();
+    std::fs::read(&new).unwrap()
+}
+
 /// The [`DATASET`] seed as an `.npz` archive.
 fn dataset_npz(dir: &std::path::Path) -> Vec<u8> {
     let (csv, npz) = (dir.join("seed-dataset.csv"), dir.join("seed-dataset.npz"));
@@ -315,6 +327,11 @@ fn parsers() -> Vec<Parser> {
         },
         Parser {
             name: "dataset CSV",
+            seeds: vec![dataset_csv(&dir)],
+            parse: |p| et_learn::dataset::load_csv(&p[0]).is_ok(),
+        },
+        Parser {
+            name: "dataset CSV, version 1",
             seeds: vec![DATASET.into()],
             parse: |p| et_learn::dataset::load_csv(&p[0]).is_ok(),
         },

@@ -71,12 +71,20 @@ impl From<ModelKind> for Kind {
     }
 }
 
+/// The model file's format version: 2 keeps the class centres in metres (`centres_m`), 1 kept
+/// them in mm (`centres_mm`).
+pub const VERSION: u32 = 2;
+
+/// What a model file's numbers are in (its `units` field).
+pub const UNITS: &str =
+    "SI: class centres in m; feature_mean and feature_scale in V, as the frames";
+
 /// A model file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModelFile {
     /// Always "et-model".
     pub format: String,
-    /// 1.
+    /// [`VERSION`] (version 1 files, centres in mm, are read and converted).
     pub version: u32,
     /// QDA or LDA (`"qda"` or `"lda"` in the file).
     pub kind: Kind,
@@ -89,7 +97,7 @@ pub struct ModelFile {
     pub referenced: bool,
     /// Frame index of each feature.
     pub feature_index: Vec<u16>,
-    /// Class centres, mm.
+    /// Class centres, mm (in the file: `centres_m`, metres, as every et file is SI).
     pub centres_mm: Vec<[f64; 2]>,
     /// Feature standardisation.
     pub feature_mean: Vec<f64>,
@@ -112,7 +120,7 @@ impl ModelFile {
     ) -> Self {
         Self {
             format: "et-model".into(),
-            version: 1,
+            version: VERSION,
             kind: model.kind.into(),
             shrinkage,
             config,
@@ -178,10 +186,23 @@ impl ModelFile {
     /// # Errors
     /// [`ModelFileError::Io`] naming the file.
     pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
-        let text = serde_json::to_string(self).map_err(|source| ModelFileError::Json {
+        let json = |source| ModelFileError::Json {
             path: path.into(),
             source,
-        })?;
+        };
+        let mut value = serde_json::to_value(self).map_err(json)?;
+        if let Some(o) = value.as_object_mut() {
+            o.remove("centres_mm");
+            let metres: Vec<[f64; 2]> = self
+                .centres_mm
+                .iter()
+                .map(|c| [c[0] * 1e-3, c[1] * 1e-3])
+                .collect();
+            o.insert("centres_m".into(), serde_json::json!(metres));
+            o.insert("units".into(), UNITS.into());
+            o.insert("version".into(), VERSION.into());
+        }
+        let text = serde_json::to_string(&value).map_err(json)?;
         std::fs::write(path, text).map_err(|source| ModelFileError::Io {
             path: path.into(),
             source,
@@ -191,19 +212,33 @@ impl ModelFile {
     /// Reads JSON.
     ///
     /// # Errors
-    /// [`ModelFileError`] naming the file (and for JSON, the line and column).
+    /// [`ModelFileError`] naming the file (and for a JSON syntax error, the line and column).
     pub fn load(path: &Path) -> Result<Self, ModelFileError> {
         let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
             path: path.into(),
             source,
         })?;
-        let m: ModelFile = serde_json::from_str(&text).map_err(|source| ModelFileError::Json {
+        let json = |source| ModelFileError::Json {
             path: path.into(),
             source,
-        })?;
-        if m.format != "et-model" || m.version != 1 {
+        };
+        let mut value: serde_json::Value = serde_json::from_str(&text).map_err(json)?;
+        let format = value.get("format").and_then(serde_json::Value::as_str);
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if format != Some("et-model") || !matches!(version, Some(1 | 2)) {
             return Err(ModelFileError::Format { path: path.into() });
         }
+        // Version 2 keeps the centres in metres; in memory they are mm.
+        if let Some(o) = value.as_object_mut()
+            && let Some(metres) = o.remove("centres_m")
+        {
+            let metres: Vec<[f64; 2]> = serde_json::from_value(metres).map_err(json)?;
+            let mm: Vec<[f64; 2]> = metres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
+            o.insert("centres_mm".into(), serde_json::json!(mm));
+            o.remove("units");
+        }
+        let mut m: ModelFile = serde_json::from_value(value).map_err(json)?;
+        m.version = VERSION;
         m.validate().map_err(|error| ModelFileError::Invalid {
             path: path.into(),
             error,
@@ -310,7 +345,7 @@ pub enum ModelFileError {
         /// The parser's error.
         source: serde_json::Error,
     },
-    /// JSON, but not `"format": "et-model"`, `"version": 1`.
+    /// JSON, but not `"format": "et-model"` of version 1 or 2.
     Format {
         /// The file.
         path: PathBuf,
@@ -330,7 +365,11 @@ impl std::fmt::Display for ModelFileError {
             ModelFileError::Io { path, source } => write!(f, "{}: {source}", path.display()),
             ModelFileError::Json { path, source } => write!(f, "{}: {source}", path.display()),
             ModelFileError::Format { path } => {
-                write!(f, "{}: not an et-model version 1 file", path.display())
+                write!(
+                    f,
+                    "{}: not an et-model file of version 1 or 2",
+                    path.display()
+                )
             }
             ModelFileError::Invalid { path, error } => write!(f, "{}: {error}", path.display()),
         }

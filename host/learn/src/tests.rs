@@ -927,7 +927,30 @@ fn a_corrupt_model_file_is_refused_on_load() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("m.json");
     file.save(&path).unwrap();
-    ModelFile::load(&path).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap(), file);
+    // On disk the centres are SI (metres) and the file says so.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["version"], 2);
+    assert!(v["units"].as_str().unwrap().starts_with("SI"));
+    assert_eq!(v["centres_m"][1][0].as_f64(), Some(0.01));
+    assert!(v.get("centres_mm").is_none(), "{text}");
+    // A version 1 file (centres in mm) reads to the same model.
+    let mut old = v.clone();
+    let o = old.as_object_mut().unwrap();
+    o.remove("centres_m");
+    o.remove("units");
+    o.insert("version".into(), 1.into());
+    o.insert("centres_mm".into(), serde_json::json!(file.centres_mm));
+    std::fs::write(&path, old.to_string()).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap(), file);
+    // Other versions are refused by name.
+    o.insert("version".into(), 3.into());
+    std::fs::write(&path, old.to_string()).unwrap();
+    assert!(matches!(
+        ModelFile::load(&path),
+        Err(ModelFileError::Format { .. })
+    ));
     let mut bad = file.clone();
     bad.classes[1].factor[0] = 1e308;
     bad.save(&path).unwrap();
