@@ -222,14 +222,15 @@ pub fn diverging(t: f64) -> RGBColor {
         (244.0, 165.0, 130.0),
         (178.0, 24.0, 43.0),
     ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.5
-    } * 4.0;
+    along(&STOPS, if t.is_finite() { t } else { 0.5 })
+}
+
+/// The colour at `t` in [0, 1] (clamped) along five evenly spaced stops, mixed linearly.
+fn along(stops: &[(f64, f64, f64); 5], t: f64) -> RGBColor {
+    let t = t.clamp(0.0, 1.0) * 4.0;
     let i = (t.floor() as usize).min(3);
     let f = t - i as f64;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let (a, b) = (stops[i], stops[i + 1]);
     let mix = |x: f64, y: f64| (x + (y - x) * f).round() as u8;
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
@@ -283,16 +284,7 @@ pub fn viridis(t: f64) -> RGBColor {
         (94.0, 201.0, 98.0),
         (253.0, 231.0, 37.0),
     ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    } * 4.0;
-    let i = (t.floor() as usize).min(3);
-    let f = t - i as f64;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
-    let mix = |x: f64, y: f64| (x + (y - x) * f) as u8;
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    along(&STOPS, if t.is_finite() { t } else { 0.0 })
 }
 
 /// A heat map of `values` (row-major, `rows` x `cols`, row 0 at the top) with a colour bar

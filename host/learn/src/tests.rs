@@ -945,7 +945,7 @@ fn a_corrupt_model_file_is_refused_on_load() {
     std::fs::write(&path, old.to_string()).unwrap();
     assert_eq!(ModelFile::load(&path).unwrap(), file);
     // Other versions are refused by name.
-    o.insert("version".into(), 3.into());
+    old["version"] = 3.into();
     std::fs::write(&path, old.to_string()).unwrap();
     assert!(matches!(
         ModelFile::load(&path),
