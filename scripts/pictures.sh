@@ -9,7 +9,7 @@
 #   report-two-pp-pp.png     et demo: two touches, PP-PP
 #   report-error-vs-distance.png   et demo: the model's error against distance
 #
-#   ./scripts/pictures.sh        # about 3 minutes after the release build
+#   ./scripts/pictures.sh        # 72 s after the release build (2-core development VM, 2026-11-25)
 #
 # The viewer runs in a real window under Xvfb (Debian's xvfb: `apt install xvfb`); each
 # screenshot is taken once V_0 is in and the press (if any) shows, then the window closes.

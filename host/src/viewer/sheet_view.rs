@@ -347,14 +347,8 @@ impl Viewer {
         let mut x = rect.min.x;
         let y = x_axis + 48.0;
         let legend_colour = Color32::from_gray(30);
-        painter.rect_filled(
-            Rect::from_min_max(
-                pos2(rect.min.x - 4.0, y - 10.0),
-                pos2(rect.max.x + 4.0, y + 10.0),
-            ),
-            3.0,
-            Color32::from_gray(247),
-        );
+        // The backdrop's slot, filled once the entries' width is known.
+        let backdrop = painter.add(egui::Shape::Noop);
         let cross = |p: Pos2| {
             let s = Stroke::new(2.0, marker);
             painter.line_segment([p - vec2(6.0, 0.0), p + vec2(6.0, 0.0)], s);
@@ -371,7 +365,7 @@ impl Viewer {
             );
             x = r.max.x + 18.0;
         };
-        entry(&cross, "found touch, numbered (1 = strongest)");
+        entry(&cross, "touch found (1 = strongest)");
         entry(
             &|p: Pos2| {
                 painter.rect_stroke(
@@ -405,9 +399,17 @@ impl Viewer {
                         StrokeKind::Inside,
                     );
                 },
-                "the model's class",
+                "model's class",
             );
         }
+        painter.set(
+            backdrop,
+            egui::Shape::rect_filled(
+                Rect::from_min_max(pos2(rect.min.x - 4.0, y - 10.0), pos2(x - 8.0, y + 10.0)),
+                3.0,
+                Color32::from_gray(247),
+            ),
+        );
         self.drawn = drawn;
         // Pressing the simulated sheet with the mouse.
         if matches!(self.source, Some(Source::Sim(_))) {
