@@ -12,7 +12,7 @@ mod learning;
 mod sheet;
 
 pub use learning::{confusion, error_map, error_vs_distance, predicted_vs_true};
-pub use sheet::{SheetMarks, half_range, sheet_image};
+pub use sheet::{SheetMarks, half_range, sheet_image, touches};
 
 /// Why a plot could not be written.
 #[derive(Debug)]
@@ -236,11 +236,12 @@ fn along(stops: &[(f64, f64, f64); 5], t: f64) -> RGBColor {
 }
 
 /// Round tick values between `lo` and `hi` (inclusive), about `about` of them, spaced 1, 2 or
-/// 5 times a power of ten; with the spacing. Empty for an empty or non-finite range.
+/// 5 times a power of ten (label them with [`axis_labels`]). Empty for an empty or non-finite
+/// range.
 #[must_use]
-pub fn nice_ticks(lo: f64, hi: f64, about: usize) -> (Vec<f64>, f64) {
+pub fn nice_ticks(lo: f64, hi: f64, about: usize) -> Vec<f64> {
     if !(lo.is_finite() && hi.is_finite() && hi > lo) {
-        return (Vec::new(), 0.0);
+        return Vec::new();
     }
     let raw = (hi - lo) / about.max(1) as f64;
     let power = 10f64.powf(raw.log10().floor());
@@ -251,27 +252,7 @@ pub fn nice_ticks(lo: f64, hi: f64, about: usize) -> (Vec<f64>, f64) {
         .unwrap_or(10.0 * power);
     let first = (lo / step).ceil() as i64;
     let last = (hi / step).floor() as i64;
-    let ticks = (first..=last).map(|k| k as f64 * step).collect();
-    (ticks, step)
-}
-
-/// A tick label: as many decimals as the spacing needs (none for whole steps); zero is "0".
-#[must_use]
-pub fn tick_label(v: f64, step: f64) -> String {
-    let decimals = if step >= 1.0 || step <= 0.0 {
-        0
-    } else {
-        (-step.log10()).ceil() as usize
-    };
-    let s = format!("{v:.decimals$}");
-    if s.trim_start_matches('-')
-        .chars()
-        .all(|c| c == '0' || c == '.')
-    {
-        "0".into()
-    } else {
-        s
-    }
+    (first..=last).map(|k| k as f64 * step).collect()
 }
 
 /// Viridis, from five stops (t in [0, 1]; outside is clamped).
@@ -349,7 +330,7 @@ pub struct Overlay {
 
 /// Labels for an axis spanning `lo..hi`: integers without decimals, others with as many as a
 /// tenth of the span needs and no trailing zeros ("0.05", "0.15", "96", "2000", never "-0").
-fn axis_labels(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+pub fn axis_labels(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
     let span = (hi - lo).abs();
     let decimals = if span > 0.0 && span.is_finite() {
         ((-(span / 10.0).log10()).ceil().max(0.0) as usize + 1).min(9)
@@ -593,19 +574,19 @@ mod tests {
 
     #[test]
     fn ticks_are_round_inside_the_range_and_labelled_without_minus_zero() {
-        let (t, step) = nice_ticks(-62.5, 62.5, 6);
-        assert_eq!(step, 20.0);
+        let t = nice_ticks(-62.5, 62.5, 6);
         assert_eq!(t, [-60.0, -40.0, -20.0, 0.0, 20.0, 40.0, 60.0]);
-        let labels: Vec<String> = t.iter().map(|&v| tick_label(v, step)).collect();
+        let label = axis_labels(-62.5, 62.5);
+        let labels: Vec<String> = t.iter().map(&label).collect();
         assert_eq!(labels[3], "0");
         assert_eq!(labels[0], "-60");
-        let (t, step) = nice_ticks(-0.37, 0.37, 4);
-        assert_eq!(step, 0.2);
-        assert!(t.iter().all(|v| v.abs() <= 0.37));
-        assert_eq!(tick_label(-1e-17, step), "0");
-        assert_eq!(tick_label(0.4, step), "0.4");
-        assert!(nice_ticks(1.0, 1.0, 5).0.is_empty());
-        assert!(nice_ticks(f64::NAN, 1.0, 5).0.is_empty());
+        let t = nice_ticks(-0.37, 0.37, 4);
+        assert_eq!(t, [-0.2, 0.0, 0.2]);
+        let label = axis_labels(-0.37, 0.37);
+        assert_eq!(label(&-1e-17), "0");
+        assert_eq!(label(&0.4), "0.4");
+        assert!(nice_ticks(1.0, 1.0, 5).is_empty());
+        assert!(nice_ticks(f64::NAN, 1.0, 5).is_empty());
     }
 
     #[test]

@@ -94,6 +94,36 @@ impl PixelGrid {
         ]
     }
 
+    /// The outline of the pixels `member` marks (one flag per pixel): each edge between a
+    /// member and a non-member (or the grid's edge), as its two ends, m. Drawn as line
+    /// segments it outlines a region of interest.
+    #[must_use]
+    pub fn outline(&self, member: &[bool]) -> Vec<[[f64; 2]; 2]> {
+        let is = |p: Option<usize>| p.is_some_and(|p| member.get(p).copied().unwrap_or(false));
+        let corner = |i: usize, j: usize| {
+            [
+                self.origin[0] + i as f64 * self.size,
+                self.origin[1] + j as f64 * self.size,
+            ]
+        };
+        let mut edges = Vec::new();
+        for p in (0..self.width * self.height).filter(|&p| is(Some(p))) {
+            let (i, j) = (p % self.width, p / self.width);
+            let [left, right, below, above] = self.neighbours(p);
+            for (next, a, b) in [
+                (left, corner(i, j), corner(i, j + 1)),
+                (right, corner(i + 1, j), corner(i + 1, j + 1)),
+                (below, corner(i, j), corner(i + 1, j)),
+                (above, corner(i, j + 1), corner(i + 1, j + 1)),
+            ] {
+                if !is(next) {
+                    edges.push([a, b]);
+                }
+            }
+        }
+        edges
+    }
+
     /// Mean of the centres of `pixels`, m ([0, 0] for none).
     #[must_use]
     pub fn centroid(&self, pixels: &[usize]) -> [f64; 2] {
@@ -266,4 +296,55 @@ fn product_f32(a: MatRef<'_, f32>, b: MatRef<'_, f32>) -> Mat<f32> {
     let mut out = Mat::<f32>::zeros(a.nrows(), b.ncols());
     matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(width: usize, height: usize) -> PixelGrid {
+        PixelGrid {
+            width,
+            height,
+            origin: [-0.01, 0.02],
+            size: 0.005,
+            triangle: vec![Some(0); width * height],
+        }
+    }
+
+    /// Total length of an outline, m.
+    fn length(edges: &[[[f64; 2]; 2]]) -> f64 {
+        edges
+            .iter()
+            .map(|[a, b]| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .sum()
+    }
+
+    #[test]
+    fn outlines_are_the_perimeter_of_the_marked_pixels() {
+        let g = grid(4, 3);
+        let mut member = vec![false; 12];
+        assert!(g.outline(&member).is_empty());
+        // One pixel inside: its four sides, around its own centre.
+        member[5] = true;
+        let one = g.outline(&member);
+        assert_eq!(one.len(), 4);
+        assert!((length(&one) - 4.0 * g.size).abs() < 1e-15);
+        let c = g.centre(5);
+        for [a, b] in &one {
+            let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+            let d = (mid[0] - c[0]).abs().max((mid[1] - c[1]).abs());
+            assert!((d - g.size / 2.0).abs() < 1e-15, "{mid:?} around {c:?}");
+        }
+        // Its right-hand neighbour joins it: the shared side is gone (a 2 x 1 rectangle).
+        member[6] = true;
+        let two = g.outline(&member);
+        assert_eq!(two.len(), 6);
+        assert!((length(&two) - 6.0 * g.size).abs() < 1e-15);
+        // The whole grid: its border, whatever the grid's edge (no neighbour) is.
+        let all = g.outline(&[true; 12]);
+        assert_eq!(all.len(), 2 * (4 + 3));
+        // Flags beyond the grid are ignored; a short list marks only what it covers.
+        assert_eq!(g.outline(&[true]).len(), 4);
+    }
 }

@@ -141,10 +141,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 format!(
                     "{name}, {}: {} found (f = {f})",
                     short(kind),
-                    match counted.len() {
-                        1 => "1 touch".to_string(),
-                        n => format!("{n} touches"),
-                    }
+                    plot::touches(counted.len())
                 ),
                 plot::SheetMarks {
                     truth: frames.truth.clone(),

@@ -23,6 +23,16 @@ pub struct SheetMarks {
     pub half_range: Option<f64>,
 }
 
+/// "1 touch", "2 touches": a count of touches for a title.
+#[must_use]
+pub fn touches(n: usize) -> String {
+    if n == 1 {
+        "1 touch".into()
+    } else {
+        format!("{n} touches")
+    }
+}
+
 /// The largest |value| of `image` in units of the background (0 for an empty image).
 #[must_use]
 pub fn half_range(imager: &Imager, image: &[Option<f64>]) -> f64 {
@@ -70,46 +80,19 @@ pub fn sheet_image(
         ),
     };
     let mut overlay = Overlay::default();
-    // The ROI's outline: each edge between one of its pixels and one outside it.
+    // The ROI's outline.
     let mut member = vec![false; grid.width * grid.height];
     for &p in &marks.roi {
         if let Some(m) = member.get_mut(p) {
             *m = true;
         }
     }
-    let is = |i: isize, j: isize| {
-        i >= 0
-            && j >= 0
-            && (i as usize) < grid.width
-            && (j as usize) < grid.height
-            && member[j as usize * grid.width + i as usize]
-    };
-    let corner = |i: isize, j: isize| {
-        (
-            mm(grid.origin[0] + i as f64 * grid.size),
-            mm(grid.origin[1] + j as f64 * grid.size),
-        )
-    };
-    for j in 0..grid.height as isize {
-        for i in 0..grid.width as isize {
-            if !is(i, j) {
-                continue;
-            }
-            for (ni, nj, a, b) in [
-                (i - 1, j, corner(i, j), corner(i, j + 1)),
-                (i + 1, j, corner(i + 1, j), corner(i + 1, j + 1)),
-                (i, j - 1, corner(i, j), corner(i + 1, j)),
-                (i, j + 1, corner(i, j + 1), corner(i + 1, j + 1)),
-            ] {
-                if !is(ni, nj) {
-                    overlay.marks.push(Mark::Line {
-                        points: vec![a, b],
-                        colour: RGBColor(0, 0, 0),
-                        width: 2,
-                    });
-                }
-            }
-        }
+    for [a, b] in grid.outline(&member) {
+        overlay.marks.push(Mark::Line {
+            points: vec![(mm(a[0]), mm(a[1])), (mm(b[0]), mm(b[1]))],
+            colour: RGBColor(0, 0, 0),
+            width: 2,
+        });
     }
     for &(c, r) in &marks.truth {
         overlay.marks.push(Mark::Line {

@@ -98,18 +98,10 @@ impl Plot {
 
     /// The y axis from `lo` (bottom) to `hi` (top): both ends labelled.
     fn y_axis(&mut self, lo: f64, hi: f64) {
-        let step = crate::plot::nice_ticks(lo, hi, 4).1.max(f64::MIN_POSITIVE);
+        let label = crate::plot::axis_labels(lo, hi);
         let (top, bottom) = (self.rect.min, self.rect.left_bottom());
-        self.label(
-            top - vec2(3.0, 0.0),
-            Align2::RIGHT_TOP,
-            crate::plot::tick_label(hi, step),
-        );
-        self.label(
-            bottom - vec2(3.0, 0.0),
-            Align2::RIGHT_BOTTOM,
-            crate::plot::tick_label(lo, step),
-        );
+        self.label(top - vec2(3.0, 0.0), Align2::RIGHT_TOP, label(&hi));
+        self.label(bottom - vec2(3.0, 0.0), Align2::RIGHT_BOTTOM, label(&lo));
     }
 
     /// The x axis: a label under each end and the quantity in the middle.

@@ -144,11 +144,12 @@ impl Viewer {
         let (y0, y1) = span_mm(grid.origin[1], grid.height);
         painter.line_segment([pos2(rect.min.x, x_axis), pos2(rect.max.x, x_axis)], axis);
         painter.line_segment([pos2(y_axis, rect.min.y), pos2(y_axis, rect.max.y)], axis);
-        let (ticks, step) = crate::plot::nice_ticks(x0, x1, 6);
+        let ticks = crate::plot::nice_ticks(x0, x1, 6);
+        let tick_label = crate::plot::axis_labels(x0, x1);
         for v in ticks {
             let x = to_screen([v * 1e-3, 0.0]).x;
             painter.line_segment([pos2(x, x_axis), pos2(x, x_axis + 4.0)], axis);
-            let label = crate::plot::tick_label(v, step);
+            let label = tick_label(&v);
             painter.text(
                 pos2(x, x_axis + 6.0),
                 Align2::CENTER_TOP,
@@ -165,11 +166,12 @@ impl Viewer {
             FontId::proportional(12.0),
             text_colour,
         );
-        let (ticks, step) = crate::plot::nice_ticks(y0, y1, 6);
+        let ticks = crate::plot::nice_ticks(y0, y1, 6);
+        let tick_label = crate::plot::axis_labels(y0, y1);
         for v in ticks {
             let y = to_screen([0.0, v * 1e-3]).y;
             painter.line_segment([pos2(y_axis - 4.0, y), pos2(y_axis, y)], axis);
-            let label = crate::plot::tick_label(v, step);
+            let label = tick_label(&v);
             painter.text(
                 pos2(y_axis - 6.0, y),
                 Align2::RIGHT_CENTER,
@@ -187,29 +189,9 @@ impl Viewer {
             text_colour,
         );
         // Outlines: each found touch's pixels; every pixel above f max on request.
-        let inside = |i: isize, j: isize| {
-            i >= 0 && j >= 0 && (i as usize) < grid.width && (j as usize) < grid.height
-        };
-        let pixel_outline = |member: &dyn Fn(usize) -> bool, stroke: Stroke| {
-            for j in 0..grid.height as isize {
-                for i in 0..grid.width as isize {
-                    if !member(j as usize * grid.width + i as usize) {
-                        continue;
-                    }
-                    let x0 = rect.min.x + i as f32 * scale;
-                    let y0 = rect.max.y - (j + 1) as f32 * scale;
-                    let (x1, y1) = (x0 + scale, y0 + scale);
-                    for (ni, nj, a, b) in [
-                        (i - 1, j, pos2(x0, y0), pos2(x0, y1)),
-                        (i + 1, j, pos2(x1, y0), pos2(x1, y1)),
-                        (i, j - 1, pos2(x0, y1), pos2(x1, y1)),
-                        (i, j + 1, pos2(x0, y0), pos2(x1, y0)),
-                    ] {
-                        if !(inside(ni, nj) && member(nj as usize * grid.width + ni as usize)) {
-                            painter.line_segment([a, b], stroke);
-                        }
-                    }
-                }
+        let pixel_outline = |member: &[bool], stroke: Stroke| {
+            for [a, b] in grid.outline(member) {
+                painter.line_segment([to_screen(a), to_screen(b)], stroke);
             }
         };
         let touched = self.last.as_ref().filter(|o| o.event.is_some());
@@ -218,7 +200,10 @@ impl Viewer {
         {
             let max = values.iter().flatten().copied().fold(0.0, f64::max);
             if max > 0.0 {
-                let above = |p: usize| values[p].is_some_and(|v| v >= out.threshold * max);
+                let above: Vec<bool> = values
+                    .iter()
+                    .map(|v| v.is_some_and(|v| v >= out.threshold * max))
+                    .collect();
                 pixel_outline(&above, Stroke::new(1.0, Color32::from_gray(170)));
                 drawn.specks = true;
             }
@@ -230,7 +215,7 @@ impl Viewer {
                 for &p in &region.pixels {
                     member[p] = true;
                 }
-                pixel_outline(&|p| member[p], Stroke::new(2.0, marker));
+                pixel_outline(&member, Stroke::new(2.0, marker));
                 drawn.outlines += 1;
                 let p = to_screen(region.centroid);
                 let s = Stroke::new(2.5, marker);
@@ -310,14 +295,15 @@ impl Viewer {
                 Color32::from_rgb(c.0, c.1, c.2),
             );
         }
-        let (ticks, step) = crate::plot::nice_ticks(-hi, hi, 4);
+        let ticks = crate::plot::nice_ticks(-hi, hi, 4);
+        let tick_label = crate::plot::axis_labels(-hi, hi);
         for v in ticks {
             let y = bar.center().y - (v / hi) as f32 * bar.height() / 2.0;
             painter.line_segment(
                 [pos2(bar.max.x, y), pos2(bar.max.x + 3.0, y)],
                 Stroke::new(1.0, text_colour),
             );
-            let label = crate::plot::tick_label(v, step);
+            let label = tick_label(&v);
             painter.text(
                 pos2(bar.max.x + 5.0, y),
                 Align2::LEFT_CENTER,

@@ -458,10 +458,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
                 args.scene
                     .file_name()
                     .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
-                match found.len() {
-                    1 => "1 touch".to_string(),
-                    n => format!("{n} touches"),
-                }
+                et_host::plot::touches(found.len())
             ),
             &image,
             &et_host::plot::SheetMarks {
