@@ -20,6 +20,8 @@
 //! - [`model`]: QDA / LDA evaluation over a validated model blob the caller owns (docs/method.md §9).
 //! - [`stats`]: SNR, MAD (docs/method.md §3) and BVC (docs/method.md §7).
 //! - [`board`]: the constants the board and the host share (baud rate, model slot size).
+//! - `sheet` (feature `std`): the physical sheet, outline, fabric and electrodes, as the
+//!   simulator and the reconstruction both describe it.
 //! - [`rng`]: the one seedable pseudo-random generator (simulator, QEMU sheet, folds, tests).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -36,6 +38,8 @@ pub mod precision;
 pub mod protocol;
 pub mod rng;
 pub mod scan;
+#[cfg(feature = "std")]
+pub mod sheet;
 pub mod stats;
 pub mod time;
 pub mod wire;

@@ -164,11 +164,11 @@ impl Viewer {
             SourceSpec::Port(p, _) => p.clone(),
             _ => String::new(),
         };
-        let b = sheet.shape.bounds();
+        let b = sheet.physical.shape.bounds();
         let centre = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
         let selector = Selector::new(DynamicSettings::new(
             centre,
-            sheet.shape.distance_to_outline(centre),
+            sheet.physical.shape.distance_to_outline(centre),
         ));
         let mut viewer = Self {
             status: format!(

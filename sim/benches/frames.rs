@@ -9,17 +9,17 @@ use et_core::rng::Rng;
 use et_core::{ScanConfig, Scanner};
 use et_sim::frontend::{FrontendSpec, SimFrontend};
 use et_sim::scene::Scene;
-use et_sim::sheet::Sheet;
+use et_sim::sheet::SimulatedSheet;
 use et_sim::touch::Touch;
 
 fn main() {
     divan::main();
 }
 
-static SHEET: LazyLock<Arc<Sheet>> = LazyLock::new(|| {
+static SHEET: LazyLock<Arc<SimulatedSheet>> = LazyLock::new(|| {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/square-13cm-16.toml");
     let scene = Scene::load(std::path::Path::new(path)).expect("default scene");
-    Arc::new(Sheet::new(&scene.sheet, &[]).expect("sheet"))
+    Arc::new(SimulatedSheet::new(&scene.sheet, &[]).expect("sheet"))
 });
 
 fn frontend() -> SimFrontend {

@@ -20,7 +20,7 @@ use et_sim::calibration::{
     MAD_V, SNR_DB, fit_frame_layer, fit_set_layer, frame_snr, replaced_sheets, set_mad, sheet_spec,
 };
 use et_sim::frontend::{FrontendSpec, SetSpread};
-use et_sim::sheet::Sheet;
+use et_sim::sheet::SimulatedSheet;
 
 const FRAMES: usize = 400;
 const SETS: usize = 120;
@@ -38,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => et_sim::frontend::CALIBRATION_MOVEMENT_M,
     };
     let spec = sheet_spec();
-    let sheet = Arc::new(Sheet::new(&spec, &[])?);
+    let sheet = Arc::new(SimulatedSheet::new(&spec, &[])?);
     let defaults = FrontendSpec::default();
     let sets = replaced_sheets(&spec, movement, SETS, 5)?;
     let show = |name: &str, fe: FrontendSpec| -> Result<(), Box<dyn std::error::Error>> {

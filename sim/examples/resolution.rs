@@ -7,21 +7,16 @@
 use std::time::Instant;
 
 use et_core::protocol::{Protocol, ProtocolKind};
-use et_sim::sheet::{
-    ElectrodeSpec, Sheet, SheetSpec, Source, build_network, direct_transfer, frame,
-};
+use et_sim::sheet::{SheetSpec, SimulatedSheet, Source, build_network, direct_transfer, frame};
 use et_sim::touch::{Piezo, Touch};
 
 fn spec(h: Option<f64>) -> SheetSpec {
-    SheetSpec {
-        electrodes: ElectrodeSpec {
-            count: 16,
-            width: 0.0052,
-            ..ElectrodeSpec::default()
-        },
+    let mut spec = SheetSpec {
         resolution: h,
         ..SheetSpec::rectangle(0.13, 0.13, 16)
-    }
+    };
+    spec.physical.electrodes.width = 0.0052;
+    spec
 }
 
 fn rel(a: &[f64], b: &[f64]) -> f64 {
@@ -60,7 +55,7 @@ fn main() {
         };
         let ((v, dv), (v_fine, dv_fine)) = (frames(h), frames(h / 2.0));
         let t = Instant::now();
-        let sheet = Sheet::new(&spec(Some(h)), &[]).expect("sheet");
+        let sheet = SimulatedSheet::new(&spec(Some(h)), &[]).expect("sheet");
         let build = t.elapsed().as_secs_f64();
         let t = Instant::now();
         for _ in 0..100 {

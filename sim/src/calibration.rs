@@ -13,7 +13,7 @@ use et_core::rng::Rng;
 use et_core::stats::{mad, snr};
 
 use crate::frontend::{CALIBRATION_GAIN, FrontendSpec, SetSpread, SimError, SimFrontend};
-use crate::sheet::{Sheet, SheetError, SheetSpec};
+use crate::sheet::{SheetError, SheetSpec, SimulatedSheet};
 
 /// The reference's frame-to-frame SNR, dB, at 32 uA and 10 uA.
 pub const SNR_DB: [(u32, f64); 2] = [(32_000, 55.0), (10_000, 49.0)];
@@ -104,7 +104,7 @@ fn frames_of(
 /// # Errors
 /// [`CalibrationError`] for a spec the simulator refuses or fewer than 2 frames.
 pub fn frame_snr(
-    sheet: &Arc<Sheet>,
+    sheet: &Arc<SimulatedSheet>,
     spec: FrontendSpec,
     current_na: u32,
     frames: usize,
@@ -128,18 +128,18 @@ pub fn replaced_sheets(
     movement: f64,
     count: usize,
     seed: u64,
-) -> Result<Vec<Arc<Sheet>>, SheetError> {
+) -> Result<Vec<Arc<SimulatedSheet>>, SheetError> {
     if movement == 0.0 {
-        let sheet = Arc::new(Sheet::new(spec, &[])?);
+        let sheet = Arc::new(SimulatedSheet::new(spec, &[])?);
         return Ok(vec![sheet; count]);
     }
     let mut rng = Rng::new(seed);
     (0..count)
         .map(|_| {
-            let offsets: Vec<f64> = (0..spec.electrodes.count)
+            let offsets: Vec<f64> = (0..spec.physical.electrodes.count)
                 .map(|_| movement * rng.normal())
                 .collect();
-            Sheet::new(spec, &offsets).map(Arc::new)
+            SimulatedSheet::new(spec, &offsets).map(Arc::new)
         })
         .collect()
 }
@@ -152,7 +152,7 @@ pub fn replaced_sheets(
 /// # Errors
 /// [`CalibrationError`] for a spec the simulator refuses or fewer than 2 sets.
 pub fn set_mad(
-    sets: &[Arc<Sheet>],
+    sets: &[Arc<SimulatedSheet>],
     spec: FrontendSpec,
     current_na: u32,
     frames_per_set: usize,
@@ -205,7 +205,7 @@ fn bisect(
 /// # Errors
 /// [`CalibrationError`] as [`frame_snr`].
 pub fn fit_frame_layer(
-    sheet: &Arc<Sheet>,
+    sheet: &Arc<SimulatedSheet>,
     base: FrontendSpec,
     frames: usize,
 ) -> Result<FrontendSpec, CalibrationError> {
@@ -237,7 +237,7 @@ pub fn fit_frame_layer(
 /// # Errors
 /// [`CalibrationError`] as [`set_mad`].
 pub fn fit_set_layer(
-    sets: &[Arc<Sheet>],
+    sets: &[Arc<SimulatedSheet>],
     base: FrontendSpec,
     frames_per_set: usize,
 ) -> Result<FrontendSpec, CalibrationError> {

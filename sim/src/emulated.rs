@@ -12,7 +12,7 @@ use et_core::protocol::Protocol;
 
 use crate::network::Transfer;
 use crate::scene::{Scene, SceneError};
-use crate::sheet::{Sheet, frame};
+use crate::sheet::{SimulatedSheet, frame};
 use crate::touch::Touch;
 
 /// The default scene's text (the sheet of the QEMU image).
@@ -40,7 +40,7 @@ pub fn states() -> Vec<Vec<Touch>> {
 /// The QEMU sheet: its network and the transfer impedance of every state.
 #[derive(Debug)]
 pub struct QemuSheet {
-    sheet: Sheet,
+    sheet: SimulatedSheet,
     /// Per state.
     pub transfers: Vec<Transfer>,
 }
@@ -52,7 +52,7 @@ impl QemuSheet {
     /// [`SceneError`] if the scene or a network solve fails.
     pub fn new() -> Result<Self, SceneError> {
         let scene = Scene::parse(SCENE, "square-13cm-16.toml")?;
-        let sheet = Sheet::new(&scene.sheet, &[])?;
+        let sheet = SimulatedSheet::new(&scene.sheet, &[])?;
         let transfers = states()
             .iter()
             .map(|touches| sheet.transfer(touches))

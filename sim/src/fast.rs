@@ -160,8 +160,8 @@ impl FastNetwork {
 mod tests {
     use super::*;
     use crate::network::{Grid, place_contacts};
-    use crate::shape::Shape;
     use crate::touch::{Inclusion, edge_multipliers};
+    use et_core::sheet::shape::Shape;
 
     const RS: f64 = 30e3;
 

@@ -16,7 +16,7 @@
 //!   [`SimFrontend::set_state`]): each electrode's DC junction potential (clip on PPy) and the
 //!   sheet's conductance (temperature, humidity) differ from one set to the next. Electrode
 //!   re-placement, were the sheet taken off between sets, is the sheet's
-//!   (`et_sim::sheet::Sheet::new`'s offsets); the calibration keeps it mounted.
+//!   (`et_sim::sheet::SimulatedSheet::new`'s offsets); the calibration keeps it mounted.
 //!
 //! [`SimFrontend::fast_frame`] gives whole frames with the same statistics without the
 //! settling transient: per step the settled value, the current jitter, the mains value
@@ -32,7 +32,7 @@ use et_core::protocol::{Injection, Measurement, Protocol};
 use serde::{Deserialize, Serialize};
 
 use crate::network::Transfer;
-use crate::sheet::{Sheet, SheetError, Source};
+use crate::sheet::{SheetError, SimulatedSheet, Source};
 use crate::touch::Touch;
 use et_core::rng::Rng;
 
@@ -281,7 +281,7 @@ impl std::error::Error for SimError {}
 /// The simulated sensor: a sheet in some touch state behind the acquisition chain.
 #[derive(Debug)]
 pub struct SimFrontend {
-    sheet: Arc<Sheet>,
+    sheet: Arc<SimulatedSheet>,
     spec: FrontendSpec,
     transfer: Transfer,
     rng: Rng,
@@ -342,7 +342,11 @@ impl SimFrontend {
     ///
     /// # Errors
     /// [`SheetError::Field`] for an invalid spec.
-    pub fn new(sheet: Arc<Sheet>, spec: FrontendSpec, seed: u64) -> Result<Self, SheetError> {
+    pub fn new(
+        sheet: Arc<SimulatedSheet>,
+        spec: FrontendSpec,
+        seed: u64,
+    ) -> Result<Self, SheetError> {
         spec.validate()?;
         let transfer = sheet.transfer(&[])?;
         let untouched = transfer.clone();
@@ -474,7 +478,7 @@ impl SimFrontend {
 
     /// The sheet.
     #[must_use]
-    pub fn sheet(&self) -> &Arc<Sheet> {
+    pub fn sheet(&self) -> &Arc<SimulatedSheet> {
         &self.sheet
     }
 

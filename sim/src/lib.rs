@@ -28,7 +28,6 @@ pub mod fast;
 pub mod frontend;
 pub mod network;
 pub mod scene;
-pub mod shape;
 pub mod sheet;
 pub mod still;
 pub mod touch;

@@ -16,7 +16,7 @@
 //! commit the inverse crime.
 
 use crate::band::{BandCholesky, BandMatrix};
-use crate::shape::Shape;
+use et_core::sheet::shape::Shape;
 
 /// A resistor between two nodes.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -20,7 +20,7 @@ use et_core::{Micros, ScanConfig, Scanner};
 use serde::{Deserialize, Serialize};
 
 use crate::frontend::{FrontendSpec, SimError, SimFrontend};
-use crate::sheet::{Sheet, SheetError, SheetSpec};
+use crate::sheet::{SheetError, SheetSpec, SimulatedSheet};
 use crate::touch::{Footprint, Touch};
 use et_core::rng::Rng;
 
@@ -433,7 +433,7 @@ impl Scene {
                 "load_s and unload_s >= 0 s, hysteresis in [0, 1)",
             ));
         }
-        let l = self.sheet.electrodes.count;
+        let l = self.sheet.physical.electrodes.count;
         for (i, f) in self.faults.iter().enumerate() {
             let at = |what: &str| format!("fault[{i}].{what}");
             if f.electrode >= l {
@@ -468,8 +468,8 @@ impl Scene {
         }
         for (i, t) in self.touches.iter().enumerate() {
             let at = |what: &str| format!("touch[{i}].{what}");
-            let inside = |p: [f64; 2]| self.sheet.shape.contains(p, 1e-9);
-            let size = self.sheet.shape.size();
+            let inside = |p: [f64; 2]| self.sheet.physical.shape.contains(p, 1e-9);
+            let size = self.sheet.physical.shape.size();
             if !(t.radius.is_finite() && t.radius > 0.0 && t.radius <= size) {
                 return Err(FieldError::new(
                     at("radius"),
@@ -539,7 +539,7 @@ impl Scene {
             ));
         }
         let config = ScanConfig {
-            electrodes: self.sheet.electrodes.count,
+            electrodes: self.sheet.physical.electrodes.count,
             protocol,
             samples_per_step: s.samples_per_step,
             settle_samples: s.settle_samples,
@@ -639,7 +639,7 @@ impl Run {
         })?;
         let mut rng = Rng::new(scene.seed);
         let mut moves = rng.fork();
-        let offsets: Vec<f64> = (0..scene.sheet.electrodes.count)
+        let offsets: Vec<f64> = (0..scene.sheet.physical.electrodes.count)
             .map(|_| scene.movement.rms * moves.normal())
             .collect();
         let shorts: Vec<(usize, usize)> = scene
@@ -648,13 +648,13 @@ impl Run {
             .filter(|f| f.kind == FaultKind::Shorted)
             .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
             .collect();
-        let sheet = Sheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
+        let sheet = SimulatedSheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
         let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())?;
         // A scene is one measurement set: its junction potentials and conductance.
-        let set = scene
-            .frontend
-            .sets
-            .draw(usize::from(scene.sheet.electrodes.count), &mut moves);
+        let set = scene.frontend.sets.draw(
+            usize::from(scene.sheet.physical.electrodes.count),
+            &mut moves,
+        );
         frontend.set_state(&set)?;
         for f in &scene.faults {
             let p = match f.kind {

@@ -6,96 +6,68 @@ use serde::{Deserialize, Serialize};
 
 use crate::fast::FastNetwork;
 use crate::network::{Grid, Network, NetworkError, Transfer, place_contacts};
-use crate::shape::{Shape, ShapeError};
 use crate::touch::{Inclusion, Piezo, Touch, edge_multipliers};
+use et_core::sheet::{ElectrodeSpec, SHEET_RESISTANCE, Shape, ShapeError, Sheet};
 
-/// Default sheet resistance of the PPy fabric, ohm per square (docs/method.md §1).
-pub const SHEET_RESISTANCE: f64 = 30e3;
-
-/// Where the electrodes are and how they touch the fabric.
+/// The simulated sheet: the physical sheet, and how the simulator models it (its grid, the
+/// pressure-to-conductance law, a bend). A scene's `[sheet]` table holds all of these side by
+/// side.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ElectrodeSpec {
-    /// Electrode count L (4 to 32).
-    pub count: u8,
-    /// Width along the outline, m (a clip: about 5 mm).
-    pub width: f64,
-    /// Contact resistance of each electrode, ohm.
-    pub contact_ohm: f64,
-    /// Arc-length fraction of the outline where electrode 0 sits; the others follow equally
-    /// spaced, counter-clockwise. Default: half a pitch from the outline's start.
-    pub first: Option<f64>,
-    /// Explicit arc-length fractions, one per electrode (overrides `first`).
-    pub positions: Option<Vec<f64>>,
-    /// How et's finite elements model the electrodes when imaging (the simulator always
-    /// models the contact over its width, as the fabric has it).
-    pub model: ElectrodeModel,
-}
-
-/// How the imaging's finite elements model an electrode (docs/method.md §5).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ElectrodeModel {
-    /// The complete electrode model: current spreads over the electrode's width through its
-    /// contact resistance, and the electrode reads one potential.
-    #[default]
-    Complete,
-    /// Point electrodes: current enters and potential is read at the node at the electrode's
-    /// centre (width and contact resistance do not enter the image's model). Cheaper, and
-    /// adequate where electrodes are narrow against their spacing.
-    Point,
-    /// The shunt model: ideal electrodes without contact resistance, every point under an
-    /// electrode at its potential (the complete model's limit of zero contact resistance).
-    Shunt,
-}
-
-impl Default for ElectrodeSpec {
-    fn default() -> Self {
-        Self {
-            count: 16,
-            width: 0.005,
-            contact_ohm: 1_000.0,
-            first: None,
-            positions: None,
-            model: ElectrodeModel::Complete,
-        }
-    }
-}
-
-impl ElectrodeSpec {
-    /// The arc-length fraction of every electrode.
-    #[must_use]
-    pub fn arc_positions(&self) -> Vec<f64> {
-        if let Some(p) = &self.positions {
-            return p.clone();
-        }
-        let l = f64::from(self.count);
-        let first = self.first.unwrap_or(0.5 / l);
-        (0..self.count).map(|e| first + f64::from(e) / l).collect()
-    }
-}
-
-/// The physical sheet: outline, fabric, electrodes, and how finely to model it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "SheetTable", into = "SheetTable")]
 pub struct SheetSpec {
-    /// Outline.
-    pub shape: Shape,
-    /// Sheet resistance, ohm per square.
-    #[serde(default = "default_rs")]
-    pub sheet_resistance: f64,
-    /// Electrodes.
-    #[serde(default)]
-    pub electrodes: ElectrodeSpec,
+    /// Outline, fabric and electrodes: what imaging models too.
+    pub physical: Sheet,
     /// Grid spacing, m. Default: [`SheetSpec::default_resolution`].
-    #[serde(default)]
     pub resolution: Option<f64>,
     /// Pressure to conductance.
-    #[serde(default)]
     pub piezo: Piezo,
     /// The sheet bent over a cylinder (docs/method.md §1: a 3 cm radius).
-    #[serde(default)]
     pub bend: Option<Bend>,
+}
+
+/// A scene's `[sheet]` table as written: the physical fields and the simulator's side by side.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SheetTable {
+    shape: Shape,
+    #[serde(default = "default_rs")]
+    sheet_resistance: f64,
+    #[serde(default)]
+    electrodes: ElectrodeSpec,
+    #[serde(default)]
+    resolution: Option<f64>,
+    #[serde(default)]
+    piezo: Piezo,
+    #[serde(default)]
+    bend: Option<Bend>,
+}
+
+impl From<SheetTable> for SheetSpec {
+    fn from(t: SheetTable) -> Self {
+        Self {
+            physical: Sheet {
+                shape: t.shape,
+                sheet_resistance: t.sheet_resistance,
+                electrodes: t.electrodes,
+            },
+            resolution: t.resolution,
+            piezo: t.piezo,
+            bend: t.bend,
+        }
+    }
+}
+
+impl From<SheetSpec> for SheetTable {
+    fn from(s: SheetSpec) -> Self {
+        Self {
+            shape: s.physical.shape,
+            sheet_resistance: s.physical.sheet_resistance,
+            electrodes: s.physical.electrodes,
+            resolution: s.resolution,
+            piezo: s.piezo,
+            bend: s.bend,
+        }
+    }
 }
 
 /// Direction along the sheet.
@@ -182,22 +154,38 @@ impl std::fmt::Display for SheetError {
 
 impl std::error::Error for SheetError {}
 
-impl SheetSpec {
-    /// A flat `width` x `height` m rectangle of the default fabric (30 kohm/sq) with `electrodes`
-    /// default clips (5 mm, 1 kohm) equally spaced, at the default resolution.
-    #[must_use]
-    pub fn rectangle(width: f64, height: f64, electrodes: u8) -> Self {
-        Self {
-            shape: Shape::Rectangle { width, height },
-            sheet_resistance: SHEET_RESISTANCE,
-            electrodes: ElectrodeSpec {
-                count: electrodes,
-                ..ElectrodeSpec::default()
+impl From<et_core::sheet::SheetError> for SheetError {
+    fn from(e: et_core::sheet::SheetError) -> Self {
+        match e {
+            et_core::sheet::SheetError::Shape(e) => Self::Shape(e),
+            et_core::sheet::SheetError::Field { field, why } => Self::Field { field, why },
+            // The physical sheet's errors are these two; a new one reads as a field error.
+            other => Self::Field {
+                field: "sheet",
+                why: other.to_string(),
             },
+        }
+    }
+}
+
+impl SheetSpec {
+    /// The physical `sheet` at the simulator's defaults: the default resolution, the default
+    /// fabric's piezoresistive law, flat.
+    #[must_use]
+    pub fn of(sheet: Sheet) -> Self {
+        Self {
+            physical: sheet,
             resolution: None,
             piezo: Piezo::default(),
             bend: None,
         }
+    }
+
+    /// A flat `width` x `height` m rectangle of the default fabric (30 kohm/sq) with `electrodes`
+    /// default clips (5 mm, 1 kohm) equally spaced, at the default resolution.
+    #[must_use]
+    pub fn rectangle(width: f64, height: f64, electrodes: u8) -> Self {
+        Self::of(Sheet::rectangle(width, height, electrodes))
     }
 
     /// The grid spacing used when none is given: 48 cells across the smaller side, at least 4
@@ -205,10 +193,13 @@ impl SheetSpec {
     /// the README (`cargo test -p et-sim --release resolution -- --nocapture`).
     #[must_use]
     pub fn default_resolution(&self) -> f64 {
-        let pitch = self.shape.perimeter() / f64::from(self.electrodes.count.max(1));
-        (self.shape.size() / 48.0)
+        let Sheet {
+            shape, electrodes, ..
+        } = &self.physical;
+        let pitch = shape.perimeter() / f64::from(electrodes.count.max(1));
+        (shape.size() / 48.0)
             .min(pitch / 4.0)
-            .min(self.electrodes.width / 2.0)
+            .min(electrodes.width / 2.0)
     }
 
     /// Checks every field.
@@ -216,46 +207,10 @@ impl SheetSpec {
     /// # Errors
     /// [`SheetError`] naming the field.
     pub fn validate(&self) -> Result<(), SheetError> {
-        self.shape.validate().map_err(SheetError::Shape)?;
+        self.physical.validate()?;
         let field = |field, why: String| Err(SheetError::Field { field, why });
-        if !(self.sheet_resistance.is_finite() && self.sheet_resistance > 0.0) {
-            return field(
-                "sheet.sheet_resistance",
-                format!(
-                    "{} must be positive (ohm per square)",
-                    self.sheet_resistance
-                ),
-            );
-        }
-        let e = &self.electrodes;
-        if !(4..=32).contains(&e.count) || !e.count.is_multiple_of(2) {
-            return field(
-                "sheet.electrodes.count",
-                format!("{} must be even, 4 to 32", e.count),
-            );
-        }
-        if !(e.width.is_finite() && e.width > 0.0) {
-            return field(
-                "sheet.electrodes.width",
-                format!("{} must be a positive length in m", e.width),
-            );
-        }
-        if !(e.contact_ohm.is_finite() && e.contact_ohm >= 0.0) {
-            return field(
-                "sheet.electrodes.contact_ohm",
-                format!("{} must be >= 0 ohm", e.contact_ohm),
-            );
-        }
-        if let Some(p) = &e.positions
-            && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
-        {
-            return field(
-                "sheet.electrodes.positions",
-                format!("need {} finite arc fractions", e.count),
-            );
-        }
         if let Some(h) = self.resolution
-            && !(h.is_finite() && h > 0.0 && h <= self.shape.size() / 4.0)
+            && !(h.is_finite() && h > 0.0 && h <= self.physical.shape.size() / 4.0)
         {
             return field(
                 "sheet.resolution",
@@ -263,7 +218,7 @@ impl SheetSpec {
             );
         }
         let h = self.resolution.unwrap_or_else(|| self.default_resolution());
-        let nodes = self.shape.area() / (h * h);
+        let nodes = self.physical.shape.area() / (h * h);
         if !nodes.is_finite() || nodes > MAX_GRID_NODES as f64 {
             return field(
                 "sheet.resolution",
@@ -323,13 +278,13 @@ pub const FAST_UPDATE_MAX_NODES: usize = 400;
 
 /// A built sheet: network, fast path and piezo law.
 #[derive(Debug)]
-pub struct Sheet {
+pub struct SimulatedSheet {
     spec: SheetSpec,
     network: Network,
     fast: FastNetwork,
 }
 
-impl Sheet {
+impl SimulatedSheet {
     /// Builds the network at the spec's resolution with electrodes moved along the outline by
     /// `offsets` (m, one per electrode; empty for none) and solves the untouched sheet.
     ///
@@ -340,10 +295,10 @@ impl Sheet {
         Self::with_shorts(spec, offsets, &[])
     }
 
-    /// As [`Sheet::new`], with the fabric's conductance uneven over the sheet by `field`.
+    /// As [`SimulatedSheet::new`], with the fabric's conductance uneven over the sheet by `field`.
     ///
     /// # Errors
-    /// As [`Sheet::new`], and [`SheetError::Field`] for a field that is not finite.
+    /// As [`SimulatedSheet::new`], and [`SheetError::Field`] for a field that is not finite.
     pub fn uneven(
         spec: &SheetSpec,
         offsets: &[f64],
@@ -353,10 +308,10 @@ impl Sheet {
         Self::of_network(spec, network)
     }
 
-    /// As [`Sheet::new`], with pairs of electrodes shorted together (a fault).
+    /// As [`SimulatedSheet::new`], with pairs of electrodes shorted together (a fault).
     ///
     /// # Errors
-    /// As [`Sheet::new`], and for a short naming an electrode the sheet does not have.
+    /// As [`SimulatedSheet::new`], and for a short naming an electrode the sheet does not have.
     pub fn with_shorts(
         spec: &SheetSpec,
         offsets: &[f64],
@@ -459,25 +414,26 @@ fn build_network_with(
             why: "the field's coefficients must be finite".into(),
         });
     }
-    let bounds = spec.shape.bounds();
+    let bounds = spec.physical.shape.bounds();
     let h = spec.resolution.unwrap_or_else(|| spec.default_resolution());
-    let grid = Grid::new(&spec.shape, h);
-    let perimeter = spec.shape.perimeter();
+    let grid = Grid::new(&spec.physical.shape, h);
+    let perimeter = spec.physical.shape.perimeter();
     let positions: Vec<f64> = spec
+        .physical
         .electrodes
         .arc_positions()
         .iter()
         .enumerate()
         .map(|(e, &t)| t + offsets.get(e).copied().unwrap_or(0.0) / perimeter)
         .collect();
-    let z = vec![spec.electrodes.contact_ohm; positions.len()];
+    let z = vec![spec.physical.electrodes.contact_ohm; positions.len()];
     let contacts = place_contacts(
-        &spec.shape,
+        &spec.physical.shape,
         &grid,
         &positions,
-        spec.electrodes.width,
+        spec.physical.electrodes.width,
         &z,
-        spec.sheet_resistance,
+        spec.physical.sheet_resistance,
     );
     let base: Vec<f64> = grid
         .edges
@@ -497,7 +453,7 @@ fn build_network_with(
             bent * field.map_or(1.0, |f| f.multiplier(middle, bounds))
         })
         .collect();
-    Network::new(grid, contacts, 1.0 / spec.sheet_resistance)
+    Network::new(grid, contacts, 1.0 / spec.physical.sheet_resistance)
         .and_then(|n| n.with_base(base))
         .map_err(SheetError::Network)
 }
@@ -556,7 +512,7 @@ impl Unevenness {
 }
 
 /// Transfer impedance of `network` with `touches`, by a direct solve (no precomputation; the
-/// oracle for [`Sheet::transfer`], and the way to use networks too large to precompute).
+/// oracle for [`SimulatedSheet::transfer`], and the way to use networks too large to precompute).
 ///
 /// # Errors
 /// [`SheetError::Network`] if the network cannot be solved.

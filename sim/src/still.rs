@@ -9,7 +9,7 @@ use et_core::stats::{self, StatsError};
 
 use crate::frontend::{SimError, SimFrontend};
 use crate::scene::{Scene, TouchEvent};
-use crate::sheet::{Sheet, SheetError};
+use crate::sheet::{SheetError, SimulatedSheet};
 use crate::touch::Touch;
 
 /// Why a still scene's frames could not be made.
@@ -103,8 +103,8 @@ pub fn scene_frames(
 ///
 /// # Errors
 /// [`StillError`] if the sheet cannot be built.
-pub fn simulated_sheet(scene: &Scene) -> Result<Arc<Sheet>, StillError> {
-    Ok(Arc::new(Sheet::new(&scene.sheet, &[])?))
+pub fn simulated_sheet(scene: &Scene) -> Result<Arc<SimulatedSheet>, StillError> {
+    Ok(Arc::new(SimulatedSheet::new(&scene.sheet, &[])?))
 }
 
 /// [`scene_frames`] on a sheet already built by [`simulated_sheet`] (from a scene with the
@@ -113,7 +113,7 @@ pub fn simulated_sheet(scene: &Scene) -> Result<Arc<Sheet>, StillError> {
 /// # Errors
 /// [`StillError`] if the configuration is invalid.
 pub fn scene_frames_on(
-    sheet: &Arc<Sheet>,
+    sheet: &Arc<SimulatedSheet>,
     scene: &Scene,
     config: &ScanConfig,
     reference: usize,

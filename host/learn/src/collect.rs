@@ -18,7 +18,7 @@ use et_core::rng::Rng;
 use et_core::scan::ScanError;
 use et_core::{ScanConfig, Scanner};
 use et_sim::frontend::{FrontendSpec, Hand, SetState, SimError, SimFrontend};
-use et_sim::sheet::{Sheet, SheetError, SheetSpec, Unevenness};
+use et_sim::sheet::{SheetError, SheetSpec, SimulatedSheet, Unevenness};
 use et_sim::touch::{Footprint, Touch};
 use nalgebra::DMatrix;
 
@@ -123,7 +123,7 @@ impl Dataset {
 /// (cell centres, row-major from the lower left).
 #[must_use]
 pub fn grid(spec: &SheetSpec, rows: usize, cols: usize, margin: f64) -> Vec<[f64; 2]> {
-    let [x0, y0, x1, y1] = spec.shape.bounds();
+    let [x0, y0, x1, y1] = spec.physical.shape.bounds();
     let (w, h) = (
         (x1 - x0 - 2.0 * margin) / cols as f64,
         (y1 - y0 - 2.0 * margin) / rows as f64,
@@ -137,7 +137,7 @@ pub fn grid(spec: &SheetSpec, rows: usize, cols: usize, margin: f64) -> Vec<[f64
                 ]
             })
         })
-        .filter(|p| spec.shape.contains(*p, 0.0))
+        .filter(|p| spec.physical.shape.contains(*p, 0.0))
         .collect()
 }
 
@@ -390,7 +390,7 @@ pub fn random_presses(
     count: usize,
     touches: usize,
 ) -> impl FnMut(&mut Rng) -> Vec<Press> {
-    let shape = spec.shape.clone();
+    let shape = spec.physical.shape.clone();
     let [x0, y0, x1, y1] = shape.bounds();
     let (radius, spread, (lo, hi)) = (plan.radius, plan.radius_spread, plan.pressure_pa);
     let plan = plan.clone();
@@ -487,20 +487,20 @@ pub fn collect_presses_with(
     for v in 0..plan.visits {
         // A frameless sheet is handled between visits: its electrodes sit somewhere else
         // within their movement each time.
-        let offsets: Vec<f64> = (0..spec.electrodes.count)
+        let offsets: Vec<f64> = (0..spec.physical.electrodes.count)
             .map(|_| plan.electrode_movement * rng.normal())
             .collect();
         let field = (plan.unevenness > 0.0).then(|| Unevenness::draw(plan.unevenness, &mut rng));
         let build = |offsets: &[f64]| match &field {
-            Some(f) => Sheet::uneven(spec, offsets, f),
-            None => Sheet::new(spec, offsets),
+            Some(f) => SimulatedSheet::uneven(spec, offsets, f),
+            None => SimulatedSheet::new(spec, offsets),
         };
         let sheet = Arc::new(build(&offsets)?);
         // Each visit is a measurement set: the junction potentials and the sheet's
         // conductance differ from the last.
         let set = frontend
             .sets
-            .draw(usize::from(spec.electrodes.count), &mut rng);
+            .draw(usize::from(spec.physical.electrodes.count), &mut rng);
         let hand = Hand {
             wobble: plan.wobble,
             correlation_s: plan.wobble_s,
@@ -532,7 +532,7 @@ pub fn collect_presses_with(
         // to another set by its end).
         let heading = frontend
             .sets
-            .draw(usize::from(spec.electrodes.count), &mut rng);
+            .draw(usize::from(spec.physical.electrodes.count), &mut rng);
         let presses = visit_presses(&mut rng);
         let count = presses.len().max(1) as f64;
         let mut remnants: Vec<Touch> = Vec::new();
@@ -577,10 +577,11 @@ pub fn collect_presses_with(
         positions,
         pressure: pressures,
         electrodes: spec
+            .physical
             .electrodes
             .arc_positions()
             .iter()
-            .map(|&t| spec.shape.boundary_point(t))
+            .map(|&t| spec.physical.shape.boundary_point(t))
             .collect(),
         centres: centres.to_vec(),
         visit,

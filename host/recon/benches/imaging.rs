@@ -10,19 +10,19 @@
 use std::sync::LazyLock;
 
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_core::sheet::Sheet;
+use et_core::sheet::shape::Shape;
 use et_recon::fem::{Electrodes, Forward, TransferJacobian};
 use et_recon::mesh::Mesh;
 use et_recon::{DataSpace, OneStep, PixelGrid, PixelOperator};
-use et_sim::shape::Shape;
-use et_sim::sheet::SheetSpec;
 use nalgebra::{DMatrix, DVector};
 
 fn main() {
     divan::main();
 }
 
-fn disc(electrodes: u8) -> SheetSpec {
-    let mut s = SheetSpec::rectangle(0.22, 0.22, electrodes);
+fn disc(electrodes: u8) -> Sheet {
+    let mut s = Sheet::rectangle(0.22, 0.22, electrodes);
     s.shape = Shape::Disc { radius: 0.11 };
     s.electrodes.width = 0.006;
     s

@@ -18,11 +18,11 @@ use std::process::Command;
 use std::time::Instant;
 
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_core::sheet::shape::Shape;
+use et_core::sheet::{ElectrodeModel, Sheet};
 use et_recon::exact::unit_disc_error;
 use et_recon::mesh::Mesh;
 use et_recon::{DataSpace, Greit, GreitOptions, Imager, Regularisation};
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeModel, SheetSpec};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -38,7 +38,7 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
 /// et's stages at about `triangles` triangles: (triangles, mesh, one-step set-up, one-step
 /// frame, GREIT set-up, GREIT frame), seconds.
 fn et_side(triangles: usize) -> (usize, [f64; 5]) {
-    let mut spec = SheetSpec::rectangle(2.0, 2.0, 16);
+    let mut spec = Sheet::rectangle(2.0, 2.0, 16);
     spec.shape = Shape::Disc { radius: 1.0 };
     spec.electrodes.model = ElectrodeModel::Point;
     spec.sheet_resistance = 1.0;

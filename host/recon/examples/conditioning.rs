@@ -6,13 +6,13 @@
 //! Run: `cargo run --release -p et-recon --example conditioning`
 
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_core::sheet::Sheet;
+use et_core::sheet::shape::Shape;
 use et_recon::Imager;
 use et_recon::mesh::Mesh;
-use et_sim::shape::Shape;
-use et_sim::sheet::SheetSpec;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut spec = SheetSpec::rectangle(0.22, 0.22, 16);
+    let mut spec = Sheet::rectangle(0.22, 0.22, 16);
     spec.shape = Shape::Disc { radius: 0.11 };
     let imager = Imager::new(&spec, Mesh::with_about(&spec, 8_000)?, 64)?;
     let alphas = [0.01, 0.03, 0.1, 0.4, 1.0, 2.5];

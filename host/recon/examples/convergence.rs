@@ -6,8 +6,8 @@
 //!
 //! Run: `cargo run --release -p et-recon --example convergence`
 
+use et_core::sheet::ElectrodeModel;
 use et_recon::exact::{FrameError, unit_disc_error};
-use et_sim::sheet::ElectrodeModel;
 
 fn main() {
     println!("| model | triangles | max error | order | L2 error | order |");

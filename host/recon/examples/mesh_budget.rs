@@ -5,12 +5,12 @@
 
 use std::time::Instant;
 
+use et_core::sheet::shape::Shape;
+use et_core::sheet::{ElectrodeModel, Sheet};
 use et_recon::mesh::Mesh;
-use et_sim::shape::Shape;
-use et_sim::sheet::{ElectrodeModel, SheetSpec};
 
 fn main() {
-    let mut disc = SheetSpec::rectangle(0.22, 0.22, 16);
+    let mut disc = Sheet::rectangle(0.22, 0.22, 16);
     disc.shape = Shape::Disc { radius: 0.11 };
     disc.electrodes.width = 0.006;
     let mut point = disc.clone();
@@ -18,17 +18,17 @@ fn main() {
     let sheets = [
         (
             "13 cm square, 16 electrodes",
-            SheetSpec::rectangle(0.13, 0.13, 16),
+            Sheet::rectangle(0.13, 0.13, 16),
         ),
         (
             "13 cm square, 8 electrodes",
-            SheetSpec::rectangle(0.13, 0.13, 8),
+            Sheet::rectangle(0.13, 0.13, 8),
         ),
         ("22 cm disc, 16 electrodes", disc),
         ("22 cm disc, 16 point electrodes", point),
         (
             "22 x 10 cm strip, 32 electrodes",
-            SheetSpec::rectangle(0.22, 0.10, 32),
+            Sheet::rectangle(0.22, 0.10, 32),
         ),
     ];
     println!(

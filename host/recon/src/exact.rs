@@ -186,11 +186,11 @@ impl FrameError {
 /// `None` if a mesh, forward model or series cannot be made (it can for the defaults).
 #[must_use]
 pub fn unit_disc_error(
-    model: et_sim::sheet::ElectrodeModel,
+    model: et_core::sheet::ElectrodeModel,
     triangles: usize,
 ) -> Option<FrameError> {
-    let mut spec = et_sim::sheet::SheetSpec::rectangle(1.0, 1.0, 16);
-    spec.shape = et_sim::shape::Shape::Disc { radius: 1.0 };
+    let mut spec = et_core::sheet::Sheet::rectangle(1.0, 1.0, 16);
+    spec.shape = et_core::sheet::shape::Shape::Disc { radius: 1.0 };
     spec.electrodes.width = 0.1;
     spec.sheet_resistance = 1.0;
     spec.electrodes.contact_ohm = 0.5;
@@ -207,7 +207,7 @@ pub fn unit_disc_error(
     let protocol = Protocol::new(ProtocolKind::Adjacent, 16).ok()?;
     let v = fwd.frame(&vec![1.0; n], &protocol, 1.0).ok()?;
     let exact: Vec<f64> = match model {
-        et_sim::sheet::ElectrodeModel::Point => protocol
+        et_core::sheet::ElectrodeModel::Point => protocol
             .steps()
             .map(|s| {
                 let at = |e: u8| centres[usize::from(e)];

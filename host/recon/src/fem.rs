@@ -27,7 +27,7 @@ use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use nalgebra::DMatrix;
 
 use crate::mesh::{Mesh, dist};
-use et_sim::sheet::ElectrodeModel;
+use et_core::sheet::ElectrodeModel;
 
 /// How electrodes meet the sheet.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,7 +51,7 @@ impl Electrodes {
     /// [`FemError::ContactTooSmall`] when the complete model's contact resistance is under
     /// [`MIN_CONTACT_RATIO`] of the sheet resistance: its system cannot be factorised
     /// accurately in f64 (the shunt model is that limit).
-    pub fn of_sheet(spec: &et_sim::sheet::SheetSpec) -> Result<Self, FemError> {
+    pub fn of_sheet(spec: &et_core::sheet::Sheet) -> Result<Self, FemError> {
         let e = &spec.electrodes;
         Ok(match e.model {
             ElectrodeModel::Point => Electrodes::Point,

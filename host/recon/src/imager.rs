@@ -2,7 +2,7 @@
 //! background conductivity and the pixel grid images are drawn on.
 
 use et_core::protocol::Protocol;
-use et_sim::sheet::SheetSpec;
+use et_core::sheet::Sheet;
 use nalgebra::DMatrix;
 
 use crate::fem::{Electrodes, FemError, Forward};
@@ -42,7 +42,7 @@ impl Imager {
     /// # Errors
     /// [`FemError::Input`] for `pixels` outside 4 to [`MAX_PIXELS`]; [`FemError`] if the
     /// forward model cannot be built.
-    pub fn new(sheet: &SheetSpec, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
+    pub fn new(sheet: &Sheet, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
         if !(4..=MAX_PIXELS).contains(&pixels) {
             return Err(FemError::Input(format!(
                 "{pixels} pixels across: use 4 to {MAX_PIXELS}"

@@ -8,7 +8,7 @@
 //! own spacing, and the refinement's angle limit grades the elements from there into the
 //! interior, so a mesh is fine only where the scene needs it.
 
-use et_sim::sheet::{ElectrodeModel, SheetSpec};
+use et_core::sheet::{ElectrodeModel, Sheet};
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
@@ -51,7 +51,7 @@ impl MeshSize {
     /// About `triangles` triangles on `spec`'s outline, electrodes sampled 4 times finer
     /// than the interior.
     #[must_use]
-    pub fn for_count(spec: &SheetSpec, triangles: usize) -> Self {
+    pub fn for_count(spec: &Sheet, triangles: usize) -> Self {
         // An equilateral triangle of edge h has area h^2 sqrt(3)/4.
         let h = (4.0 * spec.shape.area() / (3f64.sqrt() * triangles.max(1) as f64)).sqrt();
         Self {
@@ -133,7 +133,7 @@ impl Mesh {
     ///
     /// # Errors
     /// [`MeshError`] for bad sizes, overlapping electrodes or a failed triangulation.
-    pub fn of_sheet(spec: &SheetSpec, size: MeshSize) -> Result<Self, MeshError> {
+    pub fn of_sheet(spec: &Sheet, size: MeshSize) -> Result<Self, MeshError> {
         Self::refined(spec, size, &[])
     }
 
@@ -145,7 +145,7 @@ impl Mesh {
     /// As [`Mesh::of_sheet`]; a region with a non-finite or non-positive radius or edge is
     /// [`MeshError::Spec`], as is one that would add more than a million points.
     pub fn refined(
-        spec: &SheetSpec,
+        spec: &Sheet,
         size: MeshSize,
         regions: &[Refinement],
     ) -> Result<Self, MeshError> {
@@ -389,7 +389,7 @@ impl Mesh {
     ///
     /// # Errors
     /// As [`Mesh::of_sheet`].
-    pub fn with_about(spec: &SheetSpec, triangles: usize) -> Result<Self, MeshError> {
+    pub fn with_about(spec: &Sheet, triangles: usize) -> Result<Self, MeshError> {
         Self::with_about_refined(spec, triangles, &[])
     }
 
@@ -400,7 +400,7 @@ impl Mesh {
     /// # Errors
     /// As [`Mesh::refined`].
     pub fn with_about_refined(
-        spec: &SheetSpec,
+        spec: &Sheet,
         triangles: usize,
         regions: &[Refinement],
     ) -> Result<Self, MeshError> {
@@ -515,7 +515,7 @@ impl Mesh {
 /// arcs whose inner points (the ends lie on the outline, which is sampled at `d` there) are
 /// returned. Points outside the sheet or within 0.3 d of its outline (a curved or cornered
 /// outline) are left out.
-fn fan(shape: &et_sim::shape::Shape, t: f64, d: f64, rings: usize) -> Vec<[f64; 2]> {
+fn fan(shape: &et_core::sheet::shape::Shape, t: f64, d: f64, rings: usize) -> Vec<[f64; 2]> {
     let c = shape.boundary_point(t);
     let (a, b) = (
         shape.boundary_point(t - 1e-7),
@@ -560,9 +560,9 @@ pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use et_sim::shape::Shape;
+    use et_core::sheet::shape::Shape;
 
-    fn check(mesh: &Mesh, spec: &SheetSpec, min_angle: f64) {
+    fn check(mesh: &Mesh, spec: &Sheet, min_angle: f64) {
         let area: f64 = (0..mesh.triangles.len())
             .map(|t| 0.5 * mesh.double_area(t))
             .sum();
@@ -595,10 +595,10 @@ mod tests {
 
     #[test]
     fn meshes_of_every_outline_are_valid_and_graded() {
-        let mut disc = SheetSpec::rectangle(0.22, 0.22, 16);
+        let mut disc = Sheet::rectangle(0.22, 0.22, 16);
         disc.shape = Shape::Disc { radius: 0.11 };
-        let square = SheetSpec::rectangle(0.13, 0.13, 16);
-        let mut star = SheetSpec::rectangle(0.1, 0.1, 8);
+        let square = Sheet::rectangle(0.13, 0.13, 16);
+        let mut star = Sheet::rectangle(0.1, 0.1, 8);
         star.shape = Shape::Polygon {
             vertices: (0..10)
                 .map(|k| {
@@ -623,7 +623,7 @@ mod tests {
 
     #[test]
     fn refined_regions_get_their_edge_and_the_mesh_stays_valid() {
-        let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        let spec = Sheet::rectangle(0.13, 0.13, 16);
         // One region inside, one that the outline cuts.
         let inner = Refinement {
             centre: [0.02, 0.01],
@@ -676,15 +676,15 @@ mod tests {
     /// degrees; 28 where the budget allows).
     #[test]
     fn triangle_budgets_from_200_up_are_met() {
-        let mut disc = SheetSpec::rectangle(0.22, 0.22, 16);
+        let mut disc = Sheet::rectangle(0.22, 0.22, 16);
         disc.shape = Shape::Disc { radius: 0.11 };
         disc.electrodes.width = 0.006;
         let mut point = disc.clone();
         point.electrodes.model = ElectrodeModel::Point;
         let sheets = [
-            SheetSpec::rectangle(0.13, 0.13, 16),
-            SheetSpec::rectangle(0.13, 0.13, 8),
-            SheetSpec::rectangle(0.22, 0.10, 32),
+            Sheet::rectangle(0.13, 0.13, 16),
+            Sheet::rectangle(0.13, 0.13, 8),
+            Sheet::rectangle(0.22, 0.10, 32),
             disc,
             point,
         ];
@@ -724,7 +724,7 @@ mod tests {
     /// about the electrode's normal, of nearly equilateral triangles.
     #[test]
     fn point_electrodes_sit_in_regular_symmetric_fans() {
-        let mut spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        let mut spec = Sheet::rectangle(0.13, 0.13, 16);
         spec.electrodes.model = ElectrodeModel::Point;
         let size = MeshSize::for_count(&spec, 8_000);
         let mesh = Mesh::of_sheet(&spec, size).unwrap();
@@ -799,13 +799,13 @@ mod tests {
 
     #[test]
     fn bad_specs_are_refused() {
-        let mut s = SheetSpec::rectangle(0.13, 0.13, 16);
+        let mut s = Sheet::rectangle(0.13, 0.13, 16);
         s.electrodes.width = 0.04; // 16 x 4 cm on a 52 cm outline: they overlap
         assert!(matches!(
             Mesh::of_sheet(&s, MeshSize::for_count(&s, 1000)),
             Err(MeshError::Overlap { .. })
         ));
-        let s = SheetSpec::rectangle(0.13, 0.13, 16);
+        let s = Sheet::rectangle(0.13, 0.13, 16);
         let bad = MeshSize {
             interior: f64::NAN,
             ..MeshSize::for_count(&s, 1000)

@@ -172,30 +172,3 @@ pub fn merit(
         ringing: if in_sum > 0.0 { opposite / in_sum } else { 0.0 },
     })
 }
-
-/// For tests: `found` holds exactly one touch per true touch (`truth`: centre and radius, m),
-/// each true touch matched to a touch of its own, and a found centroid within each true
-/// touch's radius. Returns the matches.
-#[cfg(test)]
-pub(crate) fn assert_found_exactly(
-    name: &str,
-    grid: &PixelGrid,
-    found: &[crate::touches::Region],
-    truth: &[([f64; 2], f64)],
-) -> Vec<TouchMatch> {
-    let at: Vec<[f64; 2]> = found.iter().map(|r| r.centroid).collect();
-    assert_eq!(found.len(), truth.len(), "{name}: {at:?}");
-    let matches = match_touches(grid, found, truth);
-    let mut which: Vec<usize> = matches.iter().filter_map(|m| m.found).collect();
-    which.sort_unstable();
-    which.dedup();
-    assert_eq!(which.len(), truth.len(), "{name}: {matches:?}");
-    for (centre, radius) in truth {
-        let near = at
-            .iter()
-            .map(|c| (c[0] - centre[0]).hypot(c[1] - centre[1]))
-            .fold(f64::INFINITY, f64::min);
-        assert!(near < *radius, "{name}: {near} from {centre:?}");
-    }
-    matches
-}

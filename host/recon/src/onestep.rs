@@ -28,8 +28,6 @@ use faer::linalg::solvers::{Llt, SolveCore};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
-use crate::pixels::PixelOperator;
-
 /// Why a reconstruction could not be set up or run.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
@@ -95,22 +93,13 @@ pub struct DataSpace {
 
 /// A's nonzero eigenvalues e_i and how to get c = U^T dv for their eigenvectors U.
 #[derive(Clone, Debug)]
-enum Spectrum {
+pub(crate) enum Spectrum {
     /// From the r x r problem: with H = C C^T and F = M C (so A = F F^T), the eigenpairs
     /// (V, E) of F^T F = C^T M^T M C give A's nonzero eigenvalues E and c = W^T (M^T dv) with
     /// W = C V E^-1/2 (r x q); A's other K - q eigenvalues are 0.
     Compact { e: Vec<f64>, w: Mat<f64> },
     /// All K eigenpairs of A (when H cannot be factorised): c = U^T dv.
     Full { e: Vec<f64>, u: Mat<f64> },
-}
-
-/// A's spectrum seen by a frame: the nonzero eigenvalues, c = U^T dv for them, and the part
-/// of dv in A's null space (|dv_0|^2, V^2, and the null space's dimension).
-struct Seen<'a> {
-    e: &'a [f64],
-    c: Vec<f64>,
-    null_norm2: f64,
-    null_dim: usize,
 }
 
 impl DataSpace {
@@ -354,7 +343,7 @@ impl DataSpace {
     }
 
     /// A's spectrum, made on first use and kept.
-    fn eigen(&self) -> Result<&Spectrum, ReconError> {
+    pub(crate) fn eigen(&self) -> Result<&Spectrum, ReconError> {
         self.eigen
             .get_or_init(|| self.compact_spectrum().or_else(|| self.full_spectrum()))
             .as_ref()
@@ -387,36 +376,6 @@ impl DataSpace {
                     Mat::from_fn(k, keep.len(), |i, j| u[(i, keep[j])]),
                 )
             }
-        })
-    }
-
-    /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
-    /// `dv`.
-    fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
-        let spectrum = self.eigen()?;
-        let k = self.frame_len();
-        let (e, c) = match spectrum {
-            Spectrum::Compact { e, w } => {
-                let mtdv = self.m_transpose(dv);
-                let c: Vec<f64> = (0..e.len())
-                    .map(|i| w.col(i).iter().zip(&mtdv).map(|(a, b)| a * b).sum())
-                    .collect();
-                (e, c)
-            }
-            Spectrum::Full { e, u } => {
-                let c = (0..e.len())
-                    .map(|i| u.col(i).iter().zip(dv).map(|(a, b)| a * b).sum())
-                    .collect();
-                (e, c)
-            }
-        };
-        let total: f64 = dv.iter().map(|v| v * v).sum();
-        let seen: f64 = c.iter().map(|v| v * v).sum();
-        Ok(Seen {
-            e,
-            null_norm2: (total - seen).max(0.0),
-            null_dim: k.saturating_sub(e.len()),
-            c,
         })
     }
 
@@ -467,113 +426,6 @@ impl DataSpace {
             u: evd.U().to_owned(),
         })
     }
-
-    /// Generalised cross-validation of alpha for the frame difference `dv` (docs/method.md
-    /// (6.1)): with A = U diag(e) U^T and c = U^T dv, GCV(lambda) = K sum_i (lambda c_i /
-    /// (e_i + lambda))^2 / (sum_i lambda / (e_i + lambda))^2. Returns the candidate with the
-    /// smallest GCV and every (alpha, GCV). A's spectrum is made once and kept, from the r x r
-    /// problem of the factored Jacobian (its K - q zero eigenvalues in closed form).
-    ///
-    /// # Errors
-    /// [`ReconError::Parameter`] for a frame of the wrong length or no candidates;
-    /// [`ReconError::NonFinite`] for a frame with NaN/inf; [`ReconError::Singular`] when A
-    /// has no eigendecomposition or no candidate scores finitely.
-    pub fn gcv(
-        &self,
-        dv: &[f64],
-        candidates: &[f64],
-    ) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
-        let k = self.frame_len();
-        if dv.len() != k || candidates.is_empty() {
-            return Err(ReconError::Parameter(format!(
-                "{} frame values for K = {k}, and at least one candidate alpha",
-                dv.len()
-            )));
-        }
-        if dv.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::NonFinite);
-        }
-        let seen = self.spectrum(dv)?;
-        let scores: Vec<(f64, f64)> = candidates
-            .iter()
-            .map(|&alpha| {
-                let lambda = self.lambda(alpha);
-                // Null-space components are left whole (weight 1).
-                let (mut num, mut den) = (seen.null_norm2, seen.null_dim as f64);
-                for (e, ci) in seen.e.iter().zip(&seen.c) {
-                    let w = lambda / (e.max(0.0) + lambda);
-                    num += (w * ci).powi(2);
-                    den += w;
-                }
-                (alpha, k as f64 * num / (den * den).max(f64::MIN_POSITIVE))
-            })
-            .collect();
-        let best = scores
-            .iter()
-            .copied()
-            .filter(|s| s.1.is_finite())
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .ok_or(ReconError::Singular)?;
-        Ok((best.0, scores))
-    }
-}
-
-impl DataSpace {
-    /// |dv - J R dv|^2 at each candidate alpha, V^2 (the residual of the one-step image),
-    /// from A's eigendecomposition.
-    fn residuals(&self, dv: &[f64], candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
-        let seen = self.spectrum(dv)?;
-        Ok(candidates
-            .iter()
-            .map(|&alpha| {
-                let lambda = self.lambda(alpha);
-                seen.null_norm2
-                    + seen
-                        .e
-                        .iter()
-                        .zip(&seen.c)
-                        .map(|(e, ci)| (lambda * ci / (e.max(0.0) + lambda)).powi(2))
-                        .sum::<f64>()
-            })
-            .collect())
-    }
-
-    /// alpha for the frame difference `dv` whose per-channel noise variance is `var_dv`
-    /// (V^2): the GCV minimum ([`DataSpace::gcv`]) among the candidates that do not fit the
-    /// data closer than its noise, |dv - J R dv|^2 >= sum_k var_k (the discrepancy principle as
-    /// a floor). GCV alone assumes the misfit is noise; on frames with little or no noise it
-    /// runs to the smallest alpha, where the image rings and what remains (the ADC's
-    /// rounding, the model's mismatch) is amplified into spurious peaks. When every candidate
-    /// fits closer than the noise (dv within the noise), the largest is taken.
-    ///
-    /// # Errors
-    /// As [`DataSpace::gcv`]; [`ReconError::Parameter`] for `var_dv` not of K values.
-    pub fn choose_alpha(
-        &self,
-        dv: &[f64],
-        var_dv: &[f64],
-        candidates: &[f64],
-    ) -> Result<f64, ReconError> {
-        let (best, scores) = self.gcv(dv, candidates)?;
-        if var_dv.len() != dv.len() {
-            return Err(ReconError::Parameter(format!(
-                "{} noise variances for K = {}",
-                var_dv.len(),
-                dv.len()
-            )));
-        }
-        let noise: f64 = var_dv.iter().map(|v| v.max(0.0)).sum();
-        let residuals = self.residuals(dv, candidates)?;
-        let admissible = scores
-            .iter()
-            .zip(&residuals)
-            .filter(|(s, r)| s.1.is_finite() && **r >= noise)
-            .min_by(|a, b| a.0.1.total_cmp(&b.0.1));
-        Ok(match admissible {
-            Some((s, _)) => s.0,
-            None => candidates.iter().copied().fold(best, f64::max),
-        })
-    }
 }
 
 /// `gp` (r x T) times the sparse D^T (T x N; D's rows are (column of gp, weight)): r x N.
@@ -621,9 +473,9 @@ fn check_alpha(alpha: f64) -> Result<(), ReconError> {
 #[derive(Clone, Debug)]
 pub struct OneStep {
     /// G P^-1, r x T.
-    gp: Mat<f64>,
+    pub(crate) gp: Mat<f64>,
     /// X^T = M^T (A + lambda I)^-1, r x K.
-    xt: Mat<f64>,
+    pub(crate) xt: Mat<f64>,
     /// The alpha it was built with.
     pub alpha: f64,
     /// The NOSER exponent s.
@@ -675,15 +527,6 @@ impl OneStep {
             Par::Seq,
         );
         m
-    }
-
-    /// The rows of R for `triangles` (each a triangle index; a pixel grid's pixels) as a
-    /// [`PixelOperator`], from R's factors.
-    #[must_use]
-    pub fn pixel_operator(&self, triangles: &[usize]) -> PixelOperator {
-        let r = self.gp.nrows();
-        let g = Mat::from_fn(triangles.len(), r, |i, j| self.gp[(j, triangles[i])]);
-        PixelOperator::from_factors(g.as_ref(), self.xt.as_ref())
     }
 
     /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
@@ -789,6 +632,3 @@ fn noser_weights(diag: &[f64], s: f64) -> Option<Vec<f64>> {
         .is_finite()
         .then(|| diag.iter().map(|d| d.max(floor).powf(-s)).collect())
 }
-
-#[cfg(test)]
-mod tests;

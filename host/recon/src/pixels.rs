@@ -139,7 +139,7 @@ impl PixelGrid {
     #[must_use]
     pub fn project(&self, r: &OneStep) -> PixelOperator {
         let inside: Vec<usize> = self.triangle.iter().filter_map(|t| *t).collect();
-        r.pixel_operator(&inside)
+        PixelOperator::of_rows(r, &inside)
     }
 
     /// Spreads per-triangle values onto the grid (None outside the sheet).
@@ -170,6 +170,14 @@ pub struct PixelOperator {
 }
 
 impl PixelOperator {
+    /// The rows of R for `rows` (each one of R's rows: a triangle, or a pixel of GREIT's
+    /// matrix) from R's factors R = (G P^-1)^T X^T.
+    #[must_use]
+    pub fn of_rows(r: &OneStep, rows: &[usize]) -> Self {
+        let g = Mat::from_fn(rows.len(), r.gp.nrows(), |i, j| r.gp[(j, rows[i])]);
+        Self::from_factors(g.as_ref(), r.xt.as_ref())
+    }
+
     /// P = `a` `b` from `a` (pixels x r) and `b` (r x K).
     pub(crate) fn from_factors(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Self {
         let qr = a.qr();

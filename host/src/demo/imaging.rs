@@ -89,14 +89,17 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         1 + ProtocolKind::NAMED.len() * (1 + scenes.len()),
         "imaging docs/method.md §7 scenes",
     );
-    let mesh = Mesh::with_about(sheet_spec, sizes.triangles)?;
-    let imager = Imager::new(sheet_spec, mesh, 64)?;
+    let mesh = Mesh::with_about(&sheet_spec.physical, sizes.triangles)?;
+    let imager = Imager::new(&sheet_spec.physical, mesh, 64)?;
     let sheet = simulated_sheet(&scenes[0].1)?;
     bar.inc(1);
     // docs/method.md §8's d_c: from the sheet's centre to its outline (where the electrodes are).
-    let b = sheet_spec.shape.bounds();
+    let b = sheet_spec.physical.shape.bounds();
     let centre = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
-    let settings = Settings::new(centre, sheet_spec.shape.distance_to_outline(centre));
+    let settings = Settings::new(
+        centre,
+        sheet_spec.physical.shape.distance_to_outline(centre),
+    );
     let mut rows = Vec::new();
     let mut single = (0, 0);
     let mut one_touch = (0, 0);

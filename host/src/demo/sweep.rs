@@ -40,8 +40,11 @@ pub fn mesh_sweep(
     mut tick: impl FnMut(&SweepRow),
 ) -> Result<Vec<SweepRow>> {
     let scene = load(REFERENCE_SCENES[1])?;
-    let protocol = Protocol::new(ProtocolKind::Adjacent, scene.sheet.electrodes.count)
-        .map_err(|e| anyhow!("{e:?}"))?;
+    let protocol = Protocol::new(
+        ProtocolKind::Adjacent,
+        scene.sheet.physical.electrodes.count,
+    )
+    .map_err(|e| anyhow!("{e:?}"))?;
     let amps = 32e-6;
     let t = &scene.touches[0];
     let sheet = simulated_sheet(&scene)?;
@@ -54,7 +57,11 @@ pub fn mesh_sweep(
         .zip(&v0)
         .map(|(a, b)| a - b)
         .collect();
-    let fine = Imager::new(&scene.sheet, Mesh::with_about(&scene.sheet, reference)?, 8)?;
+    let fine = Imager::new(
+        &scene.sheet.physical,
+        Mesh::with_about(&scene.sheet.physical, reference)?,
+        8,
+    )?;
     let v_ref = fine.forward.frame(&fine.background(), &protocol, amps)?;
     let scale = v_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let pe = |imager: &Imager, d: &[f64]| {
@@ -67,7 +74,11 @@ pub fn mesh_sweep(
     let mut rows = Vec::new();
     for &target in triangles {
         let started = Instant::now();
-        let imager = Imager::new(&scene.sheet, Mesh::with_about(&scene.sheet, target)?, 64)?;
+        let imager = Imager::new(
+            &scene.sheet.physical,
+            Mesh::with_about(&scene.sheet.physical, target)?,
+            64,
+        )?;
         let jac = imager
             .forward
             .transfer_jacobian(&imager.background(), &protocol, amps)?;

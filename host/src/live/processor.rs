@@ -318,8 +318,8 @@ impl Processor {
     /// # Errors
     /// [`LiveError::Mesh`] or [`LiveError::Fem`] if the sheet cannot be meshed or modelled.
     pub fn new(sheet: &SheetSpec, settings: Settings) -> Result<Self, LiveError> {
-        let mesh = Mesh::with_about(sheet, settings.triangles)?;
-        let imager = Imager::new(sheet, mesh, settings.pixels)?;
+        let mesh = Mesh::with_about(&sheet.physical, settings.triangles)?;
+        let imager = Imager::new(&sheet.physical, mesh, settings.pixels)?;
         let inside = imager
             .grid
             .triangle

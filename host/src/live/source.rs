@@ -96,11 +96,11 @@ impl ReplaySource {
     /// are of another electrode count than `sheet`.
     pub fn open(path: &Path, sheet: SheetSpec) -> Result<Self, LiveError> {
         let recording = recording::read(path)?;
-        if recording.header.electrodes != sheet.electrodes.count {
+        if recording.header.electrodes != sheet.physical.electrodes.count {
             return Err(LiveError::OtherSheet {
                 path: path.into(),
                 recorded: recording.header.electrodes,
-                sheet: sheet.electrodes.count,
+                sheet: sheet.physical.electrodes.count,
             });
         }
         Ok(Self {

@@ -102,7 +102,7 @@ impl Viewer {
             );
         }
         // The outline and the electrodes, numbered outside it.
-        let shape = &self.sheet.shape;
+        let shape = &self.sheet.physical.shape;
         let outline: Vec<Pos2> = (0..=240)
             .map(|k| to_screen(shape.boundary_point(f64::from(k) / 240.0)))
             .collect();
@@ -113,6 +113,7 @@ impl Viewer {
         let electrode_colour = Color32::from_rgb(230, 180, 60);
         for (e, t) in self
             .sheet
+            .physical
             .electrodes
             .arc_positions()
             .into_iter()

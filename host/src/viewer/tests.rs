@@ -408,7 +408,7 @@ fn the_sheet_is_drawn_in_mm_with_numbered_electrodes_a_labelled_colour_bar_and_p
     let d = &v.drawn;
     // The axes: round mm on both, zero among them (the sheet is centred on the origin), and
     // every tick inside the image's extent.
-    let b = v.sheet.shape.bounds();
+    let b = v.sheet.physical.shape.bounds();
     for (ticks, (lo, hi)) in [(&d.ticks_mm.0, (b[0], b[2])), (&d.ticks_mm.1, (b[1], b[3]))] {
         assert!(ticks.len() >= 3, "{ticks:?}");
         assert!(ticks.contains(&"0".to_string()), "{ticks:?}");
@@ -422,12 +422,13 @@ fn the_sheet_is_drawn_in_mm_with_numbered_electrodes_a_labelled_colour_bar_and_p
         }
     }
     // Every electrode, numbered from 0 as `et protocol` counts, on the outline.
-    let count = usize::from(v.sheet.electrodes.count);
+    let count = usize::from(v.sheet.physical.electrodes.count);
     assert_eq!(d.electrodes.len(), count);
     for (k, (e, at)) in d.electrodes.iter().enumerate() {
         assert_eq!(*e, k);
         let off = v
             .sheet
+            .physical
             .shape
             .distance_to_outline([at[0] * 1e-3, at[1] * 1e-3]);
         assert!(off < 1e-6, "electrode {e} {off} m off the outline");

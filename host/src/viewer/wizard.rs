@@ -169,10 +169,11 @@ impl Wizard {
             .collect();
         self.centres = collect::grid(sheet, self.rows, self.cols, 0.0);
         self.electrodes = sheet
+            .physical
             .electrodes
             .arc_positions()
             .iter()
-            .map(|&t| sheet.shape.boundary_point(t))
+            .map(|&t| sheet.physical.shape.boundary_point(t))
             .collect();
         self.rows_x.clear();
         self.y.clear();

@@ -6,12 +6,12 @@ use et_core::protocol::ProtocolKind;
 use et_core::rng::Rng;
 use et_core::{Protocol, Scanner};
 
-pub(crate) fn sheet(resolution: Option<f64>) -> Arc<Sheet> {
+pub(crate) fn sheet(resolution: Option<f64>) -> Arc<SimulatedSheet> {
     let spec = SheetSpec {
         resolution,
         ..SheetSpec::rectangle(0.13, 0.13, 16)
     };
-    Arc::new(Sheet::new(&spec, &[]).unwrap())
+    Arc::new(SimulatedSheet::new(&spec, &[]).unwrap())
 }
 
 fn column_stats(frames: &[Vec<f32>], k: usize) -> (f64, f64) {
@@ -379,16 +379,12 @@ fn a_source_in_compliance_is_flagged_in_the_frame_by_both_paths() {
     // injection is in compliance. 1 kohm (the default clip) is not.
     let config = ScanConfig::REFERENCE;
     let frame_of = |contact_ohm: f64, open: Option<u8>| {
-        let base = SheetSpec::rectangle(0.13, 0.13, 16);
-        let spec = SheetSpec {
+        let mut spec = SheetSpec {
             resolution: Some(0.01),
-            electrodes: crate::sheet::ElectrodeSpec {
-                contact_ohm,
-                ..base.electrodes
-            },
-            ..base
+            ..SheetSpec::rectangle(0.13, 0.13, 16)
         };
-        let sheet = Arc::new(Sheet::new(&spec, &[]).unwrap());
+        spec.physical.electrodes.contact_ohm = contact_ohm;
+        let sheet = Arc::new(SimulatedSheet::new(&spec, &[]).unwrap());
         let mut fe = SimFrontend::new(sheet, FrontendSpec::default(), 3).unwrap();
         if let Some(e) = open {
             fe.set_open(e, 1.0).unwrap();

@@ -7,19 +7,19 @@ use std::time::Instant;
 
 fn square(side: f64, l: u8, resolution: Option<f64>) -> SheetSpec {
     SheetSpec {
-        shape: Shape::Rectangle {
-            width: side,
-            height: side,
-        },
-        sheet_resistance: SHEET_RESISTANCE,
-        electrodes: ElectrodeSpec {
-            count: l,
-            width: side * 0.04,
-            ..ElectrodeSpec::default()
-        },
         resolution,
-        piezo: Piezo::default(),
-        bend: None,
+        ..SheetSpec::of(Sheet {
+            shape: Shape::Rectangle {
+                width: side,
+                height: side,
+            },
+            sheet_resistance: SHEET_RESISTANCE,
+            electrodes: ElectrodeSpec {
+                count: l,
+                width: side * 0.04,
+                ..ElectrodeSpec::default()
+            },
+        })
     }
 }
 
@@ -37,7 +37,7 @@ fn adjacent(l: u8) -> Protocol {
 
 #[test]
 fn touching_raises_conductance_and_bvc_grows_with_pressure() {
-    let sheet = Sheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
+    let sheet = SimulatedSheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
     let (p, src) = (adjacent(16), Source::default());
     let v0 = frame(&sheet.transfer(&[]).unwrap(), &p, 32e-6, &src);
     let mut last = 0.0;
@@ -73,7 +73,7 @@ fn touching_raises_conductance_and_bvc_grows_with_pressure() {
 
 #[test]
 fn bvc_shrinks_with_distance_from_the_electrodes() {
-    let sheet = Sheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
+    let sheet = SimulatedSheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
     let (p, src) = (adjacent(16), Source::default());
     let v0 = frame(&sheet.transfer(&[]).unwrap(), &p, 32e-6, &src);
     let mut last = f64::INFINITY;
@@ -96,15 +96,13 @@ fn extremes_give_finite_sane_frames() {
     let src = Source::default();
     // 4 and 32 electrodes.
     for l in [4u8, 32] {
-        let spec = SheetSpec {
-            electrodes: ElectrodeSpec {
-                count: l,
-                width: 0.003,
-                ..ElectrodeSpec::default()
-            },
-            ..square(0.13, l, None)
+        let mut spec = square(0.13, l, None);
+        spec.physical.electrodes = ElectrodeSpec {
+            count: l,
+            width: 0.003,
+            ..ElectrodeSpec::default()
         };
-        let sheet = Sheet::new(&spec, &[]).unwrap();
+        let sheet = SimulatedSheet::new(&spec, &[]).unwrap();
         let v = frame(&sheet.transfer(&[]).unwrap(), &adjacent(l), 32e-6, &src);
         assert!(
             v.iter().all(|x| x.is_finite()) && v.iter().any(|x| x.abs() > 1e-4),
@@ -112,7 +110,7 @@ fn extremes_give_finite_sane_frames() {
         );
     }
     // Contrast 1e-3 .. 1e3.
-    let sheet = Sheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
+    let sheet = SimulatedSheet::new(&square(0.13, 16, Some(0.005)), &[]).unwrap();
     let v0 = frame(&sheet.transfer(&[]).unwrap(), &adjacent(16), 32e-6, &src);
     for contrast in [1e-3, 1e-1, 10.0, 1e3] {
         let inc = Inclusion {
@@ -184,14 +182,9 @@ fn extremes_give_finite_sane_frames() {
     let frames: Vec<Vec<f64>> = [0.0, 1e3, 1e6]
         .iter()
         .map(|&z| {
-            let spec = SheetSpec {
-                electrodes: ElectrodeSpec {
-                    contact_ohm: z,
-                    ..square(0.13, 16, None).electrodes
-                },
-                ..square(0.13, 16, Some(0.005))
-            };
-            let s = Sheet::new(&spec, &[]).unwrap();
+            let mut spec = square(0.13, 16, Some(0.005));
+            spec.physical.electrodes.contact_ohm = z;
+            let s = SimulatedSheet::new(&spec, &[]).unwrap();
             frame(&s.transfer(&[]).unwrap(), &adjacent(16), 32e-6, &src)
         })
         .collect();
@@ -233,8 +226,8 @@ fn sheets_from_1_cm_to_1_m_give_the_same_frame() {
         .iter()
         .map(|&side| {
             let mut spec = square(side, 16, Some(side / 26.0));
-            spec.electrodes.contact_ohm = 0.0;
-            let sheet = Sheet::new(&spec, &[]).unwrap();
+            spec.physical.electrodes.contact_ohm = 0.0;
+            let sheet = SimulatedSheet::new(&spec, &[]).unwrap();
             let inc = Inclusion {
                 position: [0.1 * side, -0.2 * side],
                 radius: 0.08 * side,
@@ -295,7 +288,7 @@ fn resolution_trade_at_the_default_spacing() {
     let spec = square(0.13, 16, None);
     let h = spec.default_resolution();
     let started = Instant::now();
-    let sheet = Sheet::new(&spec, &[]).unwrap();
+    let sheet = SimulatedSheet::new(&spec, &[]).unwrap();
     let build = started.elapsed();
     let (frame_err, dv_err) = refinement_error(h);
     println!(
@@ -338,7 +331,7 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
         pressure: 20e3,
         footprint: Default::default(),
     };
-    let sheet = Sheet::new(&bent, &[]).unwrap();
+    let sheet = SimulatedSheet::new(&bent, &[]).unwrap();
     let fast = frame(&sheet.transfer(&[touch]).unwrap(), &p, 32e-6, &src);
     let net = build_network(&bent, &[]).unwrap();
     let direct = frame(
@@ -352,7 +345,10 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
         "the fast path includes the bend"
     );
     let flat_frame = frame(
-        &Sheet::new(&flat, &[]).unwrap().transfer(&[touch]).unwrap(),
+        &SimulatedSheet::new(&flat, &[])
+            .unwrap()
+            .transfer(&[touch])
+            .unwrap(),
         &p,
         32e-6,
         &src,
@@ -385,13 +381,13 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
 fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
     let spec = square(0.13, 16, Some(0.01));
     let (p, src) = (adjacent(16), Source::default());
-    let flat = Sheet::uneven(&spec, &[], &Unevenness::default()).unwrap();
-    let plain = Sheet::new(&spec, &[]).unwrap();
+    let flat = SimulatedSheet::uneven(&spec, &[], &Unevenness::default()).unwrap();
+    let plain = SimulatedSheet::new(&spec, &[]).unwrap();
     let f0 = frame(&plain.transfer(&[]).unwrap(), &p, 32e-6, &src);
     assert_eq!(frame(&flat.transfer(&[]).unwrap(), &p, 32e-6, &src), f0);
     let mut rng = et_core::rng::Rng::new(4);
     let field = Unevenness::draw(0.05, &mut rng);
-    let uneven = Sheet::uneven(&spec, &[], &field).unwrap();
+    let uneven = SimulatedSheet::uneven(&spec, &[], &field).unwrap();
     let z = uneven.transfer(&[]).unwrap();
     // Reciprocity: driving a-b and reading p-q equals driving p-q and reading a-b.
     for (a, b, q, r) in [(0, 1, 5, 6), (2, 3, 9, 10), (0, 8, 4, 12)] {
@@ -412,7 +408,7 @@ fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
         coefficients: [f64::NAN; 8],
     };
     assert!(matches!(
-        Sheet::uneven(&spec, &[], &bad),
+        SimulatedSheet::uneven(&spec, &[], &bad),
         Err(SheetError::Field { .. })
     ));
 }
@@ -424,7 +420,7 @@ fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
 #[test]
 fn an_elliptic_touch_is_symmetric_where_the_ellipse_is() {
     let spec = square(0.13, 16, Some(0.0025));
-    let sheet = Sheet::new(&spec, &[]).unwrap();
+    let sheet = SimulatedSheet::new(&spec, &[]).unwrap();
     let touch = |elongation: f64, angle: f64| Touch {
         position: [0.0, 0.0],
         radius: 0.01,

@@ -1,10 +1,10 @@
 use super::*;
 use crate::mesh::{Mesh, MeshSize};
 use et_core::protocol::{Protocol, ProtocolKind};
-use et_sim::sheet::SheetSpec;
+use et_core::sheet::Sheet;
 
 fn cem_frame(h: f64) -> Vec<f64> {
-    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let spec = Sheet::rectangle(0.13, 0.13, 16);
     let mesh = Mesh::of_sheet(
         &spec,
         MeshSize {
@@ -45,7 +45,7 @@ fn cem_voltages_converge_under_refinement() {
 }
 
 fn square_cem(z: f64) -> (Forward, usize) {
-    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let spec = Sheet::rectangle(0.13, 0.13, 8);
     let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 2_000)).unwrap();
     let n = mesh.triangles.len();
     (
@@ -150,7 +150,7 @@ fn extremes_give_finite_voltages_or_clear_errors() {
         fwd.frame(&vec![1e-4; n], &p16, 1e-3),
         Err(FemError::Input(_))
     ));
-    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let spec = Sheet::rectangle(0.13, 0.13, 8);
     let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 500)).unwrap();
     assert!(matches!(
         Forward::new(mesh.clone(), Electrodes::Complete(vec![1.0; 7])),
@@ -165,7 +165,7 @@ fn extremes_give_finite_voltages_or_clear_errors() {
 #[test]
 fn jacobian_columns_agree_with_finite_differences() {
     for electrodes in [Electrodes::Complete(vec![5.0; 8]), Electrodes::Point] {
-        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let spec = Sheet::rectangle(0.13, 0.13, 8);
         let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 600)).unwrap();
         let n = mesh.triangles.len();
         let fwd = Forward::new(mesh, electrodes.clone()).unwrap();
@@ -204,45 +204,9 @@ fn jacobian_columns_agree_with_finite_differences() {
 }
 
 #[test]
-fn finite_elements_and_the_simulators_resistor_network_agree() {
-    // Two independent models of the same untouched sheet (scene file): the simulator's
-    // resistor network and these finite elements.
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
-    for name in ["disc-22cm-16.toml", "square-13cm-16.toml"] {
-        let sc = et_sim::scene::Scene::load(&root.join(name)).unwrap();
-        let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
-        let sheet = std::sync::Arc::new(et_sim::sheet::Sheet::new(&sc.sheet, &[]).unwrap());
-        let sim = et_sim::frontend::SimFrontend::new(sheet, sc.frontend, 1).unwrap();
-        let v_sim = sim.ideal_frame(&protocol, 32e-6);
-        let mesh = Mesh::with_about(&sc.sheet, 20_000).unwrap();
-        let n = mesh.triangles.len();
-        let e = &sc.sheet.electrodes;
-        let fwd = Forward::new(
-            mesh,
-            Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
-        )
-        .unwrap();
-        let v_fem = fwd
-            .frame(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, 32e-6)
-            .unwrap();
-        let scale = v_fem.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = v_fem
-            .iter()
-            .zip(&v_sim)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        println!(
-            "{name}: largest difference {:.2} % of the largest voltage",
-            100.0 * worst / scale
-        );
-        assert!(worst < 0.05 * scale, "{name}: {worst} of {scale}");
-    }
-}
-
-#[test]
 fn four_to_thirty_two_electrodes() {
     for l in [4u8, 8, 16, 32] {
-        let spec = SheetSpec::rectangle(0.13, 0.13, l);
+        let spec = Sheet::rectangle(0.13, 0.13, l);
         let mesh = Mesh::with_about(&spec, 3_000).unwrap();
         let n = mesh.triangles.len();
         let fwd = Forward::new(mesh, Electrodes::Complete(vec![5.0; usize::from(l)])).unwrap();
@@ -277,7 +241,7 @@ fn touch_change(mesh: Mesh, c: [f64; 2], r: f64) -> Vec<f64> {
 #[test]
 fn refining_at_a_touch_spends_the_same_triangles_better() {
     use crate::mesh::Refinement;
-    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+    let spec = Sheet::rectangle(0.13, 0.13, 16);
     let (c, r) = ([0.025, -0.015], 0.008);
     // The reference is uniformly fine, so it does not favour the refined mesh.
     let reference = touch_change(Mesh::with_about(&spec, 100_000).unwrap(), c, r);
@@ -306,7 +270,7 @@ fn refining_at_a_touch_spends_the_same_triangles_better() {
 /// holds for it; a contact resistance below the limit is refused by name.
 #[test]
 fn the_shunt_model_is_the_complete_models_limit() {
-    let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+    let spec = Sheet::rectangle(0.13, 0.13, 8);
     let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 2_000)).unwrap();
     let n = mesh.triangles.len();
     let sigma = vec![1.0 / spec.sheet_resistance; n];
@@ -364,7 +328,7 @@ fn the_shunt_model_is_the_complete_models_limit() {
 /// count.
 #[test]
 fn both_electrode_models_converge_to_the_exact_disc_solution_at_second_order() {
-    use et_sim::sheet::ElectrodeModel;
+    use et_core::sheet::ElectrodeModel;
     let all: Vec<(ElectrodeModel, Vec<crate::exact::FrameError>)> =
         [ElectrodeModel::Complete, ElectrodeModel::Point]
             .into_iter()

@@ -410,7 +410,7 @@ mod tests {
     use crate::fem::{Electrodes, Forward};
     use crate::mesh::MeshSize;
     use et_core::protocol::{Protocol, ProtocolKind};
-    use et_sim::sheet::SheetSpec;
+    use et_core::sheet::Sheet;
 
     fn tmp(name: &str) -> std::path::PathBuf {
         let d = std::env::temp_dir().join(format!("et-mesh-{}-{name}", std::process::id()));
@@ -473,7 +473,7 @@ mod tests {
 
     #[test]
     fn gmsh_and_csv_meshes_give_the_same_voltages_as_the_original() {
-        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let spec = Sheet::rectangle(0.13, 0.13, 8);
         let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 800)).unwrap();
         let dir = tmp("rt");
         let msh = dir.join("m.msh");
@@ -544,7 +544,7 @@ mod tests {
     /// refused.
     #[test]
     fn one_node_electrodes_are_point_electrodes() {
-        let spec = SheetSpec::rectangle(0.13, 0.13, 8);
+        let spec = Sheet::rectangle(0.13, 0.13, 8);
         let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 800)).unwrap();
         let dir = tmp("point");
         let write = |name: &str, text: String| {

@@ -114,7 +114,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
     let mesh = scene_mesh(&scene, &args.mesh, true)?;
-    let sigma0 = 1.0 / scene.sheet.sheet_resistance;
+    let sigma0 = 1.0 / scene.sheet.physical.sheet_resistance;
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
     let sigma1: Vec<f64> = (0..mesh.triangles.len())
         .map(|t| {
@@ -131,7 +131,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         })
         .collect();
     let t_n = mesh.triangles.len();
-    let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet)?)?;
+    let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet.physical)?)?;
     let amps = f64::from(config.current_amps());
     let v0 = fwd.frame(&vec![sigma0; t_n], &protocol, amps)?;
     let v1 = fwd.frame(&sigma1, &protocol, amps)?;
@@ -205,18 +205,18 @@ pub(crate) fn scene_mesh(
         bail!("--refine meshes the scene's sheet; it cannot change an imported --mesh");
     }
     let mesh = match args.mesh.as_deref() {
-        None => Mesh::with_about_refined(&scene.sheet, args.triangles, &regions)?,
+        None => Mesh::with_about_refined(&scene.sheet.physical, args.triangles, &regions)?,
         Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
             [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
             [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
             _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
         },
     };
-    if mesh.electrodes.len() != usize::from(scene.sheet.electrodes.count) {
+    if mesh.electrodes.len() != usize::from(scene.sheet.physical.electrodes.count) {
         bail!(
             "the mesh has {} electrodes, the scene's sheet {}",
             mesh.electrodes.len(),
-            scene.sheet.electrodes.count
+            scene.sheet.physical.electrodes.count
         );
     }
     Ok(mesh)
@@ -237,11 +237,11 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         Some(r) => r.header.config,
         None => scene.scan_config()?,
     };
-    if config.electrodes != scene.sheet.electrodes.count {
+    if config.electrodes != scene.sheet.physical.electrodes.count {
         bail!(
             "the frames are of {} electrodes, the scene's sheet has {}",
             config.electrodes,
-            scene.sheet.electrodes.count
+            scene.sheet.physical.electrodes.count
         );
     }
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -258,7 +258,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let mesh = scene_mesh(&scene, &args.mesh, false)?;
     let t_n = mesh.triangles.len();
     let t_mesh = stage(&format!("mesh ({t_n} triangles)"));
-    let imager = Imager::new(&scene.sheet, mesh, args.pixels)?;
+    let imager = Imager::new(&scene.sheet.physical, mesh, args.pixels)?;
     let jac = imager.transfer_jacobian(&protocol, amps)?;
     let grid = &imager.grid;
     let t_forward = stage(&format!(

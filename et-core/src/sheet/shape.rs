@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The outline of a flat (or developable, see [`crate::sheet::Bend`]) sheet.
+/// The outline of a flat (or developable) sheet.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Shape {

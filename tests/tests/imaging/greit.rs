@@ -1,25 +1,29 @@
-use super::*;
-use crate::mesh::Mesh;
-use crate::metrics::{assert_found_exactly, merit};
-use crate::onestep::imaging_variance;
-use crate::touches::{PROMINENCE, TOUCH_Z, above_noise, default_threshold, touches};
+use super::assert_found_exactly;
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_recon::fem::TransferJacobian;
+use et_recon::greit::*;
+use et_recon::imager::Imager;
+use et_recon::mesh::Mesh;
+use et_recon::metrics::merit;
+use et_recon::onestep::imaging_variance;
+use et_recon::touches::{PROMINENCE, TOUCH_Z, above_noise, default_threshold, touches};
+use et_recon::{PixelGrid, ReconError};
 use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
-use et_sim::sheet::Sheet;
+use et_sim::sheet::SimulatedSheet;
 use et_sim::touch::Touch;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 fn scene(name: &str) -> Scene {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
     Scene::load(&root.join(name)).unwrap()
 }
 
 /// Noiseless simulator frames (its resistor network, not these finite elements): dV of the
 /// scene's touches.
 fn sim_dv(sc: &Scene, protocol: &Protocol, amps: f64) -> Vec<f64> {
-    let sheet = Arc::new(Sheet::new(&sc.sheet, &[]).unwrap());
+    let sheet = Arc::new(SimulatedSheet::new(&sc.sheet, &[]).unwrap());
     let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
     let v0 = fe.ideal_frame(protocol, amps);
     let touches: Vec<Touch> = sc
@@ -34,8 +38,8 @@ fn sim_dv(sc: &Scene, protocol: &Protocol, amps: f64) -> Vec<f64> {
 
 fn small(kind: ProtocolKind) -> (Imager, TransferJacobian) {
     let sc = scene("disc-ref-x050.toml");
-    let mesh = Mesh::with_about(&sc.sheet, 600).unwrap();
-    let imager = Imager::new(&sc.sheet, mesh, 24).unwrap();
+    let mesh = Mesh::with_about(&sc.sheet.physical, 600).unwrap();
+    let imager = Imager::new(&sc.sheet.physical, mesh, 24).unwrap();
     let protocol = Protocol::new(kind, 16).unwrap();
     let jac = imager.transfer_jacobian(&protocol, 32e-6).unwrap();
     (imager, jac)
@@ -196,36 +200,6 @@ fn the_noise_figure_asked_for_is_met() {
     }
 }
 
-/// A triangle's desired image integrates to its area (the disc's ramp is one pixel wide
-/// about the radius) wherever the disc lies inside the sheet.
-#[test]
-fn a_desired_image_integrates_to_its_triangle() {
-    let (imager, _) = small(ProtocolKind::Adjacent);
-    let grid = &imager.grid;
-    let mesh = imager.forward.mesh();
-    for radius in [0.01, 0.02, 0.04] {
-        let (_, rows) = desired(grid, &imager, radius);
-        let mut sums = vec![0.0; mesh.triangles.len()];
-        for row in &rows {
-            for &(t, w) in row {
-                sums[t] += w * grid.size * grid.size;
-            }
-        }
-        let mut checked = 0;
-        for t in 0..mesh.triangles.len() {
-            let c = mesh.centroid(t);
-            // The 22 cm disc is centred at 0 with radius 0.11 m.
-            if c[0].hypot(c[1]) + radius + grid.size < 0.11 {
-                let area = 0.5 * mesh.double_area(t);
-                let rel = (sums[t] - area).abs() / area;
-                assert!(rel < 1e-12, "radius {radius}, triangle {t}: {rel}");
-                checked += 1;
-            }
-        }
-        assert!(checked > 10, "{checked}");
-    }
-}
-
 /// Noise-free frames of the simulator's resistor network: GREIT's image at the consensus
 /// noise figure finds exactly the true touches, each within its radius.
 #[test]
@@ -239,8 +213,8 @@ fn greit_finds_exactly_the_true_touches_on_noise_free_frames() {
         let sc = scene(name);
         let protocol = Protocol::new(kind, 16).unwrap();
         let dv = sim_dv(&sc, &protocol, 32e-6);
-        let mesh = Mesh::with_about(&sc.sheet, 3_000).unwrap();
-        let imager = Imager::new(&sc.sheet, mesh, 64).unwrap();
+        let mesh = Mesh::with_about(&sc.sheet.physical, 3_000).unwrap();
+        let imager = Imager::new(&sc.sheet.physical, mesh, 64).unwrap();
         let jac = imager.transfer_jacobian(&protocol, 32e-6).unwrap();
         let g = Greit::new(&imager, &jac, &GreitOptions::default()).unwrap();
         let var = imaging_variance(&vec![0.0; dv.len()], &dv);
@@ -306,8 +280,8 @@ fn bad_settings_and_frames_are_refused() {
     // A Jacobian of another mesh.
     let (other, _) = {
         let sc = scene("disc-ref-x050.toml");
-        let mesh = Mesh::with_about(&sc.sheet, 300).unwrap();
-        (Imager::new(&sc.sheet, mesh, 24).unwrap(), ())
+        let mesh = Mesh::with_about(&sc.sheet.physical, 300).unwrap();
+        (Imager::new(&sc.sheet.physical, mesh, 24).unwrap(), ())
     };
     assert!(matches!(
         Greit::new(&other, &jac, &GreitOptions::default()),

@@ -1,28 +1,29 @@
-use crate::fem::{Electrodes, Forward};
-use crate::gauss_newton::*;
-use crate::gcv::*;
-use crate::mesh::{Mesh, MeshSize};
-use crate::metrics::*;
-use crate::onestep::*;
-use crate::pixels::*;
-use crate::touches::*;
+use super::assert_found_exactly;
 use et_core::protocol::{Protocol, ProtocolKind};
+use et_recon::fem::{Electrodes, Forward};
+use et_recon::gauss_newton::*;
+use et_recon::gcv::*;
+use et_recon::mesh::{Mesh, MeshSize};
+use et_recon::metrics::*;
+use et_recon::onestep::*;
+use et_recon::pixels::*;
+use et_recon::touches::*;
 use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
-use et_sim::sheet::Sheet;
+use et_sim::sheet::SimulatedSheet;
 use et_sim::touch::Touch;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 fn scene(name: &str) -> Scene {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
     Scene::load(&root.join(name)).unwrap()
 }
 
 /// Noiseless simulator frames (resistor network, not these finite elements) without and with
 /// the scene's touches.
 fn sim_frames(sc: &Scene, protocol: &Protocol, amps: f64) -> (Vec<f64>, Vec<f64>) {
-    let sheet = Arc::new(Sheet::new(&sc.sheet, &[]).unwrap());
+    let sheet = Arc::new(SimulatedSheet::new(&sc.sheet, &[]).unwrap());
     let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
     let v0 = fe.ideal_frame(protocol, amps);
     let touches: Vec<Touch> = sc
@@ -46,14 +47,24 @@ fn setup(sc: &Scene, protocol: &Protocol, amps: f64) -> Setup {
 }
 
 fn setup_with(sc: &Scene, protocol: &Protocol, amps: f64, alpha: f64, s: f64) -> Setup {
-    let mesh = Mesh::of_sheet(&sc.sheet, MeshSize::for_count(&sc.sheet, 3_000)).unwrap();
-    let z =
-        vec![sc.sheet.electrodes.contact_ohm * sc.sheet.electrodes.width; mesh.electrodes.len()];
+    let mesh = Mesh::of_sheet(
+        &sc.sheet.physical,
+        MeshSize::for_count(&sc.sheet.physical, 3_000),
+    )
+    .unwrap();
+    let z = vec![
+        sc.sheet.physical.electrodes.contact_ohm * sc.sheet.physical.electrodes.width;
+        mesh.electrodes.len()
+    ];
     let grid = PixelGrid::new(&mesh, 32);
     let n = mesh.triangles.len();
     let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
     let (_, jac) = fwd
-        .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], protocol, amps)
+        .jacobian(
+            &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
+            protocol,
+            amps,
+        )
         .unwrap();
     Setup {
         grid,
@@ -219,8 +230,8 @@ fn x050_adjacent() -> (Scene, Protocol, f64, Vec<f64>) {
 fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
     // Data from the simulator's resistor network (not these finite elements).
     let (sc, protocol, amps, dv) = x050_adjacent();
-    let mesh = Mesh::with_about(&sc.sheet, 2_000).unwrap();
-    let e = &sc.sheet.electrodes;
+    let mesh = Mesh::with_about(&sc.sheet.physical, 2_000).unwrap();
+    let e = &sc.sheet.physical.electrodes;
     let n = mesh.triangles.len();
     let grid = PixelGrid::new(&mesh, 32);
     let fwd = Forward::new(
@@ -228,7 +239,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
         Electrodes::Complete(vec![e.contact_ohm * e.width; 16]),
     )
     .unwrap();
-    let sigma_0 = vec![1.0 / sc.sheet.sheet_resistance; n];
+    let sigma_0 = vec![1.0 / sc.sheet.physical.sheet_resistance; n];
     let opts = GaussNewton {
         alpha: 0.03,
         s: 0.5,
@@ -293,7 +304,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
 
 #[test]
 fn dynamic_selection_on_the_reference_scenes() {
-    use crate::select::{Selector, Settings};
+    use et_recon::select::{Selector, Settings};
     let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
     let first = scene("disc-ref-x000.toml");
     let s = setup(&first, &protocol, 32e-6);
@@ -416,14 +427,24 @@ fn two_touches_under_noise_are_two_peaks_at_the_alpha_gcv_picks() {
     let amps = f64::from(config.current_amps());
     let frames = et_sim::still::scene_frames(&sc, &config, 10).unwrap();
     let dv = frames.dv();
-    let mesh = Mesh::of_sheet(&sc.sheet, MeshSize::for_count(&sc.sheet, 3_000)).unwrap();
-    let z =
-        vec![sc.sheet.electrodes.contact_ohm * sc.sheet.electrodes.width; mesh.electrodes.len()];
+    let mesh = Mesh::of_sheet(
+        &sc.sheet.physical,
+        MeshSize::for_count(&sc.sheet.physical, 3_000),
+    )
+    .unwrap();
+    let z = vec![
+        sc.sheet.physical.electrodes.contact_ohm * sc.sheet.physical.electrodes.width;
+        mesh.electrodes.len()
+    ];
     let grid = PixelGrid::new(&mesh, 48);
     let n = mesh.triangles.len();
     let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
     let (_, jac) = fwd
-        .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, amps)
+        .jacobian(
+            &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
+            &protocol,
+            amps,
+        )
         .unwrap();
     let candidates: Vec<f64> = (0..=25)
         .map(|i| 10f64.powf(-4.0 + 0.2 * f64::from(i)))
@@ -503,16 +524,16 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
 /// allocation abort: 10^10 cells).
 #[test]
 fn pixel_counts_outside_the_documented_range_are_refused() {
-    let sheet = et_sim::sheet::SheetSpec::rectangle(0.13, 0.13, 16);
+    let sheet = et_core::sheet::Sheet::rectangle(0.13, 0.13, 16);
     let mesh = Mesh::with_about(&sheet, 500).unwrap();
-    for pixels in [0, 3, crate::imager::MAX_PIXELS + 1, 100_000] {
-        let e = crate::Imager::new(&sheet, mesh.clone(), pixels).unwrap_err();
+    for pixels in [0, 3, et_recon::imager::MAX_PIXELS + 1, 100_000] {
+        let e = et_recon::Imager::new(&sheet, mesh.clone(), pixels).unwrap_err();
         assert!(
-            matches!(&e, crate::fem::FemError::Input(m) if m.contains("4 to 512")),
+            matches!(&e, et_recon::fem::FemError::Input(m) if m.contains("4 to 512")),
             "{pixels}: {e}"
         );
     }
-    assert!(crate::Imager::new(&sheet, mesh, 4).is_ok());
+    assert!(et_recon::Imager::new(&sheet, mesh, 4).is_ok());
 }
 
 /// The data-space matrix (BLAS-3, Cholesky of the K x K system) equals the primal form
@@ -562,10 +583,10 @@ fn the_data_space_matrix_equals_the_primal_form_and_gcv_its_definition() {
 #[test]
 fn iterative_gauss_newton_does_not_diverge_and_scores_its_noise() {
     let (sc, protocol, amps, dv) = x050_adjacent();
-    let mesh = Mesh::with_about(&sc.sheet, 2_000).unwrap();
+    let mesh = Mesh::with_about(&sc.sheet.physical, 2_000).unwrap();
     let n = mesh.triangles.len();
-    let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet).unwrap()).unwrap();
-    let sigma_0 = vec![1.0 / sc.sheet.sheet_resistance; n];
+    let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet.physical).unwrap()).unwrap();
+    let sigma_0 = vec![1.0 / sc.sheet.physical.sheet_resistance; n];
     let bvc = et_core::stats::bvc_dv(&dv);
     let var = vec![(1e-3 * bvc).powi(2) / dv.len() as f64; dv.len()];
     for alpha in [1e-6, 0.03] {
@@ -622,19 +643,23 @@ fn noise_free_frames_find_exactly_the_true_touches() {
         let amps = 32e-6;
         let (v0, v1) = sim_frames(&sc, &protocol, amps);
         let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
-        let mesh = Mesh::with_about(&sc.sheet, 4_000).unwrap();
+        let mesh = Mesh::with_about(&sc.sheet.physical, 4_000).unwrap();
         let grid = PixelGrid::new(&mesh, 64);
         let n = mesh.triangles.len();
-        let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet).unwrap()).unwrap();
+        let fwd = Forward::new(mesh, Electrodes::of_sheet(&sc.sheet.physical).unwrap()).unwrap();
         let (_, jac) = fwd
-            .jacobian(&vec![1.0 / sc.sheet.sheet_resistance; n], &protocol, amps)
+            .jacobian(
+                &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
+                &protocol,
+                amps,
+            )
             .unwrap();
         let space = DataSpace::new(&jac, 0.5).unwrap();
         let var = imaging_variance(&vec![0.0; dv.len()], &dv);
         let alpha = space
-            .choose_alpha(&dv, &var, &crate::gcv::default_alphas())
+            .choose_alpha(&dv, &var, &et_recon::gcv::default_alphas())
             .unwrap();
-        let (gcv_only, _) = space.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
+        let (gcv_only, _) = space.gcv(&dv, &et_recon::gcv::default_alphas()).unwrap();
         let recon = space.one_step(alpha).unwrap();
         let image = grid.image(&recon.reconstruct(&dv).unwrap());
         let sd = grid.image(&recon.noise_sd(&var).unwrap());
@@ -663,13 +688,13 @@ fn noise_free_frames_find_exactly_the_true_touches() {
 /// protocol whose K exceeds r (PP-PP) and one whose K is below it (opposite at L = 8).
 #[test]
 fn the_factored_data_space_equals_the_dense_one() {
-    use et_sim::sheet::ElectrodeModel;
+    use et_core::sheet::ElectrodeModel;
     for (model, kind) in [
         (ElectrodeModel::Complete, ProtocolKind::Adjacent),
         (ElectrodeModel::Complete, ProtocolKind::PpPp),
         (ElectrodeModel::Point, ProtocolKind::Opposite),
     ] {
-        let mut spec = et_sim::sheet::SheetSpec::rectangle(0.13, 0.13, 8);
+        let mut spec = et_core::sheet::Sheet::rectangle(0.13, 0.13, 8);
         spec.electrodes.model = model;
         let mesh = Mesh::with_about(&spec, 600).unwrap();
         let n = mesh.triangles.len();
@@ -704,8 +729,8 @@ fn the_factored_data_space_equals_the_dense_one() {
             .map(|k| (k as f64 * 0.7).sin() * 1e-5)
             .collect();
         let var = vec![1e-14; frame.len()];
-        let (a1, s1) = f.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
-        let (a2, s2) = d.gcv(&dv, &crate::gcv::default_alphas()).unwrap();
+        let (a1, s1) = f.gcv(&dv, &et_recon::gcv::default_alphas()).unwrap();
+        let (a2, s2) = d.gcv(&dv, &et_recon::gcv::default_alphas()).unwrap();
         assert_eq!(a1, a2);
         for (x, y) in s1.iter().zip(&s2) {
             assert!((x.1 - y.1).abs() <= 1e-7 * y.1, "{x:?} {y:?}");

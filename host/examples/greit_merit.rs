@@ -8,7 +8,7 @@
 //!    of 10): touches found and each true touch's distance to its match, GN with alpha by GCV
 //!    as `et reconstruct`, GREIT at noise figure 0.5.
 //!
-//! Run: `cargo run --release -p et-recon --example greit_merit`
+//! Run: `cargo run --release -p et-host --example greit_merit`
 
 use std::time::Instant;
 
@@ -48,8 +48,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for name in ["disc-ref-x050.toml", "square-13cm-16.toml"] {
         let sc = scene(name);
-        let mesh = Mesh::with_about(&sc.sheet, 8_000)?;
-        let imager = Imager::new(&sc.sheet, mesh, 64)?;
+        let mesh = Mesh::with_about(&sc.sheet.physical, 8_000)?;
+        let imager = Imager::new(&sc.sheet.physical, mesh, 64)?;
         let protocol = et_core::protocol::Protocol::new(ProtocolKind::Adjacent, 16)?;
         let jac = imager.transfer_jacobian(&protocol, 32e-6)?;
         let grid = &imager.grid;
@@ -138,8 +138,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|(a, b)| f64::from(*a) - b)
                 .collect();
         let var = imaging_variance(&f.var, &dv);
-        let mesh = Mesh::with_about(&sc.sheet, 8_000)?;
-        let imager = Imager::new(&sc.sheet, mesh, 64)?;
+        let mesh = Mesh::with_about(&sc.sheet.physical, 8_000)?;
+        let imager = Imager::new(&sc.sheet.physical, mesh, 64)?;
         let jac = imager.transfer_jacobian(&protocol, amps)?;
         let grid = &imager.grid;
         let space = DataSpace::factored(&jac, 0.5)?;
