@@ -13,16 +13,13 @@
 use std::time::Instant;
 
 use et_core::protocol::ProtocolKind;
+use et_recon::greit::NOISE_FIGURE;
 use et_recon::greit::{MeritSummary, centre_target, figures_of_merit, noise_figure};
-use et_recon::onestep::imaging_variance;
-use et_recon::{
-    DataSpace, Greit, GreitOptions, Imager, PROMINENCE, ReconError, TOUCH_Z, above_noise,
-    default_threshold, match_touches, mesh::Mesh, touches,
-};
+use et_recon::{AlphaRule, DataSpace, ReconError, match_touches};
 use et_sim::scene::Scene;
 
 fn scene(name: &str) -> Scene {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
     Scene::load(&root.join(name)).expect("a reference scene")
 }
 
@@ -48,19 +45,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for name in ["disc-ref-x050.toml", "square-13cm-16.toml"] {
         let sc = scene(name);
-        let mesh = Mesh::with_about(&sc.sheet.physical, 8_000)?;
-        let imager = Imager::new(&sc.sheet.physical, mesh, 64)?;
         let protocol = et_core::protocol::Protocol::new(ProtocolKind::Adjacent, 16)?;
-        let jac = imager.transfer_jacobian(&protocol, 32e-6)?;
+        // GREIT at the consensus noise figure, about 8 000 triangles, 64 pixels.
+        let recon = et_recon::Spec {
+            method: et_recon::Method::Greit { radius: None },
+            alpha: AlphaRule::NoiseFigure(NOISE_FIGURE),
+            ..et_recon::Spec::new(sc.sheet.physical.clone(), protocol, 32e-6)
+        }
+        .set_up()?;
+        let (imager, jac) = (recon.imager(), recon.jacobian());
         let grid = &imager.grid;
         let extent = grid.size * grid.width.max(grid.height) as f64;
         let target = 0.025 * extent;
         let sheet = format!("{name} ({} triangles)", imager.triangles());
-        // GREIT.
-        let t = Instant::now();
-        let greit = Greit::new(&imager, &jac, &GreitOptions::default())?;
-        let setup = t.elapsed().as_secs_f64();
-        let (m, _) = figures_of_merit(&imager, &jac, 9, target, &|dv| greit.image(dv))?;
+        // GREIT: its matrix's time is the set-up's.
+        let greit = recon
+            .greit()
+            .ok_or("GREIT at a noise figure keeps its matrix")?;
+        let setup = recon.set_up_timings.matrix;
+        let (m, _) = figures_of_merit(imager, jac, 9, target, &|dv| greit.image(dv))?;
         row(
             &format!("{sheet}, GREIT"),
             greit.alpha,
@@ -70,8 +73,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         // GN at the same noise figure: alpha by bisection (NF falls as alpha grows).
         let t = Instant::now();
-        let space = DataSpace::factored(&jac, 0.5)?;
-        let h = centre_target(&imager, &jac, greit.radius);
+        let space = DataSpace::factored(jac, 0.5)?;
+        let h = centre_target(imager, jac, greit.radius);
         let ones = vec![1.0; h.len()];
         let nf_of = |alpha: f64| -> Result<f64, ReconError> {
             let r = space.one_step(alpha)?;
@@ -99,7 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let alpha = (0.5 * (lo + hi)).exp();
         let gn = space.one_step(alpha)?;
         let setup = t.elapsed().as_secs_f64();
-        let (m, _) = figures_of_merit(&imager, &jac, 9, target, &|dv| {
+        let (m, _) = figures_of_merit(imager, jac, 9, target, &|dv| {
             Ok(grid.image(&gn.reconstruct(dv)?))
         })?;
         row(
@@ -132,55 +135,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let protocol = config.validate()?;
         let amps = f64::from(config.current_amps());
         let f = et_sim::still::scene_frames(&sc, &config, 10)?;
-        let dv: Vec<f64> =
-            f.v1.iter()
-                .zip(&f.v0)
-                .map(|(a, b)| f64::from(*a) - b)
-                .collect();
-        let var = imaging_variance(&f.var, &dv);
-        let mesh = Mesh::with_about(&sc.sheet.physical, 8_000)?;
-        let imager = Imager::new(&sc.sheet.physical, mesh, 64)?;
-        let jac = imager.transfer_jacobian(&protocol, amps)?;
-        let grid = &imager.grid;
-        let space = DataSpace::factored(&jac, 0.5)?;
-        let gcv = space.choose_alpha(&dv, &var, &et_recon::default_alphas())?;
-        let gn = space.one_step(gcv)?;
-        let greit = Greit::new(&imager, &jac, &GreitOptions::default())?;
-        let adaptive = Greit::new(
-            &imager,
-            &jac,
-            &GreitOptions {
-                radius: None,
-                regularisation: et_recon::Regularisation::Alpha(Greit::choose_alpha(
-                    &imager, &jac, &dv, &var,
-                )?),
-            },
-        )?;
-        let methods = [
-            (
-                "one-step GN",
-                gcv,
-                grid.image(&gn.reconstruct(&dv)?),
-                grid.image(&gn.noise_sd(&var)?),
-            ),
-            (
-                "GREIT",
-                greit.alpha,
-                greit.image(&dv)?,
-                greit.noise_sd(&var)?,
-            ),
-            (
-                "GREIT, alpha by GCV",
-                adaptive.alpha,
-                adaptive.image(&dv)?,
-                adaptive.noise_sd(&var)?,
-            ),
-        ];
-        for (method, alpha, image, sd) in methods {
-            let found = above_noise(
-                &touches(grid, &image, &sd, default_threshold(kind), PROMINENCE),
-                TOUCH_Z,
-            );
+        let reference = et_recon::Reference {
+            v0: f.v0.clone(),
+            var_dv: f.var.clone(),
+        };
+        let mut recon = et_recon::Spec::new(sc.sheet.physical.clone(), protocol, amps).set_up()?;
+        let greit = et_recon::Method::Greit { radius: None };
+        let mut methods = Vec::new();
+        for (method, rule, what) in [
+            (et_recon::Method::default(), AlphaRule::Gcv, "one-step GN"),
+            (greit, AlphaRule::NoiseFigure(NOISE_FIGURE), "GREIT"),
+            (greit, AlphaRule::Gcv, "GREIT, alpha by GCV"),
+        ] {
+            recon.set_method(method, rule)?;
+            methods.push((what, recon.image(&f.v1, &reference)?));
+        }
+        let grid = recon.grid();
+        for (method, image) in methods {
+            let (alpha, found) = (image.alpha, image.touches);
             let matches = match_touches(grid, &found, &f.truth);
             let distances: Vec<String> = matches
                 .iter()

@@ -34,10 +34,7 @@ use et_learn::pipeline::{self, TrainOptions};
 use et_recon::Imager;
 use et_recon::mesh::Mesh;
 use et_recon::select::{Settings, significant};
-use et_recon::{
-    Data, GaussNewton, PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions,
-    touches,
-};
+use et_recon::{Data, GaussNewton, metrics, regions};
 use et_sim::still::{scene_frames_on, simulated_sheet};
 
 mod imaging;

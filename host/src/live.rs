@@ -25,15 +25,13 @@ use serde::Serialize;
 
 use crate::link::{Counters, Keepalive, Link, LinkChange, LinkError};
 use crate::recording::{self, Recording};
+use et_core::sheet::Sheet;
 use et_learn::fit::{FitError, Fitted};
 use et_learn::model_file::ModelFile;
 use et_learn::regress::posterior_centre;
-use et_recon::Imager;
-use et_recon::fem::{FemError, TransferJacobian};
-use et_recon::mesh::{Mesh, MeshError};
 use et_recon::{
-    DataSpace, Greit, GreitOptions, PROMINENCE, PixelGrid, PixelOperator, ReconError, Region,
-    above_noise, default_threshold, touches,
+    AlphaRule, Imager, ImagingError, MeshPlan, PROMINENCE, PixelGrid, PixelOperator, ReconError,
+    Reconstructor, Region, above_noise, default_threshold, touches,
 };
 
 mod monitor;
@@ -131,10 +129,8 @@ pub enum LiveError {
         /// The frame's sequence number.
         seq: u32,
     },
-    /// The sheet could not be meshed.
-    Mesh(MeshError),
-    /// The forward model or Jacobian failed.
-    Fem(FemError),
+    /// The sheet could not be meshed or modelled, or its reconstruction set up.
+    Imaging(ImagingError),
     /// The one-step reconstruction matrix could not be built.
     Recon(ReconError),
     /// The model file's tables are not a usable model.
@@ -171,8 +167,7 @@ impl std::fmt::Display for LiveError {
                 write!(f, "frame {seq}: {got} values, its protocol has {expected}")
             }
             LiveError::NonFinite { seq } => write!(f, "frame {seq}: a value is not finite"),
-            LiveError::Mesh(e) => write!(f, "mesh: {e}"),
-            LiveError::Fem(e) => write!(f, "forward model: {e}"),
+            LiveError::Imaging(e) => write!(f, "{e}"),
             LiveError::Recon(e) => write!(f, "reconstruction: {e}"),
             LiveError::Model(e) => write!(f, "model: {e}"),
             LiveError::Stats(e) => write!(f, "reference frames: {e}"),
@@ -196,8 +191,7 @@ from_errors!(
     Scene(SceneError),
     Recording(recording::RecordingError),
     Config(ConfigError),
-    Mesh(MeshError),
-    Fem(FemError),
+    Imaging(ImagingError),
     Recon(ReconError),
     Model(FitError),
     Stats(stats::StatsError),

@@ -137,7 +137,7 @@ impl Viewer {
     pub fn new(options: Options) -> Result<Self, ViewerError> {
         let (source, sheet) = open_source(&options.source, options.scene.as_deref())?;
         let mut processor = Processor::new(
-            &sheet,
+            &sheet.physical,
             Settings {
                 method: options.method,
                 ..Settings::default()
@@ -228,7 +228,7 @@ impl Viewer {
         match open_source(&spec, self.options.scene.as_deref()) {
             Ok((source, sheet)) => {
                 if sheet != self.sheet {
-                    match Processor::new(&sheet, self.processor.settings()) {
+                    match Processor::new(&sheet.physical, self.processor.settings()) {
                         Ok(mut p) => {
                             p.classifier = self.processor.classifier.take();
                             self.processor = p;

@@ -14,7 +14,7 @@ use et_core::sheet::Sheet;
 use et_core::sheet::shape::Shape;
 use et_recon::fem::{Electrodes, Forward, TransferJacobian};
 use et_recon::mesh::Mesh;
-use et_recon::{DataSpace, OneStep, PixelGrid, PixelOperator};
+use et_recon::{AlphaRule, DataSpace, MeshPlan, Method, OneStep, PixelGrid, PixelOperator, Spec};
 use nalgebra::{DMatrix, DVector};
 
 fn main() {
@@ -26,12 +26,6 @@ fn disc(electrodes: u8) -> Sheet {
     s.shape = Shape::Disc { radius: 0.11 };
     s.electrodes.width = 0.006;
     s
-}
-
-/// Everything a reconstruction needs, from the sheet spec: the mesh, the forward model at the
-/// background, the Jacobian and the one-step matrix. Returns the triangle count.
-fn set_up(triangles: usize) -> (usize, OneStep, Mesh) {
-    set_up_with(triangles, 16, ProtocolKind::Adjacent)
 }
 
 fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (TransferJacobian, Mesh) {
@@ -46,23 +40,52 @@ fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (TransferJa
     (jac, mesh)
 }
 
-fn set_up_with(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (usize, OneStep, Mesh) {
-    let (jac, mesh) = jacobian(triangles, electrodes, kind);
-    let one = DataSpace::factored(&jac, 0.5)
-        .and_then(|d| d.one_step(0.03))
-        .expect("recon");
-    (mesh.triangles.len(), one, mesh)
+/// The whole set-up through et's entry point ([`Spec::set_up`]): mesh, forward model, pixel
+/// grid, Jacobian, data space and the one-step matrix at alpha 0.03.
+fn reconstructor(
+    triangles: usize,
+    electrodes: u8,
+    kind: ProtocolKind,
+    method: Method,
+    alpha: AlphaRule,
+) -> usize {
+    let protocol = Protocol::new(kind, electrodes).expect("protocol");
+    Spec {
+        mesh: MeshPlan::About {
+            triangles,
+            refine: Vec::new(),
+        },
+        method,
+        alpha,
+        ..Spec::new(disc(electrodes), protocol, 32e-6)
+    }
+    .set_up()
+    .expect("set-up")
+    .imager()
+    .triangles()
 }
 
 #[divan::bench(args = [2_000, 8_000, 30_000], sample_count = 5, sample_size = 1)]
 fn set_up_mesh_forward_jacobian_matrix(triangles: usize) -> usize {
-    set_up(triangles).0
+    reconstructor(
+        triangles,
+        16,
+        ProtocolKind::Adjacent,
+        Method::default(),
+        AlphaRule::Fixed(0.03),
+    )
 }
 
 /// 32 electrodes, PP-PP, 8 000 triangles.
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn set_up_32_electrodes_pp_pp_8000() -> usize {
-    set_up_with(8_000, 32, ProtocolKind::PpPp).0
+    reconstructor(
+        8_000,
+        32,
+        ProtocolKind::PpPp,
+        Method::default(),
+        AlphaRule::Fixed(0.03),
+    )
 }
 
 /// GREIT's full set-up at the consensus noise figure: mesh, forward model, Jacobian, the
@@ -70,16 +93,13 @@ fn set_up_32_electrodes_pp_pp_8000() -> usize {
 /// adjacent).
 #[divan::bench(args = [2_000, 8_000], sample_count = 5, sample_size = 1)]
 fn set_up_greit_64_pixels(triangles: usize) -> usize {
-    let spec = disc(16);
-    let mesh = Mesh::with_about(&spec, triangles).expect("mesh");
-    let imager = et_recon::Imager::new(&spec, mesh, 64).expect("imager");
-    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("protocol");
-    let jac = imager
-        .transfer_jacobian(&protocol, 32e-6)
-        .expect("jacobian");
-    let greit =
-        et_recon::Greit::new(&imager, &jac, &et_recon::GreitOptions::default()).expect("greit");
-    greit.frame_len()
+    reconstructor(
+        triangles,
+        16,
+        ProtocolKind::Adjacent,
+        Method::Greit { radius: None },
+        AlphaRule::NoiseFigure(et_recon::greit::NOISE_FIGURE),
+    )
 }
 
 /// The one-step matrix alone (data space, its Cholesky and the solve), 16 electrodes
@@ -95,7 +115,11 @@ fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
 }
 
 static LIVE: LazyLock<(OneStep, [PixelOperator; 2], DVector<f64>)> = LazyLock::new(|| {
-    let (_, r, mesh) = set_up(8_000);
+    // The stages by hand: these benchmarks time the live frame's kernels themselves.
+    let (jac, mesh) = jacobian(8_000, 16, ProtocolKind::Adjacent);
+    let r = DataSpace::factored(&jac, 0.5)
+        .and_then(|d| d.one_step(0.03))
+        .expect("recon");
     let pix = [32, 64].map(|n| PixelGrid::new(&mesh, n).project(&r));
     let dv = DVector::from_fn(r.frame_len(), |k, _| (k as f64 * 0.37).sin() * 1e-4);
     (r, pix, dv)

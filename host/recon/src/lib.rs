@@ -2,7 +2,9 @@
 //! model, the reconstruction and what is read off an image; it has no command line, no file
 //! formats of its own beyond mesh import, and no plotting.
 //!
-//! Modules in pipeline order (section numbers refer to `docs/method.md`):
+//! The entry point is [`Reconstructor`]: set up once from a [`Spec`] (sheet, protocol, mesh,
+//! method, alpha rule), then [`Reconstructor::image`] for every frame. The modules below are
+//! its stages, in pipeline order (section numbers refer to `docs/method.md`):
 //!
 //! - [`mesh`]: triangle meshes of a sheet with electrodes on the boundary (spade), refined at
 //!   regions of interest; [`mesh::import`] reads Gmsh and CSV meshes.
@@ -20,10 +22,11 @@
 //! - [`touches`]: regions of interest and touches, split at their saddles and kept above
 //!   their noise (§6.5).
 //! - [`metrics`]: the image metrics SE, PE, RNG and BVC against the truth (§7).
+//! - [`reconstructor`]: the entry point, the stages above as one set-up and one call a frame.
 //! - [`select`]: choosing the protocol from the image (§8), as a state machine.
 //!
-//! The simulator's resistor network is never used here (`et-sim` only lends the sheet's
-//! description), so tests against simulated frames do not commit the inverse crime.
+//! The simulator is not a dependency (the sheet's description is `et_core::sheet`), so tests
+//! against simulated frames (in `tests/tests/imaging`) do not commit the inverse crime.
 #![forbid(unsafe_code)]
 
 pub mod exact;
@@ -36,6 +39,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod onestep;
 pub mod pixels;
+pub mod reconstructor;
 pub mod select;
 pub mod touches;
 
@@ -46,4 +50,7 @@ pub use imager::Imager;
 pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
 pub use pixels::{PixelGrid, PixelOperator};
+pub use reconstructor::{
+    AlphaRule, Image, ImagingError, MeshPlan, Method, Reconstructor, Reference, Spec,
+};
 pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};

@@ -89,8 +89,26 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         1 + ProtocolKind::NAMED.len() * (1 + scenes.len()),
         "imaging docs/method.md §7 scenes",
     );
-    let mesh = Mesh::with_about(&sheet_spec.physical, sizes.triangles)?;
-    let imager = Imager::new(&sheet_spec.physical, mesh, 64)?;
+    let base = scenes[0].1.scan_config()?;
+    let adjacent = ScanConfig {
+        protocol: ProtocolKind::Adjacent,
+        ..base
+    };
+    // One reconstructor for the sheet: one-step Gauss-Newton with NOSER (s = 0.5), alpha by
+    // generalised cross-validation on each frame, no closer than its noise, as
+    // `et reconstruct`; a Jacobian and data space per protocol, shared by every scene.
+    let mut recon = et_recon::Spec {
+        mesh: et_recon::MeshPlan::About {
+            triangles: sizes.triangles,
+            refine: Vec::new(),
+        },
+        ..et_recon::Spec::new(
+            sheet_spec.physical.clone(),
+            adjacent.validate().map_err(|e| anyhow!("{e}"))?,
+            f64::from(adjacent.current_amps()),
+        )
+    }
+    .set_up()?;
     let sheet = simulated_sheet(&scenes[0].1)?;
     bar.inc(1);
     // docs/method.md §8's d_c: from the sheet's centre to its outline (where the electrodes are).
@@ -108,35 +126,25 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
     // (scene, file, title, marks, image), drawn once every protocol has imaged each scene.
     let mut pictures = Vec::new();
     for kind in ProtocolKind::NAMED {
-        let base = scenes[0].1.scan_config()?;
         let config = ScanConfig {
             protocol: kind,
             ..base
         };
         let protocol = config.validate().map_err(|e| anyhow!("{e}"))?;
-        let amps = f64::from(config.current_amps());
-        let jac = imager.transfer_jacobian(&protocol, amps)?;
-        // One data space per protocol: GCV and the matrix of every scene share it.
-        let space = et_recon::DataSpace::factored(&jac, 0.5)?;
+        recon.set_protocol(protocol, f64::from(config.current_amps()))?;
         bar.inc(1);
-        let f = default_threshold(kind);
+        let f = recon.threshold();
         for (name, scene) in &scenes {
             let frames = scene_frames_on(&sheet, scene, &config, 10)?;
-            let dv = frames.dv();
-            // alpha by generalised cross-validation on the frame, no closer than its noise, as
-            // `et reconstruct`.
-            let var = et_recon::onestep::imaging_variance(&frames.var, &dv);
-            let alpha = space.choose_alpha(&dv, &var, &et_recon::default_alphas())?;
-            let recon = space.one_step(alpha)?;
-            let image = imager.grid.image(&recon.reconstruct(&dv)?);
-            let rois = regions(&imager.grid, &image, f);
+            let reference = et_recon::Reference {
+                v0: frames.v0.clone(),
+                var_dv: frames.var.clone(),
+            };
+            let shot = recon.image(&frames.v1, &reference)?;
+            let (alpha, image, rois, dv) = (shot.alpha, shot.pixels, shot.regions, shot.dv);
             // Touches: the regions split at their saddles, standing out of the noise
             // (estimated from the reference frames), then docs/method.md §8's significance.
-            let sd = imager.grid.image(&recon.noise_sd(&var)?);
-            let counted = significant(
-                &above_noise(&touches(&imager.grid, &image, &sd, f, PROMINENCE), TOUCH_Z),
-                &settings,
-            );
+            let counted = significant(&shot.touches, &settings);
             let png = format!("imaging/{name}-{}.png", kind.name());
             pictures.push((
                 *name,
@@ -150,13 +158,13 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                     truth: frames.truth.clone(),
                     found: counted.iter().map(|g| g.centroid).collect(),
                     roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
-                    half_range: Some(plot::half_range(&imager, &image)),
+                    half_range: Some(plot::half_range(recon.imager(), &image)),
                 },
                 image.clone(),
             ));
             // Each touch: the nearest counted touch (its own PE and SE), and whether its
             // centroid lies within the touch's radius.
-            let touch_matches = et_recon::match_touches(&imager.grid, &counted, &frames.truth);
+            let touch_matches = et_recon::match_touches(recon.grid(), &counted, &frames.truth);
             let per_touch: Vec<(f64, bool)> = touch_matches
                 .iter()
                 .zip(&frames.truth)
@@ -170,7 +178,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 .collect();
             let (c, r) = frames.truth[0];
             let m = metrics(
-                &imager.grid,
+                recon.grid(),
                 &image,
                 f,
                 &dv,
@@ -222,7 +230,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             half_range: Some(row),
             ..marks.clone()
         };
-        plot::sheet_image(&imager, &out.join(png), title, image, &marks)?;
+        plot::sheet_image(recon.imager(), &out.join(png), title, image, &marks)?;
     }
     steps.done(&bar, "imaged 5 scenes x 4 protocols");
     // Each single touch, imaged with the protocol docs/method.md §8 chose for it.
@@ -254,7 +262,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
          `recon::above_noise`), and when their peak reaches half the strongest's and their area \
          a quarter of a 10 mm fingertip's (`dynamic::significant`). The \"touches\" columns \
          count these touches.\n",
-        imager.triangles()
+        recon.imager().triangles()
     );
     let _ = write!(md, "| scene |");
     for kind in ProtocolKind::NAMED {
@@ -358,7 +366,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
     }
     md.push('\n');
     let json = serde_json::to_value(ImagingSummary {
-        triangles: imager.triangles(),
+        triangles: recon.imager().triangles(),
         single_touches_found: single,
         single_touches_found_as_one_touch: one_touch,
         single_touches_found_with_chosen_protocol: chosen,

@@ -158,11 +158,12 @@ struct Projection {
 
 impl Projection {
     /// The projection in `slot` if it is for `config` and `(alpha, s)`, else a new one put
-    /// there (with the configuration's Jacobian, kept in `jacobians` for the next alpha or s).
+    /// there, from `recon` moved to the configuration (`at`: the one it is set up for) and the
+    /// method.
     fn current<'p>(
         slot: &'p mut Option<Projection>,
-        imager: &Imager,
-        jacobians: &mut Vec<(ScanConfig, TransferJacobian)>,
+        recon: &mut Reconstructor,
+        at: &mut ScanConfig,
         config: &ScanConfig,
         (method, alpha, s): (Method, f64, f64),
     ) -> Result<&'p Projection, LiveError> {
@@ -172,34 +173,39 @@ impl Projection {
         let projection = match kept {
             Some(p) => p,
             None => {
-                let at = match jacobians.iter().position(|(c, _)| c == config) {
-                    Some(at) => at,
-                    None => {
-                        let protocol = config.validate()?;
-                        let amps = f64::from(config.current_amps());
-                        jacobians.push((*config, imager.transfer_jacobian(&protocol, amps)?));
-                        jacobians.len() - 1
-                    }
-                };
-                let jac = &jacobians[at].1;
-                let matrix = match method {
-                    Method::Gn => imager
-                        .grid
-                        .project(&DataSpace::factored(jac, s)?.one_step(alpha)?),
-                    Method::Greit => {
-                        Greit::new(imager, jac, &GreitOptions::default())?.projection()
-                    }
-                };
+                if *at != *config {
+                    recon.set_protocol(config.validate()?, f64::from(config.current_amps()))?;
+                    *at = *config;
+                }
+                let (method_of, rule) = method.reconstruction(alpha, s);
+                recon.set_method(method_of, rule)?;
                 Projection {
                     config: *config,
                     method,
                     alpha,
                     s,
-                    matrix,
+                    matrix: recon.pixel_operator()?,
                 }
             }
         };
         Ok(slot.insert(projection))
+    }
+}
+
+impl Method {
+    /// The reconstruction and alpha rule of this live method at (alpha, s): one-step
+    /// Gauss-Newton at a fixed alpha, or GREIT at the consensus noise figure.
+    fn reconstruction(self, alpha: f64, s: f64) -> (et_recon::Method, AlphaRule) {
+        match self {
+            Method::Gn => (
+                et_recon::Method::GaussNewton { s, iterations: 1 },
+                AlphaRule::Fixed(alpha),
+            ),
+            Method::Greit => (
+                et_recon::Method::Greit { radius: None },
+                AlphaRule::NoiseFigure(et_recon::greit::NOISE_FIGURE),
+            ),
+        }
     }
 }
 
@@ -292,10 +298,11 @@ pub struct Output {
 
 /// The live pipeline for one sheet (see the module docs).
 pub struct Processor {
-    imager: Imager,
+    /// The sheet's reconstruction, set up for `at`.
+    recon: Reconstructor,
+    at: ScanConfig,
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
-    jacobians: Vec<(ScanConfig, TransferJacobian)>,
     projection: Option<Projection>,
     inside: Vec<usize>,
     reference: Option<Reference>,
@@ -306,31 +313,47 @@ pub struct Processor {
 impl std::fmt::Debug for Processor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Processor")
-            .field("imager", &self.imager)
+            .field("recon", &self.recon)
             .field("settings", &self.settings)
             .finish_non_exhaustive()
     }
 }
 
 impl Processor {
-    /// The pipeline for `sheet`.
+    /// The pipeline for `sheet`, set up for its electrodes scanned as the reference scan
+    /// (adjacent; another configuration is set up when its first frame comes).
     ///
     /// # Errors
-    /// [`LiveError::Mesh`] or [`LiveError::Fem`] if the sheet cannot be meshed or modelled.
-    pub fn new(sheet: &SheetSpec, settings: Settings) -> Result<Self, LiveError> {
-        let mesh = Mesh::with_about(&sheet.physical, settings.triangles)?;
-        let imager = Imager::new(&sheet.physical, mesh, settings.pixels)?;
-        let inside = imager
-            .grid
+    /// [`LiveError::Imaging`] if the sheet cannot be meshed or modelled.
+    pub fn new(sheet: &Sheet, settings: Settings) -> Result<Self, LiveError> {
+        let at = ScanConfig {
+            electrodes: sheet.electrodes.count,
+            ..ScanConfig::REFERENCE
+        };
+        let (method, alpha) = settings.method.reconstruction(settings.alpha, settings.s);
+        let recon = et_recon::Spec {
+            mesh: MeshPlan::About {
+                triangles: settings.triangles,
+                refine: Vec::new(),
+            },
+            method,
+            alpha,
+            pixels: settings.pixels,
+            threshold: settings.threshold,
+            ..et_recon::Spec::new(sheet.clone(), at.validate()?, f64::from(at.current_amps()))
+        }
+        .set_up()?;
+        let inside = recon
+            .grid()
             .triangle
             .iter()
             .enumerate()
             .filter_map(|(p, t)| t.map(|_| p))
             .collect();
         Ok(Self {
-            imager,
+            recon,
+            at,
             settings,
-            jacobians: Vec::new(),
             projection: None,
             inside,
             reference: None,
@@ -341,13 +364,13 @@ impl Processor {
     /// The pixel grid images are on.
     #[must_use]
     pub fn grid(&self) -> &PixelGrid {
-        &self.imager.grid
+        self.recon.grid()
     }
 
     /// The imager (mesh, forward model, grid), for writing pictures.
     #[must_use]
     pub fn imager(&self) -> &Imager {
-        &self.imager
+        self.recon.imager()
     }
 
     /// The settings.
@@ -417,7 +440,7 @@ impl Processor {
                     frames: reference.frames.len(),
                     needed,
                 }),
-                image: vec![None; self.imager.grid.triangle.len()],
+                image: vec![None; self.recon.grid().triangle.len()],
                 regions: Vec::new(),
                 touches: Vec::new(),
                 bvc: 0.0,
@@ -433,8 +456,8 @@ impl Processor {
         } = self.settings;
         let projection = &Projection::current(
             &mut self.projection,
-            &self.imager,
-            &mut self.jacobians,
+            &mut self.recon,
+            &mut self.at,
             &config,
             (method, alpha, s),
         )?
@@ -483,7 +506,8 @@ impl Processor {
             .filter(|(_, sd)| **sd > 0.0)
             .map(|(v, sd)| f64::from(*v) / sd)
             .fold(0.0, f64::max);
-        let mut image = vec![None; self.imager.grid.triangle.len()];
+        let grid = self.recon.grid();
+        let mut image = vec![None; grid.triangle.len()];
         for (&p, v) in self.inside.iter().zip(values.iter()) {
             image[p] = Some(f64::from(*v));
         }
@@ -495,7 +519,7 @@ impl Processor {
                 sd[p] = Some(*v);
             }
             above_noise(
-                &touches(&self.imager.grid, &image, &sd, threshold, PROMINENCE),
+                &touches(grid, &image, &sd, threshold, PROMINENCE),
                 self.settings.touch_factor,
             )
         } else {

@@ -55,7 +55,7 @@ fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
 fn untouched_then_pressed(method: Method) {
     let (mut source, sheet) = sim();
     let mut p = Processor::new(
-        &sheet,
+        &sheet.physical,
         Settings {
             method,
             ..Settings::default()
@@ -107,7 +107,7 @@ fn untouched_then_pressed(method: Method) {
 fn a_configuration_change_takes_a_new_reference() {
     let (mut source, sheet) = sim();
     let mut p = Processor::new(
-        &sheet,
+        &sheet.physical,
         Settings {
             reference_frames: 3,
             ..Settings::default()
@@ -175,7 +175,7 @@ fn a_replay_plays_pauses_and_seeks() {
 #[test]
 fn the_monitor_counts_gaps_and_measures_snr() {
     let (mut source, sheet) = sim();
-    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    let mut p = Processor::new(&sheet.physical, Settings::default()).unwrap();
     let mut m = Monitor::default();
     for i in 0..30 {
         let mut f = source.poll(1, false).unwrap().remove(0);
@@ -242,7 +242,7 @@ fn a_trained_model_classifies_live_presses() {
 
     let (mut source, sheet) = sim();
     source.configure(file.config).unwrap();
-    let mut p = Processor::new(&sheet, Settings::default()).unwrap();
+    let mut p = Processor::new(&sheet.physical, Settings::default()).unwrap();
     p.classifier = Some(Classifier::new(file).unwrap());
     for _ in 0..p.settings().reference_frames {
         p.process(source.poll(1, false).unwrap().remove(0)).unwrap();

@@ -113,7 +113,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let config = scene.scan_config()?;
     let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     let started = Instant::now();
-    let mesh = scene_mesh(&scene, &args.mesh, true)?;
+    let mesh = mesh_plan(&scene, &args.mesh, true)?.mesh(&scene.sheet.physical)?;
     let sigma0 = 1.0 / scene.sheet.physical.sheet_resistance;
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
     let sigma1: Vec<f64> = (0..mesh.triangles.len())
@@ -168,15 +168,17 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     Ok(())
 }
 
-/// The mesh of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas) or
-/// the scene's sheet meshed to about `--triangles`; its electrode count must be the sheet's.
-pub(crate) fn scene_mesh(
+/// The mesh plan of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas)
+/// or the scene's sheet meshed to about `--triangles`, refined at `--refine` (and at the
+/// scene's touches when `at_touches`).
+pub(crate) fn mesh_plan(
     scene: &Scene,
     args: &MeshArgs,
     at_touches: bool,
-) -> Result<et_recon::mesh::Mesh> {
+) -> Result<et_recon::MeshPlan> {
+    use et_recon::MeshPlan;
     use et_recon::mesh::{Mesh, Refinement};
-    let mut regions = Vec::new();
+    let mut refine = Vec::new();
     for r in &args.refine {
         let v: Vec<f64> = r
             .split(',')
@@ -187,14 +189,14 @@ pub(crate) fn scene_mesh(
             .with_context(|| {
                 format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
             })?;
-        regions.push(Refinement {
+        refine.push(Refinement {
             centre: [v[0] * 1e-3, v[1] * 1e-3],
             radius: v[2] * 1e-3,
             edge: v[2] * 1e-3 / 6.0,
         });
     }
     if at_touches {
-        regions.extend(
+        refine.extend(
             scene
                 .touches
                 .iter()
@@ -204,254 +206,255 @@ pub(crate) fn scene_mesh(
     if args.mesh.is_some() && !args.refine.is_empty() {
         bail!("--refine meshes the scene's sheet; it cannot change an imported --mesh");
     }
-    let mesh = match args.mesh.as_deref() {
-        None => Mesh::with_about_refined(&scene.sheet.physical, args.triangles, &regions)?,
-        Some(f) => match f.split(',').collect::<Vec<_>>()[..] {
+    Ok(match args.mesh.as_deref() {
+        None => MeshPlan::About {
+            triangles: args.triangles,
+            refine,
+        },
+        Some(f) => MeshPlan::Given(match f.split(',').collect::<Vec<_>>()[..] {
             [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
             [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
             _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
-        },
-    };
-    if mesh.electrodes.len() != usize::from(scene.sheet.physical.electrodes.count) {
-        bail!(
-            "the mesh has {} electrodes, the scene's sheet {}",
-            mesh.electrodes.len(),
-            scene.sheet.physical.electrodes.count
-        );
-    }
-    Ok(mesh)
+        }),
+    })
 }
 
-pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
-    let mut inputs = vec![args.scene.as_path()];
-    inputs.extend(args.frames.as_deref());
-    crate::output::check(&args.out, &inputs, force)?;
-    use et_recon::Imager;
-    use et_recon::{
-        PROMINENCE, TOUCH_Z, above_noise, default_threshold, metrics, regions, touches,
+/// The frames `et reconstruct` images: V_0 and its noise, the frame V, and the truth (centre,
+/// radius) where known.
+fn frames(
+    args: &ReconstructArgs,
+    scene: &Scene,
+    recording: Option<&recording::Recording>,
+    config: &et_core::ScanConfig,
+) -> Result<(et_recon::Reference, Vec<f32>, Vec<et_sim::still::Truth>)> {
+    let Some(r) = recording else {
+        // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
+        // set-up) and one frame with the scene's touches.
+        let f = et_sim::still::scene_frames(scene, config, 10)?;
+        let reference = et_recon::Reference {
+            v0: f.v0,
+            var_dv: f.var,
+        };
+        return Ok((reference, f.v1, f.truth));
     };
-    use et_sim::still::{Truth, scene_frames};
-    let scene = Scene::load(&args.scene)?;
-    let recording = args.frames.as_deref().map(recording::read).transpose()?;
-    let config = match &recording {
-        Some(r) => r.header.config,
-        None => scene.scan_config()?,
-    };
-    if config.electrodes != scene.sheet.physical.electrodes.count {
+    let path = args
+        .frames
+        .as_deref()
+        .unwrap_or(std::path::Path::new(""))
+        .display();
+    let n = r.records.len();
+    let reference = args.reference.clamp(1, n.max(1));
+    let frame = args.frame.unwrap_or(n.saturating_sub(1));
+    if n == 0 || frame >= n || frame < reference {
+        bail!("{path}: {n} frames; need the reference frames 0..{reference} and a later --frame");
+    }
+    if let Some((i, rec)) = r.records[..reference]
+        .iter()
+        .chain([&r.records[frame]])
+        .enumerate()
+        .find(|(_, rec)| !rec.invalid.is_empty())
+    {
         bail!(
-            "the frames are of {} electrodes, the scene's sheet has {}",
-            config.electrodes,
-            scene.sheet.physical.electrodes.count
+            "{path}: frame {} (seq {}) has non-finite values (null in the file) in \
+             columns {:?}; choose other frames with --reference and --frame",
+            if i < reference { i } else { frame },
+            rec.seq,
+            rec.invalid
         );
     }
-    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let amps = f64::from(config.current_amps());
-    let started = Instant::now();
-    // Each stage's time, printed as it ends (stderr) and kept for --json.
-    let mut lap = Instant::now();
-    let mut stage = |what: &str| {
-        let dt = lap.elapsed().as_secs_f64();
-        eprintln!("{what:<44} {dt:>8.3} s");
-        lap = Instant::now();
-        dt
-    };
-    let mesh = scene_mesh(&scene, &args.mesh, false)?;
-    let t_n = mesh.triangles.len();
-    let t_mesh = stage(&format!("mesh ({t_n} triangles)"));
-    let imager = Imager::new(&scene.sheet.physical, mesh, args.pixels)?;
-    let jac = imager.transfer_jacobian(&protocol, amps)?;
-    let grid = &imager.grid;
-    let t_forward = stage(&format!(
-        "forward + Jacobian (K = {}, r = {})",
-        jac.frame.len(),
-        jac.pairs()
-    ));
-    // V_0 and V_1, with the truth (centre, radius) where known, and dV's noise variance.
-    let (v0, v1, truth, var): (Vec<f64>, Vec<f32>, Vec<Truth>, Vec<f64>) = match &recording {
-        Some(r) => {
-            let n = r.records.len();
-            let reference = args.reference.clamp(1, n.max(1));
-            let frame = args.frame.unwrap_or(n.saturating_sub(1));
-            if n == 0 || frame >= n || frame < reference {
-                bail!(
-                    "{}: {n} frames; need the reference frames 0..{reference} and a later --frame",
-                    args.frames
-                        .as_deref()
-                        .map(|p| p.display().to_string())
-                        .unwrap_or_default()
-                );
-            }
-            let path = args
-                .frames
-                .as_deref()
-                .unwrap_or(std::path::Path::new(""))
-                .display();
-            if let Some((i, rec)) = r.records[..reference]
-                .iter()
-                .chain([&r.records[frame]])
-                .enumerate()
-                .find(|(_, rec)| !rec.invalid.is_empty())
-            {
-                bail!(
-                    "{path}: frame {} (seq {}) has non-finite values (null in the file) in \
-                     columns {:?}; choose other frames with --reference and --frame",
-                    if i < reference { i } else { frame },
-                    rec.seq,
-                    rec.invalid
-                );
-            }
-            let frames: Vec<&[f32]> = r.records[..reference]
-                .iter()
-                .map(|rec| rec.voltages.as_slice())
-                .collect();
-            let k = protocol.frame_len();
-            let (mut v0, mut var) = (vec![0.0; k], vec![0.0; k]);
-            et_core::stats::reference(&frames, &mut v0)?;
-            et_core::stats::dv_variance(&frames, &mut var)?;
-            let rec = &r.records[frame];
-            let truth = rec
-                .touches
-                .iter()
-                .flatten()
-                .map(|t| ([t.x, t.y], t.radius))
-                .collect();
-            (v0, rec.voltages.clone(), truth, var)
-        }
-        None => {
-            // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
-            // set-up) and one frame with the scene's touches.
-            let f = scene_frames(&scene, &config, 10)?;
-            (f.v0, f.v1, f.truth, f.var)
-        }
-    };
-    let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| f64::from(*a) - b).collect();
-    // What imaging cannot explain: the frames' noise and the model's own error.
-    let var = et_recon::onestep::imaging_variance(&var, &dv);
-    stage("frames");
-    let fixed_alpha = match args.alpha.as_str() {
+    let frames: Vec<&[f32]> = r.records[..reference]
+        .iter()
+        .map(|rec| rec.voltages.as_slice())
+        .collect();
+    let rec = &r.records[frame];
+    let truth = rec
+        .touches
+        .iter()
+        .flatten()
+        .map(|t| ([t.x, t.y], t.radius))
+        .collect();
+    Ok((
+        et_recon::Reference::from_frames(&frames)?,
+        rec.voltages.clone(),
+        truth,
+    ))
+}
+
+/// The reconstruction `et reconstruct`'s arguments ask for.
+fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_recon::AlphaRule)> {
+    use et_recon::{AlphaRule, Method as M};
+    let fixed = match args.alpha.as_str() {
         "auto" | "gcv" => None,
         v => Some(
             v.parse::<f64>()
                 .with_context(|| format!("--alpha '{v}': a number, auto or gcv"))?,
         ),
     };
-    let mut noise_figure = None;
-    // The image, and its noise where the reconstruction matrix gives it.
-    let (alpha, image, sd, t_one_step, t_frame) = if args.method == Method::Greit {
-        if args.iterations > 1 {
-            bail!(
-                "--iterations {} is for --method gn: GREIT is one matrix",
-                args.iterations
-            );
-        }
-        let options = et_recon::GreitOptions {
-            radius: args.radius_mm.map(|r| r * 1e-3),
-            regularisation: match fixed_alpha {
-                Some(a) => et_recon::Regularisation::Alpha(a),
-                None if args.alpha == "gcv" => et_recon::Regularisation::Alpha(
-                    et_recon::Greit::choose_alpha(&imager, &jac, &dv, &var)?,
-                ),
-                None => et_recon::Regularisation::NoiseFigure(args.noise_figure),
-            },
-        };
-        let greit = et_recon::Greit::new(&imager, &jac, &options)?;
-        noise_figure = Some(greit.noise_figure);
-        let t_matrix = stage(&format!(
-            "GREIT matrix (alpha {:.3e}, noise figure {:.3}, radius {:.1} mm)",
-            greit.alpha,
-            greit.noise_figure,
-            greit.radius * 1e3
-        ));
-        let image = greit.image(&dv)?;
-        let t_frame = stage("one frame imaged");
-        (
-            greit.alpha,
-            image,
-            greit.noise_sd(&var)?,
-            Some(t_matrix),
-            t_frame,
-        )
-    } else {
-        let space = et_recon::DataSpace::factored(&jac, args.s)?;
-        let alpha = match fixed_alpha {
-            None => space.choose_alpha(&dv, &var, &et_recon::default_alphas())?,
-            Some(a) => a,
-        };
-        let (image, sd, t_one_step, t_frame) = if args.iterations <= 1 {
-            let recon = space.one_step(alpha)?;
-            let t_one_step = stage(&format!("one-step matrix (alpha {alpha:.3e})"));
-            let image = grid.image(&recon.reconstruct(&dv)?);
-            let t_frame = stage("one frame imaged");
+    Ok(match args.method {
+        Method::Greit => {
+            if args.iterations > 1 {
+                bail!(
+                    "--iterations {} is for --method gn: GREIT is one matrix",
+                    args.iterations
+                );
+            }
+            let alpha = match (fixed, args.alpha.as_str()) {
+                (Some(a), _) => AlphaRule::Fixed(a),
+                (None, "gcv") => AlphaRule::Gcv,
+                (None, _) => AlphaRule::NoiseFigure(args.noise_figure),
+            };
             (
-                image,
-                grid.image(&recon.noise_sd(&var)?),
-                Some(t_one_step),
-                t_frame,
-            )
-        } else {
-            let sigma0 = imager.background();
-            let fit = et_recon::gauss_newton(
-                &imager.forward,
-                &protocol,
-                amps,
-                &sigma0,
-                et_recon::Data::Difference(&dv),
-                et_recon::GaussNewton {
-                    alpha,
-                    s: args.s,
-                    iterations: args.iterations,
+                M::Greit {
+                    radius: args.radius_mm.map(|r| r * 1e-3),
                 },
-                &var,
-            )?;
-            let last = fit.iterates.last().context("no iteration")?;
-            let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-            let image = grid.image(&d);
-            let steps: Vec<String> = fit.iterates.iter().map(|i| format!("{}", i.step)).collect();
-            let t_frame = stage(&format!(
-                "{} Gauss-Newton steps (alpha {alpha:.3e}, residual {:.3e} V, step lengths {})",
-                fit.iterates.len(),
-                last.residual,
-                steps.join(" ")
-            ));
-            if let et_recon::Stop::NoDescent { iteration } = fit.stop {
+                alpha,
+            )
+        }
+        Method::Gn => (
+            M::GaussNewton {
+                s: args.s,
+                iterations: args.iterations,
+            },
+            fixed.map_or(AlphaRule::Gcv, AlphaRule::Fixed),
+        ),
+    })
+}
+
+pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(args.frames.as_deref());
+    crate::output::check(&args.out, &inputs, force)?;
+    let scene = Scene::load(&args.scene)?;
+    let recording = args.frames.as_deref().map(recording::read).transpose()?;
+    let config = match &recording {
+        Some(r) => r.header.config,
+        None => scene.scan_config()?,
+    };
+    let sheet = &scene.sheet.physical;
+    if config.electrodes != sheet.electrodes.count {
+        bail!(
+            "the frames are of {} electrodes, the scene's sheet has {}",
+            config.electrodes,
+            sheet.electrodes.count
+        );
+    }
+    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let started = Instant::now();
+    let (method, alpha) = method_and_alpha(args)?;
+    let spec = et_recon::Spec {
+        mesh: mesh_plan(&scene, &args.mesh, false)?,
+        method,
+        alpha,
+        pixels: args.pixels,
+        threshold: args.threshold,
+        ..et_recon::Spec::new(sheet.clone(), protocol, f64::from(config.current_amps()))
+    };
+    let mut recon = spec.set_up()?;
+    let set_up = recon.set_up_timings;
+    let stage = |what: &str, dt: f64| eprintln!("{what:<44} {dt:>8.3} s");
+    let t_n = recon.imager().triangles();
+    stage(&format!("mesh ({t_n} triangles)"), set_up.mesh);
+    stage(
+        &format!(
+            "forward + Jacobian (K = {}, r = {})",
+            recon.jacobian().frame.len(),
+            recon.jacobian().pairs()
+        ),
+        set_up.forward_jacobian,
+    );
+    let clock = Instant::now();
+    let (reference, v1, truth) = frames(args, &scene, recording.as_ref(), &config)?;
+    stage("frames", clock.elapsed().as_secs_f64());
+    let image = recon.image(&v1, &reference)?;
+    // The reconstruction matrix: made at set-up, or for this frame (GCV's choice).
+    let t_matrix = image
+        .timings
+        .matrix
+        .map_or(set_up.matrix, |m| m + set_up.matrix);
+    let t_one_step = match (&image.iterations, image.greit) {
+        (Some(_), _) => None,
+        (None, Some((nf, radius))) => {
+            stage(
+                &format!(
+                    "GREIT matrix (alpha {:.3e}, noise figure {nf:.3}, radius {:.1} mm)",
+                    image.alpha,
+                    radius * 1e3
+                ),
+                t_matrix,
+            );
+            Some(t_matrix)
+        }
+        (None, None) => {
+            stage(
+                &format!("one-step matrix (alpha {:.3e})", image.alpha),
+                t_matrix,
+            );
+            Some(t_matrix)
+        }
+    };
+    match &image.iterations {
+        None => stage("one frame imaged", image.timings.frame),
+        Some(it) => {
+            let steps: Vec<String> = it.steps.iter().map(|s| format!("{s}")).collect();
+            stage(
+                &format!(
+                    "{} Gauss-Newton steps (alpha {:.3e}, residual {:.3e} V, step lengths {})",
+                    it.completed,
+                    image.alpha,
+                    it.residual,
+                    steps.join(" ")
+                ),
+                image.timings.frame,
+            );
+            if let et_recon::gauss_newton::Stop::NoDescent { iteration } = it.stop {
                 eprintln!(
                     "note: stopped at iteration {iteration} of {}: no step lowered the misfit \
                  (the image is the last iterate that did; a larger --alpha may fit further)",
                     args.iterations
                 );
             }
-            (image, grid.image(&last.noise_sd), None, t_frame)
-        };
-        (alpha, image, sd, t_one_step, t_frame)
-    };
+        }
+    }
     let timings_s = Timings {
-        mesh: t_mesh,
-        forward_jacobian: t_forward,
+        mesh: set_up.mesh,
+        forward_jacobian: set_up.forward_jacobian,
         one_step: t_one_step,
-        setup: t_mesh + t_forward + t_one_step.unwrap_or(0.0),
-        frame: t_frame,
+        setup: set_up.mesh + set_up.forward_jacobian + t_one_step.unwrap_or(0.0),
+        frame: image.timings.frame,
     };
-    let f = args.threshold.unwrap_or(default_threshold(config.protocol));
-    let rois = regions(grid, &image, f);
-    let found = above_noise(&touches(grid, &image, &sd, f, PROMINENCE), TOUCH_Z);
+    report(args, &recon, &image, &truth, timings_s, started)
+}
+
+/// `et reconstruct`'s picture, JSON and lines: the image against the truth where known.
+fn report(
+    args: &ReconstructArgs,
+    recon: &et_recon::Reconstructor,
+    image: &et_recon::Image,
+    truth: &[et_sim::still::Truth],
+    timings_s: Timings,
+    started: Instant,
+) -> Result<()> {
+    let grid = recon.grid();
+    let f = image.threshold;
+    let (rois, found) = (&image.regions, &image.touches);
     // docs/method.md §7's metrics are for one object; with several, each true touch is
     // matched to its nearest found touch instead.
     let m = (truth.len() == 1)
         .then(|| truth[0])
         .map(|(centre, radius)| {
-            metrics(
+            et_recon::metrics(
                 grid,
-                &image,
+                &image.pixels,
                 f,
-                &dv,
+                &image.dv,
                 centre,
                 std::f64::consts::PI * radius * radius,
             )
         });
-    let matches = et_recon::match_touches(grid, &found, &truth);
+    let matches = et_recon::match_touches(grid, found, truth);
     crate::output::write(&args.out, |partial| {
         et_host::plot::sheet_image(
-            &imager,
+            recon.imager(),
             partial,
             &format!(
                 "{}: {} found (f = {f})",
@@ -460,9 +463,9 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
                     .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
                 et_host::plot::touches(found.len())
             ),
-            &image,
+            &image.pixels,
             &et_host::plot::SheetMarks {
-                truth: truth.clone(),
+                truth: truth.to_vec(),
                 found: found.iter().map(|g| g.centroid).collect(),
                 roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
                 half_range: None,
@@ -471,11 +474,11 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     })?;
     let summary = ReconstructSummary {
         out: &args.out,
-        triangles: t_n,
-        protocol: config.protocol.to_string(),
+        triangles: recon.imager().triangles(),
+        protocol: recon.protocol().kind().to_string(),
         method: args.method,
-        alpha,
-        noise_figure,
+        alpha: image.alpha,
+        noise_figure: image.greit.map(|g| g.0),
         s: args.s,
         threshold: f,
         regions: rois.iter().map(RegionSummary::of).collect(),
@@ -499,43 +502,43 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     };
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
-    } else {
-        for (i, r) in rois.iter().enumerate().take(5) {
-            eprintln!(
-                "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
-                r.centroid[0] * 1e3,
-                r.centroid[1] * 1e3,
-                r.area * 1e6
-            );
-        }
-        for (i, r) in found.iter().enumerate() {
-            eprintln!(
-                "touch {i}: at ({:.1}, {:.1}) mm{}",
-                r.centroid[0] * 1e3,
-                r.centroid[1] * 1e3,
-                r.z.map_or(String::new(), |z| format!(", {z:.1} x its noise"))
-            );
-        }
-        if let Some(m) = m {
-            eprintln!(
-                "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
-                m.pe, m.se, m.rng, m.bvc
-            );
-        }
-        if truth.len() > 1 {
-            for t in &matches {
-                eprintln!(
-                    "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
-                    t.truth[0] * 1e3,
-                    t.truth[1] * 1e3,
-                    t.found.map_or("not found".into(), |i| format!("touch {i}")),
-                    t.pe,
-                    t.se
-                );
-            }
-        }
-        eprintln!("wrote {}", args.out.display());
+        return Ok(());
     }
+    for (i, r) in rois.iter().enumerate().take(5) {
+        eprintln!(
+            "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
+            r.centroid[0] * 1e3,
+            r.centroid[1] * 1e3,
+            r.area * 1e6
+        );
+    }
+    for (i, r) in found.iter().enumerate() {
+        eprintln!(
+            "touch {i}: at ({:.1}, {:.1}) mm{}",
+            r.centroid[0] * 1e3,
+            r.centroid[1] * 1e3,
+            r.z.map_or(String::new(), |z| format!(", {z:.1} x its noise"))
+        );
+    }
+    if let Some(m) = m {
+        eprintln!(
+            "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
+            m.pe, m.se, m.rng, m.bvc
+        );
+    }
+    if truth.len() > 1 {
+        for t in &matches {
+            eprintln!(
+                "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
+                t.truth[0] * 1e3,
+                t.truth[1] * 1e3,
+                t.found.map_or("not found".into(), |i| format!("touch {i}")),
+                t.pe,
+                t.se
+            );
+        }
+    }
+    eprintln!("wrote {}", args.out.display());
     Ok(())
 }
 

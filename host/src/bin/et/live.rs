@@ -135,7 +135,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use std::io::Write as _;
     let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
     let mut processor = Processor::new(
-        &sheet,
+        &sheet.physical,
         Settings {
             method: args.source.method,
             ..Settings::default()
