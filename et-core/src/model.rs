@@ -57,14 +57,27 @@ pub const HEADER_LEN: usize = 32;
 /// the blob is refused at load time instead of giving meaningless discriminants.
 pub const MIN_PIVOT_RATIO: f32 = 1e-5;
 
-/// Quadratic or linear discriminant analysis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// Quadratic or linear discriminant analysis: the one name of a discriminant model's kind, in
+/// the blob, in model files (`"qda"` or `"lda"`) and on the host.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ModelKind {
     /// One covariance per class [5.6].
     Qda,
     /// One pooled covariance [5.7].
     Lda,
+}
+
+impl ModelKind {
+    /// The name in files and on the command line: `qda` or `lda`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Qda => "qda",
+            ModelKind::Lda => "lda",
+        }
+    }
 }
 
 /// Storage precision of the large tables (class means, factors, weights).

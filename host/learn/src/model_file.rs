@@ -31,46 +31,6 @@ pub struct ClassRecord {
     pub weights: Vec<f64>,
 }
 
-/// Which discriminant a model file holds, as its `kind` field spells it; also the values of
-/// `et train --kind`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Kind {
-    /// Quadratic discriminant analysis: one covariance per class (docs/method.md §9.2).
-    Qda,
-    /// Linear discriminant analysis: one pooled covariance.
-    Lda,
-}
-
-impl Kind {
-    /// The name in files and on the command line.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Kind::Qda => "qda",
-            Kind::Lda => "lda",
-        }
-    }
-}
-
-impl From<Kind> for ModelKind {
-    fn from(kind: Kind) -> Self {
-        match kind {
-            Kind::Qda => ModelKind::Qda,
-            Kind::Lda => ModelKind::Lda,
-        }
-    }
-}
-
-impl From<ModelKind> for Kind {
-    fn from(kind: ModelKind) -> Self {
-        match kind {
-            ModelKind::Qda => Kind::Qda,
-            ModelKind::Lda => Kind::Lda,
-        }
-    }
-}
-
 /// The model file's format version: 2 keeps the class centres in metres (`centres_m`), 1 kept
 /// them in mm (`centres_mm`).
 pub const VERSION: u32 = 2;
@@ -87,7 +47,7 @@ pub struct ModelFile {
     /// [`VERSION`] (version 1 files, centres in mm, are read and converted).
     pub version: u32,
     /// QDA or LDA (`"qda"` or `"lda"` in the file).
-    pub kind: Kind,
+    pub kind: ModelKind,
     /// Shrinkage used.
     pub shrinkage: f64,
     /// Scan settings of the frames it classifies.

@@ -510,7 +510,7 @@ pub enum Tables {
     /// QDA or LDA: the same class tables as et's board models (see `model_file`).
     Discriminant {
         /// QDA or LDA.
-        kind: DiscriminantKind,
+        kind: ModelKind,
         /// Per class, in the order of `classes.names`.
         classes: Vec<ClassRecord>,
     },
@@ -558,16 +558,6 @@ pub enum Tables {
         /// Their targets (x mm, y mm, third).
         targets: Vec<[f64; 3]>,
     },
-}
-
-/// QDA or LDA, as the model file spells it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DiscriminantKind {
-    /// A covariance per class.
-    Qda,
-    /// One pooled covariance.
-    Lda,
 }
 
 /// What a classifier's classes are.
@@ -1180,9 +1170,9 @@ fn fit_final(
             (
                 Tables::Discriminant {
                     kind: if best.method == Method::Lda {
-                        DiscriminantKind::Lda
+                        ModelKind::Lda
                     } else {
-                        DiscriminantKind::Qda
+                        ModelKind::Qda
                     },
                     classes: class_records(&model),
                 },
@@ -1342,8 +1332,8 @@ impl TableModel {
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
                 let (method, mk) = match kind {
-                    DiscriminantKind::Qda => (Method::Qda, ModelKind::Qda),
-                    DiscriminantKind::Lda => (Method::Lda, ModelKind::Lda),
+                    ModelKind::Qda => (Method::Qda, *kind),
+                    ModelKind::Lda => (Method::Lda, *kind),
                 };
                 method_ok(method)?;
                 let info = self

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
-use et_learn::model_file::{Kind, ModelFile};
+use et_learn::model_file::ModelFile;
 use et_learn::tabular::{self, Choice, Method};
 use et_learn::{analysis, collect, dataset, fastcv, pipeline};
 use et_sim::scene::Scene;
@@ -407,8 +407,8 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         );
     };
     let kind = match args.kind.unwrap_or(KindArg::Qda) {
-        KindArg::Qda => Kind::Qda,
-        KindArg::Lda => Kind::Lda,
+        KindArg::Qda => ModelKind::Qda,
+        KindArg::Lda => ModelKind::Lda,
         other => bail!(
             "--kind {}: et datasets (--data) train qda or lda for the board; regressors take \
              any sensor's table (--features)",
@@ -539,7 +539,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
                     plot::Labels {
                         title: &format!(
                             "learning curve: {} ({}), {} classes",
-                            Kind::from(kind).name(),
+                            kind.name(),
                             if visits >= 2 {
                                 "leave-one-visit-out"
                             } else {
@@ -589,7 +589,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     output::write(&args.out, |partial| file.save(partial))?;
     let summary = TrainSummary {
         out: &args.out,
-        kind: Kind::from(kind),
+        kind,
         referenced,
         shrinkage,
         shrinkage_chosen_by: trained.chosen_by,
@@ -619,7 +619,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     } else {
         eprintln!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {} ({}): {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
-            Kind::from(kind).name(),
+            kind.name(),
             if referenced {
                 " (referenced)"
             } else {
@@ -766,7 +766,7 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
     })?;
     let (c, p) = (file.classes.len(), file.feature_index.len());
     // Multiply-adds per frame on the chip: QDA a forward substitution per class, LDA a dot.
-    let macs = if file.kind == Kind::Qda {
+    let macs = if file.kind == ModelKind::Qda {
         c * (p * (p + 1) / 2 + p)
     } else {
         c * p
@@ -822,7 +822,7 @@ struct CollectSummary<'a> {
 #[derive(serde::Serialize)]
 struct TrainSummary<'a> {
     out: &'a std::path::Path,
-    kind: Kind,
+    kind: ModelKind,
     referenced: bool,
     shrinkage: f64,
     /// "given", "leave-one-visit-out" or {"k-fold": k}.
