@@ -14,10 +14,9 @@
 use et_core::ScanConfig;
 use et_core::model::ModelKind;
 use et_host::plot::{self, Labels, Series};
-use et_learn::collect::{
-    Dataset, Plan, collect, collect_presses, grid, random_presses, training_config,
-};
+use et_learn::collect::{Plan, collect, collect_presses, grid, random_presses, training_config};
 use et_learn::cv::evaluate;
+use et_learn::dataset::Dataset;
 use et_learn::fit::{FitOptions, Fitted, Target};
 use et_learn::regress::{
     IntensityByClass, KernelRidge, Ridge, Target3, choose_temperature, posterior_centre,

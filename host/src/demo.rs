@@ -28,7 +28,8 @@ use serde::Serialize;
 
 use crate::plot;
 use et_core::board::MODEL_SLOT_BYTES;
-use et_learn::collect::{self, Dataset, Plan};
+use et_learn::collect::{self, Plan};
+use et_learn::dataset::Dataset;
 use et_learn::model_file::ModelFile;
 use et_learn::pipeline::{self, TrainOptions};
 use et_recon::Imager;

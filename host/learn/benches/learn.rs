@@ -7,8 +7,9 @@
 use std::sync::LazyLock;
 
 use et_core::ScanConfig;
-use et_learn::collect::{Dataset, Plan, collect, grid, training_config};
+use et_learn::collect::{Plan, collect, grid, training_config};
 use et_learn::cv::folds;
+use et_learn::dataset::Dataset;
 use et_learn::fastcv::cross_validate_fast;
 use et_learn::fit::{FitOptions, Fitted};
 use et_learn::regress::{KernelRidge, Target3};

@@ -17,8 +17,9 @@ use std::time::Instant;
 
 use et_core::ScanConfig;
 use et_core::model::{Model, ModelKind, Precision};
-use et_learn::collect::{Dataset, Plan, collect, grid, training_config};
+use et_learn::collect::{Plan, collect, grid, training_config};
 use et_learn::cv::{Confusion, choose_shrinkage_with, evaluate};
+use et_learn::dataset::Dataset;
 use et_learn::fastcv::cross_validate_fast;
 use et_learn::fit::{FitOptions, Fitted, Target, fisher_ranking};
 use et_sim::frontend::{CALIBRATION_GAIN, FrontendSpec};

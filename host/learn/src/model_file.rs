@@ -81,7 +81,7 @@ impl ModelFile {
         Self {
             format: "et-model".into(),
             version: VERSION,
-            kind: model.kind.into(),
+            kind: model.kind,
             shrinkage,
             config,
             referenced,
@@ -98,7 +98,7 @@ impl ModelFile {
     /// # Errors
     /// [`FitError::Shape`] for an inconsistent file.
     pub fn fitted(&self) -> Result<Fitted, FitError> {
-        let kind = ModelKind::from(self.kind);
+        let kind = self.kind;
         let p = self.feature_mean.len();
         if self.feature_index.len() != p || self.centres_mm.len() != self.classes.len() {
             return Err(FitError::Shape(

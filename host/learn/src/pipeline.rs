@@ -7,8 +7,8 @@ use et_core::model::ModelKind;
 use nalgebra::DMatrix;
 
 use super::analysis::{self, Band, Outcome};
-use super::collect::{DataError, Dataset};
 use super::cv::{self, Confusion};
+use super::dataset::{DataError, Dataset};
 use super::fastcv::{Partition, Prepared};
 use super::fit::{self, FitError, FitOptions, Fitted, Target};
 use super::model_file::ModelFile;

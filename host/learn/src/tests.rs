@@ -409,7 +409,7 @@ fn the_procedure_on_the_simulated_sheet() {
 }
 
 mod files {
-    use super::super::collect::Dataset;
+    use super::super::dataset::Dataset;
     use super::super::dataset::{import_csv, load, load_csv, save_csv, save_npz};
     use super::*;
     use std::path::PathBuf;
@@ -975,7 +975,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         n - classes > p && n / 2 - classes < p,
         "the case under test"
     );
-    let data = super::collect::Dataset {
+    let data = super::dataset::Dataset {
         x,
         y,
         positions: vec![[0.0, 0.0]; n],
@@ -995,7 +995,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
     let t = train(&data, &options).expect("a two-visit set trains");
     assert_eq!(t.chosen_by, super::pipeline::ChosenBy::LeaveOneVisitOut);
     // The progress a command shows: statistics, the six candidates by visit, the final fit.
-    let stages = |data: &super::collect::Dataset| {
+    let stages = |data: &super::dataset::Dataset| {
         let seen = std::cell::RefCell::new(Vec::new());
         super::pipeline::train_reporting(data, &options, |s| seen.borrow_mut().push(s)).unwrap();
         seen.into_inner()
@@ -1101,7 +1101,7 @@ fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
     let (classes, per_class, p) = (6, 40, 8);
     let (x, y) = synthetic(classes, per_class, p, 17);
     let n = y.len();
-    let data = super::collect::Dataset {
+    let data = super::dataset::Dataset {
         x: x.clone(),
         y: y.clone(),
         positions: vec![[0.0, 0.0]; n],

@@ -19,8 +19,9 @@ use nalgebra::DMatrix;
 
 use crate::live::{Output, Processor, Source};
 use et_core::board::MODEL_SLOT_BYTES;
-use et_learn::collect::{self, Dataset};
+use et_learn::collect;
 use et_learn::cv::Confusion;
+use et_learn::dataset::Dataset;
 use et_learn::model_file::ModelFile;
 use et_learn::pipeline::{self, TrainOptions};
 
@@ -634,7 +635,7 @@ pub enum WizardError {
     /// Even one feature per class would not fit a model slot of the board.
     TooManyClasses,
     /// The collected set cannot give the features.
-    Data(et_learn::collect::DataError),
+    Data(et_learn::dataset::DataError),
     /// The fit failed.
     Fit(et_learn::fit::FitError),
     /// No model trained yet.

@@ -258,7 +258,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let started = Instant::now();
-    let mut data: Option<collect::Dataset> = None;
+    let mut data: Option<et_learn::dataset::Dataset> = None;
     for v in 0..args.visits {
         let seed = args.seed.wrapping_mul(1_000).wrapping_add(v as u64);
         let part = collect::collect(
@@ -445,7 +445,6 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     spinner.set_message(format!("reading {}", data_arg.display()));
     let mut data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
     let classes = data.centres.len();
-    let kind = ModelKind::from(kind);
     let referenced = !args.raw && data.has_untouched();
     if !args.raw && !referenced {
         spinner.suspend(|| {
@@ -790,7 +789,7 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
             if blob.len() <= SLOT {
                 String::new()
             } else {
-                let kind = ModelKind::from(file.kind);
+                let kind = file.kind;
                 if precision == Precision::F32
                     && et_core::model::model_len(kind, Precision::F16, c, p) <= SLOT
                 {

@@ -1,0 +1,442 @@
+//! Datasets on disk: CSV that Python and MATLAB read as they are, or the same content as a
+//! NumPy `.npz` archive that loads at disk speed (see the parent module for the format).
+
+// Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use std::path::Path;
+
+use et_core::ScanConfig;
+use nalgebra::DMatrix;
+
+use super::table::parse_table;
+use super::{Dataset, DatasetError, content};
+use crate::npz;
+
+/// Writes `data` as CSV (see the module docs), with a free-text `provenance` line.
+///
+/// # Errors
+/// [`DatasetError::Io`].
+pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(s, "{FORMAT_2}");
+    let _ = writeln!(s, "{UNITS}");
+    let _ = writeln!(
+        s,
+        "# config: {}",
+        serde_json::to_string(&data.config).unwrap_or_default()
+    );
+    let idx: Vec<String> = data.feature_index.iter().map(u16::to_string).collect();
+    let _ = writeln!(s, "# feature_index: {}", idx.join(" "));
+    let centres: Vec<String> = data
+        .centres
+        .iter()
+        .map(|c| format!("{} {}", c[0], c[1]))
+        .collect();
+    let _ = writeln!(s, "# centres_m: {}", centres.join("; "));
+    if !data.electrodes.is_empty() {
+        let e: Vec<String> = data
+            .electrodes
+            .iter()
+            .map(|c| format!("{} {}", c[0], c[1]))
+            .collect();
+        let _ = writeln!(s, "# electrodes_m: {}", e.join("; "));
+    }
+    if data.baselines.nrows() > 0 {
+        let frames: Vec<String> = data
+            .baselines
+            .row_iter()
+            .map(|r| r.iter().map(f64::to_string).collect::<Vec<_>>().join(" "))
+            .collect();
+        let _ = writeln!(s, "# untouched: {}", frames.join("; "));
+    }
+    let _ = writeln!(s, "# provenance: {}", provenance.replace('\n', " "));
+    let mut header: Vec<String> = (0..data.x.ncols()).map(|j| format!("f{j}")).collect();
+    header.extend(["label", "x_m", "y_m", "visit"].map(String::from));
+    let with_pressure = data.pressure.len() == data.x.nrows();
+    if with_pressure {
+        header.push("pressure_pa".into());
+    }
+    let _ = writeln!(s, "{}", header.join(","));
+    let rows = data
+        .x
+        .row_iter()
+        .zip(&data.positions)
+        .zip(data.y.iter().zip(&data.visit));
+    for (r, ((features, p), (label, visit))) in rows.enumerate() {
+        for v in &features {
+            let _ = write!(s, "{v},");
+        }
+        let _ = write!(s, "{label},{},{},{visit}", p[0], p[1]);
+        if let Some(pa) = data.pressure.get(r).filter(|_| with_pressure) {
+            let _ = write!(s, ",{pa}");
+        }
+        s.push('\n');
+    }
+    std::fs::write(path, s).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// Parses whitespace-separated finite numbers of a `field`.
+fn numbers(path: &Path, line: usize, field: &str, text: &str) -> Result<Vec<f64>, DatasetError> {
+    text.split_whitespace()
+        .map(|v| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    content(
+                        path,
+                        line,
+                        None,
+                        format!("{field}: '{v}' is not a finite number"),
+                    )
+                })
+        })
+        .collect()
+}
+
+/// The first line of a dataset file: the format and its version.
+const FORMAT_2: &str = "# et-dataset 2";
+/// Version 1: positions in mm and pressure in kPa (still read).
+const FORMAT_1: &str = "# et-dataset 1";
+/// The second line: what the numbers are in.
+const UNITS: &str =
+    "# units: SI: features and untouched in V, positions and centres in m, pressure in Pa";
+
+/// Parses `x y; x y; ...` (finite numbers) into metres, `per_unit` metres to the file's unit.
+fn points(
+    path: &Path,
+    line: usize,
+    field: &str,
+    list: &str,
+    per_unit: f64,
+) -> Result<Vec<[f64; 2]>, DatasetError> {
+    list.split(';')
+        .filter(|p| !p.trim().is_empty())
+        .map(|pair| match numbers(path, line, field, pair)?[..] {
+            [x, y] => Ok([x * per_unit, y * per_unit]),
+            _ => Err(content(
+                path,
+                line,
+                None,
+                format!("{field}: each point is 'x y'"),
+            )),
+        })
+        .collect()
+}
+
+/// Reads a dataset written by [`save_csv`].
+///
+/// # Errors
+/// [`DatasetError`] naming the file, line and column.
+pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let mut config: Option<ScanConfig> = None;
+    let mut feature_index = Vec::new();
+    let mut centres = Vec::new();
+    let mut untouched: Vec<Vec<f64>> = Vec::new();
+    let mut electrodes = Vec::new();
+    let mut lines = text.lines().enumerate().peekable();
+    match lines.next() {
+        Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
+        _ => {
+            return Err(content(
+                path,
+                1,
+                None,
+                format!("not an et dataset (expected '{FORMAT_2}', or version 1)"),
+            ));
+        }
+    }
+    while let Some((i, l)) = lines.peek().copied() {
+        let Some(meta) = l.strip_prefix('#') else {
+            break;
+        };
+        lines.next();
+        let meta = meta.trim();
+        if let Some(json) = meta.strip_prefix("config:") {
+            config = Some(
+                serde_json::from_str(json.trim())
+                    .map_err(|e| content(path, i + 1, None, format!("config: {e}")))?,
+            );
+        } else if let Some(list) = meta.strip_prefix("feature_index:") {
+            feature_index = list
+                .split_whitespace()
+                .map(|v| {
+                    v.parse::<u16>()
+                        .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
+                })
+                .collect::<Result<_, _>>()?;
+        } else if let Some(list) = meta.strip_prefix("untouched:") {
+            for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
+                untouched.push(numbers(path, i + 1, "untouched", frame)?);
+            }
+        } else if let Some(list) = meta.strip_prefix("electrodes_m:") {
+            electrodes = points(path, i + 1, "electrodes_m", list, 1.0)?;
+        } else if let Some(list) = meta.strip_prefix("centres_m:") {
+            centres = points(path, i + 1, "centres_m", list, 1.0)?;
+        } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
+            electrodes = points(path, i + 1, "electrodes_mm", list, 1e-3)?;
+        } else if let Some(list) = meta.strip_prefix("centres_mm:") {
+            centres = points(path, i + 1, "centres_mm", list, 1e-3)?;
+        }
+    }
+    let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
+    let rest: Vec<(usize, &str)> = lines.collect();
+    let table = parse_table(path, &rest, &|_, _| false)?;
+    let col = |name: &str| {
+        table
+            .names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| content(path, 0, Some(name.into()), "column missing"))
+    };
+    // SI columns, or version 1's mm and kPa (metres and pascals per the file's unit).
+    let either = |si: &str, old: &str, per_unit: f64| match col(si) {
+        Ok(c) => Ok((c, 1.0)),
+        Err(e) => col(old).map(|c| (c, per_unit)).map_err(|_| e),
+    };
+    let (label, visit) = (col("label")?, col("visit")?);
+    let ((xc, x_unit), (yc, y_unit)) = (either("x_m", "x_mm", 1e-3)?, either("y_m", "y_mm", 1e-3)?);
+    let pressure = either("pressure_pa", "pressure_kpa", 1e3).ok();
+    let pressure_col = pressure.map(|p| p.0);
+    let features: Vec<usize> = (0..table.names.len())
+        .filter(|&c| ![label, xc, yc, visit].contains(&c) && Some(c) != pressure_col)
+        .collect();
+    if feature_index.len() != features.len() {
+        return Err(content(
+            path,
+            0,
+            None,
+            format!(
+                "{} feature columns, {} in feature_index",
+                features.len(),
+                feature_index.len()
+            ),
+        ));
+    }
+    if let Some((bad, u)) = untouched
+        .iter()
+        .enumerate()
+        .find(|(_, u)| u.len() != features.len())
+    {
+        return Err(content(
+            path,
+            0,
+            None,
+            format!(
+                "untouched frame {bad} has {} values, the data {} features",
+                u.len(),
+                features.len()
+            ),
+        ));
+    }
+    let p = features.len();
+    let baselines =
+        DMatrix::from_row_iterator(untouched.len(), p, untouched.iter().flatten().copied());
+    let column = |c| table.column(path, c);
+    let x = table.matrix(path, &features)?;
+    let y = table.whole(path, label)?;
+    let visit = table.whole(path, visit)?;
+    let positions = column(xc)?
+        .into_iter()
+        .zip(column(yc)?)
+        .map(|(x, y)| [x * x_unit, y * y_unit])
+        .collect();
+    let pressure = match pressure {
+        Some((c, unit)) => column(c)?.into_iter().map(|p| p * unit).collect(),
+        None => Vec::new(),
+    };
+    Ok(Dataset {
+        x,
+        y,
+        positions,
+        pressure,
+        electrodes,
+        centres,
+        visit,
+        baselines,
+        feature_index,
+        config,
+    })
+}
+
+/// Writes `data` as a NumPy `.npz` archive with the same content as [`save_csv`], in SI units
+/// (the names say so) and at disk speed:
+///
+/// | array | shape, type | content |
+/// | --- | --- | --- |
+/// | `format` | text | `et-dataset 1` (the `.npz` was SI from the start) |
+/// | `x` | n x p, float64 | features, volts |
+/// | `label` | n, uint16 | class |
+/// | `position_m` | n x 2, float64 | where the finger pressed, m |
+/// | `visit` | n, uint16 | visit (session) of each row |
+/// | `pressure_pa` | n or 0, float64 | pressure of each touch, Pa (empty when unknown) |
+/// | `feature_index` | p, uint16 | frame index of each feature |
+/// | `centres_m` | C x 2, float64 | class centres, m |
+/// | `electrodes_m` | L x 2, float64 | nominal electrode centres, m (0 rows when unknown) |
+/// | `untouched` | T x p, float64 | each visit's untouched frame, volts |
+/// | `config` | text | the scan settings, JSON |
+/// | `provenance` | text | what made it |
+///
+/// Python: `d = numpy.load(path); d["x"], d["label"], json.loads(str(d["config"]))`.
+///
+/// # Errors
+/// [`DatasetError::Io`], or [`DatasetError::Content`] for a set over 4 GiB.
+pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    let mut w = npz::Writer::new();
+    w.text("format", "et-dataset 1");
+    w.matrix("x", &data.x);
+    w.u16s("label", &data.y);
+    w.pairs("position_m", &data.positions);
+    w.u16s("visit", &data.visit);
+    w.f64s("pressure_pa", &data.pressure);
+    w.u16s("feature_index", &data.feature_index);
+    w.pairs("centres_m", &data.centres);
+    w.pairs("electrodes_m", &data.electrodes);
+    w.matrix("untouched", &data.baselines);
+    w.text(
+        "config",
+        &serde_json::to_string(&data.config).unwrap_or_default(),
+    );
+    w.text("provenance", provenance);
+    let bytes = w
+        .finish()
+        .map_err(|e| content(path, 0, None, e.to_string()))?;
+    std::fs::write(path, bytes).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// Reads a dataset written by [`save_npz`] (or by numpy with the same arrays).
+///
+/// # Errors
+/// [`DatasetError`] naming the file and the array at fault.
+pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
+    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let bad = |e: npz::NpzError| content(path, 0, None, e.to_string());
+    let z = npz::Npz::read(bytes).map_err(bad)?;
+    let fault = |array: &str, message: String| {
+        content(path, 0, None, format!("array '{array}': {message}"))
+    };
+    if z.text("format").map_err(bad)? != "et-dataset 1" {
+        return Err(fault("format", "not an et dataset ('et-dataset 1')".into()));
+    }
+    let config: ScanConfig = serde_json::from_str(&z.text("config").map_err(bad)?)
+        .map_err(|e| fault("config", e.to_string()))?;
+    let x = z.matrix("x").map_err(bad)?;
+    let (n, p) = x.shape();
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(fault(
+            "x",
+            format!("row {}, column {} is not a finite number", i % n, i / n),
+        ));
+    }
+    let pairs = |name: &str, rows: Option<usize>| {
+        let m = z.matrix(name).map_err(bad)?;
+        if m.ncols() != 2 || rows.is_some_and(|r| r != m.nrows()) {
+            return Err(fault(
+                name,
+                format!(
+                    "shape {} x {}, expected {} x 2",
+                    m.nrows(),
+                    m.ncols(),
+                    rows.map_or("any".into(), |r| r.to_string())
+                ),
+            ));
+        }
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(fault(
+                name,
+                "holds a value that is not a finite number".into(),
+            ));
+        }
+        Ok(m.column(0)
+            .iter()
+            .zip(m.column(1).iter())
+            .map(|(&x, &y)| [x, y])
+            .collect::<Vec<_>>())
+    };
+    let rows = |name: &str, len: usize, want: usize| {
+        if len == want {
+            Ok(())
+        } else {
+            Err(fault(name, format!("{len} values, x has {want} rows")))
+        }
+    };
+    let y = z.whole("label").map_err(bad)?;
+    rows("label", y.len(), n)?;
+    let visit = z.whole("visit").map_err(bad)?;
+    rows("visit", visit.len(), n)?;
+    let pressure = z.vector("pressure_pa").map_err(bad)?;
+    if !pressure.is_empty() {
+        rows("pressure_pa", pressure.len(), n)?;
+    }
+    let feature_index = z.whole("feature_index").map_err(bad)?;
+    if feature_index.len() != p {
+        return Err(fault(
+            "feature_index",
+            format!("{} values, x has {p} columns", feature_index.len()),
+        ));
+    }
+    let baselines = z.matrix("untouched").map_err(bad)?;
+    if baselines.nrows() > 0 && baselines.ncols() != p {
+        return Err(fault(
+            "untouched",
+            format!("{} columns, x has {p}", baselines.ncols()),
+        ));
+    }
+    Ok(Dataset {
+        positions: pairs("position_m", Some(n))?,
+        centres: pairs("centres_m", None)?,
+        electrodes: pairs("electrodes_m", None)?,
+        x,
+        y,
+        pressure,
+        visit,
+        baselines,
+        feature_index,
+        config,
+    })
+}
+
+/// Whether `path` names an `.npz` dataset (else CSV).
+fn is_npz(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
+}
+
+/// Writes `data` as `.npz` when `path` ends so ([`save_npz`]), else as CSV ([`save_csv`]).
+///
+/// # Errors
+/// As those.
+pub fn save(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    if is_npz(path) {
+        save_npz(data, path, provenance)
+    } else {
+        save_csv(data, path, provenance)
+    }
+}
+
+/// Reads an `.npz` dataset when `path` ends so ([`load_npz`]), else CSV ([`load_csv`]).
+///
+/// # Errors
+/// As those.
+pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
+    if is_npz(path) {
+        load_npz(path)
+    } else {
+        load_csv(path)
+    }
+}

@@ -1,0 +1,199 @@
+//! A CSV table as et reads one: names from a header row or column numbers, numbers per row,
+//! text kept for the columns that may hold class labels.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use std::path::Path;
+
+use nalgebra::DMatrix;
+
+use super::{DatasetError, content};
+
+pub(super) struct Table {
+    pub(super) names: Vec<String>,
+    /// Whether the names came from a header row (else they are the column numbers, 1-based).
+    pub(super) header: bool,
+    /// (1-based line, values): every row has a value for every name (`parse_table` checks);
+    /// NaN in a text column.
+    pub(super) rows: Vec<(usize, Vec<f64>)>,
+    /// Per column: its cells as written, for the columns that may hold text (class labels).
+    pub(super) text: Vec<Option<Vec<String>>>,
+}
+
+impl Table {
+    /// Column `c` of every row.
+    pub(super) fn column(&self, path: &Path, c: usize) -> Result<Vec<f64>, DatasetError> {
+        self.rows
+            .iter()
+            .map(|(line, v)| {
+                v.get(c).copied().filter(|v| v.is_finite()).ok_or_else(|| {
+                    content(
+                        path,
+                        *line,
+                        self.names.get(c).cloned(),
+                        "missing or not a finite number",
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// Column `c` as written (labels: any text, numbers as their text).
+    pub(super) fn text_column(&self, path: &Path, c: usize) -> Result<Vec<String>, DatasetError> {
+        match self.text.get(c) {
+            Some(Some(t)) => Ok(t.clone()),
+            _ => Err(content(
+                path,
+                0,
+                self.names.get(c).cloned(),
+                "not kept as text",
+            )),
+        }
+    }
+
+    /// Columns `cols`, as an n x cols.len() matrix.
+    pub(super) fn matrix(&self, path: &Path, cols: &[usize]) -> Result<DMatrix<f64>, DatasetError> {
+        let mut x = DMatrix::zeros(self.rows.len(), cols.len());
+        for (j, &c) in cols.iter().enumerate() {
+            x.set_column(j, &nalgebra::DVector::from_vec(self.column(path, c)?));
+        }
+        Ok(x)
+    }
+
+    /// Column `c` as whole numbers 0..=65535 (class labels, visits).
+    pub(super) fn whole(&self, path: &Path, c: usize) -> Result<Vec<u16>, DatasetError> {
+        self.column(path, c)?
+            .into_iter()
+            .zip(&self.rows)
+            .map(|(v, (line, _))| {
+                if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u16::MAX) {
+                    Ok(v as u16)
+                } else {
+                    Err(content(
+                        path,
+                        *line,
+                        self.names.get(c).cloned(),
+                        format!("{v} is not a whole number from 0 to 65535"),
+                    ))
+                }
+            })
+            .collect()
+    }
+}
+
+/// Whether a cell reads as a number.
+fn is_number(cell: &str) -> bool {
+    cell.trim().parse::<f64>().is_ok()
+}
+
+/// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
+/// The first row is a header when it has a cell that is not a number, unless the second row
+/// has text in exactly the same columns (a headerless file with text labels). `text_ok(name,
+/// columns)` says which columns may hold text (kept as written besides their numbers).
+pub(super) fn parse_table(
+    path: &Path,
+    lines: &[(usize, &str)],
+    text_ok: &dyn Fn(&str, usize) -> bool,
+) -> Result<Table, DatasetError> {
+    let mut it = lines
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .peekable();
+    let &&(hl, first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
+    let texts = |l: &str| -> Vec<bool> { l.split(',').map(|c| !is_number(c)).collect() };
+    let first_text = texts(first);
+    let second_text = it.clone().nth(1).map(|&(_, l)| texts(l));
+    let header =
+        first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
+    let names: Vec<String> = if header {
+        it.next();
+        first.split(',').map(|s| s.trim().to_string()).collect()
+    } else {
+        (1..=first.split(',').count())
+            .map(|c| c.to_string())
+            .collect()
+    };
+    if names.iter().any(String::is_empty) {
+        return Err(content(
+            path,
+            hl + 1,
+            None,
+            "empty column name in the header",
+        ));
+    }
+    let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
+    let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
+    let mut rows = Vec::new();
+    for &(i, l) in it {
+        let cells: Vec<&str> = l.split(',').collect();
+        if cells.len() != names.len() {
+            return Err(content(
+                path,
+                i + 1,
+                None,
+                format!(
+                    "{} values, {} has {} columns",
+                    cells.len(),
+                    if header {
+                        "the header"
+                    } else {
+                        "the first row"
+                    },
+                    names.len()
+                ),
+            ));
+        }
+        let mut values = Vec::with_capacity(cells.len());
+        for ((c, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
+            let cell = c.trim();
+            if let Some(t) = t {
+                if cell.is_empty() {
+                    return Err(content(path, i + 1, Some(name.clone()), "empty label"));
+                }
+                t.push(cell.to_string());
+                values.push(cell.parse::<f64>().unwrap_or(f64::NAN));
+                continue;
+            }
+            values.push(match cell.parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                Ok(v) => {
+                    return Err(content(
+                        path,
+                        i + 1,
+                        Some(name.clone()),
+                        format!("{v} is not a finite number"),
+                    ));
+                }
+                Err(_) => {
+                    return Err(content(
+                        path,
+                        i + 1,
+                        Some(name.clone()),
+                        format!("'{cell}' is not a number"),
+                    ));
+                }
+            });
+        }
+        rows.push((i + 1, values));
+    }
+    if rows.is_empty() {
+        return Err(content(path, 0, None, "no data rows"));
+    }
+    Ok(Table {
+        names,
+        header,
+        rows,
+        text,
+    })
+}
+
+/// The lines of `text`, without a leading UTF-8 byte-order mark (CRLF ends are handled by
+/// `lines`).
+pub(super) fn text_lines(text: &str) -> Vec<(usize, &str)> {
+    text.strip_prefix('\u{feff}')
+        .unwrap_or(text)
+        .lines()
+        .enumerate()
+        .collect()
+}
