@@ -2,7 +2,9 @@
 //! cross-validation, regression, datasets and model files; it has no command line and no
 //! plotting.
 //!
-//! Modules in the order a model is made:
+//! The entry point is [`Trainer`]: [`Trainer::train`] fits an et dataset (QDA or LDA for the
+//! board) or any sensor's table and returns a [`Trained`] model. The modules below are its
+//! stages, in the order a model is made:
 //!
 //! - [`collect`]: the data-collection procedure (§9.4) on the simulated sheet.
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
@@ -22,6 +24,7 @@
 //!   training rows, the model file, evaluation.
 //! - [`reference`]: the reference's six published accuracies and the procedure that measures
 //!   them on the simulator (the calibration's table).
+//! - [`trainer`]: the entry point.
 //! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
 //!   test, the chip's blob through et-core), as `et train`, `et eval` and `et demo` do them.
 #![forbid(unsafe_code)]
@@ -40,6 +43,9 @@ pub mod reference;
 pub mod regress;
 pub mod standin;
 pub mod tabular;
+pub mod trainer;
+
+pub use trainer::{Examples, TrainError, Trained, Trainer};
 
 #[cfg(test)]
 mod tests;

@@ -228,7 +228,7 @@ pub enum Stage {
 pub fn train_reporting(
     data: &Dataset,
     options: &TrainOptions,
-    report: impl Fn(Stage),
+    mut report: impl FnMut(Stage),
 ) -> Result<Trained, FitError> {
     let classes = data.centres.len();
     let (x, y) = (&data.x, &data.y);
@@ -266,7 +266,7 @@ pub fn train_reporting(
     let prepared = Prepared::new(x, y, classes)?;
     let strat_part = prepared.partition(&strat)?;
     let visit_part = several_visits.then(|| prepared.partition(&by_visit));
-    let choose = |part: &Partition, by_visit: bool| match options.shrinkage {
+    let mut choose = |part: &Partition, by_visit: bool| match options.shrinkage {
         Some(l) => Ok((l, Vec::new())),
         None => {
             let mut index = 0;

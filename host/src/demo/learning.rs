@@ -187,24 +187,25 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     let bar = steps.bar(3, "training (QDA, raw QDA, LDA)");
     let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
     let fit = |referenced: bool, kind: ModelKind, shrinkage: Option<f64>, keep: Option<usize>| {
-        let mut data = train.clone();
-        pipeline::prepare(&mut data, referenced, keep)?;
-        let t = pipeline::train(
-            &data,
-            &TrainOptions {
-                kind,
-                shrinkage,
-                folds: 10,
-            },
-        )?;
-        let file = ModelFile::new(
-            &t.model,
-            t.options.shrinkage,
-            data.config,
-            data.feature_index.clone(),
-            mm.clone(),
-            referenced,
-        );
+        let trainer = Trainer {
+            method: Choice::One(match kind {
+                ModelKind::Qda => Method::Qda,
+                ModelKind::Lda => Method::Lda,
+            }),
+            shrinkage,
+            folds: Some(10),
+            raw: !referenced,
+            keep,
+            ..Trainer::default()
+        };
+        let Trained::Board(board) =
+            trainer.train(Examples::Dataset(Box::new(train.clone())), |_| {})?
+        else {
+            return Err(anyhow!("an et dataset trains a board model"));
+        };
+        let BoardModel {
+            file, training: t, ..
+        } = *board;
         let tested = pipeline::test(&file, &next_day)?;
         anyhow::Ok((t, file, tested))
     };

@@ -199,7 +199,7 @@ fn the_monitor_counts_gaps_and_measures_snr() {
 /// switched to the model's configuration, and every class centre pressed comes out as its class.
 #[test]
 fn a_trained_model_classifies_live_presses() {
-    use et_learn::{collect, pipeline};
+    use et_learn::collect;
     let scene = default_scene().unwrap();
     let config = collect::training_config(scene.scan_config().unwrap());
     let centres = collect::grid(&scene.sheet, 3, 3, 0.0);
@@ -219,26 +219,19 @@ fn a_trained_model_classifies_live_presses() {
         seed: 5,
         ..collect::Plan::default()
     };
-    let mut data = collect::collect(&scene.sheet, scene.frontend, config, &centres, &plan).unwrap();
-    pipeline::prepare(&mut data, true, None).unwrap();
-    let t = pipeline::train(
-        &data,
-        &pipeline::TrainOptions {
-            kind: et_core::model::ModelKind::Qda,
-            shrinkage: None,
-            folds: 5,
-        },
-    )
-    .unwrap();
-    let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
-    let file = ModelFile::new(
-        &t.model,
-        t.options.shrinkage,
-        config,
-        data.feature_index.clone(),
-        mm,
-        true,
-    );
+    let data = collect::collect(&scene.sheet, scene.frontend, config, &centres, &plan).unwrap();
+    let trainer = et_learn::Trainer {
+        method: et_learn::tabular::Choice::One(et_learn::tabular::Method::Qda),
+        folds: Some(5),
+        ..et_learn::Trainer::default()
+    };
+    let et_learn::Trained::Board(board) = trainer
+        .train(et_learn::Examples::Dataset(Box::new(data)), |_| {})
+        .unwrap()
+    else {
+        panic!("a dataset trains a board model");
+    };
+    let file = board.file;
 
     let (mut source, sheet) = sim();
     source.configure(file.config).unwrap();

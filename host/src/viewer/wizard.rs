@@ -22,8 +22,12 @@ use et_core::board::MODEL_SLOT_BYTES;
 use et_learn::collect;
 use et_learn::cv::Confusion;
 use et_learn::dataset::Dataset;
+use et_learn::fit::FitError;
 use et_learn::model_file::ModelFile;
-use et_learn::pipeline::{self, TrainOptions};
+use et_learn::pipeline;
+use et_learn::tabular::{Choice, Method};
+use et_learn::trainer::BoardModel;
+use et_learn::{Examples, TrainError, Trainer};
 
 /// What the wizard asks of the viewer.
 #[derive(Clone, Debug, PartialEq)]
@@ -310,7 +314,7 @@ impl Wizard {
     /// # Errors
     /// [`WizardError`] when the data cannot be fitted.
     pub fn train(&mut self) -> Result<(), WizardError> {
-        let mut data = self.dataset()?;
+        let data = self.dataset()?;
         // Keep the features that separate the classes best when all of them would not fit
         // a model slot of the board (f16).
         let all = data.feature_index.len();
@@ -318,31 +322,30 @@ impl Wizard {
         if fit == 0 {
             return Err(WizardError::TooManyClasses);
         }
-        pipeline::prepare(&mut data, true, (fit < all).then_some(fit))
-            .map_err(WizardError::Data)?;
         let per_class = self.y.len() / self.classes().max(1);
-        let t = pipeline::train(
-            &data,
-            &TrainOptions {
-                kind: ModelKind::Qda,
-                shrinkage: None,
-                folds: per_class.clamp(2, 10),
-            },
-        )
-        .map_err(WizardError::Fit)?;
-        let mm = self
-            .centres
-            .iter()
-            .map(|c| [c[0] * 1e3, c[1] * 1e3])
-            .collect();
-        let file = ModelFile::new(
-            &t.model,
-            t.options.shrinkage,
-            data.config,
-            data.feature_index.clone(),
-            mm,
-            true,
-        );
+        let trainer = Trainer {
+            method: Choice::One(Method::Qda),
+            folds: Some(per_class.clamp(2, 10)),
+            keep: (fit < all).then_some(fit),
+            ..Trainer::default()
+        };
+        let board = match trainer.train(Examples::Dataset(Box::new(data)), |_| {}) {
+            Ok(et_learn::Trained::Board(board)) => board,
+            Err(TrainError::Data(e)) => return Err(WizardError::Data(e)),
+            Err(TrainError::Fit(e)) => return Err(WizardError::Fit(e)),
+            // A dataset trains a board model, QDA here: nothing else can come back.
+            other => {
+                let why = other
+                    .err()
+                    .map_or("not a board model".into(), |e| e.to_string());
+                return Err(WizardError::Fit(FitError::Shape(why)));
+            }
+        };
+        let BoardModel {
+            file,
+            training: t,
+            data,
+        } = *board;
         self.message = format!(
             "cross-validated accuracy {:.1} % (shrinkage {}, {} of {all} features{})",
             100.0 * t.cv.accuracy(),

@@ -8,6 +8,8 @@ use et_core::model::{ModelKind, Precision};
 use et_host::plot;
 use et_learn::model_file::ModelFile;
 use et_learn::tabular::{self, Choice, Method};
+use et_learn::trainer::{BoardModel, Progress};
+use et_learn::{Examples, TrainError, Trained, Trainer};
 use et_learn::{analysis, collect, dataset, fastcv, pipeline};
 use et_sim::scene::Scene;
 
@@ -367,70 +369,71 @@ impl From<PrecisionArg> for Precision {
     }
 }
 
+impl TrainArgs {
+    /// The trainer these arguments ask for.
+    fn trainer(&self) -> Result<Trainer> {
+        let method = match self.kind {
+            None | Some(KindArg::Auto) => Choice::Auto,
+            Some(KindArg::Qda) => Choice::One(Method::Qda),
+            Some(KindArg::Lda) => Choice::One(Method::Lda),
+            Some(KindArg::Ridge) => Choice::One(Method::Ridge),
+            Some(KindArg::KernelRidge) => Choice::One(Method::KernelRidge),
+            Some(KindArg::Knn) => Choice::One(Method::Knn),
+            Some(KindArg::Gp) => Choice::One(Method::Gp),
+        };
+        let shrinkage = match self.shrinkage.as_deref().unwrap_or("auto") {
+            "auto" => None,
+            v => Some(
+                v.parse::<f64>()
+                    .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
+            ),
+        };
+        Ok(Trainer {
+            method,
+            shrinkage,
+            folds: self.folds,
+            scheme: match self.cv {
+                CvArg::Shuffled => tabular::CvScheme::Shuffled,
+                CvArg::Blocks => tabular::CvScheme::Blocks,
+            },
+            grid: self
+                .grid
+                .as_deref()
+                .map(|g| parse_grid(g, "--grid"))
+                .transpose()?,
+            raw: self.raw,
+            keep: self.keep,
+            seed: 1,
+        })
+    }
+}
+
 pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
-    let Some(data_path) = &args.data else {
+    let Some(data_arg) = &args.data else {
         if args.curve.is_some() || args.keep.is_some() || args.raw {
             bail!("--curve, --keep and --raw apply to et datasets (--data)");
         }
         if args.shrinkage.as_deref().is_some_and(|s| s != "auto") {
             bail!("--shrinkage: with --features it is chosen by cross-validation; leave it out");
         }
-        let choice = match args.kind.unwrap_or(KindArg::Auto) {
-            KindArg::Qda => Choice::One(Method::Qda),
-            KindArg::Lda => Choice::One(Method::Lda),
-            KindArg::Ridge => Choice::One(Method::Ridge),
-            KindArg::KernelRidge => Choice::One(Method::KernelRidge),
-            KindArg::Knn => Choice::One(Method::Knn),
-            KindArg::Gp => Choice::One(Method::Gp),
-            KindArg::Auto => Choice::Auto,
-        };
-        let grid = args
-            .grid
-            .as_deref()
-            .map(|g| parse_grid(g, "--grid"))
-            .transpose()?;
-        return crate::tabular::train(
-            &args.table,
-            choice,
-            &tabular::TrainOptions {
-                folds: args.folds.unwrap_or(5),
-                scheme: match args.cv {
-                    CvArg::Shuffled => tabular::CvScheme::Shuffled,
-                    CvArg::Blocks => tabular::CvScheme::Blocks,
-                },
-                grid,
-                seed: 1,
-            },
-            &args.out,
-            args.json,
-            force,
-        );
+        return crate::tabular::train(&args.table, &args.trainer()?, &args.out, args.json, force);
     };
-    let kind = match args.kind.unwrap_or(KindArg::Qda) {
-        KindArg::Qda => ModelKind::Qda,
-        KindArg::Lda => ModelKind::Lda,
-        other => bail!(
+    let trainer = args.trainer()?;
+    trainer.board_kind().map_err(|_| {
+        anyhow::anyhow!(
             "--kind {}: et datasets (--data) train qda or lda for the board; regressors take \
              any sensor's table (--features)",
-            format!("{other:?}").to_lowercase()
-        ),
-    };
+            format!("{:?}", args.kind.unwrap_or(KindArg::Qda)).to_lowercase()
+        )
+    })?;
     if args.grid.is_some() || args.cv != CvArg::Shuffled {
         bail!("--grid and --cv apply to any sensor's table (--features)");
     }
-    let data_arg = data_path;
     output::check(&args.out, &[data_arg], force)?;
     if let Some(png) = &args.curve {
         output::check(png, &[data_arg, &args.out], force)?;
     }
     let folds = args.folds.unwrap_or(10);
-    let shrinkage = match args.shrinkage.as_deref().unwrap_or("auto") {
-        "auto" => None,
-        v => Some(
-            v.parse::<f64>()
-                .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
-        ),
-    };
     // Each stage on one line that updates in place, with the time so far (stderr, and only
     // on a terminal: scripts and --json see nothing of it). Cleared on every way out.
     let spinner = ProgressBar::new_spinner().with_style(
@@ -443,62 +446,38 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         e
     };
     spinner.set_message(format!("reading {}", data_arg.display()));
-    let mut data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
+    let data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
     let classes = data.centres.len();
-    let referenced = !args.raw && data.has_untouched();
-    if !args.raw && !referenced {
-        spinner.suspend(|| {
+    let trained = trainer.train(Examples::Dataset(Box::new(data)), |stage| match stage {
+        Progress::RawFrames => spinner.suspend(|| {
             eprintln!(
                 "note: {} has no untouched frames, training on raw frames",
                 data_arg.display()
             );
-        });
-    }
-    spinner.set_message(format!(
-        "preparing {} observations x {} features",
-        data.x.nrows(),
-        data.x.ncols()
-    ));
-    pipeline::prepare(&mut data, referenced, args.keep)
-        .map_err(|e| cleared(anyhow::anyhow!("{}: {e}", data_arg.display())))?;
-    let trained = pipeline::train_reporting(
-        &data,
-        &pipeline::TrainOptions {
-            kind,
-            shrinkage,
-            folds,
-        },
-        |stage| {
-            spinner.set_message(match stage {
-                pipeline::Stage::Statistics => "each fold's statistics".to_string(),
-                pipeline::Stage::Candidate {
-                    index,
-                    of,
-                    shrinkage,
-                    by_visit,
-                } => format!(
-                    "choosing the shrinkage: {shrinkage} ({} of {of}), {}",
-                    index + 1,
-                    if by_visit {
-                        "leave-one-visit-out".to_string()
-                    } else {
-                        format!("{folds}-fold")
-                    }
-                ),
-                pipeline::Stage::Final => format!(
-                    "fitting the model beside its {folds}-fold and leave-one-visit-out cross-validations"
-                ),
-            });
-        },
-    );
+        }),
+        Progress::Preparing { rows, features } => {
+            spinner.set_message(format!(
+                "preparing {rows} observations x {features} features"
+            ));
+        }
+        Progress::Dataset(stage) => spinner.set_message(training_stage(stage, folds)),
+        Progress::Table(..) => {}
+    });
     spinner.finish_and_clear();
-    let trained = trained?;
-    let (model, opts, cv_conf, lovo) = (
-        &trained.model,
-        trained.options,
-        &trained.cv,
-        trained.leave_one_visit_out,
-    );
+    let board = match trained.map_err(|e| match e {
+        TrainError::Data(e) => anyhow::anyhow!("{}: {e}", data_arg.display()),
+        other => other.into(),
+    })? {
+        Trained::Board(board) => board,
+        Trained::Table(_) => bail!("an et dataset trains a board model"),
+    };
+    let BoardModel {
+        file,
+        training: trained,
+        data,
+    } = *board;
+    let referenced = file.referenced;
+    let (opts, cv_conf, lovo) = (trained.options, &trained.cv, trained.leave_one_visit_out);
     let (shrinkage, scores) = (opts.shrinkage, &trained.shrinkage_scores);
     // What was fitted: qda shrunk fully toward the pooled covariance is saved as the lda.
     let kind = opts.kind;
@@ -564,19 +543,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         }
         None => None,
     };
-    let mm: Vec<[f64; 2]> = data
-        .centres
-        .iter()
-        .map(|c| [c[0] * 1e3, c[1] * 1e3])
-        .collect();
-    let file = ModelFile::new(
-        model,
-        shrinkage,
-        data.config,
-        data.feature_index.clone(),
-        mm.clone(),
-        referenced,
-    );
+    let mm = &file.centres_mm;
     // What every reader of model files checks (et eval, stream, view, export): refuse to
     // write a model they would refuse.
     file.validate().with_context(|| {
@@ -604,8 +571,8 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         features: data.x.ncols(),
         cv_folds: folds.max(2),
         cv_accuracy: cv_conf.accuracy(),
-        cv_mean_error_mm: cv_conf.mean_position_error(&mm),
-        cv_aee_mm: cv_conf.aee(&mm),
+        cv_mean_error_mm: cv_conf.mean_position_error(mm),
+        cv_aee_mm: cv_conf.aee(mm),
         leave_one_visit_out_accuracy: lovo,
         fallbacks: &trained.fallbacks,
         learning_curve: curve.as_deref(),
@@ -631,7 +598,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             trained.chosen_by,
             folds.max(2),
             100.0 * cv_conf.accuracy(),
-            cv_conf.mean_position_error(&mm),
+            cv_conf.mean_position_error(mm),
             lovo.map_or(String::new(), |a| format!(
                 ", leave-one-visit-out {:.1} %",
                 100.0 * a
@@ -647,6 +614,30 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The spinner's line for a stage of training on an et dataset.
+fn training_stage(stage: pipeline::Stage, folds: usize) -> String {
+    match stage {
+        pipeline::Stage::Statistics => "each fold's statistics".to_string(),
+        pipeline::Stage::Candidate {
+            index,
+            of,
+            shrinkage,
+            by_visit,
+        } => format!(
+            "choosing the shrinkage: {shrinkage} ({} of {of}), {}",
+            index + 1,
+            if by_visit {
+                "leave-one-visit-out".to_string()
+            } else {
+                format!("{folds}-fold")
+            }
+        ),
+        pipeline::Stage::Final => format!(
+            "fitting the model beside its {folds}-fold and leave-one-visit-out cross-validations"
+        ),
+    }
 }
 
 pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {

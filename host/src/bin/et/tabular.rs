@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use et_host::plot;
-use et_learn::tabular::{self, Choice, RowRange, Table, TableModel, TrainOptions, Unit};
+use et_learn::tabular::{self, RowRange, Table, TableModel, Unit};
+use et_learn::trainer::Progress;
+use et_learn::{Examples, Trained, Trainer};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output;
@@ -134,8 +136,7 @@ fn rounded(v: serde_json::Value) -> serde_json::Value {
 
 pub(crate) fn train(
     args: &TableArgs,
-    choice: Choice,
-    opts: &TrainOptions,
+    trainer: &Trainer,
     out: &Path,
     json: bool,
     force: bool,
@@ -144,7 +145,10 @@ pub(crate) fn train(
     let table = args.load()?;
     let bar = bar();
     let mut last = String::new();
-    let mut progress = |what: &str, done: usize, of: usize| {
+    let progress = |stage: Progress<'_>| {
+        let Progress::Table(what, done, of) = stage else {
+            return;
+        };
         if what != last {
             if !last.is_empty() && !console_is_interactive() {
                 eprintln!("{last}: done");
@@ -155,8 +159,11 @@ pub(crate) fn train(
         }
         bar.set_position(done as u64);
     };
-    let model = tabular::train(&table, choice, opts, &mut progress)?;
+    let trained = trainer.train(Examples::Table(&table), progress);
     bar.finish_and_clear();
+    let Trained::Table(model) = trained? else {
+        bail!("a table trains a table model");
+    };
     output::write(out, |partial| model.save(partial))?;
     let best = model.chosen();
     if json {

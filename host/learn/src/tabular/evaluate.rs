@@ -1,0 +1,146 @@
+//! A table model scored on rows it did not train on.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// How a model did on a table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// Rows evaluated.
+    pub observations: usize,
+    /// The model's method.
+    pub method: Method,
+    /// Mean distance (x, y) from the true position to the predicted one, mm (for classes:
+    /// to the predicted class's position).
+    pub mean_error_mm: Option<f64>,
+    /// Median of the same.
+    pub median_error_mm: Option<f64>,
+    /// 90th percentile of the same.
+    pub p90_error_mm: Option<f64>,
+    /// Mean distance in (x, y, z), mm, when z is predicted.
+    pub mean_error_3d_mm: Option<f64>,
+    /// Mean absolute error of the third target (z mm, or force as given).
+    pub third_mae: Option<f64>,
+    /// A constant predictor's mean error (the training mean position), mm: the floor to beat.
+    pub mean_predictor_error_mm: Option<f64>,
+    /// Share of rows whose class is right (classifiers, when the rows have labels or the
+    /// model's grid can place them).
+    pub accuracy: Option<f64>,
+    /// Seconds the training took (from the model file).
+    pub fit_seconds: f64,
+    /// Seconds to predict every row.
+    pub predict_seconds: f64,
+    /// Per row: true and predicted (x, y) in mm, where both exist (for plots).
+    #[serde(skip)]
+    pub pairs: Vec<([f64; 2], [f64; 2])>,
+    /// Every row's prediction, in row order.
+    #[serde(skip)]
+    pub predictions: Vec<Prediction>,
+}
+
+/// Evaluates `model` on `table`: position errors when the rows have positions, accuracy for
+/// classifiers when the rows have labels the model knows (an unknown label counts as missed)
+/// or positions its grid places.
+///
+/// # Errors
+/// [`TabularError::Usage`] when the features do not match, or the rows have no target the
+/// model predicts.
+pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, TabularError> {
+    let started = std::time::Instant::now();
+    let pred = model.predict(&table.x)?;
+    let predict_seconds = started.elapsed().as_secs_f64();
+    let truth = table.targets();
+    let accuracy = match (&model.classes, model.method.is_classifier()) {
+        (Some(info), true) => {
+            let true_class: Option<Vec<Option<u16>>> = if let Some(text) = &table.labels {
+                Some(
+                    text.iter()
+                        .map(|l| info.names.iter().position(|n| n == l).map(|c| c as u16))
+                        .collect(),
+                )
+            } else {
+                match (&info.grid, &table.positions_mm) {
+                    (Some(g), Some(p)) => Some(
+                        p.iter()
+                            .map(|&q| {
+                                let name = g.name(g.cell(q));
+                                info.names.iter().position(|n| *n == name).map(|c| c as u16)
+                            })
+                            .collect(),
+                    ),
+                    _ => None,
+                }
+            };
+            true_class.map(|t| {
+                let right = t
+                    .iter()
+                    .zip(&pred)
+                    .filter(|(t, p)| t.is_some() && **t == p.class)
+                    .count();
+                right as f64 / t.len().max(1) as f64
+            })
+        }
+        _ => None,
+    };
+    if truth.is_none() && accuracy.is_none() {
+        return Err(usage(
+            "the rows have no target this model predicts: give positions (x, y) or class labels",
+        ));
+    }
+    let mut pairs = Vec::new();
+    let (mut errors, mut errors3, mut third) = (Vec::new(), Vec::new(), Vec::new());
+    if let Some(truth) = &truth {
+        for (t, p) in truth.iter().zip(&pred) {
+            if let Some(q) = p.target {
+                pairs.push(([t[0], t[1]], [q[0], q[1]]));
+                errors.push((q[0] - t[0]).hypot(q[1] - t[1]));
+                if model.third.is_some() && table.third.is_some() {
+                    third.push((q[2] - t[2]).abs());
+                    errors3.push(
+                        ((q[0] - t[0]).powi(2) + (q[1] - t[1]).powi(2) + (q[2] - t[2]).powi(2))
+                            .sqrt(),
+                    );
+                }
+            }
+        }
+    }
+    let z_is_length = model
+        .third
+        .as_deref()
+        .is_some_and(|n| n.eq_ignore_ascii_case("z"));
+    let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    errors.sort_by(f64::total_cmp);
+    let quantile = |f: f64| {
+        (!errors.is_empty()).then(|| {
+            errors
+                .get(((errors.len() as f64 - 1.0) * f).round() as usize)
+                .copied()
+                .unwrap_or(0.0)
+        })
+    };
+    let mean_predictor_error_mm = model.training_mean_position().and_then(|c| {
+        truth.as_ref().map(|t| {
+            t.iter()
+                .map(|t| (t[0] - c[0]).hypot(t[1] - c[1]))
+                .sum::<f64>()
+                / t.len().max(1) as f64
+        })
+    });
+    Ok(Evaluation {
+        observations: table.rows(),
+        method: model.method,
+        mean_error_mm: mean(&errors),
+        median_error_mm: quantile(0.5),
+        p90_error_mm: quantile(0.9),
+        mean_error_3d_mm: if z_is_length { mean(&errors3) } else { None },
+        third_mae: mean(&third),
+        mean_predictor_error_mm,
+        accuracy,
+        fit_seconds: model.fit_seconds,
+        predict_seconds,
+        pairs,
+        predictions: pred,
+    })
+}

@@ -1,0 +1,612 @@
+//! The trained table model: its tables, predictions, and its JSON file (`et-table-model`).
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// One method with one set of hyperparameters, as cross-validation scored it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// The method.
+    pub method: Method,
+    /// Its hyperparameters (name, value).
+    pub hyperparameters: BTreeMap<String, f64>,
+    /// Cross-validated mean position error, mm (positions, or classes with positions).
+    pub cv_mean_error_mm: Option<f64>,
+    /// Cross-validated accuracy (classes).
+    pub cv_accuracy: Option<f64>,
+}
+
+impl Candidate {
+    /// Smaller is better: the mean error for positions, else 1 - accuracy.
+    pub(super) fn loss(&self) -> f64 {
+        if self.method.is_classifier() {
+            1.0 - self.cv_accuracy.unwrap_or(0.0)
+        } else {
+            self.cv_mean_error_mm.unwrap_or(f64::INFINITY)
+        }
+    }
+}
+
+/// The fitted tables of each method (z-space: features standardised by `feature_mean`,
+/// `feature_scale`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "kebab-case")]
+pub enum Tables {
+    /// QDA or LDA: the same class tables as et's board models (see `model_file`).
+    Discriminant {
+        /// QDA or LDA.
+        kind: ModelKind,
+        /// Per class, in the order of `classes.names`.
+        classes: Vec<ClassRecord>,
+    },
+    /// (x, y, third) = intercept + W^T z.
+    Ridge {
+        /// p rows of 3 weights.
+        weights: Vec<[f64; 3]>,
+        /// Targets' training mean.
+        intercept: [f64; 3],
+    },
+    /// (x, y, third) = intercept + sum_i alpha_i exp(-gamma |z - s_i|^2).
+    KernelRidge {
+        /// gamma, per squared z-distance.
+        gamma: f64,
+        /// m support rows s_i (z-space).
+        support: Vec<Vec<f64>>,
+        /// m rows of 3 weights.
+        alpha: Vec<[f64; 3]>,
+        /// Targets' training mean.
+        intercept: [f64; 3],
+    },
+    /// (x, y, third) = intercept + sum_i alpha_i exp(-1/2 sum_l ((z_l - s_il) / l_l)^2).
+    Gp {
+        /// The learned length scale l_l of each feature (z-space units).
+        length_scales: Vec<f64>,
+        /// The learned signal and noise variances (standardised positions' units).
+        signal_variance: f64,
+        /// (as above)
+        noise_variance: f64,
+        /// m support rows s_i (z-space).
+        support: Vec<Vec<f64>>,
+        /// m rows of 3 weights.
+        alpha: Vec<[f64; 3]>,
+        /// Targets' training mean.
+        intercept: [f64; 3],
+    },
+    /// The (weighted) mean target of the k nearest support rows.
+    Knn {
+        /// k.
+        k: usize,
+        /// Uniform or inverse-distance.
+        weighting: Weighting,
+        /// m support rows (z-space).
+        support: Vec<Vec<f64>>,
+        /// Their targets (x mm, y mm, third).
+        targets: Vec<[f64; 3]>,
+    },
+}
+
+/// What a classifier's classes are.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClassInfo {
+    /// The user's class names (or grid cells `r<row>c<col>`), in class order.
+    pub names: Vec<String>,
+    /// Each class's position, mm (its training rows' mean position, or the grid cell's
+    /// centre), when the data had positions.
+    pub centres_mm: Option<Vec<[f64; 2]>>,
+    /// The grid, when the classes were made from positions.
+    pub grid: Option<Grid>,
+}
+
+/// A model trained on a table, as saved (JSON; every field documented for Python and MATLAB
+/// readers in docs/guide.md).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TableModel {
+    /// Always "et-table-model".
+    pub format: String,
+    /// 1.
+    pub version: u32,
+    /// The method.
+    pub method: Method,
+    /// Feature column names, in order (p of them).
+    pub feature_names: Vec<String>,
+    /// Training mean of each feature (the standardisation).
+    pub feature_mean: Vec<f64>,
+    /// Training standard deviation of each feature (1 for a constant one).
+    pub feature_scale: Vec<f64>,
+    /// The unit positions were given in (predictions are reported in mm).
+    pub unit: Unit,
+    /// Name of the third target predicted beside x and y (z, force), if any.
+    pub third: Option<String>,
+    /// Classes, for QDA and LDA.
+    pub classes: Option<ClassInfo>,
+    /// The hyperparameters chosen.
+    pub hyperparameters: BTreeMap<String, f64>,
+    /// Every candidate cross-validation scored, the chosen one included.
+    pub search: Vec<Candidate>,
+    /// Cross-validation folds and scheme.
+    pub cv_folds: usize,
+    /// How rows were dealt to folds.
+    pub cv_scheme: CvScheme,
+    /// The training rows (0-based, half open, in the files).
+    pub trained_rows: [usize; 2],
+    /// The training files, as imported.
+    pub source: String,
+    /// Seconds the training took (search and final fit).
+    pub fit_seconds: f64,
+    /// What the training changed from the request, and why (e.g. a QDA saved as the LDA it
+    /// equals); absent when nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// The fitted tables.
+    pub tables: Tables,
+}
+
+/// One prediction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// The class (classifiers).
+    pub class: Option<u16>,
+    /// The position (x, y mm) and third target: a regressor's estimate, or the class's
+    /// centre; None for a classifier without class positions.
+    pub target: Option<Target3>,
+}
+
+/// The final fit of the chosen candidate on every row: its tables and the standardisation.
+pub(super) fn fit_final(
+    table: &Table,
+    best: &Candidate,
+    targets: Option<&[Target3]>,
+    classes: Option<&(Labels, ClassInfo)>,
+    progress: Progress<'_>,
+) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
+    let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
+    let need_targets = || targets.ok_or_else(|| usage("this method needs positions"));
+    Ok(match best.method {
+        Method::Qda | Method::Lda => {
+            let (labels, _) = classes.ok_or_else(|| usage("this method needs classes"))?;
+            let fit = FitOptions {
+                kind: discriminant(best.method),
+                shrinkage: h("shrinkage"),
+                target: shrink_target(table.x.ncols(), labels),
+            };
+            let model = Fitted::fit(&table.x, &labels.index, labels.names.len(), &fit)?;
+            (
+                Tables::Discriminant {
+                    kind: if best.method == Method::Lda {
+                        ModelKind::Lda
+                    } else {
+                        ModelKind::Qda
+                    },
+                    classes: class_records(&model),
+                },
+                model.feature_mean,
+                model.feature_scale,
+            )
+        }
+        Method::Ridge => {
+            let m = Ridge::fit(&table.x, need_targets()?, h("lambda"))?;
+            (
+                Tables::Ridge {
+                    weights: m.weight_rows(),
+                    intercept: m.intercept,
+                },
+                m.mean,
+                m.scale,
+            )
+        }
+        Method::KernelRidge => {
+            let m = KernelRidge::fit(
+                &table.x,
+                need_targets()?,
+                KRR_SUPPORT,
+                h("width"),
+                h("lambda"),
+            )?;
+            (
+                Tables::KernelRidge {
+                    gamma: m.gamma,
+                    support: regress::rows_of(&m.support),
+                    alpha: regress::rows3(&m.alpha),
+                    intercept: m.intercept,
+                },
+                m.mean,
+                m.scale,
+            )
+        }
+        Method::Gp => {
+            let what = "fitting gp (learning its length scales on every training row)";
+            let mut step = |done: usize, of: usize| progress(what, done, of);
+            let m = Gp::fit(&table.x, need_targets()?, &GP, &mut step)?;
+            let k = &m.predictor;
+            // The predictor's scales are the features' spreads times the length scales.
+            let scale = k
+                .scale
+                .iter()
+                .zip(&m.length_scales)
+                .map(|(s, l)| s / l)
+                .collect();
+            (
+                Tables::Gp {
+                    support: (0..k.support.nrows())
+                        .map(|i| {
+                            (k.support.row(i).iter())
+                                .zip(&m.length_scales)
+                                .map(|(v, l)| v * l)
+                                .collect()
+                        })
+                        .collect(),
+                    alpha: regress::rows3(&k.alpha),
+                    intercept: k.intercept,
+                    length_scales: m.length_scales,
+                    signal_variance: m.signal_variance,
+                    noise_variance: m.noise_variance,
+                },
+                k.mean.clone(),
+                scale,
+            )
+        }
+        Method::Knn => {
+            let weighting = if h("distance_weighted") > 0.5 {
+                Weighting::Distance
+            } else {
+                Weighting::Uniform
+            };
+            let m = Knn::fit(
+                &table.x,
+                need_targets()?,
+                h("k").max(1.0) as usize,
+                weighting,
+            )?;
+            (
+                Tables::Knn {
+                    k: m.k,
+                    weighting,
+                    support: regress::rows_of(&m.support),
+                    targets: m.targets.clone(),
+                },
+                m.mean,
+                m.scale,
+            )
+        }
+    })
+}
+
+/// A model rebuilt from its tables, ready to predict.
+pub(super) enum Ready {
+    Discriminant(Fitted),
+    Ridge(Ridge),
+    KernelRidge(KernelRidge),
+    Knn(Knn),
+}
+
+impl TableModel {
+    /// Features it reads per row.
+    #[must_use]
+    pub fn features(&self) -> usize {
+        self.feature_mean.len()
+    }
+
+    /// Rebuilds the fitted model, checking every table's shape.
+    fn ready(&self) -> Result<Ready, String> {
+        let p = self.features();
+        if self.feature_scale.len() != p || self.feature_names.len() != p || p == 0 {
+            return Err("feature_mean, feature_scale and feature_names differ in length".into());
+        }
+        if let Some(v) = self
+            .feature_mean
+            .iter()
+            .chain(&self.feature_scale)
+            .find(|v| !v.is_finite())
+        {
+            return Err(format!("a non-finite standardisation value ({v})"));
+        }
+        if self.feature_scale.iter().any(|&s| s <= 0.0) {
+            return Err("feature_scale must be positive".into());
+        }
+        let matrix = |rows: &[Vec<f64>], what: &str| -> Result<Mat<f64>, String> {
+            if rows.is_empty() || rows.iter().any(|r| r.len() != p) {
+                return Err(format!("{what}: every row needs {p} values"));
+            }
+            if rows.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(format!("{what}: a non-finite value"));
+            }
+            Ok(Mat::from_fn(rows.len(), p, |i, j| {
+                rows.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
+            }))
+        };
+        let finite3 = |v: &[[f64; 3]], what: &str| -> Result<(), String> {
+            if v.iter().flatten().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(format!("{what}: a non-finite value"))
+            }
+        };
+        let method_ok = |m: Method| {
+            if m == self.method {
+                Ok(())
+            } else {
+                Err(format!(
+                    "method {} with the tables of {}",
+                    self.method.name(),
+                    m.name()
+                ))
+            }
+        };
+        Ok(match &self.tables {
+            Tables::Discriminant { kind, classes } => {
+                let (method, mk) = match kind {
+                    ModelKind::Qda => (Method::Qda, *kind),
+                    ModelKind::Lda => (Method::Lda, *kind),
+                };
+                method_ok(method)?;
+                let info = self
+                    .classes
+                    .as_ref()
+                    .ok_or("a classifier without 'classes'")?;
+                if info.names.len() != classes.len()
+                    || info
+                        .centres_mm
+                        .as_ref()
+                        .is_some_and(|c| c.len() != classes.len())
+                {
+                    return Err("classes.names (and centres_mm) must list every class".into());
+                }
+                let fitted =
+                    fitted_from_records(mk, &self.feature_mean, &self.feature_scale, classes)
+                        .map_err(|e| e.to_string())?;
+                Ready::Discriminant(fitted)
+            }
+            Tables::Ridge { weights, intercept } => {
+                method_ok(Method::Ridge)?;
+                if weights.len() != p {
+                    return Err(format!(
+                        "ridge: {} weight rows for {p} features",
+                        weights.len()
+                    ));
+                }
+                finite3(weights, "ridge weights")?;
+                finite3(&[*intercept], "ridge intercept")?;
+                Ready::Ridge(Ridge {
+                    mean: self.feature_mean.clone(),
+                    scale: self.feature_scale.clone(),
+                    weights: DMatrix::from_fn(p, 3, |j, c| {
+                        weights
+                            .get(j)
+                            .and_then(|w| w.get(c))
+                            .copied()
+                            .unwrap_or(0.0)
+                    }),
+                    intercept: *intercept,
+                })
+            }
+            Tables::KernelRidge {
+                gamma,
+                support,
+                alpha,
+                intercept,
+            } => {
+                method_ok(Method::KernelRidge)?;
+                let support = matrix(support, "kernel-ridge support")?;
+                if alpha.len() != support.nrows() {
+                    return Err("kernel-ridge: one alpha row per support row".into());
+                }
+                finite3(alpha, "kernel-ridge alpha")?;
+                finite3(&[*intercept], "kernel-ridge intercept")?;
+                if !(gamma.is_finite() && *gamma > 0.0) {
+                    return Err("kernel-ridge: gamma must be positive".into());
+                }
+                Ready::KernelRidge(KernelRidge {
+                    mean: self.feature_mean.clone(),
+                    scale: self.feature_scale.clone(),
+                    alpha: Mat::from_fn(alpha.len(), 3, |i, c| {
+                        alpha.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
+                    }),
+                    support,
+                    gamma: *gamma,
+                    intercept: *intercept,
+                })
+            }
+            Tables::Gp {
+                length_scales,
+                signal_variance,
+                noise_variance,
+                support,
+                alpha,
+                intercept,
+            } => {
+                method_ok(Method::Gp)?;
+                let support = matrix(support, "gp support")?;
+                if alpha.len() != support.nrows() || length_scales.len() != p {
+                    return Err(
+                        "gp: one alpha row per support row, one length scale per feature".into(),
+                    );
+                }
+                finite3(alpha, "gp alpha")?;
+                finite3(&[*intercept], "gp intercept")?;
+                let positive = |v: f64| v.is_finite() && v > 0.0;
+                if !(length_scales.iter().all(|&l| positive(l))
+                    && positive(*signal_variance)
+                    && positive(*noise_variance))
+                {
+                    return Err("gp: length scales and variances must be positive".into());
+                }
+                // The posterior mean is kernel ridge in the length-scaled space.
+                Ready::KernelRidge(KernelRidge {
+                    mean: self.feature_mean.clone(),
+                    scale: self
+                        .feature_scale
+                        .iter()
+                        .zip(length_scales)
+                        .map(|(s, l)| s * l)
+                        .collect(),
+                    alpha: Mat::from_fn(alpha.len(), 3, |i, c| {
+                        alpha.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
+                    }),
+                    support: Mat::from_fn(support.nrows(), p, |i, j| {
+                        support[(i, j)] / length_scales.get(j).copied().unwrap_or(1.0)
+                    }),
+                    gamma: 0.5,
+                    intercept: *intercept,
+                })
+            }
+            Tables::Knn {
+                k,
+                weighting,
+                support,
+                targets,
+            } => {
+                method_ok(Method::Knn)?;
+                let support = matrix(support, "knn support")?;
+                if targets.len() != support.nrows() || *k == 0 || *k > targets.len() {
+                    return Err("knn: one target per support row, 1 <= k <= rows".into());
+                }
+                finite3(targets, "knn targets")?;
+                Ready::Knn(Knn {
+                    mean: self.feature_mean.clone(),
+                    scale: self.feature_scale.clone(),
+                    support,
+                    targets: targets.clone(),
+                    k: *k,
+                    weighting: *weighting,
+                })
+            }
+        })
+    }
+
+    /// Predicts every row of `x` (n x p, the training files' units).
+    ///
+    /// # Errors
+    /// [`TabularError::Usage`] when `x` has another feature count, or the model's tables are
+    /// inconsistent.
+    pub fn predict(&self, x: &DMatrix<f64>) -> Result<Vec<Prediction>, TabularError> {
+        if x.ncols() != self.features() {
+            return Err(usage(format!(
+                "the data has {} feature columns, the model reads {}",
+                x.ncols(),
+                self.features()
+            )));
+        }
+        let ready = self.ready().map_err(usage)?;
+        let regression = |t: Vec<Target3>| {
+            t.into_iter()
+                .map(|t| Prediction {
+                    class: None,
+                    target: Some(t),
+                })
+                .collect()
+        };
+        Ok(match ready {
+            Ready::Discriminant(m) => {
+                let centres = self.classes.as_ref().and_then(|c| c.centres_mm.as_ref());
+                let mut row = vec![0.0; x.ncols()];
+                (0..x.nrows())
+                    .map(|r| {
+                        for (j, v) in row.iter_mut().enumerate() {
+                            *v = x[(r, j)];
+                        }
+                        let class = m.predict(&row);
+                        Prediction {
+                            class: Some(class),
+                            target: centres
+                                .and_then(|c| c.get(usize::from(class)))
+                                .map(|c| [c[0], c[1], 0.0]),
+                        }
+                    })
+                    .collect()
+            }
+            Ready::Ridge(m) => regression(m.predict_many(x)),
+            Ready::KernelRidge(m) => regression(m.predict_many(x)),
+            Ready::Knn(m) => regression(m.predict_many(x)),
+        })
+    }
+
+    /// Writes JSON.
+    ///
+    /// # Errors
+    /// [`TabularError::Model`] naming the file.
+    pub fn save(&self, path: &Path) -> Result<(), TabularError> {
+        let err = |message: String| TabularError::Model {
+            path: path.into(),
+            message,
+        };
+        let text = serde_json::to_string(self).map_err(|e| err(e.to_string()))?;
+        std::fs::write(path, text).map_err(|e| err(e.to_string()))
+    }
+
+    /// Reads and checks JSON written by [`save`](Self::save).
+    ///
+    /// # Errors
+    /// [`TabularError::Model`] naming the file and what is wrong.
+    pub fn load(path: &Path) -> Result<Self, TabularError> {
+        let err = |message: String| TabularError::Model {
+            path: path.into(),
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        Self::from_json(&text).map_err(err)
+    }
+
+    /// Parses and checks a model's JSON.
+    ///
+    /// # Errors
+    /// What is wrong, in words.
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        let m: TableModel = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        if m.format != "et-table-model" || m.version != 1 {
+            return Err("not an et-table-model version 1 file".into());
+        }
+        m.ready()?;
+        Ok(m)
+    }
+}
+
+/// Whether a JSON file is an et table model (else an et board model, `"format": "et-model"`).
+#[must_use]
+pub fn is_table_model(text: &str) -> bool {
+    serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .and_then(|v| v.get("format").and_then(|f| f.as_str().map(String::from)))
+        .is_some_and(|f| f == "et-table-model")
+}
+
+impl TableModel {
+    /// The search's candidate that was chosen (what cross-validation said of it). Its
+    /// hyperparameters are among the model's, which may add learned ones (the Gaussian
+    /// process's variances).
+    #[must_use]
+    pub fn chosen(&self) -> Option<&Candidate> {
+        self.search.iter().find(|c| {
+            c.method == self.method
+                && (c.hyperparameters.iter()).all(|(k, v)| self.hyperparameters.get(k) == Some(v))
+        })
+    }
+
+    /// The mean training position, mm (regressors: their intercept or targets' mean; classes:
+    /// the count-weighted class positions), when known.
+    #[must_use]
+    pub fn training_mean_position(&self) -> Option<[f64; 2]> {
+        match &self.tables {
+            Tables::Ridge { intercept, .. }
+            | Tables::KernelRidge { intercept, .. }
+            | Tables::Gp { intercept, .. } => Some([intercept[0], intercept[1]]),
+            Tables::Knn { targets, .. } => {
+                let n = targets.len().max(1) as f64;
+                Some(
+                    targets
+                        .iter()
+                        .fold([0.0, 0.0], |a, t| [a[0] + t[0] / n, a[1] + t[1] / n]),
+                )
+            }
+            Tables::Discriminant { classes, .. } => {
+                let centres = self.classes.as_ref()?.centres_mm.as_ref()?;
+                let n = classes.iter().map(|c| c.count).sum::<usize>().max(1) as f64;
+                Some(classes.iter().zip(centres).fold([0.0, 0.0], |a, (c, q)| {
+                    let w = c.count as f64 / n;
+                    [a[0] + w * q[0], a[1] + w * q[1]]
+                }))
+            }
+        }
+    }
+}

@@ -1,0 +1,530 @@
+//! Training: every candidate method and hyperparameter scored by cross-validation inside the
+//! training rows, the best fitted on all of them.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// Shrinkage candidates for QDA and LDA.
+pub(super) const SHRINKAGES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
+/// Ridge's lambda candidates (times n on the z-space Gram matrix).
+pub(super) const RIDGE_LAMBDAS: [f64; 9] = [1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0];
+/// Kernel ridge: widths (gamma = width / median squared distance) and lambdas.
+pub(super) const KRR_WIDTHS: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
+pub(super) const KRR_LAMBDAS: [f64; 4] = [1e-4, 1e-3, 1e-2, 1e-1];
+/// Kernel ridge keeps at most this many support rows (spread evenly over the training rows).
+pub const KRR_SUPPORT: usize = 3_000;
+/// ... and searches on at most this many per fold.
+pub(super) const KRR_SEARCH_SUPPORT: usize = 1_200;
+/// k-nearest-neighbour candidates.
+pub(super) const KNN_KS: [usize; 8] = [1, 2, 3, 5, 8, 12, 20, 30];
+/// The Gaussian process's learning rows, iterations and support.
+pub(super) const GP: GpOptions = GpOptions::DEFAULT;
+
+/// Trains `choice` on `table` (all its rows: select the training rows first), hyperparameters
+/// by `opts.folds`-fold cross-validation inside them.
+///
+/// # Errors
+/// [`TabularError::Usage`] when the targets do not suit the method (a regressor without
+/// positions, a classifier without labels or a grid, a single class, too few rows for the
+/// folds), [`TabularError::Fit`] when no candidate could be fitted.
+pub fn train(
+    table: &Table,
+    choice: Choice,
+    opts: &TrainOptions,
+    progress: Progress<'_>,
+) -> Result<TableModel, TabularError> {
+    let started = std::time::Instant::now();
+    let n = table.rows();
+    if opts.folds < 2 || opts.folds > n {
+        return Err(usage(format!(
+            "{} folds for {n} training rows: use 2 to {n}",
+            opts.folds
+        )));
+    }
+    let targets = table.targets();
+    let classes = class_targets(table, opts.grid)?;
+    let methods: Vec<Method> = match choice {
+        Choice::One(m) => vec![m],
+        Choice::Auto if targets.is_some() && opts.grid.is_none() => {
+            vec![Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp]
+        }
+        Choice::Auto => vec![Method::Lda, Method::Qda],
+    };
+    let mut search: Vec<Candidate> = Vec::new();
+    for &method in &methods {
+        let found = if method.is_classifier() {
+            let (labels, _) = classes.as_ref().ok_or_else(|| {
+                usage(format!(
+                    "{} needs class labels: give a label column, or make classes from the \
+                     positions with a grid (--grid 7x7)",
+                    method.name()
+                ))
+            })?;
+            search_classifier(table, method, labels, opts, progress)?
+        } else {
+            let t = targets.as_ref().ok_or_else(|| {
+                usage(format!(
+                    "{} predicts positions: the targets need x and y columns (the data has \
+                     only class labels: use qda or lda)",
+                    method.name()
+                ))
+            })?;
+            search_regressor(&table.x, t, method, opts, progress)?
+        };
+        search.extend(found);
+    }
+    // Best first; a candidate whose fit on every row fails (a covariance that cross-validated
+    // but is singular on the whole set) gives way to the next.
+    let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
+    ranked.sort_by(|a, b| a.loss().total_cmp(&b.loss()));
+    let mut fitted = None;
+    let mut last_error = None;
+    for best in ranked {
+        let lda = as_lda_if_equal(best, table.x.ncols(), classes.as_ref().map(|(l, _)| l));
+        let best = lda.as_ref().unwrap_or(best);
+        progress(&format!("fitting {}", best.method.name()), 0, 1);
+        match fit_final(table, best, targets.as_deref(), classes.as_ref(), progress) {
+            Ok(f) => {
+                fitted = Some((best.clone(), f, lda.is_some()));
+                break;
+            }
+            Err(e) => last_error = Some(e),
+        }
+    }
+    let (best, (tables, mean, scale), qda_is_lda) = fitted.ok_or_else(|| {
+        last_error.unwrap_or_else(|| {
+            TabularError::Fit(FitError::Shape(
+                "no candidate could be fitted in cross-validation".into(),
+            ))
+        })
+    })?;
+    progress(&format!("fitting {}", best.method.name()), 1, 1);
+    let note = qda_is_lda.then(|| {
+        // Its cross-validation is the QDA's: the same classifier in every fold.
+        search.push(best.clone());
+        format!(
+            "qda's best shrinkage is 1 toward the pooled covariance: every class then has the \
+             pooled covariance, which is lda (the same decisions); saved the lda, one \
+             covariance instead of {}",
+            classes.as_ref().map_or(0, |(l, _)| l.names.len())
+        )
+    });
+    let mut hyperparameters = best.hyperparameters.clone();
+    if let Tables::Gp {
+        length_scales,
+        signal_variance,
+        noise_variance,
+        ..
+    } = &tables
+    {
+        let mut sorted = length_scales.clone();
+        sorted.sort_by(f64::total_cmp);
+        hyperparameters.extend([
+            ("signal_variance".to_string(), *signal_variance),
+            ("noise_variance".to_string(), *noise_variance),
+            (
+                "length_scale_median".to_string(),
+                sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
+            ),
+        ]);
+    }
+    Ok(TableModel {
+        format: "et-table-model".into(),
+        version: 1,
+        method: best.method,
+        feature_names: table.feature_names.clone(),
+        feature_mean: mean,
+        feature_scale: scale,
+        unit: Unit::Mm,
+        third: table.third.as_ref().map(|(n, _)| n.clone()),
+        classes: if best.method.is_classifier() {
+            classes.map(|(_, info)| info)
+        } else {
+            None
+        },
+        hyperparameters,
+        search,
+        cv_folds: opts.folds,
+        cv_scheme: opts.scheme,
+        trained_rows: [table.first_row, table.first_row + n],
+        source: table.description.clone(),
+        fit_seconds: started.elapsed().as_secs_f64(),
+        note,
+        tables,
+    })
+}
+
+/// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
+/// in every fold as on all rows: that is LDA at shrinkage 0, as that LDA candidate (scored
+/// as the QDA was), C times smaller. `None` for any other candidate.
+pub(super) fn as_lda_if_equal(
+    c: &Candidate,
+    p: usize,
+    labels: Option<&Labels>,
+) -> Option<Candidate> {
+    let full = c
+        .hyperparameters
+        .get("shrinkage")
+        .is_some_and(|&s| s >= 1.0);
+    (c.method == Method::Qda && full && shrink_target(p, labels?) == Target::Pooled).then(|| {
+        Candidate {
+            method: Method::Lda,
+            hyperparameters: params(&[("shrinkage", 0.0)]),
+            ..c.clone()
+        }
+    })
+}
+
+/// The classes of a table: its labels, or the grid cells of its positions (cells without
+/// rows dropped), with each class's position where known.
+pub(super) fn class_targets(
+    table: &Table,
+    grid: Option<(usize, usize)>,
+) -> Result<Option<(Labels, ClassInfo)>, TabularError> {
+    if let Some((rows, cols)) = grid {
+        let p = table.positions_mm.as_ref().ok_or_else(|| {
+            usage("--grid makes classes from positions: the targets need x and y columns")
+        })?;
+        if rows == 0 || cols == 0 {
+            return Err(usage("--grid: at least 1x1"));
+        }
+        let g = Grid::over(p, rows, cols);
+        let cells: Vec<usize> = p.iter().map(|&q| g.cell(q)).collect();
+        let mut used: Vec<usize> = cells.clone();
+        used.sort_unstable();
+        used.dedup();
+        let of: BTreeMap<usize, u16> = used
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| (c, i as u16))
+            .collect();
+        let labels = Labels {
+            index: cells
+                .iter()
+                .map(|c| of.get(c).copied().unwrap_or(0))
+                .collect(),
+            names: used.iter().map(|&c| g.name(c)).collect(),
+        };
+        let info = ClassInfo {
+            names: labels.names.clone(),
+            centres_mm: Some(used.iter().map(|&c| g.centre(c)).collect()),
+            grid: Some(g),
+        };
+        return Ok(Some((labels, info)));
+    }
+    let Some(text) = &table.labels else {
+        return Ok(None);
+    };
+    let labels = Labels::from_text(text)?;
+    let centres_mm = table.positions_mm.as_ref().map(|p| {
+        let mut sum = vec![[0.0, 0.0, 0.0]; labels.names.len()];
+        for (&c, q) in labels.index.iter().zip(p) {
+            if let Some(s) = sum.get_mut(usize::from(c)) {
+                *s = [s[0] + q[0], s[1] + q[1], s[2] + 1.0];
+            }
+        }
+        sum.iter()
+            .map(|s| [s[0] / s[2].max(1.0), s[1] / s[2].max(1.0)])
+            .collect()
+    });
+    let info = ClassInfo {
+        names: labels.names.clone(),
+        centres_mm,
+        grid: None,
+    };
+    Ok(Some((labels, info)))
+}
+
+/// Fold of each row: contiguous blocks, or shuffled (stratified by `labels` when given).
+#[must_use]
+pub fn folds(
+    n: usize,
+    k: usize,
+    scheme: CvScheme,
+    labels: Option<&[u16]>,
+    seed: u64,
+) -> Vec<usize> {
+    let k = k.max(1);
+    match (scheme, labels) {
+        (CvScheme::Blocks, _) => (0..n).map(|r| r * k / n.max(1)).collect(),
+        (CvScheme::Shuffled, Some(y)) => cv::folds(y, k, seed),
+        (CvScheme::Shuffled, None) => cv::folds(&vec![0; n], k, seed),
+    }
+}
+
+/// Rows of `x` as a matrix.
+pub(super) fn rows_of(x: &DMatrix<f64>, rows: &[usize]) -> DMatrix<f64> {
+    DMatrix::from_fn(rows.len(), x.ncols(), |i, j| {
+        rows.get(i).map_or(0.0, |&r| x[(r, j)])
+    })
+}
+
+pub(super) fn params(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
+    pairs.iter().map(|&(k, v)| (k.to_string(), v)).collect()
+}
+
+/// Mean position error (x, y) of predictions against truth.
+pub(super) fn mean_error(pred: &[Target3], truth: &[Target3]) -> f64 {
+    summarise(pred, truth, false).mean_mm
+}
+
+/// Every hyperparameter candidate of a regressor, scored by cross-validation.
+pub(super) fn search_regressor(
+    x: &DMatrix<f64>,
+    t: &[Target3],
+    method: Method,
+    opts: &TrainOptions,
+    progress: Progress<'_>,
+) -> Result<Vec<Candidate>, TabularError> {
+    let n = x.nrows();
+    let fold = folds(n, opts.folds, opts.scheme, None, opts.seed);
+    let grid: Vec<BTreeMap<String, f64>> = match method {
+        Method::Ridge => RIDGE_LAMBDAS
+            .iter()
+            .map(|&l| params(&[("lambda", l)]))
+            .collect(),
+        Method::KernelRidge => KRR_WIDTHS
+            .iter()
+            .flat_map(|&w| {
+                KRR_LAMBDAS
+                    .iter()
+                    .map(move |&l| params(&[("width", w), ("lambda", l)]))
+            })
+            .collect(),
+        Method::Knn => KNN_KS
+            .iter()
+            .flat_map(|&k| [0.0, 1.0].map(|d| params(&[("k", k as f64), ("distance_weighted", d)])))
+            .collect(),
+        Method::Gp => vec![params(&[
+            ("learn_rows", GP.learn_rows.min(n) as f64),
+            ("iterations", GP.iterations as f64),
+        ])],
+        Method::Qda | Method::Lda => return Err(usage("not a regressor")),
+    };
+    // Out-of-fold predictions of every candidate.
+    let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
+    // Progress steps per fold: the Gaussian process reports each of its iterations, and says
+    // beforehand how long its folds and final fit will take.
+    let steps = if method == Method::Gp {
+        GP.iterations
+    } else {
+        1
+    };
+    let what = if method == Method::Gp {
+        format!(
+            "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
+            opts.folds,
+            Gp::estimate_seconds(x, &GP, opts.folds + 1)
+        )
+    } else {
+        format!(
+            "cross-validating {} ({} candidates)",
+            method.name(),
+            grid.len()
+        )
+    };
+    let total = opts.folds * steps;
+    for f in 0..opts.folds {
+        progress(&what, f * steps, total);
+        let train: Vec<usize> = (0..n).filter(|&r| fold.get(r) != Some(&f)).collect();
+        let test: Vec<usize> = (0..n).filter(|&r| fold.get(r) == Some(&f)).collect();
+        if test.is_empty() || train.len() < 2 {
+            continue;
+        }
+        let (xt, xv) = (rows_of(x, &train), rows_of(x, &test));
+        let tt: Vec<Target3> = train.iter().filter_map(|&r| t.get(r).copied()).collect();
+        let fold_pred: Vec<Option<Vec<Target3>>> = match method {
+            Method::Ridge => Ridge::fit_path(&xt, &tt, &RIDGE_LAMBDAS)?
+                .into_iter()
+                .map(|m| m.map(|m| m.predict_many(&xv)))
+                .collect(),
+            Method::KernelRidge => {
+                let fits =
+                    KernelRidge::fit_grid(&xt, &tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
+                // Every fit of the grid shares the support: the held-out rows' distances once.
+                let d2 = fits.iter().flatten().next().map(|m| m.distances(&xv));
+                fits.into_iter()
+                    .map(|m| Some(m?.predict_from_distances(d2.as_ref()?)))
+                    .collect()
+            }
+            Method::Knn => {
+                let model = Knn::fit(&xt, &tt, 1, Weighting::Uniform)?;
+                let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
+                let near = model.neighbours(&xv, k_max);
+                grid.iter()
+                    .map(|h| {
+                        let k = h.get("k").copied().unwrap_or(1.0) as usize;
+                        let w = if h.get("distance_weighted").copied().unwrap_or(0.0) > 0.5 {
+                            Weighting::Distance
+                        } else {
+                            Weighting::Uniform
+                        };
+                        Some(near.iter().map(|nr| model.combine(nr, k, w)).collect())
+                    })
+                    .collect()
+            }
+            Method::Gp => {
+                let mut step = |done: usize, _: usize| progress(&what, f * steps + done, total);
+                vec![
+                    Gp::fit(&xt, &tt, &GP, &mut step)
+                        .ok()
+                        .map(|m| m.predict_many(&xv)),
+                ]
+            }
+            Method::Qda | Method::Lda => Vec::new(),
+        };
+        for (c, p) in fold_pred.into_iter().enumerate() {
+            let (Some(p), Some(slot)) = (p, pred.get_mut(c)) else {
+                continue;
+            };
+            for (&r, v) in test.iter().zip(p) {
+                if let Some(s) = slot.get_mut(r) {
+                    *s = Some(v);
+                }
+            }
+        }
+    }
+    progress(&what, total, total);
+    Ok(grid
+        .into_iter()
+        .zip(pred)
+        .map(|(hyperparameters, p)| {
+            // A candidate that failed in any fold scores nothing.
+            let all: Option<Vec<Target3>> = p.into_iter().collect();
+            Candidate {
+                method,
+                hyperparameters,
+                cv_mean_error_mm: all.map(|p| mean_error(&p, t)).filter(|e| e.is_finite()),
+                cv_accuracy: None,
+            }
+        })
+        .collect())
+}
+
+/// Every shrinkage of QDA or LDA, scored by cross-validation (accuracy; and the mean distance
+/// from the true position to the predicted class's position when the rows have positions).
+pub(super) fn search_classifier(
+    table: &Table,
+    method: Method,
+    labels: &Labels,
+    opts: &TrainOptions,
+    progress: Progress<'_>,
+) -> Result<Vec<Candidate>, TabularError> {
+    let classes = labels.names.len();
+    if classes < 2 {
+        return Err(usage(format!(
+            "one class ('{}') only: nothing to tell apart; give rows of at least two classes",
+            labels.names.first().map_or("", String::as_str)
+        )));
+    }
+    let fold = folds(
+        table.rows(),
+        opts.folds,
+        opts.scheme,
+        Some(&labels.index),
+        opts.seed,
+    );
+    let kind = discriminant(method);
+    let what = format!(
+        "cross-validating {} ({} shrinkages)",
+        method.name(),
+        SHRINKAGES.len()
+    );
+    let mut out = Vec::new();
+    for (i, &lambda) in SHRINKAGES.iter().enumerate() {
+        progress(&what, i, SHRINKAGES.len());
+        let fit = FitOptions {
+            kind,
+            shrinkage: lambda,
+            // Toward the diagonal when a class has fewer rows than features.
+            target: shrink_target(table.x.ncols(), labels),
+        };
+        let conf = match cross_validate_fast(&table.x, &labels.index, classes, &fit, &fold) {
+            Ok(conf) => Some(conf),
+            // A fold whose training rows lack some class (blocks of a recording): fit on the
+            // classes present, and count the absent class's rows as missed.
+            Err(FitError::EmptyClass { .. }) => cv_present_classes(&table.x, labels, &fit, &fold),
+            // A singular fit: the candidate scores nothing.
+            Err(_) => None,
+        };
+        out.push(Candidate {
+            method,
+            hyperparameters: params(&[("shrinkage", lambda)]),
+            cv_mean_error_mm: None,
+            cv_accuracy: conf.as_ref().map(Confusion::accuracy),
+        });
+    }
+    progress(&what, SHRINKAGES.len(), SHRINKAGES.len());
+    Ok(out)
+}
+
+/// QDA shrinks toward the pooled covariance, unless some class has no more rows than
+/// features (then toward the diagonal, which needs no pooled estimate of full rank).
+pub(super) fn shrink_target(p: usize, labels: &Labels) -> Target {
+    if labels.index.len() <= p + labels.names.len() {
+        Target::Diagonal
+    } else {
+        Target::Pooled
+    }
+}
+
+pub(super) fn discriminant(method: Method) -> ModelKind {
+    if method == Method::Lda {
+        ModelKind::Lda
+    } else {
+        ModelKind::Qda
+    }
+}
+
+/// Cross-validation where a fold's training rows may lack classes: each fold fits on the
+/// classes it has (relabelled), and held-out rows of a class it lacks count as missed. None
+/// when a fold cannot be fitted.
+pub(super) fn cv_present_classes(
+    x: &DMatrix<f64>,
+    labels: &Labels,
+    fit: &FitOptions,
+    fold: &[usize],
+) -> Option<Confusion> {
+    let classes = labels.names.len();
+    let k = fold.iter().max().map_or(0, |m| m + 1);
+    let mut conf = Confusion::new(classes);
+    for f in 0..k {
+        let train: Vec<usize> = (0..x.nrows())
+            .filter(|&r| fold.get(r) != Some(&f))
+            .collect();
+        let test: Vec<usize> = (0..x.nrows())
+            .filter(|&r| fold.get(r) == Some(&f))
+            .collect();
+        let y = |r: usize| labels.index.get(r).copied().unwrap_or(0);
+        let mut present: Vec<u16> = train.iter().map(|&r| y(r)).collect();
+        present.sort_unstable();
+        present.dedup();
+        if present.len() < 2 {
+            return None;
+        }
+        let local: BTreeMap<u16, u16> = present
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| (c, i as u16))
+            .collect();
+        let yt: Vec<u16> = train
+            .iter()
+            .map(|&r| local.get(&y(r)).copied().unwrap_or(0))
+            .collect();
+        let model = Fitted::fit(&rows_of(x, &train), &yt, present.len(), fit).ok()?;
+        let mut row = vec![0.0; x.ncols()];
+        for &r in &test {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = x[(r, j)];
+            }
+            let predicted = present
+                .get(usize::from(model.predict(&row)))
+                .copied()
+                .unwrap_or(0);
+            conf.add(y(r), predicted);
+        }
+    }
+    Some(conf)
+}

@@ -1,0 +1,318 @@
+//! The table a model learns from: features and targets of any sensor, its units, row ranges,
+//! class labels and the grid that turns positions into classes.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// The unit of positions in the files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Unit {
+    /// Metres.
+    M,
+    /// Millimetres.
+    #[default]
+    Mm,
+}
+
+impl Unit {
+    /// Millimetres per unit.
+    #[must_use]
+    pub fn to_mm(self) -> f64 {
+        match self {
+            Unit::M => 1e3,
+            Unit::Mm => 1.0,
+        }
+    }
+}
+
+/// Rows `start..end` (0-based, half open) of a table; `end` None means to the last row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RowRange {
+    /// First row.
+    pub start: usize,
+    /// One past the last row, or None for all that follow.
+    pub end: Option<usize>,
+}
+
+impl std::str::FromStr for RowRange {
+    type Err = String;
+
+    /// `A..B`, `A..` or `..B`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (a, b) = s
+            .split_once("..")
+            .ok_or_else(|| format!("'{s}': write A..B (0-based, B excluded), A.. or ..B"))?;
+        let num = |v: &str, default: Option<usize>| -> Result<Option<usize>, String> {
+            match v.trim() {
+                "" => Ok(default),
+                v => v
+                    .parse::<usize>()
+                    .map(Some)
+                    .map_err(|_| format!("'{s}': '{v}' is not a row number")),
+            }
+        };
+        let start = num(a, Some(0))?.unwrap_or(0);
+        let end = num(b, None)?;
+        if end.is_some_and(|e| e <= start) {
+            return Err(format!("'{s}': the range is empty"));
+        }
+        Ok(Self { start, end })
+    }
+}
+
+impl std::fmt::Display for RowRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.end {
+            Some(e) => write!(f, "{}..{e}", self.start),
+            None => write!(f, "{}..", self.start),
+        }
+    }
+}
+
+/// Class labels: each row's class index into `names`, the user's own names.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Labels {
+    /// Class of each row, 0..names.len().
+    pub index: Vec<u16>,
+    /// Class names as written in the file (numbers in numeric order, else sorted).
+    pub names: Vec<String>,
+}
+
+impl Labels {
+    /// Maps labels as written to classes 0..C-1, numbers in numeric order, else sorted.
+    ///
+    /// # Errors
+    /// [`TabularError::Usage`] for more than 65 535 classes.
+    pub fn from_text(labels: &[String]) -> Result<Self, TabularError> {
+        let mut names: Vec<String> = labels.to_vec();
+        names.sort();
+        names.dedup();
+        if names.iter().all(|n| n.parse::<f64>().is_ok()) {
+            names.sort_by(|a, b| {
+                a.parse::<f64>()
+                    .unwrap_or(0.0)
+                    .total_cmp(&b.parse::<f64>().unwrap_or(0.0))
+            });
+        }
+        if names.len() > usize::from(u16::MAX) {
+            return Err(usage(format!("{} classes: at most 65535", names.len())));
+        }
+        let lookup: BTreeMap<&str, u16> = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i as u16))
+            .collect();
+        let index = labels
+            .iter()
+            .map(|l| lookup.get(l.as_str()).copied().unwrap_or(0))
+            .collect();
+        Ok(Self { index, names })
+    }
+}
+
+/// A table of features and targets from any sensor.
+#[derive(Clone, Debug)]
+pub struct Table {
+    /// n x p features, in the file's units (volts, board codes, ...).
+    pub x: DMatrix<f64>,
+    /// The feature columns' names.
+    pub feature_names: Vec<String>,
+    /// Class labels as written, when the data has them.
+    pub labels: Option<Vec<String>>,
+    /// Positions in mm, when the data has them.
+    pub positions_mm: Option<Vec<[f64; 2]>>,
+    /// A third target (name; values: a length in mm when named z, else as written).
+    pub third: Option<(String, Vec<f64>)>,
+    /// Which columns were taken as what, and the unit.
+    pub description: String,
+    /// The first row's index in the file (after `--rows`).
+    pub first_row: usize,
+}
+
+impl Table {
+    /// Imports `features` (and `targets`, a second file with the same rows) as
+    /// [`import_csv`] reads them; positions (and a third target named z) are in `unit`.
+    ///
+    /// # Errors
+    /// [`TabularError::Dataset`] naming the file, line and column.
+    pub fn import(
+        features: &Path,
+        targets: Option<&Path>,
+        unit: Unit,
+    ) -> Result<Self, TabularError> {
+        let imported = import_csv(features, targets)?;
+        let mm = unit.to_mm();
+        let third = imported.third.map(|(name, v)| {
+            let length = name.eq_ignore_ascii_case("z");
+            let v = if length {
+                v.iter().map(|z| z * mm).collect()
+            } else {
+                v
+            };
+            (name, v)
+        });
+        let mut description = format!(
+            "{}; positions in {}",
+            imported.description,
+            match unit {
+                Unit::M => "m (read as mm x 1000)",
+                Unit::Mm => "mm",
+            }
+        );
+        // Positions in metres read as mm span less than a millimetre: say so.
+        if let (Unit::Mm, Some(p)) = (unit, &imported.positions) {
+            let span = |i: usize| {
+                let (lo, hi) = p
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                        let v = q.get(i).copied().unwrap_or(0.0);
+                        (l.min(v), h.max(v))
+                    });
+                hi - lo
+            };
+            let widest = span(0).max(span(1));
+            if widest > 0.0 && widest < 1.0 {
+                description.push_str(&format!(
+                    "; note: the positions span only {widest:.3} mm: if they are in metres, \
+                     give --unit m"
+                ));
+            }
+        }
+        Ok(Self {
+            x: imported.x,
+            feature_names: imported.feature_names,
+            labels: imported.labels,
+            positions_mm: imported
+                .positions
+                .map(|p| p.iter().map(|q| [q[0] * mm, q[1] * mm]).collect()),
+            third,
+            description,
+            first_row: 0,
+        })
+    }
+
+    /// Rows.
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.x.nrows()
+    }
+
+    /// The rows of `range` only.
+    ///
+    /// # Errors
+    /// [`TabularError::Usage`] when the range reaches past the table or holds no row.
+    pub fn select(&self, range: RowRange) -> Result<Self, TabularError> {
+        let n = self.rows();
+        let end = range.end.unwrap_or(n);
+        if end > n || range.start >= end {
+            return Err(usage(format!("--rows {range}: the data has rows 0..{n}")));
+        }
+        let rows = range.start..end;
+        Ok(Self {
+            x: self.x.rows(rows.start, rows.len()).into_owned(),
+            feature_names: self.feature_names.clone(),
+            labels: self
+                .labels
+                .as_ref()
+                .and_then(|l| l.get(rows.clone()).map(<[String]>::to_vec)),
+            positions_mm: self
+                .positions_mm
+                .as_ref()
+                .and_then(|p| p.get(rows.clone()).map(<[[f64; 2]]>::to_vec)),
+            third: self
+                .third
+                .as_ref()
+                .and_then(|(name, v)| v.get(rows.clone()).map(|v| (name.clone(), v.to_vec()))),
+            description: self.description.clone(),
+            first_row: self.first_row + range.start,
+        })
+    }
+
+    /// Targets as (x mm, y mm, third or 0), when the table has positions.
+    #[must_use]
+    pub fn targets(&self) -> Option<Vec<Target3>> {
+        let p = self.positions_mm.as_ref()?;
+        Some(
+            p.iter()
+                .enumerate()
+                .map(|(r, q)| {
+                    let third = self
+                        .third
+                        .as_ref()
+                        .and_then(|(_, v)| v.get(r).copied())
+                        .unwrap_or(0.0);
+                    [q[0], q[1], third]
+                })
+                .collect(),
+        )
+    }
+}
+
+/// A class grid made from positions (`--grid RxC`): the targets' bounding box cut into
+/// `rows` x `cols` cells.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    /// Cells along y.
+    pub rows: usize,
+    /// Cells along x.
+    pub cols: usize,
+    /// Bounding box [x0, y0, x1, y1], mm.
+    pub bounds_mm: [f64; 4],
+}
+
+impl Grid {
+    /// The grid over the bounding box of `positions`.
+    #[must_use]
+    pub fn over(positions: &[[f64; 2]], rows: usize, cols: usize) -> Self {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in positions {
+            b = [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ];
+        }
+        Self {
+            rows: rows.max(1),
+            cols: cols.max(1),
+            bounds_mm: b,
+        }
+    }
+
+    /// The cell (row-major) of a position, clamped into the grid.
+    #[must_use]
+    pub fn cell(&self, p: [f64; 2]) -> usize {
+        let [x0, y0, x1, y1] = self.bounds_mm;
+        let at = |v: f64, lo: f64, hi: f64, n: usize| {
+            let f = if hi > lo { (v - lo) / (hi - lo) } else { 0.0 };
+            ((f * n as f64).floor().max(0.0) as usize).min(n - 1)
+        };
+        at(p[1], y0, y1, self.rows) * self.cols + at(p[0], x0, x1, self.cols)
+    }
+
+    /// The centre of a cell, mm.
+    #[must_use]
+    pub fn centre(&self, cell: usize) -> [f64; 2] {
+        let [x0, y0, x1, y1] = self.bounds_mm;
+        let (r, c) = (cell / self.cols, cell % self.cols);
+        [
+            x0 + (x1 - x0) * (c as f64 + 0.5) / self.cols as f64,
+            y0 + (y1 - y0) * (r as f64 + 0.5) / self.rows as f64,
+        ]
+    }
+
+    /// A cell's name: `r<row>c<col>`, 1-based from the lowest x and y.
+    #[must_use]
+    pub fn name(&self, cell: usize) -> String {
+        format!("r{}c{}", cell / self.cols + 1, cell % self.cols + 1)
+    }
+}

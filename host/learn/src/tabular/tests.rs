@@ -1,0 +1,331 @@
+#![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+use super::*;
+use crate::standin;
+use std::sync::LazyLock;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("et-tabular-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn quiet() -> impl FnMut(&str, usize, usize) {
+    |_: &str, _: usize, _: usize| {}
+}
+
+/// The stand-in written in the foreign format and read back (positions in metres): 360
+/// presses over 3 sessions, in time order.
+static STANDIN: LazyLock<Table> = LazyLock::new(|| {
+    let dir = tmp("standin");
+    let (f, t) = (dir.join("features.csv"), dir.join("targets.csv"));
+    standin::make(360, 3, 11).unwrap().write(&f, &t).unwrap();
+    let table = Table::import(&f, Some(&t), Unit::M).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    table
+});
+
+fn opts() -> TrainOptions {
+    TrainOptions {
+        folds: 3,
+        ..TrainOptions::default()
+    }
+}
+
+#[test]
+fn the_stand_in_reads_as_the_foreign_files_say() {
+    let t = &*STANDIN;
+    assert_eq!((t.rows(), t.x.ncols()), (360, 192));
+    assert!(t.labels.is_none());
+    let p = t.positions_mm.as_ref().unwrap();
+    // Metres became mm: every press within 40 mm (+ rounding) of the sheet's centre.
+    let [cx, cy, cz] = standin::SHEET_ORIGIN_M.map(|v| v * 1e3);
+    assert!(
+        p.iter().all(|q| (q[0] - cx).hypot(q[1] - cy) <= 40.01),
+        "{:?}",
+        p[0]
+    );
+    let (name, z) = t.third.as_ref().unwrap();
+    assert_eq!(name, "z");
+    assert!(z.iter().all(|&z| z <= cz && z >= cz - 2.01), "{}", z[0]);
+    assert!(t.description.contains("no header row") && t.description.contains("m (read"));
+    assert!(!t.description.contains("--unit m"));
+    // The same metres read as the default mm span a fraction of a millimetre: said.
+    let dir = tmp("unit");
+    let (f, tf) = (dir.join("features.csv"), dir.join("targets.csv"));
+    standin::make(40, 1, 3).unwrap().write(&f, &tf).unwrap();
+    let as_mm = Table::import(&f, Some(&tf), Unit::Mm).unwrap();
+    assert!(
+        as_mm.description.contains("give --unit m"),
+        "{}",
+        as_mm.description
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Each regressor, trained on the first 300 rows (a chronological split), places the last
+/// 60 presses well inside what a constant guess gets, and its model file predicts the same
+/// after a round trip through JSON.
+#[test]
+fn every_regressor_learns_the_stand_in_and_survives_its_file() {
+    let train_rows = STANDIN.select("0..300".parse().unwrap()).unwrap();
+    let test_rows = STANDIN.select("300..".parse().unwrap()).unwrap();
+    assert_eq!(test_rows.first_row, 300);
+    let dir = tmp("regressors");
+    for method in [Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp] {
+        let model = train(&train_rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
+        assert_eq!(model.method, method);
+        assert_eq!(model.trained_rows, [0, 300]);
+        assert!(model.search.iter().all(|c| c.method == method));
+        let e = evaluate(&model, &test_rows).unwrap();
+        let (mean, floor) = (e.mean_error_mm.unwrap(), e.mean_predictor_error_mm.unwrap());
+        assert!(
+            mean < 0.5 * floor,
+            "{method:?}: {mean} mm against a constant's {floor}"
+        );
+        assert!(e.median_error_mm.unwrap() <= e.p90_error_mm.unwrap());
+        assert!(e.mean_error_3d_mm.unwrap() >= mean && e.third_mae.is_some());
+        let path = dir.join(format!("{}.json", method.name()));
+        model.save(&path).unwrap();
+        let back = TableModel::load(&path).unwrap();
+        assert!(
+            back == model,
+            "{method:?}: the model changed through its file"
+        );
+        let again = evaluate(&back, &test_rows).unwrap();
+        assert_eq!(again.mean_error_mm, e.mean_error_mm);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Auto tries the regressors and keeps the one cross-validation liked best.
+#[test]
+fn auto_keeps_the_best_cross_validated_regressor() {
+    let train_rows = STANDIN.select("0..240".parse().unwrap()).unwrap();
+    let model = train(&train_rows, Choice::Auto, &opts(), &mut quiet()).unwrap();
+    let best = model
+        .search
+        .iter()
+        .filter_map(|c| c.cv_mean_error_mm.map(|e| (e, c.method)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap();
+    assert_eq!(model.method, best.1);
+    let tried: std::collections::HashSet<Method> = model.search.iter().map(|c| c.method).collect();
+    assert_eq!(tried.len(), 4);
+}
+
+/// Classes made from positions on a grid: QDA and LDA beat chance on later presses, and
+/// an evaluation places each press in the model's own grid.
+#[test]
+fn a_grid_of_classes_from_positions() {
+    let train_rows = STANDIN.select("0..300".parse().unwrap()).unwrap();
+    let test_rows = STANDIN.select("300..360".parse().unwrap()).unwrap();
+    for method in [Method::Lda, Method::Qda] {
+        let o = TrainOptions {
+            grid: Some((3, 3)),
+            ..opts()
+        };
+        let model = train(&train_rows, Choice::One(method), &o, &mut quiet()).unwrap();
+        let info = model.classes.as_ref().unwrap();
+        // A disc in a 3 x 3 grid: every cell has presses.
+        assert_eq!(info.names.len(), 9, "{:?}", info.names);
+        let e = evaluate(&model, &test_rows).unwrap();
+        assert!(e.accuracy.unwrap() > 3.0 / 9.0, "{method:?}: {e:?}");
+        assert!(e.mean_error_mm.unwrap() < e.mean_predictor_error_mm.unwrap());
+        // A QDA whose best shrinkage is 1 toward the pooled covariance is kept as the LDA
+        // it equals, and says so; any other stays QDA.
+        let best = |m: Method| {
+            model
+                .search
+                .iter()
+                .filter(|c| c.method == m)
+                .min_by(|a, b| a.loss().total_cmp(&b.loss()))
+                .unwrap()
+                .hyperparameters["shrinkage"]
+        };
+        if method == Method::Qda && best(Method::Qda) >= 1.0 {
+            assert_eq!(model.method, Method::Lda);
+            assert_eq!(model.chosen().unwrap().hyperparameters["shrinkage"], 0.0);
+            assert!(model.note.as_ref().unwrap().contains("lda"));
+            eprintln!("QDA-IS-LDA case exercised");
+        } else {
+            assert_eq!(model.method, method);
+            assert!(model.note.is_none());
+        }
+    }
+}
+
+/// The substitution itself: only QDA, only at full shrinkage, only toward the pooled
+/// covariance (enough rows for it to have full rank).
+#[test]
+fn qda_at_full_pooled_shrinkage_is_the_lda() {
+    let names: Vec<String> = (0..40).map(|i| ["a", "b"][i % 2].to_string()).collect();
+    let labels = Labels::from_text(&names).unwrap();
+    let qda = |s: f64| Candidate {
+        method: Method::Qda,
+        hyperparameters: params(&[("shrinkage", s)]),
+        cv_mean_error_mm: None,
+        cv_accuracy: Some(0.9),
+    };
+    let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
+    assert_eq!((lda.method, lda.cv_accuracy), (Method::Lda, Some(0.9)));
+    assert_eq!(lda.hyperparameters["shrinkage"], 0.0);
+    assert!(as_lda_if_equal(&qda(0.3), 5, Some(&labels)).is_none());
+    // 40 rows, 2 classes, 40 features: the pooled covariance is singular, the target is
+    // the diagonal, and QDA at 1 is not LDA.
+    assert!(as_lda_if_equal(&qda(1.0), 40, Some(&labels)).is_none());
+    assert!(as_lda_if_equal(&qda(1.0), 5, None).is_none());
+}
+
+#[test]
+fn labels_are_the_users_own_names() {
+    let l = Labels::from_text(&["10", "2", "10", "7.5"].map(String::from)).unwrap();
+    assert_eq!(l.names, ["2", "7.5", "10"]);
+    assert_eq!(l.index, [2, 0, 2, 1]);
+    let l = Labels::from_text(&["right", "left", "right"].map(String::from)).unwrap();
+    assert_eq!(
+        (l.names.as_slice(), l.index.as_slice()),
+        (
+            &["left".to_string(), "right".to_string()][..],
+            &[1, 0, 1][..]
+        )
+    );
+    // A classifier on named classes predicts names; an unknown name in the test rows
+    // counts as missed.
+    let mut rng = et_core::rng::Rng::new(4);
+    let n = 120;
+    let labels: Vec<String> = (0..n)
+        .map(|r| ["left", "middle", "right"][r % 3].to_string())
+        .collect();
+    let x = DMatrix::from_fn(n, 4, |r, j| {
+        (r % 3) as f64 * (1.0 + j as f64) + 0.1 * rng.normal()
+    });
+    let table = Table {
+        x,
+        feature_names: (0..4).map(|j| format!("c{j}")).collect(),
+        labels: Some(labels),
+        positions_mm: None,
+        third: None,
+        description: String::new(),
+        first_row: 0,
+    };
+    let model = train(&table, Choice::Auto, &opts(), &mut quiet()).unwrap();
+    assert!(model.method.is_classifier());
+    assert_eq!(
+        model.classes.as_ref().unwrap().names,
+        ["left", "middle", "right"]
+    );
+    assert_eq!(evaluate(&model, &table).unwrap().accuracy, Some(1.0));
+    let mut renamed = table.clone();
+    if let Some(l) = renamed.labels.as_mut() {
+        l[0] = "elsewhere".into();
+    }
+    let acc = evaluate(&model, &renamed).unwrap().accuracy.unwrap();
+    assert!((acc - (n - 1) as f64 / n as f64).abs() < 1e-12);
+}
+
+#[test]
+fn row_ranges_and_folds() {
+    assert_eq!(
+        "2000..2500".parse::<RowRange>().unwrap(),
+        RowRange {
+            start: 2000,
+            end: Some(2500)
+        }
+    );
+    assert_eq!("..10".parse::<RowRange>().unwrap().start, 0);
+    assert_eq!("5..".parse::<RowRange>().unwrap().end, None);
+    for bad in ["5", "a..b", "10..10", "9..3"] {
+        assert!(bad.parse::<RowRange>().is_err(), "{bad}");
+    }
+    let e = STANDIN.select("300..400".parse().unwrap()).unwrap_err();
+    assert!(e.to_string().contains("rows 0..360"), "{e}");
+    // Blocks are contiguous and in order; shuffled folds are not.
+    let b = folds(10, 3, CvScheme::Blocks, None, 1);
+    assert_eq!(b, [0, 0, 0, 0, 1, 1, 1, 2, 2, 2]);
+    let s = folds(300, 3, CvScheme::Shuffled, None, 1);
+    assert!(s.windows(2).any(|w| w[1] < w[0]));
+    assert_eq!(s.iter().filter(|&&f| f == 2).count(), 100);
+}
+
+/// A k-nearest-neighbour prediction equals the brute-force mean of the k nearest rows.
+#[test]
+fn knn_equals_brute_force() {
+    let mut rng = et_core::rng::Rng::new(9);
+    let x = DMatrix::from_fn(50, 3, |_, _| rng.normal());
+    let t: Vec<Target3> = (0..50).map(|r| [r as f64, 2.0 * r as f64, 0.0]).collect();
+    let knn = Knn::fit(&x, &t, 4, Weighting::Uniform).unwrap();
+    let q = DMatrix::from_fn(5, 3, |_, _| rng.normal());
+    let (mean, scale) = crate::fit::standardisation(&x);
+    let z = |m: &DMatrix<f64>, r: usize| -> Vec<f64> {
+        (0..3).map(|j| (m[(r, j)] - mean[j]) / scale[j]).collect()
+    };
+    for (r, p) in knn.predict_many(&q).iter().enumerate() {
+        let zq = z(&q, r);
+        let mut d: Vec<(f64, usize)> = (0..50)
+            .map(|i| {
+                let zi = z(&x, i);
+                (zi.iter().zip(&zq).map(|(a, b)| (a - b).powi(2)).sum(), i)
+            })
+            .collect();
+        d.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let want = d[..4].iter().map(|&(_, i)| t[i][0]).sum::<f64>() / 4.0;
+        assert!((p[0] - want).abs() < 1e-9, "{p:?} vs {want}");
+    }
+}
+
+#[test]
+fn bad_requests_are_refused_with_the_reason() {
+    let mut small = STANDIN.select("0..60".parse().unwrap()).unwrap();
+    // A classifier with positions only and no grid.
+    let e = train(&small, Choice::One(Method::Qda), &opts(), &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("--grid"), "{e}");
+    // More folds than rows.
+    let o = TrainOptions {
+        folds: 61,
+        ..opts()
+    };
+    let e = train(&small, Choice::One(Method::Ridge), &o, &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("61 folds"), "{e}");
+    // A regressor without positions; a single class.
+    small.positions_mm = None;
+    small.third = None;
+    small.labels = Some(vec!["only".into(); 60]);
+    let e = train(&small, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("x and y"), "{e}");
+    let e = train(&small, Choice::One(Method::Lda), &opts(), &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("one class ('only')"), "{e}");
+    // A model refuses another channel count; broken model files are named.
+    let rows = STANDIN.select("0..60".parse().unwrap()).unwrap();
+    let model = train(&rows, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap();
+    let e = model.predict(&DMatrix::zeros(2, 5)).unwrap_err();
+    assert!(e.to_string().contains("5 feature columns"), "{e}");
+    let mut text = serde_json::to_string(&model).unwrap();
+    text = text.replacen("\"weights\":[[", "\"weights\":[[1e999,", 1);
+    assert!(TableModel::from_json(&text).is_err());
+    let mut short = model.clone();
+    if let Tables::Ridge { weights, .. } = &mut short.tables {
+        weights.pop();
+    }
+    let e = TableModel::from_json(&serde_json::to_string(&short).unwrap()).unwrap_err();
+    assert!(e.contains("weight rows"), "{e}");
+    assert!(!is_table_model("{\"format\": \"et-model\"}"));
+    assert!(is_table_model(&serde_json::to_string(&model).unwrap()));
+}
+
+/// More channels than rows, and constant channels (a dead electrode): every regressor
+/// still fits.
+#[test]
+fn more_channels_than_rows_and_dead_channels_still_fit() {
+    let mut rows = STANDIN.select("0..40".parse().unwrap()).unwrap();
+    for r in 0..rows.rows() {
+        rows.x[(r, 7)] = 3.0;
+    }
+    for method in [Method::Ridge, Method::Knn, Method::KernelRidge] {
+        let model = train(&rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
+        let p = model.predict(&rows.x).unwrap();
+        assert!(
+            p.iter()
+                .all(|p| p.target.unwrap().iter().all(|v| v.is_finite()))
+        );
+    }
+}

@@ -1,0 +1,238 @@
+//! The one entry point from examples to a model: a [`Trainer`] says what to fit and how to
+//! cross-validate it, [`Trainer::train`] fits it on an et dataset (QDA or LDA for the board,
+//! docs/method.md §9) or on any sensor's table (`tabular`: classifiers and regressors, or the
+//! best of them), and returns a [`Trained`] model that predicts, is tested and saves itself.
+//! The command line, the demo, the viewer's wizard and the tests train through it.
+//!
+//! ```text
+//! Dataset --prepare (V_m - V_0, keep p)--> shrinkage by CV --> fit --> ModelFile --> blob
+//! Table --------------------------------> every candidate by CV --> fit --> TableModel
+//! ```
+
+use std::path::Path;
+
+use et_core::model::ModelKind;
+
+use crate::dataset::{DataError, Dataset};
+use crate::fit::FitError;
+use crate::model_file::{ModelFile, ModelFileError};
+use crate::pipeline::{self, Stage, TrainOptions};
+use crate::tabular::{self, Choice, CvScheme, Method, Table, TableModel, TabularError};
+
+/// Why a model could not be trained.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrainError {
+    /// The dataset cannot give the features asked for.
+    #[error("{0}")]
+    Data(#[from] DataError),
+    /// Fitting or cross-validation failed.
+    #[error("{0}")]
+    Fit(#[from] FitError),
+    /// A table could not be trained on.
+    #[error("{0}")]
+    Table(#[from] TabularError),
+    /// A method an et dataset does not train (the board takes QDA or LDA).
+    #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
+    NotForTheBoard(&'static str),
+    /// The model file could not be written.
+    #[error("{0}")]
+    File(#[from] ModelFileError),
+}
+
+/// What to train and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trainer {
+    /// The method, or the best by cross-validation. An et dataset trains QDA (the default,
+    /// also for `Auto`) or LDA.
+    pub method: Choice,
+    /// Et datasets: a fixed shrinkage in [0, 1], or None to choose it by cross-validation.
+    pub shrinkage: Option<f64>,
+    /// Folds of the cross-validation: the reported one on et datasets (None: 10), the one
+    /// that chooses hyperparameters on tables (None: 5).
+    pub folds: Option<usize>,
+    /// Tables: how rows are dealt to folds.
+    pub scheme: CvScheme,
+    /// Tables: classes from positions, ROWS x COLS cells over the targets' bounding box.
+    pub grid: Option<(usize, usize)>,
+    /// Et datasets: train on the frames as measured instead of each frame minus its visit's
+    /// untouched frame (referenced is used whenever the dataset has untouched frames).
+    pub raw: bool,
+    /// Et datasets: keep only this many features, those that separate the classes best.
+    pub keep: Option<usize>,
+    /// Tables: the seed of the folds.
+    pub seed: u64,
+}
+
+impl Default for Trainer {
+    /// QDA on et datasets (referenced, shrinkage and folds as docs/method.md §9 does them),
+    /// the best method by cross-validation on tables.
+    fn default() -> Self {
+        Self {
+            method: Choice::Auto,
+            shrinkage: None,
+            folds: None,
+            scheme: CvScheme::Shuffled,
+            grid: None,
+            raw: false,
+            keep: None,
+            seed: 1,
+        }
+    }
+}
+
+/// What is trained on.
+#[derive(Debug)]
+pub enum Examples<'a> {
+    /// An et dataset (classes, visits and their untouched frames): a model for the board.
+    Dataset(Box<Dataset>),
+    /// Any sensor's table.
+    Table(&'a Table),
+}
+
+/// A stage of training, as it starts (for a progress display).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress<'a> {
+    /// The dataset has no untouched frames: training on raw frames.
+    RawFrames,
+    /// Preparing the features (referencing, choosing the features kept).
+    Preparing {
+        /// Observations.
+        rows: usize,
+        /// Features before any are dropped.
+        features: usize,
+    },
+    /// A stage of training on an et dataset.
+    Dataset(Stage),
+    /// A stage of training on a table: what, done of total.
+    Table(&'a str, usize, usize),
+}
+
+/// A model for the board: its file, how it was chosen and cross-validated, and the features
+/// it was trained on.
+#[derive(Clone, Debug)]
+pub struct BoardModel {
+    /// The model file (what `et train` writes and the board's blob is made from).
+    pub file: ModelFile,
+    /// The fit, the shrinkage's choice and the cross-validations.
+    pub training: pipeline::Trained,
+    /// The dataset as trained on (referenced, its features kept).
+    pub data: Dataset,
+}
+
+/// A trained model.
+#[derive(Clone, Debug)]
+pub enum Trained {
+    /// QDA or LDA from an et dataset.
+    Board(Box<BoardModel>),
+    /// A table's model.
+    Table(Box<TableModel>),
+}
+
+impl Trained {
+    /// Writes the model file (JSON).
+    ///
+    /// # Errors
+    /// [`TrainError::File`] or [`TrainError::Table`] when it cannot be written.
+    pub fn save(&self, path: &Path) -> Result<(), TrainError> {
+        match self {
+            Trained::Board(b) => Ok(b.file.save(path)?),
+            Trained::Table(t) => Ok(t.save(path)?),
+        }
+    }
+}
+
+impl Trainer {
+    /// QDA (shrinkage and folds as docs/method.md §9) on et datasets.
+    #[must_use]
+    pub fn qda() -> Self {
+        Self::default()
+    }
+
+    /// Trains on `examples`, calling `progress` as each stage starts.
+    ///
+    /// # Errors
+    /// [`TrainError`] when the examples do not suit the method or cannot be fitted.
+    pub fn train(
+        &self,
+        examples: Examples<'_>,
+        mut progress: impl FnMut(Progress<'_>),
+    ) -> Result<Trained, TrainError> {
+        match examples {
+            Examples::Dataset(data) => Ok(Trained::Board(Box::new(
+                self.train_dataset(*data, &mut progress)?,
+            ))),
+            Examples::Table(table) => {
+                let options = tabular::TrainOptions {
+                    folds: self.folds.unwrap_or(5),
+                    scheme: self.scheme,
+                    grid: self.grid,
+                    seed: self.seed,
+                };
+                let mut table_progress =
+                    |what: &str, done: usize, of: usize| progress(Progress::Table(what, done, of));
+                let model = tabular::train(table, self.method, &options, &mut table_progress)?;
+                Ok(Trained::Table(Box::new(model)))
+            }
+        }
+    }
+
+    /// The board's discriminant kind this trainer fits on an et dataset.
+    ///
+    /// # Errors
+    /// [`TrainError::NotForTheBoard`] for a regressor.
+    pub fn board_kind(&self) -> Result<ModelKind, TrainError> {
+        match self.method {
+            Choice::Auto | Choice::One(Method::Qda) => Ok(ModelKind::Qda),
+            Choice::One(Method::Lda) => Ok(ModelKind::Lda),
+            Choice::One(other) => Err(TrainError::NotForTheBoard(other.name())),
+        }
+    }
+
+    /// QDA or LDA on an et dataset: features (referenced when it can be), shrinkage by
+    /// cross-validation unless given, the fit, and the model file it makes (`ModelFile::validate`
+    /// says whether the board would load it: `et train` refuses to write one it would not).
+    fn train_dataset(
+        &self,
+        mut data: Dataset,
+        progress: &mut impl FnMut(Progress<'_>),
+    ) -> Result<BoardModel, TrainError> {
+        let kind = self.board_kind()?;
+        let referenced = !self.raw && data.has_untouched();
+        if !self.raw && !referenced {
+            progress(Progress::RawFrames);
+        }
+        progress(Progress::Preparing {
+            rows: data.x.nrows(),
+            features: data.x.ncols(),
+        });
+        pipeline::prepare(&mut data, referenced, self.keep)?;
+        let training = pipeline::train_reporting(
+            &data,
+            &TrainOptions {
+                kind,
+                shrinkage: self.shrinkage,
+                folds: self.folds.unwrap_or(10),
+            },
+            |stage| progress(Progress::Dataset(stage)),
+        )?;
+        let centres_mm = data
+            .centres
+            .iter()
+            .map(|c| [c[0] * 1e3, c[1] * 1e3])
+            .collect();
+        let file = ModelFile::new(
+            &training.model,
+            training.options.shrinkage,
+            data.config,
+            data.feature_index.clone(),
+            centres_mm,
+            referenced,
+        );
+        Ok(BoardModel {
+            file,
+            training,
+            data,
+        })
+    }
+}
