@@ -21,7 +21,9 @@ macro_rules! out {
 }
 
 mod board;
+mod collect;
 mod demo;
+mod evaluate;
 mod imaging;
 mod learn;
 mod live;
@@ -102,7 +104,7 @@ enum Command {
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --out train.csv
     ///   et collect --scene sim/scenes/square-13cm-16.toml --grid 7x7 --visits 1 --scans 1 --seed 77 --out nextday.csv
     #[command(verbatim_doc_comment)]
-    Collect(learn::CollectArgs),
+    Collect(collect::CollectArgs),
     /// Train a touch model (classes or positions) and cross-validate it.
     ///
     /// On an et dataset (--data, from et collect): a QDA or LDA classifier for the board
@@ -145,7 +147,7 @@ enum Command {
     ///   et eval --model model.json --data nextday.csv --plots plots/ --json
     ///   et eval --model m.json --features F.csv --targets T.csv --unit m --rows 2000..2500 --json
     #[command(verbatim_doc_comment)]
-    Eval(learn::EvalArgs),
+    Eval(evaluate::EvalArgs),
     /// Export a trained model as the board's model blob.
     ///
     /// Export a trained model as the model blob the firmware evaluates (f32, or f16 at half
@@ -154,7 +156,7 @@ enum Command {
     /// Example:
     ///   et export --model model.json --precision f16 --out model.etm
     #[command(verbatim_doc_comment)]
-    Export(learn::ExportArgs),
+    Export(evaluate::ExportArgs),
     /// Image touches (a scene's, or recorded frames) by one-step Gauss-Newton, as PNG + metrics.
     ///
     /// Image a scene's touches by one-step Gauss-Newton difference imaging (docs/method.md §6): mesh the
@@ -265,10 +267,10 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(args, force),
         Command::Protocol(args) => protocol::run(args),
         Command::Sim(args) => sim::run(args, force),
-        Command::Collect(args) => learn::collect_cmd(args, force),
+        Command::Collect(args) => collect::collect_cmd(args, force),
         Command::Train(args) => learn::train_cmd(args, force),
-        Command::Eval(args) => learn::eval_cmd(args, force),
-        Command::Export(args) => learn::export_cmd(args, force),
+        Command::Eval(args) => evaluate::eval_cmd(args, force),
+        Command::Export(args) => evaluate::export_cmd(args, force),
         Command::Reconstruct(args) => imaging::reconstruct_cmd(args, force),
         Command::Forward(args) => imaging::forward_cmd(args),
         Command::Ports => board::ports_cmd(),

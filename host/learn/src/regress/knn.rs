@@ -1,0 +1,111 @@
+//! k nearest neighbours: the mean position of the k closest training rows in z-space.
+
+use super::*;
+
+/// How the k nearest neighbours' targets are averaged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weighting {
+    /// Each neighbour counts the same.
+    Uniform,
+    /// Each neighbour counts 1 / its distance (an exact match takes all the weight).
+    Distance,
+}
+
+/// k-nearest-neighbour regression in z-space: the mean (or inverse-distance weighted mean) of
+/// the targets of the k training observations nearest to a frame.
+#[derive(Clone, Debug)]
+pub struct Knn {
+    pub(crate) mean: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
+    /// m x p training observations in z-space.
+    pub(crate) support: Mat<f64>,
+    /// Their targets.
+    pub(crate) targets: Vec<Target3>,
+    pub(crate) k: usize,
+    pub(crate) weighting: Weighting,
+}
+
+impl Knn {
+    /// Keeps the (standardised) observations.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data, or k = 0.
+    pub fn fit(
+        x: &DMatrix<f64>,
+        t: &[Target3],
+        k: usize,
+        weighting: Weighting,
+    ) -> Result<Self, FitError> {
+        check(x, t)?;
+        if k == 0 {
+            return Err(FitError::Shape("k = 0 neighbours".into()));
+        }
+        let (mean, scale) = standardisation(x);
+        let support = z_space(x, &mean, &scale);
+        Ok(Self {
+            mean,
+            scale,
+            support,
+            targets: t.to_vec(),
+            k: k.min(x.nrows()),
+            weighting,
+        })
+    }
+
+    /// For every row of `x` (n x p, volts), its `k_max` nearest training observations as
+    /// (squared distance, index), nearest first: the distances as one matrix product.
+    #[must_use]
+    pub fn neighbours(&self, x: &DMatrix<f64>, k_max: usize) -> Vec<Vec<(f64, usize)>> {
+        let d2 = squared_distances(&z_space(x, &self.mean, &self.scale), &self.support);
+        let k = k_max.clamp(1, self.support.nrows());
+        (0..x.nrows())
+            .map(|r| {
+                let mut row: Vec<(f64, usize)> = (0..d2.ncols()).map(|j| (d2[(r, j)], j)).collect();
+                row.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+                row.truncate(k);
+                row.sort_by(|a, b| a.0.total_cmp(&b.0));
+                row
+            })
+            .collect()
+    }
+
+    /// The prediction from `near` (a row of [`neighbours`](Self::neighbours)) with `k`
+    /// neighbours and `weighting`.
+    #[must_use]
+    pub fn combine(&self, near: &[(f64, usize)], k: usize, weighting: Weighting) -> Target3 {
+        let near = near.get(..k.min(near.len())).unwrap_or(near);
+        let weights: Vec<f64> = match weighting {
+            Weighting::Uniform => vec![1.0; near.len()],
+            Weighting::Distance => {
+                if let Some(&(_, i)) = near.iter().find(|(d, _)| *d <= 1e-24) {
+                    return self.targets[i];
+                }
+                near.iter().map(|(d, _)| 1.0 / d.sqrt()).collect()
+            }
+        };
+        let total: f64 = weights.iter().sum();
+        let mut out = [0.0; 3];
+        for (w, &(_, i)) in weights.iter().zip(near) {
+            for c in 0..3 {
+                out[c] += w / total * self.targets[i][c];
+            }
+        }
+        out
+    }
+
+    /// Predicts every row of `x` (n x p, volts).
+    #[must_use]
+    pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
+        self.neighbours(x, self.k)
+            .iter()
+            .map(|near| self.combine(near, self.k, self.weighting))
+            .collect()
+    }
+
+    /// Multiply-adds per prediction (distances to every stored observation).
+    #[must_use]
+    pub fn cost(&self) -> usize {
+        self.support.nrows() * self.support.ncols()
+    }
+}

@@ -1,0 +1,246 @@
+//! `et eval` and `et export`: a trained model tested on other data, and its blob for the board.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use et_core::model::{ModelKind, Precision};
+use et_host::plot;
+use et_learn::model_file::ModelFile;
+use et_learn::tabular;
+use et_learn::{analysis, dataset, pipeline};
+
+use crate::learn::PrecisionArg;
+use crate::output;
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct EvalArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Test set: an et dataset from `et collect` (.csv or .npz), for models trained with
+    /// --data.
+    #[arg(
+        long,
+        required_unless_present = "features",
+        conflicts_with = "features"
+    )]
+    data: Option<PathBuf>,
+    #[command(flatten)]
+    table: crate::tabular::TableArgs,
+    /// Write plots into this directory. --data: confusion.png (row-normalised confusion
+    /// matrix) and error-vs-distance.png (position error against distance from the nearest
+    /// electrode). --features: error-map.png (each true position coloured by its error) and
+    /// predicted-vs-true.png.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// --features: also write every row's prediction to this CSV (`row`: the row's 0-based
+    /// index in the file; `class` for classifiers; `x_mm`, `y_mm`; the third target where
+    /// predicted), for Python's `csv` or `numpy.loadtxt(path, delimiter=",", skiprows=1)`
+    /// and MATLAB's `readtable`.
+    #[arg(long, value_name = "CSV", requires = "features")]
+    predictions: Option<PathBuf>,
+    /// Print JSON (with the confusion matrix and accuracy by distance from the electrodes).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ExportArgs {
+    /// Model (JSON from `et train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// f32, or f16 (half the flash, about 3 significant digits).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
+    precision: PrecisionArg,
+    /// Where to write the blob.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
+    let text = std::fs::read_to_string(&args.model)
+        .with_context(|| format!("reading {}", args.model.display()))?;
+    let table_model = tabular::is_table_model(&text);
+    let Some(data_arg) = &args.data else {
+        if !table_model {
+            bail!(
+                "{}: a board model (trained on an et dataset): evaluate it with --data",
+                args.model.display()
+            );
+        }
+        return crate::tabular::eval(
+            &args.model,
+            &args.table,
+            args.plots.as_deref(),
+            args.predictions.as_deref(),
+            args.json,
+            force,
+        );
+    };
+    if table_model {
+        bail!(
+            "{}: trained on a sensor's table: evaluate it with --features (and --targets)",
+            args.model.display()
+        );
+    }
+    let plots = args
+        .plots
+        .as_ref()
+        .map(|dir| (dir.join("confusion.png"), dir.join("error-vs-distance.png")));
+    if let Some((a, b)) = &plots {
+        for png in [a, b] {
+            output::check(png, &[&args.model, data_arg], force)?;
+        }
+    }
+    let file = ModelFile::load(&args.model)?;
+    let data = dataset::load(data_arg)?;
+    let classes = file.classes.len();
+    let tested = pipeline::test(&file, &data).map_err(|e| {
+        // Name the file at fault: the model's tables, or the data.
+        let blamed = match e {
+            pipeline::UseError::Model(_) => &args.model,
+            _ => data_arg,
+        };
+        anyhow::anyhow!("{}: {e}", blamed.display())
+    })?;
+    let (conf, bands) = (&tested.confusion, &tested.bands);
+    if let (Some(dir), Some((confusion_png, error_png))) = (&args.plots, &plots) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let title = format!(
+            "confusion: accuracy {:.1} % on {}",
+            100.0 * conf.accuracy(),
+            data_arg.display()
+        );
+        output::write(confusion_png, |partial| {
+            plot::confusion(partial, conf, &title)
+        })?;
+        if tested.outcomes.is_empty() {
+            eprintln!(
+                "note: {} does not say where the electrodes are: no error-vs-distance plot",
+                data_arg.display()
+            );
+        } else {
+            output::write(error_png, |partial| {
+                plot::error_vs_distance(partial, &tested)
+            })?;
+        }
+    }
+    let mut from_truth = tested.errors_from_truth_mm.clone();
+    from_truth.sort_by(f64::total_cmp);
+    let [mean, median, p90] = et_learn::regress::mean_median_p90(&from_truth);
+    let known = !from_truth.is_empty();
+    let summary = EvalSummary {
+        observations: conf.total(),
+        accuracy: conf.accuracy(),
+        mean_error_mm: known.then_some(mean),
+        median_error_mm: known.then_some(median),
+        p90_error_mm: known.then_some(p90),
+        mean_cell_error_mm: conf.mean_position_error(&file.centres_mm),
+        aee_mm: conf.aee(&file.centres_mm),
+        by_distance_from_electrodes: bands,
+        confusion: conf.counts.chunks(classes).collect(),
+    };
+    if args.json {
+        out!("{}", serde_json::to_string(&summary)?);
+    } else {
+        out!(
+            "{} observations: accuracy {:.1} %, {}mean cell error {:.2} mm (predicted class \
+             centre to true class centre), AEE {:.1} mm",
+            conf.total(),
+            100.0 * conf.accuracy(),
+            if known {
+                format!(
+                    "position error from the true press positions {mean:.2} mm mean, \
+                     {median:.2} median, {p90:.2} 90th percentile; "
+                )
+            } else {
+                String::new()
+            },
+            conf.mean_position_error(&file.centres_mm),
+            conf.aee(&file.centres_mm)
+        );
+    }
+    Ok(())
+}
+
+pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
+    output::check(&args.out, &[&args.model], force)?;
+    let file = ModelFile::load(&args.model)?;
+    let precision = Precision::from(args.precision);
+    let blob = file.blob(precision)?;
+    output::write(&args.out, |partial| {
+        std::fs::write(partial, &blob).with_context(|| format!("writing {}", args.out.display()))
+    })?;
+    let (c, p) = (file.classes.len(), file.feature_index.len());
+    // Multiply-adds per frame on the chip: QDA a forward substitution per class, LDA a dot.
+    let macs = if file.kind == ModelKind::Qda {
+        c * (p * (p + 1) / 2 + p)
+    } else {
+        c * p
+    };
+    // One model slot of the board's flash (firmware/src/store.rs).
+    const SLOT: usize = et_core::board::MODEL_SLOT_BYTES;
+    let summary = ExportSummary {
+        out: &args.out,
+        bytes: blob.len(),
+        fits_model_slot: blob.len() <= SLOT,
+        multiply_adds_per_frame: macs,
+    };
+    if args.json {
+        out!("{}", serde_json::to_string(&summary)?);
+    } else {
+        eprintln!(
+            "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",
+            args.out.display(),
+            blob.len(),
+            100.0 * blob.len() as f64 / SLOT as f64,
+            if blob.len() <= SLOT {
+                String::new()
+            } else {
+                let kind = file.kind;
+                if precision == Precision::F32
+                    && et_core::model::model_len(kind, Precision::F16, c, p) <= SLOT
+                {
+                    ": does NOT fit; --precision f16 does".to_string()
+                } else {
+                    format!(
+                        ": does NOT fit; retrain with et train --keep {} (the most that fit in f16) or fewer classes",
+                        pipeline::features_that_fit(kind, c, p)
+                    )
+                }
+            },
+            macs
+        );
+    }
+    Ok(())
+}
+
+/// `et eval --json`.
+#[derive(serde::Serialize)]
+struct EvalSummary<'a> {
+    observations: u32,
+    accuracy: f64,
+    /// From the true press position to the predicted class's centre (null when the dataset
+    /// has no positions): the figure to compare with a regressor's.
+    mean_error_mm: Option<f64>,
+    median_error_mm: Option<f64>,
+    p90_error_mm: Option<f64>,
+    /// From the true class's centre to the predicted one's (0 when right).
+    mean_cell_error_mm: f64,
+    aee_mm: f64,
+    by_distance_from_electrodes: &'a [analysis::Band],
+    /// Rows: true class; columns: predicted class.
+    confusion: Vec<&'a [u32]>,
+}
+
+/// `et export --json`.
+#[derive(serde::Serialize)]
+struct ExportSummary<'a> {
+    out: &'a std::path::Path,
+    bytes: usize,
+    fits_model_slot: bool,
+    multiply_adds_per_frame: usize,
+}
