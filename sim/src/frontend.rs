@@ -163,10 +163,10 @@ impl SetSpread {
     fn validate(&self) -> Result<(), SheetError> {
         let ok = |x: f64| x.is_finite() && x >= 0.0;
         if !(ok(self.contact_potential_v) && ok(self.conductance) && self.conductance <= 1.0) {
-            return Err(SheetError::Field {
-                field: "frontend.sets",
-                why: "contact_potential_v must be >= 0 V and conductance between 0 and 1".into(),
-            });
+            return Err(SheetError::field(
+                "frontend.sets",
+                "contact_potential_v must be >= 0 V and conductance between 0 and 1",
+            ));
         }
         Ok(())
     }
@@ -176,14 +176,9 @@ impl FrontendSpec {
     /// Checks every field.
     ///
     /// # Errors
-    /// [`SheetError::Field`] naming the field.
+    /// [`SheetError::field`] naming the field.
     pub fn validate(&self) -> Result<(), SheetError> {
-        let bad = |field, why: &str| {
-            Err(SheetError::Field {
-                field,
-                why: why.into(),
-            })
-        };
+        let bad = |field, why: &str| Err(SheetError::field(field, why));
         let nonneg = |x: f64| x.is_finite() && x >= 0.0;
         if !(1..=16).contains(&self.adc_bits) {
             return bad("frontend.adc_bits", "use 1 to 16 bits");
@@ -341,7 +336,7 @@ impl SimFrontend {
     /// An untouched sheet behind `spec`, with noise from `seed`.
     ///
     /// # Errors
-    /// [`SheetError::Field`] for an invalid spec.
+    /// [`SheetError::field`] for an invalid spec.
     pub fn new(
         sheet: Arc<SimulatedSheet>,
         spec: FrontendSpec,

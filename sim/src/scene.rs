@@ -272,9 +272,13 @@ impl std::error::Error for FieldError {}
 impl From<SheetError> for FieldError {
     fn from(e: SheetError) -> Self {
         match e {
-            SheetError::Field { field, why } => Self::new(field, why),
-            SheetError::Shape(e) => Self::new("sheet.shape", e.to_string()),
-            SheetError::Network(e) => Self::new("sheet", e.to_string()),
+            SheetError::Spec(et_core::sheet::SheetError::Field { field, why }) => {
+                Self::new(field, why)
+            }
+            SheetError::Spec(et_core::sheet::SheetError::Shape(e)) => {
+                Self::new("sheet.shape", e.to_string())
+            }
+            other => Self::new("sheet", other.to_string()),
         }
     }
 }

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::fast::FastNetwork;
 use crate::network::{Grid, Network, NetworkError, Transfer, place_contacts};
 use crate::touch::{Inclusion, Piezo, Touch, edge_multipliers};
-use et_core::sheet::{ElectrodeSpec, SHEET_RESISTANCE, Shape, ShapeError, Sheet};
+use et_core::sheet::{ElectrodeSpec, SHEET_RESISTANCE, Shape, Sheet};
 
 /// The simulated sheet: the physical sheet, and how the simulator models it (its grid, the
 /// pressure-to-conductance law, a bend). A scene's `[sheet]` table holds all of these side by
@@ -126,45 +126,26 @@ fn default_rs() -> f64 {
 pub const MAX_GRID_NODES: usize = 12_000;
 
 /// Why a sheet cannot be built.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SheetError {
-    /// The outline is not valid.
-    Shape(ShapeError),
-    /// A field is out of range.
-    Field {
-        /// The field's name, as in a scene file.
-        field: &'static str,
-        /// What is wrong.
-        why: String,
-    },
+    /// The sheet's description: its outline, or a field out of range (one of the physical
+    /// sheet's, or the simulator's own: grid, piezo law, bend, front end).
+    #[error(transparent)]
+    Spec(#[from] et_core::sheet::SheetError),
     /// The network could not be built or solved.
+    #[error("sheet: {0}")]
     Network(NetworkError),
 }
 
-impl std::fmt::Display for SheetError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SheetError::Shape(e) => write!(f, "sheet.shape: {e}"),
-            SheetError::Field { field, why } => write!(f, "{field}: {why}"),
-            SheetError::Network(e) => write!(f, "sheet: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for SheetError {}
-
-impl From<et_core::sheet::SheetError> for SheetError {
-    fn from(e: et_core::sheet::SheetError) -> Self {
-        match e {
-            et_core::sheet::SheetError::Shape(e) => Self::Shape(e),
-            et_core::sheet::SheetError::Field { field, why } => Self::Field { field, why },
-            // The physical sheet's errors are these two; a new one reads as a field error.
-            other => Self::Field {
-                field: "sheet",
-                why: other.to_string(),
-            },
-        }
+impl SheetError {
+    /// `field` (as a scene file names it) is out of range: `why`.
+    #[must_use]
+    pub fn field(field: &'static str, why: impl Into<String>) -> Self {
+        Self::Spec(et_core::sheet::SheetError::Field {
+            field,
+            why: why.into(),
+        })
     }
 }
 
@@ -208,7 +189,7 @@ impl SheetSpec {
     /// [`SheetError`] naming the field.
     pub fn validate(&self) -> Result<(), SheetError> {
         self.physical.validate()?;
-        let field = |field, why: String| Err(SheetError::Field { field, why });
+        let field = |field, why: String| Err(SheetError::field(field, why));
         if let Some(h) = self.resolution
             && !(h.is_finite() && h > 0.0 && h <= self.physical.shape.size() / 4.0)
         {
@@ -298,7 +279,7 @@ impl SimulatedSheet {
     /// As [`SimulatedSheet::new`], with the fabric's conductance uneven over the sheet by `field`.
     ///
     /// # Errors
-    /// As [`SimulatedSheet::new`], and [`SheetError::Field`] for a field that is not finite.
+    /// As [`SimulatedSheet::new`], and [`SheetError::Spec`] for a field that is not finite.
     pub fn uneven(
         spec: &SheetSpec,
         offsets: &[f64],
@@ -409,10 +390,10 @@ fn build_network_with(
     if let Some(f) = field
         && !f.coefficients.iter().all(|a| a.is_finite())
     {
-        return Err(SheetError::Field {
-            field: "unevenness",
-            why: "the field's coefficients must be finite".into(),
-        });
+        return Err(SheetError::field(
+            "unevenness",
+            "the field's coefficients must be finite",
+        ));
     }
     let bounds = spec.physical.shape.bounds();
     let h = spec.resolution.unwrap_or_else(|| spec.default_resolution());

@@ -6,6 +6,35 @@ mod forward;
 mod greit;
 mod onestep;
 
+use std::sync::Arc;
+
+use et_core::protocol::Protocol;
+use et_sim::frontend::SimFrontend;
+use et_sim::scene::Scene;
+use et_sim::sheet::SimulatedSheet;
+use et_sim::touch::Touch;
+
+/// A scene of `sim/scenes`.
+pub(crate) fn scene(name: &str) -> Scene {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
+    Scene::load(&root.join(name)).unwrap()
+}
+
+/// Noiseless simulator frames (its resistor network, not et-recon's finite elements) without
+/// and with the scene's touches, V.
+pub(crate) fn sim_frames(sc: &Scene, protocol: &Protocol, amps: f64) -> (Vec<f64>, Vec<f64>) {
+    let sheet = Arc::new(SimulatedSheet::new(&sc.sheet, &[]).unwrap());
+    let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
+    let v0 = fe.ideal_frame(protocol, amps);
+    let touches: Vec<Touch> = sc
+        .touches
+        .iter()
+        .map(et_sim::scene::TouchEvent::touch)
+        .collect();
+    fe.set_touches(&touches).unwrap();
+    (v0, fe.ideal_frame(protocol, amps))
+}
+
 /// For tests: `found` holds exactly one touch per true touch (`truth`: centre and radius, m),
 /// each true touch matched to a touch of its own, and a found centroid within each true
 /// touch's radius. Returns the matches.

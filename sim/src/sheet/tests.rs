@@ -370,10 +370,10 @@ fn a_bent_sheet_conducts_less_along_its_curve() {
     };
     assert!(matches!(
         bad.validate(),
-        Err(SheetError::Field {
+        Err(SheetError::Spec(et_core::sheet::SheetError::Field {
             field: "sheet.bend",
             ..
-        })
+        }))
     ));
 }
 
@@ -409,7 +409,7 @@ fn an_uneven_sheet_stays_reciprocal_and_a_flat_field_changes_nothing() {
     };
     assert!(matches!(
         SimulatedSheet::uneven(&spec, &[], &bad),
-        Err(SheetError::Field { .. })
+        Err(SheetError::Spec(et_core::sheet::SheetError::Field { .. }))
     ));
 }
 

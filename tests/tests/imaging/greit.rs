@@ -8,31 +8,14 @@ use et_recon::metrics::merit;
 use et_recon::onestep::imaging_variance;
 use et_recon::touches::{PROMINENCE, TOUCH_Z, above_noise, default_threshold, touches};
 use et_recon::{PixelGrid, ReconError};
-use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
-use et_sim::sheet::SimulatedSheet;
-use et_sim::touch::Touch;
 use nalgebra::{DMatrix, DVector};
-use std::sync::Arc;
 
-fn scene(name: &str) -> Scene {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
-    Scene::load(&root.join(name)).unwrap()
-}
+use super::{scene, sim_frames};
 
-/// Noiseless simulator frames (its resistor network, not these finite elements): dV of the
-/// scene's touches.
+/// Noiseless simulator frames: dV of the scene's touches.
 fn sim_dv(sc: &Scene, protocol: &Protocol, amps: f64) -> Vec<f64> {
-    let sheet = Arc::new(SimulatedSheet::new(&sc.sheet, &[]).unwrap());
-    let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
-    let v0 = fe.ideal_frame(protocol, amps);
-    let touches: Vec<Touch> = sc
-        .touches
-        .iter()
-        .map(et_sim::scene::TouchEvent::touch)
-        .collect();
-    fe.set_touches(&touches).unwrap();
-    let v1 = fe.ideal_frame(protocol, amps);
+    let (v0, v1) = sim_frames(sc, protocol, amps);
     v1.iter().zip(&v0).map(|(a, b)| a - b).collect()
 }
 

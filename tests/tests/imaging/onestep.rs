@@ -8,32 +8,10 @@ use et_recon::metrics::*;
 use et_recon::onestep::*;
 use et_recon::pixels::*;
 use et_recon::touches::*;
-use et_sim::frontend::SimFrontend;
 use et_sim::scene::Scene;
-use et_sim::sheet::SimulatedSheet;
-use et_sim::touch::Touch;
 use nalgebra::{DMatrix, DVector};
-use std::sync::Arc;
 
-fn scene(name: &str) -> Scene {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes");
-    Scene::load(&root.join(name)).unwrap()
-}
-
-/// Noiseless simulator frames (resistor network, not these finite elements) without and with
-/// the scene's touches.
-fn sim_frames(sc: &Scene, protocol: &Protocol, amps: f64) -> (Vec<f64>, Vec<f64>) {
-    let sheet = Arc::new(SimulatedSheet::new(&sc.sheet, &[]).unwrap());
-    let mut fe = SimFrontend::new(sheet, sc.frontend, 1).unwrap();
-    let v0 = fe.ideal_frame(protocol, amps);
-    let touches: Vec<Touch> = sc
-        .touches
-        .iter()
-        .map(et_sim::scene::TouchEvent::touch)
-        .collect();
-    fe.set_touches(&touches).unwrap();
-    (v0, fe.ideal_frame(protocol, amps))
-}
+use super::{scene, sim_frames};
 
 struct Setup {
     grid: PixelGrid,
