@@ -51,36 +51,7 @@ use report::{Section, machine, summary_table, today_utc};
 use sweep::{SweepKey, sweep};
 pub use sweep::{SweepRow, mesh_sweep};
 
-/// The default sheet (docs/method.md §1): 13 x 13 cm, 16 electrodes.
-pub const DEFAULT_SCENE: (&str, &str) = (
-    "square-13cm-16.toml",
-    include_str!("../../sim/scenes/square-13cm-16.toml"),
-);
-
-/// docs/method.md §7's reference scenarios: 22 cm disc, one target at x = 0.75, 0.5, 0.25, 0 of the
-/// radius, and two at x = -0.5 and 0.5.
-pub const REFERENCE_SCENES: [(&str, &str); 5] = [
-    (
-        "disc-ref-x075.toml",
-        include_str!("../../sim/scenes/disc-ref-x075.toml"),
-    ),
-    (
-        "disc-ref-x050.toml",
-        include_str!("../../sim/scenes/disc-ref-x050.toml"),
-    ),
-    (
-        "disc-ref-x025.toml",
-        include_str!("../../sim/scenes/disc-ref-x025.toml"),
-    ),
-    (
-        "disc-ref-x000.toml",
-        include_str!("../../sim/scenes/disc-ref-x000.toml"),
-    ),
-    (
-        "disc-ref-two.toml",
-        include_str!("../../sim/scenes/disc-ref-two.toml"),
-    ),
-];
+pub use et_sim::scenes::{DEFAULT_SCENE, REFERENCE_SCENES};
 
 /// What to run.
 #[derive(Clone, Debug)]

@@ -16,7 +16,7 @@ use crate::sheet::{SimulatedSheet, frame};
 use crate::touch::Touch;
 
 /// The default scene's text (the sheet of the QEMU image).
-pub const SCENE: &str = include_str!("../scenes/square-13cm-16.toml");
+pub const SCENE: &str = crate::scenes::DEFAULT_SCENE.1;
 /// Frames the image scans in each touch state before moving to the next.
 pub const FRAMES_PER_STATE: u32 = 4;
 /// White noise per ADC sample the image adds, V rms (the calibrated simulator's).
