@@ -13,7 +13,9 @@ use std::path::Path;
 
 use et_core::model::ModelKind;
 
+use crate::analysis::{self, CurvePoint};
 use crate::dataset::{DataError, Dataset};
+use crate::fastcv;
 use crate::fit::FitError;
 use crate::model_file::{ModelFile, ModelFileError};
 use crate::pipeline::{self, Stage, TrainOptions};
@@ -127,6 +129,45 @@ pub enum Trained {
     Board(Box<BoardModel>),
     /// A table's model.
     Table(Box<TableModel>),
+}
+
+impl BoardModel {
+    /// The sizes a learning curve is drawn at: observations per class from 12 up to the
+    /// largest class.
+    #[must_use]
+    pub fn curve_sizes(&self) -> Vec<usize> {
+        let classes = self.data.centres.len();
+        let largest = (0..classes)
+            .map(|c| self.data.y.iter().filter(|&&y| usize::from(y) == c).count())
+            .max()
+            .unwrap_or(0);
+        [12, 24, 60, 120, 240, 480, 960, 1_200, 2_400, 4_800]
+            .into_iter()
+            .filter(|&n| n < largest)
+            .chain([largest])
+            .collect()
+    }
+
+    /// Held-out accuracy against observations per class n_c ([`BoardModel::curve_sizes`]), on
+    /// the folds the shrinkage was chosen on (leave-one-visit-out with several visits, else
+    /// k-fold), at the fitted shrinkage; `each` is called before each size.
+    #[must_use]
+    pub fn learning_curve(&self, mut each: impl FnMut()) -> Vec<CurvePoint> {
+        let (data, fold) = (&self.data, &self.training.selection_folds);
+        let classes = data.centres.len();
+        analysis::learning_curve(&data.y, classes, &self.curve_sizes(), |rows| {
+            each();
+            let ys: Vec<u16> = rows.iter().map(|&r| data.y[r]).collect();
+            let folds: Vec<usize> = rows.iter().map(|&r| fold[r]).collect();
+            fastcv::cross_validate_fast(
+                &analysis::select_rows(&data.x, rows),
+                &ys,
+                classes,
+                &self.training.options,
+                &folds,
+            )
+        })
+    }
 }
 
 impl Trained {

@@ -1,14 +1,15 @@
 //! `et collect`, `et train`, `et eval`, `et export`: touch classification from raw voltages.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
+use et_learn::analysis::CurvePoint;
 use et_learn::tabular::{self, Choice, Method};
 use et_learn::trainer::{BoardModel, Progress};
 use et_learn::{Examples, TrainError, Trained, Trainer};
-use et_learn::{analysis, dataset, fastcv, pipeline};
+use et_learn::{dataset, pipeline};
 
 use crate::output;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -156,6 +157,46 @@ impl TrainArgs {
     }
 }
 
+/// Draws `board`'s learning curve into `png` (a progress bar while it is scored).
+fn learning_curve_png(png: &Path, board: &BoardModel) -> Result<Vec<CurvePoint>> {
+    let bar = ProgressBar::new(board.curve_sizes().len() as u64).with_style(
+        ProgressStyle::with_template("learning curve [{bar:30}] {pos}/{len}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let points = board.learning_curve(|| bar.inc(1));
+    bar.finish_and_clear();
+    let options = board.training.options;
+    output::write(png, |partial| {
+        plot::chart(
+            partial,
+            plot::Labels {
+                title: &format!(
+                    "learning curve: {} ({}), {} classes",
+                    options.kind.name(),
+                    if board.data.visits() >= 2 {
+                        "leave-one-visit-out"
+                    } else {
+                        "k-fold CV"
+                    },
+                    board.data.centres.len()
+                ),
+                x: "observations per class n_c",
+                y: "held-out accuracy (%)",
+                legend: plot::Legend::UpperLeft,
+            },
+            &[plot::Series {
+                label: format!("shrinkage {}", options.shrinkage),
+                points: points
+                    .iter()
+                    .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
+                    .collect(),
+                scatter: false,
+            }],
+        )
+    })?;
+    Ok(points)
+}
+
 pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     let Some(data_arg) = &args.data else {
         if args.curve.is_some() || args.keep.is_some() || args.raw {
@@ -195,7 +236,6 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     };
     spinner.set_message(format!("reading {}", data_arg.display()));
     let data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
-    let classes = data.centres.len();
     let trained = trainer.train(Examples::Dataset(Box::new(data)), |stage| match stage {
         Progress::RawFrames => spinner.suspend(|| {
             eprintln!(
@@ -219,79 +259,11 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         Trained::Board(board) => board,
         Trained::Table(_) => bail!("an et dataset trains a board model"),
     };
-    let BoardModel {
-        file,
-        training: trained,
-        data,
-    } = *board;
-    let referenced = file.referenced;
-    let (opts, cv_conf, lovo) = (trained.options, &trained.cv, trained.leave_one_visit_out);
-    let (shrinkage, scores) = (opts.shrinkage, &trained.shrinkage_scores);
-    // What was fitted: qda shrunk fully toward the pooled covariance is saved as the lda.
-    let kind = opts.kind;
-    let visits = data.visits();
     let curve = match &args.curve {
-        Some(png) => {
-            let fold = &trained.selection_folds;
-            let largest = (0..classes)
-                .map(|c| data.y.iter().filter(|&&y| usize::from(y) == c).count())
-                .max()
-                .unwrap_or(0);
-            let sizes: Vec<usize> = [12, 24, 60, 120, 240, 480, 960, 1_200, 2_400, 4_800]
-                .into_iter()
-                .filter(|&n| n < largest)
-                .chain([largest])
-                .collect();
-            let bar = ProgressBar::new(sizes.len() as u64).with_style(
-                ProgressStyle::with_template("learning curve [{bar:30}] {pos}/{len}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            let points = analysis::learning_curve(&data.y, classes, &sizes, |rows| {
-                bar.inc(1);
-                let ys: Vec<u16> = rows.iter().map(|&r| data.y[r]).collect();
-                let folds: Vec<usize> = rows.iter().map(|&r| fold[r]).collect();
-                fastcv::cross_validate_fast(
-                    &analysis::select_rows(&data.x, rows),
-                    &ys,
-                    classes,
-                    &opts,
-                    &folds,
-                )
-            });
-            bar.finish_and_clear();
-            output::write(png, |partial| {
-                plot::chart(
-                    partial,
-                    plot::Labels {
-                        title: &format!(
-                            "learning curve: {} ({}), {} classes",
-                            kind.name(),
-                            if visits >= 2 {
-                                "leave-one-visit-out"
-                            } else {
-                                "k-fold CV"
-                            },
-                            classes
-                        ),
-                        x: "observations per class n_c",
-                        y: "held-out accuracy (%)",
-                        legend: plot::Legend::UpperLeft,
-                    },
-                    &[plot::Series {
-                        label: format!("shrinkage {shrinkage}"),
-                        points: points
-                            .iter()
-                            .filter_map(|p| Some((p.n_c as f64, 100.0 * p.accuracy?)))
-                            .collect(),
-                        scatter: false,
-                    }],
-                )
-            })?;
-            Some(points)
-        }
+        Some(png) => Some(learning_curve_png(png, &board)?),
         None => None,
     };
-    let mm = &file.centres_mm;
+    let (file, shrinkage) = (&board.file, board.file.shrinkage);
     // What every reader of model files checks (et eval, stream, view, export): refuse to
     // write a model they would refuse.
     file.validate().with_context(|| {
@@ -301,13 +273,28 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         )
     })?;
     output::write(&args.out, |partial| file.save(partial))?;
+    print_trained(args, &board, curve.as_deref())
+}
+
+/// `et train`'s summary of a board model: JSON, or a line and its notes.
+fn print_trained(args: &TrainArgs, board: &BoardModel, curve: Option<&[CurvePoint]>) -> Result<()> {
+    let BoardModel {
+        file,
+        training: trained,
+        data,
+    } = board;
+    let (referenced, mm, classes) = (file.referenced, &file.centres_mm, data.centres.len());
+    let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
+    let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);
+    let folds = args.folds.unwrap_or(10);
     let summary = TrainSummary {
         out: &args.out,
         kind,
         referenced,
         shrinkage,
         shrinkage_chosen_by: trained.chosen_by,
-        shrinkage_scores: scores
+        shrinkage_scores: trained
+            .shrinkage_scores
             .iter()
             .map(|&(shrinkage, accuracy)| ShrinkageScore {
                 shrinkage,
@@ -323,7 +310,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         cv_aee_mm: cv_conf.aee(mm),
         leave_one_visit_out_accuracy: lovo,
         fallbacks: &trained.fallbacks,
-        learning_curve: curve.as_deref(),
+        learning_curve: curve,
     };
     for f in &trained.fallbacks {
         eprintln!("note: {f}");
@@ -409,7 +396,7 @@ struct TrainSummary<'a> {
     leave_one_visit_out_accuracy: Option<f64>,
     /// Where training changed its recipe because the data are too few (empty normally).
     fallbacks: &'a [pipeline::Fallback],
-    learning_curve: Option<&'a [analysis::CurvePoint]>,
+    learning_curve: Option<&'a [CurvePoint]>,
 }
 
 /// One shrinkage tried and its cross-validated accuracy.
