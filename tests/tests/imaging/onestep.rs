@@ -25,29 +25,31 @@ fn setup(sc: &Scene, protocol: &Protocol, amps: f64) -> Setup {
 }
 
 fn setup_with(sc: &Scene, protocol: &Protocol, amps: f64, alpha: f64, s: f64) -> Setup {
-    let mesh = Mesh::of_sheet(
-        &sc.sheet.physical,
-        MeshSize::for_count(&sc.sheet.physical, 3_000),
-    )
-    .unwrap();
-    let z = vec![
-        sc.sheet.physical.electrodes.contact_ohm * sc.sheet.physical.electrodes.width;
-        mesh.electrodes.len()
-    ];
-    let grid = PixelGrid::new(&mesh, 32);
-    let n = mesh.triangles.len();
-    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
-    let (_, jac) = fwd
-        .jacobian(
-            &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
-            protocol,
-            amps,
-        )
-        .unwrap();
+    let (grid, jac) = jacobian_on(sc, protocol, amps, 32);
     Setup {
         grid,
         recon: OneStep::new(&jac, alpha, s).unwrap(),
     }
+}
+
+/// The scene's sheet meshed to about 3 000 triangles (complete electrode model), a grid
+/// `pixels` across, and the dense Jacobian at the background.
+fn jacobian_on(
+    sc: &Scene,
+    protocol: &Protocol,
+    amps: f64,
+    pixels: usize,
+) -> (PixelGrid, DMatrix<f64>) {
+    let sheet = &sc.sheet.physical;
+    let mesh = Mesh::of_sheet(sheet, MeshSize::for_count(sheet, 3_000)).unwrap();
+    let z = vec![sheet.electrodes.contact_ohm * sheet.electrodes.width; mesh.electrodes.len()];
+    let grid = PixelGrid::new(&mesh, pixels);
+    let n = mesh.triangles.len();
+    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
+    let (_, jac) = fwd
+        .jacobian(&vec![1.0 / sheet.sheet_resistance; n], protocol, amps)
+        .unwrap();
+    (grid, jac)
 }
 
 #[test]
@@ -405,25 +407,7 @@ fn two_touches_under_noise_are_two_peaks_at_the_alpha_gcv_picks() {
     let amps = f64::from(config.current_amps());
     let frames = et_sim::still::scene_frames(&sc, &config, 10).unwrap();
     let dv = frames.dv();
-    let mesh = Mesh::of_sheet(
-        &sc.sheet.physical,
-        MeshSize::for_count(&sc.sheet.physical, 3_000),
-    )
-    .unwrap();
-    let z = vec![
-        sc.sheet.physical.electrodes.contact_ohm * sc.sheet.physical.electrodes.width;
-        mesh.electrodes.len()
-    ];
-    let grid = PixelGrid::new(&mesh, 48);
-    let n = mesh.triangles.len();
-    let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
-    let (_, jac) = fwd
-        .jacobian(
-            &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
-            &protocol,
-            amps,
-        )
-        .unwrap();
+    let (grid, jac) = jacobian_on(&sc, &protocol, amps, 48);
     let candidates: Vec<f64> = (0..=25)
         .map(|i| 10f64.powf(-4.0 + 0.2 * f64::from(i)))
         .collect();
