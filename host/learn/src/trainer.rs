@@ -8,6 +8,22 @@
 //! Dataset --prepare (V_m - V_0, keep p)--> shrinkage by CV --> fit --> ModelFile --> blob
 //! Table --------------------------------> every candidate by CV --> fit --> TableModel
 //! ```
+//!
+//! QDA for the board from `et collect`'s dataset, then its blob:
+//!
+//! ```no_run
+//! use et_core::model::Precision;
+//! use et_learn::{Examples, Trained, Trainer};
+//!
+//! let data = et_learn::dataset::load("train.npz".as_ref())?;
+//! let trained = Trainer::qda().train(Examples::Dataset(Box::new(data)), |_| {})?;
+//! trained.save("model.json".as_ref())?;
+//! if let Trained::Board(board) = &trained {
+//!     let blob = board.file.blob(Precision::F16)?; // for `et upload`
+//!     println!("{} bytes", blob.len());
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::path::Path;
 

@@ -8,6 +8,25 @@
 //! Spec --set_up()--> Reconstructor { mesh, forward model, Jacobian J, A = J P^-1 J^T or GREIT }
 //! frame V, Reference { V_0, var(dV) } --image()--> Image { pixels, noise, regions, touches }
 //! ```
+//!
+//! A 22 cm disc with 16 electrodes, adjacent drive, 1 mA; V_0 from untouched frames:
+//!
+//! ```no_run
+//! use et_core::protocol::{Protocol, ProtocolKind};
+//! use et_core::sheet::Sheet;
+//! use et_recon::{Reference, Spec};
+//!
+//! # fn frames() -> (Vec<Vec<f32>>, Vec<f32>) { unimplemented!() }
+//! let sheet = Sheet::disc(0.11, 16);
+//! let protocol = Protocol::new(ProtocolKind::Adjacent, 16)?;
+//! let mut recon = Spec::new(sheet, protocol, 1e-3).set_up()?;
+//! let (untouched, frame) = frames(); // volts, K = 208 values each
+//! let image = recon.image(&frame, &Reference::from_frames(&untouched)?)?;
+//! for touch in &image.touches {
+//!     println!("({:.1}, {:.1}) mm", touch.centroid[0] * 1e3, touch.centroid[1] * 1e3);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::time::Instant;
 
