@@ -87,3 +87,20 @@ fn kernel_ridge_predict_500(bencher: divan::Bencher) {
     let krr = KernelRidge::fit(x, t, 2_000, 0.5, 1e-2).expect("fit");
     bencher.bench(|| krr.predict_many(test));
 }
+
+/// The `.npz` entries' CRC-32 (zip's, ISO-HDLC) over 16 MB: crc32fast, which `npz` uses
+/// (SIMD where the CPU has it), against the `crc` crate of the wire format with its byte table
+/// (what et-core uses, 1 KB on the board) and a 16-row table.
+#[divan::bench(args = ["crc32fast", "crc table 1", "crc table 16"])]
+fn crc32_of_16_mb(bencher: divan::Bencher, which: &str) {
+    let data: Vec<u8> = (0..16_000_000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8)
+        .collect();
+    let table1 = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let table16 = crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISO_HDLC);
+    bencher.bench_local(|| match which {
+        "crc32fast" => crc32fast::hash(divan::black_box(&data)),
+        "crc table 1" => table1.checksum(divan::black_box(&data)),
+        _ => table16.checksum(divan::black_box(&data)),
+    });
+}

@@ -153,6 +153,8 @@ impl Writer {
             ));
             return;
         }
+        // crc32fast, not the wire format's `crc`: 10 to 35 times faster here (Cargo.toml says
+        // by how much and how it was measured).
         let crc = crc32fast::hash(data);
         // Version 2.0, no flags, stored, time/date 0 (1980-01-01), crc, sizes, name length.
         let fixed = |signature: u32| {
