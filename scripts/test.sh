@@ -29,6 +29,9 @@ step "format (cargo fmt --check)"
 cargo fmt --all -- --check
 (cd firmware && cargo fmt -- --check)
 
+step "no import circles among the files of a crate (scripts/import_cycles.py)"
+python3 scripts/import_cycles.py
+
 step "lint (clippy, warnings are errors)"
 cargo clippy --workspace --all-targets --features et-host/viewer -- -D warnings
 
