@@ -29,7 +29,6 @@ use serde::Serialize;
 use crate::plot;
 use et_core::board::MODEL_SLOT_BYTES;
 use et_learn::collect::{self, Plan};
-use et_learn::dataset::Dataset;
 use et_learn::pipeline;
 use et_learn::tabular::{Choice, Method};
 use et_learn::trainer::BoardModel;

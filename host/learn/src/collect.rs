@@ -195,6 +195,10 @@ pub enum CollectError {
     },
     /// A built-in scene could not be read, or its data referenced (the reason).
     Scene(String),
+    /// No visit was asked for.
+    NoVisits,
+    /// The visits' datasets could not be joined.
+    Data(crate::dataset::DataError),
 }
 
 impl std::fmt::Display for CollectError {
@@ -207,6 +211,8 @@ impl std::fmt::Display for CollectError {
             CollectError::Stats(e) => write!(f, "untouched frames: {e}"),
             CollectError::EmptyPress { label } => write!(f, "press {label} has no touches"),
             CollectError::Scene(m) => write!(f, "scene: {m}"),
+            CollectError::NoVisits => write!(f, "no visit to collect: ask for at least one"),
+            CollectError::Data(e) => write!(f, "joining the visits: {e}"),
         }
     }
 }
@@ -245,6 +251,41 @@ pub struct Press {
     pub label: u16,
     /// The touches, at least one.
     pub touches: Vec<Touch>,
+}
+
+/// [`collect`] once per seed in `seeds`, each a visit with its own electrode positions, joined
+/// into one dataset (visit numbers in seed order); `each` is called after each visit.
+///
+/// # Errors
+/// [`CollectError::NoVisits`] for no seeds; as [`collect`].
+pub fn collect_visits(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    seeds: impl IntoIterator<Item = u64>,
+    mut each: impl FnMut(),
+) -> Result<Dataset, CollectError> {
+    let mut data: Option<Dataset> = None;
+    for seed in seeds {
+        let visit = collect(
+            spec,
+            frontend,
+            config,
+            centres,
+            &Plan {
+                seed,
+                ..plan.clone()
+            },
+        )?;
+        match data.as_mut() {
+            None => data = Some(visit),
+            Some(d) => d.append(visit).map_err(CollectError::Data)?,
+        }
+        each();
+    }
+    data.ok_or(CollectError::NoVisits)
 }
 
 /// Runs the procedure on a simulated sheet. Every visit draws its own electrode positions from

@@ -134,25 +134,15 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         ..Plan::default()
     };
     let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");
-    let mut train: Option<Dataset> = None;
-    for v in 0..sizes.visits {
-        let part = collect::collect(
-            &scene.sheet,
-            scene.frontend,
-            config,
-            &centres,
-            &Plan {
-                seed: 1_000 + v as u64,
-                ..plan.clone()
-            },
-        )?;
-        match train.as_mut() {
-            None => train = Some(part),
-            Some(d) => d.append(part)?,
-        }
-        bar.inc(1);
-    }
-    let train = train.context("no visit collected")?;
+    let train = collect::collect_visits(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        &centres,
+        &plan,
+        (0..sizes.visits).map(|v| 1_000 + v as u64),
+        || bar.inc(1),
+    )?;
     let mut days = Vec::new();
     for d in 0..sizes.days {
         let day = Plan {

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use et_learn::{collect, dataset};
 use et_sim::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -87,90 +87,88 @@ pub(crate) struct CollectArgs {
     json: bool,
 }
 
+impl CollectArgs {
+    /// The collection plan these arguments ask for (one visit; the command runs --visits of
+    /// them), each range checked.
+    fn plan(&self) -> Result<collect::Plan> {
+        let args = self;
+        if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
+            bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
+        }
+        if !(args.radius_spread.is_finite() && (0.0..=1.0).contains(&args.radius_spread)) {
+            bail!("--radius-spread: a relative spread between 0 and 1");
+        }
+        if !(0.0..=1.0).contains(&args.creep) || !(0.0..=1.0).contains(&args.drift) {
+            bail!("--creep and --drift: fractions between 0 and 1");
+        }
+        if !(args.movement_mm.is_finite() && args.movement_mm >= 0.0) {
+            bail!("--movement-mm: at least 0");
+        }
+        let target_mm = args.target_mm.unwrap_or(args.radius_mm);
+        if !(target_mm.is_finite() && target_mm >= 0.0) {
+            bail!("--target-mm: at least 0");
+        }
+        if !(args.press_junction_uv.is_finite() && args.press_junction_uv >= 0.0) {
+            bail!("--press-junction-uv: at least 0");
+        }
+        if !(args.wobble.is_finite() && (0.0..=1.0).contains(&args.wobble)) {
+            bail!("--wobble: a relative rms between 0 and 1");
+        }
+        if !(1.0..=et_sim::touch::MAX_ELONGATION).contains(&args.elongation) {
+            bail!(
+                "--elongation: between 1 (a disc) and {}",
+                et_sim::touch::MAX_ELONGATION
+            );
+        }
+        if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
+            bail!("--visits, --scans and --subsections must be at least 1");
+        }
+        Ok(collect::Plan {
+            visits: 1,
+            scans: args.scans,
+            subsections: args.subsections,
+            pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
+            radius: args.radius_mm * 1e-3,
+            radius_spread: args.radius_spread,
+            target_radius: target_mm * 1e-3,
+            creep: args.creep,
+            drift: args.drift,
+            electrode_movement: args.movement_mm * 1e-3,
+            poses: args.poses.max(1),
+            press_movement: args.press_movement_mm * 1e-3,
+            press_junction: args.press_junction_uv * 1e-6,
+            unevenness: collect::Plan::default().unevenness,
+            wobble: args.wobble,
+            wobble_s: collect::Plan::default().wobble_s,
+            elongation: args.elongation,
+            finger_angle: collect::Plan::default().finger_angle,
+            seed: args.seed,
+        })
+    }
+}
+
 pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     output::check(&args.out, &[&args.scene], force)?;
     let scene = Scene::load(&args.scene)?;
     let (rows, cols) = parse_grid(&args.grid, "--grid")?;
-    if !(args.min_kpa >= 0.0 && args.max_kpa >= args.min_kpa) {
-        bail!("--min-kpa and --max-kpa: need 0 <= min <= max");
-    }
-    if !(args.radius_spread.is_finite() && (0.0..=1.0).contains(&args.radius_spread)) {
-        bail!("--radius-spread: a relative spread between 0 and 1");
-    }
-    if !(0.0..=1.0).contains(&args.creep) || !(0.0..=1.0).contains(&args.drift) {
-        bail!("--creep and --drift: fractions between 0 and 1");
-    }
-    if !(args.movement_mm.is_finite() && args.movement_mm >= 0.0) {
-        bail!("--movement-mm: at least 0");
-    }
-    let target_mm = args.target_mm.unwrap_or(args.radius_mm);
-    if !(target_mm.is_finite() && target_mm >= 0.0) {
-        bail!("--target-mm: at least 0");
-    }
-    if !(args.press_junction_uv.is_finite() && args.press_junction_uv >= 0.0) {
-        bail!("--press-junction-uv: at least 0");
-    }
-    if !(args.wobble.is_finite() && (0.0..=1.0).contains(&args.wobble)) {
-        bail!("--wobble: a relative rms between 0 and 1");
-    }
-    if !(1.0..=et_sim::touch::MAX_ELONGATION).contains(&args.elongation) {
-        bail!(
-            "--elongation: between 1 (a disc) and {}",
-            et_sim::touch::MAX_ELONGATION
-        );
-    }
-    if args.visits == 0 || args.scans == 0 || args.subsections == 0 {
-        bail!("--visits, --scans and --subsections must be at least 1");
-    }
     let config = collect::training_config(scene.scan_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
-    let plan = collect::Plan {
-        visits: 1,
-        scans: args.scans,
-        subsections: args.subsections,
-        pressure_pa: (args.min_kpa * 1e3, args.max_kpa * 1e3),
-        radius: args.radius_mm * 1e-3,
-        radius_spread: args.radius_spread,
-        target_radius: target_mm * 1e-3,
-        creep: args.creep,
-        drift: args.drift,
-        electrode_movement: args.movement_mm * 1e-3,
-        poses: args.poses.max(1),
-        press_movement: args.press_movement_mm * 1e-3,
-        press_junction: args.press_junction_uv * 1e-6,
-        unevenness: collect::Plan::default().unevenness,
-        wobble: args.wobble,
-        wobble_s: collect::Plan::default().wobble_s,
-        elongation: args.elongation,
-        finger_angle: collect::Plan::default().finger_angle,
-        seed: args.seed,
-    };
+    let plan = args.plan()?;
     let bar = ProgressBar::new(args.visits as u64).with_style(
         ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let started = Instant::now();
-    let mut data: Option<et_learn::dataset::Dataset> = None;
-    for v in 0..args.visits {
-        let seed = args.seed.wrapping_mul(1_000).wrapping_add(v as u64);
-        let part = collect::collect(
-            &scene.sheet,
-            scene.frontend,
-            config,
-            &centres,
-            &collect::Plan {
-                seed,
-                ..plan.clone()
-            },
-        )?;
-        match data.as_mut() {
-            None => data = Some(part),
-            Some(d) => d.append(part)?,
-        }
-        bar.inc(1);
-    }
+    let data = collect::collect_visits(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        &centres,
+        &plan,
+        (0..args.visits).map(|v| args.seed.wrapping_mul(1_000).wrapping_add(v as u64)),
+        || bar.inc(1),
+    )?;
     bar.finish_and_clear();
-    let data = data.context("no visit collected")?;
     let provenance = format!(
         "et collect: {}, grid {rows}x{cols}, T={} S_num={} S_sub={}, {}-{} kPa, radius {} mm, target {} mm, movement {} mm, press junction {} uV, wobble {}, elongation up to {}, seed {}",
         args.scene.display(),
@@ -180,7 +178,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         args.min_kpa,
         args.max_kpa,
         args.radius_mm,
-        target_mm,
+        args.target_mm.unwrap_or(args.radius_mm),
         args.movement_mm,
         args.press_junction_uv,
         args.wobble,

@@ -1,6 +1,6 @@
 //! `et eval` and `et export`: a trained model tested on other data, and its blob for the board.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
@@ -107,26 +107,8 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         anyhow::anyhow!("{}: {e}", blamed.display())
     })?;
     let (conf, bands) = (&tested.confusion, &tested.bands);
-    if let (Some(dir), Some((confusion_png, error_png))) = (&args.plots, &plots) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let title = format!(
-            "confusion: accuracy {:.1} % on {}",
-            100.0 * conf.accuracy(),
-            data_arg.display()
-        );
-        output::write(confusion_png, |partial| {
-            plot::confusion(partial, conf, &title)
-        })?;
-        if tested.outcomes.is_empty() {
-            eprintln!(
-                "note: {} does not say where the electrodes are: no error-vs-distance plot",
-                data_arg.display()
-            );
-        } else {
-            output::write(error_png, |partial| {
-                plot::error_vs_distance(partial, &tested)
-            })?;
-        }
+    if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
+        eval_plots(dir, pngs, &tested, data_arg)?;
     }
     let mut from_truth = tested.errors_from_truth_mm.clone();
     from_truth.sort_by(f64::total_cmp);
@@ -162,6 +144,37 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
             conf.mean_position_error(&file.centres_mm),
             conf.aee(&file.centres_mm)
         );
+    }
+    Ok(())
+}
+
+/// `et eval --plots` of a board model: the confusion matrix and the error against the
+/// distance from the electrodes (when the data say where the electrodes are).
+fn eval_plots(
+    dir: &Path,
+    (confusion_png, error_png): &(PathBuf, PathBuf),
+    tested: &pipeline::Tested,
+    data_arg: &Path,
+) -> Result<()> {
+    let conf = &tested.confusion;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let title = format!(
+        "confusion: accuracy {:.1} % on {}",
+        100.0 * conf.accuracy(),
+        data_arg.display()
+    );
+    output::write(confusion_png, |partial| {
+        plot::confusion(partial, conf, &title)
+    })?;
+    if tested.outcomes.is_empty() {
+        eprintln!(
+            "note: {} does not say where the electrodes are: no error-vs-distance plot",
+            data_arg.display()
+        );
+    } else {
+        output::write(error_png, |partial| {
+            plot::error_vs_distance(partial, tested)
+        })?;
     }
     Ok(())
 }

@@ -366,6 +366,18 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let (reference, v1, truth) = frames(args, &scene, recording.as_ref(), &config)?;
     stage("frames", clock.elapsed().as_secs_f64());
     let image = recon.image(&v1, &reference)?;
+    let timings_s = frame_stages(args, &image, &set_up, stage);
+    report(args, &recon, &image, &truth, timings_s, started)
+}
+
+/// Prints the matrix's and the frame's stages of `image` (stderr) and returns every stage's
+/// time for `--json`.
+fn frame_stages(
+    args: &ReconstructArgs,
+    image: &et_recon::Image,
+    set_up: &et_recon::reconstructor::SetUpTimings,
+    stage: impl Fn(&str, f64),
+) -> Timings {
     // The reconstruction matrix: made at set-up, or for this frame (GCV's choice).
     let t_matrix = image
         .timings
@@ -415,14 +427,13 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             }
         }
     }
-    let timings_s = Timings {
+    Timings {
         mesh: set_up.mesh,
         forward_jacobian: set_up.forward_jacobian,
         one_step: t_one_step,
         setup: set_up.mesh + set_up.forward_jacobian + t_one_step.unwrap_or(0.0),
         frame: image.timings.frame,
-    };
-    report(args, &recon, &image, &truth, timings_s, started)
+    }
 }
 
 /// `et reconstruct`'s picture, JSON and lines: the image against the truth where known.
