@@ -14,18 +14,16 @@
 //! ```no_run
 //! use et_core::protocol::{Protocol, ProtocolKind};
 //! use et_core::sheet::Sheet;
-//! use et_recon::{Reference, Spec};
+//! use et_recon::{ImagingError, Reference, Spec};
 //!
-//! # fn frames() -> (Vec<Vec<f32>>, Vec<f32>) { unimplemented!() }
-//! let sheet = Sheet::disc(0.11, 16);
-//! let protocol = Protocol::new(ProtocolKind::Adjacent, 16)?;
-//! let mut recon = Spec::new(sheet, protocol, 1e-3).set_up()?;
-//! let (untouched, frame) = frames(); // volts, K = 208 values each
-//! let image = recon.image(&frame, &Reference::from_frames(&untouched)?)?;
-//! for touch in &image.touches {
-//!     println!("({:.1}, {:.1}) mm", touch.centroid[0] * 1e3, touch.centroid[1] * 1e3);
+//! /// The touches in `frame` against the `untouched` frames (volts, K = 208 values each).
+//! fn touches(untouched: &[Vec<f32>], frame: &[f32]) -> Result<Vec<[f64; 2]>, ImagingError> {
+//!     let sheet = Sheet::disc(0.11, 16);
+//!     let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("16 electrodes");
+//!     let mut recon = Spec::new(sheet, protocol, 1e-3).set_up()?;
+//!     let image = recon.image(frame, &Reference::from_frames(untouched)?)?;
+//!     Ok(image.touches.iter().map(|t| t.centroid).collect())
 //! }
-//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 use std::time::Instant;
@@ -56,226 +54,6 @@ pub enum ImagingError {
     /// A parameter, a frame or a reference is unusable, or a matrix is singular.
     #[error("{0}")]
     Recon(#[from] ReconError),
-}
-
-/// Where the mesh comes from.
-#[derive(Clone, Debug)]
-pub enum MeshPlan {
-    /// The sheet meshed to about this many triangles, finer inside these regions (the
-    /// budget stays the same).
-    About {
-        /// About this many triangles.
-        triangles: usize,
-        /// Regions meshed finer.
-        refine: Vec<Refinement>,
-    },
-    /// A mesh made elsewhere (`mesh::import`); its electrodes must be the sheet's.
-    Given(Mesh),
-}
-
-/// The reconstruction (docs/method.md §6).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Method {
-    /// Gauss-Newton with the NOSER prior diag(J^T J)^s: one step (the linear reconstruction,
-    /// one matrix) or several iterations refitting the data.
-    GaussNewton {
-        /// NOSER exponent in [0, 1].
-        s: f64,
-        /// 1: one step; more: iterative.
-        iterations: usize,
-    },
-    /// GREIT, the consensus linear reconstruction onto the pixels.
-    Greit {
-        /// The desired image's radius of a small target, m (None: 5 % of the longer side).
-        radius: Option<f64>,
-    },
-}
-
-impl MeshPlan {
-    /// The mesh of `sheet` by this plan; a given mesh must have the sheet's electrode count.
-    ///
-    /// # Errors
-    /// [`ImagingError::Mesh`] when the sheet cannot be meshed; [`ReconError::Parameter`] for
-    /// a given mesh with another electrode count.
-    pub fn mesh(self, sheet: &Sheet) -> Result<Mesh, ImagingError> {
-        let mesh = match self {
-            MeshPlan::About { triangles, refine } => {
-                Mesh::with_about_refined(sheet, triangles, &refine)?
-            }
-            MeshPlan::Given(mesh) => mesh,
-        };
-        if mesh.electrodes.len() != usize::from(sheet.electrodes.count) {
-            return Err(ReconError::Parameter(format!(
-                "the mesh has {} electrodes, the sheet {}",
-                mesh.electrodes.len(),
-                sheet.electrodes.count
-            ))
-            .into());
-        }
-        Ok(mesh)
-    }
-}
-
-impl Default for Method {
-    /// One-step Gauss-Newton with s = 0.5.
-    fn default() -> Self {
-        Method::GaussNewton {
-            s: 0.5,
-            iterations: 1,
-        }
-    }
-}
-
-/// How alpha (dimensionless: lambda = alpha^2 tr(A) / K) is chosen.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AlphaRule {
-    /// This alpha for every frame: one matrix, made at set-up.
-    Fixed(f64),
-    /// Generalised cross-validation on each frame, never fitting closer than its noise
-    /// ([`DataSpace::choose_alpha`]; for GREIT, [`Greit::choose_alpha`]): a matrix per frame.
-    Gcv,
-    /// GREIT only: lambda set by this noise figure (one matrix for every frame, the
-    /// consensus rule; 0.5 is the consensus value).
-    NoiseFigure(f64),
-}
-
-/// Everything a [`Reconstructor`] is made from.
-#[derive(Clone, Debug)]
-pub struct Spec {
-    /// The sheet: outline, sheet resistance, electrodes and their model.
-    pub sheet: Sheet,
-    /// The scan's injections and measurements.
-    pub protocol: Protocol,
-    /// Injected current, A.
-    pub amps: f64,
-    /// The mesh.
-    pub mesh: MeshPlan,
-    /// The reconstruction.
-    pub method: Method,
-    /// How alpha is chosen.
-    pub alpha: AlphaRule,
-    /// Pixels across the image (4 to [`crate::imager::MAX_PIXELS`]).
-    pub pixels: usize,
-    /// ROI threshold f (keep pixels >= f max); None: the protocol's default
-    /// ([`default_threshold`]).
-    pub threshold: Option<f64>,
-}
-
-impl Spec {
-    /// `sheet` scanned with `protocol` at `amps`: one-step Gauss-Newton (s = 0.5), alpha by
-    /// GCV per frame, about 8 000 triangles, 64 pixels across, the protocol's threshold.
-    #[must_use]
-    pub fn new(sheet: Sheet, protocol: Protocol, amps: f64) -> Self {
-        Self {
-            sheet,
-            protocol,
-            amps,
-            mesh: MeshPlan::About {
-                triangles: 8_000,
-                refine: Vec::new(),
-            },
-            method: Method::default(),
-            alpha: AlphaRule::Gcv,
-            pixels: 64,
-            threshold: None,
-        }
-    }
-
-    /// Builds the mesh, the forward model at the background, the Jacobian and what the
-    /// method keeps for every frame.
-    ///
-    /// # Errors
-    /// [`ImagingError`] when the sheet cannot be meshed or modelled, the mesh's electrodes are
-    /// not the sheet's, or a parameter is out of range.
-    pub fn set_up(self) -> Result<Reconstructor, ImagingError> {
-        Reconstructor::new(self)
-    }
-}
-
-/// The untouched sheet's frame V_0 and the noise of dV per channel.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Reference {
-    /// V_0, V (K values).
-    pub v0: Vec<f64>,
-    /// Each channel's noise variance of dV = V - V_0, V^2 (zeros when unknown).
-    pub var_dv: Vec<f64>,
-}
-
-impl Reference {
-    /// V_0 as the mean of untouched `frames` (V) and the noise of dV from their spread
-    /// ([`et_core::stats::dv_variance`]; zero from one frame).
-    ///
-    /// # Errors
-    /// [`ReconError::Parameter`] for no frames or frames of different lengths.
-    pub fn from_frames<F: AsRef<[f32]>>(frames: &[F]) -> Result<Self, ReconError> {
-        let k = frames.first().map_or(0, |f| f.as_ref().len());
-        let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
-        let bad = |e: et_core::stats::StatsError| ReconError::Parameter(format!("reference: {e}"));
-        et_core::stats::reference(frames, &mut v0).map_err(bad)?;
-        et_core::stats::dv_variance(frames, &mut var_dv).map_err(bad)?;
-        Ok(Self { v0, var_dv })
-    }
-}
-
-/// What one frame's image took, s.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FrameTimings {
-    /// The matrix made for this frame (GCV's choice of alpha and the matrix at it); None
-    /// when the matrix was made at set-up or the fit is iterative.
-    pub matrix: Option<f64>,
-    /// Imaging: the matrix applied to dV and drawn on the pixels (the whole fit when
-    /// iterative).
-    pub frame: f64,
-}
-
-/// What the set-up took, s.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SetUpTimings {
-    /// Meshing the sheet (nothing for a given mesh).
-    pub mesh: f64,
-    /// The forward model, its factorisation, the frame and the Jacobian at the background.
-    pub forward_jacobian: f64,
-    /// What the method keeps for every frame (A = J P^-1 J^T, or GREIT's matrix).
-    pub matrix: f64,
-}
-
-/// How an iterative fit went.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Iterations {
-    /// Steps completed.
-    pub completed: usize,
-    /// The last iterate's residual |V - F(sigma)|, V.
-    pub residual: f64,
-    /// Each step's length along its Gauss-Newton direction.
-    pub steps: Vec<f64>,
-    /// Why it stopped.
-    pub stop: Stop,
-}
-
-/// One frame imaged.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    /// Conductivity change per pixel (None outside the sheet), S per square.
-    pub pixels: Vec<Option<f64>>,
-    /// Each pixel's noise through the reconstruction, S per square.
-    pub noise_sd: Vec<Option<f64>>,
-    /// dV = V - V_0, V.
-    pub dv: Vec<f64>,
-    /// The alpha used.
-    pub alpha: f64,
-    /// GREIT's noise figure and desired-image radius (m) of the matrix used; None for
-    /// Gauss-Newton.
-    pub greit: Option<(f64, f64)>,
-    /// The ROI threshold f used.
-    pub threshold: f64,
-    /// Every region above f max, largest peak first.
-    pub regions: Vec<Region>,
-    /// The touches: regions split at their saddles, at least [`TOUCH_Z`] times their noise.
-    pub touches: Vec<Region>,
-    /// The iterative fit's report (None for a one-step or GREIT image).
-    pub iterations: Option<Iterations>,
-    /// What this frame took.
-    pub timings: FrameTimings,
 }
 
 /// A reconstruction set up for one sheet, protocol, mesh, method and alpha rule (see the
@@ -620,3 +398,6 @@ impl Reconstructor {
         })
     }
 }
+
+mod spec;
+pub use spec::*;
