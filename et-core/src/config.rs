@@ -105,18 +105,23 @@ impl Default for ScanConfig {
 }
 
 /// Why a [`ScanConfig`] is refused.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ConfigError {
     /// `electrodes` / `protocol` do not make a protocol.
+    #[error("protocol: {0}")]
     Protocol(ProtocolError),
     /// `samples_per_step` is 0 or above [`SAMPLES_PER_STEP_MAX`].
+    #[error("samples_per_step = {samples_per_step}: use 1 to {SAMPLES_PER_STEP_MAX}")]
     SamplesPerStep {
         /// The value given.
         samples_per_step: u16,
     },
     /// `settle_samples` leaves no sample to take the median of.
+    #[error(
+        "settle_samples = {settle_samples} leaves nothing of {samples_per_step} samples per step: make it smaller"
+    )]
     Settle {
         /// t_s given.
         settle_samples: u16,
@@ -124,41 +129,18 @@ pub enum ConfigError {
         samples_per_step: u16,
     },
     /// `current_na` is 0 or above [`CURRENT_NA_MAX`].
+    #[error("current_na = {current_na}: use 1 to {CURRENT_NA_MAX} nA")]
     Current {
         /// The value given.
         current_na: u32,
     },
     /// `sample_rate_hz` is 0.
+    #[error("sample_rate_hz must be positive")]
     SampleRate,
     /// `gain` is 0.
+    #[error("gain must be at least 1")]
     Gain,
 }
-
-impl core::fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            ConfigError::Protocol(e) => write!(f, "protocol: {e}"),
-            ConfigError::SamplesPerStep { samples_per_step } => write!(
-                f,
-                "samples_per_step = {samples_per_step}: use 1 to {SAMPLES_PER_STEP_MAX}"
-            ),
-            ConfigError::Settle {
-                settle_samples,
-                samples_per_step,
-            } => write!(
-                f,
-                "settle_samples = {settle_samples} leaves nothing of {samples_per_step} samples per step: make it smaller"
-            ),
-            ConfigError::Current { current_na } => {
-                write!(f, "current_na = {current_na}: use 1 to {CURRENT_NA_MAX} nA")
-            }
-            ConfigError::SampleRate => write!(f, "sample_rate_hz must be positive"),
-            ConfigError::Gain => write!(f, "gain must be at least 1"),
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
 
 #[cfg(test)]
 mod tests {

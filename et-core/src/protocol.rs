@@ -240,61 +240,42 @@ impl core::fmt::Display for ProtocolKind {
 }
 
 /// Why a protocol cannot be built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ProtocolError {
     /// The electrode count is odd or outside `L_MIN..=L_MAX`.
+    #[error(
+        "electrode count {electrodes} is not supported: use an even number from {L_MIN} to {L_MAX}"
+    )]
     ElectrodeCount {
         /// The count asked for.
         electrodes: u8,
     },
     /// The drive skip puts the sink more than half way round (`drive_skip + 1 > L / 2`).
+    #[error(
+        "drive skip {drive_skip} reaches past the opposite electrode: use drive_skip + 1 <= L/2"
+    )]
     DriveSkip {
         /// The skip asked for.
         drive_skip: u8,
     },
     /// No measurement skip, more than [`MAX_MEASURE_SKIPS`], or one past half way round.
+    #[error("measure skips {:#x} are not valid: give 1 to {MAX_MEASURE_SKIPS} skips, each with skip + 1 <= L/2", .measure_skips.0)]
     MeasureSkips {
         /// The skip set asked for.
         measure_skips: SkipSet,
     },
     /// The protocol leaves no usable measurement (every pair touches a current electrode).
+    #[error("the protocol leaves no usable measurement")]
     Empty,
     /// An electrode number the muxes cannot address (`>= MUX_CHANNELS`).
+    #[error("electrode {} cannot be addressed by a {MUX_CHANNELS}:1 multiplexer", .electrode.0)]
     MuxRange {
         /// The electrode asked for.
         electrode: ElectrodeId,
     },
 }
-
-impl core::fmt::Display for ProtocolError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            ProtocolError::ElectrodeCount { electrodes } => write!(
-                f,
-                "electrode count {electrodes} is not supported: use an even number from {L_MIN} to {L_MAX}"
-            ),
-            ProtocolError::DriveSkip { drive_skip } => write!(
-                f,
-                "drive skip {drive_skip} reaches past the opposite electrode: use drive_skip + 1 <= L/2"
-            ),
-            ProtocolError::MeasureSkips { measure_skips } => write!(
-                f,
-                "measure skips {:#x} are not valid: give 1 to {MAX_MEASURE_SKIPS} skips, each with skip + 1 <= L/2",
-                measure_skips.0
-            ),
-            ProtocolError::Empty => write!(f, "the protocol leaves no usable measurement"),
-            ProtocolError::MuxRange { electrode } => write!(
-                f,
-                "electrode {} cannot be addressed by a {MUX_CHANNELS}:1 multiplexer",
-                electrode.0
-            ),
-        }
-    }
-}
-
-impl core::error::Error for ProtocolError {}
 
 /// Whether to drop measurements that repeat another one up to sign (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -69,17 +69,21 @@ pub struct ScanReport {
 }
 
 /// Why a scan failed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ScanError<E> {
     /// The configuration was refused before anything was switched.
+    #[error("scan configuration refused: {0}")]
     Config(ConfigError),
     /// The front end reported an error (given back as is).
+    #[error("front end error: {0:?}")]
     Frontend(E),
     /// The front end's [`AdcScale`] is not usable (bits, zero or step invalid).
+    #[error("the front end reported an unusable ADC scale")]
     Scale,
     /// A caller buffer is shorter than the scan needs.
+    #[error("buffer holds {given} elements, the scan needs {needed}")]
     Buffer {
         /// Elements needed.
         needed: usize,
@@ -87,6 +91,7 @@ pub enum ScanError<E> {
         given: usize,
     },
     /// More sub-sections than samples kept after t_s (`subsections == 0` is refused too).
+    #[error("{subsections} sub-sections do not fit the {kept} samples kept per step")]
     Subsections {
         /// Sub-sections asked for.
         subsections: usize,
@@ -94,25 +99,6 @@ pub enum ScanError<E> {
         kept: usize,
     },
 }
-
-impl<E: core::fmt::Debug> core::fmt::Display for ScanError<E> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            ScanError::Config(e) => write!(f, "scan configuration refused: {e}"),
-            ScanError::Frontend(e) => write!(f, "front end error: {e:?}"),
-            ScanError::Scale => write!(f, "the front end reported an unusable ADC scale"),
-            ScanError::Buffer { needed, given } => {
-                write!(f, "buffer holds {given} elements, the scan needs {needed}")
-            }
-            ScanError::Subsections { subsections, kept } => write!(
-                f,
-                "{subsections} sub-sections do not fit the {kept} samples kept per step"
-            ),
-        }
-    }
-}
-
-impl<E: core::fmt::Debug> core::error::Error for ScanError<E> {}
 
 /// A configured scan: the validated [`ScanConfig`], its protocol tables and the front end's
 /// ADC scale. Build it with [`Scanner::new`] on the front end it will scan with.

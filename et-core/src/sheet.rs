@@ -98,12 +98,14 @@ fn default_rs() -> f64 {
 }
 
 /// Why a sheet's description is not usable.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SheetError {
     /// The outline is not valid.
+    #[error("sheet.shape: {0}")]
     Shape(ShapeError),
     /// A field is out of range.
+    #[error("{field}: {why}")]
     Field {
         /// The field's name, as in a scene file.
         field: &'static str,
@@ -111,17 +113,6 @@ pub enum SheetError {
         why: String,
     },
 }
-
-impl core::fmt::Display for SheetError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            SheetError::Shape(e) => write!(f, "sheet.shape: {e}"),
-            SheetError::Field { field, why } => write!(f, "{field}: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for SheetError {}
 
 impl Sheet {
     /// A flat `width` x `height` m rectangle of the default fabric (30 kohm/sq) with

@@ -5,35 +5,26 @@
 //! i of frame f). Sums are accumulated in f64.
 
 /// Why a statistic could not be computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum StatsError {
     /// `k` is 0, `frames.len()` is not a multiple of `k`, or two frames differ in length.
+    #[error("frames do not have a consistent length")]
     Shape,
     /// Fewer frames than the statistic needs (2 for a variance).
+    #[error("{frames} frame(s): need at least 2")]
     TooFewFrames {
         /// Frames given.
         frames: usize,
     },
     /// A value is NaN or infinite.
+    #[error("a voltage is NaN or infinite")]
     NonFinite,
     /// No channel had both signal and noise, so no SNR is defined.
+    #[error("no channel has both signal and noise")]
     NoChannel,
 }
-
-impl core::fmt::Display for StatsError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            StatsError::Shape => write!(f, "frames do not have a consistent length"),
-            StatsError::TooFewFrames { frames } => write!(f, "{frames} frame(s): need at least 2"),
-            StatsError::NonFinite => write!(f, "a voltage is NaN or infinite"),
-            StatsError::NoChannel => write!(f, "no channel has both signal and noise"),
-        }
-    }
-}
-
-impl core::error::Error for StatsError {}
 
 /// Signal-to-noise ratio over repeated frames [3.1].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -295,46 +295,35 @@ pub enum Uplink {
 }
 
 /// Why a packet could not be encoded or decoded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum WireError {
     /// The output buffer is too small for the packet.
+    #[error("output buffer too small for the packet")]
     BufferFull,
     /// The packet is not valid COBS.
+    #[error("packet is not valid COBS")]
     Cobs,
     /// Shorter than version + CRC.
+    #[error("packet too short")]
     Short,
     /// The CRC does not match: the packet was damaged.
+    #[error("CRC mismatch (damaged packet)")]
     Crc,
     /// A version this reader does not understand.
+    #[error("wire version {got}, this build speaks {WIRE_VERSION}")]
     Version {
         /// The version byte received.
         got: u8,
     },
     /// The CRC matched but the body is not a valid message.
+    #[error("CRC ok but the body is not a valid message")]
     Body,
     /// The packet grew past the reader's buffer before its delimiter; it was dropped.
+    #[error("packet longer than the receive buffer")]
     Overflow,
 }
-
-impl core::fmt::Display for WireError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            WireError::BufferFull => write!(f, "output buffer too small for the packet"),
-            WireError::Cobs => write!(f, "packet is not valid COBS"),
-            WireError::Short => write!(f, "packet too short"),
-            WireError::Crc => write!(f, "CRC mismatch (damaged packet)"),
-            WireError::Version { got } => {
-                write!(f, "wire version {got}, this build speaks {WIRE_VERSION}")
-            }
-            WireError::Body => write!(f, "CRC ok but the body is not a valid message"),
-            WireError::Overflow => write!(f, "packet longer than the receive buffer"),
-        }
-    }
-}
-
-impl core::error::Error for WireError {}
 
 /// Largest postcard encoding of a [`Frame`]'s fields other than its voltages, with the
 /// [`Uplink`] tag and the voltage count (varints at their widest).

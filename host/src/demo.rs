@@ -18,7 +18,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow};
 use et_core::ScanConfig;
 use et_core::model::{ModelKind, Precision};
 use et_core::protocol::{Protocol, ProtocolKind};
@@ -39,6 +38,7 @@ use et_recon::select::{Settings, significant};
 use et_recon::{Data, GaussNewton, metrics, regions};
 use et_sim::still::{scene_frames_on, simulated_sheet};
 
+mod error;
 mod imaging;
 mod learning;
 mod report;
@@ -50,6 +50,8 @@ use report::{Section, machine, summary_table, today_utc};
 use sweep::{SweepKey, sweep};
 pub use sweep::{SweepRow, mesh_sweep};
 
+pub use error::DemoError;
+use error::{Result, Staged as _, io};
 pub use et_sim::scenes::{DEFAULT_SCENE, REFERENCE_SCENES};
 
 /// What to run.
@@ -168,22 +170,21 @@ pub fn run(options: &Options) -> Result<Report> {
     for stale in ["index.md", "summary.json"] {
         match std::fs::remove_file(out.join(stale)) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(e).with_context(|| format!("removing {}", out.join(stale).display()));
+                return Err(io(out.join(stale))(e));
             }
             _ => {}
         }
     }
     for dir in ["", "learning", "imaging", "sweep"] {
-        std::fs::create_dir_all(out.join(dir))
-            .with_context(|| format!("creating {}", out.join(dir).display()))?;
+        std::fs::create_dir_all(out.join(dir)).map_err(io(out.join(dir)))?;
     }
     let steps = Steps {
         show: options.progress,
         started,
     };
-    let learning = learning(out, &sizes, &steps).context("touch classification")?;
-    let imaging = imaging(out, &sizes, &steps).context("imaging the reference scenarios")?;
-    let sweep = sweep(out, &sizes, &steps).context("the speed/accuracy sweep")?;
+    let learning = learning(out, &sizes, &steps).stage("touch classification")?;
+    let imaging = imaging(out, &sizes, &steps).stage("imaging the reference scenarios")?;
+    let sweep = sweep(out, &sizes, &steps).stage("the speed/accuracy sweep")?;
     let seconds = started.elapsed().as_secs_f64();
     let machine = machine();
     let summary = serde_json::to_value(Summary {
@@ -200,9 +201,8 @@ pub fn run(options: &Options) -> Result<Report> {
     let json_path = out.join("summary.json");
     let json = serde_json::to_string_pretty(&summary)?;
     crate::output::write(&json_path, |partial| {
-        anyhow::Ok(std::fs::write(partial, &json)?)
-    })
-    .with_context(|| format!("writing {}", json_path.display()))?;
+        std::fs::write(partial, &json).map_err(io(&json_path))
+    })?;
     let mut page = String::new();
     let _ = writeln!(page, "# et demo report\n");
     let _ = writeln!(
@@ -231,14 +231,13 @@ pub fn run(options: &Options) -> Result<Report> {
     let index = out.join("index.md");
     // Last, and whole: an index.md exists only beside a complete report.
     crate::output::write(&index, |partial| {
-        anyhow::Ok(std::fs::write(partial, &page)?)
-    })
-    .with_context(|| format!("writing {}", index.display()))?;
+        std::fs::write(partial, &page).map_err(io(&index))
+    })?;
     Ok(Report { index, summary })
 }
 
 fn load(scene: (&str, &str)) -> Result<Scene> {
-    Scene::parse(scene.1, scene.0).map_err(|e| anyhow!("{e}"))
+    Ok(Scene::parse(scene.1, scene.0)?)
 }
 
 // ----------------------------------------------------------------------------------------

@@ -123,9 +123,10 @@ impl Decoder {
 }
 
 /// What can go wrong on the link.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum LinkError {
     /// The port could not be opened.
+    #[error("cannot open serial port {path}: {source} (`et ports` lists the ports)")]
     Open {
         /// The port's path.
         path: String,
@@ -133,15 +134,19 @@ pub enum LinkError {
         source: serialport::Error,
     },
     /// Writing to the port failed (the cable may be out: the reader reconnects).
+    #[error("writing to the serial port: {0}")]
     Write(std::io::Error),
     /// The port is closed right now (waiting to reconnect).
+    #[error("the serial port is disconnected (waiting for it to come back)")]
     Disconnected,
     /// No reply within the timeout.
+    #[error("no answer from the device while waiting for {waiting_for}")]
     Timeout {
         /// What was waited for.
         waiting_for: String,
     },
     /// The device refused a command.
+    #[error("the device refused {command:?}: {reason:?}")]
     Refused {
         /// The command.
         command: CommandTag,
@@ -149,38 +154,9 @@ pub enum LinkError {
         reason: Refusal,
     },
     /// A message could not be encoded (a bug: commands always fit).
+    #[error("encoding a command: {0}")]
     Encode(WireError),
 }
-
-impl std::fmt::Display for LinkError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            LinkError::Open { path, source } => write!(
-                f,
-                "cannot open serial port {path}: {source} (`et ports` lists the ports)"
-            ),
-            LinkError::Write(e) => write!(f, "writing to the serial port: {e}"),
-            LinkError::Disconnected => {
-                write!(
-                    f,
-                    "the serial port is disconnected (waiting for it to come back)"
-                )
-            }
-            LinkError::Timeout { waiting_for } => {
-                write!(
-                    f,
-                    "no answer from the device while waiting for {waiting_for}"
-                )
-            }
-            LinkError::Refused { command, reason } => {
-                write!(f, "the device refused {command:?}: {reason:?}")
-            }
-            LinkError::Encode(e) => write!(f, "encoding a command: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for LinkError {}
 
 /// The serial ports this machine has (paths), for `et ports` and the viewer's list.
 ///

@@ -84,14 +84,17 @@ pub enum ProtocolChoice {
 }
 
 /// Why the live pipeline could not open a source, talk to a board or process a frame.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LiveError {
     /// The scene file could not be read, or its simulation failed.
-    Scene(SceneError),
+    #[error("{0}")]
+    Scene(#[from] SceneError),
     /// The recording could not be read.
-    Recording(recording::RecordingError),
+    #[error("{0}")]
+    Recording(#[from] recording::RecordingError),
     /// A recording made with another electrode count than the sheet it is played on.
+    #[error("{}: frames of {recorded} electrodes, the sheet has {sheet}", .path.display())]
     OtherSheet {
         /// The recording.
         path: std::path::PathBuf,
@@ -101,6 +104,7 @@ pub enum LiveError {
         sheet: u8,
     },
     /// The serial port could not be opened, or the board refused or did not answer.
+    #[error("{port}: {error}")]
     Link {
         /// The port.
         port: String,
@@ -108,14 +112,19 @@ pub enum LiveError {
         error: LinkError,
     },
     /// Bytes that are not a model blob.
+    #[error("not a valid model blob: {0}")]
     Blob(et_core::model::ModelError),
     /// The board loaded the model but could not take V_0 for it.
+    #[error("the board verified and loaded the model, but taking V_0 failed: {0}")]
     Tare(LinkError),
     /// A recording plays the protocol it was recorded with.
+    #[error("a recording plays the protocol it was recorded with")]
     Recorded,
     /// A scan configuration the board cannot scan.
-    Config(ConfigError),
+    #[error("scan configuration: {0}")]
+    Config(#[from] ConfigError),
     /// A frame whose value count is not its protocol's K.
+    #[error("frame {seq}: {got} values, its protocol has {expected}")]
     FrameLength {
         /// The frame's sequence number.
         seq: u32,
@@ -125,77 +134,24 @@ pub enum LiveError {
         expected: usize,
     },
     /// A frame with a NaN or infinite value.
+    #[error("frame {seq}: a value is not finite")]
     NonFinite {
         /// The frame's sequence number.
         seq: u32,
     },
     /// The sheet could not be meshed or modelled, or its reconstruction set up.
-    Imaging(ImagingError),
+    #[error("{0}")]
+    Imaging(#[from] ImagingError),
     /// The one-step reconstruction matrix could not be built.
-    Recon(ReconError),
+    #[error("reconstruction: {0}")]
+    Recon(#[from] ReconError),
     /// The model file's tables are not a usable model.
-    Model(FitError),
+    #[error("model: {0}")]
+    Model(#[from] FitError),
     /// The reference frames could not be averaged.
-    Stats(stats::StatsError),
+    #[error("reference frames: {0}")]
+    Stats(#[from] stats::StatsError),
 }
-
-impl std::fmt::Display for LiveError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            LiveError::Scene(e) => write!(f, "{e}"),
-            LiveError::Recording(e) => write!(f, "{e}"),
-            LiveError::OtherSheet {
-                path,
-                recorded,
-                sheet,
-            } => write!(
-                f,
-                "{}: frames of {recorded} electrodes, the sheet has {sheet}",
-                path.display()
-            ),
-            LiveError::Link { port, error } => write!(f, "{port}: {error}"),
-            LiveError::Blob(e) => write!(f, "not a valid model blob: {e}"),
-            LiveError::Tare(e) => write!(
-                f,
-                "the board verified and loaded the model, but taking V_0 failed: {e}"
-            ),
-            LiveError::Recorded => {
-                write!(f, "a recording plays the protocol it was recorded with")
-            }
-            LiveError::Config(e) => write!(f, "scan configuration: {e}"),
-            LiveError::FrameLength { seq, got, expected } => {
-                write!(f, "frame {seq}: {got} values, its protocol has {expected}")
-            }
-            LiveError::NonFinite { seq } => write!(f, "frame {seq}: a value is not finite"),
-            LiveError::Imaging(e) => write!(f, "{e}"),
-            LiveError::Recon(e) => write!(f, "reconstruction: {e}"),
-            LiveError::Model(e) => write!(f, "model: {e}"),
-            LiveError::Stats(e) => write!(f, "reference frames: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for LiveError {}
-
-macro_rules! from_errors {
-    ($($variant:ident($ty:ty)),* $(,)?) => {
-        $(impl From<$ty> for LiveError {
-            fn from(e: $ty) -> Self {
-                LiveError::$variant(e)
-            }
-        })*
-    };
-}
-
-from_errors!(
-    Scene(SceneError),
-    Recording(recording::RecordingError),
-    Config(ConfigError),
-    Imaging(ImagingError),
-    Recon(ReconError),
-    Model(FitError),
-    Stats(stats::StatsError),
-);
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -6,10 +6,11 @@
 use std::path::{Path, PathBuf};
 
 /// Why an output was refused or could not be written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum OutputError {
     /// The output is one of the command's inputs.
+    #[error("{}: this is the input {}; refusing to overwrite it (write elsewhere)", .out.display(), .input.display())]
     Input {
         /// The output path as given.
         out: PathBuf,
@@ -17,11 +18,13 @@ pub enum OutputError {
         input: PathBuf,
     },
     /// The output exists and replacing was not asked for.
+    #[error("{} already exists; refusing to overwrite it (--force replaces it)", .out.display())]
     Exists {
         /// The output.
         out: PathBuf,
     },
     /// Writing or renaming failed.
+    #[error("{}: {source}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -29,27 +32,6 @@ pub enum OutputError {
         source: std::io::Error,
     },
 }
-
-impl std::fmt::Display for OutputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            OutputError::Input { out, input } => write!(
-                f,
-                "{}: this is the input {}; refusing to overwrite it (write elsewhere)",
-                out.display(),
-                input.display()
-            ),
-            OutputError::Exists { out } => write!(
-                f,
-                "{} already exists; refusing to overwrite it (--force replaces it)",
-                out.display()
-            ),
-            OutputError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-        }
-    }
-}
-
-impl std::error::Error for OutputError {}
 
 /// Whether `a` and `b` name the same existing file, however spelled (`./a`, a symlink, ...).
 fn same_file(a: &Path, b: &Path) -> bool {

@@ -15,21 +15,14 @@ pub use learning::{confusion, error_map, error_vs_distance, predicted_vs_true};
 pub use sheet::{SheetMarks, half_range, sheet_image, touches};
 
 /// Why a plot could not be written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", path.display())]
 pub struct PlotError {
     /// The file.
     pub path: std::path::PathBuf,
     /// What went wrong.
     pub message: String,
 }
-
-impl std::fmt::Display for PlotError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.path.display(), self.message)
-    }
-}
-
-impl std::error::Error for PlotError {}
 
 fn fail(path: &Path, e: impl std::fmt::Display) -> PlotError {
     PlotError {

@@ -178,10 +178,11 @@ fn volts_or_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::
 }
 
 /// Why a recording could not be written or read.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RecordingError {
     /// The file could not be created, written or read.
+    #[error("{}: {source}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -189,6 +190,7 @@ pub enum RecordingError {
         source: std::io::Error,
     },
     /// A line is not what the format says.
+    #[error("{}:{line}: {message}", path.display())]
     Line {
         /// The file.
         path: PathBuf,
@@ -198,30 +200,9 @@ pub enum RecordingError {
         message: String,
     },
     /// The file may not be written (it exists, or it is an input).
-    Output(crate::output::OutputError),
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
 }
-
-impl From<crate::output::OutputError> for RecordingError {
-    fn from(e: crate::output::OutputError) -> Self {
-        RecordingError::Output(e)
-    }
-}
-
-impl std::fmt::Display for RecordingError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RecordingError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            RecordingError::Line {
-                path,
-                line,
-                message,
-            } => write!(f, "{}:{line}: {message}", path.display()),
-            RecordingError::Output(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for RecordingError {}
 
 /// Writes a recording line by line, flushing each line.
 #[derive(Debug)]

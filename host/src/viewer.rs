@@ -479,14 +479,17 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
 }
 
 /// Why the viewer could not start.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ViewerError {
     /// The scene, recording or port could not be opened, or the sheet not modelled.
-    Live(LiveError),
+    #[error("{0}")]
+    Live(#[from] LiveError),
     /// The model file could not be read.
-    ModelFile(ModelFileError),
+    #[error("{0}")]
+    ModelFile(#[from] ModelFileError),
     /// The model file's tables are not a usable model.
+    #[error("{}: {error}", .path.display())]
     Model {
         /// The file.
         path: PathBuf,
@@ -494,35 +497,8 @@ pub enum ViewerError {
         error: et_learn::fit::FitError,
     },
     /// The window could not be created.
+    #[error("cannot open the window: {0} (is there a display? try DISPLAY=:0 or xvfb-run)")]
     Window(String),
-}
-
-impl std::fmt::Display for ViewerError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ViewerError::Live(e) => write!(f, "{e}"),
-            ViewerError::ModelFile(e) => write!(f, "{e}"),
-            ViewerError::Model { path, error } => write!(f, "{}: {error}", path.display()),
-            ViewerError::Window(e) => write!(
-                f,
-                "cannot open the window: {e} (is there a display? try DISPLAY=:0 or xvfb-run)"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for ViewerError {}
-
-impl From<LiveError> for ViewerError {
-    fn from(e: LiveError) -> Self {
-        Self::Live(e)
-    }
-}
-
-impl From<ModelFileError> for ViewerError {
-    fn from(e: ModelFileError) -> Self {
-        Self::ModelFile(e)
-    }
 }
 
 #[cfg(test)]

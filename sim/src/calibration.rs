@@ -37,45 +37,18 @@ pub fn config(current_na: u32) -> ScanConfig {
 }
 
 /// Why a measurement failed (a spec or configuration the simulator refuses).
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CalibrationError {
     /// The sheet or the front end's spec.
-    Sheet(SheetError),
+    #[error("{0}")]
+    Sheet(#[from] SheetError),
     /// The simulated front end.
-    Sim(SimError),
+    #[error("{0}")]
+    Sim(#[from] SimError),
     /// The statistics (too few frames, non-finite values).
-    Stats(et_core::stats::StatsError),
-}
-
-impl std::fmt::Display for CalibrationError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CalibrationError::Sheet(e) => write!(f, "{e}"),
-            CalibrationError::Sim(e) => write!(f, "{e}"),
-            CalibrationError::Stats(e) => write!(f, "statistics: {e:?}"),
-        }
-    }
-}
-
-impl std::error::Error for CalibrationError {}
-
-impl From<SheetError> for CalibrationError {
-    fn from(e: SheetError) -> Self {
-        Self::Sheet(e)
-    }
-}
-
-impl From<SimError> for CalibrationError {
-    fn from(e: SimError) -> Self {
-        Self::Sim(e)
-    }
-}
-
-impl From<et_core::stats::StatsError> for CalibrationError {
-    fn from(e: et_core::stats::StatsError) -> Self {
-        Self::Stats(e)
-    }
+    #[error("statistics: {0:?}")]
+    Stats(#[from] et_core::stats::StatsError),
 }
 
 /// K, the frame length of `config`.

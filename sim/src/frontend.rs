@@ -250,28 +250,19 @@ impl FrontendSpec {
 }
 
 /// What can go wrong in the simulated front end.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SimError {
     /// `acquire` before `configure` and `select`.
+    #[error("acquire called before configure/select")]
     NotSelected,
     /// An electrode the sheet does not have.
+    #[error("electrode {0} does not exist on this sheet")]
     Electrode(u8),
     /// The configuration asks for something the front end cannot do.
+    #[error("configuration: {0}")]
     Config(String),
 }
-
-impl std::fmt::Display for SimError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SimError::NotSelected => write!(f, "acquire called before configure/select"),
-            SimError::Electrode(e) => write!(f, "electrode {e} does not exist on this sheet"),
-            SimError::Config(why) => write!(f, "configuration: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for SimError {}
 
 /// The simulated sensor: a sheet in some touch state behind the acquisition chain.
 #[derive(Debug)]

@@ -166,12 +166,16 @@ pub struct Contact {
 }
 
 /// Why a network cannot be built or solved.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum NetworkError {
     /// Fewer than 2 electrodes, or an electrode with no contact.
+    #[error("electrodes: {0}")]
     Electrodes(String),
     /// Two electrodes share a node at this resolution.
+    #[error(
+        "electrodes {a} and {b} touch the same node at this resolution: refine the grid or narrow them"
+    )]
     Overlap {
         /// First electrode.
         a: usize,
@@ -180,23 +184,9 @@ pub enum NetworkError {
     },
     /// A conductance is not finite and non-negative, or the network is disconnected
     /// (some node has no path to an electrode).
+    #[error("the network cannot be solved: {0}")]
     Singular(String),
 }
-
-impl std::fmt::Display for NetworkError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            NetworkError::Electrodes(why) => write!(f, "electrodes: {why}"),
-            NetworkError::Overlap { a, b } => write!(
-                f,
-                "electrodes {a} and {b} touch the same node at this resolution: refine the grid or narrow them"
-            ),
-            NetworkError::Singular(why) => write!(f, "the network cannot be solved: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for NetworkError {}
 
 /// Potentials of every electrode per unit current at every electrode: V = Z I, in ohms, with
 /// electrode 0 grounded (row and column 0 are zero). Symmetric (reciprocity).

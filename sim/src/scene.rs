@@ -208,10 +208,11 @@ fn default_seed() -> u64 {
 }
 
 /// Why a scene cannot be used.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SceneError {
     /// The file could not be read.
+    #[error("{path}: {source}")]
     Io {
         /// The file.
         path: String,
@@ -220,6 +221,7 @@ pub enum SceneError {
     },
     /// The file is not valid TOML or does not fit the scene format (the message names the
     /// key and the line).
+    #[error("{path}: {message}")]
     Parse {
         /// The file.
         path: String,
@@ -227,6 +229,7 @@ pub enum SceneError {
         message: String,
     },
     /// A value is out of range.
+    #[error("{path}: {error}")]
     Invalid {
         /// The file.
         path: String,
@@ -234,17 +237,22 @@ pub enum SceneError {
         error: FieldError,
     },
     /// The sheet could not be built or solved (e.g. electrodes overlapping at the resolution).
-    Sheet(SheetError),
+    #[error("simulation: {0}")]
+    Sheet(#[from] SheetError),
     /// The simulated acquisition chain refused a request.
-    Sim(SimError),
+    #[error("simulation: {0}")]
+    Sim(#[from] SimError),
     /// The scan engine refused the configuration or a scan failed.
-    Scan(ScanError<SimError>),
+    #[error("simulation: scan: {0}")]
+    Scan(#[from] ScanError<SimError>),
     /// A frame could not be encoded.
-    Wire(WireError),
+    #[error("simulation: frame: {0}")]
+    Wire(#[from] WireError),
 }
 
 /// A scene value out of range: the field as written in a scene file, and why.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {reason}")]
 pub struct FieldError {
     /// The field, e.g. `scan.current_ua` or `touch[2].radius`.
     pub field: String,
@@ -261,14 +269,6 @@ impl FieldError {
     }
 }
 
-impl std::fmt::Display for FieldError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.field, self.reason)
-    }
-}
-
-impl std::error::Error for FieldError {}
-
 impl From<SheetError> for FieldError {
     fn from(e: SheetError) -> Self {
         match e {
@@ -282,46 +282,6 @@ impl From<SheetError> for FieldError {
         }
     }
 }
-
-impl std::fmt::Display for SceneError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SceneError::Io { path, source } => write!(f, "{path}: {source}"),
-            SceneError::Parse { path, message } => write!(f, "{path}: {message}"),
-            SceneError::Invalid { path, error } => write!(f, "{path}: {error}"),
-            SceneError::Sheet(e) => write!(f, "simulation: {e}"),
-            SceneError::Sim(e) => write!(f, "simulation: {e}"),
-            SceneError::Scan(e) => write!(f, "simulation: scan: {e}"),
-            SceneError::Wire(e) => write!(f, "simulation: frame: {e}"),
-        }
-    }
-}
-
-impl From<SheetError> for SceneError {
-    fn from(e: SheetError) -> Self {
-        Self::Sheet(e)
-    }
-}
-
-impl From<SimError> for SceneError {
-    fn from(e: SimError) -> Self {
-        Self::Sim(e)
-    }
-}
-
-impl From<ScanError<SimError>> for SceneError {
-    fn from(e: ScanError<SimError>) -> Self {
-        Self::Scan(e)
-    }
-}
-
-impl From<WireError> for SceneError {
-    fn from(e: WireError) -> Self {
-        Self::Wire(e)
-    }
-}
-
-impl std::error::Error for SceneError {}
 
 /// The deepest nesting of `[` and `{` a scene may have (a scene needs 3).
 pub const MAX_NESTING: usize = 32;

@@ -13,45 +13,18 @@ use crate::sheet::{SheetError, SimulatedSheet};
 use crate::touch::Touch;
 
 /// Why a still scene's frames could not be made.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum StillError {
     /// The sheet could not be built.
-    Sheet(SheetError),
+    #[error("simulated sheet: {0}")]
+    Sheet(#[from] SheetError),
     /// The front end refused the configuration.
-    Frontend(SimError),
+    #[error("simulated front end: {0}")]
+    Frontend(#[from] SimError),
     /// The reference frames could not be averaged (non-finite values).
-    Stats(StatsError),
-}
-
-impl std::fmt::Display for StillError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            StillError::Sheet(e) => write!(f, "simulated sheet: {e}"),
-            StillError::Frontend(e) => write!(f, "simulated front end: {e}"),
-            StillError::Stats(e) => write!(f, "reference frames: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for StillError {}
-
-impl From<SheetError> for StillError {
-    fn from(e: SheetError) -> Self {
-        Self::Sheet(e)
-    }
-}
-
-impl From<SimError> for StillError {
-    fn from(e: SimError) -> Self {
-        Self::Frontend(e)
-    }
-}
-
-impl From<StatsError> for StillError {
-    fn from(e: StatsError) -> Self {
-        Self::Stats(e)
-    }
+    #[error("reference frames: {0}")]
+    Stats(#[from] StatsError),
 }
 
 /// A touch's centre (m) and radius (m).

@@ -3,11 +3,12 @@
 use super::*;
 
 /// Why a model blob is refused.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ModelError {
     /// Shorter than a header, or not the length its dimensions imply.
+    #[error("model blob is {got} bytes, its header implies {expected}")]
     Length {
         /// Bytes the header's dimensions imply (0 if the header itself is missing).
         expected: usize,
@@ -15,19 +16,25 @@ pub enum ModelError {
         got: usize,
     },
     /// Not a model blob.
+    #[error("not a model blob (bad magic)")]
     Magic,
     /// A format version this build does not read.
+    #[error("model format version {got}, this build reads {MODEL_VERSION}")]
     Version {
         /// The version found.
         got: u16,
     },
     /// Unknown kind or precision byte, or reserved bytes not zero.
+    #[error("model header has an unknown kind, precision or reserved byte")]
     Header,
     /// Fewer than 2 classes, no feature, or more features than the frame has.
+    #[error("model needs >= 2 classes and 1..=K features")]
     Dimensions,
     /// The protocol in the header is not valid.
+    #[error("model protocol: {0}")]
     Protocol(ProtocolError),
     /// The header's frame length is not the protocol's K.
+    #[error("model says K = {got}, its protocol has K = {expected}")]
     FrameLength {
         /// K of the protocol.
         expected: u16,
@@ -35,86 +42,47 @@ pub enum ModelError {
         got: u16,
     },
     /// The CRC does not match: the blob is damaged.
+    #[error("model blob CRC mismatch (damaged)")]
     Checksum,
     /// A feature index points past the frame.
+    #[error("feature {feature} indexes past the frame")]
     FeatureIndex {
         /// Which feature.
         feature: u16,
     },
     /// A stored value is NaN or infinite.
+    #[error("model holds a NaN or infinite value")]
     NonFinite,
     /// A feature's scale is not positive.
+    #[error("feature {feature} has a non-positive scale")]
     Scale {
         /// Which feature.
         feature: u16,
     },
     /// A Cholesky factor has a diagonal entry that is not positive: the covariance is singular.
+    #[error("class {class} has a singular covariance")]
     Singular {
         /// Which class.
         class: u16,
     },
     /// A class covariance is too ill-conditioned for f32 evaluation ([`MIN_PIVOT_RATIO`]).
+    #[error("class {class} covariance is too ill-conditioned for f32 (regularise it)")]
     IllConditioned {
         /// Which class.
         class: u16,
     },
     /// A table given to [`write_model`] has the wrong length, or the output is too short.
+    #[error("model tables have inconsistent lengths")]
     Table,
 }
 
-impl core::fmt::Display for ModelError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            ModelError::Length { expected, got } => {
-                write!(
-                    f,
-                    "model blob is {got} bytes, its header implies {expected}"
-                )
-            }
-            ModelError::Magic => write!(f, "not a model blob (bad magic)"),
-            ModelError::Version { got } => {
-                write!(
-                    f,
-                    "model format version {got}, this build reads {MODEL_VERSION}"
-                )
-            }
-            ModelError::Header => write!(
-                f,
-                "model header has an unknown kind, precision or reserved byte"
-            ),
-            ModelError::Dimensions => write!(f, "model needs >= 2 classes and 1..=K features"),
-            ModelError::Protocol(e) => write!(f, "model protocol: {e}"),
-            ModelError::FrameLength { expected, got } => {
-                write!(f, "model says K = {got}, its protocol has K = {expected}")
-            }
-            ModelError::Checksum => write!(f, "model blob CRC mismatch (damaged)"),
-            ModelError::FeatureIndex { feature } => {
-                write!(f, "feature {feature} indexes past the frame")
-            }
-            ModelError::NonFinite => write!(f, "model holds a NaN or infinite value"),
-            ModelError::Scale { feature } => {
-                write!(f, "feature {feature} has a non-positive scale")
-            }
-            ModelError::Singular { class } => write!(f, "class {class} has a singular covariance"),
-            ModelError::IllConditioned { class } => {
-                write!(
-                    f,
-                    "class {class} covariance is too ill-conditioned for f32 (regularise it)"
-                )
-            }
-            ModelError::Table => write!(f, "model tables have inconsistent lengths"),
-        }
-    }
-}
-
-impl core::error::Error for ModelError {}
-
 /// Why a frame could not be classified.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum EvalError {
     /// The frame is not as long as the model's K.
+    #[error("frame has {got} values, the model expects {expected}")]
     FrameLength {
         /// The model's K.
         expected: usize,
@@ -122,6 +90,7 @@ pub enum EvalError {
         got: usize,
     },
     /// Scratch shorter than 2p.
+    #[error("scratch of {given}, need {needed}")]
     Scratch {
         /// Needed.
         needed: usize,
@@ -129,26 +98,10 @@ pub enum EvalError {
         given: usize,
     },
     /// A used voltage is NaN or infinite, or a discriminant overflowed.
+    #[error("non-finite voltage or discriminant")]
     NonFinite,
     /// A referenced model needs the untouched frame V_0 (K values) and got none or a frame
     /// of the wrong length.
+    #[error("the model is referenced: it needs the untouched frame (K values)")]
     Untouched,
 }
-
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            EvalError::FrameLength { expected, got } => {
-                write!(f, "frame has {got} values, the model expects {expected}")
-            }
-            EvalError::Scratch { needed, given } => write!(f, "scratch of {given}, need {needed}"),
-            EvalError::NonFinite => write!(f, "non-finite voltage or discriminant"),
-            EvalError::Untouched => write!(
-                f,
-                "the model is referenced: it needs the untouched frame (K values)"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for EvalError {}

@@ -27,10 +27,11 @@ pub enum Shape {
 }
 
 /// Why a shape is not usable.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ShapeError {
     /// A size is not finite and positive.
+    #[error("{field} = {value}: must be a positive length in metres")]
     Size {
         /// Which field.
         field: &'static str,
@@ -38,21 +39,9 @@ pub enum ShapeError {
         value: f64,
     },
     /// A polygon needs at least 3 vertices, all finite, and a non-zero area.
+    #[error("polygon: {0}")]
     Polygon(&'static str),
 }
-
-impl std::fmt::Display for ShapeError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ShapeError::Size { field, value } => {
-                write!(f, "{field} = {value}: must be a positive length in metres")
-            }
-            ShapeError::Polygon(why) => write!(f, "polygon: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for ShapeError {}
 
 impl Shape {
     /// Checks sizes and polygon sanity.

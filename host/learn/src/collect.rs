@@ -175,72 +175,39 @@ impl Plan {
 }
 
 /// Why collection failed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum CollectError {
     /// The scan configuration is not valid for the sheet.
-    Config(et_core::config::ConfigError),
+    #[error("scan configuration: {0}")]
+    Config(#[from] et_core::config::ConfigError),
     /// The simulated sheet could not be built or pressed.
-    Sheet(SheetError),
+    #[error("{0}")]
+    Sheet(#[from] SheetError),
     /// A scan failed.
-    Scan(ScanError<SimError>),
+    #[error("scan: {0}")]
+    Scan(#[from] ScanError<SimError>),
     /// The simulated front end refused a request.
+    #[error("simulated front end: {0}")]
     Sim(SimError),
     /// The untouched frames could not be averaged into V_0.
-    Stats(et_core::stats::StatsError),
+    #[error("untouched frames: {0}")]
+    Stats(#[from] et_core::stats::StatsError),
     /// A press without touches.
+    #[error("press {label} has no touches")]
     EmptyPress {
         /// Its label.
         label: u16,
     },
     /// A built-in scene could not be read, or its data referenced (the reason).
+    #[error("scene: {0}")]
     Scene(String),
     /// No visit was asked for.
+    #[error("no visit to collect: ask for at least one")]
     NoVisits,
     /// The visits' datasets could not be joined.
+    #[error("joining the visits: {0}")]
     Data(crate::dataset::DataError),
-}
-
-impl std::fmt::Display for CollectError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CollectError::Config(e) => write!(f, "scan configuration: {e}"),
-            CollectError::Sheet(e) => write!(f, "{e}"),
-            CollectError::Scan(e) => write!(f, "scan: {e}"),
-            CollectError::Sim(e) => write!(f, "simulated front end: {e}"),
-            CollectError::Stats(e) => write!(f, "untouched frames: {e}"),
-            CollectError::EmptyPress { label } => write!(f, "press {label} has no touches"),
-            CollectError::Scene(m) => write!(f, "scene: {m}"),
-            CollectError::NoVisits => write!(f, "no visit to collect: ask for at least one"),
-            CollectError::Data(e) => write!(f, "joining the visits: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for CollectError {}
-
-impl From<et_core::config::ConfigError> for CollectError {
-    fn from(e: et_core::config::ConfigError) -> Self {
-        Self::Config(e)
-    }
-}
-
-impl From<SheetError> for CollectError {
-    fn from(e: SheetError) -> Self {
-        Self::Sheet(e)
-    }
-}
-
-impl From<ScanError<SimError>> for CollectError {
-    fn from(e: ScanError<SimError>) -> Self {
-        Self::Scan(e)
-    }
-}
-
-impl From<et_core::stats::StatsError> for CollectError {
-    fn from(e: et_core::stats::StatsError) -> Self {
-        Self::Stats(e)
-    }
 }
 
 /// One press of the sheet: its label and its touches (the first touch's position and

@@ -141,10 +141,13 @@ impl Dataset {
 }
 
 /// Why a dataset cannot give what was asked of it.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum DataError {
     /// Referenced features (V_m - V_0) need an untouched frame V_0 per visit.
+    #[error(
+        "referenced features need an untouched frame per visit: {visits} visits, {untouched} untouched frames"
+    )]
     NoUntouched {
         /// Visits in the dataset.
         visits: usize,
@@ -152,6 +155,7 @@ pub enum DataError {
         untouched: usize,
     },
     /// Two datasets to be joined hold different features.
+    #[error("datasets with different features ({this} and {other} frame values)")]
     DifferentFeatures {
         /// Features of the set appended to.
         this: usize,
@@ -159,6 +163,7 @@ pub enum DataError {
         other: usize,
     },
     /// The dataset lacks frame values a model uses.
+    #[error("it lacks frame values the model uses (its {dataset} features vs the model's {model})")]
     MissingFeatures {
         /// Features in the dataset.
         dataset: usize,
@@ -166,6 +171,7 @@ pub enum DataError {
         model: usize,
     },
     /// A feature count to keep of 0 or more than there are.
+    #[error("keep 1 to {available} features, not {keep}")]
     Keep {
         /// Asked for.
         keep: usize,
@@ -174,35 +180,12 @@ pub enum DataError {
     },
 }
 
-impl std::fmt::Display for DataError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            DataError::NoUntouched { visits, untouched } => write!(
-                f,
-                "referenced features need an untouched frame per visit: {visits} visits, {untouched} untouched frames"
-            ),
-            DataError::DifferentFeatures { this, other } => write!(
-                f,
-                "datasets with different features ({this} and {other} frame values)"
-            ),
-            DataError::MissingFeatures { dataset, model } => write!(
-                f,
-                "it lacks frame values the model uses (its {dataset} features vs the model's {model})"
-            ),
-            DataError::Keep { keep, available } => {
-                write!(f, "keep 1 to {available} features, not {keep}")
-            }
-        }
-    }
-}
-
-impl std::error::Error for DataError {}
-
 /// Why a dataset file could not be read or written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DatasetError {
     /// The file could not be read or written.
+    #[error("{}: {source}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -210,6 +193,7 @@ pub enum DatasetError {
         source: std::io::Error,
     },
     /// Something in the file is wrong.
+    #[error("{}: {message}", place(path, *line, column.as_deref()))]
     Content {
         /// The file.
         path: PathBuf,
@@ -222,30 +206,17 @@ pub enum DatasetError {
     },
 }
 
-impl std::fmt::Display for DatasetError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            DatasetError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            DatasetError::Content {
-                path,
-                line,
-                column,
-                message,
-            } => {
-                write!(f, "{}", path.display())?;
-                if *line > 0 {
-                    write!(f, ":{line}")?;
-                }
-                if let Some(c) = column {
-                    write!(f, ", column {c}")?;
-                }
-                write!(f, ": {message}")
-            }
-        }
+/// "file:line, column c" (the line left out when 0, the column when none).
+fn place(path: &Path, line: usize, column: Option<&str>) -> String {
+    let mut place = path.display().to_string();
+    if line > 0 {
+        place += &format!(":{line}");
     }
+    if let Some(c) = column {
+        place += &format!(", column {c}");
+    }
+    place
 }
-
-impl std::error::Error for DatasetError {}
 
 fn content(
     path: &Path,

@@ -43,12 +43,14 @@ impl Default for FitOptions {
 }
 
 /// Why a fit failed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FitError {
     /// No observations, a label outside 0..classes, or rows and labels of different counts.
+    #[error("training data: {0}")]
     Shape(String),
     /// A value is NaN or infinite.
+    #[error("observation {row}, feature {feature} is NaN or infinite")]
     NonFinite {
         /// Row of the observation.
         row: usize,
@@ -56,46 +58,32 @@ pub enum FitError {
         feature: usize,
     },
     /// A class has no observation.
+    #[error("class {class} has no observation")]
     EmptyClass {
         /// The class.
         class: u16,
     },
     /// A covariance is not positive definite: too few observations, constant or duplicated
     /// features. Use shrinkage (FitOptions::shrinkage > 0).
+    #[error(
+        "class {class}: covariance not positive definite (too few observations or constant/duplicated features); fit with shrinkage"
+    )]
     NotPositiveDefinite {
         /// The class (LDA: 0).
         class: u16,
     },
     /// Shrinkage outside [0, 1].
+    #[error("shrinkage {0} is not in [0, 1]")]
     Shrinkage(f64),
     /// The blob could not be written.
+    #[error("model export: {0}")]
     Export(String),
     /// The tables fail the checks the board makes on a model (et-core's `Model::parse` on
     /// the f32 blob: a value not finite in f32, a scale not positive, a singular or
     /// ill-conditioned class covariance, a feature outside the frame).
+    #[error("not a usable model: {0}")]
     Invalid(et_core::model::ModelError),
 }
-
-impl std::fmt::Display for FitError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            FitError::Shape(why) => write!(f, "training data: {why}"),
-            FitError::NonFinite { row, feature } => {
-                write!(f, "observation {row}, feature {feature} is NaN or infinite")
-            }
-            FitError::EmptyClass { class } => write!(f, "class {class} has no observation"),
-            FitError::NotPositiveDefinite { class } => write!(
-                f,
-                "class {class}: covariance not positive definite (too few observations or constant/duplicated features); fit with shrinkage"
-            ),
-            FitError::Shrinkage(l) => write!(f, "shrinkage {l} is not in [0, 1]"),
-            FitError::Export(why) => write!(f, "model export: {why}"),
-            FitError::Invalid(e) => write!(f, "not a usable model: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for FitError {}
 
 /// Per-feature mean and standard deviation of the rows of `x` (n x p), the z-space every
 /// model here works in. A constant feature (a dead electrode) keeps unit scale rather than

@@ -288,10 +288,11 @@ pub fn fitted_from_records(
 }
 
 /// Why a model file could not be read or written.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ModelFileError {
     /// The file could not be read or written.
+    #[error("{}: {source}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -299,6 +300,7 @@ pub enum ModelFileError {
         source: std::io::Error,
     },
     /// Not JSON, or a field missing or of the wrong type (the message names it and the line).
+    #[error("{}: {source}", .path.display())]
     Json {
         /// The file.
         path: PathBuf,
@@ -306,11 +308,13 @@ pub enum ModelFileError {
         source: serde_json::Error,
     },
     /// JSON, but not `"format": "et-model"` of version 1 or 2.
+    #[error("{}: not an et-model file of version 1 or 2", .path.display())]
     Format {
         /// The file.
         path: PathBuf,
     },
     /// The tables are not a usable model ([`ModelFile::validate`]).
+    #[error("{}: {error}", .path.display())]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -318,22 +322,3 @@ pub enum ModelFileError {
         error: FitError,
     },
 }
-
-impl std::fmt::Display for ModelFileError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ModelFileError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            ModelFileError::Json { path, source } => write!(f, "{}: {source}", path.display()),
-            ModelFileError::Format { path } => {
-                write!(
-                    f,
-                    "{}: not an et-model file of version 1 or 2",
-                    path.display()
-                )
-            }
-            ModelFileError::Invalid { path, error } => write!(f, "{}: {error}", path.display()),
-        }
-    }
-}
-
-impl std::error::Error for ModelFileError {}

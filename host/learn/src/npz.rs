@@ -21,24 +21,14 @@
 use nalgebra::DMatrix;
 
 /// What is wrong with an archive or one of its arrays.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}{message}", array.as_ref().map(|a| format!("array '{a}': ")).unwrap_or_default())]
 pub struct NpzError {
     /// The array concerned (without `.npy`), when it is about one.
     pub array: Option<String>,
     /// What is wrong.
     pub message: String,
 }
-
-impl std::fmt::Display for NpzError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match &self.array {
-            Some(a) => write!(f, "array '{a}': {}", self.message),
-            None => f.write_str(&self.message),
-        }
-    }
-}
-
-impl std::error::Error for NpzError {}
 
 fn error(array: Option<&str>, message: impl Into<String>) -> NpzError {
     NpzError {

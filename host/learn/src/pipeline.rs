@@ -504,48 +504,27 @@ fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataErr
 }
 
 /// Why a model could not be used on a dataset; says which of the two is at fault.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum UseError {
     /// The dataset does not hold what the model needs.
-    Data(DataError),
+    #[error("data: {0}")]
+    Data(#[from] DataError),
     /// The model file's tables are not a usable model.
+    #[error("model: {0}")]
     Model(FitError),
     /// Evaluation on the dataset failed (e.g. a class the model does not know).
-    Fit(FitError),
+    #[error("{0}")]
+    Fit(#[from] FitError),
     /// The exported blob does not parse.
+    #[error("model blob: {0}")]
     Blob(et_core::model::ModelError),
     /// The chip's evaluation refused an observation.
+    #[error("observation {row}: {error}")]
     Frame {
         /// The observation (0-based row).
         row: usize,
         /// Why.
         error: et_core::model::EvalError,
     },
-}
-
-impl std::fmt::Display for UseError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            UseError::Data(e) => write!(f, "data: {e}"),
-            UseError::Model(e) => write!(f, "model: {e}"),
-            UseError::Fit(e) => write!(f, "{e}"),
-            UseError::Blob(e) => write!(f, "model blob: {e}"),
-            UseError::Frame { row, error } => write!(f, "observation {row}: {error}"),
-        }
-    }
-}
-
-impl std::error::Error for UseError {}
-
-impl From<DataError> for UseError {
-    fn from(e: DataError) -> Self {
-        Self::Data(e)
-    }
-}
-
-impl From<FitError> for UseError {
-    fn from(e: FitError) -> Self {
-        Self::Fit(e)
-    }
 }

@@ -105,36 +105,15 @@ pub struct Outcome {
 }
 
 /// Why a case could not be measured.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReferenceError {
     /// Collecting the data failed.
-    Collect(CollectError),
+    #[error("collecting: {0}")]
+    Collect(#[from] CollectError),
     /// Plain QDA could not be fitted (too few observations for the features).
-    Fit(FitError),
-}
-
-impl std::fmt::Display for ReferenceError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ReferenceError::Collect(e) => write!(f, "collecting: {e}"),
-            ReferenceError::Fit(e) => write!(f, "fitting plain QDA: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for ReferenceError {}
-
-impl From<CollectError> for ReferenceError {
-    fn from(e: CollectError) -> Self {
-        Self::Collect(e)
-    }
-}
-
-impl From<FitError> for ReferenceError {
-    fn from(e: FitError) -> Self {
-        Self::Fit(e)
-    }
+    #[error("fitting plain QDA: {0}")]
+    Fit(#[from] FitError),
 }
 
 /// Runs the procedure for `case` on a fabric of `piezo`: `plan` (its visits, scans,

@@ -33,47 +33,26 @@ use super::model_file::{ClassRecord, class_records, fitted_from_records};
 use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summarise};
 
 /// Why a table could not be used.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum TabularError {
     /// A file could not be read, or its content is wrong (names the file, line, column).
-    Dataset(DatasetError),
+    #[error("{0}")]
+    Dataset(#[from] DatasetError),
     /// A fit failed.
-    Fit(FitError),
+    #[error("{0}")]
+    Fit(#[from] FitError),
     /// The request does not fit the data (e.g. a regressor without positions).
+    #[error("{0}")]
     Usage(String),
     /// A model file is not JSON, or not an et table model.
+    #[error("{}: {message}", .path.display())]
     Model {
         /// The file.
         path: PathBuf,
         /// What is wrong.
         message: String,
     },
-}
-
-impl std::fmt::Display for TabularError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            TabularError::Dataset(e) => write!(f, "{e}"),
-            TabularError::Fit(e) => write!(f, "{e}"),
-            TabularError::Usage(m) => write!(f, "{m}"),
-            TabularError::Model { path, message } => write!(f, "{}: {message}", path.display()),
-        }
-    }
-}
-
-impl std::error::Error for TabularError {}
-
-impl From<DatasetError> for TabularError {
-    fn from(e: DatasetError) -> Self {
-        Self::Dataset(e)
-    }
-}
-
-impl From<FitError> for TabularError {
-    fn from(e: FitError) -> Self {
-        Self::Fit(e)
-    }
 }
 
 fn usage(message: impl Into<String>) -> TabularError {

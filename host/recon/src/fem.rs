@@ -79,16 +79,22 @@ impl Electrodes {
 pub const MIN_CONTACT_RATIO: f64 = 1e-6;
 
 /// Why a forward solve failed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FemError {
     /// Wrong lengths, or non-finite or non-positive conductivities or impedances.
+    #[error("forward model input: {0}")]
     Input(String),
     /// The system could not be factorised (disconnected mesh, or values so extreme that it
     /// is not numerically positive definite).
+    #[error("forward model: factorisation failed: {0}")]
     Factorisation(String),
     /// The complete model's contact resistance is too small against the sheet's
     /// ([`MIN_CONTACT_RATIO`]).
+    #[error("contact resistance {contact_ohm:e} ohm is too small for the complete electrode \
+                 model on a sheet of {sheet_ohm:e} ohm/sq (under {MIN_CONTACT_RATIO:e} of it, its \
+                 system cannot be solved accurately): give sheet.electrodes.contact_ohm >= {:e}, \
+                 or model = \"shunt\" for ideal contacts", MIN_CONTACT_RATIO * .sheet_ohm)]
     ContactTooSmall {
         /// The contact resistance, ohm.
         contact_ohm: f64,
@@ -96,28 +102,6 @@ pub enum FemError {
         sheet_ohm: f64,
     },
 }
-
-impl std::fmt::Display for FemError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            FemError::Input(why) => write!(f, "forward model input: {why}"),
-            FemError::Factorisation(why) => write!(f, "forward model: factorisation failed: {why}"),
-            FemError::ContactTooSmall {
-                contact_ohm,
-                sheet_ohm,
-            } => write!(
-                f,
-                "contact resistance {contact_ohm:e} ohm is too small for the complete electrode \
-                 model on a sheet of {sheet_ohm:e} ohm/sq (under {MIN_CONTACT_RATIO:e} of it, its \
-                 system cannot be solved accurately): give sheet.electrodes.contact_ohm >= {:e}, \
-                 or model = \"shunt\" for ideal contacts",
-                MIN_CONTACT_RATIO * sheet_ohm
-            ),
-        }
-    }
-}
-
-impl std::error::Error for FemError {}
 
 /// Potentials for several current patterns.
 #[derive(Clone, Debug)]

@@ -89,44 +89,28 @@ impl Refinement {
 }
 
 /// Why a mesh could not be made or read.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshError {
     /// A size or the sheet spec is unusable.
+    #[error("mesh: {0}")]
     Spec(String),
     /// Two electrodes overlap on the outline.
+    #[error("electrodes {electrode} and the next overlap on the outline")]
     Overlap {
         /// The first of the two.
         electrode: usize,
     },
     /// The triangulation failed (a degenerate outline).
+    #[error("triangulation failed: {0}")]
     Triangulation(String),
     /// An electrode has no boundary edge.
+    #[error("electrode {electrode} covers no boundary edge")]
     EmptyElectrode {
         /// Which.
         electrode: usize,
     },
 }
-
-impl std::fmt::Display for MeshError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            MeshError::Spec(why) => write!(f, "mesh: {why}"),
-            MeshError::Overlap { electrode } => {
-                write!(
-                    f,
-                    "electrodes {electrode} and the next overlap on the outline"
-                )
-            }
-            MeshError::Triangulation(why) => write!(f, "triangulation failed: {why}"),
-            MeshError::EmptyElectrode { electrode } => {
-                write!(f, "electrode {electrode} covers no boundary edge")
-            }
-        }
-    }
-}
-
-impl std::error::Error for MeshError {}
 
 impl Mesh {
     /// Meshes `spec`'s outline with its electrodes (width `spec.electrodes.width`).

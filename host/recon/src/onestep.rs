@@ -29,40 +29,30 @@ use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
 /// Why a reconstruction could not be set up or run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReconError {
     /// A parameter out of range (alpha not finite or <= 0, s outside [0, 1], wrong lengths).
+    #[error("reconstruction: {0}")]
     Parameter(String),
     /// The data-space system is not positive definite (a Jacobian with NaN, or all zero).
+    #[error("reconstruction: the regularised system is singular")]
     Singular,
     /// A frame holds NaN or infinite values.
+    #[error("reconstruction: a frame value is NaN or infinite")]
     NonFinite,
     /// Iterative Gauss-Newton found no step that lowers its objective at this iteration
     /// (the linearisation does not describe the data: a smaller alpha than the data bear, or
     /// a model far from the sheet).
+    #[error(
+        "iterative Gauss-Newton: no step lowers the misfit at iteration {iteration}; \
+                 try a larger alpha"
+    )]
     NoDescent {
         /// The iteration (0-based).
         iteration: usize,
     },
 }
-
-impl std::fmt::Display for ReconError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ReconError::Parameter(why) => write!(f, "reconstruction: {why}"),
-            ReconError::Singular => write!(f, "reconstruction: the regularised system is singular"),
-            ReconError::NonFinite => write!(f, "reconstruction: a frame value is NaN or infinite"),
-            ReconError::NoDescent { iteration } => write!(
-                f,
-                "iterative Gauss-Newton: no step lowers the misfit at iteration {iteration}; \
-                 try a larger alpha"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for ReconError {}
 
 /// The data-space quantities of one (Jacobian, NOSER exponent s), computed once and shared by
 /// alpha's automatic choice ([`DataSpace::gcv`]) and the reconstruction matrix

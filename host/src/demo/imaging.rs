@@ -49,7 +49,10 @@ struct Decision {
     switch_to: Option<ProtocolKind>,
 }
 
-fn protocol_name<S: serde::Serializer>(k: &Option<ProtocolKind>, s: S) -> Result<S::Ok, S::Error> {
+fn protocol_name<S: serde::Serializer>(
+    k: &Option<ProtocolKind>,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
     k.map(ProtocolKind::name).serialize(s)
 }
 
@@ -83,7 +86,9 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         .collect::<Result<_>>()?;
     let sheet_spec = &scenes[0].1.sheet;
     if scenes.iter().any(|(_, s)| &s.sheet != sheet_spec) {
-        return Err(anyhow!("the reference scenes differ in their sheet"));
+        return Err(DemoError::Scenes(
+            "the reference scenes differ in their sheet",
+        ));
     }
     let bar = steps.bar(
         1 + ProtocolKind::NAMED.len() * (1 + scenes.len()),
@@ -104,7 +109,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         },
         ..et_recon::Spec::new(
             sheet_spec.physical.clone(),
-            adjacent.validate().map_err(|e| anyhow!("{e}"))?,
+            adjacent.validate()?,
             f64::from(adjacent.current_amps()),
         )
     }
@@ -130,7 +135,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             protocol: kind,
             ..base
         };
-        let protocol = config.validate().map_err(|e| anyhow!("{e}"))?;
+        let protocol = config.validate()?;
         recon.set_protocol(protocol, f64::from(config.current_amps()))?;
         bar.inc(1);
         let f = recon.threshold();

@@ -191,13 +191,13 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         let Trained::Board(board) =
             trainer.train(Examples::Dataset(Box::new(train.clone())), |_| {})?
         else {
-            return Err(anyhow!("an et dataset trains a board model"));
+            return Err(DemoError::Scenes("an et dataset trains a board model"));
         };
         let BoardModel {
             file, training: t, ..
         } = *board;
         let tested = pipeline::test(&file, &next_day)?;
-        anyhow::Ok((t, file, tested))
+        Ok::<_, DemoError>((t, file, tested))
     };
     let (qda, qda_file, qda_test) = fit(true, ModelKind::Qda, None, None)?;
     bar.inc(1);
@@ -241,8 +241,8 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         .max_by_key(|(t, _)| t.features)
         .map(|(t, file)| -> Result<_> {
             let blob = file.blob(Precision::F16)?;
-            std::fs::write(out.join("learning/model.etm"), &blob)
-                .context("writing learning/model.etm")?;
+            let etm = out.join("learning/model.etm");
+            std::fs::write(&etm, &blob).map_err(io(&etm))?;
             let r = pipeline::on_chip(file, &blob, &next_day)?;
             Ok(ChipCheck {
                 features: t.features,

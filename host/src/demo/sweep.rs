@@ -43,8 +43,7 @@ pub fn mesh_sweep(
     let protocol = Protocol::new(
         ProtocolKind::Adjacent,
         scene.sheet.physical.electrodes.count,
-    )
-    .map_err(|e| anyhow!("{e:?}"))?;
+    )?;
     let amps = 32e-6;
     let t = &scene.touches[0];
     let sheet = simulated_sheet(&scene)?;
@@ -118,7 +117,10 @@ pub fn mesh_sweep(
                 },
                 &[],
             )?;
-            let last = its.iterates.last().context("no iteration")?;
+            let last = its
+                .iterates
+                .last()
+                .ok_or(DemoError::Scenes("the iterative fit returned no iterate"))?;
             let d: Vec<f64> = last.sigma.iter().map(|v| v - imager.sigma0).collect();
             Some((pe(&imager, &d), t0.elapsed().as_secs_f64()))
         } else {

@@ -628,46 +628,31 @@ fn confusion(ui: &mut egui::Ui, c: &Confusion) {
 }
 
 /// Why the wizard cannot go on.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum WizardError {
     /// The sheet cannot be scanned with the opposite protocol.
+    #[error("the opposite protocol: {0}")]
     Config(et_core::config::ConfigError),
     /// Nothing collected yet.
+    #[error("no observations yet")]
     Empty,
     /// Even one feature per class would not fit a model slot of the board.
+    #[error("too many classes for a model slot of the board: use a smaller grid")]
     TooManyClasses,
     /// The collected set cannot give the features.
+    #[error("{0}")]
     Data(et_learn::dataset::DataError),
     /// The fit failed.
+    #[error("{0}")]
     Fit(et_learn::fit::FitError),
     /// No model trained yet.
+    #[error("train first")]
     NotTrained,
     /// The model is larger than a slot, even in f16.
+    #[error("the model needs {bytes} bytes, a slot holds {MODEL_SLOT_BYTES}: use a smaller grid")]
     TooLarge {
         /// Its size, bytes.
         bytes: usize,
     },
 }
-
-impl std::fmt::Display for WizardError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            WizardError::Config(e) => write!(f, "the opposite protocol: {e}"),
-            WizardError::Empty => write!(f, "no observations yet"),
-            WizardError::TooManyClasses => write!(
-                f,
-                "too many classes for a model slot of the board: use a smaller grid"
-            ),
-            WizardError::Data(e) => write!(f, "{e}"),
-            WizardError::Fit(e) => write!(f, "{e}"),
-            WizardError::NotTrained => write!(f, "train first"),
-            WizardError::TooLarge { bytes } => write!(
-                f,
-                "the model needs {bytes} bytes, a slot holds {MODEL_SLOT_BYTES}: use a smaller grid"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for WizardError {}

@@ -545,21 +545,36 @@ impl TableModel {
             message,
         };
         let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        Self::from_json(&text).map_err(err)
+        Self::from_json(&text).map_err(|e| err(e.to_string()))
     }
 
     /// Parses and checks a model's JSON.
     ///
     /// # Errors
-    /// What is wrong, in words.
-    pub fn from_json(text: &str) -> Result<Self, String> {
-        let m: TableModel = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    /// [`TableModelError`]: not JSON of this shape, another format, or inconsistent tables.
+    pub fn from_json(text: &str) -> Result<Self, TableModelError> {
+        let m: TableModel = serde_json::from_str(text)?;
         if m.format != "et-table-model" || m.version != 1 {
-            return Err("not an et-table-model version 1 file".into());
+            return Err(TableModelError::Format);
         }
-        m.ready()?;
+        m.ready().map_err(TableModelError::Tables)?;
         Ok(m)
     }
+}
+
+/// Why a table model's JSON is not a usable model.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TableModelError {
+    /// Not JSON, or not a table model's fields.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// Another format or version.
+    #[error("not an et-table-model version 1 file")]
+    Format,
+    /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
+    #[error("{0}")]
+    Tables(String),
 }
 
 /// Whether a JSON file is an et table model (else an et board model, `"format": "et-model"`).

@@ -307,7 +307,7 @@ fn bad_requests_are_refused_with_the_reason() {
         weights.pop();
     }
     let e = TableModel::from_json(&serde_json::to_string(&short).unwrap()).unwrap_err();
-    assert!(e.contains("weight rows"), "{e}");
+    assert!(e.to_string().contains("weight rows"), "{e}");
     assert!(!is_table_model("{\"format\": \"et-model\"}"));
     assert!(is_table_model(&serde_json::to_string(&model).unwrap()));
 }
