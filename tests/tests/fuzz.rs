@@ -346,7 +346,10 @@ fn parsers() -> Vec<Parser> {
                 "\u{feff}a,b,c,label\r\n1.5E-05,2,3,0\r\n4,5,6,1\r\n7,8,9,0\r\n\r\n".into(),
                 "x,y\n0.1,0.2\n0.3,0.4\n0.5,0.6\n".into(),
             ],
-            parse: |p| et_learn::dataset::import_csv(&p[0], Some(&p[1])).is_ok(),
+            parse: |p| {
+                et_learn::dataset::Table::import(&p[0], Some(&p[1]), et_learn::dataset::Unit::Mm)
+                    .is_ok()
+            },
         },
         Parser {
             name: "model JSON",

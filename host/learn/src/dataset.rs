@@ -24,8 +24,9 @@
 //! Python: `numpy.loadtxt(path, delimiter=",", comments="#", skiprows=...)` or the `csv`
 //! module skipping `#` lines; MATLAB: `readmatrix(path, "CommentStyle", "#")`.
 //!
-//! [`import_csv`] brings data from other sensors: any channel count, a header row or none,
-//! a UTF-8 byte-order mark, CRLF line ends; the columns named `label` (class, any text) or `x`
+//! [`Table::import`] brings data from other sensors: any channel count, a header row or none,
+//! a UTF-8 byte-order mark, CRLF line ends, quoted cells, cells separated by `,`, `;` (with
+//! decimal commas) or tabs (detected and said); the columns named `label` (class, any text) or `x`
 //! and `y` (position, and `z`, `force` or `pressure` as a third target) are targets and all
 //! others are features; targets may also come from a second file with the same rows (without
 //! a header: one column is a label, two or more are x, y and a third target, e.g. z or force;
@@ -41,7 +42,7 @@ use et_core::ScanConfig;
 use nalgebra::DMatrix;
 
 pub use file::{load, load_csv, load_npz, save, save_csv, save_npz};
-pub use import::{Imported, import_csv};
+pub use import::{Table, Unit};
 
 /// A labelled set of observations.
 #[derive(Clone, Debug)]

@@ -25,7 +25,8 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use super::cv::{self, Confusion};
-use super::dataset::{DatasetError, import_csv};
+use super::dataset::DatasetError;
+pub use super::dataset::{Table, Unit};
 use super::fastcv::cross_validate_fast;
 use super::fit::{FitError, FitOptions, Fitted, Target};
 use super::gp::{Gp, GpOptions};

@@ -410,7 +410,7 @@ fn the_procedure_on_the_simulated_sheet() {
 
 mod files {
     use super::super::dataset::Dataset;
-    use super::super::dataset::{import_csv, load, load_csv, save_csv, save_npz};
+    use super::super::dataset::{Table, Unit, load, load_csv, save_csv, save_npz};
     use super::*;
     use std::path::PathBuf;
 
@@ -648,7 +648,7 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         let dir = tmp("imp");
         let one = dir.join("one.csv");
         std::fs::write(&one, "a,b,c,label\n1,2,3,0\n4,5,6,1\n7,8,9,1\n").unwrap();
-        let imp = import_csv(&one, None).unwrap();
+        let imp = Table::import(&one, None, Unit::Mm).unwrap();
         assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
         assert_eq!(imp.labels, Some(["0", "1", "1"].map(String::from).to_vec()));
         assert_eq!(imp.feature_names, ["a", "b", "c"]);
@@ -661,14 +661,14 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         )
         .unwrap();
         std::fs::write(&targets, "x,y\n10.5,20\n11,21\n").unwrap();
-        let imp = import_csv(&feats, Some(&targets)).unwrap();
+        let imp = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
         assert_eq!(imp.x.ncols(), 7);
-        assert_eq!(imp.positions, Some(vec![[10.5, 20.0], [11.0, 21.0]]));
+        assert_eq!(imp.positions_mm, Some(vec![[10.5, 20.0], [11.0, 21.0]]));
         assert!(imp.labels.is_none());
         // Errors name the file, the line and the column.
         let err = |text: &str| {
             std::fs::write(&one, text).unwrap();
-            import_csv(&one, None).unwrap_err().to_string()
+            Table::import(&one, None, Unit::Mm).unwrap_err().to_string()
         };
         let nan = err("a,b,label\n1,2,0\n1,NaN,1\n");
         assert!(
@@ -690,19 +690,69 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         // Labels are any text, kept as written.
         std::fs::write(&one, "a,label\n1,0.5\n2,left palm\n").unwrap();
         assert_eq!(
-            import_csv(&one, None).unwrap().labels,
+            Table::import(&one, None, Unit::Mm).unwrap().labels,
             Some(["0.5", "left palm"].map(String::from).to_vec())
         );
         std::fs::write(&targets, "x,y\n1,2\n").unwrap();
-        let rows = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        let rows = Table::import(&feats, Some(&targets), Unit::Mm)
+            .unwrap_err()
+            .to_string();
         assert!(
             rows.contains("targets.csv") && rows.contains("1 rows"),
             "{rows}"
         );
-        let missing = import_csv(&dir.join("nope.csv"), None)
+        let missing = Table::import(&dir.join("nope.csv"), None, Unit::Mm)
             .unwrap_err()
             .to_string();
         assert!(missing.contains("nope.csv"), "{missing}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Spreadsheet exports: quoted cells and names, `;` with decimal commas, tabs; each
+    /// delimiter detected from the first row and said in the description.
+    #[test]
+    fn csv_import_of_quoted_semicolon_and_tab_files() {
+        let dir = tmp("delim");
+        let one = dir.join("one.csv");
+        let read = |text: &str| {
+            std::fs::write(&one, text).unwrap();
+            Table::import(&one, None, Unit::Mm).unwrap()
+        };
+        let quoted = read("\"a\",\"b, mV\",label\n\"1.5\",2,\"left, palm\"\n3,4,right\n");
+        assert_eq!(quoted.feature_names, ["a", "b, mV"]);
+        assert_eq!(quoted.x[(0, 0)], 1.5);
+        assert_eq!(
+            quoted.labels,
+            Some(["left, palm", "right"].map(String::from).to_vec())
+        );
+        assert!(
+            !quoted.description.contains("separated"),
+            "{}",
+            quoted.description
+        );
+        let semicolon = read("a;b;x;y\n1,5;2;10,25;20\n3;4,75;11;21\n");
+        assert_eq!(semicolon.x[(0, 0)], 1.5);
+        assert_eq!(semicolon.x[(1, 1)], 4.75);
+        assert_eq!(
+            semicolon.positions_mm,
+            Some(vec![[10.25, 20.0], [11.0, 21.0]])
+        );
+        assert!(
+            semicolon.description.contains("separated by ';'"),
+            "{}",
+            semicolon.description
+        );
+        let tab = read("a\tb\tlabel\n1\t2\t0\n3\t4\t1\n");
+        assert_eq!(tab.x[(1, 0)], 3.0);
+        assert!(tab.description.contains("tabs"), "{}", tab.description);
+        // A comma file keeps the comma as the delimiter: `1,5` is two cells there.
+        std::fs::write(&one, "a,label\n1,5,0\n").unwrap();
+        let e = Table::import(&one, None, Unit::Mm).unwrap_err().to_string();
+        assert!(e.contains("one.csv:2") && e.contains("3 values"), "{e}");
+        // An unclosed quote is a clear error, not a silent merge of rows.
+        std::fs::write(&one, "a,label\n\"1,0\n2,1\n").unwrap();
+        let e = Table::import(&one, None, Unit::Mm).unwrap_err().to_string();
+        assert!(e.contains("one.csv:2") && e.contains("closing quote"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -719,12 +769,12 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
             "\u{feff}0.01,0.02,0.003\r\n0.04,0.05,0.006\r\n0.07,0.08,0.009\r\n",
         )
         .unwrap();
-        let imp = import_csv(&feats, Some(&targets)).unwrap();
+        let imp = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
         // The first row is data, not a header.
         assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
         assert_eq!(imp.x[(0, 0)], 1.5e-5);
         assert_eq!(
-            imp.positions,
+            imp.positions_mm,
             Some(vec![[0.01, 0.02], [0.04, 0.05], [0.07, 0.08]])
         );
         assert!(imp.labels.is_none());
@@ -741,38 +791,48 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         // One headerless column of targets is a label, names too.
         std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
         assert_eq!(
-            import_csv(&feats, Some(&targets)).unwrap().labels,
+            Table::import(&feats, Some(&targets), Unit::Mm)
+                .unwrap()
+                .labels,
             Some(["2", "0", "1"].map(String::from).to_vec())
         );
         std::fs::write(&targets, "left\nright\nleft\n").unwrap();
         assert_eq!(
-            import_csv(&feats, Some(&targets)).unwrap().labels,
+            Table::import(&feats, Some(&targets), Unit::Mm)
+                .unwrap()
+                .labels,
             Some(["left", "right", "left"].map(String::from).to_vec())
         );
         // A headerless features file whose last column is text labels (no header taken).
         std::fs::write(&feats, "1,2,up\n3,4,down\n").unwrap();
         std::fs::write(&targets, "0.1,0.2\n0.3,0.4\n").unwrap();
-        let e = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        let e = Table::import(&feats, Some(&targets), Unit::Mm)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("f.csv:1, column 3") && e.contains("'up'"), "{e}");
         // A byte-order mark before a header's `label` leaves it the label (it was read as a
         // feature named "\u{feff}label", the target leaking into the inputs); names in any
         // case.
         std::fs::write(&feats, "\u{feff}label,a,b\n0,1,2\n1,3,4\n").unwrap();
-        let imp = import_csv(&feats, None).unwrap();
+        let imp = Table::import(&feats, None, Unit::Mm).unwrap();
         assert_eq!(imp.labels, Some(["0", "1"].map(String::from).to_vec()));
         assert_eq!(imp.feature_names, ["a", "b"]);
         std::fs::write(&feats, "a,X,Y\n1,2,3\n4,5,6\n").unwrap();
-        let imp = import_csv(&feats, None).unwrap();
-        assert_eq!(imp.positions, Some(vec![[2.0, 3.0], [5.0, 6.0]]));
+        let imp = Table::import(&feats, None, Unit::Mm).unwrap();
+        assert_eq!(imp.positions_mm, Some(vec![[2.0, 3.0], [5.0, 6.0]]));
         assert_eq!(imp.feature_names, ["a"]);
         // Without a header and without a targets file there is no target: say what to do.
         std::fs::write(&feats, "1,2\n3,4\n").unwrap();
-        let e = import_csv(&feats, None).unwrap_err().to_string();
+        let e = Table::import(&feats, None, Unit::Mm)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("header row") && e.contains("second file"), "{e}");
         // A headerless file's errors name the column by number.
         std::fs::write(&feats, "1,2\n3,inf\n").unwrap();
         std::fs::write(&targets, "0\n1\n").unwrap();
-        let e = import_csv(&feats, Some(&targets)).unwrap_err().to_string();
+        let e = Table::import(&feats, Some(&targets), Unit::Mm)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("f.csv:2, column 2") && e.contains("finite"),
             "{e}"

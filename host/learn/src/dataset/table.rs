@@ -1,4 +1,4 @@
-//! A CSV table as et reads one: names from a header row or column numbers, numbers per row,
+//! A CSV file as et reads one: names from a header row or column numbers, numbers per row,
 //! text kept for the columns that may hold class labels.
 
 // Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
@@ -10,10 +10,12 @@ use nalgebra::DMatrix;
 
 use super::{DatasetError, content};
 
-pub(super) struct Table {
+pub(super) struct Csv {
     pub(super) names: Vec<String>,
     /// Whether the names came from a header row (else they are the column numbers, 1-based).
     pub(super) header: bool,
+    /// What separated the cells.
+    pub(super) delimiter: Delimiter,
     /// (1-based line, values): every row has a value for every name (`parse_table` checks);
     /// NaN in a text column.
     pub(super) rows: Vec<(usize, Vec<f64>)>,
@@ -21,7 +23,7 @@ pub(super) struct Table {
     pub(super) text: Vec<Option<Vec<String>>>,
 }
 
-impl Table {
+impl Csv {
     /// Column `c` of every row.
     pub(super) fn column(&self, path: &Path, c: usize) -> Result<Vec<f64>, DatasetError> {
         self.rows
@@ -82,55 +84,151 @@ impl Table {
     }
 }
 
-/// Whether a cell reads as a number.
-fn is_number(cell: &str) -> bool {
-    cell.trim().parse::<f64>().is_ok()
+/// What separates the cells of a row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Delimiter {
+    /// `,` (numbers with a decimal point).
+    Comma,
+    /// `;`, as spreadsheets write CSV where the decimal mark is a comma (`1,5;2,25`).
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+impl Delimiter {
+    /// The delimiter of a file whose first row is `line`: a tab if one is outside quotes,
+    /// else `;` if one is, else `,`. (Counting would misjudge `1,5;2,5`: a `;` file with
+    /// decimal commas has more commas than semicolons.)
+    fn of(line: &str) -> Self {
+        let mut quoted = false;
+        let (mut tab, mut semicolon) = (false, false);
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                '\t' if !quoted => tab = true,
+                ';' if !quoted => semicolon = true,
+                _ => {}
+            }
+        }
+        if tab {
+            Self::Tab
+        } else if semicolon {
+            Self::Semicolon
+        } else {
+            Self::Comma
+        }
+    }
+
+    fn byte(self) -> u8 {
+        match self {
+            Self::Comma => b',',
+            Self::Semicolon => b';',
+            Self::Tab => b'\t',
+        }
+    }
+
+    /// In words, for the import's description ("" for a comma).
+    pub(super) fn said(self) -> &'static str {
+        match self {
+            Self::Comma => "",
+            Self::Semicolon => "cells separated by ';'",
+            Self::Tab => "cells separated by tabs",
+        }
+    }
+}
+
+/// `cell` as a number: `1.5`, `1.5E-05`, and where the cells are not separated by commas a
+/// decimal comma too (`1,5`).
+fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
+    cell.parse::<f64>().ok().or_else(|| {
+        let decimal_comma =
+            delimiter != Delimiter::Comma && cell.matches(',').count() == 1 && !cell.contains('.');
+        decimal_comma
+            .then(|| cell.replace(',', ".").parse::<f64>().ok())
+            .flatten()
+    })
 }
 
 /// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
-/// The first row is a header when it has a cell that is not a number, unless the second row
-/// has text in exactly the same columns (a headerless file with text labels). `text_ok(name,
-/// columns)` says which columns may hold text (kept as written besides their numbers).
+/// Cells are read by the `csv` crate: quoted cells (`"1,5"`, `"a ""b"""`), cells separated by
+/// `,`, `;` or tabs (detected from the first row, [`Delimiter::of`]), spaces around cells
+/// trimmed. The first row is a header when it has a cell that is not a number, unless the
+/// second row has text in exactly the same columns (a headerless file with text labels).
+/// `text_ok(name, columns)` says which columns may hold text (kept as written besides their
+/// numbers).
 pub(super) fn parse_table(
     path: &Path,
     lines: &[(usize, &str)],
     text_ok: &dyn Fn(&str, usize) -> bool,
-) -> Result<Table, DatasetError> {
-    let mut it = lines
+) -> Result<Csv, DatasetError> {
+    let kept: Vec<(usize, &str)> = lines
         .iter()
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .peekable();
-    let &&(hl, first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
-    let texts = |l: &str| -> Vec<bool> { l.split(',').map(|c| !is_number(c)).collect() };
+        .copied()
+        .collect();
+    let &(_, first) = kept
+        .first()
+        .ok_or_else(|| content(path, 0, None, "no rows"))?;
+    let delimiter = Delimiter::of(first);
+    let joined = kept.iter().map(|(_, l)| *l).collect::<Vec<_>>().join("\n");
+    // The file's 1-based line of the csv reader's 1-based line in `joined`.
+    let file_line = |line: u64| {
+        usize::try_from(line)
+            .ok()
+            .and_then(|l| l.checked_sub(1))
+            .and_then(|l| kept.get(l))
+            .map_or(0, |(i, _)| i + 1)
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .delimiter(delimiter.byte())
+        .from_reader(joined.as_bytes());
+    let mut records = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| file_line(p.line()));
+            content(path, line, None, e.to_string())
+        })?;
+        let line = record.position().map_or(0, |p| file_line(p.line()));
+        records.push((line, record));
+    }
+    let mut it = records.iter().peekable();
+    let &&(hl, ref first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
+    let texts = |r: &csv::StringRecord| -> Vec<bool> {
+        r.iter().map(|c| number(c, delimiter).is_none()).collect()
+    };
     let first_text = texts(first);
-    let second_text = it.clone().nth(1).map(|&(_, l)| texts(l));
+    let second_text = it.clone().nth(1).map(|(_, r)| texts(r));
     let header =
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
         it.next();
-        first.split(',').map(|s| s.trim().to_string()).collect()
+        first.iter().map(str::to_string).collect()
     } else {
-        (1..=first.split(',').count())
-            .map(|c| c.to_string())
-            .collect()
+        (1..=first.len()).map(|c| c.to_string()).collect()
     };
     if names.iter().any(String::is_empty) {
-        return Err(content(
-            path,
-            hl + 1,
-            None,
-            "empty column name in the header",
-        ));
+        return Err(content(path, hl, None, "empty column name in the header"));
     }
     let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
     let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();
-    for &(i, l) in it {
-        let cells: Vec<&str> = l.split(',').collect();
+    for (i, cells) in it {
+        let i = *i;
+        if cells.iter().any(|c| c.contains('\n')) {
+            return Err(content(
+                path,
+                i,
+                None,
+                "a quoted cell runs on over the next lines: is a closing quote (\") missing?",
+            ));
+        }
         if cells.len() != names.len() {
             return Err(content(
                 path,
-                i + 1,
+                i,
                 None,
                 format!(
                     "{} values, {} has {} columns",
@@ -145,44 +243,44 @@ pub(super) fn parse_table(
             ));
         }
         let mut values = Vec::with_capacity(cells.len());
-        for ((c, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
-            let cell = c.trim();
+        for ((cell, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
             if let Some(t) = t {
                 if cell.is_empty() {
-                    return Err(content(path, i + 1, Some(name.clone()), "empty label"));
+                    return Err(content(path, i, Some(name.clone()), "empty label"));
                 }
                 t.push(cell.to_string());
-                values.push(cell.parse::<f64>().unwrap_or(f64::NAN));
+                values.push(number(cell, delimiter).unwrap_or(f64::NAN));
                 continue;
             }
-            values.push(match cell.parse::<f64>() {
-                Ok(v) if v.is_finite() => v,
-                Ok(v) => {
+            values.push(match number(cell, delimiter) {
+                Some(v) if v.is_finite() => v,
+                Some(v) => {
                     return Err(content(
                         path,
-                        i + 1,
+                        i,
                         Some(name.clone()),
                         format!("{v} is not a finite number"),
                     ));
                 }
-                Err(_) => {
+                None => {
                     return Err(content(
                         path,
-                        i + 1,
+                        i,
                         Some(name.clone()),
                         format!("'{cell}' is not a number"),
                     ));
                 }
             });
         }
-        rows.push((i + 1, values));
+        rows.push((i, values));
     }
     if rows.is_empty() {
         return Err(content(path, 0, None, "no data rows"));
     }
-    Ok(Table {
+    Ok(Csv {
         names,
         header,
+        delimiter,
         rows,
         text,
     })

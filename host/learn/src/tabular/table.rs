@@ -6,28 +6,6 @@
 
 use super::*;
 
-/// The unit of positions in the files.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Unit {
-    /// Metres.
-    M,
-    /// Millimetres.
-    #[default]
-    Mm,
-}
-
-impl Unit {
-    /// Millimetres per unit.
-    #[must_use]
-    pub fn to_mm(self) -> f64 {
-        match self {
-            Unit::M => 1e3,
-            Unit::Mm => 1.0,
-        }
-    }
-}
-
 /// Rows `start..end` (0-based, half open) of a table; `end` None means to the last row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RowRange {
@@ -113,87 +91,7 @@ impl Labels {
     }
 }
 
-/// A table of features and targets from any sensor.
-#[derive(Clone, Debug)]
-pub struct Table {
-    /// n x p features, in the file's units (volts, board codes, ...).
-    pub x: DMatrix<f64>,
-    /// The feature columns' names.
-    pub feature_names: Vec<String>,
-    /// Class labels as written, when the data has them.
-    pub labels: Option<Vec<String>>,
-    /// Positions in mm, when the data has them.
-    pub positions_mm: Option<Vec<[f64; 2]>>,
-    /// A third target (name; values: a length in mm when named z, else as written).
-    pub third: Option<(String, Vec<f64>)>,
-    /// Which columns were taken as what, and the unit.
-    pub description: String,
-    /// The first row's index in the file (after `--rows`).
-    pub first_row: usize,
-}
-
 impl Table {
-    /// Imports `features` (and `targets`, a second file with the same rows) as
-    /// [`import_csv`] reads them; positions (and a third target named z) are in `unit`.
-    ///
-    /// # Errors
-    /// [`TabularError::Dataset`] naming the file, line and column.
-    pub fn import(
-        features: &Path,
-        targets: Option<&Path>,
-        unit: Unit,
-    ) -> Result<Self, TabularError> {
-        let imported = import_csv(features, targets)?;
-        let mm = unit.to_mm();
-        let third = imported.third.map(|(name, v)| {
-            let length = name.eq_ignore_ascii_case("z");
-            let v = if length {
-                v.iter().map(|z| z * mm).collect()
-            } else {
-                v
-            };
-            (name, v)
-        });
-        let mut description = format!(
-            "{}; positions in {}",
-            imported.description,
-            match unit {
-                Unit::M => "m (read as mm x 1000)",
-                Unit::Mm => "mm",
-            }
-        );
-        // Positions in metres read as mm span less than a millimetre: say so.
-        if let (Unit::Mm, Some(p)) = (unit, &imported.positions) {
-            let span = |i: usize| {
-                let (lo, hi) = p
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                        let v = q.get(i).copied().unwrap_or(0.0);
-                        (l.min(v), h.max(v))
-                    });
-                hi - lo
-            };
-            let widest = span(0).max(span(1));
-            if widest > 0.0 && widest < 1.0 {
-                description.push_str(&format!(
-                    "; note: the positions span only {widest:.3} mm: if they are in metres, \
-                     give --unit m"
-                ));
-            }
-        }
-        Ok(Self {
-            x: imported.x,
-            feature_names: imported.feature_names,
-            labels: imported.labels,
-            positions_mm: imported
-                .positions
-                .map(|p| p.iter().map(|q| [q[0] * mm, q[1] * mm]).collect()),
-            third,
-            description,
-            first_row: 0,
-        })
-    }
-
     /// Rows.
     #[must_use]
     pub fn rows(&self) -> usize {
