@@ -752,7 +752,10 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         // An unclosed quote is a clear error, not a silent merge of rows.
         std::fs::write(&one, "a,label\n\"1,0\n2,1\n").unwrap();
         let e = Table::import(&one, None, Unit::Mm).unwrap_err().to_string();
-        assert!(e.contains("one.csv:2") && e.contains("closing quote"), "{e}");
+        assert!(
+            e.contains("one.csv:2") && e.contains("closing quote"),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

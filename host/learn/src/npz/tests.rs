@@ -1,0 +1,78 @@
+use super::*;
+
+fn sample() -> Vec<u8> {
+    let mut w = Writer::new();
+    w.matrix(
+        "x",
+        &DMatrix::from_fn(3, 2, |i, j| i as f64 + 10.0 * j as f64),
+    );
+    w.u16s("label", &[0, 7, 65535]);
+    w.pairs("p", &[[1.5, -2.0], [3.0, 4.0]]);
+    w.f64s("empty", &[]);
+    w.text("config", "{\"a\": \"µ\"}");
+    w.finish().unwrap()
+}
+
+#[test]
+fn what_is_written_reads_back() {
+    let z = Npz::read(sample()).unwrap();
+    assert_eq!(
+        z.names().collect::<Vec<_>>(),
+        ["x", "label", "p", "empty", "config"]
+    );
+    let x = z.matrix("x").unwrap();
+    assert_eq!(x, DMatrix::from_fn(3, 2, |i, j| i as f64 + 10.0 * j as f64));
+    assert_eq!(z.whole("label").unwrap(), [0, 7, 65535]);
+    assert_eq!(
+        z.matrix("p").unwrap(),
+        DMatrix::from_row_slice(2, 2, &[1.5, -2.0, 3.0, 4.0])
+    );
+    assert!(z.vector("empty").unwrap().is_empty());
+    assert_eq!(z.text("config").unwrap(), "{\"a\": \"µ\"}");
+    assert!(z.matrix("label").is_err(), "1-d is not a matrix");
+    assert!(z.text("x").is_err());
+    assert_eq!(z.vector("nope").unwrap_err().message, "missing");
+}
+
+#[test]
+fn every_entry_is_aligned_and_its_crc_right() {
+    let bytes = sample();
+    let z = Npz::read(bytes.clone()).unwrap();
+    for (name, range) in &z.entries {
+        let npy = &bytes[range.clone()];
+        let header = u16_at(npy, 8).unwrap();
+        assert_eq!((10 + header) % 64, 0, "{name}: numpy aligns data to 64");
+        // The local header's CRC (offset 14) is of the entry's bytes.
+        let local = range.start - 30 - name.len() - 4;
+        assert_eq!(
+            u32_at(&bytes, local + 14).unwrap() as u32,
+            crc32fast::hash(npy)
+        );
+    }
+}
+
+#[test]
+fn broken_archives_are_errors_not_panics() {
+    let bytes = sample();
+    for cut in [0, 4, 30, 100, bytes.len() / 2, bytes.len() - 1] {
+        let mut b = bytes.clone();
+        b.truncate(cut);
+        if let Ok(z) = Npz::read(b) {
+            let _ = z.matrix("x");
+        }
+    }
+    for i in (0..bytes.len()).step_by(7) {
+        let mut b = bytes.clone();
+        b[i] ^= 0xA5;
+        if let Ok(z) = Npz::read(b) {
+            for n in ["x", "label", "p", "empty", "config"] {
+                let _ = (z.matrix(n), z.whole(n), z.text(n));
+            }
+        }
+    }
+    let mut b = bytes.clone();
+    let central = bytes.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
+    b[central + 10] = 8; // the first entry's method: deflate
+    let e = Npz::read(b).unwrap_err();
+    assert!(e.message.contains("savez_compressed"), "{e}");
+}

@@ -1,0 +1,213 @@
+//! What et reconstruct and et forward print and write: the stage lines, the metrics and the JSON
+//! summaries.
+
+use super::*;
+
+/// `et reconstruct`'s picture, JSON and lines: the image against the truth where known.
+pub(super) fn report(
+    args: &ReconstructArgs,
+    recon: &et_recon::Reconstructor,
+    image: &et_recon::Image,
+    truth: &[et_sim::still::Truth],
+    timings_s: Timings,
+    started: Instant,
+) -> Result<()> {
+    let grid = recon.grid();
+    let f = image.threshold;
+    let (rois, found) = (&image.regions, &image.touches);
+    // docs/method.md §7's metrics are for one object; with several, each true touch is
+    // matched to its nearest found touch instead.
+    let m = (truth.len() == 1)
+        .then(|| truth[0])
+        .map(|(centre, radius)| {
+            et_recon::metrics(
+                grid,
+                &image.pixels,
+                f,
+                &image.dv,
+                centre,
+                std::f64::consts::PI * radius * radius,
+            )
+        });
+    let matches = et_recon::match_touches(grid, found, truth);
+    crate::output::write(&args.out, |partial| {
+        et_host::plot::sheet_image(
+            recon.imager(),
+            partial,
+            &format!(
+                "{}: {} found (f = {f})",
+                args.scene
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+                et_host::plot::touches(found.len())
+            ),
+            &image.pixels,
+            &et_host::plot::SheetMarks {
+                truth: truth.to_vec(),
+                found: found.iter().map(|g| g.centroid).collect(),
+                roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
+                half_range: None,
+            },
+        )
+    })?;
+    let summary = ReconstructSummary {
+        out: &args.out,
+        triangles: recon.imager().triangles(),
+        protocol: recon.protocol().kind().to_string(),
+        method: args.method,
+        alpha: image.alpha,
+        noise_figure: image.greit.map(|g| g.0),
+        s: args.s,
+        threshold: f,
+        regions: rois.iter().map(RegionSummary::of).collect(),
+        found_touches: found.iter().map(RegionSummary::of).collect(),
+        touches_mm: truth
+            .iter()
+            .map(|(c, _)| [c[0] * 1e3, c[1] * 1e3])
+            .collect(),
+        metrics: m.as_ref(),
+        touch_matches: matches
+            .iter()
+            .map(|t| TouchMatchSummary {
+                truth_mm: [t.truth[0] * 1e3, t.truth[1] * 1e3],
+                found: t.found,
+                pe: t.pe,
+                se: t.se,
+            })
+            .collect(),
+        timings_s,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if args.json {
+        out!("{}", serde_json::to_string(&summary)?);
+        return Ok(());
+    }
+    for (i, r) in rois.iter().enumerate().take(5) {
+        eprintln!(
+            "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
+            r.centroid[0] * 1e3,
+            r.centroid[1] * 1e3,
+            r.area * 1e6
+        );
+    }
+    for (i, r) in found.iter().enumerate() {
+        eprintln!(
+            "touch {i}: at ({:.1}, {:.1}) mm{}",
+            r.centroid[0] * 1e3,
+            r.centroid[1] * 1e3,
+            r.z.map_or(String::new(), |z| format!(", {z:.1} x its noise"))
+        );
+    }
+    if let Some(m) = m {
+        eprintln!(
+            "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
+            m.pe, m.se, m.rng, m.bvc
+        );
+    }
+    if truth.len() > 1 {
+        for t in &matches {
+            eprintln!(
+                "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
+                t.truth[0] * 1e3,
+                t.truth[1] * 1e3,
+                t.found.map_or("not found".into(), |i| format!("touch {i}")),
+                t.pe,
+                t.se
+            );
+        }
+    }
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
+
+/// `et forward --json`.
+#[derive(serde::Serialize)]
+pub(super) struct ForwardSummary<'a> {
+    pub(super) triangles: usize,
+    pub(super) protocol: String,
+    pub(super) current_a: f64,
+    /// The untouched frame, V (K values).
+    pub(super) v0: &'a [f64],
+    /// The touched frame, V.
+    pub(super) v1: &'a [f64],
+    /// |V_1 - V_0|, V.
+    pub(super) bvc: f64,
+    pub(super) seconds: f64,
+}
+
+/// `et reconstruct --json`.
+#[derive(serde::Serialize)]
+pub(super) struct ReconstructSummary<'a> {
+    out: &'a std::path::Path,
+    triangles: usize,
+    protocol: String,
+    /// "gn" or "greit".
+    method: Method,
+    alpha: f64,
+    /// GREIT's noise figure of the matrix made; null for gn.
+    noise_figure: Option<f64>,
+    s: f64,
+    threshold: f64,
+    /// Every region above the threshold.
+    regions: Vec<RegionSummary>,
+    /// The touches: regions split at their saddles, above TOUCH_Z times their noise.
+    found_touches: Vec<RegionSummary>,
+    /// The scene's touches, mm.
+    touches_mm: Vec<[f64; 2]>,
+    /// docs/method.md §7's PE, SE, RNG and BVC, for a scene with one touch (null otherwise).
+    metrics: Option<&'a et_recon::metrics::Metrics>,
+    /// Each true touch and the found touch nearest it, with its own PE and SE.
+    touch_matches: Vec<TouchMatchSummary>,
+    timings_s: Timings,
+    /// Wall time of the whole command, s.
+    seconds: f64,
+}
+
+/// A true touch matched to the nearest found one.
+#[derive(serde::Serialize)]
+pub(super) struct TouchMatchSummary {
+    truth_mm: [f64; 2],
+    /// Index into `found_touches`; null when none was found.
+    found: Option<usize>,
+    pe: f64,
+    se: f64,
+}
+
+/// `et reconstruct`'s stage times, s.
+#[derive(serde::Serialize)]
+pub(super) struct Timings {
+    /// Meshing the sheet (or reading --mesh).
+    pub(super) mesh: f64,
+    /// The forward model, its factorisation, the frame and the Jacobian at the background.
+    pub(super) forward_jacobian: f64,
+    /// The reconstruction matrix: one-step Gauss-Newton's (with GCV's eigendecomposition
+    /// under --alpha auto) or GREIT's (with its noise-figure search); null with --iterations
+    /// above 1, which builds no matrix.
+    pub(super) one_step: Option<f64>,
+    /// mesh + forward_jacobian + one_step: what a live session pays once.
+    pub(super) setup: f64,
+    /// Imaging one frame: the matrix applied to dV and drawn on the pixels (with
+    /// --iterations above 1, the whole iterative fit).
+    pub(super) frame: f64,
+}
+
+/// A region of the image, in mm.
+#[derive(serde::Serialize)]
+pub(super) struct RegionSummary {
+    centroid_mm: [f64; 2],
+    area_mm2: f64,
+    peak: f64,
+    /// Its peak over its pixels' noise (a z-score); null when the noise is not known.
+    z: Option<f64>,
+}
+
+impl RegionSummary {
+    fn of(r: &et_recon::Region) -> Self {
+        Self {
+            centroid_mm: [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
+            area_mm2: r.area * 1e6,
+            peak: r.peak,
+            z: r.z,
+        }
+    }
+}

@@ -1,0 +1,248 @@
+//! The wizard's panel: the steps, the grid of cells to press, the confusion matrix, saving the
+//! model.
+
+use super::*;
+
+impl Wizard {
+    /// The wizard's window contents.
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        source: Option<&Source>,
+        sheet: &SheetSpec,
+    ) -> Vec<Request> {
+        let mut requests = Vec::new();
+        let simulated = matches!(source, Some(Source::Sim(_)));
+        match self.step.clone() {
+            Step::Setup => {
+                ui.label("A class grid over the sheet; each cell is pressed in turn, every visit.");
+                egui::Grid::new("wizard-setup").show(ui, |ui| {
+                    ui.label("rows");
+                    ui.add(egui::DragValue::new(&mut self.rows).range(1..=10));
+                    ui.end_row();
+                    ui.label("columns");
+                    ui.add(egui::DragValue::new(&mut self.cols).range(1..=10));
+                    ui.end_row();
+                    ui.label("visits");
+                    ui.add(egui::DragValue::new(&mut self.visits).range(1..=6));
+                    ui.end_row();
+                    ui.label("frames per press");
+                    ui.add(egui::DragValue::new(&mut self.frames_per_press).range(2..=100));
+                    ui.end_row();
+                });
+                if ui.button("Start").clicked() {
+                    match source.and_then(Source::config) {
+                        Some(base) => match self.start(sheet, base) {
+                            Ok(r) => requests.push(r),
+                            Err(e) => self.message = e.to_string(),
+                        },
+                        None => self.message = "no frames yet: open a source first".into(),
+                    }
+                }
+            }
+            Step::Reference { visit } => {
+                ui.label(format!(
+                    "Visit {} of {}: keep the sheet untouched (taking V_0).",
+                    visit + 1,
+                    self.visits
+                ));
+            }
+            Step::Press { visit, cell } => {
+                ui.label(format!(
+                    "Visit {} of {}: press cell {} (row {}, column {}), highlighted below.",
+                    visit + 1,
+                    self.visits,
+                    cell + 1,
+                    cell / self.cols + 1,
+                    cell % self.cols + 1
+                ));
+                self.grid(ui, Some(cell));
+                if simulated {
+                    if ui.button("Press for me (simulated)").clicked() {
+                        requests.push(self.simulated_press(cell));
+                        self.step = Step::Recording {
+                            visit,
+                            cell,
+                            frames: 0,
+                        };
+                    }
+                } else if ui.button("Record this press").clicked() {
+                    self.step = Step::Recording {
+                        visit,
+                        cell,
+                        frames: 0,
+                    };
+                }
+            }
+            Step::Recording {
+                visit,
+                cell,
+                frames,
+            } => {
+                ui.label(format!(
+                    "Visit {} of {}, cell {}: {frames} of {} frames (keep pressing, vary the pressure)",
+                    visit + 1,
+                    self.visits,
+                    cell + 1,
+                    self.frames_per_press
+                ));
+                self.grid(ui, Some(cell));
+            }
+            Step::Ready => {
+                ui.label(format!(
+                    "{} observations of {} classes over {} visits.",
+                    self.observations(),
+                    self.classes(),
+                    self.visits
+                ));
+                if ui.button("Train").clicked()
+                    && let Err(e) = self.train()
+                {
+                    self.message = e.to_string();
+                }
+            }
+            Step::Trained => {
+                if let Some(t) = &self.trained {
+                    ui.label(format!(
+                        "cross-validated accuracy: {:.1} %",
+                        100.0 * t.cv.accuracy()
+                    ));
+                    if let Some(a) = t.leave_one_visit_out {
+                        ui.label(format!("leave-one-visit-out: {:.1} %", 100.0 * a));
+                    }
+                    confusion(ui, &t.cv);
+                }
+                ui.horizontal(|ui| {
+                    if ui.button("Use this model").clicked()
+                        && let Some(t) = &self.trained
+                    {
+                        requests.push(Request::UseModel(Box::new(t.file.clone())));
+                    }
+                    let board = matches!(source, Some(Source::Port(_)));
+                    if ui
+                        .add_enabled(board, egui::Button::new("Export to the board"))
+                        .on_hover_text(
+                            "with the sheet untouched: the board takes V_0 after the upload",
+                        )
+                        .on_disabled_hover_text("open the board's serial port first")
+                        .clicked()
+                    {
+                        match self.blob() {
+                            Ok(b) => requests.push(Request::Upload(b)),
+                            Err(e) => self.message = e.to_string(),
+                        }
+                    }
+                });
+                ui.horizontal(|ui| {
+                    ui.add(egui::TextEdit::singleline(&mut self.save_path));
+                    if ui.button("Save").clicked() {
+                        self.message = self.save();
+                    }
+                });
+                if ui.button("Start again").clicked() {
+                    self.step = Step::Setup;
+                }
+            }
+        }
+        if !self.message.is_empty() {
+            ui.separator();
+            ui.label(&self.message);
+        }
+        requests
+    }
+
+    /// Saves the model (JSON) and its blob beside it; says what it did. Existing files are
+    /// replaced only on a second Save (the first one says so); each file is written whole
+    /// (aside, then renamed).
+    pub(super) fn save(&mut self) -> String {
+        let Some(t) = &self.trained else {
+            return "train first".into();
+        };
+        let path = PathBuf::from(self.save_path.trim());
+        let blob_path = path.with_extension("etm");
+        let existing: Vec<String> = [&path, &blob_path]
+            .into_iter()
+            .filter(|p| p.exists())
+            .map(|p| p.display().to_string())
+            .collect();
+        if !existing.is_empty() && self.replace_confirmed.as_ref() != Some(&path) {
+            self.replace_confirmed = Some(path);
+            return format!(
+                "{} already exist(s): Save again to replace, or change the name",
+                existing.join(" and ")
+            );
+        }
+        self.replace_confirmed = None;
+        type Failure = Box<dyn std::error::Error>;
+        let saved =
+            crate::output::write(&path, |partial| t.file.save(partial).map_err(Failure::from));
+        if let Err(e) = saved {
+            return e.to_string();
+        }
+        let blob = self.blob().map_err(Failure::from).and_then(|b| {
+            crate::output::write(&blob_path, |partial| {
+                std::fs::write(partial, b).map_err(Failure::from)
+            })
+        });
+        match blob {
+            Err(e) => format!(
+                "saved {}; blob: {}: {e}",
+                path.display(),
+                blob_path.display()
+            ),
+            Ok(()) => format!("saved {} and {}", path.display(), blob_path.display()),
+        }
+    }
+
+    /// The class grid, one cell highlighted.
+    pub(super) fn grid(&self, ui: &mut egui::Ui, lit: Option<usize>) {
+        let cell = 22.0;
+        let (rect, _) = ui.allocate_exact_size(
+            vec2(self.cols as f32 * cell, self.rows as f32 * cell),
+            Sense::hover(),
+        );
+        let painter = ui.painter_at(rect);
+        for k in 0..self.classes() {
+            let (r, c) = (k / self.cols, k % self.cols);
+            // Row 0 at the bottom, as on the sheet.
+            let min = pos2(
+                rect.min.x + c as f32 * cell,
+                rect.max.y - (r + 1) as f32 * cell,
+            );
+            let box_ = Rect::from_min_size(min, vec2(cell, cell)).shrink(1.0);
+            if lit == Some(k) {
+                painter.rect_filled(box_, 2.0, Color32::from_rgb(255, 80, 60));
+            }
+            painter.rect_stroke(
+                box_,
+                2.0,
+                Stroke::new(1.0, Color32::GRAY),
+                StrokeKind::Inside,
+            );
+        }
+    }
+}
+
+/// A confusion matrix as shades (rows: true class, columns: predicted).
+pub(super) fn confusion(ui: &mut egui::Ui, c: &Confusion) {
+    let n = c.classes;
+    let side = (240.0 / n.max(1) as f32).clamp(3.0, 24.0);
+    let (rect, _) = ui.allocate_exact_size(vec2(n as f32 * side, n as f32 * side), Sense::hover());
+    let painter = ui.painter_at(rect);
+    for (t, row) in c.counts.chunks(n.max(1)).enumerate() {
+        let total = row.iter().sum::<u32>().max(1);
+        for (p, &v) in row.iter().enumerate() {
+            let share = v as f32 / total as f32;
+            let shade = (255.0 * (1.0 - share)) as u8;
+            painter.rect_filled(
+                Rect::from_min_size(
+                    pos2(rect.min.x + p as f32 * side, rect.min.y + t as f32 * side),
+                    vec2(side, side),
+                ),
+                0.0,
+                Color32::from_rgb(shade, shade, 255),
+            );
+        }
+    }
+    ui.label("confusion: rows true class, columns predicted");
+}
