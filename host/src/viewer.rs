@@ -28,6 +28,7 @@ use crate::live::{
     SourceSpec, open_source,
 };
 use et_learn::model_file::{ModelFile, ModelFileError};
+use et_recon::PixelGrid;
 use et_recon::select::{Selector, Settings as DynamicSettings};
 
 mod controls;
@@ -35,7 +36,10 @@ mod plots;
 mod sheet_view;
 pub mod wizard;
 
-pub use sheet_view::Drawn;
+pub use controls::SourceBar;
+pub use plots::Plots;
+pub use sheet_view::{Drawn, SheetView};
+use sheet_view::{Press, Shown};
 
 use wizard::Wizard;
 
@@ -61,9 +65,10 @@ pub struct Options {
 }
 
 /// Which kind of source the top bar is set to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SourceKind {
     /// The simulator.
+    #[default]
     Sim,
     /// A recording.
     Replay,
@@ -79,13 +84,8 @@ pub struct Viewer {
     sheet: SheetSpec,
     /// The live pipeline.
     pub processor: Processor,
-    /// The source kind chosen in the top bar.
-    pub source_kind: SourceKind,
-    /// The recording path typed in the top bar.
-    pub replay_path: String,
-    /// The serial port chosen in the top bar.
-    pub port: String,
-    ports: Vec<String>,
+    /// The top bar: which source to open.
+    pub source_bar: SourceBar,
     /// The protocol chosen.
     pub protocol: ProtocolChoice,
     selector: Selector,
@@ -93,19 +93,15 @@ pub struct Viewer {
     pub last: Option<Output>,
     /// Frame rate, BVC, SNR.
     pub monitor: Monitor,
-    texture: Option<TextureHandle>,
     /// The status line (what just happened, or what went wrong).
     pub status: String,
     /// The training wizard (open or not).
     pub wizard: Wizard,
-    pressing: bool,
     shot_frames: u32,
-    /// Outline every pixel above f max (noise specks too), not only the found touches'.
-    pub show_specks: bool,
-    /// What the sheet view drew last.
-    pub drawn: Drawn,
-    /// The labels the small plots' axes drew last.
-    pub plot_axes: Vec<String>,
+    /// The central panel: the sheet, its image and touches.
+    pub sheet_view: SheetView,
+    /// The right panel: the signal's plots and the link's health.
+    pub plots: Plots,
 }
 
 impl std::fmt::Debug for Viewer {
@@ -151,19 +147,6 @@ impl Viewer {
             })?;
             processor.classifier = Some(classifier);
         }
-        let source_kind = match &options.source {
-            SourceSpec::Sim => SourceKind::Sim,
-            SourceSpec::Replay(_) => SourceKind::Replay,
-            SourceSpec::Port(..) => SourceKind::Port,
-        };
-        let replay_path = match &options.source {
-            SourceSpec::Replay(p) => p.display().to_string(),
-            _ => String::new(),
-        };
-        let port = match &options.source {
-            SourceSpec::Port(p, _) => p.clone(),
-            _ => String::new(),
-        };
         let b = sheet.physical.shape.bounds();
         let centre = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
         let selector = Selector::new(DynamicSettings::new(
@@ -178,21 +161,15 @@ impl Viewer {
             source: Some(source),
             sheet,
             processor,
-            source_kind,
-            replay_path,
-            port,
-            ports: Vec::new(),
+            source_bar: SourceBar::of(&options.source),
             protocol: ProtocolChoice::Fixed(ProtocolKind::Adjacent),
             selector,
             last: None,
             monitor: Monitor::default(),
-            texture: None,
             wizard: Wizard::default(),
-            pressing: false,
             shot_frames: 0,
-            show_specks: false,
-            drawn: Drawn::default(),
-            plot_axes: Vec::new(),
+            sheet_view: SheetView::default(),
+            plots: Plots::default(),
             options,
         };
         if let Some(config) = viewer.source.as_ref().and_then(Source::config) {
@@ -207,22 +184,23 @@ impl Viewer {
 
     /// Opens the source chosen in the top bar (the sheet stays the scene's).
     pub fn open_chosen_source(&mut self) {
-        let spec = match self.source_kind {
+        let bar = &self.source_bar;
+        let spec = match bar.kind {
             SourceKind::Sim => SourceSpec::Sim,
             SourceKind::Replay => {
-                if self.replay_path.trim().is_empty() {
+                if bar.replay_path.trim().is_empty() {
                     self.status =
                         "type the recording's path first (from et sim or et record)".into();
                     return;
                 }
-                SourceSpec::Replay(PathBuf::from(self.replay_path.trim()))
+                SourceSpec::Replay(PathBuf::from(bar.replay_path.trim()))
             }
             SourceKind::Port => {
-                if self.port.is_empty() {
+                if bar.port.is_empty() {
                     self.status = "pick a serial port first (refresh the list)".into();
                     return;
                 }
-                SourceSpec::Port(self.port.clone(), et_core::board::BAUD)
+                SourceSpec::Port(bar.port.clone(), et_core::board::BAUD)
             }
         };
         match open_source(&spec, self.options.scene.as_deref()) {
@@ -384,17 +362,49 @@ impl Viewer {
     /// The viewer's whole interface.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         self.pump();
-        egui::Panel::top("source").show(ui, |ui| self.source_bar(ui));
+        egui::Panel::top("source").show(ui, |ui| {
+            let described = self
+                .source
+                .as_ref()
+                .map_or("no source".into(), Source::describe);
+            if self.source_bar.show(ui, &described, &mut self.status) {
+                self.open_chosen_source();
+            }
+        });
         egui::Panel::bottom("status").show(ui, |ui| {
             ui.label(&self.status);
         });
         egui::Panel::left("controls")
             .resizable(false)
             .show(ui, |ui| self.controls(ui));
-        egui::Panel::right("plots")
-            .resizable(false)
-            .show(ui, |ui| self.plots(ui));
-        egui::CentralPanel::default().show(ui, |ui| self.sheet_view(ui));
+        egui::Panel::right("plots").resizable(false).show(ui, |ui| {
+            self.plots.show(ui, &self.monitor, self.source.as_ref());
+        });
+        egui::CentralPanel::default().show(ui, |ui| {
+            let shown = Shown {
+                grid: self.processor.grid(),
+                sigma0: self.processor.imager().sigma0,
+                last: self.last.as_ref(),
+                sheet: &self.sheet.physical,
+                class_centres_mm: self
+                    .processor
+                    .classifier
+                    .as_ref()
+                    .map(|c| c.file.centres_mm.as_slice()),
+                pressable: matches!(self.source, Some(Source::Sim(_))),
+                hint: self.options.screenshot.is_none(),
+            };
+            match self.sheet_view.show(ui, &shown) {
+                Press::At(position) => self.press(vec![Touch {
+                    position,
+                    radius: 0.0075,
+                    pressure: 20e3,
+                    footprint: Default::default(),
+                }]),
+                Press::Released => self.press(Vec::new()),
+                Press::Nothing => {}
+            }
+        });
         if self.wizard.open {
             let mut open = true;
             let mut requests = Vec::new();

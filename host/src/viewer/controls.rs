@@ -1,15 +1,49 @@
-//! The top bar (sources) and the side panel (protocol, alpha, thresholds, tare, the wizard).
+//! The top bar ([`SourceBar`]: which source) and the side panel (protocol, alpha, thresholds,
+//! tare, replay, the touch, the wizard).
 
 use super::*;
 
-impl Viewer {
-    pub(super) fn source_bar(&mut self, ui: &mut egui::Ui) {
+/// The top bar: which source to open (the simulated sheet, a recording, a board's port).
+#[derive(Debug, Default)]
+pub struct SourceBar {
+    /// The source kind chosen.
+    pub kind: SourceKind,
+    /// The recording path typed.
+    pub replay_path: String,
+    /// The serial port chosen.
+    pub port: String,
+    /// The ports found by the last refresh.
+    ports: Vec<String>,
+}
+
+impl SourceBar {
+    /// The bar showing the source the viewer opened with.
+    pub(super) fn of(spec: &SourceSpec) -> Self {
+        let mut bar = Self::default();
+        match spec {
+            SourceSpec::Sim => bar.kind = SourceKind::Sim,
+            SourceSpec::Replay(p) => {
+                bar.kind = SourceKind::Replay;
+                bar.replay_path = p.display().to_string();
+            }
+            SourceSpec::Port(p, _) => {
+                bar.kind = SourceKind::Port;
+                bar.port.clone_from(p);
+            }
+        }
+        bar
+    }
+
+    /// Draws the bar beside `described` (the source open now); whether Open was clicked.
+    /// Refreshing the ports says what it found in `status`.
+    pub(super) fn show(&mut self, ui: &mut egui::Ui, described: &str, status: &mut String) -> bool {
+        let mut open = false;
         ui.horizontal(|ui| {
             ui.label("Source:");
-            ui.selectable_value(&mut self.source_kind, SourceKind::Sim, "Simulated sheet");
-            ui.selectable_value(&mut self.source_kind, SourceKind::Replay, "Recording");
-            ui.selectable_value(&mut self.source_kind, SourceKind::Port, "Board");
-            match self.source_kind {
+            ui.selectable_value(&mut self.kind, SourceKind::Sim, "Simulated sheet");
+            ui.selectable_value(&mut self.kind, SourceKind::Replay, "Recording");
+            ui.selectable_value(&mut self.kind, SourceKind::Port, "Board");
+            match self.kind {
                 SourceKind::Sim => {}
                 SourceKind::Replay => {
                     ui.label("File:");
@@ -33,26 +67,24 @@ impl Viewer {
                     if ui.button("Refresh").clicked() {
                         match crate::link::list_ports() {
                             Ok(p) => {
-                                self.status = format!("{} serial ports", p.len());
+                                *status = format!("{} serial ports", p.len());
                                 self.ports = p;
                             }
-                            Err(e) => self.status = format!("cannot list serial ports: {e}"),
+                            Err(e) => *status = format!("cannot list serial ports: {e}"),
                         }
                     }
                 }
             }
-            if ui.button("Open").clicked() {
-                self.open_chosen_source();
-            }
+            open = ui.button("Open").clicked();
             ui.separator();
-            ui.label(
-                self.source
-                    .as_ref()
-                    .map_or("no source".into(), Source::describe),
-            );
+            ui.label(described);
         });
+        open
     }
+}
 
+impl Viewer {
+    /// The side panel: protocol, imaging settings, tare, replay, the touch, the wizard.
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Protocol");
         let mut choice = self.protocol;
@@ -99,8 +131,11 @@ impl Viewer {
         s.threshold = (!auto).then_some(f);
         ui.add(egui::Slider::new(&mut s.touch_factor, 2.0..=20.0).text("touch at z >"))
             .on_hover_text("a touch peaks this many times its pixels' noise (z) or more");
-        ui.checkbox(&mut self.show_specks, "outline every pixel >= f max")
-            .on_hover_text("noise specks too; off: only the found touches are outlined");
+        ui.checkbox(
+            &mut self.sheet_view.show_specks,
+            "outline every pixel >= f max",
+        )
+        .on_hover_text("noise specks too; off: only the found touches are outlined");
         if s != self.processor.settings() {
             self.processor.set_settings(s);
         }

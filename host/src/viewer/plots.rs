@@ -2,40 +2,43 @@
 
 use super::*;
 
-impl Viewer {
-    pub(super) fn plots(&mut self, ui: &mut egui::Ui) {
+/// The right panel: frame rate, BVC and SNR per channel; the link's health.
+#[derive(Debug, Default)]
+pub struct Plots {
+    /// The labels the small plots' axes drew last.
+    pub axes: Vec<String>,
+}
+
+impl Plots {
+    /// Draws the signal of `monitor` and the health of `source`.
+    pub(super) fn show(&mut self, ui: &mut egui::Ui, monitor: &Monitor, source: Option<&Source>) {
         ui.set_width(260.0);
         ui.heading("Signal");
-        let rate: Vec<(f64, f64)> = self.monitor.rate.iter().copied().collect();
+        let rate: Vec<(f64, f64)> = monitor.rate.iter().copied().collect();
         let mut axes = sparkline(ui, "frames/s", &rate);
-        let bvc: Vec<(f64, f64)> = self
-            .monitor
-            .bvc
-            .iter()
-            .map(|&(t, v)| (t, v * 1e3))
-            .collect();
+        let bvc: Vec<(f64, f64)> = monitor.bvc.iter().map(|&(t, v)| (t, v * 1e3)).collect();
         axes.extend(sparkline(ui, "BVC |V_m - V_0| (mV)", &bvc));
-        axes.extend(bars(ui, "SNR per channel (dB)", &self.monitor.snr_db));
-        self.plot_axes = axes;
+        axes.extend(bars(ui, "SNR per channel (dB)", &monitor.snr_db));
+        self.axes = axes;
         ui.separator();
         ui.heading("Link health");
-        let h: Health = self.source.as_ref().map(Source::health).unwrap_or_default();
+        let h: Health = source.map(Source::health).unwrap_or_default();
         egui::Grid::new("health").show(ui, |ui| {
             for (name, v) in [
-                ("frames", self.monitor.frames),
-                ("lost (gaps)", h.lost.max(self.monitor.gaps)),
+                ("frames", monitor.frames),
+                ("lost (gaps)", h.lost.max(monitor.gaps)),
                 ("dropped by board", h.dropped),
                 ("corrupt packets", h.corrupt),
                 ("reconnects", h.reconnects),
-                ("on an ADC rail", self.monitor.rail_frames),
-                ("source in compliance", self.monitor.compliance_frames),
+                ("on an ADC rail", monitor.rail_frames),
+                ("source in compliance", monitor.compliance_frames),
             ] {
                 ui.label(name);
                 ui.label(v.to_string());
                 ui.end_row();
             }
         });
-        if let Some(Source::Port(p)) = &self.source {
+        if let Some(Source::Port(p)) = source {
             if let Some(s) = p.status {
                 ui.label(format!(
                     "board: {}scanning, model {}",

@@ -189,7 +189,7 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
     assert!(h.state().status.contains("path"), "{}", h.state().status);
     assert!(matches!(h.state().source, Some(Source::Sim(_))));
     // A path that does not exist: the error names it.
-    h.state_mut().replay_path = dir.join("missing.jsonl").display().to_string();
+    h.state_mut().source_bar.replay_path = dir.join("missing.jsonl").display().to_string();
     h.get_by_label("Open").click();
     h.step();
     assert!(
@@ -198,7 +198,7 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
         h.state().status
     );
     // The recording.
-    h.state_mut().replay_path = path.display().to_string();
+    h.state_mut().source_bar.replay_path = path.display().to_string();
     h.get_by_label("Open").click();
     h.step();
     assert!(
@@ -214,7 +214,7 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
     h.step();
     assert!(matches!(h.state().source, Some(Source::Sim(_))));
     // A recording cannot change its protocol: the status says why.
-    h.state_mut().replay_path = path.display().to_string();
+    h.state_mut().source_bar.replay_path = path.display().to_string();
     h.get_by_label("Recording").click();
     h.step();
     h.get_by_label("Open").click();
@@ -405,7 +405,7 @@ fn the_sheet_is_drawn_in_mm_with_numbered_electrodes_a_labelled_colour_bar_and_p
     settle(&mut h);
     h.step();
     let v = h.state();
-    let d = &v.drawn;
+    let d = &v.sheet_view.drawn;
     // The axes: round mm on both, zero among them (the sheet is centred on the origin), and
     // every tick inside the image's extent.
     let b = v.sheet.physical.shape.bounds();
@@ -445,7 +445,7 @@ fn the_sheet_is_drawn_in_mm_with_numbered_electrodes_a_labelled_colour_bar_and_p
     mirrored.reverse();
     assert_eq!(values, mirrored, "{ticks:?}");
     // The small plots' axes: time to now, channels 1..K.
-    let axes = &v.plot_axes;
+    let axes = &v.plots.axes;
     for label in ["time", "now", "channel k", "1"] {
         assert!(axes.iter().any(|a| a == label), "{label} not in {axes:?}");
     }
@@ -461,7 +461,7 @@ fn two_touches_get_two_numbered_markers_and_outlines_and_specks_only_on_request(
     });
     settle(&mut h);
     until_touched(&mut h, 30);
-    let d = h.state().drawn.clone();
+    let d = h.state().sheet_view.drawn.clone();
     assert_eq!(d.truth, 2, "{d:?}");
     assert_eq!(d.touches.len(), 2, "{d:?}");
     assert_eq!(d.outlines, 2, "one outline per found touch: {d:?}");
@@ -497,8 +497,8 @@ fn two_touches_get_two_numbered_markers_and_outlines_and_specks_only_on_request(
     h.get_by_label("outline every pixel >= f max").click();
     h.step();
     h.step();
-    assert!(h.state().show_specks);
-    assert!(h.state().drawn.specks);
+    assert!(h.state().sheet_view.show_specks);
+    assert!(h.state().sheet_view.drawn.specks);
 }
 
 #[test]
@@ -512,7 +512,7 @@ fn a_screenshot_presses_only_where_asked() {
     });
     settle(&mut h);
     until_touched(&mut h, 20);
-    let d = h.state().drawn.clone();
+    let d = h.state().sheet_view.drawn.clone();
     assert_eq!((d.touches.len(), d.outlines, d.truth), (1, 1, 1), "{d:?}");
     let at = d.touches[0].1;
     assert!((at[0] - 30.0).hypot(at[1] - 25.0) < 10.0, "{at:?}");
@@ -526,7 +526,7 @@ fn a_screenshot_presses_only_where_asked() {
     for _ in 0..20 {
         h.step();
     }
-    let d = &h.state().drawn;
+    let d = &h.state().sheet_view.drawn;
     assert!(h.state().last.as_ref().unwrap().event.is_none());
     assert_eq!((d.touches.len(), d.outlines, d.truth), (0, 0, 0), "{d:?}");
 }
