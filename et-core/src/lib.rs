@@ -22,6 +22,10 @@
 //! - [`board`]: the constants the board and the host share (baud rate, model slot size).
 //! - `sheet` (feature `std`): the physical sheet, outline, fabric and electrodes, as the
 //!   simulator and the reconstruction both describe it.
+//! - `schedule` (feature `std`): a frame's measurements as any EIT system lists them (source,
+//!   sink, positive, negative, current per value), from a built-in protocol or a CSV file.
+//! - `text` (feature `std`): tables as users' tools write them (delimiter, quotes, decimal
+//!   commas), read for every et reader of tables.
 //! - [`rng`]: the one seedable pseudo-random generator (simulator, QEMU sheet, folds, tests).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -39,8 +43,12 @@ pub mod protocol;
 pub mod rng;
 pub mod scan;
 #[cfg(feature = "std")]
+pub mod schedule;
+#[cfg(feature = "std")]
 pub mod sheet;
 pub mod stats;
+#[cfg(feature = "std")]
+pub mod text;
 pub mod time;
 pub mod wire;
 

@@ -9,7 +9,9 @@ use std::path::Path;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::table::{Csv, parse_table, text_lines};
+use et_core::text::lines as text_lines;
+
+use super::table::{Csv, parse_table};
 use super::{DatasetError, content};
 
 /// The unit of positions in the files.

@@ -8,6 +8,8 @@ use std::path::Path;
 
 use nalgebra::DMatrix;
 
+use et_core::text::{Delimiter, Records, number, read_records};
+
 use super::{DatasetError, content};
 
 pub(super) struct Csv {
@@ -84,71 +86,6 @@ impl Csv {
     }
 }
 
-/// What separates the cells of a row.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Delimiter {
-    /// `,` (numbers with a decimal point).
-    Comma,
-    /// `;`, as spreadsheets write CSV where the decimal mark is a comma (`1,5;2,25`).
-    Semicolon,
-    /// A tab.
-    Tab,
-}
-
-impl Delimiter {
-    /// The delimiter of a file whose first row is `line`: a tab if one is outside quotes,
-    /// else `;` if one is, else `,`. (Counting would misjudge `1,5;2,5`: a `;` file with
-    /// decimal commas has more commas than semicolons.)
-    fn of(line: &str) -> Self {
-        let mut quoted = false;
-        let (mut tab, mut semicolon) = (false, false);
-        for c in line.chars() {
-            match c {
-                '"' => quoted = !quoted,
-                '\t' if !quoted => tab = true,
-                ';' if !quoted => semicolon = true,
-                _ => {}
-            }
-        }
-        if tab {
-            Self::Tab
-        } else if semicolon {
-            Self::Semicolon
-        } else {
-            Self::Comma
-        }
-    }
-
-    fn byte(self) -> u8 {
-        match self {
-            Self::Comma => b',',
-            Self::Semicolon => b';',
-            Self::Tab => b'\t',
-        }
-    }
-
-    /// In words, for the import's description ("" for a comma).
-    pub(super) fn said(self) -> &'static str {
-        match self {
-            Self::Comma => "",
-            Self::Semicolon => "cells separated by ';'",
-            Self::Tab => "cells separated by tabs",
-        }
-    }
-}
-
-/// `cell` as a number: `1.5`, `1.5E-05`, and where the cells are not separated by commas a
-/// decimal comma too (`1,5`).
-fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
-    cell.parse::<f64>().ok().or_else(|| {
-        let decimal_comma =
-            delimiter != Delimiter::Comma && cell.matches(',').count() == 1 && !cell.contains('.');
-        decimal_comma
-            .then(|| cell.replace(',', ".").parse::<f64>().ok())
-            .flatten()
-    })
-}
-
 /// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
 /// Cells are read by the `csv` crate: quoted cells (`"1,5"`, `"a ""b"""`), cells separated by
 /// `,`, `;` or tabs (detected from the first row, [`Delimiter::of`]), spaces around cells
@@ -161,42 +98,13 @@ pub(super) fn parse_table(
     lines: &[(usize, &str)],
     text_ok: &dyn Fn(&str, usize) -> bool,
 ) -> Result<Csv, DatasetError> {
-    let kept: Vec<(usize, &str)> = lines
-        .iter()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .copied()
-        .collect();
-    let &(_, first) = kept
-        .first()
-        .ok_or_else(|| content(path, 0, None, "no rows"))?;
-    let delimiter = Delimiter::of(first);
-    let joined = kept.iter().map(|(_, l)| *l).collect::<Vec<_>>().join("\n");
-    // The file's 1-based line of the csv reader's 1-based line in `joined`.
-    let file_line = |line: u64| {
-        usize::try_from(line)
-            .ok()
-            .and_then(|l| l.checked_sub(1))
-            .and_then(|l| kept.get(l))
-            .map_or(0, |(i, _)| i + 1)
-    };
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .delimiter(delimiter.byte())
-        .from_reader(joined.as_bytes());
-    let mut records = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let line = e.position().map_or(0, |p| file_line(p.line()));
-            content(path, line, None, e.to_string())
-        })?;
-        let line = record.position().map_or(0, |p| file_line(p.line()));
-        records.push((line, record));
-    }
+    let Records {
+        delimiter,
+        rows: records,
+    } = read_records(lines).map_err(|(line, message)| content(path, line, None, message))?;
     let mut it = records.iter().peekable();
     let &&(hl, ref first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
-    let texts = |r: &csv::StringRecord| -> Vec<bool> {
+    let texts = |r: &Vec<String>| -> Vec<bool> {
         r.iter().map(|c| number(c, delimiter).is_none()).collect()
     };
     let first_text = texts(first);
@@ -205,7 +113,7 @@ pub(super) fn parse_table(
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
         it.next();
-        first.iter().map(str::to_string).collect()
+        first.clone()
     } else {
         (1..=first.len()).map(|c| c.to_string()).collect()
     };
@@ -217,14 +125,6 @@ pub(super) fn parse_table(
     let mut rows = Vec::new();
     for (i, cells) in it {
         let i = *i;
-        if cells.iter().any(|c| c.contains('\n')) {
-            return Err(content(
-                path,
-                i,
-                None,
-                "a quoted cell runs on over the next lines: is a closing quote (\") missing?",
-            ));
-        }
         if cells.len() != names.len() {
             return Err(content(
                 path,
@@ -284,14 +184,4 @@ pub(super) fn parse_table(
         rows,
         text,
     })
-}
-
-/// The lines of `text`, without a leading UTF-8 byte-order mark (CRLF ends are handled by
-/// `lines`).
-pub(super) fn text_lines(text: &str) -> Vec<(usize, &str)> {
-    text.strip_prefix('\u{feff}')
-        .unwrap_or(text)
-        .lines()
-        .enumerate()
-        .collect()
 }

@@ -1,0 +1,391 @@
+//! A frame's measurements as any EIT system lists them (docs/method.md §4): for each value of
+//! the frame, the two electrodes that drive the current (source, sink), the two that measure
+//! (positive, negative: the value is U_positive - U_negative) and the current, in amperes.
+//!
+//! et's built-in protocols are one way to make a schedule ([`Schedule::of_protocol`]); a CSV
+//! file with one row per frame value is another ([`Schedule::read_csv`]): columns `source`,
+//! `sink`, `positive`, `negative` and optionally `current_a`, named in a header or in that
+//! order without one. A schedule may hold anything other systems measure: several injection
+//! families in one frame, all-against-one injections, injections from some electrodes only,
+//! repeated rows, measurements on the drive electrodes (the complete electrode model accounts
+//! for their contact; the point model cannot), and a current per row.
+//!
+//! Behind the `std` feature, as [`crate::sheet`]: the board scans its built-in protocols.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::protocol::{Protocol, ProtocolKind};
+use crate::text::{self, Delimiter};
+
+/// The largest current a row may drive, A (tank systems drive up to a few mA; 50 mA is far
+/// beyond any of them and below anything that would be a typing error of mA for A).
+pub const MAX_CURRENT_A: f64 = 0.05;
+
+/// One value of the frame: who drives, who measures, with how much current.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// The electrode the current enters by (0-based).
+    pub source: u16,
+    /// The electrode it leaves by.
+    pub sink: u16,
+    /// The measurement's positive electrode: the value is U_positive - U_negative.
+    pub positive: u16,
+    /// The measurement's negative electrode.
+    pub negative: u16,
+    /// The current from source to sink, A.
+    pub current_a: f64,
+}
+
+impl Row {
+    /// Whether the measurement touches a drive electrode (it then reads the contact's drop
+    /// as well as the sheet's).
+    #[must_use]
+    pub fn on_drive(&self) -> Option<u16> {
+        [self.positive, self.negative]
+            .into_iter()
+            .find(|&e| e == self.source || e == self.sink)
+    }
+}
+
+/// The measurements of a frame, in frame order, on a sheet of `electrodes` electrodes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Schedule {
+    electrodes: u16,
+    rows: Vec<Row>,
+    /// The built-in protocol it was made from, if it was.
+    kind: Option<ProtocolKind>,
+}
+
+/// Why a schedule is refused. Rows are counted from 0, as the frame's values are.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ScheduleError {
+    /// No rows at all.
+    #[error("no measurements")]
+    Empty,
+    /// Fewer than two electrodes.
+    #[error("{electrodes} electrodes: a schedule needs 2 or more")]
+    Electrodes {
+        /// The count given.
+        electrodes: u16,
+    },
+    /// An electrode past the sheet's.
+    #[error(
+        "row {row}: electrode {electrode}, the sheet has {electrodes} (0 to {last}){hint}",
+        last = electrodes.saturating_sub(1),
+        hint = if *electrode == *electrodes { ": are the electrodes counted from 1? say base = 1" } else { "" }
+    )]
+    Electrode {
+        /// The row.
+        row: usize,
+        /// The electrode named.
+        electrode: u16,
+        /// The sheet's electrode count.
+        electrodes: u16,
+    },
+    /// The current would enter and leave by one electrode.
+    #[error("row {row}: source and sink are both electrode {electrode}")]
+    SameDrive {
+        /// The row.
+        row: usize,
+        /// The electrode.
+        electrode: u16,
+    },
+    /// The measurement's two electrodes are one.
+    #[error("row {row}: positive and negative are both electrode {electrode}")]
+    SameMeasure {
+        /// The row.
+        row: usize,
+        /// The electrode.
+        electrode: u16,
+    },
+    /// A current that is not positive, not finite, or above [`MAX_CURRENT_A`].
+    #[error("row {row}: current {current_a} A: give more than 0 and at most 0.05 A (50 mA)")]
+    Current {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A schedule file could not be read, or a line of it is wrong.
+    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// 1-based line (0: the whole file).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl Schedule {
+    /// A schedule of `rows` on `electrodes` electrodes, every row checked.
+    ///
+    /// # Errors
+    /// [`ScheduleError`] naming the first row that is wrong.
+    pub fn new(electrodes: u16, rows: Vec<Row>) -> Result<Self, ScheduleError> {
+        if electrodes < 2 {
+            return Err(ScheduleError::Electrodes { electrodes });
+        }
+        if rows.is_empty() {
+            return Err(ScheduleError::Empty);
+        }
+        for (row, r) in rows.iter().enumerate() {
+            for electrode in [r.source, r.sink, r.positive, r.negative] {
+                if electrode >= electrodes {
+                    return Err(ScheduleError::Electrode {
+                        row,
+                        electrode,
+                        electrodes,
+                    });
+                }
+            }
+            if r.source == r.sink {
+                return Err(ScheduleError::SameDrive {
+                    row,
+                    electrode: r.source,
+                });
+            }
+            if r.positive == r.negative {
+                return Err(ScheduleError::SameMeasure {
+                    row,
+                    electrode: r.positive,
+                });
+            }
+            if !(r.current_a.is_finite() && r.current_a > 0.0 && r.current_a <= MAX_CURRENT_A) {
+                return Err(ScheduleError::Current {
+                    row,
+                    current_a: r.current_a,
+                });
+            }
+        }
+        Ok(Self {
+            electrodes,
+            rows,
+            kind: None,
+        })
+    }
+
+    /// The rows of a built-in protocol, each driving `current_a`.
+    ///
+    /// # Errors
+    /// [`ScheduleError::Current`] for a current out of range.
+    pub fn of_protocol(protocol: &Protocol, current_a: f64) -> Result<Self, ScheduleError> {
+        let rows = protocol
+            .steps()
+            .map(|s| Row {
+                source: u16::from(s.injection.source.0),
+                sink: u16::from(s.injection.sink.0),
+                positive: u16::from(s.measurement.positive.0),
+                negative: u16::from(s.measurement.negative.0),
+                current_a,
+            })
+            .collect();
+        let mut schedule = Self::new(u16::from(protocol.electrodes()), rows)?;
+        schedule.kind = Some(protocol.kind());
+        Ok(schedule)
+    }
+
+    /// Electrode count L.
+    #[must_use]
+    pub fn electrodes(&self) -> usize {
+        usize::from(self.electrodes)
+    }
+
+    /// The rows, in frame order.
+    #[must_use]
+    pub fn rows(&self) -> &[Row] {
+        &self.rows
+    }
+
+    /// Frame length K: one value per row.
+    #[must_use]
+    pub fn frame_len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The built-in protocol it was made from (None for one read from a file).
+    #[must_use]
+    pub fn kind(&self) -> Option<ProtocolKind> {
+        self.kind
+    }
+
+    /// The distinct injections (source, sink, current A) in order of first use, and for each
+    /// row the index of its injection: one forward solve per injection serves its rows.
+    #[must_use]
+    pub fn injections(&self) -> (Vec<(u16, u16, f64)>, Vec<usize>) {
+        let mut distinct: Vec<(u16, u16, f64)> = Vec::new();
+        let of_row = self
+            .rows
+            .iter()
+            .map(|r| {
+                let key = (r.source, r.sink, r.current_a);
+                distinct.iter().position(|d| *d == key).unwrap_or_else(|| {
+                    distinct.push(key);
+                    distinct.len() - 1
+                })
+            })
+            .collect();
+        (distinct, of_row)
+    }
+
+    /// The first row that measures on one of its drive electrodes, and that electrode.
+    #[must_use]
+    pub fn first_on_drive(&self) -> Option<(usize, u16)> {
+        self.rows
+            .iter()
+            .enumerate()
+            .find_map(|(k, r)| r.on_drive().map(|e| (k, e)))
+    }
+
+    /// Reads a schedule from CSV text: an optional header naming `source`, `sink`,
+    /// `positive`, `negative` and `current_a` (any order, any case; other columns ignored),
+    /// else 4 or 5 columns in that order; cells separated by `,`, `;` or tabs; blank and `#`
+    /// lines skipped. Electrodes are counted from `base` (0, or 1 for a system that counts
+    /// from 1); rows without a current drive `default_current_a`.
+    ///
+    /// # Errors
+    /// [`ScheduleError::File`] naming `path`, the line and the cell; then the checks of
+    /// [`Schedule::new`].
+    pub fn parse_csv(
+        path: &Path,
+        text: &str,
+        electrodes: u16,
+        base: u16,
+        default_current_a: f64,
+    ) -> Result<Self, ScheduleError> {
+        let fail = |line: usize, message: String| ScheduleError::File {
+            path: path.to_path_buf(),
+            line,
+            message,
+        };
+        let records = text::records(text).map_err(|(line, m)| fail(line, m))?;
+        let Some((first_line, first)) = records.first() else {
+            return Err(fail(0, "no rows".into()));
+        };
+        const NAMES: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
+        // A header names at least one of the columns (a row of numbers with a typo is data).
+        let header = first
+            .iter()
+            .any(|c| NAMES.iter().any(|n| c.eq_ignore_ascii_case(n)));
+        let columns: [Option<usize>; 5] = if header {
+            let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
+            let columns = NAMES.map(find);
+            if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
+                return Err(fail(
+                    *first_line,
+                    format!(
+                        "the header has no '{}' column (it needs source, sink, positive, \
+                         negative and optionally current_a)",
+                        missing.0
+                    ),
+                ));
+            }
+            columns
+        } else if first.len() == 4 || first.len() == 5 {
+            [
+                Some(0),
+                Some(1),
+                Some(2),
+                Some(3),
+                (first.len() == 5).then_some(4),
+            ]
+        } else {
+            return Err(fail(
+                *first_line,
+                format!(
+                    "{} columns: without a header give source, sink, positive, negative and \
+                     optionally current_a",
+                    first.len()
+                ),
+            ));
+        };
+        let mut rows = Vec::with_capacity(records.len());
+        for (line, cells) in records.iter().skip(usize::from(header)) {
+            let cell = |c: usize| cells.get(c).map(String::as_str).unwrap_or("");
+            let electrode = |which: usize| -> Result<u16, ScheduleError> {
+                let c = columns[which].unwrap_or(which);
+                let v = cell(c);
+                let n: u16 = v.parse().map_err(|_| {
+                    fail(
+                        *line,
+                        format!("{}: '{v}' is not an electrode number", NAMES[which]),
+                    )
+                })?;
+                n.checked_sub(base).ok_or_else(|| {
+                    fail(
+                        *line,
+                        format!(
+                            "{}: electrode {n}, but they are counted from {base}",
+                            NAMES[which]
+                        ),
+                    )
+                })
+            };
+            let current_a = match columns[4] {
+                Some(c) => {
+                    let v = cell(c);
+                    text::number(v, Delimiter::Comma)
+                        .ok_or_else(|| fail(*line, format!("current_a: '{v}' is not a number")))?
+                }
+                None => default_current_a,
+            };
+            rows.push(Row {
+                source: electrode(0)?,
+                sink: electrode(1)?,
+                positive: electrode(2)?,
+                negative: electrode(3)?,
+                current_a,
+            });
+        }
+        Self::new(electrodes, rows).map_err(|e| match e {
+            // Name the file's line for a row's error.
+            ScheduleError::Electrode { row, .. }
+            | ScheduleError::SameDrive { row, .. }
+            | ScheduleError::SameMeasure { row, .. }
+            | ScheduleError::Current { row, .. } => {
+                let line = records.get(row + usize::from(header)).map_or(0, |r| r.0);
+                fail(line, e.to_string())
+            }
+            other => fail(0, other.to_string()),
+        })
+    }
+
+    /// [`Schedule::parse_csv`] of a file.
+    ///
+    /// # Errors
+    /// [`ScheduleError::File`] when it cannot be read, else as [`Schedule::parse_csv`].
+    pub fn read_csv(
+        path: &Path,
+        electrodes: u16,
+        base: u16,
+        default_current_a: f64,
+    ) -> Result<Self, ScheduleError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ScheduleError::File {
+            path: path.to_path_buf(),
+            line: 0,
+            message: e.to_string(),
+        })?;
+        Self::parse_csv(path, &text, electrodes, base, default_current_a)
+    }
+
+    /// The schedule as CSV with a header, electrodes from 0: what [`Schedule::parse_csv`]
+    /// reads back (Python: `numpy.loadtxt(path, delimiter=",", skiprows=1)`).
+    #[must_use]
+    pub fn to_csv(&self) -> String {
+        let mut out = String::from("source,sink,positive,negative,current_a\n");
+        for r in &self.rows {
+            out += &format!(
+                "{},{},{},{},{:e}\n",
+                r.source, r.sink, r.positive, r.negative, r.current_a
+            );
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests;

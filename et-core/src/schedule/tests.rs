@@ -1,0 +1,87 @@
+use std::path::Path;
+
+use super::*;
+
+fn parse(text: &str, electrodes: u16, base: u16) -> Result<Schedule, ScheduleError> {
+    Schedule::parse_csv(Path::new("p.csv"), text, electrodes, base, 1e-3)
+}
+
+#[test]
+fn a_built_in_protocol_is_its_steps_in_frame_order() {
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let s = Schedule::of_protocol(&protocol, 32e-6).unwrap();
+    assert_eq!(s.frame_len(), protocol.frame_len());
+    assert_eq!(s.kind(), Some(ProtocolKind::Adjacent));
+    for (row, step) in s.rows().iter().zip(protocol.steps()) {
+        assert_eq!(row.source, u16::from(step.injection.source.0));
+        assert_eq!(row.negative, u16::from(step.measurement.negative.0));
+    }
+    // Adjacent drops the measurements on drive electrodes; 16 injections serve 208 rows.
+    assert_eq!(s.first_on_drive(), None);
+    let (injections, of_row) = s.injections();
+    assert_eq!(injections.len(), 16);
+    assert_eq!(of_row.len(), 208);
+    // Written and read back, the same rows (the kind is the file's to forget).
+    let back = parse(&s.to_csv(), 16, 0).unwrap();
+    assert_eq!(back.rows(), s.rows());
+    assert_eq!(back.kind(), None);
+}
+
+#[test]
+fn files_as_other_systems_write_them() {
+    // Headerless, 1-based, all-against-one with measurements on the drive electrodes.
+    let s = parse("2 ;1 ;1 ;2\n3;1;2;3\n", 16, 1).unwrap();
+    assert_eq!(s.rows()[1].source, 2);
+    assert_eq!(s.rows()[1].current_a, 1e-3);
+    assert_eq!(s.first_on_drive(), Some((0, 0)));
+    // A header in another order, a current per row, other columns ignored.
+    let s = parse(
+        "# tank, 79 injections\nnegative,positive,current_a,sink,source,note\n1,0,1.4e-3,3,2,x\n",
+        16,
+        0,
+    )
+    .unwrap();
+    let r = s.rows()[0];
+    assert_eq!((r.source, r.sink, r.positive, r.negative), (2, 3, 0, 1));
+    assert_eq!(r.current_a, 1.4e-3);
+}
+
+#[test]
+fn wrong_rows_are_named_by_line_and_cell() {
+    let e = parse("source,sink,positive,negative\n0,1,2,3\n0,1,2,16\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.csv:3") && e.contains("electrode 16") && e.contains("base = 1"),
+        "{e}"
+    );
+    let e = parse("0,0,2,3\n", 16, 0).unwrap_err().to_string();
+    assert!(
+        e.contains("p.csv:1") && e.contains("source and sink"),
+        "{e}"
+    );
+    let e = parse("0,1,2,2\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("positive and negative"), "{e}");
+    let e = parse("0,1,2,3,1.4\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("1.4 A") && e.contains("50 mA"), "{e}");
+    let e = parse("0,1,2,3,nan\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("NaN A"), "{e}");
+    let e = parse("source,sink,plus,minus\n0,1,2,3\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no 'positive' column"), "{e}");
+    let e = parse("0,1,2\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("3 columns"), "{e}");
+    let e = parse("0,1,x,3\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("positive: 'x'"), "{e}");
+    let e = parse("0,1,2,3\n", 16, 1).unwrap_err().to_string();
+    assert!(e.contains("counted from 1"), "{e}");
+    assert_eq!(
+        parse("# nothing\n", 16, 0).unwrap_err().to_string(),
+        "p.csv: no rows"
+    );
+    assert_eq!(
+        Schedule::new(16, Vec::new()).unwrap_err(),
+        ScheduleError::Empty
+    );
+}

@@ -1,0 +1,184 @@
+//! Tables as text, the way users' tools write them: CSV read by the `csv` crate (quoted cells,
+//! records over several lines), cells separated by `,`, `;` or tabs (detected from the first
+//! row), a UTF-8 byte-order mark, CRLF line ends, blank and `#` lines skipped, spaces around
+//! cells trimmed. Every et reader of tables (datasets, other sensors' tables, protocols,
+//! frames) reads through [`records`].
+//!
+//! Behind the `std` feature.
+
+/// What separates the cells of a row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Delimiter {
+    /// `,` (numbers with a decimal point).
+    Comma,
+    /// `;`, as spreadsheets write CSV where the decimal mark is a comma (`1,5;2,25`).
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+impl Delimiter {
+    /// The delimiter of a file whose first row is `line`: a tab if one is outside quotes,
+    /// else `;` if one is, else `,`. (Counting would misjudge `1,5;2,5`: a `;` file with
+    /// decimal commas has more commas than semicolons.)
+    #[must_use]
+    pub fn of(line: &str) -> Self {
+        let mut quoted = false;
+        let (mut tab, mut semicolon) = (false, false);
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                '\t' if !quoted => tab = true,
+                ';' if !quoted => semicolon = true,
+                _ => {}
+            }
+        }
+        if tab {
+            Self::Tab
+        } else if semicolon {
+            Self::Semicolon
+        } else {
+            Self::Comma
+        }
+    }
+
+    /// The byte.
+    #[must_use]
+    pub fn byte(self) -> u8 {
+        match self {
+            Self::Comma => b',',
+            Self::Semicolon => b';',
+            Self::Tab => b'\t',
+        }
+    }
+
+    /// In words, for a reader's description ("" for a comma).
+    #[must_use]
+    pub fn said(self) -> &'static str {
+        match self {
+            Self::Comma => "",
+            Self::Semicolon => "cells separated by ';'",
+            Self::Tab => "cells separated by tabs",
+        }
+    }
+}
+
+/// `cell` as a number: `1.5`, `1.5E-05`, `nan`, and where the cells are not separated by
+/// commas a decimal comma too (`1,5`).
+#[must_use]
+pub fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
+    cell.parse::<f64>().ok().or_else(|| {
+        let decimal_comma =
+            delimiter != Delimiter::Comma && cell.matches(',').count() == 1 && !cell.contains('.');
+        decimal_comma
+            .then(|| cell.replace(',', ".").parse::<f64>().ok())
+            .flatten()
+    })
+}
+
+/// A record: the 1-based line it starts on, and its cells, trimmed.
+pub type Record = (usize, Vec<String>);
+
+/// The rows of a table: its delimiter and each record with the 1-based line it starts on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Records {
+    /// What separated the cells.
+    pub delimiter: Delimiter,
+    /// (1-based line, cells trimmed) per record, blank and `#` lines left out.
+    pub rows: Vec<Record>,
+}
+
+/// Reads `lines` ((0-based line number, text) pairs, say from [`lines`]) as CSV records.
+///
+/// # Errors
+/// (1-based line, message): a cell that runs on over lines (a missing closing quote), or
+/// what the `csv` crate could not read.
+pub fn read_records(lines: &[(usize, &str)]) -> Result<Records, (usize, String)> {
+    let kept: Vec<(usize, &str)> = lines
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .copied()
+        .collect();
+    let delimiter = kept
+        .first()
+        .map_or(Delimiter::Comma, |(_, l)| Delimiter::of(l));
+    let joined = kept.iter().map(|(_, l)| *l).collect::<Vec<_>>().join("\n");
+    // The file's 1-based line of the csv reader's 1-based line in `joined`.
+    let file_line = |line: u64| {
+        usize::try_from(line)
+            .ok()
+            .and_then(|l| l.checked_sub(1))
+            .and_then(|l| kept.get(l))
+            .map_or(0, |(i, _)| i + 1)
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .delimiter(delimiter.byte())
+        .from_reader(joined.as_bytes());
+    let mut rows = Vec::with_capacity(kept.len());
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| file_line(p.line()));
+            (line, e.to_string())
+        })?;
+        let line = record.position().map_or(0, |p| file_line(p.line()));
+        let cells: Vec<String> = record.iter().map(str::to_string).collect();
+        if cells.iter().any(|c| c.contains('\n')) {
+            return Err((
+                line,
+                "a quoted cell runs on over the next lines: is a closing quote (\") missing?"
+                    .into(),
+            ));
+        }
+        rows.push((line, cells));
+    }
+    Ok(Records { delimiter, rows })
+}
+
+/// The lines of `text` with their 0-based numbers, without a leading UTF-8 byte-order mark
+/// (CRLF ends are handled by `lines`).
+#[must_use]
+pub fn lines(text: &str) -> Vec<(usize, &str)> {
+    text.strip_prefix('\u{feff}')
+        .unwrap_or(text)
+        .lines()
+        .enumerate()
+        .collect()
+}
+
+/// [`read_records`] of a whole text, the rows only.
+///
+/// # Errors
+/// As [`read_records`].
+pub fn records(text: &str) -> Result<Vec<Record>, (usize, String)> {
+    read_records(&lines(text)).map(|r| r.rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn delimiters_quotes_and_lines_are_read_as_users_write_them() {
+        assert_eq!(Delimiter::of("a,b"), Delimiter::Comma);
+        assert_eq!(Delimiter::of("1,5;2,5"), Delimiter::Semicolon);
+        assert_eq!(Delimiter::of("a\tb;c"), Delimiter::Tab);
+        assert_eq!(Delimiter::of("\"a;b\",c"), Delimiter::Comma);
+        assert_eq!(number("1,5", Delimiter::Semicolon), Some(1.5));
+        assert_eq!(number("1,5", Delimiter::Comma), None);
+        assert_eq!(number("1,500.5", Delimiter::Tab), None);
+        let rows = records("\u{feff}# note\r\n\r\na,\"b,c\"\r\n1,2\r\n").unwrap();
+        assert_eq!(
+            rows,
+            vec![
+                (3, vec!["a".to_string(), "b,c".to_string()]),
+                (4, vec!["1".to_string(), "2".to_string()]),
+            ]
+        );
+        let (line, message) = records("a,b\n\"1,2\n3,4\n").unwrap_err();
+        assert_eq!(line, 2);
+        assert!(message.contains("closing quote"), "{message}");
+    }
+}
