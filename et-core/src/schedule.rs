@@ -16,6 +16,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::ScanConfig;
+use crate::config::ConfigError;
 use crate::protocol::{Protocol, ProtocolKind};
 use crate::text::{self, Delimiter};
 
@@ -101,9 +103,17 @@ pub enum ScheduleError {
         /// The electrode.
         electrode: u16,
     },
-    /// A current that is not positive, not finite, or above [`MAX_CURRENT_A`].
-    #[error("row {row}: current {current_a} A: give more than 0 and at most 0.05 A (50 mA)")]
+    /// A current that is not positive or not finite.
+    #[error("row {row}: current {current_a} A: give a current above 0 A")]
     Current {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A user's current above [`MAX_CURRENT_A`] (a file's, a scene's).
+    #[error("row {row}: current {current_a} A is above 0.05 A (50 mA): current_a is in amperes")]
+    TooLarge {
         /// The row.
         row: usize,
         /// The current given, A.
@@ -155,7 +165,7 @@ impl Schedule {
                     electrode: r.positive,
                 });
             }
-            if !(r.current_a.is_finite() && r.current_a > 0.0 && r.current_a <= MAX_CURRENT_A) {
+            if !(r.current_a.is_finite() && r.current_a > 0.0) {
                 return Err(ScheduleError::Current {
                     row,
                     current_a: r.current_a,
@@ -169,11 +179,21 @@ impl Schedule {
         })
     }
 
-    /// The rows of a built-in protocol, each driving `current_a`.
+    /// The rows of a built-in protocol, each driving `current_a` (any positive current: the
+    /// model is linear, and a unit current gives transfer impedances).
     ///
     /// # Errors
-    /// [`ScheduleError::Current`] for a current out of range.
+    /// [`ScheduleError::Current`] for a current that is not finite and positive.
     pub fn of_protocol(protocol: &Protocol, current_a: f64) -> Result<Self, ScheduleError> {
+        if !(current_a.is_finite() && current_a > 0.0) {
+            return Err(ScheduleError::Current { row: 0, current_a });
+        }
+        Ok(Self::of_valid(protocol, current_a))
+    }
+
+    /// A valid protocol's rows at a current already checked: every row is valid (a
+    /// protocol's electrodes are below its count, its pairs distinct).
+    fn of_valid(protocol: &Protocol, current_a: f64) -> Self {
         let rows = protocol
             .steps()
             .map(|s| Row {
@@ -184,9 +204,11 @@ impl Schedule {
                 current_a,
             })
             .collect();
-        let mut schedule = Self::new(u16::from(protocol.electrodes()), rows)?;
-        schedule.kind = Some(protocol.kind());
-        Ok(schedule)
+        Self {
+            electrodes: u16::from(protocol.electrodes()),
+            rows,
+            kind: Some(protocol.kind()),
+        }
     }
 
     /// Electrode count L.
@@ -341,17 +363,27 @@ impl Schedule {
                 current_a,
             });
         }
-        Self::new(electrodes, rows).map_err(|e| match e {
-            // Name the file's line for a row's error.
-            ScheduleError::Electrode { row, .. }
-            | ScheduleError::SameDrive { row, .. }
-            | ScheduleError::SameMeasure { row, .. }
-            | ScheduleError::Current { row, .. } => {
-                let line = records.get(row + usize::from(header)).map_or(0, |r| r.0);
-                fail(line, e.to_string())
-            }
-            other => fail(0, other.to_string()),
-        })
+        let too_large = rows
+            .iter()
+            .position(|r| r.current_a > MAX_CURRENT_A)
+            .map(|row| ScheduleError::TooLarge {
+                row,
+                current_a: rows[row].current_a,
+            });
+        too_large
+            .map_or_else(|| Self::new(electrodes, rows), Err)
+            .map_err(|e| match e {
+                // Name the file's line for a row's error.
+                ScheduleError::Electrode { row, .. }
+                | ScheduleError::SameDrive { row, .. }
+                | ScheduleError::SameMeasure { row, .. }
+                | ScheduleError::Current { row, .. }
+                | ScheduleError::TooLarge { row, .. } => {
+                    let line = records.get(row + usize::from(header)).map_or(0, |r| r.0);
+                    fail(line, e.to_string())
+                }
+                other => fail(0, other.to_string()),
+            })
     }
 
     /// [`Schedule::parse_csv`] of a file.
@@ -384,6 +416,30 @@ impl Schedule {
             );
         }
         out
+    }
+}
+
+impl ScanConfig {
+    /// The schedule this configuration scans: its protocol's rows at its current.
+    ///
+    /// # Errors
+    /// [`ConfigError`] when the configuration is not valid.
+    pub fn schedule(&self) -> Result<Schedule, ConfigError> {
+        let protocol = self.validate()?;
+        Ok(Schedule::of_valid(
+            &protocol,
+            f64::from(self.current_amps()),
+        ))
+    }
+}
+
+impl Protocol {
+    /// This protocol's rows, each driving `current_a` ([`Schedule::of_protocol`]).
+    ///
+    /// # Errors
+    /// [`ScheduleError::Current`] for a current that is not finite and positive.
+    pub fn schedule(&self, current_a: f64) -> Result<Schedule, ScheduleError> {
+        Schedule::of_protocol(self, current_a)
     }
 }
 

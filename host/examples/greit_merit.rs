@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let recon = et_recon::Spec {
             method: et_recon::Method::Greit { radius: None },
             alpha: AlphaRule::NoiseFigure(NOISE_FIGURE),
-            ..et_recon::Spec::new(sc.sheet.physical.clone(), protocol, 32e-6)
+            ..et_recon::Spec::new(sc.sheet.physical.clone(), protocol.schedule(32e-6)?)
         }
         .set_up()?;
         let (imager, jac) = (recon.imager(), recon.jacobian());
@@ -139,7 +139,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             v0: f.v0.clone(),
             var_dv: f.var.clone(),
         };
-        let mut recon = et_recon::Spec::new(sc.sheet.physical.clone(), protocol, amps).set_up()?;
+        let mut recon =
+            et_recon::Spec::new(sc.sheet.physical.clone(), protocol.schedule(amps)?).set_up()?;
         let greit = et_recon::Method::Greit { radius: None };
         let mut methods = Vec::new();
         for (method, rule, what) in [

@@ -62,8 +62,15 @@ fn wrong_rows_are_named_by_line_and_cell() {
     );
     let e = parse("0,1,2,2\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("positive and negative"), "{e}");
-    let e = parse("0,1,2,3,1.4\n", 16, 0).unwrap_err().to_string();
-    assert!(e.contains("1.4 A") && e.contains("50 mA"), "{e}");
+    let e = parse("0,1,2,3,1e-3\n0,1,2,3,1.4\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.csv:2") && e.contains("1.4 A") && e.contains("50 mA"),
+        "{e}"
+    );
+    let e = parse("0,1,2,3,-1e-3\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("above 0 A"), "{e}");
     let e = parse("0,1,2,3,nan\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("NaN A"), "{e}");
     let e = parse("source,sink,plus,minus\n0,1,2,3\n", 16, 0)

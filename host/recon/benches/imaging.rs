@@ -35,7 +35,10 @@ fn jacobian(triangles: usize, electrodes: u8, kind: ProtocolKind) -> (TransferJa
     let fwd = Forward::new(mesh.clone(), Electrodes::of_sheet(&spec).expect("z")).expect("forward");
     let protocol = Protocol::new(kind, electrodes).expect("protocol");
     let jac = fwd
-        .transfer_jacobian(&vec![1.0 / spec.sheet_resistance; n], &protocol, 32e-6)
+        .transfer_jacobian(
+            &vec![1.0 / spec.sheet_resistance; n],
+            &protocol.schedule(32e-6).unwrap(),
+        )
         .expect("jacobian");
     (jac, mesh)
 }
@@ -57,7 +60,10 @@ fn reconstructor(
         },
         method,
         alpha,
-        ..Spec::new(disc(electrodes), protocol, 32e-6)
+        ..Spec::new(
+            disc(electrodes),
+            protocol.schedule(32e-6).expect("a current"),
+        )
     }
     .set_up()
     .expect("set-up")
@@ -193,7 +199,7 @@ static FORWARD: LazyLock<(Forward, DMatrix<f64>, Vec<f64>)> = LazyLock::new(|| {
     let z = vec![spec.electrodes.contact_ohm * spec.electrodes.width; 16];
     let fwd = Forward::new(mesh, Electrodes::Complete(z)).expect("forward");
     let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("protocol");
-    let currents = Forward::injection_currents(&protocol, 32e-6);
+    let currents = Forward::injection_currents(&protocol.schedule(32e-6).unwrap());
     let sigma = (0..n)
         .map(|t| (1.0 + 0.5 * (t as f64 * 0.01).sin()) / spec.sheet_resistance)
         .collect();

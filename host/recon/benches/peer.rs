@@ -50,14 +50,18 @@ fn et_side(triangles: usize) -> (usize, [f64; 5]) {
         count = mesh.triangles.len();
         let ((imager, one), t_one) = timed(|| {
             let imager = Imager::new(&spec, mesh, 64).expect("imager");
-            let jac = imager.transfer_jacobian(&protocol, 1.0).expect("jacobian");
+            let jac = imager
+                .transfer_jacobian(&protocol.schedule(1.0).unwrap())
+                .expect("jacobian");
             let one = DataSpace::factored(&jac, 0.5)
                 .and_then(|d| d.one_step(0.1))
                 .expect("one-step");
             (imager, one)
         });
         let (greit, t_greit) = timed(|| {
-            let jac = imager.transfer_jacobian(&protocol, 1.0).expect("jacobian");
+            let jac = imager
+                .transfer_jacobian(&protocol.schedule(1.0).unwrap())
+                .expect("jacobian");
             Greit::new(
                 &imager,
                 &jac,

@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("\n|---|---|---|{}", "---|".repeat(alphas.len()));
     for kind in [ProtocolKind::Adjacent, ProtocolKind::PpPp] {
         let protocol = Protocol::new(kind, 16)?;
-        let j = imager.jacobian(&protocol, 32e-6)?;
+        let j = imager.jacobian(&protocol.schedule(32e-6).unwrap())?;
         // J P^-1 with P^-1 = diag(J^T J)^-s, s = 0.5.
         let p_inv: Vec<f64> = (0..j.ncols())
             .map(|c| j.column(c).norm_squared().powf(-0.5))

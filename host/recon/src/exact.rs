@@ -204,33 +204,35 @@ pub fn unit_disc_error(
         .map(|&t| spec.shape.boundary_point(t))
         .collect();
     let fwd = Forward::new(mesh, Electrodes::of_sheet(&spec).ok()?).ok()?;
-    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).ok()?;
-    let v = fwd.frame(&vec![1.0; n], &protocol, 1.0).ok()?;
+    let schedule = Protocol::new(ProtocolKind::Adjacent, 16)
+        .ok()?
+        .schedule(1.0)
+        .ok()?;
+    let v = fwd.frame(&vec![1.0; n], &schedule).ok()?;
+    let at = |e: u16| centres[usize::from(e)];
     let exact: Vec<f64> = match model {
-        et_core::sheet::ElectrodeModel::Point => protocol
-            .steps()
-            .map(|s| {
-                let at = |e: u8| centres[usize::from(e)];
-                let (a, b) = (at(s.injection.source.0), at(s.injection.sink.0));
-                point_disc(at(s.measurement.positive.0), a, b, 1.0)
-                    - point_disc(at(s.measurement.negative.0), a, b, 1.0)
+        et_core::sheet::ElectrodeModel::Point => schedule
+            .rows()
+            .iter()
+            .map(|r| {
+                let (a, b) = (at(r.source), at(r.sink));
+                point_disc(at(r.positive), a, b, 1.0) - point_disc(at(r.negative), a, b, 1.0)
             })
             .collect(),
         _ => {
             let angles: Vec<f64> = centres.iter().map(|c| c[1].atan2(c[0])).collect();
-            let currents = Forward::injection_currents(&protocol, 1.0);
+            let currents = Forward::injection_currents(&schedule);
             // The series converges as modes^-2 (exact.rs's test): Richardson's extrapolation
             // of 500 and 1 000 modes removes its leading error.
             let series = |m| cem_disc(&angles, 0.1, 0.05, 1.0, 1.0, &currents, m);
             let (u1, u2) = (series(500)?, series(1_000)?);
             let u = &u2 + (&u2 - &u1) / 3.0;
-            protocol
-                .steps()
-                .map(|s| {
-                    let i = usize::from(s.injection_index);
-                    u[(usize::from(s.measurement.positive.0), i)]
-                        - u[(usize::from(s.measurement.negative.0), i)]
-                })
+            let (_, of_row) = schedule.injections();
+            schedule
+                .rows()
+                .iter()
+                .zip(of_row)
+                .map(|(r, i)| u[(usize::from(r.positive), i)] - u[(usize::from(r.negative), i)])
                 .collect()
         }
     };

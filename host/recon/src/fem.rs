@@ -19,7 +19,7 @@
 //! in [`Forward::new`]; a solve at a new conductivity only fills in the values and redoes the
 //! numeric factorisation (docs/design.md: "keep the symbolic step").
 
-use et_core::protocol::Protocol;
+use et_core::schedule::Schedule;
 use faer::Side;
 use faer::linalg::solvers::SolveCore;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
@@ -399,43 +399,56 @@ impl Forward {
         Ok(Solution { nodes, electrodes })
     }
 
-    /// The L x L current patterns of `protocol`'s injections (`amps` from source to sink).
+    /// The L x I current patterns of `schedule`'s distinct injections (each its current from
+    /// source to sink, A), in the order of [`Schedule::injections`].
     #[must_use]
-    pub fn injection_currents(protocol: &Protocol, amps: f64) -> DMatrix<f64> {
-        let l = usize::from(protocol.electrodes());
-        let mut c = DMatrix::zeros(l, l);
-        for (i, inj) in protocol.injections().enumerate() {
-            c[(usize::from(inj.source.0), i)] += amps;
-            c[(usize::from(inj.sink.0), i)] -= amps;
+    pub fn injection_currents(schedule: &Schedule) -> DMatrix<f64> {
+        let (injections, _) = schedule.injections();
+        let mut c = DMatrix::zeros(schedule.electrodes(), injections.len());
+        for (i, &(source, sink, amps)) in injections.iter().enumerate() {
+            c[(usize::from(source), i)] += amps;
+            c[(usize::from(sink), i)] -= amps;
         }
         c
     }
 
-    /// The frame V_m (K values, V) of `protocol` at conductivity `sigma` and current `amps`:
-    /// U_positive - U_negative of each measurement.
-    ///
-    /// # Errors
-    /// [`FemError`] as [`Forward::solve`], or a protocol for another electrode count.
-    pub fn frame(
-        &self,
-        sigma: &[f64],
-        protocol: &Protocol,
-        amps: f64,
-    ) -> Result<Vec<f64>, FemError> {
-        if usize::from(protocol.electrodes()) != self.mesh.electrodes.len() {
+    /// Refuses a schedule for another electrode count, or one that measures on a drive
+    /// electrode where the electrodes are points (a point reads the node the current enters
+    /// by: its potential is the model's singularity, not a measurement).
+    fn check(&self, schedule: &Schedule) -> Result<(), FemError> {
+        let l = self.mesh.electrodes.len();
+        if schedule.electrodes() != l {
             return Err(FemError::Input(format!(
-                "protocol for {} electrodes, mesh has {}",
-                protocol.electrodes(),
-                self.mesh.electrodes.len()
+                "the protocol is for {} electrodes, the mesh has {l}",
+                schedule.electrodes()
             )));
         }
-        let sol = self.solve(sigma, &Self::injection_currents(protocol, amps))?;
-        Ok(protocol
-            .steps()
-            .map(|s| {
-                let i = usize::from(s.injection_index);
-                sol.electrodes[(usize::from(s.measurement.positive.0), i)]
-                    - sol.electrodes[(usize::from(s.measurement.negative.0), i)]
+        if let (Electrodes::Point, Some((k, e))) = (&self.electrodes, schedule.first_on_drive()) {
+            return Err(FemError::Input(format!(
+                "value {k} measures on drive electrode {e}: point electrodes cannot model it \
+                 (use the complete electrode model, electrodes.model = \"complete\")"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The frame V_m (K values, V) of `schedule` at conductivity `sigma`: U_positive -
+    /// U_negative of each row, under its injection's current.
+    ///
+    /// # Errors
+    /// [`FemError`] as [`Forward::solve`], a schedule for another electrode count, or one
+    /// measuring on a drive electrode with point electrodes.
+    pub fn frame(&self, sigma: &[f64], schedule: &Schedule) -> Result<Vec<f64>, FemError> {
+        self.check(schedule)?;
+        let sol = self.solve(sigma, &Self::injection_currents(schedule))?;
+        let (_, of_row) = schedule.injections();
+        Ok(schedule
+            .rows()
+            .iter()
+            .zip(of_row)
+            .map(|(r, i)| {
+                sol.electrodes[(usize::from(r.positive), i)]
+                    - sol.electrodes[(usize::from(r.negative), i)]
             })
             .collect())
     }

@@ -26,8 +26,7 @@ use crate::onestep::{DataSpace, ReconError, noser_inverse};
 /// when even the first step cannot lower the objective (nothing was fitted).
 pub fn gauss_newton(
     forward: &crate::fem::Forward,
-    protocol: &et_core::protocol::Protocol,
-    amps: f64,
+    schedule: &et_core::schedule::Schedule,
     sigma_0: &[f64],
     data: Data<'_>,
     options: GaussNewton,
@@ -45,7 +44,7 @@ pub fn gauss_newton(
     }
     let fem = |e: crate::fem::FemError| ReconError::Parameter(e.to_string());
     // One factorisation per iterate: the Jacobian solve also gives the frame.
-    let (v0, jac0) = forward.jacobian(sigma_0, protocol, amps).map_err(fem)?;
+    let (v0, jac0) = forward.jacobian(sigma_0, schedule).map_err(fem)?;
     let target: Vec<f64> = match data {
         Data::Difference(dv) => dv.iter().zip(&v0).map(|(d, v)| d + v).collect(),
         Data::Absolute(v) => v.to_vec(),
@@ -107,7 +106,7 @@ pub fn gauss_newton(
                 .zip(&full)
                 .map(|(a, b)| a + t * (b - a))
                 .collect();
-            let v_trial = forward.frame(&trial, protocol, amps).map_err(fem)?;
+            let v_trial = forward.frame(&trial, schedule).map_err(fem)?;
             let phi = norm2(&residual(&v_trial)) + lambda * prior(&trial);
             if phi < phi_now {
                 accepted = Some((trial, v_trial, phi));
@@ -138,7 +137,7 @@ pub fn gauss_newton(
         });
         // The next step needs the Jacobian here.
         if it + 1 < iterations {
-            (v, jac) = forward.jacobian(&sigma, protocol, amps).map_err(fem)?;
+            (v, jac) = forward.jacobian(&sigma, schedule).map_err(fem)?;
         }
     }
     Ok(Fit { iterates, stop })

@@ -1,7 +1,7 @@
 //! One sheet's imaging set-up, shared by every caller: the forward model about the
 //! background conductivity and the pixel grid images are drawn on.
 
-use et_core::protocol::Protocol;
+use et_core::schedule::Schedule;
 use et_core::sheet::Sheet;
 use nalgebra::DMatrix;
 
@@ -68,27 +68,24 @@ impl Imager {
         vec![self.sigma0; self.triangles()]
     }
 
-    /// The Jacobian of `protocol`'s frame at the background in factored form (J = M G over
-    /// the transfer impedances, [`crate::fem::TransferJacobian`]), `amps` injected: what
+    /// The Jacobian of `schedule`'s frame at the background in factored form (J = M G over
+    /// the transfer impedances, [`crate::fem::TransferJacobian`]): what
     /// [`crate::onestep::DataSpace::factored`] takes.
     ///
     /// # Errors
     /// [`FemError`] if the solve fails.
     pub fn transfer_jacobian(
         &self,
-        protocol: &Protocol,
-        amps: f64,
+        schedule: &Schedule,
     ) -> Result<crate::fem::TransferJacobian, FemError> {
-        self.forward
-            .transfer_jacobian(&self.background(), protocol, amps)
+        self.forward.transfer_jacobian(&self.background(), schedule)
     }
 
-    /// The K x T Jacobian of `protocol`'s frame at the background, `amps` injected (V per
-    /// S per square).
+    /// The K x T Jacobian of `schedule`'s frame at the background (V per S per square).
     ///
     /// # Errors
     /// [`FemError`] if the solve fails.
-    pub fn jacobian(&self, protocol: &Protocol, amps: f64) -> Result<DMatrix<f64>, FemError> {
-        Ok(self.forward.jacobian(&self.background(), protocol, amps)?.1)
+    pub fn jacobian(&self, schedule: &Schedule) -> Result<DMatrix<f64>, FemError> {
+        Ok(self.forward.jacobian(&self.background(), schedule)?.1)
     }
 }

@@ -1,5 +1,7 @@
 //! The one entry point from frames to an image: a [`Reconstructor`] is set up once for a
-//! sheet, a protocol, a mesh, an electrode model (the sheet's), a method and an alpha rule,
+//! sheet, a [`Schedule`] (the protocol: who drives, who measures, with what current; a
+//! built-in protocol's or any system's from a CSV file), a mesh, an electrode model (the
+//! sheet's), a method and an alpha rule,
 //! then images every frame against a [`Reference`] (docs/method.md §5-6). The command line,
 //! the demo, the live pipeline, the viewer, the examples and the benchmarks all image through
 //! it; none chains mesh -> forward model -> Jacobian -> matrix -> image itself.
@@ -20,7 +22,7 @@
 //! fn touches(untouched: &[Vec<f32>], frame: &[f32]) -> Result<Vec<[f64; 2]>, ImagingError> {
 //!     let sheet = Sheet::disc(0.11, 16);
 //!     let protocol = Protocol::new(ProtocolKind::Adjacent, 16).expect("16 electrodes");
-//!     let mut recon = Spec::new(sheet, protocol, 1e-3).set_up()?;
+//!     let mut recon = Spec::new(sheet, protocol.schedule(1e-3)?).set_up()?;
 //!     let image = recon.image(frame, &Reference::from_frames(untouched)?)?;
 //!     Ok(image.touches.iter().map(|t| t.centroid).collect())
 //! }
@@ -28,7 +30,7 @@
 
 use std::time::Instant;
 
-use et_core::protocol::Protocol;
+use et_core::schedule::Schedule;
 use et_core::sheet::Sheet;
 
 use crate::fem::{FemError, TransferJacobian};
@@ -54,13 +56,15 @@ pub enum ImagingError {
     /// A parameter, a frame or a reference is unusable, or a matrix is singular.
     #[error("{0}")]
     Recon(#[from] ReconError),
+    /// The schedule (protocol, currents) is not usable.
+    #[error("protocol: {0}")]
+    Schedule(#[from] et_core::schedule::ScheduleError),
 }
 
 /// A reconstruction set up for one sheet, protocol, mesh, method and alpha rule (see the
 /// module docs).
 pub struct Reconstructor {
-    protocol: Protocol,
-    amps: f64,
+    schedule: Schedule,
     method: Method,
     alpha: AlphaRule,
     /// The ROI threshold asked for (None: the protocol's default).
@@ -95,12 +99,11 @@ impl Reconstructor {
         let mesh_s = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
         let imager = Imager::new(&spec.sheet, mesh, spec.pixels)?;
-        let jac = imager.transfer_jacobian(&spec.protocol, spec.amps)?;
+        let jac = imager.transfer_jacobian(&spec.schedule)?;
         let forward_jacobian = clock.elapsed().as_secs_f64();
         let mut r = Self {
             threshold: spec.threshold,
-            protocol: spec.protocol,
-            amps: spec.amps,
+            schedule: spec.schedule,
             method: spec.method,
             alpha: spec.alpha,
             imager,
@@ -167,14 +170,13 @@ impl Reconstructor {
         )
     }
 
-    /// Another protocol (and current) on the same mesh: a new Jacobian and matrix.
+    /// Another schedule (protocol and currents) on the same mesh: a new Jacobian and matrix.
     ///
     /// # Errors
     /// As [`Spec::set_up`].
-    pub fn set_protocol(&mut self, protocol: Protocol, amps: f64) -> Result<(), ImagingError> {
-        self.jac = self.imager.transfer_jacobian(&protocol, amps)?;
-        self.protocol = protocol;
-        self.amps = amps;
+    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<(), ImagingError> {
+        self.jac = self.imager.transfer_jacobian(&schedule)?;
+        self.schedule = schedule;
         self.prepare()
     }
 
@@ -211,16 +213,10 @@ impl Reconstructor {
         &self.jac
     }
 
-    /// The protocol imaged.
+    /// The measurements imaged: electrodes, protocol and currents.
     #[must_use]
-    pub fn protocol(&self) -> &Protocol {
-        &self.protocol
-    }
-
-    /// The injected current, A.
-    #[must_use]
-    pub fn amps(&self) -> f64 {
-        self.amps
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
     }
 
     /// The method.
@@ -239,7 +235,7 @@ impl Reconstructor {
     #[must_use]
     pub fn threshold(&self) -> f64 {
         self.threshold
-            .unwrap_or_else(|| default_threshold(self.protocol.kind()))
+            .unwrap_or_else(|| self.schedule.kind().map_or(0.10, default_threshold))
     }
 
     /// GREIT's matrix when one serves every frame (a fixed rule).
@@ -277,7 +273,7 @@ impl Reconstructor {
     /// [`ReconError::Parameter`] for a frame or reference not of K values,
     /// [`ReconError::NonFinite`] for NaN or infinity in them; a failed solve.
     pub fn image(&mut self, frame: &[f32], reference: &Reference) -> Result<Image, ImagingError> {
-        let k = self.protocol.frame_len();
+        let k = self.schedule.frame_len();
         for (what, n) in [
             ("frame", frame.len()),
             ("reference V_0", reference.v0.len()),
@@ -355,8 +351,7 @@ impl Reconstructor {
                     let sigma0 = self.imager.background();
                     let fit = gauss_newton(
                         &self.imager.forward,
-                        &self.protocol,
-                        self.amps,
+                        &self.schedule,
                         &sigma0,
                         Data::Difference(&dv),
                         GaussNewton {

@@ -57,6 +57,9 @@ pub enum DemoError {
     /// A built-in protocol is refused.
     #[error(transparent)]
     Protocol(#[from] ProtocolError),
+    /// A built-in protocol's schedule is refused.
+    #[error(transparent)]
+    Schedule(#[from] et_core::schedule::ScheduleError),
     /// A built-in scan configuration is refused.
     #[error(transparent)]
     Config(#[from] ConfigError),

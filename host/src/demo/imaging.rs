@@ -107,11 +107,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             triangles: sizes.triangles,
             refine: Vec::new(),
         },
-        ..et_recon::Spec::new(
-            sheet_spec.physical.clone(),
-            adjacent.validate()?,
-            f64::from(adjacent.current_amps()),
-        )
+        ..et_recon::Spec::new(sheet_spec.physical.clone(), adjacent.schedule()?)
     }
     .set_up()?;
     let sheet = simulated_sheet(&scenes[0].1)?;
@@ -135,8 +131,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             protocol: kind,
             ..base
         };
-        let protocol = config.validate()?;
-        recon.set_protocol(protocol, f64::from(config.current_amps()))?;
+        recon.set_schedule(config.schedule()?)?;
         bar.inc(1);
         let f = recon.threshold();
         for (name, scene) in &scenes {

@@ -45,6 +45,7 @@ pub fn mesh_sweep(
         scene.sheet.physical.electrodes.count,
     )?;
     let amps = 32e-6;
+    let schedule = protocol.schedule(amps)?;
     let t = &scene.touches[0];
     let sheet = simulated_sheet(&scene)?;
     let mut sim = et_sim::frontend::SimFrontend::new(sheet, scene.frontend, 1)?;
@@ -61,7 +62,7 @@ pub fn mesh_sweep(
         Mesh::with_about(&scene.sheet.physical, reference)?,
         8,
     )?;
-    let v_ref = fine.forward.frame(&fine.background(), &protocol, amps)?;
+    let v_ref = fine.forward.frame(&fine.background(), &schedule)?;
     let scale = v_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let pe = |imager: &Imager, d: &[f64]| {
         let rois = regions(&imager.grid, &imager.grid.image(d), 0.1);
@@ -80,7 +81,7 @@ pub fn mesh_sweep(
         )?;
         let jac = imager
             .forward
-            .transfer_jacobian(&imager.background(), &protocol, amps)?;
+            .transfer_jacobian(&imager.background(), &schedule)?;
         let one = et_recon::DataSpace::factored(&jac, 0.5)?.one_step(0.03)?;
         let v = jac.frame;
         let setup_s = started.elapsed().as_secs_f64();
@@ -106,8 +107,7 @@ pub fn mesh_sweep(
             let t0 = Instant::now();
             let its = et_recon::gauss_newton(
                 &imager.forward,
-                &protocol,
-                amps,
+                &schedule,
                 &imager.background(),
                 Data::Difference(&dv),
                 GaussNewton {

@@ -174,7 +174,7 @@ impl Projection {
             Some(p) => p,
             None => {
                 if *at != *config {
-                    recon.set_protocol(config.validate()?, f64::from(config.current_amps()))?;
+                    recon.set_schedule(config.schedule()?)?;
                     *at = *config;
                 }
                 let (method_of, rule) = method.reconstruction(alpha, s);
@@ -340,7 +340,7 @@ impl Processor {
             alpha,
             pixels: settings.pixels,
             threshold: settings.threshold,
-            ..et_recon::Spec::new(sheet.clone(), at.validate()?, f64::from(at.current_amps()))
+            ..et_recon::Spec::new(sheet.clone(), at.schedule()?)
         }
         .set_up()?;
         let inside = recon

@@ -28,8 +28,7 @@ fn finite_elements_and_the_simulators_resistor_network_agree() {
         let v_fem = fwd
             .frame(
                 &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
-                &protocol,
-                32e-6,
+                &protocol.schedule(32e-6).unwrap(),
             )
             .unwrap();
         let scale = v_fem.iter().fold(0.0f64, |m, v| m.max(v.abs()));

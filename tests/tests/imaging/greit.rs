@@ -24,7 +24,9 @@ fn small(kind: ProtocolKind) -> (Imager, TransferJacobian) {
     let mesh = Mesh::with_about(&sc.sheet.physical, 600).unwrap();
     let imager = Imager::new(&sc.sheet.physical, mesh, 24).unwrap();
     let protocol = Protocol::new(kind, 16).unwrap();
-    let jac = imager.transfer_jacobian(&protocol, 32e-6).unwrap();
+    let jac = imager
+        .transfer_jacobian(&protocol.schedule(32e-6).unwrap())
+        .unwrap();
     (imager, jac)
 }
 
@@ -198,7 +200,9 @@ fn greit_finds_exactly_the_true_touches_on_noise_free_frames() {
         let dv = sim_dv(&sc, &protocol, 32e-6);
         let mesh = Mesh::with_about(&sc.sheet.physical, 3_000).unwrap();
         let imager = Imager::new(&sc.sheet.physical, mesh, 64).unwrap();
-        let jac = imager.transfer_jacobian(&protocol, 32e-6).unwrap();
+        let jac = imager
+            .transfer_jacobian(&protocol.schedule(32e-6).unwrap())
+            .unwrap();
         let g = Greit::new(&imager, &jac, &GreitOptions::default()).unwrap();
         let var = imaging_variance(&vec![0.0; dv.len()], &dv);
         let image = g.image(&dv).unwrap();

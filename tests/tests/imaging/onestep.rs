@@ -47,7 +47,10 @@ fn jacobian_on(
     let n = mesh.triangles.len();
     let fwd = Forward::new(mesh, Electrodes::Complete(z)).unwrap();
     let (_, jac) = fwd
-        .jacobian(&vec![1.0 / sheet.sheet_resistance; n], protocol, amps)
+        .jacobian(
+            &vec![1.0 / sheet.sheet_resistance; n],
+            &protocol.schedule(amps).unwrap(),
+        )
         .unwrap();
     (grid, jac)
 }
@@ -227,8 +230,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
     };
     let fit = gauss_newton(
         &fwd,
-        &protocol,
-        amps,
+        &protocol.schedule(amps).unwrap(),
         &sigma_0,
         Data::Difference(&dv),
         opts,
@@ -259,8 +261,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
     assert!(
         gauss_newton(
             &fwd,
-            &protocol,
-            amps,
+            &protocol.schedule(amps).unwrap(),
             &sigma_0,
             Data::Difference(&dv),
             bad,
@@ -271,8 +272,7 @@ fn iterative_gauss_newton_fits_the_data_better_than_one_step() {
     assert!(
         gauss_newton(
             &fwd,
-            &protocol,
-            amps,
+            &protocol.schedule(amps).unwrap(),
             &sigma_0,
             Data::Difference(&dv[..5]),
             opts,
@@ -559,8 +559,7 @@ fn iterative_gauss_newton_does_not_diverge_and_scores_its_noise() {
         };
         let fit = gauss_newton(
             &fwd,
-            &protocol,
-            amps,
+            &protocol.schedule(amps).unwrap(),
             &sigma_0,
             Data::Difference(&dv),
             opts,
@@ -612,8 +611,7 @@ fn noise_free_frames_find_exactly_the_true_touches() {
         let (_, jac) = fwd
             .jacobian(
                 &vec![1.0 / sc.sheet.physical.sheet_resistance; n],
-                &protocol,
-                amps,
+                &protocol.schedule(amps).unwrap(),
             )
             .unwrap();
         let space = DataSpace::new(&jac, 0.5).unwrap();
@@ -665,10 +663,14 @@ fn the_factored_data_space_equals_the_dense_one() {
         let sigma: Vec<f64> = (0..n)
             .map(|t| 1e-4 * (1.0 + 0.3 * ((t % 7) as f64)))
             .collect();
-        let tj = fwd.transfer_jacobian(&sigma, &protocol, 1e-4).unwrap();
+        let tj = fwd
+            .transfer_jacobian(&sigma, &protocol.schedule(1e-4).unwrap())
+            .unwrap();
         assert_eq!(tj.pairs(), 28);
         let dense = tj.dense();
-        let frame = fwd.frame(&sigma, &protocol, 1e-4).unwrap();
+        let frame = fwd
+            .frame(&sigma, &protocol.schedule(1e-4).unwrap())
+            .unwrap();
         let scale = frame.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         for (a, b) in tj.frame.iter().zip(&frame) {
             assert!((a - b).abs() < 1e-10 * scale, "{a} vs {b}");

@@ -3,7 +3,7 @@
 
 use super::*;
 
-/// A protocol's Jacobian in factored form J = M G (docs/method.md §5): by reciprocity every
+/// A schedule's Jacobian in factored form J = M G (docs/method.md §5): by reciprocity every
 /// frame value is a combination of the transfer impedances Z_ij (i <= j < L - 1: the
 /// potential at electrode i, against electrode L - 1, of a unit current into electrode j and
 /// out of electrode L - 1), so J (K x T) is a sparse K x r combination M of the r = L (L - 1) / 2
@@ -53,7 +53,7 @@ pub fn pair_index(l: usize, i: usize, j: usize) -> usize {
 }
 
 impl Forward {
-    /// The frame of `protocol` and its Jacobian with respect to each triangle's conductivity
+    /// The frame of `schedule` and its Jacobian with respect to each triangle's conductivity
     /// (K x T, V per S/sq): [`Forward::transfer_jacobian`] multiplied out.
     ///
     /// # Errors
@@ -61,15 +61,14 @@ impl Forward {
     pub fn jacobian(
         &self,
         sigma: &[f64],
-        protocol: &Protocol,
-        amps: f64,
+        schedule: &Schedule,
     ) -> Result<(Vec<f64>, DMatrix<f64>), FemError> {
-        let tj = self.transfer_jacobian(sigma, protocol, amps)?;
+        let tj = self.transfer_jacobian(sigma, schedule)?;
         let jac = tj.dense();
         Ok((tj.frame, jac))
     }
 
-    /// The frame of `protocol` and its Jacobian in factored form, by the adjoint method on
+    /// The frame of `schedule` and its Jacobian in factored form, by the adjoint method on
     /// the transfer impedances: with u_i the potentials of a unit current from electrode i to
     /// electrode L - 1, dZ_ij / dsigma_t = -int_T grad u_i . grad u_j = -|T| grad u_i . grad
     /// u_j (P1: gradients constant on a triangle). L - 1 solves of one factorisation serve
@@ -80,16 +79,10 @@ impl Forward {
     pub fn transfer_jacobian(
         &self,
         sigma: &[f64],
-        protocol: &Protocol,
-        amps: f64,
+        schedule: &Schedule,
     ) -> Result<TransferJacobian, FemError> {
+        self.check(schedule)?;
         let l = self.mesh.electrodes.len();
-        if usize::from(protocol.electrodes()) != l {
-            return Err(FemError::Input(format!(
-                "protocol for {} electrodes, mesh has {l}",
-                protocol.electrodes()
-            )));
-        }
         let n = l - 1;
         let r = l * n / 2;
         let mut currents = DMatrix::zeros(l, n);
@@ -102,13 +95,14 @@ impl Forward {
         let z = |i: usize, j: usize| sol.electrodes[(i, j)] - sol.electrodes[(n, j)];
         // Electrode x as a vector of the grounded basis: e_x (x < L - 1), 0 for x = L - 1.
         let basis = |x: usize| (x < n).then_some(x);
-        let mut frame = Vec::with_capacity(protocol.frame_len());
-        let mut combination = Vec::with_capacity(protocol.frame_len());
-        for s in protocol.steps() {
+        let mut frame = Vec::with_capacity(schedule.frame_len());
+        let mut combination = Vec::with_capacity(schedule.frame_len());
+        for s in schedule.rows() {
+            let amps = s.current_a;
             let terms =
-                |a: u8, b: u8| [(basis(usize::from(a)), 1.0), (basis(usize::from(b)), -1.0)];
-            let inj = terms(s.injection.source.0, s.injection.sink.0);
-            let meas = terms(s.measurement.positive.0, s.measurement.negative.0);
+                |a: u16, b: u16| [(basis(usize::from(a)), 1.0), (basis(usize::from(b)), -1.0)];
+            let inj = terms(s.source, s.sink);
+            let meas = terms(s.positive, s.negative);
             let mut row: Vec<(usize, f64)> = Vec::with_capacity(4);
             let mut value = 0.0;
             for &(p, cp) in &meas {

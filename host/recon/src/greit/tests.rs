@@ -10,7 +10,9 @@ fn small(kind: ProtocolKind) -> (Imager, TransferJacobian) {
     let mesh = Mesh::with_about(&sheet, 600).unwrap();
     let imager = Imager::new(&sheet, mesh, 24).unwrap();
     let protocol = Protocol::new(kind, 16).unwrap();
-    let jac = imager.transfer_jacobian(&protocol, 32e-6).unwrap();
+    let jac = imager
+        .transfer_jacobian(&protocol.schedule(32e-6).unwrap())
+        .unwrap();
     (imager, jac)
 }
 

@@ -89,10 +89,8 @@ pub enum AlphaRule {
 pub struct Spec {
     /// The sheet: outline, sheet resistance, electrodes and their model.
     pub sheet: Sheet,
-    /// The scan's injections and measurements.
-    pub protocol: Protocol,
-    /// Injected current, A.
-    pub amps: f64,
+    /// The frame's measurements: who drives, who measures, with what current.
+    pub schedule: Schedule,
     /// The mesh.
     pub mesh: MeshPlan,
     /// The reconstruction.
@@ -107,14 +105,13 @@ pub struct Spec {
 }
 
 impl Spec {
-    /// `sheet` scanned with `protocol` at `amps`: one-step Gauss-Newton (s = 0.5), alpha by
-    /// GCV per frame, about 8 000 triangles, 64 pixels across, the protocol's threshold.
+    /// `sheet` measured by `schedule`: one-step Gauss-Newton (s = 0.5), alpha by GCV per
+    /// frame, about 8 000 triangles, 64 pixels across, the protocol's threshold.
     #[must_use]
-    pub fn new(sheet: Sheet, protocol: Protocol, amps: f64) -> Self {
+    pub fn new(sheet: Sheet, schedule: Schedule) -> Self {
         Self {
             sheet,
-            protocol,
-            amps,
+            schedule,
             mesh: MeshPlan::About {
                 triangles: 8_000,
                 refine: Vec::new(),

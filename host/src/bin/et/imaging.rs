@@ -111,7 +111,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     use et_recon::fem::{Electrodes, Forward};
     let scene = Scene::load(&args.scene)?;
     let config = scene.scan_config()?;
-    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let schedule = config.schedule()?;
     let started = Instant::now();
     let mesh = mesh_plan(&scene, &args.mesh, true)?.mesh(&scene.sheet.physical)?;
     let sigma0 = 1.0 / scene.sheet.physical.sheet_resistance;
@@ -133,8 +133,8 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     let t_n = mesh.triangles.len();
     let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet.physical)?)?;
     let amps = f64::from(config.current_amps());
-    let v0 = fwd.frame(&vec![sigma0; t_n], &protocol, amps)?;
-    let v1 = fwd.frame(&sigma1, &protocol, amps)?;
+    let v0 = fwd.frame(&vec![sigma0; t_n], &schedule)?;
+    let v1 = fwd.frame(&sigma1, &schedule)?;
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
     let bvc = et_core::stats::bvc_dv(&dv);
     if args.json {
@@ -338,7 +338,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             sheet.electrodes.count
         );
     }
-    let protocol = config.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let schedule = config.schedule()?;
     let started = Instant::now();
     let (method, alpha) = method_and_alpha(args)?;
     let spec = et_recon::Spec {
@@ -347,7 +347,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         alpha,
         pixels: args.pixels,
         threshold: args.threshold,
-        ..et_recon::Spec::new(sheet.clone(), protocol, f64::from(config.current_amps()))
+        ..et_recon::Spec::new(sheet.clone(), schedule)
     };
     let mut recon = spec.set_up()?;
     let set_up = recon.set_up_timings;

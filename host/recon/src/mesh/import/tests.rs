@@ -108,7 +108,7 @@ fn gmsh_and_csv_meshes_give_the_same_voltages_as_the_original() {
         let n = m.triangles.len();
         Forward::new(m, Electrodes::Complete(vec![5.0; 8]))
             .unwrap()
-            .frame(&vec![1e-4; n], &protocol, 1e-4)
+            .frame(&vec![1e-4; n], &protocol.schedule(1e-4).unwrap())
             .unwrap()
     };
     let (v, vg, vc) = (frame(mesh), frame(g), frame(c));
@@ -189,7 +189,7 @@ fn one_node_electrodes_are_point_electrodes() {
         let n = m.triangles.len();
         Forward::new(m, Electrodes::Point)
             .unwrap()
-            .frame(&vec![1e-4; n], &protocol, 1e-4)
+            .frame(&vec![1e-4; n], &protocol.schedule(1e-4).unwrap())
             .unwrap()
     };
     let v = frame(mesh.clone());

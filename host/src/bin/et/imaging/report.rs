@@ -53,7 +53,10 @@ pub(super) fn report(
     let summary = ReconstructSummary {
         out: &args.out,
         triangles: recon.imager().triangles(),
-        protocol: recon.protocol().kind().to_string(),
+        protocol: recon
+            .schedule()
+            .kind()
+            .map_or_else(|| "custom".to_string(), |k| k.to_string()),
         method: args.method,
         alpha: image.alpha,
         noise_figure: image.greit.map(|g| g.0),
