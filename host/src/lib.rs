@@ -9,6 +9,7 @@
 //!   commands with replies and timeouts, model upload, reconnect after a pulled cable.
 //! - [`recording`]: the recording format (JSON Lines: header, then one frame per line), which
 //!   Python and MATLAB read without et; `et sim` and `et record` write it.
+//! - [`frames`]: measured frames from other systems' files (CSV, `.npy`, `.npz`) for imaging.
 //! - [`recorder`]: `et record`: frames from a board into recording parts, through pulled
 //!   cables, idle boards and damaged frames.
 //! - [`output`]: where commands write: never onto an input, never over an existing file
@@ -22,6 +23,7 @@
 #![forbid(unsafe_code)]
 
 pub mod demo;
+pub mod frames;
 pub mod link;
 pub mod live;
 pub mod output;

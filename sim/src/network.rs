@@ -211,6 +211,31 @@ impl Transfer {
         i * (self.at(p, a) - self.at(p, b) - self.at(q, a) + self.at(q, b))
     }
 
+    /// The ideal frame of any system's `schedule`: each row's voltage under its current
+    /// (the contact's drop included where a row measures on a drive electrode), V; None for
+    /// a schedule of another electrode count.
+    #[must_use]
+    pub fn frame_of(&self, schedule: &et_core::schedule::Schedule) -> Option<Vec<f64>> {
+        if schedule.electrodes() != self.electrodes {
+            return None;
+        }
+        let frame = schedule
+            .rows()
+            .iter()
+            .map(|r| {
+                let e = |x: u16| usize::from(x);
+                self.voltage(
+                    e(r.source),
+                    e(r.sink),
+                    e(r.positive),
+                    e(r.negative),
+                    r.current_a,
+                )
+            })
+            .collect();
+        Some(frame)
+    }
+
     /// Resistance seen between electrodes a and b, ohms (the current source's load).
     #[must_use]
     pub fn load(&self, a: usize, b: usize) -> f64 {

@@ -24,17 +24,48 @@ use crate::sheet::{SheetError, SheetSpec, SimulatedSheet};
 use crate::touch::{Footprint, Touch};
 use et_core::rng::Rng;
 
+/// A scene's protocol: a built-in one by name, or any system's from a file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ProtocolSpec {
+    /// adjacent, pseudo-polar, pp-pp or opposite (`protocol = "adjacent"`).
+    Named(String),
+    /// Any system's protocol (`protocol = { file = "protocol.csv" }`): a CSV with one row per
+    /// frame value, `source,sink,positive,negative` and optionally `current_a`
+    /// ([`et_core::schedule::Schedule::parse_csv`]). Imaged, not scanned by the simulated
+    /// board.
+    File(ProtocolFile),
+}
+
+/// A protocol file and how it counts electrodes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProtocolFile {
+    /// The CSV, relative to the scene file.
+    pub file: std::path::PathBuf,
+    /// The number of the first electrode in the file: 0 (et's), or 1.
+    #[serde(default)]
+    pub base: u16,
+}
+
+impl Default for ProtocolSpec {
+    fn default() -> Self {
+        Self::Named("adjacent".into())
+    }
+}
+
 /// How a scene's frames are scanned.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScanSpec {
-    /// adjacent, pseudo-polar, pp-pp or opposite.
-    pub protocol: String,
+    /// The protocol: a built-in one's name, or a file of any system's measurements.
+    pub protocol: ProtocolSpec,
     /// Samples per injection step (S / L).
     pub samples_per_step: u16,
     /// t_s, samples dropped per step.
     pub settle_samples: u16,
-    /// Injected current, uA.
+    /// Injected current, uA (the simulated board drives up to 1 000; imaging recorded frames
+    /// takes up to 50 000, a tank's milliamperes; a protocol file may give a current per row).
     pub current_ua: f64,
     /// Sample rate per channel, Hz.
     pub sample_rate_hz: u32,
@@ -47,7 +78,7 @@ impl Default for ScanSpec {
     fn default() -> Self {
         let r = ScanConfig::REFERENCE;
         Self {
-            protocol: "adjacent".into(),
+            protocol: ProtocolSpec::default(),
             samples_per_step: r.samples_per_step,
             settle_samples: r.settle_samples,
             current_ua: f64::from(r.current_na) / 1e3,
@@ -201,6 +232,10 @@ pub struct Scene {
     /// Temperature drift.
     #[serde(default)]
     pub drift: Option<Drift>,
+    /// The folder of the scene file (what a protocol file's path is relative to); the
+    /// working folder for a scene parsed from text.
+    #[serde(skip)]
+    pub dir: std::path::PathBuf,
 }
 
 fn default_seed() -> u64 {
@@ -344,7 +379,14 @@ impl Scene {
             path: name.clone(),
             source,
         })?;
-        Self::parse(&text, &name)
+        let mut scene = Self::parse(&text, &name)?;
+        scene.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        // A protocol file is read now, so that a scene that loads images.
+        scene.schedule().map_err(|error| SceneError::Invalid {
+            path: name.clone(),
+            error,
+        })?;
+        Ok(scene)
     }
 
     /// Parses and validates scene text; `name` is used in messages.
@@ -383,7 +425,7 @@ impl Scene {
     fn validate(&self) -> Result<(), FieldError> {
         self.sheet.validate()?;
         self.frontend.validate()?;
-        self.scan_config()?;
+        self.check_scan()?;
         if !(self.movement.rms.is_finite() && self.movement.rms >= 0.0) {
             return Err(FieldError::new(
                 "movement.rms",
@@ -481,25 +523,90 @@ impl Scene {
         Ok(())
     }
 
-    /// The scan configuration the scene asks for.
+    /// The built-in protocol named, if it is one.
+    fn named_protocol(&self) -> Result<Option<ProtocolKind>, FieldError> {
+        match &self.scan.protocol {
+            ProtocolSpec::File(_) => Ok(None),
+            ProtocolSpec::Named(name) => ProtocolKind::from_name(name).map(Some).ok_or_else(|| {
+                FieldError::new(
+                    "scan.protocol",
+                    format!(
+                        "'{name}' is not adjacent, pseudo-polar, pp-pp or opposite (or give \
+                         any system's protocol as {{ file = \"protocol.csv\" }})"
+                    ),
+                )
+            }),
+        }
+    }
+
+    /// The scan section as far as it can be checked without reading files: the board's
+    /// configuration where the simulated board can scan it (a named protocol at up to
+    /// 1 mA), else a known protocol and a current up to 50 mA for imaging recorded frames.
+    fn check_scan(&self) -> Result<(), FieldError> {
+        let ua = self.scan.current_ua;
+        let max_ua = et_core::schedule::MAX_CURRENT_A * 1e6;
+        if !(ua.is_finite() && ua > 0.0 && ua <= max_ua) {
+            return Err(FieldError::new(
+                "scan.current_ua",
+                format!("{ua} must be in (0, {max_ua}] uA"),
+            ));
+        }
+        if self.named_protocol()?.is_some() && ua <= 1000.0 {
+            self.scan_config()?;
+        }
+        Ok(())
+    }
+
+    /// What each frame value measures: the built-in protocol's rows at the scene's current,
+    /// or the protocol file's (relative to [`Scene::dir`]), its rows without a current at
+    /// the scene's.
     ///
     /// # Errors
-    /// [`FieldError`] naming the `scan.` field at fault.
+    /// [`FieldError`] naming `scan.protocol` (with the file, line and cell) or
+    /// `scan.current_ua`.
+    pub fn schedule(&self) -> Result<et_core::schedule::Schedule, FieldError> {
+        self.check_scan()?;
+        let amps = self.scan.current_ua * 1e-6;
+        let electrodes = self.sheet.physical.electrodes.count;
+        let field = |e: &dyn std::fmt::Display| FieldError::new("scan.protocol", e.to_string());
+        match (&self.scan.protocol, self.named_protocol()?) {
+            (ProtocolSpec::File(f), _) => et_core::schedule::Schedule::read_csv(
+                &self.dir.join(&f.file),
+                u16::from(electrodes),
+                f.base,
+                amps,
+            )
+            .map_err(|e| field(&e)),
+            (_, Some(kind)) => et_core::protocol::Protocol::new(kind, electrodes)
+                .map_err(|e| field(&e))?
+                .schedule(amps)
+                .map_err(|e| field(&e)),
+            (ProtocolSpec::Named(_), None) => Err(field(&"no protocol")),
+        }
+    }
+
+    /// The scan configuration the scene asks of the (simulated) board.
+    ///
+    /// # Errors
+    /// [`FieldError`] naming the `scan.` field at fault: a protocol file (imaged from
+    /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
         let s = &self.scan;
-        let protocol = ProtocolKind::from_name(&s.protocol).ok_or_else(|| {
+        let protocol = self.named_protocol()?.ok_or_else(|| {
             FieldError::new(
                 "scan.protocol",
-                format!(
-                    "'{}' is not adjacent, pseudo-polar, pp-pp or opposite",
-                    s.protocol
-                ),
+                "a protocol file is imaged from recorded frames (et reconstruct --frames), \
+                 not scanned by the simulated board: name a built-in protocol to simulate",
             )
         })?;
         if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {
             return Err(FieldError::new(
                 "scan.current_ua",
-                format!("{} must be in (0, 1000] uA", s.current_ua),
+                format!(
+                    "{} uA: the simulated board drives (0, 1000] uA (imaging recorded frames \
+                     takes up to 50 mA: give them with --frames)",
+                    s.current_ua
+                ),
             ));
         }
         let config = ScanConfig {

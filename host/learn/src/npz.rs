@@ -265,6 +265,17 @@ fn u64_at(b: &[u8], at: usize) -> Option<usize> {
 }
 
 impl Npz {
+    /// One `.npy` file's bytes as an archive holding one array named `array` (nothing is
+    /// copied; the array is checked when read).
+    #[must_use]
+    pub fn from_npy(bytes: Vec<u8>) -> Self {
+        let range = 0..bytes.len();
+        Self {
+            bytes,
+            entries: vec![("array".to_string(), range)],
+        }
+    }
+
     /// Indexes the archive in `bytes` (nothing is copied).
     ///
     /// # Errors

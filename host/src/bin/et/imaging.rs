@@ -88,14 +88,22 @@ pub(crate) struct ReconstructArgs {
     /// Pixels across the image (4 to 512).
     #[arg(long, default_value_t = 64)]
     pixels: usize,
-    /// Image recorded frames (from `et sim`, later from the board) instead of simulating
-    /// the scene's touches; the scene still gives the sheet and electrodes.
-    #[arg(long, value_name = "JSONL")]
+    /// Image measured frames instead of simulating the scene's touches; the scene gives the
+    /// sheet, the electrodes and the protocol (a built-in one, or any system's as a file).
+    /// An et recording (.jsonl, from `et sim` or `et record`), or any system's frames in
+    /// volts: a CSV with one frame per row (header optional; `,` `;` or tab), a NumPy .npy
+    /// (2-D, frames as rows) or an .npz array (FILE.npz:NAME). A matrix whose columns are
+    /// the frames (MATLAB's habit) is read transposed.
+    #[arg(long, value_name = "FILE")]
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as
     /// `et stream` and `et view` do; record them with the sheet untouched).
     #[arg(long, default_value_t = 20)]
     reference: usize,
+    /// The untouched reference V_0 from another file (one or more frames, averaged; any
+    /// format --frames reads); then --frame counts every frame of --frames.
+    #[arg(long, value_name = "FILE", requires = "frames")]
+    reference_file: Option<PathBuf>,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long)]
     frame: Option<usize>,
@@ -280,6 +288,48 @@ fn frames(
     ))
 }
 
+/// Another system's frames from a table file: V_0 from `--reference-file` or the first
+/// `--reference` frames, and the frame `--frame` (default the last). No truth is known.
+fn table_frames(
+    args: &ReconstructArgs,
+    path: &std::path::Path,
+    k: usize,
+) -> Result<(et_recon::Reference, Vec<f32>, Vec<et_sim::still::Truth>)> {
+    let frames = et_host::frames::read(path, k)?;
+    eprintln!("{}", frames.description);
+    let n = frames.frames.len();
+    let (reference, first) = match &args.reference_file {
+        Some(f) => {
+            let r = et_host::frames::read(f, k)?;
+            eprintln!("reference {}", r.description);
+            (et_recon::Reference::from_frames(&r.frames)?, 0)
+        }
+        None => {
+            let count = args.reference.clamp(1, n.max(1));
+            if n <= count {
+                bail!(
+                    "{}: {n} frames; --reference {count} takes the first {count} as V_0 and \
+                     leaves none to image (lower --reference, or give --reference-file)",
+                    path.display()
+                );
+            }
+            (
+                et_recon::Reference::from_frames(&frames.frames[..count])?,
+                count,
+            )
+        }
+    };
+    let frame = args.frame.unwrap_or(n.saturating_sub(1));
+    if frame >= n || frame < first {
+        bail!(
+            "{}: --frame {frame}: the frames to image are {first} to {}",
+            path.display(),
+            n.saturating_sub(1)
+        );
+    }
+    Ok((reference, frames.frames[frame].clone(), Vec::new()))
+}
+
 /// The reconstruction `et reconstruct`'s arguments ask for.
 fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_recon::AlphaRule)> {
     use et_recon::{AlphaRule, Method as M};
@@ -323,22 +373,36 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
     let mut inputs = vec![args.scene.as_path()];
     inputs.extend(args.frames.as_deref());
+    inputs.extend(args.reference_file.as_deref());
     crate::output::check(&args.out, &inputs, force)?;
     let scene = Scene::load(&args.scene)?;
-    let recording = args.frames.as_deref().map(recording::read).transpose()?;
-    let config = match &recording {
-        Some(r) => r.header.config,
-        None => scene.scan_config()?,
+    let table = args
+        .frames
+        .as_deref()
+        .filter(|f| et_host::frames::is_table(f));
+    let recording = match (&args.frames, table) {
+        (Some(f), None) => Some(recording::read(f)?),
+        _ => None,
     };
     let sheet = &scene.sheet.physical;
-    if config.electrodes != sheet.electrodes.count {
-        bail!(
-            "the frames are of {} electrodes, the scene's sheet has {}",
-            config.electrodes,
-            sheet.electrodes.count
-        );
-    }
-    let schedule = config.schedule()?;
+    let (schedule, config) = match &recording {
+        Some(r) => {
+            if r.header.config.electrodes != sheet.electrodes.count {
+                bail!(
+                    "the frames are of {} electrodes, the scene's sheet has {}",
+                    r.header.config.electrodes,
+                    sheet.electrodes.count
+                );
+            }
+            (r.header.config.schedule()?, Some(r.header.config))
+        }
+        // Another system's frames: the scene's protocol (any schedule, any current).
+        None if table.is_some() => (scene.schedule()?, None),
+        None => {
+            let config = scene.scan_config()?;
+            (config.schedule()?, Some(config))
+        }
+    };
     let started = Instant::now();
     let (method, alpha) = method_and_alpha(args)?;
     let spec = et_recon::Spec {
@@ -363,7 +427,11 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         set_up.forward_jacobian,
     );
     let clock = Instant::now();
-    let (reference, v1, truth) = frames(args, &scene, recording.as_ref(), &config)?;
+    let (reference, v1, truth) = match (table, config) {
+        (Some(path), _) => table_frames(args, path, recon.schedule().frame_len())?,
+        (None, Some(config)) => frames(args, &scene, recording.as_ref(), &config)?,
+        (None, None) => bail!("no frames to image"),
+    };
     stage("frames", clock.elapsed().as_secs_f64());
     let image = recon.image(&v1, &reference)?;
     let timings_s = frame_stages(args, &image, &set_up, stage);

@@ -1,0 +1,54 @@
+use super::*;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("et-frames-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn csv_rows_or_columns_header_or_not() {
+    let dir = tmp("csv");
+    let f = dir.join("f.csv");
+    std::fs::write(&f, "v0,v1,v2\n1e-3,2e-3,3e-3\n4e-3,5e-3,6e-3\n").unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!(r.frames.len(), 2);
+    assert_eq!(r.frames[1][2], 6e-3);
+    // Three frames of K = 2 stored as columns (MATLAB's habit), `;` with decimal commas.
+    std::fs::write(&f, "1,0;4,0;7,5\n2,0;5,0;8,0\n").unwrap();
+    let r = read(&f, 2).unwrap();
+    assert_eq!(
+        r.frames,
+        vec![vec![1.0, 2.0], vec![4.0, 5.0], vec![7.5, 8.0]]
+    );
+    assert!(r.description.contains("transposed"), "{}", r.description);
+    let e = read(&f, 5).unwrap_err().to_string();
+    assert!(e.contains("2 x 3") && e.contains("K = 5"), "{e}");
+    std::fs::write(&f, "1,2\n3,x\n").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("f.csv:2") && e.contains("'x'"), "{e}");
+    std::fs::write(&f, "1,2\n3,nan\n").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("not finite"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn npy_and_npz_as_numpy_writes_them() {
+    let dir = tmp("npy");
+    let m = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    let mut w = et_learn::npz::Writer::new();
+    w.matrix("frames", &m);
+    w.matrix("other", &m);
+    let npz = dir.join("f.npz");
+    std::fs::write(&npz, w.finish().unwrap()).unwrap();
+    let named = PathBuf::from(format!("{}:frames", npz.display()));
+    assert!(is_table(&named));
+    let r = read(&named, 3).unwrap();
+    assert_eq!(r.frames[1], vec![4.0, 5.0, 6.0]);
+    let e = read(&npz, 3).unwrap_err().to_string();
+    assert!(e.contains("2 arrays") && e.contains(":NAME"), "{e}");
+    let e = read(&PathBuf::from(format!("{}:none", npz.display())), 3).unwrap_err();
+    assert!(e.to_string().contains("none"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
