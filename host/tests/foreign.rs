@@ -172,3 +172,50 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     );
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// `et protocol --csv` writes a protocol file a scene takes back row for row.
+#[test]
+fn et_protocol_csv_is_a_protocol_file() {
+    let d = dir("protocol");
+    let out = et(&[
+        "protocol",
+        "-l",
+        "16",
+        "-p",
+        "pp-pp",
+        "--csv",
+        "--current-a",
+        "2e-4",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::write(d.join("pp.csv"), &out.stdout).unwrap();
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"pp.csv\" }\n",
+    )
+    .unwrap();
+    let read = Scene::load(&scene).unwrap().schedule().unwrap();
+    let built = et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::PpPp, 16)
+        .unwrap()
+        .schedule(2e-4)
+        .unwrap();
+    assert_eq!(read.rows(), built.rows());
+    // The simulated board scans named protocols only, and says what to do instead.
+    let e = et(&[
+        "sim",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "2",
+        "--out",
+        d.join("r.jsonl").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&e.stderr).into_owned();
+    assert!(e.contains("--frames"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}

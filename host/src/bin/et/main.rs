@@ -73,6 +73,7 @@ enum Command {
     ///   et protocol --electrodes 16 --protocol adjacent
     ///   et protocol -l 16 -p opposite --json > opposite16.json
     ///   et protocol -l 16 --drive-skip 3 --measure-skip 0 --measure-skip 3
+    ///   et protocol -l 16 -p adjacent --csv --current-a 1.4e-3 > protocol.csv
     #[command(verbatim_doc_comment)]
     Protocol(protocol::ProtocolArgs),
     /// Simulate a scene into a recording of frames (JSON Lines).

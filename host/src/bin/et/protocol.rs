@@ -19,8 +19,16 @@ pub(crate) struct ProtocolArgs {
     #[arg(long)]
     measure_skip: Vec<u8>,
     /// Print JSON (all tables, machine-readable) instead of text.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "csv")]
     json: bool,
+    /// Print the protocol as a protocol file: one row per frame value, source, sink,
+    /// positive, negative (electrodes from 0) and current_a; a scene takes it as
+    /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
+    #[arg(long)]
+    csv: bool,
+    /// With --csv: the current of every row, A.
+    #[arg(long, default_value_t = 1e-3, requires = "csv")]
+    current_a: f64,
 }
 
 pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
@@ -46,6 +54,17 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
         }
     };
     let protocol = Protocol::new(kind, args.electrodes)?;
+    if args.csv {
+        let max = et_core::schedule::MAX_CURRENT_A;
+        if !(args.current_a > 0.0 && args.current_a <= max) {
+            bail!(
+                "--current-a {}: give more than 0 and at most {max} A",
+                args.current_a
+            );
+        }
+        out!("{}", protocol.schedule(args.current_a)?.to_csv().trim_end());
+        return Ok(());
+    }
     let tables = ProtocolTables::new(&protocol);
     if args.json {
         out!("{}", serde_json::to_string_pretty(&tables)?);
