@@ -27,13 +27,33 @@ pub struct ElectrodeSpec {
     /// Contact resistance of each electrode, ohm.
     pub contact_ohm: f64,
     /// Arc-length fraction of the outline where electrode 0 sits; the others follow equally
-    /// spaced, counter-clockwise. Default: half a pitch from the outline's start.
+    /// spaced. Default: half a pitch from the outline's start (the disc's +x direction, the
+    /// rectangle's lower-left corner), so on a disc of 16 electrode 0 sits at 11.25 degrees.
     pub first: Option<f64>,
-    /// Explicit arc-length fractions, one per electrode (overrides `first`).
+    /// The angle of electrode 0's centre, degrees counter-clockwise from +x as seen from the
+    /// outline's centre (the middle of its bounding box): 90 for a system that numbers from
+    /// the top. Instead of `first`.
+    pub first_deg: Option<f64>,
+    /// The way the numbers run round the outline: "ccw" (counter-clockwise, the default) or
+    /// "cw" (clockwise), as seen with +x to the right and +y up.
+    pub direction: Direction,
+    /// Explicit arc-length fractions, one per electrode (overrides `first`, `first_deg` and
+    /// `direction`).
     pub positions: Option<Vec<f64>>,
     /// How et's finite elements model the electrodes when imaging (the simulator always
     /// models the contact over its width, as the fabric has it).
     pub model: ElectrodeModel,
+}
+
+/// The way electrode numbers run round the outline.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// Counter-clockwise (et's own numbering).
+    #[default]
+    Ccw,
+    /// Clockwise.
+    Cw,
 }
 
 /// How the imaging's finite elements model an electrode (docs/method.md §5).
@@ -60,6 +80,8 @@ impl Default for ElectrodeSpec {
             width: 0.005,
             contact_ohm: 1_000.0,
             first: None,
+            first_deg: None,
+            direction: Direction::Ccw,
             positions: None,
             model: ElectrodeModel::Complete,
         }
@@ -67,15 +89,36 @@ impl Default for ElectrodeSpec {
 }
 
 impl ElectrodeSpec {
-    /// The arc-length fraction of every electrode.
+    /// The arc-length fraction of every electrode on `shape`'s outline, in electrode order.
     #[must_use]
-    pub fn arc_positions(&self) -> Vec<f64> {
+    pub fn arc_positions(&self, shape: &Shape) -> Vec<f64> {
         if let Some(p) = &self.positions {
             return p.clone();
         }
         let l = f64::from(self.count);
-        let first = self.first.unwrap_or(0.5 / l);
-        (0..self.count).map(|e| first + f64::from(e) / l).collect()
+        let first = match self.first_deg {
+            Some(deg) => shape.arc_at_angle(deg),
+            None => self.first.unwrap_or(0.5 / l),
+        };
+        let step = match self.direction {
+            Direction::Ccw => 1.0 / l,
+            Direction::Cw => -1.0 / l,
+        };
+        (0..self.count)
+            .map(|e| {
+                let t = first + f64::from(e) * step;
+                if t < 0.0 { t + 1.0 } else { t }
+            })
+            .collect()
+    }
+
+    /// The centre of every electrode on `shape`'s outline, m.
+    #[must_use]
+    pub fn centres(&self, shape: &Shape) -> Vec<[f64; 2]> {
+        self.arc_positions(shape)
+            .into_iter()
+            .map(|t| shape.boundary_point(t))
+            .collect()
     }
 }
 
@@ -173,6 +216,20 @@ impl Sheet {
                 format!("{} must be >= 0 ohm", e.contact_ohm),
             );
         }
+        if let Some(deg) = e.first_deg {
+            if !deg.is_finite() {
+                return field(
+                    "sheet.electrodes.first_deg",
+                    format!("{deg} must be a finite angle in degrees"),
+                );
+            }
+            if e.first.is_some() {
+                return field(
+                    "sheet.electrodes.first_deg",
+                    "give first_deg (an angle) or first (an arc fraction), not both".into(),
+                );
+            }
+        }
         if let Some(p) = &e.positions
             && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
         {
@@ -182,5 +239,56 @@ impl Sheet {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn near(a: [f64; 2], b: [f64; 2]) -> bool {
+        (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9
+    }
+
+    /// A tank numbered clockwise from the top, on a disc and on a rectangle; et's default.
+    #[test]
+    fn electrodes_sit_where_the_users_numbering_puts_them() {
+        let mut disc = Sheet::disc(0.14, 16);
+        let default = disc.electrodes.centres(&disc.shape);
+        let at = |deg: f64| {
+            let a = deg.to_radians();
+            [0.14 * a.cos(), 0.14 * a.sin()]
+        };
+        assert!(near(default[0], at(11.25)) && near(default[1], at(33.75)));
+        disc.electrodes.first_deg = Some(90.0);
+        disc.electrodes.direction = Direction::Cw;
+        disc.validate().unwrap();
+        let cw = disc.electrodes.centres(&disc.shape);
+        assert!(near(cw[0], at(90.0)), "{:?}", cw[0]);
+        assert!(near(cw[1], at(67.5)), "{:?}", cw[1]);
+        assert!(near(cw[4], at(0.0)), "{:?}", cw[4]);
+        assert!(near(cw[15], at(112.5)), "{:?}", cw[15]);
+        let mut square = Sheet::rectangle(0.2, 0.1, 8);
+        square.electrodes.first_deg = Some(90.0);
+        let c = square.electrodes.centres(&square.shape);
+        // The top edge's middle (the rectangle is centred on the origin).
+        assert!(near(c[0], [0.0, 0.05]), "{:?}", c[0]);
+        square.electrodes.first = Some(0.1);
+        assert!(
+            square
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("not both")
+        );
+        square.electrodes.first = None;
+        square.electrodes.first_deg = Some(f64::NAN);
+        assert!(
+            square
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("first_deg")
+        );
     }
 }

@@ -21,12 +21,12 @@ fn et(args: &[&str]) -> std::process::Output {
 }
 
 const TANK: &str = r#"
-description = "a 28 cm saline tank, 16 electrodes 2.5 cm wide, its own 79-injection protocol"
+description = "a 28 cm saline tank, 16 electrodes 2.5 cm wide numbered clockwise from the top, its own 79-injection protocol"
 
 [sheet]
 shape = { kind = "disc", radius = 0.14 }
 sheet_resistance = 200.0
-electrodes = { count = 16, width = 0.025, contact_ohm = 20 }
+electrodes = { count = 16, width = 0.025, contact_ohm = 20, first_deg = 90, direction = "cw" }
 
 [scan]
 protocol = { file = "protocol.csv" }
@@ -95,6 +95,29 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     std::fs::write(d.join("protocol.csv"), protocol_csv()).unwrap();
     let scene = Scene::load(&scene_path).unwrap();
     assert_eq!(scene.schedule().unwrap().frame_len(), 1_264);
+    // Electrode 0 at the top, 1 clockwise from it: as `et forward --json` lists them.
+    let out = et(&[
+        "forward",
+        "--scene",
+        scene_path.to_str().unwrap(),
+        "--triangles",
+        "1000",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let e = |i: usize, c: usize| j["electrodes_m"][i][c].as_f64().unwrap();
+    assert!(
+        e(0, 0).abs() < 1e-9 && (e(0, 1) - 0.14).abs() < 1e-9,
+        "{}",
+        j["electrodes_m"]
+    );
+    assert!(e(1, 0) > 0.0 && e(1, 1) < 0.14, "{}", j["electrodes_m"]);
+    assert_eq!(j["v0"].as_array().map(Vec::len), Some(1_264));
     let targets = [[0.07, 0.0], [-0.03, 0.06], [0.0, -0.09]];
     let frames = frames(&scene, &targets);
     // As rows of a CSV, with a header of channel names.

@@ -402,7 +402,7 @@ fn build_network_with(
     let positions: Vec<f64> = spec
         .physical
         .electrodes
-        .arc_positions()
+        .arc_positions(&spec.physical.shape)
         .iter()
         .enumerate()
         .map(|(e, &t)| t + offsets.get(e).copied().unwrap_or(0.0) / perimeter)

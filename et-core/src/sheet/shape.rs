@@ -241,6 +241,42 @@ impl Shape {
         }
     }
 
+    /// Arc-length fraction (0..1) of the outline point in the direction `deg` degrees
+    /// (counter-clockwise from +x) from the outline's centre (the middle of its bounding
+    /// box), for outlines that every such ray crosses once (discs, rectangles, convex
+    /// polygons).
+    #[must_use]
+    pub fn arc_at_angle(&self, deg: f64) -> f64 {
+        use std::f64::consts::{PI, TAU};
+        let a = deg.to_radians();
+        if let Shape::Disc { .. } = self {
+            return (a / TAU).rem_euclid(1.0);
+        }
+        let b = self.bounds();
+        let c = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
+        // The angle of the outline point at t, less `a`, wrapped to [-pi, pi).
+        let off = |t: f64| {
+            let p = self.boundary_point(t);
+            ((p[1] - c[1]).atan2(p[0] - c[0]) - a + PI).rem_euclid(TAU) - PI
+        };
+        let n = 3_600;
+        let coarse = (0..n)
+            .map(|i| f64::from(i) / f64::from(n))
+            .min_by(|&s, &t| off(s).abs().total_cmp(&off(t).abs()))
+            .unwrap_or(0.0);
+        // The angle grows with t (counter-clockwise): bisect the sign change around it.
+        let (mut lo, mut hi) = (coarse - 1.0 / f64::from(n), coarse + 1.0 / f64::from(n));
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if off(mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (0.5 * (lo + hi)).rem_euclid(1.0)
+    }
+
     /// Arc-length fraction (0..1) of the outline point nearest to `p`: the inverse of
     /// [`Shape::boundary_point`].
     #[must_use]

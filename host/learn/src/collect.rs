@@ -492,7 +492,7 @@ pub fn collect_presses_with(
         electrodes: spec
             .physical
             .electrodes
-            .arc_positions()
+            .arc_positions(&spec.physical.shape)
             .iter()
             .map(|&t| spec.physical.shape.boundary_point(t))
             .collect(),

@@ -199,7 +199,7 @@ pub fn unit_disc_error(
     let n = mesh.triangles.len();
     let centres: Vec<[f64; 2]> = spec
         .electrodes
-        .arc_positions()
+        .arc_positions(&spec.shape)
         .iter()
         .map(|&t| spec.shape.boundary_point(t))
         .collect();

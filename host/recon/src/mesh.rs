@@ -162,7 +162,7 @@ impl Mesh {
             return Err(MeshError::Spec("electrode width must be positive".into()));
         }
         let point = spec.electrodes.model == ElectrodeModel::Point;
-        let centres = spec.electrodes.arc_positions();
+        let centres = spec.electrodes.arc_positions(&spec.shape);
         // The graded stretch of outline at each electrode: its width for the complete model;
         // for point electrodes an interior edge either side of the node (or a quarter of the
         // spacing, if less), which only sets where the outline is sampled finer.
@@ -393,7 +393,7 @@ impl Mesh {
         let mut best: Option<Mesh> = None;
         let point = spec.electrodes.model == ElectrodeModel::Point;
         // A fan of k rings holds about 3 k^2 triangles: at most 40 % of the budget.
-        let electrodes = spec.electrodes.arc_positions().len().max(1) as f64;
+        let electrodes = f64::from(spec.electrodes.count.max(1));
         let affordable = (0.4 * target / (3.0 * electrodes)).sqrt().floor() as usize;
         let full = MeshSize::for_count(spec, triangles)
             .fan_rings

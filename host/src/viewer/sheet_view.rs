@@ -262,7 +262,12 @@ fn electrodes(canvas: &Canvas, sheet: &et_core::sheet::Sheet, drawn: &mut Drawn)
         outline,
         Stroke::new(1.0, Color32::from_gray(150)),
     ));
-    for (e, t) in sheet.electrodes.arc_positions().into_iter().enumerate() {
+    for (e, t) in sheet
+        .electrodes
+        .arc_positions(shape)
+        .into_iter()
+        .enumerate()
+    {
         let p = shape.boundary_point(t);
         let (a, b) = (
             shape.boundary_point(t - 1e-3),

@@ -176,7 +176,7 @@ impl Wizard {
         self.electrodes = sheet
             .physical
             .electrodes
-            .arc_positions()
+            .arc_positions(&sheet.physical.shape)
             .iter()
             .map(|&t| sheet.physical.shape.boundary_point(t))
             .collect();

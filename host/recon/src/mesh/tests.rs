@@ -153,7 +153,12 @@ fn triangle_budgets_from_200_up_are_met() {
     }
     // Point electrodes: the node is exactly at the electrode's centre.
     let mesh = Mesh::with_about(&sheets[4], 500).unwrap();
-    for (l, &t) in sheets[4].electrodes.arc_positions().iter().enumerate() {
+    for (l, &t) in sheets[4]
+        .electrodes
+        .arc_positions(&sheets[4].shape)
+        .iter()
+        .enumerate()
+    {
         let c = sheets[4].shape.boundary_point(t);
         assert!(dist(mesh.nodes[mesh.centre_nodes[l]], c) < 1e-12);
     }

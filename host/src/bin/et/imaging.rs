@@ -118,8 +118,10 @@ pub(crate) struct ReconstructArgs {
 pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     use et_recon::fem::{Electrodes, Forward};
     let scene = Scene::load(&args.scene)?;
-    let config = scene.scan_config()?;
-    let schedule = config.schedule()?;
+    let schedule = scene.schedule()?;
+    let protocol = schedule
+        .kind()
+        .map_or_else(|| "from its file".to_string(), |k| k.to_string());
     let started = Instant::now();
     let mesh = mesh_plan(&scene, &args.mesh, true)?.mesh(&scene.sheet.physical)?;
     let sigma0 = 1.0 / scene.sheet.physical.sheet_resistance;
@@ -140,7 +142,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         .collect();
     let t_n = mesh.triangles.len();
     let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet.physical)?)?;
-    let amps = f64::from(config.current_amps());
+    let amps = scene.scan.current_ua * 1e-6;
     let v0 = fwd.frame(&vec![sigma0; t_n], &schedule)?;
     let v1 = fwd.frame(&sigma1, &schedule)?;
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
@@ -148,8 +150,13 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
     if args.json {
         let summary = ForwardSummary {
             triangles: t_n,
-            protocol: config.protocol.to_string(),
+            protocol,
             current_a: amps,
+            electrodes_m: scene
+                .sheet
+                .physical
+                .electrodes
+                .centres(&scene.sheet.physical.shape),
             v0: &v0,
             v1: &v1,
             bvc,
@@ -160,7 +167,7 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         out!(
             "{} triangles, {} protocol, K = {}, {:.1} uA",
             t_n,
-            config.protocol,
+            protocol,
             v0.len(),
             amps * 1e6
         );

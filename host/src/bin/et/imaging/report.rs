@@ -128,7 +128,11 @@ pub(super) fn report(
 pub(super) struct ForwardSummary<'a> {
     pub(super) triangles: usize,
     pub(super) protocol: String,
+    /// The scene's current, A (a protocol file's rows may give their own).
     pub(super) current_a: f64,
+    /// Each electrode's centre, m, in electrode order (where `first_deg` and `direction`
+    /// put them).
+    pub(super) electrodes_m: Vec<[f64; 2]>,
     /// The untouched frame, V (K values).
     pub(super) v0: &'a [f64],
     /// The touched frame, V.
