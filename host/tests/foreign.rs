@@ -56,8 +56,9 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
-/// The empty tank's frame, then one frame per target (a conductive rod, 2 cm across).
-fn frames(scene: &Scene, targets: &[[f64; 2]]) -> Vec<Vec<f64>> {
+/// The empty tank's frame, then one frame per target (a rod 2 cm across: conductive for a
+/// multiplier above 1, metal; resistive below, plastic).
+fn frames(scene: &Scene, targets: &[([f64; 2], f64)]) -> Vec<Vec<f64>> {
     let sheet = et_sim::still::simulated_sheet(scene).unwrap();
     let schedule = scene.schedule().unwrap();
     let frame = |inclusions: &[Inclusion]| {
@@ -65,26 +66,33 @@ fn frames(scene: &Scene, targets: &[[f64; 2]]) -> Vec<Vec<f64>> {
         z.frame_of(&schedule).unwrap()
     };
     let mut out = vec![frame(&[])];
-    for &position in targets {
+    for &(position, multiplier) in targets {
         out.push(frame(&[Inclusion {
             position,
             radius: 0.01,
-            multiplier: 10.0,
+            multiplier,
             footprint: Footprint::default(),
         }]));
     }
     out
 }
 
-fn strongest(out: &std::process::Output) -> [f64; 2] {
+/// The strongest object's centre (mm) and sign.
+fn strongest(out: &std::process::Output) -> ([f64; 2], i64) {
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let c = &j["regions"][0]["centroid_mm"];
-    [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()]
+    let o = &j["objects"][0];
+    let mm = |k: &str| o[k].as_f64().unwrap() * 1e3;
+    assert!(o["area_m2"].as_f64().unwrap() > 0.0, "{o}");
+    assert!(
+        o["peak"].as_f64().unwrap().signum() == o["sign"].as_f64().unwrap(),
+        "{o}"
+    );
+    ([mm("x_m"), mm("y_m")], o["sign"].as_i64().unwrap())
 }
 
 #[test]
@@ -118,7 +126,14 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     );
     assert!(e(1, 0) > 0.0 && e(1, 1) < 0.14, "{}", j["electrodes_m"]);
     assert_eq!(j["v0"].as_array().map(Vec::len), Some(1_264));
-    let targets = [[0.07, 0.0], [-0.03, 0.06], [0.0, -0.09]];
+    // Metal rods (conductivity x 10) and plastic ones (x 0.1).
+    let targets = [
+        ([0.07, 0.0], 10.0),
+        ([-0.03, 0.06], 10.0),
+        ([0.0, -0.09], 10.0),
+        ([-0.06, -0.04], 0.1),
+        ([0.05, 0.07], 0.1),
+    ];
     let frames = frames(&scene, &targets);
     // As rows of a CSV, with a header of channel names.
     let mut csv: String = (0..1_264).map(|k| format!("ch{k},")).collect();
@@ -162,8 +177,10 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             png.to_str().unwrap(),
         ])
     };
-    for (i, t) in targets.iter().enumerate() {
-        let found = strongest(&run(&csv_path, i + 1));
+    for (i, (t, multiplier)) in targets.iter().enumerate() {
+        let (found, sign) = strongest(&run(&csv_path, i + 1));
+        let expected = if *multiplier > 1.0 { 1 } else { -1 };
+        assert_eq!(sign, expected, "target {t:?} x {multiplier}");
         let miss = (found[0] - t[0] * 1e3).hypot(found[1] - t[1] * 1e3);
         // Within a tenth of the tank's radius (the defaults' accuracy on real tanks is
         // docs/measurements.md's business; this is the door).
@@ -173,7 +190,7 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             "target {t:?}: strongest at {found:?} mm, {miss:.1} mm away"
         );
         assert_eq!(
-            strongest(&run(&npz_path, i + 1)),
+            strongest(&run(&npz_path, i + 1)).0,
             found,
             "npz and csv differ"
         );

@@ -53,4 +53,6 @@ pub use pixels::{PixelGrid, PixelOperator};
 pub use reconstructor::{
     AlphaRule, Image, ImagingError, MeshPlan, Method, Reconstructor, Reference, Spec,
 };
-pub use touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions, touches};
+pub use touches::{
+    Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions, touches,
+};

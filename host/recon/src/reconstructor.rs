@@ -41,7 +41,9 @@ use crate::imager::Imager;
 use crate::mesh::{Mesh, MeshError, Refinement};
 use crate::onestep::{DataSpace, OneStep, ReconError, imaging_variance};
 use crate::pixels::{PixelGrid, PixelOperator};
-use crate::touches::{PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, regions};
+use crate::touches::{
+    Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions,
+};
 
 /// Why a reconstruction could not be set up or a frame imaged.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -382,6 +384,7 @@ impl Reconstructor {
                 &crate::touches::touches(grid, &pixels, &noise_sd, f, PROMINENCE),
                 TOUCH_Z,
             ),
+            objects: objects(grid, &pixels, &noise_sd, f, TOUCH_Z),
             pixels,
             noise_sd,
             dv,

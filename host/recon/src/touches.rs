@@ -232,6 +232,56 @@ pub const TOUCH_Z: f64 = 5.0;
 /// The regions that reach at least `z` times their pixels' noise somewhere (their `z`, from
 /// [`touches`]); a region whose noise is unknown is kept.
 #[must_use]
+/// An object of a difference image: a touch-like region of either sign, conductive (+1: a
+/// press, a metal rod) or resistive (-1: a plastic rod, a cut).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Object {
+    /// +1 where the conductivity rose, -1 where it fell.
+    pub sign: i8,
+    /// The region (its peak's magnitude: `peak` is |Delta sigma| at its strongest pixel).
+    pub region: Region,
+}
+
+/// The objects of a signed image: [`touches`] of the image and of its negative, each kept
+/// above `f` times the image's largest magnitude (so that the ringing around a strong object
+/// of one sign is not taken for an object of the other) and `z` times its noise, strongest
+/// (largest |peak|) first.
+#[must_use]
+pub fn objects(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    sd: &[Option<f64>],
+    f: f64,
+    z: f64,
+) -> Vec<Object> {
+    let largest = image.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !(largest > 0.0 && largest.is_finite()) {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for sign in [1i8, -1] {
+        let signed: Vec<Option<f64>> = image
+            .iter()
+            .map(|v| v.map(|v| f64::from(sign) * v))
+            .collect();
+        let Some(max) = positive_max(&signed) else {
+            continue;
+        };
+        // touches() thresholds at f times this sign's maximum: rescale to the largest magnitude.
+        let f_here = f * largest / max;
+        if f_here > 1.0 {
+            continue;
+        }
+        out.extend(
+            above_noise(&touches(grid, &signed, sd, f_here, PROMINENCE), z)
+                .into_iter()
+                .map(|region| Object { sign, region }),
+        );
+    }
+    out.sort_by(|a, b| b.region.peak.total_cmp(&a.region.peak));
+    out
+}
+
 pub fn above_noise(regions: &[Region], z: f64) -> Vec<Region> {
     regions
         .iter()
