@@ -195,6 +195,62 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             "npz and csv differ"
         );
     }
+    // The pixel image as .npy, its grid in the JSON: the largest |value| at the first target.
+    let npy = d.join("f1.npy");
+    let mut with_image: Vec<String> = [
+        "reconstruct",
+        "--scene",
+        scene_path.to_str().unwrap(),
+        "--frames",
+        csv_path.to_str().unwrap(),
+        "--reference",
+        "1",
+        "--frame",
+        "1",
+        "--triangles",
+        "3000",
+        "--json",
+        "--force",
+        "--out",
+        png.to_str().unwrap(),
+        "--image-out",
+    ]
+    .map(String::from)
+    .to_vec();
+    with_image.push(npy.display().to_string());
+    let out = et(&with_image.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let g = &j["image"];
+    let m = et_learn::npz::Npz::from_npy(std::fs::read(&npy).unwrap())
+        .matrix("array")
+        .unwrap();
+    let (rows, cols) = (
+        g["rows"].as_u64().unwrap() as usize,
+        g["cols"].as_u64().unwrap() as usize,
+    );
+    assert_eq!(m.shape(), (rows, cols));
+    assert!(
+        m.iter().any(|v| v.is_nan()),
+        "the corners outside the tank are NaN"
+    );
+    let (mut best, mut at) = (0.0, (0, 0));
+    for r in 0..rows {
+        for c in 0..cols {
+            if m[(r, c)].abs() > best {
+                (best, at) = (m[(r, c)].abs(), (r, c));
+            }
+        }
+    }
+    let pixel = g["pixel_m"].as_f64().unwrap();
+    let x = g["x0_m"].as_f64().unwrap() + (at.1 as f64 + 0.5) * pixel;
+    let y = g["y0_m"].as_f64().unwrap() + ((rows - 1 - at.0) as f64 + 0.5) * pixel;
+    assert!((x - 0.07).hypot(y) < 0.015, "largest pixel at ({x}, {y}) m");
+    assert!((best - j["objects"][0]["peak"].as_f64().unwrap().abs()).abs() < 1e-9 * best);
     // The protocol's K is checked against the frames, by name.
     std::fs::write(&csv_path, "1,2,3\n4,5,6\n").unwrap();
     let e = String::from_utf8_lossy(&run(&csv_path, 1).stderr).into_owned();

@@ -101,36 +101,54 @@ impl Writer {
     }
 
     fn array(&mut self, name: &str, descr: &str, fortran: bool, shape: &[usize], data: &[u8]) {
-        let shape = match shape {
-            [] => "()".to_string(),
-            [n] => format!("({n},)"),
-            _ => format!(
-                "({})",
-                shape
-                    .iter()
-                    .map(usize::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        };
-        let fortran = if fortran { "True" } else { "False" };
-        let mut header =
-            format!("{{'descr': '{descr}', 'fortran_order': {fortran}, 'shape': {shape}, }}");
-        // Magic (6) + version (2) + header length (2) + header + '\n', to a multiple of 64.
-        let unpadded = 10 + header.len() + 1;
-        header.extend(std::iter::repeat_n(
-            ' ',
-            unpadded.next_multiple_of(64) - unpadded,
-        ));
-        header.push('\n');
-        let mut npy = Vec::with_capacity(10 + header.len() + data.len());
-        npy.extend_from_slice(b"\x93NUMPY\x01\x00");
-        npy.extend_from_slice(&(header.len() as u16).to_le_bytes());
-        npy.extend_from_slice(header.as_bytes());
-        npy.extend_from_slice(data);
-        self.entry(&format!("{name}.npy"), &npy);
+        self.entry(&format!("{name}.npy"), &npy(descr, fortran, shape, data));
     }
+}
 
+/// An `.npy` file's bytes: the header (version 1.0, padded to 64 bytes) and `data`.
+fn npy(descr: &str, fortran: bool, shape: &[usize], data: &[u8]) -> Vec<u8> {
+    let shape = match shape {
+        [] => "()".to_string(),
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    let fortran = if fortran { "True" } else { "False" };
+    let mut header =
+        format!("{{'descr': '{descr}', 'fortran_order': {fortran}, 'shape': {shape}, }}");
+    // Magic (6) + version (2) + header length (2) + header + '\n', to a multiple of 64.
+    let unpadded = 10 + header.len() + 1;
+    header.extend(std::iter::repeat_n(
+        ' ',
+        unpadded.next_multiple_of(64) - unpadded,
+    ));
+    header.push('\n');
+    let mut npy = Vec::with_capacity(10 + header.len() + data.len());
+    npy.extend_from_slice(b"\x93NUMPY\x01\x00");
+    npy.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    npy.extend_from_slice(header.as_bytes());
+    npy.extend_from_slice(data);
+    npy
+}
+
+/// A matrix as an `.npy` file's bytes: little-endian f64, rows in order (C order):
+/// `numpy.load(path)` gives it back with its shape.
+#[must_use]
+pub fn npy_of_matrix(m: &DMatrix<f64>) -> Vec<u8> {
+    let data: Vec<u8> = m
+        .row_iter()
+        .flat_map(|r| r.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>())
+        .collect();
+    npy("<f8", false, &[m.nrows(), m.ncols()], &data)
+}
+
+impl Writer {
     fn entry(&mut self, file: &str, data: &[u8]) {
         if self.failed.is_some() {
             return;

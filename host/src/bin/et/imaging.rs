@@ -113,6 +113,11 @@ pub(crate) struct ReconstructArgs {
     /// Print a JSON summary (regions, metrics, timings).
     #[arg(long)]
     json: bool,
+    /// Also write the pixel image as a NumPy .npy: Delta sigma / sigma_0 (no unit), NaN
+    /// outside the sheet, the top row first (`plt.imshow(numpy.load(F))` shows it upright);
+    /// --json gives its grid (`image`: lower-left corner and pixel size, m).
+    #[arg(long, value_name = "NPY")]
+    image_out: Option<PathBuf>,
 }
 
 pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
@@ -382,6 +387,12 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     inputs.extend(args.frames.as_deref());
     inputs.extend(args.reference_file.as_deref());
     crate::output::check(&args.out, &inputs, force)?;
+    if let Some(npy) = &args.image_out {
+        crate::output::check(npy, &inputs, force)?;
+        if npy == &args.out {
+            bail!("--image-out and --out are both {}", npy.display());
+        }
+    }
     let scene = Scene::load(&args.scene)?;
     let table = args
         .frames

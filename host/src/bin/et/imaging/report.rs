@@ -30,6 +30,10 @@ pub(super) fn report(
             )
         });
     let matches = et_recon::match_touches(grid, found, truth);
+    let image_grid = match &args.image_out {
+        Some(path) => Some(write_image(path, recon, image)?),
+        None => None,
+    };
     crate::output::write(&args.out, |partial| {
         et_host::plot::sheet_image(
             recon.imager(),
@@ -64,6 +68,7 @@ pub(super) fn report(
         threshold: f,
         regions: rois.iter().map(RegionSummary::of).collect(),
         found_touches: found.iter().map(RegionSummary::of).collect(),
+        image: image_grid,
         objects: image
             .objects
             .iter()
@@ -164,6 +169,8 @@ pub(super) struct ReconstructSummary<'a> {
     regions: Vec<RegionSummary>,
     /// The touches: regions split at their saddles, above TOUCH_Z times their noise.
     found_touches: Vec<RegionSummary>,
+    /// The pixel image written by --image-out, and its grid.
+    image: Option<ImageGrid>,
     /// Objects of both signs, strongest (|peak|) first: conductive (+1) and resistive (-1)
     /// targets of a tank, presses of a sheet. Field names fixed: scripts rely on them.
     objects: Vec<ObjectSummary>,
@@ -176,6 +183,52 @@ pub(super) struct ReconstructSummary<'a> {
     timings_s: Timings,
     /// Wall time of the whole command, s.
     seconds: f64,
+}
+
+/// Where `--image-out`'s pixels are: row 0 is the top row.
+#[derive(serde::Serialize)]
+pub(super) struct ImageGrid {
+    file: PathBuf,
+    rows: usize,
+    cols: usize,
+    /// The lower-left corner of the lower-left pixel, m.
+    x0_m: f64,
+    /// The lower-left corner of the lower-left pixel, m.
+    y0_m: f64,
+    /// A pixel's side, m.
+    pixel_m: f64,
+    /// What each value is.
+    unit: &'static str,
+}
+
+/// Writes the image's pixels (Delta sigma / sigma_0, NaN outside, top row first) as .npy.
+fn write_image(
+    path: &std::path::Path,
+    recon: &et_recon::Reconstructor,
+    image: &et_recon::Image,
+) -> Result<ImageGrid> {
+    let grid = recon.grid();
+    let sigma0 = recon.imager().sigma0;
+    let m = nalgebra::DMatrix::from_fn(grid.height, grid.width, |r, c| {
+        let j = grid.height - 1 - r;
+        image
+            .pixels
+            .get(j * grid.width + c)
+            .copied()
+            .flatten()
+            .map_or(f64::NAN, |v| v / sigma0)
+    });
+    let bytes = et_learn::npz::npy_of_matrix(&m);
+    crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
+    Ok(ImageGrid {
+        file: path.to_path_buf(),
+        rows: grid.height,
+        cols: grid.width,
+        x0_m: grid.origin[0],
+        y0_m: grid.origin[1],
+        pixel_m: grid.size,
+        unit: "Delta sigma / sigma_0",
+    })
 }
 
 /// One object of `et reconstruct --json`'s `objects`.
