@@ -158,8 +158,10 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     let npz_path = d.join("frames.npz");
     std::fs::write(&npz_path, w.finish().unwrap()).unwrap();
     let png = d.join("f.png");
-    let run = |file: &Path, frame: usize| {
-        et(&[
+    // `et reconstruct` on frame `frame` of `file`, with `extra` arguments.
+    let run_with = |file: &Path, frame: usize, extra: &[&str]| {
+        let frame = frame.to_string();
+        let mut args = vec![
             "reconstruct",
             "--scene",
             scene_path.to_str().unwrap(),
@@ -168,15 +170,18 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             "--reference",
             "1",
             "--frame",
-            &frame.to_string(),
+            &frame,
             "--triangles",
             "3000",
             "--json",
             "--force",
             "--out",
             png.to_str().unwrap(),
-        ])
+        ];
+        args.extend_from_slice(extra);
+        et(&args)
     };
+    let run = |file: &Path, frame: usize| run_with(file, frame, &[]);
     for (i, (t, multiplier)) in targets.iter().enumerate() {
         let (found, sign) = strongest(&run(&csv_path, i + 1));
         let expected = if *multiplier > 1.0 { 1 } else { -1 };
@@ -197,28 +202,7 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     }
     // The pixel image as .npy, its grid in the JSON: the largest |value| at the first target.
     let npy = d.join("f1.npy");
-    let mut with_image: Vec<String> = [
-        "reconstruct",
-        "--scene",
-        scene_path.to_str().unwrap(),
-        "--frames",
-        csv_path.to_str().unwrap(),
-        "--reference",
-        "1",
-        "--frame",
-        "1",
-        "--triangles",
-        "3000",
-        "--json",
-        "--force",
-        "--out",
-        png.to_str().unwrap(),
-        "--image-out",
-    ]
-    .map(String::from)
-    .to_vec();
-    with_image.push(npy.display().to_string());
-    let out = et(&with_image.iter().map(String::as_str).collect::<Vec<_>>());
+    let out = run_with(&csv_path, 1, &["--image-out", npy.to_str().unwrap()]);
     assert!(
         out.status.success(),
         "{}",
