@@ -366,6 +366,47 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
             ),
         ));
     }
+    // The columns say what each value is: they must be the protocol's, in its order (a
+    // reader images by the configuration's protocol; columns in another order would give a
+    // silently wrong image).
+    let expected = Header::new(header.source.clone(), &header.config)
+        .map_err(|e| bad(1, format!("header config: {e}")))?
+        .columns;
+    if header.columns.len() != expected.len() {
+        return Err(bad(
+            1,
+            format!(
+                "header lists {} columns, its protocol has K = {}",
+                header.columns.len(),
+                expected.len()
+            ),
+        ));
+    }
+    if let Some((k, (got, want))) = header
+        .columns
+        .iter()
+        .zip(&expected)
+        .enumerate()
+        .find(|(_, (a, b))| a != b)
+    {
+        let show = |c: &Column| {
+            format!(
+                "source {}, sink {}, + {}, - {}",
+                c.source, c.sink, c.positive, c.negative
+            )
+        };
+        return Err(bad(
+            1,
+            format!(
+                "header column {k} is ({}) but the {} protocol's column {k} is ({}): the \
+                 columns must follow the protocol's order (another system's frames in another \
+                 order: give them as a table with a protocol file, et reconstruct --frames)",
+                show(got),
+                header.config.protocol.name(),
+                show(want)
+            ),
+        ));
+    }
     let mut records = Vec::new();
     let mut truncated_tail = false;
     let last = lines.len();
@@ -526,6 +567,34 @@ mod tests {
             out.contains("frames 3") && out.contains("invalid_frames 1"),
             "{out}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Columns in another order than the protocol's are refused by the first that differs
+    /// (they were ignored: the same frames with the columns reversed gave the same image).
+    #[test]
+    fn columns_in_another_order_than_the_protocols_are_refused() {
+        let dir = std::env::temp_dir().join(format!("et-rec-cols-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("c.jsonl");
+        let mut header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+        header.columns.reverse();
+        let mut text = serde_json::to_string(&header).unwrap();
+        text.push('\n');
+        text.push_str(&serde_json::to_string(&Record::new(&frame(0, 208), None)).unwrap());
+        text.push('\n');
+        std::fs::write(&path, &text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("c.jsonl:1") && err.contains("header column 0") && err.contains("order"),
+            "{err}"
+        );
+        header.columns.pop();
+        let mut text = serde_json::to_string(&header).unwrap();
+        text.push('\n');
+        std::fs::write(&path, &text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(err.contains("207 columns"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
