@@ -384,7 +384,6 @@ impl Reconstructor {
                 &crate::touches::touches(grid, &pixels, &noise_sd, f, PROMINENCE),
                 TOUCH_Z,
             ),
-            objects: objects(grid, &pixels, &noise_sd, f, TOUCH_Z),
             pixels,
             noise_sd,
             dv,
@@ -394,6 +393,22 @@ impl Reconstructor {
             iterations,
             timings,
         })
+    }
+}
+
+impl Reconstructor {
+    /// The objects of both signs in `image` (conductive and resistive, strongest first,
+    /// [`crate::touches::objects`]): asked for by who images tanks, not made for every live
+    /// frame, where touches are positive.
+    #[must_use]
+    pub fn objects(&self, image: &Image) -> Vec<Object> {
+        objects(
+            &self.imager.grid,
+            &image.pixels,
+            &image.noise_sd,
+            image.threshold,
+            TOUCH_Z,
+        )
     }
 }
 

@@ -214,10 +214,6 @@ pub struct Image {
     pub regions: Vec<Region>,
     /// The touches: regions split at their saddles, at least [`TOUCH_Z`] times their noise.
     pub touches: Vec<Region>,
-    /// Objects of both signs (conductive and resistive), as the touches are found, strongest
-    /// first ([`crate::touches::objects`]): what imaging finds in a tank; touch commands keep
-    /// the positive `touches`.
-    pub objects: Vec<Object>,
     /// The iterative fit's report (None for a one-step or GREIT image).
     pub iterations: Option<Iterations>,
     /// What this frame took.

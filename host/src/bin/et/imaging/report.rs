@@ -69,8 +69,8 @@ pub(super) fn report(
         regions: rois.iter().map(RegionSummary::of).collect(),
         found_touches: found.iter().map(RegionSummary::of).collect(),
         image: image_grid,
-        objects: image
-            .objects
+        objects: recon
+            .objects(image)
             .iter()
             .map(|o| ObjectSummary::of(o, recon.imager().sigma0))
             .collect(),
