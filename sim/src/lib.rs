@@ -15,6 +15,8 @@
 //! - [`calibration`]: the front end's noise fitted to the reference hardware's SNR and MAD.
 //! - [`scene`]: scene files (TOML) and the runner that turns them into frames with their truth;
 //!   [`scenes`]: the scenes compiled in (the default sheet, the reference scenarios).
+//! - [`foreign`]: another lab's instrument: any schedule on the network, with its noise and
+//!   drift.
 //! - [`still`]: a still scene's frames (V_0, the noise of dV, one touched frame), as imaging
 //!   uses them.
 //! - [`emulated`]: the tables of the sheet compiled into the firmware's QEMU image.
@@ -26,6 +28,7 @@ pub mod band;
 pub mod calibration;
 pub mod emulated;
 pub mod fast;
+pub mod foreign;
 pub mod frontend;
 pub mod network;
 pub mod scene;

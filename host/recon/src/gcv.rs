@@ -144,10 +144,30 @@ impl DataSpace {
             .collect())
     }
 
+    /// K - tr(H_lambda) at each candidate, where H_lambda = A (A + lambda I)^-1 maps dv to the
+    /// fitted J R dv: the degrees of freedom left to the residual (pure noise of variance s^2
+    /// per value leaves a residual of s^2 (K - tr H) on average).
+    fn residual_dof(&self, candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
+        let seen = self.spectrum(&vec![0.0; self.frame_len()])?;
+        Ok(candidates
+            .iter()
+            .map(|&alpha| {
+                let lambda = self.lambda(alpha);
+                seen.null_dim as f64
+                    + seen
+                        .e
+                        .iter()
+                        .map(|e| lambda / (e.max(0.0) + lambda))
+                        .sum::<f64>()
+            })
+            .collect())
+    }
+
     /// alpha for the frame difference `dv` whose per-channel noise variance is `var_dv`
     /// (V^2): the GCV minimum ([`DataSpace::gcv`]) among the candidates that do not fit the
-    /// data closer than its noise, |dv - J R dv|^2 >= sum_k var_k (the discrepancy principle as
-    /// a floor). GCV alone assumes the misfit is noise; on frames with little or no noise it
+    /// data closer than its noise, |dv - J R dv|^2 >= (K - tr H_lambda) sum_k var_k / K (the
+    /// generalised discrepancy principle as a floor: noise alone of that variance leaves that
+    /// residual on average, the fit taking tr H_lambda of its K degrees of freedom). GCV alone assumes the misfit is noise; on frames with little or no noise it
     /// runs to the smallest alpha, where the image rings and what remains (the ADC's
     /// rounding, the model's mismatch) is amplified into spurious peaks. When every candidate
     /// fits closer than the noise (dv within the noise), the largest is taken.
@@ -170,10 +190,14 @@ impl DataSpace {
         }
         let noise: f64 = var_dv.iter().map(|v| v.max(0.0)).sum();
         let residuals = self.residuals(dv, candidates)?;
+        let dof = self.residual_dof(candidates)?;
+        let k = dv.len() as f64;
         let admissible = scores
             .iter()
             .zip(&residuals)
-            .filter(|(s, r)| s.1.is_finite() && **r >= noise)
+            .zip(&dof)
+            .filter(|((s, r), d)| s.1.is_finite() && **r >= noise * **d / k)
+            .map(|(a, _)| a)
             .min_by(|a, b| a.0.1.total_cmp(&b.0.1));
         Ok(match admissible {
             Some((s, _)) => s.0,

@@ -40,6 +40,7 @@ pub mod metrics;
 pub mod onestep;
 pub mod pixels;
 pub mod reconstructor;
+pub mod redundancy;
 pub mod select;
 pub mod touches;
 
@@ -51,7 +52,8 @@ pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
 pub use pixels::{PixelGrid, PixelOperator};
 pub use reconstructor::{
-    AlphaRule, Image, ImagingError, MeshPlan, Method, Reconstructor, Reference, Spec,
+    AlphaRule, FrameNoise, Image, ImagingError, MeshPlan, Method, NoiseSource, Reconstructor,
+    Reference, Spec,
 };
 pub use touches::{
     Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions, touches,

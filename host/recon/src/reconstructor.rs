@@ -39,10 +39,12 @@ use crate::gcv::default_alphas;
 use crate::greit::{Greit, GreitOptions, Regularisation};
 use crate::imager::Imager;
 use crate::mesh::{Mesh, MeshError, Refinement};
-use crate::onestep::{DataSpace, OneStep, ReconError, imaging_variance};
+use crate::onestep::{DataSpace, OneStep, ReconError, floor_variance, imaging_variance};
 use crate::pixels::{PixelGrid, PixelOperator};
+use crate::redundancy::{Redundancy, RedundancyNoise};
 use crate::touches::{
-    Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions,
+    OBJECT_FRACTION, Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects,
+    regions,
 };
 
 /// Why a reconstruction could not be set up or a frame imaged.
@@ -79,6 +81,9 @@ pub struct Reconstructor {
     greit: Option<Greit>,
     /// The last one-step matrix made, with its alpha.
     one_step: Option<(f64, OneStep)>,
+    /// The protocol's redundancy (the noise of a frame without repeated reference frames),
+    /// made on first use.
+    redundancy: std::sync::OnceLock<Option<Redundancy>>,
     /// What the set-up took.
     pub set_up_timings: SetUpTimings,
 }
@@ -113,6 +118,7 @@ impl Reconstructor {
             space: None,
             greit: None,
             one_step: None,
+            redundancy: std::sync::OnceLock::new(),
             set_up_timings: SetUpTimings {
                 mesh: mesh_s,
                 forward_jacobian,
@@ -179,6 +185,7 @@ impl Reconstructor {
     pub fn set_schedule(&mut self, schedule: Schedule) -> Result<(), ImagingError> {
         self.jac = self.imager.transfer_jacobian(&schedule)?;
         self.schedule = schedule;
+        self.redundancy = std::sync::OnceLock::new();
         self.prepare()
     }
 
@@ -298,14 +305,46 @@ impl Reconstructor {
         self.image_dv(dv, &reference.var_dv)
     }
 
+    /// The noise of `dv` (K values, V) seen in the protocol's redundancy (the part of dV no
+    /// conductivity change can make, [`Redundancy`]); None when the protocol has too little
+    /// redundancy.
+    #[must_use]
+    pub fn redundancy_noise(&self, dv: &[f64]) -> Option<RedundancyNoise> {
+        self.redundancy
+            .get_or_init(|| Redundancy::of(&self.jac))
+            .as_ref()
+            .and_then(|r| r.noise(dv))
+    }
+
     /// As [`Reconstructor::image`], from dV = V - V_0 (V) and its noise variance per channel
-    /// (V^2).
+    /// (V^2). When the noise is unknown (all zeros: one reference frame), it is estimated from
+    /// dV itself ([`Reconstructor::redundancy_noise`]).
     ///
     /// # Errors
     /// As [`Reconstructor::image`].
     pub fn image_dv(&mut self, dv: Vec<f64>, var_dv: &[f64]) -> Result<Image, ImagingError> {
-        // What imaging cannot explain: the frames' noise and the model's own error.
+        let estimated = if var_dv.iter().all(|v| *v <= 0.0) {
+            self.redundancy_noise(&dv)
+        } else {
+            None
+        };
+        let var_dv = match estimated {
+            Some(n) => &vec![n.variance; dv.len()][..],
+            None => var_dv,
+        };
+        let ms = var_dv.iter().map(|v| v.max(0.0)).sum::<f64>() / var_dv.len().max(1) as f64;
+        let noise = FrameNoise {
+            rms_v: ms.sqrt(),
+            source: match estimated {
+                Some(n) => NoiseSource::Redundancy { dof: n.dof },
+                None if ms > 0.0 => NoiseSource::ReferenceFrames,
+                None => NoiseSource::Unknown,
+            },
+        };
+        // What imaging cannot explain: the frames' noise and the model's own error; alpha's
+        // floor counts less of the latter.
         let var = imaging_variance(var_dv, &dv);
+        let floor = floor_variance(var_dv, &dv);
         let grid = &self.imager.grid;
         let mut timings = FrameTimings::default();
         let mut greit_made = None;
@@ -317,7 +356,7 @@ impl Reconstructor {
                 let greit = match &self.greit {
                     Some(g) => g,
                     None => {
-                        let alpha = Greit::choose_alpha(&self.imager, &self.jac, &dv, &var)?;
+                        let alpha = Greit::choose_alpha(&self.imager, &self.jac, &dv, &floor)?;
                         made = self.greit_with(radius, Regularisation::Alpha(alpha))?;
                         timings.matrix = Some(clock.elapsed().as_secs_f64());
                         &made
@@ -334,7 +373,7 @@ impl Reconstructor {
                 let space = self.space.as_ref().ok_or(ReconError::Singular)?;
                 let alpha = match self.alpha {
                     AlphaRule::Fixed(a) => a,
-                    _ => space.choose_alpha(&dv, &var, &default_alphas())?,
+                    _ => space.choose_alpha(&dv, &floor, &default_alphas())?,
                 };
                 if n <= 1 {
                     if self.one_step.as_ref().is_none_or(|(a, _)| *a != alpha) {
@@ -387,6 +426,7 @@ impl Reconstructor {
             pixels,
             noise_sd,
             dv,
+            noise,
             alpha,
             greit: greit_made,
             threshold: f,
@@ -406,7 +446,7 @@ impl Reconstructor {
             &self.imager.grid,
             &image.pixels,
             &image.noise_sd,
-            image.threshold,
+            OBJECT_FRACTION,
             TOUCH_Z,
         )
     }

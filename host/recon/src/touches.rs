@@ -229,9 +229,12 @@ pub fn touches(
 /// its pixel (see [`above_noise`]; noise alone stays below about 3.5 on the simulator).
 pub const TOUCH_Z: f64 = 5.0;
 
-/// The regions that reach at least `z` times their pixels' noise somewhere (their `z`, from
-/// [`touches`]); a region whose noise is unknown is kept.
-#[must_use]
+/// The share of a difference image's largest magnitude an object of either sign must reach:
+/// a one-step image's side lobes (the ringing of the opposite sign around a strong object,
+/// and specks at the boundary) reach 10 to 20 % of its peak (`cargo run --release -p et-host
+/// --example defaults_sweep`, docs/measurements.md), true second and third objects 30 to 100 %.
+pub const OBJECT_FRACTION: f64 = 0.25;
+
 /// An object of a difference image: a touch-like region of either sign, conductive (+1: a
 /// press, a metal rod) or resistive (-1: a plastic rod, a cut).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -282,6 +285,9 @@ pub fn objects(
     out
 }
 
+/// The regions that reach at least `z` times their pixels' noise somewhere (their `z`, from
+/// [`touches`]); a region whose noise is unknown is kept.
+#[must_use]
 pub fn above_noise(regions: &[Region], z: f64) -> Vec<Region> {
     regions
         .iter()

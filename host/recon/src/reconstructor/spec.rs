@@ -194,6 +194,30 @@ pub struct Iterations {
     pub stop: Stop,
 }
 
+/// Where an image's noise of dV came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseSource {
+    /// The reference frames' spread ([`Reference::from_frames`]).
+    ReferenceFrames,
+    /// The part of dV no conductivity change makes, with one reference frame
+    /// ([`crate::redundancy`]), from `dof` redundant values.
+    Redundancy {
+        /// How many redundant values the estimate rests on.
+        dof: usize,
+    },
+    /// Neither: one reference frame and a protocol without redundancy (zero noise assumed).
+    Unknown,
+}
+
+/// The noise of dV an image was made against.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameNoise {
+    /// rms over the channels of dV's noise, V.
+    pub rms_v: f64,
+    /// Where it came from.
+    pub source: NoiseSource,
+}
+
 /// One frame imaged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -203,6 +227,8 @@ pub struct Image {
     pub noise_sd: Vec<Option<f64>>,
     /// dV = V - V_0, V.
     pub dv: Vec<f64>,
+    /// The noise of dV the image was made against, and where it came from.
+    pub noise: FrameNoise,
     /// The alpha used.
     pub alpha: f64,
     /// GREIT's noise figure and desired-image radius (m) of the matrix used; None for

@@ -490,6 +490,18 @@ fn frame_stages(
             Some(t_matrix)
         }
     };
+    use et_recon::NoiseSource as S;
+    eprintln!(
+        "noise of dV: {:.2e} V rms, {}",
+        image.noise.rms_v,
+        match image.noise.source {
+            S::ReferenceFrames => "from the reference frames' spread".to_string(),
+            S::Redundancy { dof } => format!(
+                "from the protocol's {dof} redundant values (one reference frame)"
+            ),
+            S::Unknown => "unknown (one reference frame, no redundant values): taken as 0".into(),
+        }
+    );
     match &image.iterations {
         None => stage("one frame imaged", image.timings.frame),
         Some(it) => {

@@ -63,6 +63,7 @@ pub(super) fn report(
             .map_or_else(|| "custom".to_string(), |k| k.to_string()),
         method: args.method,
         alpha: image.alpha,
+        noise: NoiseSummary::of(image),
         noise_figure: image.greit.map(|g| g.0),
         s: args.s,
         threshold: f,
@@ -161,6 +162,8 @@ pub(super) struct ReconstructSummary<'a> {
     /// "gn" or "greit".
     method: Method,
     alpha: f64,
+    /// The noise of dV the image was made against.
+    noise: NoiseSummary,
     /// GREIT's noise figure of the matrix made; null for gn.
     noise_figure: Option<f64>,
     s: f64,
@@ -183,6 +186,34 @@ pub(super) struct ReconstructSummary<'a> {
     timings_s: Timings,
     /// Wall time of the whole command, s.
     seconds: f64,
+}
+
+/// The noise of dV: its rms over the channels and where it came from.
+#[derive(serde::Serialize)]
+pub(super) struct NoiseSummary {
+    /// rms over the channels of dV's noise, V.
+    rms_v: f64,
+    /// "reference frames" (their spread), "redundancy" (the part of dV no conductivity change
+    /// makes, with one reference frame) or "unknown".
+    source: &'static str,
+    /// With "redundancy": how many redundant values the estimate rests on.
+    dof: Option<usize>,
+}
+
+impl NoiseSummary {
+    fn of(image: &et_recon::Image) -> Self {
+        use et_recon::NoiseSource as S;
+        let (source, dof) = match image.noise.source {
+            S::ReferenceFrames => ("reference frames", None),
+            S::Redundancy { dof } => ("redundancy", Some(dof)),
+            S::Unknown => ("unknown", None),
+        };
+        Self {
+            rms_v: image.noise.rms_v,
+            source,
+            dof,
+        }
+    }
 }
 
 /// Where `--image-out`'s pixels are: row 0 is the top row.

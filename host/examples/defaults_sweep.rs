@@ -1,0 +1,237 @@
+//! The default alpha against fixed alphas on another system's frames: two saline tanks as
+//! other labs build them, measured by the simulator's resistor network (not the
+//! reconstruction's finite elements) through [`et_sim::foreign`]'s laboratory instrument
+//! (noise, gain drift), with a true sheet resistance and contact impedance other than the ones
+//! the user's scene guesses; one reference frame (the empty tank), as real data sets give.
+//! Each case holds 1 to 3 rods, metal (conductivity x 10) or plastic (x 0.01), 2 to 3 cm
+//! across, anywhere within 70 % of the radius.
+//!
+//! For each rule: the median distance from the strongest object to the nearest rod, how often
+//! its sign is that rod's, how often the object count is within one of the rods', and the
+//! alphas chosen.
+//!
+//! Run: `cargo run --release -p et-host --example defaults_sweep`
+
+use et_core::rng::Rng;
+use et_core::schedule::{Row, Schedule};
+use et_recon::{AlphaRule, Method, Reference, Spec};
+use et_sim::foreign::{self, Instrument};
+use et_sim::scene::Scene;
+use et_sim::sheet::SimulatedSheet;
+use et_sim::touch::{Footprint, Inclusion};
+
+/// A tank: the user's scene, the truth the simulator measures, and the protocol.
+struct Tank {
+    name: &'static str,
+    scene: Scene,
+    truth: Scene,
+    schedule: Schedule,
+    radius: f64,
+}
+
+/// A disc tank of `radius` with `electrodes` (`extra` TOML keys), the user's guesses of
+/// 200 ohm/sq and 20 ohm contacts; the truth 230 ohm/sq and 60 ohm.
+fn tank(name: &'static str, radius: f64, electrodes: &str, schedule: Schedule) -> Tank {
+    let scene = |rs: f64, contact: f64| {
+        let text = format!(
+            "[sheet]\nshape = {{ kind = \"disc\", radius = {radius} }}\nsheet_resistance = {rs}\n\
+             electrodes = {{ {electrodes}, contact_ohm = {contact} }}\n"
+        );
+        Scene::parse(&text, name).expect("a valid scene")
+    };
+    Tank {
+        name,
+        scene: scene(200.0, 20.0),
+        truth: scene(230.0, 60.0),
+        schedule,
+        radius,
+    }
+}
+
+/// Injections `pairs` (source, sink), each measured on every adjacent pair, at `amps`.
+fn schedule(l: u16, pairs: &[(u16, u16)], amps: f64) -> Schedule {
+    let rows = pairs
+        .iter()
+        .flat_map(|&(source, sink)| {
+            (0..l).map(move |m| Row {
+                source,
+                sink,
+                positive: m,
+                negative: (m + 1) % l,
+                current_a: amps,
+            })
+        })
+        .collect();
+    Schedule::new(l, rows).expect("a valid schedule")
+}
+
+/// The 16-electrode tank: adjacent, skip 1, 2, 3 and all against electrode 0 (79
+/// injections, 1 264 values); the 32-electrode tank: injections between odd electrodes only,
+/// 1 to 4 odd electrodes apart and opposite (72 injections, 2 304 values).
+fn tanks() -> Vec<Tank> {
+    let mut pairs16: Vec<(u16, u16)> = (0..4)
+        .flat_map(|skip| (0..16).map(move |i| (i, (i + skip + 1) % 16)))
+        .collect();
+    pairs16.extend((1..16).map(|i| (i, 0)));
+    let odd = |i: u16| (2 * i + 1) % 32;
+    let mut pairs32: Vec<(u16, u16)> = (1..=4)
+        .flat_map(|d| (0..16).map(move |i| (odd(i), odd(i + d))))
+        .collect();
+    pairs32.extend((0..8).map(|i| (odd(i), odd(i + 8))));
+    vec![
+        tank(
+            "16 electrodes, 79 injections",
+            0.14,
+            "count = 16, width = 0.025, first_deg = 90, direction = \"cw\"",
+            schedule(16, &pairs16, 1.4142e-3),
+        ),
+        tank(
+            "32 electrodes, odd injections",
+            0.15,
+            "count = 32, width = 0.01, first_deg = 0, direction = \"ccw\"",
+            schedule(32, &pairs32, 1e-3),
+        ),
+    ]
+}
+
+/// `n` cases of 1 to 3 rods (centre m, radius m, multiplier) within 70 % of `radius`, at
+/// least 4 cm apart edge to edge.
+fn cases(radius: f64, n: usize, seed: u64) -> Vec<Vec<Inclusion>> {
+    let mut rng = Rng::new(seed);
+    (0..n)
+        .map(|i| {
+            let count = 1 + i % 3;
+            let mut rods: Vec<Inclusion> = Vec::new();
+            while rods.len() < count {
+                let r = 0.7 * radius * rng.uniform().sqrt();
+                let a = std::f64::consts::TAU * rng.uniform();
+                let position = [r * a.cos(), r * a.sin()];
+                let size = 0.01 + 0.005 * rng.uniform();
+                let clear = rods.iter().all(|o| {
+                    (o.position[0] - position[0]).hypot(o.position[1] - position[1])
+                        > o.radius + size + 0.04
+                });
+                if clear {
+                    rods.push(Inclusion {
+                        position,
+                        radius: size,
+                        multiplier: if rng.uniform() < 0.5 { 10.0 } else { 0.01 },
+                        footprint: Footprint::default(),
+                    });
+                }
+            }
+            rods
+        })
+        .collect()
+}
+
+/// One rule's results over the cases.
+#[derive(Default)]
+struct Score {
+    miss_mm: Vec<f64>,
+    sign_right: usize,
+    count_within_one: usize,
+    alphas: Vec<f64>,
+    objects: Vec<usize>,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v[v.len() / 2]
+    }
+}
+
+fn main() -> anyhow::Result<()> {
+    let rules = [
+        ("default (GCV, noise floor)", AlphaRule::Gcv),
+        ("fixed 0.01", AlphaRule::Fixed(0.01)),
+        ("fixed 0.03", AlphaRule::Fixed(0.03)),
+        ("fixed 0.1", AlphaRule::Fixed(0.1)),
+        ("fixed 0.3", AlphaRule::Fixed(0.3)),
+        ("fixed 1", AlphaRule::Fixed(1.0)),
+    ];
+    let n = 24;
+    println!(
+        "| tank | instrument | alpha | strongest object to nearest rod, median | its sign right | count within one | objects, median | alpha chosen (min, median, max) |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let instruments = [
+        ("ideal", Instrument::ideal()),
+        ("laboratory", Instrument::laboratory(11)),
+        (
+            "noisy",
+            Instrument {
+                noise: 2e-3,
+                proportional: 2e-3,
+                ..Instrument::laboratory(11)
+            },
+        ),
+    ];
+    for (instrument_name, instrument) in instruments {
+        for tank in tanks() {
+            let sheet = SimulatedSheet::new(&tank.truth.sheet, &[])?;
+            let cases = cases(tank.radius, n, 7);
+            let frames = foreign::frames(&sheet, &tank.schedule, &cases, &instrument)?;
+            let as_f32 = |f: &[f64]| f.iter().map(|&v| v as f32).collect::<Vec<f32>>();
+            let reference = Reference::from_frames(&[as_f32(&frames[0])])?;
+            let mut recon =
+                Spec::new(tank.scene.sheet.physical.clone(), tank.schedule.clone()).set_up()?;
+            for (name, rule) in rules {
+                recon.set_method(Method::default(), rule)?;
+                let mut score = Score::default();
+                for (rods, frame) in cases.iter().zip(&frames[1..]) {
+                    let image = recon.image(&as_f32(frame), &reference)?;
+                    let objects = recon.objects(&image);
+                    score.alphas.push(image.alpha);
+                    score.objects.push(objects.len());
+                    if objects.len().abs_diff(rods.len()) <= 1 {
+                        score.count_within_one += 1;
+                    }
+                    let Some(first) = objects.first() else {
+                        score.miss_mm.push(f64::INFINITY);
+                        continue;
+                    };
+                    let c = first.region.centroid;
+                    let nearest = rods
+                        .iter()
+                        .min_by(|a, b| {
+                            let d =
+                                |o: &Inclusion| (o.position[0] - c[0]).hypot(o.position[1] - c[1]);
+                            d(a).total_cmp(&d(b))
+                        })
+                        .expect("a rod");
+                    score
+                        .miss_mm
+                        .push(1e3 * (nearest.position[0] - c[0]).hypot(nearest.position[1] - c[1]));
+                    if (first.sign > 0) == (nearest.multiplier > 1.0) {
+                        score.sign_right += 1;
+                    }
+                }
+                let mut objects: Vec<f64> = score.objects.iter().map(|&o| o as f64).collect();
+                let mut alphas = score.alphas.clone();
+                let (lo, hi) = alphas
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(l, h), a| (l.min(*a), h.max(*a)));
+                let none = score.miss_mm.iter().filter(|m| m.is_infinite()).count();
+                let miss = median(&mut score.miss_mm);
+                let miss = if miss.is_finite() {
+                    format!("{miss:.1} mm")
+                } else {
+                    format!("no object in {none} of {n}")
+                };
+                println!(
+                    "| {} | {instrument_name} | {name} | {miss} | {} of {n} | {} % | {} | {lo:.2e}, {:.2e}, {hi:.2e} |",
+                    tank.name,
+                    score.sign_right,
+                    100 * score.count_within_one / n,
+                    median(&mut objects),
+                    median(&mut alphas),
+                );
+            }
+        }
+    }
+    Ok(())
+}

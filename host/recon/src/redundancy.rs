@@ -1,0 +1,182 @@
+//! The noise of one frame difference from the protocol's redundancy: a frame's K values are
+//! combinations of the r = L (L - 1) / 2 transfer impedances (J = M G,
+//! [`TransferJacobian`]), so whatever part of dV lies outside M's range no change of
+//! conductivity, contact or gain can make. With one reference frame and no repeated frames
+//! that part is the only measure of the noise there is (reciprocal pairs are its simplest
+//! case: a pair's two values must agree).
+
+use faer::{Mat, Side};
+
+use crate::fem::TransferJacobian;
+
+/// The fewest redundant directions an estimate is made from (fewer: no estimate).
+pub const MIN_REDUNDANCY: usize = 8;
+
+/// The noise of dV seen in the protocol's redundancy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RedundancyNoise {
+    /// |dV - P_M dV|^2 / (K - rank M), V^2: each value's noise variance, taken as alike.
+    pub variance: f64,
+    /// K - rank(M): how many independent directions the estimate rests on.
+    pub dof: usize,
+}
+
+/// M's range (K x r, sparse) as a basis in the r-space: with N = M^T M = V diag(n) V^T over
+/// the eigenvalues n above 1e-10 of the largest, |P_M dV|^2 = sum_i (v_i^T M^T dV)^2 / n_i.
+#[derive(Clone, Debug)]
+pub struct Redundancy {
+    combination: Vec<Vec<(usize, f64)>>,
+    /// V diag(n)^-1/2, r x rank(M).
+    basis: Mat<f64>,
+}
+
+impl Redundancy {
+    /// The redundancy of `jac`'s protocol; None when N has no eigendecomposition.
+    #[must_use]
+    pub fn of(jac: &TransferJacobian) -> Option<Self> {
+        let r = jac.pairs();
+        let mut n = Mat::<f64>::zeros(r, r);
+        for row in &jac.combination {
+            for &(p, a) in row {
+                for &(q, b) in row {
+                    n[(p, q)] += a * b;
+                }
+            }
+        }
+        let evd = n.self_adjoint_eigen(Side::Lower).ok()?;
+        let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+        let top = e.iter().copied().fold(0.0f64, f64::max);
+        let keep: Vec<usize> = (0..r).filter(|&i| e[i] > 1e-10 * top).collect();
+        let v = evd.U();
+        Some(Self {
+            combination: jac.combination.clone(),
+            basis: Mat::from_fn(r, keep.len(), |i, j| v[(i, keep[j])] / e[keep[j]].sqrt()),
+        })
+    }
+
+    /// K - rank(M): the protocol's redundant values.
+    #[must_use]
+    pub fn dof(&self) -> usize {
+        self.combination.len().saturating_sub(self.basis.ncols())
+    }
+
+    /// The noise of `dv` (K values, V) from the protocol's redundancy (see the module docs);
+    /// None when the protocol has fewer than [`MIN_REDUNDANCY`] redundant values or `dv` is not
+    /// of K finite values.
+    #[must_use]
+    pub fn noise(&self, dv: &[f64]) -> Option<RedundancyNoise> {
+        let dof = self.dof();
+        if dv.len() != self.combination.len() || dof < MIN_REDUNDANCY {
+            return None;
+        }
+        if dv.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let mut mtdv = vec![0.0; self.basis.nrows()];
+        for (row, v) in self.combination.iter().zip(dv) {
+            for &(p, c) in row {
+                mtdv[p] += c * v;
+            }
+        }
+        let seen: f64 = self
+            .basis
+            .col_iter()
+            .map(|b| b.iter().zip(&mtdv).map(|(a, c)| a * c).sum::<f64>().powi(2))
+            .sum();
+        let total: f64 = dv.iter().map(|v| v * v).sum();
+        Some(RedundancyNoise {
+            variance: (total - seen).max(0.0) / dof as f64,
+            dof,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::imager::Imager;
+    use crate::mesh::Mesh;
+    use et_core::protocol::{Protocol, ProtocolKind};
+    use et_core::rng::Rng;
+    use et_core::sheet::Sheet;
+
+    /// A 22 cm disc of 16 electrodes under `kind`: its imager, schedule and redundancy.
+    fn disc(kind: ProtocolKind) -> (Imager, et_core::schedule::Schedule, Redundancy) {
+        let sheet = Sheet::disc(0.11, 16);
+        let mesh = Mesh::with_about(&sheet, 600).unwrap();
+        let imager = Imager::new(&sheet, mesh, 16).unwrap();
+        let schedule = Protocol::new(kind, 16).unwrap().schedule(1e-3).unwrap();
+        let jac = imager.transfer_jacobian(&schedule).unwrap();
+        let redundancy = Redundancy::of(&jac).unwrap();
+        (imager, schedule, redundancy)
+    }
+
+    /// Adjacent drive on L electrodes measures L (L - 3) / 2 independent values (the
+    /// reciprocal pairs and the frame's sums account for the rest): 104 of 208 for 16.
+    #[test]
+    fn adjacent_drive_has_as_many_redundant_values_as_reciprocity_says() {
+        let (_, schedule, redundancy) = disc(ProtocolKind::Adjacent);
+        assert_eq!(schedule.frame_len(), 208);
+        assert_eq!(redundancy.dof(), 208 - 16 * 13 / 2);
+    }
+
+    /// What a conductivity change (the forward model's own, not linearised) or a gain drift
+    /// makes has no redundant part; white noise's variance is found within its sampling error.
+    #[test]
+    fn a_change_has_no_redundant_part_and_white_noise_is_measured() {
+        let (imager, schedule, redundancy) = disc(ProtocolKind::Adjacent);
+        let sigma0 = imager.background();
+        let v0 = imager.forward.frame(&sigma0, &schedule).unwrap();
+        let mut touched = sigma0.clone();
+        for s in touched.iter_mut().step_by(7) {
+            *s *= 3.0;
+        }
+        let v1 = imager.forward.frame(&touched, &schedule).unwrap();
+        let norm2 = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
+        for dv in [
+            v1.iter().zip(&v0).map(|(a, b)| a - b).collect::<Vec<_>>(),
+            v0.iter().map(|v| 2e-3 * v).collect(),
+        ] {
+            let n = redundancy.noise(&dv).unwrap();
+            assert!(
+                n.variance * n.dof as f64 <= 1e-12 * norm2(&dv),
+                "{n:?} for |dv|^2 = {}",
+                norm2(&dv)
+            );
+        }
+        let mut rng = Rng::new(3);
+        let sd = 1e-5;
+        let draws = 40;
+        let mut mean = 0.0;
+        for _ in 0..draws {
+            let dv: Vec<f64> = v1
+                .iter()
+                .zip(&v0)
+                .map(|(a, b)| a - b + sd * rng.normal())
+                .collect();
+            mean += redundancy.noise(&dv).unwrap().variance / draws as f64;
+        }
+        // 40 draws of 104 degrees of freedom: the mean's relative sd is sqrt(2 / 4160) = 2 %.
+        assert!(
+            (mean / (sd * sd) - 1.0).abs() < 0.08,
+            "{mean} vs {}",
+            sd * sd
+        );
+    }
+
+    /// Too little redundancy, a wrong length or a non-finite value: no estimate.
+    #[test]
+    fn no_estimate_without_redundancy_or_from_bad_frames() {
+        let (_, _, redundancy) = disc(ProtocolKind::Adjacent);
+        assert!(redundancy.noise(&[0.0; 207]).is_none());
+        let mut dv = vec![1e-3; 208];
+        dv[5] = f64::NAN;
+        assert!(redundancy.noise(&dv).is_none());
+        let few = Redundancy {
+            combination: vec![vec![(0, 1.0)]; MIN_REDUNDANCY],
+            basis: Mat::from_fn(1, 1, |_, _| 1.0),
+        };
+        assert_eq!(few.dof(), MIN_REDUNDANCY - 1);
+        assert!(few.noise(&[1.0; MIN_REDUNDANCY]).is_none());
+    }
+}
