@@ -6,6 +6,7 @@
 //! Each case holds 1 to 3 rods, metal (conductivity x 10) or plastic (x 0.01), 2 to 3 cm
 //! across, anywhere within 70 % of the radius.
 //!
+//! The background is fitted to the reference frame first, as `et reconstruct --frames` does.
 //! For each rule: the median distance from the strongest object to the nearest rod, how often
 //! its sign is that rod's, how often the object count is within one of the rods', and the
 //! alphas chosen.
@@ -179,6 +180,16 @@ fn main() -> anyhow::Result<()> {
             let reference = Reference::from_frames(&[as_f32(&frames[0])])?;
             let mut recon =
                 Spec::new(tank.scene.sheet.physical.clone(), tank.schedule.clone()).set_up()?;
+            // As `et reconstruct --frames` does by default.
+            let fit = recon.fit_background(&reference.v0)?;
+            eprintln!(
+                "{}, {instrument_name}: background {:.1} ohm/sq (truth 230), contact {:.1} ohm (truth 60; the models' electrodes differ), residual {:.2} % (the scene's guess: {:.1} %)",
+                tank.name,
+                fit.sheet_resistance,
+                fit.contact_ohm,
+                100.0 * fit.residual,
+                100.0 * fit.scene_residual
+            );
             for (name, rule) in rules {
                 recon.set_method(Method::default(), rule)?;
                 let mut score = Score::default();

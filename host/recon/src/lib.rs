@@ -29,6 +29,7 @@
 //! against simulated frames (in `tests/tests/imaging`) do not commit the inverse crime.
 #![forbid(unsafe_code)]
 
+pub mod background;
 pub mod exact;
 pub mod fem;
 pub mod gauss_newton;

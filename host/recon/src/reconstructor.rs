@@ -33,6 +33,7 @@ use std::time::Instant;
 use et_core::schedule::Schedule;
 use et_core::sheet::Sheet;
 
+use crate::background::{BackgroundError, BackgroundFit};
 use crate::fem::{FemError, TransferJacobian};
 use crate::gauss_newton::{Data, GaussNewton, Stop, gauss_newton};
 use crate::gcv::default_alphas;
@@ -63,11 +64,18 @@ pub enum ImagingError {
     /// The schedule (protocol, currents) is not usable.
     #[error("protocol: {0}")]
     Schedule(#[from] et_core::schedule::ScheduleError),
+    /// The background could not be fitted to the reference frame.
+    #[error("{0}")]
+    Background(#[from] BackgroundError),
 }
 
 /// A reconstruction set up for one sheet, protocol, mesh, method and alpha rule (see the
 /// module docs).
 pub struct Reconstructor {
+    /// The sheet imaged (its R_s and contact the background's, fitted or the scene's).
+    sheet: Sheet,
+    /// Pixels across the image.
+    pixels: usize,
     schedule: Schedule,
     method: Method,
     alpha: AlphaRule,
@@ -109,6 +117,8 @@ impl Reconstructor {
         let jac = imager.transfer_jacobian(&spec.schedule)?;
         let forward_jacobian = clock.elapsed().as_secs_f64();
         let mut r = Self {
+            sheet: spec.sheet,
+            pixels: spec.pixels,
             threshold: spec.threshold,
             schedule: spec.schedule,
             method: spec.method,
@@ -187,6 +197,32 @@ impl Reconstructor {
         self.schedule = schedule;
         self.redundancy = std::sync::OnceLock::new();
         self.prepare()
+    }
+
+    /// The background fitted to the reference frame `v0` (K values, V; [`crate::background`]):
+    /// the sheet resistance and contact with which this mesh's model reproduces it best, then
+    /// the forward model, Jacobian and matrix made again about it (the mesh kept).
+    ///
+    /// # Errors
+    /// [`BackgroundError`] for a reference of the wrong length, NaN, all zero, or running
+    /// against the model; as [`Spec::set_up`] for the new model.
+    pub fn fit_background(&mut self, v0: &[f64]) -> Result<BackgroundFit, ImagingError> {
+        let mesh = self.imager.forward.mesh();
+        let fit = crate::background::fit(&self.sheet, mesh, &self.schedule, v0)?;
+        let sheet = fit.apply(&self.sheet);
+        self.imager = Imager::new(&sheet, mesh.clone(), self.pixels)?;
+        self.sheet = sheet;
+        self.jac = self.imager.transfer_jacobian(&self.schedule)?;
+        self.redundancy = std::sync::OnceLock::new();
+        self.prepare()?;
+        Ok(fit)
+    }
+
+    /// The sheet imaged: the spec's, or with the fitted background
+    /// ([`Reconstructor::fit_background`]).
+    #[must_use]
+    pub fn sheet(&self) -> &Sheet {
+        &self.sheet
     }
 
     /// Another method or alpha rule on the same mesh and Jacobian.

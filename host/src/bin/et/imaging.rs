@@ -36,6 +36,15 @@ pub(crate) struct ForwardArgs {
     json: bool,
 }
 
+/// `et reconstruct --background`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Background {
+    /// Fitted to the reference frame.
+    Fit,
+    /// The scene's sheet resistance and contact.
+    Scene,
+}
+
 /// `et reconstruct --method`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -104,6 +113,12 @@ pub(crate) struct ReconstructArgs {
     /// format --frames reads); then --frame counts every frame of --frames.
     #[arg(long, value_name = "FILE", requires = "frames")]
     reference_file: Option<PathBuf>,
+    /// The background the image is made about: fit (the sheet resistance and one contact
+    /// resistance with which the model reproduces the reference frame best, least squares;
+    /// the contact only when the protocol measures on drive electrodes) or scene (the
+    /// scene's values). Default: fit for measured --frames, scene for a simulated scene.
+    #[arg(long, value_enum)]
+    background: Option<Background>,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long)]
     frame: Option<usize>,
@@ -451,9 +466,48 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         (None, None) => bail!("no frames to image"),
     };
     stage("frames", clock.elapsed().as_secs_f64());
+    let fit_background = args.background.unwrap_or(if args.frames.is_some() {
+        Background::Fit
+    } else {
+        Background::Scene
+    }) == Background::Fit;
+    let background = if fit_background {
+        let clock = Instant::now();
+        let fit = recon.fit_background(&reference.v0)?;
+        stage(
+            &format!(
+                "background fit ({} solves + forward + Jacobian)",
+                fit.solves
+            ),
+            clock.elapsed().as_secs_f64(),
+        );
+        eprintln!(
+            "background: {:.4} ohm/sq, contact {:.4} ohm{}; the model leaves {:.2} % of V_0 \
+             unexplained (the scene's values: {:.2} %)",
+            fit.sheet_resistance,
+            fit.contact_ohm,
+            if fit.contact_fitted {
+                ""
+            } else {
+                " (not fitted: kept at the scene's ratio)"
+            },
+            100.0 * fit.residual,
+            100.0 * fit.scene_residual
+        );
+        if fit.residual > 0.2 {
+            eprintln!(
+                "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
+                 protocol's electrode numbering (electrodes.first_deg, direction) and order",
+                100.0 * fit.residual
+            );
+        }
+        Some(fit)
+    } else {
+        None
+    };
     let image = recon.image(&v1, &reference)?;
     let timings_s = frame_stages(args, &image, &set_up, stage);
-    report(args, &recon, &image, &truth, timings_s, started)
+    report(args, &recon, &image, &truth, background, timings_s, started)
 }
 
 /// Prints the matrix's and the frame's stages of `image` (stderr) and returns every stage's
@@ -496,9 +550,8 @@ fn frame_stages(
         image.noise.rms_v,
         match image.noise.source {
             S::ReferenceFrames => "from the reference frames' spread".to_string(),
-            S::Redundancy { dof } => format!(
-                "from the protocol's {dof} redundant values (one reference frame)"
-            ),
+            S::Redundancy { dof } =>
+                format!("from the protocol's {dof} redundant values (one reference frame)"),
             S::Unknown => "unknown (one reference frame, no redundant values): taken as 0".into(),
         }
     );

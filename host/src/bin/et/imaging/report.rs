@@ -9,6 +9,7 @@ pub(super) fn report(
     recon: &et_recon::Reconstructor,
     image: &et_recon::Image,
     truth: &[et_sim::still::Truth],
+    background: Option<et_recon::background::BackgroundFit>,
     timings_s: Timings,
     started: Instant,
 ) -> Result<()> {
@@ -64,6 +65,7 @@ pub(super) fn report(
         method: args.method,
         alpha: image.alpha,
         noise: NoiseSummary::of(image),
+        background,
         noise_figure: image.greit.map(|g| g.0),
         s: args.s,
         threshold: f,
@@ -164,6 +166,8 @@ pub(super) struct ReconstructSummary<'a> {
     alpha: f64,
     /// The noise of dV the image was made against.
     noise: NoiseSummary,
+    /// The background fitted to the reference frame (null: the scene's).
+    background: Option<et_recon::background::BackgroundFit>,
     /// GREIT's noise figure of the matrix made; null for gn.
     noise_figure: Option<f64>,
     s: f64,

@@ -1,0 +1,285 @@
+//! The background from the data: the homogeneous sheet resistance R_s and one contact
+//! resistance z_c (every electrode alike) with which the finite elements reproduce the
+//! reference frame V_0 best, by least squares (docs/method.md §6.6).
+//!
+//! Scaling makes the fit one-dimensional: with sigma = 1 / R_s and the complete model's
+//! contact z_c, the frame is V(R_s, z_c) = R_s F(z_c / R_s), F(rho) the frame of a unit sheet
+//! with contacts of rho ohm. For each rho the best R_s is closed-form (R_s = <F, V_0> / |F|^2);
+//! rho is searched on a logarithmic grid, then by golden section. The contact shows in a frame
+//! only through measurements on drive electrodes (their contact's drop), so it is fitted only
+//! when the protocol has them and the sheet's model is the complete one; otherwise R_s alone is
+//! fitted at the scene's contact-to-sheet ratio.
+//!
+//! A system whose values are not volts (an unknown gain) fits R_s times that gain: images in
+//! Delta sigma / sigma_0 do not change with it.
+
+use et_core::schedule::Schedule;
+use et_core::sheet::{ElectrodeModel, Sheet};
+
+use crate::fem::{Electrodes, FemError, Forward, MIN_CONTACT_RATIO};
+use crate::mesh::Mesh;
+
+/// The background fitted to a reference frame.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct BackgroundFit {
+    /// Sheet resistance R_s, ohm per square.
+    pub sheet_resistance: f64,
+    /// Each electrode's contact resistance, ohm (the scene's times the ratio kept when not
+    /// fitted).
+    pub contact_ohm: f64,
+    /// Whether the contact was fitted (the complete model and measurements on drive
+    /// electrodes), or kept at the scene's ratio to R_s.
+    pub contact_fitted: bool,
+    /// |V_0 - V(fit)| / |V_0|: what the homogeneous model leaves unexplained.
+    pub residual: f64,
+    /// The same at the scene's R_s and contact.
+    pub scene_residual: f64,
+    /// Forward solves the fit took.
+    pub solves: usize,
+}
+
+/// Why a background could not be fitted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BackgroundError {
+    /// The forward model failed.
+    #[error("background fit: {0}")]
+    Fem(#[from] FemError),
+    /// The reference frame is not of K finite values, or all zero.
+    #[error("background fit: {0}")]
+    Frame(String),
+    /// The reference frame runs against the model (the best R_s is negative).
+    #[error(
+        "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
+         ohm/sq < 0): are the protocol's positive and negative electrodes, or source and sink, \
+         swapped, or the electrodes numbered the other way (electrodes.direction)?"
+    )]
+    Sign(f64),
+}
+
+/// The unit sheet's frame with contacts of `rho` ohm (or the sheet's point or shunt model).
+fn unit_frame(
+    sheet: &Sheet,
+    mesh: &Mesh,
+    schedule: &Schedule,
+    rho: Option<f64>,
+) -> Result<Vec<f64>, FemError> {
+    let electrodes = match rho {
+        Some(rho) => Electrodes::Complete(vec![
+            rho * sheet.electrodes.width;
+            usize::from(sheet.electrodes.count)
+        ]),
+        None => Electrodes::of_sheet(sheet)?,
+    };
+    let forward = Forward::new(mesh.clone(), electrodes)?;
+    let n = forward.mesh().triangles.len();
+    forward.frame(&vec![1.0; n], schedule)
+}
+
+/// (R_s, |V_0 - R_s F| / |V_0|) for the unit frame `f`.
+fn scale(f: &[f64], v0: &[f64]) -> (f64, f64) {
+    let (fv, ff) = f
+        .iter()
+        .zip(v0)
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x * y, b + x * x));
+    let rs = if ff > 0.0 { fv / ff } else { 0.0 };
+    let misfit: f64 = f.iter().zip(v0).map(|(x, y)| (y - rs * x).powi(2)).sum();
+    let norm: f64 = v0.iter().map(|v| v * v).sum();
+    (rs, (misfit / norm).sqrt())
+}
+
+/// The background of `sheet` (its outline and electrodes; its R_s and contact the starting
+/// guess) on `mesh` that best reproduces `v0` (K values of `schedule`, V). See the module docs.
+///
+/// # Errors
+/// [`BackgroundError`] for a frame of the wrong length, non-finite or all zero, a reference
+/// that runs against the model, or a failed solve.
+pub fn fit(
+    sheet: &Sheet,
+    mesh: &Mesh,
+    schedule: &Schedule,
+    v0: &[f64],
+) -> Result<BackgroundFit, BackgroundError> {
+    let k = schedule.frame_len();
+    if v0.len() != k || v0.iter().any(|v| !v.is_finite()) || v0.iter().all(|v| *v == 0.0) {
+        return Err(BackgroundError::Frame(format!(
+            "the reference has {} values for K = {k}, or a NaN, or is all zero",
+            v0.len()
+        )));
+    }
+    let complete = matches!(sheet.electrodes.model, ElectrodeModel::Complete);
+    let ratio = sheet.electrodes.contact_ohm / sheet.sheet_resistance;
+    let solves = std::cell::Cell::new(1);
+    let eval = |rho: Option<f64>| -> Result<(f64, f64), BackgroundError> {
+        solves.set(solves.get() + 1);
+        Ok(scale(&unit_frame(sheet, mesh, schedule, rho)?, v0))
+    };
+    let scene_rho = complete.then_some(ratio);
+    let scene_frame = unit_frame(sheet, mesh, schedule, scene_rho)?;
+    let scene_fit = scale(&scene_frame, v0);
+    // The scene's own residual, at its R_s (not the fitted scale).
+    let scene_residual = {
+        let misfit: f64 = scene_frame
+            .iter()
+            .zip(v0)
+            .map(|(x, y)| (y - sheet.sheet_resistance * x).powi(2))
+            .sum();
+        (misfit / v0.iter().map(|v| v * v).sum::<f64>()).sqrt()
+    };
+    let fit_contact = complete && schedule.first_on_drive().is_some();
+    let (rho, (rs, residual)) = if fit_contact {
+        // log10 rho from 1e-4 sheet squares (where the contact's drop is under a thousandth
+        // of the sheet's) to 100, half decades.
+        let lo = -4.0f64.max(MIN_CONTACT_RATIO.log10());
+        let grid: Vec<f64> = (0..)
+            .map(|i| lo + 0.5 * f64::from(i))
+            .take_while(|x| *x <= 2.0)
+            .collect();
+        let mut scores = Vec::with_capacity(grid.len());
+        for &x in &grid {
+            scores.push(eval(Some(10f64.powf(x)))?);
+        }
+        let best = (0..grid.len())
+            .filter(|&i| scores[i].0 > 0.0)
+            .min_by(|&a, &b| scores[a].1.total_cmp(&scores[b].1))
+            .ok_or(BackgroundError::Sign(scores[0].0))?;
+        // Golden section on [grid[best - 1], grid[best + 1]].
+        let (mut a, mut b) = (
+            grid[best.saturating_sub(1)],
+            grid[(best + 1).min(grid.len() - 1)],
+        );
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+        let (mut fc, mut fd) = (eval(Some(10f64.powf(c)))?, eval(Some(10f64.powf(d)))?);
+        for _ in 0..8 {
+            if fc.1 < fd.1 {
+                (b, d, fd) = (d, c, fc);
+                c = b - g * (b - a);
+                fc = eval(Some(10f64.powf(c)))?;
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + g * (b - a);
+                fd = eval(Some(10f64.powf(d)))?;
+            }
+        }
+        let (x, s) = if fc.1 < fd.1 { (c, fc) } else { (d, fd) };
+        let (x, s) = if scores[best].1 < s.1 {
+            (grid[best], scores[best])
+        } else {
+            (x, s)
+        };
+        (Some(10f64.powf(x)), s)
+    } else {
+        (scene_rho, scene_fit)
+    };
+    if rs <= 0.0 {
+        return Err(BackgroundError::Sign(rs));
+    }
+    Ok(BackgroundFit {
+        sheet_resistance: rs,
+        contact_ohm: rho.map_or(sheet.electrodes.contact_ohm, |r| r * rs),
+        contact_fitted: fit_contact,
+        residual,
+        scene_residual,
+        solves: solves.get(),
+    })
+}
+
+impl BackgroundFit {
+    /// `sheet` with the fitted sheet resistance and contact.
+    #[must_use]
+    pub fn apply(&self, sheet: &Sheet) -> Sheet {
+        let mut out = sheet.clone();
+        out.sheet_resistance = self.sheet_resistance;
+        out.electrodes.contact_ohm = self.contact_ohm;
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use et_core::schedule::Row;
+
+    /// A 28 cm tank of 8 electrodes, all against electrode 0 and adjacent, every pair
+    /// measured (the drive electrodes' too).
+    fn tank() -> (Sheet, Mesh, Schedule) {
+        let mut sheet = Sheet::disc(0.14, 8);
+        sheet.electrodes.width = 0.025;
+        let mesh = Mesh::with_about(&sheet, 1_500).unwrap();
+        let mut rows = Vec::new();
+        for (source, sink) in (1..8)
+            .map(|e| (e, 0))
+            .chain((0..8).map(|e| (e, (e + 1) % 8)))
+        {
+            for m in 0..8 {
+                rows.push(Row {
+                    source,
+                    sink,
+                    positive: m,
+                    negative: (m + 1) % 8,
+                    current_a: 1e-3,
+                });
+            }
+        }
+        (sheet, mesh, Schedule::new(8, rows).unwrap())
+    }
+
+    /// The model's own frame at (R_s, z_c) is fitted back to them, from a guess far off; with
+    /// the scaling identity V(R_s, z_c) = R_s F(z_c / R_s) checked on the way.
+    #[test]
+    fn the_models_own_frame_is_fitted_back() {
+        let (mut sheet, mesh, schedule) = tank();
+        let (rs, contact) = (230.0, 60.0);
+        sheet.sheet_resistance = rs;
+        sheet.electrodes.contact_ohm = contact;
+        let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
+        let n = mesh.triangles.len();
+        let v0 = forward.frame(&vec![1.0 / rs; n], &schedule).unwrap();
+        let unit = unit_frame(&sheet, &mesh, &schedule, Some(contact / rs)).unwrap();
+        for (a, b) in v0.iter().zip(&unit) {
+            assert!(
+                (a - rs * b).abs() < 1e-9 * a.abs().max(1e-3),
+                "{a} vs {}",
+                rs * b
+            );
+        }
+        let mut guess = sheet.clone();
+        guess.sheet_resistance = 100.0;
+        guess.electrodes.contact_ohm = 5.0;
+        let fit = fit(&guess, &mesh, &schedule, &v0).unwrap();
+        assert!(fit.contact_fitted);
+        assert!((fit.sheet_resistance / rs - 1.0).abs() < 1e-3, "{fit:?}");
+        assert!((fit.contact_ohm / contact - 1.0).abs() < 1e-2, "{fit:?}");
+        assert!(fit.residual < 1e-4 && fit.scene_residual > 0.3, "{fit:?}");
+    }
+
+    /// Without measurements on drive electrodes the contact is kept at the guess's ratio and
+    /// R_s still fitted; a frame of the other sign is refused with the likely causes.
+    #[test]
+    fn contact_only_where_the_frame_shows_it_and_a_reversed_frame_refused() {
+        let (mut sheet, mesh, schedule) = tank();
+        let off_drive: Vec<Row> = schedule
+            .rows()
+            .iter()
+            .copied()
+            .filter(|r| r.on_drive().is_none())
+            .collect();
+        let off_drive = Schedule::new(8, off_drive).unwrap();
+        sheet.sheet_resistance = 150.0;
+        let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
+        let n = mesh.triangles.len();
+        let v0 = forward.frame(&vec![1.0 / 150.0; n], &off_drive).unwrap();
+        let mut guess = sheet.clone();
+        guess.sheet_resistance = 300.0;
+        let fit = fit(&guess, &mesh, &off_drive, &v0).unwrap();
+        assert!(!fit.contact_fitted);
+        assert!((fit.sheet_resistance / 150.0 - 1.0).abs() < 0.05, "{fit:?}");
+        let reversed: Vec<f64> = v0.iter().map(|v| -v).collect();
+        let e = super::fit(&guess, &mesh, &off_drive, &reversed).unwrap_err();
+        assert!(matches!(e, BackgroundError::Sign(_)), "{e}");
+        assert!(e.to_string().contains("direction"), "{e}");
+        assert!(super::fit(&guess, &mesh, &off_drive, &v0[1..]).is_err());
+        assert!(super::fit(&guess, &mesh, &off_drive, &vec![0.0; v0.len()]).is_err());
+    }
+}
