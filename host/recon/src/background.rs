@@ -1,6 +1,6 @@
 //! The background from the data: the homogeneous sheet resistance R_s and one contact
 //! resistance z_c (every electrode alike) with which the finite elements reproduce the
-//! reference frame V_0 best, by least squares (docs/method.md §6.6).
+//! reference frame V_0 best, by least squares (docs/method.md §6.8).
 //!
 //! Scaling makes the fit one-dimensional: with sigma = 1 / R_s and the complete model's
 //! contact z_c, the frame is V(R_s, z_c) = R_s F(z_c / R_s), F(rho) the frame of a unit sheet
