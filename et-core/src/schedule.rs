@@ -179,6 +179,32 @@ impl Schedule {
         })
     }
 
+    /// Every adjacent pair (m, m + 1) measured under each of `injections` (source, sink), the
+    /// drive electrodes' pairs too, at `current_a`: how many laboratory systems scan (a tank's
+    /// adjacent, skip and all-against-one families in one frame). K = L x injections.
+    ///
+    /// # Errors
+    /// As [`Schedule::new`].
+    pub fn adjacent_pairs_under(
+        electrodes: u16,
+        injections: &[(u16, u16)],
+        current_a: f64,
+    ) -> Result<Self, ScheduleError> {
+        let rows = injections
+            .iter()
+            .flat_map(|&(source, sink)| {
+                (0..electrodes).map(move |m| Row {
+                    source,
+                    sink,
+                    positive: m,
+                    negative: (m + 1) % electrodes.max(1),
+                    current_a,
+                })
+            })
+            .collect();
+        Self::new(electrodes, rows)
+    }
+
     /// The rows of a built-in protocol, each driving `current_a` (any positive current: the
     /// model is linear, and a unit current gives transfer impedances).
     ///

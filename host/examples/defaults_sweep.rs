@@ -14,7 +14,7 @@
 //! Run: `cargo run --release -p et-host --example defaults_sweep`
 
 use et_core::rng::Rng;
-use et_core::schedule::{Row, Schedule};
+use et_core::schedule::Schedule;
 use et_recon::{AlphaRule, Method, Reference, Spec};
 use et_sim::foreign::{self, Instrument};
 use et_sim::scene::Scene;
@@ -49,23 +49,6 @@ fn tank(name: &'static str, radius: f64, electrodes: &str, schedule: Schedule) -
     }
 }
 
-/// Injections `pairs` (source, sink), each measured on every adjacent pair, at `amps`.
-fn schedule(l: u16, pairs: &[(u16, u16)], amps: f64) -> Schedule {
-    let rows = pairs
-        .iter()
-        .flat_map(|&(source, sink)| {
-            (0..l).map(move |m| Row {
-                source,
-                sink,
-                positive: m,
-                negative: (m + 1) % l,
-                current_a: amps,
-            })
-        })
-        .collect();
-    Schedule::new(l, rows).expect("a valid schedule")
-}
-
 /// The 16-electrode tank: adjacent, skip 1, 2, 3 and all against electrode 0 (79
 /// injections, 1 264 values); the 32-electrode tank: injections between odd electrodes only,
 /// 1 to 4 odd electrodes apart and opposite (72 injections, 2 304 values).
@@ -84,13 +67,13 @@ fn tanks() -> Vec<Tank> {
             "16 electrodes, 79 injections",
             0.14,
             "count = 16, width = 0.025, first_deg = 90, direction = \"cw\"",
-            schedule(16, &pairs16, 1.4142e-3),
+            Schedule::adjacent_pairs_under(16, &pairs16, 1.4142e-3).expect("a schedule"),
         ),
         tank(
             "32 electrodes, odd injections",
             0.15,
             "count = 32, width = 0.01, first_deg = 0, direction = \"ccw\"",
-            schedule(32, &pairs32, 1e-3),
+            Schedule::adjacent_pairs_under(32, &pairs32, 1e-3).expect("a schedule"),
         ),
     ]
 }

@@ -1,6 +1,7 @@
 //! Imaging speed: mesh + forward + Jacobian + one-step matrix for a 16-electrode disc
 //! (adjacent protocol, complete electrode model) at about 2 000, 8 000 and 30 000 triangles,
-//! and 32 electrodes PP-PP at 8 000; GREIT's set-up at 2 000 and 8 000; the one-step matrix
+//! and 32 electrodes PP-PP at 8 000; other systems' protocols of 1 264 and 2 304 values at
+//! 8 000; GREIT's set-up at 2 000 and 8 000; the one-step matrix
 //! alone; a live frame onto the mesh
 //! against reading its matrix once (the memory-bandwidth limit) and onto a 32 x 32 grid. One
 //! core: faer runs sequentially, nalgebra is single-threaded.
@@ -92,6 +93,41 @@ fn set_up_32_electrodes_pp_pp_8000() -> usize {
         Method::default(),
         AlphaRule::Fixed(0.03),
     )
+}
+
+/// Another system's protocol through the whole set-up (mesh, forward model, Jacobian, the
+/// one-step matrix at alpha 0.1) on a 28 cm tank at 8 000 triangles, every adjacent pair
+/// measured under each injection, the drive electrodes' too: 16 electrodes 2.5 cm wide with 79
+/// injections (adjacent, skip 1 to 3, all against electrode 0: K = 1 264), and 32 electrodes 1
+/// cm wide injecting between odd electrodes only (1 to 4 apart and opposite, 72 injections:
+/// K = 2 304).
+#[divan::bench(args = [16, 32], sample_count = 3, sample_size = 1)]
+fn set_up_foreign_protocol_8000(electrodes: u16) -> usize {
+    let l = electrodes;
+    let injections: Vec<(u16, u16)> = if l == 16 {
+        (0..4)
+            .flat_map(|skip| (0..l).map(move |i| (i, (i + skip + 1) % l)))
+            .chain((1..l).map(|i| (i, 0)))
+            .collect()
+    } else {
+        let odd = |i: u16| (2 * i + 1) % l;
+        (1..=4)
+            .flat_map(|d| (0..l / 2).map(move |i| (odd(i), odd(i + d))))
+            .chain((0..l / 4).map(|i| (odd(i), odd(i + l / 4))))
+            .collect()
+    };
+    let schedule = et_core::schedule::Schedule::adjacent_pairs_under(l, &injections, 1e-3)
+        .expect("a schedule");
+    let mut sheet = Sheet::disc(0.14, l as u8);
+    sheet.electrodes.width = if l == 16 { 0.025 } else { 0.01 };
+    Spec {
+        alpha: AlphaRule::Fixed(0.1),
+        ..Spec::new(sheet, schedule)
+    }
+    .set_up()
+    .expect("set-up")
+    .imager()
+    .triangles()
 }
 
 /// GREIT's full set-up at the consensus noise figure: mesh, forward model, Jacobian, the

@@ -79,6 +79,48 @@ pub struct DataSpace {
     h: Mat<f64>,
     /// A's spectrum, made on first use (GCV).
     eigen: std::sync::OnceLock<Option<Spectrum>>,
+    /// N = M^T M's root and B^T H B, made on first use (the one-step matrix).
+    root: std::sync::OnceLock<Option<NormalRoot>>,
+}
+
+/// N = M^T M (r x r) for the K rows of M (`combination`, over r columns).
+pub(crate) fn normal(combination: &[Vec<(usize, f64)>], r: usize) -> Mat<f64> {
+    let mut n = Mat::<f64>::zeros(r, r);
+    for row in combination {
+        for &(p, a) in row {
+            for &(q, b) in row {
+                n[(p, q)] += a * b;
+            }
+        }
+    }
+    n
+}
+
+/// N = M^T M on its range: N = B B^T with B = Q diag(n)^1/2 over N's eigenpairs (Q, n) above
+/// 1e-10 of the largest (r x q), B^+ = diag(n)^-1/2 Q^T (q x r), and B^T H B (q x q).
+#[derive(Clone, Debug)]
+struct NormalRoot {
+    b: Mat<f64>,
+    b_pinv: Mat<f64>,
+    bhb: Mat<f64>,
+}
+
+impl NormalRoot {
+    fn new(combination: &[Vec<(usize, f64)>], h: &Mat<f64>) -> Option<Self> {
+        let r = h.nrows();
+        let evd = normal(combination, r)
+            .self_adjoint_eigen(Side::Lower)
+            .ok()?;
+        let n: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+        let top = n.iter().copied().fold(0.0f64, f64::max);
+        let keep: Vec<usize> = (0..r).filter(|&i| n[i] > 1e-10 * top).collect();
+        let q = evd.U();
+        let b = Mat::from_fn(r, keep.len(), |i, j| q[(i, keep[j])] * n[keep[j]].sqrt());
+        let b_pinv = Mat::from_fn(keep.len(), r, |i, j| q[(j, keep[i])] / n[keep[i]].sqrt());
+        let hb = product(h.as_ref(), b.as_ref());
+        let bhb = product(b.transpose(), hb.as_ref());
+        Some(Self { b, b_pinv, bhb })
+    }
 }
 
 /// A's nonzero eigenvalues e_i and how to get c = U^T dv for their eigenvectors U.
@@ -230,6 +272,7 @@ impl DataSpace {
             p: p_inv.iter().map(|w| 1.0 / w).collect(),
             h,
             eigen: std::sync::OnceLock::new(),
+            root: std::sync::OnceLock::new(),
         }
     }
 
@@ -270,19 +313,36 @@ impl DataSpace {
         self.at_lambda(self.lambda(alpha), alpha)
     }
 
-    /// R = P^-1 J^T (A + lambda I)^-1 = (G P^-1)^T X^T with X = (A + lambda I)^-1 M (K x r,
-    /// one Cholesky solve with r right-hand sides) at an absolute `lambda`.
+    /// R = P^-1 J^T (A + lambda I)^-1 = (G P^-1)^T X^T at an absolute `lambda`, with X^T =
+    /// M^T (M H M^T + lambda I)^-1 = (N H + lambda I)^-1 M^T (N = M^T M; the push-through
+    /// identity, since (N H + lambda I) M^T = M^T (M H M^T + lambda I)): an r x r problem
+    /// instead of a K x K Cholesky, so a protocol of many values (a tank's 1 264, 32
+    /// electrodes' 2 304) costs what its r transfer impedances cost. M^T's columns lie in N's
+    /// range, where N = B B^T ([`NormalRoot`]) and (N H + lambda I)^-1 = B (B^T H B + lambda
+    /// I)^-1 B^+: a symmetric positive definite q x q Cholesky whose condition is A + lambda
+    /// I's (B^T H B has A's nonzero eigenvalues).
     pub(crate) fn at_lambda(&self, lambda: f64, alpha: f64) -> Result<OneStep, ReconError> {
-        let llt = self.regularised(lambda)?;
-        let (k, r) = (self.frame_len(), self.gp.nrows());
-        let mut x = Mat::<f64>::zeros(k, r);
-        for (i, row) in self.combination.iter().enumerate() {
+        let k = self.frame_len();
+        let root = self.normal_root()?;
+        let q = root.b.ncols();
+        let mut s = root.bhb.clone();
+        for i in 0..q {
+            s[(i, i)] += lambda;
+        }
+        let llt = s.llt(Side::Lower).map_err(|_| ReconError::Singular)?;
+        let mut z = root.b_pinv.clone();
+        llt.solve_in_place_with_conj(faer::Conj::No, z.as_mut());
+        // (N H + lambda I)^-1 on N's range (r x r), then combined by M^T's sparse columns.
+        let inverse = product(root.b.as_ref(), z.as_ref());
+        let mut xt = Mat::<f64>::zeros(self.gp.nrows(), k);
+        for (col, row) in self.combination.iter().enumerate() {
             for &(p, c) in row {
-                x[(i, p)] += c;
+                xt.col_mut(col)
+                    .iter_mut()
+                    .zip(inverse.col(p).iter())
+                    .for_each(|(x, v)| *x += c * v);
             }
         }
-        llt.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
-        let xt = x.transpose().to_owned();
         if xt.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
             return Err(ReconError::Singular);
         }
@@ -292,6 +352,14 @@ impl DataSpace {
             alpha,
             s: self.s,
         })
+    }
+
+    /// [`NormalRoot`], made on first use and kept.
+    fn normal_root(&self) -> Result<&NormalRoot, ReconError> {
+        self.root
+            .get_or_init(|| NormalRoot::new(&self.combination, &self.h))
+            .as_ref()
+            .ok_or(ReconError::Singular)
     }
 
     /// (A + lambda I)^-1 `rhs` at an absolute `lambda` for one vector of K values (iterative
@@ -383,15 +451,7 @@ impl DataSpace {
         let c = Mat::from_fn(r, kept.len(), |i, j| {
             q[(i, kept[j])] * lambda[kept[j]].sqrt()
         });
-        // N = M^T M.
-        let mut n = Mat::<f64>::zeros(r, r);
-        for row in &self.combination {
-            for &(p, a) in row {
-                for &(q, b) in row {
-                    n[(p, q)] += a * b;
-                }
-            }
-        }
+        let n = normal(&self.combination, r);
         let m = c.ncols();
         let nc = product(n.as_ref(), c.as_ref());
         let small = product(c.transpose(), nc.as_ref());

@@ -35,15 +35,9 @@ impl Redundancy {
     #[must_use]
     pub fn of(jac: &TransferJacobian) -> Option<Self> {
         let r = jac.pairs();
-        let mut n = Mat::<f64>::zeros(r, r);
-        for row in &jac.combination {
-            for &(p, a) in row {
-                for &(q, b) in row {
-                    n[(p, q)] += a * b;
-                }
-            }
-        }
-        let evd = n.self_adjoint_eigen(Side::Lower).ok()?;
+        let evd = crate::onestep::normal(&jac.combination, r)
+            .self_adjoint_eigen(Side::Lower)
+            .ok()?;
         let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
         let top = e.iter().copied().fold(0.0f64, f64::max);
         let keep: Vec<usize> = (0..r).filter(|&i| e[i] > 1e-10 * top).collect();
