@@ -10,6 +10,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use et_core::schedule::Schedule;
+use et_sim::foreign::Instrument;
 use et_sim::scene::Scene;
 use et_sim::touch::{Footprint, Inclusion};
 
@@ -36,18 +38,13 @@ current_ua = 1414.2
 /// The tank's protocol: 79 injections x 16 adjacent measurements, drive electrodes included.
 fn protocol_csv() -> String {
     let l = 16u16;
-    let mut injections: Vec<(u16, u16)> = Vec::new();
-    for skip in 0..4 {
-        injections.extend((0..l).map(|i| (i, (i + skip + 1) % l)));
-    }
+    let mut injections: Vec<(u16, u16)> = (0..4)
+        .flat_map(|skip| (0..l).map(move |i| (i, (i + skip + 1) % l)))
+        .collect();
     injections.extend((1..l).map(|i| (i, 0)));
-    let mut csv = String::from("source,sink,positive,negative,current_a\n");
-    for (source, sink) in injections {
-        for m in 0..l {
-            let _ = writeln!(csv, "{source},{sink},{m},{},1.4142e-3", (m + 1) % l);
-        }
-    }
-    csv
+    Schedule::adjacent_pairs_under(l, &injections, 1.4142e-3)
+        .unwrap()
+        .to_csv()
 }
 
 fn dir(name: &str) -> PathBuf {
@@ -56,25 +53,29 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
-/// The empty tank's frame, then one frame per target (a rod 2 cm across: conductive for a
-/// multiplier above 1, metal; resistive below, plastic).
-fn frames(scene: &Scene, targets: &[([f64; 2], f64)]) -> Vec<Vec<f64>> {
+/// The empty tank's frame, then one frame per entry of `targets` (rods 2 cm across:
+/// conductive for a multiplier above 1, metal; resistive below, plastic), measured by
+/// `instrument`.
+fn frames(
+    scene: &Scene,
+    targets: &[Vec<([f64; 2], f64)>],
+    instrument: &Instrument,
+) -> Vec<Vec<f64>> {
     let sheet = et_sim::still::simulated_sheet(scene).unwrap();
-    let schedule = scene.schedule().unwrap();
-    let frame = |inclusions: &[Inclusion]| {
-        let z = sheet.transfer_inclusions(inclusions).unwrap();
-        z.frame_of(&schedule).unwrap()
-    };
-    let mut out = vec![frame(&[])];
-    for &(position, multiplier) in targets {
-        out.push(frame(&[Inclusion {
-            position,
-            radius: 0.01,
-            multiplier,
-            footprint: Footprint::default(),
-        }]));
-    }
-    out
+    let scenes: Vec<Vec<Inclusion>> = targets
+        .iter()
+        .map(|rods| {
+            rods.iter()
+                .map(|&(position, multiplier)| Inclusion {
+                    position,
+                    radius: 0.01,
+                    multiplier,
+                    footprint: Footprint::default(),
+                })
+                .collect()
+        })
+        .collect();
+    et_sim::foreign::frames(&sheet, &scene.schedule().unwrap(), &scenes, instrument).unwrap()
 }
 
 /// The strongest object's centre (mm) and sign.
@@ -134,7 +135,8 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
         ([-0.06, -0.04], 0.1),
         ([0.05, 0.07], 0.1),
     ];
-    let frames = frames(&scene, &targets);
+    let one_each: Vec<Vec<([f64; 2], f64)>> = targets.iter().map(|t| vec![*t]).collect();
+    let frames = frames(&scene, &one_each, &Instrument::ideal());
     // As rows of a CSV, with a header of channel names.
     let mut csv: String = (0..1_264).map(|k| format!("ch{k},")).collect();
     csv.pop();
@@ -297,5 +299,116 @@ fn et_protocol_csv_is_a_protocol_file() {
     ]);
     let e = String::from_utf8_lossy(&e.stderr).into_owned();
     assert!(e.contains("--frames"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A 32-electrode tank from another lab: electrodes counted from 1 in its protocol file
+/// (`base = 1`), injections between odd electrodes only (1 to 4 apart and opposite: 72
+/// injections x 32 adjacent pairs = 2 304 values), 1 mA; its frames as a NumPy .npy with a
+/// laboratory instrument's noise and gain drift, one reference frame; rods of both kinds, one
+/// to three at a time. With the defaults, every case's strongest object is near a rod and of
+/// its kind, and the object count is within one of the rods'.
+#[test]
+fn a_noisy_drifting_32_electrode_tank_from_npy() {
+    let d = dir("tank32");
+    let scene_path = d.join("tank.toml");
+    std::fs::write(
+        &scene_path,
+        r#"
+[sheet]
+shape = { kind = "disc", radius = 0.15 }
+sheet_resistance = 200.0
+electrodes = { count = 32, width = 0.01, contact_ohm = 20, first_deg = 0, direction = "ccw" }
+
+[scan]
+protocol = { file = "protocol.csv", base = 1 }
+current_ua = 1000
+"#,
+    )
+    .unwrap();
+    let odd = |i: u16| (2 * i + 1) % 32;
+    let injections: Vec<(u16, u16)> = (1..=4)
+        .flat_map(|d| (0..16).map(move |i| (odd(i), odd(i + d))))
+        .chain((0..8).map(|i| (odd(i), odd(i + 8))))
+        .collect();
+    // Counted from 1, as the lab's file has it.
+    let mut csv = String::from("source,sink,positive,negative\n");
+    for r in Schedule::adjacent_pairs_under(32, &injections, 1e-3)
+        .unwrap()
+        .rows()
+    {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{}",
+            r.source + 1,
+            r.sink + 1,
+            r.positive + 1,
+            r.negative + 1
+        );
+    }
+    std::fs::write(d.join("protocol.csv"), csv).unwrap();
+    let scene = Scene::load(&scene_path).unwrap();
+    assert_eq!(scene.schedule().unwrap().frame_len(), 2_304);
+    let (metal, plastic) = (10.0, 0.01);
+    let cases = vec![
+        vec![([0.06, 0.03], metal)],
+        vec![([-0.04, -0.07], plastic)],
+        vec![([0.07, -0.02], metal), ([-0.05, 0.05], plastic)],
+        vec![([-0.06, -0.03], plastic), ([0.02, 0.08], plastic)],
+        vec![
+            ([0.08, 0.0], metal),
+            ([-0.04, 0.07], metal),
+            ([-0.03, -0.08], plastic),
+        ],
+    ];
+    let frames = frames(&scene, &cases, &Instrument::laboratory(5));
+    let m = nalgebra::DMatrix::from_fn(frames.len(), 2_304, |i, k| frames[i][k]);
+    let npy = d.join("frames.npy");
+    std::fs::write(&npy, et_learn::npz::npy_of_matrix(&m)).unwrap();
+    let png = d.join("f.png");
+    for (i, rods) in cases.iter().enumerate() {
+        let frame = (i + 1).to_string();
+        let out = et(&[
+            "reconstruct",
+            "--scene",
+            scene_path.to_str().unwrap(),
+            "--frames",
+            npy.to_str().unwrap(),
+            "--reference",
+            "1",
+            "--frame",
+            &frame,
+            "--triangles",
+            "3000",
+            "--json",
+            "--force",
+            "--out",
+            png.to_str().unwrap(),
+        ]);
+        let (found, sign) = strongest(&out);
+        let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let count = j["objects"].as_array().unwrap().len();
+        let (miss, kind) = rods
+            .iter()
+            .map(|(t, mult)| ((found[0] - t[0] * 1e3).hypot(found[1] - t[1] * 1e3), *mult))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap();
+        eprintln!(
+            "case {i}: {} rods, {count} objects; strongest {miss:.1} mm from a rod, noise {}, background {}",
+            rods.len(),
+            j["noise"],
+            j["background"]
+        );
+        assert!(miss < 12.0, "case {i}: strongest at {found:?} mm");
+        assert_eq!(sign, if kind > 1.0 { 1 } else { -1 }, "case {i}");
+        assert!(
+            count.abs_diff(rods.len()) <= 1,
+            "case {i}: {}",
+            j["objects"]
+        );
+        // The noise came from the protocol's redundancy, and the background was fitted.
+        assert_eq!(j["noise"]["source"], "redundancy");
+        assert!(j["background"]["residual"].as_f64().unwrap() < 0.05);
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
