@@ -1,6 +1,7 @@
 //! Measured frames from other systems' files, for imaging: a CSV (one frame per row, a header
 //! row optional, cells separated by `,`, `;` or tabs), a NumPy `.npy` (2-D, or 1-D for one
-//! frame) or an array of an `.npz` (`file.npz:NAME`, or its only array). Values in volts.
+//! frame), an array of an `.npz` (`file.npz:NAME`, or its only array) or a MATLAB `.mat`
+//! of version 5 or 7 (`file.mat:VARIABLE`, or its only numeric array). Values in volts.
 //! A matrix whose rows are the protocol's K values and whose columns are not (frames as
 //! columns, as MATLAB users store them) is read as its transpose, and said so. et's own
 //! recordings (`.jsonl`) are read by [`crate::recording`].
@@ -70,19 +71,117 @@ pub fn is_table(spec: &Path) -> bool {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .as_deref(),
-        Some("csv" | "txt" | "tsv" | "npy" | "npz")
+        Some("csv" | "txt" | "tsv" | "npy" | "npz" | "mat")
     )
 }
 
-/// `file.npz:NAME` as (file, Some(NAME)); anything else as (spec, None).
+/// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).
 fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
     let s = spec.to_string_lossy();
-    match s.rsplit_once(".npz:") {
-        Some((file, name)) if !name.is_empty() => {
-            (PathBuf::from(format!("{file}.npz")), Some(name.to_string()))
+    for ext in [".npz:", ".mat:"] {
+        if let Some((file, name)) = s.rsplit_once(ext)
+            && !name.is_empty()
+        {
+            return (
+                PathBuf::from(format!("{file}{}", &ext[..4])),
+                Some(name.to_string()),
+            );
         }
-        _ => (spec.to_path_buf(), None),
     }
+    (spec.to_path_buf(), None)
+}
+
+/// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
+fn mat_matrix(
+    path: &Path,
+    bytes: &[u8],
+    name: Option<&str>,
+) -> Result<(DMatrix<f64>, String), FramesError> {
+    if bytes.starts_with(b"MATLAB 7.3") {
+        return Err(content(
+            path,
+            0,
+            "a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV",
+        ));
+    }
+    let file = matfile::MatFile::parse(bytes)
+        .map_err(|e| content(path, 0, format!("not a MATLAB version 5 or 7 file: {e}")))?;
+    let names: Vec<&str> = file.arrays().iter().map(matfile::Array::name).collect();
+    let array = match name {
+        Some(n) => file.find_by_name(n).ok_or_else(|| {
+            content(
+                path,
+                0,
+                format!("no numeric array '{n}' (it has: {})", names.join(", ")),
+            )
+        })?,
+        None => match file.arrays().as_slice() {
+            [only] => only,
+            _ => {
+                return Err(content(
+                    path,
+                    0,
+                    format!(
+                        "{} numeric arrays ({}): name one as {}:VARIABLE",
+                        names.len(),
+                        names.join(", "),
+                        path.display()
+                    ),
+                ));
+            }
+        },
+    };
+    use matfile::NumericData as D;
+    let values: Vec<f64> = match array.data() {
+        D::Double { real, imag: None } => real.clone(),
+        D::Single { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        _ => {
+            return Err(content(
+                path,
+                0,
+                format!(
+                    "'{}' is complex or 64-bit integer: store the frames' real voltages as double",
+                    array.name()
+                ),
+            ));
+        }
+    };
+    let (rows, cols) = match array.size().as_slice() {
+        [r, c] => (*r, *c),
+        other => {
+            return Err(content(
+                path,
+                0,
+                format!(
+                    "'{}' has {} dimensions: frames are a 2-D matrix",
+                    array.name(),
+                    other.len()
+                ),
+            ));
+        }
+    };
+    if rows * cols != values.len() {
+        return Err(content(
+            path,
+            0,
+            format!(
+                "'{}': {rows} x {cols} but {} values",
+                array.name(),
+                values.len()
+            ),
+        ));
+    }
+    // MATLAB stores by columns.
+    Ok((
+        DMatrix::from_column_slice(rows, cols, &values),
+        format!("variable '{}', ", array.name()),
+    ))
 }
 
 /// Reads the frames of `spec` for a protocol of `k` values per frame.
@@ -135,6 +234,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             let m = npy_matrix(&archive, &name).map_err(npz)?;
             (m, format!("array '{name}', "))
         }
+        "mat" => mat_matrix(&path, &std::fs::read(&path).map_err(io)?, array.as_deref())?,
         _ => {
             let text = std::fs::read_to_string(&path).map_err(io)?;
             csv_matrix(&path, &text)?
@@ -242,6 +342,39 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
         d => format!("{}, ", d.said()),
     };
     Ok((DMatrix::from_row_slice(n, w, &values), said))
+}
+
+/// A MATLAB version 5 file holding the double matrix `m` as variable `name` (uncompressed;
+/// MATLAB's `load`, SciPy's `loadmat` and [`read`] take it): how et writes frames for MATLAB
+/// users and its tests write other systems' `.mat` files.
+#[must_use]
+pub fn mat_v5(name: &str, m: &DMatrix<f64>) -> Vec<u8> {
+    fn element(out: &mut Vec<u8>, kind: u32, data: &[u8]) {
+        out.extend(kind.to_le_bytes());
+        out.extend(u32::try_from(data.len()).unwrap_or(u32::MAX).to_le_bytes());
+        out.extend(data);
+        out.resize(out.len().next_multiple_of(8), 0);
+    }
+    let (rows, cols) = m.shape();
+    let mut body = Vec::new();
+    // Array flags: class double (6); dimensions (int32); name (int8); real part (double).
+    element(&mut body, 6, &[6, 0, 0, 0, 0, 0, 0, 0]);
+    let dims: Vec<u8> = [rows, cols]
+        .iter()
+        .flat_map(|d| i32::try_from(*d).unwrap_or(i32::MAX).to_le_bytes())
+        .collect();
+    element(&mut body, 5, &dims);
+    element(&mut body, 1, name.as_bytes());
+    let values: Vec<u8> = m.iter().flat_map(|v| v.to_le_bytes()).collect();
+    element(&mut body, 9, &values);
+    let mut out =
+        format!("MATLAB 5.0 MAT-file, written by et: {name} ({rows} x {cols})").into_bytes();
+    out.resize(116, b' ');
+    out.extend([0u8; 8]);
+    out.extend(0x0100u16.to_le_bytes());
+    out.extend(b"IM");
+    element(&mut out, 14, &body);
+    out
 }
 
 #[cfg(test)]

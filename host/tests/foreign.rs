@@ -2,8 +2,8 @@
 //! them (a 28 cm disc, 16 electrodes 2.5 cm wide, 1.41 mA), its own protocol in a file (79
 //! injections: adjacent, skip 1, 2 and 3, all against electrode 0; under each, all 16
 //! adjacent pairs measured, the drive electrodes' too: 1 264 values a frame), frames written
-//! by the simulator's resistor network (not the reconstruction's finite elements) as a CSV
-//! and as an .npz whose columns are the frames; `et reconstruct` images them with its
+//! by the simulator's resistor network (not the reconstruction's finite elements) as a CSV,
+//! an .npz and a MATLAB .mat whose columns are the frames; `et reconstruct` images them with its
 //! defaults.
 
 use std::fmt::Write as _;
@@ -159,6 +159,9 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     w.matrix("v", &m);
     let npz_path = d.join("frames.npz");
     std::fs::write(&npz_path, w.finish().unwrap()).unwrap();
+    // As a MATLAB variable, frames as columns.
+    let mat_path = d.join("frames.mat");
+    std::fs::write(&mat_path, et_host::frames::mat_v5("v", &m)).unwrap();
     let png = d.join("f.png");
     // `et reconstruct` on frame `frame` of `file`, with `extra` arguments.
     let run_with = |file: &Path, frame: usize, extra: &[&str]| {
@@ -196,11 +199,14 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             miss < 14.0,
             "target {t:?}: strongest at {found:?} mm, {miss:.1} mm away"
         );
-        assert_eq!(
-            strongest(&run(&npz_path, i + 1)).0,
-            found,
-            "npz and csv differ"
-        );
+        for other in [&npz_path, &mat_path] {
+            assert_eq!(
+                strongest(&run(other, i + 1)).0,
+                found,
+                "{} and csv differ",
+                other.display()
+            );
+        }
     }
     // The pixel image as .npy, its grid in the JSON: the largest |value| at the first target.
     let npy = d.join("f1.npy");

@@ -52,3 +52,48 @@ fn npy_and_npz_as_numpy_writes_them() {
     assert!(e.to_string().contains("none"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A MATLAB file as et writes it (and as MATLAB stores frames: one per column) is read by its
+/// variable's name, transposed; a second variable makes the name necessary; MATLAB 7.3 (HDF5)
+/// and unknown names are refused with what to do.
+#[test]
+fn matlab_files_by_variable() {
+    let dir = tmp("mat");
+    let f = dir.join("tank.mat");
+    // Three frames of K = 2 as columns.
+    let v = DMatrix::from_row_slice(2, 3, &[1e-3, 4e-3, 7e-3, 2e-3, 5e-3, 8e-3]);
+    std::fs::write(&f, mat_v5("v", &v)).unwrap();
+    let r = read(&f, 2).unwrap();
+    assert_eq!(
+        r.frames,
+        vec![vec![1e-3, 2e-3], vec![4e-3, 5e-3], vec![7e-3, 8e-3]]
+    );
+    assert!(
+        r.description.contains("variable 'v'") && r.description.contains("transposed"),
+        "{}",
+        r.description
+    );
+    let by_name = read(&dir.join("tank.mat:v"), 2).unwrap();
+    assert_eq!(by_name.frames, r.frames);
+    // Two variables: the frames' must be named.
+    let mut two = mat_v5("v", &v);
+    two.extend_from_slice(&mat_v5("ref", &DMatrix::from_element(2, 1, 1.0))[128..]);
+    std::fs::write(&f, &two).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("v, ref") && e.contains("tank.mat:VARIABLE"),
+        "{e}"
+    );
+    assert_eq!(read(&dir.join("tank.mat:ref"), 2).unwrap().frames.len(), 1);
+    let e = read(&dir.join("tank.mat:volts"), 2)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no numeric array 'volts'"), "{e}");
+    std::fs::write(&f, b"MATLAB 7.3 MAT-file, Platform: GLNXA64").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("-v7"), "{e}");
+    std::fs::write(&f, b"not a mat file at all").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("tank.mat") && e.contains("not a MATLAB"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
