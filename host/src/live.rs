@@ -117,6 +117,12 @@ pub enum LiveError {
     /// The board loaded the model but could not take V_0 for it.
     #[error("the board verified and loaded the model, but taking V_0 failed: {0}")]
     Tare(LinkError),
+    /// Another system's frames (CSV, .npy, .npz, .mat) could not be read.
+    #[error("{0}")]
+    Frames(#[from] crate::frames::FramesError),
+    /// Another system's frames for a protocol the live pipeline does not scan.
+    #[error("{0}")]
+    Table(String),
     /// A recording plays the protocol it was recorded with.
     #[error("a recording plays the protocol it was recorded with")]
     Recorded,

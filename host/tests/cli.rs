@@ -185,6 +185,58 @@ fn sim_writes_a_recording_that_python_reads() {
             assert!(decimals <= 1, "{text} in {e}");
         }
     }
+    // The same frames as another system's CSV (volts, one frame per row) play the same
+    // touches, the scene giving the protocol.
+    let recorded = et_host::recording::read(&swipe).unwrap();
+    let csv: String = recorded
+        .records
+        .iter()
+        .map(|r| {
+            let row: Vec<String> = r.voltages.iter().map(|v| format!("{v:e}")).collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    let swipe_csv = dir.join("swipe.csv");
+    std::fs::write(&swipe_csv, csv).unwrap();
+    let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
+    let from_csv = et(&[
+        "stream",
+        "--json",
+        "--replay",
+        swipe_csv.to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(
+        from_csv.status.success(),
+        "{}",
+        String::from_utf8_lossy(&from_csv.stderr)
+    );
+    let positions = |out: &[u8]| -> Vec<serde_json::Value> {
+        String::from_utf8_lossy(out)
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["position_mm"].clone())
+            .collect()
+    };
+    assert_eq!(positions(&from_csv.stdout), positions(&stream.stdout));
+    // A scene whose protocol is a file is for `et reconstruct`, and says so.
+    std::fs::write(dir.join("p.csv"), "0,1,2,3\n").unwrap();
+    let file_scene = dir.join("file-protocol.toml");
+    std::fs::write(
+        &file_scene,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"p.csv\" }\n",
+    )
+    .unwrap();
+    let e = et(&[
+        "stream",
+        "--json",
+        "--replay",
+        swipe_csv.to_str().unwrap(),
+        "--scene",
+        file_scene.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&e.stderr).into_owned();
+    assert!(e.contains("et reconstruct --frames"), "{e}");
     // A bad scene names the file and the field.
     let bad = dir.join("bad.toml");
     std::fs::write(

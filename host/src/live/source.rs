@@ -113,6 +113,52 @@ impl ReplaySource {
         })
     }
 
+    /// Another system's frames (a CSV, .npy, .npz or .mat of frames in volts,
+    /// [`crate::frames`]) played as a recording of `scene`'s built-in protocol and current.
+    ///
+    /// # Errors
+    /// [`LiveError::Table`] for a scene whose protocol is a file (the live pipeline scans et's
+    /// built-in protocols; `et reconstruct --frames` images any), [`LiveError::Frames`] naming
+    /// the file.
+    pub fn open_table(path: &Path, scene: &Scene) -> Result<Self, LiveError> {
+        let config = scene.scan_config().map_err(|e| {
+            LiveError::Table(format!(
+                "{}: {e}; `et stream` and `et view` play frames of et's built-in protocols \
+                 only: image this protocol's frames with `et reconstruct --frames {}`",
+                path.display(),
+                path.display()
+            ))
+        })?;
+        let header = recording::Header::new(format!("file:{}", path.display()), &config)?;
+        let frames = crate::frames::read(path, header.frame_len)?;
+        let records = frames
+            .frames
+            .into_iter()
+            .enumerate()
+            .map(|(i, voltages)| recording::Record {
+                seq: u32::try_from(i).unwrap_or(u32::MAX),
+                t_us: 0,
+                flags: 0,
+                rail_count: 0,
+                voltages,
+                invalid: Vec::new(),
+                touches: None,
+            })
+            .collect();
+        Ok(Self {
+            name: frames.description,
+            recording: Recording {
+                header,
+                records,
+                truncated_tail: false,
+            },
+            sheet: scene.sheet.clone(),
+            position: 0,
+            paused: false,
+            looping: true,
+        })
+    }
+
     /// Frames in the recording.
     #[must_use]
     pub fn len(&self) -> usize {
@@ -434,6 +480,9 @@ pub fn open_source(
     let sheet = scene.sheet.clone();
     let source = match spec {
         SourceSpec::Sim => Source::Sim(Box::new(SimSource::new(&scene, name)?)),
+        SourceSpec::Replay(path) if crate::frames::is_table(path) => {
+            Source::Replay(Box::new(ReplaySource::open_table(path, &scene)?))
+        }
         SourceSpec::Replay(path) => {
             Source::Replay(Box::new(ReplaySource::open(path, sheet.clone())?))
         }

@@ -12,7 +12,10 @@ pub(crate) struct SourceArgs {
     /// shape and electrodes, for imaging). Default: the 13 x 13 cm, 16-electrode sheet.
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Replay a recording (JSON Lines from `et sim` or `et record`).
+    /// Replay a recording (JSON Lines from `et sim` or `et record`), or another system's
+    /// frames in volts for the scene's built-in protocol: a CSV (one frame per row), .npy,
+    /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE), as `et reconstruct --frames`
+    /// reads them.
     #[arg(long, conflicts_with = "port")]
     replay: Option<PathBuf>,
     /// A board's serial port (`et ports` lists them).
