@@ -304,7 +304,47 @@ fn et_protocol_csv_is_a_protocol_file() {
         d.join("r.jsonl").to_str().unwrap(),
     ]);
     let e = String::from_utf8_lossy(&e.stderr).into_owned();
-    assert!(e.contains("--frames"), "{e}");
+    assert!(e.contains("--frames") && e.contains("frames.csv"), "{e}");
+    // It writes another system's frames of any protocol instead, and they image: a touch
+    // pressed at (40, 30) mm, frames as a MATLAB variable.
+    std::fs::write(
+        &scene,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"pp.csv\" }\n\n\
+         [[touch]]\nposition = [0.04, 0.03]\nradius = 0.01\npressure = 20e3\n",
+    )
+    .unwrap();
+    let mat = d.join("frames.mat");
+    let out = et(&[
+        "sim",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--out",
+        mat.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = et(&[
+        "reconstruct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        &format!("{}:frames", mat.display()),
+        "--reference",
+        "1",
+        "--triangles",
+        "2000",
+        "--json",
+        "--out",
+        d.join("f.png").to_str().unwrap(),
+    ]);
+    let (found, sign) = strongest(&out);
+    assert_eq!(sign, 1);
+    assert!((found[0] - 40.0).hypot(found[1] - 30.0) < 10.0, "{found:?}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 

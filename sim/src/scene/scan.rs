@@ -76,8 +76,9 @@ impl Scene {
         let protocol = self.named_protocol()?.ok_or_else(|| {
             FieldError::new(
                 "scan.protocol",
-                "a protocol file is imaged from recorded frames (et reconstruct --frames), \
-                 not scanned by the simulated board: name a built-in protocol to simulate",
+                "a protocol file is imaged from measured frames (et reconstruct --frames), \
+                 not scanned by the simulated board: name a built-in protocol to simulate \
+                 the board, or write another system's frames with et sim --out frames.csv",
             )
         })?;
         if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {

@@ -1,4 +1,5 @@
-//! `et sim`: the simulated sheet, from a scene file into a recording.
+//! `et sim`: the simulated sheet, from a scene file into a recording, or into another
+//! system's frames (CSV, .npy, .mat) under the scene's protocol, whatever it is.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -16,9 +17,18 @@ pub(crate) struct SimArgs {
     /// How many frames to simulate.
     #[arg(long, default_value_t = 100)]
     frames: u32,
-    /// Where to write the recording (.jsonl).
+    /// Where to write: a recording (.jsonl) of et's simulated board, or another system's
+    /// frames in volts (.csv one per row, .npy, or .mat as variable "frames"): the empty
+    /// sheet first, then the scene's touches all pressed (their times ignored), under the
+    /// scene's protocol whatever it is (a protocol file, any current), measured by
+    /// --instrument. The way to try `et reconstruct --frames` with no system of your own.
     #[arg(long)]
     out: PathBuf,
+    /// With a .csv/.npy/.mat --out: the instrument's noise and drift: ideal (none),
+    /// laboratory (0.05 % of the rms white and 0.05 % proportional, 0.01 % gain drift a
+    /// frame) or noisy (0.2 % and 0.2 %).
+    #[arg(long, value_enum, default_value_t = Instrument::Laboratory)]
+    instrument: Instrument,
     /// Simulate every ADC sample through the real scan engine (slower) instead of whole frames.
     #[arg(long)]
     samples: bool,
@@ -27,11 +37,25 @@ pub(crate) struct SimArgs {
     seed: Option<u64>,
 }
 
+/// `et sim --instrument`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Instrument {
+    /// No noise, no drift.
+    Ideal,
+    /// A good laboratory system.
+    Laboratory,
+    /// Four times the laboratory's noise.
+    Noisy,
+}
+
 pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     crate::output::check(&args.out, &[&args.scene], force)?;
     let mut scene = Scene::load(&args.scene)?;
     if let Some(seed) = args.seed {
         scene.seed = seed;
+    }
+    if et_host::frames::is_table(&args.out) {
+        return foreign_frames(args, &scene);
     }
     let started = Instant::now();
     let mut run = Run::new(&scene)?;
@@ -99,5 +123,74 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
              the contacts"
         );
     }
+    Ok(())
+}
+
+/// Another system's frames of `scene` (see `--out`), written as the extension of `--out` says.
+fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
+    use et_sim::foreign::Instrument as I;
+    let started = Instant::now();
+    let schedule = scene.schedule()?;
+    let sheet = et_sim::still::simulated_sheet(scene)?;
+    let lab = I::laboratory(scene.seed);
+    let instrument = match args.instrument {
+        Instrument::Ideal => I::ideal(),
+        Instrument::Laboratory => lab,
+        Instrument::Noisy => I {
+            noise: 4.0 * lab.noise,
+            proportional: 4.0 * lab.proportional,
+            ..lab
+        },
+    };
+    let touched: Vec<et_sim::touch::Inclusion> = scene
+        .touches
+        .iter()
+        .map(|t| et_sim::touch::Inclusion::of_touch(&t.touch(), &scene.sheet.piezo))
+        .collect();
+    let n = usize::try_from(args.frames.max(2))?;
+    let frames = et_sim::foreign::frames(&sheet, &schedule, &vec![touched; n - 1], &instrument)?;
+    let k = schedule.frame_len();
+    let m = nalgebra::DMatrix::from_fn(n, k, |i, j| frames[i][j]);
+    let ext = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let bytes = match ext.as_str() {
+        "npy" => et_learn::npz::npy_of_matrix(&m),
+        "mat" => et_host::frames::mat_v5("frames", &m),
+        "csv" => {
+            let mut text: String = (0..k)
+                .map(|j| format!("v{j}"))
+                .collect::<Vec<_>>()
+                .join(",");
+            text.push('\n');
+            for f in &frames {
+                let row: Vec<String> = f.iter().map(|v| format!("{v:e}")).collect();
+                text += &row.join(",");
+                text.push('\n');
+            }
+            text.into_bytes()
+        }
+        other => anyhow::bail!(
+            "{}: another system's frames are written as .csv, .npy or .mat, not .{other}",
+            args.out.display()
+        ),
+    };
+    crate::output::write(&args.out, |partial| std::fs::write(partial, &bytes))?;
+    eprintln!(
+        "wrote {n} frames of {k} values ({}; the empty sheet first, then {} touch{} pressed; \
+         instrument {:?}) to {} in {:.2} s",
+        schedule.kind().map_or_else(
+            || "the scene's protocol file".to_string(),
+            |p| p.to_string()
+        ),
+        scene.touches.len(),
+        if scene.touches.len() == 1 { "" } else { "es" },
+        args.instrument,
+        args.out.display(),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }
