@@ -78,6 +78,37 @@ fn frames(
     et_sim::foreign::frames(&sheet, &scene.schedule().unwrap(), &scenes, instrument).unwrap()
 }
 
+/// `et reconstruct` of `scene` on frame `frame` of `frames` (the first frame the reference,
+/// 3 000 triangles, --json, the picture to `png`), with `extra` arguments.
+fn reconstruct(
+    scene: &Path,
+    frames: &Path,
+    frame: usize,
+    png: &Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let frame = frame.to_string();
+    let mut args = vec![
+        "reconstruct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        frames.to_str().unwrap(),
+        "--reference",
+        "1",
+        "--frame",
+        &frame,
+        "--triangles",
+        "3000",
+        "--json",
+        "--force",
+        "--out",
+        png.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    et(&args)
+}
+
 /// The strongest object's centre (mm) and sign.
 fn strongest(out: &std::process::Output) -> ([f64; 2], i64) {
     assert!(
@@ -163,28 +194,8 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     let mat_path = d.join("frames.mat");
     std::fs::write(&mat_path, et_host::frames::mat_v5("v", &m)).unwrap();
     let png = d.join("f.png");
-    // `et reconstruct` on frame `frame` of `file`, with `extra` arguments.
     let run_with = |file: &Path, frame: usize, extra: &[&str]| {
-        let frame = frame.to_string();
-        let mut args = vec![
-            "reconstruct",
-            "--scene",
-            scene_path.to_str().unwrap(),
-            "--frames",
-            file.to_str().unwrap(),
-            "--reference",
-            "1",
-            "--frame",
-            &frame,
-            "--triangles",
-            "3000",
-            "--json",
-            "--force",
-            "--out",
-            png.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        et(&args)
+        reconstruct(&scene_path, file, frame, &png, extra)
     };
     let run = |file: &Path, frame: usize| run_with(file, frame, &[]);
     for (i, (t, multiplier)) in targets.iter().enumerate() {
@@ -413,24 +424,7 @@ current_ua = 1000
     std::fs::write(&npy, et_learn::npz::npy_of_matrix(&m)).unwrap();
     let png = d.join("f.png");
     for (i, rods) in cases.iter().enumerate() {
-        let frame = (i + 1).to_string();
-        let out = et(&[
-            "reconstruct",
-            "--scene",
-            scene_path.to_str().unwrap(),
-            "--frames",
-            npy.to_str().unwrap(),
-            "--reference",
-            "1",
-            "--frame",
-            &frame,
-            "--triangles",
-            "3000",
-            "--json",
-            "--force",
-            "--out",
-            png.to_str().unwrap(),
-        ]);
+        let out = reconstruct(&scene_path, &npy, i + 1, &png, &[]);
         let (found, sign) = strongest(&out);
         let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let count = j["objects"].as_array().unwrap().len();

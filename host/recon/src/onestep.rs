@@ -96,6 +96,25 @@ pub(crate) fn normal(combination: &[Vec<(usize, f64)>], r: usize) -> Mat<f64> {
     n
 }
 
+/// N = M^T M's eigenpairs with eigenvalues above 1e-10 of the largest, for the K rows of M
+/// (`combination`, over r columns): (Q, r x q orthonormal; n, q values). Its range is M^T's.
+pub(crate) fn normal_range(
+    combination: &[Vec<(usize, f64)>],
+    r: usize,
+) -> Option<(Mat<f64>, Vec<f64>)> {
+    let evd = normal(combination, r)
+        .self_adjoint_eigen(Side::Lower)
+        .ok()?;
+    let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+    let top = e.iter().copied().fold(0.0f64, f64::max);
+    let keep: Vec<usize> = (0..r).filter(|&i| e[i] > 1e-10 * top).collect();
+    let u = evd.U();
+    Some((
+        Mat::from_fn(r, keep.len(), |i, j| u[(i, keep[j])]),
+        keep.iter().map(|&i| e[i]).collect(),
+    ))
+}
+
 /// N = M^T M on its range: N = B B^T with B = Q diag(n)^1/2 over N's eigenpairs (Q, n) above
 /// 1e-10 of the largest (r x q), B^+ = diag(n)^-1/2 Q^T (q x r), and B^T H B (q x q).
 #[derive(Clone, Debug)]
@@ -108,15 +127,9 @@ struct NormalRoot {
 impl NormalRoot {
     fn new(combination: &[Vec<(usize, f64)>], h: &Mat<f64>) -> Option<Self> {
         let r = h.nrows();
-        let evd = normal(combination, r)
-            .self_adjoint_eigen(Side::Lower)
-            .ok()?;
-        let n: Vec<f64> = evd.S().column_vector().iter().copied().collect();
-        let top = n.iter().copied().fold(0.0f64, f64::max);
-        let keep: Vec<usize> = (0..r).filter(|&i| n[i] > 1e-10 * top).collect();
-        let q = evd.U();
-        let b = Mat::from_fn(r, keep.len(), |i, j| q[(i, keep[j])] * n[keep[j]].sqrt());
-        let b_pinv = Mat::from_fn(keep.len(), r, |i, j| q[(j, keep[i])] / n[keep[i]].sqrt());
+        let (q, n) = normal_range(combination, r)?;
+        let b = Mat::from_fn(r, n.len(), |i, j| q[(i, j)] * n[j].sqrt());
+        let b_pinv = Mat::from_fn(n.len(), r, |i, j| q[(j, i)] / n[i].sqrt());
         let hb = product(h.as_ref(), b.as_ref());
         let bhb = product(b.transpose(), hb.as_ref());
         Some(Self { b, b_pinv, bhb })

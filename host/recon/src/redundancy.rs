@@ -5,7 +5,7 @@
 //! that part is the only measure of the noise there is (reciprocal pairs are its simplest
 //! case: a pair's two values must agree).
 
-use faer::{Mat, Side};
+use faer::Mat;
 
 use crate::fem::TransferJacobian;
 
@@ -35,16 +35,10 @@ impl Redundancy {
     #[must_use]
     pub fn of(jac: &TransferJacobian) -> Option<Self> {
         let r = jac.pairs();
-        let evd = crate::onestep::normal(&jac.combination, r)
-            .self_adjoint_eigen(Side::Lower)
-            .ok()?;
-        let e: Vec<f64> = evd.S().column_vector().iter().copied().collect();
-        let top = e.iter().copied().fold(0.0f64, f64::max);
-        let keep: Vec<usize> = (0..r).filter(|&i| e[i] > 1e-10 * top).collect();
-        let v = evd.U();
+        let (v, n) = crate::onestep::normal_range(&jac.combination, r)?;
         Some(Self {
             combination: jac.combination.clone(),
-            basis: Mat::from_fn(r, keep.len(), |i, j| v[(i, keep[j])] / e[keep[j]].sqrt()),
+            basis: Mat::from_fn(r, n.len(), |i, j| v[(i, j)] / n[j].sqrt()),
         })
     }
 
