@@ -36,6 +36,7 @@ pub mod dataset;
 pub mod fastcv;
 pub mod fit;
 pub mod gp;
+pub mod mlp;
 pub mod model_file;
 pub mod npz;
 pub mod pipeline;

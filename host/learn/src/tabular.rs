@@ -30,6 +30,7 @@ pub use super::dataset::{Table, Unit};
 use super::fastcv::cross_validate_fast;
 use super::fit::{FitError, FitOptions, Fitted, Target};
 use super::gp::{Gp, GpOptions};
+use super::mlp::{Activation, Dense, Mlp, MlpOptions};
 use super::model_file::{ClassRecord, class_records, fitted_from_records};
 use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summarise};
 
@@ -77,6 +78,9 @@ pub enum Method {
     /// Gaussian process with one length scale per feature (positions), every hyperparameter
     /// learned by marginal likelihood (`gp`).
     Gp,
+    /// A multilayer perceptron (positions): dense layers, relu or tanh, size and L2 penalty by
+    /// cross-validation (`mlp`).
+    Mlp,
 }
 
 impl Method {
@@ -90,6 +94,7 @@ impl Method {
             Method::KernelRidge => "kernel-ridge",
             Method::Knn => "knn",
             Method::Gp => "gp",
+            Method::Mlp => "mlp",
         }
     }
 

@@ -74,6 +74,18 @@ pub enum Tables {
         /// Targets' training mean.
         intercept: [f64; 3],
     },
+    /// A multilayer perceptron on the z-space features: hidden layers with `activation`, a
+    /// linear output layer of 3; its outputs times `target_scale` plus `target_mean`.
+    Mlp {
+        /// The hidden layers' nonlinearity.
+        activation: Activation,
+        /// Hidden layers, then the output layer (weights: one row per input).
+        layers: Vec<Dense>,
+        /// Targets' training mean (x mm, y mm, third).
+        target_mean: [f64; 3],
+        /// Targets' training standard deviation.
+        target_scale: [f64; 3],
+    },
     /// The (weighted) mean target of the k nearest support rows.
     Knn {
         /// k.
@@ -247,6 +259,24 @@ pub(super) fn fit_final(
                 scale,
             )
         }
+        Method::Mlp => {
+            let opts = MlpOptions {
+                starts: MLP_FINAL_STARTS,
+                ..mlp_options(&best.hyperparameters)
+            };
+            progress("fitting mlp", 0, 1);
+            let m = Mlp::fit(&table.x, need_targets()?, &opts)?;
+            (
+                Tables::Mlp {
+                    activation: m.activation,
+                    layers: m.dense(),
+                    target_mean: m.target_mean,
+                    target_scale: m.target_scale,
+                },
+                m.mean,
+                m.scale,
+            )
+        }
         Method::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
@@ -279,6 +309,7 @@ pub(super) enum Ready {
     Ridge(Ridge),
     KernelRidge(KernelRidge),
     Knn(Knn),
+    Mlp(Mlp),
 }
 
 impl TableModel {
@@ -332,6 +363,7 @@ impl TableModel {
             Ready::Ridge(m) => regression(m.predict_many(x)),
             Ready::KernelRidge(m) => regression(m.predict_many(x)),
             Ready::Knn(m) => regression(m.predict_many(x)),
+            Ready::Mlp(m) => regression(m.predict_many(x)),
         })
     }
 
@@ -419,6 +451,7 @@ impl TableModel {
             Tables::Ridge { intercept, .. }
             | Tables::KernelRidge { intercept, .. }
             | Tables::Gp { intercept, .. } => Some([intercept[0], intercept[1]]),
+            Tables::Mlp { target_mean, .. } => Some([target_mean[0], target_mean[1]]),
             Tables::Knn { targets, .. } => {
                 let n = targets.len().max(1) as f64;
                 Some(

@@ -22,6 +22,39 @@ pub(super) const KNN_KS: [usize; 8] = [1, 2, 3, 5, 8, 12, 20, 30];
 /// The Gaussian process's learning rows, iterations and support.
 pub(super) const GP: GpOptions = GpOptions::DEFAULT;
 
+/// The perceptron's candidates: hidden layers 300, 50, 20 (what won on measured skins) with
+/// relu or tanh, and L2 penalties.
+pub(super) const MLP_L2S: [f64; 2] = [0.1, 1.0];
+pub(super) const MLP_ACTIVATIONS: [Activation; 2] = [Activation::Relu, Activation::Tanh];
+pub(super) const MLP_HIDDEN: [usize; 3] = [300, 50, 20];
+/// Random starts in the search's folds and in the final fit.
+pub(super) const MLP_SEARCH_STARTS: usize = 1;
+pub(super) const MLP_FINAL_STARTS: usize = 3;
+
+/// The perceptron a candidate's hyperparameters describe.
+pub(super) fn mlp_options(h: &BTreeMap<String, f64>) -> MlpOptions {
+    let get = |k: &str| h.get(k).copied();
+    let hidden: Vec<usize> = (1..=4)
+        .map_while(|i| get(&format!("hidden_{i}")))
+        .map(|w| w.max(1.0) as usize)
+        .collect();
+    MlpOptions {
+        hidden: if hidden.is_empty() {
+            MLP_HIDDEN.to_vec()
+        } else {
+            hidden
+        },
+        activation: if get("tanh").unwrap_or(0.0) > 0.5 {
+            Activation::Tanh
+        } else {
+            Activation::Relu
+        },
+        l2: get("l2").unwrap_or(0.1),
+        starts: MLP_SEARCH_STARTS,
+        ..MlpOptions::default()
+    }
+}
+
 /// Trains `choice` on `table` (all its rows: select the training rows first), hyperparameters
 /// by `opts.folds`-fold cross-validation inside them.
 ///
@@ -48,7 +81,13 @@ pub fn train(
     let methods: Vec<Method> = match choice {
         Choice::One(m) => vec![m],
         Choice::Auto if targets.is_some() && opts.grid.is_none() => {
-            vec![Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp]
+            vec![
+                Method::Ridge,
+                Method::Knn,
+                Method::KernelRidge,
+                Method::Mlp,
+                Method::Gp,
+            ]
         }
         Choice::Auto => vec![Method::Lda, Method::Qda],
     };
@@ -301,16 +340,31 @@ pub(super) fn search_regressor(
             ("learn_rows", GP.learn_rows.min(n) as f64),
             ("iterations", GP.iterations as f64),
         ])],
+        Method::Mlp => MLP_ACTIVATIONS
+            .iter()
+            .flat_map(|&a| {
+                MLP_L2S.iter().map(move |&l2| {
+                    let mut h = params(&[
+                        ("l2", l2),
+                        ("tanh", f64::from(u8::from(a == Activation::Tanh))),
+                    ]);
+                    for (i, w) in MLP_HIDDEN.iter().enumerate() {
+                        h.insert(format!("hidden_{}", i + 1), *w as f64);
+                    }
+                    h
+                })
+            })
+            .collect(),
         Method::Qda | Method::Lda => return Err(usage("not a regressor")),
     };
     // Out-of-fold predictions of every candidate.
     let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
     // Progress steps per fold: the Gaussian process reports each of its iterations, and says
     // beforehand how long its folds and final fit will take.
-    let steps = if method == Method::Gp {
-        GP.iterations
-    } else {
-        1
+    let steps = match method {
+        Method::Gp => GP.iterations,
+        Method::Mlp => grid.len(),
+        _ => 1,
     };
     let what = if method == Method::Gp {
         format!(
@@ -373,6 +427,16 @@ pub(super) fn search_regressor(
                         .map(|m| m.predict_many(&xv)),
                 ]
             }
+            Method::Mlp => grid
+                .iter()
+                .enumerate()
+                .map(|(c, h)| {
+                    progress(&what, f * steps + c, total);
+                    Mlp::fit(&xt, &tt, &mlp_options(h))
+                        .ok()
+                        .map(|m| m.predict_many(&xv))
+                })
+                .collect(),
             Method::Qda | Method::Lda => Vec::new(),
         };
         for (c, p) in fold_pred.into_iter().enumerate() {

@@ -71,7 +71,13 @@ fn every_regressor_learns_the_stand_in_and_survives_its_file() {
     let test_rows = STANDIN.select("300..".parse().unwrap()).unwrap();
     assert_eq!(test_rows.first_row, 300);
     let dir = tmp("regressors");
-    for method in [Method::Ridge, Method::Knn, Method::KernelRidge, Method::Gp] {
+    for method in [
+        Method::Ridge,
+        Method::Knn,
+        Method::KernelRidge,
+        Method::Gp,
+        Method::Mlp,
+    ] {
         let model = train(&train_rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
         assert_eq!(model.method, method);
         assert_eq!(model.trained_rows, [0, 300]);
@@ -110,7 +116,7 @@ fn auto_keeps_the_best_cross_validated_regressor() {
         .unwrap();
     assert_eq!(model.method, best.1);
     let tried: std::collections::HashSet<Method> = model.search.iter().map(|c| c.method).collect();
-    assert_eq!(tried.len(), 4);
+    assert_eq!(tried.len(), 5);
 }
 
 /// Classes made from positions on a grid: QDA and LDA beat chance on later presses, and

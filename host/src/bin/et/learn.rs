@@ -27,7 +27,7 @@ pub(crate) struct TrainArgs {
     table: crate::tabular::TableArgs,
     /// The model. On --data: qda (a covariance per class) or lda (one pooled covariance);
     /// default qda. On --features: also ridge, kernel-ridge (RBF), knn, gp (a Gaussian
-    /// process learning a length scale per feature), or auto (every
+    /// process learning a length scale per feature), mlp (a multilayer perceptron), or auto (every
     /// method that fits the targets, the best by cross-validation); default auto.
     #[arg(long, value_enum)]
     kind: Option<KindArg>,
@@ -87,6 +87,9 @@ pub(crate) enum KindArg {
     /// Gaussian process with a length scale per feature, learned by marginal likelihood
     /// (--features): slower (it shows how long), learns which channels matter.
     Gp,
+    /// A multilayer perceptron (--features): three hidden layers (300, 50, 20), relu or tanh
+    /// and its L2 penalty by cross-validation, Adam with early stopping, three random starts.
+    Mlp,
     /// Every method that fits the targets, the best by cross-validation (--features).
     Auto,
 }
@@ -129,6 +132,7 @@ impl TrainArgs {
             Some(KindArg::KernelRidge) => Choice::One(Method::KernelRidge),
             Some(KindArg::Knn) => Choice::One(Method::Knn),
             Some(KindArg::Gp) => Choice::One(Method::Gp),
+            Some(KindArg::Mlp) => Choice::One(Method::Mlp),
         };
         let shrinkage = match self.shrinkage.as_deref().unwrap_or("auto") {
             "auto" => None,

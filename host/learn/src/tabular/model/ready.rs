@@ -166,6 +166,26 @@ impl TableModel {
                     intercept: *intercept,
                 })
             }
+            Tables::Mlp {
+                activation,
+                layers,
+                target_mean,
+                target_scale,
+            } => {
+                method_ok(Method::Mlp)?;
+                finite3(&[*target_mean, *target_scale], "mlp target standardisation")?;
+                Ready::Mlp(
+                    Mlp::from_dense(
+                        self.feature_mean.clone(),
+                        self.feature_scale.clone(),
+                        *target_mean,
+                        *target_scale,
+                        *activation,
+                        layers,
+                    )
+                    .map_err(|e| format!("mlp: {e}"))?,
+                )
+            }
             Tables::Knn {
                 k,
                 weighting,

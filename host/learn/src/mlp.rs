@@ -1,0 +1,595 @@
+//! A multilayer perceptron for positions: a few dense layers, relu or tanh, trained in f32 on
+//! the CPU by Adam on mini-batches with an L2 penalty, early stopping on a held-out part of
+//! the training rows, and several random starts (the best start by its held-out loss).
+//!
+//! Inputs are standardised by the training rows' mean and standard deviation, targets (x, y
+//! and the third) by theirs; the output layer is linear. The penalty follows scikit-learn's
+//! `MLPRegressor` (`alpha`): each mini-batch of B rows adds (l2 / 2B) |W|^2 to half its mean
+//! squared error, so `l2` means the same in both.
+//!
+//! ```text
+//! z = (x - mean) / scale          (p)
+//! a_1 = f(z W_1 + b_1)            (h_1)      f = relu or tanh
+//! ...
+//! t = (a_L W_out + b_out) * t_scale + t_mean   (3)
+//! ```
+
+use et_core::rng::Rng;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use super::fit::{FitError, standardisation};
+use super::regress::{Target3, check, target_mean};
+
+/// A hidden layer's nonlinearity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Activation {
+    /// max(0, v).
+    Relu,
+    /// tanh(v).
+    Tanh,
+}
+
+impl Activation {
+    /// The name in files and hyperparameters.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Activation::Relu => "relu",
+            Activation::Tanh => "tanh",
+        }
+    }
+
+    fn apply(self, v: f32) -> f32 {
+        match self {
+            Activation::Relu => v.max(0.0),
+            Activation::Tanh => tanh(v),
+        }
+    }
+
+    /// The derivative at the pre-activation, from the activation's value `a`.
+    fn slope(self, a: f32) -> f32 {
+        match self {
+            Activation::Relu => {
+                if a > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Activation::Tanh => 1.0 - a * a,
+        }
+    }
+}
+
+/// tanh in f32 to a few ulp, by a rational function on [-7.9, 7.9] (beyond it tanh is +-1 in
+/// f32). Plain arithmetic: the C library's transcendental functions run many times slower
+/// once the matrix kernels' AVX code has run in the process (see `regress::exp_neg`).
+#[must_use]
+pub fn tanh(x: f32) -> f32 {
+    // The minimax (13, 6) rational approximation of Eigen's `ptanh_float`.
+    const CLAMP: f32 = 7.905_311;
+    const A: [f32; 7] = [
+        4.893_524_6e-3,
+        6.372_619_3e-4,
+        1.485_722_4e-5,
+        5.122_297e-8,
+        -8.604_672e-11,
+        2.000_188e-13,
+        -2.760_768_5e-16,
+    ];
+    const B: [f32; 4] = [4.893_525e-3, 2.268_434_6e-3, 1.185_347_1e-4, 1.198_258_4e-6];
+    if x.is_nan() {
+        return x;
+    }
+    let x = x.clamp(-CLAMP, CLAMP);
+    let x2 = x * x;
+    let p = x
+        * (A[0] + x2 * (A[1] + x2 * (A[2] + x2 * (A[3] + x2 * (A[4] + x2 * (A[5] + x2 * A[6]))))));
+    let q = B[0] + x2 * (B[1] + x2 * (B[2] + x2 * B[3]));
+    p / q
+}
+
+/// How to train.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MlpOptions {
+    /// Widths of the hidden layers (at least one).
+    pub hidden: Vec<usize>,
+    /// Their nonlinearity.
+    pub activation: Activation,
+    /// L2 penalty (scikit-learn's `alpha`).
+    pub l2: f64,
+    /// Adam's step size.
+    pub learning_rate: f32,
+    /// Rows per mini-batch (fewer when the training rows are fewer).
+    pub batch: usize,
+    /// Most passes over the training rows.
+    pub max_epochs: usize,
+    /// Stop after this many passes without a better held-out loss (by 1e-4 relative).
+    pub patience: usize,
+    /// Share of the training rows held out for early stopping.
+    pub validation_fraction: f64,
+    /// Random starts; the one with the lowest held-out loss is kept.
+    pub starts: usize,
+    /// Seed of the starts, the hold-out and the batches.
+    pub seed: u64,
+}
+
+impl Default for MlpOptions {
+    /// scikit-learn's `MLPRegressor` defaults where it has them (Adam at 1e-3, batches of 200,
+    /// 10 passes' patience, 10 % held out), three hidden layers 300, 50, 20 with relu and an L2 of
+    /// 0.1 (what won on measured skins), three starts.
+    fn default() -> Self {
+        Self {
+            hidden: vec![300, 50, 20],
+            activation: Activation::Relu,
+            l2: 0.1,
+            learning_rate: 1e-3,
+            batch: 200,
+            max_epochs: 300,
+            patience: 10,
+            validation_fraction: 0.1,
+            starts: 3,
+            seed: 1,
+        }
+    }
+}
+
+/// One dense layer: out = in W + b.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Dense {
+    /// Rows of W: one per input, each with a weight per output.
+    pub weights: Vec<Vec<f32>>,
+    /// One per output.
+    pub bias: Vec<f32>,
+}
+
+/// A trained perceptron.
+#[derive(Clone, Debug)]
+pub struct Mlp {
+    pub(crate) mean: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
+    /// Targets' training mean and standard deviation.
+    pub(crate) target_mean: Target3,
+    pub(crate) target_scale: Target3,
+    pub(crate) activation: Activation,
+    /// Hidden layers, then the linear output layer (3 outputs); W as in x out.
+    pub(crate) layers: Layers,
+    /// Passes over the training rows of the kept start.
+    pub epochs: usize,
+    /// Its held-out loss (half the mean squared standardised error), or NaN without a hold-out.
+    pub validation_loss: f64,
+}
+
+/// Adam's state for one parameter array.
+struct Moments {
+    m: Vec<f32>,
+    v: Vec<f32>,
+}
+
+impl Moments {
+    fn new(len: usize) -> Self {
+        Self {
+            m: vec![0.0; len],
+            v: vec![0.0; len],
+        }
+    }
+
+    /// One Adam step of `params` along `grad` (step t from 1).
+    fn step(&mut self, params: &mut [f32], grad: &[f32], lr: f32, t: i32) {
+        const B1: f32 = 0.9;
+        const B2: f32 = 0.999;
+        const EPS: f32 = 1e-8;
+        let lr_t = lr * (1.0 - B2.powi(t)).sqrt() / (1.0 - B1.powi(t));
+        for (((p, g), m), v) in params
+            .iter_mut()
+            .zip(grad)
+            .zip(&mut self.m)
+            .zip(&mut self.v)
+        {
+            *m = B1 * *m + (1.0 - B1) * g;
+            *v = B2 * *v + (1.0 - B2) * g * g;
+            *p -= lr_t * *m / (v.sqrt() + EPS);
+        }
+    }
+}
+
+/// The contiguous values of a column-major faer matrix.
+fn values(m: &Mat<f32>) -> Vec<f32> {
+    m.col_iter().flat_map(|c| c.iter().copied()).collect()
+}
+
+fn set_values(m: &mut Mat<f32>, v: &[f32]) {
+    let rows = m.nrows();
+    for (j, col) in m.col_iter_mut().enumerate() {
+        for (i, x) in col.iter_mut().enumerate() {
+            *x = v.get(j * rows + i).copied().unwrap_or(0.0);
+        }
+    }
+}
+
+impl Mlp {
+    /// Trains on `x` (n x p, any units) and targets `t`.
+    ///
+    /// # Errors
+    /// [`FitError`] for mismatched or non-finite data, no hidden layer, a zero width, or no
+    /// start that reached a finite loss.
+    pub fn fit(x: &DMatrix<f64>, t: &[Target3], opts: &MlpOptions) -> Result<Self, FitError> {
+        check(x, t)?;
+        if opts.hidden.is_empty() || opts.hidden.contains(&0) {
+            return Err(FitError::Shape(format!(
+                "hidden layers {:?}: at least one, each at least 1 wide",
+                opts.hidden
+            )));
+        }
+        let (mean, scale) = standardisation(x);
+        let target_mean = target_mean(t);
+        let mut target_scale = [1.0; 3];
+        for (k, s) in target_scale.iter_mut().enumerate() {
+            let var = t
+                .iter()
+                .map(|r| (r[k] - target_mean[k]).powi(2))
+                .sum::<f64>()
+                / t.len() as f64;
+            if var.sqrt() > 1e-12 * target_mean[k].abs().max(1e-300) && var > 0.0 {
+                *s = var.sqrt();
+            }
+        }
+        let (n, p) = (x.nrows(), x.ncols());
+        let z = Mat::<f32>::from_fn(n, p, |r, j| ((x[(r, j)] - mean[j]) / scale[j]) as f32);
+        let y = Mat::<f32>::from_fn(n, 3, |r, k| {
+            ((t[r][k] - target_mean[k]) / target_scale[k]) as f32
+        });
+        let mut rng = Rng::new(opts.seed);
+        // The held-out rows for early stopping (none with fewer than 20 rows: then every pass
+        // runs).
+        let mut order: Vec<usize> = (0..n).collect();
+        shuffle(&mut order, &mut rng);
+        let held = if n >= 20 {
+            ((n as f64 * opts.validation_fraction).round() as usize).clamp(1, n / 2)
+        } else {
+            0
+        };
+        let (valid, train) = order.split_at(held);
+        let mut best: Option<Self> = None;
+        for _ in 0..opts.starts.max(1) {
+            let mut start_rng = rng.fork();
+            let Some((layers, epochs, loss)) =
+                train_one(&z, &y, train, valid, p, opts, &mut start_rng)
+            else {
+                continue;
+            };
+            if best
+                .as_ref()
+                .is_none_or(|b| loss < b.validation_loss || b.validation_loss.is_nan())
+            {
+                best = Some(Self {
+                    mean: mean.clone(),
+                    scale: scale.clone(),
+                    target_mean,
+                    target_scale,
+                    activation: opts.activation,
+                    layers,
+                    epochs,
+                    validation_loss: loss,
+                });
+            }
+        }
+        best.ok_or_else(|| {
+            FitError::Shape("no start of the perceptron reached a finite loss".into())
+        })
+    }
+
+    /// Predicts every row of `x` (n x p, the training units).
+    #[must_use]
+    pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
+        let z = Mat::<f32>::from_fn(x.nrows(), x.ncols(), |r, j| {
+            let (m, s) = (
+                self.mean.get(j).copied().unwrap_or(0.0),
+                self.scale.get(j).copied().unwrap_or(1.0),
+            );
+            ((x[(r, j)] - m) / s) as f32
+        });
+        let out = forward(&self.layers, self.activation, z.as_ref(), &mut Vec::new());
+        (0..x.nrows())
+            .map(|r| {
+                let mut t = [0.0; 3];
+                for (k, v) in t.iter_mut().enumerate() {
+                    *v = f64::from(out[(r, k)]) * self.target_scale[k] + self.target_mean[k];
+                }
+                t
+            })
+            .collect()
+    }
+
+    /// The layers as saved: hidden layers, then the output layer.
+    #[must_use]
+    pub fn dense(&self) -> Vec<Dense> {
+        self.layers
+            .iter()
+            .map(|(w, b)| Dense {
+                weights: (0..w.nrows())
+                    .map(|i| (0..w.ncols()).map(|j| w[(i, j)]).collect())
+                    .collect(),
+                bias: b.clone(),
+            })
+            .collect()
+    }
+
+    /// Rebuilds a perceptron from saved layers (untrusted: a model file's).
+    ///
+    /// # Errors
+    /// A message when the layers do not chain (p inputs, ..., 3 outputs) or hold a non-finite
+    /// value.
+    #[deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+    pub fn from_dense(
+        mean: Vec<f64>,
+        scale: Vec<f64>,
+        target_mean: Target3,
+        target_scale: Target3,
+        activation: Activation,
+        dense: &[Dense],
+    ) -> Result<Self, String> {
+        let mut inputs = mean.len();
+        let mut layers = Vec::with_capacity(dense.len());
+        if dense.len() < 2 {
+            return Err("a perceptron needs a hidden layer and the output layer".into());
+        }
+        for (l, d) in dense.iter().enumerate() {
+            let outputs = d.bias.len();
+            if d.weights.len() != inputs
+                || d.weights.iter().any(|r| r.len() != outputs)
+                || outputs == 0
+            {
+                return Err(format!(
+                    "layer {}: {} weight rows for {inputs} inputs, or rows not {outputs} long",
+                    l + 1,
+                    d.weights.len()
+                ));
+            }
+            if d.weights
+                .iter()
+                .flatten()
+                .chain(&d.bias)
+                .any(|v| !v.is_finite())
+            {
+                return Err(format!("layer {}: a non-finite weight", l + 1));
+            }
+            let w = Mat::from_fn(inputs, outputs, |i, j| {
+                d.weights
+                    .get(i)
+                    .and_then(|r| r.get(j))
+                    .copied()
+                    .unwrap_or(0.0)
+            });
+            layers.push((w, d.bias.clone()));
+            inputs = outputs;
+        }
+        if inputs != 3 {
+            return Err(format!("the output layer has {inputs} outputs, not 3"));
+        }
+        if target_scale.iter().any(|s| !(s.is_finite() && *s > 0.0))
+            || scale.iter().any(|s| !(s.is_finite() && *s > 0.0))
+        {
+            return Err("a scale that is not a positive number".into());
+        }
+        Ok(Self {
+            mean,
+            scale,
+            target_mean,
+            target_scale,
+            activation,
+            layers,
+            epochs: 0,
+            validation_loss: f64::NAN,
+        })
+    }
+
+    /// Multiply-adds per prediction.
+    #[must_use]
+    pub fn cost(&self) -> usize {
+        self.layers.iter().map(|(w, _)| w.nrows() * w.ncols()).sum()
+    }
+}
+
+/// Each layer's weights (inputs x outputs) and biases.
+type Layers = Vec<(Mat<f32>, Vec<f32>)>;
+
+/// Fisher-Yates.
+fn shuffle(v: &mut [usize], rng: &mut Rng) {
+    for i in (1..v.len()).rev() {
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+        v.swap(i, j);
+    }
+}
+
+/// The network's output for the rows of `z` (n x 3); `keep` receives every hidden layer's
+/// activations (for back-propagation) when it is to be filled.
+fn forward(
+    layers: &[(Mat<f32>, Vec<f32>)],
+    activation: Activation,
+    z: MatRef<'_, f32>,
+    keep: &mut Vec<Mat<f32>>,
+) -> Mat<f32> {
+    keep.clear();
+    let mut input: Option<Mat<f32>> = None;
+    let last = layers.len().saturating_sub(1);
+    for (l, (w, b)) in layers.iter().enumerate() {
+        let a = input.as_ref().map_or(z, |m| m.as_ref());
+        let mut out = Mat::<f32>::zeros(a.nrows(), w.ncols());
+        matmul(out.as_mut(), Accum::Replace, a, w.as_ref(), 1.0, Par::Seq);
+        for (j, col) in out.col_iter_mut().enumerate() {
+            let bj = b.get(j).copied().unwrap_or(0.0);
+            for v in col.iter_mut() {
+                *v += bj;
+                if l < last {
+                    *v = activation.apply(*v);
+                }
+            }
+        }
+        if let Some(prev) = input.take() {
+            keep.push(prev);
+        }
+        input = Some(out);
+    }
+    input.unwrap_or_else(|| Mat::zeros(z.nrows(), 3))
+}
+
+/// Rows `rows` of `m`.
+fn gather(m: &Mat<f32>, rows: &[usize]) -> Mat<f32> {
+    Mat::from_fn(rows.len(), m.ncols(), |i, j| {
+        rows.get(i).map_or(0.0, |&r| m[(r, j)])
+    })
+}
+
+/// Half the mean squared error over rows and outputs (scikit-learn's squared loss).
+fn loss(out: &Mat<f32>, y: &Mat<f32>) -> f64 {
+    let mut s = 0.0f64;
+    for j in 0..out.ncols() {
+        for i in 0..out.nrows() {
+            let d = f64::from(out[(i, j)] - y[(i, j)]);
+            s += d * d;
+        }
+    }
+    0.5 * s / (out.nrows() * out.ncols()).max(1) as f64
+}
+
+/// One random start: Glorot-uniform weights, Adam on shuffled mini-batches of `train`, the
+/// weights of the pass with the lowest loss on `valid` kept. (layers, passes, held-out loss).
+fn train_one(
+    z: &Mat<f32>,
+    y: &Mat<f32>,
+    train: &[usize],
+    valid: &[usize],
+    p: usize,
+    opts: &MlpOptions,
+    rng: &mut Rng,
+) -> Option<(Layers, usize, f64)> {
+    let widths: Vec<usize> = std::iter::once(p)
+        .chain(opts.hidden.iter().copied())
+        .chain([3])
+        .collect();
+    let mut layers: Vec<(Mat<f32>, Vec<f32>)> = widths
+        .windows(2)
+        .map(|w| {
+            let (fan_in, fan_out) = (
+                w.first().copied().unwrap_or(1),
+                w.get(1).copied().unwrap_or(1),
+            );
+            let bound = (6.0 / (fan_in + fan_out) as f64).sqrt();
+            let mut u = || ((2.0 * rng.uniform() - 1.0) * bound) as f32;
+            (
+                Mat::from_fn(fan_in, fan_out, |_, _| u()),
+                (0..fan_out).map(|_| u()).collect(),
+            )
+        })
+        .collect();
+    let mut moments: Vec<(Moments, Moments)> = layers
+        .iter()
+        .map(|(w, b)| (Moments::new(w.nrows() * w.ncols()), Moments::new(b.len())))
+        .collect();
+    let (zv, yv) = (gather(z, valid), gather(y, valid));
+    let batch = opts.batch.clamp(1, train.len().max(1));
+    let mut order = train.to_vec();
+    let mut keep = Vec::new();
+    let mut best: Option<(Layers, usize, f64)> = None;
+    let mut since_best = 0;
+    let mut step = 0i32;
+    let last = layers.len() - 1;
+    for epoch in 1..=opts.max_epochs.max(1) {
+        shuffle(&mut order, rng);
+        let mut train_loss = 0.0;
+        for rows in order.chunks(batch) {
+            let (zb, yb) = (gather(z, rows), gather(y, rows));
+            let out = forward(&layers, opts.activation, zb.as_ref(), &mut keep);
+            train_loss += loss(&out, &yb) * rows.len() as f64;
+            let b = rows.len() as f32;
+            // d(loss)/d(out) for scikit-learn's loss: (out - y) / B (the 1/2 and the mean over
+            // outputs folded as it does: per row, per output).
+            let mut delta = Mat::<f32>::from_fn(out.nrows(), out.ncols(), |i, j| {
+                (out[(i, j)] - yb[(i, j)]) / b
+            });
+            step = step.saturating_add(1);
+            for l in (0..=last).rev() {
+                let input = if l == 0 {
+                    zb.as_ref()
+                } else {
+                    keep.get(l - 1).map_or(zb.as_ref(), |m| m.as_ref())
+                };
+                let (w, bias) = layers.get_mut(l)?;
+                let mut gw = Mat::<f32>::zeros(w.nrows(), w.ncols());
+                matmul(
+                    gw.as_mut(),
+                    Accum::Replace,
+                    input.transpose(),
+                    delta.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                let penalty = (opts.l2 / f64::from(b)) as f32;
+                for j in 0..w.ncols() {
+                    for i in 0..w.nrows() {
+                        gw[(i, j)] += penalty * w[(i, j)];
+                    }
+                }
+                let gb: Vec<f32> = delta.col_iter().map(|c| c.iter().sum()).collect();
+                // The delta of the layer below, before this layer's weights change.
+                let below = (l > 0).then(|| {
+                    let mut d = Mat::<f32>::zeros(delta.nrows(), w.nrows());
+                    matmul(
+                        d.as_mut(),
+                        Accum::Replace,
+                        delta.as_ref(),
+                        w.transpose(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for j in 0..d.ncols() {
+                        for i in 0..d.nrows() {
+                            d[(i, j)] *= opts.activation.slope(input[(i, j)]);
+                        }
+                    }
+                    d
+                });
+                let (mw, mb) = moments.get_mut(l)?;
+                let mut wv = values(w);
+                mw.step(&mut wv, &values(&gw), opts.learning_rate, step);
+                set_values(w, &wv);
+                mb.step(bias, &gb, opts.learning_rate, step);
+                if let Some(d) = below {
+                    delta = d;
+                }
+            }
+        }
+        let score = if valid.is_empty() {
+            train_loss / order.len().max(1) as f64
+        } else {
+            loss(
+                &forward(&layers, opts.activation, zv.as_ref(), &mut Vec::new()),
+                &yv,
+            )
+        };
+        if !score.is_finite() {
+            break;
+        }
+        let better = best
+            .as_ref()
+            .is_none_or(|(_, _, s)| score < s * (1.0 - 1e-4));
+        if better {
+            best = Some((layers.clone(), epoch, score));
+            since_best = 0;
+        } else {
+            since_best += 1;
+            if since_best >= opts.patience {
+                break;
+            }
+        }
+    }
+    best.map(|(l, e, s)| (l, e, if valid.is_empty() { f64::NAN } else { s }))
+}
+
+#[cfg(test)]
+mod tests;
