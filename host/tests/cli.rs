@@ -948,9 +948,10 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     std::fs::create_dir_all(&dir).unwrap();
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let (f, t) = (dir.join("F.csv"), dir.join("T.csv"));
+    let sessions = dir.join("sessions.csv");
     et_learn::standin::make(300, 3, 5)
         .unwrap()
-        .write(&f, &t)
+        .write_all(&f, &t, Some(&sessions))
         .unwrap();
     let ok = |o: std::process::Output| {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -988,7 +989,7 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     let tr = json(ok(train(&["--kind", "auto"], &auto)));
     let method = tr["method"].as_str().unwrap().to_string();
     assert!(
-        ["ridge", "knn", "kernel-ridge", "gp"].contains(&method.as_str()),
+        ["ridge", "knn", "kernel-ridge", "gp", "mlp"].contains(&method.as_str()),
         "{tr}"
     );
     assert_eq!(tr["rows"], serde_json::json!([0, 240]));
@@ -1057,6 +1058,7 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
         ("knn", vec![]),
         ("kernel-ridge", vec![]),
         ("gp", vec![]),
+        ("mlp", vec![]),
         ("lda", vec!["--grid", "3x3"]),
         ("qda", vec!["--grid", "3x3", "--cv", "blocks"]),
     ] {
@@ -1078,11 +1080,56 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
             );
         }
     }
+    // Sessions: with --groups cross-validation leaves each session out in turn, and the
+    // evaluation scores each session of its rows.
+    let grouped = s(&dir.join("grouped.json"));
+    let tr = json(ok(train(
+        &["--kind", "knn", "--groups", &s(&sessions)],
+        &grouped,
+    )));
+    assert_eq!(tr["cv_scheme"], "groups", "{tr}");
+    let train_sessions = std::fs::read_to_string(&sessions)
+        .unwrap()
+        .lines()
+        .take(240)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    assert_eq!(tr["cv_folds"], train_sessions, "{tr}");
+    let ev = json(ok(eval(&grouped, &["--groups", &s(&sessions)])));
+    let per_group = ev["per_group"].as_array().unwrap();
+    let counted: u64 = per_group
+        .iter()
+        .map(|g| g["observations"].as_u64().unwrap())
+        .sum();
+    assert_eq!(counted, 60, "{ev}");
+    assert!(
+        per_group
+            .iter()
+            .all(|g| g["group"].as_str().unwrap().starts_with("session-"))
+    );
+    // Groups and a chosen fold scheme contradict each other.
+    let e = train(&["--groups", &s(&sessions), "--cv", "blocks"], &grouped);
+    assert!(!e.status.success());
     // Mistakes are explained.
     let err = |o: std::process::Output| {
         assert!(!o.status.success());
         String::from_utf8_lossy(&o.stderr).to_string()
     };
+    let e = err(et(&[
+        "train",
+        "--groups",
+        "no-such-column",
+        "--features",
+        &s(&f),
+        "--targets",
+        &s(&t),
+        "--out",
+        &s(&dir.join("x.json")),
+    ]));
+    assert!(
+        e.contains("no-such-column") && e.contains("no header row"),
+        "{e}"
+    );
     let e = err(et(&[
         "train",
         "--features",

@@ -4,7 +4,9 @@
 //! with scikit-learn on the same rows.
 //!
 //! Usage: cargo run --release -p et-learn --example standin -- DIR [ROWS] [SESSIONS] [SEED]
-//! (defaults: 2500 rows over 5 sessions, seed 1).
+//! [drifting] (defaults: 2500 rows over 5 sessions, seed 1; `drifting` adds per-channel gain
+//! and offset changes between sessions, `standin::SessionDrift::SESSIONS`). Also writes
+//! `sessions.csv`, each row's session, for `--groups`.
 
 use std::path::PathBuf;
 
@@ -17,11 +19,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rows: usize = args.next().map_or(Ok(2_500), |v| v.parse())?;
     let sessions: usize = args.next().map_or(Ok(5), |v| v.parse())?;
     let seed: u64 = args.next().map_or(Ok(1), |v| v.parse())?;
+    let drift = match args.next().as_deref() {
+        None => et_learn::standin::SessionDrift::NONE,
+        Some("drifting") => et_learn::standin::SessionDrift::SESSIONS,
+        Some(other) => {
+            return Err(format!("'{other}': the fifth argument is 'drifting' or nothing").into());
+        }
+    };
     std::fs::create_dir_all(&dir)?;
     let started = std::time::Instant::now();
-    let data = et_learn::standin::make(rows, sessions, seed)?;
+    let data = et_learn::standin::make_drifting(rows, sessions, seed, drift)?;
     let (f, t) = (dir.join("features.csv"), dir.join("targets.csv"));
-    data.write(&f, &t)?;
+    data.write_all(&f, &t, Some(&dir.join("sessions.csv")))?;
     eprintln!(
         "wrote {} and {} ({} rows x {} features, {sessions} sessions, seed {seed}) in {:.1} s",
         f.display(),

@@ -49,6 +49,36 @@ pub struct StandIn {
     pub features: DMatrix<f64>,
     /// x, y, z in metres in the robot's frame.
     pub targets_m: Vec<[f64; 3]>,
+    /// The session of each row (0-based).
+    pub session: Vec<u16>,
+}
+
+/// How a sensor changes between sessions beyond its electrodes moving (which every stand-in
+/// has): each channel's gain (the contacts and the amplifier path of each measured pair) and
+/// a per-channel offset (a reference frame that no longer matches the sheet: the fabric
+/// relaxed, the contacts settled). Drawn anew for each session; the first session is as
+/// measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SessionDrift {
+    /// Standard deviation of each channel's relative gain change (0.1 = 10 %).
+    pub gain: f64,
+    /// Standard deviation of each channel's offset, as a share of that channel's spread over
+    /// the presses.
+    pub offset: f64,
+}
+
+impl SessionDrift {
+    /// No drift beyond the electrodes' movement.
+    pub const NONE: Self = Self {
+        gain: 0.0,
+        offset: 0.0,
+    };
+    /// Drift like separate sessions on a real skin: gains within about 15 % and offsets of
+    /// a quarter of a channel's spread.
+    pub const SESSIONS: Self = Self {
+        gain: 0.15,
+        offset: 0.25,
+    };
 }
 
 /// `presses` rows over `sessions` sessions (at least 1), from `seed`.
@@ -56,6 +86,19 @@ pub struct StandIn {
 /// # Errors
 /// [`CollectError`] if the simulated sheet cannot be built or scanned.
 pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, CollectError> {
+    make_drifting(presses, sessions, seed, SessionDrift::NONE)
+}
+
+/// [`make`] with `drift` between sessions.
+///
+/// # Errors
+/// [`CollectError`] if the simulated sheet cannot be built or scanned.
+pub fn make_drifting(
+    presses: usize,
+    sessions: usize,
+    seed: u64,
+    drift: SessionDrift,
+) -> Result<StandIn, CollectError> {
     let scene = Scene::parse(SCENE, "stand-in").map_err(|e| CollectError::Scene(e.to_string()))?;
     let config = training_config(
         scene
@@ -119,9 +162,35 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
     let features = data
         .features(true)
         .map_err(|e| CollectError::Scene(e.to_string()))?;
-    let features = DMatrix::from_fn(n, features.ncols(), |r, j| {
+    let mut features = DMatrix::from_fn(n, features.ncols(), |r, j| {
         features[(r, j)] * CODES_PER_VOLT
     });
+    let session: Vec<u16> = data.visit.iter().take(n).copied().collect();
+    if drift != SessionDrift::NONE {
+        let mut rng = Rng::new(seed ^ 0x5e55_1011);
+        let spread: Vec<f64> = (0..features.ncols())
+            .map(|j| {
+                let c = features.column(j);
+                c.variance().sqrt()
+            })
+            .collect();
+        for s in 1..sessions {
+            let (gain, offset): (Vec<f64>, Vec<f64>) = spread
+                .iter()
+                .map(|sd| {
+                    (
+                        1.0 + drift.gain * rng.normal(),
+                        drift.offset * sd * rng.normal(),
+                    )
+                })
+                .unzip();
+            for r in (0..n).filter(|&r| usize::from(session[r]) == s) {
+                for j in 0..features.ncols() {
+                    features[(r, j)] = features[(r, j)] * gain[j] + offset[j];
+                }
+            }
+        }
+    }
     let targets_m = (0..n)
         .map(|r| {
             let p = data.positions[r];
@@ -136,6 +205,7 @@ pub fn make(presses: usize, sessions: usize, seed: u64) -> Result<StandIn, Colle
     Ok(StandIn {
         features,
         targets_m,
+        session,
     })
 }
 
@@ -146,6 +216,28 @@ impl StandIn {
     /// # Errors
     /// The I/O error.
     pub fn write(&self, features: &Path, targets: &Path) -> std::io::Result<()> {
+        self.write_all(features, targets, None)
+    }
+
+    /// [`write`](Self::write), and each row's session (`session-1`, ...) one per line in
+    /// `sessions` when given.
+    ///
+    /// # Errors
+    /// The I/O error.
+    pub fn write_all(
+        &self,
+        features: &Path,
+        targets: &Path,
+        sessions: Option<&Path>,
+    ) -> std::io::Result<()> {
+        if let Some(path) = sessions {
+            let text: String = self
+                .session
+                .iter()
+                .map(|s| format!("session-{}\n", s + 1))
+                .collect();
+            std::fs::write(path, text)?;
+        }
         let mut f = std::io::BufWriter::new(std::fs::File::create(features)?);
         f.write_all("\u{feff}".as_bytes())?;
         for row in self.features.row_iter() {

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cv::{self, Confusion};
 use super::dataset::DatasetError;
-pub use super::dataset::{Table, Unit};
+pub use super::dataset::{GroupsFrom, Table, Unit};
 use super::fastcv::cross_validate_fast;
 use super::fit::{FitError, FitOptions, Fitted, Target};
 use super::gp::{Gp, GpOptions};
@@ -125,6 +125,21 @@ pub enum CvScheme {
     /// Contiguous blocks of rows in file order: for recordings in time order, where presses
     /// drift and a shuffled split flatters a model.
     Blocks,
+    /// One fold per group (session, visit): each group held out in turn, so the score is
+    /// that of a session the model never saw. Used whenever the table has two groups or more.
+    Groups,
+}
+
+impl CvScheme {
+    /// How it is said in reports.
+    #[must_use]
+    pub fn said(self) -> &'static str {
+        match self {
+            CvScheme::Shuffled => "shuffled",
+            CvScheme::Blocks => "blocks",
+            CvScheme::Groups => "leave-one-group-out",
+        }
+    }
 }
 
 /// How to train.

@@ -53,6 +53,18 @@ pub struct Table {
     pub description: String,
     /// The first row's index in the file (after `--rows`).
     pub first_row: usize,
+    /// The session (or visit, or subject) of each row as written, when given: rows of one
+    /// group share their drift, and cross-validation leaves one group out.
+    pub groups: Option<Vec<String>>,
+}
+
+/// Where the rows' groups (sessions) come from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GroupsFrom {
+    /// A CSV with one column (a header row optional), a group per row of the features.
+    File(std::path::PathBuf),
+    /// A named column of the features file (not then a feature).
+    Column(String),
 }
 
 /// Names a third target column may have, besides the column after y in a headerless file.
@@ -78,13 +90,35 @@ impl Table {
         targets: Option<&Path>,
         unit: Unit,
     ) -> Result<Self, DatasetError> {
+        Self::import_grouped(features, targets, unit, None)
+    }
+
+    /// [`Table::import`], and each row's group from `groups`: a file with one column, or a
+    /// named column of the features file (then not a feature). Groups may be any text.
+    ///
+    /// # Errors
+    /// As [`Table::import`]; and a groups file with another row count, or a column the
+    /// features file does not have, named.
+    pub fn import_grouped(
+        features: &Path,
+        targets: Option<&Path>,
+        unit: Unit,
+        groups: Option<&GroupsFrom>,
+    ) -> Result<Self, DatasetError> {
+        let group_column = match groups {
+            Some(GroupsFrom::Column(name)) => Some(name.as_str()),
+            _ => None,
+        };
         let read = |p: &Path| {
             std::fs::read_to_string(p).map_err(|source| DatasetError::Io {
                 path: p.into(),
                 source,
             })
         };
-        let label_text = |name: &str, _: usize| name.eq_ignore_ascii_case("label");
+        let label_text = |name: &str, _: usize| {
+            name.eq_ignore_ascii_case("label")
+                || group_column.is_some_and(|g| g.eq_ignore_ascii_case(name))
+        };
         let text = read(features)?;
         let main = parse_table(features, &text_lines(&text), &label_text)?;
         let target_text = targets.map(read).transpose()?;
@@ -117,9 +151,67 @@ impl Table {
             ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
         };
         // Without a header every column of the features file is a feature.
+        let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
         let feature_cols: Vec<usize> = (0..main.names.len())
-            .filter(|&c| !main.header || main.names.get(c).is_some_and(|n| !is_target(n)))
+            .filter(|&c| {
+                !main.header
+                    || main
+                        .names
+                        .get(c)
+                        .is_some_and(|n| !is_target(n) && !is_group(n))
+            })
             .collect();
+        let group_values = match groups {
+            None => None,
+            Some(GroupsFrom::Column(name)) => {
+                let c = main
+                    .names
+                    .iter()
+                    .position(|n| n.eq_ignore_ascii_case(name))
+                    .filter(|_| main.header)
+                    .ok_or_else(|| {
+                        content(
+                            features,
+                            0,
+                            None,
+                            format!(
+                                "--groups {name}: no such column (the header has {}); give a \
+                                 column name or a file with one group per row",
+                                if main.header {
+                                    main.names
+                                        .iter()
+                                        .take(8)
+                                        .cloned()
+                                        .collect::<Vec<_>>()
+                                        .join(", ")
+                                } else {
+                                    "no names: the file has no header row".into()
+                                }
+                            ),
+                        )
+                    })?;
+                Some(main.text_column(features, c)?)
+            }
+            Some(GroupsFrom::File(p)) => {
+                let text = read(p)?;
+                let one = |_: &str, _: usize| true;
+                let g = parse_table(p, &text_lines(&text), &one)?;
+                if g.rows.len() != main.rows.len() {
+                    return Err(content(
+                        p,
+                        0,
+                        None,
+                        format!(
+                            "{} rows of groups, {} has {}",
+                            g.rows.len(),
+                            features.display(),
+                            main.rows.len()
+                        ),
+                    ));
+                }
+                Some(g.text_column(p, 0)?)
+            }
+        };
         if feature_cols.is_empty() {
             return Err(content(features, 0, None, "no feature columns"));
         }
@@ -291,8 +383,17 @@ impl Table {
             labels,
             positions_mm: positions.map(|p| p.iter().map(|q| [q[0] * mm, q[1] * mm]).collect()),
             third,
-            description,
+            description: match &group_values {
+                Some(g) => {
+                    let mut distinct = g.clone();
+                    distinct.sort();
+                    distinct.dedup();
+                    format!("{description}; {} groups", distinct.len())
+                }
+                None => description,
+            },
             first_row: 0,
+            groups: group_values,
         })
     }
 }

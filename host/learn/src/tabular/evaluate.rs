@@ -28,6 +28,9 @@ pub struct Evaluation {
     /// Share of rows whose class is right (classifiers, when the rows have labels or the
     /// model's grid can place them).
     pub accuracy: Option<f64>,
+    /// Per group (session) of the rows, when they have groups: its rows' errors.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_group: Option<Vec<GroupScore>>,
     /// Seconds the training took (from the model file).
     pub fit_seconds: f64,
     /// Seconds to predict every row.
@@ -38,6 +41,19 @@ pub struct Evaluation {
     /// Every row's prediction, in row order.
     #[serde(skip)]
     pub predictions: Vec<Prediction>,
+}
+
+/// How a model did on one group's rows.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GroupScore {
+    /// The group as written.
+    pub group: String,
+    /// Its rows.
+    pub observations: usize,
+    /// Mean position error, mm.
+    pub mean_error_mm: Option<f64>,
+    /// Median position error, mm.
+    pub median_error_mm: Option<f64>,
 }
 
 /// Evaluates `model` on `table`: position errors when the rows have positions, accuracy for
@@ -91,11 +107,21 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     }
     let mut pairs = Vec::new();
     let (mut errors, mut errors3, mut third) = (Vec::new(), Vec::new(), Vec::new());
+    let groups = table.group_index();
+    let mut group_errors: Vec<Vec<f64>> =
+        vec![Vec::new(); groups.as_ref().map_or(0, |(_, n)| n.len())];
     if let Some(truth) = &truth {
-        for (t, p) in truth.iter().zip(&pred) {
+        for (r, (t, p)) in truth.iter().zip(&pred).enumerate() {
             if let Some(q) = p.target {
                 pairs.push(([t[0], t[1]], [q[0], q[1]]));
                 errors.push((q[0] - t[0]).hypot(q[1] - t[1]));
+                if let Some(g) = groups
+                    .as_ref()
+                    .and_then(|(index, _)| index.get(r))
+                    .and_then(|&g| group_errors.get_mut(g))
+                {
+                    g.push((q[0] - t[0]).hypot(q[1] - t[1]));
+                }
                 if model.third.is_some() && table.third.is_some() {
                     third.push((q[2] - t[2]).abs());
                     errors3.push(
@@ -128,7 +154,24 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
                 / t.len().max(1) as f64
         })
     });
+    let per_group = groups.map(|(index, names)| {
+        names
+            .iter()
+            .enumerate()
+            .map(|(g, name)| {
+                let mut e = group_errors.get(g).cloned().unwrap_or_default();
+                e.sort_by(f64::total_cmp);
+                GroupScore {
+                    group: name.clone(),
+                    observations: index.iter().filter(|&&i| i == g).count(),
+                    mean_error_mm: mean(&e),
+                    median_error_mm: e.get(e.len().saturating_sub(1) / 2).copied(),
+                }
+            })
+            .collect()
+    });
     Ok(Evaluation {
+        per_group,
         observations: table.rows(),
         method: model.method,
         mean_error_mm: mean(&errors),

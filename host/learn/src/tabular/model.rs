@@ -16,6 +16,15 @@ pub struct Candidate {
     pub cv_mean_error_mm: Option<f64>,
     /// Cross-validated accuracy (classes).
     pub cv_accuracy: Option<f64>,
+    /// Regressors: the cross-validated mean error of each group's rows (with groups), else of
+    /// each of [`STABILITY_BLOCKS`] contiguous blocks of rows in file order, mm: how steady
+    /// the error is over the recording.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cv_block_errors_mm: Option<Vec<f64>>,
+    /// Regressors: the cross-validated mean error with the held-out rows' channel gains changed
+    /// ([`DRIFT_GAIN`]), mm: how the candidate would take a new session's drift.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cv_drifted_error_mm: Option<f64>,
 }
 
 impl Candidate {
@@ -25,6 +34,18 @@ impl Candidate {
             1.0 - self.cv_accuracy.unwrap_or(0.0)
         } else {
             self.cv_mean_error_mm.unwrap_or(f64::INFINITY)
+        }
+    }
+
+    /// The standard deviation of the block (or group) errors, mm; infinite without them.
+    #[must_use]
+    pub fn block_spread_mm(&self) -> f64 {
+        match &self.cv_block_errors_mm {
+            Some(e) if e.len() >= 2 => {
+                let m = e.iter().sum::<f64>() / e.len() as f64;
+                (e.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (e.len() - 1) as f64).sqrt()
+            }
+            _ => f64::INFINITY,
         }
     }
 }

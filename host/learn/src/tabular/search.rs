@@ -22,6 +22,28 @@ pub(super) const KNN_KS: [usize; 8] = [1, 2, 3, 5, 8, 12, 20, 30];
 /// The Gaussian process's learning rows, iterations and support.
 pub(super) const GP: GpOptions = GpOptions::DEFAULT;
 
+/// Contiguous blocks of rows over which a candidate's error is checked for steadiness when the
+/// rows have no groups.
+pub const STABILITY_BLOCKS: usize = 5;
+/// Candidates whose cross-validated error is within this share of the best are close: without
+/// groups, `auto` takes the steadiest of them over [`STABILITY_BLOCKS`].
+pub const CLOSE: f64 = 0.05;
+
+/// The held-out rows are also predicted with each channel's gain changed by this standard
+/// deviation (10 %: contacts and amplifier paths between sessions), which scores how a
+/// candidate would take a new session's drift ([`Candidate::cv_drifted_error_mm`]).
+pub const DRIFT_GAIN: f64 = 0.1;
+
+/// `x` with each column's gain changed by a factor 1 + `sd` N(0, 1), drawn from `seed`.
+#[must_use]
+pub fn gain_drifted(x: &DMatrix<f64>, sd: f64, seed: u64) -> DMatrix<f64> {
+    let mut rng = et_core::rng::Rng::new(seed);
+    let gains: Vec<f64> = (0..x.ncols()).map(|_| 1.0 + sd * rng.normal()).collect();
+    DMatrix::from_fn(x.nrows(), x.ncols(), |r, j| {
+        x[(r, j)] * gains.get(j).copied().unwrap_or(1.0)
+    })
+}
+
 /// The perceptron's candidates: hidden layers 300, 50, 20 (what won on measured skins) with
 /// relu or tanh, and L2 penalties.
 pub(super) const MLP_L2S: [f64; 2] = [0.1, 1.0];
@@ -70,12 +92,34 @@ pub fn train(
 ) -> Result<TableModel, TabularError> {
     let started = std::time::Instant::now();
     let n = table.rows();
-    if opts.folds < 2 || opts.folds > n {
+    let groups = table.group_index();
+    let grouped = groups.as_ref().is_some_and(|(_, names)| names.len() >= 2);
+    let k = if grouped {
+        groups.as_ref().map_or(0, |(_, names)| names.len())
+    } else {
+        opts.folds
+    };
+    if !grouped && (opts.folds < 2 || opts.folds > n) {
         return Err(usage(format!(
             "{} folds for {n} training rows: use 2 to {n}",
             opts.folds
         )));
     }
+    let scheme = if grouped {
+        CvScheme::Groups
+    } else if opts.scheme == CvScheme::Groups {
+        return Err(usage(
+            "leave-one-group-out cross-validation needs each row's group (--groups)",
+        ));
+    } else {
+        opts.scheme
+    };
+    let fold_of = |labels: Option<&[u16]>| -> Vec<usize> {
+        match &groups {
+            Some((index, _)) if grouped => index.clone(),
+            _ => folds(n, k, scheme, labels, opts.seed),
+        }
+    };
     let targets = table.targets();
     let classes = class_targets(table, opts.grid)?;
     let methods: Vec<Method> = match choice {
@@ -101,7 +145,13 @@ pub fn train(
                     method.name()
                 ))
             })?;
-            search_classifier(table, method, labels, opts, progress)?
+            search_classifier(
+                table,
+                method,
+                labels,
+                &fold_of(Some(&labels.index)),
+                progress,
+            )?
         } else {
             let t = targets.as_ref().ok_or_else(|| {
                 usage(format!(
@@ -110,7 +160,7 @@ pub fn train(
                     method.name()
                 ))
             })?;
-            search_regressor(&table.x, t, method, opts, progress)?
+            search_regressor(&table.x, t, method, &fold_of(None), grouped, progress)?
         };
         search.extend(found);
     }
@@ -118,6 +168,14 @@ pub fn train(
     // but is singular on the whole set) gives way to the next.
     let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
     ranked.sort_by(|a, b| a.loss().total_cmp(&b.loss()));
+    let mut notes: Vec<String> = Vec::new();
+    if !grouped
+        && choice == Choice::Auto
+        && let Some(steadier) = steadiest_close(&ranked)
+    {
+        notes.push(steadier.1);
+        ranked.insert(0, steadier.0);
+    }
     let mut fitted = None;
     let mut last_error = None;
     for best in ranked {
@@ -140,7 +198,7 @@ pub fn train(
         })
     })?;
     progress(&format!("fitting {}", best.method.name()), 1, 1);
-    let note = qda_is_lda.then(|| {
+    let lda_note = qda_is_lda.then(|| {
         // Its cross-validation is the QDA's: the same classifier in every fold.
         search.push(best.clone());
         format!(
@@ -185,14 +243,56 @@ pub fn train(
         },
         hyperparameters,
         search,
-        cv_folds: opts.folds,
-        cv_scheme: opts.scheme,
+        cv_folds: k,
+        cv_scheme: scheme,
         trained_rows: [table.first_row, table.first_row + n],
         source: table.description.clone(),
         fit_seconds: started.elapsed().as_secs_f64(),
-        note,
+        note: {
+            notes.extend(lda_note);
+            (!notes.is_empty()).then(|| notes.join("; "))
+        },
         tables,
     })
+}
+
+/// Without groups: among the best of each method within [`CLOSE`] of the best error, the one
+/// whose error varies least over the recording's blocks, with why, when it is not the best.
+fn steadiest_close<'a>(ranked: &[&'a Candidate]) -> Option<(&'a Candidate, String)> {
+    let best = *ranked.first()?;
+    if best.method.is_classifier() {
+        return None;
+    }
+    let mut per_method: Vec<&Candidate> = Vec::new();
+    for c in ranked {
+        if !per_method.iter().any(|p| p.method == c.method) {
+            per_method.push(c);
+        }
+    }
+    let steadiest = per_method
+        .iter()
+        .filter(|c| c.loss() <= best.loss() * (1.0 + CLOSE))
+        .min_by(|a, b| a.block_spread_mm().total_cmp(&b.block_spread_mm()))?;
+    (steadiest.method != best.method && steadiest.block_spread_mm() < best.block_spread_mm()).then(
+        || {
+            (
+                *steadiest,
+                format!(
+                    "{} ({:.2} mm) is within {:.0} % of {} ({:.2} mm) and steadier over the \
+                     recording's {} blocks (their errors vary by {:.2} mm against {:.2}): chose {}",
+                    steadiest.method.name(),
+                    steadiest.loss(),
+                    100.0 * CLOSE,
+                    best.method.name(),
+                    best.loss(),
+                    STABILITY_BLOCKS,
+                    steadiest.block_spread_mm(),
+                    best.block_spread_mm(),
+                    steadiest.method.name()
+                ),
+            )
+        },
+    )
 }
 
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
@@ -287,7 +387,8 @@ pub fn folds(
 ) -> Vec<usize> {
     let k = k.max(1);
     match (scheme, labels) {
-        (CvScheme::Blocks, _) => (0..n).map(|r| r * k / n.max(1)).collect(),
+        // Without the groups themselves, contiguous blocks are the nearest thing.
+        (CvScheme::Blocks | CvScheme::Groups, _) => (0..n).map(|r| r * k / n.max(1)).collect(),
         (CvScheme::Shuffled, Some(y)) => cv::folds(y, k, seed),
         (CvScheme::Shuffled, None) => cv::folds(&vec![0; n], k, seed),
     }
@@ -314,11 +415,12 @@ pub(super) fn search_regressor(
     x: &DMatrix<f64>,
     t: &[Target3],
     method: Method,
-    opts: &TrainOptions,
+    fold: &[usize],
+    grouped: bool,
     progress: Progress<'_>,
 ) -> Result<Vec<Candidate>, TabularError> {
     let n = x.nrows();
-    let fold = folds(n, opts.folds, opts.scheme, None, opts.seed);
+    let k = fold.iter().max().map_or(0, |m| m + 1);
     let grid: Vec<BTreeMap<String, f64>> = match method {
         Method::Ridge => RIDGE_LAMBDAS
             .iter()
@@ -359,6 +461,8 @@ pub(super) fn search_regressor(
     };
     // Out-of-fold predictions of every candidate.
     let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
+    let mut pred_drifted = pred.clone();
+    let seed_of = |f: usize| 0x6a1e_d41f ^ (f as u64);
     // Progress steps per fold: the Gaussian process reports each of its iterations, and says
     // beforehand how long its folds and final fit will take.
     let steps = match method {
@@ -369,8 +473,8 @@ pub(super) fn search_regressor(
     let what = if method == Method::Gp {
         format!(
             "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
-            opts.folds,
-            Gp::estimate_seconds(x, &GP, opts.folds + 1)
+            k,
+            Gp::estimate_seconds(x, &GP, k + 1)
         )
     } else {
         format!(
@@ -379,8 +483,8 @@ pub(super) fn search_regressor(
             grid.len()
         )
     };
-    let total = opts.folds * steps;
-    for f in 0..opts.folds {
+    let total = k * steps;
+    for f in 0..k {
         progress(&what, f * steps, total);
         let train: Vec<usize> = (0..n).filter(|&r| fold.get(r) != Some(&f)).collect();
         let test: Vec<usize> = (0..n).filter(|&r| fold.get(r) == Some(&f)).collect();
@@ -389,24 +493,34 @@ pub(super) fn search_regressor(
         }
         let (xt, xv) = (rows_of(x, &train), rows_of(x, &test));
         let tt: Vec<Target3> = train.iter().filter_map(|&r| t.get(r).copied()).collect();
-        let fold_pred: Vec<Option<Vec<Target3>>> = match method {
+        // The held-out rows as measured, and as a session later might measure them: each
+        // channel's gain changed (drawn per fold).
+        let sets = [xv.clone(), gain_drifted(&xv, DRIFT_GAIN, seed_of(f))];
+        let fold_pred: Vec<Option<[Vec<Target3>; 2]>> = match method {
             Method::Ridge => Ridge::fit_path(&xt, &tt, &RIDGE_LAMBDAS)?
                 .into_iter()
-                .map(|m| m.map(|m| m.predict_many(&xv)))
+                .map(|m| m.map(|m| sets.clone().map(|x| m.predict_many(&x))))
                 .collect(),
             Method::KernelRidge => {
                 let fits =
                     KernelRidge::fit_grid(&xt, &tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
                 // Every fit of the grid shares the support: the held-out rows' distances once.
-                let d2 = fits.iter().flatten().next().map(|m| m.distances(&xv));
+                let d2 = fits
+                    .iter()
+                    .flatten()
+                    .next()
+                    .map(|m| sets.clone().map(|x| m.distances(&x)));
                 fits.into_iter()
-                    .map(|m| Some(m?.predict_from_distances(d2.as_ref()?)))
+                    .map(|m| {
+                        let (m, d2) = (m?, d2.as_ref()?);
+                        Some(d2.each_ref().map(|d| m.predict_from_distances(d)))
+                    })
                     .collect()
             }
             Method::Knn => {
                 let model = Knn::fit(&xt, &tt, 1, Weighting::Uniform)?;
                 let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
-                let near = model.neighbours(&xv, k_max);
+                let near = sets.clone().map(|x| model.neighbours(&x, k_max));
                 grid.iter()
                     .map(|h| {
                         let k = h.get("k").copied().unwrap_or(1.0) as usize;
@@ -415,7 +529,11 @@ pub(super) fn search_regressor(
                         } else {
                             Weighting::Uniform
                         };
-                        Some(near.iter().map(|nr| model.combine(nr, k, w)).collect())
+                        Some(
+                            near.each_ref().map(|near| {
+                                near.iter().map(|nr| model.combine(nr, k, w)).collect()
+                            }),
+                        )
                     })
                     .collect()
             }
@@ -424,7 +542,7 @@ pub(super) fn search_regressor(
                 vec![
                     Gp::fit(&xt, &tt, &GP, &mut step)
                         .ok()
-                        .map(|m| m.predict_many(&xv)),
+                        .map(|m| sets.clone().map(|x| m.predict_many(&x))),
                 ]
             }
             Method::Mlp => grid
@@ -434,18 +552,20 @@ pub(super) fn search_regressor(
                     progress(&what, f * steps + c, total);
                     Mlp::fit(&xt, &tt, &mlp_options(h))
                         .ok()
-                        .map(|m| m.predict_many(&xv))
+                        .map(|m| sets.clone().map(|x| m.predict_many(&x)))
                 })
                 .collect(),
             Method::Qda | Method::Lda => Vec::new(),
         };
         for (c, p) in fold_pred.into_iter().enumerate() {
-            let (Some(p), Some(slot)) = (p, pred.get_mut(c)) else {
+            let (Some([p, q]), Some(slot), Some(drifted)) =
+                (p, pred.get_mut(c), pred_drifted.get_mut(c))
+            else {
                 continue;
             };
-            for (&r, v) in test.iter().zip(p) {
-                if let Some(s) = slot.get_mut(r) {
-                    *s = Some(v);
+            for ((&r, v), w) in test.iter().zip(p).zip(q) {
+                if let (Some(s), Some(d)) = (slot.get_mut(r), drifted.get_mut(r)) {
+                    (*s, *d) = (Some(v), Some(w));
                 }
             }
         }
@@ -453,18 +573,59 @@ pub(super) fn search_regressor(
     progress(&what, total, total);
     Ok(grid
         .into_iter()
-        .zip(pred)
-        .map(|(hyperparameters, p)| {
+        .zip(pred.into_iter().zip(pred_drifted))
+        .map(|(hyperparameters, (p, q))| {
             // A candidate that failed in any fold scores nothing.
-            let all: Option<Vec<Target3>> = p.into_iter().collect();
+            let p_all: Option<Vec<Target3>> = p.into_iter().collect();
+            let q_all: Option<Vec<Target3>> = q.into_iter().collect();
             Candidate {
                 method,
                 hyperparameters,
-                cv_mean_error_mm: all.map(|p| mean_error(&p, t)).filter(|e| e.is_finite()),
+                cv_mean_error_mm: p_all
+                    .as_ref()
+                    .map(|p| mean_error(p, t))
+                    .filter(|e| e.is_finite()),
+                cv_block_errors_mm: block_errors(&p_all, t, fold, grouped),
+                cv_drifted_error_mm: q_all
+                    .as_ref()
+                    .map(|p| mean_error(p, t))
+                    .filter(|e| e.is_finite()),
                 cv_accuracy: None,
             }
         })
         .collect())
+}
+
+/// The mean error of each fold's rows (`grouped`: folds are groups), else of each of
+/// [`STABILITY_BLOCKS`] contiguous blocks of rows, mm; None when a prediction is missing.
+fn block_errors(
+    pred: &Option<Vec<Target3>>,
+    t: &[Target3],
+    fold: &[usize],
+    grouped: bool,
+) -> Option<Vec<f64>> {
+    let pred = pred.as_ref()?;
+    let n = t.len();
+    let of = |r: usize| {
+        if grouped {
+            fold.get(r).copied().unwrap_or(0)
+        } else {
+            r * STABILITY_BLOCKS / n.max(1)
+        }
+    };
+    let blocks = (0..n).map(of).max().map_or(0, |m| m + 1);
+    let mut sum = vec![(0.0, 0usize); blocks];
+    for (r, (p, q)) in pred.iter().zip(t).enumerate() {
+        if let Some(s) = sum.get_mut(of(r)) {
+            *s = (s.0 + (p[0] - q[0]).hypot(p[1] - q[1]), s.1 + 1);
+        }
+    }
+    Some(
+        sum.iter()
+            .filter(|s| s.1 > 0)
+            .map(|s| s.0 / s.1 as f64)
+            .collect(),
+    )
 }
 
 /// Every shrinkage of QDA or LDA, scored by cross-validation (accuracy; and the mean distance
@@ -473,7 +634,7 @@ pub(super) fn search_classifier(
     table: &Table,
     method: Method,
     labels: &Labels,
-    opts: &TrainOptions,
+    fold: &[usize],
     progress: Progress<'_>,
 ) -> Result<Vec<Candidate>, TabularError> {
     let classes = labels.names.len();
@@ -483,13 +644,7 @@ pub(super) fn search_classifier(
             labels.names.first().map_or("", String::as_str)
         )));
     }
-    let fold = folds(
-        table.rows(),
-        opts.folds,
-        opts.scheme,
-        Some(&labels.index),
-        opts.seed,
-    );
+
     let kind = discriminant(method);
     let what = format!(
         "cross-validating {} ({} shrinkages)",
@@ -505,11 +660,11 @@ pub(super) fn search_classifier(
             // Toward the diagonal when a class has fewer rows than features.
             target: shrink_target(table.x.ncols(), labels),
         };
-        let conf = match cross_validate_fast(&table.x, &labels.index, classes, &fit, &fold) {
+        let conf = match cross_validate_fast(&table.x, &labels.index, classes, &fit, fold) {
             Ok(conf) => Some(conf),
             // A fold whose training rows lack some class (blocks of a recording): fit on the
             // classes present, and count the absent class's rows as missed.
-            Err(FitError::EmptyClass { .. }) => cv_present_classes(&table.x, labels, &fit, &fold),
+            Err(FitError::EmptyClass { .. }) => cv_present_classes(&table.x, labels, &fit, fold),
             // A singular fit: the candidate scores nothing.
             Err(_) => None,
         };
@@ -517,6 +672,8 @@ pub(super) fn search_classifier(
             method,
             hyperparameters: params(&[("shrinkage", lambda)]),
             cv_mean_error_mm: None,
+            cv_block_errors_mm: None,
+            cv_drifted_error_mm: None,
             cv_accuracy: conf.as_ref().map(Confusion::accuracy),
         });
     }

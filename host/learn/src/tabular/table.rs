@@ -126,7 +126,30 @@ impl Table {
                 .and_then(|(name, v)| v.get(rows.clone()).map(|v| (name.clone(), v.to_vec()))),
             description: self.description.clone(),
             first_row: self.first_row + range.start,
+            groups: self
+                .groups
+                .as_ref()
+                .and_then(|g| g.get(rows.clone()).map(<[String]>::to_vec)),
         })
+    }
+
+    /// Each row's group as an index into the distinct groups (in order of first appearance),
+    /// and the groups, when the table has groups.
+    #[must_use]
+    pub fn group_index(&self) -> Option<(Vec<usize>, Vec<String>)> {
+        let groups = self.groups.as_ref()?;
+        let mut names: Vec<String> = Vec::new();
+        let mut of: BTreeMap<&str, usize> = BTreeMap::new();
+        let index = groups
+            .iter()
+            .map(|g| {
+                *of.entry(g.as_str()).or_insert_with(|| {
+                    names.push(g.clone());
+                    names.len() - 1
+                })
+            })
+            .collect();
+        Some((index, names))
     }
 
     /// Targets as (x mm, y mm, third or 0), when the table has positions.

@@ -170,6 +170,8 @@ fn qda_at_full_pooled_shrinkage_is_the_lda() {
         method: Method::Qda,
         hyperparameters: params(&[("shrinkage", s)]),
         cv_mean_error_mm: None,
+        cv_block_errors_mm: None,
+        cv_drifted_error_mm: None,
         cv_accuracy: Some(0.9),
     };
     let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
@@ -213,6 +215,7 @@ fn labels_are_the_users_own_names() {
         third: None,
         description: String::new(),
         first_row: 0,
+        groups: None,
     };
     let model = train(&table, Choice::Auto, &opts(), &mut quiet()).unwrap();
     assert!(model.method.is_classifier());
@@ -334,4 +337,65 @@ fn more_channels_than_rows_and_dead_channels_still_fit() {
                 .all(|p| p.target.unwrap().iter().all(|v| v.is_finite()))
         );
     }
+}
+
+/// A sensor that drifts between sessions (channel gains and offsets: `standin::SessionDrift`):
+/// cross-validation inside the training sessions flatters the model plain `auto` picks, a
+/// session it never saw exposes it, and with the rows' sessions given (`groups`) `auto`
+/// chooses by leaving a session out, estimates the new session's error honestly, and picks a
+/// model that holds better on it.
+#[test]
+fn with_sessions_given_auto_picks_the_model_that_holds_on_a_new_session() {
+    // Through the files, as another lab's recording comes in.
+    let dir = tmp("sessions");
+    let (f, t, g) = (
+        dir.join("features.csv"),
+        dir.join("targets.csv"),
+        dir.join("sessions.csv"),
+    );
+    standin::make_drifting(800, 4, 7, standin::SessionDrift::SESSIONS)
+        .unwrap()
+        .write_all(&f, &t, Some(&g))
+        .unwrap();
+    let table = Table::import_grouped(&f, Some(&t), Unit::M, Some(&GroupsFrom::File(g))).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let (train_rows, test_rows) = (
+        table.select("0..600".parse().unwrap()).unwrap(),
+        table.select("600..".parse().unwrap()).unwrap(),
+    );
+    let test_groups = test_rows.group_index().unwrap().1;
+    assert_eq!(test_groups, ["session-4"], "a session of its own");
+    let mut plain_rows = train_rows.clone();
+    plain_rows.groups = None;
+    let plain = train(&plain_rows, Choice::Auto, &opts(), &mut quiet()).unwrap();
+    let aware = train(&train_rows, Choice::Auto, &opts(), &mut quiet()).unwrap();
+    assert_eq!((aware.cv_scheme, aware.cv_folds), (CvScheme::Groups, 3));
+    let cv = |m: &TableModel| m.chosen().unwrap().cv_mean_error_mm.unwrap();
+    let new_session = |m: &TableModel| evaluate(m, &test_rows).unwrap().mean_error_mm.unwrap();
+    let (plain_new, aware_new) = (new_session(&plain), new_session(&aware));
+    assert!(
+        cv(&plain) < 0.7 * plain_new,
+        "within-session CV should flatter: {:.2} mm against {plain_new:.2} on the new session",
+        cv(&plain)
+    );
+    assert!(
+        (cv(&aware) - aware_new).abs() < 0.4 * aware_new,
+        "leave-one-session-out should estimate the new session: {:.2} against {aware_new:.2}",
+        cv(&aware)
+    );
+    assert!(
+        aware_new < 0.9 * plain_new,
+        "{} with sessions {aware_new:.2} mm against {} without {plain_new:.2}",
+        aware.method.name(),
+        plain.method.name()
+    );
+    // Scored per session of the rows.
+    let e = evaluate(&aware, &test_rows).unwrap();
+    let g = e.per_group.unwrap();
+    assert_eq!((g.len(), g[0].observations), (1, 200));
+    assert_eq!(g[0].mean_error_mm, e.mean_error_mm);
+    // One session only: nothing to leave out; the usual folds.
+    let one = train_rows.select("0..200".parse().unwrap()).unwrap();
+    let m = train(&one, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap();
+    assert_eq!(m.cv_scheme, CvScheme::Shuffled);
 }

@@ -47,8 +47,9 @@ pub(crate) struct TrainArgs {
     /// How --features rows are dealt to folds: shuffled (stratified by class), or blocks
     /// (contiguous, in file order: for recordings in time order, where a shuffled split
     /// flatters a model).
-    #[arg(long, value_enum, default_value_t = CvArg::Shuffled)]
-    cv: CvArg,
+    /// Default shuffled; with --groups cross-validation always leaves one group out.
+    #[arg(long, value_enum, conflicts_with = "groups")]
+    cv: Option<CvArg>,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched
     /// frames: it cancels electrode movement between sessions, but on the board it needs an
@@ -146,8 +147,8 @@ impl TrainArgs {
             shrinkage,
             folds: self.folds,
             scheme: match self.cv {
-                CvArg::Shuffled => tabular::CvScheme::Shuffled,
-                CvArg::Blocks => tabular::CvScheme::Blocks,
+                None | Some(CvArg::Shuffled) => tabular::CvScheme::Shuffled,
+                Some(CvArg::Blocks) => tabular::CvScheme::Blocks,
             },
             grid: self
                 .grid
@@ -219,7 +220,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             format!("{:?}", args.kind.unwrap_or(KindArg::Qda)).to_lowercase()
         )
     })?;
-    if args.grid.is_some() || args.cv != CvArg::Shuffled {
+    if args.grid.is_some() || args.cv.is_some() {
         bail!("--grid and --cv apply to any sensor's table (--features)");
     }
     output::check(&args.out, &[data_arg], force)?;

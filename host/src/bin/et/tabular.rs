@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use et_host::plot;
-use et_learn::tabular::{self, RowRange, Table, TableModel, Unit};
+use et_learn::tabular::{self, GroupsFrom, RowRange, Table, TableModel, Unit};
 use et_learn::trainer::Progress;
 use et_learn::{Examples, Trained, Trainer};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -32,6 +32,13 @@ pub(crate) struct TableArgs {
     /// flatters a model).
     #[arg(long, value_name = "A..B", requires = "features")]
     rows: Option<RowRange>,
+    /// Which session (visit, subject) each row belongs to: a CSV with one column and a row per
+    /// row of --features (any text; a header row optional), or the name of a column of
+    /// --features. With two groups or more, cross-validation leaves one group out (so `auto`
+    /// chooses the model that holds on a session it never saw), and `et eval` reports the
+    /// error per group.
+    #[arg(long, value_name = "CSV|COLUMN", requires = "features")]
+    pub(crate) groups: Option<String>,
 }
 
 /// `--unit`.
@@ -65,7 +72,15 @@ impl TableArgs {
             UnitArg::M => Unit::M,
             UnitArg::Mm => Unit::Mm,
         };
-        let table = Table::import(features, self.targets.as_deref(), unit)?;
+        let groups = self.groups.as_ref().map(|g| {
+            if Path::new(g).is_file() {
+                GroupsFrom::File(g.into())
+            } else {
+                GroupsFrom::Column(g.clone())
+            }
+        });
+        let table =
+            Table::import_grouped(features, self.targets.as_deref(), unit, groups.as_ref())?;
         eprintln!("read {}", table.description);
         Ok(match self.rows {
             Some(r) => {
@@ -82,6 +97,7 @@ impl TableArgs {
             .iter()
             .chain(self.targets.iter())
             .map(PathBuf::as_path)
+            .chain(self.groups.iter().map(Path::new).filter(|p| p.is_file()))
             .collect()
     }
 }
@@ -143,6 +159,22 @@ pub(crate) fn train(
 ) -> Result<()> {
     output::check(out, &args.inputs(), force)?;
     let table = args.load()?;
+    match table.group_index() {
+        None => eprintln!(
+            "note: no --groups: every row is taken as one session, and nothing in the data can \
+             show how a model holds on a new session (sensors drift between sessions: give \
+             --groups to choose by leaving a session out)"
+        ),
+        Some((_, names)) if names.len() < 2 => eprintln!(
+            "note: one group ('{}') only: nothing in the data can show how a model holds on a \
+             new session",
+            names.first().map_or("", String::as_str)
+        ),
+        Some((_, names)) => eprintln!(
+            "{} groups: cross-validation leaves one group out",
+            names.len()
+        ),
+    }
     let bar = bar();
     let mut last = String::new();
     let progress = |stage: Progress<'_>| {
@@ -221,10 +253,7 @@ pub(crate) fn train(
             .as_ref()
             .map_or(String::new(), |c| format!(", {} classes", c.names.len())),
         model.cv_folds,
-        match model.cv_scheme {
-            tabular::CvScheme::Shuffled => "shuffled",
-            tabular::CvScheme::Blocks => "blocks",
-        },
+        model.cv_scheme.said(),
         best.map_or("-".into(), describe),
         hyper(&model.hyperparameters),
         model.fit_seconds,
@@ -323,6 +352,15 @@ pub(crate) fn eval(
         parts.join(", "),
         1e3 * e.predict_seconds
     );
+    for g in e.per_group.iter().flatten() {
+        if let (Some(m), Some(md)) = (g.mean_error_mm, g.median_error_mm) {
+            out!(
+                "  group {}: {} rows, mean {m:.2} mm, median {md:.2} mm",
+                g.group,
+                g.observations
+            );
+        }
+    }
     Ok(())
 }
 
