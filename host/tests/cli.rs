@@ -949,10 +949,10 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let (f, t) = (dir.join("F.csv"), dir.join("T.csv"));
     let sessions = dir.join("sessions.csv");
-    et_learn::standin::make(300, 3, 5)
-        .unwrap()
-        .write_all(&f, &t, Some(&sessions))
-        .unwrap();
+    let (pressed, before) = (dir.join("pressed.csv"), dir.join("before.csv"));
+    let standin = et_learn::standin::make(300, 3, 5).unwrap();
+    standin.write_all(&f, &t, Some(&sessions)).unwrap();
+    standin.write_frames(&pressed, &before).unwrap();
     let ok = |o: std::process::Output| {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         o
@@ -1107,6 +1107,67 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
             .iter()
             .all(|g| g["group"].as_str().unwrap().starts_with("session-"))
     );
+    // Each session standardised by its own statistics: remembered, and done again to the
+    // evaluated rows.
+    let own = s(&dir.join("own.json"));
+    ok(train(
+        &["--kind", "ridge", "--groups", &s(&sessions), "--per-group"],
+        &own,
+    ));
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&own).unwrap()).unwrap();
+    assert_eq!(model["per_group"], true);
+    assert!(json(ok(eval(&own, &["--groups", &s(&sessions)])))["mean_error_mm"].is_number());
+    // Pressed frames referenced to the frame before each press: pressed - before is the
+    // features file itself, so the difference trains the same model.
+    let with_reference = |extra: &[&str], out: &str| {
+        let mut a: Vec<String> = ["train", "--features", &s(&pressed), "--targets", &s(&t)]
+            .map(String::from)
+            .to_vec();
+        a.extend(
+            [
+                "--unit",
+                "m",
+                "--rows",
+                "0..240",
+                "--folds",
+                "3",
+                "--kind",
+                "ridge",
+                "--json",
+                "--out",
+                out,
+                "--reference-features",
+                &s(&before),
+            ]
+            .map(String::from),
+        );
+        a.extend(extra.iter().map(|x| x.to_string()));
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        et(&refs)
+    };
+    let plain = json(ok(train(&["--kind", "ridge"], &s(&dir.join("plain.json")))));
+    let differenced = s(&dir.join("difference.json"));
+    let diff = json(ok(with_reference(
+        &["--reference-as", "difference"],
+        &differenced,
+    )));
+    let (a, b) = (
+        plain["cv_mean_error_mm"].as_f64().unwrap(),
+        diff["cv_mean_error_mm"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() < 1e-3 * a, "{a} against {b}");
+    ok(with_reference(&[], &s(&dir.join("ratio.json"))));
+    // The evaluation needs the same references, and says so.
+    let mut a: Vec<String> = ["eval", "--model", &differenced, "--features", &s(&pressed)]
+        .map(String::from)
+        .to_vec();
+    a.extend(["--targets", &s(&t), "--unit", "m", "--rows", "240..300"].map(String::from));
+    let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+    let o = et(&refs);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--reference-features"), "{e}");
     // Groups and a chosen fold scheme contradict each other.
     let e = train(&["--groups", &s(&sessions), "--cv", "blocks"], &grouped);
     assert!(!e.status.success());

@@ -6,7 +6,8 @@
 //! Usage: cargo run --release -p et-learn --example standin -- DIR [ROWS] [SESSIONS] [SEED]
 //! [drifting] (defaults: 2500 rows over 5 sessions, seed 1; `drifting` adds per-channel gain
 //! and offset changes between sessions, `standin::SessionDrift::SESSIONS`). Also writes
-//! `sessions.csv`, each row's session, for `--groups`.
+//! `sessions.csv`, each row's session, for `--groups`, and `pressed.csv` and `before.csv`, the
+//! pressed frames and the frames before them, for `--reference-features`.
 
 use std::path::PathBuf;
 
@@ -31,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let data = et_learn::standin::make_drifting(rows, sessions, seed, drift)?;
     let (f, t) = (dir.join("features.csv"), dir.join("targets.csv"));
     data.write_all(&f, &t, Some(&dir.join("sessions.csv")))?;
+    data.write_frames(&dir.join("pressed.csv"), &dir.join("before.csv"))?;
     eprintln!(
         "wrote {} and {} ({} rows x {} features, {sessions} sessions, seed {seed}) in {:.1} s",
         f.display(),

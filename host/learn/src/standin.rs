@@ -51,6 +51,9 @@ pub struct StandIn {
     pub targets_m: Vec<[f64; 3]>,
     /// The session of each row (0-based).
     pub session: Vec<u16>,
+    /// n x 192: the frame taken before each press (its session's untouched frame as
+    /// measured then), ADC codes: the pressed frame is `features + before`.
+    pub before: DMatrix<f64>,
 }
 
 /// How a sensor changes between sessions beyond its electrodes moving (which every stand-in
@@ -166,6 +169,14 @@ pub fn make_drifting(
         features[(r, j)] * CODES_PER_VOLT
     });
     let session: Vec<u16> = data.visit.iter().take(n).copied().collect();
+    // The frame taken before each press: its session's untouched frame.
+    let mut before = DMatrix::from_fn(n, features.ncols(), |r, j| {
+        data.baselines
+            .get((usize::from(session[r]), j))
+            .copied()
+            .unwrap_or(0.0)
+            * CODES_PER_VOLT
+    });
     if drift != SessionDrift::NONE {
         let mut rng = Rng::new(seed ^ 0x5e55_1011);
         let spread: Vec<f64> = (0..features.ncols())
@@ -186,7 +197,11 @@ pub fn make_drifting(
                 .unzip();
             for r in (0..n).filter(|&r| usize::from(session[r]) == s) {
                 for j in 0..features.ncols() {
+                    // The pressed frame and the frame before it both pass through the
+                    // channel's gain; the frame before is stale by the offset (the sheet
+                    // settled since): pressed - before = gain x change + offset.
                     features[(r, j)] = features[(r, j)] * gain[j] + offset[j];
+                    before[(r, j)] = before[(r, j)] * gain[j] - offset[j];
                 }
             }
         }
@@ -206,6 +221,7 @@ pub fn make_drifting(
         features,
         targets_m,
         session,
+        before,
     })
 }
 
@@ -217,6 +233,17 @@ impl StandIn {
     /// The I/O error.
     pub fn write(&self, features: &Path, targets: &Path) -> std::io::Result<()> {
         self.write_all(features, targets, None)
+    }
+
+    /// The pressed frames (`features + before`) and the frames before them, as a sensor that
+    /// records both writes them (same dialect as [`write`](Self::write)): for
+    /// `--reference-features`.
+    ///
+    /// # Errors
+    /// The I/O error.
+    pub fn write_frames(&self, pressed: &Path, before: &Path) -> std::io::Result<()> {
+        write_matrix(pressed, &(&self.features + &self.before))?;
+        write_matrix(before, &self.before)
     }
 
     /// [`write`](Self::write), and each row's session (`session-1`, ...) one per line in
@@ -238,13 +265,7 @@ impl StandIn {
                 .collect();
             std::fs::write(path, text)?;
         }
-        let mut f = std::io::BufWriter::new(std::fs::File::create(features)?);
-        f.write_all("\u{feff}".as_bytes())?;
-        for row in self.features.row_iter() {
-            let cells: Vec<String> = row.iter().map(|v| format!("{v:.6E}")).collect();
-            write!(f, "{}\r\n", cells.join(","))?;
-        }
-        f.flush()?;
+        write_matrix(features, &self.features)?;
         let mut t = std::io::BufWriter::new(std::fs::File::create(targets)?);
         t.write_all("\u{feff}".as_bytes())?;
         for p in &self.targets_m {
@@ -252,4 +273,15 @@ impl StandIn {
         }
         t.flush()
     }
+}
+
+/// A matrix as the other lab's tools write one: byte-order mark, no header, CRLF, `1.5E-05`.
+fn write_matrix(path: &Path, m: &DMatrix<f64>) -> std::io::Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    f.write_all("\u{feff}".as_bytes())?;
+    for row in m.row_iter() {
+        let cells: Vec<String> = row.iter().map(|v| format!("{v:.6E}")).collect();
+        write!(f, "{}\r\n", cells.join(","))?;
+    }
+    f.flush()
 }

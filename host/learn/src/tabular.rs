@@ -81,6 +81,9 @@ pub enum Method {
     /// A multilayer perceptron (positions): dense layers, relu or tanh, size and L2 penalty by
     /// cross-validation (`mlp`).
     Mlp,
+    /// The mean of the best two or three methods' predictions, kept by `auto` when
+    /// cross-validation says the mean beats the best of them.
+    Average,
 }
 
 impl Method {
@@ -95,6 +98,7 @@ impl Method {
             Method::Knn => "knn",
             Method::Gp => "gp",
             Method::Mlp => "mlp",
+            Method::Average => "average",
         }
     }
 
@@ -154,17 +158,32 @@ pub struct TrainOptions {
     pub grid: Option<(usize, usize)>,
     /// Seed of the shuffled folds.
     pub seed: u64,
+    /// Standardise each group's (session's) features by that group's own mean and spread
+    /// before anything else, so a session's offsets and gains cancel; evaluation does the
+    /// same to the rows it scores.
+    pub per_group: bool,
 }
 
 impl Default for TrainOptions {
     fn default() -> Self {
         Self {
+            per_group: false,
             folds: 5,
             scheme: CvScheme::Shuffled,
             grid: None,
             seed: 1,
         }
     }
+}
+
+/// How features are referenced to a frame taken before each press (`--reference-features`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Referencing {
+    /// (F - B) / B: relative change; a channel's gain cancels.
+    Ratio,
+    /// F - B: the change; a channel's offset cancels.
+    Difference,
 }
 
 /// Progress of a long training: (what, done, of).

@@ -80,6 +80,8 @@ pub struct Trainer {
     pub keep: Option<usize>,
     /// Tables: the seed of the folds.
     pub seed: u64,
+    /// Tables: standardise each group's (session's) features by its own statistics.
+    pub per_group: bool,
 }
 
 impl Default for Trainer {
@@ -95,6 +97,7 @@ impl Default for Trainer {
             raw: false,
             keep: None,
             seed: 1,
+            per_group: false,
         }
     }
 }
@@ -225,6 +228,7 @@ impl Trainer {
                     scheme: self.scheme,
                     grid: self.grid,
                     seed: self.seed,
+                    per_group: self.per_group,
                 };
                 let mut table_progress =
                     |what: &str, done: usize, of: usize| progress(Progress::Table(what, done, of));

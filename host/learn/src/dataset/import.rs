@@ -67,6 +67,22 @@ pub enum GroupsFrom {
     Column(String),
 }
 
+/// Reads a CSV of numbers only (a header row optional; the same dialects as
+/// [`Table::import`]): reference frames, one per row or per session.
+///
+/// # Errors
+/// [`DatasetError`] naming the file, line and column of a cell that is not a finite number.
+pub fn read_matrix(path: &Path) -> Result<DMatrix<f64>, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let none = |_: &str, _: usize| false;
+    let csv = parse_table(path, &text_lines(&text), &none)?;
+    let cols: Vec<usize> = (0..csv.names.len()).collect();
+    csv.matrix(path, &cols)
+}
+
 /// Names a third target column may have, besides the column after y in a headerless file.
 const THIRD_NAMES: [&str; 4] = ["z", "force", "pressure", "pressure_kpa"];
 

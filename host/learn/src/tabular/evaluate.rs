@@ -64,6 +64,13 @@ pub struct GroupScore {
 /// [`TabularError::Usage`] when the features do not match, or the rows have no target the
 /// model predicts.
 pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, TabularError> {
+    let standardised;
+    let table = if model.per_group {
+        standardised = table.standardised_per_group()?;
+        &standardised
+    } else {
+        table
+    };
     let started = std::time::Instant::now();
     let pred = model.predict(&table.x)?;
     let predict_seconds = started.elapsed().as_secs_f64();

@@ -25,6 +25,10 @@ pub struct Candidate {
     /// ([`DRIFT_GAIN`]), mm: how the candidate would take a new session's drift.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_drifted_error_mm: Option<f64>,
+    /// Regressors, during training only: the out-of-fold prediction of every row (for the
+    /// average of the best candidates).
+    #[serde(skip)]
+    pub(super) out_of_fold: Option<Vec<Target3>>,
 }
 
 impl Candidate {
@@ -107,6 +111,11 @@ pub enum Tables {
         /// Targets' training standard deviation.
         target_scale: [f64; 3],
     },
+    /// The mean of several regressors' predictions, each with its own standardisation.
+    Average {
+        /// The regressors averaged.
+        members: Vec<Member>,
+    },
     /// The (weighted) mean target of the k nearest support rows.
     Knn {
         /// k.
@@ -118,6 +127,21 @@ pub enum Tables {
         /// Their targets (x mm, y mm, third).
         targets: Vec<[f64; 3]>,
     },
+}
+
+/// One regressor of an [`Tables::Average`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Member {
+    /// Its method.
+    pub method: Method,
+    /// Its hyperparameters.
+    pub hyperparameters: BTreeMap<String, f64>,
+    /// Its standardisation of the features.
+    pub feature_mean: Vec<f64>,
+    /// (as above)
+    pub feature_scale: Vec<f64>,
+    /// Its tables.
+    pub tables: Tables,
 }
 
 /// What a classifier's classes are.
@@ -168,6 +192,14 @@ pub struct TableModel {
     pub source: String,
     /// Seconds the training took (search and final fit).
     pub fit_seconds: f64,
+    /// Whether each group's features were standardised by the group's own statistics (then
+    /// evaluation does the same to each group of the rows it scores).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub per_group: bool,
+    /// How the features were referenced to frames before each press, when they were (the
+    /// evaluation's rows need the same references).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Referencing>,
     /// What the training changed from the request, and why (e.g. a QDA saved as the LDA it
     /// equals); absent when nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -192,6 +224,7 @@ pub(super) fn fit_final(
     best: &Candidate,
     targets: Option<&[Target3]>,
     classes: Option<&(Labels, ClassInfo)>,
+    members: &[Candidate],
     progress: Progress<'_>,
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
@@ -298,6 +331,25 @@ pub(super) fn fit_final(
                 m.scale,
             )
         }
+        Method::Average => {
+            let mut fitted = Vec::with_capacity(members.len());
+            for m in members {
+                let (tables, feature_mean, feature_scale) =
+                    fit_final(table, m, targets, classes, &[], progress)?;
+                fitted.push(Member {
+                    method: m.method,
+                    hyperparameters: m.hyperparameters.clone(),
+                    feature_mean,
+                    feature_scale,
+                    tables,
+                });
+            }
+            let (mean, scale) = fitted
+                .first()
+                .map(|m| (m.feature_mean.clone(), m.feature_scale.clone()))
+                .ok_or_else(|| usage("an average of no regressor"))?;
+            (Tables::Average { members: fitted }, mean, scale)
+        }
         Method::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
@@ -331,6 +383,7 @@ pub(super) enum Ready {
     KernelRidge(KernelRidge),
     Knn(Knn),
     Mlp(Mlp),
+    Average(Vec<TableModel>),
 }
 
 impl TableModel {
@@ -385,6 +438,17 @@ impl TableModel {
             Ready::KernelRidge(m) => regression(m.predict_many(x)),
             Ready::Knn(m) => regression(m.predict_many(x)),
             Ready::Mlp(m) => regression(m.predict_many(x)),
+            Ready::Average(members) => {
+                let mut sum = vec![[0.0; 3]; x.nrows()];
+                for m in &members {
+                    for (s, p) in sum.iter_mut().zip(m.predict(x)?) {
+                        let t = p.target.unwrap_or([0.0; 3]);
+                        *s = [s[0] + t[0], s[1] + t[1], s[2] + t[2]];
+                    }
+                }
+                let k = members.len().max(1) as f64;
+                regression(sum.into_iter().map(|s| s.map(|v| v / k)).collect())
+            }
         })
     }
 
@@ -473,6 +537,7 @@ impl TableModel {
             | Tables::KernelRidge { intercept, .. }
             | Tables::Gp { intercept, .. } => Some([intercept[0], intercept[1]]),
             Tables::Mlp { target_mean, .. } => Some([target_mean[0], target_mean[1]]),
+            Tables::Average { .. } => self.members().first()?.training_mean_position(),
             Tables::Knn { targets, .. } => {
                 let n = targets.len().max(1) as f64;
                 Some(
@@ -489,6 +554,58 @@ impl TableModel {
                     [a[0] + w * q[0], a[1] + w * q[1]]
                 }))
             }
+        }
+    }
+}
+
+impl TableModel {
+    /// An average's regressors as models of their own (empty for any other model).
+    #[must_use]
+    pub fn members(&self) -> Vec<TableModel> {
+        let Tables::Average { members } = &self.tables else {
+            return Vec::new();
+        };
+        members
+            .iter()
+            .map(|m| TableModel {
+                method: m.method,
+                hyperparameters: m.hyperparameters.clone(),
+                feature_mean: m.feature_mean.clone(),
+                feature_scale: m.feature_scale.clone(),
+                tables: m.tables.clone(),
+                search: Vec::new(),
+                note: None,
+                ..self.clone_shallow()
+            })
+            .collect()
+    }
+
+    /// This model without its tables and search (the shared fields of its members).
+    fn clone_shallow(&self) -> TableModel {
+        TableModel {
+            format: self.format.clone(),
+            version: self.version,
+            method: self.method,
+            feature_names: self.feature_names.clone(),
+            feature_mean: Vec::new(),
+            feature_scale: Vec::new(),
+            unit: self.unit,
+            third: self.third.clone(),
+            classes: None,
+            hyperparameters: BTreeMap::new(),
+            search: Vec::new(),
+            cv_folds: self.cv_folds,
+            cv_scheme: self.cv_scheme,
+            trained_rows: self.trained_rows,
+            source: String::new(),
+            fit_seconds: 0.0,
+            note: None,
+            per_group: false,
+            reference: None,
+            tables: Tables::Ridge {
+                weights: Vec::new(),
+                intercept: [0.0; 3],
+            },
         }
     }
 }

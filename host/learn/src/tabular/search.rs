@@ -21,6 +21,13 @@ pub(super) const KRR_SEARCH_SUPPORT: usize = 1_200;
 pub(super) const KNN_KS: [usize; 8] = [1, 2, 3, 5, 8, 12, 20, 30];
 /// The Gaussian process's learning rows, iterations and support.
 pub(super) const GP: GpOptions = GpOptions::DEFAULT;
+/// ... and in each fold of its search: half the learning rows (a third of the time each), so
+/// the search fits the 30 s budget on 2 000 x 192. The folds' score is then a little
+/// pessimistic for the final fit, never flattering.
+pub(super) const GP_SEARCH: GpOptions = GpOptions {
+    learn_rows: GP.learn_rows / 2,
+    ..GP
+};
 
 /// Contiguous blocks of rows over which a candidate's error is checked for steadiness when the
 /// rows have no groups.
@@ -28,6 +35,12 @@ pub const STABILITY_BLOCKS: usize = 5;
 /// Candidates whose cross-validated error is within this share of the best are close: without
 /// groups, `auto` takes the steadiest of them over [`STABILITY_BLOCKS`].
 pub const CLOSE: f64 = 0.05;
+
+/// `auto` averages at most this many methods ...
+pub const AVERAGE_MOST: usize = 3;
+/// ... and keeps the average when its cross-validated error is this share below the best
+/// single method's.
+pub const AVERAGE_GAIN: f64 = 0.02;
 
 /// The held-out rows are also predicted with each channel's gain changed by this standard
 /// deviation (10 %: contacts and amplifier paths between sessions), which scores how a
@@ -91,6 +104,13 @@ pub fn train(
     progress: Progress<'_>,
 ) -> Result<TableModel, TabularError> {
     let started = std::time::Instant::now();
+    let standardised;
+    let table = if opts.per_group {
+        standardised = table.standardised_per_group()?;
+        &standardised
+    } else {
+        table
+    };
     let n = table.rows();
     let groups = table.group_index();
     let grouped = groups.as_ref().is_some_and(|(_, names)| names.len() >= 2);
@@ -176,13 +196,45 @@ pub fn train(
         notes.push(steadier.1);
         ranked.insert(0, steadier.0);
     }
+    let average = match (&targets, choice) {
+        (Some(t), Choice::Auto) if opts.grid.is_none() => {
+            average_of_best(&ranked, t, &fold_of(None), grouped)
+        }
+        _ => None,
+    };
+    let members = average.as_ref().map_or(Vec::new(), |(_, m)| m.clone());
+    if let Some((avg, members)) = &average {
+        notes.push(format!(
+            "the mean of {}'s predictions cross-validated at {:.2} mm against {:.2} for {} \
+             alone: chose their average",
+            members
+                .iter()
+                .map(|c| c.method.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+            avg.loss(),
+            members.first().map_or(f64::NAN, Candidate::loss),
+            members.first().map_or("", |c| c.method.name())
+        ));
+    }
+    let average = average.map(|(c, _)| c);
+    if let Some(avg) = &average {
+        ranked.insert(0, avg);
+    }
     let mut fitted = None;
     let mut last_error = None;
     for best in ranked {
         let lda = as_lda_if_equal(best, table.x.ncols(), classes.as_ref().map(|(l, _)| l));
         let best = lda.as_ref().unwrap_or(best);
         progress(&format!("fitting {}", best.method.name()), 0, 1);
-        match fit_final(table, best, targets.as_deref(), classes.as_ref(), progress) {
+        match fit_final(
+            table,
+            best,
+            targets.as_deref(),
+            classes.as_ref(),
+            &members,
+            progress,
+        ) {
             Ok(f) => {
                 fitted = Some((best.clone(), f, lda.is_some()));
                 break;
@@ -198,6 +250,10 @@ pub fn train(
         })
     })?;
     progress(&format!("fitting {}", best.method.name()), 1, 1);
+    search.extend(average.clone());
+    for c in &mut search {
+        c.out_of_fold = None;
+    }
     let lda_note = qda_is_lda.then(|| {
         // Its cross-validation is the QDA's: the same classifier in every fold.
         search.push(best.clone());
@@ -253,6 +309,8 @@ pub fn train(
             (!notes.is_empty()).then(|| notes.join("; "))
         },
         tables,
+        per_group: opts.per_group,
+        reference: None,
     })
 }
 
@@ -440,6 +498,7 @@ pub(super) fn search_regressor(
             .collect(),
         Method::Gp => vec![params(&[
             ("learn_rows", GP.learn_rows.min(n) as f64),
+            ("search_learn_rows", GP_SEARCH.learn_rows.min(n) as f64),
             ("iterations", GP.iterations as f64),
         ])],
         Method::Mlp => MLP_ACTIVATIONS
@@ -457,7 +516,7 @@ pub(super) fn search_regressor(
                 })
             })
             .collect(),
-        Method::Qda | Method::Lda => return Err(usage("not a regressor")),
+        Method::Qda | Method::Lda | Method::Average => return Err(usage("not a regressor")),
     };
     // Out-of-fold predictions of every candidate.
     let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
@@ -474,7 +533,7 @@ pub(super) fn search_regressor(
         format!(
             "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
             k,
-            Gp::estimate_seconds(x, &GP, k + 1)
+            Gp::estimate_seconds(x, &GP_SEARCH, k) + Gp::estimate_seconds(x, &GP, 1)
         )
     } else {
         format!(
@@ -540,7 +599,7 @@ pub(super) fn search_regressor(
             Method::Gp => {
                 let mut step = |done: usize, _: usize| progress(&what, f * steps + done, total);
                 vec![
-                    Gp::fit(&xt, &tt, &GP, &mut step)
+                    Gp::fit(&xt, &tt, &GP_SEARCH, &mut step)
                         .ok()
                         .map(|m| sets.clone().map(|x| m.predict_many(&x))),
                 ]
@@ -555,7 +614,7 @@ pub(super) fn search_regressor(
                         .map(|m| sets.clone().map(|x| m.predict_many(&x)))
                 })
                 .collect(),
-            Method::Qda | Method::Lda => Vec::new(),
+            Method::Qda | Method::Lda | Method::Average => Vec::new(),
         };
         for (c, p) in fold_pred.into_iter().enumerate() {
             let (Some([p, q]), Some(slot), Some(drifted)) =
@@ -591,9 +650,74 @@ pub(super) fn search_regressor(
                     .map(|p| mean_error(p, t))
                     .filter(|e| e.is_finite()),
                 cv_accuracy: None,
+                out_of_fold: p_all,
             }
         })
         .collect())
+}
+
+/// The best candidate of each regression method, best first.
+fn best_per_method<'a>(ranked: &[&'a Candidate]) -> Vec<&'a Candidate> {
+    let mut out: Vec<&Candidate> = Vec::new();
+    for c in ranked {
+        if !c.method.is_classifier() && !out.iter().any(|p| p.method == c.method) {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The mean of the best two or three methods' out-of-fold predictions, as a candidate, when
+/// it beats the best single one by [`AVERAGE_GAIN`]; and its members.
+fn average_of_best(
+    ranked: &[&Candidate],
+    t: &[Target3],
+    fold: &[usize],
+    grouped: bool,
+) -> Option<(Candidate, Vec<Candidate>)> {
+    let bests = best_per_method(ranked);
+    let best = bests.first()?.loss();
+    (2..=AVERAGE_MOST.min(bests.len()))
+        .filter_map(|m| {
+            let members: Vec<Candidate> = bests.iter().take(m).map(|&c| c.clone()).collect();
+            let predictions: Vec<&Vec<Target3>> = members
+                .iter()
+                .map(|c| c.out_of_fold.as_ref())
+                .collect::<Option<_>>()?;
+            let mean: Vec<Target3> = (0..t.len())
+                .map(|r| {
+                    let mut s = [0.0; 3];
+                    for p in &predictions {
+                        let q = p.get(r).copied().unwrap_or([0.0; 3]);
+                        s = [s[0] + q[0], s[1] + q[1], s[2] + q[2]];
+                    }
+                    s.map(|v| v / m as f64)
+                })
+                .collect();
+            let error = mean_error(&mean, t);
+            let drifted: Option<f64> = members
+                .iter()
+                .map(|c| c.cv_drifted_error_mm)
+                .sum::<Option<f64>>()
+                .map(|s| s / m as f64);
+            let mean = Some(mean);
+            Some((
+                Candidate {
+                    method: Method::Average,
+                    hyperparameters: params(&[("members", m as f64)]),
+                    cv_mean_error_mm: Some(error),
+                    cv_block_errors_mm: block_errors(&mean, t, fold, grouped),
+                    // The members' mean: an upper bound of the average's (the error of a mean
+                    // is at most the mean of the errors).
+                    cv_drifted_error_mm: drifted,
+                    cv_accuracy: None,
+                    out_of_fold: None,
+                },
+                members,
+            ))
+        })
+        .filter(|(c, _)| c.loss() < best * (1.0 - AVERAGE_GAIN))
+        .min_by(|a, b| a.0.loss().total_cmp(&b.0.loss()))
 }
 
 /// The mean error of each fold's rows (`grouped`: folds are groups), else of each of
@@ -675,6 +799,7 @@ pub(super) fn search_classifier(
             cv_block_errors_mm: None,
             cv_drifted_error_mm: None,
             cv_accuracy: conf.as_ref().map(Confusion::accuracy),
+            out_of_fold: None,
         });
     }
     progress(&what, SHRINKAGES.len(), SHRINKAGES.len());

@@ -152,6 +152,107 @@ impl Table {
         Some((index, names))
     }
 
+    /// The features referenced to `reference`: one frame per row, one per group (in order of
+    /// first appearance), or one for all rows; `(F - B) / B` or `F - B`.
+    ///
+    /// # Errors
+    /// [`TabularError::Usage`] when `reference` has another column count or a row count that
+    /// is none of those, or a ratio's reference value is 0 (naming the row and column).
+    pub fn referenced(
+        &self,
+        reference: &DMatrix<f64>,
+        how: Referencing,
+        what: &str,
+    ) -> Result<Self, TabularError> {
+        let (n, p) = (self.rows(), self.x.ncols());
+        if reference.ncols() != p {
+            return Err(usage(format!(
+                "{what}: {} columns, the features have {p}",
+                reference.ncols()
+            )));
+        }
+        let groups = self.group_index();
+        let row_of: Vec<usize> = match reference.nrows() {
+            r if r == n => (0..n).collect(),
+            1 => vec![0; n],
+            r if groups.as_ref().is_some_and(|(_, names)| names.len() == r) => {
+                groups.map(|(index, _)| index).unwrap_or_default()
+            }
+            r => {
+                return Err(usage(format!(
+                    "{what}: {r} rows; give one per row of the features ({n}), one per group \
+                     (with --groups){}, or one for all",
+                    groups.map_or(String::new(), |(_, g)| format!(": {}", g.len()))
+                )));
+            }
+        };
+        let mut x = self.x.clone();
+        for (r, &b) in row_of.iter().enumerate() {
+            for j in 0..p {
+                let base = reference.get((b, j)).copied().unwrap_or(f64::NAN);
+                let Some(v) = x.get_mut((r, j)) else {
+                    continue;
+                };
+                *v = match how {
+                    Referencing::Difference => *v - base,
+                    Referencing::Ratio if base != 0.0 && base.is_finite() => (*v - base) / base,
+                    Referencing::Ratio => {
+                        return Err(usage(format!(
+                            "{what}: row {} column {}: {base}: a ratio needs a reference \
+                             that is not 0 (use difference)",
+                            b + 1,
+                            j + 1
+                        )));
+                    }
+                };
+            }
+        }
+        Ok(Self {
+            x,
+            description: format!(
+                "{}; features {} {what}",
+                self.description,
+                match how {
+                    Referencing::Ratio => "relative to",
+                    Referencing::Difference => "minus",
+                }
+            ),
+            ..self.clone()
+        })
+    }
+
+    /// Each group's features standardised by that group's own mean and standard deviation
+    /// (all rows as one group when the table has none): a session's channel offsets and gains
+    /// cancel.
+    ///
+    /// # Errors
+    /// [`TabularError::Usage`] when a group has a single row (no spread to divide by).
+    pub fn standardised_per_group(&self) -> Result<Self, TabularError> {
+        let n = self.rows();
+        let (index, names) = self
+            .group_index()
+            .unwrap_or_else(|| (vec![0; n], vec!["all rows".to_string()]));
+        let mut x = self.x.clone();
+        for (g, name) in names.iter().enumerate() {
+            let rows: Vec<usize> = (0..n).filter(|&r| index.get(r) == Some(&g)).collect();
+            if rows.len() < 2 {
+                return Err(usage(format!(
+                    "group '{name}' has {} row: standardising per group needs two or more",
+                    rows.len()
+                )));
+            }
+            let (mean, scale) = super::super::fit::standardisation(&rows_of(&self.x, &rows));
+            for &r in &rows {
+                for (j, (m, s)) in mean.iter().zip(&scale).enumerate() {
+                    if let Some(v) = x.get_mut((r, j)) {
+                        *v = (*v - m) / s;
+                    }
+                }
+            }
+        }
+        Ok(Self { x, ..self.clone() })
+    }
+
     /// Targets as (x mm, y mm, third or 0), when the table has positions.
     #[must_use]
     pub fn targets(&self) -> Option<Vec<Target3>> {

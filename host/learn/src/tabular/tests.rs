@@ -173,6 +173,7 @@ fn qda_at_full_pooled_shrinkage_is_the_lda() {
         cv_block_errors_mm: None,
         cv_drifted_error_mm: None,
         cv_accuracy: Some(0.9),
+        out_of_fold: None,
     };
     let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
     assert_eq!((lda.method, lda.cv_accuracy), (Method::Lda, Some(0.9)));
@@ -398,4 +399,158 @@ fn with_sessions_given_auto_picks_the_model_that_holds_on_a_new_session() {
     let one = train_rows.select("0..200".parse().unwrap()).unwrap();
     let m = train(&one, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap();
     assert_eq!(m.cv_scheme, CvScheme::Shuffled);
+}
+
+/// Referencing to the frame before each press cancels what it should: a ratio each channel's
+/// gain, a difference each channel's offset; standardising each group by its own statistics
+/// cancels both. References come one per row, one per group or one for all.
+#[test]
+fn references_and_per_group_standardisation_cancel_a_sessions_gains_and_offsets() {
+    let mut rng = et_core::rng::Rng::new(9);
+    let (n, p) = (40, 5);
+    let groups: Vec<String> = (0..n).map(|r| format!("s{}", r / 20)).collect();
+    let pressed = DMatrix::from_fn(n, p, |_, _| 2.0 + rng.uniform());
+    let before = DMatrix::from_fn(n, p, |_, _| 1.0 + rng.uniform());
+    let table = |x: DMatrix<f64>| Table {
+        x,
+        feature_names: (0..p).map(|j| format!("c{j}")).collect(),
+        labels: None,
+        positions_mm: Some(vec![[0.0, 0.0]; n]),
+        third: None,
+        description: String::new(),
+        first_row: 0,
+        groups: Some(groups.clone()),
+    };
+    // Session s1 through other gains g_j and offsets o_j.
+    let gain: Vec<f64> = (0..p).map(|j| 0.8 + 0.1 * j as f64).collect();
+    let offset: Vec<f64> = (0..p).map(|j| 0.3 - 0.1 * j as f64).collect();
+    let drift = |m: &DMatrix<f64>, g: bool, o: bool| {
+        DMatrix::from_fn(n, p, |r, j| {
+            let v = m[(r, j)];
+            if r < 20 {
+                v
+            } else {
+                v * if g { gain[j] } else { 1.0 } + if o { offset[j] } else { 0.0 }
+            }
+        })
+    };
+    let close = |a: &Table, b: &Table| (&a.x - &b.x).amax() < 1e-12;
+    let ratio = |f: &DMatrix<f64>, b: &DMatrix<f64>| {
+        table(f.clone())
+            .referenced(b, Referencing::Ratio, "B")
+            .unwrap()
+    };
+    let diff = |f: &DMatrix<f64>, b: &DMatrix<f64>| {
+        table(f.clone())
+            .referenced(b, Referencing::Difference, "B")
+            .unwrap()
+    };
+    assert!(close(
+        &ratio(&pressed, &before),
+        &ratio(&drift(&pressed, true, false), &drift(&before, true, false))
+    ));
+    assert!(close(
+        &diff(&pressed, &before),
+        &diff(&drift(&pressed, false, true), &drift(&before, false, true))
+    ));
+    // The ratio does not cancel an offset (the check can fail).
+    assert!(!close(
+        &ratio(&pressed, &before),
+        &ratio(&drift(&pressed, false, true), &drift(&before, false, true))
+    ));
+    let own = |m: DMatrix<f64>| table(m).standardised_per_group().unwrap();
+    assert!(close(
+        &own(pressed.clone()),
+        &own(drift(&pressed, true, true))
+    ));
+    // Each group then has mean 0 and standard deviation 1 in every column.
+    let s = own(pressed.clone());
+    for g in [0..20, 20..40] {
+        for j in 0..p {
+            let c: Vec<f64> = g.clone().map(|r| s.x[(r, j)]).collect();
+            let mean = c.iter().sum::<f64>() / 20.0;
+            let var = c.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 19.0;
+            assert!(mean.abs() < 1e-12 && (var - 1.0).abs() < 1e-12);
+        }
+    }
+    // One reference per group, or one for all, is each row's group's.
+    let per_group = DMatrix::from_fn(2, p, |g, j| before[(20 * g, j)]);
+    let expanded = DMatrix::from_fn(n, p, |r, j| before[(20 * (r / 20), j)]);
+    assert!(close(
+        &ratio(&pressed, &per_group),
+        &ratio(&pressed, &expanded)
+    ));
+    let one = DMatrix::from_fn(1, p, |_, j| before[(0, j)]);
+    let everywhere = DMatrix::from_fn(n, p, |_, j| before[(0, j)]);
+    assert!(close(&diff(&pressed, &one), &diff(&pressed, &everywhere)));
+    // Wrong shapes and a zero reference are refused, named.
+    let e = table(pressed.clone())
+        .referenced(&DMatrix::zeros(3, p), Referencing::Ratio, "B.csv")
+        .unwrap_err();
+    assert!(e.to_string().contains("B.csv: 3 rows"), "{e}");
+    let e = table(pressed.clone())
+        .referenced(&DMatrix::zeros(1, p), Referencing::Ratio, "B.csv")
+        .unwrap_err();
+    assert!(e.to_string().contains("row 1 column 1"), "{e}");
+    let mut single = table(pressed.clone());
+    single.groups = Some(
+        (0..n)
+            .map(|r| {
+                if r == 0 {
+                    "alone".into()
+                } else {
+                    "rest".into()
+                }
+            })
+            .collect(),
+    );
+    assert!(
+        single
+            .standardised_per_group()
+            .unwrap_err()
+            .to_string()
+            .contains("'alone'")
+    );
+}
+
+/// An average of regressors predicts the mean of its members' predictions, survives its
+/// file, and an average that is not one (a single member) is refused.
+#[test]
+fn an_average_predicts_the_mean_of_its_members() {
+    let train_rows = STANDIN.select("0..240".parse().unwrap()).unwrap();
+    let test_rows = STANDIN.select("240..".parse().unwrap()).unwrap();
+    let fitted: Vec<TableModel> = [Method::Ridge, Method::Knn]
+        .iter()
+        .map(|&m| train(&train_rows, Choice::One(m), &opts(), &mut quiet()).unwrap())
+        .collect();
+    let member = |m: &TableModel| Member {
+        method: m.method,
+        hyperparameters: m.hyperparameters.clone(),
+        feature_mean: m.feature_mean.clone(),
+        feature_scale: m.feature_scale.clone(),
+        tables: m.tables.clone(),
+    };
+    let mut average = fitted[0].clone();
+    average.method = Method::Average;
+    average.search.clear();
+    average.tables = Tables::Average {
+        members: fitted.iter().map(member).collect(),
+    };
+    let back = TableModel::from_json(&serde_json::to_string(&average).unwrap()).unwrap();
+    let p = back.predict(&test_rows.x).unwrap();
+    let (a, b) = (
+        fitted[0].predict(&test_rows.x).unwrap(),
+        fitted[1].predict(&test_rows.x).unwrap(),
+    );
+    for ((p, a), b) in p.iter().zip(&a).zip(&b) {
+        let (p, a, b) = (p.target.unwrap(), a.target.unwrap(), b.target.unwrap());
+        for k in 0..3 {
+            assert!((p[k] - 0.5 * (a[k] + b[k])).abs() < 1e-9);
+        }
+    }
+    if let Tables::Average { members } = &mut average.tables {
+        members.pop();
+    }
+    let e = TableModel::from_json(&serde_json::to_string(&average).unwrap()).unwrap_err();
+    assert!(e.to_string().contains("two regressors"), "{e}");
 }

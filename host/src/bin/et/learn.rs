@@ -50,6 +50,12 @@ pub(crate) struct TrainArgs {
     /// Default shuffled; with --groups cross-validation always leaves one group out.
     #[arg(long, value_enum, conflicts_with = "groups")]
     cv: Option<CvArg>,
+    /// Standardise each session's features by that session's own mean and spread (--features;
+    /// the sessions from --groups, else all rows as one): its channel offsets and gains
+    /// cancel. `et eval` then does the same to each session of the rows it scores, so it
+    /// needs a session's worth of rows (two or more per group).
+    #[arg(long)]
+    per_group: bool,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched
     /// frames: it cancels electrode movement between sessions, but on the board it needs an
@@ -158,6 +164,7 @@ impl TrainArgs {
             raw: self.raw,
             keep: self.keep,
             seed: 1,
+            per_group: self.per_group,
         })
     }
 }
@@ -220,8 +227,8 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             format!("{:?}", args.kind.unwrap_or(KindArg::Qda)).to_lowercase()
         )
     })?;
-    if args.grid.is_some() || args.cv.is_some() {
-        bail!("--grid and --cv apply to any sensor's table (--features)");
+    if args.grid.is_some() || args.cv.is_some() || args.per_group {
+        bail!("--grid, --cv and --per-group apply to any sensor's table (--features)");
     }
     output::check(&args.out, &[data_arg], force)?;
     if let Some(png) = &args.curve {

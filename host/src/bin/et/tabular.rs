@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use et_host::plot;
-use et_learn::tabular::{self, GroupsFrom, RowRange, Table, TableModel, Unit};
+use et_learn::tabular::{self, GroupsFrom, Referencing, RowRange, Table, TableModel, Unit};
 use et_learn::trainer::Progress;
 use et_learn::{Examples, Trained, Trainer};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -39,6 +39,25 @@ pub(crate) struct TableArgs {
     /// error per group.
     #[arg(long, value_name = "CSV|COLUMN", requires = "features")]
     pub(crate) groups: Option<String>,
+    /// Frames taken just before each press (or one per session with --groups, or one for all
+    /// rows), same columns as --features: the features become (F - B) / B, or F - B with
+    /// --reference-as difference. A relative change cancels each channel's gain, a difference
+    /// its offset: features that survive a new session. The model remembers it; `et eval`
+    /// then needs the evaluated rows' references too.
+    #[arg(long, value_name = "CSV", requires = "features")]
+    reference_features: Option<PathBuf>,
+    /// How --reference-features is applied.
+    #[arg(long, value_enum, default_value_t = ReferenceArg::Ratio, requires = "reference_features")]
+    reference_as: ReferenceArg,
+}
+
+/// `--reference-as`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum ReferenceArg {
+    /// (F - B) / B.
+    Ratio,
+    /// F - B.
+    Difference,
 }
 
 /// `--unit`.
@@ -79,8 +98,12 @@ impl TableArgs {
                 GroupsFrom::Column(g.clone())
             }
         });
-        let table =
+        let mut table =
             Table::import_grouped(features, self.targets.as_deref(), unit, groups.as_ref())?;
+        if let (Some(b), Some(how)) = (&self.reference_features, self.referencing()) {
+            let reference = et_learn::dataset::read_matrix(b)?;
+            table = table.referenced(&reference, how, &b.display().to_string())?;
+        }
         eprintln!("read {}", table.description);
         Ok(match self.rows {
             Some(r) => {
@@ -92,12 +115,23 @@ impl TableArgs {
         })
     }
 
+    /// How the features are referenced, when they are.
+    fn referencing(&self) -> Option<Referencing> {
+        self.reference_features
+            .as_ref()
+            .map(|_| match self.reference_as {
+                ReferenceArg::Ratio => Referencing::Ratio,
+                ReferenceArg::Difference => Referencing::Difference,
+            })
+    }
+
     fn inputs(&self) -> Vec<&Path> {
         self.features
             .iter()
             .chain(self.targets.iter())
             .map(PathBuf::as_path)
             .chain(self.groups.iter().map(Path::new).filter(|p| p.is_file()))
+            .chain(self.reference_features.iter().map(PathBuf::as_path))
             .collect()
     }
 }
@@ -193,9 +227,10 @@ pub(crate) fn train(
     };
     let trained = trainer.train(Examples::Table(&table), progress);
     bar.finish_and_clear();
-    let Trained::Table(model) = trained? else {
+    let Trained::Table(mut model) = trained? else {
         bail!("a table trains a table model");
     };
+    model.reference = args.referencing();
     output::write(out, |partial| model.save(partial))?;
     let best = model.chosen();
     if json {
@@ -234,9 +269,13 @@ pub(crate) fn train(
             .min_by(|a, b| score(a).total_cmp(&score(b)));
         if let Some(c) = best_of {
             eprintln!(
-                "  {:<13} {}  ({})",
+                "  {:<13} {}{}  ({})",
                 m.name(),
                 describe(c),
+                c.cv_drifted_error_mm.map_or(String::new(), |d| format!(
+                    ", {d:.2} mm if channel gains drift by {:.0} %",
+                    100.0 * tabular::DRIFT_GAIN
+                )),
                 hyper(&c.hyperparameters)
             );
         }
@@ -299,6 +338,22 @@ pub(crate) fn eval(
         output::check(csv, &inputs, force)?;
     }
     let model = TableModel::load(model_path)?;
+    if model.reference != args.referencing() {
+        let said = |r: Option<Referencing>| match r {
+            None => "raw features".to_string(),
+            Some(Referencing::Ratio) => "features relative to --reference-features (ratio)".into(),
+            Some(Referencing::Difference) => {
+                "features minus --reference-features (difference)".into()
+            }
+        };
+        bail!(
+            "{} was trained on {}; these rows would be {}: give the same --reference-features \
+             and --reference-as as in training",
+            model_path.display(),
+            said(model.reference),
+            said(args.referencing())
+        );
+    }
     let table = args.load()?;
     let e = tabular::evaluate(&model, &table).map_err(|e| {
         anyhow::anyhow!(

@@ -186,6 +186,23 @@ impl TableModel {
                     .map_err(|e| format!("mlp: {e}"))?,
                 )
             }
+            Tables::Average { members } => {
+                method_ok(Method::Average)?;
+                if members.len() < 2
+                    || members
+                        .iter()
+                        .any(|m| m.method == Method::Average || m.method.is_classifier())
+                {
+                    return Err("average: two regressors or more, none an average".into());
+                }
+                let models = self.members();
+                for (i, m) in models.iter().enumerate() {
+                    m.ready().map_err(|e| {
+                        format!("average member {} ({}): {e}", i + 1, m.method.name())
+                    })?;
+                }
+                Ready::Average(models)
+            }
             Tables::Knn {
                 k,
                 weighting,
