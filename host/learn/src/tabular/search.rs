@@ -667,8 +667,10 @@ fn best_per_method<'a>(ranked: &[&'a Candidate]) -> Vec<&'a Candidate> {
     out
 }
 
-/// The mean of the best two or three methods' out-of-fold predictions, as a candidate, when
-/// it beats the best single one by [`AVERAGE_GAIN`]; and its members.
+/// The mean of two or three methods' out-of-fold predictions (each method's best candidate;
+/// the set whose mean cross-validates best), as a candidate, when it beats the best single
+/// one by [`AVERAGE_GAIN`]; and its members. Methods that err differently average best, and
+/// they need not be the two best alone.
 fn average_of_best(
     ranked: &[&Candidate],
     t: &[Target3],
@@ -677,9 +679,23 @@ fn average_of_best(
 ) -> Option<(Candidate, Vec<Candidate>)> {
     let bests = best_per_method(ranked);
     let best = bests.first()?.loss();
-    (2..=AVERAGE_MOST.min(bests.len()))
-        .filter_map(|m| {
-            let members: Vec<Candidate> = bests.iter().take(m).map(|&c| c.clone()).collect();
+    // Every set of two or three methods (their best candidates), best first within a set.
+    let k = bests.len();
+    let sets: Vec<Vec<usize>> = (0..k)
+        .flat_map(|a| (a + 1..k).map(move |b| vec![a, b]))
+        .chain(
+            (0..k)
+                .flat_map(|a| (a + 1..k).flat_map(move |b| (b + 1..k).map(move |c| vec![a, b, c]))),
+        )
+        .filter(|set| set.len() <= AVERAGE_MOST)
+        .collect();
+    sets.into_iter()
+        .filter_map(|set| {
+            let m = set.len();
+            let members: Vec<Candidate> = set
+                .iter()
+                .filter_map(|&i| bests.get(i).map(|&c| c.clone()))
+                .collect();
             let predictions: Vec<&Vec<Target3>> = members
                 .iter()
                 .map(|c| c.out_of_fold.as_ref())

@@ -103,7 +103,8 @@ fn every_regressor_learns_the_stand_in_and_survives_its_file() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Auto tries the regressors and keeps the one cross-validation liked best.
+/// Auto tries the regressors and keeps the one cross-validation liked best (an average of
+/// several when that cross-validates best; a steadier one within 5 % of the best, saying so).
 #[test]
 fn auto_keeps_the_best_cross_validated_regressor() {
     let train_rows = STANDIN.select("0..240".parse().unwrap()).unwrap();
@@ -114,8 +115,22 @@ fn auto_keeps_the_best_cross_validated_regressor() {
         .filter_map(|c| c.cv_mean_error_mm.map(|e| (e, c.method)))
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .unwrap();
-    assert_eq!(model.method, best.1);
-    let tried: std::collections::HashSet<Method> = model.search.iter().map(|c| c.method).collect();
+    let chosen = model.chosen().unwrap().cv_mean_error_mm.unwrap();
+    let note = model.note.clone().unwrap_or_default();
+    if model.method == Method::Average {
+        assert_eq!(best.1, Method::Average);
+        assert!(note.contains("average"), "{note}");
+    } else if note.contains("steadier") {
+        assert!(chosen <= best.0 * (1.0 + CLOSE), "{note}");
+    } else {
+        assert_eq!(model.method, best.1);
+    }
+    let tried: std::collections::HashSet<Method> = model
+        .search
+        .iter()
+        .map(|c| c.method)
+        .filter(|&m| m != Method::Average)
+        .collect();
     assert_eq!(tried.len(), 5);
 }
 
