@@ -512,7 +512,7 @@ fn collect_train_eval_export_chain() {
     ]);
     assert!(
         String::from_utf8_lossy(&bad.stderr)
-            .contains("[possible values: qda, lda, ridge, kernel-ridge, knn, gp, auto]")
+            .contains("[possible values: qda, lda, ridge, kernel-ridge, knn, gp, mlp, auto]")
     );
     let bad = et(&[
         "collect",

@@ -393,7 +393,9 @@ impl TableModel {
         self.feature_mean.len()
     }
 
-    /// Predicts every row of `x` (n x p, the training files' units).
+    /// Predicts every row of `x` (n x p, the training files' units). A model trained with
+    /// `per_group` reads rows already standardised per session
+    /// ([`Table::standardised_per_group`]; [`evaluate`] does it).
     ///
     /// # Errors
     /// [`TabularError::Usage`] when `x` has another feature count, or the model's tables are
