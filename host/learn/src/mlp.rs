@@ -178,18 +178,19 @@ impl Moments {
         }
     }
 
-    /// One Adam step of `params` along `grad` (step t from 1).
-    fn step(&mut self, params: &mut [f32], grad: &[f32], lr: f32, t: i32) {
+    /// One Adam step of `params` along `grad` (step t from 1), both in the same order.
+    fn step<'a>(
+        &mut self,
+        params: impl Iterator<Item = &'a mut f32>,
+        grad: impl Iterator<Item = f32>,
+        lr: f32,
+        t: i32,
+    ) {
         const B1: f32 = 0.9;
         const B2: f32 = 0.999;
         const EPS: f32 = 1e-8;
         let lr_t = lr * (1.0 - B2.powi(t)).sqrt() / (1.0 - B1.powi(t));
-        for (((p, g), m), v) in params
-            .iter_mut()
-            .zip(grad)
-            .zip(&mut self.m)
-            .zip(&mut self.v)
-        {
+        for (((p, g), m), v) in params.zip(grad).zip(&mut self.m).zip(&mut self.v) {
             *m = B1 * *m + (1.0 - B1) * g;
             *v = B2 * *v + (1.0 - B2) * g * g;
             *p -= lr_t * *m / (v.sqrt() + EPS);
@@ -197,18 +198,9 @@ impl Moments {
     }
 }
 
-/// The contiguous values of a column-major faer matrix.
-fn values(m: &Mat<f32>) -> Vec<f32> {
-    m.col_iter().flat_map(|c| c.iter().copied()).collect()
-}
-
-fn set_values(m: &mut Mat<f32>, v: &[f32]) {
-    let rows = m.nrows();
-    for (j, col) in m.col_iter_mut().enumerate() {
-        for (i, x) in col.iter_mut().enumerate() {
-            *x = v.get(j * rows + i).copied().unwrap_or(0.0);
-        }
-    }
+/// The values of a matrix, column by column (its storage order).
+fn values(m: &Mat<f32>) -> impl Iterator<Item = f32> + '_ {
+    m.col_iter().flat_map(|c| c.iter().copied())
 }
 
 impl Mlp {
@@ -555,10 +547,18 @@ fn train_one(
                     d
                 });
                 let (mw, mb) = moments.get_mut(l)?;
-                let mut wv = values(w);
-                mw.step(&mut wv, &values(&gw), opts.learning_rate, step);
-                set_values(w, &wv);
-                mb.step(bias, &gb, opts.learning_rate, step);
+                mw.step(
+                    w.col_iter_mut().flat_map(|c| c.iter_mut()),
+                    values(&gw),
+                    opts.learning_rate,
+                    step,
+                );
+                mb.step(
+                    bias.iter_mut(),
+                    gb.iter().copied(),
+                    opts.learning_rate,
+                    step,
+                );
                 if let Some(d) = below {
                     delta = d;
                 }

@@ -189,6 +189,8 @@ pub enum Referencing {
 /// Progress of a long training: (what, done, of).
 pub type Progress<'a> = &'a mut dyn FnMut(&str, usize, usize);
 
+mod choose;
+mod classify;
 mod evaluate;
 mod model;
 mod search;
@@ -196,6 +198,8 @@ mod table;
 #[cfg(test)]
 mod tests;
 
+pub use choose::*;
+use classify::*;
 pub use evaluate::*;
 pub use model::*;
 pub use search::*;

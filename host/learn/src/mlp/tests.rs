@@ -119,7 +119,7 @@ fn the_same_seed_trains_the_same_network_and_a_larger_penalty_shrinks_the_weight
     let norm = |m: &Mlp| -> f64 {
         m.layers
             .iter()
-            .flat_map(|(w, _)| values(w))
+            .flat_map(|(w, _)| values(w).collect::<Vec<_>>())
             .map(|v| f64::from(v).powi(2))
             .sum()
     };

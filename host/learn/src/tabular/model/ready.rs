@@ -3,6 +3,39 @@
 use super::*;
 
 impl TableModel {
+    /// An average's regressors as models of their own (empty for any other model).
+    #[must_use]
+    pub fn members(&self) -> Vec<TableModel> {
+        let Tables::Average { members } = &self.tables else {
+            return Vec::new();
+        };
+        members
+            .iter()
+            .map(|m| TableModel {
+                format: self.format.clone(),
+                version: self.version,
+                method: m.method,
+                feature_names: self.feature_names.clone(),
+                feature_mean: m.feature_mean.clone(),
+                feature_scale: m.feature_scale.clone(),
+                unit: self.unit,
+                third: self.third.clone(),
+                classes: None,
+                hyperparameters: m.hyperparameters.clone(),
+                search: Vec::new(),
+                cv_folds: self.cv_folds,
+                cv_scheme: self.cv_scheme,
+                trained_rows: self.trained_rows,
+                source: String::new(),
+                fit_seconds: 0.0,
+                per_group: false,
+                reference: None,
+                note: None,
+                tables: m.tables.clone(),
+            })
+            .collect()
+    }
+
     /// Rebuilds the fitted model, checking every table's shape.
     pub(super) fn ready(&self) -> Result<Ready, String> {
         let p = self.features();

@@ -1,0 +1,172 @@
+//! How `auto` chooses among the searched candidates beyond the lowest cross-validated error:
+//! the steadiest of the close ones without groups, and the average of several methods when
+//! it cross-validates better.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// Contiguous blocks of rows over which a candidate's error is checked for steadiness when the
+/// rows have no groups.
+pub const STABILITY_BLOCKS: usize = 5;
+/// Candidates whose cross-validated error is within this share of the best are close: without
+/// groups, `auto` takes the steadiest of them over [`STABILITY_BLOCKS`].
+pub const CLOSE: f64 = 0.05;
+
+/// `auto` averages at most this many methods ...
+pub const AVERAGE_MOST: usize = 3;
+/// ... and keeps the average when its cross-validated error is this share below the best
+/// single method's.
+pub const AVERAGE_GAIN: f64 = 0.02;
+
+/// Without groups: among the best of each method within [`CLOSE`] of the best error, the one
+/// whose error varies least over the recording's blocks, with why, when it is not the best.
+pub(super) fn steadiest_close<'a>(ranked: &[&'a Candidate]) -> Option<(&'a Candidate, String)> {
+    let best = *ranked.first()?;
+    if best.method.is_classifier() {
+        return None;
+    }
+    let mut per_method: Vec<&Candidate> = Vec::new();
+    for c in ranked {
+        if !per_method.iter().any(|p| p.method == c.method) {
+            per_method.push(c);
+        }
+    }
+    let steadiest = per_method
+        .iter()
+        .filter(|c| c.loss() <= best.loss() * (1.0 + CLOSE))
+        .min_by(|a, b| a.block_spread_mm().total_cmp(&b.block_spread_mm()))?;
+    (steadiest.method != best.method && steadiest.block_spread_mm() < best.block_spread_mm()).then(
+        || {
+            (
+                *steadiest,
+                format!(
+                    "{} ({:.2} mm) is within {:.0} % of {} ({:.2} mm) and steadier over the \
+                     recording's {} blocks (their errors vary by {:.2} mm against {:.2}): chose {}",
+                    steadiest.method.name(),
+                    steadiest.loss(),
+                    100.0 * CLOSE,
+                    best.method.name(),
+                    best.loss(),
+                    STABILITY_BLOCKS,
+                    steadiest.block_spread_mm(),
+                    best.block_spread_mm(),
+                    steadiest.method.name()
+                ),
+            )
+        },
+    )
+}
+
+/// The best candidate of each regression method, best first.
+pub(super) fn best_per_method<'a>(ranked: &[&'a Candidate]) -> Vec<&'a Candidate> {
+    let mut out: Vec<&Candidate> = Vec::new();
+    for c in ranked {
+        if !c.method.is_classifier() && !out.iter().any(|p| p.method == c.method) {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The mean of two or three methods' out-of-fold predictions (each method's best candidate;
+/// the set whose mean cross-validates best), as a candidate, when it beats the best single
+/// one by [`AVERAGE_GAIN`]; and its members. Methods that err differently average best, and
+/// they need not be the two best alone.
+pub(super) fn average_of_best(
+    ranked: &[&Candidate],
+    t: &[Target3],
+    fold: &[usize],
+    grouped: bool,
+) -> Option<(Candidate, Vec<Candidate>)> {
+    let bests = best_per_method(ranked);
+    let best = bests.first()?.loss();
+    // Every set of two or three methods (their best candidates), best first within a set.
+    let k = bests.len();
+    let sets: Vec<Vec<usize>> = (0..k)
+        .flat_map(|a| (a + 1..k).map(move |b| vec![a, b]))
+        .chain(
+            (0..k)
+                .flat_map(|a| (a + 1..k).flat_map(move |b| (b + 1..k).map(move |c| vec![a, b, c]))),
+        )
+        .filter(|set| set.len() <= AVERAGE_MOST)
+        .collect();
+    sets.into_iter()
+        .filter_map(|set| {
+            let m = set.len();
+            let members: Vec<Candidate> = set
+                .iter()
+                .filter_map(|&i| bests.get(i).map(|&c| c.clone()))
+                .collect();
+            let predictions: Vec<&Vec<Target3>> = members
+                .iter()
+                .map(|c| c.out_of_fold.as_ref())
+                .collect::<Option<_>>()?;
+            let mean: Vec<Target3> = (0..t.len())
+                .map(|r| {
+                    let mut s = [0.0; 3];
+                    for p in &predictions {
+                        let q = p.get(r).copied().unwrap_or([0.0; 3]);
+                        s = [s[0] + q[0], s[1] + q[1], s[2] + q[2]];
+                    }
+                    s.map(|v| v / m as f64)
+                })
+                .collect();
+            let error = mean_error(&mean, t);
+            let drifted: Option<f64> = members
+                .iter()
+                .map(|c| c.cv_drifted_error_mm)
+                .sum::<Option<f64>>()
+                .map(|s| s / m as f64);
+            let mean = Some(mean);
+            Some((
+                Candidate {
+                    method: Method::Average,
+                    hyperparameters: params(&[("members", m as f64)]),
+                    cv_mean_error_mm: Some(error),
+                    cv_block_errors_mm: block_errors(&mean, t, fold, grouped),
+                    // The members' mean: an upper bound of the average's (the error of a mean
+                    // is at most the mean of the errors).
+                    cv_drifted_error_mm: drifted,
+                    cv_accuracy: None,
+                    out_of_fold: None,
+                },
+                members,
+            ))
+        })
+        .filter(|(c, _)| c.loss() < best * (1.0 - AVERAGE_GAIN))
+        .min_by(|a, b| a.0.loss().total_cmp(&b.0.loss()))
+}
+
+/// The mean error of each fold's rows (`grouped`: folds are groups), else of each of
+/// [`STABILITY_BLOCKS`] contiguous blocks of rows, mm; None when a prediction is missing.
+pub(super) fn block_errors(
+    pred: &Option<Vec<Target3>>,
+    t: &[Target3],
+    fold: &[usize],
+    grouped: bool,
+) -> Option<Vec<f64>> {
+    let pred = pred.as_ref()?;
+    let n = t.len();
+    let of = |r: usize| {
+        if grouped {
+            fold.get(r).copied().unwrap_or(0)
+        } else {
+            r * STABILITY_BLOCKS / n.max(1)
+        }
+    };
+    let blocks = (0..n).map(of).max().map_or(0, |m| m + 1);
+    let mut sum = vec![(0.0, 0usize); blocks];
+    for (r, (p, q)) in pred.iter().zip(t).enumerate() {
+        if let Some(s) = sum.get_mut(of(r)) {
+            *s = (s.0 + (p[0] - q[0]).hypot(p[1] - q[1]), s.1 + 1);
+        }
+    }
+    Some(
+        sum.iter()
+            .filter(|s| s.1 > 0)
+            .map(|s| s.0 / s.1 as f64)
+            .collect(),
+    )
+}

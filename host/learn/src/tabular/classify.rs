@@ -1,0 +1,189 @@
+//! The classifiers' search: every shrinkage of QDA or LDA scored by cross-validation.
+
+// Reads untrusted bytes (a file): no unwrap, expect or unchecked indexing.
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use super::*;
+
+/// The classes of a table: its labels, or the grid cells of its positions (cells without
+/// rows dropped), with each class's position where known.
+pub(super) fn class_targets(
+    table: &Table,
+    grid: Option<(usize, usize)>,
+) -> Result<Option<(Labels, ClassInfo)>, TabularError> {
+    if let Some((rows, cols)) = grid {
+        let p = table.positions_mm.as_ref().ok_or_else(|| {
+            usage("--grid makes classes from positions: the targets need x and y columns")
+        })?;
+        if rows == 0 || cols == 0 {
+            return Err(usage("--grid: at least 1x1"));
+        }
+        let g = Grid::over(p, rows, cols);
+        let cells: Vec<usize> = p.iter().map(|&q| g.cell(q)).collect();
+        let mut used: Vec<usize> = cells.clone();
+        used.sort_unstable();
+        used.dedup();
+        let of: BTreeMap<usize, u16> = used
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| (c, i as u16))
+            .collect();
+        let labels = Labels {
+            index: cells
+                .iter()
+                .map(|c| of.get(c).copied().unwrap_or(0))
+                .collect(),
+            names: used.iter().map(|&c| g.name(c)).collect(),
+        };
+        let info = ClassInfo {
+            names: labels.names.clone(),
+            centres_mm: Some(used.iter().map(|&c| g.centre(c)).collect()),
+            grid: Some(g),
+        };
+        return Ok(Some((labels, info)));
+    }
+    let Some(text) = &table.labels else {
+        return Ok(None);
+    };
+    let labels = Labels::from_text(text)?;
+    let centres_mm = table.positions_mm.as_ref().map(|p| {
+        let mut sum = vec![[0.0, 0.0, 0.0]; labels.names.len()];
+        for (&c, q) in labels.index.iter().zip(p) {
+            if let Some(s) = sum.get_mut(usize::from(c)) {
+                *s = [s[0] + q[0], s[1] + q[1], s[2] + 1.0];
+            }
+        }
+        sum.iter()
+            .map(|s| [s[0] / s[2].max(1.0), s[1] / s[2].max(1.0)])
+            .collect()
+    });
+    let info = ClassInfo {
+        names: labels.names.clone(),
+        centres_mm,
+        grid: None,
+    };
+    Ok(Some((labels, info)))
+}
+
+/// Every shrinkage of QDA or LDA, scored by cross-validation (accuracy; and the mean distance
+/// from the true position to the predicted class's position when the rows have positions).
+pub(super) fn search_classifier(
+    table: &Table,
+    method: Method,
+    labels: &Labels,
+    fold: &[usize],
+    progress: Progress<'_>,
+) -> Result<Vec<Candidate>, TabularError> {
+    let classes = labels.names.len();
+    if classes < 2 {
+        return Err(usage(format!(
+            "one class ('{}') only: nothing to tell apart; give rows of at least two classes",
+            labels.names.first().map_or("", String::as_str)
+        )));
+    }
+
+    let kind = discriminant(method);
+    let what = format!(
+        "cross-validating {} ({} shrinkages)",
+        method.name(),
+        SHRINKAGES.len()
+    );
+    let mut out = Vec::new();
+    for (i, &lambda) in SHRINKAGES.iter().enumerate() {
+        progress(&what, i, SHRINKAGES.len());
+        let fit = FitOptions {
+            kind,
+            shrinkage: lambda,
+            // Toward the diagonal when a class has fewer rows than features.
+            target: shrink_target(table.x.ncols(), labels),
+        };
+        let conf = match cross_validate_fast(&table.x, &labels.index, classes, &fit, fold) {
+            Ok(conf) => Some(conf),
+            // A fold whose training rows lack some class (blocks of a recording): fit on the
+            // classes present, and count the absent class's rows as missed.
+            Err(FitError::EmptyClass { .. }) => cv_present_classes(&table.x, labels, &fit, fold),
+            // A singular fit: the candidate scores nothing.
+            Err(_) => None,
+        };
+        out.push(Candidate {
+            method,
+            hyperparameters: params(&[("shrinkage", lambda)]),
+            cv_mean_error_mm: None,
+            cv_block_errors_mm: None,
+            cv_drifted_error_mm: None,
+            cv_accuracy: conf.as_ref().map(Confusion::accuracy),
+            out_of_fold: None,
+        });
+    }
+    progress(&what, SHRINKAGES.len(), SHRINKAGES.len());
+    Ok(out)
+}
+
+/// QDA shrinks toward the pooled covariance, unless some class has no more rows than
+/// features (then toward the diagonal, which needs no pooled estimate of full rank).
+pub(super) fn shrink_target(p: usize, labels: &Labels) -> Target {
+    if labels.index.len() <= p + labels.names.len() {
+        Target::Diagonal
+    } else {
+        Target::Pooled
+    }
+}
+
+pub(super) fn discriminant(method: Method) -> ModelKind {
+    if method == Method::Lda {
+        ModelKind::Lda
+    } else {
+        ModelKind::Qda
+    }
+}
+
+/// Cross-validation where a fold's training rows may lack classes: each fold fits on the
+/// classes it has (relabelled), and held-out rows of a class it lacks count as missed. None
+/// when a fold cannot be fitted.
+pub(super) fn cv_present_classes(
+    x: &DMatrix<f64>,
+    labels: &Labels,
+    fit: &FitOptions,
+    fold: &[usize],
+) -> Option<Confusion> {
+    let classes = labels.names.len();
+    let k = fold.iter().max().map_or(0, |m| m + 1);
+    let mut conf = Confusion::new(classes);
+    for f in 0..k {
+        let train: Vec<usize> = (0..x.nrows())
+            .filter(|&r| fold.get(r) != Some(&f))
+            .collect();
+        let test: Vec<usize> = (0..x.nrows())
+            .filter(|&r| fold.get(r) == Some(&f))
+            .collect();
+        let y = |r: usize| labels.index.get(r).copied().unwrap_or(0);
+        let mut present: Vec<u16> = train.iter().map(|&r| y(r)).collect();
+        present.sort_unstable();
+        present.dedup();
+        if present.len() < 2 {
+            return None;
+        }
+        let local: BTreeMap<u16, u16> = present
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| (c, i as u16))
+            .collect();
+        let yt: Vec<u16> = train
+            .iter()
+            .map(|&r| local.get(&y(r)).copied().unwrap_or(0))
+            .collect();
+        let model = Fitted::fit(&rows_of(x, &train), &yt, present.len(), fit).ok()?;
+        let mut row = vec![0.0; x.ncols()];
+        for &r in &test {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = x[(r, j)];
+            }
+            let predicted = present
+                .get(usize::from(model.predict(&row)))
+                .copied()
+                .unwrap_or(0);
+            conf.add(y(r), predicted);
+        }
+    }
+    Some(conf)
+}
