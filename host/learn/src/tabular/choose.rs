@@ -22,7 +22,10 @@ pub const AVERAGE_GAIN: f64 = 0.02;
 
 /// Without groups: among the best of each method within [`CLOSE`] of the best error, the one
 /// whose error varies least over the recording's blocks, with why, when it is not the best.
-pub(super) fn steadiest_close<'a>(ranked: &[&'a Candidate]) -> Option<(&'a Candidate, String)> {
+pub(super) fn steadiest_close<'a>(
+    ranked: &[&'a Candidate],
+    by_drift: bool,
+) -> Option<(&'a Candidate, String)> {
     let best = *ranked.first()?;
     if best.method.is_classifier() {
         return None;
@@ -35,7 +38,7 @@ pub(super) fn steadiest_close<'a>(ranked: &[&'a Candidate]) -> Option<(&'a Candi
     }
     let steadiest = per_method
         .iter()
-        .filter(|c| c.loss() <= best.loss() * (1.0 + CLOSE))
+        .filter(|c| c.choice_loss(by_drift) <= best.choice_loss(by_drift) * (1.0 + CLOSE))
         .min_by(|a, b| a.block_spread_mm().total_cmp(&b.block_spread_mm()))?;
     (steadiest.method != best.method && steadiest.block_spread_mm() < best.block_spread_mm()).then(
         || {
@@ -45,10 +48,10 @@ pub(super) fn steadiest_close<'a>(ranked: &[&'a Candidate]) -> Option<(&'a Candi
                     "{} ({:.2} mm) is within {:.0} % of {} ({:.2} mm) and steadier over the \
                      recording's {} blocks (their errors vary by {:.2} mm against {:.2}): chose {}",
                     steadiest.method.name(),
-                    steadiest.loss(),
+                    steadiest.choice_loss(by_drift),
                     100.0 * CLOSE,
                     best.method.name(),
-                    best.loss(),
+                    best.choice_loss(by_drift),
                     STABILITY_BLOCKS,
                     steadiest.block_spread_mm(),
                     best.block_spread_mm(),
@@ -79,9 +82,10 @@ pub(super) fn average_of_best(
     t: &[Target3],
     fold: &[usize],
     grouped: bool,
+    by_drift: bool,
 ) -> Option<(Candidate, Vec<Candidate>)> {
     let bests = best_per_method(ranked);
-    let best = bests.first()?.loss();
+    let best = bests.first()?.choice_loss(by_drift);
     // Every set of two or three methods (their best candidates), best first within a set.
     let k = bests.len();
     let sets: Vec<Vec<usize>> = (0..k)
@@ -94,49 +98,73 @@ pub(super) fn average_of_best(
         .collect();
     sets.into_iter()
         .filter_map(|set| {
-            let m = set.len();
             let members: Vec<Candidate> = set
                 .iter()
                 .filter_map(|&i| bests.get(i).map(|&c| c.clone()))
                 .collect();
-            let predictions: Vec<&Vec<Target3>> = members
+            let predictions: Vec<&[Vec<Target3>; 2]> = members
                 .iter()
                 .map(|c| c.out_of_fold.as_ref())
                 .collect::<Option<_>>()?;
-            let mean: Vec<Target3> = (0..t.len())
-                .map(|r| {
-                    let mut s = [0.0; 3];
-                    for p in &predictions {
-                        let q = p.get(r).copied().unwrap_or([0.0; 3]);
-                        s = [s[0] + q[0], s[1] + q[1], s[2] + q[2]];
-                    }
-                    s.map(|v| v / m as f64)
-                })
-                .collect();
-            let error = mean_error(&mean, t);
-            let drifted: Option<f64> = members
-                .iter()
-                .map(|c| c.cv_drifted_error_mm)
-                .sum::<Option<f64>>()
-                .map(|s| s / m as f64);
-            let mean = Some(mean);
+            // The members' mean prediction of each row, as measured (0) and drifted (1).
+            let mean = |which: usize| -> Vec<Target3> {
+                (0..t.len())
+                    .map(|r| {
+                        let mut s = [0.0; 3];
+                        for p in &predictions {
+                            let q = p
+                                .get(which)
+                                .and_then(|v| v.get(r))
+                                .copied()
+                                .unwrap_or([0.0; 3]);
+                            s = [s[0] + q[0], s[1] + q[1], s[2] + q[2]];
+                        }
+                        s.map(|v| v / predictions.len() as f64)
+                    })
+                    .collect()
+            };
+            let (measured, drifted) = (mean(0), mean(1));
             Some((
                 Candidate {
                     method: Method::Average,
-                    hyperparameters: params(&[("members", m as f64)]),
-                    cv_mean_error_mm: Some(error),
-                    cv_block_errors_mm: block_errors(&mean, t, fold, grouped),
-                    // The members' mean: an upper bound of the average's (the error of a mean
-                    // is at most the mean of the errors).
-                    cv_drifted_error_mm: drifted,
+                    hyperparameters: params(&[("members", members.len() as f64)]),
+                    cv_mean_error_mm: Some(mean_error(&measured, t)),
+                    cv_block_errors_mm: block_errors(&Some(measured), t, fold, grouped),
+                    cv_drifted_error_mm: Some(mean_error(&drifted, t)),
                     cv_accuracy: None,
                     out_of_fold: None,
                 },
                 members,
             ))
         })
-        .filter(|(c, _)| c.loss() < best * (1.0 - AVERAGE_GAIN))
-        .min_by(|a, b| a.0.loss().total_cmp(&b.0.loss()))
+        .filter(|(c, _)| c.choice_loss(by_drift) < best * (1.0 - AVERAGE_GAIN))
+        .min_by(|a, b| {
+            a.0.choice_loss(by_drift)
+                .total_cmp(&b.0.choice_loss(by_drift))
+        })
+}
+
+/// When ranking `by_drift` put first another method than the lowest plain cross-validated
+/// error would have, a note that says so and why.
+pub(super) fn drift_note(ranked: &[&Candidate], by_drift: bool) -> Option<String> {
+    let chosen = *ranked.first()?;
+    let plain = ranked.iter().min_by(|a, b| a.loss().total_cmp(&b.loss()))?;
+    (by_drift && !chosen.method.is_classifier() && plain.method != chosen.method).then(|| {
+        format!(
+            "{} cross-validates best ({:.2} mm) but its error grows to {:.2} mm when the held-out \
+             rows' channels drift as between sessions (gain {:.0} %, level {:.2} of each \
+             channel's spread); {} holds better ({:.2} mm, {:.2} mm drifted): chose by the \
+             drifted error, as nothing in rows without --groups shows a new session",
+            plain.method.name(),
+            plain.loss(),
+            plain.choice_loss(true),
+            100.0 * DRIFT_GAIN,
+            DRIFT_OFFSET,
+            chosen.method.name(),
+            chosen.loss(),
+            chosen.choice_loss(true),
+        )
+    })
 }
 
 /// The mean error of each fold's rows (`grouped`: folds are groups), else of each of

@@ -21,14 +21,14 @@ pub struct Candidate {
     /// the error is over the recording.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_block_errors_mm: Option<Vec<f64>>,
-    /// Regressors: the cross-validated mean error with the held-out rows' channel gains changed
-    /// ([`DRIFT_GAIN`]), mm: how the candidate would take a new session's drift.
+    /// Regressors: the cross-validated mean error with the held-out rows' channels drifted
+    /// ([`DRIFT_GAIN`], [`DRIFT_OFFSET`]), mm: how the candidate would take a new session.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_drifted_error_mm: Option<f64>,
-    /// Regressors, during training only: the out-of-fold prediction of every row (for the
-    /// average of the best candidates).
+    /// Regressors, during training only: the out-of-fold prediction of every row, as measured
+    /// and drifted (for the average of the best candidates).
     #[serde(skip)]
-    pub(super) out_of_fold: Option<Vec<Target3>>,
+    pub(super) out_of_fold: Option<[Vec<Target3>; 2]>,
 }
 
 impl Candidate {
@@ -38,6 +38,17 @@ impl Candidate {
             1.0 - self.cv_accuracy.unwrap_or(0.0)
         } else {
             self.cv_mean_error_mm.unwrap_or(f64::INFINITY)
+        }
+    }
+
+    /// What `auto` minimises: [`Self::loss`], or for a regressor chosen `by_drift` its error
+    /// with the held-out channels drifted (infinite when it has none).
+    #[must_use]
+    pub fn choice_loss(&self, by_drift: bool) -> f64 {
+        if by_drift && !self.method.is_classifier() {
+            self.cv_drifted_error_mm.unwrap_or(f64::INFINITY)
+        } else {
+            self.loss()
         }
     }
 
@@ -192,6 +203,11 @@ pub struct TableModel {
     pub source: String,
     /// Seconds the training took (search and final fit).
     pub fit_seconds: f64,
+    /// Whether the regressor and its hyperparameters were chosen by the cross-validated error
+    /// with the held-out rows' channels drifted ([`Candidate::cv_drifted_error_mm`]), as they
+    /// are without groups, rather than by the plain cross-validated error.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub chosen_by_drift: bool,
     /// Whether each group's features were standardised by the group's own statistics (then
     /// evaluation does the same to each group of the rows it scores).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]

@@ -29,18 +29,36 @@ pub(super) const GP_SEARCH: GpOptions = GpOptions {
     ..GP
 };
 
-/// The held-out rows are also predicted with each channel's gain changed by this standard
-/// deviation (10 %: contacts and amplifier paths between sessions), which scores how a
-/// candidate would take a new session's drift ([`Candidate::cv_drifted_error_mm`]).
+/// The held-out rows are also predicted as a later session might measure them: each
+/// channel's gain changed by this standard deviation (10 %: contacts and amplifier paths) ...
 pub const DRIFT_GAIN: f64 = 0.1;
+/// ... and its level shifted by this share of the channel's spread (a quarter: the sheet
+/// settled, a reference frame gone stale), which scores how a candidate would take a new
+/// session's drift ([`Candidate::cv_drifted_error_mm`]).
+pub const DRIFT_OFFSET: f64 = 0.25;
 
-/// `x` with each column's gain changed by a factor 1 + `sd` N(0, 1), drawn from `seed`.
+/// `x` as a drifted session measures it: each column `j` times 1 + `gain` N(0, 1), plus
+/// `offset` `spread[j]` N(0, 1), drawn from `seed`; `spread` is each column's standard
+/// deviation (in the learning rows, so the held-out rows' own spread is not peeked at).
 #[must_use]
-pub fn gain_drifted(x: &DMatrix<f64>, sd: f64, seed: u64) -> DMatrix<f64> {
+pub fn drifted(
+    x: &DMatrix<f64>,
+    spread: &[f64],
+    gain: f64,
+    offset: f64,
+    seed: u64,
+) -> DMatrix<f64> {
     let mut rng = et_core::rng::Rng::new(seed);
-    let gains: Vec<f64> = (0..x.ncols()).map(|_| 1.0 + sd * rng.normal()).collect();
+    let shift: Vec<(f64, f64)> = (0..x.ncols())
+        .map(|j| {
+            let g = 1.0 + gain * rng.normal();
+            let o = offset * spread.get(j).copied().unwrap_or(0.0) * rng.normal();
+            (g, o)
+        })
+        .collect();
     DMatrix::from_fn(x.nrows(), x.ncols(), |r, j| {
-        x[(r, j)] * gains.get(j).copied().unwrap_or(1.0)
+        let (g, o) = shift.get(j).copied().unwrap_or((1.0, 0.0));
+        x[(r, j)] * g + o
     })
 }
 
@@ -172,35 +190,49 @@ pub fn train(
         search.extend(found);
     }
     // Best first; a candidate whose fit on every row fails (a covariance that cross-validated
-    // but is singular on the whole set) gives way to the next.
+    // but is singular on the whole set) gives way to the next. Without groups nothing in the
+    // rows shows a new session, so regressors are ranked by their error with the held-out
+    // channels drifted: a model that latches onto a few channels, or needs every channel as it
+    // was, loses there what it would lose on a new session.
+    let by_drift = !grouped;
     let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
-    ranked.sort_by(|a, b| a.loss().total_cmp(&b.loss()));
+    ranked.sort_by(|a, b| a.choice_loss(by_drift).total_cmp(&b.choice_loss(by_drift)));
     let mut notes: Vec<String> = Vec::new();
+    if let Some(note) = drift_note(&ranked, by_drift) {
+        notes.push(note);
+    }
     if !grouped
         && choice == Choice::Auto
-        && let Some(steadier) = steadiest_close(&ranked)
+        && let Some(steadier) = steadiest_close(&ranked, by_drift)
     {
         notes.push(steadier.1);
         ranked.insert(0, steadier.0);
     }
     let average = match (&targets, choice) {
         (Some(t), Choice::Auto) if opts.grid.is_none() => {
-            average_of_best(&ranked, t, &fold_of(None), grouped)
+            average_of_best(&ranked, t, &fold_of(None), grouped, by_drift)
         }
         _ => None,
     };
     let members = average.as_ref().map_or(Vec::new(), |(_, m)| m.clone());
     if let Some((avg, members)) = &average {
         notes.push(format!(
-            "the mean of {}'s predictions cross-validated at {:.2} mm against {:.2} for {} \
+            "the mean of {}'s predictions cross-validated at {:.2} mm{} against {:.2} for {} \
              alone: chose their average",
             members
                 .iter()
                 .map(|c| c.method.name())
                 .collect::<Vec<_>>()
                 .join(", "),
-            avg.loss(),
-            members.first().map_or(f64::NAN, Candidate::loss),
+            avg.choice_loss(by_drift),
+            if by_drift {
+                " with channels drifted"
+            } else {
+                ""
+            },
+            members
+                .first()
+                .map_or(f64::NAN, |c| c.choice_loss(by_drift)),
             members.first().map_or("", |c| c.method.name())
         ));
     }
@@ -291,6 +323,7 @@ pub fn train(
         trained_rows: [table.first_row, table.first_row + n],
         source: table.description.clone(),
         fit_seconds: started.elapsed().as_secs_f64(),
+        chosen_by_drift: by_drift && !best.method.is_classifier(),
         note: {
             notes.extend(lda_note);
             (!notes.is_empty()).then(|| notes.join("; "))
@@ -441,8 +474,14 @@ pub(super) fn search_regressor(
         let (xt, xv) = (rows_of(x, &train), rows_of(x, &test));
         let tt: Vec<Target3> = train.iter().filter_map(|&r| t.get(r).copied()).collect();
         // The held-out rows as measured, and as a session later might measure them: each
-        // channel's gain changed (drawn per fold).
-        let sets = [xv.clone(), gain_drifted(&xv, DRIFT_GAIN, seed_of(f))];
+        // channel's gain and level changed (drawn per fold).
+        let spread: Vec<f64> = (0..xt.ncols())
+            .map(|j| xt.column(j).variance().sqrt())
+            .collect();
+        let sets = [
+            xv.clone(),
+            drifted(&xv, &spread, DRIFT_GAIN, DRIFT_OFFSET, seed_of(f)),
+        ];
         let fold_pred: Vec<Option<[Vec<Target3>; 2]>> = match method {
             Method::Ridge => Ridge::fit_path(&xt, &tt, &RIDGE_LAMBDAS)?
                 .into_iter()
@@ -538,7 +577,7 @@ pub(super) fn search_regressor(
                     .map(|p| mean_error(p, t))
                     .filter(|e| e.is_finite()),
                 cv_accuracy: None,
-                out_of_fold: p_all,
+                out_of_fold: p_all.zip(q_all).map(|(p, q)| [p, q]),
             }
         })
         .collect())

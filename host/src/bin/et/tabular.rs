@@ -196,8 +196,9 @@ pub(crate) fn train(
     match table.group_index() {
         None => eprintln!(
             "note: no --groups: every row is taken as one session, and nothing in the data can \
-             show how a model holds on a new session (sensors drift between sessions: give \
-             --groups to choose by leaving a session out)"
+             show how a model holds on a new session; sensors drift between sessions, so \
+             positions are predicted by the model that cross-validates best with each channel's \
+             gain and level drifted (give --groups to choose by leaving a session out)"
         ),
         Some((_, names)) if names.len() < 2 => eprintln!(
             "note: one group ('{}') only: nothing in the data can show how a model holds on a \
@@ -244,6 +245,8 @@ pub(crate) fn train(
                 "cv_scheme": model.cv_scheme,
                 "cv_mean_error_mm": best.and_then(|b| b.cv_mean_error_mm),
                 "cv_accuracy": best.and_then(|b| b.cv_accuracy),
+                "cv_drifted_error_mm": best.and_then(|b| b.cv_drifted_error_mm),
+                "chosen_by_drift": model.chosen_by_drift,
                 "candidates": model.search,
                 "rows": model.trained_rows,
                 "features": model.features(),
@@ -266,22 +269,23 @@ pub(crate) fn train(
             .search
             .iter()
             .filter(|c| c.method == *m)
-            .min_by(|a, b| score(a).total_cmp(&score(b)));
+            .min_by(|a, b| {
+                let by = model.chosen_by_drift;
+                a.choice_loss(by).total_cmp(&b.choice_loss(by))
+            });
         if let Some(c) = best_of {
             eprintln!(
                 "  {:<13} {}{}  ({})",
                 m.name(),
                 describe(c),
-                c.cv_drifted_error_mm.map_or(String::new(), |d| format!(
-                    ", {d:.2} mm if channel gains drift by {:.0} %",
-                    100.0 * tabular::DRIFT_GAIN
-                )),
+                c.cv_drifted_error_mm
+                    .map_or(String::new(), |d| format!(", {d:.2} mm if channels drift")),
                 hyper(&c.hyperparameters)
             );
         }
     }
     eprintln!(
-        "trained {} on rows {}..{} ({} features{}), {}-fold {} cross-validation {}; chose {}; \
+        "trained {} on rows {}..{} ({} features{}), {}-fold {} cross-validation {}{}; chose {}; \
          {:.1} s; wrote {}",
         model.method.name(),
         model.trained_rows[0],
@@ -294,6 +298,11 @@ pub(crate) fn train(
         model.cv_folds,
         model.cv_scheme.said(),
         best.map_or("-".into(), describe),
+        best.and_then(|b| b.cv_drifted_error_mm)
+            .filter(|_| model.chosen_by_drift)
+            .map_or(String::new(), |d| format!(
+                " ({d:.2} mm with channels drifted)"
+            )),
         hyper(&model.hyperparameters),
         model.fit_seconds,
         out.display()
@@ -302,14 +311,6 @@ pub(crate) fn train(
 }
 
 /// Smaller is better.
-fn score(c: &tabular::Candidate) -> f64 {
-    match (c.cv_mean_error_mm, c.cv_accuracy) {
-        (_, Some(a)) => 1.0 - a,
-        (Some(e), None) => e,
-        (None, None) => f64::INFINITY,
-    }
-}
-
 fn describe(c: &tabular::Candidate) -> String {
     match (c.cv_mean_error_mm, c.cv_accuracy) {
         (_, Some(a)) => format!("accuracy {:.1} %", 100.0 * a),

@@ -28,6 +28,7 @@ impl TableModel {
                 trained_rows: self.trained_rows,
                 source: String::new(),
                 fit_seconds: 0.0,
+                chosen_by_drift: false,
                 per_group: false,
                 reference: None,
                 note: None,
