@@ -8,6 +8,12 @@ Make the stand-in and run (one BLAS thread, one core):
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 \
         python host/learn/benches/tabular_sklearn.py /tmp/si [--kinds ridge,knn,...]
 
+Other rows and features (the drifting stand-in's one-session case: train on session 1, test on
+session 2, features referenced as (pressed - before) / before, as `et --reference-features`):
+
+    python host/learn/benches/tabular_sklearn.py /tmp/sd --features pressed.csv \
+        --before before.csv --train 0..500 --test 500..1000
+
 Prints one row per kind: the search + fit time, the time to predict the 500 test rows, and the
 test rows' mean / median / 90th-percentile position error in mm (x, y; targets are in metres).
 """
@@ -70,15 +76,26 @@ def candidates(features, median):
     }
 
 
+def flag(name, default):
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
+def rows(text):
+    a, b = text.split("..")
+    return slice(int(a), int(b))
+
+
 def main():
     folder = sys.argv[1] if len(sys.argv) > 1 else "/tmp/si"
-    kinds = ["ridge", "kernel-ridge", "knn", "mlp"]
-    if "--kinds" in sys.argv:
-        kinds = sys.argv[sys.argv.index("--kinds") + 1].split(",")
-    x = load(f"{folder}/features.csv")
+    kinds = flag("--kinds", "ridge,kernel-ridge,knn,mlp").split(",")
+    x = load(f"{folder}/{flag('--features', 'features.csv')}")
+    if "--before" in sys.argv:
+        before = load(f"{folder}/{flag('--before', '')}")
+        x = (x - before) / before
     t = load(f"{folder}/targets.csv") * 1000.0  # m -> mm
-    train, test = slice(0, 2000), slice(2000, 2500)
-    print(f"{x.shape[0]} rows x {x.shape[1]} features; train rows 0..2000, test rows 2000..2500")
+    train, test = rows(flag("--train", "0..2000")), rows(flag("--test", "2000..2500"))
+    print(f"{x.shape[0]} rows x {x.shape[1]} features; train rows {train.start}..{train.stop}, "
+          f"test rows {test.start}..{test.stop}")
     print(f"{'kind':<14}{'search+fit s':>13}{'predict ms':>12}{'mean mm':>9}{'median mm':>11}{'p90 mm':>8}  chosen")
     z = StandardScaler().fit(x[train]).transform(x[train])[:400]
     d2 = ((z[:, None, :] - z[None, :, :]) ** 2).sum(-1)[np.triu_indices(len(z), 1)]
