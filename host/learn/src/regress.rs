@@ -231,25 +231,32 @@ pub(crate) fn median_pair(d2: &Mat<f64>) -> f64 {
 /// against 9 ns) once faer's AVX matrix kernels have run in the process, and every kernel
 /// matrix here follows a matrix product. This one is plain arithmetic: 2^n times a degree-13
 /// Taylor polynomial on |r| <= ln 2 / 2 (the first omitted term is below 1e-17 relative).
+#[inline]
 pub(crate) fn exp_neg(a: f64) -> f64 {
     // ln 2 split so that n * LN2_HI is exact for |n| < 2^20 (fdlibm's constants).
     const LN2_HI: f64 = 6.931_471_803_691_238e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-    if a.is_nan() {
-        return f64::NAN;
-    }
-    if a > 708.0 {
-        return 0.0;
-    }
-    let x = -a.max(-709.0);
-    let n = (x * std::f64::consts::LOG2_E).round();
+    // Round to the nearest integer by adding and taking away 1.5 x 2^52 (exact for |n| <
+    // 2^51): plain arithmetic, where `f64::round` is a library call that pays the same
+    // penalty after AVX code as `exp`.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    // No branches (selects only), so that a loop over a kernel matrix runs several at once.
+    let x = -a.clamp(-709.0, 708.0);
+    let n = (x * std::f64::consts::LOG2_E + ROUND) - ROUND;
     let r = (x - n * LN2_HI) - n * LN2_LO;
-    // sum of r^k / k! for k = 0..=13, Horner.
-    let p = INV_FACTORIALS.iter().rev().fold(0.0, |p, c| p * r + c);
+    // sum of r^k / k! for k = 0..=13 by Estrin's scheme: pairs, then powers r^2, r^4, r^8
+    // (four dependent steps instead of Horner's thirteen).
+    let c = &INV_FACTORIALS;
+    let (r2, pair) = (r * r, |k: usize| c[k] + c[k + 1] * r);
+    let r4 = r2 * r2;
+    let low = (pair(0) + r2 * pair(2)) + r4 * (pair(4) + r2 * pair(6));
+    let high = (pair(8) + r2 * pair(10)) + r4 * pair(12);
+    let p = low + (r4 * r4) * high;
     // n is in [-1021, 1023] here, so 2^n is a normal number built from its exponent bits.
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let scale = f64::from_bits(((n as i64 + 1023) as u64) << 52);
-    p * scale
+    let e = if a > 708.0 { 0.0 } else { p * scale };
+    if a.is_nan() { a } else { e }
 }
 
 /// 1/k! for k = 0..=13.
@@ -295,6 +302,33 @@ pub(crate) fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
         }
     }
     d
+}
+
+/// [`squared_distances`] for the nearest neighbours: the product in f32, at twice the speed.
+/// The distances' absolute error is about 1e-7 |z|^2 (4e-5 for 192 standardised channels):
+/// only neighbours that close to each other can swap, and a 1/distance weight moves by a
+/// relative 1e-7 |z|^2 / d^2. Kernel models keep f64: their weights can be large and of both
+/// signs, which would magnify the error.
+pub(crate) fn squared_distances_f32(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
+    let single = |m: &Mat<f64>| Mat::<f32>::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)] as f32);
+    let norms = |m: &Mat<f64>| -> Vec<f64> {
+        (0..m.nrows())
+            .map(|i| (0..m.ncols()).map(|j| m[(i, j)] * m[(i, j)]).sum())
+            .collect()
+    };
+    let (na, nb) = (norms(a), norms(b));
+    let mut dot = Mat::<f32>::zeros(a.nrows(), b.nrows());
+    matmul(
+        dot.as_mut(),
+        Accum::Replace,
+        single(a).as_ref(),
+        single(b).transpose(),
+        -2.0,
+        Par::Seq,
+    );
+    Mat::from_fn(a.nrows(), b.nrows(), |i, j| {
+        (f64::from(dot[(i, j)]) + na[i] + nb[j]).max(0.0)
+    })
 }
 
 /// Gaussian-kernel ridge regression: f(z) = mean T + sum_i alpha_i exp(-gamma |z - z_i|^2).

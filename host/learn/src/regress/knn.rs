@@ -57,7 +57,7 @@ impl Knn {
     /// (squared distance, index), nearest first: the distances as one matrix product.
     #[must_use]
     pub fn neighbours(&self, x: &DMatrix<f64>, k_max: usize) -> Vec<Vec<(f64, usize)>> {
-        let d2 = squared_distances(&z_space(x, &self.mean, &self.scale), &self.support);
+        let d2 = squared_distances_f32(&z_space(x, &self.mean, &self.scale), &self.support);
         let k = k_max.clamp(1, self.support.nrows());
         (0..x.nrows())
             .map(|r| {
