@@ -17,9 +17,39 @@ pub enum OutputError {
         /// The input it names.
         input: PathBuf,
     },
+    /// Two outputs of one command name the same file.
+    #[error("{} and {} are the same file: give each output its own path", .out.display(), .other.display())]
+    Collision {
+        /// One output.
+        out: PathBuf,
+        /// The other.
+        other: PathBuf,
+    },
     /// The output exists and replacing was not asked for.
     #[error("{} already exists; refusing to overwrite it (--force replaces it)", .out.display())]
     Exists {
+        /// The output.
+        out: PathBuf,
+    },
+    /// The output is something et does not replace, even with --force.
+    #[error("{} is {what}, not a regular file; et replaces only regular files (write to a file, or remove it first)", .out.display())]
+    NotAFile {
+        /// The output.
+        out: PathBuf,
+        /// What it is: "a symbolic link", "a FIFO", "a device", ...
+        what: &'static str,
+    },
+    /// The folder the output goes into does not exist or is not a folder.
+    #[error("{}: the folder {} does not exist (create it first)", .out.display(), .folder.display())]
+    NoFolder {
+        /// The output.
+        out: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+    },
+    /// Another writer created the output while et was writing it.
+    #[error("{} appeared while et was writing it (another run writing the same file?); left it as it is, and et's result is not saved (run again, or --force to replace it)", .out.display())]
+    Raced {
         /// The output.
         out: PathBuf,
     },
@@ -33,19 +63,117 @@ pub enum OutputError {
     },
 }
 
-/// Whether `a` and `b` name the same existing file, however spelled (`./a`, a symlink, ...).
+/// Outputs that are streams, written straight through (no temporary name, no rename): the
+/// null device and the process's own standard output and error.
+const STREAMS: [&str; 7] = [
+    "/dev/null",
+    "/dev/stdout",
+    "/dev/stderr",
+    "/dev/fd/1",
+    "/dev/fd/2",
+    "/proc/self/fd/1",
+    "/proc/self/fd/2",
+];
+
+/// Whether `out` is one of [`STREAMS`].
+#[must_use]
+pub fn is_stream(out: &Path) -> bool {
+    STREAMS.iter().any(|s| out == Path::new(s))
+}
+
+/// `p` spelled canonically, whether or not it exists yet: its longest existing ancestor
+/// resolved (`.`, `..`, symlinks), then the rest of its components with `.` dropped and `..`
+/// taken lexically.
+fn canonical(p: &Path) -> Option<PathBuf> {
+    use std::path::Component;
+    let absolute = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        std::env::current_dir().ok()?.join(p)
+    };
+    let mut base = absolute.as_path();
+    let mut rest: Vec<Component<'_>> = Vec::new();
+    let mut resolved = loop {
+        if let Ok(c) = base.canonicalize() {
+            break c;
+        }
+        let (Some(parent), Some(last)) = (base.parent(), base.components().next_back()) else {
+            return None;
+        };
+        rest.push(last);
+        base = parent;
+    };
+    for c in rest.into_iter().rev() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                resolved.pop();
+            }
+            other => resolved.push(other),
+        }
+    }
+    Some(resolved)
+}
+
+/// Whether `a` and `b` name the same file, however spelled (`./a`, a symlink, ...), existing
+/// or not.
 fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
+    match (canonical(a), canonical(b)) {
+        (Some(a), Some(b)) => a == b,
         _ => false,
     }
 }
 
-/// Checks `out` before a command writes it: not one of `inputs` (even with `force`), and not
-/// an existing file or non-empty folder unless `force`.
+/// What is at an output's path now.
+enum Occupant {
+    Nothing,
+    File,
+    EmptyFolder,
+    Folder,
+    Stream,
+    Other(&'static str),
+}
+
+fn occupant(out: &Path) -> Occupant {
+    if is_stream(out) {
+        return Occupant::Stream;
+    }
+    let Ok(m) = std::fs::symlink_metadata(out) else {
+        return Occupant::Nothing;
+    };
+    let t = m.file_type();
+    if t.is_symlink() {
+        Occupant::Other("a symbolic link")
+    } else if t.is_file() {
+        Occupant::File
+    } else if t.is_dir() {
+        if std::fs::read_dir(out).map_or(true, |mut d| d.next().is_some()) {
+            Occupant::Folder
+        } else {
+            Occupant::EmptyFolder
+        }
+    } else {
+        use std::os::unix::fs::FileTypeExt as _;
+        Occupant::Other(if t.is_fifo() {
+            "a FIFO"
+        } else if t.is_socket() {
+            "a socket"
+        } else if t.is_block_device() || t.is_char_device() {
+            "a device"
+        } else {
+            "not a file"
+        })
+    }
+}
+
+/// Checks `out` before a command writes it: not one of `inputs` (even with `force`); a
+/// regular file or a non-empty folder only with `force`; never a symbolic link, FIFO, socket
+/// or device (except the null device and standard output or error, written through); and its
+/// folder must exist.
 ///
 /// # Errors
-/// [`OutputError::Input`] or [`OutputError::Exists`].
+/// [`OutputError::Input`], [`OutputError::Exists`], [`OutputError::NotAFile`] or
+/// [`OutputError::NoFolder`].
 pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputError> {
     if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
         return Err(OutputError::Input {
@@ -53,58 +181,186 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
             input: input.to_path_buf(),
         });
     }
-    let occupied = match std::fs::metadata(out) {
-        Ok(m) if m.is_dir() => std::fs::read_dir(out).map_or(true, |mut d| d.next().is_some()),
-        Ok(_) => true,
-        Err(_) => false,
+    match occupant(out) {
+        Occupant::Stream | Occupant::EmptyFolder => return Ok(()),
+        Occupant::Other(what) => {
+            return Err(OutputError::NotAFile {
+                out: out.into(),
+                what,
+            });
+        }
+        Occupant::File | Occupant::Folder if !force => {
+            return Err(OutputError::Exists { out: out.into() });
+        }
+        Occupant::File | Occupant::Folder | Occupant::Nothing => {}
+    }
+    let folder = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
     };
-    if occupied && !force {
-        return Err(OutputError::Exists { out: out.into() });
+    if !folder.is_dir() {
+        return Err(OutputError::NoFolder {
+            out: out.into(),
+            folder: folder.into(),
+        });
     }
     Ok(())
 }
 
+/// [`check`] for every output of one command at once, before any work: each against every
+/// input, and no two outputs at the same file. `folders` are folders the command creates
+/// (a folder of plots): an output inside one needs no existing folder.
+///
+/// # Errors
+/// As [`check`], and [`OutputError::Collision`].
+pub fn check_all(
+    outputs: &[&Path],
+    folders: &[&Path],
+    inputs: &[&Path],
+    force: bool,
+) -> Result<(), OutputError> {
+    for folder in folders {
+        if let Some(input) = inputs.iter().find(|i| same_file(folder, i)) {
+            return Err(OutputError::Input {
+                out: folder.to_path_buf(),
+                input: input.to_path_buf(),
+            });
+        }
+    }
+    for (i, out) in outputs.iter().enumerate() {
+        let made = out
+            .parent()
+            .is_some_and(|d| folders.iter().any(|f| f == &d || same_file(f, d)));
+        match check(out, inputs, force) {
+            Err(OutputError::NoFolder { .. }) if made => {}
+            other => other?,
+        }
+        if let Some(other) = outputs
+            .get(..i)
+            .unwrap_or_default()
+            .iter()
+            .find(|o| !is_stream(out) && same_file(out, o))
+        {
+            return Err(OutputError::Collision {
+                out: other.to_path_buf(),
+                other: out.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// File names longer than this many bytes are refused by most file systems.
+const NAME_MAX: usize = 255;
+
 /// The temporary name `out` is written under: hidden, beside it (so the rename stays on one
-/// file system), with the same extension (writers that pick a format by it still do).
+/// file system), with the same extension (writers that pick a format by it still do), the
+/// stem shortened when the whole would pass the file system's 255 bytes.
 #[must_use]
 pub fn partial_path(out: &Path) -> PathBuf {
     let stem = out.file_stem().unwrap_or_default().to_string_lossy();
-    let name = match out.extension() {
-        Some(ext) => format!(
-            ".{stem}.partial-{}.{}",
-            std::process::id(),
-            ext.to_string_lossy()
-        ),
-        None => format!(".{stem}.partial-{}", std::process::id()),
+    let tail = match out.extension() {
+        Some(ext) => format!(".partial-{}.{}", std::process::id(), ext.to_string_lossy()),
+        None => format!(".partial-{}", std::process::id()),
     };
-    out.with_file_name(name)
+    let budget = NAME_MAX.saturating_sub(tail.len() + 1);
+    let mut short = String::new();
+    for c in stem.chars() {
+        if short.len() + c.len_utf8() > budget {
+            break;
+        }
+        short.push(c);
+    }
+    out.with_file_name(format!(".{short}{tail}"))
+}
+
+/// The partial files being written now, removed if et is stopped by Ctrl-C or SIGTERM.
+static PARTIALS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Removes every partial output being written when the process gets SIGINT (Ctrl-C), SIGTERM
+/// or SIGHUP, then exits with 128 + the signal. Call once, early in `main`.
+///
+/// # Errors
+/// When the handler cannot be installed.
+pub fn clean_up_on_signals() -> std::io::Result<()> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    std::thread::Builder::new()
+        .name("et-signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                let partials = PARTIALS
+                    .lock()
+                    .map_or_else(|e| e.into_inner().clone(), |p| p.clone());
+                for p in partials {
+                    let _ = std::fs::remove_file(p);
+                }
+                std::process::exit(128 + signal);
+            }
+        })?;
+    Ok(())
+}
+
+fn track(partial: &Path, on: bool) {
+    let mut list = PARTIALS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if on {
+        list.push(partial.into());
+    } else {
+        list.retain(|p| p != partial);
+    }
 }
 
 /// Writes `out` with `save` (which writes the path it is given) under [`partial_path`], then
-/// renames it over `out`. The partial file is removed when `save` fails.
+/// moves it to `out`: over an existing file (which [`check`] allowed: `--force`), or as a new
+/// name created exclusively, so that two runs writing the same new file cannot both succeed.
+/// The partial file is removed when `save` fails (and on Ctrl-C, see
+/// [`clean_up_on_signals`]). A stream ([`is_stream`]) is written straight through.
 ///
 /// # Errors
-/// `save`'s error, or an [`OutputError::Io`] converted into it.
+/// `save`'s error, or an [`OutputError`] converted into it.
 pub fn write<T, E: From<OutputError>>(
     out: &Path,
     save: impl FnOnce(&Path) -> Result<T, E>,
 ) -> Result<T, E> {
+    if is_stream(out) {
+        return save(out);
+    }
+    // Whether the output is new: then it is created exclusively at the end.
+    let new = std::fs::symlink_metadata(out).is_err();
     let partial = partial_path(out);
-    match save(&partial) {
-        Ok(value) => {
-            std::fs::rename(&partial, out).map_err(|source| {
-                let _ = std::fs::remove_file(&partial);
-                OutputError::Io {
-                    path: out.into(),
-                    source,
-                }
-            })?;
-            Ok(value)
+    track(&partial, true);
+    let result = save(&partial).and_then(|value| {
+        settle(&partial, out, new)?;
+        Ok(value)
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    track(&partial, false);
+    result
+}
+
+/// Moves the finished `partial` to `out`: over it, or as a `new` file created exclusively.
+fn settle(partial: &Path, out: &Path, new: bool) -> Result<(), OutputError> {
+    let io = |source| OutputError::Io {
+        path: out.into(),
+        source,
+    };
+    if !new {
+        return std::fs::rename(partial, out).map_err(io);
+    }
+    match std::fs::hard_link(partial, out) {
+        Ok(()) => {
+            let _ = std::fs::remove_file(partial);
+            Ok(())
         }
-        Err(e) => {
-            let _ = std::fs::remove_file(&partial);
-            Err(e)
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            Err(OutputError::Raced { out: out.into() })
         }
+        // A file system without hard links: the plain rename.
+        Err(_) => std::fs::rename(partial, out).map_err(io),
     }
 }
 
@@ -174,6 +430,124 @@ mod tests {
         .unwrap();
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
         assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn only_regular_files_are_replaced_and_streams_are_written_through() {
+        let d = dir("kinds");
+        let target = d.join("target.json");
+        std::fs::write(&target, "keep").unwrap();
+        let link = d.join("link.json");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let fifo = d.join("fifo.json");
+        assert!(
+            std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success()
+        );
+        for (path, what) in [
+            (link.as_path(), "a symbolic link"),
+            (fifo.as_path(), "a FIFO"),
+            (Path::new("/dev/zero"), "a device"),
+        ] {
+            for force in [false, true] {
+                let e = check(path, &[], force).unwrap_err();
+                assert!(
+                    matches!(e, OutputError::NotAFile { what: w, .. } if w == what),
+                    "{e}"
+                );
+                assert!(e.to_string().contains(&path.display().to_string()), "{e}");
+            }
+        }
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep");
+        // The null device and standard output: allowed without --force, written straight
+        // through (no temporary file beside /dev/null).
+        for stream in ["/dev/null", "/dev/stdout"] {
+            check(Path::new(stream), &[], false).unwrap();
+        }
+        let mut given = None;
+        write::<_, OutputError>(Path::new("/dev/null"), |p| {
+            given = Some(p.to_path_buf());
+            std::fs::write(p, "x").map_err(|source| OutputError::Io {
+                path: p.into(),
+                source,
+            })
+        })
+        .unwrap();
+        assert_eq!(given.as_deref(), Some(Path::new("/dev/null")));
+        // A folder that does not exist.
+        let e = check(&d.join("nodir").join("v.png"), &[], true).unwrap_err();
+        assert!(matches!(e, OutputError::NoFolder { .. }), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn outputs_may_not_collide_with_inputs_or_each_other_however_spelled() {
+        let d = dir("collide");
+        let mesh = d.join("tri.csv");
+        std::fs::write(&mesh, "x").unwrap();
+        let out = d.join("out.json");
+        let same_out = d.join(".").join("out.json");
+        // Two outputs at one new path.
+        let e = check_all(&[&out, &same_out], &[], &[], false).unwrap_err();
+        assert!(matches!(e, OutputError::Collision { .. }), "{e}");
+        // An output at an input named anywhere among the inputs, with --force too.
+        let e = check_all(
+            &[
+                &out,
+                &d.join("..").join(d.file_name().unwrap()).join("tri.csv"),
+            ],
+            &[],
+            &[&mesh],
+            true,
+        )
+        .unwrap_err();
+        assert!(matches!(e, OutputError::Input { .. }), "{e}");
+        // A file the command puts in a folder it creates, and another output at the same name.
+        let plots = d.join("plots");
+        let map = plots.join("error-map.png");
+        let e = check_all(
+            &[&map, &plots.join("./error-map.png")],
+            &[&plots],
+            &[],
+            false,
+        )
+        .unwrap_err();
+        assert!(matches!(e, OutputError::Collision { .. }), "{e}");
+        check_all(&[&map, &out], &[&plots], &[&mesh], false).unwrap();
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_new_output_is_created_exclusively_and_long_names_fit() {
+        let d = dir("race");
+        let out = d.join("model.json");
+        // Another run creates the same new file while this one writes: this one fails and
+        // leaves the other's file alone.
+        let r = write::<(), OutputError>(&out, |p| {
+            std::fs::write(p, "mine").unwrap();
+            std::fs::write(&out, "theirs").unwrap();
+            Ok(())
+        });
+        assert!(matches!(r, Err(OutputError::Raced { .. })), "{r:?}");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "theirs");
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "no partial left");
+        // A 250-byte name (multi-byte characters too): the temporary name stays within 255.
+        for stem in ["a".repeat(245), "é".repeat(122)] {
+            let long = d.join(format!("{stem}.json"));
+            assert!(partial_path(&long).file_name().unwrap().len() <= NAME_MAX);
+            write::<(), OutputError>(&long, |p| {
+                std::fs::write(p, "x").map_err(|source| OutputError::Io {
+                    path: p.into(),
+                    source,
+                })
+            })
+            .unwrap();
+            assert_eq!(std::fs::read_to_string(&long).unwrap(), "x");
+        }
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -920,6 +920,156 @@ fn outputs_refuse_inputs_and_existing_files_without_force() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Outputs as a class: a command's outputs are checked together against every input named in
+/// any flag and against each other; only regular files are replaced; the null device and
+/// standard output are written through; Ctrl-C or SIGTERM leaves no hidden partial file; a
+/// full device is an error.
+#[test]
+fn outputs_are_checked_together_and_never_lost_silently() {
+    use std::process::Stdio;
+    let dir = std::env::temp_dir().join(format!("et-cli-outputs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    std::fs::copy(root.join("sim/scenes/square-13cm-16.toml"), p("s.toml")).unwrap();
+    let fails = |args: &[&str], what: &str| {
+        let out = et(args);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(
+            !out.status.success() && err.contains(what),
+            "{args:?}: {err}"
+        );
+    };
+    // A recording to image, and a mesh given as three files.
+    let sim = et(&[
+        "sim",
+        "--scene",
+        &p("s.toml"),
+        "--frames",
+        "5",
+        "--out",
+        &p("r.jsonl"),
+    ]);
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    for name in ["nodes.csv", "tri.csv", "el.csv"] {
+        std::fs::write(p(name), "x").unwrap();
+    }
+    let mesh = format!("{},{},{}", p("nodes.csv"), p("tri.csv"), p("el.csv"));
+    let recon = [
+        "reconstruct",
+        "--scene",
+        &p("s.toml"),
+        "--frames",
+        &p("r.jsonl"),
+        "--reference",
+        "2",
+        "--frame",
+        "4",
+    ];
+    // An output onto a file named inside --mesh, even with --force: the mesh is untouched.
+    fails(
+        &[
+            &recon[..],
+            &["--mesh", &mesh, "--out", &p("tri.csv"), "--force"],
+        ]
+        .concat(),
+        "this is the input",
+    );
+    assert_eq!(std::fs::read_to_string(p("tri.csv")).unwrap(), "x");
+    // Two outputs at one path, spelled differently.
+    let same = dir.join(".").join("i.json");
+    fails(
+        &[
+            &recon[..],
+            &["--out", &p("i.json"), "--image-out", same.to_str().unwrap()],
+        ]
+        .concat(),
+        "are the same file",
+    );
+    // Not a regular file: refused by name even with --force; the null device is written.
+    std::fs::write(p("other.json"), "keep").unwrap();
+    std::os::unix::fs::symlink(p("other.json"), p("link.json")).unwrap();
+    fails(
+        &[&recon[..], &["--out", &p("link.json"), "--force"]].concat(),
+        "is a symbolic link",
+    );
+    let null = et(&[
+        "sim",
+        "--scene",
+        &p("s.toml"),
+        "--frames",
+        "2",
+        "--out",
+        "/dev/null",
+    ]);
+    assert!(
+        null.status.success(),
+        "{}",
+        String::from_utf8_lossy(&null.stderr)
+    );
+    fails(
+        &[&recon[..], &["--out", &p("nodir/i.json")]].concat(),
+        "does not exist",
+    );
+    // SIGTERM in the middle of a long write: no hidden partial file left.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args([
+            "sim",
+            "--scene",
+            &p("s.toml"),
+            "--frames",
+            "10000000",
+            "--out",
+            &p("big.jsonl"),
+        ])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let partial_appeared = (0..200).any(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .any(|e| e.unwrap().file_name().to_string_lossy().contains("partial"))
+    });
+    assert!(partial_appeared, "et sim writes under a partial name");
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(128 + 15), "{status:?}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.contains("partial") || n == "big.jsonl"),
+        "{names:?}"
+    );
+    // A full device takes nothing: not a success.
+    for args in [&["--help"][..], &["protocol", "--json"][..]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_et"))
+            .args(args)
+            .stdout(std::fs::File::create("/dev/full").unwrap())
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?} onto /dev/full");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("No space left"),
+            "{args:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic
 /// ("failed printing to stdout: Broken pipe").
 #[test]

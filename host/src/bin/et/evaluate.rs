@@ -91,9 +91,8 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         .as_ref()
         .map(|dir| (dir.join("confusion.png"), dir.join("error-vs-distance.png")));
     if let Some((a, b)) = &plots {
-        for png in [a, b] {
-            output::check(png, &[&args.model, data_arg], force)?;
-        }
+        let folders: Vec<&Path> = args.plots.as_deref().into_iter().collect();
+        output::check_all(&[a, b], &folders, &[&args.model, data_arg], force)?;
     }
     let file = ModelFile::load(&args.model)?;
     let data = dataset::load(data_arg)?;

@@ -1,6 +1,6 @@
 //! `et forward` and `et reconstruct`: the finite elements and one-step imaging of a scene.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -402,13 +402,17 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let mut inputs = vec![args.scene.as_path()];
     inputs.extend(args.frames.as_deref());
     inputs.extend(args.reference_file.as_deref());
-    crate::output::check(&args.out, &inputs, force)?;
-    if let Some(npy) = &args.image_out {
-        crate::output::check(npy, &inputs, force)?;
-        if npy == &args.out {
-            bail!("--image-out and --out are both {}", npy.display());
-        }
-    }
+    // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.
+    let mesh_files: Vec<&Path> = args
+        .mesh
+        .mesh
+        .as_deref()
+        .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
+        .unwrap_or_default();
+    inputs.extend(mesh_files);
+    let mut outputs = vec![args.out.as_path()];
+    outputs.extend(args.image_out.as_deref());
+    crate::output::check_all(&outputs, &[], &inputs, force)?;
     let scene = Scene::load(&args.scene)?;
     let table = args
         .frames

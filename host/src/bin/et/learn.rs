@@ -230,10 +230,9 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     if args.grid.is_some() || args.cv.is_some() || args.per_group {
         bail!("--grid, --cv and --per-group apply to any sensor's table (--features)");
     }
-    output::check(&args.out, &[data_arg], force)?;
-    if let Some(png) = &args.curve {
-        output::check(png, &[data_arg, &args.out], force)?;
-    }
+    let mut outputs = vec![args.out.as_path()];
+    outputs.extend(args.curve.as_deref());
+    output::check_all(&outputs, &[], &[data_arg], force)?;
     let folds = args.folds.unwrap_or(10);
     // Each stage on one line that updates in place, with the time so far (stderr, and only
     // on a terminal: scripts and --json see nothing of it). Cleared on every way out.

@@ -196,12 +196,11 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             };
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
-                if writeln!(stdout, "{line}")
-                    .and_then(|()| stdout.flush())
-                    .is_err()
-                {
+                match writeln!(stdout, "{line}").and_then(|()| stdout.flush()) {
+                    Ok(()) => {}
                     // The reader went away (a closed pipe): stop quietly.
-                    return Ok(());
+                    Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(()),
+                    Err(e) => anyhow::bail!("writing to stdout: {e}"),
                 }
             }
         }

@@ -279,8 +279,46 @@ fn report(e: &anyhow::Error) -> String {
     message
 }
 
+/// The command line, or exit: help and version go to stdout, and a stdout that cannot take
+/// them (a full device) is an error, not a silent success.
+fn parse() -> Cli {
+    use std::io::Write as _;
+    match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+            ) =>
+        {
+            use std::io::IsTerminal as _;
+            let mut stdout = std::io::stdout().lock();
+            let text = if stdout.is_terminal() {
+                e.render().ansi().to_string()
+            } else {
+                e.render().to_string()
+            };
+            match stdout
+                .write_all(text.as_bytes())
+                .and_then(|()| stdout.flush())
+            {
+                Ok(()) => std::process::exit(0),
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+                Err(e) => {
+                    eprintln!("error: writing to stdout: {e}");
+                    std::process::exit(1);
+                }
+            }
+        }
+        Err(e) => e.exit(),
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse();
+    if let Err(e) = et_host::output::clean_up_on_signals() {
+        eprintln!("warning: Ctrl-C will not remove partial outputs: {e}");
+    }
     let force = cli.force;
     let result = match &cli.command {
         Command::Demo(args) => demo::run(args, force),

@@ -2,12 +2,15 @@
 
 use std::path::Path;
 
-pub(crate) use et_host::output::check;
+pub(crate) use et_host::output::{check, check_all};
 
 /// Writes `out` by `save` aside and renames it when complete (`et_host::output::write`).
 pub(crate) fn write<T, E: Into<anyhow::Error>>(
     out: &Path,
     save: impl FnOnce(&Path) -> Result<T, E>,
 ) -> anyhow::Result<T> {
+    use anyhow::Context as _;
+    // The error names the user's path first (the temporary file's name only after it).
     et_host::output::write(out, |partial| save(partial).map_err(Into::into))
+        .with_context(|| format!("writing {}", out.display()))
 }

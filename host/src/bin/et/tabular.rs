@@ -330,14 +330,13 @@ pub(crate) fn eval(
     let pngs = plots.map(|d| (d.join("error-map.png"), d.join("predicted-vs-true.png")));
     let mut inputs = args.inputs();
     inputs.push(model_path);
+    let mut outputs: Vec<&Path> = Vec::new();
     if let Some((a, b)) = &pngs {
-        for png in [a, b] {
-            output::check(png, &inputs, force)?;
-        }
+        outputs.extend([a.as_path(), b.as_path()]);
     }
-    if let Some(csv) = predictions {
-        output::check(csv, &inputs, force)?;
-    }
+    outputs.extend(predictions);
+    let folders: Vec<&Path> = plots.into_iter().collect();
+    output::check_all(&outputs, &folders, &inputs, force)?;
     let model = TableModel::load(model_path)?;
     if model.reference != args.referencing() {
         let said = |r: Option<Referencing>| match r {
