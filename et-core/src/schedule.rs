@@ -422,11 +422,14 @@ impl Schedule {
         base: u16,
         default_current_a: f64,
     ) -> Result<Self, ScheduleError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ScheduleError::File {
-            path: path.to_path_buf(),
-            line: 0,
-            message: e.to_string(),
-        })?;
+        let text =
+            crate::text::read_text_at_most(path, crate::text::MAX_FILE_BYTES).map_err(|e| {
+                ScheduleError::File {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    message: e.to_string(),
+                }
+            })?;
         Self::parse_csv(path, &text, electrodes, base, default_current_a)
     }
 

@@ -156,6 +156,45 @@ pub fn records(text: &str) -> Result<Vec<Record>, (usize, String)> {
     read_records(&lines(text)).map(|r| r.rows)
 }
 
+/// The largest data file et reads whole (a dataset, a table, frames, a model): 1 GiB, far above
+/// any real one (2 500 presses x 192 channels is 5 MB of text) and below what would exhaust
+/// memory; an endless stream (`/dev/zero`, a pipe that never closes) stops here.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// The bytes of `path`, stopping at `limit`: more is an error of kind
+/// [`std::io::ErrorKind::FileTooLarge`] saying so, found while reading (an endless stream is
+/// never read to its end).
+///
+/// # Errors
+/// The file's I/O error, or the size error.
+pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("more than {limit} bytes: not a file et reads (is it the right one?)"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// [`read_at_most`] as UTF-8 text.
+///
+/// # Errors
+/// As [`read_at_most`], and [`std::io::ErrorKind::InvalidData`] for text that is not UTF-8.
+pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<String> {
+    String::from_utf8(read_at_most(path, limit)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,5 +219,14 @@ mod tests {
         let (line, message) = records("a,b\n\"1,2\n3,4\n").unwrap_err();
         assert_eq!(line, 2);
         assert!(message.contains("closing quote"), "{message}");
+    }
+
+    #[test]
+    fn a_reader_stops_at_its_limit_on_an_endless_stream() {
+        let e = super::read_at_most(std::path::Path::new("/dev/zero"), 1 << 16).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+        assert!(e.to_string().contains("more than 65536 bytes"), "{e}");
+        let text = super::read_text_at_most(std::path::Path::new("/dev/null"), 10).unwrap();
+        assert!(text.is_empty());
     }
 }

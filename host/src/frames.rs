@@ -206,14 +206,18 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     };
     let (matrix, said) = match ext.as_str() {
         "npy" => {
-            let bytes = std::fs::read(&path).map_err(io)?;
+            let bytes =
+                et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?;
             (
                 npy_matrix(&Npz::from_npy(bytes), "array").map_err(npz)?,
                 String::new(),
             )
         }
         "npz" => {
-            let archive = Npz::read(std::fs::read(&path).map_err(io)?).map_err(npz)?;
+            let archive = Npz::read(
+                et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?,
+            )
+            .map_err(npz)?;
             let names: Vec<&str> = archive.names().collect();
             let name = match (&array, names.as_slice()) {
                 (Some(n), _) => n.clone(),
@@ -234,9 +238,14 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             let m = npy_matrix(&archive, &name).map_err(npz)?;
             (m, format!("array '{name}', "))
         }
-        "mat" => mat_matrix(&path, &std::fs::read(&path).map_err(io)?, array.as_deref())?,
+        "mat" => mat_matrix(
+            &path,
+            &et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?,
+            array.as_deref(),
+        )?,
         _ => {
-            let text = std::fs::read_to_string(&path).map_err(io)?;
+            let text = et_core::text::read_text_at_most(&path, et_core::text::MAX_FILE_BYTES)
+                .map_err(io)?;
             csv_matrix(&path, &text)?
         }
     };

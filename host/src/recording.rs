@@ -16,7 +16,7 @@
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use et_core::ScanConfig;
@@ -327,11 +327,9 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         line,
         message,
     };
-    let file = File::open(path).map_err(io)?;
-    let lines: Vec<String> = BufReader::new(file)
-        .lines()
-        .collect::<Result<_, _>>()
-        .map_err(io)?;
+    // Read whole, but never more than a data file's limit (an endless stream stops there).
+    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(io)?;
+    let lines: Vec<&str> = text.lines().collect();
     let first = lines
         .first()
         .ok_or_else(|| bad(1, "empty file: no header".into()))?;

@@ -132,6 +132,11 @@ impl Viewer {
     /// [`ViewerError`] when the scene, the model or the first source cannot be opened.
     pub fn new(options: Options) -> Result<Self, ViewerError> {
         let (source, sheet) = open_source(&options.source, options.scene.as_deref())?;
+        if let Some([x, y]) = options.press
+            && !sheet.physical.shape.contains([x * 1e-3, y * 1e-3], 0.0)
+        {
+            return Err(ViewerError::Press([x, y]));
+        }
         let mut processor = Processor::new(
             &sheet.physical,
             Settings {
@@ -506,6 +511,9 @@ pub enum ViewerError {
         /// Why.
         error: et_learn::fit::FitError,
     },
+    /// `press` is not on the sheet.
+    #[error("--press {},{} mm is not on the sheet (give a point inside it, in the scene's coordinates)", .0[0], .0[1])]
+    Press([f64; 2]),
     /// The window could not be created.
     #[error("cannot open the window: {0} (is there a display? try DISPLAY=:0 or xvfb-run)")]
     Window(String),

@@ -1070,6 +1070,117 @@ fn outputs_are_checked_together_and_never_lost_silently() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Every numeric flag has a domain, refused before any work with what the flag takes; an
+/// endless input stops at the reader's limit.
+#[test]
+fn flags_outside_their_domain_and_endless_inputs_are_refused() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let scene = scene.to_str().unwrap();
+    let out = std::env::temp_dir().join(format!("et-cli-domains-{}.png", std::process::id()));
+    let out = out.to_str().unwrap();
+    let recon = ["reconstruct", "--scene", scene, "--out", out];
+    let collect = ["collect", "--scene", scene, "--out", out];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "record",
+                "--port",
+                "/dev/null",
+                "--out",
+                out,
+                "--seconds=-1",
+            ],
+            "--seconds",
+        ),
+        (
+            vec![
+                "record",
+                "--port",
+                "/dev/null",
+                "--out",
+                out,
+                "--seconds",
+                "nan",
+            ],
+            "not a finite number",
+        ),
+        (
+            vec![
+                "record",
+                "--port",
+                "/dev/null",
+                "--out",
+                out,
+                "--seconds",
+                "inf",
+            ],
+            "not a finite number",
+        ),
+        (
+            vec!["train", "--features", out, "--out", out, "--folds", "1"],
+            "outside 2 to",
+        ),
+        (
+            vec![
+                "train",
+                "--features",
+                out,
+                "--out",
+                out,
+                "--folds",
+                "1000000",
+            ],
+            "outside 2 to",
+        ),
+        ([&recon[..], &["--threshold", "2"]].concat(), "--threshold"),
+        (
+            [&recon[..], &["--threshold", "nan"]].concat(),
+            "--threshold",
+        ),
+        ([&recon[..], &["--triangles", "0"]].concat(), "--triangles"),
+        (
+            [&recon[..], &["--triangles", "1000000000"]].concat(),
+            "--triangles",
+        ),
+        (
+            [&recon[..], &["--iterations", "0"]].concat(),
+            "--iterations",
+        ),
+        ([&recon[..], &["--reference", "0"]].concat(), "--reference"),
+        (
+            [&recon[..], &["--radius-mm", "1e9"]].concat(),
+            "--radius-mm",
+        ),
+        (
+            [&collect[..], &["--radius-mm", "0"]].concat(),
+            "--radius-mm",
+        ),
+        ([&collect[..], &["--max-kpa", "inf"]].concat(), "--max-kpa"),
+        ([&collect[..], &["--poses", "0"]].concat(), "--poses"),
+        ([&collect[..], &["--poses", "1000000"]].concat(), "--poses"),
+        (
+            [&collect[..], &["--press-movement-mm", "nan"]].concat(),
+            "--press-movement-mm",
+        ),
+        (
+            [&collect[..], &["--grid", "100000x100000"]].concat(),
+            "at most 100 rows",
+        ),
+        (
+            vec!["reconstruct", "--scene", "/dev/zero", "--out", out],
+            "more than 1048576 bytes",
+        ),
+    ];
+    for (args, what) in cases {
+        let o = et(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(what), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert!(!std::path::Path::new(out).exists());
+}
+
 /// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic
 /// ("failed printing to stdout: Broken pipe").
 #[test]

@@ -174,10 +174,12 @@ impl ModelFile {
     /// # Errors
     /// [`ModelFileError`] naming the file (and for a JSON syntax error, the line and column).
     pub fn load(path: &Path) -> Result<Self, ModelFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
-            path: path.into(),
-            source,
-        })?;
+        let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
+            |source| ModelFileError::Io {
+                path: path.into(),
+                source,
+            },
+        )?;
         let json = |source| ModelFileError::Json {
             path: path.into(),
             source,

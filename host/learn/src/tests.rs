@@ -459,6 +459,39 @@ mod files {
         }
     }
 
+    /// One set of checks for both formats, after reading: a visit number far past the visits
+    /// (it would make 65 535 leave-one-visit-out folds), a missing visit, and non-finite
+    /// pressures or untouched frames are refused from .npz as from CSV, naming the field.
+    #[test]
+    fn both_formats_refuse_the_same_inconsistent_datasets() {
+        let dir = tmp("consistent");
+        let cases: [(&str, fn(&mut Dataset)); 4] = [
+            ("visit", |d| d.visit[0] = u16::MAX),
+            ("visit", |d| d.visit.iter_mut().for_each(|v| *v *= 2)),
+            ("pressure", |d| d.pressure[3] = f64::NAN),
+            ("untouched", |d| d.baselines[(1, 2)] = f64::INFINITY),
+        ];
+        for (i, (field, spoil)) in cases.iter().enumerate() {
+            let mut d = small();
+            spoil(&mut d);
+            for ext in ["csv", "npz"] {
+                let path = dir.join(format!("bad{i}.{ext}"));
+                // The CSV writer may refuse a NaN itself; what matters is the reading.
+                let written = if ext == "npz" {
+                    save_npz(&d, &path, "spoilt").is_ok()
+                } else {
+                    save_csv(&d, &path, "spoilt").is_ok()
+                };
+                if !written {
+                    continue;
+                }
+                let e = load(&path).unwrap_err().to_string();
+                assert!(e.contains(field), "{ext} case {i}: {e}");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn datasets_round_trip_and_python_reads_them() {
         let dir = tmp("rt");

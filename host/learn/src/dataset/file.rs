@@ -134,10 +134,12 @@ fn points(
 /// # Errors
 /// [`DatasetError`] naming the file, line and column.
 pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
-    let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
-        path: path.into(),
-        source,
-    })?;
+    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
+        |source| DatasetError::Io {
+            path: path.into(),
+            source,
+        },
+    )?;
     let mut config: Option<ScanConfig> = None;
     let mut feature_index = Vec::new();
     let mut centres = Vec::new();
@@ -321,10 +323,13 @@ pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
 /// # Errors
 /// [`DatasetError`] naming the file and the array at fault.
 pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
-    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
-        path: path.into(),
-        source,
-    })?;
+    let bytes =
+        et_core::text::read_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(|source| {
+            DatasetError::Io {
+                path: path.into(),
+                source,
+            }
+        })?;
     let bad = |e: npz::NpzError| content(path, 0, None, e.to_string());
     let z = npz::Npz::read(bytes).map_err(bad)?;
     let fault = |array: &str, message: String| {
@@ -434,9 +439,58 @@ pub fn save(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dataset
 /// # Errors
 /// As those.
 pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
-    if is_npz(path) {
-        load_npz(path)
+    let data = if is_npz(path) {
+        load_npz(path)?
     } else {
-        load_csv(path)
+        load_csv(path)?
+    };
+    consistent(path, &data)?;
+    Ok(data)
+}
+
+/// The checks both formats share, after reading: every number finite (features, positions,
+/// pressures, untouched frames), and the visits numbered 0 to T - 1 with none missing (a
+/// visit number is a fold of leave-one-visit-out: 65 535 of them for three visits would run
+/// 65 535 folds).
+fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
+    let fault = |field: &str, message: String| content(path, 0, Some(field.to_string()), message);
+    let finite = |field: &str, mut values: std::slice::Iter<'_, f64>| match values
+        .position(|v| !v.is_finite())
+    {
+        Some(i) => Err(fault(
+            field,
+            format!("value {} is not a finite number", i + 1),
+        )),
+        None => Ok(()),
+    };
+    finite("features", data.x.as_slice().iter())?;
+    finite("untouched", data.baselines.as_slice().iter())?;
+    finite("pressure", data.pressure.iter())?;
+    finite("position", data.positions.as_flattened().iter())?;
+    let mut seen = vec![false; data.x.nrows().min(usize::from(u16::MAX)) + 1];
+    for &v in &data.visit {
+        match seen.get_mut(usize::from(v)) {
+            Some(s) => *s = true,
+            None => {
+                return Err(fault(
+                    "visit",
+                    format!(
+                        "visit {v} in a set of {} rows: visits are numbered from 0",
+                        data.x.nrows()
+                    ),
+                ));
+            }
+        }
     }
+    let t = data.visits();
+    if let Some(missing) = seen.iter().take(t).position(|s| !s) {
+        return Err(fault(
+            "visit",
+            format!(
+                "visits run to {} but visit {missing} has no rows: number them 0 to T - 1",
+                t - 1
+            ),
+        ));
+    }
+    Ok(())
 }

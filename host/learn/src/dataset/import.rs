@@ -73,10 +73,12 @@ pub enum GroupsFrom {
 /// # Errors
 /// [`DatasetError`] naming the file, line and column of a cell that is not a finite number.
 pub fn read_matrix(path: &Path) -> Result<DMatrix<f64>, DatasetError> {
-    let text = std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
-        path: path.into(),
-        source,
-    })?;
+    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
+        |source| DatasetError::Io {
+            path: path.into(),
+            source,
+        },
+    )?;
     let none = |_: &str, _: usize| false;
     let csv = parse_table(path, &text_lines(&text), &none)?;
     let cols: Vec<usize> = (0..csv.names.len()).collect();
@@ -126,9 +128,11 @@ impl Table {
             _ => None,
         };
         let read = |p: &Path| {
-            std::fs::read_to_string(p).map_err(|source| DatasetError::Io {
-                path: p.into(),
-                source,
+            et_core::text::read_text_at_most(p, et_core::text::MAX_FILE_BYTES).map_err(|source| {
+                DatasetError::Io {
+                    path: p.into(),
+                    source,
+                }
             })
         };
         let label_text = |name: &str, _: usize| {

@@ -492,7 +492,8 @@ impl TableModel {
             path: path.into(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES)
+            .map_err(|e| err(e.to_string()))?;
         Self::from_json(&text).map_err(|e| err(e.to_string()))
     }
 

@@ -27,7 +27,8 @@ fn bad(path: &Path, line: usize, why: impl std::fmt::Display) -> MeshError {
 }
 
 fn read(path: &Path) -> Result<String, MeshError> {
-    std::fs::read_to_string(path).map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
+    et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES)
+        .map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
 }
 
 /// Rows of comma-separated values, each `width` long if given; a non-numeric first row is a

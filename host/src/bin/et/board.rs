@@ -34,10 +34,10 @@ pub(crate) struct RecordArgs {
     #[arg(long, default_value_t = et_core::board::BAUD)]
     baud: u32,
     /// Stop after this many frames.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
     /// Stop after this many seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::above(0.0, 31_536_000.0))]
     seconds: Option<f64>,
     /// Do not send Start (the board is already scanning).
     #[arg(long)]
@@ -130,8 +130,8 @@ pub(crate) fn wait_for_board(link: &mut et_host::link::Link) -> Result<()> {
 
 pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     use std::time::Duration;
-    let blob =
-        std::fs::read(&args.blob).with_context(|| format!("reading {}", args.blob.display()))?;
+    let blob = et_core::text::read_at_most(&args.blob, 1 << 24)
+        .with_context(|| format!("reading {}", args.blob.display()))?;
     let model = et_core::model::Model::parse(&blob)
         .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e:?}", args.blob.display()))?;
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;

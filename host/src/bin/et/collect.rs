@@ -20,59 +20,59 @@ pub(crate) struct CollectArgs {
     #[arg(long, default_value = "7x7")]
     grid: String,
     /// T: visits of the whole grid.
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = 6, value_parser = crate::domain::count(1, 1_000))]
     visits: usize,
     /// S_num: scans per class and visit.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::domain::count(1, 10_000))]
     scans: usize,
     /// S_sub: observations (sub-section medians) per scan.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::domain::count(1, 1_000))]
     subsections: usize,
     /// Lowest pressure while pressing, kPa.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = crate::domain::real(0.0, 1_000.0))]
     min_kpa: f64,
     /// Highest pressure while pressing, kPa.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::domain::above(0.0, 1_000.0))]
     max_kpa: f64,
     /// Finger contact radius (the median over presses), mm.
-    #[arg(long, default_value_t = 7.5)]
+    #[arg(long, default_value_t = 7.5, value_parser = crate::domain::above(0.0, 100.0))]
     radius_mm: f64,
     /// Radius of the target the finger's centre lands in (uniformly) around each class
     /// centre, mm (default: the finger's radius; the method's 10 mm targets for 100 classes
     /// are 5).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::above(0.0, 1_000.0))]
     target_mm: Option<f64>,
     /// Relative rms of the contact radius from press to press (0.15: 15 %).
-    #[arg(long, default_value_t = collect::Plan::default().radius_spread)]
+    #[arg(long, default_value_t = collect::Plan::default().radius_spread, value_parser = crate::domain::real(0.0, 1.0))]
     radius_spread: f64,
     /// Fraction of a press's pressure the fabric still holds at the next press (0 to 1).
-    #[arg(long, default_value_t = collect::Plan::default().creep)]
+    #[arg(long, default_value_t = collect::Plan::default().creep, value_parser = crate::domain::real(0.0, 1.0))]
     creep: f64,
     /// How far the front end drifts during a visit, as a fraction of the spread between
     /// measurement sets (0 to 1).
-    #[arg(long, default_value_t = collect::Plan::default().drift)]
+    #[arg(long, default_value_t = collect::Plan::default().drift, value_parser = crate::domain::real(0.0, 1.0))]
     drift: f64,
     /// Rms electrode movement between visits (clips put back), mm.
-    #[arg(long, default_value_t = collect::Plan::default().electrode_movement * 1e3)]
+    #[arg(long, default_value_t = collect::Plan::default().electrode_movement * 1e3, value_parser = crate::domain::real(0.0, 50.0))]
     movement_mm: f64,
     /// Electrode poses within a visit: each press finds the electrodes in one of them (1 =
     /// they stay put while the grid is visited).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::domain::count(1, 1_000))]
     poses: usize,
     /// Rms movement of each pose around the visit's electrode positions, mm.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::domain::real(0.0, 50.0))]
     press_movement_mm: f64,
     /// Rms change of each clip's junction potential at every press (pressing tugs on the
     /// clips), uV.
-    #[arg(long, default_value_t = collect::Plan::default().press_junction * 1e6)]
+    #[arg(long, default_value_t = collect::Plan::default().press_junction * 1e6, value_parser = crate::domain::real(0.0, 10_000.0))]
     press_junction_uv: f64,
     /// Relative rms of the hand's force about each press's pressure while a scan runs.
-    #[arg(long, default_value_t = collect::Plan::default().wobble)]
+    #[arg(long, default_value_t = collect::Plan::default().wobble, value_parser = crate::domain::real(0.0, 1.0))]
     wobble: f64,
     /// Largest elongation of the finger's contact (long over short axis; each press draws one
     /// between 1 and this): 1 presses discs, about 1.5 a finger pressed at a slant, its long
     /// axis along +y (the hand coming from the bottom edge), 20 degrees rms.
-    #[arg(long, default_value_t = collect::Plan::default().elongation)]
+    #[arg(long, default_value_t = collect::Plan::default().elongation, value_parser = crate::domain::real(1.0, 10.0))]
     elongation: f64,
     /// Seed of the session.
     #[arg(long, default_value_t = 1)]

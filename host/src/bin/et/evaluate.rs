@@ -61,7 +61,7 @@ pub(crate) struct ExportArgs {
 }
 
 pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
-    let text = std::fs::read_to_string(&args.model)
+    let text = et_core::text::read_text_at_most(&args.model, et_core::text::MAX_FILE_BYTES)
         .with_context(|| format!("reading {}", args.model.display()))?;
     let table_model = tabular::is_table_model(&text);
     let Some(data_arg) = &args.data else {

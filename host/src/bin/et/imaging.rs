@@ -11,7 +11,7 @@ use et_sim::scene::Scene;
 #[derive(Debug, clap::Args)]
 pub(crate) struct MeshArgs {
     /// About how many triangles to mesh the sheet with.
-    #[arg(long, default_value_t = 8_000)]
+    #[arg(long, default_value_t = 8_000, value_parser = crate::domain::count(20, 500_000))]
     triangles: usize,
     /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
     /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
@@ -64,7 +64,7 @@ pub(crate) struct ReconstructArgs {
     mesh: MeshArgs,
     /// Gauss-Newton iterations: 1 is the one-step reconstruction; more refit the data
     /// (slower, for when accuracy matters more than speed).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::domain::count(1, 100))]
     iterations: usize,
     /// The reconstruction: gn, one-step (or iterative) Gauss-Newton with the NOSER prior,
     /// or greit, the consensus linear reconstruction (GREIT: desired images of small targets
@@ -81,21 +81,21 @@ pub(crate) struct ReconstructArgs {
     alpha: String,
     /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
     /// target at the centre; larger is sharper and noisier; 0.5 is the consensus value).
-    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE)]
+    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE, value_parser = crate::domain::above(0.0, 100.0))]
     noise_figure: f64,
     /// GREIT: the radius of the desired image of a small target, mm (default: 5 % of the
     /// sheet's longer side; at least one pixel).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::above(0.0, 1_000.0))]
     radius_mm: Option<f64>,
     /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::domain::real(0.0, 1.0))]
     s: f64,
     /// ROI threshold f (keep pixels >= f max); default per protocol as docs/method.md §6: adjacent
     /// 0.10, pseudo-polar 0.08, PP-PP 0.05, others 0.10.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::real(0.0, 1.0))]
     threshold: Option<f64>,
     /// Pixels across the image (4 to 512).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = crate::domain::count(4, 512))]
     pixels: usize,
     /// Image measured frames instead of simulating the scene's touches; the scene gives the
     /// sheet, the electrodes and the protocol (a built-in one, or any system's as a file).
@@ -108,7 +108,7 @@ pub(crate) struct ReconstructArgs {
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as
     /// `et stream` and `et view` do; record them with the sheet untouched).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::domain::count(1, 10_000_000))]
     reference: usize,
     /// The untouched reference V_0 from another file (one or more frames, averaged; any
     /// format --frames reads); then --frame counts every frame of --frames.

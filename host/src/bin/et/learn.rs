@@ -42,7 +42,7 @@ pub(crate) struct TrainArgs {
     shrinkage: Option<String>,
     /// Folds of the cross-validation: the reported one on --data (default 10), the one that
     /// chooses hyperparameters on --features (default 5).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::count(2, 1_000))]
     folds: Option<usize>,
     /// How --features rows are dealt to folds: shuffled (stratified by class), or blocks
     /// (contiguous, in file order: for recordings in time order, where a shuffled split
@@ -68,7 +68,7 @@ pub(crate) struct TrainArgs {
     curve: Option<PathBuf>,
     /// Keep only this many features (--data), those that separate the classes best (Fisher
     /// ratio): QDA's size and cost grow with the square of the feature count.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::domain::count(1, 1_000_000))]
     keep: Option<usize>,
     /// Where to write the model (JSON).
     #[arg(long)]
@@ -418,9 +418,18 @@ struct ShrinkageScore {
 }
 
 /// `ROWSxCOLS`, both at least 1.
+/// The most rows or columns of a class grid: 10 000 classes, far beyond what a sheet
+/// resolves (the method's finest grid is 10 x 10).
+pub(crate) const GRID_MOST: usize = 100;
+
 pub(crate) fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
-    text.split_once('x')
+    let (r, c) = text
+        .split_once('x')
         .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
         .filter(|&(r, c)| r > 0 && c > 0)
-        .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))
+        .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))?;
+    if r > GRID_MOST || c > GRID_MOST {
+        bail!("{flag} '{text}': at most {GRID_MOST} rows and {GRID_MOST} columns");
+    }
+    Ok((r, c))
 }

@@ -94,7 +94,7 @@ pub(crate) struct StreamArgs {
     #[arg(long)]
     json: bool,
     /// Stop after this many frames (default: run until Ctrl-C or the end of a recording).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
     /// Simulate as fast as possible instead of in real time.
     #[arg(long)]

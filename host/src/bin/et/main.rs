@@ -23,6 +23,7 @@ macro_rules! out {
 mod board;
 mod collect;
 mod demo;
+mod domain;
 mod evaluate;
 mod imaging;
 mod learn;

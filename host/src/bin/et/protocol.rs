@@ -27,7 +27,7 @@ pub(crate) struct ProtocolArgs {
     #[arg(long)]
     csv: bool,
     /// With --csv: the current of every row, A.
-    #[arg(long, default_value_t = 1e-3, requires = "csv")]
+    #[arg(long, default_value_t = 1e-3, requires = "csv", value_parser = crate::domain::above(0.0, 1.0))]
     current_a: f64,
 }
 

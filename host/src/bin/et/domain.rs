@@ -1,0 +1,73 @@
+//! The domain of every numeric flag: clap value parsers that refuse what is not a number of the
+//! flag's kind before any work, saying what the flag takes.
+
+/// A finite number from `lo` to `hi`, both included.
+pub(crate) fn real(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone {
+    move |text| {
+        let v = number(text)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!("{v} is outside {lo} to {hi}"))
+        }
+    }
+}
+
+/// A finite number above `lo` (excluded) and at most `hi`.
+pub(crate) fn above(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone {
+    move |text| {
+        let v = number(text)?;
+        if v > lo && v <= hi {
+            Ok(v)
+        } else {
+            Err(format!("{v} is not above {lo} and at most {hi}"))
+        }
+    }
+}
+
+/// A whole number from `lo` to `hi`, both included.
+pub(crate) fn count(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + Clone {
+    move |text| {
+        let v: usize = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{text}' is not a whole number"))?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!("{v} is outside {lo} to {hi}"))
+        }
+    }
+}
+
+fn number(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not a finite number"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn domains_refuse_what_is_outside_them_and_non_numbers() {
+        let unit = real(0.0, 1.0);
+        assert_eq!(unit("0.5"), Ok(0.5));
+        assert_eq!(unit("1"), Ok(1.0));
+        for bad in ["-1", "2", "nan", "inf", "-inf", "x", ""] {
+            assert!(unit(bad).is_err(), "{bad}");
+        }
+        let positive = above(0.0, 10.0);
+        assert!(positive("0").is_err() && positive("1e-9").is_ok() && positive("11").is_err());
+        let folds = count(2, 100);
+        assert!(folds("1").is_err() && folds("2").is_ok() && folds("-2").is_err());
+        assert!(folds("1000000").unwrap_err().contains("outside 2 to 100"));
+    }
+}
