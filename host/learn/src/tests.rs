@@ -465,7 +465,8 @@ mod files {
     #[test]
     fn both_formats_refuse_the_same_inconsistent_datasets() {
         let dir = tmp("consistent");
-        let cases: [(&str, fn(&mut Dataset)); 4] = [
+        type Spoil = fn(&mut Dataset);
+        let cases: [(&str, Spoil); 4] = [
             ("visit", |d| d.visit[0] = u16::MAX),
             ("visit", |d| d.visit.iter_mut().for_each(|v| *v *= 2)),
             ("pressure", |d| d.pressure[3] = f64::NAN),
