@@ -53,6 +53,8 @@ pub struct Table {
     pub description: String,
     /// The first row's index in the file (after `--rows`).
     pub first_row: usize,
+    /// The unit the files' positions were written in (they are held in mm).
+    pub unit: Unit,
     /// The session (or visit, or subject) of each row as written, when given: rows of one
     /// group share their drift, and cross-validation leaves one group out.
     pub groups: Option<Vec<String>>,
@@ -413,6 +415,7 @@ impl Table {
                 None => description,
             },
             first_row: 0,
+            unit,
             groups: group_values,
         })
     }

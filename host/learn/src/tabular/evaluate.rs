@@ -64,6 +64,8 @@ pub struct GroupScore {
 /// [`TabularError::Usage`] when the features do not match, or the rows have no target the
 /// model predicts.
 pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, TabularError> {
+    let reordered = aligned(model, table)?;
+    let table = reordered.as_ref().unwrap_or(table);
     let standardised;
     let table = if model.per_group {
         standardised = table.standardised_per_group()?;
@@ -193,4 +195,52 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         pairs,
         predictions: pred,
     })
+}
+
+/// `table`'s feature columns in the model's order, when both name them and the order differs
+/// (None: already in order, or the columns are unnamed and taken by position).
+///
+/// # Errors
+/// [`TabularError::Usage`] when named columns are not the model's: one the model reads is
+/// missing, or one the model never saw is there.
+pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, TabularError> {
+    let (ours, theirs) = (&model.feature_names, &table.feature_names);
+    let positional = |names: &[String]| {
+        names
+            .iter()
+            .enumerate()
+            .all(|(i, n)| n.parse::<usize>() == Ok(i + 1))
+    };
+    if ours == theirs || positional(ours) || positional(theirs) {
+        return Ok(None);
+    }
+    if ours.len() != theirs.len() {
+        return Err(usage(format!(
+            "the data has {} feature columns, the model reads {}",
+            theirs.len(),
+            ours.len()
+        )));
+    }
+    let mut order = Vec::with_capacity(ours.len());
+    for name in ours {
+        let Some(j) = theirs.iter().position(|t| t == name) else {
+            return Err(usage(format!(
+                "the model reads a feature column '{name}' that the data does not have \
+                 (its columns must be the model's feature_names, in any order)"
+            )));
+        };
+        order.push(j);
+    }
+    if let Some(extra) = theirs.iter().find(|t| !ours.contains(t)) {
+        return Err(usage(format!(
+            "the data has a feature column '{extra}' the model was not trained on (its columns \
+             must be the model's feature_names, in any order)"
+        )));
+    }
+    let mut out = table.clone();
+    out.x = DMatrix::from_fn(table.x.nrows(), order.len(), |r, c| {
+        order.get(c).map_or(f64::NAN, |&j| table.x[(r, j)])
+    });
+    out.feature_names = ours.clone();
+    Ok(Some(out))
 }

@@ -311,7 +311,7 @@ pub fn train(
         feature_names: table.feature_names.clone(),
         feature_mean: mean,
         feature_scale: scale,
-        unit: Unit::Mm,
+        unit: table.unit,
         third: table.third.as_ref().map(|(n, _)| n.clone()),
         classes: if best.method.is_classifier() {
             classes.map(|(_, info)| info)

@@ -126,6 +126,7 @@ impl Table {
                 .and_then(|(name, v)| v.get(rows.clone()).map(|v| (name.clone(), v.to_vec()))),
             description: self.description.clone(),
             first_row: self.first_row + range.start,
+            unit: self.unit,
             groups: self
                 .groups
                 .as_ref()

@@ -250,6 +250,7 @@ fn labels_are_the_users_own_names() {
         third: None,
         description: String::new(),
         first_row: 0,
+        unit: Unit::Mm,
         groups: None,
     };
     let model = train(&table, Choice::Auto, &opts(), &mut quiet()).unwrap();
@@ -629,4 +630,43 @@ fn an_average_predicts_the_mean_of_its_members() {
     }
     let e = TableModel::from_json(&serde_json::to_string(&average).unwrap()).unwrap_err();
     assert!(e.to_string().contains("two regressors"), "{e}");
+}
+
+/// Named feature columns are matched by name: the same columns in another order evaluate
+/// exactly as in the model's order, and a column the model never saw is refused by name.
+#[test]
+fn named_columns_in_another_order_are_matched_by_name() {
+    let mut named = STANDIN.select("0..300".parse().unwrap()).unwrap();
+    let p = named.x.ncols();
+    named.feature_names = (0..p).map(|j| format!("ch{j}")).collect();
+    let (train_rows, test_rows) = (
+        named.select("0..240".parse().unwrap()).unwrap(),
+        named.select("240..".parse().unwrap()).unwrap(),
+    );
+    let model = train(
+        &train_rows,
+        Choice::One(Method::Ridge),
+        &opts(),
+        &mut quiet(),
+    )
+    .unwrap();
+    let straight = evaluate(&model, &test_rows).unwrap();
+    // Reversed columns, names with them.
+    let mut reversed = test_rows.clone();
+    reversed.x = DMatrix::from_fn(reversed.x.nrows(), p, |r, c| test_rows.x[(r, p - 1 - c)]);
+    reversed.feature_names.reverse();
+    let again = evaluate(&model, &reversed).unwrap();
+    assert_eq!(again.mean_error_mm, straight.mean_error_mm);
+    // Without the names the reversed columns would be read in file order: a different answer.
+    let mut unnamed = reversed.clone();
+    unnamed.feature_names = (1..=p).map(|j| j.to_string()).collect();
+    assert_ne!(
+        evaluate(&model, &unnamed).unwrap().mean_error_mm,
+        straight.mean_error_mm
+    );
+    // A column the model never saw.
+    let mut renamed = test_rows.clone();
+    renamed.feature_names[3] = "elsewhere".into();
+    let e = evaluate(&model, &renamed).unwrap_err().to_string();
+    assert!(e.contains("ch3") || e.contains("elsewhere"), "{e}");
 }
