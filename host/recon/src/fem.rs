@@ -199,7 +199,15 @@ fn make_pattern(
     size: usize,
 ) -> Result<Pattern, FemError> {
     let n = mesh.nodes.len();
-    let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+    // The factorisation's own error is internal (a pivot's index): say what it means.
+    let fail = |_: &dyn std::fmt::Debug| {
+        FemError::Factorisation(
+            "the finite-element system is singular or not positive definite (a conductivity \
+             that is zero, negative or not finite, or a piece of the mesh that no electrode \
+             reaches)"
+                .into(),
+        )
+    };
     let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * mesh.triangles.len());
     let mut entries = Vec::with_capacity(places.capacity());
     let mut put = |i: usize, j: usize, entry: Entry| {
@@ -362,7 +370,15 @@ impl Forward {
                 Entry::Fixed(v) => v,
             })
             .collect();
-        let fail = |e: &dyn std::fmt::Debug| FemError::Factorisation(format!("{e:?}"));
+        // The factorisation's own error is internal (a pivot's index): say what it means.
+        let fail = |_: &dyn std::fmt::Debug| {
+            FemError::Factorisation(
+                "the finite-element system is singular or not positive definite (a conductivity \
+             that is zero, negative or not finite, or a piece of the mesh that no electrode \
+             reaches)"
+                    .into(),
+            )
+        };
         let a = SparseColMat::new_from_argsort(
             self.pattern.symbolic.clone(),
             &self.pattern.argsort,

@@ -135,9 +135,12 @@ impl Greit {
             Regularisation::NoiseFigure(v) | Regularisation::Alpha(v)
                 if !(v.is_finite() && v > 0.0) =>
             {
+                let (what, v) = match options.regularisation {
+                    Regularisation::NoiseFigure(v) => ("noise figure", v),
+                    Regularisation::Alpha(v) => ("alpha", v),
+                };
                 return Err(ReconError::Parameter(format!(
-                    "{:?}: must be finite and > 0",
-                    options.regularisation
+                    "a GREIT {what} of {v}: must be finite and > 0"
                 )));
             }
             _ => {}

@@ -133,7 +133,7 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     let blob = et_core::text::read_at_most(&args.blob, 1 << 24)
         .with_context(|| format!("reading {}", args.blob.display()))?;
     let model = et_core::model::Model::parse(&blob)
-        .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e:?}", args.blob.display()))?;
+        .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e}", args.blob.display()))?;
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;
     wait_for_board(&mut link)?;
     let started = Instant::now();
