@@ -239,7 +239,11 @@ pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, Tabul
     }
     let mut out = table.clone();
     out.x = DMatrix::from_fn(table.x.nrows(), order.len(), |r, c| {
-        order.get(c).map_or(f64::NAN, |&j| table.x[(r, j)])
+        order
+            .get(c)
+            .and_then(|&j| table.x.get((r, j)))
+            .copied()
+            .unwrap_or(f64::NAN)
     });
     out.feature_names = ours.clone();
     Ok(Some(out))

@@ -496,6 +496,7 @@ fn references_and_per_group_standardisation_cancel_a_sessions_gains_and_offsets(
         third: None,
         description: String::new(),
         first_row: 0,
+        unit: Unit::Mm,
         groups: Some(groups.clone()),
     };
     // Session s1 through other gains g_j and offsets o_j.
