@@ -1250,7 +1250,7 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     let tr = json(ok(train(&["--kind", "auto"], &auto)));
     let method = tr["method"].as_str().unwrap().to_string();
     assert!(
-        ["ridge", "knn", "kernel-ridge", "gp", "mlp"].contains(&method.as_str()),
+        ["ridge", "knn", "kernel-ridge", "gp", "mlp", "average"].contains(&method.as_str()),
         "{tr}"
     );
     assert_eq!(tr["rows"], serde_json::json!([0, 240]));

@@ -78,6 +78,16 @@ impl Electrodes {
 /// model is the accurate choice.
 pub const MIN_CONTACT_RATIO: f64 = 1e-6;
 
+/// A failed factorisation, in words: the factoriser's own error is internal (a pivot's
+/// index).
+fn fail(_: impl std::fmt::Debug) -> FemError {
+    FemError::Factorisation(
+        "the finite-element system is singular or not positive definite (a conductivity that \
+         is zero, negative or not finite, or a piece of the mesh that no electrode reaches)"
+            .into(),
+    )
+}
+
 /// Why a forward solve failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -199,15 +209,6 @@ fn make_pattern(
     size: usize,
 ) -> Result<Pattern, FemError> {
     let n = mesh.nodes.len();
-    // The factorisation's own error is internal (a pivot's index): say what it means.
-    let fail = |_: &dyn std::fmt::Debug| {
-        FemError::Factorisation(
-            "the finite-element system is singular or not positive definite (a conductivity \
-             that is zero, negative or not finite, or a piece of the mesh that no electrode \
-             reaches)"
-                .into(),
-        )
-    };
     let mut places: Vec<Pair<usize, usize>> = Vec::with_capacity(9 * mesh.triangles.len());
     let mut entries = Vec::with_capacity(places.capacity());
     let mut put = |i: usize, j: usize, entry: Entry| {
@@ -241,8 +242,8 @@ fn make_pattern(
         }
     }
     let (symbolic, argsort) =
-        SymbolicSparseColMat::try_new_from_indices(size, size, &places).map_err(|e| fail(&e))?;
-    let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).map_err(|e| fail(&e))?;
+        SymbolicSparseColMat::try_new_from_indices(size, size, &places).map_err(fail)?;
+    let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).map_err(fail)?;
     Ok(Pattern {
         entries,
         symbolic,
@@ -370,23 +371,14 @@ impl Forward {
                 Entry::Fixed(v) => v,
             })
             .collect();
-        // The factorisation's own error is internal (a pivot's index): say what it means.
-        let fail = |_: &dyn std::fmt::Debug| {
-            FemError::Factorisation(
-                "the finite-element system is singular or not positive definite (a conductivity \
-             that is zero, negative or not finite, or a piece of the mesh that no electrode \
-             reaches)"
-                    .into(),
-            )
-        };
         let a = SparseColMat::new_from_argsort(
             self.pattern.symbolic.clone(),
             &self.pattern.argsort,
             &values,
         )
-        .map_err(|e| fail(&e))?;
+        .map_err(fail)?;
         let llt = Llt::try_new_with_symbolic(self.pattern.llt.clone(), a.as_ref(), Side::Lower)
-            .map_err(|e| fail(&e))?;
+            .map_err(fail)?;
         let m = currents.ncols();
         let mut rhs = faer::Mat::<f64>::zeros(size, m);
         for c in 0..m {
