@@ -1179,6 +1179,107 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
     assert!(!std::path::Path::new(out).exists());
+
+    // Flags that do not apply to the mode, a model used on another scan, two columns of one
+    // name: refused, not ignored.
+    let dir = std::env::temp_dir().join(format!("et-cli-modes-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let small = [
+        "--grid",
+        "2x2",
+        "--visits",
+        "2",
+        "--scans",
+        "2",
+        "--subsections",
+        "10",
+    ];
+    let eight = root.join("sim/scenes/square-13cm-8.toml");
+    for (s, d) in [(scene, "d.csv"), (eight.to_str().unwrap(), "d8.csv")] {
+        let c = et(&[&["collect", "--scene", s, "--out", &p(d)][..], &small[..]].concat());
+        assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    }
+    let t = et(&["train", "--data", &p("d.csv"), "--out", &p("m.json")]);
+    assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
+    std::fs::write(p("F.csv"), "x,a,X\n1,2,3\n4,5,6\n7,8,9\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "train".into(),
+                "--data".into(),
+                p("d.csv"),
+                "--rows".into(),
+                "0..10".into(),
+                "--out".into(),
+                p("n.json"),
+            ],
+            "--rows applies to any sensor's table",
+        ),
+        (
+            vec![
+                "eval".into(),
+                "--model".into(),
+                p("m.json"),
+                "--data".into(),
+                p("d.csv"),
+                "--unit".into(),
+                "m".into(),
+            ],
+            "--unit applies",
+        ),
+        (
+            vec![
+                "eval".into(),
+                "--model".into(),
+                p("m.json"),
+                "--data".into(),
+                p("d.csv"),
+                "--predictions".into(),
+                p("p.csv"),
+            ],
+            "--predictions writes",
+        ),
+        (
+            vec![
+                "eval".into(),
+                "--model".into(),
+                p("m.json"),
+                "--data".into(),
+                p("d8.csv"),
+            ],
+            "trained on a scan of L = 16",
+        ),
+        (
+            vec![
+                "train".into(),
+                "--features".into(),
+                p("F.csv"),
+                "--out".into(),
+                p("n.json"),
+            ],
+            "both named",
+        ),
+        (
+            vec![
+                "reconstruct".into(),
+                "--scene".into(),
+                scene.into(),
+                "--frame".into(),
+                "3".into(),
+                "--out".into(),
+                p("i.png"),
+            ],
+            "--frames",
+        ),
+    ];
+    for (args, what) in cases {
+        let o = et(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(what), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic

@@ -393,6 +393,15 @@ pub struct Tested {
 /// [`UseError::Model`] when the model's tables are not usable, [`UseError::Fit`] when the
 /// dataset does not match its classes.
 pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
+    let (m, d) = (file.config, data.config);
+    if (m.electrodes, m.protocol, m.current_na, m.gain)
+        != (d.electrodes, d.protocol, d.current_na, d.gain)
+    {
+        return Err(UseError::Config {
+            model: scan(&m),
+            data: scan(&d),
+        });
+    }
     let columns = model_columns(file, data)?;
     let model = file.fitted().map_err(UseError::Model)?;
     let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
@@ -503,6 +512,17 @@ fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataErr
         })
 }
 
+/// What of a scan decides what its features mean: L, the protocol, the current and the gain.
+fn scan(c: &et_core::config::ScanConfig) -> String {
+    format!(
+        "L = {}, {} drive, {} uA, gain {}",
+        c.electrodes,
+        c.protocol,
+        f64::from(c.current_na) / 1e3,
+        c.gain
+    )
+}
+
 /// Why a model could not be used on a dataset; says which of the two is at fault.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -510,6 +530,18 @@ pub enum UseError {
     /// The dataset does not hold what the model needs.
     #[error("data: {0}")]
     Data(#[from] DataError),
+    /// The model was trained on another scan than the data's: its features are other
+    /// measurements.
+    #[error(
+        "the model was trained on a scan of {model}, the data were measured with {data}: \
+             train a model on data of this scan"
+    )]
+    Config {
+        /// The model's scan.
+        model: String,
+        /// The data's scan.
+        data: String,
+    },
     /// The model file's tables are not a usable model.
     #[error("model: {0}")]
     Model(FitError),

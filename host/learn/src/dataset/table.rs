@@ -120,6 +120,24 @@ pub(super) fn parse_table(
     if names.iter().any(String::is_empty) {
         return Err(content(path, hl, None, "empty column name in the header"));
     }
+    // Two columns of one name: which one a reader takes would be a guess (a second `x` was
+    // dropped silently).
+    let mut seen = std::collections::HashMap::with_capacity(names.len());
+    for (b, name) in names.iter().enumerate() {
+        if let Some(&a) = seen.get(&name.to_ascii_lowercase()) {
+            return Err(content(
+                path,
+                hl,
+                Some(name.clone()),
+                format!(
+                    "columns {} and {} are both named '{name}': give each column its own name",
+                    a + 1,
+                    b + 1
+                ),
+            ));
+        }
+        seen.insert(name.to_ascii_lowercase(), b);
+    }
     let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
     let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();

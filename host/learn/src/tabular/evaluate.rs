@@ -109,10 +109,15 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         }
         _ => None,
     };
-    if truth.is_none() && accuracy.is_none() {
-        return Err(usage(
-            "the rows have no target this model predicts: give positions (x, y) or class labels",
-        ));
+    // Positions score only a model that predicts them (a regressor, or classes with centres).
+    let positions_scored = truth.is_some() && pred.iter().any(|p| p.target.is_some());
+    if !positions_scored && accuracy.is_none() {
+        return Err(usage(if model.method.is_classifier() {
+            "the rows have no target this model predicts: it predicts class labels (and \
+             positions only when its classes have centres); give the rows a label column"
+        } else {
+            "the rows have no target this model predicts: give positions (x, y)"
+        }));
     }
     let mut pairs = Vec::new();
     let (mut errors, mut errors3, mut third) = (Vec::new(), Vec::new(), Vec::new());

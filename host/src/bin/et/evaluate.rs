@@ -86,6 +86,15 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
             args.model.display()
         );
     }
+    if let Some(flag) = args.table.table_only_flag() {
+        bail!("{flag} applies to any sensor's table (--features), not to an et dataset (--data)");
+    }
+    if args.predictions.is_some() {
+        bail!(
+            "--predictions writes a sensor's table's predictions (--features); for an et \
+             dataset --json has the confusion matrix"
+        );
+    }
     let plots = args
         .plots
         .as_ref()

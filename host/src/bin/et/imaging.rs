@@ -108,7 +108,12 @@ pub(crate) struct ReconstructArgs {
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as
     /// `et stream` and `et view` do; record them with the sheet untouched).
-    #[arg(long, default_value_t = 20, value_parser = crate::domain::count(1, 10_000_000))]
+    #[arg(
+        long,
+        default_value_t = 20,
+        requires = "frames",
+        value_parser = crate::domain::count(1, 10_000_000)
+    )]
     reference: usize,
     /// The untouched reference V_0 from another file (one or more frames, averaged; any
     /// format --frames reads); then --frame counts every frame of --frames.
@@ -121,7 +126,7 @@ pub(crate) struct ReconstructArgs {
     #[arg(long, value_enum)]
     background: Option<Background>,
     /// With --frames: which frame to image (0-based; default the last).
-    #[arg(long)]
+    #[arg(long, requires = "frames")]
     frame: Option<usize>,
     /// Where to write the image (PNG).
     #[arg(long)]

@@ -145,6 +145,8 @@ impl TrainArgs {
             "auto" => None,
             v => Some(
                 v.parse::<f64>()
+                    .ok()
+                    .filter(|s| (0.0..=1.0).contains(s))
                     .with_context(|| format!("--shrinkage '{v}': a number in [0, 1] or auto"))?,
             ),
         };
@@ -227,6 +229,9 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             format!("{:?}", args.kind.unwrap_or(KindArg::Qda)).to_lowercase()
         )
     })?;
+    if let Some(flag) = args.table.table_only_flag() {
+        bail!("{flag} applies to any sensor's table (--features), not to an et dataset (--data)");
+    }
     if args.grid.is_some() || args.cv.is_some() || args.per_group {
         bail!("--grid, --cv and --per-group apply to any sensor's table (--features)");
     }

@@ -25,8 +25,8 @@ pub(crate) struct TableArgs {
     #[arg(long, value_name = "CSV", requires = "features")]
     targets: Option<PathBuf>,
     /// Unit of the positions in the files (reports are in mm).
-    #[arg(long, value_enum, default_value_t = UnitArg::Mm, requires = "features")]
-    unit: UnitArg,
+    #[arg(long, value_enum, requires = "features")]
+    unit: Option<UnitArg>,
     /// Only rows A..B (0-based, B excluded; A.. or ..B), e.g. the first 80 % to train and
     /// the rest to test: a chronological split (real presses drift: a random split
     /// flatters a model).
@@ -70,6 +70,20 @@ pub(crate) enum UnitArg {
 }
 
 impl TableArgs {
+    /// The first flag given that applies to a sensor's table (--features) only, for commands
+    /// that were given an et dataset (--data) instead.
+    pub(crate) fn table_only_flag(&self) -> Option<&'static str> {
+        [
+            (self.targets.is_some(), "--targets"),
+            (self.unit.is_some(), "--unit"),
+            (self.rows.is_some(), "--rows"),
+            (self.groups.is_some(), "--groups"),
+            (self.reference_features.is_some(), "--reference-features"),
+        ]
+        .into_iter()
+        .find_map(|(given, flag)| given.then_some(flag))
+    }
+
     /// The table, its rows selected, with what was taken as what printed.
     fn load(&self) -> Result<Table> {
         let features = self
@@ -88,8 +102,8 @@ impl TableArgs {
             );
         }
         let unit = match self.unit {
-            UnitArg::M => Unit::M,
-            UnitArg::Mm => Unit::Mm,
+            Some(UnitArg::M) => Unit::M,
+            None | Some(UnitArg::Mm) => Unit::Mm,
         };
         let groups = self.groups.as_ref().map(|g| {
             if Path::new(g).is_file() {
