@@ -7,6 +7,8 @@ use anyhow::{Context, Result, bail};
 use et_host::recording;
 use et_sim::scene::Scene;
 
+use crate::domain::count;
+
 /// How a command gets its mesh.
 #[derive(Debug, clap::Args)]
 pub(crate) struct MeshArgs {
@@ -108,12 +110,7 @@ pub(crate) struct ReconstructArgs {
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as
     /// `et stream` and `et view` do; record them with the sheet untouched).
-    #[arg(
-        long,
-        default_value_t = 20,
-        requires = "frames",
-        value_parser = crate::domain::count(1, 10_000_000)
-    )]
+    #[arg(long, default_value_t = 20, requires = "frames", value_parser = count(1, 10_000_000))]
     reference: usize,
     /// The untouched reference V_0 from another file (one or more frames, averaged; any
     /// format --frames reads); then --frame counts every frame of --frames.
