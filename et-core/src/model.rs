@@ -348,49 +348,18 @@ impl<'a> Model<'a> {
     }
 
     fn check_tables(&self) -> Result<(), ModelError> {
-        let (c_n, p) = (self.classes, self.features);
-        for j in 0..p {
-            if usize::from(self.feature_index(j)) >= self.frame_len {
+        let mut previous = None;
+        for j in 0..self.features {
+            let index = self.feature_index(j);
+            if usize::from(index) >= self.frame_len {
                 return Err(ModelError::FeatureIndex { feature: j as u16 });
             }
-            if !self.mean(j).is_finite() || !self.scale(j).is_finite() {
-                return Err(ModelError::NonFinite);
+            if previous.is_some_and(|before| index <= before) {
+                return Err(ModelError::FeatureOrder { feature: j as u16 });
             }
-            if self.scale(j) <= 0.0 {
-                return Err(ModelError::Scale { feature: j as u16 });
-            }
+            previous = Some(index);
         }
-        for c in 0..c_n {
-            let [x, y] = self.position_mm(c as u16);
-            if !(x.is_finite()
-                && y.is_finite()
-                && self.log_prior(c).is_finite()
-                && self.constant(c).is_finite())
-            {
-                return Err(ModelError::NonFinite);
-            }
-            if (0..p).any(|j| !self.vector(c, j).is_finite()) {
-                return Err(ModelError::NonFinite);
-            }
-            if self.kind == ModelKind::Qda {
-                if (0..packed_len(p)).any(|i| !self.factor(c, i).is_finite()) {
-                    return Err(ModelError::NonFinite);
-                }
-                let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
-                for r in 0..p {
-                    let d = self.factor(c, packed_len(r) + r);
-                    if d <= 0.0 {
-                        return Err(ModelError::Singular { class: c as u16 });
-                    }
-                    lo = lo.min(d);
-                    hi = hi.max(d);
-                }
-                if lo < MIN_PIVOT_RATIO * hi {
-                    return Err(ModelError::IllConditioned { class: c as u16 });
-                }
-            }
-        }
-        Ok(())
+        check_class_tables(self)
     }
 
     /// QDA or LDA.
@@ -510,10 +479,12 @@ impl<'a> Model<'a> {
     }
 }
 
+mod check;
 mod error;
 mod evaluate;
 mod write;
 
+pub use check::{ClassTables, check_class_tables};
 pub use error::{EvalError, ModelError};
 pub use write::{ModelTables, write_model};
 

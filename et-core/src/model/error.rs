@@ -53,6 +53,15 @@ pub enum ModelError {
     /// A stored value is NaN or infinite.
     #[error("model holds a NaN or infinite value")]
     NonFinite,
+    /// A feature's frame index is not above the one before: each frame value is a feature at
+    /// most once, in frame order (a repeated index would read one channel twice).
+    #[error(
+        "feature {feature}'s frame index repeats or is below the one before (each frame value once, in frame order)"
+    )]
+    FeatureOrder {
+        /// Which feature.
+        feature: u16,
+    },
     /// A feature's scale is not positive.
     #[error("feature {feature} has a non-positive scale")]
     Scale {

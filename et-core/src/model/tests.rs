@@ -490,6 +490,13 @@ fn corrupted_or_mismatched_blobs_are_refused() {
         Model::parse(&resign(idx)).unwrap_err(),
         ModelError::FeatureIndex { feature: 0 }
     );
+    // A frame value read twice (or out of frame order) would weigh one channel twice.
+    let mut twice = blob.clone();
+    twice.copy_within(HEADER_LEN..HEADER_LEN + 2, HEADER_LEN + 2);
+    assert_eq!(
+        Model::parse(&resign(twice)).unwrap_err(),
+        ModelError::FeatureOrder { feature: 1 }
+    );
     let mut elec = blob.clone();
     elec[14] = 16; // K of opposite at L = 16 is 192, header says 32
     assert_eq!(

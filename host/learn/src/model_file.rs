@@ -105,7 +105,13 @@ impl ModelFile {
                 "feature or class tables of different lengths".into(),
             ));
         }
-        fitted_from_records(kind, &self.feature_mean, &self.feature_scale, &self.classes)
+        fitted_from_records(
+            kind,
+            &self.feature_mean,
+            &self.feature_scale,
+            &self.classes,
+            &self.centres_mm,
+        )
     }
 
     /// The et-core blob at `precision`.
@@ -234,15 +240,20 @@ pub fn class_records(model: &Fitted) -> Vec<ClassRecord> {
         .collect()
 }
 
-/// The fitted model from its standardisation and stored classes.
+/// The fitted model from its standardisation, stored classes and their positions (mm; empty
+/// when the classes have none), checked as the board checks a model
+/// ([`et_core::model::check_class_tables`]): board and table model files accept and refuse the
+/// same class tables.
 ///
 /// # Errors
-/// [`FitError::Shape`] for tables of inconsistent lengths.
+/// [`FitError::Shape`] for tables of inconsistent lengths, [`FitError::Invalid`] for tables
+/// the board would refuse.
 pub fn fitted_from_records(
     kind: ModelKind,
     feature_mean: &[f64],
     feature_scale: &[f64],
     records: &[ClassRecord],
+    positions_mm: &[[f64; 2]],
 ) -> Result<Fitted, FitError> {
     let p = feature_mean.len();
     if feature_scale.len() != p || records.is_empty() {
@@ -281,12 +292,89 @@ pub fn fitted_from_records(
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(Fitted {
+    let fitted = Fitted {
         kind,
         feature_mean: feature_mean.to_vec(),
         feature_scale: feature_scale.to_vec(),
         classes,
+    };
+    check_tables(&fitted, positions_mm)?;
+    Ok(fitted)
+}
+
+/// Checks a fitted model's tables as the board checks a model
+/// ([`et_core::model::check_class_tables`]), with its classes' positions (mm; empty when the
+/// classes have none).
+///
+/// # Errors
+/// [`FitError::Shape`] for positions of another count, [`FitError::Invalid`] for tables the
+/// board would refuse.
+pub fn check_tables(fitted: &Fitted, positions_mm: &[[f64; 2]]) -> Result<(), FitError> {
+    if !positions_mm.is_empty() && positions_mm.len() != fitted.classes.len() {
+        return Err(FitError::Shape("a position for every class".into()));
+    }
+    et_core::model::check_class_tables(&Tables {
+        fitted,
+        positions_mm,
     })
+    .map_err(FitError::Invalid)
+}
+
+/// A fitted model's tables as the board reads them (f32), for the board's checks.
+struct Tables<'a> {
+    fitted: &'a Fitted,
+    /// Per class, mm, or empty.
+    positions_mm: &'a [[f64; 2]],
+}
+
+impl et_core::model::ClassTables for Tables<'_> {
+    fn kind(&self) -> ModelKind {
+        self.fitted.kind
+    }
+    fn classes(&self) -> usize {
+        self.fitted.classes.len()
+    }
+    fn features(&self) -> usize {
+        self.fitted.features()
+    }
+    fn mean(&self, j: usize) -> f32 {
+        at(&self.fitted.feature_mean, j)
+    }
+    fn scale(&self, j: usize) -> f32 {
+        at(&self.fitted.feature_scale, j)
+    }
+    fn position_mm(&self, c: usize) -> [f32; 2] {
+        let [x, y] = self.positions_mm.get(c).copied().unwrap_or([0.0; 2]);
+        [x as f32, y as f32]
+    }
+    fn log_prior(&self, c: usize) -> f32 {
+        self.fitted
+            .classes
+            .get(c)
+            .map_or(f32::NAN, |k| k.log_prior as f32)
+    }
+    fn constant(&self, c: usize) -> f32 {
+        (self.fitted.classes.get(c)).map_or(f32::NAN, |k| (-0.5 * k.log_det_or_quad) as f32)
+    }
+    fn vector(&self, c: usize, j: usize) -> f32 {
+        self.fitted
+            .classes
+            .get(c)
+            .map_or(f32::NAN, |k| match self.fitted.kind {
+                ModelKind::Qda => at(k.mean.as_slice(), j),
+                ModelKind::Lda => at(k.weights.as_slice(), j),
+            })
+    }
+    fn factor(&self, c: usize, r: usize, q: usize) -> f32 {
+        (self.fitted.classes.get(c))
+            .and_then(|k| k.factor.get((r, q)))
+            .map_or(f32::NAN, |&v| v as f32)
+    }
+}
+
+/// `v[j]` in f32, NaN past the end (refused by the checks).
+fn at(v: &[f64], j: usize) -> f32 {
+    v.get(j).map_or(f32::NAN, |&x| x as f32)
 }
 
 /// Why a model file could not be read or written.

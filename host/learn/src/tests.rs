@@ -459,14 +459,17 @@ mod files {
         }
     }
 
-    /// One set of checks for both formats, after reading: a visit number far past the visits
-    /// (it would make 65 535 leave-one-visit-out folds), a missing visit, and non-finite
-    /// pressures or untouched frames are refused from .npz as from CSV, naming the field.
+    /// One set of checks for both formats, after reading: a frame value read twice or past the
+    /// frame, a visit number far past the visits (it would make 65 535 leave-one-visit-out
+    /// folds), a missing visit, and non-finite pressures or untouched frames are refused from
+    /// .npz as from CSV, naming the field.
     #[test]
     fn both_formats_refuse_the_same_inconsistent_datasets() {
         let dir = tmp("consistent");
         type Spoil = fn(&mut Dataset);
-        let cases: [(&str, Spoil); 4] = [
+        let cases: [(&str, Spoil); 6] = [
+            ("feature_index", |d| d.feature_index[2] = 1),
+            ("feature_index", |d| d.feature_index[4] = 99),
             ("visit", |d| d.visit[0] = u16::MAX),
             ("visit", |d| d.visit.iter_mut().for_each(|v| *v *= 2)),
             ("pressure", |d| d.pressure[3] = f64::NAN),

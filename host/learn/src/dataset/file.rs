@@ -467,6 +467,30 @@ fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
     finite("untouched", data.baselines.as_slice().iter())?;
     finite("pressure", data.pressure.iter())?;
     finite("position", data.positions.as_flattened().iter())?;
+    let frame_len = et_core::protocol::Protocol::new(data.config.protocol, data.config.electrodes)
+        .map_or(usize::MAX, |p| p.frame_len());
+    for (j, pair) in data.feature_index.windows(2).enumerate() {
+        if let [before, index] = pair
+            && index <= before
+        {
+            return Err(fault(
+                "feature_index",
+                format!(
+                    "feature {} reads frame value {index} after {before}: each frame value once, \
+                     in frame order",
+                    j + 2
+                ),
+            ));
+        }
+    }
+    if let Some(&last) = data.feature_index.last()
+        && usize::from(last) >= frame_len
+    {
+        return Err(fault(
+            "feature_index",
+            format!("frame value {last} in a frame of {frame_len} values"),
+        ));
+    }
     let mut seen = vec![false; data.x.nrows().min(usize::from(u16::MAX)) + 1];
     for &v in &data.visit {
         match seen.get_mut(usize::from(v)) {

@@ -173,6 +173,8 @@ pub(super) fn cv_present_classes(
             .map(|&r| local.get(&y(r)).copied().unwrap_or(0))
             .collect();
         let model = Fitted::fit(&rows_of(x, &train), &yt, present.len(), fit).ok()?;
+        // Tables a board would refuse (and the model file's reader with it) score nothing.
+        crate::model_file::check_tables(&model, &[]).ok()?;
         let mut row = vec![0.0; x.ncols()];
         for &r in &test {
             for (j, v) in row.iter_mut().enumerate() {

@@ -254,6 +254,7 @@ pub(super) fn fit_final(
                 target: shrink_target(table.x.ncols(), labels),
             };
             let model = Fitted::fit(&table.x, &labels.index, labels.names.len(), &fit)?;
+            crate::model_file::check_tables(&model, &[])?;
             (
                 Tables::Discriminant {
                     kind: if best.method == Method::Lda {

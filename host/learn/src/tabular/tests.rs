@@ -671,3 +671,83 @@ fn named_columns_in_another_order_are_matched_by_name() {
     let e = evaluate(&model, &renamed).unwrap_err().to_string();
     assert!(e.contains("ch3") || e.contains("elsewhere"), "{e}");
 }
+
+/// One validation for both kinds of model file: a table model's class tables pass the checks
+/// a board model's pass (et-core's `check_class_tables`, the board's own), so the same spoilt
+/// class is refused by both, for the same reason.
+#[test]
+fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
+    use crate::model_file::{ModelFile, fitted_from_records};
+    let mut rng = et_core::rng::Rng::new(8);
+    let n = 90;
+    let class = |r: usize| r % 3;
+    // Each class its own spread: QDA, not the LDA it would equal.
+    let x = DMatrix::from_fn(n, 3, |r, j| {
+        class(r) as f64 * (1.0 + j as f64) + 0.05 * (1 + 4 * class(r)) as f64 * rng.normal()
+    });
+    let table = Table {
+        x,
+        feature_names: (0..3).map(|j| format!("c{j}")).collect(),
+        labels: Some((0..n).map(|r| ["a", "b", "c"][class(r)].into()).collect()),
+        positions_mm: None,
+        third: None,
+        description: String::new(),
+        first_row: 0,
+        unit: Unit::Mm,
+        groups: None,
+    };
+    let model = train(&table, Choice::One(Method::Qda), &opts(), &mut quiet()).unwrap();
+    assert_eq!(model.method, Method::Qda);
+    let Tables::Discriminant { classes, .. } = &model.tables else {
+        panic!("a discriminant's tables");
+    };
+    let m = &model;
+    let fitted = fitted_from_records(
+        ModelKind::Qda,
+        &m.feature_mean,
+        &m.feature_scale,
+        classes,
+        &[],
+    )
+    .unwrap();
+    let config = et_core::ScanConfig {
+        electrodes: 8,
+        protocol: et_core::protocol::ProtocolKind::Adjacent,
+        ..et_core::ScanConfig::REFERENCE
+    };
+    let centres = vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]];
+    let board = ModelFile::new(&fitted, 0.1, config, vec![0, 3, 7], centres, false);
+    let dir = tmp("spoilt");
+    let (t, b) = (dir.join("table.json"), dir.join("board.json"));
+    model.save(&t).unwrap();
+    board.save(&b).unwrap();
+    let json = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    type Spoil = fn(&mut serde_json::Value);
+    let spoils: [(&str, Spoil); 3] = [
+        ("singular", |c| {
+            let zeros = vec![0.0; c["factor"].as_array().unwrap().len()];
+            c["factor"] = zeros.into();
+        }),
+        // Finite in f64, infinite in the f32 the board evaluates.
+        ("NaN or infinite", |c| c["log_prior"] = 1e39.into()),
+        ("ill-conditioned", |c| c["factor"][0] = 1e9.into()),
+    ];
+    for (reason, spoil) in spoils {
+        let (mut tv, mut bv) = (json(&t), json(&b));
+        spoil(&mut tv["tables"]["classes"][1]);
+        spoil(&mut bv["classes"][1]);
+        let (t2, b2) = (dir.join("t2.json"), dir.join("b2.json"));
+        std::fs::write(&t2, tv.to_string()).unwrap();
+        std::fs::write(&b2, bv.to_string()).unwrap();
+        let te = TableModel::load(&t2).unwrap_err().to_string();
+        let be = ModelFile::load(&b2).unwrap_err().to_string();
+        assert!(
+            te.contains(reason) && be.contains(reason),
+            "{reason}: table '{te}', board '{be}'"
+        );
+    }
+    assert!(TableModel::load(&t).is_ok() && ModelFile::load(&b).is_ok());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,6 +6,7 @@ use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
 use et_learn::analysis::CurvePoint;
+use et_learn::fit::FitError;
 use et_learn::tabular::{self, Choice, Method};
 use et_learn::trainer::{BoardModel, Progress};
 use et_learn::{Examples, TrainError, Trained, Trainer};
@@ -282,12 +283,23 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     let (file, shrinkage) = (&board.file, board.file.shrinkage);
     // What every reader of model files checks (et eval, stream, view, export): refuse to
     // write a model they would refuse.
-    file.validate().with_context(|| {
-        format!(
-            "the trained model is not usable (shrinkage {shrinkage}); train with a larger \
-             --shrinkage (e.g. 0.1) or more observations per class"
-        )
-    })?;
+    if let Err(e) = file.validate() {
+        use et_core::model::ModelError::{IllConditioned, Singular};
+        let covariance = matches!(
+            e,
+            FitError::Invalid(Singular { .. } | IllConditioned { .. })
+                | FitError::NotPositiveDefinite { .. }
+        );
+        let advice = if covariance {
+            format!(
+                " (shrinkage {shrinkage}): train with a larger --shrinkage (e.g. 0.1) or more \
+                 observations per class"
+            )
+        } else {
+            format!(" ({}: check its header)", data_arg.display())
+        };
+        bail!("the trained model is not usable: {e}{advice}");
+    }
     output::write(&args.out, |partial| file.save(partial))?;
     print_trained(args, &board, curve.as_deref())
 }

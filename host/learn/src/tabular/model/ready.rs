@@ -102,9 +102,14 @@ impl TableModel {
                 {
                     return Err("classes.names (and centres_mm) must list every class".into());
                 }
-                let fitted =
-                    fitted_from_records(mk, &self.feature_mean, &self.feature_scale, classes)
-                        .map_err(|e| e.to_string())?;
+                let fitted = fitted_from_records(
+                    mk,
+                    &self.feature_mean,
+                    &self.feature_scale,
+                    classes,
+                    info.centres_mm.as_deref().unwrap_or(&[]),
+                )
+                .map_err(|e| e.to_string())?;
                 Ready::Discriminant(fitted)
             }
             Tables::Ridge { weights, intercept } => {
