@@ -49,10 +49,10 @@ pub fn check_class_tables(t: &impl ClassTables) -> Result<(), ModelError> {
     }
     for c in 0..c_n {
         let [x, y] = t.position_mm(c);
-        if !(x.is_finite() && y.is_finite() && t.log_prior(c).is_finite())
-            || !t.constant(c).is_finite()
-            || (0..p).any(|j| !t.vector(c, j).is_finite())
-        {
+        let finite = [x, y, t.log_prior(c), t.constant(c)]
+            .iter()
+            .all(|v| v.is_finite());
+        if !finite || (0..p).any(|j| !t.vector(c, j).is_finite()) {
             return Err(ModelError::NonFinite);
         }
         if t.kind() == ModelKind::Qda {
