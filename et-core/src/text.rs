@@ -162,24 +162,49 @@ pub fn records(text: &str) -> Result<Vec<Record>, (usize, String)> {
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
 
 /// The bytes of `path`, stopping at `limit`: more is an error of kind
-/// [`std::io::ErrorKind::FileTooLarge`] saying so, found while reading (an endless stream is
-/// never read to its end).
+/// [`std::io::ErrorKind::FileTooLarge`] saying so, found before reading for a regular file
+/// and while reading for a stream (an endless stream is never read to its end). The buffer
+/// never grows past `limit` bytes: reading an endless stream allocates at most 1.5 x `limit`
+/// (the last growth), a regular file its size.
 ///
 /// # Errors
 /// The file's I/O error, or the size error.
 pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read as _;
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)?
-        .take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > limit {
-        return Err(std::io::Error::new(
+    let too_large = || {
+        std::io::Error::new(
             std::io::ErrorKind::FileTooLarge,
             format!("more than {limit} bytes: not a file et reads (is it the right one?)"),
-        ));
+        )
+    };
+    let mut file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if meta.is_file() && meta.len() > limit {
+        return Err(too_large());
     }
-    Ok(bytes)
+    let limit = usize::try_from(limit).unwrap_or(usize::MAX);
+    let mut bytes = Vec::new();
+    if meta.is_file() {
+        // Its size (a file that grows while it is read grows the buffer as a stream would).
+        bytes.reserve_exact(usize::try_from(meta.len()).unwrap_or(0));
+    }
+    let mut chunk = vec![0u8; 1 << 16];
+    loop {
+        let n = match file.read(&mut chunk) {
+            Ok(0) => return Ok(bytes),
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if n > limit - bytes.len() {
+            return Err(too_large());
+        }
+        if bytes.capacity() - bytes.len() < n {
+            let grown = bytes.capacity().saturating_mul(2).clamp(1 << 16, limit);
+            bytes.reserve_exact(grown.max(bytes.len() + n) - bytes.len());
+        }
+        bytes.extend_from_slice(chunk.get(..n).unwrap_or_default());
+    }
 }
 
 /// [`read_at_most`] as UTF-8 text.
@@ -228,5 +253,12 @@ mod tests {
         assert!(e.to_string().contains("more than 65536 bytes"), "{e}");
         let text = super::read_text_at_most(std::path::Path::new("/dev/null"), 10).unwrap();
         assert!(text.is_empty());
+        // A regular file is measured before it is read; one at the limit is read whole.
+        let path = std::env::temp_dir().join(format!("et-text-{}", std::process::id()));
+        std::fs::write(&path, vec![b'a'; 100_000]).unwrap();
+        assert_eq!(super::read_at_most(&path, 100_000).unwrap().len(), 100_000);
+        let e = super::read_at_most(&path, 99_999).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+        std::fs::remove_file(&path).unwrap();
     }
 }

@@ -28,6 +28,7 @@ use et_core::rng::Rng;
 use et_host::recording::{Header, Record, Writer};
 use et_learn::fit::{FitOptions, Fitted, Target};
 use et_learn::model_file::ModelFile;
+use et_learn::tabular::{Choice, Member, Method, Table, TableModel, Tables, TrainOptions, Unit};
 use nalgebra::DMatrix;
 use peak_alloc::PeakAlloc;
 use proptest::prelude::*;
@@ -35,6 +36,9 @@ use proptest::test_runner::{Config, TestRunner};
 
 #[global_allocator]
 static ALLOC: PeakAlloc = PeakAlloc;
+
+/// The allocator's peak is the whole process's: the tests take turns.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// Allowed peak allocation while parsing a file of `len` bytes: a multiple of it plus a
 /// constant for the parser's fixed tables and buffers. The TOML parser is the hungriest: about
@@ -259,6 +263,65 @@ fn model_json(dir: &Path) -> Vec<u8> {
     std::fs::read(path).unwrap()
 }
 
+/// A small table model of `method` (an average: of knn and kernel ridge, as `auto` may
+/// choose; QDA: four classes from a 2 x 2 grid of positions), as `et train --features` writes
+/// it.
+fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
+    let mut rng = Rng::new(3);
+    let n = 48;
+    let positions: Vec<[f64; 2]> = (0..n)
+        .map(|r| [(r % 7) as f64 * 3.0, (r % 5) as f64 * 4.0])
+        .collect();
+    let x = DMatrix::from_fn(n, 3, |r, j| {
+        let [px, py] = positions[r];
+        (0.1 * px).sin() * (j as f64 + 1.0)
+            + 0.05 * py * py / (j as f64 + 1.0)
+            + 0.02 * (1.0 + (r % 4) as f64) * rng.normal()
+    });
+    let table = Table {
+        x,
+        feature_names: ["a", "b", "c"].map(String::from).to_vec(),
+        labels: None,
+        positions_mm: Some(positions),
+        third: None,
+        description: "fuzz seed".into(),
+        first_row: 0,
+        unit: Unit::Mm,
+        groups: None,
+    };
+    let train = |m: Method, grid| {
+        let options = TrainOptions {
+            folds: 3,
+            grid,
+            ..TrainOptions::default()
+        };
+        et_learn::tabular::train(&table, Choice::One(m), &options, &mut |_, _, _| {}).unwrap()
+    };
+    let model = if method == Method::Average {
+        let members = [Method::Knn, Method::KernelRidge].map(|m| {
+            let fitted = train(m, None);
+            Member {
+                method: m,
+                hyperparameters: fitted.hyperparameters,
+                feature_mean: fitted.feature_mean,
+                feature_scale: fitted.feature_scale,
+                tables: fitted.tables,
+            }
+        });
+        let mut model = train(Method::Ridge, None);
+        model.method = Method::Average;
+        model.tables = Tables::Average {
+            members: members.to_vec(),
+        };
+        model
+    } else {
+        train(method, Some((2, 2)))
+    };
+    let path = dir.join("seed-table-model.json");
+    model.save(&path).unwrap();
+    std::fs::read(path).unwrap()
+}
+
 fn recording(dir: &Path) -> Vec<u8> {
     let config = small_config();
     let header = Header::new("fuzz", &config).unwrap();
@@ -357,9 +420,23 @@ fn parsers() -> Vec<Parser> {
             parse: |p| ModelFile::load(&p[0]).is_ok(),
         },
         Parser {
+            name: "table model JSON, average of regressors",
+            seeds: vec![table_model_json(&dir, Method::Average)],
+            parse: |p| TableModel::load(&p[0]).is_ok(),
+        },
+        Parser {
+            name: "table model JSON, QDA",
+            seeds: vec![table_model_json(&dir, Method::Qda)],
+            parse: |p| TableModel::load(&p[0]).is_ok(),
+        },
+        Parser {
             name: "model blob",
             seeds: vec![model(&dir).blob(et_core::model::Precision::F16).unwrap()],
-            parse: |p| std::fs::read(&p[0]).is_ok_and(|b| et_core::model::Model::parse(&b).is_ok()),
+            // As `et board upload` reads it.
+            parse: |p| {
+                et_core::text::read_at_most(&p[0], 1 << 24)
+                    .is_ok_and(|b| et_core::model::Model::parse(&b).is_ok())
+            },
         },
         Parser {
             name: "recording JSONL",
@@ -381,6 +458,9 @@ fn parsers() -> Vec<Parser> {
 
 #[test]
 fn every_parser_survives_damaged_files_in_bounded_memory() {
+    let _turn = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let cases: u32 = std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -455,4 +535,64 @@ fn every_parser_survives_damaged_files_in_bounded_memory() {
         );
     }
     let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Every reader given an endless stream (`/dev/zero`) or a huge file (sparse, one byte past
+/// the largest file et reads) in place of each of its files: a clean refusal, never a panic,
+/// an abort or memory past the reader's limit. A huge regular file is refused by its size
+/// before it is read; a stream is read to the reader's limit (1 GiB for data files, 1 MiB for
+/// scenes) and no further, and the buffer never grows past that limit (the last growth copies
+/// from a half-size buffer: 1.5 x the limit at most).
+#[test]
+fn every_reader_stops_at_its_limit_on_endless_and_huge_inputs() {
+    let _turn = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let dir = scratch().join("endless");
+    std::fs::create_dir_all(&dir).unwrap();
+    let huge = dir.join("huge");
+    std::fs::File::create(&huge)
+        .unwrap()
+        .set_len(et_core::text::MAX_FILE_BYTES + 1)
+        .unwrap();
+    let limit = et_core::text::MAX_FILE_BYTES as usize;
+    for target in parsers() {
+        let paths: Vec<PathBuf> = (0..target.seeds.len())
+            .map(|i| dir.join(format!("{}-{i}", target.seeds.len())))
+            .collect();
+        for (p, b) in paths.iter().zip(&target.seeds) {
+            std::fs::write(p, b).unwrap();
+        }
+        for which in 0..paths.len() {
+            for (what, input, allowed) in [
+                (
+                    "endless",
+                    Path::new("/dev/zero"),
+                    limit + limit / 2 + (4 << 20),
+                ),
+                ("huge", huge.as_path(), 4 << 20),
+            ] {
+                let mut given = paths.clone();
+                given[which] = input.into();
+                let started = Instant::now();
+                let before = ALLOC.current_usage();
+                ALLOC.reset_peak_usage();
+                let ok = (target.parse)(&given);
+                let peak = ALLOC.peak_usage().saturating_sub(before);
+                println!(
+                    "{:<40} file {which}: {what:<7} refused, peak allocation {:>7.1} MB, {:.2} s",
+                    target.name,
+                    peak as f64 / 1e6,
+                    started.elapsed().as_secs_f64()
+                );
+                assert!(!ok, "{}: an {what} file {which} accepted", target.name);
+                assert!(
+                    peak <= allowed,
+                    "{}: {peak} bytes allocated for an {what} file {which}",
+                    target.name
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
