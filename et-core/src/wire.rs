@@ -572,6 +572,8 @@ impl<const N: usize> Accumulator<N> {
     }
 }
 
+mod words;
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests;

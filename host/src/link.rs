@@ -146,7 +146,7 @@ pub enum LinkError {
         waiting_for: String,
     },
     /// The device refused a command.
-    #[error("the device refused {command:?}: {reason:?}")]
+    #[error("the device refused {command}: {reason}")]
     Refused {
         /// The command.
         command: CommandTag,

@@ -31,6 +31,48 @@ fn fail(path: &Path, e: impl std::fmt::Display) -> PlotError {
     }
 }
 
+/// Draws onto a `width` x `height` canvas with `draw` and writes it to `path` as PNG (et's own
+/// encoding: any path works, `/dev/stdout` included, whatever its extension).
+fn render(
+    path: &Path,
+    (width, height): (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<(), PlotError>,
+) -> Result<(), PlotError> {
+    fonts().map_err(|e| fail(path, e))?;
+    let mut pixels = vec![0u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(path, e))?;
+        draw(&root)?;
+        root.present().map_err(|e| fail(path, e))?;
+    }
+    write_png(path, &pixels, (width, height), false)
+}
+
+/// Writes `pixels` (rows of RGB, or RGBA when `alpha`, 8 bits each) to `path` as PNG.
+///
+/// # Errors
+/// [`PlotError`] naming the file.
+pub fn write_png(
+    path: &Path,
+    pixels: &[u8],
+    (width, height): (u32, u32),
+    alpha: bool,
+) -> Result<(), PlotError> {
+    use image::ImageEncoder as _;
+    let colour = if alpha {
+        image::ColorType::Rgba8
+    } else {
+        image::ColorType::Rgb8
+    };
+    let file = std::fs::File::create(path).map_err(|e| fail(path, e))?;
+    let mut out = std::io::BufWriter::new(file);
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(pixels, width, height, colour)
+        .map_err(|e| fail(path, e))?;
+    std::io::Write::flush(&mut out).map_err(|e| fail(path, e))
+}
+
 fn fonts() -> Result<(), String> {
     static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
     REGISTERED
@@ -117,7 +159,6 @@ fn range(values: impl Iterator<Item = f64>, zero: bool) -> (f64, f64) {
 /// # Errors
 /// [`PlotError`] naming the file.
 pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), PlotError> {
-    fonts().map_err(|e| fail(path, e))?;
     let all = || series.iter().flat_map(|s| s.points.iter());
     let (x0, x1) = range(all().map(|p| p.0), false);
     // From zero when the data come near it (the lowest non-negative value under half the
@@ -133,9 +174,20 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
     if labelled > 0 && labels.legend != Legend::LowerRight {
         y1 += (y1 - y0) * (0.04 + 0.075 * labelled as f64);
     }
-    let root = BitMapBackend::new(path, (800, 520)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| fail(path, e))?;
-    let mut c = ChartBuilder::on(&root)
+    render(path, (800, 520), |root| {
+        draw_chart(path, root, labels, series, [x0, x1, y0, y1])
+    })
+}
+
+/// [`chart`]'s drawing, on `root`, over [x0, x1] x [y0, y1].
+fn draw_chart(
+    path: &Path,
+    root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    labels: Labels<'_>,
+    series: &[Series],
+    [x0, x1, y0, y1]: [f64; 4],
+) -> Result<(), PlotError> {
+    let mut c = ChartBuilder::on(root)
         .caption(labels.title, ("sans-serif", 22))
         .margin(14)
         .x_label_area_size(44)
@@ -190,7 +242,7 @@ pub fn chart(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), P
             .draw()
             .map_err(|e| fail(path, e))?;
     }
-    root.present().map_err(|e| fail(path, e))
+    Ok(())
 }
 
 /// The colour of `v` on a scale from `lo` to `hi`: [`diverging`] centred on zero when the
@@ -368,10 +420,35 @@ pub fn heatmap_over(
     if values.len() != rows * cols || rows == 0 || cols == 0 {
         return Err(fail(path, "heat map table of the wrong length"));
     }
-    fonts().map_err(|e| fail(path, e))?;
     let key_height = if overlay.key.is_empty() { 0 } else { 26 };
-    let root = BitMapBackend::new(path, (780, 640 + key_height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| fail(path, e))?;
+    render(path, (780, 640 + key_height), |root| {
+        draw_heat_map(
+            path,
+            root,
+            labels,
+            values,
+            (rows, cols),
+            extent,
+            (lo, hi),
+            unit,
+            overlay,
+        )
+    })
+}
+
+/// [`heatmap_over`]'s drawing, on `root`.
+#[allow(clippy::too_many_arguments)]
+fn draw_heat_map(
+    path: &Path,
+    root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    labels: Labels<'_>,
+    values: &[f64],
+    (rows, cols): (usize, usize),
+    extent: Extent,
+    (lo, hi): (f64, f64),
+    unit: &str,
+    overlay: &Overlay,
+) -> Result<(), PlotError> {
     let (root, key) = root.split_vertically(640);
     if !overlay.key.is_empty() {
         key.draw(&Text::new(
@@ -472,7 +549,7 @@ pub fn heatmap_over(
         )
     }))
     .map_err(|e| fail(path, e))?;
-    root.present().map_err(|e| fail(path, e))
+    Ok(())
 }
 
 #[cfg(test)]

@@ -98,6 +98,8 @@ pub struct Viewer {
     /// The training wizard (open or not).
     pub wizard: Wizard,
     shot_frames: u32,
+    /// How the screenshot went: None until it is taken, then its error, if any.
+    shot: std::sync::Arc<std::sync::Mutex<Option<Result<(), String>>>>,
     /// The central panel: the sheet, its image and touches.
     pub sheet_view: SheetView,
     /// The right panel: the signal's plots and the link's health.
@@ -173,6 +175,7 @@ impl Viewer {
             monitor: Monitor::default(),
             wizard: Wizard::default(),
             shot_frames: 0,
+            shot: std::sync::Arc::default(),
             sheet_view: SheetView::default(),
             plots: Plots::default(),
             options,
@@ -454,16 +457,22 @@ impl Viewer {
         }
         if self.shot_frames == 80 {
             let close = ctx.clone();
+            let shot = std::sync::Arc::clone(&self.shot);
             ctx.request_screenshot(move |img| {
                 let [w, h] = img.size;
                 let bytes: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
-                match image::RgbaImage::from_raw(w as u32, h as u32, bytes)
-                    .ok_or_else(|| "bad screenshot size".to_string())
-                    .and_then(|i| i.save(&path).map_err(|e| e.to_string()))
-                {
-                    Ok(()) => eprintln!("wrote {}", path.display()),
-                    Err(e) => eprintln!("screenshot {}: {e}", path.display()),
+                type Failure = Box<dyn std::error::Error + Send + Sync>;
+                let saved = crate::output::write(&path, |partial| {
+                    crate::plot::write_png(partial, &bytes, (w as u32, h as u32), true)
+                        .map_err(Failure::from)
+                })
+                .map_err(|e| e.to_string());
+                if saved.is_ok() {
+                    eprintln!("wrote {}", path.display());
                 }
+                *shot
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(saved);
                 close.send_viewport_cmd(egui::ViewportCommand::Close);
             });
         }
@@ -483,6 +492,7 @@ impl eframe::App for Viewer {
 /// display, no OpenGL).
 pub fn run(options: Options) -> Result<(), ViewerError> {
     let viewer = Viewer::new(options)?;
+    let shot = (viewer.options.screenshot.as_ref()).map(|_| std::sync::Arc::clone(&viewer.shot));
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size(Vec2::new(1280.0, 780.0))
@@ -490,7 +500,14 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
         ..Default::default()
     };
     eframe::run_native("et view", native, Box::new(|_cc| Ok(Box::new(viewer))))
-        .map_err(|e| ViewerError::Window(e.to_string()))
+        .map_err(|e| ViewerError::Window(e.to_string()))?;
+    match shot.map(|s| s.lock().map(|mut s| s.take()).unwrap_or(None)) {
+        None | Some(Some(Ok(()))) => Ok(()),
+        Some(Some(Err(e))) => Err(ViewerError::Screenshot(e)),
+        Some(None) => Err(ViewerError::Screenshot(
+            "the window closed before the screenshot was taken".into(),
+        )),
+    }
 }
 
 /// Why the viewer could not start.
@@ -517,6 +534,9 @@ pub enum ViewerError {
     /// The window could not be created.
     #[error("cannot open the window: {0} (is there a display? try DISPLAY=:0 or xvfb-run)")]
     Window(String),
+    /// The screenshot was not written.
+    #[error("screenshot not written: {0}")]
+    Screenshot(String),
 }
 
 #[cfg(test)]

@@ -1282,6 +1282,127 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Rust's debug text in a message (`ImageError(IoError(Os { code: 2, .. }))`,
+/// `NonPositivePivot { index: 1161 }`, `Some(..)`): a CamelCase name, or a name right before a
+/// bracket or brace.
+fn debug_text(message: &str) -> Option<String> {
+    let words = message.split(|c: char| !c.is_ascii_alphanumeric() && c != '_');
+    let camel = |w: &&str| {
+        let mut chars = w.chars();
+        chars.next().is_some_and(|c| c.is_ascii_uppercase())
+            && w.chars().any(|c| c.is_ascii_lowercase())
+            && w.chars().skip(1).any(|c| c.is_ascii_uppercase())
+    };
+    if let Some(w) = words.clone().find(camel) {
+        return Some(w.to_string());
+    }
+    [
+        "Os {", "Some(", "None)", "Err(", "Ok(", "\\\"", " { ", "(\"",
+    ]
+    .iter()
+    .find(|p| message.contains(**p))
+    .map(|p| (*p).to_string())
+}
+
+/// Messages in words, for the causes that used to reach users as Rust's debug text or with
+/// advice that did not fit (each case fails in its own way; none may print debug text, and
+/// each says what is wrong in the user's terms). And a plot written to a stream (it used to
+/// fail: the image format came from the file name).
+#[test]
+fn messages_say_the_cause_in_words() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let scene = scene.to_str().unwrap();
+    let dir = std::env::temp_dir().join(format!("et-cli-words-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    // A dataset whose header reads one frame value twice.
+    let dataset = "# et-dataset 1
+# config: {\"electrodes\":8,\"protocol\":\"Adjacent\",\"samples_per_step\":200,\"settle_samples\":40,\"current_na\":32000,\"sample_rate_hz\":10000,\"gain\":1}
+# feature_index: 0 3 3
+# centres_mm: 0 0; 10 10
+# untouched: 0.1 0.2 0.3
+label,x_mm,y_mm,visit,v0,v3,v3b
+0,0.5,-0.2,0,0.11,0.2,0.3
+1,9.5,10.2,0,0.1,0.22,0.3
+0,0.1,0.3,0,0.12,0.2,0.29
+1,10.1,9.9,0,0.1,0.21,0.33
+";
+    std::fs::write(p("twice.csv"), dataset).unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "train".into(),
+                "--data".into(),
+                p("twice.csv"),
+                "--out".into(),
+                p("m.json"),
+            ],
+            "each frame value once",
+        ),
+        (
+            [
+                "reconstruct",
+                "--scene",
+                scene,
+                "--refine",
+                "500,500,10",
+                "--out",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([p("r.png")])
+            .collect(),
+            "does not meet the sheet",
+        ),
+        (
+            [
+                "reconstruct",
+                "--scene",
+                scene,
+                "--method",
+                "greit",
+                "--radius-mm",
+                "90",
+                "--out",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([p("g.png")])
+            .collect(),
+            "at most half",
+        ),
+        (
+            ["collect", "--scene", scene, "--radius-mm", "60", "--out"]
+                .map(String::from)
+                .into_iter()
+                .chain([p("c.csv")])
+                .collect(),
+            "sheet 130.0 mm across",
+        ),
+    ];
+    for (args, what) in cases {
+        let o = et(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(what), "{args:?}: {err}");
+        assert_eq!(debug_text(&err), None, "{args:?}: {err}");
+        assert!(!err.contains("mesh: mesh:"), "{args:?}: {err}");
+    }
+    // The checker itself finds what it is for.
+    for debug in [
+        "ImageError(IoError(Os { code: 2 }))",
+        "Numeric(NonPositivePivot { index: 1161 })",
+        "x: Some(3)",
+    ] {
+        assert!(debug_text(debug).is_some(), "{debug}");
+    }
+    // An image to a stream: PNG bytes, whatever the name.
+    let o = et(&["reconstruct", "--scene", scene, "--out", "/dev/stdout"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.stdout.starts_with(b"\x89PNG"), "{} bytes", o.stdout.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic
 /// ("failed printing to stdout: Broken pipe").
 #[test]

@@ -47,7 +47,7 @@ pub enum CalibrationError {
     #[error("{0}")]
     Sim(#[from] SimError),
     /// The statistics (too few frames, non-finite values).
-    #[error("statistics: {0:?}")]
+    #[error("statistics: {0}")]
     Stats(#[from] et_core::stats::StatsError),
 }
 

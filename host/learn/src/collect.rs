@@ -157,6 +157,45 @@ impl Default for Plan {
 }
 
 impl Plan {
+    /// Checks the plan's lengths against the sheet (its bounding box's shorter side S): a
+    /// finger of radius under S / 4 (so there is room to place it away from the outline), a
+    /// target under S / 2 around each class centre, electrode movements under S / 4.
+    ///
+    /// # Errors
+    /// [`CollectError::Plan`] naming the length, in mm, and the sheet's.
+    pub fn fits(&self, shape: &et_core::sheet::Shape) -> Result<(), CollectError> {
+        let [x0, y0, x1, y1] = shape.bounds();
+        let side = (x1 - x0).min(y1 - y0);
+        for (name, value, share) in [
+            ("--radius-mm (the finger's radius)", self.radius, 0.25),
+            (
+                "--target-mm (the target around each class centre)",
+                self.target_radius,
+                0.5,
+            ),
+            (
+                "--movement-mm (electrodes between visits)",
+                self.electrode_movement,
+                0.25,
+            ),
+            (
+                "--press-movement-mm (electrodes between presses)",
+                self.press_movement,
+                0.25,
+            ),
+        ] {
+            if !(value.is_finite() && value >= 0.0 && value <= share * side) {
+                return Err(CollectError::Plan(format!(
+                    "{name}: {:.1} mm on a sheet {:.1} mm across: at most {:.1} mm",
+                    value * 1e3,
+                    side * 1e3,
+                    share * side * 1e3
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// One press's contact shape: a disc when `elongation` is 1 (drawing nothing, so that
     /// sessions without footprints keep their random streams), else an ellipse of elongation
     /// uniform in [1, `elongation`] along the finger's direction.
@@ -205,6 +244,9 @@ pub enum CollectError {
     /// No visit was asked for.
     #[error("no visit to collect: ask for at least one")]
     NoVisits,
+    /// A length of the plan does not fit the sheet.
+    #[error("{0}")]
+    Plan(String),
     /// The visits' datasets could not be joined.
     #[error("joining the visits: {0}")]
     Data(crate::dataset::DataError),
@@ -313,15 +355,17 @@ pub fn random_presses(
                 label: touches as u16,
                 touches: (0..touches)
                     .map(|_| {
-                        let position = loop {
-                            let p = [
-                                x0 + (x1 - x0) * rng.uniform(),
-                                y0 + (y1 - y0) * rng.uniform(),
-                            ];
-                            if shape.contains(p, radius) {
-                                break p;
-                            }
-                        };
+                        // Rejection sampling, bounded: a sheet with no room for the finger
+                        // anywhere (a thin strip) gets presses at its bounding box's centre.
+                        let position = (0..100_000)
+                            .map(|_| {
+                                [
+                                    x0 + (x1 - x0) * rng.uniform(),
+                                    y0 + (y1 - y0) * rng.uniform(),
+                                ]
+                            })
+                            .find(|&p| shape.contains(p, radius))
+                            .unwrap_or([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
                         Touch {
                             position,
                             radius: radius * (spread * rng.normal()).exp(),
@@ -376,6 +420,7 @@ pub fn collect_presses_with(
     mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
 ) -> Result<Dataset, CollectError> {
     let protocol = config.validate()?;
+    plan.fits(&spec.physical.shape)?;
     let feature_index: Vec<u16> = protocol.features(halving).map(|k| k as u16).collect();
     let mut rng = Rng::new(plan.seed);
     let k = protocol.frame_len();

@@ -130,6 +130,14 @@ impl Greit {
                 "a desired image's radius of {radius} m: must be finite and > 0"
             )));
         }
+        if radius > 0.5 * extent {
+            return Err(ReconError::Parameter(format!(
+                "a desired image's radius of {:.1} mm on a sheet {:.1} mm across: at most half \
+                 of it (GREIT's targets are small, 5 % of the sheet by default)",
+                radius * 1e3,
+                extent * 1e3
+            )));
+        }
         let radius = radius.max(grid.size);
         match options.regularisation {
             Regularisation::NoiseFigure(v) | Regularisation::Alpha(v)

@@ -93,7 +93,7 @@ impl Refinement {
 #[non_exhaustive]
 pub enum MeshError {
     /// A size or the sheet spec is unusable.
-    #[error("mesh: {0}")]
+    #[error("{0}")]
     Spec(String),
     /// Two electrodes overlap on the outline.
     #[error("electrodes {electrode} and the next overlap on the outline")]
@@ -137,13 +137,23 @@ impl Mesh {
             let ok = |v: f64| v.is_finite() && v > 0.0;
             if !(ok(r.radius) && ok(r.edge) && r.centre.iter().all(|c| c.is_finite())) {
                 return Err(MeshError::Spec(format!(
-                    "a refinement needs a finite centre and a positive radius and edge: {r:?}"
+                    "a refinement needs a finite centre and a positive radius and edge: centre \
+                     ({}, {}) m, radius {} m, edge {} m",
+                    r.centre[0], r.centre[1], r.radius, r.edge
                 )));
             }
             if (r.radius / r.edge).powi(2) > 1e6 {
                 return Err(MeshError::Spec(format!(
                     "a refinement of radius {} m at edge {} m adds over a million points",
                     r.radius, r.edge
+                )));
+            }
+            if !spec.shape.contains(r.centre, 0.0)
+                && spec.shape.distance_to_outline(r.centre) >= r.radius
+            {
+                return Err(MeshError::Spec(format!(
+                    "a refinement at ({}, {}) m of radius {} m does not meet the sheet",
+                    r.centre[0], r.centre[1], r.radius
                 )));
             }
         }
@@ -153,7 +163,9 @@ impl Mesh {
         let ok = |v: f64| v.is_finite() && v > 0.0;
         if !(ok(size.interior) && ok(size.electrode) && size.min_angle_deg.is_finite()) {
             return Err(MeshError::Spec(format!(
-                "sizes must be finite and positive: {size:?}"
+                "sizes must be finite and positive: interior {} m, at electrodes {} m, \
+                 smallest angle {} degrees",
+                size.interior, size.electrode, size.min_angle_deg
             )));
         }
         let perimeter = spec.shape.perimeter();
@@ -250,10 +262,7 @@ impl Mesh {
         let mut handles = Vec::with_capacity(ts.len());
         for &t in &ts {
             let p = spec.shape.boundary_point(t);
-            handles.push(
-                cdt.insert(Point2::new(p[0], p[1]))
-                    .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?,
-            );
+            handles.push(cdt.insert(Point2::new(p[0], p[1])).map_err(not_placed)?);
         }
         for i in 0..handles.len() {
             let (a, b) = (handles[i], handles[(i + 1) % handles.len()]);
@@ -266,27 +275,42 @@ impl Mesh {
             let rings = size.fan_rings.min(pieces as usize - 1);
             for &t in &centres {
                 for p in fan(&spec.shape, t, d, rings) {
-                    cdt.insert(Point2::new(p[0], p[1]))
-                        .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
+                    cdt.insert(Point2::new(p[0], p[1])).map_err(not_placed)?;
                 }
             }
         }
+        let [x_min, y_min, x_max, y_max] = spec.shape.bounds();
         for r in regions {
             let h = r.edge.min(size.interior);
-            let rows = (r.radius / (h * 0.75f64.sqrt())).ceil() as i64;
-            for j in -rows..=rows {
-                let y = j as f64 * h * 0.75f64.sqrt();
+            let dy = h * 0.75f64.sqrt();
+            // The lattice over the part of the disc's square on the sheet's bounding box
+            // (a disc far larger than the sheet costs no more than the sheet).
+            let (c_x, c_y) = (r.centre[0], r.centre[1]);
+            let span = |lo: f64, hi: f64, step: f64| {
+                (
+                    (lo / step).floor() as i64 - 1,
+                    (hi / step).ceil() as i64 + 1,
+                )
+            };
+            let (j_lo, j_hi) = span((-r.radius).max(y_min - c_y), r.radius.min(y_max - c_y), dy);
+            let (i_lo, i_hi) = span((-r.radius).max(x_min - c_x), r.radius.min(x_max - c_x), h);
+            if (j_hi - j_lo).max(0) as f64 * (i_hi - i_lo).max(0) as f64 > 1e7 {
+                return Err(MeshError::Spec(format!(
+                    "a refinement of radius {} m at edge {h} m adds over ten million points",
+                    r.radius
+                )));
+            }
+            for j in j_lo..=j_hi {
+                let y = j as f64 * dy;
                 let shift = if j % 2 == 0 { 0.0 } else { 0.5 * h };
-                let cols = (r.radius / h).ceil() as i64 + 1;
-                for i in -cols..=cols {
+                for i in i_lo..=i_hi {
                     let x = i as f64 * h + shift;
                     let p = [r.centre[0] + x, r.centre[1] + y];
                     if x.hypot(y) <= r.radius
                         && spec.shape.contains(p, 0.0)
                         && spec.shape.distance_to_outline(p) > 0.5 * h.max(h_e)
                     {
-                        cdt.insert(Point2::new(p[0], p[1]))
-                            .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
+                        cdt.insert(Point2::new(p[0], p[1])).map_err(not_placed)?;
                     }
                 }
             }
@@ -539,6 +563,18 @@ mod import;
 
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// A point the triangulation could not place, in words.
+fn not_placed(e: spade::InsertionError) -> MeshError {
+    MeshError::Triangulation(
+        match e {
+            spade::InsertionError::NAN => "a point is not a number",
+            spade::InsertionError::TooLarge => "a coordinate is too large (the sheet in m?)",
+            spade::InsertionError::TooSmall => "a coordinate is too small to place",
+        }
+        .into(),
+    )
 }
 
 #[cfg(test)]

@@ -311,10 +311,10 @@ impl PortSource {
                 }
                 Uplink::Event(Event::Status(s)) => self.status = Some(s),
                 Uplink::Event(Event::Refused { command, reason }) => {
-                    self.last_problem = Some(format!("the board refused {command:?}: {reason:?}"));
+                    self.last_problem = Some(format!("the board refused {command}: {reason}"));
                 }
                 Uplink::Event(Event::Fault(f)) => {
-                    self.last_problem = Some(format!("the board reports {f:?}"));
+                    self.last_problem = Some(format!("the board reports: {f}"));
                 }
                 Uplink::Event(_) => {}
             }

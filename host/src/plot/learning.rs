@@ -86,7 +86,6 @@ pub fn error_map(
     title: &str,
 ) -> Result<(), PlotError> {
     use plotters::prelude::*;
-    super::fonts().map_err(|e| super::fail(path, e))?;
     let err = |p: &([f64; 2], [f64; 2])| (p.1[0] - p.0[0]).hypot(p.1[1] - p.0[1]);
     let top = pairs.iter().map(err).fold(0.0f64, f64::max).max(1e-9);
     let (x0, x1) = super::range(pairs.iter().map(|p| p.0[0]), false);
@@ -94,34 +93,34 @@ pub fn error_map(
     // Equal scales on both axes: the sheet keeps its shape.
     let side = (x1 - x0).max(y1 - y0);
     let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let root = BitMapBackend::new(path, (720, 680)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| super::fail(path, e))?;
     let caption = format!("{title} (colour: position error, 0 to {top:.1} mm)");
-    let mut c = ChartBuilder::on(&root)
-        .caption(caption, ("sans-serif", 18))
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d(
-            (cx - side / 2.0)..(cx + side / 2.0),
-            (cy - side / 2.0)..(cy + side / 2.0),
+    super::render(path, (720, 680), |root| {
+        let mut c = ChartBuilder::on(root)
+            .caption(caption, ("sans-serif", 18))
+            .margin(14)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(
+                (cx - side / 2.0)..(cx + side / 2.0),
+                (cy - side / 2.0)..(cy + side / 2.0),
+            )
+            .map_err(|e| super::fail(path, e))?;
+        c.configure_mesh()
+            .x_desc("true x (mm)")
+            .y_desc("true y (mm)")
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| super::fail(path, e))?;
+        c.draw_series(
+            pairs
+                .iter()
+                .filter(|p| err(p).is_finite())
+                .map(|p| Circle::new((p.0[0], p.0[1]), 4, super::viridis(err(p) / top).filled())),
         )
         .map_err(|e| super::fail(path, e))?;
-    c.configure_mesh()
-        .x_desc("true x (mm)")
-        .y_desc("true y (mm)")
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .draw()
-        .map_err(|e| super::fail(path, e))?;
-    c.draw_series(
-        pairs
-            .iter()
-            .filter(|p| err(p).is_finite())
-            .map(|p| Circle::new((p.0[0], p.0[1]), 4, super::viridis(err(p) / top).filled())),
-    )
-    .map_err(|e| super::fail(path, e))?;
-    root.present().map_err(|e| super::fail(path, e))
+        Ok(())
+    })
 }
 
 /// Writes predicted against true coordinates (x and y, mm) with the identity line.
