@@ -222,10 +222,12 @@ fn train(sheet: &QemuSheet, config: &ScanConfig) -> (Fitted, Vec<u16>, Vec<u8>) 
         }
     }
     let x = DMatrix::from_row_slice(y.len(), features.len(), &rows);
-    let best: Vec<usize> = fisher_ranking(&x, &y, classes)
+    let mut best: Vec<usize> = fisher_ranking(&x, &y, classes)
         .into_iter()
         .take(16)
         .collect();
+    // A blob lists its features in frame order (as `et train` keeps them).
+    best.sort_unstable();
     let x = x.select_columns(&best);
     let index: Vec<u16> = best.iter().map(|&j| features[j] as u16).collect();
     let opts = FitOptions {

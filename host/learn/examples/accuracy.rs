@@ -319,6 +319,12 @@ fn main() {
             &case.train.y,
             case.classes,
         );
+        // The best `n`, in frame order (a blob lists its features so).
+        let best = |n: usize| {
+            let mut kept = ranked[..n].to_vec();
+            kept.sort_unstable();
+            kept
+        };
         for (variant, kind, lambda, keep, precision) in [
             ("QDA, f32", ModelKind::Qda, *lq, all.clone(), Precision::F32),
             ("QDA, f16", ModelKind::Qda, *lq, all.clone(), Precision::F16),
@@ -326,14 +332,14 @@ fn main() {
                 "QDA, 64 features, f16",
                 ModelKind::Qda,
                 *lq,
-                ranked[..64].to_vec(),
+                best(64),
                 Precision::F16,
             ),
             (
                 "QDA, 48 features, f16",
                 ModelKind::Qda,
                 *lq,
-                ranked[..48].to_vec(),
+                best(48),
                 Precision::F16,
             ),
             ("LDA, f32", ModelKind::Lda, *ll, all.clone(), Precision::F32),

@@ -377,6 +377,13 @@ impl Npz {
             {
                 return Err(error(Some(array), "cut short (the file ends inside it)"));
             }
+            if entries.iter().any(|(n, _)| n == array) {
+                return Err(error(
+                    Some(array),
+                    "stored twice in the archive (numpy reads the last, so which one is meant \
+                     is unclear): write the archive again",
+                ));
+            }
             entries.push((array.to_string(), data_at..data_at + size));
         }
         Ok(Self { bytes, entries })

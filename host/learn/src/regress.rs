@@ -77,36 +77,24 @@ pub struct Ridge {
 }
 
 impl Ridge {
-    /// Fits (Z^T Z + lambda n I) W = Z^T (T - mean T).
+    /// Fits (Z^T Z + lambda n I) W = Z^T (T - mean T); with more features than rows, in the
+    /// dual: W = Z^T (Z Z^T + lambda n I)^-1 (T - mean T), the same weights from an n x n
+    /// system instead of a p x p one (360 rows of 10 000 features: a 360 x 360 Cholesky).
     ///
     /// # Errors
     /// [`FitError`] for mismatched or non-finite data, or a system that is not positive
     /// definite (lambda = 0 with collinear features).
     pub fn fit(x: &DMatrix<f64>, t: &[Target3], lambda: f64) -> Result<Self, FitError> {
-        check(x, t)?;
-        let (mean, scale) = standardisation(x);
-        let z = standardise(x, &mean, &scale);
-        let intercept = target_mean(t);
-        let tc = DMatrix::from_fn(t.len(), 3, |r, k| t[r][k] - intercept[k]);
-        let mut a = z.transpose() * &z;
-        for j in 0..a.nrows() {
-            a[(j, j)] += lambda * x.nrows() as f64;
-        }
-        let chol = a
-            .cholesky()
-            .ok_or(FitError::NotPositiveDefinite { class: 0 })?;
-        let weights = chol.solve(&(z.transpose() * tc));
-        Ok(Self {
-            mean,
-            scale,
-            weights,
-            intercept,
-        })
+        Self::fit_path(x, t, &[lambda])?
+            .pop()
+            .flatten()
+            .ok_or(FitError::NotPositiveDefinite { class: 0 })
     }
 
-    /// [`fit`](Self::fit) at each of `lambdas` from one Gram matrix Z^T Z (the cost of one
-    /// fit plus a p x p Cholesky per lambda): a ridge path for cross-validation. A lambda whose
-    /// system is not positive definite gives `None`.
+    /// [`fit`](Self::fit) at each of `lambdas` from one Gram matrix (Z^T Z, or Z Z^T when
+    /// there are more features than rows; the cost of one fit plus a Cholesky per lambda): a
+    /// ridge path for cross-validation. A lambda whose system is not positive definite gives
+    /// `None`.
     ///
     /// # Errors
     /// [`FitError`] for mismatched or non-finite data.
@@ -120,29 +108,30 @@ impl Ridge {
         let z = standardise(x, &mean, &scale);
         let intercept = target_mean(t);
         let tc = DMatrix::from_fn(t.len(), 3, |r, k| t[r][k] - intercept[k]);
-        let zf = Mat::from_fn(z.nrows(), z.ncols(), |r, j| z[(r, j)]);
-        let mut gram = Mat::<f64>::zeros(z.ncols(), z.ncols());
-        matmul(
-            gram.as_mut(),
-            Accum::Replace,
-            zf.transpose(),
-            zf.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        let zt = z.transpose() * tc;
+        let (n, p) = (z.nrows(), z.ncols());
+        let dual = p > n;
+        let zf = Mat::from_fn(n, p, |r, j| z[(r, j)]);
+        let side = if dual { n } else { p };
+        let mut gram = Mat::<f64>::zeros(side, side);
+        let (a, b) = if dual {
+            (zf.as_ref(), zf.transpose())
+        } else {
+            (zf.transpose(), zf.as_ref())
+        };
+        matmul(gram.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+        let zt = if dual {
+            tc.clone()
+        } else {
+            z.transpose() * &tc
+        };
         Ok(lambdas
             .iter()
             .map(|&lambda| {
-                let a = DMatrix::from_fn(gram.nrows(), gram.ncols(), |i, j| {
-                    gram[(i, j)]
-                        + if i == j {
-                            lambda * x.nrows() as f64
-                        } else {
-                            0.0
-                        }
+                let a = DMatrix::from_fn(side, side, |i, j| {
+                    gram[(i, j)] + if i == j { lambda * n as f64 } else { 0.0 }
                 });
-                let weights = a.cholesky()?.solve(&zt);
+                let solved = a.cholesky()?.solve(&zt);
+                let weights = if dual { z.transpose() * solved } else { solved };
                 weights.iter().all(|v| v.is_finite()).then(|| Self {
                     mean: mean.clone(),
                     scale: scale.clone(),

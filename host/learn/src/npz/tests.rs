@@ -76,3 +76,14 @@ fn broken_archives_are_errors_not_panics() {
     let e = Npz::read(b).unwrap_err();
     assert!(e.message.contains("savez_compressed"), "{e}");
 }
+
+/// Two entries of one name (a zip may hold them; numpy reads the last): refused by name.
+#[test]
+fn an_array_stored_twice_is_refused() {
+    let mut w = Writer::new();
+    w.f64s("x", &[1.0, 2.0]);
+    w.f64s("y", &[0.0]);
+    w.f64s("x", &[3.0, 4.0]);
+    let e = Npz::read(w.finish().unwrap()).unwrap_err().to_string();
+    assert!(e.contains("stored twice"), "{e}");
+}

@@ -177,3 +177,32 @@ fn bad_input_is_refused() {
     );
     assert_eq!((s.mean_mm, s.p90_mm, s.pressure_r), (2.5, 5.0, 0.0));
 }
+
+/// With more features than rows the ridge solves in the dual (an n x n system); its weights
+/// are the primal's, (Z^T Z + lambda n I)^-1 Z^T T, computed here the textbook way.
+#[test]
+fn ridge_on_wide_data_solves_in_the_dual_with_the_primal_weights() {
+    let mut rng = et_core::rng::Rng::new(12);
+    let (n, p) = (15, 40);
+    let x = DMatrix::from_fn(n, p, |_, _| rng.normal());
+    let t: Vec<Target3> = (0..n)
+        .map(|r| [x[(r, 0)] - 2.0 * x[(r, 5)], x[(r, 7)], 0.5 * x[(r, 3)]])
+        .collect();
+    let lambda = 0.3;
+    let m = Ridge::fit(&x, &t, lambda).unwrap();
+    let (mean, scale) = standardisation(&x);
+    let z = standardise(&x, &mean, &scale);
+    let centre = target_mean(&t);
+    let tc = DMatrix::from_fn(n, 3, |r, k| t[r][k] - centre[k]);
+    let a = z.transpose() * &z + DMatrix::identity(p, p) * (lambda * n as f64);
+    let primal = a.lu().solve(&(z.transpose() * tc)).unwrap();
+    let worst = (&m.weights - &primal).abs().max();
+    assert!(
+        worst < 1e-10 * primal.abs().max(),
+        "largest difference {worst:e}"
+    );
+    // And a path gives each lambda's fit.
+    let path = Ridge::fit_path(&x, &t, &[lambda, 10.0]).unwrap();
+    assert_eq!(path[0].as_ref().unwrap().weights, m.weights);
+    assert!(path[1].is_some());
+}

@@ -129,7 +129,7 @@ impl Mesh {
             });
             let (kind, ntags, rest) = match v.as_deref() {
                 Ok(&[_, kind, ntags, ref rest @ ..]) => {
-                    (kind, usize::try_from(ntags).unwrap_or(0), rest)
+                    (kind, usize::try_from(ntags).unwrap_or(usize::MAX), rest)
                 }
                 _ => {
                     return Err(bad(
@@ -139,8 +139,31 @@ impl Mesh {
                     ));
                 }
             };
-            let tags = rest.get(..ntags).unwrap_or(&[]);
-            let conn = rest.get(ntags..).unwrap_or(&[]);
+            let (Some(tags), Some(conn)) = (rest.get(..ntags), rest.get(ntags..)) else {
+                return Err(bad(
+                    path,
+                    ln + 1,
+                    format!("{ntags} tags, but only {} numbers follow", rest.len()),
+                ));
+            };
+            let nodes_of = |kind: i64| match kind {
+                1 => Some(2),
+                2 => Some(3),
+                15 => Some(1),
+                _ => None,
+            };
+            if let Some(want) = nodes_of(kind)
+                && conn.len() != want
+            {
+                return Err(bad(
+                    path,
+                    ln + 1,
+                    format!(
+                        "an element of type {kind} has {want} nodes, this line gives {}",
+                        conn.len()
+                    ),
+                ));
+            }
             let node = |id: i64| {
                 ids.get(&id)
                     .copied()

@@ -255,6 +255,26 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     .unwrap();
     let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
     assert!(e.contains("99999999999 elements"), "{e}");
+    // An element whose tag count runs past its line, or with the wrong number of nodes for
+    // its type, is refused by line (it used to be dropped silently).
+    for (line, what) in [
+        ("1 2 99999999999 1 1 1 2 3", "99999999999 tags"),
+        ("1 2 -1 1 2 3", "tags"),
+        ("1 2 2 1 1 1 2 3 4", "has 3 nodes, this line gives 4"),
+        ("1 1 2 1 1 1", "has 2 nodes, this line gives 1"),
+    ] {
+        let p = dir.join("el.msh");
+        std::fs::write(
+            &p,
+            format!(
+                "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n\
+                 4 1 1 0\n$EndNodes\n$Elements\n1\n{line}\n$EndElements\n"
+            ),
+        )
+        .unwrap();
+        let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+        assert!(e.contains("el.msh:13") && e.contains(what), "{line}: {e}");
+    }
     let p = dir.join("t.csv");
     std::fs::write(&p, "a,b,c\n0,1,2\n0,1\n").unwrap();
     let e = Mesh::from_csv(&p, &p, &p).unwrap_err().to_string();
