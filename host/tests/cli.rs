@@ -731,6 +731,11 @@ fn reconstruct_images_recorded_frames() {
 /// A structured 13 x 13 cm mesh (16 x 16 cells, each split in two) with 16 one-edge
 /// electrodes around the boundary, as Gmsh 2.2 text.
 fn square_msh() -> String {
+    square_msh_scaled(1.0)
+}
+
+/// [`square_msh`] with its coordinates times `scale` (1 000: the same mesh in mm).
+fn square_msh_scaled(scale: f64) -> String {
     use std::fmt::Write as _;
     let (n, h) = (16usize, 0.13 / 16.0);
     let id = |i: usize, j: usize| j * (n + 1) + i + 1;
@@ -742,8 +747,8 @@ fn square_msh() -> String {
                 s,
                 "{} {} {} 0",
                 id(i, j),
-                -0.065 + i as f64 * h,
-                -0.065 + j as f64 * h
+                scale * (-0.065 + i as f64 * h),
+                scale * (-0.065 + j as f64 * h)
             );
         }
     }
@@ -827,6 +832,25 @@ fn forward_and_reconstruct_take_an_imported_mesh() {
     let disc = root.join("sim/scenes/square-13cm-8.toml");
     let bad = et(&["forward", "--scene", disc.to_str().unwrap(), "--mesh", m]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("16 electrodes"));
+    // A mesh that is not the scene's sheet: the same mesh in mm, a square mesh for a disc.
+    let mm = dir.join("square-mm.msh");
+    std::fs::write(&mm, square_msh_scaled(1e3)).unwrap();
+    let bad = et(&["forward", "--scene", sc, "--mesh", mm.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && e.contains("in metres"), "{e}");
+    let disc = root.join("sim/scenes/disc-22cm-16.toml");
+    let png = dir.join("d.png");
+    let bad = et(&[
+        "reconstruct",
+        "--scene",
+        disc.to_str().unwrap(),
+        "--mesh",
+        m,
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && e.contains("not the sheet's"), "{e}");
     let bad = et(&["forward", "--scene", sc, "--mesh", "a.csv,b.csv"]);
     assert!(
         String::from_utf8_lossy(&bad.stderr).contains("nodes.csv,triangles.csv,electrodes.csv")

@@ -318,6 +318,26 @@ impl Mesh {
             }
         }
         check_topology(n, &triangles, &electrodes, &point)?;
+        // Each node under one electrode at most: two that share a node are shorted together.
+        let mut owner = vec![None; n];
+        for (l, (edges, p)) in electrodes.iter().zip(&point).enumerate() {
+            let under: Vec<usize> = match p {
+                Some(i) => vec![*i],
+                None => edges.iter().flatten().copied().collect(),
+            };
+            for i in under {
+                match owner.get_mut(i) {
+                    Some(Some(other)) if *other != l => {
+                        return Err(MeshError::Spec(format!(
+                            "electrodes {other} and {l} share node {i}: electrodes that touch \
+                             are one electrode (leave a gap of at least one edge)"
+                        )));
+                    }
+                    Some(o) => *o = Some(l),
+                    None => {}
+                }
+            }
+        }
         let centre_nodes = electrodes
             .iter()
             .zip(&point)

@@ -47,7 +47,10 @@ impl MeshPlan {
             MeshPlan::About { triangles, refine } => {
                 Mesh::with_about_refined(sheet, triangles, &refine)?
             }
-            MeshPlan::Given(mesh) => mesh,
+            MeshPlan::Given(mesh) => {
+                fits(&mesh, sheet)?;
+                mesh
+            }
         };
         if mesh.electrodes.len() != usize::from(sheet.electrodes.count) {
             return Err(ReconError::Parameter(format!(
@@ -59,6 +62,48 @@ impl MeshPlan {
         }
         Ok(mesh)
     }
+}
+
+/// Whether a mesh made elsewhere is the sheet's: every node on the sheet and the mesh's extent
+/// the sheet's, each within 5 % of the sheet's size (a mesh in mm, or a square mesh for a
+/// disc, would image another sheet).
+fn fits(mesh: &Mesh, sheet: &Sheet) -> Result<(), ImagingError> {
+    let [x0, y0, x1, y1] = sheet.shape.bounds();
+    let tol = 0.05 * (x1 - x0).max(y1 - y0);
+    let mm = |v: f64| v * 1e3;
+    if let Some((i, p)) = (mesh.nodes.iter().enumerate())
+        .find(|(_, p)| !(p[0].is_finite() && p[1].is_finite()) || !sheet.shape.contains(**p, tol))
+    {
+        return Err(ReconError::Parameter(format!(
+            "the mesh is not the sheet's: its node {i} at ({:.1}, {:.1}) mm lies outside the \
+             scene's sheet, {:.1} x {:.1} mm (a mesh's coordinates are in metres)",
+            mm(p[0]),
+            mm(p[1]),
+            mm(x1 - x0),
+            mm(y1 - y0)
+        ))
+        .into());
+    }
+    let [m0, n0, m1, n1] = mesh.nodes.iter().fold(
+        [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+        |[a, b, c, d], p| [a.min(p[0]), b.min(p[1]), c.max(p[0]), d.max(p[1])],
+    );
+    if [m0 - x0, n0 - y0, x1 - m1, y1 - n1].iter().any(|gap| *gap > tol) {
+        return Err(ReconError::Parameter(format!(
+            "the mesh is not the sheet's: it spans x {:.1} to {:.1} mm and y {:.1} to {:.1} mm, \
+             the scene's sheet x {:.1} to {:.1} mm and y {:.1} to {:.1} mm",
+            mm(m0),
+            mm(m1),
+            mm(n0),
+            mm(n1),
+            mm(x0),
+            mm(x1),
+            mm(y0),
+            mm(y1)
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 impl Default for Method {
