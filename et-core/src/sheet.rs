@@ -8,6 +8,7 @@
 //! never needs them.
 
 pub mod shape;
+pub mod xy;
 
 use serde::{Deserialize, Serialize};
 
@@ -238,6 +239,33 @@ impl Sheet {
                 format!("need {} finite arc fractions", e.count),
             );
         }
+        // The electrodes apart on the outline (the simulator and the meshes alike): each
+        // covers its width of the outline (a point electrode only its place).
+        let perimeter = self.shape.perimeter();
+        let half = match e.model {
+            ElectrodeModel::Point => 0.0,
+            _ => 0.5 * e.width / perimeter,
+        };
+        let mut at: Vec<(f64, usize)> = (e.arc_positions(&self.shape).iter().enumerate())
+            .map(|(l, t)| (t.rem_euclid(1.0), l))
+            .collect();
+        at.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (w, &(t, l)) in at.iter().enumerate() {
+            let (next, m) = match at.get(w + 1) {
+                Some(&n) => n,
+                None => at.first().map_or((t, l), |&(u, m)| (u + 1.0, m)),
+            };
+            if m != l && next - t <= 2.0 * half || next <= t {
+                return field(
+                    "sheet.electrodes",
+                    format!(
+                        "electrodes {l} and {m} overlap: {} electrodes {} m wide on an outline \
+                         {perimeter} m long (narrower electrodes, fewer, or a larger sheet)",
+                        e.count, e.width
+                    ),
+                );
+            }
+        }
         Ok(())
     }
 }
@@ -248,6 +276,30 @@ mod tests {
 
     fn near(a: [f64; 2], b: [f64; 2]) -> bool {
         (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9
+    }
+
+    /// Electrodes that do not fit apart on the outline are refused here, for the simulator
+    /// and the meshes alike (a 1 nm disc with 5 mm electrodes was simulated, then refused by
+    /// the mesher).
+    #[test]
+    fn electrodes_that_overlap_on_the_outline_are_refused() {
+        let mut tiny = Sheet::disc(1e-9, 16);
+        tiny.electrodes.width = 0.005;
+        let e = tiny.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("overlap") && e.contains("sheet.electrodes"),
+            "{e}"
+        );
+        let mut fits = Sheet::disc(0.1, 16);
+        fits.electrodes.width = 0.039; // 16 x 39 mm on a 628 mm outline: 0.3 mm apart
+        fits.validate().unwrap();
+        fits.electrodes.width = 0.04; // 640 mm
+        assert!(fits.validate().is_err());
+        // Two electrodes given at one place.
+        let mut same = Sheet::disc(0.1, 4);
+        same.electrodes.positions = Some(vec![0.1, 0.3, 0.3, 0.8]);
+        let e = same.validate().unwrap_err().to_string();
+        assert!(e.contains("electrodes 1 and 2 overlap"), "{e}");
     }
 
     /// A tank numbered clockwise from the top, on a disc and on a rectangle; et's default.

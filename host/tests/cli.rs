@@ -850,7 +850,10 @@ fn forward_and_reconstruct_take_an_imported_mesh() {
         png.to_str().unwrap(),
     ]);
     let e = String::from_utf8_lossy(&bad.stderr);
-    assert!(!bad.status.success() && e.contains("not the sheet's"), "{e}");
+    assert!(
+        !bad.status.success() && e.contains("not the sheet's"),
+        "{e}"
+    );
     let bad = et(&["forward", "--scene", sc, "--mesh", "a.csv,b.csv"]);
     assert!(
         String::from_utf8_lossy(&bad.stderr).contains("nodes.csv,triangles.csv,electrodes.csv")

@@ -126,9 +126,10 @@ impl Default for Dynamics {
 #[serde(deny_unknown_fields)]
 pub struct TouchEvent {
     /// Centre at `start`, m.
+    #[serde(deserialize_with = "et_core::sheet::xy::one")]
     pub position: [f64; 2],
     /// Centre at `end` (default: not moving), m.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "et_core::sheet::xy::option")]
     pub to: Option<[f64; 2]>,
     /// Contact radius, m.
     pub radius: f64,

@@ -22,6 +22,7 @@ pub enum Shape {
     /// A simple polygon, vertices counter-clockwise (m).
     Polygon {
         /// Vertices `[x, y]` in m.
+        #[serde(deserialize_with = "super::xy::many")]
         vertices: Vec<[f64; 2]>,
     },
 }

@@ -85,10 +85,18 @@ fn fits(mesh: &Mesh, sheet: &Sheet) -> Result<(), ImagingError> {
         .into());
     }
     let [m0, n0, m1, n1] = mesh.nodes.iter().fold(
-        [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
         |[a, b, c, d], p| [a.min(p[0]), b.min(p[1]), c.max(p[0]), d.max(p[1])],
     );
-    if [m0 - x0, n0 - y0, x1 - m1, y1 - n1].iter().any(|gap| *gap > tol) {
+    if [m0 - x0, n0 - y0, x1 - m1, y1 - n1]
+        .iter()
+        .any(|gap| *gap > tol)
+    {
         return Err(ReconError::Parameter(format!(
             "the mesh is not the sheet's: it spans x {:.1} to {:.1} mm and y {:.1} to {:.1} mm, \
              the scene's sheet x {:.1} to {:.1} mm and y {:.1} to {:.1} mm",

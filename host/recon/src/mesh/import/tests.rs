@@ -221,7 +221,10 @@ fn one_node_electrodes_are_point_electrodes() {
     let mut shared: Vec<String> = mesh.centre_nodes.iter().map(usize::to_string).collect();
     shared[5] = shared[4].clone();
     let e = Mesh::from_csv(&nodes, &tris, &write("shared.csv", shared.join("\n"))).unwrap_err();
-    assert!(e.to_string().contains("electrodes 4 and 5 share node"), "{e}");
+    assert!(
+        e.to_string().contains("electrodes 4 and 5 share node"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
