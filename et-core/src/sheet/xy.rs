@@ -1,7 +1,7 @@
 //! Points `[x, y]` read from files: exactly two numbers. (Serde's fixed-size arrays take the
 //! first two of a longer list and drop the rest: `position = [0, 0, 0]` was read as `[0, 0]`.)
 
-use serde::{Deserialize, Deserializer, de::Error as _};
+use serde::{Deserialize, Deserializer};
 
 fn exactly_two<E: serde::de::Error>(v: &[f64]) -> Result<[f64; 2], E> {
     <[f64; 2]>::try_from(v).map_err(|_| E::invalid_length(v.len(), &"two numbers, [x, y]"))
