@@ -72,7 +72,7 @@ fn fits(mesh: &Mesh, sheet: &Sheet) -> Result<(), ImagingError> {
     let tol = 0.05 * (x1 - x0).max(y1 - y0);
     let mm = |v: f64| v * 1e3;
     if let Some((i, p)) = (mesh.nodes.iter().enumerate())
-        .find(|(_, p)| !(p[0].is_finite() && p[1].is_finite()) || !sheet.shape.contains(**p, tol))
+        .find(|(_, p)| !(p.iter().all(|v| v.is_finite()) && sheet.shape.contains(**p, tol)))
     {
         return Err(ReconError::Parameter(format!(
             "the mesh is not the sheet's: its node {i} at ({:.1}, {:.1}) mm lies outside the \
