@@ -207,17 +207,23 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
     }
 }
 
-/// [`read_at_most`] as UTF-8 text.
+/// [`read_at_most`] as UTF-8 text, without a leading byte-order mark.
 ///
 /// # Errors
 /// As [`read_at_most`], and [`std::io::ErrorKind::InvalidData`] for text that is not UTF-8.
 pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<String> {
-    String::from_utf8(read_at_most(path, limit)?).map_err(|e| {
+    let mut text = String::from_utf8(read_at_most(path, limit)?).map_err(|e| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
         )
-    })
+    })?;
+    // A byte-order mark (Windows editors write one) is not part of the text: every reader
+    // of every format accepts it alike.
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
 }
 
 #[cfg(test)]
@@ -259,6 +265,9 @@ mod tests {
         assert_eq!(super::read_at_most(&path, 100_000).unwrap().len(), 100_000);
         let e = super::read_at_most(&path, 99_999).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+        // A byte-order mark is dropped, for every format alike.
+        std::fs::write(&path, "\u{feff}{\"a\": 1}").unwrap();
+        assert_eq!(super::read_text_at_most(&path, 100).unwrap(), "{\"a\": 1}");
         std::fs::remove_file(&path).unwrap();
     }
 }

@@ -553,7 +553,10 @@ fn et_upload_sends_a_model_the_board_verifies() {
     let refused = upload(&bad);
     assert!(!refused.status.success());
     let message = String::from_utf8_lossy(&refused.stderr);
-    assert!(message.contains("ModelMismatch"), "{message}");
+    assert!(
+        message.contains("the model was trained for another scan"),
+        "{message}"
+    );
     let accepted = upload(&good);
     assert!(
         accepted.status.success(),
@@ -595,7 +598,8 @@ fn the_live_board_source_installs_a_model_and_delivers_the_chips_classes() {
     let mut port = PortSource::open(&qemu.pty, BAUD).unwrap();
     let refused = port.install_model(&wrong).unwrap_err();
     assert!(
-        matches!(refused, LiveError::Link { .. }) && refused.to_string().contains("ModelMismatch"),
+        matches!(refused, LiveError::Link { .. })
+            && refused.to_string().contains("trained for another scan"),
         "{refused}"
     );
     assert!(port.install_model(&blob[..blob.len() / 2]).is_err());

@@ -126,6 +126,11 @@ pub fn train(
     } else {
         opts.folds
     };
+    if !grouped && n < 2 {
+        return Err(usage(format!(
+            "{n} training row(s): cross-validation needs at least 2 (more rows with --rows)"
+        )));
+    }
     if !grouped && (opts.folds < 2 || opts.folds > n) {
         return Err(usage(format!(
             "{} folds for {n} training rows: use 2 to {n}",

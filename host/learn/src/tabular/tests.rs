@@ -284,6 +284,10 @@ fn row_ranges_and_folds() {
     }
     let e = STANDIN.select("300..400".parse().unwrap()).unwrap_err();
     assert!(e.to_string().contains("rows 0..360"), "{e}");
+    // One training row: said as such, not "use 2 to 1".
+    let one = STANDIN.select("0..1".parse().unwrap()).unwrap();
+    let e = train(&one, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("needs at least 2"), "{e}");
     // Blocks are contiguous and in order; shuffled folds are not.
     let b = folds(10, 3, CvScheme::Blocks, None, 1);
     assert_eq!(b, [0, 0, 0, 0, 1, 1, 1, 2, 2, 2]);
