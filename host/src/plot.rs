@@ -422,134 +422,108 @@ pub fn heatmap_over(
     }
     let key_height = if overlay.key.is_empty() { 0 } else { 26 };
     render(path, (780, 640 + key_height), |root| {
-        draw_heat_map(
-            path,
-            root,
-            labels,
-            values,
-            (rows, cols),
-            extent,
-            (lo, hi),
-            unit,
-            overlay,
-        )
-    })
-}
-
-/// [`heatmap_over`]'s drawing, on `root`.
-#[allow(clippy::too_many_arguments)]
-fn draw_heat_map(
-    path: &Path,
-    root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
-    labels: Labels<'_>,
-    values: &[f64],
-    (rows, cols): (usize, usize),
-    extent: Extent,
-    (lo, hi): (f64, f64),
-    unit: &str,
-    overlay: &Overlay,
-) -> Result<(), PlotError> {
-    let (root, key) = root.split_vertically(640);
-    if !overlay.key.is_empty() {
-        key.draw(&Text::new(
-            overlay.key.clone(),
-            (66, 2),
-            ("sans-serif", 14).into_font().color(&BLACK),
-        ))
-        .map_err(|e| fail(path, e))?;
-    }
-    let (main, bar) = root.split_horizontally(640);
-    let mut c = ChartBuilder::on(&main)
-        .caption(labels.title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(54)
-        .build_cartesian_2d(extent.x.0..extent.x.1, extent.y.1..extent.y.0)
-        .map_err(|e| fail(path, e))?;
-    c.configure_mesh()
-        .disable_mesh()
-        .x_desc(labels.x)
-        .y_desc(labels.y)
-        .x_label_formatter(&axis_labels(extent.x.0, extent.x.1))
-        .y_label_formatter(&axis_labels(extent.y.0, extent.y.1))
-        .label_style(("sans-serif", 13))
-        .axis_desc_style(("sans-serif", 15))
-        .draw()
-        .map_err(|e| fail(path, e))?;
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    c.draw_series((0..rows).flat_map(|r| {
-        (0..cols).map(move |q| {
-            let v = values[r * cols + q];
-            let colour = if v.is_finite() {
-                colour_map(v, (lo, hi))
-            } else {
-                RGBColor(160, 160, 160)
-            };
-            let (w, h) = (
-                (extent.x.1 - extent.x.0) / cols as f64,
-                (extent.y.1 - extent.y.0) / rows as f64,
-            );
-            let (x, y) = (extent.x.0 + q as f64 * w, extent.y.0 + r as f64 * h);
-            Rectangle::new([(x, y), (x + w, y + h)], colour.filled())
-        })
-    }))
-    .map_err(|e| fail(path, e))?;
-    for mark in &overlay.marks {
-        match mark {
-            Mark::Line {
-                points,
-                colour,
-                width,
-            } => c
-                .draw_series(std::iter::once(PathElement::new(
-                    points.clone(),
-                    colour.stroke_width(*width),
-                )))
-                .map(|_| ()),
-            Mark::Cross { at, label } => c
-                .draw_series(std::iter::once(
-                    EmptyElement::at(*at)
-                        + Cross::new((0, 0), 8, BLACK.stroke_width(3))
-                        + Text::new(
-                            label.clone(),
-                            (9, -24),
-                            ("sans-serif", 18).into_font().color(&BLACK),
-                        ),
-                ))
-                .map(|_| ()),
+        let (root, key) = root.split_vertically(640);
+        if !overlay.key.is_empty() {
+            key.draw(&Text::new(
+                overlay.key.clone(),
+                (66, 2),
+                ("sans-serif", 14).into_font().color(&BLACK),
+            ))
+            .map_err(|e| fail(path, e))?;
         }
+        let (main, bar) = root.split_horizontally(640);
+        let mut c = ChartBuilder::on(&main)
+            .caption(labels.title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(54)
+            .build_cartesian_2d(extent.x.0..extent.x.1, extent.y.1..extent.y.0)
+            .map_err(|e| fail(path, e))?;
+        c.configure_mesh()
+            .disable_mesh()
+            .x_desc(labels.x)
+            .y_desc(labels.y)
+            .x_label_formatter(&axis_labels(extent.x.0, extent.x.1))
+            .y_label_formatter(&axis_labels(extent.y.0, extent.y.1))
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| fail(path, e))?;
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        c.draw_series((0..rows).flat_map(|r| {
+            (0..cols).map(move |q| {
+                let v = values[r * cols + q];
+                let colour = if v.is_finite() {
+                    colour_map(v, (lo, hi))
+                } else {
+                    RGBColor(160, 160, 160)
+                };
+                let (w, h) = (
+                    (extent.x.1 - extent.x.0) / cols as f64,
+                    (extent.y.1 - extent.y.0) / rows as f64,
+                );
+                let (x, y) = (extent.x.0 + q as f64 * w, extent.y.0 + r as f64 * h);
+                Rectangle::new([(x, y), (x + w, y + h)], colour.filled())
+            })
+        }))
         .map_err(|e| fail(path, e))?;
-    }
-    let mut b = ChartBuilder::on(&bar)
-        .margin_top(46)
-        .margin_bottom(56)
-        .margin_right(8)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..1.0, lo..lo + span)
+        for mark in &overlay.marks {
+            match mark {
+                Mark::Line {
+                    points,
+                    colour,
+                    width,
+                } => c
+                    .draw_series(std::iter::once(PathElement::new(
+                        points.clone(),
+                        colour.stroke_width(*width),
+                    )))
+                    .map(|_| ()),
+                Mark::Cross { at, label } => c
+                    .draw_series(std::iter::once(
+                        EmptyElement::at(*at)
+                            + Cross::new((0, 0), 8, BLACK.stroke_width(3))
+                            + Text::new(
+                                label.clone(),
+                                (9, -24),
+                                ("sans-serif", 18).into_font().color(&BLACK),
+                            ),
+                    ))
+                    .map(|_| ()),
+            }
+            .map_err(|e| fail(path, e))?;
+        }
+        let mut b = ChartBuilder::on(&bar)
+            .margin_top(46)
+            .margin_bottom(56)
+            .margin_right(8)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..1.0, lo..lo + span)
+            .map_err(|e| fail(path, e))?;
+        let bar_label = axis_labels(lo, hi);
+        b.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_label_formatter(&bar_label)
+            .y_desc(unit)
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| fail(path, e))?;
+        let steps = 100;
+        b.draw_series((0..steps).map(|i| {
+            let (a, z) = (
+                lo + span * i as f64 / steps as f64,
+                lo + span * (i + 1) as f64 / steps as f64,
+            );
+            Rectangle::new(
+                [(0.0, a), (1.0, z)],
+                colour_map(0.5 * (a + z), (lo, hi)).filled(),
+            )
+        }))
         .map_err(|e| fail(path, e))?;
-    let bar_label = axis_labels(lo, hi);
-    b.configure_mesh()
-        .disable_mesh()
-        .disable_x_axis()
-        .y_label_formatter(&bar_label)
-        .y_desc(unit)
-        .label_style(("sans-serif", 13))
-        .axis_desc_style(("sans-serif", 14))
-        .draw()
-        .map_err(|e| fail(path, e))?;
-    let steps = 100;
-    b.draw_series((0..steps).map(|i| {
-        let (a, z) = (
-            lo + span * i as f64 / steps as f64,
-            lo + span * (i + 1) as f64 / steps as f64,
-        );
-        Rectangle::new(
-            [(0.0, a), (1.0, z)],
-            colour_map(0.5 * (a + z), (lo, hi)).filled(),
-        )
-    }))
-    .map_err(|e| fail(path, e))?;
-    Ok(())
+        Ok(())
+    })
 }
 
 #[cfg(test)]

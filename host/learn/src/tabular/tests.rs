@@ -24,6 +24,21 @@ static STANDIN: LazyLock<Table> = LazyLock::new(|| {
     table
 });
 
+/// A table of features `x` (columns c0, c1, ...) and a label per row.
+fn labelled(x: DMatrix<f64>, labels: Vec<String>) -> Table {
+    Table {
+        feature_names: (0..x.ncols()).map(|j| format!("c{j}")).collect(),
+        x,
+        labels: Some(labels),
+        positions_mm: None,
+        third: None,
+        description: String::new(),
+        first_row: 0,
+        unit: Unit::Mm,
+        groups: None,
+    }
+}
+
 fn opts() -> TrainOptions {
     TrainOptions {
         folds: 3,
@@ -242,17 +257,7 @@ fn labels_are_the_users_own_names() {
     let x = DMatrix::from_fn(n, 4, |r, j| {
         (r % 3) as f64 * (1.0 + j as f64) + 0.1 * rng.normal()
     });
-    let table = Table {
-        x,
-        feature_names: (0..4).map(|j| format!("c{j}")).collect(),
-        labels: Some(labels),
-        positions_mm: None,
-        third: None,
-        description: String::new(),
-        first_row: 0,
-        unit: Unit::Mm,
-        groups: None,
-    };
+    let table = labelled(x, labels);
     let model = train(&table, Choice::Auto, &opts(), &mut quiet()).unwrap();
     assert!(model.method.is_classifier());
     assert_eq!(
@@ -689,17 +694,10 @@ fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
     let x = DMatrix::from_fn(n, 3, |r, j| {
         class(r) as f64 * (1.0 + j as f64) + 0.05 * (1 + 4 * class(r)) as f64 * rng.normal()
     });
-    let table = Table {
+    let table = labelled(
         x,
-        feature_names: (0..3).map(|j| format!("c{j}")).collect(),
-        labels: Some((0..n).map(|r| ["a", "b", "c"][class(r)].into()).collect()),
-        positions_mm: None,
-        third: None,
-        description: String::new(),
-        first_row: 0,
-        unit: Unit::Mm,
-        groups: None,
-    };
+        (0..n).map(|r| ["a", "b", "c"][class(r)].into()).collect(),
+    );
     let model = train(&table, Choice::One(Method::Qda), &opts(), &mut quiet()).unwrap();
     assert_eq!(model.method, Method::Qda);
     let Tables::Discriminant { classes, .. } = &model.tables else {
