@@ -197,7 +197,7 @@ fn sim_writes_a_recording_that_python_reads() {
         })
         .collect();
     let swipe_csv = dir.join("swipe.csv");
-    std::fs::write(&swipe_csv, csv).unwrap();
+    std::fs::write(&swipe_csv, &csv).unwrap();
     let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
     let from_csv = et(&[
         "stream",
@@ -219,6 +219,23 @@ fn sim_writes_a_recording_that_python_reads() {
             .collect()
     };
     assert_eq!(positions(&from_csv.stdout), positions(&stream.stdout));
+    // A recording shorter than the untouched reference gives no image: said, not silence.
+    let short = dir.join("short.csv");
+    let first: String = csv.lines().take(3).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&short, first).unwrap();
+    let e = et(&[
+        "stream",
+        "--json",
+        "--replay",
+        short.to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+    ]);
+    let message = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success() && message.contains("ended after 3 frame(s), before the untouched"),
+        "{message}"
+    );
     // A scene whose protocol is a file is for `et reconstruct`, and says so.
     std::fs::write(dir.join("p.csv"), "0,1,2,3\n").unwrap();
     let file_scene = dir.join("file-protocol.toml");

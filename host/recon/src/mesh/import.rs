@@ -9,7 +9,8 @@
 //! CSV: `nodes.csv` (x,y per row, m), `triangles.csv` (three 0-based node indices per row),
 //! `electrodes.csv` (one row per electrode: its boundary node indices in order along it; a
 //! single index is a point electrode at that node). A header row is allowed in each (a first
-//! row that is not numeric is skipped).
+//! row that is not numeric is skipped), as are blank lines and `#` comments; errors name the
+//! file's own line.
 //!
 //! A point electrode has no edges (`Mesh::electrodes` is empty for it) and its node as its
 //! centre node: only the point model images with it.
@@ -31,27 +32,29 @@ fn read(path: &Path) -> Result<String, MeshError> {
         .map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
 }
 
-/// Rows of comma-separated values, each `width` long if given; a non-numeric first row is a
-/// header.
+/// Rows of comma-separated values with their line numbers (1-based), each `width` long if
+/// given; blank lines and `#` comments are skipped, and a non-numeric first row is a header.
 fn csv_rows<T: std::str::FromStr>(
     path: &Path,
     width: Option<usize>,
-) -> Result<Vec<Vec<T>>, MeshError> {
+) -> Result<Vec<(usize, Vec<T>)>, MeshError> {
     let text = read(path)?;
     let mut out = Vec::new();
+    let mut first = true;
     for (i, line) in text.lines().enumerate() {
-        if line.trim().is_empty() {
+        if line.trim().is_empty() || line.trim_start().starts_with('#') {
             continue;
         }
         let v: Result<Vec<T>, _> = line.split(',').map(|x| x.trim().parse::<T>()).collect();
         match v {
-            Ok(v) if width.is_none_or(|w| v.len() == w) => out.push(v),
-            Err(_) if i == 0 => {}
+            Ok(v) if width.is_none_or(|w| v.len() == w) => out.push((i + 1, v)),
+            Err(_) if first => {}
             _ => {
                 let what = width.map_or("a list of".to_string(), |w| w.to_string());
                 return Err(bad(path, i + 1, format!("expected {what} numbers")));
             }
         }
+        first = false;
     }
     Ok(out)
 }
@@ -195,33 +198,48 @@ impl Mesh {
     /// # Errors
     /// [`MeshError::Spec`] naming the file and line, or what [`Mesh::from_parts`] finds.
     pub fn from_csv(nodes: &Path, triangles: &Path, electrodes: &Path) -> Result<Self, MeshError> {
-        let xy: Vec<Vec<f64>> = csv_rows(nodes, Some(2))?;
-        if let Some(i) = xy.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
-            return Err(bad(nodes, i + 1, "non-finite coordinate"));
+        let xy: Vec<(usize, Vec<f64>)> = csv_rows(nodes, Some(2))?;
+        if let Some((line, _)) = xy.iter().find(|(_, r)| r.iter().any(|v| !v.is_finite())) {
+            return Err(bad(nodes, *line, "non-finite coordinate"));
         }
-        let tri: Vec<Vec<usize>> = csv_rows(triangles, Some(3))?;
-        let el: Vec<Vec<usize>> = csv_rows(electrodes, None)?;
+        let tri: Vec<(usize, Vec<usize>)> = csv_rows(triangles, Some(3))?;
+        let el: Vec<(usize, Vec<usize>)> = csv_rows(electrodes, None)?;
+        // Node numbers past the nodes, named by file and line (from 0, as in the docs).
+        let n = xy.len();
+        for (path, rows) in [(triangles, &tri), (electrodes, &el)] {
+            if let Some((line, v)) = rows
+                .iter()
+                .find_map(|(line, r)| r.iter().find(|&&v| v >= n).map(|v| (line, v)))
+            {
+                return Err(bad(
+                    path,
+                    *line,
+                    format!(
+                        "node {v}, but {} has {n} nodes (numbered from 0)",
+                        nodes.display()
+                    ),
+                ));
+            }
+        }
         // csv_rows gave each row its width; a row that is not is refused, not indexed.
-        let width = |path: &Path, i: usize| bad(path, i + 1, "wrong number of values");
+        let width = |path: &Path, line: usize| bad(path, line, "wrong number of values");
         let xy = xy
             .iter()
-            .enumerate()
-            .map(|(i, r)| match r[..] {
+            .map(|(line, r)| match r[..] {
                 [x, y] => Ok([x, y]),
-                _ => Err(width(nodes, i)),
+                _ => Err(width(nodes, *line)),
             })
             .collect::<Result<_, _>>()?;
         let tri = tri
             .iter()
-            .enumerate()
-            .map(|(i, r)| match r[..] {
+            .map(|(line, r)| match r[..] {
                 [a, b, c] => Ok([a, b, c]),
-                _ => Err(width(triangles, i)),
+                _ => Err(width(triangles, *line)),
             })
             .collect::<Result<_, _>>()?;
         let el = el
             .iter()
-            .map(|r| match r[..] {
+            .map(|(_, r)| match r[..] {
                 [a] => vec![[a, a]], // a point electrode
                 _ => r
                     .windows(2)

@@ -166,7 +166,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         Settings::default().reference_frames
     );
     let limit = args.frames.unwrap_or(u64::MAX);
-    let mut seen = 0u64;
+    let (mut seen, mut imaged, mut needed) = (0u64, 0u64, 0usize);
     let mut stdout = std::io::stdout().lock();
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
@@ -194,6 +194,10 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     continue;
                 }
             };
+            match &out.referencing {
+                Some(r) => needed = r.needed,
+                None => imaged += 1,
+            }
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
                 match writeln!(stdout, "{line}").and_then(|()| stdout.flush()) {
@@ -204,6 +208,14 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                 }
             }
         }
+    }
+    // A replay that ended before any frame was imaged gave no events: say why, not nothing.
+    if imaged == 0 && matches!(source, Source::Replay(_)) {
+        anyhow::bail!(
+            "{} ended after {seen} frame(s), before the untouched reference ({needed} frames) \
+             was complete: no frame was imaged",
+            source.describe()
+        );
     }
     Ok(())
 }

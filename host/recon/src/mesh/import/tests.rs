@@ -287,6 +287,17 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     std::fs::write(&p, "a,b,c\n0,1,2\n0,1\n").unwrap();
     let e = Mesh::from_csv(&p, &p, &p).unwrap_err().to_string();
     assert!(e.contains("t.csv:2"), "{e}");
+    // Line numbers are the file's, past comments, blank lines and the header; a node number
+    // past the nodes is named by the file and line that gives it.
+    let (nodes, tris, els) = (dir.join("n.csv"), dir.join("tri.csv"), dir.join("el.csv"));
+    std::fs::write(&tris, "0,1,2\n\n0,1,9\n").unwrap();
+    std::fs::write(&els, "0,1\n1,2\n").unwrap();
+    std::fs::write(&nodes, "# made by hand\n\nx,y\n0,0\n1,0\nnan,1\n").unwrap();
+    let e = Mesh::from_csv(&nodes, &tris, &els).unwrap_err().to_string();
+    assert!(e.contains("n.csv:6") && e.contains("non-finite"), "{e}");
+    std::fs::write(&nodes, "# made by hand\n\nx,y\n0,0\n1,0\n0,1\n").unwrap();
+    let e = Mesh::from_csv(&nodes, &tris, &els).unwrap_err().to_string();
+    assert!(e.contains("tri.csv:3") && e.contains("node 9"), "{e}");
     // A sliver of zero area is refused; one of tiny area keeps finite potentials.
     let nodes = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.0]];
     let tris = vec![[0, 4, 1], [0, 1, 2], [0, 2, 3]];
