@@ -440,6 +440,34 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
     })
 }
 
+impl Recording {
+    /// What a reader should say about the frames' order, if anything: where `seq` goes back or
+    /// repeats, or the board's clock `t_us` goes back (a wrap of its 32 bits, every 71.6
+    /// minutes, is not going back). Such a file is a board that restarted mid-recording or
+    /// recordings joined; readers still take the frames in file order, and say so.
+    #[must_use]
+    pub fn order_note(&self) -> Option<String> {
+        let (mut seq_back, mut time_back, mut first) = (0usize, 0usize, None);
+        for (i, pair) in self.records.windows(2).enumerate() {
+            let [a, b] = pair else { continue };
+            let seq = b.seq <= a.seq;
+            let time = b.t_us.wrapping_sub(a.t_us) > u32::MAX / 2;
+            seq_back += usize::from(seq);
+            time_back += usize::from(time);
+            if (seq || time) && first.is_none() {
+                first = Some((i + 1, a.seq, b.seq));
+            }
+        }
+        let (at, before, after) = first?;
+        Some(format!(
+            "frames out of order: seq goes back or repeats {seq_back} time(s), the board's clock \
+             goes back {time_back} time(s), first at frame {at} of the file (seq {before} then \
+             {after}): a board that restarted, or recordings joined; the frames are taken in \
+             file order"
+        ))
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 mod tests {
@@ -458,6 +486,43 @@ mod tests {
             &v,
         )
         .unwrap()
+    }
+
+    /// A board that restarted mid-recording (seq from 0 again), or two recordings joined, is
+    /// said; a clock that wraps its 32 bits is not going back.
+    #[test]
+    fn frames_out_of_order_are_noted() {
+        let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+        let recording = |stamps: &[(u32, u32)]| Recording {
+            header: header.clone(),
+            records: stamps
+                .iter()
+                .map(|&(seq, t_us)| Record {
+                    seq,
+                    t_us,
+                    flags: 0,
+                    rail_count: 0,
+                    voltages: vec![0.0; 208],
+                    invalid: Vec::new(),
+                    touches: None,
+                })
+                .collect(),
+            truncated_tail: false,
+        };
+        let wraps = recording(&[(7, u32::MAX - 100), (8, 12_700), (9, 25_500)]);
+        assert_eq!(wraps.order_note(), None);
+        let restarted = recording(&[(0, 0), (1, 12_800), (0, 5), (1, 12_805)]);
+        let note = restarted.order_note().unwrap();
+        assert!(
+            note.contains("repeats 1 time(s)") && note.contains("goes back 1 time(s)"),
+            "{note}"
+        );
+        assert!(
+            note.contains("frame 2 of the file (seq 1 then 0)"),
+            "{note}"
+        );
+        let repeated = recording(&[(0, 0), (1, 12_800), (1, 12_800)]);
+        assert!(repeated.order_note().unwrap().contains("repeats 1 time(s)"));
     }
 
     #[test]

@@ -424,6 +424,15 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         (Some(f), None) => Some(recording::read(f)?),
         _ => None,
     };
+    if let Some(note) = recording
+        .as_ref()
+        .and_then(recording::Recording::order_note)
+    {
+        eprintln!(
+            "note: {}: {note}",
+            args.frames.as_deref().unwrap_or(Path::new("")).display()
+        );
+    }
     let sheet = &scene.sheet.physical;
     let (schedule, config) = match &recording {
         Some(r) => {

@@ -156,6 +156,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     }
     if let Source::Replay(r) = &mut source {
         r.looping = false;
+        if let Some(note) = r.recording.order_note() {
+            eprintln!("note: {}: {note}", r.name);
+        }
     }
     if !args.json {
         eprintln!("note: et stream prints JSON lines (--json); streaming them anyway");
