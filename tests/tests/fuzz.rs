@@ -1,8 +1,9 @@
 //! Every file parser of et on damaged files: no panic, no abort, and no allocation beyond a
 //! small multiple of the file's size.
 //!
-//! Each case takes a valid file (a scene, a dataset, a foreign CSV and its targets, a model,
-//! a model blob, a recording, a Gmsh mesh, a CSV mesh) and damages it: bit flips, deletions, repeated
+//! Each case takes a valid file (a scene, a dataset, a foreign CSV and its targets, a board or
+//! table model, a model blob, a recording, another system's frames as CSV and `.mat`, a Gmsh
+//! mesh, a CSV mesh) and damages it: bit flips, deletions, repeated
 //! stretches (files that grow), extreme tokens inserted or put in place of a number (counts of
 //! 10^20, 1e308, NaN, -1, a byte-order mark, stray separators, section names), truncation.
 //! The parser reads it from disk as `et` would.
@@ -322,6 +323,29 @@ fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
     std::fs::read(path).unwrap()
 }
 
+/// Another system's frames: 5 frames of the 8-electrode adjacent protocol's 40 values.
+fn frames_matrix() -> DMatrix<f64> {
+    DMatrix::from_fn(5, 40, |f, k| 1e-3 * (k as f64 + 1.0) + 1e-5 * f as f64)
+}
+
+fn frames_csv() -> String {
+    let m = frames_matrix();
+    (0..m.nrows())
+        .map(|f| {
+            let row: Vec<String> = m.row(f).iter().map(|v| format!("{v:e}")).collect();
+            row.join(",") + "\n"
+        })
+        .collect()
+}
+
+/// `et_host::frames::read` picks the format by extension: the case's file is given one
+/// through a symbolic link (so an endless input stays endless).
+fn read_frames(case: &Path, ext: &str) -> bool {
+    let named = scratch().join(format!("frames.{ext}"));
+    let _ = std::fs::remove_file(&named);
+    std::os::unix::fs::symlink(case, &named).is_ok() && et_host::frames::read(&named, 40).is_ok()
+}
+
 fn recording(dir: &Path) -> Vec<u8> {
     let config = small_config();
     let header = Header::new("fuzz", &config).unwrap();
@@ -442,6 +466,16 @@ fn parsers() -> Vec<Parser> {
             name: "recording JSONL",
             seeds: vec![recording(&dir)],
             parse: |p| et_host::recording::read(&p[0]).is_ok(),
+        },
+        Parser {
+            name: "frames CSV",
+            seeds: vec![frames_csv().into()],
+            parse: |p| read_frames(&p[0], "csv"),
+        },
+        Parser {
+            name: "frames MATLAB .mat",
+            seeds: vec![et_host::frames::mat_v5("v", &frames_matrix())],
+            parse: |p| read_frames(&p[0], "mat"),
         },
         Parser {
             name: "Gmsh 2.2",
