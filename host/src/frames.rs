@@ -92,6 +92,47 @@ fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
 }
 
 /// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
+/// Checks the compressed variables of a version 5/7 `.mat` before matfile inflates them (it
+/// reads each to its end, without a limit): each must inflate, and to no more than the data
+/// files' limit (a small file could otherwise expand to gigabytes).
+fn compressed_within_limits(bytes: &[u8]) -> Result<(), String> {
+    use std::io::Read as _;
+    let little = bytes.get(126..128) == Some(b"IM");
+    let word = |at: usize| -> Option<u32> {
+        let b: [u8; 4] = bytes.get(at..at + 4)?.try_into().ok()?;
+        Some(if little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    };
+    let mut at = 128;
+    while let (Some(kind), Some(size)) = (word(at), word(at + 4)) {
+        let size = size as usize;
+        let data = bytes.get(at + 8..(at + 8).saturating_add(size));
+        if kind == 15 {
+            let data = data.ok_or("a compressed variable is cut short")?;
+            let mut out = Vec::new();
+            libflate::zlib::Decoder::new(data)
+                .map_err(|_| "a compressed variable is damaged".to_string())?
+                .take(et_core::text::MAX_FILE_BYTES + 1)
+                .read_to_end(&mut out)
+                .map_err(|_| "a compressed variable is damaged".to_string())?;
+            if out.len() as u64 > et_core::text::MAX_FILE_BYTES {
+                return Err(format!(
+                    "a compressed variable inflates past {} bytes: not frames et reads",
+                    et_core::text::MAX_FILE_BYTES
+                ));
+            }
+            at = at.saturating_add(8).saturating_add(size);
+        } else {
+            // Uncompressed elements are padded to 8 bytes; matfile checks them itself.
+            at = at.saturating_add(8).saturating_add(size.div_ceil(8) * 8);
+        }
+    }
+    Ok(())
+}
+
 fn mat_matrix(
     path: &Path,
     bytes: &[u8],
@@ -104,6 +145,7 @@ fn mat_matrix(
             "a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV",
         ));
     }
+    compressed_within_limits(bytes).map_err(|why| content(path, 0, why))?;
     let file = matfile::MatFile::parse(bytes)
         .map_err(|e| content(path, 0, format!("not a MATLAB version 5 or 7 file: {e}")))?;
     let names: Vec<&str> = file.arrays().iter().map(matfile::Array::name).collect();

@@ -97,3 +97,38 @@ fn matlab_files_by_variable() {
     assert!(e.contains("tank.mat") && e.contains("not a MATLAB"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// MATLAB's default `save` compresses each variable: such a file is read as the plain one,
+/// and a damaged compressed variable is refused in words before matfile inflates it (matfile
+/// reads a compressed variable to its end, without a limit, and prints debug text on errors).
+#[test]
+fn compressed_matlab_variables_are_read_and_checked_first() {
+    use std::io::Write as _;
+    let dir = tmp("matz");
+    let v = DMatrix::from_row_slice(2, 3, &[1e-3, 4e-3, 7e-3, 2e-3, 5e-3, 8e-3]);
+    let plain = mat_v5("v", &v);
+    // The header, then the variable's element (tag and data) compressed as one miCOMPRESSED.
+    let mut z = libflate::zlib::Encoder::new(Vec::new()).unwrap();
+    z.write_all(&plain[128..]).unwrap();
+    let deflated = z.finish().into_result().unwrap();
+    let mut file = plain[..128].to_vec();
+    file.extend(15u32.to_le_bytes());
+    file.extend((deflated.len() as u32).to_le_bytes());
+    file.extend(&deflated);
+    let f = dir.join("z.mat");
+    std::fs::write(&f, &file).unwrap();
+    assert_eq!(read(&f, 2).unwrap().frames, read_plain(&dir, &plain));
+    let mut damaged = file.clone();
+    let n = damaged.len();
+    damaged[n - 12..n - 4].fill(0xA5);
+    std::fs::write(&f, &damaged).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("compressed variable is damaged"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn read_plain(dir: &Path, bytes: &[u8]) -> Vec<Vec<f32>> {
+    let f = dir.join("plain.mat");
+    std::fs::write(&f, bytes).unwrap();
+    read(&f, 2).unwrap().frames
+}
