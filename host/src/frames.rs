@@ -146,8 +146,30 @@ fn mat_matrix(
         ));
     }
     compressed_within_limits(bytes).map_err(|why| content(path, 0, why))?;
-    let file = matfile::MatFile::parse(bytes)
-        .map_err(|e| content(path, 0, format!("not a MATLAB version 5 or 7 file: {e}")))?;
+    // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
+    // found by the fuzzer): such a file is refused like any other it cannot read, silently
+    // for the panic itself.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes));
+    std::panic::set_hook(hook);
+    let file = match parsed {
+        Ok(Ok(file)) => file,
+        Ok(Err(e)) => {
+            return Err(content(
+                path,
+                0,
+                format!("not a MATLAB version 5 or 7 file: {e}"),
+            ));
+        }
+        Err(_) => {
+            return Err(content(
+                path,
+                0,
+                "not a MATLAB file et can read: its variables' headers are inconsistent",
+            ));
+        }
+    };
     let names: Vec<&str> = file.arrays().iter().map(matfile::Array::name).collect();
     let array = match name {
         Some(n) => file.find_by_name(n).ok_or_else(|| {
