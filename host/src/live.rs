@@ -30,7 +30,7 @@ use et_learn::fit::{FitError, Fitted};
 use et_learn::model_file::ModelFile;
 use et_learn::regress::posterior_centre;
 use et_recon::{
-    AlphaRule, Imager, ImagingError, MeshPlan, PROMINENCE, PixelGrid, PixelOperator, ReconError,
+    AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PROMINENCE, PixelGrid, ReconError,
     Reconstructor, Region, above_noise, default_threshold, touches,
 };
 

@@ -15,7 +15,7 @@ use et_core::sheet::Sheet;
 use et_core::sheet::shape::Shape;
 use et_recon::fem::{Electrodes, Forward, TransferJacobian};
 use et_recon::mesh::Mesh;
-use et_recon::{AlphaRule, DataSpace, MeshPlan, Method, OneStep, PixelGrid, PixelOperator, Spec};
+use et_recon::{AlphaRule, DataSpace, FrameOperator, MeshPlan, Method, OneStep, PixelGrid, Spec};
 use nalgebra::{DMatrix, DVector};
 
 fn main() {
@@ -156,43 +156,40 @@ fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
     });
 }
 
-static LIVE: LazyLock<(OneStep, [PixelOperator; 2], DVector<f64>)> = LazyLock::new(|| {
+static LIVE: LazyLock<(OneStep, [FrameOperator; 3], DVector<f64>)> = LazyLock::new(|| {
     // The stages by hand: these benchmarks time the live frame's kernels themselves.
     let (jac, mesh) = jacobian(8_000, 16, ProtocolKind::Adjacent);
     let r = DataSpace::factored(&jac, 0.5)
         .and_then(|d| d.one_step(0.03))
         .expect("recon");
-    let pix = [32, 64].map(|n| PixelGrid::new(&mesh, n).project(&r));
+    let [a, b] = [32, 64].map(|n| PixelGrid::new(&mesh, n).project(&r));
+    let pix = [a, b, FrameOperator::of(&r)];
     let dv = DVector::from_fn(r.frame_len(), |k, _| (k as f64 * 0.37).sin() * 1e-4);
     (r, pix, dv)
 });
 
-/// A live frame onto the 8 000-triangle mesh (f64, the factored matrix: r = 120).
+/// A live frame onto the 8 000-triangle mesh in f32 (the packed thin factors: q = 104).
 #[divan::bench]
-fn live_frame_onto_the_mesh() -> f64 {
+fn live_frame_onto_the_mesh(bencher: divan::Bencher) {
+    let (_, pix, dv) = &*LIVE;
+    let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+    let mut out = vec![0.0f32; pix[2].rows()];
+    bencher.bench_local(|| {
+        pix[2]
+            .apply(divan::black_box(&dv32), &mut out)
+            .expect("sizes");
+        out[0]
+    });
+}
+
+/// A live frame onto the 8 000-triangle mesh in f64 (faer's products on the factors: r = 120).
+#[divan::bench]
+fn live_frame_onto_the_mesh_f64() -> f64 {
     let (r, _, dv) = &*LIVE;
     r.reconstruct(divan::black_box(dv.as_slice()))
         .expect("frame")
         .iter()
         .sum()
-}
-
-/// Reading as many f64 as the live frame's factors hold, r (T + K) with r = 120, once (a sum
-/// in eight lanes, so that it vectorises): the memory-bandwidth limit a live frame onto the
-/// mesh is measured against.
-#[divan::bench]
-fn read_the_factors_once(bencher: divan::Bencher) {
-    let (r, _, _) = &*LIVE;
-    let data = vec![1.0f64; 120 * (r.triangles() + r.frame_len())];
-    bencher.bench(|| {
-        let mut lanes = [0.0f64; 8];
-        for chunk in divan::black_box(&data).chunks_exact(8) {
-            for (l, v) in lanes.iter_mut().zip(chunk) {
-                *l += v;
-            }
-        }
-        lanes.iter().sum::<f64>()
-    });
 }
 
 /// A live frame onto a 32 x 32 and a 64 x 64 pixel grid (f32, the thin factors: pixels
@@ -201,7 +198,7 @@ fn read_the_factors_once(bencher: divan::Bencher) {
 fn live_frame_onto_pixels_32_64(bencher: divan::Bencher, which: usize) {
     let (_, pix, dv) = &*LIVE;
     let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-    let mut out = vec![0.0f32; pix[which].pixels()];
+    let mut out = vec![0.0f32; pix[which].rows()];
     bencher.bench_local(|| {
         pix[which]
             .apply(divan::black_box(&dv32), &mut out)
@@ -210,22 +207,80 @@ fn live_frame_onto_pixels_32_64(bencher: divan::Bencher, which: usize) {
     });
 }
 
-/// Reading as many f32 as the 32 x 32 and 64 x 64 frames' factors hold, q (pixels + K), once
-/// (a sum in sixteen lanes): their memory-bandwidth limit.
-#[divan::bench(args = [0, 1])]
-fn read_the_pixel_factors_once(bencher: divan::Bencher, which: usize) {
+/// Reading as many bytes as the 32 x 32, 64 x 64 and 8 000-triangle frames' packed factors
+/// hold, once, with nothing else (a sum in eight vector registers): the memory-bandwidth limit
+/// each frame is measured against.
+#[divan::bench(args = [0, 1, 2])]
+fn read_the_factors_once(bencher: divan::Bencher, which: usize) {
     let (_, pix, _) = &*LIVE;
-    let p = &pix[which];
-    let data = vec![1.0f32; p.rank() * (p.pixels() + p.frame_len())];
-    bencher.bench_local(|| {
-        let mut lanes = [0.0f32; 16];
-        for chunk in divan::black_box(&data).chunks_exact(16) {
-            for (l, v) in lanes.iter_mut().zip(chunk) {
-                *l += v;
+    let data = vec![1.0f32; pix[which].bytes() / 4];
+    bencher.bench_local(|| bandwidth::sum(divan::black_box(&data)));
+}
+
+/// STREAM's triad, a = b + s c, on one core over three arrays of `n` f32 each: 3 x 4 n bytes
+/// moved (counted as STREAM counts them: two read, one written). Warm: arrays that fit this
+/// machine's L3 cache together (3 x 1.5 MB); cold: 3 x 64 MB, far past it.
+#[divan::bench(args = [393_216, 16_777_216], sample_count = 30)]
+fn stream_triad(bencher: divan::Bencher, n: usize) {
+    let b = vec![1.0f32; n];
+    let c = vec![2.0f32; n];
+    let mut a = vec![0.0f32; n];
+    bencher
+        .counter(divan::counter::BytesCount::new(12 * n))
+        .bench_local(|| {
+            bandwidth::triad(&mut a, divan::black_box(&b), &c, 3.0);
+            a[0]
+        });
+}
+
+mod bandwidth {
+    use pulp::{Arch, Simd, WithSimd};
+
+    /// The sum of `data` in eight vector accumulators (the reading speed of one core).
+    pub fn sum(data: &[f32]) -> f32 {
+        struct Sum<'a>(&'a [f32]);
+        impl WithSimd for Sum<'_> {
+            type Output = f32;
+            #[inline(always)]
+            fn with_simd<S: Simd>(self, simd: S) -> f32 {
+                let (v, tail) = S::as_simd_f32s(self.0);
+                let mut acc = [simd.splat_f32s(0.0); 8];
+                for chunk in v.chunks_exact(8) {
+                    for (a, x) in acc.iter_mut().zip(chunk) {
+                        *a = simd.add_f32s(*a, *x);
+                    }
+                }
+                let total = acc
+                    .iter()
+                    .fold(simd.splat_f32s(0.0), |s, a| simd.add_f32s(s, *a));
+                simd.reduce_sum_f32s(total) + tail.iter().sum::<f32>()
             }
         }
-        lanes.iter().sum::<f32>()
-    });
+        Arch::new().dispatch(Sum(data))
+    }
+
+    /// a = b + s c.
+    pub fn triad(a: &mut [f32], b: &[f32], c: &[f32], s: f32) {
+        struct Triad<'a>(&'a mut [f32], &'a [f32], &'a [f32], f32);
+        impl WithSimd for Triad<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: Simd>(self, simd: S) {
+                let Triad(a, b, c, s) = self;
+                let (av, at) = S::as_mut_simd_f32s(a);
+                let (bv, bt) = S::as_simd_f32s(b);
+                let (cv, ct) = S::as_simd_f32s(c);
+                let sv = simd.splat_f32s(s);
+                for ((a, b), c) in av.iter_mut().zip(bv).zip(cv) {
+                    *a = simd.mul_add_f32s(*c, sv, *b);
+                }
+                for ((a, b), c) in at.iter_mut().zip(bt).zip(ct) {
+                    *a = c.mul_add(s, *b);
+                }
+            }
+        }
+        Arch::new().dispatch(Triad(a, b, c, s));
+    }
 }
 
 static FORWARD: LazyLock<(Forward, DMatrix<f64>, Vec<f64>)> = LazyLock::new(|| {

@@ -36,7 +36,8 @@ use faer::Mat;
 use crate::fem::TransferJacobian;
 use crate::imager::Imager;
 use crate::onestep::{DataSpace, OneStep, ReconError, map_columns, product};
-use crate::pixels::{PixelGrid, PixelOperator};
+use crate::operator::FrameOperator;
+use crate::pixels::PixelGrid;
 
 /// The area of each of `imager`'s triangles, m^2 (GREIT's prior S_x), once `jac` is checked
 /// to be of the same mesh.
@@ -98,6 +99,8 @@ pub struct Greit {
     grid_len: usize,
     /// R, factored.
     recon: OneStep,
+    /// R as a frame meets it (f32, packed thin factors).
+    operator: FrameOperator,
     /// The desired image's radius, m (at least one pixel).
     pub radius: f64,
     /// lambda, V^2 per (S/sq)^2.
@@ -189,7 +192,9 @@ impl Greit {
             &recon.reconstruct(&h)?,
             &recon.noise_sd(&vec![1.0; h.len()])?,
         );
+        let all: Vec<usize> = (0..inside.len()).collect();
         Ok(Self {
+            operator: FrameOperator::of_rows(&recon, &all),
             inside,
             grid_len: grid.triangle.len(),
             recon,
@@ -231,11 +236,10 @@ impl Greit {
     }
 
     /// R (pixels inside the sheet x K, in [`PixelGrid::project`]'s order) as the
-    /// [`PixelOperator`] a live frame is imaged with.
+    /// [`FrameOperator`] a live frame is imaged with.
     #[must_use]
-    pub fn projection(&self) -> PixelOperator {
-        let all: Vec<usize> = (0..self.inside.len()).collect();
-        PixelOperator::of_rows(&self.recon, &all)
+    pub fn projection(&self) -> FrameOperator {
+        self.operator.clone()
     }
 
     /// The image of the frame difference `dv` (K values, V) on the grid, S per square (None
@@ -244,7 +248,14 @@ impl Greit {
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
     pub fn image(&self, dv: &[f64]) -> Result<Vec<Option<f64>>, ReconError> {
-        Ok(self.spread(&self.recon.reconstruct(dv)?))
+        let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+        if dv.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::NonFinite);
+        }
+        let mut inside = vec![0.0f32; self.operator.rows()];
+        self.operator.apply(&dv, &mut inside)?;
+        let inside: Vec<f64> = inside.into_iter().map(f64::from).collect();
+        Ok(self.spread(&inside))
     }
 
     /// The standard deviation of each pixel's value when dV carries independent noise of

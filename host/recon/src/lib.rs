@@ -39,6 +39,7 @@ pub mod imager;
 pub mod mesh;
 pub mod metrics;
 pub mod onestep;
+pub mod operator;
 pub mod pixels;
 pub mod reconstructor;
 pub mod redundancy;
@@ -51,7 +52,8 @@ pub use greit::{Greit, GreitOptions, Regularisation};
 pub use imager::Imager;
 pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
-pub use pixels::{PixelGrid, PixelOperator};
+pub use operator::FrameOperator;
+pub use pixels::PixelGrid;
 pub use reconstructor::{
     AlphaRule, FrameNoise, Image, ImagingError, MeshPlan, Method, NoiseSource, Reconstructor,
     Reference, Spec,

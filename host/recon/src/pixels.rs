@@ -1,11 +1,8 @@
 //! Pixel grids over a mesh: images drawn on pixels cost two thin products per frame.
 
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatMut, MatRef, Par};
-use nalgebra::DMatrix;
-
 use crate::mesh::Mesh;
-use crate::onestep::{OneStep, ReconError, product};
+use crate::onestep::OneStep;
+use crate::operator::FrameOperator;
 
 /// A pixel grid over a mesh: which triangle each pixel centre lies in.
 #[derive(Clone, Debug)]
@@ -135,11 +132,11 @@ impl PixelGrid {
     }
 
     /// The reconstruction matrix onto the pixels (one row per pixel inside the sheet, in
-    /// pixel order), as a [`PixelOperator`].
+    /// pixel order), as a [`FrameOperator`].
     #[must_use]
-    pub fn project(&self, r: &OneStep) -> PixelOperator {
+    pub fn project(&self, r: &OneStep) -> FrameOperator {
         let inside: Vec<usize> = self.triangle.iter().filter_map(|t| *t).collect();
-        PixelOperator::of_rows(r, &inside)
+        FrameOperator::of_rows(r, &inside)
     }
 
     /// Spreads per-triangle values onto the grid (None outside the sheet).
@@ -150,160 +147,6 @@ impl PixelGrid {
             .map(|t| t.map(|t| per_triangle[t]))
             .collect()
     }
-}
-
-/// A reconstruction matrix onto pixels, P (pixels inside the sheet x K), kept as two thin
-/// factors in f32, P = L C with L (pixels x q) and C (q x K), q the numerical rank of P: a
-/// frame reads q (pixels + K) numbers instead of pixels K. One-step Gauss-Newton and GREIT
-/// both reach the pixels through the r transfer impedances (r = L (L - 1) / 2 for L
-/// electrodes: 120 for 16), so q <= r, and fewer when the protocol has fewer independent
-/// values (104 for 16 electrodes adjacent): a 64 x 64 frame on a disc reads 0.36 M numbers
-/// instead of 0.67 M. The factors come from a QR factor of the pixels' side and a singular
-/// value decomposition of the r x K core; only singular values below 1e-7 of the largest
-/// (what f32 cannot resolve) are dropped.
-#[derive(Clone, Debug)]
-pub struct PixelOperator {
-    /// L, pixels x q.
-    left: Mat<f32>,
-    /// C, q x K.
-    core: Mat<f32>,
-}
-
-impl PixelOperator {
-    /// The rows of R for `rows` (each one of R's rows: a triangle, or a pixel of GREIT's
-    /// matrix) from R's factors R = (G P^-1)^T X^T.
-    #[must_use]
-    pub fn of_rows(r: &OneStep, rows: &[usize]) -> Self {
-        let g = Mat::from_fn(rows.len(), r.gp.nrows(), |i, j| r.gp[(j, rows[i])]);
-        Self::from_factors(g.as_ref(), r.xt.as_ref())
-    }
-
-    /// P = `a` `b` from `a` (pixels x r) and `b` (r x K).
-    pub(crate) fn from_factors(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Self {
-        let qr = a.qr();
-        let (q, r) = (qr.compute_thin_Q(), qr.thin_R());
-        let core = product(r, b);
-        let (left, core) = match core.thin_svd() {
-            Ok(svd) => {
-                let s = svd.S().column_vector();
-                let top = s.iter().copied().fold(0.0f64, f64::max);
-                let rank = s.iter().filter(|&&x| x > 1e-7 * top).count();
-                let left = product(q.as_ref(), svd.U().subcols(0, rank));
-                let v = svd.V();
-                let core = Mat::from_fn(rank, b.ncols(), |i, k| s[i] * v[(k, i)]);
-                (left, core)
-            }
-            // Not expected for finite input; the untruncated factors are as exact.
-            Err(_) => (q, core),
-        };
-        let f32_of = |m: &Mat<f64>| Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)] as f32);
-        Self {
-            left: f32_of(&left),
-            core: f32_of(&core),
-        }
-    }
-
-    /// Pixels (rows of P).
-    #[must_use]
-    pub fn pixels(&self) -> usize {
-        self.left.nrows()
-    }
-
-    /// K, the frame length (columns of P).
-    #[must_use]
-    pub fn frame_len(&self) -> usize {
-        self.core.ncols()
-    }
-
-    /// q, the rank the factors keep.
-    #[must_use]
-    pub fn rank(&self) -> usize {
-        self.core.nrows()
-    }
-
-    /// A live frame onto the pixels: P `dv` (K values, V) into `out` (one value per pixel
-    /// inside), as C dv (q values) then L times that, faer's f32 kernels on one core.
-    ///
-    /// # Errors
-    /// [`ReconError::Parameter`] when `dv` does not hold K values or `out` not one per pixel.
-    pub fn apply(&self, dv: &[f32], out: &mut [f32]) -> Result<(), ReconError> {
-        let (p, k) = (self.pixels(), self.frame_len());
-        if dv.len() != k || out.len() != p {
-            return Err(ReconError::Parameter(format!(
-                "{} values into {} pixels for a projection of {p} x {k}",
-                dv.len(),
-                out.len()
-            )));
-        }
-        let mut y = Mat::<f32>::zeros(self.rank(), 1);
-        let dv = MatRef::from_column_major_slice(dv, k, 1);
-        matmul(
-            y.as_mut(),
-            Accum::Replace,
-            self.core.as_ref(),
-            dv,
-            1.0,
-            Par::Seq,
-        );
-        let out = MatMut::from_column_major_slice_mut(out, p, 1);
-        matmul(
-            out,
-            Accum::Replace,
-            self.left.as_ref(),
-            y.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        Ok(())
-    }
-
-    /// P multiplied out (pixels x K).
-    #[must_use]
-    pub fn dense(&self) -> DMatrix<f32> {
-        let m = product_f32(self.left.as_ref(), self.core.as_ref());
-        DMatrix::from_fn(self.pixels(), self.frame_len(), |i, k| m[(i, k)])
-    }
-
-    /// The standard deviation of each pixel's value when dV carries independent noise of
-    /// variance `var_dv` per channel (V^2): sqrt(sum_k P_pk^2 var_k) = |L_p W| with W = C
-    /// diag(sqrt var) (q x K), computed through the q x q Gram matrix W W^T. Negative
-    /// variances count as 0.
-    ///
-    /// # Errors
-    /// [`ReconError::Parameter`] when `var_dv` does not hold K values.
-    pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
-        if var_dv.len() != self.frame_len() {
-            return Err(ReconError::Parameter(format!(
-                "{} variances for K = {}",
-                var_dv.len(),
-                self.frame_len()
-            )));
-        }
-        let w = Mat::from_fn(self.rank(), self.frame_len(), |i, k| {
-            f64::from(self.core[(i, k)]) * var_dv[k].max(0.0).sqrt()
-        });
-        let gram = product(w.as_ref(), w.transpose());
-        let left = Mat::from_fn(self.pixels(), self.rank(), |p, i| {
-            f64::from(self.left[(p, i)])
-        });
-        let lg = product(left.as_ref(), gram.as_ref());
-        Ok((0..self.pixels())
-            .map(|p| {
-                (0..self.rank())
-                    .map(|i| lg[(p, i)] * left[(p, i)])
-                    .sum::<f64>()
-                    .max(0.0)
-                    .sqrt()
-            })
-            .collect())
-    }
-}
-
-/// a b in f32, one core.
-fn product_f32(a: MatRef<'_, f32>, b: MatRef<'_, f32>) -> Mat<f32> {
-    let mut out = Mat::<f32>::zeros(a.nrows(), b.ncols());
-    matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
-    out
 }
 
 #[cfg(test)]

@@ -41,7 +41,8 @@ use crate::greit::{Greit, GreitOptions, Regularisation};
 use crate::imager::Imager;
 use crate::mesh::{Mesh, MeshError, Refinement};
 use crate::onestep::{DataSpace, OneStep, ReconError, floor_variance, imaging_variance};
-use crate::pixels::{PixelGrid, PixelOperator};
+use crate::operator::FrameOperator;
+use crate::pixels::PixelGrid;
 use crate::redundancy::{Redundancy, RedundancyNoise};
 use crate::touches::{
     OBJECT_FRACTION, Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects,
@@ -87,8 +88,11 @@ pub struct Reconstructor {
     space: Option<DataSpace>,
     /// GREIT's matrix, when one serves every frame.
     greit: Option<Greit>,
-    /// The last one-step matrix made, with its alpha.
-    one_step: Option<(f64, OneStep)>,
+    /// The last one-step matrix made: its alpha, its factors, and the operator a frame onto
+    /// the triangles is applied with (f32, packed).
+    one_step: Option<(f64, OneStep, FrameOperator)>,
+    /// GREIT's matrix chosen for the last frame (alpha by GCV).
+    greit_chosen: Option<Greit>,
     /// The protocol's redundancy (the noise of a frame without repeated reference frames),
     /// made on first use.
     redundancy: std::sync::OnceLock<Option<Redundancy>>,
@@ -128,6 +132,7 @@ impl Reconstructor {
             space: None,
             greit: None,
             one_step: None,
+            greit_chosen: None,
             redundancy: std::sync::OnceLock::new(),
             set_up_timings: SetUpTimings {
                 mesh: mesh_s,
@@ -146,6 +151,7 @@ impl Reconstructor {
         self.space = None;
         self.greit = None;
         self.one_step = None;
+        self.greit_chosen = None;
         match (self.method, self.alpha) {
             (Method::GaussNewton { .. }, AlphaRule::NoiseFigure(_)) => {
                 return Err(ReconError::Parameter(
@@ -157,7 +163,7 @@ impl Reconstructor {
             (Method::GaussNewton { s, iterations }, rule) => {
                 let space = DataSpace::factored(&self.jac, s)?;
                 if let (AlphaRule::Fixed(alpha), 0 | 1) = (rule, iterations) {
-                    self.one_step = Some((alpha, space.one_step(alpha)?));
+                    self.one_step = Some(linear(&space, alpha)?);
                 }
                 self.space = Some(space);
             }
@@ -296,12 +302,12 @@ impl Reconstructor {
     /// # Errors
     /// [`ReconError::Parameter`] under [`AlphaRule::Gcv`] or for iterative Gauss-Newton,
     /// which have no one matrix.
-    pub fn pixel_operator(&self) -> Result<PixelOperator, ImagingError> {
+    pub fn pixel_operator(&self) -> Result<FrameOperator, ImagingError> {
         if let Some(g) = &self.greit {
             return Ok(g.projection());
         }
         match &self.one_step {
-            Some((_, r)) => Ok(self.imager.grid.project(r)),
+            Some((_, r, _)) => Ok(self.imager.grid.project(r)),
             None => Err(ReconError::Parameter(
                 "no single matrix: alpha is chosen per frame, or the fit is iterative".into(),
             )
@@ -384,18 +390,18 @@ impl Reconstructor {
         let grid = &self.imager.grid;
         let mut timings = FrameTimings::default();
         let mut greit_made = None;
+        let made;
         let mut iterations = None;
         let (alpha, pixels, noise_sd) = match self.method {
             Method::Greit { radius } => {
                 let clock = Instant::now();
-                let made;
                 let greit = match &self.greit {
                     Some(g) => g,
                     None => {
                         let alpha = Greit::choose_alpha(&self.imager, &self.jac, &dv, &floor)?;
                         made = self.greit_with(radius, Regularisation::Alpha(alpha))?;
                         timings.matrix = Some(clock.elapsed().as_secs_f64());
-                        &made
+                        &*self.greit_chosen.insert(made)
                     }
                 };
                 greit_made = Some((greit.noise_figure, greit.radius));
@@ -412,15 +418,15 @@ impl Reconstructor {
                     _ => space.choose_alpha(&dv, &floor, &default_alphas())?,
                 };
                 if n <= 1 {
-                    if self.one_step.as_ref().is_none_or(|(a, _)| *a != alpha) {
-                        self.one_step = Some((alpha, space.one_step(alpha)?));
+                    if self.one_step.as_ref().is_none_or(|(a, ..)| *a != alpha) {
+                        self.one_step = Some(linear(space, alpha)?);
                         timings.matrix = Some(clock.elapsed().as_secs_f64());
                     }
-                    let Some((_, recon)) = &self.one_step else {
+                    let Some((_, recon, operator)) = &self.one_step else {
                         return Err(ReconError::Singular.into());
                     };
                     let clock = Instant::now();
-                    let image = grid.image(&recon.reconstruct(&dv)?);
+                    let image = onto_triangles(grid, operator, &dv)?;
                     timings.frame = clock.elapsed().as_secs_f64();
                     (alpha, image, grid.image(&recon.noise_sd(&var)?))
                 } else {
@@ -472,7 +478,70 @@ impl Reconstructor {
     }
 }
 
+/// The one-step matrix at `alpha` and its operator onto the triangles.
+fn linear(space: &DataSpace, alpha: f64) -> Result<(f64, OneStep, FrameOperator), ReconError> {
+    let r = space.one_step(alpha)?;
+    let operator = FrameOperator::of(&r);
+    Ok((alpha, r, operator))
+}
+
+/// A frame imaged as a live frame is: dV (K values, V) in f32 through the operator onto the
+/// mesh's triangles, drawn on the grid's pixels (None outside the sheet).
+fn onto_triangles(
+    grid: &PixelGrid,
+    operator: &FrameOperator,
+    dv: &[f64],
+) -> Result<Vec<Option<f64>>, ReconError> {
+    let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+    if dv.iter().any(|v| !v.is_finite()) {
+        return Err(ReconError::NonFinite);
+    }
+    let mut triangles = vec![0.0f32; operator.rows()];
+    operator.apply(&dv, &mut triangles)?;
+    Ok(grid
+        .triangle
+        .iter()
+        .map(|t| t.map(|t| f64::from(triangles[t])))
+        .collect())
+}
+
 impl Reconstructor {
+    /// What a live frame costs, s: the median time of `repeats` applications of the last
+    /// imaged frame's linear reconstruction to `dv` (K values, V), each as
+    /// [`Reconstructor::image`] applies it (in f32 onto the triangles and drawn on the pixels
+    /// for one-step Gauss-Newton, onto the pixels for GREIT), with the matrix warm in cache.
+    /// This is the figure `et reconstruct` reports as the frame's time (its first application
+    /// is [`FrameTimings::frame`]); `et demo` and `cargo bench -p et-recon --bench imaging`
+    /// report the same. None for iterative Gauss-Newton (each frame is a fit), before any
+    /// frame, or for `dv` of another length.
+    #[must_use]
+    pub fn frame_median(&self, dv: &[f64], repeats: usize) -> Option<f64> {
+        let greit = self.greit.as_ref().or(self.greit_chosen.as_ref());
+        let apply = || -> Option<Vec<Option<f64>>> {
+            match (self.method, greit, &self.one_step) {
+                (Method::Greit { .. }, Some(g), _) => g.image(dv).ok(),
+                (
+                    Method::GaussNewton {
+                        iterations: 0 | 1, ..
+                    },
+                    _,
+                    Some((_, _, op)),
+                ) => onto_triangles(&self.imager.grid, op, dv).ok(),
+                _ => None,
+            }
+        };
+        apply()?;
+        let mut times: Vec<f64> = (0..repeats.max(1))
+            .map(|_| {
+                let clock = Instant::now();
+                std::hint::black_box(apply());
+                clock.elapsed().as_secs_f64()
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        Some(times[times.len() / 2])
+    }
+
     /// The objects of both signs in `image` (conductive and resistive, strongest first,
     /// [`crate::touches::objects`]): asked for by who images tanks, not made for every live
     /// frame, where touches are positive.

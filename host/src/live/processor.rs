@@ -153,7 +153,7 @@ struct Projection {
     alpha: f64,
     s: f64,
     /// Pixels inside the sheet x K, in thin factors.
-    matrix: PixelOperator,
+    matrix: FrameOperator,
 }
 
 impl Projection {
@@ -497,7 +497,7 @@ impl Processor {
             .collect();
         let bvc = stats::bvc_dv(&dv);
         let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        let mut values = vec![0.0f32; projection.pixels()];
+        let mut values = vec![0.0f32; projection.rows()];
         projection.apply(&dv32, &mut values)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = values
