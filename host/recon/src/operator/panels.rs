@@ -46,7 +46,7 @@ impl Panels {
         let width = (REGISTERS * Arch::new().dispatch(Lanes)).min(MAX_WIDTH);
         let panels = rows.div_ceil(width);
         let mut data = vec![0.0f32; panels * width * cols];
-        for (p, panel) in data.chunks_exact_mut(width * cols).enumerate() {
+        for (p, panel) in data.chunks_exact_mut((width * cols).max(1)).enumerate() {
             for (j, column) in panel.chunks_exact_mut(width).enumerate() {
                 for (i, v) in column.iter_mut().enumerate() {
                     let row = p * width + i;
