@@ -1,7 +1,9 @@
 //! The reconstruction as the operator a live frame meets: rows (triangles or pixels) x K, in
 //! two thin f32 factors packed for matrix-vector products at memory speed ([`Panels`]).
 
-use faer::{Mat, MatRef};
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::linalg::triangular_solve::solve_upper_triangular_in_place;
+use faer::{Accum, Mat, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
 use crate::onestep::{OneStep, ReconError, product};
@@ -44,23 +46,42 @@ impl FrameOperator {
         Self::from_factors(r.gp.transpose(), r.xt.as_ref())
     }
 
-    /// P = `a` `b` from `a` (rows x r) and `b` (r x K).
+    /// P = `a` `b` from `a` (rows x r) and `b` (r x K). With a = Q R (R from the Cholesky
+    /// factor of the r x r Gram matrix a^T a, Householder's QR when that is not positive
+    /// definite; Q never formed) and R b = U S V^T (SVD, the q singular values above 1e-7 of
+    /// the largest kept): L = Q U = a (R^-1 U), one product of the tall `a` by an r x q
+    /// matrix, and C = S V^T. Any invertible R gives L C = a b; an accurate one makes L's
+    /// columns orthonormal, so rounding L to f32 costs no accuracy through cancellation.
     pub(crate) fn from_factors(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Self {
-        let qr = a.qr();
-        let (q, r) = (qr.compute_thin_Q(), qr.thin_R());
-        let core = product(r, b);
+        // Q explicitly when a's conditioning would cost R^-1 its accuracy.
+        let (q, r) = match upper_factor(a) {
+            Some(r) => (None, r),
+            None => {
+                let qr = a.qr();
+                (Some(qr.compute_thin_Q()), qr.thin_R().to_owned())
+            }
+        };
+        let core = product(r.as_ref(), b);
         let (left, core) = match core.thin_svd() {
             Ok(svd) => {
                 let s = svd.S().column_vector();
                 let top = s.iter().copied().fold(0.0f64, f64::max);
                 let rank = s.iter().filter(|&&x| x > 1e-7 * top).count();
-                let left = product(q.as_ref(), svd.U().subcols(0, rank));
+                let u = svd.U().subcols(0, rank);
+                let left = match &q {
+                    Some(q) => product(q.as_ref(), u),
+                    None => {
+                        let mut m = u.to_owned();
+                        solve_upper_triangular_in_place(r.as_ref(), m.as_mut(), Par::Seq);
+                        product(a, m.as_ref())
+                    }
+                };
                 let v = svd.V();
                 let core = Mat::from_fn(rank, b.ncols(), |i, k| s[i] * v[(k, i)]);
                 (left, core)
             }
-            // Not expected for finite input; the untruncated factors are as exact.
-            Err(_) => (q, core),
+            // Not expected for finite input; the unfactored product is as exact.
+            Err(_) => (a.to_owned(), b.to_owned()),
         };
         let packed = |m: &Mat<f64>| Panels::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)] as f32);
         Self {
@@ -162,4 +183,31 @@ impl FrameOperator {
             })
             .collect())
     }
+}
+
+/// R (r x r, upper triangular) with a = Q R for the tall `a` (n x r): the transposed Cholesky
+/// factor of a^T a (a symmetric rank-n update: half the work of Householder's QR, and no Q).
+/// None when a^T a is not positive definite or a is too ill-conditioned for it (its
+/// diagonal's ratio, a lower bound of a's condition number, above 1e5: Q = a R^-1 would
+/// lose orthogonality as the condition's square times f64's 1e-16).
+fn upper_factor(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
+    let r = a.ncols();
+    let mut gram = Mat::<f64>::zeros(r, r);
+    triangular::matmul(
+        gram.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        a.transpose(),
+        BlockStructure::Rectangular,
+        a,
+        BlockStructure::Rectangular,
+        1.0,
+        Par::Seq,
+    );
+    let l = gram.llt(Side::Lower).ok()?.L().to_owned();
+    let diag: Vec<f64> = (0..r).map(|i| l[(i, i)].abs()).collect();
+    let (lo, hi) = diag.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+        (lo.min(*d), hi.max(*d))
+    });
+    (hi.is_finite() && lo > 1e-5 * hi).then(|| l.transpose().to_owned())
 }

@@ -834,6 +834,7 @@ fn f32_frames_are_the_f64_images_within_1e_5_of_their_peak() {
                     worst / peak,
                     op.rank()
                 );
+                assert!(out.iter().all(|v| v.is_finite()), "{name} {what} {onto}");
                 assert!(peak > 0.0 && worst <= 1e-5 * peak, "{name} {what} {onto}");
             }
         }
