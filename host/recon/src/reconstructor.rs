@@ -506,14 +506,23 @@ fn onto_triangles(
 }
 
 impl Reconstructor {
+    /// The one-step matrix of the last frame imaged (or made at set-up for a fixed alpha),
+    /// factored; [`OneStep::matrix`] multiplies it out (triangles x K). None for GREIT and
+    /// iterative Gauss-Newton.
+    #[must_use]
+    pub fn one_step(&self) -> Option<&OneStep> {
+        self.one_step.as_ref().map(|(_, r, _)| r)
+    }
+
     /// What a live frame costs, s: the median time of `repeats` applications of the last
     /// imaged frame's linear reconstruction to `dv` (K values, V), each as
     /// [`Reconstructor::image`] applies it (in f32 onto the triangles and drawn on the pixels
     /// for one-step Gauss-Newton, onto the pixels for GREIT), with the matrix warm in cache.
     /// This is the figure `et reconstruct` reports as the frame's time (its first application
     /// is [`FrameTimings::frame`]); `et demo` and `cargo bench -p et-recon --bench imaging`
-    /// report the same. None for iterative Gauss-Newton (each frame is a fit), before any
-    /// frame, or for `dv` of another length.
+    /// report the same. With `repeats` 1, one application as the caches find it. None for
+    /// iterative Gauss-Newton (each frame is a fit), before any frame, or for `dv` of another
+    /// length.
     #[must_use]
     pub fn frame_median(&self, dv: &[f64], repeats: usize) -> Option<f64> {
         let greit = self.greit.as_ref().or(self.greit_chosen.as_ref());
@@ -530,14 +539,12 @@ impl Reconstructor {
                 _ => None,
             }
         };
-        apply()?;
-        let mut times: Vec<f64> = (0..repeats.max(1))
-            .map(|_| {
-                let clock = Instant::now();
-                std::hint::black_box(apply());
-                clock.elapsed().as_secs_f64()
-            })
-            .collect();
+        let mut times = Vec::with_capacity(repeats.max(1));
+        for _ in 0..repeats.max(1) {
+            let clock = Instant::now();
+            std::hint::black_box(apply()?);
+            times.push(clock.elapsed().as_secs_f64());
+        }
         times.sort_by(f64::total_cmp);
         Some(times[times.len() / 2])
     }
