@@ -54,6 +54,23 @@ pub struct Counters {
     pub reconnects: u64,
 }
 
+/// Counts `message` in `counters`: frames, the frames lost before it (a gap in `seq` after
+/// `next_seq`, the one expected), events.
+fn count(counters: &mut Counters, next_seq: &mut Option<u32>, message: &Uplink) {
+    match message {
+        Uplink::Frame(f) => {
+            counters.frames += 1;
+            if let Some(want) = *next_seq
+                && f.seq > want
+            {
+                counters.lost_frames += u64::from(f.seq - want);
+            }
+            *next_seq = Some(f.seq.wrapping_add(1));
+        }
+        Uplink::Event(_) => counters.events += 1,
+    }
+}
+
 /// Byte stream to messages, with resynchronisation and counters (see the module docs).
 #[derive(Debug)]
 pub struct Decoder {
@@ -82,32 +99,19 @@ impl Decoder {
     /// Decodes `bytes`, appending every good message to `out`.
     pub fn feed(&mut self, bytes: &[u8], out: &mut Vec<Uplink>) {
         self.counters.bytes += bytes.len() as u64;
-        for &b in bytes {
-            match self.packets.feed::<Uplink>(b) {
-                None => {}
-                Some(Ok(message)) => {
-                    self.count(&message);
-                    out.push(message);
-                }
-                Some(Err(WireError::Version { .. })) => self.counters.wrong_version += 1,
-                Some(Err(_)) => self.counters.corrupt += 1,
+        let Self {
+            packets,
+            counters,
+            next_seq,
+        } = self;
+        packets.feed_slice::<Uplink>(bytes, |result| match result {
+            Ok(message) => {
+                count(counters, next_seq, &message);
+                out.push(message);
             }
-        }
-    }
-
-    fn count(&mut self, message: &Uplink) {
-        match message {
-            Uplink::Frame(f) => {
-                self.counters.frames += 1;
-                if let Some(want) = self.next_seq
-                    && f.seq > want
-                {
-                    self.counters.lost_frames += u64::from(f.seq - want);
-                }
-                self.next_seq = Some(f.seq.wrapping_add(1));
-            }
-            Uplink::Event(_) => self.counters.events += 1,
-        }
+            Err(WireError::Version { .. }) => counters.wrong_version += 1,
+            Err(_) => counters.corrupt += 1,
+        });
     }
 
     /// Forgets a packet in progress (after a reconnect: its first half came from before).

@@ -65,6 +65,21 @@ pub struct LiveFrame {
     pub chip_class: Option<ChipClass>,
 }
 
+impl From<et_core::wire::Frame> for LiveFrame {
+    /// A board's frame as it came off the wire (no truth, no class yet).
+    fn from(f: et_core::wire::Frame) -> Self {
+        Self {
+            seq: f.seq,
+            t_us: f.timestamp.0,
+            config: f.config,
+            flags: f.flags,
+            voltages: f.voltages.to_vec(),
+            truth: None,
+            chip_class: None,
+        }
+    }
+}
+
 /// The class a board found for a frame, as its `Event::Touch` says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChipClass {

@@ -548,6 +548,66 @@ proptest! {
             prop_assert!(same_bits(a, b));
         }
     }
+
+    /// Fed in chunks of any size (a serial port's reads), as blocks, the accumulator gives the
+    /// same results in the same order as byte by byte: good packets, damaged ones, overflows.
+    #[test]
+    fn feeding_blocks_is_feeding_bytes(
+        items in proptest::collection::vec((arb_frame(), arb_damage()), 1..8),
+        cuts in proptest::collection::vec(0usize..3000, 0..12),
+        overflow in proptest::collection::vec(1u8..=255, 0..200),
+    ) {
+        let mut stream = StdVec::new();
+        for (frame, damage) in &items {
+            let mut packet = encode_vec(&Uplink::Frame(frame.clone()));
+            match damage {
+                Damage::GarbageBefore(g) => stream.extend(g),
+                Damage::Truncate(at) => packet.truncate(1 + at % (packet.len() - 2)),
+                Damage::Flip(at, bit) => {
+                    let at = 1 + at % (packet.len() - 2);
+                    packet[at] ^= 1 << bit;
+                }
+                Damage::None => {}
+            }
+            stream.extend(packet);
+        }
+        // A run of bytes longer than a small accumulator holds, then a delimiter.
+        stream.extend(&overflow);
+        stream.push(0);
+        let mut cuts: StdVec<usize> = cuts.into_iter().map(|c| c % (stream.len() + 1)).collect();
+        cuts.sort_unstable();
+        let (mut bytewise, mut blockwise) = (StdVec::new(), StdVec::new());
+        let mut one: std::boxed::Box<Accumulator<PACKET_MAX>> = std::boxed::Box::default();
+        for &b in &stream {
+            if let Some(r) = one.feed::<Uplink>(b) {
+                bytewise.push(r);
+            }
+        }
+        let mut other: std::boxed::Box<Accumulator<PACKET_MAX>> = std::boxed::Box::default();
+        let mut start = 0;
+        for end in cuts.into_iter().chain([stream.len()]) {
+            other.feed_slice::<Uplink>(&stream[start..end], |r| blockwise.push(r));
+            start = end;
+        }
+        prop_assert_eq!(bytewise.len(), blockwise.len());
+        for (a, b) in bytewise.iter().zip(&blockwise) {
+            match (a, b) {
+                (Ok(a), Ok(b)) => prop_assert!(same_bits(a, b)),
+                (a, b) => prop_assert_eq!(a.as_ref().err(), b.as_ref().err()),
+            }
+        }
+        // The small accumulator overflows on the long frames and on the run alike.
+        let (mut small_bytes, mut small_blocks) = (StdVec::new(), StdVec::new());
+        let mut small = Accumulator::<COMMAND_PACKET_MAX>::new();
+        for &b in &stream {
+            if let Some(r) = small.feed::<Command>(b) {
+                small_bytes.push(r.err());
+            }
+        }
+        let mut small = Accumulator::<COMMAND_PACKET_MAX>::new();
+        small.feed_slice::<Command>(&stream, |r| small_blocks.push(r.err()));
+        prop_assert_eq!(small_bytes, small_blocks);
+    }
 }
 
 #[test]

@@ -244,7 +244,7 @@ impl Default for Settings {
             touch_factor: 5.0,
             reference_frames: 20,
             triangles: 3_000,
-            pixels: 48,
+            pixels: 32,
         }
     }
 }

@@ -295,15 +295,7 @@ impl PortSource {
         let before = self.pending.len();
         while let Ok(m) = self.link.next(Duration::ZERO) {
             match m {
-                Uplink::Frame(f) => self.pending.push_back(LiveFrame {
-                    seq: f.seq,
-                    t_us: f.timestamp.0,
-                    config: f.config,
-                    flags: f.flags,
-                    voltages: f.voltages.to_vec(),
-                    truth: None,
-                    chip_class: None,
-                }),
+                Uplink::Frame(f) => self.pending.push_back(LiveFrame::from(f)),
                 Uplink::Event(Event::Touch { seq, class, margin }) => {
                     if let Some(f) = self.pending.iter_mut().find(|f| f.seq == seq) {
                         f.chip_class = Some(ChipClass { class, margin });
