@@ -28,7 +28,10 @@ const FRAMES: usize = 400;
 /// The swipe scene's sheet with `electrodes` electrodes scanned by `protocol`, and FRAMES of
 /// its frames as wire packets (the first LEAD_FRAMES untouched).
 fn packets(electrodes: u8, protocol: ProtocolKind) -> (Sheet, Vec<Vec<u8>>) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../sim/scenes/square-13cm-16-swipe.toml");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../sim/scenes/square-13cm-16-swipe.toml"
+    );
     let mut scene = Scene::load(std::path::Path::new(path)).expect("scene");
     scene.sheet.physical.electrodes.count = electrodes;
     let sheet = scene.sheet.physical.clone();
@@ -62,8 +65,7 @@ fn packets(electrodes: u8, protocol: ProtocolKind) -> (Sheet, Vec<Vec<u8>>) {
     (sheet, packets)
 }
 
-static L16: LazyLock<(Sheet, Vec<Vec<u8>>)> =
-    LazyLock::new(|| packets(16, ProtocolKind::Adjacent));
+static L16: LazyLock<(Sheet, Vec<Vec<u8>>)> = LazyLock::new(|| packets(16, ProtocolKind::Adjacent));
 static L32: LazyLock<(Sheet, Vec<Vec<u8>>)> = LazyLock::new(|| packets(32, ProtocolKind::PpPp));
 
 /// One frame through the whole pipeline, bytes in, event out, for 16 electrodes adjacent

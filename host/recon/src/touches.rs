@@ -134,7 +134,7 @@ pub fn touches(
         .enumerate()
         .filter_map(|(p, v)| v.filter(|&v| v >= f * max).map(|v| (p, v)))
         .collect();
-    order.sort_by(|a, b| b.1.total_cmp(&a.1));
+    order.sort_unstable_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     // Union-find over pixels; a root's peak is its region's highest value.
     let mut parent: Vec<usize> = (0..image.len()).collect();
     let mut peak = vec![f64::NAN; image.len()];
@@ -149,15 +149,18 @@ pub fn touches(
     // Pairs of regions already found to be separate touches (by root).
     let mut apart: Vec<(usize, usize)> = Vec::new();
     for &(p, v) in &order {
-        let mut near: Vec<usize> = Vec::with_capacity(4);
+        // The regions already flooded around p (at most its four neighbours'), on the stack.
+        let (mut around, mut n) = ([0usize; 4], 0);
         for q in grid.neighbours(p).into_iter().flatten() {
             if flooded[q] {
                 let r = root(&mut parent, q);
-                if !near.contains(&r) {
-                    near.push(r);
+                if !around[..n].contains(&r) {
+                    around[n] = r;
+                    n += 1;
                 }
             }
         }
+        let near = &mut around[..n];
         flooded[p] = true;
         near.sort_by(|&a, &b| peak[b].total_cmp(&peak[a]));
         let Some(&top) = near.first() else {

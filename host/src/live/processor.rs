@@ -268,7 +268,10 @@ pub(super) struct Noise {
     pub(super) s: f64,
     pub(super) v0: Vec<f64>,
     pub(super) var_dv: Vec<f64>,
-    pub(super) pixel_sd: Vec<f64>,
+    /// 1 / each pixel's noise (0 where the noise is 0), for the frames' z-scores.
+    pub(super) inverse_sd: Vec<f32>,
+    /// Each pixel's noise on the grid (None outside the sheet), for the touch search.
+    pub(super) grid_sd: Vec<Option<f64>>,
 }
 
 /// One frame processed.
@@ -473,20 +476,30 @@ impl Processor {
                 // filters the noise the data carry, so a touch stands out better here than in
                 // |dV|.
                 let pixel_sd = projection.noise_sd(&var_dv)?;
+                let inverse_sd = pixel_sd
+                    .iter()
+                    .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
+                    .collect();
+                let mut grid_sd = vec![None; self.recon.grid().triangle.len()];
+                for (&p, v) in self.inside.iter().zip(&pixel_sd) {
+                    grid_sd[p] = Some(*v);
+                }
                 slot.insert(Noise {
                     method,
                     alpha,
                     s,
                     v0,
                     var_dv,
-                    pixel_sd,
+                    inverse_sd,
+                    grid_sd,
                 })
             }
         };
         let Noise {
             v0,
             var_dv,
-            pixel_sd,
+            inverse_sd,
+            grid_sd,
             ..
         } = &*noise;
         let dv: Vec<f64> = frame
@@ -500,12 +513,13 @@ impl Processor {
         let mut values = vec![0.0f32; projection.rows()];
         projection.apply(&dv32, &mut values)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
-        let intensity = values
-            .iter()
-            .zip(pixel_sd)
-            .filter(|(_, sd)| **sd > 0.0)
-            .map(|(v, sd)| f64::from(*v) / sd)
-            .fold(0.0, f64::max);
+        let intensity = f64::from(
+            values
+                .iter()
+                .zip(inverse_sd)
+                .map(|(v, inverse)| v * inverse)
+                .fold(0.0f32, f32::max),
+        );
         let grid = self.recon.grid();
         let mut image = vec![None; grid.triangle.len()];
         for (&p, v) in self.inside.iter().zip(values.iter()) {
@@ -514,12 +528,8 @@ impl Processor {
         // The touches: regions split at their saddles, each reaching the touch factor times
         // its pixels' noise somewhere. A frame is touched when one does.
         let rois = if intensity > self.settings.touch_factor {
-            let mut sd = vec![None; image.len()];
-            for (&p, v) in self.inside.iter().zip(pixel_sd) {
-                sd[p] = Some(*v);
-            }
             above_noise(
-                &touches(grid, &image, &sd, threshold, PROMINENCE),
+                &touches(grid, &image, grid_sd, threshold, PROMINENCE),
                 self.settings.touch_factor,
             )
         } else {

@@ -218,8 +218,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let elapsed = started.elapsed().as_secs_f64();
     if matches!(source, Source::Replay(_)) && seen > 0 {
         eprintln!(
-            "{seen} frames ({imaged} imaged) in {elapsed:.3} s: {:.0} frames/s (each decoded, \
-             referenced, imaged, searched for touches and its event written)",
+            "{seen} frames ({imaged} imaged) in {elapsed:.3} s: {:.0} frames/s on one core (each \
+             referenced, imaged, searched for touches and its event written; the recording \
+             was read before the clock started)",
             seen as f64 / elapsed
         );
     }
