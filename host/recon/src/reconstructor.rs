@@ -478,6 +478,20 @@ impl Reconstructor {
     }
 }
 
+/// The median time of `repeats` calls of `f` (at least one), s; None as soon as `f` gives
+/// None. The live frame's figure everywhere it is reported ([`Reconstructor::frame_median`],
+/// `et demo`'s sweep).
+pub fn median_seconds<T>(repeats: usize, mut f: impl FnMut() -> Option<T>) -> Option<f64> {
+    let mut times = Vec::with_capacity(repeats.max(1));
+    for _ in 0..repeats.max(1) {
+        let clock = Instant::now();
+        std::hint::black_box(f()?);
+        times.push(clock.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    Some(times[times.len() / 2])
+}
+
 /// The one-step matrix at `alpha` and its operator onto the triangles.
 fn linear(space: &DataSpace, alpha: f64) -> Result<(f64, OneStep, FrameOperator), ReconError> {
     let r = space.one_step(alpha)?;
@@ -487,7 +501,10 @@ fn linear(space: &DataSpace, alpha: f64) -> Result<(f64, OneStep, FrameOperator)
 
 /// A frame imaged as a live frame is: dV (K values, V) in f32 through the operator onto the
 /// mesh's triangles, drawn on the grid's pixels (None outside the sheet).
-fn onto_triangles(
+///
+/// # Errors
+/// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
+pub fn onto_triangles(
     grid: &PixelGrid,
     operator: &FrameOperator,
     dv: &[f64],
@@ -539,14 +556,7 @@ impl Reconstructor {
                 _ => None,
             }
         };
-        let mut times = Vec::with_capacity(repeats.max(1));
-        for _ in 0..repeats.max(1) {
-            let clock = Instant::now();
-            std::hint::black_box(apply()?);
-            times.push(clock.elapsed().as_secs_f64());
-        }
-        times.sort_by(f64::total_cmp);
-        Some(times[times.len() / 2])
+        median_seconds(repeats, apply)
     }
 
     /// The objects of both signs in `image` (conductive and resistive, strongest first,
