@@ -116,7 +116,8 @@ fn greit_equals_its_dense_formula() {
         let got: Vec<f64> = g.image(&dv).unwrap().into_iter().flatten().collect();
         let sd: Vec<f64> = g.noise_sd(&var).unwrap().into_iter().flatten().collect();
         for (row, (a, b)) in want.iter().zip(&got).enumerate() {
-            assert!((a - b).abs() <= 1e-9 * want.amax(), "{kind:?} pixel {row}");
+            // The image is applied in f32 (the packed thin factors): within 1e-5 of its peak.
+            assert!((a - b).abs() <= 1e-5 * want.amax(), "{kind:?} pixel {row}");
             let s: f64 = (0..k)
                 .map(|c| r[(row, c)].powi(2) * var[c])
                 .sum::<f64>()
