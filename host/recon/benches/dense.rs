@@ -65,6 +65,7 @@ fn evict(buffer: &mut [u8]) {
 }
 
 /// Median seconds of `apply` warm (1 000 runs) and cold (30 runs, caches evicted before each).
+/// (Applications of the frame itself are timed by `Reconstructor::frame_median`.)
 fn warm_and_cold(mut apply: impl FnMut()) -> (f64, f64) {
     apply();
     let warm = median(
@@ -151,7 +152,7 @@ fn main() {
     let python = std::env::var("ET_PEER_PYTHON").unwrap_or_else(|_| "python3".into());
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/dense_numpy.py");
     let files: Vec<String> = cases.iter().map(|c| c.1.clone()).collect();
-    let numpy: Vec<Option<(f64, f64)>> = match Command::new(&python)
+    let numpy: Vec<Option<(f64, f64, f64)>> = match Command::new(&python)
         .env("OMP_NUM_THREADS", "1")
         .env("OPENBLAS_NUM_THREADS", "1")
         .env("MKL_NUM_THREADS", "1")
@@ -164,7 +165,11 @@ fn main() {
             .lines()
             .map(|l| {
                 let v: serde_json::Value = serde_json::from_str(l).ok()?;
-                Some((v["warm_s"].as_f64()?, v["cold_s"].as_f64()?))
+                Some((
+                    v["warm_s"].as_f64()?,
+                    v["cold_s"].as_f64()?,
+                    v["warm_f32_s"].as_f64()?,
+                ))
             })
             .collect(),
         Ok(out) => {
@@ -182,21 +187,21 @@ fn main() {
     };
     let _ = std::fs::remove_dir_all(&dir);
     println!(
-        "| frame onto | numpy H @ dv (f64), warm | et, warm | et / numpy | numpy, cold | et, cold |"
+        "| frame onto | numpy H @ dv (f64), warm | et, warm | et / numpy | numpy in f32, warm | numpy, cold | et, cold |"
     );
-    println!("| --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
     let us = |s: f64| format!("{:.1} us", s * 1e6);
     for ((name, _, warm, cold, _), np) in cases
         .iter()
         .zip(numpy.iter().chain(std::iter::repeat(&None)))
     {
-        let (np_warm, np_cold) = match np {
-            Some((w, c)) => (us(*w), us(*c)),
-            None => ("-".into(), "-".into()),
+        let (np_warm, np_cold, np_f32) = match np {
+            Some((w, c, f)) => (us(*w), us(*c), us(*f)),
+            None => ("-".into(), "-".into(), "-".into()),
         };
-        let ratio = np.map_or("-".into(), |(w, _)| format!("{:.2}", warm / w));
+        let ratio = np.map_or("-".into(), |(w, ..)| format!("{:.2}", warm / w));
         println!(
-            "| {name} | {np_warm} | {} | {ratio} | {np_cold} | {} |",
+            "| {name} | {np_warm} | {} | {ratio} | {np_f32} | {np_cold} | {} |",
             us(*warm),
             us(*cold)
         );
