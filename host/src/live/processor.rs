@@ -405,6 +405,27 @@ impl Processor {
         Some(v0)
     }
 
+    /// Builds the reconstruction for frames of `config` now (the one-step or GREIT matrix on
+    /// the pixels), so that the first such frame does not wait for it: a replay or a board
+    /// whose configuration is known before its first frame.
+    ///
+    /// # Errors
+    /// [`LiveError`] when the configuration is not valid for the sheet or cannot be imaged.
+    pub fn prepare(&mut self, config: &ScanConfig) -> Result<(), LiveError> {
+        config.validate()?;
+        let Settings {
+            method, alpha, s, ..
+        } = self.settings;
+        Projection::current(
+            &mut self.projection,
+            &mut self.recon,
+            &mut self.at,
+            config,
+            (method, alpha, s),
+        )?;
+        Ok(())
+    }
+
     /// Processes one frame.
     ///
     /// # Errors

@@ -159,6 +159,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         if let Some(note) = r.recording.order_note() {
             eprintln!("note: {}: {note}", r.name);
         }
+        // The reconstruction for the recording's scans, made before its first frame.
+        processor.prepare(&r.recording.header.config)?;
     }
     if !args.json {
         eprintln!("note: et stream prints JSON lines (--json); streaming them anyway");
