@@ -15,36 +15,37 @@ import numpy as np
 
 directory = Path(sys.argv[1])
 buffer = np.zeros(64 << 20, dtype=np.uint8)
+
+
+def median_seconds(f, n, before=lambda: None):
+    """The median time of `n` calls of `f`, each after `before`."""
+    times = []
+    for _ in range(n):
+        before()
+        t = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+def evict():
+    buffer[::64] += 1
+
+
 for name in sys.argv[2:]:
     h = np.ascontiguousarray(np.load(directory / name))
     dv = np.load(directory / f"dv{h.shape[1]}.npy").reshape(-1)
-    h @ dv
-    warm = []
-    for _ in range(1000):
-        t = time.perf_counter()
-        h @ dv
-        warm.append(time.perf_counter() - t)
     h32, dv32 = h.astype(np.float32), dv.astype(np.float32)
+    h @ dv
     h32 @ dv32
-    warm32 = []
-    for _ in range(1000):
-        t = time.perf_counter()
-        h32 @ dv32
-        warm32.append(time.perf_counter() - t)
-    cold = []
-    for _ in range(30):
-        buffer[::64] += 1
-        t = time.perf_counter()
-        h @ dv
-        cold.append(time.perf_counter() - t)
     print(
         json.dumps(
             {
                 "matrix": name,
                 "shape": list(h.shape),
-                "warm_s": statistics.median(warm),
-                "warm_f32_s": statistics.median(warm32),
-                "cold_s": statistics.median(cold),
+                "warm_s": median_seconds(lambda: h @ dv, 1000),
+                "warm_f32_s": median_seconds(lambda: h32 @ dv32, 1000),
+                "cold_s": median_seconds(lambda: h @ dv, 30, evict),
             }
         ),
         flush=True,
