@@ -156,6 +156,17 @@ fn one_step_matrix(bencher: divan::Bencher, triangles: usize) {
     });
 }
 
+/// The one-step matrix's operator for live frames (its thin f32 factors, orthonormalised and
+/// packed): the part of the set-up the f32 frame costs.
+#[divan::bench(args = [8_000, 30_000], sample_count = 5, sample_size = 1)]
+fn frame_operator_of_the_one_step_matrix(bencher: divan::Bencher, triangles: usize) {
+    let (jac, _) = jacobian(triangles, 16, ProtocolKind::Adjacent);
+    let r = DataSpace::factored(&jac, 0.5)
+        .and_then(|d| d.one_step(0.03))
+        .expect("recon");
+    bencher.bench(|| FrameOperator::of(divan::black_box(&r)));
+}
+
 static LIVE: LazyLock<(OneStep, [FrameOperator; 3], DVector<f64>)> = LazyLock::new(|| {
     // The stages by hand: these benchmarks time the live frame's kernels themselves.
     let (jac, mesh) = jacobian(8_000, 16, ProtocolKind::Adjacent);
