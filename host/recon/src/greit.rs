@@ -192,9 +192,8 @@ impl Greit {
             &recon.reconstruct(&h)?,
             &recon.noise_sd(&vec![1.0; h.len()])?,
         );
-        let all: Vec<usize> = (0..inside.len()).collect();
         Ok(Self {
-            operator: FrameOperator::of_rows(&recon, &all),
+            operator: FrameOperator::of(&recon),
             inside,
             grid_len: grid.triangle.len(),
             recon,
@@ -248,13 +247,12 @@ impl Greit {
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
     pub fn image(&self, dv: &[f64]) -> Result<Vec<Option<f64>>, ReconError> {
-        let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        if dv.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::NonFinite);
-        }
-        let mut inside = vec![0.0f32; self.operator.rows()];
-        self.operator.apply(&dv, &mut inside)?;
-        let inside: Vec<f64> = inside.into_iter().map(f64::from).collect();
+        let inside: Vec<f64> = self
+            .operator
+            .image(dv)?
+            .into_iter()
+            .map(f64::from)
+            .collect();
         Ok(self.spread(&inside))
     }
 

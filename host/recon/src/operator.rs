@@ -140,6 +140,22 @@ impl FrameOperator {
         Ok(())
     }
 
+    /// A frame as every imaging path applies it: dV (K values, V, as f64) rounded to f32, then
+    /// [`FrameOperator::apply`]; one value per row.
+    ///
+    /// # Errors
+    /// [`ReconError::NonFinite`] for a value that is NaN or infinite in f32,
+    /// [`ReconError::Parameter`] for a wrong length.
+    pub fn image(&self, dv: &[f64]) -> Result<Vec<f32>, ReconError> {
+        let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
+        if dv.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::NonFinite);
+        }
+        let mut out = vec![0.0f32; self.rows()];
+        self.apply(&dv, &mut out)?;
+        Ok(out)
+    }
+
     /// P multiplied out (rows x K), from the f32 factors.
     #[must_use]
     pub fn dense(&self) -> DMatrix<f32> {

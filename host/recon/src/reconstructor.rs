@@ -89,8 +89,9 @@ pub struct Reconstructor {
     /// GREIT's matrix, when one serves every frame.
     greit: Option<Greit>,
     /// The last one-step matrix made: its alpha, its factors, and the operator a frame onto
-    /// the triangles is applied with (f32, packed).
-    one_step: Option<(f64, OneStep, FrameOperator)>,
+    /// the triangles is applied with (f32, packed), made for the first frame imaged (the live
+    /// pipeline, which images onto the pixels through `pixel_operator`, never needs it).
+    one_step: Option<(f64, OneStep, std::sync::OnceLock<FrameOperator>)>,
     /// GREIT's matrix chosen for the last frame (alpha by GCV).
     greit_chosen: Option<Greit>,
     /// The protocol's redundancy (the noise of a frame without repeated reference frames),
@@ -163,7 +164,7 @@ impl Reconstructor {
             (Method::GaussNewton { s, iterations }, rule) => {
                 let space = DataSpace::factored(&self.jac, s)?;
                 if let (AlphaRule::Fixed(alpha), 0 | 1) = (rule, iterations) {
-                    self.one_step = Some(linear(&space, alpha)?);
+                    self.one_step = Some((alpha, space.one_step(alpha)?, Default::default()));
                 }
                 self.space = Some(space);
             }
@@ -419,11 +420,23 @@ impl Reconstructor {
                 };
                 if n <= 1 {
                     if self.one_step.as_ref().is_none_or(|(a, ..)| *a != alpha) {
-                        self.one_step = Some(linear(space, alpha)?);
+                        self.one_step = Some((alpha, space.one_step(alpha)?, Default::default()));
                         timings.matrix = Some(clock.elapsed().as_secs_f64());
                     }
                     let Some((_, recon, operator)) = &self.one_step else {
                         return Err(ReconError::Singular.into());
+                    };
+                    // The f32 operator onto the triangles, on the matrix's first frame: part
+                    // of making the matrix.
+                    let operator = match operator.get() {
+                        Some(op) => op,
+                        None => {
+                            let clock = Instant::now();
+                            let op = operator.get_or_init(|| FrameOperator::of(recon));
+                            let made = clock.elapsed().as_secs_f64();
+                            timings.matrix = Some(timings.matrix.unwrap_or(0.0) + made);
+                            op
+                        }
                     };
                     let clock = Instant::now();
                     let image = onto_triangles(grid, operator, &dv)?;
@@ -492,13 +505,6 @@ pub fn median_seconds<T>(repeats: usize, mut f: impl FnMut() -> Option<T>) -> Op
     Some(times[times.len() / 2])
 }
 
-/// The one-step matrix at `alpha` and its operator onto the triangles.
-fn linear(space: &DataSpace, alpha: f64) -> Result<(f64, OneStep, FrameOperator), ReconError> {
-    let r = space.one_step(alpha)?;
-    let operator = FrameOperator::of(&r);
-    Ok((alpha, r, operator))
-}
-
 /// A frame imaged as a live frame is: dV (K values, V) in f32 through the operator onto the
 /// mesh's triangles, drawn on the grid's pixels (None outside the sheet).
 ///
@@ -509,12 +515,7 @@ pub fn onto_triangles(
     operator: &FrameOperator,
     dv: &[f64],
 ) -> Result<Vec<Option<f64>>, ReconError> {
-    let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-    if dv.iter().any(|v| !v.is_finite()) {
-        return Err(ReconError::NonFinite);
-    }
-    let mut triangles = vec![0.0f32; operator.rows()];
-    operator.apply(&dv, &mut triangles)?;
+    let triangles = operator.image(dv)?;
     Ok(grid
         .triangle
         .iter()
@@ -552,7 +553,7 @@ impl Reconstructor {
                     },
                     _,
                     Some((_, _, op)),
-                ) => onto_triangles(&self.imager.grid, op, dv).ok(),
+                ) => onto_triangles(&self.imager.grid, op.get()?, dv).ok(),
                 _ => None,
             }
         };

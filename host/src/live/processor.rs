@@ -530,9 +530,7 @@ impl Processor {
             .map(|(a, b)| f64::from(*a) - b)
             .collect();
         let bvc = stats::bvc_dv(&dv);
-        let dv32: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
-        let mut values = vec![0.0f32; projection.rows()];
-        projection.apply(&dv32, &mut values)?;
+        let values = projection.image(&dv)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = f64::from(
             values
