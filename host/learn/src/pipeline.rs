@@ -15,6 +15,9 @@ use super::model_file::ModelFile;
 
 use et_core::board::MODEL_SLOT_BYTES;
 
+mod summary;
+pub use summary::TestSummary;
+
 /// The most features (at most `max`) a `kind` model of `classes` classes can keep and still
 /// fit one model slot of the board in f16 (0 when not even one feature fits).
 #[must_use]

@@ -147,6 +147,24 @@ impl PixelGrid {
             .map(|t| t.map(|t| per_triangle[t]))
             .collect()
     }
+
+    /// An image (one value per pixel, the bottom row first, as [`PixelGrid::image`] gives)
+    /// as a picture is read: rows from the top, row-major (height x width), each value times
+    /// `scale`, NaN outside the sheet. `plt.imshow` shows it upright.
+    #[must_use]
+    pub fn top_first(&self, image: &[Option<f64>], scale: f64) -> Vec<f64> {
+        (0..self.height)
+            .rev()
+            .flat_map(|j| (0..self.width).map(move |i| j * self.width + i))
+            .map(|p| {
+                image
+                    .get(p)
+                    .copied()
+                    .flatten()
+                    .map_or(f64::NAN, |v| v * scale)
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -393,6 +393,7 @@ impl Reconstructor {
         let mut greit_made = None;
         let made;
         let mut iterations = None;
+        let mut mesh_values = None;
         let (alpha, pixels, noise_sd) = match self.method {
             Method::Greit { radius } => {
                 let clock = Instant::now();
@@ -439,8 +440,10 @@ impl Reconstructor {
                         }
                     };
                     let clock = Instant::now();
-                    let image = onto_triangles(grid, operator, &dv)?;
+                    let values = operator.image(&dv)?;
+                    let image = on_pixels(grid, &values);
                     timings.frame = clock.elapsed().as_secs_f64();
+                    mesh_values = Some(values.iter().map(|&v| f64::from(v)).collect());
                     (alpha, image, grid.image(&recon.noise_sd(&var)?))
                 } else {
                     let clock = Instant::now();
@@ -466,7 +469,9 @@ impl Reconstructor {
                         steps: fit.iterates.iter().map(|i| i.step).collect(),
                         stop: fit.stop,
                     });
-                    (alpha, grid.image(&d), grid.image(&last.noise_sd))
+                    let image = grid.image(&d);
+                    mesh_values = Some(d);
+                    (alpha, image, grid.image(&last.noise_sd))
                 }
             }
         };
@@ -480,6 +485,7 @@ impl Reconstructor {
             ),
             pixels,
             noise_sd,
+            mesh_values,
             dv,
             noise,
             alpha,
@@ -515,12 +521,15 @@ pub fn onto_triangles(
     operator: &FrameOperator,
     dv: &[f64],
 ) -> Result<Vec<Option<f64>>, ReconError> {
-    let triangles = operator.image(dv)?;
-    Ok(grid
-        .triangle
+    Ok(on_pixels(grid, &operator.image(dv)?))
+}
+
+/// Values on the mesh's triangles drawn on the grid's pixels (None outside the sheet).
+fn on_pixels(grid: &PixelGrid, triangles: &[f32]) -> Vec<Option<f64>> {
+    grid.triangle
         .iter()
         .map(|t| t.map(|t| f64::from(triangles[t])))
-        .collect())
+        .collect()
 }
 
 impl Reconstructor {

@@ -248,6 +248,41 @@ pub struct Object {
     pub region: Region,
 }
 
+/// An object as `et reconstruct --json` reports it (its `objects`), and the Python module
+/// too: SI, the peak relative to the background. Field names are fixed: scripts rely on them.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ObjectSummary {
+    /// Its centroid, m.
+    pub x_m: f64,
+    /// Its centroid, m.
+    pub y_m: f64,
+    /// +1 conductive (the conductivity rose), -1 resistive.
+    pub sign: i8,
+    /// Its area above the threshold, m^2.
+    pub area_m2: f64,
+    /// Its peak Delta sigma / sigma_0 (dimensionless, signed: the change over the
+    /// background's conductivity).
+    pub peak: f64,
+    /// Its peak over the pixel's noise (None when the noise is not known).
+    pub z: Option<f64>,
+}
+
+impl ObjectSummary {
+    /// `object` on a background of conductivity `sigma0` (S per square).
+    #[must_use]
+    pub fn of(object: &Object, sigma0: f64) -> Self {
+        let r = &object.region;
+        Self {
+            x_m: r.centroid[0],
+            y_m: r.centroid[1],
+            sign: object.sign,
+            area_m2: r.area,
+            peak: f64::from(object.sign) * r.peak / sigma0,
+            z: r.z,
+        }
+    }
+}
+
 /// The objects of a signed image: [`touches`] of the image and of its negative, each kept
 /// above `f` times the image's largest magnitude (so that the ringing around a strong object
 /// of one sign is not taken for an object of the other) and `z` times its noise, strongest

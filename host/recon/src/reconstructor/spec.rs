@@ -137,6 +137,28 @@ pub enum AlphaRule {
     NoiseFigure(f64),
 }
 
+impl AlphaRule {
+    /// The rule a user's text asks for with `method`: a number (a fixed alpha), "gcv"
+    /// (generalised cross-validation on each frame), or "auto": GCV for Gauss-Newton, and for
+    /// GREIT the lambda of `noise_figure` (one matrix for every frame, the consensus rule).
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for other text.
+    pub fn from_text(text: &str, method: &Method, noise_figure: f64) -> Result<Self, ReconError> {
+        let rule = match text {
+            "gcv" => AlphaRule::Gcv,
+            "auto" => match method {
+                Method::Greit { .. } => AlphaRule::NoiseFigure(noise_figure),
+                Method::GaussNewton { .. } => AlphaRule::Gcv,
+            },
+            v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
+                ReconError::Parameter(format!("alpha '{v}': a number, auto or gcv"))
+            })?),
+        };
+        Ok(rule)
+    }
+}
+
 /// Everything a [`Reconstructor`] is made from.
 #[derive(Clone, Debug)]
 pub struct Spec {
@@ -272,6 +294,25 @@ pub struct FrameNoise {
     pub source: NoiseSource,
 }
 
+impl serde::Serialize for FrameNoise {
+    /// As `et reconstruct --json` writes it: `rms_v`; `source`, "reference frames" (their
+    /// spread), "redundancy" (the part of dV no conductivity change makes, with one reference
+    /// frame) or "unknown"; `dof`, with "redundancy", how many redundant values it rests on.
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let (source, dof) = match self.source {
+            NoiseSource::ReferenceFrames => ("reference frames", None),
+            NoiseSource::Redundancy { dof } => ("redundancy", Some(dof)),
+            NoiseSource::Unknown => ("unknown", None),
+        };
+        let mut s = serializer.serialize_struct("FrameNoise", 3)?;
+        s.serialize_field("rms_v", &self.rms_v)?;
+        s.serialize_field("source", source)?;
+        s.serialize_field("dof", &dof)?;
+        s.end()
+    }
+}
+
 /// One frame imaged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -279,6 +320,9 @@ pub struct Image {
     pub pixels: Vec<Option<f64>>,
     /// Each pixel's noise through the reconstruction, S per square.
     pub noise_sd: Vec<Option<f64>>,
+    /// Conductivity change per triangle of the mesh, S per square: Gauss-Newton's image
+    /// before it is drawn on the pixels; None for GREIT, which images onto the pixels.
+    pub mesh_values: Option<Vec<f64>>,
     /// dV = V - V_0, V.
     pub dv: Vec<f64>,
     /// The noise of dV the image was made against, and where it came from.

@@ -7,7 +7,7 @@ use et_core::model::{ModelKind, Precision};
 use et_host::plot;
 use et_learn::model_file::ModelFile;
 use et_learn::tabular;
-use et_learn::{analysis, dataset, pipeline};
+use et_learn::{dataset, pipeline};
 
 use crate::learn::PrecisionArg;
 use crate::output;
@@ -105,7 +105,6 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
     }
     let file = ModelFile::load(&args.model)?;
     let data = dataset::load(data_arg)?;
-    let classes = file.classes.len();
     let tested = pipeline::test(&file, &data).map_err(|e| {
         // Name the file at fault: the model's tables, or the data.
         let blamed = match e {
@@ -114,25 +113,18 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         };
         anyhow::anyhow!("{}: {e}", blamed.display())
     })?;
-    let (conf, bands) = (&tested.confusion, &tested.bands);
+    let conf = &tested.confusion;
     if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
         eval_plots(dir, pngs, &tested, data_arg)?;
     }
-    let mut from_truth = tested.errors_from_truth_mm.clone();
-    from_truth.sort_by(f64::total_cmp);
-    let [mean, median, p90] = et_learn::regress::mean_median_p90(&from_truth);
-    let known = !from_truth.is_empty();
-    let summary = EvalSummary {
-        observations: conf.total(),
-        accuracy: conf.accuracy(),
-        mean_error_mm: known.then_some(mean),
-        median_error_mm: known.then_some(median),
-        p90_error_mm: known.then_some(p90),
-        mean_cell_error_mm: conf.mean_position_error(&file.centres_mm),
-        aee_mm: conf.aee(&file.centres_mm),
-        by_distance_from_electrodes: bands,
-        confusion: conf.counts.chunks(classes).collect(),
-    };
+    let summary = tested.summary(&file.centres_mm);
+    let [mean, median, p90] = [
+        summary.mean_error_mm,
+        summary.median_error_mm,
+        summary.p90_error_mm,
+    ]
+    .map(|v| v.unwrap_or(0.0));
+    let known = summary.mean_error_mm.is_some();
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
@@ -237,24 +229,6 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// `et eval --json`.
-#[derive(serde::Serialize)]
-struct EvalSummary<'a> {
-    observations: u32,
-    accuracy: f64,
-    /// From the true press position to the predicted class's centre (null when the dataset
-    /// has no positions): the figure to compare with a regressor's.
-    mean_error_mm: Option<f64>,
-    median_error_mm: Option<f64>,
-    p90_error_mm: Option<f64>,
-    /// From the true class's centre to the predicted one's (0 when right).
-    mean_cell_error_mm: f64,
-    aee_mm: f64,
-    by_distance_from_electrodes: &'a [analysis::Band],
-    /// Rows: true class; columns: predicted class.
-    confusion: Vec<&'a [u32]>,
 }
 
 /// `et export --json`.

@@ -263,14 +263,7 @@ pub(crate) fn mesh_plan(
 /// The reconstruction `et reconstruct`'s arguments ask for.
 fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_recon::AlphaRule)> {
     use et_recon::{AlphaRule, Method as M};
-    let fixed = match args.alpha.as_str() {
-        "auto" | "gcv" => None,
-        v => Some(
-            v.parse::<f64>()
-                .with_context(|| format!("--alpha '{v}': a number, auto or gcv"))?,
-        ),
-    };
-    Ok(match args.method {
+    let method = match args.method {
         Method::Greit => {
             if args.iterations > 1 {
                 bail!(
@@ -278,26 +271,18 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
                     args.iterations
                 );
             }
-            let alpha = match (fixed, args.alpha.as_str()) {
-                (Some(a), _) => AlphaRule::Fixed(a),
-                (None, "gcv") => AlphaRule::Gcv,
-                (None, _) => AlphaRule::NoiseFigure(args.noise_figure),
-            };
-            (
-                M::Greit {
-                    radius: args.radius_mm.map(|r| r * 1e-3),
-                },
-                alpha,
-            )
+            M::Greit {
+                radius: args.radius_mm.map(|r| r * 1e-3),
+            }
         }
-        Method::Gn => (
-            M::GaussNewton {
-                s: args.s,
-                iterations: args.iterations,
-            },
-            fixed.map_or(AlphaRule::Gcv, AlphaRule::Fixed),
-        ),
-    })
+        Method::Gn => M::GaussNewton {
+            s: args.s,
+            iterations: args.iterations,
+        },
+    };
+    let alpha = AlphaRule::from_text(&args.alpha, &method, args.noise_figure)
+        .map_err(|_| anyhow::anyhow!("--alpha '{}': a number, auto or gcv", args.alpha))?;
+    Ok((method, alpha))
 }
 
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {

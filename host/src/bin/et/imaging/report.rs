@@ -64,7 +64,7 @@ pub(super) fn report(
             .map_or_else(|| "custom".to_string(), |k| k.to_string()),
         method: args.method,
         alpha: image.alpha,
-        noise: NoiseSummary::of(image),
+        noise: image.noise,
         background,
         noise_figure: image.greit.map(|g| g.0),
         s: args.s,
@@ -75,7 +75,7 @@ pub(super) fn report(
         objects: recon
             .objects(image)
             .iter()
-            .map(|o| ObjectSummary::of(o, recon.imager().sigma0))
+            .map(|o| et_recon::touches::ObjectSummary::of(o, recon.imager().sigma0))
             .collect(),
         touches_mm: truth
             .iter()
@@ -165,7 +165,7 @@ pub(super) struct ReconstructSummary<'a> {
     method: Method,
     alpha: f64,
     /// The noise of dV the image was made against.
-    noise: NoiseSummary,
+    noise: et_recon::FrameNoise,
     /// The background fitted to the reference frame (null: the scene's).
     background: Option<et_recon::background::BackgroundFit>,
     /// GREIT's noise figure of the matrix made; null for gn.
@@ -180,7 +180,7 @@ pub(super) struct ReconstructSummary<'a> {
     image: Option<ImageGrid>,
     /// Objects of both signs, strongest (|peak|) first: conductive (+1) and resistive (-1)
     /// targets of a tank, presses of a sheet. Field names fixed: scripts rely on them.
-    objects: Vec<ObjectSummary>,
+    objects: Vec<et_recon::touches::ObjectSummary>,
     /// The scene's touches, mm.
     touches_mm: Vec<[f64; 2]>,
     /// docs/method.md §7's PE, SE, RNG and BVC, for a scene with one touch (null otherwise).
@@ -190,34 +190,6 @@ pub(super) struct ReconstructSummary<'a> {
     timings_s: Timings,
     /// Wall time of the whole command, s.
     seconds: f64,
-}
-
-/// The noise of dV: its rms over the channels and where it came from.
-#[derive(serde::Serialize)]
-pub(super) struct NoiseSummary {
-    /// rms over the channels of dV's noise, V.
-    rms_v: f64,
-    /// "reference frames" (their spread), "redundancy" (the part of dV no conductivity change
-    /// makes, with one reference frame) or "unknown".
-    source: &'static str,
-    /// With "redundancy": how many redundant values the estimate rests on.
-    dof: Option<usize>,
-}
-
-impl NoiseSummary {
-    fn of(image: &et_recon::Image) -> Self {
-        use et_recon::NoiseSource as S;
-        let (source, dof) = match image.noise.source {
-            S::ReferenceFrames => ("reference frames", None),
-            S::Redundancy { dof } => ("redundancy", Some(dof)),
-            S::Unknown => ("unknown", None),
-        };
-        Self {
-            rms_v: image.noise.rms_v,
-            source,
-            dof,
-        }
-    }
 }
 
 /// Where `--image-out`'s pixels are: row 0 is the top row.
@@ -244,15 +216,8 @@ fn write_image(
 ) -> Result<ImageGrid> {
     let grid = recon.grid();
     let sigma0 = recon.imager().sigma0;
-    let m = nalgebra::DMatrix::from_fn(grid.height, grid.width, |r, c| {
-        let j = grid.height - 1 - r;
-        image
-            .pixels
-            .get(j * grid.width + c)
-            .copied()
-            .flatten()
-            .map_or(f64::NAN, |v| v / sigma0)
-    });
+    let top_first = grid.top_first(&image.pixels, 1.0 / sigma0);
+    let m = nalgebra::DMatrix::from_row_slice(grid.height, grid.width, &top_first);
     let bytes = et_learn::npz::npy_of_matrix(&m);
     crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
     Ok(ImageGrid {
@@ -264,37 +229,6 @@ fn write_image(
         pixel_m: grid.size,
         unit: "Delta sigma / sigma_0",
     })
-}
-
-/// One object of `et reconstruct --json`'s `objects`.
-#[derive(serde::Serialize)]
-pub(super) struct ObjectSummary {
-    /// Its centroid, m.
-    x_m: f64,
-    /// Its centroid, m.
-    y_m: f64,
-    /// +1 conductive (the conductivity rose), -1 resistive.
-    sign: i8,
-    /// Its area above the threshold, m^2.
-    area_m2: f64,
-    /// Its peak Delta sigma / sigma_0 (dimensionless, signed: the change over the
-    /// background's conductivity).
-    peak: f64,
-    /// Its peak over the pixel's noise.
-    z: Option<f64>,
-}
-
-impl ObjectSummary {
-    fn of(o: &et_recon::Object, sigma0: f64) -> Self {
-        Self {
-            x_m: o.region.centroid[0],
-            y_m: o.region.centroid[1],
-            sign: o.sign,
-            area_m2: o.region.area,
-            peak: f64::from(o.sign) * o.region.peak / sigma0,
-            z: o.region.z,
-        }
-    }
 }
 
 /// A true touch matched to the nearest found one.

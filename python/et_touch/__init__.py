@@ -1,0 +1,591 @@
+"""et from Python: touch sensing by electrical tomography, NumPy arrays in and out.
+
+Imaging a frame (every number SI: metres, volts, amperes, siemens per square)::
+
+    import et_touch as et
+    sheet = et.disc(0.065, electrodes=16)                 # 13 cm disc, 16 electrodes
+    r = et.Reconstructor(sheet, et.protocol("adjacent", 16, current_a=1e-3))
+    image = r.image(v, v0)          # v: K volts; v0: K volts, or n x K untouched frames
+    image.pixels                    # 64 x 64 Delta sigma / sigma_0, top row first, NaN outside
+    image.objects                   # [{"x_m", "y_m", "sign", "area_m2", "peak", "z"}, ...]
+
+Learning::
+
+    model = et.train(X, y)          # y: labels (n) or positions (n x 2, m); kind="auto"
+    model.predict(X_new)            # labels, or positions n x 2 (m)
+    model.evaluate(X_test, y_test)  # {"mean_error_mm", "median_error_mm", "p90_error_mm", ...}
+    board = et.train(et.read_dataset("train.npz"))   # QDA for the board from `et collect`
+    open("model.etm", "wb").write(board.export_blob())
+
+et's two entry points do the work (the Reconstructor and the Trainer of the Rust workspace),
+the same code the `et` command runs: an image here is the image `et reconstruct` makes of the
+same frames, and a model's predictions are `et eval`'s. The whole API: docs/python.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _native
+from ._native import Dataset, EtError
+
+__all__ = [
+    "EtError",
+    "Sheet",
+    "disc",
+    "rectangle",
+    "polygon",
+    "Protocol",
+    "protocol",
+    "scene",
+    "Reconstructor",
+    "Image",
+    "train",
+    "Model",
+    "Dataset",
+    "read_dataset",
+    "read_recording",
+    "read_frames",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _f64(a: Any, ndim: int, what: str) -> np.ndarray:
+    """`a` as a C-contiguous float64 array of `ndim` dimensions: no copy when it already is."""
+    out = np.ascontiguousarray(a, dtype=np.float64)
+    if out.ndim != ndim:
+        raise EtError(f"{what}: {out.ndim}-D array of shape {out.shape}; expected {ndim}-D")
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Sheets
+
+
+@dataclass
+class Sheet:
+    """A sheet: its outline, sheet resistance and electrodes, as a scene file's [sheet] table.
+
+    ``spec`` is that table as a dict (metres, ohms per square, ohms): ``shape`` (``{"kind": "disc",
+    "radius": R}``, ``{"kind": "rectangle", "width": W, "height": H}`` or ``{"kind":
+    "polygon", "vertices": [[x, y], ...]}``), ``sheet_resistance`` and ``electrodes`` (``count``,
+    ``width``, ``contact_ohm``, ``first_deg``, ``direction`` "ccw" or "cw", ``positions``,
+    ``model`` "complete", "point" or "shunt"). Make one with :func:`disc`,
+    :func:`rectangle`, :func:`polygon` or :func:`scene`.
+    """
+
+    spec: Dict[str, Any]
+
+    @property
+    def electrodes(self) -> int:
+        """How many electrodes it has."""
+        return int(self.spec.get("electrodes", {}).get("count", 16))
+
+
+def _sheet(
+    shape: Dict[str, Any],
+    electrodes: int,
+    sheet_resistance: float,
+    contact_ohm: float,
+    width_m: float,
+    first_deg: Optional[float],
+    direction: str,
+    model: str,
+) -> Sheet:
+    spec_electrodes: Dict[str, Any] = {
+        "count": int(electrodes),
+        "width": float(width_m),
+        "contact_ohm": float(contact_ohm),
+        "direction": direction,
+        "model": model,
+    }
+    if first_deg is not None:
+        spec_electrodes["first_deg"] = float(first_deg)
+    return Sheet(
+        {"shape": shape, "sheet_resistance": float(sheet_resistance), "electrodes": spec_electrodes}
+    )
+
+
+def disc(
+    radius_m: float,
+    electrodes: int = 16,
+    *,
+    sheet_resistance: float = 30e3,
+    contact_ohm: float = 1000.0,
+    electrode_width_m: float = 0.005,
+    first_deg: Optional[float] = None,
+    direction: str = "ccw",
+    model: str = "complete",
+) -> Sheet:
+    """A disc of ``radius_m`` (m) centred on the origin, ``electrodes`` evenly round its edge.
+
+    ``sheet_resistance`` in ohms per square, ``contact_ohm`` each electrode's contact
+    resistance (ohm), ``electrode_width_m`` each electrode's width along the edge (m), ``first_deg`` the
+    first electrode's angle from +x (degrees; default half a spacing from +x), ``direction``
+    the numbering "ccw" or "cw", ``model`` the electrode model ("complete", "point", "shunt").
+    """
+    return _sheet(
+        {"kind": "disc", "radius": float(radius_m)},
+        electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction, model,
+    )
+
+
+def rectangle(
+    width_m: float,
+    height_m: float,
+    electrodes: int = 16,
+    *,
+    sheet_resistance: float = 30e3,
+    contact_ohm: float = 1000.0,
+    electrode_width_m: float = 0.005,
+    first_deg: Optional[float] = None,
+    direction: str = "ccw",
+    model: str = "complete",
+) -> Sheet:
+    """A ``width_m`` x ``height_m`` rectangle (m) centred on the origin; options as :func:`disc`."""
+    return _sheet(
+        {"kind": "rectangle", "width": float(width_m), "height": float(height_m)},
+        electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction,
+        model,
+    )
+
+
+def polygon(
+    vertices_m: Any,
+    electrodes: int = 16,
+    *,
+    sheet_resistance: float = 30e3,
+    contact_ohm: float = 1000.0,
+    electrode_width_m: float = 0.005,
+    first_deg: Optional[float] = None,
+    direction: str = "ccw",
+    model: str = "complete",
+) -> Sheet:
+    """A simple polygon, ``vertices_m`` n x 2 (m) counter-clockwise; options as :func:`disc`."""
+    vertices = _f64(vertices_m, 2, "vertices_m").tolist()
+    return _sheet(
+        {"kind": "polygon", "vertices": vertices},
+        electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction, model,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Protocols
+
+
+@dataclass
+class Protocol:
+    """Who drives and who measures, value by value of a frame.
+
+    ``rows`` is K x 4 (source, sink, positive, negative; 0-based electrodes: value k is
+    U_positive - U_negative while the current enters by source and leaves by sink),
+    ``currents`` K currents (A). ``name`` is set for et's built-in protocols (it chooses the
+    protocol's default imaging threshold).
+    """
+
+    electrodes: int
+    rows: np.ndarray
+    currents: np.ndarray
+    name: Optional[str] = None
+
+    @property
+    def K(self) -> int:  # noqa: N802 (the method's symbol)
+        """Values a frame."""
+        return int(self.rows.shape[0])
+
+    @classmethod
+    def from_rows(
+        cls, rows: Any, electrodes: int, current_a: float = 1e-3, base: int = 0
+    ) -> "Protocol":
+        """Any system's protocol: ``rows`` N x 4 (source, sink, positive, negative) or N x 5
+        (the fifth the current, A), electrodes counted from ``base`` (0, or 1 for systems that
+        count from 1); rows without a current drive ``current_a``."""
+        table = np.asarray(rows, dtype=np.float64)
+        if table.ndim != 2 or table.shape[1] not in (4, 5):
+            raise EtError(f"rows: shape {table.shape}; give N x 4 or N x 5")
+        currents = table[:, 4].copy() if table.shape[1] == 5 else np.full(len(table), current_a)
+        electrodes_of = table[:, :4] - base
+        if not np.all(electrodes_of == np.round(electrodes_of)):
+            raise EtError("rows: electrode numbers must be whole numbers")
+        return cls(int(electrodes), electrodes_of.astype(np.int64), currents.astype(np.float64))
+
+    @classmethod
+    def from_pyeit(
+        cls, ex_mat: Any, meas_mat: Any = None, electrodes: Optional[int] = None,
+        current_a: float = 1e-3,
+    ) -> "Protocol":
+        """The Python peer's convention: ``ex_mat`` (n_exc x 2: source, sink) and ``meas_mat``
+        (K x 3: N, M, excitation index; the value is u[N] - u[M]), or its protocol object (with
+        ``ex_mat`` and ``meas_mat``); ``electrodes`` defaults to its largest electrode + 1."""
+        if meas_mat is None and hasattr(ex_mat, "meas_mat"):
+            ex_mat, meas_mat = ex_mat.ex_mat, ex_mat.meas_mat
+        ex = np.asarray(ex_mat, dtype=np.int64)
+        meas = np.asarray(meas_mat, dtype=np.int64)
+        if ex.ndim != 2 or ex.shape[1] != 2 or meas.ndim != 2 or meas.shape[1] != 3:
+            raise EtError(
+                f"ex_mat {ex.shape} and meas_mat {meas.shape}: give n_exc x 2 and K x 3"
+            )
+        if meas[:, 2].min() < 0 or meas[:, 2].max() >= len(ex):
+            raise EtError("meas_mat: an excitation index outside ex_mat's rows")
+        rows = np.column_stack([ex[meas[:, 2], 0], ex[meas[:, 2], 1], meas[:, 0], meas[:, 1]])
+        n = int(electrodes) if electrodes is not None else int(max(ex.max(), meas[:, :2].max()) + 1)
+        return cls(n, rows, np.full(len(rows), float(current_a)))
+
+
+def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protocol:
+    """et's built-in protocol ``name`` ("adjacent", "pseudo-polar", "pp-pp", "opposite") on
+    ``electrodes`` electrodes, driving ``current_a`` (A)."""
+    rows, currents = _native.protocol_table(name, int(electrodes), float(current_a))
+    return Protocol(int(electrodes), rows, currents, name)
+
+
+def scene(path: PathLike) -> Tuple[Sheet, Protocol]:
+    """A scene file's sheet and protocol (the TOML files `et sim` and `et reconstruct` take)."""
+    sheet_json, name, electrodes, current_a, rows, currents = _native.scene_parts(
+        os.fspath(path)
+    )
+    return Sheet(json.loads(sheet_json)), Protocol(electrodes, rows, currents, name)
+
+
+# ---------------------------------------------------------------------------------------------
+# Imaging
+
+
+@dataclass
+class Image:
+    """One frame imaged.
+
+    ``pixels`` and ``noise_sd``: rows x cols, Delta sigma / sigma_0 (no unit), the top row
+    first, NaN outside the sheet (``plt.imshow(image.pixels, extent=image.extent)`` shows it
+    upright, in metres). ``values``: Delta sigma / sigma_0 on each triangle of the mesh
+    (Gauss-Newton; None for GREIT), for ``plt.tripcolor(x, y, triangles, values)``. ``dv``: V -
+    V_0 (K, V). ``objects``: conductive (sign +1) and resistive (-1) objects, strongest first,
+    as `et reconstruct --json` gives them; ``touches``: the presses (regions of positive change
+    split at their saddles, above 5 times their noise); ``regions``: every region above the
+    threshold. Each is a dict: ``x_m``, ``y_m``, ``sign``, ``area_m2``, ``peak`` (Delta sigma /
+    sigma_0), ``z`` (peak over its noise).
+    """
+
+    pixels: np.ndarray
+    noise_sd: np.ndarray
+    values: Optional[np.ndarray]
+    dv: np.ndarray
+    objects: List[Dict[str, Any]]
+    touches: List[Dict[str, Any]]
+    regions: List[Dict[str, Any]]
+    alpha: float
+    threshold: float
+    noise: Dict[str, Any]
+    extent: Tuple[float, float, float, float]
+    timings_s: Dict[str, Any] = field(default_factory=dict)
+    summary: Dict[str, Any] = field(default_factory=dict)
+
+
+class Reconstructor:
+    """A reconstruction set up once for a sheet, a protocol, a mesh and a method; it images
+    every frame against the untouched frame (et's Reconstructor).
+
+    ``triangles``: about how many triangles to mesh the sheet with. ``method``: "gn" (one-step
+    Gauss-Newton with the NOSER prior; ``iterations`` > 1 refits) or "greit". ``alpha``:
+    "auto" (Gauss-Newton: generalised cross-validation on each frame, never closer than its
+    noise; GREIT: the noise figure's lambda), "gcv", or a number. ``pixels``: pixels across the
+    image. ``threshold``: the share of the peak a region must reach (default: the protocol's).
+    ``s``: the NOSER exponent; ``noise_figure`` and ``radius_m``: GREIT's. Set-up runs without
+    the GIL.
+    """
+
+    def __init__(
+        self,
+        sheet: Sheet,
+        protocol: Protocol,
+        triangles: int = 8000,
+        method: str = "gn",
+        alpha: Union[str, float] = "auto",
+        pixels: int = 64,
+        threshold: Optional[float] = None,
+        s: float = 0.5,
+        iterations: int = 1,
+        noise_figure: Optional[float] = None,
+        radius_m: Optional[float] = None,
+    ) -> None:
+        if sheet.electrodes != protocol.electrodes:
+            raise EtError(
+                f"the protocol is of {protocol.electrodes} electrodes, the sheet has "
+                f"{sheet.electrodes}"
+            )
+        rows = np.ascontiguousarray(protocol.rows, dtype=np.int64)
+        currents = _f64(protocol.currents, 1, "currents")
+        current_a = float(currents[0]) if len(currents) else 1e-3
+        self._native = _native.Reconstructor(
+            json.dumps(sheet.spec), int(protocol.electrodes), protocol.name, current_a,
+            None if protocol.name else rows, None if protocol.name else currents,
+            int(triangles), method, str(alpha), int(pixels), threshold, float(s),
+            int(iterations), noise_figure, radius_m,
+        )
+        self.protocol = protocol
+
+    @staticmethod
+    def _frames(v0: Any) -> np.ndarray:
+        v0 = np.asarray(v0, dtype=np.float64)
+        return _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
+
+    def image(self, v: Any, v0: Any) -> Image:
+        """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
+        several untouched frames (n x K: their mean is V_0 and their spread the noise of dV;
+        with one frame the noise is estimated from the protocol's redundancy). Frames are taken
+        in single precision, as et's frames are."""
+        summary_json, pixels, noise, values, dv = self._native.image(
+            _f64(v, 1, "v"), self._frames(v0)
+        )
+        s = json.loads(summary_json)
+        return Image(
+            pixels=pixels, noise_sd=noise, values=values, dv=dv, objects=s["objects"],
+            touches=s["touches"], regions=s["regions"], alpha=s["alpha"],
+            threshold=s["threshold"], noise=s["noise"], extent=self.extent,
+            timings_s=s["timings_s"], summary=s,
+        )
+
+    def fit_background(self, v0: Any) -> Dict[str, Any]:
+        """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``
+        and images about them from then on (as `et reconstruct` does for measured frames); the
+        fit as `et reconstruct --json`'s ``background``."""
+        return json.loads(self._native.fit_background(self._frames(v0)))
+
+    def forward(self, sigma: Any) -> np.ndarray:
+        """The frame (K values, V) of conductivity ``sigma``: one per triangle, or one number
+        for all (S per square)."""
+        sigma = np.asarray(sigma, dtype=np.float64)
+        if sigma.ndim == 0:
+            sigma = np.full(len(self.triangles), float(sigma))
+        return self._native.forward(_f64(sigma, 1, "sigma"))
+
+    def jacobian(self) -> np.ndarray:
+        """The Jacobian at the background, K x T (V per S/sq)."""
+        return self._native.jacobian()
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """The mesh's nodes, n x 2 (m)."""
+        return self._native.nodes
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """The mesh's triangles, T x 3 node indices (``plt.tripcolor(nodes[:, 0], nodes[:, 1],
+        triangles, image.values)``)."""
+        return self._native.triangles
+
+    @property
+    def electrodes(self) -> np.ndarray:
+        """Each electrode's centre, L x 2 (m)."""
+        return self._native.electrodes
+
+    @property
+    def sigma0(self) -> float:
+        """The background conductivity, S per square (1 / sheet resistance)."""
+        return self._native.sigma0
+
+    @property
+    def sheet(self) -> Sheet:
+        """The sheet imaged (after :meth:`fit_background`, with the fitted values)."""
+        return Sheet(json.loads(self._native.sheet_json))
+
+    @property
+    def extent(self) -> Tuple[float, float, float, float]:
+        """The image's extent (left, right, bottom, top; m) for ``plt.imshow``."""
+        rows, cols, x0, y0, size = self._native.grid
+        return (x0, x0 + cols * size, y0, y0 + rows * size)
+
+    @property
+    def set_up_s(self) -> Dict[str, float]:
+        """What the set-up took, s."""
+        mesh, forward_jacobian, matrix = self._native.set_up_s
+        return {"mesh": mesh, "forward_jacobian": forward_jacobian, "matrix": matrix}
+
+    def frame_median(self, dv: Any, repeats: int = 100) -> Optional[float]:
+        """The median time (s) of ``repeats`` warm applications of the last frame's
+        reconstruction to ``dv``: `et reconstruct --json`'s ``timings_s.frame``."""
+        return self._native.frame_median(_f64(dv, 1, "dv"), int(repeats))
+
+
+# ---------------------------------------------------------------------------------------------
+# Learning
+
+
+def _labels(y: np.ndarray) -> List[str]:
+    return [str(v.item() if hasattr(v, "item") else v) for v in y]
+
+
+def _targets(y: Any) -> Tuple[Optional[List[str]], Optional[np.ndarray]]:
+    """Labels (a 1-D y) or positions (n x 2 or n x 3, m)."""
+    if y is None:
+        return None, None
+    a = np.asarray(y)
+    if a.ndim == 2 and a.dtype.kind in "fiu":
+        return None, _f64(a, 2, "y")
+    if a.ndim == 1:
+        return _labels(a), None
+    raise EtError(f"y: shape {a.shape}; give n labels or n x 2 positions (m)")
+
+
+class Model:
+    """A trained model: a table's (any sensor's features) or the board's (QDA or LDA from an et
+    dataset). Made by :func:`train` or :meth:`Model.load`."""
+
+    def __init__(self, native: "_native.Model") -> None:
+        self._native = native
+
+    @property
+    def kind(self) -> str:
+        """The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average."""
+        return self._native.kind
+
+    @property
+    def is_board(self) -> bool:
+        """Whether it is a board model (it classifies frames on the board: export_blob)."""
+        return self._native.is_board
+
+    @property
+    def info(self) -> Dict[str, Any]:
+        """The model file's content: the method, hyperparameters, the cross-validation's scores."""
+        return json.loads(self._native.file_json())
+
+    def _predicted(self, X: Any, v0: Any) -> Tuple[Any, Any, Any, Any]:
+        v0 = None if v0 is None else _f64(v0, 1, "v0")
+        return self._native.predict(_f64(X, 2, "X"), v0)
+
+    def predict(self, X: Any, v0: Any = None) -> np.ndarray:
+        """Predicts each row of ``X`` (n x p features; for a board model, n x K frames, V,
+        minus ``v0`` when it was trained referenced): a classifier's labels (a board model's
+        class indices), a regressor's positions n x 2 (m)."""
+        classes, names, positions, _ = self._predicted(X, v0)
+        if classes is None:
+            return positions
+        if names is None:
+            return classes
+        if all(n.lstrip("-").isdigit() for n in names):
+            lookup = np.array([int(n) for n in names] + [-1])
+        else:
+            lookup = np.array(list(names) + [""], dtype=object)
+        return lookup[classes]
+
+    def predict_positions(self, X: Any, v0: Any = None) -> Optional[np.ndarray]:
+        """Each row's position, n x 2 (m): a regressor's estimate, a classifier's class centre
+        (None when its classes have no positions)."""
+        return self._predicted(X, v0)[2]
+
+    def evaluate(self, X: Any, y: Any = None, groups: Optional[Sequence[Any]] = None) -> Dict[str, Any]:
+        """Scores the model as `et eval --json` does: on rows ``X`` and their labels or
+        positions ``y`` (m) for a table model (``mean_error_mm``, ``median_error_mm``,
+        ``p90_error_mm``, ``accuracy``, ...), or on an et dataset for a board model (pass it as
+        ``X``)."""
+        if isinstance(X, (str, os.PathLike)):
+            X = read_dataset(X)
+        if isinstance(X, Dataset):
+            return json.loads(self._native.evaluate_dataset(X))
+        labels, positions = _targets(y)
+        groups = None if groups is None else _labels(np.asarray(groups))
+        return json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
+
+    def save(self, path: PathLike) -> None:
+        """Writes et's model file (JSON): `et eval`, `et stream` and `et export` read it."""
+        self._native.save(os.fspath(path))
+
+    @classmethod
+    def load(cls, path: PathLike) -> "Model":
+        """Reads et's model file (a board model or a table's)."""
+        return cls(_native.Model.load(os.fspath(path)))
+
+    def export_blob(self, precision: str = "f16") -> bytes:
+        """The board's model blob (`et export`; `et upload` sends it): "f16" or "f32" tables."""
+        return self._native.export_blob(precision)
+
+    def __repr__(self) -> str:
+        return f"et_touch.Model({self.kind}{', board' if self.is_board else ''})"
+
+
+def train(
+    X: Any,
+    y: Any = None,
+    *,
+    kind: str = "auto",
+    groups: Optional[Sequence[Any]] = None,
+    folds: Optional[int] = None,
+    cv: str = "shuffled",
+    grid: Optional[Tuple[int, int]] = None,
+    per_group: bool = False,
+    seed: int = 1,
+    shrinkage: Optional[float] = None,
+    raw: bool = False,
+    keep: Optional[int] = None,
+) -> Model:
+    """Trains a model (et's Trainer; runs without the GIL).
+
+    On arrays: ``X`` n x p features of any sensor, ``y`` n labels (a classifier) or n x 2
+    positions in m (a regressor; n x 3 with z). ``kind``: "auto" (every method that fits the
+    targets, the best by cross-validation), "qda", "lda", "ridge", "kernel-ridge", "knn",
+    "gp" or "mlp". ``groups``: each row's session (cross-validation leaves one out);
+    ``per_group`` standardises each session by its own statistics; ``cv``: "shuffled" or
+    "blocks" (contiguous, for rows in time order); ``grid``: (rows, cols) classes from
+    positions; ``folds``: default 5.
+
+    On an et dataset (``X`` a :class:`Dataset` or the path of `et collect`'s .csv/.npz): QDA
+    ("auto" or "qda") or LDA for the board, ``shrinkage`` in [0, 1] (None: by
+    cross-validation), ``folds`` (default 10), ``raw`` (not minus the untouched frame),
+    ``keep`` (only the best features).
+    """
+    if isinstance(X, (str, os.PathLike)):
+        X = read_dataset(X)
+    if isinstance(X, Dataset):
+        if y is not None:
+            raise EtError("an et dataset carries its classes: train(dataset) without y")
+        return Model(_native.train_dataset(X, kind, shrinkage, folds, raw, keep))
+    if y is None:
+        raise EtError("give y: n labels, or n x 2 positions (m)")
+    if shrinkage is not None or raw or keep is not None:
+        raise EtError("shrinkage, raw and keep apply to et datasets; on arrays they are chosen by cross-validation")
+    labels, positions = _targets(y)
+    groups = None if groups is None else _labels(np.asarray(groups))
+    grid_pair = None if grid is None else (int(grid[0]), int(grid[1]))
+    return Model(
+        _native.train_table(
+            _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
+            bool(per_group), int(seed),
+        )
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Files
+
+
+def read_dataset(path: PathLike) -> Dataset:
+    """Reads an et dataset (`et collect`'s .csv or .npz): ``x`` (n x p, V), ``y`` (class of
+    each row), ``positions_m`` (n x 2), ``pressure_pa``, ``centres_m`` (C x 2), ``electrodes_m``,
+    ``visit``, ``feature_index``, ``untouched`` (each visit's untouched frame), ``config_json``."""
+    return Dataset.load(os.fspath(path))
+
+
+def read_recording(path: PathLike) -> Dict[str, Any]:
+    """Reads an et recording (`et sim`, `et record`; JSON Lines): a dict of ``header`` (its
+    protocol, K, columns, units), ``voltages`` (n x K, V; NaN where the board sent NaN or
+    infinity), ``seq``, ``t_us``, ``flags`` (n each), ``touches`` (per frame, the truth of a
+    simulated frame or None) and ``truncated_tail`` (a cut last line was skipped)."""
+    header, volts, seq, t_us, flags, touches, truncated = _native.read_recording(os.fspath(path))
+    return {
+        "header": json.loads(header), "voltages": volts, "seq": seq, "t_us": t_us,
+        "flags": flags, "touches": json.loads(touches), "truncated_tail": truncated,
+    }
+
+
+def read_frames(path: PathLike, k: int) -> np.ndarray:
+    """Reads any system's frames for a protocol of ``k`` values a frame, n x K (V): a CSV (one
+    frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a matrix of frames as
+    columns is read transposed), as `et reconstruct --frames` reads them."""
+    frames, _ = _native.read_frames(os.fspath(path), int(k))
+    return frames

@@ -1,0 +1,436 @@
+//! Imaging from Python: protocols as tables, and [`Reconstructor`] over
+//! [`et_recon::Reconstructor`].
+
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+use et_core::protocol::{Protocol, ProtocolKind};
+use et_core::schedule::{Row, Schedule};
+use et_core::sheet::Sheet;
+use et_recon::touches::ObjectSummary;
+use et_recon::{AlphaRule, MeshPlan, Method, Object, Reference, Spec};
+
+use crate::{json, refused, usage};
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(protocol_table, m)?)?;
+    m.add_function(wrap_pyfunction!(scene_parts, m)?)?;
+    m.add_class::<Reconstructor>()?;
+    Ok(())
+}
+
+/// A C-contiguous float64 array's values in place (the Python side makes it so).
+pub(crate) fn slice<'a>(a: &'a PyReadonlyArray1<'_, f64>, what: &str) -> PyResult<&'a [f64]> {
+    a.as_slice()
+        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))
+}
+
+/// The rows of a C-contiguous 2-D float64 array (rows x columns, row-major) in place.
+pub(crate) fn matrix<'a>(
+    a: &'a PyReadonlyArray2<'_, f64>,
+    what: &str,
+) -> PyResult<(&'a [f64], usize, usize)> {
+    let [rows, cols] = [a.shape()[0], a.shape()[1]];
+    let values = a
+        .as_slice()
+        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))?;
+    Ok((values, rows, cols))
+}
+
+/// `values` (rows x cols, row-major) as a 2-D array.
+pub(crate) fn array2<T: numpy::Element>(
+    py: Python<'_>,
+    values: Vec<T>,
+    rows: usize,
+    cols: usize,
+) -> PyResult<Bound<'_, PyArray2<T>>> {
+    PyArray1::from_vec(py, values).reshape([rows, cols])
+}
+
+/// The schedule of a built-in protocol, or of rows (source, sink, positive, negative,
+/// 0-based) and their currents (A).
+fn schedule(
+    electrodes: u16,
+    protocol: Option<&str>,
+    current_a: f64,
+    rows: Option<PyReadonlyArray2<'_, i64>>,
+    currents: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Schedule> {
+    if let Some(name) = protocol {
+        let kind = ProtocolKind::from_name(name).ok_or_else(|| {
+            usage(format!(
+                "protocol '{name}': adjacent, pseudo-polar, pp-pp, opposite, or a table of \
+                 rows (Protocol.from_rows)"
+            ))
+        })?;
+        let electrodes = u8::try_from(electrodes)
+            .map_err(|_| usage(format!("{electrodes} electrodes: at most 255")))?;
+        let p = Protocol::new(kind, electrodes).map_err(|e| refused(&e))?;
+        return Schedule::of_protocol(&p, current_a).map_err(|e| refused(&e));
+    }
+    let (Some(rows), Some(currents)) = (rows, currents) else {
+        return Err(usage(
+            "a protocol: a built-in one's name, or rows and currents",
+        ));
+    };
+    let (table, currents) = (rows.as_array(), currents.as_array());
+    if table.shape()[1] != 4 || currents.len() != table.shape()[0] {
+        return Err(usage(format!(
+            "protocol rows: {} x {} with {} currents; give K x 4 (source, sink, positive, \
+             negative) and K currents",
+            table.shape()[0],
+            table.shape()[1],
+            currents.len()
+        )));
+    }
+    let electrode = |row: usize, v: i64| {
+        u16::try_from(v).map_err(|_| usage(format!("row {row}: electrode {v} is not 0 to 65535")))
+    };
+    let rows = (0..table.shape()[0])
+        .map(|k| {
+            Ok(Row {
+                source: electrode(k, table[[k, 0]])?,
+                sink: electrode(k, table[[k, 1]])?,
+                positive: electrode(k, table[[k, 2]])?,
+                negative: electrode(k, table[[k, 3]])?,
+                current_a: currents[k],
+            })
+        })
+        .collect::<PyResult<Vec<Row>>>()?;
+    Schedule::new(electrodes, rows).map_err(|e| refused(&e))
+}
+
+/// A protocol as arrays: rows (K x 4) and currents (K, A).
+type Table<'py> = (Bound<'py, PyArray2<i64>>, Bound<'py, PyArray1<f64>>);
+
+/// A schedule's rows (K x 4: source, sink, positive, negative) and currents (K, A).
+fn schedule_table<'py>(py: Python<'py>, schedule: &Schedule) -> PyResult<Table<'py>> {
+    let rows = schedule.rows();
+    let table = rows
+        .iter()
+        .flat_map(|r| [r.source, r.sink, r.positive, r.negative].map(i64::from))
+        .collect();
+    let currents = rows.iter().map(|r| r.current_a).collect();
+    Ok((
+        array2(py, table, rows.len(), 4)?,
+        PyArray1::from_vec(py, currents),
+    ))
+}
+
+/// A built-in protocol's rows (K x 4) and currents (K, A).
+#[pyfunction]
+fn protocol_table<'py>(
+    py: Python<'py>,
+    name: &str,
+    electrodes: u16,
+    current_a: f64,
+) -> PyResult<Table<'py>> {
+    schedule_table(
+        py,
+        &schedule(electrodes, Some(name), current_a, None, None)?,
+    )
+}
+
+/// A scene file's sheet (JSON), its protocol's name (None for a protocol file), electrode
+/// count, current (A), and the schedule's rows and currents.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn scene_parts<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<(
+    String,
+    Option<String>,
+    u16,
+    f64,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyArray1<f64>>,
+)> {
+    let scene = et_sim::scene::Scene::load(&path).map_err(|e| refused(&e))?;
+    let schedule = scene.schedule().map_err(|e| refused(&e))?;
+    let (rows, currents) = schedule_table(py, &schedule)?;
+    Ok((
+        json(&scene.sheet.physical)?,
+        schedule.kind().map(|k| k.name().to_string()),
+        u16::from(scene.sheet.physical.electrodes.count),
+        scene.scan.current_ua * 1e-6,
+        rows,
+        currents,
+    ))
+}
+
+/// One frame's image as the Python side receives it: the summary (JSON) and the arrays.
+type ImageParts<'py> = (
+    String,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Option<Bound<'py, PyArray1<f64>>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+/// What `image` reports besides the arrays (the `et reconstruct --json` names).
+#[derive(serde::Serialize)]
+struct ImageSummary<'a> {
+    alpha: f64,
+    threshold: f64,
+    noise: et_recon::FrameNoise,
+    noise_figure: Option<f64>,
+    radius_m: Option<f64>,
+    objects: Vec<ObjectSummary>,
+    touches: Vec<ObjectSummary>,
+    regions: Vec<ObjectSummary>,
+    iterations: Option<usize>,
+    timings_s: &'a Timings,
+}
+
+/// What a frame took, s.
+#[derive(serde::Serialize)]
+struct Timings {
+    matrix: Option<f64>,
+    frame: f64,
+}
+
+/// A reconstruction set up once for a sheet, a protocol, a mesh and a method, that images
+/// every frame against a reference ([`et_recon::Reconstructor`]).
+#[pyclass(module = "et_touch._native")]
+pub(crate) struct Reconstructor {
+    inner: et_recon::Reconstructor,
+}
+
+#[pymethods]
+impl Reconstructor {
+    #[new]
+    #[pyo3(signature = (sheet_json, electrodes, protocol, current_a, rows, currents, triangles,
+        method, alpha, pixels, threshold, s, iterations, noise_figure, radius_m))]
+    fn new(
+        py: Python<'_>,
+        sheet_json: &str,
+        electrodes: u16,
+        protocol: Option<&str>,
+        current_a: f64,
+        rows: Option<PyReadonlyArray2<'_, i64>>,
+        currents: Option<PyReadonlyArray1<'_, f64>>,
+        triangles: usize,
+        method: &str,
+        alpha: &str,
+        pixels: usize,
+        threshold: Option<f64>,
+        s: f64,
+        iterations: usize,
+        noise_figure: Option<f64>,
+        radius_m: Option<f64>,
+    ) -> PyResult<Self> {
+        let sheet: Sheet = serde_json::from_str(sheet_json).map_err(|e| refused(&e))?;
+        sheet.validate().map_err(|e| refused(&e))?;
+        let schedule = schedule(electrodes, protocol, current_a, rows, currents)?;
+        let method = match method {
+            "gn" => Method::GaussNewton { s, iterations },
+            "greit" => Method::Greit { radius: radius_m },
+            other => return Err(usage(format!("method '{other}': gn or greit"))),
+        };
+        let noise_figure = noise_figure.unwrap_or(et_recon::greit::NOISE_FIGURE);
+        let alpha = AlphaRule::from_text(alpha, &method, noise_figure).map_err(|e| refused(&e))?;
+        let spec = Spec {
+            mesh: MeshPlan::About {
+                triangles,
+                refine: Vec::new(),
+            },
+            method,
+            alpha,
+            pixels,
+            threshold,
+            ..Spec::new(sheet, schedule)
+        };
+        let inner = py.detach(|| spec.set_up()).map_err(|e| refused(&e))?;
+        Ok(Self { inner })
+    }
+
+    /// Images `frame` (K values, V) against the untouched `reference` frames (n x K, V; their
+    /// mean is V_0, their spread the noise of dV): the summary (JSON), the pixels and their
+    /// noise (rows from the top, Delta sigma / sigma_0, NaN outside), the values on the
+    /// triangles (Delta sigma / sigma_0; None for GREIT) and dV.
+    fn image<'py>(
+        &mut self,
+        py: Python<'py>,
+        frame: PyReadonlyArray1<'_, f64>,
+        reference: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<ImageParts<'py>> {
+        // As et's frames are: single precision (the board's, and every reader's).
+        let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
+        let (values, n, k) = matrix(&reference, "v0")?;
+        let frames: Vec<Vec<f32>> = values
+            .chunks(k.max(1))
+            .take(n)
+            .map(|f| f.iter().map(|&v| v as f32).collect())
+            .collect();
+        let reference = Reference::from_frames(&frames).map_err(|e| refused(&e))?;
+        let inner = &mut self.inner;
+        let image = py
+            .detach(|| inner.image(&frame, &reference))
+            .map_err(|e| refused(&e))?;
+        let (grid, sigma0) = (self.inner.grid(), self.inner.imager().sigma0);
+        let found = |regions: &[et_recon::Region]| {
+            regions
+                .iter()
+                .map(|r| {
+                    let object = Object {
+                        sign: 1,
+                        region: r.clone(),
+                    };
+                    ObjectSummary::of(&object, sigma0)
+                })
+                .collect()
+        };
+        let summary = ImageSummary {
+            alpha: image.alpha,
+            threshold: image.threshold,
+            noise: image.noise,
+            noise_figure: image.greit.map(|g| g.0),
+            radius_m: image.greit.map(|g| g.1),
+            objects: (self.inner.objects(&image).iter())
+                .map(|o| ObjectSummary::of(o, sigma0))
+                .collect(),
+            touches: found(&image.touches),
+            regions: found(&image.regions),
+            iterations: image.iterations.as_ref().map(|i| i.completed),
+            timings_s: &Timings {
+                matrix: image.timings.matrix,
+                frame: image.timings.frame,
+            },
+        };
+        let (w, h) = (grid.width, grid.height);
+        let pixels = array2(py, grid.top_first(&image.pixels, 1.0 / sigma0), h, w)?;
+        let noise = array2(py, grid.top_first(&image.noise_sd, 1.0 / sigma0), h, w)?;
+        let mesh_values = image
+            .mesh_values
+            .as_ref()
+            .map(|v| PyArray1::from_vec(py, v.iter().map(|x| x / sigma0).collect()));
+        Ok((
+            json(&summary)?,
+            pixels,
+            noise,
+            mesh_values,
+            PyArray1::from_vec(py, image.dv),
+        ))
+    }
+
+    /// Fits the background (sheet resistance, contact) to the untouched `reference` frames
+    /// (n x K, V) and images about it from then on; the fit as JSON.
+    fn fit_background(
+        &mut self,
+        py: Python<'_>,
+        reference: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<String> {
+        let (values, n, k) = matrix(&reference, "v0")?;
+        let frames: Vec<Vec<f32>> = values
+            .chunks(k.max(1))
+            .take(n)
+            .map(|f| f.iter().map(|&v| v as f32).collect())
+            .collect();
+        let v0 = Reference::from_frames(&frames).map_err(|e| refused(&e))?.v0;
+        let inner = &mut self.inner;
+        let fit = py
+            .detach(|| inner.fit_background(&v0))
+            .map_err(|e| refused(&e))?;
+        json(&fit)
+    }
+
+    /// The frame (K values, V) the finite-element model gives for conductivity `sigma` (one
+    /// per triangle, S per square).
+    fn forward<'py>(
+        &self,
+        py: Python<'py>,
+        sigma: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let sigma = slice(&sigma, "sigma")?;
+        let t = self.inner.imager().triangles();
+        if sigma.len() != t {
+            return Err(usage(format!(
+                "sigma: {} values for {t} triangles",
+                sigma.len()
+            )));
+        }
+        let (imager, schedule) = (self.inner.imager(), self.inner.schedule());
+        let frame = py
+            .detach(|| imager.forward.frame(sigma, schedule))
+            .map_err(|e| refused(&e))?;
+        Ok(PyArray1::from_vec(py, frame))
+    }
+
+    /// The Jacobian of the frame at the background, K x T (V per S/sq).
+    fn jacobian<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let j = self.inner.jacobian().dense();
+        let (k, t) = j.shape();
+        // nalgebra is column-major: its transpose's storage is J row by row.
+        array2(py, j.transpose().as_slice().to_vec(), k, t)
+    }
+
+    /// The mesh's nodes, n x 2 (m).
+    #[getter]
+    fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let nodes = &self.inner.imager().forward.mesh().nodes;
+        array2(
+            py,
+            nodes.iter().flatten().copied().collect(),
+            nodes.len(),
+            2,
+        )
+    }
+
+    /// The mesh's triangles, T x 3 node indices (counter-clockwise).
+    #[getter]
+    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let tris = &self.inner.imager().forward.mesh().triangles;
+        let flat = tris.iter().flatten().map(|&i| i as i64).collect();
+        array2(py, flat, tris.len(), 3)
+    }
+
+    /// Each electrode's centre, L x 2 (m), in electrode order.
+    #[getter]
+    fn electrodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let sheet = self.inner.sheet();
+        let c = sheet.electrodes.centres(&sheet.shape);
+        array2(py, c.iter().flatten().copied().collect(), c.len(), 2)
+    }
+
+    /// The protocol's rows (K x 4) and currents (K, A).
+    #[getter]
+    fn protocol<'py>(&self, py: Python<'py>) -> PyResult<Table<'py>> {
+        schedule_table(py, self.inner.schedule())
+    }
+
+    /// The pixel grid: (rows, cols, x0_m, y0_m, pixel_m), the lower-left corner of the
+    /// lower-left pixel and a pixel's side.
+    #[getter]
+    fn grid(&self) -> (usize, usize, f64, f64, f64) {
+        let g = self.inner.grid();
+        (g.height, g.width, g.origin[0], g.origin[1], g.size)
+    }
+
+    /// The background conductivity sigma_0, S per square.
+    #[getter]
+    fn sigma0(&self) -> f64 {
+        self.inner.imager().sigma0
+    }
+
+    /// The sheet imaged (JSON; after `fit_background`, with the fitted values).
+    #[getter]
+    fn sheet_json(&self) -> PyResult<String> {
+        json(self.inner.sheet())
+    }
+
+    /// What the set-up took, s: (mesh, forward_jacobian, matrix).
+    #[getter]
+    fn set_up_s(&self) -> (f64, f64, f64) {
+        let t = self.inner.set_up_timings;
+        (t.mesh, t.forward_jacobian, t.matrix)
+    }
+
+    /// The median time of `repeats` warm applications of the last frame's reconstruction to
+    /// `dv` (s; `et reconstruct`'s `timings_s.frame`), None when it has none.
+    fn frame_median(&self, dv: PyReadonlyArray1<'_, f64>, repeats: usize) -> PyResult<Option<f64>> {
+        Ok(self.inner.frame_median(slice(&dv, "dv")?, repeats))
+    }
+}
