@@ -456,13 +456,18 @@ class Model:
         return json.loads(self._native.file_json())
 
     def _predicted(self, X: Any, v0: Any) -> Tuple[Any, Any, Any, Any]:
+        if isinstance(X, (str, os.PathLike)):
+            X = read_dataset(X)
+        if isinstance(X, Dataset):
+            return self._native.predict_dataset(X)
         v0 = None if v0 is None else _f64(v0, 1, "v0")
         return self._native.predict(_f64(X, 2, "X"), v0)
 
     def predict(self, X: Any, v0: Any = None) -> np.ndarray:
-        """Predicts each row of ``X`` (n x p features; for a board model, n x K frames, V,
-        minus ``v0`` when it was trained referenced): a classifier's labels (a board model's
-        class indices), a regressor's positions n x 2 (m)."""
+        """Predicts each row of ``X``: a table model's features (n x p); a board model's
+        frames (n x K, V; minus the untouched frame ``v0`` when it was trained referenced) or an
+        et dataset (its visits' own untouched frames). Returns a classifier's labels (a board
+        model's class indices) or a regressor's positions n x 2 (m)."""
         classes, names, positions, _ = self._predicted(X, v0)
         if classes is None:
             return positions

@@ -203,6 +203,29 @@ type Predicted<'py> = (
     Option<Bound<'py, PyArray1<f64>>>,
 );
 
+/// A board model's classes and their centres (n x 2, m).
+fn board_predictions<'py>(
+    py: Python<'py>,
+    file: &ModelFile,
+    classes: &[u16],
+) -> PyResult<Predicted<'py>> {
+    let xy = classes
+        .iter()
+        .map(|&c| file.centres_mm.get(usize::from(c)).copied())
+        .collect::<Option<Vec<[f64; 2]>>>()
+        .map(|p| {
+            array2(
+                py,
+                p.iter().flatten().map(|v| v * 1e-3).collect(),
+                p.len(),
+                2,
+            )
+        })
+        .transpose()?;
+    let c = PyArray1::from_vec(py, classes.iter().map(|&c| i64::from(c)).collect());
+    Ok((Some(c), None, xy, None))
+}
+
 #[pymethods]
 impl Model {
     /// Reads an et model file: a board model (`et train --data`) or a table's.
@@ -325,16 +348,25 @@ impl Model {
                 });
                 let fitted = f.fitted().map_err(|e| refused(&e))?;
                 let classes = cv::predict_rows(&fitted, &chosen).map_err(|e| refused(&e))?;
-                let xy = classes
-                    .iter()
-                    .map(|&c| f.centres_mm.get(usize::from(c)).copied())
-                    .collect::<Option<Vec<[f64; 2]>>>()
-                    .map(positions)
-                    .transpose()?;
-                let c = PyArray1::from_vec(py, classes.iter().map(|&c| i64::from(c)).collect());
-                Ok((Some(c), None, xy, None))
+                board_predictions(py, f, &classes)
             }
         }
+    }
+
+    /// A board model's class for each observation of an et dataset (its features as the
+    /// model takes them, minus each visit's untouched frame when the model is referenced),
+    /// and each class's centre (n x 2, m).
+    fn predict_dataset<'py>(&self, py: Python<'py>, dataset: &Dataset) -> PyResult<Predicted<'py>> {
+        let Inner::Board(file) = &self.inner else {
+            return Err(usage(
+                "a table model predicts arrays of features: model.predict(X)",
+            ));
+        };
+        let data = &dataset.inner;
+        let classes = py
+            .detach(|| pipeline::predict(file, data))
+            .map_err(|e| refused(&e))?;
+        board_predictions(py, file, &classes)
     }
 
     /// Scores a table model on rows (as `et eval --features --json`): JSON.

@@ -388,14 +388,14 @@ pub struct Tested {
     pub errors_from_truth_mm: Vec<f64>,
 }
 
-/// Tests `file`'s model on `data` (raw frames as collected: the model's own features are
-/// taken from it, referenced if the model is).
+/// `file`'s class for each observation of `data` (raw frames as collected: the model's own
+/// features are taken from it, referenced if the model is).
 ///
 /// # Errors
-/// [`UseError::Data`] when the dataset lacks the model's features or untouched frames,
-/// [`UseError::Model`] when the model's tables are not usable, [`UseError::Fit`] when the
-/// dataset does not match its classes.
-pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
+/// [`UseError::Config`] when they were scanned differently, [`UseError::Data`] when the
+/// dataset lacks the model's features or untouched frames, [`UseError::Model`] when the
+/// model's tables are not usable.
+pub fn predict(file: &ModelFile, data: &Dataset) -> Result<Vec<u16>, UseError> {
     let (m, d) = (file.config, data.config);
     if (m.electrodes, m.protocol, m.current_na, m.gain)
         != (d.electrodes, d.protocol, d.current_na, d.gain)
@@ -408,9 +408,17 @@ pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
     let columns = model_columns(file, data)?;
     let model = file.fitted().map_err(UseError::Model)?;
     let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
+    Ok(cv::predict_rows(&model, &x)?)
+}
+
+/// Tests `file`'s model on `data` ([`predict`]).
+///
+/// # Errors
+/// As [`predict`]; [`UseError::Fit`] when the dataset does not match its classes.
+pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
     // One prediction per observation serves the confusion, the bands and the errors.
-    let predicted = cv::predict_rows(&model, &x)?;
-    let confusion = cv::confusion_of(model.classes.len(), &data.y, &predicted)?;
+    let predicted = predict(file, data)?;
+    let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
     let electrodes_mm: Vec<[f64; 2]> = data
         .electrodes
         .iter()

@@ -1,0 +1,190 @@
+"""Imaging from Python against `et reconstruct` and `et forward` on the same input, and the
+finite-element model against physics it must obey."""
+
+import numpy as np
+import pytest
+
+import et_touch as et
+
+TRIANGLES = 2000
+
+
+def cli_image(et_cli, work, scene, recording, *extra):
+    """`et reconstruct`'s image (.npy) and JSON summary of the recording's last frame."""
+    npy = work / f"image{'-'.join(map(str, extra))}.npy"
+    summary = et_cli(
+        "reconstruct", "--scene", scene, "--frames", recording, "--triangles", TRIANGLES,
+        "--reference", 20, "--image-out", npy, "--out", work / f"image{len(extra)}.png",
+        "--json", "--force", *extra,
+    )
+    return np.load(npy), summary
+
+
+def python_image(scene, recording, fit, **options):
+    sheet, protocol = et.scene(scene)
+    r = et.Reconstructor(sheet, protocol, triangles=TRIANGLES, **options)
+    v = et.read_recording(recording)["voltages"]
+    if fit:
+        r.fit_background(v[:20])
+    return r, r.image(v[-1], v[:20])
+
+
+@pytest.mark.parametrize(
+    "cli_args, options, fit",
+    [
+        ((), {}, True),  # measured frames: et fits the background, as et reconstruct does
+        (("--background", "scene"), {}, False),
+        (("--method", "greit"), {"method": "greit"}, True),
+    ],
+)
+def test_the_image_is_et_reconstructs(et_cli, work, scene, recording, cli_args, options, fit):
+    pixels, summary = cli_image(et_cli, work, scene, recording, *cli_args)
+    r, image = python_image(scene, recording, fit, **options)
+    assert image.pixels.shape == pixels.shape == (64, 64)
+    assert np.array_equal(np.isnan(image.pixels), np.isnan(pixels))
+    peak = np.nanmax(np.abs(pixels))
+    assert peak > 0
+    # The same code on the same frames; the frame is applied in single precision (within
+    # 1e-5 of the peak, et's contract) and the two builds may sum in other orders.
+    np.testing.assert_allclose(image.pixels, pixels, rtol=0, atol=1e-6 * peak, equal_nan=True)
+    assert image.alpha == pytest.approx(summary["alpha"], rel=1e-6)
+    assert len(image.objects) == len(summary["objects"]) >= 1
+    for mine, theirs in zip(image.objects, summary["objects"]):
+        for key in ("x_m", "y_m", "area_m2", "peak"):
+            assert mine[key] == pytest.approx(theirs[key], rel=1e-5, abs=1e-9), key
+        assert mine["sign"] == theirs["sign"]
+    assert image.noise == summary["noise"]
+    grid = summary["image"]
+    left, right, bottom, top = image.extent
+    assert (left, bottom) == pytest.approx((grid["x0_m"], grid["y0_m"]))
+    assert right - left == pytest.approx(grid["cols"] * grid["pixel_m"])
+
+
+def test_the_press_is_found_where_it_was(scene, recording):
+    _, image = python_image(scene, recording, fit=True)
+    truth = et.read_recording(recording)["touches"][-1][0]
+    best = image.touches[0]
+    assert best["sign"] == 1
+    assert np.hypot(best["x_m"] - truth["x"], best["y_m"] - truth["y"]) < 0.01
+    # The values on the mesh are what the pixels are drawn from.
+    r, _ = python_image(scene, recording, fit=True)
+    assert image.values.shape == (len(r.triangles),)
+    assert np.nanmax(image.pixels) == pytest.approx(image.values.max(), rel=1e-6)
+
+
+def test_forward_is_et_forward_on_the_same_mesh(et_cli, work, scene):
+    # A scene without touches: `et forward` meshes it as the Reconstructor does.
+    untouched = work / "untouched.toml"
+    text = scene.read_text()
+    untouched.write_text(text[: text.index("[[touch]]")])
+    cli = et_cli("forward", "--scene", untouched, "--triangles", TRIANGLES, "--json")
+    sheet, protocol = et.scene(untouched)
+    r = et.Reconstructor(sheet, protocol, triangles=TRIANGLES)
+    assert len(r.triangles) == cli["triangles"]
+    v0 = r.forward(r.sigma0)
+    np.testing.assert_allclose(v0, cli["v0"], rtol=1e-12)
+    np.testing.assert_allclose(r.electrodes, cli["electrodes_m"], rtol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def disc():
+    sheet = et.disc(0.065, 16)
+    return et.Reconstructor(sheet, et.protocol("adjacent", 16, current_a=1e-3), triangles=1200)
+
+
+def test_voltages_scale_inversely_with_conductivity():
+    # Point electrodes: nothing but the sheet, so V is exactly proportional to 1 / sigma (a
+    # contact resistance would not scale with it).
+    sheet = et.disc(0.065, 16, model="point")
+    r = et.Reconstructor(sheet, et.protocol("adjacent", 16), triangles=1200)
+    v = r.forward(r.sigma0)
+    np.testing.assert_allclose(r.forward(2 * r.sigma0), v / 2, rtol=1e-10)
+
+
+def test_reciprocity_swapping_drive_and_measure_pairs(disc):
+    rows = np.array([[0, 1, 5, 6], [5, 6, 0, 1], [2, 9, 4, 12], [4, 12, 2, 9]])
+    p = et.Protocol.from_rows(rows, 16, current_a=1e-3)
+    r = et.Reconstructor(et.disc(0.065, 16), p, triangles=1200)
+    v = r.forward(r.sigma0)
+    assert v[0] == pytest.approx(v[1], rel=1e-9)
+    assert v[2] == pytest.approx(v[3], rel=1e-9)
+
+
+def test_the_jacobian_is_the_forward_models_derivative(disc):
+    j = disc.jacobian()
+    t = len(disc.triangles)
+    assert j.shape == (208, t)
+    sigma = np.full(t, disc.sigma0)
+    rng = np.random.default_rng(7)
+    direction = rng.standard_normal(t) * disc.sigma0
+    h = 1e-5
+    fd = (disc.forward(sigma + h * direction) - disc.forward(sigma - h * direction)) / (2 * h)
+    np.testing.assert_allclose(j @ direction, fd, rtol=1e-5, atol=1e-9 * np.abs(fd).max())
+
+
+def test_the_peers_protocol_convention_gives_the_same_values(disc):
+    # The Python peer's adjacent protocol: ex_mat (source, sink) and meas_mat (N, M, exc):
+    # value = u[N] - u[M], measurements on drive electrodes left out.
+    n = 16
+    ex = np.array([[i, (i + 1) % n] for i in range(n)])
+    meas = [
+        [(m + 1) % n, m, k]
+        for k, (a, b) in enumerate(ex)
+        for m in range(n)
+        if len({m, (m + 1) % n} & {a, b}) == 0
+    ]
+    p = et.Protocol.from_pyeit(ex, np.array(meas), electrodes=n)
+    assert p.K == 208
+    r = et.Reconstructor(et.disc(0.065, n), p, triangles=1200)
+    mine = dict(zip(map(tuple, p.rows), r.forward(r.sigma0)))
+    builtin = et.protocol("adjacent", n)
+    theirs = dict(zip(map(tuple, builtin.rows), disc.forward(disc.sigma0)))
+    for quad, value in mine.items():
+        s, k, pos, neg = quad
+        same = theirs.get(quad)
+        flipped = theirs.get((s, k, neg, pos))
+        assert same is not None or flipped is not None, quad
+        expected = same if same is not None else -flipped
+        assert value == pytest.approx(expected, rel=1e-9, abs=1e-15)
+
+
+def test_the_mesh_is_ready_for_tripcolor(disc):
+    nodes, tris = disc.nodes, disc.triangles
+    assert nodes.shape[1] == 2 and tris.shape[1] == 3
+    assert tris.min() == 0 and tris.max() == len(nodes) - 1
+    # Counter-clockwise: every triangle's signed area is positive.
+    a, b, c = (nodes[tris[:, i]] for i in range(3))
+    area = 0.5 * ((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    assert (area > 0).all()
+    assert area.sum() == pytest.approx(np.pi * 0.065**2, rel=0.01)
+
+
+def test_bad_input_is_refused_with_ets_message(disc):
+    v = disc.forward(disc.sigma0)
+    with pytest.raises(et.EtError, match="5 values for K = 208"):
+        disc.image(v[:5], v)
+    bad = v.copy()
+    bad[3] = np.nan
+    with pytest.raises(et.EtError, match="NaN|finite"):
+        disc.image(bad, v)
+    with pytest.raises(et.EtError, match="protocol 'zigzag'"):
+        et.protocol("zigzag", 16)
+    with pytest.raises(et.EtError, match="8 electrodes"):
+        et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 8))
+    with pytest.raises(et.EtError, match="radius"):
+        et.Reconstructor(et.disc(-1.0, 16), et.protocol("adjacent", 16))
+    with pytest.raises(et.EtError, match="row 0: source and sink"):
+        et.Reconstructor(et.disc(0.065, 16), et.Protocol.from_rows([[0, 0, 2, 3]], 16))
+    with pytest.raises(et.EtError, match="alpha 'much'"):
+        et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16), alpha="much")
+
+
+def test_arrays_of_any_layout_are_taken(disc):
+    v0 = disc.forward(disc.sigma0)
+    v = v0 * 1.001
+    reference = np.asfortranarray(np.vstack([v0, v0]))
+    a = disc.image(v, v0).pixels
+    b = disc.image(list(v), reference).pixels
+    c = disc.image(v.astype(np.float32), v0[None, :]).pixels
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, c)
