@@ -188,3 +188,28 @@ def test_arrays_of_any_layout_are_taken(disc):
     c = disc.image(v.astype(np.float32), v0[None, :]).pixels
     np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(a, c)
+
+
+def test_set_up_lets_other_python_threads_run():
+    # Set-up runs without the GIL: the main thread keeps running while another sets up.
+    import threading
+    import time
+
+    done = threading.Event()
+    took = []
+
+    def set_up():
+        clock = time.perf_counter()
+        et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16), triangles=20000)
+        took.append(time.perf_counter() - clock)
+        done.set()
+
+    worker = threading.Thread(target=set_up)
+    last, longest = time.perf_counter(), 0.0
+    worker.start()
+    while not done.is_set():
+        now = time.perf_counter()
+        longest, last = max(longest, now - last), now
+    worker.join()
+    # Held, the GIL would stall this loop for the whole set-up.
+    assert longest < 0.5 * took[0], (longest, took[0])

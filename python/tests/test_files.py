@@ -1,0 +1,82 @@
+"""et's files read into NumPy arrays, against the standard-library readers and numpy itself."""
+
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+
+import et_touch as et
+
+from conftest import ROOT, SCENES
+
+
+def stdlib_reader(name):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "python" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_recording_reads_as_the_standard_library_reads_it(recording):
+    r = et.read_recording(recording)
+    header, frames = stdlib_reader("et_recording").load(recording)
+    assert r["header"] == header
+    assert r["voltages"].shape == (len(frames), header["K"])
+    # et's frames are single precision, written as the shortest decimal that reads back.
+    stdlib = np.array([f["voltages"] for f in frames], dtype=np.float32)
+    np.testing.assert_array_equal(r["voltages"], stdlib.astype(np.float64))
+    np.testing.assert_array_equal(r["seq"], [f["seq"] for f in frames])
+    np.testing.assert_array_equal(r["t_us"], [f["t_us"] for f in frames])
+    assert r["touches"] == [f.get("touches") for f in frames]
+    assert r["truncated_tail"] is False
+
+
+def test_a_cut_recording_keeps_its_whole_frames(recording, work):
+    cut = work / "cut.jsonl"
+    text = recording.read_text()
+    cut.write_text(text[: len(text) - 50])
+    r = et.read_recording(cut)
+    assert r["truncated_tail"] is True
+    assert len(r["voltages"]) == len(text.splitlines()) - 2
+
+
+def test_a_dataset_reads_the_same_from_csv_and_npz(et_cli, work, dataset):
+    csv_path = work / "train.csv"
+    et_cli(
+        "collect", "--scene", SCENES / "square-13cm-16.toml", "--grid", "3x3", "--visits", 2,
+        "--scans", 3, "--subsections", 5, "--out", csv_path, "--force",
+    )
+    a, b = et.read_dataset(dataset), et.read_dataset(csv_path)
+    for name in ("x", "y", "positions_m", "centres_m", "visit", "feature_index", "untouched"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-12, err_msg=name)
+    assert json.loads(a.config_json) == json.loads(b.config_json)
+    # numpy reads et's .npz itself: the same observations.
+    with np.load(dataset) as raw:
+        np.testing.assert_array_equal(a.x, raw["x"])
+
+
+@pytest.mark.parametrize("layout", ["rows", "columns"])
+def test_frames_of_another_system_read_in_either_orientation(work, layout):
+    rng = np.random.default_rng(3)
+    frames = rng.normal(1.0, 0.1, size=(7, 208)).astype(np.float32).astype(np.float64)
+    path = work / f"frames-{layout}.npy"
+    np.save(path, frames if layout == "rows" else frames.T)
+    np.testing.assert_array_equal(et.read_frames(path, 208), frames)
+    csv = work / f"frames-{layout}.csv"
+    np.savetxt(csv, frames, delimiter=",", fmt="%.9g")
+    np.testing.assert_allclose(et.read_frames(csv, 208), frames, rtol=1e-7)
+
+
+def test_bad_files_are_named_in_the_error(work):
+    missing = work / "no-such.jsonl"
+    with pytest.raises(et.EtError, match="no-such.jsonl"):
+        et.read_recording(missing)
+    bad = work / "bad.npz"
+    bad.write_bytes(b"PK\x03\x04 not a zip")
+    with pytest.raises(et.EtError, match="bad.npz"):
+        et.read_dataset(bad)
+    wrong = work / "wrong.npy"
+    np.save(wrong, np.zeros((3, 5)))
+    with pytest.raises(et.EtError, match="wrong.npy"):
+        et.read_frames(wrong, 208)

@@ -1,0 +1,118 @@
+"""Learning from Python against `et train`, `et eval` and `et export` on the same input."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import et_touch as et
+
+
+def without_times(d):
+    """A summary without the run's own timings (they differ between any two runs)."""
+    return {k: v for k, v in d.items() if not k.endswith("_seconds")}
+
+
+def test_a_board_model_is_et_trains(et_cli, work, dataset):
+    cli_model = work / "cli-model.json"
+    trained = et_cli("train", "--data", dataset, "--out", cli_model, "--json", "--force")
+    model = et.train(et.read_dataset(dataset))
+    assert model.is_board and model.kind == "qda"
+    assert model.info["shrinkage"] == trained["shrinkage"]
+    # The same model file, number for number.
+    mine = work / "py-model.json"
+    model.save(mine)
+    assert json.loads(mine.read_text()) == json.loads(cli_model.read_text())
+    # Scored as et eval scores it.
+    cli_eval = et_cli("eval", "--model", cli_model, "--data", dataset, "--json")
+    assert model.evaluate(dataset) == cli_eval
+    assert model.evaluate(et.read_dataset(dataset))["accuracy"] > 0.8
+    # The board's blob, byte for byte.
+    for precision in ("f16", "f32"):
+        blob = work / f"cli-{precision}.etm"
+        et_cli("export", "--model", cli_model, "--precision", precision, "--out", blob, "--force")
+        assert model.export_blob(precision) == blob.read_bytes()
+
+
+def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
+    data = et.read_dataset(dataset)
+    model = et.train(data, kind="lda")
+    assert model.kind == "lda"
+    by_dataset = model.predict(data)
+    assert by_dataset.shape == (len(data.y),)
+    assert (by_dataset == data.y).mean() > 0.8
+    # One visit's frames minus its untouched frame, as the board classifies them.
+    visit = data.visit == 0
+    k = int(data.feature_index.max()) + 1
+    frames = np.full((int(visit.sum()), k), np.nan)
+    frames[:, data.feature_index] = data.x[visit]
+    v0 = np.zeros(k)
+    v0[data.feature_index] = data.untouched[0]
+    np.testing.assert_array_equal(model.predict(frames, v0=v0), by_dataset[visit])
+    positions = model.predict_positions(data)
+    np.testing.assert_allclose(positions, data.centres_m[by_dataset], atol=1e-12)
+    with pytest.raises(et.EtError, match="untouched frame"):
+        model.predict(frames)
+
+
+def write_table(path, X, header):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(X.tolist())
+
+
+@pytest.fixture(scope="module")
+def table(work, dataset):
+    """The dataset as any sensor's table: features.csv and targets.csv (positions in m)."""
+    data = et.read_dataset(dataset)
+    features, targets = work / "features.csv", work / "targets.csv"
+    write_table(features, data.x, [f"f{i}" for i in range(data.x.shape[1])])
+    write_table(targets, data.positions_m, ["x", "y"])
+    return data, features, targets
+
+
+@pytest.mark.parametrize("kind", ["ridge", "knn"])
+def test_a_regressor_predicts_as_et_eval_does(et_cli, work, table, kind):
+    data, features, targets = table
+    cli_model = work / f"cli-{kind}.json"
+    common = ("--features", features, "--targets", targets, "--unit", "m")
+    et_cli("train", *common, "--kind", kind, "--out", cli_model, "--json", "--force")
+    predictions = work / f"predictions-{kind}.csv"
+    cli_eval = et_cli(
+        "eval", "--model", cli_model, *common, "--predictions", predictions, "--json", "--force"
+    )
+    model = et.train(data.x, data.positions_m, kind=kind)
+    assert model.kind == kind
+    assert model.info["hyperparameters"] == json.loads(cli_model.read_text())["hyperparameters"]
+    predicted = model.predict(data.x)
+    written = np.loadtxt(predictions, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(predicted * 1e3, written[:, 1:3], atol=1e-4)
+    mine = model.evaluate(data.x, data.positions_m)
+    assert without_times(mine) == pytest.approx(without_times(cli_eval))
+    assert mine["mean_error_mm"] < mine["mean_predictor_error_mm"]
+    # A model file et wrote predicts the same from Python.
+    np.testing.assert_allclose(et.Model.load(cli_model).predict(data.x), predicted, atol=1e-12)
+
+
+def test_a_classifier_returns_the_labels_it_was_given(table):
+    data, _, _ = table
+    names = np.array(["cell-%d" % c for c in data.y])
+    model = et.train(data.x, names, kind="lda", groups=data.visit)
+    assert set(model.predict(data.x[:20])) <= set(names)
+    assert model.evaluate(data.x, names)["accuracy"] > 0.8
+    by_number = et.train(data.x, data.y, kind="lda")
+    assert by_number.predict(data.x[:5]).dtype.kind == "i"
+
+
+def test_bad_training_input_is_refused(table):
+    data, _, _ = table
+    with pytest.raises(et.EtError, match="positions"):
+        et.train(data.x, data.positions_m[:10])
+    with pytest.raises(et.EtError, match="kind 'forest'"):
+        et.train(data.x, data.positions_m, kind="forest")
+    with pytest.raises(et.EtError, match="board"):
+        et.train(data, kind="ridge")
+    with pytest.raises(et.EtError, match="only a board model"):
+        et.train(data.x, data.positions_m, kind="ridge").export_blob()
