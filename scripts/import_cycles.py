@@ -32,7 +32,7 @@ def expand(prefix, body):
         else: res.append(prefix+p)
     return res
 found = 0
-ROOTS = ["et-core/src", "sim/src", "host/recon/src", "host/learn/src", "host/src", "firmware/src"]
+ROOTS = ["et-core/src", "sim/src", "host/recon/src", "host/learn/src", "host/src", "firmware/src", "python/src"]
 for root in sys.argv[1:] or ROOTS:
     F=files_of(root); g={m:set() for m in F}
     for m,f in F.items():

@@ -50,3 +50,22 @@ fi
 
 step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
 ET_REQUIRE_QEMU=1 cargo test --workspace --features et-host/viewer
+
+step "Python module (python/): built into its own virtual environment, then pytest"
+venv=target/python-venv
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv" 2>/dev/null || {
+    # Debian's python3 keeps venv in its own package.
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null \
+      || { $sudo apt-get update >/dev/null && $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null; }
+    python3 -m venv "$venv"
+  }
+fi
+# maturin, numpy and pytest from the package index, when missing.
+"$venv/bin/python" -c "import numpy, pytest" 2>/dev/null && [ -x "$venv/bin/maturin" ] \
+  || "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest
+# `maturin develop` is `pip install ./python` without the wheel's release build (the tests'
+# dev profile shares the workspace's compiled crates).
+VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" develop -q -m python/Cargo.toml
+ET_BIN="$PWD/target/debug/et" "$venv/bin/python" -m pytest -q python/tests

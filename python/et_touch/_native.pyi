@@ -1,0 +1,154 @@
+"""Type stubs of et_touch's native part (python/src). Use the API of `et_touch` itself; these
+functions take C-contiguous float64 arrays (et_touch makes them so) and return summaries as
+JSON text, with the `et` command's field names. Shapes: K values a frame, T triangles, L
+electrodes, n rows; units SI (m, V, A, S per square)."""
+
+from typing import List, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+F64 = npt.NDArray[np.float64]
+I64 = npt.NDArray[np.int64]
+
+class EtError(ValueError):
+    """et refused an input: the message names the file, field or value and why."""
+
+def protocol_table(name: str, electrodes: int, current_a: float) -> Tuple[I64, F64]:
+    """A built-in protocol's rows (K x 4: source, sink, positive, negative) and currents (K, A)."""
+
+def scene_parts(path: str) -> Tuple[str, Optional[str], int, float, I64, F64]:
+    """A scene file's sheet (JSON), protocol name (None for a protocol file), electrode count,
+    current (A), rows (K x 4) and currents (K, A)."""
+
+class Reconstructor:
+    def __init__(
+        self,
+        sheet_json: str,
+        electrodes: int,
+        protocol: Optional[str],
+        current_a: float,
+        rows: Optional[I64],
+        currents: Optional[F64],
+        triangles: int,
+        method: str,
+        alpha: str,
+        pixels: int,
+        threshold: Optional[float],
+        s: float,
+        iterations: int,
+        noise_figure: Optional[float],
+        radius_m: Optional[float],
+    ) -> None: ...
+    def image(self, frame: F64, reference: F64) -> Tuple[str, F64, F64, Optional[F64], F64]:
+        """frame (K, V) against reference frames (n x K, V): the summary (JSON), pixels and
+        their noise (rows x cols, Delta sigma / sigma_0, top row first, NaN outside), the
+        values on the triangles (T; None for GREIT) and dV (K, V)."""
+    def fit_background(self, reference: F64) -> str: ...
+    def forward(self, sigma: F64) -> F64:
+        """The frame (K, V) of conductivity sigma (T, S per square)."""
+    def jacobian(self) -> F64:
+        """K x T, V per S/sq."""
+    @property
+    def nodes(self) -> F64:
+        """n x 2, m."""
+    @property
+    def triangles(self) -> I64:
+        """T x 3 node indices, counter-clockwise."""
+    @property
+    def electrodes(self) -> F64:
+        """L x 2, m."""
+    @property
+    def protocol(self) -> Tuple[I64, F64]: ...
+    @property
+    def grid(self) -> Tuple[int, int, float, float, float]:
+        """(rows, cols, x0_m, y0_m, pixel_m)."""
+    @property
+    def sigma0(self) -> float: ...
+    @property
+    def sheet_json(self) -> str: ...
+    @property
+    def set_up_s(self) -> Tuple[float, float, float]:
+        """(mesh, forward_jacobian, matrix), s."""
+    def frame_median(self, dv: F64, repeats: int) -> Optional[float]: ...
+
+class Dataset:
+    """An et dataset (`et collect`'s .csv or .npz)."""
+
+    @staticmethod
+    def load(path: str) -> "Dataset": ...
+    @property
+    def x(self) -> F64:
+        """n x p observations, V."""
+    @property
+    def y(self) -> I64:
+        """n classes."""
+    @property
+    def positions_m(self) -> F64:
+        """n x 2, m."""
+    @property
+    def pressure_pa(self) -> F64: ...
+    @property
+    def centres_m(self) -> F64:
+        """C x 2, m."""
+    @property
+    def electrodes_m(self) -> F64: ...
+    @property
+    def visit(self) -> I64: ...
+    @property
+    def feature_index(self) -> I64:
+        """p: each feature's index in the frame."""
+    @property
+    def untouched(self) -> F64:
+        """T x p: each visit's untouched frame, V."""
+    @property
+    def config_json(self) -> str: ...
+
+class Model:
+    @staticmethod
+    def load(path: str) -> "Model": ...
+    def save(self, path: str) -> None: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def is_board(self) -> bool: ...
+    def file_json(self) -> str: ...
+    def predict(
+        self, x: F64, v0: Optional[F64] = None
+    ) -> Tuple[Optional[I64], Optional[List[str]], Optional[F64], Optional[F64]]:
+        """(class indices, class names, positions n x 2 in m, third target)."""
+    def predict_dataset(
+        self, dataset: Dataset
+    ) -> Tuple[Optional[I64], Optional[List[str]], Optional[F64], Optional[F64]]: ...
+    def evaluate_table(
+        self,
+        x: F64,
+        labels: Optional[List[str]],
+        positions_m: Optional[F64],
+        groups: Optional[List[str]],
+    ) -> str: ...
+    def evaluate_dataset(self, dataset: Dataset) -> str: ...
+    def export_blob(self, precision: str) -> bytes: ...
+
+def train_table(
+    x: F64,
+    labels: Optional[List[str]],
+    positions_m: Optional[F64],
+    groups: Optional[List[str]],
+    kind: str,
+    folds: Optional[int],
+    cv: str,
+    grid: Optional[Tuple[int, int]],
+    per_group: bool,
+    seed: int,
+) -> Model: ...
+def train_dataset(
+    dataset: Dataset,
+    kind: str,
+    shrinkage: Optional[float],
+    folds: Optional[int],
+    raw: bool,
+    keep: Optional[int],
+) -> Model: ...
+def read_recording(path: str) -> Tuple[str, F64, I64, I64, I64, str, bool]: ...
+def read_frames(path: str, k: int) -> Tuple[F64, str]: ...
