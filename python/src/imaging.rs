@@ -161,6 +161,18 @@ fn scene_parts<'py>(
     ))
 }
 
+/// V_0 and the noise of dV from untouched frames (n x K, V), taken in single precision as
+/// et's frames are.
+fn reference_of(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<Reference> {
+    let (values, n, k) = matrix(frames, "v0")?;
+    let frames: Vec<Vec<f32>> = values
+        .chunks(k.max(1))
+        .take(n)
+        .map(|f| f.iter().map(|&v| v as f32).collect())
+        .collect();
+    Reference::from_frames(&frames).map_err(|e| refused(&e))
+}
+
 /// One frame's image as the Python side receives it: the summary (JSON) and the arrays.
 type ImageParts<'py> = (
     String,
@@ -259,13 +271,7 @@ impl Reconstructor {
     ) -> PyResult<ImageParts<'py>> {
         // As et's frames are: single precision (the board's, and every reader's).
         let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
-        let (values, n, k) = matrix(&reference, "v0")?;
-        let frames: Vec<Vec<f32>> = values
-            .chunks(k.max(1))
-            .take(n)
-            .map(|f| f.iter().map(|&v| v as f32).collect())
-            .collect();
-        let reference = Reference::from_frames(&frames).map_err(|e| refused(&e))?;
+        let reference = reference_of(&reference)?;
         let inner = &mut self.inner;
         let image = py
             .detach(|| inner.image(&frame, &reference))
@@ -323,13 +329,7 @@ impl Reconstructor {
         py: Python<'_>,
         reference: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<String> {
-        let (values, n, k) = matrix(&reference, "v0")?;
-        let frames: Vec<Vec<f32>> = values
-            .chunks(k.max(1))
-            .take(n)
-            .map(|f| f.iter().map(|&v| v as f32).collect())
-            .collect();
-        let v0 = Reference::from_frames(&frames).map_err(|e| refused(&e))?.v0;
+        let v0 = reference_of(&reference)?.v0;
         let inner = &mut self.inner;
         let fit = py
             .detach(|| inner.fit_background(&v0))
