@@ -10,7 +10,7 @@ use et_core::protocol::{Protocol, ProtocolKind};
 use et_core::schedule::{Row, Schedule};
 use et_core::sheet::Sheet;
 use et_recon::touches::ObjectSummary;
-use et_recon::{AlphaRule, MeshPlan, Method, Object, Reference, Spec};
+use et_recon::{AlphaRule, MeshPlan, Method, Reference, Spec};
 
 use crate::{json, refused, usage};
 
@@ -278,15 +278,8 @@ impl Reconstructor {
             .map_err(|e| refused(&e))?;
         let (grid, sigma0) = (self.inner.grid(), self.inner.imager().sigma0);
         let found = |regions: &[et_recon::Region]| {
-            regions
-                .iter()
-                .map(|r| {
-                    let object = Object {
-                        sign: 1,
-                        region: r.clone(),
-                    };
-                    ObjectSummary::of(&object, sigma0)
-                })
+            (regions.iter())
+                .map(|r| ObjectSummary::of_region(r, 1, sigma0))
                 .collect()
         };
         let summary = ImageSummary {

@@ -290,13 +290,14 @@ impl Model {
         x: PyReadonlyArray2<'_, f64>,
         v0: Option<numpy::PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Predicted<'py>> {
-        let x = features(&x, "X")?;
+        let (frames, _, k) = matrix(&x, "X")?;
         let positions = |p: Vec<[f64; 2]>| {
             let n = p.len();
             array2(py, p.iter().flatten().map(|v| v * 1e-3).collect(), n, 2)
         };
         match &self.inner {
             Inner::Table(t) => {
+                let x = features(&x, "X")?;
                 let predicted = py.detach(|| t.predict(&x)).map_err(|e| refused(&e))?;
                 let classes = t.classes.as_ref().map(|_| {
                     let c = predicted.iter().map(|p| p.class.map_or(-1, i64::from));
@@ -320,32 +321,33 @@ impl Model {
                 Ok((classes, names, xy, third))
             }
             Inner::Board(f) => {
-                let columns: Vec<usize> = f.feature_index.iter().map(|&i| usize::from(i)).collect();
-                if let Some(&bad) = columns.iter().find(|&&c| c >= x.ncols()) {
-                    return Err(usage(format!(
-                        "X: {} values a frame; the model reads value {bad} (it was trained on \
-                         frames of {} electrodes)",
-                        x.ncols(),
-                        f.config.electrodes
-                    )));
-                }
-                let reference = match (&v0, f.referenced) {
-                    (Some(v0), _) => Some(crate::imaging::slice(v0, "v0")?.to_vec()),
+                let v0 = match (&v0, f.referenced) {
+                    (Some(v0), _) => crate::imaging::slice(v0, "v0")?,
                     (None, true) => {
                         return Err(usage(
                             "this model classifies each frame minus the untouched frame: give \
                              v0 (the untouched frame, K values)",
                         ));
                     }
-                    (None, false) => None,
+                    (None, false) => &[],
                 };
-                if reference.as_ref().is_some_and(|r| r.len() != x.ncols()) {
-                    return Err(usage("v0: one value per column of X"));
+                // Each frame's features as the live pipeline takes them (ModelFile::features).
+                let mut chosen =
+                    Vec::with_capacity(frames.len() / k.max(1) * f.feature_index.len());
+                for frame in frames.chunks(k.max(1)) {
+                    chosen.extend(f.features(frame, v0).ok_or_else(|| {
+                        usage(format!(
+                            "X: frames of {k} values, v0 of {}: the model reads value {} of \
+                             frames of {} electrodes ({})",
+                            v0.len(),
+                            f.feature_index.iter().max().copied().unwrap_or(0),
+                            f.config.electrodes,
+                            f.config.protocol
+                        ))
+                    })?);
                 }
-                let chosen = DMatrix::from_fn(x.nrows(), columns.len(), |r, c| {
-                    let v = x[(r, columns[c])];
-                    v - reference.as_ref().map_or(0.0, |v0| v0[columns[c]])
-                });
+                let p = f.feature_index.len();
+                let chosen = DMatrix::from_row_slice(chosen.len() / p.max(1), p, &chosen);
                 let fitted = f.fitted().map_err(|e| refused(&e))?;
                 let classes = cv::predict_rows(&fitted, &chosen).map_err(|e| refused(&e))?;
                 board_predictions(py, f, &classes)

@@ -114,6 +114,21 @@ impl ModelFile {
         )
     }
 
+    /// The features this model classifies a frame by: the frame's values `v` (K values, V) at
+    /// `feature_index`, minus the untouched frame `v0` there when the model is referenced (an
+    /// unreferenced model reads no `v0`). None when either frame is too short.
+    #[must_use]
+    pub fn features<T: Copy + Into<f64>>(&self, v: &[T], v0: &[f64]) -> Option<Vec<f64>> {
+        self.feature_index
+            .iter()
+            .map(|&i| {
+                let i = usize::from(i);
+                let m: f64 = (*v.get(i)?).into();
+                Some(if self.referenced { m - v0.get(i)? } else { m })
+            })
+            .collect()
+    }
+
     /// The et-core blob at `precision`.
     ///
     /// # Errors

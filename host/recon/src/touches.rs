@@ -271,13 +271,19 @@ impl ObjectSummary {
     /// `object` on a background of conductivity `sigma0` (S per square).
     #[must_use]
     pub fn of(object: &Object, sigma0: f64) -> Self {
-        let r = &object.region;
+        Self::of_region(&object.region, object.sign, sigma0)
+    }
+
+    /// A region of `sign` (a touch or region of an image is +1) on a background of
+    /// conductivity `sigma0` (S per square).
+    #[must_use]
+    pub fn of_region(r: &Region, sign: i8, sigma0: f64) -> Self {
         Self {
             x_m: r.centroid[0],
             y_m: r.centroid[1],
-            sign: object.sign,
+            sign,
             area_m2: r.area,
-            peak: f64::from(object.sign) * r.peak / sigma0,
+            peak: f64::from(sign) * r.peak / sigma0,
             z: r.z,
         }
     }

@@ -78,20 +78,7 @@ impl Classifier {
         if *config != self.file.config {
             return None;
         }
-        let x: Vec<f64> = self
-            .file
-            .feature_index
-            .iter()
-            .map(|&i| {
-                let i = usize::from(i);
-                let m = f64::from(*v.get(i)?);
-                Some(if self.file.referenced {
-                    m - v0.get(i)?
-                } else {
-                    m
-                })
-            })
-            .collect::<Option<_>>()?;
+        let x = self.file.features(v, v0)?;
         let d = self.fitted.discriminants(&x);
         let top = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
