@@ -362,6 +362,8 @@ impl DataSpace {
         Ok(OneStep {
             gp: self.gp.clone(),
             xt,
+            inverse,
+            combination: self.combination.clone(),
             alpha,
             s: self.s,
         })

@@ -12,6 +12,11 @@ pub struct OneStep {
     pub(crate) gp: Mat<f64>,
     /// X^T = M^T (A + lambda I)^-1, r x K.
     pub(crate) xt: Mat<f64>,
+    /// (N H + lambda I)^-1 on N's range, r x r: X^T = `inverse` M^T.
+    pub(crate) inverse: Mat<f64>,
+    /// M's rows: frame value k is the sum of c z_p over `combination[k]`'s (p, c), z the r
+    /// transfer impedances.
+    pub(crate) combination: Vec<Vec<(usize, f64)>>,
     /// The alpha it was built with.
     pub alpha: f64,
     /// The NOSER exponent s.

@@ -1,66 +1,132 @@
-//! An f32 matrix packed for matrix-vector products at memory speed.
+//! A matrix packed for matrix-vector products at memory speed.
 //!
 //! A frame's image is a matrix-vector product y = A x whose matrix (tens of thousands of rows,
 //! a hundred or two columns) is read from cache or memory once per frame, so its speed is the
-//! speed of reading A. [`Panels`] stores A in panels of W rows (W = 8 vector registers of f32
-//! lanes: 64 with AVX2), each panel's columns one after another, so the product streams the
-//! matrix in one sequential pass: for every column j, eight vector fused multiply-adds of the
-//! panel's W values by x_j into eight accumulators held in registers. The instruction set is
-//! chosen when the program runs (pulp's dispatch: AVX2 and FMA where the processor has them,
-//! else SSE2 or plain arithmetic), never fixed at build time.
+//! speed of reading A. [`Panels`] stores A in 16-bit fixed point, each row scaled by its own
+//! factor (A_ij = s_i n_ij, n_ij an i16, |n_ij| <= 32 767 with the row's largest entry at 32
+//! 767): half the bytes of f32, and each entry within 1.5e-5 of its row's largest (f16 would
+//! keep 11 bits: 4.9e-4). The rows come in panels of W = 64 (8 vector registers of 8 f32
+//! lanes), each panel's columns one after another, so the product streams the matrix in one
+//! sequential pass: for every column j, the panel's 64 integers widened to f32 and multiplied
+//! by x_j into eight accumulators held in registers, the row scales applied once at the end.
+//! With AVX2 (found when the program runs, through pulp's safe wrappers: no `unsafe` here) a
+//! column is eight sign extensions, eight conversions and eight fused multiply-adds; other
+//! processors run the same sums in plain arithmetic.
 
-use pulp::{Arch, Simd, WithSimd};
+#[cfg(target_arch = "x86_64")]
+use pulp::{Simd, WithSimd, x86::V3};
 
 /// Vector registers a panel fills: enough independent accumulators to hide the latency of a
 /// fused multiply-add (4 cycles, 2 a cycle on current x86 cores).
 const REGISTERS: usize = 8;
 
-/// The widest panel any instruction set here packs: 8 registers of 16 f32 lanes.
-const MAX_WIDTH: usize = REGISTERS * 16;
+/// f32 lanes of one AVX2 register.
+const LANES: usize = 8;
 
-/// An f32 matrix (rows x cols) in panels of `width` rows; the last panel is padded with zeros.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Panels {
-    rows: usize,
-    cols: usize,
-    /// Rows per panel, REGISTERS x the f32 lanes of this processor's vectors.
-    width: usize,
-    /// Panel p, column j, row i of the panel at `p * width * cols + j * width + i`.
-    data: Vec<f32>,
+/// Rows per panel.
+const WIDTH: usize = REGISTERS * LANES;
+
+/// What a panel stores per entry: f32 itself, or i16 in fixed point per row.
+pub trait Stored: Copy + Default + pulp::bytemuck::Pod + std::fmt::Debug {
+    /// s_i for a row whose largest magnitude is `largest` (NaN for a row that is not finite).
+    fn scale(largest: f64) -> f32;
+    /// The stored value of `v` in a row of scale `s`.
+    fn round(v: f64, s: f32) -> Self;
+    /// The stored value as f32 (before the row's scale).
+    fn widen(self) -> f32;
+    /// Eight stored values as f32 lanes (before the row's scale).
+    #[cfg(target_arch = "x86_64")]
+    fn widen8(v3: V3, n: [Self; LANES]) -> pulp::f32x8;
 }
 
-/// This processor's f32 lanes per vector register.
-struct Lanes;
-
-impl WithSimd for Lanes {
-    type Output = usize;
+impl Stored for f32 {
+    fn scale(_: f64) -> f32 {
+        1.0
+    }
+    fn round(v: f64, _: f32) -> Self {
+        v as f32
+    }
     #[inline(always)]
-    fn with_simd<S: Simd>(self, _simd: S) -> usize {
-        S::F32_LANES
+    fn widen(self) -> f32 {
+        self
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn widen8(_: V3, n: [Self; LANES]) -> pulp::f32x8 {
+        pulp::cast(n)
     }
 }
 
-impl Panels {
-    /// The `rows` x `cols` matrix whose entry (i, j) is `entry(i, j)`.
-    pub fn from_fn(rows: usize, cols: usize, mut entry: impl FnMut(usize, usize) -> f32) -> Self {
-        let width = (REGISTERS * Arch::new().dispatch(Lanes)).min(MAX_WIDTH);
-        let panels = rows.div_ceil(width);
-        let mut data = vec![0.0f32; panels * width * cols];
-        for (p, panel) in data.chunks_exact_mut((width * cols).max(1)).enumerate() {
-            for (j, column) in panel.chunks_exact_mut(width).enumerate() {
-                for (i, v) in column.iter_mut().enumerate() {
-                    let row = p * width + i;
-                    if row < rows {
-                        *v = entry(row, j);
-                    }
-                }
+/// The largest integer a row's entries are scaled to.
+const FULL_SCALE: f64 = i16::MAX as f64;
+
+impl Stored for i16 {
+    fn scale(largest: f64) -> f32 {
+        (largest / FULL_SCALE) as f32
+    }
+    fn round(v: f64, s: f32) -> Self {
+        // |v / s| <= 32 767 up to s's rounding to f32: clamped, never wrapped.
+        let n = (v / f64::from(s)).round().clamp(-FULL_SCALE, FULL_SCALE);
+        if n.is_finite() { n as i16 } else { 0 }
+    }
+    #[inline(always)]
+    fn widen(self) -> f32 {
+        f32::from(self)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn widen8(v3: V3, n: [Self; LANES]) -> pulp::f32x8 {
+        v3.convert_i32x8_to_f32x8(v3.convert_i16x8_to_i32x8(pulp::cast(n)))
+    }
+}
+
+/// A matrix (rows x cols) of entries stored as `T` with a scale per row, in panels of
+/// [`WIDTH`] rows; the last panel is padded with zero rows.
+#[derive(Clone, Debug)]
+pub struct Panels<T: Stored = f32> {
+    rows: usize,
+    cols: usize,
+    /// Panel p, column j, row i of the panel at `p * WIDTH * cols + j * WIDTH + i`.
+    data: Vec<T>,
+    /// s_i, one per row (padded to whole panels with zeros): A_ij = s_i n_ij.
+    scale: Vec<f32>,
+    /// AVX2 and FMA, when this processor has them.
+    #[cfg(target_arch = "x86_64")]
+    v3: Option<V3>,
+}
+
+impl<T: Stored> Panels<T> {
+    /// The `rows` x `cols` matrix whose entry (i, j) is `entry(i, j)`, rounded to each row's
+    /// fixed point. A row holding a value that is not finite gets a NaN scale (its products
+    /// are NaN, as in floating point).
+    pub fn from_fn(rows: usize, cols: usize, mut entry: impl FnMut(usize, usize) -> f64) -> Self {
+        let panels = rows.div_ceil(WIDTH);
+        let mut data = vec![T::default(); panels * WIDTH * cols];
+        let mut scale = vec![0.0f32; panels * WIDTH];
+        let mut row = vec![0.0f64; cols];
+        for i in 0..rows {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = entry(i, j);
+            }
+            let largest = row.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let finite = row.iter().all(|v| v.is_finite());
+            let s = if finite { T::scale(largest) } else { f32::NAN };
+            scale[i] = s;
+            if s == 0.0 {
+                continue;
+            }
+            let (p, r) = (i / WIDTH, i % WIDTH);
+            for (j, v) in row.iter().enumerate() {
+                data[p * WIDTH * cols + j * WIDTH + r] = T::round(*v, s);
             }
         }
         Self {
             rows,
             cols,
-            width,
             data,
+            scale,
+            #[cfg(target_arch = "x86_64")]
+            v3: V3::try_new(),
         }
     }
 
@@ -76,17 +142,17 @@ impl Panels {
         self.cols
     }
 
-    /// Entry (i, j).
+    /// Entry (i, j) as stored: s_i n_ij.
     #[must_use]
     pub fn get(&self, i: usize, j: usize) -> f32 {
-        let (p, r) = (i / self.width, i % self.width);
-        self.data[p * self.width * self.cols + j * self.width + r]
+        let (p, r) = (i / WIDTH, i % WIDTH);
+        self.scale[i] * self.data[p * WIDTH * self.cols + j * WIDTH + r].widen()
     }
 
-    /// Bytes the product reads (the padded matrix).
+    /// Bytes the product reads (the padded matrix and its row scales).
     #[must_use]
     pub fn bytes(&self) -> usize {
-        self.data.len() * size_of::<f32>()
+        self.data.len() * size_of::<T>() + self.scale.len() * size_of::<f32>()
     }
 
     /// `out` = A `x`: `x` of `cols` values, `out` of `rows`.
@@ -95,51 +161,80 @@ impl Panels {
     /// When the lengths do not match (the callers check them against their own sizes first).
     pub fn apply(&self, x: &[f32], out: &mut [f32]) {
         assert!(x.len() == self.cols && out.len() == self.rows);
-        Arch::new().dispatch(Product { a: self, x, out });
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = self.v3 {
+            return Simd::vectorize(
+                v3,
+                Product {
+                    v3,
+                    a: self,
+                    x,
+                    out,
+                },
+            );
+        }
+        self.apply_plain(x, out);
+    }
+
+    /// The same product in plain arithmetic (processors without AVX2, and the tests).
+    fn apply_plain(&self, x: &[f32], out: &mut [f32]) {
+        if self.cols == 0 {
+            out.fill(0.0);
+            return;
+        }
+        let panels = self.data.chunks_exact(WIDTH * self.cols);
+        for ((panel, out), scale) in panels
+            .zip(out.chunks_mut(WIDTH))
+            .zip(self.scale.chunks(WIDTH))
+        {
+            let mut sum = [0.0f32; WIDTH];
+            for (column, &xj) in panel.chunks_exact(WIDTH).zip(x) {
+                for (s, &n) in sum.iter_mut().zip(column) {
+                    *s = n.widen().mul_add(xj, *s);
+                }
+            }
+            for ((o, s), scale) in out.iter_mut().zip(sum).zip(scale) {
+                *o = s * scale;
+            }
+        }
     }
 }
 
-/// One product A x into `out`, run with the processor's vectors.
-struct Product<'a> {
-    a: &'a Panels,
+/// One product A x into `out` with AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+struct Product<'a, T: Stored> {
+    v3: V3,
+    a: &'a Panels<T>,
     x: &'a [f32],
     out: &'a mut [f32],
 }
 
-impl WithSimd for Product<'_> {
+#[cfg(target_arch = "x86_64")]
+impl<T: Stored> WithSimd for Product<'_, T> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) {
-        let Product { a, x, out } = self;
-        let w = a.width;
+    fn with_simd<S: Simd>(self, _: S) {
+        let Product { v3, a, x, out } = self;
         if a.cols == 0 {
             out.fill(0.0);
             return;
         }
-        for (panel, out) in a.data.chunks_exact(w * a.cols).zip(out.chunks_mut(w)) {
-            let mut sum = [0.0f32; MAX_WIDTH];
-            if w == REGISTERS * S::F32_LANES {
-                let mut acc = [simd.splat_f32s(0.0); REGISTERS];
-                for (column, &xj) in panel.chunks_exact(w).zip(x) {
-                    let (v, _) = S::as_simd_f32s(column);
-                    let Ok(v) = <&[S::f32s; REGISTERS]>::try_from(v) else {
-                        unreachable!("a panel column is REGISTERS vectors")
-                    };
-                    let xj = simd.splat_f32s(xj);
-                    for (acc, v) in acc.iter_mut().zip(v) {
-                        *acc = simd.mul_add_f32s(*v, xj, *acc);
-                    }
+        let panels = a.data.chunks_exact(WIDTH * a.cols);
+        for ((panel, out), scale) in panels.zip(out.chunks_mut(WIDTH)).zip(a.scale.chunks(WIDTH)) {
+            let mut acc = [v3.splat_f32x8(0.0); REGISTERS];
+            for (column, &xj) in panel.chunks_exact(WIDTH).zip(x) {
+                let (n, _) = pulp::as_arrays::<LANES, T>(column);
+                let xj = v3.splat_f32x8(xj);
+                for (acc, n) in acc.iter_mut().zip(n) {
+                    *acc = v3.mul_add_f32x8(T::widen8(v3, *n), xj, *acc);
                 }
-                let (lanes, _) = S::as_mut_simd_f32s(&mut sum[..w]);
-                lanes.copy_from_slice(&acc);
-            } else {
-                // Packed on a processor with other vectors (not expected within one process).
-                for (column, &xj) in panel.chunks_exact(w).zip(x) {
-                    for (s, v) in sum.iter_mut().zip(column) {
-                        *s = v.mul_add(xj, *s);
-                    }
-                }
+            }
+            let (scale, _) = pulp::as_arrays::<LANES, f32>(scale);
+            let mut sum = [0.0f32; WIDTH];
+            let (lanes, _) = pulp::as_arrays_mut::<LANES, f32>(&mut sum);
+            for ((lane, acc), scale) in lanes.iter_mut().zip(acc).zip(scale) {
+                *lane = pulp::cast(v3.mul_f32x8(acc, pulp::cast(*scale)));
             }
             out.copy_from_slice(&sum[..out.len()]);
         }
@@ -150,10 +245,17 @@ impl WithSimd for Product<'_> {
 mod tests {
     use super::*;
 
-    /// The product against a plain f64 sum of the same f32 entries, for shapes around the
-    /// panel width (empty, one row, a partial last panel, several panels).
+    /// The product against a plain f64 sum of the stored entries, for shapes around the panel
+    /// width (empty, one row, a partial last panel, several panels), on both paths; and every
+    /// stored entry within half a step (1 / 65 534 of its row's largest in i16) or f32's
+    /// rounding of the entry given.
     #[test]
-    fn the_packed_product_is_the_matrix_vector_product() {
+    fn the_packed_product_is_the_matrix_vector_product_of_the_rounded_matrix() {
+        product_of_the_rounded_matrix::<i16>(0.5 / FULL_SCALE);
+        product_of_the_rounded_matrix::<f32>(f64::from(f32::EPSILON) / 2.0);
+    }
+
+    fn product_of_the_rounded_matrix<T: Stored>(step: f64) {
         for (rows, cols) in [
             (0, 3),
             (1, 1),
@@ -163,29 +265,68 @@ mod tests {
             (65, 17),
             (300, 120),
         ] {
-            let entry = |i: usize, j: usize| ((i * 31 + j * 17) % 23) as f32 / 7.0 - 1.5;
-            let a = Panels::from_fn(rows, cols, entry);
+            // Rows of very different sizes, from 1e-30 to 1e30, and one of zeros.
+            let size = |i: usize| {
+                if i % 11 == 3 {
+                    0.0
+                } else {
+                    10f64.powi((i % 7) as i32 * 10 - 30)
+                }
+            };
+            let entry =
+                |i: usize, j: usize| size(i) * (((i * 31 + j * 17) % 23) as f64 / 7.0 - 1.5);
+            let a = Panels::<T>::from_fn(rows, cols, entry);
             assert_eq!((a.rows(), a.cols()), (rows, cols));
             let x: Vec<f32> = (0..cols).map(|j| (j as f32 * 0.37).sin()).collect();
-            let mut out = vec![f32::NAN; rows];
+            let (mut out, mut plain) = (vec![f32::NAN; rows], vec![f32::NAN; rows]);
             a.apply(&x, &mut out);
+            a.apply_plain(&x, &mut plain);
             for i in 0..rows {
-                if cols > 0 {
-                    assert_eq!(a.get(i, cols - 1), entry(i, cols - 1));
+                let largest = (0..cols).map(|j| entry(i, j).abs()).fold(0.0, f64::max);
+                for j in 0..cols {
+                    let stored = f64::from(a.get(i, j));
+                    assert!(
+                        (stored - entry(i, j)).abs() <= largest * step * (1.0 + 1e-6),
+                        "{rows} x {cols}, ({i}, {j}): {stored} for {}",
+                        entry(i, j)
+                    );
                 }
                 let exact: f64 = (0..cols)
-                    .map(|j| f64::from(entry(i, j)) * f64::from(x[j]))
+                    .map(|j| f64::from(a.get(i, j)) * f64::from(x[j]))
                     .sum();
                 let scale: f64 = (0..cols)
-                    .map(|j| (f64::from(entry(i, j)) * f64::from(x[j])).abs())
-                    .sum::<f64>()
-                    .max(1.0);
-                assert!(
-                    (f64::from(out[i]) - exact).abs() <= 1e-6 * scale,
-                    "{rows} x {cols}, row {i}: {} against {exact}",
-                    out[i]
-                );
+                    .map(|j| (f64::from(a.get(i, j)) * f64::from(x[j])).abs())
+                    .sum::<f64>();
+                for got in [out[i], plain[i]] {
+                    assert!(
+                        (f64::from(got) - exact).abs() <= 1e-6 * scale,
+                        "{rows} x {cols}, row {i}: {got} against {exact}"
+                    );
+                }
             }
+        }
+    }
+
+    /// A row with a value that is not finite gives NaN, as in floating point; the other rows
+    /// are unaffected.
+    #[test]
+    fn a_row_that_is_not_finite_stays_not_finite() {
+        let entry = |i, j| if i == 1 && j == 0 { f64::INFINITY } else { 1.0 };
+        let (a, b) = (
+            Panels::<i16>::from_fn(3, 2, entry),
+            Panels::<f32>::from_fn(3, 2, entry),
+        );
+        for out in [a.image_of(&[1.0, 2.0]), b.image_of(&[1.0, 2.0])] {
+            assert!(out[1].is_nan());
+            assert_eq!((out[0], out[2]), (3.0, 3.0));
+        }
+    }
+
+    impl<T: Stored> Panels<T> {
+        fn image_of(&self, x: &[f32]) -> Vec<f32> {
+            let mut out = vec![0.0; self.rows];
+            self.apply(x, &mut out);
+            out
         }
     }
 }
