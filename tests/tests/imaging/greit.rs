@@ -105,7 +105,8 @@ fn greit_equals_its_dense_formula() {
             .map(|(a, b)| (a - f64::from(*b)).abs())
             .fold(0.0, f64::max);
         println!("{kind:?}: |R - dense| {:.2e} of max {top:.3e}", worst / top);
-        assert!(worst < 1e-5 * top, "{kind:?}: {worst} against {top}");
+        // The tall factor is stored in 16-bit fixed point per row: within 1e-4 of the largest.
+        assert!(worst < 1e-4 * top, "{kind:?}: {worst} against {top}");
         // A frame and the noise of each pixel against R dv and sqrt(sum_k R_pk^2 var_k).
         let k = jac.combination.len();
         let dv: Vec<f64> = (0..k)
@@ -116,8 +117,8 @@ fn greit_equals_its_dense_formula() {
         let got: Vec<f64> = g.image(&dv).unwrap().into_iter().flatten().collect();
         let sd: Vec<f64> = g.noise_sd(&var).unwrap().into_iter().flatten().collect();
         for (row, (a, b)) in want.iter().zip(&got).enumerate() {
-            // The image is applied in f32 (the packed thin factors): within 1e-5 of its peak.
-            assert!((a - b).abs() <= 1e-5 * want.amax(), "{kind:?} pixel {row}");
+            // The image is applied through the packed thin factors: within 1e-4 of its peak.
+            assert!((a - b).abs() <= 1e-4 * want.amax(), "{kind:?} pixel {row}");
             let s: f64 = (0..k)
                 .map(|c| r[(row, c)].powi(2) * var[c])
                 .sum::<f64>()

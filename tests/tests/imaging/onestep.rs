@@ -745,7 +745,11 @@ fn the_pixel_operator_equals_the_dense_pixel_rows_at_their_rank() {
         assert!(worst < 1e-4 * top, "{kind:?}: {worst:e} of {top:e}");
         let sv = p.singular_values();
         let rank = sv.iter().filter(|&&s| s > 1e-7 * sv.max()).count();
-        println!("{kind:?}: rank {} of K = {}, r = {r_max}", op.rank(), p.ncols());
+        println!(
+            "{kind:?}: rank {} of K = {}, r = {r_max}",
+            op.rank(),
+            p.ncols()
+        );
         assert_eq!(op.rank(), rank, "{kind:?}");
         assert!(op.rank() <= r_max && op.rank() < p.ncols(), "{kind:?}");
         // A frame, and the noise of each pixel.
@@ -778,9 +782,9 @@ fn the_pixel_operator_equals_the_dense_pixel_rows_at_their_rank() {
     }
 }
 
-/// Frames in f32 through the packed thin factors (what `et reconstruct`, the live pipeline and
-/// GREIT apply) against the f64 product of the one-step matrix's factors: within 1e-5 of the
-/// image's largest value, onto about 8 000 triangles and onto 64 x 64 pixels, for 16
+/// Frames through the packed thin factors (f32 arithmetic, the tall factor stored in 16-bit
+/// fixed point per row: what `et reconstruct`, the live pipeline and GREIT apply) against the
+/// f64 product of the one-step matrix's factors: within 1e-4 of the image's largest value, onto about 8 000 triangles and onto 64 x 64 pixels, for 16
 /// electrodes adjacent (K = 208) and 32 electrodes PP-PP (K = 1 824), on a simulated touch's
 /// dV (the simulator's resistor network) and on noise alone.
 #[test]
