@@ -149,10 +149,10 @@ impl FrameOperator {
     /// definite; Q never formed) and R b = U S V^T (SVD, the q singular values above 1e-7 of
     /// the largest kept): L = Q U = a (R^-1 U), one product of the tall `a` by an r x q
     /// matrix, and C = S V^T. Any invertible R gives L C = a b; an accurate one makes L's
-    /// columns orthonormal, so rounding L to f32 costs no accuracy through cancellation.
-    /// With `short` = (b', M^T) where b = b' M^T (b' r x r), C is kept as C' = U^T R b' (q x
-    /// r) and M^T: the same C = U^T R b = S V^T, and the same rank (cut on b's singular
-    /// values, not b''s).
+    /// columns orthonormal, so rounding L costs no accuracy through cancellation. With
+    /// `short` = (b', M^T) where b = b' M^T (b' r x r), C is kept as C' = U^T R b' (q x r)
+    /// and M^T: the same C = U^T R b = S V^T, at the same rank (cut on R b's singular values,
+    /// as without it).
     fn from_factors(
         a: MatRef<'_, f64>,
         b: MatRef<'_, f64>,

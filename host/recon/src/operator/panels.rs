@@ -2,15 +2,15 @@
 //!
 //! A frame's image is a matrix-vector product y = A x whose matrix (tens of thousands of rows,
 //! a hundred or two columns) is read from cache or memory once per frame, so its speed is the
-//! speed of reading A. [`Panels`] stores A in 16-bit fixed point, each row scaled by its own
-//! factor (A_ij = s_i n_ij, n_ij an i16, |n_ij| <= 32 767 with the row's largest entry at 32
-//! 767): half the bytes of f32, and each entry within 1.5e-5 of its row's largest (f16 would
-//! keep 11 bits: 4.9e-4). The rows come in panels of W = 64 (8 vector registers of 8 f32
-//! lanes), each panel's columns one after another, so the product streams the matrix in one
-//! sequential pass: for every column j, the panel's 64 integers widened to f32 and multiplied
-//! by x_j into eight accumulators held in registers, the row scales applied once at the end.
-//! With AVX2 (found when the program runs, through pulp's safe wrappers: no `unsafe` here) a
-//! column is eight sign extensions, eight conversions and eight fused multiply-adds; other
+//! speed of reading A. [`Panels`] stores A in f32, or in 16-bit fixed point with each row
+//! scaled by its own factor (A_ij = s_i n_ij, n_ij an i16, the row's largest entry at 32 767):
+//! half the bytes of f32, each entry within 1.5e-5 of its row's largest (f16 would keep 11
+//! bits: 4.9e-4). The rows come in panels of W = 64 (8 vector registers of 8 f32 lanes), each
+//! panel's columns one after another, so the product streams the matrix in one sequential
+//! pass: for every column j, the panel's 64 entries (widened to f32) multiplied by x_j into
+//! eight accumulators held in registers, the row scales applied once at the end. With AVX2
+//! (found when the program runs, through pulp's safe wrappers: no `unsafe` here) a column of
+//! i16 is eight sign extensions, eight conversions and eight fused multiply-adds; other
 //! processors run the same sums in plain arithmetic.
 
 #[cfg(target_arch = "x86_64")]
