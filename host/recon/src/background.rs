@@ -36,6 +36,11 @@ pub struct BackgroundFit {
     pub scene_residual: f64,
     /// Forward solves the fit took.
     pub solves: usize,
+    /// |V_0 - V(fit)| / |V_0| over the values measured on drive electrodes alone (None when
+    /// there are none, or before the reconstructor has made the fitted model's frame).
+    pub misfit_on_drive: Option<f64>,
+    /// The same over the values off the drive electrodes.
+    pub misfit_off_drive: Option<f64>,
 }
 
 /// Why a background could not be fitted.
@@ -182,6 +187,8 @@ pub fn fit(
         residual,
         scene_residual,
         solves: solves.get(),
+        misfit_on_drive: None,
+        misfit_off_drive: None,
     })
 }
 

@@ -6,6 +6,21 @@ use nalgebra::DMatrix;
 
 use crate::onestep::{DataSpace, ReconError, Spectrum};
 
+/// How alpha is chosen from a frame, all from A's spectrum (cheap once it is made).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Criterion {
+    /// Generalised cross-validation's minimum, never fitting closer than the noise
+    /// ([`DataSpace::choose_alpha`]).
+    Gcv,
+    /// The generalised discrepancy principle: the smallest alpha whose residual reaches what
+    /// the noise alone leaves.
+    Discrepancy,
+    /// The L-curve's corner: the largest curvature of (log residual, log image norm).
+    LCurve,
+    /// Quasi-optimality: where the image changes least from one candidate to the next.
+    QuasiOptimality,
+}
+
 /// The alphas automatic selection tries: 26 steps from 1e-4 to 10, five per decade (alpha is
 /// dimensionless, normalised as in [`crate::onestep`]).
 #[must_use]
@@ -49,6 +64,7 @@ impl DataSpace {
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
     /// `dv`.
     fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
+        let dv = &*self.whiten(dv);
         let spectrum = self.eigen()?;
         let k = self.frame_len();
         let (e, c) = match spectrum {
@@ -163,6 +179,130 @@ impl DataSpace {
             .collect())
     }
 
+    /// |x_alpha|_P^2 = x^T P x of the one-step image x = P^-1 J^T (A + lambda I)^-1 dv at each
+    /// candidate (= sum_i e_i c_i^2 / (e_i + lambda)^2), and |x_alpha_j - x_alpha_j+1|_P^2
+    /// between consecutive candidates (the last repeats the one before).
+    fn image_norms(
+        &self,
+        dv: &[f64],
+        candidates: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), ReconError> {
+        let seen = self.spectrum(dv)?;
+        let lambdas: Vec<f64> = candidates.iter().map(|&a| self.lambda(a)).collect();
+        let norm = |l: f64| -> f64 {
+            seen.e
+                .iter()
+                .zip(&seen.c)
+                .map(|(e, c)| e.max(0.0) * c * c / (e.max(0.0) + l).powi(2))
+                .sum()
+        };
+        let step = |l1: f64, l2: f64| -> f64 {
+            seen.e
+                .iter()
+                .zip(&seen.c)
+                .map(|(e, c)| {
+                    let e = e.max(0.0);
+                    e * c * c * (1.0 / (e + l1) - 1.0 / (e + l2)).powi(2)
+                })
+                .sum()
+        };
+        let norms = lambdas.iter().map(|&l| norm(l)).collect();
+        let mut steps: Vec<f64> = lambdas.windows(2).map(|w| step(w[0], w[1])).collect();
+        if let Some(&last) = steps.last() {
+            steps.push(last);
+        }
+        Ok((norms, steps))
+    }
+
+    /// alpha for the frame difference `dv` by `criterion` (see [`Criterion`]), with the noise
+    /// variance per value `var_dv` (V^2) where the criterion uses it.
+    ///
+    /// # Errors
+    /// As [`DataSpace::choose_alpha`].
+    pub fn alpha_by(
+        &self,
+        criterion: Criterion,
+        dv: &[f64],
+        var_dv: &[f64],
+        candidates: &[f64],
+    ) -> Result<f64, ReconError> {
+        if candidates.is_empty() {
+            return Err(ReconError::Parameter("no candidate alpha".into()));
+        }
+        match criterion {
+            Criterion::Gcv => self.choose_alpha(dv, var_dv, candidates),
+            Criterion::Discrepancy => {
+                self.gcv(dv, candidates)?;
+                if var_dv.len() != dv.len() {
+                    return Err(ReconError::Parameter(format!(
+                        "{} noise variances for K = {}",
+                        var_dv.len(),
+                        dv.len()
+                    )));
+                }
+                let noise: f64 = self
+                    .whiten_variance(var_dv)
+                    .iter()
+                    .map(|v| v.max(0.0))
+                    .sum();
+                let residuals = self.residuals(dv, candidates)?;
+                let dof = self.residual_dof(candidates)?;
+                let k = dv.len() as f64;
+                // The smallest alpha whose residual reaches the noise's (residuals grow with
+                // alpha); the largest when none does.
+                let mut order: Vec<usize> = (0..candidates.len()).collect();
+                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
+                Ok(order
+                    .iter()
+                    .find(|&&i| residuals[i] >= noise * dof[i] / k)
+                    .or(order.last())
+                    .map(|&i| candidates[i])
+                    .unwrap_or(candidates[0]))
+            }
+            Criterion::LCurve => {
+                self.gcv(dv, candidates)?;
+                let mut order: Vec<usize> = (0..candidates.len()).collect();
+                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
+                let sorted: Vec<f64> = order.iter().map(|&i| candidates[i]).collect();
+                let residuals = self.residuals(dv, &sorted)?;
+                let (norms, _) = self.image_norms(dv, &sorted)?;
+                let tiny = f64::MIN_POSITIVE;
+                let x: Vec<f64> = residuals.iter().map(|r| 0.5 * r.max(tiny).ln()).collect();
+                let y: Vec<f64> = norms.iter().map(|n| 0.5 * n.max(tiny).ln()).collect();
+                // The corner: the largest curvature of (log residual, log image norm) against
+                // log alpha, by central differences.
+                let t: Vec<f64> = sorted.iter().map(|a| a.ln()).collect();
+                let mut best = (f64::NEG_INFINITY, sorted[sorted.len() / 2]);
+                for i in 1..sorted.len().saturating_sub(1) {
+                    let (h0, h1) = (t[i] - t[i - 1], t[i + 1] - t[i]);
+                    let d1 = |v: &[f64]| (v[i + 1] - v[i - 1]) / (h0 + h1);
+                    let d2 = |v: &[f64]| {
+                        2.0 * ((v[i + 1] - v[i]) / h1 - (v[i] - v[i - 1]) / h0) / (h0 + h1)
+                    };
+                    let (dx, dy, ddx, ddy) = (d1(&x), d1(&y), d2(&x), d2(&y));
+                    let kappa = (dx * ddy - ddx * dy) / (dx * dx + dy * dy).powf(1.5).max(tiny);
+                    if kappa.is_finite() && kappa > best.0 {
+                        best = (kappa, sorted[i]);
+                    }
+                }
+                Ok(best.1)
+            }
+            Criterion::QuasiOptimality => {
+                self.gcv(dv, candidates)?;
+                let mut order: Vec<usize> = (0..candidates.len()).collect();
+                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
+                let sorted: Vec<f64> = order.iter().map(|&i| candidates[i]).collect();
+                let (_, steps) = self.image_norms(dv, &sorted)?;
+                Ok(steps
+                    .iter()
+                    .zip(&sorted)
+                    .filter(|(s, _)| s.is_finite())
+                    .min_by(|a, b| a.0.total_cmp(b.0))
+                    .map_or(sorted[0], |(_, a)| *a))
+            }
+        }
+    }
+
     /// alpha for the frame difference `dv` whose per-channel noise variance is `var_dv`
     /// (V^2): the GCV minimum ([`DataSpace::gcv`]) among the candidates that do not fit the
     /// data closer than its noise, |dv - J R dv|^2 >= (K - tr H_lambda) sum_k var_k / K (the
@@ -188,7 +328,11 @@ impl DataSpace {
                 dv.len()
             )));
         }
-        let noise: f64 = var_dv.iter().map(|v| v.max(0.0)).sum();
+        let noise: f64 = self
+            .whiten_variance(var_dv)
+            .iter()
+            .map(|v| v.max(0.0))
+            .sum();
         let residuals = self.residuals(dv, candidates)?;
         let dof = self.residual_dof(candidates)?;
         let k = dv.len() as f64;

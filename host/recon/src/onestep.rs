@@ -63,8 +63,12 @@ pub enum ReconError {
 /// J P^-1 J^T (K x K).
 #[derive(Clone, Debug)]
 pub struct DataSpace {
-    /// M: K rows of (column of G, coefficient).
+    /// M: K rows of (column of G, coefficient), each row scaled by its value's weight's root
+    /// sqrt(w_k) (the data space of the whitened frame sqrt(w) dV).
     combination: Vec<Vec<(usize, f64)>>,
+    /// sqrt(w_k) per frame value: a frame's values are whitened by it before they meet M
+    /// (None: every weight 1).
+    root_weights: Option<Vec<f64>>,
     /// G P^-1, r x T.
     gp: Mat<f64>,
     /// A = J P^-1 J^T, K x K (full).
@@ -187,6 +191,57 @@ impl DataSpace {
         Ok(Self::build(jac.combination.clone(), g, s, &p_inv))
     }
 
+    /// As [`DataSpace::factored`], for a frame whose value k weighs `weights[k]` (K positive
+    /// values: the inverse of each value's error variance, to any common scale): the data
+    /// space of the whitened frame sqrt(w) dV, with NOSER's prior diag(J^T W J)^s. Every
+    /// method still takes the frame as measured; the weights are applied inside.
+    ///
+    /// # Errors
+    /// As [`DataSpace::factored`]; [`ReconError::Parameter`] for weights not of K positive
+    /// finite values.
+    pub fn factored_weighted(
+        jac: &crate::fem::TransferJacobian,
+        s: f64,
+        weights: &[f64],
+    ) -> Result<Self, ReconError> {
+        if weights.len() != jac.combination.len()
+            || weights.iter().any(|w| !(w.is_finite() && *w > 0.0))
+        {
+            return Err(ReconError::Parameter(format!(
+                "{} weights for K = {}: each positive and finite",
+                weights.len(),
+                jac.combination.len()
+            )));
+        }
+        let root: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
+        let whitened = crate::fem::TransferJacobian {
+            frame: jac.frame.iter().zip(&root).map(|(v, w)| v * w).collect(),
+            combination: (jac.combination.iter().zip(&root))
+                .map(|(row, w)| row.iter().map(|&(p, c)| (p, c * w)).collect())
+                .collect(),
+            g: jac.g.clone(),
+        };
+        let mut space = Self::factored(&whitened, s)?;
+        space.root_weights = Some(root);
+        Ok(space)
+    }
+
+    /// `dv` whitened: sqrt(w_k) dv_k (itself without weights).
+    pub(crate) fn whiten<'a>(&self, dv: &'a [f64]) -> std::borrow::Cow<'a, [f64]> {
+        match &self.root_weights {
+            Some(w) => dv.iter().zip(w).map(|(v, w)| v * w).collect(),
+            None => std::borrow::Cow::Borrowed(dv),
+        }
+    }
+
+    /// `var` (V^2 per value) whitened: w_k var_k.
+    pub(crate) fn whiten_variance<'a>(&self, var: &'a [f64]) -> std::borrow::Cow<'a, [f64]> {
+        match &self.root_weights {
+            Some(w) => var.iter().zip(w).map(|(v, w)| v * w * w).collect(),
+            None => std::borrow::Cow::Borrowed(var),
+        }
+    }
+
     /// The data space of a factored Jacobian with the prior's inverse P^-1 given (`p_inv`, T
     /// positive values; GREIT's covariance of the conductivity, [`crate::greit`]). Its `s` is 0.
     ///
@@ -278,6 +333,7 @@ impl DataSpace {
         let trace = (0..k).map(|i| a[(i, i)]).sum();
         Self {
             combination,
+            root_weights: None,
             gp,
             a,
             trace,
@@ -347,8 +403,15 @@ impl DataSpace {
         llt.solve_in_place_with_conj(faer::Conj::No, z.as_mut());
         // (N H + lambda I)^-1 on N's range (r x r), then combined by M^T's sparse columns.
         let inverse = product(root.b.as_ref(), z.as_ref());
+        // Applied to the frame as measured: M's row k times sqrt(w_k) once more.
+        let combination: Vec<Vec<(usize, f64)>> = match &self.root_weights {
+            Some(w) => (self.combination.iter().zip(w))
+                .map(|(row, w)| row.iter().map(|&(p, c)| (p, c * w)).collect())
+                .collect(),
+            None => self.combination.clone(),
+        };
         let mut xt = Mat::<f64>::zeros(self.gp.nrows(), k);
-        for (col, row) in self.combination.iter().enumerate() {
+        for (col, row) in combination.iter().enumerate() {
             for &(p, c) in row {
                 xt.col_mut(col)
                     .iter_mut()
@@ -363,7 +426,7 @@ impl DataSpace {
             gp: self.gp.clone(),
             xt,
             inverse,
-            combination: self.combination.clone(),
+            combination,
             alpha,
             s: self.s,
         })

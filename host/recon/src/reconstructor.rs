@@ -99,6 +99,55 @@ pub struct Reconstructor {
     redundancy: std::sync::OnceLock<Option<Redundancy>>,
     /// What the set-up took.
     pub set_up_timings: SetUpTimings,
+    /// Each value's share of the reference the fitted background leaves unexplained, by kind
+    /// of value (on a drive electrode or off), after [`Reconstructor::fit_background`].
+    mismatch: Option<Vec<f64>>,
+    /// Imaging counts `mismatch_factor` x that share of each value's change as the model's
+    /// error ([`MISMATCH_FACTOR`] unless set; None: the constant shares of a model not
+    /// fitted, [`imaging_variance`] and [`floor_variance`]).
+    mismatch_factor: Option<f64>,
+    /// How the values are weighted in the fit.
+    weighting: Weighting,
+    /// Each value's weight under `weighting` (None: alike).
+    weights: Option<Vec<f64>>,
+}
+
+/// How much of a frame's change the model's mismatch with a real sheet may explain, as a
+/// multiple of the share of the reference frame V_0 the fitted background leaves unexplained
+/// (per kind of value: on a drive electrode, off one). A difference image meets the model's
+/// error twice (the frame's and the reference's), and the linearisation adds to it; on two
+/// real tanks 1.5 and 2 are equally good, 1 and 3 each lose a count on one of them
+/// (docs/measurements.md, "Defaults on real tanks").
+pub const MISMATCH_FACTOR: f64 = 2.0;
+
+/// How the values of a frame are weighted in the fit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Weighting {
+    /// Alike (the default: the measured best on real tanks, docs/measurements.md).
+    #[default]
+    Alike,
+    /// By the inverse of the mean square the fitted background leaves of their kind's values
+    /// in the reference (on a drive electrode or off).
+    PerKind,
+    /// By 1 / V_0^2: the normalised difference dV / V_0 (as EIDORS offers it).
+    Normalised,
+}
+
+impl Weighting {
+    /// The weighting a user's text names: "alike", "kind" or "normalised".
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for other text.
+    pub fn from_text(text: &str) -> Result<Self, ReconError> {
+        match text {
+            "alike" => Ok(Self::Alike),
+            "kind" => Ok(Self::PerKind),
+            "normalised" | "normalized" => Ok(Self::Normalised),
+            other => Err(ReconError::Parameter(format!(
+                "weights '{other}': alike, kind or normalised"
+            ))),
+        }
+    }
 }
 
 impl std::fmt::Debug for Reconstructor {
@@ -135,6 +184,10 @@ impl Reconstructor {
             one_step: None,
             greit_chosen: None,
             redundancy: std::sync::OnceLock::new(),
+            mismatch: None,
+            mismatch_factor: Some(MISMATCH_FACTOR),
+            weighting: Weighting::Alike,
+            weights: None,
             set_up_timings: SetUpTimings {
                 mesh: mesh_s,
                 forward_jacobian,
@@ -162,7 +215,10 @@ impl Reconstructor {
                 .into());
             }
             (Method::GaussNewton { s, iterations }, rule) => {
-                let space = DataSpace::factored(&self.jac, s)?;
+                let space = match &self.weights {
+                    Some(w) => DataSpace::factored_weighted(&self.jac, s, w)?,
+                    None => DataSpace::factored(&self.jac, s)?,
+                };
                 if let (AlphaRule::Fixed(alpha), 0 | 1) = (rule, iterations) {
                     self.one_step = Some((alpha, space.one_step(alpha)?, Default::default()));
                 }
@@ -174,7 +230,7 @@ impl Reconstructor {
             (Method::Greit { radius }, AlphaRule::NoiseFigure(nf)) => {
                 self.greit = Some(self.greit_with(radius, Regularisation::NoiseFigure(nf))?);
             }
-            (Method::Greit { .. }, AlphaRule::Gcv) => {}
+            (Method::Greit { .. }, AlphaRule::Gcv | AlphaRule::Chosen(_)) => {}
         }
         self.set_up_timings.matrix = clock.elapsed().as_secs_f64();
         Ok(())
@@ -215,12 +271,18 @@ impl Reconstructor {
     /// against the model; as [`Spec::set_up`] for the new model.
     pub fn fit_background(&mut self, v0: &[f64]) -> Result<BackgroundFit, ImagingError> {
         let mesh = self.imager.forward.mesh();
-        let fit = crate::background::fit(&self.sheet, mesh, &self.schedule, v0)?;
+        let mut fit = crate::background::fit(&self.sheet, mesh, &self.schedule, v0)?;
         let sheet = fit.apply(&self.sheet);
         self.imager = Imager::new(&sheet, mesh.clone(), self.pixels)?;
         self.sheet = sheet;
         self.jac = self.imager.transfer_jacobian(&self.schedule)?;
         self.redundancy = std::sync::OnceLock::new();
+        let (mismatch, weights) =
+            mismatch_and_weights(self.schedule.rows(), v0, &self.jac.frame, self.weighting);
+        fit.misfit_on_drive = mismatch.on_drive;
+        fit.misfit_off_drive = mismatch.off_drive;
+        self.mismatch = Some(mismatch.shares);
+        self.weights = weights;
         self.prepare()?;
         Ok(fit)
     }
@@ -230,6 +292,21 @@ impl Reconstructor {
     #[must_use]
     pub fn sheet(&self) -> &Sheet {
         &self.sheet
+    }
+
+    /// How the values are weighted in the fit ([`Weighting`]): the weights are made from the
+    /// reference by the next [`Reconstructor::fit_background`] (alike without one).
+    pub fn set_weighting(&mut self, weighting: Weighting) {
+        self.weighting = weighting;
+    }
+
+    /// How many times the share of V_0 the fitted background leaves unexplained imaging counts
+    /// of each value's change as the model's error ([`MISMATCH_FACTOR`] by default; a
+    /// negative or non-finite factor is taken as 0); None: the constant shares a model not
+    /// fitted to the reference is given ([`imaging_variance`], [`floor_variance`]), as before
+    /// any fit.
+    pub fn set_mismatch_factor(&mut self, factor: Option<f64>) {
+        self.mismatch_factor = factor.map(|f| if f.is_finite() { f.max(0.0) } else { 0.0 });
     }
 
     /// Another method or alpha rule on the same mesh and Jacobian.
@@ -386,8 +463,18 @@ impl Reconstructor {
         };
         // What imaging cannot explain: the frames' noise and the model's own error; alpha's
         // floor counts less of the latter.
-        let var = imaging_variance(var_dv, &dv);
-        let floor = floor_variance(var_dv, &dv);
+        // What imaging cannot explain: the frames' noise and the model's own error (from the
+        // fitted background when there is one); alpha's floor counts less of the latter when
+        // the model's error is not known.
+        let (var, floor) = match (&self.mismatch, self.mismatch_factor) {
+            (Some(share), Some(factor)) => {
+                let v: Vec<f64> = (var_dv.iter().zip(&dv).zip(share))
+                    .map(|((v, d), e)| v.max(0.0) + (factor * e * d).powi(2))
+                    .collect();
+                (v.clone(), v)
+            }
+            _ => (imaging_variance(var_dv, &dv), floor_variance(var_dv, &dv)),
+        };
         let grid = &self.imager.grid;
         let mut timings = FrameTimings::default();
         let mut greit_made = None;
@@ -417,7 +504,10 @@ impl Reconstructor {
                 let space = self.space.as_ref().ok_or(ReconError::Singular)?;
                 let alpha = match self.alpha {
                     AlphaRule::Fixed(a) => a,
-                    _ => space.choose_alpha(&dv, &floor, &default_alphas())?,
+                    AlphaRule::Chosen(c) => space.alpha_by(c, &dv, &floor, &default_alphas())?,
+                    AlphaRule::Gcv | AlphaRule::NoiseFigure(_) => {
+                        space.choose_alpha(&dv, &floor, &default_alphas())?
+                    }
                 };
                 if n <= 1 {
                     if self.one_step.as_ref().is_none_or(|(a, ..)| *a != alpha) {
@@ -582,6 +672,67 @@ impl Reconstructor {
             TOUCH_Z,
         )
     }
+}
+
+/// What the fitted background leaves of the reference, by kind of value.
+struct Mismatch {
+    /// Each value's kind's share of V_0 left unexplained.
+    shares: Vec<f64>,
+    /// |V_0 - V(fit)| / |V_0| over the values on drive electrodes (None: there are none).
+    on_drive: Option<f64>,
+    /// The same over the values off them.
+    off_drive: Option<f64>,
+}
+
+/// The model's mismatch with the reference `v0` (K values, V) by kind of value (on a drive
+/// electrode or off), the fitted background's frame being `model`; and each value's weight
+/// under `weighting`.
+fn mismatch_and_weights(
+    rows: &[et_core::schedule::Row],
+    v0: &[f64],
+    model: &[f64],
+    weighting: Weighting,
+) -> (Mismatch, Option<Vec<f64>>) {
+    // (sum of squared misfits, sum of squares of V_0, values) per kind.
+    let mut kinds = [(0.0, 0.0, 0usize); 2];
+    for ((row, v), m) in rows.iter().zip(v0).zip(model) {
+        let kind = &mut kinds[usize::from(row.on_drive().is_some())];
+        kind.0 += (v - m).powi(2);
+        kind.1 += v * v;
+        kind.2 += 1;
+    }
+    let share = |(r2, v2, n): (f64, f64, usize)| (n > 0 && v2 > 0.0).then(|| (r2 / v2).sqrt());
+    let (off, on) = (share(kinds[0]), share(kinds[1]));
+    let shares = rows
+        .iter()
+        .map(|row| {
+            let kind = if row.on_drive().is_some() { on } else { off };
+            kind.unwrap_or(0.0)
+        })
+        .collect();
+    let mean_square = |(r2, _, n): (f64, f64, usize)| r2 / n.max(1) as f64;
+    let weights = match weighting {
+        Weighting::Alike => None,
+        Weighting::PerKind => {
+            let ms = [mean_square(kinds[0]), mean_square(kinds[1])];
+            (ms.iter().all(|m| *m > 0.0)).then(|| {
+                rows.iter()
+                    .map(|row| 1.0 / ms[usize::from(row.on_drive().is_some())])
+                    .collect()
+            })
+        }
+        Weighting::Normalised => {
+            (v0.iter().all(|v| *v != 0.0)).then(|| v0.iter().map(|v| 1.0 / (v * v)).collect())
+        }
+    };
+    (
+        Mismatch {
+            shares,
+            on_drive: on,
+            off_drive: off,
+        },
+        weights,
+    )
 }
 
 mod spec;

@@ -129,9 +129,13 @@ impl Default for Method {
 pub enum AlphaRule {
     /// This alpha for every frame: one matrix, made at set-up.
     Fixed(f64),
-    /// Generalised cross-validation on each frame, never fitting closer than its noise
-    /// ([`DataSpace::choose_alpha`]; for GREIT, [`Greit::choose_alpha`]): a matrix per frame.
+    /// Generalised cross-validation on each frame, never fitting closer than its noise and
+    /// the model's error ([`DataSpace::choose_alpha`]; for GREIT, [`Greit::choose_alpha`]): a
+    /// matrix per frame. The default: on two real tanks and the simulated ones, its worst
+    /// case is the best of the criteria (docs/measurements.md, "Defaults on real tanks").
     Gcv,
+    /// Gauss-Newton only: chosen on each frame by this criterion (a matrix per frame).
+    Chosen(crate::gcv::Criterion),
     /// GREIT only: lambda set by this noise figure (one matrix for every frame, the
     /// consensus rule; 0.5 is the consensus value).
     NoiseFigure(f64),
@@ -139,20 +143,28 @@ pub enum AlphaRule {
 
 impl AlphaRule {
     /// The rule a user's text asks for with `method`: a number (a fixed alpha), "gcv"
-    /// (generalised cross-validation on each frame), or "auto": GCV for Gauss-Newton, and for
+    /// (generalised cross-validation on each frame, no closer than the noise), "discrepancy",
+    /// "lcurve" or "quasi-optimality" (those criteria on each frame, [`crate::gcv::Criterion`]), or
+    /// "auto": GCV for Gauss-Newton, and for
     /// GREIT the lambda of `noise_figure` (one matrix for every frame, the consensus rule).
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for other text.
     pub fn from_text(text: &str, method: &Method, noise_figure: f64) -> Result<Self, ReconError> {
+        use crate::gcv::Criterion;
         let rule = match text {
             "gcv" => AlphaRule::Gcv,
+            "discrepancy" => AlphaRule::Chosen(Criterion::Discrepancy),
+            "lcurve" | "l-curve" => AlphaRule::Chosen(Criterion::LCurve),
+            "quasi-optimality" => AlphaRule::Chosen(Criterion::QuasiOptimality),
             "auto" => match method {
                 Method::Greit { .. } => AlphaRule::NoiseFigure(noise_figure),
                 Method::GaussNewton { .. } => AlphaRule::Gcv,
             },
             v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
-                ReconError::Parameter(format!("alpha '{v}': a number, auto or gcv"))
+                ReconError::Parameter(format!(
+                    "alpha '{v}': a number, auto, gcv, discrepancy, lcurve or quasi-optimality"
+                ))
             })?),
         };
         Ok(rule)

@@ -78,7 +78,10 @@ pub(crate) struct ReconstructArgs {
     method: Method,
     /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), "auto" or
     /// "gcv". For gn both choose it by generalised cross-validation on the frame, never
-    /// fitting it closer than its noise (the discrepancy principle as a floor); for greit
+    /// fitting it closer than its noise and the model's error (the discrepancy principle as a
+    /// floor; with a fitted background the model's error is twice the share of V_0 it leaves
+    /// unexplained, per kind of value); "discrepancy", "lcurve" and "quasi-optimality" choose
+    /// it by those criteria instead (docs/measurements.md compares them); for greit
     /// "auto" sets it by --noise-figure (one lambda for every frame, the consensus rule) and
     /// "gcv" by cross-validation on this frame (finds touches where the protocol sees little,
     /// as the centre for adjacent drive; places others less closely).
@@ -125,6 +128,12 @@ pub(crate) struct ReconstructArgs {
     /// scene's values). Default: fit for measured --frames, scene for a simulated scene.
     #[arg(long, value_enum)]
     background: Option<Background>,
+    /// How the frame's values are weighted in the fit: alike (the default), kind (values on
+    /// drive electrodes and off them each by the inverse of what the fitted background leaves
+    /// of them in V_0) or normalised (by 1 / V_0^2: the normalised difference dV / V_0, as
+    /// EIDORS offers it). Needs the fitted background. docs/measurements.md measures them.
+    #[arg(long, default_value = "alike", value_parser = ["alike", "kind", "normalised"])]
+    weights: String,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long, requires = "frames")]
     frame: Option<usize>,
@@ -280,8 +289,12 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
             iterations: args.iterations,
         },
     };
-    let alpha = AlphaRule::from_text(&args.alpha, &method, args.noise_figure)
-        .map_err(|_| anyhow::anyhow!("--alpha '{}': a number, auto or gcv", args.alpha))?;
+    let alpha = AlphaRule::from_text(&args.alpha, &method, args.noise_figure).map_err(|_| {
+        anyhow::anyhow!(
+            "--alpha '{}': a number, auto, gcv, discrepancy, lcurve or quasi-optimality",
+            args.alpha
+        )
+    })?;
     Ok((method, alpha))
 }
 
@@ -375,6 +388,14 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     } else {
         Background::Scene
     }) == Background::Fit;
+    let weighting = et_recon::reconstructor::Weighting::from_text(&args.weights)?;
+    if weighting != et_recon::reconstructor::Weighting::Alike && !fit_background {
+        bail!(
+            "--weights {}: needs the fitted background (--background fit)",
+            args.weights
+        );
+    }
+    recon.set_weighting(weighting);
     let background = if fit_background {
         let clock = Instant::now();
         let fit = recon.fit_background(&reference.v0)?;
@@ -397,6 +418,15 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             },
             100.0 * fit.residual,
             100.0 * fit.scene_residual
+        );
+        let share =
+            |s: Option<f64>| s.map_or("none measured".into(), |s| format!("{:.2} %", 100.0 * s));
+        eprintln!(
+            "model error: it leaves {} of V_0 on drive electrodes, {} off them; imaging counts \
+             {} times that share of each change as the model's error",
+            share(fit.misfit_on_drive),
+            share(fit.misfit_off_drive),
+            et_recon::reconstructor::MISMATCH_FACTOR
         );
         if fit.residual > 0.2 {
             eprintln!(

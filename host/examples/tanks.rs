@@ -1,0 +1,196 @@
+//! et's imaging rules on two real saline tanks measured by other labs' instruments
+//! (`../shared/data/tanks/`: the KIT4 archive of Hauptmann et al. 2017, arXiv:1704.01178, and
+//! the Kuopio Tomography Challenge 2023's training data): each tank as a user gives it to
+//! `et reconstruct` (a scene, a protocol file, the reference frame), the background fitted to
+//! the reference as `et reconstruct --frames` does, then every case with known targets imaged
+//! under each rule: the median distance from the strongest object to the nearest target,
+//! how often its sign is that target's, how often the object count is within one, and the
+//! alphas chosen.
+//!
+//! Run: `cargo run --release -p et-host --example tanks`
+
+#[path = "../tests/support/tanks.rs"]
+mod tanks;
+
+use et_recon::{AlphaRule, Method, Reference, Spec};
+use et_sim::scene::Scene;
+use tanks::{CaseScore, Found};
+
+fn main() -> anyhow::Result<()> {
+    let Some(all) = tanks::both() else {
+        anyhow::bail!("no ../shared/data/tanks beside the project");
+    };
+    use et_recon::gcv::Criterion;
+    use et_recon::reconstructor::{MISMATCH_FACTOR, Weighting};
+    /// A rule: its name, the model's error (None: the constant shares of before), the
+    /// weighting, the method and alpha's rule.
+    type Rule = (String, Option<f64>, Weighting, Method, AlphaRule);
+    let gn = Method::default();
+    let d = Some(MISMATCH_FACTOR);
+    let mut all_rules: Vec<Rule> = vec![(
+        "before: GCV above noise + 1 % of dV".into(),
+        None,
+        Weighting::Alike,
+        gn,
+        AlphaRule::Gcv,
+    )];
+    for factor in [1.0, 1.5, 2.0, 3.0] {
+        all_rules.push((
+            format!(
+                "GCV above noise + {factor} x V_0's misfit of dV{}",
+                if factor == MISMATCH_FACTOR {
+                    " (default)"
+                } else {
+                    ""
+                }
+            ),
+            Some(factor),
+            Weighting::Alike,
+            gn,
+            AlphaRule::Gcv,
+        ));
+    }
+    for (name, c) in [
+        ("discrepancy", Criterion::Discrepancy),
+        ("L-curve", Criterion::LCurve),
+        ("quasi-optimality", Criterion::QuasiOptimality),
+    ] {
+        all_rules.push((
+            format!("{name}, noise + 2 x misfit"),
+            d,
+            Weighting::Alike,
+            gn,
+            AlphaRule::Chosen(c),
+        ));
+    }
+    for a in [0.1, 0.3, 1.0] {
+        all_rules.push((
+            format!("fixed alpha {a}"),
+            d,
+            Weighting::Alike,
+            gn,
+            AlphaRule::Fixed(a),
+        ));
+    }
+    all_rules.push((
+        "GREIT, noise figure 0.5".into(),
+        d,
+        Weighting::Alike,
+        Method::Greit { radius: None },
+        AlphaRule::NoiseFigure(0.5),
+    ));
+    for (name, w) in [
+        ("weighted by kind", Weighting::PerKind),
+        ("normalised dV / V_0", Weighting::Normalised),
+    ] {
+        all_rules.push((format!("default, {name}"), d, w, gn, AlphaRule::Gcv));
+        all_rules.push((
+            format!("fixed alpha 1, {name}"),
+            d,
+            w,
+            gn,
+            AlphaRule::Fixed(1.0),
+        ));
+    }
+    let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
+    all_rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
+    println!(
+        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- |");
+    let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
+    for tank in &all {
+        let dir = work.join(tank.name.split(' ').next().unwrap_or("tank"));
+        let (scene_path, _) = tank.write(&dir);
+        let scene = Scene::load(&scene_path)?;
+        let mut recon = Spec::new(scene.sheet.physical.clone(), scene.schedule()?).set_up()?;
+        let reference = Reference::from_frames(&[tank.reference.clone()])?;
+        let fit = recon.fit_background(&reference.v0)?;
+        eprintln!(
+            "{}: background {:.4} ohm/sq, contact {:.3} ohm, residual {:.2} %",
+            tank.name,
+            fit.sheet_resistance,
+            fit.contact_ohm,
+            100.0 * fit.residual
+        );
+        let mut weighting = Weighting::Alike;
+        for (name, factor, w, method, rule) in &all_rules {
+            if *w != weighting {
+                weighting = *w;
+                recon.set_weighting(weighting);
+                recon.fit_background(&reference.v0)?;
+            }
+            recon.set_mismatch_factor(*factor);
+            recon.set_method(*method, *rule)?;
+            let mut scores = Vec::new();
+            let mut alphas = Vec::new();
+            for case in &tank.cases {
+                let image = recon.image(&case.values, &reference)?;
+                let objects: Vec<Found> = recon
+                    .objects(&image)
+                    .iter()
+                    .map(|o| Found {
+                        centre: o.region.centroid,
+                        sign: o.sign,
+                    })
+                    .collect();
+                let score = CaseScore::of(case, &objects);
+                if std::env::var("ET_TANKS_CASE").is_ok_and(|c| c == case.id) {
+                    let all = recon.objects(&image);
+                    let top = all.first().map_or(1.0, |o| o.region.peak);
+                    for o in &all {
+                        eprintln!(
+                            "    {name} {}: sign {} at ({:.0}, {:.0}) mm, peak {:.2} of the top, z {:.1}, area {:.0} mm2, {} px",
+                            case.id,
+                            o.sign,
+                            1e3 * o.region.centroid[0],
+                            1e3 * o.region.centroid[1],
+                            o.region.peak / top,
+                            o.region.z.unwrap_or(f64::NAN),
+                            1e6 * o.region.area,
+                            o.region.pixels.len()
+                        );
+                    }
+                    for t in &case.targets {
+                        eprintln!(
+                            "    target {} at ({:.0}, {:.0}) mm, r {:.0} mm",
+                            if t.conductive { "+" } else { "-" },
+                            1e3 * t.centre[0],
+                            1e3 * t.centre[1],
+                            1e3 * t.radius
+                        );
+                    }
+                }
+                if std::env::var_os("ET_TANKS_VERBOSE").is_some() {
+                    eprintln!(
+                        "  {name} {}: alpha {:.2e}, miss {:.1} mm, sign {}, {} objects of {}",
+                        case.id,
+                        image.alpha,
+                        1e3 * score.miss.unwrap_or(f64::NAN),
+                        score.sign_right,
+                        score.found,
+                        score.targets
+                    );
+                }
+                scores.push(score);
+                alphas.push(image.alpha);
+            }
+            alphas.sort_by(f64::total_cmp);
+            let s = tanks::summary(&scores);
+            println!(
+                "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} |",
+                tank.name,
+                1e3 * s.median_miss,
+                s.sign_right,
+                s.cases,
+                s.count_within_one,
+                s.cases,
+                alphas[0],
+                alphas[alphas.len() / 2],
+                alphas[alphas.len() - 1]
+            );
+        }
+    }
+    std::fs::remove_dir_all(&work).ok();
+    Ok(())
+}

@@ -1,0 +1,3 @@
+//! What several of the host's tests share.
+
+pub mod tanks;
