@@ -104,7 +104,7 @@ fn main() -> anyhow::Result<()> {
         let (scene_path, _) = tank.write(&dir);
         let scene = Scene::load(&scene_path)?;
         let mut recon = Spec::new(scene.sheet.physical.clone(), scene.schedule()?).set_up()?;
-        let reference = Reference::from_frames(&[tank.reference.clone()])?;
+        let reference = Reference::from_frames(std::slice::from_ref(&tank.reference))?;
         let fit = recon.fit_background(&reference.v0)?;
         eprintln!(
             "{}: background {:.4} ohm/sq, contact {:.3} ohm, residual {:.2} %",
