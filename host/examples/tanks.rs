@@ -95,9 +95,9 @@ fn main() -> anyhow::Result<()> {
     let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
     all_rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
     println!(
-        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) |"
+        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) | challenge score (Otsu) |"
     );
-    println!("| --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
     let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
     for tank in &all {
         let dir = work.join(tank.name.split(' ').next().unwrap_or("tank"));
@@ -124,6 +124,7 @@ fn main() -> anyhow::Result<()> {
             recon.set_method(*method, *rule)?;
             let mut scores = Vec::new();
             let mut alphas = Vec::new();
+            let mut challenge: Option<(f64, usize)> = None;
             for case in &tank.cases {
                 let image = recon.image(&case.values, &reference)?;
                 let objects: Vec<Found> = recon
@@ -135,6 +136,31 @@ fn main() -> anyhow::Result<()> {
                     })
                     .collect();
                 let score = CaseScore::of(case, &objects);
+                if let Some(truth) = tanks::ktc_truth(tank, case) {
+                    let grid = recon.grid();
+                    let sampled: Vec<Option<f64>> = (0..256 * 256)
+                        .map(|p| {
+                            let [x, y] = tanks::ktc_pixel(p / 256, p % 256);
+                            if x.hypot(y) > tank.radius {
+                                return None;
+                            }
+                            let i = ((x - grid.origin[0]) / grid.size).floor();
+                            let j = ((y - grid.origin[1]) / grid.size).floor();
+                            if i < 0.0 || j < 0.0 {
+                                return None;
+                            }
+                            let (i, j) = (i as usize, j as usize);
+                            (i < grid.width && j < grid.height)
+                                .then(|| image.pixels[j * grid.width + i])
+                                .flatten()
+                        })
+                        .collect();
+                    let seg = tanks::otsu_segmentation(&sampled);
+                    let s = tanks::ktc_score(&truth, &seg);
+                    let c = challenge.get_or_insert((0.0, 0));
+                    c.0 += s;
+                    c.1 += 1;
+                }
                 if std::env::var("ET_TANKS_CASE").is_ok_and(|c| c == case.id) {
                     let all = recon.objects(&image);
                     let top = all.first().map_or(1.0, |o| o.region.peak);
@@ -178,7 +204,7 @@ fn main() -> anyhow::Result<()> {
             alphas.sort_by(f64::total_cmp);
             let s = tanks::summary(&scores);
             println!(
-                "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} |",
+                "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} | {} |",
                 tank.name,
                 1e3 * s.median_miss,
                 s.sign_right,
@@ -187,7 +213,8 @@ fn main() -> anyhow::Result<()> {
                 s.cases,
                 alphas[0],
                 alphas[alphas.len() / 2],
-                alphas[alphas.len() - 1]
+                alphas[alphas.len() - 1],
+                challenge.map_or("-".into(), |(s, n)| format!("{s:.2} of {n}"))
             );
         }
     }

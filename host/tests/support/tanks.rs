@@ -418,3 +418,69 @@ pub fn ktc_score(truth: &[u8], seg: &[u8]) -> f64 {
     }
     total / 2.0
 }
+
+/// The challenge baseline's segmentation of an image sampled at the challenge's 256 x 256
+/// pixels (`values`, None outside the tank): a three-class Otsu threshold over a 256-bin
+/// histogram of the values inside; the largest class is water (0), the class below it
+/// resistive (1), the one above it conductive (2).
+#[must_use]
+pub fn otsu_segmentation(values: &[Option<f64>]) -> Vec<u8> {
+    let inside: Vec<f64> = values.iter().flatten().copied().collect();
+    let (lo, hi) = inside
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+    if inside.is_empty() || hi <= lo {
+        return vec![0; values.len()];
+    }
+    let bins = 256;
+    let bin = |v: f64| (((v - lo) / (hi - lo) * bins as f64) as usize).min(bins - 1);
+    let mut hist = vec![0.0f64; bins];
+    for v in &inside {
+        hist[bin(*v)] += 1.0;
+    }
+    let centre = |b: usize| lo + (b as f64 + 0.5) * (hi - lo) / bins as f64;
+    // Prefix sums of counts and first moments.
+    let (mut w, mut m) = (vec![0.0; bins + 1], vec![0.0; bins + 1]);
+    for b in 0..bins {
+        w[b + 1] = w[b] + hist[b];
+        m[b + 1] = m[b] + hist[b] * centre(b);
+    }
+    let class = |a: usize, b: usize| {
+        let n = w[b] - w[a];
+        if n > 0.0 { (m[b] - m[a]).powi(2) / n } else { 0.0 }
+    };
+    // Classes [0, t1), [t1, t2), [t2, bins): the largest between-class variance.
+    let mut best = (f64::NEG_INFINITY, 1, 2);
+    for t1 in 1..bins - 1 {
+        for t2 in t1 + 1..bins {
+            let score = class(0, t1) + class(t1, t2) + class(t2, bins);
+            if score > best.0 {
+                best = (score, t1, t2);
+            }
+        }
+    }
+    let (_, t1, t2) = best;
+    let which = |v: f64| {
+        let b = bin(v);
+        usize::from(b >= t1) + usize::from(b >= t2)
+    };
+    let mut counts = [0usize; 3];
+    for v in &inside {
+        counts[which(*v)] += 1;
+    }
+    let water = (0..3).max_by_key(|&c| counts[c]).unwrap_or(1);
+    values
+        .iter()
+        .map(|v| match v {
+            None => 0,
+            Some(v) => {
+                let c = which(*v);
+                match c.cmp(&water) {
+                    std::cmp::Ordering::Equal => 0,
+                    std::cmp::Ordering::Less => 1,
+                    std::cmp::Ordering::Greater => 2,
+                }
+            }
+        })
+        .collect()
+}
