@@ -428,7 +428,9 @@ pub fn otsu_segmentation(values: &[Option<f64>]) -> Vec<u8> {
     let inside: Vec<f64> = values.iter().flatten().copied().collect();
     let (lo, hi) = inside
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
     if inside.is_empty() || hi <= lo {
         return vec![0; values.len()];
     }
@@ -447,7 +449,11 @@ pub fn otsu_segmentation(values: &[Option<f64>]) -> Vec<u8> {
     }
     let class = |a: usize, b: usize| {
         let n = w[b] - w[a];
-        if n > 0.0 { (m[b] - m[a]).powi(2) / n } else { 0.0 }
+        if n > 0.0 {
+            (m[b] - m[a]).powi(2) / n
+        } else {
+            0.0
+        }
     };
     // Classes [0, t1), [t1, t2), [t2, bins): the largest between-class variance.
     let mut best = (f64::NEG_INFINITY, 1, 2);
