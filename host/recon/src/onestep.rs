@@ -191,57 +191,6 @@ impl DataSpace {
         Ok(Self::build(jac.combination.clone(), g, s, &p_inv))
     }
 
-    /// As [`DataSpace::factored`], for a frame whose value k weighs `weights[k]` (K positive
-    /// values: the inverse of each value's error variance, to any common scale): the data
-    /// space of the whitened frame sqrt(w) dV, with NOSER's prior diag(J^T W J)^s. Every
-    /// method still takes the frame as measured; the weights are applied inside.
-    ///
-    /// # Errors
-    /// As [`DataSpace::factored`]; [`ReconError::Parameter`] for weights not of K positive
-    /// finite values.
-    pub fn factored_weighted(
-        jac: &crate::fem::TransferJacobian,
-        s: f64,
-        weights: &[f64],
-    ) -> Result<Self, ReconError> {
-        if weights.len() != jac.combination.len()
-            || weights.iter().any(|w| !(w.is_finite() && *w > 0.0))
-        {
-            return Err(ReconError::Parameter(format!(
-                "{} weights for K = {}: each positive and finite",
-                weights.len(),
-                jac.combination.len()
-            )));
-        }
-        let root: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
-        let whitened = crate::fem::TransferJacobian {
-            frame: jac.frame.iter().zip(&root).map(|(v, w)| v * w).collect(),
-            combination: (jac.combination.iter().zip(&root))
-                .map(|(row, w)| row.iter().map(|&(p, c)| (p, c * w)).collect())
-                .collect(),
-            g: jac.g.clone(),
-        };
-        let mut space = Self::factored(&whitened, s)?;
-        space.root_weights = Some(root);
-        Ok(space)
-    }
-
-    /// `dv` whitened: sqrt(w_k) dv_k (itself without weights).
-    pub(crate) fn whiten<'a>(&self, dv: &'a [f64]) -> std::borrow::Cow<'a, [f64]> {
-        match &self.root_weights {
-            Some(w) => dv.iter().zip(w).map(|(v, w)| v * w).collect(),
-            None => std::borrow::Cow::Borrowed(dv),
-        }
-    }
-
-    /// `var` (V^2 per value) whitened: w_k var_k.
-    pub(crate) fn whiten_variance<'a>(&self, var: &'a [f64]) -> std::borrow::Cow<'a, [f64]> {
-        match &self.root_weights {
-            Some(w) => var.iter().zip(w).map(|(v, w)| v * w * w).collect(),
-            None => std::borrow::Cow::Borrowed(var),
-        }
-    }
-
     /// The data space of a factored Jacobian with the prior's inverse P^-1 given (`p_inv`, T
     /// positive values; GREIT's covariance of the conductivity, [`crate::greit`]). Its `s` is 0.
     ///
@@ -617,4 +566,5 @@ fn noser_weights(diag: &[f64], s: f64) -> Option<Vec<f64>> {
 }
 
 mod matrix;
+mod weights;
 pub use matrix::*;
