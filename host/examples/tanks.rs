@@ -93,9 +93,15 @@ fn main() -> anyhow::Result<()> {
         ));
     }
     let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
+    // The segmentations' levels scored beside Otsu's (a share of each object's peak).
+    let levels: Vec<f64> = std::env::var("ET_TANKS_LEVELS")
+        .unwrap_or_else(|_| et_recon::SEGMENT_LEVEL.to_string())
+        .split(',')
+        .filter_map(|l| l.trim().parse().ok())
+        .collect();
     all_rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
     println!(
-        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) | challenge score (Otsu) |"
+        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) | challenge score (Otsu / objects at each level) |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- |");
     let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
@@ -124,7 +130,7 @@ fn main() -> anyhow::Result<()> {
             recon.set_method(*method, *rule)?;
             let mut scores = Vec::new();
             let mut alphas = Vec::new();
-            let mut challenge: Option<(f64, usize)> = None;
+            let mut challenge: Option<(Vec<f64>, usize)> = None;
             for case in &tank.cases {
                 let image = recon.image(&case.values, &reference)?;
                 let objects: Vec<Found> = recon
@@ -136,29 +142,21 @@ fn main() -> anyhow::Result<()> {
                     })
                     .collect();
                 let score = CaseScore::of(case, &objects);
-                if let Some(truth) = tanks::ktc_truth(tank, case) {
+                {
+                    let truth = tanks::truth_mask(tank, case);
                     let grid = recon.grid();
-                    let sampled: Vec<Option<f64>> = (0..256 * 256)
-                        .map(|p| {
-                            let [x, y] = tanks::ktc_pixel(p / 256, p % 256);
-                            if x.hypot(y) > tank.radius {
-                                return None;
-                            }
-                            let i = ((x - grid.origin[0]) / grid.size).floor();
-                            let j = ((y - grid.origin[1]) / grid.size).floor();
-                            if i < 0.0 || j < 0.0 {
-                                return None;
-                            }
-                            let (i, j) = (i as usize, j as usize);
-                            (i < grid.width && j < grid.height)
-                                .then(|| image.pixels[j * grid.width + i])
-                                .flatten()
-                        })
-                        .collect();
-                    let seg = tanks::otsu_segmentation(&sampled);
-                    let s = tanks::ktc_score(&truth, &seg);
-                    let c = challenge.get_or_insert((0.0, 0));
-                    c.0 += s;
+                    let sampled = tanks::on_score_grid(tank, grid, &image.pixels);
+                    let c = challenge.get_or_insert((vec![0.0; 1 + levels.len()], 0));
+                    c.0[0] += tanks::challenge_score(&truth, &tanks::otsu_segmentation(&sampled));
+                    let found = recon.objects(&image);
+                    for (k, level) in levels.iter().enumerate() {
+                        let classes = et_recon::segment(&image.pixels, &found, *level);
+                        let seg: Vec<u8> = tanks::on_score_grid(tank, grid, &classes)
+                            .iter()
+                            .map(|c| c.map_or(0, |c| c as u8))
+                            .collect();
+                        c.0[1 + k] += tanks::challenge_score(&truth, &seg);
+                    }
                     c.1 += 1;
                 }
                 if std::env::var("ET_TANKS_CASE").is_ok_and(|c| c == case.id) {
@@ -214,7 +212,12 @@ fn main() -> anyhow::Result<()> {
                 alphas[0],
                 alphas[alphas.len() / 2],
                 alphas[alphas.len() - 1],
-                challenge.map_or("-".into(), |(s, n)| format!("{s:.2} of {n}"))
+                challenge.map_or("-".into(), |(s, n)| s
+                    .iter()
+                    .map(|s| format!("{s:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+                    + &format!(" of {n}"))
             );
         }
     }

@@ -285,6 +285,16 @@ class Image:
     extent: Tuple[float, float, float, float]
     timings_s: Dict[str, Any] = field(default_factory=dict)
     summary: Dict[str, Any] = field(default_factory=dict)
+    _classes: Optional[np.ndarray] = field(default=None, repr=False)
+
+    def segment(self) -> np.ndarray:
+        """The three-class picture (rows x cols like ``pixels``): 0 background, 1 resistive
+        (the conductivity fell), 2 conductive (it rose), NaN outside the sheet. Each object's
+        pixels at or above 60 % of its own peak take its class, so a kind of target the image
+        does not show stays empty (as `et reconstruct --segment` writes it)."""
+        if self._classes is None:
+            raise EtError("this image was not made by Reconstructor.image")
+        return self._classes
 
 
 class Reconstructor:
@@ -340,7 +350,7 @@ class Reconstructor:
         several untouched frames (n x K: their mean is V_0 and their spread the noise of dV;
         with one frame the noise is estimated from the protocol's redundancy). Frames are taken
         in single precision, as et's frames are."""
-        summary_json, pixels, noise, values, dv = self._native.image(
+        summary_json, pixels, noise, values, dv, classes = self._native.image(
             _f64(v, 1, "v"), self._frames(v0)
         )
         s = json.loads(summary_json)
@@ -348,7 +358,7 @@ class Reconstructor:
             pixels=pixels, noise_sd=noise, values=values, dv=dv, objects=s["objects"],
             touches=s["touches"], regions=s["regions"], alpha=s["alpha"],
             threshold=s["threshold"], noise=s["noise"], extent=self.extent,
-            timings_s=s["timings_s"], summary=s,
+            timings_s=s["timings_s"], summary=s, _classes=classes,
         )
 
     def fit_background(self, v0: Any) -> Dict[str, Any]:

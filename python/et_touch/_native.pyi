@@ -40,10 +40,13 @@ class Reconstructor:
         noise_figure: Optional[float],
         radius_m: Optional[float],
     ) -> None: ...
-    def image(self, frame: F64, reference: F64) -> Tuple[str, F64, F64, Optional[F64], F64]:
+    def image(
+        self, frame: F64, reference: F64
+    ) -> Tuple[str, F64, F64, Optional[F64], F64, F64]:
         """frame (K, V) against reference frames (n x K, V): the summary (JSON), pixels and
         their noise (rows x cols, Delta sigma / sigma_0, top row first, NaN outside), the
-        values on the triangles (T; None for GREIT) and dV (K, V)."""
+        values on the triangles (T; None for GREIT), dV (K, V) and the three-class picture
+        (rows x cols: 0 background, 1 resistive, 2 conductive, NaN outside)."""
     def fit_background(self, reference: F64) -> str: ...
     def forward(self, sigma: F64) -> F64:
         """The frame (K, V) of conductivity sigma (T, S per square)."""

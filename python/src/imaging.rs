@@ -180,6 +180,7 @@ type ImageParts<'py> = (
     Bound<'py, PyArray2<f64>>,
     Option<Bound<'py, PyArray1<f64>>>,
     Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
 );
 
 /// What `image` reports besides the arrays (the `et reconstruct --json` names).
@@ -262,7 +263,8 @@ impl Reconstructor {
     /// Images `frame` (K values, V) against the untouched `reference` frames (n x K, V; their
     /// mean is V_0, their spread the noise of dV): the summary (JSON), the pixels and their
     /// noise (rows from the top, Delta sigma / sigma_0, NaN outside), the values on the
-    /// triangles (Delta sigma / sigma_0; None for GREIT) and dV.
+    /// triangles (Delta sigma / sigma_0; None for GREIT), dV and the three-class picture
+    /// (0 background, 1 resistive, 2 conductive, NaN outside; [`et_recon::segment`]).
     fn image<'py>(
         &mut self,
         py: Python<'py>,
@@ -282,13 +284,19 @@ impl Reconstructor {
                 .map(|r| ObjectSummary::of_region(r, 1, sigma0))
                 .collect()
         };
+        let objects = self.inner.objects(&image);
+        let classes: Vec<Option<f64>> =
+            et_recon::segment(&image.pixels, &objects, et_recon::SEGMENT_LEVEL)
+                .iter()
+                .map(|c| c.map(|c| f64::from(c as u8)))
+                .collect();
         let summary = ImageSummary {
             alpha: image.alpha,
             threshold: image.threshold,
             noise: image.noise,
             noise_figure: image.greit.map(|g| g.0),
             radius_m: image.greit.map(|g| g.1),
-            objects: (self.inner.objects(&image).iter())
+            objects: (objects.iter())
                 .map(|o| ObjectSummary::of(o, sigma0))
                 .collect(),
             touches: found(&image.touches),
@@ -302,6 +310,7 @@ impl Reconstructor {
         let (w, h) = (grid.width, grid.height);
         let pixels = array2(py, grid.top_first(&image.pixels, 1.0 / sigma0), h, w)?;
         let noise = array2(py, grid.top_first(&image.noise_sd, 1.0 / sigma0), h, w)?;
+        let classes = array2(py, grid.top_first(&classes, 1.0), h, w)?;
         let mesh_values = image
             .mesh_values
             .as_ref()
@@ -312,6 +321,7 @@ impl Reconstructor {
             noise,
             mesh_values,
             PyArray1::from_vec(py, image.dv),
+            classes,
         ))
     }
 

@@ -21,6 +21,7 @@
 //! - [`pixels`]: pixel grids over a mesh and the reconstruction onto them in thin factors.
 //! - [`touches`]: regions of interest and touches, split at their saddles and kept above
 //!   their noise (§6.5).
+//! - [`segment`]: the three-class picture (background, resistive, conductive) from the objects.
 //! - [`metrics`]: the image metrics SE, PE, RNG and BVC against the truth (§7).
 //! - [`reconstructor`]: the entry point, the stages above as one set-up and one call a frame.
 //! - [`select`]: choosing the protocol from the image (§8), as a state machine.
@@ -43,6 +44,7 @@ pub mod operator;
 pub mod pixels;
 pub mod reconstructor;
 pub mod redundancy;
+pub mod segment;
 pub mod select;
 pub mod touches;
 
@@ -58,6 +60,7 @@ pub use reconstructor::{
     AlphaRule, FrameNoise, Image, ImagingError, MeshPlan, Method, NoiseSource, Reconstructor,
     Reference, Spec,
 };
+pub use segment::{Class, SEGMENT_LEVEL, segment};
 pub use touches::{
     Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions, touches,
 };

@@ -332,23 +332,101 @@ impl std::fmt::Display for Summary {
     }
 }
 
-/// The Kuopio Tomography Challenge 2023's truth image of a training case (256 x 256, row 0
-/// at the top: 0 water, 1 resistive, 2 conductive), when the tank has one.
+/// The side of the score's square grid, pixels (the Kuopio Tomography Challenge 2023's).
+pub const SCORE_PIXELS: usize = 256;
+
+/// The truth of a case on the score's grid ([`score_pixel`]; 0 water, 1 resistive, 2
+/// conductive): the Kuopio Tomography Challenge 2023's own image where the tank has one
+/// (`truth/<case>.csv`), else each target drawn as the disc of its area at its centroid (the
+/// KIT4 archive gives the masks' centroids and areas).
 #[must_use]
-pub fn ktc_truth(tank: &Tank, case: &Case) -> Option<Vec<u8>> {
+pub fn truth_mask(tank: &Tank, case: &Case) -> Vec<u8> {
     let path = tank.dir.join("truth").join(format!("{}.csv", case.id));
-    if !path.is_file() {
-        return None;
+    if path.is_file() {
+        let rows = numbers(&path);
+        return rows.iter().flatten().map(|&v| v as u8).collect();
     }
-    let rows = numbers(&path);
-    Some(rows.iter().flatten().map(|&v| v as u8).collect())
+    let n = SCORE_PIXELS;
+    (0..n * n)
+        .map(|p| {
+            let [x, y] = score_pixel(tank.radius, p / n, p % n);
+            case.targets
+                .iter()
+                .find(|t| (x - t.centre[0]).hypot(y - t.centre[1]) <= t.radius)
+                .map_or(0, |t| if t.conductive { 2 } else { 1 })
+        })
+        .collect()
 }
 
-/// The challenge's pixel (r, c) centre on its 256 x 256 grid of the 23 cm tank, m.
+/// The centre of pixel (r, c) of the score's grid over a tank of `radius`, m: the square
+/// [-radius, radius]^2 in [`SCORE_PIXELS`] x [`SCORE_PIXELS`], row 0 at the top (the
+/// challenge's grid of its 23 cm tank).
 #[must_use]
-pub fn ktc_pixel(r: usize, c: usize) -> [f64; 2] {
-    let h = 0.23 / 256.0;
-    [-0.115 + (c as f64 + 0.5) * h, 0.115 - (r as f64 + 0.5) * h]
+pub fn score_pixel(radius: f64, r: usize, c: usize) -> [f64; 2] {
+    let h = 2.0 * radius / SCORE_PIXELS as f64;
+    [
+        -radius + (c as f64 + 0.5) * h,
+        radius - (r as f64 + 0.5) * h,
+    ]
+}
+
+/// An image on et's pixel grid sampled at the score's grid over the tank (None outside the
+/// tank or the image), each score pixel taking the value of et's pixel under its centre.
+#[must_use]
+pub fn on_score_grid<T: Copy>(
+    tank: &Tank,
+    grid: &et_recon::PixelGrid,
+    image: &[Option<T>],
+) -> Vec<Option<T>> {
+    let n = SCORE_PIXELS;
+    (0..n * n)
+        .map(|p| {
+            let [x, y] = score_pixel(tank.radius, p / n, p % n);
+            if x.hypot(y) > tank.radius {
+                return None;
+            }
+            let i = ((x - grid.origin[0]) / grid.size).floor();
+            let j = ((y - grid.origin[1]) / grid.size).floor();
+            if i < 0.0 || j < 0.0 {
+                return None;
+            }
+            let (i, j) = (i as usize, j as usize);
+            (i < grid.width && j < grid.height)
+                .then(|| image[j * grid.width + i])
+                .flatten()
+        })
+        .collect()
+}
+
+/// A `.npy` image `et reconstruct` wrote of `tank` (--image-out, --segment: f64, top row
+/// first, NaN outside) sampled on the score's grid ([`on_score_grid`]), from the grid `et
+/// reconstruct --json` reported with it.
+#[must_use]
+pub fn read_pixels(tank: &Tank, path: &Path, grid: &serde_json::Value) -> Vec<Option<f64>> {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let n = |k: &str| grid[k].as_u64().unwrap_or_else(|| panic!("grid: {k}")) as usize;
+    let x = |k: &str| grid[k].as_f64().unwrap_or_else(|| panic!("grid: {k}"));
+    let (rows, cols) = (n("rows"), n("cols"));
+    let data = &bytes[bytes.len() - 8 * rows * cols..];
+    let value = |r: usize, c: usize| {
+        let at = 8 * (r * cols + c);
+        let v = f64::from_le_bytes(data[at..at + 8].try_into().expect("8 bytes"));
+        (!v.is_nan()).then_some(v)
+    };
+    // Bottom row first, as et's pixel grids are.
+    let bottom_first: Vec<Option<f64>> = (0..rows)
+        .rev()
+        .flat_map(|r| (0..cols).map(move |c| (r, c)))
+        .map(|(r, c)| value(r, c))
+        .collect();
+    let grid = et_recon::PixelGrid {
+        width: cols,
+        height: rows,
+        origin: [x("x0_m"), x("y0_m")],
+        size: x("pixel_m"),
+        triangle: Vec::new(),
+    };
+    on_score_grid(tank, &grid, &bottom_first)
 }
 
 /// A Gaussian blur as the challenge's score makes it: exp(-d^2 / (2 x 80^2)) over 321 x 321
@@ -387,29 +465,28 @@ fn blur(image: &[f64], n: usize) -> Vec<f64> {
 /// resistive, 2 conductive): the mean over the two classes of the SSIM of their masks
 /// (`../shared/data/tanks/README.md`, "The challenge's own score"); 1 is perfect.
 #[must_use]
-pub fn ktc_score(truth: &[u8], seg: &[u8]) -> f64 {
-    let n = 256;
-    let ones = blur(&vec![1.0; n * n], n);
+pub fn challenge_score(truth: &[u8], seg: &[u8]) -> f64 {
+    let n = SCORE_PIXELS;
+    static ONES: std::sync::OnceLock<Vec<f64>> = std::sync::OnceLock::new();
+    let ones = ONES.get_or_init(|| blur(&vec![1.0; n * n], n));
     let local =
-        |v: &[f64]| -> Vec<f64> { blur(v, n).iter().zip(&ones).map(|(a, b)| a / b).collect() };
+        |v: &[f64]| -> Vec<f64> { blur(v, n).iter().zip(ones).map(|(a, b)| a / b).collect() };
     let (c1, c2) = (1e-4, 9e-4);
     let mut total = 0.0;
     for class in [1u8, 2] {
-        let t: Vec<f64> = truth
-            .iter()
-            .map(|&v| f64::from(u8::from(v == class)))
-            .collect();
-        let r: Vec<f64> = seg
-            .iter()
-            .map(|&v| f64::from(u8::from(v == class)))
-            .collect();
+        let mask = |image: &[u8]| -> Vec<f64> {
+            image
+                .iter()
+                .map(|&v| f64::from(u8::from(v == class)))
+                .collect()
+        };
+        let (t, r) = (mask(truth), mask(seg));
+        // The masks are 0 or 1: t^2 = t, so the local mean of t^2 is mu_t (and of r^2, mu_r).
         let (mt, mr) = (local(&t), local(&r));
-        let tt = local(&t.iter().map(|v| v * v).collect::<Vec<_>>());
-        let rr = local(&r.iter().map(|v| v * v).collect::<Vec<_>>());
         let tr = local(&t.iter().zip(&r).map(|(a, b)| a * b).collect::<Vec<_>>());
         let mut ssim = 0.0;
         for i in 0..n * n {
-            let (st, sr) = (tt[i] - mt[i] * mt[i], rr[i] - mr[i] * mr[i]);
+            let (st, sr) = (mt[i] - mt[i] * mt[i], mr[i] - mr[i] * mr[i]);
             let str_ = tr[i] - mt[i] * mr[i];
             ssim += (2.0 * mt[i] * mr[i] + c1) * (2.0 * str_ + c2)
                 / ((mt[i] * mt[i] + mr[i] * mr[i] + c1) * (st + sr + c2));

@@ -2,6 +2,7 @@
 //! image: its one-step matrix and the objects of both signs.
 
 use super::*;
+use crate::segment::{Class, SEGMENT_LEVEL, segment};
 
 /// The median time of `repeats` calls of `f` (at least one), s; None as soon as `f` gives
 /// None. The live frame's figure everywhere it is reported ([`Reconstructor::frame_median`],
@@ -87,5 +88,13 @@ impl Reconstructor {
             OBJECT_FRACTION,
             TOUCH_Z,
         )
+    }
+
+    /// The three-class picture of `image` (background, resistive, conductive; None outside
+    /// the sheet), from its [`objects`](Self::objects) at [`SEGMENT_LEVEL`] of each one's
+    /// peak ([`crate::segment`]).
+    #[must_use]
+    pub fn segment(&self, image: &Image) -> Vec<Option<Class>> {
+        segment(&image.pixels, &self.objects(image), SEGMENT_LEVEL)
     }
 }

@@ -148,6 +148,13 @@ pub(crate) struct ReconstructArgs {
     /// --json gives its grid (`image`: lower-left corner and pixel size, m).
     #[arg(long, value_name = "NPY")]
     image_out: Option<PathBuf>,
+    /// Also write the three-class picture as a NumPy .npy: 0 background, 1 resistive (the
+    /// conductivity fell), 2 conductive (it rose), NaN outside the sheet, top row first, on
+    /// --image-out's grid. Each object's pixels at or above 60 % of its own peak take its
+    /// class, so a kind of target the image does not show stays empty (the picture
+    /// tomography challenges score; docs/method.md §6.5).
+    #[arg(long, value_name = "NPY")]
+    segment: Option<PathBuf>,
 }
 
 pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
@@ -312,6 +319,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     inputs.extend(mesh_files);
     let mut outputs = vec![args.out.as_path()];
     outputs.extend(args.image_out.as_deref());
+    outputs.extend(args.segment.as_deref());
     crate::output::check_all(&outputs, &[], &inputs, force)?;
     let scene = Scene::load(&args.scene)?;
     let table = args

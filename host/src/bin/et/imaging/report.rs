@@ -31,8 +31,33 @@ pub(super) fn report(
             )
         });
     let matches = et_recon::match_touches(grid, found, truth);
+    let sigma0 = recon.imager().sigma0;
     let image_grid = match &args.image_out {
-        Some(path) => Some(write_image(path, recon, image)?),
+        Some(path) => Some(write_pixels(
+            path,
+            grid,
+            &image.pixels,
+            1.0 / sigma0,
+            "Delta sigma / sigma_0",
+        )?),
+        None => None,
+    };
+    let objects = recon.objects(image);
+    let segment = match &args.segment {
+        Some(path) => {
+            let classes: Vec<Option<f64>> =
+                et_recon::segment(&image.pixels, &objects, et_recon::SEGMENT_LEVEL)
+                    .iter()
+                    .map(|c| c.map(|c| f64::from(c as u8)))
+                    .collect();
+            Some(write_pixels(
+                path,
+                grid,
+                &classes,
+                1.0,
+                "class: 0 background, 1 resistive, 2 conductive",
+            )?)
+        }
         None => None,
     };
     crate::output::write(&args.out, |partial| {
@@ -72,10 +97,10 @@ pub(super) fn report(
         regions: rois.iter().map(RegionSummary::of).collect(),
         found_touches: found.iter().map(RegionSummary::of).collect(),
         image: image_grid,
-        objects: recon
-            .objects(image)
+        segment,
+        objects: objects
             .iter()
-            .map(|o| et_recon::touches::ObjectSummary::of(o, recon.imager().sigma0))
+            .map(|o| et_recon::touches::ObjectSummary::of(o, sigma0))
             .collect(),
         touches_mm: truth
             .iter()
@@ -178,6 +203,8 @@ pub(super) struct ReconstructSummary<'a> {
     found_touches: Vec<RegionSummary>,
     /// The pixel image written by --image-out, and its grid.
     image: Option<ImageGrid>,
+    /// The three-class picture written by --segment, and its grid.
+    segment: Option<ImageGrid>,
     /// Objects of both signs, strongest (|peak|) first: conductive (+1) and resistive (-1)
     /// targets of a tank, presses of a sheet. Field names fixed: scripts rely on them.
     objects: Vec<et_recon::touches::ObjectSummary>,
@@ -192,7 +219,7 @@ pub(super) struct ReconstructSummary<'a> {
     seconds: f64,
 }
 
-/// Where `--image-out`'s pixels are: row 0 is the top row.
+/// Where `--image-out`'s or `--segment`'s pixels are: row 0 is the top row.
 #[derive(serde::Serialize)]
 pub(super) struct ImageGrid {
     file: PathBuf,
@@ -208,15 +235,15 @@ pub(super) struct ImageGrid {
     unit: &'static str,
 }
 
-/// Writes the image's pixels (Delta sigma / sigma_0, NaN outside, top row first) as .npy.
-fn write_image(
+/// Writes pixels on `grid` (times `scale`, NaN outside, top row first) as .npy.
+fn write_pixels(
     path: &std::path::Path,
-    recon: &et_recon::Reconstructor,
-    image: &et_recon::Image,
+    grid: &et_recon::PixelGrid,
+    pixels: &[Option<f64>],
+    scale: f64,
+    unit: &'static str,
 ) -> Result<ImageGrid> {
-    let grid = recon.grid();
-    let sigma0 = recon.imager().sigma0;
-    let top_first = grid.top_first(&image.pixels, 1.0 / sigma0);
+    let top_first = grid.top_first(pixels, scale);
     let m = nalgebra::DMatrix::from_row_slice(grid.height, grid.width, &top_first);
     let bytes = et_learn::npz::npy_of_matrix(&m);
     crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
@@ -227,7 +254,7 @@ fn write_image(
         x0_m: grid.origin[0],
         y0_m: grid.origin[1],
         pixel_m: grid.size,
-        unit: "Delta sigma / sigma_0",
+        unit,
     })
 }
 
