@@ -16,7 +16,7 @@
 use et_core::rng::Rng;
 use et_core::schedule::Schedule;
 use et_recon::{AlphaRule, Method, Reference, Spec};
-use et_sim::foreign::{self, Instrument};
+use et_sim::foreign::{self, Instrument, Mismatch};
 use et_sim::scene::Scene;
 use et_sim::sheet::SimulatedSheet;
 use et_sim::touch::{Footprint, Inclusion};
@@ -78,9 +78,9 @@ fn tanks() -> Vec<Tank> {
     ]
 }
 
-/// `n` cases of 1 to 3 rods (centre m, radius m, multiplier) within 70 % of `radius`, at
-/// least 4 cm apart edge to edge.
-fn cases(radius: f64, n: usize, seed: u64) -> Vec<Vec<Inclusion>> {
+/// `n` cases of 1 to 3 rods (centre m, radius m, multiplier: metal's or plastic's of
+/// `[metal, plastic]`) within 70 % of `radius`, at least 4 cm apart edge to edge.
+fn cases(radius: f64, n: usize, seed: u64, [metal, plastic]: [f64; 2]) -> Vec<Vec<Inclusion>> {
     let mut rng = Rng::new(seed);
     (0..n)
         .map(|i| {
@@ -99,7 +99,7 @@ fn cases(radius: f64, n: usize, seed: u64) -> Vec<Vec<Inclusion>> {
                     rods.push(Inclusion {
                         position,
                         radius: size,
-                        multiplier: if rng.uniform() < 0.5 { 10.0 } else { 0.01 },
+                        multiplier: if rng.uniform() < 0.5 { metal } else { plastic },
                         footprint: Footprint::default(),
                     });
                 }
@@ -128,23 +128,58 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// The real tank's mismatch: [`Mismatch::tank`], or ET_SWEEP_MISMATCH="position, width,
+/// contact spread, contact drift, unevenness" to try others.
+fn mismatch() -> Mismatch {
+    let mut m = Mismatch::tank(5);
+    if let Ok(text) = std::env::var("ET_SWEEP_MISMATCH") {
+        let v: Vec<f64> = text
+            .split(',')
+            .filter_map(|x| x.trim().parse().ok())
+            .collect();
+        if let [position, width, contact_spread, contact_drift, unevenness] = v[..] {
+            m = Mismatch {
+                position,
+                width,
+                contact_spread,
+                contact_drift,
+                unevenness,
+                ..m
+            };
+        }
+    }
+    m
+}
+
 fn main() -> anyhow::Result<()> {
-    let rules = [
-        ("default (GCV, noise floor)", AlphaRule::Gcv),
-        ("fixed 0.01", AlphaRule::Fixed(0.01)),
-        ("fixed 0.03", AlphaRule::Fixed(0.03)),
-        ("fixed 0.1", AlphaRule::Fixed(0.1)),
-        ("fixed 0.3", AlphaRule::Fixed(0.3)),
-        ("fixed 1", AlphaRule::Fixed(1.0)),
+    use et_recon::reconstructor::MISMATCH_FACTOR;
+    // name, alpha's rule, the model's error counted (None: the constant shares of before).
+    let mut rules = vec![
+        ("before (GCV above noise + 1 % of dV)", AlphaRule::Gcv, None),
+        (
+            "default (GCV above noise + 2 x misfit)",
+            AlphaRule::Gcv,
+            Some(MISMATCH_FACTOR),
+        ),
+        ("GCV above noise + 1 x misfit", AlphaRule::Gcv, Some(1.0)),
+        ("GCV above noise + 0.5 x misfit", AlphaRule::Gcv, Some(0.5)),
+        ("fixed 0.01", AlphaRule::Fixed(0.01), Some(MISMATCH_FACTOR)),
+        ("fixed 0.03", AlphaRule::Fixed(0.03), Some(MISMATCH_FACTOR)),
+        ("fixed 0.1", AlphaRule::Fixed(0.1), Some(MISMATCH_FACTOR)),
+        ("fixed 0.3", AlphaRule::Fixed(0.3), Some(MISMATCH_FACTOR)),
+        ("fixed 1", AlphaRule::Fixed(1.0), Some(MISMATCH_FACTOR)),
     ];
+    let only = std::env::var("ET_SWEEP_RULES").unwrap_or_default();
+    rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
     let n = 24;
     println!(
         "| tank | instrument | alpha | strongest object to nearest rod, median | its sign right | count within one | objects, median | alpha chosen (min, median, max) |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
-    let instruments = [
-        ("ideal", Instrument::ideal()),
-        ("laboratory", Instrument::laboratory(11)),
+    // The instrument, and the tank's departures from its model (None: the network as drawn).
+    let mut instruments = vec![
+        ("ideal", Instrument::ideal(), None),
+        ("laboratory", Instrument::laboratory(11), None),
         (
             "noisy",
             Instrument {
@@ -152,13 +187,33 @@ fn main() -> anyhow::Result<()> {
                 proportional: 2e-3,
                 ..Instrument::laboratory(11)
             },
+            None,
+        ),
+        (
+            "laboratory, a real tank's mismatch",
+            Instrument::laboratory(11),
+            Some(mismatch()),
         ),
     ];
-    for (instrument_name, instrument) in instruments {
+    let only = std::env::var("ET_SWEEP_INSTRUMENTS").unwrap_or_default();
+    instruments.retain(|i| only.is_empty() || only.split(';').any(|o| i.0.contains(o)));
+    for (instrument_name, instrument, mismatch) in instruments {
         for tank in tanks() {
-            let sheet = SimulatedSheet::new(&tank.truth.sheet, &[])?;
-            let cases = cases(tank.radius, n, 7);
-            let frames = foreign::frames(&sheet, &tank.schedule, &cases, &instrument)?;
+            // Metal (x 10) and plastic (x 0.01) as before; metal and plastic as real
+            // tanks' rods are (x 1e3, x 1e-3) beside a real tank's mismatch.
+            let contrast = if mismatch.is_some() {
+                [1e3, 1e-3]
+            } else {
+                [10.0, 0.01]
+            };
+            let cases = cases(tank.radius, n, 7, contrast);
+            let frames = if let Some(m) = mismatch {
+                let (reference, later) = m.sheets(&tank.truth.sheet)?;
+                foreign::frames_between(&reference, &later, &tank.schedule, &cases, &instrument)?
+            } else {
+                let sheet = SimulatedSheet::new(&tank.truth.sheet, &[])?;
+                foreign::frames(&sheet, &tank.schedule, &cases, &instrument)?
+            };
             let as_f32 = |f: &[f64]| f.iter().map(|&v| v as f32).collect::<Vec<f32>>();
             let reference = Reference::from_frames(&[as_f32(&frames[0])])?;
             let mut recon =
@@ -166,14 +221,17 @@ fn main() -> anyhow::Result<()> {
             // As `et reconstruct --frames` does by default.
             let fit = recon.fit_background(&reference.v0)?;
             eprintln!(
-                "{}, {instrument_name}: background {:.1} ohm/sq (truth 230), contact {:.1} ohm (truth 60; the models' electrodes differ), residual {:.2} % (the scene's guess: {:.1} %)",
+                "{}, {instrument_name}: background {:.1} ohm/sq (truth 230), contact {:.1} ohm (truth 60; the models' electrodes differ), residual {:.2} % ({:.2} % on drive electrodes, {:.2} % off them; the scene's guess: {:.1} %)",
                 tank.name,
                 fit.sheet_resistance,
                 fit.contact_ohm,
                 100.0 * fit.residual,
+                100.0 * fit.misfit_on_drive.unwrap_or(f64::NAN),
+                100.0 * fit.misfit_off_drive.unwrap_or(f64::NAN),
                 100.0 * fit.scene_residual
             );
-            for (name, rule) in rules {
+            for &(name, rule, factor) in &rules {
+                recon.set_mismatch_factor(factor);
                 recon.set_method(Method::default(), rule)?;
                 let mut score = Score::default();
                 for (rods, frame) in cases.iter().zip(&frames[1..]) {

@@ -15,7 +15,7 @@
 use et_core::rng::Rng;
 use et_core::schedule::Schedule;
 
-use crate::sheet::{SheetError, SimulatedSheet};
+use crate::sheet::{SheetError, SheetSpec, SimulatedSheet, Unevenness};
 use crate::touch::Inclusion;
 
 /// A foreign instrument's imperfections (all dimensionless).
@@ -56,6 +56,77 @@ impl Instrument {
     }
 }
 
+/// How a real tank departs from the model that images it: what no fit of one sheet
+/// resistance and one contact removes (the misfit a real 32-electrode tank leaves is 5 to 15
+/// % of V_0; the resistor network against et's finite elements alone leaves about 1 %).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mismatch {
+    /// Each electrode's place along the outline off by a normal draw of this standard
+    /// deviation, as a share of the electrodes' spacing.
+    pub position: f64,
+    /// The electrodes' true width over the width the model is told (one factor for all).
+    pub width: f64,
+    /// Each electrode's contact impedance the model's times exp(this x a normal draw).
+    pub contact_spread: f64,
+    /// Each contact's change from the reference frame to the later frames, likewise (the
+    /// electrodes settle, the saline's level and temperature change).
+    pub contact_drift: f64,
+    /// The medium's conductance uneven by a smooth field of this rms (natural-log units,
+    /// [`Unevenness::draw`]): a temperature gradient, a meniscus, the third dimension.
+    pub unevenness: f64,
+    /// The draws' seed.
+    pub seed: u64,
+}
+
+impl Mismatch {
+    /// A saline tank as labs build them: electrodes 3 % of a spacing off their drawn places
+    /// and 10 % wider than drawn, contacts spread by a factor of about 1.35 and drifting by
+    /// 10 % after the reference, the medium 5 % uneven.
+    #[must_use]
+    pub fn tank(seed: u64) -> Self {
+        Self {
+            position: 0.03,
+            width: 1.1,
+            contact_spread: 0.3,
+            contact_drift: 0.1,
+            unevenness: 0.05,
+            seed,
+        }
+    }
+
+    /// The true tank of the model `spec`, as measured for the reference frame and for the
+    /// later frames (its contacts drifted): two sheets of the resistor network.
+    ///
+    /// # Errors
+    /// [`ForeignError::Sheet`] when a network cannot be built or solved.
+    pub fn sheets(
+        &self,
+        spec: &SheetSpec,
+    ) -> Result<(SimulatedSheet, SimulatedSheet), ForeignError> {
+        let mut rng = Rng::new(self.seed);
+        let mut truth = spec.clone();
+        truth.physical.electrodes.width *= self.width;
+        let n = usize::from(spec.physical.electrodes.count);
+        let spacing = spec.physical.shape.perimeter() / n.max(1) as f64;
+        let offsets: Vec<f64> = (0..n)
+            .map(|_| self.position * spacing * rng.normal())
+            .collect();
+        let z0 = spec.physical.electrodes.contact_ohm;
+        let contacts: Vec<f64> = (0..n)
+            .map(|_| z0 * (self.contact_spread * rng.normal()).exp())
+            .collect();
+        let later: Vec<f64> = contacts
+            .iter()
+            .map(|z| z * (self.contact_drift * rng.normal()).exp())
+            .collect();
+        let field = Unevenness::draw(self.unevenness, &mut rng);
+        Ok((
+            SimulatedSheet::with_contacts(&truth, &offsets, &contacts, Some(&field))?,
+            SimulatedSheet::with_contacts(&truth, &offsets, &later, Some(&field))?,
+        ))
+    }
+}
+
 /// Why frames could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -85,16 +156,32 @@ pub fn frames(
     scenes: &[Vec<Inclusion>],
     instrument: &Instrument,
 ) -> Result<Vec<Vec<f64>>, ForeignError> {
-    let ideal = |inclusions: &[Inclusion]| -> Result<Vec<f64>, ForeignError> {
-        sheet
-            .transfer_inclusions(inclusions)?
-            .frame_of(schedule)
-            .ok_or(ForeignError::Electrodes {
-                protocol: schedule.electrodes(),
-                sheet: sheet.electrodes(),
-            })
-    };
-    let empty = ideal(&[])?;
+    frames_between(sheet, sheet, schedule, scenes, instrument)
+}
+
+/// As [`frames`], the empty tank's frame measured on `reference` and the later frames on
+/// `later` (the same tank with its contacts drifted: [`Mismatch::sheets`]).
+///
+/// # Errors
+/// As [`frames`].
+pub fn frames_between(
+    reference: &SimulatedSheet,
+    later: &SimulatedSheet,
+    schedule: &Schedule,
+    scenes: &[Vec<Inclusion>],
+    instrument: &Instrument,
+) -> Result<Vec<Vec<f64>>, ForeignError> {
+    let ideal =
+        |sheet: &SimulatedSheet, inclusions: &[Inclusion]| -> Result<Vec<f64>, ForeignError> {
+            sheet
+                .transfer_inclusions(inclusions)?
+                .frame_of(schedule)
+                .ok_or(ForeignError::Electrodes {
+                    protocol: schedule.electrodes(),
+                    sheet: sheet.electrodes(),
+                })
+        };
+    let empty = ideal(reference, &[])?;
     let rms = (empty.iter().map(|v| v * v).sum::<f64>() / empty.len().max(1) as f64).sqrt();
     let mut rng = Rng::new(instrument.seed);
     let mut measure = |i: usize, v: Vec<f64>| -> Vec<f64> {
@@ -108,7 +195,98 @@ pub fn frames(
     };
     let mut out = vec![measure(0, empty)];
     for (i, inclusions) in scenes.iter().enumerate() {
-        out.push(measure(i + 1, ideal(inclusions)?));
+        out.push(measure(i + 1, ideal(later, inclusions)?));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use et_core::sheet::Sheet;
+
+    /// A 10 cm disc of 16 electrodes on a 5 mm network, adjacent pairs measured under
+    /// adjacent injections.
+    fn tank() -> (SheetSpec, Schedule) {
+        let spec = SheetSpec {
+            resolution: Some(0.005),
+            ..SheetSpec::of(Sheet::disc(0.1, 16))
+        };
+        let pairs: Vec<(u16, u16)> = (0..16).map(|i| (i, (i + 1) % 16)).collect();
+        let schedule = Schedule::adjacent_pairs_under(16, &pairs, 1e-3).expect("a schedule");
+        (spec, schedule)
+    }
+
+    #[test]
+    fn no_mismatch_is_the_network_as_drawn() {
+        let (spec, schedule) = tank();
+        let none = Mismatch {
+            position: 0.0,
+            width: 1.0,
+            contact_spread: 0.0,
+            contact_drift: 0.0,
+            unevenness: 0.0,
+            seed: 1,
+        };
+        let (reference, later) = none.sheets(&spec).unwrap();
+        let plain = SimulatedSheet::new(&spec, &[]).unwrap();
+        let ideal = Instrument::ideal();
+        let a = frames_between(&reference, &later, &schedule, &[vec![]], &ideal).unwrap();
+        let b = frames(&plain, &schedule, &[vec![]], &ideal).unwrap();
+        for (x, y) in a.iter().flatten().zip(b.iter().flatten()) {
+            assert!((x - y).abs() <= 1e-9 * y.abs().max(1e-6), "{x} against {y}");
+        }
+    }
+
+    #[test]
+    fn contacts_drifting_change_the_drive_electrodes_values_most() {
+        // A contact's impedance is in series with its electrode: it adds I z to the values
+        // measured on a drive electrode and reaches the others only through the current's
+        // spread under the electrode.
+        let (spec, schedule) = tank();
+        let drift = Mismatch {
+            position: 0.0,
+            width: 1.0,
+            contact_spread: 0.0,
+            contact_drift: 0.2,
+            unevenness: 0.0,
+            seed: 3,
+        };
+        let (reference, later) = drift.sheets(&spec).unwrap();
+        let f = frames_between(
+            &reference,
+            &later,
+            &schedule,
+            &[vec![]],
+            &Instrument::ideal(),
+        )
+        .unwrap();
+        let (mut on, mut off) = (Vec::new(), Vec::new());
+        for (k, row) in schedule.rows().iter().enumerate() {
+            let change = (f[1][k] - f[0][k]).abs() / f[0][k].abs().max(1e-12);
+            let driven = [row.source, row.sink];
+            if driven.contains(&row.positive) || driven.contains(&row.negative) {
+                on.push(change);
+            } else {
+                off.push(change);
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        assert!(
+            mean(&on) > 5.0 * mean(&off),
+            "relative change on drive electrodes {:.2e}, off them {:.2e}",
+            mean(&on),
+            mean(&off)
+        );
+    }
+
+    #[test]
+    fn a_contact_count_other_than_the_electrodes_is_refused() {
+        let (spec, _) = tank();
+        let err = SimulatedSheet::with_contacts(&spec, &[], &[20.0; 15], None).unwrap_err();
+        assert!(
+            err.to_string().contains("15 contacts for 16 electrodes"),
+            "{err}"
+        );
+    }
 }

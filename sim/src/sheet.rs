@@ -285,7 +285,37 @@ impl SimulatedSheet {
         offsets: &[f64],
         field: &Unevenness,
     ) -> Result<Self, SheetError> {
-        let network = build_network_with(spec, offsets, Some(field))?;
+        let network = build_network_with(spec, offsets, Some(field), None)?;
+        Self::of_network(spec, network)
+    }
+
+    /// As [`SimulatedSheet::new`], with each electrode's own contact impedance (`contacts`,
+    /// ohm, one per electrode, in place of the spec's one value) and the conductance uneven by
+    /// `field` (none: uniform): a real tank's departures from the model that images it.
+    ///
+    /// # Errors
+    /// As [`SimulatedSheet::uneven`], and [`SheetError::Spec`] for a contact count other than
+    /// the electrodes' or a contact that is not finite and positive.
+    pub fn with_contacts(
+        spec: &SheetSpec,
+        offsets: &[f64],
+        contacts: &[f64],
+        field: Option<&Unevenness>,
+    ) -> Result<Self, SheetError> {
+        let count = usize::from(spec.physical.electrodes.count);
+        if contacts.len() != count {
+            return Err(SheetError::field(
+                "contacts",
+                format!("{} contacts for {count} electrodes", contacts.len()),
+            ));
+        }
+        if !contacts.iter().all(|z| z.is_finite() && *z > 0.0) {
+            return Err(SheetError::field(
+                "contacts",
+                "each contact must be finite and positive",
+            ));
+        }
+        let network = build_network_with(spec, offsets, field, Some(contacts))?;
         Self::of_network(spec, network)
     }
 
@@ -377,14 +407,16 @@ impl SimulatedSheet {
 /// # Errors
 /// [`SheetError`] for an invalid spec or electrodes that cannot be placed.
 pub fn build_network(spec: &SheetSpec, offsets: &[f64]) -> Result<Network, SheetError> {
-    build_network_with(spec, offsets, None)
+    build_network_with(spec, offsets, None, None)
 }
 
-/// [`build_network`] with the fabric's conductance uneven by `field` (none: uniform).
+/// [`build_network`] with the fabric's conductance uneven by `field` (none: uniform) and each
+/// electrode's own contact (none: the spec's for all).
 fn build_network_with(
     spec: &SheetSpec,
     offsets: &[f64],
     field: Option<&Unevenness>,
+    contacts: Option<&[f64]>,
 ) -> Result<Network, SheetError> {
     spec.validate()?;
     if let Some(f) = field
@@ -407,7 +439,10 @@ fn build_network_with(
         .enumerate()
         .map(|(e, &t)| t + offsets.get(e).copied().unwrap_or(0.0) / perimeter)
         .collect();
-    let z = vec![spec.physical.electrodes.contact_ohm; positions.len()];
+    let z = contacts.map_or_else(
+        || vec![spec.physical.electrodes.contact_ohm; positions.len()],
+        <[f64]>::to_vec,
+    );
     let contacts = place_contacts(
         &spec.physical.shape,
         &grid,
