@@ -85,7 +85,7 @@ standin=$(mktemp -d)
 cargo run --release -q -p et-learn --example standin -- "$standin" 2500 >/dev/null
 mv "$standin/features.csv" F.csv
 mv "$standin/targets.csv" T.csv
-rmdir "$standin"
+rm -r "$standin"  # the example also writes before.csv, pressed.csv and sessions.csv
 run "et train --features F.csv --targets T.csv --unit m --rows 0..2000 --kind auto --out m.json"
 run "et eval  --model m.json --features F.csv --targets T.csv --unit m --rows 2000..2500 --json --plots own-plots/"
 
