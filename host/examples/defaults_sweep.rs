@@ -11,7 +11,9 @@
 //! its sign is that rod's, how often the object count is within one of the rods', and the
 //! alphas chosen.
 //!
-//! Run: `cargo run --release -p et-host --example defaults_sweep`
+//! Run: `cargo run --release -p et-host --example defaults_sweep` (ET_SWEEP_RULES and
+//! ET_SWEEP_INSTRUMENTS pick rows by name, `;` between; ET_SWEEP_MISMATCH sets the real
+//! tank's mismatch; ET_LINEAR=1 prints the linearisation's misfit at each rule's images).
 
 use et_core::rng::Rng;
 use et_core::schedule::Schedule;
@@ -234,8 +236,15 @@ fn main() -> anyhow::Result<()> {
                 recon.set_mismatch_factor(factor);
                 recon.set_method(Method::default(), rule)?;
                 let mut score = Score::default();
+                // The linearisation's misfit at each case's image (ET_LINEAR).
+                let mut linear: Vec<f64> = Vec::new();
                 for (rods, frame) in cases.iter().zip(&frames[1..]) {
                     let image = recon.image(&as_f32(frame), &reference)?;
+                    if std::env::var_os("ET_LINEAR").is_some()
+                        && let Some(m) = recon.linearisation_misfit(&image)?
+                    {
+                        linear.push(m);
+                    }
                     let objects = recon.objects(&image);
                     score.alphas.push(image.alpha);
                     score.objects.push(objects.len());
@@ -261,6 +270,14 @@ fn main() -> anyhow::Result<()> {
                     if (first.sign > 0) == (nearest.multiplier > 1.0) {
                         score.sign_right += 1;
                     }
+                }
+                if !linear.is_empty() {
+                    let m = median(&mut linear);
+                    eprintln!(
+                        "{}, {instrument_name}, {name}: the linearisation's misfit at the images, of |dV|: median {m:.3}, max {:.3}",
+                        tank.name,
+                        linear[linear.len() - 1]
+                    );
                 }
                 let mut objects: Vec<f64> = score.objects.iter().map(|&o| o as f64).collect();
                 let mut alphas = score.alphas.clone();

@@ -7,7 +7,9 @@
 //! how often its sign is that target's, how often the object count is within one, and the
 //! alphas chosen.
 //!
-//! Run: `cargo run --release -p et-host --example tanks`
+//! Run: `cargo run --release -p et-host --example tanks` (ET_TANKS_RULES picks rules by name,
+//! `;` between; ET_TANKS_LEVELS the segmentation's shares; ET_LINEAR=1 prints the
+//! linearisation's misfit at each rule's images, `Reconstructor::linearisation_misfit`).
 
 #[path = "../tests/support/tanks.rs"]
 mod tanks;
@@ -131,6 +133,8 @@ fn main() -> anyhow::Result<()> {
             let mut scores = Vec::new();
             let mut alphas = Vec::new();
             let mut challenge: Option<(Vec<f64>, usize)> = None;
+            // The linearisation's misfit at each case's image (ET_LINEAR).
+            let mut linear: Vec<f64> = Vec::new();
             for case in &tank.cases {
                 let image = recon.image(&case.values, &reference)?;
                 let objects: Vec<Found> = recon
@@ -196,10 +200,25 @@ fn main() -> anyhow::Result<()> {
                         score.targets
                     );
                 }
+                if std::env::var_os("ET_LINEAR").is_some()
+                    && let Some(m) = recon.linearisation_misfit(&image)?
+                {
+                    linear.push(m);
+                }
                 scores.push(score);
                 alphas.push(image.alpha);
             }
             alphas.sort_by(f64::total_cmp);
+            if !linear.is_empty() {
+                linear.sort_by(f64::total_cmp);
+                eprintln!(
+                    "{} {name}: the linearisation's misfit at the images, of |dV|: min {:.3}, median {:.3}, max {:.3}",
+                    tank.name,
+                    linear[0],
+                    linear[linear.len() / 2],
+                    linear[linear.len() - 1]
+                );
+            }
             let s = tanks::summary(&scores);
             println!(
                 "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} | {} |",
