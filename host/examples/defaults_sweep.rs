@@ -154,6 +154,7 @@ fn mismatch() -> Mismatch {
 }
 
 fn main() -> anyhow::Result<()> {
+    use et_recon::gcv::Criterion;
     use et_recon::reconstructor::MISMATCH_FACTOR;
     // name, alpha's rule, the model's error counted (None: the constant shares of before).
     let mut rules = vec![
@@ -165,6 +166,21 @@ fn main() -> anyhow::Result<()> {
         ),
         ("GCV above noise + 1 x misfit", AlphaRule::Gcv, Some(1.0)),
         ("GCV above noise + 0.5 x misfit", AlphaRule::Gcv, Some(0.5)),
+        (
+            "L-curve above noise + 1 % of dV",
+            AlphaRule::Chosen(Criterion::LCurve),
+            None,
+        ),
+        (
+            "L-curve above noise + 2 x misfit",
+            AlphaRule::Chosen(Criterion::LCurve),
+            Some(MISMATCH_FACTOR),
+        ),
+        (
+            "quasi-optimality above noise + 1 % of dV",
+            AlphaRule::Chosen(Criterion::QuasiOptimality),
+            None,
+        ),
         ("fixed 0.01", AlphaRule::Fixed(0.01), Some(MISMATCH_FACTOR)),
         ("fixed 0.03", AlphaRule::Fixed(0.03), Some(MISMATCH_FACTOR)),
         ("fixed 0.1", AlphaRule::Fixed(0.1), Some(MISMATCH_FACTOR)),
