@@ -285,11 +285,11 @@ impl Reconstructor {
                 .collect()
         };
         let objects = self.inner.objects(&image);
-        let classes: Vec<Option<f64>> =
-            et_recon::segment(&image.pixels, &objects, et_recon::SEGMENT_LEVEL)
-                .iter()
-                .map(|c| c.map(|c| f64::from(c as u8)))
-                .collect();
+        let classes = et_recon::segment::as_values(&et_recon::segment(
+            &image.pixels,
+            &objects,
+            et_recon::SEGMENT_LEVEL,
+        ));
         let summary = ImageSummary {
             alpha: image.alpha,
             threshold: image.threshold,

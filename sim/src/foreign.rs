@@ -217,18 +217,22 @@ mod tests {
         (spec, schedule)
     }
 
-    #[test]
-    fn no_mismatch_is_the_network_as_drawn() {
-        let (spec, schedule) = tank();
-        let none = Mismatch {
+    /// No departure from the model at all.
+    fn none() -> Mismatch {
+        Mismatch {
             position: 0.0,
             width: 1.0,
             contact_spread: 0.0,
             contact_drift: 0.0,
             unevenness: 0.0,
             seed: 1,
-        };
-        let (reference, later) = none.sheets(&spec).unwrap();
+        }
+    }
+
+    #[test]
+    fn no_mismatch_is_the_network_as_drawn() {
+        let (spec, schedule) = tank();
+        let (reference, later) = none().sheets(&spec).unwrap();
         let plain = SimulatedSheet::new(&spec, &[]).unwrap();
         let ideal = Instrument::ideal();
         let a = frames_between(&reference, &later, &schedule, &[vec![]], &ideal).unwrap();
@@ -245,12 +249,9 @@ mod tests {
         // spread under the electrode.
         let (spec, schedule) = tank();
         let drift = Mismatch {
-            position: 0.0,
-            width: 1.0,
-            contact_spread: 0.0,
             contact_drift: 0.2,
-            unevenness: 0.0,
             seed: 3,
+            ..none()
         };
         let (reference, later) = drift.sheets(&spec).unwrap();
         let f = frames_between(

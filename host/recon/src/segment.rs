@@ -70,6 +70,16 @@ pub fn segment(image: &[Option<f64>], objects: &[Object], level: f64) -> Vec<Opt
     classes
 }
 
+/// The classes as numbers (0 background, 1 resistive, 2 conductive; None outside the sheet),
+/// for the files and arrays that carry them beside an image's values.
+#[must_use]
+pub fn as_values(classes: &[Option<Class>]) -> Vec<Option<f64>> {
+    classes
+        .iter()
+        .map(|c| c.map(|c| f64::from(c as u8)))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

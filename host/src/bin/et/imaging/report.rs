@@ -45,11 +45,11 @@ pub(super) fn report(
     let objects = recon.objects(image);
     let segment = match &args.segment {
         Some(path) => {
-            let classes: Vec<Option<f64>> =
-                et_recon::segment(&image.pixels, &objects, et_recon::SEGMENT_LEVEL)
-                    .iter()
-                    .map(|c| c.map(|c| f64::from(c as u8)))
-                    .collect();
+            let classes = et_recon::segment::as_values(&et_recon::segment(
+                &image.pixels,
+                &objects,
+                et_recon::SEGMENT_LEVEL,
+            ));
             Some(write_pixels(
                 path,
                 grid,
