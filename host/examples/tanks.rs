@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
             format!(
                 "GCV above noise + {factor} x V_0's misfit of dV{}",
                 if factor == MISMATCH_FACTOR {
-                    " (default)"
+                    " (the default before the corner)"
                 } else {
                     ""
                 }
@@ -56,6 +56,10 @@ fn main() -> anyhow::Result<()> {
         ("discrepancy", Criterion::Discrepancy),
         ("L-curve", Criterion::LCurve),
         ("quasi-optimality", Criterion::QuasiOptimality),
+        (
+            "default: the corner above GCV's (noise + 1 % of dV)",
+            Criterion::CornerAboveFloor,
+        ),
     ] {
         all_rules.push((
             format!("{name}, noise + 2 x misfit"),
@@ -85,7 +89,13 @@ fn main() -> anyhow::Result<()> {
         ("weighted by kind", Weighting::PerKind),
         ("normalised dV / V_0", Weighting::Normalised),
     ] {
-        all_rules.push((format!("default, {name}"), d, w, gn, AlphaRule::Gcv));
+        all_rules.push((
+            format!("default, {name}"),
+            d,
+            w,
+            gn,
+            AlphaRule::Chosen(Criterion::CornerAboveFloor),
+        ));
         all_rules.push((
             format!("fixed alpha 1, {name}"),
             d,

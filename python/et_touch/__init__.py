@@ -290,7 +290,7 @@ class Image:
     def segment(self) -> np.ndarray:
         """The three-class picture (rows x cols like ``pixels``): 0 background, 1 resistive
         (the conductivity fell), 2 conductive (it rose), NaN outside the sheet. Each object's
-        pixels at or above 60 % of its own peak take its class, so a kind of target the image
+        pixels at or above half its own peak take its class, so a kind of target the image
         does not show stays empty (as `et reconstruct --segment` writes it)."""
         if self._classes is None:
             raise EtError("this image was not made by Reconstructor.image")

@@ -19,6 +19,11 @@ pub enum Criterion {
     LCurve,
     /// Quasi-optimality: where the image changes least from one candidate to the next.
     QuasiOptimality,
+    /// The L-curve's corner, never below GCV's choice above the floor given
+    /// ([`DataSpace::choose_alpha`]): the corner finds the error the frame itself shows (noise
+    /// and the model's mismatch), the floor keeps noise-free frames, which have no corner,
+    /// from running to the smallest alpha.
+    CornerAboveFloor,
 }
 
 /// The alphas automatic selection tries: 26 steps from 1e-4 to 10, five per decade (alpha is
@@ -318,6 +323,10 @@ impl DataSpace {
                     }
                 }
                 Ok(best.1)
+            }
+            Criterion::CornerAboveFloor => {
+                let corner = self.alpha_by(Criterion::LCurve, dv, var_dv, candidates)?;
+                Ok(corner.max(self.choose_alpha(dv, var_dv, candidates)?))
             }
             Criterion::QuasiOptimality => {
                 self.gcv(dv, candidates)?;

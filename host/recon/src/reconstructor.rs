@@ -36,7 +36,7 @@ use et_core::sheet::Sheet;
 use crate::background::{BackgroundError, BackgroundFit};
 use crate::fem::{FemError, TransferJacobian};
 use crate::gauss_newton::{Data, GaussNewton, Stop, gauss_newton};
-use crate::gcv::default_alphas;
+use crate::gcv::{Criterion, default_alphas};
 use crate::greit::{Greit, GreitOptions, Regularisation};
 use crate::imager::Imager;
 use crate::mesh::{Mesh, MeshError, Refinement};
@@ -466,6 +466,11 @@ impl Reconstructor {
                 let space = self.space.as_ref().ok_or(ReconError::Singular)?;
                 let alpha = match self.alpha {
                     AlphaRule::Fixed(a) => a,
+                    // The corner's floor is the least model error any frame has, not the
+                    // fitted background's.
+                    AlphaRule::Chosen(c @ Criterion::CornerAboveFloor) => {
+                        space.alpha_by(c, &dv, &floor_variance(var_dv, &dv), &default_alphas())?
+                    }
                     AlphaRule::Chosen(c) => space.alpha_by(c, &dv, &floor, &default_alphas())?,
                     AlphaRule::Gcv | AlphaRule::NoiseFigure(_) => {
                         space.choose_alpha(&dv, &floor, &default_alphas())?

@@ -131,10 +131,13 @@ pub enum AlphaRule {
     Fixed(f64),
     /// Generalised cross-validation on each frame, never fitting closer than its noise and
     /// the model's error ([`DataSpace::choose_alpha`]; for GREIT, [`Greit::choose_alpha`]): a
-    /// matrix per frame. The default: on two real tanks and the simulated ones, its worst
-    /// case is the best of the criteria (docs/measurements.md, "Defaults on real tanks").
+    /// matrix per frame. GREIT's per-frame rule; for Gauss-Newton the default before the
+    /// L-curve's corner, which holds where this over-smooths (a tank whose background misfit
+    /// does not carry into dV, docs/measurements.md "Defaults on real tanks").
     Gcv,
-    /// Gauss-Newton only: chosen on each frame by this criterion (a matrix per frame).
+    /// Gauss-Newton only: chosen on each frame by this criterion (a matrix per frame). The
+    /// default is [`crate::gcv::Criterion::CornerAboveFloor`]: on two real tanks and the
+    /// simulated ones, mismatched or not, its worst case is the best of the rules measured.
     Chosen(crate::gcv::Criterion),
     /// GREIT only: lambda set by this noise figure (one matrix for every frame, the
     /// consensus rule; 0.5 is the consensus value).
@@ -143,10 +146,10 @@ pub enum AlphaRule {
 
 impl AlphaRule {
     /// The rule a user's text asks for with `method`: a number (a fixed alpha), "gcv"
-    /// (generalised cross-validation on each frame, no closer than the noise), "discrepancy",
-    /// "lcurve" or "quasi-optimality" (those criteria on each frame, [`crate::gcv::Criterion`]), or
-    /// "auto": GCV for Gauss-Newton, and for
-    /// GREIT the lambda of `noise_figure` (one matrix for every frame, the consensus rule).
+    /// (generalised cross-validation on each frame, no closer than the noise), "corner",
+    /// "discrepancy", "lcurve" or "quasi-optimality" (those criteria on each frame,
+    /// [`crate::gcv::Criterion`]), or "auto": the corner for Gauss-Newton, and for GREIT the
+    /// lambda of `noise_figure` (one matrix for every frame, the consensus rule).
     ///
     /// # Errors
     /// [`ReconError::Parameter`] for other text.
@@ -154,16 +157,18 @@ impl AlphaRule {
         use crate::gcv::Criterion;
         let rule = match text {
             "gcv" => AlphaRule::Gcv,
+            "corner" => AlphaRule::Chosen(Criterion::CornerAboveFloor),
             "discrepancy" => AlphaRule::Chosen(Criterion::Discrepancy),
             "lcurve" | "l-curve" => AlphaRule::Chosen(Criterion::LCurve),
             "quasi-optimality" => AlphaRule::Chosen(Criterion::QuasiOptimality),
             "auto" => match method {
                 Method::Greit { .. } => AlphaRule::NoiseFigure(noise_figure),
-                Method::GaussNewton { .. } => AlphaRule::Gcv,
+                Method::GaussNewton { .. } => AlphaRule::Chosen(Criterion::CornerAboveFloor),
             },
             v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
                 ReconError::Parameter(format!(
-                    "alpha '{v}': a number, auto, gcv, discrepancy, lcurve or quasi-optimality"
+                    "alpha '{v}': a number, auto, corner, gcv, discrepancy, lcurve or \
+                     quasi-optimality"
                 ))
             })?),
         };
@@ -192,8 +197,8 @@ pub struct Spec {
 }
 
 impl Spec {
-    /// `sheet` measured by `schedule`: one-step Gauss-Newton (s = 0.5), alpha by GCV per
-    /// frame, about 8 000 triangles, 64 pixels across, the protocol's threshold.
+    /// `sheet` measured by `schedule`: one-step Gauss-Newton (s = 0.5), alpha by the L-curve's
+    /// corner above GCV's floor per frame, about 8 000 triangles, 64 pixels across, the protocol's threshold.
     #[must_use]
     pub fn new(sheet: Sheet, schedule: Schedule) -> Self {
         Self {
@@ -204,7 +209,7 @@ impl Spec {
                 refine: Vec::new(),
             },
             method: Method::default(),
-            alpha: AlphaRule::Gcv,
+            alpha: AlphaRule::Chosen(crate::gcv::Criterion::CornerAboveFloor),
             pixels: 64,
             threshold: None,
         }

@@ -76,15 +76,18 @@ pub(crate) struct ReconstructArgs {
     /// over the sheet, lambda set by the noise figure). docs/method.md §6.
     #[arg(long, value_enum, default_value_t = Method::Gn)]
     method: Method,
-    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), "auto" or
-    /// "gcv". For gn both choose it by generalised cross-validation on the frame, never
-    /// fitting it closer than its noise and the model's error (the discrepancy principle as a
-    /// floor; with a fitted background the model's error is twice the share of V_0 it leaves
-    /// unexplained, per kind of value); "discrepancy", "lcurve" and "quasi-optimality" choose
-    /// it by those criteria instead (docs/measurements.md compares them); for greit
-    /// "auto" sets it by --noise-figure (one lambda for every frame, the consensus rule) and
-    /// "gcv" by cross-validation on this frame (finds touches where the protocol sees little,
-    /// as the centre for adjacent drive; places others less closely).
+    /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or a rule
+    /// that chooses it on each frame. For gn, "auto" (or "corner") takes the L-curve's corner
+    /// (where fitting the frame closer costs the image most: the error the frame itself
+    /// shows, noise and the model's mismatch with a real sheet), never below what generalised
+    /// cross-validation takes above the frame's noise and 1 % of its change; "gcv" takes
+    /// GCV's choice above the noise and the fitted background's misfit (twice the share of
+    /// V_0 left unexplained, per kind of value: smoother); "discrepancy", "lcurve" and
+    /// "quasi-optimality" those criteria alone (docs/measurements.md compares them all on
+    /// two real tanks). For greit "auto" sets it by --noise-figure (one lambda for every
+    /// frame, the consensus rule) and "gcv" by cross-validation on this frame (finds touches
+    /// where the protocol sees little, as the centre for adjacent drive; places others less
+    /// closely).
     #[arg(long, default_value = "auto")]
     alpha: String,
     /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
@@ -150,7 +153,7 @@ pub(crate) struct ReconstructArgs {
     image_out: Option<PathBuf>,
     /// Also write the three-class picture as a NumPy .npy: 0 background, 1 resistive (the
     /// conductivity fell), 2 conductive (it rose), NaN outside the sheet, top row first, on
-    /// --image-out's grid. Each object's pixels at or above 60 % of its own peak take its
+    /// --image-out's grid. Each object's pixels at or above half its own peak take its
     /// class, so a kind of target the image does not show stays empty (the picture
     /// tomography challenges score; docs/method.md §6.5).
     #[arg(long, value_name = "NPY")]
@@ -298,7 +301,7 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
     };
     let alpha = AlphaRule::from_text(&args.alpha, &method, args.noise_figure).map_err(|_| {
         anyhow::anyhow!(
-            "--alpha '{}': a number, auto, gcv, discrepancy, lcurve or quasi-optimality",
+            "--alpha '{}': a number, auto, corner, gcv, discrepancy, lcurve or quasi-optimality",
             args.alpha
         )
     })?;
@@ -430,8 +433,8 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         let share =
             |s: Option<f64>| s.map_or("none measured".into(), |s| format!("{:.2} %", 100.0 * s));
         eprintln!(
-            "model error: it leaves {} of V_0 on drive electrodes, {} off them; imaging counts \
-             {} times that share of each change as the model's error",
+            "model error: it leaves {} of V_0 on drive electrodes, {} off them; the objects' \
+             noise counts {} times that share of each change as the model's error",
             share(fit.misfit_on_drive),
             share(fit.misfit_off_drive),
             et_recon::reconstructor::MISMATCH_FACTOR
