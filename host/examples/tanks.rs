@@ -9,7 +9,8 @@
 //!
 //! Run: `cargo run --release -p et-host --example tanks` (ET_TANKS_RULES picks rules by name,
 //! `;` between; ET_TANKS_LEVELS the segmentation's shares; ET_LINEAR=1 prints the
-//! linearisation's misfit at each rule's images, `Reconstructor::linearisation_misfit`).
+//! linearisation's misfit at each rule's images, `Reconstructor::linearisation_misfit`;
+//! ET_TANKS_WRITE=dir writes each tank's scene, protocol and frames there and stops).
 
 #[path = "../tests/support/tanks.rs"]
 mod tanks;
@@ -22,6 +23,17 @@ fn main() -> anyhow::Result<()> {
     let Some(all) = tanks::both() else {
         anyhow::bail!("no ../shared/data/tanks beside the project");
     };
+    // ET_TANKS_WRITE=dir: each tank's scene, protocol and frames as a user writes them, for
+    // `et reconstruct` by hand (dir/kit4-2017/scene.toml, protocol.csv, frames.csv; the same for
+    // ktc2023-training).
+    if let Some(dir) = std::env::var_os("ET_TANKS_WRITE") {
+        for tank in &all {
+            let folder = tank.name.split(' ').next().unwrap_or(tank.name);
+            let (scene, frames) = tank.write(&std::path::Path::new(&dir).join(folder));
+            println!("{}: {} {}", tank.name, scene.display(), frames.display());
+        }
+        return Ok(());
+    }
     use et_recon::gcv::Criterion;
     use et_recon::reconstructor::{MISMATCH_FACTOR, Weighting};
     /// A rule: its name, the model's error (None: the constant shares of before), the

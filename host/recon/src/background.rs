@@ -62,23 +62,43 @@ pub enum BackgroundError {
     Sign(f64),
 }
 
-/// The unit sheet's frame with contacts of `rho` ohm (or the sheet's point or shunt model).
-fn unit_frame(
-    sheet: &Sheet,
-    mesh: &Mesh,
-    schedule: &Schedule,
-    rho: Option<f64>,
-) -> Result<Vec<f64>, FemError> {
-    let electrodes = match rho {
-        Some(rho) => Electrodes::Complete(vec![
-            rho * sheet.electrodes.width;
-            usize::from(sheet.electrodes.count)
-        ]),
-        None => Electrodes::of_sheet(sheet)?,
-    };
-    let forward = Forward::new(mesh.clone(), electrodes)?;
-    let n = forward.mesh().triangles.len();
-    forward.frame(&vec![1.0; n], schedule)
+/// The unit sheet's frames: one forward model whose contacts change between solves (its
+/// pattern and symbolic factorisation made once).
+struct UnitSheet<'a> {
+    forward: Forward,
+    width: f64,
+    count: usize,
+    schedule: &'a Schedule,
+}
+
+impl<'a> UnitSheet<'a> {
+    /// `sheet`'s electrode model on `mesh` (the complete model at contacts of 1 ohm until
+    /// [`UnitSheet::frame`] asks for others).
+    fn new(sheet: &Sheet, mesh: &Mesh, schedule: &'a Schedule) -> Result<Self, FemError> {
+        let count = usize::from(sheet.electrodes.count);
+        let width = sheet.electrodes.width;
+        let electrodes = match sheet.electrodes.model {
+            ElectrodeModel::Complete => Electrodes::Complete(vec![width; count]),
+            _ => Electrodes::of_sheet(sheet)?,
+        };
+        Ok(Self {
+            forward: Forward::new(mesh.clone(), electrodes)?,
+            width,
+            count,
+            schedule,
+        })
+    }
+
+    /// The unit sheet's frame with contacts of `rho` ohm (None: the sheet's point or shunt
+    /// model).
+    fn frame(&mut self, rho: Option<f64>) -> Result<Vec<f64>, FemError> {
+        if let Some(rho) = rho {
+            self.forward
+                .set_contacts(vec![rho * self.width; self.count])?;
+        }
+        let n = self.forward.mesh().triangles.len();
+        self.forward.frame(&vec![1.0; n], self.schedule)
+    }
 }
 
 /// (R_s, |V_0 - R_s F| / |V_0|) for the unit frame `f`.
@@ -114,13 +134,14 @@ pub fn fit(
     }
     let complete = matches!(sheet.electrodes.model, ElectrodeModel::Complete);
     let ratio = sheet.electrodes.contact_ohm / sheet.sheet_resistance;
+    let unit = std::cell::RefCell::new(UnitSheet::new(sheet, mesh, schedule)?);
     let solves = std::cell::Cell::new(1);
     let eval = |rho: Option<f64>| -> Result<(f64, f64), BackgroundError> {
         solves.set(solves.get() + 1);
-        Ok(scale(&unit_frame(sheet, mesh, schedule, rho)?, v0))
+        Ok(scale(&unit.borrow_mut().frame(rho)?, v0))
     };
     let scene_rho = complete.then_some(ratio);
-    let scene_frame = unit_frame(sheet, mesh, schedule, scene_rho)?;
+    let scene_frame = unit.borrow_mut().frame(scene_rho)?;
     let scene_fit = scale(&scene_frame, v0);
     // The scene's own residual, at its R_s (not the fitted scale).
     let scene_residual = {
@@ -243,7 +264,9 @@ mod tests {
         let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
         let n = mesh.triangles.len();
         let v0 = forward.frame(&vec![1.0 / rs; n], &schedule).unwrap();
-        let unit = unit_frame(&sheet, &mesh, &schedule, Some(contact / rs)).unwrap();
+        let unit = UnitSheet::new(&sheet, &mesh, &schedule)
+            .and_then(|mut u| u.frame(Some(contact / rs)))
+            .unwrap();
         for (a, b) in v0.iter().zip(&unit) {
             assert!(
                 (a - rs * b).abs() < 1e-9 * a.abs().max(1e-3),

@@ -127,8 +127,9 @@ pub struct Solution {
 enum Entry {
     /// sigma_t times entry k of triangle t's unit stiffness.
     Stiffness { t: usize, k: usize },
-    /// A contact term (independent of sigma).
-    Fixed(f64),
+    /// A contact term of electrode `e` (independent of sigma): `weight` / z_e, `weight` in m
+    /// (its share of the electrode's edge length).
+    Contact { e: usize, weight: f64 },
 }
 
 /// The system's sparsity, fixed per mesh and electrode model: its entries, their order in CSC
@@ -224,20 +225,20 @@ fn make_pattern(
             }
         }
     }
-    if let Electrodes::Complete(z) = electrodes {
+    if let Electrodes::Complete(_) = electrodes {
         for (e, edges) in mesh.electrodes.iter().enumerate() {
             for &[a, b] in edges {
                 let len = dist(mesh.nodes[a], mesh.nodes[b]);
-                let k = len / z[e];
-                put(a, a, Entry::Fixed(k / 3.0));
-                put(b, b, Entry::Fixed(k / 3.0));
-                put(a, b, Entry::Fixed(k / 6.0));
-                put(b, a, Entry::Fixed(k / 6.0));
+                let contact = |weight: f64| Entry::Contact { e, weight };
+                put(a, a, contact(len / 3.0));
+                put(b, b, contact(len / 3.0));
+                put(a, b, contact(len / 6.0));
+                put(b, a, contact(len / 6.0));
                 for v in [a, b] {
-                    put(v, n + e, Entry::Fixed(-k / 2.0));
-                    put(n + e, v, Entry::Fixed(-k / 2.0));
+                    put(v, n + e, contact(-len / 2.0));
+                    put(n + e, v, contact(-len / 2.0));
                 }
-                put(n + e, n + e, Entry::Fixed(k));
+                put(n + e, n + e, contact(len));
             }
         }
     }
@@ -315,6 +316,32 @@ impl Forward {
         })
     }
 
+    /// Other contact impedances z_l (ohm m) for the complete model, keeping the mesh, the
+    /// system's pattern and its symbolic factorisation (a background fit's search over the
+    /// contact solves at many).
+    ///
+    /// # Errors
+    /// [`FemError::Input`] for another electrode model, or impedances of the wrong count or
+    /// not finite and positive.
+    pub fn set_contacts(&mut self, z: Vec<f64>) -> Result<(), FemError> {
+        let l = self.mesh.electrodes.len();
+        match &mut self.electrodes {
+            Electrodes::Complete(old) => {
+                if z.len() != l || z.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                    return Err(FemError::Input(format!(
+                        "{} contact impedances for {l} electrodes, each finite and > 0",
+                        z.len()
+                    )));
+                }
+                *old = z;
+                Ok(())
+            }
+            _ => Err(FemError::Input(
+                "contact impedances are the complete electrode model's".into(),
+            )),
+        }
+    }
+
     /// The mesh.
     #[must_use]
     pub fn mesh(&self) -> &Mesh {
@@ -362,13 +389,17 @@ impl Forward {
         }
         let size = self.size;
         let idx = |full: usize| self.unknown[full];
+        let z: &[f64] = match &self.electrodes {
+            Electrodes::Complete(z) => z,
+            _ => &[],
+        };
         let values: Vec<f64> = self
             .pattern
             .entries
             .iter()
             .map(|e| match *e {
                 Entry::Stiffness { t, k } => sigma[t] * self.local[t][k],
-                Entry::Fixed(v) => v,
+                Entry::Contact { e, weight } => weight / z[e],
             })
             .collect();
         let a = SparseColMat::new_from_argsort(
@@ -448,16 +479,31 @@ impl Forward {
     /// measuring on a drive electrode with point electrodes.
     pub fn frame(&self, sigma: &[f64], schedule: &Schedule) -> Result<Vec<f64>, FemError> {
         self.check(schedule)?;
-        let sol = self.solve(sigma, &Self::injection_currents(schedule))?;
+        let currents = Self::injection_currents(schedule);
+        let l = currents.nrows();
+        // More injections than the L - 1 independent patterns: solve for those (+1 A into
+        // electrode c, out of the last) and combine them, as every injection's currents sum
+        // to 0 (I = sum_{c < L-1} I_c (e_c - e_{L-1})).
+        let u = if currents.ncols() > l - 1 {
+            let basis = DMatrix::from_fn(l, l - 1, |e, c| {
+                if e == c {
+                    1.0
+                } else if e == l - 1 {
+                    -1.0
+                } else {
+                    0.0
+                }
+            });
+            self.solve(sigma, &basis)?.electrodes * currents.rows(0, l - 1)
+        } else {
+            self.solve(sigma, &currents)?.electrodes
+        };
         let (_, of_row) = schedule.injections();
         Ok(schedule
             .rows()
             .iter()
             .zip(of_row)
-            .map(|(r, i)| {
-                sol.electrodes[(usize::from(r.positive), i)]
-                    - sol.electrodes[(usize::from(r.negative), i)]
-            })
+            .map(|(r, i)| u[(usize::from(r.positive), i)] - u[(usize::from(r.negative), i)])
             .collect())
     }
 }

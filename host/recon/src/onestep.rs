@@ -176,16 +176,7 @@ impl DataSpace {
         if g.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
-        // diag(J^T J)_t = |M g_t|^2.
-        let diag: Vec<f64> = (0..g.ncols())
-            .map(|t| {
-                let col = g.column(t);
-                jac.combination
-                    .iter()
-                    .map(|row| row.iter().map(|&(p, c)| c * col[p]).sum::<f64>().powi(2))
-                    .sum()
-            })
-            .collect();
+        let diag = jtj_diagonal(&jac.combination, g);
         let p_inv = noser_weights(&diag, s).ok_or(ReconError::Singular)?;
         let g = MatRef::from_column_major_slice(g.as_slice(), g.nrows(), g.ncols());
         Ok(Self::build(jac.combination.clone(), g, s, &p_inv))
@@ -544,27 +535,9 @@ fn check_alpha(alpha: f64) -> Result<(), ReconError> {
     }
 }
 
-/// The NOSER weights P^-1 = diag(J^T J)^-s (a column that sees nothing gets the smallest
-/// positive weight's), or None when every column is zero.
-pub(crate) fn noser_inverse(jac: &DMatrix<f64>, s: f64) -> Option<Vec<f64>> {
-    let diag: Vec<f64> = (0..jac.ncols())
-        .map(|c| jac.column(c).norm_squared())
-        .collect();
-    noser_weights(&diag, s)
-}
-
-/// P^-1 = diag^-s from diag(J^T J) (`diag`, T values), as [`noser_inverse`].
-fn noser_weights(diag: &[f64], s: f64) -> Option<Vec<f64>> {
-    let floor = diag
-        .iter()
-        .copied()
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    floor
-        .is_finite()
-        .then(|| diag.iter().map(|d| d.max(floor).powf(-s)).collect())
-}
-
 mod matrix;
+mod prior;
 mod weights;
 pub use matrix::*;
+pub(crate) use prior::noser_inverse;
+use prior::{jtj_diagonal, noser_weights};

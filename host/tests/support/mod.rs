@@ -1,4 +1,4 @@
 //! What several of the host's tests share.
 
-pub mod tanks;
 pub mod stand_in;
+pub mod tanks;
