@@ -303,8 +303,9 @@ class Reconstructor:
 
     ``triangles``: about how many triangles to mesh the sheet with. ``method``: "gn" (one-step
     Gauss-Newton with the NOSER prior; ``iterations`` > 1 refits) or "greit". ``alpha``:
-    "auto" (Gauss-Newton: generalised cross-validation on each frame, never closer than its
-    noise; GREIT: the noise figure's lambda), "gcv", or a number. ``pixels``: pixels across the
+    "auto" (Gauss-Newton: the L-curve's corner on each frame, never below generalised
+    cross-validation's choice above the noise and 1 % of the change; GREIT: the noise figure's
+    lambda), "corner", "gcv", "discrepancy", "lcurve", "quasi-optimality", or a number. ``pixels``: pixels across the
     image. ``threshold``: the share of the peak a region must reach (default: the protocol's).
     ``s``: the NOSER exponent; ``noise_figure`` and ``radius_m``: GREIT's. Set-up runs without
     the GIL.

@@ -125,14 +125,31 @@ impl std::fmt::Debug for Reconstructor {
 
 impl Reconstructor {
     fn new(spec: Spec) -> Result<Self, ImagingError> {
+        let mut r = Self::unprepared(spec, true)?;
+        r.prepare()?;
+        Ok(r)
+    }
+
+    /// The mesh and the forward model, and the Jacobian at the spec's background when
+    /// `jacobian` (else an empty one: a background fit makes it, about the fitted sheet);
+    /// nothing prepared for the frames ([`Reconstructor::prepare`]).
+    fn unprepared(spec: Spec, jacobian: bool) -> Result<Self, ImagingError> {
         let clock = Instant::now();
         let mesh = spec.mesh.mesh(&spec.sheet)?;
         let mesh_s = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
         let imager = Imager::new(&spec.sheet, mesh, spec.pixels)?;
-        let jac = imager.transfer_jacobian(&spec.schedule)?;
+        let jac = if jacobian {
+            imager.transfer_jacobian(&spec.schedule)?
+        } else {
+            TransferJacobian {
+                frame: Vec::new(),
+                combination: Vec::new(),
+                g: nalgebra::DMatrix::zeros(0, 0),
+            }
+        };
         let forward_jacobian = clock.elapsed().as_secs_f64();
-        let mut r = Self {
+        Ok(Self {
             sheet: spec.sheet,
             pixels: spec.pixels,
             threshold: spec.threshold,
@@ -155,9 +172,7 @@ impl Reconstructor {
                 forward_jacobian,
                 matrix: 0.0,
             },
-        };
-        r.prepare()?;
-        Ok(r)
+        })
     }
 
     /// What the method keeps for every frame: Gauss-Newton's data space (and the matrix at a

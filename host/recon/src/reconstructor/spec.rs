@@ -224,6 +224,24 @@ impl Spec {
     pub fn set_up(self) -> Result<Reconstructor, ImagingError> {
         Reconstructor::new(self)
     }
+
+    /// As [`Spec::set_up`] followed by [`Reconstructor::fit_background`] to the reference
+    /// `v0` (K values, V) with the values weighted by `weighting`, without first making the
+    /// Jacobian and matrix about the spec's background (which the fit replaces): the set-up a
+    /// recording with its own reference frame needs, in about half the time.
+    ///
+    /// # Errors
+    /// As [`Spec::set_up`] and [`Reconstructor::fit_background`].
+    pub fn set_up_fitted(
+        self,
+        v0: &[f64],
+        weighting: Weighting,
+    ) -> Result<(Reconstructor, BackgroundFit), ImagingError> {
+        let mut r = Reconstructor::unprepared(self, false)?;
+        r.set_weighting(weighting);
+        let fit = r.fit_background(v0)?;
+        Ok((r, fit))
+    }
 }
 
 /// The untouched sheet's frame V_0 and the noise of dV per channel.

@@ -371,25 +371,13 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         threshold: args.threshold,
         ..et_recon::Spec::new(sheet.clone(), schedule)
     };
-    let mut recon = spec.set_up()?;
-    let set_up = recon.set_up_timings;
     let stage = |what: &str, dt: f64| match dt < 0.01 {
         true => eprintln!("{what:<44} {:>8.1} us", dt * 1e6),
         false => eprintln!("{what:<44} {dt:>8.3} s"),
     };
-    let t_n = recon.imager().triangles();
-    stage(&format!("mesh ({t_n} triangles)"), set_up.mesh);
-    stage(
-        &format!(
-            "forward + Jacobian (K = {}, r = {})",
-            recon.jacobian().frame.len(),
-            recon.jacobian().pairs()
-        ),
-        set_up.forward_jacobian,
-    );
     let clock = Instant::now();
     let (reference, v1, truth) = match (table, config) {
-        (Some(path), _) => table_frames(args, path, recon.schedule().frame_len())?,
+        (Some(path), _) => table_frames(args, path, spec.schedule.frame_len())?,
         (None, Some(config)) => frames(args, &scene, recording.as_ref(), &config)?,
         (None, None) => bail!("no frames to image"),
     };
@@ -406,16 +394,29 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
             args.weights
         );
     }
-    recon.set_weighting(weighting);
-    let background = if fit_background {
-        let clock = Instant::now();
-        let fit = recon.fit_background(&reference.v0)?;
+    // With a fitted background the Jacobian and matrix are made once, about the fit.
+    let clock = Instant::now();
+    let (mut recon, fit) = if fit_background {
+        let (recon, fit) = spec.set_up_fitted(&reference.v0, weighting)?;
+        (recon, Some(fit))
+    } else {
+        (spec.set_up()?, None)
+    };
+    let set_up = recon.set_up_timings;
+    let t_n = recon.imager().triangles();
+    stage(&format!("mesh ({t_n} triangles)"), set_up.mesh);
+    let jacobian = format!(
+        "(K = {}, r = {})",
+        recon.jacobian().frame.len(),
+        recon.jacobian().pairs()
+    );
+    let background = if let Some(fit) = fit {
         stage(
             &format!(
-                "background fit ({} solves + forward + Jacobian)",
+                "background fit ({} solves), forward + Jacobian {jacobian}",
                 fit.solves
             ),
-            clock.elapsed().as_secs_f64(),
+            clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix,
         );
         eprintln!(
             "background: {:.4} ohm/sq, contact {:.4} ohm{}; the model leaves {:.2} % of V_0 \
@@ -448,6 +449,10 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         }
         Some(fit)
     } else {
+        stage(
+            &format!("forward + Jacobian {jacobian}"),
+            set_up.forward_jacobian,
+        );
         None
     };
     let image = recon.image(&v1, &reference)?;
