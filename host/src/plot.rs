@@ -59,18 +59,52 @@ pub fn write_png(
     (width, height): (u32, u32),
     alpha: bool,
 ) -> Result<(), PlotError> {
-    use image::ImageEncoder as _;
-    let colour = if alpha {
-        image::ColorType::Rgba8
-    } else {
-        image::ColorType::Rgb8
-    };
     let file = std::fs::File::create(path).map_err(|e| fail(path, e))?;
-    let mut out = std::io::BufWriter::new(file);
-    image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(pixels, width, height, colour)
-        .map_err(|e| fail(path, e))?;
-    std::io::Write::flush(&mut out).map_err(|e| fail(path, e))
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(if alpha {
+        png::ColorType::Rgba
+    } else {
+        png::ColorType::Rgb
+    });
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| fail(path, e))?;
+    writer.write_image_data(pixels).map_err(|e| fail(path, e))?;
+    writer.finish().map_err(|e| fail(path, e))
+}
+
+/// Reads a PNG of 8-bit RGB, RGBA, grey or grey-alpha pixels: its width, height and RGB
+/// pixels (rows, 3 bytes a pixel; alpha dropped).
+///
+/// # Errors
+/// [`PlotError`] naming the file, for one that cannot be read or decoded, or another kind of
+/// pixel.
+pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<u8>), PlotError> {
+    let file = std::fs::File::open(path).map_err(|e| fail(path, e))?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(|e| fail(path, e))?;
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| fail(path, "an image too large to decode"))?;
+    let mut buf = vec![0u8; size];
+    let info = reader.next_frame(&mut buf).map_err(|e| fail(path, e))?;
+    let data = &buf[..info.buffer_size()];
+    let rgb: Vec<u8> = match (info.color_type, info.bit_depth) {
+        (png::ColorType::Rgb, png::BitDepth::Eight) => data.to_vec(),
+        (png::ColorType::Rgba, png::BitDepth::Eight) => data
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect(),
+        (png::ColorType::Grayscale, png::BitDepth::Eight) => {
+            data.iter().flat_map(|&g| [g, g, g]).collect()
+        }
+        (png::ColorType::GrayscaleAlpha, png::BitDepth::Eight) => data
+            .chunks_exact(2)
+            .flat_map(|p| [p[0], p[0], p[0]])
+            .collect(),
+        (c, d) => return Err(fail(path, format!("{c:?} pixels of {d:?}: not 8-bit"))),
+    };
+    Ok((info.width, info.height, rgb))
 }
 
 fn fonts() -> Result<(), String> {

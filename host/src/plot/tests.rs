@@ -1,9 +1,8 @@
 use super::*;
 
-/// Decodes a PNG's size and RGB pixels with the `image` crate plotters writes with.
+/// A PNG's size and RGB pixels.
 fn pixels(path: &Path) -> (u32, u32, Vec<u8>) {
-    let img = image::open(path).expect("a PNG").to_rgb8();
-    (img.width(), img.height(), img.into_raw())
+    read_png(path).expect("a PNG")
 }
 
 #[test]
