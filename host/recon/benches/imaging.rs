@@ -1,7 +1,8 @@
 //! Imaging speed: mesh + forward + Jacobian + one-step matrix for a 16-electrode disc
 //! (adjacent protocol, complete electrode model) at about 2 000, 8 000 and 30 000 triangles,
 //! and 32 electrodes PP-PP at 8 000; other systems' protocols of 1 264 and 2 304 values at
-//! 8 000; GREIT's set-up at 2 000 and 8 000; the one-step matrix
+//! 8 000, and the 32-electrode one fitted to its reference and imaging its first frame with
+//! defaults (what `et reconstruct` does with a tank's frame); GREIT's set-up at 2 000 and 8 000; the one-step matrix
 //! alone; a live frame onto the mesh
 //! against reading its matrix once (the memory-bandwidth limit) and onto a 32 x 32 grid. One
 //! core: faer runs sequentially, nalgebra is single-threaded.
@@ -129,6 +130,63 @@ fn set_up_foreign_protocol_8000(electrodes: u16) -> usize {
     .imager()
     .triangles()
 }
+
+/// Another system's 32-electrode tank as `et reconstruct` images one of its frames with
+/// defaults: the set-up fitted to the reference frame ([`Spec::set_up_fitted`]: mesh, the
+/// background's sheet resistance and contact, the Jacobian there, the data space) and the
+/// first frame's image (alpha at the L-curve's corner, the one-step matrix at it, the frame,
+/// its noise and objects). The 32-electrode protocol of `set_up_foreign_protocol_8000`
+/// (K = 2 304) on a 28 cm tank at 8 000 triangles; V_0 and the frame from the finite elements
+/// on a finer mesh at another sheet resistance and contact, the frame with a rod of 5 times
+/// the conductivity 7 cm from the centre.
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn set_up_fitted_and_first_frame_32_electrodes() -> usize {
+    let (spec, v0, v1) = &*TANK_32;
+    let reference = et_recon::Reference::from_frames(&[v0]).expect("V_0");
+    let (mut r, _) = spec
+        .clone()
+        .set_up_fitted(&reference.v0, et_recon::reconstructor::Weighting::Alike)
+        .expect("set-up");
+    r.image(v1, &reference).expect("image").touches.len()
+}
+
+static TANK_32: LazyLock<(Spec, Vec<f32>, Vec<f32>)> = LazyLock::new(|| {
+    let l = 32u16;
+    let odd = |i: u16| (2 * i + 1) % l;
+    let injections: Vec<(u16, u16)> = (1..=4)
+        .flat_map(|d| (0..l / 2).map(move |i| (odd(i), odd(i + d))))
+        .chain((0..l / 4).map(|i| (odd(i), odd(i + l / 4))))
+        .collect();
+    let schedule = et_core::schedule::Schedule::adjacent_pairs_under(l, &injections, 1e-3)
+        .expect("a schedule");
+    let mut sheet = Sheet::disc(0.14, 32);
+    sheet.electrodes.width = 0.01;
+    // The tank: a finer mesh, 10 % more resistive, contacts twice the scene's.
+    let mut tank = sheet.clone();
+    tank.sheet_resistance *= 1.1;
+    tank.electrodes.contact_ohm *= 2.0;
+    let mesh = Mesh::with_about(&tank, 20_000).expect("mesh");
+    let fwd = Forward::new(mesh, Electrodes::of_sheet(&tank).expect("z")).expect("forward");
+    let sigma0 = 1.0 / tank.sheet_resistance;
+    let mut sigma = vec![sigma0; fwd.mesh().triangles.len()];
+    let f32s = |v: Vec<f64>| v.into_iter().map(|x| x as f32).collect::<Vec<f32>>();
+    let v0 = f32s(fwd.frame(&sigma, &schedule).expect("V_0"));
+    for (t, s) in sigma.iter_mut().enumerate() {
+        let [x, y] = fwd.mesh().centroid(t);
+        if (x - 0.07).hypot(y) < 0.02 {
+            *s = 5.0 * sigma0;
+        }
+    }
+    let v1 = f32s(fwd.frame(&sigma, &schedule).expect("V_1"));
+    let spec = Spec {
+        mesh: MeshPlan::About {
+            triangles: 8_000,
+            refine: Vec::new(),
+        },
+        ..Spec::new(sheet, schedule)
+    };
+    (spec, v0, v1)
+});
 
 /// GREIT's full set-up at the consensus noise figure: mesh, forward model, Jacobian, the
 /// desired images, the noise-figure search and the matrix onto a 64 x 64 grid (16 electrodes,

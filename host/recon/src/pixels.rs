@@ -148,6 +148,27 @@ impl PixelGrid {
             .collect()
     }
 
+    /// [`OneStep::noise_sd`] on the pixels for dV's variance `var_dv` (K values, V^2),
+    /// computed for the triangles under them only.
+    ///
+    /// # Errors
+    /// As [`OneStep::noise_sd_of`].
+    pub fn noise_sd(
+        &self,
+        r: &OneStep,
+        var_dv: &[f64],
+    ) -> Result<Vec<Option<f64>>, crate::onestep::ReconError> {
+        let mut under: Vec<usize> = self.triangle.iter().flatten().copied().collect();
+        under.sort_unstable();
+        under.dedup();
+        let sd = r.noise_sd_of(var_dv, &under)?;
+        Ok(self
+            .triangle
+            .iter()
+            .map(|t| t.and_then(|t| under.binary_search(&t).ok().map(|i| sd[i])))
+            .collect())
+    }
+
     /// An image (one value per pixel, the bottom row first, as [`PixelGrid::image`] gives)
     /// as a picture is read: rows from the top, row-major (height x width), each value times
     /// `scale`, NaN outside the sheet. `plt.imshow` shows it upright.

@@ -468,6 +468,15 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
         assert!((sum_sq[t].sqrt() / sd[t] - 1.0).abs() < 0.03, "{t}");
     }
     assert!(recon.noise_sd(&var_dv[..4]).is_err());
+    // Some triangles only, in any order, repeated: the same values.
+    let some = recon.noise_sd_of(&var_dv, &[6, 2, 2, 0]).unwrap();
+    for (s, t) in some.iter().zip([6, 2, 2, 0]) {
+        assert!((s - sd[t]).abs() <= 1e-12 * sd[t], "{t}");
+    }
+    assert!(matches!(
+        recon.noise_sd_of(&var_dv, &[7]),
+        Err(ReconError::Parameter(_))
+    ));
     // Touches are given their largest value over noise; unknown noise keeps a region.
     let g = plain_grid(4, 1);
     let image = vec![Some(1.0), Some(6.0), Some(1.0), Some(4.0)];

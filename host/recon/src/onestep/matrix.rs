@@ -114,7 +114,23 @@ impl OneStep {
     /// # Errors
     /// [`ReconError::Parameter`] for a wrong length.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
+        let all: Vec<usize> = (0..self.triangles()).collect();
+        self.noise_sd_of(var_dv, &all)
+    }
+
+    /// [`OneStep::noise_sd`] of the triangles `rows` only (each < T), in their order: an
+    /// image drawn on pixels needs only the triangles under them.
+    ///
+    /// # Errors
+    /// [`ReconError::Parameter`] for a wrong length or a triangle out of range.
+    pub fn noise_sd_of(&self, var_dv: &[f64], rows: &[usize]) -> Result<Vec<f64>, ReconError> {
         self.check_len(var_dv.len(), "variances")?;
+        if let Some(t) = rows.iter().find(|&&t| t >= self.triangles()) {
+            return Err(ReconError::Parameter(format!(
+                "triangle {t}, the mesh has {}",
+                self.triangles()
+            )));
+        }
         let r = self.xt.nrows();
         let w = Mat::from_fn(self.frame_len(), r, |k, j| {
             self.xt[(j, k)] * var_dv[k].max(0.0).sqrt()
@@ -126,8 +142,25 @@ impl OneStep {
             r,
             |i, j| if i <= j { thin[(i, j)] } else { 0.0 },
         );
-        let y = product(upper.as_ref(), self.gp.as_ref());
-        Ok((0..self.triangles())
+        let g = Mat::from_fn(r, rows.len(), |i, t| self.gp[(i, rows[t])]);
+        let mut y = Mat::<f64>::zeros(upper.nrows(), rows.len());
+        // R_W is upper triangular (thin.nrows() = min(K, r) rows): half the products.
+        faer::linalg::matmul::triangular::matmul(
+            y.as_mut(),
+            BlockStructure::Rectangular,
+            Accum::Replace,
+            upper.as_ref(),
+            if upper.nrows() == r {
+                BlockStructure::TriangularUpper
+            } else {
+                BlockStructure::Rectangular
+            },
+            g.as_ref(),
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        );
+        Ok((0..rows.len())
             .map(|t| y.col(t).iter().map(|v| v * v).sum::<f64>().sqrt())
             .collect())
     }

@@ -273,7 +273,7 @@ impl Reference {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameTimings {
     /// The matrix made for this frame (GCV's choice of alpha and the matrix at it, and the
-    /// f32 operator a one-step frame is applied with, made for the matrix's first frame);
+    /// f32 operator one-step frames are applied with, made for the matrix's second frame);
     /// None when all of it was made before or the fit is iterative.
     pub matrix: Option<f64>,
     /// Imaging: the matrix applied to dV and drawn on the pixels (the whole fit when
