@@ -23,8 +23,8 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-echo "== building et (release)"
-cargo build --release -q -p et-host --bin et
+echo "== building et (release, with the viewer)"
+cargo build --release -q -p et-host --features viewer --bin et
 et=target/release/et
 
 echo "== et demo (its model and its figures)"

@@ -9,7 +9,8 @@
 # model.json, nextday.csv, plots/, model.etm, F.csv, T.csv, m.json, own-plots/) are written
 # where the README says, in the repository's root; the script refuses to start if any of them
 # exists (so nothing of yours is replaced) and removes them at the end (KEEP=1 keeps them).
-# `et view` runs under Xvfb (Debian's xvfb) for a few seconds when xvfb-run is installed.
+# `et view` runs under Xvfb (Debian's xvfb) for a few seconds when xvfb-run is installed, as
+# the README writes it: `et` with `--features viewer`.
 # Commands that need a board (et record/upload/stream --port, the training wizard, flashing
 # the firmware) are not run here: tests/tests/qemu.rs runs the same commands' code against the
 # firmware image in QEMU over a pseudo-terminal.
@@ -30,6 +31,7 @@ cleanup() {
 trap cleanup EXIT
 
 et() { cargo run --release -q -p et-host --bin et -- "$@"; }
+etv() { cargo run --release -q -p et-host --features viewer --bin et -- "$@"; }
 ran=0
 run() { # run "command as the README writes it"
   local started=$SECONDS
@@ -46,7 +48,8 @@ window() {
   fi
   printf '\n$ %s   # under Xvfb for 8 s\n' "$1"
   local status=0
-  timeout 8 xvfb-run -a -s "-screen 0 1280x800x24" bash -c "$(declare -f et); $1" || status=$?
+  timeout 8 xvfb-run -a -s "-screen 0 1280x800x24" bash -c "$(declare -f etv); et() { etv \"\$@\"; }; $1" \
+    || status=$?
   if [ "$status" -ne 124 ]; then
     echo "walkthrough: '$1' ended with status $status before its window could be used" >&2
     exit 1
@@ -54,8 +57,9 @@ window() {
   ran=$((ran + 1))
 }
 
-echo "== building et (release)"
+echo "== building et (release; with the viewer too when its windows can open)"
 cargo build --release -q -p et-host --bin et
+if command -v xvfb-run >/dev/null; then cargo build --release -q -p et-host --features viewer --bin et; fi
 
 echo "== the two commands: the main job (the test command is what CI runs)"
 run "cargo run --release -p et-host --bin et -- demo"

@@ -129,7 +129,9 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
 #[cfg(not(feature = "viewer"))]
 pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
     anyhow::bail!(
-        "this et was built without the viewer (--no-default-features); build it with its default features:\n  cargo run --release -p et-host --bin et -- view"
+        "this et was built without the viewer (the `viewer` feature, off by default: it doubles a \
+         fresh build); build it with the feature:\n  cargo run --release -p et-host --features \
+         viewer --bin et -- view\n(or install it once: cargo install --path host --features viewer)"
     )
 }
 

@@ -222,7 +222,7 @@ enum Command {
     /// with the recognised class lit and the position marker, protocol (or automatic),
     /// alpha and threshold, plots of frame rate, BVC and per-channel SNR, link health, and the
     /// training wizard. Press the simulated sheet with the mouse. Needs the `viewer` feature
-    /// (on by default; a build with --no-default-features has no viewer).
+    /// (off by default: `cargo run --release -p et-host --features viewer --bin et -- view`).
     ///
     /// Examples:
     ///   et view                                   (the simulated 13 x 13 cm sheet)
