@@ -494,32 +494,16 @@ impl Reconstructor {
                         self.one_step = Some(Matrix::new(alpha, space.one_step(alpha)?));
                         timings.matrix = Some(clock.elapsed().as_secs_f64());
                     }
-                    let Some(matrix) = &mut self.one_step else {
+                    let Some(matrix) = &self.one_step else {
                         return Err(ReconError::Singular.into());
                     };
-                    matrix.frames += 1;
-                    // The matrix's first frame from its f64 factors; from the second on, the
-                    // f32 operator (made then: part of making the matrix).
-                    if matrix.frames > 1 && matrix.operator.get().is_none() {
-                        let clock = Instant::now();
-                        matrix.operator();
-                        let made = clock.elapsed().as_secs_f64();
-                        timings.matrix = Some(timings.matrix.unwrap_or(0.0) + made);
-                    }
+                    // From the f64 factors: exact, the same image every call, and cheaper for
+                    // one frame than making the f32 operator (which the warm frames' figure,
+                    // `frame_median`, and the live pipeline's pixels use).
                     let clock = Instant::now();
-                    let (image, values) = match matrix.operator.get() {
-                        Some(op) => {
-                            let values = op.image(&dv)?;
-                            let image = on_pixels(grid, &values);
-                            timings.frame = clock.elapsed().as_secs_f64();
-                            (image, values.iter().map(|&v| f64::from(v)).collect())
-                        }
-                        None => {
-                            let values = matrix.recon.reconstruct(&dv)?;
-                            timings.frame = clock.elapsed().as_secs_f64();
-                            (grid.image(&values), values)
-                        }
-                    };
+                    let values = matrix.recon.reconstruct(&dv)?;
+                    timings.frame = clock.elapsed().as_secs_f64();
+                    let image = grid.image(&values);
                     let noise_sd = grid.noise_sd(&matrix.recon, &var)?;
                     mesh_values = Some(values);
                     (alpha, image, noise_sd)
@@ -582,13 +566,12 @@ struct Matrix {
     alpha: f64,
     /// Its f64 factors.
     recon: OneStep,
-    /// The f32 operator onto the triangles (packed, [`FrameOperator`]), made for the second
-    /// frame imaged at this matrix: one frame is cheaper from the factors than the operator is
-    /// to make (0.9 s for 32 electrodes at 8 000 triangles). The live pipeline, which images
-    /// onto the pixels through `pixel_operator`, never needs it.
+    /// The f32 operator onto the triangles (packed, [`FrameOperator`]) whose warm frames
+    /// [`Reconstructor::frame_median`] times, made when first asked for: images are made from
+    /// the f64 factors, and the operator costs more to make than a frame from them (0.7 to 1 s
+    /// for 32 electrodes at 8 000 triangles). The live pipeline, which images onto the pixels
+    /// through `pixel_operator`, never needs it.
     operator: std::sync::OnceLock<FrameOperator>,
-    /// Frames imaged at it.
-    frames: usize,
 }
 
 impl Matrix {
@@ -597,7 +580,6 @@ impl Matrix {
             alpha,
             recon,
             operator: std::sync::OnceLock::new(),
-            frames: 0,
         }
     }
 
@@ -609,7 +591,6 @@ impl Matrix {
 
 mod frame;
 mod model_error;
-use frame::on_pixels;
 pub use frame::*;
 use model_error::mismatch_and_weights;
 pub use model_error::{MISMATCH_FACTOR, Weighting};

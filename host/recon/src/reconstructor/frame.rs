@@ -32,7 +32,7 @@ pub fn onto_triangles(
 }
 
 /// Values on the mesh's triangles drawn on the grid's pixels (None outside the sheet).
-pub(super) fn on_pixels(grid: &PixelGrid, triangles: &[f32]) -> Vec<Option<f64>> {
+fn on_pixels(grid: &PixelGrid, triangles: &[f32]) -> Vec<Option<f64>> {
     grid.triangle
         .iter()
         .map(|t| t.map(|t| f64::from(triangles[t])))
@@ -48,11 +48,11 @@ impl Reconstructor {
         self.one_step.as_ref().map(|m| &m.recon)
     }
 
-    /// Makes the f32 operator one-step Gauss-Newton applies from its second frame on (the
-    /// first is imaged from the matrix's f64 factors, cheaper than making it), so that the
-    /// next frame costs only the frame; the seconds it took, 0 when there is nothing to make
-    /// (made already, GREIT, iterative Gauss-Newton, or alpha chosen per frame and no frame
-    /// imaged yet).
+    /// Makes the f32 operator onto the triangles whose warm frames
+    /// [`Reconstructor::frame_median`] times (images are made from the matrix's f64 factors,
+    /// which is cheaper for a few frames than making it); the seconds it took, 0 when there is
+    /// nothing to make (made already, GREIT, iterative Gauss-Newton, or alpha chosen per frame
+    /// and no frame imaged yet).
     pub fn prepare_frames(&self) -> f64 {
         let clock = Instant::now();
         match (self.method, &self.one_step) {
@@ -65,19 +65,20 @@ impl Reconstructor {
     }
 
     /// What a live frame costs, s: the median time of `repeats` applications of the last
-    /// imaged frame's linear reconstruction to `dv` (K values, V), each as
-    /// [`Reconstructor::image`] applies it (in f32 onto the triangles and drawn on the pixels
-    /// for one-step Gauss-Newton, onto the pixels for GREIT), with the matrix warm in cache.
-    /// This is the figure `et reconstruct` reports as the frame's time (its first application
-    /// is [`FrameTimings::frame`]); `et demo` and `cargo bench -p et-recon --bench imaging`
-    /// report the same. With `repeats` 1, one application as the caches find it. The f32
-    /// operator is made first if no frame has needed it yet (a single frame is imaged from the
-    /// f64 factors), outside the time. None for iterative Gauss-Newton (each frame is a fit),
+    /// imaged frame's linear reconstruction to `dv` (K values, V) as a stream applies it (in
+    /// f32 through the packed operator onto the triangles and drawn on the pixels for one-step
+    /// Gauss-Newton, onto the pixels for GREIT), with the matrix warm in cache.
+    /// This is the figure `et reconstruct` reports as the frame's time; `et demo` and `cargo
+    /// bench -p et-recon --bench imaging` report the same. With `repeats` 1, one application
+    /// as the caches find it. [`Reconstructor::image`] applies the one-step matrix's f64
+    /// factors instead (exact, and for one frame cheaper than making the operator:
+    /// [`FrameTimings::frame`]); the operator is made first when not yet made
+    /// ([`Reconstructor::prepare_frames`]), outside the time. None for iterative Gauss-Newton (each frame is a fit),
     /// before any matrix (alpha chosen per frame), or for `dv` of another length.
     #[must_use]
     pub fn frame_median(&self, dv: &[f64], repeats: usize) -> Option<f64> {
         let greit = self.greit.as_ref().or(self.greit_chosen.as_ref());
-        // The operator made before the clock starts (a single frame is imaged without it).
+        // The operator made before the clock starts.
         self.prepare_frames();
         let apply = || -> Option<Vec<Option<f64>>> {
             match (self.method, greit, &self.one_step) {

@@ -272,12 +272,11 @@ impl Reference {
 /// What one frame's image took, s.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameTimings {
-    /// The matrix made for this frame (GCV's choice of alpha and the matrix at it, and the
-    /// f32 operator one-step frames are applied with, made for the matrix's second frame);
+    /// The matrix made for this frame (the choice of alpha and the matrix at it);
     /// None when all of it was made before or the fit is iterative.
     pub matrix: Option<f64>,
-    /// Imaging: the matrix applied to dV and drawn on the pixels (the whole fit when
-    /// iterative).
+    /// Imaging: the matrix applied to dV (the one-step matrix's f64 factors) and drawn on the
+    /// pixels (the whole fit when iterative).
     pub frame: f64,
 }
 

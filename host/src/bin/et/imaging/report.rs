@@ -286,7 +286,8 @@ pub(super) struct Timings {
     /// and drawn on the pixels; GREIT onto the pixels). With --iterations above 1, the whole
     /// iterative fit, once.
     pub(super) frame: f64,
-    /// The first application (the matrix cold from its making), or the iterative fit.
+    /// The image's own application (the one-step matrix's f64 factors, GREIT's operator), or
+    /// the iterative fit.
     pub(super) frame_first: f64,
 }
 
