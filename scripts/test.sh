@@ -49,7 +49,7 @@ if command -v size >/dev/null; then
 fi
 
 step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
-ET_REQUIRE_QEMU=1 cargo test --workspace --features et-host/viewer
+ET_REQUIRE_QEMU=1 ET_BIN="$PWD/target/debug/et" cargo test --workspace --features et-host/viewer
 
 step "Python module (python/): built into its own virtual environment, then pytest"
 venv=target/python-venv

@@ -465,7 +465,14 @@ fn the_board_refuses_a_blob_whose_sizes_wrap_32_bit_arithmetic() {
     );
 }
 
+/// The `et` command: `$ET_BIN` when set, else built with `cargo build -p et-host`. The test
+/// command (scripts/test.sh) names the `et` its own `cargo test --workspace` built beside the
+/// tests: building it here again would compile et and half its dependencies a second time (the
+/// features differ from the workspace's), minutes on CI.
 fn build_et() -> PathBuf {
+    if let Some(et) = std::env::var_os("ET_BIN") {
+        return PathBuf::from(et);
+    }
     let status = Process::new(env!("CARGO"))
         .args(["build", "-p", "et-host", "--bin", "et"])
         .current_dir(repo())

@@ -6,11 +6,15 @@ use egui_kittest::kittest::Queryable;
 
 use super::*;
 
+/// The viewer in a harness. A live source asks for a repaint every frame, so the harness's
+/// build (which runs until no repaint is asked, at most `max_steps`) is held to a few frames:
+/// each test steps the frames it needs itself (with 10 000 the build alone simulated 10 000
+/// frames, most of a test's time).
 fn harness(options: Options) -> Harness<'static, Viewer> {
     let viewer = Viewer::new(options).unwrap();
     Harness::builder()
         .with_size(vec2(1280.0, 800.0))
-        .with_max_steps(10_000)
+        .with_max_steps(2)
         .build_ui_state(|ui, v: &mut Viewer| v.ui(ui), viewer)
 }
 
@@ -386,6 +390,19 @@ fn scene(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// Steps until the scene's touches are on the sheet (the simulated source holds them back for
+/// its first [`crate::live::SimSource::LEAD_FRAMES`] frames).
+fn until_pressed(h: &mut Harness<'static, Viewer>) {
+    for _ in 0..2 * crate::live::SimSource::LEAD_FRAMES {
+        h.step();
+        let truth = h.state().last.as_ref().and_then(|o| o.frame.truth.as_ref());
+        if truth.is_some_and(|t| !t.is_empty()) {
+            return;
+        }
+    }
+    panic!("the scene's touches never came: {}", h.state().status);
+}
+
 /// Steps until the frame is a touch (at most `n` frames).
 fn until_touched(h: &mut Harness<'static, Viewer>, n: usize) -> crate::live::TouchEvent {
     for _ in 0..n {
@@ -460,6 +477,7 @@ fn two_touches_get_two_numbered_markers_and_outlines_and_specks_only_on_request(
         ..sim_options()
     });
     settle(&mut h);
+    until_pressed(&mut h);
     until_touched(&mut h, 30);
     let d = h.state().sheet_view.drawn.clone();
     assert_eq!(d.truth, 2, "{d:?}");
