@@ -32,21 +32,27 @@ cargo fmt --all -- --check
 step "no import circles among the files of a crate (scripts/import_cycles.py)"
 python3 scripts/import_cycles.py
 
-step "lint (clippy, warnings are errors)"
-cargo clippy --workspace --all-targets --features et-host/viewer -- -D warnings
+# Every build below compiles the workspace's own crates with clippy's lints, warnings as
+# errors (scripts/clippy-rustc as cargo's RUSTC_WORKSPACE_WRAPPER): one compilation lints and
+# builds each, where `cargo clippy` and then `cargo test` compiled every dependency twice. The
+# cargo runs inside the tests (the QEMU image) inherit it, so they reuse what was built here.
+export RUSTC_WORKSPACE_WRAPPER="$PWD/scripts/clippy-rustc"
 
 step "et-core builds no_std for the microcontroller (no default features)"
+# (With the defmt feature it is built for the firmware just below.)
 cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
-cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features --features defmt
 
-step "firmware image (cd firmware && cargo build --release)"
-(cd firmware && cargo clippy --release -- -D warnings && cargo build --release \
-  && cargo clippy --profile qemu --features qemu -- -D warnings)
+step "firmware image, linted (cd firmware && cargo build --release), and the QEMU test image"
+(cd firmware && cargo build --release && cargo build --profile qemu --features qemu)
 elf=target/thumbv7em-none-eabihf/release/et-firmware
 if command -v size >/dev/null; then
   size -A "$elf" | awk '/^\.(vector_table|text|rodata|data) /{f+=$2} /^\.(data|bss|uninit) /{r+=$2}
     END {printf "firmware image: flash %d of 262144 bytes (program region), static RAM %d of 131072 bytes\n", f, r}'
 fi
+
+step "build and lint every target: libraries, programs, tests, examples, benchmarks"
+cargo test --workspace --features et-host/viewer --no-run
+cargo build --workspace --benches --features et-host/viewer
 
 step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
 ET_REQUIRE_QEMU=1 ET_BIN="$PWD/target/debug/et" cargo test --workspace --features et-host/viewer
