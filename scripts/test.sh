@@ -6,7 +6,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n== %s\n' "$*"; }
+# Each step's title, and how long the one before took (the figures in docs/measurements.md).
+last=$SECONDS
+step() {
+  if [ -n "${title:-}" ]; then printf '   (%s: %d s)\n' "$title" $((SECONDS - last)); fi
+  title=$1; last=$SECONDS
+  printf '\n== %s\n' "$*"
+}
+trap 'if [ $? -eq 0 ] && [ -n "${title:-}" ]; then printf "   (%s: %d s; test.sh %d s in all)\n" "$title" $((SECONDS - last)) $SECONDS; fi' EXIT
 
 step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
 installed=$(rustup target list --installed)
