@@ -44,6 +44,9 @@ python3 scripts/import_cycles.py
 # builds each, where `cargo clippy` and then `cargo test` compiled every dependency twice. The
 # cargo runs inside the tests (the QEMU image) inherit it, so they reuse what was built here.
 export RUSTC_WORKSPACE_WRAPPER="$PWD/scripts/clippy-rustc"
+# CI builds from an empty target folder once: incremental compilation's caches would only be
+# written, never read (on a developer's machine they are kept for the next run).
+if [ -n "${CI:-}" ]; then export CARGO_INCREMENTAL=0; fi
 
 step "et-core builds no_std for the microcontroller (no default features)"
 # (With the defmt feature it is built for the firmware just below.)
@@ -78,7 +81,9 @@ fi
 # maturin, numpy and pytest from the package index, when missing.
 "$venv/bin/python" -c "import numpy, pytest" 2>/dev/null && [ -x "$venv/bin/maturin" ] \
   || "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest
-# `maturin develop` is `pip install ./python` without the wheel's release build (the tests'
-# dev profile shares the workspace's compiled crates).
-VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" develop -q -m python/Cargo.toml
+# `maturin develop` is `pip install ./python` without the wheel's release build. With the
+# viewer feature (which the module does not use) every crate it shares with the workspace's test
+# build above resolves with the same features (python/Cargo.toml, host/Cargo.toml say which), so
+# only pyo3 and the module itself are compiled here.
+VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" develop -q -m python/Cargo.toml -F et-host/viewer
 ET_BIN="$PWD/target/debug/et" "$venv/bin/python" -m pytest -q python/tests

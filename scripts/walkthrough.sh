@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every README command that needs no hardware, as written, from the repository's root,
-# and prints how long each took (the README's times come from this script's output).
+# then every example of docs/guide.md that needs no hardware (scripts/doc_blocks.py reads them
+# from the guide itself), and prints how long each took (the README's times come from this
+# script's output).
 #
 #   ./scripts/walkthrough.sh            # about 4 minutes after the release build
 #
@@ -93,4 +95,22 @@ rm -r "$standin"  # the example also writes before.csv, pressed.csv and sessions
 run "et train --features F.csv --targets T.csv --unit m --rows 0..2000 --kind auto --out m.json"
 run "et eval  --model m.json --features F.csv --targets T.csv --unit m --rows 2000..2500 --json --plots own-plots/"
 
-printf '\nwalkthrough: %d README commands ran as written\n' "$ran"
+readme=$ran
+echo "== docs/guide.md's examples, as written, in a scratch folder (with sim/ and python/ beside them)"
+root=$PWD
+guide=$(mktemp -d)
+ln -s "$root/sim" "$guide/sim"
+ln -s "$root/python" "$guide/python"
+cp F.csv T.csv "$guide/"
+examples=$(python3 scripts/doc_blocks.py docs/guide.md "$guide")
+(
+  cd "$guide"
+  et() { cargo run --release -q --manifest-path "$root/Cargo.toml" -p et-host --bin et -- "$@"; }
+  eval "$examples"
+  echo "$ran" >"$guide/.ran"
+)
+ran=$(cat "$guide/.ran")
+[ "${KEEP:-0}" = 1 ] && echo "(the guide's files are kept in $guide)" || rm -rf "$guide"
+
+printf '\nwalkthrough: %d README commands and %d of docs/guide.md ran as written\n' "$readme" \
+  $((ran - readme))

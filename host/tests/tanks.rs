@@ -48,9 +48,12 @@ fn defaults_hold_on(which: usize) {
     let (scene, frames) = tank.write(&work);
     let mut scores = Vec::new();
     let mut segment_score = 0.0;
-    for case in &tank.cases {
-        let classes_path = work.join(format!("{}-classes.npy", case.id));
-        let out = Command::new(env!("CARGO_BIN_EXE_et"))
+    // Each case is its own `et reconstruct`, as a user runs it; as many at a time as there are
+    // cores (the set-up is most of each run).
+    let classes_path = |id: &str| work.join(format!("{id}-classes.npy"));
+    let command = |case: &tanks::Case| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_et"));
+        command
             .args(["reconstruct", "--scene"])
             .arg(&scene)
             .arg("--frames")
@@ -65,9 +68,30 @@ fn defaults_hold_on(which: usize) {
             .args(["--force", "--out"])
             .arg(work.join(format!("{}.png", case.id)))
             .arg("--segment")
-            .arg(&classes_path)
-            .output()
-            .expect("run et");
+            .arg(classes_path(&case.id));
+        command
+    };
+    let at_once = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    let mut outputs = Vec::new();
+    for cases in tank.cases.chunks(at_once) {
+        let running: Vec<_> = cases
+            .iter()
+            .map(|case| {
+                command(case)
+                    .stdout(std::process::Stdio::piped())
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .expect("run et")
+            })
+            .collect();
+        outputs.extend(
+            running
+                .into_iter()
+                .map(|c| c.wait_with_output().expect("run et")),
+        );
+    }
+    for (case, out) in tank.cases.iter().zip(outputs) {
+        let classes_path = classes_path(&case.id);
         assert!(
             out.status.success(),
             "{} {}: {}",

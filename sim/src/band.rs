@@ -129,12 +129,14 @@ impl BandCholesky {
         let (n, b) = (self.l.n, self.l.b);
         assert_eq!(x.len(), n);
         let d = &self.l.data;
+        // (Slices zipped rather than indexed: no bounds check in the inner loops, the same
+        // operations in the same order.)
         for i in first..n {
             let row = i * (b + 1) + b - i;
             let lo = i.saturating_sub(b).max(first);
             let mut s = x[i];
-            for k in lo..i {
-                s -= d[row + k] * x[k];
+            for (l_ik, x_k) in d[row + lo..row + i].iter().zip(&x[lo..i]) {
+                s -= l_ik * x_k;
             }
             x[i] = s / d[row + i];
         }
@@ -142,8 +144,9 @@ impl BandCholesky {
             let xi = x[i] / d[i * (b + 1) + b];
             x[i] = xi;
             let row = i * (b + 1) + b - i;
-            for k in i.saturating_sub(b)..i {
-                x[k] -= d[row + k] * xi;
+            let lo = i.saturating_sub(b);
+            for (x_k, l_ik) in x[lo..i].iter_mut().zip(&d[row + lo..row + i]) {
+                *x_k -= l_ik * xi;
             }
         }
     }

@@ -1,7 +1,7 @@
 //! The fast path: electrode transfer impedances for any touch state without refactoring.
 //!
-//! The untouched network is solved once, and the inverse of its banded block A is stored
-//! (n x n). A touch changes the conductance of the few resistors under it; with S the nodes
+//! The untouched network is solved once, and the rows of the inverse of its banded block A
+//! are solved as touches first need them (n each, kept). A touch changes the conductance of the few resistors under it; with S the nodes
 //! they join and dG their change of the network matrix, the Woodbury identity gives
 //!
 //! ```text
@@ -13,8 +13,11 @@
 //! nodes for a fingertip at the default resolution) instead of a factorisation of the whole
 //! sheet. [`Network::solve`] computes the same thing directly and is the oracle in the tests.
 
+use std::sync::OnceLock;
+
 use nalgebra::DMatrix;
 
+use crate::band::BandCholesky;
 use crate::network::{Network, NetworkError, Transfer};
 
 /// A network prepared for fast touch updates.
@@ -22,8 +25,12 @@ use crate::network::{Network, NetworkError, Transfer};
 pub struct FastNetwork {
     n: usize,
     electrodes: usize,
-    /// A^-1 of the untouched network, n x n row-major (symmetric).
-    ainv: Vec<f64>,
+    /// The Cholesky factor of the untouched network's banded block A.
+    factor: BandCholesky,
+    /// The rows of A^-1 (symmetric: row j is column j), each n long, solved the first time a
+    /// touch's nodes include j. A collection's presses cover part of the sheet, so most
+    /// sheets never pay for all n.
+    ainv: Vec<OnceLock<Box<[f64]>>>,
     /// W = A^-1 B, n x (L-1) column-major.
     w: Vec<f64>,
     /// Untouched transfer impedance.
@@ -35,27 +42,20 @@ pub struct FastNetwork {
 }
 
 impl FastNetwork {
-    /// Solves `network` with edge conductances `g0` (S) and stores what touch updates need:
-    /// n^2 doubles (for n = 2 800 nodes, 63 MB) and about 1.5 n^2 b flops once.
+    /// Solves `network` with edge conductances `g0` (S) and stores what touch updates need.
+    /// A^-1's rows come later, as touches need them: up to n^2 doubles (for n = 2 800 nodes,
+    /// 63 MB) and about 1.5 n^2 b flops when every node has been touched.
     ///
     /// # Errors
     /// As [`Network::solve`].
     pub fn new(network: &Network, g0: Vec<f64>) -> Result<Self, NetworkError> {
         let solved = network.solve(&g0)?;
         let n = network.grid.len();
-        let mut ainv = vec![0.0; n * n];
-        let mut col = vec![0.0; n];
-        for j in 0..n {
-            col.fill(0.0);
-            col[j] = 1.0;
-            solved.factor().solve_from(&mut col, j);
-            // Symmetric: column j is row j.
-            ainv[j * n..(j + 1) * n].copy_from_slice(&col);
-        }
         Ok(Self {
             n,
             electrodes: network.electrodes(),
-            ainv,
+            factor: solved.factor().clone(),
+            ainv: (0..n).map(|_| OnceLock::new()).collect(),
             w: solved.w().to_vec(),
             base: solved.transfer.clone(),
             g0,
@@ -67,6 +67,17 @@ impl FastNetwork {
     #[must_use]
     pub fn base(&self) -> &Transfer {
         &self.base
+    }
+
+    /// Row j of A^-1 (= column j: A is symmetric), solved the first time it is asked for.
+    fn ainv_row(&self, j: usize) -> &[f64] {
+        self.ainv[j].get_or_init(|| {
+            let mut col = vec![0.0; self.n];
+            col[j] = 1.0;
+            // A e_j's right-hand side is zero above j: the forward substitution starts there.
+            self.factor.solve_from(&mut col, j);
+            col.into_boxed_slice()
+        })
     }
 
     /// How many nodes the changed edges join (the size of the update's dense solve).
@@ -125,7 +136,7 @@ impl FastNetwork {
         let p = &ws * &z;
         let mut kss = &p * ws.transpose();
         for (i, &a) in s_nodes.iter().enumerate() {
-            let row = &self.ainv[a as usize * n..(a as usize + 1) * n];
+            let row = self.ainv_row(a as usize);
             for (j, &b) in s_nodes.iter().enumerate() {
                 kss[(i, j)] += row[b as usize];
             }

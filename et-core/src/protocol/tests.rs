@@ -24,21 +24,20 @@ fn all(l: u8) -> impl Iterator<Item = Protocol> {
         .map(move |k| Protocol::new(k, l).unwrap())
 }
 
-/// Brute-force count, independent of the candidate walk: for every injection, every
-/// unordered electrode pair at a measured distance that avoids both injection electrodes.
+/// Brute-force count, independent of the candidate walk: for every injection and every
+/// measured distance, every electrode pair at that distance that avoids both injection
+/// electrodes.
 fn brute_force_k(l: u8, pattern: Pattern) -> usize {
     let mut k = 0;
     for i in 0..l {
         let (a, b) = (i, (i + pattern.drive_skip + 1) % l);
-        for x in 0..l {
-            for y in 0..l {
-                let d = (y + l - x) % l;
-                let wanted = pattern.measure_skips.iter().any(|s| {
-                    let off = s + 1;
-                    // Ordered pair (x, x + off); for off == L/2 count each unordered pair once.
-                    d == off && (off != l / 2 || x < l / 2)
-                });
-                if wanted && ![a, b].contains(&x) && ![a, b].contains(&y) {
+        for s in pattern.measure_skips.iter() {
+            let off = s + 1;
+            for x in 0..l {
+                let y = (x + off) % l;
+                // Ordered pair (x, x + off); for off == L/2 count each unordered pair once.
+                let once = off != l / 2 || x < l / 2;
+                if once && ![a, b].contains(&x) && ![a, b].contains(&y) {
                     k += 1;
                 }
             }

@@ -263,10 +263,13 @@ pub struct Press {
 }
 
 /// [`collect`] once per seed in `seeds`, each a visit with its own electrode positions, joined
-/// into one dataset (visit numbers in seed order); `each` is called after each visit.
+/// into one dataset (visit numbers in seed order); `each` is called after each visit. The
+/// visits are independent, so they run side by side on the machine's cores; the dataset is the
+/// same as one visit after another would give.
 ///
 /// # Errors
-/// [`CollectError::NoVisits`] for no seeds; as [`collect`].
+/// [`CollectError::NoVisits`] for no seeds; as [`collect`] (the first failing visit's error,
+/// in seed order).
 pub fn collect_visits(
     spec: &SheetSpec,
     frontend: FrontendSpec,
@@ -276,23 +279,43 @@ pub fn collect_visits(
     seeds: impl IntoIterator<Item = u64>,
     mut each: impl FnMut(),
 ) -> Result<Dataset, CollectError> {
+    let seeds: Vec<u64> = seeds.into_iter().collect();
+    let threads = std::thread::available_parallelism()
+        .map_or(1, std::num::NonZero::get)
+        .min(seeds.len());
+    let mut visits: Vec<Option<Result<Dataset, CollectError>>> = Vec::new();
+    visits.resize_with(seeds.len(), || None);
+    std::thread::scope(|scope| {
+        let (done, finished) = std::sync::mpsc::channel();
+        for t in 0..threads {
+            let (done, seeds) = (done.clone(), &seeds);
+            scope.spawn(move || {
+                for (v, &seed) in seeds.iter().enumerate().skip(t).step_by(threads) {
+                    let plan = Plan {
+                        seed,
+                        ..plan.clone()
+                    };
+                    let visit = collect(spec, frontend, config, centres, &plan);
+                    if done.send((v, visit)).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(done);
+        for (v, visit) in finished {
+            visits[v] = Some(visit);
+            each();
+        }
+    });
     let mut data: Option<Dataset> = None;
-    for seed in seeds {
-        let visit = collect(
-            spec,
-            frontend,
-            config,
-            centres,
-            &Plan {
-                seed,
-                ..plan.clone()
-            },
-        )?;
+    for visit in visits {
+        // Every visit sent its result unless a worker panicked (which the scope re-raises).
+        let visit = visit.ok_or(CollectError::NoVisits)??;
         match data.as_mut() {
             None => data = Some(visit),
             Some(d) => d.append(visit).map_err(CollectError::Data)?,
         }
-        each();
     }
     data.ok_or(CollectError::NoVisits)
 }

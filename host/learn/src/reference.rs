@@ -10,7 +10,7 @@ use et_sim::frontend::{CALIBRATION_GAIN, FrontendSpec};
 use et_sim::sheet::SheetSpec;
 use et_sim::touch::Piezo;
 
-use crate::collect::{CollectError, Plan, collect, grid, training_config};
+use crate::collect::{CollectError, Plan, collect, collect_visits, grid, training_config};
 use crate::cv::evaluate;
 use crate::fastcv::cross_validate_fast;
 use crate::fit::{FitError, FitOptions, Fitted};
@@ -150,22 +150,20 @@ pub fn measure(
     let folds: Vec<usize> = (0..train.y.len()).map(|i| i % 10).collect();
     let training = cross_validate_fast(&train.x, &train.y, centres.len(), &opts, &folds)?;
     let model = Fitted::fit(&train.x, &train.y, centres.len(), &opts)?;
-    let (mut right, mut total) = (0.0, 0.0);
-    for d in 0..days {
-        let day = Plan {
-            visits: 1,
-            scans: 1,
-            seed: 77 + d as u64,
-            ..plan.clone()
-        };
-        let test = collect(&spec, frontend, config, &centres, &day)?;
-        let c = evaluate(&model, &test.x, &test.y)?;
-        let n = test.y.len() as f64;
-        right += c.accuracy() * n;
-        total += n;
-    }
+    let day = Plan {
+        visits: 1,
+        scans: 1,
+        ..plan.clone()
+    };
+    let seeds = (0..days).map(|d| 77 + d as u64);
+    let next_day = if days == 0 {
+        0.0
+    } else {
+        let test = collect_visits(&spec, frontend, config, &centres, &day, seeds, || {})?;
+        evaluate(&model, &test.x, &test.y)?.accuracy()
+    };
     Ok(Outcome {
-        next_day: if total > 0.0 { right / total } else { 0.0 },
+        next_day,
         training: training.accuracy(),
     })
 }

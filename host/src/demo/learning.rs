@@ -143,26 +143,19 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         (0..sizes.visits).map(|v| 1_000 + v as u64),
         || bar.inc(1),
     )?;
-    let mut days = Vec::new();
-    for d in 0..sizes.days {
-        let day = Plan {
-            scans: 1,
-            seed: 77 + d as u64,
-            ..plan.clone()
-        };
-        days.push(collect::collect(
-            &scene.sheet,
-            scene.frontend,
-            config,
-            &centres,
-            &day,
-        )?);
-        bar.inc(1);
-    }
-    let mut next_day = days.remove(0);
-    for d in days {
-        next_day.append(d)?;
-    }
+    let day = Plan {
+        scans: 1,
+        ..plan.clone()
+    };
+    let next_day = collect::collect_visits(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        &centres,
+        &day,
+        (0..sizes.days).map(|d| 77 + d as u64),
+        || bar.inc(1),
+    )?;
     let n_c = train.x.nrows() / classes;
     steps.done(
         &bar,
