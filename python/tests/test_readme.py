@@ -38,7 +38,8 @@ def test_the_reconstructors_documented_signature_is_its_defaults(recording):
 
     import et_touch as et
 
-    block = next(b for b in python_blocks("docs/python.md") if b.startswith("r = et.Reconstructor("))
+    blocks = python_blocks("docs/python.md")
+    block = next(b for b in blocks if b.startswith("r = et.Reconstructor("))
     sheet, protocol = et.scene(str(SCENES / "square-13cm-16.toml"))
     names = {"et": et, "sheet": sheet, "protocol": protocol}
     exec(block, names)
