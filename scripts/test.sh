@@ -53,7 +53,15 @@ step "et-core builds no_std for the microcontroller (no default features)"
 cargo build -p et-core --target thumbv7em-none-eabihf --no-default-features
 
 step "firmware image, linted (cd firmware && cargo build --release), and the QEMU test image"
-(cd firmware && cargo build --release && cargo build --profile qemu --features qemu)
+# The QEMU image is the release profile with the `qemu` feature (what `cargo build --profile
+# qemu --features qemu` builds): built first and kept aside for the QEMU tests (ET_QEMU_IMAGE),
+# then the board image, which reuses every compiled dependency (only the firmware crate is
+# compiled again), where the qemu profile compiled all of them a second time.
+(cd firmware && cargo build --release --features qemu)
+qemu_image="$PWD/target/thumbv7em-none-eabihf/qemu-test/et-firmware"
+mkdir -p "$(dirname "$qemu_image")"
+cp target/thumbv7em-none-eabihf/release/et-firmware "$qemu_image"
+(cd firmware && cargo build --release)
 elf=target/thumbv7em-none-eabihf/release/et-firmware
 if command -v size >/dev/null; then
   size -A "$elf" | awk '/^\.(vector_table|text|rodata|data) /{f+=$2} /^\.(data|bss|uninit) /{r+=$2}
@@ -65,7 +73,8 @@ cargo test --workspace --features et-host/viewer --no-run
 cargo build --workspace --benches --features et-host/viewer
 
 step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
-ET_REQUIRE_QEMU=1 ET_BIN="$PWD/target/debug/et" cargo test --workspace --features et-host/viewer
+ET_REQUIRE_QEMU=1 ET_QEMU_IMAGE="$qemu_image" ET_BIN="$PWD/target/debug/et" \
+  cargo test --workspace --features et-host/viewer
 
 step "Python module (python/): built into its own virtual environment, then pytest"
 venv=target/python-venv

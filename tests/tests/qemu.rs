@@ -72,8 +72,18 @@ fn image_or_skip(test: &str) -> Option<PathBuf> {
     Some(build_image())
 }
 
-/// Builds the QEMU image and returns its path.
+/// Builds the QEMU image and returns its path; `$ET_QEMU_IMAGE` when set (scripts/test.sh
+/// builds the image before the tests, with the board image's compiled dependencies).
 fn build_image() -> PathBuf {
+    if let Some(image) = std::env::var_os("ET_QEMU_IMAGE") {
+        let image = PathBuf::from(image);
+        assert!(
+            image.is_file(),
+            "ET_QEMU_IMAGE: {} is not a file",
+            image.display()
+        );
+        return image;
+    }
     let status = Process::new(env!("CARGO"))
         .args(["build", "--profile", "qemu", "--features", "qemu"])
         .current_dir(repo().join("firmware"))

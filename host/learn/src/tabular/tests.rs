@@ -412,14 +412,18 @@ fn with_sessions_given_auto_picks_the_model_that_holds_on_a_new_session() {
     assert_eq!(test_groups, ["session-4"], "a session of its own");
     let mut plain_rows = train_rows.clone();
     plain_rows.groups = None;
-    let plain = train(&plain_rows, Choice::Auto, &opts(), &mut quiet()).unwrap();
     // Session-aware: leave a session out, and standardise each session on its own statistics
     // (what knowing the sessions makes possible).
     let per_group = TrainOptions {
         per_group: true,
         ..opts()
     };
-    let aware = train(&train_rows, Choice::Auto, &per_group, &mut quiet()).unwrap();
+    // (The two searches side by side: each runs on one core.)
+    let (plain, aware) = std::thread::scope(|scope| {
+        let plain = scope.spawn(|| train(&plain_rows, Choice::Auto, &opts(), &mut quiet()));
+        let aware = train(&train_rows, Choice::Auto, &per_group, &mut quiet());
+        (plain.join().unwrap().unwrap(), aware.unwrap())
+    });
     assert_eq!((aware.cv_scheme, aware.cv_folds), (CvScheme::Groups, 3));
     assert!(plain.chosen_by_drift && !aware.chosen_by_drift);
     let cv = |m: &TableModel| m.chosen().unwrap().cv_mean_error_mm.unwrap();
