@@ -62,6 +62,7 @@ window() {
 echo "== building et (release; with the viewer too when its windows can open)"
 cargo build --release -q -p et-host --bin et
 if command -v xvfb-run >/dev/null; then cargo build --release -q -p et-host --features viewer --bin et; fi
+printf '  (%d s)\n' "$SECONDS"
 
 echo "== the two commands: the main job (the test command is what CI runs)"
 run "cargo run --release -p et-host --bin et -- demo"
