@@ -94,7 +94,7 @@ pub struct ChipClass {
 pub enum ProtocolChoice {
     /// One protocol.
     Fixed(ProtocolKind),
-    /// `dynamic::Selector` picks from the regions.
+    /// `et_recon::select::Selector` picks from the regions.
     Automatic,
 }
 

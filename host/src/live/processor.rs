@@ -26,7 +26,7 @@ pub struct TouchEvent {
     pub confidence: Option<f64>,
     /// Touches in the image: its regions split at their saddles (`recon::touches`), above
     /// the touch factor times their noise, with half the strongest peak and a quarter
-    /// fingertip's area (`dynamic::significant`).
+    /// fingertip's area (`et_recon::select::significant`).
     pub regions: usize,
 }
 
@@ -274,7 +274,7 @@ pub struct Output {
     /// their saddles, each above the touch factor times its noise; strongest first.
     pub regions: Vec<Region>,
     /// Of `regions`, those counted as touches (`TouchEvent::regions`): with half the strongest
-    /// peak and a quarter fingertip's area (`dynamic::significant`); strongest first.
+    /// peak and a quarter fingertip's area (`et_recon::select::significant`); strongest first.
     pub touches: Vec<Region>,
     /// BVC = |V_m - V_0|, V.
     pub bvc: f64,
