@@ -4,7 +4,7 @@
 # from the guide itself), and prints how long each took (the README's times come from this
 # script's output).
 #
-#   ./scripts/walkthrough.sh            # about 4 minutes after the release build
+#   ./scripts/walkthrough.sh            # about 5 minutes after the release build
 #
 # `et` is what the README says it stands for: `cargo run --release -p et-host --bin et --`.
 # The files the README's commands write (et-demo-report/, session.jsonl, f80.png, train.csv,
