@@ -7,8 +7,10 @@
 //! stages, in the order a model is made:
 //!
 //! - [`collect`]: the data-collection procedure (§9.4) on the simulated sheet.
-//! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are),
-//!   and import of other sensors' CSV.
+//! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are)
+//!   or `.npz`, and import of other sensors' CSV.
+//! - [`npz`]: NumPy's `.npz` archives written and read without numpy (what `.npz` datasets
+//!   are stored in).
 //! - [`fit`]: QDA and LDA in f64 with standardisation and shrinkage; export to et-core's blob.
 //! - [`cv`]: stratified and leave-one-visit-out cross-validation, confusion matrix, accuracy,
 //!   AEE (§9.5).
@@ -16,13 +18,17 @@
 //! - [`analysis`]: error against distance from the electrodes, learning curves against n_c.
 //! - [`regress`]: continuous position and pressure by regression (linear ridge, kernel ridge,
 //!   posterior-weighted class centres).
+//! - [`gp`]: Gaussian-process regression with one learned length scale per feature.
+//! - [`mlp`]: a multilayer perceptron for positions (Adam, L2, early stopping, several
+//!   starts).
 //! - [`model_file`]: trained models on disk (JSON).
 //! - [`standin`]: another lab's e-skin data set made on the simulated sheet, in its own
 //!   file format (what the tabular path is tested on).
 //! - [`tabular`]: any sensor's table (features and targets from CSV): QDA, LDA, ridge, kernel
-//!   ridge and k nearest neighbours with hyperparameters by cross-validation inside the
-//!   training rows, the model file, evaluation.
-//! - [`reference`]: the reference's six published accuracies and the procedure that measures
+//!   ridge, k nearest neighbours, the Gaussian process and the perceptron, with
+//!   hyperparameters by cross-validation inside the training rows, the model file,
+//!   evaluation.
+//! - [`reference`](mod@reference): the reference's six published accuracies and the procedure that measures
 //!   them on the simulator (the calibration's table).
 //! - [`trainer`]: the entry point.
 //! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,

@@ -41,7 +41,7 @@ impl Candidate {
         }
     }
 
-    /// What `auto` minimises: [`Self::loss`], or for a regressor chosen `by_drift` its error
+    /// What `auto` minimises: `loss()`, or for a regressor chosen `by_drift` its error
     /// with the held-out channels drifted (infinite when it has none).
     #[must_use]
     pub fn choice_loss(&self, by_drift: bool) -> f64 {
