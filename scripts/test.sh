@@ -39,6 +39,28 @@ cargo fmt --all -- --check
 step "no import circles among the files of a crate (scripts/import_cycles.py)"
 python3 scripts/import_cycles.py
 
+# The Python module's environment (python/): a virtual environment with maturin, numpy and pytest
+# from the package index, made in the background while the Rust builds below use the cores (it
+# mostly waits on the network and the disk); its output is printed with the Python step.
+venv=target/python-venv
+python_setup_log=target/python-setup.log
+python_setup() {
+  if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv" 2>/dev/null || {
+      # Debian's python3 keeps venv in its own package.
+      sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+      $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null \
+        || { $sudo apt-get update >/dev/null && $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null; }
+      python3 -m venv "$venv"
+    }
+  fi
+  "$venv/bin/python" -c "import numpy, pytest" 2>/dev/null && [ -x "$venv/bin/maturin" ] \
+    || "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest
+}
+mkdir -p target
+python_setup >"$python_setup_log" 2>&1 &
+python_setup_pid=$!
+
 # Every build below compiles the workspace's own crates with clippy's lints, warnings as
 # errors (scripts/clippy-rustc as cargo's RUSTC_WORKSPACE_WRAPPER): one compilation lints and
 # builds each, where `cargo clippy` and then `cargo test` compiled every dependency twice. The
@@ -72,27 +94,32 @@ step "build and lint every target: libraries, programs, tests, examples, benchma
 cargo test --workspace --features et-host/viewer --no-run
 cargo build --workspace --benches --features et-host/viewer
 
-step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here)"
+step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here), and beside them the Python module"
+# The Python step runs beside the Rust tests, which leave a core idle for much of their time
+# (binaries run one after another, several with one or two long tests); its output follows
+# theirs. `maturin develop` is `pip install ./python` without the wheel's release build. With
+# the viewer feature (which the module does not use) every crate it shares with the test build
+# above resolves with the same features (python/Cargo.toml, host/Cargo.toml say which), so only
+# pyo3 and the module itself are compiled here.
+python_log=target/python-tests.log
+wait "$python_setup_pid" || { cat "$python_setup_log"; echo "setting up the Python environment failed"; exit 1; }
+python_step() {
+  cat "$python_setup_log"
+  # cargo test first takes the build folder's lock to see that its build is fresh (under a
+  # second); maturin's cargo, first, would hold it through its whole build of the module.
+  sleep 5
+  VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" develop -q -m python/Cargo.toml -F et-host/viewer
+  ET_BIN="$PWD/target/debug/et" "$venv/bin/python" -m pytest -q python/tests
+}
+python_step >"$python_log" 2>&1 &
+python_pid=$!
+rust_tests=0
 ET_REQUIRE_QEMU=1 ET_QEMU_IMAGE="$qemu_image" ET_BIN="$PWD/target/debug/et" \
-  cargo test --workspace --features et-host/viewer
-
-step "Python module (python/): built into its own virtual environment, then pytest"
-venv=target/python-venv
-if [ ! -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv" 2>/dev/null || {
-    # Debian's python3 keeps venv in its own package.
-    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
-    $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null \
-      || { $sudo apt-get update >/dev/null && $sudo apt-get install -y --no-install-recommends python3-venv >/dev/null; }
-    python3 -m venv "$venv"
-  }
-fi
-# maturin, numpy and pytest from the package index, when missing.
-"$venv/bin/python" -c "import numpy, pytest" 2>/dev/null && [ -x "$venv/bin/maturin" ] \
-  || "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest
-# `maturin develop` is `pip install ./python` without the wheel's release build. With the
-# viewer feature (which the module does not use) every crate it shares with the workspace's test
-# build above resolves with the same features (python/Cargo.toml, host/Cargo.toml say which), so
-# only pyo3 and the module itself are compiled here.
-VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" develop -q -m python/Cargo.toml -F et-host/viewer
-ET_BIN="$PWD/target/debug/et" "$venv/bin/python" -m pytest -q python/tests
+  cargo test --workspace --features et-host/viewer || rust_tests=$?
+python_tests=0
+wait "$python_pid" || python_tests=$?
+printf '\n== Python module (python/), run beside the Rust tests: its output\n'
+cat "$python_log"
+if [ "$rust_tests" -ne 0 ]; then echo "the Rust tests failed (cargo test exited $rust_tests)"; fi
+if [ "$python_tests" -ne 0 ]; then echo "the Python step failed (exit $python_tests)"; fi
+[ "$rust_tests" -eq 0 ] && [ "$python_tests" -eq 0 ]
