@@ -26,9 +26,7 @@ use serde::Serialize;
 use crate::link::{Counters, Keepalive, Link, LinkChange, LinkError};
 use crate::recording::{self, Recording};
 use et_core::sheet::Sheet;
-use et_learn::fit::{FitError, Fitted};
-use et_learn::model_file::ModelFile;
-use et_learn::regress::posterior_centre;
+use et_learn::model::Board;
 use et_recon::{
     AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PROMINENCE, PixelGrid, ReconError,
     Reconstructor, Region, above_noise, default_threshold, touches,
@@ -39,9 +37,7 @@ mod processor;
 mod source;
 
 pub use monitor::Monitor;
-pub use processor::{
-    Classification, Classifier, Method, Output, Processor, Referencing, Settings, TouchEvent,
-};
+pub use processor::{Method, Output, Processor, Referencing, Settings, TouchEvent};
 pub use source::{
     Health, PortSource, ReplaySource, SimSource, Source, SourceSpec, default_scene, open_source,
 };
@@ -166,9 +162,6 @@ pub enum LiveError {
     /// The one-step reconstruction matrix could not be built.
     #[error("reconstruction: {0}")]
     Recon(#[from] ReconError),
-    /// The model file's tables are not a usable model.
-    #[error("model: {0}")]
-    Model(#[from] FitError),
     /// The reference frames could not be averaged.
     #[error("reference frames: {0}")]
     Stats(#[from] stats::StatsError),

@@ -24,10 +24,10 @@ use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
 
 use crate::live::{
-    Classifier, Health, LiveError, Monitor, Output, Processor, ProtocolChoice, Settings, Source,
-    SourceSpec, open_source,
+    Health, LiveError, Monitor, Output, Processor, ProtocolChoice, Settings, Source, SourceSpec,
+    open_source,
 };
-use et_learn::model_file::{ModelFile, ModelFileError};
+use et_learn::{Model, ModelError};
 use et_recon::PixelGrid;
 use et_recon::select::{Selector, Settings as DynamicSettings};
 
@@ -147,11 +147,13 @@ impl Viewer {
             },
         )?;
         if let Some(path) = &options.model {
-            let file = ModelFile::load(path)?;
-            let classifier = Classifier::new(file).map_err(|error| ViewerError::Model {
-                path: path.clone(),
-                error,
-            })?;
+            let classifier =
+                Model::load(path)?
+                    .into_board()
+                    .map_err(|error| ViewerError::Model {
+                        path: path.clone(),
+                        error,
+                    })?;
             processor.classifier = Some(classifier);
         }
         let b = sheet.physical.shape.bounds();
@@ -184,7 +186,7 @@ impl Viewer {
             viewer.protocol = ProtocolChoice::Fixed(config.protocol);
         }
         if let Some(c) = &viewer.processor.classifier {
-            let config = c.file.config;
+            let config = c.file().config;
             viewer.switch_config(config);
         }
         Ok(viewer)
@@ -342,13 +344,11 @@ impl Viewer {
         match request {
             wizard::Request::Configure(config) => self.switch_config(config),
             wizard::Request::Press(touches) => self.press(touches),
-            wizard::Request::UseModel(file) => match Classifier::new(*file) {
-                Ok(c) => {
-                    self.processor.classifier = Some(c);
-                    self.status = "the trained model now classifies each touch".into();
-                }
-                Err(e) => self.status = e.to_string(),
-            },
+            wizard::Request::UseModel(board) => {
+                // Trained, hence checked as the board checks a model (`Board::new`).
+                self.processor.classifier = Some(*board);
+                self.status = "the trained model now classifies each touch".into();
+            }
             wizard::Request::Upload(blob) => {
                 self.status = match self.source.as_mut() {
                     Some(Source::Port(p)) => {
@@ -398,7 +398,7 @@ impl Viewer {
                     .processor
                     .classifier
                     .as_ref()
-                    .map(|c| c.file.centres_mm.as_slice()),
+                    .map(|c| c.file().centres_mm.as_slice()),
                 pressable: matches!(self.source, Some(Source::Sim(_))),
                 hint: self.options.screenshot.is_none(),
             };
@@ -517,16 +517,16 @@ pub enum ViewerError {
     /// The scene, recording or port could not be opened, or the sheet not modelled.
     #[error("{0}")]
     Live(#[from] LiveError),
-    /// The model file could not be read.
-    #[error("{0}")]
-    ModelFile(#[from] ModelFileError),
-    /// The model file's tables are not a usable model.
+    /// The model file could not be read or is not a usable model (the error names it).
+    #[error(transparent)]
+    Load(#[from] ModelError),
+    /// The model is a table's model, which cannot classify the board's frames.
     #[error("{}: {error}", .path.display())]
     Model {
         /// The file.
         path: PathBuf,
         /// Why.
-        error: et_learn::fit::FitError,
+        error: ModelError,
     },
     /// `press` is not on the sheet.
     #[error("--press {},{} mm is not on the sheet (give a point inside it, in the scene's coordinates)", .0[0], .0[1])]

@@ -10,9 +10,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use et_core::model::Precision;
-use et_learn::model_file::ModelFile;
-use et_learn::tabular::{self, Choice, CvScheme, Method, Table, TableModel, Unit};
-use et_learn::{Examples, Trained, Trainer, cv, pipeline};
+use et_learn::model::{Evaluation, Model as Estimator};
+use et_learn::tabular::{Choice, CvScheme, Method, Prediction, Table, Unit};
+use et_learn::{Examples, Trainer};
 
 use crate::files::Dataset;
 use crate::imaging::{array2, matrix};
@@ -130,7 +130,9 @@ fn train_table(
     let trained = py
         .detach(|| trainer.train(Examples::Table(&table), |_| {}))
         .map_err(|e| refused(&e))?;
-    Ok(Model::of(trained))
+    Ok(Model {
+        inner: trained.model,
+    })
 }
 
 /// Trains QDA or LDA for the board on an et dataset; see `et_touch.train`.
@@ -154,45 +156,20 @@ fn train_dataset(
         ..Trainer::default()
     };
     trainer.board_kind().map_err(|e| refused(&e))?;
-    let data = Box::new(dataset.inner.clone());
+    let data = &dataset.inner;
+    // The trainer refuses a model the board (or any reader of model files) would refuse.
     let trained = py
         .detach(|| trainer.train(Examples::Dataset(data), |_| {}))
         .map_err(|e| refused(&e))?;
-    let model = Model::of(trained);
-    if let Inner::Board(file) = &model.inner {
-        // What every reader of model files checks: refuse a model they would refuse.
-        file.validate().map_err(|e| {
-            usage(format!(
-                "the trained model is not usable: {e} (shrinkage {}): train with a larger \
-                 shrinkage (e.g. 0.1) or more observations per class",
-                file.shrinkage
-            ))
-        })?;
-    }
-    Ok(model)
+    Ok(Model {
+        inner: trained.model,
+    })
 }
 
 /// A trained model: QDA or LDA for the board (et's model file), or a table's model.
 #[pyclass(module = "et_touch._native")]
 pub(crate) struct Model {
-    inner: Inner,
-}
-
-enum Inner {
-    /// QDA or LDA from an et dataset.
-    Board(ModelFile),
-    /// Any sensor's table's model.
-    Table(Box<TableModel>),
-}
-
-impl Model {
-    fn of(trained: Trained) -> Self {
-        let inner = match trained {
-            Trained::Board(b) => Inner::Board(b.file),
-            Trained::Table(t) => Inner::Table(t),
-        };
-        Self { inner }
-    }
+    inner: Estimator,
 }
 
 /// Predictions: classes (index), the class names, positions (n x 2, m) and a third target.
@@ -203,27 +180,43 @@ type Predicted<'py> = (
     Option<Bound<'py, PyArray1<f64>>>,
 );
 
-/// A board model's classes and their centres (n x 2, m).
-fn board_predictions<'py>(
+/// Predictions as Python takes them: classes, their names, positions (n x 2, m) and the
+/// third target (z in m, else as written).
+fn predicted<'py>(
     py: Python<'py>,
-    file: &ModelFile,
-    classes: &[u16],
+    model: &Estimator,
+    p: &[Prediction],
 ) -> PyResult<Predicted<'py>> {
-    let xy = classes
-        .iter()
-        .map(|&c| file.centres_mm.get(usize::from(c)).copied())
-        .collect::<Option<Vec<[f64; 2]>>>()
-        .map(|p| {
-            array2(
-                py,
-                p.iter().flatten().map(|v| v * 1e-3).collect(),
-                p.len(),
-                2,
-            )
+    let (classified, names, third) = match model {
+        Estimator::Board(_) => (true, None, None),
+        Estimator::Table(t) => (
+            t.classes.is_some(),
+            t.classes.as_ref().map(|c| c.names.clone()),
+            t.third.as_deref(),
+        ),
+    };
+    let classes = classified.then(|| {
+        let c = p.iter().map(|p| p.class.map_or(-1, i64::from));
+        PyArray1::from_vec(py, c.collect())
+    });
+    let targets: Option<Vec<[f64; 3]>> = p.iter().map(|p| p.target).collect();
+    let xy = targets
+        .as_ref()
+        .map(|t| {
+            let metres = t.iter().flat_map(|t| [t[0] * 1e-3, t[1] * 1e-3]).collect();
+            array2(py, metres, t.len(), 2)
         })
         .transpose()?;
-    let c = PyArray1::from_vec(py, classes.iter().map(|&c| i64::from(c)).collect());
-    Ok((Some(c), None, xy, None))
+    let third = third.zip(targets.as_ref()).map(|(name, t)| {
+        // A length in mm when named z (returned in m), else as written.
+        let scale = if name.eq_ignore_ascii_case("z") {
+            1e-3
+        } else {
+            1.0
+        };
+        PyArray1::from_vec(py, t.iter().map(|t| t[2] * scale).collect())
+    });
+    Ok((classes, names, xy, third))
 }
 
 #[pymethods]
@@ -231,53 +224,33 @@ impl Model {
     /// Reads an et model file: a board model (`et train --data`) or a table's.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        py.detach(|| {
-            let text = et_core::text::read_text_at_most(&path, et_core::text::MAX_FILE_BYTES)
-                .map_err(|e| usage(format!("{}: {e}", path.display())))?;
-            if tabular::is_table_model(&text) {
-                TableModel::load(&path)
-                    .map(|t| Model {
-                        inner: Inner::Table(Box::new(t)),
-                    })
-                    .map_err(|e| refused(&e))
-            } else {
-                ModelFile::load(&path)
-                    .map(|f| Model {
-                        inner: Inner::Board(f),
-                    })
-                    .map_err(|e| refused(&e))
-            }
-        })
+        py.detach(|| Estimator::load(&path))
+            .map(|inner| Model { inner })
+            .map_err(|e| refused(&e))
     }
 
     /// Writes the model file (JSON), as `et train --out` does.
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        match &self.inner {
-            Inner::Board(f) => f.save(&path).map_err(|e| refused(&e)),
-            Inner::Table(t) => t.save(&path).map_err(|e| refused(&e)),
-        }
+        self.inner.save(&path).map_err(|e| refused(&e))
     }
 
     /// The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average.
     #[getter]
     fn kind(&self) -> &'static str {
-        match &self.inner {
-            Inner::Board(f) => f.kind.name(),
-            Inner::Table(t) => t.method.name(),
-        }
+        self.inner.method()
     }
 
     /// Whether it is a board model (QDA or LDA from an et dataset: it makes a blob).
     #[getter]
     fn is_board(&self) -> bool {
-        matches!(self.inner, Inner::Board(_))
+        self.inner.as_board().is_some()
     }
 
     /// The model file's content (JSON).
     fn file_json(&self) -> PyResult<String> {
         match &self.inner {
-            Inner::Board(f) => json(f),
-            Inner::Table(t) => json(t),
+            Estimator::Board(b) => json(b.file()),
+            Estimator::Table(t) => json(t),
         }
     }
 
@@ -290,85 +263,26 @@ impl Model {
         x: PyReadonlyArray2<'_, f64>,
         v0: Option<numpy::PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Predicted<'py>> {
-        let (frames, _, k) = matrix(&x, "X")?;
-        let positions = |p: Vec<[f64; 2]>| {
-            let n = p.len();
-            array2(py, p.iter().flatten().map(|v| v * 1e-3).collect(), n, 2)
-        };
-        match &self.inner {
-            Inner::Table(t) => {
-                let x = features(&x, "X")?;
-                let predicted = py.detach(|| t.predict(&x)).map_err(|e| refused(&e))?;
-                let classes = t.classes.as_ref().map(|_| {
-                    let c = predicted.iter().map(|p| p.class.map_or(-1, i64::from));
-                    PyArray1::from_vec(py, c.collect())
-                });
-                let targets: Option<Vec<[f64; 3]>> = predicted.iter().map(|p| p.target).collect();
-                let xy = targets
-                    .as_ref()
-                    .map(|t| positions(t.iter().map(|t| [t[0], t[1]]).collect()))
-                    .transpose()?;
-                let third = (t.third.as_ref().zip(targets.as_ref())).map(|(name, t)| {
-                    // A length in mm when named z (returned in m), else as written.
-                    let scale = if name.eq_ignore_ascii_case("z") {
-                        1e-3
-                    } else {
-                        1.0
-                    };
-                    PyArray1::from_vec(py, t.iter().map(|t| t[2] * scale).collect())
-                });
-                let names = t.classes.as_ref().map(|c| c.names.clone());
-                Ok((classes, names, xy, third))
-            }
-            Inner::Board(f) => {
-                let v0 = match (&v0, f.referenced) {
-                    (Some(v0), _) => crate::imaging::slice(v0, "v0")?,
-                    (None, true) => {
-                        return Err(usage(
-                            "this model classifies each frame minus the untouched frame: give \
-                             v0 (the untouched frame, K values)",
-                        ));
-                    }
-                    (None, false) => &[],
-                };
-                // Each frame's features as the live pipeline takes them (ModelFile::features).
-                let mut chosen =
-                    Vec::with_capacity(frames.len() / k.max(1) * f.feature_index.len());
-                for frame in frames.chunks(k.max(1)) {
-                    chosen.extend(f.features(frame, v0).ok_or_else(|| {
-                        usage(format!(
-                            "X: frames of {k} values, v0 of {}: the model reads value {} of \
-                             frames of {} electrodes ({})",
-                            v0.len(),
-                            f.feature_index.iter().max().copied().unwrap_or(0),
-                            f.config.electrodes,
-                            f.config.protocol
-                        ))
-                    })?);
-                }
-                let p = f.feature_index.len();
-                let chosen = DMatrix::from_row_slice(chosen.len() / p.max(1), p, &chosen);
-                let fitted = f.fitted().map_err(|e| refused(&e))?;
-                let classes = cv::predict_rows(&fitted, &chosen).map_err(|e| refused(&e))?;
-                board_predictions(py, f, &classes)
-            }
-        }
+        let x = features(&x, "X")?;
+        let v0 = v0
+            .as_ref()
+            .map(|v0| crate::imaging::slice(v0, "v0"))
+            .transpose()?;
+        let p = py
+            .detach(|| self.inner.predict(&x, v0))
+            .map_err(|e| refused(&e))?;
+        predicted(py, &self.inner, &p)
     }
 
     /// A board model's class for each observation of an et dataset (its features as the
     /// model takes them, minus each visit's untouched frame when the model is referenced),
     /// and each class's centre (n x 2, m).
     fn predict_dataset<'py>(&self, py: Python<'py>, dataset: &Dataset) -> PyResult<Predicted<'py>> {
-        let Inner::Board(file) = &self.inner else {
-            return Err(usage(
-                "a table model predicts arrays of features: model.predict(X)",
-            ));
-        };
         let data = &dataset.inner;
-        let classes = py
-            .detach(|| pipeline::predict(file, data))
+        let p = py
+            .detach(|| self.inner.predict_dataset(data))
             .map_err(|e| refused(&e))?;
-        board_predictions(py, file, &classes)
+        predicted(py, &self.inner, &p)
     }
 
     /// Scores a table model on rows (as `et eval --features --json`): JSON.
@@ -381,45 +295,36 @@ impl Model {
         positions_m: Option<PyReadonlyArray2<'_, f64>>,
         groups: Option<Vec<String>>,
     ) -> PyResult<String> {
-        let Inner::Table(model) = &self.inner else {
-            return Err(usage(
-                "a board model is scored on an et dataset: model.evaluate(read_dataset(path))",
-            ));
-        };
         let table = table(&x, labels, positions_m, groups)?;
-        let e = py
-            .detach(|| tabular::evaluate(model, &table))
-            .map_err(|e| refused(&e))?;
-        json(&e)
+        self.evaluation(py, Examples::Table(&table))
     }
 
     /// Scores a board model on an et dataset (as `et eval --data --json`): JSON.
     fn evaluate_dataset(&self, py: Python<'_>, dataset: &Dataset) -> PyResult<String> {
-        let Inner::Board(file) = &self.inner else {
-            return Err(usage(
-                "a table model is scored on arrays: model.evaluate(X, y)",
-            ));
-        };
-        let data = &dataset.inner;
-        let tested = py
-            .detach(|| pipeline::test(file, data))
-            .map_err(|e| refused(&e))?;
-        json(&tested.summary(&file.centres_mm))
+        self.evaluation(py, Examples::Dataset(&dataset.inner))
     }
 
     /// The board's model blob (`et export`): precision "f16" or "f32".
     fn export_blob<'py>(&self, py: Python<'py>, precision: &str) -> PyResult<Bound<'py, PyBytes>> {
-        let Inner::Board(file) = &self.inner else {
-            return Err(usage(
-                "only a board model (QDA or LDA trained on an et dataset) makes a blob",
-            ));
-        };
         let precision = match precision {
             "f16" => Precision::F16,
             "f32" => Precision::F32,
             other => return Err(usage(format!("precision '{other}': f16 or f32"))),
         };
-        let blob = file.blob(precision).map_err(|e| refused(&e))?;
+        let blob = self.inner.export_blob(precision).map_err(|e| refused(&e))?;
         Ok(PyBytes::new(py, &blob))
+    }
+}
+
+impl Model {
+    /// The model scored on `examples`, as `et eval --json` prints it (JSON).
+    fn evaluation(&self, py: Python<'_>, examples: Examples<'_>) -> PyResult<String> {
+        let e = py
+            .detach(|| self.inner.evaluate(examples))
+            .map_err(|e| refused(&e))?;
+        match &e {
+            Evaluation::Table(e) => json(e),
+            Evaluation::Board(tested) => json(&tested.summary()),
+        }
     }
 }

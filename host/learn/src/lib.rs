@@ -3,8 +3,9 @@
 //! plotting.
 //!
 //! The entry point is [`Trainer`]: [`Trainer::train`] fits an et dataset (QDA or LDA for the
-//! board) or any sensor's table and returns a [`Trained`] model. The modules below are its
-//! stages, in the order a model is made:
+//! board) or any sensor's table and returns a [`Model`] (in a [`Trained`], with how a board
+//! model's training went): the one model type, which predicts, is evaluated, saves, loads and
+//! makes the board's blob. The modules below are its stages, in the order a model is made:
 //!
 //! - [`collect`]: the data-collection procedure (§9.4) on the simulated sheet.
 //! - [`dataset`]: datasets as CSV with provenance (Python and MATLAB read them as they are)
@@ -21,7 +22,9 @@
 //! - [`gp`]: Gaussian-process regression with one learned length scale per feature.
 //! - [`mlp`]: a multilayer perceptron for positions (Adam, L2, early stopping, several
 //!   starts).
-//! - [`model_file`]: trained models on disk (JSON).
+//! - [`model`]: the trained model in use ([`Model`]): a board model or a table's, predicting,
+//!   evaluated, saved and loaded.
+//! - [`model_file`]: board models on disk (JSON).
 //! - [`standin`]: another lab's e-skin data set made on the simulated sheet, in its own
 //!   file format (what the tabular path is tested on).
 //! - [`tabular`]: any sensor's table (features and targets from CSV): QDA, LDA, ridge, kernel
@@ -31,8 +34,8 @@
 //! - [`reference`](mod@reference): the reference's six published accuracies and the procedure that measures
 //!   them on the simulator (the calibration's table).
 //! - [`trainer`]: the entry point.
-//! - [`pipeline`]: training and testing strung together (features, shrinkage by CV, fit,
-//!   test, the chip's blob through et-core), as `et train`, `et eval` and `et demo` do them.
+//! - [`pipeline`]: a board model's training strung together (features, shrinkage by CV, fit),
+//!   as `et train`, the viewer's wizard and `et demo` do it.
 #![forbid(unsafe_code)]
 
 pub mod analysis;
@@ -43,6 +46,7 @@ pub mod fastcv;
 pub mod fit;
 pub mod gp;
 pub mod mlp;
+pub mod model;
 pub mod model_file;
 pub mod npz;
 pub mod pipeline;
@@ -52,6 +56,7 @@ pub mod standin;
 pub mod tabular;
 pub mod trainer;
 
+pub use model::{Model, ModelError};
 pub use trainer::{Examples, TrainError, Trained, Trainer};
 
 #[cfg(test)]

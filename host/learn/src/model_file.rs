@@ -190,7 +190,7 @@ impl ModelFile {
         })
     }
 
-    /// Reads JSON.
+    /// Reads JSON and checks it as the board would ([`validate`](Self::validate)).
     ///
     /// # Errors
     /// [`ModelFileError`] naming the file (and for a JSON syntax error, the line and column).
@@ -201,11 +201,29 @@ impl ModelFile {
                 source,
             },
         )?;
+        let value = serde_json::from_str(&text).map_err(|source| ModelFileError::Json {
+            path: path.into(),
+            source,
+        })?;
+        let m = Self::from_value(path, value)?;
+        m.validate().map_err(|error| ModelFileError::Invalid {
+            path: path.into(),
+            error,
+        })?;
+        Ok(m)
+    }
+
+    /// The model file parsed from `path`'s JSON, not yet [`validate`](Self::validate)d (`path`
+    /// names the file in errors).
+    ///
+    /// # Errors
+    /// [`ModelFileError::Format`] for another format or version, [`ModelFileError::Json`] for a
+    /// missing or mistyped field.
+    pub fn from_value(path: &Path, mut value: serde_json::Value) -> Result<Self, ModelFileError> {
         let json = |source| ModelFileError::Json {
             path: path.into(),
             source,
         };
-        let mut value: serde_json::Value = serde_json::from_str(&text).map_err(json)?;
         let format = value.get("format").and_then(serde_json::Value::as_str);
         let version = value.get("version").and_then(serde_json::Value::as_u64);
         if format != Some("et-model") || !matches!(version, Some(1 | 2)) {
@@ -222,10 +240,6 @@ impl ModelFile {
         }
         let mut m: ModelFile = serde_json::from_value(value).map_err(json)?;
         m.version = VERSION;
-        m.validate().map_err(|error| ModelFileError::Invalid {
-            path: path.into(),
-            error,
-        })?;
         Ok(m)
     }
 }

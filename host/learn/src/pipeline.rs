@@ -1,22 +1,18 @@
-//! Training and testing as `et train`, `et eval` and `et demo` do them, in one place: features
-//! from a dataset (referenced or raw, optionally the best p by Fisher ratio), the shrinkage
-//! chosen by cross-validation (leave-one-visit-out when there are several visits), the fit,
-//! its cross-validated accuracy, and a test on another session's data.
+//! A board model's training as `et train`, the viewer's wizard and `et demo` do it, in one
+//! place: features from a dataset (referenced or raw, optionally the best p by Fisher ratio),
+//! the shrinkage chosen by cross-validation (leave-one-visit-out when there are several
+//! visits), the fit and its cross-validated accuracy. Its use (prediction, a test on another
+//! session's data, the chip's check) is [`crate::model::Board`]'s.
 
 use et_core::model::ModelKind;
-use nalgebra::DMatrix;
 
-use super::analysis::{self, Band, Outcome};
+use super::analysis;
 use super::cv::{self, Confusion};
 use super::dataset::{DataError, Dataset};
 use super::fastcv::{Partition, Prepared};
 use super::fit::{self, FitError, FitOptions, Fitted, Target};
-use super::model_file::ModelFile;
 
 use et_core::board::MODEL_SLOT_BYTES;
-
-mod summary;
-pub use summary::TestSummary;
 
 /// The most features (at most `max`) a `kind` model of `classes` classes can keep and still
 /// fit one model slot of the board in f16 (0 when not even one feature fits).
@@ -72,7 +68,7 @@ pub struct TrainOptions {
 
 /// A trained model and how well it cross-validates.
 #[derive(Clone, Debug)]
-pub struct Trained {
+pub struct Training {
     /// The fit on every observation.
     pub model: Fitted,
     /// Its options (shrinkage included).
@@ -199,11 +195,11 @@ fn fewest_training_rows(fold: &[usize]) -> usize {
 /// toward the diagonal, since a rank-deficient target cannot make a class covariance definite;
 /// LDA toward the diagonal. The shrinkage is chosen by leave-one-visit-out when there are
 /// several visits and some candidate fits on every visit's complement, else by stratified
-/// k-fold; each such fallback is listed in [`Trained::fallbacks`].
+/// k-fold; each such fallback is listed in [`Training::fallbacks`].
 ///
 /// # Errors
 /// [`FitError`] from fitting or cross-validation.
-pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Trained, FitError> {
+pub fn train(data: &Dataset, options: &TrainOptions) -> Result<Training, FitError> {
     train_reporting(data, options, |_| {})
 }
 
@@ -232,7 +228,7 @@ pub fn train_reporting(
     data: &Dataset,
     options: &TrainOptions,
     mut report: impl FnMut(Stage),
-) -> Result<Trained, FitError> {
+) -> Result<Training, FitError> {
     let classes = data.centres.len();
     let (x, y) = (&data.x, &data.y);
     let p = x.ncols();
@@ -360,7 +356,7 @@ pub fn train_reporting(
         }
         None => None,
     };
-    Ok(Trained {
+    Ok(Training {
         model,
         options: opts,
         shrinkage_scores,
@@ -370,204 +366,4 @@ pub fn train_reporting(
         chosen_by,
         fallbacks,
     })
-}
-
-/// A model's results on a test set.
-#[derive(Clone, Debug)]
-pub struct Tested {
-    /// The confusion matrix.
-    pub confusion: Confusion,
-    /// Per observation: distance from the electrodes and position error (empty when the
-    /// dataset does not say where the electrodes are).
-    pub outcomes: Vec<Outcome>,
-    /// Mean error per 10 mm band of distance from the electrodes.
-    pub bands: Vec<Band>,
-    /// Per observation: the distance from where the finger really was to the predicted
-    /// class's centre, mm (what a regressor's error compares with; not 0 when the class is
-    /// right). Empty when the dataset has no positions.
-    pub errors_from_truth_mm: Vec<f64>,
-}
-
-/// `file`'s class for each observation of `data` (raw frames as collected: the model's own
-/// features are taken from it, referenced if the model is).
-///
-/// # Errors
-/// [`UseError::Config`] when they were scanned differently, [`UseError::Data`] when the
-/// dataset lacks the model's features or untouched frames, [`UseError::Model`] when the
-/// model's tables are not usable.
-pub fn predict(file: &ModelFile, data: &Dataset) -> Result<Vec<u16>, UseError> {
-    let (m, d) = (file.config, data.config);
-    if (m.electrodes, m.protocol, m.current_na, m.gain)
-        != (d.electrodes, d.protocol, d.current_na, d.gain)
-    {
-        return Err(UseError::Config {
-            model: scan(&m),
-            data: scan(&d),
-        });
-    }
-    let columns = model_columns(file, data)?;
-    let model = file.fitted().map_err(UseError::Model)?;
-    let x: DMatrix<f64> = analysis::select_columns(&data.features(file.referenced)?, &columns);
-    Ok(cv::predict_rows(&model, &x)?)
-}
-
-/// Tests `file`'s model on `data` ([`predict`]).
-///
-/// # Errors
-/// As [`predict`]; [`UseError::Fit`] when the dataset does not match its classes.
-pub fn test(file: &ModelFile, data: &Dataset) -> Result<Tested, UseError> {
-    // One prediction per observation serves the confusion, the bands and the errors.
-    let predicted = predict(file, data)?;
-    let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
-    let electrodes_mm: Vec<[f64; 2]> = data
-        .electrodes
-        .iter()
-        .map(|e| [e[0] * 1e3, e[1] * 1e3])
-        .collect();
-    let outcomes = if electrodes_mm.is_empty() {
-        Vec::new()
-    } else {
-        analysis::outcomes(&predicted, &data.y, &file.centres_mm, &electrodes_mm)?
-    };
-    let bands = analysis::by_distance(&outcomes, 10.0);
-    let errors_from_truth_mm = if data.positions.len() == predicted.len() {
-        predicted
-            .iter()
-            .zip(&data.positions)
-            .map(|(&c, truth)| {
-                let c = file.centres_mm.get(usize::from(c))?;
-                Some((c[0] - truth[0] * 1e3).hypot(c[1] - truth[1] * 1e3))
-            })
-            .collect::<Option<Vec<f64>>>()
-            .unwrap_or_default()
-    } else {
-        Vec::new()
-    };
-    Ok(Tested {
-        confusion,
-        outcomes,
-        bands,
-        errors_from_truth_mm,
-    })
-}
-
-/// How an exported blob did on a test set, evaluated by et-core as the firmware does it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct OnChip {
-    /// Observations classified right.
-    pub right: usize,
-    /// Observations.
-    pub total: usize,
-    /// Observations where the chip's class differs from the f64 host model's.
-    pub disagree: usize,
-}
-
-/// Classifies every observation of `data` with `blob` through `et_core::model` (frames as
-/// f32 V_m, and each visit's untouched frame as V_0 for a referenced model), and compares
-/// with `file`'s f64 model.
-///
-/// # Errors
-/// [`UseError::Blob`] when the blob does not parse, [`UseError::Data`] when the dataset lacks
-/// the model's features, [`UseError::Frame`] when a frame cannot be classified (not finite).
-pub fn on_chip(file: &ModelFile, blob: &[u8], data: &Dataset) -> Result<OnChip, UseError> {
-    let chip = et_core::model::Model::parse(blob).map_err(UseError::Blob)?;
-    let host = file.fitted().map_err(UseError::Model)?;
-    let columns = model_columns(file, data)?;
-    let xs = analysis::select_columns(&data.features(file.referenced)?, &columns);
-    // A whole frame (K values) with the dataset's features in their frame positions.
-    let k = chip.frame_len();
-    let frame = |m: &DMatrix<f64>, r: usize| {
-        let mut v = vec![0.0f32; k];
-        for (j, &i) in data.feature_index.iter().enumerate() {
-            if let Some(slot) = v.get_mut(usize::from(i)) {
-                *slot = m[(r, j)] as f32;
-            }
-        }
-        v
-    };
-    let mut scratch = vec![0.0f32; chip.scratch_len()];
-    let mut out = OnChip {
-        right: 0,
-        total: 0,
-        disagree: 0,
-    };
-    let mut row = vec![0.0; xs.ncols()];
-    for r in 0..data.x.nrows() {
-        let v_m = frame(&data.x, r);
-        let v_0 = file
-            .referenced
-            .then(|| frame(&data.baselines, usize::from(data.visit[r])));
-        let d = chip
-            .evaluate_referenced(&v_m, v_0.as_deref(), &mut scratch)
-            .map_err(|error| UseError::Frame { row: r, error })?;
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = xs[(r, j)];
-        }
-        out.disagree += usize::from(d.class != host.predict(&row));
-        out.right += usize::from(d.class == data.y[r]);
-        out.total += 1;
-    }
-    Ok(out)
-}
-
-/// The dataset's columns holding `file`'s features, in the model's order (a feature-reduced
-/// model uses a subset).
-fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataError> {
-    file.feature_index
-        .iter()
-        .map(|i| data.feature_index.iter().position(|d| d == i))
-        .collect::<Option<Vec<usize>>>()
-        .ok_or(DataError::MissingFeatures {
-            dataset: data.feature_index.len(),
-            model: file.feature_index.len(),
-        })
-}
-
-/// What of a scan decides what its features mean: L, the protocol, the current and the gain.
-fn scan(c: &et_core::config::ScanConfig) -> String {
-    format!(
-        "L = {}, {} drive, {} uA, gain {}",
-        c.electrodes,
-        c.protocol,
-        f64::from(c.current_na) / 1e3,
-        c.gain
-    )
-}
-
-/// Why a model could not be used on a dataset; says which of the two is at fault.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum UseError {
-    /// The dataset does not hold what the model needs.
-    #[error("data: {0}")]
-    Data(#[from] DataError),
-    /// The model was trained on another scan than the data's: its features are other
-    /// measurements.
-    #[error(
-        "the model was trained on a scan of {model}, the data were measured with {data}: \
-             train a model on data of this scan"
-    )]
-    Config {
-        /// The model's scan.
-        model: String,
-        /// The data's scan.
-        data: String,
-    },
-    /// The model file's tables are not a usable model.
-    #[error("model: {0}")]
-    Model(FitError),
-    /// Evaluation on the dataset failed (e.g. a class the model does not know).
-    #[error("{0}")]
-    Fit(#[from] FitError),
-    /// The exported blob does not parse.
-    #[error("model blob: {0}")]
-    Blob(et_core::model::ModelError),
-    /// The chip's evaluation refused an observation.
-    #[error("observation {row}: {error}")]
-    Frame {
-        /// The observation (0-based row).
-        row: usize,
-        /// Why.
-        error: et_core::model::EvalError,
-    },
 }

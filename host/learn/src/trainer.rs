@@ -1,7 +1,8 @@
 //! The one entry point from examples to a model: a [`Trainer`] says what to fit and how to
 //! cross-validate it, [`Trainer::train`] fits it on an et dataset (QDA or LDA for the board,
 //! docs/method.md §9) or on any sensor's table (`tabular`: classifiers and regressors, or the
-//! best of them), and returns a [`Trained`] model that predicts, is tested and saves itself.
+//! best of them), and returns the [`Model`] (which predicts, is evaluated, saves itself and
+//! makes the board's blob) with, for a board model, how its training went.
 //! The command line, the demo, the viewer's wizard and the tests train through it.
 //!
 //! ```text
@@ -13,19 +14,15 @@
 //!
 //! ```no_run
 //! use et_core::model::Precision;
-//! use et_learn::{Examples, Trained, Trainer};
+//! use et_learn::{Examples, Trainer};
 //!
 //! let data = et_learn::dataset::load("train.npz".as_ref())?;
-//! let trained = Trainer::qda().train(Examples::Dataset(Box::new(data)), |_| {})?;
-//! trained.save("model.json".as_ref())?;
-//! if let Trained::Board(board) = &trained {
-//!     let blob = board.file.blob(Precision::F16)?; // for `et upload`
-//!     println!("{} bytes", blob.len());
-//! }
+//! let trained = Trainer::qda().train(Examples::Dataset(&data), |_| {})?;
+//! trained.model.save("model.json".as_ref())?;
+//! let blob = trained.model.export_blob(Precision::F16)?; // for `et upload`
+//! println!("{} bytes", blob.len());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-
-use std::path::Path;
 
 use et_core::model::ModelKind;
 
@@ -33,9 +30,10 @@ use crate::analysis::{self, CurvePoint};
 use crate::dataset::{DataError, Dataset};
 use crate::fastcv;
 use crate::fit::FitError;
+use crate::model::{Board, Model};
 use crate::model_file::{ModelFile, ModelFileError};
 use crate::pipeline::{self, Stage, TrainOptions};
-use crate::tabular::{self, Choice, CvScheme, Method, Table, TableModel, TabularError};
+use crate::tabular::{self, Choice, CvScheme, Method, Table, TabularError};
 
 /// Why a model could not be trained.
 #[derive(Debug, thiserror::Error)]
@@ -56,6 +54,34 @@ pub enum TrainError {
     /// The model file could not be written.
     #[error("{0}")]
     File(#[from] ModelFileError),
+    /// The trained tables are not a model the board, or any reader of model files, would
+    /// accept (`ModelFile::validate`): `train` refuses to return one.
+    #[error("the trained model is not usable: {error}{}", unusable_advice(error, *shrinkage))]
+    Unusable {
+        /// The check that failed.
+        error: FitError,
+        /// The shrinkage it was fitted at.
+        shrinkage: f64,
+    },
+}
+
+/// What to do about an [`TrainError::Unusable`] model: a larger shrinkage when a covariance
+/// is the cause, else look at the data.
+fn unusable_advice(error: &FitError, shrinkage: f64) -> String {
+    use et_core::model::ModelError::{IllConditioned, Singular};
+    let covariance = matches!(
+        error,
+        FitError::Invalid(Singular { .. } | IllConditioned { .. })
+            | FitError::NotPositiveDefinite { .. }
+    );
+    if covariance {
+        format!(
+            " (shrinkage {shrinkage}): train with a larger shrinkage (e.g. 0.1) \
+             or more observations per class"
+        )
+    } else {
+        " (check the dataset's header: its scan and feature columns)".into()
+    }
 }
 
 /// What to train and how.
@@ -106,7 +132,7 @@ impl Default for Trainer {
 #[derive(Debug)]
 pub enum Examples<'a> {
     /// An et dataset (classes, visits and their untouched frames): a model for the board.
-    Dataset(Box<Dataset>),
+    Dataset(&'a Dataset),
     /// Any sensor's table.
     Table(&'a Table),
 }
@@ -129,28 +155,37 @@ pub enum Progress<'a> {
     Table(&'a str, usize, usize),
 }
 
-/// A model for the board: its file, how it was chosen and cross-validated, and the features
-/// it was trained on.
+/// How a board model's training went: the fit, the shrinkage's choice and the
+/// cross-validations, and the features it was trained on.
 #[derive(Clone, Debug)]
-pub struct BoardModel {
-    /// The model file (what `et train` writes and the board's blob is made from).
-    pub file: ModelFile,
+pub struct BoardTraining {
     /// The fit, the shrinkage's choice and the cross-validations.
-    pub training: pipeline::Trained,
+    pub training: pipeline::Training,
     /// The dataset as trained on (referenced, its features kept).
     pub data: Dataset,
 }
 
-/// A trained model.
+/// A trained model and, for a board model, how its training went.
 #[derive(Clone, Debug)]
-pub enum Trained {
-    /// QDA or LDA from an et dataset.
-    Board(Box<BoardModel>),
-    /// A table's model.
-    Table(Box<TableModel>),
+pub struct Trained {
+    /// The model.
+    pub model: Model,
+    /// A board model's training (None for a table's model, whose file holds its search).
+    pub board: Option<Box<BoardTraining>>,
 }
 
-impl BoardModel {
+impl Trained {
+    /// A board model's model and training, None for a table's model.
+    #[must_use]
+    pub fn into_board(self) -> Option<(Board, BoardTraining)> {
+        match (self.model, self.board) {
+            (Model::Board(model), Some(training)) => Some((*model, *training)),
+            _ => None,
+        }
+    }
+}
+
+impl BoardTraining {
     /// The sizes a learning curve is drawn at: observations per class from 12 up to the
     /// largest class.
     #[must_use]
@@ -167,7 +202,7 @@ impl BoardModel {
             .collect()
     }
 
-    /// Held-out accuracy against observations per class n_c ([`BoardModel::curve_sizes`]), on
+    /// Held-out accuracy against observations per class n_c ([`BoardTraining::curve_sizes`]), on
     /// the folds the shrinkage was chosen on (leave-one-visit-out with several visits, else
     /// k-fold), at the fitted shrinkage; `each` is called before each size.
     #[must_use]
@@ -189,19 +224,6 @@ impl BoardModel {
     }
 }
 
-impl Trained {
-    /// Writes the model file (JSON).
-    ///
-    /// # Errors
-    /// [`TrainError::File`] or [`TrainError::Table`] when it cannot be written.
-    pub fn save(&self, path: &Path) -> Result<(), TrainError> {
-        match self {
-            Trained::Board(b) => Ok(b.file.save(path)?),
-            Trained::Table(t) => Ok(t.save(path)?),
-        }
-    }
-}
-
 impl Trainer {
     /// QDA (shrinkage and folds as docs/method.md §9) on et datasets.
     #[must_use]
@@ -219,9 +241,13 @@ impl Trainer {
         mut progress: impl FnMut(Progress<'_>),
     ) -> Result<Trained, TrainError> {
         match examples {
-            Examples::Dataset(data) => Ok(Trained::Board(Box::new(
-                self.train_dataset(*data, &mut progress)?,
-            ))),
+            Examples::Dataset(data) => {
+                let (model, training) = self.train_dataset(data.clone(), &mut progress)?;
+                Ok(Trained {
+                    model: Model::Board(Box::new(model)),
+                    board: Some(Box::new(training)),
+                })
+            }
             Examples::Table(table) => {
                 let options = tabular::TrainOptions {
                     folds: self.folds.unwrap_or(5),
@@ -233,7 +259,10 @@ impl Trainer {
                 let mut table_progress =
                     |what: &str, done: usize, of: usize| progress(Progress::Table(what, done, of));
                 let model = tabular::train(table, self.method, &options, &mut table_progress)?;
-                Ok(Trained::Table(Box::new(model)))
+                Ok(Trained {
+                    model: Model::Table(Box::new(model)),
+                    board: None,
+                })
             }
         }
     }
@@ -251,13 +280,13 @@ impl Trainer {
     }
 
     /// QDA or LDA on an et dataset: features (referenced when it can be), shrinkage by
-    /// cross-validation unless given, the fit, and the model file it makes (`ModelFile::validate`
-    /// says whether the board would load it: `et train` refuses to write one it would not).
+    /// cross-validation unless given, the fit, and the model file it makes, checked as the
+    /// board would check it ([`TrainError::Unusable`] when it would refuse it).
     fn train_dataset(
         &self,
         mut data: Dataset,
         progress: &mut impl FnMut(Progress<'_>),
-    ) -> Result<BoardModel, TrainError> {
+    ) -> Result<(Board, BoardTraining), TrainError> {
         let kind = self.board_kind()?;
         let referenced = !self.raw && data.has_untouched();
         if !self.raw && !referenced {
@@ -290,10 +319,10 @@ impl Trainer {
             centres_mm,
             referenced,
         );
-        Ok(BoardModel {
-            file,
-            training,
-            data,
-        })
+        // What every reader of model files checks (et eval, stream, view, export, Python's
+        // load): a model they would refuse is not returned.
+        let shrinkage = file.shrinkage;
+        let board = Board::new(file).map_err(|error| TrainError::Unusable { error, shrinkage })?;
+        Ok((board, BoardTraining { training, data }))
     }
 }

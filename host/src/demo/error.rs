@@ -6,7 +6,7 @@ use et_core::config::ConfigError;
 use et_core::protocol::ProtocolError;
 use et_learn::dataset::DataError;
 use et_learn::fit::FitError;
-use et_learn::pipeline::UseError;
+use et_learn::model::UseError;
 use et_learn::{TrainError, collect::CollectError, model_file::ModelFileError};
 use et_recon::{ImagingError, ReconError, fem::FemError, mesh::MeshError};
 use et_sim::scene::{FieldError, SceneError};

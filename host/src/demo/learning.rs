@@ -55,7 +55,7 @@ pub(super) struct Learning {
     chip: Option<ChipCheck>,
     /// The QDA's next-day test, for the figures.
     #[serde(skip)]
-    qda_test: pipeline::Tested,
+    qda_test: Tested,
 }
 
 /// The referenced QDA, the section's model.
@@ -181,16 +181,12 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
             keep,
             ..Trainer::default()
         };
-        let Trained::Board(board) =
-            trainer.train(Examples::Dataset(Box::new(train.clone())), |_| {})?
-        else {
-            return Err(DemoError::Scenes("an et dataset trains a board model"));
-        };
-        let BoardModel {
-            file, training: t, ..
-        } = *board;
-        let tested = pipeline::test(&file, &next_day)?;
-        Ok::<_, DemoError>((t, file, tested))
+        let (board, training) = trainer
+            .train(Examples::Dataset(&train), |_| {})?
+            .into_board()
+            .ok_or(DemoError::Scenes("an et dataset trains a board model"))?;
+        let tested = board.test(&next_day)?;
+        Ok::<_, DemoError>((training.training, board, tested))
     };
     let (qda, qda_file, qda_test) = fit(true, ModelKind::Qda, None, None)?;
     bar.inc(1);
@@ -199,7 +195,7 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     bar.inc(1);
     let (lda, _, lda_test) = fit(true, ModelKind::Lda, None, None)?;
     steps.done(&bar, "trained QDA and LDA, cross-validated");
-    qda_file.save(&out.join("learning/model.json"))?;
+    qda_file.file().save(&out.join("learning/model.json"))?;
 
     // The trade: features kept (Fisher ranking) against accuracy and the chip's model size.
     let p_all = train.x.ncols();
@@ -213,9 +209,9 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     for &p in &keeps {
         // What the main model is (a qda whose best shrinkage is full toward the pooled
         // covariance was saved as the lda it equals).
-        let (_, file, tested) = fit(true, qda.options.kind, Some(qda.options.shrinkage), Some(p))?;
-        let f16 = file.blob(Precision::F16)?.len();
-        let f32 = file.blob(Precision::F32)?.len();
+        let (_, board, tested) = fit(true, qda.options.kind, Some(qda.options.shrinkage), Some(p))?;
+        let f16 = board.blob(Precision::F16)?.len();
+        let f32 = board.blob(Precision::F32)?.len();
         trade.push((
             TradePoint {
                 features: p,
@@ -223,7 +219,7 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
                 f16_bytes: f16,
                 f32_bytes: f32,
             },
-            file,
+            board,
         ));
         bar.inc(1);
     }
@@ -232,11 +228,11 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         .iter()
         .filter(|(t, _)| t.f16_bytes <= MODEL_SLOT_BYTES)
         .max_by_key(|(t, _)| t.features)
-        .map(|(t, file)| -> Result<_> {
-            let blob = file.blob(Precision::F16)?;
+        .map(|(t, board)| -> Result<_> {
+            let blob = board.blob(Precision::F16)?;
             let etm = out.join("learning/model.etm");
             std::fs::write(&etm, &blob).map_err(io(&etm))?;
-            let r = pipeline::on_chip(file, &blob, &next_day)?;
+            let r = board.on_chip(&blob, &next_day)?;
             Ok(ChipCheck {
                 features: t.features,
                 bytes: t.f16_bytes,
@@ -251,7 +247,7 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         "feature trade curve; the chip's model checked in et-core",
     );
 
-    let row = |name: &str, t: &pipeline::Trained, tested: &pipeline::Tested| ModelRow {
+    let row = |name: &str, t: &pipeline::Training, tested: &Tested| ModelRow {
         name: if t
             .fallbacks
             .iter()

@@ -53,56 +53,6 @@ fn thousandth<S: serde::Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::E
     x.map(|c| rounded(c, 3)).serialize(s)
 }
 
-/// A trained model the host evaluates on each frame.
-#[derive(Clone, Debug)]
-pub struct Classifier {
-    /// As trained.
-    pub file: ModelFile,
-    fitted: Fitted,
-}
-
-impl Classifier {
-    /// Wraps a model file.
-    ///
-    /// # Errors
-    /// [`FitError`] if the file's tables are not a usable model.
-    pub fn new(file: ModelFile) -> Result<Self, FitError> {
-        let fitted = file.fitted()?;
-        Ok(Self { file, fitted })
-    }
-
-    /// The class of a frame V (K values, V) given V_0, its posterior and the
-    /// posterior-weighted centre. None when the model is for another configuration.
-    #[must_use]
-    pub fn classify(&self, config: &ScanConfig, v: &[f32], v0: &[f64]) -> Option<Classification> {
-        if *config != self.file.config {
-            return None;
-        }
-        let x = self.file.features(v, v0)?;
-        let d = self.fitted.discriminants(&x);
-        let top = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
-        let class = d.iter().position(|&v| v == top)?;
-        let centre = posterior_centre(&self.fitted, &x, &self.file.centres_mm, 1.0);
-        Some(Classification {
-            class: class as u16,
-            posterior: 1.0 / total,
-            centre_mm: centre,
-        })
-    }
-}
-
-/// What a model says of one frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Classification {
-    /// The most probable class.
-    pub class: u16,
-    /// Its posterior probability (0 to 1).
-    pub posterior: f64,
-    /// The class centres weighted by their posteriors, mm: a position between the cells.
-    pub centre_mm: [f64; 2],
-}
-
 /// Reference frames collected so far of those needed before images start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Referencing {
@@ -296,8 +246,8 @@ pub struct Processor {
     projection: Option<Projection>,
     inside: Vec<usize>,
     reference: Option<Reference>,
-    /// The model evaluated on each touched frame.
-    pub classifier: Option<Classifier>,
+    /// The board model evaluated on each touched frame.
+    pub classifier: Option<Board>,
 }
 
 impl std::fmt::Debug for Processor {

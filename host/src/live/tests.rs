@@ -225,18 +225,16 @@ fn a_trained_model_classifies_live_presses() {
         folds: Some(5),
         ..et_learn::Trainer::default()
     };
-    let et_learn::Trained::Board(board) = trainer
-        .train(et_learn::Examples::Dataset(Box::new(data)), |_| {})
+    let (board, _) = trainer
+        .train(et_learn::Examples::Dataset(&data), |_| {})
         .unwrap()
-    else {
-        panic!("a dataset trains a board model");
-    };
-    let file = board.file;
+        .into_board()
+        .expect("a dataset trains a board model");
 
     let (mut source, sheet) = sim();
-    source.configure(file.config).unwrap();
+    source.configure(board.file().config).unwrap();
     let mut p = Processor::new(&sheet.physical, Settings::default()).unwrap();
-    p.classifier = Some(Classifier::new(file).unwrap());
+    p.classifier = Some(board);
     for _ in 0..p.settings().reference_frames {
         p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
     }

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use et_learn::cv::Confusion;
-use et_learn::pipeline::Tested;
+use et_learn::model::Tested;
 
 use super::PlotError;
 

@@ -11,22 +11,21 @@ use std::path::PathBuf;
 
 use eframe::egui::{self, Color32, Rect, Sense, Stroke, StrokeKind, pos2, vec2};
 use et_core::ScanConfig;
-use et_core::model::{ModelKind, Precision};
+use et_core::board::MODEL_SLOT_BYTES;
+use et_core::model::ModelKind;
 use et_core::protocol::{Halving, ProtocolKind};
 use et_sim::sheet::SheetSpec;
 use et_sim::touch::Touch;
 use nalgebra::DMatrix;
 
 use crate::live::{Output, Processor, Source};
-use et_core::board::MODEL_SLOT_BYTES;
 use et_learn::collect;
 use et_learn::cv::Confusion;
 use et_learn::dataset::Dataset;
 use et_learn::fit::FitError;
-use et_learn::model_file::ModelFile;
+use et_learn::model::{Board, SlotError};
 use et_learn::pipeline;
 use et_learn::tabular::{Choice, Method};
-use et_learn::trainer::BoardModel;
 use et_learn::{Examples, TrainError, Trainer};
 
 /// What the wizard asks of the viewer.
@@ -37,7 +36,7 @@ pub enum Request {
     /// Press the simulated sheet (empty: release).
     Press(Vec<Touch>),
     /// Classify with this model from now on.
-    UseModel(Box<ModelFile>),
+    UseModel(Box<Board>),
     /// Send this blob to the board.
     Upload(Vec<u8>),
 }
@@ -74,11 +73,11 @@ pub enum Step {
     Trained,
 }
 
-/// The outcome of training.
+/// The model the wizard trained, and how it cross-validated.
 #[derive(Clone, Debug)]
-pub struct Trained {
+pub struct TrainedBoard {
     /// The model.
-    pub file: ModelFile,
+    pub board: Board,
     /// Stratified k-fold cross-validation.
     pub cv: Confusion,
     /// Leave-one-visit-out accuracy (several visits).
@@ -101,7 +100,7 @@ pub struct Wizard {
     /// Where it is.
     pub step: Step,
     /// After training.
-    pub trained: Option<Trained>,
+    pub trained: Option<TrainedBoard>,
     /// Where "Save" writes the model (JSON) and its blob (`.etm` beside it).
     pub save_path: String,
     /// The existing file the user was warned about: a second Save replaces it.
@@ -329,23 +328,20 @@ impl Wizard {
             keep: (fit < all).then_some(fit),
             ..Trainer::default()
         };
-        let board = match trainer.train(Examples::Dataset(Box::new(data)), |_| {}) {
-            Ok(et_learn::Trained::Board(board)) => board,
+        let (board, training) = match trainer.train(Examples::Dataset(&data), |_| {}) {
+            Ok(trained) => trained
+                .into_board()
+                .ok_or(WizardError::Fit(FitError::Shape(
+                    "not a board model".into(),
+                )))?,
             Err(TrainError::Data(e)) => return Err(WizardError::Data(e)),
-            Err(TrainError::Fit(e)) => return Err(WizardError::Fit(e)),
-            // A dataset trains a board model, QDA here: nothing else can come back.
-            other => {
-                let why = other
-                    .err()
-                    .map_or("not a board model".into(), |e| e.to_string());
-                return Err(WizardError::Fit(FitError::Shape(why)));
+            Err(TrainError::Fit(e) | TrainError::Unusable { error: e, .. }) => {
+                return Err(WizardError::Fit(e));
             }
+            // A dataset trains a board model, QDA here: nothing else can go wrong.
+            Err(other) => return Err(WizardError::Fit(FitError::Shape(other.to_string()))),
         };
-        let BoardModel {
-            file,
-            training: t,
-            data,
-        } = *board;
+        let (t, data) = (training.training, training.data);
         self.message = format!(
             "cross-validated accuracy {:.1} % (shrinkage {}, {} of {all} features{})",
             100.0 * t.cv.accuracy(),
@@ -360,8 +356,8 @@ impl Wizard {
         for f in &t.fallbacks {
             self.message.push_str(&format!("\nnote: {f}"));
         }
-        self.trained = Some(Trained {
-            file,
+        self.trained = Some(TrainedBoard {
+            board,
             cv: t.cv,
             leave_one_visit_out: t.leave_one_visit_out,
         });
@@ -372,16 +368,10 @@ impl Wizard {
     /// The model blob for the board: f32 if it fits a slot, else f16.
     fn blob(&self) -> Result<Vec<u8>, WizardError> {
         let t = self.trained.as_ref().ok_or(WizardError::NotTrained)?;
-        let b = t.file.blob(Precision::F32).map_err(WizardError::Fit)?;
-        if b.len() <= MODEL_SLOT_BYTES {
-            return Ok(b);
-        }
-        let b = t.file.blob(Precision::F16).map_err(WizardError::Fit)?;
-        if b.len() <= MODEL_SLOT_BYTES {
-            Ok(b)
-        } else {
-            Err(WizardError::TooLarge { bytes: b.len() })
-        }
+        t.board.slot_blob().map_err(|e| match e {
+            SlotError::Fit(e) => WizardError::Fit(e),
+            SlotError::TooLarge { bytes } => WizardError::TooLarge { bytes },
+        })
     }
 }
 

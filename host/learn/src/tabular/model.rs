@@ -503,7 +503,15 @@ impl TableModel {
     /// # Errors
     /// [`TableModelError`]: not JSON of this shape, another format, or inconsistent tables.
     pub fn from_json(text: &str) -> Result<Self, TableModelError> {
-        let m: TableModel = serde_json::from_str(text)?;
+        Self::from_value(serde_json::from_str(text)?)
+    }
+
+    /// Checks a model's parsed JSON ([`from_json`](Self::from_json)).
+    ///
+    /// # Errors
+    /// As [`from_json`](Self::from_json).
+    pub fn from_value(value: serde_json::Value) -> Result<Self, TableModelError> {
+        let m: TableModel = serde_json::from_value(value)?;
         if m.format != "et-table-model" || m.version != 1 {
             return Err(TableModelError::Format);
         }
@@ -525,15 +533,6 @@ pub enum TableModelError {
     /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
     #[error("{0}")]
     Tables(String),
-}
-
-/// Whether a JSON file is an et table model (else an et board model, `"format": "et-model"`).
-#[must_use]
-pub fn is_table_model(text: &str) -> bool {
-    serde_json::from_str::<serde_json::Value>(text)
-        .ok()
-        .and_then(|v| v.get("format").and_then(|f| f.as_str().map(String::from)))
-        .is_some_and(|f| f == "et-table-model")
 }
 
 impl TableModel {

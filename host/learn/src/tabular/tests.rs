@@ -362,8 +362,8 @@ fn bad_requests_are_refused_with_the_reason() {
     }
     let e = TableModel::from_json(&serde_json::to_string(&short).unwrap()).unwrap_err();
     assert!(e.to_string().contains("weight rows"), "{e}");
-    assert!(!is_table_model("{\"format\": \"et-model\"}"));
-    assert!(is_table_model(&serde_json::to_string(&model).unwrap()));
+    assert!(TableModel::from_json("{\"format\": \"et-model\"}").is_err());
+    assert!(TableModel::from_json(&serde_json::to_string(&model).unwrap()).is_ok());
 }
 
 /// More channels than rows, and constant channels (a dead electrode): every regressor

@@ -5,9 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
-use et_learn::model_file::ModelFile;
-use et_learn::tabular;
-use et_learn::{dataset, pipeline};
+use et_learn::model::{Board, Tested};
+use et_learn::{Model, dataset, pipeline};
 
 use crate::learn::PrecisionArg;
 use crate::output;
@@ -61,31 +60,30 @@ pub(crate) struct ExportArgs {
 }
 
 pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
-    let text = et_core::text::read_text_at_most(&args.model, et_core::text::MAX_FILE_BYTES)
-        .with_context(|| format!("reading {}", args.model.display()))?;
-    let table_model = tabular::is_table_model(&text);
-    let Some(data_arg) = &args.data else {
-        if !table_model {
-            bail!(
-                "{}: a board model (trained on an et dataset): evaluate it with --data",
-                args.model.display()
+    let model = Model::load(&args.model)?;
+    let board = match (&model, &args.data) {
+        (Model::Table(table_model), None) => {
+            return crate::tabular::eval(
+                table_model,
+                &args.model,
+                &args.table,
+                args.plots.as_deref(),
+                args.predictions.as_deref(),
+                args.json,
+                force,
             );
         }
-        return crate::tabular::eval(
-            &args.model,
-            &args.table,
-            args.plots.as_deref(),
-            args.predictions.as_deref(),
-            args.json,
-            force,
-        );
-    };
-    if table_model {
-        bail!(
+        (Model::Table(_), Some(_)) => bail!(
             "{}: trained on a sensor's table: evaluate it with --features (and --targets)",
             args.model.display()
-        );
-    }
+        ),
+        (Model::Board(_), None) => bail!(
+            "{}: a board model (trained on an et dataset): evaluate it with --data",
+            args.model.display()
+        ),
+        (Model::Board(board), Some(_)) => board,
+    };
+    let data_arg = args.data.as_deref().unwrap_or(Path::new(""));
     if let Some(flag) = args.table.table_only_flag() {
         bail!("{flag} applies to any sensor's table (--features), not to an et dataset (--data)");
     }
@@ -103,21 +101,17 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
         let folders: Vec<&Path> = args.plots.as_deref().into_iter().collect();
         output::check_all(&[a, b], &folders, &[&args.model, data_arg], force)?;
     }
-    let file = ModelFile::load(&args.model)?;
     let data = dataset::load(data_arg)?;
-    let tested = pipeline::test(&file, &data).map_err(|e| {
-        // Name the file at fault: the model's tables, or the data.
-        let blamed = match e {
-            pipeline::UseError::Model(_) => &args.model,
-            _ => data_arg,
-        };
-        anyhow::anyhow!("{}: {e}", blamed.display())
-    })?;
+    // The model was checked when loaded: what goes wrong now is the data's.
+    let tested = board
+        .test(&data)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", data_arg.display()))?;
+    let centres_mm = &board.file().centres_mm;
     let conf = &tested.confusion;
     if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
         eval_plots(dir, pngs, &tested, data_arg)?;
     }
-    let summary = tested.summary(&file.centres_mm);
+    let summary = tested.summary();
     let [mean, median, p90] = [
         summary.mean_error_mm,
         summary.median_error_mm,
@@ -141,8 +135,8 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
             } else {
                 String::new()
             },
-            conf.mean_position_error(&file.centres_mm),
-            conf.aee(&file.centres_mm)
+            conf.mean_position_error(centres_mm),
+            conf.aee(centres_mm)
         );
     }
     Ok(())
@@ -153,7 +147,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
 fn eval_plots(
     dir: &Path,
     (confusion_png, error_png): &(PathBuf, PathBuf),
-    tested: &pipeline::Tested,
+    tested: &Tested,
     data_arg: &Path,
 ) -> Result<()> {
     let conf = &tested.confusion;
@@ -181,9 +175,12 @@ fn eval_plots(
 
 pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
     output::check(&args.out, &[&args.model], force)?;
-    let file = ModelFile::load(&args.model)?;
+    let model = Model::load(&args.model)?;
     let precision = Precision::from(args.precision);
-    let blob = file.blob(precision)?;
+    let blob = model
+        .export_blob(precision)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.model.display()))?;
+    let file = model.as_board().map(Board::file).context("a board model")?;
     output::write(&args.out, |partial| {
         std::fs::write(partial, &blob).with_context(|| format!("writing {}", args.out.display()))
     })?;

@@ -6,10 +6,10 @@ use anyhow::{Context, Result, bail};
 use et_core::model::{ModelKind, Precision};
 use et_host::plot;
 use et_learn::analysis::CurvePoint;
-use et_learn::fit::FitError;
+use et_learn::model::Board;
 use et_learn::tabular::{self, Choice, Method};
-use et_learn::trainer::{BoardModel, Progress};
-use et_learn::{Examples, TrainError, Trained, Trainer};
+use et_learn::trainer::{BoardTraining, Progress};
+use et_learn::{Examples, TrainError, Trainer};
 use et_learn::{dataset, pipeline};
 
 use crate::output;
@@ -173,7 +173,7 @@ impl TrainArgs {
 }
 
 /// Draws `board`'s learning curve into `png` (a progress bar while it is scored).
-fn learning_curve_png(png: &Path, board: &BoardModel) -> Result<Vec<CurvePoint>> {
+fn learning_curve_png(png: &Path, board: &BoardTraining) -> Result<Vec<CurvePoint>> {
     let bar = ProgressBar::new(board.curve_sizes().len() as u64).with_style(
         ProgressStyle::with_template("learning curve [{bar:30}] {pos}/{len}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -253,7 +253,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     };
     spinner.set_message(format!("reading {}", data_arg.display()));
     let data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
-    let trained = trainer.train(Examples::Dataset(Box::new(data)), |stage| match stage {
+    let trained = trainer.train(Examples::Dataset(&data), |stage| match stage {
         Progress::RawFrames => spinner.suspend(|| {
             eprintln!(
                 "note: {} has no untouched frames, training on raw frames",
@@ -269,48 +269,33 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         Progress::Table(..) => {}
     });
     spinner.finish_and_clear();
-    let board = match trained.map_err(|e| match e {
+    let trained = trained.map_err(|e| match e {
         TrainError::Data(e) => anyhow::anyhow!("{}: {e}", data_arg.display()),
         other => other.into(),
-    })? {
-        Trained::Board(board) => board,
-        Trained::Table(_) => bail!("an et dataset trains a board model"),
-    };
+    })?;
+    let (board, training) = trained
+        .into_board()
+        .context("an et dataset trains a board model")?;
     let curve = match &args.curve {
-        Some(png) => Some(learning_curve_png(png, &board)?),
+        Some(png) => Some(learning_curve_png(png, &training)?),
         None => None,
     };
-    let (file, shrinkage) = (&board.file, board.file.shrinkage);
-    // What every reader of model files checks (et eval, stream, view, export): refuse to
-    // write a model they would refuse.
-    if let Err(e) = file.validate() {
-        use et_core::model::ModelError::{IllConditioned, Singular};
-        let covariance = matches!(
-            e,
-            FitError::Invalid(Singular { .. } | IllConditioned { .. })
-                | FitError::NotPositiveDefinite { .. }
-        );
-        let advice = if covariance {
-            format!(
-                " (shrinkage {shrinkage}): train with a larger --shrinkage (e.g. 0.1) or more \
-                 observations per class"
-            )
-        } else {
-            format!(" ({}: check its header)", data_arg.display())
-        };
-        bail!("the trained model is not usable: {e}{advice}");
-    }
-    output::write(&args.out, |partial| file.save(partial))?;
-    print_trained(args, &board, curve.as_deref())
+    output::write(&args.out, |partial| board.file().save(partial))?;
+    print_trained(args, &board, &training, curve.as_deref())
 }
 
 /// `et train`'s summary of a board model: JSON, or a line and its notes.
-fn print_trained(args: &TrainArgs, board: &BoardModel, curve: Option<&[CurvePoint]>) -> Result<()> {
-    let BoardModel {
-        file,
+fn print_trained(
+    args: &TrainArgs,
+    board: &Board,
+    training: &BoardTraining,
+    curve: Option<&[CurvePoint]>,
+) -> Result<()> {
+    let BoardTraining {
         training: trained,
         data,
-    } = board;
+    } = training;
+    let file = board.file();
     let (referenced, mm, classes) = (file.referenced, &file.centres_mm, data.centres.len());
     let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
     let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);

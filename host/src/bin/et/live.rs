@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use et_learn::model_file::ModelFile;
 
 /// Where live frames come from (`et stream`, `et view`).
 #[derive(Debug, Clone, clap::Args)]
@@ -43,12 +42,13 @@ impl SourceArgs {
         }
     }
 
-    fn classifier(&self) -> Result<Option<et_host::live::Classifier>> {
+    fn classifier(&self) -> Result<Option<et_learn::model::Board>> {
         self.model
             .as_deref()
             .map(|p| {
-                let file = ModelFile::load(p)?;
-                et_host::live::Classifier::new(file)
+                // Load errors name the file already.
+                et_learn::Model::load(p)?
+                    .into_board()
                     .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
             })
             .transpose()
@@ -149,10 +149,10 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     processor.classifier = args.source.classifier()?;
     if let Some(c) = &processor.classifier {
         // The model classifies frames of the configuration it was trained on.
-        source.configure(c.file.config).map_err(|e| {
+        source.configure(c.file().config).map_err(|e| {
             anyhow::anyhow!(
                 "the model was trained on {} frames and the source cannot scan them: {e}",
-                c.file.config.protocol.name()
+                c.file().config.protocol.name()
             )
         })?;
     }

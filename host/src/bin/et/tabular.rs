@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use et_host::plot;
 use et_learn::tabular::{self, GroupsFrom, Referencing, RowRange, Table, TableModel, Unit};
 use et_learn::trainer::Progress;
-use et_learn::{Examples, Trained, Trainer};
+use et_learn::{Examples, Model, Trainer};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output;
@@ -242,7 +242,7 @@ pub(crate) fn train(
     };
     let trained = trainer.train(Examples::Table(&table), progress);
     bar.finish_and_clear();
-    let Trained::Table(mut model) = trained? else {
+    let Model::Table(mut model) = trained?.model else {
         bail!("a table trains a table model");
     };
     model.reference = args.referencing();
@@ -334,6 +334,7 @@ fn describe(c: &tabular::Candidate) -> String {
 }
 
 pub(crate) fn eval(
+    model: &TableModel,
     model_path: &Path,
     args: &TableArgs,
     plots: Option<&Path>,
@@ -351,7 +352,6 @@ pub(crate) fn eval(
     outputs.extend(predictions);
     let folders: Vec<&Path> = plots.into_iter().collect();
     output::check_all(&outputs, &folders, &inputs, force)?;
-    let model = TableModel::load(model_path)?;
     if model.reference != args.referencing() {
         let said = |r: Option<Referencing>| match r {
             None => "raw features".to_string(),
@@ -369,7 +369,7 @@ pub(crate) fn eval(
         );
     }
     let table = args.load()?;
-    let e = tabular::evaluate(&model, &table).map_err(|e| {
+    let e = tabular::evaluate(model, &table).map_err(|e| {
         anyhow::anyhow!(
             "{} with {}: {e}",
             model_path.display(),
@@ -392,7 +392,7 @@ pub(crate) fn eval(
     }
     if let Some(csv) = predictions {
         output::write(csv, |partial| {
-            std::fs::write(partial, predictions_csv(&model, &e, table.first_row))
+            std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
     if json {

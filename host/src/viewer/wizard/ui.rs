@@ -116,7 +116,7 @@ impl Wizard {
                     if ui.button("Use this model").clicked()
                         && let Some(t) = &self.trained
                     {
-                        requests.push(Request::UseModel(Box::new(t.file.clone())));
+                        requests.push(Request::UseModel(Box::new(t.board.clone())));
                     }
                     let board = matches!(source, Some(Source::Port(_)));
                     if ui
@@ -174,8 +174,9 @@ impl Wizard {
         }
         self.replace_confirmed = None;
         type Failure = Box<dyn std::error::Error>;
-        let saved =
-            crate::output::write(&path, |partial| t.file.save(partial).map_err(Failure::from));
+        let saved = crate::output::write(&path, |partial| {
+            t.board.file().save(partial).map_err(Failure::from)
+        });
         if let Err(e) = saved {
             return e.to_string();
         }

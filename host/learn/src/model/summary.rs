@@ -1,6 +1,6 @@
 //! A board model's test as `et eval --json` reports it, and the Python module too.
 
-use super::Tested;
+use super::board::Tested;
 use crate::analysis::Band;
 
 /// What a board model scored on a dataset (`et eval --data ... --json`). Field names are
@@ -29,9 +29,10 @@ pub struct TestSummary<'a> {
 }
 
 impl Tested {
-    /// The summary of this test of a model whose class centres are `centres_mm`.
+    /// The summary of this test.
     #[must_use]
-    pub fn summary(&self, centres_mm: &[[f64; 2]]) -> TestSummary<'_> {
+    pub fn summary(&self) -> TestSummary<'_> {
+        let centres_mm = &self.centres_mm;
         let conf = &self.confusion;
         let mut from_truth = self.errors_from_truth_mm.clone();
         from_truth.sort_by(f64::total_cmp);

@@ -1,0 +1,326 @@
+//! The one trained-model type: [`Model`], a board model (QDA or LDA from an et dataset, what
+//! the board's blob is made from) or a table's model (any sensor's features, any method). It
+//! is what [`Trainer::train`](crate::Trainer::train) makes, and it predicts, is evaluated,
+//! saves, loads (whichever of the two a file holds) and exports the board's blob; the checks a
+//! model must pass (usable tables, the board's own validation) are made where it is loaded.
+//! `et train`, `et eval`, `et export`, `et stream`, the viewer, the demo and the Python module
+//! all use it.
+//!
+//! ```no_run
+//! use et_core::model::Precision;
+//! use et_learn::{Examples, Model};
+//!
+//! let model = Model::load("model.json".as_ref())?;
+//! let data = et_learn::dataset::load("next-day.npz".as_ref())?;
+//! let evaluation = model.evaluate(Examples::Dataset(&data))?;
+//! let blob = model.export_blob(Precision::F16)?; // for `et upload`
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use et_core::model::Precision;
+use nalgebra::DMatrix;
+
+use crate::dataset::Dataset;
+use crate::fit::FitError;
+use crate::model_file::{ModelFile, ModelFileError};
+use crate::tabular::{self, Prediction, TableModel, TabularError};
+use crate::trainer::Examples;
+
+mod board;
+mod summary;
+
+pub use board::{Board, Classification, OnChip, SlotError, Tested, UseError};
+pub use summary::TestSummary;
+
+/// A trained model.
+#[derive(Clone, Debug)]
+pub enum Model {
+    /// QDA or LDA from an et dataset: classifies frames, on the host or on the board.
+    Board(Box<Board>),
+    /// A model of any sensor's table.
+    Table(Box<TableModel>),
+}
+
+/// How a model did on examples it was not trained on.
+#[derive(Clone, Debug)]
+pub enum Evaluation {
+    /// A board model on an et dataset.
+    Board(Box<Tested>),
+    /// A table's model on a table.
+    Table(Box<tabular::Evaluation>),
+}
+
+/// Why a model could not be loaded, saved or used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// The file could not be read or written.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The reason.
+        source: std::io::Error,
+    },
+    /// Not JSON (the message names the line and column).
+    #[error("{}: {source}", .path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error.
+        source: serde_json::Error,
+    },
+    /// JSON, but neither `"format": "et-model"` (a board model) nor `"et-table-model"`.
+    #[error(
+        "{}: not an et model file (its \"format\" is neither \"et-model\", a board model, nor \
+         \"et-table-model\", a table's model)",
+        .path.display()
+    )]
+    Format {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A board model's file is not usable.
+    #[error(transparent)]
+    BoardFile(#[from] ModelFileError),
+    /// A table's model is not usable, or could not be used on the rows.
+    #[error(transparent)]
+    Table(#[from] TabularError),
+    /// A board model could not be used on the examples.
+    #[error(transparent)]
+    Use(#[from] UseError),
+    /// The tables could not be exported.
+    #[error(transparent)]
+    Fit(#[from] FitError),
+    /// The call needs the other kind of model, or the other kind of examples.
+    #[error("{0}")]
+    Mismatch(Mismatch),
+}
+
+/// A call that needs the other kind of model or examples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Mismatch {
+    /// A blob for the board from a table's model.
+    BlobFromTable,
+    /// A board model given a table's rows.
+    BoardOnTable,
+    /// A table's model given an et dataset.
+    TableOnDataset,
+    /// A table's model asked to classify the board's frames (live, or in the viewer).
+    TableOnFrames,
+    /// A board model's referenced frames without the untouched frame.
+    NoUntouchedFrame,
+}
+
+impl std::fmt::Display for Mismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Mismatch::BlobFromTable => {
+                "only a board model (QDA or LDA trained on an et dataset) makes a blob for the \
+                 board; this model was trained on a sensor's table"
+            }
+            Mismatch::BoardOnTable => {
+                "a board model (trained on an et dataset) classifies et datasets and frames, \
+                 not a sensor's table"
+            }
+            Mismatch::TableOnDataset => {
+                "a table's model (trained on a sensor's table) is evaluated on a table of the \
+                 same features, not on an et dataset"
+            }
+            Mismatch::TableOnFrames => {
+                "a table's model (trained on a sensor's table) predicts rows of its own \
+                 features, not the board's frames: give a board model (et train --data)"
+            }
+            Mismatch::NoUntouchedFrame => {
+                "this model classifies each frame minus the untouched frame: give the \
+                 untouched frame (K values)"
+            }
+        })
+    }
+}
+
+impl From<Mismatch> for ModelError {
+    fn from(m: Mismatch) -> Self {
+        ModelError::Mismatch(m)
+    }
+}
+
+impl Model {
+    /// Reads a model file, a board model or a table's, and checks it is usable (a board
+    /// model as the board itself would check its blob).
+    ///
+    /// # Errors
+    /// [`ModelError`] naming the file and what is wrong with it.
+    pub fn load(path: &Path) -> Result<Self, ModelError> {
+        let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
+            |source| ModelError::Io {
+                path: path.into(),
+                source,
+            },
+        )?;
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|source| ModelError::Json {
+                path: path.into(),
+                source,
+            })?;
+        match value.get("format").and_then(serde_json::Value::as_str) {
+            Some("et-model") => {
+                let file = ModelFile::from_value(path, value)?;
+                Ok(Self::board(file).map_err(|error| ModelFileError::Invalid {
+                    path: path.into(),
+                    error,
+                })?)
+            }
+            Some("et-table-model") => Ok(Model::Table(Box::new(
+                TableModel::from_value(value).map_err(|e| TabularError::Model {
+                    path: path.into(),
+                    message: e.to_string(),
+                })?,
+            ))),
+            _ => Err(ModelError::Format { path: path.into() }),
+        }
+    }
+
+    /// A board model from its file ([`Board::new`]: checked as the board would check it).
+    ///
+    /// # Errors
+    /// [`FitError`] when its tables are not a usable model.
+    pub fn board(file: ModelFile) -> Result<Self, FitError> {
+        Ok(Model::Board(Box::new(Board::new(file)?)))
+    }
+
+    /// Writes the model file (JSON).
+    ///
+    /// # Errors
+    /// [`ModelError`] naming the file.
+    pub fn save(&self, path: &Path) -> Result<(), ModelError> {
+        match self {
+            Model::Board(b) => Ok(b.file().save(path)?),
+            Model::Table(t) => Ok(t.save(path)?),
+        }
+    }
+
+    /// The method's name: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average.
+    #[must_use]
+    pub fn method(&self) -> &'static str {
+        match self {
+            Model::Board(b) => b.file().kind.name(),
+            Model::Table(t) => t.method.name(),
+        }
+    }
+
+    /// The board model, when it is one.
+    #[must_use]
+    pub fn as_board(&self) -> Option<&Board> {
+        match self {
+            Model::Board(b) => Some(b),
+            Model::Table(_) => None,
+        }
+    }
+
+    /// The board model, or [`Mismatch::TableOnFrames`] for a table's model (what the live
+    /// pipeline and the viewer classify frames with).
+    ///
+    /// # Errors
+    /// [`Mismatch::TableOnFrames`] for a table's model.
+    pub fn into_board(self) -> Result<Board, ModelError> {
+        match self {
+            Model::Board(b) => Ok(*b),
+            Model::Table(_) => Err(Mismatch::TableOnFrames.into()),
+        }
+    }
+
+    /// The table's model, when it is one.
+    #[must_use]
+    pub fn as_table(&self) -> Option<&TableModel> {
+        match self {
+            Model::Table(t) => Some(t),
+            Model::Board(_) => None,
+        }
+    }
+
+    /// Predicts each row of `x`: a table's model reads features (n x p), a board model frames
+    /// (n x K, V; minus `v0`, K values, when the model is referenced) and gives each frame's
+    /// class and the class's centre as its position (mm).
+    ///
+    /// # Errors
+    /// [`ModelError::Table`] or [`ModelError::Use`] when the rows do not fit the model;
+    /// [`Mismatch::NoUntouchedFrame`] when a referenced board model has no `v0`.
+    pub fn predict(
+        &self,
+        x: &DMatrix<f64>,
+        v0: Option<&[f64]>,
+    ) -> Result<Vec<Prediction>, ModelError> {
+        match self {
+            Model::Table(t) => Ok(t.predict(x)?),
+            Model::Board(b) => {
+                let v0 = match (v0, b.file().referenced) {
+                    (Some(v0), _) => v0,
+                    (None, true) => return Err(Mismatch::NoUntouchedFrame.into()),
+                    (None, false) => &[],
+                };
+                let classes = b.predict_frames(x, v0)?;
+                Ok(b.predictions(&classes))
+            }
+        }
+    }
+
+    /// Predicts each observation of an et dataset (a board model only).
+    ///
+    /// # Errors
+    /// [`ModelError::Use`] when the dataset does not fit the model;
+    /// [`Mismatch::TableOnDataset`] for a table's model.
+    pub fn predict_dataset(&self, data: &Dataset) -> Result<Vec<Prediction>, ModelError> {
+        let b = self.as_board().ok_or(Mismatch::TableOnDataset)?;
+        let classes = b.predict(data)?;
+        Ok(b.predictions(&classes))
+    }
+
+    /// Scores the model on examples it was not trained on: a board model on an et dataset
+    /// (as `et eval --data`), a table's model on a table (as `et eval --features`).
+    ///
+    /// # Errors
+    /// [`ModelError`] when the examples do not fit the model.
+    pub fn evaluate(&self, examples: Examples<'_>) -> Result<Evaluation, ModelError> {
+        match (self, examples) {
+            (Model::Board(b), Examples::Dataset(data)) => {
+                Ok(Evaluation::Board(Box::new(b.test(data)?)))
+            }
+            (Model::Table(t), Examples::Table(table)) => {
+                Ok(Evaluation::Table(Box::new(tabular::evaluate(t, table)?)))
+            }
+            (Model::Board(_), Examples::Table(_)) => Err(Mismatch::BoardOnTable.into()),
+            (Model::Table(_), Examples::Dataset(_)) => Err(Mismatch::TableOnDataset.into()),
+        }
+    }
+
+    /// The board's blob at `precision` (what `et export` writes and `et upload` sends).
+    ///
+    /// # Errors
+    /// [`Mismatch::BlobFromTable`] for a table's model; [`ModelError::Fit`] when the blob's
+    /// own validation refuses the tables.
+    pub fn export_blob(&self, precision: Precision) -> Result<Vec<u8>, ModelError> {
+        let b = self.as_board().ok_or(Mismatch::BlobFromTable)?;
+        Ok(b.blob(precision)?)
+    }
+}
+
+impl Board {
+    /// Each class with its centre as the position (mm), a table model's prediction's shape.
+    fn predictions(&self, classes: &[u16]) -> Vec<Prediction> {
+        let centres = &self.file().centres_mm;
+        classes
+            .iter()
+            .map(|&c| Prediction {
+                class: Some(c),
+                target: centres.get(usize::from(c)).map(|p| [p[0], p[1], 0.0]),
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests;

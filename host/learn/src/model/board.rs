@@ -1,0 +1,394 @@
+//! A board model in use: QDA or LDA from an et dataset (its [`ModelFile`] and the fitted
+//! tables made from it once), classifying frames as the live pipeline does, predicting and
+//! testing on datasets as `et eval` does, and checked against the blob the chip evaluates.
+
+use nalgebra::DMatrix;
+
+use crate::analysis::{self, Band, Outcome};
+use crate::cv::{self, Confusion};
+use crate::dataset::{DataError, Dataset};
+use crate::fit::{FitError, Fitted};
+use crate::model_file::ModelFile;
+use crate::regress::posterior_centre;
+use et_core::ScanConfig;
+use et_core::board::MODEL_SLOT_BYTES;
+use et_core::model::Precision;
+
+/// A board model ready to classify: its file, checked, and the fitted tables made from it.
+#[derive(Clone, Debug)]
+pub struct Board {
+    file: ModelFile,
+    fitted: Fitted,
+}
+
+/// Two board models are equal when their files are (the fitted tables are made from the file).
+impl PartialEq for Board {
+    fn eq(&self, other: &Self) -> bool {
+        self.file == other.file
+    }
+}
+
+/// What a board model says of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Classification {
+    /// The most probable class (argmax of the discriminants).
+    pub class: u16,
+    /// Its posterior probability (0 to 1), the discriminants' softmax.
+    pub posterior: f64,
+    /// The class centres weighted by their posteriors, mm: a position between the cells.
+    pub centre_mm: [f64; 2],
+}
+
+impl Board {
+    /// The model a file holds, checked as the board checks a blob
+    /// ([`ModelFile::validate`]): every reader of a board model accepts and refuses the same.
+    ///
+    /// # Errors
+    /// [`FitError`] when the file's tables are not a usable model.
+    pub fn new(file: ModelFile) -> Result<Self, FitError> {
+        file.validate()?;
+        let fitted = file.fitted()?;
+        Ok(Self { file, fitted })
+    }
+
+    /// As trained and saved.
+    #[must_use]
+    pub fn file(&self) -> &ModelFile {
+        &self.file
+    }
+
+    /// The discriminant tables.
+    #[must_use]
+    pub fn fitted(&self) -> &Fitted {
+        &self.fitted
+    }
+
+    /// The class of one frame's features `x` (p values, the model's features), its posterior
+    /// and the posterior-weighted centre; None when the discriminants are not finite.
+    #[must_use]
+    pub fn classify_features(&self, x: &[f64]) -> Option<Classification> {
+        if x.len() != self.fitted.features() {
+            return None;
+        }
+        let d = self.fitted.discriminants(x);
+        if !d.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let class = self.fitted.predict(x);
+        let top = *d.get(usize::from(class))?;
+        let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
+        Some(Classification {
+            class,
+            posterior: 1.0 / total,
+            centre_mm: posterior_centre(&self.fitted, x, &self.file.centres_mm, 1.0),
+        })
+    }
+
+    /// The class of a frame V (K values, V) scanned with `config`, given the untouched frame
+    /// V_0 (read only when the model is referenced), as the live pipeline classifies each
+    /// touched frame; None when the frame is of another scan than the model's, either frame is
+    /// too short, or the discriminants are not finite.
+    #[must_use]
+    pub fn classify<T: Copy + Into<f64>>(
+        &self,
+        config: &ScanConfig,
+        v: &[T],
+        v0: &[f64],
+    ) -> Option<Classification> {
+        if *config != self.file.config {
+            return None;
+        }
+        self.classify_features(&self.file.features(v, v0)?)
+    }
+
+    /// The class of each frame, a row of `frames` (n x K, V), minus `v0` (K values) when the
+    /// model is referenced.
+    ///
+    /// # Errors
+    /// [`UseError::FrameLength`] when the frames or `v0` are too short for the model's
+    /// features.
+    pub fn predict_frames(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Result<Vec<u16>, UseError> {
+        let mut frame = vec![0.0; frames.ncols()];
+        (0..frames.nrows())
+            .map(|r| {
+                for (j, v) in frame.iter_mut().enumerate() {
+                    *v = frames[(r, j)];
+                }
+                let x = self
+                    .file
+                    .features(&frame, v0)
+                    .ok_or_else(|| UseError::FrameLength {
+                        frame: frames.ncols(),
+                        v0: v0.len(),
+                        reads: self
+                            .file
+                            .feature_index
+                            .iter()
+                            .max()
+                            .map_or(0, |&i| usize::from(i)),
+                        scan: scan(&self.file.config),
+                    })?;
+                Ok(self.fitted.predict(&x))
+            })
+            .collect()
+    }
+
+    /// The class of each observation of `data` (raw frames as collected: the model's own
+    /// features are taken from it, minus each visit's untouched frame if the model is
+    /// referenced).
+    ///
+    /// # Errors
+    /// [`UseError::Config`] when they were scanned differently, [`UseError::Data`] when the
+    /// dataset lacks the model's features or untouched frames.
+    pub fn predict(&self, data: &Dataset) -> Result<Vec<u16>, UseError> {
+        let file = &self.file;
+        let (m, d) = (file.config, data.config);
+        if (m.electrodes, m.protocol, m.current_na, m.gain)
+            != (d.electrodes, d.protocol, d.current_na, d.gain)
+        {
+            return Err(UseError::Config {
+                model: scan(&m),
+                data: scan(&d),
+            });
+        }
+        let columns = model_columns(file, data)?;
+        let x = analysis::select_columns(&data.features(file.referenced)?, &columns);
+        Ok(cv::predict_rows(&self.fitted, &x)?)
+    }
+
+    /// Tests the model on `data` ([`predict`](Self::predict)): the confusion, the errors by
+    /// distance from the electrodes, and from the true press positions when known.
+    ///
+    /// # Errors
+    /// As [`predict`](Self::predict); [`UseError::Fit`] when the dataset does not match its
+    /// classes.
+    pub fn test(&self, data: &Dataset) -> Result<Tested, UseError> {
+        let file = &self.file;
+        // One prediction per observation serves the confusion, the bands and the errors.
+        let predicted = self.predict(data)?;
+        let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
+        let electrodes_mm: Vec<[f64; 2]> = data
+            .electrodes
+            .iter()
+            .map(|e| [e[0] * 1e3, e[1] * 1e3])
+            .collect();
+        let outcomes = if electrodes_mm.is_empty() {
+            Vec::new()
+        } else {
+            analysis::outcomes(&predicted, &data.y, &file.centres_mm, &electrodes_mm)?
+        };
+        let bands = analysis::by_distance(&outcomes, 10.0);
+        let errors_from_truth_mm = if data.positions.len() == predicted.len() {
+            predicted
+                .iter()
+                .zip(&data.positions)
+                .map(|(&c, truth)| {
+                    let c = file.centres_mm.get(usize::from(c))?;
+                    Some((c[0] - truth[0] * 1e3).hypot(c[1] - truth[1] * 1e3))
+                })
+                .collect::<Option<Vec<f64>>>()
+                .unwrap_or_default()
+        } else {
+            Vec::new()
+        };
+        Ok(Tested {
+            centres_mm: file.centres_mm.clone(),
+            confusion,
+            outcomes,
+            bands,
+            errors_from_truth_mm,
+        })
+    }
+
+    /// The et-core blob at `precision` (what `et upload` sends).
+    ///
+    /// # Errors
+    /// [`FitError`] when the blob's own validation refuses the tables.
+    pub fn blob(&self, precision: Precision) -> Result<Vec<u8>, FitError> {
+        self.file.blob(precision)
+    }
+
+    /// The blob for one model slot of the board: f32 when it fits, else f16 (about 3
+    /// significant digits, half the flash).
+    ///
+    /// # Errors
+    /// [`SlotError::TooLarge`] when not even the f16 blob fits; [`SlotError::Fit`] when the
+    /// blob's own validation refuses the tables.
+    pub fn slot_blob(&self) -> Result<Vec<u8>, SlotError> {
+        let mut bytes = 0;
+        for precision in [Precision::F32, Precision::F16] {
+            let blob = self.blob(precision)?;
+            if blob.len() <= MODEL_SLOT_BYTES {
+                return Ok(blob);
+            }
+            bytes = blob.len();
+        }
+        Err(SlotError::TooLarge { bytes })
+    }
+
+    /// Classifies every observation of `data` with `blob` through `et_core::model` (frames as
+    /// f32 V_m, and each visit's untouched frame as V_0 for a referenced model), as the
+    /// firmware does, and compares with this f64 model.
+    ///
+    /// # Errors
+    /// [`UseError::Blob`] when the blob does not parse, [`UseError::Data`] when the dataset
+    /// lacks the model's features, [`UseError::Frame`] when a frame cannot be classified (not
+    /// finite).
+    pub fn on_chip(&self, blob: &[u8], data: &Dataset) -> Result<OnChip, UseError> {
+        let file = &self.file;
+        let chip = et_core::model::Model::parse(blob).map_err(UseError::Blob)?;
+        let columns = model_columns(file, data)?;
+        let xs = analysis::select_columns(&data.features(file.referenced)?, &columns);
+        // A whole frame (K values) with the dataset's features in their frame positions.
+        let k = chip.frame_len();
+        let frame = |m: &DMatrix<f64>, r: usize| {
+            let mut v = vec![0.0f32; k];
+            for (j, &i) in data.feature_index.iter().enumerate() {
+                if let Some(slot) = v.get_mut(usize::from(i)) {
+                    *slot = m[(r, j)] as f32;
+                }
+            }
+            v
+        };
+        let mut scratch = vec![0.0f32; chip.scratch_len()];
+        let mut out = OnChip {
+            right: 0,
+            total: 0,
+            disagree: 0,
+        };
+        let mut row = vec![0.0; xs.ncols()];
+        for r in 0..data.x.nrows() {
+            let v_m = frame(&data.x, r);
+            let v_0 = file
+                .referenced
+                .then(|| frame(&data.baselines, usize::from(data.visit[r])));
+            let d = chip
+                .evaluate_referenced(&v_m, v_0.as_deref(), &mut scratch)
+                .map_err(|error| UseError::Frame { row: r, error })?;
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = xs[(r, j)];
+            }
+            out.disagree += usize::from(d.class != self.fitted.predict(&row));
+            out.right += usize::from(d.class == data.y[r]);
+            out.total += 1;
+        }
+        Ok(out)
+    }
+}
+
+/// A model's results on a test set.
+#[derive(Clone, Debug)]
+pub struct Tested {
+    /// The model's class centres, mm (what the cell errors are measured between).
+    pub centres_mm: Vec<[f64; 2]>,
+    /// The confusion matrix.
+    pub confusion: Confusion,
+    /// Per observation: distance from the electrodes and position error (empty when the
+    /// dataset does not say where the electrodes are).
+    pub outcomes: Vec<Outcome>,
+    /// Mean error per 10 mm band of distance from the electrodes.
+    pub bands: Vec<Band>,
+    /// Per observation: the distance from where the finger really was to the predicted
+    /// class's centre, mm (what a regressor's error compares with; not 0 when the class is
+    /// right). Empty when the dataset has no positions.
+    pub errors_from_truth_mm: Vec<f64>,
+}
+
+/// How an exported blob did on a test set, evaluated by et-core as the firmware does it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OnChip {
+    /// Observations classified right.
+    pub right: usize,
+    /// Observations.
+    pub total: usize,
+    /// Observations where the chip's class differs from the f64 host model's.
+    pub disagree: usize,
+}
+
+/// The dataset's columns holding `file`'s features, in the model's order (a feature-reduced
+/// model uses a subset).
+fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataError> {
+    file.feature_index
+        .iter()
+        .map(|i| data.feature_index.iter().position(|d| d == i))
+        .collect::<Option<Vec<usize>>>()
+        .ok_or(DataError::MissingFeatures {
+            dataset: data.feature_index.len(),
+            model: file.feature_index.len(),
+        })
+}
+
+/// What of a scan decides what its features mean: L, the protocol, the current and the gain.
+fn scan(c: &et_core::config::ScanConfig) -> String {
+    format!(
+        "L = {}, {} drive, {} uA, gain {}",
+        c.electrodes,
+        c.protocol,
+        f64::from(c.current_na) / 1e3,
+        c.gain
+    )
+}
+
+/// Why a model could not be used on a dataset; says which of the two is at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UseError {
+    /// The dataset does not hold what the model needs.
+    #[error("data: {0}")]
+    Data(#[from] DataError),
+    /// The model was trained on another scan than the data's: its features are other
+    /// measurements.
+    #[error(
+        "the model was trained on a scan of {model}, the data were measured with {data}: \
+             train a model on data of this scan"
+    )]
+    Config {
+        /// The model's scan.
+        model: String,
+        /// The data's scan.
+        data: String,
+    },
+    /// A frame (or the untouched frame) is too short for the model's features.
+    #[error(
+        "frames of {frame} values and an untouched frame of {v0}: the model reads value \
+         {reads} of frames of {scan}"
+    )]
+    FrameLength {
+        /// Values in each frame given.
+        frame: usize,
+        /// Values in the untouched frame given (0 when none).
+        v0: usize,
+        /// The largest frame index the model reads.
+        reads: usize,
+        /// The model's scan.
+        scan: String,
+    },
+    /// Evaluation on the dataset failed (e.g. a class the model does not know).
+    #[error("{0}")]
+    Fit(#[from] FitError),
+    /// The exported blob does not parse.
+    #[error("model blob: {0}")]
+    Blob(et_core::model::ModelError),
+    /// The chip's evaluation refused an observation.
+    #[error("observation {row}: {error}")]
+    Frame {
+        /// The observation (0-based row).
+        row: usize,
+        /// Why.
+        error: et_core::model::EvalError,
+    },
+}
+
+/// Why a board model has no blob for a model slot of the board.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SlotError {
+    /// The blob's own validation refuses the tables.
+    #[error(transparent)]
+    Fit(#[from] FitError),
+    /// Even in f16 the blob is larger than a slot.
+    #[error("the model needs {bytes} bytes in f16, a slot of the board holds {MODEL_SLOT_BYTES}")]
+    TooLarge {
+        /// The f16 blob's size.
+        bytes: usize,
+    },
+}

@@ -1,0 +1,223 @@
+//! The one model type: either kind loaded from its file, predicting as the kind's own code
+//! does, classifying frames as the live pipeline does, and refusing the other kind's calls.
+
+use super::*;
+use crate::Trainer;
+use crate::dataset::Unit;
+use crate::tabular::{Choice, Method, Table};
+use et_core::ScanConfig;
+use et_core::protocol::{Halving, Protocol, ProtocolKind};
+use et_core::rng::Rng;
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("et-model-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Three classes of frames (opposite drive, L = 8: K = 32, the 16 reciprocity-halved values
+/// as features), each class shifting the frame its own way, in two visits with their own
+/// untouched frames: the referenced features V_m - V_0 separate the classes.
+fn dataset() -> Dataset {
+    let protocol = Protocol::new(ProtocolKind::Opposite, 8).unwrap();
+    let feature_index: Vec<u16> = protocol
+        .features(Halving::Reciprocity)
+        .map(|k| k as u16)
+        .collect();
+    let p = feature_index.len();
+    let mut rng = Rng::new(5);
+    let baselines = DMatrix::from_fn(2, p, |v, j| 0.05 + 0.01 * v as f64 + 1e-3 * j as f64);
+    let shift = |c: usize, j: usize| 2e-3 * ((c * 7 + j * 3) % 5) as f64;
+    let (classes, per_class) = (3, 60);
+    let n = classes * per_class;
+    let (y, visit): (Vec<u16>, Vec<u16>) = (0..n).map(|r| ((r % 3) as u16, (r % 2) as u16)).unzip();
+    let x = DMatrix::from_fn(n, p, |r, j| {
+        baselines[(usize::from(visit[r]), j)]
+            + shift(usize::from(y[r]), j)
+            + 3e-4 * (1.0 + f64::from(y[r])) * rng.normal()
+    });
+    Dataset {
+        x,
+        positions: (0..n).map(|r| [0.02 * f64::from(y[r]), 0.01]).collect(),
+        pressure: vec![2e4; n],
+        electrodes: Vec::new(),
+        centres: vec![[0.0, 0.01], [0.02, 0.01], [0.04, 0.01]],
+        y,
+        visit,
+        feature_index,
+        baselines,
+        config: ScanConfig {
+            protocol: ProtocolKind::Opposite,
+            electrodes: 8,
+            ..ScanConfig::REFERENCE
+        },
+    }
+}
+
+/// Row `r` of `data` as the whole frame the board sends (K values, its features in place),
+/// and its visit's untouched frame.
+fn frames_of(data: &Dataset, r: usize) -> (Vec<f64>, Vec<f64>) {
+    let k = Protocol::new(data.config.protocol, data.config.electrodes)
+        .unwrap()
+        .frame_len();
+    let (mut v, mut v0) = (vec![0.0; k], vec![0.0; k]);
+    for (j, &i) in data.feature_index.iter().enumerate() {
+        v[usize::from(i)] = data.x[(r, j)];
+        v0[usize::from(i)] = data.baselines[(usize::from(data.visit[r]), j)];
+    }
+    (v, v0)
+}
+
+#[test]
+fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
+    let data = dataset();
+    let trained = Trainer::qda()
+        .train(Examples::Dataset(&data), |_| {})
+        .unwrap();
+    assert!(
+        trained.board.is_some(),
+        "a board model's training comes with it"
+    );
+    let dir = tmp("board");
+    let path = dir.join("model.json");
+    trained.model.save(&path).unwrap();
+    let model = Model::load(&path).unwrap();
+    assert_eq!(model.method(), "qda");
+    let board = model.as_board().expect("a board model");
+    assert_eq!(board.file(), trained.model.as_board().unwrap().file());
+
+    // The dataset's predictions, the frames' predictions and the live classification agree.
+    let by_dataset = model.predict_dataset(&data).unwrap();
+    let test = board.test(&data).unwrap();
+    assert!(
+        test.confusion.accuracy() > 0.9,
+        "{}",
+        test.confusion.accuracy()
+    );
+    for r in (0..data.x.nrows()).step_by(7) {
+        let (v, v0) = frames_of(&data, r);
+        let frame = DMatrix::from_row_slice(1, v.len(), &v);
+        let by_frame = model.predict(&frame, Some(&v0)).unwrap();
+        assert_eq!(by_frame, by_dataset[r..=r], "row {r}");
+        let live = board.classify(&data.config, &v, &v0).unwrap();
+        assert_eq!(Some(live.class), by_dataset[r].class, "row {r}");
+        // The softmax's largest posterior is at least 1/C.
+        assert!((1.0 / 3.0..=1.0).contains(&live.posterior), "{live:?}");
+        // The class's centre (mm) is its prediction's position.
+        let c = data.centres[usize::from(live.class)];
+        let target = by_dataset[r].target.unwrap();
+        assert!((target[0] - 1e3 * c[0]).abs() < 1e-9 && (target[1] - 1e3 * c[1]).abs() < 1e-9);
+    }
+    // Another scan's frames are not classified; a referenced model needs V_0.
+    let other = ScanConfig {
+        protocol: ProtocolKind::Adjacent,
+        ..data.config
+    };
+    let (v, v0) = frames_of(&data, 0);
+    assert!(board.classify(&other, &v, &v0).is_none());
+    let frame = DMatrix::from_row_slice(1, v.len(), &v);
+    assert!(matches!(
+        model.predict(&frame, None),
+        Err(ModelError::Mismatch(Mismatch::NoUntouchedFrame))
+    ));
+    // A frame too short for the features is refused, not read past its end.
+    let short = DMatrix::from_row_slice(1, 3, &v[..3]);
+    assert!(matches!(
+        model.predict(&short, Some(&v0)),
+        Err(ModelError::Use(UseError::FrameLength { .. }))
+    ));
+
+    // Evaluation is the test; the blob is the file's; a table is refused.
+    let Evaluation::Board(evaluated) = model.evaluate(Examples::Dataset(&data)).unwrap() else {
+        panic!("a board model's evaluation");
+    };
+    assert_eq!(evaluated.confusion, test.confusion);
+    assert_eq!(
+        model.export_blob(Precision::F16).unwrap(),
+        board.file().blob(Precision::F16).unwrap()
+    );
+    assert!(board.slot_blob().unwrap().len() <= et_core::board::MODEL_SLOT_BYTES);
+    let table = table();
+    assert!(matches!(
+        model.evaluate(Examples::Table(&table)),
+        Err(ModelError::Mismatch(Mismatch::BoardOnTable))
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two features, three labelled classes.
+fn table() -> Table {
+    let mut rng = Rng::new(9);
+    let n = 90;
+    let x = DMatrix::from_fn(n, 2, |r, j| {
+        (r % 3) as f64 * (1.0 + j as f64) + 0.1 * rng.normal()
+    });
+    Table {
+        feature_names: vec!["a".into(), "b".into()],
+        x,
+        labels: Some((0..n).map(|r| ["x", "y", "z"][r % 3].into()).collect()),
+        positions_mm: None,
+        third: None,
+        description: String::new(),
+        first_row: 0,
+        unit: Unit::Mm,
+        groups: None,
+    }
+}
+
+#[test]
+fn a_tables_model_loads_predicts_and_refuses_the_boards_calls() {
+    let table = table();
+    let trainer = Trainer {
+        method: Choice::One(Method::Lda),
+        folds: Some(3),
+        ..Trainer::default()
+    };
+    let trained = trainer.train(Examples::Table(&table), |_| {}).unwrap();
+    assert!(trained.board.is_none());
+    let dir = tmp("table");
+    let path = dir.join("model.json");
+    trained.model.save(&path).unwrap();
+    let model = Model::load(&path).unwrap();
+    assert_eq!(model.method(), "lda");
+    assert!(model.as_board().is_none());
+    let before = trained.model.predict(&table.x, None).unwrap();
+    assert_eq!(model.predict(&table.x, None).unwrap(), before);
+    assert!(matches!(
+        model.evaluate(Examples::Table(&table)).unwrap(),
+        Evaluation::Table(e) if e.accuracy.unwrap() > 0.9
+    ));
+    for refused in [
+        model.export_blob(Precision::F32).map(|_| ()),
+        model.evaluate(Examples::Dataset(&dataset())).map(|_| ()),
+        model.predict_dataset(&dataset()).map(|_| ()),
+        model.clone().into_board().map(|_| ()),
+    ] {
+        assert!(
+            matches!(refused, Err(ModelError::Mismatch(_))),
+            "{refused:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_file_of_neither_kind_is_refused_naming_it() {
+    let dir = tmp("neither");
+    for (name, text) in [
+        (
+            "other.json",
+            r#"{"format": "something-else", "version": 1}"#,
+        ),
+        ("none.json", r#"[1, 2, 3]"#),
+        ("broken.json", r#"{"format": "et-model""#),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let e = Model::load(&path).unwrap_err();
+        assert!(e.to_string().contains(name), "{e}");
+    }
+    let e = Model::load(&dir.join("missing.json")).unwrap_err();
+    assert!(matches!(e, ModelError::Io { .. }), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
