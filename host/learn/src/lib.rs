@@ -56,8 +56,8 @@ pub mod standin;
 pub mod tabular;
 pub mod trainer;
 
-pub use model::{Model, ModelError};
-pub use trainer::{Examples, TrainError, Trained, Trainer};
+pub use model::{Examples, Model, ModelError};
+pub use trainer::{TrainError, Trained, Trainer};
 
 #[cfg(test)]
 mod tests;

@@ -25,14 +25,24 @@ use nalgebra::DMatrix;
 use crate::dataset::Dataset;
 use crate::fit::FitError;
 use crate::model_file::{ModelFile, ModelFileError};
+use crate::tabular::Table;
 use crate::tabular::{self, Prediction, TableModel, TabularError};
-use crate::trainer::Examples;
 
 mod board;
 mod summary;
 
 pub use board::{Board, Classification, OnChip, SlotError, Tested, UseError};
 pub use summary::TestSummary;
+
+/// What a model is trained on ([`Trainer::train`](crate::Trainer::train)) or evaluated on
+/// ([`Model::evaluate`]).
+#[derive(Debug)]
+pub enum Examples<'a> {
+    /// An et dataset (classes, visits and their untouched frames): a model for the board.
+    Dataset(&'a Dataset),
+    /// Any sensor's table.
+    Table(&'a Table),
+}
 
 /// A trained model.
 #[derive(Clone, Debug)]

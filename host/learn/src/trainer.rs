@@ -30,10 +30,10 @@ use crate::analysis::{self, CurvePoint};
 use crate::dataset::{DataError, Dataset};
 use crate::fastcv;
 use crate::fit::FitError;
-use crate::model::{Board, Model};
+use crate::model::{Board, Examples, Model};
 use crate::model_file::{ModelFile, ModelFileError};
 use crate::pipeline::{self, Stage, TrainOptions};
-use crate::tabular::{self, Choice, CvScheme, Method, Table, TabularError};
+use crate::tabular::{self, Choice, CvScheme, Method, TabularError};
 
 /// Why a model could not be trained.
 #[derive(Debug, thiserror::Error)]
@@ -126,15 +126,6 @@ impl Default for Trainer {
             per_group: false,
         }
     }
-}
-
-/// What is trained on.
-#[derive(Debug)]
-pub enum Examples<'a> {
-    /// An et dataset (classes, visits and their untouched frames): a model for the board.
-    Dataset(&'a Dataset),
-    /// Any sensor's table.
-    Table(&'a Table),
 }
 
 /// A stage of training, as it starts (for a progress display).
