@@ -83,6 +83,7 @@ impl ModelKind {
 /// Storage precision of the large tables (class means, factors, weights).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Precision {
     /// 4 bytes per value.
     F32,

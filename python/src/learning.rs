@@ -11,7 +11,7 @@ use pyo3::types::PyBytes;
 
 use et_core::model::Precision;
 use et_learn::model::{Evaluation, Model as Estimator};
-use et_learn::tabular::{Choice, CvScheme, Method, Prediction, Table, Unit};
+use et_learn::tabular::{Choice, CvScheme, Prediction, Table, Unit};
 use et_learn::{Examples, Trainer};
 
 use crate::files::Dataset;
@@ -27,19 +27,10 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 
 /// The method `kind` names ("auto" or one of `et train --kind`'s).
 fn choice(kind: &str) -> PyResult<Choice> {
-    use Method::*;
-    if kind == "auto" {
-        return Ok(Choice::Auto);
-    }
-    [Qda, Lda, Ridge, KernelRidge, Knn, Gp, Mlp]
-        .into_iter()
-        .find(|m| m.name() == kind)
-        .map(Choice::One)
-        .ok_or_else(|| {
-            usage(format!(
-                "kind '{kind}': auto, qda, lda, ridge, kernel-ridge, knn, gp or mlp"
-            ))
-        })
+    Choice::from_name(kind).ok_or_else(|| {
+        let names: Vec<&str> = Choice::ASKED.iter().map(|c| c.name()).collect();
+        usage(format!("kind '{kind}': one of {}", names.join(", ")))
+    })
 }
 
 /// An n x p matrix from a C-contiguous float64 array.

@@ -178,12 +178,99 @@ impl Default for TrainOptions {
 
 /// How features are referenced to a frame taken before each press (`--reference-features`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Referencing {
     /// (F - B) / B: relative change; a channel's gain cancels.
     Ratio,
     /// F - B: the change; a channel's offset cancels.
     Difference,
+}
+
+impl Choice {
+    /// What a user can ask for: each method (but the average, which `auto` makes), and auto.
+    pub const ASKED: [Choice; 8] = [
+        Choice::One(Method::Qda),
+        Choice::One(Method::Lda),
+        Choice::One(Method::Ridge),
+        Choice::One(Method::KernelRidge),
+        Choice::One(Method::Knn),
+        Choice::One(Method::Gp),
+        Choice::One(Method::Mlp),
+        Choice::Auto,
+    ];
+
+    /// The name on the command line, in Python and in files: the method's, or "auto".
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Choice::One(m) => m.name(),
+            Choice::Auto => "auto",
+        }
+    }
+
+    /// The choice [`ASKED`](Self::ASKED) holds by this name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ASKED.into_iter().find(|c| c.name() == name)
+    }
+}
+
+/// The methods and `auto` as command-line values (`--kind`), by their names.
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Choice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ASKED
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let help = match self {
+            Choice::One(Method::Qda) => "Quadratic discriminant analysis: a covariance per class",
+            Choice::One(Method::Lda) => "Linear discriminant analysis: one pooled covariance",
+            Choice::One(Method::Ridge) => "Linear ridge regression of the position (--features)",
+            Choice::One(Method::KernelRidge) => {
+                "Gaussian-kernel (RBF) ridge regression of the position (--features)"
+            }
+            Choice::One(Method::Knn) => "k nearest neighbours' mean position (--features)",
+            Choice::One(Method::Gp) => {
+                "Gaussian process with a length scale per feature, learned by marginal \
+                 likelihood (--features): slower (it shows how long), learns which channels \
+                 matter"
+            }
+            Choice::One(Method::Mlp) => {
+                "A multilayer perceptron (--features): three hidden layers (300, 50, 20), relu \
+                 or tanh and its L2 penalty by cross-validation, Adam with early stopping, \
+                 three random starts"
+            }
+            Choice::Auto => {
+                "Every method that fits the targets, the best by cross-validation (--features)"
+            }
+            // Made by `auto`, not asked for.
+            Choice::One(Method::Average) => return None,
+        };
+        Some(clap::builder::PossibleValue::new(self.name()).help(help))
+    }
+}
+
+/// The schemes a user chooses (`--cv`); leaving one group out follows from `--groups`.
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for CvScheme {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[CvScheme::Shuffled, CvScheme::Blocks]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        use clap::builder::PossibleValue;
+        match self {
+            CvScheme::Shuffled => {
+                Some(PossibleValue::new("shuffled").help("At random (stratified by class)"))
+            }
+            CvScheme::Blocks => {
+                Some(PossibleValue::new("blocks").help("Contiguous blocks in file order"))
+            }
+            CvScheme::Groups => None,
+        }
+    }
 }
 
 /// Progress of a long training: (what, done, of).

@@ -62,14 +62,17 @@ pub struct Referencing {
     pub needed: usize,
 }
 
-/// The reconstruction the live pipeline images with (docs/method.md §6).
+/// The reconstruction a frame is imaged with (docs/method.md §6), by name: the live
+/// pipeline's (`et stream`, `et view`) and `et reconstruct`'s `--method`; its parameters are
+/// `et_recon::Method`'s.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// One-step Gauss-Newton with the NOSER prior (alpha, s).
+    /// Gauss-Newton with the NOSER prior (alpha, s): one step live; `et reconstruct
+    /// --iterations` refits more.
     #[default]
     Gn,
-    /// GREIT at the consensus noise figure (alpha and s are not used).
+    /// GREIT, the consensus linear reconstruction (alpha and s are not used).
     Greit,
 }
 

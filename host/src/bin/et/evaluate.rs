@@ -8,7 +8,6 @@ use et_host::plot;
 use et_learn::model::{Board, Tested};
 use et_learn::{Model, dataset, pipeline};
 
-use crate::learn::PrecisionArg;
 use crate::output;
 
 #[derive(Debug, clap::Args)]
@@ -49,8 +48,8 @@ pub(crate) struct ExportArgs {
     #[arg(long)]
     model: PathBuf,
     /// f32, or f16 (half the flash, about 3 significant digits).
-    #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
-    precision: PrecisionArg,
+    #[arg(long, value_enum, default_value_t = Precision::F32)]
+    precision: Precision,
     /// Where to write the blob.
     #[arg(long)]
     out: PathBuf,
@@ -176,7 +175,7 @@ fn eval_plots(
 pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
     output::check(&args.out, &[&args.model], force)?;
     let model = Model::load(&args.model)?;
-    let precision = Precision::from(args.precision);
+    let precision = args.precision;
     let blob = model
         .export_blob(precision)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.model.display()))?;

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use et_host::live::Method;
 use et_host::recording;
 use et_sim::scene::Scene;
 
@@ -48,16 +49,6 @@ pub(crate) enum Background {
     Fit,
     /// The scene's sheet resistance and contact.
     Scene,
-}
-
-/// `et reconstruct --method`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub(crate) enum Method {
-    /// Gauss-Newton with the NOSER prior, one step or --iterations.
-    Gn,
-    /// GREIT.
-    Greit,
 }
 
 #[derive(Debug, clap::Args)]

@@ -3,11 +3,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use et_core::model::{ModelKind, Precision};
+use et_core::model::ModelKind;
 use et_host::plot;
 use et_learn::analysis::CurvePoint;
 use et_learn::model::Board;
-use et_learn::tabular::{self, Choice, Method};
+use et_learn::tabular::{self, Choice};
 use et_learn::trainer::{BoardTraining, Progress};
 use et_learn::{Examples, TrainError, Trainer};
 use et_learn::{dataset, pipeline};
@@ -31,7 +31,7 @@ pub(crate) struct TrainArgs {
     /// process learning a length scale per feature), mlp (a multilayer perceptron), or auto (every
     /// method that fits the targets, the best by cross-validation); default auto.
     #[arg(long, value_enum)]
-    kind: Option<KindArg>,
+    kind: Option<Choice>,
     /// Classes from positions (--features only): ROWSxCOLS cells over the targets' bounding
     /// box, cells without training rows dropped.
     #[arg(long, value_name = "ROWSxCOLS")]
@@ -50,7 +50,7 @@ pub(crate) struct TrainArgs {
     /// flatters a model).
     /// Default shuffled; with --groups cross-validation always leaves one group out.
     #[arg(long, value_enum, conflicts_with = "groups")]
-    cv: Option<CvArg>,
+    cv: Option<tabular::CvScheme>,
     /// Standardise each session's features by that session's own mean and spread (--features;
     /// the sessions from --groups, else all rows as one): its channel offsets and gains
     /// cancel. `et eval` then does the same to each session of the rows it scores, so it
@@ -79,69 +79,10 @@ pub(crate) struct TrainArgs {
     json: bool,
 }
 
-/// `--kind`: which model to train.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum KindArg {
-    /// Quadratic discriminant analysis: a covariance per class.
-    Qda,
-    /// Linear discriminant analysis: one pooled covariance.
-    Lda,
-    /// Linear ridge regression of the position (--features).
-    Ridge,
-    /// Gaussian-kernel (RBF) ridge regression of the position (--features).
-    KernelRidge,
-    /// k nearest neighbours' mean position (--features).
-    Knn,
-    /// Gaussian process with a length scale per feature, learned by marginal likelihood
-    /// (--features): slower (it shows how long), learns which channels matter.
-    Gp,
-    /// A multilayer perceptron (--features): three hidden layers (300, 50, 20), relu or tanh
-    /// and its L2 penalty by cross-validation, Adam with early stopping, three random starts.
-    Mlp,
-    /// Every method that fits the targets, the best by cross-validation (--features).
-    Auto,
-}
-
-/// `--cv`: how rows are dealt to folds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum CvArg {
-    /// At random (stratified by class).
-    Shuffled,
-    /// Contiguous blocks in file order.
-    Blocks,
-}
-
-/// `--precision`: how the blob stores its tables.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum PrecisionArg {
-    /// 4 bytes per value.
-    F32,
-    /// 2 bytes per value (IEEE binary16).
-    F16,
-}
-
-impl From<PrecisionArg> for Precision {
-    fn from(p: PrecisionArg) -> Self {
-        match p {
-            PrecisionArg::F32 => Precision::F32,
-            PrecisionArg::F16 => Precision::F16,
-        }
-    }
-}
-
 impl TrainArgs {
     /// The trainer these arguments ask for.
     fn trainer(&self) -> Result<Trainer> {
-        let method = match self.kind {
-            None | Some(KindArg::Auto) => Choice::Auto,
-            Some(KindArg::Qda) => Choice::One(Method::Qda),
-            Some(KindArg::Lda) => Choice::One(Method::Lda),
-            Some(KindArg::Ridge) => Choice::One(Method::Ridge),
-            Some(KindArg::KernelRidge) => Choice::One(Method::KernelRidge),
-            Some(KindArg::Knn) => Choice::One(Method::Knn),
-            Some(KindArg::Gp) => Choice::One(Method::Gp),
-            Some(KindArg::Mlp) => Choice::One(Method::Mlp),
-        };
+        let method = self.kind.unwrap_or(Choice::Auto);
         let shrinkage = match self.shrinkage.as_deref().unwrap_or("auto") {
             "auto" => None,
             v => Some(
@@ -155,10 +96,7 @@ impl TrainArgs {
             method,
             shrinkage,
             folds: self.folds,
-            scheme: match self.cv {
-                None | Some(CvArg::Shuffled) => tabular::CvScheme::Shuffled,
-                Some(CvArg::Blocks) => tabular::CvScheme::Blocks,
-            },
+            scheme: self.cv.unwrap_or(tabular::CvScheme::Shuffled),
             grid: self
                 .grid
                 .as_deref()
@@ -227,7 +165,10 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         anyhow::anyhow!(
             "--kind {}: et datasets (--data) train qda or lda for the board; regressors take \
              any sensor's table (--features)",
-            format!("{:?}", args.kind.unwrap_or(KindArg::Qda)).to_lowercase()
+            match args.kind {
+                Some(Choice::One(m)) => m.name(),
+                _ => "auto",
+            }
         )
     })?;
     if let Some(flag) = args.table.table_only_flag() {

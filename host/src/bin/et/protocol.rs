@@ -10,8 +10,8 @@ pub(crate) struct ProtocolArgs {
     #[arg(short = 'l', long, default_value_t = 16)]
     electrodes: u8,
     /// The protocol (docs/method.md §4). Ignored with --drive-skip.
-    #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolArg::Adjacent)]
-    protocol: ProtocolArg,
+    #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolKind::Adjacent)]
+    protocol: ProtocolKind,
     /// General form: inject between i and i + drive_skip + 1 (needs --measure-skip).
     #[arg(long, requires = "measure_skip")]
     drive_skip: Option<u8>,
@@ -50,7 +50,7 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
             if !args.measure_skip.is_empty() {
                 bail!("--measure-skip needs --drive-skip (the general form)");
             }
-            ProtocolKind::from(args.protocol)
+            args.protocol
         }
     };
     let protocol = Protocol::new(kind, args.electrodes)?;
@@ -72,34 +72,4 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
         out!("{}", tables.to_text().trim_end_matches('\n'));
     }
     Ok(())
-}
-
-/// `--protocol`: the named protocols of docs/method.md §4.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum ProtocolArg {
-    /// AD: inject and measure between neighbouring electrodes (most sensitive near the edge).
-    #[value(alias = "ad")]
-    Adjacent,
-    /// PP: inject between electrodes one short of opposite, measure between neighbours.
-    #[value(alias = "pp", alias = "pseudopolar")]
-    PseudoPolar,
-    /// PP-PP: inject one short of opposite; measure between neighbours and one short of
-    /// opposite.
-    #[value(alias = "pppp")]
-    PpPp,
-    /// Inject between opposite electrodes, measure between neighbours (most sensitive in the
-    /// middle).
-    #[value(alias = "polar", alias = "op")]
-    Opposite,
-}
-
-impl From<ProtocolArg> for ProtocolKind {
-    fn from(p: ProtocolArg) -> Self {
-        match p {
-            ProtocolArg::Adjacent => ProtocolKind::Adjacent,
-            ProtocolArg::PseudoPolar => ProtocolKind::PseudoPolar,
-            ProtocolArg::PpPp => ProtocolKind::PpPp,
-            ProtocolArg::Opposite => ProtocolKind::Opposite,
-        }
-    }
 }

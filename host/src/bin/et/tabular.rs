@@ -26,7 +26,7 @@ pub(crate) struct TableArgs {
     targets: Option<PathBuf>,
     /// Unit of the positions in the files (reports are in mm).
     #[arg(long, value_enum, requires = "features")]
-    unit: Option<UnitArg>,
+    unit: Option<Unit>,
     /// Only rows A..B (0-based, B excluded; A.. or ..B), e.g. the first 80 % to train and
     /// the rest to test: a chronological split (real presses drift: a random split
     /// flatters a model).
@@ -47,26 +47,8 @@ pub(crate) struct TableArgs {
     #[arg(long, value_name = "CSV", requires = "features")]
     reference_features: Option<PathBuf>,
     /// How --reference-features is applied.
-    #[arg(long, value_enum, default_value_t = ReferenceArg::Ratio, requires = "reference_features")]
-    reference_as: ReferenceArg,
-}
-
-/// `--reference-as`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum ReferenceArg {
-    /// (F - B) / B.
-    Ratio,
-    /// F - B.
-    Difference,
-}
-
-/// `--unit`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum UnitArg {
-    /// Metres.
-    M,
-    /// Millimetres.
-    Mm,
+    #[arg(long, value_enum, default_value_t = Referencing::Ratio, requires = "reference_features")]
+    reference_as: Referencing,
 }
 
 impl TableArgs {
@@ -101,10 +83,7 @@ impl TableArgs {
                 features.display()
             );
         }
-        let unit = match self.unit {
-            Some(UnitArg::M) => Unit::M,
-            None | Some(UnitArg::Mm) => Unit::Mm,
-        };
+        let unit = self.unit.unwrap_or(Unit::Mm);
         let groups = self.groups.as_ref().map(|g| {
             if Path::new(g).is_file() {
                 GroupsFrom::File(g.into())
@@ -131,12 +110,7 @@ impl TableArgs {
 
     /// How the features are referenced, when they are.
     fn referencing(&self) -> Option<Referencing> {
-        self.reference_features
-            .as_ref()
-            .map(|_| match self.reference_as {
-                ReferenceArg::Ratio => Referencing::Ratio,
-                ReferenceArg::Difference => Referencing::Difference,
-            })
+        self.reference_features.as_ref().map(|_| self.reference_as)
     }
 
     fn inputs(&self) -> Vec<&Path> {
