@@ -240,20 +240,7 @@ pub fn train_reporting(
     if several_visits {
         rows = rows.min(fewest_training_rows(&by_visit));
     }
-    let target = if options.kind != ModelKind::Qda {
-        Target::Diagonal
-    } else if rows.saturating_sub(classes) > p {
-        Target::Pooled
-    } else {
-        if x.nrows().saturating_sub(classes) > p {
-            fallbacks.push(Fallback::DiagonalTarget {
-                rows,
-                features: p,
-                classes,
-            });
-        }
-        Target::Diagonal
-    };
+    let target = shrinkage_target(options.kind, rows, x.nrows(), p, classes, &mut fallbacks);
     let base = FitOptions {
         kind: options.kind,
         shrinkage: 0.0,
@@ -331,20 +318,9 @@ pub fn train_reporting(
     } else {
         FitOptions { shrinkage, ..base }
     };
-    // The model itself on one thread while the cross-validations use the others.
     report(Stage::Final);
-    let (model, cv, leave_one_visit_out) = std::thread::scope(|scope| {
-        let model = scope.spawn(|| Fitted::fit(x, y, classes, &opts));
-        let cv = prepared.cross_validate(&strat_part, &opts);
-        let lovo = visit_part.as_ref().map(|part| match part {
-            Ok(part) => prepared.cross_validate(part, &opts),
-            Err(e) => Err(e.clone()),
-        });
-        let model = model
-            .join()
-            .unwrap_or_else(|_| Err(FitError::Shape("the fit panicked".into())));
-        (model, cv, lovo)
-    });
+    let (model, cv, leave_one_visit_out) =
+        fit_beside_scores(&prepared, data, &opts, &strat_part, visit_part.as_ref());
     let (model, cv) = (model?, cv?);
     let leave_one_visit_out = match leave_one_visit_out {
         Some(Ok(c)) => Some(c.accuracy()),
@@ -365,5 +341,64 @@ pub fn train_reporting(
         selection_folds,
         chosen_by,
         fallbacks,
+    })
+}
+
+/// The covariance the class covariances shrink toward: QDA's pooled covariance when it has
+/// full rank (more than `p` + `classes` rows) in the fold with the fewest training `rows`,
+/// else the diagonal (noted in `fallbacks` when all `n` rows would have had full rank); LDA's
+/// always the diagonal.
+fn shrinkage_target(
+    kind: ModelKind,
+    rows: usize,
+    n: usize,
+    p: usize,
+    classes: usize,
+    fallbacks: &mut Vec<Fallback>,
+) -> Target {
+    if kind != ModelKind::Qda {
+        Target::Diagonal
+    } else if rows.saturating_sub(classes) > p {
+        Target::Pooled
+    } else {
+        if n.saturating_sub(classes) > p {
+            fallbacks.push(Fallback::DiagonalTarget {
+                rows,
+                features: p,
+                classes,
+            });
+        }
+        Target::Diagonal
+    }
+}
+
+/// A fit and its cross-validations as [`train`] returns them: the model on every observation,
+/// the stratified k-fold confusion, and the leave-one-visit-out confusion when there are visits.
+type FitAndScores = (
+    Result<Fitted, FitError>,
+    Result<Confusion, FitError>,
+    Option<Result<Confusion, FitError>>,
+);
+
+/// The final fit at `opts` on one thread while its k-fold (`strat`) and leave-one-visit-out
+/// (`by_visit`) cross-validations use the others.
+fn fit_beside_scores(
+    prepared: &Prepared,
+    data: &Dataset,
+    opts: &FitOptions,
+    strat: &Partition,
+    by_visit: Option<&Result<Partition, FitError>>,
+) -> FitAndScores {
+    std::thread::scope(|scope| {
+        let model = scope.spawn(|| Fitted::fit(&data.x, &data.y, data.centres.len(), opts));
+        let cv = prepared.cross_validate(strat, opts);
+        let lovo = by_visit.map(|part| match part {
+            Ok(part) => prepared.cross_validate(part, opts),
+            Err(e) => Err(e.clone()),
+        });
+        let model = model
+            .join()
+            .unwrap_or_else(|_| Err(FitError::Shape("the fit panicked".into())));
+        (model, cv, lovo)
     })
 }

@@ -110,28 +110,7 @@ pub fn make_drifting(
     );
     let sessions = sessions.max(1);
     let per_session = presses.div_ceil(sessions);
-    let plan = Plan {
-        visits: sessions,
-        scans: 1,
-        subsections: 1,
-        pressure_pa: (5e3, 60e3),
-        radius: 0.0075,
-        // The stand-in's own presses (below) carry their variety; the collection adds none.
-        radius_spread: 0.0,
-        target_radius: 0.0,
-        creep: 0.0,
-        drift: 0.0,
-        electrode_movement: 0.0005,
-        poses: 4,
-        press_movement: 0.0002,
-        press_junction: 0.0,
-        unevenness: 0.0,
-        wobble: 0.0,
-        wobble_s: 0.1,
-        elongation: 1.0,
-        finger_angle: (0.0, 0.0),
-        seed,
-    };
+    let plan = plan(sessions, seed);
     let draw = |rng: &mut Rng| -> Vec<Press> {
         (0..per_session)
             .map(|_| {
@@ -177,6 +156,65 @@ pub fn make_drifting(
             .unwrap_or(0.0)
             * CODES_PER_VOLT
     });
+    drift_sessions(&mut features, &mut before, &session, sessions, seed, drift);
+    let targets_m = (0..n)
+        .map(|r| {
+            let p = data.positions[r];
+            let depth = 0.002 * data.pressure[r] / 60e3;
+            [
+                SHEET_ORIGIN_M[0] + p[0],
+                SHEET_ORIGIN_M[1] + p[1],
+                SHEET_ORIGIN_M[2] - depth,
+            ]
+        })
+        .collect();
+    Ok(StandIn {
+        features,
+        targets_m,
+        session,
+        before,
+    })
+}
+
+/// The stand-in's collection: `sessions` visits of one scan each, their variety in the presses
+/// the stand-in draws, electrodes moved a little between visits.
+fn plan(sessions: usize, seed: u64) -> Plan {
+    Plan {
+        visits: sessions,
+        scans: 1,
+        subsections: 1,
+        pressure_pa: (5e3, 60e3),
+        radius: 0.0075,
+        // The stand-in's own presses (below) carry their variety; the collection adds none.
+        radius_spread: 0.0,
+        target_radius: 0.0,
+        creep: 0.0,
+        drift: 0.0,
+        electrode_movement: 0.0005,
+        poses: 4,
+        press_movement: 0.0002,
+        press_junction: 0.0,
+        unevenness: 0.0,
+        wobble: 0.0,
+        wobble_s: 0.1,
+        elongation: 1.0,
+        finger_angle: (0.0, 0.0),
+        seed,
+    }
+}
+
+/// Each session after the first drawn its own channel gains and offsets (`drift`, offsets in
+/// units of each channel's spread): `features` (pressed minus before) become gain x change +
+/// offset, `before` gain x before - offset. No change for [`SessionDrift::NONE`].
+fn drift_sessions(
+    features: &mut DMatrix<f64>,
+    before: &mut DMatrix<f64>,
+    session: &[u16],
+    sessions: usize,
+    seed: u64,
+    drift: SessionDrift,
+) {
+    let n = session.len();
     if drift != SessionDrift::NONE {
         let mut rng = Rng::new(seed ^ 0x5e55_1011);
         let spread: Vec<f64> = (0..features.ncols())
@@ -206,23 +244,6 @@ pub fn make_drifting(
             }
         }
     }
-    let targets_m = (0..n)
-        .map(|r| {
-            let p = data.positions[r];
-            let depth = 0.002 * data.pressure[r] / 60e3;
-            [
-                SHEET_ORIGIN_M[0] + p[0],
-                SHEET_ORIGIN_M[1] + p[1],
-                SHEET_ORIGIN_M[2] - depth,
-            ]
-        })
-        .collect();
-    Ok(StandIn {
-        features,
-        targets_m,
-        session,
-        before,
-    })
 }
 
 impl StandIn {

@@ -173,8 +173,8 @@ pub struct Settings {
 
 impl Default for Settings {
     /// One-step Gauss-Newton, alpha 0.3 (about what GCV picks on the simulator's noisy
-    /// frames), s = 0.5, 5 x the noise for a touch, 20 reference frames, 3 000 triangles, 48
-    /// pixels.
+    /// frames), s = 0.5, 5 x the noise for a touch, 20 reference frames, 3 000 triangles, 32
+    /// pixels across.
     fn default() -> Self {
         Self {
             method: Method::Gn,

@@ -129,6 +129,71 @@ fn points(
         .collect()
 }
 
+/// The `#` lines after a CSV dataset's first line: its scan, features, class centres,
+/// untouched frames and electrodes.
+struct Header {
+    config: ScanConfig,
+    feature_index: Vec<u16>,
+    centres: Vec<[f64; 2]>,
+    untouched: Vec<Vec<f64>>,
+    electrodes: Vec<[f64; 2]>,
+}
+
+impl Header {
+    /// Reads the `#` lines from `lines` (0-based numbers), leaving it at the first other line.
+    fn read<'t>(
+        path: &Path,
+        lines: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'t str)>>,
+    ) -> Result<Self, DatasetError> {
+        let mut config: Option<ScanConfig> = None;
+        let mut feature_index = Vec::new();
+        let mut centres = Vec::new();
+        let mut untouched: Vec<Vec<f64>> = Vec::new();
+        let mut electrodes = Vec::new();
+        while let Some((i, l)) = lines.peek().copied() {
+            let Some(meta) = l.strip_prefix('#') else {
+                break;
+            };
+            lines.next();
+            let meta = meta.trim();
+            if let Some(json) = meta.strip_prefix("config:") {
+                config = Some(
+                    serde_json::from_str(json.trim())
+                        .map_err(|e| content(path, i + 1, None, format!("config: {e}")))?,
+                );
+            } else if let Some(list) = meta.strip_prefix("feature_index:") {
+                feature_index = list
+                    .split_whitespace()
+                    .map(|v| {
+                        v.parse::<u16>()
+                            .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
+                    })
+                    .collect::<Result<_, _>>()?;
+            } else if let Some(list) = meta.strip_prefix("untouched:") {
+                for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
+                    untouched.push(numbers(path, i + 1, "untouched", frame)?);
+                }
+            } else if let Some(list) = meta.strip_prefix("electrodes_m:") {
+                electrodes = points(path, i + 1, "electrodes_m", list, 1.0)?;
+            } else if let Some(list) = meta.strip_prefix("centres_m:") {
+                centres = points(path, i + 1, "centres_m", list, 1.0)?;
+            } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
+                electrodes = points(path, i + 1, "electrodes_mm", list, 1e-3)?;
+            } else if let Some(list) = meta.strip_prefix("centres_mm:") {
+                centres = points(path, i + 1, "centres_mm", list, 1e-3)?;
+            }
+        }
+        let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
+        Ok(Self {
+            config,
+            feature_index,
+            centres,
+            untouched,
+            electrodes,
+        })
+    }
+}
+
 /// Reads a dataset written by [`save_csv`].
 ///
 /// # Errors
@@ -140,11 +205,6 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             source,
         },
     )?;
-    let mut config: Option<ScanConfig> = None;
-    let mut feature_index = Vec::new();
-    let mut centres = Vec::new();
-    let mut untouched: Vec<Vec<f64>> = Vec::new();
-    let mut electrodes = Vec::new();
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
         Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
@@ -157,40 +217,13 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             ));
         }
     }
-    while let Some((i, l)) = lines.peek().copied() {
-        let Some(meta) = l.strip_prefix('#') else {
-            break;
-        };
-        lines.next();
-        let meta = meta.trim();
-        if let Some(json) = meta.strip_prefix("config:") {
-            config = Some(
-                serde_json::from_str(json.trim())
-                    .map_err(|e| content(path, i + 1, None, format!("config: {e}")))?,
-            );
-        } else if let Some(list) = meta.strip_prefix("feature_index:") {
-            feature_index = list
-                .split_whitespace()
-                .map(|v| {
-                    v.parse::<u16>()
-                        .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
-                })
-                .collect::<Result<_, _>>()?;
-        } else if let Some(list) = meta.strip_prefix("untouched:") {
-            for frame in list.split(';').filter(|p| !p.trim().is_empty()) {
-                untouched.push(numbers(path, i + 1, "untouched", frame)?);
-            }
-        } else if let Some(list) = meta.strip_prefix("electrodes_m:") {
-            electrodes = points(path, i + 1, "electrodes_m", list, 1.0)?;
-        } else if let Some(list) = meta.strip_prefix("centres_m:") {
-            centres = points(path, i + 1, "centres_m", list, 1.0)?;
-        } else if let Some(list) = meta.strip_prefix("electrodes_mm:") {
-            electrodes = points(path, i + 1, "electrodes_mm", list, 1e-3)?;
-        } else if let Some(list) = meta.strip_prefix("centres_mm:") {
-            centres = points(path, i + 1, "centres_mm", list, 1e-3)?;
-        }
-    }
-    let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
+    let Header {
+        config,
+        feature_index,
+        centres,
+        untouched,
+        electrodes,
+    } = Header::read(path, &mut lines)?;
     let rest: Vec<(usize, &str)> = lines.collect();
     let table = parse_table(path, &rest, &|_, _| false)?;
     let col = |name: &str| {

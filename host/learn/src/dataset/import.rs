@@ -130,51 +130,18 @@ impl Table {
             Some(GroupsFrom::Column(name)) => Some(name.as_str()),
             _ => None,
         };
-        let read = |p: &Path| {
-            et_core::text::read_text_at_most(p, et_core::text::MAX_FILE_BYTES).map_err(|source| {
-                DatasetError::Io {
-                    path: p.into(),
-                    source,
-                }
-            })
-        };
-        let label_text = |name: &str, _: usize| {
-            name.eq_ignore_ascii_case("label")
-                || group_column.is_some_and(|g| g.eq_ignore_ascii_case(name))
-        };
-        let text = read(features)?;
-        let main = parse_table(features, &text_lines(&text), &label_text)?;
-        let target_text = targets.map(read).transpose()?;
-        let side = match (targets, &target_text) {
-            (Some(p), Some(t)) => {
-                // Without a header, one column is a label and may be text.
-                let label_or_only = |name: &str, columns: usize| {
-                    name.eq_ignore_ascii_case("label") || (columns == 1 && name == "1")
-                };
-                let table = parse_table(p, &text_lines(t), &label_or_only)?;
-                if table.rows.len() != main.rows.len() {
-                    return Err(content(
-                        p,
-                        0,
-                        None,
-                        format!(
-                            "{} rows, {} has {}",
-                            table.rows.len(),
-                            features.display(),
-                            main.rows.len()
-                        ),
-                    ));
-                }
-                Some((p, table))
-            }
-            _ => None,
-        };
+        let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
+        let label_text =
+            |name: &str, _: usize| name.eq_ignore_ascii_case("label") || is_group(name);
+        let main = parse_table(features, &text_lines(&read(features)?), &label_text)?;
+        let side = targets
+            .map(|p| targets_file(p, features, &main))
+            .transpose()?;
         let is_target = |n: &str| {
             let n = n.to_ascii_lowercase();
             ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
         };
         // Without a header every column of the features file is a feature.
-        let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
         let feature_cols: Vec<usize> = (0..main.names.len())
             .filter(|&c| {
                 !main.header
@@ -184,185 +151,24 @@ impl Table {
                         .is_some_and(|n| !is_target(n) && !is_group(n))
             })
             .collect();
-        let group_values = match groups {
-            None => None,
-            Some(GroupsFrom::Column(name)) => {
-                let c = main
-                    .names
-                    .iter()
-                    .position(|n| n.eq_ignore_ascii_case(name))
-                    .filter(|_| main.header)
-                    .ok_or_else(|| {
-                        content(
-                            features,
-                            0,
-                            None,
-                            format!(
-                                "--groups {name}: no such column (the header has {}); give a \
-                                 column name or a file with one group per row",
-                                if main.header {
-                                    main.names
-                                        .iter()
-                                        .take(8)
-                                        .cloned()
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                } else {
-                                    "no names: the file has no header row".into()
-                                }
-                            ),
-                        )
-                    })?;
-                Some(main.text_column(features, c)?)
-            }
-            Some(GroupsFrom::File(p)) => {
-                let text = read(p)?;
-                let one = |_: &str, _: usize| true;
-                let g = parse_table(p, &text_lines(&text), &one)?;
-                if g.rows.len() != main.rows.len() {
-                    return Err(content(
-                        p,
-                        0,
-                        None,
-                        format!(
-                            "{} rows of groups, {} has {}",
-                            g.rows.len(),
-                            features.display(),
-                            main.rows.len()
-                        ),
-                    ));
-                }
-                Some(g.text_column(p, 0)?)
-            }
-        };
+        let group_values = groups
+            .map(|g| group_values(g, features, &main))
+            .transpose()?;
         if feature_cols.is_empty() {
             return Err(content(features, 0, None, "no feature columns"));
         }
         let x = main.matrix(features, &feature_cols)?;
         let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
-        let named = |name: &str| {
-            ttable
-                .names
-                .iter()
-                .position(|c| c.eq_ignore_ascii_case(name))
-        };
-        // A targets file without a header: one column is a label, more are x, y, (z), ...
-        let (label_col, x_col, y_col, third_col) =
-            match (side.is_some(), ttable.header, ttable.names.len()) {
-                (true, false, 1) => (Some(0), None, None, None),
-                (true, false, n) => (None, Some(0), Some(1), (n > 2).then_some(2)),
-                _ => (
-                    named("label"),
-                    named("x"),
-                    named("y"),
-                    THIRD_NAMES.iter().find_map(|n| named(n)),
-                ),
-            };
-        let labels = label_col
-            .map(|c| ttable.text_column(tpath, c))
-            .transpose()?;
-        let positions: Option<Vec<[f64; 2]>> = match (x_col, y_col) {
-            (Some(cx), Some(cy)) => Some(
-                ttable
-                    .column(tpath, cx)?
-                    .into_iter()
-                    .zip(ttable.column(tpath, cy)?)
-                    .map(|(x, y)| [x, y])
-                    .collect(),
-            ),
-            (None, None) => None,
-            _ => {
-                return Err(content(
-                    tpath,
-                    0,
-                    None,
-                    "give both x and y columns, or neither",
-                ));
-            }
-        };
-        let third = match third_col {
-            Some(c) if positions.is_some() => Some((
-                ttable
-                    .names
-                    .get(c)
-                    .filter(|_| ttable.header)
-                    .cloned()
-                    .unwrap_or_else(|| "z".into()),
-                ttable.column(tpath, c)?,
-            )),
-            _ => None,
-        };
-        if labels.is_none() && positions.is_none() {
-            return Err(content(
-                tpath,
-                0,
-                None,
-                if ttable.header {
-                    "no target: add a 'label' column or 'x' and 'y' columns"
-                } else {
-                    "no target: without a header row every column is a feature; name the targets \
-                 (label, or x and y) in a header row, or give them in a second file"
-                },
-            ));
-        }
-        let file = |p: &Path| {
-            p.file_name()
-                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
-        };
-        let header_note = |t: &Csv| {
-            let header = if t.header {
-                "header row"
-            } else {
-                "no header row"
-            };
-            match t.delimiter.said() {
-                "" => header.to_string(),
-                said => format!("{header}, {said}"),
-            }
-        };
-        let mut description = format!(
-            "{}: {} rows, {} feature columns ({}), {}",
-            file(features),
-            main.rows.len(),
-            feature_cols.len(),
-            match (feature_cols.first(), feature_cols.last()) {
-                (Some(&a), Some(&b)) if !main.header => format!("columns {} to {}", a + 1, b + 1),
-                _ =>
-                    feature_cols
-                        .iter()
-                        .filter_map(|&c| main.names.get(c).cloned())
-                        .take(3)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                        + if feature_cols.len() > 3 { ", ..." } else { "" },
-            },
-            header_note(&main)
-        );
-        let third_name = third.as_ref().map(|(n, _)| n.as_str());
-        let taken: Vec<String> = [
-            ("label", label_col),
-            ("x", x_col),
-            ("y", y_col),
-            (
-                third_name.unwrap_or("z"),
-                third_col.filter(|_| third.is_some()),
-            ),
-        ]
-        .iter()
-        .filter_map(|&(what, c)| c.map(|c| format!("{what} from column {}", c + 1)))
-        .collect();
-        let used = taken.len();
-        description += &format!(
-            "; targets in {} ({}): {}",
-            file(tpath),
-            header_note(ttable),
-            taken.join(", ")
-        );
-        if side.is_some() && ttable.names.len() > used {
-            description += &format!(" ({} more columns not used)", ttable.names.len() - used);
+        let found = Targets::read(tpath, ttable, side.is_some())?;
+        let mut description = describe(features, &main, &feature_cols, tpath, ttable, &found);
+        if side.is_some() && ttable.names.len() > found.taken() {
+            description += &format!(
+                " ({} more columns not used)",
+                ttable.names.len() - found.taken()
+            );
         }
         let mm = unit.to_mm();
-        let third = third.map(|(name, v)| {
+        let third = found.third.map(|(name, v)| {
             let length = name.eq_ignore_ascii_case("z");
             let v = if length {
                 v.iter().map(|z| z * mm).collect()
@@ -371,32 +177,9 @@ impl Table {
             };
             (name, v)
         });
-        description += &format!(
-            "; positions in {}",
-            match unit {
-                Unit::M => "m (read as mm x 1000)",
-                Unit::Mm => "mm",
-            }
-        );
-        // Positions in metres read as mm span less than a millimetre: say so.
-        if let (Unit::Mm, Some(p)) = (unit, &positions) {
-            let span = |i: usize| {
-                let (lo, hi) = p
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                        let v = q.get(i).copied().unwrap_or(0.0);
-                        (l.min(v), h.max(v))
-                    });
-                hi - lo
-            };
-            let widest = span(0).max(span(1));
-            if widest > 0.0 && widest < 1.0 {
-                description.push_str(&format!(
-                    "; note: the positions span only {widest:.3} mm: if they are in metres, \
-                 give --unit m"
-                ));
-            }
-        }
+        description += &positions_note(unit, found.positions.as_deref());
+        let positions = found.positions;
+        let labels = found.labels;
         Ok(Self {
             x,
             feature_names: feature_cols
@@ -420,4 +203,285 @@ impl Table {
             groups: group_values,
         })
     }
+}
+
+/// A file's text, at most et's file limit.
+fn read(p: &Path) -> Result<String, DatasetError> {
+    et_core::text::read_text_at_most(p, et_core::text::MAX_FILE_BYTES).map_err(|source| {
+        DatasetError::Io {
+            path: p.into(),
+            source,
+        }
+    })
+}
+
+/// The targets file `p`, with the features file's row count. Without a header, its one column
+/// is a label and may be text.
+fn targets_file<'p>(
+    p: &'p Path,
+    features: &Path,
+    main: &Csv,
+) -> Result<(&'p Path, Csv), DatasetError> {
+    let label_or_only = |name: &str, columns: usize| {
+        name.eq_ignore_ascii_case("label") || (columns == 1 && name == "1")
+    };
+    let table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
+    if table.rows.len() != main.rows.len() {
+        return Err(content(
+            p,
+            0,
+            None,
+            format!(
+                "{} rows, {} has {}",
+                table.rows.len(),
+                features.display(),
+                main.rows.len()
+            ),
+        ));
+    }
+    Ok((p, table))
+}
+
+/// Each row's group: a named column of the features file (`main`), or a file of one column with
+/// its row count.
+fn group_values(
+    groups: &GroupsFrom,
+    features: &Path,
+    main: &Csv,
+) -> Result<Vec<String>, DatasetError> {
+    match groups {
+        GroupsFrom::Column(name) => {
+            let c = main
+                .names
+                .iter()
+                .position(|n| n.eq_ignore_ascii_case(name))
+                .filter(|_| main.header)
+                .ok_or_else(|| {
+                    content(
+                        features,
+                        0,
+                        None,
+                        format!(
+                            "--groups {name}: no such column (the header has {}); give a \
+                             column name or a file with one group per row",
+                            if main.header {
+                                main.names
+                                    .iter()
+                                    .take(8)
+                                    .cloned()
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            } else {
+                                "no names: the file has no header row".into()
+                            }
+                        ),
+                    )
+                })?;
+            main.text_column(features, c)
+        }
+        GroupsFrom::File(p) => {
+            let one = |_: &str, _: usize| true;
+            let g = parse_table(p, &text_lines(&read(p)?), &one)?;
+            if g.rows.len() != main.rows.len() {
+                return Err(content(
+                    p,
+                    0,
+                    None,
+                    format!(
+                        "{} rows of groups, {} has {}",
+                        g.rows.len(),
+                        features.display(),
+                        main.rows.len()
+                    ),
+                ));
+            }
+            g.text_column(p, 0)
+        }
+    }
+}
+
+/// The targets a table holds and the columns they came from.
+struct Targets {
+    /// Class labels, as written.
+    labels: Option<Vec<String>>,
+    /// (x, y), in the file's unit.
+    positions: Option<Vec<[f64; 2]>>,
+    /// The third target's name and values (a length in the file's unit when named z).
+    third: Option<(String, Vec<f64>)>,
+    /// The columns of the label, x, y and the third target.
+    columns: [Option<usize>; 4],
+}
+
+impl Targets {
+    /// The targets of `table` (`path`): by name in a header; without one, in a targets file
+    /// (`side`), its one column is a label, more are x, y, (z), ...
+    fn read(path: &Path, table: &Csv, side: bool) -> Result<Self, DatasetError> {
+        let named = |name: &str| {
+            table
+                .names
+                .iter()
+                .position(|c| c.eq_ignore_ascii_case(name))
+        };
+        let (label_col, x_col, y_col, third_col) = match (side, table.header, table.names.len()) {
+            (true, false, 1) => (Some(0), None, None, None),
+            (true, false, n) => (None, Some(0), Some(1), (n > 2).then_some(2)),
+            _ => (
+                named("label"),
+                named("x"),
+                named("y"),
+                THIRD_NAMES.iter().find_map(|n| named(n)),
+            ),
+        };
+        let labels = label_col.map(|c| table.text_column(path, c)).transpose()?;
+        let positions: Option<Vec<[f64; 2]>> = match (x_col, y_col) {
+            (Some(cx), Some(cy)) => Some(
+                table
+                    .column(path, cx)?
+                    .into_iter()
+                    .zip(table.column(path, cy)?)
+                    .map(|(x, y)| [x, y])
+                    .collect(),
+            ),
+            (None, None) => None,
+            _ => {
+                return Err(content(
+                    path,
+                    0,
+                    None,
+                    "give both x and y columns, or neither",
+                ));
+            }
+        };
+        let third = match third_col {
+            Some(c) if positions.is_some() => Some((
+                table
+                    .names
+                    .get(c)
+                    .filter(|_| table.header)
+                    .cloned()
+                    .unwrap_or_else(|| "z".into()),
+                table.column(path, c)?,
+            )),
+            _ => None,
+        };
+        if labels.is_none() && positions.is_none() {
+            return Err(content(
+                path,
+                0,
+                None,
+                if table.header {
+                    "no target: add a 'label' column or 'x' and 'y' columns"
+                } else {
+                    "no target: without a header row every column is a feature; name the targets \
+                 (label, or x and y) in a header row, or give them in a second file"
+                },
+            ));
+        }
+        let third_col = third_col.filter(|_| third.is_some());
+        Ok(Self {
+            labels,
+            positions,
+            third,
+            columns: [label_col, x_col, y_col, third_col],
+        })
+    }
+
+    /// How many target columns were taken.
+    fn taken(&self) -> usize {
+        self.columns.iter().flatten().count()
+    }
+}
+
+/// What was read from where, as `et train` prints it: the features' file, rows and columns,
+/// and the targets' file and columns.
+fn describe(
+    features: &Path,
+    main: &Csv,
+    feature_cols: &[usize],
+    tpath: &Path,
+    ttable: &Csv,
+    found: &Targets,
+) -> String {
+    let file = |p: &Path| {
+        p.file_name()
+            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+    };
+    let header_note = |t: &Csv| {
+        let header = if t.header {
+            "header row"
+        } else {
+            "no header row"
+        };
+        match t.delimiter.said() {
+            "" => header.to_string(),
+            said => format!("{header}, {said}"),
+        }
+    };
+    let mut description = format!(
+        "{}: {} rows, {} feature columns ({}), {}",
+        file(features),
+        main.rows.len(),
+        feature_cols.len(),
+        match (feature_cols.first(), feature_cols.last()) {
+            (Some(&a), Some(&b)) if !main.header => format!("columns {} to {}", a + 1, b + 1),
+            _ =>
+                feature_cols
+                    .iter()
+                    .filter_map(|&c| main.names.get(c).cloned())
+                    .take(3)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+                    + if feature_cols.len() > 3 { ", ..." } else { "" },
+        },
+        header_note(main)
+    );
+    let third_name = found.third.as_ref().map_or("z", |(n, _)| n.as_str());
+    let [label_col, x_col, y_col, third_col] = found.columns;
+    let taken: Vec<String> = [
+        ("label", label_col),
+        ("x", x_col),
+        ("y", y_col),
+        (third_name, third_col),
+    ]
+    .iter()
+    .filter_map(|&(what, c)| c.map(|c| format!("{what} from column {}", c + 1)))
+    .collect();
+    description += &format!(
+        "; targets in {} ({}): {}",
+        file(tpath),
+        header_note(ttable),
+        taken.join(", ")
+    );
+    description
+}
+
+/// The unit the positions were read in, and a note when positions read as mm span less than a
+/// millimetre (metres given without `--unit m`).
+fn positions_note(unit: Unit, positions: Option<&[[f64; 2]]>) -> String {
+    let mut note = format!(
+        "; positions in {}",
+        match unit {
+            Unit::M => "m (read as mm x 1000)",
+            Unit::Mm => "mm",
+        }
+    );
+    if let (Unit::Mm, Some(p)) = (unit, positions) {
+        let span = |i: usize| {
+            let (lo, hi) = p
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                    let v = q.get(i).copied().unwrap_or(0.0);
+                    (l.min(v), h.max(v))
+                });
+            hi - lo
+        };
+        let widest = span(0).max(span(1));
+        if widest > 0.0 && widest < 1.0 {
+            note.push_str(&format!(
+                "; note: the positions span only {widest:.3} mm: if they are in metres, give \
+                 --unit m"
+            ));
+        }
+    }
+    note
 }

@@ -77,38 +77,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     let pred = model.predict(&table.x)?;
     let predict_seconds = started.elapsed().as_secs_f64();
     let truth = table.targets();
-    let accuracy = match (&model.classes, model.method.is_classifier()) {
-        (Some(info), true) => {
-            let true_class: Option<Vec<Option<u16>>> = if let Some(text) = &table.labels {
-                Some(
-                    text.iter()
-                        .map(|l| info.names.iter().position(|n| n == l).map(|c| c as u16))
-                        .collect(),
-                )
-            } else {
-                match (&info.grid, &table.positions_mm) {
-                    (Some(g), Some(p)) => Some(
-                        p.iter()
-                            .map(|&q| {
-                                let name = g.name(g.cell(q));
-                                info.names.iter().position(|n| *n == name).map(|c| c as u16)
-                            })
-                            .collect(),
-                    ),
-                    _ => None,
-                }
-            };
-            true_class.map(|t| {
-                let right = t
-                    .iter()
-                    .zip(&pred)
-                    .filter(|(t, p)| t.is_some() && **t == p.class)
-                    .count();
-                right as f64 / t.len().max(1) as f64
-            })
-        }
-        _ => None,
-    };
+    let accuracy = accuracy(model, table, &pred);
     // Positions score only a model that predicts them (a regressor, or classes with centres).
     let positions_scored = truth.is_some() && pred.iter().any(|p| p.target.is_some());
     if !positions_scored && accuracy.is_none() {
@@ -200,6 +169,43 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         pairs,
         predictions: pred,
     })
+}
+
+/// The share of rows whose predicted class is right: a classifier's, when the rows have labels
+/// (a label the model does not know counts as missed) or positions its grid places.
+fn accuracy(model: &TableModel, table: &Table, pred: &[Prediction]) -> Option<f64> {
+    match (&model.classes, model.method.is_classifier()) {
+        (Some(info), true) => {
+            let true_class: Option<Vec<Option<u16>>> = if let Some(text) = &table.labels {
+                Some(
+                    text.iter()
+                        .map(|l| info.names.iter().position(|n| n == l).map(|c| c as u16))
+                        .collect(),
+                )
+            } else {
+                match (&info.grid, &table.positions_mm) {
+                    (Some(g), Some(p)) => Some(
+                        p.iter()
+                            .map(|&q| {
+                                let name = g.name(g.cell(q));
+                                info.names.iter().position(|n| *n == name).map(|c| c as u16)
+                            })
+                            .collect(),
+                    ),
+                    _ => None,
+                }
+            };
+            true_class.map(|t| {
+                let right = t
+                    .iter()
+                    .zip(pred)
+                    .filter(|(t, p)| t.is_some() && **t == p.class)
+                    .count();
+                right as f64 / t.len().max(1) as f64
+            })
+        }
+        _ => None,
+    }
 }
 
 /// `table`'s feature columns in the model's order, when both name them and the order differs
