@@ -199,12 +199,7 @@ impl Header {
 /// # Errors
 /// [`DatasetError`] naming the file, line and column.
 pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
-    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
-        |source| DatasetError::Io {
-            path: path.into(),
-            source,
-        },
-    )?;
+    let text = super::import::read(path)?;
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
         Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}

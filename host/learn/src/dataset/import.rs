@@ -205,8 +205,8 @@ impl Table {
     }
 }
 
-/// A file's text, at most et's file limit.
-fn read(p: &Path) -> Result<String, DatasetError> {
+/// A file's text, at most et's file limit (a read error names the file).
+pub(super) fn read(p: &Path) -> Result<String, DatasetError> {
     et_core::text::read_text_at_most(p, et_core::text::MAX_FILE_BYTES).map_err(|source| {
         DatasetError::Io {
             path: p.into(),
