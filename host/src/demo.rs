@@ -41,7 +41,7 @@ use et_sim::still::{scene_frames_on, simulated_sheet};
 mod error;
 mod imaging;
 mod learning;
-mod report;
+pub mod report;
 mod sweep;
 
 use imaging::{ImagingKey, imaging};
@@ -113,12 +113,15 @@ const FULL: Sizes = Sizes {
     iterative_up_to: 8_500,
 };
 
+/// The meshes (triangles) `--quick`'s sweep times.
+pub const QUICK_SWEEP: &[usize] = &[500, 1_000];
+
 const QUICK: Sizes = Sizes {
     visits: 2,
     scans: 2,
     days: 1,
     triangles: 2_000,
-    sweep: &[500, 1_000],
+    sweep: QUICK_SWEEP,
     sweep_reference: 2_000,
     iterative_up_to: 1_200,
 };
@@ -251,6 +254,3 @@ fn load(scene: (&str, &str)) -> Result<Scene> {
 
 // ----------------------------------------------------------------------------------------
 // The machine and the date
-
-#[cfg(test)]
-mod tests;

@@ -449,6 +449,3 @@ pub fn mat_v5(name: &str, m: &DMatrix<f64>) -> Vec<u8> {
     element(&mut out, 14, &body);
     out
 }
-
-#[cfg(test)]
-mod tests;

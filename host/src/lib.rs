@@ -14,6 +14,7 @@
 //!   cables, idle boards and damaged frames.
 //! - [`output`]: where commands write: never onto an input, never over an existing file
 //!   without `--force`, complete files only (written aside, then renamed).
+//! - [`message`]: an error and its causes as the one line `et` prints.
 //! - [`tables`]: a protocol's tables (docs/method.md §4) as plain data, behind `et protocol`.
 //! - [`live`]: live touch sensing from any source (simulator, recording, board): images,
 //!   touch events, frame-rate / SNR / BVC monitoring; behind `et view` and `et stream`.
@@ -26,6 +27,7 @@ pub mod demo;
 pub mod frames;
 pub mod link;
 pub mod live;
+pub mod message;
 pub mod output;
 pub mod plot;
 pub mod recorder;

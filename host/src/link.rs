@@ -514,7 +514,3 @@ impl Keepalive {
         Some(change)
     }
 }
-
-#[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
-mod tests;

@@ -166,6 +166,3 @@ pub enum LiveError {
     #[error("reference frames: {0}")]
     Stats(#[from] stats::StatsError),
 }
-
-#[cfg(test)]
-pub(crate) mod tests;

@@ -559,6 +559,3 @@ pub fn heatmap_over(
         Ok(())
     })
 }
-
-#[cfg(test)]
-mod tests;

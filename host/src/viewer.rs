@@ -81,7 +81,8 @@ pub struct Viewer {
     options: Options,
     /// The source frames come from (None after a failed open).
     pub source: Option<Source>,
-    sheet: SheetSpec,
+    /// The sheet shown (the source's, or the scene's).
+    pub sheet: SheetSpec,
     /// The live pipeline.
     pub processor: Processor,
     /// The top bar: which source to open.
@@ -538,6 +539,3 @@ pub enum ViewerError {
     #[error("screenshot not written: {0}")]
     Screenshot(String),
 }
-
-#[cfg(test)]
-mod tests;

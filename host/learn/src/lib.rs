@@ -58,6 +58,3 @@ pub mod trainer;
 
 pub use model::{Examples, Model, ModelError};
 pub use trainer::{TrainError, Trained, Trainer};
-
-#[cfg(test)]
-mod tests;

@@ -150,12 +150,14 @@ pub struct Dense {
 /// A trained perceptron.
 #[derive(Clone, Debug)]
 pub struct Mlp {
-    pub(crate) mean: Vec<f64>,
-    pub(crate) scale: Vec<f64>,
+    /// Features' training mean and standard deviation (p each): z = (x - mean) / scale.
+    pub mean: Vec<f64>,
+    pub scale: Vec<f64>,
     /// Targets' training mean and standard deviation.
-    pub(crate) target_mean: Target3,
-    pub(crate) target_scale: Target3,
-    pub(crate) activation: Activation,
+    pub target_mean: Target3,
+    pub target_scale: Target3,
+    /// The hidden layers' nonlinearity.
+    pub activation: Activation,
     /// Hidden layers, then the linear output layer (3 outputs); W as in x out.
     pub(crate) layers: Layers,
     /// Passes over the training rows of the kept start.
@@ -590,6 +592,3 @@ fn train_one(
     }
     best.map(|(l, e, s)| (l, e, if valid.is_empty() { f64::NAN } else { s }))
 }
-
-#[cfg(test)]
-mod tests;

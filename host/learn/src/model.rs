@@ -331,6 +331,3 @@ impl Board {
             .collect()
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -294,6 +294,12 @@ impl Npz {
         }
     }
 
+    /// Each array's name (without `.npy`) and where its `.npy` file lies in the archive's bytes.
+    #[must_use]
+    pub fn entries(&self) -> &[(String, std::ops::Range<usize>)] {
+        &self.entries
+    }
+
     /// Indexes the archive in `bytes` (nothing is copied).
     ///
     /// # Errors
@@ -580,7 +586,3 @@ impl Npz {
             .collect()
     }
 }
-
-#[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing)]
-mod tests;

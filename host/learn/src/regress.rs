@@ -16,12 +16,14 @@ use faer::{Accum, Mat, Par, Side};
 use nalgebra::DMatrix;
 
 use super::fit::{FitError, Fitted, standardisation};
-pub(crate) use kernel_exp::exp_neg;
+pub use kernel_exp::exp_neg;
 
 /// Targets per observation: x (mm), y (mm), pressure (kPa).
 pub type Target3 = [f64; 3];
 
-fn standardise(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> DMatrix<f64> {
+/// `x` (n x p) standardised column by column: (x - mean) / scale.
+#[must_use]
+pub fn standardise(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> DMatrix<f64> {
     DMatrix::from_fn(x.nrows(), x.ncols(), |r, j| {
         (x[(r, j)] - mean[j]) / scale[j]
     })
@@ -56,7 +58,9 @@ pub(crate) fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
     Ok(())
 }
 
-pub(crate) fn target_mean(t: &[Target3]) -> Target3 {
+/// The mean of the targets, per component.
+#[must_use]
+pub fn target_mean(t: &[Target3]) -> Target3 {
     let mut m = [0.0; 3];
     for row in t {
         for k in 0..3 {
@@ -72,7 +76,7 @@ pub struct Ridge {
     pub(crate) mean: Vec<f64>,
     pub(crate) scale: Vec<f64>,
     /// p x 3 weights.
-    pub(crate) weights: DMatrix<f64>,
+    pub weights: DMatrix<f64>,
     pub(crate) intercept: Target3,
 }
 
@@ -554,6 +558,3 @@ mod knn;
 mod summary;
 pub use knn::*;
 pub use summary::*;
-
-#[cfg(test)]
-mod tests;

@@ -282,8 +282,6 @@ mod evaluate;
 mod model;
 mod search;
 mod table;
-#[cfg(test)]
-mod tests;
 
 pub use choose::*;
 use classify::*;

@@ -64,7 +64,8 @@ pub enum BackgroundError {
 
 /// The unit sheet's frames: one forward model whose contacts change between solves (its
 /// pattern and symbolic factorisation made once).
-struct UnitSheet<'a> {
+#[derive(Debug)]
+pub struct UnitSheet<'a> {
     forward: Forward,
     width: f64,
     count: usize,
@@ -74,7 +75,10 @@ struct UnitSheet<'a> {
 impl<'a> UnitSheet<'a> {
     /// `sheet`'s electrode model on `mesh` (the complete model at contacts of 1 ohm until
     /// [`UnitSheet::frame`] asks for others).
-    fn new(sheet: &Sheet, mesh: &Mesh, schedule: &'a Schedule) -> Result<Self, FemError> {
+    ///
+    /// # Errors
+    /// [`FemError`] when the sheet's electrodes or the mesh cannot make a forward model.
+    pub fn new(sheet: &Sheet, mesh: &Mesh, schedule: &'a Schedule) -> Result<Self, FemError> {
         let count = usize::from(sheet.electrodes.count);
         let width = sheet.electrodes.width;
         let electrodes = match sheet.electrodes.model {
@@ -91,7 +95,10 @@ impl<'a> UnitSheet<'a> {
 
     /// The unit sheet's frame with contacts of `rho` ohm (None: the sheet's point or shunt
     /// model).
-    fn frame(&mut self, rho: Option<f64>) -> Result<Vec<f64>, FemError> {
+    ///
+    /// # Errors
+    /// [`FemError`] when the contacts or the solve fail.
+    pub fn frame(&mut self, rho: Option<f64>) -> Result<Vec<f64>, FemError> {
         if let Some(rho) = rho {
             self.forward
                 .set_contacts(vec![rho * self.width; self.count])?;
@@ -221,95 +228,5 @@ impl BackgroundFit {
         out.sheet_resistance = self.sheet_resistance;
         out.electrodes.contact_ohm = self.contact_ohm;
         out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use et_core::schedule::Row;
-
-    /// A 28 cm tank of 8 electrodes, all against electrode 0 and adjacent, every pair
-    /// measured (the drive electrodes' too).
-    fn tank() -> (Sheet, Mesh, Schedule) {
-        let mut sheet = Sheet::disc(0.14, 8);
-        sheet.electrodes.width = 0.025;
-        let mesh = Mesh::with_about(&sheet, 1_500).unwrap();
-        let mut rows = Vec::new();
-        for (source, sink) in (1..8)
-            .map(|e| (e, 0))
-            .chain((0..8).map(|e| (e, (e + 1) % 8)))
-        {
-            for m in 0..8 {
-                rows.push(Row {
-                    source,
-                    sink,
-                    positive: m,
-                    negative: (m + 1) % 8,
-                    current_a: 1e-3,
-                });
-            }
-        }
-        (sheet, mesh, Schedule::new(8, rows).unwrap())
-    }
-
-    /// The model's own frame at (R_s, z_c) is fitted back to them, from a guess far off; with
-    /// the scaling identity V(R_s, z_c) = R_s F(z_c / R_s) checked on the way.
-    #[test]
-    fn the_models_own_frame_is_fitted_back() {
-        let (mut sheet, mesh, schedule) = tank();
-        let (rs, contact) = (230.0, 60.0);
-        sheet.sheet_resistance = rs;
-        sheet.electrodes.contact_ohm = contact;
-        let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
-        let n = mesh.triangles.len();
-        let v0 = forward.frame(&vec![1.0 / rs; n], &schedule).unwrap();
-        let unit = UnitSheet::new(&sheet, &mesh, &schedule)
-            .and_then(|mut u| u.frame(Some(contact / rs)))
-            .unwrap();
-        for (a, b) in v0.iter().zip(&unit) {
-            assert!(
-                (a - rs * b).abs() < 1e-9 * a.abs().max(1e-3),
-                "{a} vs {}",
-                rs * b
-            );
-        }
-        let mut guess = sheet.clone();
-        guess.sheet_resistance = 100.0;
-        guess.electrodes.contact_ohm = 5.0;
-        let fit = fit(&guess, &mesh, &schedule, &v0).unwrap();
-        assert!(fit.contact_fitted);
-        assert!((fit.sheet_resistance / rs - 1.0).abs() < 1e-3, "{fit:?}");
-        assert!((fit.contact_ohm / contact - 1.0).abs() < 1e-2, "{fit:?}");
-        assert!(fit.residual < 1e-4 && fit.scene_residual > 0.3, "{fit:?}");
-    }
-
-    /// Without measurements on drive electrodes the contact is kept at the guess's ratio and
-    /// R_s still fitted; a frame of the other sign is refused with the likely causes.
-    #[test]
-    fn contact_only_where_the_frame_shows_it_and_a_reversed_frame_refused() {
-        let (mut sheet, mesh, schedule) = tank();
-        let off_drive: Vec<Row> = schedule
-            .rows()
-            .iter()
-            .copied()
-            .filter(|r| r.on_drive().is_none())
-            .collect();
-        let off_drive = Schedule::new(8, off_drive).unwrap();
-        sheet.sheet_resistance = 150.0;
-        let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
-        let n = mesh.triangles.len();
-        let v0 = forward.frame(&vec![1.0 / 150.0; n], &off_drive).unwrap();
-        let mut guess = sheet.clone();
-        guess.sheet_resistance = 300.0;
-        let fit = fit(&guess, &mesh, &off_drive, &v0).unwrap();
-        assert!(!fit.contact_fitted);
-        assert!((fit.sheet_resistance / 150.0 - 1.0).abs() < 0.05, "{fit:?}");
-        let reversed: Vec<f64> = v0.iter().map(|v| -v).collect();
-        let e = super::fit(&guess, &mesh, &off_drive, &reversed).unwrap_err();
-        assert!(matches!(e, BackgroundError::Sign(_)), "{e}");
-        assert!(e.to_string().contains("direction"), "{e}");
-        assert!(super::fit(&guess, &mesh, &off_drive, &v0[1..]).is_err());
-        assert!(super::fit(&guess, &mesh, &off_drive, &vec![0.0; v0.len()]).is_err());
     }
 }

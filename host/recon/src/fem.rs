@@ -510,6 +510,3 @@ impl Forward {
 
 mod jacobian;
 pub use jacobian::*;
-
-#[cfg(test)]
-mod tests;

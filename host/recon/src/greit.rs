@@ -451,7 +451,12 @@ pub fn figures_of_merit(
 /// ramp(d) h^2, where ramp is 1 within r - h/2 and 0 beyond r + h/2 (d: pixel centre to the
 /// triangle's centroid, h: the pixel's size). Each triangle's desired image integrates to its
 /// area, less what falls off the sheet.
-fn desired(grid: &PixelGrid, imager: &Imager, radius: f64) -> (Vec<usize>, Vec<Vec<(usize, f64)>>) {
+#[must_use]
+pub fn desired(
+    grid: &PixelGrid,
+    imager: &Imager,
+    radius: f64,
+) -> (Vec<usize>, Vec<Vec<(usize, f64)>>) {
     let mesh = imager.forward.mesh();
     let inside: Vec<usize> = (0..grid.triangle.len())
         .filter(|&p| grid.triangle[p].is_some())
@@ -540,6 +545,3 @@ fn solve_noise_figure(figure: &dyn Fn(f64) -> f64, target: f64, scale: f64) -> f
     }
     (0.5 * (lo + hi)).exp()
 }
-
-#[cfg(test)]
-mod tests;

@@ -576,6 +576,3 @@ fn not_placed(e: spade::InsertionError) -> MeshError {
         .into(),
     )
 }
-
-#[cfg(test)]
-mod tests;

@@ -539,5 +539,6 @@ mod matrix;
 mod prior;
 mod weights;
 pub use matrix::*;
+pub use prior::jtj_diagonal;
 pub(crate) use prior::noser_inverse;
-use prior::{jtj_diagonal, noser_weights};
+use prior::noser_weights;

@@ -10,7 +10,7 @@ use nalgebra::DMatrix;
 use crate::onestep::{OneStep, ReconError, product};
 
 mod panels;
-pub use panels::Panels;
+pub use panels::{Panels, Stored};
 
 /// A reconstruction matrix onto rows (triangles of the mesh, or pixels inside the sheet), P
 /// (rows x K), kept as two thin factors, P = L C with L (rows x q) and C (q x K), q the

@@ -118,7 +118,7 @@ pub fn today_utc() -> String {
 }
 
 /// Days since 1970-01-01 as YYYY-MM-DD (proleptic Gregorian; H. Hinnant's algorithm).
-pub(super) fn civil_date(days: u64) -> String {
+pub fn civil_date(days: u64) -> String {
     let z = days as i64 + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z - era * 146_097;

@@ -8,7 +8,7 @@
 /// matrix here follows a matrix product. This one is plain arithmetic: 2^n times a degree-13
 /// Taylor polynomial on |r| <= ln 2 / 2 (the first omitted term is below 1e-17 relative).
 #[inline]
-pub(crate) fn exp_neg(a: f64) -> f64 {
+pub fn exp_neg(a: f64) -> f64 {
     // ln 2 split so that n * LN2_HI is exact for |n| < 2^20 (fdlibm's constants).
     const LN2_HI: f64 = 6.931_471_803_691_238e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;

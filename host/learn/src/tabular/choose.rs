@@ -126,13 +126,13 @@ pub(super) fn average_of_best(
             let (measured, drifted) = (mean(0), mean(1));
             Some((
                 Candidate {
-                    method: Method::Average,
-                    hyperparameters: params(&[("members", members.len() as f64)]),
                     cv_mean_error_mm: Some(mean_error(&measured, t)),
                     cv_block_errors_mm: block_errors(&Some(measured), t, fold, grouped),
                     cv_drifted_error_mm: Some(mean_error(&drifted, t)),
-                    cv_accuracy: None,
-                    out_of_fold: None,
+                    ..Candidate::new(
+                        Method::Average,
+                        params(&[("members", members.len() as f64)]),
+                    )
                 },
                 members,
             ))

@@ -106,13 +106,8 @@ pub(super) fn search_classifier(
             Err(_) => None,
         };
         out.push(Candidate {
-            method,
-            hyperparameters: params(&[("shrinkage", lambda)]),
-            cv_mean_error_mm: None,
-            cv_block_errors_mm: None,
-            cv_drifted_error_mm: None,
             cv_accuracy: conf.as_ref().map(Confusion::accuracy),
-            out_of_fold: None,
+            ..Candidate::new(method, params(&[("shrinkage", lambda)]))
         });
     }
     progress(&what, SHRINKAGES.len(), SHRINKAGES.len());

@@ -32,8 +32,23 @@ pub struct Candidate {
 }
 
 impl Candidate {
+    /// `method` at `hyperparameters`, not yet scored.
+    #[must_use]
+    pub fn new(method: Method, hyperparameters: BTreeMap<String, f64>) -> Self {
+        Self {
+            method,
+            hyperparameters,
+            cv_mean_error_mm: None,
+            cv_accuracy: None,
+            cv_block_errors_mm: None,
+            cv_drifted_error_mm: None,
+            out_of_fold: None,
+        }
+    }
+
     /// Smaller is better: the mean error for positions, else 1 - accuracy.
-    pub(super) fn loss(&self) -> f64 {
+    #[must_use]
+    pub fn loss(&self) -> f64 {
         if self.method.is_classifier() {
             1.0 - self.cv_accuracy.unwrap_or(0.0)
         } else {

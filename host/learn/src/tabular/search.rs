@@ -344,11 +344,8 @@ pub fn train(
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
 /// in every fold as on all rows: that is LDA at shrinkage 0, as that LDA candidate (scored
 /// as the QDA was), C times smaller. `None` for any other candidate.
-pub(super) fn as_lda_if_equal(
-    c: &Candidate,
-    p: usize,
-    labels: Option<&Labels>,
-) -> Option<Candidate> {
+#[must_use]
+pub fn as_lda_if_equal(c: &Candidate, p: usize, labels: Option<&Labels>) -> Option<Candidate> {
     let full = c
         .hyperparameters
         .get("shrinkage")

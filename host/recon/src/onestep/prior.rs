@@ -26,7 +26,8 @@ pub(super) fn noser_weights(diag: &[f64], s: f64) -> Option<Vec<f64>> {
 /// diag(J^T J) for J = M G (M's K rows `combination` over G's r rows; G r x T): |M g_t|^2
 /// for each of G's columns g_t. Sixteen columns at a time, laid out side by side, so that each
 /// row of M combines them in one vectorised pass.
-pub(super) fn jtj_diagonal(combination: &[Vec<(usize, f64)>], g: &DMatrix<f64>) -> Vec<f64> {
+#[must_use]
+pub fn jtj_diagonal(combination: &[Vec<(usize, f64)>], g: &DMatrix<f64>) -> Vec<f64> {
     const B: usize = 16;
     let (r, t) = g.shape();
     let mut diag = vec![0.0; t];
@@ -54,38 +55,4 @@ pub(super) fn jtj_diagonal(combination: &[Vec<(usize, f64)>], g: &DMatrix<f64>) 
         diag[t0..t0 + w].copy_from_slice(&sum[..w]);
     }
     diag
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use et_core::rng::Rng;
-
-    /// The factored diagonal equals J^T J's with J = M G made whole, for a column count that
-    /// is not a multiple of the tile's (the last tile part empty).
-    #[test]
-    fn the_factored_diagonal_is_jtjs() {
-        let (k, r, t) = (23, 9, 37);
-        let mut rng = Rng::new(3);
-        let combination: Vec<Vec<(usize, f64)>> = (0..k)
-            .map(|i| vec![(i % r, rng.normal()), ((3 * i + 1) % r, rng.normal())])
-            .collect();
-        let g = DMatrix::from_fn(r, t, |_, _| rng.normal());
-        let m = DMatrix::from_fn(k, r, |i, p| {
-            combination[i]
-                .iter()
-                .filter(|(q, _)| *q == p)
-                .map(|(_, c)| c)
-                .sum::<f64>()
-        });
-        let j = &m * &g;
-        let diag = jtj_diagonal(&combination, &g);
-        for (c, d) in diag.iter().enumerate() {
-            let whole = j.column(c).norm_squared();
-            assert!(
-                (d - whole).abs() <= 1e-12 * whole,
-                "column {c}: {d} against {whole}"
-            );
-        }
-    }
 }

@@ -51,23 +51,3 @@ fn number(text: &str) -> Result<f64, String> {
         Err(format!("{v} is not a finite number"))
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn domains_refuse_what_is_outside_them_and_non_numbers() {
-        let unit = real(0.0, 1.0);
-        assert_eq!(unit("0.5"), Ok(0.5));
-        assert_eq!(unit("1"), Ok(1.0));
-        for bad in ["-1", "2", "nan", "inf", "-inf", "x", ""] {
-            assert!(unit(bad).is_err(), "{bad}");
-        }
-        let positive = above(0.0, 10.0);
-        assert!(positive("0").is_err() && positive("1e-9").is_ok() && positive("11").is_err());
-        let folds = count(2, 100);
-        assert!(folds("1").is_err() && folds("2").is_ok() && folds("-2").is_err());
-        assert!(folds("1000000").unwrap_err().contains("outside 2 to 100"));
-    }
-}

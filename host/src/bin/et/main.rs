@@ -262,24 +262,6 @@ enum Command {
     Upload(board::UploadArgs),
 }
 
-/// The error and the causes under it, "outer: inner: ...", each said once: an error type that
-/// already prints its cause in its own message (`#[error("mesh: {0}")]` over a `#[from]`
-/// field) does not have it printed again.
-fn report(e: &anyhow::Error) -> String {
-    let mut message = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if message.contains(&text) {
-            continue;
-        }
-        if !message.is_empty() {
-            message += ": ";
-        }
-        message += &text;
-    }
-    message
-}
-
 /// The command line, or exit: help and version go to stdout, and a stdout that cannot take
 /// them (a full device) is an error, not a silent success.
 fn parse() -> Cli {
@@ -340,28 +322,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", report(&e));
+            eprintln!("error: {}", et_host::message::one_line(&e));
             ExitCode::FAILURE
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::report;
-
-    #[derive(Debug, thiserror::Error)]
-    enum Outer {
-        #[error("mesh: {0}")]
-        Mesh(#[from] std::io::Error),
-    }
-
-    #[test]
-    fn a_cause_already_in_the_message_is_said_once() {
-        let inner = std::io::Error::other("too few triangles");
-        let e = anyhow::Error::from(Outer::from(inner)).context("sheet.toml");
-        assert_eq!(report(&e), "sheet.toml: mesh: too few triangles");
-        let plain = anyhow::anyhow!("no port").context("et stream");
-        assert_eq!(report(&plain), "et stream: no port");
     }
 }

@@ -1,4 +1,6 @@
-use super::*;
+use et_host::plot::*;
+use plotters::prelude::*;
+use std::path::Path;
 
 /// A PNG's size and RGB pixels.
 fn pixels(path: &Path) -> (u32, u32, Vec<u8>) {

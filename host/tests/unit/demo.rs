@@ -1,5 +1,6 @@
-use super::report::civil_date;
-use super::*;
+use et_core::board::MODEL_SLOT_BYTES;
+use et_host::demo::report::civil_date;
+use et_host::demo::*;
 
 #[test]
 fn civil_dates_match_the_calendar() {
@@ -52,7 +53,7 @@ fn the_quick_demo_writes_a_complete_report() {
     assert_eq!(figures.len(), 27, "{figures:?}");
     for f in &figures {
         let (width, height, px) =
-            crate::plot::read_png(&dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+            et_host::plot::read_png(&dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         assert!(width >= 600 && height >= 400, "{f}");
         // Every image of the sheet shows the truth (green circles) and the ROI's outline
         // (black), over a map white at zero.
@@ -125,7 +126,7 @@ fn the_quick_demo_writes_a_complete_report() {
     let chosen = &on_disk["imaging"]["single_touches_found_with_chosen_protocol"];
     assert_eq!(chosen, &serde_json::json!([4, 4]));
     let rows = on_disk["sweep"]["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), QUICK.sweep.len());
+    assert_eq!(rows.len(), QUICK_SWEEP.len());
     for r in rows {
         let live = r["live_frame_us"].as_f64().unwrap();
         let err = r["forward_error"].as_f64().unwrap();

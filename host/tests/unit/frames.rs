@@ -1,4 +1,6 @@
-use super::*;
+use et_host::frames::*;
+use nalgebra::DMatrix;
+use std::path::{Path, PathBuf};
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("et-frames-{}-{name}", std::process::id()));

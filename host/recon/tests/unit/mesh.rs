@@ -1,5 +1,10 @@
-use super::*;
 use et_core::sheet::shape::Shape;
+use et_core::sheet::{ElectrodeModel, Sheet};
+use et_recon::mesh::*;
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
 
 fn check(mesh: &Mesh, spec: &Sheet, min_angle: f64) {
     let area: f64 = (0..mesh.triangles.len())

@@ -1,8 +1,8 @@
-use super::*;
-use crate::fem::{Electrodes, Forward};
-use crate::mesh::MeshSize;
 use et_core::protocol::{Protocol, ProtocolKind};
 use et_core::sheet::Sheet;
+use et_recon::fem::{Electrodes, Forward};
+use et_recon::mesh::MeshSize;
+use et_recon::mesh::*;
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("et-mesh-{}-{name}", std::process::id()));

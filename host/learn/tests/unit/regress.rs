@@ -4,20 +4,22 @@ fn the_kernel_exponential_matches_the_library_one_to_two_ulp() {
     let mut worst = 0.0f64;
     for i in 0..=200_000 {
         let a = f64::from(i) * 708.0 / 200_000.0;
-        let (ours, exact) = (super::exp_neg(a), (-a).exp());
+        let (ours, exact) = (et_learn::regress::exp_neg(a), (-a).exp());
         worst = worst.max((ours - exact).abs() / exact);
     }
     assert!(worst < 4.5e-16, "worst relative error {worst:e}");
-    assert_eq!(super::exp_neg(0.0), 1.0);
-    assert_eq!(super::exp_neg(709.0), 0.0);
-    assert_eq!(super::exp_neg(f64::INFINITY), 0.0);
-    assert!(super::exp_neg(f64::NAN).is_nan());
+    assert_eq!(et_learn::regress::exp_neg(0.0), 1.0);
+    assert_eq!(et_learn::regress::exp_neg(709.0), 0.0);
+    assert_eq!(et_learn::regress::exp_neg(f64::INFINITY), 0.0);
+    assert!(et_learn::regress::exp_neg(f64::NAN).is_nan());
     // Negative arguments (never a kernel weight, but not wrong either).
-    let e = super::exp_neg(-3.5);
+    let e = et_learn::regress::exp_neg(-3.5);
     assert!((e - 3.5f64.exp()).abs() < 1e-15 * e);
 }
 
-use super::*;
+use et_learn::fit::{FitError, standardisation};
+use et_learn::regress::*;
+use nalgebra::DMatrix;
 
 /// A smooth non-linear map from 2-D positions to 6 "voltages", like a sheet's.
 fn data(n: usize, seed: u64) -> (DMatrix<f64>, Vec<Target3>) {

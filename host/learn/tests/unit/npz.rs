@@ -1,4 +1,5 @@
-use super::*;
+use et_learn::npz::*;
+use nalgebra::DMatrix;
 
 fn sample() -> Vec<u8> {
     let mut w = Writer::new();
@@ -38,14 +39,14 @@ fn what_is_written_reads_back() {
 fn every_entry_is_aligned_and_its_crc_right() {
     let bytes = sample();
     let z = Npz::read(bytes.clone()).unwrap();
-    for (name, range) in &z.entries {
+    for (name, range) in z.entries() {
         let npy = &bytes[range.clone()];
-        let header = u16_at(npy, 8).unwrap();
+        let header = usize::from(u16::from_le_bytes([npy[8], npy[9]]));
         assert_eq!((10 + header) % 64, 0, "{name}: numpy aligns data to 64");
         // The local header's CRC (offset 14) is of the entry's bytes.
         let local = range.start - 30 - name.len() - 4;
         assert_eq!(
-            u32_at(&bytes, local + 14).unwrap() as u32,
+            u32::from_le_bytes(bytes[local + 14..local + 18].try_into().unwrap()),
             crc32fast::hash(npy)
         );
     }

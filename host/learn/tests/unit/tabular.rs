@@ -1,7 +1,15 @@
-#![allow(clippy::unwrap_used, clippy::indexing_slicing)]
-use super::*;
-use crate::standin;
+use et_core::model::ModelKind;
+use et_learn::regress::{Knn, Target3, Weighting};
+use et_learn::standin;
+use et_learn::tabular::*;
+use nalgebra::DMatrix;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 use std::sync::LazyLock;
+
+fn params(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
+    pairs.iter().map(|&(k, v)| (k.to_string(), v)).collect()
+}
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("et-tabular-{}-{name}", std::process::id()));
@@ -215,14 +223,10 @@ fn a_grid_of_classes_from_positions() {
 fn qda_at_full_pooled_shrinkage_is_the_lda() {
     let names: Vec<String> = (0..40).map(|i| ["a", "b"][i % 2].to_string()).collect();
     let labels = Labels::from_text(&names).unwrap();
-    let qda = |s: f64| Candidate {
-        method: Method::Qda,
-        hyperparameters: params(&[("shrinkage", s)]),
-        cv_mean_error_mm: None,
-        cv_block_errors_mm: None,
-        cv_drifted_error_mm: None,
-        cv_accuracy: Some(0.9),
-        out_of_fold: None,
+    let qda = |s: f64| {
+        let mut c = Candidate::new(Method::Qda, params(&[("shrinkage", s)]));
+        c.cv_accuracy = Some(0.9);
+        c
     };
     let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
     assert_eq!((lda.method, lda.cv_accuracy), (Method::Lda, Some(0.9)));
@@ -309,7 +313,7 @@ fn knn_equals_brute_force() {
     let t: Vec<Target3> = (0..50).map(|r| [r as f64, 2.0 * r as f64, 0.0]).collect();
     let knn = Knn::fit(&x, &t, 4, Weighting::Uniform).unwrap();
     let q = DMatrix::from_fn(5, 3, |_, _| rng.normal());
-    let (mean, scale) = crate::fit::standardisation(&x);
+    let (mean, scale) = et_learn::fit::standardisation(&x);
     let z = |m: &DMatrix<f64>, r: usize| -> Vec<f64> {
         (0..3).map(|j| (m[(r, j)] - mean[j]) / scale[j]).collect()
     };
@@ -690,7 +694,7 @@ fn named_columns_in_another_order_are_matched_by_name() {
 /// class is refused by both, for the same reason.
 #[test]
 fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
-    use crate::model_file::{ModelFile, fitted_from_records};
+    use et_learn::model_file::{ModelFile, fitted_from_records};
     let mut rng = et_core::rng::Rng::new(8);
     let n = 90;
     let class = |r: usize| r % 3;

@@ -1,13 +1,13 @@
 //! Learning: host fits against et-core's evaluation, degenerate training sets, CV and AEE, and
 //! the whole procedure on the simulator.
 
-use super::collect::{Plan, collect, grid, training_config};
-use super::cv::{Confusion, cross_validate};
-use super::fit::{FitError, FitOptions, Fitted, Target};
 use et_core::ScanConfig;
 use et_core::model::{Model, ModelKind, Precision};
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
 use et_core::rng::Rng;
+use et_learn::collect::{Plan, collect, grid, training_config};
+use et_learn::cv::{Confusion, cross_validate};
+use et_learn::fit::{FitError, FitOptions, Fitted, Target};
 use et_sim::frontend::FrontendSpec;
 use et_sim::sheet::SheetSpec;
 use nalgebra::DMatrix;
@@ -296,7 +296,7 @@ fn the_procedure_on_the_simulated_sheet() {
         },
     )
     .unwrap();
-    let test = super::cv::evaluate(&model, &next_day.x, &next_day.y).unwrap();
+    let test = et_learn::cv::evaluate(&model, &next_day.x, &next_day.y).unwrap();
     let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
     println!(
         "sim 3 x 3: CV accuracy {:.3}, next-day accuracy {:.3}, next-day AEE {:.1} mm",
@@ -307,7 +307,7 @@ fn the_procedure_on_the_simulated_sheet() {
     assert!(cv.accuracy() > 0.9, "CV {}", cv.accuracy());
     // Leave-one-visit-out picks a shrinkage that works across electrode positions.
     let by_visit: Vec<usize> = train.visit.iter().map(|&v| usize::from(v)).collect();
-    let (lambda, scores) = super::cv::choose_shrinkage(
+    let (lambda, scores) = et_learn::cv::choose_shrinkage(
         &train.x,
         &train.y,
         9,
@@ -371,7 +371,7 @@ fn the_procedure_on_the_simulated_sheet() {
         next_day.features(true).unwrap(),
     );
     let referenced = Fitted::fit(&xr, &train.y, 9, &opts).unwrap();
-    let test_r = super::cv::evaluate(&referenced, &next_r, &next_day.y).unwrap();
+    let test_r = et_learn::cv::evaluate(&referenced, &next_r, &next_day.y).unwrap();
     println!("referenced: next-day accuracy {:.3}", test_r.accuracy());
     assert!(
         test_r.accuracy() > 0.9,
@@ -409,9 +409,9 @@ fn the_procedure_on_the_simulated_sheet() {
 }
 
 mod files {
-    use super::super::dataset::Dataset;
-    use super::super::dataset::{Table, Unit, load, load_csv, save_csv, save_npz};
     use super::*;
+    use et_learn::dataset::Dataset;
+    use et_learn::dataset::{Table, Unit, load, load_csv, save_csv, save_npz};
     use std::path::PathBuf;
 
     fn tmp(name: &str) -> PathBuf {
@@ -883,8 +883,8 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
 
 #[test]
 fn fast_cross_validation_equals_refitting() {
-    use super::cv::{cross_validate_folds, folds};
-    use super::fastcv::cross_validate_fast;
+    use et_learn::cv::{cross_validate_folds, folds};
+    use et_learn::fastcv::cross_validate_fast;
     let (x, y) = synthetic(6, 60, 10, 31);
     let strat = folds(&y, 5, 3);
     let by_block: Vec<usize> = (0..y.len()).map(|r| (r / 7) % 3).collect();
@@ -922,7 +922,7 @@ fn fast_cross_validation_equals_refitting() {
     let (x, y) = synthetic(8, 200, 24, 37);
     let mut rng = Rng::new(38);
     let x = x.map(|v| v + 2e-3 * rng.normal()); // classes overlap: some decisions are close
-    let prepared = super::fastcv::Prepared::new(&x, &y, 8).unwrap();
+    let prepared = et_learn::fastcv::Prepared::new(&x, &y, 8).unwrap();
     for fold in [
         folds(&y, 5, 3),
         (0..y.len()).map(|r| (r / 50) % 4).collect(),
@@ -974,15 +974,15 @@ fn fisher_ranking_puts_the_separating_feature_first() {
         y.push(c);
     }
     let x = DMatrix::from_row_slice(90, 3, &rows);
-    let order = super::fit::fisher_ranking(&x, &y, 3);
+    let order = et_learn::fit::fisher_ranking(&x, &y, 3);
     assert_eq!(order[0], 2);
     assert_eq!(order[2], 1, "a constant feature carries nothing");
 }
 
 #[test]
 fn the_features_that_fit_a_slot_are_the_most_that_do() {
-    use super::pipeline::features_that_fit;
     use et_core::board::MODEL_SLOT_BYTES;
+    use et_learn::pipeline::features_that_fit;
     let len = |kind, classes, p| et_core::model::model_len(kind, Precision::F16, classes, p);
     for (kind, classes) in [
         (ModelKind::Qda, 49),
@@ -1012,7 +1012,7 @@ fn the_features_that_fit_a_slot_are_the_most_that_do() {
 /// naming the file and the check.
 #[test]
 fn a_corrupt_model_file_is_refused_on_load() {
-    use crate::model_file::{ModelFile, ModelFileError};
+    use et_learn::model_file::{ModelFile, ModelFileError};
     let (x, y) = synthetic(3, 40, 4, 31);
     let model = Fitted::fit(&x, &y, 3, &FitOptions::default()).unwrap();
     let file = ModelFile::new(
@@ -1067,7 +1067,7 @@ fn a_corrupt_model_file_is_refused_on_load() {
 /// shrinkage ("covariance not positive definite"). Training falls back and says so.
 #[test]
 fn two_visit_training_sets_fall_back_and_say_so() {
-    use super::pipeline::{Fallback, TrainOptions, train};
+    use et_learn::pipeline::{Fallback, TrainOptions, train};
     let (classes, per_class, p) = (5, 8, 20);
     let (x, y) = synthetic(classes, per_class, p, 41);
     let n = y.len();
@@ -1075,7 +1075,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         n - classes > p && n / 2 - classes < p,
         "the case under test"
     );
-    let data = super::dataset::Dataset {
+    let data = et_learn::dataset::Dataset {
         x,
         y,
         positions: vec![[0.0, 0.0]; n],
@@ -1093,21 +1093,21 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         folds: 10,
     };
     let t = train(&data, &options).expect("a two-visit set trains");
-    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::LeaveOneVisitOut);
+    assert_eq!(t.chosen_by, et_learn::pipeline::ChosenBy::LeaveOneVisitOut);
     // The progress a command shows: statistics, the six candidates by visit, the final fit.
-    let stages = |data: &super::dataset::Dataset| {
+    let stages = |data: &et_learn::dataset::Dataset| {
         let seen = std::cell::RefCell::new(Vec::new());
-        super::pipeline::train_reporting(data, &options, |s| seen.borrow_mut().push(s)).unwrap();
+        et_learn::pipeline::train_reporting(data, &options, |s| seen.borrow_mut().push(s)).unwrap();
         seen.into_inner()
     };
     let seen = stages(&data);
-    let n_candidates = super::pipeline::SHRINKAGE_CANDIDATES.len();
+    let n_candidates = et_learn::pipeline::SHRINKAGE_CANDIDATES.len();
     assert_eq!(seen.len(), n_candidates + 2, "{seen:?}");
-    assert_eq!(seen[0], super::pipeline::Stage::Statistics);
-    assert_eq!(seen[n_candidates + 1], super::pipeline::Stage::Final);
+    assert_eq!(seen[0], et_learn::pipeline::Stage::Statistics);
+    assert_eq!(seen[n_candidates + 1], et_learn::pipeline::Stage::Final);
     for (i, s) in seen[1..=n_candidates].iter().enumerate() {
         assert!(
-            matches!(s, super::pipeline::Stage::Candidate { index, of, by_visit: true, .. } if *index == i && *of == n_candidates),
+            matches!(s, et_learn::pipeline::Stage::Candidate { index, of, by_visit: true, .. } if *index == i && *of == n_candidates),
             "{s:?}"
         );
     }
@@ -1146,7 +1146,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         .filter(|s| {
             matches!(
                 s,
-                super::pipeline::Stage::Candidate {
+                et_learn::pipeline::Stage::Candidate {
                     by_visit: false,
                     ..
                 }
@@ -1154,8 +1154,8 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         })
         .count();
     assert_eq!(by_kfold, n_candidates, "{seen:?}");
-    assert_eq!(seen.last(), Some(&super::pipeline::Stage::Final));
-    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::KFold(10));
+    assert_eq!(seen.last(), Some(&et_learn::pipeline::Stage::Final));
+    assert_eq!(t.chosen_by, et_learn::pipeline::ChosenBy::KFold(10));
     assert_eq!(t.chosen_by.to_string(), "chosen by stratified 10-fold");
     assert!(t.cv.accuracy() > 1.0 / classes as f64);
 }
@@ -1164,7 +1164,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
 /// allocated (its length used to be usize::MAX, an allocation abort).
 #[test]
 fn a_model_too_big_for_the_blob_format_is_refused_not_allocated() {
-    use super::fit::ClassFit;
+    use et_learn::fit::ClassFit;
     use nalgebra::DVector;
     let class = ClassFit {
         count: 1,
@@ -1197,11 +1197,11 @@ fn a_model_too_big_for_the_blob_format_is_refused_not_allocated() {
 /// kept (one covariance, not C), it is said, and it decides every row as that QDA does.
 #[test]
 fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
-    use super::pipeline::{Fallback, TrainOptions, train};
+    use et_learn::pipeline::{Fallback, TrainOptions, train};
     let (classes, per_class, p) = (6, 40, 8);
     let (x, y) = synthetic(classes, per_class, p, 17);
     let n = y.len();
-    let data = super::dataset::Dataset {
+    let data = et_learn::dataset::Dataset {
         x: x.clone(),
         y: y.clone(),
         positions: vec![[0.0, 0.0]; n],
@@ -1220,7 +1220,7 @@ fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
     };
     let t = train(&data, &options).unwrap();
     assert_eq!((t.options.kind, t.options.shrinkage), (ModelKind::Lda, 0.0));
-    assert_eq!(t.chosen_by, super::pipeline::ChosenBy::Given);
+    assert_eq!(t.chosen_by, et_learn::pipeline::ChosenBy::Given);
     assert_eq!(t.model.kind, ModelKind::Lda);
     let note = t
         .fallbacks

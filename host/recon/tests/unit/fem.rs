@@ -1,7 +1,12 @@
-use super::*;
-use crate::mesh::{Mesh, MeshSize};
 use et_core::protocol::{Protocol, ProtocolKind};
 use et_core::sheet::Sheet;
+use et_recon::fem::*;
+use et_recon::mesh::{Mesh, MeshSize};
+use nalgebra::DMatrix;
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
 
 fn cem_frame(h: f64) -> Vec<f64> {
     let spec = Sheet::rectangle(0.13, 0.13, 16);
@@ -90,7 +95,7 @@ fn reciprocity_and_current_balance_hold() {
         assert!((u1 - u2).abs() < 1e-9 * scale, "{u1} vs {u2}");
     }
     // The current through each electrode's contact equals the one prescribed.
-    let Electrodes::Complete(z) = &fwd.electrodes else {
+    let Electrodes::Complete(z) = fwd.electrodes() else {
         unreachable!()
     };
     let m = fwd.mesh();
@@ -260,7 +265,7 @@ fn touch_change(mesh: Mesh, c: [f64; 2], r: f64) -> Vec<f64> {
 
 #[test]
 fn refining_at_a_touch_spends_the_same_triangles_better() {
-    use crate::mesh::Refinement;
+    use et_recon::mesh::Refinement;
     let spec = Sheet::rectangle(0.13, 0.13, 16);
     let (c, r) = ([0.025, -0.015], 0.008);
     // The reference is uniformly fine, so it does not favour the refined mesh.
@@ -353,13 +358,13 @@ fn the_shunt_model_is_the_complete_models_limit() {
 #[test]
 fn both_electrode_models_converge_to_the_exact_disc_solution_at_second_order() {
     use et_core::sheet::ElectrodeModel;
-    let all: Vec<(ElectrodeModel, Vec<crate::exact::FrameError>)> =
+    let all: Vec<(ElectrodeModel, Vec<et_recon::exact::FrameError>)> =
         [ElectrodeModel::Complete, ElectrodeModel::Point]
             .into_iter()
             .map(|model| {
                 let e = [500, 2_000, 8_000, 32_000]
                     .iter()
-                    .map(|&t| crate::exact::unit_disc_error(model, t).unwrap())
+                    .map(|&t| et_recon::exact::unit_disc_error(model, t).unwrap())
                     .collect();
                 (model, e)
             })
@@ -377,7 +382,7 @@ fn both_electrode_models_converge_to_the_exact_disc_solution_at_second_order() {
     // The order in h (the edge halves when the triangles quadruple): over the whole range at
     // least 1.6, and no step below 1.3 (the complete model's steps are uneven: the mesh's
     // electrode edges do not scale exactly with the interior's).
-    let order = |a: crate::exact::FrameError, b: crate::exact::FrameError| {
+    let order = |a: et_recon::exact::FrameError, b: et_recon::exact::FrameError| {
         (a.max / b.max).ln() / (b.triangles as f64 / a.triangles as f64).sqrt().ln()
     };
     for (model, e) in all {

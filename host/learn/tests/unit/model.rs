@@ -1,13 +1,17 @@
 //! The one model type: either kind loaded from its file, predicting as the kind's own code
 //! does, classifying frames as the live pipeline does, and refusing the other kind's calls.
 
-use super::*;
-use crate::Trainer;
-use crate::dataset::Unit;
-use crate::tabular::{Choice, Method, Table};
 use et_core::ScanConfig;
+use et_core::model::Precision;
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
 use et_core::rng::Rng;
+use et_learn::Trainer;
+use et_learn::dataset::Dataset;
+use et_learn::dataset::Unit;
+use et_learn::model::*;
+use et_learn::tabular::{Choice, Method, Table};
+use nalgebra::DMatrix;
+use std::path::PathBuf;
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("et-model-{}-{name}", std::process::id()));

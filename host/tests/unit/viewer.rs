@@ -1,10 +1,15 @@
 //! The viewer driven headless through its real interface (egui_kittest: widgets found by
 //! their labels, clicked, the state checked).
+use eframe::egui::{self, vec2};
+use et_core::protocol::ProtocolKind;
+use et_host::live::{ProtocolChoice, Source, SourceSpec};
+use et_sim::touch::Touch;
+use std::path::PathBuf;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 
-use super::*;
+use et_host::viewer::*;
 
 /// The viewer in a harness. A live source asks for a repaint every frame, so the harness's
 /// build (which runs until no repaint is asked, at most `max_steps`) is held to a few frames:
@@ -23,7 +28,7 @@ fn sim_options() -> Options {
         scene: None,
         source: SourceSpec::Sim,
         model: None,
-        method: crate::live::Method::Gn,
+        method: et_host::live::Method::Gn,
         realtime: false,
         screenshot: None,
         press: None,
@@ -147,7 +152,7 @@ fn greit_images_a_press_where_it_is() {
     h.step();
     assert_eq!(
         h.state().processor.settings().method,
-        crate::live::Method::Greit
+        et_host::live::Method::Greit
     );
     h.state_mut().press(vec![Touch {
         position: [0.03, -0.03],
@@ -171,7 +176,7 @@ fn greit_images_a_press_where_it_is() {
     h.step();
     assert_eq!(
         h.state().processor.settings().method,
-        crate::live::Method::Gn
+        et_host::live::Method::Gn
     );
 }
 
@@ -234,7 +239,7 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
 }
 
 fn write_recording(path: &std::path::Path, frames: usize) {
-    crate::live::tests::write_sim_recording(path, frames);
+    crate::live::write_sim_recording(path, frames);
 }
 
 #[test]
@@ -247,7 +252,7 @@ fn replay_pauses_and_seeks() {
         scene: None,
         source: SourceSpec::Replay(path.clone()),
         model: None,
-        method: crate::live::Method::Gn,
+        method: et_host::live::Method::Gn,
         realtime: false,
         screenshot: None,
         press: None,
@@ -358,7 +363,7 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
     assert!(h.state().processor.classifier.is_some());
     // The wizard scans the opposite protocol, as the model expects: press each cell and
     // the class grid lights that cell.
-    let sheet = crate::live::default_scene().unwrap().sheet;
+    let sheet = et_host::live::default_scene().unwrap().sheet;
     let centres = et_learn::collect::grid(&sheet, 2, 2, 0.0);
     for (c, centre) in centres.iter().enumerate() {
         h.state_mut().press(vec![Touch {
@@ -391,9 +396,9 @@ fn scene(name: &str) -> PathBuf {
 }
 
 /// Steps until the scene's touches are on the sheet (the simulated source holds them back for
-/// its first [`crate::live::SimSource::LEAD_FRAMES`] frames).
+/// its first [`et_host::live::SimSource::LEAD_FRAMES`] frames).
 fn until_pressed(h: &mut Harness<'static, Viewer>) {
-    for _ in 0..2 * crate::live::SimSource::LEAD_FRAMES {
+    for _ in 0..2 * et_host::live::SimSource::LEAD_FRAMES {
         h.step();
         let truth = h.state().last.as_ref().and_then(|o| o.frame.truth.as_ref());
         if truth.is_some_and(|t| !t.is_empty()) {
@@ -404,7 +409,7 @@ fn until_pressed(h: &mut Harness<'static, Viewer>) {
 }
 
 /// Steps until the frame is a touch (at most `n` frames).
-fn until_touched(h: &mut Harness<'static, Viewer>, n: usize) -> crate::live::TouchEvent {
+fn until_touched(h: &mut Harness<'static, Viewer>, n: usize) -> et_host::live::TouchEvent {
     for _ in 0..n {
         h.step();
         if let Some(e) = h.state().last.as_ref().and_then(|o| o.event.clone()) {

@@ -1,4 +1,10 @@
-use super::*;
+use et_core::ScanConfig;
+use et_core::protocol::ProtocolKind;
+use et_host::live::*;
+use et_host::recording::{self};
+use et_sim::sheet::SheetSpec;
+use et_sim::touch::Touch;
+use std::path::Path;
 
 /// Writes `n` frames of the untouched default sheet as a recording at `path`; returns them.
 pub(crate) fn write_sim_recording(path: &Path, n: usize) -> Vec<LiveFrame> {

@@ -1,6 +1,7 @@
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
-
-use super::*;
+use et_core::rng::Rng;
+use et_learn::mlp::*;
+use et_learn::regress::{Target3, target_mean};
+use nalgebra::DMatrix;
 
 #[test]
 fn tanh_matches_the_library_everywhere_in_f32() {
@@ -57,7 +58,7 @@ fn learns_a_smooth_nonlinear_map_far_better_than_the_mean_and_a_line() {
         let err = mean_error(&m.predict_many(&xv), &tv);
         let mean = target_mean(&t);
         let constant = mean_error(&vec![mean; tv.len()], &tv);
-        let line = super::super::regress::Ridge::fit(&x, &t, 1e-6).unwrap();
+        let line = et_learn::regress::Ridge::fit(&x, &t, 1e-6).unwrap();
         let linear = mean_error(&line.predict_many(&xv), &tv);
         assert!(
             err < 0.25 * linear && err < 0.1 * constant,
@@ -117,9 +118,9 @@ fn the_same_seed_trains_the_same_network_and_a_larger_penalty_shrinks_the_weight
     let b = Mlp::fit(&x, &t, &opts).unwrap();
     assert_eq!(a.predict_many(&x), b.predict_many(&x));
     let norm = |m: &Mlp| -> f64 {
-        m.layers
+        m.dense()
             .iter()
-            .flat_map(|(w, _)| values(w).collect::<Vec<_>>())
+            .flat_map(|layer| layer.weights.concat())
             .map(|v| f64::from(v).powi(2))
             .sum()
     };

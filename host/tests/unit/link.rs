@@ -1,7 +1,12 @@
+use et_core::wire::{self, Accumulator, Command, CommandTag, Event, PACKET_MAX, Refusal, Uplink};
+use serde::Serialize;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use et_core::ScanConfig;
 use et_core::ScanReport;
@@ -9,7 +14,7 @@ use et_core::device::{Device, RamStore};
 use et_core::wire::{COMMAND_PACKET_MAX, Frame};
 use serialport::{SerialPort, TTYPort};
 
-use super::*;
+use et_host::link::*;
 
 fn packet<T: Serialize>(m: &T) -> Vec<u8> {
     let mut buf = vec![0u8; PACKET_MAX];
@@ -286,8 +291,8 @@ fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
 /// Start again (the recording used to stall forever).
 #[test]
 fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
-    use crate::link::LinkChange;
-    use crate::recorder::{Notice, Plan, record};
+    use et_host::link::LinkChange;
+    use et_host::recorder::{Notice, Plan, record};
     let dir = temp_dir("record");
     let (master, path) = cable(&dir);
     let mangle: fn(&mut Frame) = |f| match f.seq {
@@ -335,7 +340,7 @@ fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
         expected: 208
     }));
     // One part, every frame readable, the NaN flagged.
-    let rec = crate::recording::read(&out).unwrap();
+    let rec = et_host::recording::read(&out).unwrap();
     assert_eq!(rec.records.len(), 400);
     assert_eq!(rec.records.iter().filter(|r| r.invalid == [2]).count(), 2);
     assert!(!dir.join("session-2.jsonl").exists());
@@ -352,7 +357,7 @@ fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
     };
     let e = record(&mut link, &again, |_| {}).unwrap_err().to_string();
     assert!(e.contains("already exists"), "{e}");
-    assert_eq!(crate::recording::read(&out).unwrap().records.len(), 400);
+    assert_eq!(et_host::recording::read(&out).unwrap().records.len(), 400);
     drop(link);
     device.stop();
     let _ = std::fs::remove_dir_all(dir);

@@ -1,7 +1,9 @@
-use super::*;
-use crate::mesh::Mesh;
 use et_core::protocol::{Protocol, ProtocolKind};
 use et_core::sheet::Sheet;
+use et_recon::Imager;
+use et_recon::fem::TransferJacobian;
+use et_recon::greit::*;
+use et_recon::mesh::Mesh;
 
 /// The reference scenes' sheet: a 22 cm disc, 16 electrodes 6 mm wide.
 fn small(kind: ProtocolKind) -> (Imager, TransferJacobian) {

@@ -1,0 +1,15 @@
+//! et-host's library tests through its public interface, one binary (each module is one of
+//! the library's).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+mod demo;
+mod frames;
+mod link;
+mod live;
+mod message;
+mod output;
+mod plot;
+mod recording;
+mod tables;
+#[cfg(feature = "viewer")]
+mod viewer;

@@ -1,0 +1,215 @@
+use et_core::Micros;
+use et_core::ScanConfig;
+use et_core::scan::ScanReport;
+use et_core::wire::Frame;
+use et_host::recording::*;
+
+fn frame(seq: u32, k: usize) -> Frame {
+    let v: Vec<f32> = (0..k).map(|i| i as f32 * 1e-3 + seq as f32).collect();
+    Frame::from_scan(
+        seq,
+        Micros(seq * 12_800),
+        ScanConfig::REFERENCE,
+        &ScanReport::default(),
+        0,
+        &v,
+    )
+    .unwrap()
+}
+
+/// A board that restarted mid-recording (seq from 0 again), or two recordings joined, is
+/// said; a clock that wraps its 32 bits is not going back.
+#[test]
+fn frames_out_of_order_are_noted() {
+    let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    let recording = |stamps: &[(u32, u32)]| Recording {
+        header: header.clone(),
+        records: stamps
+            .iter()
+            .map(|&(seq, t_us)| Record {
+                seq,
+                t_us,
+                flags: 0,
+                rail_count: 0,
+                voltages: vec![0.0; 208],
+                invalid: Vec::new(),
+                touches: None,
+            })
+            .collect(),
+        truncated_tail: false,
+    };
+    let wraps = recording(&[(7, u32::MAX - 100), (8, 12_700), (9, 25_500)]);
+    assert_eq!(wraps.order_note(), None);
+    let restarted = recording(&[(0, 0), (1, 12_800), (0, 5), (1, 12_805)]);
+    let note = restarted.order_note().unwrap();
+    assert!(
+        note.contains("repeats 1 time(s)") && note.contains("goes back 1 time(s)"),
+        "{note}"
+    );
+    assert!(
+        note.contains("frame 2 of the file (seq 1 then 0)"),
+        "{note}"
+    );
+    let repeated = recording(&[(0, 0), (1, 12_800), (1, 12_800)]);
+    assert!(repeated.order_note().unwrap().contains("repeats 1 time(s)"));
+}
+
+#[test]
+fn round_trip_and_a_cut_tail_loses_only_the_last_frame() {
+    let dir = std::env::temp_dir().join(format!("et-rec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("a.jsonl");
+    let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    assert_eq!((header.frame_len, header.columns.len()), (208, 208));
+    let mut w = Writer::create(&path, &header).unwrap();
+    let touches = Some(vec![TouchRecord {
+        x: 0.01,
+        y: -0.02,
+        radius: 0.0075,
+        pressure: 2e4,
+    }]);
+    for seq in 0..5 {
+        w.append(&Record::new(&frame(seq, 208), touches.clone()))
+            .unwrap();
+    }
+    assert!(
+        w.append(&Record::new(&frame(9, 10), None)).is_err(),
+        "wrong K refused"
+    );
+    drop(w);
+    // The header says what the numbers are in.
+    let first = std::fs::read_to_string(&path).unwrap();
+    let first: serde_json::Value = serde_json::from_str(first.lines().next().unwrap()).unwrap();
+    assert!(
+        first["units"].as_str().unwrap().starts_with("SI"),
+        "{first}"
+    );
+    let rec = read(&path).unwrap();
+    assert_eq!(rec.header, header);
+    // A header written before `units` existed reads as the same.
+    let mut old = serde_json::to_value(&header).unwrap();
+    old.as_object_mut().unwrap().remove("units");
+    let old: Header = serde_json::from_value(old).unwrap();
+    assert_eq!(old, header);
+    assert_eq!(rec.records.len(), 5);
+    assert_eq!(rec.records[3].voltages, frame(3, 208).voltages.to_vec());
+    assert_eq!(rec.records[0].touches, touches);
+    assert!(!rec.truncated_tail);
+    // A crash mid-line: everything before it survives.
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes.truncate(bytes.len() - 40);
+    std::fs::write(&path, &bytes).unwrap();
+    let cut = read(&path).unwrap();
+    assert_eq!(cut.records.len(), 4);
+    assert!(cut.truncated_tail);
+    // Damage elsewhere is an error naming the line.
+    let text = std::fs::read_to_string(dir.join("a.jsonl"))
+        .unwrap()
+        .replacen("\"seq\":1", "\"seq\":\"x\"", 1);
+    std::fs::write(&path, text).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(err.contains("a.jsonl:3"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A NaN or infinite value from the board used to be written as `null` and then refused
+/// the whole recording (here and in Python). It is kept: NaN, flagged in `invalid`.
+#[test]
+fn a_frame_with_nan_or_inf_stays_readable_and_flagged() {
+    let dir = std::env::temp_dir().join(format!("et-rec-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("nan.jsonl");
+    let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    let mut w = Writer::create(&path, &header).unwrap();
+    let mut bad = frame(1, 208);
+    bad.voltages[3] = f32::NAN;
+    bad.voltages[7] = f32::INFINITY;
+    for f in [frame(0, 208), bad, frame(2, 208)] {
+        w.append(&Record::new(&f, None)).unwrap();
+    }
+    drop(w);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("null") && text.contains("\"invalid\":[3,7]"),
+        "{text}"
+    );
+    let rec = read(&path).unwrap();
+    assert_eq!(rec.records.len(), 3);
+    let r = &rec.records[1];
+    assert!(r.voltages[3].is_nan() && r.voltages[7].is_nan());
+    assert_eq!(r.voltages[4], frame(1, 208).voltages[4]);
+    assert_eq!(r.invalid, vec![3, 7]);
+    assert!(rec.records[0].invalid.is_empty() && rec.records[2].invalid.is_empty());
+    // The standard-library Python reader reads it too (NaN for null).
+    let py = std::process::Command::new("python3")
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../python/et_recording.py"
+        ))
+        .arg(&path)
+        .output()
+        .expect("python3");
+    let out = String::from_utf8_lossy(&py.stdout);
+    assert!(
+        py.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    assert!(
+        out.contains("frames 3") && out.contains("invalid_frames 1"),
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Columns in another order than the protocol's are refused by the first that differs
+/// (they were ignored: the same frames with the columns reversed gave the same image).
+#[test]
+fn columns_in_another_order_than_the_protocols_are_refused() {
+    let dir = std::env::temp_dir().join(format!("et-rec-cols-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("c.jsonl");
+    let mut header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    header.columns.reverse();
+    let mut text = serde_json::to_string(&header).unwrap();
+    text.push('\n');
+    text.push_str(&serde_json::to_string(&Record::new(&frame(0, 208), None)).unwrap());
+    text.push('\n');
+    std::fs::write(&path, &text).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("c.jsonl:1") && err.contains("header column 0") && err.contains("order"),
+        "{err}"
+    );
+    header.columns.pop();
+    let mut text = serde_json::to_string(&header).unwrap();
+    text.push('\n');
+    std::fs::write(&path, &text).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(err.contains("207 columns"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A header whose K disagrees with its own protocol (frames of 100 values under an
+/// adjacent 16-electrode config, K = 208) is refused at line 1; `et reconstruct` used to
+/// take K from the config and panic on the frames.
+#[test]
+fn a_header_that_contradicts_its_protocol_is_refused() {
+    let dir = std::env::temp_dir().join(format!("et-rec-k-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("k.jsonl");
+    let mut header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    header.frame_len = 100;
+    header.columns.truncate(100);
+    let mut text = serde_json::to_string(&header).unwrap();
+    text.push('\n');
+    text.push_str(&serde_json::to_string(&Record::new(&frame(0, 100), None)).unwrap());
+    text.push('\n');
+    std::fs::write(&path, text).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("k.jsonl:1") && err.contains("K = 208"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
