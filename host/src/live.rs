@@ -28,8 +28,8 @@ use crate::recording::{self, Recording};
 use et_core::sheet::Sheet;
 use et_learn::model::Board;
 use et_recon::{
-    AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PROMINENCE, PixelGrid, ReconError,
-    Reconstructor, Region, above_noise, default_threshold, touches,
+    AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PixelGrid, ReconError, Reconstructor,
+    Region, TOUCH_Z, default_threshold, touch_rule,
 };
 
 mod monitor;

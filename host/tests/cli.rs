@@ -325,6 +325,99 @@ fn python_reads_the_dataset(root: &std::path::Path, csv: &std::path::Path) {
     assert!(shape.contains("(80, 96) [0, 1, 2, 3]"), "{shape}");
 }
 
+/// One touch rule: the live pipeline (`et stream --replay`) and `et reconstruct` of the same
+/// recording, with the live pipeline's settings (its 20 untouched frames as V_0, one-step
+/// Gauss-Newton at alpha 0.3 and s 0.5, 3 000 triangles, 32 x 32 pixels, the scene's
+/// background), find a touch on the same frames and put it in the same place.
+#[test]
+fn stream_and_reconstruct_find_the_same_touches() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = std::env::temp_dir().join(format!("et-cli-one-rule-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
+    let scene = scene.to_str().unwrap();
+    let swipe = dir.join("swipe.jsonl");
+    let swipe = swipe.to_str().unwrap();
+    let run = et(&["sim", "--scene", scene, "--frames", "60", "--out", swipe]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stream = et(&["stream", "--json", "--replay", swipe]);
+    assert!(
+        stream.status.success(),
+        "{}",
+        String::from_utf8_lossy(&stream.stderr)
+    );
+    let events: Vec<serde_json::Value> = String::from_utf8_lossy(&stream.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let recording = et_host::recording::read(std::path::Path::new(swipe)).unwrap();
+    let (mut touched, mut untouched) = (0, 0);
+    // Every third frame after the reference: the untouched ones before the finger lands, then
+    // the swipe.
+    for frame in (20..60).step_by(3) {
+        let seq = recording.records[frame].seq;
+        let event = events.iter().find(|e| e["seq"] == seq);
+        let out = dir.join(format!("frame-{frame}.png"));
+        let image = et(&[
+            "reconstruct",
+            "--scene",
+            scene,
+            "--frames",
+            swipe,
+            "--frame",
+            &frame.to_string(),
+            "--reference",
+            "20",
+            "--alpha",
+            "0.3",
+            "--triangles",
+            "3000",
+            "--pixels",
+            "32",
+            "--background",
+            "scene",
+            "--out",
+            out.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(
+            image.status.success(),
+            "{}",
+            String::from_utf8_lossy(&image.stderr)
+        );
+        let summary: serde_json::Value = serde_json::from_slice(&image.stdout).unwrap();
+        let found = summary["found_touches"].as_array().unwrap();
+        match (event, found.first()) {
+            (None, None) => untouched += 1,
+            (Some(e), Some(first)) => {
+                touched += 1;
+                for axis in 0..2 {
+                    let (live, offline) = (
+                        e["position_mm"][axis].as_f64().unwrap(),
+                        first["centroid_mm"][axis].as_f64().unwrap(),
+                    );
+                    // The stream prints tenths of a millimetre; its image is the same matrix in
+                    // f32.
+                    assert!(
+                        (live - offline).abs() <= 0.1,
+                        "frame {frame}: stream {live} mm, reconstruct {offline} mm"
+                    );
+                }
+            }
+            (e, f) => panic!("frame {frame}: stream {e:?}, reconstruct {f:?}"),
+        }
+    }
+    assert!(
+        touched >= 5 && untouched >= 1,
+        "{touched} touched, {untouched} not"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn collect_train_eval_export_chain() {
     let dir = std::env::temp_dir().join(format!("et-cli-learn-{}", std::process::id()));

@@ -45,8 +45,7 @@ use crate::operator::FrameOperator;
 use crate::pixels::PixelGrid;
 use crate::redundancy::{Redundancy, RedundancyNoise};
 use crate::touches::{
-    OBJECT_FRACTION, Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects,
-    regions,
+    OBJECT_FRACTION, Object, Region, TOUCH_Z, default_threshold, objects, regions, touch_rule,
 };
 
 /// Why a reconstruction could not be set up or a frame imaged.
@@ -400,6 +399,21 @@ impl Reconstructor {
         self.image_dv(dv, &reference.var_dv)
     }
 
+    /// Each channel's variance of `dv` (K values, V) as this reconstructor's images see it,
+    /// V^2: what imaging cannot explain, the frames' noise `var_dv` and the model's own error,
+    /// from the fitted background's misfit when there is one, else [`imaging_variance`]'s
+    /// share of dV. It sets each pixel's noise, and with it which touches stand out: the live
+    /// pipeline takes its pixels' noise from here too.
+    #[must_use]
+    pub fn imaging_variance(&self, var_dv: &[f64], dv: &[f64]) -> Vec<f64> {
+        match (&self.mismatch, self.mismatch_factor) {
+            (Some(share), Some(factor)) => (var_dv.iter().zip(dv).zip(share))
+                .map(|((v, d), e)| v.max(0.0) + (factor * e * d).powi(2))
+                .collect(),
+            _ => imaging_variance(var_dv, dv),
+        }
+    }
+
     /// The noise of `dv` (K values, V) seen in the protocol's redundancy (the part of dV no
     /// conductivity change can make, [`Redundancy`]); None when the protocol has too little
     /// redundancy.
@@ -436,19 +450,10 @@ impl Reconstructor {
                 None => NoiseSource::Unknown,
             },
         };
-        // What imaging cannot explain: the frames' noise and the model's own error; alpha's
-        // floor counts less of the latter.
-        // What imaging cannot explain: the frames' noise and the model's own error (from the
-        // fitted background when there is one); alpha's floor counts less of the latter when
-        // the model's error is not known.
-        let (var, floor) = match (&self.mismatch, self.mismatch_factor) {
-            (Some(share), Some(factor)) => {
-                let v: Vec<f64> = (var_dv.iter().zip(&dv).zip(share))
-                    .map(|((v, d), e)| v.max(0.0) + (factor * e * d).powi(2))
-                    .collect();
-                (v.clone(), v)
-            }
-            _ => (imaging_variance(var_dv, &dv), floor_variance(var_dv, &dv)),
+        let var = self.imaging_variance(var_dv, &dv);
+        let floor = match (&self.mismatch, self.mismatch_factor) {
+            (Some(_), Some(_)) => var.clone(),
+            _ => floor_variance(var_dv, &dv),
         };
         let grid = &self.imager.grid;
         let mut timings = FrameTimings::default();
@@ -541,10 +546,9 @@ impl Reconstructor {
         let grid = &self.imager.grid;
         Ok(Image {
             regions: regions(grid, &pixels, f),
-            touches: above_noise(
-                &crate::touches::touches(grid, &pixels, &noise_sd, f, PROMINENCE),
-                TOUCH_Z,
-            ),
+            touches: touch_rule(grid, &pixels, f, TOUCH_Z, |p| {
+                noise_sd.get(p).copied().flatten()
+            }),
             pixels,
             noise_sd,
             mesh_values,

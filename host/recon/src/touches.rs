@@ -126,6 +126,35 @@ pub fn touches(
     f: f64,
     prominence: f64,
 ) -> Vec<Region> {
+    touches_with(grid, image, f, prominence, |p| sd.get(p).copied().flatten())
+}
+
+/// The touches et finds, in `et reconstruct` and in the live pipeline (`et stream`, `et
+/// view`) alike: [`touches`] at [`PROMINENCE`], each kept when it reaches `z` times its
+/// pixels' noise somewhere ([`above_noise`]; [`TOUCH_Z`] by default). `sd(p)` is pixel p's
+/// noise standard deviation (None: unknown), asked only for the pixels of a region, so a
+/// caller that pays for each pixel's noise pays for those alone.
+#[must_use]
+pub fn touch_rule(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    f: f64,
+    z: f64,
+    sd: impl FnMut(usize) -> Option<f64>,
+) -> Vec<Region> {
+    let mut found = touches_with(grid, image, f, PROMINENCE, sd);
+    found.retain(|r| r.z.is_none_or(|v| v >= z));
+    found
+}
+
+/// [`touches`] with each pixel's noise from `sd` (None: unknown).
+fn touches_with(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    f: f64,
+    prominence: f64,
+    mut sd: impl FnMut(usize) -> Option<f64>,
+) -> Vec<Region> {
     let Some(max) = positive_max(image) else {
         return Vec::new();
     };
@@ -216,7 +245,7 @@ pub fn touches(
                 peak_pixel: r,
                 z: m.iter()
                     .filter_map(|&q| {
-                        let sd = sd.get(q).copied().flatten().filter(|&sd| sd > 0.0)?;
+                        let sd = sd(q).filter(|&sd| sd > 0.0)?;
                         Some(image[q]? / sd)
                     })
                     .reduce(f64::max),

@@ -94,6 +94,20 @@ struct Projection {
     s: f64,
     /// Pixels inside the sheet x K, in thin factors.
     matrix: FrameOperator,
+    /// Its entries squared, P_pk^2 (row-major, pixels inside x K): a pixel's noise variance
+    /// is its row times the channels' variances, made for a touched frame's regions alone.
+    squares: Vec<f32>,
+}
+
+impl Projection {
+    /// The noise standard deviation of inside pixel `i` under channel variances `var` (K
+    /// values, V^2): sqrt(sum_k P_ik^2 var_k).
+    fn pixel_sd(&self, i: usize, var: &[f32]) -> Option<f64> {
+        let k = var.len();
+        let row = self.squares.get(i * k..(i + 1) * k)?;
+        let v: f32 = row.iter().zip(var).map(|(p2, v)| p2 * v).sum();
+        Some(f64::from(v).sqrt())
+    }
 }
 
 impl Projection {
@@ -119,12 +133,19 @@ impl Projection {
                 }
                 let (method_of, rule) = method.reconstruction(alpha, s);
                 recon.set_method(method_of, rule)?;
+                let matrix = recon.pixel_operator()?;
+                let dense = matrix.dense();
+                // Row-major: a pixel's row is contiguous (nalgebra stores columns).
+                let squares = (0..dense.nrows())
+                    .flat_map(|i| dense.row(i).iter().map(|p| p * p).collect::<Vec<_>>())
+                    .collect();
                 Projection {
                     config: *config,
                     method,
                     alpha,
                     s,
-                    matrix: recon.pixel_operator()?,
+                    matrix,
+                    squares,
                 }
             }
         };
@@ -160,8 +181,10 @@ pub struct Settings {
     pub s: f64,
     /// ROI threshold f; None: docs/method.md §6's value for the protocol.
     pub threshold: Option<f64>,
-    /// A frame is a touch when one of the image's touches (`recon::touches`) peaks at more
-    /// than this many times its pixel's noise on the untouched sheet.
+    /// A frame is a touch when one of the image's touches (`et_recon::touch_rule`) reaches
+    /// this many times its pixels' noise (the noise `et reconstruct` gives its images: the
+    /// untouched frames' and the model's own error); `et reconstruct`'s is
+    /// [`et_recon::TOUCH_Z`], the default.
     pub touch_factor: f64,
     /// Untouched frames averaged into V_0 after a start, a configuration change or a tare.
     pub reference_frames: usize,
@@ -181,7 +204,7 @@ impl Default for Settings {
             alpha: 0.3,
             s: 0.5,
             threshold: None,
-            touch_factor: 5.0,
+            touch_factor: TOUCH_Z,
             reference_frames: 20,
             triangles: 3_000,
             pixels: 32,
@@ -210,8 +233,6 @@ pub(super) struct Noise {
     pub(super) var_dv: Vec<f64>,
     /// 1 / each pixel's noise (0 where the noise is 0), for the frames' z-scores.
     pub(super) inverse_sd: Vec<f32>,
-    /// Each pixel's noise on the grid (None outside the sheet), for the touch search.
-    pub(super) grid_sd: Vec<Option<f64>>,
 }
 
 /// One frame processed.
@@ -247,7 +268,10 @@ pub struct Processor {
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
     projection: Option<Projection>,
+    /// The grid's pixels inside the sheet, in the projection's row order.
     inside: Vec<usize>,
+    /// Each grid pixel's row in the projection (None outside the sheet).
+    inside_index: Vec<Option<usize>>,
     reference: Option<Reference>,
     /// The board model evaluated on each touched frame.
     pub classifier: Option<Board>,
@@ -286,19 +310,24 @@ impl Processor {
             ..et_recon::Spec::new(sheet.clone(), at.schedule()?)
         }
         .set_up()?;
-        let inside = recon
+        let inside: Vec<usize> = recon
             .grid()
             .triangle
             .iter()
             .enumerate()
             .filter_map(|(p, t)| t.map(|_| p))
             .collect();
+        let mut inside_index = vec![None; recon.grid().triangle.len()];
+        for (i, &p) in inside.iter().enumerate() {
+            inside_index[p] = Some(i);
+        }
         Ok(Self {
             recon,
             at,
             settings,
             projection: None,
             inside,
+            inside_index,
             reference: None,
             classifier: None,
         })
@@ -418,14 +447,13 @@ impl Processor {
         let Settings {
             method, alpha, s, ..
         } = self.settings;
-        let projection = &Projection::current(
+        let projection = Projection::current(
             &mut self.projection,
             &mut self.recon,
             &mut self.at,
             &config,
             (method, alpha, s),
-        )?
-        .matrix;
+        )?;
         let noise = match &mut reference.noise {
             Some(n) if n.method == method && n.alpha == alpha && n.s == s => n,
             slot => {
@@ -436,15 +464,11 @@ impl Processor {
                 // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
                 // filters the noise the data carry, so a touch stands out better here than in
                 // |dV|.
-                let pixel_sd = projection.noise_sd(&var_dv)?;
+                let pixel_sd = projection.matrix.noise_sd(&var_dv)?;
                 let inverse_sd = pixel_sd
                     .iter()
                     .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
                     .collect();
-                let mut grid_sd = vec![None; self.recon.grid().triangle.len()];
-                for (&p, v) in self.inside.iter().zip(&pixel_sd) {
-                    grid_sd[p] = Some(*v);
-                }
                 slot.insert(Noise {
                     method,
                     alpha,
@@ -452,7 +476,6 @@ impl Processor {
                     v0,
                     var_dv,
                     inverse_sd,
-                    grid_sd,
                 })
             }
         };
@@ -460,7 +483,6 @@ impl Processor {
             v0,
             var_dv,
             inverse_sd,
-            grid_sd,
             ..
         } = &*noise;
         let dv: Vec<f64> = frame
@@ -470,7 +492,7 @@ impl Processor {
             .map(|(a, b)| f64::from(*a) - b)
             .collect();
         let bvc = stats::bvc_dv(&dv);
-        let values = projection.image(&dv)?;
+        let values = projection.matrix.image(&dv)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = f64::from(
             values
@@ -484,13 +506,24 @@ impl Processor {
         for (&p, v) in self.inside.iter().zip(values.iter()) {
             image[p] = Some(f64::from(*v));
         }
-        // The touches: regions split at their saddles, each reaching the touch factor times
-        // its pixels' noise somewhere. A frame is touched when one does.
+        // The touches by `et reconstruct`'s rule (et_recon::touches::touch_rule): regions split
+        // at their saddles, each reaching the touch factor times its pixels' noise somewhere,
+        // that noise what the Reconstructor's images carry (the frames' and the model's own
+        // error, a share of dV) made for the regions' pixels alone. A frame is touched when
+        // one does. The reference's noise alone is smaller: a frame whose strongest pixel
+        // does not reach the factor over it has no touch, and no region is searched.
         let rois = if intensity > self.settings.touch_factor {
-            above_noise(
-                &touches(grid, &image, grid_sd, threshold, PROMINENCE),
-                self.settings.touch_factor,
-            )
+            let var: Vec<f32> = self
+                .recon
+                .imaging_variance(var_dv, &dv)
+                .iter()
+                .map(|&v| v as f32)
+                .collect();
+            let inside_index = &self.inside_index;
+            touch_rule(grid, &image, threshold, self.settings.touch_factor, |p| {
+                let i = (*inside_index.get(p)?)?;
+                projection.pixel_sd(i, &var)
+            })
         } else {
             Vec::new()
         };
