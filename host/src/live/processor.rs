@@ -105,8 +105,20 @@ impl Projection {
     fn pixel_sd(&self, i: usize, var: &[f32]) -> Option<f64> {
         let k = var.len();
         let row = self.squares.get(i * k..(i + 1) * k)?;
-        let v: f32 = row.iter().zip(var).map(|(p2, v)| p2 * v).sum();
-        Some(f64::from(v).sqrt())
+        // Eight running sums, so that the compiler keeps them in one vector register.
+        let mut sums = [0.0f32; 8];
+        let (head, tail) = row.split_at(k - k % 8);
+        for (p2, v) in head.chunks_exact(8).zip(var.chunks_exact(8)) {
+            for j in 0..8 {
+                sums[j] += p2[j] * v[j];
+            }
+        }
+        let rest: f32 = tail
+            .iter()
+            .zip(&var[k - k % 8..])
+            .map(|(p2, v)| p2 * v)
+            .sum();
+        Some(f64::from(sums.iter().sum::<f32>() + rest).sqrt())
     }
 }
 
@@ -519,9 +531,16 @@ impl Processor {
                 .iter()
                 .map(|&v| v as f32)
                 .collect();
-            let inside_index = &self.inside_index;
-            touch_rule(grid, &image, threshold, self.settings.touch_factor, |p| {
+            let (inside_index, factor) = (&self.inside_index, self.settings.touch_factor);
+            touch_rule(grid, &image, threshold, factor, |p| {
                 let i = (*inside_index.get(p)?)?;
+                let inverse = *inverse_sd.get(i)?;
+                // A pixel below the factor over the reference's noise alone is below it over
+                // the larger noise too: its noise need not be made (the reference's, which it
+                // is given, keeps it below the factor; a region's z is its largest pixel's).
+                if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
+                    return Some(f64::from(1.0 / inverse));
+                }
                 projection.pixel_sd(i, &var)
             })
         } else {
