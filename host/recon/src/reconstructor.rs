@@ -399,11 +399,9 @@ impl Reconstructor {
         self.image_dv(dv, &reference.var_dv)
     }
 
-    /// Each channel's variance of `dv` (K values, V) as this reconstructor's images see it,
-    /// V^2: what imaging cannot explain, the frames' noise `var_dv` and the model's own error,
-    /// from the fitted background's misfit when there is one, else [`imaging_variance`]'s
-    /// share of dV. It sets each pixel's noise, and with it which touches stand out: the live
-    /// pipeline takes its pixels' noise from here too.
+    /// Each channel's variance of `dv` (K values, V) as the images see it, V^2: the frames'
+    /// noise `var_dv` and the model's error (the fitted background's misfit, else
+    /// [`imaging_variance`]'s share of dV). The live pipeline's pixel noise comes from here too.
     #[must_use]
     pub fn imaging_variance(&self, var_dv: &[f64], dv: &[f64]) -> Vec<f64> {
         match (&self.mismatch, self.mismatch_factor) {
