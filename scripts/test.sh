@@ -94,10 +94,10 @@ step "build and lint every target: libraries, programs, tests, examples, benchma
 cargo test --workspace --features et-host/viewer --no-run
 cargo build --workspace --benches --features et-host/viewer
 
-step "tests (cargo test --workspace --features et-host/viewer; the QEMU tests must run here), and beside them the Python module"
-# The Python step runs beside the Rust tests, which leave a core idle for much of their time
-# (binaries run one after another, several with one or two long tests); its output follows
-# theirs. `maturin develop` is `pip install ./python` without the wheel's release build. With
+step "tests (cargo test --workspace --features et-host/viewer, its binaries side by side; the QEMU tests must run here), and beside them the Python module"
+# scripts/run_tests.py runs cargo test's binaries as many at a time as there are cores (cargo
+# runs them one after another, and several end on one long test that leaves a core idle) and
+# prints a table of their times. The Python step runs beside them; its output follows theirs. `maturin develop` is `pip install ./python` without the wheel's release build. With
 # the viewer feature (which the module does not use) every crate it shares with the test build
 # above resolves with the same features (python/Cargo.toml, host/Cargo.toml say which), so only
 # pyo3 and the module itself are compiled here.
@@ -115,11 +115,11 @@ python_step >"$python_log" 2>&1 &
 python_pid=$!
 rust_tests=0
 ET_REQUIRE_QEMU=1 ET_QEMU_IMAGE="$qemu_image" ET_BIN="$PWD/target/debug/et" \
-  cargo test --workspace --features et-host/viewer || rust_tests=$?
+  python3 scripts/run_tests.py --workspace --features et-host/viewer || rust_tests=$?
 python_tests=0
 wait "$python_pid" || python_tests=$?
 printf '\n== Python module (python/), run beside the Rust tests: its output\n'
 cat "$python_log"
-if [ "$rust_tests" -ne 0 ]; then echo "the Rust tests failed (cargo test exited $rust_tests)"; fi
+if [ "$rust_tests" -ne 0 ]; then echo "the Rust tests failed (scripts/run_tests.py exited $rust_tests)"; fi
 if [ "$python_tests" -ne 0 ]; then echo "the Python step failed (exit $python_tests)"; fi
 [ "$rust_tests" -eq 0 ] && [ "$python_tests" -eq 0 ]

@@ -61,23 +61,68 @@ pub fn f16_to_f32(h: u16) -> f32 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn every_half_decodes_like_the_half_crate() {
-        for h in 0..=u16::MAX {
-            let want = half::f16::from_bits(h).to_f32();
-            let got = f16_to_f32(h);
-            assert!(
-                got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
-                "{h:#x}"
-            );
-            if !got.is_nan() {
-                assert_eq!(f32_to_f16(got), h, "round trip {h:#x}");
+    /// The magnitude of finite binary16 bits `h` by IEEE 754's definition, in f64 (exact):
+    /// m x 2^-24 for exponent field 0, (1024 + m) x 2^(e - 25) otherwise. 0x7c00 (infinity)
+    /// gives 2^16, the next step after the largest finite half, 65 504, as rounding sees it.
+    fn magnitude(h: u16) -> f64 {
+        let (e, m) = (i32::from((h >> 10) & 0x1f), f64::from(h & 0x3ff));
+        if e == 0 {
+            m * 2f64.powi(-24)
+        } else {
+            (1024.0 + m) * 2f64.powi(e - 25)
+        }
+    }
+
+    /// The binary16 nearest `f` by the definition (ties to an even last bit; from 65 520 up,
+    /// infinity), found by bisection over the ordered positive halves.
+    fn nearest(f: f32) -> u16 {
+        let sign = if f.is_sign_negative() { 0x8000 } else { 0 };
+        let a = f64::from(f).abs();
+        if a >= magnitude(0x7c00) {
+            return sign | 0x7c00;
+        }
+        // The largest h with magnitude(h) <= a, then it or the next, whichever is nearer.
+        let (mut lo, mut hi) = (0u16, 0x7c00u16);
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if magnitude(mid) <= a {
+                lo = mid;
+            } else {
+                hi = mid;
             }
+        }
+        let (below, above) = (a - magnitude(lo), magnitude(hi) - a);
+        sign | if below < above || (below == above && lo & 1 == 0) {
+            lo
+        } else {
+            hi
         }
     }
 
     #[test]
-    fn encoding_rounds_like_the_half_crate() {
+    fn every_half_decodes_to_its_value_by_definition() {
+        for h in 0..=u16::MAX {
+            let got = f16_to_f32(h);
+            let negative = h & 0x8000 != 0;
+            if (h >> 10) & 0x1f == 0x1f {
+                if h & 0x3ff == 0 {
+                    assert!(
+                        got.is_infinite() && got.is_sign_negative() == negative,
+                        "{h:#x}"
+                    );
+                } else {
+                    assert!(got.is_nan(), "{h:#x}");
+                }
+                continue;
+            }
+            assert_eq!(f64::from(got).abs(), magnitude(h), "{h:#x}");
+            assert_eq!(got.is_sign_negative(), negative, "{h:#x}");
+            assert_eq!(f32_to_f16(got), h, "round trip {h:#x}");
+        }
+    }
+
+    #[test]
+    fn encoding_rounds_to_the_nearest_half_ties_to_even() {
         // A deterministic sweep over f32 bit patterns, dense enough to hit every exponent and
         // the rounding boundaries (ties included, via the low mantissa bits).
         let mut rng = crate::rng::Rng::new(0x1234_5678);
@@ -89,13 +134,20 @@ mod tests {
                 x
             };
             let f = f32::from_bits(bits);
-            let want = half::f16::from_f32(f);
             let got = f32_to_f16(f);
-            if want.is_nan() {
-                assert!(f16_to_f32(got).is_nan());
+            if f.is_nan() {
+                assert!(f16_to_f32(got).is_nan(), "{bits:#x}");
             } else {
-                assert_eq!(got, want.to_bits(), "{f:e} ({bits:#x})");
+                assert_eq!(got, nearest(f), "{f:e} ({bits:#x})");
             }
         }
+        // The boundaries by name: the largest half, the tie above it, the smallest subnormal
+        // and the tie below it (to zero, the even neighbour).
+        assert_eq!(f32_to_f16(65_504.0), 0x7bff);
+        assert_eq!(f32_to_f16(65_519.99), 0x7bff);
+        assert_eq!(f32_to_f16(65_520.0), 0x7c00);
+        assert_eq!(f32_to_f16(2f32.powi(-24)), 0x0001);
+        assert_eq!(f32_to_f16(2f32.powi(-25)), 0x0000);
+        assert_eq!(f32_to_f16(-2f32.powi(-25)), 0x8000);
     }
 }

@@ -423,7 +423,7 @@ impl Schedule {
         default_current_a: f64,
     ) -> Result<Self, ScheduleError> {
         let text =
-            crate::text::read_text_at_most(path, crate::text::MAX_FILE_BYTES).map_err(|e| {
+            crate::text::read_text_at_most(path, crate::text::max_file_bytes()).map_err(|e| {
                 ScheduleError::File {
                     path: path.to_path_buf(),
                     line: 0,

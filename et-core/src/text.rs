@@ -156,10 +156,33 @@ pub fn records(text: &str) -> Result<Vec<Record>, (usize, String)> {
     read_records(&lines(text)).map(|r| r.rows)
 }
 
-/// The largest data file et reads whole (a dataset, a table, frames, a model): 1 GiB, far above
-/// any real one (2 500 presses x 192 channels is 5 MB of text) and below what would exhaust
-/// memory; an endless stream (`/dev/zero`, a pipe that never closes) stops here.
+/// The largest data file et reads whole by default (a dataset, a table, frames, a model): 1 GiB,
+/// far above any real one (2 500 presses x 192 channels is 5 MB of text) and below what would
+/// exhaust memory; an endless stream (`/dev/zero`, a pipe that never closes) stops here.
+/// [`max_file_bytes`] is the limit in force.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// The data-file limit in force in this process (0: not set, [`MAX_FILE_BYTES`]).
+static MAX_FILE_BYTES_SET: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// The largest data file et's readers take whole in this process, in bytes: [`MAX_FILE_BYTES`]
+/// unless [`set_max_file_bytes`] changed it.
+#[must_use]
+pub fn max_file_bytes() -> u64 {
+    match MAX_FILE_BYTES_SET.load(std::sync::atomic::Ordering::Relaxed) {
+        0 => MAX_FILE_BYTES,
+        set => set,
+    }
+}
+
+/// Sets the data-file limit of every et reader in this process (datasets, tables, frames,
+/// models, meshes, protocols, recordings and a `.mat` variable's inflated size) to `limit`
+/// bytes: larger for a program that reads recordings past 1 GiB on a machine with the memory
+/// for them, smaller for one that must bound what a file can make it allocate. 0 restores
+/// [`MAX_FILE_BYTES`]. Scenes (1 MiB) and model blobs (16 MiB) keep their own limits.
+pub fn set_max_file_bytes(limit: u64) {
+    MAX_FILE_BYTES_SET.store(limit, std::sync::atomic::Ordering::Relaxed);
+}
 
 /// The bytes of `path`, stopping at `limit`: more is an error of kind
 /// [`std::io::ErrorKind::FileTooLarge`] saying so, found before reading for a regular file

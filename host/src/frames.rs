@@ -113,15 +113,15 @@ fn compressed_within_limits(bytes: &[u8]) -> Result<(), String> {
         if kind == 15 {
             let data = data.ok_or("a compressed variable is cut short")?;
             let mut out = Vec::new();
+            let limit = et_core::text::max_file_bytes();
             libflate::zlib::Decoder::new(data)
                 .map_err(|_| "a compressed variable is damaged".to_string())?
-                .take(et_core::text::MAX_FILE_BYTES + 1)
+                .take(limit.saturating_add(1))
                 .read_to_end(&mut out)
                 .map_err(|_| "a compressed variable is damaged".to_string())?;
-            if out.len() as u64 > et_core::text::MAX_FILE_BYTES {
+            if out.len() as u64 > limit {
                 return Err(format!(
-                    "a compressed variable inflates past {} bytes: not frames et reads",
-                    et_core::text::MAX_FILE_BYTES
+                    "a compressed variable inflates past {limit} bytes: not frames et reads"
                 ));
             }
             at = at.saturating_add(8).saturating_add(size);
@@ -271,7 +271,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     let (matrix, said) = match ext.as_str() {
         "npy" => {
             let bytes =
-                et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?;
+                et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?;
             (
                 npy_matrix(&Npz::from_npy(bytes), "array").map_err(npz)?,
                 String::new(),
@@ -279,7 +279,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         }
         "npz" => {
             let archive = Npz::read(
-                et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?,
+                et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?,
             )
             .map_err(npz)?;
             let names: Vec<&str> = archive.names().collect();
@@ -304,11 +304,11 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         }
         "mat" => mat_matrix(
             &path,
-            &et_core::text::read_at_most(&path, et_core::text::MAX_FILE_BYTES).map_err(io)?,
+            &et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?,
             array.as_deref(),
         )?,
         _ => {
-            let text = et_core::text::read_text_at_most(&path, et_core::text::MAX_FILE_BYTES)
+            let text = et_core::text::read_text_at_most(&path, et_core::text::max_file_bytes())
                 .map_err(io)?;
             csv_matrix(&path, &text)?
         }

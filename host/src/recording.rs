@@ -328,7 +328,8 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         message,
     };
     // Read whole, but never more than a data file's limit (an endless stream stops there).
-    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(io)?;
+    let text =
+        et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(io)?;
     let lines: Vec<&str> = text.lines().collect();
     let first = lines
         .first()

@@ -8,8 +8,9 @@
 //! 10^20, 1e308, NaN, -1, a byte-order mark, stray separators, section names), truncation.
 //! The parser reads it from disk as `et` would.
 //!
-//! Its own test binary: the peak-tracking allocator counts the whole process, so one test
-//! runs the parsers one after the other. Cases per parser from PROPTEST_CASES (default
+//! Its own test binary: the peak-tracking allocator counts the whole process, so its tests take
+//! turns, and the parsers are fuzzed in child processes of it, one per core, each with its own
+//! count. Cases per parser from PROPTEST_CASES (default
 //! 2 000); the long run of docs/guide.md:
 //!
 //! ```sh
@@ -38,7 +39,8 @@ use proptest::test_runner::{Config, TestRunner};
 #[global_allocator]
 static ALLOC: PeakAlloc = PeakAlloc;
 
-/// The allocator's peak is the whole process's: the tests take turns.
+/// The allocator's peak is the whole process's: the tests take turns, and the parsers are
+/// fuzzed in child processes of this binary, one per core, each with its own peak.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// Allowed peak allocation while parsing a file of `len` bytes: a multiple of it plus a
@@ -165,8 +167,11 @@ struct Parser {
     parse: fn(&[PathBuf]) -> bool,
 }
 
-fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("et-fuzz-{}", std::process::id()));
+/// A new folder for one test's or one parser's files, under this process's folder.
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir()
+        .join(format!("et-fuzz-{}", std::process::id()))
+        .join(name);
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -341,7 +346,9 @@ fn frames_csv() -> String {
 /// `et_host::frames::read` picks the format by extension: the case's file is given one
 /// through a symbolic link (so an endless input stays endless).
 fn read_frames(case: &Path, ext: &str) -> bool {
-    let named = scratch().join(format!("frames.{ext}"));
+    static LINKS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = LINKS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let named = scratch("links").join(format!("frames-{n}.{ext}"));
     let _ = std::fs::remove_file(&named);
     std::os::unix::fs::symlink(case, &named).is_ok() && et_host::frames::read(&named, 40).is_ok()
 }
@@ -402,8 +409,9 @@ fn dataset_npz(dir: &std::path::Path) -> Vec<u8> {
     std::fs::read(&npz).unwrap()
 }
 
-fn parsers() -> Vec<Parser> {
-    let dir = scratch();
+/// Every parser, its seeds made in `dir`.
+fn parsers(dir: &Path) -> Vec<Parser> {
+    let dir = dir.to_path_buf();
     let (msh, [nodes, triangles, electrodes]) = square_mesh(3);
     let scene = include_str!("../../sim/scenes/square-13cm-16-swipe.toml");
     vec![
@@ -499,98 +507,164 @@ fn every_parser_survives_damaged_files_in_bounded_memory() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(2_000);
-    let dir = scratch();
     let only: Vec<String> = std::env::var("ET_FUZZ_PARSERS")
         .map(|v| v.split(',').map(|s| s.trim().to_lowercase()).collect())
         .unwrap_or_default();
-    for target in parsers().into_iter().filter(|t| {
-        only.is_empty()
-            || only
-                .iter()
-                .any(|o| !o.is_empty() && t.name.to_lowercase().contains(o.as_str()))
-    }) {
-        let paths: Vec<PathBuf> = (0..target.seeds.len())
-            .map(|i| dir.join(format!("case-{i}")))
-            .collect();
-        let write = |files: &[Vec<u8>]| {
-            for (p, b) in paths.iter().zip(files) {
-                std::fs::write(p, b).unwrap();
-            }
-        };
-        eprintln!("fuzzing {}", target.name);
-        // The seeds are valid: damage starts from files the parser accepts.
-        write(&target.seeds);
-        assert!((target.parse)(&paths), "{}: the seed parses", target.name);
-        let started = Instant::now();
-        let accepted = std::cell::Cell::new(0u64);
-        // The largest peak allocation seen, and the size of the input that caused it.
-        let largest = std::cell::Cell::new((0usize, 0usize));
-        let mut runner = TestRunner::new(Config {
+    // "i/n": this process fuzzes every n-th parser from the i-th (a child of the run below).
+    let shard: Option<(usize, usize)> = std::env::var("ET_FUZZ_SHARD").ok().map(|v| {
+        let (i, n) = v.split_once('/').expect("ET_FUZZ_SHARD is i/n");
+        (i.parse().unwrap(), n.parse().unwrap())
+    });
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    if shard.is_none() && cores > 1 {
+        shards(cores);
+        return;
+    }
+    let (first, every) = shard.unwrap_or((0, 1));
+    let dir = scratch("damaged");
+    for target in parsers(&dir)
+        .into_iter()
+        .filter(|t| {
+            only.is_empty()
+                || only
+                    .iter()
+                    .any(|o| !o.is_empty() && t.name.to_lowercase().contains(o.as_str()))
+        })
+        .skip(first)
+        .step_by(every)
+    {
+        damage(
+            &target,
+            &scratch(&format!("damaged/{}", target.name)),
             cases,
-            failure_persistence: None,
-            ..Config::default()
-        });
-        let strategy = (
-            0..target.seeds.len(),
-            proptest::collection::vec(edit(), 1..6),
-        );
-        let result = runner.run(&strategy, |(which, edits)| {
-            let mut files = target.seeds.clone();
-            files[which] = apply(&files[which], &edits);
-            write(&files);
-            let len: usize = files.iter().map(Vec::len).sum();
-            let before = ALLOC.current_usage();
-            ALLOC.reset_peak_usage();
-            let ok = (target.parse)(&paths);
-            let peak = ALLOC.peak_usage().saturating_sub(before);
-            accepted.set(accepted.get() + u64::from(ok));
-            if peak > largest.get().0 {
-                largest.set((peak, len));
-            }
-            prop_assert!(
-                peak <= allowance(len),
-                "{}: {peak} bytes allocated for a {len}-byte input",
-                target.name
-            );
-            Ok(())
-        });
-        if let Err(e) = result {
-            panic!("{}: {e}", target.name);
-        }
-        let (peak, len) = largest.get();
-        println!(
-            "{:<22} {cases:>8} damaged inputs, {:>7} accepted, no panic; largest peak \
-             allocation {:.2} MB (for a {:.1} kB input); {:.1} s",
-            target.name,
-            accepted.get(),
-            peak as f64 / 1e6,
-            len as f64 / 1e3,
-            started.elapsed().as_secs_f64(),
         );
     }
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// The fuzz test in `n` child processes of this test binary at once, each fuzzing every n-th
+/// parser (`ET_FUZZ_SHARD`); their reports printed, their failures this test's.
+fn shards(n: usize) {
+    let children: Vec<_> = (0..n)
+        .map(|i| {
+            std::process::Command::new(std::env::current_exe().unwrap())
+                .args([
+                    "--exact",
+                    "every_parser_survives_damaged_files_in_bounded_memory",
+                    "--nocapture",
+                ])
+                .env("ET_FUZZ_SHARD", format!("{i}/{n}"))
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut failed = Vec::new();
+    for (i, child) in children.into_iter().enumerate() {
+        let out = child.wait_with_output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        // The child's own reports, without libtest's lines around them.
+        for line in text.lines().filter(|l| l.contains("damaged inputs")) {
+            println!("{line}");
+        }
+        if !out.status.success() {
+            failed.push(format!(
+                "shard {i}/{n}: {}\n{text}\n{}",
+                out.status,
+                String::from_utf8_lossy(&out.stderr)
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+/// `cases` damaged versions of `target`'s seeds, written to `dir` and parsed: no panic, and
+/// the parse's peak allocation within [`allowance`] of the files' size.
+fn damage(target: &Parser, dir: &Path, cases: u32) {
+    let paths: Vec<PathBuf> = (0..target.seeds.len())
+        .map(|i| dir.join(format!("case-{i}")))
+        .collect();
+    let write = |files: &[Vec<u8>]| {
+        for (p, b) in paths.iter().zip(files) {
+            std::fs::write(p, b).unwrap();
+        }
+    };
+    // The seeds are valid: damage starts from files the parser accepts.
+    write(&target.seeds);
+    assert!((target.parse)(&paths), "{}: the seed parses", target.name);
+    let started = Instant::now();
+    let accepted = std::cell::Cell::new(0u64);
+    // The largest peak allocation seen, and the size of the input that caused it.
+    let largest = std::cell::Cell::new((0usize, 0usize));
+    let mut runner = TestRunner::new(Config {
+        cases,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let strategy = (
+        0..target.seeds.len(),
+        proptest::collection::vec(edit(), 1..6),
+    );
+    let result = runner.run(&strategy, |(which, edits)| {
+        let mut files = target.seeds.clone();
+        files[which] = apply(&files[which], &edits);
+        write(&files);
+        let len: usize = files.iter().map(Vec::len).sum();
+        let before = ALLOC.current_usage();
+        ALLOC.reset_peak_usage();
+        let ok = (target.parse)(&paths);
+        let peak = ALLOC.peak_usage().saturating_sub(before);
+        accepted.set(accepted.get() + u64::from(ok));
+        if peak > largest.get().0 {
+            largest.set((peak, len));
+        }
+        prop_assert!(
+            peak <= allowance(len),
+            "{}: {peak} bytes allocated for a {len}-byte input",
+            target.name
+        );
+        Ok(())
+    });
+    if let Err(e) = result {
+        panic!("{}: {e}", target.name);
+    }
+    let (peak, len) = largest.get();
+    println!(
+        "{:<40} {cases:>8} damaged inputs, {:>7} accepted, no panic; largest peak \
+         allocation {:.2} MB (for a {:.1} kB input); {:.1} s",
+        target.name,
+        accepted.get(),
+        peak as f64 / 1e6,
+        len as f64 / 1e3,
+        started.elapsed().as_secs_f64(),
+    );
+}
+
 /// Every reader given an endless stream (`/dev/zero`) or a huge file (sparse, one byte past
 /// the largest file et reads) in place of each of its files: a clean refusal, never a panic,
 /// an abort or memory past the reader's limit. A huge regular file is refused by its size
-/// before it is read; a stream is read to the reader's limit (1 GiB for data files, 1 MiB for
-/// scenes) and no further, and the buffer never grows past that limit (the last growth copies
-/// from a half-size buffer: 1.5 x the limit at most).
+/// before it is read; a stream is read to the reader's limit (the data files' limit, 1 GiB by
+/// default, lowered here by `set_max_file_bytes`; 1 MiB for scenes, 16 MiB for blobs) and no
+/// further, and the buffer never grows past that limit (the last growth copies from a half-size
+/// buffer: 1.5 x the limit at most).
 #[test]
 fn every_reader_stops_at_its_limit_on_endless_and_huge_inputs() {
     let _turn = ONE_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let dir = scratch().join("endless");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("endless");
+    // A huge file is one byte past the default limit (sparse, refused by its size); an endless
+    // stream is read to a limit lowered for this test, 1/32 of the default, since reading 1 GiB
+    // from /dev/zero per reader and file would take a minute and prove no more.
     let huge = dir.join("huge");
     std::fs::File::create(&huge)
         .unwrap()
         .set_len(et_core::text::MAX_FILE_BYTES + 1)
         .unwrap();
-    let limit = et_core::text::MAX_FILE_BYTES as usize;
-    for target in parsers() {
+    let lowered = et_core::text::MAX_FILE_BYTES / 32;
+    let limit = lowered as usize;
+    for target in parsers(&dir) {
         let paths: Vec<PathBuf> = (0..target.seeds.len())
             .map(|i| dir.join(format!("{}-{i}", target.seeds.len())))
             .collect();
@@ -608,10 +682,12 @@ fn every_reader_stops_at_its_limit_on_endless_and_huge_inputs() {
             ] {
                 let mut given = paths.clone();
                 given[which] = input.into();
+                et_core::text::set_max_file_bytes(if what == "endless" { lowered } else { 0 });
                 let started = Instant::now();
                 let before = ALLOC.current_usage();
                 ALLOC.reset_peak_usage();
                 let ok = (target.parse)(&given);
+                et_core::text::set_max_file_bytes(0);
                 let peak = ALLOC.peak_usage().saturating_sub(before);
                 println!(
                     "{:<40} file {which}: {what:<7} refused, peak allocation {:>7.1} MB, {:.2} s",

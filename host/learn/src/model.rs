@@ -165,12 +165,11 @@ impl Model {
     /// # Errors
     /// [`ModelError`] naming the file and what is wrong with it.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
-        let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
-            |source| ModelError::Io {
+        let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
+            .map_err(|source| ModelError::Io {
                 path: path.into(),
                 source,
-            },
-        )?;
+            })?;
         let value: serde_json::Value =
             serde_json::from_str(&text).map_err(|source| ModelError::Json {
                 path: path.into(),

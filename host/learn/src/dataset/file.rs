@@ -352,7 +352,7 @@ pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
 /// [`DatasetError`] naming the file and the array at fault.
 pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
     let bytes =
-        et_core::text::read_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(|source| {
+        et_core::text::read_at_most(path, et_core::text::max_file_bytes()).map_err(|source| {
             DatasetError::Io {
                 path: path.into(),
                 source,

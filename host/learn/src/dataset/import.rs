@@ -76,7 +76,7 @@ pub enum GroupsFrom {
 /// # Errors
 /// [`DatasetError`] naming the file, line and column of a cell that is not a finite number.
 pub fn read_matrix(path: &Path) -> Result<DMatrix<f64>, DatasetError> {
-    let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES).map_err(
+    let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(
         |source| DatasetError::Io {
             path: path.into(),
             source,
@@ -207,7 +207,7 @@ impl Table {
 
 /// A file's text, at most et's file limit (a read error names the file).
 pub(super) fn read(p: &Path) -> Result<String, DatasetError> {
-    et_core::text::read_text_at_most(p, et_core::text::MAX_FILE_BYTES).map_err(|source| {
+    et_core::text::read_text_at_most(p, et_core::text::max_file_bytes()).map_err(|source| {
         DatasetError::Io {
             path: p.into(),
             source,

@@ -508,7 +508,7 @@ impl TableModel {
             path: path.into(),
             message,
         };
-        let text = et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES)
+        let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
             .map_err(|e| err(e.to_string()))?;
         Self::from_json(&text).map_err(|e| err(e.to_string()))
     }

@@ -28,7 +28,7 @@ fn bad(path: &Path, line: usize, why: impl std::fmt::Display) -> MeshError {
 }
 
 fn read(path: &Path) -> Result<String, MeshError> {
-    et_core::text::read_text_at_most(path, et_core::text::MAX_FILE_BYTES)
+    et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
         .map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
 }
 
