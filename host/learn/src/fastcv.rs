@@ -89,7 +89,9 @@ fn stats(rows: &[f64], p: usize, y: &[u16], fold: &[usize], classes: usize, k: u
     st
 }
 
-#[allow(clippy::too_many_lines)]
+/// The model of fold `f` of `k` (trained on every other fold) from the blocks' statistics
+/// `st`, the features' raw standardisation (`raw_mean`, `raw_scale`, p values) and the fit's
+/// options: what `Fitted::fit` would give on those rows, without going back to them.
 fn fold_model(
     st: &Stats,
     f: usize,
@@ -99,158 +101,213 @@ fn fold_model(
     raw_scale: &[f64],
     opts: &FitOptions,
 ) -> Result<FoldModel, FitError> {
+    let fold = FoldClasses::of(st, (f, k), classes, raw_mean, raw_scale)?;
     let p = raw_mean.len();
-    // Training statistics per class (all folds but f).
-    let mut n_c = vec![0usize; classes];
-    let mut s_c = vec![DVector::<f64>::zeros(p); classes];
-    let mut q_c = vec![DMatrix::<f64>::zeros(p, p); classes];
-    for c in 0..classes {
-        for g in (0..k).filter(|&g| g != f) {
-            let i = c * k + g;
-            n_c[c] += st.n[i];
-            s_c[c] += &st.s[i];
-            q_c[c] += &st.q[i];
-        }
-        if n_c[c] == 0 {
-            return Err(FitError::EmptyClass { class: c as u16 });
-        }
-    }
-    let n: usize = n_c.iter().sum();
-    // The fold's standardisation, as Fitted::fit computes it from its training rows.
-    let total_s: DVector<f64> = s_c.iter().sum();
-    let m = &total_s / n as f64;
-    let mut gain = DVector::<f64>::zeros(p);
-    for j in 0..p {
-        let sumsq: f64 = q_c.iter().map(|q| q[(j, j)]).sum();
-        let var = ((sumsq - n as f64 * m[j] * m[j]) / (n - 1).max(1) as f64).max(0.0);
-        let sd_raw = raw_scale[j] * var.sqrt();
-        let mean_raw = raw_mean[j] + raw_scale[j] * m[j];
-        let floor = 1e-9 * mean_raw.abs().max(f64::MIN_POSITIVE);
-        let scale = if sd_raw > floor && sd_raw.is_finite() {
-            sd_raw
-        } else {
-            1.0
-        };
-        gain[j] = raw_scale[j] / scale;
-    }
-    // Class means and scatters in the fold's standardised coordinates.
-    let mut means = Vec::with_capacity(classes);
-    let mut scatters = Vec::with_capacity(classes);
-    let mut pooled = DMatrix::<f64>::zeros(p, p);
-    for c in 0..classes {
-        let mu0 = &s_c[c] / n_c[c] as f64;
-        let mut scatter = &q_c[c] - (&mu0 * mu0.transpose()) * n_c[c] as f64;
-        for a in 0..p {
-            for b in 0..p {
-                scatter[(a, b)] *= gain[a] * gain[b];
-            }
-        }
-        means.push((&mu0 - &m).component_mul(&gain));
-        pooled += &scatter;
-        scatters.push(scatter);
-    }
-    let pooled = pooled / (n.saturating_sub(classes).max(1)) as f64;
-    let shrink = |s: &DMatrix<f64>| -> DMatrix<f64> {
-        if opts.shrinkage == 0.0 {
-            return s.clone();
-        }
-        let t = match opts.target {
-            Target::Pooled => pooled.clone(),
-            Target::Diagonal => {
-                let nu = s.trace() / p as f64;
-                DMatrix::identity(p, p) * if nu > 0.0 { nu } else { 1.0 }
-            }
-        };
-        s * (1.0 - opts.shrinkage) + t * opts.shrinkage
-    };
-    let log_prior = |c: usize| (n_c[c] as f64 / n as f64).ln();
     let mut model = FoldModel {
         factors: Vec::new(),
         means: Vec::new(),
         constants: Vec::new(),
-        shift: m,
-        gain,
+        shift: fold.shift.clone(),
+        gain: fold.gain.clone(),
         order: (0..p).collect(),
         lead: DMatrix::zeros(0, 0),
         lead_shift: Vec::new(),
         weights: Vec::new(),
     };
     match opts.kind {
-        ModelKind::Qda => {
-            // Between-class over pooled within-class variance per feature (the means are
-            // centred on the fold's mean).
-            let ratio: Vec<f64> = (0..p)
-                .map(|j| {
-                    let between: f64 = (0..classes)
-                        .map(|c| n_c[c] as f64 * means[c][j] * means[c][j])
-                        .sum::<f64>()
-                        / n as f64;
-                    between / pooled[(j, j)].max(f64::MIN_POSITIVE)
-                })
-                .collect();
-            model.order.sort_by(|&a, &b| ratio[b].total_cmp(&ratio[a]));
-            let order = &model.order;
-            let mut leads = Vec::with_capacity(classes);
-            for (c, (mean, scatter)) in means.into_iter().zip(scatters).enumerate() {
-                let sigma = shrink(&(scatter / (n_c[c].saturating_sub(1).max(1)) as f64));
-                let sigma = DMatrix::from_fn(p, p, |a, b| sigma[(order[a], order[b])]);
-                let mean = DVector::from_fn(p, |a, _| mean[order[a]]);
-                let l = sigma
-                    .cholesky()
-                    .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?
-                    .l();
-                if (0..p).any(|i| !(l[(i, i)] > 0.0 && l[(i, i)].is_finite())) {
-                    return Err(FitError::NotPositiveDefinite { class: c as u16 });
-                }
-                let log_det = 2.0 * (0..p).map(|i| l[(i, i)].ln()).sum::<f64>();
-                let d = LEAD.min(p);
-                let w = l
-                    .view((0, 0), (d, d))
-                    .solve_lower_triangular(&DMatrix::identity(d, d))
-                    .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?;
-                leads.push(w);
-                model.constants.push(-0.5 * log_det + log_prior(c));
-                model.factors.push(
-                    (0..p)
-                        .flat_map(|r| (0..=r).map(move |c| (r, c)))
-                        .map(|(r, c)| if r == c { 1.0 / l[(r, c)] } else { l[(r, c)] })
-                        .collect(),
-                );
-                model.means.push(mean);
-            }
-            let d = LEAD.min(p);
-            model.lead = DMatrix::from_fn(classes * d, d, |r, j| leads[r / d][(r % d, j)]);
-            model.lead_shift = (0..classes * d)
-                .map(|r| {
-                    let (c, i) = (r / d, r % d);
-                    (0..d).map(|j| leads[c][(i, j)] * model.means[c][j]).sum()
-                })
-                .collect();
-        }
-        ModelKind::Lda => {
-            let opts_d = FitOptions {
-                target: Target::Diagonal,
-                ..*opts
-            };
-            let sigma = if opts_d.shrinkage == 0.0 {
-                pooled.clone()
-            } else {
-                let nu = pooled.trace() / p as f64;
-                &pooled * (1.0 - opts_d.shrinkage)
-                    + DMatrix::identity(p, p) * (if nu > 0.0 { nu } else { 1.0 }) * opts_d.shrinkage
-            };
-            let chol = sigma
-                .cholesky()
-                .ok_or(FitError::NotPositiveDefinite { class: 0 })?;
-            for (c, mean) in means.into_iter().enumerate() {
-                let w = chol.solve(&mean);
-                model.constants.push(-0.5 * mean.dot(&w) + log_prior(c));
-                model.weights.push(w);
-                model.means.push(mean);
-            }
-        }
+        ModelKind::Qda => fold.qda(opts, &mut model)?,
+        ModelKind::Lda => fold.lda(opts.shrinkage, &mut model)?,
     }
     Ok(model)
+}
+
+/// A fold's training rows summed per class, in the fold's standardised coordinates.
+struct FoldClasses {
+    /// Rows per class.
+    n_c: Vec<usize>,
+    /// Each class's mean, centred on the fold's mean (p values).
+    means: Vec<DVector<f64>>,
+    /// Each class's scatter, sum (x - mean)(x - mean)^T (p x p).
+    scatters: Vec<DMatrix<f64>>,
+    /// The pooled within-class covariance (p x p).
+    pooled: DMatrix<f64>,
+    /// The fold's mean in the raw standardisation (p values), and each feature's gain to the
+    /// fold's own standardisation.
+    shift: DVector<f64>,
+    gain: DVector<f64>,
+}
+
+impl FoldClasses {
+    /// Fold `f` of `k` from the blocks' statistics (every class's blocks but fold f's).
+    fn of(
+        st: &Stats,
+        (f, k): (usize, usize),
+        classes: usize,
+        raw_mean: &[f64],
+        raw_scale: &[f64],
+    ) -> Result<Self, FitError> {
+        let p = raw_mean.len();
+        // Training statistics per class (all folds but f).
+        let mut n_c = vec![0usize; classes];
+        let mut s_c = vec![DVector::<f64>::zeros(p); classes];
+        let mut q_c = vec![DMatrix::<f64>::zeros(p, p); classes];
+        for c in 0..classes {
+            for g in (0..k).filter(|&g| g != f) {
+                let i = c * k + g;
+                n_c[c] += st.n[i];
+                s_c[c] += &st.s[i];
+                q_c[c] += &st.q[i];
+            }
+            if n_c[c] == 0 {
+                return Err(FitError::EmptyClass { class: c as u16 });
+            }
+        }
+        let n: usize = n_c.iter().sum();
+        // The fold's standardisation, as Fitted::fit computes it from its training rows.
+        let total_s: DVector<f64> = s_c.iter().sum();
+        let m = &total_s / n as f64;
+        let mut gain = DVector::<f64>::zeros(p);
+        for j in 0..p {
+            let sumsq: f64 = q_c.iter().map(|q| q[(j, j)]).sum();
+            let var = ((sumsq - n as f64 * m[j] * m[j]) / (n - 1).max(1) as f64).max(0.0);
+            let sd_raw = raw_scale[j] * var.sqrt();
+            let mean_raw = raw_mean[j] + raw_scale[j] * m[j];
+            let floor = 1e-9 * mean_raw.abs().max(f64::MIN_POSITIVE);
+            let scale = if sd_raw > floor && sd_raw.is_finite() {
+                sd_raw
+            } else {
+                1.0
+            };
+            gain[j] = raw_scale[j] / scale;
+        }
+        // Class means and scatters in the fold's standardised coordinates.
+        let mut means = Vec::with_capacity(classes);
+        let mut scatters = Vec::with_capacity(classes);
+        let mut pooled = DMatrix::<f64>::zeros(p, p);
+        for c in 0..classes {
+            let mu0 = &s_c[c] / n_c[c] as f64;
+            let mut scatter = &q_c[c] - (&mu0 * mu0.transpose()) * n_c[c] as f64;
+            for a in 0..p {
+                for b in 0..p {
+                    scatter[(a, b)] *= gain[a] * gain[b];
+                }
+            }
+            means.push((&mu0 - &m).component_mul(&gain));
+            pooled += &scatter;
+            scatters.push(scatter);
+        }
+        let pooled = pooled / (n.saturating_sub(classes).max(1)) as f64;
+        Ok(Self {
+            n_c,
+            means,
+            scatters,
+            pooled,
+            shift: m,
+            gain,
+        })
+    }
+
+    /// ln of class `c`'s share of the rows.
+    fn log_prior(&self, c: usize) -> f64 {
+        let n: usize = self.n_c.iter().sum();
+        (self.n_c[c] as f64 / n as f64).ln()
+    }
+
+    /// QDA's factors into `model`: the features ordered by between- over within-class
+    /// variance, each class's shrunk covariance's Cholesky factor (its first [`LEAD`] rows
+    /// inverted for the block products) and its constant.
+    fn qda(self, opts: &FitOptions, model: &mut FoldModel) -> Result<(), FitError> {
+        let (p, classes) = (self.gain.len(), self.n_c.len());
+        let n: usize = self.n_c.iter().sum();
+        let shrink = |s: &DMatrix<f64>| -> DMatrix<f64> {
+            if opts.shrinkage == 0.0 {
+                return s.clone();
+            }
+            let t = match opts.target {
+                Target::Pooled => self.pooled.clone(),
+                Target::Diagonal => {
+                    let nu = s.trace() / p as f64;
+                    DMatrix::identity(p, p) * if nu > 0.0 { nu } else { 1.0 }
+                }
+            };
+            s * (1.0 - opts.shrinkage) + t * opts.shrinkage
+        };
+        // Between-class over pooled within-class variance per feature (the means are centred
+        // on the fold's mean).
+        let ratio: Vec<f64> = (0..p)
+            .map(|j| {
+                let between: f64 = (0..classes)
+                    .map(|c| self.n_c[c] as f64 * self.means[c][j] * self.means[c][j])
+                    .sum::<f64>()
+                    / n as f64;
+                between / self.pooled[(j, j)].max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        model.order.sort_by(|&a, &b| ratio[b].total_cmp(&ratio[a]));
+        let order = &model.order;
+        let mut leads = Vec::with_capacity(classes);
+        for (c, (mean, scatter)) in self.means.iter().zip(&self.scatters).enumerate() {
+            let sigma = shrink(&(scatter / (self.n_c[c].saturating_sub(1).max(1)) as f64));
+            let sigma = DMatrix::from_fn(p, p, |a, b| sigma[(order[a], order[b])]);
+            let mean = DVector::from_fn(p, |a, _| mean[order[a]]);
+            let l = sigma
+                .cholesky()
+                .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?
+                .l();
+            if (0..p).any(|i| !(l[(i, i)] > 0.0 && l[(i, i)].is_finite())) {
+                return Err(FitError::NotPositiveDefinite { class: c as u16 });
+            }
+            let log_det = 2.0 * (0..p).map(|i| l[(i, i)].ln()).sum::<f64>();
+            let d = LEAD.min(p);
+            let w = l
+                .view((0, 0), (d, d))
+                .solve_lower_triangular(&DMatrix::identity(d, d))
+                .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?;
+            leads.push(w);
+            model.constants.push(-0.5 * log_det + self.log_prior(c));
+            model.factors.push(
+                (0..p)
+                    .flat_map(|r| (0..=r).map(move |c| (r, c)))
+                    .map(|(r, c)| if r == c { 1.0 / l[(r, c)] } else { l[(r, c)] })
+                    .collect(),
+            );
+            model.means.push(mean);
+        }
+        let d = LEAD.min(p);
+        model.lead = DMatrix::from_fn(classes * d, d, |r, j| leads[r / d][(r % d, j)]);
+        model.lead_shift = (0..classes * d)
+            .map(|r| {
+                let (c, i) = (r / d, r % d);
+                (0..d).map(|j| leads[c][(i, j)] * model.means[c][j]).sum()
+            })
+            .collect();
+        Ok(())
+    }
+
+    /// LDA's weights into `model`: the pooled covariance shrunk toward its mean variance by
+    /// `shrinkage` (LDA's one target), each class's weights and constant.
+    fn lda(self, shrinkage: f64, model: &mut FoldModel) -> Result<(), FitError> {
+        let p = self.gain.len();
+        let sigma = if shrinkage == 0.0 {
+            self.pooled.clone()
+        } else {
+            let nu = self.pooled.trace() / p as f64;
+            &self.pooled * (1.0 - shrinkage)
+                + DMatrix::identity(p, p) * (if nu > 0.0 { nu } else { 1.0 }) * shrinkage
+        };
+        let chol = sigma
+            .cholesky()
+            .ok_or(FitError::NotPositiveDefinite { class: 0 })?;
+        for (c, mean) in self.means.iter().enumerate() {
+            let w = chol.solve(mean);
+            model
+                .constants
+                .push(-0.5 * mean.dot(&w) + self.log_prior(c));
+            model.weights.push(w);
+            model.means.push(mean.clone());
+        }
+        Ok(())
+    }
 }
 
 /// Observations per block of [`FoldModel::predict_block`].

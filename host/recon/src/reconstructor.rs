@@ -35,12 +35,11 @@ use et_core::sheet::Sheet;
 
 use crate::background::{BackgroundError, BackgroundFit};
 use crate::fem::{FemError, TransferJacobian};
-use crate::gauss_newton::{Data, GaussNewton, Stop, gauss_newton};
-use crate::gcv::{Criterion, default_alphas};
+use crate::gauss_newton::Stop;
 use crate::greit::{Greit, GreitOptions, Regularisation};
 use crate::imager::Imager;
 use crate::mesh::{Mesh, MeshError, Refinement};
-use crate::onestep::{DataSpace, OneStep, ReconError, floor_variance, imaging_variance};
+use crate::onestep::{DataSpace, OneStep, ReconError, imaging_variance};
 use crate::operator::FrameOperator;
 use crate::pixels::PixelGrid;
 use crate::redundancy::{Redundancy, RedundancyNoise};
@@ -449,114 +448,29 @@ impl Reconstructor {
             },
         };
         let var = self.imaging_variance(var_dv, &dv);
-        let floor = match (&self.mismatch, self.mismatch_factor) {
-            (Some(_), Some(_)) => var.clone(),
-            _ => floor_variance(var_dv, &dv),
-        };
-        let grid = &self.imager.grid;
-        let mut timings = FrameTimings::default();
-        let mut greit_made = None;
-        let made;
-        let mut iterations = None;
-        let mut mesh_values = None;
-        let (alpha, pixels, noise_sd) = match self.method {
-            Method::Greit { radius } => {
-                let clock = Instant::now();
-                let greit = match &self.greit {
-                    Some(g) => g,
-                    None => {
-                        let alpha = Greit::choose_alpha(&self.imager, &self.jac, &dv, &floor)?;
-                        made = self.greit_with(radius, Regularisation::Alpha(alpha))?;
-                        timings.matrix = Some(clock.elapsed().as_secs_f64());
-                        &*self.greit_chosen.insert(made)
-                    }
-                };
-                greit_made = Some((greit.noise_figure, greit.radius));
-                let clock = Instant::now();
-                let image = greit.image(&dv)?;
-                timings.frame = clock.elapsed().as_secs_f64();
-                (greit.alpha, image, greit.noise_sd(&var)?)
-            }
-            Method::GaussNewton { s, iterations: n } => {
-                let clock = Instant::now();
-                let space = self.space.as_ref().ok_or(ReconError::Singular)?;
-                let alpha = match self.alpha {
-                    AlphaRule::Fixed(a) => a,
-                    // The corner's floor is the least model error any frame has, not the
-                    // fitted background's.
-                    AlphaRule::Chosen(c @ Criterion::CornerAboveFloor) => {
-                        space.alpha_by(c, &dv, &floor_variance(var_dv, &dv), &default_alphas())?
-                    }
-                    AlphaRule::Chosen(c) => space.alpha_by(c, &dv, &floor, &default_alphas())?,
-                    AlphaRule::Gcv | AlphaRule::NoiseFigure(_) => {
-                        space.choose_alpha(&dv, &floor, &default_alphas())?
-                    }
-                };
-                if n <= 1 {
-                    if self.one_step.as_ref().is_none_or(|m| m.alpha != alpha) {
-                        self.one_step = Some(Matrix::new(alpha, space.one_step(alpha)?));
-                        timings.matrix = Some(clock.elapsed().as_secs_f64());
-                    }
-                    let Some(matrix) = &self.one_step else {
-                        return Err(ReconError::Singular.into());
-                    };
-                    // From the f64 factors: exact, the same image every call, and cheaper for
-                    // one frame than making the f32 operator (which the warm frames' figure,
-                    // `frame_median`, and the live pipeline's pixels use).
-                    let clock = Instant::now();
-                    let values = matrix.recon.reconstruct(&dv)?;
-                    timings.frame = clock.elapsed().as_secs_f64();
-                    let image = grid.image(&values);
-                    let noise_sd = grid.noise_sd(&matrix.recon, &var)?;
-                    mesh_values = Some(values);
-                    (alpha, image, noise_sd)
-                } else {
-                    let clock = Instant::now();
-                    let sigma0 = self.imager.background();
-                    let fit = gauss_newton(
-                        &self.imager.forward,
-                        &self.schedule,
-                        &sigma0,
-                        Data::Difference(&dv),
-                        GaussNewton {
-                            alpha,
-                            s,
-                            iterations: n,
-                        },
-                        &var,
-                    )?;
-                    timings.frame = clock.elapsed().as_secs_f64();
-                    let last = fit.iterates.last().ok_or(ReconError::Singular)?;
-                    let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-                    iterations = Some(Iterations {
-                        completed: fit.iterates.len(),
-                        residual: last.residual,
-                        steps: fit.iterates.iter().map(|i| i.step).collect(),
-                        stop: fit.stop,
-                    });
-                    let image = grid.image(&d);
-                    mesh_values = Some(d);
-                    (alpha, image, grid.image(&last.noise_sd))
-                }
+        let solved = match self.method {
+            Method::Greit { radius } => self.solve_greit(radius, &dv, var_dv, &var)?,
+            Method::GaussNewton { s, iterations } => {
+                self.solve_gauss_newton(s, iterations, &dv, var_dv, &var)?
             }
         };
         let f = self.threshold();
         let grid = &self.imager.grid;
         Ok(Image {
-            regions: regions(grid, &pixels, f),
-            touches: touch_rule(grid, &pixels, f, TOUCH_Z, |p| {
-                noise_sd.get(p).copied().flatten()
+            regions: regions(grid, &solved.pixels, f),
+            touches: touch_rule(grid, &solved.pixels, f, TOUCH_Z, |p| {
+                solved.noise_sd.get(p).copied().flatten()
             }),
-            pixels,
-            noise_sd,
-            mesh_values,
+            pixels: solved.pixels,
+            noise_sd: solved.noise_sd,
+            mesh_values: solved.mesh_values,
             dv,
             noise,
-            alpha,
-            greit: greit_made,
+            alpha: solved.alpha,
+            greit: solved.greit,
             threshold: f,
-            iterations,
-            timings,
+            iterations: solved.iterations,
+            timings: solved.timings,
         })
     }
 }
@@ -593,6 +507,7 @@ impl Matrix {
 
 mod frame;
 mod model_error;
+mod solve;
 pub use frame::*;
 use model_error::mismatch_and_weights;
 pub use model_error::{MISMATCH_FACTOR, Weighting};

@@ -455,56 +455,96 @@ impl Processor {
                 frame,
             });
         }
-        let config = frame.config;
-        let Settings {
-            method, alpha, s, ..
-        } = self.settings;
+        let key = (self.settings.method, self.settings.alpha, self.settings.s);
         let projection = Projection::current(
             &mut self.projection,
             &mut self.recon,
             &mut self.at,
-            &config,
-            (method, alpha, s),
+            &frame.config,
+            key,
         )?;
-        let noise = match &mut reference.noise {
-            Some(n) if n.method == method && n.alpha == alpha && n.s == s => n,
-            slot => {
-                // V_0 and the channel variances of an untouched frame's dV.
-                let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
-                stats::reference(&reference.frames, &mut v0)?;
-                stats::dv_variance(&reference.frames, &mut var_dv)?;
-                // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image
-                // filters the noise the data carry, so a touch stands out better here than in
-                // |dV|.
-                let pixel_sd = projection.matrix.noise_sd(&var_dv)?;
-                let inverse_sd = pixel_sd
-                    .iter()
-                    .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
-                    .collect();
-                slot.insert(Noise {
-                    method,
-                    alpha,
-                    s,
-                    v0,
-                    var_dv,
-                    inverse_sd,
-                })
-            }
-        };
+        let noise = Noise::current(&mut reference.noise, &reference.frames, projection, key)?;
+        Imaging {
+            recon: &self.recon,
+            inside: &self.inside,
+            inside_index: &self.inside_index,
+            touch_factor: self.settings.touch_factor,
+            projection,
+            noise,
+            classifier: self.classifier.as_ref(),
+        }
+        .frame(frame, threshold)
+    }
+}
+
+impl Noise {
+    /// The noise in `slot` if it was made for `(method, alpha, s)`, else one made from the
+    /// reference `frames` (each K values, V) through `projection` and put there.
+    fn current<'n>(
+        slot: &'n mut Option<Noise>,
+        frames: &[Vec<f32>],
+        projection: &Projection,
+        (method, alpha, s): (Method, f64, f64),
+    ) -> Result<&'n Noise, LiveError> {
+        if let Some(kept) = slot
+            .take()
+            .filter(|n| n.method == method && n.alpha == alpha && n.s == s)
+        {
+            return Ok(slot.insert(kept));
+        }
+        // V_0 and the channel variances of an untouched frame's dV.
+        let k = frames.first().map_or(0, Vec::len);
+        let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
+        stats::reference(frames, &mut v0)?;
+        stats::dv_variance(frames, &mut var_dv)?;
+        // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image filters
+        // the noise the data carry, so a touch stands out better here than in |dV|.
+        let pixel_sd = projection.matrix.noise_sd(&var_dv)?;
+        let inverse_sd = pixel_sd
+            .iter()
+            .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
+            .collect();
+        Ok(slot.insert(Noise {
+            method,
+            alpha,
+            s,
+            v0,
+            var_dv,
+            inverse_sd,
+        }))
+    }
+}
+
+/// What imaging one frame reads, made current for its configuration and settings: the
+/// reconstruction, the projection, the reference's noise and the classifier.
+struct Imaging<'a> {
+    recon: &'a Reconstructor,
+    /// The grid's pixels inside the sheet, in the projection's row order.
+    inside: &'a [usize],
+    /// Each grid pixel's row in the projection (None outside the sheet).
+    inside_index: &'a [Option<usize>],
+    touch_factor: f64,
+    projection: &'a Projection,
+    noise: &'a Noise,
+    classifier: Option<&'a Board>,
+}
+
+impl Imaging<'_> {
+    /// `frame` imaged against the reference, its touches found and, when touched, its event.
+    fn frame(&self, frame: LiveFrame, threshold: f64) -> Result<Output, LiveError> {
         let Noise {
             v0,
             var_dv,
             inverse_sd,
             ..
-        } = &*noise;
+        } = self.noise;
         let dv: Vec<f64> = frame
             .voltages
             .iter()
             .zip(v0)
             .map(|(a, b)| f64::from(*a) - b)
             .collect();
-        let bvc = stats::bvc_dv(&dv);
-        let values = projection.matrix.image(&dv)?;
+        let values = self.projection.matrix.image(&dv)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = f64::from(
             values
@@ -513,71 +553,93 @@ impl Processor {
                 .map(|(v, inverse)| v * inverse)
                 .fold(0.0f32, f32::max),
         );
-        let grid = self.recon.grid();
-        let mut image = vec![None; grid.triangle.len()];
+        let mut image = vec![None; self.recon.grid().triangle.len()];
         for (&p, v) in self.inside.iter().zip(values.iter()) {
             image[p] = Some(f64::from(*v));
         }
-        // The touches by `et reconstruct`'s rule (et_recon::touches::touch_rule): regions split
-        // at their saddles, each reaching the touch factor times its pixels' noise somewhere,
-        // that noise what the Reconstructor's images carry (the frames' and the model's own
-        // error, a share of dV) made for the regions' pixels alone. A frame is touched when
-        // one does. The reference's noise alone is smaller: a frame whose strongest pixel
-        // does not reach the factor over it has no touch, and no region is searched.
-        let rois = if intensity > self.settings.touch_factor {
-            let var: Vec<f32> = self
-                .recon
-                .imaging_variance(var_dv, &dv)
-                .iter()
-                .map(|&v| v as f32)
-                .collect();
-            let (inside_index, factor) = (&self.inside_index, self.settings.touch_factor);
-            touch_rule(grid, &image, threshold, factor, |p| {
-                let i = (*inside_index.get(p)?)?;
-                let inverse = *inverse_sd.get(i)?;
-                // A pixel below the factor over the reference's noise alone is below it over
-                // the larger noise too: its noise need not be made (the reference's, which it
-                // is given, keeps it below the factor; a region's z is its largest pixel's).
-                if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
-                    return Some(f64::from(1.0 / inverse));
-                }
-                projection.pixel_sd(i, &var)
-            })
+        let regions = if intensity > self.touch_factor {
+            self.touches(&image, &values, &dv, threshold)
         } else {
             Vec::new()
         };
-        let touched = !rois.is_empty();
-        let kept =
-            et_recon::select::significant(&rois, &et_recon::select::Settings::new([0.0, 0.0], 1.0));
-        let event = touched.then(|| {
-            let model = self
-                .classifier
-                .as_ref()
-                .and_then(|c| c.classify(&config, &frame.voltages, v0));
-            let chip = frame.chip_class.map(|c| c.class);
-            let image_position = rois.first().map_or([f64::NAN; 2], |r| {
-                [r.centroid[0] * 1e3, r.centroid[1] * 1e3]
-            });
-            TouchEvent {
-                t_us: frame.t_us,
-                seq: frame.seq,
-                class: chip.or(model.map(|m| m.class)),
-                position_mm: model.map_or(image_position, |m| m.centre_mm),
-                intensity,
-                confidence: model.map(|m| m.posterior),
-                regions: kept.len(),
-            }
-        });
+        let touches = et_recon::select::significant(
+            &regions,
+            &et_recon::select::Settings::new([0.0, 0.0], 1.0),
+        );
+        let event =
+            (!regions.is_empty()).then(|| self.event(&frame, &regions, touches.len(), intensity));
         Ok(Output {
-            frame,
             referencing: None,
             image,
-            regions: rois,
-            touches: kept,
-            bvc,
+            regions,
+            touches,
+            bvc: stats::bvc_dv(&dv),
             noise: var_dv.iter().sum::<f64>().sqrt(),
             event,
             threshold,
+            frame,
         })
+    }
+
+    /// The touches by `et reconstruct`'s rule (et_recon::touches::touch_rule) in a frame's
+    /// `image` (grid pixels; `values` its inside pixels, `dv` its K changes, V): regions split
+    /// at their saddles, each reaching the touch factor times its pixels' noise somewhere, that
+    /// noise what the Reconstructor's images carry (the frames' and the model's own error, a
+    /// share of dV) made for the regions' pixels alone. Called for a frame whose strongest
+    /// pixel reaches the factor over the reference's noise alone, which is smaller: one that
+    /// does not has no touch, and no region is searched.
+    fn touches(
+        &self,
+        image: &[Option<f64>],
+        values: &[f32],
+        dv: &[f64],
+        threshold: f64,
+    ) -> Vec<Region> {
+        let var: Vec<f32> = self
+            .recon
+            .imaging_variance(&self.noise.var_dv, dv)
+            .iter()
+            .map(|&v| v as f32)
+            .collect();
+        let (inside_index, inverse_sd, factor) =
+            (self.inside_index, &self.noise.inverse_sd, self.touch_factor);
+        touch_rule(self.recon.grid(), image, threshold, factor, |p| {
+            let i = (*inside_index.get(p)?)?;
+            let inverse = *inverse_sd.get(i)?;
+            // A pixel below the factor over the reference's noise alone is below it over the
+            // larger noise too: its noise need not be made (the reference's, which it is
+            // given, keeps it below the factor; a region's z is its largest pixel's).
+            if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
+                return Some(f64::from(1.0 / inverse));
+            }
+            self.projection.pixel_sd(i, &var)
+        })
+    }
+
+    /// A touched frame's event: the classifier's class, position and posterior when there is
+    /// one, else the board's class and the strongest region's centroid.
+    fn event(
+        &self,
+        frame: &LiveFrame,
+        regions: &[Region],
+        touches: usize,
+        intensity: f64,
+    ) -> TouchEvent {
+        let model = self
+            .classifier
+            .and_then(|c| c.classify(&frame.config, &frame.voltages, &self.noise.v0));
+        let chip = frame.chip_class.map(|c| c.class);
+        let image_position = regions.first().map_or([f64::NAN; 2], |r| {
+            [r.centroid[0] * 1e3, r.centroid[1] * 1e3]
+        });
+        TouchEvent {
+            t_us: frame.t_us,
+            seq: frame.seq,
+            class: chip.or(model.map(|m| m.class)),
+            position_mm: model.map_or(image_position, |m| m.centre_mm),
+            intensity,
+            confidence: model.map(|m| m.posterior),
+            regions: touches,
+        }
     }
 }

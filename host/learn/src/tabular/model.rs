@@ -316,34 +316,7 @@ pub(super) fn fit_final(
         Method::Gp => {
             let what = "fitting gp (learning its length scales on every training row)";
             let mut step = |done: usize, of: usize| progress(what, done, of);
-            let m = Gp::fit(&table.x, need_targets()?, &GP, &mut step)?;
-            let k = &m.predictor;
-            // The predictor's scales are the features' spreads times the length scales.
-            let scale = k
-                .scale
-                .iter()
-                .zip(&m.length_scales)
-                .map(|(s, l)| s / l)
-                .collect();
-            (
-                Tables::Gp {
-                    support: (0..k.support.nrows())
-                        .map(|i| {
-                            (k.support.row(i).iter())
-                                .zip(&m.length_scales)
-                                .map(|(v, l)| v * l)
-                                .collect()
-                        })
-                        .collect(),
-                    alpha: regress::rows3(&k.alpha),
-                    intercept: k.intercept,
-                    length_scales: m.length_scales,
-                    signal_variance: m.signal_variance,
-                    noise_variance: m.noise_variance,
-                },
-                k.mean.clone(),
-                scale,
-            )
+            gp_tables(Gp::fit(&table.x, need_targets()?, &GP, &mut step)?)
         }
         Method::Mlp => {
             let opts = MlpOptions {
@@ -363,25 +336,7 @@ pub(super) fn fit_final(
                 m.scale,
             )
         }
-        Method::Average => {
-            let mut fitted = Vec::with_capacity(members.len());
-            for m in members {
-                let (tables, feature_mean, feature_scale) =
-                    fit_final(table, m, targets, classes, &[], progress)?;
-                fitted.push(Member {
-                    method: m.method,
-                    hyperparameters: m.hyperparameters.clone(),
-                    feature_mean,
-                    feature_scale,
-                    tables,
-                });
-            }
-            let (mean, scale) = fitted
-                .first()
-                .map(|m| (m.feature_mean.clone(), m.feature_scale.clone()))
-                .ok_or_else(|| usage("an average of no regressor"))?;
-            (Tables::Average { members: fitted }, mean, scale)
-        }
+        Method::Average => average_tables(table, members, targets, classes, progress)?,
         Method::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
@@ -406,6 +361,65 @@ pub(super) fn fit_final(
             )
         }
     })
+}
+
+/// A fitted Gaussian process's tables and standardisation: its support rows scaled back by
+/// the length scales, the predictor's scales the features' spreads over them.
+fn gp_tables(m: Gp) -> (Tables, Vec<f64>, Vec<f64>) {
+    let k = &m.predictor;
+    let scale = k
+        .scale
+        .iter()
+        .zip(&m.length_scales)
+        .map(|(s, l)| s / l)
+        .collect();
+    (
+        Tables::Gp {
+            support: (0..k.support.nrows())
+                .map(|i| {
+                    (k.support.row(i).iter())
+                        .zip(&m.length_scales)
+                        .map(|(v, l)| v * l)
+                        .collect()
+                })
+                .collect(),
+            alpha: regress::rows3(&k.alpha),
+            intercept: k.intercept,
+            length_scales: m.length_scales.clone(),
+            signal_variance: m.signal_variance,
+            noise_variance: m.noise_variance,
+        },
+        k.mean.clone(),
+        scale,
+    )
+}
+
+/// An average's tables: each of its `members` fitted on every row ([`fit_final`]), the
+/// standardisation its first member's.
+fn average_tables(
+    table: &Table,
+    members: &[Candidate],
+    targets: Option<&[Target3]>,
+    classes: Option<&(Labels, ClassInfo)>,
+    progress: Progress<'_>,
+) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
+    let mut fitted = Vec::with_capacity(members.len());
+    for m in members {
+        let (tables, feature_mean, feature_scale) =
+            fit_final(table, m, targets, classes, &[], progress)?;
+        fitted.push(Member {
+            method: m.method,
+            hyperparameters: m.hyperparameters.clone(),
+            feature_mean,
+            feature_scale,
+            tables,
+        });
+    }
+    let (mean, scale) = fitted
+        .first()
+        .map(|m| (m.feature_mean.clone(), m.feature_scale.clone()))
+        .ok_or_else(|| usage("an average of no regressor"))?;
+    Ok((Tables::Average { members: fitted }, mean, scale))
 }
 
 /// A model rebuilt from its tables, ready to predict.

@@ -119,96 +119,30 @@ pub fn train(
         table
     };
     let n = table.rows();
-    let groups = table.group_index();
-    let grouped = groups.as_ref().is_some_and(|(_, names)| names.len() >= 2);
-    let k = if grouped {
-        groups.as_ref().map_or(0, |(_, names)| names.len())
-    } else {
-        opts.folds
-    };
-    if !grouped && n < 2 {
-        return Err(usage(format!(
-            "{n} training row(s): cross-validation needs at least 2 (more rows with --rows)"
-        )));
-    }
-    if !grouped && (opts.folds < 2 || opts.folds > n) {
-        return Err(usage(format!(
-            "{} folds for {n} training rows: use 2 to {n}",
-            opts.folds
-        )));
-    }
-    let scheme = if grouped {
-        CvScheme::Groups
-    } else if opts.scheme == CvScheme::Groups {
-        return Err(usage(
-            "leave-one-group-out cross-validation needs each row's group (--groups)",
-        ));
-    } else {
-        opts.scheme
-    };
-    let fold_of = |labels: Option<&[u16]>| -> Vec<usize> {
-        match &groups {
-            Some((index, _)) if grouped => index.clone(),
-            _ => folds(n, k, scheme, labels, opts.seed),
-        }
-    };
+    let cv = Cv::plan(table, opts)?;
     let targets = table.targets();
     let classes = class_targets(table, opts.grid)?;
-    let methods: Vec<Method> = match choice {
-        Choice::One(m) => vec![m],
-        Choice::Auto if targets.is_some() && opts.grid.is_none() => {
-            vec![
-                Method::Ridge,
-                Method::Knn,
-                Method::KernelRidge,
-                Method::Mlp,
-                Method::Gp,
-            ]
-        }
-        Choice::Auto => vec![Method::Lda, Method::Qda],
-    };
-    let mut search: Vec<Candidate> = Vec::new();
-    for &method in &methods {
-        let found = if method.is_classifier() {
-            let (labels, _) = classes.as_ref().ok_or_else(|| {
-                usage(format!(
-                    "{} needs class labels: give a label column, or make classes from the \
-                     positions with a grid (--grid 7x7)",
-                    method.name()
-                ))
-            })?;
-            search_classifier(
-                table,
-                method,
-                labels,
-                &fold_of(Some(&labels.index)),
-                progress,
-            )?
-        } else {
-            let t = targets.as_ref().ok_or_else(|| {
-                usage(format!(
-                    "{} predicts positions: the targets need x and y columns (the data has \
-                     only class labels: use qda or lda)",
-                    method.name()
-                ))
-            })?;
-            search_regressor(&table.x, t, method, &fold_of(None), grouped, progress)?
-        };
-        search.extend(found);
-    }
+    let mut search = search_all(
+        table,
+        choice,
+        opts,
+        &cv,
+        (targets.as_deref(), classes.as_ref()),
+        progress,
+    )?;
     // Best first; a candidate whose fit on every row fails (a covariance that cross-validated
     // but is singular on the whole set) gives way to the next. Without groups nothing in the
     // rows shows a new session, so regressors are ranked by their error with the held-out
     // channels drifted: a model that latches onto a few channels, or needs every channel as it
     // was, loses there what it would lose on a new session.
-    let by_drift = !grouped;
+    let by_drift = !cv.grouped;
     let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
     ranked.sort_by(|a, b| a.choice_loss(by_drift).total_cmp(&b.choice_loss(by_drift)));
     let mut notes: Vec<String> = Vec::new();
     if let Some(note) = drift_note(&ranked, by_drift) {
         notes.push(note);
     }
-    if !grouped
+    if !cv.grouped
         && choice == Choice::Auto
         && let Some(steadier) = steadiest_close(&ranked, by_drift)
     {
@@ -216,99 +150,46 @@ pub fn train(
         ranked.insert(0, steadier.0);
     }
     let average = match (&targets, choice) {
-        (Some(t), Choice::Auto) if opts.grid.is_none() => {
-            average_of_best(&ranked, t, &fold_of(None), grouped, by_drift)
-        }
+        (Some(t), Choice::Auto) if opts.grid.is_none() => average_of_best(
+            &ranked,
+            t,
+            &cv.folds(n, None, opts.seed),
+            cv.grouped,
+            by_drift,
+        ),
         _ => None,
     };
     let members = average.as_ref().map_or(Vec::new(), |(_, m)| m.clone());
     if let Some((avg, members)) = &average {
-        notes.push(format!(
-            "the mean of {}'s predictions cross-validated at {:.2} mm{} against {:.2} for {} \
-             alone: chose their average",
-            members
-                .iter()
-                .map(|c| c.method.name())
-                .collect::<Vec<_>>()
-                .join(", "),
-            avg.choice_loss(by_drift),
-            if by_drift {
-                " with channels drifted"
-            } else {
-                ""
-            },
-            members
-                .first()
-                .map_or(f64::NAN, |c| c.choice_loss(by_drift)),
-            members.first().map_or("", |c| c.method.name())
-        ));
+        notes.push(average_note(avg, members, by_drift));
     }
     let average = average.map(|(c, _)| c);
     if let Some(avg) = &average {
         ranked.insert(0, avg);
     }
-    let mut fitted = None;
-    let mut last_error = None;
-    for best in ranked {
-        let lda = as_lda_if_equal(best, table.x.ncols(), classes.as_ref().map(|(l, _)| l));
-        let best = lda.as_ref().unwrap_or(best);
-        progress(&format!("fitting {}", best.method.name()), 0, 1);
-        match fit_final(
-            table,
-            best,
-            targets.as_deref(),
-            classes.as_ref(),
-            &members,
-            progress,
-        ) {
-            Ok(f) => {
-                fitted = Some((best.clone(), f, lda.is_some()));
-                break;
-            }
-            Err(e) => last_error = Some(e),
-        }
-    }
-    let (best, (tables, mean, scale), qda_is_lda) = fitted.ok_or_else(|| {
-        last_error.unwrap_or_else(|| {
-            TabularError::Fit(FitError::Shape(
-                "no candidate could be fitted in cross-validation".into(),
-            ))
-        })
-    })?;
-    progress(&format!("fitting {}", best.method.name()), 1, 1);
+    let (best, (tables, mean, scale), qda_is_lda) = fit_first(
+        &ranked,
+        table,
+        (targets.as_deref(), classes.as_ref()),
+        &members,
+        progress,
+    )?;
     search.extend(average.clone());
     for c in &mut search {
         c.out_of_fold = None;
     }
-    let lda_note = qda_is_lda.then(|| {
+    if qda_is_lda {
         // Its cross-validation is the QDA's: the same classifier in every fold.
         search.push(best.clone());
-        format!(
+        notes.push(format!(
             "qda's best shrinkage is 1 toward the pooled covariance: every class then has the \
              pooled covariance, which is lda (the same decisions); saved the lda, one \
              covariance instead of {}",
             classes.as_ref().map_or(0, |(l, _)| l.names.len())
-        )
-    });
-    let mut hyperparameters = best.hyperparameters.clone();
-    if let Tables::Gp {
-        length_scales,
-        signal_variance,
-        noise_variance,
-        ..
-    } = &tables
-    {
-        let mut sorted = length_scales.clone();
-        sorted.sort_by(f64::total_cmp);
-        hyperparameters.extend([
-            ("signal_variance".to_string(), *signal_variance),
-            ("noise_variance".to_string(), *noise_variance),
-            (
-                "length_scale_median".to_string(),
-                sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
-            ),
-        ]);
+        ));
     }
+    let mut hyperparameters = best.hyperparameters.clone();
+    hyperparameters.extend(fitted_hyperparameters(&tables));
     Ok(TableModel {
         format: "et-table-model".into(),
         version: 1,
@@ -325,20 +206,207 @@ pub fn train(
         },
         hyperparameters,
         search,
-        cv_folds: k,
-        cv_scheme: scheme,
+        cv_folds: cv.k,
+        cv_scheme: cv.scheme,
         trained_rows: [table.first_row, table.first_row + n],
         source: table.description.clone(),
         fit_seconds: started.elapsed().as_secs_f64(),
         chosen_by_drift: by_drift && !best.method.is_classifier(),
-        note: {
-            notes.extend(lda_note);
-            (!notes.is_empty()).then(|| notes.join("; "))
-        },
+        note: (!notes.is_empty()).then(|| notes.join("; ")),
         tables,
         per_group: opts.per_group,
         reference: None,
     })
+}
+
+/// How a training's rows are cross-validated: leaving each group out when the rows name two
+/// groups or more, else `opts.folds` folds by `opts.scheme`.
+struct Cv {
+    /// Folds (groups when grouped).
+    k: usize,
+    scheme: CvScheme,
+    grouped: bool,
+    /// Each row's group and the groups' names, when the rows have groups.
+    groups: Option<(Vec<usize>, Vec<String>)>,
+}
+
+impl Cv {
+    /// The cross-validation of `table`'s rows under `opts`.
+    fn plan(table: &Table, opts: &TrainOptions) -> Result<Self, TabularError> {
+        let n = table.rows();
+        let groups = table.group_index();
+        let grouped = groups.as_ref().is_some_and(|(_, names)| names.len() >= 2);
+        let k = if grouped {
+            groups.as_ref().map_or(0, |(_, names)| names.len())
+        } else {
+            opts.folds
+        };
+        if !grouped && n < 2 {
+            return Err(usage(format!(
+                "{n} training row(s): cross-validation needs at least 2 (more rows with --rows)"
+            )));
+        }
+        if !grouped && (opts.folds < 2 || opts.folds > n) {
+            return Err(usage(format!(
+                "{} folds for {n} training rows: use 2 to {n}",
+                opts.folds
+            )));
+        }
+        let scheme = if grouped {
+            CvScheme::Groups
+        } else if opts.scheme == CvScheme::Groups {
+            return Err(usage(
+                "leave-one-group-out cross-validation needs each row's group (--groups)",
+            ));
+        } else {
+            opts.scheme
+        };
+        Ok(Self {
+            k,
+            scheme,
+            grouped,
+            groups,
+        })
+    }
+
+    /// Each of the `n` rows' fold: its group when grouped, else by the scheme (stratified by
+    /// `labels` when given).
+    fn folds(&self, n: usize, labels: Option<&[u16]>, seed: u64) -> Vec<usize> {
+        match &self.groups {
+            Some((index, _)) if self.grouped => index.clone(),
+            _ => folds(n, self.k, self.scheme, labels, seed),
+        }
+    }
+}
+
+/// Every candidate of `choice`'s methods, cross-validated by `cv`: the classifiers on the
+/// class labels, the regressors on the positions (`targets`).
+fn search_all(
+    table: &Table,
+    choice: Choice,
+    opts: &TrainOptions,
+    cv: &Cv,
+    (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
+    progress: Progress<'_>,
+) -> Result<Vec<Candidate>, TabularError> {
+    let methods: Vec<Method> = match choice {
+        Choice::One(m) => vec![m],
+        Choice::Auto if targets.is_some() && opts.grid.is_none() => {
+            vec![
+                Method::Ridge,
+                Method::Knn,
+                Method::KernelRidge,
+                Method::Mlp,
+                Method::Gp,
+            ]
+        }
+        Choice::Auto => vec![Method::Lda, Method::Qda],
+    };
+    let n = table.rows();
+    let mut search: Vec<Candidate> = Vec::new();
+    for &method in &methods {
+        let found = if method.is_classifier() {
+            let (labels, _) = classes.ok_or_else(|| {
+                usage(format!(
+                    "{} needs class labels: give a label column, or make classes from the \
+                     positions with a grid (--grid 7x7)",
+                    method.name()
+                ))
+            })?;
+            let fold = cv.folds(n, Some(&labels.index), opts.seed);
+            search_classifier(table, method, labels, &fold, progress)?
+        } else {
+            let t = targets.ok_or_else(|| {
+                usage(format!(
+                    "{} predicts positions: the targets need x and y columns (the data has \
+                     only class labels: use qda or lda)",
+                    method.name()
+                ))
+            })?;
+            let fold = cv.folds(n, None, opts.seed);
+            search_regressor(&table.x, t, method, &fold, cv.grouped, progress)?
+        };
+        search.extend(found);
+    }
+    Ok(search)
+}
+
+/// What the training says when it chose the average `avg` of `members`.
+fn average_note(avg: &Candidate, members: &[Candidate], by_drift: bool) -> String {
+    format!(
+        "the mean of {}'s predictions cross-validated at {:.2} mm{} against {:.2} for {} \
+         alone: chose their average",
+        members
+            .iter()
+            .map(|c| c.method.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        avg.choice_loss(by_drift),
+        if by_drift {
+            " with channels drifted"
+        } else {
+            ""
+        },
+        members
+            .first()
+            .map_or(f64::NAN, |c| c.choice_loss(by_drift)),
+        members.first().map_or("", |c| c.method.name())
+    )
+}
+
+/// The first of the `ranked` candidates whose fit on every row succeeds ([`fit_final`]): the
+/// candidate (a QDA at shrinkage 1 saved as the LDA it is), its tables and standardisation,
+/// and whether it was so turned into an LDA.
+#[allow(clippy::type_complexity)]
+fn fit_first(
+    ranked: &[&Candidate],
+    table: &Table,
+    (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
+    members: &[Candidate],
+    progress: Progress<'_>,
+) -> Result<(Candidate, (Tables, Vec<f64>, Vec<f64>), bool), TabularError> {
+    let mut last_error = None;
+    for &best in ranked {
+        let lda = as_lda_if_equal(best, table.x.ncols(), classes.map(|(l, _)| l));
+        let best = lda.as_ref().unwrap_or(best);
+        progress(&format!("fitting {}", best.method.name()), 0, 1);
+        match fit_final(table, best, targets, classes, members, progress) {
+            Ok(f) => {
+                progress(&format!("fitting {}", best.method.name()), 1, 1);
+                return Ok((best.clone(), f, lda.is_some()));
+            }
+            Err(e) => last_error = Some(e),
+        }
+    }
+    Err(last_error.unwrap_or_else(|| {
+        TabularError::Fit(FitError::Shape(
+            "no candidate could be fitted in cross-validation".into(),
+        ))
+    }))
+}
+
+/// The hyperparameters a fit learns beside those searched: a Gaussian process's signal and
+/// noise variances and its length scales' median.
+fn fitted_hyperparameters(tables: &Tables) -> Vec<(String, f64)> {
+    let Tables::Gp {
+        length_scales,
+        signal_variance,
+        noise_variance,
+        ..
+    } = tables
+    else {
+        return Vec::new();
+    };
+    let mut sorted = length_scales.clone();
+    sorted.sort_by(f64::total_cmp);
+    vec![
+        ("signal_variance".to_string(), *signal_variance),
+        ("noise_variance".to_string(), *noise_variance),
+        (
+            "length_scale_median".to_string(),
+            sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
+        ),
+    ]
 }
 
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
@@ -404,45 +472,7 @@ pub(super) fn search_regressor(
 ) -> Result<Vec<Candidate>, TabularError> {
     let n = x.nrows();
     let k = fold.iter().max().map_or(0, |m| m + 1);
-    let grid: Vec<BTreeMap<String, f64>> = match method {
-        Method::Ridge => RIDGE_LAMBDAS
-            .iter()
-            .map(|&l| params(&[("lambda", l)]))
-            .collect(),
-        Method::KernelRidge => KRR_WIDTHS
-            .iter()
-            .flat_map(|&w| {
-                KRR_LAMBDAS
-                    .iter()
-                    .map(move |&l| params(&[("width", w), ("lambda", l)]))
-            })
-            .collect(),
-        Method::Knn => KNN_KS
-            .iter()
-            .flat_map(|&k| [0.0, 1.0].map(|d| params(&[("k", k as f64), ("distance_weighted", d)])))
-            .collect(),
-        Method::Gp => vec![params(&[
-            ("learn_rows", GP.learn_rows.min(n) as f64),
-            ("search_learn_rows", GP_SEARCH.learn_rows.min(n) as f64),
-            ("iterations", GP.iterations as f64),
-        ])],
-        Method::Mlp => MLP_ACTIVATIONS
-            .iter()
-            .flat_map(|&a| {
-                MLP_L2S.iter().map(move |&l2| {
-                    let mut h = params(&[
-                        ("l2", l2),
-                        ("tanh", f64::from(u8::from(a == Activation::Tanh))),
-                    ]);
-                    for (i, w) in MLP_HIDDEN.iter().enumerate() {
-                        h.insert(format!("hidden_{}", i + 1), *w as f64);
-                    }
-                    h
-                })
-            })
-            .collect(),
-        Method::Qda | Method::Lda | Method::Average => return Err(usage("not a regressor")),
-    };
+    let grid = regressor_grid(method, n)?;
     // Out-of-fold predictions of every candidate.
     let mut pred: Vec<Vec<Option<Target3>>> = vec![vec![None; n]; grid.len()];
     let mut pred_drifted = pred.clone();
@@ -486,67 +516,8 @@ pub(super) fn search_regressor(
             xv.clone(),
             drifted(&xv, &spread, DRIFT_GAIN, DRIFT_OFFSET, seed_of(f)),
         ];
-        let fold_pred: Vec<Option<[Vec<Target3>; 2]>> = match method {
-            Method::Ridge => Ridge::fit_path(&xt, &tt, &RIDGE_LAMBDAS)?
-                .into_iter()
-                .map(|m| m.map(|m| sets.clone().map(|x| m.predict_many(&x))))
-                .collect(),
-            Method::KernelRidge => {
-                let fits =
-                    KernelRidge::fit_grid(&xt, &tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
-                // Every fit of the grid shares the support: the held-out rows' distances once.
-                let d2 = fits
-                    .iter()
-                    .flatten()
-                    .next()
-                    .map(|m| sets.clone().map(|x| m.distances(&x)));
-                fits.into_iter()
-                    .map(|m| {
-                        let (m, d2) = (m?, d2.as_ref()?);
-                        Some(d2.each_ref().map(|d| m.predict_from_distances(d)))
-                    })
-                    .collect()
-            }
-            Method::Knn => {
-                let model = Knn::fit(&xt, &tt, 1, Weighting::Uniform)?;
-                let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
-                let near = sets.clone().map(|x| model.neighbours(&x, k_max));
-                grid.iter()
-                    .map(|h| {
-                        let k = h.get("k").copied().unwrap_or(1.0) as usize;
-                        let w = if h.get("distance_weighted").copied().unwrap_or(0.0) > 0.5 {
-                            Weighting::Distance
-                        } else {
-                            Weighting::Uniform
-                        };
-                        Some(
-                            near.each_ref().map(|near| {
-                                near.iter().map(|nr| model.combine(nr, k, w)).collect()
-                            }),
-                        )
-                    })
-                    .collect()
-            }
-            Method::Gp => {
-                let mut step = |done: usize, _: usize| progress(&what, f * steps + done, total);
-                vec![
-                    Gp::fit(&xt, &tt, &GP_SEARCH, &mut step)
-                        .ok()
-                        .map(|m| sets.clone().map(|x| m.predict_many(&x))),
-                ]
-            }
-            Method::Mlp => grid
-                .iter()
-                .enumerate()
-                .map(|(c, h)| {
-                    progress(&what, f * steps + c, total);
-                    Mlp::fit(&xt, &tt, &mlp_options(h))
-                        .ok()
-                        .map(|m| sets.clone().map(|x| m.predict_many(&x)))
-                })
-                .collect(),
-            Method::Qda | Method::Lda | Method::Average => Vec::new(),
-        };
+        let mut tick = |done: usize| progress(&what, f * steps + done, total);
+        let fold_pred = fold_predictions(method, &grid, (&xt, &tt), &sets, &mut tick)?;
         for (c, p) in fold_pred.into_iter().enumerate() {
             let (Some([p, q]), Some(slot), Some(drifted)) =
                 (p, pred.get_mut(c), pred_drifted.get_mut(c))
@@ -585,4 +556,121 @@ pub(super) fn search_regressor(
             }
         })
         .collect())
+}
+
+/// The hyperparameter candidates a regressor's search tries on `n` rows.
+fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>, TabularError> {
+    Ok(match method {
+        Method::Ridge => RIDGE_LAMBDAS
+            .iter()
+            .map(|&l| params(&[("lambda", l)]))
+            .collect(),
+        Method::KernelRidge => KRR_WIDTHS
+            .iter()
+            .flat_map(|&w| {
+                KRR_LAMBDAS
+                    .iter()
+                    .map(move |&l| params(&[("width", w), ("lambda", l)]))
+            })
+            .collect(),
+        Method::Knn => KNN_KS
+            .iter()
+            .flat_map(|&k| [0.0, 1.0].map(|d| params(&[("k", k as f64), ("distance_weighted", d)])))
+            .collect(),
+        Method::Gp => vec![params(&[
+            ("learn_rows", GP.learn_rows.min(n) as f64),
+            ("search_learn_rows", GP_SEARCH.learn_rows.min(n) as f64),
+            ("iterations", GP.iterations as f64),
+        ])],
+        Method::Mlp => MLP_ACTIVATIONS
+            .iter()
+            .flat_map(|&a| {
+                MLP_L2S.iter().map(move |&l2| {
+                    let mut h = params(&[
+                        ("l2", l2),
+                        ("tanh", f64::from(u8::from(a == Activation::Tanh))),
+                    ]);
+                    for (i, w) in MLP_HIDDEN.iter().enumerate() {
+                        h.insert(format!("hidden_{}", i + 1), *w as f64);
+                    }
+                    h
+                })
+            })
+            .collect(),
+        Method::Qda | Method::Lda | Method::Average => return Err(usage("not a regressor")),
+    })
+}
+
+/// One fold's predictions by every candidate of `grid`, fitted on the fold's training rows
+/// (`xt`, `tt`), of each of the held-out `sets` (as measured, drifted); None for a candidate
+/// whose fit failed. `tick(done)` reports the steps of a long fold (the Gaussian process's
+/// iterations, the perceptron's candidates).
+#[allow(clippy::type_complexity)]
+fn fold_predictions(
+    method: Method,
+    grid: &[BTreeMap<String, f64>],
+    (xt, tt): (&DMatrix<f64>, &[Target3]),
+    sets: &[DMatrix<f64>; 2],
+    tick: &mut dyn FnMut(usize),
+) -> Result<Vec<Option<[Vec<Target3>; 2]>>, TabularError> {
+    Ok(match method {
+        Method::Ridge => Ridge::fit_path(xt, tt, &RIDGE_LAMBDAS)?
+            .into_iter()
+            .map(|m| m.map(|m| sets.each_ref().map(|x| m.predict_many(x))))
+            .collect(),
+        Method::KernelRidge => {
+            let fits =
+                KernelRidge::fit_grid(xt, tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
+            // Every fit of the grid shares the support: the held-out rows' distances once.
+            let d2 = fits
+                .iter()
+                .flatten()
+                .next()
+                .map(|m| sets.each_ref().map(|x| m.distances(x)));
+            fits.into_iter()
+                .map(|m| {
+                    let (m, d2) = (m?, d2.as_ref()?);
+                    Some(d2.each_ref().map(|d| m.predict_from_distances(d)))
+                })
+                .collect()
+        }
+        Method::Knn => {
+            let model = Knn::fit(xt, tt, 1, Weighting::Uniform)?;
+            let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
+            let near = sets.each_ref().map(|x| model.neighbours(x, k_max));
+            grid.iter()
+                .map(|h| {
+                    let k = h.get("k").copied().unwrap_or(1.0) as usize;
+                    let w = if h.get("distance_weighted").copied().unwrap_or(0.0) > 0.5 {
+                        Weighting::Distance
+                    } else {
+                        Weighting::Uniform
+                    };
+                    Some(
+                        near.each_ref()
+                            .map(|near| near.iter().map(|nr| model.combine(nr, k, w)).collect()),
+                    )
+                })
+                .collect()
+        }
+        Method::Gp => {
+            let mut step = |done: usize, _: usize| tick(done);
+            vec![
+                Gp::fit(xt, tt, &GP_SEARCH, &mut step)
+                    .ok()
+                    .map(|m| sets.each_ref().map(|x| m.predict_many(x))),
+            ]
+        }
+        Method::Mlp => grid
+            .iter()
+            .enumerate()
+            .map(|(c, h)| {
+                tick(c);
+                Mlp::fit(xt, tt, &mlp_options(h))
+                    .ok()
+                    .map(|m| sets.each_ref().map(|x| m.predict_many(x)))
+            })
+            .collect(),
+        Method::Qda | Method::Lda | Method::Average => Vec::new(),
+    })
 }

@@ -54,66 +54,19 @@ impl TableModel {
         if self.feature_scale.iter().any(|&s| s <= 0.0) {
             return Err("feature_scale must be positive".into());
         }
-        let matrix = |rows: &[Vec<f64>], what: &str| -> Result<Mat<f64>, String> {
-            if rows.is_empty() || rows.iter().any(|r| r.len() != p) {
-                return Err(format!("{what}: every row needs {p} values"));
-            }
-            if rows.iter().flatten().any(|v| !v.is_finite()) {
-                return Err(format!("{what}: a non-finite value"));
-            }
-            Ok(Mat::from_fn(rows.len(), p, |i, j| {
-                rows.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
-            }))
-        };
-        let finite3 = |v: &[[f64; 3]], what: &str| -> Result<(), String> {
-            if v.iter().flatten().all(|x| x.is_finite()) {
-                Ok(())
-            } else {
-                Err(format!("{what}: a non-finite value"))
-            }
-        };
-        let method_ok = |m: Method| {
-            if m == self.method {
-                Ok(())
-            } else {
-                Err(format!(
-                    "method {} with the tables of {}",
-                    self.method.name(),
-                    m.name()
-                ))
-            }
-        };
+        let tables_of = self.tables.method();
+        if tables_of != self.method {
+            return Err(format!(
+                "method {} with the tables of {}",
+                self.method.name(),
+                tables_of.name()
+            ));
+        }
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
-                let (method, mk) = match kind {
-                    ModelKind::Qda => (Method::Qda, *kind),
-                    ModelKind::Lda => (Method::Lda, *kind),
-                };
-                method_ok(method)?;
-                let info = self
-                    .classes
-                    .as_ref()
-                    .ok_or("a classifier without 'classes'")?;
-                if info.names.len() != classes.len()
-                    || info
-                        .centres_mm
-                        .as_ref()
-                        .is_some_and(|c| c.len() != classes.len())
-                {
-                    return Err("classes.names (and centres_mm) must list every class".into());
-                }
-                let fitted = fitted_from_records(
-                    mk,
-                    &self.feature_mean,
-                    &self.feature_scale,
-                    classes,
-                    info.centres_mm.as_deref().unwrap_or(&[]),
-                )
-                .map_err(|e| e.to_string())?;
-                Ready::Discriminant(fitted)
+                Ready::Discriminant(self.ready_discriminant(*kind, classes)?)
             }
             Tables::Ridge { weights, intercept } => {
-                method_ok(Method::Ridge)?;
                 if weights.len() != p {
                     return Err(format!(
                         "ridge: {} weight rows for {p} features",
@@ -141,8 +94,7 @@ impl TableModel {
                 alpha,
                 intercept,
             } => {
-                method_ok(Method::KernelRidge)?;
-                let support = matrix(support, "kernel-ridge support")?;
+                let support = matrix(support, p, "kernel-ridge support")?;
                 if alpha.len() != support.nrows() {
                     return Err("kernel-ridge: one alpha row per support row".into());
                 }
@@ -154,64 +106,19 @@ impl TableModel {
                 Ready::KernelRidge(KernelRidge {
                     mean: self.feature_mean.clone(),
                     scale: self.feature_scale.clone(),
-                    alpha: Mat::from_fn(alpha.len(), 3, |i, c| {
-                        alpha.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
-                    }),
+                    alpha: rows3_matrix(alpha),
                     support,
                     gamma: *gamma,
                     intercept: *intercept,
                 })
             }
-            Tables::Gp {
-                length_scales,
-                signal_variance,
-                noise_variance,
-                support,
-                alpha,
-                intercept,
-            } => {
-                method_ok(Method::Gp)?;
-                let support = matrix(support, "gp support")?;
-                if alpha.len() != support.nrows() || length_scales.len() != p {
-                    return Err(
-                        "gp: one alpha row per support row, one length scale per feature".into(),
-                    );
-                }
-                finite3(alpha, "gp alpha")?;
-                finite3(&[*intercept], "gp intercept")?;
-                let positive = |v: f64| v.is_finite() && v > 0.0;
-                if !(length_scales.iter().all(|&l| positive(l))
-                    && positive(*signal_variance)
-                    && positive(*noise_variance))
-                {
-                    return Err("gp: length scales and variances must be positive".into());
-                }
-                // The posterior mean is kernel ridge in the length-scaled space.
-                Ready::KernelRidge(KernelRidge {
-                    mean: self.feature_mean.clone(),
-                    scale: self
-                        .feature_scale
-                        .iter()
-                        .zip(length_scales)
-                        .map(|(s, l)| s * l)
-                        .collect(),
-                    alpha: Mat::from_fn(alpha.len(), 3, |i, c| {
-                        alpha.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
-                    }),
-                    support: Mat::from_fn(support.nrows(), p, |i, j| {
-                        support[(i, j)] / length_scales.get(j).copied().unwrap_or(1.0)
-                    }),
-                    gamma: 0.5,
-                    intercept: *intercept,
-                })
-            }
+            Tables::Gp { .. } => Ready::KernelRidge(self.ready_gp()?),
             Tables::Mlp {
                 activation,
                 layers,
                 target_mean,
                 target_scale,
             } => {
-                method_ok(Method::Mlp)?;
                 finite3(&[*target_mean, *target_scale], "mlp target standardisation")?;
                 Ready::Mlp(
                     Mlp::from_dense(
@@ -225,31 +132,14 @@ impl TableModel {
                     .map_err(|e| format!("mlp: {e}"))?,
                 )
             }
-            Tables::Average { members } => {
-                method_ok(Method::Average)?;
-                if members.len() < 2
-                    || members
-                        .iter()
-                        .any(|m| m.method == Method::Average || m.method.is_classifier())
-                {
-                    return Err("average: two regressors or more, none an average".into());
-                }
-                let models = self.members();
-                for (i, m) in models.iter().enumerate() {
-                    m.ready().map_err(|e| {
-                        format!("average member {} ({}): {e}", i + 1, m.method.name())
-                    })?;
-                }
-                Ready::Average(models)
-            }
+            Tables::Average { members } => Ready::Average(self.ready_average(members)?),
             Tables::Knn {
                 k,
                 weighting,
                 support,
                 targets,
             } => {
-                method_ok(Method::Knn)?;
-                let support = matrix(support, "knn support")?;
+                let support = matrix(support, p, "knn support")?;
                 if targets.len() != support.nrows() || *k == 0 || *k > targets.len() {
                     return Err("knn: one target per support row, 1 <= k <= rows".into());
                 }
@@ -264,5 +154,148 @@ impl TableModel {
                 })
             }
         })
+    }
+
+    /// A discriminant's tables (`classes`, one per class) and this model's class names and
+    /// centres, rebuilt.
+    fn ready_discriminant(
+        &self,
+        kind: ModelKind,
+        classes: &[ClassRecord],
+    ) -> Result<Fitted, String> {
+        let info = self
+            .classes
+            .as_ref()
+            .ok_or("a classifier without 'classes'")?;
+        if info.names.len() != classes.len()
+            || info
+                .centres_mm
+                .as_ref()
+                .is_some_and(|c| c.len() != classes.len())
+        {
+            return Err("classes.names (and centres_mm) must list every class".into());
+        }
+        fitted_from_records(
+            kind,
+            &self.feature_mean,
+            &self.feature_scale,
+            classes,
+            info.centres_mm.as_deref().unwrap_or(&[]),
+        )
+        .map_err(|e| e.to_string())
+    }
+
+    /// A Gaussian process's tables rebuilt as the kernel ridge its posterior mean is, in the
+    /// length-scaled space.
+    fn ready_gp(&self) -> Result<KernelRidge, String> {
+        let Tables::Gp {
+            length_scales,
+            signal_variance,
+            noise_variance,
+            support,
+            alpha,
+            intercept,
+        } = &self.tables
+        else {
+            return Err("gp: not a gp's tables".into());
+        };
+        let p = self.features();
+        let support = matrix(support, p, "gp support")?;
+        if alpha.len() != support.nrows() || length_scales.len() != p {
+            return Err("gp: one alpha row per support row, one length scale per feature".into());
+        }
+        finite3(alpha, "gp alpha")?;
+        finite3(&[*intercept], "gp intercept")?;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !(length_scales.iter().all(|&l| positive(l))
+            && positive(*signal_variance)
+            && positive(*noise_variance))
+        {
+            return Err("gp: length scales and variances must be positive".into());
+        }
+        Ok(KernelRidge {
+            mean: self.feature_mean.clone(),
+            scale: self
+                .feature_scale
+                .iter()
+                .zip(length_scales)
+                .map(|(s, l)| s * l)
+                .collect(),
+            alpha: rows3_matrix(alpha),
+            support: Mat::from_fn(support.nrows(), p, |i, j| {
+                support[(i, j)] / length_scales.get(j).copied().unwrap_or(1.0)
+            }),
+            gamma: 0.5,
+            intercept: *intercept,
+        })
+    }
+
+    /// An average's members, each checked as a model of its own.
+    fn ready_average(&self, members: &[Member]) -> Result<Vec<TableModel>, String> {
+        if members.len() < 2
+            || members
+                .iter()
+                .any(|m| m.method == Method::Average || m.method.is_classifier())
+        {
+            return Err("average: two regressors or more, none an average".into());
+        }
+        let models = self.members();
+        for (i, m) in models.iter().enumerate() {
+            m.ready()
+                .map_err(|e| format!("average member {} ({}): {e}", i + 1, m.method.name()))?;
+        }
+        Ok(models)
+    }
+}
+
+impl Tables {
+    /// The method these tables are of.
+    #[must_use]
+    pub fn method(&self) -> Method {
+        match self {
+            Tables::Discriminant {
+                kind: ModelKind::Qda,
+                ..
+            } => Method::Qda,
+            Tables::Discriminant {
+                kind: ModelKind::Lda,
+                ..
+            } => Method::Lda,
+            Tables::Ridge { .. } => Method::Ridge,
+            Tables::KernelRidge { .. } => Method::KernelRidge,
+            Tables::Gp { .. } => Method::Gp,
+            Tables::Mlp { .. } => Method::Mlp,
+            Tables::Average { .. } => Method::Average,
+            Tables::Knn { .. } => Method::Knn,
+        }
+    }
+}
+
+/// `rows` (each p values, finite) as an n x p matrix; `what` names the table in the error.
+fn matrix(rows: &[Vec<f64>], p: usize, what: &str) -> Result<Mat<f64>, String> {
+    if rows.is_empty() || rows.iter().any(|r| r.len() != p) {
+        return Err(format!("{what}: every row needs {p} values"));
+    }
+    if rows.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("{what}: a non-finite value"));
+    }
+    Ok(Mat::from_fn(rows.len(), p, |i, j| {
+        rows.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
+    }))
+}
+
+/// Rows of three values as an n x 3 matrix.
+fn rows3_matrix(rows: &[[f64; 3]]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), 3, |i, c| {
+        rows.get(i).and_then(|a| a.get(c)).copied().unwrap_or(0.0)
+    })
+}
+
+/// Ok when every value of `v` is finite; `what` names the table in the error.
+fn finite3(v: &[[f64; 3]], what: &str) -> Result<(), String> {
+    if v.iter().flatten().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("{what}: a non-finite value"))
     }
 }
