@@ -29,7 +29,7 @@ use et_core::sheet::Sheet;
 use et_learn::model::Board;
 use et_recon::{
     AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PixelGrid, ReconError, Reconstructor,
-    Region, TOUCH_Z, default_threshold, touch_rule,
+    Region, SquaredRows, TOUCH_Z, default_threshold, touch_rule,
 };
 
 mod monitor;

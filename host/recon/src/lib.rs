@@ -54,7 +54,7 @@ pub use greit::{Greit, GreitOptions, Regularisation};
 pub use imager::Imager;
 pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
-pub use operator::FrameOperator;
+pub use operator::{FrameOperator, SquaredRows};
 pub use pixels::PixelGrid;
 pub use reconstructor::{
     AlphaRule, FrameNoise, Image, ImagingError, MeshPlan, Method, NoiseSource, Reconstructor,

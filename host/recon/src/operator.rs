@@ -10,7 +10,9 @@ use nalgebra::DMatrix;
 use crate::onestep::{OneStep, ReconError, product};
 
 mod panels;
+mod squared;
 pub use panels::{Panels, Stored};
+pub use squared::SquaredRows;
 
 /// A reconstruction matrix onto rows (triangles of the mesh, or pixels inside the sheet), P
 /// (rows x K), kept as two thin factors, P = L C with L (rows x q) and C (q x K), q the

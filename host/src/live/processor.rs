@@ -94,32 +94,9 @@ struct Projection {
     s: f64,
     /// Pixels inside the sheet x K, in thin factors.
     matrix: FrameOperator,
-    /// Its entries squared, P_pk^2 (row-major, pixels inside x K): a pixel's noise variance
-    /// is its row times the channels' variances, made for a touched frame's regions alone.
-    squares: Vec<f32>,
-}
-
-impl Projection {
-    /// The noise standard deviation of inside pixel `i` under channel variances `var` (K
-    /// values, V^2): sqrt(sum_k P_ik^2 var_k).
-    fn pixel_sd(&self, i: usize, var: &[f32]) -> Option<f64> {
-        let k = var.len();
-        let row = self.squares.get(i * k..(i + 1) * k)?;
-        // Eight running sums, so that the compiler keeps them in one vector register.
-        let mut sums = [0.0f32; 8];
-        let (head, tail) = row.split_at(k - k % 8);
-        for (p2, v) in head.chunks_exact(8).zip(var.chunks_exact(8)) {
-            for j in 0..8 {
-                sums[j] += p2[j] * v[j];
-            }
-        }
-        let rest: f32 = tail
-            .iter()
-            .zip(&var[k - k % 8..])
-            .map(|(p2, v)| p2 * v)
-            .sum();
-        Some(f64::from(sums.iter().sum::<f32>() + rest).sqrt())
-    }
+    /// Its entries squared: a pixel's noise under a touched frame's channel variances,
+    /// made for its regions' pixels alone.
+    squares: SquaredRows,
 }
 
 impl Projection {
@@ -146,11 +123,7 @@ impl Projection {
                 let (method_of, rule) = method.reconstruction(alpha, s);
                 recon.set_method(method_of, rule)?;
                 let matrix = recon.pixel_operator()?;
-                let dense = matrix.dense();
-                // Row-major: a pixel's row is contiguous (nalgebra stores columns).
-                let squares = (0..dense.nrows())
-                    .flat_map(|i| dense.row(i).iter().map(|p| p * p).collect::<Vec<_>>())
-                    .collect();
+                let squares = SquaredRows::of(&matrix);
                 Projection {
                     config: *config,
                     method,
@@ -612,7 +585,7 @@ impl Imaging<'_> {
             if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
                 return Some(f64::from(1.0 / inverse));
             }
-            self.projection.pixel_sd(i, &var)
+            self.projection.squares.sd(i, &var)
         })
     }
 

@@ -774,7 +774,10 @@ fn the_pixel_operator_equals_the_dense_pixel_rows_at_their_rank() {
             assert!((a - f64::from(*b)).abs() < 1e-4 * want.amax(), "{kind:?}");
         }
         let var: Vec<f64> = (0..k).map(|i| 1e-8 * (1.0 + (i % 5) as f64)).collect();
+        let var32: Vec<f32> = var.iter().map(|&v| v as f32).collect();
         let sd = op.noise_sd(&var).unwrap();
+        // The same noise a row at a time from the squared rows (the live pipeline's, f32).
+        let squares = et_recon::SquaredRows::of(&op);
         for (row, s) in sd.iter().enumerate() {
             let want: f64 = (0..k)
                 .map(|c| p[(row, c)].powi(2) * var[c])
@@ -784,10 +787,17 @@ fn the_pixel_operator_equals_the_dense_pixel_rows_at_their_rank() {
                 (s - want).abs() <= 1e-4 * want,
                 "{kind:?} pixel {row}: {s} vs {want}"
             );
+            let one = squares.sd(row, &var32).unwrap();
+            assert!(
+                (one - want).abs() <= 1e-4 * want,
+                "{kind:?} pixel {row}, squared row: {one} vs {want}"
+            );
         }
         assert!(op.apply(&dv32[1..], &mut out).is_err());
         assert!(op.apply(&dv32, &mut out[1..]).is_err());
         assert!(op.noise_sd(&var[1..]).is_err());
+        assert_eq!(squares.sd(0, &var32[1..]), None);
+        assert_eq!(squares.sd(op.rows(), &var32), None);
     }
 }
 
