@@ -335,77 +335,7 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         .first()
         .ok_or_else(|| bad(1, "empty file: no header".into()))?;
     let header: Header = serde_json::from_str(first).map_err(|e| bad(1, format!("header: {e}")))?;
-    if header.format != FORMAT {
-        return Err(bad(
-            1,
-            format!("format '{}' is not {FORMAT}", header.format),
-        ));
-    }
-    if header.version != VERSION {
-        return Err(bad(
-            1,
-            format!("version {} (this build reads {VERSION})", header.version),
-        ));
-    }
-    // The header must agree with itself: every reader takes K and L from the configuration.
-    let protocol = header
-        .config
-        .validate()
-        .map_err(|e| bad(1, format!("header config: {e}")))?;
-    if header.frame_len != protocol.frame_len() || header.electrodes != header.config.electrodes {
-        return Err(bad(
-            1,
-            format!(
-                "header says K = {} on {} electrodes, its config ({} on {}) gives K = {}",
-                header.frame_len,
-                header.electrodes,
-                header.config.protocol.name(),
-                header.config.electrodes,
-                protocol.frame_len()
-            ),
-        ));
-    }
-    // The columns say what each value is: they must be the protocol's, in its order (a
-    // reader images by the configuration's protocol; columns in another order would give a
-    // silently wrong image).
-    let expected = Header::new(header.source.clone(), &header.config)
-        .map_err(|e| bad(1, format!("header config: {e}")))?
-        .columns;
-    if header.columns.len() != expected.len() {
-        return Err(bad(
-            1,
-            format!(
-                "header lists {} columns, its protocol has K = {}",
-                header.columns.len(),
-                expected.len()
-            ),
-        ));
-    }
-    if let Some((k, (got, want))) = header
-        .columns
-        .iter()
-        .zip(&expected)
-        .enumerate()
-        .find(|(_, (a, b))| a != b)
-    {
-        let show = |c: &Column| {
-            format!(
-                "source {}, sink {}, + {}, - {}",
-                c.source, c.sink, c.positive, c.negative
-            )
-        };
-        return Err(bad(
-            1,
-            format!(
-                "header column {k} is ({}) but the {} protocol's column {k} is ({}): the \
-                 columns must follow the protocol's order (another system's frames in another \
-                 order: give them as a table with a protocol file, et reconstruct --frames)",
-                show(got),
-                header.config.protocol.name(),
-                show(want)
-            ),
-        ));
-    }
+    header.check().map_err(|message| bad(1, message))?;
     let mut records = Vec::new();
     let mut truncated_tail = false;
     let last = lines.len();
@@ -439,6 +369,75 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         records,
         truncated_tail,
     })
+}
+
+impl Header {
+    /// Whether this header is one et reads: its format and version, and its frame length,
+    /// electrodes and columns those of its configuration's protocol, in its order. Err says
+    /// what is wrong, for people.
+    fn check(&self) -> Result<(), String> {
+        if self.format != FORMAT {
+            return Err(format!("format '{}' is not {FORMAT}", self.format));
+        }
+        if self.version != VERSION {
+            return Err(format!(
+                "version {} (this build reads {VERSION})",
+                self.version
+            ));
+        }
+        // The header must agree with itself: every reader takes K and L from the
+        // configuration.
+        let protocol = self
+            .config
+            .validate()
+            .map_err(|e| format!("header config: {e}"))?;
+        if self.frame_len != protocol.frame_len() || self.electrodes != self.config.electrodes {
+            return Err(format!(
+                "header says K = {} on {} electrodes, its config ({} on {}) gives K = {}",
+                self.frame_len,
+                self.electrodes,
+                self.config.protocol.name(),
+                self.config.electrodes,
+                protocol.frame_len()
+            ));
+        }
+        // The columns say what each value is: they must be the protocol's, in its order (a
+        // reader images by the configuration's protocol; columns in another order would give
+        // a silently wrong image).
+        let expected = Header::new(self.source.clone(), &self.config)
+            .map_err(|e| format!("header config: {e}"))?
+            .columns;
+        if self.columns.len() != expected.len() {
+            return Err(format!(
+                "header lists {} columns, its protocol has K = {}",
+                self.columns.len(),
+                expected.len()
+            ));
+        }
+        if let Some((k, (got, want))) = self
+            .columns
+            .iter()
+            .zip(&expected)
+            .enumerate()
+            .find(|(_, (a, b))| a != b)
+        {
+            let show = |c: &Column| {
+                format!(
+                    "source {}, sink {}, + {}, - {}",
+                    c.source, c.sink, c.positive, c.negative
+                )
+            };
+            return Err(format!(
+                "header column {k} is ({}) but the {} protocol's column {k} is ({}): the \
+                 columns must follow the protocol's order (another system's frames in another \
+                 order: give them as a table with a protocol file, et reconstruct --frames)",
+                show(got),
+                self.config.protocol.name(),
+                show(want)
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Recording {

@@ -119,13 +119,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         centre,
         sheet_spec.physical.shape.distance_to_outline(centre),
     );
-    let mut rows = Vec::new();
-    let mut single = (0, 0);
-    let mut one_touch = (0, 0);
-    let mut two = Vec::new();
-    let mut decisions = Vec::new();
-    // (scene, file, title, marks, image), drawn once every protocol has imaged each scene.
-    let mut pictures = Vec::new();
+    let mut tally = Tally::default();
     for kind in ProtocolKind::NAMED {
         let config = ScanConfig {
             protocol: kind,
@@ -133,7 +127,6 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         };
         recon.set_schedule(config.schedule()?)?;
         bar.inc(1);
-        let f = recon.threshold();
         for (name, scene) in &scenes {
             let frames = scene_frames_on(&sheet, scene, &config, 10)?;
             let reference = et_recon::Reference {
@@ -141,86 +134,13 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
                 var_dv: frames.var.clone(),
             };
             let shot = recon.image(&frames.v1, &reference)?;
-            let (alpha, image, rois, dv) = (shot.alpha, shot.pixels, shot.regions, shot.dv);
-            // Touches: the regions split at their saddles, standing out of the noise
-            // (estimated from the reference frames), then docs/method.md §8's significance.
-            let counted = significant(&shot.touches, &settings);
-            let png = format!("imaging/{name}-{}.png", kind.name());
-            pictures.push((
-                *name,
-                png.clone(),
-                format!(
-                    "{name}, {}: {} found (f = {f})",
-                    short(kind),
-                    plot::touches(counted.len())
-                ),
-                plot::SheetMarks {
-                    truth: frames.truth.clone(),
-                    found: counted.iter().map(|g| g.centroid).collect(),
-                    roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
-                    half_range: Some(plot::half_range(recon.imager(), &image)),
-                },
-                image.clone(),
-            ));
-            // Each touch: the nearest counted touch (its own PE and SE), and whether its
-            // centroid lies within the touch's radius.
-            let touch_matches = et_recon::match_touches(recon.grid(), &counted, &frames.truth);
-            let per_touch: Vec<(f64, bool)> = touch_matches
-                .iter()
-                .zip(&frames.truth)
-                .map(|(m, &(c, r))| {
-                    let off = m.found.map_or(f64::INFINITY, |i| {
-                        let g = counted[i].centroid;
-                        (g[0] - c[0]).hypot(g[1] - c[1])
-                    });
-                    (off, off < r)
-                })
-                .collect();
-            let (c, r) = frames.truth[0];
-            let m = metrics(
-                recon.grid(),
-                &image,
-                f,
-                &dv,
-                c,
-                std::f64::consts::PI * r * r,
-            );
-            if frames.truth.len() == 1 {
-                single.1 += 1;
-                // The strongest region is the detection (docs/method.md §7's PE).
-                let found = rois
-                    .first()
-                    .is_some_and(|g| (g.centroid[0] - c[0]).hypot(g.centroid[1] - c[1]) < r);
-                single.0 += usize::from(found);
-                one_touch.1 += 1;
-                one_touch.0 += usize::from(counted.len() == 1 && per_touch[0].1);
-            } else if counted.len() == frames.truth.len() && per_touch.iter().all(|t| t.1) {
-                two.push(short(kind));
-            }
-            if kind == ProtocolKind::Adjacent {
-                decisions.push(Decision {
-                    scene: name,
-                    regions_on_adjacent: counted.len(),
-                    switch_to: et_recon::select::decide(&counted, &settings),
-                });
-            }
-            rows.push(ImageRow {
-                scene: name,
-                protocol: kind.name(),
-                alpha,
-                threshold: f,
-                regions: counted.len(),
-                touch_offsets_mm: per_touch.iter().map(|t| t.0 * 1e3).collect(),
-                found_within_radius: per_touch.iter().map(|t| t.1).collect(),
-                metrics: m,
-                touch_matches,
-                png,
-            });
+            tally.add((*name, kind), &frames, shot, &settings, &recon);
             bar.inc(1);
         }
     }
     // One colour scale per scene (a row of the report's table): its protocols' largest change.
-    for (scene, png, title, marks, image) in &pictures {
+    let pictures = &tally.pictures;
+    for (scene, png, title, marks, image) in pictures {
         let row = pictures
             .iter()
             .filter(|p| p.0 == *scene)
@@ -233,6 +153,14 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         plot::sheet_image(recon.imager(), &out.join(png), title, image, &marks)?;
     }
     steps.done(&bar, "imaged 5 scenes x 4 protocols");
+    let Tally {
+        rows,
+        single,
+        one_touch,
+        two,
+        decisions,
+        ..
+    } = tally;
     // Each single touch, imaged with the protocol docs/method.md §8 chose for it.
     let mut chosen = (0, 0);
     for d in &decisions {
@@ -246,7 +174,151 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
             chosen.0 += usize::from(r.found_within_radius[0]);
         }
     }
+    let names: Vec<&str> = scenes.iter().map(|(name, _)| *name).collect();
+    let md = markdown(recon.imager().triangles(), &names, &rows, &decisions);
+    let json = serde_json::to_value(ImagingSummary {
+        triangles: recon.imager().triangles(),
+        single_touches_found: single,
+        single_touches_found_as_one_touch: one_touch,
+        single_touches_found_with_chosen_protocol: chosen,
+        two_touches_found_by: &two,
+        images: &rows,
+        dynamic: &decisions,
+    })?;
+    Ok(Section {
+        markdown: md,
+        json,
+        key: ImagingKey {
+            single,
+            one_touch,
+            chosen,
+            two,
+        },
+    })
+}
 
+/// A picture to draw once every protocol has imaged its scene: (scene, file, title, marks,
+/// image).
+type Picture = (
+    &'static str,
+    String,
+    String,
+    plot::SheetMarks,
+    Vec<Option<f64>>,
+);
+
+/// The section's images so far and what they add up to.
+#[derive(Default)]
+struct Tally {
+    rows: Vec<ImageRow>,
+    /// (found within the touch radius, single-touch images).
+    single: (usize, usize),
+    /// (found as exactly one touch within its radius, single-touch images).
+    one_touch: (usize, usize),
+    /// Protocols that found two touches as two, each within its radius.
+    two: Vec<&'static str>,
+    decisions: Vec<Decision>,
+    pictures: Vec<Picture>,
+}
+
+impl Tally {
+    /// Scene `name` imaged with protocol `kind` (`shot`, of `frames`): its touches counted by
+    /// docs/method.md §8's significance (`settings`), matched to the truth, its metrics, its
+    /// picture, and on the adjacent protocol the selector's decision.
+    fn add(
+        &mut self,
+        (name, kind): (&'static str, ProtocolKind),
+        frames: &et_sim::still::SceneFrames,
+        shot: et_recon::Image,
+        settings: &Settings,
+        recon: &et_recon::Reconstructor,
+    ) {
+        let f = shot.threshold;
+        let (alpha, image, rois, dv) = (shot.alpha, shot.pixels, shot.regions, shot.dv);
+        // Touches: the regions split at their saddles, standing out of the noise (estimated
+        // from the reference frames), then docs/method.md §8's significance.
+        let counted = significant(&shot.touches, settings);
+        let png = format!("imaging/{name}-{}.png", kind.name());
+        self.pictures.push((
+            name,
+            png.clone(),
+            format!(
+                "{name}, {}: {} found (f = {f})",
+                short(kind),
+                plot::touches(counted.len())
+            ),
+            plot::SheetMarks {
+                truth: frames.truth.clone(),
+                found: counted.iter().map(|g| g.centroid).collect(),
+                roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
+                half_range: Some(plot::half_range(recon.imager(), &image)),
+            },
+            image.clone(),
+        ));
+        // Each touch: the nearest counted touch (its own PE and SE), and whether its centroid
+        // lies within the touch's radius.
+        let touch_matches = et_recon::match_touches(recon.grid(), &counted, &frames.truth);
+        let per_touch: Vec<(f64, bool)> = touch_matches
+            .iter()
+            .zip(&frames.truth)
+            .map(|(m, &(c, r))| {
+                let off = m.found.map_or(f64::INFINITY, |i| {
+                    let g = counted[i].centroid;
+                    (g[0] - c[0]).hypot(g[1] - c[1])
+                });
+                (off, off < r)
+            })
+            .collect();
+        let (c, r) = frames.truth[0];
+        let m = metrics(
+            recon.grid(),
+            &image,
+            f,
+            &dv,
+            c,
+            std::f64::consts::PI * r * r,
+        );
+        if frames.truth.len() == 1 {
+            self.single.1 += 1;
+            // The strongest region is the detection (docs/method.md §7's PE).
+            let found = rois
+                .first()
+                .is_some_and(|g| (g.centroid[0] - c[0]).hypot(g.centroid[1] - c[1]) < r);
+            self.single.0 += usize::from(found);
+            self.one_touch.1 += 1;
+            self.one_touch.0 += usize::from(counted.len() == 1 && per_touch[0].1);
+        } else if counted.len() == frames.truth.len() && per_touch.iter().all(|t| t.1) {
+            self.two.push(short(kind));
+        }
+        if kind == ProtocolKind::Adjacent {
+            self.decisions.push(Decision {
+                scene: name,
+                regions_on_adjacent: counted.len(),
+                switch_to: et_recon::select::decide(&counted, settings),
+            });
+        }
+        self.rows.push(ImageRow {
+            scene: name,
+            protocol: kind.name(),
+            alpha,
+            threshold: f,
+            regions: counted.len(),
+            touch_offsets_mm: per_touch.iter().map(|t| t.0 * 1e3).collect(),
+            found_within_radius: per_touch.iter().map(|t| t.1).collect(),
+            metrics: m,
+            touch_matches,
+            png,
+        });
+    }
+}
+
+/// The section's report: the images, the table of their metrics and the protocol choices.
+fn markdown(
+    triangles: usize,
+    scenes: &[&str],
+    rows: &[ImageRow],
+    decisions: &[Decision],
+) -> String {
     let mut md = String::from("## 2. Imaging the reference scenarios (docs/method.md §7)\n\n");
     let _ = writeln!(
         md,
@@ -262,25 +334,9 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
          `et_recon::touches::above_noise`), and when their peak reaches half the strongest's and their area \
          a quarter of a 10 mm fingertip's (`et_recon::select::significant`). The \"touches\" columns \
          count these touches.\n",
-        recon.imager().triangles()
+        triangles
     );
-    let _ = write!(md, "| scene |");
-    for kind in ProtocolKind::NAMED {
-        let _ = write!(md, " {} |", short(kind));
-    }
-    let _ = writeln!(md, "\n| --- | --- | --- | --- | --- |");
-    for (name, _) in &scenes {
-        let _ = write!(md, "| {name} |");
-        for kind in ProtocolKind::NAMED {
-            let _ = write!(
-                md,
-                " ![{name} {}](imaging/{name}-{}.png) |",
-                short(kind),
-                kind.name()
-            );
-        }
-        let _ = writeln!(md);
-    }
+    images_table(&mut md, scenes);
     let _ = writeln!(
         md,
         "\nHow to read these images: colour is the conductivity change over the untouched \
@@ -295,7 +351,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         md,
         "\n| scene | protocol | alpha | touches | distance of each true touch from the nearest found | PE | SE | RNG | BVC |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
-    for r in &rows {
+    for r in rows {
         let offsets: Vec<String> = r
             .touch_offsets_mm
             .iter()
@@ -351,7 +407,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
          **Dynamic protocol selection (docs/method.md §8)** on the AD image of each scene (xi = 0.5):\n\n\
          | scene | touches on AD | docs/method.md §8 switches to |\n| --- | --- | --- |"
     );
-    for d in &decisions {
+    for d in decisions {
         let _ = writeln!(
             md,
             "| {} | {} | {} |",
@@ -365,23 +421,26 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         );
     }
     md.push('\n');
-    let json = serde_json::to_value(ImagingSummary {
-        triangles: recon.imager().triangles(),
-        single_touches_found: single,
-        single_touches_found_as_one_touch: one_touch,
-        single_touches_found_with_chosen_protocol: chosen,
-        two_touches_found_by: &two,
-        images: &rows,
-        dynamic: &decisions,
-    })?;
-    Ok(Section {
-        markdown: md,
-        json,
-        key: ImagingKey {
-            single,
-            one_touch,
-            chosen,
-            two,
-        },
-    })
+    md
+}
+
+/// The table of the images: a row per scene, a column per protocol.
+fn images_table(md: &mut String, scenes: &[&str]) {
+    let _ = write!(md, "| scene |");
+    for kind in ProtocolKind::NAMED {
+        let _ = write!(md, " {} |", short(kind));
+    }
+    let _ = writeln!(md, "\n| --- | --- | --- | --- | --- |");
+    for name in scenes {
+        let _ = write!(md, "| {name} |");
+        for kind in ProtocolKind::NAMED {
+            let _ = write!(
+                md,
+                " ![{name} {}](imaging/{name}-{}.png) |",
+                short(kind),
+                kind.name()
+            );
+        }
+        let _ = writeln!(md);
+    }
 }

@@ -2,6 +2,8 @@
 //! tested the next day and run through et-core as the chip runs it.
 
 use super::*;
+use et_learn::dataset::Dataset;
+use et_learn::model::Board;
 
 /// The headline numbers of the learning section.
 pub(super) struct LearningKey {
@@ -121,132 +123,27 @@ impl ChipCheck {
 /// model and blob are written into `out/learning`.
 fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
     let scene = load(DEFAULT_SCENE)?;
-    let config = collect::training_config(scene.scan_config()?);
     // docs/method.md §9: 49 classes with a 15 mm target on the 13 cm sheet.
     let (rows, radius) = (7, 0.0075);
     let centres = collect::grid(&scene.sheet, rows, rows, 0.0);
     let classes = centres.len();
-    let plan = Plan {
-        visits: 1,
-        scans: sizes.scans,
-        radius,
-        target_radius: radius,
-        ..Plan::default()
-    };
-    let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");
-    let train = collect::collect_visits(
-        &scene.sheet,
-        scene.frontend,
-        config,
-        &centres,
-        &plan,
-        (0..sizes.visits).map(|v| 1_000 + v as u64),
-        || bar.inc(1),
-    )?;
-    let day = Plan {
-        scans: 1,
-        ..plan.clone()
-    };
-    let next_day = collect::collect_visits(
-        &scene.sheet,
-        scene.frontend,
-        config,
-        &centres,
-        &day,
-        (0..sizes.days).map(|d| 77 + d as u64),
-        || bar.inc(1),
-    )?;
+    let (train, next_day) = collect_sets(&scene, &centres, radius, sizes, steps)?;
     let n_c = train.x.nrows() / classes;
-    steps.done(
-        &bar,
-        &format!(
-            "collected {} training and {} next-day observations",
-            train.x.nrows(),
-            next_day.x.nrows()
-        ),
-    );
 
     // The model: QDA on referenced frames, shrinkage by leave-one-visit-out.
     let bar = steps.bar(3, "training (QDA, raw QDA, LDA)");
     let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
-    let fit = |referenced: bool, kind: ModelKind, shrinkage: Option<f64>, keep: Option<usize>| {
-        let trainer = Trainer {
-            method: Choice::One(match kind {
-                ModelKind::Qda => Method::Qda,
-                ModelKind::Lda => Method::Lda,
-            }),
-            shrinkage,
-            folds: Some(10),
-            raw: !referenced,
-            keep,
-            ..Trainer::default()
-        };
-        let (board, training) = trainer
-            .train(Examples::Dataset(&train), |_| {})?
-            .into_board()
-            .ok_or(DemoError::Scenes("an et dataset trains a board model"))?;
-        let tested = board.test(&next_day)?;
-        Ok::<_, DemoError>((training.training, board, tested))
-    };
-    let (qda, qda_file, qda_test) = fit(true, ModelKind::Qda, None, None)?;
+    let sets = (&train, &next_day);
+    let (qda, qda_file, qda_test) = fit(sets, true, ModelKind::Qda, None, None)?;
     bar.inc(1);
     // docs/method.md §9 as published: QDA on the raw frames, no shrinkage.
-    let raw = fit(false, ModelKind::Qda, Some(0.0), None);
+    let raw = fit(sets, false, ModelKind::Qda, Some(0.0), None);
     bar.inc(1);
-    let (lda, _, lda_test) = fit(true, ModelKind::Lda, None, None)?;
+    let (lda, _, lda_test) = fit(sets, true, ModelKind::Lda, None, None)?;
     steps.done(&bar, "trained QDA and LDA, cross-validated");
     qda_file.file().save(&out.join("learning/model.json"))?;
-
-    // The trade: features kept (Fisher ranking) against accuracy and the chip's model size.
+    let (trade, chip) = feature_trade(out, sets, &qda, steps)?;
     let p_all = train.x.ncols();
-    let keeps: Vec<usize> = [8, 16, 24, 32, 48, 64, 80]
-        .into_iter()
-        .filter(|&p| p < p_all)
-        .chain([p_all])
-        .collect();
-    let bar = steps.bar(keeps.len(), "features against accuracy and size");
-    let mut trade = Vec::new();
-    for &p in &keeps {
-        // What the main model is (a qda whose best shrinkage is full toward the pooled
-        // covariance was saved as the lda it equals).
-        let (_, board, tested) = fit(true, qda.options.kind, Some(qda.options.shrinkage), Some(p))?;
-        let f16 = board.blob(Precision::F16)?.len();
-        let f32 = board.blob(Precision::F32)?.len();
-        trade.push((
-            TradePoint {
-                features: p,
-                next_day_accuracy: tested.confusion.accuracy(),
-                f16_bytes: f16,
-                f32_bytes: f32,
-            },
-            board,
-        ));
-        bar.inc(1);
-    }
-    // The chip's model: the most features whose f16 blob fits a slot, run through et-core.
-    let chip = trade
-        .iter()
-        .filter(|(t, _)| t.f16_bytes <= MODEL_SLOT_BYTES)
-        .max_by_key(|(t, _)| t.features)
-        .map(|(t, board)| -> Result<_> {
-            let blob = board.blob(Precision::F16)?;
-            let etm = out.join("learning/model.etm");
-            std::fs::write(&etm, &blob).map_err(io(&etm))?;
-            let r = board.on_chip(&blob, &next_day)?;
-            Ok(ChipCheck {
-                features: t.features,
-                bytes: t.f16_bytes,
-                right: r.right,
-                total: r.total,
-                disagree_with_host: r.disagree,
-            })
-        })
-        .transpose()?;
-    steps.done(
-        &bar,
-        "feature trade curve; the chip's model checked in et-core",
-    );
-
     let row = |name: &str, t: &pipeline::Training, tested: &Tested| ModelRow {
         name: if t
             .fallbacks
@@ -302,10 +199,157 @@ fn measure(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Learning> {
         lda_next_day_accuracy: lda_test.confusion.accuracy(),
         raw_qda_next_day_accuracy: raw.as_ref().ok().map(|(_, _, t)| t.confusion.accuracy()),
         models,
-        features_trade: trade.into_iter().map(|(t, _)| t).collect(),
+        features_trade: trade,
         chip,
         qda_test,
     })
+}
+
+/// The training visits and next-day sessions on `scene`'s sheet: a press of `radius` (m) in
+/// each class's target around `centres`, sizes.scans scans a visit, one scan a next-day
+/// session.
+fn collect_sets(
+    scene: &Scene,
+    centres: &[[f64; 2]],
+    radius: f64,
+    sizes: &Sizes,
+    steps: &Steps,
+) -> Result<(Dataset, Dataset)> {
+    let config = collect::training_config(scene.scan_config()?);
+    let plan = Plan {
+        visits: 1,
+        scans: sizes.scans,
+        radius,
+        target_radius: radius,
+        ..Plan::default()
+    };
+    let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");
+    let train = collect::collect_visits(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        centres,
+        &plan,
+        (0..sizes.visits).map(|v| 1_000 + v as u64),
+        || bar.inc(1),
+    )?;
+    let day = Plan {
+        scans: 1,
+        ..plan.clone()
+    };
+    let next_day = collect::collect_visits(
+        &scene.sheet,
+        scene.frontend,
+        config,
+        centres,
+        &day,
+        (0..sizes.days).map(|d| 77 + d as u64),
+        || bar.inc(1),
+    )?;
+    steps.done(
+        &bar,
+        &format!(
+            "collected {} training and {} next-day observations",
+            train.x.nrows(),
+            next_day.x.nrows()
+        ),
+    );
+    Ok((train, next_day))
+}
+
+/// A board model trained on the first of `sets` (training, next day) as the demo trains
+/// them: referenced frames or raw, QDA or LDA, shrinkage by cross-validation (10 folds)
+/// unless given, `keep` features when given; its training, the model, and its test on the
+/// next day.
+fn fit(
+    (train, next_day): (&Dataset, &Dataset),
+    referenced: bool,
+    kind: ModelKind,
+    shrinkage: Option<f64>,
+    keep: Option<usize>,
+) -> Result<(pipeline::Training, Board, Tested)> {
+    let trainer = Trainer {
+        method: Choice::One(match kind {
+            ModelKind::Qda => Method::Qda,
+            ModelKind::Lda => Method::Lda,
+        }),
+        shrinkage,
+        folds: Some(10),
+        raw: !referenced,
+        keep,
+        ..Trainer::default()
+    };
+    let (board, training) = trainer
+        .train(Examples::Dataset(train), |_| {})?
+        .into_board()
+        .ok_or(DemoError::Scenes("an et dataset trains a board model"))?;
+    let tested = board.test(next_day)?;
+    Ok((training.training, board, tested))
+}
+
+/// The trade of features kept (Fisher ranking) against the next day's accuracy and the
+/// chip's model size, for the main model's kind and shrinkage (`qda`: a QDA whose best
+/// shrinkage is full toward the pooled covariance was saved as the LDA it equals); and the
+/// chip's model, the most features whose f16 blob fits a slot, written to
+/// `out/learning/model.etm` and run through et-core on the next day's frames.
+fn feature_trade(
+    out: &Path,
+    sets: (&Dataset, &Dataset),
+    qda: &pipeline::Training,
+    steps: &Steps,
+) -> Result<(Vec<TradePoint>, Option<ChipCheck>)> {
+    let p_all = sets.0.x.ncols();
+    let keeps: Vec<usize> = [8, 16, 24, 32, 48, 64, 80]
+        .into_iter()
+        .filter(|&p| p < p_all)
+        .chain([p_all])
+        .collect();
+    let bar = steps.bar(keeps.len(), "features against accuracy and size");
+    let mut trade = Vec::new();
+    for &p in &keeps {
+        let (_, board, tested) = fit(
+            sets,
+            true,
+            qda.options.kind,
+            Some(qda.options.shrinkage),
+            Some(p),
+        )?;
+        let f16 = board.blob(Precision::F16)?.len();
+        let f32 = board.blob(Precision::F32)?.len();
+        trade.push((
+            TradePoint {
+                features: p,
+                next_day_accuracy: tested.confusion.accuracy(),
+                f16_bytes: f16,
+                f32_bytes: f32,
+            },
+            board,
+        ));
+        bar.inc(1);
+    }
+    let chip = trade
+        .iter()
+        .filter(|(t, _)| t.f16_bytes <= MODEL_SLOT_BYTES)
+        .max_by_key(|(t, _)| t.features)
+        .map(|(t, board)| -> Result<_> {
+            let blob = board.blob(Precision::F16)?;
+            let etm = out.join("learning/model.etm");
+            std::fs::write(&etm, &blob).map_err(io(&etm))?;
+            let r = board.on_chip(&blob, sets.1)?;
+            Ok(ChipCheck {
+                features: t.features,
+                bytes: t.f16_bytes,
+                right: r.right,
+                total: r.total,
+                disagree_with_host: r.disagree,
+            })
+        })
+        .transpose()?;
+    steps.done(
+        &bar,
+        "feature trade curve; the chip's model checked in et-core",
+    );
+    Ok((trade.into_iter().map(|(t, _)| t).collect(), chip))
 }
 
 /// The section's figures: the next day's confusion and error against distance, and the
@@ -408,36 +452,7 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
         Plan::default().drift,
         sizes.days
     );
-    let _ = writeln!(
-        md,
-        "| model | shrinkage | 10-fold CV | leave-one-visit-out | next day | mean error | AEE |\n| --- | --- | --- | --- | --- | --- | --- |"
-    );
-    for m in &r.models {
-        match (&m.result, &m.error) {
-            (Some(t), _) => {
-                let _ = writeln!(
-                    md,
-                    "| {} | {} | {:.1} % | {} | **{:.1} %** | {:.2} mm | {:.1} mm |",
-                    m.name,
-                    t.shrinkage,
-                    100.0 * t.cv_accuracy,
-                    t.leave_one_visit_out
-                        .map_or("-".into(), |a| format!("{:.1} %", 100.0 * a)),
-                    100.0 * t.next_day_accuracy,
-                    t.next_day_mean_error_mm,
-                    t.aee_mm,
-                );
-            }
-            (None, e) => {
-                let _ = writeln!(
-                    md,
-                    "| {} | - | cannot be fitted: {} | | | | |",
-                    m.name,
-                    e.as_deref().unwrap_or("")
-                );
-            }
-        }
-    }
+    models_table(&mut md, &r.models);
     let _ = writeln!(
         md,
         "\nReferencing each frame to its session's untouched frame removes what moves from one \
@@ -482,6 +497,49 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
             b.mean_error_mm
         );
     }
+    chip_markdown(&mut md, r);
+    md
+}
+
+/// The models' table: each model's shrinkage, cross-validations and next-day results, or why
+/// it could not be fitted.
+fn models_table(md: &mut String, models: &[ModelRow]) {
+    let _ = writeln!(
+        md,
+        "| model | shrinkage | 10-fold CV | leave-one-visit-out | next day | mean error | AEE |\n| --- | --- | --- | --- | --- | --- | --- |"
+    );
+    for m in models {
+        match (&m.result, &m.error) {
+            (Some(t), _) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {:.1} % | {} | **{:.1} %** | {:.2} mm | {:.1} mm |",
+                    m.name,
+                    t.shrinkage,
+                    100.0 * t.cv_accuracy,
+                    t.leave_one_visit_out
+                        .map_or("-".into(), |a| format!("{:.1} %", 100.0 * a)),
+                    100.0 * t.next_day_accuracy,
+                    t.next_day_mean_error_mm,
+                    t.aee_mm,
+                );
+            }
+            (None, e) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | - | cannot be fitted: {} | | | | |",
+                    m.name,
+                    e.as_deref().unwrap_or("")
+                );
+            }
+        }
+    }
+}
+
+/// "The model on the chip": the feature trade's table and the chip's model checked in
+/// et-core.
+fn chip_markdown(md: &mut String, r: &Learning) {
+    let classes = r.classes;
     let _ = writeln!(
         md,
         "\n### The model on the chip\n\nA QDA of {classes} classes over all {} features \
@@ -534,5 +592,4 @@ fn markdown(r: &Learning, sizes: &Sizes) -> String {
          kept and the precision of its tables; a model fits the board when its line is under \
          the flash slot's (it grows as 49 classes x p^2 / 2 numbers).\n"
     );
-    md
 }

@@ -146,7 +146,69 @@ pub(super) fn sweep(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<
         |_| bar.inc(1),
     )?;
     steps.done(&bar, "swept mesh sizes");
-    let dir = out.join("sweep");
+    charts(&out.join("sweep"), &rows)?;
+    let mut md = String::from("## 3. Speed against accuracy (imaging)\n\n");
+    let _ = writeln!(
+        md,
+        "22 cm disc, adjacent protocol, complete electrode model, the target at x = 0.5; \
+         noiseless simulator frames so that only the mesh matters; alpha = 0.03, s = 0.5. \
+         Forward error: the largest difference of the untouched frame from a {}-triangle \
+         mesh's, over the largest voltage. Times on one core of the machine above (the live \
+         frame is the median of 100 applications, as `et reconstruct --json` reports it).\n\n\
+         | triangles | forward error | set-up | live frame | PE one-step | PE iterative (4 steps) | iterative time |\n\
+         | --- | --- | --- | --- | --- | --- | --- |",
+        sizes.sweep_reference
+    );
+    for r in &rows {
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} % | {:.3} s | {:.0} us | {:.3} | {} | {} |",
+            r.triangles,
+            100.0 * r.forward_error,
+            r.setup_s,
+            r.live_frame_us,
+            r.pe_one_step,
+            r.iterative.map_or("-".into(), |i| format!("{:.3}", i.0)),
+            r.iterative.map_or("-".into(), |i| format!("{:.2} s", i.1)),
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n![accuracy](sweep/accuracy.png)\n\n\
+         How to read this: one point per mesh (the lines only join them); lower is better. PE \
+         is the distance from the true centre to the ROI's centroid over the sheet's largest \
+         extent (22 cm: 1 % is 2.2 mm). The frames are noiseless, so what is left is the mesh's \
+         and the method's own error.\n\n\
+         ![forward error](sweep/forward-error.png)\n\n\
+         How to read this: how far the host's finite-element voltages on the untouched sheet \
+         are from a {}-triangle mesh's, as a share of the largest voltage. It falls as the \
+         mesh refines, though not at every step: each mesh places its nodes anew.\n\n\
+         ![time](sweep/time.png)\n\n\
+         How to read this: the set-up is paid once per mesh, protocol and alpha; the iterative \
+         fit is paid per frame. A live one-step frame (the table) is microseconds at every \
+         size.\n\n\
+         The one-step matrix is built once per (mesh, protocol, alpha); a live frame is one \
+         matrix-vector product. The iterative Gauss-Newton refits the nonlinear model and costs \
+         a Jacobian per step: use it offline, when accuracy matters more than speed.\n",
+        sizes.sweep_reference
+    );
+    let at_8k = rows
+        .iter()
+        .min_by_key(|r| r.triangles.abs_diff(8_000))
+        .map(|r| (r.triangles, r.setup_s, r.live_frame_us));
+    Ok(Section {
+        markdown: md,
+        json: serde_json::to_value(SweepSummary {
+            reference_triangles: sizes.sweep_reference,
+            rows: &rows,
+        })?,
+        key: SweepKey { at_8k },
+    })
+}
+
+/// The sweep's three charts in `dir`: mesh size against position error, against the forward
+/// model's error, and against time.
+fn charts(dir: &Path, rows: &[SweepRow]) -> Result<()> {
     let xs = |f: fn(&SweepRow) -> Option<f64>| -> Vec<(f64, f64)> {
         rows.iter()
             .filter_map(|r| Some((r.triangles as f64, f(r)?)))
@@ -208,63 +270,7 @@ pub(super) fn sweep(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Section<
             },
         ],
     )?;
-    let mut md = String::from("## 3. Speed against accuracy (imaging)\n\n");
-    let _ = writeln!(
-        md,
-        "22 cm disc, adjacent protocol, complete electrode model, the target at x = 0.5; \
-         noiseless simulator frames so that only the mesh matters; alpha = 0.03, s = 0.5. \
-         Forward error: the largest difference of the untouched frame from a {}-triangle \
-         mesh's, over the largest voltage. Times on one core of the machine above (the live \
-         frame is the median of 100 applications, as `et reconstruct --json` reports it).\n\n\
-         | triangles | forward error | set-up | live frame | PE one-step | PE iterative (4 steps) | iterative time |\n\
-         | --- | --- | --- | --- | --- | --- | --- |",
-        sizes.sweep_reference
-    );
-    for r in &rows {
-        let _ = writeln!(
-            md,
-            "| {} | {:.2} % | {:.3} s | {:.0} us | {:.3} | {} | {} |",
-            r.triangles,
-            100.0 * r.forward_error,
-            r.setup_s,
-            r.live_frame_us,
-            r.pe_one_step,
-            r.iterative.map_or("-".into(), |i| format!("{:.3}", i.0)),
-            r.iterative.map_or("-".into(), |i| format!("{:.2} s", i.1)),
-        );
-    }
-    let _ = writeln!(
-        md,
-        "\n![accuracy](sweep/accuracy.png)\n\n\
-         How to read this: one point per mesh (the lines only join them); lower is better. PE \
-         is the distance from the true centre to the ROI's centroid over the sheet's largest \
-         extent (22 cm: 1 % is 2.2 mm). The frames are noiseless, so what is left is the mesh's \
-         and the method's own error.\n\n\
-         ![forward error](sweep/forward-error.png)\n\n\
-         How to read this: how far the host's finite-element voltages on the untouched sheet \
-         are from a {}-triangle mesh's, as a share of the largest voltage. It falls as the \
-         mesh refines, though not at every step: each mesh places its nodes anew.\n\n\
-         ![time](sweep/time.png)\n\n\
-         How to read this: the set-up is paid once per mesh, protocol and alpha; the iterative \
-         fit is paid per frame. A live one-step frame (the table) is microseconds at every \
-         size.\n\n\
-         The one-step matrix is built once per (mesh, protocol, alpha); a live frame is one \
-         matrix-vector product. The iterative Gauss-Newton refits the nonlinear model and costs \
-         a Jacobian per step: use it offline, when accuracy matters more than speed.\n",
-        sizes.sweep_reference
-    );
-    let at_8k = rows
-        .iter()
-        .min_by_key(|r| r.triangles.abs_diff(8_000))
-        .map(|r| (r.triangles, r.setup_s, r.live_frame_us));
-    Ok(Section {
-        markdown: md,
-        json: serde_json::to_value(SweepSummary {
-            reference_triangles: sizes.sweep_reference,
-            rows: &rows,
-        })?,
-        key: SweepKey { at_8k },
-    })
+    Ok(())
 }
 
 /// `summary.json`'s "sweep".

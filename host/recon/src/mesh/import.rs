@@ -87,23 +87,7 @@ impl Mesh {
         if head.get(1) != Some(&"0") {
             return Err(bad(path, fmt + 2, "binary Gmsh file: save as ASCII"));
         }
-        // The count on line index `i`, believed only as far as the file holds lines for it
-        // (nothing is allocated for a count the file cannot back).
-        let count = |i: usize, what: &str| -> Result<usize, MeshError> {
-            let n: usize = lines
-                .get(i)
-                .and_then(|l| l.trim().parse().ok())
-                .ok_or_else(|| bad(path, i + 1, "expected a count"))?;
-            let room = lines.len().saturating_sub(i + 1);
-            if n > room {
-                return Err(bad(
-                    path,
-                    i + 1,
-                    format!("{n} {what} claimed; the file has {room} lines after the count"),
-                ));
-            }
-            Ok(n)
-        };
+        let count = |i: usize, what: &str| gmsh_count(path, &lines, i, what);
         let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, "no $Nodes section"))?;
         let n = count(nodes_at + 1, "nodes")?;
         let mut ids = HashMap::new();
@@ -123,73 +107,7 @@ impl Mesh {
         }
         let el_at = find("$Elements").ok_or_else(|| bad(path, 0, "no $Elements section"))?;
         let m = count(el_at + 1, "elements")?;
-        let mut triangles = Vec::new();
-        let mut by_tag: BTreeMap<i64, Vec<[usize; 2]>> = BTreeMap::new();
-        for i in 0..m {
-            let ln = el_at + 2 + i;
-            let v: Result<Vec<i64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
-                l.split_whitespace().map(str::parse).collect()
-            });
-            let (kind, ntags, rest) = match v.as_deref() {
-                Ok(&[_, kind, ntags, ref rest @ ..]) => {
-                    (kind, usize::try_from(ntags).unwrap_or(usize::MAX), rest)
-                }
-                _ => {
-                    return Err(bad(
-                        path,
-                        ln + 1,
-                        "element line: id type ntags tags... nodes",
-                    ));
-                }
-            };
-            let (Some(tags), Some(conn)) = (rest.get(..ntags), rest.get(ntags..)) else {
-                return Err(bad(
-                    path,
-                    ln + 1,
-                    format!("{ntags} tags, but only {} numbers follow", rest.len()),
-                ));
-            };
-            let nodes_of = |kind: i64| match kind {
-                1 => Some(2),
-                2 => Some(3),
-                15 => Some(1),
-                _ => None,
-            };
-            if let Some(want) = nodes_of(kind)
-                && conn.len() != want
-            {
-                return Err(bad(
-                    path,
-                    ln + 1,
-                    format!(
-                        "an element of type {kind} has {want} nodes, this line gives {}",
-                        conn.len()
-                    ),
-                ));
-            }
-            let node = |id: i64| {
-                ids.get(&id)
-                    .copied()
-                    .ok_or_else(|| bad(path, ln + 1, format!("node {id} is not in $Nodes")))
-            };
-            match (kind, conn) {
-                (2, &[a, b, c]) => triangles.push([node(a)?, node(b)?, node(c)?]),
-                (1, &[a, b]) => {
-                    let tag = *tags.first().ok_or_else(|| {
-                        bad(path, ln + 1, "a line element without a physical tag")
-                    })?;
-                    by_tag.entry(tag).or_default().push([node(a)?, node(b)?]);
-                }
-                (15, &[a]) => {
-                    // A physical point: a point electrode (written as the edge [a, a]).
-                    if let Some(&tag) = tags.first() {
-                        let a = node(a)?;
-                        by_tag.entry(tag).or_default().push([a, a]);
-                    }
-                }
-                _ => {} // points, quadrangles and higher orders are not used
-            }
-        }
+        let (triangles, by_tag) = gmsh_elements(path, &lines, (el_at + 2, m), &ids)?;
         Self::from_parts(nodes, triangles, by_tag.into_values().collect())
     }
 
@@ -463,4 +381,103 @@ fn check_topology(
         }
     }
     Ok(())
+}
+
+/// The number on line index `i` of a Gmsh file's `lines`, believed only as far as the file
+/// holds lines for it (nothing is allocated for a count the file cannot back); `what` names
+/// what is counted in the error.
+fn gmsh_count(path: &Path, lines: &[&str], i: usize, what: &str) -> Result<usize, MeshError> {
+    let n: usize = lines
+        .get(i)
+        .and_then(|l| l.trim().parse().ok())
+        .ok_or_else(|| bad(path, i + 1, "expected a count"))?;
+    let room = lines.len().saturating_sub(i + 1);
+    if n > room {
+        return Err(bad(
+            path,
+            i + 1,
+            format!("{n} {what} claimed; the file has {room} lines after the count"),
+        ));
+    }
+    Ok(n)
+}
+
+/// A Gmsh file's `m` elements from line index `first` of its `lines` (`ids`: each node id's
+/// index): its triangles, and its line and point elements by physical tag (the electrodes;
+/// a point as the edge [a, a]).
+#[allow(clippy::type_complexity)]
+fn gmsh_elements(
+    path: &Path,
+    lines: &[&str],
+    (first, m): (usize, usize),
+    ids: &HashMap<i64, usize>,
+) -> Result<(Vec<[usize; 3]>, BTreeMap<i64, Vec<[usize; 2]>>), MeshError> {
+    let mut triangles = Vec::new();
+    let mut by_tag: BTreeMap<i64, Vec<[usize; 2]>> = BTreeMap::new();
+    for i in 0..m {
+        let ln = first + i;
+        let v: Result<Vec<i64>, _> = lines.get(ln).map_or(Ok(Vec::new()), |l| {
+            l.split_whitespace().map(str::parse).collect()
+        });
+        let (kind, ntags, rest) = match v.as_deref() {
+            Ok(&[_, kind, ntags, ref rest @ ..]) => {
+                (kind, usize::try_from(ntags).unwrap_or(usize::MAX), rest)
+            }
+            _ => {
+                return Err(bad(
+                    path,
+                    ln + 1,
+                    "element line: id type ntags tags... nodes",
+                ));
+            }
+        };
+        let (Some(tags), Some(conn)) = (rest.get(..ntags), rest.get(ntags..)) else {
+            return Err(bad(
+                path,
+                ln + 1,
+                format!("{ntags} tags, but only {} numbers follow", rest.len()),
+            ));
+        };
+        let nodes_of = |kind: i64| match kind {
+            1 => Some(2),
+            2 => Some(3),
+            15 => Some(1),
+            _ => None,
+        };
+        if let Some(want) = nodes_of(kind)
+            && conn.len() != want
+        {
+            return Err(bad(
+                path,
+                ln + 1,
+                format!(
+                    "an element of type {kind} has {want} nodes, this line gives {}",
+                    conn.len()
+                ),
+            ));
+        }
+        let node = |id: i64| {
+            ids.get(&id)
+                .copied()
+                .ok_or_else(|| bad(path, ln + 1, format!("node {id} is not in $Nodes")))
+        };
+        match (kind, conn) {
+            (2, &[a, b, c]) => triangles.push([node(a)?, node(b)?, node(c)?]),
+            (1, &[a, b]) => {
+                let tag = *tags
+                    .first()
+                    .ok_or_else(|| bad(path, ln + 1, "a line element without a physical tag"))?;
+                by_tag.entry(tag).or_default().push([node(a)?, node(b)?]);
+            }
+            (15, &[a]) => {
+                // A physical point: a point electrode (written as the edge [a, a]).
+                if let Some(&tag) = tags.first() {
+                    let a = node(a)?;
+                    by_tag.entry(tag).or_default().push([a, a]);
+                }
+            }
+            _ => {} // points, quadrangles and higher orders are not used
+        }
+    }
+    Ok((triangles, by_tag))
 }

@@ -300,21 +300,7 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
 }
 
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
-    let mut inputs = vec![args.scene.as_path()];
-    inputs.extend(args.frames.as_deref());
-    inputs.extend(args.reference_file.as_deref());
-    // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.
-    let mesh_files: Vec<&Path> = args
-        .mesh
-        .mesh
-        .as_deref()
-        .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
-        .unwrap_or_default();
-    inputs.extend(mesh_files);
-    let mut outputs = vec![args.out.as_path()];
-    outputs.extend(args.image_out.as_deref());
-    outputs.extend(args.segment.as_deref());
-    crate::output::check_all(&outputs, &[], &inputs, force)?;
+    check_paths(args, force)?;
     let scene = Scene::load(&args.scene)?;
     let table = args
         .frames
@@ -401,50 +387,19 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         recon.jacobian().frame.len(),
         recon.jacobian().pairs()
     );
-    let background = if let Some(fit) = fit {
-        stage(
-            &format!(
-                "background fit ({} solves), forward + Jacobian {jacobian}",
-                fit.solves
-            ),
-            clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix,
-        );
-        eprintln!(
-            "background: {:.4} ohm/sq, contact {:.4} ohm{}; the model leaves {:.2} % of V_0 \
-             unexplained (the scene's values: {:.2} %)",
-            fit.sheet_resistance,
-            fit.contact_ohm,
-            if fit.contact_fitted {
-                ""
-            } else {
-                " (not fitted: kept at the scene's ratio)"
-            },
-            100.0 * fit.residual,
-            100.0 * fit.scene_residual
-        );
-        let share =
-            |s: Option<f64>| s.map_or("none measured".into(), |s| format!("{:.2} %", 100.0 * s));
-        eprintln!(
-            "model error: it leaves {} of V_0 on drive electrodes, {} off them; the objects' \
-             noise counts {} times that share of each change as the model's error",
-            share(fit.misfit_on_drive),
-            share(fit.misfit_off_drive),
-            et_recon::reconstructor::MISMATCH_FACTOR
-        );
-        if fit.residual > 0.2 {
-            eprintln!(
-                "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
-                 protocol's electrode numbering (electrodes.first_deg, direction) and order",
-                100.0 * fit.residual
-            );
+    let background = match fit {
+        Some(fit) => {
+            let took = clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix;
+            say_background(&fit, &jacobian, took, stage);
+            Some(fit)
         }
-        Some(fit)
-    } else {
-        stage(
-            &format!("forward + Jacobian {jacobian}"),
-            set_up.forward_jacobian,
-        );
-        None
+        None => {
+            stage(
+                &format!("forward + Jacobian {jacobian}"),
+                set_up.forward_jacobian,
+            );
+            None
+        }
     };
     let image = recon.image(&v1, &reference)?;
     // The warm frames' figure is the live pipeline's: through the f32 operator, made here if
@@ -453,6 +408,74 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let frame_median = recon.frame_median(&image.dv, 100);
     let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
     report(args, &recon, &image, &truth, background, timings_s, started)
+}
+
+/// The paths `et reconstruct` reads and writes checked before any work: no output replaces
+/// an input, and none an existing file without `--force`.
+fn check_paths(args: &ReconstructArgs, force: bool) -> Result<()> {
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(args.frames.as_deref());
+    inputs.extend(args.reference_file.as_deref());
+    // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.
+    let mesh_files: Vec<&Path> = args
+        .mesh
+        .mesh
+        .as_deref()
+        .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
+        .unwrap_or_default();
+    inputs.extend(mesh_files);
+    let mut outputs = vec![args.out.as_path()];
+    outputs.extend(args.image_out.as_deref());
+    outputs.extend(args.segment.as_deref());
+    crate::output::check_all(&outputs, &[], &inputs, force)?;
+    Ok(())
+}
+
+/// The fitted background said on standard error: the fit's stage time (`took`, s, with
+/// the forward model and `jacobian`'s sizes), its values and misfit, and the model error the
+/// objects' noise counts.
+fn say_background(
+    fit: &et_recon::background::BackgroundFit,
+    jacobian: &str,
+    took: f64,
+    stage: impl Fn(&str, f64),
+) {
+    stage(
+        &format!(
+            "background fit ({} solves), forward + Jacobian {jacobian}",
+            fit.solves
+        ),
+        took,
+    );
+    eprintln!(
+        "background: {:.4} ohm/sq, contact {:.4} ohm{}; the model leaves {:.2} % of V_0 \
+         unexplained (the scene's values: {:.2} %)",
+        fit.sheet_resistance,
+        fit.contact_ohm,
+        if fit.contact_fitted {
+            ""
+        } else {
+            " (not fitted: kept at the scene's ratio)"
+        },
+        100.0 * fit.residual,
+        100.0 * fit.scene_residual
+    );
+    let share =
+        |s: Option<f64>| s.map_or("none measured".into(), |s| format!("{:.2} %", 100.0 * s));
+    eprintln!(
+        "model error: it leaves {} of V_0 on drive electrodes, {} off them; the objects' \
+         noise counts {} times that share of each change as the model's error",
+        share(fit.misfit_on_drive),
+        share(fit.misfit_off_drive),
+        et_recon::reconstructor::MISMATCH_FACTOR
+    );
+    if fit.residual > 0.2 {
+        eprintln!(
+            "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
+             protocol's electrode numbering (electrodes.first_deg, direction) and order",
+            100.0 * fit.residual
+        );
+    }
 }
 
 /// Prints the matrix's and the frame's stages of `image` (stderr) and returns every stage's

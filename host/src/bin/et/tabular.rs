@@ -181,23 +181,7 @@ pub(crate) fn train(
 ) -> Result<()> {
     output::check(out, &args.inputs(), force)?;
     let table = args.load()?;
-    match table.group_index() {
-        None => eprintln!(
-            "note: no --groups: every row is taken as one session, and nothing in the data can \
-             show how a model holds on a new session; sensors drift between sessions, so \
-             positions are predicted by the model that cross-validates best with each channel's \
-             gain and level drifted (give --groups to choose by leaving a session out)"
-        ),
-        Some((_, names)) if names.len() < 2 => eprintln!(
-            "note: one group ('{}') only: nothing in the data can show how a model holds on a \
-             new session",
-            names.first().map_or("", String::as_str)
-        ),
-        Some((_, names)) => eprintln!(
-            "{} groups: cross-validation leaves one group out",
-            names.len()
-        ),
-    }
+    say_groups(&table);
     let bar = bar();
     let mut last = String::new();
     let progress = |stage: Progress<'_>| {
@@ -246,6 +230,35 @@ pub(crate) fn train(
         );
         return Ok(());
     }
+    report(&model, out);
+    Ok(())
+}
+
+/// What the groups of `table` mean for its cross-validation, said on standard error.
+fn say_groups(table: &tabular::Table) {
+    match table.group_index() {
+        None => eprintln!(
+            "note: no --groups: every row is taken as one session, and nothing in the data can \
+             show how a model holds on a new session; sensors drift between sessions, so \
+             positions are predicted by the model that cross-validates best with each channel's \
+             gain and level drifted (give --groups to choose by leaving a session out)"
+        ),
+        Some((_, names)) if names.len() < 2 => eprintln!(
+            "note: one group ('{}') only: nothing in the data can show how a model holds on a \
+             new session",
+            names.first().map_or("", String::as_str)
+        ),
+        Some((_, names)) => eprintln!(
+            "{} groups: cross-validation leaves one group out",
+            names.len()
+        ),
+    }
+}
+
+/// A trained model's summary on standard error: its note, the best candidate of each method
+/// tried, and the choice, written to `out`.
+fn report(model: &tabular::TableModel, out: &Path) {
+    let best = model.chosen();
     if let Some(note) = &model.note {
         eprintln!("note: {note}");
     }
@@ -295,7 +308,6 @@ pub(crate) fn train(
         model.fit_seconds,
         out.display()
     );
-    Ok(())
 }
 
 /// Smaller is better.

@@ -14,32 +14,7 @@ impl Wizard {
         let mut requests = Vec::new();
         let simulated = matches!(source, Some(Source::Sim(_)));
         match self.step.clone() {
-            Step::Setup => {
-                ui.label("A class grid over the sheet; each cell is pressed in turn, every visit.");
-                egui::Grid::new("wizard-setup").show(ui, |ui| {
-                    ui.label("rows");
-                    ui.add(egui::DragValue::new(&mut self.rows).range(1..=10));
-                    ui.end_row();
-                    ui.label("columns");
-                    ui.add(egui::DragValue::new(&mut self.cols).range(1..=10));
-                    ui.end_row();
-                    ui.label("visits");
-                    ui.add(egui::DragValue::new(&mut self.visits).range(1..=6));
-                    ui.end_row();
-                    ui.label("frames per press");
-                    ui.add(egui::DragValue::new(&mut self.frames_per_press).range(2..=100));
-                    ui.end_row();
-                });
-                if ui.button("Start").clicked() {
-                    match source.and_then(Source::config) {
-                        Some(base) => match self.start(sheet, base) {
-                            Ok(r) => requests.push(r),
-                            Err(e) => self.message = e.to_string(),
-                        },
-                        None => self.message = "no frames yet: open a source first".into(),
-                    }
-                }
-            }
+            Step::Setup => requests.extend(self.setup_ui(ui, source, sheet)),
             Step::Reference { visit } => {
                 ui.label(format!(
                     "Visit {} of {}: keep the sheet untouched (taking V_0).",
@@ -101,52 +76,92 @@ impl Wizard {
                     self.message = e.to_string();
                 }
             }
-            Step::Trained => {
-                if let Some(t) = &self.trained {
-                    ui.label(format!(
-                        "cross-validated accuracy: {:.1} %",
-                        100.0 * t.cv.accuracy()
-                    ));
-                    if let Some(a) = t.leave_one_visit_out {
-                        ui.label(format!("leave-one-visit-out: {:.1} %", 100.0 * a));
-                    }
-                    confusion(ui, &t.cv);
-                }
-                ui.horizontal(|ui| {
-                    if ui.button("Use this model").clicked()
-                        && let Some(t) = &self.trained
-                    {
-                        requests.push(Request::UseModel(Box::new(t.board.clone())));
-                    }
-                    let board = matches!(source, Some(Source::Port(_)));
-                    if ui
-                        .add_enabled(board, egui::Button::new("Export to the board"))
-                        .on_hover_text(
-                            "with the sheet untouched: the board takes V_0 after the upload",
-                        )
-                        .on_disabled_hover_text("open the board's serial port first")
-                        .clicked()
-                    {
-                        match self.blob() {
-                            Ok(b) => requests.push(Request::Upload(b)),
-                            Err(e) => self.message = e.to_string(),
-                        }
-                    }
-                });
-                ui.horizontal(|ui| {
-                    ui.add(egui::TextEdit::singleline(&mut self.save_path));
-                    if ui.button("Save").clicked() {
-                        self.message = self.save();
-                    }
-                });
-                if ui.button("Start again").clicked() {
-                    self.step = Step::Setup;
-                }
-            }
+            Step::Trained => requests.extend(self.trained_ui(ui, source)),
         }
         if !self.message.is_empty() {
             ui.separator();
             ui.label(&self.message);
+        }
+        requests
+    }
+
+    /// The set-up step: the grid's rows and columns, the visits and frames per press, and
+    /// Start.
+    fn setup_ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        source: Option<&Source>,
+        sheet: &SheetSpec,
+    ) -> Option<Request> {
+        ui.label("A class grid over the sheet; each cell is pressed in turn, every visit.");
+        egui::Grid::new("wizard-setup").show(ui, |ui| {
+            ui.label("rows");
+            ui.add(egui::DragValue::new(&mut self.rows).range(1..=10));
+            ui.end_row();
+            ui.label("columns");
+            ui.add(egui::DragValue::new(&mut self.cols).range(1..=10));
+            ui.end_row();
+            ui.label("visits");
+            ui.add(egui::DragValue::new(&mut self.visits).range(1..=6));
+            ui.end_row();
+            ui.label("frames per press");
+            ui.add(egui::DragValue::new(&mut self.frames_per_press).range(2..=100));
+            ui.end_row();
+        });
+        if ui.button("Start").clicked() {
+            match source.and_then(Source::config) {
+                Some(base) => match self.start(sheet, base) {
+                    Ok(r) => return Some(r),
+                    Err(e) => self.message = e.to_string(),
+                },
+                None => self.message = "no frames yet: open a source first".into(),
+            }
+        }
+        None
+    }
+
+    /// The trained step: the cross-validations and confusion, using, exporting and saving the
+    /// model, or starting again.
+    fn trained_ui(&mut self, ui: &mut egui::Ui, source: Option<&Source>) -> Vec<Request> {
+        let mut requests = Vec::new();
+
+        if let Some(t) = &self.trained {
+            ui.label(format!(
+                "cross-validated accuracy: {:.1} %",
+                100.0 * t.cv.accuracy()
+            ));
+            if let Some(a) = t.leave_one_visit_out {
+                ui.label(format!("leave-one-visit-out: {:.1} %", 100.0 * a));
+            }
+            confusion(ui, &t.cv);
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Use this model").clicked()
+                && let Some(t) = &self.trained
+            {
+                requests.push(Request::UseModel(Box::new(t.board.clone())));
+            }
+            let board = matches!(source, Some(Source::Port(_)));
+            if ui
+                .add_enabled(board, egui::Button::new("Export to the board"))
+                .on_hover_text("with the sheet untouched: the board takes V_0 after the upload")
+                .on_disabled_hover_text("open the board's serial port first")
+                .clicked()
+            {
+                match self.blob() {
+                    Ok(b) => requests.push(Request::Upload(b)),
+                    Err(e) => self.message = e.to_string(),
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.add(egui::TextEdit::singleline(&mut self.save_path));
+            if ui.button("Save").clicked() {
+                self.message = self.save();
+            }
+        });
+        if ui.button("Start again").clicked() {
+            self.step = Step::Setup;
         }
         requests
     }

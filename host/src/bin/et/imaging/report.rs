@@ -44,20 +44,7 @@ pub(super) fn report(
     };
     let objects = recon.objects(image);
     let segment = match &args.segment {
-        Some(path) => {
-            let classes = et_recon::segment::as_values(&et_recon::segment(
-                &image.pixels,
-                &objects,
-                et_recon::SEGMENT_LEVEL,
-            ));
-            Some(write_pixels(
-                path,
-                grid,
-                &classes,
-                1.0,
-                "class: 0 background, 1 resistive, 2 conductive",
-            )?)
-        }
+        Some(path) => Some(write_segment(path, grid, image, &objects)?),
         None => None,
     };
     crate::output::write(&args.out, |partial| {
@@ -123,6 +110,42 @@ pub(super) fn report(
         out!("{}", serde_json::to_string(&summary)?);
         return Ok(());
     }
+    say_found(rois, found, m.as_ref(), truth.len(), &matches);
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
+
+/// The segmentation of `image` by its `objects` (0 background, 1 resistive, 2 conductive)
+/// written to `path` as pixels.
+fn write_segment(
+    path: &std::path::Path,
+    grid: &et_recon::PixelGrid,
+    image: &et_recon::Image,
+    objects: &[et_recon::Object],
+) -> Result<ImageGrid> {
+    let classes = et_recon::segment::as_values(&et_recon::segment(
+        &image.pixels,
+        objects,
+        et_recon::SEGMENT_LEVEL,
+    ));
+    write_pixels(
+        path,
+        grid,
+        &classes,
+        1.0,
+        "class: 0 background, 1 resistive, 2 conductive",
+    )
+}
+
+/// The regions and touches found, the metrics against a single true touch, and each of
+/// `truths` true touches' match when there are several, said on standard error.
+fn say_found(
+    rois: &[et_recon::Region],
+    found: &[et_recon::Region],
+    m: Option<&et_recon::Metrics>,
+    truths: usize,
+    matches: &[et_recon::TouchMatch],
+) {
     for (i, r) in rois.iter().enumerate().take(5) {
         eprintln!(
             "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
@@ -145,8 +168,8 @@ pub(super) fn report(
             m.pe, m.se, m.rng, m.bvc
         );
     }
-    if truth.len() > 1 {
-        for t in &matches {
+    if truths > 1 {
+        for t in matches {
             eprintln!(
                 "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
                 t.truth[0] * 1e3,
@@ -157,8 +180,6 @@ pub(super) fn report(
             );
         }
     }
-    eprintln!("wrote {}", args.out.display());
-    Ok(())
 }
 
 /// `et forward --json`.
