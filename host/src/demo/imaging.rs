@@ -329,10 +329,10 @@ fn markdown(
          reference study (0.10 AD and opposite, 0.08 PP, 0.05 PP-PP). Colour: conductivity \
          change over the background. Touches: the regions of interest split at their saddles \
          (a peak stands apart when the dip below it is a quarter of the image's maximum, \
-         `et_recon::touches`), kept when they reach 5 times their pixels' noise (the noise from \
-         the spread of the reference frames through the reconstruction matrix, \
-         `et_recon::touches::above_noise`), and when their peak reaches half the strongest's and their area \
-         a quarter of a 10 mm fingertip's (`et_recon::select::significant`). The \"touches\" columns \
+         `et_recon::touches`), kept when they reach 5 times their pixels' noise (the reference \
+         frames' spread and the model's own error through the reconstruction matrix, \
+         `et_recon::touch_rule`, the rule `et reconstruct` and `et stream` share), and when \
+         their peak reaches half the strongest's and their area a quarter of a 10 mm fingertip's (`et_recon::select::significant`). The \"touches\" columns \
          count these touches.\n",
         triangles
     );
