@@ -457,18 +457,17 @@ pub fn collect_presses_with(
         s_sub
     ];
     let mut obs = vec![0.0f32; s_sub * k];
-    let (mut rows, mut y, mut positions, mut visit, mut baselines, mut pressures) = (
-        Vec::new(),
-        Vec::new(),
-        Vec::new(),
-        Vec::new(),
-        Vec::new(),
-        Vec::new(),
-    );
+    let mut rows = Rows::default();
+    let mut baselines = Vec::new();
+    let electrodes = usize::from(spec.physical.electrodes.count);
+    let hand = Hand {
+        wobble: plan.wobble,
+        correlation_s: plan.wobble_s,
+    };
     for v in 0..plan.visits {
         // A frameless sheet is handled between visits: its electrodes sit somewhere else
         // within their movement each time.
-        let offsets: Vec<f64> = (0..spec.physical.electrodes.count)
+        let offsets: Vec<f64> = (0..electrodes)
             .map(|_| plan.electrode_movement * rng.normal())
             .collect();
         let field = (plan.unevenness > 0.0).then(|| Unevenness::draw(plan.unevenness, &mut rng));
@@ -476,20 +475,11 @@ pub fn collect_presses_with(
             Some(f) => SimulatedSheet::uneven(spec, offsets, f),
             None => SimulatedSheet::new(spec, offsets),
         };
-        let sheet = Arc::new(build(&offsets)?);
         // Each visit is a measurement set: the junction potentials and the sheet's
         // conductance differ from the last.
-        let set = frontend
-            .sets
-            .draw(usize::from(spec.physical.electrodes.count), &mut rng);
-        let hand = Hand {
-            wobble: plan.wobble,
-            correlation_s: plan.wobble_s,
-        };
-        let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
-        fe.set_state(&set).map_err(CollectError::Sim)?;
-        fe.set_hand(hand).map_err(CollectError::Sim)?;
-        let scanner = Scanner::new(config, &mut fe)?;
+        let set = frontend.sets.draw(electrodes, &mut rng);
+        let held = |sheet, seed| posed(sheet, frontend, &set, hand, seed, config);
+        let (mut fe, scanner) = held(build(&offsets)?, rng.next_u64())?;
         // The untouched frame, as the sheet lies before the first press.
         scanner.scan_subsections(&mut fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
         let untouched: Vec<&[f32]> = obs.chunks(k).collect();
@@ -502,18 +492,11 @@ pub fn collect_presses_with(
                 .iter()
                 .map(|o| o + plan.press_movement * rng.normal())
                 .collect();
-            let sheet = Arc::new(build(&moved)?);
-            let mut fe = SimFrontend::new(sheet, frontend, rng.next_u64())?;
-            fe.set_state(&set).map_err(CollectError::Sim)?;
-            fe.set_hand(hand).map_err(CollectError::Sim)?;
-            Scanner::new(config, &mut fe)?;
-            poses.push(fe);
+            poses.push(held(build(&moved)?, rng.next_u64())?.0);
         }
         // Where the front end's state heads during the visit (a fraction `drift` of the way
         // to another set by its end).
-        let heading = frontend
-            .sets
-            .draw(usize::from(spec.physical.electrodes.count), &mut rng);
+        let heading = frontend.sets.draw(electrodes, &mut rng);
         let presses = visit_presses(&mut rng);
         let count = presses.len().max(1) as f64;
         let mut remnants: Vec<Touch> = Vec::new();
@@ -543,20 +526,20 @@ pub fn collect_presses_with(
                 .collect();
             scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
             for o in obs.chunks(k) {
-                rows.extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
-                y.push(press.label);
-                positions.push(first.position);
-                pressures.push(first.pressure);
-                visit.push(v as u16);
+                rows.x
+                    .extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
+                rows.y.push(press.label);
+                rows.positions.push(first.position);
+                rows.pressures.push(first.pressure);
+                rows.visit.push(v as u16);
             }
         }
     }
-    let x = DMatrix::from_row_slice(y.len(), feature_index.len(), &rows);
     Ok(Dataset {
-        x,
-        y,
-        positions,
-        pressure: pressures,
+        x: DMatrix::from_row_slice(rows.y.len(), feature_index.len(), &rows.x),
+        y: rows.y,
+        positions: rows.positions,
+        pressure: rows.pressures,
         electrodes: spec
             .physical
             .electrodes
@@ -565,11 +548,39 @@ pub fn collect_presses_with(
             .map(|&t| spec.physical.shape.boundary_point(t))
             .collect(),
         centres: centres.to_vec(),
-        visit,
+        visit: rows.visit,
         baselines: DMatrix::from_row_slice(plan.visits, feature_index.len(), &baselines),
         feature_index,
         config,
     })
+}
+
+/// The rows a collection gathers, one per scan: the features (row-major), then each row's
+/// label, first touch's position (m) and pressure (Pa), and visit.
+#[derive(Default)]
+struct Rows {
+    x: Vec<f64>,
+    y: Vec<u16>,
+    positions: Vec<[f64; 2]>,
+    pressures: Vec<f64>,
+    visit: Vec<u16>,
+}
+
+/// A simulated front end on `sheet` (its noise drawn from `seed`) in the measurement set
+/// `set`, held by `hand`, with the scanner for `config` set up on it.
+fn posed(
+    sheet: SimulatedSheet,
+    frontend: FrontendSpec,
+    set: &SetState,
+    hand: Hand,
+    seed: u64,
+    config: ScanConfig,
+) -> Result<(SimFrontend, Scanner), CollectError> {
+    let mut fe = SimFrontend::new(Arc::new(sheet), frontend, seed)?;
+    fe.set_state(set).map_err(CollectError::Sim)?;
+    fe.set_hand(hand).map_err(CollectError::Sim)?;
+    let scanner = Scanner::new(config, &mut fe)?;
+    Ok((fe, scanner))
 }
 
 /// The set `start` moved a fraction `f` of the way to `heading`'s deviation from nominal:

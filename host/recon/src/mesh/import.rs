@@ -204,49 +204,11 @@ impl Mesh {
                 "an electrode names a node past the {n} nodes"
             )));
         }
-        // Indices are in range (checked above); NaN otherwise, which is refused as degenerate.
-        let at = |i: usize| nodes.get(i).copied().unwrap_or([f64::NAN; 2]);
-        let area2 = |t: &[usize; 3]| {
-            let [a, b, c] = t.map(at);
-            (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
-        };
-        let mean = triangles.iter().map(|t| area2(t).abs()).sum::<f64>() / triangles.len() as f64;
-        for (i, t) in triangles.iter_mut().enumerate() {
-            let a = area2(t);
-            if a.is_nan() || a.abs() <= 1e-12 * mean {
-                return Err(MeshError::Spec(format!(
-                    "triangle {i} is degenerate (area {:.3e} m^2)",
-                    0.5 * a.abs()
-                )));
-            }
-            if a < 0.0 {
-                t.swap(1, 2);
-            }
-        }
+        orient(&nodes, &mut triangles)?;
         if let Some(l) = electrodes.iter().position(Vec::is_empty) {
             return Err(MeshError::EmptyElectrode { electrode: l });
         }
-        // Point electrodes: only [i, i] entries, all the same node.
-        let point: Vec<Option<usize>> = electrodes
-            .iter()
-            .map(|el| {
-                let first = el.first()?[0];
-                el.iter()
-                    .all(|&[a, b]| a == first && b == first)
-                    .then_some(first)
-            })
-            .collect();
-        if let Some(l) = (0..electrodes.len()).find(|&l| {
-            point.get(l).copied().flatten().is_none()
-                && electrodes
-                    .get(l)
-                    .is_some_and(|el| el.iter().any(|&[a, b]| a == b))
-        }) {
-            return Err(MeshError::Spec(format!(
-                "electrode {l} mixes a single node with edges: give one node (a point \
-                 electrode) or its nodes in order along the boundary"
-            )));
-        }
+        let point = point_electrodes(&electrodes)?;
         let mut electrodes = electrodes;
         for (el, p) in electrodes.iter_mut().zip(&point) {
             if p.is_some() {
@@ -254,46 +216,11 @@ impl Mesh {
             }
         }
         check_topology(n, &triangles, &electrodes, &point)?;
-        // Each node under one electrode at most: two that share a node are shorted together.
-        let mut owner = vec![None; n];
-        for (l, (edges, p)) in electrodes.iter().zip(&point).enumerate() {
-            let under: Vec<usize> = match p {
-                Some(i) => vec![*i],
-                None => edges.iter().flatten().copied().collect(),
-            };
-            for i in under {
-                match owner.get_mut(i) {
-                    Some(Some(other)) if *other != l => {
-                        return Err(MeshError::Spec(format!(
-                            "electrodes {other} and {l} share node {i}: electrodes that touch \
-                             are one electrode (leave a gap of at least one edge)"
-                        )));
-                    }
-                    Some(o) => *o = Some(l),
-                    None => {}
-                }
-            }
-        }
+        check_unshared(n, &electrodes, &point)?;
         let centre_nodes = electrodes
             .iter()
             .zip(&point)
-            .map(|(edges, p)| {
-                if let Some(i) = *p {
-                    return i;
-                }
-                let mut v: Vec<usize> = edges.iter().flatten().copied().collect();
-                v.sort_unstable();
-                v.dedup();
-                let k = v.len() as f64;
-                let c = v.iter().fold([0.0, 0.0], |[sx, sy], &i| {
-                    let [x, y] = at(i);
-                    [sx + x / k, sy + y / k]
-                });
-                v.iter()
-                    .copied()
-                    .min_by(|&a, &b| dist(at(a), c).total_cmp(&dist(at(b), c)))
-                    .unwrap_or(0)
-            })
+            .map(|(edges, p)| p.unwrap_or_else(|| centre_node(&nodes, edges)))
             .collect();
         Ok(Self {
             nodes,
@@ -302,6 +229,103 @@ impl Mesh {
             centre_nodes,
         })
     }
+}
+
+/// Node `i` of `nodes` (m), or NaN past their end (which the checks refuse as degenerate).
+fn node(nodes: &[[f64; 2]], i: usize) -> [f64; 2] {
+    nodes.get(i).copied().unwrap_or([f64::NAN; 2])
+}
+
+/// Every triangle turned counter-clockwise; a degenerate one (area below 1e-12 of the mean, or
+/// NaN) refused.
+fn orient(nodes: &[[f64; 2]], triangles: &mut [[usize; 3]]) -> Result<(), MeshError> {
+    let area2 = |t: &[usize; 3]| {
+        let [a, b, c] = t.map(|i| node(nodes, i));
+        (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+    };
+    let mean = triangles.iter().map(|t| area2(t).abs()).sum::<f64>() / triangles.len() as f64;
+    for (i, t) in triangles.iter_mut().enumerate() {
+        let a = area2(t);
+        if a.is_nan() || a.abs() <= 1e-12 * mean {
+            return Err(MeshError::Spec(format!(
+                "triangle {i} is degenerate (area {:.3e} m^2)",
+                0.5 * a.abs()
+            )));
+        }
+        if a < 0.0 {
+            t.swap(1, 2);
+        }
+    }
+    Ok(())
+}
+
+/// Each electrode's node when it is a point electrode (only `[i, i]` entries, all the same
+/// node); an electrode that mixes a single node with edges refused.
+fn point_electrodes(electrodes: &[Vec<[usize; 2]>]) -> Result<Vec<Option<usize>>, MeshError> {
+    let point: Vec<Option<usize>> = electrodes
+        .iter()
+        .map(|el| {
+            let first = el.first()?[0];
+            el.iter()
+                .all(|&[a, b]| a == first && b == first)
+                .then_some(first)
+        })
+        .collect();
+    let mixed = electrodes
+        .iter()
+        .zip(&point)
+        .position(|(el, p)| p.is_none() && el.iter().any(|&[a, b]| a == b));
+    if let Some(l) = mixed {
+        return Err(MeshError::Spec(format!(
+            "electrode {l} mixes a single node with edges: give one node (a point \
+             electrode) or its nodes in order along the boundary"
+        )));
+    }
+    Ok(point)
+}
+
+/// Each node under one electrode at most: two that share a node are shorted together.
+fn check_unshared(
+    n: usize,
+    electrodes: &[Vec<[usize; 2]>],
+    point: &[Option<usize>],
+) -> Result<(), MeshError> {
+    let mut owner = vec![None; n];
+    for (l, (edges, p)) in electrodes.iter().zip(point).enumerate() {
+        let under: Vec<usize> = match p {
+            Some(i) => vec![*i],
+            None => edges.iter().flatten().copied().collect(),
+        };
+        for i in under {
+            match owner.get_mut(i) {
+                Some(Some(other)) if *other != l => {
+                    return Err(MeshError::Spec(format!(
+                        "electrodes {other} and {l} share node {i}: electrodes that touch \
+                         are one electrode (leave a gap of at least one edge)"
+                    )));
+                }
+                Some(o) => *o = Some(l),
+                None => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An electrode's centre node: of the nodes of its `edges`, the one nearest their mean.
+fn centre_node(nodes: &[[f64; 2]], edges: &[[usize; 2]]) -> usize {
+    let mut v: Vec<usize> = edges.iter().flatten().copied().collect();
+    v.sort_unstable();
+    v.dedup();
+    let k = v.len() as f64;
+    let c = v.iter().fold([0.0, 0.0], |[sx, sy], &i| {
+        let [x, y] = node(nodes, i);
+        [sx + x / k, sy + y / k]
+    });
+    v.iter()
+        .copied()
+        .min_by(|&a, &b| dist(node(nodes, a), c).total_cmp(&dist(node(nodes, b), c)))
+        .unwrap_or(0)
 }
 
 /// What the finite elements need of a mesh's topology, each with its cause named: every

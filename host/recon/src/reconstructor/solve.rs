@@ -8,6 +8,7 @@ use super::{ImagingError, Matrix, Reconstructor};
 use crate::gauss_newton::{Data, GaussNewton, gauss_newton};
 use crate::gcv::{Criterion, default_alphas};
 use crate::greit::{Greit, Regularisation};
+use crate::pixels::PixelGrid;
 use crate::onestep::{ReconError, floor_variance};
 
 impl Reconstructor {
@@ -96,15 +97,8 @@ impl Reconstructor {
             let clock = Instant::now();
             let values = matrix.recon.reconstruct(dv)?;
             timings.frame = clock.elapsed().as_secs_f64();
-            return Ok(Solved {
-                alpha,
-                pixels: grid.image(&values),
-                noise_sd: grid.noise_sd(&matrix.recon, var)?,
-                mesh_values: Some(values),
-                iterations: None,
-                greit: None,
-                timings,
-            });
+            let noise_sd = grid.noise_sd(&matrix.recon, var)?;
+            return Ok(Solved::on_mesh(alpha, grid, values, noise_sd, None, timings));
         }
         let clock = Instant::now();
         let sigma0 = self.imager.background();
@@ -123,20 +117,14 @@ impl Reconstructor {
         timings.frame = clock.elapsed().as_secs_f64();
         let last = fit.iterates.last().ok_or(ReconError::Singular)?;
         let d: Vec<f64> = last.sigma.iter().zip(&sigma0).map(|(a, b)| a - b).collect();
-        Ok(Solved {
-            alpha,
-            pixels: grid.image(&d),
-            noise_sd: grid.image(&last.noise_sd),
-            mesh_values: Some(d),
-            iterations: Some(Iterations {
-                completed: fit.iterates.len(),
-                residual: last.residual,
-                steps: fit.iterates.iter().map(|i| i.step).collect(),
-                stop: fit.stop,
-            }),
-            greit: None,
-            timings,
-        })
+        let iterations = Iterations {
+            completed: fit.iterates.len(),
+            residual: last.residual,
+            steps: fit.iterates.iter().map(|i| i.step).collect(),
+            stop: fit.stop,
+        };
+        let noise_sd = grid.image(&last.noise_sd);
+        Ok(Solved::on_mesh(alpha, grid, d, noise_sd, Some(iterations), timings))
     }
 }
 
@@ -150,4 +138,27 @@ pub(super) struct Solved {
     pub(super) iterations: Option<Iterations>,
     pub(super) greit: Option<(f64, f64)>,
     pub(super) timings: FrameTimings,
+}
+
+impl Solved {
+    /// A Gauss-Newton solve's result: the change of each element's conductivity `values`
+    /// drawn on `grid`, with the pixels' noise.
+    fn on_mesh(
+        alpha: f64,
+        grid: &PixelGrid,
+        values: Vec<f64>,
+        noise_sd: Vec<Option<f64>>,
+        iterations: Option<Iterations>,
+        timings: FrameTimings,
+    ) -> Self {
+        Self {
+            alpha,
+            pixels: grid.image(&values),
+            noise_sd,
+            mesh_values: Some(values),
+            iterations,
+            greit: None,
+            timings,
+        }
+    }
 }

@@ -95,18 +95,15 @@ impl Wizard {
     ) -> Option<Request> {
         ui.label("A class grid over the sheet; each cell is pressed in turn, every visit.");
         egui::Grid::new("wizard-setup").show(ui, |ui| {
-            ui.label("rows");
-            ui.add(egui::DragValue::new(&mut self.rows).range(1..=10));
-            ui.end_row();
-            ui.label("columns");
-            ui.add(egui::DragValue::new(&mut self.cols).range(1..=10));
-            ui.end_row();
-            ui.label("visits");
-            ui.add(egui::DragValue::new(&mut self.visits).range(1..=6));
-            ui.end_row();
-            ui.label("frames per press");
-            ui.add(egui::DragValue::new(&mut self.frames_per_press).range(2..=100));
-            ui.end_row();
+            let mut row = |name: &str, value: &mut usize, range| {
+                ui.label(name);
+                ui.add(egui::DragValue::new(value).range(range));
+                ui.end_row();
+            };
+            row("rows", &mut self.rows, 1..=10);
+            row("columns", &mut self.cols, 1..=10);
+            row("visits", &mut self.visits, 1..=6);
+            row("frames per press", &mut self.frames_per_press, 2..=100);
         });
         if ui.button("Start").clicked() {
             match source.and_then(Source::config) {

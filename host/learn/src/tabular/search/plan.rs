@@ -1,0 +1,194 @@
+//! A training's plan: how its rows are cross-validated, every candidate searched, the best
+//! that fits on every row, and what is said of the choice.
+
+use super::*;
+
+/// How a training's rows are cross-validated: leaving each group out when the rows name two
+/// groups or more, else `opts.folds` folds by `opts.scheme`.
+pub(super) struct Cv {
+    /// Folds (groups when grouped).
+    pub(super) k: usize,
+    pub(super) scheme: CvScheme,
+    pub(super) grouped: bool,
+    /// Each row's group and the groups' names, when the rows have groups.
+    pub(super) groups: Option<(Vec<usize>, Vec<String>)>,
+}
+
+impl Cv {
+    /// The cross-validation of `table`'s rows under `opts`.
+    pub(super) fn plan(table: &Table, opts: &TrainOptions) -> Result<Self, TabularError> {
+        let n = table.rows();
+        let groups = table.group_index();
+        let grouped = groups.as_ref().is_some_and(|(_, names)| names.len() >= 2);
+        let k = if grouped {
+            groups.as_ref().map_or(0, |(_, names)| names.len())
+        } else {
+            opts.folds
+        };
+        if !grouped && n < 2 {
+            return Err(usage(format!(
+                "{n} training row(s): cross-validation needs at least 2 (more rows with --rows)"
+            )));
+        }
+        if !grouped && (opts.folds < 2 || opts.folds > n) {
+            return Err(usage(format!(
+                "{} folds for {n} training rows: use 2 to {n}",
+                opts.folds
+            )));
+        }
+        let scheme = if grouped {
+            CvScheme::Groups
+        } else if opts.scheme == CvScheme::Groups {
+            return Err(usage(
+                "leave-one-group-out cross-validation needs each row's group (--groups)",
+            ));
+        } else {
+            opts.scheme
+        };
+        Ok(Self {
+            k,
+            scheme,
+            grouped,
+            groups,
+        })
+    }
+
+    /// Each of the `n` rows' fold: its group when grouped, else by the scheme (stratified by
+    /// `labels` when given).
+    pub(super) fn folds(&self, n: usize, labels: Option<&[u16]>, seed: u64) -> Vec<usize> {
+        match &self.groups {
+            Some((index, _)) if self.grouped => index.clone(),
+            _ => folds(n, self.k, self.scheme, labels, seed),
+        }
+    }
+}
+
+/// Every candidate of `choice`'s methods, cross-validated by `cv`: the classifiers on the
+/// class labels, the regressors on the positions (`targets`).
+pub(super) fn search_all(
+    table: &Table,
+    choice: Choice,
+    opts: &TrainOptions,
+    cv: &Cv,
+    (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
+    progress: Progress<'_>,
+) -> Result<Vec<Candidate>, TabularError> {
+    let methods: Vec<Method> = match choice {
+        Choice::One(m) => vec![m],
+        Choice::Auto if targets.is_some() && opts.grid.is_none() => {
+            vec![
+                Method::Ridge,
+                Method::Knn,
+                Method::KernelRidge,
+                Method::Mlp,
+                Method::Gp,
+            ]
+        }
+        Choice::Auto => vec![Method::Lda, Method::Qda],
+    };
+    let n = table.rows();
+    let mut search: Vec<Candidate> = Vec::new();
+    for &method in &methods {
+        let found = if method.is_classifier() {
+            let (labels, _) = classes.ok_or_else(|| {
+                usage(format!(
+                    "{} needs class labels: give a label column, or make classes from the \
+                     positions with a grid (--grid 7x7)",
+                    method.name()
+                ))
+            })?;
+            let fold = cv.folds(n, Some(&labels.index), opts.seed);
+            search_classifier(table, method, labels, &fold, progress)?
+        } else {
+            let t = targets.ok_or_else(|| {
+                usage(format!(
+                    "{} predicts positions: the targets need x and y columns (the data has \
+                     only class labels: use qda or lda)",
+                    method.name()
+                ))
+            })?;
+            let fold = cv.folds(n, None, opts.seed);
+            search_regressor(&table.x, t, method, &fold, cv.grouped, progress)?
+        };
+        search.extend(found);
+    }
+    Ok(search)
+}
+
+/// What the training says when it chose the average `avg` of `members`.
+pub(super) fn average_note(avg: &Candidate, members: &[Candidate], by_drift: bool) -> String {
+    format!(
+        "the mean of {}'s predictions cross-validated at {:.2} mm{} against {:.2} for {} \
+         alone: chose their average",
+        members
+            .iter()
+            .map(|c| c.method.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        avg.choice_loss(by_drift),
+        if by_drift {
+            " with channels drifted"
+        } else {
+            ""
+        },
+        members
+            .first()
+            .map_or(f64::NAN, |c| c.choice_loss(by_drift)),
+        members.first().map_or("", |c| c.method.name())
+    )
+}
+
+/// The first of the `ranked` candidates whose fit on every row succeeds ([`fit_final`]): the
+/// candidate (a QDA at shrinkage 1 saved as the LDA it is), its tables and standardisation,
+/// and whether it was so turned into an LDA.
+#[allow(clippy::type_complexity)]
+pub(super) fn fit_first(
+    ranked: &[&Candidate],
+    table: &Table,
+    (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
+    members: &[Candidate],
+    progress: Progress<'_>,
+) -> Result<(Candidate, (Tables, Vec<f64>, Vec<f64>), bool), TabularError> {
+    let mut last_error = None;
+    for &best in ranked {
+        let lda = as_lda_if_equal(best, table.x.ncols(), classes.map(|(l, _)| l));
+        let best = lda.as_ref().unwrap_or(best);
+        progress(&format!("fitting {}", best.method.name()), 0, 1);
+        match fit_final(table, best, targets, classes, members, progress) {
+            Ok(f) => {
+                progress(&format!("fitting {}", best.method.name()), 1, 1);
+                return Ok((best.clone(), f, lda.is_some()));
+            }
+            Err(e) => last_error = Some(e),
+        }
+    }
+    Err(last_error.unwrap_or_else(|| {
+        TabularError::Fit(FitError::Shape(
+            "no candidate could be fitted in cross-validation".into(),
+        ))
+    }))
+}
+
+/// The hyperparameters a fit learns beside those searched: a Gaussian process's signal and
+/// noise variances and its length scales' median.
+pub(super) fn fitted_hyperparameters(tables: &Tables) -> Vec<(String, f64)> {
+    let Tables::Gp {
+        length_scales,
+        signal_variance,
+        noise_variance,
+        ..
+    } = tables
+    else {
+        return Vec::new();
+    };
+    let mut sorted = length_scales.clone();
+    sorted.sort_by(f64::total_cmp);
+    vec![
+        ("signal_variance".to_string(), *signal_variance),
+        ("noise_variance".to_string(), *noise_variance),
+        (
+            "length_scale_median".to_string(),
+            sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
+        ),
+    ]
+}

@@ -1,0 +1,133 @@
+//! One frame imaged: the reconstruction, projection, noise and classifier made current for
+//! its configuration, then the frame's pixels, touches and event.
+
+use super::*;
+
+/// What imaging one frame reads, made current for its configuration and settings: the
+/// reconstruction, the projection, the reference's noise and the classifier.
+pub(super) struct Imaging<'a> {
+    pub(super) recon: &'a Reconstructor,
+    /// The grid's pixels inside the sheet, in the projection's row order.
+    pub(super) inside: &'a [usize],
+    /// Each grid pixel's row in the projection (None outside the sheet).
+    pub(super) inside_index: &'a [Option<usize>],
+    pub(super) touch_factor: f64,
+    pub(super) projection: &'a Projection,
+    pub(super) noise: &'a Noise,
+    pub(super) classifier: Option<&'a Board>,
+}
+
+impl Imaging<'_> {
+    /// `frame` imaged against the reference, its touches found and, when touched, its event.
+    pub(super) fn frame(&self, frame: LiveFrame, threshold: f64) -> Result<Output, LiveError> {
+        let Noise {
+            v0,
+            var_dv,
+            inverse_sd,
+            ..
+        } = self.noise;
+        let dv: Vec<f64> = frame
+            .voltages
+            .iter()
+            .zip(v0)
+            .map(|(a, b)| f64::from(*a) - b)
+            .collect();
+        let values = self.projection.matrix.image(&dv)?;
+        // The strongest pixel in units of its own noise (a touch raises the conductivity).
+        let intensity = f64::from(
+            values
+                .iter()
+                .zip(inverse_sd)
+                .map(|(v, inverse)| v * inverse)
+                .fold(0.0f32, f32::max),
+        );
+        let mut image = vec![None; self.recon.grid().triangle.len()];
+        for (&p, v) in self.inside.iter().zip(values.iter()) {
+            image[p] = Some(f64::from(*v));
+        }
+        let regions = if intensity > self.touch_factor {
+            self.touches(&image, &values, &dv, threshold)
+        } else {
+            Vec::new()
+        };
+        let touches = et_recon::select::significant(
+            &regions,
+            &et_recon::select::Settings::new([0.0, 0.0], 1.0),
+        );
+        let event =
+            (!regions.is_empty()).then(|| self.event(&frame, &regions, touches.len(), intensity));
+        Ok(Output {
+            referencing: None,
+            image,
+            regions,
+            touches,
+            bvc: stats::bvc_dv(&dv),
+            noise: var_dv.iter().sum::<f64>().sqrt(),
+            event,
+            threshold,
+            frame,
+        })
+    }
+
+    /// The touches by `et reconstruct`'s rule (et_recon::touches::touch_rule) in a frame's
+    /// `image` (grid pixels; `values` its inside pixels, `dv` its K changes, V): regions split
+    /// at their saddles, each reaching the touch factor times its pixels' noise somewhere, that
+    /// noise what the Reconstructor's images carry (the frames' and the model's own error, a
+    /// share of dV) made for the regions' pixels alone. Called for a frame whose strongest
+    /// pixel reaches the factor over the reference's noise alone, which is smaller: one that
+    /// does not has no touch, and no region is searched.
+    pub(super) fn touches(
+        &self,
+        image: &[Option<f64>],
+        values: &[f32],
+        dv: &[f64],
+        threshold: f64,
+    ) -> Vec<Region> {
+        let var: Vec<f32> = self
+            .recon
+            .imaging_variance(&self.noise.var_dv, dv)
+            .iter()
+            .map(|&v| v as f32)
+            .collect();
+        let (inside_index, inverse_sd, factor) =
+            (self.inside_index, &self.noise.inverse_sd, self.touch_factor);
+        touch_rule(self.recon.grid(), image, threshold, factor, |p| {
+            let i = (*inside_index.get(p)?)?;
+            let inverse = *inverse_sd.get(i)?;
+            // A pixel below the factor over the reference's noise alone is below it over the
+            // larger noise too: its noise need not be made (the reference's, which it is
+            // given, keeps it below the factor; a region's z is its largest pixel's).
+            if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
+                return Some(f64::from(1.0 / inverse));
+            }
+            self.projection.squares.sd(i, &var)
+        })
+    }
+
+    /// A touched frame's event: the classifier's class, position and posterior when there is
+    /// one, else the board's class and the strongest region's centroid.
+    pub(super) fn event(
+        &self,
+        frame: &LiveFrame,
+        regions: &[Region],
+        touches: usize,
+        intensity: f64,
+    ) -> TouchEvent {
+        let model = self
+            .classifier
+            .and_then(|c| c.classify(&frame.config, &frame.voltages, &self.noise.v0));
+        let chip = frame.chip_class.map(|c| c.class);
+        let image_position = regions.first().map_or([f64::NAN; 2], |r| {
+            [r.centroid[0] * 1e3, r.centroid[1] * 1e3]
+        });
+        TouchEvent {
+            t_us: frame.t_us,
+            seq: frame.seq,
+            class: chip.or(model.map(|m| m.class)),
+            position_mm: model.map_or(image_position, |m| m.centre_mm),
+            intensity,
+            confidence: model.map(|m| m.posterior),
+            regions: touches,
+        }
+    }
+}
