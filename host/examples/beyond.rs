@@ -51,54 +51,102 @@ fn rows(x: &DMatrix<f64>) -> Vec<Vec<f64>> {
     x.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
+/// The sheet, its front end and scan, and the collection plans every part of the example
+/// draws from.
+struct Setup {
+    spec: SheetSpec,
+    fe: FrontendSpec,
+    config: ScanConfig,
+    /// The training visits.
+    plan: Plan,
+    /// The "next day" test visit.
+    next_day: Plan,
+    /// Training presses per visit.
+    presses: usize,
+}
+
+impl Setup {
+    fn new(quick: bool) -> Self {
+        let spec = SheetSpec::rectangle(0.13, 0.13, 16);
+        // The calibrated simulator's operating point (docs/calibration.md): PGIA gain 8, the
+        // collection's calibrated press variability and its 7.5 mm fingertip.
+        let config = training_config(ScanConfig {
+            gain: et_sim::frontend::CALIBRATION_GAIN,
+            ..ScanConfig::REFERENCE
+        });
+        let plan = Plan {
+            visits: 6,
+            scans: if quick { 5 } else { 20 },
+            subsections: 5,
+            pressure_pa: (5e3, 60e3),
+            ..Plan::default()
+        };
+        let next_day = Plan {
+            visits: 1,
+            subsections: 1,
+            seed: 77,
+            ..plan.clone()
+        };
+        Self {
+            spec,
+            fe: FrontendSpec::default(),
+            config,
+            plan,
+            next_day,
+            presses: if quick { 150 } else { 400 },
+        }
+    }
+
+    /// `n` random presses of `touches` touches each, collected under `plan`.
+    fn presses(&self, plan: &Plan, n: usize, touches: usize) -> Dataset {
+        collect_presses(
+            &self.spec,
+            self.fe,
+            self.config,
+            &[],
+            plan,
+            random_presses(&self.spec, &self.plan, n, touches),
+        )
+        .expect("collect")
+    }
+
+    /// `n` one-touch presses under `plan`, then `n` two-touch presses under it with `seed`.
+    fn one_and_two(&self, plan: &Plan, n: usize, seed: u64) -> Dataset {
+        let mut one = self.presses(plan, n, 1);
+        let two = self.presses(
+            &Plan {
+                seed,
+                ..plan.clone()
+            },
+            n,
+            2,
+        );
+        one.append(two).expect("append");
+        one
+    }
+}
+
+/// Each method's name and its position errors' empirical CDF, for the plot.
+type Cdfs = Vec<(String, Vec<(f64, f64)>)>;
+
+/// The regression table's row for one method.
+fn regression_row(name: &str, pred: &[Target3], truth: &[Target3], macs: usize) {
+    let s = summarise(pred, truth, true);
+    println!(
+        "{name:<40} {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {macs:10}",
+        s.mean_mm, s.median_mm, s.p90_mm, s.pressure_mae_kpa, s.pressure_r,
+    );
+}
+
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let spec = SheetSpec::rectangle(0.13, 0.13, 16);
-    // The calibrated simulator's operating point (docs/calibration.md): PGIA gain 8, the
-    // collection's calibrated press variability and its 7.5 mm fingertip.
-    let config = training_config(ScanConfig {
-        gain: et_sim::frontend::CALIBRATION_GAIN,
-        ..ScanConfig::REFERENCE
-    });
-    let fe = FrontendSpec::default();
-    let plan = Plan {
-        visits: 6,
-        scans: if quick { 5 } else { 20 },
-        subsections: 5,
-        pressure_pa: (5e3, 60e3),
-        ..Plan::default()
-    };
-    let presses = if quick { 150 } else { 400 };
-    let next_day = Plan {
-        visits: 1,
-        subsections: 1,
-        seed: 77,
-        ..plan.clone()
-    };
+    let setup = Setup::new(quick);
     let started = std::time::Instant::now();
-    let train = collect_presses(
-        &spec,
-        fe,
-        config,
-        &[],
-        &plan,
-        random_presses(&spec, &plan, presses, 1),
-    )
-    .expect("collect");
-    let test = collect_presses(
-        &spec,
-        fe,
-        config,
-        &[],
-        &next_day,
-        random_presses(&spec, &plan, 400, 1),
-    )
-    .expect("collect");
+    let train = setup.presses(&setup.plan, setup.presses, 1);
+    let test = setup.presses(&setup.next_day, 400, 1);
     eprintln!("collected in {:.1} s", started.elapsed().as_secs_f64());
     let (x, xt) = (train.features(true).unwrap(), test.features(true).unwrap());
     let (t, tt) = (targets(&train), targets(&test));
-    let test_rows = rows(&xt);
-    let mut cdfs: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     println!(
         "Regression, next-day test of {} presses ({} training observations):",
         tt.len(),
@@ -107,19 +155,29 @@ fn main() {
     println!(
         "method                                   mean_mm  median_mm  p90_mm  pressure_MAE_kPa  pressure_r  MACs/frame"
     );
-    let ridge = Ridge::fit(&x, &t, 1e-4).expect("ridge");
+    let mut cdfs = regression(&x, &t, &xt, &tt);
+    let qda = class_based(&setup, &x, &t, &xt, &tt, &mut cdfs);
+    one_touch_or_two(&setup, &qda);
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(dir) = args
+        .iter()
+        .position(|a| a == "--plots")
+        .and_then(|i| args.get(i + 1))
+    {
+        plot_cdfs(std::path::Path::new(dir), cdfs);
+    }
+    eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
+}
+
+/// Linear ridge, then kernel ridge on direction and raw features: the table's rows and their
+/// CDFs.
+fn regression(x: &DMatrix<f64>, t: &[Target3], xt: &DMatrix<f64>, tt: &[Target3]) -> Cdfs {
+    let test_rows = rows(xt);
+    let mut cdfs: Cdfs = Vec::new();
+    let ridge = Ridge::fit(x, t, 1e-4).expect("ridge");
     let pred: Vec<Target3> = test_rows.iter().map(|r| ridge.predict(r)).collect();
-    let s = summarise(&pred, &tt, true);
-    cdfs.push(("linear ridge".to_string(), cdf(&pred, &tt)));
-    println!(
-        "linear ridge                             {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
-        s.mean_mm,
-        s.median_mm,
-        s.p90_mm,
-        s.pressure_mae_kpa,
-        s.pressure_r,
-        ridge.cost()
-    );
+    cdfs.push(("linear ridge".to_string(), cdf(&pred, tt)));
+    regression_row("linear ridge", &pred, tt, ridge.cost());
     // Direction features: the touch's signature divided by its size (which pressure sets),
     // plus the log of the size as one more feature.
     let direction = |x: &DMatrix<f64>| {
@@ -128,9 +186,8 @@ fn main() {
             if j < x.ncols() { x[(r, j)] / n } else { n.ln() }
         })
     };
-    let (xd, xtd) = (direction(&x), direction(&xt));
+    let (xd, xtd) = (direction(x), direction(xt));
     let test_dir = rows(&xtd);
-    let test_rows_owned = test_rows.clone();
     for (features, train_x, test_x, settings) in [
         (
             "direction",
@@ -145,8 +202,8 @@ fn main() {
         ),
         (
             "raw",
-            &x,
-            &test_rows_owned,
+            x,
+            &test_rows,
             [
                 (1000, 1.0, 1e-3),
                 (2000, 1.0, 1e-3),
@@ -159,39 +216,44 @@ fn main() {
             if m > t.len() {
                 continue;
             }
-            let krr = KernelRidge::fit(train_x, &t, m, width, lambda).expect("krr");
+            let krr = KernelRidge::fit(train_x, t, m, width, lambda).expect("krr");
             let pred: Vec<Target3> = test_x.iter().map(|r| krr.predict(r)).collect();
-            let s = summarise(&pred, &tt, true);
             if features == "direction" {
                 cdfs.push((
                     format!("kernel ridge, direction, m = {m}, w = {width}"),
-                    cdf(&pred, &tt),
+                    cdf(&pred, tt),
                 ));
             }
-            println!(
-                "{:<40} {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
-                format!("kernel ridge, {features}, m={m} w={width} l={lambda}"),
-                s.mean_mm,
-                s.median_mm,
-                s.p90_mm,
-                s.pressure_mae_kpa,
-                s.pressure_r,
-                krr.cost()
-            );
+            let name = format!("kernel ridge, {features}, m={m} w={width} l={lambda}");
+            regression_row(&name, &pred, tt, krr.cost());
         }
     }
-    // Class-based: QDA on a 10 x 10 grid (docs/method.md §9 collection), referenced.
-    let centres = grid(&spec, 10, 10, 0.0);
+    cdfs
+}
+
+/// Class-based: QDA on a 10 x 10 grid (docs/method.md §9 collection), referenced; its class
+/// centres, then its posterior-weighted centres at a temperature chosen on the training
+/// presses. Returns the QDA model.
+fn class_based(
+    setup: &Setup,
+    x: &DMatrix<f64>,
+    t: &[Target3],
+    xt: &DMatrix<f64>,
+    tt: &[Target3],
+    cdfs: &mut Cdfs,
+) -> Fitted {
+    let test_rows = rows(xt);
+    let centres = grid(&setup.spec, 10, 10, 0.0);
     let grid_train = collect(
-        &spec,
-        fe,
-        config,
+        &setup.spec,
+        setup.fe,
+        setup.config,
         &centres,
         &Plan {
             subsections: 20,
             // docs/method.md §9's 10 mm targets for 100 classes.
             target_radius: 0.005,
-            ..plan.clone()
+            ..setup.plan.clone()
         },
     )
     .expect("collect");
@@ -215,8 +277,8 @@ fn main() {
         })
         .collect();
     let qda_macs = centres.len() * (96 * 97 / 2 + 96);
-    let s = summarise(&nearest, &tt, false);
-    cdfs.push(("QDA class centre".to_string(), cdf(&nearest, &tt)));
+    let s = summarise(&nearest, tt, false);
+    cdfs.push(("QDA class centre".to_string(), cdf(&nearest, tt)));
     println!(
         "{:<40} {:7.2}  {:9.2}  {:6.2}  {:>16}  {:>10}  {qda_macs:10}",
         "QDA class centre (10 x 10)", s.mean_mm, s.median_mm, s.p90_mm, "-", "-"
@@ -224,7 +286,7 @@ fn main() {
     // The temperature is chosen on the training presses, never on the test.
     let truth_mm: Vec<[f64; 2]> = t.iter().map(|v| [v[0], v[1]]).collect();
     let temps = [1.0, 2.0, 5.0, 10.0, 20.0, 50.0];
-    let temperature = choose_temperature(&qda, &x, &truth_mm, &mm, &temps);
+    let temperature = choose_temperature(&qda, x, &truth_mm, &mm, &temps);
     let grid_x = grid_train.features(true).unwrap();
     let kpa: Vec<f64> = grid_train.pressure.iter().map(|p| p * 1e-3).collect();
     let intensity =
@@ -236,21 +298,9 @@ fn main() {
             [p[0], p[1], intensity.predict(r, qda.predict(r))]
         })
         .collect();
-    let s = summarise(&post, &tt, true);
-    cdfs.push((
-        format!("QDA posterior centres, T = {temperature}"),
-        cdf(&post, &tt),
-    ));
-    println!(
-        "{:<40} {:7.2}  {:9.2}  {:6.2}  {:16.1}  {:10.3}  {:10}",
-        format!("QDA posterior centres, T = {temperature}"),
-        s.mean_mm,
-        s.median_mm,
-        s.p90_mm,
-        s.pressure_mae_kpa,
-        s.pressure_r,
-        qda_macs + 3 * 96
-    );
+    let name = format!("QDA posterior centres, T = {temperature}");
+    cdfs.push((name.clone(), cdf(&post, tt)));
+    regression_row(&name, &post, tt, qda_macs + 3 * 96);
     for &tp in &temps {
         let post: Vec<Target3> = test_rows
             .iter()
@@ -261,60 +311,17 @@ fn main() {
             .collect();
         eprintln!(
             "  (T = {tp}: test mean error {:.2} mm)",
-            summarise(&post, &tt, false).mean_mm
+            summarise(&post, tt, false).mean_mm
         );
     }
-    // One touch or two.
-    let two_train = {
-        let mut one = collect_presses(
-            &spec,
-            fe,
-            config,
-            &[],
-            &plan,
-            random_presses(&spec, &plan, presses / 2, 1),
-        )
-        .expect("collect");
-        let two = collect_presses(
-            &spec,
-            fe,
-            config,
-            &[],
-            &Plan {
-                seed: 2,
-                ..plan.clone()
-            },
-            random_presses(&spec, &plan, presses / 2, 2),
-        )
-        .expect("collect");
-        one.append(two).expect("append");
-        one
-    };
-    let two_test = {
-        let mut one = collect_presses(
-            &spec,
-            fe,
-            config,
-            &[],
-            &next_day,
-            random_presses(&spec, &plan, 200, 1),
-        )
-        .expect("collect");
-        let two = collect_presses(
-            &spec,
-            fe,
-            config,
-            &[],
-            &Plan {
-                seed: 78,
-                ..next_day.clone()
-            },
-            random_presses(&spec, &plan, 200, 2),
-        )
-        .expect("collect");
-        one.append(two).expect("append");
-        one
-    };
+    qda
+}
+
+/// One touch or two: LDA and QDA trained on the count, and the 10 x 10 single-touch `qda`'s
+/// best discriminant as an outlier test.
+fn one_touch_or_two(setup: &Setup, qda: &Fitted) {
+    let two_train = setup.one_and_two(&setup.plan, setup.presses / 2, 2);
+    let two_test = setup.one_and_two(&setup.next_day, 200, 78);
     let labels = |d: &Dataset| d.y.iter().map(|&n| n - 1).collect::<Vec<u16>>();
     println!("\nOne touch or two (next day: 200 presses of each):");
     println!("model            accuracy  two_missed  false_two");
@@ -392,33 +399,28 @@ fn main() {
         100.0 * missed as f64 / 200.0,
         100.0 * false_two as f64 / 200.0
     );
-    let args: Vec<String> = std::env::args().collect();
-    if let Some(dir) = args
-        .iter()
-        .position(|a| a == "--plots")
-        .and_then(|i| args.get(i + 1))
-    {
-        let dir = std::path::Path::new(dir);
-        std::fs::create_dir_all(dir).expect("plot directory");
-        let series: Vec<Series> = cdfs
-            .into_iter()
-            .map(|(label, points)| Series {
-                label,
-                points,
-                scatter: false,
-            })
-            .collect();
-        plot::chart(
-            &dir.join("position-error-cdf.png"),
-            Labels {
-                title: "continuous position, next day: cumulative distribution of the error",
-                x: "position error (mm)",
-                y: "share of presses with a smaller error (%)",
-                legend: plot::Legend::LowerRight,
-            },
-            &series,
-        )
-        .expect("plot");
-    }
-    eprintln!("total {:.1} s", started.elapsed().as_secs_f64());
+}
+
+/// The CDFs drawn as DIR/position-error-cdf.png.
+fn plot_cdfs(dir: &std::path::Path, cdfs: Cdfs) {
+    std::fs::create_dir_all(dir).expect("plot directory");
+    let series: Vec<Series> = cdfs
+        .into_iter()
+        .map(|(label, points)| Series {
+            label,
+            points,
+            scatter: false,
+        })
+        .collect();
+    plot::chart(
+        &dir.join("position-error-cdf.png"),
+        Labels {
+            title: "continuous position, next day: cumulative distribution of the error",
+            x: "position error (mm)",
+            y: "share of presses with a smaller error (%)",
+            legend: plot::Legend::LowerRight,
+        },
+        &series,
+    )
+    .expect("plot");
 }

@@ -15,13 +15,23 @@
 //! ET_SWEEP_INSTRUMENTS pick rows by name, `;` between; ET_SWEEP_MISMATCH sets the real
 //! tank's mismatch; ET_LINEAR=1 prints the linearisation's misfit at each rule's images).
 
-use et_recon::{AlphaRule, Method, Reference, Spec};
+use et_recon::gcv::Criterion;
+use et_recon::reconstructor::MISMATCH_FACTOR;
+use et_recon::{AlphaRule, Method, Reconstructor, Reference, Spec};
 use et_sim::foreign::{self, Instrument, Mismatch};
 use et_sim::sheet::SimulatedSheet;
+use et_sim::touch::Inclusion;
 
 #[path = "../tests/support/stand_in.rs"]
 mod stand_in;
-use stand_in::{Score, cases, median, tanks};
+use stand_in::{Score, Tank, cases, median, tanks};
+
+/// A rule: its name, alpha's rule, the model's error counted (None: the constant shares of
+/// before).
+type Rule = (&'static str, AlphaRule, Option<f64>);
+
+/// An instrument, and the tank's departures from its model (None: the network as drawn).
+type Setting = (&'static str, Instrument, Option<Mismatch>);
 
 /// The real tank's mismatch: [`Mismatch::tank`], or ET_SWEEP_MISMATCH="position, width,
 /// contact spread, contact drift, unevenness" to try others.
@@ -47,45 +57,7 @@ fn mismatch() -> Mismatch {
 }
 
 fn main() -> anyhow::Result<()> {
-    use et_recon::gcv::Criterion;
-    use et_recon::reconstructor::MISMATCH_FACTOR;
-    // name, alpha's rule, the model's error counted (None: the constant shares of before).
-    let mut rules = vec![
-        ("before (GCV above noise + 1 % of dV)", AlphaRule::Gcv, None),
-        (
-            "GCV above noise + 2 x misfit (the default before the corner)",
-            AlphaRule::Gcv,
-            Some(MISMATCH_FACTOR),
-        ),
-        ("GCV above noise + 1 x misfit", AlphaRule::Gcv, Some(1.0)),
-        ("GCV above noise + 0.5 x misfit", AlphaRule::Gcv, Some(0.5)),
-        (
-            "L-curve above noise + 1 % of dV",
-            AlphaRule::Chosen(Criterion::LCurve),
-            None,
-        ),
-        (
-            "L-curve above noise + 2 x misfit",
-            AlphaRule::Chosen(Criterion::LCurve),
-            Some(MISMATCH_FACTOR),
-        ),
-        (
-            "default: the corner above GCV's (noise + 1 % of dV)",
-            AlphaRule::Chosen(Criterion::CornerAboveFloor),
-            Some(MISMATCH_FACTOR),
-        ),
-        (
-            "quasi-optimality above noise + 1 % of dV",
-            AlphaRule::Chosen(Criterion::QuasiOptimality),
-            None,
-        ),
-        ("fixed 0.01", AlphaRule::Fixed(0.01), Some(MISMATCH_FACTOR)),
-        ("fixed 0.03", AlphaRule::Fixed(0.03), Some(MISMATCH_FACTOR)),
-        ("fixed 0.1", AlphaRule::Fixed(0.1), Some(MISMATCH_FACTOR)),
-        ("fixed 0.3", AlphaRule::Fixed(0.3), Some(MISMATCH_FACTOR)),
-        ("fixed 1", AlphaRule::Fixed(1.0), Some(MISMATCH_FACTOR)),
-        ("fixed 3", AlphaRule::Fixed(3.0), Some(MISMATCH_FACTOR)),
-    ];
+    let mut rules = rules();
     let only = std::env::var("ET_SWEEP_RULES").unwrap_or_default();
     rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
     let n = 24;
@@ -93,34 +65,7 @@ fn main() -> anyhow::Result<()> {
         "| tank | instrument | alpha | strongest object to nearest rod, median | its sign right | count within one | objects, median | alpha chosen (min, median, max) |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
-    // The instrument, and the tank's departures from its model (None: the network as drawn).
-    let mut instruments = vec![
-        ("ideal", Instrument::ideal(), None),
-        ("laboratory", Instrument::laboratory(11), None),
-        (
-            "noisy",
-            Instrument {
-                noise: 2e-3,
-                proportional: 2e-3,
-                ..Instrument::laboratory(11)
-            },
-            None,
-        ),
-        (
-            "very noisy",
-            Instrument {
-                noise: 1e-2,
-                proportional: 1e-2,
-                ..Instrument::laboratory(11)
-            },
-            None,
-        ),
-        (
-            "laboratory, a real tank's mismatch",
-            Instrument::laboratory(11),
-            Some(mismatch()),
-        ),
-    ];
+    let mut instruments = instruments();
     let only = std::env::var("ET_SWEEP_INSTRUMENTS").unwrap_or_default();
     instruments.retain(|i| only.is_empty() || only.split(';').any(|o| i.0.contains(o)));
     for (instrument_name, instrument, mismatch) in instruments {
@@ -156,49 +101,153 @@ fn main() -> anyhow::Result<()> {
                 100.0 * fit.misfit_off_drive.unwrap_or(f64::NAN),
                 100.0 * fit.scene_residual
             );
-            for &(name, rule, factor) in &rules {
-                recon.set_mismatch_factor(factor);
-                recon.set_method(Method::default(), rule)?;
-                // The linearisation's misfit at each case's image (ET_LINEAR).
-                let mut linear: Vec<f64> = Vec::new();
-                let want_linear = std::env::var_os("ET_LINEAR").is_some();
-                let mut score = Score::of(
-                    &mut recon,
-                    &reference,
-                    &cases,
-                    &frames[1..],
-                    want_linear.then_some(&mut linear),
-                )?;
-                if !linear.is_empty() {
-                    let m = median(&mut linear);
-                    eprintln!(
-                        "{}, {instrument_name}, {name}: the linearisation's misfit at the images, of |dV|: median {m:.3}, max {:.3}",
-                        tank.name,
-                        linear[linear.len() - 1]
-                    );
-                }
-                let mut objects: Vec<f64> = score.objects.iter().map(|&o| o as f64).collect();
-                let mut alphas = score.alphas.clone();
-                let (lo, hi) = alphas
-                    .iter()
-                    .fold((f64::INFINITY, 0.0f64), |(l, h), a| (l.min(*a), h.max(*a)));
-                let none = score.miss_mm.iter().filter(|m| m.is_infinite()).count();
-                let miss = median(&mut score.miss_mm);
-                let miss = if miss.is_finite() {
-                    format!("{miss:.1} mm")
-                } else {
-                    format!("no object in {none} of {n}")
+            for &rule in &rules {
+                let run = Run {
+                    tank: &tank,
+                    instrument_name,
+                    cases: &cases,
+                    frames: &frames,
+                    reference: &reference,
                 };
-                println!(
-                    "| {} | {instrument_name} | {name} | {miss} | {} of {n} | {} % | {} | {lo:.2e}, {:.2e}, {hi:.2e} |",
-                    tank.name,
-                    score.sign_right,
-                    100 * score.count_within_one / n,
-                    median(&mut objects),
-                    median(&mut alphas),
-                );
+                run.row(&mut recon, rule)?;
             }
         }
     }
     Ok(())
+}
+
+/// Every rule the table compares, the defaults of before and now among them.
+fn rules() -> Vec<Rule> {
+    vec![
+        ("before (GCV above noise + 1 % of dV)", AlphaRule::Gcv, None),
+        (
+            "GCV above noise + 2 x misfit (the default before the corner)",
+            AlphaRule::Gcv,
+            Some(MISMATCH_FACTOR),
+        ),
+        ("GCV above noise + 1 x misfit", AlphaRule::Gcv, Some(1.0)),
+        ("GCV above noise + 0.5 x misfit", AlphaRule::Gcv, Some(0.5)),
+        (
+            "L-curve above noise + 1 % of dV",
+            AlphaRule::Chosen(Criterion::LCurve),
+            None,
+        ),
+        (
+            "L-curve above noise + 2 x misfit",
+            AlphaRule::Chosen(Criterion::LCurve),
+            Some(MISMATCH_FACTOR),
+        ),
+        (
+            "default: the corner above GCV's (noise + 1 % of dV)",
+            AlphaRule::Chosen(Criterion::CornerAboveFloor),
+            Some(MISMATCH_FACTOR),
+        ),
+        (
+            "quasi-optimality above noise + 1 % of dV",
+            AlphaRule::Chosen(Criterion::QuasiOptimality),
+            None,
+        ),
+        ("fixed 0.01", AlphaRule::Fixed(0.01), Some(MISMATCH_FACTOR)),
+        ("fixed 0.03", AlphaRule::Fixed(0.03), Some(MISMATCH_FACTOR)),
+        ("fixed 0.1", AlphaRule::Fixed(0.1), Some(MISMATCH_FACTOR)),
+        ("fixed 0.3", AlphaRule::Fixed(0.3), Some(MISMATCH_FACTOR)),
+        ("fixed 1", AlphaRule::Fixed(1.0), Some(MISMATCH_FACTOR)),
+        ("fixed 3", AlphaRule::Fixed(3.0), Some(MISMATCH_FACTOR)),
+    ]
+}
+
+/// The instruments the frames are measured by, and the tank's mismatch beside the last.
+fn instruments() -> Vec<Setting> {
+    vec![
+        ("ideal", Instrument::ideal(), None),
+        ("laboratory", Instrument::laboratory(11), None),
+        (
+            "noisy",
+            Instrument {
+                noise: 2e-3,
+                proportional: 2e-3,
+                ..Instrument::laboratory(11)
+            },
+            None,
+        ),
+        (
+            "very noisy",
+            Instrument {
+                noise: 1e-2,
+                proportional: 1e-2,
+                ..Instrument::laboratory(11)
+            },
+            None,
+        ),
+        (
+            "laboratory, a real tank's mismatch",
+            Instrument::laboratory(11),
+            Some(mismatch()),
+        ),
+    ]
+}
+
+/// One tank's frames under one instrument, as every rule images them.
+struct Run<'a> {
+    tank: &'a Tank,
+    instrument_name: &'a str,
+    /// The cases' rods, and each frame (the reference's first).
+    cases: &'a [Vec<Inclusion>],
+    frames: &'a [Vec<f64>],
+    reference: &'a Reference,
+}
+
+impl Run<'_> {
+    /// Every case imaged under `rule`: its table row.
+    fn row(&self, recon: &mut Reconstructor, (name, rule, factor): Rule) -> anyhow::Result<()> {
+        let Run {
+            tank,
+            instrument_name,
+            cases,
+            frames,
+            reference,
+        } = *self;
+        let n = cases.len();
+        recon.set_mismatch_factor(factor);
+        recon.set_method(Method::default(), rule)?;
+        // The linearisation's misfit at each case's image (ET_LINEAR).
+        let mut linear: Vec<f64> = Vec::new();
+        let want_linear = std::env::var_os("ET_LINEAR").is_some();
+        let mut score = Score::of(
+            recon,
+            reference,
+            cases,
+            &frames[1..],
+            want_linear.then_some(&mut linear),
+        )?;
+        if !linear.is_empty() {
+            let m = median(&mut linear);
+            eprintln!(
+                "{}, {instrument_name}, {name}: the linearisation's misfit at the images, of |dV|: median {m:.3}, max {:.3}",
+                tank.name,
+                linear[linear.len() - 1]
+            );
+        }
+        let mut objects: Vec<f64> = score.objects.iter().map(|&o| o as f64).collect();
+        let mut alphas = score.alphas.clone();
+        let (lo, hi) = alphas
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), a| (l.min(*a), h.max(*a)));
+        let none = score.miss_mm.iter().filter(|m| m.is_infinite()).count();
+        let miss = median(&mut score.miss_mm);
+        let miss = if miss.is_finite() {
+            format!("{miss:.1} mm")
+        } else {
+            format!("no object in {none} of {n}")
+        };
+        println!(
+            "| {} | {instrument_name} | {name} | {miss} | {} of {n} | {} % | {} | {lo:.2e}, {:.2e}, {hi:.2e} |",
+            tank.name,
+            score.sign_right,
+            100 * score.count_within_one / n,
+            median(&mut objects),
+            median(&mut alphas),
+        );
+        Ok(())
+    }
 }

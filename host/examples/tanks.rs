@@ -15,9 +15,15 @@
 #[path = "../tests/support/tanks.rs"]
 mod tanks;
 
-use et_recon::{AlphaRule, Method, Reference, Spec};
+use et_recon::gcv::Criterion;
+use et_recon::reconstructor::{MISMATCH_FACTOR, Weighting};
+use et_recon::{AlphaRule, Image, Method, Reconstructor, Reference, Spec};
 use et_sim::scene::Scene;
-use tanks::{CaseScore, Found};
+use tanks::{Case, CaseScore, Found, Tank};
+
+/// A rule: its name, the model's error (None: the constant shares of before), the
+/// weighting, the method and alpha's rule.
+type Rule = (String, Option<f64>, Weighting, Method, AlphaRule);
 
 fn main() -> anyhow::Result<()> {
     let Some(all) = tanks::both() else {
@@ -34,11 +40,50 @@ fn main() -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    use et_recon::gcv::Criterion;
-    use et_recon::reconstructor::{MISMATCH_FACTOR, Weighting};
-    /// A rule: its name, the model's error (None: the constant shares of before), the
-    /// weighting, the method and alpha's rule.
-    type Rule = (String, Option<f64>, Weighting, Method, AlphaRule);
+    let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
+    let mut all_rules = rules();
+    all_rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
+    // The segmentations' levels scored beside Otsu's (a share of each object's peak).
+    let levels: Vec<f64> = std::env::var("ET_TANKS_LEVELS")
+        .unwrap_or_else(|_| et_recon::SEGMENT_LEVEL.to_string())
+        .split(',')
+        .filter_map(|l| l.trim().parse().ok())
+        .collect();
+    println!(
+        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) | challenge score (Otsu / objects at each level) |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
+    for tank in &all {
+        let dir = work.join(tank.name.split(' ').next().unwrap_or("tank"));
+        let (scene_path, _) = tank.write(&dir);
+        let scene = Scene::load(&scene_path)?;
+        let mut recon = Spec::new(scene.sheet.physical.clone(), scene.schedule()?).set_up()?;
+        let reference = Reference::from_frames(std::slice::from_ref(&tank.reference))?;
+        let fit = recon.fit_background(&reference.v0)?;
+        eprintln!(
+            "{}: background {:.4} ohm/sq, contact {:.3} ohm, residual {:.2} %",
+            tank.name,
+            fit.sheet_resistance,
+            fit.contact_ohm,
+            100.0 * fit.residual
+        );
+        let mut weighting = Weighting::Alike;
+        for rule in &all_rules {
+            if rule.2 != weighting {
+                weighting = rule.2;
+                recon.set_weighting(weighting);
+                recon.fit_background(&reference.v0)?;
+            }
+            score_rule(tank, &mut recon, &reference, rule, &levels)?;
+        }
+    }
+    std::fs::remove_dir_all(&work).ok();
+    Ok(())
+}
+
+/// Every rule the table compares, the defaults of before and now among them.
+fn rules() -> Vec<Rule> {
     let gn = Method::default();
     let d = Some(MISMATCH_FACTOR);
     let mut all_rules: Vec<Rule> = vec![(
@@ -116,152 +161,145 @@ fn main() -> anyhow::Result<()> {
             AlphaRule::Fixed(1.0),
         ));
     }
-    let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
-    // The segmentations' levels scored beside Otsu's (a share of each object's peak).
-    let levels: Vec<f64> = std::env::var("ET_TANKS_LEVELS")
-        .unwrap_or_else(|_| et_recon::SEGMENT_LEVEL.to_string())
-        .split(',')
-        .filter_map(|l| l.trim().parse().ok())
-        .collect();
-    all_rules.retain(|r| only.is_empty() || only.split(';').any(|o| r.0.contains(o)));
-    println!(
-        "| tank | rule | strongest object, median miss | sign right | count within one | alpha (min, median, max) | challenge score (Otsu / objects at each level) |"
-    );
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
-    let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
-    for tank in &all {
-        let dir = work.join(tank.name.split(' ').next().unwrap_or("tank"));
-        let (scene_path, _) = tank.write(&dir);
-        let scene = Scene::load(&scene_path)?;
-        let mut recon = Spec::new(scene.sheet.physical.clone(), scene.schedule()?).set_up()?;
-        let reference = Reference::from_frames(std::slice::from_ref(&tank.reference))?;
-        let fit = recon.fit_background(&reference.v0)?;
-        eprintln!(
-            "{}: background {:.4} ohm/sq, contact {:.3} ohm, residual {:.2} %",
-            tank.name,
-            fit.sheet_resistance,
-            fit.contact_ohm,
-            100.0 * fit.residual
-        );
-        let mut weighting = Weighting::Alike;
-        for (name, factor, w, method, rule) in &all_rules {
-            if *w != weighting {
-                weighting = *w;
-                recon.set_weighting(weighting);
-                recon.fit_background(&reference.v0)?;
-            }
-            recon.set_mismatch_factor(*factor);
-            recon.set_method(*method, *rule)?;
-            let mut scores = Vec::new();
-            let mut alphas = Vec::new();
-            let mut challenge: Option<(Vec<f64>, usize)> = None;
-            // The linearisation's misfit at each case's image (ET_LINEAR).
-            let mut linear: Vec<f64> = Vec::new();
-            for case in &tank.cases {
-                let image = recon.image(&case.values, &reference)?;
-                let objects: Vec<Found> = recon
-                    .objects(&image)
-                    .iter()
-                    .map(|o| Found {
-                        centre: o.region.centroid,
-                        sign: o.sign,
-                    })
-                    .collect();
-                let score = CaseScore::of(case, &objects);
-                {
-                    let truth = tanks::truth_mask(tank, case);
-                    let grid = recon.grid();
-                    let sampled = tanks::on_score_grid(tank, grid, &image.pixels);
-                    let c = challenge.get_or_insert((vec![0.0; 1 + levels.len()], 0));
-                    c.0[0] += tanks::challenge_score(&truth, &tanks::otsu_segmentation(&sampled));
-                    let found = recon.objects(&image);
-                    for (k, level) in levels.iter().enumerate() {
-                        let classes = et_recon::segment(&image.pixels, &found, *level);
-                        let seg: Vec<u8> = tanks::on_score_grid(tank, grid, &classes)
-                            .iter()
-                            .map(|c| c.map_or(0, |c| c as u8))
-                            .collect();
-                        c.0[1 + k] += tanks::challenge_score(&truth, &seg);
-                    }
-                    c.1 += 1;
-                }
-                if std::env::var("ET_TANKS_CASE").is_ok_and(|c| c == case.id) {
-                    let all = recon.objects(&image);
-                    let top = all.first().map_or(1.0, |o| o.region.peak);
-                    for o in &all {
-                        eprintln!(
-                            "    {name} {}: sign {} at ({:.0}, {:.0}) mm, peak {:.2} of the top, z {:.1}, area {:.0} mm2, {} px",
-                            case.id,
-                            o.sign,
-                            1e3 * o.region.centroid[0],
-                            1e3 * o.region.centroid[1],
-                            o.region.peak / top,
-                            o.region.z.unwrap_or(f64::NAN),
-                            1e6 * o.region.area,
-                            o.region.pixels.len()
-                        );
-                    }
-                    for t in &case.targets {
-                        eprintln!(
-                            "    target {} at ({:.0}, {:.0}) mm, r {:.0} mm",
-                            if t.conductive { "+" } else { "-" },
-                            1e3 * t.centre[0],
-                            1e3 * t.centre[1],
-                            1e3 * t.radius
-                        );
-                    }
-                }
-                if std::env::var_os("ET_TANKS_VERBOSE").is_some() {
-                    eprintln!(
-                        "  {name} {}: alpha {:.2e}, miss {:.1} mm, sign {}, {} objects of {}",
-                        case.id,
-                        image.alpha,
-                        1e3 * score.miss.unwrap_or(f64::NAN),
-                        score.sign_right,
-                        score.found,
-                        score.targets
-                    );
-                }
-                if std::env::var_os("ET_LINEAR").is_some()
-                    && let Some(m) = recon.linearisation_misfit(&image)?
-                {
-                    linear.push(m);
-                }
-                scores.push(score);
-                alphas.push(image.alpha);
-            }
-            alphas.sort_by(f64::total_cmp);
-            if !linear.is_empty() {
-                linear.sort_by(f64::total_cmp);
-                eprintln!(
-                    "{} {name}: the linearisation's misfit at the images, of |dV|: min {:.3}, median {:.3}, max {:.3}",
-                    tank.name,
-                    linear[0],
-                    linear[linear.len() / 2],
-                    linear[linear.len() - 1]
-                );
-            }
-            let s = tanks::summary(&scores);
-            println!(
-                "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} | {} |",
-                tank.name,
-                1e3 * s.median_miss,
-                s.sign_right,
-                s.cases,
-                s.count_within_one,
-                s.cases,
-                alphas[0],
-                alphas[alphas.len() / 2],
-                alphas[alphas.len() - 1],
-                challenge.map_or("-".into(), |(s, n)| s
-                    .iter()
-                    .map(|s| format!("{s:.2}"))
-                    .collect::<Vec<_>>()
-                    .join(" / ")
-                    + &format!(" of {n}"))
+    all_rules
+}
+
+/// Every case of `tank` imaged under `rule` (the weighting already set): its table row.
+fn score_rule(
+    tank: &Tank,
+    recon: &mut Reconstructor,
+    reference: &Reference,
+    (name, factor, _, method, alpha_rule): &Rule,
+    levels: &[f64],
+) -> anyhow::Result<()> {
+    recon.set_mismatch_factor(*factor);
+    recon.set_method(*method, *alpha_rule)?;
+    let mut scores = Vec::new();
+    let mut alphas = Vec::new();
+    let mut challenge = (vec![0.0; 1 + levels.len()], 0);
+    // The linearisation's misfit at each case's image (ET_LINEAR).
+    let mut linear: Vec<f64> = Vec::new();
+    for case in &tank.cases {
+        let image = recon.image(&case.values, reference)?;
+        let objects: Vec<Found> = recon
+            .objects(&image)
+            .iter()
+            .map(|o| Found {
+                centre: o.region.centroid,
+                sign: o.sign,
+            })
+            .collect();
+        let score = CaseScore::of(case, &objects);
+        add_challenge(tank, case, recon, &image, levels, &mut challenge.0);
+        challenge.1 += 1;
+        if std::env::var("ET_TANKS_CASE").is_ok_and(|c| c == case.id) {
+            say_case(name, case, recon, &image);
+        }
+        if std::env::var_os("ET_TANKS_VERBOSE").is_some() {
+            eprintln!(
+                "  {name} {}: alpha {:.2e}, miss {:.1} mm, sign {}, {} objects of {}",
+                case.id,
+                image.alpha,
+                1e3 * score.miss.unwrap_or(f64::NAN),
+                score.sign_right,
+                score.found,
+                score.targets
             );
         }
+        if std::env::var_os("ET_LINEAR").is_some()
+            && let Some(m) = recon.linearisation_misfit(&image)?
+        {
+            linear.push(m);
+        }
+        scores.push(score);
+        alphas.push(image.alpha);
     }
-    std::fs::remove_dir_all(&work).ok();
+    alphas.sort_by(f64::total_cmp);
+    if !linear.is_empty() {
+        linear.sort_by(f64::total_cmp);
+        eprintln!(
+            "{} {name}: the linearisation's misfit at the images, of |dV|: min {:.3}, median {:.3}, max {:.3}",
+            tank.name,
+            linear[0],
+            linear[linear.len() / 2],
+            linear[linear.len() - 1]
+        );
+    }
+    let s = tanks::summary(&scores);
+    let (sums, n) = challenge;
+    let challenge = if n == 0 {
+        "-".to_string()
+    } else {
+        sums.iter()
+            .map(|s| format!("{s:.2}"))
+            .collect::<Vec<_>>()
+            .join(" / ")
+            + &format!(" of {n}")
+    };
+    println!(
+        "| {} | {name} | {:.1} mm | {}/{} | {}/{} | {:.2e}, {:.2e}, {:.2e} | {challenge} |",
+        tank.name,
+        1e3 * s.median_miss,
+        s.sign_right,
+        s.cases,
+        s.count_within_one,
+        s.cases,
+        alphas[0],
+        alphas[alphas.len() / 2],
+        alphas[alphas.len() - 1],
+    );
     Ok(())
+}
+
+/// Adds `case`'s challenge scores to `sums`: Otsu's segmentation first, then the objects'
+/// segmentation at each of `levels`.
+fn add_challenge(
+    tank: &Tank,
+    case: &Case,
+    recon: &Reconstructor,
+    image: &Image,
+    levels: &[f64],
+    sums: &mut [f64],
+) {
+    let truth = tanks::truth_mask(tank, case);
+    let grid = recon.grid();
+    let sampled = tanks::on_score_grid(tank, grid, &image.pixels);
+    sums[0] += tanks::challenge_score(&truth, &tanks::otsu_segmentation(&sampled));
+    let found = recon.objects(image);
+    for (k, level) in levels.iter().enumerate() {
+        let classes = et_recon::segment(&image.pixels, &found, *level);
+        let seg: Vec<u8> = tanks::on_score_grid(tank, grid, &classes)
+            .iter()
+            .map(|c| c.map_or(0, |c| c as u8))
+            .collect();
+        sums[1 + k] += tanks::challenge_score(&truth, &seg);
+    }
+}
+
+/// Every object of `case`'s image and every target (ET_TANKS_CASE), to standard error.
+fn say_case(name: &str, case: &Case, recon: &Reconstructor, image: &Image) {
+    let all = recon.objects(image);
+    let top = all.first().map_or(1.0, |o| o.region.peak);
+    for o in &all {
+        eprintln!(
+            "    {name} {}: sign {} at ({:.0}, {:.0}) mm, peak {:.2} of the top, z {:.1}, area {:.0} mm2, {} px",
+            case.id,
+            o.sign,
+            1e3 * o.region.centroid[0],
+            1e3 * o.region.centroid[1],
+            o.region.peak / top,
+            o.region.z.unwrap_or(f64::NAN),
+            1e6 * o.region.area,
+            o.region.pixels.len()
+        );
+    }
+    for t in &case.targets {
+        eprintln!(
+            "    target {} at ({:.0}, {:.0}) mm, r {:.0} mm",
+            if t.conductive { "+" } else { "-" },
+            1e3 * t.centre[0],
+            1e3 * t.centre[1],
+            1e3 * t.radius
+        );
+    }
 }

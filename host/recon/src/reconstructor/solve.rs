@@ -8,8 +8,8 @@ use super::{ImagingError, Matrix, Reconstructor};
 use crate::gauss_newton::{Data, GaussNewton, gauss_newton};
 use crate::gcv::{Criterion, default_alphas};
 use crate::greit::{Greit, Regularisation};
-use crate::pixels::PixelGrid;
 use crate::onestep::{ReconError, floor_variance};
+use crate::pixels::PixelGrid;
 
 impl Reconstructor {
     /// The least model error a frame's alpha choice allows for, per channel (V^2): the
@@ -98,7 +98,9 @@ impl Reconstructor {
             let values = matrix.recon.reconstruct(dv)?;
             timings.frame = clock.elapsed().as_secs_f64();
             let noise_sd = grid.noise_sd(&matrix.recon, var)?;
-            return Ok(Solved::on_mesh(alpha, grid, values, noise_sd, None, timings));
+            return Ok(Solved::on_mesh(
+                alpha, grid, values, noise_sd, None, timings,
+            ));
         }
         let clock = Instant::now();
         let sigma0 = self.imager.background();
@@ -124,7 +126,14 @@ impl Reconstructor {
             stop: fit.stop,
         };
         let noise_sd = grid.image(&last.noise_sd);
-        Ok(Solved::on_mesh(alpha, grid, d, noise_sd, Some(iterations), timings))
+        Ok(Solved::on_mesh(
+            alpha,
+            grid,
+            d,
+            noise_sd,
+            Some(iterations),
+            timings,
+        ))
     }
 }
 
