@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 
-use crate::onestep::{DataSpace, ReconError, noser_inverse};
+use crate::onestep::{DataSpace, ReconError, check_alpha, check_s, noser_inverse};
 
 /// Iterative Gauss-Newton for when accuracy matters more than speed. Minimises
 /// Phi(sigma) = |r(sigma)|^2 + lambda |sigma - sigma_0|^2_P, with the prior P = diag(J_0^T
@@ -37,24 +37,20 @@ pub fn gauss_newton(
         s,
         iterations,
     } = options;
-    if !(alpha.is_finite() && alpha > 0.0 && (0.0..=1.0).contains(&s)) {
-        return Err(ReconError::Parameter(format!(
-            "alpha = {alpha} (> 0), s = {s} (in [0, 1])"
-        )));
-    }
-    let fem = |e: crate::fem::FemError| ReconError::Parameter(e.to_string());
+    check_alpha(alpha)?;
+    check_s(s)?;
     // One factorisation per iterate: the Jacobian solve also gives the frame.
-    let (v0, jac0) = forward.jacobian(sigma_0, schedule).map_err(fem)?;
+    let (v0, jac0) = forward.jacobian(sigma_0, schedule)?;
     let target: Vec<f64> = match data {
         Data::Difference(dv) => dv.iter().zip(&v0).map(|(d, v)| d + v).collect(),
         Data::Absolute(v) => v.to_vec(),
     };
     if target.len() != v0.len() {
-        return Err(ReconError::Parameter(format!(
-            "{} values, K = {}",
-            target.len(),
-            v0.len()
-        )));
+        return Err(ReconError::FrameLength {
+            what: "the data",
+            got: target.len(),
+            k: v0.len(),
+        });
     }
     if target.iter().any(|v| !v.is_finite()) {
         return Err(ReconError::NonFinite);
@@ -106,7 +102,7 @@ pub fn gauss_newton(
                 .zip(&full)
                 .map(|(a, b)| a + t * (b - a))
                 .collect();
-            let v_trial = forward.frame(&trial, schedule).map_err(fem)?;
+            let v_trial = forward.frame(&trial, schedule)?;
             let phi = norm2(&residual(&v_trial)) + lambda * prior(&trial);
             if phi < phi_now {
                 accepted = Some((trial, v_trial, phi));
@@ -137,7 +133,7 @@ pub fn gauss_newton(
         });
         // The next step needs the Jacobian here.
         if it + 1 < iterations {
-            (v, jac) = forward.jacobian(&sigma, schedule).map_err(fem)?;
+            (v, jac) = forward.jacobian(&sigma, schedule)?;
         }
     }
     Ok(Fit { iterates, stop })

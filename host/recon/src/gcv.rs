@@ -47,11 +47,11 @@ pub fn gcv_alpha(
     candidates: &[f64],
 ) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
     if dv.len() != jac.nrows() {
-        return Err(ReconError::Parameter(format!(
-            "{} frame values for K = {}",
-            dv.len(),
-            jac.nrows()
-        )));
+        return Err(ReconError::FrameLength {
+            what: "frame",
+            got: dv.len(),
+            k: jac.nrows(),
+        });
     }
     DataSpace::new(jac, s)?.gcv(dv, candidates)
 }
@@ -104,7 +104,7 @@ impl DataSpace {
     /// problem of the factored Jacobian (its K - q zero eigenvalues in closed form).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a frame of the wrong length or no candidates;
+    /// [`ReconError::FrameLength`] for a frame of the wrong length, [`ReconError::NoCandidates`];
     /// [`ReconError::NonFinite`] for a frame with NaN/inf; [`ReconError::Singular`] when A
     /// has no eigendecomposition or no candidate scores finitely.
     pub fn gcv(
@@ -113,11 +113,15 @@ impl DataSpace {
         candidates: &[f64],
     ) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
         let k = self.frame_len();
-        if dv.len() != k || candidates.is_empty() {
-            return Err(ReconError::Parameter(format!(
-                "{} frame values for K = {k}, and at least one candidate alpha",
-                dv.len()
-            )));
+        if dv.len() != k {
+            return Err(ReconError::FrameLength {
+                what: "frame",
+                got: dv.len(),
+                k,
+            });
+        }
+        if candidates.is_empty() {
+            return Err(ReconError::NoCandidates);
         }
         if dv.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::NonFinite);
@@ -224,7 +228,7 @@ impl DataSpace {
     /// generalised discrepancy principle; weights applied).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for `var_dv` not of K values; as [`DataSpace::gcv`].
+    /// [`ReconError::FrameLength`] for `var_dv` not of K values; as [`DataSpace::gcv`].
     pub fn above_noise(
         &self,
         dv: &[f64],
@@ -232,11 +236,11 @@ impl DataSpace {
         candidates: &[f64],
     ) -> Result<Vec<bool>, ReconError> {
         if var_dv.len() != dv.len() {
-            return Err(ReconError::Parameter(format!(
-                "{} noise variances for K = {}",
-                var_dv.len(),
-                dv.len()
-            )));
+            return Err(ReconError::FrameLength {
+                what: "noise variances",
+                got: var_dv.len(),
+                k: dv.len(),
+            });
         }
         let noise: f64 = (self.whiten_variance(var_dv).iter())
             .map(|v| v.max(0.0))
@@ -264,18 +268,18 @@ impl DataSpace {
         candidates: &[f64],
     ) -> Result<f64, ReconError> {
         if candidates.is_empty() {
-            return Err(ReconError::Parameter("no candidate alpha".into()));
+            return Err(ReconError::NoCandidates);
         }
         match criterion {
             Criterion::Gcv => self.choose_alpha(dv, var_dv, candidates),
             Criterion::Discrepancy => {
                 self.gcv(dv, candidates)?;
                 if var_dv.len() != dv.len() {
-                    return Err(ReconError::Parameter(format!(
-                        "{} noise variances for K = {}",
-                        var_dv.len(),
-                        dv.len()
-                    )));
+                    return Err(ReconError::FrameLength {
+                        what: "noise variances",
+                        got: var_dv.len(),
+                        k: dv.len(),
+                    });
                 }
                 let noise: f64 = self
                     .whiten_variance(var_dv)
@@ -354,7 +358,7 @@ impl DataSpace {
     /// fits closer than the noise (dv within the noise), the largest is taken.
     ///
     /// # Errors
-    /// As [`DataSpace::gcv`]; [`ReconError::Parameter`] for `var_dv` not of K values.
+    /// As [`DataSpace::gcv`]; [`ReconError::FrameLength`] for `var_dv` not of K values.
     pub fn choose_alpha(
         &self,
         dv: &[f64],

@@ -45,10 +45,11 @@ fn triangle_areas(imager: &Imager, jac: &TransferJacobian) -> Result<Vec<f64>, R
     let mesh = imager.forward.mesh();
     let t_n = mesh.triangles.len();
     if jac.g.ncols() != t_n {
-        return Err(ReconError::Parameter(format!(
-            "a Jacobian of {} triangles for a mesh of {t_n}",
-            jac.g.ncols()
-        )));
+        return Err(ReconError::Size {
+            what: "the Jacobian's triangles",
+            got: jac.g.ncols(),
+            expected: t_n,
+        });
     }
     Ok((0..t_n).map(|t| 0.5 * mesh.double_area(t)).collect())
 }
@@ -116,7 +117,7 @@ impl Greit {
     /// `imager`'s pixel grid.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a radius not finite and > 0, a noise figure or alpha not
+    /// [`ReconError::OutOfRange`] (or [`ReconError::RadiusTooLarge`]) for a radius not finite and > 0, a noise figure or alpha not
     /// finite and > 0, or a Jacobian of another mesh; [`ReconError::Singular`] when the data
     /// space has no eigendecomposition or cannot be factorised.
     pub fn new(
@@ -129,30 +130,32 @@ impl Greit {
         let extent = grid.size * grid.width.max(grid.height) as f64;
         let radius = options.radius.unwrap_or(RADIUS_SHARE * extent);
         if !(radius.is_finite() && radius > 0.0) {
-            return Err(ReconError::Parameter(format!(
-                "a desired image's radius of {radius} m: must be finite and > 0"
-            )));
+            return Err(ReconError::OutOfRange {
+                name: "a desired image's radius (m)",
+                value: radius,
+                range: "finite and > 0",
+            });
         }
         if radius > 0.5 * extent {
-            return Err(ReconError::Parameter(format!(
-                "a desired image's radius of {:.1} mm on a sheet {:.1} mm across: at most half \
-                 of it (GREIT's targets are small, 5 % of the sheet by default)",
-                radius * 1e3,
-                extent * 1e3
-            )));
+            return Err(ReconError::RadiusTooLarge {
+                radius,
+                across: extent,
+            });
         }
         let radius = radius.max(grid.size);
         match options.regularisation {
             Regularisation::NoiseFigure(v) | Regularisation::Alpha(v)
                 if !(v.is_finite() && v > 0.0) =>
             {
-                let (what, v) = match options.regularisation {
-                    Regularisation::NoiseFigure(v) => ("noise figure", v),
-                    Regularisation::Alpha(v) => ("alpha", v),
+                let (name, value) = match options.regularisation {
+                    Regularisation::NoiseFigure(v) => ("GREIT's noise figure", v),
+                    Regularisation::Alpha(v) => ("GREIT's alpha", v),
                 };
-                return Err(ReconError::Parameter(format!(
-                    "a GREIT {what} of {v}: must be finite and > 0"
-                )));
+                return Err(ReconError::OutOfRange {
+                    name,
+                    value,
+                    range: "finite and > 0",
+                });
             }
             _ => {}
         }
@@ -213,7 +216,7 @@ impl Greit {
     /// smooths more and finds it (docs/measurements.md, "GREIT").
     ///
     /// # Errors
-    /// As [`DataSpace::choose_alpha`]; [`ReconError::Parameter`] for a Jacobian of another
+    /// As [`DataSpace::choose_alpha`]; [`ReconError::Size`] for a Jacobian of another
     /// mesh.
     pub fn choose_alpha(
         imager: &Imager,
@@ -245,7 +248,7 @@ impl Greit {
     /// outside the sheet).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
+    /// [`ReconError::FrameLength`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
     pub fn image(&self, dv: &[f64]) -> Result<Vec<Option<f64>>, ReconError> {
         let inside: Vec<f64> = self
             .operator
@@ -261,7 +264,7 @@ impl Greit {
     /// [`OneStep::noise_sd`].
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a wrong length.
+    /// [`ReconError::FrameLength`] for a wrong length.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<Option<f64>>, ReconError> {
         Ok(self.spread(&self.recon.noise_sd(var_dv)?))
     }
@@ -359,7 +362,7 @@ pub type TargetMerit = ([f64; 2], crate::metrics::Merit);
 /// ([`crate::metrics::merit`]). Also returns each target's centre and merit.
 ///
 /// # Errors
-/// What `image_of` returns; [`ReconError::Parameter`] when no target fits on the sheet.
+/// What `image_of` returns; [`ReconError::OutOfRange`] when no target fits on the sheet.
 pub fn figures_of_merit(
     imager: &Imager,
     jac: &TransferJacobian,
@@ -417,9 +420,11 @@ pub fn figures_of_merit(
         }
     }
     if out.is_empty() {
-        return Err(ReconError::Parameter(format!(
-            "no target of radius {target_radius} m fits on the sheet"
-        )));
+        return Err(ReconError::OutOfRange {
+            name: "the targets' radius (m)",
+            value: target_radius,
+            range: "small enough for a target to fit on the sheet",
+        });
     }
     let stats = |f: fn(&crate::metrics::Merit) -> f64| {
         let n = out.len() as f64;

@@ -32,9 +32,119 @@ use nalgebra::DMatrix;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReconError {
-    /// A parameter out of range (alpha not finite or <= 0, s outside [0, 1], wrong lengths).
+    /// A number out of its range (alpha not finite or <= 0, s outside [0, 1], a GREIT radius
+    /// or noise figure).
+    #[error("reconstruction: {name} = {value}: must be {range}")]
+    OutOfRange {
+        /// What the number is (with its unit when it has one).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        range: &'static str,
+    },
+    /// A vector of frame values (K of them) of another length.
+    #[error("reconstruction: {what}: {got} values for K = {k}")]
+    FrameLength {
+        /// Which vector (the frame, the reference, the noise variances, the weights).
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The protocol's frame length.
+        k: usize,
+    },
+    /// Tables of the mesh or the image that disagree in size.
+    #[error("reconstruction: {what}: {got}, where {expected} belong")]
+    Size {
+        /// What was counted (a prior's values per triangle, a Jacobian's triangles, ...).
+        what: &'static str,
+        /// How many were given.
+        got: usize,
+        /// How many the mesh or the image has.
+        expected: usize,
+    },
+    /// A weight or prior value that is not positive and finite.
+    #[error("reconstruction: {what} {index} is {value}: each must be positive and finite")]
+    NotPositive {
+        /// What the values are.
+        what: &'static str,
+        /// The first bad one's index.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A name that is none of its choices (an alpha rule, a weighting).
+    #[error("reconstruction: {what} '{given}': {choices}")]
+    UnknownName {
+        /// What was named.
+        what: &'static str,
+        /// The name given.
+        given: String,
+        /// The names there are.
+        choices: &'static str,
+    },
+    /// A request the chosen method or rule cannot carry out.
     #[error("reconstruction: {0}")]
-    Parameter(String),
+    Unsupported(&'static str),
+    /// No candidate alpha to choose from.
+    #[error("reconstruction: no candidate alpha")]
+    NoCandidates,
+    /// The reference frames cannot give V_0 (none, or of different lengths).
+    #[error("reconstruction: reference: {0}")]
+    Reference(#[source] et_core::stats::StatsError),
+    /// GREIT's desired image's radius is over half the sheet.
+    #[error(
+        "reconstruction: a desired image's radius of {:.1} mm on a sheet {:.1} mm across: at \
+         most half of it (GREIT's targets are small, 5 % of the sheet by default)",
+        radius * 1e3,
+        across * 1e3
+    )]
+    RadiusTooLarge {
+        /// The radius, m.
+        radius: f64,
+        /// The sheet's longer side, m.
+        across: f64,
+    },
+    /// A mesh made elsewhere with a node off the scene's sheet (a mesh in mm, or another
+    /// sheet's).
+    #[error(
+        "the mesh is not the sheet's: its node {node} at ({:.1}, {:.1}) mm lies outside the \
+         scene's sheet, {:.1} x {:.1} mm (a mesh's coordinates are in metres)",
+        at[0] * 1e3,
+        at[1] * 1e3,
+        sheet[0] * 1e3,
+        sheet[1] * 1e3
+    )]
+    MeshNodeOffSheet {
+        /// The node's index.
+        node: usize,
+        /// Where it is, m.
+        at: [f64; 2],
+        /// The sheet's width and height, m.
+        sheet: [f64; 2],
+    },
+    /// A mesh made elsewhere that spans less than the scene's sheet.
+    #[error(
+        "the mesh is not the sheet's: it spans x {:.1} to {:.1} mm and y {:.1} to {:.1} mm, \
+         the scene's sheet x {:.1} to {:.1} mm and y {:.1} to {:.1} mm",
+        mesh[0] * 1e3,
+        mesh[2] * 1e3,
+        mesh[1] * 1e3,
+        mesh[3] * 1e3,
+        sheet[0] * 1e3,
+        sheet[2] * 1e3,
+        sheet[1] * 1e3,
+        sheet[3] * 1e3
+    )]
+    MeshExtent {
+        /// The mesh's bounding box [x0, y0, x1, y1], m.
+        mesh: [f64; 4],
+        /// The sheet's, m.
+        sheet: [f64; 4],
+    },
+    /// The forward model failed (a conductivity or schedule it cannot take).
+    #[error(transparent)]
+    Forward(#[from] crate::fem::FemError),
     /// The data-space system is not positive definite (a Jacobian with NaN, or all zero).
     #[error("reconstruction: the regularised system is singular")]
     Singular,
@@ -155,7 +265,7 @@ impl DataSpace {
     /// The data space of the dense Jacobian `jac` (K x T) and NOSER exponent `s`.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for s outside [0, 1]; [`ReconError::Singular`] for a
+    /// [`ReconError::OutOfRange`] for s outside [0, 1]; [`ReconError::Singular`] for a
     /// Jacobian with non-finite values or all zero.
     pub fn new(jac: &DMatrix<f64>, s: f64) -> Result<Self, ReconError> {
         check_s(s)?;
@@ -187,7 +297,7 @@ impl DataSpace {
     ///
     /// # Errors
     /// [`ReconError::Singular`] for a Jacobian with non-finite values;
-    /// [`ReconError::Parameter`] for `p_inv` not of T positive finite values.
+    /// [`ReconError::Size`] for `p_inv` not of T values, [`ReconError::NotPositive`] for one not positive and finite.
     pub(crate) fn factored_with_prior(
         jac: &crate::fem::TransferJacobian,
         p_inv: &[f64],
@@ -196,13 +306,14 @@ impl DataSpace {
         if g.iter().any(|v| !v.is_finite()) {
             return Err(ReconError::Singular);
         }
-        if p_inv.len() != g.ncols() || p_inv.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
-            return Err(ReconError::Parameter(format!(
-                "a prior of {} positive values for {} triangles",
-                p_inv.len(),
-                g.ncols()
-            )));
+        if p_inv.len() != g.ncols() {
+            return Err(ReconError::Size {
+                what: "the prior's values (one per triangle)",
+                got: p_inv.len(),
+                expected: g.ncols(),
+            });
         }
+        not_positive("prior value", p_inv)?;
         let g = MatRef::from_column_major_slice(g.as_slice(), g.nrows(), g.ncols());
         Ok(Self::build(jac.combination.clone(), g, 0.0, p_inv))
     }
@@ -315,7 +426,7 @@ impl DataSpace {
     /// The one-step reconstruction R = P^-1 J^T (A + lambda I)^-1 at `alpha`, factored.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for alpha not in (0, inf); [`ReconError::Singular`] when
+    /// [`ReconError::OutOfRange`] for alpha not in (0, inf); [`ReconError::Singular`] when
     /// A + lambda I cannot be factorised.
     pub fn one_step(&self, alpha: f64) -> Result<OneStep, ReconError> {
         check_alpha(alpha)?;
@@ -517,21 +628,39 @@ pub(crate) fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     out
 }
 
-fn check_s(s: f64) -> Result<(), ReconError> {
-    if (0.0..=1.0).contains(&s) {
-        Ok(())
-    } else {
-        Err(ReconError::Parameter(format!("s = {s}: must be in [0, 1]")))
+/// [`ReconError::NotPositive`] for the first of `values` that is not positive and finite.
+pub(crate) fn not_positive(what: &'static str, values: &[f64]) -> Result<(), ReconError> {
+    match values.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+        Some(index) => Err(ReconError::NotPositive {
+            what,
+            index,
+            value: values.get(index).copied().unwrap_or(f64::NAN),
+        }),
+        None => Ok(()),
     }
 }
 
-fn check_alpha(alpha: f64) -> Result<(), ReconError> {
+pub(crate) fn check_s(s: f64) -> Result<(), ReconError> {
+    if (0.0..=1.0).contains(&s) {
+        Ok(())
+    } else {
+        Err(ReconError::OutOfRange {
+            name: "s",
+            value: s,
+            range: "in [0, 1]",
+        })
+    }
+}
+
+pub(crate) fn check_alpha(alpha: f64) -> Result<(), ReconError> {
     if alpha.is_finite() && alpha > 0.0 {
         Ok(())
     } else {
-        Err(ReconError::Parameter(format!(
-            "alpha = {alpha}: must be finite and > 0"
-        )))
+        Err(ReconError::OutOfRange {
+            name: "alpha",
+            value: alpha,
+            range: "finite and > 0",
+        })
     }
 }
 

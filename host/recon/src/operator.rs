@@ -247,15 +247,22 @@ impl FrameOperator {
     /// one core.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] when `dv` does not hold K values or `out` not one per row.
+    /// [`ReconError::FrameLength`] when `dv` does not hold K values, [`ReconError::Size`] when `out` is not one per row.
     pub fn apply(&self, dv: &[f32], out: &mut [f32]) -> Result<(), ReconError> {
         let (p, k) = (self.rows(), self.frame_len());
-        if dv.len() != k || out.len() != p {
-            return Err(ReconError::Parameter(format!(
-                "{} values into {} rows for a reconstruction of {p} x {k}",
-                dv.len(),
-                out.len()
-            )));
+        if dv.len() != k {
+            return Err(ReconError::FrameLength {
+                what: "frame",
+                got: dv.len(),
+                k,
+            });
+        }
+        if out.len() != p {
+            return Err(ReconError::Size {
+                what: "the output's rows",
+                got: out.len(),
+                expected: p,
+            });
         }
         let (mut stack, mut heap) = ([0.0f32; 512], Vec::new());
         let y = if self.rank() <= stack.len() {
@@ -300,7 +307,7 @@ impl FrameOperator {
     ///
     /// # Errors
     /// [`ReconError::NonFinite`] for a value that is NaN or infinite in f32,
-    /// [`ReconError::Parameter`] for a wrong length.
+    /// [`ReconError::FrameLength`] for a wrong length.
     pub fn image(&self, dv: &[f64]) -> Result<Vec<f32>, ReconError> {
         let dv: Vec<f32> = dv.iter().map(|&v| v as f32).collect();
         if dv.iter().any(|v| !v.is_finite()) {
@@ -338,14 +345,14 @@ impl FrameOperator {
     /// variances count as 0.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] when `var_dv` does not hold K values.
+    /// [`ReconError::FrameLength`] when `var_dv` does not hold K values.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
         if var_dv.len() != self.frame_len() {
-            return Err(ReconError::Parameter(format!(
-                "{} variances for K = {}",
-                var_dv.len(),
-                self.frame_len()
-            )));
+            return Err(ReconError::FrameLength {
+                what: "variances",
+                got: var_dv.len(),
+                k: self.frame_len(),
+            });
         }
         let core = self.core_dense();
         let w = Mat::from_fn(self.rank(), self.frame_len(), |i, k| {

@@ -181,9 +181,8 @@ impl Reconstructor {
         self.greit_chosen = None;
         match (self.method, self.alpha) {
             (Method::GaussNewton { .. }, AlphaRule::NoiseFigure(_)) => {
-                return Err(ReconError::Parameter(
-                    "a noise figure sets GREIT's lambda; Gauss-Newton takes a fixed alpha or GCV"
-                        .into(),
+                return Err(ReconError::Unsupported(
+                    "a noise figure sets GREIT's lambda; Gauss-Newton takes a fixed alpha or GCV",
                 )
                 .into());
             }
@@ -351,7 +350,7 @@ impl Reconstructor {
     /// live pipeline applies it to each frame.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] under [`AlphaRule::Gcv`] or for iterative Gauss-Newton,
+    /// [`ReconError::Unsupported`] under [`AlphaRule::Gcv`] or for iterative Gauss-Newton,
     /// which have no one matrix.
     pub fn pixel_operator(&self) -> Result<FrameOperator, ImagingError> {
         if let Some(g) = &self.greit {
@@ -359,8 +358,8 @@ impl Reconstructor {
         }
         match &self.one_step {
             Some(m) => Ok(self.imager.grid.project(&m.recon)),
-            None => Err(ReconError::Parameter(
-                "no single matrix: alpha is chosen per frame, or the fit is iterative".into(),
+            None => Err(ReconError::Unsupported(
+                "no single matrix: alpha is chosen per frame, or the fit is iterative",
             )
             .into()),
         }
@@ -372,7 +371,7 @@ impl Reconstructor {
     /// f max and the touches above [`TOUCH_Z`] times their noise.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a frame or reference not of K values,
+    /// [`ReconError::FrameLength`] for a frame or reference not of K values,
     /// [`ReconError::NonFinite`] for NaN or infinity in them; a failed solve.
     pub fn image(&mut self, frame: &[f32], reference: &Reference) -> Result<Image, ImagingError> {
         let k = self.schedule.frame_len();
@@ -382,9 +381,7 @@ impl Reconstructor {
             ("reference noise", reference.var_dv.len()),
         ] {
             if n != k {
-                return Err(
-                    ReconError::Parameter(format!("{what}: {n} values for K = {k}")).into(),
-                );
+                return Err(ReconError::FrameLength { what, got: n, k }.into());
             }
         }
         let dv: Vec<f64> = frame

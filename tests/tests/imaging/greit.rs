@@ -251,7 +251,7 @@ fn bad_settings_and_frames_are_refused() {
         assert!(
             matches!(
                 Greit::new(&imager, &jac, &options),
-                Err(ReconError::Parameter(_))
+                Err(ReconError::OutOfRange { .. } | ReconError::RadiusTooLarge { .. })
             ),
             "{options:?}"
         );
@@ -260,12 +260,15 @@ fn bad_settings_and_frames_are_refused() {
     let k = g.frame_len();
     assert!(matches!(
         g.image(&vec![0.0; k - 1]),
-        Err(ReconError::Parameter(_))
+        Err(ReconError::FrameLength { .. })
     ));
     let mut nan = vec![0.0; k];
     nan[3] = f64::NAN;
     assert_eq!(g.image(&nan), Err(ReconError::NonFinite));
-    assert!(matches!(g.noise_sd(&[1.0]), Err(ReconError::Parameter(_))));
+    assert!(matches!(
+        g.noise_sd(&[1.0]),
+        Err(ReconError::FrameLength { got: 1, .. })
+    ));
     // A Jacobian of another mesh.
     let (other, _) = {
         let sc = scene("disc-ref-x050.toml");
@@ -274,7 +277,7 @@ fn bad_settings_and_frames_are_refused() {
     };
     assert!(matches!(
         Greit::new(&other, &jac, &GreitOptions::default()),
-        Err(ReconError::Parameter(_))
+        Err(ReconError::Size { .. })
     ));
 }
 

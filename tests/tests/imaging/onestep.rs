@@ -132,7 +132,7 @@ fn parameters_and_frames_are_checked() {
     for (alpha, s) in [(0.0, 0.5), (f64::NAN, 0.5), (1.0, 1.5), (1.0, -0.1)] {
         assert!(matches!(
             OneStep::new(&jac, alpha, s),
-            Err(ReconError::Parameter(_))
+            Err(ReconError::OutOfRange { .. })
         ));
     }
     assert_eq!(
@@ -149,7 +149,7 @@ fn parameters_and_frames_are_checked() {
     let r = OneStep::new(&jac, 0.5, 0.5).unwrap();
     assert!(matches!(
         r.reconstruct(&[1.0; 3]),
-        Err(ReconError::Parameter(_))
+        Err(ReconError::FrameLength { got: 3, k: 4, .. })
     ));
     assert_eq!(
         r.reconstruct(&[1.0, f64::NAN, 0.0, 0.0]),
@@ -195,7 +195,7 @@ fn gcv_prefers_little_regularisation_for_clean_data_and_much_for_noise() {
     );
     assert!(matches!(
         gcv_alpha(&jac, 0.5, &clean[..5], &candidates),
-        Err(ReconError::Parameter(_))
+        Err(ReconError::FrameLength { got: 5, .. })
     ));
 }
 
@@ -475,7 +475,7 @@ fn noise_of_an_image_by_hand_and_by_sampling() {
     }
     assert!(matches!(
         recon.noise_sd_of(&var_dv, &[7]),
-        Err(ReconError::Parameter(_))
+        Err(ReconError::Size { got: 7, .. })
     ));
     // Touches are given their largest value over noise; unknown noise keeps a region.
     let g = plain_grid(4, 1);

@@ -28,7 +28,7 @@ impl OneStep {
     /// [`DataSpace::one_step`] (use those to choose alpha by GCV on the same data space).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for alpha not in (0, inf) or s not in [0, 1];
+    /// [`ReconError::OutOfRange`] for alpha not in (0, inf) or s not in [0, 1];
     /// [`ReconError::Singular`] when the system cannot be factorised.
     pub fn new(jac: &DMatrix<f64>, alpha: f64, s: f64) -> Result<Self, ReconError> {
         check_alpha(alpha)?;
@@ -73,7 +73,7 @@ impl OneStep {
     /// d_sigma on the mesh's triangles for the frame difference `dv` = V_1 - V_0 (K values).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
+    /// [`ReconError::FrameLength`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
     pub fn reconstruct(&self, dv: &[f64]) -> Result<Vec<f64>, ReconError> {
         self.check_len(dv.len(), "values")?;
         if dv.iter().any(|v| !v.is_finite()) {
@@ -94,14 +94,15 @@ impl OneStep {
         Ok(image)
     }
 
-    fn check_len(&self, n: usize, what: &str) -> Result<(), ReconError> {
+    fn check_len(&self, n: usize, what: &'static str) -> Result<(), ReconError> {
         if n == self.frame_len() {
             Ok(())
         } else {
-            Err(ReconError::Parameter(format!(
-                "{n} {what}, the protocol has K = {}",
-                self.frame_len()
-            )))
+            Err(ReconError::FrameLength {
+                what,
+                got: n,
+                k: self.frame_len(),
+            })
         }
     }
 
@@ -112,7 +113,7 @@ impl OneStep {
     /// keeps its accuracy). Same units as an image.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a wrong length.
+    /// [`ReconError::FrameLength`] for a wrong length.
     pub fn noise_sd(&self, var_dv: &[f64]) -> Result<Vec<f64>, ReconError> {
         let all: Vec<usize> = (0..self.triangles()).collect();
         self.noise_sd_of(var_dv, &all)
@@ -122,14 +123,15 @@ impl OneStep {
     /// image drawn on pixels needs only the triangles under them.
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for a wrong length or a triangle out of range.
+    /// [`ReconError::FrameLength`] for a wrong length, [`ReconError::Size`] for a triangle out of range.
     pub fn noise_sd_of(&self, var_dv: &[f64], rows: &[usize]) -> Result<Vec<f64>, ReconError> {
         self.check_len(var_dv.len(), "variances")?;
         if let Some(t) = rows.iter().find(|&&t| t >= self.triangles()) {
-            return Err(ReconError::Parameter(format!(
-                "triangle {t}, the mesh has {}",
-                self.triangles()
-            )));
+            return Err(ReconError::Size {
+                what: "a triangle's index",
+                got: *t,
+                expected: self.triangles(),
+            });
         }
         let r = self.xt.nrows();
         let w = Mat::from_fn(self.frame_len(), r, |k, j| {

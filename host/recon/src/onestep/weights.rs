@@ -11,22 +11,21 @@ impl DataSpace {
     /// method still takes the frame as measured; the weights are applied inside.
     ///
     /// # Errors
-    /// As [`DataSpace::factored`]; [`ReconError::Parameter`] for weights not of K positive
+    /// As [`DataSpace::factored`]; [`ReconError::FrameLength`] or [`ReconError::NotPositive`] for weights not of K positive
     /// finite values.
     pub fn factored_weighted(
         jac: &crate::fem::TransferJacobian,
         s: f64,
         weights: &[f64],
     ) -> Result<Self, ReconError> {
-        if weights.len() != jac.combination.len()
-            || weights.iter().any(|w| !(w.is_finite() && *w > 0.0))
-        {
-            return Err(ReconError::Parameter(format!(
-                "{} weights for K = {}: each positive and finite",
-                weights.len(),
-                jac.combination.len()
-            )));
+        if weights.len() != jac.combination.len() {
+            return Err(ReconError::FrameLength {
+                what: "weights",
+                got: weights.len(),
+                k: jac.combination.len(),
+            });
         }
+        super::not_positive("weight", weights)?;
         let root: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
         let whitened = crate::fem::TransferJacobian {
             frame: jac.frame.iter().zip(&root).map(|(v, w)| v * w).collect(),

@@ -22,7 +22,7 @@ pub fn median_seconds<T>(repeats: usize, mut f: impl FnMut() -> Option<T>) -> Op
 /// mesh's triangles, drawn on the grid's pixels (None outside the sheet).
 ///
 /// # Errors
-/// [`ReconError::Parameter`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
+/// [`ReconError::FrameLength`] for a wrong length, [`ReconError::NonFinite`] for NaN/inf.
 pub fn onto_triangles(
     grid: &PixelGrid,
     operator: &FrameOperator,

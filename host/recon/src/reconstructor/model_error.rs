@@ -30,15 +30,17 @@ impl Weighting {
     /// The weighting a user's text names: "alike", "kind" or "normalised".
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for other text.
+    /// [`ReconError::UnknownName`] for other text.
     pub fn from_text(text: &str) -> Result<Self, ReconError> {
         match text {
             "alike" => Ok(Self::Alike),
             "kind" => Ok(Self::PerKind),
             "normalised" | "normalized" => Ok(Self::Normalised),
-            other => Err(ReconError::Parameter(format!(
-                "weights '{other}': alike, kind or normalised"
-            ))),
+            other => Err(ReconError::UnknownName {
+                what: "weights",
+                given: other.to_string(),
+                choices: "alike, kind or normalised",
+            }),
         }
     }
 }

@@ -40,7 +40,7 @@ impl MeshPlan {
     /// The mesh of `sheet` by this plan; a given mesh must have the sheet's electrode count.
     ///
     /// # Errors
-    /// [`ImagingError::Mesh`] when the sheet cannot be meshed; [`ReconError::Parameter`] for
+    /// [`ImagingError::Mesh`] when the sheet cannot be meshed; [`ReconError::Size`] for
     /// a given mesh with another electrode count.
     pub fn mesh(self, sheet: &Sheet) -> Result<Mesh, ImagingError> {
         let mesh = match self {
@@ -53,11 +53,11 @@ impl MeshPlan {
             }
         };
         if mesh.electrodes.len() != usize::from(sheet.electrodes.count) {
-            return Err(ReconError::Parameter(format!(
-                "the mesh has {} electrodes, the sheet {}",
-                mesh.electrodes.len(),
-                sheet.electrodes.count
-            ))
+            return Err(ReconError::Size {
+                what: "the mesh's electrodes",
+                got: mesh.electrodes.len(),
+                expected: usize::from(sheet.electrodes.count),
+            }
             .into());
         }
         Ok(mesh)
@@ -70,18 +70,14 @@ impl MeshPlan {
 fn fits(mesh: &Mesh, sheet: &Sheet) -> Result<(), ImagingError> {
     let [x0, y0, x1, y1] = sheet.shape.bounds();
     let tol = 0.05 * (x1 - x0).max(y1 - y0);
-    let mm = |v: f64| v * 1e3;
     if let Some((i, p)) = (mesh.nodes.iter().enumerate())
         .find(|(_, p)| !(p.iter().all(|v| v.is_finite()) && sheet.shape.contains(**p, tol)))
     {
-        return Err(ReconError::Parameter(format!(
-            "the mesh is not the sheet's: its node {i} at ({:.1}, {:.1}) mm lies outside the \
-             scene's sheet, {:.1} x {:.1} mm (a mesh's coordinates are in metres)",
-            mm(p[0]),
-            mm(p[1]),
-            mm(x1 - x0),
-            mm(y1 - y0)
-        ))
+        return Err(ReconError::MeshNodeOffSheet {
+            node: i,
+            at: *p,
+            sheet: [x1 - x0, y1 - y0],
+        }
         .into());
     }
     let [m0, n0, m1, n1] = mesh.nodes.iter().fold(
@@ -97,18 +93,10 @@ fn fits(mesh: &Mesh, sheet: &Sheet) -> Result<(), ImagingError> {
         .iter()
         .any(|gap| *gap > tol)
     {
-        return Err(ReconError::Parameter(format!(
-            "the mesh is not the sheet's: it spans x {:.1} to {:.1} mm and y {:.1} to {:.1} mm, \
-             the scene's sheet x {:.1} to {:.1} mm and y {:.1} to {:.1} mm",
-            mm(m0),
-            mm(m1),
-            mm(n0),
-            mm(n1),
-            mm(x0),
-            mm(x1),
-            mm(y0),
-            mm(y1)
-        ))
+        return Err(ReconError::MeshExtent {
+            mesh: [m0, n0, m1, n1],
+            sheet: [x0, y0, x1, y1],
+        }
         .into());
     }
     Ok(())
@@ -152,7 +140,7 @@ impl AlphaRule {
     /// lambda of `noise_figure` (one matrix for every frame, the consensus rule).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for other text.
+    /// [`ReconError::UnknownName`] for other text.
     pub fn from_text(text: &str, method: &Method, noise_figure: f64) -> Result<Self, ReconError> {
         use crate::gcv::Criterion;
         let rule = match text {
@@ -166,10 +154,12 @@ impl AlphaRule {
                 Method::GaussNewton { .. } => AlphaRule::Chosen(Criterion::CornerAboveFloor),
             },
             v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
-                ReconError::Parameter(format!(
-                    "alpha '{v}': a number, auto, corner, gcv, discrepancy, lcurve or \
-                     quasi-optimality"
-                ))
+                ReconError::UnknownName {
+                    what: "alpha",
+                    given: v.to_string(),
+                    choices: "a number, auto, corner, gcv, discrepancy, lcurve or \
+                              quasi-optimality",
+                }
             })?),
         };
         Ok(rule)
@@ -258,13 +248,12 @@ impl Reference {
     /// ([`et_core::stats::dv_variance`]; zero from one frame).
     ///
     /// # Errors
-    /// [`ReconError::Parameter`] for no frames or frames of different lengths.
+    /// [`ReconError::Reference`] for no frames or frames of different lengths.
     pub fn from_frames<F: AsRef<[f32]>>(frames: &[F]) -> Result<Self, ReconError> {
         let k = frames.first().map_or(0, |f| f.as_ref().len());
         let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
-        let bad = |e: et_core::stats::StatsError| ReconError::Parameter(format!("reference: {e}"));
-        et_core::stats::reference(frames, &mut v0).map_err(bad)?;
-        et_core::stats::dv_variance(frames, &mut var_dv).map_err(bad)?;
+        et_core::stats::reference(frames, &mut v0).map_err(ReconError::Reference)?;
+        et_core::stats::dv_variance(frames, &mut var_dv).map_err(ReconError::Reference)?;
         Ok(Self { v0, var_dv })
     }
 }
