@@ -8,7 +8,7 @@
 //! own spacing, and the refinement's angle limit grades the elements from there into the
 //! interior, so a mesh is fine only where the scene needs it.
 
-use et_core::sheet::{ElectrodeModel, Sheet};
+use et_core::sheet::{ElectrodeModel, ShapeError, Sheet};
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
@@ -92,23 +92,198 @@ impl Refinement {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshError {
-    /// A size or the sheet spec is unusable.
-    #[error("{0}")]
-    Spec(String),
+    /// The sheet's outline is unusable.
+    #[error(transparent)]
+    Shape(#[from] ShapeError),
+    /// Mesh sizes that are not finite and positive.
+    #[error(
+        "sizes must be finite and positive: interior {interior} m, at electrodes {electrode} m, \
+         smallest angle {min_angle_deg} degrees"
+    )]
+    Sizes {
+        /// The interior's edge, m.
+        interior: f64,
+        /// The edge at the electrodes, m.
+        electrode: f64,
+        /// The smallest angle, degrees.
+        min_angle_deg: f64,
+    },
+    /// An electrode width that is not positive.
+    #[error("electrode width must be positive")]
+    ElectrodeWidth,
+    /// No size gave a mesh near the triangles asked for.
+    #[error("no mesh was made")]
+    NoMesh,
+    /// A refinement region with a centre that is not finite or a radius or edge that is not
+    /// positive.
+    #[error(
+        "a refinement needs a finite centre and a positive radius and edge: centre ({}, {}) m, \
+         radius {radius} m, edge {edge} m",
+        centre[0],
+        centre[1]
+    )]
+    Refinement {
+        /// Its centre, m.
+        centre: [f64; 2],
+        /// Its radius, m.
+        radius: f64,
+        /// Its edge, m.
+        edge: f64,
+    },
+    /// A refinement region that would add more points than a mesh is made of.
+    #[error("a refinement of radius {radius} m at edge {edge} m adds over {limit} points")]
+    RefinementTooFine {
+        /// Its radius, m.
+        radius: f64,
+        /// Its edge, m.
+        edge: f64,
+        /// The limit it passes, in words.
+        limit: &'static str,
+    },
+    /// A refinement region that does not meet the sheet.
+    #[error(
+        "a refinement at ({}, {}) m of radius {radius} m does not meet the sheet",
+        centre[0],
+        centre[1]
+    )]
+    RefinementOffSheet {
+        /// Its centre, m.
+        centre: [f64; 2],
+        /// Its radius, m.
+        radius: f64,
+    },
     /// Two electrodes overlap on the outline.
     #[error("electrodes {electrode} and the next overlap on the outline")]
     Overlap {
         /// The first of the two.
         electrode: usize,
     },
-    /// The triangulation failed (a degenerate outline).
+    /// The triangulation failed (a degenerate outline): why, in words.
     #[error("triangulation failed: {0}")]
-    Triangulation(String),
+    Triangulation(&'static str),
     /// An electrode has no boundary edge.
     #[error("electrode {electrode} covers no boundary edge")]
     EmptyElectrode {
         /// Which.
         electrode: usize,
+    },
+    /// A mesh of no triangles.
+    #[error("no triangles")]
+    NoTriangles,
+    /// Fewer than two electrodes.
+    #[error("{count} electrodes: need at least 2")]
+    TooFewElectrodes {
+        /// How many.
+        count: usize,
+    },
+    /// A triangle names a node past the nodes.
+    #[error("triangle {triangle} names a node past the {nodes} nodes")]
+    TriangleNodePast {
+        /// The triangle.
+        triangle: usize,
+        /// How many nodes there are.
+        nodes: usize,
+    },
+    /// An electrode names a node past the nodes.
+    #[error("an electrode names a node past the {nodes} nodes")]
+    ElectrodeNodePast {
+        /// How many nodes there are.
+        nodes: usize,
+    },
+    /// A triangle of (nearly) no area.
+    #[error("triangle {triangle} is degenerate (area {area:.3e} m^2)")]
+    Degenerate {
+        /// The triangle.
+        triangle: usize,
+        /// Its area, m^2.
+        area: f64,
+    },
+    /// An electrode given as a single node and as edges at once.
+    #[error(
+        "electrode {electrode} mixes a single node with edges: give one node (a point \
+         electrode) or its nodes in order along the boundary"
+    )]
+    MixedElectrode {
+        /// The electrode.
+        electrode: usize,
+    },
+    /// Two electrodes that share a node (and so are shorted together).
+    #[error(
+        "electrodes {} and {} share node {node}: electrodes that touch are one electrode \
+         (leave a gap of at least one edge)",
+        electrodes[0],
+        electrodes[1]
+    )]
+    SharedNode {
+        /// The two electrodes.
+        electrodes: [usize; 2],
+        /// The node.
+        node: usize,
+    },
+    /// A triangle listed twice.
+    #[error("triangle {triangle} repeats triangle {first}")]
+    RepeatedTriangle {
+        /// The repeat.
+        triangle: usize,
+        /// The first listing.
+        first: usize,
+    },
+    /// A node in no triangle.
+    #[error("node {node} is in no triangle (an unused node leaves the system singular)")]
+    UnusedNode {
+        /// The node.
+        node: usize,
+    },
+    /// A point electrode's node inside the mesh.
+    #[error("electrode {electrode}: node {node} is inside the mesh, not on its boundary")]
+    InteriorNode {
+        /// The electrode.
+        electrode: usize,
+        /// Its node.
+        node: usize,
+    },
+    /// An electrode's edge inside the mesh.
+    #[error(
+        "electrode {electrode}: edge ({}, {}) is inside the mesh, not on its boundary",
+        edge[0],
+        edge[1]
+    )]
+    InteriorEdge {
+        /// The electrode.
+        electrode: usize,
+        /// The edge's nodes.
+        edge: [usize; 2],
+    },
+    /// Consecutive electrode nodes that share no triangle edge.
+    #[error(
+        "electrode {electrode}: nodes {} and {} share no triangle edge (list an electrode's \
+         nodes in order along the boundary)",
+        nodes[0],
+        nodes[1]
+    )]
+    NotAnEdge {
+        /// The electrode.
+        electrode: usize,
+        /// The two nodes.
+        nodes: [usize; 2],
+    },
+    /// A mesh file that cannot be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: import::ReadError,
+    },
+    /// A mesh file that is not a mesh at a line.
+    #[error("{}:{line}: {fault}", path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The line (1-based; 0 for the file as a whole).
+        line: usize,
+        /// What is wrong there.
+        fault: import::FileFault,
     },
 }
 
@@ -127,7 +302,8 @@ impl Mesh {
     ///
     /// # Errors
     /// As [`Mesh::of_sheet`]; a region with a non-finite or non-positive radius or edge is
-    /// [`MeshError::Spec`], as is one that would add more than a million points.
+    /// [`MeshError::Refinement`], one that would add more than a million points
+    /// [`MeshError::RefinementTooFine`], one off the sheet [`MeshError::RefinementOffSheet`].
     pub fn refined(
         spec: &Sheet,
         size: MeshSize,
@@ -136,16 +312,14 @@ impl Mesh {
         for r in regions {
             r.check(spec)?;
         }
-        spec.shape
-            .validate()
-            .map_err(|e| MeshError::Spec(e.to_string()))?;
+        spec.shape.validate()?;
         let ok = |v: f64| v.is_finite() && v > 0.0;
         if !(ok(size.interior) && ok(size.electrode) && size.min_angle_deg.is_finite()) {
-            return Err(MeshError::Spec(format!(
-                "sizes must be finite and positive: interior {} m, at electrodes {} m, \
-                 smallest angle {} degrees",
-                size.interior, size.electrode, size.min_angle_deg
-            )));
+            return Err(MeshError::Sizes {
+                interior: size.interior,
+                electrode: size.electrode,
+                min_angle_deg: size.min_angle_deg,
+            });
         }
         let outline = Outline::of(spec, size)?;
         let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
@@ -284,7 +458,7 @@ impl Mesh {
                 break;
             }
         }
-        best.ok_or_else(|| MeshError::Spec("no mesh was made".into()))
+        best.ok_or(MeshError::NoMesh)
     }
 
     /// Twice the signed area of triangle `t` (positive: counter-clockwise), m^2.
@@ -371,7 +545,7 @@ fn fan(shape: &et_core::sheet::shape::Shape, t: f64, d: f64, rings: usize) -> Ve
     points
 }
 
-mod import;
+pub mod import;
 mod outline;
 use outline::Outline;
 
@@ -381,12 +555,9 @@ pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// A point the triangulation could not place, in words.
 pub(crate) fn not_placed(e: spade::InsertionError) -> MeshError {
-    MeshError::Triangulation(
-        match e {
-            spade::InsertionError::NAN => "a point is not a number",
-            spade::InsertionError::TooLarge => "a coordinate is too large (the sheet in m?)",
-            spade::InsertionError::TooSmall => "a coordinate is too small to place",
-        }
-        .into(),
-    )
+    MeshError::Triangulation(match e {
+        spade::InsertionError::NAN => "a point is not a number",
+        spade::InsertionError::TooLarge => "a coordinate is too large (the sheet in m?)",
+        spade::InsertionError::TooSmall => "a coordinate is too small to place",
+    })
 }

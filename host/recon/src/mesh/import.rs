@@ -23,13 +23,119 @@ use std::path::Path;
 
 use super::{Mesh, MeshError, dist};
 
-fn bad(path: &Path, line: usize, why: impl std::fmt::Display) -> MeshError {
-    MeshError::Spec(format!("{}:{line}: {why}", path.display()))
+/// What is wrong at a line of a mesh file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FileFault {
+    /// A CSV row of another width, or with a value that is not a number.
+    #[error("expected {0} numbers")]
+    Numbers(usize),
+    /// A CSV row with a value that is not a number.
+    #[error("expected a list of numbers")]
+    NumberList,
+    /// A coordinate that is NaN or infinite.
+    #[error("non-finite coordinate")]
+    NonFinite,
+    /// A row of the wrong number of values.
+    #[error("wrong number of values")]
+    Width,
+    /// A node number past the nodes file's.
+    #[error("node {node}, but {} has {count} nodes (numbered from 0)", nodes.display())]
+    NodePast {
+        /// The node named.
+        node: usize,
+        /// The nodes file.
+        nodes: std::path::PathBuf,
+        /// Its nodes.
+        count: usize,
+    },
+    /// No `$MeshFormat`.
+    #[error("no $MeshFormat: not a Gmsh file")]
+    NotGmsh,
+    /// A Gmsh version other than 2.
+    #[error("Gmsh format {version}: only 2.2 ASCII is read; save with `gmsh -format msh22`")]
+    GmshVersion {
+        /// The version as written.
+        version: String,
+    },
+    /// A binary Gmsh file.
+    #[error("binary Gmsh file: save as ASCII")]
+    Binary,
+    /// A section missing.
+    #[error("no {0} section")]
+    NoSection(&'static str),
+    /// A node line that is not `id x y z`.
+    #[error("node line: id x y z")]
+    NodeLine,
+    /// No count where one belongs.
+    #[error("expected a count")]
+    Count,
+    /// A count the file has no lines for.
+    #[error("{count} {what} claimed; the file has {room} lines after the count")]
+    CountPastEnd {
+        /// The count.
+        count: usize,
+        /// What is counted.
+        what: &'static str,
+        /// The lines there are.
+        room: usize,
+    },
+    /// An element line that is not `id type ntags tags... nodes`.
+    #[error("element line: id type ntags tags... nodes")]
+    ElementLine,
+    /// Fewer numbers than the tags claimed.
+    #[error("{tags} tags, but only {numbers} numbers follow")]
+    Tags {
+        /// The tags claimed.
+        tags: usize,
+        /// The numbers after them.
+        numbers: usize,
+    },
+    /// An element with the wrong number of nodes for its type.
+    #[error("an element of type {kind} has {want} nodes, this line gives {got}")]
+    ElementNodes {
+        /// Its Gmsh type.
+        kind: i64,
+        /// The nodes of that type.
+        want: usize,
+        /// The nodes given.
+        got: usize,
+    },
+    /// A node id not in `$Nodes`.
+    #[error("node {0} is not in $Nodes")]
+    UnknownNode(i64),
+    /// A line element with no physical tag.
+    #[error("a line element without a physical tag")]
+    Untagged,
+}
+
+/// Why a mesh file could not be read (the I/O error, shared so that [`MeshError`] stays
+/// `Clone`; two are equal when their kind and text are).
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{0}")]
+pub struct ReadError(std::sync::Arc<std::io::Error>);
+
+impl PartialEq for ReadError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
+    }
+}
+
+fn bad(path: &Path, line: usize, fault: FileFault) -> MeshError {
+    MeshError::File {
+        path: path.into(),
+        line,
+        fault,
+    }
 }
 
 fn read(path: &Path) -> Result<String, MeshError> {
-    et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
-        .map_err(|e| MeshError::Spec(format!("{}: {e}", path.display())))
+    et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(|e| {
+        MeshError::Read {
+            path: path.into(),
+            source: ReadError(std::sync::Arc::new(e)),
+        }
+    })
 }
 
 /// Rows of comma-separated values with their line numbers (1-based), each `width` long if
@@ -50,8 +156,8 @@ fn csv_rows<T: std::str::FromStr>(
             Ok(v) if width.is_none_or(|w| v.len() == w) => out.push((i + 1, v)),
             Err(_) if first => {}
             _ => {
-                let what = width.map_or("a list of".to_string(), |w| w.to_string());
-                return Err(bad(path, i + 1, format!("expected {what} numbers")));
+                let fault = width.map_or(FileFault::NumberList, FileFault::Numbers);
+                return Err(bad(path, i + 1, fault));
             }
         }
         first = false;
@@ -63,32 +169,28 @@ impl Mesh {
     /// Reads a Gmsh 2.2 ASCII mesh (see the module docs).
     ///
     /// # Errors
-    /// [`MeshError::Spec`] naming the file and line, or what [`Mesh::from_parts`] finds.
+    /// [`MeshError::Read`] or [`MeshError::File`] naming the file (and line), or what
+    /// [`Mesh::from_parts`] finds.
     pub fn from_gmsh(path: &Path) -> Result<Self, MeshError> {
         let text = read(path)?;
         let lines: Vec<&str> = text.lines().collect();
         let find = |tag: &str| lines.iter().position(|l| l.trim() == tag);
         let fmt =
-            find("$MeshFormat").ok_or_else(|| bad(path, 1, "no $MeshFormat: not a Gmsh file"))?;
+            find("$MeshFormat").ok_or_else(|| bad(path, 1, FileFault::NotGmsh))?;
         let head: Vec<&str> = lines
             .get(fmt + 1)
             .map(|l| l.split_whitespace().collect())
             .unwrap_or_default();
         let version = head.first().copied().unwrap_or("");
         if !version.starts_with("2.") {
-            return Err(bad(
-                path,
-                fmt + 2,
-                format!(
-                    "Gmsh format {version}: only 2.2 ASCII is read; save with `gmsh -format msh22`"
-                ),
-            ));
+            let version = version.to_string();
+            return Err(bad(path, fmt + 2, FileFault::GmshVersion { version }));
         }
         if head.get(1) != Some(&"0") {
-            return Err(bad(path, fmt + 2, "binary Gmsh file: save as ASCII"));
+            return Err(bad(path, fmt + 2, FileFault::Binary));
         }
-        let count = |i: usize, what: &str| gmsh_count(path, &lines, i, what);
-        let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, "no $Nodes section"))?;
+        let count = |i: usize, what: &'static str| gmsh_count(path, &lines, i, what);
+        let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Nodes")))?;
         let n = count(nodes_at + 1, "nodes")?;
         let mut ids = HashMap::new();
         let mut nodes = Vec::with_capacity(n);
@@ -102,10 +204,10 @@ impl Mesh {
                     ids.insert(id as i64, nodes.len());
                     nodes.push([x, y]);
                 }
-                _ => return Err(bad(path, ln + 1, "node line: id x y z")),
+                _ => return Err(bad(path, ln + 1, FileFault::NodeLine)),
             }
         }
-        let el_at = find("$Elements").ok_or_else(|| bad(path, 0, "no $Elements section"))?;
+        let el_at = find("$Elements").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Elements")))?;
         let m = count(el_at + 1, "elements")?;
         let (triangles, by_tag) = gmsh_elements(path, &lines, (el_at + 2, m), &ids)?;
         Self::from_parts(nodes, triangles, by_tag.into_values().collect())
@@ -114,11 +216,12 @@ impl Mesh {
     /// Reads a mesh from three CSV files (see the module docs).
     ///
     /// # Errors
-    /// [`MeshError::Spec`] naming the file and line, or what [`Mesh::from_parts`] finds.
+    /// [`MeshError::Read`] or [`MeshError::File`] naming the file (and line), or what
+    /// [`Mesh::from_parts`] finds.
     pub fn from_csv(nodes: &Path, triangles: &Path, electrodes: &Path) -> Result<Self, MeshError> {
         let xy: Vec<(usize, Vec<f64>)> = csv_rows(nodes, Some(2))?;
         if let Some((line, _)) = xy.iter().find(|(_, r)| r.iter().any(|v| !v.is_finite())) {
-            return Err(bad(nodes, *line, "non-finite coordinate"));
+            return Err(bad(nodes, *line, FileFault::NonFinite));
         }
         let tri: Vec<(usize, Vec<usize>)> = csv_rows(triangles, Some(3))?;
         let el: Vec<(usize, Vec<usize>)> = csv_rows(electrodes, None)?;
@@ -129,18 +232,16 @@ impl Mesh {
                 .iter()
                 .find_map(|(line, r)| r.iter().find(|&&v| v >= n).map(|v| (line, v)))
             {
-                return Err(bad(
-                    path,
-                    *line,
-                    format!(
-                        "node {v}, but {} has {n} nodes (numbered from 0)",
-                        nodes.display()
-                    ),
-                ));
+                let fault = FileFault::NodePast {
+                    node: *v,
+                    nodes: nodes.into(),
+                    count: n,
+                };
+                return Err(bad(path, *line, fault));
             }
         }
         // csv_rows gave each row its width; a row that is not is refused, not indexed.
-        let width = |path: &Path, line: usize| bad(path, line, "wrong number of values");
+        let width = |path: &Path, line: usize| bad(path, line, FileFault::Width);
         let xy = xy
             .iter()
             .map(|(line, r)| match r[..] {
@@ -178,7 +279,9 @@ impl Mesh {
     /// nodes.
     ///
     /// # Errors
-    /// [`MeshError::Spec`] or [`MeshError::EmptyElectrode`].
+    /// The [`MeshError`] naming the first fault: a node number past the nodes
+    /// ([`MeshError::TriangleNodePast`]), a degenerate or repeated triangle, an unused node, an
+    /// electrode that is empty, mixed, shared or not on the boundary.
     pub fn from_parts(
         nodes: Vec<[f64; 2]>,
         mut triangles: Vec<[usize; 3]>,
@@ -186,23 +289,21 @@ impl Mesh {
     ) -> Result<Self, MeshError> {
         let n = nodes.len();
         if triangles.is_empty() {
-            return Err(MeshError::Spec("no triangles".into()));
+            return Err(MeshError::NoTriangles);
         }
         if electrodes.len() < 2 {
-            return Err(MeshError::Spec(format!(
-                "{} electrodes: need at least 2",
-                electrodes.len()
-            )));
+            return Err(MeshError::TooFewElectrodes {
+                count: electrodes.len(),
+            });
         }
         if let Some(t) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
-            return Err(MeshError::Spec(format!(
-                "triangle {t} names a node past the {n} nodes"
-            )));
+            return Err(MeshError::TriangleNodePast {
+                triangle: t,
+                nodes: n,
+            });
         }
         if electrodes.iter().flatten().flatten().any(|&i| i >= n) {
-            return Err(MeshError::Spec(format!(
-                "an electrode names a node past the {n} nodes"
-            )));
+            return Err(MeshError::ElectrodeNodePast { nodes: n });
         }
         orient(&nodes, &mut triangles)?;
         if let Some(l) = electrodes.iter().position(Vec::is_empty) {
@@ -247,10 +348,10 @@ fn orient(nodes: &[[f64; 2]], triangles: &mut [[usize; 3]]) -> Result<(), MeshEr
     for (i, t) in triangles.iter_mut().enumerate() {
         let a = area2(t);
         if a.is_nan() || a.abs() <= 1e-12 * mean {
-            return Err(MeshError::Spec(format!(
-                "triangle {i} is degenerate (area {:.3e} m^2)",
-                0.5 * a.abs()
-            )));
+            return Err(MeshError::Degenerate {
+                triangle: i,
+                area: 0.5 * a.abs(),
+            });
         }
         if a < 0.0 {
             t.swap(1, 2);
@@ -276,10 +377,7 @@ fn point_electrodes(electrodes: &[Vec<[usize; 2]>]) -> Result<Vec<Option<usize>>
         .zip(&point)
         .position(|(el, p)| p.is_none() && el.iter().any(|&[a, b]| a == b));
     if let Some(l) = mixed {
-        return Err(MeshError::Spec(format!(
-            "electrode {l} mixes a single node with edges: give one node (a point \
-             electrode) or its nodes in order along the boundary"
-        )));
+        return Err(MeshError::MixedElectrode { electrode: l });
     }
     Ok(point)
 }
@@ -299,10 +397,10 @@ fn check_unshared(
         for i in under {
             match owner.get_mut(i) {
                 Some(Some(other)) if *other != l => {
-                    return Err(MeshError::Spec(format!(
-                        "electrodes {other} and {l} share node {i}: electrodes that touch \
-                         are one electrode (leave a gap of at least one edge)"
-                    )));
+                    return Err(MeshError::SharedNode {
+                        electrodes: [*other, l],
+                        node: i,
+                    });
                 }
                 Some(o) => *o = Some(l),
                 None => {}
@@ -347,9 +445,10 @@ fn check_topology(
         let mut key = *t;
         key.sort_unstable();
         if let Some(j) = seen.insert(key, i) {
-            return Err(MeshError::Spec(format!(
-                "triangle {i} repeats triangle {j}"
-            )));
+            return Err(MeshError::RepeatedTriangle {
+                triangle: i,
+                first: j,
+            });
         }
         let [a, b, c] = *t;
         for v in [a, b, c] {
@@ -362,9 +461,7 @@ fn check_topology(
         }
     }
     if let Some(v) = used.iter().position(|&u| !u) {
-        return Err(MeshError::Spec(format!(
-            "node {v} is in no triangle (an unused node leaves the system singular)"
-        )));
+        return Err(MeshError::UnusedNode { node: v });
     }
     let mut boundary = vec![false; n];
     for (e, &count) in &edges {
@@ -381,9 +478,10 @@ fn check_topology(
         if let Some(v) = *p
             && !on_boundary(v)
         {
-            return Err(MeshError::Spec(format!(
-                "electrode {l}: node {v} is inside the mesh, not on its boundary"
-            )));
+            return Err(MeshError::InteriorNode {
+                electrode: l,
+                node: v,
+            });
         }
     }
     for (l, el) in electrodes.iter().enumerate() {
@@ -391,15 +489,16 @@ fn check_topology(
             match edges.get(&edge(a, b)) {
                 Some(1) => {}
                 Some(_) => {
-                    return Err(MeshError::Spec(format!(
-                        "electrode {l}: edge ({a}, {b}) is inside the mesh, not on its boundary"
-                    )));
+                    return Err(MeshError::InteriorEdge {
+                        electrode: l,
+                        edge: [a, b],
+                    });
                 }
                 None => {
-                    return Err(MeshError::Spec(format!(
-                        "electrode {l}: nodes {a} and {b} share no triangle edge (list an \
-                         electrode's nodes in order along the boundary)"
-                    )));
+                    return Err(MeshError::NotAnEdge {
+                        electrode: l,
+                        nodes: [a, b],
+                    });
                 }
             }
         }
@@ -410,18 +509,19 @@ fn check_topology(
 /// The number on line index `i` of a Gmsh file's `lines`, believed only as far as the file
 /// holds lines for it (nothing is allocated for a count the file cannot back); `what` names
 /// what is counted in the error.
-fn gmsh_count(path: &Path, lines: &[&str], i: usize, what: &str) -> Result<usize, MeshError> {
+fn gmsh_count(path: &Path, lines: &[&str], i: usize, what: &'static str) -> Result<usize, MeshError> {
     let n: usize = lines
         .get(i)
         .and_then(|l| l.trim().parse().ok())
-        .ok_or_else(|| bad(path, i + 1, "expected a count"))?;
+        .ok_or_else(|| bad(path, i + 1, FileFault::Count))?;
     let room = lines.len().saturating_sub(i + 1);
     if n > room {
-        return Err(bad(
-            path,
-            i + 1,
-            format!("{n} {what} claimed; the file has {room} lines after the count"),
-        ));
+        let fault = FileFault::CountPastEnd {
+            count: n,
+            what,
+            room,
+        };
+        return Err(bad(path, i + 1, fault));
     }
     Ok(n)
 }
@@ -448,19 +548,15 @@ fn gmsh_elements(
                 (kind, usize::try_from(ntags).unwrap_or(usize::MAX), rest)
             }
             _ => {
-                return Err(bad(
-                    path,
-                    ln + 1,
-                    "element line: id type ntags tags... nodes",
-                ));
+                return Err(bad(path, ln + 1, FileFault::ElementLine));
             }
         };
         let (Some(tags), Some(conn)) = (rest.get(..ntags), rest.get(ntags..)) else {
-            return Err(bad(
-                path,
-                ln + 1,
-                format!("{ntags} tags, but only {} numbers follow", rest.len()),
-            ));
+            let fault = FileFault::Tags {
+                tags: ntags,
+                numbers: rest.len(),
+            };
+            return Err(bad(path, ln + 1, fault));
         };
         let nodes_of = |kind: i64| match kind {
             1 => Some(2),
@@ -471,26 +567,24 @@ fn gmsh_elements(
         if let Some(want) = nodes_of(kind)
             && conn.len() != want
         {
-            return Err(bad(
-                path,
-                ln + 1,
-                format!(
-                    "an element of type {kind} has {want} nodes, this line gives {}",
-                    conn.len()
-                ),
-            ));
+            let fault = FileFault::ElementNodes {
+                kind,
+                want,
+                got: conn.len(),
+            };
+            return Err(bad(path, ln + 1, fault));
         }
         let node = |id: i64| {
             ids.get(&id)
                 .copied()
-                .ok_or_else(|| bad(path, ln + 1, format!("node {id} is not in $Nodes")))
+                .ok_or_else(|| bad(path, ln + 1, FileFault::UnknownNode(id)))
         };
         match (kind, conn) {
             (2, &[a, b, c]) => triangles.push([node(a)?, node(b)?, node(c)?]),
             (1, &[a, b]) => {
                 let tag = *tags
                     .first()
-                    .ok_or_else(|| bad(path, ln + 1, "a line element without a physical tag"))?;
+                    .ok_or_else(|| bad(path, ln + 1, FileFault::Untagged))?;
                 by_tag.entry(tag).or_default().push([node(a)?, node(b)?]);
             }
             (15, &[a]) => {

@@ -13,25 +13,26 @@ impl Refinement {
         let r = self;
         let ok = |v: f64| v.is_finite() && v > 0.0;
         if !(ok(r.radius) && ok(r.edge) && r.centre.iter().all(|c| c.is_finite())) {
-            return Err(MeshError::Spec(format!(
-                "a refinement needs a finite centre and a positive radius and edge: centre \
-                 ({}, {}) m, radius {} m, edge {} m",
-                r.centre[0], r.centre[1], r.radius, r.edge
-            )));
+            return Err(MeshError::Refinement {
+                centre: r.centre,
+                radius: r.radius,
+                edge: r.edge,
+            });
         }
         if (r.radius / r.edge).powi(2) > 1e6 {
-            return Err(MeshError::Spec(format!(
-                "a refinement of radius {} m at edge {} m adds over a million points",
-                r.radius, r.edge
-            )));
+            return Err(MeshError::RefinementTooFine {
+                radius: r.radius,
+                edge: r.edge,
+                limit: "a million",
+            });
         }
         if !spec.shape.contains(r.centre, 0.0)
             && spec.shape.distance_to_outline(r.centre) >= r.radius
         {
-            return Err(MeshError::Spec(format!(
-                "a refinement at ({}, {}) m of radius {} m does not meet the sheet",
-                r.centre[0], r.centre[1], r.radius
-            )));
+            return Err(MeshError::RefinementOffSheet {
+                centre: r.centre,
+                radius: r.radius,
+            });
         }
         Ok(())
     }
@@ -62,10 +63,11 @@ impl Refinement {
         let (j_lo, j_hi) = span((-r.radius).max(y_min - c_y), r.radius.min(y_max - c_y), dy);
         let (i_lo, i_hi) = span((-r.radius).max(x_min - c_x), r.radius.min(x_max - c_x), h);
         if (j_hi - j_lo).max(0) as f64 * (i_hi - i_lo).max(0) as f64 > 1e7 {
-            return Err(MeshError::Spec(format!(
-                "a refinement of radius {} m at edge {h} m adds over ten million points",
-                r.radius
-            )));
+            return Err(MeshError::RefinementTooFine {
+                radius: r.radius,
+                edge: h,
+                limit: "ten million",
+            });
         }
         for j in j_lo..=j_hi {
             let y = j as f64 * dy;
@@ -110,7 +112,7 @@ impl Outline {
         let perimeter = spec.shape.perimeter();
         let half = 0.5 * spec.electrodes.width / perimeter;
         if !(half > 0.0 && half.is_finite()) {
-            return Err(MeshError::Spec("electrode width must be positive".into()));
+            return Err(MeshError::ElectrodeWidth);
         }
         let point = spec.electrodes.model == ElectrodeModel::Point;
         let centres = spec.electrodes.arc_positions(&spec.shape);

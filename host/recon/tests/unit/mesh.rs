@@ -110,7 +110,9 @@ fn refined_regions_get_their_edge_and_the_mesh_stays_valid() {
     ] {
         assert!(matches!(
             Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[bad]),
-            Err(MeshError::Spec(_))
+            Err(MeshError::Refinement { .. }
+                | MeshError::RefinementTooFine { .. }
+                | MeshError::RefinementOffSheet { .. })
         ));
     }
 }
@@ -259,5 +261,8 @@ fn bad_specs_are_refused() {
         interior: f64::NAN,
         ..MeshSize::for_count(&s, 1000)
     };
-    assert!(matches!(Mesh::of_sheet(&s, bad), Err(MeshError::Spec(_))));
+    assert!(matches!(
+        Mesh::of_sheet(&s, bad),
+        Err(MeshError::Sizes { .. })
+    ));
 }
