@@ -50,9 +50,17 @@ pub enum BackgroundError {
     /// The forward model failed.
     #[error("background fit: {0}")]
     Fem(#[from] FemError),
-    /// The reference frame is not of K finite values, or all zero.
-    #[error("background fit: {0}")]
-    Frame(String),
+    /// The reference frame is not of K values.
+    #[error("background fit: the reference has {got} values for K = {k}")]
+    FrameLength {
+        /// Its length.
+        got: usize,
+        /// The protocol's.
+        k: usize,
+    },
+    /// The reference frame holds a NaN or infinite value, or is all zero.
+    #[error("background fit: the reference holds a NaN or infinite value, or is all zero")]
+    FrameValues,
     /// The reference frame runs against the model (the best R_s is negative).
     #[error(
         "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
@@ -133,11 +141,11 @@ pub fn fit(
     v0: &[f64],
 ) -> Result<BackgroundFit, BackgroundError> {
     let k = schedule.frame_len();
-    if v0.len() != k || v0.iter().any(|v| !v.is_finite()) || v0.iter().all(|v| *v == 0.0) {
-        return Err(BackgroundError::Frame(format!(
-            "the reference has {} values for K = {k}, or a NaN, or is all zero",
-            v0.len()
-        )));
+    if v0.len() != k {
+        return Err(BackgroundError::FrameLength { got: v0.len(), k });
+    }
+    if v0.iter().any(|v| !v.is_finite()) || v0.iter().all(|v| *v == 0.0) {
+        return Err(BackgroundError::FrameValues);
     }
     let complete = matches!(sheet.electrodes.model, ElectrodeModel::Complete);
     let ratio = sheet.electrodes.contact_ohm / sheet.sheet_resistance;

@@ -78,27 +78,135 @@ impl Electrodes {
 /// model is the accurate choice.
 pub const MIN_CONTACT_RATIO: f64 = 1e-6;
 
+/// Refuses contact impedances `z` unless there is one per electrode (`l`), each finite and
+/// positive.
+fn check_contacts(z: &[f64], l: usize) -> Result<(), FemError> {
+    if z.len() != l {
+        return Err(FemError::Count {
+            what: "contact impedances",
+            got: z.len(),
+            expected: l,
+            of: "electrodes",
+        });
+    }
+    positive("contact impedance of electrode", z)
+}
+
+/// [`FemError::NotPositive`] for the first of `values` not finite and positive.
+fn positive(what: &'static str, values: &[f64]) -> Result<(), FemError> {
+    match values.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
+        Some(index) => Err(FemError::NotPositive {
+            what,
+            index,
+            value: values.get(index).copied().unwrap_or(f64::NAN),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// A failed factorisation, in words: the factoriser's own error is internal (a pivot's
 /// index).
 fn fail(_: impl std::fmt::Debug) -> FemError {
-    FemError::Factorisation(
-        "the finite-element system is singular or not positive definite (a conductivity that \
-         is zero, negative or not finite, or a piece of the mesh that no electrode reaches)"
-            .into(),
-    )
+    FemError::Factorisation
 }
 
 /// Why a forward solve failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FemError {
-    /// Wrong lengths, or non-finite or non-positive conductivities or impedances.
-    #[error("forward model input: {0}")]
-    Input(String),
+    /// A count that is not the mesh's or the model's (impedances per electrode,
+    /// conductivities per triangle, currents' rows per electrode, a protocol's electrodes).
+    #[error("forward model input: {got} {what} for {expected} {of}")]
+    Count {
+        /// What was counted.
+        what: &'static str,
+        /// How many were given.
+        got: usize,
+        /// How many there must be.
+        expected: usize,
+        /// What they are counted against.
+        of: &'static str,
+    },
+    /// A value that must be finite and positive (a contact impedance, a conductivity).
+    #[error("forward model input: {what} {index} is {value}: it must be finite and > 0")]
+    NotPositive {
+        /// What the value is.
+        what: &'static str,
+        /// Whose (the electrode's or triangle's index).
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Fewer than two electrodes.
+    #[error("forward model input: at least 2 electrodes")]
+    TooFewElectrodes,
+    /// An electrode of a single node under a model that needs edges.
+    #[error(
+        "forward model input: electrode {electrode} is a single node (a point electrode): \
+         image with electrodes.model = \"point\""
+    )]
+    PointElectrode {
+        /// The electrode.
+        electrode: usize,
+    },
+    /// A triangle of no area.
+    #[error("forward model input: triangle {triangle} is degenerate")]
+    Degenerate {
+        /// The triangle.
+        triangle: usize,
+    },
+    /// A node under two electrodes (point or shunt models).
+    #[error("forward model input: node {node} belongs to electrodes {} and {}", electrodes[0], electrodes[1])]
+    SharedNode {
+        /// The node.
+        node: usize,
+        /// The two electrodes.
+        electrodes: [usize; 2],
+    },
+    /// Contact impedances given to a model without them.
+    #[error("forward model input: contact impedances are the complete electrode model's")]
+    NotComplete,
+    /// A current that is NaN or infinite.
+    #[error("forward model input: the currents must be finite")]
+    NonFiniteCurrent,
+    /// A current pattern that does not sum to zero.
+    #[error("forward model input: pattern {pattern}: currents do not sum to 0")]
+    Unbalanced {
+        /// The pattern (column).
+        pattern: usize,
+    },
+    /// A protocol that measures on a drive electrode under point electrodes.
+    #[error(
+        "forward model input: value {value} measures on drive electrode {electrode}: point \
+         electrodes cannot model it (use the complete electrode model, electrodes.model = \
+         \"complete\")"
+    )]
+    MeasuresOnDrive {
+        /// The frame value.
+        value: usize,
+        /// The electrode.
+        electrode: usize,
+    },
+    /// An image grid of too few or too many pixels across.
+    #[error(
+        "forward model input: {pixels} pixels across: use 4 to {}",
+        crate::imager::MAX_PIXELS
+    )]
+    Pixels {
+        /// The pixels asked for.
+        pixels: usize,
+    },
     /// The system could not be factorised (disconnected mesh, or values so extreme that it
     /// is not numerically positive definite).
-    #[error("forward model: factorisation failed: {0}")]
-    Factorisation(String),
+    #[error(
+        "forward model: factorisation failed: the finite-element system is singular or not \
+         positive definite (a conductivity that is zero, negative or not finite, or a piece of \
+         the mesh that no electrode reaches)"
+    )]
+    Factorisation,
+    /// The solve gave potentials that are not finite.
+    #[error("forward model: factorisation failed: non-finite potentials")]
+    NonFinitePotentials,
     /// The complete model's contact resistance is too small against the sheet's
     /// ([`MIN_CONTACT_RATIO`]).
     #[error("contact resistance {contact_ohm:e} ohm is too small for the complete electrode \
@@ -173,9 +281,10 @@ fn unknowns(mesh: &Mesh, electrodes: &Electrodes) -> Result<(Vec<Option<usize>>,
         for i in nodes {
             match owner[i] {
                 Some(other) if other != e => {
-                    return Err(FemError::Input(format!(
-                        "node {i} belongs to electrodes {other} and {e}"
-                    )));
+                    return Err(FemError::SharedNode {
+                        node: i,
+                        electrodes: [other, e],
+                    });
                 }
                 _ => owner[i] = Some(e),
             }
@@ -257,35 +366,28 @@ impl Forward {
     /// Prepares the forward model.
     ///
     /// # Errors
-    /// [`FemError::Input`] for impedances of the wrong count or not finite and positive, or a
-    /// mesh with a degenerate triangle.
+    /// [`FemError::Count`] or [`FemError::NotPositive`] for impedances of the wrong count or
+    /// not finite and positive, [`FemError::Degenerate`] for a mesh with a degenerate
+    /// triangle, and the electrodes' faults.
     pub fn new(mesh: Mesh, electrodes: Electrodes) -> Result<Self, FemError> {
         let l = mesh.electrodes.len();
-        if let Electrodes::Complete(z) = &electrodes
-            && (z.len() != l || z.iter().any(|v| !(v.is_finite() && *v > 0.0)))
-        {
-            return Err(FemError::Input(format!(
-                "{} contact impedances for {l} electrodes, each finite and > 0",
-                z.len()
-            )));
+        if let Electrodes::Complete(z) = &electrodes {
+            check_contacts(z, l)?;
         }
         if l < 2 {
-            return Err(FemError::Input("at least 2 electrodes".into()));
+            return Err(FemError::TooFewElectrodes);
         }
         if !matches!(electrodes, Electrodes::Point)
             && let Some(e) = mesh.electrodes.iter().position(Vec::is_empty)
         {
-            return Err(FemError::Input(format!(
-                "electrode {e} is a single node (a point electrode): image with \
-                 electrodes.model = \"point\""
-            )));
+            return Err(FemError::PointElectrode { electrode: e });
         }
         let local = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.triangles[t].map(|i| mesh.nodes[i]);
                 let area2 = mesh.double_area(t);
                 if !(area2.is_finite() && area2 > 0.0) {
-                    return Err(FemError::Input(format!("triangle {t} is degenerate")));
+                    return Err(FemError::Degenerate { triangle: t });
                 }
                 // grad phi_k = (y_{k+1} - y_{k+2}, x_{k+2} - x_{k+1}) / (2 area).
                 let p = [a, b, c];
@@ -321,24 +423,17 @@ impl Forward {
     /// contact solves at many).
     ///
     /// # Errors
-    /// [`FemError::Input`] for another electrode model, or impedances of the wrong count or
-    /// not finite and positive.
+    /// [`FemError::NotComplete`] for another electrode model, [`FemError::Count`] or
+    /// [`FemError::NotPositive`] for impedances of the wrong count or not finite and positive.
     pub fn set_contacts(&mut self, z: Vec<f64>) -> Result<(), FemError> {
         let l = self.mesh.electrodes.len();
         match &mut self.electrodes {
             Electrodes::Complete(old) => {
-                if z.len() != l || z.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-                    return Err(FemError::Input(format!(
-                        "{} contact impedances for {l} electrodes, each finite and > 0",
-                        z.len()
-                    )));
-                }
+                check_contacts(&z, l)?;
                 *old = z;
                 Ok(())
             }
-            _ => Err(FemError::Input(
-                "contact impedances are the complete electrode model's".into(),
-            )),
+            _ => Err(FemError::NotComplete),
         }
     }
 
@@ -362,29 +457,29 @@ impl Forward {
     pub fn solve(&self, sigma: &[f64], currents: &DMatrix<f64>) -> Result<Solution, FemError> {
         let (n, l) = (self.mesh.nodes.len(), self.mesh.electrodes.len());
         if sigma.len() != self.mesh.triangles.len() {
-            return Err(FemError::Input(format!(
-                "{} conductivities for {} triangles",
-                sigma.len(),
-                self.mesh.triangles.len()
-            )));
+            return Err(FemError::Count {
+                what: "conductivities",
+                got: sigma.len(),
+                expected: self.mesh.triangles.len(),
+                of: "triangles",
+            });
         }
-        if let Some(t) = sigma.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err(FemError::Input(format!(
-                "conductivity of triangle {t} is {}",
-                sigma[t]
-            )));
+        positive("conductivity of triangle", sigma)?;
+        if currents.nrows() != l {
+            return Err(FemError::Count {
+                what: "rows of currents",
+                got: currents.nrows(),
+                expected: l,
+                of: "electrodes",
+            });
         }
-        if currents.nrows() != l || currents.iter().any(|v| !v.is_finite()) {
-            return Err(FemError::Input(format!(
-                "currents must be {l} x m and finite"
-            )));
+        if currents.iter().any(|v| !v.is_finite()) {
+            return Err(FemError::NonFiniteCurrent);
         }
         for (c, col) in currents.column_iter().enumerate() {
             let scale = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if col.sum().abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {
-                return Err(FemError::Input(format!(
-                    "pattern {c}: currents do not sum to 0"
-                )));
+                return Err(FemError::Unbalanced { pattern: c });
             }
         }
         let size = self.size;
@@ -433,7 +528,7 @@ impl Forward {
             .chain(electrodes.iter())
             .any(|v| !v.is_finite())
         {
-            return Err(FemError::Factorisation("non-finite potentials".into()));
+            return Err(FemError::NonFinitePotentials);
         }
         Ok(Solution { nodes, electrodes })
     }
@@ -457,16 +552,18 @@ impl Forward {
     fn check(&self, schedule: &Schedule) -> Result<(), FemError> {
         let l = self.mesh.electrodes.len();
         if schedule.electrodes() != l {
-            return Err(FemError::Input(format!(
-                "the protocol is for {} electrodes, the mesh has {l}",
-                schedule.electrodes()
-            )));
+            return Err(FemError::Count {
+                what: "electrodes in the protocol",
+                got: schedule.electrodes(),
+                expected: l,
+                of: "in the mesh",
+            });
         }
         if let (Electrodes::Point, Some((k, e))) = (&self.electrodes, schedule.first_on_drive()) {
-            return Err(FemError::Input(format!(
-                "value {k} measures on drive electrode {e}: point electrodes cannot model it \
-                 (use the complete electrode model, electrodes.model = \"complete\")"
-            )));
+            return Err(FemError::MeasuresOnDrive {
+                value: k,
+                electrode: usize::from(e),
+            });
         }
         Ok(())
     }

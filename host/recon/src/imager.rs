@@ -40,13 +40,11 @@ impl Imager {
     /// ohm m, point or shunt), a grid `pixels` across.
     ///
     /// # Errors
-    /// [`FemError::Input`] for `pixels` outside 4 to [`MAX_PIXELS`]; [`FemError`] if the
+    /// [`FemError::Pixels`] for `pixels` outside 4 to [`MAX_PIXELS`]; [`FemError`] if the
     /// forward model cannot be built.
     pub fn new(sheet: &Sheet, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
         if !(4..=MAX_PIXELS).contains(&pixels) {
-            return Err(FemError::Input(format!(
-                "{pixels} pixels across: use 4 to {MAX_PIXELS}"
-            )));
+            return Err(FemError::Pixels { pixels });
         }
         let grid = PixelGrid::new(&mesh, pixels);
         Ok(Self {

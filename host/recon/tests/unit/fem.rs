@@ -147,33 +147,43 @@ fn extremes_give_finite_voltages_or_clear_errors() {
     );
     let mut bad = vec![1e-4; n];
     bad[3] = f64::NAN;
-    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    assert!(matches!(
+        fwd.solve(&bad, &c),
+        Err(FemError::NotPositive { index: 3, .. })
+    ));
     bad[3] = 0.0;
-    assert!(matches!(fwd.solve(&bad, &c), Err(FemError::Input(_))));
+    assert!(matches!(
+        fwd.solve(&bad, &c),
+        Err(FemError::NotPositive { index: 3, .. })
+    ));
     assert!(matches!(
         fwd.solve(&vec![1e-4; n - 1], &c),
-        Err(FemError::Input(_))
+        Err(FemError::Count { .. })
     ));
     let mut unbalanced = c.clone();
     unbalanced[(0, 0)] += 1e-3;
     assert!(matches!(
         fwd.solve(&vec![1e-4; n], &unbalanced),
-        Err(FemError::Input(_))
+        Err(FemError::Unbalanced { pattern: 0 })
     ));
     let p16 = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
     assert!(matches!(
         fwd.frame(&vec![1e-4; n], &p16.schedule(1e-3).unwrap()),
-        Err(FemError::Input(_))
+        Err(FemError::Count {
+            got: 16,
+            expected: 8,
+            ..
+        })
     ));
     let spec = Sheet::rectangle(0.13, 0.13, 8);
     let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 500)).unwrap();
     assert!(matches!(
         Forward::new(mesh.clone(), Electrodes::Complete(vec![1.0; 7])),
-        Err(FemError::Input(_))
+        Err(FemError::Count { got: 7, .. })
     ));
     assert!(matches!(
         Forward::new(mesh, Electrodes::Complete(vec![0.0; 8])),
-        Err(FemError::Input(_))
+        Err(FemError::NotPositive { index: 0, .. })
     ));
 }
 
