@@ -27,6 +27,42 @@ mod train;
 
 use train::{shuffle, train_one};
 
+/// Why saved layers are not a perceptron.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LayersError {
+    /// Fewer than a hidden layer and the output layer.
+    #[error("a perceptron needs a hidden layer and the output layer")]
+    TooFew,
+    /// A layer whose weights do not take the layer before's outputs.
+    #[error("layer {layer}: {rows} weight rows for {inputs} inputs, or rows not {outputs} long")]
+    Chain {
+        /// The layer (1-based).
+        layer: usize,
+        /// Its weight rows.
+        rows: usize,
+        /// The inputs it must take.
+        inputs: usize,
+        /// Its outputs (its biases).
+        outputs: usize,
+    },
+    /// A weight or bias that is not finite.
+    #[error("layer {layer}: a non-finite weight")]
+    NonFinite {
+        /// The layer (1-based).
+        layer: usize,
+    },
+    /// An output layer of other than 3 outputs.
+    #[error("the output layer has {outputs} outputs, not 3")]
+    Outputs {
+        /// Its outputs.
+        outputs: usize,
+    },
+    /// A feature or target scale that is not a positive number.
+    #[error("a scale that is not a positive number")]
+    Scale,
+}
+
 /// A hidden layer's nonlinearity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -281,8 +317,8 @@ impl Mlp {
     /// Rebuilds a perceptron from saved layers (untrusted: a model file's).
     ///
     /// # Errors
-    /// A message when the layers do not chain (p inputs, ..., 3 outputs) or hold a non-finite
-    /// value.
+    /// [`LayersError`] when the layers do not chain (p inputs, ..., 3 outputs) or hold a
+    /// non-finite value.
     #[deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
     pub fn from_dense(
         mean: Vec<f64>,
@@ -291,11 +327,11 @@ impl Mlp {
         target_scale: Target3,
         activation: Activation,
         dense: &[Dense],
-    ) -> Result<Self, String> {
+    ) -> Result<Self, LayersError> {
         let mut inputs = mean.len();
         let mut layers = Vec::with_capacity(dense.len());
         if dense.len() < 2 {
-            return Err("a perceptron needs a hidden layer and the output layer".into());
+            return Err(LayersError::TooFew);
         }
         for (l, d) in dense.iter().enumerate() {
             let outputs = d.bias.len();
@@ -303,11 +339,12 @@ impl Mlp {
                 || d.weights.iter().any(|r| r.len() != outputs)
                 || outputs == 0
             {
-                return Err(format!(
-                    "layer {}: {} weight rows for {inputs} inputs, or rows not {outputs} long",
-                    l + 1,
-                    d.weights.len()
-                ));
+                return Err(LayersError::Chain {
+                    layer: l + 1,
+                    rows: d.weights.len(),
+                    inputs,
+                    outputs,
+                });
             }
             if d.weights
                 .iter()
@@ -315,7 +352,7 @@ impl Mlp {
                 .chain(&d.bias)
                 .any(|v| !v.is_finite())
             {
-                return Err(format!("layer {}: a non-finite weight", l + 1));
+                return Err(LayersError::NonFinite { layer: l + 1 });
             }
             let w = Mat::from_fn(inputs, outputs, |i, j| {
                 d.weights
@@ -328,12 +365,12 @@ impl Mlp {
             inputs = outputs;
         }
         if inputs != 3 {
-            return Err(format!("the output layer has {inputs} outputs, not 3"));
+            return Err(LayersError::Outputs { outputs: inputs });
         }
         if target_scale.iter().any(|s| !(s.is_finite() && *s > 0.0))
             || scale.iter().any(|s| !(s.is_finite() && *s > 0.0))
         {
-            return Err("a scale that is not a positive number".into());
+            return Err(LayersError::Scale);
         }
         Ok(Self {
             mean,

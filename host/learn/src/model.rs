@@ -184,9 +184,9 @@ impl Model {
                 })?)
             }
             Some("et-table-model") => Ok(Model::Table(Box::new(
-                TableModel::from_value(value).map_err(|e| TabularError::Model {
+                TableModel::from_value(value).map_err(|source| TabularError::Model {
                     path: path.into(),
-                    message: e.to_string(),
+                    source,
                 })?,
             ))),
             _ => Err(ModelError::Format { path: path.into() }),

@@ -30,7 +30,7 @@ pub use super::dataset::{GroupsFrom, Table, Unit};
 use super::fastcv::cross_validate_fast;
 use super::fit::{FitError, FitOptions, Fitted, Target};
 use super::gp::{Gp, GpOptions};
-use super::mlp::{Activation, Dense, Mlp, MlpOptions};
+use super::mlp::{Activation, Dense, LayersError, Mlp, MlpOptions};
 use super::model_file::{ClassRecord, class_records, fitted_from_records};
 use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summarise};
 
@@ -45,20 +45,169 @@ pub enum TabularError {
     #[error("{0}")]
     Fit(#[from] FitError),
     /// The request does not fit the data (e.g. a regressor without positions).
-    #[error("{0}")]
-    Usage(String),
-    /// A model file is not JSON, or not an et table model.
-    #[error("{}: {message}", .path.display())]
+    #[error(transparent)]
+    Usage(#[from] Misuse),
+    /// A model's tables that are not the model they claim to be.
+    #[error(transparent)]
+    Tables(#[from] TablesError),
+    /// A model file that could not be written or read, is not JSON, or not an et table model.
+    #[error("{}: {source}", .path.display())]
     Model {
         /// The file.
         path: PathBuf,
         /// What is wrong.
-        message: String,
+        source: TableModelError,
     },
 }
 
-fn usage(message: impl Into<String>) -> TabularError {
-    TabularError::Usage(message.into())
+/// A request that does not fit the data or the model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Misuse {
+    /// A regressor's fit without positions.
+    #[error("this method needs positions")]
+    NeedsPositions,
+    /// A classifier's fit without classes.
+    #[error("this method needs classes")]
+    NeedsClasses,
+    /// An average of no regressor.
+    #[error("an average of no regressor")]
+    EmptyAverage,
+    /// A classifier searched as a regressor.
+    #[error("not a regressor")]
+    NotARegressor,
+    /// Rows of another feature count than the model's.
+    #[error("the data has {data} feature columns, the model reads {model}")]
+    FeatureCount {
+        /// The data's.
+        data: usize,
+        /// The model's.
+        model: usize,
+    },
+    /// A feature column the model reads that the data does not have.
+    #[error(
+        "the model reads a feature column '{0}' that the data does not have (its columns must \
+         be the model's feature_names, in any order)"
+    )]
+    MissingFeature(String),
+    /// A feature column the model was not trained on.
+    #[error(
+        "the data has a feature column '{0}' the model was not trained on (its columns must be \
+         the model's feature_names, in any order)"
+    )]
+    ExtraFeature(String),
+    /// Too few training rows to cross-validate.
+    #[error("{0} training row(s): cross-validation needs at least 2 (more rows with --rows)")]
+    TooFewRows(usize),
+    /// More folds than rows, or fewer than 2.
+    #[error("{folds} folds for {rows} training rows: use 2 to {rows}")]
+    Folds {
+        /// The folds asked for.
+        folds: usize,
+        /// The training rows.
+        rows: usize,
+    },
+    /// Leaving a group out without groups.
+    #[error("leave-one-group-out cross-validation needs each row's group (--groups)")]
+    NoGroups,
+    /// A classifier asked for on rows without labels.
+    #[error(
+        "{} needs class labels: give a label column, or make classes from the positions with a \
+         grid (--grid 7x7)",
+        .0.name()
+    )]
+    NeedsLabels(Method),
+    /// A regressor asked for on rows with labels only.
+    #[error(
+        "{} predicts positions: the targets need x and y columns (the data has only class \
+         labels: use qda or lda)",
+        .0.name()
+    )]
+    NeedsXy(Method),
+    /// Rows with no target a classifier predicts.
+    #[error(
+        "the rows have no target this model predicts: it predicts class labels (and positions \
+         only when its classes have centres); give the rows a label column"
+    )]
+    NoLabelTarget,
+    /// Rows with no position for a regressor.
+    #[error("the rows have no target this model predicts: give positions (x, y)")]
+    NoPositionTarget,
+    /// More classes than a model holds.
+    #[error("{0} classes: at most 65535")]
+    TooManyClasses(usize),
+    /// A row range past the data, or empty.
+    #[error("--rows {range}: the data has rows 0..{rows}")]
+    Rows {
+        /// The range asked for.
+        range: RowRange,
+        /// The data's rows.
+        rows: usize,
+    },
+    /// Reference features of another column count.
+    #[error("{reference}: {columns} columns, the features have {features}")]
+    ReferenceColumns {
+        /// The reference (its file).
+        reference: String,
+        /// Its columns.
+        columns: usize,
+        /// The features'.
+        features: usize,
+    },
+    /// Reference features of a row count that is none of one per row, one per group or one.
+    #[error(
+        "{reference}: {rows} rows; give one per row of the features ({features}), one per group \
+         (with --groups){}, or one for all",
+        groups.map_or(String::new(), |g| format!(": {g}"))
+    )]
+    ReferenceRows {
+        /// The reference (its file).
+        reference: String,
+        /// Its rows.
+        rows: usize,
+        /// The features' rows.
+        features: usize,
+        /// The groups, when the rows have them.
+        groups: Option<usize>,
+    },
+    /// A ratio's reference value that is 0 (or not finite).
+    #[error(
+        "{reference}: row {row} column {column}: {value}: a ratio needs a reference that is not \
+         0 (use difference)"
+    )]
+    ZeroReference {
+        /// The reference (its file).
+        reference: String,
+        /// Its row (1-based).
+        row: usize,
+        /// Its column (1-based).
+        column: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A group of one row, standardised per group.
+    #[error("group '{group}' has {rows} row: standardising per group needs two or more")]
+    SmallGroup {
+        /// The group's name.
+        group: String,
+        /// Its rows.
+        rows: usize,
+    },
+    /// A class grid without positions.
+    #[error("--grid makes classes from positions: the targets need x and y columns")]
+    GridNeedsPositions,
+    /// A class grid of no cells.
+    #[error("--grid: at least 1x1")]
+    EmptyGrid,
+    /// One class only.
+    #[error(
+        "one class ('{0}') only: nothing to tell apart; give rows of at least two classes"
+    )]
+    OneClass(String),
+}
+
+fn usage(misuse: Misuse) -> TabularError {
+    TabularError::Usage(misuse)
 }
 
 /// A learning method.

@@ -13,10 +13,10 @@ pub(super) fn class_targets(
 ) -> Result<Option<(Labels, ClassInfo)>, TabularError> {
     if let Some((rows, cols)) = grid {
         let p = table.positions_mm.as_ref().ok_or_else(|| {
-            usage("--grid makes classes from positions: the targets need x and y columns")
+            usage(Misuse::GridNeedsPositions)
         })?;
         if rows == 0 || cols == 0 {
-            return Err(usage("--grid: at least 1x1"));
+            return Err(usage(Misuse::EmptyGrid));
         }
         let g = Grid::over(p, rows, cols);
         let cells: Vec<usize> = p.iter().map(|&q| g.cell(q)).collect();
@@ -76,9 +76,8 @@ pub(super) fn search_classifier(
 ) -> Result<Vec<Candidate>, TabularError> {
     let classes = labels.names.len();
     if classes < 2 {
-        return Err(usage(format!(
-            "one class ('{}') only: nothing to tell apart; give rows of at least two classes",
-            labels.names.first().map_or("", String::as_str)
+        return Err(usage(Misuse::OneClass(
+            labels.names.first().cloned().unwrap_or_default(),
         )));
     }
 

@@ -82,10 +82,9 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     let positions_scored = truth.is_some() && pred.iter().any(|p| p.target.is_some());
     if !positions_scored && accuracy.is_none() {
         return Err(usage(if model.method.is_classifier() {
-            "the rows have no target this model predicts: it predicts class labels (and \
-             positions only when its classes have centres); give the rows a label column"
+            Misuse::NoLabelTarget
         } else {
-            "the rows have no target this model predicts: give positions (x, y)"
+            Misuse::NoPositionTarget
         }));
     }
     let mut pairs = Vec::new();
@@ -226,27 +225,20 @@ pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, Tabul
         return Ok(None);
     }
     if ours.len() != theirs.len() {
-        return Err(usage(format!(
-            "the data has {} feature columns, the model reads {}",
-            theirs.len(),
-            ours.len()
-        )));
+        return Err(usage(Misuse::FeatureCount {
+            data: theirs.len(),
+            model: ours.len(),
+        }));
     }
     let mut order = Vec::with_capacity(ours.len());
     for name in ours {
         let Some(j) = theirs.iter().position(|t| t == name) else {
-            return Err(usage(format!(
-                "the model reads a feature column '{name}' that the data does not have \
-                 (its columns must be the model's feature_names, in any order)"
-            )));
+            return Err(usage(Misuse::MissingFeature(name.clone())));
         };
         order.push(j);
     }
     if let Some(extra) = theirs.iter().find(|t| !ours.contains(t)) {
-        return Err(usage(format!(
-            "the data has a feature column '{extra}' the model was not trained on (its columns \
-             must be the model's feature_names, in any order)"
-        )));
+        return Err(usage(Misuse::ExtraFeature(extra.clone())));
     }
     let mut out = table.clone();
     out.x = DMatrix::from_fn(table.x.nrows(), order.len(), |r, c| {

@@ -271,17 +271,16 @@ impl TableModel {
     /// ([`Table::standardised_per_group`]; [`evaluate`] does it).
     ///
     /// # Errors
-    /// [`TabularError::Usage`] when `x` has another feature count, or the model's tables are
-    /// inconsistent.
+    /// [`TabularError::Usage`] when `x` has another feature count, [`TabularError::Tables`]
+    /// when the model's tables are inconsistent.
     pub fn predict(&self, x: &DMatrix<f64>) -> Result<Vec<Prediction>, TabularError> {
         if x.ncols() != self.features() {
-            return Err(usage(format!(
-                "the data has {} feature columns, the model reads {}",
-                x.ncols(),
-                self.features()
-            )));
+            return Err(usage(Misuse::FeatureCount {
+                data: x.ncols(),
+                model: self.features(),
+            }));
         }
-        let ready = self.ready().map_err(usage)?;
+        let ready = self.ready()?;
         let regression = |t: Vec<Target3>| {
             t.into_iter()
                 .map(|t| Prediction {
@@ -332,12 +331,12 @@ impl TableModel {
     /// # Errors
     /// [`TabularError::Model`] naming the file.
     pub fn save(&self, path: &Path) -> Result<(), TabularError> {
-        let err = |message: String| TabularError::Model {
+        let err = |source: TableModelError| TabularError::Model {
             path: path.into(),
-            message,
+            source,
         };
-        let text = serde_json::to_string(self).map_err(|e| err(e.to_string()))?;
-        std::fs::write(path, text).map_err(|e| err(e.to_string()))
+        let text = serde_json::to_string(self).map_err(|e| err(e.into()))?;
+        std::fs::write(path, text).map_err(|e| err(e.into()))
     }
 
     /// Reads and checks JSON written by [`save`](Self::save).
@@ -345,13 +344,13 @@ impl TableModel {
     /// # Errors
     /// [`TabularError::Model`] naming the file and what is wrong.
     pub fn load(path: &Path) -> Result<Self, TabularError> {
-        let err = |message: String| TabularError::Model {
+        let err = |source: TableModelError| TabularError::Model {
             path: path.into(),
-            message,
+            source,
         };
         let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
-            .map_err(|e| err(e.to_string()))?;
-        Self::from_json(&text).map_err(|e| err(e.to_string()))
+            .map_err(|e| err(e.into()))?;
+        Self::from_json(&text).map_err(err)
     }
 
     /// Parses and checks a model's JSON.
@@ -371,7 +370,7 @@ impl TableModel {
         if m.format != "et-table-model" || m.version != 1 {
             return Err(TableModelError::Format);
         }
-        m.ready().map_err(TableModelError::Tables)?;
+        m.ready()?;
         Ok(m)
     }
 }
@@ -387,8 +386,11 @@ pub enum TableModelError {
     #[error("not an et-table-model version 1 file")]
     Format,
     /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
-    #[error("{0}")]
-    Tables(String),
+    #[error(transparent)]
+    Tables(#[from] TablesError),
+    /// The file could not be written or read.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
 }
 
 impl TableModel {
@@ -435,5 +437,7 @@ impl TableModel {
 
 mod fit;
 mod ready;
+
+pub use ready::TablesError;
 
 pub(super) use fit::fit_final;

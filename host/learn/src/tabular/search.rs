@@ -411,7 +411,7 @@ fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>
                 })
             })
             .collect(),
-        Method::Qda | Method::Lda | Method::Average => return Err(usage("not a regressor")),
+        Method::Qda | Method::Lda | Method::Average => return Err(usage(Misuse::NotARegressor)),
     })
 }
 

@@ -76,7 +76,7 @@ impl Labels {
             });
         }
         if names.len() > usize::from(u16::MAX) {
-            return Err(usage(format!("{} classes: at most 65535", names.len())));
+            return Err(usage(Misuse::TooManyClasses(names.len())));
         }
         let lookup: BTreeMap<&str, u16> = names
             .iter()
@@ -106,7 +106,7 @@ impl Table {
         let n = self.rows();
         let end = range.end.unwrap_or(n);
         if end > n || range.start >= end {
-            return Err(usage(format!("--rows {range}: the data has rows 0..{n}")));
+            return Err(usage(Misuse::Rows { range, rows: n }));
         }
         let rows = range.start..end;
         Ok(Self {
@@ -167,10 +167,11 @@ impl Table {
     ) -> Result<Self, TabularError> {
         let (n, p) = (self.rows(), self.x.ncols());
         if reference.ncols() != p {
-            return Err(usage(format!(
-                "{what}: {} columns, the features have {p}",
-                reference.ncols()
-            )));
+            return Err(usage(Misuse::ReferenceColumns {
+                reference: what.to_string(),
+                columns: reference.ncols(),
+                features: p,
+            }));
         }
         let groups = self.group_index();
         let row_of: Vec<usize> = match reference.nrows() {
@@ -180,11 +181,12 @@ impl Table {
                 groups.map(|(index, _)| index).unwrap_or_default()
             }
             r => {
-                return Err(usage(format!(
-                    "{what}: {r} rows; give one per row of the features ({n}), one per group \
-                     (with --groups){}, or one for all",
-                    groups.map_or(String::new(), |(_, g)| format!(": {}", g.len()))
-                )));
+                return Err(usage(Misuse::ReferenceRows {
+                    reference: what.to_string(),
+                    rows: r,
+                    features: n,
+                    groups: groups.map(|(_, g)| g.len()),
+                }));
             }
         };
         let mut x = self.x.clone();
@@ -198,12 +200,12 @@ impl Table {
                     Referencing::Difference => *v - base,
                     Referencing::Ratio if base != 0.0 && base.is_finite() => (*v - base) / base,
                     Referencing::Ratio => {
-                        return Err(usage(format!(
-                            "{what}: row {} column {}: {base}: a ratio needs a reference \
-                             that is not 0 (use difference)",
-                            b + 1,
-                            j + 1
-                        )));
+                        return Err(usage(Misuse::ZeroReference {
+                            reference: what.to_string(),
+                            row: b + 1,
+                            column: j + 1,
+                            value: base,
+                        }));
                     }
                 };
             }
@@ -237,10 +239,10 @@ impl Table {
         for (g, name) in names.iter().enumerate() {
             let rows: Vec<usize> = (0..n).filter(|&r| index.get(r) == Some(&g)).collect();
             if rows.len() < 2 {
-                return Err(usage(format!(
-                    "group '{name}' has {} row: standardising per group needs two or more",
-                    rows.len()
-                )));
+                return Err(usage(Misuse::SmallGroup {
+                    group: name.clone(),
+                    rows: rows.len(),
+                }));
             }
             let (mean, scale) = super::super::fit::standardisation(&rows_of(&self.x, &rows));
             for &r in &rows {

@@ -12,10 +12,10 @@ pub(in crate::tabular) fn fit_final(
     progress: Progress<'_>,
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
-    let need_targets = || targets.ok_or_else(|| usage("this method needs positions"));
+    let need_targets = || targets.ok_or_else(|| usage(Misuse::NeedsPositions));
     Ok(match best.method {
         Method::Qda | Method::Lda => {
-            let (labels, _) = classes.ok_or_else(|| usage("this method needs classes"))?;
+            let (labels, _) = classes.ok_or_else(|| usage(Misuse::NeedsClasses))?;
             let fit = FitOptions {
                 kind: discriminant(best.method),
                 shrinkage: h("shrinkage"),
@@ -171,6 +171,6 @@ fn average_tables(
     let (mean, scale) = fitted
         .first()
         .map(|m| (m.feature_mean.clone(), m.feature_scale.clone()))
-        .ok_or_else(|| usage("an average of no regressor"))?;
+        .ok_or_else(|| usage(Misuse::EmptyAverage))?;
     Ok((Tables::Average { members: fitted }, mean, scale))
 }

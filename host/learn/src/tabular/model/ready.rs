@@ -2,6 +2,70 @@
 
 use super::*;
 
+/// Why a saved table model's tables are not the model they claim to be.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TablesError {
+    /// The standardisation's and the feature names' lengths differ, or are zero.
+    #[error("feature_mean, feature_scale and feature_names differ in length")]
+    FeatureLengths,
+    /// A standardisation value that is not finite.
+    #[error("a non-finite standardisation value ({0})")]
+    NonFiniteStandardisation(f64),
+    /// A feature scale that is not positive.
+    #[error("feature_scale must be positive")]
+    NonPositiveScale,
+    /// The model names one method, its tables are another's.
+    #[error("method {} with the tables of {}", method.name(), tables.name())]
+    Mismatch {
+        /// The method named.
+        method: Method,
+        /// The method the tables are of.
+        tables: Method,
+    },
+    /// Ridge weights not one row per feature.
+    #[error("ridge: {rows} weight rows for {features} features")]
+    RidgeRows {
+        /// The rows.
+        rows: usize,
+        /// The features.
+        features: usize,
+    },
+    /// A table whose rows are not one value per feature.
+    #[error("{what}: every row needs {p} values")]
+    RowWidth {
+        /// The table.
+        what: &'static str,
+        /// The features.
+        p: usize,
+    },
+    /// A table holding a value that is not finite.
+    #[error("{what}: a non-finite value")]
+    NonFinite {
+        /// The table.
+        what: &'static str,
+    },
+    /// Tables that disagree with each other: which, and the rule they break.
+    #[error("{0}")]
+    Inconsistent(&'static str),
+    /// A perceptron's layers that do not chain.
+    #[error("mlp: {0}")]
+    Mlp(#[source] LayersError),
+    /// A discriminant's class tables that are not a model.
+    #[error("{0}")]
+    Classes(#[source] FitError),
+    /// An average's member that is not a model of its own.
+    #[error("average member {member} ({}): {source}", method.name())]
+    Member {
+        /// The member (1-based).
+        member: usize,
+        /// Its method.
+        method: Method,
+        /// What is wrong with it.
+        source: Box<TablesError>,
+    },
+}
+
 impl TableModel {
     /// An average's regressors as models of their own (empty for any other model).
     #[must_use]
@@ -38,10 +102,10 @@ impl TableModel {
     }
 
     /// Rebuilds the fitted model, checking every table's shape.
-    pub(super) fn ready(&self) -> Result<Ready, String> {
+    pub(super) fn ready(&self) -> Result<Ready, TablesError> {
         let p = self.features();
         if self.feature_scale.len() != p || self.feature_names.len() != p || p == 0 {
-            return Err("feature_mean, feature_scale and feature_names differ in length".into());
+            return Err(TablesError::FeatureLengths);
         }
         if let Some(v) = self
             .feature_mean
@@ -49,18 +113,17 @@ impl TableModel {
             .chain(&self.feature_scale)
             .find(|v| !v.is_finite())
         {
-            return Err(format!("a non-finite standardisation value ({v})"));
+            return Err(TablesError::NonFiniteStandardisation(*v));
         }
         if self.feature_scale.iter().any(|&s| s <= 0.0) {
-            return Err("feature_scale must be positive".into());
+            return Err(TablesError::NonPositiveScale);
         }
         let tables_of = self.tables.method();
         if tables_of != self.method {
-            return Err(format!(
-                "method {} with the tables of {}",
-                self.method.name(),
-                tables_of.name()
-            ));
+            return Err(TablesError::Mismatch {
+                method: self.method,
+                tables: tables_of,
+            });
         }
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
@@ -68,10 +131,10 @@ impl TableModel {
             }
             Tables::Ridge { weights, intercept } => {
                 if weights.len() != p {
-                    return Err(format!(
-                        "ridge: {} weight rows for {p} features",
-                        weights.len()
-                    ));
+                    return Err(TablesError::RidgeRows {
+                        rows: weights.len(),
+                        features: p,
+                    });
                 }
                 finite3(weights, "ridge weights")?;
                 finite3(&[*intercept], "ridge intercept")?;
@@ -96,12 +159,16 @@ impl TableModel {
             } => {
                 let support = matrix(support, p, "kernel-ridge support")?;
                 if alpha.len() != support.nrows() {
-                    return Err("kernel-ridge: one alpha row per support row".into());
+                    return Err(TablesError::Inconsistent(
+                        "kernel-ridge: one alpha row per support row",
+                    ));
                 }
                 finite3(alpha, "kernel-ridge alpha")?;
                 finite3(&[*intercept], "kernel-ridge intercept")?;
                 if !(gamma.is_finite() && *gamma > 0.0) {
-                    return Err("kernel-ridge: gamma must be positive".into());
+                    return Err(TablesError::Inconsistent(
+                        "kernel-ridge: gamma must be positive",
+                    ));
                 }
                 Ready::KernelRidge(KernelRidge {
                     mean: self.feature_mean.clone(),
@@ -129,7 +196,7 @@ impl TableModel {
                         *activation,
                         layers,
                     )
-                    .map_err(|e| format!("mlp: {e}"))?,
+                    .map_err(TablesError::Mlp)?,
                 )
             }
             Tables::Average { members } => Ready::Average(self.ready_average(members)?),
@@ -141,7 +208,9 @@ impl TableModel {
             } => {
                 let support = matrix(support, p, "knn support")?;
                 if targets.len() != support.nrows() || *k == 0 || *k > targets.len() {
-                    return Err("knn: one target per support row, 1 <= k <= rows".into());
+                    return Err(TablesError::Inconsistent(
+                        "knn: one target per support row, 1 <= k <= rows",
+                    ));
                 }
                 finite3(targets, "knn targets")?;
                 Ready::Knn(Knn {
@@ -162,18 +231,22 @@ impl TableModel {
         &self,
         kind: ModelKind,
         classes: &[ClassRecord],
-    ) -> Result<Fitted, String> {
+    ) -> Result<Fitted, TablesError> {
         let info = self
             .classes
             .as_ref()
-            .ok_or("a classifier without 'classes'")?;
+            .ok_or(TablesError::Inconsistent(
+                "a classifier without 'classes'",
+            ))?;
         if info.names.len() != classes.len()
             || info
                 .centres_mm
                 .as_ref()
                 .is_some_and(|c| c.len() != classes.len())
         {
-            return Err("classes.names (and centres_mm) must list every class".into());
+            return Err(TablesError::Inconsistent(
+                "classes.names (and centres_mm) must list every class",
+            ));
         }
         fitted_from_records(
             kind,
@@ -182,12 +255,12 @@ impl TableModel {
             classes,
             info.centres_mm.as_deref().unwrap_or(&[]),
         )
-        .map_err(|e| e.to_string())
+        .map_err(TablesError::Classes)
     }
 
     /// A Gaussian process's tables rebuilt as the kernel ridge its posterior mean is, in the
     /// length-scaled space.
-    fn ready_gp(&self) -> Result<KernelRidge, String> {
+    fn ready_gp(&self) -> Result<KernelRidge, TablesError> {
         let Tables::Gp {
             length_scales,
             signal_variance,
@@ -197,12 +270,14 @@ impl TableModel {
             intercept,
         } = &self.tables
         else {
-            return Err("gp: not a gp's tables".into());
+            return Err(TablesError::Inconsistent("gp: not a gp's tables"));
         };
         let p = self.features();
         let support = matrix(support, p, "gp support")?;
         if alpha.len() != support.nrows() || length_scales.len() != p {
-            return Err("gp: one alpha row per support row, one length scale per feature".into());
+            return Err(TablesError::Inconsistent(
+                "gp: one alpha row per support row, one length scale per feature",
+            ));
         }
         finite3(alpha, "gp alpha")?;
         finite3(&[*intercept], "gp intercept")?;
@@ -211,7 +286,9 @@ impl TableModel {
             && positive(*signal_variance)
             && positive(*noise_variance))
         {
-            return Err("gp: length scales and variances must be positive".into());
+            return Err(TablesError::Inconsistent(
+                "gp: length scales and variances must be positive",
+            ));
         }
         Ok(KernelRidge {
             mean: self.feature_mean.clone(),
@@ -231,18 +308,23 @@ impl TableModel {
     }
 
     /// An average's members, each checked as a model of its own.
-    fn ready_average(&self, members: &[Member]) -> Result<Vec<TableModel>, String> {
+    fn ready_average(&self, members: &[Member]) -> Result<Vec<TableModel>, TablesError> {
         if members.len() < 2
             || members
                 .iter()
                 .any(|m| m.method == Method::Average || m.method.is_classifier())
         {
-            return Err("average: two regressors or more, none an average".into());
+            return Err(TablesError::Inconsistent(
+                "average: two regressors or more, none an average",
+            ));
         }
         let models = self.members();
         for (i, m) in models.iter().enumerate() {
-            m.ready()
-                .map_err(|e| format!("average member {} ({}): {e}", i + 1, m.method.name()))?;
+            m.ready().map_err(|e| TablesError::Member {
+                member: i + 1,
+                method: m.method,
+                source: Box::new(e),
+            })?;
         }
         Ok(models)
     }
@@ -272,12 +354,12 @@ impl Tables {
 }
 
 /// `rows` (each p values, finite) as an n x p matrix; `what` names the table in the error.
-fn matrix(rows: &[Vec<f64>], p: usize, what: &str) -> Result<Mat<f64>, String> {
+fn matrix(rows: &[Vec<f64>], p: usize, what: &'static str) -> Result<Mat<f64>, TablesError> {
     if rows.is_empty() || rows.iter().any(|r| r.len() != p) {
-        return Err(format!("{what}: every row needs {p} values"));
+        return Err(TablesError::RowWidth { what, p });
     }
     if rows.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(format!("{what}: a non-finite value"));
+        return Err(TablesError::NonFinite { what });
     }
     Ok(Mat::from_fn(rows.len(), p, |i, j| {
         rows.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
@@ -292,10 +374,10 @@ fn rows3_matrix(rows: &[[f64; 3]]) -> Mat<f64> {
 }
 
 /// Ok when every value of `v` is finite; `what` names the table in the error.
-fn finite3(v: &[[f64; 3]], what: &str) -> Result<(), String> {
+fn finite3(v: &[[f64; 3]], what: &'static str) -> Result<(), TablesError> {
     if v.iter().flatten().all(|x| x.is_finite()) {
         Ok(())
     } else {
-        Err(format!("{what}: a non-finite value"))
+        Err(TablesError::NonFinite { what })
     }
 }

@@ -26,22 +26,18 @@ impl Cv {
             opts.folds
         };
         if !grouped && n < 2 {
-            return Err(usage(format!(
-                "{n} training row(s): cross-validation needs at least 2 (more rows with --rows)"
-            )));
+            return Err(usage(Misuse::TooFewRows(n)));
         }
         if !grouped && (opts.folds < 2 || opts.folds > n) {
-            return Err(usage(format!(
-                "{} folds for {n} training rows: use 2 to {n}",
-                opts.folds
-            )));
+            return Err(usage(Misuse::Folds {
+                folds: opts.folds,
+                rows: n,
+            }));
         }
         let scheme = if grouped {
             CvScheme::Groups
         } else if opts.scheme == CvScheme::Groups {
-            return Err(usage(
-                "leave-one-group-out cross-validation needs each row's group (--groups)",
-            ));
+            return Err(usage(Misuse::NoGroups));
         } else {
             opts.scheme
         };
@@ -91,21 +87,13 @@ pub(super) fn search_all(
     for &method in &methods {
         let found = if method.is_classifier() {
             let (labels, _) = classes.ok_or_else(|| {
-                usage(format!(
-                    "{} needs class labels: give a label column, or make classes from the \
-                     positions with a grid (--grid 7x7)",
-                    method.name()
-                ))
+                usage(Misuse::NeedsLabels(method))
             })?;
             let fold = cv.folds(n, Some(&labels.index), opts.seed);
             search_classifier(table, method, labels, &fold, progress)?
         } else {
             let t = targets.ok_or_else(|| {
-                usage(format!(
-                    "{} predicts positions: the targets need x and y columns (the data has \
-                     only class labels: use qda or lda)",
-                    method.name()
-                ))
+                usage(Misuse::NeedsXy(method))
             })?;
             let fold = cv.folds(n, None, opts.seed);
             search_regressor(&table.x, t, method, &fold, cv.grouped, progress)?
