@@ -29,7 +29,7 @@ pub struct Outcome {
 /// in mm.
 ///
 /// # Errors
-/// [`FitError::Shape`] for a label or prediction that is not one of the classes, or counts
+/// [`FitError::Label`] for a label or prediction that is not one of the classes, [`FitError::Counts`] for counts
 /// that differ.
 pub fn outcomes(
     predicted: &[u16],
@@ -38,9 +38,12 @@ pub fn outcomes(
     electrodes_mm: &[[f64; 2]],
 ) -> Result<Vec<Outcome>, FitError> {
     if predicted.len() != y.len() {
-        return Err(FitError::Shape(
-            "predictions and labels differ in number".into(),
-        ));
+        return Err(FitError::Counts {
+            what: "predictions",
+            got: predicted.len(),
+            expected: y.len(),
+            of: "labels",
+        });
     }
     y.iter()
         .zip(predicted)
@@ -50,7 +53,11 @@ pub fn outcomes(
                 centres_mm
                     .get(usize::from(c))
                     .copied()
-                    .ok_or_else(|| FitError::Shape(format!("observation {r}: class {c}")))
+                    .ok_or(FitError::Label {
+                        row: r,
+                        label: usize::from(c),
+                        classes: centres_mm.len(),
+                    })
             };
             let (t, p) = (class(label)?, class(p)?);
             Ok(Outcome {

@@ -96,7 +96,7 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 /// Predicts every observation (row of `x`) with `model` and counts it against its label.
 ///
 /// # Errors
-/// [`FitError::Shape`] if `x` does not have the model's feature count, rows and labels differ
+/// [`FitError::FeatureCount`] if `x` does not have the model's feature count, [`FitError::Counts`] or [`FitError::Label`] if rows and labels differ
 /// in number, or a label is not one of the model's classes.
 pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion, FitError> {
     confusion_of(model.classes.len(), y, &predict_rows(model, x)?)
@@ -105,15 +105,13 @@ pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion
 /// The model's class for every observation (row of `x`).
 ///
 /// # Errors
-/// [`FitError::Shape`] if `x` does not have the model's feature count.
+/// [`FitError::FeatureCount`] if `x` does not have the model's feature count.
 pub fn predict_rows(model: &Fitted, x: &DMatrix<f64>) -> Result<Vec<u16>, FitError> {
     if x.ncols() != model.features() {
-        return Err(FitError::Shape(format!(
-            "{} x {} observations for a model of {} features",
-            x.nrows(),
-            x.ncols(),
-            model.features()
-        )));
+        return Err(FitError::FeatureCount {
+            got: x.ncols(),
+            expected: model.features(),
+        });
     }
     let mut row = vec![0.0; x.ncols()];
     Ok((0..x.nrows())
@@ -129,21 +127,24 @@ pub fn predict_rows(model: &Fitted, x: &DMatrix<f64>) -> Result<Vec<u16>, FitErr
 /// Counts `predicted` against the labels `y` (one each, labels in 0..classes).
 ///
 /// # Errors
-/// [`FitError::Shape`] if they differ in number or a label is not one of the classes.
+/// [`FitError::Counts`] if they differ in number, [`FitError::Label`] if a label is not one of the classes.
 pub fn confusion_of(classes: usize, y: &[u16], predicted: &[u16]) -> Result<Confusion, FitError> {
     if predicted.len() != y.len() {
-        return Err(FitError::Shape(format!(
-            "{} observations with {} labels",
-            predicted.len(),
-            y.len()
-        )));
+        return Err(FitError::Counts {
+            what: "labels",
+            got: y.len(),
+            expected: predicted.len(),
+            of: "observations",
+        });
     }
     let mut confusion = Confusion::new(classes);
     for (r, (&label, &p)) in y.iter().zip(predicted).enumerate() {
         if usize::from(label) >= classes {
-            return Err(FitError::Shape(format!(
-                "observation {r} has class {label}, the model has {classes}"
-            )));
+            return Err(FitError::Label {
+                row: r,
+                label: usize::from(label),
+                classes,
+            });
         }
         confusion.add(label, p);
     }
@@ -208,19 +209,19 @@ pub fn cross_validate_folds(
 /// The number of folds in `fold` (one entry per observation, values 0..k).
 ///
 /// # Errors
-/// [`FitError::Shape`] if `fold` is not one entry per observation or holds fewer than 2 folds.
+/// [`FitError::Counts`] if `fold` is not one entry per observation, [`FitError::TooFewFolds`] if it holds fewer than 2 folds.
 pub(crate) fn fold_count(fold: &[usize], n: usize) -> Result<usize, FitError> {
     if fold.len() != n {
-        return Err(FitError::Shape(format!(
-            "{} folds for {n} observations",
-            fold.len()
-        )));
+        return Err(FitError::Counts {
+            what: "fold assignments",
+            got: fold.len(),
+            expected: n,
+            of: "observations",
+        });
     }
     let k = fold.iter().max().map_or(0, |m| m + 1);
     if k < 2 {
-        return Err(FitError::Shape(
-            "cross-validation needs at least 2 folds".into(),
-        ));
+        return Err(FitError::TooFewFolds(k));
     }
     Ok(k)
 }
@@ -230,7 +231,7 @@ pub(crate) fn fold_count(fold: &[usize], n: usize) -> Result<usize, FitError> {
 /// definite scores 0.
 ///
 /// # Errors
-/// [`FitError::Shape`] for no candidates or bad folds.
+/// [`FitError::NoCandidates`] for no candidates, [`FitError::Counts`] or [`FitError::TooFewFolds`] for bad folds.
 pub fn choose_shrinkage(
     x: &DMatrix<f64>,
     y: &[u16],
@@ -249,7 +250,7 @@ pub fn choose_shrinkage(
 /// [`choose_shrinkage`] with any cross-validation (e.g. [`super::fastcv::cross_validate_fast`]).
 ///
 /// # Errors
-/// [`FitError::Shape`] for no candidates; the first error other than a singular fit.
+/// [`FitError::NoCandidates`] for no candidates; the first error other than a singular fit.
 pub fn choose_shrinkage_with(
     candidates: &[f64],
     mut validate: impl FnMut(&FitOptions) -> Result<Confusion, FitError>,
@@ -275,7 +276,7 @@ pub fn choose_shrinkage_with(
             Some(b) if b.1 >= s.1 => Some(b),
             _ => Some(s),
         })
-        .ok_or_else(|| FitError::Shape("no shrinkage candidates".into()))?;
+        .ok_or(FitError::NoCandidates("no shrinkage candidates"))?;
     Ok((best.0, scores))
 }
 
@@ -292,7 +293,7 @@ pub fn cross_validate(
     seed: u64,
 ) -> Result<Confusion, FitError> {
     if k < 2 {
-        return Err(FitError::Shape(format!("{k} folds: use at least 2")));
+        return Err(FitError::TooFewFolds(k));
     }
     cross_validate_folds(x, y, classes, opts, &folds(y, k, seed))
 }

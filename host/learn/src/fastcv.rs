@@ -487,7 +487,7 @@ impl<'a> Prepared<'a> {
     /// The sufficient statistics of `fold` (one value per row, 0..k).
     ///
     /// # Errors
-    /// [`FitError::Shape`] for a fold list of another length or with an empty fold.
+    /// [`FitError::Counts`] for a fold list of another length, [`FitError::TooFewFolds`] for fewer than two folds.
     pub fn partition(&self, fold: &[usize]) -> Result<Partition, FitError> {
         let n = self.y.len();
         let k = super::cv::fold_count(fold, n)?;
@@ -549,7 +549,7 @@ impl<'a> Prepared<'a> {
                 .into_iter()
                 .map(|h| {
                     h.join()
-                        .unwrap_or_else(|_| Err(FitError::Shape("worker panicked".into())))
+                        .unwrap_or(Err(FitError::Panicked))
                 })
                 .collect()
         });

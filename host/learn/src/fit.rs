@@ -46,9 +46,67 @@ impl Default for FitOptions {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FitError {
-    /// No observations, a label outside 0..classes, or rows and labels of different counts.
-    #[error("training data: {0}")]
-    Shape(String),
+    /// No observations or no features.
+    #[error("training data: no observations or no features")]
+    Empty,
+    /// Tables that must be as long as each other are not (labels per row, targets per
+    /// observation, predictions per label, ...).
+    #[error("training data: {got} {what} for {expected} {of}")]
+    Counts {
+        /// What was counted.
+        what: &'static str,
+        /// How many.
+        got: usize,
+        /// How many there must be.
+        expected: usize,
+        /// What they are counted against.
+        of: &'static str,
+    },
+    /// Observations of another feature count than the model's.
+    #[error("training data: {got} features for a model of {expected}")]
+    FeatureCount {
+        /// The observations' features.
+        got: usize,
+        /// The model's.
+        expected: usize,
+    },
+    /// A label (class) outside the model's classes.
+    #[error("training data: observation {row} has class {label}, the model has {classes}")]
+    Label {
+        /// The observation.
+        row: usize,
+        /// Its class.
+        label: usize,
+        /// The model's classes.
+        classes: usize,
+    },
+    /// A target that is NaN or infinite.
+    #[error("training data: observation {row}: non-finite target")]
+    NonFiniteTarget {
+        /// The observation.
+        row: usize,
+    },
+    /// Cross-validation with fewer than 2 folds.
+    #[error("cross-validation needs at least 2 folds ({0} given)")]
+    TooFewFolds(usize),
+    /// Nothing to choose from, or nothing fitted: which.
+    #[error("{0}")]
+    NoCandidates(&'static str),
+    /// A perceptron with no hidden layer or a layer of no width.
+    #[error("hidden layers {0:?}: at least one, each at least 1 wide")]
+    HiddenLayers(Vec<usize>),
+    /// k nearest neighbours with k = 0.
+    #[error("k = 0 neighbours")]
+    NoNeighbours,
+    /// The fit's numbers failed (a kernel matrix not factored, a loss not finite): which.
+    #[error("fit: {0}")]
+    Numerics(&'static str),
+    /// A model's tables that disagree in length: which.
+    #[error("model tables: {0}")]
+    Tables(&'static str),
+    /// A fit's worker panicked (a bug in et).
+    #[error("the fit panicked (a bug in et: please report it)")]
+    Panicked,
     /// A value is NaN or infinite.
     #[error("observation {row}, feature {feature} is NaN or infinite")]
     NonFinite {
@@ -75,9 +133,20 @@ pub enum FitError {
     /// Shrinkage outside [0, 1].
     #[error("shrinkage {0} is not in [0, 1]")]
     Shrinkage(f64),
+    /// Too many classes or features for the board's blob.
+    #[error(
+        "model export: {classes} classes x {features} features do not fit the blob format (at \
+         most 65 535 each)"
+    )]
+    BlobSize {
+        /// The classes.
+        classes: usize,
+        /// The features.
+        features: usize,
+    },
     /// The blob could not be written.
     #[error("model export: {0}")]
-    Export(String),
+    Export(#[source] et_core::model::ModelError),
     /// The tables fail the checks the board makes on a model (et-core's `Model::parse` on
     /// the f32 blob: a value not finite in f32, a scale not positive, a singular or
     /// ill-conditioned class covariance, a feature outside the frame).
@@ -188,14 +257,15 @@ pub(crate) fn check(
     classes: usize,
 ) -> Result<Vec<Vec<usize>>, FitError> {
     if x.nrows() == 0 || x.ncols() == 0 {
-        return Err(FitError::Shape("no observations or no features".into()));
+        return Err(FitError::Empty);
     }
     if x.nrows() != y.len() {
-        return Err(FitError::Shape(format!(
-            "{} rows but {} labels",
-            x.nrows(),
-            y.len()
-        )));
+        return Err(FitError::Counts {
+            what: "labels",
+            got: y.len(),
+            expected: x.nrows(),
+            of: "rows",
+        });
     }
     for r in 0..x.nrows() {
         for c in 0..x.ncols() {
@@ -209,7 +279,11 @@ pub(crate) fn check(
         members
             .get_mut(usize::from(label))
             .ok_or_else(|| {
-                FitError::Shape(format!("label {label} at row {r} is not below {classes}"))
+                FitError::Label {
+                    row: r,
+                    label: usize::from(label),
+                    classes,
+                }
             })?
             .push(r);
     }
@@ -439,13 +513,13 @@ impl Fitted {
         // allocating.
         let len = model_len(self.kind, precision, self.classes.len(), p);
         if len == usize::MAX {
-            return Err(FitError::Export(format!(
-                "{} classes x {p} features do not fit the blob format (at most 65 535 each)",
-                self.classes.len()
-            )));
+            return Err(FitError::BlobSize {
+                classes: self.classes.len(),
+                features: p,
+            });
         }
         let mut out = vec![0u8; len];
-        write_model(&tables, &mut out).map_err(|e| FitError::Export(e.to_string()))?;
+        write_model(&tables, &mut out).map_err(FitError::Export)?;
         Ok(out)
     }
 }

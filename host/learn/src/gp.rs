@@ -122,7 +122,7 @@ impl Gp {
         let objective = |th: &[f64]| nll_and_gradient(&z, &u, th);
         let (theta, nll, iterations) =
             minimise(objective, theta, &lo, &hi, opts.iterations, progress).ok_or_else(|| {
-                FitError::Shape("no kernel matrix of these rows could be factored".into())
+                FitError::Numerics("no kernel matrix of these rows could be factored")
             })?;
 
         let length_scales: Vec<f64> = theta[..p].iter().map(|v| v.exp()).collect();
@@ -145,14 +145,14 @@ impl Gp {
         }
         let mut alpha = Mat::from_fn(m, 3, |r, c| ts[r][c] - intercept[c]);
         let llt = k.llt(Side::Lower).map_err(|_| {
-            FitError::Shape("the learned kernel matrix is not positive definite".into())
+            FitError::Numerics("the learned kernel matrix is not positive definite")
         })?;
         llt.solve_in_place_with_conj(faer::Conj::No, alpha.as_mut());
         for v in alpha.col_iter_mut().flat_map(|c| c.iter_mut()) {
             *v *= signal_variance;
         }
         if (0..m).any(|r| (0..3).any(|c| !alpha[(r, c)].is_finite())) {
-            return Err(FitError::Shape("the posterior mean is not finite".into()));
+            return Err(FitError::Numerics("the posterior mean is not finite"));
         }
         Ok(Self {
             length_scales,

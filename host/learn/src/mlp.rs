@@ -215,10 +215,7 @@ impl Mlp {
     pub fn fit(x: &DMatrix<f64>, t: &[Target3], opts: &MlpOptions) -> Result<Self, FitError> {
         check(x, t)?;
         if opts.hidden.is_empty() || opts.hidden.contains(&0) {
-            return Err(FitError::Shape(format!(
-                "hidden layers {:?}: at least one, each at least 1 wide",
-                opts.hidden
-            )));
+            return Err(FitError::HiddenLayers(opts.hidden.clone()));
         }
         let (mean, scale) = standardisation(x);
         let target_mean = target_mean(t);
@@ -274,7 +271,7 @@ impl Mlp {
             }
         }
         best.ok_or_else(|| {
-            FitError::Shape("no start of the perceptron reached a finite loss".into())
+            FitError::Numerics("no start of the perceptron reached a finite loss")
         })
     }
 

@@ -96,13 +96,13 @@ impl ModelFile {
     /// The fitted model back.
     ///
     /// # Errors
-    /// [`FitError::Shape`] for an inconsistent file.
+    /// [`FitError::Tables`] for an inconsistent file.
     pub fn fitted(&self) -> Result<Fitted, FitError> {
         let kind = self.kind;
         let p = self.feature_mean.len();
         if self.feature_index.len() != p || self.centres_mm.len() != self.classes.len() {
-            return Err(FitError::Shape(
-                "feature or class tables of different lengths".into(),
+            return Err(FitError::Tables(
+                "feature or class tables of different lengths",
             ));
         }
         fitted_from_records(
@@ -274,7 +274,7 @@ pub fn class_records(model: &Fitted) -> Vec<ClassRecord> {
 /// same class tables.
 ///
 /// # Errors
-/// [`FitError::Shape`] for tables of inconsistent lengths, [`FitError::Invalid`] for tables
+/// [`FitError::Tables`] for tables of inconsistent lengths, [`FitError::Invalid`] for tables
 /// the board would refuse.
 pub fn fitted_from_records(
     kind: ModelKind,
@@ -285,8 +285,8 @@ pub fn fitted_from_records(
 ) -> Result<Fitted, FitError> {
     let p = feature_mean.len();
     if feature_scale.len() != p || records.is_empty() {
-        return Err(FitError::Shape(
-            "feature or class tables of different lengths".into(),
+        return Err(FitError::Tables(
+            "feature or class tables of different lengths",
         ));
     }
     let classes = records
@@ -299,7 +299,7 @@ pub fn fitted_from_records(
                     ModelKind::Lda => c.weights.len() == p,
                 };
             if !ok {
-                return Err(FitError::Shape("a class table has the wrong length".into()));
+                return Err(FitError::Tables("a class table has the wrong length"));
             }
             // The packed lower triangle, row by row (its length was checked above).
             let n = if kind == ModelKind::Qda { p } else { 0 };
@@ -335,11 +335,11 @@ pub fn fitted_from_records(
 /// classes have none).
 ///
 /// # Errors
-/// [`FitError::Shape`] for positions of another count, [`FitError::Invalid`] for tables the
+/// [`FitError::Tables`] for positions of another count, [`FitError::Invalid`] for tables the
 /// board would refuse.
 pub fn check_tables(fitted: &Fitted, positions_mm: &[[f64; 2]]) -> Result<(), FitError> {
     if !positions_mm.is_empty() && positions_mm.len() != fitted.classes.len() {
-        return Err(FitError::Shape("a position for every class".into()));
+        return Err(FitError::Tables("a position for every class"));
     }
     et_core::model::check_class_tables(&Tables {
         fitted,

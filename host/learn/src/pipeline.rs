@@ -398,7 +398,7 @@ fn fit_beside_scores(
         });
         let model = model
             .join()
-            .unwrap_or_else(|_| Err(FitError::Shape("the fit panicked".into())));
+            .unwrap_or(Err(FitError::Panicked));
         (model, cv, lovo)
     })
 }

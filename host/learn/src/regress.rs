@@ -38,21 +38,19 @@ pub(crate) fn z_space(x: &DMatrix<f64>, mean: &[f64], scale: &[f64]) -> Mat<f64>
 
 pub(crate) fn check(x: &DMatrix<f64>, t: &[Target3]) -> Result<(), FitError> {
     if x.nrows() != t.len() || x.nrows() < 2 || x.ncols() == 0 {
-        return Err(FitError::Shape(format!(
-            "{} observations of {} features with {} targets",
-            x.nrows(),
-            x.ncols(),
-            t.len()
-        )));
+        return Err(FitError::Counts {
+            what: "targets",
+            got: t.len(),
+            expected: x.nrows(),
+            of: "observations",
+        });
     }
     for (r, row) in x.row_iter().enumerate() {
         if let Some(j) = row.iter().position(|v| !v.is_finite()) {
             return Err(FitError::NonFinite { row: r, feature: j });
         }
         if t[r].iter().any(|v| !v.is_finite()) {
-            return Err(FitError::Shape(format!(
-                "observation {r}: non-finite target"
-            )));
+            return Err(FitError::NonFiniteTarget { row: r });
         }
     }
     Ok(())
@@ -495,7 +493,7 @@ impl IntensityByClass {
     /// pooled fit.
     ///
     /// # Errors
-    /// [`FitError::Shape`] for mismatched lengths or labels, [`FitError::NotPositiveDefinite`]
+    /// [`FitError::Counts`] for mismatched lengths, [`FitError::Label`] for a label out of range, [`FitError::NotPositiveDefinite`]
     /// when even the pooled fit is singular (all signatures the same size).
     pub fn fit(
         x: &DMatrix<f64>,
@@ -503,10 +501,15 @@ impl IntensityByClass {
         pressure_kpa: &[f64],
         classes: usize,
     ) -> Result<Self, FitError> {
-        if x.nrows() != y.len() || y.len() != pressure_kpa.len() {
-            return Err(FitError::Shape(
-                "rows, labels and pressures differ in number".into(),
-            ));
+        for (what, got) in [("labels", y.len()), ("pressures", pressure_kpa.len())] {
+            if got != x.nrows() {
+                return Err(FitError::Counts {
+                    what,
+                    got,
+                    expected: x.nrows(),
+                    of: "rows",
+                });
+            }
         }
         let u: Vec<f64> = x.row_iter().map(|r| r.norm().max(1e-300).ln()).collect();
         let solve = |rows: &[usize]| -> Option<[f64; 3]> {
@@ -536,10 +539,11 @@ impl IntensityByClass {
             }
         }
         if let Some(r) = y.iter().position(|&c| usize::from(c) >= classes) {
-            return Err(FitError::Shape(format!(
-                "observation {r}: class {} of {classes}",
-                y[r]
-            )));
+            return Err(FitError::Label {
+                row: r,
+                label: usize::from(y[r]),
+                classes,
+            });
         }
         Ok(Self { coefficients })
     }

@@ -22,7 +22,6 @@ use crate::live::{Output, Processor, Source};
 use et_learn::collect;
 use et_learn::cv::Confusion;
 use et_learn::dataset::Dataset;
-use et_learn::fit::FitError;
 use et_learn::model::{Board, SlotError};
 use et_learn::pipeline;
 use et_learn::tabular::{Choice, Method};
@@ -331,15 +330,13 @@ impl Wizard {
         let (board, training) = match trainer.train(Examples::Dataset(&data), |_| {}) {
             Ok(trained) => trained
                 .into_board()
-                .ok_or(WizardError::Fit(FitError::Shape(
-                    "not a board model".into(),
-                )))?,
+                .ok_or(WizardError::NotBoard)?,
             Err(TrainError::Data(e)) => return Err(WizardError::Data(e)),
             Err(TrainError::Fit(e) | TrainError::Unusable { error: e, .. }) => {
                 return Err(WizardError::Fit(e));
             }
             // A dataset trains a board model, QDA here: nothing else can go wrong.
-            Err(other) => return Err(WizardError::Fit(FitError::Shape(other.to_string()))),
+            Err(other) => return Err(WizardError::Train(other)),
         };
         let (t, data) = (training.training, training.data);
         self.message = format!(
@@ -376,7 +373,7 @@ impl Wizard {
 }
 
 /// Why the wizard cannot go on.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum WizardError {
     /// The sheet cannot be scanned with the opposite protocol.
@@ -394,6 +391,12 @@ pub enum WizardError {
     /// The fit failed.
     #[error("{0}")]
     Fit(et_learn::fit::FitError),
+    /// The training failed otherwise.
+    #[error("{0}")]
+    Train(et_learn::trainer::TrainError),
+    /// The training gave a model other than a board model.
+    #[error("the training gave a table model, not a board model")]
+    NotBoard,
     /// No model trained yet.
     #[error("train first")]
     NotTrained,

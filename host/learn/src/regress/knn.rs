@@ -39,7 +39,7 @@ impl Knn {
     ) -> Result<Self, FitError> {
         check(x, t)?;
         if k == 0 {
-            return Err(FitError::Shape("k = 0 neighbours".into()));
+            return Err(FitError::NoNeighbours);
         }
         let (mean, scale) = standardisation(x);
         let support = z_space(x, &mean, &scale);

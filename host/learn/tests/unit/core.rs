@@ -190,11 +190,11 @@ fn degenerate_training_sets_give_errors_or_regularised_fits() {
     );
     assert!(matches!(
         Fitted::fit(&x, &y, 2, &FitOptions::default()),
-        Err(FitError::Shape(_))
+        Err(FitError::Label { classes: 2, .. })
     ));
     assert!(matches!(
         Fitted::fit(&x, &y[1..], 3, &FitOptions::default()),
-        Err(FitError::Shape(_))
+        Err(FitError::Counts { what: "labels", .. })
     ));
     assert!(matches!(
         Fitted::fit(
@@ -958,7 +958,10 @@ fn fast_cross_validation_equals_refitting() {
     ));
     assert!(matches!(
         cross_validate_fast(&x, &y, 3, &FitOptions::default(), &fold[1..]),
-        Err(FitError::Shape(_))
+        Err(FitError::Counts {
+            what: "fold assignments",
+            ..
+        })
     ));
 }
 

@@ -155,7 +155,11 @@ fn intensity_by_class_recovers_each_class_calibration() {
     }
     assert!(matches!(
         IntensityByClass::fit(&x, &y[..5], &kpa, 3),
-        Err(FitError::Shape(_))
+        Err(FitError::Counts {
+            what: "labels",
+            got: 5,
+            ..
+        })
     ));
 }
 
@@ -164,7 +168,12 @@ fn bad_input_is_refused() {
     let x = DMatrix::from_element(3, 2, 1.0);
     assert!(matches!(
         Ridge::fit(&x, &[[0.0; 3]; 2], 0.1),
-        Err(FitError::Shape(_))
+        Err(FitError::Counts {
+            what: "targets",
+            got: 2,
+            expected: 3,
+            ..
+        })
     ));
     let mut y = x.clone();
     y[(1, 1)] = f64::NAN;

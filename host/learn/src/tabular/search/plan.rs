@@ -151,8 +151,8 @@ pub(super) fn fit_first(
         }
     }
     Err(last_error.unwrap_or_else(|| {
-        TabularError::Fit(FitError::Shape(
-            "no candidate could be fitted in cross-validation".into(),
+        TabularError::Fit(FitError::NoCandidates(
+            "no candidate could be fitted in cross-validation",
         ))
     }))
 }
