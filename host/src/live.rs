@@ -132,8 +132,18 @@ pub enum LiveError {
     #[error("{0}")]
     Frames(#[from] crate::frames::FramesError),
     /// Another system's frames for a protocol the live pipeline does not scan.
-    #[error("{0}")]
-    Table(String),
+    #[error(
+        "{}: {error}; `et stream` and `et view` play frames of et's built-in protocols only: \
+         image this protocol's frames with `et reconstruct --frames {}`",
+        path.display(),
+        path.display()
+    )]
+    Table {
+        /// The frames' file.
+        path: std::path::PathBuf,
+        /// Why its scene's protocol is not one the board scans.
+        error: et_sim::scene::FieldError,
+    },
     /// A recording plays the protocol it was recorded with.
     #[error("a recording plays the protocol it was recorded with")]
     Recorded,

@@ -100,7 +100,7 @@ pub struct Viewer {
     pub wizard: Wizard,
     shot_frames: u32,
     /// How the screenshot went: None until it is taken, then its error, if any.
-    shot: std::sync::Arc<std::sync::Mutex<Option<Result<(), String>>>>,
+    shot: std::sync::Arc<std::sync::Mutex<Option<Result<(), ShotError>>>>,
     /// The central panel: the sheet, its image and touches.
     pub sheet_view: SheetView,
     /// The right panel: the signal's plots and the link's health.
@@ -462,12 +462,10 @@ impl Viewer {
             ctx.request_screenshot(move |img| {
                 let [w, h] = img.size;
                 let bytes: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
-                type Failure = Box<dyn std::error::Error + Send + Sync>;
                 let saved = crate::output::write(&path, |partial| {
                     crate::plot::write_png(partial, &bytes, (w as u32, h as u32), true)
-                        .map_err(Failure::from)
-                })
-                .map_err(|e| e.to_string());
+                        .map_err(ShotError::from)
+                });
                 if saved.is_ok() {
                     eprintln!("wrote {}", path.display());
                 }
@@ -505,9 +503,7 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
     match shot.map(|s| s.lock().map(|mut s| s.take()).unwrap_or(None)) {
         None | Some(Some(Ok(()))) => Ok(()),
         Some(Some(Err(e))) => Err(ViewerError::Screenshot(e)),
-        Some(None) => Err(ViewerError::Screenshot(
-            "the window closed before the screenshot was taken".into(),
-        )),
+        Some(None) => Err(ViewerError::NoScreenshot),
     }
 }
 
@@ -532,10 +528,17 @@ pub enum ViewerError {
     /// `press` is not on the sheet.
     #[error("--press {},{} mm is not on the sheet (give a point inside it, in the scene's coordinates)", .0[0], .0[1])]
     Press([f64; 2]),
-    /// The window could not be created.
+    /// The window could not be created: eframe's error as its text (eframe's error type is
+    /// neither `Send` nor `Sync`, so it cannot travel inside this one).
     #[error("cannot open the window: {0} (is there a display? try DISPLAY=:0 or xvfb-run)")]
     Window(String),
     /// The screenshot was not written.
     #[error("screenshot not written: {0}")]
-    Screenshot(String),
+    Screenshot(#[source] ShotError),
+    /// The window closed before the screenshot was taken.
+    #[error("screenshot not written: the window closed before the screenshot was taken")]
+    NoScreenshot,
 }
+
+/// Why a screenshot's file was not written (the PNG encoder's or the output's error).
+pub type ShotError = Box<dyn std::error::Error + Send + Sync>;

@@ -185,12 +185,12 @@ impl Plan {
             ),
         ] {
             if !(value.is_finite() && value >= 0.0 && value <= share * side) {
-                return Err(CollectError::Plan(format!(
-                    "{name}: {:.1} mm on a sheet {:.1} mm across: at most {:.1} mm",
-                    value * 1e3,
-                    side * 1e3,
-                    share * side * 1e3
-                )));
+                return Err(CollectError::Plan {
+                    name,
+                    value,
+                    side,
+                    limit: share * side,
+                });
             }
         }
         Ok(())
@@ -214,7 +214,7 @@ impl Plan {
 }
 
 /// Why collection failed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CollectError {
     /// The scan configuration is not valid for the sheet.
@@ -238,15 +238,32 @@ pub enum CollectError {
         /// Its label.
         label: u16,
     },
-    /// A built-in scene could not be read, or its data referenced (the reason).
+    /// A built-in scene could not be read.
     #[error("scene: {0}")]
-    Scene(String),
+    Scene(#[source] et_sim::scene::SceneError),
+    /// A built-in scene's scan settings are not usable.
+    #[error("scene: {0}")]
+    SceneField(#[source] et_sim::scene::FieldError),
     /// No visit was asked for.
     #[error("no visit to collect: ask for at least one")]
     NoVisits,
     /// A length of the plan does not fit the sheet.
-    #[error("{0}")]
-    Plan(String),
+    #[error(
+        "{name}: {:.1} mm on a sheet {:.1} mm across: at most {:.1} mm",
+        value * 1e3,
+        side * 1e3,
+        limit * 1e3
+    )]
+    Plan {
+        /// The length's name (its command-line flag).
+        name: &'static str,
+        /// Its value, m.
+        value: f64,
+        /// The sheet's shorter side, m.
+        side: f64,
+        /// The most it may be, m.
+        limit: f64,
+    },
     /// The visits' datasets could not be joined.
     #[error("joining the visits: {0}")]
     Data(crate::dataset::DataError),

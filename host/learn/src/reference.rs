@@ -105,7 +105,7 @@ pub struct Outcome {
 }
 
 /// Why a case could not be measured.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReferenceError {
     /// Collecting the data failed.

@@ -102,12 +102,8 @@ pub fn make_drifting(
     seed: u64,
     drift: SessionDrift,
 ) -> Result<StandIn, CollectError> {
-    let scene = Scene::parse(SCENE, "stand-in").map_err(|e| CollectError::Scene(e.to_string()))?;
-    let config = training_config(
-        scene
-            .scan_config()
-            .map_err(|e| CollectError::Scene(e.to_string()))?,
-    );
+    let scene = Scene::parse(SCENE, "stand-in").map_err(CollectError::Scene)?;
+    let config = training_config(scene.scan_config().map_err(CollectError::SceneField)?);
     let sessions = sessions.max(1);
     let per_session = presses.div_ceil(sessions);
     let plan = plan(sessions, seed);
@@ -143,7 +139,7 @@ pub fn make_drifting(
     let n = presses.min(data.x.nrows());
     let features = data
         .features(true)
-        .map_err(|e| CollectError::Scene(e.to_string()))?;
+        .map_err(CollectError::Data)?;
     let mut features = DMatrix::from_fn(n, features.ncols(), |r, j| {
         features[(r, j)] * CODES_PER_VOLT
     });

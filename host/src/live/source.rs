@@ -121,13 +121,9 @@ impl ReplaySource {
     /// built-in protocols; `et reconstruct --frames` images any), [`LiveError::Frames`] naming
     /// the file.
     pub fn open_table(path: &Path, scene: &Scene) -> Result<Self, LiveError> {
-        let config = scene.scan_config().map_err(|e| {
-            LiveError::Table(format!(
-                "{}: {e}; `et stream` and `et view` play frames of et's built-in protocols \
-                 only: image this protocol's frames with `et reconstruct --frames {}`",
-                path.display(),
-                path.display()
-            ))
+        let config = scene.scan_config().map_err(|error| LiveError::Table {
+            path: path.into(),
+            error,
         })?;
         let header = recording::Header::new(format!("file:{}", path.display()), &config)?;
         let frames = crate::frames::read(path, header.frame_len)?;
