@@ -53,10 +53,7 @@ pub enum CalibrationError {
 
 /// K, the frame length of `config`.
 fn frame_len(config: &ScanConfig) -> Result<usize, CalibrationError> {
-    Ok(config
-        .validate()
-        .map_err(|e| SimError::Config(e.to_string()))?
-        .frame_len())
+    Ok(config.validate().map_err(SimError::Config)?.frame_len())
 }
 
 /// `frames` frames of one measurement set, flattened (fast path).

@@ -18,7 +18,7 @@ use std::sync::OnceLock;
 use nalgebra::DMatrix;
 
 use crate::band::BandCholesky;
-use crate::network::{Network, NetworkError, Transfer};
+use crate::network::{Conductor, Network, NetworkError, Transfer};
 
 /// A network prepared for fast touch updates.
 #[derive(Debug)]
@@ -97,7 +97,8 @@ impl FastNetwork {
     /// `(k, m)` in `changes` (from [`crate::touch::edge_multipliers`]).
     ///
     /// # Errors
-    /// [`NetworkError::Singular`] if a multiplier is not finite and positive, or the update
+    /// [`NetworkError::Conductance`] if a multiplier is not finite and positive,
+    /// [`NetworkError::Singular`] if the update
     /// is singular (cannot happen for positive multipliers on a connected sheet).
     pub fn transfer(&self, changes: &[(usize, f64)]) -> Result<Transfer, NetworkError> {
         if changes.is_empty() {
@@ -107,7 +108,10 @@ impl FastNetwork {
             .iter()
             .find(|(k, m)| !(m.is_finite() && *m > 0.0) || *k >= self.g0.len())
         {
-            return Err(NetworkError::Singular(format!("edge {k} multiplier {m}")));
+            return Err(NetworkError::Conductance {
+                of: Conductor::Multiplier(k),
+                value: m,
+            });
         }
         let (n, l) = (self.n, self.electrodes);
         let m = l - 1;
@@ -149,7 +153,7 @@ impl FastNetwork {
         let x = big_m
             .lu()
             .solve(&r)
-            .ok_or_else(|| NetworkError::Singular("touch update is singular".into()))?;
+            .ok_or(NetworkError::Singular("touch update is singular"))?;
         // Z' = Z - K_ES X = Z + P^T X.
         let dz = p.transpose() * x;
         let mut out = self.base.clone();
@@ -160,7 +164,7 @@ impl FastNetwork {
         }
         if out.z.iter().any(|v| !v.is_finite()) {
             return Err(NetworkError::Singular(
-                "touch update produced a non-finite impedance".into(),
+                "touch update produced a non-finite impedance",
             ));
         }
         Ok(out)

@@ -259,9 +259,44 @@ pub enum SimError {
     /// An electrode the sheet does not have.
     #[error("electrode {0} does not exist on this sheet")]
     Electrode(u8),
-    /// The configuration asks for something the front end cannot do.
+    /// A scan configuration that is not valid.
     #[error("configuration: {0}")]
-    Config(String),
+    Config(#[source] et_core::config::ConfigError),
+    /// A configuration for another electrode count than the sheet's.
+    #[error("configuration: {configured} electrodes configured, the sheet has {sheet}")]
+    Electrodes {
+        /// The configuration's.
+        configured: u8,
+        /// The sheet's.
+        sheet: usize,
+    },
+    /// A hand with a negative wobble or a correlation time that is not positive.
+    #[error(
+        "configuration: a hand needs a wobble >= 0 and a positive correlation time (got \
+         {wobble} and {correlation_s} s)"
+    )]
+    Hand {
+        /// Its wobble.
+        wobble: f64,
+        /// Its correlation time, s.
+        correlation_s: f64,
+    },
+    /// A probability outside [0, 1].
+    #[error("configuration: open probability {0} is not in [0, 1]")]
+    Probability(f64),
+    /// A conductance scale that is not finite and positive.
+    #[error("configuration: conductance scale {0} must be positive")]
+    ConductanceScale(f64),
+    /// A measurement set with a potential per electrode of another count, a non-finite
+    /// potential or a conductance that is not finite and positive.
+    #[error(
+        "configuration: a measurement set needs {electrodes} finite junction potentials and a \
+         positive conductance"
+    )]
+    Set {
+        /// The sheet's electrodes.
+        electrodes: usize,
+    },
 }
 
 /// The simulated sensor: a sheet in some touch state behind the acquisition chain.
@@ -366,7 +401,7 @@ impl SimFrontend {
     /// How the hand holds its presses from now on ([`Hand`]).
     ///
     /// # Errors
-    /// [`SimError::Config`] for a negative or non-finite wobble or a correlation time that is
+    /// [`SimError::Hand`] for a negative or non-finite wobble or a correlation time that is
     /// not positive.
     pub fn set_hand(&mut self, hand: Hand) -> Result<(), SimError> {
         if !(hand.wobble.is_finite()
@@ -374,10 +409,10 @@ impl SimFrontend {
             && hand.correlation_s.is_finite()
             && hand.correlation_s > 0.0)
         {
-            return Err(SimError::Config(format!(
-                "a hand needs a wobble >= 0 and a positive correlation time (got {} and {} s)",
-                hand.wobble, hand.correlation_s
-            )));
+            return Err(SimError::Hand {
+                wobble: hand.wobble,
+                correlation_s: hand.correlation_s,
+            });
         }
         self.hand = hand;
         if hand.wobble == 0.0 {
@@ -411,7 +446,7 @@ impl SimFrontend {
     /// an open measurement electrode leaves the amplifier input floating to a rail.
     ///
     /// # Errors
-    /// [`SimError::Electrode`] for an electrode the sheet does not have, [`SimError::Config`]
+    /// [`SimError::Electrode`] for an electrode the sheet does not have, [`SimError::Probability`]
     /// for p outside [0, 1].
     pub fn set_open(&mut self, e: u8, p: f64) -> Result<(), SimError> {
         let slot = self
@@ -419,9 +454,7 @@ impl SimFrontend {
             .get_mut(usize::from(e))
             .ok_or(SimError::Electrode(e))?;
         if !(0.0..=1.0).contains(&p) {
-            return Err(SimError::Config(format!(
-                "open probability {p} is not in [0, 1]"
-            )));
+            return Err(SimError::Probability(p));
         }
         *slot = p;
         Ok(())
@@ -430,12 +463,10 @@ impl SimFrontend {
     /// Scales the sheet's conductance (temperature drift): every voltage divides by `c`.
     ///
     /// # Errors
-    /// [`SimError::Config`] unless `c` is finite and positive.
+    /// [`SimError::ConductanceScale`] unless `c` is finite and positive.
     pub fn set_conductance_scale(&mut self, c: f64) -> Result<(), SimError> {
         if !(c.is_finite() && c > 0.0) {
-            return Err(SimError::Config(format!(
-                "conductance scale {c} must be positive"
-            )));
+            return Err(SimError::ConductanceScale(c));
         }
         self.conductance_scale = c;
         Ok(())
@@ -446,17 +477,16 @@ impl SimFrontend {
     /// potentials, nominal conductance).
     ///
     /// # Errors
-    /// [`SimError::Config`] for a potential per electrode of another count, a non-finite
+    /// [`SimError::Set`] for a potential per electrode of another count, a non-finite
     /// potential or a conductance that is not finite and positive.
     pub fn set_state(&mut self, set: &SetState) -> Result<(), SimError> {
         if set.contact_potentials_v.len() != self.open.len()
             || set.contact_potentials_v.iter().any(|v| !v.is_finite())
             || !(set.conductance_scale.is_finite() && set.conductance_scale > 0.0)
         {
-            return Err(SimError::Config(format!(
-                "a measurement set needs {} finite junction potentials and a positive conductance",
-                self.open.len()
-            )));
+            return Err(SimError::Set {
+                electrodes: self.open.len(),
+            });
         }
         self.set = set.clone();
         Ok(())

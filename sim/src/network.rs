@@ -169,9 +169,23 @@ pub struct Contact {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum NetworkError {
-    /// Fewer than 2 electrodes, or an electrode with no contact.
-    #[error("electrodes: {0}")]
-    Electrodes(String),
+    /// Fewer than 2 electrodes.
+    #[error("electrodes: need at least 2")]
+    TooFewElectrodes,
+    /// An electrode that touches no node.
+    #[error("electrodes: electrode {0} touches no node")]
+    NoContact(usize),
+    /// An electrode's node that is not on the grid.
+    #[error("electrodes: electrode {electrode}: node {node} is not on the grid")]
+    OffGrid {
+        /// The electrode.
+        electrode: usize,
+        /// The node.
+        node: u32,
+    },
+    /// A short between electrodes that do not exist, or of an electrode with itself.
+    #[error("electrodes: cannot short electrodes {0} and {1}")]
+    Short(usize, usize),
     /// Two electrodes share a node at this resolution.
     #[error(
         "electrodes {a} and {b} touch the same node at this resolution: refine the grid or narrow them"
@@ -182,10 +196,50 @@ pub enum NetworkError {
         /// Second electrode.
         b: usize,
     },
-    /// A conductance is not finite and non-negative, or the network is disconnected
-    /// (some node has no path to an electrode).
+    /// A conductance (S) that is not finite and positive (an edge's: non-negative), or an
+    /// edge multiplier that is not finite and positive.
+    #[error("the network cannot be solved: {of} {value}")]
+    Conductance {
+        /// Whose.
+        of: Conductor,
+        /// Its value.
+        value: f64,
+    },
+    /// A node with no path to an electrode.
+    #[error("the network cannot be solved: node {0} has no path to an electrode")]
+    Unreached(usize),
+    /// An electrode with no path through the sheet to electrode 0.
+    #[error(
+        "the network cannot be solved: electrode {0} has no path through the sheet to electrode 0"
+    )]
+    Isolated(usize),
+    /// A matrix that could not be inverted, or gave a non-finite impedance: which.
     #[error("the network cannot be solved: {0}")]
-    Singular(String),
+    Singular(&'static str),
+}
+
+/// Whose conductance (or multiplier) a [`NetworkError::Conductance`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Conductor {
+    /// The sheet's, S.
+    Sheet,
+    /// An electrode's contact, S.
+    Contact(usize),
+    /// An edge's, S.
+    Edge,
+    /// An edge's multiplier (a touch's), dimensionless.
+    Multiplier(usize),
+}
+
+impl std::fmt::Display for Conductor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Conductor::Sheet => f.write_str("sheet conductance (S)"),
+            Conductor::Contact(e) => write!(f, "electrode {e} contact conductance (S)"),
+            Conductor::Edge => f.write_str("edge conductance (S)"),
+            Conductor::Multiplier(k) => write!(f, "edge {k} multiplier"),
+        }
+    }
 }
 
 /// Potentials of every electrode per unit current at every electrode: V = Z I, in ohms, with
@@ -281,29 +335,32 @@ impl Network {
         sheet_conductance: f64,
     ) -> Result<Self, NetworkError> {
         if contacts.len() < 2 {
-            return Err(NetworkError::Electrodes("need at least 2".into()));
+            return Err(NetworkError::TooFewElectrodes);
         }
         if !(sheet_conductance.is_finite() && sheet_conductance > 0.0) {
-            return Err(NetworkError::Singular(format!(
-                "sheet conductance {sheet_conductance} S"
-            )));
+            return Err(NetworkError::Conductance {
+                of: Conductor::Sheet,
+                value: sheet_conductance,
+            });
         }
         let mut owner = vec![usize::MAX; grid.len()];
         for (e, c) in contacts.iter().enumerate() {
             if c.nodes.is_empty() {
-                return Err(NetworkError::Electrodes(format!(
-                    "electrode {e} touches no node"
-                )));
+                return Err(NetworkError::NoContact(e));
             }
             for &(n, g) in &c.nodes {
                 if !(g.is_finite() && g > 0.0) {
-                    return Err(NetworkError::Singular(format!(
-                        "electrode {e} contact conductance {g} S"
-                    )));
+                    return Err(NetworkError::Conductance {
+                        of: Conductor::Contact(e),
+                        value: g,
+                    });
                 }
-                let slot = owner.get_mut(n as usize).ok_or_else(|| {
-                    NetworkError::Electrodes(format!("electrode {e}: node {n} is not on the grid"))
-                })?;
+                let slot = owner
+                    .get_mut(n as usize)
+                    .ok_or_else(|| NetworkError::OffGrid {
+                        electrode: e,
+                        node: n,
+                    })?;
                 if *slot != usize::MAX && *slot != e {
                     return Err(NetworkError::Overlap { a: *slot, b: e });
                 }
@@ -329,7 +386,7 @@ impl Network {
         if base.len() != self.grid.edges.len() || base.iter().any(|m| !(m.is_finite() && *m > 0.0))
         {
             return Err(NetworkError::Singular(
-                "base multipliers: one finite positive value per edge".into(),
+                "base multipliers: one finite positive value per edge",
             ));
         }
         self.base = base;
@@ -339,13 +396,11 @@ impl Network {
     /// The same network with electrodes `a` and `b` shorted together.
     ///
     /// # Errors
-    /// [`NetworkError::Electrodes`] for an electrode that does not exist or a == b.
+    /// [`NetworkError::Short`] for an electrode that does not exist or a == b.
     pub fn with_short(mut self, a: usize, b: usize) -> Result<Self, NetworkError> {
         let l = self.contacts.len();
         if a >= l || b >= l || a == b {
-            return Err(NetworkError::Electrodes(format!(
-                "cannot short electrodes {a} and {b}"
-            )));
+            return Err(NetworkError::Short(a, b));
         }
         self.shorts.push((a, b));
         Ok(self)
@@ -393,17 +448,22 @@ impl Network {
     /// transfer impedance. Cost: n b^2 + 4 n b L flops.
     ///
     /// # Errors
-    /// [`NetworkError::Singular`] for a non-finite or negative conductance, or a part of the
-    /// sheet cut off from every electrode.
+    /// [`NetworkError::Conductance`] for a non-finite or negative conductance,
+    /// [`NetworkError::Unreached`] or [`NetworkError::Isolated`] for a part of the sheet cut off
+    /// from every electrode.
     pub fn solve(&self, g: &[f64]) -> Result<Solved, NetworkError> {
         if let Some(bad) = g.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
-            return Err(NetworkError::Singular(format!("edge conductance {bad} S")));
+            return Err(NetworkError::Conductance {
+                of: Conductor::Edge,
+                value: *bad,
+            });
         }
         let n = self.grid.len();
         let l = self.electrodes();
-        let factor = self.assemble(g).cholesky().map_err(|e| {
-            NetworkError::Singular(format!("node {} has no path to an electrode", e.row))
-        })?;
+        let factor = self
+            .assemble(g)
+            .cholesky()
+            .map_err(|e| NetworkError::Unreached(e.row))?;
         // W = A^-1 B for electrodes 1..L (column e-1), B[node][e] = -g_contact.
         let mut w = vec![0.0; n * (l - 1)];
         for e in 1..l {
@@ -451,15 +511,14 @@ impl Network {
             let c_ee: f64 = self.contacts[e].nodes.iter().map(|&(_, gc)| gc).sum();
             let pivot = s[(e - 1, e - 1)];
             if pivot.is_nan() || pivot <= 1e-12 * c_ee {
-                return Err(NetworkError::Singular(format!(
-                    "electrode {e} has no path through the sheet to electrode 0"
-                )));
+                return Err(NetworkError::Isolated(e));
             }
         }
         // Not symmetrised on purpose: the reciprocity test checks that Z comes out symmetric.
-        let zinv = s.lu().try_inverse().ok_or_else(|| {
-            NetworkError::Singular("electrode Schur complement is singular".into())
-        })?;
+        let zinv = s
+            .lu()
+            .try_inverse()
+            .ok_or_else(|| NetworkError::Singular("electrode Schur complement is singular"))?;
         let mut z = vec![0.0; l * l];
         for e in 1..l {
             for f in 1..l {

@@ -547,10 +547,7 @@ impl<'a> Prepared<'a> {
                 .collect();
             handles
                 .into_iter()
-                .map(|h| {
-                    h.join()
-                        .unwrap_or(Err(FitError::Panicked))
-                })
+                .map(|h| h.join().unwrap_or(Err(FitError::Panicked)))
                 .collect()
         });
         let mut total = Confusion::new(classes);

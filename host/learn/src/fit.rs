@@ -278,12 +278,10 @@ pub(crate) fn check(
     for (r, &label) in y.iter().enumerate() {
         members
             .get_mut(usize::from(label))
-            .ok_or_else(|| {
-                FitError::Label {
-                    row: r,
-                    label: usize::from(label),
-                    classes,
-                }
+            .ok_or_else(|| FitError::Label {
+                row: r,
+                label: usize::from(label),
+                classes,
             })?
             .push(r);
     }

@@ -396,9 +396,7 @@ fn fit_beside_scores(
             Ok(part) => prepared.cross_validate(part, opts),
             Err(e) => Err(e.clone()),
         });
-        let model = model
-            .join()
-            .unwrap_or(Err(FitError::Panicked));
+        let model = model.join().unwrap_or(Err(FitError::Panicked));
         (model, cv, lovo)
     })
 }

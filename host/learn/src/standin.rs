@@ -137,9 +137,7 @@ pub fn make_drifting(
         draw,
     )?;
     let n = presses.min(data.x.nrows());
-    let features = data
-        .features(true)
-        .map_err(CollectError::Data)?;
+    let features = data.features(true).map_err(CollectError::Data)?;
     let mut features = DMatrix::from_fn(n, features.ncols(), |r, j| {
         features[(r, j)] * CODES_PER_VOLT
     });

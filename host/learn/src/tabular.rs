@@ -86,16 +86,22 @@ pub enum Misuse {
     },
     /// A feature column the model reads that the data does not have.
     #[error(
-        "the model reads a feature column '{0}' that the data does not have (its columns must \
+        "the model reads a feature column '{column}' that the data does not have (its columns must \
          be the model's feature_names, in any order)"
     )]
-    MissingFeature(String),
+    MissingFeature {
+        /// The column's name.
+        column: String,
+    },
     /// A feature column the model was not trained on.
     #[error(
-        "the data has a feature column '{0}' the model was not trained on (its columns must be \
+        "the data has a feature column '{column}' the model was not trained on (its columns must be \
          the model's feature_names, in any order)"
     )]
-    ExtraFeature(String),
+    ExtraFeature {
+        /// The column's name.
+        column: String,
+    },
     /// Too few training rows to cross-validate.
     #[error("{0} training row(s): cross-validation needs at least 2 (more rows with --rows)")]
     TooFewRows(usize),
@@ -200,10 +206,11 @@ pub enum Misuse {
     #[error("--grid: at least 1x1")]
     EmptyGrid,
     /// One class only.
-    #[error(
-        "one class ('{0}') only: nothing to tell apart; give rows of at least two classes"
-    )]
-    OneClass(String),
+    #[error("one class ('{class}') only: nothing to tell apart; give rows of at least two classes")]
+    OneClass {
+        /// The class's name.
+        class: String,
+    },
 }
 
 fn usage(misuse: Misuse) -> TabularError {

@@ -328,9 +328,7 @@ impl Wizard {
             ..Trainer::default()
         };
         let (board, training) = match trainer.train(Examples::Dataset(&data), |_| {}) {
-            Ok(trained) => trained
-                .into_board()
-                .ok_or(WizardError::NotBoard)?,
+            Ok(trained) => trained.into_board().ok_or(WizardError::NotBoard)?,
             Err(TrainError::Data(e)) => return Err(WizardError::Data(e)),
             Err(TrainError::Fit(e) | TrainError::Unusable { error: e, .. }) => {
                 return Err(WizardError::Fit(e));

@@ -13,7 +13,8 @@ impl SimFrontend {
     /// scan would.
     ///
     /// # Errors
-    /// [`SimError::Config`] for an invalid configuration.
+    /// [`SimError::Config`] for an invalid configuration, [`SimError::Electrodes`] for one of
+    /// another electrode count.
     pub fn fast_frame(&mut self, config: &ScanConfig) -> Result<Vec<f32>, SimError> {
         Ok(self.fast_frame_with_report(config)?.0)
     }
@@ -25,14 +26,13 @@ impl SimFrontend {
     /// in `compliance_steps`.
     ///
     /// # Errors
-    /// [`SimError::Config`] for an invalid configuration.
+    /// [`SimError::Config`] for an invalid configuration, [`SimError::Electrodes`] for one of
+    /// another electrode count.
     pub fn fast_frame_with_report(
         &mut self,
         config: &ScanConfig,
     ) -> Result<(Vec<f32>, et_core::ScanReport), SimError> {
-        let protocol = config
-            .validate()
-            .map_err(|e| SimError::Config(e.to_string()))?;
+        let protocol = config.validate().map_err(SimError::Config)?;
         self.check_electrodes(config)?;
         let scale = self.spec.scale(config.gain);
         let dt = 1.0 / f64::from(config.sample_rate_hz);
@@ -99,11 +99,10 @@ impl SimFrontend {
 
     pub(super) fn check_electrodes(&self, config: &ScanConfig) -> Result<(), SimError> {
         if usize::from(config.electrodes) != self.sheet.electrodes() {
-            return Err(SimError::Config(format!(
-                "{} electrodes configured, the sheet has {}",
-                config.electrodes,
-                self.sheet.electrodes()
-            )));
+            return Err(SimError::Electrodes {
+                configured: config.electrodes,
+                sheet: self.sheet.electrodes(),
+            });
         }
         Ok(())
     }

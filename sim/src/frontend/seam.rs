@@ -6,9 +6,7 @@ impl Frontend for SimFrontend {
     type Error = SimError;
 
     fn configure(&mut self, config: &ScanConfig) -> Result<AdcScale, SimError> {
-        config
-            .validate()
-            .map_err(|e| SimError::Config(e.to_string()))?;
+        config.validate().map_err(SimError::Config)?;
         self.check_electrodes(config)?;
         self.config = Some(*config);
         self.injection = None;

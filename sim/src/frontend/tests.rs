@@ -177,8 +177,14 @@ fn misuse_is_a_typed_error() {
         electrodes: 8,
         ..ScanConfig::REFERENCE
     };
-    assert!(matches!(fe.configure(&wrong), Err(SimError::Config(_))));
-    assert!(matches!(fe.fast_frame(&wrong), Err(SimError::Config(_))));
+    assert!(matches!(
+        fe.configure(&wrong),
+        Err(SimError::Electrodes { configured: 8, .. })
+    ));
+    assert!(matches!(
+        fe.fast_frame(&wrong),
+        Err(SimError::Electrodes { configured: 8, .. })
+    ));
     fe.configure(&ScanConfig::REFERENCE).unwrap();
     let p = Protocol::new(ProtocolKind::Adjacent, 32).unwrap();
     let s = p.step(500).unwrap();
@@ -308,7 +314,7 @@ fn a_measurement_set_shifts_the_frame_by_its_junction_potentials_and_conductance
             ..set.clone()
         },
     ] {
-        assert!(matches!(fe.set_state(&bad), Err(SimError::Config(_))));
+        assert!(matches!(fe.set_state(&bad), Err(SimError::Set { .. })));
     }
 }
 
@@ -506,6 +512,6 @@ fn a_hand_wobbles_the_touch_per_injection_and_leaves_the_untouched_sheet_alone()
             ..hand
         },
     ] {
-        assert!(matches!(fe.set_hand(bad), Err(SimError::Config(_))));
+        assert!(matches!(fe.set_hand(bad), Err(SimError::Hand { .. })));
     }
 }

@@ -12,9 +12,10 @@ pub(super) fn class_targets(
     grid: Option<(usize, usize)>,
 ) -> Result<Option<(Labels, ClassInfo)>, TabularError> {
     if let Some((rows, cols)) = grid {
-        let p = table.positions_mm.as_ref().ok_or_else(|| {
-            usage(Misuse::GridNeedsPositions)
-        })?;
+        let p = table
+            .positions_mm
+            .as_ref()
+            .ok_or_else(|| usage(Misuse::GridNeedsPositions))?;
         if rows == 0 || cols == 0 {
             return Err(usage(Misuse::EmptyGrid));
         }
@@ -76,9 +77,9 @@ pub(super) fn search_classifier(
 ) -> Result<Vec<Candidate>, TabularError> {
     let classes = labels.names.len();
     if classes < 2 {
-        return Err(usage(Misuse::OneClass(
-            labels.names.first().cloned().unwrap_or_default(),
-        )));
+        return Err(usage(Misuse::OneClass {
+            class: labels.names.first().cloned().unwrap_or_default(),
+        }));
     }
 
     let kind = discriminant(method);

@@ -233,12 +233,16 @@ pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, Tabul
     let mut order = Vec::with_capacity(ours.len());
     for name in ours {
         let Some(j) = theirs.iter().position(|t| t == name) else {
-            return Err(usage(Misuse::MissingFeature(name.clone())));
+            return Err(usage(Misuse::MissingFeature {
+                column: name.clone(),
+            }));
         };
         order.push(j);
     }
     if let Some(extra) = theirs.iter().find(|t| !ours.contains(t)) {
-        return Err(usage(Misuse::ExtraFeature(extra.clone())));
+        return Err(usage(Misuse::ExtraFeature {
+            column: extra.clone(),
+        }));
     }
     let mut out = table.clone();
     out.x = DMatrix::from_fn(table.x.nrows(), order.len(), |r, c| {

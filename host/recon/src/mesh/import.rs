@@ -175,8 +175,7 @@ impl Mesh {
         let text = read(path)?;
         let lines: Vec<&str> = text.lines().collect();
         let find = |tag: &str| lines.iter().position(|l| l.trim() == tag);
-        let fmt =
-            find("$MeshFormat").ok_or_else(|| bad(path, 1, FileFault::NotGmsh))?;
+        let fmt = find("$MeshFormat").ok_or_else(|| bad(path, 1, FileFault::NotGmsh))?;
         let head: Vec<&str> = lines
             .get(fmt + 1)
             .map(|l| l.split_whitespace().collect())
@@ -190,7 +189,8 @@ impl Mesh {
             return Err(bad(path, fmt + 2, FileFault::Binary));
         }
         let count = |i: usize, what: &'static str| gmsh_count(path, &lines, i, what);
-        let nodes_at = find("$Nodes").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Nodes")))?;
+        let nodes_at =
+            find("$Nodes").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Nodes")))?;
         let n = count(nodes_at + 1, "nodes")?;
         let mut ids = HashMap::new();
         let mut nodes = Vec::with_capacity(n);
@@ -207,7 +207,8 @@ impl Mesh {
                 _ => return Err(bad(path, ln + 1, FileFault::NodeLine)),
             }
         }
-        let el_at = find("$Elements").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Elements")))?;
+        let el_at =
+            find("$Elements").ok_or_else(|| bad(path, 0, FileFault::NoSection("$Elements")))?;
         let m = count(el_at + 1, "elements")?;
         let (triangles, by_tag) = gmsh_elements(path, &lines, (el_at + 2, m), &ids)?;
         Self::from_parts(nodes, triangles, by_tag.into_values().collect())
@@ -509,7 +510,12 @@ fn check_topology(
 /// The number on line index `i` of a Gmsh file's `lines`, believed only as far as the file
 /// holds lines for it (nothing is allocated for a count the file cannot back); `what` names
 /// what is counted in the error.
-fn gmsh_count(path: &Path, lines: &[&str], i: usize, what: &'static str) -> Result<usize, MeshError> {
+fn gmsh_count(
+    path: &Path,
+    lines: &[&str],
+    i: usize,
+    what: &'static str,
+) -> Result<usize, MeshError> {
     let n: usize = lines
         .get(i)
         .and_then(|l| l.trim().parse().ok())

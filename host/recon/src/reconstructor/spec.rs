@@ -143,25 +143,26 @@ impl AlphaRule {
     /// [`ReconError::UnknownName`] for other text.
     pub fn from_text(text: &str, method: &Method, noise_figure: f64) -> Result<Self, ReconError> {
         use crate::gcv::Criterion;
-        let rule = match text {
-            "gcv" => AlphaRule::Gcv,
-            "corner" => AlphaRule::Chosen(Criterion::CornerAboveFloor),
-            "discrepancy" => AlphaRule::Chosen(Criterion::Discrepancy),
-            "lcurve" | "l-curve" => AlphaRule::Chosen(Criterion::LCurve),
-            "quasi-optimality" => AlphaRule::Chosen(Criterion::QuasiOptimality),
-            "auto" => match method {
-                Method::Greit { .. } => AlphaRule::NoiseFigure(noise_figure),
-                Method::GaussNewton { .. } => AlphaRule::Chosen(Criterion::CornerAboveFloor),
-            },
-            v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
-                ReconError::UnknownName {
-                    what: "alpha",
-                    given: v.to_string(),
-                    choices: "a number, auto, corner, gcv, discrepancy, lcurve or \
+        let rule =
+            match text {
+                "gcv" => AlphaRule::Gcv,
+                "corner" => AlphaRule::Chosen(Criterion::CornerAboveFloor),
+                "discrepancy" => AlphaRule::Chosen(Criterion::Discrepancy),
+                "lcurve" | "l-curve" => AlphaRule::Chosen(Criterion::LCurve),
+                "quasi-optimality" => AlphaRule::Chosen(Criterion::QuasiOptimality),
+                "auto" => match method {
+                    Method::Greit { .. } => AlphaRule::NoiseFigure(noise_figure),
+                    Method::GaussNewton { .. } => AlphaRule::Chosen(Criterion::CornerAboveFloor),
+                },
+                v => AlphaRule::Fixed(v.trim().parse::<f64>().map_err(|_| {
+                    ReconError::UnknownName {
+                        what: "alpha",
+                        given: v.to_string(),
+                        choices: "a number, auto, corner, gcv, discrepancy, lcurve or \
                               quasi-optimality",
-                }
-            })?),
-        };
+                    }
+                })?),
+            };
         Ok(rule)
     }
 }

@@ -235,9 +235,7 @@ impl TableModel {
         let info = self
             .classes
             .as_ref()
-            .ok_or(TablesError::Inconsistent(
-                "a classifier without 'classes'",
-            ))?;
+            .ok_or(TablesError::Inconsistent("a classifier without 'classes'"))?;
         if info.names.len() != classes.len()
             || info
                 .centres_mm

@@ -86,15 +86,11 @@ pub(super) fn search_all(
     let mut search: Vec<Candidate> = Vec::new();
     for &method in &methods {
         let found = if method.is_classifier() {
-            let (labels, _) = classes.ok_or_else(|| {
-                usage(Misuse::NeedsLabels(method))
-            })?;
+            let (labels, _) = classes.ok_or_else(|| usage(Misuse::NeedsLabels(method)))?;
             let fold = cv.folds(n, Some(&labels.index), opts.seed);
             search_classifier(table, method, labels, &fold, progress)?
         } else {
-            let t = targets.ok_or_else(|| {
-                usage(Misuse::NeedsXy(method))
-            })?;
+            let t = targets.ok_or_else(|| usage(Misuse::NeedsXy(method)))?;
             let fold = cv.folds(n, None, opts.seed);
             search_regressor(&table.x, t, method, &fold, cv.grouped, progress)?
         };
