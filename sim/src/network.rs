@@ -355,12 +355,10 @@ impl Network {
                         value: g,
                     });
                 }
-                let slot = owner
-                    .get_mut(n as usize)
-                    .ok_or_else(|| NetworkError::OffGrid {
-                        electrode: e,
-                        node: n,
-                    })?;
+                let slot = owner.get_mut(n as usize).ok_or(NetworkError::OffGrid {
+                    electrode: e,
+                    node: n,
+                })?;
                 if *slot != usize::MAX && *slot != e {
                     return Err(NetworkError::Overlap { a: *slot, b: e });
                 }
@@ -515,10 +513,9 @@ impl Network {
             }
         }
         // Not symmetrised on purpose: the reciprocity test checks that Z comes out symmetric.
-        let zinv = s
-            .lu()
-            .try_inverse()
-            .ok_or_else(|| NetworkError::Singular("electrode Schur complement is singular"))?;
+        let zinv = s.lu().try_inverse().ok_or(NetworkError::Singular(
+            "electrode Schur complement is singular",
+        ))?;
         let mut z = vec![0.0; l * l];
         for e in 1..l {
             for f in 1..l {

@@ -121,9 +121,9 @@ impl Gp {
         hi.extend([5.0, 1.0]);
         let objective = |th: &[f64]| nll_and_gradient(&z, &u, th);
         let (theta, nll, iterations) =
-            minimise(objective, theta, &lo, &hi, opts.iterations, progress).ok_or_else(|| {
-                FitError::Numerics("no kernel matrix of these rows could be factored")
-            })?;
+            minimise(objective, theta, &lo, &hi, opts.iterations, progress).ok_or(
+                FitError::Numerics("no kernel matrix of these rows could be factored"),
+            )?;
 
         let length_scales: Vec<f64> = theta[..p].iter().map(|v| v.exp()).collect();
         let (signal_variance, noise_variance) = (theta[p].exp(), theta[p + 1].exp());

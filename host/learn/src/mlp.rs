@@ -270,7 +270,9 @@ impl Mlp {
                 });
             }
         }
-        best.ok_or_else(|| FitError::Numerics("no start of the perceptron reached a finite loss"))
+        best.ok_or(FitError::Numerics(
+            "no start of the perceptron reached a finite loss",
+        ))
     }
 
     /// Predicts every row of `x` (n x p, the training units).

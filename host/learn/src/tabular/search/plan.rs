@@ -146,11 +146,11 @@ pub(super) fn fit_first(
             Err(e) => last_error = Some(e),
         }
     }
-    Err(last_error.unwrap_or_else(|| {
-        TabularError::Fit(FitError::NoCandidates(
+    Err(
+        last_error.unwrap_or(TabularError::Fit(FitError::NoCandidates(
             "no candidate could be fitted in cross-validation",
-        ))
-    }))
+        ))),
+    )
 }
 
 /// The hyperparameters a fit learns beside those searched: a Gaussian process's signal and
