@@ -99,10 +99,10 @@ pub enum ProtocolChoice {
 #[non_exhaustive]
 pub enum LiveError {
     /// The scene file could not be read, or its simulation failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Scene(#[from] SceneError),
     /// The recording could not be read.
-    #[error("{0}")]
+    #[error(transparent)]
     Recording(#[from] recording::RecordingError),
     /// A recording made with another electrode count than the sheet it is played on.
     #[error("{}: frames of {recorded} electrodes, the sheet has {sheet}", .path.display())]
@@ -129,7 +129,7 @@ pub enum LiveError {
     #[error("the board verified and loaded the model, but taking V_0 failed: {0}")]
     Tare(LinkError),
     /// Another system's frames (CSV, .npy, .npz, .mat) could not be read.
-    #[error("{0}")]
+    #[error(transparent)]
     Frames(#[from] crate::frames::FramesError),
     /// Another system's frames for a protocol the live pipeline does not scan.
     #[error(
@@ -167,7 +167,7 @@ pub enum LiveError {
         seq: u32,
     },
     /// The sheet could not be meshed or modelled, or its reconstruction set up.
-    #[error("{0}")]
+    #[error(transparent)]
     Imaging(#[from] ImagingError),
     /// The one-step reconstruction matrix could not be built.
     #[error("reconstruction: {0}")]

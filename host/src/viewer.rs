@@ -512,7 +512,7 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
 #[non_exhaustive]
 pub enum ViewerError {
     /// The scene, recording or port could not be opened, or the sheet not modelled.
-    #[error("{0}")]
+    #[error(transparent)]
     Live(#[from] LiveError),
     /// The model file could not be read or is not a usable model (the error names it).
     #[error(transparent)]

@@ -41,10 +41,10 @@ pub fn config(current_na: u32) -> ScanConfig {
 #[non_exhaustive]
 pub enum CalibrationError {
     /// The sheet or the front end's spec.
-    #[error("{0}")]
+    #[error(transparent)]
     Sheet(#[from] SheetError),
     /// The simulated front end.
-    #[error("{0}")]
+    #[error(transparent)]
     Sim(#[from] SimError),
     /// The statistics (too few frames, non-finite values).
     #[error("statistics: {0}")]

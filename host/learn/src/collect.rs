@@ -221,7 +221,7 @@ pub enum CollectError {
     #[error("scan configuration: {0}")]
     Config(#[from] et_core::config::ConfigError),
     /// The simulated sheet could not be built or pressed.
-    #[error("{0}")]
+    #[error(transparent)]
     Sheet(#[from] SheetError),
     /// A scan failed.
     #[error("scan: {0}")]

@@ -39,10 +39,10 @@ use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summaris
 #[non_exhaustive]
 pub enum TabularError {
     /// A file could not be read, or its content is wrong (names the file, line, column).
-    #[error("{0}")]
+    #[error(transparent)]
     Dataset(#[from] DatasetError),
     /// A fit failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Fit(#[from] FitError),
     /// The request does not fit the data (e.g. a regressor without positions).
     #[error(transparent)]

@@ -40,19 +40,19 @@ use crate::tabular::{self, Choice, CvScheme, Method, TabularError};
 #[non_exhaustive]
 pub enum TrainError {
     /// The dataset cannot give the features asked for.
-    #[error("{0}")]
+    #[error(transparent)]
     Data(#[from] DataError),
     /// Fitting or cross-validation failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Fit(#[from] FitError),
     /// A table could not be trained on.
-    #[error("{0}")]
+    #[error(transparent)]
     Table(#[from] TabularError),
     /// A method an et dataset does not train (the board takes QDA or LDA).
     #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
     NotForTheBoard(&'static str),
     /// The model file could not be written.
-    #[error("{0}")]
+    #[error(transparent)]
     File(#[from] ModelFileError),
     /// The trained tables are not a model the board, or any reader of model files, would
     /// accept (`ModelFile::validate`): `train` refuses to return one.

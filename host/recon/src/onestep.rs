@@ -105,6 +105,14 @@ pub enum ReconError {
         /// The sheet's longer side, m.
         across: f64,
     },
+    /// A mesh made elsewhere with another electrode count than the sheet's.
+    #[error("the mesh has {mesh} electrodes, the sheet {sheet}")]
+    MeshElectrodes {
+        /// The mesh's.
+        mesh: usize,
+        /// The sheet's.
+        sheet: usize,
+    },
     /// A mesh made elsewhere with a node off the scene's sheet (a mesh in mm, or another
     /// sheet's).
     #[error(

@@ -58,13 +58,13 @@ pub enum ImagingError {
     #[error("forward model: {0}")]
     Fem(#[from] FemError),
     /// A parameter, a frame or a reference is unusable, or a matrix is singular.
-    #[error("{0}")]
+    #[error(transparent)]
     Recon(#[from] ReconError),
     /// The schedule (protocol, currents) is not usable.
     #[error("protocol: {0}")]
     Schedule(#[from] et_core::schedule::ScheduleError),
     /// The background could not be fitted to the reference frame.
-    #[error("{0}")]
+    #[error(transparent)]
     Background(#[from] BackgroundError),
 }
 

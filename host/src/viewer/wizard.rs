@@ -384,13 +384,13 @@ pub enum WizardError {
     #[error("too many classes for a model slot of the board: use a smaller grid")]
     TooManyClasses,
     /// The collected set cannot give the features.
-    #[error("{0}")]
+    #[error(transparent)]
     Data(et_learn::dataset::DataError),
     /// The fit failed.
-    #[error("{0}")]
+    #[error(transparent)]
     Fit(et_learn::fit::FitError),
     /// The training failed otherwise.
-    #[error("{0}")]
+    #[error(transparent)]
     Train(et_learn::trainer::TrainError),
     /// The training gave a model other than a board model.
     #[error("the training gave a table model, not a board model")]

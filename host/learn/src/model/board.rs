@@ -364,7 +364,7 @@ pub enum UseError {
         scan: String,
     },
     /// Evaluation on the dataset failed (e.g. a class the model does not know).
-    #[error("{0}")]
+    #[error(transparent)]
     Fit(#[from] FitError),
     /// The exported blob does not parse.
     #[error("model blob: {0}")]

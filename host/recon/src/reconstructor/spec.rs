@@ -40,7 +40,7 @@ impl MeshPlan {
     /// The mesh of `sheet` by this plan; a given mesh must have the sheet's electrode count.
     ///
     /// # Errors
-    /// [`ImagingError::Mesh`] when the sheet cannot be meshed; [`ReconError::Size`] for
+    /// [`ImagingError::Mesh`] when the sheet cannot be meshed; [`ReconError::MeshElectrodes`] for
     /// a given mesh with another electrode count.
     pub fn mesh(self, sheet: &Sheet) -> Result<Mesh, ImagingError> {
         let mesh = match self {
@@ -53,10 +53,9 @@ impl MeshPlan {
             }
         };
         if mesh.electrodes.len() != usize::from(sheet.electrodes.count) {
-            return Err(ReconError::Size {
-                what: "the mesh's electrodes",
-                got: mesh.electrodes.len(),
-                expected: usize::from(sheet.electrodes.count),
+            return Err(ReconError::MeshElectrodes {
+                mesh: mesh.electrodes.len(),
+                sheet: usize::from(sheet.electrodes.count),
             }
             .into());
         }
@@ -214,6 +213,18 @@ impl Spec {
     /// not the sheet's, or a parameter is out of range.
     pub fn set_up(self) -> Result<Reconstructor, ImagingError> {
         Reconstructor::new(self)
+    }
+
+    /// The sheet meshed by this spec's plan, with its forward model (the sheet's electrodes,
+    /// its background conductivity) and pixel grid: where [`Spec::set_up`] starts, without
+    /// the Jacobian. What `et forward` simulates frames with.
+    ///
+    /// # Errors
+    /// [`ImagingError::Mesh`] when the sheet cannot be meshed, [`ImagingError::Fem`] for a
+    /// forward model that cannot be built.
+    pub fn imager(self) -> Result<Imager, ImagingError> {
+        let mesh = self.mesh.mesh(&self.sheet)?;
+        Ok(Imager::new(&self.sheet, mesh, self.pixels)?)
     }
 
     /// As [`Spec::set_up`] followed by [`Reconstructor::fit_background`] to the reference

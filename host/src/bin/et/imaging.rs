@@ -152,20 +152,25 @@ pub(crate) struct ReconstructArgs {
 }
 
 pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
-    use et_recon::fem::{Electrodes, Forward};
     let scene = Scene::load(&args.scene)?;
     let schedule = scene.schedule()?;
     let protocol = schedule
         .kind()
         .map_or_else(|| "from its file".to_string(), |k| k.to_string());
     let started = Instant::now();
-    let mesh = mesh_plan(&scene, &args.mesh, true)?.mesh(&scene.sheet.physical)?;
-    let sigma0 = 1.0 / scene.sheet.physical.sheet_resistance;
+    // The mesh and forward model `et reconstruct` images with, refined at the touches.
+    let imager = et_recon::Spec {
+        mesh: mesh_plan(&scene, &args.mesh, true)?,
+        ..et_recon::Spec::new(scene.sheet.physical.clone(), schedule.clone())
+    }
+    .imager()?;
+    let (fwd, sigma0) = (&imager.forward, imager.background());
+    let mesh = fwd.mesh();
     // Each touch multiplies the conductivity of the triangles whose centroid it covers.
-    let sigma1: Vec<f64> = (0..mesh.triangles.len())
-        .map(|t| {
+    let sigma1: Vec<f64> = (sigma0.iter().enumerate())
+        .map(|(t, &s0)| {
             let c = mesh.centroid(t);
-            scene.touches.iter().fold(sigma0, |s, touch| {
+            scene.touches.iter().fold(s0, |s, touch| {
                 let inside =
                     (c[0] - touch.position[0]).hypot(c[1] - touch.position[1]) <= touch.radius;
                 if inside {
@@ -177,9 +182,8 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         })
         .collect();
     let t_n = mesh.triangles.len();
-    let fwd = Forward::new(mesh, Electrodes::of_sheet(&scene.sheet.physical)?)?;
     let amps = scene.scan.current_ua * 1e-6;
-    let v0 = fwd.frame(&vec![sigma0; t_n], &schedule)?;
+    let v0 = fwd.frame(&sigma0, &schedule)?;
     let v1 = fwd.frame(&sigma1, &schedule)?;
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
     let bvc = et_core::stats::bvc_dv(&dv);

@@ -52,8 +52,8 @@ pub enum TablesError {
     #[error("mlp: {0}")]
     Mlp(#[source] LayersError),
     /// A discriminant's class tables that are not a model.
-    #[error("{0}")]
-    Classes(#[source] FitError),
+    #[error(transparent)]
+    Classes(FitError),
     /// An average's member that is not a model of its own.
     #[error("average member {member} ({}): {source}", method.name())]
     Member {
