@@ -30,7 +30,7 @@ use et_core::board::MODEL_SLOT_BYTES;
 use et_learn::collect::{self, Plan};
 use et_learn::model::Tested;
 use et_learn::pipeline;
-use et_learn::tabular::{Choice, Method};
+use et_learn::tabular::{Choice, Kind};
 use et_learn::{Examples, Trainer};
 use et_recon::Imager;
 use et_recon::mesh::Mesh;

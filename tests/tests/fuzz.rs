@@ -30,7 +30,7 @@ use et_core::rng::Rng;
 use et_host::recording::{Header, Record, Writer};
 use et_learn::fit::{FitOptions, Fitted, Target};
 use et_learn::model_file::ModelFile;
-use et_learn::tabular::{Choice, Member, Method, Table, TableModel, Tables, TrainOptions, Unit};
+use et_learn::tabular::{Choice, Member, Kind, Table, TableModel, Tables, TrainOptions, Unit};
 use nalgebra::DMatrix;
 use peak_alloc::PeakAlloc;
 use proptest::prelude::*;
@@ -272,7 +272,7 @@ fn model_json(dir: &Path) -> Vec<u8> {
 /// A small table model of `method` (an average: of knn and kernel ridge, as `auto` may
 /// choose; QDA: four classes from a 2 x 2 grid of positions), as `et train --features` writes
 /// it.
-fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
+fn table_model_json(dir: &Path, method: Kind) -> Vec<u8> {
     let mut rng = Rng::new(3);
     let n = 48;
     let positions: Vec<[f64; 2]> = (0..n)
@@ -295,7 +295,7 @@ fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
         unit: Unit::Mm,
         groups: None,
     };
-    let train = |m: Method, grid| {
+    let train = |m: Kind, grid| {
         let options = TrainOptions {
             folds: 3,
             grid,
@@ -303,8 +303,8 @@ fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
         };
         et_learn::tabular::train(&table, Choice::One(m), &options, &mut |_, _, _| {}).unwrap()
     };
-    let model = if method == Method::Average {
-        let members = [Method::Knn, Method::KernelRidge].map(|m| {
+    let model = if method == Kind::Average {
+        let members = [Kind::Knn, Kind::KernelRidge].map(|m| {
             let fitted = train(m, None);
             Member {
                 method: m,
@@ -314,8 +314,8 @@ fn table_model_json(dir: &Path, method: Method) -> Vec<u8> {
                 tables: fitted.tables,
             }
         });
-        let mut model = train(Method::Ridge, None);
-        model.method = Method::Average;
+        let mut model = train(Kind::Ridge, None);
+        model.method = Kind::Average;
         model.tables = Tables::Average {
             members: members.to_vec(),
         };
@@ -453,12 +453,12 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         },
         Parser {
             name: "table model JSON, average of regressors",
-            seeds: vec![table_model_json(&dir, Method::Average)],
+            seeds: vec![table_model_json(&dir, Kind::Average)],
             parse: |p| TableModel::load(&p[0]).is_ok(),
         },
         Parser {
             name: "table model JSON, QDA",
-            seeds: vec![table_model_json(&dir, Method::Qda)],
+            seeds: vec![table_model_json(&dir, Kind::Qda)],
             parse: |p| TableModel::load(&p[0]).is_ok(),
         },
         Parser {

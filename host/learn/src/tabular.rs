@@ -2,7 +2,7 @@
 //!
 //! A [`Table`] is n rows of p features (any channel count) with a target per row: a class
 //! label (any text), a position (x, y in mm; files may be in metres) with an optional third
-//! value (z, force), or both. [`train`] fits one [`Method`] (or tries several with
+//! value (z, force), or both. [`train`] fits one [`Kind`] (or tries several with
 //! [`Choice::Auto`]) with its hyperparameters chosen by cross-validation inside the training
 //! rows only ([`CvScheme::Shuffled`]: stratified for classes; [`CvScheme::Blocks`]:
 //! contiguous blocks, for recordings where presses drift over time), and returns a
@@ -122,14 +122,14 @@ pub enum Misuse {
          grid (--grid 7x7)",
         .0.name()
     )]
-    NeedsLabels(Method),
+    NeedsLabels(Kind),
     /// A regressor asked for on rows with labels only.
     #[error(
         "{} predicts positions: the targets need x and y columns (the data has only class \
          labels: use qda or lda)",
         .0.name()
     )]
-    NeedsXy(Method),
+    NeedsXy(Kind),
     /// Rows with no target a classifier predicts.
     #[error(
         "the rows have no target this model predicts: it predicts class labels (and positions \
@@ -220,7 +220,7 @@ fn usage(misuse: Misuse) -> TabularError {
 /// A learning method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Method {
+pub enum Kind {
     /// Quadratic discriminant analysis (classes), shrinkage by cross-validation.
     Qda,
     /// Linear discriminant analysis (classes).
@@ -242,26 +242,26 @@ pub enum Method {
     Average,
 }
 
-impl Method {
+impl Kind {
     /// The name on the command line and in files.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
-            Method::Qda => "qda",
-            Method::Lda => "lda",
-            Method::Ridge => "ridge",
-            Method::KernelRidge => "kernel-ridge",
-            Method::Knn => "knn",
-            Method::Gp => "gp",
-            Method::Mlp => "mlp",
-            Method::Average => "average",
+            Kind::Qda => "qda",
+            Kind::Lda => "lda",
+            Kind::Ridge => "ridge",
+            Kind::KernelRidge => "kernel-ridge",
+            Kind::Knn => "knn",
+            Kind::Gp => "gp",
+            Kind::Mlp => "mlp",
+            Kind::Average => "average",
         }
     }
 
     /// Whether it predicts classes (else positions).
     #[must_use]
     pub fn is_classifier(self) -> bool {
-        matches!(self, Method::Qda | Method::Lda)
+        matches!(self, Kind::Qda | Kind::Lda)
     }
 }
 
@@ -269,7 +269,7 @@ impl Method {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Choice {
     /// One method.
-    One(Method),
+    One(Kind),
     /// Every method that fits the targets, the best by cross-validation: regressors for
     /// positions (mean error), classifiers for labels only (accuracy).
     Auto,
@@ -346,13 +346,13 @@ pub enum Referencing {
 impl Choice {
     /// What a user can ask for: each method (but the average, which `auto` makes), and auto.
     pub const ASKED: [Choice; 8] = [
-        Choice::One(Method::Qda),
-        Choice::One(Method::Lda),
-        Choice::One(Method::Ridge),
-        Choice::One(Method::KernelRidge),
-        Choice::One(Method::Knn),
-        Choice::One(Method::Gp),
-        Choice::One(Method::Mlp),
+        Choice::One(Kind::Qda),
+        Choice::One(Kind::Lda),
+        Choice::One(Kind::Ridge),
+        Choice::One(Kind::KernelRidge),
+        Choice::One(Kind::Knn),
+        Choice::One(Kind::Gp),
+        Choice::One(Kind::Mlp),
         Choice::Auto,
     ];
 
@@ -381,19 +381,19 @@ impl clap::ValueEnum for Choice {
 
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
         let help = match self {
-            Choice::One(Method::Qda) => "Quadratic discriminant analysis: a covariance per class",
-            Choice::One(Method::Lda) => "Linear discriminant analysis: one pooled covariance",
-            Choice::One(Method::Ridge) => "Linear ridge regression of the position (--features)",
-            Choice::One(Method::KernelRidge) => {
+            Choice::One(Kind::Qda) => "Quadratic discriminant analysis: a covariance per class",
+            Choice::One(Kind::Lda) => "Linear discriminant analysis: one pooled covariance",
+            Choice::One(Kind::Ridge) => "Linear ridge regression of the position (--features)",
+            Choice::One(Kind::KernelRidge) => {
                 "Gaussian-kernel (RBF) ridge regression of the position (--features)"
             }
-            Choice::One(Method::Knn) => "k nearest neighbours' mean position (--features)",
-            Choice::One(Method::Gp) => {
+            Choice::One(Kind::Knn) => "k nearest neighbours' mean position (--features)",
+            Choice::One(Kind::Gp) => {
                 "Gaussian process with a length scale per feature, learned by marginal \
                  likelihood (--features): slower (it shows how long), learns which channels \
                  matter"
             }
-            Choice::One(Method::Mlp) => {
+            Choice::One(Kind::Mlp) => {
                 "A multilayer perceptron (--features): three hidden layers (300, 50, 20), relu \
                  or tanh and its L2 penalty by cross-validation, Adam with early stopping, \
                  three random starts"
@@ -402,7 +402,7 @@ impl clap::ValueEnum for Choice {
                 "Every method that fits the targets, the best by cross-validation (--features)"
             }
             // Made by `auto`, not asked for.
-            Choice::One(Method::Average) => return None,
+            Choice::One(Kind::Average) => return None,
         };
         Some(clap::builder::PossibleValue::new(self.name()).help(help))
     }

@@ -33,7 +33,7 @@ use crate::fit::FitError;
 use crate::model::{Board, Examples, Model};
 use crate::model_file::{ModelFile, ModelFileError};
 use crate::pipeline::{self, Stage, TrainOptions};
-use crate::tabular::{self, Choice, CvScheme, Method, TabularError};
+use crate::tabular::{self, Choice, CvScheme, Kind, TabularError};
 
 /// Why a model could not be trained.
 #[derive(Debug, thiserror::Error)]
@@ -264,8 +264,8 @@ impl Trainer {
     /// [`TrainError::NotForTheBoard`] for a regressor.
     pub fn board_kind(&self) -> Result<ModelKind, TrainError> {
         match self.method {
-            Choice::Auto | Choice::One(Method::Qda) => Ok(ModelKind::Qda),
-            Choice::One(Method::Lda) => Ok(ModelKind::Lda),
+            Choice::Auto | Choice::One(Kind::Qda) => Ok(ModelKind::Qda),
+            Choice::One(Kind::Lda) => Ok(ModelKind::Lda),
             Choice::One(other) => Err(TrainError::NotForTheBoard(other.name())),
         }
     }

@@ -270,8 +270,8 @@ fn fit(
 ) -> Result<(pipeline::Training, Board, Tested)> {
     let trainer = Trainer {
         method: Choice::One(match kind {
-            ModelKind::Qda => Method::Qda,
-            ModelKind::Lda => Method::Lda,
+            ModelKind::Qda => Kind::Qda,
+            ModelKind::Lda => Kind::Lda,
         }),
         shrinkage,
         folds: Some(10),

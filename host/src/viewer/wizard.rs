@@ -24,7 +24,7 @@ use et_learn::cv::Confusion;
 use et_learn::dataset::Dataset;
 use et_learn::model::{Board, SlotError};
 use et_learn::pipeline;
-use et_learn::tabular::{Choice, Method};
+use et_learn::tabular::{Choice, Kind};
 use et_learn::{Examples, TrainError, Trainer};
 
 /// What the wizard asks of the viewer.
@@ -322,7 +322,7 @@ impl Wizard {
         }
         let per_class = self.y.len() / self.classes().max(1);
         let trainer = Trainer {
-            method: Choice::One(Method::Qda),
+            method: Choice::One(Kind::Qda),
             folds: Some(per_class.clamp(2, 10)),
             keep: (fit < all).then_some(fit),
             ..Trainer::default()

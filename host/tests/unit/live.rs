@@ -227,7 +227,7 @@ fn a_trained_model_classifies_live_presses() {
     };
     let data = collect::collect(&scene.sheet, scene.frontend, config, &centres, &plan).unwrap();
     let trainer = et_learn::Trainer {
-        method: et_learn::tabular::Choice::One(et_learn::tabular::Method::Qda),
+        method: et_learn::tabular::Choice::One(et_learn::tabular::Kind::Qda),
         folds: Some(5),
         ..et_learn::Trainer::default()
     };

@@ -130,7 +130,7 @@ pub(super) fn average_of_best(
                     cv_block_errors_mm: block_errors(&Some(measured), t, fold, grouped),
                     cv_drifted_error_mm: Some(mean_error(&drifted, t)),
                     ..Candidate::new(
-                        Method::Average,
+                        Kind::Average,
                         params(&[("members", members.len() as f64)]),
                     )
                 },

@@ -70,7 +70,7 @@ pub(super) fn class_targets(
 /// from the true position to the predicted class's position when the rows have positions).
 pub(super) fn search_classifier(
     table: &Table,
-    method: Method,
+    method: Kind,
     labels: &Labels,
     fold: &[usize],
     progress: Progress<'_>,
@@ -124,8 +124,8 @@ pub(super) fn shrink_target(p: usize, labels: &Labels) -> Target {
     }
 }
 
-pub(super) fn discriminant(method: Method) -> ModelKind {
-    if method == Method::Lda {
+pub(super) fn discriminant(method: Kind) -> ModelKind {
+    if method == Kind::Lda {
         ModelKind::Lda
     } else {
         ModelKind::Qda

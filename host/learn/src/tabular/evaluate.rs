@@ -11,7 +11,7 @@ pub struct Evaluation {
     /// Rows evaluated.
     pub observations: usize,
     /// The model's method.
-    pub method: Method,
+    pub method: Kind,
     /// Mean distance (x, y) from the true position to the predicted one, mm (for classes:
     /// to the predicted class's position).
     pub mean_error_mm: Option<f64>,

@@ -9,7 +9,7 @@ use super::*;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Candidate {
     /// The method.
-    pub method: Method,
+    pub method: Kind,
     /// Its hyperparameters (name, value).
     pub hyperparameters: BTreeMap<String, f64>,
     /// Cross-validated mean position error, mm (positions, or classes with positions).
@@ -34,7 +34,7 @@ pub struct Candidate {
 impl Candidate {
     /// `method` at `hyperparameters`, not yet scored.
     #[must_use]
-    pub fn new(method: Method, hyperparameters: BTreeMap<String, f64>) -> Self {
+    pub fn new(method: Kind, hyperparameters: BTreeMap<String, f64>) -> Self {
         Self {
             method,
             hyperparameters,
@@ -159,7 +159,7 @@ pub enum Tables {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Member {
     /// Its method.
-    pub method: Method,
+    pub method: Kind,
     /// Its hyperparameters.
     pub hyperparameters: BTreeMap<String, f64>,
     /// Its standardisation of the features.
@@ -191,7 +191,7 @@ pub struct TableModel {
     /// 1.
     pub version: u32,
     /// The method.
-    pub method: Method,
+    pub method: Kind,
     /// Feature column names, in order (p of them).
     pub feature_names: Vec<String>,
     /// Training mean of each feature (the standardisation).

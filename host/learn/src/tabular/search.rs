@@ -232,9 +232,9 @@ pub fn as_lda_if_equal(c: &Candidate, p: usize, labels: Option<&Labels>) -> Opti
         .hyperparameters
         .get("shrinkage")
         .is_some_and(|&s| s >= 1.0);
-    (c.method == Method::Qda && full && shrink_target(p, labels?) == Target::Pooled).then(|| {
+    (c.method == Kind::Qda && full && shrink_target(p, labels?) == Target::Pooled).then(|| {
         Candidate {
-            method: Method::Lda,
+            method: Kind::Lda,
             hyperparameters: params(&[("shrinkage", 0.0)]),
             ..c.clone()
         }
@@ -279,7 +279,7 @@ pub(super) fn mean_error(pred: &[Target3], truth: &[Target3]) -> f64 {
 pub(super) fn search_regressor(
     x: &DMatrix<f64>,
     t: &[Target3],
-    method: Method,
+    method: Kind,
     fold: &[usize],
     grouped: bool,
     progress: Progress<'_>,
@@ -294,11 +294,11 @@ pub(super) fn search_regressor(
     // Progress steps per fold: the Gaussian process reports each of its iterations, and says
     // beforehand how long its folds and final fit will take.
     let steps = match method {
-        Method::Gp => GP.iterations,
-        Method::Mlp => grid.len(),
+        Kind::Gp => GP.iterations,
+        Kind::Mlp => grid.len(),
         _ => 1,
     };
-    let what = if method == Method::Gp {
+    let what = if method == Kind::Gp {
         format!(
             "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
             k,
@@ -373,13 +373,13 @@ pub(super) fn search_regressor(
 }
 
 /// The hyperparameter candidates a regressor's search tries on `n` rows.
-fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>, TabularError> {
+fn regressor_grid(method: Kind, n: usize) -> Result<Vec<BTreeMap<String, f64>>, TabularError> {
     Ok(match method {
-        Method::Ridge => RIDGE_LAMBDAS
+        Kind::Ridge => RIDGE_LAMBDAS
             .iter()
             .map(|&l| params(&[("lambda", l)]))
             .collect(),
-        Method::KernelRidge => KRR_WIDTHS
+        Kind::KernelRidge => KRR_WIDTHS
             .iter()
             .flat_map(|&w| {
                 KRR_LAMBDAS
@@ -387,16 +387,16 @@ fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>
                     .map(move |&l| params(&[("width", w), ("lambda", l)]))
             })
             .collect(),
-        Method::Knn => KNN_KS
+        Kind::Knn => KNN_KS
             .iter()
             .flat_map(|&k| [0.0, 1.0].map(|d| params(&[("k", k as f64), ("distance_weighted", d)])))
             .collect(),
-        Method::Gp => vec![params(&[
+        Kind::Gp => vec![params(&[
             ("learn_rows", GP.learn_rows.min(n) as f64),
             ("search_learn_rows", GP_SEARCH.learn_rows.min(n) as f64),
             ("iterations", GP.iterations as f64),
         ])],
-        Method::Mlp => MLP_ACTIVATIONS
+        Kind::Mlp => MLP_ACTIVATIONS
             .iter()
             .flat_map(|&a| {
                 MLP_L2S.iter().map(move |&l2| {
@@ -411,7 +411,7 @@ fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>
                 })
             })
             .collect(),
-        Method::Qda | Method::Lda | Method::Average => return Err(usage(Misuse::NotARegressor)),
+        Kind::Qda | Kind::Lda | Kind::Average => return Err(usage(Misuse::NotARegressor)),
     })
 }
 
@@ -421,18 +421,18 @@ fn regressor_grid(method: Method, n: usize) -> Result<Vec<BTreeMap<String, f64>>
 /// iterations, the perceptron's candidates).
 #[allow(clippy::type_complexity)]
 fn fold_predictions(
-    method: Method,
+    method: Kind,
     grid: &[BTreeMap<String, f64>],
     (xt, tt): (&DMatrix<f64>, &[Target3]),
     sets: &[DMatrix<f64>; 2],
     tick: &mut dyn FnMut(usize),
 ) -> Result<Vec<Option<[Vec<Target3>; 2]>>, TabularError> {
     Ok(match method {
-        Method::Ridge => Ridge::fit_path(xt, tt, &RIDGE_LAMBDAS)?
+        Kind::Ridge => Ridge::fit_path(xt, tt, &RIDGE_LAMBDAS)?
             .into_iter()
             .map(|m| m.map(|m| sets.each_ref().map(|x| m.predict_many(x))))
             .collect(),
-        Method::KernelRidge => {
+        Kind::KernelRidge => {
             let fits =
                 KernelRidge::fit_grid(xt, tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
             // Every fit of the grid shares the support: the held-out rows' distances once.
@@ -448,7 +448,7 @@ fn fold_predictions(
                 })
                 .collect()
         }
-        Method::Knn => {
+        Kind::Knn => {
             let model = Knn::fit(xt, tt, 1, Weighting::Uniform)?;
             let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
             let near = sets.each_ref().map(|x| model.neighbours(x, k_max));
@@ -467,7 +467,7 @@ fn fold_predictions(
                 })
                 .collect()
         }
-        Method::Gp => {
+        Kind::Gp => {
             let mut step = |done: usize, _: usize| tick(done);
             vec![
                 Gp::fit(xt, tt, &GP_SEARCH, &mut step)
@@ -475,7 +475,7 @@ fn fold_predictions(
                     .map(|m| sets.each_ref().map(|x| m.predict_many(x))),
             ]
         }
-        Method::Mlp => grid
+        Kind::Mlp => grid
             .iter()
             .enumerate()
             .map(|(c, h)| {
@@ -485,6 +485,6 @@ fn fold_predictions(
                     .map(|m| sets.each_ref().map(|x| m.predict_many(x)))
             })
             .collect(),
-        Method::Qda | Method::Lda | Method::Average => Vec::new(),
+        Kind::Qda | Kind::Lda | Kind::Average => Vec::new(),
     })
 }

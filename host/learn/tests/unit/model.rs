@@ -9,7 +9,7 @@ use et_learn::Trainer;
 use et_learn::dataset::Dataset;
 use et_learn::dataset::Unit;
 use et_learn::model::*;
-use et_learn::tabular::{Choice, Method, Table};
+use et_learn::tabular::{Choice, Kind, Table};
 use nalgebra::DMatrix;
 use std::path::PathBuf;
 
@@ -173,7 +173,7 @@ fn table() -> Table {
 fn a_tables_model_loads_predicts_and_refuses_the_boards_calls() {
     let table = table();
     let trainer = Trainer {
-        method: Choice::One(Method::Lda),
+        method: Choice::One(Kind::Lda),
         folds: Some(3),
         ..Trainer::default()
     };

@@ -95,11 +95,11 @@ fn every_regressor_learns_the_stand_in_and_survives_its_file() {
     assert_eq!(test_rows.first_row, 300);
     let dir = tmp("regressors");
     for method in [
-        Method::Ridge,
-        Method::Knn,
-        Method::KernelRidge,
-        Method::Gp,
-        Method::Mlp,
+        Kind::Ridge,
+        Kind::Knn,
+        Kind::KernelRidge,
+        Kind::Gp,
+        Kind::Mlp,
     ] {
         let model = train(&train_rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
         assert_eq!(model.method, method);
@@ -145,8 +145,8 @@ fn auto_keeps_the_best_cross_validated_regressor() {
         .unwrap();
     let chosen = model.chosen().unwrap();
     let note = model.note.clone().unwrap_or_default();
-    if model.method == Method::Average {
-        assert_eq!(best.method, Method::Average);
+    if model.method == Kind::Average {
+        assert_eq!(best.method, Kind::Average);
         assert!(note.contains("average"), "{note}");
     } else if note.contains("steadier") {
         assert!(
@@ -161,17 +161,17 @@ fn auto_keeps_the_best_cross_validated_regressor() {
     let plain_best = model
         .search
         .iter()
-        .filter(|c| c.method != Method::Average)
+        .filter(|c| c.method != Kind::Average)
         .min_by(|a, b| a.loss().total_cmp(&b.loss()))
         .unwrap();
-    if plain_best.method != model.method && model.method != Method::Average {
+    if plain_best.method != model.method && model.method != Kind::Average {
         assert!(note.contains("drifted"), "{note}");
     }
-    let tried: std::collections::HashSet<Method> = model
+    let tried: std::collections::HashSet<Kind> = model
         .search
         .iter()
         .map(|c| c.method)
-        .filter(|&m| m != Method::Average)
+        .filter(|&m| m != Kind::Average)
         .collect();
     assert_eq!(tried.len(), 5);
 }
@@ -182,7 +182,7 @@ fn auto_keeps_the_best_cross_validated_regressor() {
 fn a_grid_of_classes_from_positions() {
     let train_rows = STANDIN.select("0..300".parse().unwrap()).unwrap();
     let test_rows = STANDIN.select("300..360".parse().unwrap()).unwrap();
-    for method in [Method::Lda, Method::Qda] {
+    for method in [Kind::Lda, Kind::Qda] {
         let o = TrainOptions {
             grid: Some((3, 3)),
             ..opts()
@@ -196,7 +196,7 @@ fn a_grid_of_classes_from_positions() {
         assert!(e.mean_error_mm.unwrap() < e.mean_predictor_error_mm.unwrap());
         // A QDA whose best shrinkage is 1 toward the pooled covariance is kept as the LDA
         // it equals, and says so; any other stays QDA.
-        let best = |m: Method| {
+        let best = |m: Kind| {
             model
                 .search
                 .iter()
@@ -205,8 +205,8 @@ fn a_grid_of_classes_from_positions() {
                 .unwrap()
                 .hyperparameters["shrinkage"]
         };
-        if method == Method::Qda && best(Method::Qda) >= 1.0 {
-            assert_eq!(model.method, Method::Lda);
+        if method == Kind::Qda && best(Kind::Qda) >= 1.0 {
+            assert_eq!(model.method, Kind::Lda);
             assert_eq!(model.chosen().unwrap().hyperparameters["shrinkage"], 0.0);
             assert!(model.note.as_ref().unwrap().contains("lda"));
             eprintln!("QDA-IS-LDA case exercised");
@@ -224,12 +224,12 @@ fn qda_at_full_pooled_shrinkage_is_the_lda() {
     let names: Vec<String> = (0..40).map(|i| ["a", "b"][i % 2].to_string()).collect();
     let labels = Labels::from_text(&names).unwrap();
     let qda = |s: f64| {
-        let mut c = Candidate::new(Method::Qda, params(&[("shrinkage", s)]));
+        let mut c = Candidate::new(Kind::Qda, params(&[("shrinkage", s)]));
         c.cv_accuracy = Some(0.9);
         c
     };
     let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
-    assert_eq!((lda.method, lda.cv_accuracy), (Method::Lda, Some(0.9)));
+    assert_eq!((lda.method, lda.cv_accuracy), (Kind::Lda, Some(0.9)));
     assert_eq!(lda.hyperparameters["shrinkage"], 0.0);
     assert!(as_lda_if_equal(&qda(0.3), 5, Some(&labels)).is_none());
     // 40 rows, 2 classes, 40 features: the pooled covariance is singular, the target is
@@ -295,7 +295,7 @@ fn row_ranges_and_folds() {
     assert!(e.to_string().contains("rows 0..360"), "{e}");
     // One training row: said as such, not "use 2 to 1".
     let one = STANDIN.select("0..1".parse().unwrap()).unwrap();
-    let e = train(&one, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap_err();
+    let e = train(&one, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("needs at least 2"), "{e}");
     // Blocks are contiguous and in order; shuffled folds are not.
     let b = folds(10, 3, CvScheme::Blocks, None, 1);
@@ -335,26 +335,26 @@ fn knn_equals_brute_force() {
 fn bad_requests_are_refused_with_the_reason() {
     let mut small = STANDIN.select("0..60".parse().unwrap()).unwrap();
     // A classifier with positions only and no grid.
-    let e = train(&small, Choice::One(Method::Qda), &opts(), &mut quiet()).unwrap_err();
+    let e = train(&small, Choice::One(Kind::Qda), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("--grid"), "{e}");
     // More folds than rows.
     let o = TrainOptions {
         folds: 61,
         ..opts()
     };
-    let e = train(&small, Choice::One(Method::Ridge), &o, &mut quiet()).unwrap_err();
+    let e = train(&small, Choice::One(Kind::Ridge), &o, &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("61 folds"), "{e}");
     // A regressor without positions; a single class.
     small.positions_mm = None;
     small.third = None;
     small.labels = Some(vec!["only".into(); 60]);
-    let e = train(&small, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap_err();
+    let e = train(&small, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("x and y"), "{e}");
-    let e = train(&small, Choice::One(Method::Lda), &opts(), &mut quiet()).unwrap_err();
+    let e = train(&small, Choice::One(Kind::Lda), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("one class ('only')"), "{e}");
     // A model refuses another channel count; broken model files are named.
     let rows = STANDIN.select("0..60".parse().unwrap()).unwrap();
-    let model = train(&rows, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap();
+    let model = train(&rows, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
     let e = model.predict(&DMatrix::zeros(2, 5)).unwrap_err();
     assert!(e.to_string().contains("5 feature columns"), "{e}");
     let mut text = serde_json::to_string(&model).unwrap();
@@ -378,7 +378,7 @@ fn more_channels_than_rows_and_dead_channels_still_fit() {
     for r in 0..rows.rows() {
         rows.x[(r, 7)] = 3.0;
     }
-    for method in [Method::Ridge, Method::Knn, Method::KernelRidge] {
+    for method in [Kind::Ridge, Kind::Knn, Kind::KernelRidge] {
         let model = train(&rows, Choice::One(method), &opts(), &mut quiet()).unwrap();
         let p = model.predict(&rows.x).unwrap();
         assert!(
@@ -437,7 +437,7 @@ fn with_sessions_given_auto_picks_the_model_that_holds_on_a_new_session() {
     let favourite = plain
         .search
         .iter()
-        .filter(|c| c.method != Method::Average)
+        .filter(|c| c.method != Kind::Average)
         .min_by(|a, b| a.loss().total_cmp(&b.loss()))
         .unwrap();
     let alone = train(
@@ -491,7 +491,7 @@ fn with_sessions_given_auto_picks_the_model_that_holds_on_a_new_session() {
     assert_eq!(g[0].mean_error_mm, e.mean_error_mm);
     // One session only: nothing to leave out; the usual folds.
     let one = train_rows.select("0..200".parse().unwrap()).unwrap();
-    let m = train(&one, Choice::One(Method::Ridge), &opts(), &mut quiet()).unwrap();
+    let m = train(&one, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
     assert_eq!(m.cv_scheme, CvScheme::Shuffled);
 }
 
@@ -614,7 +614,7 @@ fn references_and_per_group_standardisation_cancel_a_sessions_gains_and_offsets(
 fn an_average_predicts_the_mean_of_its_members() {
     let train_rows = STANDIN.select("0..240".parse().unwrap()).unwrap();
     let test_rows = STANDIN.select("240..".parse().unwrap()).unwrap();
-    let fitted: Vec<TableModel> = [Method::Ridge, Method::Knn]
+    let fitted: Vec<TableModel> = [Kind::Ridge, Kind::Knn]
         .iter()
         .map(|&m| train(&train_rows, Choice::One(m), &opts(), &mut quiet()).unwrap())
         .collect();
@@ -626,7 +626,7 @@ fn an_average_predicts_the_mean_of_its_members() {
         tables: m.tables.clone(),
     };
     let mut average = fitted[0].clone();
-    average.method = Method::Average;
+    average.method = Kind::Average;
     average.search.clear();
     average.tables = Tables::Average {
         members: fitted.iter().map(member).collect(),
@@ -663,7 +663,7 @@ fn named_columns_in_another_order_are_matched_by_name() {
     );
     let model = train(
         &train_rows,
-        Choice::One(Method::Ridge),
+        Choice::One(Kind::Ridge),
         &opts(),
         &mut quiet(),
     )
@@ -706,8 +706,8 @@ fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
         x,
         (0..n).map(|r| ["a", "b", "c"][class(r)].into()).collect(),
     );
-    let model = train(&table, Choice::One(Method::Qda), &opts(), &mut quiet()).unwrap();
-    assert_eq!(model.method, Method::Qda);
+    let model = train(&table, Choice::One(Kind::Qda), &opts(), &mut quiet()).unwrap();
+    assert_eq!(model.method, Kind::Qda);
     let Tables::Discriminant { classes, .. } = &model.tables else {
         panic!("a discriminant's tables");
     };

@@ -263,7 +263,7 @@ fn report(model: &tabular::TableModel, out: &Path) {
         eprintln!("note: {note}");
     }
     // The best of each method tried, then the winner.
-    let mut methods: Vec<tabular::Method> = model.search.iter().map(|c| c.method).collect();
+    let mut methods: Vec<tabular::Kind> = model.search.iter().map(|c| c.method).collect();
     methods.dedup();
     for m in &methods {
         let best_of = model

@@ -14,7 +14,7 @@ pub(in crate::tabular) fn fit_final(
     let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
     let need_targets = || targets.ok_or_else(|| usage(Misuse::NeedsPositions));
     Ok(match best.method {
-        Method::Qda | Method::Lda => {
+        Kind::Qda | Kind::Lda => {
             let (labels, _) = classes.ok_or_else(|| usage(Misuse::NeedsClasses))?;
             let fit = FitOptions {
                 kind: discriminant(best.method),
@@ -25,7 +25,7 @@ pub(in crate::tabular) fn fit_final(
             crate::model_file::check_tables(&model, &[])?;
             (
                 Tables::Discriminant {
-                    kind: if best.method == Method::Lda {
+                    kind: if best.method == Kind::Lda {
                         ModelKind::Lda
                     } else {
                         ModelKind::Qda
@@ -36,7 +36,7 @@ pub(in crate::tabular) fn fit_final(
                 model.feature_scale,
             )
         }
-        Method::Ridge => {
+        Kind::Ridge => {
             let m = Ridge::fit(&table.x, need_targets()?, h("lambda"))?;
             (
                 Tables::Ridge {
@@ -47,7 +47,7 @@ pub(in crate::tabular) fn fit_final(
                 m.scale,
             )
         }
-        Method::KernelRidge => {
+        Kind::KernelRidge => {
             let m = KernelRidge::fit(
                 &table.x,
                 need_targets()?,
@@ -66,12 +66,12 @@ pub(in crate::tabular) fn fit_final(
                 m.scale,
             )
         }
-        Method::Gp => {
+        Kind::Gp => {
             let what = "fitting gp (learning its length scales on every training row)";
             let mut step = |done: usize, of: usize| progress(what, done, of);
             gp_tables(Gp::fit(&table.x, need_targets()?, &GP, &mut step)?)
         }
-        Method::Mlp => {
+        Kind::Mlp => {
             let opts = MlpOptions {
                 starts: MLP_FINAL_STARTS,
                 ..mlp_options(&best.hyperparameters)
@@ -89,8 +89,8 @@ pub(in crate::tabular) fn fit_final(
                 m.scale,
             )
         }
-        Method::Average => average_tables(table, members, targets, classes, progress)?,
-        Method::Knn => {
+        Kind::Average => average_tables(table, members, targets, classes, progress)?,
+        Kind::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
             } else {

@@ -19,9 +19,9 @@ pub enum TablesError {
     #[error("method {} with the tables of {}", method.name(), tables.name())]
     Mismatch {
         /// The method named.
-        method: Method,
+        method: Kind,
         /// The method the tables are of.
-        tables: Method,
+        tables: Kind,
     },
     /// Ridge weights not one row per feature.
     #[error("ridge: {rows} weight rows for {features} features")]
@@ -60,7 +60,7 @@ pub enum TablesError {
         /// The member (1-based).
         member: usize,
         /// Its method.
-        method: Method,
+        method: Kind,
         /// What is wrong with it.
         source: Box<TablesError>,
     },
@@ -310,7 +310,7 @@ impl TableModel {
         if members.len() < 2
             || members
                 .iter()
-                .any(|m| m.method == Method::Average || m.method.is_classifier())
+                .any(|m| m.method == Kind::Average || m.method.is_classifier())
         {
             return Err(TablesError::Inconsistent(
                 "average: two regressors or more, none an average",
@@ -331,22 +331,22 @@ impl TableModel {
 impl Tables {
     /// The method these tables are of.
     #[must_use]
-    pub fn method(&self) -> Method {
+    pub fn method(&self) -> Kind {
         match self {
             Tables::Discriminant {
                 kind: ModelKind::Qda,
                 ..
-            } => Method::Qda,
+            } => Kind::Qda,
             Tables::Discriminant {
                 kind: ModelKind::Lda,
                 ..
-            } => Method::Lda,
-            Tables::Ridge { .. } => Method::Ridge,
-            Tables::KernelRidge { .. } => Method::KernelRidge,
-            Tables::Gp { .. } => Method::Gp,
-            Tables::Mlp { .. } => Method::Mlp,
-            Tables::Average { .. } => Method::Average,
-            Tables::Knn { .. } => Method::Knn,
+            } => Kind::Lda,
+            Tables::Ridge { .. } => Kind::Ridge,
+            Tables::KernelRidge { .. } => Kind::KernelRidge,
+            Tables::Gp { .. } => Kind::Gp,
+            Tables::Mlp { .. } => Kind::Mlp,
+            Tables::Average { .. } => Kind::Average,
+            Tables::Knn { .. } => Kind::Knn,
         }
     }
 }

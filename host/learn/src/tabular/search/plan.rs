@@ -69,18 +69,18 @@ pub(super) fn search_all(
     (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
     progress: Progress<'_>,
 ) -> Result<Vec<Candidate>, TabularError> {
-    let methods: Vec<Method> = match choice {
+    let methods: Vec<Kind> = match choice {
         Choice::One(m) => vec![m],
         Choice::Auto if targets.is_some() && opts.grid.is_none() => {
             vec![
-                Method::Ridge,
-                Method::Knn,
-                Method::KernelRidge,
-                Method::Mlp,
-                Method::Gp,
+                Kind::Ridge,
+                Kind::Knn,
+                Kind::KernelRidge,
+                Kind::Mlp,
+                Kind::Gp,
             ]
         }
-        Choice::Auto => vec![Method::Lda, Method::Qda],
+        Choice::Auto => vec![Kind::Lda, Kind::Qda],
     };
     let n = table.rows();
     let mut search: Vec<Candidate> = Vec::new();
