@@ -28,8 +28,8 @@ use crate::recording::{self, Recording};
 use et_core::sheet::Sheet;
 use et_learn::model::Board;
 use et_recon::{
-    AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, PixelGrid, ReconError, Reconstructor,
-    Region, SquaredRows, TOUCH_Z, default_threshold, touch_rule,
+    AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, Method, PixelGrid, ReconError,
+    Reconstructor, Region, SquaredRows, TOUCH_Z, default_threshold, touch_rule,
 };
 
 mod monitor;
@@ -37,7 +37,7 @@ mod processor;
 mod source;
 
 pub use monitor::Monitor;
-pub use processor::{Method, Output, Processor, Referencing, Settings, TouchEvent};
+pub use processor::{Output, Processor, Referencing, Settings, TouchEvent};
 pub use source::{
     Health, PortSource, ReplaySource, SimSource, Source, SourceSpec, default_scene, open_source,
 };

@@ -53,7 +53,7 @@ pub struct Options {
     /// A trained model to classify with.
     pub model: Option<PathBuf>,
     /// The reconstruction to image with (switchable in the side panel).
-    pub method: crate::live::Method,
+    pub method: et_recon::Method,
     /// Simulate in real time (false: one frame per drawn frame, for tests).
     pub realtime: bool,
     /// For documentation: once V_0 is taken (and `press` is pressed), save the window as

@@ -238,10 +238,10 @@ impl Reconstructor {
         let sheet: Sheet = serde_json::from_str(sheet_json).map_err(|e| refused(&e))?;
         sheet.validate().map_err(|e| refused(&e))?;
         let schedule = schedule(electrodes, protocol, current_a, rows, currents)?;
-        let method = match method {
-            "gn" => Method::GaussNewton { s, iterations },
-            "greit" => Method::Greit { radius: radius_m },
-            other => return Err(usage(format!("method '{other}': gn or greit"))),
+        let method = match Method::from_name(method) {
+            Some(Method::GaussNewton { .. }) => Method::GaussNewton { s, iterations },
+            Some(Method::Greit { .. }) => Method::Greit { radius: radius_m },
+            None => return Err(usage(format!("method '{method}': gn or greit"))),
         };
         let noise_figure = noise_figure.unwrap_or(et_recon::greit::NOISE_FIGURE);
         let alpha = AlphaRule::from_text(alpha, &method, noise_figure).map_err(|e| refused(&e))?;

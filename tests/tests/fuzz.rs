@@ -30,7 +30,7 @@ use et_core::rng::Rng;
 use et_host::recording::{Header, Record, Writer};
 use et_learn::fit::{FitOptions, Fitted, Target};
 use et_learn::model_file::ModelFile;
-use et_learn::tabular::{Choice, Member, Kind, Table, TableModel, Tables, TrainOptions, Unit};
+use et_learn::tabular::{Choice, Kind, Member, Table, TableModel, Tables, TrainOptions, Unit};
 use nalgebra::DMatrix;
 use peak_alloc::PeakAlloc;
 use proptest::prelude::*;

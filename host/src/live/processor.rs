@@ -66,36 +66,12 @@ pub struct Referencing {
     pub needed: usize,
 }
 
-/// The reconstruction a frame is imaged with (docs/method.md §6), by name: the live
-/// pipeline's (`et stream`, `et view`) and `et reconstruct`'s `--method`; its parameters are
-/// `et_recon::Method`'s.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Gauss-Newton with the NOSER prior (alpha, s): one step live; `et reconstruct
-    /// --iterations` refits more.
-    #[default]
-    Gn,
-    /// GREIT, the consensus linear reconstruction (alpha and s are not used).
-    Greit,
-}
-
-impl std::fmt::Display for Method {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Method::Gn => "one-step Gauss-Newton",
-            Method::Greit => "GREIT",
-        })
-    }
-}
-
 /// The pixel projection of the reconstruction matrix for one configuration, method and
-/// (alpha, s).
+/// alpha.
 struct Projection {
     config: ScanConfig,
     method: Method,
     alpha: f64,
-    s: f64,
     /// Pixels inside the sheet x K, in thin factors.
     matrix: FrameOperator,
     /// Its entries squared: a pixel's noise under a touched frame's channel variances,
@@ -104,7 +80,7 @@ struct Projection {
 }
 
 impl Projection {
-    /// The projection in `slot` if it is for `config` and `(alpha, s)`, else a new one put
+    /// The projection in `slot` if it is for `config` and `(method, alpha)`, else a new one put
     /// there, from `recon` moved to the configuration (`at`: the one it is set up for) and the
     /// method.
     fn current<'p>(
@@ -112,11 +88,11 @@ impl Projection {
         recon: &mut Reconstructor,
         at: &mut ScanConfig,
         config: &ScanConfig,
-        (method, alpha, s): (Method, f64, f64),
+        (method, alpha): (Method, f64),
     ) -> Result<&'p Projection, LiveError> {
         let kept = slot
             .take()
-            .filter(|p| p.config == *config && p.method == method && p.alpha == alpha && p.s == s);
+            .filter(|p| p.config == *config && p.method == method && p.alpha == alpha);
         let projection = match kept {
             Some(p) => p,
             None => {
@@ -124,7 +100,7 @@ impl Projection {
                     recon.set_schedule(config.schedule()?)?;
                     *at = *config;
                 }
-                let (method_of, rule) = method.reconstruction(alpha, s);
+                let (method_of, rule) = live_reconstruction(method, alpha);
                 recon.set_method(method_of, rule)?;
                 let matrix = recon.pixel_operator()?;
                 let squares = SquaredRows::of(&matrix);
@@ -132,7 +108,6 @@ impl Projection {
                     config: *config,
                     method,
                     alpha,
-                    s,
                     matrix,
                     squares,
                 }
@@ -142,32 +117,30 @@ impl Projection {
     }
 }
 
-impl Method {
-    /// The reconstruction and alpha rule of this live method at (alpha, s): one-step
-    /// Gauss-Newton at a fixed alpha, or GREIT at the consensus noise figure.
-    fn reconstruction(self, alpha: f64, s: f64) -> (et_recon::Method, AlphaRule) {
-        match self {
-            Method::Gn => (
-                et_recon::Method::GaussNewton { s, iterations: 1 },
-                AlphaRule::Fixed(alpha),
-            ),
-            Method::Greit => (
-                et_recon::Method::Greit { radius: None },
-                AlphaRule::NoiseFigure(et_recon::greit::NOISE_FIGURE),
-            ),
-        }
+/// The reconstruction and alpha rule the live pipeline images with: one step of
+/// Gauss-Newton (with `method`'s s) at the fixed `alpha`, or GREIT at the consensus noise
+/// figure.
+fn live_reconstruction(method: Method, alpha: f64) -> (Method, AlphaRule) {
+    match method {
+        Method::GaussNewton { s, .. } => (
+            Method::GaussNewton { s, iterations: 1 },
+            AlphaRule::Fixed(alpha),
+        ),
+        Method::Greit { radius } => (
+            Method::Greit { radius },
+            AlphaRule::NoiseFigure(et_recon::greit::NOISE_FIGURE),
+        ),
     }
 }
 
 /// Settings of the live pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
-    /// The reconstruction.
+    /// The reconstruction (Gauss-Newton with its NOSER exponent s, one step a frame whatever
+    /// its iterations; or GREIT).
     pub method: Method,
-    /// Tikhonov alpha (dimensionless, as `recon::OneStep`).
+    /// Tikhonov alpha of Gauss-Newton (dimensionless, as `recon::OneStep`).
     pub alpha: f64,
-    /// NOSER exponent s.
-    pub s: f64,
     /// ROI threshold f; None: docs/method.md §6's value for the protocol.
     pub threshold: Option<f64>,
     /// A frame is a touch when one of the image's touches (`et_recon::touch_rule`) reaches
@@ -189,9 +162,8 @@ impl Default for Settings {
     /// pixels across.
     fn default() -> Self {
         Self {
-            method: Method::Gn,
+            method: Method::default(),
             alpha: 0.3,
-            s: 0.5,
             threshold: None,
             touch_factor: TOUCH_Z,
             reference_frames: 20,
@@ -207,17 +179,17 @@ pub(super) struct Reference {
     pub(super) config: ScanConfig,
     /// The untouched frames so far, V.
     pub(super) frames: Vec<Vec<f32>>,
-    /// What the complete reference gives, made once (and again when alpha or s change).
+    /// What the complete reference gives, made once (and again when the method or alpha
+    /// change).
     pub(super) noise: Option<Noise>,
 }
 
 /// V_0, the noise of dV per channel, and each pixel's noise through the projection built
-/// with (alpha, s).
+/// with (method, alpha).
 #[derive(Clone, Debug)]
 pub(super) struct Noise {
     pub(super) method: Method,
     pub(super) alpha: f64,
-    pub(super) s: f64,
     pub(super) v0: Vec<f64>,
     pub(super) var_dv: Vec<f64>,
     /// 1 / each pixel's noise (0 where the noise is 0), for the frames' z-scores.
@@ -286,7 +258,7 @@ impl Processor {
             electrodes: sheet.electrodes.count,
             ..ScanConfig::REFERENCE
         };
-        let (method, alpha) = settings.method.reconstruction(settings.alpha, settings.s);
+        let (method, alpha) = live_reconstruction(settings.method, settings.alpha);
         let recon = et_recon::Spec {
             mesh: MeshPlan::About {
                 triangles: settings.triangles,
@@ -371,15 +343,13 @@ impl Processor {
     /// [`LiveError`] when the configuration is not valid for the sheet or cannot be imaged.
     pub fn prepare(&mut self, config: &ScanConfig) -> Result<(), LiveError> {
         config.validate()?;
-        let Settings {
-            method, alpha, s, ..
-        } = self.settings;
+        let Settings { method, alpha, .. } = self.settings;
         Projection::current(
             &mut self.projection,
             &mut self.recon,
             &mut self.at,
             config,
-            (method, alpha, s),
+            (method, alpha),
         )?;
         Ok(())
     }
@@ -432,7 +402,7 @@ impl Processor {
                 frame,
             });
         }
-        let key = (self.settings.method, self.settings.alpha, self.settings.s);
+        let key = (self.settings.method, self.settings.alpha);
         let projection = Projection::current(
             &mut self.projection,
             &mut self.recon,
@@ -455,17 +425,17 @@ impl Processor {
 }
 
 impl Noise {
-    /// The noise in `slot` if it was made for `(method, alpha, s)`, else one made from the
+    /// The noise in `slot` if it was made for `(method, alpha)`, else one made from the
     /// reference `frames` (each K values, V) through `projection` and put there.
     fn current<'n>(
         slot: &'n mut Option<Noise>,
         frames: &[Vec<f32>],
         projection: &Projection,
-        (method, alpha, s): (Method, f64, f64),
+        (method, alpha): (Method, f64),
     ) -> Result<&'n Noise, LiveError> {
         if let Some(kept) = slot
             .take()
-            .filter(|n| n.method == method && n.alpha == alpha && n.s == s)
+            .filter(|n| n.method == method && n.alpha == alpha)
         {
             return Ok(slot.insert(kept));
         }
@@ -484,7 +454,6 @@ impl Noise {
         Ok(slot.insert(Noise {
             method,
             alpha,
-            s,
             v0,
             var_dv,
             inverse_sd,

@@ -109,12 +109,12 @@ impl Viewer {
         ui.heading("Imaging");
         let mut s = self.processor.settings();
         ui.horizontal(|ui| {
-            for m in [crate::live::Method::Gn, crate::live::Method::Greit] {
+            for m in et_recon::Method::NAMED {
                 ui.selectable_value(&mut s.method, m, m.to_string());
             }
         });
         ui.add_enabled(
-            s.method == crate::live::Method::Gn,
+            matches!(s.method, et_recon::Method::GaussNewton { .. }),
             egui::Slider::new(&mut s.alpha, 1e-3..=10.0)
                 .logarithmic(true)
                 .text("alpha"),

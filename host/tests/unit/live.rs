@@ -53,12 +53,12 @@ fn press_at(source: &mut Source, position: Option<[f64; 2]>) {
 
 #[test]
 fn the_simulator_untouched_gives_no_touch_and_a_press_is_found_where_it_is() {
-    for method in [Method::Gn, Method::Greit] {
+    for method in et_recon::Method::NAMED {
         untouched_then_pressed(method);
     }
 }
 
-fn untouched_then_pressed(method: Method) {
+fn untouched_then_pressed(method: et_recon::Method) {
     let (mut source, sheet) = sim();
     let mut p = Processor::new(
         &sheet.physical,

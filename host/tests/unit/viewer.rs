@@ -28,7 +28,7 @@ fn sim_options() -> Options {
         scene: None,
         source: SourceSpec::Sim,
         model: None,
-        method: et_host::live::Method::Gn,
+        method: et_recon::Method::default(),
         realtime: false,
         screenshot: None,
         press: None,
@@ -152,7 +152,7 @@ fn greit_images_a_press_where_it_is() {
     h.step();
     assert_eq!(
         h.state().processor.settings().method,
-        et_host::live::Method::Greit
+        et_recon::Method::Greit { radius: None }
     );
     h.state_mut().press(vec![Touch {
         position: [0.03, -0.03],
@@ -176,7 +176,7 @@ fn greit_images_a_press_where_it_is() {
     h.step();
     assert_eq!(
         h.state().processor.settings().method,
-        et_host::live::Method::Gn
+        et_recon::Method::default()
     );
 }
 
@@ -252,7 +252,7 @@ fn replay_pauses_and_seeks() {
         scene: None,
         source: SourceSpec::Replay(path.clone()),
         model: None,
-        method: et_host::live::Method::Gn,
+        method: et_recon::Method::default(),
         realtime: false,
         screenshot: None,
         press: None,

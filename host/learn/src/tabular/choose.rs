@@ -129,10 +129,7 @@ pub(super) fn average_of_best(
                     cv_mean_error_mm: Some(mean_error(&measured, t)),
                     cv_block_errors_mm: block_errors(&Some(measured), t, fold, grouped),
                     cv_drifted_error_mm: Some(mean_error(&drifted, t)),
-                    ..Candidate::new(
-                        Kind::Average,
-                        params(&[("members", members.len() as f64)]),
-                    )
+                    ..Candidate::new(Kind::Average, params(&[("members", members.len() as f64)]))
                 },
                 members,
             ))

@@ -661,13 +661,7 @@ fn named_columns_in_another_order_are_matched_by_name() {
         named.select("0..240".parse().unwrap()).unwrap(),
         named.select("240..".parse().unwrap()).unwrap(),
     );
-    let model = train(
-        &train_rows,
-        Choice::One(Kind::Ridge),
-        &opts(),
-        &mut quiet(),
-    )
-    .unwrap();
+    let model = train(&train_rows, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
     let straight = evaluate(&model, &test_rows).unwrap();
     // Reversed columns, names with them.
     let mut reversed = test_rows.clone();

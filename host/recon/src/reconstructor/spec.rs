@@ -111,6 +111,64 @@ impl Default for Method {
     }
 }
 
+impl Method {
+    /// The methods by name at their default parameters: what `--method` (and Python's
+    /// `method=`) choose from.
+    pub const NAMED: [Method; 2] = [
+        Method::GaussNewton {
+            s: 0.5,
+            iterations: 1,
+        },
+        Method::Greit { radius: None },
+    ];
+
+    /// Its name on the command line and in Python: `gn` or `greit`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::GaussNewton { .. } => "gn",
+            Method::Greit { .. } => "greit",
+        }
+    }
+
+    /// The method named `name` at its default parameters ([`Method::NAMED`]).
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMED.into_iter().find(|m| m.name() == name)
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::GaussNewton { iterations, .. } if *iterations > 1 => "iterative Gauss-Newton",
+            Method::GaussNewton { .. } => "one-step Gauss-Newton",
+            Method::Greit { .. } => "GREIT",
+        })
+    }
+}
+
+/// The methods as command-line values (`--method gn|greit`), by their names, at their
+/// default parameters (the command's other flags set s, the iterations and GREIT's radius).
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Method {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::NAMED
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let help = match self {
+            Method::GaussNewton { .. } => {
+                "Gauss-Newton with the NOSER prior: one step (one matrix), or iterated"
+            }
+            Method::Greit { .. } => {
+                "GREIT, the consensus linear reconstruction (lambda by the noise figure)"
+            }
+        };
+        Some(clap::builder::PossibleValue::new(self.name()).help(help))
+    }
+}
+
 /// How alpha (dimensionless: lambda = alpha^2 tr(A) / K) is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlphaRule {

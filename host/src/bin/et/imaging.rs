@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use et_host::live::Method;
 use et_host::recording;
+use et_recon::Method;
 use et_sim::scene::Scene;
 
 use crate::domain::count;
@@ -65,7 +65,7 @@ pub(crate) struct ReconstructArgs {
     /// The reconstruction: gn, one-step (or iterative) Gauss-Newton with the NOSER prior,
     /// or greit, the consensus linear reconstruction (GREIT: desired images of small targets
     /// over the sheet, lambda set by the noise figure). docs/method.md §6.
-    #[arg(long, value_enum, default_value_t = Method::Gn)]
+    #[arg(long, value_enum, default_value_t = Method::default())]
     method: Method,
     /// Regularisation alpha (dimensionless: lambda = alpha^2 tr(J P^-1 J^T) / K), or a rule
     /// that chooses it on each frame. For gn, "auto" (or "corner") takes the L-curve's corner
@@ -276,20 +276,20 @@ pub(crate) fn mesh_plan(
 
 /// The reconstruction `et reconstruct`'s arguments ask for.
 fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_recon::AlphaRule)> {
-    use et_recon::{AlphaRule, Method as M};
+    use et_recon::AlphaRule;
     let method = match args.method {
-        Method::Greit => {
+        Method::Greit { .. } => {
             if args.iterations > 1 {
                 bail!(
                     "--iterations {} is for --method gn: GREIT is one matrix",
                     args.iterations
                 );
             }
-            M::Greit {
+            Method::Greit {
                 radius: args.radius_mm.map(|r| r * 1e-3),
             }
         }
-        Method::Gn => M::GaussNewton {
+        Method::GaussNewton { .. } => Method::GaussNewton {
             s: args.s,
             iterations: args.iterations,
         },

@@ -28,8 +28,8 @@ pub(crate) struct SourceArgs {
     model: Option<PathBuf>,
     /// The reconstruction the images are made with: gn (one-step Gauss-Newton, alpha 0.3)
     /// or greit (GREIT at the consensus noise figure 0.5). docs/method.md §6.
-    #[arg(long, value_enum, default_value_t = et_host::live::Method::Gn)]
-    method: et_host::live::Method,
+    #[arg(long, value_enum, default_value_t = et_recon::Method::default())]
+    method: et_recon::Method,
 }
 
 impl SourceArgs {

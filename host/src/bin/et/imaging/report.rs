@@ -74,7 +74,7 @@ pub(super) fn report(
             .schedule()
             .kind()
             .map_or_else(|| "custom".to_string(), |k| k.to_string()),
-        method: args.method,
+        method: args.method.name(),
         alpha: image.alpha,
         noise: image.noise,
         background,
@@ -208,7 +208,7 @@ pub(super) struct ReconstructSummary<'a> {
     triangles: usize,
     protocol: String,
     /// "gn" or "greit".
-    method: Method,
+    method: &'static str,
     alpha: f64,
     /// The noise of dV the image was made against.
     noise: et_recon::FrameNoise,
