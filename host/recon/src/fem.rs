@@ -92,14 +92,19 @@ fn check_contacts(z: &[f64], l: usize) -> Result<(), FemError> {
     positive("contact impedance of electrode", z)
 }
 
+/// The index and value of the first of `values` that is not finite and positive.
+pub(crate) fn first_not_positive(values: &[f64]) -> Option<(usize, f64)> {
+    values
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+        .map(|(i, v)| (i, *v))
+}
+
 /// [`FemError::NotPositive`] for the first of `values` not finite and positive.
 fn positive(what: &'static str, values: &[f64]) -> Result<(), FemError> {
-    match values.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
-        Some(index) => Err(FemError::NotPositive {
-            what,
-            index,
-            value: values.get(index).copied().unwrap_or(f64::NAN),
-        }),
+    match first_not_positive(values) {
+        Some((index, value)) => Err(FemError::NotPositive { what, index, value }),
         None => Ok(()),
     }
 }

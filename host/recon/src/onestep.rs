@@ -638,12 +638,8 @@ pub(crate) fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 
 /// [`ReconError::NotPositive`] for the first of `values` that is not positive and finite.
 pub(crate) fn not_positive(what: &'static str, values: &[f64]) -> Result<(), ReconError> {
-    match values.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
-        Some(index) => Err(ReconError::NotPositive {
-            what,
-            index,
-            value: values.get(index).copied().unwrap_or(f64::NAN),
-        }),
+    match crate::fem::first_not_positive(values) {
+        Some((index, value)) => Err(ReconError::NotPositive { what, index, value }),
         None => Ok(()),
     }
 }
