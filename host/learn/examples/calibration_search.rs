@@ -132,6 +132,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .partial_cmp(&(b.junction_uv, b.wobble))
             .unwrap_or(std::cmp::Ordering::Equal)
     });
+    print_table(&points);
+    if let Some(best) = points.iter().min_by(|a, b| a.worst.total_cmp(&b.worst)) {
+        println!(
+            "best: press junction {} uV, wobble {} (largest difference {:.1} points); {:.0} s",
+            best.junction_uv,
+            best.wobble,
+            best.worst,
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// The grid's results as a Markdown table, the reference row first.
+fn print_table(points: &[Point]) {
     let names: Vec<String> = CASES.iter().map(|c| c.name()).collect();
     println!(
         "| press junction (uV) | wobble | {} | largest difference | rms difference |",
@@ -143,7 +158,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|c| format!("{:.1}", 100.0 * c.reference))
         .collect();
     println!("| reference | | {} | | |", reference.join(" | "));
-    for p in &points {
+    for p in points {
         let cells: Vec<String> = p
             .next_day
             .iter()
@@ -158,14 +173,4 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             p.rms
         );
     }
-    if let Some(best) = points.iter().min_by(|a, b| a.worst.total_cmp(&b.worst)) {
-        println!(
-            "best: press junction {} uV, wobble {} (largest difference {:.1} points); {:.0} s",
-            best.junction_uv,
-            best.wobble,
-            best.worst,
-            started.elapsed().as_secs_f64()
-        );
-    }
-    Ok(())
 }

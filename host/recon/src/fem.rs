@@ -193,13 +193,12 @@ pub enum FemError {
         electrode: usize,
     },
     /// An image grid of too few or too many pixels across.
-    #[error(
-        "forward model input: {pixels} pixels across: use 4 to {}",
-        crate::imager::MAX_PIXELS
-    )]
+    #[error("forward model input: {pixels} pixels across: use 4 to {max}")]
     Pixels {
         /// The pixels asked for.
         pixels: usize,
+        /// The most there may be.
+        max: usize,
     },
     /// The system could not be factorised (disconnected mesh, or values so extreme that it
     /// is not numerically positive definite).

@@ -44,7 +44,10 @@ impl Imager {
     /// forward model cannot be built.
     pub fn new(sheet: &Sheet, mesh: Mesh, pixels: usize) -> Result<Self, FemError> {
         if !(4..=MAX_PIXELS).contains(&pixels) {
-            return Err(FemError::Pixels { pixels });
+            return Err(FemError::Pixels {
+                pixels,
+                max: MAX_PIXELS,
+            });
         }
         let grid = PixelGrid::new(&mesh, pixels);
         Ok(Self {

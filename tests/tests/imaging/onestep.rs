@@ -501,7 +501,7 @@ fn pixel_counts_outside_the_documented_range_are_refused() {
     for pixels in [0, 3, et_recon::imager::MAX_PIXELS + 1, 100_000] {
         let e = et_recon::Imager::new(&sheet, mesh.clone(), pixels).unwrap_err();
         assert!(
-            matches!(&e, et_recon::fem::FemError::Pixels { pixels: p } if *p == pixels)
+            matches!(&e, et_recon::fem::FemError::Pixels { pixels: p, .. } if *p == pixels)
                 && e.to_string().contains("4 to 512"),
             "{pixels}: {e}"
         );

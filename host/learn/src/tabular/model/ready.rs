@@ -101,8 +101,9 @@ impl TableModel {
             .collect()
     }
 
-    /// Rebuilds the fitted model, checking every table's shape.
-    pub(super) fn ready(&self) -> Result<Ready, TablesError> {
+    /// Checks the standardisation (one finite mean and positive scale per named feature) and
+    /// that the tables are the named method's.
+    fn check_standardisation(&self) -> Result<(), TablesError> {
         let p = self.features();
         if self.feature_scale.len() != p || self.feature_names.len() != p || p == 0 {
             return Err(TablesError::FeatureLengths);
@@ -125,6 +126,13 @@ impl TableModel {
                 tables: tables_of,
             });
         }
+        Ok(())
+    }
+
+    /// Rebuilds the fitted model, checking every table's shape.
+    pub(super) fn ready(&self) -> Result<Ready, TablesError> {
+        self.check_standardisation()?;
+        let p = self.features();
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
                 Ready::Discriminant(self.ready_discriminant(*kind, classes)?)
