@@ -395,11 +395,11 @@ impl Viewer {
                 sigma0: self.processor.imager().sigma0,
                 last: self.last.as_ref(),
                 sheet: &self.sheet.physical,
-                class_centres_mm: self
+                class_centres: self
                     .processor
                     .classifier
                     .as_ref()
-                    .map(|c| c.file().centres_mm.as_slice()),
+                    .map(|c| c.file().centres.as_slice()),
                 pressable: matches!(self.source, Some(Source::Sim(_))),
                 hint: self.options.screenshot.is_none(),
             };

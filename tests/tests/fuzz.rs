@@ -255,7 +255,7 @@ fn model(dir: &Path) -> ModelFile {
         0.1,
         small_config(),
         vec![0, 3, 7, 20],
-        vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]],
+        vec![[0.0, 0.0], [0.01, 0.0], [0.0, 0.01]],
         true,
     );
     let path = dir.join("seed-model.json");

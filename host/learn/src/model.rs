@@ -320,7 +320,7 @@ impl Model {
 impl Board {
     /// Each class with its centre as the position (mm), a table model's prediction's shape.
     fn predictions(&self, classes: &[u16]) -> Vec<Prediction> {
-        let centres = &self.file().centres_mm;
+        let centres = self.file().board_positions();
         classes
             .iter()
             .map(|&c| Prediction {

@@ -57,8 +57,9 @@ pub struct ModelFile {
     pub referenced: bool,
     /// Frame index of each feature.
     pub feature_index: Vec<u16>,
-    /// Class centres, mm (in the file: `centres_m`, metres, as every et file is SI).
-    pub centres_mm: Vec<[f64; 2]>,
+    /// Class centres, m (`centres_m` in the file).
+    #[serde(rename = "centres_m")]
+    pub centres: Vec<[f64; 2]>,
     /// Feature standardisation.
     pub feature_mean: Vec<f64>,
     /// Feature standardisation.
@@ -75,7 +76,7 @@ impl ModelFile {
         shrinkage: f64,
         config: ScanConfig,
         feature_index: Vec<u16>,
-        centres_mm: Vec<[f64; 2]>,
+        centres: Vec<[f64; 2]>,
         referenced: bool,
     ) -> Self {
         Self {
@@ -86,7 +87,7 @@ impl ModelFile {
             config,
             referenced,
             feature_index,
-            centres_mm,
+            centres,
             feature_mean: model.feature_mean.clone(),
             feature_scale: model.feature_scale.clone(),
             classes: class_records(model),
@@ -100,7 +101,7 @@ impl ModelFile {
     pub fn fitted(&self) -> Result<Fitted, FitError> {
         let kind = self.kind;
         let p = self.feature_mean.len();
-        if self.feature_index.len() != p || self.centres_mm.len() != self.classes.len() {
+        if self.feature_index.len() != p || self.centres.len() != self.classes.len() {
             return Err(FitError::Tables(
                 "feature or class tables of different lengths",
             ));
@@ -110,8 +111,17 @@ impl ModelFile {
             &self.feature_mean,
             &self.feature_scale,
             &self.classes,
-            &self.centres_mm,
+            &self.board_positions(),
         )
+    }
+
+    /// The class centres as the board's tables hold them (et-core's blob): mm.
+    #[must_use]
+    pub fn board_positions(&self) -> Vec<[f64; 2]> {
+        self.centres
+            .iter()
+            .map(|c| [c[0] * 1e3, c[1] * 1e3])
+            .collect()
     }
 
     /// The features this model classifies a frame by: the frame's values `v` (K values, V) at
@@ -135,7 +145,7 @@ impl ModelFile {
     /// [`FitError`] from [`Fitted::to_blob`].
     pub fn blob(&self, precision: Precision) -> Result<Vec<u8>, FitError> {
         let positions: Vec<[f32; 2]> = self
-            .centres_mm
+            .board_positions()
             .iter()
             .map(|c| [c[0] as f32, c[1] as f32])
             .collect();
@@ -173,13 +183,6 @@ impl ModelFile {
         };
         let mut value = serde_json::to_value(self).map_err(json)?;
         if let Some(o) = value.as_object_mut() {
-            o.remove("centres_mm");
-            let metres: Vec<[f64; 2]> = self
-                .centres_mm
-                .iter()
-                .map(|c| [c[0] * 1e-3, c[1] * 1e-3])
-                .collect();
-            o.insert("centres_m".into(), serde_json::json!(metres));
             o.insert("units".into(), UNITS.into());
             o.insert("version".into(), VERSION.into());
         }
@@ -228,14 +231,14 @@ impl ModelFile {
         if format != Some("et-model") || !matches!(version, Some(1 | 2)) {
             return Err(ModelFileError::Format { path: path.into() });
         }
-        // Version 2 keeps the centres in metres; in memory they are mm.
-        if let Some(o) = value.as_object_mut()
-            && let Some(metres) = o.remove("centres_m")
-        {
-            let metres: Vec<[f64; 2]> = serde_json::from_value(metres).map_err(json)?;
-            let mm: Vec<[f64; 2]> = metres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
-            o.insert("centres_mm".into(), serde_json::json!(mm));
+        // Version 1 kept the centres in mm.
+        if let Some(o) = value.as_object_mut() {
             o.remove("units");
+            if let Some(mm) = o.remove("centres_mm") {
+                let mm: Vec<[f64; 2]> = serde_json::from_value(mm).map_err(json)?;
+                let metres: Vec<[f64; 2]> = mm.iter().map(|c| [c[0] / 1e3, c[1] / 1e3]).collect();
+                o.insert("centres_m".into(), serde_json::json!(metres));
+            }
         }
         let mut m: ModelFile = serde_json::from_value(value).map_err(json)?;
         m.version = VERSION;

@@ -297,17 +297,13 @@ impl Trainer {
             },
             |stage| progress(Progress::Dataset(stage)),
         )?;
-        let centres_mm = data
-            .centres
-            .iter()
-            .map(|c| [c[0] * 1e3, c[1] * 1e3])
-            .collect();
+
         let file = ModelFile::new(
             &training.model,
             training.options.shrinkage,
             data.config,
             data.feature_index.clone(),
-            centres_mm,
+            data.centres.clone(),
             referenced,
         );
         // What every reader of model files checks (et eval, stream, view, export, Python's

@@ -73,8 +73,8 @@ pub(super) struct Shown<'a> {
     pub last: Option<&'a Output>,
     /// The sheet's outline and electrodes.
     pub sheet: &'a et_core::sheet::Sheet,
-    /// A model's class centres, mm, when one classifies the touches.
-    pub class_centres_mm: Option<&'a [[f64; 2]]>,
+    /// A model's class centres, m, when one classifies the touches.
+    pub class_centres: Option<&'a [[f64; 2]]>,
     /// The mouse presses the sheet (a simulated one), and says so when hovered.
     pub pressable: bool,
     /// Say what the mouse does when hovered (not in screenshots).
@@ -180,12 +180,12 @@ impl SheetView {
             drawn.specks = specks(&canvas, shown.last, &values);
         }
         touches(&canvas, shown.last, values.len(), &mut drawn);
-        if let Some(centres) = shown.class_centres_mm {
+        if let Some(centres) = shown.class_centres {
             drawn.class = class_grid(&canvas, centres, shown.last);
         }
         drawn.truth = truth(&canvas, shown.last);
         colour_bar(&canvas, hi, &mut drawn);
-        legend(&canvas, x_axis, shown.class_centres_mm.is_some());
+        legend(&canvas, x_axis, shown.class_centres.is_some());
         self.drawn = drawn;
         if shown.pressable {
             self.press(&response, &canvas, shown.hint)
@@ -390,15 +390,15 @@ fn touches(canvas: &Canvas, last: Option<&Output>, pixels: usize, drawn: &mut Dr
 
 /// The class grid (centres in mm), the recognised class lit; the class lit, if any.
 fn class_grid(canvas: &Canvas, centres: &[[f64; 2]], last: Option<&Output>) -> Option<u16> {
-    let pitch = pitch_mm(centres);
+    let pitch = pitch(centres);
     let lit = last
         .filter(|o| o.event.is_some())
         .and_then(|o| o.event.as_ref())
         .and_then(|e| e.class);
     let mut shown = None;
     for (k, m) in centres.iter().enumerate() {
-        let a = canvas.to_screen([(m[0] - pitch / 2.0) * 1e-3, (m[1] + pitch / 2.0) * 1e-3]);
-        let b = canvas.to_screen([(m[0] + pitch / 2.0) * 1e-3, (m[1] - pitch / 2.0) * 1e-3]);
+        let a = canvas.to_screen([m[0] - pitch / 2.0, m[1] + pitch / 2.0]);
+        let b = canvas.to_screen([m[0] + pitch / 2.0, m[1] - pitch / 2.0]);
         let cell = Rect::from_two_pos(a, b).shrink(1.0);
         if lit == Some(k as u16) {
             let stroke = Stroke::new(3.0, CLASS);
@@ -543,13 +543,13 @@ fn legend(canvas: &Canvas, x_axis: f32, classes: bool) {
     );
 }
 
-/// The spacing of a class grid (smallest distance between centres), mm.
-fn pitch_mm(centres: &[[f64; 2]]) -> f64 {
+/// The spacing of a class grid (smallest distance between centres), m (1 cm for one class).
+fn pitch(centres: &[[f64; 2]]) -> f64 {
     let mut best = f64::INFINITY;
     for (i, a) in centres.iter().enumerate() {
         for b in &centres[i + 1..] {
             best = best.min((a[0] - b[0]).hypot(a[1] - b[1]));
         }
     }
-    if best.is_finite() { best } else { 10.0 }
+    if best.is_finite() { best } else { 0.01 }
 }

@@ -35,8 +35,8 @@ pub struct Classification {
     pub class: u16,
     /// Its posterior probability (0 to 1), the discriminants' softmax.
     pub posterior: f64,
-    /// The class centres weighted by their posteriors, mm: a position between the cells.
-    pub centre_mm: [f64; 2],
+    /// The class centres weighted by their posteriors, m: a position between the cells.
+    pub centre: [f64; 2],
 }
 
 impl Board {
@@ -80,7 +80,7 @@ impl Board {
         Some(Classification {
             class,
             posterior: 1.0 / total,
-            centre_mm: posterior_centre(&self.fitted, x, &self.file.centres_mm, 1.0),
+            centre: posterior_centre(&self.fitted, x, &self.file.centres, 1.0),
         })
     }
 
@@ -167,6 +167,8 @@ impl Board {
         // One prediction per observation serves the confusion, the bands and the errors.
         let predicted = self.predict(data)?;
         let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
+        // The report is in mm, as people read it.
+        let centres_mm = file.board_positions();
         let electrodes_mm: Vec<[f64; 2]> = data
             .electrodes
             .iter()
@@ -175,7 +177,7 @@ impl Board {
         let outcomes = if electrodes_mm.is_empty() {
             Vec::new()
         } else {
-            analysis::outcomes(&predicted, &data.y, &file.centres_mm, &electrodes_mm)?
+            analysis::outcomes(&predicted, &data.y, &centres_mm, &electrodes_mm)?
         };
         let bands = analysis::by_distance(&outcomes, 10.0);
         let errors_from_truth_mm = if data.positions.len() == predicted.len() {
@@ -183,7 +185,7 @@ impl Board {
                 .iter()
                 .zip(&data.positions)
                 .map(|(&c, truth)| {
-                    let c = file.centres_mm.get(usize::from(c))?;
+                    let c = centres_mm.get(usize::from(c))?;
                     Some((c[0] - truth[0] * 1e3).hypot(c[1] - truth[1] * 1e3))
                 })
                 .collect::<Option<Vec<f64>>>()
@@ -192,7 +194,7 @@ impl Board {
             Vec::new()
         };
         Ok(Tested {
-            centres_mm: file.centres_mm.clone(),
+            centres_mm,
             confusion,
             outcomes,
             bands,

@@ -1023,7 +1023,7 @@ fn a_corrupt_model_file_is_refused_on_load() {
         0.0,
         et_core::ScanConfig::REFERENCE,
         vec![0, 1, 2, 3],
-        vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]],
+        vec![[0.0, 0.0], [0.01, 0.0], [0.0, 0.01]],
         false,
     );
     let dir = std::env::temp_dir().join(format!("et-model-{}", std::process::id()));
@@ -1044,7 +1044,10 @@ fn a_corrupt_model_file_is_refused_on_load() {
     o.remove("centres_m");
     o.remove("units");
     o.insert("version".into(), 1.into());
-    o.insert("centres_mm".into(), serde_json::json!(file.centres_mm));
+    o.insert(
+        "centres_mm".into(),
+        serde_json::json!(file.board_positions()),
+    );
     std::fs::write(&path, old.to_string()).unwrap();
     assert_eq!(ModelFile::load(&path).unwrap(), file);
     // Other versions are refused by name.

@@ -719,7 +719,7 @@ fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
         protocol: et_core::protocol::ProtocolKind::Adjacent,
         ..et_core::ScanConfig::REFERENCE
     };
-    let centres = vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]];
+    let centres = vec![[0.0, 0.0], [0.01, 0.0], [0.0, 0.01]];
     let board = ModelFile::new(&fitted, 0.1, config, vec![0, 3, 7], centres, false);
     let dir = tmp("spoilt");
     let (t, b) = (dir.join("table.json"), dir.join("board.json"));

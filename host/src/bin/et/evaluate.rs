@@ -105,7 +105,7 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
     let tested = board
         .test(&data)
         .map_err(|e| anyhow::anyhow!("{}: {e}", data_arg.display()))?;
-    let centres_mm = &board.file().centres_mm;
+    let centres_mm = &board.file().board_positions();
     let conf = &tested.confusion;
     if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
         eval_plots(dir, pngs, &tested, data_arg)?;

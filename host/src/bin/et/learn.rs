@@ -237,7 +237,7 @@ fn print_trained(
         data,
     } = training;
     let file = board.file();
-    let (referenced, mm, classes) = (file.referenced, &file.centres_mm, data.centres.len());
+    let (referenced, mm, classes) = (file.referenced, &file.board_positions(), data.centres.len());
     let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
     let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);
     let folds = args.folds.unwrap_or(10);

@@ -124,7 +124,7 @@ impl Imaging<'_> {
             t_us: frame.t_us,
             seq: frame.seq,
             class: chip.or(model.map(|m| m.class)),
-            position_mm: model.map_or(image_position, |m| m.centre_mm),
+            position_mm: model.map_or(image_position, |m| [m.centre[0] * 1e3, m.centre[1] * 1e3]),
             intensity,
             confidence: model.map(|m| m.posterior),
             regions: touches,
