@@ -30,7 +30,7 @@ fn targets(d: &Dataset) -> Vec<Target3> {
     d.positions
         .iter()
         .zip(&d.pressure)
-        .map(|(p, kpa)| [p[0] * 1e3, p[1] * 1e3, kpa * 1e-3])
+        .map(|(p, kpa)| [p[0], p[1], kpa * 1e-3])
         .collect()
 }
 
@@ -257,7 +257,6 @@ fn class_based(
         },
     )
     .expect("collect");
-    let mm: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] * 1e3, c[1] * 1e3]).collect();
     let qda = Fitted::fit(
         &grid_train.features(true).unwrap(),
         &grid_train.y,
@@ -272,7 +271,7 @@ fn class_based(
     let nearest: Vec<Target3> = test_rows
         .iter()
         .map(|r| {
-            let c = mm[usize::from(qda.predict(r))];
+            let c = centres[usize::from(qda.predict(r))];
             [c[0], c[1], 0.0]
         })
         .collect();
@@ -284,9 +283,9 @@ fn class_based(
         "QDA class centre (10 x 10)", s.mean_mm, s.median_mm, s.p90_mm, "-", "-"
     );
     // The temperature is chosen on the training presses, never on the test.
-    let truth_mm: Vec<[f64; 2]> = t.iter().map(|v| [v[0], v[1]]).collect();
+    let truth: Vec<[f64; 2]> = t.iter().map(|v| [v[0], v[1]]).collect();
     let temps = [1.0, 2.0, 5.0, 10.0, 20.0, 50.0];
-    let temperature = choose_temperature(&qda, x, &truth_mm, &mm, &temps);
+    let temperature = choose_temperature(&qda, x, &truth, &centres, &temps);
     let grid_x = grid_train.features(true).unwrap();
     let kpa: Vec<f64> = grid_train.pressure.iter().map(|p| p * 1e-3).collect();
     let intensity =
@@ -294,7 +293,7 @@ fn class_based(
     let post: Vec<Target3> = test_rows
         .iter()
         .map(|r| {
-            let p = posterior_centre(&qda, r, &mm, temperature);
+            let p = posterior_centre(&qda, r, &centres, temperature);
             [p[0], p[1], intensity.predict(r, qda.predict(r))]
         })
         .collect();
@@ -305,7 +304,7 @@ fn class_based(
         let post: Vec<Target3> = test_rows
             .iter()
             .map(|r| {
-                let p = posterior_centre(&qda, r, &mm, tp);
+                let p = posterior_centre(&qda, r, &centres, tp);
                 [p[0], p[1], 0.0]
             })
             .collect();

@@ -49,7 +49,7 @@ fn table(
 ) -> PyResult<Table> {
     let x = features(x, "X")?;
     let n = x.nrows();
-    let (positions_mm, third) = match &positions_m {
+    let (positions, third) = match &positions_m {
         None => (None, None),
         Some(p) => {
             let (values, rows, cols) = matrix(p, "y")?;
@@ -59,9 +59,9 @@ fn table(
                      n x 3 (x, y, z in m)"
                 )));
             }
-            let row = |r: &[f64]| [r[0] * 1e3, r[1] * 1e3];
+            let row = |r: &[f64]| [r[0], r[1]];
             let third = (cols == 3).then(|| {
-                let z = values.chunks(cols).map(|r| r[2] * 1e3).collect();
+                let z = values.chunks(cols).map(|r| r[2]).collect();
                 ("z".to_string(), z)
             });
             (Some(values.chunks(cols).map(row).collect()), third)
@@ -80,7 +80,7 @@ fn table(
         description: format!("{n} rows x {} features from Python", x.ncols()),
         x,
         labels,
-        positions_mm,
+        positions,
         third,
         first_row: 0,
         unit: Unit::M,
@@ -194,19 +194,14 @@ fn predicted<'py>(
     let xy = targets
         .as_ref()
         .map(|t| {
-            let metres = t.iter().flat_map(|t| [t[0] * 1e-3, t[1] * 1e-3]).collect();
+            let metres = t.iter().flat_map(|t| [t[0], t[1]]).collect();
             array2(py, metres, t.len(), 2)
         })
         .transpose()?;
-    let third = third.zip(targets.as_ref()).map(|(name, t)| {
-        // A length in mm when named z (returned in m), else as written.
-        let scale = if name.eq_ignore_ascii_case("z") {
-            1e-3
-        } else {
-            1.0
-        };
-        PyArray1::from_vec(py, t.iter().map(|t| t[2] * scale).collect())
-    });
+    // A length in m when named z, else as written.
+    let third = third
+        .zip(targets.as_ref())
+        .map(|(_, t)| PyArray1::from_vec(py, t.iter().map(|t| t[2]).collect()));
     Ok((classes, names, xy, third))
 }
 

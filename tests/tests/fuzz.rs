@@ -288,7 +288,13 @@ fn table_model_json(dir: &Path, method: Kind) -> Vec<u8> {
         x,
         feature_names: ["a", "b", "c"].map(String::from).to_vec(),
         labels: None,
-        positions_mm: Some(positions),
+        // The positions above are mm; a table holds m.
+        positions: Some(
+            positions
+                .iter()
+                .map(|p| [p[0] * 1e-3, p[1] * 1e-3])
+                .collect(),
+        ),
         third: None,
         description: "fuzz seed".into(),
         first_row: 0,

@@ -253,7 +253,7 @@ impl Model {
 
     /// Predicts each row of `x`: a table's model reads features (n x p), a board model frames
     /// (n x K, V; minus `v0`, K values, when the model is referenced) and gives each frame's
-    /// class and the class's centre as its position (mm).
+    /// class and the class's centre as its position (m).
     ///
     /// # Errors
     /// [`ModelError::Table`] or [`ModelError::Use`] when the rows do not fit the model;
@@ -318,9 +318,9 @@ impl Model {
 }
 
 impl Board {
-    /// Each class with its centre as the position (mm), a table model's prediction's shape.
+    /// Each class with its centre as the position (m), a table model's prediction's shape.
     fn predictions(&self, classes: &[u16]) -> Vec<Prediction> {
-        let centres = self.file().board_positions();
+        let centres = &self.file().centres;
         classes
             .iter()
             .map(|&c| Prediction {

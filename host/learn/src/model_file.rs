@@ -111,7 +111,7 @@ impl ModelFile {
             &self.feature_mean,
             &self.feature_scale,
             &self.classes,
-            &self.board_positions(),
+            &self.centres,
         )
     }
 
@@ -284,7 +284,7 @@ pub fn fitted_from_records(
     feature_mean: &[f64],
     feature_scale: &[f64],
     records: &[ClassRecord],
-    positions_mm: &[[f64; 2]],
+    centres: &[[f64; 2]],
 ) -> Result<Fitted, FitError> {
     let p = feature_mean.len();
     if feature_scale.len() != p || records.is_empty() {
@@ -329,33 +329,29 @@ pub fn fitted_from_records(
         feature_scale: feature_scale.to_vec(),
         classes,
     };
-    check_tables(&fitted, positions_mm)?;
+    check_tables(&fitted, centres)?;
     Ok(fitted)
 }
 
 /// Checks a fitted model's tables as the board checks a model
-/// ([`et_core::model::check_class_tables`]), with its classes' positions (mm; empty when the
+/// ([`et_core::model::check_class_tables`]), with its classes' centres (m; empty when the
 /// classes have none).
 ///
 /// # Errors
 /// [`FitError::Tables`] for positions of another count, [`FitError::Invalid`] for tables the
 /// board would refuse.
-pub fn check_tables(fitted: &Fitted, positions_mm: &[[f64; 2]]) -> Result<(), FitError> {
-    if !positions_mm.is_empty() && positions_mm.len() != fitted.classes.len() {
+pub fn check_tables(fitted: &Fitted, centres: &[[f64; 2]]) -> Result<(), FitError> {
+    if !centres.is_empty() && centres.len() != fitted.classes.len() {
         return Err(FitError::Tables("a position for every class"));
     }
-    et_core::model::check_class_tables(&Tables {
-        fitted,
-        positions_mm,
-    })
-    .map_err(FitError::Invalid)
+    et_core::model::check_class_tables(&Tables { fitted, centres }).map_err(FitError::Invalid)
 }
 
 /// A fitted model's tables as the board reads them (f32), for the board's checks.
 struct Tables<'a> {
     fitted: &'a Fitted,
-    /// Per class, mm, or empty.
-    positions_mm: &'a [[f64; 2]],
+    /// Per class, m, or empty.
+    centres: &'a [[f64; 2]],
 }
 
 impl et_core::model::ClassTables for Tables<'_> {
@@ -375,8 +371,9 @@ impl et_core::model::ClassTables for Tables<'_> {
         at(&self.fitted.feature_scale, j)
     }
     fn position_mm(&self, c: usize) -> [f32; 2] {
-        let [x, y] = self.positions_mm.get(c).copied().unwrap_or([0.0; 2]);
-        [x as f32, y as f32]
+        // The board's tables hold mm.
+        let [x, y] = self.centres.get(c).copied().unwrap_or([0.0; 2]);
+        [(x * 1e3) as f32, (y * 1e3) as f32]
     }
     fn log_prior(&self, c: usize) -> f32 {
         self.fitted

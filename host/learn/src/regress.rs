@@ -8,7 +8,9 @@
 //! - [`posterior_centre`]: the class centres weighted by a classifier's posteriors (softmax of
 //!   the discriminants), so a class model interpolates between its grid cells.
 //!
-//! Targets are in mm and kPa; features are volts (standardised inside each model).
+//! Targets are positions in m and a third value (pressure in kPa, or a table's third target);
+//! the learners are equivariant to the targets' units. Features are volts (standardised
+//! inside each model).
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::SolveCore;
@@ -18,7 +20,7 @@ use nalgebra::DMatrix;
 use super::fit::{FitError, Fitted, standardisation};
 pub use kernel_exp::exp_neg;
 
-/// Targets per observation: x (mm), y (mm), pressure (kPa).
+/// Targets per observation: x (m), y (m), a third value (pressure in kPa, a z in m, ...).
 pub type Target3 = [f64; 3];
 
 /// `x` (n x p) standardised column by column: (x - mean) / scale.
@@ -429,12 +431,12 @@ impl KernelRidge {
 
 /// Posterior-weighted class centre: sum_c w_c centre_c with w the softmax of the model's
 /// discriminants divided by `temperature` (1 = the posteriors P(c | x); larger spreads the
-/// weight over neighbouring cells), in the units of `centres_mm`.
+/// weight over neighbouring cells), in the units of `centres`.
 #[must_use]
 pub fn posterior_centre(
     model: &Fitted,
     x: &[f64],
-    centres_mm: &[[f64; 2]],
+    centres: &[[f64; 2]],
     temperature: f64,
 ) -> [f64; 2] {
     let d = model.discriminants(x);
@@ -443,7 +445,7 @@ pub fn posterior_centre(
     let w: Vec<f64> = d.iter().map(|v| ((v - top) / t).exp()).collect();
     let total: f64 = w.iter().sum();
     let mut p = [0.0; 2];
-    for (wc, c) in w.iter().zip(centres_mm) {
+    for (wc, c) in w.iter().zip(centres) {
         p[0] += wc / total * c[0];
         p[1] += wc / total * c[1];
     }
@@ -451,22 +453,22 @@ pub fn posterior_centre(
 }
 
 /// The temperature of [`posterior_centre`] with the smallest mean position error on a
-/// validation set (`x` rows, true positions in mm), from `candidates`. Choose it on data the
+/// validation set (`x` rows, true positions in the centres' units), from `candidates`. Choose it on data the
 /// test never sees.
 #[must_use]
 pub fn choose_temperature(
     model: &Fitted,
     x: &DMatrix<f64>,
-    truth_mm: &[[f64; 2]],
-    centres_mm: &[[f64; 2]],
+    truth: &[[f64; 2]],
+    centres: &[[f64; 2]],
     candidates: &[f64],
 ) -> f64 {
     let rows: Vec<Vec<f64>> = x.row_iter().map(|r| r.iter().copied().collect()).collect();
     let err = |t: f64| {
         rows.iter()
-            .zip(truth_mm)
+            .zip(truth)
             .map(|(r, p)| {
-                let q = posterior_centre(model, r, centres_mm, t);
+                let q = posterior_centre(model, r, centres, t);
                 (q[0] - p[0]).hypot(q[1] - p[1])
             })
             .sum::<f64>()

@@ -27,12 +27,12 @@ pub enum Unit {
 }
 
 impl Unit {
-    /// Millimetres per unit.
+    /// Metres per unit.
     #[must_use]
-    pub fn to_mm(self) -> f64 {
+    pub fn metres(self) -> f64 {
         match self {
-            Unit::M => 1e3,
-            Unit::Mm => 1.0,
+            Unit::M => 1.0,
+            Unit::Mm => 1e-3,
         }
     }
 }
@@ -46,15 +46,15 @@ pub struct Table {
     pub feature_names: Vec<String>,
     /// Class labels as written, when the data has them.
     pub labels: Option<Vec<String>>,
-    /// Positions in mm, when the data has them.
-    pub positions_mm: Option<Vec<[f64; 2]>>,
-    /// A third target (name; values: a length in mm when named z, else as written).
+    /// Positions in m, when the data has them.
+    pub positions: Option<Vec<[f64; 2]>>,
+    /// A third target (name; values: a length in m when named z, else as written).
     pub third: Option<(String, Vec<f64>)>,
     /// Which columns were taken as what, and the unit.
     pub description: String,
     /// The first row's index in the file (after `--rows`).
     pub first_row: usize,
-    /// The unit the files' positions were written in (they are held in mm).
+    /// The unit the files' positions were written in (they are held in m).
     pub unit: Unit,
     /// The session (or visit, or subject) of each row as written, when given: rows of one
     /// group share their drift, and cross-validation leaves one group out.
@@ -167,11 +167,11 @@ impl Table {
                 ttable.names.len() - found.taken()
             );
         }
-        let mm = unit.to_mm();
+        let m = unit.metres();
         let third = found.third.map(|(name, v)| {
             let length = name.eq_ignore_ascii_case("z");
             let v = if length {
-                v.iter().map(|z| z * mm).collect()
+                v.iter().map(|z| z * m).collect()
             } else {
                 v
             };
@@ -187,7 +187,7 @@ impl Table {
                 .filter_map(|&c| main.names.get(c).cloned())
                 .collect(),
             labels,
-            positions_mm: positions.map(|p| p.iter().map(|q| [q[0] * mm, q[1] * mm]).collect()),
+            positions: positions.map(|p| p.iter().map(|q| [q[0] * m, q[1] * m]).collect()),
             third,
             description: match &group_values {
                 Some(g) => {
@@ -461,7 +461,7 @@ fn positions_note(unit: Unit, positions: Option<&[[f64; 2]]>) -> String {
     let mut note = format!(
         "; positions in {}",
         match unit {
-            Unit::M => "m (read as mm x 1000)",
+            Unit::M => "m",
             Unit::Mm => "mm",
         }
     );

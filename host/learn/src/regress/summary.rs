@@ -17,13 +17,13 @@ pub struct ErrorSummary {
     pub pressure_r: f64,
 }
 
-/// Position errors (mm) of predictions against truth, sorted ascending.
+/// Position errors (mm) of predictions against truth (both m), sorted ascending.
 #[must_use]
 pub fn sorted_position_errors(pred: &[Target3], truth: &[Target3]) -> Vec<f64> {
     let mut e: Vec<f64> = pred
         .iter()
         .zip(truth)
-        .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]))
+        .map(|(p, t)| 1e3 * (p[0] - t[0]).hypot(p[1] - t[1]))
         .collect();
     e.sort_by(f64::total_cmp);
     e
@@ -45,7 +45,8 @@ pub fn mean_median_p90(sorted: &[f64]) -> [f64; 3] {
     ]
 }
 
-/// Summarises predictions against truth (`pressure`: whether the third component counts).
+/// Summarises predictions against truth (positions in m, summarised in mm; the third
+/// component as given; `pressure`: whether it counts).
 #[must_use]
 pub fn summarise(pred: &[Target3], truth: &[Target3], pressure: bool) -> ErrorSummary {
     let [mean_mm, median_mm, p90_mm] = mean_median_p90(&sorted_position_errors(pred, truth));

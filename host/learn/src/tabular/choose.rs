@@ -165,7 +165,7 @@ pub(super) fn drift_note(ranked: &[&Candidate], by_drift: bool) -> Option<String
 }
 
 /// The mean error of each fold's rows (`grouped`: folds are groups), else of each of
-/// [`STABILITY_BLOCKS`] contiguous blocks of rows, mm; None when a prediction is missing.
+/// [`STABILITY_BLOCKS`] contiguous blocks of rows, mm (`t` in m); None when a prediction is missing.
 pub(super) fn block_errors(
     pred: &Option<Vec<Target3>>,
     t: &[Target3],
@@ -185,7 +185,7 @@ pub(super) fn block_errors(
     let mut sum = vec![(0.0, 0usize); blocks];
     for (r, (p, q)) in pred.iter().zip(t).enumerate() {
         if let Some(s) = sum.get_mut(of(r)) {
-            *s = (s.0 + (p[0] - q[0]).hypot(p[1] - q[1]), s.1 + 1);
+            *s = (s.0 + 1e3 * (p[0] - q[0]).hypot(p[1] - q[1]), s.1 + 1);
         }
     }
     Some(

@@ -13,7 +13,7 @@ pub(super) fn class_targets(
 ) -> Result<Option<(Labels, ClassInfo)>, TabularError> {
     if let Some((rows, cols)) = grid {
         let p = table
-            .positions_mm
+            .positions
             .as_ref()
             .ok_or_else(|| usage(Misuse::GridNeedsPositions))?;
         if rows == 0 || cols == 0 {
@@ -38,7 +38,7 @@ pub(super) fn class_targets(
         };
         let info = ClassInfo {
             names: labels.names.clone(),
-            centres_mm: Some(used.iter().map(|&c| g.centre(c)).collect()),
+            centres: Some(used.iter().map(|&c| g.centre(c)).collect()),
             grid: Some(g),
         };
         return Ok(Some((labels, info)));
@@ -47,7 +47,7 @@ pub(super) fn class_targets(
         return Ok(None);
     };
     let labels = Labels::from_text(text)?;
-    let centres_mm = table.positions_mm.as_ref().map(|p| {
+    let centres = table.positions.as_ref().map(|p| {
         let mut sum = vec![[0.0, 0.0, 0.0]; labels.names.len()];
         for (&c, q) in labels.index.iter().zip(p) {
             if let Some(s) = sum.get_mut(usize::from(c)) {
@@ -60,7 +60,7 @@ pub(super) fn class_targets(
     });
     let info = ClassInfo {
         names: labels.names.clone(),
-        centres_mm,
+        centres,
         grid: None,
     };
     Ok(Some((labels, info)))

@@ -87,6 +87,18 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             Misuse::NoPositionTarget
         }));
     }
+    let z_is_length = model
+        .third
+        .as_deref()
+        .is_some_and(|n| n.eq_ignore_ascii_case("z"));
+    // The scores are for people: positions (and a z) in mm.
+    let mm = |v: Target3| {
+        [
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * if z_is_length { 1e3 } else { 1.0 },
+        ]
+    };
     let mut pairs = Vec::new();
     let (mut errors, mut errors3, mut third) = (Vec::new(), Vec::new(), Vec::new());
     let groups = table.group_index();
@@ -95,6 +107,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     if let Some(truth) = &truth {
         for (r, (t, p)) in truth.iter().zip(&pred).enumerate() {
             if let Some(q) = p.target {
+                let (t, q) = (mm(*t), mm(q));
                 pairs.push(([t[0], t[1]], [q[0], q[1]]));
                 errors.push((q[0] - t[0]).hypot(q[1] - t[1]));
                 if let Some(g) = groups
@@ -114,10 +127,6 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             }
         }
     }
-    let z_is_length = model
-        .third
-        .as_deref()
-        .is_some_and(|n| n.eq_ignore_ascii_case("z"));
     let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     errors.sort_by(f64::total_cmp);
     let quantile = |f: f64| {
@@ -131,7 +140,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     let mean_predictor_error_mm = model.training_mean_position().and_then(|c| {
         truth.as_ref().map(|t| {
             t.iter()
-                .map(|t| (t[0] - c[0]).hypot(t[1] - c[1]))
+                .map(|t| 1e3 * (t[0] - c[0]).hypot(t[1] - c[1]))
                 .sum::<f64>()
                 / t.len().max(1) as f64
         })
@@ -182,7 +191,7 @@ fn accuracy(model: &TableModel, table: &Table, pred: &[Prediction]) -> Option<f6
                         .collect(),
                 )
             } else {
-                match (&info.grid, &table.positions_mm) {
+                match (&info.grid, &table.positions) {
                     (Some(g), Some(p)) => Some(
                         p.iter()
                             .map(|&q| {

@@ -132,7 +132,7 @@ pub enum Tables {
         activation: Activation,
         /// Hidden layers, then the output layer (weights: one row per input).
         layers: Vec<Dense>,
-        /// Targets' training mean (x mm, y mm, third).
+        /// Targets' training mean (x m, y m, third).
         target_mean: [f64; 3],
         /// Targets' training standard deviation.
         target_scale: [f64; 3],
@@ -150,7 +150,7 @@ pub enum Tables {
         weighting: Weighting,
         /// m support rows (z-space).
         support: Vec<Vec<f64>>,
-        /// Their targets (x mm, y mm, third).
+        /// Their targets (x m, y m, third).
         targets: Vec<[f64; 3]>,
     },
 }
@@ -175,9 +175,11 @@ pub struct Member {
 pub struct ClassInfo {
     /// The user's class names (or grid cells `r<row>c<col>`), in class order.
     pub names: Vec<String>,
-    /// Each class's position, mm (its training rows' mean position, or the grid cell's
-    /// centre), when the data had positions.
-    pub centres_mm: Option<Vec<[f64; 2]>>,
+    /// Each class's position, m (its training rows' mean position, or the grid cell's
+    /// centre), when the data had positions (version 1 files: `centres_mm`, converted on
+    /// reading).
+    #[serde(rename = "centres_m")]
+    pub centres: Option<Vec<[f64; 2]>>,
     /// The grid, when the classes were made from positions.
     pub grid: Option<Grid>,
 }
@@ -188,7 +190,7 @@ pub struct ClassInfo {
 pub struct TableModel {
     /// Always "et-table-model".
     pub format: String,
-    /// 1.
+    /// 2 (version 1 held positions in mm; it is read and converted).
     pub version: u32,
     /// The method.
     pub method: Kind,
@@ -198,7 +200,7 @@ pub struct TableModel {
     pub feature_mean: Vec<f64>,
     /// Training standard deviation of each feature (1 for a constant one).
     pub feature_scale: Vec<f64>,
-    /// The unit positions were given in (predictions are reported in mm).
+    /// The unit positions were given in (the tables hold m, whatever it was).
     pub unit: Unit,
     /// Name of the third target predicted beside x and y (z, force), if any.
     pub third: Option<String>,
@@ -244,7 +246,7 @@ pub struct TableModel {
 pub struct Prediction {
     /// The class (classifiers).
     pub class: Option<u16>,
-    /// The position (x, y mm) and third target: a regressor's estimate, or the class's
+    /// The position (x, y m) and third target: a regressor's estimate, or the class's
     /// centre; None for a classifier without class positions.
     pub target: Option<Target3>,
 }
@@ -291,7 +293,7 @@ impl TableModel {
         };
         Ok(match ready {
             Ready::Discriminant(m) => {
-                let centres = self.classes.as_ref().and_then(|c| c.centres_mm.as_ref());
+                let centres = self.classes.as_ref().and_then(|c| c.centres.as_ref());
                 let mut row = vec![0.0; x.ncols()];
                 (0..x.nrows())
                     .map(|r| {
@@ -365,13 +367,101 @@ impl TableModel {
     ///
     /// # Errors
     /// As [`from_json`](Self::from_json).
-    pub fn from_value(value: serde_json::Value) -> Result<Self, TableModelError> {
-        let m: TableModel = serde_json::from_value(value)?;
-        if m.format != "et-table-model" || m.version != 1 {
+    pub fn from_value(mut value: serde_json::Value) -> Result<Self, TableModelError> {
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if version == Some(1) {
+            mm_names_to_metres(&mut value);
+        }
+        let mut m: TableModel = serde_json::from_value(value)?;
+        if m.format != "et-table-model" || !matches!(m.version, 1 | TABLE_MODEL_VERSION) {
             return Err(TableModelError::Format);
+        }
+        if m.version == 1 {
+            m.migrate_to_metres();
         }
         m.ready()?;
         Ok(m)
+    }
+
+    /// A version 1 model (positions in mm) made the current version (m): every table on the
+    /// targets' side scaled, the third target's only when it is a length (z).
+    fn migrate_to_metres(&mut self) {
+        let z = self
+            .third
+            .as_deref()
+            .is_some_and(|t| t.eq_ignore_ascii_case("z"));
+        let s = [1e-3, 1e-3, if z { 1e-3 } else { 1.0 }];
+        self.tables.scale_targets(s);
+        if let Some(c) = &mut self.classes {
+            for q in c.centres.iter_mut().flatten() {
+                *q = [q[0] * 1e-3, q[1] * 1e-3];
+            }
+            if let Some(g) = &mut c.grid {
+                g.bounds = g.bounds.map(|b| b * 1e-3);
+            }
+        }
+        self.version = TABLE_MODEL_VERSION;
+    }
+}
+
+/// The table model file's version: 2, positions in m.
+pub const TABLE_MODEL_VERSION: u32 = 2;
+
+/// A version 1 file's mm field names given the current version's m names (the values are
+/// scaled after parsing, [`TableModel::migrate_to_metres`]).
+fn mm_names_to_metres(value: &mut serde_json::Value) {
+    let rename = |o: Option<&mut serde_json::Value>, from: &str, to: &str| {
+        if let Some(o) = o.and_then(serde_json::Value::as_object_mut)
+            && let Some(v) = o.remove(from)
+        {
+            o.insert(to.into(), v);
+        }
+    };
+    let classes = value.get_mut("classes");
+    rename(classes, "centres_mm", "centres_m");
+    let grid = value.get_mut("classes").and_then(|c| c.get_mut("grid"));
+    rename(grid, "bounds_mm", "bounds_m");
+}
+
+impl Tables {
+    /// Multiplies every value on the targets' side by `s` (x, y, third): intercepts, weights
+    /// into the targets, the perceptron's target standardisation, the neighbours' targets.
+    fn scale_targets(&mut self, s: [f64; 3]) {
+        let scale = |r: &mut [f64; 3]| {
+            for (v, k) in r.iter_mut().zip(s) {
+                *v *= k;
+            }
+        };
+        match self {
+            Tables::Discriminant { .. } => {}
+            Tables::Ridge { weights, intercept } => {
+                weights.iter_mut().for_each(scale);
+                scale(intercept);
+            }
+            Tables::KernelRidge {
+                alpha, intercept, ..
+            }
+            | Tables::Gp {
+                alpha, intercept, ..
+            } => {
+                alpha.iter_mut().for_each(scale);
+                scale(intercept);
+            }
+            Tables::Mlp {
+                target_mean,
+                target_scale,
+                ..
+            } => {
+                scale(target_mean);
+                scale(target_scale);
+            }
+            Tables::Average { members } => {
+                for m in members {
+                    m.tables.scale_targets(s);
+                }
+            }
+            Tables::Knn { targets, .. } => targets.iter_mut().for_each(scale),
+        }
     }
 }
 
@@ -383,7 +473,7 @@ pub enum TableModelError {
     #[error(transparent)]
     Json(#[from] serde_json::Error),
     /// Another format or version.
-    #[error("not an et-table-model version 1 file")]
+    #[error("not an et-table-model file of version 1 or 2")]
     Format,
     /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
     #[error(transparent)]
@@ -405,7 +495,7 @@ impl TableModel {
         })
     }
 
-    /// The mean training position, mm (regressors: their intercept or targets' mean; classes:
+    /// The mean training position, m (regressors: their intercept or targets' mean; classes:
     /// the count-weighted class positions), when known.
     #[must_use]
     pub fn training_mean_position(&self) -> Option<[f64; 2]> {
@@ -424,7 +514,7 @@ impl TableModel {
                 )
             }
             Tables::Discriminant { classes, .. } => {
-                let centres = self.classes.as_ref()?.centres_mm.as_ref()?;
+                let centres = self.classes.as_ref()?.centres.as_ref()?;
                 let n = classes.iter().map(|c| c.count).sum::<usize>().max(1) as f64;
                 Some(classes.iter().zip(centres).fold([0.0, 0.0], |a, (c, q)| {
                     let w = c.count as f64 / n;

@@ -196,7 +196,7 @@ pub fn train(
     hyperparameters.extend(fitted_hyperparameters(&tables));
     Ok(TableModel {
         format: "et-table-model".into(),
-        version: 1,
+        version: TABLE_MODEL_VERSION,
         method: best.method,
         feature_names: table.feature_names.clone(),
         feature_mean: mean,
@@ -270,7 +270,7 @@ pub(super) fn params(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
     pairs.iter().map(|&(k, v)| (k.to_string(), v)).collect()
 }
 
-/// Mean position error (x, y) of predictions against truth.
+/// Mean position error (x, y; mm) of predictions against truth (m).
 pub(super) fn mean_error(pred: &[Target3], truth: &[Target3]) -> f64 {
     summarise(pred, truth, false).mean_mm
 }

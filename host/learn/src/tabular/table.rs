@@ -116,8 +116,8 @@ impl Table {
                 .labels
                 .as_ref()
                 .and_then(|l| l.get(rows.clone()).map(<[String]>::to_vec)),
-            positions_mm: self
-                .positions_mm
+            positions: self
+                .positions
                 .as_ref()
                 .and_then(|p| p.get(rows.clone()).map(<[[f64; 2]]>::to_vec)),
             third: self
@@ -256,10 +256,10 @@ impl Table {
         Ok(Self { x, ..self.clone() })
     }
 
-    /// Targets as (x mm, y mm, third or 0), when the table has positions.
+    /// Targets as (x m, y m, third or 0), when the table has positions.
     #[must_use]
     pub fn targets(&self) -> Option<Vec<Target3>> {
-        let p = self.positions_mm.as_ref()?;
+        let p = self.positions.as_ref()?;
         Some(
             p.iter()
                 .enumerate()
@@ -284,8 +284,10 @@ pub struct Grid {
     pub rows: usize,
     /// Cells along x.
     pub cols: usize,
-    /// Bounding box [x0, y0, x1, y1], mm.
-    pub bounds_mm: [f64; 4],
+    /// Bounding box [x0, y0, x1, y1], m (version 1 files: `bounds_mm`, converted on
+    /// reading).
+    #[serde(rename = "bounds_m")]
+    pub bounds: [f64; 4],
 }
 
 impl Grid {
@@ -309,25 +311,27 @@ impl Grid {
         Self {
             rows: rows.max(1),
             cols: cols.max(1),
-            bounds_mm: b,
+            bounds: b,
         }
     }
 
     /// The cell (row-major) of a position, clamped into the grid.
     #[must_use]
     pub fn cell(&self, p: [f64; 2]) -> usize {
-        let [x0, y0, x1, y1] = self.bounds_mm;
+        let [x0, y0, x1, y1] = self.bounds;
         let at = |v: f64, lo: f64, hi: f64, n: usize| {
             let f = if hi > lo { (v - lo) / (hi - lo) } else { 0.0 };
-            ((f * n as f64).floor().max(0.0) as usize).min(n - 1)
+            // A position on a cell's edge belongs to the cell above it, whatever rounding
+            // the unit's conversion left (0.01 / 0.04 * 4 is 0.999...).
+            ((f * n as f64 + 1e-9).floor().max(0.0) as usize).min(n - 1)
         };
         at(p[1], y0, y1, self.rows) * self.cols + at(p[0], x0, x1, self.cols)
     }
 
-    /// The centre of a cell, mm.
+    /// The centre of a cell, m.
     #[must_use]
     pub fn centre(&self, cell: usize) -> [f64; 2] {
-        let [x0, y0, x1, y1] = self.bounds_mm;
+        let [x0, y0, x1, y1] = self.bounds;
         let (r, c) = (cell / self.cols, cell % self.cols);
         [
             x0 + (x1 - x0) * (c as f64 + 0.5) / self.cols as f64,

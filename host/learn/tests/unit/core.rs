@@ -700,7 +700,10 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         std::fs::write(&targets, "x,y\n10.5,20\n11,21\n").unwrap();
         let imp = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
         assert_eq!(imp.x.ncols(), 7);
-        assert_eq!(imp.positions_mm, Some(vec![[10.5, 20.0], [11.0, 21.0]]));
+        assert_eq!(
+            in_mm(&imp.positions),
+            Some(vec![[10.5, 20.0], [11.0, 21.0]])
+        );
         assert!(imp.labels.is_none());
         // Errors name the file, the line and the column.
         let err = |text: &str| {
@@ -771,7 +774,7 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         assert_eq!(semicolon.x[(0, 0)], 1.5);
         assert_eq!(semicolon.x[(1, 1)], 4.75);
         assert_eq!(
-            semicolon.positions_mm,
+            in_mm(&semicolon.positions),
             Some(vec![[10.25, 20.0], [11.0, 21.0]])
         );
         assert!(
@@ -814,7 +817,7 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         assert_eq!((imp.x.nrows(), imp.x.ncols()), (3, 3));
         assert_eq!(imp.x[(0, 0)], 1.5e-5);
         assert_eq!(
-            imp.positions_mm,
+            in_mm(&imp.positions),
             Some(vec![[0.01, 0.02], [0.04, 0.05], [0.07, 0.08]])
         );
         assert!(imp.labels.is_none());
@@ -824,9 +827,14 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 && d.contains("x from column 1, y from column 2, z from column 3"),
             "{d}"
         );
+        // z, a length, is held in m like x and y (the file wrote mm).
+        let (name, z) = imp.third.as_ref().unwrap();
+        assert_eq!(name, "z");
         assert_eq!(
-            imp.third,
-            Some(("z".to_string(), vec![0.003, 0.006, 0.009]))
+            z.iter()
+                .map(|v| (v * 1e9).round() / 1e6)
+                .collect::<Vec<_>>(),
+            [0.003, 0.006, 0.009]
         );
         // One headerless column of targets is a label, names too.
         std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
@@ -859,7 +867,7 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         assert_eq!(imp.feature_names, ["a", "b"]);
         std::fs::write(&feats, "a,X,Y\n1,2,3\n4,5,6\n").unwrap();
         let imp = Table::import(&feats, None, Unit::Mm).unwrap();
-        assert_eq!(imp.positions_mm, Some(vec![[2.0, 3.0], [5.0, 6.0]]));
+        assert_eq!(in_mm(&imp.positions), Some(vec![[2.0, 3.0], [5.0, 6.0]]));
         assert_eq!(imp.feature_names, ["a"]);
         // Without a header and without a targets file there is no target: say what to do.
         std::fs::write(&feats, "1,2\n3,4\n").unwrap();
@@ -1291,4 +1299,13 @@ fn press_footprints_follow_the_plan_and_round_ones_draw_nothing() {
         "{angle}"
     );
     assert!((rms / spread - 1.0).abs() < 0.03, "{rms}");
+}
+
+/// A table's positions (m) in mm, to a nanometre: as the file wrote them.
+fn in_mm(p: &Option<Vec<[f64; 2]>>) -> Option<Vec<[f64; 2]>> {
+    p.as_ref().map(|p| {
+        p.iter()
+            .map(|q| q.map(|v| (v * 1e9).round() / 1e6))
+            .collect()
+    })
 }

@@ -107,10 +107,10 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
         assert_eq!(Some(live.class), by_dataset[r].class, "row {r}");
         // The softmax's largest posterior is at least 1/C.
         assert!((1.0 / 3.0..=1.0).contains(&live.posterior), "{live:?}");
-        // The class's centre (mm) is its prediction's position.
+        // The class's centre (m) is its prediction's position.
         let c = data.centres[usize::from(live.class)];
         let target = by_dataset[r].target.unwrap();
-        assert!((target[0] - 1e3 * c[0]).abs() < 1e-9 && (target[1] - 1e3 * c[1]).abs() < 1e-9);
+        assert_eq!([target[0], target[1]], c);
     }
     // Another scan's frames are not classified; a referenced model needs V_0.
     let other = ScanConfig {
@@ -160,7 +160,7 @@ fn table() -> Table {
         feature_names: vec!["a".into(), "b".into()],
         x,
         labels: Some((0..n).map(|r| ["x", "y", "z"][r % 3].into()).collect()),
-        positions_mm: None,
+        positions: None,
         third: None,
         description: String::new(),
         first_row: 0,

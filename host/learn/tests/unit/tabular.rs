@@ -38,7 +38,7 @@ fn labelled(x: DMatrix<f64>, labels: Vec<String>) -> Table {
         feature_names: (0..x.ncols()).map(|j| format!("c{j}")).collect(),
         x,
         labels: Some(labels),
-        positions_mm: None,
+        positions: None,
         third: None,
         description: String::new(),
         first_row: 0,
@@ -59,18 +59,18 @@ fn the_stand_in_reads_as_the_foreign_files_say() {
     let t = &*STANDIN;
     assert_eq!((t.rows(), t.x.ncols()), (360, 192));
     assert!(t.labels.is_none());
-    let p = t.positions_mm.as_ref().unwrap();
-    // Metres became mm: every press within 40 mm (+ rounding) of the sheet's centre.
-    let [cx, cy, cz] = standin::SHEET_ORIGIN_M.map(|v| v * 1e3);
+    let p = t.positions.as_ref().unwrap();
+    // Metres stay metres: every press within 40 mm (+ rounding) of the sheet's centre.
+    let [cx, cy, cz] = standin::SHEET_ORIGIN_M;
     assert!(
-        p.iter().all(|q| (q[0] - cx).hypot(q[1] - cy) <= 40.01),
+        p.iter().all(|q| (q[0] - cx).hypot(q[1] - cy) <= 40.01e-3),
         "{:?}",
         p[0]
     );
     let (name, z) = t.third.as_ref().unwrap();
     assert_eq!(name, "z");
-    assert!(z.iter().all(|&z| z <= cz && z >= cz - 2.01), "{}", z[0]);
-    assert!(t.description.contains("no header row") && t.description.contains("m (read"));
+    assert!(z.iter().all(|&z| z <= cz && z >= cz - 2.01e-3), "{}", z[0]);
+    assert!(t.description.contains("no header row") && t.description.contains("positions in m"));
     assert!(!t.description.contains("--unit m"));
     // The same metres read as the default mm span a fraction of a millimetre: said.
     let dir = tmp("unit");
@@ -345,7 +345,7 @@ fn bad_requests_are_refused_with_the_reason() {
     let e = train(&small, Choice::One(Kind::Ridge), &o, &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("61 folds"), "{e}");
     // A regressor without positions; a single class.
-    small.positions_mm = None;
+    small.positions = None;
     small.third = None;
     small.labels = Some(vec!["only".into(); 60]);
     let e = train(&small, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap_err();
@@ -509,7 +509,7 @@ fn references_and_per_group_standardisation_cancel_a_sessions_gains_and_offsets(
         x,
         feature_names: (0..p).map(|j| format!("c{j}")).collect(),
         labels: None,
-        positions_mm: Some(vec![[0.0, 0.0]; n]),
+        positions: Some(vec![[0.0, 0.0]; n]),
         third: None,
         description: String::new(),
         first_row: 0,
@@ -754,4 +754,89 @@ fn table_and_board_models_refuse_the_same_spoilt_class_tables() {
     }
     assert!(TableModel::load(&t).is_ok() && ModelFile::load(&b).is_ok());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A version 1 model file (positions in mm, from et before positions were held in m) reads
+/// as the same model: each of its predictions is the one that et printed then (mm, 4
+/// decimals), and its scores are the same; saved again, it is version 2 and predicts alike.
+#[test]
+fn version_1_table_models_read_as_the_same_model_in_metres() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/table-model-v1");
+    let table = Table::import(
+        &dir.join("features.csv"),
+        Some(&dir.join("targets.csv")),
+        Unit::M,
+    )
+    .unwrap()
+    .select("72..96".parse().unwrap())
+    .unwrap();
+    let out = tmp("v1");
+    for kind in [
+        "ridge",
+        "kernel-ridge",
+        "gp",
+        "mlp",
+        "knn",
+        "average",
+        "lda-grid",
+    ] {
+        let text = std::fs::read_to_string(dir.join(format!("{kind}.json"))).unwrap();
+        assert!(text.contains("\"version\":1"), "{kind}: a version 1 file");
+        let model = TableModel::load(&dir.join(format!("{kind}.json"))).unwrap();
+        assert_eq!(model.version, TABLE_MODEL_VERSION, "{kind}");
+        let predicted = model.predict(&table.x).unwrap();
+        let printed = std::fs::read_to_string(dir.join(format!("{kind}.predictions.csv"))).unwrap();
+        let mut lines = printed.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        for (line, p) in lines.zip(&predicted) {
+            let cells: Vec<&str> = line.split(',').collect();
+            let then = |name: &str| cells[col(name)].parse::<f64>().unwrap();
+            let t = p.target.unwrap();
+            // x and y were printed to 0.1 um; z in full.
+            assert!(
+                (t[0] * 1e3 - then("x_mm")).abs() <= 6e-5,
+                "{kind}: {line} {t:?}"
+            );
+            assert!(
+                (t[1] * 1e3 - then("y_mm")).abs() <= 6e-5,
+                "{kind}: {line} {t:?}"
+            );
+            assert!(
+                (t[2] * 1e3 - then("z_mm")).abs() <= 1e-9,
+                "{kind}: {line} {t:?}"
+            );
+            if header.contains(&"class") {
+                let name = &model.classes.as_ref().unwrap().names[usize::from(p.class.unwrap())];
+                assert_eq!(name, cells[col("class")], "{kind}");
+            }
+        }
+        let scores: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(format!("{kind}.eval.json"))).unwrap(),
+        )
+        .unwrap();
+        let e = evaluate(&model, &table).unwrap();
+        let now = serde_json::to_value(&e).unwrap();
+        for (name, then) in scores.as_object().unwrap() {
+            match (then.as_f64(), now[name].as_f64()) {
+                (Some(a), Some(b)) => {
+                    assert!(
+                        (a - b).abs() <= 1e-9 * a.abs().max(1.0),
+                        "{kind} {name}: {a} {b}"
+                    );
+                }
+                (a, b) => assert_eq!(a, b, "{kind} {name}"),
+            }
+        }
+        let again = out.join(format!("{kind}.json"));
+        model.save(&again).unwrap();
+        let back = TableModel::load(&again).unwrap();
+        assert_eq!(back, model, "{kind}");
+        assert!(
+            std::fs::read_to_string(&again)
+                .unwrap()
+                .contains("\"version\":2")
+        );
+    }
+    std::fs::remove_dir_all(&out).unwrap();
 }

@@ -431,6 +431,15 @@ fn predictions_csv(model: &TableModel, e: &tabular::Evaluation, first_row: usize
     }
     header.extend(["x_mm", "y_mm"]);
     // The third target: a length in mm when named z, else in the file's own unit.
+    let z_scale = if model
+        .third
+        .as_deref()
+        .is_some_and(|t| t.eq_ignore_ascii_case("z"))
+    {
+        1e3
+    } else {
+        1.0
+    };
     let third = model.third.as_ref().map(|t| {
         if t.eq_ignore_ascii_case("z") {
             "z_mm".to_string()
@@ -458,10 +467,11 @@ fn predictions_csv(model: &TableModel, e: &tabular::Evaluation, first_row: usize
             let _ = write!(s, ",{name}");
         }
         let t = p.target;
-        let cell = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v:.4}"));
+        // The model predicts m; the file is for people: mm.
+        let cell = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{:.4}", v * 1e3));
         let _ = write!(s, ",{},{}", cell(t.map(|t| t[0])), cell(t.map(|t| t[1])));
         if third.is_some() {
-            let v = t.map_or_else(String::new, |t| t[2].to_string());
+            let v = t.map_or_else(String::new, |t| (t[2] * z_scale).to_string());
             let _ = write!(s, ",{v}");
         }
         s.push('\n');

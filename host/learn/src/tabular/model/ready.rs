@@ -246,12 +246,12 @@ impl TableModel {
             .ok_or(TablesError::Inconsistent("a classifier without 'classes'"))?;
         if info.names.len() != classes.len()
             || info
-                .centres_mm
+                .centres
                 .as_ref()
                 .is_some_and(|c| c.len() != classes.len())
         {
             return Err(TablesError::Inconsistent(
-                "classes.names (and centres_mm) must list every class",
+                "classes.names (and centres_m) must list every class",
             ));
         }
         fitted_from_records(
@@ -259,7 +259,7 @@ impl TableModel {
             &self.feature_mean,
             &self.feature_scale,
             classes,
-            info.centres_mm.as_deref().unwrap_or(&[]),
+            info.centres.as_deref().unwrap_or(&[]),
         )
         .map_err(TablesError::Classes)
     }
