@@ -61,8 +61,12 @@ pub const FLAG_COMPLIANCE: u8 = 1 << 3;
 
 /// One scan: the frame vector V_m and everything needed to interpret it (docs/design.md: a frame
 /// always says which protocol, electrode count and settings produced it).
+///
+/// `V` holds the voltages: a fixed [`K_MAX`] buffer on the board; on the host a heap vector
+/// ([`HostFrame`]), the same bytes on the wire, so that decoding a frame moves a pointer
+/// rather than the whole buffer (8 KB) from call to call.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
+pub struct Frame<V = Vec<f32, K_MAX>> {
     /// Sequence number, +1 per frame produced (gaps = frames lost).
     pub seq: u32,
     /// When the scan started, device clock.
@@ -74,7 +78,53 @@ pub struct Frame {
     /// Number of measurements with rail samples (0 unless [`FLAG_RAIL`]).
     pub rail_count: u16,
     /// V_m in volts, K values in protocol step order (208 for AD at L = 16).
-    pub voltages: Vec<f32, K_MAX>,
+    pub voltages: V,
+}
+
+/// The host's [`Frame`]: its voltages on the heap.
+#[cfg(feature = "std")]
+pub type HostFrame = Frame<std::vec::Vec<f32>>;
+
+/// The host's [`Uplink`]: what [`decode`] gives the host from the same packets the board
+/// writes (a frame's voltages on the heap; [`HostUplink::fits`] checks their count).
+#[cfg(feature = "std")]
+pub type HostUplink = Uplink<std::vec::Vec<f32>>;
+
+#[cfg(feature = "std")]
+impl HostUplink {
+    /// Whether a frame holds at most [`K_MAX`] values, as every frame the board can send
+    /// does (a heap vector reads any count the packet holds).
+    #[must_use]
+    pub fn fits(&self) -> bool {
+        match self {
+            Uplink::Frame(f) => f.voltages.len() <= K_MAX,
+            Uplink::Event(_) => true,
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl From<Frame> for HostFrame {
+    fn from(f: Frame) -> Self {
+        Self {
+            seq: f.seq,
+            timestamp: f.timestamp,
+            config: f.config,
+            flags: f.flags,
+            rail_count: f.rail_count,
+            voltages: f.voltages.to_vec(),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl From<Uplink> for HostUplink {
+    fn from(u: Uplink) -> Self {
+        match u {
+            Uplink::Frame(f) => Uplink::Frame(f.into()),
+            Uplink::Event(e) => Uplink::Event(e),
+        }
+    }
 }
 
 impl Frame {
@@ -294,9 +344,9 @@ pub enum Refusal {
 /// Device to host.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[allow(clippy::large_enum_variant)] // a Frame is the common case; boxing needs alloc.
-pub enum Uplink {
+pub enum Uplink<V = Vec<f32, K_MAX>> {
     /// A scan.
-    Frame(Frame),
+    Frame(Frame<V>),
     /// Anything else.
     Event(Event),
 }

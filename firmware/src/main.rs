@@ -43,7 +43,6 @@ mod app {
     use heapless::spsc::{Consumer, Producer, Queue};
     use rtic::Mutex as _;
     use rtic_monotonics::systick::prelude::*;
-    use serde::Serialize;
     use stm32f4xx_hal::pac::{self, USART1};
     use stm32f4xx_hal::rcc::RccExt as _;
     use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, RxListen as _, Serial, Tx};
@@ -185,7 +184,7 @@ mod app {
 
     /// Encodes `message` and queues it whole, or not at all (returns false when the queue is
     /// too full or the message does not encode).
-    fn send<T: Serialize>(tx: &mut Producer<'static, u8>, message: &T, buf: &mut [u8]) -> bool {
+    fn send(tx: &mut Producer<'static, u8>, message: &Uplink, buf: &mut [u8]) -> bool {
         let Ok(n) = wire::encode(message, buf) else {
             return false;
         };

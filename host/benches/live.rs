@@ -50,7 +50,7 @@ fn packets(electrodes: u8, protocol: ProtocolKind) -> (Sheet, Vec<Vec<u8>>) {
     let packets = (0..FRAMES)
         .map(|_| {
             let f = sim.next_frame().expect("frame");
-            let frame = wire::Frame {
+            let frame: wire::Frame = wire::Frame {
                 seq: f.seq,
                 timestamp: et_core::Micros(f.t_us),
                 config: f.config,

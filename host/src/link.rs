@@ -24,8 +24,8 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use et_core::wire::{
-    self, Accumulator, Command, CommandTag, Event, MODEL_CHUNK, PACKET_MAX, Refusal, Uplink,
-    WireError,
+    self, Accumulator, Command, CommandTag, Event, HostUplink, MODEL_CHUNK, PACKET_MAX, Refusal,
+    Uplink, WireError,
 };
 use serde::Serialize;
 
@@ -56,7 +56,7 @@ pub struct Counters {
 
 /// Counts `message` in `counters`: frames, the frames lost before it (a gap in `seq` after
 /// `next_seq`, the one expected), events.
-fn count(counters: &mut Counters, next_seq: &mut Option<u32>, message: &Uplink) {
+fn count(counters: &mut Counters, next_seq: &mut Option<u32>, message: &HostUplink) {
     match message {
         Uplink::Frame(f) => {
             counters.frames += 1;
@@ -97,20 +97,21 @@ impl Decoder {
     }
 
     /// Decodes `bytes`, appending every good message to `out`.
-    pub fn feed(&mut self, bytes: &[u8], out: &mut Vec<Uplink>) {
+    pub fn feed(&mut self, bytes: &[u8], out: &mut Vec<HostUplink>) {
         self.counters.bytes += bytes.len() as u64;
         let Self {
             packets,
             counters,
             next_seq,
         } = self;
-        packets.feed_slice::<Uplink>(bytes, |result| match result {
-            Ok(message) => {
+        packets.feed_slice::<HostUplink>(bytes, |result| match result {
+            Ok(message) if message.fits() => {
                 count(counters, next_seq, &message);
                 out.push(message);
             }
             Err(WireError::Version { .. }) => counters.wrong_version += 1,
-            Err(_) => counters.corrupt += 1,
+            // A bad packet, or a frame longer than any board sends.
+            _ => counters.corrupt += 1,
         });
     }
 
@@ -185,8 +186,8 @@ pub struct Link {
     path: String,
     writer: Arc<Mutex<Option<Port>>>,
     counters: Arc<Mutex<Counters>>,
-    incoming: Receiver<Uplink>,
-    pending: VecDeque<Uplink>,
+    incoming: Receiver<HostUplink>,
+    pending: VecDeque<HostUplink>,
     stop: Arc<AtomicBool>,
     reader: Option<JoinHandle<()>>,
 }
@@ -282,7 +283,7 @@ impl Link {
     ///
     /// # Errors
     /// [`LinkError::Timeout`] when nothing came.
-    pub fn next(&mut self, timeout: Duration) -> Result<Uplink, LinkError> {
+    pub fn next(&mut self, timeout: Duration) -> Result<HostUplink, LinkError> {
         if let Some(m) = self.pending.pop_front() {
             return Ok(m);
         }
@@ -379,7 +380,7 @@ struct Reader {
     writer: Arc<Mutex<Option<Port>>>,
     counters: Arc<Mutex<Counters>>,
     stop: Arc<AtomicBool>,
-    out: Sender<Uplink>,
+    out: Sender<HostUplink>,
 }
 
 impl Reader {

@@ -61,15 +61,15 @@ pub struct LiveFrame {
     pub chip_class: Option<ChipClass>,
 }
 
-impl From<et_core::wire::Frame> for LiveFrame {
+impl From<et_core::wire::HostFrame> for LiveFrame {
     /// A board's frame as it came off the wire (no truth, no class yet).
-    fn from(f: et_core::wire::Frame) -> Self {
+    fn from(f: et_core::wire::HostFrame) -> Self {
         Self {
             seq: f.seq,
             t_us: f.timestamp.0,
             config: f.config,
             flags: f.flags,
-            voltages: f.voltages.to_vec(),
+            voltages: f.voltages,
             truth: None,
             chip_class: None,
         }

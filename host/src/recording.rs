@@ -149,14 +149,15 @@ pub struct Record {
 impl Record {
     /// The record of `frame`, with the truth if known.
     #[must_use]
-    pub fn new(frame: &Frame, touches: Option<Vec<TouchRecord>>) -> Self {
+    pub fn new<V: AsRef<[f32]>>(frame: &Frame<V>, touches: Option<Vec<TouchRecord>>) -> Self {
+        let voltages = frame.voltages.as_ref();
         Self {
             seq: frame.seq,
             t_us: frame.timestamp.0,
             flags: frame.flags,
             rail_count: frame.rail_count,
-            voltages: frame.voltages.to_vec(),
-            invalid: invalid_columns(&frame.voltages),
+            voltages: voltages.to_vec(),
+            invalid: invalid_columns(voltages),
             touches,
         }
     }

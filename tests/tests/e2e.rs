@@ -89,7 +89,7 @@ impl Device {
             .expect("K <= K_MAX");
         let mut bytes = packet(&Uplink::Frame(out.frame));
         for e in out.events {
-            bytes.extend(packet(&Uplink::Event(e)));
+            bytes.extend(packet(&Uplink::<()>::Event(e)));
         }
         bytes
     }
@@ -114,7 +114,7 @@ impl Device {
             if let Some(result) = self.commands.feed::<Command>(b)
                 && let Some(reply) = self.device.handle_decoded(result)
             {
-                replies.extend(packet(&Uplink::Event(reply)));
+                replies.extend(packet(&Uplink::<()>::Event(reply)));
             }
         }
         replies

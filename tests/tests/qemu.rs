@@ -24,7 +24,7 @@ use et_core::board::BAUD;
 use et_core::model::{Model, Precision};
 use et_core::protocol::{Halving, Protocol, ProtocolKind};
 use et_core::rng::Rng;
-use et_core::wire::{self, Command, CommandTag, Event, Frame, Refusal, Uplink};
+use et_core::wire::{self, Command, CommandTag, Event, HostFrame, Refusal, Uplink};
 use et_host::link::{Link, LinkError};
 use et_learn::fit::{FitOptions, Fitted, fisher_ranking};
 use et_sim::emulated::QemuSheet;
@@ -157,7 +157,7 @@ impl Drop for Qemu {
 }
 
 /// The next `n` frames, and every event that came with them.
-fn collect(link: &mut Link, n: usize) -> (Vec<Frame>, Vec<Event>) {
+fn collect(link: &mut Link, n: usize) -> (Vec<HostFrame>, Vec<Event>) {
     let (mut frames, mut events) = (Vec::new(), Vec::new());
     while frames.len() < n {
         match link.next(REPLY) {
@@ -170,7 +170,7 @@ fn collect(link: &mut Link, n: usize) -> (Vec<Frame>, Vec<Event>) {
 }
 
 /// Largest and rms difference between a frame and the sheet's noiseless one, V.
-fn deviation(frame: &Frame, ideal: &[f64]) -> (f64, f64) {
+fn deviation(frame: &HostFrame, ideal: &[f64]) -> (f64, f64) {
     assert_eq!(frame.voltages.len(), ideal.len());
     let d: Vec<f64> = frame
         .voltages
@@ -186,7 +186,7 @@ fn deviation(frame: &Frame, ideal: &[f64]) -> (f64, f64) {
 /// Checks every frame against its state's noiseless frame: within a few ADC codes (the image adds
 /// the calibrated 49 uV per sample and quantises at gain 1, a 153 uV code), and nearer its own
 /// state than any other.
-fn check_against_sheet(sheet: &QemuSheet, frames: &[Frame], config: &ScanConfig) {
+fn check_against_sheet(sheet: &QemuSheet, frames: &[HostFrame], config: &ScanConfig) {
     let protocol = config.validate().unwrap();
     let amps = f64::from(config.current_amps());
     let ideals: Vec<Vec<f64>> = (0..sheet.transfers.len())

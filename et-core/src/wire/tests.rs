@@ -280,7 +280,7 @@ fn every_command_fits_the_device_receive_buffer() {
 
 #[test]
 fn largest_frame_fits_packet_max_and_reference_frame_size_is_known() {
-    let big = Frame {
+    let big: Frame = Frame {
         seq: u32::MAX,
         timestamp: Micros(u32::MAX),
         config: ScanConfig {

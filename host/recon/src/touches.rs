@@ -164,39 +164,50 @@ fn touches_with(
         .filter_map(|(p, v)| v.filter(|&v| v >= f * max).map(|v| (p, v)))
         .collect();
     order.sort_unstable_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-    // Union-find over pixels; a root's peak is its region's highest value.
-    let mut parent: Vec<usize> = (0..image.len()).collect();
-    let mut peak = vec![f64::NAN; image.len()];
-    let mut flooded = vec![false; image.len()];
-    fn root(parent: &mut [usize], mut p: usize) -> usize {
-        while parent[p] != p {
-            parent[p] = parent[parent[p]];
-            p = parent[p];
+    // Union-find over the flooded pixels by rank (their place in `order`): a pixel is
+    // flooded once the flood has passed its rank, and a root's peak is its region's highest
+    // value. Only the pixels at or above f max are held, not the whole grid.
+    let mut rank = vec![u32::MAX; image.len()];
+    for (i, &(p, _)) in order.iter().enumerate() {
+        rank[p] = i as u32;
+    }
+    let mut parent: Vec<usize> = (0..order.len()).collect();
+    let mut peak = vec![f64::NAN; order.len()];
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
         }
-        p
+        i
     }
     // Pairs of regions already found to be separate touches (by root).
     let mut apart: Vec<(usize, usize)> = Vec::new();
-    for &(p, v) in &order {
-        // The regions already flooded around p (at most its four neighbours'), on the stack.
+    for (i, &(p, v)) in order.iter().enumerate() {
+        // The regions already flooded around p (at most its four neighbours'), on the stack,
+        // highest peak first.
         let (mut around, mut n) = ([0usize; 4], 0);
         for q in grid.neighbours(p).into_iter().flatten() {
-            if flooded[q] {
-                let r = root(&mut parent, q);
+            let j = rank[q] as usize;
+            if j < i {
+                let r = root(&mut parent, j);
                 if !around[..n].contains(&r) {
-                    around[n] = r;
+                    // Insertion by peak, descending.
+                    let at = around[..n]
+                        .iter()
+                        .position(|&a| peak[r] > peak[a])
+                        .unwrap_or(n);
+                    around.copy_within(at..n, at + 1);
+                    around[at] = r;
                     n += 1;
                 }
             }
         }
-        let near = &mut around[..n];
-        flooded[p] = true;
-        near.sort_by(|&a, &b| peak[b].total_cmp(&peak[a]));
+        let near = &around[..n];
         let Some(&top) = near.first() else {
-            peak[p] = v;
+            peak[i] = v;
             continue;
         };
-        parent[p] = top;
+        parent[i] = top;
         for &r in &near[1..] {
             let separate = apart
                 .iter()
@@ -220,10 +231,10 @@ fn touches_with(
         }
     }
     // Each region's pixels, by root (a noisy image has many small regions).
-    let mut slot = vec![usize::MAX; image.len()];
+    let mut slot = vec![usize::MAX; order.len()];
     let mut members: Vec<(usize, Vec<usize>)> = Vec::new();
-    for &(p, _) in &order {
-        let r = root(&mut parent, p);
+    for (i, &(p, _)) in order.iter().enumerate() {
+        let r = root(&mut parent, i);
         if slot[r] == usize::MAX {
             slot[r] = members.len();
             members.push((r, Vec::new()));
@@ -233,16 +244,17 @@ fn touches_with(
     let mut out: Vec<Region> = members
         .into_iter()
         .map(|(r, m)| {
+            let top = peak[r];
             let core: Vec<usize> = m
                 .iter()
                 .copied()
-                .filter(|&q| image[q].is_some_and(|v| v >= 0.5 * peak[r]))
+                .filter(|&q| image[q].is_some_and(|v| v >= 0.5 * top))
                 .collect();
             Region {
                 centroid: grid.centroid(&core),
                 area: m.len() as f64 * grid.size * grid.size,
-                peak: peak[r],
-                peak_pixel: r,
+                peak: top,
+                peak_pixel: order[r].0,
                 z: m.iter()
                     .filter_map(|&q| {
                         let sd = sd(q).filter(|&sd| sd > 0.0)?;

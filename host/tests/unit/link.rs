@@ -1,4 +1,7 @@
-use et_core::wire::{self, Accumulator, Command, CommandTag, Event, PACKET_MAX, Refusal, Uplink};
+use et_core::wire::{
+    self, Accumulator, Command, CommandTag, Event, HostFrame, HostUplink, PACKET_MAX, Refusal,
+    Uplink,
+};
 use serde::Serialize;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -45,7 +48,7 @@ fn decoder_resyncs_counts_damage_and_sequence_gaps() {
     let truncated = packet(&frame(2));
     stream.extend(&truncated[..truncated.len() / 2]);
     stream.extend(packet(&frame(3)));
-    stream.extend(packet(&Uplink::Event(Event::Pong { nonce: 9 })));
+    stream.extend(packet(&HostUplink::Event(Event::Pong { nonce: 9 })));
     // Another wire version: valid COBS and CRC, version byte 2.
     let mut other = vec![2u8, 1, 2];
     let crc = wire::crc32(&other);
@@ -76,7 +79,10 @@ fn decoder_resyncs_counts_damage_and_sequence_gaps() {
         assert_eq!(seqs, [0, 3, 7], "piece {piece}");
         assert_eq!(
             out[1..3],
-            [frame(3), Uplink::Event(Event::Pong { nonce: 9 })]
+            [
+                HostUplink::from(frame(3)),
+                HostUplink::Event(Event::Pong { nonce: 9 })
+            ]
         );
         let c = d.counters();
         // The garbage before the first 0x00 and the flipped frame; the truncated frame ran
@@ -85,6 +91,33 @@ fn decoder_resyncs_counts_damage_and_sequence_gaps() {
         assert_eq!((c.frames, c.events, c.lost_frames), (3, 1, 2 + 3));
         assert_eq!(c.bytes, stream.len() as u64);
     }
+}
+
+/// The host reads a frame's voltages into a heap vector, which would take any count a packet
+/// holds: a frame longer than any board sends (K_MAX + 1 values, which still fit a packet)
+/// is refused as damaged, and the frames around it are read.
+#[test]
+fn a_frame_longer_than_k_max_is_refused() {
+    let Uplink::Frame(f) = frame(1) else {
+        unreachable!()
+    };
+    let long = HostUplink::Frame(HostFrame {
+        voltages: vec![0.5; et_core::protocol::K_MAX + 1],
+        ..HostFrame::from(f)
+    });
+    let mut stream = packet(&frame(0));
+    let mut buf = vec![0u8; PACKET_MAX];
+    let n = wire::encode(&long, &mut buf).expect("K_MAX + 1 values fit a packet");
+    stream.extend(&buf[..n]);
+    stream.extend(packet(&frame(2)));
+    let mut d = Decoder::new();
+    let mut out = Vec::new();
+    d.feed(&stream, &mut out);
+    assert_eq!(
+        out,
+        [HostUplink::from(frame(0)), HostUplink::from(frame(2))]
+    );
+    assert_eq!(d.counters().corrupt, 1);
 }
 
 /// A device on the master side of a pty: the real `et_core::device::Device` answering
@@ -115,7 +148,7 @@ impl FakeDevice {
                         if let Some(d) = packets.feed::<Command>(b)
                             && let Some(reply) = device.handle_decoded(d)
                         {
-                            let _ = master.write_all(&packet(&Uplink::Event(reply)));
+                            let _ = master.write_all(&packet(&HostUplink::Event(reply)));
                         }
                     }
                 }
@@ -166,7 +199,7 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn frames(link: &mut Link, n: usize) -> Vec<Frame> {
+fn frames(link: &mut Link, n: usize) -> Vec<HostFrame> {
     let mut out = Vec::new();
     let deadline = Instant::now() + Duration::from_secs(10);
     while out.len() < n && Instant::now() < deadline {
@@ -428,7 +461,7 @@ proptest::proptest! {
             d.feed(chunk, &mut out);
         }
         for m in &out {
-            proptest::prop_assert!(packets.iter().any(|(sent, _)| sent == m), "misread {:?}", m);
+            proptest::prop_assert!(packets.iter().any(|(sent, _)| HostUplink::from(sent.clone()) == *m), "misread {:?}", m);
         }
         let c = d.counters();
         proptest::prop_assert_eq!(c.frames + c.events, out.len() as u64);
