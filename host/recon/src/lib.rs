@@ -62,6 +62,6 @@ pub use reconstructor::{
 };
 pub use segment::{Class, SEGMENT_LEVEL, segment};
 pub use touches::{
-    Object, PROMINENCE, Region, TOUCH_Z, above_noise, default_threshold, objects, regions,
-    touch_rule, touches,
+    Object, PROMINENCE, PixelNoise, Region, TOUCH_Z, above_noise, default_threshold, objects,
+    regions, touch_rule, touches,
 };

@@ -140,11 +140,83 @@ pub fn touch_rule(
     image: &[Option<f64>],
     f: f64,
     z: f64,
-    sd: impl FnMut(usize) -> Option<f64>,
+    sd: impl PixelNoise,
 ) -> Vec<Region> {
     let mut found = touches_with(grid, image, f, PROMINENCE, sd);
     found.retain(|r| r.z.is_none_or(|v| v >= z));
     found
+}
+
+/// Each pixel's noise standard deviation, for [`touch_rule`]: a closure `|p| sd` is one.
+pub trait PixelNoise {
+    /// Pixel p's noise standard deviation (None: unknown).
+    fn sd(&mut self, p: usize) -> Option<f64>;
+
+    /// A lower bound of [`sd`](Self::sd) that costs less to have (by default the standard
+    /// deviation itself): a region's z, its largest value over noise, is then made from the
+    /// pixels whose bound could beat the best so far, not from every pixel's own noise.
+    fn floor(&mut self, p: usize) -> Option<f64> {
+        self.sd(p)
+    }
+}
+
+impl<F: FnMut(usize) -> Option<f64>> PixelNoise for F {
+    fn sd(&mut self, p: usize) -> Option<f64> {
+        self(p)
+    }
+}
+
+/// The largest `image[q] / sd(q)` over `pixels` (those with a positive noise), as the
+/// exhaustive maximum gives it; each pixel's own noise made only when its value over the
+/// noise's floor (an upper bound of its z, for a value above 0) could beat the best so far.
+fn region_z(pixels: &[usize], image: &[Option<f64>], noise: &mut impl PixelNoise) -> Option<f64> {
+    // Each pixel's bound: v / floor >= v / sd for v > 0; 0 for v <= 0 (v / sd <= 0); no
+    // bound without a floor. None: no value, which the exhaustive maximum skips too.
+    let bounds: Vec<Option<f64>> = pixels
+        .iter()
+        .map(|&q| {
+            let v = image.get(q).copied().flatten()?;
+            Some(if v <= 0.0 {
+                0.0
+            } else {
+                (noise.floor(q).filter(|&s| s > 0.0)).map_or(f64::INFINITY, |lo| v / lo)
+            })
+        })
+        .collect();
+    let mut best: Option<f64> = None;
+    let mut exact = |q: usize, best: &mut Option<f64>| {
+        let Some(z) = noise
+            .sd(q)
+            .filter(|&s| s > 0.0)
+            .and_then(|s| Some(image.get(q).copied().flatten()? / s))
+        else {
+            return;
+        };
+        *best = Some(best.map_or(z, |b| b.max(z)));
+    };
+    // The most promising pixel first, then whichever could still beat it.
+    let first = (0..pixels.len())
+        .filter(|&i| bounds[i].is_some())
+        .max_by(|&a, &b| {
+            bounds[a]
+                .unwrap_or(0.0)
+                .total_cmp(&bounds[b].unwrap_or(0.0))
+        });
+    if let Some(i) = first {
+        exact(pixels[i], &mut best);
+    }
+    for (i, &q) in pixels.iter().enumerate() {
+        if Some(i) == first {
+            continue;
+        }
+        match (bounds[i], best) {
+            (Some(b), Some(z)) if b <= z => {}
+            (Some(_), _) => exact(q, &mut best),
+            // No value here: the exhaustive maximum skips it too.
+            (None, _) => {}
+        }
+    }
+    best
 }
 
 /// [`touches`] with each pixel's noise from `sd` (None: unknown).
@@ -153,7 +225,7 @@ fn touches_with(
     image: &[Option<f64>],
     f: f64,
     prominence: f64,
-    mut sd: impl FnMut(usize) -> Option<f64>,
+    mut sd: impl PixelNoise,
 ) -> Vec<Region> {
     let Some(max) = positive_max(image) else {
         return Vec::new();
@@ -255,12 +327,7 @@ fn touches_with(
                 area: m.len() as f64 * grid.size * grid.size,
                 peak: top,
                 peak_pixel: order[r].0,
-                z: m.iter()
-                    .filter_map(|&q| {
-                        let sd = sd(q).filter(|&sd| sd > 0.0)?;
-                        Some(image[q]? / sd)
-                    })
-                    .reduce(f64::max),
+                z: region_z(&m, image, &mut sd),
                 pixels: m,
             }
         })

@@ -89,19 +89,17 @@ impl Imaging<'_> {
             .iter()
             .map(|&v| v as f32)
             .collect();
-        let (inside_index, inverse_sd, factor) =
-            (self.inside_index, &self.noise.inverse_sd, self.touch_factor);
-        touch_rule(self.recon.grid(), image, threshold, factor, |p| {
-            let i = (*inside_index.get(p)?)?;
-            let inverse = *inverse_sd.get(i)?;
-            // A pixel below the factor over the reference's noise alone is below it over the
-            // larger noise too: its noise need not be made (the reference's, which it is
-            // given, keeps it below the factor; a region's z is its largest pixel's).
-            if values.get(i).is_some_and(|v| v * inverse < factor as f32) && inverse > 0.0 {
-                return Some(f64::from(1.0 / inverse));
-            }
-            self.projection.squares.sd(i, &var)
-        })
+        touch_rule(
+            self.recon.grid(),
+            image,
+            threshold,
+            self.touch_factor,
+            RegionNoise {
+                imaging: self,
+                values,
+                var: &var,
+            },
+        )
     }
 
     /// A touched frame's event: the classifier's class, position and posterior when there is
@@ -129,5 +127,46 @@ impl Imaging<'_> {
             confidence: model.map(|m| m.posterior),
             regions: touches,
         }
+    }
+}
+
+/// A touched frame's pixel noise for the touch rule: the reference's alone (its floor, held
+/// per pixel), and the images' own (the frames' and the model's error, a dot product over
+/// the channels) made only for pixels the rule asks.
+struct RegionNoise<'a, 'b> {
+    imaging: &'a Imaging<'b>,
+    /// The frame's inside pixels.
+    values: &'a [f32],
+    /// Each channel's variance, V^2 (K values).
+    var: &'a [f32],
+}
+
+impl RegionNoise<'_, '_> {
+    /// Pixel p's row and its reference noise's inverse.
+    fn inverse(&self, p: usize) -> Option<(usize, f32)> {
+        let i = (*self.imaging.inside_index.get(p)?)?;
+        Some((i, *self.imaging.noise.inverse_sd.get(i)?))
+    }
+}
+
+impl et_recon::PixelNoise for RegionNoise<'_, '_> {
+    fn sd(&mut self, p: usize) -> Option<f64> {
+        let (i, inverse) = self.inverse(p)?;
+        // A pixel below the factor over the reference's noise alone is below it over the
+        // larger noise too: its noise need not be made (the reference's, which it is given,
+        // keeps it below the factor; a region's z is its largest pixel's).
+        let factor = self.imaging.touch_factor as f32;
+        if self.values.get(i).is_some_and(|v| v * inverse < factor) && inverse > 0.0 {
+            return Some(f64::from(1.0 / inverse));
+        }
+        self.imaging.projection.squares.sd(i, self.var)
+    }
+
+    fn floor(&mut self, p: usize) -> Option<f64> {
+        // The reference's noise, less a thousandth: it and the images' own noise are summed
+        // in other precisions (f64 at set-up, f32 here), so it stays below it when the
+        // model's error adds almost nothing.
+        let (_, inverse) = self.inverse(p)?;
+        (inverse > 0.0).then(|| 0.999 * f64::from(1.0 / inverse))
     }
 }
