@@ -16,18 +16,45 @@ pub use sheet::{SheetMarks, half_range, sheet_image, touches};
 
 /// Why a plot could not be written.
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {message}", path.display())]
+#[error("{}: {source}", path.display())]
 pub struct PlotError {
     /// The file.
     pub path: std::path::PathBuf,
-    /// What went wrong.
-    pub message: String,
+    /// What went wrong: the drawing's, the encoder's or the file system's own error, or a
+    /// [`PlotFault`].
+    pub source: Box<dyn std::error::Error + Send + Sync>,
 }
 
-fn fail(path: &Path, e: impl std::fmt::Display) -> PlotError {
+/// What et itself refuses in a plot or a PNG (the libraries' own errors are kept as they are).
+#[derive(Debug, thiserror::Error)]
+pub enum PlotFault {
+    /// The PNG's size does not fit in memory.
+    #[error("an image too large to decode")]
+    TooLarge,
+    /// A PNG of pixels et does not read.
+    #[error("{color:?} pixels of {depth:?}: not 8-bit")]
+    NotEightBit {
+        /// Its colour type.
+        color: png::ColorType,
+        /// Its bit depth.
+        depth: png::BitDepth,
+    },
+    /// A heat map's values do not fill its rows x cols (or it has none).
+    #[error("heat map table of the wrong length: {values} values for {rows} x {cols}")]
+    HeatMapLength {
+        /// Values given.
+        values: usize,
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        cols: usize,
+    },
+}
+
+fn fail(path: &Path, e: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> PlotError {
     PlotError {
         path: path.into(),
-        message: e.to_string(),
+        source: e.into(),
     }
 }
 
@@ -85,7 +112,7 @@ pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<u8>), PlotError> {
     let mut reader = decoder.read_info().map_err(|e| fail(path, e))?;
     let size = reader
         .output_buffer_size()
-        .ok_or_else(|| fail(path, "an image too large to decode"))?;
+        .ok_or_else(|| fail(path, PlotFault::TooLarge))?;
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(|e| fail(path, e))?;
     let data = &buf[..info.buffer_size()];
@@ -102,7 +129,7 @@ pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<u8>), PlotError> {
             .chunks_exact(2)
             .flat_map(|p| [p[0], p[0], p[0]])
             .collect(),
-        (c, d) => return Err(fail(path, format!("{c:?} pixels of {d:?}: not 8-bit"))),
+        (color, depth) => return Err(fail(path, PlotFault::NotEightBit { color, depth })),
     };
     Ok((info.width, info.height, rgb))
 }
@@ -452,7 +479,8 @@ pub fn heatmap_over(
     overlay: &Overlay,
 ) -> Result<(), PlotError> {
     if values.len() != rows * cols || rows == 0 || cols == 0 {
-        return Err(fail(path, "heat map table of the wrong length"));
+        let values = values.len();
+        return Err(fail(path, PlotFault::HeatMapLength { values, rows, cols }));
     }
     let key_height = if overlay.key.is_empty() { 0 } else { 26 };
     render(path, (780, 640 + key_height), |root| {

@@ -153,7 +153,7 @@ pub fn record(
                         .map_err(|e| RecordingError::Line {
                             path: path.clone(),
                             line: 1,
-                            message: e.to_string(),
+                            fault: recording::LineFault::Config(e),
                         })?;
                     let w = if plan.force {
                         recording::Writer::create(&path, &header)?

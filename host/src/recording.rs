@@ -38,7 +38,7 @@ fn units() -> String {
 }
 
 /// One column of V_m: which injection and which measurement produced it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Column {
     /// Electrode the current enters.
     pub source: u8,
@@ -48,6 +48,21 @@ pub struct Column {
     pub positive: u8,
     /// Amplifier - input.
     pub negative: u8,
+}
+
+impl std::fmt::Display for Column {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Self {
+            source,
+            sink,
+            positive,
+            negative,
+        } = self;
+        write!(
+            f,
+            "source {source}, sink {sink}, + {positive}, - {negative}"
+        )
+    }
 }
 
 /// The first line of a recording.
@@ -191,18 +206,93 @@ pub enum RecordingError {
         source: std::io::Error,
     },
     /// A line is not what the format says.
-    #[error("{}:{line}: {message}", path.display())]
+    #[error("{}:{line}: {fault}", path.display())]
     Line {
         /// The file.
         path: PathBuf,
-        /// 1-based line number.
+        /// 1-based line number (0: a frame being appended).
         line: usize,
         /// What is wrong.
-        message: String,
+        fault: LineFault,
     },
     /// The file may not be written (it exists, or it is an input).
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+}
+
+/// What is wrong with one line of a recording (or a frame appended to one).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LineFault {
+    /// The file has no line.
+    #[error("empty file: no header")]
+    Empty,
+    /// The header is not the format's JSON.
+    #[error("header: {0}")]
+    Header(serde_json::Error),
+    /// Another format's file.
+    #[error("format '{0}' is not {FORMAT}")]
+    Format(String),
+    /// Another version of the format.
+    #[error("version {0} (this build reads {VERSION})")]
+    Version(u32),
+    /// The header's configuration is not one et scans.
+    #[error("header config: {0}")]
+    Config(et_core::config::ConfigError),
+    /// The header's K and electrodes disagree with its configuration.
+    #[error(
+        "header says K = {k} on {electrodes} electrodes, its config ({protocol} on \
+         {config_electrodes}) gives K = {config_k}"
+    )]
+    HeaderK {
+        /// The header's K.
+        k: usize,
+        /// The header's electrode count.
+        electrodes: u8,
+        /// The configuration's protocol.
+        protocol: &'static str,
+        /// The configuration's electrode count.
+        config_electrodes: u8,
+        /// The configuration's K.
+        config_k: usize,
+    },
+    /// The header lists another number of columns than its protocol's K.
+    #[error("header lists {listed} columns, its protocol has K = {k}")]
+    ColumnCount {
+        /// Columns listed.
+        listed: usize,
+        /// The protocol's K.
+        k: usize,
+    },
+    /// A header column is not the protocol's column there.
+    #[error(
+        "header column {column} is ({got}) but the {protocol} protocol's column {column} is \
+         ({want}): the columns must follow the protocol's order (another system's frames in \
+         another order: give them as a table with a protocol file, et reconstruct --frames)"
+    )]
+    ColumnOrder {
+        /// The column (0-based).
+        column: usize,
+        /// The header's.
+        got: Column,
+        /// The protocol's name.
+        protocol: &'static str,
+        /// The protocol's.
+        want: Column,
+    },
+    /// A frame of another length than the header's K.
+    #[error("frame {seq} has {values} values, the header says K = {k}")]
+    FrameLength {
+        /// Its sequence number.
+        seq: u32,
+        /// Its values.
+        values: usize,
+        /// The header's K.
+        k: usize,
+    },
+    /// A frame line is not the format's JSON.
+    #[error(transparent)]
+    Frame(serde_json::Error),
 }
 
 /// Writes a recording line by line, flushing each line.
@@ -281,12 +371,11 @@ impl Writer {
             return Err(RecordingError::Line {
                 path: self.path.clone(),
                 line: 0,
-                message: format!(
-                    "frame {} has {} values, the header says K = {}",
-                    record.seq,
-                    record.voltages.len(),
-                    self.k
-                ),
+                fault: LineFault::FrameLength {
+                    seq: record.seq,
+                    values: record.voltages.len(),
+                    k: self.k,
+                },
             });
         }
         let invalid = invalid_columns(&record.voltages);
@@ -323,20 +412,18 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         path: path.into(),
         source,
     };
-    let bad = |line, message: String| RecordingError::Line {
+    let bad = |line, fault: LineFault| RecordingError::Line {
         path: path.into(),
         line,
-        message,
+        fault,
     };
     // Read whole, but never more than a data file's limit (an endless stream stops there).
     let text =
         et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(io)?;
     let lines: Vec<&str> = text.lines().collect();
-    let first = lines
-        .first()
-        .ok_or_else(|| bad(1, "empty file: no header".into()))?;
-    let header: Header = serde_json::from_str(first).map_err(|e| bad(1, format!("header: {e}")))?;
-    header.check().map_err(|message| bad(1, message))?;
+    let first = lines.first().ok_or_else(|| bad(1, LineFault::Empty))?;
+    let header: Header = serde_json::from_str(first).map_err(|e| bad(1, LineFault::Header(e)))?;
+    header.check().map_err(|fault| bad(1, fault))?;
     let mut records = Vec::new();
     let mut truncated_tail = false;
     let last = lines.len();
@@ -353,16 +440,15 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
             Ok(r) => {
                 return Err(bad(
                     i + 1,
-                    format!(
-                        "frame {} has {} values, K = {}",
-                        r.seq,
-                        r.voltages.len(),
-                        header.frame_len
-                    ),
+                    LineFault::FrameLength {
+                        seq: r.seq,
+                        values: r.voltages.len(),
+                        k: header.frame_len,
+                    },
                 ));
             }
             Err(e) if i + 1 == last && e.is_eof() => truncated_tail = true,
-            Err(e) => return Err(bad(i + 1, e.to_string())),
+            Err(e) => return Err(bad(i + 1, LineFault::Frame(e))),
         }
     }
     Ok(Recording {
@@ -376,44 +462,36 @@ impl Header {
     /// Whether this header is one et reads: its format and version, and its frame length,
     /// electrodes and columns those of its configuration's protocol, in its order. Err says
     /// what is wrong, for people.
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), LineFault> {
         if self.format != FORMAT {
-            return Err(format!("format '{}' is not {FORMAT}", self.format));
+            return Err(LineFault::Format(self.format.clone()));
         }
         if self.version != VERSION {
-            return Err(format!(
-                "version {} (this build reads {VERSION})",
-                self.version
-            ));
+            return Err(LineFault::Version(self.version));
         }
         // The header must agree with itself: every reader takes K and L from the
         // configuration.
-        let protocol = self
-            .config
-            .validate()
-            .map_err(|e| format!("header config: {e}"))?;
+        let protocol = self.config.validate().map_err(LineFault::Config)?;
         if self.frame_len != protocol.frame_len() || self.electrodes != self.config.electrodes {
-            return Err(format!(
-                "header says K = {} on {} electrodes, its config ({} on {}) gives K = {}",
-                self.frame_len,
-                self.electrodes,
-                self.config.protocol.name(),
-                self.config.electrodes,
-                protocol.frame_len()
-            ));
+            return Err(LineFault::HeaderK {
+                k: self.frame_len,
+                electrodes: self.electrodes,
+                protocol: self.config.protocol.name(),
+                config_electrodes: self.config.electrodes,
+                config_k: protocol.frame_len(),
+            });
         }
         // The columns say what each value is: they must be the protocol's, in its order (a
         // reader images by the configuration's protocol; columns in another order would give
         // a silently wrong image).
         let expected = Header::new(self.source.clone(), &self.config)
-            .map_err(|e| format!("header config: {e}"))?
+            .map_err(LineFault::Config)?
             .columns;
         if self.columns.len() != expected.len() {
-            return Err(format!(
-                "header lists {} columns, its protocol has K = {}",
-                self.columns.len(),
-                expected.len()
-            ));
+            return Err(LineFault::ColumnCount {
+                listed: self.columns.len(),
+                k: expected.len(),
+            });
         }
         if let Some((k, (got, want))) = self
             .columns
@@ -422,20 +500,12 @@ impl Header {
             .enumerate()
             .find(|(_, (a, b))| a != b)
         {
-            let show = |c: &Column| {
-                format!(
-                    "source {}, sink {}, + {}, - {}",
-                    c.source, c.sink, c.positive, c.negative
-                )
-            };
-            return Err(format!(
-                "header column {k} is ({}) but the {} protocol's column {k} is ({}): the \
-                 columns must follow the protocol's order (another system's frames in another \
-                 order: give them as a table with a protocol file, et reconstruct --frames)",
-                show(got),
-                self.config.protocol.name(),
-                show(want)
-            ));
+            return Err(LineFault::ColumnOrder {
+                column: k,
+                got: *got,
+                protocol: self.config.protocol.name(),
+                want: *want,
+            });
         }
         Ok(())
     }

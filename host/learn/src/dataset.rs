@@ -193,6 +193,24 @@ pub enum DatasetError {
         /// The reason.
         source: std::io::Error,
     },
+    /// The `.npz` archive, or one of its arrays, could not be read or written.
+    #[error("{}: {source}", .path.display())]
+    Npz {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: crate::npz::NpzError,
+    },
+    /// A text array of an `.npz` dataset is not the JSON it should hold.
+    #[error("{}: array '{array}': {source}", .path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The array.
+        array: &'static str,
+        /// What is wrong.
+        source: serde_json::Error,
+    },
     /// Something in the file is wrong.
     #[error("{}: {message}", place(path, *line, column.as_deref()))]
     Content {

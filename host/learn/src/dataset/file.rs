@@ -337,9 +337,10 @@ pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         &serde_json::to_string(&data.config).unwrap_or_default(),
     );
     w.text("provenance", provenance);
-    let bytes = w
-        .finish()
-        .map_err(|e| content(path, 0, None, e.to_string()))?;
+    let bytes = w.finish().map_err(|source| DatasetError::Npz {
+        path: path.into(),
+        source,
+    })?;
     std::fs::write(path, bytes).map_err(|source| DatasetError::Io {
         path: path.into(),
         source,
@@ -358,7 +359,10 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
                 source,
             }
         })?;
-    let bad = |e: npz::NpzError| content(path, 0, None, e.to_string());
+    let bad = |source: npz::NpzError| DatasetError::Npz {
+        path: path.into(),
+        source,
+    };
     let z = npz::Npz::read(bytes).map_err(bad)?;
     let fault = |array: &str, message: String| {
         content(path, 0, None, format!("array '{array}': {message}"))
@@ -366,8 +370,14 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
     if z.text("format").map_err(bad)? != "et-dataset 1" {
         return Err(fault("format", "not an et dataset ('et-dataset 1')".into()));
     }
-    let config: ScanConfig = serde_json::from_str(&z.text("config").map_err(bad)?)
-        .map_err(|e| fault("config", e.to_string()))?;
+    let config: ScanConfig =
+        serde_json::from_str(&z.text("config").map_err(bad)?).map_err(|source| {
+            DatasetError::Json {
+                path: path.into(),
+                array: "config",
+                source,
+            }
+        })?;
     let x = z.matrix("x").map_err(bad)?;
     let (n, p) = x.shape();
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
