@@ -42,7 +42,7 @@ use et_core::ScanConfig;
 use nalgebra::DMatrix;
 
 pub use file::{load, load_csv, load_npz, save, save_csv, save_npz};
-pub use import::{GroupsFrom, Table, Unit, read_matrix};
+pub use import::{GroupsFrom, Table, Unit, is_length, read_matrix};
 
 /// A labelled set of observations.
 #[derive(Clone, Debug)]

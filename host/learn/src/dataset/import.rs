@@ -37,6 +37,13 @@ impl Unit {
     }
 }
 
+/// Whether a third target named `name` is a length (z: held in m like x and y), rather than
+/// a value kept as written (a force).
+#[must_use]
+pub fn is_length(name: &str) -> bool {
+    name.eq_ignore_ascii_case("z")
+}
+
 /// A table of features and targets from any sensor.
 #[derive(Clone, Debug)]
 pub struct Table {
@@ -169,7 +176,7 @@ impl Table {
         }
         let m = unit.metres();
         let third = found.third.map(|(name, v)| {
-            let length = name.eq_ignore_ascii_case("z");
+            let length = is_length(&name);
             let v = if length {
                 v.iter().map(|z| z * m).collect()
             } else {

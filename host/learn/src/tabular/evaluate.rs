@@ -87,10 +87,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             Misuse::NoPositionTarget
         }));
     }
-    let z_is_length = model
-        .third
-        .as_deref()
-        .is_some_and(|n| n.eq_ignore_ascii_case("z"));
+    let z_is_length = model.third_is_length();
     // The scores are for people: positions (and a z) in mm.
     let mm = |v: Target3| {
         [

@@ -383,14 +383,17 @@ impl TableModel {
         Ok(m)
     }
 
+    /// Whether the third target is a length (z: in m like x and y, in mm where people read
+    /// it), rather than a value as the files wrote it.
+    #[must_use]
+    pub fn third_is_length(&self) -> bool {
+        self.third.as_deref().is_some_and(crate::dataset::is_length)
+    }
+
     /// A version 1 model (positions in mm) made the current version (m): every table on the
     /// targets' side scaled, the third target's only when it is a length (z).
     fn migrate_to_metres(&mut self) {
-        let z = self
-            .third
-            .as_deref()
-            .is_some_and(|t| t.eq_ignore_ascii_case("z"));
-        let s = [1e-3, 1e-3, if z { 1e-3 } else { 1.0 }];
+        let s = [1e-3, 1e-3, if self.third_is_length() { 1e-3 } else { 1.0 }];
         self.tables.scale_targets(s);
         if let Some(c) = &mut self.classes {
             for q in c.centres.iter_mut().flatten() {

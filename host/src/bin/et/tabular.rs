@@ -431,17 +431,9 @@ fn predictions_csv(model: &TableModel, e: &tabular::Evaluation, first_row: usize
     }
     header.extend(["x_mm", "y_mm"]);
     // The third target: a length in mm when named z, else in the file's own unit.
-    let z_scale = if model
-        .third
-        .as_deref()
-        .is_some_and(|t| t.eq_ignore_ascii_case("z"))
-    {
-        1e3
-    } else {
-        1.0
-    };
+    let z_scale = if model.third_is_length() { 1e3 } else { 1.0 };
     let third = model.third.as_ref().map(|t| {
-        if t.eq_ignore_ascii_case("z") {
+        if model.third_is_length() {
             "z_mm".to_string()
         } else {
             t.clone()
