@@ -61,7 +61,7 @@ pub struct Schedule {
 }
 
 /// Why a schedule is refused. Rows are counted from 0, as the frame's values are.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 #[non_exhaustive]
 pub enum ScheduleError {
     /// No rows at all.
@@ -119,16 +119,72 @@ pub enum ScheduleError {
         /// The current given, A.
         current_a: f64,
     },
-    /// A schedule file could not be read, or a line of it is wrong.
-    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    /// A schedule file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why (shared, so the error stays `Clone`).
+        source: std::sync::Arc<std::io::Error>,
+    },
+    /// A line of a schedule file is wrong.
+    #[error("{}{}: {fault}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
     File {
         /// The file.
         path: std::path::PathBuf,
         /// 1-based line (0: the whole file).
         line: usize,
         /// What is wrong.
-        message: String,
+        fault: FileFault,
     },
+}
+
+/// What is wrong in a schedule file, at its line.
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
+pub enum FileFault {
+    /// The rows could not be read as CSV.
+    #[error(transparent)]
+    Records(#[from] crate::text::RecordFault),
+    /// No rows.
+    #[error("no rows")]
+    NoRows,
+    /// The header lacks a column.
+    #[error(
+        "the header has no '{0}' column (it needs source, sink, positive, negative and \
+         optionally current_a)"
+    )]
+    MissingColumn(&'static str),
+    /// Without a header, a row of another width.
+    #[error(
+        "{0} columns: without a header give source, sink, positive, negative and optionally \
+         current_a"
+    )]
+    Columns(usize),
+    /// An electrode's cell is not a whole number.
+    #[error("{column}: '{cell}' is not an electrode number")]
+    NotElectrode {
+        /// source, sink, positive or negative.
+        column: &'static str,
+        /// The cell as written.
+        cell: String,
+    },
+    /// An electrode below the first one's number.
+    #[error("{column}: electrode {electrode}, but they are counted from {base}")]
+    BelowBase {
+        /// source, sink, positive or negative.
+        column: &'static str,
+        /// The number written.
+        electrode: u16,
+        /// The first electrode's number.
+        base: u16,
+    },
+    /// The current's cell is not a number.
+    #[error("current_a: '{0}' is not a number")]
+    NotCurrent(String),
+    /// The row, read, is refused by [`Schedule::new`] (row counted among the data rows).
+    #[error(transparent)]
+    Row(Box<ScheduleError>),
 }
 
 impl Schedule {
@@ -305,14 +361,14 @@ impl Schedule {
         base: u16,
         default_current_a: f64,
     ) -> Result<Self, ScheduleError> {
-        let fail = |line: usize, message: String| ScheduleError::File {
+        let fail = |line: usize, fault: FileFault| ScheduleError::File {
             path: path.to_path_buf(),
             line,
-            message,
+            fault,
         };
-        let records = text::records(text).map_err(|(line, m)| fail(line, m))?;
+        let records = text::records(text).map_err(|(line, f)| fail(line, f.into()))?;
         let Some((first_line, first)) = records.first() else {
-            return Err(fail(0, "no rows".into()));
+            return Err(fail(0, FileFault::NoRows));
         };
         const NAMES: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
         // A header names at least one of the columns (a row of numbers with a typo is data).
@@ -323,14 +379,7 @@ impl Schedule {
             let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
             let columns = NAMES.map(find);
             if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
-                return Err(fail(
-                    *first_line,
-                    format!(
-                        "the header has no '{}' column (it needs source, sink, positive, \
-                         negative and optionally current_a)",
-                        missing.0
-                    ),
-                ));
+                return Err(fail(*first_line, FileFault::MissingColumn(missing.0)));
             }
             columns
         } else if first.len() == 4 || first.len() == 5 {
@@ -342,14 +391,7 @@ impl Schedule {
                 (first.len() == 5).then_some(4),
             ]
         } else {
-            return Err(fail(
-                *first_line,
-                format!(
-                    "{} columns: without a header give source, sink, positive, negative and \
-                     optionally current_a",
-                    first.len()
-                ),
-            ));
+            return Err(fail(*first_line, FileFault::Columns(first.len())));
         };
         let mut rows = Vec::with_capacity(records.len());
         for (line, cells) in records.iter().skip(usize::from(header)) {
@@ -357,19 +399,20 @@ impl Schedule {
             let electrode = |which: usize| -> Result<u16, ScheduleError> {
                 let c = columns[which].unwrap_or(which);
                 let v = cell(c);
+                let column = NAMES[which];
                 let n: u16 = v.parse().map_err(|_| {
-                    fail(
-                        *line,
-                        format!("{}: '{v}' is not an electrode number", NAMES[which]),
-                    )
+                    let cell = v.to_string();
+                    fail(*line, FileFault::NotElectrode { column, cell })
                 })?;
                 n.checked_sub(base).ok_or_else(|| {
+                    let (electrode, base) = (n, base);
                     fail(
                         *line,
-                        format!(
-                            "{}: electrode {n}, but they are counted from {base}",
-                            NAMES[which]
-                        ),
+                        FileFault::BelowBase {
+                            column,
+                            electrode,
+                            base,
+                        },
                     )
                 })
             };
@@ -377,7 +420,7 @@ impl Schedule {
                 Some(c) => {
                     let v = cell(c);
                     text::number(v, Delimiter::Comma)
-                        .ok_or_else(|| fail(*line, format!("current_a: '{v}' is not a number")))?
+                        .ok_or_else(|| fail(*line, FileFault::NotCurrent(v.to_string())))?
                 }
                 None => default_current_a,
             };
@@ -406,9 +449,9 @@ impl Schedule {
                 | ScheduleError::Current { row, .. }
                 | ScheduleError::TooLarge { row, .. } => {
                     let line = records.get(row + usize::from(header)).map_or(0, |r| r.0);
-                    fail(line, e.to_string())
+                    fail(line, FileFault::Row(Box::new(e)))
                 }
-                other => fail(0, other.to_string()),
+                other => fail(0, FileFault::Row(Box::new(other))),
             })
     }
 
@@ -424,10 +467,9 @@ impl Schedule {
     ) -> Result<Self, ScheduleError> {
         let text =
             crate::text::read_text_at_most(path, crate::text::max_file_bytes()).map_err(|e| {
-                ScheduleError::File {
+                ScheduleError::Read {
                     path: path.to_path_buf(),
-                    line: 0,
-                    message: e.to_string(),
+                    source: std::sync::Arc::new(e),
                 }
             })?;
         Self::parse_csv(path, &text, electrodes, base, default_current_a)

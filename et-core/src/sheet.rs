@@ -149,13 +149,70 @@ pub enum SheetError {
     #[error("sheet.shape: {0}")]
     Shape(ShapeError),
     /// A field is out of range.
-    #[error("{field}: {why}")]
+    #[error("{field}: {fault}")]
     Field {
         /// The field's name, as in a scene file.
         field: &'static str,
         /// What is wrong.
-        why: String,
+        fault: FieldFault,
     },
+    /// Two electrodes overlap (or share a place) on the outline.
+    #[error(
+        "sheet.electrodes: electrodes {a} and {b} overlap: {count} electrodes {width} m wide on \
+         an outline {perimeter} m long (narrower electrodes, fewer, or a larger sheet)"
+    )]
+    Overlap {
+        /// One electrode.
+        a: usize,
+        /// The next along the outline.
+        b: usize,
+        /// The electrodes.
+        count: u8,
+        /// Their width, m.
+        width: f64,
+        /// The outline's length, m.
+        perimeter: f64,
+    },
+}
+
+/// What is wrong with a field's value: the value and the rule it breaks (as a scene file's
+/// reader says it).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FieldFault {
+    /// The value breaks its rule: `rule` says what it must be, with its unit.
+    #[error("{value} must be {rule}")]
+    Value {
+        /// The value given.
+        value: f64,
+        /// What it must be ("positive (ohm per square)").
+        rule: &'static str,
+    },
+    /// The value is outside (`low`, `high`] in `unit`.
+    #[error("{value} must be in ({low}, {high}] {unit}")]
+    Range {
+        /// The value given.
+        value: f64,
+        /// The bound it must be above.
+        low: f64,
+        /// The bound it may reach.
+        high: f64,
+        /// The unit.
+        unit: &'static str,
+    },
+    /// A list of the wrong length or with values that are not finite.
+    #[error("{found} given, need {need} {what}")]
+    Count {
+        /// The usable entries given.
+        found: usize,
+        /// The entries needed.
+        need: usize,
+        /// Of what ("finite arc fractions").
+        what: &'static str,
+    },
+    /// The fields given together break a rule (no one value is at fault).
+    #[error("{0}")]
+    Rule(&'static str),
 }
 
 impl Sheet {
@@ -188,56 +245,46 @@ impl Sheet {
     /// [`SheetError`] naming the field, as a scene file spells it.
     pub fn validate(&self) -> Result<(), SheetError> {
         self.shape.validate().map_err(SheetError::Shape)?;
-        let field = |field, why: String| Err(SheetError::Field { field, why });
+        let field = |field, fault| Err(SheetError::Field { field, fault });
+        let value = |value, rule| FieldFault::Value { value, rule };
         if !(self.sheet_resistance.is_finite() && self.sheet_resistance > 0.0) {
-            return field(
-                "sheet.sheet_resistance",
-                format!(
-                    "{} must be positive (ohm per square)",
-                    self.sheet_resistance
-                ),
-            );
+            let rule = "positive (ohm per square)";
+            return field("sheet.sheet_resistance", value(self.sheet_resistance, rule));
         }
         let e = &self.electrodes;
         if !(4..=32).contains(&e.count) || !e.count.is_multiple_of(2) {
-            return field(
-                "sheet.electrodes.count",
-                format!("{} must be even, 4 to 32", e.count),
-            );
+            let count = f64::from(e.count);
+            return field("sheet.electrodes.count", value(count, "even, 4 to 32"));
         }
         if !(e.width.is_finite() && e.width > 0.0) {
-            return field(
-                "sheet.electrodes.width",
-                format!("{} must be a positive length in m", e.width),
-            );
+            let rule = "a positive length in m";
+            return field("sheet.electrodes.width", value(e.width, rule));
         }
         if !(e.contact_ohm.is_finite() && e.contact_ohm >= 0.0) {
             return field(
                 "sheet.electrodes.contact_ohm",
-                format!("{} must be >= 0 ohm", e.contact_ohm),
+                value(e.contact_ohm, ">= 0 ohm"),
             );
         }
         if let Some(deg) = e.first_deg {
             if !deg.is_finite() {
-                return field(
-                    "sheet.electrodes.first_deg",
-                    format!("{deg} must be a finite angle in degrees"),
-                );
+                let rule = "a finite angle in degrees";
+                return field("sheet.electrodes.first_deg", value(deg, rule));
             }
             if e.first.is_some() {
-                return field(
-                    "sheet.electrodes.first_deg",
-                    "give first_deg (an angle) or first (an arc fraction), not both".into(),
-                );
+                let rule = "give first_deg (an angle) or first (an arc fraction), not both";
+                return field("sheet.electrodes.first_deg", FieldFault::Rule(rule));
             }
         }
         if let Some(p) = &e.positions
             && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
         {
-            return field(
-                "sheet.electrodes.positions",
-                format!("need {} finite arc fractions", e.count),
-            );
+            let fault = FieldFault::Count {
+                found: p.iter().filter(|x| x.is_finite()).count(),
+                need: usize::from(e.count),
+                what: "finite arc fractions",
+            };
+            return field("sheet.electrodes.positions", fault);
         }
         // The electrodes apart on the outline (the simulator and the meshes alike): each
         // covers its width of the outline (a point electrode only its place).
@@ -256,14 +303,13 @@ impl Sheet {
                 None => at.first().map_or((t, l), |&(u, m)| (u + 1.0, m)),
             };
             if m != l && next - t <= 2.0 * half || next <= t {
-                return field(
-                    "sheet.electrodes",
-                    format!(
-                        "electrodes {l} and {m} overlap: {} electrodes {} m wide on an outline \
-                         {perimeter} m long (narrower electrodes, fewer, or a larger sheet)",
-                        e.count, e.width
-                    ),
-                );
+                return Err(SheetError::Overlap {
+                    a: l,
+                    b: m,
+                    count: e.count,
+                    width: e.width,
+                    perimeter,
+                });
             }
         }
         Ok(())

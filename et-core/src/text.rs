@@ -88,12 +88,25 @@ pub struct Records {
     pub rows: Vec<Record>,
 }
 
+/// Why a table's rows could not be read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RecordFault {
+    /// A quoted cell holds a line break: a closing quote is missing.
+    #[error("a quoted cell runs on over the next lines: is a closing quote (\") missing?")]
+    RunOn,
+    /// The `csv` crate refused the text (its errors are about bytes that are not UTF-8 and
+    /// rows of unequal length, neither of which text read flexibly can have).
+    #[error("not readable as CSV")]
+    Unreadable,
+}
+
 /// Reads `lines` ((0-based line number, text) pairs, say from [`lines`]) as CSV records.
 ///
 /// # Errors
-/// (1-based line, message): a cell that runs on over lines (a missing closing quote), or
+/// (1-based line, fault): a cell that runs on over lines (a missing closing quote), or
 /// what the `csv` crate could not read.
-pub fn read_records(lines: &[(usize, &str)]) -> Result<Records, (usize, String)> {
+pub fn read_records(lines: &[(usize, &str)]) -> Result<Records, (usize, RecordFault)> {
     let kept: Vec<(usize, &str)> = lines
         .iter()
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
@@ -121,16 +134,12 @@ pub fn read_records(lines: &[(usize, &str)]) -> Result<Records, (usize, String)>
     for record in reader.records() {
         let record = record.map_err(|e| {
             let line = e.position().map_or(0, |p| file_line(p.line()));
-            (line, e.to_string())
+            (line, RecordFault::Unreadable)
         })?;
         let line = record.position().map_or(0, |p| file_line(p.line()));
         let cells: Vec<String> = record.iter().map(str::to_string).collect();
         if cells.iter().any(|c| c.contains('\n')) {
-            return Err((
-                line,
-                "a quoted cell runs on over the next lines: is a closing quote (\") missing?"
-                    .into(),
-            ));
+            return Err((line, RecordFault::RunOn));
         }
         rows.push((line, cells));
     }
@@ -152,7 +161,7 @@ pub fn lines(text: &str) -> Vec<(usize, &str)> {
 ///
 /// # Errors
 /// As [`read_records`].
-pub fn records(text: &str) -> Result<Vec<Record>, (usize, String)> {
+pub fn records(text: &str) -> Result<Vec<Record>, (usize, RecordFault)> {
     read_records(&lines(text)).map(|r| r.rows)
 }
 
@@ -270,9 +279,9 @@ mod tests {
                 (4, vec!["1".to_string(), "2".to_string()]),
             ]
         );
-        let (line, message) = records("a,b\n\"1,2\n3,4\n").unwrap_err();
-        assert_eq!(line, 2);
-        assert!(message.contains("closing quote"), "{message}");
+        let (line, fault) = records("a,b\n\"1,2\n3,4\n").unwrap_err();
+        assert_eq!((line, fault), (2, super::RecordFault::RunOn));
+        assert!(fault.to_string().contains("closing quote"), "{fault}");
     }
 
     #[test]

@@ -34,14 +34,14 @@ pub enum FramesError {
         source: std::io::Error,
     },
     /// The content is not frames of this protocol.
-    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    #[error("{}{}: {fault}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
     Content {
         /// The file.
         path: PathBuf,
         /// 1-based line of a CSV (0: not about one line).
         line: usize,
         /// What is wrong.
-        message: String,
+        fault: FramesFault,
     },
     /// The `.npy`/`.npz` could not be read.
     #[error("{}: {error}", path.display())]
@@ -53,11 +53,126 @@ pub enum FramesError {
     },
 }
 
-fn content(path: &Path, line: usize, message: impl Into<String>) -> FramesError {
+/// What is wrong inside a file of frames.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FramesFault {
+    /// The rows could not be read as CSV.
+    #[error(transparent)]
+    Records(#[from] et_core::text::RecordFault),
+    /// A row of another length than the first.
+    #[error("{found} values, the first frame has {first}")]
+    RowLength {
+        /// The row's values.
+        found: usize,
+        /// The first row's.
+        first: usize,
+    },
+    /// A cell that is not a number (column from 1).
+    #[error("column {column}: '{cell}' is not a number")]
+    NotNumber {
+        /// The column, from 1.
+        column: usize,
+        /// The cell as written.
+        cell: String,
+    },
+    /// No rows of numbers.
+    #[error("no frames")]
+    NoFrames,
+    /// A value that is not finite (row and column from 0).
+    #[error("value {value} at row {row}, column {column} is not finite")]
+    NotFinite {
+        /// The value.
+        value: f64,
+        /// Its row.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
+    /// Neither dimension is the protocol's K.
+    #[error(
+        "{rows} x {columns} values: the protocol has K = {k} values per frame, so one dimension \
+         must be {k} (is it the scene's protocol?)"
+    )]
+    NoK {
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        columns: usize,
+        /// The protocol's values per frame.
+        k: usize,
+    },
+    /// Several arrays and none named.
+    #[error(
+        "{} {kind} ({}): name one as {}:{placeholder}",
+        names.len(), names.join(", "), path.display()
+    )]
+    Choose {
+        /// The arrays there are.
+        names: Vec<String>,
+        /// "arrays", "numeric arrays".
+        kind: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// NAME, VARIABLE.
+        placeholder: &'static str,
+    },
+    /// A MATLAB 7.3 file.
+    #[error("a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV")]
+    Mat73,
+    /// A compressed MATLAB variable that ends early.
+    #[error("a compressed variable is cut short")]
+    CutShort,
+    /// A compressed MATLAB variable that does not inflate.
+    #[error("a compressed variable is damaged")]
+    Damaged,
+    /// A compressed MATLAB variable that inflates past the data files' limit.
+    #[error("a compressed variable inflates past {0} bytes: not frames et reads")]
+    Inflates(u64),
+    /// The MATLAB reader refused the file.
+    #[error("not a MATLAB version 5 or 7 file: {0}")]
+    NotMat(matfile::Error),
+    /// The MATLAB reader stopped on inconsistent headers.
+    #[error("not a MATLAB file et can read: its variables' headers are inconsistent")]
+    MatInconsistent,
+    /// No numeric array of the name.
+    #[error("no numeric array '{name}' (it has: {})", names.join(", "))]
+    NoVariable {
+        /// The name asked for.
+        name: String,
+        /// The ones there are.
+        names: Vec<String>,
+    },
+    /// A variable that is not real doubles, singles or 8 to 32-bit integers.
+    #[error("'{0}' is complex or 64-bit integer: store the frames' real voltages as double")]
+    NotReal(String),
+    /// A variable of other than 2 dimensions.
+    #[error("'{name}' has {dimensions} dimensions: frames are a 2-D matrix")]
+    Dimensions {
+        /// The variable.
+        name: String,
+        /// Its dimensions.
+        dimensions: usize,
+    },
+    /// A variable whose size and values disagree.
+    #[error("'{name}': {rows} x {columns} but {values} values")]
+    Size {
+        /// The variable.
+        name: String,
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        columns: usize,
+        /// Its values.
+        values: usize,
+    },
+}
+
+fn content(path: &Path, line: usize, fault: FramesFault) -> FramesError {
     FramesError::Content {
         path: path.into(),
         line,
-        message: message.into(),
+        fault,
     }
 }
 
@@ -95,7 +210,7 @@ fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
 /// Checks the compressed variables of a version 5/7 `.mat` before matfile inflates them (it
 /// reads each to its end, without a limit): each must inflate, and to no more than the data
 /// files' limit (a small file could otherwise expand to gigabytes).
-fn compressed_within_limits(bytes: &[u8]) -> Result<(), String> {
+fn compressed_within_limits(bytes: &[u8]) -> Result<(), FramesFault> {
     use std::io::Read as _;
     let little = bytes.get(126..128) == Some(b"IM");
     let word = |at: usize| -> Option<u32> {
@@ -111,18 +226,16 @@ fn compressed_within_limits(bytes: &[u8]) -> Result<(), String> {
         let size = size as usize;
         let data = bytes.get(at + 8..(at + 8).saturating_add(size));
         if kind == 15 {
-            let data = data.ok_or("a compressed variable is cut short")?;
+            let data = data.ok_or(FramesFault::CutShort)?;
             let mut out = Vec::new();
             let limit = et_core::text::max_file_bytes();
             libflate::zlib::Decoder::new(data)
-                .map_err(|_| "a compressed variable is damaged".to_string())?
+                .map_err(|_| FramesFault::Damaged)?
                 .take(limit.saturating_add(1))
                 .read_to_end(&mut out)
-                .map_err(|_| "a compressed variable is damaged".to_string())?;
+                .map_err(|_| FramesFault::Damaged)?;
             if out.len() as u64 > limit {
-                return Err(format!(
-                    "a compressed variable inflates past {limit} bytes: not frames et reads"
-                ));
+                return Err(FramesFault::Inflates(limit));
             }
             at = at.saturating_add(8).saturating_add(size);
         } else {
@@ -139,13 +252,9 @@ fn mat_matrix(
     name: Option<&str>,
 ) -> Result<(DMatrix<f64>, String), FramesError> {
     if bytes.starts_with(b"MATLAB 7.3") {
-        return Err(content(
-            path,
-            0,
-            "a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV",
-        ));
+        return Err(content(path, 0, FramesFault::Mat73));
     }
-    compressed_within_limits(bytes).map_err(|why| content(path, 0, why))?;
+    compressed_within_limits(bytes).map_err(|fault| content(path, 0, fault))?;
     // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
     // found by the fuzzer): such a file is refused like any other it cannot read, silently
     // for the panic itself.
@@ -155,43 +264,25 @@ fn mat_matrix(
     std::panic::set_hook(hook);
     let file = match parsed {
         Ok(Ok(file)) => file,
-        Ok(Err(e)) => {
-            return Err(content(
-                path,
-                0,
-                format!("not a MATLAB version 5 or 7 file: {e}"),
-            ));
-        }
-        Err(_) => {
-            return Err(content(
-                path,
-                0,
-                "not a MATLAB file et can read: its variables' headers are inconsistent",
-            ));
-        }
+        Ok(Err(e)) => return Err(content(path, 0, FramesFault::NotMat(e))),
+        Err(_) => return Err(content(path, 0, FramesFault::MatInconsistent)),
     };
-    let names: Vec<&str> = file.arrays().iter().map(matfile::Array::name).collect();
+    let names = || file.arrays().iter().map(|a| a.name().to_string()).collect();
     let array = match name {
         Some(n) => file.find_by_name(n).ok_or_else(|| {
-            content(
-                path,
-                0,
-                format!("no numeric array '{n}' (it has: {})", names.join(", ")),
-            )
+            let (name, names) = (n.to_string(), names());
+            content(path, 0, FramesFault::NoVariable { name, names })
         })?,
         None => match file.arrays().as_slice() {
             [only] => only,
             _ => {
-                return Err(content(
-                    path,
-                    0,
-                    format!(
-                        "{} numeric arrays ({}): name one as {}:VARIABLE",
-                        names.len(),
-                        names.join(", "),
-                        path.display()
-                    ),
-                ));
+                let fault = FramesFault::Choose {
+                    names: names(),
+                    kind: "numeric arrays",
+                    path: path.into(),
+                    placeholder: "VARIABLE",
+                };
+                return Err(content(path, 0, fault));
             }
         },
     };
@@ -206,40 +297,29 @@ fn mat_matrix(
         D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
         D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
         _ => {
-            return Err(content(
-                path,
-                0,
-                format!(
-                    "'{}' is complex or 64-bit integer: store the frames' real voltages as double",
-                    array.name()
-                ),
-            ));
+            let fault = FramesFault::NotReal(array.name().to_string());
+            return Err(content(path, 0, fault));
         }
     };
     let (rows, cols) = match array.size().as_slice() {
         [r, c] => (*r, *c),
         other => {
+            let (name, dimensions) = (array.name().to_string(), other.len());
             return Err(content(
                 path,
                 0,
-                format!(
-                    "'{}' has {} dimensions: frames are a 2-D matrix",
-                    array.name(),
-                    other.len()
-                ),
+                FramesFault::Dimensions { name, dimensions },
             ));
         }
     };
     if rows * cols != values.len() {
-        return Err(content(
-            path,
-            0,
-            format!(
-                "'{}': {rows} x {cols} but {} values",
-                array.name(),
-                values.len()
-            ),
-        ));
+        let fault = FramesFault::Size {
+            name: array.name().to_string(),
+            rows,
+            columns: cols,
+            values: values.len(),
+        };
+        return Err(content(path, 0, fault));
     }
     // MATLAB stores by columns.
     Ok((
@@ -287,16 +367,13 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
                 (Some(n), _) => n.clone(),
                 (None, [only]) => (*only).to_string(),
                 (None, _) => {
-                    return Err(content(
-                        &path,
-                        0,
-                        format!(
-                            "{} arrays ({}): name one as {}:NAME",
-                            names.len(),
-                            names.join(", "),
-                            path.display()
-                        ),
-                    ));
+                    let fault = FramesFault::Choose {
+                        names: names.iter().map(|n| (*n).to_string()).collect(),
+                        kind: "arrays",
+                        path: path.clone(),
+                        placeholder: "NAME",
+                    };
+                    return Err(content(&path, 0, fault));
                 }
             };
             let m = npy_matrix(&archive, &name).map_err(npz)?;
@@ -315,27 +392,22 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     };
     let (rows, cols) = matrix.shape();
     if let Some((i, v)) = matrix.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        let (value, row, column) = (*v, i % rows, i / rows);
         return Err(content(
             &path,
             0,
-            format!(
-                "value {v} at row {}, column {} is not finite",
-                i % rows,
-                i / rows
-            ),
+            FramesFault::NotFinite { value, row, column },
         ));
     }
     let by_rows = cols == k;
     let by_columns = !by_rows && rows == k;
     if !by_rows && !by_columns {
-        return Err(content(
-            &path,
-            0,
-            format!(
-                "{rows} x {cols} values: the protocol has K = {k} values per frame, so one \
-                 dimension must be {k} (is it the scene's protocol?)"
-            ),
-        ));
+        let fault = FramesFault::NoK {
+            rows,
+            columns: cols,
+            k,
+        };
+        return Err(content(&path, 0, fault));
     }
     let frames: Vec<Vec<f32>> = if by_rows {
         matrix
@@ -376,8 +448,8 @@ fn npy_matrix(archive: &Npz, name: &str) -> Result<DMatrix<f64>, NpzError> {
 
 /// A CSV of numbers, a header row skipped; its matrix and what was said of the delimiter.
 fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
-    let records =
-        text::read_records(&text::lines(text)).map_err(|(line, m)| content(path, line, m))?;
+    let records = text::read_records(&text::lines(text))
+        .map_err(|(line, f)| content(path, line, f.into()))?;
     let delimiter = records.delimiter;
     let mut rows = records.rows.iter().peekable();
     let header = rows
@@ -392,24 +464,21 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
     for (line, cells) in rows {
         let w = *width.get_or_insert(cells.len());
         if cells.len() != w {
-            return Err(content(
-                path,
-                *line,
-                format!("{} values, the first frame has {w}", cells.len()),
-            ));
+            let fault = FramesFault::RowLength {
+                found: cells.len(),
+                first: w,
+            };
+            return Err(content(path, *line, fault));
         }
         for (c, cell) in cells.iter().enumerate() {
             values.push(text::number(cell, delimiter).ok_or_else(|| {
-                content(
-                    path,
-                    *line,
-                    format!("column {}: '{cell}' is not a number", c + 1),
-                )
+                let (column, cell) = (c + 1, cell.clone());
+                content(path, *line, FramesFault::NotNumber { column, cell })
             })?);
         }
         n += 1;
     }
-    let w = width.ok_or_else(|| content(path, 0, "no frames"))?;
+    let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames))?;
     let said = match delimiter {
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),

@@ -145,10 +145,13 @@ pub enum LinkError {
     #[error("the serial port is disconnected (waiting for it to come back)")]
     Disconnected,
     /// No reply within the timeout.
-    #[error("no answer from the device while waiting for {waiting_for}")]
+    #[error(
+        "no answer from the device while waiting for {}",
+        waiting_for.map_or("a message".into(), |t| format!("the reply to {t:?}"))
+    )]
     Timeout {
-        /// What was waited for.
-        waiting_for: String,
+        /// The command whose reply was waited for (none: any message).
+        waiting_for: Option<et_core::wire::CommandTag>,
     },
     /// The device refused a command.
     #[error("the device refused {command}: {reason}")]
@@ -289,9 +292,7 @@ impl Link {
         }
         self.incoming
             .recv_timeout(timeout)
-            .map_err(|_| LinkError::Timeout {
-                waiting_for: "a message".into(),
-            })
+            .map_err(|_| LinkError::Timeout { waiting_for: None })
     }
 
     /// Sends `command` and waits up to `timeout` for its reply: `Pong` for a ping, the
@@ -309,7 +310,7 @@ impl Link {
                 Ok(m) => m,
                 Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => {
                     return Err(LinkError::Timeout {
-                        waiting_for: format!("the reply to {tag:?}"),
+                        waiting_for: Some(tag),
                     });
                 }
             };

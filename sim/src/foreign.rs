@@ -286,7 +286,17 @@ mod tests {
         let (spec, _) = tank();
         let err = SimulatedSheet::with_contacts(&spec, &[], &[20.0; 15], None).unwrap_err();
         assert!(
-            err.to_string().contains("15 contacts for 16 electrodes"),
+            matches!(
+                err,
+                crate::sheet::SheetError::Spec(et_core::sheet::SheetError::Field {
+                    field: "contacts",
+                    fault: et_core::sheet::FieldFault::Count {
+                        found: 15,
+                        need: 16,
+                        ..
+                    },
+                })
+            ),
             "{err}"
         );
     }

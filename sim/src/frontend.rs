@@ -163,7 +163,7 @@ impl SetSpread {
     fn validate(&self) -> Result<(), SheetError> {
         let ok = |x: f64| x.is_finite() && x >= 0.0;
         if !(ok(self.contact_potential_v) && ok(self.conductance) && self.conductance <= 1.0) {
-            return Err(SheetError::field(
+            return Err(SheetError::rule(
                 "frontend.sets",
                 "contact_potential_v must be >= 0 V and conductance between 0 and 1",
             ));
@@ -178,13 +178,13 @@ impl FrontendSpec {
     /// # Errors
     /// [`SheetError::field`] naming the field.
     pub fn validate(&self) -> Result<(), SheetError> {
-        let bad = |field, why: &str| Err(SheetError::field(field, why));
+        let bad = |field, rule| Err(SheetError::rule(field, rule));
         let nonneg = |x: f64| x.is_finite() && x >= 0.0;
         if !(1..=16).contains(&self.adc_bits) {
             return bad("frontend.adc_bits", "use 1 to 16 bits");
         }
         if !(self.adc_range_v.is_finite() && self.adc_range_v > 0.0) {
-            return bad("frontend.adc_range_v", "must be a positive voltage");
+            return bad("frontend.adc_range_v", "a positive voltage");
         }
         if !(nonneg(self.white_noise_v)
             && nonneg(self.adc_noise_codes)

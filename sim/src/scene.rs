@@ -15,6 +15,7 @@ use std::sync::Arc;
 
 use et_core::protocol::ProtocolKind;
 use et_core::scan::ScanError;
+pub use et_core::sheet::FieldFault;
 use et_core::wire::{Frame, WireError};
 use et_core::{Micros, ScanConfig, Scanner};
 use serde::{Deserialize, Serialize};
@@ -255,14 +256,34 @@ pub enum SceneError {
         /// The reason.
         source: std::io::Error,
     },
-    /// The file is not valid TOML or does not fit the scene format (the message names the
-    /// key and the line).
-    #[error("{path}: {message}")]
+    /// The file is not valid TOML or does not fit the scene format (the parser's message
+    /// names the key and the line).
+    #[error("{path}: {}", source.to_string().trim_end())]
     Parse {
         /// The file.
         path: String,
-        /// The parser's message.
-        message: String,
+        /// The parser's error.
+        source: toml::de::Error,
+    },
+    /// The text is longer than a scene is.
+    #[error(
+        "{path}: {bytes} bytes: a scene is at most {MAX_SCENE_BYTES} bytes (scenes are a few hundred)"
+    )]
+    TooLarge {
+        /// The file.
+        path: String,
+        /// Its length.
+        bytes: usize,
+    },
+    /// Brackets and braces nest deeper than [`MAX_NESTING`].
+    #[error(
+        "{path}: line {line}: brackets and braces nest deeper than {MAX_NESTING} (an unclosed '{{' or '['?)"
+    )]
+    TooDeep {
+        /// The file.
+        path: String,
+        /// The 1-based line where the nesting goes too deep.
+        line: usize,
     },
     /// A value is out of range.
     #[error("{path}: {error}")]
@@ -287,34 +308,114 @@ pub enum SceneError {
 }
 
 /// A scene value out of range: the field as written in a scene file, and why.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{field}: {reason}")]
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(
+    "{}{fault}",
+    if matches!(**fault, SceneFault::Sheet(_)) { String::new() } else { format!("{field}: ") }
+)]
 pub struct FieldError {
     /// The field, e.g. `scan.current_ua` or `touch[2].radius`.
     pub field: String,
-    /// What is wrong with its value.
-    pub reason: String,
+    /// What is wrong with its value (boxed: errors that hold this one stay small).
+    pub fault: Box<SceneFault>,
+}
+
+/// What is wrong with a scene's field.
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneFault {
+    /// A value out of its range, or fields that break a rule together.
+    #[error(transparent)]
+    Value(#[from] FieldFault),
+    /// The outline.
+    #[error(transparent)]
+    Shape(et_core::sheet::ShapeError),
+    /// The sheet as a whole (electrodes that overlap, a grid too fine), its message naming
+    /// the field.
+    #[error(transparent)]
+    Sheet(SheetError),
+    /// A protocol name that is not a built-in protocol.
+    #[error(
+        "'{0}' is not adjacent, pseudo-polar, pp-pp or opposite (or give any system's protocol \
+         as {{ file = \"protocol.csv\" }})"
+    )]
+    UnknownProtocol(String),
+    /// A protocol file asked of the simulated board.
+    #[error(
+        "a protocol file is imaged from measured frames (et reconstruct --frames), not scanned \
+         by the simulated board: name a built-in protocol to simulate the board, or write \
+         another system's frames with et sim --out frames.csv"
+    )]
+    NotScanned,
+    /// A current above the simulated board's.
+    #[error(
+        "{0} uA: the simulated board drives (0, 1000] uA (imaging recorded frames takes up to \
+         50 mA: give them with --frames)"
+    )]
+    BoardCurrent(f64),
+    /// The protocol file, or the built-in protocol's schedule.
+    #[error(transparent)]
+    Schedule(#[from] et_core::schedule::ScheduleError),
+    /// The built-in protocol on these electrodes.
+    #[error(transparent)]
+    Protocol(#[from] et_core::protocol::ProtocolError),
+    /// The board's scan configuration.
+    #[error(transparent)]
+    Config(#[from] et_core::config::ConfigError),
+    /// An electrode number past the sheet's.
+    #[error("{electrode} is not an electrode (0 to {})", count.saturating_sub(1))]
+    Electrode {
+        /// The number given.
+        electrode: u8,
+        /// The sheet's electrodes.
+        count: u8,
+    },
+    /// A short without another electrode.
+    #[error("a short needs another electrode, 0 to {}", .0.saturating_sub(1))]
+    ShortWith(u8),
+    /// A touch's footprint.
+    #[error(
+        "elongation {elongation} must be in [1, {}] and angle {angle} rad finite",
+        crate::touch::MAX_ELONGATION
+    )]
+    Footprint {
+        /// Long over short axis.
+        elongation: f64,
+        /// The long axis's angle, rad.
+        angle: f64,
+    },
+    /// A point off the sheet.
+    #[error("{0:?} is not on the sheet")]
+    OffSheet([f64; 2]),
 }
 
 impl FieldError {
-    fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
+    fn new(field: impl Into<String>, fault: impl Into<SceneFault>) -> Self {
         Self {
             field: field.into(),
-            reason: reason.into(),
+            fault: Box::new(fault.into()),
         }
+    }
+
+    fn rule(field: impl Into<String>, rule: &'static str) -> Self {
+        Self::new(field, FieldFault::Rule(rule))
+    }
+
+    fn value(field: impl Into<String>, value: f64, rule: &'static str) -> Self {
+        Self::new(field, FieldFault::Value { value, rule })
     }
 }
 
 impl From<SheetError> for FieldError {
     fn from(e: SheetError) -> Self {
         match e {
-            SheetError::Spec(et_core::sheet::SheetError::Field { field, why }) => {
-                Self::new(field, why)
+            SheetError::Spec(et_core::sheet::SheetError::Field { field, fault }) => {
+                Self::new(field, fault)
             }
             SheetError::Spec(et_core::sheet::SheetError::Shape(e)) => {
-                Self::new("sheet.shape", e.to_string())
+                Self::new("sheet.shape", SceneFault::Shape(e))
             }
-            other => Self::new("sheet", other.to_string()),
+            other => Self::new("sheet", SceneFault::Sheet(other)),
         }
     }
 }
@@ -335,8 +436,8 @@ pub const MAX_SCENE_BYTES: usize = 1 << 20;
 /// valid file it is exactly the nesting.
 ///
 /// # Errors
-/// The line where the nesting goes too deep, for people.
-fn nesting_within(text: &str, max: usize) -> Result<(), String> {
+/// The 1-based line where the nesting goes too deep.
+fn nesting_within(text: &str, max: usize) -> Result<(), usize> {
     use toml_parser::lexer::TokenKind;
     let mut open: Vec<TokenKind> = Vec::new();
     for token in toml_parser::Source::new(text).lex() {
@@ -351,10 +452,7 @@ fn nesting_within(text: &str, max: usize) -> Result<(), String> {
                         .take(at)
                         .filter(|&&b| b == b'\n')
                         .count();
-                    return Err(format!(
-                        "line {line}: brackets and braces nest deeper than {max} (an unclosed \
-                         '{{' or '['?)"
-                    ));
+                    return Err(line);
                 }
             }
             TokenKind::RightSquareBracket if open.last() == Some(&TokenKind::LeftSquareBracket) => {
@@ -399,24 +497,20 @@ impl Scene {
     /// [`SceneError::Parse`] or [`SceneError::Invalid`].
     pub fn parse(text: &str, name: &str) -> Result<Self, SceneError> {
         if text.len() > MAX_SCENE_BYTES {
-            return Err(SceneError::Parse {
+            return Err(SceneError::TooLarge {
                 path: name.into(),
-                message: format!(
-                    "{} bytes: a scene is at most {MAX_SCENE_BYTES} bytes (scenes are a few \
-                     hundred)",
-                    text.len()
-                ),
+                bytes: text.len(),
             });
         }
-        if let Err(message) = nesting_within(text, MAX_NESTING) {
-            return Err(SceneError::Parse {
+        if let Err(line) = nesting_within(text, MAX_NESTING) {
+            return Err(SceneError::TooDeep {
                 path: name.into(),
-                message,
+                line,
             });
         }
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+        let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
             path: name.into(),
-            message: e.to_string().trim_end().to_string(),
+            source,
         })?;
         scene.validate().map_err(|error| SceneError::Invalid {
             path: name.into(),
@@ -431,39 +525,34 @@ impl Scene {
         self.frontend.validate()?;
         self.check_scan()?;
         if !(self.movement.rms.is_finite() && self.movement.rms >= 0.0) {
-            return Err(FieldError::new(
+            return Err(FieldError::value(
                 "movement.rms",
-                format!("{} must be >= 0 m", self.movement.rms),
+                self.movement.rms,
+                ">= 0 m",
             ));
         }
         let d = &self.dynamics;
         if !(d.load_s >= 0.0 && d.unload_s >= 0.0 && (0.0..1.0).contains(&d.hysteresis)) {
-            return Err(FieldError::new(
-                "dynamics",
-                "load_s and unload_s >= 0 s, hysteresis in [0, 1)",
-            ));
+            let rule = "load_s and unload_s >= 0 s, hysteresis in [0, 1)";
+            return Err(FieldError::rule("dynamics", rule));
         }
         let l = self.sheet.physical.electrodes.count;
         for (i, f) in self.faults.iter().enumerate() {
             let at = |what: &str| format!("fault[{i}].{what}");
             if f.electrode >= l {
+                let (electrode, count) = (f.electrode, l);
                 return Err(FieldError::new(
                     at("electrode"),
-                    format!("{} is not an electrode (0 to {})", f.electrode, l - 1),
+                    SceneFault::Electrode { electrode, count },
                 ));
             }
             match f.kind {
                 FaultKind::Shorted if f.with.is_none_or(|w| w >= l || w == f.electrode) => {
-                    return Err(FieldError::new(
-                        at("with"),
-                        format!("a short needs another electrode, 0 to {}", l - 1),
-                    ));
+                    return Err(FieldError::new(at("with"), SceneFault::ShortWith(l)));
                 }
                 FaultKind::Intermittent if f.probability.is_none_or(|p| !(p > 0.0 && p < 1.0)) => {
-                    return Err(FieldError::new(
-                        at("probability"),
-                        "intermittent needs a probability in (0, 1)",
-                    ));
+                    let rule = "intermittent needs a probability in (0, 1)";
+                    return Err(FieldError::rule(at("probability"), rule));
                 }
                 _ => {}
             }
@@ -471,57 +560,48 @@ impl Scene {
         if let Some(d) = &self.drift
             && !(d.per_kelvin.is_finite() && d.kelvin_per_minute.is_finite())
         {
-            return Err(FieldError::new(
-                "drift",
-                "per_kelvin and kelvin_per_minute must be finite",
-            ));
+            let rule = "per_kelvin and kelvin_per_minute must be finite";
+            return Err(FieldError::rule("drift", rule));
         }
         for (i, t) in self.touches.iter().enumerate() {
             let at = |what: &str| format!("touch[{i}].{what}");
             let inside = |p: [f64; 2]| self.sheet.physical.shape.contains(p, 1e-9);
             let size = self.sheet.physical.shape.size();
             if !(t.radius.is_finite() && t.radius > 0.0 && t.radius <= size) {
-                return Err(FieldError::new(
-                    at("radius"),
-                    format!(
-                        "{} must be a positive length in m, at most the sheet's size ({size} m)",
-                        t.radius
-                    ),
-                ));
+                let fault = FieldFault::Range {
+                    value: t.radius,
+                    low: 0.0,
+                    high: size,
+                    unit: "m (at most the sheet's size)",
+                };
+                return Err(FieldError::new(at("radius"), fault));
             }
             if !t.footprint.is_valid() {
+                let (elongation, angle) = (t.footprint.elongation, t.footprint.angle);
                 return Err(FieldError::new(
                     at("footprint"),
-                    format!(
-                        "elongation {} must be in [1, {}] and angle {} rad finite",
-                        t.footprint.elongation,
-                        crate::touch::MAX_ELONGATION,
-                        t.footprint.angle
-                    ),
+                    SceneFault::Footprint { elongation, angle },
                 ));
             }
             if !(t.pressure.is_finite() && t.pressure >= 0.0) {
-                return Err(FieldError::new(
-                    at("pressure"),
-                    format!("{} must be >= 0 Pa", t.pressure),
-                ));
+                return Err(FieldError::value(at("pressure"), t.pressure, ">= 0 Pa"));
             }
             if !t.position.iter().all(|v| v.is_finite()) || !inside(t.position) {
                 return Err(FieldError::new(
                     at("position"),
-                    format!("{:?} is not on the sheet", t.position),
+                    SceneFault::OffSheet(t.position),
                 ));
             }
             if let Some(to) = t.to
                 && (!to.iter().all(|v| v.is_finite()) || !inside(to))
             {
-                return Err(FieldError::new(
-                    at("to"),
-                    format!("{to:?} is not on the sheet"),
-                ));
+                return Err(FieldError::new(at("to"), SceneFault::OffSheet(to)));
             }
             if !t.start.is_finite() || t.end.is_some_and(|e| !(e.is_finite() && e >= t.start)) {
-                return Err(FieldError::new(at("start"), "need finite start <= end (s)"));
+                return Err(FieldError::rule(
+                    at("start"),
+                    "need finite start <= end (s)",
+                ));
             }
         }
         Ok(())

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::fast::FastNetwork;
 use crate::network::{Grid, Network, NetworkError, Transfer, place_contacts};
 use crate::touch::{Inclusion, Piezo, Touch, edge_multipliers};
-use et_core::sheet::{ElectrodeSpec, SHEET_RESISTANCE, Shape, Sheet};
+use et_core::sheet::{ElectrodeSpec, FieldFault, SHEET_RESISTANCE, Shape, Sheet};
 
 /// The simulated sheet: the physical sheet, and how the simulator models it (its grid, the
 /// pressure-to-conductance law, a bend). A scene's `[sheet]` table holds all of these side by
@@ -136,16 +136,34 @@ pub enum SheetError {
     /// The network could not be built or solved.
     #[error("sheet: {0}")]
     Network(NetworkError),
+    /// The grid would have more nodes than the simulator keeps.
+    #[error(
+        "sheet.resolution: {spacing} m gives about {nodes:.0} grid nodes; the simulator keeps \
+         the untouched network's inverse (nodes x nodes), so at most {MAX_GRID_NODES}: use a \
+         coarser spacing{}",
+        if *default { " (the default follows the electrode width: set sheet.resolution)" } else { "" }
+    )]
+    TooManyNodes {
+        /// The grid spacing, m.
+        spacing: f64,
+        /// The nodes it gives (about).
+        nodes: f64,
+        /// Whether the spacing is the default one.
+        default: bool,
+    },
 }
 
 impl SheetError {
-    /// `field` (as a scene file names it) is out of range: `why`.
+    /// `field` (as a scene file names it) is out of range: `fault`.
     #[must_use]
-    pub fn field(field: &'static str, why: impl Into<String>) -> Self {
-        Self::Spec(et_core::sheet::SheetError::Field {
-            field,
-            why: why.into(),
-        })
+    pub fn field(field: &'static str, fault: FieldFault) -> Self {
+        Self::Spec(et_core::sheet::SheetError::Field { field, fault })
+    }
+
+    /// `field` (as a scene file names it) breaks `rule`.
+    #[must_use]
+    pub fn rule(field: &'static str, rule: &'static str) -> Self {
+        Self::field(field, FieldFault::Rule(rule))
     }
 }
 
@@ -189,49 +207,42 @@ impl SheetSpec {
     /// [`SheetError`] naming the field.
     pub fn validate(&self) -> Result<(), SheetError> {
         self.physical.validate()?;
-        let field = |field, why: String| Err(SheetError::field(field, why));
         if let Some(h) = self.resolution
             && !(h.is_finite() && h > 0.0 && h <= self.physical.shape.size() / 4.0)
         {
-            return field(
-                "sheet.resolution",
-                format!("{h} m: use a positive spacing below a quarter of the sheet"),
-            );
+            let rule = "a positive spacing below a quarter of the sheet (m)";
+            let fault = FieldFault::Value { value: h, rule };
+            return Err(SheetError::field("sheet.resolution", fault));
         }
         let h = self.resolution.unwrap_or_else(|| self.default_resolution());
         let nodes = self.physical.shape.area() / (h * h);
         if !nodes.is_finite() || nodes > MAX_GRID_NODES as f64 {
-            return field(
-                "sheet.resolution",
-                format!(
-                    "{h} m gives about {nodes:.0} grid nodes; the simulator keeps the untouched \
-                     network's inverse (nodes x nodes), so at most {MAX_GRID_NODES}: use a coarser \
-                     spacing{}",
-                    if self.resolution.is_none() {
-                        " (the default follows the electrode width: set sheet.resolution)"
-                    } else {
-                        ""
-                    }
-                ),
-            );
+            return Err(SheetError::TooManyNodes {
+                spacing: h,
+                nodes,
+                default: self.resolution.is_none(),
+            });
         }
         let p = &self.piezo;
-        if !(p.gain.is_finite()
-            && p.gain > -1.0
-            && p.gain <= crate::touch::MAX_MULTIPLIER - 1.0
-            && p.half_pressure.is_finite()
+        let high = crate::touch::MAX_MULTIPLIER - 1.0;
+        if !(p.gain.is_finite() && p.gain > -1.0 && p.gain <= high) {
+            return Err(SheetError::field(
+                "sheet.piezo.gain",
+                FieldFault::Range {
+                    value: p.gain,
+                    low: -1.0,
+                    high,
+                    unit: "(beyond, the pressed fabric conducts perfectly already)",
+                },
+            ));
+        }
+        if !(p.half_pressure.is_finite()
             && p.half_pressure > 0.0
             && p.exponent.is_finite()
             && p.exponent > 0.0)
         {
-            return field(
-                "sheet.piezo",
-                format!(
-                    "gain in (-1, {:e}] (beyond, the pressed fabric is a perfect conductor \
-                     already), half_pressure > 0 and exponent > 0, all finite",
-                    crate::touch::MAX_MULTIPLIER - 1.0
-                ),
-            );
+            let rule = "half_pressure > 0 Pa and exponent > 0, both finite";
+            return Err(SheetError::rule("sheet.piezo", rule));
         }
         if let Some(b) = &self.bend
             && !(b.radius.is_finite()
@@ -240,10 +251,8 @@ impl SheetSpec {
                 && b.thickness < b.radius
                 && b.gauge_factor >= 0.0)
         {
-            return field(
-                "sheet.bend",
-                "radius > thickness > 0 m and gauge_factor >= 0".into(),
-            );
+            let rule = "radius > thickness > 0 m and gauge_factor >= 0";
+            return Err(SheetError::rule("sheet.bend", rule));
         }
         Ok(())
     }
@@ -304,16 +313,19 @@ impl SimulatedSheet {
     ) -> Result<Self, SheetError> {
         let count = usize::from(spec.physical.electrodes.count);
         if contacts.len() != count {
+            let what = "contacts, one per electrode";
             return Err(SheetError::field(
                 "contacts",
-                format!("{} contacts for {count} electrodes", contacts.len()),
+                FieldFault::Count {
+                    found: contacts.len(),
+                    need: count,
+                    what,
+                },
             ));
         }
         if !contacts.iter().all(|z| z.is_finite() && *z > 0.0) {
-            return Err(SheetError::field(
-                "contacts",
-                "each contact must be finite and positive",
-            ));
+            let rule = "each contact must be finite and positive";
+            return Err(SheetError::rule("contacts", rule));
         }
         let network = build_network_with(spec, offsets, field, Some(contacts))?;
         Self::of_network(spec, network)
@@ -422,10 +434,8 @@ fn build_network_with(
     if let Some(f) = field
         && !f.coefficients.iter().all(|a| a.is_finite())
     {
-        return Err(SheetError::field(
-            "unevenness",
-            "the field's coefficients must be finite",
-        ));
+        let rule = "the field's coefficients must be finite";
+        return Err(SheetError::rule("unevenness", rule));
     }
     let bounds = spec.physical.shape.bounds();
     let h = spec.resolution.unwrap_or_else(|| spec.default_resolution());

@@ -32,6 +32,7 @@
 //! a header: one column is a label, two or more are x, y and a third target, e.g. z or force;
 //! further columns unused).
 
+mod fault;
 mod file;
 mod import;
 mod table;
@@ -41,6 +42,7 @@ use std::path::{Path, PathBuf};
 use et_core::ScanConfig;
 use nalgebra::DMatrix;
 
+pub use fault::DatasetFault;
 pub use file::{load, load_csv, load_npz, save, save_csv, save_npz};
 pub use import::{GroupsFrom, Table, Unit, is_length, read_matrix};
 
@@ -212,7 +214,7 @@ pub enum DatasetError {
         source: serde_json::Error,
     },
     /// Something in the file is wrong.
-    #[error("{}: {message}", place(path, *line, column.as_deref()))]
+    #[error("{}: {fault}", place(path, *line, column.as_deref()))]
     Content {
         /// The file.
         path: PathBuf,
@@ -220,8 +222,8 @@ pub enum DatasetError {
         line: usize,
         /// Column name or number, where it is about one.
         column: Option<String>,
-        /// What is wrong.
-        message: String,
+        /// What is wrong (boxed: the error stays small).
+        fault: Box<DatasetFault>,
     },
 }
 
@@ -237,16 +239,11 @@ fn place(path: &Path, line: usize, column: Option<&str>) -> String {
     place
 }
 
-fn content(
-    path: &Path,
-    line: usize,
-    column: Option<String>,
-    message: impl Into<String>,
-) -> DatasetError {
+fn content(path: &Path, line: usize, column: Option<String>, fault: DatasetFault) -> DatasetError {
     DatasetError::Content {
         path: path.into(),
         line,
         column,
-        message: message.into(),
+        fault: Box::new(fault),
     }
 }

@@ -21,19 +21,83 @@
 use nalgebra::DMatrix;
 
 /// What is wrong with an archive or one of its arrays.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{}{message}", array.as_ref().map(|a| format!("array '{a}': ")).unwrap_or_default())]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}{fault}", array.as_ref().map(|a| format!("array '{a}': ")).unwrap_or_default())]
 pub struct NpzError {
     /// The array concerned (without `.npy`), when it is about one.
     pub array: Option<String>,
     /// What is wrong.
-    pub message: String,
+    pub fault: NpzFault,
 }
 
-fn error(array: Option<&str>, message: impl Into<String>) -> NpzError {
+/// What is wrong with an archive, or with one array of it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NpzFault {
+    /// An archive et would write past the zip format's 32-bit limits.
+    #[error("more than 4 GiB or 65 535 arrays: too large for an .npz written by et")]
+    TooLarge,
+    /// The zip structure is damaged (which part).
+    #[error("not a readable .npz: {0}")]
+    Broken(&'static str),
+    /// A compressed entry.
+    #[error("compressed (numpy.savez_compressed): write it with numpy.savez")]
+    Compressed,
+    /// An entry the file ends inside.
+    #[error("cut short (the file ends inside it)")]
+    CutShort,
+    /// Two entries of one name.
+    #[error(
+        "stored twice in the archive (numpy reads the last, so which one is meant is unclear): \
+         write the archive again"
+    )]
+    Twice,
+    /// No array of the name.
+    #[error("missing")]
+    Missing,
+    /// The `.npy` inside is damaged (which part).
+    #[error("{0}")]
+    Npy(&'static str),
+    /// The `.npy` header lacks a key.
+    #[error("header has no '{0}'")]
+    NoKey(&'static str),
+    /// Big-endian values.
+    #[error("big-endian values: save it little-endian ('<')")]
+    BigEndian,
+    /// A type other than numbers, booleans or text.
+    #[error("unsupported type '{0}' (numbers, booleans or text only)")]
+    Type(String),
+    /// Text where numbers belong.
+    #[error("text where numbers belong")]
+    TextNotNumbers,
+    /// Another number of dimensions than the reader's.
+    #[error("{found}-d, a {want}-d array was expected")]
+    Dimensions {
+        /// The array's.
+        found: usize,
+        /// The reader's.
+        want: usize,
+    },
+    /// An element that is not 0 to 65 535.
+    #[error("element {index} is {value}, not a whole number in 0..=65535")]
+    NotWhole {
+        /// Its index.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// Not one text.
+    #[error("not a single text")]
+    NotText,
+    /// A character that is not one.
+    #[error("not valid text")]
+    InvalidText,
+}
+
+fn error(array: Option<&str>, fault: NpzFault) -> NpzError {
     NpzError {
         array: array.map(String::from),
-        message: message.into(),
+        fault,
     }
 }
 
@@ -155,10 +219,7 @@ impl Writer {
         }
         let offset = self.bytes.len();
         if offset + data.len() + 30 + file.len() > ZIP32_MAX || self.entries == u16::MAX {
-            self.failed = Some(error(
-                None,
-                "more than 4 GiB or 65 535 arrays: too large for an .npz written by et",
-            ));
+            self.failed = Some(error(None, NpzFault::TooLarge));
             return;
         }
         // crc32fast, not the wire format's `crc`: 10 to 35 times faster here (Cargo.toml says
@@ -206,10 +267,7 @@ impl Writer {
         }
         let start = self.bytes.len();
         if start + self.central.len() > ZIP32_MAX {
-            return Err(error(
-                None,
-                "more than 4 GiB: too large for an .npz written by et",
-            ));
+            return Err(error(None, NpzFault::TooLarge));
         }
         self.bytes.append(&mut self.central);
         let size = self.bytes.len() - start;
@@ -305,7 +363,7 @@ impl Npz {
     /// # Errors
     /// When `bytes` is not a zip archive of stored `.npy` entries.
     pub fn read(bytes: Vec<u8>) -> Result<Self, NpzError> {
-        let broken = |what: &str| error(None, format!("not a readable .npz: {what}"));
+        let broken = |what| error(None, NpzFault::Broken(what));
         // The end-of-central-directory record: 22 bytes, then a comment of at most 64 KiB.
         let lowest = bytes.len().saturating_sub(22 + 0xFFFF);
         let eocd = (lowest..=bytes.len().saturating_sub(22))
@@ -367,10 +425,7 @@ impl Npz {
                 continue;
             };
             if method != 0 {
-                return Err(error(
-                    Some(array),
-                    "compressed (numpy.savez_compressed): write it with numpy.savez",
-                ));
+                return Err(error(Some(array), NpzFault::Compressed));
             }
             let data_at = u16_at(&bytes, local + 26)
                 .zip(u16_at(&bytes, local + 28))
@@ -381,14 +436,10 @@ impl Npz {
                 .checked_add(size)
                 .is_none_or(|end| end > bytes.len())
             {
-                return Err(error(Some(array), "cut short (the file ends inside it)"));
+                return Err(error(Some(array), NpzFault::CutShort));
             }
             if entries.iter().any(|(n, _)| n == array) {
-                return Err(error(
-                    Some(array),
-                    "stored twice in the archive (numpy reads the last, so which one is meant \
-                     is unclear): write the archive again",
-                ));
+                return Err(error(Some(array), NpzFault::Twice));
             }
             entries.push((array.to_string(), data_at..data_at + size));
         }
@@ -407,13 +458,14 @@ impl Npz {
     }
 
     fn array(&self, name: &str) -> Result<Array<'_>, NpzError> {
-        let bad = |m: &str| error(Some(name), m);
+        let fault = |f| error(Some(name), f);
+        let bad = |m| fault(NpzFault::Npy(m));
         let range = self
             .entries
             .iter()
             .find(|(n, _)| n == name)
             .map(|(_, r)| r.clone())
-            .ok_or_else(|| bad("missing"))?;
+            .ok_or_else(|| fault(NpzFault::Missing))?;
         let npy = self
             .bytes
             .get(range)
@@ -431,10 +483,10 @@ impl Npz {
             .get(at..at + len)
             .and_then(|h| std::str::from_utf8(h).ok())
             .ok_or_else(|| bad("header cut short or not text"))?;
-        let value = |key: &str| {
+        let value = |key: &'static str| {
             let k = header
                 .find(&format!("'{key}'"))
-                .ok_or_else(|| bad(&format!("header has no '{key}'")))?;
+                .ok_or_else(|| fault(NpzFault::NoKey(key)))?;
             let rest = header.get(k + key.len() + 2..).unwrap_or_default();
             Ok::<&str, NpzError>(rest.trim_start().trim_start_matches(':').trim_start())
         };
@@ -445,10 +497,10 @@ impl Npz {
             .ok_or_else(|| bad("descr is not a simple type (a structured or object array?)"))?;
         let (order, code) = descr.split_at(descr.len().min(1));
         if order == ">" {
-            return Err(bad("big-endian values: save it little-endian ('<')"));
+            return Err(fault(NpzFault::BigEndian));
         }
         if !matches!(order, "<" | "|" | "=") {
-            return Err(bad(&format!("unsupported type '{descr}'")));
+            return Err(fault(NpzFault::Type(descr.to_string())));
         }
         let width = code.get(1..).and_then(|w| w.parse::<usize>().ok());
         let kind = match (code.get(..1), width) {
@@ -457,11 +509,7 @@ impl Npz {
             (Some("u"), Some(s @ (1 | 2 | 4 | 8))) => Kind::Uint(s),
             (Some("b"), Some(1)) => Kind::Bool,
             (Some("U"), Some(n)) => Kind::Unicode(n),
-            _ => {
-                return Err(bad(&format!(
-                    "unsupported type '{descr}' (numbers, booleans or text only)"
-                )));
-            }
+            _ => return Err(fault(NpzFault::Type(descr.to_string()))),
         };
         let fortran = value("fortran_order")?.starts_with("True");
         let shape = value("shape")?;
@@ -508,7 +556,7 @@ impl Npz {
             Kind::Uint(2) => |b| f64::from(u16::from_le_bytes(b.try_into().unwrap_or_default())),
             Kind::Uint(4) => |b| f64::from(u32::from_le_bytes(b.try_into().unwrap_or_default())),
             Kind::Uint(_) => |b| u64::from_le_bytes(b.try_into().unwrap_or_default()) as f64,
-            Kind::Unicode(_) => return Err(error(Some(name), "text where numbers belong")),
+            Kind::Unicode(_) => return Err(error(Some(name), NpzFault::TextNotNumbers)),
         };
         let values = a.data.chunks_exact(size).map(convert).collect();
         Ok((values, a.shape, a.fortran))
@@ -521,10 +569,8 @@ impl Npz {
     pub fn matrix(&self, name: &str) -> Result<DMatrix<f64>, NpzError> {
         let (values, shape, fortran) = self.numbers(name)?;
         let &[rows, cols] = shape.as_slice() else {
-            return Err(error(
-                Some(name),
-                format!("{}-d, a 2-d array was expected", shape.len()),
-            ));
+            let (found, want) = (shape.len(), 2);
+            return Err(error(Some(name), NpzFault::Dimensions { found, want }));
         };
         Ok(if fortran {
             DMatrix::from_vec(rows, cols, values)
@@ -540,10 +586,8 @@ impl Npz {
     pub fn vector(&self, name: &str) -> Result<Vec<f64>, NpzError> {
         let (values, shape, _) = self.numbers(name)?;
         if shape.len() != 1 {
-            return Err(error(
-                Some(name),
-                format!("{}-d, a 1-d array was expected", shape.len()),
-            ));
+            let (found, want) = (shape.len(), 1);
+            return Err(error(Some(name), NpzFault::Dimensions { found, want }));
         }
         Ok(values)
     }
@@ -559,12 +603,7 @@ impl Npz {
             .map(|(i, v)| {
                 (v.fract() == 0.0 && (0.0..=65535.0).contains(&v))
                     .then_some(v as u16)
-                    .ok_or_else(|| {
-                        error(
-                            Some(name),
-                            format!("element {i} is {v}, not a whole number in 0..=65535"),
-                        )
-                    })
+                    .ok_or_else(|| error(Some(name), NpzFault::NotWhole { index: i, value: v }))
             })
             .collect()
     }
@@ -576,13 +615,13 @@ impl Npz {
     pub fn text(&self, name: &str) -> Result<String, NpzError> {
         let a = self.array(name)?;
         if a.shape.iter().product::<usize>() != 1 || !matches!(a.kind, Kind::Unicode(_)) {
-            return Err(error(Some(name), "not a single text"));
+            return Err(error(Some(name), NpzFault::NotText));
         }
         a.data
             .chunks_exact(4)
             .map(|b| u32::from_le_bytes(b.try_into().unwrap_or_default()))
             .take_while(|&c| c != 0)
-            .map(|c| char::from_u32(c).ok_or_else(|| error(Some(name), "not valid text")))
+            .map(|c| char::from_u32(c).ok_or_else(|| error(Some(name), NpzFault::InvalidText)))
             .collect()
     }
 }

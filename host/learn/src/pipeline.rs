@@ -113,7 +113,7 @@ impl std::fmt::Display for ChosenBy {
 
 /// What [`train`] did differently from the usual recipe because the data are too few, said
 /// aloud by `et train` and the report.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[serde(tag = "fallback", rename_all = "snake_case")]
 pub enum Fallback {
     /// QDA shrinks toward the diagonal instead of the pooled covariance: some cross-validation
@@ -130,13 +130,15 @@ pub enum Fallback {
     /// The shrinkage was chosen by stratified k-fold instead of leave-one-visit-out, because no
     /// candidate fits on every visit's complement (`reason`).
     KFoldSelection {
-        /// Why leave-one-visit-out could not choose.
-        reason: String,
+        /// Why leave-one-visit-out could not choose (its text in JSON).
+        #[serde(serialize_with = "as_text")]
+        reason: VisitFault,
     },
     /// Leave-one-visit-out accuracy is not reported (`reason`).
     NoLeaveOneVisitOut {
-        /// Why.
-        reason: String,
+        /// Why (its text in JSON).
+        #[serde(serialize_with = "as_text")]
+        reason: VisitFault,
     },
     /// QDA's chosen shrinkage was 1 toward the pooled covariance: every class has the pooled
     /// covariance, which is LDA (the same decisions); the LDA is what was fitted, C times
@@ -145,6 +147,22 @@ pub enum Fallback {
         /// C.
         classes: usize,
     },
+}
+
+/// Why leave-one-visit-out could not choose the shrinkage, or score the model.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum VisitFault {
+    /// A fit on some visit's complement failed.
+    #[error(transparent)]
+    Fit(#[from] FitError),
+    /// Every candidate failed on some visit's complement.
+    #[error("no shrinkage candidate fits on one visit's complement")]
+    NoCandidateFits,
+}
+
+fn as_text<S: serde::Serializer>(value: &impl std::fmt::Display, to: S) -> Result<S::Ok, S::Error> {
+    to.collect_str(value)
 }
 
 impl std::fmt::Display for Fallback {
@@ -274,25 +292,26 @@ pub fn train_reporting(
     };
     // Leave-one-visit-out chooses when some candidate fits on every visit's complement (a
     // failing candidate scores 0); otherwise stratified k-fold does.
-    let by_visit_choice = if let Some(part) = &visit_part {
+    // None: one visit, nothing to choose by.
+    let by_visit_choice = visit_part.as_ref().map(|part| {
         match part {
-            Ok(part) => choose(part, true).map_err(|e| e.to_string()),
-            Err(e) => Err(e.to_string()),
+            Ok(part) => choose(part, true).map_err(VisitFault::from),
+            Err(e) => Err(VisitFault::from(e.clone())),
         }
         .and_then(|(l, scores)| {
             if !scores.is_empty() && scores.iter().all(|&(_, a)| a == 0.0) {
-                Err("no shrinkage candidate fits on one visit's complement".to_string())
+                Err(VisitFault::NoCandidateFits)
             } else {
                 Ok((l, scores))
             }
         })
-    } else {
-        Err(String::new())
-    };
+    });
     let ((shrinkage, shrinkage_scores), selection_folds, chosen_by) = match by_visit_choice {
-        Ok(choice) => (choice, by_visit.clone(), ChosenBy::LeaveOneVisitOut),
-        Err(reason) => {
-            if several_visits && options.shrinkage.is_none() {
+        Some(Ok(choice)) => (choice, by_visit.clone(), ChosenBy::LeaveOneVisitOut),
+        failed => {
+            if let Some(Err(reason)) = failed
+                && options.shrinkage.is_none()
+            {
                 fallbacks.push(Fallback::KFoldSelection { reason });
             }
             let k = options.folds.max(2);
@@ -325,9 +344,7 @@ pub fn train_reporting(
     let leave_one_visit_out = match leave_one_visit_out {
         Some(Ok(c)) => Some(c.accuracy()),
         Some(Err(e)) => {
-            fallbacks.push(Fallback::NoLeaveOneVisitOut {
-                reason: e.to_string(),
-            });
+            fallbacks.push(Fallback::NoLeaveOneVisitOut { reason: e.into() });
             None
         }
         None => None,

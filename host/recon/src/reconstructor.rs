@@ -48,7 +48,7 @@ use crate::touches::{
 };
 
 /// Why a reconstruction could not be set up or a frame imaged.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 #[non_exhaustive]
 pub enum ImagingError {
     /// The sheet could not be meshed.

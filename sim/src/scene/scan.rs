@@ -9,13 +9,7 @@ impl Scene {
         match &self.scan.protocol {
             ProtocolSpec::File(_) => Ok(None),
             ProtocolSpec::Named(name) => ProtocolKind::from_name(name).map(Some).ok_or_else(|| {
-                FieldError::new(
-                    "scan.protocol",
-                    format!(
-                        "'{name}' is not adjacent, pseudo-polar, pp-pp or opposite (or give \
-                         any system's protocol as {{ file = \"protocol.csv\" }})"
-                    ),
-                )
+                FieldError::new("scan.protocol", SceneFault::UnknownProtocol(name.clone()))
             }),
         }
     }
@@ -27,10 +21,13 @@ impl Scene {
         let ua = self.scan.current_ua;
         let max_ua = et_core::schedule::MAX_CURRENT_A * 1e6;
         if !(ua.is_finite() && ua > 0.0 && ua <= max_ua) {
-            return Err(FieldError::new(
-                "scan.current_ua",
-                format!("{ua} must be in (0, {max_ua}] uA"),
-            ));
+            let fault = FieldFault::Range {
+                value: ua,
+                low: 0.0,
+                high: max_ua,
+                unit: "uA",
+            };
+            return Err(FieldError::new("scan.current_ua", fault));
         }
         if self.named_protocol()?.is_some() && ua <= 1000.0 {
             self.scan_config()?;
@@ -49,7 +46,7 @@ impl Scene {
         self.check_scan()?;
         let amps = self.scan.current_ua * 1e-6;
         let electrodes = self.sheet.physical.electrodes.count;
-        let field = |e: &dyn std::fmt::Display| FieldError::new("scan.protocol", e.to_string());
+        let field = |fault: SceneFault| FieldError::new("scan.protocol", fault);
         match (&self.scan.protocol, self.named_protocol()?) {
             (ProtocolSpec::File(f), _) => et_core::schedule::Schedule::read_csv(
                 &self.dir.join(&f.file),
@@ -57,12 +54,14 @@ impl Scene {
                 f.base,
                 amps,
             )
-            .map_err(|e| field(&e)),
+            .map_err(|e| field(e.into())),
             (_, Some(kind)) => et_core::protocol::Protocol::new(kind, electrodes)
-                .map_err(|e| field(&e))?
+                .map_err(|e| field(e.into()))?
                 .schedule(amps)
-                .map_err(|e| field(&e)),
-            (ProtocolSpec::Named(_), None) => Err(field(&"no protocol")),
+                .map_err(|e| field(e.into())),
+            (ProtocolSpec::Named(name), None) => {
+                Err(field(SceneFault::UnknownProtocol(name.clone())))
+            }
         }
     }
 
@@ -73,23 +72,12 @@ impl Scene {
     /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
         let s = &self.scan;
-        let protocol = self.named_protocol()?.ok_or_else(|| {
-            FieldError::new(
-                "scan.protocol",
-                "a protocol file is imaged from measured frames (et reconstruct --frames), \
-                 not scanned by the simulated board: name a built-in protocol to simulate \
-                 the board, or write another system's frames with et sim --out frames.csv",
-            )
-        })?;
+        let protocol = self
+            .named_protocol()?
+            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?;
         if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {
-            return Err(FieldError::new(
-                "scan.current_ua",
-                format!(
-                    "{} uA: the simulated board drives (0, 1000] uA (imaging recorded frames \
-                     takes up to 50 mA: give them with --frames)",
-                    s.current_ua
-                ),
-            ));
+            let fault = SceneFault::BoardCurrent(s.current_ua);
+            return Err(FieldError::new("scan.current_ua", fault));
         }
         let config = ScanConfig {
             electrodes: self.sheet.physical.electrodes.count,
@@ -100,9 +88,7 @@ impl Scene {
             sample_rate_hz: s.sample_rate_hz,
             gain: s.gain,
         };
-        config
-            .validate()
-            .map_err(|e| FieldError::new("scan", e.to_string()))?;
+        config.validate().map_err(|e| FieldError::new("scan", e))?;
         Ok(config)
     }
 }

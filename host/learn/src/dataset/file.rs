@@ -10,7 +10,7 @@ use et_core::ScanConfig;
 use nalgebra::DMatrix;
 
 use super::table::parse_table;
-use super::{Dataset, DatasetError, content};
+use super::{Dataset, DatasetError, DatasetFault, content};
 use crate::npz;
 
 /// Writes `data` as CSV (see the module docs), with a free-text `provenance` line.
@@ -81,19 +81,20 @@ pub fn save_csv(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
 }
 
 /// Parses whitespace-separated finite numbers of a `field`.
-fn numbers(path: &Path, line: usize, field: &str, text: &str) -> Result<Vec<f64>, DatasetError> {
+fn numbers(
+    path: &Path,
+    line: usize,
+    field: &'static str,
+    text: &str,
+) -> Result<Vec<f64>, DatasetError> {
     text.split_whitespace()
         .map(|v| {
             v.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
-                    content(
-                        path,
-                        line,
-                        None,
-                        format!("{field}: '{v}' is not a finite number"),
-                    )
+                    let cell = v.to_string();
+                    content(path, line, None, DatasetFault::HeaderNumber { field, cell })
                 })
         })
         .collect()
@@ -111,7 +112,7 @@ const UNITS: &str =
 fn points(
     path: &Path,
     line: usize,
-    field: &str,
+    field: &'static str,
     list: &str,
     per_unit: f64,
 ) -> Result<Vec<[f64; 2]>, DatasetError> {
@@ -119,12 +120,7 @@ fn points(
         .filter(|p| !p.trim().is_empty())
         .map(|pair| match numbers(path, line, field, pair)?[..] {
             [x, y] => Ok([x * per_unit, y * per_unit]),
-            _ => Err(content(
-                path,
-                line,
-                None,
-                format!("{field}: each point is 'x y'"),
-            )),
+            _ => Err(content(path, line, None, DatasetFault::NotPoint(field))),
         })
         .collect()
 }
@@ -159,14 +155,14 @@ impl Header {
             if let Some(json) = meta.strip_prefix("config:") {
                 config = Some(
                     serde_json::from_str(json.trim())
-                        .map_err(|e| content(path, i + 1, None, format!("config: {e}")))?,
+                        .map_err(|e| content(path, i + 1, None, DatasetFault::Config(e)))?,
                 );
             } else if let Some(list) = meta.strip_prefix("feature_index:") {
                 feature_index = list
                     .split_whitespace()
                     .map(|v| {
                         v.parse::<u16>()
-                            .map_err(|e| content(path, i + 1, None, format!("feature_index: {e}")))
+                            .map_err(|e| content(path, i + 1, None, DatasetFault::FeatureIndex(e)))
                     })
                     .collect::<Result<_, _>>()?;
             } else if let Some(list) = meta.strip_prefix("untouched:") {
@@ -183,7 +179,7 @@ impl Header {
                 centres = points(path, i + 1, "centres_mm", list, 1e-3)?;
             }
         }
-        let config = config.ok_or_else(|| content(path, 0, None, "no '# config:' line"))?;
+        let config = config.ok_or_else(|| content(path, 0, None, DatasetFault::NoConfig))?;
         Ok(Self {
             config,
             feature_index,
@@ -204,12 +200,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     match lines.next() {
         Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
         _ => {
-            return Err(content(
-                path,
-                1,
-                None,
-                format!("not an et dataset (expected '{FORMAT_2}', or version 1)"),
-            ));
+            return Err(content(path, 1, None, DatasetFault::NotDataset));
         }
     }
     let Header {
@@ -226,7 +217,7 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
             .names
             .iter()
             .position(|n| n == name)
-            .ok_or_else(|| content(path, 0, Some(name.into()), "column missing"))
+            .ok_or_else(|| content(path, 0, Some(name.into()), DatasetFault::ColumnMissing))
     };
     // SI columns, or version 1's mm and kPa (metres and pascals per the file's unit).
     let either = |si: &str, old: &str, per_unit: f64| match col(si) {
@@ -241,15 +232,12 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         .filter(|&c| ![label, xc, yc, visit].contains(&c) && Some(c) != pressure_col)
         .collect();
     if feature_index.len() != features.len() {
+        let (features, index) = (features.len(), feature_index.len());
         return Err(content(
             path,
             0,
             None,
-            format!(
-                "{} feature columns, {} in feature_index",
-                features.len(),
-                feature_index.len()
-            ),
+            DatasetFault::FeatureCount { features, index },
         ));
     }
     if let Some((bad, u)) = untouched
@@ -257,16 +245,12 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         .enumerate()
         .find(|(_, u)| u.len() != features.len())
     {
-        return Err(content(
-            path,
-            0,
-            None,
-            format!(
-                "untouched frame {bad} has {} values, the data {} features",
-                u.len(),
-                features.len()
-            ),
-        ));
+        let fault = DatasetFault::UntouchedLength {
+            frame: bad,
+            values: u.len(),
+            features: features.len(),
+        };
+        return Err(content(path, 0, None, fault));
     }
     let p = features.len();
     let baselines =
@@ -364,11 +348,9 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
         source,
     };
     let z = npz::Npz::read(bytes).map_err(bad)?;
-    let fault = |array: &str, message: String| {
-        content(path, 0, None, format!("array '{array}': {message}"))
-    };
+    let fault = |fault| content(path, 0, None, fault);
     if z.text("format").map_err(bad)? != "et-dataset 1" {
-        return Err(fault("format", "not an et dataset ('et-dataset 1')".into()));
+        return Err(fault(DatasetFault::NotNpzDataset));
     }
     let config: ScanConfig =
         serde_json::from_str(&z.text("config").map_err(bad)?).map_err(|source| {
@@ -381,29 +363,27 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
     let x = z.matrix("x").map_err(bad)?;
     let (n, p) = x.shape();
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(fault(
-            "x",
-            format!("row {}, column {} is not a finite number", i % n, i / n),
-        ));
+        let (row, column) = (i % n, i / n);
+        return Err(fault(DatasetFault::ArrayNotFinite {
+            array: "x",
+            row,
+            column,
+        }));
     }
-    let pairs = |name: &str, rows: Option<usize>| {
-        let m = z.matrix(name).map_err(bad)?;
-        if m.ncols() != 2 || rows.is_some_and(|r| r != m.nrows()) {
-            return Err(fault(
-                name,
-                format!(
-                    "shape {} x {}, expected {} x 2",
-                    m.nrows(),
-                    m.ncols(),
-                    rows.map_or("any".into(), |r| r.to_string())
-                ),
-            ));
+    let pairs = |array: &'static str, want: Option<usize>| {
+        let m = z.matrix(array).map_err(bad)?;
+        if m.ncols() != 2 || want.is_some_and(|r| r != m.nrows()) {
+            let (rows, columns) = m.shape();
+            return Err(fault(DatasetFault::ArrayShape {
+                array,
+                rows,
+                columns,
+                want,
+            }));
         }
-        if m.iter().any(|v| !v.is_finite()) {
-            return Err(fault(
-                name,
-                "holds a value that is not a finite number".into(),
-            ));
+        if let Some(i) = m.iter().position(|v| !v.is_finite()) {
+            let (row, column) = (i % m.nrows(), i / m.nrows());
+            return Err(fault(DatasetFault::ArrayNotFinite { array, row, column }));
         }
         Ok(m.column(0)
             .iter()
@@ -411,11 +391,11 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
             .map(|(&x, &y)| [x, y])
             .collect::<Vec<_>>())
     };
-    let rows = |name: &str, len: usize, want: usize| {
+    let rows = |array: &'static str, len: usize, want: usize| {
         if len == want {
             Ok(())
         } else {
-            Err(fault(name, format!("{len} values, x has {want} rows")))
+            Err(fault(DatasetFault::ArrayLength { array, len, want }))
         }
     };
     let y = z.whole("label").map_err(bad)?;
@@ -428,17 +408,21 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
     }
     let feature_index = z.whole("feature_index").map_err(bad)?;
     if feature_index.len() != p {
-        return Err(fault(
-            "feature_index",
-            format!("{} values, x has {p} columns", feature_index.len()),
-        ));
+        let (array, len) = ("feature_index", feature_index.len());
+        return Err(fault(DatasetFault::ArrayColumns {
+            array,
+            len,
+            want: p,
+        }));
     }
     let baselines = z.matrix("untouched").map_err(bad)?;
     if baselines.nrows() > 0 && baselines.ncols() != p {
-        return Err(fault(
-            "untouched",
-            format!("{} columns, x has {p}", baselines.ncols()),
-        ));
+        let (array, len) = ("untouched", baselines.ncols());
+        return Err(fault(DatasetFault::ArrayColumns {
+            array,
+            len,
+            want: p,
+        }));
     }
     Ok(Dataset {
         positions: pairs("position_m", Some(n))?,
@@ -491,14 +475,11 @@ pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
 /// visit number is a fold of leave-one-visit-out: 65 535 of them for three visits would run
 /// 65 535 folds).
 fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
-    let fault = |field: &str, message: String| content(path, 0, Some(field.to_string()), message);
+    let fault = |field: &str, fault| content(path, 0, Some(field.to_string()), fault);
     let finite = |field: &str, mut values: std::slice::Iter<'_, f64>| match values
         .position(|v| !v.is_finite())
     {
-        Some(i) => Err(fault(
-            field,
-            format!("value {} is not a finite number", i + 1),
-        )),
+        Some(i) => Err(fault(field, DatasetFault::ValueNotFinite(i + 1))),
         None => Ok(()),
     };
     finite("features", data.x.as_slice().iter())?;
@@ -511,48 +492,38 @@ fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
         if let [before, index] = pair
             && index <= before
         {
-            return Err(fault(
-                "feature_index",
-                format!(
-                    "feature {} reads frame value {index} after {before}: each frame value once, \
-                     in frame order",
-                    j + 2
-                ),
-            ));
+            let (feature, index, before) = (j + 2, *index, *before);
+            let order = DatasetFault::FeatureOrder {
+                feature,
+                index,
+                before,
+            };
+            return Err(fault("feature_index", order));
         }
     }
     if let Some(&last) = data.feature_index.last()
         && usize::from(last) >= frame_len
     {
-        return Err(fault(
-            "feature_index",
-            format!("frame value {last} in a frame of {frame_len} values"),
-        ));
+        let past = DatasetFault::PastFrame {
+            index: last,
+            frame_len,
+        };
+        return Err(fault("feature_index", past));
     }
     let mut seen = vec![false; data.x.nrows().min(usize::from(u16::MAX)) + 1];
     for &v in &data.visit {
         match seen.get_mut(usize::from(v)) {
             Some(s) => *s = true,
             None => {
-                return Err(fault(
-                    "visit",
-                    format!(
-                        "visit {v} in a set of {} rows: visits are numbered from 0",
-                        data.x.nrows()
-                    ),
-                ));
+                let rows = data.x.nrows();
+                return Err(fault("visit", DatasetFault::VisitPast { visit: v, rows }));
             }
         }
     }
     let t = data.visits();
     if let Some(missing) = seen.iter().take(t).position(|s| !s) {
-        return Err(fault(
-            "visit",
-            format!(
-                "visits run to {} but visit {missing} has no rows: number them 0 to T - 1",
-                t - 1
-            ),
-        ));
+        let last = t - 1;
+        return Err(fault("visit", DatasetFault::VisitMissing { last, missing }));
     }
     Ok(())
 }

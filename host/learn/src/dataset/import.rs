@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use et_core::text::lines as text_lines;
 
 use super::table::{Csv, parse_table};
-use super::{DatasetError, content};
+use super::{DatasetError, DatasetFault, content};
 
 /// The unit of positions in the files.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -162,7 +162,7 @@ impl Table {
             .map(|g| group_values(g, features, &main))
             .transpose()?;
         if feature_cols.is_empty() {
-            return Err(content(features, 0, None, "no feature columns"));
+            return Err(content(features, 0, None, DatasetFault::NoFeatures));
         }
         let x = main.matrix(features, &feature_cols)?;
         let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
@@ -234,17 +234,13 @@ fn targets_file<'p>(
     };
     let table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
     if table.rows.len() != main.rows.len() {
-        return Err(content(
-            p,
-            0,
-            None,
-            format!(
-                "{} rows, {} has {}",
-                table.rows.len(),
-                features.display(),
-                main.rows.len()
-            ),
-        ));
+        let fault = DatasetFault::RowCount {
+            rows: table.rows.len(),
+            what: "rows",
+            features: features.into(),
+            features_rows: main.rows.len(),
+        };
+        return Err(content(p, 0, None, fault));
     }
     Ok((p, table))
 }
@@ -264,24 +260,15 @@ fn group_values(
                 .position(|n| n.eq_ignore_ascii_case(name))
                 .filter(|_| main.header)
                 .ok_or_else(|| {
+                    let names = main
+                        .header
+                        .then(|| main.names.iter().take(8).cloned().collect());
+                    let name = name.clone();
                     content(
                         features,
                         0,
                         None,
-                        format!(
-                            "--groups {name}: no such column (the header has {}); give a \
-                             column name or a file with one group per row",
-                            if main.header {
-                                main.names
-                                    .iter()
-                                    .take(8)
-                                    .cloned()
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            } else {
-                                "no names: the file has no header row".into()
-                            }
-                        ),
+                        DatasetFault::NoGroupColumn { name, names },
                     )
                 })?;
             main.text_column(features, c)
@@ -290,17 +277,13 @@ fn group_values(
             let one = |_: &str, _: usize| true;
             let g = parse_table(p, &text_lines(&read(p)?), &one)?;
             if g.rows.len() != main.rows.len() {
-                return Err(content(
-                    p,
-                    0,
-                    None,
-                    format!(
-                        "{} rows of groups, {} has {}",
-                        g.rows.len(),
-                        features.display(),
-                        main.rows.len()
-                    ),
-                ));
+                let fault = DatasetFault::RowCount {
+                    rows: g.rows.len(),
+                    what: "rows of groups",
+                    features: features.into(),
+                    features_rows: main.rows.len(),
+                };
+                return Err(content(p, 0, None, fault));
             }
             g.text_column(p, 0)
         }
@@ -351,12 +334,7 @@ impl Targets {
             ),
             (None, None) => None,
             _ => {
-                return Err(content(
-                    path,
-                    0,
-                    None,
-                    "give both x and y columns, or neither",
-                ));
+                return Err(content(path, 0, None, DatasetFault::HalfPosition));
             }
         };
         let third = match third_col {
@@ -372,17 +350,8 @@ impl Targets {
             _ => None,
         };
         if labels.is_none() && positions.is_none() {
-            return Err(content(
-                path,
-                0,
-                None,
-                if table.header {
-                    "no target: add a 'label' column or 'x' and 'y' columns"
-                } else {
-                    "no target: without a header row every column is a feature; name the targets \
-                 (label, or x and y) in a header row, or give them in a second file"
-                },
-            ));
+            let header = table.header;
+            return Err(content(path, 0, None, DatasetFault::NoTarget { header }));
         }
         let third_col = third_col.filter(|_| third.is_some());
         Ok(Self {

@@ -10,7 +10,7 @@ use nalgebra::DMatrix;
 
 use et_core::text::{Delimiter, Records, number, read_records};
 
-use super::{DatasetError, content};
+use super::{DatasetError, DatasetFault, content};
 
 pub(super) struct Csv {
     pub(super) names: Vec<String>,
@@ -36,7 +36,7 @@ impl Csv {
                         path,
                         *line,
                         self.names.get(c).cloned(),
-                        "missing or not a finite number",
+                        DatasetFault::Missing,
                     )
                 })
             })
@@ -51,7 +51,7 @@ impl Csv {
                 path,
                 0,
                 self.names.get(c).cloned(),
-                "not kept as text",
+                DatasetFault::NotText,
             )),
         }
     }
@@ -74,12 +74,8 @@ impl Csv {
                 if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u16::MAX) {
                     Ok(v as u16)
                 } else {
-                    Err(content(
-                        path,
-                        *line,
-                        self.names.get(c).cloned(),
-                        format!("{v} is not a whole number from 0 to 65535"),
-                    ))
+                    let name = self.names.get(c).cloned();
+                    Err(content(path, *line, name, DatasetFault::NotWhole(v)))
                 }
             })
             .collect()
@@ -101,9 +97,11 @@ pub(super) fn parse_table(
     let Records {
         delimiter,
         rows: records,
-    } = read_records(lines).map_err(|(line, message)| content(path, line, None, message))?;
+    } = read_records(lines).map_err(|(line, f)| content(path, line, None, f.into()))?;
     let mut it = records.iter().peekable();
-    let &&(hl, ref first) = it.peek().ok_or_else(|| content(path, 0, None, "no rows"))?;
+    let &&(hl, ref first) = it
+        .peek()
+        .ok_or_else(|| content(path, 0, None, DatasetFault::NoRows))?;
     let texts = |r: &Vec<String>| -> Vec<bool> {
         r.iter().map(|c| number(c, delimiter).is_none()).collect()
     };
@@ -118,23 +116,20 @@ pub(super) fn parse_table(
         (1..=first.len()).map(|c| c.to_string()).collect()
     };
     if names.iter().any(String::is_empty) {
-        return Err(content(path, hl, None, "empty column name in the header"));
+        return Err(content(path, hl, None, DatasetFault::EmptyName));
     }
     // Two columns of one name: which one a reader takes would be a guess (a second `x` was
     // dropped silently).
     let mut seen = std::collections::HashMap::with_capacity(names.len());
     for (b, name) in names.iter().enumerate() {
         if let Some(&a) = seen.get(&name.to_ascii_lowercase()) {
-            return Err(content(
-                path,
-                hl,
-                Some(name.clone()),
-                format!(
-                    "columns {} and {} are both named '{name}': give each column its own name",
-                    a + 1,
-                    b + 1
-                ),
-            ));
+            let (first, second, name) = (a + 1, b + 1, name.clone());
+            let fault = DatasetFault::SameName {
+                first,
+                second,
+                name: name.clone(),
+            };
+            return Err(content(path, hl, Some(name), fault));
         }
         seen.insert(name.to_ascii_lowercase(), b);
     }
@@ -144,27 +139,24 @@ pub(super) fn parse_table(
     for (i, cells) in it {
         let i = *i;
         if cells.len() != names.len() {
-            return Err(content(
-                path,
-                i,
-                None,
-                format!(
-                    "{} values, {} has {} columns",
-                    cells.len(),
-                    if header {
-                        "the header"
-                    } else {
-                        "the first row"
-                    },
-                    names.len()
-                ),
-            ));
+            let (found, columns) = (cells.len(), names.len());
+            let fault = DatasetFault::RowLength {
+                found,
+                columns,
+                header,
+            };
+            return Err(content(path, i, None, fault));
         }
         let mut values = Vec::with_capacity(cells.len());
         for ((cell, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
             if let Some(t) = t {
                 if cell.is_empty() {
-                    return Err(content(path, i, Some(name.clone()), "empty label"));
+                    return Err(content(
+                        path,
+                        i,
+                        Some(name.clone()),
+                        DatasetFault::EmptyLabel,
+                    ));
                 }
                 t.push(cell.to_string());
                 values.push(number(cell, delimiter).unwrap_or(f64::NAN));
@@ -173,27 +165,19 @@ pub(super) fn parse_table(
             values.push(match number(cell, delimiter) {
                 Some(v) if v.is_finite() => v,
                 Some(v) => {
-                    return Err(content(
-                        path,
-                        i,
-                        Some(name.clone()),
-                        format!("{v} is not a finite number"),
-                    ));
+                    let fault = DatasetFault::NotFinite(v);
+                    return Err(content(path, i, Some(name.clone()), fault));
                 }
                 None => {
-                    return Err(content(
-                        path,
-                        i,
-                        Some(name.clone()),
-                        format!("'{cell}' is not a number"),
-                    ));
+                    let fault = DatasetFault::NotNumber(cell.clone());
+                    return Err(content(path, i, Some(name.clone()), fault));
                 }
             });
         }
         rows.push((i, values));
     }
     if rows.is_empty() {
-        return Err(content(path, 0, None, "no data rows"));
+        return Err(content(path, 0, None, DatasetFault::NoDataRows));
     }
     Ok(Csv {
         names,

@@ -126,7 +126,7 @@ impl Board {
                             .iter()
                             .max()
                             .map_or(0, |&i| usize::from(i)),
-                        scan: scan(&self.file.config),
+                        scan: self.file.config,
                     })?;
                 Ok(self.fitted.predict(&x))
             })
@@ -146,10 +146,7 @@ impl Board {
         if (m.electrodes, m.protocol, m.current_na, m.gain)
             != (d.electrodes, d.protocol, d.current_na, d.gain)
         {
-            return Err(UseError::Config {
-                model: scan(&m),
-                data: scan(&d),
-            });
+            return Err(UseError::Config { model: m, data: d });
         }
         let columns = model_columns(file, data)?;
         let x = analysis::select_columns(&data.features(file.referenced)?, &columns);
@@ -321,7 +318,7 @@ fn model_columns(file: &ModelFile, data: &Dataset) -> Result<Vec<usize>, DataErr
 }
 
 /// What of a scan decides what its features mean: L, the protocol, the current and the gain.
-fn scan(c: &et_core::config::ScanConfig) -> String {
+fn said(c: &et_core::config::ScanConfig) -> String {
     format!(
         "L = {}, {} drive, {} uA, gain {}",
         c.electrodes,
@@ -341,19 +338,22 @@ pub enum UseError {
     /// The model was trained on another scan than the data's: its features are other
     /// measurements.
     #[error(
-        "the model was trained on a scan of {model}, the data were measured with {data}: \
-             train a model on data of this scan"
+        "the model was trained on a scan of {}, the data were measured with {}: train a model \
+         on data of this scan",
+        said(model),
+        said(data)
     )]
     Config {
         /// The model's scan.
-        model: String,
+        model: et_core::config::ScanConfig,
         /// The data's scan.
-        data: String,
+        data: et_core::config::ScanConfig,
     },
     /// A frame (or the untouched frame) is too short for the model's features.
     #[error(
         "frames of {frame} values and an untouched frame of {v0}: the model reads value \
-         {reads} of frames of {scan}"
+         {reads} of frames of {}",
+        said(scan)
     )]
     FrameLength {
         /// Values in each frame given.
@@ -363,7 +363,7 @@ pub enum UseError {
         /// The largest frame index the model reads.
         reads: usize,
         /// The model's scan.
-        scan: String,
+        scan: et_core::config::ScanConfig,
     },
     /// Evaluation on the dataset failed (e.g. a class the model does not know).
     #[error(transparent)]

@@ -1,0 +1,239 @@
+//! What can be wrong inside a dataset or a table of features and targets: the faults a
+//! [`super::DatasetError::Content`] names, with the file, line and column beside them.
+
+use std::path::PathBuf;
+
+/// What is wrong in a dataset or table file (where: the error's file, line and column).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DatasetFault {
+    /// The rows could not be read as CSV.
+    #[error(transparent)]
+    Records(#[from] et_core::text::RecordFault),
+    /// No rows at all.
+    #[error("no rows")]
+    NoRows,
+    /// A header and no rows under it.
+    #[error("no data rows")]
+    NoDataRows,
+    /// A header cell left empty.
+    #[error("empty column name in the header")]
+    EmptyName,
+    /// Two columns of one name (letter case aside).
+    #[error("columns {first} and {second} are both named '{name}': give each column its own name")]
+    SameName {
+        /// The first column, from 1.
+        first: usize,
+        /// The second, from 1.
+        second: usize,
+        /// The name.
+        name: String,
+    },
+    /// A row of another length than the header (or the first row).
+    #[error(
+        "{found} values, {} has {columns} columns",
+        if *header { "the header" } else { "the first row" }
+    )]
+    RowLength {
+        /// The row's values.
+        found: usize,
+        /// The columns.
+        columns: usize,
+        /// Whether the file has a header row.
+        header: bool,
+    },
+    /// A label cell left empty.
+    #[error("empty label")]
+    EmptyLabel,
+    /// A number that is not finite (`inf`, `nan`).
+    #[error("{0} is not a finite number")]
+    NotFinite(f64),
+    /// A cell that is not a number.
+    #[error("'{0}' is not a number")]
+    NotNumber(String),
+    /// A number needed where a label's text is.
+    #[error("missing or not a finite number")]
+    Missing,
+    /// A column asked for as text that was read as numbers only.
+    #[error("not kept as text")]
+    NotText,
+    /// A class or visit that is not 0 to 65 535.
+    #[error("{0} is not a whole number from 0 to 65535")]
+    NotWhole(f64),
+    /// A header line's value that is not a finite number.
+    #[error("{field}: '{cell}' is not a finite number")]
+    HeaderNumber {
+        /// The header line's key.
+        field: &'static str,
+        /// What is written.
+        cell: String,
+    },
+    /// A header line's point that is not two numbers.
+    #[error("{0}: each point is 'x y'")]
+    NotPoint(&'static str),
+    /// The configuration line is not the scan settings' JSON.
+    #[error("config: {0}")]
+    Config(serde_json::Error),
+    /// The feature index line holds something that is not a frame index.
+    #[error("feature_index: {0}")]
+    FeatureIndex(std::num::ParseIntError),
+    /// The header has no configuration line.
+    #[error("no '# config:' line")]
+    NoConfig,
+    /// The first line is not an et dataset's.
+    #[error("not an et dataset (expected '# et-dataset 2', or version 1)")]
+    NotDataset,
+    /// A column the format needs.
+    #[error("column missing")]
+    ColumnMissing,
+    /// The features and the feature index disagree.
+    #[error("{features} feature columns, {index} in feature_index")]
+    FeatureCount {
+        /// Feature columns.
+        features: usize,
+        /// Entries of the feature index.
+        index: usize,
+    },
+    /// An untouched frame of another length than the features.
+    #[error("untouched frame {frame} has {values} values, the data {features} features")]
+    UntouchedLength {
+        /// The frame, from 0.
+        frame: usize,
+        /// Its values.
+        values: usize,
+        /// The features.
+        features: usize,
+    },
+    /// An `.npz` whose `format` array is not an et dataset's.
+    #[error("array 'format': not an et dataset ('et-dataset 1')")]
+    NotNpzDataset,
+    /// A value of an `.npz` array (row, column from 0) that is not finite.
+    #[error("array '{array}': row {row}, column {column} is not a finite number")]
+    ArrayNotFinite {
+        /// The array.
+        array: &'static str,
+        /// Its row.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
+    /// An `.npz` array of another shape.
+    #[error(
+        "array '{array}': shape {rows} x {columns}, expected {} x 2",
+        want.map_or("any".into(), |r| r.to_string())
+    )]
+    ArrayShape {
+        /// The array.
+        array: &'static str,
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        columns: usize,
+        /// The rows expected, if any number.
+        want: Option<usize>,
+    },
+    /// An `.npz` array of another length than `x`'s rows.
+    #[error("array '{array}': {len} values, x has {want} rows")]
+    ArrayLength {
+        /// The array.
+        array: &'static str,
+        /// Its length.
+        len: usize,
+        /// `x`'s rows.
+        want: usize,
+    },
+    /// An `.npz` array across the features of another length than `x`'s columns.
+    #[error("array '{array}': {len} values, x has {want} columns")]
+    ArrayColumns {
+        /// The array.
+        array: &'static str,
+        /// Its length (or columns).
+        len: usize,
+        /// `x`'s columns.
+        want: usize,
+    },
+    /// The `index`-th value (from 1) of the column is not finite.
+    #[error("value {0} is not a finite number")]
+    ValueNotFinite(usize),
+    /// The features' frame indices out of order.
+    #[error(
+        "feature {feature} reads frame value {index} after {before}: each frame value once, in \
+         frame order"
+    )]
+    FeatureOrder {
+        /// The feature, from 1.
+        feature: usize,
+        /// Its frame value.
+        index: u16,
+        /// The previous feature's.
+        before: u16,
+    },
+    /// A feature's frame value past the frame.
+    #[error("frame value {index} in a frame of {frame_len} values")]
+    PastFrame {
+        /// The frame value.
+        index: u16,
+        /// The frame's length.
+        frame_len: usize,
+    },
+    /// A visit number above the rows.
+    #[error("visit {visit} in a set of {rows} rows: visits are numbered from 0")]
+    VisitPast {
+        /// The visit.
+        visit: u16,
+        /// The rows.
+        rows: usize,
+    },
+    /// A visit with no rows below the last.
+    #[error("visits run to {last} but visit {missing} has no rows: number them 0 to T - 1")]
+    VisitMissing {
+        /// The last visit.
+        last: usize,
+        /// The one without rows.
+        missing: usize,
+    },
+    /// A table with no feature columns.
+    #[error("no feature columns")]
+    NoFeatures,
+    /// A second file (targets, groups) of other rows than the features'.
+    #[error("{rows} {what}, {} has {features_rows}", features.display())]
+    RowCount {
+        /// This file's rows.
+        rows: usize,
+        /// "rows", "rows of groups".
+        what: &'static str,
+        /// The features file.
+        features: PathBuf,
+        /// Its rows.
+        features_rows: usize,
+    },
+    /// `--groups NAME` that is no column.
+    #[error(
+        "--groups {name}: no such column (the header has {}); give a column name or a file with \
+         one group per row",
+        names.as_ref().map_or("no names: the file has no header row".into(), |n| n.join(", "))
+    )]
+    NoGroupColumn {
+        /// The name given.
+        name: String,
+        /// The header's first names (none: no header).
+        names: Option<Vec<String>>,
+    },
+    /// x without y or y without x.
+    #[error("give both x and y columns, or neither")]
+    HalfPosition,
+    /// Neither labels nor positions.
+    #[error(
+        "{}",
+        if *header {
+            "no target: add a 'label' column or 'x' and 'y' columns"
+        } else {
+            "no target: without a header row every column is a feature; name the targets (label, \
+             or x and y) in a header row, or give them in a second file"
+        }
+    )]
+    NoTarget {
+        /// Whether the file has a header row.
+        header: bool,
+    },
+}
