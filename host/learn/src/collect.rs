@@ -488,14 +488,7 @@ pub fn collect_presses_with(
                 })
                 .collect();
             scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
-            for o in obs.chunks(k) {
-                rows.x
-                    .extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
-                rows.y.push(press.label);
-                rows.positions.push(first.position);
-                rows.pressures.push(first.pressure);
-                rows.visit.push(v as u16);
-            }
+            rows.push(&obs, k, &feature_index, (press.label, first, v as u16));
         }
     }
     Ok(Dataset {
@@ -527,6 +520,22 @@ struct Rows {
     positions: Vec<[f64; 2]>,
     pressures: Vec<f64>,
     visit: Vec<u16>,
+}
+
+impl Rows {
+    /// One row per frame of `obs` (frames of `k` values): the features `feature_index` reads,
+    /// with the press's label, its first touch's position and pressure, and the visit.
+    fn push(&mut self, obs: &[f32], k: usize, feature_index: &[u16], of: (u16, Touch, u16)) {
+        let (label, first, visit) = of;
+        for o in obs.chunks(k) {
+            self.x
+                .extend(feature_index.iter().map(|&i| f64::from(o[usize::from(i)])));
+            self.y.push(label);
+            self.positions.push(first.position);
+            self.pressures.push(first.pressure);
+            self.visit.push(visit);
+        }
+    }
 }
 
 /// A simulated front end on `sheet` (its noise drawn from `seed`) in the measurement set
