@@ -312,7 +312,7 @@ pub struct TrainOptions {
     pub scheme: CvScheme,
     /// Classes from positions: a grid of rows x cols cells over the targets' bounding box.
     pub grid: Option<(usize, usize)>,
-    /// Seed of the shuffled folds.
+    /// Seed of the shuffled folds and of the final perceptron's random starts.
     pub seed: u64,
     /// Standardise each group's (session's) features by that group's own mean and spread
     /// before anything else, so a session's offsets and gains cancel; evaluation does the

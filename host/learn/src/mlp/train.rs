@@ -201,7 +201,7 @@ pub(super) fn train_one(
 ) -> Option<(Layers, usize, f64)> {
     let widths: Vec<usize> = std::iter::once(p)
         .chain(opts.hidden.iter().copied())
-        .chain([3])
+        .chain([y.ncols()])
         .collect();
     let mut layers = glorot(&widths, rng);
     let mut adam = Adam::new(&layers);
@@ -231,15 +231,17 @@ pub(super) fn train_one(
         if !score.is_finite() {
             break;
         }
-        let better = best
-            .as_ref()
-            .is_none_or(|(_, _, s)| score < s * (1.0 - 1e-4));
-        if better {
+        // scikit-learn's rule: the best weights kept at any improvement, the patience
+        // restarting only at an improvement of more than `tol`.
+        let best_score = best.as_ref().map_or(f64::INFINITY, |b| b.2);
+        if score < best_score {
             best = Some((layers.clone(), epoch, score));
+        }
+        if score < best_score - opts.tol {
             since_best = 0;
         } else {
             since_best += 1;
-            if since_best >= opts.patience {
+            if since_best > opts.patience {
                 break;
             }
         }

@@ -176,7 +176,7 @@ pub fn train(
         table,
         (targets.as_deref(), classes.as_ref()),
         &members,
-        progress,
+        (opts.seed, progress),
     )?;
     search.extend(average.clone());
     for c in &mut search {

@@ -2,14 +2,15 @@
 
 use super::*;
 
-/// The final fit of the chosen candidate on every row: its tables and the standardisation.
+/// The final fit of the chosen candidate on every row: its tables and the standardisation;
+/// `seed` seeds a perceptron's starts.
 pub(in crate::tabular) fn fit_final(
     table: &Table,
     best: &Candidate,
     targets: Option<&[Target3]>,
     classes: Option<&(Labels, ClassInfo)>,
     members: &[Candidate],
-    progress: Progress<'_>,
+    (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let h = |name: &str| best.hyperparameters.get(name).copied().unwrap_or(0.0);
     let need_targets = || targets.ok_or_else(|| usage(Misuse::NeedsPositions));
@@ -74,6 +75,7 @@ pub(in crate::tabular) fn fit_final(
         Kind::Mlp => {
             let opts = MlpOptions {
                 starts: MLP_FINAL_STARTS,
+                seed,
                 ..mlp_options(&best.hyperparameters)
             };
             progress("fitting mlp", 0, 1);
@@ -89,7 +91,7 @@ pub(in crate::tabular) fn fit_final(
                 m.scale,
             )
         }
-        Kind::Average => average_tables(table, members, targets, classes, progress)?,
+        Kind::Average => average_tables(table, members, targets, classes, (seed, progress))?,
         Kind::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
@@ -154,12 +156,12 @@ fn average_tables(
     members: &[Candidate],
     targets: Option<&[Target3]>,
     classes: Option<&(Labels, ClassInfo)>,
-    progress: Progress<'_>,
+    (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let mut fitted = Vec::with_capacity(members.len());
     for m in members {
         let (tables, feature_mean, feature_scale) =
-            fit_final(table, m, targets, classes, &[], progress)?;
+            fit_final(table, m, targets, classes, &[], (seed, progress))?;
         fitted.push(Member {
             method: m.method,
             hyperparameters: m.hyperparameters.clone(),

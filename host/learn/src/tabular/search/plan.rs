@@ -131,14 +131,14 @@ pub(super) fn fit_first(
     table: &Table,
     (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
     members: &[Candidate],
-    progress: Progress<'_>,
+    (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Candidate, (Tables, Vec<f64>, Vec<f64>), bool), TabularError> {
     let mut last_error = None;
     for &best in ranked {
         let lda = as_lda_if_equal(best, table.x.ncols(), classes.map(|(l, _)| l));
         let best = lda.as_ref().unwrap_or(best);
         progress(&format!("fitting {}", best.method.name()), 0, 1);
-        match fit_final(table, best, targets, classes, members, progress) {
+        match fit_final(table, best, targets, classes, members, (seed, progress)) {
             Ok(f) => {
                 progress(&format!("fitting {}", best.method.name()), 1, 1);
                 return Ok((best.clone(), f, lda.is_some()));

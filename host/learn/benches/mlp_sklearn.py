@@ -1,0 +1,121 @@
+"""et's perceptron beside scikit-learn's MLPRegressor, call for call, on the same rows: the
+table "The perceptron beside scikit-learn's" in docs/measurements.md.
+
+Each side searches the same grid by 5-fold shuffled cross-validation inside the training rows
+and fits the best on all of them: hidden layers 300, 50, 20; relu or tanh; L2 (alpha) 0.1 or
+1; Adam at 1e-3 on batches of 200; early stopping on 10 % held out; inputs and targets
+standardised. et: `et_touch.train(X, T, kind="mlp")` (the whole call a user makes);
+scikit-learn: `GridSearchCV` over `StandardScaler` + `MLPRegressor(max_iter=2000,
+early_stopping=True)` with its targets standardised (`TransformedTargetRegressor`).
+
+Data sets: scikit-learn's bundled `load_diabetes` (442 x 10) and `make_friedman1` (2 000 x
+10, noise 1), a shuffled 80/20 split drawn from each of three seeds (which also seed both
+sides' folds and weights: a single seed's comparison is mostly which side drew the luckier
+start); and, when a directory is given, the stand-in e-skin
+(`cargo run --release -p et-learn --example standin -- DIR 2500`), train on rows 0..2000, test
+on 2000..2500 (three seeds of the searches), its targets x, y, z in m, scored on x, y. A single target is given to et as the
+position (t, 0).
+
+Run on one core with one BLAS thread (after `maturin develop` of python/):
+
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 \
+        python host/learn/benches/mlp_sklearn.py [STANDIN_DIR]
+
+With three targets scikit-learn is also fitted on x, y alone (its network otherwise spends
+itself on z). Prints per data set and side: search + fit seconds and the test rows' mean error (absolute for
+one target, the x, y distance for positions, in the targets' units; mm for the stand-in).
+"""
+import sys
+import time
+
+import numpy as np
+import et_touch
+from sklearn.compose import TransformedTargetRegressor
+from sklearn.datasets import load_diabetes, make_friedman1
+from sklearn.model_selection import GridSearchCV, KFold
+from sklearn.neural_network import MLPRegressor
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+
+
+SEEDS = (0, 1, 2)
+
+
+def shuffled_split(x, t, seed):
+    order = np.random.default_rng(seed).permutation(len(t))
+    cut = int(0.8 * len(t))
+    return x[order[:cut]], t[order[:cut]], x[order[cut:]], t[order[cut:]]
+
+
+def data_sets(standin):
+    x, t = load_diabetes(return_X_y=True)
+    for seed in SEEDS:
+        yield "diabetes (442 x 10)", seed, 1.0, *shuffled_split(x, t[:, None], seed)
+    x, t = make_friedman1(n_samples=2000, noise=1.0, random_state=0)
+    for seed in SEEDS:
+        yield "friedman1 (2 000 x 10, noise 1)", seed, 1.0, *shuffled_split(x, t[:, None], seed)
+    if standin:
+        load = lambda f: np.loadtxt(f"{standin}/{f}", delimiter=",", encoding="utf-8-sig", ndmin=2)
+        x, t = load("features.csv"), load("targets.csv")
+        for seed in SEEDS:
+            yield ("stand-in skin (2 500 x 192; x, y, z)", seed, 1e3,
+                   x[:2000], t[:2000], x[2000:], t[2000:])
+
+
+def error(predicted, truth, unit):
+    d = predicted[:, :2] - truth[:, :2] if truth.shape[1] > 1 else predicted[:, :1] - truth
+    return unit * float(np.mean(np.hypot(d[:, 0], d[:, 1]) if d.shape[1] > 1 else np.abs(d[:, 0])))
+
+
+def sklearn_side(x, t, seed):
+    model = make_pipeline(
+        StandardScaler(),
+        TransformedTargetRegressor(
+            MLPRegressor(hidden_layer_sizes=(300, 50, 20), max_iter=2000, early_stopping=True,
+                         random_state=seed),
+            transformer=StandardScaler()))
+    grid = {"transformedtargetregressor__regressor__alpha": [0.1, 1.0],
+            "transformedtargetregressor__regressor__activation": ["relu", "tanh"]}
+    search = GridSearchCV(model, grid, cv=KFold(5, shuffle=True, random_state=seed),
+                          scoring="neg_mean_squared_error")
+    search.fit(x, t if t.shape[1] > 1 else t[:, 0])
+    return lambda z: np.asarray(search.predict(z)).reshape(len(z), -1)
+
+
+def sklearn_side_xy(x, t, seed):
+    """scikit-learn fitted on x, y only (the position a user scores), where there are more."""
+    predict = sklearn_side(x[:, :], t[:, :2], seed)
+    return lambda z: np.c_[predict(z), np.zeros(len(z))]
+
+
+def et_side(x, t, seed):
+    positions = t if t.shape[1] > 1 else np.c_[t, np.zeros_like(t)]
+    model = et_touch.train(x, positions, kind="mlp", seed=seed + 1)
+    return lambda z: np.asarray(model.predict(z))
+
+
+def main():
+    standin = sys.argv[1] if len(sys.argv) > 1 else None
+    print("| data set | seed | et mlp: search + fit | et error | scikit-learn: search + fit "
+          "| scikit-learn error | scikit-learn on x, y only: search + fit | error |")
+    print("|---|---|---|---|---|---|---|---|")
+    totals = {}
+    for name, seed, unit, xtr, ttr, xte, tte in data_sets(standin):
+        row = [name, str(seed)]
+        sides = (et_side, sklearn_side) + ((sklearn_side_xy,) if ttr.shape[1] > 2 else ())
+        for side in sides:
+            start = time.perf_counter()
+            predict = side(xtr, ttr, seed)
+            seconds = time.perf_counter() - start
+            e = error(predict(xte), tte, unit)
+            totals.setdefault((name, side.__name__), []).append((seconds, e))
+            row += [f"{seconds:.1f} s", f"{e:.3f}"]
+        print("| " + " | ".join(row) + " |", flush=True)
+    print("\nmeans over the seeds:")
+    for (name, side), runs in totals.items():
+        s, e = np.mean(runs, axis=0)
+        print(f"  {name:40s} {side:13s} {s:6.1f} s  error {e:.3f}")
+
+
+if __name__ == "__main__":
+    main()
