@@ -22,7 +22,8 @@ Run on one core with one BLAS thread (after `maturin develop` of python/):
         python host/learn/benches/mlp_sklearn.py [STANDIN_DIR]
 
 With three targets scikit-learn is also fitted on x, y alone (its network otherwise spends
-itself on z). Prints per data set and side: search + fit seconds and the test rows' mean error (absolute for
+itself on z). Prints per data set and side (and et's candidates' cross-validated errors, as measured and
+with the held-out channels drifted, in the error's unit): search + fit seconds and the test rows' mean error (absolute for
 one target, the x, y distance for positions, in the targets' units; mm for the stand-in).
 """
 import sys
@@ -88,9 +89,14 @@ def sklearn_side_xy(x, t, seed):
     return lambda z: np.c_[predict(z), np.zeros(len(z))]
 
 
+SEARCHES = []
+
+
 def et_side(x, t, seed):
     positions = t if t.shape[1] > 1 else np.c_[t, np.zeros_like(t)]
     model = et_touch.train(x, positions, kind="mlp", seed=seed + 1)
+    SEARCHES.append([(c["hyperparameters"], c["cv_mean_error_mm"], c["cv_drifted_error_mm"])
+                     for c in model.info.get("search", [])])
     return lambda z: np.asarray(model.predict(z))
 
 
@@ -102,6 +108,7 @@ def main():
     totals = {}
     for name, seed, unit, xtr, ttr, xte, tte in data_sets(standin):
         row = [name, str(seed)]
+        searched = None
         sides = (et_side, sklearn_side) + ((sklearn_side_xy,) if ttr.shape[1] > 2 else ())
         for side in sides:
             start = time.perf_counter()
@@ -109,8 +116,14 @@ def main():
             seconds = time.perf_counter() - start
             e = error(predict(xte), tte, unit)
             totals.setdefault((name, side.__name__), []).append((seconds, e))
+            if side is et_side:
+                searched = SEARCHES[-1]
             row += [f"{seconds:.1f} s", f"{e:.3f}"]
         print("| " + " | ".join(row) + " |", flush=True)
+        for h, plain, drifted in searched or []:
+            said = ", ".join(f"{k}={v:g}" for k, v in h.items() if not k.startswith("hidden"))
+            print(f"    et's candidate {said}: cross-validated {plain / 1e3 * unit:.3f}, "
+                  f"drifted {drifted / 1e3 * unit:.3f}", flush=True)
     print("\nmeans over the seeds:")
     for (name, side), runs in totals.items():
         s, e = np.mean(runs, axis=0)
