@@ -22,7 +22,10 @@ Run on one core with one BLAS thread (after `maturin develop` of python/):
         python host/learn/benches/mlp_sklearn.py [STANDIN_DIR]
 
 With three targets scikit-learn is also fitted on x, y alone (its network otherwise spends
-itself on z). Prints per data set and side (and et's candidates' cross-validated errors, as measured and
+itself on z). `--candidates` instead fits each of scikit-learn's candidates alone on friedman1's seed-0 split
+(three `random_state`s), beside et's `mlp_candidates` example.
+
+Prints per data set and side (and et's candidates' cross-validated errors, as measured and
 with the held-out channels drifted, in the error's unit): search + fit seconds and the test rows' mean error (absolute for
 one target, the x, y distance for positions, in the targets' units; mm for the stand-in).
 """
@@ -100,7 +103,27 @@ def et_side(x, t, seed):
     return lambda z: np.asarray(model.predict(z))
 
 
+def candidates():
+    """Each candidate alone on friedman1's seed-0 split, `random_state` 0 to 2 (what et's
+    `mlp_candidates` example does on its side), the test rows' mean absolute error."""
+    x, t = make_friedman1(n_samples=2000, noise=1.0, random_state=0)
+    xtr, ttr, xte, tte = shuffled_split(x, t, 0)
+    mx, sx, mt, st = xtr.mean(0), xtr.std(0), ttr.mean(), ttr.std()
+    for activation in ("relu", "tanh"):
+        for alpha in (0.1, 1.0):
+            errors = []
+            for seed in range(3):
+                m = MLPRegressor(hidden_layer_sizes=(300, 50, 20), alpha=alpha,
+                                 activation=activation, max_iter=2000, early_stopping=True,
+                                 random_state=seed).fit((xtr - mx) / sx, (ttr - mt) / st)
+                p = m.predict((xte - mx) / sx) * st + mt
+                errors.append(f"{np.mean(np.abs(p - tte)):.3f} ({m.n_iter_} passes)")
+            print(f"{activation} alpha {alpha}: " + ", ".join(errors), flush=True)
+
+
 def main():
+    if "--candidates" in sys.argv:
+        return candidates()
     standin = sys.argv[1] if len(sys.argv) > 1 else None
     print("| data set | seed | et mlp: search + fit | et error | scikit-learn: search + fit "
           "| scikit-learn error | scikit-learn on x, y only: search + fit | error |")
