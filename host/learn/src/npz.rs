@@ -20,86 +20,10 @@
 
 use nalgebra::DMatrix;
 
-/// What is wrong with an archive or one of its arrays.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{}{fault}", array.as_ref().map(|a| format!("array '{a}': ")).unwrap_or_default())]
-pub struct NpzError {
-    /// The array concerned (without `.npy`), when it is about one.
-    pub array: Option<String>,
-    /// What is wrong.
-    pub fault: NpzFault,
-}
+mod fault;
 
-/// What is wrong with an archive, or with one array of it.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum NpzFault {
-    /// An archive et would write past the zip format's 32-bit limits.
-    #[error("more than 4 GiB or 65 535 arrays: too large for an .npz written by et")]
-    TooLarge,
-    /// The zip structure is damaged (which part).
-    #[error("not a readable .npz: {0}")]
-    Broken(&'static str),
-    /// A compressed entry.
-    #[error("compressed (numpy.savez_compressed): write it with numpy.savez")]
-    Compressed,
-    /// An entry the file ends inside.
-    #[error("cut short (the file ends inside it)")]
-    CutShort,
-    /// Two entries of one name.
-    #[error(
-        "stored twice in the archive (numpy reads the last, so which one is meant is unclear): \
-         write the archive again"
-    )]
-    Twice,
-    /// No array of the name.
-    #[error("missing")]
-    Missing,
-    /// The `.npy` inside is damaged (which part).
-    #[error("{0}")]
-    Npy(&'static str),
-    /// The `.npy` header lacks a key.
-    #[error("header has no '{0}'")]
-    NoKey(&'static str),
-    /// Big-endian values.
-    #[error("big-endian values: save it little-endian ('<')")]
-    BigEndian,
-    /// A type other than numbers, booleans or text.
-    #[error("unsupported type '{0}' (numbers, booleans or text only)")]
-    Type(String),
-    /// Text where numbers belong.
-    #[error("text where numbers belong")]
-    TextNotNumbers,
-    /// Another number of dimensions than the reader's.
-    #[error("{found}-d, a {want}-d array was expected")]
-    Dimensions {
-        /// The array's.
-        found: usize,
-        /// The reader's.
-        want: usize,
-    },
-    /// An element that is not 0 to 65 535.
-    #[error("element {index} is {value}, not a whole number in 0..=65535")]
-    NotWhole {
-        /// Its index.
-        index: usize,
-        /// Its value.
-        value: f64,
-    },
-    /// Not one text.
-    #[error("not a single text")]
-    NotText,
-    /// A character that is not one.
-    #[error("not valid text")]
-    InvalidText,
-}
-
-fn error(array: Option<&str>, fault: NpzFault) -> NpzError {
-    NpzError {
-        array: array.map(String::from),
-        fault,
-    }
-}
+use fault::error;
+pub use fault::{NpzError, NpzFault};
 
 /// Largest offset or size a zip without zip64 holds.
 const ZIP32_MAX: usize = 0xFFFF_FFFE;
