@@ -5,7 +5,9 @@
 //!
 //! Usage: cargo run --release -p et-learn --example standin -- DIR [ROWS] [SESSIONS] [SEED]
 //! [drifting] (defaults: 2500 rows over 5 sessions, seed 1; `drifting` adds per-channel gain
-//! and offset changes between sessions, `standin::SessionDrift::SESSIONS`). Also writes
+//! and offset changes between sessions, `standin::SessionDrift::SESSIONS`;
+//! `drifting:GAIN,OFFSET` other standard deviations, e.g. `drifting:0.3,1` for sessions
+//! further apart). Also writes
 //! `sessions.csv`, each row's session, for `--groups`, and `pressed.csv` and `before.csv`, the
 //! pressed frames and the frames before them, for `--reference-features`.
 
@@ -23,9 +25,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let drift = match args.next().as_deref() {
         None => et_learn::standin::SessionDrift::NONE,
         Some("drifting") => et_learn::standin::SessionDrift::SESSIONS,
-        Some(other) => {
-            return Err(format!("'{other}': the fifth argument is 'drifting' or nothing").into());
-        }
+        Some(other) => match other
+            .strip_prefix("drifting:")
+            .and_then(|v| v.split_once(','))
+            .and_then(|(g, o)| Some((g.parse().ok()?, o.parse().ok()?)))
+        {
+            Some((gain, offset)) => et_learn::standin::SessionDrift { gain, offset },
+            None => {
+                return Err(format!(
+                    "'{other}': the fifth argument is 'drifting', 'drifting:GAIN,OFFSET' \
+                     (e.g. drifting:0.3,1) or nothing"
+                )
+                .into());
+            }
+        },
     };
     std::fs::create_dir_all(&dir)?;
     let started = std::time::Instant::now();

@@ -45,10 +45,15 @@ pub(super) fn steadiest_close<'a>(
             (
                 *steadiest,
                 format!(
-                    "{} ({:.2} mm) is within {:.0} % of {} ({:.2} mm) and steadier over the \
+                    "{} ({:.2} mm{}) is within {:.0} % of {} ({:.2} mm) and steadier over the \
                      recording's {} blocks (their errors vary by {:.2} mm against {:.2}): chose {}",
                     steadiest.method.name(),
                     steadiest.choice_loss(by_drift),
+                    if by_drift {
+                        ", the geometric mean of its plain and drifted errors"
+                    } else {
+                        ""
+                    },
                     100.0 * CLOSE,
                     best.method.name(),
                     best.choice_loss(by_drift),
@@ -106,9 +111,14 @@ pub(super) fn average_of_best(
                 .iter()
                 .map(|c| c.out_of_fold.as_ref())
                 .collect::<Option<_>>()?;
-            // The members' mean prediction of each row, as measured (0) and drifted (1).
+            // The members' mean prediction of each row, as measured (0) and drifted (1: each
+            // draw's).
             let mean = |which: usize| -> Vec<Target3> {
-                (0..t.len())
+                let len = predictions
+                    .first()
+                    .and_then(|p| p.get(which))
+                    .map_or(0, Vec::len);
+                (0..len)
                     .map(|r| {
                         let mut s = [0.0; 3];
                         for p in &predictions {
@@ -128,7 +138,7 @@ pub(super) fn average_of_best(
                 Candidate {
                     cv_mean_error_mm: Some(mean_error(&measured, t)),
                     cv_block_errors_mm: block_errors(&Some(measured), t, fold, grouped),
-                    cv_drifted_error_mm: Some(mean_error(&drifted, t)),
+                    cv_drifted_error_mm: Some(drifted_error(&drifted, t)),
                     ..Candidate::new(Kind::Average, params(&[("members", members.len() as f64)]))
                 },
                 members,
@@ -150,16 +160,17 @@ pub(super) fn drift_note(ranked: &[&Candidate], by_drift: bool) -> Option<String
         format!(
             "{} cross-validates best ({:.2} mm) but its error grows to {:.2} mm when the held-out \
              rows' channels drift as between sessions (gain {:.0} %, level {:.2} of each \
-             channel's spread); {} holds better ({:.2} mm, {:.2} mm drifted): chose by the \
-             drifted error, as nothing in rows without --groups shows a new session",
+             channel's spread); {} holds better ({:.2} mm, {:.2} mm drifted): chose by both \
+             errors (their geometric mean), as nothing in rows without --groups shows a new \
+             session",
             plain.method.name(),
             plain.loss(),
-            plain.choice_loss(true),
+            plain.cv_drifted_error_mm.unwrap_or(f64::INFINITY),
             100.0 * DRIFT_GAIN,
             DRIFT_OFFSET,
             chosen.method.name(),
             chosen.loss(),
-            chosen.choice_loss(true),
+            chosen.cv_drifted_error_mm.unwrap_or(f64::INFINITY),
         )
     })
 }

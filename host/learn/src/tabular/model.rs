@@ -26,7 +26,8 @@ pub struct Candidate {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_drifted_error_mm: Option<f64>,
     /// Regressors, during training only: the out-of-fold prediction of every row, as measured
-    /// and drifted (for the average of the best candidates).
+    /// (n) and drifted ([`DRIFT_DRAWS`] n: draw d's of row r at d n + r), for the average of
+    /// the best candidates.
     #[serde(skip)]
     pub(super) out_of_fold: Option<[Vec<Target3>; 2]>,
 }
@@ -56,12 +57,15 @@ impl Candidate {
         }
     }
 
-    /// What `auto` minimises: `loss()`, or for a regressor chosen `by_drift` its error
-    /// with the held-out channels drifted (infinite when it has none).
+    /// What `auto` minimises: `loss()`, or for a regressor chosen `by_drift` its plain
+    /// cross-validated error P and its error D with the held-out channels drifted weighed
+    /// together, P^(1 - w) D^w with w = [`DRIFT_WEIGHT`] (infinite without D).
     #[must_use]
     pub fn choice_loss(&self, by_drift: bool) -> f64 {
         if by_drift && !self.method.is_classifier() {
-            self.cv_drifted_error_mm.unwrap_or(f64::INFINITY)
+            self.cv_drifted_error_mm.map_or(f64::INFINITY, |d| {
+                self.loss().powf(1.0 - DRIFT_WEIGHT) * d.powf(DRIFT_WEIGHT)
+            })
         } else {
             self.loss()
         }
@@ -220,9 +224,10 @@ pub struct TableModel {
     pub source: String,
     /// Seconds the training took (search and final fit).
     pub fit_seconds: f64,
-    /// Whether the regressor and its hyperparameters were chosen by the cross-validated error
-    /// with the held-out rows' channels drifted ([`Candidate::cv_drifted_error_mm`]), as they
-    /// are without groups, rather than by the plain cross-validated error.
+    /// Whether the regressor and its hyperparameters were chosen with both cross-validated
+    /// errors in view, plain and with the held-out rows' channels drifted
+    /// ([`Candidate::choice_loss`]), as they are without groups, rather than by the plain
+    /// cross-validated error alone.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub chosen_by_drift: bool,
     /// Whether each group's features were standardised by the group's own statistics (then

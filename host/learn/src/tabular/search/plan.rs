@@ -111,7 +111,7 @@ pub(super) fn average_note(avg: &Candidate, members: &[Candidate], by_drift: boo
             .join(", "),
         avg.choice_loss(by_drift),
         if by_drift {
-            " with channels drifted"
+            " (the geometric mean of the plain and the drifted error)"
         } else {
             ""
         },
