@@ -50,9 +50,9 @@ pub(super) fn steadiest_close<'a>(
                     steadiest.method.name(),
                     steadiest.choice_loss(by_drift),
                     if by_drift {
-                        ", the geometric mean of its plain and drifted errors"
+                        format!(", {} of its plain and drifted errors", drift_weighting())
                     } else {
-                        ""
+                        String::new()
                     },
                     100.0 * CLOSE,
                     best.method.name(),
@@ -161,8 +161,8 @@ pub(super) fn drift_note(ranked: &[&Candidate], by_drift: bool) -> Option<String
             "{} cross-validates best ({:.2} mm) but its error grows to {:.2} mm when the held-out \
              rows' channels drift as between sessions (gain {:.0} %, level {:.2} of each \
              channel's spread); {} holds better ({:.2} mm, {:.2} mm drifted): chose by both \
-             errors (their geometric mean), as nothing in rows without --groups shows a new \
-             session",
+             errors ({} of the plain P and the drifted D), as nothing in rows without --groups \
+             shows a new session",
             plain.method.name(),
             plain.loss(),
             plain.cv_drifted_error_mm.unwrap_or(f64::INFINITY),
@@ -171,6 +171,7 @@ pub(super) fn drift_note(ranked: &[&Candidate], by_drift: bool) -> Option<String
             chosen.method.name(),
             chosen.loss(),
             chosen.cv_drifted_error_mm.unwrap_or(f64::INFINITY),
+            drift_weighting(),
         )
     })
 }

@@ -56,6 +56,12 @@ pub const DRIFT_DRAWS: usize = 4;
 /// 1.23) and worse on friedman1 (1.57 against 1.23).
 pub const DRIFT_WEIGHT: f64 = 0.75;
 
+/// The choice's weighting as the reports write it: "P^0.25 D^0.75".
+#[must_use]
+pub fn drift_weighting() -> String {
+    format!("P^{:.2} D^{:.2}", 1.0 - DRIFT_WEIGHT, DRIFT_WEIGHT)
+}
+
 /// `x` as a drifted session measures it: each column `j` times 1 + `gain` N(0, 1), plus
 /// `offset` `spread[j]` N(0, 1), drawn from `seed`; `spread` is each column's standard
 /// deviation (in the learning rows, so the held-out rows' own spread is not peeked at).

@@ -240,9 +240,10 @@ fn say_groups(table: &tabular::Table) {
         None => eprintln!(
             "note: no --groups: every row is taken as one session, and nothing in the data can \
              show how a model holds on a new session; sensors drift between sessions, so \
-             positions are predicted by the model best on two figures together (their \
-             geometric mean): its cross-validated error, and the same with each channel's gain \
-             and level drifted (give --groups to choose by leaving a session out)"
+             positions are predicted by the model best on two figures together ({}): its \
+             cross-validated error P, and D, the same with each channel's gain and level \
+             drifted (give --groups to choose by leaving a session out)",
+            tabular::drift_weighting()
         ),
         Some((_, names)) if names.len() < 2 => eprintln!(
             "note: one group ('{}') only: nothing in the data can show how a model holds on a \

@@ -111,9 +111,12 @@ pub(super) fn average_note(avg: &Candidate, members: &[Candidate], by_drift: boo
             .join(", "),
         avg.choice_loss(by_drift),
         if by_drift {
-            " (the geometric mean of the plain and the drifted error)"
+            format!(
+                " ({} of the plain and the drifted error)",
+                drift_weighting()
+            )
         } else {
-            ""
+            String::new()
         },
         members
             .first()
