@@ -3,6 +3,7 @@
 //! and makes the board's blob.
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use nalgebra::DMatrix;
 use numpy::{PyArray1, PyReadonlyArray2};
@@ -11,7 +12,7 @@ use pyo3::types::PyBytes;
 
 use et_core::model::Precision;
 use et_learn::model::{Evaluation, Model as Estimator};
-use et_learn::tabular::{Choice, CvScheme, Prediction, Table, Unit};
+use et_learn::tabular::{Choice, CvScheme, Prediction, Prepared, Table, Unit};
 use et_learn::{Examples, Trainer};
 
 use crate::files::Dataset;
@@ -121,9 +122,7 @@ fn train_table(
     let trained = py
         .detach(|| trainer.train(Examples::Table(&table), |_| {}))
         .map_err(|e| refused(&e))?;
-    Ok(Model {
-        inner: trained.model,
-    })
+    Ok(Model::new(trained.model))
 }
 
 /// Trains QDA or LDA for the board on an et dataset; see `et_touch.train`.
@@ -152,15 +151,16 @@ fn train_dataset(
     let trained = py
         .detach(|| trainer.train(Examples::Dataset(data), |_| {}))
         .map_err(|e| refused(&e))?;
-    Ok(Model {
-        inner: trained.model,
-    })
+    Ok(Model::new(trained.model))
 }
 
 /// A trained model: QDA or LDA for the board (et's model file), or a table's model.
 #[pyclass(module = "et_touch._native")]
 pub(crate) struct Model {
     inner: Estimator,
+    /// A table model rebuilt from its tables at its first prediction, kept for the next
+    /// (a model is not changed once made).
+    prepared: OnceLock<Prepared>,
 }
 
 /// Predictions: classes (index), the class names, positions (n x 2, m) and a third target.
@@ -211,7 +211,7 @@ impl Model {
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         py.detach(|| Estimator::load(&path))
-            .map(|inner| Model { inner })
+            .map(Model::new)
             .map_err(|e| refused(&e))
     }
 
@@ -254,9 +254,23 @@ impl Model {
             .as_ref()
             .map(|v0| crate::imaging::slice(v0, "v0"))
             .transpose()?;
-        let p = py
-            .detach(|| self.inner.predict(&x, v0))
-            .map_err(|e| refused(&e))?;
+        let p = match self.inner.as_table() {
+            Some(table) => py
+                .detach(|| {
+                    let prepared = match self.prepared.get() {
+                        Some(p) => p,
+                        None => {
+                            let p = table.prepare()?;
+                            self.prepared.get_or_init(|| p)
+                        }
+                    };
+                    prepared.predict(&x)
+                })
+                .map_err(|e| refused(&e))?,
+            None => py
+                .detach(|| self.inner.predict(&x, v0))
+                .map_err(|e| refused(&e))?,
+        };
         predicted(py, &self.inner, &p)
     }
 
@@ -303,6 +317,13 @@ impl Model {
 }
 
 impl Model {
+    fn new(inner: Estimator) -> Self {
+        Model {
+            inner,
+            prepared: OnceLock::new(),
+        }
+    }
+
     /// The model scored on `examples`, as `et eval --json` prints it (JSON).
     fn evaluation(&self, py: Python<'_>, examples: Examples<'_>) -> PyResult<String> {
         let e = py

@@ -31,7 +31,8 @@ use nalgebra::DMatrix;
 
 use super::fit::{FitError, standardisation};
 use super::regress::{
-    KernelRidge, Target3, check, exp_neg, median_pair, squared_distances, target_mean, z_space,
+    KernelRidge, Target3, check, gaussian_in_place, median_pair, squared_distances, target_mean,
+    z_space,
 };
 
 /// How much work the Gaussian process does.
@@ -138,8 +139,9 @@ impl Gp {
         let ts: Vec<Target3> = rows.iter().map(|&r| t[r]).collect();
         let intercept = target_mean(&ts);
         let m = rows.len();
-        let d2 = squared_distances(&support, &support);
-        let mut k = Mat::from_fn(m, m, |a, b| signal_variance * exp_neg(0.5 * d2[(a, b)]));
+        let mut k = squared_distances(&support, &support);
+        gaussian_in_place(&mut k, 0.5);
+        scale_in_place(&mut k, signal_variance);
         for i in 0..m {
             k[(i, i)] += noise_variance;
         }
@@ -206,8 +208,9 @@ pub fn nll_and_gradient(z: &Mat<f64>, u: &Mat<f64>, theta: &[f64]) -> Option<(f6
     let (n, p, q) = (z.nrows(), z.ncols(), u.ncols());
     let (s2, noise) = (theta[p].exp(), theta[p + 1].exp());
     let a = Mat::from_fn(n, p, |i, l| z[(i, l)] / theta[l].exp());
-    let d2 = squared_distances(&a, &a);
-    let kf = Mat::from_fn(n, n, |i, j| s2 * exp_neg(0.5 * d2[(i, j)]));
+    let mut kf = squared_distances(&a, &a);
+    gaussian_in_place(&mut kf, 0.5);
+    scale_in_place(&mut kf, s2);
     let mut k = kf.clone();
     for i in 0..n {
         k[(i, i)] += noise;
@@ -367,4 +370,11 @@ pub fn minimise(
     }
     progress(iterations, iterations);
     Some((x, fx, taken))
+}
+
+/// Every entry of `m` times `s`.
+fn scale_in_place(m: &mut Mat<f64>, s: f64) {
+    for j in 0..m.ncols() {
+        m.col_mut(j).iter_mut().for_each(|v| *v *= s);
+    }
 }

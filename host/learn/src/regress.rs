@@ -18,7 +18,7 @@ use faer::{Accum, Mat, Par, Side};
 use nalgebra::DMatrix;
 
 use super::fit::{FitError, Fitted, standardisation};
-pub use kernel_exp::exp_neg;
+pub use kernel_exp::{exp_neg, exp_neg_scaled};
 
 /// Targets per observation: x (m), y (m), a third value (pressure in kPa, a z in m, ...).
 pub type Target3 = [f64; 3];
@@ -240,6 +240,20 @@ pub(crate) fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
     d
 }
 
+/// The Gaussian kernel from squared distances, in place: each d2 becomes e^(-`gamma` d2).
+pub(crate) fn gaussian_in_place(d2: &mut Mat<f64>, gamma: f64) {
+    for j in 0..d2.ncols() {
+        // An owned matrix's columns are contiguous.
+        if let Some(c) = d2.col_mut(j).try_as_col_major_mut() {
+            exp_neg_scaled(c.as_slice_mut(), gamma);
+        } else {
+            d2.col_mut(j)
+                .iter_mut()
+                .for_each(|v| *v = exp_neg(gamma * *v));
+        }
+    }
+}
+
 /// |row|^2 of each row of `m`.
 fn squared_norms(m: &Mat<f64>) -> Vec<f64> {
     (0..m.nrows())
@@ -329,7 +343,8 @@ impl KernelRidge {
         let mut fits = Vec::with_capacity(widths.len() * lambdas.len());
         for &width in widths {
             let gamma = width / median;
-            let kernel = Mat::from_fn(m, m, |a, b| exp_neg(gamma * d2[(a, b)]));
+            let mut kernel = d2.clone();
+            gaussian_in_place(&mut kernel, gamma);
             for &lambda in lambdas {
                 let mut k = kernel.clone();
                 for i in 0..m {
@@ -384,11 +399,7 @@ impl KernelRidge {
     #[must_use]
     pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
         let mut k = self.distances(x);
-        for j in 0..k.ncols() {
-            for v in k.col_mut(j).iter_mut() {
-                *v = exp_neg(self.gamma * *v);
-            }
-        }
+        gaussian_in_place(&mut k, self.gamma);
         self.kernel_times_alpha(&k)
     }
 
@@ -400,9 +411,8 @@ impl KernelRidge {
 
     /// Predictions from [`distances`](Self::distances).
     pub(crate) fn predict_from_distances(&self, d2: &Mat<f64>) -> Vec<Target3> {
-        let k = Mat::from_fn(d2.nrows(), d2.ncols(), |i, j| {
-            exp_neg(self.gamma * d2[(i, j)])
-        });
+        let mut k = d2.clone();
+        gaussian_in_place(&mut k, self.gamma);
         self.kernel_times_alpha(&k)
     }
 

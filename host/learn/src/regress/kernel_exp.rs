@@ -18,7 +18,8 @@ pub fn exp_neg(a: f64) -> f64 {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     // No branches (selects only), so that a loop over a kernel matrix runs several at once.
     let x = -a.clamp(-709.0, 708.0);
-    let n = (x * std::f64::consts::LOG2_E + ROUND) - ROUND;
+    let t = x * std::f64::consts::LOG2_E + ROUND;
+    let n = t - ROUND;
     let r = (x - n * LN2_HI) - n * LN2_LO;
     // sum of r^k / k! for k = 0..=13 by Estrin's scheme: pairs, then powers r^2, r^4, r^8
     // (four dependent steps instead of Horner's thirteen).
@@ -28,11 +29,21 @@ pub fn exp_neg(a: f64) -> f64 {
     let low = (pair(0) + r2 * pair(2)) + r4 * (pair(4) + r2 * pair(6));
     let high = (pair(8) + r2 * pair(10)) + r4 * pair(12);
     let p = low + (r4 * r4) * high;
-    // n is in [-1021, 1023] here, so 2^n is a normal number built from its exponent bits.
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-    let scale = f64::from_bits(((n as i64 + 1023) as u64) << 52);
+    // n is in [-1021, 1023] here, so 2^n is a normal number built from its exponent bits;
+    // those of n + 1023 are the low bits of t's (t's mantissa holds 2^51 + n), so no
+    // float-to-integer conversion (which has no packed form before AVX-512) is needed and a
+    // loop over many values runs on the vector units.
+    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
     let e = if a > 708.0 { 0.0 } else { p * scale };
     if a.is_nan() { a } else { e }
+}
+
+/// `values[i]` replaced by e^(-`gamma` `values[i]`) ([`exp_neg`]), several at a time: a kernel
+/// matrix's column from its squared distances.
+pub fn exp_neg_scaled(values: &mut [f64], gamma: f64) {
+    for v in values {
+        *v = exp_neg(gamma * *v);
+    }
 }
 
 /// 1/k! for k = 0..=13.

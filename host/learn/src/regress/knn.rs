@@ -57,15 +57,18 @@ impl Knn {
     /// (squared distance, index), nearest first: the distances as one matrix product.
     #[must_use]
     pub fn neighbours(&self, x: &DMatrix<f64>, k_max: usize) -> Vec<Vec<(f64, usize)>> {
-        let d2 = squared_distances_f32(&z_space(x, &self.mean, &self.scale), &self.support);
+        // m x n: each row's distances to the support are a contiguous column.
+        let d2 = squared_distances_f32(&self.support, &z_space(x, &self.mean, &self.scale));
         let k = k_max.clamp(1, self.support.nrows());
-        (0..x.nrows())
+        let mut all: Vec<(f64, usize)> = Vec::with_capacity(d2.nrows());
+        (0..d2.ncols())
             .map(|r| {
-                let mut row: Vec<(f64, usize)> = (0..d2.ncols()).map(|j| (d2[(r, j)], j)).collect();
-                row.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
-                row.truncate(k);
-                row.sort_by(|a, b| a.0.total_cmp(&b.0));
-                row
+                all.clear();
+                all.extend(d2.col(r).iter().copied().zip(0..));
+                all.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+                let mut near = all.get(..k).unwrap_or(&all).to_vec();
+                near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                near
             })
             .collect()
     }

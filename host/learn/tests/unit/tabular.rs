@@ -703,6 +703,23 @@ fn an_average_predicts_the_mean_of_its_members() {
             assert!((p[k] - 0.5 * (a[k] + b[k])).abs() < 1e-9);
         }
     }
+    // Prepared once, the same predictions, all rows at once and one row a call.
+    let prepared = back.prepare().unwrap();
+    assert_eq!(prepared.predict(&test_rows.x).unwrap(), p);
+    for (r, p) in p.iter().enumerate() {
+        let row = test_rows.x.rows(r, 1).into_owned();
+        let (one, all) = (
+            prepared.predict(&row).unwrap()[0].target.unwrap(),
+            p.target.unwrap(),
+        );
+        assert!(
+            (0..3).all(|k| (one[k] - all[k]).abs() < 1e-9),
+            "{one:?} {all:?}"
+        );
+    }
+    let narrow = test_rows.x.columns(0, 3).into_owned();
+    let e = prepared.predict(&narrow).unwrap_err();
+    assert!(e.to_string().contains("feature"), "{e}");
     if let Tables::Average { members } = &mut average.tables {
         members.pop();
     }

@@ -313,8 +313,8 @@ impl TableModel {
         })
     }
 
-    /// An average's members, each checked as a model of its own.
-    fn ready_average(&self, members: &[Member]) -> Result<Vec<TableModel>, TablesError> {
+    /// An average's members, each checked and rebuilt as a model of its own.
+    fn ready_average(&self, members: &[Member]) -> Result<Vec<Prepared>, TablesError> {
         if members.len() < 2
             || members
                 .iter()
@@ -324,15 +324,21 @@ impl TableModel {
                 "average: two regressors or more, none an average",
             ));
         }
-        let models = self.members();
-        for (i, m) in models.iter().enumerate() {
-            m.ready().map_err(|e| TablesError::Member {
-                member: i + 1,
-                method: m.method,
-                source: Box::new(e),
-            })?;
-        }
-        Ok(models)
+        self.members()
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                Ok(Prepared {
+                    features: m.features(),
+                    centres: None,
+                    ready: m.ready().map_err(|e| TablesError::Member {
+                        member: i + 1,
+                        method: m.method,
+                        source: Box::new(e),
+                    })?,
+                })
+            })
+            .collect()
     }
 }
 
