@@ -23,7 +23,8 @@ Run on one core with one BLAS thread (after `maturin develop` of python/):
 
 With three targets scikit-learn is also fitted on x, y alone (its network otherwise spends
 itself on z). `--candidates` instead fits each of scikit-learn's candidates alone on friedman1's seed-0 split
-(three `random_state`s), beside et's `mlp_candidates` example.
+(three `random_state`s), beside et's `mlp_candidates` example. `--et-only` runs et's side
+alone (scikit-learn's side does not change with et's commits).
 
 Prints per data set and side (and et's candidates' cross-validated errors, as measured and
 with the held-out channels drifted, in the error's unit): search + fit seconds and the test rows' mean error (absolute for
@@ -124,7 +125,9 @@ def candidates():
 def main():
     if "--candidates" in sys.argv:
         return candidates()
-    standin = sys.argv[1] if len(sys.argv) > 1 else None
+    et_only = "--et-only" in sys.argv
+    args = [a for a in sys.argv[1:] if a != "--et-only"]
+    standin = args[0] if args else None
     print("| data set | seed | et mlp: search + fit | et error | scikit-learn: search + fit "
           "| scikit-learn error | scikit-learn on x, y only: search + fit | error |")
     print("|---|---|---|---|---|---|---|---|")
@@ -132,7 +135,8 @@ def main():
     for name, seed, unit, xtr, ttr, xte, tte in data_sets(standin):
         row = [name, str(seed)]
         searched = None
-        sides = (et_side, sklearn_side) + ((sklearn_side_xy,) if ttr.shape[1] > 2 else ())
+        sides = (et_side,) if et_only else (
+            (et_side, sklearn_side) + ((sklearn_side_xy,) if ttr.shape[1] > 2 else ()))
         for side in sides:
             start = time.perf_counter()
             predict = side(xtr, ttr, seed)
