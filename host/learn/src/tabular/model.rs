@@ -22,7 +22,8 @@ pub struct Candidate {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_block_errors_mm: Option<Vec<f64>>,
     /// Regressors: the cross-validated mean error with the held-out rows' channels drifted
-    /// ([`DRIFT_GAIN`], [`DRIFT_OFFSET`]), mm: how the candidate would take a new session.
+    /// ([`DRIFT_GAIN`], [`DRIFT_OFFSET`]; the mean over [`DRIFT_DRAWS`] draws per fold), mm:
+    /// how the candidate would take a new session.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_drifted_error_mm: Option<f64>,
     /// Regressors, during training only: the out-of-fold prediction of every row, as measured
