@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -257,7 +257,6 @@ def scene(path: PathLike) -> Tuple[Sheet, Protocol]:
 # Imaging
 
 
-@dataclass
 class Image:
     """One frame imaged.
 
@@ -270,31 +269,82 @@ class Image:
     split at their saddles, above 5 times their noise); ``regions``: every region above the
     threshold. Each is a dict: ``x_m``, ``y_m``, ``sign``, ``area_m2``, ``peak`` (Delta sigma /
     sigma_0), ``z`` (peak over its noise).
+
+    ``pixels``, ``dv``, ``alpha`` and ``extent`` are made with the image; the rest when first
+    read (the frame imaged again in full, once): a loop that reads only the pixels pays for
+    the pixels. Imaged against a reference set once (:meth:`Reconstructor.set_reference`),
+    ``pixels`` come from the reconstruction's f32 operator from the second frame at an alpha
+    on (within 1e-4 of the peak of the f64 image the rest is made from).
     """
 
-    pixels: np.ndarray
-    noise_sd: np.ndarray
-    values: Optional[np.ndarray]
-    dv: np.ndarray
-    objects: List[Dict[str, Any]]
-    touches: List[Dict[str, Any]]
-    regions: List[Dict[str, Any]]
-    alpha: float
-    threshold: float
-    noise: Dict[str, Any]
-    extent: Tuple[float, float, float, float]
-    timings_s: Dict[str, Any] = field(default_factory=dict)
-    summary: Dict[str, Any] = field(default_factory=dict)
-    _classes: Optional[np.ndarray] = field(default=None, repr=False)
+    def __init__(
+        self,
+        pixels: np.ndarray,
+        dv: np.ndarray,
+        alpha: float,
+        extent: Tuple[float, float, float, float],
+        whole: Any,
+    ) -> None:
+        self.pixels = pixels
+        self.dv = dv
+        self.alpha = alpha
+        self.extent = extent
+        self._whole = whole
+        self._made: Optional[Tuple[Dict[str, Any], Any, Any, Any]] = None
+
+    def _details(self) -> Tuple[Dict[str, Any], Any, Any, Any]:
+        if self._made is None:
+            summary_json, _, noise, values, _, classes = self._whole()
+            self._made = (json.loads(summary_json), noise, values, classes)
+            self._whole = None
+        return self._made
+
+    @property
+    def noise_sd(self) -> np.ndarray:
+        return self._details()[1]
+
+    @property
+    def values(self) -> Optional[np.ndarray]:
+        return self._details()[2]
+
+    @property
+    def summary(self) -> Dict[str, Any]:
+        return self._details()[0]
+
+    @property
+    def objects(self) -> List[Dict[str, Any]]:
+        return self.summary["objects"]
+
+    @property
+    def touches(self) -> List[Dict[str, Any]]:
+        return self.summary["touches"]
+
+    @property
+    def regions(self) -> List[Dict[str, Any]]:
+        return self.summary["regions"]
+
+    @property
+    def threshold(self) -> float:
+        return self.summary["threshold"]
+
+    @property
+    def noise(self) -> Dict[str, Any]:
+        return self.summary["noise"]
+
+    @property
+    def timings_s(self) -> Dict[str, Any]:
+        return self.summary["timings_s"]
 
     def segment(self) -> np.ndarray:
         """The three-class picture (rows x cols like ``pixels``): 0 background, 1 resistive
         (the conductivity fell), 2 conductive (it rose), NaN outside the sheet. Each object's
         pixels at or above half its own peak take its class, so a kind of target the image
         does not show stays empty (as `et reconstruct --segment` writes it)."""
-        if self._classes is None:
-            raise EtError("this image was not made by Reconstructor.image")
-        return self._classes
+        return self._details()[3]
+
+    def __repr__(self) -> str:
+        rows, cols = self.pixels.shape
+        return f"Image({rows} x {cols} pixels, alpha {self.alpha:.3g})"
 
 
 class Reconstructor:
@@ -340,27 +390,44 @@ class Reconstructor:
             int(iterations), noise_figure, radius_m,
         )
         self.protocol = protocol
+        self._reference: Optional[np.ndarray] = None
 
     @staticmethod
     def _frames(v0: Any) -> np.ndarray:
         v0 = np.asarray(v0, dtype=np.float64)
         return _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
 
-    def image(self, v: Any, v0: Any) -> Image:
+    def set_reference(self, v0: Any) -> None:
+        """Sets the untouched frame ``v0`` (K values), or several (n x K: their mean is V_0 and
+        their spread the noise of dV), that :meth:`image` images every later frame against
+        when it is given none. The reference is read and checked once; the matrices made for
+        the frames (one per alpha, a few kept) and their noise images are kept from frame to
+        frame."""
+        frames = self._frames(v0)
+        self._native.set_reference(frames)
+        self._reference = frames
+
+    def image(self, v: Any, v0: Any = None) -> Image:
         """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
         several untouched frames (n x K: their mean is V_0 and their spread the noise of dV;
-        with one frame the noise is estimated from the protocol's redundancy). Frames are taken
-        in single precision, as et's frames are."""
-        summary_json, pixels, noise, values, dv, classes = self._native.image(
-            _f64(v, 1, "v"), self._frames(v0)
-        )
-        s = json.loads(summary_json)
-        return Image(
-            pixels=pixels, noise_sd=noise, values=values, dv=dv, objects=s["objects"],
-            touches=s["touches"], regions=s["regions"], alpha=s["alpha"],
-            threshold=s["threshold"], noise=s["noise"], extent=self.extent,
-            timings_s=s["timings_s"], summary=s, _classes=classes,
-        )
+        with one frame the noise is estimated from the protocol's redundancy); without
+        ``v0``, against the reference :meth:`set_reference` set, the fast way to image many
+        frames (the image's pixels at once, its noise and objects when first read). Frames
+        are taken in single precision, as et's frames are."""
+        v = _f64(v, 1, "v")
+        if v0 is None:
+            if self._reference is None:
+                raise EtError(
+                    "no reference set: give the untouched frame(s), image(v, v0), or set them "
+                    "once with set_reference(v0)"
+                )
+            pixels, dv, alpha = self._native.pixels(v)
+            reference = self._reference
+            return Image(pixels, dv, alpha, self.extent,
+                         lambda: self._native.image(v, reference))
+        made = self._native.image(v, self._frames(v0))
+        s = json.loads(made[0])
+        return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
 
     def fit_background(self, v0: Any) -> Dict[str, Any]:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``

@@ -41,12 +41,15 @@ class Reconstructor:
         radius_m: Optional[float],
     ) -> None: ...
     def image(
-        self, frame: F64, reference: F64
+        self, frame: F64, reference: Optional[F64] = None
     ) -> Tuple[str, F64, F64, Optional[F64], F64, F64]:
         """frame (K, V) against reference frames (n x K, V): the summary (JSON), pixels and
         their noise (rows x cols, Delta sigma / sigma_0, top row first, NaN outside), the
         values on the triangles (T; None for GREIT), dV (K, V) and the three-class picture
         (rows x cols: 0 background, 1 resistive, 2 conductive, NaN outside)."""
+    def set_reference(self, reference: F64) -> None: ...
+    def pixels(self, frame: F64) -> Tuple[F64, F64, float]:
+        """frame (K, V) against the reference set: pixels (rows x cols), dV (K, V), alpha."""
     def fit_background(self, reference: F64) -> str: ...
     def forward(self, sigma: F64) -> F64:
         """The frame (K, V) of conductivity sigma (T, S per square)."""

@@ -183,6 +183,9 @@ type ImageParts<'py> = (
     Bound<'py, PyArray2<f64>>,
 );
 
+/// A frame's pixels alone: the pixels (rows x cols), dV (K) and the alpha.
+type PixelParts<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>, f64);
+
 /// What `image` reports besides the arrays (the `et reconstruct --json` names).
 #[derive(serde::Serialize)]
 struct ImageSummary<'a> {
@@ -261,22 +264,27 @@ impl Reconstructor {
     }
 
     /// Images `frame` (K values, V) against the untouched `reference` frames (n x K, V; their
-    /// mean is V_0, their spread the noise of dV): the summary (JSON), the pixels and their
+    /// mean is V_0, their spread the noise of dV), or against those set by `set_reference`
+    /// when None: the summary (JSON), the pixels and their
     /// noise (rows from the top, Delta sigma / sigma_0, NaN outside), the values on the
     /// triangles (Delta sigma / sigma_0; None for GREIT), dV and the three-class picture
     /// (0 background, 1 resistive, 2 conductive, NaN outside; [`et_recon::segment`]).
+    #[pyo3(signature = (frame, reference=None))]
     fn image<'py>(
         &mut self,
         py: Python<'py>,
         frame: PyReadonlyArray1<'_, f64>,
-        reference: PyReadonlyArray2<'_, f64>,
+        reference: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<ImageParts<'py>> {
         // As et's frames are: single precision (the board's, and every reader's).
         let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
-        let reference = reference_of(&reference)?;
+        let reference = reference.as_ref().map(reference_of).transpose()?;
         let inner = &mut self.inner;
         let image = py
-            .detach(|| inner.image(&frame, &reference))
+            .detach(|| match &reference {
+                Some(reference) => inner.image(&frame, reference),
+                None => inner.image_frame(&frame),
+            })
             .map_err(|e| refused(&e))?;
         let (grid, sigma0) = (self.inner.grid(), self.inner.imager().sigma0);
         let found = |regions: &[et_recon::Region]| {
@@ -323,6 +331,35 @@ impl Reconstructor {
             PyArray1::from_vec(py, image.dv),
             classes,
         ))
+    }
+
+    /// The pixels of `frame` (K values, V) against the reference `set_reference` set, and no
+    /// more (rows x cols, Delta sigma / sigma_0, top row first, NaN outside), with dV and the
+    /// alpha: what `image` makes first, the rest (noise, objects) when first read.
+    fn pixels<'py>(
+        &mut self,
+        py: Python<'py>,
+        frame: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<PixelParts<'py>> {
+        let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
+        let inner = &mut self.inner;
+        let made = py
+            .detach(|| inner.frame_pixels(&frame))
+            .map_err(|e| refused(&e))?;
+        let (grid, sigma0) = (self.inner.grid(), self.inner.imager().sigma0);
+        let (w, h) = (grid.width, grid.height);
+        Ok((
+            array2(py, grid.top_first(&made.pixels, 1.0 / sigma0), h, w)?,
+            PyArray1::from_vec(py, made.dv),
+            made.alpha,
+        ))
+    }
+
+    /// Sets the untouched `reference` frames (n x K, V) every later frame is imaged against
+    /// when `image` is given none.
+    fn set_reference(&mut self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        let reference = reference_of(&reference)?;
+        self.inner.set_reference(reference).map_err(|e| refused(&e))
     }
 
     /// Fits the background (sheet resistance, contact) to the untouched `reference` frames

@@ -67,6 +67,32 @@ def test_the_image_is_et_reconstructs(et_cli, work, scene, recording, cli_args, 
     assert right - left == pytest.approx(grid["cols"] * grid["pixel_m"])
 
 
+@pytest.mark.parametrize("method", ["gn", "greit"])
+def test_a_reference_set_once_images_each_frame_as_with_it_given(scene, recording, method):
+    sheet, protocol = et.scene(scene)
+    r = et.Reconstructor(sheet, protocol, triangles=TRIANGLES, method=method)
+    v = et.read_recording(recording)["voltages"]
+    with pytest.raises(et.EtError, match="set_reference"):
+        r.image(v[-1])
+    r.fit_background(v[:20])
+    r.set_reference(v[:20])
+    for frame in (v[-1], v[-2], v[-1]):
+        given = r.image(frame, v[:20])
+        made = r.image(frame)
+        # The pixels at once (f32 from the second frame at an alpha: within 1e-4 of the peak),
+        # the rest when read, from the same reference.
+        assert made.alpha == given.alpha
+        peak = np.nanmax(np.abs(given.pixels))
+        np.testing.assert_allclose(made.pixels, given.pixels, rtol=0, atol=1e-4 * peak,
+                                   equal_nan=True)
+        np.testing.assert_array_equal(made.dv, given.dv)
+        # The noise the same to rounding (it may come from the squared rows or the factors).
+        assert made.objects == [pytest.approx(o, rel=1e-9) for o in given.objects]
+        assert made.noise == given.noise
+        np.testing.assert_array_equal(made.segment(), given.segment())
+        np.testing.assert_allclose(made.noise_sd, given.noise_sd, rtol=1e-9, equal_nan=True)
+
+
 def test_the_press_is_found_where_it_was(scene, recording):
     _, image = python_image(scene, recording, fit=True)
     truth = et.read_recording(recording)["touches"][-1][0]

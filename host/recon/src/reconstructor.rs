@@ -66,6 +66,12 @@ pub enum ImagingError {
     /// The background could not be fitted to the reference frame.
     #[error(transparent)]
     Background(#[from] BackgroundError),
+    /// A frame to image against the reference set, and none was set.
+    #[error(
+        "no reference set: set the untouched frame(s) first (set_reference), or give them with \
+         the frame"
+    )]
+    NoReference,
 }
 
 /// A reconstruction set up for one sheet, protocol, mesh, method and alpha rule (see the
@@ -86,8 +92,12 @@ pub struct Reconstructor {
     space: Option<DataSpace>,
     /// GREIT's matrix, when one serves every frame.
     greit: Option<Greit>,
-    /// The last one-step matrix made, with how its frames are applied.
+    /// The last one-step matrix used, with how its frames are applied.
     one_step: Option<Matrix>,
+    /// The matrices used before it at other alphas, the latest first (at most
+    /// [`MATRICES_KEPT`]): a recording's frames choose among a few neighbouring alphas of
+    /// the candidates, and each matrix is made once.
+    earlier: Vec<Matrix>,
     /// GREIT's matrix chosen for the last frame (alpha by GCV).
     greit_chosen: Option<Greit>,
     /// The protocol's redundancy (the noise of a frame without repeated reference frames),
@@ -104,6 +114,8 @@ pub struct Reconstructor {
     mismatch_factor: Option<f64>,
     /// How the values are weighted in the fit.
     weighting: Weighting,
+    /// The untouched frame(s) set once for the frames after ([`Reconstructor::set_reference`]).
+    reference: Option<Reference>,
     /// Each value's weight under `weighting` (None: alike).
     weights: Option<Vec<f64>>,
 }
@@ -157,12 +169,14 @@ impl Reconstructor {
             space: None,
             greit: None,
             one_step: None,
+            earlier: Vec::new(),
             greit_chosen: None,
             redundancy: std::sync::OnceLock::new(),
             mismatch: None,
             mismatch_factor: Some(MISMATCH_FACTOR),
             weighting: Weighting::Alike,
             weights: None,
+            reference: None,
             set_up_timings: SetUpTimings {
                 mesh: mesh_s,
                 forward_jacobian,
@@ -178,6 +192,7 @@ impl Reconstructor {
         self.space = None;
         self.greit = None;
         self.one_step = None;
+        self.earlier.clear();
         self.greit_chosen = None;
         match (self.method, self.alpha) {
             (Method::GaussNewton { .. }, AlphaRule::NoiseFigure(_)) => {
@@ -374,6 +389,12 @@ impl Reconstructor {
     /// [`ReconError::FrameLength`] for a frame or reference not of K values,
     /// [`ReconError::NonFinite`] for NaN or infinity in them; a failed solve.
     pub fn image(&mut self, frame: &[f32], reference: &Reference) -> Result<Image, ImagingError> {
+        let dv = self.difference(frame, reference)?;
+        self.image_dv(dv, &reference.var_dv)
+    }
+
+    /// dV = `frame` - V_0 (K values, V), frame and reference checked.
+    fn difference(&self, frame: &[f32], reference: &Reference) -> Result<Vec<f64>, ImagingError> {
         let k = self.schedule.frame_len();
         for (what, n) in [
             ("frame", frame.len()),
@@ -392,7 +413,54 @@ impl Reconstructor {
         if dv.iter().chain(&reference.var_dv).any(|v| !v.is_finite()) {
             return Err(ReconError::NonFinite.into());
         }
-        self.image_dv(dv, &reference.var_dv)
+        Ok(dv)
+    }
+
+    /// Sets the untouched reference (V_0 and the noise of dV) that [`Reconstructor::image_frame`]
+    /// images every later frame against, checked once here. The matrices made for the
+    /// frames (one per alpha chosen, a few kept) and each frame's noise image's squared rows
+    /// are kept from frame to frame, so a recording's frames cost the frame, not the set-up.
+    ///
+    /// # Errors
+    /// [`ReconError::FrameLength`] when V_0 or the noise is not of K values,
+    /// [`ReconError::NonFinite`] for NaN or infinity in them.
+    pub fn set_reference(&mut self, reference: Reference) -> Result<(), ImagingError> {
+        let k = self.schedule.frame_len();
+        for (what, n) in [
+            ("reference V_0", reference.v0.len()),
+            ("reference noise", reference.var_dv.len()),
+        ] {
+            if n != k {
+                return Err(ReconError::FrameLength { what, got: n, k }.into());
+            }
+        }
+        if reference
+            .v0
+            .iter()
+            .chain(&reference.var_dv)
+            .any(|v| !v.is_finite())
+        {
+            return Err(ReconError::NonFinite.into());
+        }
+        self.reference = Some(reference);
+        Ok(())
+    }
+
+    /// The reference set by [`Reconstructor::set_reference`].
+    #[must_use]
+    pub fn reference(&self) -> Option<&Reference> {
+        self.reference.as_ref()
+    }
+
+    /// [`Reconstructor::image`] of `frame` (V, K values) against the reference set.
+    ///
+    /// # Errors
+    /// [`ImagingError::NoReference`] when none was set; as [`Reconstructor::image`].
+    pub fn image_frame(&mut self, frame: &[f32]) -> Result<Image, ImagingError> {
+        let reference = self.reference.take().ok_or(ImagingError::NoReference)?;
+        let image = self.image(frame, &reference);
+        self.reference = Some(reference);
+        image
     }
 
     /// Each channel's variance of `dv` (K values, V) as the images see it, V^2: the frames'
@@ -419,6 +487,16 @@ impl Reconstructor {
             .and_then(|r| r.noise(dv))
     }
 
+    /// The noise of `dv` from the protocol's redundancy when the frames' own, `var_dv`, is
+    /// unknown (all zeros: one reference frame).
+    fn estimated_noise(&self, dv: &[f64], var_dv: &[f64]) -> Option<RedundancyNoise> {
+        if var_dv.iter().all(|v| *v <= 0.0) {
+            self.redundancy_noise(dv)
+        } else {
+            None
+        }
+    }
+
     /// As [`Reconstructor::image`], from dV = V - V_0 (V) and its noise variance per channel
     /// (V^2). When the noise is unknown (all zeros: one reference frame), it is estimated from
     /// dV itself ([`Reconstructor::redundancy_noise`]).
@@ -426,11 +504,7 @@ impl Reconstructor {
     /// # Errors
     /// As [`Reconstructor::image`].
     pub fn image_dv(&mut self, dv: Vec<f64>, var_dv: &[f64]) -> Result<Image, ImagingError> {
-        let estimated = if var_dv.iter().all(|v| *v <= 0.0) {
-            self.redundancy_noise(&dv)
-        } else {
-            None
-        };
+        let estimated = self.estimated_noise(&dv, var_dv);
         let var_dv = match estimated {
             Some(n) => &vec![n.variance; dv.len()][..],
             None => var_dv,
@@ -472,6 +546,9 @@ impl Reconstructor {
     }
 }
 
+/// One-step matrices kept at other alphas than the last frame's.
+const MATRICES_KEPT: usize = 2;
+
 /// A one-step matrix and how its frames are applied.
 #[derive(Debug)]
 struct Matrix {
@@ -485,6 +562,11 @@ struct Matrix {
     /// for 32 electrodes at 8 000 triangles). The live pipeline, which images onto the pixels
     /// through `pixel_operator`, never needs it.
     operator: std::sync::OnceLock<FrameOperator>,
+    /// The f32 operator onto the pixels inside the sheet, made at the second frame
+    /// [`Reconstructor::frame_pixels`] images with this matrix.
+    pixels: std::sync::OnceLock<FrameOperator>,
+    /// Frames [`Reconstructor::frame_pixels`] imaged with it.
+    streamed: usize,
 }
 
 impl Matrix {
@@ -493,6 +575,8 @@ impl Matrix {
             alpha,
             recon,
             operator: std::sync::OnceLock::new(),
+            pixels: std::sync::OnceLock::new(),
+            streamed: 0,
         }
     }
 
@@ -505,8 +589,10 @@ impl Matrix {
 mod frame;
 mod model_error;
 mod solve;
+mod stream;
 pub use frame::*;
 use model_error::mismatch_and_weights;
 pub use model_error::{MISMATCH_FACTOR, Weighting};
+pub use stream::FramePixels;
 mod spec;
 pub use spec::*;

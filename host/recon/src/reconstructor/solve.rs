@@ -68,26 +68,12 @@ impl Reconstructor {
     ) -> Result<Solved, ImagingError> {
         let mut timings = FrameTimings::default();
         let clock = Instant::now();
-        let space = self.space.as_ref().ok_or(ReconError::Singular)?;
-        let floor = self.floor(var_dv, dv, var);
-        let alpha = match self.alpha {
-            AlphaRule::Fixed(a) => a,
-            // The corner's floor is the least model error any frame has, not the fitted
-            // background's.
-            AlphaRule::Chosen(c @ Criterion::CornerAboveFloor) => {
-                space.alpha_by(c, dv, &floor_variance(var_dv, dv), &default_alphas())?
-            }
-            AlphaRule::Chosen(c) => space.alpha_by(c, dv, &floor, &default_alphas())?,
-            AlphaRule::Gcv | AlphaRule::NoiseFigure(_) => {
-                space.choose_alpha(dv, &floor, &default_alphas())?
-            }
-        };
-        let grid = &self.imager.grid;
+        let alpha = self.gauss_newton_alpha(dv, var_dv, var)?;
         if n <= 1 {
-            if self.one_step.as_ref().is_none_or(|m| m.alpha != alpha) {
-                self.one_step = Some(Matrix::new(alpha, space.one_step(alpha)?));
+            if self.matrix_at(alpha)? {
                 timings.matrix = Some(clock.elapsed().as_secs_f64());
             }
+            let grid = &self.imager.grid;
             let Some(matrix) = &self.one_step else {
                 return Err(ReconError::Singular.into());
             };
@@ -125,6 +111,7 @@ impl Reconstructor {
             steps: fit.iterates.iter().map(|i| i.step).collect(),
             stop: fit.stop,
         };
+        let grid = &self.imager.grid;
         let noise_sd = grid.image(&last.noise_sd);
         Ok(Solved::on_mesh(
             alpha,
@@ -134,6 +121,53 @@ impl Reconstructor {
             Some(iterations),
             timings,
         ))
+    }
+
+    /// Gauss-Newton's alpha for `dv` by the spec's rule (the frames' noise `var_dv` and the
+    /// imaging variance `var` set the floor of the rules that choose).
+    pub(super) fn gauss_newton_alpha(
+        &self,
+        dv: &[f64],
+        var_dv: &[f64],
+        var: &[f64],
+    ) -> Result<f64, ImagingError> {
+        let space = self.space.as_ref().ok_or(ReconError::Singular)?;
+        Ok(match self.alpha {
+            AlphaRule::Fixed(a) => a,
+            // The corner's floor is the least model error any frame has, not the fitted
+            // background's.
+            AlphaRule::Chosen(c @ Criterion::CornerAboveFloor) => {
+                space.alpha_by(c, dv, &floor_variance(var_dv, dv), &default_alphas())?
+            }
+            AlphaRule::Chosen(c) => {
+                let floor = self.floor(var_dv, dv, var);
+                space.alpha_by(c, dv, &floor, &default_alphas())?
+            }
+            AlphaRule::Gcv | AlphaRule::NoiseFigure(_) => {
+                let floor = self.floor(var_dv, dv, var);
+                space.choose_alpha(dv, &floor, &default_alphas())?
+            }
+        })
+    }
+
+    /// Makes the one-step matrix at `alpha` the current one: the current, one kept from
+    /// before, or made (then true).
+    pub(super) fn matrix_at(&mut self, alpha: f64) -> Result<bool, ImagingError> {
+        if self.one_step.as_ref().is_some_and(|m| m.alpha == alpha) {
+            return Ok(false);
+        }
+        let (matrix, made) = match self.earlier.iter().position(|m| m.alpha == alpha) {
+            Some(i) => (self.earlier.remove(i), false),
+            None => {
+                let space = self.space.as_ref().ok_or(ReconError::Singular)?;
+                (Matrix::new(alpha, space.one_step(alpha)?), true)
+            }
+        };
+        if let Some(last) = self.one_step.replace(matrix) {
+            self.earlier.insert(0, last);
+            self.earlier.truncate(super::MATRICES_KEPT);
+        }
+        Ok(made)
     }
 }
 

@@ -49,3 +49,116 @@ fn the_linearisation_misfit_is_of_second_order() {
         "4 times the change, {ratio:.2} times the misfit's share ({large:.4} against {small:.4})"
     );
 }
+
+/// A 10 cm disc of 16 electrodes, the adjacent protocol, the given alpha rule; the model's
+/// frames of the untouched sheet and of a bump of `scale` x sigma_0 near (3, 2) cm.
+fn disc_and_bump(alpha: AlphaRule, scales: &[f64]) -> (Reconstructor, Vec<f32>, Vec<Vec<f32>>) {
+    let sheet = Sheet::disc(0.1, 16);
+    let protocol =
+        et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::Adjacent, 16).unwrap();
+    let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
+    let recon = Spec {
+        mesh: MeshPlan::About {
+            triangles: 900,
+            refine: Vec::new(),
+        },
+        alpha,
+        ..Spec::new(sheet, schedule)
+    }
+    .set_up()
+    .unwrap();
+    let sigma0 = recon.imager().background();
+    let mesh = recon.imager().forward.mesh().clone();
+    let frame = |scale: f64| {
+        let sigma: Vec<f64> = (0..sigma0.len())
+            .map(|t| {
+                let [x, y] = mesh.centroid(t);
+                let r2 = (x - 0.03).powi(2) + (y - 0.02).powi(2);
+                sigma0[t] * (1.0 + scale * (-r2 / (2.0 * 0.015f64.powi(2))).exp())
+            })
+            .collect();
+        (recon
+            .imager()
+            .forward
+            .frame(&sigma, recon.schedule())
+            .unwrap())
+        .into_iter()
+        .map(|x| x as f32)
+        .collect::<Vec<f32>>()
+    };
+    let frames = scales.iter().map(|&s| frame(s)).collect();
+    let v0 = frame(0.0);
+    (recon, v0, frames)
+}
+
+/// Frames against a reference set once: the same image as with the reference given, the
+/// noise image from the squared rows (second frame on) as from the factors, the pixels
+/// alone as the whole image's (f64 at a matrix's first frame, f32 after), a matrix kept when
+/// alpha comes back to it, and a clear error before any reference.
+#[test]
+fn frames_against_a_reference_set_once_image_as_with_it_given() {
+    let (mut recon, v0, frames) = disc_and_bump(AlphaRule::Gcv, &[0.5, 0.05]);
+    let e = recon.image_frame(&frames[0]).unwrap_err();
+    assert!(matches!(e, ImagingError::NoReference), "{e}");
+    assert!(e.to_string().contains("set_reference"), "{e}");
+    // Two reference frames 1 uV apart: the noise of dV is known (no redundancy estimate).
+    let v0b: Vec<f32> = v0.iter().map(|v| v + 1e-6).collect();
+    let reference = Reference::from_frames(&[v0.clone(), v0b]).unwrap();
+    let given = recon.image(&frames[0], &reference).unwrap();
+    recon.set_reference(reference.clone()).unwrap();
+    let first = recon.image_frame(&frames[0]).unwrap();
+    assert_eq!(first.pixels, given.pixels);
+    // The noise from the factors at the matrix's first frame, from the squared rows after.
+    close(&first.noise_sd, &given.noise_sd, 1e-9);
+    assert!(first.noise_sd.iter().flatten().any(|v| *v > 0.0));
+    // The pixels alone: exact at a fresh matrix, f32's precision through the operator.
+    let (mut fresh, _, _) = disc_and_bump(AlphaRule::Gcv, &[]);
+    fresh.set_reference(reference).unwrap();
+    let peak = first
+        .pixels
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in 0..3 {
+        let p = fresh.frame_pixels(&frames[0]).unwrap();
+        assert_eq!(p.alpha, first.alpha);
+        if k == 0 {
+            assert_eq!(p.pixels, first.pixels);
+        } else {
+            // The f32 operator: 1e-5 of the peak measured (the live pipeline's precision).
+            close(&p.pixels, &first.pixels, 1e-4 * peak);
+        }
+    }
+    // A weaker bump may take another alpha; coming back, the first matrix is still kept.
+    let weak = recon.image_frame(&frames[1]).unwrap();
+    let again = recon.image_frame(&frames[0]).unwrap();
+    assert_eq!(again.alpha, first.alpha);
+    if weak.alpha != first.alpha {
+        assert!(
+            weak.timings.matrix.is_some(),
+            "a new alpha makes its matrix"
+        );
+    }
+    assert_eq!(
+        again.timings.matrix, None,
+        "the matrix at the first alpha was kept"
+    );
+    assert_eq!(again.pixels, first.pixels);
+}
+
+/// Two images' pixels (None outside) within `tol` of each other, relative for values above
+/// 1 and absolute below.
+fn close(a: &[Option<f64>], b: &[Option<f64>], tol: f64) {
+    assert_eq!(a.len(), b.len());
+    for (p, (a, b)) in a.iter().zip(b).enumerate() {
+        match (a, b) {
+            (Some(a), Some(b)) => {
+                assert!(
+                    (a - b).abs() <= tol * a.abs().max(1.0),
+                    "pixel {p}: {a} against {b}"
+                )
+            }
+            _ => assert_eq!(a.is_some(), b.is_some(), "pixel {p}"),
+        }
+    }
+}
