@@ -423,9 +423,11 @@ current_ua = 1000
     let npy = d.join("frames.npy");
     std::fs::write(&npy, et_learn::npz::npy_of_matrix(&m)).unwrap();
     let png = d.join("f.png");
+    let mut one_by_one = Vec::new();
     for (i, rods) in cases.iter().enumerate() {
         let out = reconstruct(&scene_path, &npy, i + 1, &png, &[]);
         let (found, sign) = strongest(&out);
+        one_by_one.push((found, sign));
         let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let count = j["objects"].as_array().unwrap().len();
         let (miss, kind) = rods
@@ -450,5 +452,100 @@ current_ua = 1000
         assert_eq!(j["noise"]["source"], "redundancy");
         assert!(j["background"]["residual"].as_f64().unwrap() < 0.05);
     }
+    every_frame_set_up_once(&d, &scene_path, &npy, &one_by_one);
     std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// `--all` images every frame after the reference with one set-up: a JSON line each whose
+/// strongest object is where imaging the frame alone put it (within a pixel: from a matrix's
+/// second frame the pixels come through its f32 operator), and every frame's pixels in one
+/// .npy; `--range` a part of them; `--frame` and `--json` beside them refused.
+fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f64; 2], i64)]) {
+    let stack = d.join("stack.npy");
+    let (scene, npy, png) = (
+        scene.to_str().unwrap(),
+        npy.to_str().unwrap(),
+        d.join("all.png"),
+    );
+    let png = png.to_str().unwrap();
+    let base = [
+        "reconstruct",
+        "--scene",
+        scene,
+        "--frames",
+        npy,
+        "--reference",
+        "1",
+        "--triangles",
+        "3000",
+        "--force",
+        "--out",
+        png,
+    ];
+    let run = |extra: &[&str]| et(&[&base[..], extra].concat());
+    let out = run(&["--all", "--image-out", stack.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), one_by_one.len());
+    let pixel_mm = 300.0 / 64.0;
+    for (k, (line, (alone, sign))) in lines.iter().zip(one_by_one).enumerate() {
+        assert_eq!(line["frame"], k + 1);
+        let o = &line["objects"][0];
+        let at = [
+            o["x_m"].as_f64().unwrap() * 1e3,
+            o["y_m"].as_f64().unwrap() * 1e3,
+        ];
+        assert!(
+            (at[0] - alone[0]).hypot(at[1] - alone[1]) <= pixel_mm,
+            "frame {}: {at:?} against {alone:?} mm alone",
+            k + 1
+        );
+        assert_eq!(o["sign"].as_i64().unwrap(), *sign);
+    }
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("imaged 5 frames in"), "{stderr}");
+    let bytes = std::fs::read(&stack).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(128)]);
+    assert!(header.contains("'shape': (5, 64, 64)"), "{header}");
+    let data = 5 * 64 * 64 * 8;
+    assert!(
+        bytes.len() > data && (bytes.len() - data).is_multiple_of(16),
+        "f8 values after the header"
+    );
+    let part = run(&["--range", "2..4"]);
+    assert!(
+        part.status.success(),
+        "{}",
+        String::from_utf8_lossy(&part.stderr)
+    );
+    let frames: Vec<u64> = String::from_utf8(part.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["frame"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(frames, [2, 3]);
+    for clash in [&["--all", "--frame", "2"][..], &["--all", "--json"]] {
+        let refused = run(clash);
+        assert!(!refused.status.success(), "{clash:?}");
+        assert!(String::from_utf8_lossy(&refused.stderr).contains("cannot be used with"));
+    }
+    let before = run(&["--range", "0..3"]);
+    assert!(!before.status.success());
+    assert!(
+        String::from_utf8_lossy(&before.stderr).contains("the frames to image are 1 to 5"),
+        "{}",
+        String::from_utf8_lossy(&before.stderr)
+    );
 }

@@ -86,11 +86,12 @@ def test_a_reference_set_once_images_each_frame_as_with_it_given(scene, recordin
         np.testing.assert_allclose(made.pixels, given.pixels, rtol=0, atol=1e-4 * peak,
                                    equal_nan=True)
         np.testing.assert_array_equal(made.dv, given.dv)
-        # The noise the same to rounding (it may come from the squared rows or the factors).
-        assert made.objects == [pytest.approx(o, rel=1e-9) for o in given.objects]
+        # The noise the same to f32's precision (from the factors at a matrix's first frame,
+        # from its squared rows in f32 after).
+        assert made.objects == [pytest.approx(o, rel=1e-5) for o in given.objects]
         assert made.noise == given.noise
         np.testing.assert_array_equal(made.segment(), given.segment())
-        np.testing.assert_allclose(made.noise_sd, given.noise_sd, rtol=1e-9, equal_nan=True)
+        np.testing.assert_allclose(made.noise_sd, given.noise_sd, rtol=1e-5, equal_nan=True)
 
 
 def test_the_press_is_found_where_it_was(scene, recording):

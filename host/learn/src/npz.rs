@@ -136,6 +136,17 @@ pub fn npy_of_matrix(m: &DMatrix<f64>) -> Vec<u8> {
     npy("<f8", false, &[m.nrows(), m.ncols()], &data)
 }
 
+/// `values` (C order) as an `.npy` file's bytes of `shape`: little-endian f64. `values.len()`
+/// must be the shape's product (what is missing is written as NaN, what is over dropped).
+#[must_use]
+pub fn npy_of_array(values: &[f64], shape: &[usize]) -> Vec<u8> {
+    let n: usize = shape.iter().product();
+    let data: Vec<u8> = (0..n)
+        .flat_map(|i| values.get(i).copied().unwrap_or(f64::NAN).to_le_bytes())
+        .collect();
+    npy("<f8", false, shape, &data)
+}
+
 impl Writer {
     fn entry(&mut self, file: &str, data: &[u8]) {
         if self.failed.is_some() {

@@ -116,6 +116,8 @@ pub struct Reconstructor {
     weighting: Weighting,
     /// The untouched frame(s) set once for the frames after ([`Reconstructor::set_reference`]).
     reference: Option<Reference>,
+    /// Whether one-step images keep their values on the mesh ([`Image::mesh_values`]).
+    mesh_values: bool,
     /// Each value's weight under `weighting` (None: alike).
     weights: Option<Vec<f64>>,
 }
@@ -177,6 +179,7 @@ impl Reconstructor {
             weighting: Weighting::Alike,
             weights: None,
             reference: None,
+            mesh_values: true,
             set_up_timings: SetUpTimings {
                 mesh: mesh_s,
                 forward_jacobian,
@@ -446,6 +449,15 @@ impl Reconstructor {
         Ok(())
     }
 
+    /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles
+    /// ([`Image::mesh_values`]; the default). Without them, a matrix's second frame on is
+    /// imaged onto the pixels alone through its f32 operator, as
+    /// [`Reconstructor::frame_pixels`] does: what a stream of frames whose objects are read
+    /// needs (a 32-electrode protocol's factors onto 8 000 triangles are 32 MB a frame).
+    pub fn keep_mesh_values(&mut self, keep: bool) {
+        self.mesh_values = keep;
+    }
+
     /// The reference set by [`Reconstructor::set_reference`].
     #[must_use]
     pub fn reference(&self) -> Option<&Reference> {
@@ -562,11 +574,12 @@ struct Matrix {
     /// for 32 electrodes at 8 000 triangles). The live pipeline, which images onto the pixels
     /// through `pixel_operator`, never needs it.
     operator: std::sync::OnceLock<FrameOperator>,
-    /// The f32 operator onto the pixels inside the sheet, made at the second frame
-    /// [`Reconstructor::frame_pixels`] images with this matrix.
+    /// The f32 operator onto the pixels inside the sheet, made at the second frame imaged
+    /// with this matrix by [`Reconstructor::frame_pixels`], or by any image when the values
+    /// on the mesh are not kept ([`Reconstructor::keep_mesh_values`]).
     pixels: std::sync::OnceLock<FrameOperator>,
-    /// Frames [`Reconstructor::frame_pixels`] imaged with it.
-    streamed: usize,
+    /// Frames imaged with it.
+    frames: usize,
 }
 
 impl Matrix {
@@ -576,7 +589,7 @@ impl Matrix {
             recon,
             operator: std::sync::OnceLock::new(),
             pixels: std::sync::OnceLock::new(),
-            streamed: 0,
+            frames: 0,
         }
     }
 

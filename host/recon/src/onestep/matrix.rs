@@ -26,14 +26,15 @@ pub struct OneStep {
     pub(crate) squared: SquaredRows,
 }
 
-/// The rows of R (T x K) some frames' noise images need, squared entrywise (rows x K), made
-/// the second time the same rows' noise is asked for: a frame's noise is then sqrt(S var), rows
-/// K multiply-adds, where the factors' way costs r^2 rows a frame (r the transfer impedances;
-/// 9 ms at 8 000 triangles and 16 electrodes). One image of a frame never pays to make it.
+/// The rows of R (T x K) some frames' noise images need, squared entrywise (rows x K, f32),
+/// made the second time the same rows' noise is asked for: a frame's noise is then
+/// sqrt(S var) (to f32's precision), rows K multiply-adds, where the factors' way costs r^2
+/// rows a frame (r the transfer impedances; 9 ms at 8 000 triangles and 16 electrodes). One
+/// image of a frame never pays to make it.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SquaredRows {
     asked: std::sync::OnceLock<Vec<usize>>,
-    made: std::sync::OnceLock<Mat<f64>>,
+    made: std::sync::OnceLock<Mat<f32>>,
 }
 
 impl OneStep {
@@ -151,11 +152,21 @@ impl OneStep {
             });
         }
         if let Some(s) = self.squared_rows(rows) {
-            let var = MatRef::from_column_major_slice(var_dv, var_dv.len(), 1);
-            let clamped = Mat::from_fn(var_dv.len(), 1, |k, _| var[(k, 0)].max(0.0));
-            let sd2 = product(s.as_ref(), clamped.as_ref());
+            // f32: the rows are read once a frame (62 MB in f64 for 3 300 pixels and K = 2 356),
+            // and a sum of positive terms keeps f32's relative precision (a noise figure
+            // needs no more).
+            let var = Mat::from_fn(var_dv.len(), 1, |k, _| var_dv[k].max(0.0) as f32);
+            let mut sd2 = Mat::<f32>::zeros(rows.len(), 1);
+            matmul(
+                sd2.as_mut(),
+                Accum::Replace,
+                s.as_ref(),
+                var.as_ref(),
+                1.0,
+                Par::Seq,
+            );
             return Ok((0..rows.len())
-                .map(|t| sd2[(t, 0)].max(0.0).sqrt())
+                .map(|t| f64::from(sd2[(t, 0)].max(0.0)).sqrt())
                 .collect());
         }
         let r = self.xt.nrows();
@@ -194,7 +205,7 @@ impl OneStep {
 
     /// R's rows `rows` squared entrywise (rows x K), when these rows were asked for before
     /// ([`SquaredRows`]); None the first time, or for other rows than the first asked.
-    fn squared_rows(&self, rows: &[usize]) -> Option<&Mat<f64>> {
+    fn squared_rows(&self, rows: &[usize]) -> Option<&Mat<f32>> {
         if let Some(s) = self.squared.made.get() {
             return (self.squared.asked.get().map(Vec::as_slice) == Some(rows)).then_some(s);
         }
@@ -206,11 +217,8 @@ impl OneStep {
             }
             Some(asked) if asked.as_slice() == rows => Some(self.squared.made.get_or_init(|| {
                 let g = Mat::from_fn(self.gp.nrows(), rows.len(), |i, t| self.gp[(i, rows[t])]);
-                let mut r = product(g.transpose(), self.xt.as_ref());
-                for j in 0..r.ncols() {
-                    r.col_mut(j).iter_mut().for_each(|v| *v *= *v);
-                }
-                r
+                let r = product(g.transpose(), self.xt.as_ref());
+                Mat::from_fn(r.nrows(), r.ncols(), |i, k| (r[(i, k)] * r[(i, k)]) as f32)
             })),
             Some(_) => None,
         }

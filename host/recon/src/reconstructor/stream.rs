@@ -3,6 +3,7 @@
 
 use super::{ImagingError, Reconstructor};
 use crate::onestep::ReconError;
+use crate::pixels::PixelGrid;
 use crate::reconstructor::spec::Method;
 
 /// One frame's pixels against the reference set ([`Reconstructor::frame_pixels`]).
@@ -57,25 +58,32 @@ impl Reconstructor {
         self.matrix_at(alpha)?;
         let grid = &self.imager.grid;
         let matrix = self.one_step.as_mut().ok_or(ReconError::Singular)?;
-        matrix.streamed += 1;
-        if matrix.streamed == 1 {
-            let values = matrix.recon.reconstruct(&dv)?;
-            return Ok(FramePixels {
-                pixels: grid.image(&values),
-                dv,
-                alpha,
-            });
-        }
-        let inside = matrix
+        matrix.frames += 1;
+        let pixels = if matrix.frames == 1 {
+            grid.image(&matrix.recon.reconstruct(&dv)?)
+        } else {
+            matrix.pixels_of(grid, &dv)?
+        };
+        Ok(FramePixels { dv, alpha, pixels })
+    }
+}
+
+impl super::Matrix {
+    /// The pixels of `dv` through the f32 operator onto the pixels (made at the first call).
+    pub(super) fn pixels_of(
+        &self,
+        grid: &PixelGrid,
+        dv: &[f64],
+    ) -> Result<Vec<Option<f64>>, ReconError> {
+        let inside = self
             .pixels
-            .get_or_init(|| grid.project(&matrix.recon))
-            .image(&dv)?;
+            .get_or_init(|| grid.project(&self.recon))
+            .image(dv)?;
         let mut values = inside.into_iter();
-        let pixels = grid
+        Ok(grid
             .triangle
             .iter()
             .map(|t| t.and_then(|_| values.next().map(f64::from)))
-            .collect();
-        Ok(FramePixels { dv, alpha, pixels })
+            .collect())
     }
 }

@@ -1,5 +1,8 @@
 //! Which frames `et reconstruct` images: simulated from the scene, read from a recording, or
-//! another system's table of frames.
+//! another system's table of frames; one (`--frame`, default the last) or many (`--all`,
+//! `--range`).
+
+use std::ops::Range;
 
 use anyhow::{Result, bail};
 use et_host::recording;
@@ -7,14 +10,51 @@ use et_sim::scene::Scene;
 
 use super::ReconstructArgs;
 
-/// The frames `et reconstruct` images: V_0 and its noise, the frame V, and the truth (centre,
-/// radius) where known.
+/// What `et reconstruct` images: V_0 and its noise, the frames chosen (their 0-based index in
+/// the file and values, in order; one unless `--all` or `--range`), and the truth (centre,
+/// radius) of the last where known.
+pub(super) struct Chosen {
+    pub(super) reference: et_recon::Reference,
+    pub(super) frames: Vec<(usize, Vec<f32>)>,
+    pub(super) truth: Vec<et_sim::still::Truth>,
+}
+
+/// The frames to image among `n`, of which those from `first` on may be imaged (the ones
+/// before are the reference): `--all`, `--range`, or `--frame` (default the last).
+fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<Range<usize>> {
+    let last = n.saturating_sub(1);
+    let range = match (args.all, args.range, args.frame) {
+        (true, _, _) => first..n,
+        (_, Some(r), _) => r.start..r.end.unwrap_or(n).min(n),
+        (_, None, frame) => {
+            let frame = frame.unwrap_or(last);
+            frame..frame + 1
+        }
+    };
+    if n <= first || range.start < first || range.start >= n || range.is_empty() {
+        let asked = match (args.all, args.range) {
+            (true, _) => "--all".to_string(),
+            (_, Some(r)) => format!("--range {r}"),
+            _ => format!("--frame {}", range.start),
+        };
+        if n <= first {
+            bail!(
+                "{path}: {n} frames; the first {first} are the reference V_0 and none is left \
+                 to image (lower --reference, or give --reference-file)"
+            );
+        }
+        bail!("{path}: {asked}: the frames to image are {first} to {last}");
+    }
+    Ok(range)
+}
+
+/// The frames `et reconstruct` images from the scene or an et recording.
 pub(super) fn frames(
     args: &ReconstructArgs,
     scene: &Scene,
     recording: Option<&recording::Recording>,
     config: &et_core::ScanConfig,
-) -> Result<(et_recon::Reference, Vec<f32>, Vec<et_sim::still::Truth>)> {
+) -> Result<Chosen> {
     let Some(r) = recording else {
         // The simulator's frames: the untouched sheet (mean of 10 frames, as captured at
         // set-up) and one frame with the scene's touches.
@@ -23,59 +63,70 @@ pub(super) fn frames(
             v0: f.v0,
             var_dv: f.var,
         };
-        return Ok((reference, f.v1, f.truth));
+        return Ok(Chosen {
+            reference,
+            frames: vec![(0, f.v1)],
+            truth: f.truth,
+        });
     };
     let path = args
         .frames
         .as_deref()
         .unwrap_or(std::path::Path::new(""))
-        .display();
+        .display()
+        .to_string();
     let n = r.records.len();
     let reference = args.reference.clamp(1, n.max(1));
-    let frame = args.frame.unwrap_or(n.saturating_sub(1));
-    if n == 0 || frame >= n || frame < reference {
-        bail!("{path}: {n} frames; need the reference frames 0..{reference} and a later --frame");
-    }
-    if let Some((i, rec)) = r.records[..reference]
+    let range = chosen(args, &path, reference, n)?;
+    let (Some(before), Some(imaged)) = (r.records.get(..reference), r.records.get(range.clone()))
+    else {
+        bail!("{path}: {n} frames; need the reference frames 0..{reference} and later ones");
+    };
+    if let Some((i, rec)) = before
         .iter()
-        .chain([&r.records[frame]])
         .enumerate()
+        .chain(
+            imaged
+                .iter()
+                .enumerate()
+                .map(|(i, rec)| (range.start + i, rec)),
+        )
         .find(|(_, rec)| !rec.invalid.is_empty())
     {
         bail!(
-            "{path}: frame {} (seq {}) has non-finite values (null in the file) in \
-             columns {:?}; choose other frames with --reference and --frame",
-            if i < reference { i } else { frame },
+            "{path}: frame {i} (seq {}) has non-finite values (null in the file) in \
+             columns {:?}; choose other frames with --reference and --frame or --range",
             rec.seq,
             rec.invalid
         );
     }
-    let frames: Vec<&[f32]> = r.records[..reference]
-        .iter()
-        .map(|rec| rec.voltages.as_slice())
-        .collect();
-    let rec = &r.records[frame];
-    let truth = rec
-        .touches
-        .iter()
+    let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
+    let truth = imaged
+        .last()
+        .and_then(|rec| rec.touches.as_ref())
+        .into_iter()
         .flatten()
         .map(|t| ([t.x, t.y], t.radius))
         .collect();
-    Ok((
-        et_recon::Reference::from_frames(&frames)?,
-        rec.voltages.clone(),
+    Ok(Chosen {
+        reference: et_recon::Reference::from_frames(&frames)?,
+        frames: imaged
+            .iter()
+            .enumerate()
+            .map(|(i, rec)| (range.start + i, rec.voltages.clone()))
+            .collect(),
         truth,
-    ))
+    })
 }
 
 /// Another system's frames from a table file: V_0 from `--reference-file` or the first
-/// `--reference` frames, and the frame `--frame` (default the last). No truth is known.
+/// `--reference` frames, and the frames chosen. No truth is known.
 pub(super) fn table_frames(
     args: &ReconstructArgs,
     path: &std::path::Path,
     k: usize,
-) -> Result<(et_recon::Reference, Vec<f32>, Vec<et_sim::still::Truth>)> {
-    let frames = et_host::frames::read(path, k)?;
+) -> Result<Chosen> {
+    let mut frames = et_host::frames::read(path, k)?;
     eprintln!("{}", frames.description);
     let n = frames.frames.len();
     let (reference, first) = match &args.reference_file {
@@ -86,26 +137,22 @@ pub(super) fn table_frames(
         }
         None => {
             let count = args.reference.clamp(1, n.max(1));
-            if n <= count {
-                bail!(
-                    "{}: {n} frames; --reference {count} takes the first {count} as V_0 and \
-                     leaves none to image (lower --reference, or give --reference-file)",
-                    path.display()
-                );
-            }
+            let before = frames.frames.get(..count.min(n)).unwrap_or_default();
             (
-                et_recon::Reference::from_frames(&frames.frames[..count])?,
+                // An empty reference is refused by `chosen` below with the reason.
+                et_recon::Reference::from_frames(before).unwrap_or(et_recon::Reference {
+                    v0: Vec::new(),
+                    var_dv: Vec::new(),
+                }),
                 count,
             )
         }
     };
-    let frame = args.frame.unwrap_or(n.saturating_sub(1));
-    if frame >= n || frame < first {
-        bail!(
-            "{}: --frame {frame}: the frames to image are {first} to {}",
-            path.display(),
-            n.saturating_sub(1)
-        );
-    }
-    Ok((reference, frames.frames[frame].clone(), Vec::new()))
+    let range = chosen(args, &path.display().to_string(), first, n)?;
+    let imaged = frames.frames.drain(range.clone());
+    Ok(Chosen {
+        reference,
+        frames: range.zip(imaged).collect(),
+        truth: Vec::new(),
+    })
 }

@@ -32,7 +32,9 @@ pub(super) fn report(
         });
     let matches = et_recon::match_touches(grid, found, truth);
     let sigma0 = recon.imager().sigma0;
-    let image_grid = match &args.image_out {
+    // --all and --range wrote every frame's pixels already.
+    let batch = args.all || args.range.is_some();
+    let image_grid = match args.image_out.as_ref().filter(|_| !batch) {
         Some(path) => Some(write_pixels(
             path,
             grid,
@@ -323,7 +325,7 @@ pub(super) struct RegionSummary {
 }
 
 impl RegionSummary {
-    fn of(r: &et_recon::Region) -> Self {
+    pub(super) fn of(r: &et_recon::Region) -> Self {
         Self {
             centroid_mm: [r.centroid[0] * 1e3, r.centroid[1] * 1e3],
             area_mm2: r.area * 1e6,
