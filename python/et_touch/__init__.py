@@ -347,6 +347,34 @@ class Image:
         return f"Image({rows} x {cols} pixels, alpha {self.alpha:.3g})"
 
 
+class ImageBatch:
+    """Frames imaged together (:meth:`Reconstructor.images`): ``pixels`` n x rows x cols
+    (Delta sigma / sigma_0, top row first, NaN outside), ``dv`` n x K (V), ``alpha`` (n);
+    ``batch[i]`` (and iterating) gives each frame's :class:`Image`, whose noise, objects and
+    segmentation are made when first read, against the reference the batch was imaged
+    against."""
+
+    def __init__(self, r: "Reconstructor", frames: np.ndarray, reference: np.ndarray,
+                 pixels: np.ndarray, dv: np.ndarray, alpha: np.ndarray) -> None:
+        self._r, self._frames, self._reference = r, frames, reference
+        self.pixels, self.dv, self.alpha = pixels, dv, alpha
+
+    def __len__(self) -> int:
+        return len(self.alpha)
+
+    def __getitem__(self, i: int) -> Image:
+        frame, reference, native = self._frames[i], self._reference, self._r._native
+        return Image(self.pixels[i], self.dv[i], float(self.alpha[i]), self._r.extent,
+                     lambda: native.image(frame, reference))
+
+    def __iter__(self) -> Any:
+        return (self[i] for i in range(len(self)))
+
+    def __repr__(self) -> str:
+        n, rows, cols = self.pixels.shape
+        return f"ImageBatch({n} frames of {rows} x {cols} pixels)"
+
+
 class Reconstructor:
     """A reconstruction set up once for a sheet, a protocol, a mesh and a method; it images
     every frame against the untouched frame (et's Reconstructor).
@@ -428,6 +456,21 @@ class Reconstructor:
         made = self._native.image(v, self._frames(v0))
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
+
+    def images(self, V: Any, v0: Any = None) -> "ImageBatch":
+        """Images every frame of ``V`` (n x K, V) against the reference set (or ``v0``, set as
+        the reference first) in one call without the GIL: an :class:`ImageBatch` of stacked
+        ``pixels`` (n x rows x cols), ``dv`` (n x K) and ``alpha`` (n); ``batch[i]`` is frame
+        i's :class:`Image`, its noise and objects made when first read."""
+        if v0 is not None:
+            self.set_reference(v0)
+        if self._reference is None:
+            raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
+        frames = _f64(V, 2, "V")
+        pixels, dv, alpha = self._native.pixels_batch(frames)
+        rows, cols = self._native.grid[:2]
+        return ImageBatch(self, frames, self._reference,
+                          pixels.reshape(len(frames), rows, cols), dv, alpha)
 
     def fit_background(self, v0: Any) -> Dict[str, Any]:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``

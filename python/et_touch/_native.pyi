@@ -48,6 +48,8 @@ class Reconstructor:
         values on the triangles (T; None for GREIT), dV (K, V) and the three-class picture
         (rows x cols: 0 background, 1 resistive, 2 conductive, NaN outside)."""
     def set_reference(self, reference: F64) -> None: ...
+    def pixels_batch(self, frames: F64) -> Tuple[F64, F64, F64]:
+        """frames (n x K, V) against the reference set: pixels (n * rows * cols), dV, alphas."""
     def pixels(self, frame: F64) -> Tuple[F64, F64, float]:
         """frame (K, V) against the reference set: pixels (rows x cols), dV (K, V), alpha."""
     def fit_background(self, reference: F64) -> str: ...

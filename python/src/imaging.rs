@@ -186,6 +186,13 @@ type ImageParts<'py> = (
 /// A frame's pixels alone: the pixels (rows x cols), dV (K) and the alpha.
 type PixelParts<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>, f64);
 
+/// A batch's pixels alone: the pixels (n * rows * cols), dV (n x K) and the alphas (n).
+type BatchParts<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
 /// What `image` reports besides the arrays (the `et reconstruct --json` names).
 #[derive(serde::Serialize)]
 struct ImageSummary<'a> {
@@ -352,6 +359,43 @@ impl Reconstructor {
             array2(py, grid.top_first(&made.pixels, 1.0 / sigma0), h, w)?,
             PyArray1::from_vec(py, made.dv),
             made.alpha,
+        ))
+    }
+
+    /// The pixels of each of `frames` (n x K, V) against the reference set, as `pixels` does
+    /// frame by frame, in one call without the GIL: the pixels stacked (n * rows * cols, top
+    /// row first), dV (n * K) and each frame's alpha.
+    fn pixels_batch<'py>(
+        &mut self,
+        py: Python<'py>,
+        frames: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<BatchParts<'py>> {
+        let (values, n, k) = matrix(&frames, "V")?;
+        let frames: Vec<Vec<f32>> = values
+            .chunks(k.max(1))
+            .take(n)
+            .map(|f| f.iter().map(|&v| v as f32).collect())
+            .collect();
+        let inner = &mut self.inner;
+        let (grid, sigma0) = (inner.grid().clone(), inner.imager().sigma0);
+        let (w, h) = (grid.width, grid.height);
+        let mut pixels = Vec::with_capacity(n * w * h);
+        let mut dv = Vec::with_capacity(n * k);
+        let mut alpha = Vec::with_capacity(n);
+        py.detach(|| {
+            for f in &frames {
+                let m = inner.frame_pixels(f)?;
+                grid.top_first_into(&m.pixels, 1.0 / sigma0, &mut pixels);
+                dv.extend(m.dv);
+                alpha.push(m.alpha);
+            }
+            Ok::<(), et_recon::reconstructor::ImagingError>(())
+        })
+        .map_err(|e| refused(&e))?;
+        Ok((
+            PyArray1::from_vec(py, pixels),
+            array2(py, dv, n, k)?,
+            PyArray1::from_vec(py, alpha),
         ))
     }
 

@@ -94,6 +94,25 @@ def test_a_reference_set_once_images_each_frame_as_with_it_given(scene, recordin
         np.testing.assert_allclose(made.noise_sd, given.noise_sd, rtol=1e-5, equal_nan=True)
 
 
+def test_a_batch_is_its_frames_imaged_one_by_one(scene, recording):
+    sheet, protocol = et.scene(scene)
+    r = et.Reconstructor(sheet, protocol, triangles=TRIANGLES)
+    v = et.read_recording(recording)["voltages"]
+    r.fit_background(v[:20])
+    batch = r.images(v[20:], v[:20])
+    assert len(batch) == len(v) - 20
+    assert batch.pixels.shape == (len(batch), 64, 64)
+    for i in (0, len(batch) // 2, len(batch) - 1):
+        alone = r.image(v[20 + i], v[:20])
+        assert batch.alpha[i] == alone.alpha
+        peak = np.nanmax(np.abs(alone.pixels))
+        np.testing.assert_allclose(batch.pixels[i], alone.pixels, rtol=0, atol=1e-4 * peak,
+                                   equal_nan=True)
+        assert batch[i].objects == [pytest.approx(o, rel=1e-5) for o in alone.objects]
+    with pytest.raises(et.EtError, match="K"):
+        r.images(v[20:, :-1])
+
+
 def test_the_press_is_found_where_it_was(scene, recording):
     _, image = python_image(scene, recording, fit=True)
     truth = et.read_recording(recording)["touches"][-1][0]

@@ -65,6 +65,21 @@ struct Seen<'a> {
     null_dim: usize,
 }
 
+/// `m`^T `v` for `m` (n x q) and `v` (n values): q values.
+fn transposed_times(m: &faer::Mat<f64>, v: &[f64]) -> Vec<f64> {
+    let v = faer::MatRef::from_column_major_slice(v, v.len(), 1);
+    let mut out = vec![0.0; m.ncols()];
+    faer::linalg::matmul::matmul(
+        faer::MatMut::from_column_major_slice_mut(&mut out, m.ncols(), 1),
+        faer::Accum::Replace,
+        m.transpose(),
+        v,
+        1.0,
+        faer::Par::Seq,
+    );
+    out
+}
+
 impl DataSpace {
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
     /// `dv`.
@@ -73,19 +88,10 @@ impl DataSpace {
         let spectrum = self.eigen()?;
         let k = self.frame_len();
         let (e, c) = match spectrum {
-            Spectrum::Compact { e, w } => {
-                let mtdv = self.m_transpose(dv);
-                let c: Vec<f64> = (0..e.len())
-                    .map(|i| w.col(i).iter().zip(&mtdv).map(|(a, b)| a * b).sum())
-                    .collect();
-                (e, c)
-            }
-            Spectrum::Full { e, u } => {
-                let c = (0..e.len())
-                    .map(|i| u.col(i).iter().zip(dv).map(|(a, b)| a * b).sum())
-                    .collect();
-                (e, c)
-            }
+            // One matrix-vector product each (faer's, on the vector unit: every frame's alpha
+            // reads the spectrum several times).
+            Spectrum::Compact { e, w } => (e, transposed_times(w, &self.m_transpose(dv))),
+            Spectrum::Full { e, u } => (e, transposed_times(u, dv)),
         };
         let total: f64 = dv.iter().map(|v| v * v).sum();
         let seen: f64 = c.iter().map(|v| v * v).sum();

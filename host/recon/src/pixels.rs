@@ -174,16 +174,18 @@ impl PixelGrid {
     /// `scale`, NaN outside the sheet. `plt.imshow` shows it upright.
     #[must_use]
     pub fn top_first(&self, image: &[Option<f64>], scale: f64) -> Vec<f64> {
-        (0..self.height)
-            .rev()
-            .flat_map(|j| (0..self.width).map(move |i| j * self.width + i))
-            .map(|p| {
-                image
-                    .get(p)
-                    .copied()
-                    .flatten()
-                    .map_or(f64::NAN, |v| v * scale)
-            })
-            .collect()
+        let mut out = Vec::with_capacity(self.width * self.height);
+        self.top_first_into(image, scale, &mut out);
+        out
+    }
+
+    /// [`PixelGrid::top_first`] appended to `out` (a stack of images grows frame by frame).
+    pub fn top_first_into(&self, image: &[Option<f64>], scale: f64, out: &mut Vec<f64>) {
+        for j in (0..self.height).rev() {
+            let row = image.get(j * self.width..(j + 1) * self.width).unwrap_or(&[]);
+            out.extend(row.iter().map(|v| v.map_or(f64::NAN, |v| v * scale)));
+            // A short image (not of this grid) is padded with NaN, as before.
+            out.extend(std::iter::repeat_n(f64::NAN, self.width - row.len()));
+        }
     }
 }
