@@ -122,6 +122,7 @@ def disc(
     first_deg: Optional[float] = None,
     direction: str = "ccw",
     model: str = "complete",
+    placement: Optional[str] = None,
 ) -> Sheet:
     """A disc of ``radius_m`` (m) centred on the origin, ``electrodes`` evenly round its edge.
 
@@ -129,7 +130,16 @@ def disc(
     resistance (ohm), ``electrode_width_m`` each electrode's width along the edge (m), ``first_deg`` the
     first electrode's angle from +x (degrees; default half a spacing from +x), ``direction``
     the numbering "ccw" or "cw", ``model`` the electrode model ("complete", "point", "shunt").
+    ``placement="pyeit"`` puts the electrodes where the Python peer's meshes do (electrode 0
+    at 180 degrees, numbered clockwise: ``first_deg=180, direction="cw"``), so its frames
+    image the right way round.
     """
+    if placement is not None:
+        if placement != "pyeit":
+            raise EtError(f"placement {placement!r}: 'pyeit', or first_deg and direction")
+        if first_deg is not None or direction != "ccw":
+            raise EtError("placement='pyeit' sets first_deg and direction: give one or the other")
+        first_deg, direction = 180.0, "cw"
     return _sheet(
         {"kind": "disc", "radius": float(radius_m)},
         electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction, model,
@@ -220,22 +230,50 @@ class Protocol:
         cls, ex_mat: Any, meas_mat: Any = None, electrodes: Optional[int] = None,
         current_a: float = 1e-3,
     ) -> "Protocol":
-        """The Python peer's convention: ``ex_mat`` (n_exc x 2: source, sink) and ``meas_mat``
-        (K x 3: N, M, excitation index; the value is u[N] - u[M]), or its protocol object (with
-        ``ex_mat`` and ``meas_mat``); ``electrodes`` defaults to its largest electrode + 1."""
+        """The Python peer's convention, as it comes: its protocol object (pyEIT 1.2's
+        ``protocol.create(...)``, with ``ex_mat``, ``meas_mat`` and ``n_el``), or its arrays:
+        ``ex_mat`` n_exc x 2 (source, sink) and ``meas_mat`` either n_exc x n_meas x 2 (pyEIT
+        1.2: each excitation's [N, M] pairs, the value u[N] - u[M], frames excitation by
+        excitation) or K x 3 (N, M, excitation index; earlier versions). ``electrodes``
+        defaults to the object's ``n_el``, else the largest electrode + 1. pyEIT's frames are
+        those of its ``meas_mat``: data with every pair of each excitation (its
+        ``keep_ba``) are cut to them first, ``v[protocol.keep_ba]``. Its electrodes sit where
+        ``placement="pyeit"`` puts them (electrode 0 at 180 degrees, numbered clockwise)."""
         if meas_mat is None and hasattr(ex_mat, "meas_mat"):
+            if electrodes is None and hasattr(ex_mat, "n_el"):
+                electrodes = int(ex_mat.n_el)
             ex_mat, meas_mat = ex_mat.ex_mat, ex_mat.meas_mat
-        ex = np.asarray(ex_mat, dtype=np.int64)
-        meas = np.asarray(meas_mat, dtype=np.int64)
+        if meas_mat is None:
+            raise EtError("from_pyeit: give the peer's protocol object, or ex_mat and meas_mat")
+        ex, meas = _whole(ex_mat, "ex_mat"), _whole(meas_mat, "meas_mat")
+        if meas.ndim == 3 and meas.shape[2] == 2:
+            if meas.shape[0] != len(ex):
+                raise EtError(
+                    f"meas_mat {meas.shape}: one block of [N, M] pairs per excitation, and "
+                    f"ex_mat has {len(ex)} rows"
+                )
+            excitation = np.repeat(np.arange(meas.shape[0]), meas.shape[1])
+            meas = np.column_stack([meas.reshape(-1, 2), excitation])
         if ex.ndim != 2 or ex.shape[1] != 2 or meas.ndim != 2 or meas.shape[1] != 3:
             raise EtError(
-                f"ex_mat {ex.shape} and meas_mat {meas.shape}: give n_exc x 2 and K x 3"
+                f"ex_mat {ex.shape} and meas_mat {meas.shape}: give n_exc x 2 and "
+                "n_exc x n_meas x 2 (pyEIT 1.2) or K x 3"
             )
-        if meas[:, 2].min() < 0 or meas[:, 2].max() >= len(ex):
+        if len(meas) == 0 or meas[:, 2].min() < 0 or meas[:, 2].max() >= len(ex):
             raise EtError("meas_mat: an excitation index outside ex_mat's rows")
         rows = np.column_stack([ex[meas[:, 2], 0], ex[meas[:, 2], 1], meas[:, 0], meas[:, 1]])
         n = int(electrodes) if electrodes is not None else int(max(ex.max(), meas[:, :2].max()) + 1)
+        if rows.min() < 0 or rows.max() >= n:
+            raise EtError(f"from_pyeit: an electrode outside 0 to {n - 1}")
         return cls(n, rows, np.full(len(rows), float(current_a)))
+
+
+def _whole(a: Any, what: str) -> np.ndarray:
+    """``a`` as whole numbers (int64), refusing fractions rather than truncating them."""
+    values = np.asarray(a, dtype=np.float64)
+    if not np.all(np.isfinite(values)) or not np.all(values == np.round(values)):
+        raise EtError(f"{what}: electrode numbers and indices must be whole numbers")
+    return values.astype(np.int64)
 
 
 def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protocol:
