@@ -347,7 +347,7 @@ impl DataSpace {
             combination,
             alpha,
             s: self.s,
-            squared: SquaredRows::default(),
+            squared: NoiseRows::default(),
         })
     }
 

@@ -182,7 +182,9 @@ impl PixelGrid {
     /// [`PixelGrid::top_first`] appended to `out` (a stack of images grows frame by frame).
     pub fn top_first_into(&self, image: &[Option<f64>], scale: f64, out: &mut Vec<f64>) {
         for j in (0..self.height).rev() {
-            let row = image.get(j * self.width..(j + 1) * self.width).unwrap_or(&[]);
+            let row = image
+                .get(j * self.width..(j + 1) * self.width)
+                .unwrap_or(&[]);
             out.extend(row.iter().map(|v| v.map_or(f64::NAN, |v| v * scale)));
             // A short image (not of this grid) is padded with NaN, as before.
             out.extend(std::iter::repeat_n(f64::NAN, self.width - row.len()));

@@ -23,7 +23,7 @@ pub struct OneStep {
     pub s: f64,
     /// R's rows of the triangles a noise image was asked for twice, squared entrywise
     /// ([`OneStep::noise_sd_of`]).
-    pub(crate) squared: SquaredRows,
+    pub(crate) squared: NoiseRows,
 }
 
 /// The rows of R (T x K) some frames' noise images need, squared entrywise (rows x K, f32),
@@ -32,7 +32,7 @@ pub struct OneStep {
 /// rows a frame (r the transfer impedances; 9 ms at 8 000 triangles and 16 electrodes). One
 /// image of a frame never pays to make it.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct SquaredRows {
+pub(crate) struct NoiseRows {
     asked: std::sync::OnceLock<Vec<usize>>,
     made: std::sync::OnceLock<Mat<f32>>,
 }
@@ -55,7 +55,7 @@ impl OneStep {
         debug_assert_eq!(gp.nrows(), self.gp.nrows());
         OneStep {
             gp,
-            squared: SquaredRows::default(),
+            squared: NoiseRows::default(),
             ..self
         }
     }
@@ -204,7 +204,7 @@ impl OneStep {
     }
 
     /// R's rows `rows` squared entrywise (rows x K), when these rows were asked for before
-    /// ([`SquaredRows`]); None the first time, or for other rows than the first asked.
+    /// ([`NoiseRows`]); None the first time, or for other rows than the first asked.
     fn squared_rows(&self, rows: &[usize]) -> Option<&Mat<f32>> {
         if let Some(s) = self.squared.made.get() {
             return (self.squared.asked.get().map(Vec::as_slice) == Some(rows)).then_some(s);
