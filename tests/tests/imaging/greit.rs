@@ -123,9 +123,12 @@ fn greit_equals_its_dense_formula() {
                 .map(|c| r[(row, c)].powi(2) * var[c])
                 .sum::<f64>()
                 .sqrt();
+            // The noise figure's search asked for these rows already, so they come from R's
+            // squared rows in f32 (`NoiseRows`): within f32's relative precision.
             assert!(
-                (s - sd[row]).abs() <= 1e-9 * s.max(1e-300),
-                "{kind:?} sd {row}"
+                (s - sd[row]).abs() <= 1e-6 * s.max(1e-300),
+                "{kind:?} sd {row}: {} against {s}",
+                sd[row]
             );
         }
     }

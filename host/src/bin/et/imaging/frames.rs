@@ -43,7 +43,15 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
                  to image (lower --reference, or give --reference-file)"
             );
         }
-        bail!("{path}: {asked}: the frames to image are {first} to {last}");
+        bail!(
+            "{path}: {asked}: the frames to image are {first} to {last} ({} the reference \
+             V_0)",
+            if first == 1 {
+                "the frame before them is".to_string()
+            } else {
+                format!("the {first} frames before them are")
+            }
+        );
     }
     Ok(range)
 }
