@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 import et_touch as et
+from peer_example import CENTRE, CONTRAST, RADIUS, peer_set_up
 
-CENTRE, RADIUS, CONTRAST = (0.5, 0.5), 0.1, 1000.0
 BATCH = 1000
 
 
@@ -44,22 +44,7 @@ def batch_of(v0, v1):
 
 
 def peer(h0, repeats):
-    import pyeit.eit.jac as jac
-    import pyeit.eit.protocol as protocol
-    import pyeit.mesh as mesh
-    from pyeit.eit.fem import EITForward
-    from pyeit.mesh.wrapper import PyEITAnomaly_Circle
-
-    clock = time.perf_counter()
-    mesh_obj = mesh.create(16, h0=h0)
-    proto = protocol.create(16, dist_exc=1, step_meas=1, parser_meas="std")
-    solver = jac.JAC(mesh_obj, proto)
-    solver.setup(p=0.5, lamb=0.01, method="kotre", perm=1, jac_normalized=True)
-    set_up = time.perf_counter() - clock
-    anomaly = PyEITAnomaly_Circle(center=list(CENTRE), r=RADIUS, perm=CONTRAST)
-    mesh_new = mesh.set_perm(mesh_obj, anomaly=anomaly, background=1.0)
-    fwd = EITForward(mesh_obj, proto)
-    v0, v1 = fwd.solve_eit(), fwd.solve_eit(perm=mesh_new.perm)
+    mesh_obj, solver, set_up, v0, v1 = peer_set_up(h0)
     frame = median_s(lambda: solver.solve(v1, v0, normalize=True), repeats)
     frames = batch_of(v0, v1)
     clock = time.perf_counter()

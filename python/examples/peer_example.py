@@ -47,8 +47,10 @@ def with_et(triangles):
     return r, image, set_up, first, float(np.median(times))
 
 
-def with_peer():
-    """The peer's example (pyeit/examples/eit_dynamic_jac.py), timed the same way."""
+def peer_set_up(h0=0.05):
+    """The peer's example (pyeit/examples/eit_dynamic_jac.py) up to its frames: its mesh
+    (``h0``), protocol and solver, the set-up's seconds (mesh, protocol and solver, as a user
+    makes them), and its model's frames v0, v1."""
     import pyeit.eit.jac as jac
     import pyeit.eit.protocol as protocol
     import pyeit.mesh as mesh
@@ -56,7 +58,7 @@ def with_peer():
     from pyeit.mesh.wrapper import PyEITAnomaly_Circle
 
     clock = time.perf_counter()
-    mesh_obj = mesh.create(16, h0=0.05)
+    mesh_obj = mesh.create(16, h0=h0)
     proto = protocol.create(16, dist_exc=1, step_meas=1, parser_meas="std")
     solver = jac.JAC(mesh_obj, proto)
     solver.setup(p=0.5, lamb=0.01, method="kotre", perm=1, jac_normalized=True)
@@ -65,6 +67,12 @@ def with_peer():
     mesh_new = mesh.set_perm(mesh_obj, anomaly=anomaly, background=1.0)
     fwd = EITForward(mesh_obj, proto)
     v0, v1 = fwd.solve_eit(), fwd.solve_eit(perm=mesh_new.perm)
+    return mesh_obj, solver, set_up, v0, v1
+
+
+def with_peer():
+    """The peer's example, timed the same way."""
+    mesh_obj, solver, set_up, v0, v1 = peer_set_up()
     clock = time.perf_counter()
     solver.solve(v1, v0, normalize=True)
     first = time.perf_counter() - clock

@@ -5,20 +5,7 @@ use et_recon::reconstructor::*;
 /// of 16 electrodes (pairs adjacent, drive electrodes measured too), imaged at alpha 0.1:
 /// the linearisation's misfit at that image.
 fn misfit_at(recon: &mut Reconstructor, scale: f64) -> f64 {
-    let sigma0 = recon.imager().background();
-    let mesh = recon.imager().forward.mesh().clone();
-    let sigma: Vec<f64> = (0..sigma0.len())
-        .map(|t| {
-            let [x, y] = mesh.centroid(t);
-            let r2 = (x - 0.03).powi(2) + (y - 0.02).powi(2);
-            sigma0[t] * (1.0 + scale * (-r2 / (2.0 * 0.015f64.powi(2))).exp())
-        })
-        .collect();
-    let schedule = recon.schedule().clone();
-    let forward = &recon.imager().forward;
-    let f32s = |v: Vec<f64>| v.into_iter().map(|x| x as f32).collect::<Vec<f32>>();
-    let v0 = f32s(forward.frame(&sigma0, &schedule).unwrap());
-    let v = f32s(forward.frame(&sigma, &schedule).unwrap());
+    let (v0, v) = (bump_frame(recon, 0.0), bump_frame(recon, scale));
     let reference = Reference::from_frames(&[v0]).unwrap();
     let image = recon.image(&v, &reference).unwrap();
     recon.linearisation_misfit(&image).unwrap().unwrap()
@@ -67,28 +54,31 @@ fn disc_and_bump(alpha: AlphaRule, scales: &[f64]) -> (Reconstructor, Vec<f32>, 
     }
     .set_up()
     .unwrap();
-    let sigma0 = recon.imager().background();
-    let mesh = recon.imager().forward.mesh().clone();
-    let frame = |scale: f64| {
-        let sigma: Vec<f64> = (0..sigma0.len())
-            .map(|t| {
-                let [x, y] = mesh.centroid(t);
-                let r2 = (x - 0.03).powi(2) + (y - 0.02).powi(2);
-                sigma0[t] * (1.0 + scale * (-r2 / (2.0 * 0.015f64.powi(2))).exp())
-            })
-            .collect();
-        (recon
-            .imager()
-            .forward
-            .frame(&sigma, recon.schedule())
-            .unwrap())
-        .into_iter()
-        .map(|x| x as f32)
-        .collect::<Vec<f32>>()
-    };
-    let frames = scales.iter().map(|&s| frame(s)).collect();
-    let v0 = frame(0.0);
+    let frames = scales.iter().map(|&s| bump_frame(&recon, s)).collect();
+    let v0 = bump_frame(&recon, 0.0);
     (recon, v0, frames)
+}
+
+/// The model's own frame (f32, as et's frames are) of a bump of `scale` x sigma_0 near
+/// (3, 2) cm, 1.5 cm wide.
+fn bump_frame(recon: &Reconstructor, scale: f64) -> Vec<f32> {
+    let sigma0 = recon.imager().background();
+    let mesh = recon.imager().forward.mesh();
+    let sigma: Vec<f64> = (0..sigma0.len())
+        .map(|t| {
+            let [x, y] = mesh.centroid(t);
+            let r2 = (x - 0.03).powi(2) + (y - 0.02).powi(2);
+            sigma0[t] * (1.0 + scale * (-r2 / (2.0 * 0.015f64.powi(2))).exp())
+        })
+        .collect();
+    (recon
+        .imager()
+        .forward
+        .frame(&sigma, recon.schedule())
+        .unwrap())
+    .into_iter()
+    .map(|x| x as f32)
+    .collect()
 }
 
 /// Frames against a reference set once: the same image as with the reference given, the
