@@ -84,9 +84,23 @@ impl DataSpace {
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
     /// `dv`.
     fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
-        let dv = &*self.whiten(dv);
         let spectrum = self.eigen()?;
         let k = self.frame_len();
+        let (Spectrum::Compact { e, .. } | Spectrum::Full { e, .. }) = spectrum;
+        // The same frame again (the alpha rules read it several times): its projections.
+        if let Ok(last) = self.last_seen.0.lock()
+            && let Some((seen_dv, c, null_norm2)) = last.as_ref()
+            && seen_dv.as_slice() == dv
+        {
+            return Ok(Seen {
+                e,
+                c: c.clone(),
+                null_norm2: *null_norm2,
+                null_dim: k.saturating_sub(e.len()),
+            });
+        }
+        let key = dv.to_vec();
+        let dv = &*self.whiten(dv);
         let (e, c) = match spectrum {
             // One matrix-vector product each (faer's, on the vector unit: every frame's alpha
             // reads the spectrum several times).
@@ -95,9 +109,13 @@ impl DataSpace {
         };
         let total: f64 = dv.iter().map(|v| v * v).sum();
         let seen: f64 = c.iter().map(|v| v * v).sum();
+        let null_norm2 = (total - seen).max(0.0);
+        if let Ok(mut last) = self.last_seen.0.lock() {
+            *last = Some((key, c.clone(), null_norm2));
+        }
         Ok(Seen {
             e,
-            null_norm2: (total - seen).max(0.0),
+            null_norm2,
             null_dim: k.saturating_sub(e.len()),
             c,
         })
@@ -179,15 +197,15 @@ impl DataSpace {
     /// fitted J R dv: the degrees of freedom left to the residual (pure noise of variance s^2
     /// per value leaves a residual of s^2 (K - tr H) on average).
     fn residual_dof(&self, candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
-        let seen = self.spectrum(&vec![0.0; self.frame_len()])?;
+        // A's eigenvalues alone: no frame's projections needed.
+        let (Spectrum::Compact { e, .. } | Spectrum::Full { e, .. }) = self.eigen()?;
+        let null_dim = self.frame_len().saturating_sub(e.len());
         Ok(candidates
             .iter()
             .map(|&alpha| {
                 let lambda = self.lambda(alpha);
-                seen.null_dim as f64
-                    + seen
-                        .e
-                        .iter()
+                null_dim as f64
+                    + e.iter()
                         .map(|e| lambda / (e.max(0.0) + lambda))
                         .sum::<f64>()
             })

@@ -38,6 +38,20 @@ pub use error::ReconError;
 /// the transfer impedances, not K, the frame length: G P^-1 (r x T), H = G P^-1 G^T (r x r, a
 /// symmetric rank-T update of its lower triangle: faer's BLAS-3 kernel) and A = M H M^T =
 /// J P^-1 J^T (K x K).
+/// A frame dV and its projections c onto A's eigenvectors with the rest's squared norm, kept
+/// by the data space for the next read of the same frame (a clone starts empty).
+#[derive(Debug, Default)]
+pub(crate) struct LastSeen(pub(crate) std::sync::Mutex<Option<Projected>>);
+
+/// A frame dV, its projections c and the rest's squared norm.
+type Projected = (Vec<f64>, Vec<f64>, f64);
+
+impl Clone for LastSeen {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct DataSpace {
     /// M: K rows of (column of G, coefficient), each row scaled by its value's weight's root
@@ -62,6 +76,9 @@ pub struct DataSpace {
     eigen: std::sync::OnceLock<Option<Spectrum>>,
     /// N = M^T M's root and B^T H B, made on first use (the one-step matrix).
     root: std::sync::OnceLock<Option<NormalRoot>>,
+    /// The last frame's projections onto A's eigenvectors (the alpha rules read them
+    /// several times a frame).
+    pub(crate) last_seen: LastSeen,
 }
 
 /// N = M^T M (r x r) for the K rows of M (`combination`, over r columns).
@@ -260,6 +277,7 @@ impl DataSpace {
             h,
             eigen: std::sync::OnceLock::new(),
             root: std::sync::OnceLock::new(),
+            last_seen: LastSeen::default(),
         }
     }
 
