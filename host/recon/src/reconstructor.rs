@@ -419,62 +419,6 @@ impl Reconstructor {
         Ok(dv)
     }
 
-    /// Sets the untouched reference (V_0 and the noise of dV) that [`Reconstructor::image_frame`]
-    /// images every later frame against, checked once here. The matrices made for the
-    /// frames (one per alpha chosen, a few kept) and each frame's noise image's squared rows
-    /// are kept from frame to frame, so a recording's frames cost the frame, not the set-up.
-    ///
-    /// # Errors
-    /// [`ReconError::FrameLength`] when V_0 or the noise is not of K values,
-    /// [`ReconError::NonFinite`] for NaN or infinity in them.
-    pub fn set_reference(&mut self, reference: Reference) -> Result<(), ImagingError> {
-        let k = self.schedule.frame_len();
-        for (what, n) in [
-            ("reference V_0", reference.v0.len()),
-            ("reference noise", reference.var_dv.len()),
-        ] {
-            if n != k {
-                return Err(ReconError::FrameLength { what, got: n, k }.into());
-            }
-        }
-        if reference
-            .v0
-            .iter()
-            .chain(&reference.var_dv)
-            .any(|v| !v.is_finite())
-        {
-            return Err(ReconError::NonFinite.into());
-        }
-        self.reference = Some(reference);
-        Ok(())
-    }
-
-    /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles
-    /// ([`Image::mesh_values`]; the default). Without them, a matrix's second frame on is
-    /// imaged onto the pixels alone through its f32 operator, as
-    /// [`Reconstructor::frame_pixels`] does: what a stream of frames whose objects are read
-    /// needs (a 32-electrode protocol's factors onto 8 000 triangles are 32 MB a frame).
-    pub fn keep_mesh_values(&mut self, keep: bool) {
-        self.mesh_values = keep;
-    }
-
-    /// The reference set by [`Reconstructor::set_reference`].
-    #[must_use]
-    pub fn reference(&self) -> Option<&Reference> {
-        self.reference.as_ref()
-    }
-
-    /// [`Reconstructor::image`] of `frame` (V, K values) against the reference set.
-    ///
-    /// # Errors
-    /// [`ImagingError::NoReference`] when none was set; as [`Reconstructor::image`].
-    pub fn image_frame(&mut self, frame: &[f32]) -> Result<Image, ImagingError> {
-        let reference = self.reference.take().ok_or(ImagingError::NoReference)?;
-        let image = self.image(frame, &reference);
-        self.reference = Some(reference);
-        image
-    }
-
     /// Each channel's variance of `dv` (K values, V) as the images see it, V^2: the frames'
     /// noise `var_dv` and the model's error (the fitted background's misfit, else
     /// [`imaging_variance`]'s share of dV). The live pipeline's pixel noise comes from here too.

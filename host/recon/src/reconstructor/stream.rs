@@ -1,7 +1,7 @@
-//! Frames against a reference set, their pixels alone: what a stream of frames needs of each
-//! before anyone asks for its noise, regions or objects.
+//! Frames against a reference set once: the whole image of each, or its pixels alone (what a
+//! stream of frames needs of each before anyone asks for its noise, regions or objects).
 
-use super::{ImagingError, Reconstructor};
+use super::{Image, ImagingError, Reconstructor, Reference};
 use crate::onestep::ReconError;
 use crate::pixels::PixelGrid;
 use crate::reconstructor::spec::Method;
@@ -19,6 +19,62 @@ pub struct FramePixels {
 }
 
 impl Reconstructor {
+    /// Sets the untouched reference (V_0 and the noise of dV) that [`Reconstructor::image_frame`]
+    /// images every later frame against, checked once here. The matrices made for the
+    /// frames (one per alpha chosen, a few kept) and each frame's noise image's squared rows
+    /// are kept from frame to frame, so a recording's frames cost the frame, not the set-up.
+    ///
+    /// # Errors
+    /// [`ReconError::FrameLength`] when V_0 or the noise is not of K values,
+    /// [`ReconError::NonFinite`] for NaN or infinity in them.
+    pub fn set_reference(&mut self, reference: Reference) -> Result<(), ImagingError> {
+        let k = self.schedule.frame_len();
+        for (what, n) in [
+            ("reference V_0", reference.v0.len()),
+            ("reference noise", reference.var_dv.len()),
+        ] {
+            if n != k {
+                return Err(ReconError::FrameLength { what, got: n, k }.into());
+            }
+        }
+        if reference
+            .v0
+            .iter()
+            .chain(&reference.var_dv)
+            .any(|v| !v.is_finite())
+        {
+            return Err(ReconError::NonFinite.into());
+        }
+        self.reference = Some(reference);
+        Ok(())
+    }
+
+    /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles
+    /// ([`Image::mesh_values`]; the default). Without them, a matrix's second frame on is
+    /// imaged onto the pixels alone through its f32 operator, as
+    /// [`Reconstructor::frame_pixels`] does: what a stream of frames whose objects are read
+    /// needs (a 32-electrode protocol's factors onto 8 000 triangles are 32 MB a frame).
+    pub fn keep_mesh_values(&mut self, keep: bool) {
+        self.mesh_values = keep;
+    }
+
+    /// The reference set by [`Reconstructor::set_reference`].
+    #[must_use]
+    pub fn reference(&self) -> Option<&Reference> {
+        self.reference.as_ref()
+    }
+
+    /// [`Reconstructor::image`] of `frame` (V, K values) against the reference set.
+    ///
+    /// # Errors
+    /// [`ImagingError::NoReference`] when none was set; as [`Reconstructor::image`].
+    pub fn image_frame(&mut self, frame: &[f32]) -> Result<Image, ImagingError> {
+        let reference = self.reference.take().ok_or(ImagingError::NoReference)?;
+        let image = self.image(frame, &reference);
+        self.reference = Some(reference);
+        image
+    }
+
     /// The pixels of `frame` (V, K values) against the reference set
     /// ([`Reconstructor::set_reference`]), and no more: [`Reconstructor::image_frame`] makes
     /// the whole image (the pixels' noise, regions, touches) of the same frame. One-step

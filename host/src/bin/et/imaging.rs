@@ -11,7 +11,7 @@ use et_sim::scene::Scene;
 use crate::domain::count;
 
 mod frames;
-use frames::{frames, table_frames};
+use frames::{each_frame, frames, table_frames};
 
 /// How a command gets its mesh.
 #[derive(Debug, clap::Args)]
@@ -435,69 +435,6 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let frame_median = recon.frame_median(&image.dv, 100);
     let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
     report(args, &recon, &image, &truth, background, timings_s, started)
-}
-
-/// One frame's line of `et reconstruct --all`.
-#[derive(serde::Serialize)]
-struct FrameLine {
-    /// The frame's 0-based index in the file.
-    frame: usize,
-    alpha: f64,
-    noise: et_recon::FrameNoise,
-    objects: Vec<et_recon::touches::ObjectSummary>,
-    found_touches: Vec<RegionSummary>,
-}
-
-/// `--all` and `--range`: every chosen frame imaged against `reference` with the set-up made
-/// once, its line on standard output and its pixels kept for --image-out; the last frame's
-/// image (what --out draws).
-fn each_frame(
-    args: &ReconstructArgs,
-    recon: &mut et_recon::Reconstructor,
-    reference: et_recon::Reference,
-    chosen: &[(usize, Vec<f32>)],
-) -> Result<et_recon::Image> {
-    recon.set_reference(reference)?;
-    // Objects and pixels are read, not the values on the mesh.
-    recon.keep_mesh_values(false);
-    let clock = Instant::now();
-    let sigma0 = recon.imager().sigma0;
-    let (grid, n) = (recon.grid().clone(), chosen.len());
-    let mut stack: Vec<f64> = Vec::new();
-    let mut last = None;
-    for (i, v) in chosen {
-        let image = recon.image_frame(v).with_context(|| format!("frame {i}"))?;
-        let line = FrameLine {
-            frame: *i,
-            alpha: image.alpha,
-            noise: image.noise,
-            objects: (recon.objects(&image).iter())
-                .map(|o| et_recon::touches::ObjectSummary::of(o, sigma0))
-                .collect(),
-            found_touches: image.touches.iter().map(RegionSummary::of).collect(),
-        };
-        out!("{}", serde_json::to_string(&line)?);
-        if args.image_out.is_some() {
-            stack.extend(grid.top_first(&image.pixels, 1.0 / sigma0));
-        }
-        last = Some(image);
-    }
-    let took = clock.elapsed().as_secs_f64();
-    eprintln!(
-        "imaged {n} frames in {took:.3} s after the set-up ({:.2} ms a frame, objects included)",
-        1e3 * took / n.max(1) as f64
-    );
-    if let Some(path) = &args.image_out {
-        let bytes = et_learn::npz::npy_of_array(&stack, &[n, grid.height, grid.width]);
-        crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
-        eprintln!(
-            "wrote {} ({n} x {} x {} pixels, Delta sigma / sigma_0, top row first)",
-            path.display(),
-            grid.height,
-            grid.width
-        );
-    }
-    last.ok_or_else(|| anyhow::anyhow!("no frames to image"))
 }
 
 /// The paths `et reconstruct` reads and writes checked before any work: no output replaces
