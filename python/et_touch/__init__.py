@@ -309,8 +309,9 @@ class Image:
     sigma_0), ``z`` (peak over its noise).
 
     ``pixels``, ``dv``, ``alpha`` and ``extent`` are made with the image; the rest when first
-    read (the frame imaged again in full, once): a loop that reads only the pixels pays for
-    the pixels. Imaged against a reference set once (:meth:`Reconstructor.set_reference`),
+    read: ``objects`` and ``touches`` alone with the noise of their own pixels, anything else
+    by imaging the frame again in full, once. A loop that reads only the pixels pays for the
+    pixels, one that reads the objects too for little more. Imaged against a reference set once (:meth:`Reconstructor.set_reference`),
     ``pixels`` come from the reconstruction's f32 operator from the second frame at an alpha
     on (within 1e-4 of the peak of the f64 image the rest is made from).
     """
@@ -322,6 +323,7 @@ class Image:
         alpha: float,
         extent: Tuple[float, float, float, float],
         whole: Any,
+        found: Any = None,
     ) -> None:
         self.pixels = pixels
         self.dv = dv
@@ -329,6 +331,17 @@ class Image:
         self.extent = extent
         self._whole = whole
         self._made: Optional[Tuple[Dict[str, Any], Any, Any, Any]] = None
+        # The objects and touches alone (against a reference set), when the rest is not made.
+        self._found = found
+        self._found_made: Optional[Dict[str, Any]] = None
+
+    def _objects_and_touches(self) -> Dict[str, Any]:
+        if self._made is not None or self._found is None:
+            return self.summary
+        if self._found_made is None:
+            self._found_made = self._found()
+            self._found = None
+        return self._found_made
 
     def _details(self) -> Tuple[Dict[str, Any], Any, Any, Any]:
         if self._made is None:
@@ -351,11 +364,11 @@ class Image:
 
     @property
     def objects(self) -> List[Dict[str, Any]]:
-        return self.summary["objects"]
+        return self._objects_and_touches()["objects"]
 
     @property
     def touches(self) -> List[Dict[str, Any]]:
-        return self.summary["touches"]
+        return self._objects_and_touches()["touches"]
 
     @property
     def regions(self) -> List[Dict[str, Any]]:
@@ -396,14 +409,34 @@ class ImageBatch:
                  pixels: np.ndarray, dv: np.ndarray, alpha: np.ndarray) -> None:
         self._r, self._frames, self._reference = r, frames, reference
         self.pixels, self.dv, self.alpha = pixels, dv, alpha
+        self._found: Optional[List[Dict[str, Any]]] = None
 
     def __len__(self) -> int:
         return len(self.alpha)
 
     def __getitem__(self, i: int) -> Image:
         frame, reference, native = self._frames[i], self._reference, self._r._native
+        found = self._found
         return Image(self.pixels[i], self.dv[i], float(self.alpha[i]), self._r.extent,
-                     lambda: native.image(frame, reference))
+                     lambda: native.image(frame, reference),
+                     (lambda: found[i]) if found is not None
+                     else lambda: self._r._found_of(frame[None, :], reference)[0])
+
+    @property
+    def objects(self) -> List[List[Dict[str, Any]]]:
+        """Each frame's objects (a list per frame, strongest first, as ``Image.objects``),
+        made for every frame at the first read, over every core."""
+        return [f["objects"] for f in self._found_all()]
+
+    @property
+    def touches(self) -> List[List[Dict[str, Any]]]:
+        """Each frame's touches (a list per frame, as ``Image.touches``)."""
+        return [f["touches"] for f in self._found_all()]
+
+    def _found_all(self) -> List[Dict[str, Any]]:
+        if self._found is None:
+            self._found = self._r._found_of(self._frames, self._reference)
+        return self._found
 
     def __iter__(self) -> Any:
         return (self[i] for i in range(len(self)))
@@ -490,7 +523,8 @@ class Reconstructor:
             pixels, dv, alpha = self._native.pixels(v)
             reference = self._reference
             return Image(pixels, dv, alpha, self.extent,
-                         lambda: self._native.image(v, reference))
+                         lambda: self._native.image(v, reference),
+                         lambda: self._found_of(v[None, :], reference)[0])
         made = self._native.image(v, self._frames(v0))
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
@@ -509,6 +543,13 @@ class Reconstructor:
         rows, cols = self._native.grid[:2]
         return ImageBatch(self, frames, self._reference,
                           pixels.reshape(len(frames), rows, cols), dv, alpha)
+
+    def _found_of(self, frames: np.ndarray, reference: Any) -> List[Dict[str, Any]]:
+        """Each frame's objects and touches against ``reference`` (set again if another was
+        set since)."""
+        if self._reference is not reference:
+            self.set_reference(reference)
+        return json.loads(self._native.objects_batch(frames))
 
     def fit_background(self, v0: Any) -> Dict[str, Any]:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``

@@ -50,6 +50,8 @@ class Reconstructor:
     def set_reference(self, reference: F64) -> None: ...
     def pixels_batch(self, frames: F64) -> Tuple[F64, F64, F64]:
         """frames (n x K, V) against the reference set: pixels (n * rows * cols), dV, alphas."""
+    def objects_batch(self, frames: F64) -> str:
+        """frames (n x K, V) against the reference set: JSON, one {"objects", "touches"} each."""
     def pixels(self, frame: F64) -> Tuple[F64, F64, float]:
         """frame (K, V) against the reference set: pixels (rows x cols), dV (K, V), alpha."""
     def fit_background(self, reference: F64) -> str: ...

@@ -193,6 +193,13 @@ type BatchParts<'py> = (
     Bound<'py, PyArray1<f64>>,
 );
 
+/// One frame's objects and touches (`objects_batch`), as `image`'s summary names them.
+#[derive(serde::Serialize)]
+struct FoundSummary {
+    objects: Vec<ObjectSummary>,
+    touches: Vec<ObjectSummary>,
+}
+
 /// What `image` reports besides the arrays (the `et reconstruct --json` names).
 #[derive(serde::Serialize)]
 struct ImageSummary<'a> {
@@ -383,11 +390,11 @@ impl Reconstructor {
         let mut dv = Vec::with_capacity(n * k);
         let mut alpha = Vec::with_capacity(n);
         py.detach(|| {
-            for f in &frames {
-                let m = inner.frame_pixels(f)?;
-                grid.top_first_into(&m.pixels, 1.0 / sigma0, &mut pixels);
-                dv.extend(m.dv);
-                alpha.push(m.alpha);
+            let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
+            for m in inner.image_frames(&frames, false)? {
+                grid.top_first_into(&m.pixels.pixels, 1.0 / sigma0, &mut pixels);
+                dv.extend(m.pixels.dv);
+                alpha.push(m.pixels.alpha);
             }
             Ok::<(), et_recon::reconstructor::ImagingError>(())
         })
@@ -397,6 +404,45 @@ impl Reconstructor {
             array2(py, dv, n, k)?,
             PyArray1::from_vec(py, alpha),
         ))
+    }
+
+    /// The objects and touches of each of `frames` (n x K, V) against the reference set, as
+    /// `image` finds them (each object's pixels' noise made for them alone), over every
+    /// core: JSON, a list with one {"objects": [...], "touches": [...]} per frame.
+    fn objects_batch(
+        &mut self,
+        py: Python<'_>,
+        frames: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<String> {
+        let (values, n, k) = matrix(&frames, "V")?;
+        let frames: Vec<Vec<f32>> = values
+            .chunks(k.max(1))
+            .take(n)
+            .map(|f| f.iter().map(|&v| v as f32).collect())
+            .collect();
+        let inner = &mut self.inner;
+        let sigma0 = inner.imager().sigma0;
+        let imaged = py
+            .detach(|| {
+                let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
+                inner.image_frames(&frames, true)
+            })
+            .map_err(|e| refused(&e))?;
+        let found: Vec<FoundSummary> = imaged
+            .iter()
+            .map(|m| {
+                let found = m.found.as_ref();
+                FoundSummary {
+                    objects: (found.map_or(&[][..], |f| &f.objects).iter())
+                        .map(|o| ObjectSummary::of(o, sigma0))
+                        .collect(),
+                    touches: (found.map_or(&[][..], |f| &f.touches).iter())
+                        .map(|r| ObjectSummary::of_region(r, 1, sigma0))
+                        .collect(),
+                }
+            })
+            .collect();
+        json(&found)
     }
 
     /// Sets the untouched `reference` frames (n x K, V) every later frame is imaged against

@@ -109,6 +109,13 @@ def test_a_batch_is_its_frames_imaged_one_by_one(scene, recording):
         np.testing.assert_allclose(batch.pixels[i], alone.pixels, rtol=0, atol=1e-4 * peak,
                                    equal_nan=True)
         assert batch[i].objects == [pytest.approx(o, rel=1e-5) for o in alone.objects]
+        # Every frame's objects and touches at once (over every core), as each alone.
+        assert batch.objects[i] == [pytest.approx(o, rel=1e-5) for o in alone.objects]
+        # (A weak touch's peak and z to the f32 pixels' precision: 1e-4 of the image's peak.)
+        assert batch.touches[i] == [pytest.approx(t, rel=1e-4, abs=1e-4 * peak)
+                                    for t in alone.touches]
+        assert batch[i].touches == batch.touches[i]
+    assert len(batch.objects) == len(batch)
     with pytest.raises(et.EtError, match="K"):
         r.images(v[20:, :-1])
 

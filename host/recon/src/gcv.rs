@@ -4,7 +4,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::onestep::{DataSpace, ReconError, Spectrum};
+use crate::onestep::{DataSpace, ReconError, Spectrum, Weights, transposed_times};
 
 /// How alpha is chosen from a frame, all from A's spectrum (cheap once it is made).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,56 +56,106 @@ pub fn gcv_alpha(
     DataSpace::new(jac, s)?.gcv(dv, candidates)
 }
 
-/// A's spectrum seen by a frame: the nonzero eigenvalues, c = U^T dv for them, and the part
-/// of dv in A's null space (|dv_0|^2, V^2, and the null space's dimension).
-struct Seen<'a> {
-    e: &'a [f64],
+/// A's spectrum seen by a frame: c = U^T dv for the nonzero eigenvalues, and the part of dv
+/// in A's null space (|dv_0|^2, V^2).
+struct Seen {
     c: Vec<f64>,
     null_norm2: f64,
-    null_dim: usize,
 }
 
-/// `m`^T `v` for `m` (n x q) and `v` (n values): q values.
-fn transposed_times(m: &faer::Mat<f64>, v: &[f64]) -> Vec<f64> {
-    let v = faer::MatRef::from_column_major_slice(v, v.len(), 1);
-    let mut out = vec![0.0; m.ncols()];
-    faer::linalg::matmul::matmul(
-        faer::MatMut::from_column_major_slice_mut(&mut out, m.ncols(), 1),
-        faer::Accum::Replace,
-        m.transpose(),
-        v,
-        1.0,
-        faer::Par::Seq,
-    );
-    out
+/// The alpha rules' curves for one frame over the candidates (in the order given).
+struct Curves<'w> {
+    weights: &'w Weights,
+    /// c_i^2 (n values).
+    c2: Vec<f64>,
+    /// |dv - J R dv|^2 (V^2) per candidate.
+    residual: Vec<f64>,
+    /// |x_alpha|_P^2 per candidate.
+    norm: Vec<f64>,
+    /// K, the frame length.
+    k: f64,
+}
+
+impl Curves<'_> {
+    /// GCV(lambda) = K |dv - J R dv|^2 / (K - tr H)^2 per candidate.
+    fn gcv(&self) -> Vec<(f64, f64)> {
+        (self
+            .weights
+            .alphas
+            .iter()
+            .zip(&self.residual)
+            .zip(&self.weights.dof))
+        .map(|((&a, r), d)| (a, self.k * r / (d * d).max(f64::MIN_POSITIVE)))
+        .collect()
+    }
+
+    /// GCV's smallest finite score and every (alpha, score).
+    fn gcv_best(&self) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
+        let scores = self.gcv();
+        let best = scores
+            .iter()
+            .copied()
+            .filter(|s| s.1.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .ok_or(ReconError::Singular)?;
+        Ok((best.0, scores))
+    }
+
+    /// Whether each candidate's residual reaches the noise's: r >= noise (K - tr H) / K.
+    fn above(&self, noise: f64) -> Vec<bool> {
+        (self.residual.iter().zip(&self.weights.dof))
+            .map(|(r, d)| *r >= noise * d / self.k)
+            .collect()
+    }
+
+    /// |x_alpha_j - x_alpha_j+1|_P^2 between consecutive candidates (the last repeats the one
+    /// before).
+    fn steps(&self) -> Vec<f64> {
+        let (w, n) = (self.weights, self.weights.n);
+        let mut steps: Vec<f64> = (1..w.alphas.len())
+            .map(|j| {
+                let (s0, s1) = (&w.s[(j - 1) * n..j * n], &w.s[j * n..(j + 1) * n]);
+                (self.c2.iter().zip(s0).zip(s1))
+                    .map(|((c2, a), b)| c2 * (a - b) * (a - b))
+                    .sum()
+            })
+            .collect();
+        if let Some(&last) = steps.last() {
+            steps.push(last);
+        }
+        steps
+    }
+}
+
+/// The candidates in increasing order, with their indices in the list given.
+fn sorted(candidates: &[f64]) -> (Vec<usize>, Vec<f64>) {
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
+    let alphas = order.iter().map(|&i| candidates[i]).collect();
+    (order, alphas)
 }
 
 impl DataSpace {
     /// A's spectrum (made once: from the r x r problem, cheap when K is large) as seen by
     /// `dv`.
-    fn spectrum(&self, dv: &[f64]) -> Result<Seen<'_>, ReconError> {
+    fn spectrum(&self, dv: &[f64]) -> Result<Seen, ReconError> {
         let spectrum = self.eigen()?;
-        let k = self.frame_len();
-        let (Spectrum::Compact { e, .. } | Spectrum::Full { e, .. }) = spectrum;
-        // The same frame again (the alpha rules read it several times): its projections.
+        // The same frame again (a frame's image asks after its alpha): its projections.
         if let Ok(last) = self.last_seen.0.lock()
             && let Some((seen_dv, c, null_norm2)) = last.as_ref()
             && seen_dv.as_slice() == dv
         {
             return Ok(Seen {
-                e,
                 c: c.clone(),
                 null_norm2: *null_norm2,
-                null_dim: k.saturating_sub(e.len()),
             });
         }
         let key = dv.to_vec();
         let dv = &*self.whiten(dv);
-        let (e, c) = match spectrum {
-            // One matrix-vector product each (faer's, on the vector unit: every frame's alpha
-            // reads the spectrum several times).
-            Spectrum::Compact { e, w } => (e, transposed_times(w, &self.m_transpose(dv))),
-            Spectrum::Full { e, u } => (e, transposed_times(u, dv)),
+        let c = match spectrum {
+            // One matrix-vector product each (faer's, on the vector unit).
+            Spectrum::Compact { w, .. } => transposed_times(w, &self.m_transpose(dv)),
+            Spectrum::Full { u, .. } => transposed_times(u, dv),
         };
         let total: f64 = dv.iter().map(|v| v * v).sum();
         let seen: f64 = c.iter().map(|v| v * v).sum();
@@ -113,11 +163,42 @@ impl DataSpace {
         if let Ok(mut last) = self.last_seen.0.lock() {
             *last = Some((key, c.clone(), null_norm2));
         }
-        Ok(Seen {
-            e,
-            null_norm2,
-            null_dim: k.saturating_sub(e.len()),
-            c,
+        Ok(Seen { c, null_norm2 })
+    }
+
+    /// The frame `dv` checked (length, finite) and the alpha rules' curves over `candidates`.
+    fn curves<'w>(
+        &self,
+        dv: &[f64],
+        candidates: &[f64],
+        weights: &'w Weights,
+    ) -> Result<Curves<'w>, ReconError> {
+        let k = self.frame_len();
+        if dv.len() != k {
+            return Err(ReconError::FrameLength {
+                what: "frame",
+                got: dv.len(),
+                k,
+            });
+        }
+        if candidates.is_empty() {
+            return Err(ReconError::NoCandidates);
+        }
+        if dv.iter().any(|v| !v.is_finite()) {
+            return Err(ReconError::NonFinite);
+        }
+        let seen = self.spectrum(dv)?;
+        let c2: Vec<f64> = seen.c.iter().map(|c| c * c).collect();
+        // Two matrix-vector products (faer's, on the vector unit).
+        let mut residual = transposed_times(&weights.w2, &c2);
+        let norm = transposed_times(&weights.g, &c2);
+        residual.iter_mut().for_each(|r| *r += seen.null_norm2);
+        Ok(Curves {
+            weights,
+            c2,
+            residual,
+            norm,
+            k: k as f64,
         })
     }
 
@@ -136,115 +217,22 @@ impl DataSpace {
         dv: &[f64],
         candidates: &[f64],
     ) -> Result<(f64, Vec<(f64, f64)>), ReconError> {
-        let k = self.frame_len();
-        if dv.len() != k {
+        let weights = self.weights(candidates)?;
+        self.curves(dv, candidates, &weights)?.gcv_best()
+    }
+
+    /// The noise's residual sum_k var_k (whitened, V^2) for per-value variances `var_dv`.
+    fn noise_sum(&self, dv: &[f64], var_dv: &[f64]) -> Result<f64, ReconError> {
+        if var_dv.len() != dv.len() {
             return Err(ReconError::FrameLength {
-                what: "frame",
-                got: dv.len(),
-                k,
+                what: "noise variances",
+                got: var_dv.len(),
+                k: dv.len(),
             });
         }
-        if candidates.is_empty() {
-            return Err(ReconError::NoCandidates);
-        }
-        if dv.iter().any(|v| !v.is_finite()) {
-            return Err(ReconError::NonFinite);
-        }
-        let seen = self.spectrum(dv)?;
-        let scores: Vec<(f64, f64)> = candidates
-            .iter()
-            .map(|&alpha| {
-                let lambda = self.lambda(alpha);
-                // Null-space components are left whole (weight 1).
-                let (mut num, mut den) = (seen.null_norm2, seen.null_dim as f64);
-                for (e, ci) in seen.e.iter().zip(&seen.c) {
-                    let w = lambda / (e.max(0.0) + lambda);
-                    num += (w * ci).powi(2);
-                    den += w;
-                }
-                (alpha, k as f64 * num / (den * den).max(f64::MIN_POSITIVE))
-            })
-            .collect();
-        let best = scores
-            .iter()
-            .copied()
-            .filter(|s| s.1.is_finite())
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .ok_or(ReconError::Singular)?;
-        Ok((best.0, scores))
-    }
-
-    /// |dv - J R dv|^2 at each candidate alpha, V^2 (the residual of the one-step image),
-    /// from A's eigendecomposition.
-    fn residuals(&self, dv: &[f64], candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
-        let seen = self.spectrum(dv)?;
-        Ok(candidates
-            .iter()
-            .map(|&alpha| {
-                let lambda = self.lambda(alpha);
-                seen.null_norm2
-                    + seen
-                        .e
-                        .iter()
-                        .zip(&seen.c)
-                        .map(|(e, ci)| (lambda * ci / (e.max(0.0) + lambda)).powi(2))
-                        .sum::<f64>()
-            })
-            .collect())
-    }
-
-    /// K - tr(H_lambda) at each candidate, where H_lambda = A (A + lambda I)^-1 maps dv to the
-    /// fitted J R dv: the degrees of freedom left to the residual (pure noise of variance s^2
-    /// per value leaves a residual of s^2 (K - tr H) on average).
-    fn residual_dof(&self, candidates: &[f64]) -> Result<Vec<f64>, ReconError> {
-        // A's eigenvalues alone: no frame's projections needed.
-        let (Spectrum::Compact { e, .. } | Spectrum::Full { e, .. }) = self.eigen()?;
-        let null_dim = self.frame_len().saturating_sub(e.len());
-        Ok(candidates
-            .iter()
-            .map(|&alpha| {
-                let lambda = self.lambda(alpha);
-                null_dim as f64
-                    + e.iter()
-                        .map(|e| lambda / (e.max(0.0) + lambda))
-                        .sum::<f64>()
-            })
-            .collect())
-    }
-
-    /// |x_alpha|_P^2 = x^T P x of the one-step image x = P^-1 J^T (A + lambda I)^-1 dv at each
-    /// candidate (= sum_i e_i c_i^2 / (e_i + lambda)^2), and |x_alpha_j - x_alpha_j+1|_P^2
-    /// between consecutive candidates (the last repeats the one before).
-    fn image_norms(
-        &self,
-        dv: &[f64],
-        candidates: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>), ReconError> {
-        let seen = self.spectrum(dv)?;
-        let lambdas: Vec<f64> = candidates.iter().map(|&a| self.lambda(a)).collect();
-        let norm = |l: f64| -> f64 {
-            seen.e
-                .iter()
-                .zip(&seen.c)
-                .map(|(e, c)| e.max(0.0) * c * c / (e.max(0.0) + l).powi(2))
-                .sum()
-        };
-        let step = |l1: f64, l2: f64| -> f64 {
-            seen.e
-                .iter()
-                .zip(&seen.c)
-                .map(|(e, c)| {
-                    let e = e.max(0.0);
-                    e * c * c * (1.0 / (e + l1) - 1.0 / (e + l2)).powi(2)
-                })
-                .sum()
-        };
-        let norms = lambdas.iter().map(|&l| norm(l)).collect();
-        let mut steps: Vec<f64> = lambdas.windows(2).map(|w| step(w[0], w[1])).collect();
-        if let Some(&last) = steps.last() {
-            steps.push(last);
-        }
-        Ok((norms, steps))
+        Ok((self.whiten_variance(var_dv).iter())
+            .map(|v| v.max(0.0))
+            .sum())
     }
 
     /// Whether each candidate's residual reaches what noise of variance `var_dv` per value
@@ -259,24 +247,9 @@ impl DataSpace {
         var_dv: &[f64],
         candidates: &[f64],
     ) -> Result<Vec<bool>, ReconError> {
-        if var_dv.len() != dv.len() {
-            return Err(ReconError::FrameLength {
-                what: "noise variances",
-                got: var_dv.len(),
-                k: dv.len(),
-            });
-        }
-        let noise: f64 = (self.whiten_variance(var_dv).iter())
-            .map(|v| v.max(0.0))
-            .sum();
-        let residuals = self.residuals(dv, candidates)?;
-        let dof = self.residual_dof(candidates)?;
-        let k = dv.len() as f64;
-        Ok(residuals
-            .iter()
-            .zip(&dof)
-            .map(|(r, d)| *r >= noise * d / k)
-            .collect())
+        let weights = self.weights(candidates)?;
+        let curves = self.curves(dv, candidates, &weights)?;
+        Ok(curves.above(self.noise_sum(dv, var_dv)?))
     }
 
     /// alpha for the frame difference `dv` by `criterion` (see [`Criterion`]), with the noise
@@ -294,81 +267,30 @@ impl DataSpace {
         if candidates.is_empty() {
             return Err(ReconError::NoCandidates);
         }
+        // The curves over the candidates in increasing order (the rules walk alpha upwards).
+        let (_, alphas) = sorted(candidates);
+        let weights = self.weights(&alphas)?;
+        let curves = self.curves(dv, &alphas, &weights)?;
+        curves.gcv_best()?;
         match criterion {
-            Criterion::Gcv => self.choose_alpha(dv, var_dv, candidates),
+            Criterion::Gcv => self.choose_by(&curves, dv, var_dv),
             Criterion::Discrepancy => {
-                self.gcv(dv, candidates)?;
-                if var_dv.len() != dv.len() {
-                    return Err(ReconError::FrameLength {
-                        what: "noise variances",
-                        got: var_dv.len(),
-                        k: dv.len(),
-                    });
-                }
-                let noise: f64 = self
-                    .whiten_variance(var_dv)
-                    .iter()
-                    .map(|v| v.max(0.0))
-                    .sum();
-                let residuals = self.residuals(dv, candidates)?;
-                let dof = self.residual_dof(candidates)?;
-                let k = dv.len() as f64;
                 // The smallest alpha whose residual reaches the noise's (residuals grow with
                 // alpha); the largest when none does.
-                let mut order: Vec<usize> = (0..candidates.len()).collect();
-                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
-                Ok(order
+                let above = curves.above(self.noise_sum(dv, var_dv)?);
+                Ok(above
                     .iter()
-                    .find(|&&i| residuals[i] >= noise * dof[i] / k)
-                    .or(order.last())
-                    .map(|&i| candidates[i])
-                    .unwrap_or(candidates[0]))
+                    .position(|&a| a)
+                    .map_or(alphas[alphas.len() - 1], |i| alphas[i]))
             }
-            Criterion::LCurve => {
-                self.gcv(dv, candidates)?;
-                let mut order: Vec<usize> = (0..candidates.len()).collect();
-                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
-                let sorted: Vec<f64> = order.iter().map(|&i| candidates[i]).collect();
-                let residuals = self.residuals(dv, &sorted)?;
-                let (norms, _) = self.image_norms(dv, &sorted)?;
-                let tiny = f64::MIN_POSITIVE;
-                let x: Vec<f64> = residuals.iter().map(|r| 0.5 * r.max(tiny).ln()).collect();
-                let y: Vec<f64> = norms.iter().map(|n| 0.5 * n.max(tiny).ln()).collect();
-                // The corner: the largest curvature of (log residual, log image norm) against
-                // log alpha, by central differences.
-                let t: Vec<f64> = sorted.iter().map(|a| a.ln()).collect();
-                let mut best = (f64::NEG_INFINITY, sorted[sorted.len() / 2]);
-                for i in 1..sorted.len().saturating_sub(1) {
-                    let (h0, h1) = (t[i] - t[i - 1], t[i + 1] - t[i]);
-                    let d1 = |v: &[f64]| (v[i + 1] - v[i - 1]) / (h0 + h1);
-                    let d2 = |v: &[f64]| {
-                        2.0 * ((v[i + 1] - v[i]) / h1 - (v[i] - v[i - 1]) / h0) / (h0 + h1)
-                    };
-                    let (dx, dy, ddx, ddy) = (d1(&x), d1(&y), d2(&x), d2(&y));
-                    let kappa = (dx * ddy - ddx * dy) / (dx * dx + dy * dy).powf(1.5).max(tiny);
-                    if kappa.is_finite() && kappa > best.0 {
-                        best = (kappa, sorted[i]);
-                    }
-                }
-                Ok(best.1)
-            }
+            Criterion::LCurve => Ok(corner(&curves)),
             Criterion::CornerAboveFloor => {
-                let corner = self.alpha_by(Criterion::LCurve, dv, var_dv, candidates)?;
-                Ok(corner.max(self.choose_alpha(dv, var_dv, candidates)?))
+                Ok(corner(&curves).max(self.choose_by(&curves, dv, var_dv)?))
             }
-            Criterion::QuasiOptimality => {
-                self.gcv(dv, candidates)?;
-                let mut order: Vec<usize> = (0..candidates.len()).collect();
-                order.sort_by(|&a, &b| candidates[a].total_cmp(&candidates[b]));
-                let sorted: Vec<f64> = order.iter().map(|&i| candidates[i]).collect();
-                let (_, steps) = self.image_norms(dv, &sorted)?;
-                Ok(steps
-                    .iter()
-                    .zip(&sorted)
-                    .filter(|(s, _)| s.is_finite())
-                    .min_by(|a, b| a.0.total_cmp(b.0))
-                    .map_or(sorted[0], |(_, a)| *a))
-            }
+            Criterion::QuasiOptimality => Ok((curves.steps().iter().zip(&alphas))
+                .filter(|(s, _)| s.is_finite())
+                .min_by(|a, b| a.0.total_cmp(b.0))
+                .map_or(alphas[0], |(_, a)| *a)),
         }
     }
 
@@ -389,8 +311,15 @@ impl DataSpace {
         var_dv: &[f64],
         candidates: &[f64],
     ) -> Result<f64, ReconError> {
-        let (best, scores) = self.gcv(dv, candidates)?;
-        let admissible = self.above_noise(dv, var_dv, candidates)?;
+        let weights = self.weights(candidates)?;
+        let curves = self.curves(dv, candidates, &weights)?;
+        self.choose_by(&curves, dv, var_dv)
+    }
+
+    /// [`DataSpace::choose_alpha`] on a frame's curves.
+    fn choose_by(&self, curves: &Curves, dv: &[f64], var_dv: &[f64]) -> Result<f64, ReconError> {
+        let (best, scores) = curves.gcv_best()?;
+        let admissible = curves.above(self.noise_sum(dv, var_dv)?);
         let chosen = scores
             .iter()
             .zip(&admissible)
@@ -399,7 +328,34 @@ impl DataSpace {
             .min_by(|a, b| a.1.total_cmp(&b.1));
         Ok(match chosen {
             Some(s) => s.0,
-            None => candidates.iter().copied().fold(best, f64::max),
+            None => curves.weights.alphas.iter().copied().fold(best, f64::max),
         })
     }
+}
+
+/// The L-curve's corner over curves whose candidates increase: the largest curvature of
+/// (log residual, log image norm) against log alpha, by central differences (the middle
+/// candidate when no curvature is finite).
+fn corner(curves: &Curves) -> f64 {
+    let alphas = &curves.weights.alphas;
+    let tiny = f64::MIN_POSITIVE;
+    let x: Vec<f64> = curves
+        .residual
+        .iter()
+        .map(|r| 0.5 * r.max(tiny).ln())
+        .collect();
+    let y: Vec<f64> = curves.norm.iter().map(|n| 0.5 * n.max(tiny).ln()).collect();
+    let t: Vec<f64> = alphas.iter().map(|a| a.ln()).collect();
+    let mut best = (f64::NEG_INFINITY, alphas[alphas.len() / 2]);
+    for i in 1..alphas.len().saturating_sub(1) {
+        let (h0, h1) = (t[i] - t[i - 1], t[i + 1] - t[i]);
+        let d1 = |v: &[f64]| (v[i + 1] - v[i - 1]) / (h0 + h1);
+        let d2 = |v: &[f64]| 2.0 * ((v[i + 1] - v[i]) / h1 - (v[i] - v[i - 1]) / h0) / (h0 + h1);
+        let (dx, dy, ddx, ddy) = (d1(&x), d1(&y), d2(&x), d2(&y));
+        let kappa = (dx * ddy - ddx * dy) / (dx * dx + dy * dy).powf(1.5).max(tiny);
+        if kappa.is_finite() && kappa > best.0 {
+            best = (kappa, alphas[i]);
+        }
+    }
+    best.1
 }

@@ -55,13 +55,13 @@ pub use imager::Imager;
 pub use metrics::{Merit, Metrics, TouchMatch, match_touches, merit, metrics};
 pub use onestep::{DataSpace, OneStep, ReconError};
 pub use operator::{FrameOperator, SquaredRows};
-pub use pixels::PixelGrid;
+pub use pixels::{PixelGrid, PixelOperator};
 pub use reconstructor::{
-    AlphaRule, FrameNoise, Image, ImagingError, MeshPlan, Method, NoiseSource, Reconstructor,
-    Reference, Spec,
+    AlphaRule, Found, FrameNoise, FrameObjects, FramePixels, Image, ImagingError, MeshPlan, Method,
+    NoiseSource, Reconstructor, Reference, Spec,
 };
 pub use segment::{Class, SEGMENT_LEVEL, segment};
 pub use touches::{
     Object, PROMINENCE, PixelNoise, Region, TOUCH_Z, above_noise, default_threshold, objects,
-    regions, touch_rule, touches,
+    objects_with, regions, touch_rule, touches,
 };

@@ -28,7 +28,9 @@ use faer::linalg::solvers::{Llt, SolveCore};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use nalgebra::DMatrix;
 
+mod candidates;
 mod error;
+pub(crate) use candidates::Weights;
 pub use error::ReconError;
 
 /// The data-space quantities of one (Jacobian, NOSER exponent s), computed once and shared by
@@ -38,19 +40,25 @@ pub use error::ReconError;
 /// the transfer impedances, not K, the frame length: G P^-1 (r x T), H = G P^-1 G^T (r x r, a
 /// symmetric rank-T update of its lower triangle: faer's BLAS-3 kernel) and A = M H M^T =
 /// J P^-1 J^T (K x K).
-/// A frame dV and its projections c onto A's eigenvectors with the rest's squared norm, kept
-/// by the data space for the next read of the same frame (a clone starts empty).
-#[derive(Debug, Default)]
-pub(crate) struct LastSeen(pub(crate) std::sync::Mutex<Option<Projected>>);
+/// What a data space keeps from one call for the next (a frame's projections, the
+/// candidates' weights): made on use, replaced by the next; a clone starts empty.
+#[derive(Debug)]
+pub(crate) struct Kept<T>(pub(crate) std::sync::Mutex<Option<T>>);
 
-/// A frame dV, its projections c and the rest's squared norm.
-type Projected = (Vec<f64>, Vec<f64>, f64);
+impl<T> Default for Kept<T> {
+    fn default() -> Self {
+        Self(std::sync::Mutex::new(None))
+    }
+}
 
-impl Clone for LastSeen {
+impl<T> Clone for Kept<T> {
     fn clone(&self) -> Self {
         Self::default()
     }
 }
+
+/// A frame dV, its projections c onto A's eigenvectors and the rest's squared norm.
+type Projected = (Vec<f64>, Vec<f64>, f64);
 
 #[derive(Clone, Debug)]
 pub struct DataSpace {
@@ -78,7 +86,24 @@ pub struct DataSpace {
     root: std::sync::OnceLock<Option<NormalRoot>>,
     /// The last frame's projections onto A's eigenvectors (the alpha rules read them
     /// several times a frame).
-    pub(crate) last_seen: LastSeen,
+    pub(crate) last_seen: Kept<Projected>,
+    /// The alpha rules' weights for the last candidate list asked.
+    pub(crate) weights: Kept<std::sync::Arc<Weights>>,
+}
+
+/// `m`^T `v` for `m` (n x q) and `v` (n values): q values.
+pub(crate) fn transposed_times(m: &faer::Mat<f64>, v: &[f64]) -> Vec<f64> {
+    let v = faer::MatRef::from_column_major_slice(v, v.len(), 1);
+    let mut out = vec![0.0; m.ncols()];
+    faer::linalg::matmul::matmul(
+        faer::MatMut::from_column_major_slice_mut(&mut out, m.ncols(), 1),
+        faer::Accum::Replace,
+        m.transpose(),
+        v,
+        1.0,
+        faer::Par::Seq,
+    );
+    out
 }
 
 /// N = M^T M (r x r) for the K rows of M (`combination`, over r columns).
@@ -277,7 +302,8 @@ impl DataSpace {
             h,
             eigen: std::sync::OnceLock::new(),
             root: std::sync::OnceLock::new(),
-            last_seen: LastSeen::default(),
+            last_seen: Kept::default(),
+            weights: Kept::default(),
         }
     }
 

@@ -322,11 +322,13 @@ impl FrameOperator {
     #[must_use]
     pub fn dense(&self) -> DMatrix<f32> {
         let core = self.core_dense();
-        DMatrix::from_fn(self.rows(), self.frame_len(), |i, k| {
-            (0..self.rank())
-                .map(|j| f64::from(self.left.get(i, j)) * core[(j, k)])
-                .sum::<f64>() as f32
-        })
+        let left = Mat::from_fn(self.rows(), self.rank(), |i, j| {
+            f64::from(self.left.get(i, j))
+        });
+        // One matrix product (faer's, blocked on the vector unit: rows x rank x K
+        // multiply-adds, 3 300 x 496 x 2 356 for 32 electrodes onto the pixels).
+        let p = crate::onestep::product(left.as_ref(), core.as_ref());
+        DMatrix::from_fn(self.rows(), self.frame_len(), |i, k| p[(i, k)] as f32)
     }
 
     /// C (q x K) as stored: C' M^T when M^T is kept.

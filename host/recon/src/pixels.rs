@@ -2,7 +2,7 @@
 
 use crate::mesh::Mesh;
 use crate::onestep::OneStep;
-use crate::operator::FrameOperator;
+use crate::operator::{FrameOperator, SquaredRows};
 
 /// A pixel grid over a mesh: which triangle each pixel centre lies in.
 #[derive(Clone, Debug)]
@@ -131,6 +131,26 @@ impl PixelGrid {
         })
     }
 
+    /// The reconstruction matrix onto the triangles under the pixels, each once, and where
+    /// each pixel reads its value: a frame costs the distinct triangles' rows, not one row
+    /// per pixel (four pixels or more to a triangle at 750 triangles on 64 x 64 pixels).
+    #[must_use]
+    pub fn project_under(&self, r: &OneStep) -> PixelOperator {
+        let mut under: Vec<usize> = self.triangle.iter().flatten().copied().collect();
+        under.sort_unstable();
+        under.dedup();
+        let at = self
+            .triangle
+            .iter()
+            .map(|t| t.and_then(|t| under.binary_search(&t).ok()))
+            .collect();
+        PixelOperator {
+            rows: FrameOperator::of_rows(r, &under),
+            at,
+            squares: std::sync::OnceLock::new(),
+        }
+    }
+
     /// The reconstruction matrix onto the pixels (one row per pixel inside the sheet, in
     /// pixel order), as a [`FrameOperator`].
     #[must_use]
@@ -189,5 +209,69 @@ impl PixelGrid {
             // A short image (not of this grid) is padded with NaN, as before.
             out.extend(std::iter::repeat_n(f64::NAN, self.width - row.len()));
         }
+    }
+}
+
+/// A frame onto the pixels through the triangles under them ([`PixelGrid::project_under`]).
+#[derive(Clone, Debug)]
+pub struct PixelOperator {
+    /// One row per distinct triangle under a pixel (in increasing triangle order).
+    rows: FrameOperator,
+    /// Each pixel's row of `rows` (the grid's order), None outside the sheet.
+    at: Vec<Option<usize>>,
+    /// `rows`' entries squared (each pixel's noise), made on first use.
+    squares: std::sync::OnceLock<SquaredRows>,
+}
+
+impl PixelOperator {
+    /// The image of `dv` (K values, V) on the pixels, the grid's order (None outside).
+    ///
+    /// # Errors
+    /// As [`FrameOperator::image`].
+    pub fn image(&self, dv: &[f64]) -> Result<Vec<Option<f64>>, crate::onestep::ReconError> {
+        let rows = self.rows.image(dv)?;
+        Ok(self
+            .at
+            .iter()
+            .map(|i| i.and_then(|i| rows.get(i).copied().map(f64::from)))
+            .collect())
+    }
+
+    /// Each pixel's noise standard deviation (Delta sigma, S per square) under the channels'
+    /// variances `var` (K values, V^2), from the operator's rows squared (made at the first
+    /// call, kept): asked pixel by pixel, each triangle's once.
+    #[must_use]
+    pub fn noise(&self, var: &[f64]) -> RowNoise<'_> {
+        RowNoise {
+            squares: self.squares.get_or_init(|| SquaredRows::of(&self.rows)),
+            at: &self.at,
+            var: var.iter().map(|&v| v as f32).collect(),
+            made: vec![None; self.rows.rows()],
+        }
+    }
+}
+
+/// Pixels' noise through [`PixelOperator::noise`] (a [`crate::PixelNoise`]).
+#[derive(Debug)]
+pub struct RowNoise<'a> {
+    squares: &'a SquaredRows,
+    at: &'a [Option<usize>],
+    var: Vec<f32>,
+    /// Each row's noise once made.
+    made: Vec<Option<f64>>,
+}
+
+impl RowNoise<'_> {
+    /// Pixel p's noise standard deviation (None outside the sheet).
+    pub fn sd(&mut self, p: usize) -> Option<f64> {
+        let row = self.at.get(p).copied().flatten()?;
+        if let Some(sd) = self.made.get(row).copied().flatten() {
+            return Some(sd);
+        }
+        let sd = self.squares.sd(row, &self.var)?;
+        if let Some(slot) = self.made.get_mut(row) {
+            *slot = Some(sd);
+        }
+        Some(sd)
     }
 }

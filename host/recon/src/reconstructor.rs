@@ -72,6 +72,14 @@ pub enum ImagingError {
          the frame"
     )]
     NoReference,
+    /// One frame of many failed ([`Reconstructor::image_frames`]).
+    #[error("frame {index} (0-based, of those given): {source}")]
+    Frame {
+        /// Its place among the frames given.
+        index: usize,
+        /// Why.
+        source: Box<ImagingError>,
+    },
 }
 
 /// A reconstruction set up for one sheet, protocol, mesh, method and alpha rule (see the
@@ -453,17 +461,14 @@ impl Reconstructor {
         }
     }
 
-    /// As [`Reconstructor::image`], from dV = V - V_0 (V) and its noise variance per channel
-    /// (V^2). When the noise is unknown (all zeros: one reference frame), it is estimated from
-    /// dV itself ([`Reconstructor::redundancy_noise`]).
-    ///
-    /// # Errors
-    /// As [`Reconstructor::image`].
-    pub fn image_dv(&mut self, dv: Vec<f64>, var_dv: &[f64]) -> Result<Image, ImagingError> {
-        let estimated = self.estimated_noise(&dv, var_dv);
+    /// The noise variance of `dv`'s channels (V^2) the frame is imaged with: `var_dv`, or
+    /// when that is unknown (all zeros: one reference frame) the estimate from dV itself
+    /// ([`Reconstructor::redundancy_noise`]); and the frame's noise as reported.
+    fn frame_noise(&self, dv: &[f64], var_dv: &[f64]) -> (Vec<f64>, FrameNoise) {
+        let estimated = self.estimated_noise(dv, var_dv);
         let var_dv = match estimated {
-            Some(n) => &vec![n.variance; dv.len()][..],
-            None => var_dv,
+            Some(n) => vec![n.variance; dv.len()],
+            None => var_dv.to_vec(),
         };
         let ms = var_dv.iter().map(|v| v.max(0.0)).sum::<f64>() / var_dv.len().max(1) as f64;
         let noise = FrameNoise {
@@ -474,6 +479,18 @@ impl Reconstructor {
                 None => NoiseSource::Unknown,
             },
         };
+        (var_dv, noise)
+    }
+
+    /// As [`Reconstructor::image`], from dV = V - V_0 (V) and its noise variance per channel
+    /// (V^2). When the noise is unknown (all zeros: one reference frame), it is estimated from
+    /// dV itself ([`Reconstructor::redundancy_noise`]).
+    ///
+    /// # Errors
+    /// As [`Reconstructor::image`].
+    pub fn image_dv(&mut self, dv: Vec<f64>, var_dv: &[f64]) -> Result<Image, ImagingError> {
+        let (var_dv, noise) = self.frame_noise(&dv, var_dv);
+        let var_dv = &var_dv[..];
         let var = self.imaging_variance(var_dv, &dv);
         let solved = match self.method {
             Method::Greit { radius } => self.solve_greit(radius, &dv, var_dv, &var)?,
@@ -518,10 +535,11 @@ struct Matrix {
     /// for 32 electrodes at 8 000 triangles). The live pipeline, which images onto the pixels
     /// through `pixel_operator`, never needs it.
     operator: std::sync::OnceLock<FrameOperator>,
-    /// The f32 operator onto the pixels inside the sheet, made at the second frame imaged
-    /// with this matrix by [`Reconstructor::frame_pixels`], or by any image when the values
-    /// on the mesh are not kept ([`Reconstructor::keep_mesh_values`]).
-    pixels: std::sync::OnceLock<FrameOperator>,
+    /// The f32 operator onto the pixels inside the sheet (through the triangles under them),
+    /// made at the second frame imaged with this matrix by [`Reconstructor::frame_pixels`],
+    /// or by any image when the values on the mesh are not kept
+    /// ([`Reconstructor::keep_mesh_values`]).
+    pixels: std::sync::OnceLock<crate::pixels::PixelOperator>,
     /// Frames imaged with it.
     frames: usize,
 }
@@ -543,10 +561,12 @@ impl Matrix {
     }
 }
 
+mod batch;
 mod frame;
 mod model_error;
 mod solve;
 mod stream;
+pub use batch::{Found, FrameObjects};
 pub use frame::*;
 use model_error::mismatch_and_weights;
 pub use model_error::{MISMATCH_FACTOR, Weighting};

@@ -67,10 +67,8 @@ impl Redundancy {
                 mtdv[p] += c * v;
             }
         }
-        let seen: f64 = self
-            .basis
-            .col_iter()
-            .map(|b| b.iter().zip(&mtdv).map(|(a, c)| a * c).sum::<f64>().powi(2))
+        let seen: f64 = (crate::onestep::transposed_times(&self.basis, &mtdv).iter())
+            .map(|p| p * p)
             .sum();
         let total: f64 = dv.iter().map(|v| v * v).sum();
         Some(RedundancyNoise {

@@ -6,12 +6,33 @@ use crate::pixels::PixelGrid;
 
 /// The largest value of an image when it is positive and finite.
 fn positive_max(image: &[Option<f64>]) -> Option<f64> {
-    let max = image
-        .iter()
-        .flatten()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
+    let max = largest_of(image, |v| v);
     (max.is_finite() && max > 0.0).then_some(max)
+}
+
+/// The largest `f(v)` over an image's values (NaN skipped, -inf for none), in eight running
+/// maxima: no chain of comparisons each waiting for the one before (a pass over 4 096 pixels
+/// is read several times a frame).
+fn largest_of(image: &[Option<f64>], f: impl Fn(f64) -> f64) -> f64 {
+    let mut m = [f64::NEG_INFINITY; 8];
+    let (runs, rest) = image.as_chunks::<8>();
+    for run in runs {
+        for j in 0..8 {
+            if let Some(v) = run[j] {
+                let x = f(v);
+                if x > m[j] {
+                    m[j] = x;
+                }
+            }
+        }
+    }
+    for v in rest.iter().flatten() {
+        let x = f(*v);
+        if x > m[0] {
+            m[0] = x;
+        }
+    }
+    m.into_iter().fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The ROI threshold f of docs/method.md §6 [3.10] the reference study used for a protocol: 0.10 for
@@ -225,11 +246,23 @@ fn touches_with(
     image: &[Option<f64>],
     f: f64,
     prominence: f64,
+    sd: impl PixelNoise,
+) -> Vec<Region> {
+    match positive_max(image) {
+        Some(max) => touches_below(grid, image, max, f, prominence, sd),
+        None => Vec::new(),
+    }
+}
+
+/// [`touches_with`] of an image whose largest value, positive and finite, is `max`.
+fn touches_below(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    max: f64,
+    f: f64,
+    prominence: f64,
     mut sd: impl PixelNoise,
 ) -> Vec<Region> {
-    let Some(max) = positive_max(image) else {
-        return Vec::new();
-    };
     let mut order: Vec<(usize, f64)> = image
         .iter()
         .enumerate()
@@ -419,26 +452,45 @@ pub fn objects(
     f: f64,
     z: f64,
 ) -> Vec<Object> {
-    let largest = image.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    objects_with(grid, image, |p| sd.get(p).copied().flatten(), f, z)
+}
+
+/// [`objects`] with each pixel's noise from `sd`, asked for the pixels of a region alone (a
+/// caller that pays for each pixel's noise pays for those).
+#[must_use]
+pub fn objects_with(
+    grid: &PixelGrid,
+    image: &[Option<f64>],
+    mut sd: impl PixelNoise,
+    f: f64,
+    z: f64,
+) -> Vec<Object> {
+    // Each sign's largest value.
+    let (rising, falling) = (largest_of(image, |v| v), largest_of(image, |v| -v));
+    let largest = rising.max(falling);
     if !(largest > 0.0 && largest.is_finite()) {
         return Vec::new();
     }
     let mut out = Vec::new();
-    for sign in [1i8, -1] {
-        let signed: Vec<Option<f64>> = image
-            .iter()
-            .map(|v| v.map(|v| f64::from(sign) * v))
-            .collect();
-        let Some(max) = positive_max(&signed) else {
+    for (sign, max) in [(1i8, rising), (-1, falling)] {
+        if max <= 0.0 {
             continue;
-        };
+        }
         // touches() thresholds at f times this sign's maximum: rescale to the largest magnitude.
         let f_here = f * largest / max;
         if f_here > 1.0 {
             continue;
         }
+        let negated: Vec<Option<f64>>;
+        let signed = if sign > 0 {
+            image
+        } else {
+            negated = image.iter().map(|v| v.map(|v| -v)).collect();
+            &negated
+        };
+        let found = touches_below(grid, signed, max, f_here, PROMINENCE, Borrowed(&mut sd));
         out.extend(
-            above_noise(&touches(grid, &signed, sd, f_here, PROMINENCE), z)
+            above_noise(&found, z)
                 .into_iter()
                 .map(|region| Object { sign, region }),
         );
@@ -456,6 +508,25 @@ pub fn objects(
     out.retain(|o| mass(o) >= OBJECT_MASS_FRACTION * heaviest);
     out.sort_by(|a, b| b.region.peak.total_cmp(&a.region.peak));
     out
+}
+
+impl PixelNoise for crate::pixels::RowNoise<'_> {
+    fn sd(&mut self, p: usize) -> Option<f64> {
+        crate::pixels::RowNoise::sd(self, p)
+    }
+}
+
+/// A pixel noise lent to one call and used again after it.
+struct Borrowed<'a, N>(&'a mut N);
+
+impl<N: PixelNoise> PixelNoise for Borrowed<'_, N> {
+    fn sd(&mut self, p: usize) -> Option<f64> {
+        self.0.sd(p)
+    }
+
+    fn floor(&mut self, p: usize) -> Option<f64> {
+        self.0.floor(p)
+    }
 }
 
 /// The regions that reach at least `z` times their pixels' noise somewhere (their `z`, from

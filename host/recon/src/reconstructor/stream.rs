@@ -102,13 +102,9 @@ impl Reconstructor {
         let alpha = match self.alpha {
             super::AlphaRule::Fixed(a) => a,
             _ => {
-                let var_dv = &reference.var_dv;
-                let var_dv = match self.estimated_noise(&dv, var_dv) {
-                    Some(n) => &vec![n.variance; dv.len()][..],
-                    None => var_dv,
-                };
-                let var = self.imaging_variance(var_dv, &dv);
-                self.gauss_newton_alpha(&dv, var_dv, &var)?
+                let (var_dv, _) = self.frame_noise(&dv, &reference.var_dv);
+                let var = self.imaging_variance(&var_dv, &dv);
+                self.gauss_newton_alpha(&dv, &var_dv, &var)?
             }
         };
         self.matrix_at(alpha)?;
@@ -131,15 +127,11 @@ impl super::Matrix {
         grid: &PixelGrid,
         dv: &[f64],
     ) -> Result<Vec<Option<f64>>, ReconError> {
-        let inside = self
-            .pixels
-            .get_or_init(|| grid.project(&self.recon))
-            .image(dv)?;
-        let mut values = inside.into_iter();
-        Ok(grid
-            .triangle
-            .iter()
-            .map(|t| t.and_then(|_| values.next().map(f64::from)))
-            .collect())
+        self.pixel_operator(grid).image(dv)
+    }
+
+    /// The f32 operator onto `grid`'s pixels, made at the first call.
+    pub(super) fn pixel_operator(&self, grid: &PixelGrid) -> &crate::pixels::PixelOperator {
+        self.pixels.get_or_init(|| grid.project_under(&self.recon))
     }
 }

@@ -166,3 +166,61 @@ fn close(a: &[Option<f64>], b: &[Option<f64>], tol: f64) {
         }
     }
 }
+
+/// Many frames at once (over every core): each frame's pixels, alpha, noise, objects and
+/// touches as the frame imaged whole and alone finds them (the objects' pixels' noise made
+/// through the f32 operator's squared rows, to f32's precision), in the frames' order; a
+/// frame that cannot be imaged named by its place.
+#[test]
+fn a_batch_of_frames_finds_what_each_frame_alone_finds() {
+    let scales = [0.5, 0.05, 0.3, 0.5, 0.2, 0.05];
+    let (mut recon, v0, frames) = disc_and_bump(
+        AlphaRule::Chosen(et_recon::gcv::Criterion::CornerAboveFloor),
+        &scales,
+    );
+    let v0b: Vec<f32> = v0.iter().map(|v| v + 1e-6).collect();
+    let reference = Reference::from_frames(&[v0, v0b]).unwrap();
+    let (mut alone, _, _) = disc_and_bump(
+        AlphaRule::Chosen(et_recon::gcv::Criterion::CornerAboveFloor),
+        &[],
+    );
+    recon.set_reference(reference.clone()).unwrap();
+    alone.set_reference(reference).unwrap();
+    let views: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
+    let batch = recon.image_frames(&views, true).unwrap();
+    assert_eq!(batch.len(), frames.len());
+    let grid = recon.grid().clone();
+    for (k, (frame, got)) in frames.iter().zip(&batch).enumerate() {
+        let whole = alone.image_frame(frame).unwrap();
+        assert_eq!(got.pixels.alpha, whole.alpha, "frame {k}");
+        assert_eq!(got.noise, whole.noise, "frame {k}");
+        let peak = (whole.pixels.iter().flatten()).fold(0.0f64, |m, v| m.max(v.abs()));
+        close(&got.pixels.pixels, &whole.pixels, 1e-4 * peak);
+        let found = got.found.as_ref().expect("objects were asked for");
+        let objects = alone.objects(&whole);
+        assert!(!objects.is_empty(), "frame {k}: the bump is an object");
+        assert_eq!(found.objects.len(), objects.len(), "frame {k}");
+        for (a, b) in found.objects.iter().zip(&objects) {
+            assert_eq!(a.sign, b.sign, "frame {k}");
+            let moved = (a.region.centroid[0] - b.region.centroid[0])
+                .hypot(a.region.centroid[1] - b.region.centroid[1]);
+            assert!(moved <= grid.size, "frame {k}: {moved} m");
+            let (za, zb) = (a.region.z.unwrap(), b.region.z.unwrap());
+            assert!(
+                (za - zb).abs() <= 1e-3 * zb,
+                "frame {k}: z {za} against {zb}"
+            );
+        }
+        assert_eq!(found.touches.len(), whole.touches.len(), "frame {k}");
+    }
+    // Without objects: the pixels alone.
+    let bare = recon.image_frames(&views[..2], false).unwrap();
+    assert!(bare.iter().all(|f| f.found.is_none()));
+    // A frame of the wrong length among good ones: named by its place.
+    let short = &frames[1][1..];
+    let e = recon
+        .image_frames(&[views[0], short, views[2]], true)
+        .unwrap_err();
+    assert!(matches!(e, ImagingError::Frame { index: 1, .. }), "{e:?}");
+    assert!(e.to_string().contains("frame 1"), "{e}");
+}

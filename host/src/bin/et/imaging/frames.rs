@@ -194,23 +194,35 @@ pub(super) fn each_frame(
     let sigma0 = recon.imager().sigma0;
     let (grid, n) = (recon.grid().clone(), chosen.len());
     let mut stack: Vec<f64> = Vec::new();
-    let mut last = None;
-    for (i, v) in chosen {
-        let image = recon.image_frame(v).with_context(|| format!("frame {i}"))?;
-        let line = FrameLine {
-            frame: *i,
-            alpha: image.alpha,
-            noise: image.noise,
-            objects: (recon.objects(&image).iter())
-                .map(|o| et_recon::touches::ObjectSummary::of(o, sigma0))
-                .collect(),
-            found_touches: image.touches.iter().map(RegionSummary::of).collect(),
-        };
-        out!("{}", serde_json::to_string(&line)?);
-        if args.image_out.is_some() {
-            stack.extend(grid.top_first(&image.pixels, 1.0 / sigma0));
+    // In runs (a recording's frames need not all be held imaged at once), each run over
+    // every core.
+    for run in chosen.chunks(FRAMES_AT_ONCE) {
+        let frames: Vec<&[f32]> = run.iter().map(|(_, v)| v.as_slice()).collect();
+        let imaged = recon.image_frames(&frames, true).map_err(|e| match e {
+            et_recon::ImagingError::Frame { index, source } => {
+                anyhow::anyhow!("frame {}: {source}", run[index].0)
+            }
+            e => e.into(),
+        })?;
+        for ((i, _), image) in run.iter().zip(imaged) {
+            let found = image.found.unwrap_or_else(|| et_recon::Found {
+                objects: Vec::new(),
+                touches: Vec::new(),
+            });
+            let line = FrameLine {
+                frame: *i,
+                alpha: image.pixels.alpha,
+                noise: image.noise,
+                objects: (found.objects.iter())
+                    .map(|o| et_recon::touches::ObjectSummary::of(o, sigma0))
+                    .collect(),
+                found_touches: found.touches.iter().map(RegionSummary::of).collect(),
+            };
+            out!("{}", serde_json::to_string(&line)?);
+            if args.image_out.is_some() {
+                grid.top_first_into(&image.pixels.pixels, 1.0 / sigma0, &mut stack);
+            }
         }
-        last = Some(image);
     }
     let took = clock.elapsed().as_secs_f64();
     eprintln!(
@@ -227,5 +239,12 @@ pub(super) fn each_frame(
             grid.width
         );
     }
-    last.ok_or_else(|| anyhow::anyhow!("no frames to image"))
+    // The last frame's whole image, for --out.
+    let (i, last) = chosen.last().context("no frames to image")?;
+    recon
+        .image_frame(last)
+        .with_context(|| format!("frame {i}"))
 }
+
+/// Frames imaged at once by `--all` and `--range` (their pixels held until written).
+const FRAMES_AT_ONCE: usize = 512;
