@@ -193,6 +193,25 @@ type BatchParts<'py> = (
     Bound<'py, PyArray1<f64>>,
 );
 
+/// Frames a batch images at once (their pixels held until copied out).
+const FRAMES_AT_ONCE: usize = 64;
+
+/// A batch's error with its frame's place among all the frames, from its place in run `r`.
+fn in_run(
+    e: et_recon::reconstructor::ImagingError,
+    r: usize,
+) -> et_recon::reconstructor::ImagingError {
+    match e {
+        et_recon::reconstructor::ImagingError::Frame { index, source } => {
+            et_recon::reconstructor::ImagingError::Frame {
+                index: r * FRAMES_AT_ONCE + index,
+                source,
+            }
+        }
+        e => e,
+    }
+}
+
 /// One frame's objects and touches (`objects_batch`), as `image`'s summary names them.
 #[derive(serde::Serialize)]
 struct FoundSummary {
@@ -357,15 +376,16 @@ impl Reconstructor {
     ) -> PyResult<PixelParts<'py>> {
         let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
         let inner = &mut self.inner;
-        let made = py
-            .detach(|| inner.frame_pixels(&frame))
+        let (w, h) = (inner.grid().width, inner.grid().height);
+        let sigma0 = inner.imager().sigma0;
+        let mut picture = vec![f64::NAN; w * h];
+        let (dv, alpha) = py
+            .detach(|| inner.frame_picture(&frame, 1.0 / sigma0, &mut picture))
             .map_err(|e| refused(&e))?;
-        let (grid, sigma0) = (self.inner.grid(), self.inner.imager().sigma0);
-        let (w, h) = (grid.width, grid.height);
         Ok((
-            array2(py, grid.top_first(&made.pixels, 1.0 / sigma0), h, w)?,
-            PyArray1::from_vec(py, made.dv),
-            made.alpha,
+            array2(py, picture, h, w)?,
+            PyArray1::from_vec(py, dv),
+            alpha,
         ))
     }
 
@@ -386,24 +406,32 @@ impl Reconstructor {
         let inner = &mut self.inner;
         let (grid, sigma0) = (inner.grid().clone(), inner.imager().sigma0);
         let (w, h) = (grid.width, grid.height);
-        let mut pixels = Vec::with_capacity(n * w * h);
+        // The stack in NumPy's own memory: it asks the kernel for huge pages for large
+        // arrays, where a Rust Vec's fresh pages cost a fault each 4 kB (8 a 64 x 64 frame,
+        // as much as the frame itself at 750 triangles).
+        let stack = numpy::PyArray1::<f64>::zeros(py, n * w * h, false);
         let mut dv = Vec::with_capacity(n * k);
         let mut alpha = Vec::with_capacity(n);
-        py.detach(|| {
-            let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
-            for m in inner.image_frames(&frames, false)? {
-                grid.top_first_into(&m.pixels.pixels, 1.0 / sigma0, &mut pixels);
-                dv.extend(m.pixels.dv);
-                alpha.push(m.pixels.alpha);
-            }
-            Ok::<(), et_recon::reconstructor::ImagingError>(())
-        })
-        .map_err(|e| refused(&e))?;
-        Ok((
-            PyArray1::from_vec(py, pixels),
-            array2(py, dv, n, k)?,
-            PyArray1::from_vec(py, alpha),
-        ))
+        {
+            let mut stack = stack.readwrite();
+            let pixels = stack.as_slice_mut().map_err(|e| refused(&e))?;
+            py.detach(|| {
+                let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
+                let mut out = pixels.chunks_mut((w * h).max(1));
+                // In runs: each run's images are held until copied out.
+                for (r, run) in frames.chunks(FRAMES_AT_ONCE).enumerate() {
+                    let imaged = inner.image_frames(run, false).map_err(|e| in_run(e, r))?;
+                    for (m, to) in imaged.into_iter().zip(&mut out) {
+                        grid.top_first_onto(&m.pixels.pixels, 1.0 / sigma0, to);
+                        dv.extend(m.pixels.dv);
+                        alpha.push(m.pixels.alpha);
+                    }
+                }
+                Ok::<(), et_recon::reconstructor::ImagingError>(())
+            })
+            .map_err(|e| refused(&e))?;
+        }
+        Ok((stack, array2(py, dv, n, k)?, PyArray1::from_vec(py, alpha)))
     }
 
     /// The objects and touches of each of `frames` (n x K, V) against the reference set, as
@@ -425,13 +453,21 @@ impl Reconstructor {
         let imaged = py
             .detach(|| {
                 let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
-                inner.image_frames(&frames, true)
+                let mut imaged = Vec::with_capacity(frames.len());
+                for (r, run) in frames.chunks(FRAMES_AT_ONCE).enumerate() {
+                    // Each frame's objects kept, its pixels dropped.
+                    let found = (inner.image_frames(run, true).map_err(|e| in_run(e, r))?)
+                        .into_iter()
+                        .map(|m| m.found);
+                    imaged.extend(found);
+                }
+                Ok::<_, et_recon::reconstructor::ImagingError>(imaged)
             })
             .map_err(|e| refused(&e))?;
         let found: Vec<FoundSummary> = imaged
             .iter()
-            .map(|m| {
-                let found = m.found.as_ref();
+            .map(|found| {
+                let found = found.as_ref();
                 FoundSummary {
                     objects: (found.map_or(&[][..], |f| &f.objects).iter())
                         .map(|o| ObjectSummary::of(o, sigma0))

@@ -74,6 +74,11 @@ def test_a_reference_set_once_images_each_frame_as_with_it_given(scene, recordin
     v = et.read_recording(recording)["voltages"]
     with pytest.raises(et.EtError, match="set_reference"):
         r.image(v[-1])
+    # A reference of the other sign, or all zero, is refused with what to check.
+    with pytest.raises(et.EtError, match="runs against the model.*direction"):
+        r.set_reference(-v[:20])
+    with pytest.raises(et.EtError, match="all zero"):
+        r.set_reference(np.zeros_like(v[:20]))
     r.fit_background(v[:20])
     r.set_reference(v[:20])
     for frame in (v[-1], v[-2], v[-1]):

@@ -65,7 +65,8 @@ pub enum BackgroundError {
     #[error(
         "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
          ohm/sq < 0): are the protocol's positive and negative electrodes, or source and sink, \
-         swapped, or the electrodes numbered the other way (electrodes.direction)?"
+         swapped, or the electrodes numbered the other way (electrodes.direction in a scene, \
+         direction= in Python)?"
     )]
     Sign(f64),
 }

@@ -201,13 +201,26 @@ impl PixelGrid {
 
     /// [`PixelGrid::top_first`] appended to `out` (a stack of images grows frame by frame).
     pub fn top_first_into(&self, image: &[Option<f64>], scale: f64, out: &mut Vec<f64>) {
-        for j in (0..self.height).rev() {
+        let start = out.len();
+        out.resize(start + self.width * self.height, f64::NAN);
+        self.top_first_onto(image, scale, &mut out[start..]);
+    }
+
+    /// [`PixelGrid::top_first`] written over `out` (height x width values; a longer `out`
+    /// keeps the rest, a shorter one takes the rows it holds).
+    pub fn top_first_onto(&self, image: &[Option<f64>], scale: f64, out: &mut [f64]) {
+        for (j, to) in (0..self.height)
+            .rev()
+            .zip(out.chunks_mut(self.width.max(1)))
+        {
             let row = image
                 .get(j * self.width..(j + 1) * self.width)
                 .unwrap_or(&[]);
-            out.extend(row.iter().map(|v| v.map_or(f64::NAN, |v| v * scale)));
+            for (t, v) in to.iter_mut().zip(row) {
+                *t = v.map_or(f64::NAN, |v| v * scale);
+            }
             // A short image (not of this grid) is padded with NaN, as before.
-            out.extend(std::iter::repeat_n(f64::NAN, self.width - row.len()));
+            to.iter_mut().skip(row.len()).for_each(|t| *t = f64::NAN);
         }
     }
 }
@@ -235,6 +248,33 @@ impl PixelOperator {
             .iter()
             .map(|i| i.and_then(|i| rows.get(i).copied().map(f64::from)))
             .collect())
+    }
+
+    /// The image of `dv` (K values, V) drawn over `out` as [`PixelGrid::top_first_onto`]
+    /// draws [`PixelOperator::image`]'s, `grid` the one this operator was made on: one pass
+    /// from the rows' values.
+    ///
+    /// # Errors
+    /// As [`FrameOperator::image`].
+    pub fn picture(
+        &self,
+        grid: &PixelGrid,
+        dv: &[f64],
+        scale: f64,
+        out: &mut [f64],
+    ) -> Result<(), crate::onestep::ReconError> {
+        let rows = self.rows.image(dv)?;
+        let width = grid.width.max(1);
+        for (j, to) in (0..grid.height).rev().zip(out.chunks_mut(width)) {
+            let at = self.at.get(j * width..(j + 1) * width).unwrap_or(&[]);
+            for (t, i) in to.iter_mut().zip(at) {
+                *t = i
+                    .and_then(|i| rows.get(i))
+                    .map_or(f64::NAN, |v| f64::from(*v) * scale);
+            }
+            to.iter_mut().skip(at.len()).for_each(|t| *t = f64::NAN);
+        }
+        Ok(())
     }
 
     /// Each pixel's noise standard deviation (Delta sigma, S per square) under the channels'

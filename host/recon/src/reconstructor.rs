@@ -72,6 +72,13 @@ pub enum ImagingError {
          the frame"
     )]
     NoReference,
+    /// The reference runs against the model's frame of the untouched sheet, or is all zero.
+    #[error(
+        "the reference V_0 {0}: are the protocol's positive and negative electrodes, or \
+         source and sink, swapped, or the electrodes placed or numbered the other way \
+         (first_deg and direction; placement=\"pyeit\" for pyEIT's frames)?"
+    )]
+    ReferenceAgainstModel(String),
     /// One frame of many failed ([`Reconstructor::image_frames`]).
     #[error("frame {index} (0-based, of those given): {source}")]
     Frame {

@@ -45,7 +45,33 @@ impl Reconstructor {
         {
             return Err(ReconError::NonFinite.into());
         }
+        self.runs_with_the_model(&reference.v0)?;
         self.reference = Some(reference);
+        Ok(())
+    }
+
+    /// Whether `v0` (K values, V) runs with the model's frame of the untouched sheet: their
+    /// correlation sum_k v0_k m_k / (|v0| |m|) positive. Frames of the other sign (a polarity
+    /// or a drive swapped) image every touch as its opposite; an all-zero reference images
+    /// nothing. One forward solve.
+    ///
+    /// # Errors
+    /// [`ImagingError::ReferenceAgainstModel`] naming the correlation; [`ImagingError::Fem`].
+    fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
+        let model = (self.imager.forward).frame(&self.imager.background(), &self.schedule)?;
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (a, b) = (norm(v0), norm(&model));
+        if a == 0.0 {
+            return Err(ImagingError::ReferenceAgainstModel("is all zero".into()));
+        }
+        let r =
+            v0.iter().zip(&model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE);
+        if r <= 0.0 {
+            return Err(ImagingError::ReferenceAgainstModel(format!(
+                "runs against the model's frame of the untouched sheet (their correlation is \
+                 {r:.2}, where a reference that fits has about +1)"
+            )));
+        }
         Ok(())
     }
 
@@ -97,6 +123,54 @@ impl Reconstructor {
                 pixels: image.pixels,
             });
         };
+        let (dv, alpha) = self.frame_matrix(frame)?;
+        let grid = &self.imager.grid;
+        let matrix = self.one_step.as_mut().ok_or(ReconError::Singular)?;
+        matrix.frames += 1;
+        let pixels = if matrix.frames == 1 {
+            grid.image(&matrix.recon.reconstruct(&dv)?)
+        } else {
+            matrix.pixels_of(grid, &dv)?
+        };
+        Ok(FramePixels { dv, alpha, pixels })
+    }
+
+    /// [`Reconstructor::frame_pixels`] drawn as a picture is read ([`PixelGrid::top_first`]:
+    /// rows from the top, each value times `scale`, NaN outside) over `out` (height x width
+    /// values), straight from the f32 operator's rows where the frame goes through it; dV
+    /// (K values, V) and alpha returned.
+    ///
+    /// # Errors
+    /// As [`Reconstructor::frame_pixels`].
+    pub fn frame_picture(
+        &mut self,
+        frame: &[f32],
+        scale: f64,
+        out: &mut [f64],
+    ) -> Result<(Vec<f64>, f64), ImagingError> {
+        let Method::GaussNewton {
+            iterations: 0 | 1, ..
+        } = self.method
+        else {
+            let made = self.frame_pixels(frame)?;
+            self.imager.grid.top_first_onto(&made.pixels, scale, out);
+            return Ok((made.dv, made.alpha));
+        };
+        let (dv, alpha) = self.frame_matrix(frame)?;
+        let grid = &self.imager.grid;
+        let matrix = self.one_step.as_mut().ok_or(ReconError::Singular)?;
+        matrix.frames += 1;
+        if matrix.frames == 1 {
+            grid.top_first_onto(&grid.image(&matrix.recon.reconstruct(&dv)?), scale, out);
+        } else {
+            matrix.pixel_operator(grid).picture(grid, &dv, scale, out)?;
+        }
+        Ok((dv, alpha))
+    }
+
+    /// One-step Gauss-Newton's dV of `frame` against the reference set and its alpha, the
+    /// matrix at that alpha made the current one.
+    fn frame_matrix(&mut self, frame: &[f32]) -> Result<(Vec<f64>, f64), ImagingError> {
         let reference = self.reference.as_ref().ok_or(ImagingError::NoReference)?;
         let dv = self.difference(frame, reference)?;
         let alpha = match self.alpha {
@@ -108,15 +182,7 @@ impl Reconstructor {
             }
         };
         self.matrix_at(alpha)?;
-        let grid = &self.imager.grid;
-        let matrix = self.one_step.as_mut().ok_or(ReconError::Singular)?;
-        matrix.frames += 1;
-        let pixels = if matrix.frames == 1 {
-            grid.image(&matrix.recon.reconstruct(&dv)?)
-        } else {
-            matrix.pixels_of(grid, &dv)?
-        };
-        Ok(FramePixels { dv, alpha, pixels })
+        Ok((dv, alpha))
     }
 }
 

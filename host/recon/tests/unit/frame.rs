@@ -224,3 +224,30 @@ fn a_batch_of_frames_finds_what_each_frame_alone_finds() {
     assert!(matches!(e, ImagingError::Frame { index: 1, .. }), "{e:?}");
     assert!(e.to_string().contains("frame 1"), "{e}");
 }
+
+/// A reference of the other sign (a polarity or a drive swapped) or all zero is refused when
+/// set, naming what to check; the model's own reference, and one 30 % off in scale, are taken.
+#[test]
+fn a_reference_against_the_model_is_refused() {
+    let (mut recon, v0, _) = disc_and_bump(AlphaRule::Fixed(0.1), &[]);
+    let negated: Vec<f32> = v0.iter().map(|v| -v).collect();
+    let e = recon
+        .set_reference(Reference::from_frames(&[negated]).unwrap())
+        .unwrap_err();
+    assert!(matches!(e, ImagingError::ReferenceAgainstModel(_)), "{e:?}");
+    assert!(e.to_string().contains("-1.00"), "{e}");
+    assert!(e.to_string().contains("direction"), "{e}");
+    assert!(recon.reference().is_none(), "nothing set");
+    let zero = vec![0.0f32; v0.len()];
+    let e = recon
+        .set_reference(Reference::from_frames(&[zero]).unwrap())
+        .unwrap_err();
+    assert!(e.to_string().contains("all zero"), "{e}");
+    let scaled: Vec<f32> = v0.iter().map(|v| 1.3 * v).collect();
+    recon
+        .set_reference(Reference::from_frames(&[scaled]).unwrap())
+        .unwrap();
+    recon
+        .set_reference(Reference::from_frames(&[v0]).unwrap())
+        .unwrap();
+}
