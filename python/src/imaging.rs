@@ -193,6 +193,17 @@ type BatchParts<'py> = (
     Bound<'py, PyArray1<f64>>,
 );
 
+/// Frames (n x K, V) in single precision, as et's frames are, with n and K.
+fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, usize, usize)> {
+    let (values, n, k) = matrix(frames, "V")?;
+    let frames = values
+        .chunks(k.max(1))
+        .take(n)
+        .map(|f| f.iter().map(|&v| v as f32).collect())
+        .collect();
+    Ok((frames, n, k))
+}
+
 /// Frames a batch images at once (their pixels held until copied out).
 const FRAMES_AT_ONCE: usize = 64;
 
@@ -397,12 +408,7 @@ impl Reconstructor {
         py: Python<'py>,
         frames: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<BatchParts<'py>> {
-        let (values, n, k) = matrix(&frames, "V")?;
-        let frames: Vec<Vec<f32>> = values
-            .chunks(k.max(1))
-            .take(n)
-            .map(|f| f.iter().map(|&v| v as f32).collect())
-            .collect();
+        let (frames, n, k) = frames_f32(&frames)?;
         let inner = &mut self.inner;
         let (grid, sigma0) = (inner.grid().clone(), inner.imager().sigma0);
         let (w, h) = (grid.width, grid.height);
@@ -442,12 +448,7 @@ impl Reconstructor {
         py: Python<'_>,
         frames: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<String> {
-        let (values, n, k) = matrix(&frames, "V")?;
-        let frames: Vec<Vec<f32>> = values
-            .chunks(k.max(1))
-            .take(n)
-            .map(|f| f.iter().map(|&v| v as f32).collect())
-            .collect();
+        let (frames, _, _) = frames_f32(&frames)?;
         let inner = &mut self.inner;
         let sigma0 = inner.imager().sigma0;
         let imaged = py
