@@ -156,7 +156,10 @@ impl Steps {
     fn done(&self, bar: &ProgressBar, what: &str) {
         bar.finish_and_clear();
         if self.show {
-            eprintln!("{what:<60} {:>6.1} s", self.started.elapsed().as_secs_f64());
+            // A message that cannot be written (`2> /dev/full`) is dropped, not a panic.
+            use std::io::Write as _;
+            let took = self.started.elapsed().as_secs_f64();
+            let _ = writeln!(std::io::stderr(), "{what:<60} {took:>6.1} s");
         }
     }
 }

@@ -467,7 +467,10 @@ impl Viewer {
                         .map_err(ShotError::from)
                 });
                 if saved.is_ok() {
-                    eprintln!("wrote {}", path.display());
+                    let _ = std::io::Write::write_fmt(
+                        &mut std::io::stderr(),
+                        format_args!("wrote {}\n", path.display()),
+                    );
                 }
                 *shot
                     .lock()

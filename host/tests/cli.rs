@@ -1672,6 +1672,19 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     let mean = sum / 60.0;
     let reported = ev["mean_error_mm"].as_f64().unwrap();
     assert!((mean - reported).abs() < 1e-3, "{mean} vs {reported}");
+    // Standard error onto a full device: its messages are dropped, the work and the model
+    // are not (a panic on the first message lost the model).
+    let quiet = dir.join("quiet.json");
+    let mut a: Vec<String> = vec!["train".into()];
+    a.extend(table.iter().cloned());
+    a.extend(["--rows", "0..240", "--kind", "ridge", "--out", &s(&quiet)].map(String::from));
+    let full = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args(&a)
+        .stderr(std::fs::File::create("/dev/full").unwrap())
+        .output()
+        .unwrap();
+    assert!(full.status.success(), "{:?}", full.status);
+    assert!(quiet.is_file(), "the model written");
     // Every kind.
     for (kind, extra) in [
         ("ridge", vec![]),

@@ -262,7 +262,10 @@ class Protocol:
         if len(meas) == 0 or meas[:, 2].min() < 0 or meas[:, 2].max() >= len(ex):
             raise EtError("meas_mat: an excitation index outside ex_mat's rows")
         rows = np.column_stack([ex[meas[:, 2], 0], ex[meas[:, 2], 1], meas[:, 0], meas[:, 1]])
-        n = int(electrodes) if electrodes is not None else int(max(ex.max(), meas[:, :2].max()) + 1)
+        if electrodes is not None:
+            n = int(_whole(np.asarray([electrodes]), "electrodes")[0])
+        else:
+            n = int(max(ex.max(), meas[:, :2].max()) + 1)
         if rows.min() < 0 or rows.max() >= n:
             raise EtError(f"from_pyeit: an electrode outside 0 to {n - 1}")
         return cls(n, rows, np.full(len(rows), float(current_a)))

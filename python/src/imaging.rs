@@ -598,6 +598,8 @@ impl Reconstructor {
     /// The median time of `repeats` warm applications of the last frame's reconstruction to
     /// `dv` (s; `et reconstruct`'s `timings_s.frame`), None when it has none.
     fn frame_median(&self, dv: PyReadonlyArray1<'_, f64>, repeats: usize) -> PyResult<Option<f64>> {
+        et_recon::limits::count("repeats", repeats, &et_recon::limits::REPEATS)
+            .map_err(|e| refused(&e))?;
         Ok(self.inner.frame_median(slice(&dv, "dv")?, repeats))
     }
 }

@@ -37,6 +37,7 @@ pub mod gauss_newton;
 pub mod gcv;
 pub mod greit;
 pub mod imager;
+pub mod limits;
 pub mod mesh;
 pub mod metrics;
 pub mod onestep;

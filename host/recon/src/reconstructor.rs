@@ -319,14 +319,20 @@ impl Reconstructor {
     /// # Errors
     /// As [`Spec::set_up`].
     pub fn set_method(&mut self, method: Method, alpha: AlphaRule) -> Result<(), ImagingError> {
+        spec::check_method(&method, &alpha)?;
         self.method = method;
         self.alpha = alpha;
         self.prepare()
     }
 
     /// Another ROI threshold f (None: the protocol's default).
-    pub fn set_threshold(&mut self, threshold: Option<f64>) {
+    ///
+    /// # Errors
+    /// [`ReconError::OutOfRange`] for f outside [0, 1] (the threshold kept).
+    pub fn set_threshold(&mut self, threshold: Option<f64>) -> Result<(), ReconError> {
+        spec::check_threshold(threshold)?;
         self.threshold = threshold;
+        Ok(())
     }
 
     /// The forward model and the pixel grid (for pictures and for tests).

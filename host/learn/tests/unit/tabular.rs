@@ -239,6 +239,31 @@ fn a_grid_of_classes_from_positions() {
         assert_eq!(info.names.len(), 9, "{:?}", info.names);
         let e = evaluate(&model, &test_rows).unwrap();
         assert!(e.accuracy.unwrap() > 3.0 / 9.0, "{method:?}: {e:?}");
+        // An edited grid that cannot hold the classes, or whose box is turned inside out, is
+        // refused on reading (a zero divided by, wrong cells reported).
+        let text = serde_json::to_string(&model).unwrap();
+        et_learn::tabular::TableModel::from_json(&text).unwrap();
+        for (what, edit) in [
+            ("cols 0", ("\"cols\":3", "\"cols\":0")),
+            ("rows 0", ("\"rows\":3", "\"rows\":0")),
+            ("rows 2^40", ("\"rows\":3", "\"rows\":1099511627776")),
+        ] {
+            assert!(text.contains(edit.0), "{what}");
+            let refused = et_learn::tabular::TableModel::from_json(&text.replace(edit.0, edit.1))
+                .unwrap_err();
+            assert!(
+                refused.to_string().contains("classes.grid"),
+                "{what}: {refused}"
+            );
+        }
+        let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let b = &mut value["classes"]["grid"]["bounds_m"];
+        *b = serde_json::json!([b[2].clone(), b[1].clone(), b[0].clone(), b[3].clone()]);
+        let refused = et_learn::tabular::TableModel::from_value(value).unwrap_err();
+        assert!(
+            refused.to_string().contains("bounds_m"),
+            "reversed: {refused}"
+        );
         assert!(e.mean_error_mm.unwrap() < e.mean_predictor_error_mm.unwrap());
         // A QDA whose best shrinkage is 1 toward the pooled covariance is kept as the LDA
         // it equals, and says so; any other stays QDA.

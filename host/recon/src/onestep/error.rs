@@ -15,6 +15,18 @@ pub enum ReconError {
         /// What it must be.
         range: &'static str,
     },
+    /// A whole number out of its range (triangles, iterations, pixels).
+    #[error("reconstruction: {name} = {value}: must be a whole number from {lo} to {hi}")]
+    CountOutOfRange {
+        /// What is counted.
+        name: &'static str,
+        /// The value given.
+        value: usize,
+        /// The least it may be.
+        lo: usize,
+        /// The most it may be.
+        hi: usize,
+    },
     /// A vector of frame values (K of them) of another length.
     #[error("reconstruction: {what}: {got} values for K = {k}")]
     FrameLength {

@@ -8,8 +8,13 @@ use crate::segment::{Class, SEGMENT_LEVEL, segment};
 /// None. The live frame's figure everywhere it is reported ([`Reconstructor::frame_median`],
 /// `et demo`'s sweep).
 pub fn median_seconds<T>(repeats: usize, mut f: impl FnMut() -> Option<T>) -> Option<f64> {
-    let mut times = Vec::with_capacity(repeats.max(1));
-    for _ in 0..repeats.max(1) {
+    // Within crate::limits::REPEATS (a larger count is taken as its most).
+    let repeats = repeats.clamp(
+        *crate::limits::REPEATS.start(),
+        *crate::limits::REPEATS.end(),
+    );
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats {
         let clock = Instant::now();
         std::hint::black_box(f()?);
         times.push(clock.elapsed().as_secs_f64());

@@ -263,6 +263,23 @@ impl Spec {
         }
     }
 
+    /// Every number of the spec within its domain ([`crate::limits`]): the triangles asked
+    /// for, the iterations and s, GREIT's radius, a fixed alpha or noise figure, the pixels
+    /// and the threshold. [`Spec::set_up`] and [`Spec::set_up_fitted`] run it first.
+    ///
+    /// # Errors
+    /// [`ReconError::OutOfRange`] or [`ReconError::CountOutOfRange`] naming the first value
+    /// outside and what it must be.
+    pub fn check(&self) -> Result<(), ReconError> {
+        use crate::limits;
+        if let MeshPlan::About { triangles, .. } = &self.mesh {
+            limits::count("triangles", *triangles, &limits::TRIANGLES)?;
+        }
+        check_method(&self.method, &self.alpha)?;
+        limits::count("pixels", self.pixels, &limits::PIXELS)?;
+        check_threshold(self.threshold)
+    }
+
     /// Builds the mesh, the forward model at the background, the Jacobian and what the
     /// method keeps for every frame.
     ///
@@ -270,6 +287,7 @@ impl Spec {
     /// [`ImagingError`] when the sheet cannot be meshed or modelled, the mesh's electrodes are
     /// not the sheet's, or a parameter is out of range.
     pub fn set_up(self) -> Result<Reconstructor, ImagingError> {
+        self.check()?;
         Reconstructor::new(self)
     }
 
@@ -297,6 +315,7 @@ impl Spec {
         v0: &[f64],
         weighting: Weighting,
     ) -> Result<(Reconstructor, BackgroundFit), ImagingError> {
+        self.check()?;
         let mut r = Reconstructor::unprepared(self, false)?;
         r.set_weighting(weighting);
         let fit = r.fit_background(v0)?;
@@ -435,4 +454,54 @@ pub struct Image {
     pub iterations: Option<Iterations>,
     /// What this frame took.
     pub timings: FrameTimings,
+}
+
+/// `method` and `alpha`'s numbers within their domains ([`crate::limits`]).
+pub(crate) fn check_method(method: &Method, alpha: &AlphaRule) -> Result<(), ReconError> {
+    use crate::limits;
+    match *method {
+        Method::GaussNewton { s, iterations } => {
+            limits::count("iterations", iterations, &limits::ITERATIONS)?;
+            limits::real("s", s, 0.0, true, 1.0, "from 0 to 1")?;
+        }
+        Method::Greit { radius } => {
+            if let Some(r) = radius {
+                limits::real(
+                    "radius, m",
+                    r,
+                    0.0,
+                    false,
+                    limits::MAX_RADIUS_M,
+                    "above 0 and at most 1 m",
+                )?;
+            }
+        }
+    }
+    match *alpha {
+        AlphaRule::Fixed(a) => limits::real(
+            "alpha",
+            a,
+            0.0,
+            false,
+            limits::MAX_ALPHA,
+            "above 0 and at most 1e6",
+        ),
+        AlphaRule::NoiseFigure(f) => limits::real(
+            "noise figure",
+            f,
+            0.0,
+            false,
+            limits::MAX_NOISE_FIGURE,
+            "above 0 and at most 100",
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// A ROI threshold f (None: the protocol's) within [0, 1].
+pub(crate) fn check_threshold(threshold: Option<f64>) -> Result<(), ReconError> {
+    match threshold {
+        Some(f) => crate::limits::real("threshold", f, 0.0, true, 1.0, "from 0 to 1"),
+        None => Ok(()),
+    }
 }

@@ -198,7 +198,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
-        eprintln!(
+        say!(
             "wrote {} observations of {} features, {} classes, to {} in {:.1} s",
             data.x.nrows(),
             data.x.ncols(),

@@ -32,7 +32,7 @@ pub(crate) fn run(args: &DemoArgs, force: bool) -> Result<()> {
     if args.json {
         out!("{}", report.summary);
     } else {
-        eprintln!("\nreport: {}", report.index.display());
+        say!("\nreport: {}", report.index.display());
     }
     Ok(())
 }

@@ -40,6 +40,13 @@ pub(crate) fn count(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, Stri
     }
 }
 
+/// A whole number within `range` (a library's domain, [`et_recon::limits`]).
+pub(crate) fn within(
+    range: std::ops::RangeInclusive<usize>,
+) -> impl Fn(&str) -> Result<usize, String> + Clone {
+    count(*range.start(), *range.end())
+}
+
 fn number(text: &str) -> Result<f64, String> {
     let v: f64 = text
         .trim()

@@ -160,7 +160,7 @@ fn eval_plots(
         plot::confusion(partial, conf, &title)
     })?;
     if tested.outcomes.is_empty() {
-        eprintln!(
+        say!(
             "note: {} does not say where the electrodes are: no error-vs-distance plot",
             data_arg.display()
         );
@@ -201,7 +201,7 @@ pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
-        eprintln!(
+        say!(
             "wrote {} ({} bytes, {:.0} % of the board's 384 KiB model slot{}); {} multiply-adds per frame",
             args.out.display(),
             blob.len(),

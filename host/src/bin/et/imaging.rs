@@ -17,7 +17,7 @@ use frames::{each_frame, frames, table_frames};
 #[derive(Debug, clap::Args)]
 pub(crate) struct MeshArgs {
     /// About how many triangles to mesh the sheet with.
-    #[arg(long, default_value_t = 8_000, value_parser = crate::domain::count(20, 500_000))]
+    #[arg(long, default_value_t = 8_000, value_parser = crate::domain::within(et_recon::limits::TRIANGLES))]
     triangles: usize,
     /// Use this mesh instead of meshing the scene's sheet: a Gmsh 2.2 ASCII `.msh` (one
     /// physical line per electrode), or `nodes.csv,triangles.csv,electrodes.csv`.
@@ -60,7 +60,7 @@ pub(crate) struct ReconstructArgs {
     mesh: MeshArgs,
     /// Gauss-Newton iterations: 1 is the one-step reconstruction; more refit the data
     /// (slower, for when accuracy matters more than speed).
-    #[arg(long, default_value_t = 1, value_parser = crate::domain::count(1, 100))]
+    #[arg(long, default_value_t = 1, value_parser = crate::domain::within(et_recon::limits::ITERATIONS))]
     iterations: usize,
     /// The reconstruction: gn, one-step (or iterative) Gauss-Newton with the NOSER prior,
     /// or greit, the consensus linear reconstruction (GREIT: desired images of small targets
@@ -83,7 +83,7 @@ pub(crate) struct ReconstructArgs {
     alpha: String,
     /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
     /// target at the centre; larger is sharper and noisier; 0.5 is the consensus value).
-    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE, value_parser = crate::domain::above(0.0, 100.0))]
+    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE, value_parser = crate::domain::above(0.0, et_recon::limits::MAX_NOISE_FIGURE))]
     noise_figure: f64,
     /// GREIT: the radius of the desired image of a small target, mm (default: 5 % of the
     /// sheet's longer side; at least one pixel).
@@ -97,7 +97,7 @@ pub(crate) struct ReconstructArgs {
     #[arg(long, value_parser = crate::domain::real(0.0, 1.0))]
     threshold: Option<f64>,
     /// Pixels across the image (4 to 512).
-    #[arg(long, default_value_t = 64, value_parser = crate::domain::count(4, 512))]
+    #[arg(long, default_value_t = 64, value_parser = crate::domain::within(et_recon::limits::PIXELS))]
     pixels: usize,
     /// Image measured frames instead of simulating the scene's touches; the scene gives the
     /// sheet, the electrodes and the protocol (a built-in one, or any system's as a file).
@@ -327,7 +327,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         .as_ref()
         .and_then(recording::Recording::order_note)
     {
-        eprintln!(
+        say!(
             "note: {}: {note}",
             args.frames.as_deref().unwrap_or(Path::new("")).display()
         );
@@ -362,8 +362,8 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         ..et_recon::Spec::new(sheet.clone(), schedule)
     };
     let stage = |what: &str, dt: f64| match dt < 0.01 {
-        true => eprintln!("{what:<44} {:>8.1} us", dt * 1e6),
-        false => eprintln!("{what:<44} {dt:>8.3} s"),
+        true => say!("{what:<44} {:>8.1} us", dt * 1e6),
+        false => say!("{what:<44} {dt:>8.3} s"),
     };
     let clock = Instant::now();
     let chosen = match (table, config) {
@@ -474,7 +474,7 @@ fn say_background(
         ),
         took,
     );
-    eprintln!(
+    say!(
         "background: {:.4} ohm/sq, contact {:.4} ohm{}; the model leaves {:.2} % of V_0 \
          unexplained (the scene's values: {:.2} %)",
         fit.sheet_resistance,
@@ -489,7 +489,7 @@ fn say_background(
     );
     let share =
         |s: Option<f64>| s.map_or("none measured".into(), |s| format!("{:.2} %", 100.0 * s));
-    eprintln!(
+    say!(
         "model error: it leaves {} of V_0 on drive electrodes, {} off them; the objects' \
          noise counts {} times that share of each change as the model's error",
         share(fit.misfit_on_drive),
@@ -497,7 +497,7 @@ fn say_background(
         et_recon::reconstructor::MISMATCH_FACTOR
     );
     if fit.residual > 0.2 {
-        eprintln!(
+        say!(
             "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
              protocol's electrode numbering (electrodes.first_deg, direction) and order",
             100.0 * fit.residual
@@ -541,7 +541,7 @@ fn frame_stages(
         }
     };
     use et_recon::NoiseSource as S;
-    eprintln!(
+    say!(
         "noise of dV: {:.2e} V rms, {}",
         image.noise.rms_v,
         match image.noise.source {
@@ -574,7 +574,7 @@ fn frame_stages(
                 image.timings.frame,
             );
             if let et_recon::gauss_newton::Stop::NoDescent { iteration } = it.stop {
-                eprintln!(
+                say!(
                     "note: stopped at iteration {iteration} of {}: no step lowered the misfit \
                  (the image is the last iterate that did; a larger --alpha may fit further)",
                     args.iterations

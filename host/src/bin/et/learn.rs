@@ -196,7 +196,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     let data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
     let trained = trainer.train(Examples::Dataset(&data), |stage| match stage {
         Progress::RawFrames => spinner.suspend(|| {
-            eprintln!(
+            say!(
                 "note: {} has no untouched frames, training on raw frames",
                 data_arg.display()
             );
@@ -267,12 +267,12 @@ fn print_trained(
         learning_curve: curve,
     };
     for f in &trained.fallbacks {
-        eprintln!("note: {f}");
+        say!("note: {f}");
     }
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
-        eprintln!(
+        say!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {} ({}): {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
             kind.name(),
             if referenced {
@@ -296,7 +296,7 @@ fn print_trained(
         );
         let fit = pipeline::features_that_fit(kind, classes, data.x.ncols());
         if fit < data.x.ncols() {
-            eprintln!(
+            say!(
                 "note: for the board, this model is too big for a model slot even in f16; \
                  train with --keep {fit} (the most that fit for {classes} classes) or fewer classes"
             );

@@ -159,15 +159,15 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     if let Source::Replay(r) = &mut source {
         r.looping = false;
         if let Some(note) = r.recording.order_note() {
-            eprintln!("note: {}: {note}", r.name);
+            say!("note: {}: {note}", r.name);
         }
         // The reconstruction for the recording's scans, made before its first frame.
         processor.prepare(&r.recording.header.config)?;
     }
     if !args.json {
-        eprintln!("note: et stream prints JSON lines (--json); streaming them anyway");
+        say!("note: et stream prints JSON lines (--json); streaming them anyway");
     }
-    eprintln!(
+    say!(
         "streaming touch events from the {} (the first {} frames are the untouched reference)",
         source.describe(),
         Settings::default().reference_frames
@@ -179,7 +179,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
-            eprintln!("{}: {change}", source.describe());
+            say!("{}: {change}", source.describe());
         }
         if frames.is_empty() {
             if let Source::Replay(r) = &source
@@ -198,7 +198,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             let out = match processor.process(frame) {
                 Ok(o) => o,
                 Err(e) => {
-                    eprintln!("skipped: {e}");
+                    say!("skipped: {e}");
                     continue;
                 }
             };
@@ -221,7 +221,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     // recording and setting up the reconstruction not counted).
     let elapsed = started.elapsed().as_secs_f64();
     if matches!(source, Source::Replay(_)) && seen > 0 {
-        eprintln!(
+        say!(
             "{seen} frames ({imaged} imaged) in {elapsed:.3} s: {:.0} frames/s on one core (each \
              referenced, imaged, searched for touches and its event written; the recording \
              was read before the clock started)",

@@ -6,6 +6,15 @@ use clap::{Parser, Subcommand};
 
 /// `println!` for a command's output on stdout: when the reader goes away (`et protocol
 /// --json | head`) the program ends quietly, as Unix tools do, instead of panicking.
+/// `eprintln!` that never panics: a message to standard error that cannot be written (`2>
+/// /dev/full`, a closed stream) is dropped, and the command's work and outputs go on.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -14,7 +23,7 @@ macro_rules! out {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }
-            eprintln!("error: writing to stdout: {e}");
+            say!("error: writing to stdout: {e}");
             std::process::exit(1);
         }
     }};
@@ -288,7 +297,7 @@ fn parse() -> Cli {
                 Ok(()) => std::process::exit(0),
                 Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
                 Err(e) => {
-                    eprintln!("error: writing to stdout: {e}");
+                    say!("error: writing to stdout: {e}");
                     std::process::exit(1);
                 }
             }
@@ -300,7 +309,7 @@ fn parse() -> Cli {
 fn main() -> ExitCode {
     let cli = parse();
     if let Err(e) = et_host::output::clean_up_on_signals() {
-        eprintln!("warning: Ctrl-C will not remove partial outputs: {e}");
+        say!("warning: Ctrl-C will not remove partial outputs: {e}");
     }
     let force = cli.force;
     let result = match &cli.command {
@@ -322,7 +331,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", et_host::message::one_line(&e));
+            say!("error: {}", et_host::message::one_line(&e));
             ExitCode::FAILURE
         }
     }

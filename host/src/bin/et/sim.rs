@@ -97,7 +97,7 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     })?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
-    eprintln!(
+    say!(
         "wrote {} frames of {} values ({} at L = {}, {:.1} s of scene time) to {} \
          (sheet built in {:.2} s; {:.0} frames/s)",
         args.frames,
@@ -110,13 +110,13 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
         f64::from(args.frames) / elapsed.max(1e-9)
     );
     if rail > 0 {
-        eprintln!(
+        say!(
             "warning: {rail} frames have readings on an ADC rail (flagged in the recording): \
              lower the scene's gain or current"
         );
     }
     if compliance > 0 {
-        eprintln!(
+        say!(
             "warning: in {compliance} frames the current source was in compliance (flagged in \
              the recording): the drive load is above V_out_max / (2 I), from contacts too \
              resistive or open, so those readings are too small; lower the current or fix \
@@ -179,7 +179,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         ),
     };
     crate::output::write(&args.out, |partial| std::fs::write(partial, &bytes))?;
-    eprintln!(
+    say!(
         "wrote {n} frames of {k} values ({}; the empty sheet first, then {} touch{} pressed; \
          instrument {:?}) to {} in {:.2} s",
         schedule.kind().map_or_else(

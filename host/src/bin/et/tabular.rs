@@ -97,11 +97,11 @@ impl TableArgs {
             let reference = et_learn::dataset::read_matrix(b)?;
             table = table.referenced(&reference, how, &b.display().to_string())?;
         }
-        eprintln!("read {}", table.description);
+        say!("read {}", table.description);
         Ok(match self.rows {
             Some(r) => {
                 let t = table.select(r)?;
-                eprintln!("using rows {r} ({} rows)", t.rows());
+                say!("using rows {r} ({} rows)", t.rows());
                 t
             }
             None => table,
@@ -190,7 +190,7 @@ pub(crate) fn train(
         };
         if what != last {
             if !last.is_empty() && !console_is_interactive() {
-                eprintln!("{last}: done");
+                say!("{last}: done");
             }
             last = what.to_string();
             bar.set_message(what.to_string());
@@ -237,7 +237,7 @@ pub(crate) fn train(
 /// What the groups of `table` mean for its cross-validation, said on standard error.
 fn say_groups(table: &tabular::Table) {
     match table.group_index() {
-        None => eprintln!(
+        None => say!(
             "note: no --groups: every row is taken as one session, and nothing in the data can \
              show how a model holds on a new session; sensors drift between sessions, so \
              positions are predicted by the model best on two figures together ({}): its \
@@ -245,12 +245,12 @@ fn say_groups(table: &tabular::Table) {
              drifted (give --groups to choose by leaving a session out)",
             tabular::drift_weighting()
         ),
-        Some((_, names)) if names.len() < 2 => eprintln!(
+        Some((_, names)) if names.len() < 2 => say!(
             "note: one group ('{}') only: nothing in the data can show how a model holds on a \
              new session",
             names.first().map_or("", String::as_str)
         ),
-        Some((_, names)) => eprintln!(
+        Some((_, names)) => say!(
             "{} groups: cross-validation leaves one group out",
             names.len()
         ),
@@ -262,7 +262,7 @@ fn say_groups(table: &tabular::Table) {
 fn report(model: &tabular::TableModel, out: &Path) {
     let best = model.chosen();
     if let Some(note) = &model.note {
-        eprintln!("note: {note}");
+        say!("note: {note}");
     }
     // The best of each method tried, then the winner.
     let mut methods: Vec<tabular::Kind> = model.search.iter().map(|c| c.method).collect();
@@ -277,7 +277,7 @@ fn report(model: &tabular::TableModel, out: &Path) {
                 a.choice_loss(by).total_cmp(&b.choice_loss(by))
             });
         if let Some(c) = best_of {
-            eprintln!(
+            say!(
                 "  {:<13} {}{}  ({})",
                 m.name(),
                 describe(c),
@@ -287,7 +287,7 @@ fn report(model: &tabular::TableModel, out: &Path) {
             );
         }
     }
-    eprintln!(
+    say!(
         "trained {} on rows {}..{} ({} features{}), {}-fold {} cross-validation {}{}; chose {}; \
          {:.1} s; wrote {}",
         model.method.name(),
@@ -368,7 +368,7 @@ pub(crate) fn eval(
     })?;
     if let (Some(dir), Some((map, scatter))) = (plots, &pngs) {
         if e.pairs.is_empty() {
-            eprintln!("note: no positions to plot (the rows or the model have none)");
+            say!("note: no positions to plot (the rows or the model have none)");
         } else {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
             let title = format!("{} on {} rows", model.method.name(), e.observations);

@@ -254,6 +254,24 @@ impl TableModel {
                 "classes.names (and centres_m) must list every class",
             ));
         }
+        if let Some(g) = &info.grid {
+            let [x0, y0, x1, y1] = g.bounds;
+            let cells = g.rows.checked_mul(g.cols);
+            if g.rows == 0
+                || g.cols == 0
+                || cells.is_none_or(|c| c < classes.len() || c > MAX_CELLS)
+            {
+                return Err(TablesError::Inconsistent(
+                    "classes.grid: rows and cols must be at least 1, with a cell for every class \
+                     and at most a million cells",
+                ));
+            }
+            if !(g.bounds.iter().all(|b| b.is_finite()) && x0 <= x1 && y0 <= y1) {
+                return Err(TablesError::Inconsistent(
+                    "classes.grid.bounds_m: [x0, y0, x1, y1], finite, x0 <= x1 and y0 <= y1",
+                ));
+            }
+        }
         fitted_from_records(
             kind,
             &self.feature_mean,
@@ -393,3 +411,6 @@ fn finite3(v: &[[f64; 3]], what: &'static str) -> Result<(), TablesError> {
         Err(TablesError::NonFinite { what })
     }
 }
+
+/// The most cells a class grid may have (`--grid RxC` makes a class of each occupied cell).
+const MAX_CELLS: usize = 1_000_000;

@@ -137,12 +137,12 @@ pub(super) fn table_frames(
     k: usize,
 ) -> Result<Chosen> {
     let mut frames = et_host::frames::read(path, k)?;
-    eprintln!("{}", frames.description);
+    say!("{}", frames.description);
     let n = frames.frames.len();
     let (reference, first) = match &args.reference_file {
         Some(f) => {
             let r = et_host::frames::read(f, k)?;
-            eprintln!("reference {}", r.description);
+            say!("reference {}", r.description);
             (et_recon::Reference::from_frames(&r.frames)?, 0)
         }
         None => {
@@ -225,14 +225,14 @@ pub(super) fn each_frame(
         }
     }
     let took = clock.elapsed().as_secs_f64();
-    eprintln!(
+    say!(
         "imaged {n} frames in {took:.3} s after the set-up ({:.2} ms a frame, objects included)",
         1e3 * took / n.max(1) as f64
     );
     if let Some(path) = &args.image_out {
         let bytes = et_learn::npz::npy_of_array(&stack, &[n, grid.height, grid.width]);
         crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
-        eprintln!(
+        say!(
             "wrote {} ({n} x {} x {} pixels, Delta sigma / sigma_0, top row first)",
             path.display(),
             grid.height,

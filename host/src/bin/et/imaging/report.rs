@@ -113,7 +113,7 @@ pub(super) fn report(
         return Ok(());
     }
     say_found(rois, found, m.as_ref(), truth.len(), &matches);
-    eprintln!("wrote {}", args.out.display());
+    say!("wrote {}", args.out.display());
     Ok(())
 }
 
@@ -149,7 +149,7 @@ fn say_found(
     matches: &[et_recon::TouchMatch],
 ) {
     for (i, r) in rois.iter().enumerate().take(5) {
-        eprintln!(
+        say!(
             "region {i}: centroid ({:.1}, {:.1}) mm, area {:.0} mm^2",
             r.centroid[0] * 1e3,
             r.centroid[1] * 1e3,
@@ -157,7 +157,7 @@ fn say_found(
         );
     }
     for (i, r) in found.iter().enumerate() {
-        eprintln!(
+        say!(
             "touch {i}: at ({:.1}, {:.1}) mm{}",
             r.centroid[0] * 1e3,
             r.centroid[1] * 1e3,
@@ -165,14 +165,17 @@ fn say_found(
         );
     }
     if let Some(m) = m {
-        eprintln!(
+        say!(
             "PE {:.3}, SE {:.3}, RNG {:.3}, BVC {:.3e} V",
-            m.pe, m.se, m.rng, m.bvc
+            m.pe,
+            m.se,
+            m.rng,
+            m.bvc
         );
     }
     if truths > 1 {
         for t in matches {
-            eprintln!(
+            say!(
                 "true touch at ({:.1}, {:.1}) mm: {}, PE {:.3}, SE {:.3}",
                 t.truth[0] * 1e3,
                 t.truth[1] * 1e3,

@@ -1,0 +1,45 @@
+"""The Python module holds every value to the domain the command line's flags do (the
+library checks them where the value is made), naming the value and what it must be."""
+
+import math
+
+import numpy as np
+import pytest
+
+import et_touch as et
+
+
+@pytest.mark.parametrize(
+    "options, named",
+    [
+        (dict(triangles=0), "triangles = 0: must be a whole number from 20 to 500000"),
+        (dict(triangles=5_000_000), "triangles = 5000000"),
+        (dict(threshold=-1.0), "threshold = -1: must be from 0 to 1"),
+        (dict(threshold=2.0), "threshold = 2"),
+        (dict(threshold=math.nan), "threshold = NaN"),
+        (dict(iterations=0), "iterations = 0: must be a whole number from 1 to 100"),
+        (dict(s=2.0), "s = 2: must be from 0 to 1"),
+        (dict(pixels=2), "pixels = 2"),
+        (dict(alpha="0"), "alpha = 0"),
+        (dict(alpha="1e9"), "alpha = 1000000000"),
+        (dict(method="greit", noise_figure=1e9), "noise figure = 1000000000"),
+        (dict(method="greit", radius_m=-1.0), "radius, m = -1"),
+    ],
+)
+def test_a_reconstruction_out_of_its_domain_is_refused_before_any_work(options, named):
+    with pytest.raises(et.EtError, match=named.replace("(", r"\(")):
+        et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), **options)
+
+
+def test_timing_repeats_and_electrode_counts_are_checked():
+    r = et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300,
+                         alpha=0.1)
+    v0 = r.forward(r.sigma0)
+    r.image(v0 * 1.001, v0)
+    with pytest.raises(et.EtError, match="repeats = 1000000000"):
+        r.frame_median(np.zeros_like(v0), 10**9)
+    ex = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+    meas = np.array([[2, 3, 0], [3, 0, 1], [0, 1, 2], [1, 2, 3]])
+    with pytest.raises(et.EtError, match="whole numbers"):
+        et.Protocol.from_pyeit(ex, meas, electrodes=4.5)
+    assert et.Protocol.from_pyeit(ex, meas, electrodes=4.0).electrodes == 4
