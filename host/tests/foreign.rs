@@ -158,6 +158,50 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     );
     assert!(e(1, 0) > 0.0 && e(1, 1) < 0.14, "{}", j["electrodes_m"]);
     assert_eq!(j["v0"].as_array().map(Vec::len), Some(1_264));
+    // The protocol file the scene names is an input: no output replaces it, even with
+    // --force and by another spelling of its path.
+    let protocol = d.join("protocol.csv");
+    let before = std::fs::read(&protocol).unwrap();
+    std::fs::create_dir_all(d.join("sub")).unwrap();
+    let other = d.join("sub/../protocol.csv");
+    for args in [
+        vec![
+            "sim",
+            "--scene",
+            scene_path.to_str().unwrap(),
+            "--out",
+            other.to_str().unwrap(),
+            "--force",
+        ],
+        vec![
+            "collect",
+            "--scene",
+            scene_path.to_str().unwrap(),
+            "--out",
+            protocol.to_str().unwrap(),
+            "--force",
+        ],
+        vec![
+            "reconstruct",
+            "--scene",
+            scene_path.to_str().unwrap(),
+            "--triangles",
+            "500",
+            "--out",
+            protocol.to_str().unwrap(),
+            "--force",
+        ],
+    ] {
+        let out = et(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert!(text.contains("this is the input"), "{args:?}: {text}");
+    }
+    assert_eq!(
+        std::fs::read(&protocol).unwrap(),
+        before,
+        "the protocol file intact"
+    );
     // Metal rods (conductivity x 10) and plastic ones (x 0.1).
     let targets = [
         ([0.07, 0.0], 10.0),

@@ -35,6 +35,16 @@ impl Scene {
         Ok(())
     }
 
+    /// The files the scene names and a command reads through it (its protocol file), as
+    /// paths from the working directory: outputs must not replace them.
+    #[must_use]
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        match &self.scan.protocol {
+            ProtocolSpec::File(f) => vec![self.dir.join(&f.file)],
+            ProtocolSpec::Named(_) => Vec::new(),
+        }
+    }
+
     /// What each frame value measures: the built-in protocol's rows at the scene's current,
     /// or the protocol file's (relative to [`Scene::dir`]), its rows without a current at
     /// the scene's.

@@ -148,8 +148,11 @@ impl CollectArgs {
 }
 
 pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
-    output::check(&args.out, &[&args.scene], force)?;
     let scene = Scene::load(&args.scene)?;
+    let named = scene.files();
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(named.iter().map(std::path::PathBuf::as_path));
+    output::check(&args.out, &inputs, force)?;
     let (rows, cols) = parse_grid(&args.grid, "--grid")?;
     let config = collect::training_config(scene.scan_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);

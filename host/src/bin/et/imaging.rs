@@ -313,8 +313,8 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
 }
 
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
-    check_paths(args, force)?;
     let scene = Scene::load(&args.scene)?;
+    check_paths(args, &scene, force)?;
     let table = args
         .frames
         .as_deref()
@@ -439,8 +439,10 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
 
 /// The paths `et reconstruct` reads and writes checked before any work: no output replaces
 /// an input, and none an existing file without `--force`.
-fn check_paths(args: &ReconstructArgs, force: bool) -> Result<()> {
+fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) -> Result<()> {
+    let named = scene.files();
     let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(named.iter().map(PathBuf::as_path));
     inputs.extend(args.frames.as_deref());
     inputs.extend(args.reference_file.as_deref());
     // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.

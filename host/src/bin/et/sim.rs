@@ -49,8 +49,11 @@ pub(crate) enum Instrument {
 }
 
 pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
-    crate::output::check(&args.out, &[&args.scene], force)?;
     let mut scene = Scene::load(&args.scene)?;
+    let named = scene.files();
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(named.iter().map(PathBuf::as_path));
+    crate::output::check(&args.out, &inputs, force)?;
     if let Some(seed) = args.seed {
         scene.seed = seed;
     }
