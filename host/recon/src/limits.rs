@@ -28,6 +28,10 @@ pub const MAX_RADIUS_M: f64 = 1.0;
 /// lambda = alpha^2 tr(A) / K; the automatic rules try 1e-4 to 10).
 pub const MAX_ALPHA: f64 = 1e6;
 
+/// The most values a frame may have (K, the protocol's rows): the reconstruction keeps
+/// A = J P^-1 J^T, K x K, 2.1 GB at this K (a 100 000-row protocol would ask for 80 GB).
+pub const MAX_FRAME_LEN: usize = 16_384;
+
 /// Timed repeats of one frame ([`crate::Reconstructor::frame_median`], `repeats=`).
 pub const REPEATS: RangeInclusive<usize> = 1..=100_000;
 

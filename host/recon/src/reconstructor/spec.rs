@@ -264,7 +264,7 @@ impl Spec {
     }
 
     /// Every number of the spec within its domain ([`crate::limits`]): the triangles asked
-    /// for, the iterations and s, GREIT's radius, a fixed alpha or noise figure, the pixels
+    /// for, the frame's length, the iterations and s, GREIT's radius, a fixed alpha or noise figure, the pixels
     /// and the threshold. [`Spec::set_up`] and [`Spec::set_up_fitted`] run it first.
     ///
     /// # Errors
@@ -275,6 +275,12 @@ impl Spec {
         if let MeshPlan::About { triangles, .. } = &self.mesh {
             limits::count("triangles", *triangles, &limits::TRIANGLES)?;
         }
+        let k = self.schedule.frame_len();
+        limits::count(
+            "values a frame (the protocol's rows)",
+            k,
+            &(1..=limits::MAX_FRAME_LEN),
+        )?;
         check_method(&self.method, &self.alpha)?;
         limits::count("pixels", self.pixels, &limits::PIXELS)?;
         check_threshold(self.threshold)

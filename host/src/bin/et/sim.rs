@@ -129,6 +129,10 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     Ok(())
 }
 
+/// The most values (frames x K) `et sim` writes as another system's file (.csv, .npy, .mat),
+/// which is made whole in memory: 50 million, about 1.2 GB held.
+const MAX_FOREIGN_VALUES: usize = 50_000_000;
+
 /// Another system's frames of `scene` (see `--out`), written as the extension of `--out` says.
 fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     use et_sim::foreign::Instrument as I;
@@ -151,8 +155,22 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         .map(|t| et_sim::touch::Inclusion::of_touch(&t.touch(), &scene.sheet.piezo))
         .collect();
     let n = usize::try_from(args.frames.max(2))?;
-    let frames = et_sim::foreign::frames(&sheet, &schedule, &vec![touched; n - 1], &instrument)?;
     let k = schedule.frame_len();
+    // Another system's file is made whole in memory (its frames, their matrix and the
+    // file's bytes): bounded, and said before any work.
+    if n.saturating_mul(k) > MAX_FOREIGN_VALUES {
+        anyhow::bail!(
+            "{}: {n} frames of {k} values is {:.1} GB in memory before it is written (the \
+             frames, their matrix and the file); another system's file holds at most {} \
+             million values here: fewer --frames (at most {}), or an et recording (.jsonl, \
+             written frame by frame)",
+            args.out.display(),
+            (n as f64) * (k as f64) * 8.0 * 3.0 / 1e9,
+            MAX_FOREIGN_VALUES / 1_000_000,
+            MAX_FOREIGN_VALUES / k.max(1)
+        );
+    }
+    let frames = et_sim::foreign::frames(&sheet, &schedule, &vec![touched; n - 1], &instrument)?;
     let m = nalgebra::DMatrix::from_fn(n, k, |i, j| frames[i][j]);
     let ext = args
         .out
