@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import json
 import os
+import re
+import threading
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -298,6 +300,28 @@ def scene(path: PathLike) -> Tuple[Sheet, Protocol]:
 # Imaging
 
 
+class _Serialised:
+    """A native object whose calls are made one thread at a time: a call holds it while the
+    GIL is released, where a second thread's call would find it "Already borrowed". Another
+    thread's call waits for the first to end."""
+
+    def __init__(self, inner: Any) -> None:
+        self._inner = inner
+        self._lock = threading.RLock()
+
+    def __getattr__(self, name: str) -> Any:
+        with self._lock:
+            value = getattr(self._inner, name)
+        if not callable(value):
+            return value
+
+        def call(*args: Any, **kwargs: Any) -> Any:
+            with self._lock:
+                return value(*args, **kwargs)
+
+        return call
+
+
 class Image:
     """One frame imaged.
 
@@ -485,12 +509,12 @@ class Reconstructor:
         rows = np.ascontiguousarray(protocol.rows, dtype=np.int64)
         currents = _f64(protocol.currents, 1, "currents")
         current_a = float(currents[0]) if len(currents) else 1e-3
-        self._native = _native.Reconstructor(
+        self._native = _Serialised(_native.Reconstructor(
             json.dumps(sheet.spec), int(protocol.electrodes), protocol.name, current_a,
             None if protocol.name else rows, None if protocol.name else currents,
             int(triangles), method, str(alpha), int(pixels), threshold, float(s),
             int(iterations), noise_figure, radius_m,
-        )
+        ))
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None
 
@@ -624,6 +648,42 @@ def _labels(y: np.ndarray) -> List[str]:
     return [str(v.item() if hasattr(v, "item") else v) for v in y]
 
 
+def _label_type(y: Any) -> str:
+    """What labels were before they became text: "int", "float", "bool" or "str" (a model
+    gives its predictions back as that type)."""
+    a = np.asarray(y)
+    if a.dtype.kind == "b":
+        return "bool"
+    if a.dtype.kind in "iu":
+        return "int"
+    if a.dtype.kind == "f":
+        return "float"
+    values = [v.item() if hasattr(v, "item") else v for v in a]
+    if values and all(isinstance(v, bool) for v in values):
+        return "bool"
+    if values and all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+        return "int"
+    if values and all(isinstance(v, float) for v in values):
+        return "float"
+    return "str"
+
+
+def _as_given(names: Sequence[str], label_type: Optional[str]) -> np.ndarray:
+    """Class names as the labels were given (their ``label_type``), one more at the end for a
+    row no class took; a model from the command line (no type) gives whole numbers written
+    plainly (no "01", no "+1") as ints and any other name as text."""
+    if label_type is None:
+        plain = all(re.fullmatch(r"-?(0|[1-9][0-9]*)", n) for n in names)
+        label_type = "int" if plain and names else "str"
+    if label_type == "int":
+        return np.array([int(n) for n in names] + [-1])
+    if label_type == "float":
+        return np.array([float(n) for n in names] + [np.nan])
+    if label_type == "bool":
+        return np.array([n == "True" for n in names] + [None], dtype=object)
+    return np.array(list(names) + [""], dtype=object)
+
+
 def _targets(y: Any) -> Tuple[Optional[List[str]], Optional[np.ndarray]]:
     """Labels (a 1-D y) or positions (n x 2 or n x 3, m)."""
     if y is None:
@@ -641,7 +701,7 @@ class Model:
     dataset). Made by :func:`train` or :meth:`Model.load`."""
 
     def __init__(self, native: "_native.Model") -> None:
-        self._native = native
+        self._native = _Serialised(native)
 
     @property
     def kind(self) -> str:
@@ -676,11 +736,8 @@ class Model:
             return positions
         if names is None:
             return classes
-        if all(n.lstrip("-").isdigit() for n in names):
-            lookup = np.array([int(n) for n in names] + [-1])
-        else:
-            lookup = np.array(list(names) + [""], dtype=object)
-        return lookup[classes]
+        label_type = (self.info.get("classes") or {}).get("label_type")
+        return _as_given(names, label_type)[classes]
 
     def predict_positions(self, X: Any, v0: Any = None) -> Optional[np.ndarray]:
         """Each row's position, n x 2 (m): a regressor's estimate, a classifier's class centre
@@ -758,12 +815,17 @@ def train(
     if shrinkage is not None or raw or keep is not None:
         raise EtError("shrinkage, raw and keep apply to et datasets; on arrays they are chosen by cross-validation")
     labels, positions = _targets(y)
+    if groups is not None and cv == "blocks":
+        raise EtError(
+            "cv='blocks' with groups: with groups, cross-validation leaves one group out; "
+            "give one or the other"
+        )
     groups = None if groups is None else _labels(np.asarray(groups))
     grid_pair = None if grid is None else (int(grid[0]), int(grid[1]))
     return Model(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
-            bool(per_group), int(seed),
+            bool(per_group), int(seed), _label_type(y) if labels is not None else None,
         )
     )
 

@@ -91,7 +91,7 @@ fn table(
 
 /// Trains on any sensor's table (arrays); see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed))]
+#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None))]
 fn train_table(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
@@ -104,6 +104,7 @@ fn train_table(
     grid: Option<(usize, usize)>,
     per_group: bool,
     seed: u64,
+    label_type: Option<String>,
 ) -> PyResult<Model> {
     let table = table(&x, labels, positions_m, groups)?;
     let trainer = Trainer {
@@ -119,9 +120,15 @@ fn train_table(
         per_group,
         ..Trainer::default()
     };
-    let trained = py
+    let mut trained = py
         .detach(|| trainer.train(Examples::Table(&table), |_| {}))
         .map_err(|e| refused(&e))?;
+    // The labels' type, so that predictions give them back as they were given.
+    if let et_learn::model::Model::Table(t) = &mut trained.model
+        && let Some(c) = &mut t.classes
+    {
+        c.label_type = label_type;
+    }
     Ok(Model::new(trained.model))
 }
 

@@ -43,3 +43,60 @@ def test_timing_repeats_and_electrode_counts_are_checked():
     with pytest.raises(et.EtError, match="whole numbers"):
         et.Protocol.from_pyeit(ex, meas, electrodes=4.5)
     assert et.Protocol.from_pyeit(ex, meas, electrodes=4.0).electrodes == 4
+
+
+def test_one_reconstructor_shared_by_threads_images_as_alone():
+    # A call holds the native reconstruction with the GIL released; another thread's call
+    # waits for it (before, it raised "Already borrowed").
+    import threading
+
+    r = et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=600)
+    v0 = r.forward(r.sigma0)
+    centroids = r.nodes[r.triangles].mean(axis=1)
+    bump = np.hypot(centroids[:, 0] - 0.03, centroids[:, 1]) < 0.015
+    v1 = r.forward(np.where(bump, 2 * r.sigma0, r.sigma0))
+    r.set_reference(v0)
+    alone = r.image(v1).objects
+    assert alone
+    errors = []
+
+    def work():
+        try:
+            for _ in range(20):
+                assert r.image(v1).objects == alone
+                r.images(np.stack([v1, v1]))
+        except Exception as e:  # noqa: BLE001 (any failure is the finding)
+            errors.append(repr(e))
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+
+
+@pytest.mark.parametrize(
+    "first, second",
+    [(1, 2), ("1", "01"), (1.5, 2.5), (True, False), ("--1", "a"), ("x", "y")],
+)
+def test_labels_come_back_as_given(tmp_path, first, second):
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((120, 5))
+    X[:60] += 2
+    y = np.array([first] * 60 + [second] * 60)
+    model = et.train(X, y, kind="lda")
+    saved = tmp_path / "model.json"
+    model.save(saved)
+    for m in (model, et.Model.load(saved)):
+        got = m.predict(X[[0, 119]])
+        assert list(got) == [first, second]
+        assert [type(v) for v in got.tolist()] == [type(first), type(second)]
+
+
+def test_blocks_beside_groups_is_refused():
+    rng = np.random.default_rng(1)
+    X = rng.standard_normal((60, 4))
+    y = np.array([0, 1] * 30)
+    with pytest.raises(et.EtError, match="cv='blocks' with groups"):
+        et.train(X, y, groups=[0, 1, 2] * 20, cv="blocks")

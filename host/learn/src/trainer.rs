@@ -48,6 +48,9 @@ pub enum TrainError {
     /// A table could not be trained on.
     #[error(transparent)]
     Table(#[from] TabularError),
+    /// A fixed shrinkage outside [0, 1].
+    #[error("shrinkage {0}: a number from 0 to 1 (or none: chosen by cross-validation)")]
+    Shrinkage(f64),
     /// A method an et dataset does not train (the board takes QDA or LDA).
     #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
     NotForTheBoard(&'static str),
@@ -231,6 +234,9 @@ impl Trainer {
         examples: Examples<'_>,
         mut progress: impl FnMut(Progress<'_>),
     ) -> Result<Trained, TrainError> {
+        if let Some(s) = self.shrinkage.filter(|s| !(0.0..=1.0).contains(s)) {
+            return Err(TrainError::Shrinkage(s));
+        }
         match examples {
             Examples::Dataset(data) => {
                 let (model, training) = self.train_dataset(data.clone(), &mut progress)?;

@@ -40,6 +40,7 @@ pub(super) fn class_targets(
             names: labels.names.clone(),
             centres: Some(used.iter().map(|&c| g.centre(c)).collect()),
             grid: Some(g),
+            label_type: None,
         };
         return Ok(Some((labels, info)));
     }
@@ -62,6 +63,7 @@ pub(super) fn class_targets(
         names: labels.names.clone(),
         centres,
         grid: None,
+        label_type: None,
     };
     Ok(Some((labels, info)))
 }

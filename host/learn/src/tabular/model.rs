@@ -187,6 +187,11 @@ pub struct ClassInfo {
     pub centres: Option<Vec<[f64; 2]>>,
     /// The grid, when the classes were made from positions.
     pub grid: Option<Grid>,
+    /// What the names were before they were written as text, so that a reader gives them
+    /// back as given: "int", "float", "bool" or "str" (the Python module writes it; absent
+    /// from files the command line trained, whose names are the file's text).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label_type: Option<String>,
 }
 
 /// A model trained on a table, as saved (JSON; every field documented for Python and MATLAB

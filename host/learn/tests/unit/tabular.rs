@@ -405,6 +405,17 @@ fn knn_equals_brute_force() {
 #[test]
 fn bad_requests_are_refused_with_the_reason() {
     let mut small = STANDIN.select("0..60".parse().unwrap()).unwrap();
+    // A fixed shrinkage outside [0, 1], whoever asks (the Python module too).
+    for s in [2.0, -0.1, f64::NAN] {
+        let trainer = et_learn::Trainer {
+            shrinkage: Some(s),
+            ..et_learn::Trainer::default()
+        };
+        let e = trainer
+            .train(et_learn::Examples::Table(&small), |_| {})
+            .unwrap_err();
+        assert!(e.to_string().contains("from 0 to 1"), "{s}: {e}");
+    }
     // A classifier with positions only and no grid.
     let e = train(&small, Choice::One(Kind::Qda), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("--grid"), "{e}");

@@ -254,6 +254,13 @@ impl TableModel {
                 "classes.names (and centres_m) must list every class",
             ));
         }
+        if (info.label_type.as_deref())
+            .is_some_and(|t| !["int", "float", "bool", "str"].contains(&t))
+        {
+            return Err(TablesError::Inconsistent(
+                "classes.label_type: int, float, bool or str",
+            ));
+        }
         if let Some(g) = &info.grid {
             let [x0, y0, x1, y1] = g.bounds;
             let cells = g.rows.checked_mul(g.cols);
