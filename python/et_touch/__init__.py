@@ -90,6 +90,24 @@ class Sheet:
         return int(self.spec.get("electrodes", {}).get("count", 16))
 
 
+def _spec_json(spec: Dict[str, Any]) -> str:
+    """A sheet's spec as JSON, a NaN or infinite number refused by its name (JSON has none)."""
+
+    def bad(value: Any, at: str) -> Optional[str]:
+        if isinstance(value, dict):
+            return next((b for k, v in value.items() if (b := bad(v, f"{at}.{k}" if at else k))), None)
+        if isinstance(value, (list, tuple)):
+            return next((b for i, v in enumerate(value) if (b := bad(v, f"{at}[{i}]"))), None)
+        if isinstance(value, float) and not np.isfinite(value):
+            return f"{at} = {value}"
+        return None
+
+    found = bad(spec, "")
+    if found is not None:
+        raise EtError(f"sheet: {found}: give a finite number")
+    return json.dumps(spec)
+
+
 def _sheet(
     shape: Dict[str, Any],
     electrodes: int,
@@ -510,7 +528,7 @@ class Reconstructor:
         currents = _f64(protocol.currents, 1, "currents")
         current_a = float(currents[0]) if len(currents) else 1e-3
         self._native = _Serialised(_native.Reconstructor(
-            json.dumps(sheet.spec), int(protocol.electrodes), protocol.name, current_a,
+            _spec_json(sheet.spec), int(protocol.electrodes), protocol.name, current_a,
             None if protocol.name else rows, None if protocol.name else currents,
             int(triangles), method, str(alpha), int(pixels), threshold, float(s),
             int(iterations), noise_figure, radius_m,

@@ -100,3 +100,10 @@ def test_blocks_beside_groups_is_refused():
     y = np.array([0, 1] * 30)
     with pytest.raises(et.EtError, match="cv='blocks' with groups"):
         et.train(X, y, groups=[0, 1, 2] * 20, cv="blocks")
+
+
+def test_a_sheet_with_a_nan_is_refused_by_the_numbers_name():
+    with pytest.raises(et.EtError, match="sheet_resistance = nan"):
+        et.Reconstructor(et.disc(0.1, 16, sheet_resistance=math.nan), et.protocol("adjacent", 16))
+    with pytest.raises(et.EtError, match="electrodes.contact_ohm = inf"):
+        et.Reconstructor(et.disc(0.1, 16, contact_ohm=math.inf), et.protocol("adjacent", 16))

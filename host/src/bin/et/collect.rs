@@ -31,11 +31,13 @@ pub(crate) struct CollectArgs {
     /// Lowest pressure while pressing, kPa.
     #[arg(long, default_value_t = 5.0, value_parser = crate::domain::real(0.0, 1_000.0))]
     min_kpa: f64,
-    /// Highest pressure while pressing, kPa.
-    #[arg(long, default_value_t = 60.0, value_parser = crate::domain::above(0.0, 1_000.0))]
+    /// Highest pressure while pressing, kPa (0.1 to 1 000: a lighter touch barely changes
+    /// the sheet).
+    #[arg(long, default_value_t = 60.0, value_parser = crate::domain::real(0.1, 1_000.0))]
     max_kpa: f64,
-    /// Finger contact radius (the median over presses), mm.
-    #[arg(long, default_value_t = 7.5, value_parser = crate::domain::above(0.0, 100.0))]
+    /// Finger contact radius (the median over presses), mm (0.5 to 100: a smaller contact
+    /// is no finger's, and below what the simulated sheet resolves).
+    #[arg(long, default_value_t = 7.5, value_parser = crate::domain::real(0.5, 100.0))]
     radius_mm: f64,
     /// Radius of the target the finger's centre lands in (uniformly) around each class
     /// centre, mm (default: the finger's radius; the method's 10 mm targets for 100 classes

@@ -58,6 +58,23 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
     Ok(range)
 }
 
+/// `--reference`'s count of untouched frames at the start of a file of `n` frames: at least
+/// one frame must be left to image after them. Said as the user gave it (the default too).
+fn reference_count(args: &ReconstructArgs, path: &str, n: usize) -> Result<usize> {
+    if args.reference >= n {
+        bail!(
+            "{path}: {n} frame{}; --reference {} asks for {} untouched frames before the ones \
+             to image (20 unless given): lower --reference (at most {}), or give the untouched \
+             frames with --reference-file",
+            if n == 1 { "" } else { "s" },
+            args.reference,
+            args.reference,
+            n.saturating_sub(1)
+        );
+    }
+    Ok(args.reference)
+}
+
 /// The frames `et reconstruct` images from the scene or an et recording.
 pub(super) fn frames(
     args: &ReconstructArgs,
@@ -86,7 +103,7 @@ pub(super) fn frames(
         .display()
         .to_string();
     let n = r.records.len();
-    let reference = args.reference.clamp(1, n.max(1));
+    let reference = reference_count(args, &path, n)?;
     let range = chosen(args, &path, reference, n)?;
     let (Some(before), Some(imaged)) = (r.records.get(..reference), r.records.get(range.clone()))
     else {
@@ -146,7 +163,7 @@ pub(super) fn table_frames(
             (et_recon::Reference::from_frames(&r.frames)?, 0)
         }
         None => {
-            let count = args.reference.clamp(1, n.max(1));
+            let count = reference_count(args, &path.display().to_string(), n)?;
             let before = frames.frames.get(..count.min(n)).unwrap_or_default();
             (
                 // An empty reference is refused by `chosen` below with the reason.
