@@ -127,7 +127,7 @@ pub enum FramesFault {
     #[error("a compressed variable is damaged")]
     Damaged,
     /// A compressed MATLAB variable that inflates past the data files' limit.
-    #[error("a compressed variable inflates past {0} bytes: not frames et reads")]
+    #[error("its compressed variables inflate past {0} bytes together: not frames et reads")]
     Inflates(u64),
     /// The MATLAB reader refused the file.
     #[error("not a MATLAB version 5 or 7 file: {0}")]
@@ -208,8 +208,8 @@ fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
 
 /// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
 /// Checks the compressed variables of a version 5/7 `.mat` before matfile inflates them (it
-/// reads each to its end, without a limit): each must inflate, and to no more than the data
-/// files' limit (a small file could otherwise expand to gigabytes).
+/// reads each to its end, without a limit): each must inflate, and all of them together to
+/// no more than the data files' limit (a small file could otherwise expand to gigabytes).
 fn compressed_within_limits(bytes: &[u8]) -> Result<(), FramesFault> {
     use std::io::Read as _;
     let little = bytes.get(126..128) == Some(b"IM");
@@ -222,19 +222,25 @@ fn compressed_within_limits(bytes: &[u8]) -> Result<(), FramesFault> {
         })
     };
     let mut at = 128;
+    // The limit is on all the variables together: matfile inflates every one.
+    let limit = et_core::text::max_file_bytes();
+    let mut inflated: u64 = 0;
     while let (Some(kind), Some(size)) = (word(at), word(at + 4)) {
         let size = size as usize;
         let data = bytes.get(at + 8..(at + 8).saturating_add(size));
         if kind == 15 {
             let data = data.ok_or(FramesFault::CutShort)?;
-            let mut out = Vec::new();
-            let limit = et_core::text::max_file_bytes();
-            libflate::zlib::Decoder::new(data)
-                .map_err(|_| FramesFault::Damaged)?
-                .take(limit.saturating_add(1))
-                .read_to_end(&mut out)
-                .map_err(|_| FramesFault::Damaged)?;
-            if out.len() as u64 > limit {
+            let left = limit.saturating_sub(inflated);
+            // Counted, not kept: a variable's bytes are read through a sink.
+            let n = std::io::copy(
+                &mut libflate::zlib::Decoder::new(data)
+                    .map_err(|_| FramesFault::Damaged)?
+                    .take(left.saturating_add(1)),
+                &mut std::io::sink(),
+            )
+            .map_err(|_| FramesFault::Damaged)?;
+            inflated = inflated.saturating_add(n);
+            if inflated > limit {
                 return Err(FramesFault::Inflates(limit));
             }
             at = at.saturating_add(8).saturating_add(size);

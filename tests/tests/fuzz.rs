@@ -349,6 +349,26 @@ fn frames_csv() -> String {
         .collect()
 }
 
+/// The frames as another system's `.npz` (one array, "frames").
+fn frames_npz() -> Vec<u8> {
+    let mut w = et_learn::npz::Writer::new();
+    w.matrix("frames", &frames_matrix());
+    w.finish().expect("a small archive")
+}
+
+/// A protocol file as other systems write one: a header, 1-based electrodes, each row's
+/// current (A), 40 rows (the frames' K).
+fn protocol_csv() -> String {
+    let mut text = String::from("source,sink,positive,negative,current_a\n");
+    for k in 0..40u16 {
+        let (a, m) = (k / 10, k % 10);
+        let (s, t) = (a + 1, a + 2);
+        let (p, n) = ((a + 3 + m) % 16 + 1, (a + 4 + m) % 16 + 1);
+        text += &format!("{s},{t},{p},{n},1e-3\n");
+    }
+    text
+}
+
 /// `et_host::frames::read` picks the format by extension: the case's file is given one
 /// through a symbolic link (so an endless input stays endless).
 fn read_frames(case: &Path, ext: &str) -> bool {
@@ -485,6 +505,22 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             name: "frames CSV",
             seeds: vec![frames_csv().into()],
             parse: |p| read_frames(&p[0], "csv"),
+        },
+        Parser {
+            name: "frames NumPy .npy",
+            seeds: vec![et_learn::npz::npy_of_matrix(&frames_matrix())],
+            parse: |p| read_frames(&p[0], "npy"),
+        },
+        Parser {
+            name: "frames NumPy .npz",
+            seeds: vec![frames_npz()],
+            parse: |p| read_frames(&p[0], "npz"),
+        },
+        Parser {
+            name: "protocol CSV",
+            seeds: vec![protocol_csv().into()],
+            // As a scene's `protocol = { file = ... }` reads it: 16 electrodes, 1-based.
+            parse: |p| et_core::schedule::Schedule::read_csv(&p[0], 16, 1, 1e-3).is_ok(),
         },
         Parser {
             name: "frames MATLAB .mat",
@@ -711,4 +747,41 @@ fn every_reader_stops_at_its_limit_on_endless_and_huge_inputs() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A `.mat` of many compressed variables, each within the data files' limit when inflated but
+/// all together past it, is refused before any is parsed: the limit counts their total (a
+/// 4.6 MB file inflated to 4.5 GB when each was checked alone).
+#[test]
+fn compressed_matlab_variables_are_bounded_together() {
+    use std::io::Write as _;
+    let _turn = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let limit: u64 = 1 << 20;
+    // One variable of 256 KiB of zeros, compressed (a few hundred bytes).
+    let plain = et_host::frames::mat_v5("v", &DMatrix::zeros(128, 256));
+    let mut z = libflate::zlib::Encoder::new(Vec::new()).unwrap();
+    z.write_all(&plain[128..]).unwrap();
+    let deflated = z.finish().into_result().unwrap();
+    let file_of = |copies: usize| {
+        let mut file = plain[..128].to_vec();
+        for _ in 0..copies {
+            file.extend(15u32.to_le_bytes());
+            file.extend((deflated.len() as u32).to_le_bytes());
+            file.extend(&deflated);
+        }
+        file
+    };
+    let dir = scratch("mat-total");
+    let (one, many) = (dir.join("one.mat"), dir.join("many.mat"));
+    std::fs::write(&one, file_of(1)).unwrap();
+    std::fs::write(&many, file_of(8)).unwrap();
+    et_core::text::set_max_file_bytes(limit);
+    let alone = et_host::frames::read(&one, 256);
+    let together = et_host::frames::read(&many, 256);
+    et_core::text::set_max_file_bytes(0);
+    assert!(alone.is_ok(), "one variable within the limit: {alone:?}");
+    let e = together.unwrap_err().to_string();
+    assert!(e.contains("inflate past") && e.contains("together"), "{e}");
 }
