@@ -182,6 +182,7 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
         });
     }
     match occupant(out) {
+        Occupant::Nothing => new_at_check(out),
         Occupant::Stream | Occupant::EmptyFolder => return Ok(()),
         Occupant::Other(what) => {
             return Err(OutputError::NotAFile {
@@ -192,7 +193,7 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
         Occupant::File | Occupant::Folder if !force => {
             return Err(OutputError::Exists { out: out.into() });
         }
-        Occupant::File | Occupant::Folder | Occupant::Nothing => {}
+        Occupant::File | Occupant::Folder => {}
     }
     let folder = match out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -274,17 +275,46 @@ pub fn partial_path(out: &Path) -> PathBuf {
     out.with_file_name(format!(".{short}{tail}"))
 }
 
+/// Outputs that did not exist when [`check`] looked: a file that appears there before et
+/// writes it is another writer's, never replaced (only an output that existed then was
+/// sanctioned by `--force`).
+static NEW_AT_CHECK: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn new_at_check(out: &Path) {
+    let mut list = NEW_AT_CHECK
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    list.push(out.into());
+}
+
+fn was_new_at_check(out: &Path) -> bool {
+    NEW_AT_CHECK
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .iter()
+        .any(|p| p == out)
+}
+
 /// The partial files being written now, removed if et is stopped by Ctrl-C or SIGTERM.
 static PARTIALS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
-/// Removes every partial output being written when the process gets SIGINT (Ctrl-C), SIGTERM
-/// or SIGHUP, then exits with 128 + the signal. Call once, early in `main`.
+/// Removes every partial output being written when the process gets a signal whose default
+/// ends it (SIGINT from Ctrl-C, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGXCPU,
+/// SIGXFSZ, SIGVTALRM, SIGPROF), then exits with 128 + the signal. SIGKILL cannot be caught;
+/// SIGPIPE is left as Rust sets it (ignored: a closed pipe is a write error, said as one).
+/// Call once, early in `main`.
 ///
 /// # Errors
 /// When the handler cannot be installed.
 pub fn clean_up_on_signals() -> std::io::Result<()> {
-    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    use signal_hook::consts::{
+        SIGALRM, SIGHUP, SIGINT, SIGPROF, SIGQUIT, SIGTERM, SIGUSR1, SIGUSR2, SIGVTALRM, SIGXCPU,
+        SIGXFSZ,
+    };
+    let mut signals = signal_hook::iterator::Signals::new([
+        SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGXCPU, SIGXFSZ, SIGVTALRM,
+        SIGPROF,
+    ])?;
     std::thread::Builder::new()
         .name("et-signals".into())
         .spawn(move || {
@@ -327,8 +357,9 @@ pub fn write<T, E: From<OutputError>>(
     if is_stream(out) {
         return save(out);
     }
-    // Whether the output is new: then it is created exclusively at the end.
-    let new = std::fs::symlink_metadata(out).is_err();
+    // Whether the output is new (when the command checked it, or now): then it is created
+    // exclusively at the end, and one that appeared meanwhile is left as it is.
+    let new = was_new_at_check(out) || std::fs::symlink_metadata(out).is_err();
     let partial = partial_path(out);
     track(&partial, true);
     let result = save(&partial).and_then(|value| {

@@ -1153,44 +1153,47 @@ fn outputs_are_checked_together_and_never_lost_silently() {
         &[&recon[..], &["--out", &p("nodir/i.json")]].concat(),
         "does not exist",
     );
-    // SIGTERM in the middle of a long write: no hidden partial file left.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
-        .args([
-            "sim",
-            "--scene",
-            &p("s.toml"),
-            "--frames",
-            "10000000",
-            "--out",
-            &p("big.jsonl"),
-        ])
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let partial_appeared = (0..200).any(|_| {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-        std::fs::read_dir(&dir)
+    // SIGTERM, or SIGUSR1 (any signal that ends et), in the middle of a long write: no hidden
+    // partial file left.
+    for (signal, number) in [("TERM", 15), ("USR1", 10)] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+            .args([
+                "sim",
+                "--scene",
+                &p("s.toml"),
+                "--frames",
+                "10000000",
+                "--out",
+                &p("big.jsonl"),
+            ])
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let partial_appeared = (0..200).any(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            std::fs::read_dir(&dir)
+                .unwrap()
+                .any(|e| e.unwrap().file_name().to_string_lossy().contains("partial"))
+        });
+        assert!(partial_appeared, "et sim writes under a partial name");
+        let kill = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(128 + number), "{signal}: {status:?}");
+        let names: Vec<String> = std::fs::read_dir(&dir)
             .unwrap()
-            .any(|e| e.unwrap().file_name().to_string_lossy().contains("partial"))
-    });
-    assert!(partial_appeared, "et sim writes under a partial name");
-    let kill = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(128 + 15), "{status:?}");
-    let names: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    assert!(
-        !names
-            .iter()
-            .any(|n| n.contains("partial") || n == "big.jsonl"),
-        "{names:?}"
-    );
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(
+            !names
+                .iter()
+                .any(|n| n.contains("partial") || n == "big.jsonl"),
+            "{signal}: {names:?}"
+        );
+    }
     // A full device takes nothing: not a success.
     for args in [&["--help"][..], &["protocol", "--json"][..]] {
         let out = Command::new(env!("CARGO_BIN_EXE_et"))

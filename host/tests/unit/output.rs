@@ -183,3 +183,47 @@ fn a_new_output_is_created_exclusively_and_long_names_fit() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// An output that did not exist when the command checked it, and that another writer
+/// creates while et works, is left as it is, with or without --force (which sanctions
+/// replacing what existed at the check, nothing that appeared after it); a file that existed
+/// at the check is replaced under --force as before.
+#[test]
+fn a_file_that_appears_during_the_work_is_never_replaced() {
+    let d = dir("appears");
+    let out = d.join("model.json");
+    for force in [false, true] {
+        let _ = std::fs::remove_file(&out);
+        check(&out, &[], force).unwrap();
+        // Another run writes it while this one trains.
+        std::fs::write(&out, "theirs").unwrap();
+        let e = write(&out, |p: &Path| {
+            std::fs::write(p, "ours").map_err(|source| OutputError::Io {
+                path: p.into(),
+                source,
+            })
+        })
+        .unwrap_err();
+        assert!(matches!(e, OutputError::Raced { .. }), "{e}");
+        assert!(
+            e.to_string().contains("appeared while et was writing it"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "theirs");
+        let partials = std::fs::read_dir(&d).unwrap().count();
+        assert_eq!(partials, 1, "no partial file left");
+    }
+    // Existing at the check, replaced with --force.
+    let old = d.join("old.json");
+    std::fs::write(&old, "old").unwrap();
+    check(&old, &[], true).unwrap();
+    write(&old, |p: &Path| {
+        std::fs::write(p, "new").map_err(|source| OutputError::Io {
+            path: p.into(),
+            source,
+        })
+    })
+    .unwrap();
+    assert_eq!(std::fs::read_to_string(&old).unwrap(), "new");
+    std::fs::remove_dir_all(&d).unwrap();
+}
