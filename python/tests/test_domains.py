@@ -107,3 +107,14 @@ def test_a_sheet_with_a_nan_is_refused_by_the_numbers_name():
         et.Reconstructor(et.disc(0.1, 16, sheet_resistance=math.nan), et.protocol("adjacent", 16))
     with pytest.raises(et.EtError, match="electrodes.contact_ohm = inf"):
         et.Reconstructor(et.disc(0.1, 16, contact_ohm=math.inf), et.protocol("adjacent", 16))
+
+
+def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
+    with pytest.raises(et.EtError, match="sliver"):
+        et.Reconstructor(et.rectangle(0.2, 1e-6, 16), et.protocol("adjacent", 16))
+    angles = np.linspace(0, 2 * np.pi, 1001, endpoint=False)
+    many = np.column_stack([0.1 * np.cos(angles), 0.1 * np.sin(angles)])
+    with pytest.raises(et.EtError, match="more than 1 000 vertices"):
+        et.Reconstructor(et.polygon(many, 16), et.protocol("adjacent", 16))
+    # A long strip is not a sliver.
+    et.Reconstructor(et.rectangle(0.3, 0.01, 16), et.protocol("adjacent", 16), triangles=300)

@@ -39,10 +39,29 @@ pub enum ShapeError {
         /// Its value.
         value: f64,
     },
-    /// A polygon needs at least 3 vertices, all finite, and a non-zero area.
+    /// A polygon needs at least 3 vertices (at most [`MAX_VERTICES`]), all finite, and a
+    /// non-zero area.
     #[error("polygon: {0}")]
     Polygon(&'static str),
+    /// An outline too narrow against its longer side to mesh.
+    #[error(
+        "the outline is a sliver: its area is {slenderness:.1e} of its longer side squared, \
+         at least 1e-3 is meshed (a strip 1 m x 5 mm passes)"
+    )]
+    Sliver {
+        /// Area over the square of the bounding box's longer side.
+        slenderness: f64,
+    },
 }
+
+/// The most vertices an outline may have: the mesher's cost grows with them (3 000 took 43 s,
+/// 10 000 hung), and a sheet's outline needs far fewer (a disc is meshed from 24 to 200).
+pub const MAX_VERTICES: usize = 1_000;
+
+/// The narrowest an outline may be against its longest side (area over the square of the
+/// bounding box's longer side): a strip 1 m x 5 mm passes (0.005), a 0.2 m x 1 um sliver
+/// (5e-6) would ask the mesher for millions of triangles or none.
+pub const MIN_SLENDERNESS: f64 = 1e-3;
 
 impl Shape {
     /// Checks sizes and polygon sanity.
@@ -61,11 +80,18 @@ impl Shape {
             Shape::Disc { radius } => positive("radius", *radius),
             Shape::Rectangle { width, height } => {
                 positive("width", *width)?;
-                positive("height", *height)
+                positive("height", *height)?;
+                self.not_a_sliver()
             }
             Shape::Polygon { vertices } => {
                 if vertices.len() < 3 {
                     return Err(ShapeError::Polygon("needs at least 3 vertices"));
+                }
+                if vertices.len() > MAX_VERTICES {
+                    return Err(ShapeError::Polygon(
+                        "more than 1 000 vertices (the mesher's time grows with them; a \
+                         sheet's outline needs far fewer: simplify it)",
+                    ));
                 }
                 if vertices.iter().flatten().any(|v| !v.is_finite()) {
                     return Err(ShapeError::Polygon("a vertex is not finite"));
@@ -78,8 +104,21 @@ impl Shape {
                         "edges cross or touch (the outline must be a simple polygon)",
                     ));
                 }
-                Ok(())
+                self.not_a_sliver()
             }
+        }
+    }
+
+    /// [`ShapeError::Sliver`] for an outline narrower than [`MIN_SLENDERNESS`] of its longer
+    /// side.
+    fn not_a_sliver(&self) -> Result<(), ShapeError> {
+        let [x0, y0, x1, y1] = self.bounds();
+        let longest = (x1 - x0).max(y1 - y0);
+        let slenderness = self.area() / (longest * longest);
+        if slenderness >= MIN_SLENDERNESS {
+            Ok(())
+        } else {
+            Err(ShapeError::Sliver { slenderness })
         }
     }
 
