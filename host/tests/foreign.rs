@@ -593,3 +593,51 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
         String::from_utf8_lossy(&before.stderr)
     );
 }
+
+/// A scene's protocol file is read once per run, however often the run asks for the
+/// protocol: a FIFO (a file another program writes once) images, where reading it a second
+/// time waited forever.
+#[test]
+fn a_protocol_file_is_read_once() {
+    let d = dir("fifo");
+    let scene_path = d.join("tank.toml");
+    std::fs::write(&scene_path, TANK).unwrap();
+    let fifo = d.join("protocol.csv");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::write(&fifo, protocol_csv()))
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args([
+            "forward",
+            "--scene",
+            scene_path.to_str().unwrap(),
+            "--triangles",
+            "500",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // At most a minute, then the test fails rather than hangs.
+    let status = (0..600).find_map(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        child.try_wait().unwrap()
+    });
+    if status.is_none() {
+        let _ = child.kill();
+        // Let the writer finish: open the FIFO for reading once.
+        let _ = std::fs::read(&fifo);
+    }
+    writer.join().unwrap().unwrap();
+    assert!(status.is_some_and(|s| s.success()), "{status:?}");
+    let _ = std::fs::remove_file(&fifo);
+}

@@ -58,13 +58,18 @@ impl Scene {
         let electrodes = self.sheet.physical.electrodes.count;
         let field = |fault: SceneFault| FieldError::new("scan.protocol", fault);
         match (&self.scan.protocol, self.named_protocol()?) {
-            (ProtocolSpec::File(f), _) => et_core::schedule::Schedule::read_csv(
-                &self.dir.join(&f.file),
-                u16::from(electrodes),
-                f.base,
-                amps,
-            )
-            .map_err(|e| field(e.into())),
+            (ProtocolSpec::File(f), _) => {
+                let path = self.dir.join(&f.file);
+                let text = self.read.text(&path).map_err(|e| field(e.into()))?;
+                et_core::schedule::Schedule::parse_csv(
+                    &path,
+                    &text,
+                    u16::from(electrodes),
+                    f.base,
+                    amps,
+                )
+                .map_err(|e| field(e.into()))
+            }
             (_, Some(kind)) => et_core::protocol::Protocol::new(kind, electrodes)
                 .map_err(|e| field(e.into()))?
                 .schedule(amps)
