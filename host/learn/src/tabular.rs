@@ -64,6 +64,26 @@ pub enum TabularError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Misuse {
+    /// A feature value to predict from that is NaN or infinite.
+    #[error("row {row}, feature {column}: {value}, where a finite number belongs")]
+    NonFiniteFeature {
+        /// Its row (0-based among those given).
+        row: usize,
+        /// Its column (0-based).
+        column: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Predictions that came out NaN or infinite from finite features: the model's tables
+    /// overflow.
+    #[error(
+        "row {row}'s prediction is not finite from finite features: the model's tables \
+         overflow (an edited weight of 1e308?); retrain it"
+    )]
+    NonFinitePrediction {
+        /// The first such row (0-based).
+        row: usize,
+    },
     /// A regressor's fit without positions.
     #[error("this method needs positions")]
     NeedsPositions,

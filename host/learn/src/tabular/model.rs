@@ -335,7 +335,8 @@ impl Prepared {
     /// [`TableModel::predict`].
     ///
     /// # Errors
-    /// [`TabularError::Usage`] when `x` has another feature count.
+    /// [`TabularError::Usage`] when `x` has another feature count, a value that is NaN or
+    /// infinite, or a prediction that is not finite (tables that overflow).
     pub fn predict(&self, x: &DMatrix<f64>) -> Result<Vec<Prediction>, TabularError> {
         if x.ncols() != self.features {
             return Err(usage(Misuse::FeatureCount {
@@ -343,6 +344,27 @@ impl Prepared {
                 model: self.features,
             }));
         }
+        if let Some((i, value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            // Column-major: the i-th value is row i % n of column i / n.
+            let n = x.nrows().max(1);
+            return Err(usage(Misuse::NonFiniteFeature {
+                row: i % n,
+                column: i / n,
+                value: *value,
+            }));
+        }
+        let predicted = self.predict_finite(x)?;
+        if let Some(row) = predicted
+            .iter()
+            .position(|p| p.target.is_some_and(|t| t.iter().any(|v| !v.is_finite())))
+        {
+            return Err(usage(Misuse::NonFinitePrediction { row }));
+        }
+        Ok(predicted)
+    }
+
+    /// [`Prepared::predict`] of finite features.
+    fn predict_finite(&self, x: &DMatrix<f64>) -> Result<Vec<Prediction>, TabularError> {
         let regression = |t: Vec<Target3>| {
             t.into_iter()
                 .map(|t| Prediction {

@@ -442,6 +442,23 @@ fn bad_requests_are_refused_with_the_reason() {
     let mut text = serde_json::to_string(&model).unwrap();
     text = text.replacen("\"weights\":[[", "\"weights\":[[1e999,", 1);
     assert!(TableModel::from_json(&text).is_err());
+    // Weights that load but overflow: said, not a null error; a NaN feature named.
+    let mut huge = model.clone();
+    if let Tables::Ridge { weights, .. } = &mut huge.tables {
+        for w in weights.iter_mut() {
+            *w = [1e308; 3];
+        }
+    }
+    let x = rows.x.rows(0, 3).into_owned();
+    let e = huge.predict(&x).unwrap_err();
+    assert!(
+        e.to_string().contains("not finite from finite features"),
+        "{e}"
+    );
+    let mut nan = x.clone();
+    nan[(1, 4)] = f64::NAN;
+    let e = model.predict(&nan).unwrap_err();
+    assert!(e.to_string().contains("row 1, feature 4: NaN"), "{e}");
     let mut short = model.clone();
     if let Tables::Ridge { weights, .. } = &mut short.tables {
         weights.pop();
