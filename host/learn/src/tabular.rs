@@ -84,6 +84,17 @@ pub enum Misuse {
         /// The first such row (0-based).
         row: usize,
     },
+    /// More groups than cross-validation leaves out one at a time.
+    #[error(
+        "{groups} groups among {rows} rows: leaving each out fits every candidate {groups} \
+         times; groups are sessions (at most 100), not rows: give each row its session"
+    )]
+    TooManyGroups {
+        /// The groups named.
+        groups: usize,
+        /// The rows.
+        rows: usize,
+    },
     /// A regressor's fit without positions.
     #[error("this method needs positions")]
     NeedsPositions,

@@ -416,6 +416,11 @@ fn bad_requests_are_refused_with_the_reason() {
             .unwrap_err();
         assert!(e.to_string().contains("from 0 to 1"), "{s}: {e}");
     }
+    // Every row its own group: refused at once, not fitted once per row.
+    let mut each = STANDIN.select("0..150".parse().unwrap()).unwrap();
+    each.groups = Some((0..150).map(|i| format!("row{i}")).collect());
+    let e = train(&each, Choice::Auto, &opts(), &mut quiet()).unwrap_err();
+    assert!(e.to_string().contains("150 groups among 150 rows"), "{e}");
     // A classifier with positions only and no grid.
     let e = train(&small, Choice::One(Kind::Qda), &opts(), &mut quiet()).unwrap_err();
     assert!(e.to_string().contains("--grid"), "{e}");

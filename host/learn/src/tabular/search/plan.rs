@@ -3,6 +3,10 @@
 
 use super::*;
 
+/// The most groups (sessions) a training leaves out one at a time: each candidate is fitted
+/// once per group (every row its own group took over five minutes, without a word).
+pub const MAX_GROUPS: usize = 100;
+
 /// How a training's rows are cross-validated: leaving each group out when the rows name two
 /// groups or more, else `opts.folds` folds by `opts.scheme`.
 pub(super) struct Cv {
@@ -25,6 +29,10 @@ impl Cv {
         } else {
             opts.folds
         };
+        // Leaving each group out fits every candidate once per group: sessions, not rows.
+        if grouped && k > MAX_GROUPS {
+            return Err(usage(Misuse::TooManyGroups { groups: k, rows: n }));
+        }
         if !grouped && n < 2 {
             return Err(usage(Misuse::TooFewRows(n)));
         }
