@@ -302,9 +302,10 @@ impl Spec {
     /// the Jacobian. What `et forward` simulates frames with.
     ///
     /// # Errors
-    /// [`ImagingError::Mesh`] when the sheet cannot be meshed, [`ImagingError::Fem`] for a
-    /// forward model that cannot be built.
+    /// As [`Spec::check`]; [`ImagingError::Mesh`] when the sheet cannot be meshed,
+    /// [`ImagingError::Fem`] for a forward model that cannot be built.
     pub fn imager(self) -> Result<Imager, ImagingError> {
+        self.check()?;
         let mesh = self.mesh.mesh(&self.sheet)?;
         Ok(Imager::new(&self.sheet, mesh, self.pixels)?)
     }
