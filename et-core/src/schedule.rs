@@ -155,6 +155,9 @@ pub enum FileFault {
          optionally current_a)"
     )]
     MissingColumn(&'static str),
+    /// A header that names a column twice.
+    #[error("the header names {0} twice: which column is meant would be a guess")]
+    SameColumn(&'static str),
     /// Without a header, a row of another width.
     #[error(
         "{0} columns: without a header give source, sink, positive, negative and optionally \
@@ -380,6 +383,13 @@ impl Schedule {
             let columns = NAMES.map(find);
             if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
                 return Err(fail(*first_line, FileFault::MissingColumn(missing.0)));
+            }
+            // A column named twice: which one is meant would be a guess.
+            if let Some(name) = NAMES
+                .iter()
+                .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
+            {
+                return Err(fail(*first_line, FileFault::SameColumn(name)));
             }
             columns
         } else if first.len() == 4 || first.len() == 5 {

@@ -55,6 +55,14 @@ fn wrong_rows_are_named_by_line_and_cell() {
         e.contains("p.csv:3") && e.contains("electrode 16") && e.contains("base = 1"),
         "{e}"
     );
+    // A column named twice is refused, not guessed at (the first `source` was used).
+    let e = parse("source,sink,positive,negative,Source\n0,1,2,3,5\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.csv:1") && e.contains("names source twice"),
+        "{e}"
+    );
     let e = parse("0,0,2,3\n", 16, 0).unwrap_err().to_string();
     assert!(
         e.contains("p.csv:1") && e.contains("source and sink"),
