@@ -1153,6 +1153,41 @@ fn outputs_are_checked_together_and_never_lost_silently() {
         &[&recon[..], &["--out", &p("nodir/i.json")]].concat(),
         "does not exist",
     );
+    // Flags that would have no effect are refused, not ignored.
+    for (args, said) in [
+        (
+            vec![
+                "sim",
+                "--scene",
+                &p("s.toml"),
+                "--frames",
+                "2",
+                "--out",
+                &p("i.jsonl"),
+                "--instrument",
+                "ideal",
+            ],
+            "--instrument ideal sets another system's noise",
+        ),
+        (
+            vec![
+                "sim",
+                "--scene",
+                &p("s.toml"),
+                "--frames",
+                "2",
+                "--out",
+                &p("i.csv"),
+                "--samples",
+            ],
+            "--samples simulates the board's ADC",
+        ),
+    ] {
+        let out = et(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert!(text.contains(said), "{args:?}: {text}");
+    }
     // SIGTERM, or SIGUSR1 (any signal that ends et), in the middle of a long write: no hidden
     // partial file left.
     for (signal, number) in [("TERM", 15), ("USR1", 10)] {

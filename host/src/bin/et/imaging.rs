@@ -114,7 +114,12 @@ pub(crate) struct ReconstructArgs {
     reference: usize,
     /// The untouched reference V_0 from another file (one or more frames, averaged; any
     /// format --frames reads); then --frame counts every frame of --frames.
-    #[arg(long, value_name = "FILE", requires = "frames")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "frames",
+        conflicts_with = "reference"
+    )]
     reference_file: Option<PathBuf>,
     /// The background the image is made about: fit (the sheet resistance and one contact
     /// resistance with which the model reproduces the reference frame best, least squares;

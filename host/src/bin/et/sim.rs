@@ -27,9 +27,11 @@ pub(crate) struct SimArgs {
     /// With a .csv/.npy/.mat --out: the instrument's noise and drift: ideal (none),
     /// laboratory (0.05 % of the rms white and 0.05 % proportional, 0.01 % gain drift a
     /// frame) or noisy (0.2 % and 0.2 %).
-    #[arg(long, value_enum, default_value_t = Instrument::Laboratory)]
-    instrument: Instrument,
-    /// Simulate every ADC sample through the real scan engine (slower) instead of whole frames.
+    /// (Default laboratory; a recording's board has its own noise: refused with .jsonl.)
+    #[arg(long, value_enum)]
+    instrument: Option<Instrument>,
+    /// With a .jsonl --out: simulate every ADC sample through the real scan engine (slower)
+    /// instead of whole frames (refused for another system's files, made whole).
     #[arg(long)]
     samples: bool,
     /// Override the scene's seed.
@@ -58,7 +60,22 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
         scene.seed = seed;
     }
     if et_host::frames::is_table(&args.out) {
+        if args.samples {
+            anyhow::bail!(
+                "--samples simulates the board's ADC for a recording (.jsonl); {} is another \
+                 system's frames, made whole: drop --samples, or write a .jsonl",
+                args.out.display()
+            );
+        }
         return foreign_frames(args, &scene);
+    }
+    if let Some(i) = args.instrument {
+        anyhow::bail!(
+            "--instrument {} sets another system's noise for a .csv, .npy or .mat --out; a \
+             recording (.jsonl) has the simulated board's own noise (the scene's [frontend]): \
+             drop --instrument, or write .csv, .npy or .mat",
+            format!("{i:?}").to_lowercase()
+        );
     }
     let started = Instant::now();
     let mut run = Run::new(&scene)?;
@@ -140,7 +157,8 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     let schedule = scene.schedule()?;
     let sheet = et_sim::still::simulated_sheet(scene)?;
     let lab = I::laboratory(scene.seed);
-    let instrument = match args.instrument {
+    let chosen = args.instrument.unwrap_or(Instrument::Laboratory);
+    let instrument = match chosen {
         Instrument::Ideal => I::ideal(),
         Instrument::Laboratory => lab,
         Instrument::Noisy => I {
@@ -209,7 +227,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         ),
         scene.touches.len(),
         if scene.touches.len() == 1 { "" } else { "es" },
-        args.instrument,
+        chosen,
         args.out.display(),
         started.elapsed().as_secs_f64()
     );
