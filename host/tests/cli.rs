@@ -1154,38 +1154,24 @@ fn outputs_are_checked_together_and_never_lost_silently() {
         "does not exist",
     );
     // Flags that would have no effect are refused, not ignored.
-    for (args, said) in [
+    let (scene, recording, table) = (p("s.toml"), p("i.jsonl"), p("i.csv"));
+    for (out, flag, said) in [
         (
-            vec![
-                "sim",
-                "--scene",
-                &p("s.toml"),
-                "--frames",
-                "2",
-                "--out",
-                &p("i.jsonl"),
-                "--instrument",
-                "ideal",
-            ],
+            &recording,
+            &["--instrument", "ideal"][..],
             "--instrument ideal sets another system's noise",
         ),
         (
-            vec![
-                "sim",
-                "--scene",
-                &p("s.toml"),
-                "--frames",
-                "2",
-                "--out",
-                &p("i.csv"),
-                "--samples",
-            ],
+            &table,
+            &["--samples"][..],
             "--samples simulates the board's ADC",
         ),
     ] {
-        let out = et(&args);
-        assert!(!out.status.success(), "{args:?}");
-        let text = String::from_utf8_lossy(&out.stderr);
+        let mut args = vec!["sim", "--scene", &scene, "--frames", "2", "--out", out];
+        args.extend(flag);
+        let run = et(&args);
+        assert!(!run.status.success(), "{args:?}");
+        let text = String::from_utf8_lossy(&run.stderr);
         assert!(text.contains(said), "{args:?}: {text}");
     }
     // SIGTERM, or SIGUSR1 (any signal that ends et), in the middle of a long write: no hidden
