@@ -430,7 +430,10 @@ impl Npz {
             .strip_prefix('\'')
             .and_then(|d| d.split('\'').next())
             .ok_or_else(|| bad("descr is not a simple type (a structured or object array?)"))?;
-        let (order, code) = descr.split_at(descr.len().min(1));
+        // The byte order is the first character, whatever it is (a damaged header may start
+        // with one of several bytes: splitting at byte 1 inside it panicked).
+        let first = descr.chars().next().map_or(0, char::len_utf8);
+        let (order, code) = descr.split_at(first);
         if order == ">" {
             return Err(fault(NpzFault::BigEndian));
         }

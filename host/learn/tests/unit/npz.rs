@@ -71,6 +71,15 @@ fn broken_archives_are_errors_not_panics() {
             }
         }
     }
+    // A descr whose first character is several bytes long (the fuzzer's byte-order mark
+    // inserted before '<f8'): refused, where splitting at byte 1 panicked.
+    let npy = et_learn::npz::npy_of_matrix(&nalgebra::DMatrix::from_element(2, 3, 1.0));
+    let at = npy.windows(5).position(|w| w == b"'<f8'").unwrap() + 1;
+    let mut marked = npy[..at].to_vec();
+    marked.extend("\u{feff}".as_bytes());
+    marked.extend(&npy[at..]);
+    let e = Npz::from_npy(marked).matrix("array").unwrap_err();
+    assert!(e.to_string().contains("f8"), "{e}");
     let mut b = bytes.clone();
     let central = bytes.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
     b[central + 10] = 8; // the first entry's method: deflate
