@@ -1,6 +1,7 @@
 //! Imaging from Python: protocols as tables, and [`Reconstructor`] over
 //! [`et_recon::Reconstructor`].
 
+use crate::batch::{FRAMES_AT_ONCE, in_run};
 use numpy::{
     PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
@@ -202,25 +203,6 @@ fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, us
         .map(|f| f.iter().map(|&v| v as f32).collect())
         .collect();
     Ok((frames, n, k))
-}
-
-/// Frames a batch images at once (their pixels held until copied out).
-const FRAMES_AT_ONCE: usize = 64;
-
-/// A batch's error with its frame's place among all the frames, from its place in run `r`.
-fn in_run(
-    e: et_recon::reconstructor::ImagingError,
-    r: usize,
-) -> et_recon::reconstructor::ImagingError {
-    match e {
-        et_recon::reconstructor::ImagingError::Frame { index, source } => {
-            et_recon::reconstructor::ImagingError::Frame {
-                index: r * FRAMES_AT_ONCE + index,
-                source,
-            }
-        }
-        e => e,
-    }
 }
 
 /// One frame's objects and touches (`objects_batch`), as `image`'s summary names them.

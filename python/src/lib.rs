@@ -9,6 +9,7 @@
 
 use pyo3::prelude::*;
 
+mod batch;
 mod files;
 mod imaging;
 mod learning;

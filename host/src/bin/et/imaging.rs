@@ -319,7 +319,7 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
 
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
-    check_paths(args, &scene, force)?;
+    frames::check_paths(args, &scene, force)?;
     let table = args
         .frames
         .as_deref()
@@ -440,29 +440,6 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let frame_median = recon.frame_median(&image.dv, 100);
     let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
     report(args, &recon, &image, &truth, background, timings_s, started)
-}
-
-/// The paths `et reconstruct` reads and writes checked before any work: no output replaces
-/// an input, and none an existing file without `--force`.
-fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) -> Result<()> {
-    let named = scene.files();
-    let mut inputs = vec![args.scene.as_path()];
-    inputs.extend(named.iter().map(PathBuf::as_path));
-    inputs.extend(args.frames.as_deref());
-    inputs.extend(args.reference_file.as_deref());
-    // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.
-    let mesh_files: Vec<&Path> = args
-        .mesh
-        .mesh
-        .as_deref()
-        .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
-        .unwrap_or_default();
-    inputs.extend(mesh_files);
-    let mut outputs = vec![args.out.as_path()];
-    outputs.extend(args.image_out.as_deref());
-    outputs.extend(args.segment.as_deref());
-    crate::output::check_all(&outputs, &[], &inputs, force)?;
-    Ok(())
 }
 
 /// The fitted background said on standard error: the fit's stage time (`took`, s, with

@@ -3,6 +3,7 @@
 //! `--range`, each imaged here against the reference set once).
 
 use std::ops::Range;
+use std::path::Path;
 
 use std::time::Instant;
 
@@ -265,3 +266,26 @@ pub(super) fn each_frame(
 
 /// Frames imaged at once by `--all` and `--range` (their pixels held until written).
 const FRAMES_AT_ONCE: usize = 512;
+
+/// The paths `et reconstruct` reads and writes checked before any work: no output replaces
+/// an input, and none an existing file without `--force`.
+pub(super) fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) -> Result<()> {
+    let named = scene.files();
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(named.iter().map(std::path::PathBuf::as_path));
+    inputs.extend(args.frames.as_deref());
+    inputs.extend(args.reference_file.as_deref());
+    // `--mesh nodes.csv,triangles.csv,electrodes.csv` names inputs too.
+    let mesh_files: Vec<&Path> = args
+        .mesh
+        .mesh
+        .as_deref()
+        .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
+        .unwrap_or_default();
+    inputs.extend(mesh_files);
+    let mut outputs = vec![args.out.as_path()];
+    outputs.extend(args.image_out.as_deref());
+    outputs.extend(args.segment.as_deref());
+    crate::output::check_all(&outputs, &[], &inputs, force)?;
+    Ok(())
+}
