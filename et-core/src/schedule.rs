@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::ScanConfig;
 use crate::config::ConfigError;
 use crate::protocol::{Protocol, ProtocolKind};
-use crate::text::{self, Delimiter};
+use crate::text;
 
 /// The largest current a row may drive, A (tank systems drive up to a few mA; 50 mA is far
 /// beyond any of them and below anything that would be a typing error of mA for A).
@@ -369,9 +369,12 @@ impl Schedule {
             line,
             fault,
         };
-        let records = text::records(text).map_err(|(line, f)| fail(line, f.into()))?;
-        let Some((first_line, first)) = records.first() else {
-            return Err(fail(0, FileFault::NoRows));
+        let lines = text::lines(text);
+        let mut records = text::RecordIter::new(&lines);
+        let delimiter = records.delimiter;
+        let (first_line, first) = match records.next() {
+            Some(r) => r.map_err(|(line, f)| fail(line, f.into()))?,
+            None => return Err(fail(0, FileFault::NoRows)),
         };
         const NAMES: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
         // A header names at least one of the columns (a row of numbers with a typo is data).
@@ -382,14 +385,14 @@ impl Schedule {
             let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
             let columns = NAMES.map(find);
             if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
-                return Err(fail(*first_line, FileFault::MissingColumn(missing.0)));
+                return Err(fail(first_line, FileFault::MissingColumn(missing.0)));
             }
             // A column named twice: which one is meant would be a guess.
             if let Some(name) = NAMES
                 .iter()
                 .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
             {
-                return Err(fail(*first_line, FileFault::SameColumn(name)));
+                return Err(fail(first_line, FileFault::SameColumn(name)));
             }
             columns
         } else if first.len() == 4 || first.len() == 5 {
@@ -401,23 +404,32 @@ impl Schedule {
                 (first.len() == 5).then_some(4),
             ]
         } else {
-            return Err(fail(*first_line, FileFault::Columns(first.len())));
+            return Err(fail(first_line, FileFault::Columns(first.len())));
         };
-        let mut rows = Vec::with_capacity(records.len());
-        for (line, cells) in records.iter().skip(usize::from(header)) {
-            let cell = |c: usize| cells.get(c).map(String::as_str).unwrap_or("");
+        // The rows and the file's line of each (for a row's error): the header's record
+        // again when it is data.
+        let mut rows = Vec::new();
+        let mut row_lines = Vec::new();
+        let data = (!header)
+            .then_some(Ok((first_line, first)))
+            .into_iter()
+            .chain(records);
+        for record in data {
+            let (line, cells) = record.map_err(|(line, f)| fail(line, f.into()))?;
+            row_lines.push(line);
+            let cell = |c: usize| cells.get(c).unwrap_or("");
             let electrode = |which: usize| -> Result<u16, ScheduleError> {
                 let c = columns[which].unwrap_or(which);
                 let v = cell(c);
                 let column = NAMES[which];
                 let n: u16 = v.parse().map_err(|_| {
                     let cell = v.to_string();
-                    fail(*line, FileFault::NotElectrode { column, cell })
+                    fail(line, FileFault::NotElectrode { column, cell })
                 })?;
                 n.checked_sub(base).ok_or_else(|| {
                     let (electrode, base) = (n, base);
                     fail(
-                        *line,
+                        line,
                         FileFault::BelowBase {
                             column,
                             electrode,
@@ -429,8 +441,8 @@ impl Schedule {
             let current_a = match columns[4] {
                 Some(c) => {
                     let v = cell(c);
-                    text::number(v, Delimiter::Comma)
-                        .ok_or_else(|| fail(*line, FileFault::NotCurrent(v.to_string())))?
+                    text::number(v, delimiter)
+                        .ok_or_else(|| fail(line, FileFault::NotCurrent(v.to_string())))?
                 }
                 None => default_current_a,
             };
@@ -458,7 +470,7 @@ impl Schedule {
                 | ScheduleError::SameMeasure { row, .. }
                 | ScheduleError::Current { row, .. }
                 | ScheduleError::TooLarge { row, .. } => {
-                    let line = records.get(row + usize::from(header)).map_or(0, |r| r.0);
+                    let line = row_lines.get(row).copied().unwrap_or(0);
                     fail(line, FileFault::Row(Box::new(e)))
                 }
                 other => fail(0, FileFault::Row(Box::new(other))),

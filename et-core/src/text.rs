@@ -76,6 +76,9 @@ pub fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
     })
 }
 
+/// One record's cells, as [`RecordIter`] gives them.
+pub use csv::StringRecord;
+
 /// A record: the 1-based line it starts on, and its cells, trimmed.
 pub type Record = (usize, Vec<String>);
 
@@ -107,43 +110,146 @@ pub enum RecordFault {
 /// (1-based line, fault): a cell that runs on over lines (a missing closing quote), or
 /// what the `csv` crate could not read.
 pub fn read_records(lines: &[(usize, &str)]) -> Result<Records, (usize, RecordFault)> {
-    let kept: Vec<(usize, &str)> = lines
-        .iter()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .copied()
-        .collect();
-    let delimiter = kept
-        .first()
-        .map_or(Delimiter::Comma, |(_, l)| Delimiter::of(l));
-    let joined = kept.iter().map(|(_, l)| *l).collect::<Vec<_>>().join("\n");
-    // The file's 1-based line of the csv reader's 1-based line in `joined`.
-    let file_line = |line: u64| {
+    let mut each = RecordIter::new(lines);
+    let rows = each
+        .by_ref()
+        .map(|r| r.map(|(line, cells)| (line, cells.iter().map(str::to_string).collect())))
+        .collect::<Result<Vec<Record>, _>>()?;
+    Ok(Records {
+        delimiter: each.delimiter,
+        rows,
+    })
+}
+
+/// The records of a table one at a time, as [`read_records`] reads them (blank and `#` lines
+/// skipped, cells trimmed): a reader keeps what it makes of each record, never the table's
+/// cells as text (a table of cells as strings took about 110 times its file's size).
+#[derive(Debug)]
+pub struct RecordIter<'a> {
+    reader: csv::Reader<Kept<'a>>,
+    /// What separates the cells (from the first record's line).
+    pub delimiter: Delimiter,
+    /// After an error, nothing more.
+    done: bool,
+}
+
+/// The lines a table is read from, blank and `#` lines left out, as bytes for the csv reader
+/// (each line then `\n`), remembering the file's line of each one handed on.
+#[derive(Debug)]
+struct Kept<'a> {
+    lines: &'a [(usize, &'a str)],
+    /// The rest of the line being handed on.
+    pending: &'a [u8],
+    /// A `\n` is owed after `pending`.
+    newline: bool,
+    /// The file's 0-based line of each line handed on, in order.
+    kept: Vec<usize>,
+}
+
+/// A blank or `#` line: not a record.
+fn skipped(line: &str) -> bool {
+    let t = line.trim_start();
+    t.is_empty() || t.starts_with('#')
+}
+
+impl std::io::Read for Kept<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        loop {
+            if !self.pending.is_empty() {
+                let n = self.pending.len().min(buf.len());
+                let (now, rest) = self.pending.split_at(n);
+                if let Some(to) = buf.get_mut(..n) {
+                    to.copy_from_slice(now);
+                }
+                self.pending = rest;
+                return Ok(n);
+            }
+            if self.newline {
+                let Some(b) = buf.first_mut() else {
+                    return Ok(0);
+                };
+                *b = b'\n';
+                self.newline = false;
+                return Ok(1);
+            }
+            let Some((&(i, line), rest)) = self.lines.split_first() else {
+                return Ok(0);
+            };
+            self.lines = rest;
+            if !skipped(line) {
+                self.kept.push(i);
+                self.pending = line.as_bytes();
+                self.newline = true;
+            }
+        }
+    }
+}
+
+impl<'a> RecordIter<'a> {
+    /// The records of `lines` ((0-based line number, text) pairs, say from [`lines`]).
+    #[must_use]
+    pub fn new(lines: &'a [(usize, &'a str)]) -> Self {
+        let delimiter = lines
+            .iter()
+            .find(|(_, l)| !skipped(l))
+            .map_or(Delimiter::Comma, |(_, l)| Delimiter::of(l));
+        let kept = Kept {
+            lines,
+            pending: &[],
+            newline: false,
+            kept: Vec::new(),
+        };
+        let reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .delimiter(delimiter.byte())
+            .from_reader(kept);
+        Self {
+            reader,
+            delimiter,
+            done: false,
+        }
+    }
+
+    /// The file's 1-based line of the csv reader's 1-based line (0 if unknown).
+    fn file_line(&self, line: u64) -> usize {
         usize::try_from(line)
             .ok()
             .and_then(|l| l.checked_sub(1))
-            .and_then(|l| kept.get(l))
-            .map_or(0, |(i, _)| i + 1)
-    };
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .delimiter(delimiter.byte())
-        .from_reader(joined.as_bytes());
-    let mut rows = Vec::with_capacity(kept.len());
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let line = e.position().map_or(0, |p| file_line(p.line()));
-            (line, RecordFault::Unreadable)
-        })?;
-        let line = record.position().map_or(0, |p| file_line(p.line()));
-        let cells: Vec<String> = record.iter().map(str::to_string).collect();
-        if cells.iter().any(|c| c.contains('\n')) {
-            return Err((line, RecordFault::RunOn));
-        }
-        rows.push((line, cells));
+            .and_then(|l| self.reader.get_ref().kept.get(l))
+            .map_or(0, |i| i + 1)
     }
-    Ok(Records { delimiter, rows })
+}
+
+impl Iterator for RecordIter<'_> {
+    /// (1-based line the record starts on, its cells trimmed), or (1-based line, fault): a
+    /// cell that runs on over lines (a missing closing quote), or what the `csv` crate could
+    /// not read. Nothing follows an error.
+    type Item = Result<(usize, StringRecord), (usize, RecordFault)>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let mut record = StringRecord::new();
+        let read = self.reader.read_record(&mut record);
+        let line = |p: Option<&csv::Position>| p.map_or(0, |p| self.file_line(p.line()));
+        let item = match read {
+            Ok(false) => None,
+            Ok(true) => {
+                let line = line(record.position());
+                if record.iter().any(|c| c.contains('\n')) {
+                    Some(Err((line, RecordFault::RunOn)))
+                } else {
+                    Some(Ok((line, record)))
+                }
+            }
+            Err(e) => Some(Err((line(e.position()), RecordFault::Unreadable))),
+        };
+        self.done = !matches!(item, Some(Ok(_)));
+        item
+    }
 }
 
 /// The lines of `text` with their 0-based numbers, without a leading UTF-8 byte-order mark

@@ -453,33 +453,32 @@ fn npy_matrix(archive: &Npz, name: &str) -> Result<DMatrix<f64>, NpzError> {
 }
 
 /// A CSV of numbers, a header row skipped; its matrix and what was said of the delimiter.
+/// Read record by record: what is kept is the numbers (8 bytes a value), not the cells.
 fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
-    let records = text::read_records(&text::lines(text))
-        .map_err(|(line, f)| content(path, line, f.into()))?;
+    let lines = text::lines(text);
+    let mut records = text::RecordIter::new(&lines);
     let delimiter = records.delimiter;
-    let mut rows = records.rows.iter().peekable();
-    let header = rows
-        .peek()
-        .is_some_and(|(_, r)| r.iter().any(|c| text::number(c, delimiter).is_none()));
-    if header {
-        rows.next();
-    }
     let mut values = Vec::new();
     let mut width = None;
     let mut n = 0;
-    for (line, cells) in rows {
+    for (i, record) in records.by_ref().enumerate() {
+        let (line, cells) = record.map_err(|(line, f)| content(path, line, f.into()))?;
+        // A first row with a cell that is not a number is a header.
+        if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
+            continue;
+        }
         let w = *width.get_or_insert(cells.len());
         if cells.len() != w {
             let fault = FramesFault::RowLength {
                 found: cells.len(),
                 first: w,
             };
-            return Err(content(path, *line, fault));
+            return Err(content(path, line, fault));
         }
         for (c, cell) in cells.iter().enumerate() {
             values.push(text::number(cell, delimiter).ok_or_else(|| {
-                let (column, cell) = (c + 1, cell.clone());
-                content(path, *line, FramesFault::NotNumber { column, cell })
+                let (column, cell) = (c + 1, cell.to_string());
+                content(path, line, FramesFault::NotNumber { column, cell })
             })?);
         }
         n += 1;
@@ -489,7 +488,8 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),
     };
-    Ok((DMatrix::from_row_slice(n, w, &values), said))
+    // Row after row is a w x n column-major matrix: transposed, n x w.
+    Ok((DMatrix::from_vec(w, n, values).transpose(), said))
 }
 
 /// A MATLAB version 5 file holding the double matrix `m` as variable `name` (uncompressed;

@@ -785,3 +785,60 @@ fn compressed_matlab_variables_are_bounded_together() {
     let e = together.unwrap_err().to_string();
     assert!(e.contains("inflate past") && e.contains("together"), "{e}");
 }
+
+/// Tables of numbers are read record by record: what a reader holds is its numbers (8 bytes
+/// a value, a copy or two while the matrix is shaped) beside the file's text, never its cells
+/// as strings (a frames CSV of one-digit cells took 37 times its size, 777 MB for 21 MB).
+#[test]
+fn tables_are_read_within_a_small_multiple_of_the_numbers_kept() {
+    let _turn = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let dir = scratch("table-memory");
+    let (rows, k) = (2_000, 208);
+    let mut rng = Rng::new(5);
+    let row = |rng: &mut Rng| {
+        (0..k)
+            .map(|_| (1 + rng.next_u32() % 9).to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let frames: String = (0..rows).map(|_| row(&mut rng) + "\n").collect();
+    let names: Vec<String> = (0..k - 1).map(|j| format!("f{j}")).collect();
+    let features = format!("{},label\n", names.join(","))
+        + &(0..rows).map(|_| row(&mut rng) + "\n").collect::<String>();
+    let (f, t) = (dir.join("frames.csv"), dir.join("features.csv"));
+    std::fs::write(&f, &frames).unwrap();
+    std::fs::write(&t, &features).unwrap();
+    let values = rows * k;
+    let allowed = |text: usize| text + 4 * 8 * values + (1 << 20);
+    for (what, len, read) in [
+        (
+            "frames CSV",
+            frames.len(),
+            Box::new(|| et_host::frames::read(&f, k).is_ok()) as Box<dyn Fn() -> bool>,
+        ),
+        (
+            "features CSV",
+            features.len(),
+            Box::new(|| {
+                et_learn::dataset::Table::import(&t, None, et_learn::dataset::Unit::Mm).is_ok()
+            }),
+        ),
+    ] {
+        let before = ALLOC.current_usage();
+        ALLOC.reset_peak_usage();
+        assert!(read(), "{what} read");
+        let peak = ALLOC.peak_usage().saturating_sub(before);
+        println!(
+            "{what}: {len} bytes, {values} values, peak allocation {:.1} MB",
+            peak as f64 / 1e6
+        );
+        assert!(
+            peak <= allowed(len),
+            "{what}: {peak} bytes allocated, allowed {}",
+            allowed(len)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

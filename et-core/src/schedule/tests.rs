@@ -44,6 +44,24 @@ fn files_as_other_systems_write_them() {
     let r = s.rows()[0];
     assert_eq!((r.source, r.sink, r.positive, r.negative), (2, 3, 0, 1));
     assert_eq!(r.current_a, 1.4e-3);
+    // Cells separated by ';' with decimal commas, as a spreadsheet in Europe writes them
+    // (the frame readers took them; the protocol reader refused '0,0014').
+    let s = parse(
+        "source;sink;positive;negative;current_a\n2;3;0;1;0,0014\n",
+        16,
+        0,
+    )
+    .unwrap();
+    assert_eq!(s.rows()[0].current_a, 1.4e-3);
+    // A row's error names its line after a header, blank and '#' lines.
+    let e = parse(
+        "source,sink,positive,negative\n\n# note\n0,1,2,3\n0,0,2,3\n",
+        16,
+        0,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("p.csv:5"), "{e}");
 }
 
 #[test]

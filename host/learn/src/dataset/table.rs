@@ -8,7 +8,7 @@ use std::path::Path;
 
 use nalgebra::DMatrix;
 
-use et_core::text::{Delimiter, Records, number, read_records};
+use et_core::text::{Delimiter, RecordFault, RecordIter, StringRecord, number};
 
 use super::{DatasetError, DatasetFault, content};
 
@@ -94,24 +94,31 @@ pub(super) fn parse_table(
     lines: &[(usize, &str)],
     text_ok: &dyn Fn(&str, usize) -> bool,
 ) -> Result<Csv, DatasetError> {
-    let Records {
-        delimiter,
-        rows: records,
-    } = read_records(lines).map_err(|(line, f)| content(path, line, None, f.into()))?;
-    let mut it = records.iter().peekable();
-    let &&(hl, ref first) = it
-        .peek()
+    let mut records = RecordIter::new(lines);
+    let delimiter = records.delimiter;
+    let read = |r: Result<(usize, StringRecord), (usize, RecordFault)>| {
+        r.map_err(|(line, f)| content(path, line, None, f.into()))
+    };
+    // The first two records decide the header; the rest are read one at a time (what is kept
+    // is each row's numbers, not its cells as text).
+    let head = records
+        .by_ref()
+        .take(2)
+        .map(read)
+        .collect::<Result<Vec<_>, _>>()?;
+    let (hl, first) = head
+        .first()
+        .map(|(line, cells)| (*line, cells))
         .ok_or_else(|| content(path, 0, None, DatasetFault::NoRows))?;
-    let texts = |r: &Vec<String>| -> Vec<bool> {
+    let texts = |r: &StringRecord| -> Vec<bool> {
         r.iter().map(|c| number(c, delimiter).is_none()).collect()
     };
     let first_text = texts(first);
-    let second_text = it.clone().nth(1).map(|(_, r)| texts(r));
+    let second_text = head.get(1).map(|(_, r)| texts(r));
     let header =
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
-        it.next();
-        first.clone()
+        first.iter().map(str::to_string).collect()
     } else {
         (1..=first.len()).map(|c| c.to_string()).collect()
     };
@@ -136,8 +143,13 @@ pub(super) fn parse_table(
     let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
     let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();
-    for (i, cells) in it {
-        let i = *i;
+    let body = head
+        .into_iter()
+        .skip(usize::from(header))
+        .map(Ok)
+        .chain(records.map(read));
+    for record in body {
+        let (i, cells) = record?;
         if cells.len() != names.len() {
             let (found, columns) = (cells.len(), names.len());
             let fault = DatasetFault::RowLength {
@@ -169,7 +181,7 @@ pub(super) fn parse_table(
                     return Err(content(path, i, Some(name.clone()), fault));
                 }
                 None => {
-                    let fault = DatasetFault::NotNumber(cell.clone());
+                    let fault = DatasetFault::NotNumber(cell.to_string());
                     return Err(content(path, i, Some(name.clone()), fault));
                 }
             });
