@@ -219,6 +219,12 @@ pub enum DatasetFault {
         /// The header's first names (none: no header).
         names: Option<Vec<String>>,
     },
+    /// `--groups NAME` naming a target column (label, x, y, z, force, pressure).
+    #[error(
+        "--groups {0}: that column is a target, not a session; give the column (or a file) \
+         that says which session each row was recorded in"
+    )]
+    GroupIsTarget(String),
     /// x without y or y without x.
     #[error("give both x and y columns, or neither")]
     HalfPosition,

@@ -98,6 +98,12 @@ pub fn read_matrix(path: &Path) -> Result<DMatrix<f64>, DatasetError> {
 /// Names a third target column may have, besides the column after y in a headerless file.
 const THIRD_NAMES: [&str; 4] = ["z", "force", "pressure", "pressure_kpa"];
 
+/// A target column's name (label, x, y or a third target's), in any case.
+fn is_target_name(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
+}
+
 impl Table {
     /// Imports CSV from any sensor. A header row is optional (a first row with a cell that is not
     /// a number is one); a UTF-8 byte-order mark, CRLF line ends and blank lines are allowed.
@@ -137,6 +143,11 @@ impl Table {
             Some(GroupsFrom::Column(name)) => Some(name.as_str()),
             _ => None,
         };
+        // A target column is no session (every position would be a group of its own).
+        if let Some(name) = group_column.filter(|n| is_target_name(n)) {
+            let fault = DatasetFault::GroupIsTarget(name.into());
+            return Err(content(features, 0, Some(name.into()), fault));
+        }
         let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
         let label_text =
             |name: &str, _: usize| name.eq_ignore_ascii_case("label") || is_group(name);
@@ -144,10 +155,6 @@ impl Table {
         let side = targets
             .map(|p| targets_file(p, features, &main))
             .transpose()?;
-        let is_target = |n: &str| {
-            let n = n.to_ascii_lowercase();
-            ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
-        };
         // Without a header every column of the features file is a feature.
         let feature_cols: Vec<usize> = (0..main.names.len())
             .filter(|&c| {
@@ -155,7 +162,7 @@ impl Table {
                     || main
                         .names
                         .get(c)
-                        .is_some_and(|n| !is_target(n) && !is_group(n))
+                        .is_some_and(|n| !is_target_name(n) && !is_group(n))
             })
             .collect();
         let group_values = groups

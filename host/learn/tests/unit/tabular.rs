@@ -975,3 +975,29 @@ fn version_1_table_models_read_as_the_same_model_in_metres() {
     }
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// `--groups` names the sessions: a target column (x, label, ...) is refused, not taken as the
+/// session of each row (every position its own group), and a column of sessions is read.
+#[test]
+fn groups_naming_a_target_column_are_refused() {
+    let dir = tmp("groups-target");
+    let f = dir.join("features.csv");
+    std::fs::write(&f, "a,b,x,y,session\n1,2,0.1,0.2,s1\n3,4,0.3,0.4,s2\n").unwrap();
+    let group = |name: &str| {
+        Table::import_grouped(&f, None, Unit::M, Some(&GroupsFrom::Column(name.into())))
+    };
+    for name in ["x", "Y", "label", "force"] {
+        let e = group(name).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("--groups {name}")) && e.contains("target"),
+            "{e}"
+        );
+    }
+    let table = group("session").unwrap();
+    assert_eq!(table.x.ncols(), 2);
+    assert_eq!(
+        table.groups.as_deref(),
+        Some(&["s1".to_string(), "s2".into()][..])
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
