@@ -219,6 +219,19 @@ pub enum DatasetFault {
         /// The header's first names (none: no header).
         names: Option<Vec<String>>,
     },
+    /// Reference features whose header does not name a feature.
+    #[error(
+        "no column '{feature}' (the header names {}): reference features are paired with the \
+         features by name; name its columns as the features' header does, or leave out its \
+         header to pair them by position",
+        names.join(", ")
+    )]
+    NoReferenceColumn {
+        /// The feature without a column.
+        feature: String,
+        /// The reference header's first names.
+        names: Vec<String>,
+    },
     /// `--groups NAME` naming a target column (label, x, y, z, force, pressure).
     #[error(
         "--groups {0}: that column is a target, not a session; give the column (or a file) \

@@ -77,21 +77,44 @@ pub enum GroupsFrom {
     Column(String),
 }
 
-/// Reads a CSV of numbers only (a header row optional; the same dialects as
-/// [`Table::import`]): reference frames, one per row or per session.
+/// Reference features (a CSV of numbers only, a header row optional; the same dialects as
+/// [`Table::import`]: one frame per row or per session), its columns paired with `features`
+/// (the features' names, in order): by name when both have a header (a reference whose columns are in
+/// another order is read in the features' order; one without a feature's column is
+/// refused, naming it), by position when either has none.
 ///
 /// # Errors
-/// [`DatasetError`] naming the file, line and column of a cell that is not a finite number.
-pub fn read_matrix(path: &Path) -> Result<DMatrix<f64>, DatasetError> {
-    let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(
-        |source| DatasetError::Io {
-            path: path.into(),
-            source,
-        },
-    )?;
+/// [`DatasetError`] naming the file, line and column of a cell that is not a finite number;
+/// [`DatasetFault::NoReferenceColumn`] for a feature the reference's
+/// header does not name.
+pub fn read_reference(path: &Path, features: &[String]) -> Result<DMatrix<f64>, DatasetError> {
+    let text = read(path)?;
     let none = |_: &str, _: usize| false;
     let csv = parse_table(path, &text_lines(&text), &none)?;
-    let cols: Vec<usize> = (0..csv.names.len()).collect();
+    // Without a header a table's features are named by their column numbers.
+    let named = features
+        .iter()
+        .enumerate()
+        .any(|(i, n)| *n != (i + 1).to_string());
+    let cols: Vec<usize> = if csv.header && named {
+        features
+            .iter()
+            .map(|f| {
+                csv.names
+                    .iter()
+                    .position(|n| n.eq_ignore_ascii_case(f))
+                    .ok_or_else(|| {
+                        let fault = DatasetFault::NoReferenceColumn {
+                            feature: f.clone(),
+                            names: csv.names.iter().take(8).cloned().collect(),
+                        };
+                        content(path, 0, None, fault)
+                    })
+            })
+            .collect::<Result<_, _>>()?
+    } else {
+        (0..csv.names.len()).collect()
+    };
     csv.matrix(path, &cols)
 }
 

@@ -1001,3 +1001,38 @@ fn groups_naming_a_target_column_are_refused() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Reference features are paired with the features by name when both files have a header
+/// (another column order is read in the features' order; a missing column is refused, named),
+/// by position when either has none.
+#[test]
+fn reference_features_are_paired_by_name() {
+    use et_learn::dataset::read_reference;
+    let dir = tmp("reference-names");
+    let b = dir.join("before.csv");
+    let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let read = |text: &str, features: &[String]| {
+        std::fs::write(&b, text).unwrap();
+        read_reference(&b, features)
+    };
+    let abc = names(&["a", "b", "c"]);
+    let m = read("c,a,b\n3,1,2\n", &abc).unwrap();
+    assert_eq!(
+        m.row(0).iter().copied().collect::<Vec<_>>(),
+        [1.0, 2.0, 3.0]
+    );
+    let e = read("a,b,d\n1,2,4\n", &abc).unwrap_err().to_string();
+    assert!(e.contains("no column 'c'") && e.contains("a, b, d"), "{e}");
+    // By position: a reference without a header, or features without one.
+    let m = read("3,1,2\n", &abc).unwrap();
+    assert_eq!(
+        m.row(0).iter().copied().collect::<Vec<_>>(),
+        [3.0, 1.0, 2.0]
+    );
+    let m = read("c,a,b\n3,1,2\n", &names(&["1", "2", "3"])).unwrap();
+    assert_eq!(
+        m.row(0).iter().copied().collect::<Vec<_>>(),
+        [3.0, 1.0, 2.0]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -94,7 +94,7 @@ impl TableArgs {
         let mut table =
             Table::import_grouped(features, self.targets.as_deref(), unit, groups.as_ref())?;
         if let (Some(b), Some(how)) = (&self.reference_features, self.referencing()) {
-            let reference = et_learn::dataset::read_matrix(b)?;
+            let reference = et_learn::dataset::read_reference(b, &table.feature_names)?;
             table = table.referenced(&reference, how, &b.display().to_string())?;
         }
         say!("read {}", table.description);
