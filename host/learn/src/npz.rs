@@ -330,6 +330,7 @@ impl Npz {
                 return Err(broken("directory entry without its signature"));
             }
             let method = u16_at(&bytes, at + 10).ok_or_else(short)?;
+            let crc = u32_at(&bytes, at + 16).ok_or_else(short)?;
             let mut size = u32_at(&bytes, at + 20).ok_or_else(short)?;
             let stored_size = u32_at(&bytes, at + 24).ok_or_else(short)?;
             let name_len = u16_at(&bytes, at + 28).ok_or_else(short)?;
@@ -367,11 +368,15 @@ impl Npz {
                 .filter(|_| bytes.get(local..local + 4) == Some(b"PK\x03\x04"))
                 .map(|(n, x)| local + 30 + n + x)
                 .ok_or_else(|| broken("local header missing"))?;
-            if data_at
+            let Some(data) = data_at
                 .checked_add(size)
-                .is_none_or(|end| end > bytes.len())
-            {
+                .and_then(|end| bytes.get(data_at..end))
+            else {
                 return Err(error(Some(array), NpzFault::CutShort));
+            };
+            // Stored entries carry no other check: a flipped bit would be read as a value.
+            if crc32fast::hash(data) as usize != crc {
+                return Err(error(Some(array), NpzFault::Checksum));
             }
             if entries.iter().any(|(n, _)| n == array) {
                 return Err(error(Some(array), NpzFault::Twice));

@@ -26,6 +26,12 @@ pub enum NpzFault {
     /// An entry the file ends inside.
     #[error("cut short (the file ends inside it)")]
     CutShort,
+    /// An entry whose bytes do not give the checksum the archive stored for them.
+    #[error(
+        "damaged: its bytes do not match the checksum stored with them (a disk or copy \
+         error?): copy or write the archive again"
+    )]
+    Checksum,
     /// Two entries of one name.
     #[error(
         "stored twice in the archive (numpy reads the last, so which one is meant is unclear): \

@@ -52,6 +52,23 @@ fn every_entry_is_aligned_and_its_crc_right() {
     }
 }
 
+/// A value's flipped bit inside a stored entry is caught by the entry's checksum (it was read
+/// as another value).
+#[test]
+fn an_entry_failing_its_checksum_is_refused() {
+    let bytes = sample();
+    let z = Npz::read(bytes.clone()).unwrap();
+    let (name, range) = z.entries()[0].clone();
+    let mut b = bytes.clone();
+    b[range.end - 1] ^= 0x01;
+    let e = Npz::read(b).unwrap_err();
+    assert_eq!(
+        (e.fault.clone(), e.array.as_deref()),
+        (NpzFault::Checksum, Some(name.as_str()))
+    );
+    assert!(e.to_string().contains("checksum"), "{e}");
+}
+
 #[test]
 fn broken_archives_are_errors_not_panics() {
     let bytes = sample();
