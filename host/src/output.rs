@@ -17,6 +17,16 @@ pub enum OutputError {
         /// The input it names.
         input: PathBuf,
     },
+    /// Standard output named as the output, where the caller closed it.
+    #[error(
+        "{}: standard output is closed (>&-), so what et writes there would vanish: give \
+         a file, or leave standard output open",
+        .out.display()
+    )]
+    StdoutClosed {
+        /// The output path as given.
+        out: PathBuf,
+    },
     /// Two outputs of one command name the same file.
     #[error("{} and {} are the same file: give each output its own path", .out.display(), .other.display())]
     Collision {
@@ -74,6 +84,35 @@ const STREAMS: [&str; 7] = [
     "/proc/self/fd/1",
     "/proc/self/fd/2",
 ];
+
+/// Whether standard output was closed when et started ([`note_standard_streams`]).
+static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Notes whether the caller closed standard output (`et eval --json >&-`): then a result
+/// printed there ([`stdout_closed`]) or written to `/dev/stdout` fails, said, as a Unix tool's
+/// does. Rust opens the null device in place of a closed standard stream before `main`, so
+/// writes vanished and the command exited 0; that null device is told from one the caller
+/// gave (`> /dev/null`, which asks for the result to be dropped) by its being open for reading
+/// and writing (Linux, from `/proc`; elsewhere nothing is noted). Call once, first in `main`.
+pub fn note_standard_streams() {
+    let null = std::fs::read_link("/proc/self/fd/1").is_ok_and(|p| p == Path::new("/dev/null"));
+    let read_write = || {
+        let info = std::fs::read_to_string("/proc/self/fdinfo/1").unwrap_or_default();
+        info.lines()
+            .find_map(|l| l.strip_prefix("flags:"))
+            .and_then(|f| u32::from_str_radix(f.trim(), 8).ok())
+            .is_some_and(|flags| flags & 0o3 == 0o2)
+    };
+    if null && read_write() {
+        STDOUT_CLOSED.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// Whether standard output was closed when et started: a command's result has nowhere to go.
+#[must_use]
+pub fn stdout_closed() -> bool {
+    STDOUT_CLOSED.load(std::sync::atomic::Ordering::Relaxed)
+}
 
 /// Whether `out` is one of [`STREAMS`].
 #[must_use]
@@ -180,6 +219,12 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
             out: out.into(),
             input: input.to_path_buf(),
         });
+    }
+    let to_stdout = ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]
+        .iter()
+        .any(|s| out == Path::new(s));
+    if to_stdout && stdout_closed() {
+        return Err(OutputError::StdoutClosed { out: out.into() });
     }
     match occupant(out) {
         Occupant::Nothing => new_at_check(out),

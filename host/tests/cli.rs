@@ -1215,6 +1215,48 @@ fn outputs_are_checked_together_and_never_lost_silently() {
             "{signal}: {names:?}"
         );
     }
+    // A closed standard output takes nothing either (Rust puts the null device in its place:
+    // the result vanished with exit 0), while one sent to the null device asks for that.
+    let closed = |args: &str| {
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!("exec \"$0\" {args}"))
+            .arg(env!("CARGO_BIN_EXE_et"))
+            .output()
+            .unwrap()
+    };
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sim/scenes/square-13cm-16.toml")
+        .display()
+        .to_string();
+    // (Told from /proc: Linux only.)
+    let on_linux = if cfg!(target_os = "linux") { 2 } else { 0 };
+    for args in [
+        "protocol --json >&-".to_string(),
+        format!("sim --scene {scene} --frames 2 --out /dev/stdout >&-"),
+    ]
+    .into_iter()
+    .take(on_linux)
+    {
+        let o = closed(&args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains("standard output is closed"),
+            "{args}: {e}"
+        );
+    }
+    let jsonl = dir.join("closed.jsonl");
+    let o = closed(&format!(
+        "sim --scene {scene} --frames 2 --out {} >&- 2>&-",
+        jsonl.display()
+    ));
+    assert!(o.status.success(), "{o:?}");
+    let text = std::fs::read_to_string(&jsonl).unwrap();
+    assert!(
+        text.lines().all(|l| l.starts_with('{')),
+        "only the recording: {text}"
+    );
+    assert!(closed("protocol --json > /dev/null").status.success());
     // A full device takes nothing: not a success.
     for args in [&["--help"][..], &["protocol", "--json"][..]] {
         let out = Command::new(env!("CARGO_BIN_EXE_et"))

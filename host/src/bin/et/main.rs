@@ -4,8 +4,6 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-/// `println!` for a command's output on stdout: when the reader goes away (`et protocol
-/// --json | head`) the program ends quietly, as Unix tools do, instead of panicking.
 /// `eprintln!` that never panics: a message to standard error that cannot be written (`2>
 /// /dev/full`, a closed stream) is dropped, and the command's work and outputs go on.
 macro_rules! say {
@@ -15,9 +13,20 @@ macro_rules! say {
     }};
 }
 
+/// `println!` for a command's output on stdout: when the reader goes away (`et protocol
+/// --json | head`) the program ends quietly, as Unix tools do, instead of panicking; where
+/// the caller closed standard output (`>&-`) the result would vanish, so et says so and
+/// fails.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
+        if et_host::output::stdout_closed() {
+            say!(
+                "error: standard output is closed (>&-): the result printed there would \
+                 vanish; leave it open, or redirect it to a file"
+            );
+            std::process::exit(1);
+        }
         let mut stdout = std::io::stdout().lock();
         if let Err(e) = writeln!(stdout, $($arg)*).and_then(|()| stdout.flush()) {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
@@ -307,6 +316,7 @@ fn parse() -> Cli {
 }
 
 fn main() -> ExitCode {
+    et_host::output::note_standard_streams();
     let cli = parse();
     if let Err(e) = et_host::output::clean_up_on_signals() {
         say!("warning: Ctrl-C will not remove partial outputs: {e}");
