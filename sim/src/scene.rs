@@ -26,7 +26,7 @@ use crate::touch::{Footprint, Touch};
 use et_core::rng::Rng;
 
 /// A scene's protocol: a built-in one by name, or any system's from a file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum ProtocolSpec {
     /// adjacent, pseudo-polar, pp-pp or opposite (`protocol = "adjacent"`).
@@ -47,6 +47,34 @@ pub struct ProtocolFile {
     /// The number of the first electrode in the file: 0 (et's), or 1.
     #[serde(default)]
     pub base: u16,
+}
+
+/// A name or a table, each read as itself: a damaged `{ ... }` is told by the field that is
+/// wrong (an untagged enum said only that no variant matched).
+impl<'de> Deserialize<'de> for ProtocolSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Spec;
+        impl<'de> serde::de::Visitor<'de> for Spec {
+            type Value = ProtocolSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(
+                    "a built-in protocol's name (\"adjacent\", \"pseudo-polar\", \"pp-pp\", \
+                     \"opposite\") or a file, { file = \"protocol.csv\", base = 0 or 1 }",
+                )
+            }
+            fn visit_str<E: serde::de::Error>(self, name: &str) -> Result<ProtocolSpec, E> {
+                Ok(ProtocolSpec::Named(name.into()))
+            }
+            fn visit_map<M: serde::de::MapAccess<'de>>(
+                self,
+                m: M,
+            ) -> Result<ProtocolSpec, M::Error> {
+                ProtocolFile::deserialize(serde::de::value::MapAccessDeserializer::new(m))
+                    .map(ProtocolSpec::File)
+            }
+        }
+        d.deserialize_any(Spec)
+    }
 }
 
 impl Default for ProtocolSpec {

@@ -110,6 +110,19 @@ fn bad_scenes_name_the_file_and_the_field() {
     );
     let protocol = err(&format!("{SMALL}\n[scan]\nprotocol = \"spiral\"\n"));
     assert!(protocol.contains("scan.protocol"), "{protocol}");
+    // A damaged file table is told by its field (an untagged enum said no variant matched).
+    for (table, says) in [
+        ("{ fle = \"p.csv\" }", "fle"),
+        ("{ base = 1 }", "file"),
+        ("{ file = \"p.csv\", base = -1 }", "base"),
+        ("3", "a built-in protocol's name"),
+    ] {
+        let e = err(&format!("{SMALL}\n[scan]\nprotocol = {table}\n"));
+        assert!(
+            e.contains("protocol") && e.contains(says) && !e.contains("untagged"),
+            "{table}: {e}"
+        );
+    }
     let settle = err(&format!("{SMALL}\n[scan]\nsettle_samples = 60\n"));
     assert!(settle.contains("settle_samples"), "{settle}");
     let shape = err(&SMALL.replace("width = 0.13, height", "width = -0.13, height"));
