@@ -58,9 +58,12 @@ pub enum BackgroundError {
         /// The protocol's.
         k: usize,
     },
-    /// The reference frame holds a NaN or infinite value, or is all zero.
-    #[error("background fit: the reference holds a NaN or infinite value, or is all zero")]
+    /// The reference frame holds a NaN or infinite value.
+    #[error("background fit: the reference holds a NaN or infinite value")]
     FrameValues,
+    /// The reference frame is one value throughout: not measured voltages.
+    #[error("background fit: the reference {}", not_measured_said(*.0))]
+    NotMeasured(f64),
     /// The reference frame runs against the model (the best R_s is negative).
     #[error(
         "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
@@ -69,6 +72,23 @@ pub enum BackgroundError {
          direction= in Python)?"
     )]
     Sign(f64),
+}
+
+/// The value of a frame that holds one value throughout (all zero, or a constant): no
+/// sheet's measurements do, whatever the protocol, its numbering or its polarity.
+#[must_use]
+pub fn one_value(v: &[f64]) -> Option<f64> {
+    let first = *v.first()?;
+    v.iter().all(|x| *x == first).then_some(first)
+}
+
+/// What is said of a frame of one value (`value` in every entry).
+#[must_use]
+pub fn not_measured_said(value: f64) -> String {
+    format!(
+        "is {value} in every entry: not measured voltages (a column of another quantity, \
+         frames from a DAQ that was not running, or an empty recording?)"
+    )
 }
 
 /// The unit sheet's frames: one forward model whose contacts change between solves (its
@@ -145,8 +165,11 @@ pub fn fit(
     if v0.len() != k {
         return Err(BackgroundError::FrameLength { got: v0.len(), k });
     }
-    if v0.iter().any(|v| !v.is_finite()) || v0.iter().all(|v| *v == 0.0) {
+    if v0.iter().any(|v| !v.is_finite()) {
         return Err(BackgroundError::FrameValues);
+    }
+    if let Some(value) = one_value(v0) {
+        return Err(BackgroundError::NotMeasured(value));
     }
     let complete = matches!(sheet.electrodes.model, ElectrodeModel::Complete);
     let ratio = sheet.electrodes.contact_ohm / sheet.sheet_resistance;

@@ -72,7 +72,10 @@ pub enum ImagingError {
          the frame"
     )]
     NoReference,
-    /// The reference runs against the model's frame of the untouched sheet, or is all zero.
+    /// The reference is one value throughout (all zero, a constant): not measured voltages.
+    #[error("the reference V_0 {}", crate::background::not_measured_said(*.0))]
+    ReferenceNotMeasured(f64),
+    /// The reference runs against the model's frame of the untouched sheet.
     #[error(
         "the reference V_0 {0}: are the protocol's positive and negative electrodes, or \
          source and sink, swapped, or the electrodes placed or numbered the other way \

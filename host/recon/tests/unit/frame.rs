@@ -238,11 +238,20 @@ fn a_reference_against_the_model_is_refused() {
     assert!(e.to_string().contains("-1.00"), "{e}");
     assert!(e.to_string().contains("direction"), "{e}");
     assert!(recon.reference().is_none(), "nothing set");
-    let zero = vec![0.0f32; v0.len()];
-    let e = recon
-        .set_reference(Reference::from_frames(&[zero]).unwrap())
-        .unwrap_err();
-    assert!(e.to_string().contains("all zero"), "{e}");
+    // One value throughout (all zero, a constant) is no measurement: not asked about
+    // swapped electrodes.
+    for value in [0.0f32, 1.0] {
+        let constant = vec![value; v0.len()];
+        let e = recon
+            .set_reference(Reference::from_frames(&[constant]).unwrap())
+            .unwrap_err();
+        assert!(matches!(e, ImagingError::ReferenceNotMeasured(_)), "{e:?}");
+        let said = e.to_string();
+        assert!(
+            said.contains("not measured") && !said.contains("swapped"),
+            "{said}"
+        );
+    }
     let scaled: Vec<f32> = v0.iter().map(|v| 1.3 * v).collect();
     recon
         .set_reference(Reference::from_frames(&[scaled]).unwrap())
