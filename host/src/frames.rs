@@ -206,52 +206,72 @@ fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
     (spec.to_path_buf(), None)
 }
 
-/// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
-/// Checks the compressed variables of a version 5/7 `.mat` before matfile inflates them (it
-/// reads each to its end, without a limit): each must inflate, and all of them together to
-/// no more than the data files' limit (a small file could otherwise expand to gigabytes).
-fn compressed_within_limits(bytes: &[u8]) -> Result<(), FramesFault> {
+/// A version 5/7 `.mat` as the MATLAB reader is given it: every compressed variable
+/// inflated in place, each checked to inflate and all of them together to no more than the
+/// data files' limit (matfile reads each to its end, without a limit: a small file could
+/// expand to gigabytes), and each int32 array marked int64 (matfile 0.5 expects an int32
+/// array's values stored as uint32 and refused the int32 ones scipy's `savemat` writes; as
+/// int64 they are read exactly).
+fn plain_mat(bytes: &[u8]) -> Result<Vec<u8>, FramesFault> {
     use std::io::Read as _;
     let little = bytes.get(126..128) == Some(b"IM");
-    let word = |at: usize| -> Option<u32> {
-        let b: [u8; 4] = bytes.get(at..at + 4)?.try_into().ok()?;
+    let word = |b: &[u8], at: usize| -> Option<u32> {
+        let w: [u8; 4] = b.get(at..at + 4)?.try_into().ok()?;
         Some(if little {
-            u32::from_le_bytes(b)
+            u32::from_le_bytes(w)
         } else {
-            u32::from_be_bytes(b)
+            u32::from_be_bytes(w)
         })
     };
-    let mut at = 128;
-    // The limit is on all the variables together: matfile inflates every one.
+    // An array (miMATRIX, 14) starts with its flags (miUINT32, 8 bytes), the class in the
+    // flags word's low byte: int32 (12) becomes int64 (14).
+    let mark_int32 = |out: &mut Vec<u8>, start: usize| {
+        let class_at = start + 16 + if little { 0 } else { 3 };
+        let flags = (
+            word(out, start),
+            word(out, start + 8),
+            word(out, start + 12),
+        );
+        if flags == (Some(14), Some(6), Some(8))
+            && let Some(class) = out.get_mut(class_at)
+            && *class == 12
+        {
+            *class = 14;
+        }
+    };
     let limit = et_core::text::max_file_bytes();
-    let mut inflated: u64 = 0;
-    while let (Some(kind), Some(size)) = (word(at), word(at + 4)) {
+    let mut out = bytes.get(..128).unwrap_or(bytes).to_vec();
+    let mut at = 128;
+    while let (Some(kind), Some(size)) = (word(bytes, at), word(bytes, at + 4)) {
         let size = size as usize;
-        let data = bytes.get(at + 8..(at + 8).saturating_add(size));
+        let start = out.len();
         if kind == 15 {
-            let data = data.ok_or(FramesFault::CutShort)?;
-            let left = limit.saturating_sub(inflated);
-            // Counted, not kept: a variable's bytes are read through a sink.
-            let n = std::io::copy(
-                &mut libflate::zlib::Decoder::new(data)
-                    .map_err(|_| FramesFault::Damaged)?
-                    .take(left.saturating_add(1)),
-                &mut std::io::sink(),
-            )
-            .map_err(|_| FramesFault::Damaged)?;
-            inflated = inflated.saturating_add(n);
-            if inflated > limit {
+            let data = bytes
+                .get(at + 8..(at + 8).saturating_add(size))
+                .ok_or(FramesFault::CutShort)?;
+            let left = limit.saturating_sub(start as u64);
+            libflate::zlib::Decoder::new(data)
+                .map_err(|_| FramesFault::Damaged)?
+                .take(left.saturating_add(1))
+                .read_to_end(&mut out)
+                .map_err(|_| FramesFault::Damaged)?;
+            if out.len() as u64 > limit {
                 return Err(FramesFault::Inflates(limit));
             }
             at = at.saturating_add(8).saturating_add(size);
         } else {
             // Uncompressed elements are padded to 8 bytes; matfile checks them itself.
-            at = at.saturating_add(8).saturating_add(size.div_ceil(8) * 8);
+            let end = at.saturating_add(8).saturating_add(size.div_ceil(8) * 8);
+            out.extend_from_slice(bytes.get(at..end.min(bytes.len())).unwrap_or_default());
+            at = end;
         }
+        mark_int32(&mut out, start);
     }
-    Ok(())
+    out.extend_from_slice(bytes.get(at..).unwrap_or_default());
+    Ok(out)
 }
 
+/// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
 fn mat_matrix(
     path: &Path,
     bytes: &[u8],
@@ -260,7 +280,8 @@ fn mat_matrix(
     if bytes.starts_with(b"MATLAB 7.3") {
         return Err(content(path, 0, FramesFault::Mat73));
     }
-    compressed_within_limits(bytes).map_err(|fault| content(path, 0, fault))?;
+    let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
+    let bytes = plain.as_slice();
     // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
     // found by the fuzzer): such a file is refused like any other it cannot read, silently
     // for the panic itself.
@@ -302,6 +323,9 @@ fn mat_matrix(
         D::UInt16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
         D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
         D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        // Exact below 2^53 (numpy's default integers are int64).
+        D::Int64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        D::UInt64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
         _ => {
             let fault = FramesFault::NotReal(array.name().to_string());
             return Err(content(path, 0, fault));

@@ -129,6 +129,55 @@ fn compressed_matlab_variables_are_read_and_checked_first() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// An int32 array as scipy's `savemat` writes it (class int32, its values as miINT32, the
+/// name as a small element): read exactly, negative values too, compressed or not (matfile
+/// alone refused it as "not a MATLAB version 5 or 7 file").
+#[test]
+fn int32_matlab_arrays_as_scipy_writes_them() {
+    use std::io::Write as _;
+    let dir = tmp("mat-int32");
+    let word = |v: u32| v.to_le_bytes();
+    let values: [i32; 6] = [-3, 1, -2, 2, 7, -2_000_000_000];
+    let mut body = Vec::new();
+    body.extend(word(6)); // array flags: miUINT32, 8 bytes
+    body.extend(word(8));
+    body.extend(word(12)); // class int32
+    body.extend(word(0));
+    body.extend(word(5)); // dimensions: miINT32, 8 bytes: 2 x 3
+    body.extend(word(8));
+    body.extend(word(2));
+    body.extend(word(3));
+    body.extend(word((1 << 16) | 1)); // the name 'v', a small element of miINT8
+    body.extend(b"v\0\0\0");
+    body.extend(word(5)); // the values, miINT32, column-major
+    body.extend(word(24));
+    values.iter().for_each(|v| body.extend(v.to_le_bytes()));
+    let mut file = b"MATLAB 5.0 MAT-file, Platform: posix, Created by: scipy".to_vec();
+    file.resize(116, b' ');
+    file.extend([0u8; 8]);
+    file.extend(0x0100u16.to_le_bytes());
+    file.extend(b"IM");
+    let header = file.clone();
+    file.extend(word(14));
+    file.extend(word(body.len() as u32));
+    file.extend(&body);
+    let mut z = libflate::zlib::Encoder::new(Vec::new()).unwrap();
+    z.write_all(&file[128..]).unwrap();
+    let deflated = z.finish().into_result().unwrap();
+    let mut compressed = header;
+    compressed.extend(word(15));
+    compressed.extend(word(deflated.len() as u32));
+    compressed.extend(&deflated);
+    let f = dir.join("i.mat");
+    for bytes in [&file, &compressed] {
+        std::fs::write(&f, bytes).unwrap();
+        let r = read(&f, 3).unwrap();
+        // Column-major 2 x 3: rows (-3, -2, 7) and (1, 2, -2e9), K = 3 per row.
+        assert_eq!(r.frames, vec![vec![-3.0, -2.0, 7.0], vec![1.0, 2.0, -2e9]]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 fn read_plain(dir: &Path, bytes: &[u8]) -> Vec<Vec<f32>> {
     let f = dir.join("plain.mat");
     std::fs::write(&f, bytes).unwrap();
