@@ -25,6 +25,11 @@ use crate::text;
 /// beyond any of them and below anything that would be a typing error of mA for A).
 pub const MAX_CURRENT_A: f64 = 0.05;
 
+/// The largest current any schedule may drive, A: the unit current of simulated frames
+/// (pyEIT's, which the Python module images with `current_a=1.0`). A system's own files and
+/// scenes are held to [`MAX_CURRENT_A`], where more is a unit slip.
+pub const MAX_UNIT_CURRENT_A: f64 = 1.0;
+
 /// One value of the frame: who drives, who measures, with how much current.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -106,6 +111,17 @@ pub enum ScheduleError {
     /// A current that is not positive or not finite.
     #[error("row {row}: current {current_a} A: give a current above 0 A")]
     Current {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A current above [`MAX_UNIT_CURRENT_A`], whoever gave it.
+    #[error(
+        "row {row}: current {current_a} A is above 1 A, the unit current of simulated frames \
+         (pyEIT's): currents are in amperes, a system's a few mA"
+    )]
+    AboveUnit {
         /// The row.
         row: usize,
         /// The current given, A.
@@ -230,6 +246,12 @@ impl Schedule {
                     current_a: r.current_a,
                 });
             }
+            if r.current_a > MAX_UNIT_CURRENT_A {
+                return Err(ScheduleError::AboveUnit {
+                    row,
+                    current_a: r.current_a,
+                });
+            }
         }
         Ok(Self {
             electrodes,
@@ -272,6 +294,9 @@ impl Schedule {
     pub fn of_protocol(protocol: &Protocol, current_a: f64) -> Result<Self, ScheduleError> {
         if !(current_a.is_finite() && current_a > 0.0) {
             return Err(ScheduleError::Current { row: 0, current_a });
+        }
+        if current_a > MAX_UNIT_CURRENT_A {
+            return Err(ScheduleError::AboveUnit { row: 0, current_a });
         }
         Ok(Self::of_valid(protocol, current_a))
     }
@@ -469,6 +494,7 @@ impl Schedule {
                 | ScheduleError::SameDrive { row, .. }
                 | ScheduleError::SameMeasure { row, .. }
                 | ScheduleError::Current { row, .. }
+                | ScheduleError::AboveUnit { row, .. }
                 | ScheduleError::TooLarge { row, .. } => {
                     let line = row_lines.get(row).copied().unwrap_or(0);
                     fail(line, FileFault::Row(Box::new(e)))

@@ -118,3 +118,16 @@ def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
         et.Reconstructor(et.polygon(many, 16), et.protocol("adjacent", 16))
     # A long strip is not a sliver.
     et.Reconstructor(et.rectangle(0.3, 0.01, 16), et.protocol("adjacent", 16), triangles=300)
+
+
+def test_currents_up_to_the_unit_current_of_simulated_frames():
+    # pyEIT's frames are for 1 A: taken (the peer examples image them so); more is a slip of
+    # units, refused by the row it is in, for built-in protocols and tables alike.
+    sheet = et.disc(0.1, 16)
+    et.Reconstructor(sheet, et.protocol("adjacent", 16, current_a=1.0), triangles=300)
+    with pytest.raises(et.EtError, match="current 2 A is above 1 A"):
+        et.Reconstructor(sheet, et.protocol("adjacent", 16, current_a=2.0), triangles=300)
+    p = et.protocol("adjacent", 16)
+    table = np.column_stack([p.rows, np.full(len(p.rows), 3.0)])
+    with pytest.raises(et.EtError, match="above 1 A"):
+        et.Reconstructor(sheet, et.Protocol.from_rows(table, 16), triangles=300)

@@ -117,4 +117,11 @@ fn wrong_rows_are_named_by_line_and_cell() {
         Schedule::new(16, Vec::new()).unwrap_err(),
         ScheduleError::Empty
     ));
+    // Any schedule drives at most 1 A (simulated frames' unit current); a file at most 50 mA.
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    assert!(Schedule::of_protocol(&protocol, 1.0).is_ok());
+    let e = Schedule::of_protocol(&protocol, 1.5).unwrap_err();
+    assert!(matches!(e, ScheduleError::AboveUnit { .. }), "{e:?}");
+    let e = parse("0,1,2,3,1.0\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("50 mA"), "{e}");
 }
