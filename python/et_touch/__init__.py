@@ -806,6 +806,7 @@ def train(
     shrinkage: Optional[float] = None,
     raw: bool = False,
     keep: Optional[int] = None,
+    budget_s: float = 3600.0,
 ) -> Model:
     """Trains a model (et's Trainer; runs without the GIL).
 
@@ -815,7 +816,9 @@ def train(
     "gp" or "mlp". ``groups``: each row's session (cross-validation leaves one out);
     ``per_group`` standardises each session by its own statistics; ``cv``: "shuffled" or
     "blocks" (contiguous, for rows in time order); ``grid``: (rows, cols) classes from
-    positions; ``folds``: default 5.
+    positions; ``folds``: default 5; ``budget_s``: the longest the training may be
+    estimated to take (the Gaussian process and the perceptron time a piece of their work
+    first; past it, refused with the estimate).
 
     On an et dataset (``X`` a :class:`Dataset` or the path of `et collect`'s .csv/.npz): QDA
     ("auto" or "qda") or LDA for the board, ``shrinkage`` in [0, 1] (None: by
@@ -844,6 +847,7 @@ def train(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
             bool(per_group), int(seed), _label_type(y) if labels is not None else None,
+            float(budget_s),
         )
     )
 

@@ -151,6 +151,8 @@ def train_table(
     grid: Optional[Tuple[int, int]],
     per_group: bool,
     seed: int,
+    label_type: Optional[str] = None,
+    budget_s: float = 3600.0,
 ) -> Model: ...
 def train_dataset(
     dataset: Dataset,

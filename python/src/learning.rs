@@ -91,7 +91,7 @@ fn table(
 
 /// Trains on any sensor's table (arrays); see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None))]
+#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None, budget_s=et_learn::tabular::BUDGET_S))]
 fn train_table(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
@@ -105,7 +105,13 @@ fn train_table(
     per_group: bool,
     seed: u64,
     label_type: Option<String>,
+    budget_s: f64,
 ) -> PyResult<Model> {
+    if !(budget_s.is_finite() && budget_s > 0.0) {
+        return Err(usage(format!(
+            "budget_s = {budget_s}: a number of seconds above 0"
+        )));
+    }
     let table = table(&x, labels, positions_m, groups)?;
     let trainer = Trainer {
         method: choice(kind)?,
@@ -118,6 +124,7 @@ fn train_table(
         grid,
         seed,
         per_group,
+        budget_s,
         ..Trainer::default()
     };
     let mut trained = py

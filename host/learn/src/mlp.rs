@@ -140,6 +140,10 @@ pub fn tanh(x: f32) -> f32 {
     p / q
 }
 
+/// Passes over the rows a fit is taken to run for in [`Mlp::estimate_seconds`]: early
+/// stopping ends most fits after a few tens.
+pub const TYPICAL_PASSES: f64 = 40.0;
+
 /// How to train.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MlpOptions {
@@ -350,6 +354,35 @@ impl Mlp {
                 .chain([bias as f32])
                 .collect();
         }
+    }
+
+    /// Seconds `fits` fits on rows like `x` (n x p) will take, each of `opts.starts` starts
+    /// stopping after [`TYPICAL_PASSES`] passes (early stopping decides: a rough figure, said
+    /// as one): a start's set-up and its passes timed apart, from fits of one and of three
+    /// passes on as many rows as a batch (the time does not depend on the values).
+    #[must_use]
+    pub fn estimate_seconds(x: &DMatrix<f64>, opts: &MlpOptions, fits: usize) -> f64 {
+        let (n, p) = x.shape();
+        let rows = n.clamp(2, opts.batch.max(2));
+        let probe = DMatrix::from_fn(rows, p, |i, j| ((i * 31 + j * 17) % 97) as f64 / 97.0);
+        let t: Vec<Target3> = (0..rows)
+            .map(|i| [(i % 13) as f64, (i % 7) as f64, 0.0])
+            .collect();
+        let timed = |passes: usize| {
+            let one = MlpOptions {
+                max_epochs: passes,
+                patience: passes,
+                starts: 1,
+                ..opts.clone()
+            };
+            let started = std::time::Instant::now();
+            let _ = Self::fit(&probe, &t, &one);
+            started.elapsed().as_secs_f64()
+        };
+        let (one, three) = (timed(1), timed(3));
+        let pass = ((three - one) / 2.0).max(0.0) * n as f64 / rows as f64;
+        let set_up = (one - pass).max(0.0);
+        (set_up + pass * TYPICAL_PASSES) * (opts.starts.max(1) * fits) as f64
     }
 
     /// Predicts every row of `x` (n x p, the training units).

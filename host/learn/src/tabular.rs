@@ -84,6 +84,20 @@ pub enum Misuse {
         /// The first such row (0-based).
         row: usize,
     },
+    /// A training estimated to take longer than its budget.
+    #[error(
+        "{what} would take about {estimate_s:.0} s, past the budget of {budget_s:.0} s: train \
+         on fewer rows (--rows) or features, choose a faster kind (ridge, knn, kernel-ridge), \
+         or raise the budget (--max-minutes, budget_s=)"
+    )]
+    OverBudget {
+        /// What was estimated.
+        what: String,
+        /// The estimate, s.
+        estimate_s: f64,
+        /// The budget, s.
+        budget_s: f64,
+    },
     /// More groups than cross-validation leaves out one at a time.
     #[error(
         "{groups} groups among {rows} rows: leaving each out fits every candidate {groups} \
@@ -349,12 +363,20 @@ pub struct TrainOptions {
     /// before anything else, so a session's offsets and gains cancel; evaluation does the
     /// same to the rows it scores.
     pub per_group: bool,
+    /// The longest the training may be estimated to take, s ([`BUDGET_S`] by default): the
+    /// methods whose time grows fastest (the Gaussian process, the perceptron) estimate theirs
+    /// before any fit, and a training past this is refused, said with the estimate.
+    pub budget_s: f64,
 }
+
+/// The default training budget, s: an hour.
+pub const BUDGET_S: f64 = 3_600.0;
 
 impl Default for TrainOptions {
     fn default() -> Self {
         Self {
             per_group: false,
+            budget_s: BUDGET_S,
             folds: 5,
             scheme: CvScheme::Shuffled,
             grid: None,

@@ -111,6 +111,9 @@ pub struct Trainer {
     pub seed: u64,
     /// Tables: standardise each group's (session's) features by its own statistics.
     pub per_group: bool,
+    /// Tables: the longest a training may be estimated to take, s: the Gaussian process and
+    /// the perceptron estimate their time before they start, and one past this is refused.
+    pub budget_s: f64,
 }
 
 impl Default for Trainer {
@@ -127,6 +130,7 @@ impl Default for Trainer {
             keep: None,
             seed: 1,
             per_group: false,
+            budget_s: crate::tabular::BUDGET_S,
         }
     }
 }
@@ -252,6 +256,7 @@ impl Trainer {
                     grid: self.grid,
                     seed: self.seed,
                     per_group: self.per_group,
+                    budget_s: self.budget_s,
                 };
                 let mut table_progress =
                     |what: &str, done: usize, of: usize| progress(Progress::Table(what, done, of));

@@ -302,13 +302,37 @@ pub(super) fn drifted_error(pred: &[Target3], t: &[Target3]) -> f64 {
     mean_error(pred, &truth)
 }
 
-/// Every hyperparameter candidate of a regressor, scored by cross-validation.
+/// Seconds `method`'s cross-validation over `k` folds and its final fit on rows like `x` are
+/// estimated to take, for the methods whose time grows fastest with the table (the Gaussian
+/// process, the perceptron: each times a piece of its work on rows of `x`'s shape); None for
+/// the others.
+pub(super) fn estimate_seconds(method: Kind, x: &DMatrix<f64>, k: usize) -> Option<f64> {
+    match method {
+        Kind::Gp => Some(Gp::estimate_seconds(x, &GP_SEARCH, k) + Gp::estimate_seconds(x, &GP, 1)),
+        Kind::Mlp => {
+            let grid = regressor_grid(Kind::Mlp, x.nrows()).ok()?;
+            let search = mlp_options(grid.first()?);
+            let last = MlpOptions {
+                starts: MLP_FINAL_STARTS,
+                ..search.clone()
+            };
+            Some(
+                Mlp::estimate_seconds(x, &search, k * grid.len())
+                    + Mlp::estimate_seconds(x, &last, 1),
+            )
+        }
+        _ => None,
+    }
+}
+
+/// Every hyperparameter candidate of a regressor, scored by cross-validation; `estimate_s`
+/// its time when estimated ([`estimate_seconds`]), said beforehand.
 pub(super) fn search_regressor(
     x: &DMatrix<f64>,
     t: &[Target3],
     method: Kind,
-    fold: &[usize],
-    grouped: bool,
+    (fold, grouped): (&[usize], bool),
+    estimate_s: Option<f64>,
     progress: Progress<'_>,
 ) -> Result<Vec<Candidate>, TabularError> {
     let n = x.nrows();
@@ -326,18 +350,21 @@ pub(super) fn search_regressor(
         Kind::Mlp => grid.len(),
         _ => 1,
     };
-    let what = if method == Kind::Gp {
-        format!(
-            "cross-validating gp ({} folds, then the final fit: about {:.0} s)",
-            k,
-            Gp::estimate_seconds(x, &GP_SEARCH, k) + Gp::estimate_seconds(x, &GP, 1)
-        )
-    } else {
-        format!(
+    let what = match estimate_s {
+        Some(seconds) if method == Kind::Mlp => format!(
+            "cross-validating mlp ({} candidates, {k} folds, then the final fit: about {seconds:.0} \
+             s, within a factor of 3: early stopping decides)",
+            grid.len()
+        ),
+        Some(seconds) => format!(
+            "cross-validating {} ({k} folds, then the final fit: about {seconds:.0} s)",
+            method.name()
+        ),
+        None => format!(
             "cross-validating {} ({} candidates)",
             method.name(),
             grid.len()
-        )
+        ),
     };
     let total = k * steps;
     for f in 0..k {

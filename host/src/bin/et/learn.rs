@@ -57,6 +57,12 @@ pub(crate) struct TrainArgs {
     /// needs a session's worth of rows (two or more per group).
     #[arg(long)]
     per_group: bool,
+    /// On --features: the longest the training may take, minutes. The Gaussian process and
+    /// the perceptron (alone or in auto) estimate their time from a timed piece of their work
+    /// before any fit and say it; a training estimated past this is refused, naming what to
+    /// cut.
+    #[arg(long, default_value_t = 60.0, value_name = "M", value_parser = crate::domain::above(0.0, 10_080.0))]
+    max_minutes: f64,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched
     /// frames: it cancels electrode movement between sessions, but on the board it needs an
@@ -106,6 +112,7 @@ impl TrainArgs {
             keep: self.keep,
             seed: 1,
             per_group: self.per_group,
+            budget_s: self.max_minutes * 60.0,
         })
     }
 }

@@ -91,16 +91,48 @@ pub(super) fn search_all(
         Choice::Auto => vec![Kind::Lda, Kind::Qda],
     };
     let n = table.rows();
+    // The regressors' folds, and the time of those that estimate theirs, refused past the
+    // budget before any fit.
+    let regressor_fold = cv.folds(n, None, opts.seed);
+    let k = regressor_fold.iter().max().map_or(0, |m| m + 1);
+    let estimates: Vec<Option<f64>> = methods
+        .iter()
+        .map(|&m| {
+            let regressor = !m.is_classifier() && targets.is_some();
+            regressor
+                .then(|| estimate_seconds(m, &table.x, k))
+                .flatten()
+        })
+        .collect();
+    let total: f64 = estimates.iter().flatten().sum();
+    if total > opts.budget_s {
+        let what = methods
+            .iter()
+            .zip(&estimates)
+            .filter(|(_, e)| e.is_some())
+            .map(|(m, _)| m.name())
+            .collect::<Vec<_>>()
+            .join(" and ");
+        return Err(usage(Misuse::OverBudget {
+            what: format!(
+                "training {what} on {} rows x {} features",
+                n,
+                table.x.ncols()
+            ),
+            estimate_s: total,
+            budget_s: opts.budget_s,
+        }));
+    }
     let mut search: Vec<Candidate> = Vec::new();
-    for &method in &methods {
+    for (&method, &estimate_s) in methods.iter().zip(&estimates) {
         let found = if method.is_classifier() {
             let (labels, _) = classes.ok_or_else(|| usage(Misuse::NeedsLabels(method)))?;
             let fold = cv.folds(n, Some(&labels.index), opts.seed);
             search_classifier(table, method, labels, &fold, progress)?
         } else {
             let t = targets.ok_or_else(|| usage(Misuse::NeedsXy(method)))?;
-            let fold = cv.folds(n, None, opts.seed);
-            search_regressor(&table.x, t, method, &fold, cv.grouped, progress)?
+            let fold = (regressor_fold.as_slice(), cv.grouped);
+            search_regressor(&table.x, t, method, fold, estimate_s, progress)?
         };
         search.extend(found);
     }
