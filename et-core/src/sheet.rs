@@ -276,6 +276,15 @@ impl Sheet {
                 return field("sheet.electrodes.first_deg", FieldFault::Rule(rule));
             }
         }
+        // Positions place every electrode: a first place or a direction beside them would
+        // be ignored without a word.
+        if e.positions.is_some()
+            && (e.first.is_some() || e.first_deg.is_some() || e.direction != Direction::Ccw)
+        {
+            let rule = "positions place every electrode: give them, or first/first_deg and \
+                        direction, not both";
+            return field("sheet.electrodes.positions", FieldFault::Rule(rule));
+        }
         if let Some(p) = &e.positions
             && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
         {
@@ -346,6 +355,16 @@ mod tests {
         same.electrodes.positions = Some(vec![0.1, 0.3, 0.3, 0.8]);
         let e = same.validate().unwrap_err().to_string();
         assert!(e.contains("electrodes 1 and 2 overlap"), "{e}");
+        // Positions beside a first place or a direction (which they would override unsaid).
+        let mut both = Sheet::disc(0.1, 4);
+        both.electrodes.positions = Some(vec![0.1, 0.3, 0.5, 0.8]);
+        both.validate().unwrap();
+        both.electrodes.first_deg = Some(90.0);
+        let e = both.validate().unwrap_err().to_string();
+        assert!(e.contains("positions") && e.contains("not both"), "{e}");
+        both.electrodes.first_deg = None;
+        both.electrodes.direction = Direction::Cw;
+        assert!(both.validate().is_err());
     }
 
     /// A tank numbered clockwise from the top, on a disc and on a rectangle; et's default.

@@ -527,9 +527,12 @@ class Reconstructor:
         rows = np.ascontiguousarray(protocol.rows, dtype=np.int64)
         currents = _f64(protocol.currents, 1, "currents")
         current_a = float(currents[0]) if len(currents) else 1e-3
+        # A built-in protocol by its name, unless its currents were changed row by row
+        # (then its rows, each with its own current: none is ignored).
+        name = protocol.name if np.all(currents == current_a) else None
         self._native = _Serialised(_native.Reconstructor(
-            _spec_json(sheet.spec), int(protocol.electrodes), protocol.name, current_a,
-            None if protocol.name else rows, None if protocol.name else currents,
+            _spec_json(sheet.spec), int(protocol.electrodes), name, current_a,
+            None if name else rows, None if name else currents,
             int(triangles), method, str(alpha), int(pixels), threshold, float(s),
             int(iterations), noise_figure, radius_m,
         ))

@@ -131,3 +131,17 @@ def test_currents_up_to_the_unit_current_of_simulated_frames():
     table = np.column_stack([p.rows, np.full(len(p.rows), 3.0)])
     with pytest.raises(et.EtError, match="above 1 A"):
         et.Reconstructor(sheet, et.Protocol.from_rows(table, 16), triangles=300)
+
+
+def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
+    # A named protocol was set up from its name and first current alone: a row's own
+    # current was ignored without a word.
+    sheet = et.disc(0.1, 16)
+    p = et.protocol("adjacent", 16)
+    changed = et.Protocol(p.electrodes, p.rows.copy(), p.currents.copy(), p.name)
+    changed.currents[5] *= 2.0
+    r = et.Reconstructor(sheet, p, triangles=300)
+    s = et.Reconstructor(sheet, changed, triangles=300)
+    v, w = r.forward(r.sigma0), s.forward(s.sigma0)
+    assert w[5] == pytest.approx(2.0 * v[5], rel=1e-9)
+    assert np.allclose(np.delete(w, 5), np.delete(v, 5), rtol=1e-9)
