@@ -171,6 +171,28 @@ pub fn frames_between(
     scenes: &[Vec<Inclusion>],
     instrument: &Instrument,
 ) -> Result<Vec<Vec<f64>>, ForeignError> {
+    let mut out = Vec::with_capacity(scenes.len() + 1);
+    each_frame_between(reference, later, schedule, scenes, instrument, |v| {
+        out.push(v);
+        Ok::<(), ForeignError>(())
+    })?;
+    Ok(out)
+}
+
+/// As [`frames_between`], each frame handed to `each` as it is measured, none kept (a writer
+/// streams them to its file); a scene equal to the one before is not solved again. `each`'s
+/// error ends the run.
+///
+/// # Errors
+/// As [`frames`], or `each`'s.
+pub fn each_frame_between<E: From<ForeignError>>(
+    reference: &SimulatedSheet,
+    later: &SimulatedSheet,
+    schedule: &Schedule,
+    scenes: &[Vec<Inclusion>],
+    instrument: &Instrument,
+    mut each: impl FnMut(Vec<f64>) -> Result<(), E>,
+) -> Result<(), E> {
     let ideal =
         |sheet: &SimulatedSheet, inclusions: &[Inclusion]| -> Result<Vec<f64>, ForeignError> {
             sheet
@@ -193,11 +215,17 @@ pub fn frames_between(
             })
             .collect()
     };
-    let mut out = vec![measure(0, empty)];
+    each(measure(0, empty))?;
+    let mut last: Option<(&[Inclusion], Vec<f64>)> = None;
     for (i, inclusions) in scenes.iter().enumerate() {
-        out.push(measure(i + 1, ideal(later, inclusions)?));
+        let frame = match &last {
+            Some((scene, frame)) if *scene == inclusions.as_slice() => frame.clone(),
+            _ => ideal(later, inclusions)?,
+        };
+        each(measure(i + 1, frame.clone()))?;
+        last = Some((inclusions, frame));
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]

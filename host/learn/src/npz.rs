@@ -136,6 +136,13 @@ pub fn npy_of_matrix(m: &DMatrix<f64>) -> Vec<u8> {
     npy("<f8", false, &[m.nrows(), m.ncols()], &data)
 }
 
+/// The header of an `.npy` file of little-endian f64 values of `shape` in C order: what a
+/// writer puts before values it streams.
+#[must_use]
+pub fn npy_header_f64(shape: &[usize]) -> Vec<u8> {
+    npy("<f8", false, shape, &[])
+}
+
 /// `values` (C order) as an `.npy` file's bytes of `shape`: little-endian f64. `values.len()`
 /// must be the shape's product (what is missing is written as NaN, what is over dropped).
 #[must_use]

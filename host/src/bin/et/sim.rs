@@ -146,13 +146,19 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// The most values (frames x K) `et sim` writes as another system's file (.csv, .npy, .mat),
-/// which is made whole in memory: 50 million, about 1.2 GB held.
-const MAX_FOREIGN_VALUES: usize = 50_000_000;
+/// The most values (frames x K) `et sim` writes as a MATLAB file, which is made whole in
+/// memory: 50 million, about 1.2 GB held.
+const MAX_MAT_VALUES: usize = 50_000_000;
 
-/// Another system's frames of `scene` (see `--out`), written as the extension of `--out` says.
+/// The most values `et sim` writes as a .csv or .npy file, frame by frame (nothing held): a
+/// thousand million, 8 GB as .npy, about 13 GB as text.
+const MAX_STREAMED_VALUES: usize = 1_000_000_000;
+
+/// Another system's frames of `scene` (see `--out`), written as the extension of `--out` says:
+/// .csv and .npy frame by frame as they are measured, .mat whole.
 fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     use et_sim::foreign::Instrument as I;
+    use std::io::Write as _;
     let started = Instant::now();
     let schedule = scene.schedule()?;
     let sheet = et_sim::still::simulated_sheet(scene)?;
@@ -174,50 +180,73 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         .collect();
     let n = usize::try_from(args.frames.max(2))?;
     let k = schedule.frame_len();
-    // Another system's file is made whole in memory (its frames, their matrix and the
-    // file's bytes): bounded, and said before any work.
-    if n.saturating_mul(k) > MAX_FOREIGN_VALUES {
-        anyhow::bail!(
-            "{}: {n} frames of {k} values is {:.1} GB in memory before it is written (the \
-             frames, their matrix and the file); another system's file holds at most {} \
-             million values here: fewer --frames (at most {}), or an et recording (.jsonl, \
-             written frame by frame)",
-            args.out.display(),
-            (n as f64) * (k as f64) * 8.0 * 3.0 / 1e9,
-            MAX_FOREIGN_VALUES / 1_000_000,
-            MAX_FOREIGN_VALUES / k.max(1)
-        );
-    }
-    let frames = et_sim::foreign::frames(&sheet, &schedule, &vec![touched; n - 1], &instrument)?;
-    let m = nalgebra::DMatrix::from_fn(n, k, |i, j| frames[i][j]);
     let ext = args
         .out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    let bytes = match ext.as_str() {
-        "npy" => et_learn::npz::npy_of_matrix(&m),
-        "mat" => et_host::frames::mat_v5("frames", &m),
-        "csv" => {
-            let mut text: String = (0..k)
-                .map(|j| format!("v{j}"))
-                .collect::<Vec<_>>()
-                .join(",");
-            text.push('\n');
-            for f in &frames {
-                let row: Vec<String> = f.iter().map(|v| format!("{v:e}")).collect();
-                text += &row.join(",");
-                text.push('\n');
-            }
-            text.into_bytes()
-        }
+    // Bounded, and said before any work: a .mat is made whole in memory, the others on disk.
+    let (limit, held) = match ext.as_str() {
+        "mat" => (
+            MAX_MAT_VALUES,
+            "in memory before it is written (the frames, their matrix and the file)",
+        ),
+        "csv" | "npy" => (MAX_STREAMED_VALUES, "on disk"),
         other => anyhow::bail!(
             "{}: another system's frames are written as .csv, .npy or .mat, not .{other}",
             args.out.display()
         ),
     };
-    crate::output::write(&args.out, |partial| std::fs::write(partial, &bytes))?;
+    if n.saturating_mul(k) > limit {
+        anyhow::bail!(
+            "{}: {n} frames of {k} values is {:.1} GB {held}; a .{ext} holds at most {} million \
+             values here: fewer --frames (at most {}), or an et recording (.jsonl, written \
+             frame by frame)",
+            args.out.display(),
+            (n as f64) * (k as f64) * 8.0 / 1e9,
+            limit / 1_000_000,
+            limit / k.max(1)
+        );
+    }
+    let scenes = vec![touched; n - 1];
+    let each = |mut frame: Box<dyn FnMut(Vec<f64>) -> Result<()> + '_>| {
+        et_sim::foreign::each_frame_between(&sheet, &sheet, &schedule, &scenes, &instrument, |f| {
+            frame(f)
+        })
+    };
+    crate::output::write(&args.out, |partial| -> Result<()> {
+        if ext == "mat" {
+            let mut values = Vec::with_capacity(n * k);
+            each(Box::new(|f| {
+                values.extend(f);
+                Ok(())
+            }))?;
+            let m = nalgebra::DMatrix::from_row_slice(n, k, &values);
+            drop(values);
+            std::fs::write(partial, et_host::frames::mat_v5("frames", &m))?;
+            return Ok(());
+        }
+        let mut file = std::io::BufWriter::new(std::fs::File::create(partial)?);
+        if ext == "npy" {
+            file.write_all(&et_learn::npz::npy_header_f64(&[n, k]))?;
+        } else {
+            let names: Vec<String> = (0..k).map(|j| format!("v{j}")).collect();
+            writeln!(file, "{}", names.join(","))?;
+        }
+        each(Box::new(|f| {
+            if ext == "npy" {
+                f.iter()
+                    .try_for_each(|v| file.write_all(&v.to_le_bytes()))?;
+            } else {
+                let row: Vec<String> = f.iter().map(|v| format!("{v:e}")).collect();
+                writeln!(file, "{}", row.join(","))?;
+            }
+            Ok(())
+        }))?;
+        file.flush()?;
+        Ok(())
+    })?;
     say!(
         "wrote {n} frames of {k} values ({}; the empty sheet first, then {} touch{} pressed; \
          instrument {:?}) to {} in {:.2} s",
