@@ -240,7 +240,7 @@ impl ModelFile {
                 o.insert("centres_m".into(), serde_json::json!(metres));
             }
         }
-        let mut m: ModelFile = serde_json::from_value(value).map_err(json)?;
+        let mut m: ModelFile = from_value_named(value).map_err(json)?;
         m.version = VERSION;
         Ok(m)
     }
@@ -439,4 +439,29 @@ pub enum ModelFileError {
         /// Why.
         error: FitError,
     },
+}
+
+/// `value` read as a `T`, an error naming the field where it went wrong (`tables.method:
+/// missing field`, where serde alone said `missing field` of some table) and without serde's
+/// names for its own types ("internally tagged enum").
+///
+/// # Errors
+/// serde_json's error, its field's path in front.
+pub fn from_value_named<T: serde::de::DeserializeOwned>(
+    value: serde_json::Value,
+) -> Result<T, serde_json::Error> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let said = e
+            .into_inner()
+            .to_string()
+            .replace("internally tagged enum ", "")
+            .replace("untagged enum ", "");
+        let said = if path == "." {
+            said
+        } else {
+            format!("{path}: {said}")
+        };
+        <serde_json::Error as serde::de::Error>::custom(said)
+    })
 }

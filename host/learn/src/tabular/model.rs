@@ -369,7 +369,7 @@ impl TableModel {
         if version == Some(1) {
             mm_names_to_metres(&mut value);
         }
-        let mut m: TableModel = serde_json::from_value(value)?;
+        let mut m: TableModel = crate::model_file::from_value_named(value)?;
         if m.format != "et-table-model" || !matches!(m.version, 1 | TABLE_MODEL_VERSION) {
             return Err(TableModelError::Format);
         }

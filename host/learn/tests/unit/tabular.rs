@@ -264,6 +264,32 @@ fn a_grid_of_classes_from_positions() {
             refused.to_string().contains("bounds_m"),
             "reversed: {refused}"
         );
+        // A damaged field is named by its place in the file, in words of the file (serde
+        // alone said "missing field" of some table, or "internally tagged enum").
+        for (field, damaged, said) in [
+            (
+                "tables",
+                serde_json::json!({ "kind": "qda" }),
+                "tables: missing field",
+            ),
+            (
+                "tables",
+                serde_json::Value::Null,
+                "tables: invalid type: null, expected Tables",
+            ),
+            (
+                "feature_mean",
+                serde_json::json!(["x"]),
+                "feature_mean[0]: invalid type",
+            ),
+        ] {
+            let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+            value[field] = damaged;
+            let refused = et_learn::tabular::TableModel::from_value(value)
+                .unwrap_err()
+                .to_string();
+            assert!(refused.starts_with(said), "{field}: {refused}");
+        }
         assert!(e.mean_error_mm.unwrap() < e.mean_predictor_error_mm.unwrap());
         // A QDA whose best shrinkage is 1 toward the pooled covariance is kept as the LDA
         // it equals, and says so; any other stays QDA.
