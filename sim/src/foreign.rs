@@ -172,6 +172,7 @@ pub fn frames_between(
     instrument: &Instrument,
 ) -> Result<Vec<Vec<f64>>, ForeignError> {
     let mut out = Vec::with_capacity(scenes.len() + 1);
+    let scenes = scenes.iter().map(Vec::as_slice);
     each_frame_between(reference, later, schedule, scenes, instrument, |v| {
         out.push(v);
         Ok::<(), ForeignError>(())
@@ -179,17 +180,18 @@ pub fn frames_between(
     Ok(out)
 }
 
-/// As [`frames_between`], each frame handed to `each` as it is measured, none kept (a writer
-/// streams them to its file); a scene equal to the one before is not solved again. `each`'s
-/// error ends the run.
+/// As [`frames_between`], the scenes taken one at a time and each frame handed to `each` as it
+/// is measured, none kept (a writer streams them to its file: `iter::repeat_n` of one scene
+/// holds it once); a scene equal to the one before is not solved again. `each`'s error ends
+/// the run.
 ///
 /// # Errors
 /// As [`frames`], or `each`'s.
-pub fn each_frame_between<E: From<ForeignError>>(
+pub fn each_frame_between<'a, E: From<ForeignError>>(
     reference: &SimulatedSheet,
     later: &SimulatedSheet,
     schedule: &Schedule,
-    scenes: &[Vec<Inclusion>],
+    scenes: impl IntoIterator<Item = &'a [Inclusion]>,
     instrument: &Instrument,
     mut each: impl FnMut(Vec<f64>) -> Result<(), E>,
 ) -> Result<(), E> {
@@ -217,9 +219,9 @@ pub fn each_frame_between<E: From<ForeignError>>(
     };
     each(measure(0, empty))?;
     let mut last: Option<(&[Inclusion], Vec<f64>)> = None;
-    for (i, inclusions) in scenes.iter().enumerate() {
+    for (i, inclusions) in scenes.into_iter().enumerate() {
         let frame = match &last {
-            Some((scene, frame)) if *scene == inclusions.as_slice() => frame.clone(),
+            Some((scene, frame)) if *scene == inclusions => frame.clone(),
             _ => ideal(later, inclusions)?,
         };
         each(measure(i + 1, frame.clone()))?;

@@ -186,13 +186,21 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    // Bounded, and said before any work: a .mat is made whole in memory, the others on disk.
-    let (limit, held) = match ext.as_str() {
+    // Bounded, and said before any work: a .mat is made whole in memory (its values, their
+    // matrix and the file: three copies), the others on disk.
+    let (limit, copies, held, instead) = match ext.as_str() {
         "mat" => (
             MAX_MAT_VALUES,
-            "in memory before it is written (the frames, their matrix and the file)",
+            3.0,
+            "in memory before it is written",
+            "a .npy or .csv (written frame by frame)",
         ),
-        "csv" | "npy" => (MAX_STREAMED_VALUES, "on disk"),
+        "csv" | "npy" => (
+            MAX_STREAMED_VALUES,
+            1.0,
+            "on disk",
+            "an et recording (.jsonl, also written frame by frame)",
+        ),
         other => anyhow::bail!(
             "{}: another system's frames are written as .csv, .npy or .mat, not .{other}",
             args.out.display()
@@ -201,17 +209,17 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     if n.saturating_mul(k) > limit {
         anyhow::bail!(
             "{}: {n} frames of {k} values is {:.1} GB {held}; a .{ext} holds at most {} million \
-             values here: fewer --frames (at most {}), or an et recording (.jsonl, written \
-             frame by frame)",
+             values here: fewer --frames (at most {}), or {instead}",
             args.out.display(),
-            (n as f64) * (k as f64) * 8.0 / 1e9,
+            (n as f64) * (k as f64) * 8.0 * copies / 1e9,
             limit / 1_000_000,
             limit / k.max(1)
         );
     }
-    let scenes = vec![touched; n - 1];
+    // The touched scene once, measured n - 1 times (solved once).
     let each = |mut frame: Box<dyn FnMut(Vec<f64>) -> Result<()> + '_>| {
-        et_sim::foreign::each_frame_between(&sheet, &sheet, &schedule, &scenes, &instrument, |f| {
+        let scenes = std::iter::repeat_n(touched.as_slice(), n - 1);
+        et_sim::foreign::each_frame_between(&sheet, &sheet, &schedule, scenes, &instrument, |f| {
             frame(f)
         })
     };
