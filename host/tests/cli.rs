@@ -1324,6 +1324,32 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             vec!["train", "--features", out, "--out", out, "--folds", "1"],
             "outside 2 to",
         ),
+        // Another system's frames: streamed files bounded on disk, a .mat in memory, said
+        // before any work with what to write instead.
+        (
+            vec![
+                "sim",
+                "--scene",
+                scene,
+                "--frames",
+                "4294967295",
+                "--out",
+                "/tmp/f.npy",
+            ],
+            "at most 4807692",
+        ),
+        (
+            vec![
+                "sim",
+                "--scene",
+                scene,
+                "--frames",
+                "300000",
+                "--out",
+                "/tmp/f.mat",
+            ],
+            "a .npy or .csv",
+        ),
         (
             vec![
                 "train",
