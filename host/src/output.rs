@@ -17,16 +17,6 @@ pub enum OutputError {
         /// The input it names.
         input: PathBuf,
     },
-    /// Standard output named as the output, where the caller closed it.
-    #[error(
-        "{}: standard output is closed (>&-), so what et writes there would vanish: give \
-         a file, or leave standard output open",
-        .out.display()
-    )]
-    StdoutClosed {
-        /// The output path as given.
-        out: PathBuf,
-    },
     /// Two outputs of one command name the same file.
     #[error("{} and {} are the same file: give each output its own path", .out.display(), .other.display())]
     Collision {
@@ -88,12 +78,13 @@ const STREAMS: [&str; 7] = [
 /// Whether standard output was closed when et started ([`note_standard_streams`]).
 static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
-/// Notes whether the caller closed standard output (`et eval --json >&-`): then a result
-/// printed there ([`stdout_closed`]) or written to `/dev/stdout` fails, said, as a Unix tool's
-/// does. Rust opens the null device in place of a closed standard stream before `main`, so
-/// writes vanished and the command exited 0; that null device is told from one the caller
-/// gave (`> /dev/null`, which asks for the result to be dropped) by its being open for reading
-/// and writing (Linux, from `/proc`; elsewhere nothing is noted). Call once, first in `main`.
+/// Notes whether the caller may have closed standard output (`et eval --json >&-`): then a
+/// result printed there ([`stdout_closed`]) or written to `/dev/stdout` is said to be dropped.
+/// Rust opens the null device in place of a closed standard stream before `main`, so writes
+/// vanished without a word; that null device is told from one a shell gave (`> /dev/null`,
+/// which asks for the result to be dropped) by its being open for reading and writing (Linux,
+/// from `/proc`; elsewhere nothing is noted). Python's `subprocess.DEVNULL` opens it so too,
+/// which is why this is a note and not a failure. Call once, first in `main`.
 pub fn note_standard_streams() {
     let null = std::fs::read_link("/proc/self/fd/1").is_ok_and(|p| p == Path::new("/dev/null"));
     let read_write = || {
@@ -108,10 +99,19 @@ pub fn note_standard_streams() {
     }
 }
 
-/// Whether standard output was closed when et started: a command's result has nowhere to go.
+/// Whether standard output was closed when et started (or is the null device opened for
+/// reading and writing): a command's result has nowhere to go.
 #[must_use]
 pub fn stdout_closed() -> bool {
     STDOUT_CLOSED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Whether `out` names the process's standard output.
+#[must_use]
+pub fn is_stdout(out: &Path) -> bool {
+    ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]
+        .iter()
+        .any(|s| out == Path::new(s))
 }
 
 /// Whether `out` is one of [`STREAMS`].
@@ -219,12 +219,6 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
             out: out.into(),
             input: input.to_path_buf(),
         });
-    }
-    let to_stdout = ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]
-        .iter()
-        .any(|s| out == Path::new(s));
-    if to_stdout && stdout_closed() {
-        return Err(OutputError::StdoutClosed { out: out.into() });
     }
     match occupant(out) {
         Occupant::Nothing => new_at_check(out),

@@ -138,12 +138,7 @@ pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
     use std::io::Write as _;
-    if et_host::output::stdout_closed() {
-        anyhow::bail!(
-            "standard output is closed (>&-): et stream's events would vanish; leave it open, \
-             or redirect it to a file"
-        );
-    }
+    crate::note_stdout_closed();
     let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
     let mut processor = Processor::new(
         &sheet.physical,

@@ -13,20 +13,27 @@ macro_rules! say {
     }};
 }
 
+/// Says once that what goes to standard output is dropped, where the caller closed it
+/// (`>&-`; [`et_host::output::stdout_closed`]).
+fn note_stdout_closed() {
+    static SAID: std::sync::Once = std::sync::Once::new();
+    if et_host::output::stdout_closed() {
+        SAID.call_once(|| {
+            say!(
+                "note: standard output is closed (>&-) or the null device: what et prints there \
+                 is dropped"
+            );
+        });
+    }
+}
+
 /// `println!` for a command's output on stdout: when the reader goes away (`et protocol
 /// --json | head`) the program ends quietly, as Unix tools do, instead of panicking; where
-/// the caller closed standard output (`>&-`) the result would vanish, so et says so and
-/// fails.
+/// the caller closed standard output (`>&-`) the result is dropped, said once.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if et_host::output::stdout_closed() {
-            say!(
-                "error: standard output is closed (>&-): the result printed there would \
-                 vanish; leave it open, or redirect it to a file"
-            );
-            std::process::exit(1);
-        }
+        crate::note_stdout_closed();
         let mut stdout = std::io::stdout().lock();
         if let Err(e) = writeln!(stdout, $($arg)*).and_then(|()| stdout.flush()) {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
