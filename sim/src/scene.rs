@@ -272,50 +272,6 @@ pub struct Scene {
     pub read: ReadOnce,
 }
 
-/// A file's text read once, kept with the scene (clones share it; it takes no part in
-/// comparing scenes).
-#[derive(Clone, Debug, Default)]
-pub struct ReadOnce(std::sync::Arc<std::sync::Mutex<Option<FileText>>>);
-
-/// A file's path and its text (or why it could not be read).
-type FileText = (
-    std::path::PathBuf,
-    Result<String, et_core::schedule::ScheduleError>,
-);
-
-impl PartialEq for ReadOnce {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl ReadOnce {
-    /// `path`'s text, read the first time (up to the data files' limit) and kept.
-    ///
-    /// # Errors
-    /// [`et_core::schedule::ScheduleError::Read`] when it cannot be read (kept too).
-    pub fn text(&self, path: &std::path::Path) -> Result<String, et_core::schedule::ScheduleError> {
-        let mut kept = self
-            .0
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some((p, text)) = kept.as_ref()
-            && p == path
-        {
-            return text.clone();
-        }
-        let text =
-            et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(|e| {
-                et_core::schedule::ScheduleError::Read {
-                    path: path.to_path_buf(),
-                    source: std::sync::Arc::new(e),
-                }
-            });
-        *kept = Some((path.to_path_buf(), text.clone()));
-        text
-    }
-}
-
 fn default_seed() -> u64 {
     1
 }
@@ -601,9 +557,11 @@ impl Scene {
 }
 
 mod fault;
+mod read_once;
 mod run;
 mod scan;
 pub use fault::{FieldError, SceneFault};
+pub use read_once::ReadOnce;
 pub use run::*;
 
 #[cfg(test)]
