@@ -219,13 +219,18 @@ impl FoldClasses {
     fn qda(self, opts: &FitOptions, model: &mut FoldModel) -> Result<(), FitError> {
         let (p, classes) = (self.gain.len(), self.n_c.len());
         let n: usize = self.n_c.iter().sum();
+        // As `Fitted::fit` shrinks: toward the pooled covariance where it can be a target.
+        let pooled = match opts.target {
+            Target::Pooled if opts.shrinkage > 0.0 => crate::fit::pooled_target(&self.pooled),
+            _ => None,
+        };
         let shrink = |s: &DMatrix<f64>| -> DMatrix<f64> {
             if opts.shrinkage == 0.0 {
                 return s.clone();
             }
-            let t = match opts.target {
-                Target::Pooled => self.pooled.clone(),
-                Target::Diagonal => {
+            let t = match &pooled {
+                Some(t) => t.clone(),
+                None => {
                     let nu = s.trace() / p as f64;
                     DMatrix::identity(p, p) * if nu > 0.0 { nu } else { 1.0 }
                 }

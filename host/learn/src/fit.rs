@@ -156,19 +156,31 @@ pub enum FitError {
 
 /// Per-feature mean and standard deviation of the rows of `x` (n x p), the z-space every
 /// model here works in. A constant feature (a dead electrode) keeps unit scale rather than
-/// blow round-off up into a feature.
+/// blow round-off up into a feature. The deviations are summed as multiples of the largest,
+/// so features of any magnitude f64 holds keep their spread (squared as they are, values
+/// of 1e-300 underflowed to a spread of 0 and values of 1e200 overflowed to infinity: both
+/// were kept at unit scale, and a classifier on them guessed).
 #[must_use]
 pub fn standardisation(x: &DMatrix<f64>) -> (Vec<f64>, Vec<f64>) {
     let (n, p) = (x.nrows(), x.ncols());
     let feature_mean: Vec<f64> = (0..p).map(|j| x.column(j).mean()).collect();
     let feature_scale: Vec<f64> = (0..p)
         .map(|j| {
-            let sd = if n > 1 {
-                x.column(j).variance() * n as f64 / (n - 1) as f64
+            let m = feature_mean[j];
+            let largest = x
+                .column(j)
+                .iter()
+                .fold(0.0_f64, |a, v| a.max((v - m).abs()));
+            let sd = if n > 1 && largest > 0.0 && largest.is_finite() {
+                let sum: f64 = x
+                    .column(j)
+                    .iter()
+                    .map(|v| ((v - m) / largest).powi(2))
+                    .sum();
+                largest * (sum / (n - 1) as f64).sqrt()
             } else {
                 0.0
-            }
-            .sqrt();
+            };
             // A constant feature (a dead electrode) has a round-off-sized spread: keep it
             // at unit scale rather than blow round-off up into a feature.
             let floor = 1e-9 * feature_mean[j].abs().max(f64::MIN_POSITIVE);
@@ -291,14 +303,36 @@ pub(crate) fn check(
     Ok(members)
 }
 
-fn shrink(s: &DMatrix<f64>, lambda: f64, target: Target, pooled: &DMatrix<f64>) -> DMatrix<f64> {
+/// The pooled covariance as a shrinkage target, when it can be one: a feature constant in
+/// every class (a dead electrode, a column of one value) has no pooled variance, so unit
+/// variance (the z-space's total) takes its place, which costs nothing as its z is 0 in
+/// every row and class mean; a pooled covariance still singular (more features than rows
+/// to pool, or features that repeat each other) is no target (None: the caller shrinks
+/// toward the diagonal instead, where every shrinkage failed before).
+#[must_use]
+pub(crate) fn pooled_target(pooled: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let mut t = pooled.clone();
+    for i in 0..t.nrows() {
+        if t[(i, i)] <= 0.0 {
+            t[(i, i)] = 1.0;
+        }
+    }
+    let l = t.clone().cholesky()?.l();
+    (0..l.nrows())
+        .all(|i| l[(i, i)] > 0.0 && l[(i, i)].is_finite())
+        .then_some(t)
+}
+
+/// `s` shrunk by `lambda` toward `pooled` ([`pooled_target`]), or toward the identity times
+/// its own mean variance when `pooled` is None.
+fn shrink(s: &DMatrix<f64>, lambda: f64, pooled: Option<&DMatrix<f64>>) -> DMatrix<f64> {
     if lambda == 0.0 {
         return s.clone();
     }
     let p = s.nrows();
-    let t = match target {
-        Target::Pooled => pooled.clone(),
-        Target::Diagonal => {
+    let t = match pooled {
+        Some(pooled) => pooled.clone(),
+        None => {
             let nu = s.trace() / p as f64;
             DMatrix::identity(p, p) * if nu > 0.0 { nu } else { 1.0 }
         }
@@ -349,6 +383,10 @@ impl Fitted {
         let dof = n.saturating_sub(classes).max(1);
         let pooled = pooled / dof as f64; // [5.3]
         let log_prior = |count: usize| (count as f64 / n as f64).ln(); // [5.5]
+        let target = match (opts.kind, opts.target) {
+            (ModelKind::Qda, Target::Pooled) if opts.shrinkage > 0.0 => pooled_target(&pooled),
+            _ => None,
+        };
         let classes_fit = match opts.kind {
             ModelKind::Qda => members
                 .iter()
@@ -357,7 +395,7 @@ impl Fitted {
                 .enumerate()
                 .map(|(c, ((rows, mean), scatter))| {
                     let s = scatter / (rows.len().saturating_sub(1).max(1)) as f64;
-                    let sigma = shrink(&s, opts.shrinkage, opts.target, &pooled);
+                    let sigma = shrink(&s, opts.shrinkage, target.as_ref());
                     let chol = sigma
                         .cholesky()
                         .ok_or(FitError::NotPositiveDefinite { class: c as u16 })?;
@@ -377,7 +415,7 @@ impl Fitted {
                 })
                 .collect::<Result<Vec<_>, _>>()?,
             ModelKind::Lda => {
-                let sigma = shrink(&pooled, opts.shrinkage, Target::Diagonal, &pooled);
+                let sigma = shrink(&pooled, opts.shrinkage, None);
                 let chol = sigma
                     .cholesky()
                     .ok_or(FitError::NotPositiveDefinite { class: 0 })?;

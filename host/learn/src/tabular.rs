@@ -50,6 +50,9 @@ pub enum TabularError {
     /// A model's tables that are not the model they claim to be.
     #[error(transparent)]
     Tables(#[from] TablesError),
+    /// No candidate could be fitted in cross-validation: the first reason each method gave.
+    #[error("no candidate could be fitted in cross-validation: {0}")]
+    NothingFitted(String),
     /// A model file that could not be written or read, is not JSON, or not an et table model.
     #[error("{}: {source}", .path.display())]
     Model {

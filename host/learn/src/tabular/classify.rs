@@ -84,6 +84,17 @@ pub(super) fn search_classifier(
         }));
     }
 
+    // QDA and LDA hold their tables in single precision, as the board does: a feature whose
+    // level or spread f32 cannot hold is said, not fitted into tables the check refuses.
+    if let Some(failure) = beyond_single_precision(table) {
+        return Ok(SHRINKAGES
+            .iter()
+            .map(|&lambda| Candidate {
+                failure: Some(failure.clone()),
+                ..Candidate::new(method, params(&[("shrinkage", lambda)]))
+            })
+            .collect());
+    }
     let kind = discriminant(method);
     let what = format!(
         "cross-validating {} ({} shrinkages)",
@@ -96,19 +107,19 @@ pub(super) fn search_classifier(
         let fit = FitOptions {
             kind,
             shrinkage: lambda,
-            // Toward the diagonal when a class has fewer rows than features.
-            target: shrink_target(table.x.ncols(), labels),
+            // Toward the diagonal when a fold has too few rows to pool.
+            target: shrink_target(table.x.ncols(), labels, fold_rows(fold)),
         };
         let conf = match cross_validate_fast(&table.x, &labels.index, classes, &fit, fold) {
-            Ok(conf) => Some(conf),
             // A fold whose training rows lack some class (blocks of a recording): fit on the
             // classes present, and count the absent class's rows as missed.
             Err(FitError::EmptyClass { .. }) => cv_present_classes(&table.x, labels, &fit, fold),
-            // A singular fit: the candidate scores nothing.
-            Err(_) => None,
+            other => other,
         };
+        // A fit that fails scores nothing; why is kept to say if nothing else fits.
         out.push(Candidate {
-            cv_accuracy: conf.as_ref().map(Confusion::accuracy),
+            cv_accuracy: conf.as_ref().ok().map(Confusion::accuracy),
+            failure: conf.err().map(|e| e.to_string()),
             ..Candidate::new(method, params(&[("shrinkage", lambda)]))
         });
     }
@@ -116,14 +127,43 @@ pub(super) fn search_classifier(
     Ok(out)
 }
 
-/// QDA shrinks toward the pooled covariance, unless some class has no more rows than
-/// features (then toward the diagonal, which needs no pooled estimate of full rank).
-pub(super) fn shrink_target(p: usize, labels: &Labels) -> Target {
-    if labels.index.len() <= p + labels.names.len() {
+/// The first feature whose mean or spread single precision cannot hold (beyond about
+/// 3.4e38, or a spread below 1.2e-38), in words.
+fn beyond_single_precision(table: &Table) -> Option<String> {
+    let (mean, scale) = crate::fit::standardisation(&table.x);
+    let held = |v: f64| (v as f32).is_finite() && (v == 0.0 || (v as f32).is_normal());
+    let (j, (m, sd)) = mean
+        .iter()
+        .zip(&scale)
+        .enumerate()
+        .find(|(_, (m, sd))| !held(**m) || !held(**sd))?;
+    let name = table.feature_names.get(j).cloned().unwrap_or_default();
+    Some(format!(
+        "feature {name}: mean {m:.3e}, spread {sd:.3e}, beyond single precision (1.2e-38 to \
+         3.4e38), in which QDA and LDA hold their tables as the board does: give it in other \
+         units"
+    ))
+}
+
+/// QDA shrinks toward the pooled covariance, unless the `rows` a fit has (those of the
+/// smallest cross-validation training set, [`fold_rows`]: the saved model is fitted toward
+/// the target its cross-validation scored) leave fewer degrees of freedom than features
+/// (then toward the diagonal, which needs no pooled estimate of full rank).
+pub(super) fn shrink_target(p: usize, labels: &Labels, rows: usize) -> Target {
+    if rows <= p + labels.names.len() {
         Target::Diagonal
     } else {
         Target::Pooled
     }
+}
+
+/// The training rows of the smallest fold's training set (`fold`: each row's fold).
+pub(super) fn fold_rows(fold: &[usize]) -> usize {
+    let mut sizes: BTreeMap<usize, usize> = BTreeMap::new();
+    for &f in fold {
+        *sizes.entry(f).or_default() += 1;
+    }
+    fold.len() - sizes.values().copied().max().unwrap_or(0)
 }
 
 pub(super) fn discriminant(method: Kind) -> ModelKind {
@@ -135,14 +175,16 @@ pub(super) fn discriminant(method: Kind) -> ModelKind {
 }
 
 /// Cross-validation where a fold's training rows may lack classes: each fold fits on the
-/// classes it has (relabelled), and held-out rows of a class it lacks count as missed. None
-/// when a fold cannot be fitted.
+/// classes it has (relabelled), and held-out rows of a class it lacks count as missed.
+///
+/// # Errors
+/// The first fold's that cannot be fitted.
 pub(super) fn cv_present_classes(
     x: &DMatrix<f64>,
     labels: &Labels,
     fit: &FitOptions,
     fold: &[usize],
-) -> Option<Confusion> {
+) -> Result<Confusion, FitError> {
     let classes = labels.names.len();
     let k = fold.iter().max().map_or(0, |m| m + 1);
     let mut conf = Confusion::new(classes);
@@ -158,7 +200,10 @@ pub(super) fn cv_present_classes(
         present.sort_unstable();
         present.dedup();
         if present.len() < 2 {
-            return None;
+            return Err(FitError::NoCandidates(
+                "a fold's training rows hold one class only (a class with fewer rows than \
+                 folds: give it more rows, fewer --folds, or leave it out)",
+            ));
         }
         let local: BTreeMap<u16, u16> = present
             .iter()
@@ -169,9 +214,9 @@ pub(super) fn cv_present_classes(
             .iter()
             .map(|&r| local.get(&y(r)).copied().unwrap_or(0))
             .collect();
-        let model = Fitted::fit(&rows_of(x, &train), &yt, present.len(), fit).ok()?;
+        let model = Fitted::fit(&rows_of(x, &train), &yt, present.len(), fit)?;
         // Tables a board would refuse (and the model file's reader with it) score nothing.
-        crate::model_file::check_tables(&model, &[]).ok()?;
+        crate::model_file::check_tables(&model, &[])?;
         let mut row = vec![0.0; x.ncols()];
         for &r in &test {
             for (j, v) in row.iter_mut().enumerate() {
@@ -184,5 +229,5 @@ pub(super) fn cv_present_classes(
             conf.add(y(r), predicted);
         }
     }
-    Some(conf)
+    Ok(conf)
 }

@@ -31,6 +31,9 @@ pub struct Candidate {
     /// the best candidates.
     #[serde(skip)]
     pub(super) out_of_fold: Option<[Vec<Target3>; 2]>,
+    /// During training only: why its cross-validation could not be fitted, when it could not.
+    #[serde(skip)]
+    pub(super) failure: Option<String>,
 }
 
 impl Candidate {
@@ -45,6 +48,7 @@ impl Candidate {
             cv_block_errors_mm: None,
             cv_drifted_error_mm: None,
             out_of_fold: None,
+            failure: None,
         }
     }
 
@@ -52,7 +56,9 @@ impl Candidate {
     #[must_use]
     pub fn loss(&self) -> f64 {
         if self.method.is_classifier() {
-            1.0 - self.cv_accuracy.unwrap_or(0.0)
+            // Not fitted in cross-validation: never chosen (as 1.0, it was, and its model
+            // written as "could not be fitted").
+            self.cv_accuracy.map_or(f64::INFINITY, |a| 1.0 - a)
         } else {
             self.cv_mean_error_mm.unwrap_or(f64::INFINITY)
         }

@@ -191,11 +191,35 @@ pub fn train(
     if let Some(avg) = &average {
         ranked.insert(0, avg);
     }
+    if ranked.is_empty() {
+        // Why, in the methods' words (a class of one row, values beyond single precision).
+        let mut why: Vec<(String, Vec<&str>)> = Vec::new();
+        for c in &search {
+            let Some(failure) = &c.failure else { continue };
+            let name = c.method.name();
+            match why.iter_mut().find(|(f, _)| f == failure) {
+                Some((_, methods)) if !methods.contains(&name) => methods.push(name),
+                Some(_) => {}
+                None => why.push((failure.clone(), vec![name])),
+            }
+        }
+        if !why.is_empty() {
+            let said: Vec<String> = why
+                .iter()
+                .map(|(f, methods)| format!("{}: {f}", methods.join(", ")))
+                .collect();
+            return Err(TabularError::NothingFitted(said.join("; ")));
+        }
+    }
+    // The smallest cross-validation training set, which chose QDA's shrinkage target.
+    let fold_rows = classes.as_ref().map_or(n, |(l, _)| {
+        classify::fold_rows(&cv.folds(n, Some(&l.index), opts.seed))
+    });
     let (best, (tables, mean, scale), qda_is_lda) = fit_first(
         &ranked,
         table,
         (targets.as_deref(), classes.as_ref()),
-        &members,
+        (&members, fold_rows),
         (opts.seed, progress),
     )?;
     search.extend(average.clone());
@@ -245,19 +269,24 @@ pub fn train(
 
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
 /// in every fold as on all rows: that is LDA at shrinkage 0, as that LDA candidate (scored
-/// as the QDA was), C times smaller. `None` for any other candidate.
+/// as the QDA was), C times smaller. `None` for any other candidate, and when the folds'
+/// `fold_rows` made the target the diagonal.
 #[must_use]
-pub fn as_lda_if_equal(c: &Candidate, p: usize, labels: Option<&Labels>) -> Option<Candidate> {
+pub fn as_lda_if_equal(
+    c: &Candidate,
+    p: usize,
+    labels: Option<&Labels>,
+    fold_rows: usize,
+) -> Option<Candidate> {
     let full = c
         .hyperparameters
         .get("shrinkage")
         .is_some_and(|&s| s >= 1.0);
-    (c.method == Kind::Qda && full && shrink_target(p, labels?) == Target::Pooled).then(|| {
-        Candidate {
-            method: Kind::Lda,
-            hyperparameters: params(&[("shrinkage", 0.0)]),
-            ..c.clone()
-        }
+    let pooled = shrink_target(p, labels?, fold_rows) == Target::Pooled;
+    (c.method == Kind::Qda && full && pooled).then(|| Candidate {
+        method: Kind::Lda,
+        hyperparameters: params(&[("shrinkage", 0.0)]),
+        ..c.clone()
     })
 }
 
@@ -443,6 +472,7 @@ pub(super) fn search_regressor(
                     .filter(|e| e.is_finite()),
                 cv_accuracy: None,
                 out_of_fold: p_all.zip(q_all).map(|(p, q)| [p, q]),
+                failure: None,
             }
         })
         .collect())

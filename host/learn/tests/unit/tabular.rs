@@ -325,14 +325,16 @@ fn qda_at_full_pooled_shrinkage_is_the_lda() {
         c.cv_accuracy = Some(0.9);
         c
     };
-    let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels)).unwrap();
+    let lda = as_lda_if_equal(&qda(1.0), 5, Some(&labels), 30).unwrap();
     assert_eq!((lda.method, lda.cv_accuracy), (Kind::Lda, Some(0.9)));
     assert_eq!(lda.hyperparameters["shrinkage"], 0.0);
-    assert!(as_lda_if_equal(&qda(0.3), 5, Some(&labels)).is_none());
-    // 40 rows, 2 classes, 40 features: the pooled covariance is singular, the target is
-    // the diagonal, and QDA at 1 is not LDA.
-    assert!(as_lda_if_equal(&qda(1.0), 40, Some(&labels)).is_none());
-    assert!(as_lda_if_equal(&qda(1.0), 5, None).is_none());
+    assert!(as_lda_if_equal(&qda(0.3), 5, Some(&labels), 30).is_none());
+    // 30 rows in a fold's training set, 2 classes, 40 features: the pooled covariance is
+    // singular, the target is the diagonal, and QDA at 1 is not LDA.
+    assert!(as_lda_if_equal(&qda(1.0), 40, Some(&labels), 30).is_none());
+    // Nor with 5 features when the folds train on 6 rows (40 rows in all would pool).
+    assert!(as_lda_if_equal(&qda(1.0), 5, Some(&labels), 6).is_none());
+    assert!(as_lda_if_equal(&qda(1.0), 5, None, 30).is_none());
 }
 
 #[test]
@@ -1082,4 +1084,79 @@ fn a_training_past_its_budget_is_refused_before_any_fit() {
         );
     }
     assert!(train(&STANDIN, Choice::One(Kind::Ridge), &tight, &mut quiet()).is_ok());
+}
+
+/// Features of any magnitude f64 holds keep their spread (their squares under- or
+/// overflowed: a regressor on them was fitted to nothing); a classifier on features single
+/// precision cannot hold says so by the feature's name; a constant column does not stop
+/// QDA (its pooled variance, 0, was a singular target at every shrinkage); and a class too
+/// small to cross-validate is said, never saved as a model whose cross-validation "could
+/// not be fitted".
+#[test]
+fn scales_constant_columns_and_tiny_classes_are_fitted_or_said() {
+    let mut rng = et_core::rng::Rng::new(21);
+    let n = 90;
+    let labels: Vec<String> = (0..n).map(|r| format!("{}", r % 3)).collect();
+    let x = DMatrix::from_fn(n, 4, |r, j| {
+        (r % 3) as f64 * (1.0 + j as f64) + 0.3 * rng.normal()
+    });
+    // Regressors: the same error at any scale of the features.
+    let positions: Vec<[f64; 2]> = (0..n)
+        .map(|r| [x[(r, 0)] * 3.0, x[(r, 1)] - x[(r, 2)]])
+        .collect();
+    let regress = |scale: f64| {
+        let table = Table {
+            positions: Some(positions.clone()),
+            labels: None,
+            ..labelled(&x * scale, labels.clone())
+        };
+        let model = train(&table, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
+        model.chosen().unwrap().cv_mean_error_mm.unwrap()
+    };
+    let plain = regress(1.0);
+    for scale in [1e-300, 1e300] {
+        let scaled = regress(scale);
+        assert!(
+            (scaled - plain).abs() < 1e-6 * plain,
+            "x {scale:e}: {scaled} mm against {plain} mm"
+        );
+    }
+    // Classifiers: refused by the feature's name at scales f32 cannot hold.
+    for scale in [1e-300, 1e300] {
+        let table = labelled(&x * scale, labels.clone());
+        for kind in [Kind::Lda, Kind::Qda] {
+            let e = train(&table, Choice::One(kind), &opts(), &mut quiet())
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("feature c0") && e.contains("single precision"),
+                "x {scale:e}: {e}"
+            );
+        }
+    }
+    // A constant column: QDA and LDA train and classify as without it.
+    let mut constant = x.clone().insert_column(2, 5.0);
+    constant[(0, 2)] = 5.0;
+    let table = labelled(constant, labels.clone());
+    for kind in [Kind::Lda, Kind::Qda] {
+        let model = train(&table, Choice::One(kind), &opts(), &mut quiet()).unwrap();
+        let accuracy = evaluate(&model, &table).unwrap().accuracy.unwrap();
+        assert!(accuracy > 0.95, "{kind:?}: {accuracy}");
+    }
+    // A class of one row: a fold trains on the other class alone.
+    let few = labelled(
+        x.rows(0, 31).into_owned(),
+        (0..31)
+            .map(|r| if r == 30 { "b" } else { "a" }.to_string())
+            .collect(),
+    );
+    for kind in [Kind::Lda, Kind::Qda] {
+        let e = train(&few, Choice::One(kind), &opts(), &mut quiet())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("one class only") && e.contains("fewer rows than folds"),
+            "{e}"
+        );
+    }
 }

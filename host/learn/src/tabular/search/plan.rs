@@ -173,20 +173,26 @@ pub(super) fn fit_first(
     ranked: &[&Candidate],
     table: &Table,
     (targets, classes): (Option<&[Target3]>, Option<&(Labels, ClassInfo)>),
-    members: &[Candidate],
+    (members, fold_rows): (&[Candidate], usize),
     (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Candidate, (Tables, Vec<f64>, Vec<f64>), bool), TabularError> {
     let mut last_error = None;
-    for &best in ranked {
-        let lda = as_lda_if_equal(best, table.x.ncols(), classes.map(|(l, _)| l));
-        let best = lda.as_ref().unwrap_or(best);
-        progress(&format!("fitting {}", best.method.name()), 0, 1);
-        match fit_final(table, best, targets, classes, members, (seed, progress)) {
-            Ok(f) => {
-                progress(&format!("fitting {}", best.method.name()), 1, 1);
-                return Ok((best.clone(), f, lda.is_some()));
+    for &candidate in ranked {
+        // QDA shrunk fully toward the pooled covariance is LDA, saved as one; where the pooled
+        // covariance is singular (a constant feature, more features than rows to pool) LDA
+        // cannot be fitted and the QDA, shrunk toward a target made usable, is kept.
+        let labels = classes.map(|(l, _)| l);
+        let lda = as_lda_if_equal(candidate, table.x.ncols(), labels, fold_rows);
+        for (best, is_lda) in lda.iter().map(|l| (l, true)).chain([(candidate, false)]) {
+            progress(&format!("fitting {}", best.method.name()), 0, 1);
+            let fit = (classes, fold_rows);
+            match fit_final(table, best, targets, fit, members, (seed, progress)) {
+                Ok(f) => {
+                    progress(&format!("fitting {}", best.method.name()), 1, 1);
+                    return Ok((best.clone(), f, is_lda));
+                }
+                Err(e) => last_error = Some(e),
             }
-            Err(e) => last_error = Some(e),
         }
     }
     Err(
