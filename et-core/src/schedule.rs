@@ -176,10 +176,20 @@ pub enum FileFault {
     SameColumn(&'static str),
     /// Without a header, a row of another width.
     #[error(
-        "{0} columns: without a header give source, sink, positive, negative and optionally \
-         current_a"
+        "{0} column{s}: without a header give source, sink, positive, negative and optionally \
+         current_a, separated by ',', ';' or tabs",
+        s = if *.0 == 1 { "" } else { "s" }
     )]
     Columns(usize),
+    /// A first row of names, none of them a column's.
+    #[error(
+        "the header names {0}: name the columns source, sink, positive, negative and \
+         optionally current_a (any order)"
+    )]
+    OtherNames(String),
+    /// Electrodes counted from neither 0 nor 1.
+    #[error("base = {0}: electrodes are counted from 0 (et's) or 1")]
+    Base(u16),
     /// An electrode's cell is not a whole number.
     #[error("{column}: '{cell}' is not an electrode number")]
     NotElectrode {
@@ -394,6 +404,9 @@ impl Schedule {
             line,
             fault,
         };
+        if base > 1 {
+            return Err(fail(0, FileFault::Base(base)));
+        }
         let lines = text::lines(text);
         let mut records = text::RecordIter::new(&lines);
         let delimiter = records.delimiter;
@@ -409,17 +422,22 @@ impl Schedule {
         let columns: [Option<usize>; 5] = if header {
             let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
             let columns = NAMES.map(find);
-            if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
-                return Err(fail(first_line, FileFault::MissingColumn(missing.0)));
-            }
-            // A column named twice: which one is meant would be a guess.
+            // A column named twice: which one is meant would be a guess (said before the
+            // column a misspelt second name leaves missing).
             if let Some(name) = NAMES
                 .iter()
                 .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
             {
                 return Err(fail(first_line, FileFault::SameColumn(name)));
             }
+            if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
+                return Err(fail(first_line, FileFault::MissingColumn(missing.0)));
+            }
             columns
+        } else if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
+            // No number in the first row: a header with other names, not a row of data.
+            let names = first.iter().collect::<Vec<_>>().join(", ");
+            return Err(fail(first_line, FileFault::OtherNames(names)));
         } else if first.len() == 4 || first.len() == 5 {
             [
                 Some(0),

@@ -172,7 +172,7 @@ pub fn run(options: &Options) -> Result<Report> {
     let started = Instant::now();
     let sizes = if options.quick { QUICK } else { FULL };
     let out = &options.out;
-    crate::output::check(out, &[], options.force)?;
+    crate::output::check_folder(out, options.force)?;
     for stale in ["index.md", "summary.json"] {
         match std::fs::remove_file(out.join(stale)) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {

@@ -120,6 +120,24 @@ pub enum FramesFault {
     /// A MATLAB 7.3 file.
     #[error("a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV")]
     Mat73,
+    /// A file without a version 5 header: MATLAB's version 4 format, or not MATLAB's.
+    #[error(
+        "not a MATLAB version 5 or 7 file (no such header: a version 4 file, from save -v4 \
+         or scipy's format='4'?): save it with save(..., '-v7') or as CSV"
+    )]
+    NoMatHeader,
+    /// A file holding no array of numbers.
+    #[error(
+        "no {kind}: cell arrays, structs, sparse matrices and text are not frames; store \
+         them as a matrix of numbers, one frame per row or column"
+    )]
+    Nothing {
+        /// "numeric arrays" or "arrays".
+        kind: &'static str,
+    },
+    /// An array of booleans.
+    #[error("array '{0}' holds booleans (True, False), not voltages")]
+    Booleans(String),
     /// A compressed MATLAB variable that ends early.
     #[error("a compressed variable is cut short")]
     CutShort,
@@ -280,6 +298,10 @@ fn mat_matrix(
     if bytes.starts_with(b"MATLAB 7.3") {
         return Err(content(path, 0, FramesFault::Mat73));
     }
+    // A version 5 file says its byte order at bytes 126 and 127.
+    if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
+        return Err(content(path, 0, FramesFault::NoMatHeader));
+    }
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
     let bytes = plain.as_slice();
     // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
@@ -302,6 +324,10 @@ fn mat_matrix(
         })?,
         None => match file.arrays().as_slice() {
             [only] => only,
+            [] => {
+                let kind = "numeric arrays";
+                return Err(content(path, 0, FramesFault::Nothing { kind }));
+            }
             _ => {
                 let fault = FramesFault::Choose {
                     names: names(),
@@ -382,10 +408,12 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         "npy" => {
             let bytes =
                 et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?;
-            (
-                npy_matrix(&Npz::from_npy(bytes), "array").map_err(npz)?,
-                String::new(),
-            )
+            let archive = Npz::from_npy(bytes);
+            if archive.is_boolean("array") {
+                let fault = FramesFault::Booleans("array".into());
+                return Err(content(&path, 0, fault));
+            }
+            (npy_matrix(&archive, "array").map_err(npz)?, String::new())
         }
         "npz" => {
             let archive = Npz::read(
@@ -396,6 +424,9 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             let name = match (&array, names.as_slice()) {
                 (Some(n), _) => n.clone(),
                 (None, [only]) => (*only).to_string(),
+                (None, []) => {
+                    return Err(content(&path, 0, FramesFault::Nothing { kind: "arrays" }));
+                }
                 (None, _) => {
                     let fault = FramesFault::Choose {
                         names: names.iter().map(|n| (*n).to_string()).collect(),
@@ -406,6 +437,9 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
                     return Err(content(&path, 0, fault));
                 }
             };
+            if archive.is_boolean(&name) {
+                return Err(content(&path, 0, FramesFault::Booleans(name)));
+            }
             let m = npy_matrix(&archive, &name).map_err(npz)?;
             (m, format!("array '{name}', "))
         }

@@ -39,6 +39,26 @@ pub enum OutputError {
         /// What it is: "a symbolic link", "a FIFO", "a device", ...
         what: &'static str,
     },
+    /// An output whose extension names a format other than the one written in it.
+    #[error(
+        "{}: {what} is written as {}: name the file so (or with no extension)",
+        .out.display(),
+        .extensions.iter().map(|e| format!(".{e}")).collect::<Vec<_>>().join(", ")
+    )]
+    Format {
+        /// The output.
+        out: PathBuf,
+        /// What is written there ("the image (PNG)").
+        what: &'static str,
+        /// The extensions of the formats it can be written in.
+        extensions: &'static [&'static str],
+    },
+    /// A report folder's path holds a file.
+    #[error("{} is a file; the report is a folder of files (give another path, or remove it first)", .out.display())]
+    NotAFolder {
+        /// The output.
+        out: PathBuf,
+    },
     /// The folder the output goes into does not exist or is not a folder.
     #[error("{}: the folder {} does not exist (create it first)", .out.display(), .folder.display())]
     NoFolder {
@@ -205,15 +225,52 @@ fn occupant(out: &Path) -> Occupant {
     }
 }
 
-/// Checks `out` before a command writes it: not one of `inputs` (even with `force`); a
-/// regular file or a non-empty folder only with `force`; never a symbolic link, FIFO, socket
-/// or device (except the null device and standard output or error, written through); and its
+/// Checks the file `out` before a command writes it: not one of `inputs` (even with
+/// `force`); a regular file only with `force`; never a folder, symbolic link, FIFO, socket or
+/// device (except the null device and standard output or error, written through); and its
 /// folder must exist.
 ///
 /// # Errors
 /// [`OutputError::Input`], [`OutputError::Exists`], [`OutputError::NotAFile`] or
 /// [`OutputError::NoFolder`].
 pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputError> {
+    check_at(out, inputs, force, false)
+}
+
+/// Checks that `out`'s extension names a format `what` is written in (one of `extensions`,
+/// any case): a PNG named `r.jpg`, a model named `m.png` or a recording named `x.png` was
+/// written without a word, a file whose name says what it is not. A name without an
+/// extension, and a stream, are taken.
+///
+/// # Errors
+/// [`OutputError::Format`] naming the extensions.
+pub fn check_format(
+    out: &Path,
+    what: &'static str,
+    extensions: &'static [&'static str],
+) -> Result<(), OutputError> {
+    match out.extension().and_then(|e| e.to_str()) {
+        Some(e) if !is_stream(out) && !extensions.iter().any(|x| e.eq_ignore_ascii_case(x)) => {
+            Err(OutputError::Format {
+                out: out.into(),
+                what,
+                extensions,
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
+/// [`check`] for a report folder `out` (`et demo --out`): an empty folder is taken, one
+/// with files only with `force`, a file never.
+///
+/// # Errors
+/// As [`check`], and [`OutputError::NotAFolder`].
+pub fn check_folder(out: &Path, force: bool) -> Result<(), OutputError> {
+    check_at(out, &[], force, true)
+}
+
+fn check_at(out: &Path, inputs: &[&Path], force: bool, folder: bool) -> Result<(), OutputError> {
     if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
         return Err(OutputError::Input {
             out: out.into(),
@@ -222,7 +279,24 @@ pub fn check(out: &Path, inputs: &[&Path], force: bool) -> Result<(), OutputErro
     }
     match occupant(out) {
         Occupant::Nothing => new_at_check(out),
-        Occupant::Stream | Occupant::EmptyFolder => return Ok(()),
+        Occupant::Stream if !folder => return Ok(()),
+        Occupant::Stream => {
+            let what = "a device";
+            return Err(OutputError::NotAFile {
+                out: out.into(),
+                what,
+            });
+        }
+        Occupant::File if folder => return Err(OutputError::NotAFolder { out: out.into() }),
+        Occupant::EmptyFolder | Occupant::Folder if !folder => {
+            // A file's output is never a folder, even with --force (its files are not et's).
+            let what = "a folder";
+            return Err(OutputError::NotAFile {
+                out: out.into(),
+                what,
+            });
+        }
+        Occupant::EmptyFolder => return Ok(()),
         Occupant::Other(what) => {
             return Err(OutputError::NotAFile {
                 out: out.into(),

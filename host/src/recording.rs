@@ -227,8 +227,15 @@ pub enum LineFault {
     /// The file has no line.
     #[error("empty file: no header")]
     Empty,
-    /// The header is not the format's JSON.
-    #[error("header: {0}")]
+    /// The first line is not JSON: not an et recording.
+    #[error(
+        "not an et recording: its first line is not JSON ({}); et sim and et record write \
+         JSON lines, another system's frames are read from .csv, .npy, .npz or .mat",
+        et_learn::model_file::json_said(.0, true)
+    )]
+    NotJson(serde_json::Error),
+    /// The header is JSON but not the format's fields (named by their place).
+    #[error("header: {}", et_learn::model_file::json_said(.0, true))]
     Header(serde_json::Error),
     /// Another format's file.
     #[error("format '{0}' is not {FORMAT}")]
@@ -291,7 +298,7 @@ pub enum LineFault {
         k: usize,
     },
     /// A frame line is not the format's JSON.
-    #[error(transparent)]
+    #[error("{}", et_learn::model_file::json_said(.0, true))]
     Frame(serde_json::Error),
 }
 
@@ -422,7 +429,17 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(io)?;
     let lines: Vec<&str> = text.lines().collect();
     let first = lines.first().ok_or_else(|| bad(1, LineFault::Empty))?;
-    let header: Header = serde_json::from_str(first).map_err(|e| bad(1, LineFault::Header(e)))?;
+    let header = serde_json::from_str::<serde_json::Value>(first)
+        .map_err(|e| bad(1, LineFault::NotJson(e)))?;
+    // Another format's JSON is said as such before its fields are asked for.
+    match header.get("format").and_then(serde_json::Value::as_str) {
+        Some(format) if format != FORMAT => {
+            return Err(bad(1, LineFault::Format(format.to_string())));
+        }
+        _ => {}
+    }
+    let header: Header =
+        et_learn::model_file::from_value_named(header).map_err(|e| bad(1, LineFault::Header(e)))?;
     header.check().map_err(|fault| bad(1, fault))?;
     let mut records = Vec::new();
     let mut truncated_tail = false;

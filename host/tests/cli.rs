@@ -1012,6 +1012,25 @@ fn outputs_refuse_inputs_and_existing_files_without_force() {
             .status
             .success()
     );
+    // A name whose extension is neither a recording's nor a table's (a recording was
+    // written as x.png), and a folder, even forced (it said "--force replaces it").
+    let out = et(&[&sim[..], &[&p("x.png")]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains(".jsonl") && err.contains(".npy"),
+        "{err}"
+    );
+    assert!(!dir.join("x.png").exists());
+    std::fs::create_dir(dir.join("d.jsonl")).unwrap();
+    for force in [&[][..], &["--force"]] {
+        let out = et(&[&sim[..], &[&p("d.jsonl")], force].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains("is a folder"),
+            "{err}"
+        );
+    }
+    std::fs::remove_dir(dir.join("d.jsonl")).unwrap();
     // A dataset, a model, a blob: none onto its input.
     let collect = [
         "collect",
@@ -1287,7 +1306,8 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
     let out = std::env::temp_dir().join(format!("et-cli-domains-{}.png", std::process::id()));
     let out = out.to_str().unwrap();
     let recon = ["reconstruct", "--scene", scene, "--out", out];
-    let collect = ["collect", "--scene", scene, "--out", out];
+    let dataset = out.replace(".png", ".csv");
+    let collect = ["collect", "--scene", scene, "--out", &dataset];
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
             vec![
@@ -1412,6 +1432,7 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
     assert!(!std::path::Path::new(out).exists());
+    assert!(!std::path::Path::new(&dataset).exists());
 
     // Flags that do not apply to the mode, a model used on another scan, two columns of one
     // name: refused, not ignored.

@@ -302,6 +302,19 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     std::fs::write(&csv_path, "1,2,3\n4,5,6\n").unwrap();
     let e = String::from_utf8_lossy(&run(&csv_path, 1).stderr).into_owned();
     assert!(e.contains("frames.csv") && e.contains("K = 1264"), "{e}");
+    // One frame is not a reference and a frame to image: said as that, not "lower
+    // --reference (at most 0)", which its own range refuses.
+    let one: Vec<String> = (0..1_264)
+        .map(|i| format!("{}", 1.0 + f64::from(i) * 1e-3))
+        .collect();
+    std::fs::write(&csv_path, one.join(",")).unwrap();
+    let e = String::from_utf8_lossy(&run(&csv_path, 0).stderr).into_owned();
+    assert!(
+        e.contains("frames.csv: 1 frame:")
+            && e.contains("--reference-file")
+            && !e.contains("at most 0"),
+        "{e}"
+    );
     // A protocol file's mistakes are named by file, line and cell.
     std::fs::write(
         d.join("protocol.csv"),

@@ -108,6 +108,25 @@ def _spec_json(spec: Dict[str, Any]) -> str:
     return json.dumps(spec)
 
 
+def _count(value: Any, what: str, least: int = 0) -> int:
+    """``value`` as a whole number of at least ``least``: a fraction, a negative number or a
+    boolean is refused by name rather than truncated or wrapped."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+        if value < least:
+            raise EtError(f"{what} = {value!r}: a whole number of at least {least}")
+        return int(value)
+    number = np.asarray(value)
+    if (
+        number.ndim != 0
+        or number.dtype.kind not in "iuf"
+        or not np.isfinite(number)
+        or number != np.round(number)
+        or number < least
+    ):
+        raise EtError(f"{what} = {value!r}: a whole number of at least {least}")
+    return int(number)
+
+
 def _sheet(
     shape: Dict[str, Any],
     electrodes: int,
@@ -118,8 +137,12 @@ def _sheet(
     direction: str,
     model: str,
 ) -> Sheet:
+    if direction not in ("ccw", "cw"):
+        raise EtError(f"direction {direction!r}: 'ccw' or 'cw'")
+    if model not in ("complete", "point", "shunt"):
+        raise EtError(f"model {model!r}: 'complete', 'point' or 'shunt'")
     spec_electrodes: Dict[str, Any] = {
-        "count": int(electrodes),
+        "count": _count(electrodes, "electrodes"),
         "width": float(width_m),
         "contact_ohm": float(contact_ohm),
         "direction": direction,
@@ -239,11 +262,22 @@ class Protocol:
         table = np.asarray(rows, dtype=np.float64)
         if table.ndim != 2 or table.shape[1] not in (4, 5):
             raise EtError(f"rows: shape {table.shape}; give N x 4 or N x 5")
+        if base not in (0, 1) or isinstance(base, bool):
+            raise EtError(f"base = {base!r}: electrodes are counted from 0 (et's) or 1")
+        n = _count(electrodes, "electrodes", 2)
         currents = table[:, 4].copy() if table.shape[1] == 5 else np.full(len(table), current_a)
         electrodes_of = table[:, :4] - base
         if not np.all(electrodes_of == np.round(electrodes_of)):
             raise EtError("rows: electrode numbers must be whole numbers")
-        return cls(int(electrodes), electrodes_of.astype(np.int64), currents.astype(np.float64))
+        outside = np.flatnonzero((electrodes_of < 0).any(axis=1) | (electrodes_of >= n).any(axis=1))
+        if len(outside):
+            row = int(outside[0])
+            raise EtError(
+                f"rows: row {row} ({', '.join(f'{v:g}' for v in table[row, :4])}): electrodes "
+                f"are {base} to {n - 1 + base} ({n} counted from {base})"
+                + (": are they counted from 1? give base=1" if base == 0 and table[row, :4].max() == n else "")
+            )
+        return cls(n, electrodes_of.astype(np.int64), currents.astype(np.float64))
 
     @classmethod
     def from_pyeit(
@@ -302,8 +336,9 @@ def _whole(a: Any, what: str) -> np.ndarray:
 def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protocol:
     """et's built-in protocol ``name`` ("adjacent", "pseudo-polar", "pp-pp", "opposite") on
     ``electrodes`` electrodes, driving ``current_a`` (A)."""
-    rows, currents = _native.protocol_table(name, int(electrodes), float(current_a))
-    return Protocol(int(electrodes), rows, currents, name)
+    n = _count(electrodes, "electrodes")
+    rows, currents = _native.protocol_table(name, n, float(current_a))
+    return Protocol(n, rows, currents, name)
 
 
 def scene(path: PathLike) -> Tuple[Sheet, Protocol]:
@@ -533,8 +568,8 @@ class Reconstructor:
         self._native = _Serialised(_native.Reconstructor(
             _spec_json(sheet.spec), int(protocol.electrodes), name, current_a,
             None if name else rows, None if name else currents,
-            int(triangles), method, str(alpha), int(pixels), threshold, float(s),
-            int(iterations), noise_figure, radius_m,
+            _count(triangles, "triangles"), method, str(alpha), _count(pixels, "pixels"),
+            threshold, float(s), _count(iterations, "iterations"), noise_figure, radius_m,
         ))
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None
@@ -658,7 +693,7 @@ class Reconstructor:
     def frame_median(self, dv: Any, repeats: int = 100) -> Optional[float]:
         """The median time (s) of ``repeats`` warm applications of the last frame's
         reconstruction to ``dv``: `et reconstruct --json`'s ``timings_s.frame``."""
-        return self._native.frame_median(_f64(dv, 1, "dv"), int(repeats))
+        return self._native.frame_median(_f64(dv, 1, "dv"), _count(repeats, "repeats"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -845,11 +880,11 @@ def train(
             "give one or the other"
         )
     groups = None if groups is None else _labels(np.asarray(groups))
-    grid_pair = None if grid is None else (int(grid[0]), int(grid[1]))
+    grid_pair = None if grid is None else (_count(grid[0], "grid rows"), _count(grid[1], "grid columns"))
     return Model(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
-            bool(per_group), int(seed), _label_type(y) if labels is not None else None,
+            bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
             float(budget_s),
         )
     )
@@ -882,5 +917,5 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
     """Reads any system's frames for a protocol of ``k`` values a frame, n x K (V): a CSV (one
     frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a matrix of frames as
     columns is read transposed), as `et reconstruct --frames` reads them."""
-    frames, _ = _native.read_frames(os.fspath(path), int(k))
+    frames, _ = _native.read_frames(os.fspath(path), _count(k, "k", 1))
     return frames

@@ -264,7 +264,16 @@ impl Reconstructor {
         noise_figure: Option<f64>,
         radius_m: Option<f64>,
     ) -> PyResult<Self> {
-        let sheet: Sheet = serde_json::from_str(sheet_json).map_err(|e| refused(&e))?;
+        // Each field named by its place (`electrodes.direction: unknown variant ...`), not
+        // by a column of the JSON the module wrote.
+        let sheet: Sheet = serde_json::from_str(sheet_json)
+            .and_then(et_learn::model_file::from_value_named)
+            .map_err(|e| {
+                usage(format!(
+                    "sheet: {}",
+                    et_learn::model_file::json_said(&e, false)
+                ))
+            })?;
         sheet.validate().map_err(|e| refused(&e))?;
         let schedule = schedule(electrodes, protocol, current_a, rows, currents)?;
         let method = match Method::from_name(method) {

@@ -145,3 +145,45 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
     v, w = r.forward(r.sigma0), s.forward(s.sigma0)
     assert w[5] == pytest.approx(2.0 * v[5], rel=1e-9)
     assert np.allclose(np.delete(w, 5), np.delete(v, 5), rtol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "make, named",
+    [
+        (lambda: et.disc(0.1, 2.5), "electrodes = 2.5: a whole number"),
+        (lambda: et.disc(0.1, -3), "electrodes = -3: a whole number of at least 0"),
+        (lambda: et.protocol("adjacent", 16.5), "electrodes = 16.5"),
+        (lambda: et.disc(0.1, 16, direction="up"), "direction 'up': 'ccw' or 'cw'"),
+        (lambda: et.rectangle(0.1, 0.1, 16, model="x"), "model 'x'"),
+        (lambda: et.Protocol.from_rows([[2, 3, 4, 5]], 16, base=2), "base = 2"),
+        (lambda: et.Protocol.from_rows([[0, 1, 2, 3]], 16, base=-1), "base = -1"),
+        (lambda: et.Protocol.from_rows([[0, 1, 2, 16]], 16), "give base=1"),
+        (lambda: et.Protocol.from_rows([[0, 1, 2, -1]], 16), "electrodes are 0 to 15"),
+        (lambda: et.Protocol.from_rows([[0, 1, 2, 3]], 0), "electrodes = 0: a whole number of at least 2"),
+        (
+            lambda: et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), iterations=1.5),
+            "iterations = 1.5",
+        ),
+        (
+            lambda: et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300.7),
+            "triangles = 300.7",
+        ),
+    ],
+)
+def test_counts_and_names_are_refused_where_they_are_made_not_truncated(make, named):
+    # A fraction was truncated (2.5 electrodes made 2; 1.5 iterations made 1), a base of -1
+    # shifted every electrode, and a direction or model was refused only later, as a JSON
+    # parser's "unknown variant at line 1 column 156".
+    with pytest.raises(et.EtError, match=named.replace("(", r"\(").replace(".", r"\.")):
+        make()
+
+
+def test_files_that_are_not_what_is_asked_are_said_so(tmp_path):
+    frames = tmp_path / "frames.csv"
+    frames.write_text("v0,v1\n1,2\n")
+    with pytest.raises(et.EtError, match="not an et model file"):
+        et.Model.load(frames)
+    with pytest.raises(et.EtError, match="not an et recording"):
+        et.read_recording(frames)
+    with pytest.raises(et.EtError, match="k = 0: a whole number of at least 1"):
+        et.read_frames(frames, 0)

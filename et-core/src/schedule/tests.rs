@@ -109,6 +109,24 @@ fn wrong_rows_are_named_by_line_and_cell() {
     assert!(e.contains("positive: 'x'"), "{e}");
     let e = parse("0,1,2,3\n", 16, 1).unwrap_err().to_string();
     assert!(e.contains("counted from 1"), "{e}");
+    // Counted from 2 would shift every electrode by one more than any system does.
+    let e = parse("2,3,4,5\n", 16, 2).unwrap_err().to_string();
+    assert!(e.contains("base = 2") && e.contains("0 (et's) or 1"), "{e}");
+    // A header of other names is said as a header, not as a row whose cell is not a number;
+    // a name twice beside a missing one is said as twice.
+    let e = parse("src,snk,pos,neg\n0,1,2,3\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.csv:1") && e.contains("names src, snk, pos, neg") && e.contains("source"),
+        "{e}"
+    );
+    let e = parse("source,source,positive,negative\n0,1,2,3\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("names source twice"), "{e}");
+    let e = parse("0 1 2 3\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("1 column:") && e.contains("tabs"), "{e}");
     assert_eq!(
         parse("# nothing\n", 16, 0).unwrap_err().to_string(),
         "p.csv: no rows"

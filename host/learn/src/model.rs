@@ -75,12 +75,15 @@ pub enum ModelError {
         source: std::io::Error,
     },
     /// Not JSON (the message names the line and column).
-    #[error("{}: {source}", .path.display())]
+    #[error(
+        "{}: not an et model file (et train writes JSON): {}",
+        .path.display(), crate::model_file::json_said(error, false)
+    )]
     Json {
         /// The file.
         path: PathBuf,
-        /// The parser's error.
-        source: serde_json::Error,
+        /// The parser's error (said in the message, not as a cause).
+        error: serde_json::Error,
     },
     /// JSON, but neither `"format": "et-model"` (a board model) nor `"et-table-model"`.
     #[error(
@@ -171,9 +174,9 @@ impl Model {
                 source,
             })?;
         let value: serde_json::Value =
-            serde_json::from_str(&text).map_err(|source| ModelError::Json {
+            serde_json::from_str(&text).map_err(|error| ModelError::Json {
                 path: path.into(),
-                source,
+                error,
             })?;
         match value.get("format").and_then(serde_json::Value::as_str) {
             Some("et-model") => {

@@ -441,6 +441,27 @@ pub enum ModelFileError {
     },
 }
 
+/// A JSON parser's error for people: what is wrong, then where for text that is not JSON
+/// (`expected value (line 3, column 7)`; within one line of a file of JSON lines, whose line
+/// the caller says, only the column), without serde_json's `at line 1 column 9` tail, which
+/// for a field of the wrong type or missing names a place in text nobody wrote.
+#[must_use]
+pub fn json_said(e: &serde_json::Error, within_line: bool) -> String {
+    let text = e.to_string();
+    let tail = format!(" at line {} column {}", e.line(), e.column());
+    let what = text.strip_suffix(&tail).unwrap_or(&text);
+    match e.classify() {
+        serde_json::error::Category::Syntax | serde_json::error::Category::Eof if e.line() > 0 => {
+            if within_line {
+                format!("{what} (column {})", e.column())
+            } else {
+                format!("{what} (line {}, column {})", e.line(), e.column())
+            }
+        }
+        _ => what.to_string(),
+    }
+}
+
 /// `value` read as a `T`, an error naming the field where it went wrong (`tables.method:
 /// missing field`, where serde alone said `missing field` of some table) and without serde's
 /// names for its own types ("internally tagged enum").

@@ -404,6 +404,13 @@ impl Npz {
         self.entries.iter().any(|(n, _)| n == name)
     }
 
+    /// Whether `name` is an array of booleans (numpy's `|b1`): read as 0 and 1 by
+    /// [`Npz::matrix`], which suits labels but not measurements.
+    #[must_use]
+    pub fn is_boolean(&self, name: &str) -> bool {
+        self.array(name).is_ok_and(|a| a.kind == Kind::Bool)
+    }
+
     fn array(&self, name: &str) -> Result<Array<'_>, NpzError> {
         let fault = |f| error(Some(name), f);
         let bad = |m| fault(NpzFault::Npy(m));

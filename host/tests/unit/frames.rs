@@ -183,3 +183,49 @@ fn read_plain(dir: &Path, bytes: &[u8]) -> Vec<Vec<f32>> {
     std::fs::write(&f, bytes).unwrap();
     read(&f, 2).unwrap().frames
 }
+
+/// Files that hold nothing to read as frames say so, and what to store instead, rather
+/// than "0 arrays (): name one" or a parser's internal message; booleans are not voltages.
+#[test]
+fn files_without_frames_say_what_they_hold() {
+    let dir = tmp("nothing");
+    // An .npz without arrays (numpy.savez with no arguments).
+    let npz = dir.join("none.npz");
+    std::fs::write(&npz, et_learn::npz::Writer::new().finish().unwrap()).unwrap();
+    let e = read(&npz, 3).unwrap_err().to_string();
+    assert!(e.contains("no arrays") && !e.contains("name one"), "{e}");
+    // A MATLAB file of no numeric variable: its header alone.
+    let m = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    let mat = dir.join("none.mat");
+    std::fs::write(&mat, &mat_v5("x", &m)[..128]).unwrap();
+    let e = read(&mat, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("no numeric arrays") && e.contains("matrix of numbers"),
+        "{e}"
+    );
+    // MATLAB's version 4 format (`save -v4`, scipy's format='4'): a 20-byte header of
+    // int32 (type 0 = little-endian doubles, rows, columns, imaginary, name length), the
+    // name and the values; no text header.
+    let mut v4 = Vec::new();
+    for word in [0i32, 2, 3, 0, 2] {
+        v4.extend(word.to_le_bytes());
+    }
+    v4.extend(b"x\0");
+    v4.extend(m.iter().flat_map(|v| v.to_le_bytes()));
+    let old = dir.join("v4.mat");
+    std::fs::write(&old, &v4).unwrap();
+    let e = read(&old, 3).unwrap_err().to_string();
+    assert!(e.contains("version 4") && e.contains("-v7"), "{e}");
+    // A boolean .npy (numpy's `frames > 0`).
+    let mut npy = b"\x93NUMPY\x01\x00".to_vec();
+    let header = "{'descr': '|b1', 'fortran_order': False, 'shape': (2, 3), }";
+    let header = format!("{header:<117}\n");
+    npy.extend(u16::try_from(header.len()).unwrap().to_le_bytes());
+    npy.extend(header.as_bytes());
+    npy.extend([1u8, 0, 1, 1, 1, 0]);
+    let b = dir.join("b.npy");
+    std::fs::write(&b, &npy).unwrap();
+    let e = read(&b, 3).unwrap_err().to_string();
+    assert!(e.contains("booleans") && e.contains("not voltages"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

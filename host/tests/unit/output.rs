@@ -28,12 +28,20 @@ fn inputs_are_never_overwritten_and_existing_files_only_with_force() {
     ));
     check(&old, &[&input], true).unwrap();
     check(&d.join("new.json"), &[&input], false).unwrap();
-    // A folder: empty is fine, one with files is not (unless forced).
+    // A report folder: empty is fine, one with files is not (unless forced), a file never.
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    check(&empty, &[], false).unwrap();
-    assert!(check(&d, &[], false).is_err());
-    check(&d, &[], true).unwrap();
+    check_folder(&empty, false).unwrap();
+    assert!(check_folder(&d, false).is_err());
+    check_folder(&d, true).unwrap();
+    let e = check_folder(&old, true).unwrap_err();
+    assert!(matches!(e, OutputError::NotAFolder { .. }), "{e}");
+    // A file's output is never a folder, even with force (it said "--force replaces it", and
+    // forced, failed on the rename as "Device or resource busy").
+    for (folder, force) in [(&empty, false), (&d, true)] {
+        let e = check(folder, &[], force).unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -226,4 +234,27 @@ fn a_file_that_appears_during_the_work_is_never_replaced() {
     .unwrap();
     assert_eq!(std::fs::read_to_string(&old).unwrap(), "new");
     std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// An output's extension must be one of the formats written there (any case); a name without
+/// one, and a stream, are taken.
+#[test]
+fn an_output_named_for_another_format_is_refused() {
+    let png: &[&str] = &["png"];
+    for ok in [
+        "r.png",
+        "R.PNG",
+        "r",
+        "/dev/stdout",
+        "/dev/null",
+        "dir.v2/r",
+    ] {
+        check_format(Path::new(ok), "the image (PNG)", png).unwrap();
+    }
+    let e = check_format(Path::new("r.jpg"), "the image (PNG)", png).unwrap_err();
+    assert!(matches!(e, OutputError::Format { .. }), "{e}");
+    assert_eq!(
+        e.to_string(),
+        "r.jpg: the image (PNG) is written as .png: name the file so (or with no extension)"
+    );
 }

@@ -213,3 +213,45 @@ fn a_header_that_contradicts_its_protocol_is_refused() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Files that are not et recordings, or lines that are not its records, are said as such,
+/// by the field's name, without serde's "at line 1 column 9" (the place in one line of
+/// JSON nobody wrote by hand).
+#[test]
+fn what_is_not_a_recording_is_said_so() {
+    let dir = std::env::temp_dir().join(format!("et-rec-not-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("r.jsonl");
+    // Another system's CSV given a recording's name.
+    std::fs::write(&path, "v0,v1\n1,2\n").unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("r.jsonl:1") && err.contains("not an et recording") && err.contains(".csv"),
+        "{err}"
+    );
+    assert!(!err.contains("at line"), "{err}");
+    // Another JSON format: said by its format before its fields are asked for.
+    std::fs::write(&path, "{\"format\":\"et-model\",\"version\":2}\n").unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(err.contains("format 'et-model'"), "{err}");
+    // A header with a field missing, a record with one missing: named, and no place in the
+    // line.
+    let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    let mut value = serde_json::to_value(&header).unwrap();
+    value.as_object_mut().unwrap().remove("config");
+    std::fs::write(&path, format!("{value}\n")).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("missing field `config`") && !err.contains("at line"),
+        "{err}"
+    );
+    let mut text = serde_json::to_string(&header).unwrap();
+    text.push_str("\n{\"seq\":1}\n{\"seq\":2}\n");
+    std::fs::write(&path, text).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("r.jsonl:2") && err.contains("missing field") && !err.contains("column"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

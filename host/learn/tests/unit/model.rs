@@ -221,6 +221,15 @@ fn a_file_of_neither_kind_is_refused_naming_it() {
         let e = Model::load(&path).unwrap_err();
         assert!(e.to_string().contains(name), "{e}");
     }
+    // A file that is not JSON at all (frames given as the model): said as not a model file,
+    // with the place the text stops being JSON.
+    let csv = dir.join("frames.csv");
+    std::fs::write(&csv, "v0,v1\n1,2\n").unwrap();
+    let e = Model::load(&csv).unwrap_err().to_string();
+    assert!(
+        e.contains("frames.csv: not an et model file") && e.contains("(line 1, column 1)"),
+        "{e}"
+    );
     let e = Model::load(&dir.join("missing.json")).unwrap_err();
     assert!(matches!(e, ModelError::Io { .. }), "{e}");
     let _ = std::fs::remove_dir_all(&dir);

@@ -69,6 +69,7 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
     };
     // Refuse an existing recording before the board is touched.
     crate::output::check(&plan.out, &[], force)?;
+    crate::output::check_format(&plan.out, "a recording", &["jsonl"])?;
     let mut link = Link::open(&args.port, args.baud)?;
     if !args.no_start {
         wait_for_board(&mut link)?;

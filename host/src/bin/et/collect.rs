@@ -155,6 +155,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     let mut inputs = vec![args.scene.as_path()];
     inputs.extend(named.iter().map(std::path::PathBuf::as_path));
     output::check(&args.out, &inputs, force)?;
+    output::check_format(&args.out, "a dataset", &["csv", "npz"])?;
     let (rows, cols) = parse_grid(&args.grid, "--grid")?;
     let config = collect::training_config(scene.scan_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);

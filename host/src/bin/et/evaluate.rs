@@ -174,6 +174,7 @@ fn eval_plots(
 
 pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {
     output::check(&args.out, &[&args.model], force)?;
+    output::check_format(&args.out, "the board's blob", &["etm", "bin"])?;
     let model = Model::load(&args.model)?;
     let precision = args.precision;
     let blob = model

@@ -187,6 +187,10 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     let mut outputs = vec![args.out.as_path()];
     outputs.extend(args.curve.as_deref());
     output::check_all(&outputs, &[], &[data_arg], force)?;
+    output::check_format(&args.out, "a model (JSON)", &["json"])?;
+    if let Some(curve) = &args.curve {
+        output::check_format(curve, "the learning curve (PNG)", &["png"])?;
+    }
     let folds = args.folds.unwrap_or(10);
     // Each stage on one line that updates in place, with the time so far (stderr, and only
     // on a terminal: scripts and --json see nothing of it). Cleared on every way out.

@@ -110,6 +110,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
                 .filter_map(|p| p.as_deref())
                 .collect();
         crate::output::check(png, &inputs, force)?;
+        crate::output::check_format(png, "the screenshot (PNG)", &["png"])?;
     }
     if args.press.is_some() && args.source.spec() != et_host::live::SourceSpec::Sim {
         anyhow::bail!("--press presses the simulated sheet: drop --replay / --port, or --press");

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-pub(crate) use et_host::output::{check, check_all};
+pub(crate) use et_host::output::{check, check_all, check_format};
 
 /// Writes `out` by `save` aside and renames it when complete (`et_host::output::write`).
 pub(crate) fn write<T, E: Into<anyhow::Error>>(

@@ -59,6 +59,11 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     if let Some(seed) = args.seed {
         scene.seed = seed;
     }
+    crate::output::check_format(
+        &args.out,
+        "a recording, or another system's frames,",
+        &["jsonl", "csv", "npy", "mat"],
+    )?;
     if et_host::frames::is_table(&args.out) {
         if args.samples {
             anyhow::bail!(

@@ -180,6 +180,7 @@ pub(crate) fn train(
     force: bool,
 ) -> Result<()> {
     output::check(out, &args.inputs(), force)?;
+    output::check_format(out, "a model (JSON)", &["json"])?;
     let table = args.load()?;
     say_groups(&table);
     let bar = bar();
@@ -340,6 +341,9 @@ pub(crate) fn eval(
     outputs.extend(predictions);
     let folders: Vec<&Path> = plots.into_iter().collect();
     output::check_all(&outputs, &folders, &inputs, force)?;
+    if let Some(p) = predictions {
+        output::check_format(p, "the predictions (CSV)", &["csv"])?;
+    }
     if model.reference != args.referencing() {
         let said = |r: Option<Referencing>| match r {
             None => "raw features".to_string(),

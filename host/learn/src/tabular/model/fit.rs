@@ -3,12 +3,13 @@
 use super::*;
 
 /// The final fit of the chosen candidate on every row: its tables and the standardisation;
-/// `seed` seeds a perceptron's starts.
+/// `seed` seeds a perceptron's starts; QDA shrinks toward the target its cross-validation's
+/// `fold_rows` chose ([`shrink_target`]).
 pub(in crate::tabular) fn fit_final(
     table: &Table,
     best: &Candidate,
     targets: Option<&[Target3]>,
-    classes: Option<&(Labels, ClassInfo)>,
+    (classes, fold_rows): (Option<&(Labels, ClassInfo)>, usize),
     members: &[Candidate],
     (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
@@ -20,7 +21,7 @@ pub(in crate::tabular) fn fit_final(
             let fit = FitOptions {
                 kind: discriminant(best.method),
                 shrinkage: h("shrinkage"),
-                target: shrink_target(table.x.ncols(), labels),
+                target: shrink_target(table.x.ncols(), labels, fold_rows),
             };
             let model = Fitted::fit(&table.x, &labels.index, labels.names.len(), &fit)?;
             crate::model_file::check_tables(&model, &[])?;
@@ -91,7 +92,13 @@ pub(in crate::tabular) fn fit_final(
                 m.scale,
             )
         }
-        Kind::Average => average_tables(table, members, targets, classes, (seed, progress))?,
+        Kind::Average => average_tables(
+            table,
+            members,
+            targets,
+            (classes, fold_rows),
+            (seed, progress),
+        )?,
         Kind::Knn => {
             let weighting = if h("distance_weighted") > 0.5 {
                 Weighting::Distance
@@ -155,7 +162,7 @@ fn average_tables(
     table: &Table,
     members: &[Candidate],
     targets: Option<&[Target3]>,
-    classes: Option<&(Labels, ClassInfo)>,
+    classes: (Option<&(Labels, ClassInfo)>, usize),
     (seed, progress): (u64, Progress<'_>),
 ) -> Result<(Tables, Vec<f64>, Vec<f64>), TabularError> {
     let mut fitted = Vec::with_capacity(members.len());

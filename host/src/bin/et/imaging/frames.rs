@@ -34,6 +34,9 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
             frame..frame + 1
         }
     };
+    if n == 0 {
+        bail!("{path}: no frames to image");
+    }
     if n <= first || range.start < first || range.start >= n || range.is_empty() {
         let asked = match (args.all, args.range) {
             (true, _) => "--all".to_string(),
@@ -62,6 +65,16 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
 /// `--reference`'s count of untouched frames at the start of a file of `n` frames: at least
 /// one frame must be left to image after them. Said as the user gave it (the default too).
 fn reference_count(args: &ReconstructArgs, path: &str, n: usize) -> Result<usize> {
+    if n < 2 {
+        bail!(
+            "{path}: {}: at least one untouched frame (--reference) and one to image are \
+             needed; give the untouched frames with --reference-file, or more frames",
+            match n {
+                0 => "no frames".to_string(),
+                _ => "1 frame".to_string(),
+            }
+        );
+    }
     if args.reference >= n {
         bail!(
             "{path}: {n} frame{}; --reference {} asks for {} untouched frames before the ones \
@@ -287,5 +300,9 @@ pub(super) fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) ->
     outputs.extend(args.image_out.as_deref());
     outputs.extend(args.segment.as_deref());
     crate::output::check_all(&outputs, &[], &inputs, force)?;
+    crate::output::check_format(&args.out, "the image (PNG)", &["png"])?;
+    for npy in [&args.image_out, &args.segment].into_iter().flatten() {
+        crate::output::check_format(npy, "a NumPy array", &["npy"])?;
+    }
     Ok(())
 }
