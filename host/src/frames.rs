@@ -485,9 +485,10 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             .collect()
     };
     let description = format!(
-        "{}: {said}{} frames of {k} values{}",
+        "{}: {said}{} frame{} of {k} values{}",
         path.display(),
         frames.len(),
+        if frames.len() == 1 { "" } else { "s" },
         if by_columns {
             " (one per column: read transposed)"
         } else {

@@ -233,7 +233,27 @@ fn sim_writes_a_recording_that_python_reads() {
     ]);
     let message = String::from_utf8_lossy(&e.stderr);
     assert!(
-        !e.status.success() && message.contains("ended after 3 frame(s), before the untouched"),
+        !e.status.success()
+            && message
+                .contains("it ended after 3 frames before the untouched reference (20 frames)"),
+        "{message}"
+    );
+    // --frames ending it before the reference is said as that (it said the file ended, and
+    // the reference's length as 0 frames).
+    let e = et(&[
+        "stream",
+        "--json",
+        "--frames",
+        "2",
+        "--replay",
+        short.to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+    ]);
+    let message = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success()
+            && message.contains("--frames 2 stopped it before the untouched reference (20 frames)"),
         "{message}"
     );
     // A scene whose protocol is a file is for `et reconstruct`, and says so.
@@ -1458,7 +1478,41 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
     let t = et(&["train", "--data", &p("d.csv"), "--out", &p("m.json")]);
     assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
     std::fs::write(p("F.csv"), "x,a,X\n1,2,3\n4,5,6\n7,8,9\n").unwrap();
+    // One method's flags beside the other method (the GREIT flags under Gauss-Newton, the
+    // NOSER exponent under GREIT, a noise figure beside an alpha that overrides it).
+    let image = |extra: &[&str]| -> Vec<String> {
+        let base = [
+            "reconstruct",
+            "--scene",
+            scene,
+            "--triangles",
+            "300",
+            "--out",
+        ];
+        base.iter()
+            .map(|a| (*a).to_string())
+            .chain([p("m.png")])
+            .chain(extra.iter().map(|a| (*a).to_string()))
+            .collect()
+    };
     let cases: Vec<(Vec<String>, &str)> = vec![
+        (image(&["--noise-figure", "0.3"]), "are GREIT's"),
+        (image(&["--radius-mm", "5"]), "are GREIT's"),
+        (
+            image(&["--method", "greit", "--s", "0.2"]),
+            "GREIT has no prior",
+        ),
+        (
+            image(&[
+                "--method",
+                "greit",
+                "--alpha",
+                "0.1",
+                "--noise-figure",
+                "0.3",
+            ]),
+            "under --alpha auto",
+        ),
         (
             vec![
                 "train".into(),

@@ -549,7 +549,7 @@ class Reconstructor:
         alpha: Union[str, float] = "auto",
         pixels: int = 64,
         threshold: Optional[float] = None,
-        s: float = 0.5,
+        s: Optional[float] = None,
         iterations: int = 1,
         noise_figure: Optional[float] = None,
         radius_m: Optional[float] = None,
@@ -558,6 +558,22 @@ class Reconstructor:
             raise EtError(
                 f"the protocol is of {protocol.electrodes} electrodes, the sheet has "
                 f"{sheet.electrodes}"
+            )
+        # One method's options beside the other change nothing: refused, not ignored.
+        if method == "greit":
+            if s is not None:
+                raise EtError(f"s = {s}: Gauss-Newton's NOSER exponent; GREIT has no prior")
+            if iterations != 1:
+                raise EtError(f"iterations = {iterations}: Gauss-Newton's; GREIT is one matrix")
+            if noise_figure is not None and str(alpha) != "auto":
+                raise EtError(
+                    f"noise_figure = {noise_figure} sets GREIT's lambda under alpha='auto'; "
+                    f"alpha={alpha!r} sets it otherwise: give one of them"
+                )
+        elif method == "gn" and (noise_figure is not None or radius_m is not None):
+            raise EtError(
+                "noise_figure and radius_m are GREIT's (method='greit'); Gauss-Newton's "
+                "smoothing is alpha and s"
             )
         rows = np.ascontiguousarray(protocol.rows, dtype=np.int64)
         currents = _f64(protocol.currents, 1, "currents")
@@ -569,7 +585,8 @@ class Reconstructor:
             _spec_json(sheet.spec), int(protocol.electrodes), name, current_a,
             None if name else rows, None if name else currents,
             _count(triangles, "triangles"), method, str(alpha), _count(pixels, "pixels"),
-            threshold, float(s), _count(iterations, "iterations"), noise_figure, radius_m,
+            threshold, 0.5 if s is None else float(s), _count(iterations, "iterations"),
+            noise_figure, radius_m,
         ))
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None

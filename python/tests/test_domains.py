@@ -187,3 +187,18 @@ def test_files_that_are_not_what_is_asked_are_said_so(tmp_path):
         et.read_recording(frames)
     with pytest.raises(et.EtError, match="k = 0: a whole number of at least 1"):
         et.read_frames(frames, 0)
+
+
+@pytest.mark.parametrize(
+    "options, named",
+    [
+        (dict(method="gn", noise_figure=0.3), "are GREIT's"),
+        (dict(radius_m=0.01), "are GREIT's"),
+        (dict(method="greit", s=0.2), "GREIT has no prior"),
+        (dict(method="greit", iterations=3), "GREIT is one matrix"),
+        (dict(method="greit", alpha=0.1, noise_figure=0.3), "under alpha='auto'"),
+    ],
+)
+def test_one_methods_options_beside_the_other_are_refused_not_ignored(options, named):
+    with pytest.raises(et.EtError, match=named):
+        et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300, **options)

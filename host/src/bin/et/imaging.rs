@@ -82,16 +82,18 @@ pub(crate) struct ReconstructArgs {
     #[arg(long, default_value = "auto")]
     alpha: String,
     /// GREIT: the noise figure that sets lambda under --alpha auto (SNR in / SNR out of a
-    /// target at the centre; larger is sharper and noisier; 0.5 is the consensus value).
-    #[arg(long, default_value_t = et_recon::greit::NOISE_FIGURE, value_parser = crate::domain::above(0.0, et_recon::limits::MAX_NOISE_FIGURE))]
-    noise_figure: f64,
+    /// target at the centre; larger is sharper and noisier; default 0.5, the consensus
+    /// value). Refused beside --method gn or another --alpha, which it would not change.
+    #[arg(long, value_parser = crate::domain::above(0.0, et_recon::limits::MAX_NOISE_FIGURE))]
+    noise_figure: Option<f64>,
     /// GREIT: the radius of the desired image of a small target, mm (default: 5 % of the
-    /// sheet's longer side; at least one pixel).
+    /// sheet's longer side; at least one pixel). Refused beside --method gn.
     #[arg(long, value_parser = crate::domain::above(0.0, 1_000.0))]
     radius_mm: Option<f64>,
-    /// NOSER exponent s in [0, 1] (prior diag(J^T J)^s).
-    #[arg(long, default_value_t = 0.5, value_parser = crate::domain::real(0.0, 1.0))]
-    s: f64,
+    /// Gauss-Newton: the NOSER exponent s in [0, 1] (prior diag(J^T J)^s; default 0.5).
+    /// Refused beside --method greit, which has no prior.
+    #[arg(long, value_parser = crate::domain::real(0.0, 1.0))]
+    s: Option<f64>,
     /// ROI threshold f (keep pixels >= f max); default per protocol as docs/method.md §6: adjacent
     /// 0.10, pseudo-polar 0.08, PP-PP 0.05, others 0.10.
     #[arg(long, value_parser = crate::domain::real(0.0, 1.0))]
@@ -288,9 +290,13 @@ pub(crate) fn mesh_plan(
     })
 }
 
+/// The NOSER exponent unless `--s` gives another.
+pub(crate) const NOSER_S: f64 = 0.5;
+
 /// The reconstruction `et reconstruct`'s arguments ask for.
 fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_recon::AlphaRule)> {
     use et_recon::AlphaRule;
+    // A flag of the other method changes nothing: refused, not ignored.
     let method = match args.method {
         Method::Greit { .. } => {
             if args.iterations > 1 {
@@ -299,16 +305,37 @@ fn method_and_alpha(args: &ReconstructArgs) -> Result<(et_recon::Method, et_reco
                     args.iterations
                 );
             }
+            if let Some(s) = args.s {
+                bail!("--s {s} is Gauss-Newton's NOSER exponent: GREIT has no prior (drop it)");
+            }
+            if let Some(nf) = args.noise_figure
+                && args.alpha != "auto"
+            {
+                bail!(
+                    "--noise-figure {nf} sets GREIT's lambda under --alpha auto; --alpha {} \
+                     sets it otherwise: give one of them",
+                    args.alpha
+                );
+            }
             Method::Greit {
                 radius: args.radius_mm.map(|r| r * 1e-3),
             }
         }
-        Method::GaussNewton { .. } => Method::GaussNewton {
-            s: args.s,
-            iterations: args.iterations,
-        },
+        Method::GaussNewton { .. } => {
+            if args.noise_figure.is_some() || args.radius_mm.is_some() {
+                bail!(
+                    "--noise-figure and --radius-mm are GREIT's (--method greit); Gauss-Newton's \
+                     smoothing is --alpha and --s"
+                );
+            }
+            Method::GaussNewton {
+                s: args.s.unwrap_or(NOSER_S),
+                iterations: args.iterations,
+            }
+        }
     };
-    let alpha = AlphaRule::from_text(&args.alpha, &method, args.noise_figure).map_err(|_| {
+    let noise_figure = args.noise_figure.unwrap_or(et_recon::greit::NOISE_FIGURE);
+    let alpha = AlphaRule::from_text(&args.alpha, &method, noise_figure).map_err(|_| {
         anyhow::anyhow!(
             "--alpha '{}': a number, auto, corner, gcv, discrepancy, lcurve or quasi-optimality",
             args.alpha

@@ -175,7 +175,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         Settings::default().reference_frames
     );
     let limit = args.frames.unwrap_or(u64::MAX);
-    let (mut seen, mut imaged, mut needed) = (0u64, 0u64, 0usize);
+    let (mut seen, mut imaged) = (0u64, 0u64);
+    let needed = processor.settings().reference_frames.max(1);
     let started = std::time::Instant::now();
     let mut stdout = std::io::stdout().lock();
     while seen < limit {
@@ -204,9 +205,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     continue;
                 }
             };
-            match &out.referencing {
-                Some(r) => needed = r.needed,
-                None => imaged += 1,
+            if out.referencing.is_none() {
+                imaged += 1;
             }
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
@@ -232,9 +232,17 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     }
     // A replay that ended before any frame was imaged gave no events: say why, not nothing.
     if imaged == 0 && matches!(source, Source::Replay(_)) {
+        let stopped = if seen >= limit {
+            format!("--frames {limit} stopped it")
+        } else {
+            format!(
+                "it ended after {seen} frame{}",
+                if seen == 1 { "" } else { "s" }
+            )
+        };
         anyhow::bail!(
-            "{} ended after {seen} frame(s), before the untouched reference ({needed} frames) \
-             was complete: no frame was imaged",
+            "{}: {stopped} before the untouched reference ({needed} frames) was complete: no \
+             frame was imaged",
             source.describe()
         );
     }
