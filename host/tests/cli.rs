@@ -1440,6 +1440,8 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             [&collect[..], &["--grid", "100000x100000"]].concat(),
             "at most 100 rows",
         ),
+        // One class: a dataset no classifier can be trained on.
+        ([&collect[..], &["--grid", "1x1"]].concat(), "one class"),
         (
             vec!["reconstruct", "--scene", "/dev/zero", "--out", out],
             "more than 1048576 bytes",

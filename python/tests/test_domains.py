@@ -202,3 +202,12 @@ def test_files_that_are_not_what_is_asked_are_said_so(tmp_path):
 def test_one_methods_options_beside_the_other_are_refused_not_ignored(options, named):
     with pytest.raises(et.EtError, match=named):
         et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300, **options)
+
+
+@pytest.mark.parametrize("grid", [(1, 1), (0, 3), (10**6, 2)])
+def test_a_grid_of_fewer_than_two_cells_or_past_its_bound_is_refused(grid):
+    rng = np.random.default_rng(2)
+    X = rng.standard_normal((40, 3))
+    positions = rng.uniform(-0.05, 0.05, (40, 2))
+    with pytest.raises(et.EtError, match=r"grid .*: a classifier tells at least two classes apart"):
+        et.train(X, positions, kind="lda", grid=grid)

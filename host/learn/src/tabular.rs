@@ -34,6 +34,10 @@ use super::mlp::{Activation, Dense, LayersError, Mlp, MlpOptions};
 use super::model_file::{ClassRecord, class_records, fitted_from_records};
 use super::regress::{self, KernelRidge, Knn, Ridge, Target3, Weighting, summarise};
 
+/// The most rows, and the most columns, of a grid of classes made from positions: 10 000
+/// classes, far beyond what a sheet resolves (the method's finest grid is 10 x 10).
+pub const GRID_MOST: usize = 100;
+
 /// Why a table could not be used.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -250,9 +254,17 @@ pub enum Misuse {
     /// A class grid without positions.
     #[error("--grid makes classes from positions: the targets need x and y columns")]
     GridNeedsPositions,
-    /// A class grid of no cells.
-    #[error("--grid: at least 1x1")]
-    EmptyGrid,
+    /// A class grid of fewer than two cells, or more rows or columns than [`GRID_MOST`].
+    #[error(
+        "grid {rows}x{cols}: a classifier tells at least two classes apart (2x1 or more), and \
+         a grid has at most {GRID_MOST} rows and {GRID_MOST} columns"
+    )]
+    EmptyGrid {
+        /// Rows asked for.
+        rows: usize,
+        /// Columns asked for.
+        cols: usize,
+    },
     /// One class only.
     #[error("one class ('{class}') only: nothing to tell apart; give rows of at least two classes")]
     OneClass {

@@ -16,8 +16,8 @@ pub(super) fn class_targets(
             .positions
             .as_ref()
             .ok_or_else(|| usage(Misuse::GridNeedsPositions))?;
-        if rows == 0 || cols == 0 {
-            return Err(usage(Misuse::EmptyGrid));
+        if rows.saturating_mul(cols) < 2 || rows > GRID_MOST || cols > GRID_MOST {
+            return Err(usage(Misuse::EmptyGrid { rows, cols }));
         }
         let g = Grid::over(p, rows, cols);
         let cells: Vec<usize> = p.iter().map(|&q| g.cell(q)).collect();

@@ -371,11 +371,9 @@ struct ShrinkageScore {
     accuracy: f64,
 }
 
-/// `ROWSxCOLS`, both at least 1.
-/// The most rows or columns of a class grid: 10 000 classes, far beyond what a sheet
-/// resolves (the method's finest grid is 10 x 10).
-pub(crate) const GRID_MOST: usize = 100;
+use et_learn::tabular::GRID_MOST;
 
+/// `ROWSxCOLS`, both at least 1, at least two cells, at most [`GRID_MOST`] each.
 pub(crate) fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
     let (r, c) = text
         .split_once('x')
@@ -384,6 +382,9 @@ pub(crate) fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
         .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))?;
     if r > GRID_MOST || c > GRID_MOST {
         bail!("{flag} '{text}': at most {GRID_MOST} rows and {GRID_MOST} columns");
+    }
+    if r.saturating_mul(c) < 2 {
+        bail!("{flag} '{text}': one class; a classifier tells at least two apart (2x1 or more)");
     }
     Ok((r, c))
 }
