@@ -72,8 +72,22 @@ pub enum DatasetFault {
     #[error("{0}: each point is 'x y'")]
     NotPoint(&'static str),
     /// The configuration line is not the scan settings' JSON.
-    #[error("config: {0}")]
+    #[error("config: {}", crate::model_file::json_said(.0, true))]
     Config(serde_json::Error),
+    /// The configuration is not one et scans (an electrode count, a gain of 0, ...).
+    #[error("config: {0} (check the dataset's header)")]
+    ConfigInvalid(et_core::config::ConfigError),
+    /// A class with no centre in the header's `centres_m`.
+    #[error(
+        "class {class}, but centres_m lists {centres} class centre(s): is the header's \
+         centres_m line missing or cut?"
+    )]
+    NoCentre {
+        /// The class.
+        class: u16,
+        /// The centres listed.
+        centres: usize,
+    },
     /// The feature index line holds something that is not a frame index.
     #[error("feature_index: {0}")]
     FeatureIndex(std::num::ParseIntError),

@@ -482,6 +482,17 @@ fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
         Some(i) => Err(fault(field, DatasetFault::ValueNotFinite(i + 1))),
         None => Ok(()),
     };
+    data.config
+        .validate()
+        .map_err(|e| content(path, 0, None, DatasetFault::ConfigInvalid(e)))?;
+    if let Some(&class) = data
+        .y
+        .iter()
+        .find(|&&c| usize::from(c) >= data.centres.len())
+    {
+        let centres = data.centres.len();
+        return Err(fault("label", DatasetFault::NoCentre { class, centres }));
+    }
     finite("features", data.x.as_slice().iter())?;
     finite("untouched", data.baselines.as_slice().iter())?;
     finite("pressure", data.pressure.iter())?;
