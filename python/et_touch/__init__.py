@@ -796,6 +796,11 @@ class Model:
             X = read_dataset(X)
         if isinstance(X, Dataset):
             return self._native.predict_dataset(X)
+        if v0 is not None and not self.is_board:
+            raise EtError(
+                "v0 is a board model's untouched frame; a table's model predicts its own "
+                "features as given (reference them before training and predicting)"
+            )
         v0 = None if v0 is None else _f64(v0, 1, "v0")
         return self._native.predict(_f64(X, 2, "X"), v0)
 

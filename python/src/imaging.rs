@@ -591,6 +591,11 @@ impl Reconstructor {
     fn frame_median(&self, dv: PyReadonlyArray1<'_, f64>, repeats: usize) -> PyResult<Option<f64>> {
         et_recon::limits::count("repeats", repeats, &et_recon::limits::REPEATS)
             .map_err(|e| refused(&e))?;
-        Ok(self.inner.frame_median(slice(&dv, "dv")?, repeats))
+        let dv = slice(&dv, "dv")?;
+        // A frame that cannot be imaged is refused, not timed as None.
+        if let Some((i, v)) = dv.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(usage(format!("dv[{i}] = {v}: a finite number")));
+        }
+        Ok(self.inner.frame_median(dv, repeats))
     }
 }

@@ -211,3 +211,16 @@ def test_a_grid_of_fewer_than_two_cells_or_past_its_bound_is_refused(grid):
     positions = rng.uniform(-0.05, 0.05, (40, 2))
     with pytest.raises(et.EtError, match=r"grid .*: a classifier tells at least two classes apart"):
         et.train(X, positions, kind="lda", grid=grid)
+
+
+def test_what_a_call_cannot_use_is_refused_not_ignored():
+    # v0 beside a table's model was ignored; a NaN frame was timed as None.
+    rng = np.random.default_rng(3)
+    model = et.train(rng.standard_normal((60, 3)), np.arange(60) % 3, kind="lda")
+    with pytest.raises(et.EtError, match="v0 is a board model's"):
+        model.predict(rng.standard_normal((2, 3)), v0=np.zeros(3))
+    r = et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300)
+    v0 = r.forward(r.sigma0)
+    r.image(v0 * 1.001, v0)
+    with pytest.raises(et.EtError, match=r"dv\[0\] = NaN"):
+        r.frame_median(np.full(len(v0), np.nan), 3)
