@@ -223,39 +223,31 @@ fn sim_writes_a_recording_that_python_reads() {
     let short = dir.join("short.csv");
     let first: String = csv.lines().take(3).map(|l| format!("{l}\n")).collect();
     std::fs::write(&short, first).unwrap();
-    let e = et(&[
-        "stream",
-        "--json",
-        "--replay",
-        short.to_str().unwrap(),
-        "--scene",
-        scene.to_str().unwrap(),
-    ]);
-    let message = String::from_utf8_lossy(&e.stderr);
-    assert!(
-        !e.status.success()
-            && message
-                .contains("it ended after 3 frames before the untouched reference (20 frames)"),
-        "{message}"
-    );
-    // --frames ending it before the reference is said as that (it said the file ended, and
-    // the reference's length as 0 frames).
-    let e = et(&[
-        "stream",
-        "--json",
-        "--frames",
-        "2",
-        "--replay",
-        short.to_str().unwrap(),
-        "--scene",
-        scene.to_str().unwrap(),
-    ]);
-    let message = String::from_utf8_lossy(&e.stderr);
-    assert!(
-        !e.status.success()
-            && message.contains("--frames 2 stopped it before the untouched reference (20 frames)"),
-        "{message}"
-    );
+    // And --frames ending it before the reference is said as that (it said the file ended,
+    // and the reference's length as 0 frames).
+    for (extra, said) in [
+        (
+            &[][..],
+            "it ended after 3 frames before the untouched reference (20 frames)",
+        ),
+        (
+            &["--frames", "2"],
+            "--frames 2 stopped it before the untouched reference (20 frames)",
+        ),
+    ] {
+        let short = short.to_str().unwrap();
+        let args = [
+            "stream",
+            "--json",
+            "--replay",
+            short,
+            "--scene",
+            scene.to_str().unwrap(),
+        ];
+        let e = et(&[&args[..], extra].concat());
+        let message = String::from_utf8_lossy(&e.stderr);
+        assert!(!e.status.success() && message.contains(said), "{message}");
+    }
     // A scene whose protocol is a file is for `et reconstruct`, and says so.
     std::fs::write(dir.join("p.csv"), "0,1,2,3\n").unwrap();
     let file_scene = dir.join("file-protocol.toml");
