@@ -1432,8 +1432,10 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             [&collect[..], &["--grid", "100000x100000"]].concat(),
             "at most 100 rows",
         ),
-        // One class: a dataset no classifier can be trained on.
+        // One class: a dataset no classifier can be trained on (also written as people
+        // write grids: the same error, not "write ROWSxCOLS").
         ([&collect[..], &["--grid", "1x1"]].concat(), "one class"),
+        ([&collect[..], &["--grid", " 1 X 1"]].concat(), "one class"),
         (
             vec!["reconstruct", "--scene", "/dev/zero", "--out", out],
             "more than 1048576 bytes",

@@ -28,6 +28,10 @@ pub struct Evaluation {
     /// Share of rows whose class is right (classifiers, when the rows have labels or the
     /// model's grid can place them).
     pub accuracy: Option<f64>,
+    /// The rows' labels the model has no class of (each once, in order of first row): their
+    /// rows count as missed in `accuracy`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unknown_labels: Vec<String>,
     /// Per group (session) of the rows, when they have groups: its rows' errors.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_group: Option<Vec<GroupScore>>,
@@ -158,7 +162,18 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             })
             .collect()
     });
+    let mut unknown_labels: Vec<String> = Vec::new();
+    if let (Some(info), Some(labels)) = (&model.classes, &table.labels)
+        && model.method.is_classifier()
+    {
+        for l in labels {
+            if !info.names.contains(l) && !unknown_labels.contains(l) {
+                unknown_labels.push(l.clone());
+            }
+        }
+    }
     Ok(Evaluation {
+        unknown_labels,
         per_group,
         observations: table.rows(),
         method: model.method,

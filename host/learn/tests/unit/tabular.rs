@@ -372,8 +372,12 @@ fn labels_are_the_users_own_names() {
     if let Some(l) = renamed.labels.as_mut() {
         l[0] = "elsewhere".into();
     }
-    let acc = evaluate(&model, &renamed).unwrap().accuracy.unwrap();
+    let e = evaluate(&model, &renamed).unwrap();
+    let acc = e.accuracy.unwrap();
     assert!((acc - (n - 1) as f64 / n as f64).abs() < 1e-12);
+    // Said, for the command to note.
+    assert_eq!(e.unknown_labels, ["elsewhere"]);
+    assert!(evaluate(&model, &table).unwrap().unknown_labels.is_empty());
 }
 
 #[test]

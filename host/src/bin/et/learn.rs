@@ -375,8 +375,11 @@ use et_learn::tabular::GRID_MOST;
 
 /// `ROWSxCOLS`, both at least 1, at least two cells, at most [`GRID_MOST`] each.
 pub(crate) fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
+    // 7x7, 7X7 or 7 x 7: as people write a grid.
     let (r, c) = text
-        .split_once('x')
+        .trim()
+        .split_once(['x', 'X'])
+        .map(|(r, c)| (r.trim(), c.trim()))
         .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
         .filter(|&(r, c)| r > 0 && c > 0)
         .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))?;

@@ -387,6 +387,29 @@ pub(crate) fn eval(
             std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
+    if !e.unknown_labels.is_empty() {
+        let shown: Vec<&str> = e
+            .unknown_labels
+            .iter()
+            .take(5)
+            .map(String::as_str)
+            .collect();
+        say!(
+            "note: {} label{} the model has no class of ({}{}): {} rows counted as missed",
+            e.unknown_labels.len(),
+            if e.unknown_labels.len() == 1 { "" } else { "s" },
+            shown.join(", "),
+            if e.unknown_labels.len() > 5 {
+                ", ..."
+            } else {
+                ""
+            },
+            table.labels.as_ref().map_or(0, |l| l
+                .iter()
+                .filter(|l| e.unknown_labels.contains(l))
+                .count())
+        );
+    }
     if json {
         out!("{}", serde_json::to_string(&e)?);
         return Ok(());
