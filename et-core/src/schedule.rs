@@ -216,6 +216,47 @@ pub enum FileFault {
     Row(Box<ScheduleError>),
 }
 
+/// A schedule file's columns, in this order.
+const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
+
+/// Whether the `first` record is a header, and where each of [`COLUMNS`] is: named by a
+/// header (any order; a name twice, or one of the four missing, refused), or, without one, the
+/// first four or five columns. A header names at least one column (a row of numbers with a typo
+/// is data); a first row with no number and none of the names is a header of other names.
+fn header_columns(
+    first: &csv::StringRecord,
+    delimiter: text::Delimiter,
+) -> Result<(bool, [Option<usize>; 5]), FileFault> {
+    let header = first
+        .iter()
+        .any(|c| COLUMNS.iter().any(|n| c.eq_ignore_ascii_case(n)));
+    if header {
+        let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
+        let columns = COLUMNS.map(find);
+        // A column named twice: which one is meant would be a guess (said before the column a
+        // misspelt second name leaves missing).
+        if let Some(name) = COLUMNS
+            .iter()
+            .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
+        {
+            return Err(FileFault::SameColumn(name));
+        }
+        if let Some(missing) = COLUMNS[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
+            return Err(FileFault::MissingColumn(missing.0));
+        }
+        return Ok((true, columns));
+    }
+    if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
+        let names = first.iter().collect::<Vec<_>>().join(", ");
+        return Err(FileFault::OtherNames(names));
+    }
+    if first.len() == 4 || first.len() == 5 {
+        let current = (first.len() == 5).then_some(4);
+        return Ok((false, [Some(0), Some(1), Some(2), Some(3), current]));
+    }
+    Err(FileFault::Columns(first.len()))
+}
+
 impl Schedule {
     /// A schedule of `rows` on `electrodes` electrodes, every row checked.
     ///
@@ -414,41 +455,8 @@ impl Schedule {
             Some(r) => r.map_err(|(line, f)| fail(line, f.into()))?,
             None => return Err(fail(0, FileFault::NoRows)),
         };
-        const NAMES: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
-        // A header names at least one of the columns (a row of numbers with a typo is data).
-        let header = first
-            .iter()
-            .any(|c| NAMES.iter().any(|n| c.eq_ignore_ascii_case(n)));
-        let columns: [Option<usize>; 5] = if header {
-            let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
-            let columns = NAMES.map(find);
-            // A column named twice: which one is meant would be a guess (said before the
-            // column a misspelt second name leaves missing).
-            if let Some(name) = NAMES
-                .iter()
-                .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
-            {
-                return Err(fail(first_line, FileFault::SameColumn(name)));
-            }
-            if let Some(missing) = NAMES[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
-                return Err(fail(first_line, FileFault::MissingColumn(missing.0)));
-            }
-            columns
-        } else if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
-            // No number in the first row: a header with other names, not a row of data.
-            let names = first.iter().collect::<Vec<_>>().join(", ");
-            return Err(fail(first_line, FileFault::OtherNames(names)));
-        } else if first.len() == 4 || first.len() == 5 {
-            [
-                Some(0),
-                Some(1),
-                Some(2),
-                Some(3),
-                (first.len() == 5).then_some(4),
-            ]
-        } else {
-            return Err(fail(first_line, FileFault::Columns(first.len())));
-        };
+        let (header, columns) =
+            header_columns(&first, delimiter).map_err(|fault| fail(first_line, fault))?;
         // The rows and the file's line of each (for a row's error): the header's record
         // again when it is data.
         let mut rows = Vec::new();
@@ -464,7 +472,7 @@ impl Schedule {
             let electrode = |which: usize| -> Result<u16, ScheduleError> {
                 let c = columns[which].unwrap_or(which);
                 let v = cell(c);
-                let column = NAMES[which];
+                let column = COLUMNS[which];
                 let n: u16 = v.parse().map_err(|_| {
                     let cell = v.to_string();
                     fail(line, FileFault::NotElectrode { column, cell })

@@ -7,7 +7,7 @@ use nalgebra::DMatrix;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use crate::imaging::array2;
+use crate::array2;
 use crate::{json, refused};
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -2,9 +2,7 @@
 //! [`et_recon::Reconstructor`].
 
 use crate::batch::{FRAMES_AT_ONCE, in_run};
-use numpy::{
-    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
-};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 use et_core::protocol::{Protocol, ProtocolKind};
@@ -13,41 +11,13 @@ use et_core::sheet::Sheet;
 use et_recon::touches::ObjectSummary;
 use et_recon::{AlphaRule, MeshPlan, Method, Reference, Spec};
 
-use crate::{json, refused, usage};
+use crate::{array2, json, matrix, refused, slice, usage};
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(protocol_table, m)?)?;
     m.add_function(wrap_pyfunction!(scene_parts, m)?)?;
     m.add_class::<Reconstructor>()?;
     Ok(())
-}
-
-/// A C-contiguous float64 array's values in place (the Python side makes it so).
-pub(crate) fn slice<'a>(a: &'a PyReadonlyArray1<'_, f64>, what: &str) -> PyResult<&'a [f64]> {
-    a.as_slice()
-        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))
-}
-
-/// The rows of a C-contiguous 2-D float64 array (rows x columns, row-major) in place.
-pub(crate) fn matrix<'a>(
-    a: &'a PyReadonlyArray2<'_, f64>,
-    what: &str,
-) -> PyResult<(&'a [f64], usize, usize)> {
-    let [rows, cols] = [a.shape()[0], a.shape()[1]];
-    let values = a
-        .as_slice()
-        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))?;
-    Ok((values, rows, cols))
-}
-
-/// `values` (rows x cols, row-major) as a 2-D array.
-pub(crate) fn array2<T: numpy::Element>(
-    py: Python<'_>,
-    values: Vec<T>,
-    rows: usize,
-    cols: usize,
-) -> PyResult<Bound<'_, PyArray2<T>>> {
-    PyArray1::from_vec(py, values).reshape([rows, cols])
 }
 
 /// The schedule of a built-in protocol, or of rows (source, sink, positive, negative,

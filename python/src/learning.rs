@@ -16,7 +16,7 @@ use et_learn::tabular::{Choice, CvScheme, Prediction, Prepared, Table, Unit};
 use et_learn::{Examples, Trainer};
 
 use crate::files::Dataset;
-use crate::imaging::{array2, matrix};
+use crate::{array2, matrix};
 use crate::{json, refused, usage};
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -264,10 +264,7 @@ impl Model {
         v0: Option<numpy::PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Predicted<'py>> {
         let x = features(&x, "X")?;
-        let v0 = v0
-            .as_ref()
-            .map(|v0| crate::imaging::slice(v0, "v0"))
-            .transpose()?;
+        let v0 = v0.as_ref().map(|v0| crate::slice(v0, "v0")).transpose()?;
         let p = match self.inner.as_table() {
             Some(table) => py
                 .detach(|| {

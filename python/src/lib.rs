@@ -47,6 +47,39 @@ pub(crate) fn json(value: &impl serde::Serialize) -> PyResult<String> {
     serde_json::to_string(value).map_err(|e| refused(&e))
 }
 
+/// A C-contiguous float64 array's values in place (the Python side makes it so).
+pub(crate) fn slice<'a>(
+    a: &'a numpy::PyReadonlyArray1<'_, f64>,
+    what: &str,
+) -> PyResult<&'a [f64]> {
+    a.as_slice()
+        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))
+}
+
+/// The rows of a C-contiguous 2-D float64 array (rows x columns, row-major) in place.
+pub(crate) fn matrix<'a>(
+    a: &'a numpy::PyReadonlyArray2<'_, f64>,
+    what: &str,
+) -> PyResult<(&'a [f64], usize, usize)> {
+    use numpy::PyUntypedArrayMethods as _;
+    let [rows, cols] = [a.shape()[0], a.shape()[1]];
+    let values = a
+        .as_slice()
+        .map_err(|_| usage(format!("{what}: a contiguous float64 array")))?;
+    Ok((values, rows, cols))
+}
+
+/// `values` (rows x cols, row-major) as a 2-D array.
+pub(crate) fn array2<T: numpy::Element>(
+    py: Python<'_>,
+    values: Vec<T>,
+    rows: usize,
+    cols: usize,
+) -> PyResult<Bound<'_, numpy::PyArray2<T>>> {
+    use numpy::PyArrayMethods as _;
+    numpy::PyArray1::from_vec(py, values).reshape([rows, cols])
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EtError", m.py().get_type::<EtError>())?;

@@ -162,18 +162,8 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             })
             .collect()
     });
-    let mut unknown_labels: Vec<String> = Vec::new();
-    if let (Some(info), Some(labels)) = (&model.classes, &table.labels)
-        && model.method.is_classifier()
-    {
-        for l in labels {
-            if !info.names.contains(l) && !unknown_labels.contains(l) {
-                unknown_labels.push(l.clone());
-            }
-        }
-    }
     Ok(Evaluation {
-        unknown_labels,
+        unknown_labels: unknown_labels(model, table),
         per_group,
         observations: table.rows(),
         method: model.method,
@@ -189,6 +179,21 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         pairs,
         predictions: pred,
     })
+}
+
+/// The rows' labels a classifier has no class of, each once, in order of first row.
+fn unknown_labels(model: &TableModel, table: &Table) -> Vec<String> {
+    let mut unknown: Vec<String> = Vec::new();
+    if let (Some(info), Some(labels)) = (&model.classes, &table.labels)
+        && model.method.is_classifier()
+    {
+        for l in labels {
+            if !info.names.contains(l) && !unknown.contains(l) {
+                unknown.push(l.clone());
+            }
+        }
+    }
+    unknown
 }
 
 /// The share of rows whose predicted class is right: a classifier's, when the rows have labels

@@ -191,25 +191,10 @@ pub fn train(
     if let Some(avg) = &average {
         ranked.insert(0, avg);
     }
-    if ranked.is_empty() {
-        // Why, in the methods' words (a class of one row, values beyond single precision).
-        let mut why: Vec<(String, Vec<&str>)> = Vec::new();
-        for c in &search {
-            let Some(failure) = &c.failure else { continue };
-            let name = c.method.name();
-            match why.iter_mut().find(|(f, _)| f == failure) {
-                Some((_, methods)) if !methods.contains(&name) => methods.push(name),
-                Some(_) => {}
-                None => why.push((failure.clone(), vec![name])),
-            }
-        }
-        if !why.is_empty() {
-            let said: Vec<String> = why
-                .iter()
-                .map(|(f, methods)| format!("{}: {f}", methods.join(", ")))
-                .collect();
-            return Err(TabularError::NothingFitted(said.join("; ")));
-        }
+    if ranked.is_empty()
+        && let Some(e) = nothing_fitted(&search)
+    {
+        return Err(e);
     }
     // The smallest cross-validation training set, which chose QDA's shrinkage target.
     let fold_rows = classes.as_ref().map_or(n, |(l, _)| {
@@ -265,6 +250,26 @@ pub fn train(
         per_group: opts.per_group,
         reference: None,
     })
+}
+
+/// When no candidate could be fitted: why, in the methods' words (a class of one row, values
+/// beyond single precision), each reason once with the methods that gave it.
+fn nothing_fitted(search: &[Candidate]) -> Option<TabularError> {
+    let mut why: Vec<(String, Vec<&str>)> = Vec::new();
+    for c in search {
+        let Some(failure) = &c.failure else { continue };
+        let name = c.method.name();
+        match why.iter_mut().find(|(f, _)| f == failure) {
+            Some((_, methods)) if !methods.contains(&name) => methods.push(name),
+            Some(_) => {}
+            None => why.push((failure.clone(), vec![name])),
+        }
+    }
+    let said: Vec<String> = why
+        .iter()
+        .map(|(f, methods)| format!("{}: {f}", methods.join(", ")))
+        .collect();
+    (!said.is_empty()).then(|| TabularError::NothingFitted(said.join("; ")))
 }
 
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,

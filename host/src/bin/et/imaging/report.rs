@@ -81,7 +81,7 @@ pub(super) fn report(
         noise: image.noise,
         background,
         noise_figure: image.greit.map(|g| g.0),
-        s: args.s.unwrap_or(super::NOSER_S),
+        s: args.s.unwrap_or(super::method::NOSER_S),
         threshold: f,
         regions: rois.iter().map(RegionSummary::of).collect(),
         found_touches: found.iter().map(RegionSummary::of).collect(),
