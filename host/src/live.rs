@@ -160,6 +160,16 @@ pub enum LiveError {
         /// K of its protocol.
         expected: usize,
     },
+    /// A frame imaged against a reference of one frame, whose noise cannot be estimated from
+    /// its own dV (the protocol has too little redundancy).
+    #[error(
+        "frame {seq}: one reference frame gives no noise, and this protocol has too little \
+         redundancy to estimate it from the frame: take two or more reference frames"
+    )]
+    UnknownNoise {
+        /// The frame's sequence number.
+        seq: u32,
+    },
     /// A frame with a NaN or infinite value.
     #[error("frame {seq}: a value is not finite")]
     NonFinite {

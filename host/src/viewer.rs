@@ -54,6 +54,9 @@ pub struct Options {
     pub model: Option<PathBuf>,
     /// The reconstruction to image with (switchable in the side panel).
     pub method: et_recon::Method,
+    /// Untouched frames averaged into V_0 at the start and after a tare
+    /// ([`Settings::reference_frames`]).
+    pub reference_frames: usize,
     /// Simulate in real time (false: one frame per drawn frame, for tests).
     pub realtime: bool,
     /// For documentation: once V_0 is taken (and `press` is pressed), save the window as
@@ -144,6 +147,7 @@ impl Viewer {
             &sheet.physical,
             Settings {
                 method: options.method,
+                reference_frames: options.reference_frames,
                 ..Settings::default()
             },
         )?;

@@ -248,6 +248,37 @@ fn sim_writes_a_recording_that_python_reads() {
         let message = String::from_utf8_lossy(&e.stderr);
         assert!(!e.status.success() && message.contains(said), "{message}");
     }
+    // Another system's file with one untouched frame at its start (as many tanks' are): with
+    // --reference 1 each frame's noise is estimated from the frame itself, and the swipe
+    // streams as it does against 20 untouched frames: the same frames touched, the same
+    // places within 2 mm (no untouched frame called a touch, none of the swipe's missed).
+    let one = dir.join("one.csv");
+    let kept: String = (csv.lines().enumerate())
+        .filter(|(i, _)| *i == 0 || *i >= 20)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    std::fs::write(&one, kept).unwrap();
+    let from_one = et(&[
+        "stream",
+        "--json",
+        "--replay",
+        one.to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+        "--reference",
+        "1",
+    ]);
+    let (a, b) = (positions(&from_csv.stdout), positions(&from_one.stdout));
+    assert_eq!(
+        a.len(),
+        b.len(),
+        "{}",
+        String::from_utf8_lossy(&from_one.stderr)
+    );
+    for (a, b) in a.iter().zip(&b) {
+        let d = |i: usize| a[i].as_f64().unwrap() - b[i].as_f64().unwrap();
+        assert!(d(0).hypot(d(1)) < 2.0, "{a} and {b}");
+    }
     // A scene whose protocol is a file is for `et reconstruct`, and says so.
     std::fs::write(dir.join("p.csv"), "0,1,2,3\n").unwrap();
     let file_scene = dir.join("file-protocol.toml");

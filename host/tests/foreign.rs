@@ -349,6 +349,10 @@ fn et_protocol_csv_is_a_protocol_file() {
         String::from_utf8_lossy(&out.stderr)
     );
     std::fs::write(d.join("pp.csv"), &out.stdout).unwrap();
+    // One range for the current, the one scenes and files are held to.
+    let slip = et(&["protocol", "--csv", "--current-a", "0.5"]);
+    let e = String::from_utf8_lossy(&slip.stderr);
+    assert!(!slip.status.success() && e.contains("at most 0.05"), "{e}");
     let scene = d.join("s.toml");
     std::fs::write(
         &scene,

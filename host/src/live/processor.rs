@@ -194,6 +194,10 @@ pub(super) struct Noise {
     pub(super) var_dv: Vec<f64>,
     /// 1 / each pixel's noise (0 where the noise is 0), for the frames' z-scores.
     pub(super) inverse_sd: Vec<f32>,
+    /// A reference of one frame carries no noise: `var_dv` is then 0 and `inverse_sd` is for
+    /// a variance of 1 V^2 on every channel, and each frame's noise is estimated from its own
+    /// dV ([`Noise::of_frame`]), as `et reconstruct` images such frames.
+    pub(super) per_frame: bool,
 }
 
 /// One frame processed.
@@ -411,6 +415,8 @@ impl Processor {
             key,
         )?;
         let noise = Noise::current(&mut reference.noise, &reference.frames, projection, key)?;
+        let estimated = noise.of_frame(&self.recon, &frame)?;
+        let noise = estimated.as_ref().unwrap_or(noise);
         Imaging {
             recon: &self.recon,
             inside: &self.inside,
@@ -444,9 +450,14 @@ impl Noise {
         let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
         stats::reference(frames, &mut v0)?;
         stats::dv_variance(frames, &mut var_dv)?;
+        let per_frame = frames.len() < 2;
         // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image filters
         // the noise the data carry, so a touch stands out better here than in |dV|.
-        let pixel_sd = projection.matrix.noise_sd(&var_dv)?;
+        let pixel_sd = if per_frame {
+            projection.matrix.noise_sd(&vec![1.0; k])?
+        } else {
+            projection.matrix.noise_sd(&var_dv)?
+        };
         let inverse_sd = pixel_sd
             .iter()
             .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
@@ -457,6 +468,44 @@ impl Noise {
             v0,
             var_dv,
             inverse_sd,
+            per_frame,
+        }))
+    }
+
+    /// For a reference of one frame ([`Noise::per_frame`]): this noise with each channel's
+    /// variance estimated from the frame's own dV (the part no conductivity change can make,
+    /// [`Reconstructor::redundancy_noise`]); None for a reference of two or more frames,
+    /// whose noise is measured.
+    ///
+    /// # Errors
+    /// [`LiveError::UnknownNoise`] when the protocol has too little redundancy to tell noise
+    /// from a change.
+    fn of_frame(
+        &self,
+        recon: &Reconstructor,
+        frame: &LiveFrame,
+    ) -> Result<Option<Noise>, LiveError> {
+        if !self.per_frame {
+            return Ok(None);
+        }
+        let dv: Vec<f64> = (frame.voltages.iter().zip(&self.v0))
+            .map(|(a, b)| f64::from(*a) - b)
+            .collect();
+        let variance = recon
+            .redundancy_noise(&dv)
+            .map(|n| n.variance)
+            .ok_or(LiveError::UnknownNoise { seq: frame.seq })?;
+        // A frame equal to V_0 has no noise to see and nothing to image: no touch.
+        let scale = if variance > 0.0 {
+            (1.0 / variance.sqrt()) as f32
+        } else {
+            0.0
+        };
+        Ok(Some(Noise {
+            var_dv: vec![variance; dv.len()],
+            inverse_sd: self.inverse_sd.iter().map(|i| i * scale).collect(),
+            per_frame: false,
+            ..self.clone()
         }))
     }
 }

@@ -30,7 +30,17 @@ pub(crate) struct SourceArgs {
     /// or greit (GREIT at the consensus noise figure 0.5). docs/method.md §6.
     #[arg(long, value_enum, default_value_t = et_recon::Method::default())]
     method: et_recon::Method,
+    /// Untouched frames averaged into V_0 at the start (and after a tare), the sheet not
+    /// touched while they come. Another system's file with fewer untouched frames at its
+    /// start: give their count; with 1, each frame's noise is estimated from the frame
+    /// itself, as `et reconstruct` does.
+    #[arg(long, default_value_t = 20, value_name = "FRAMES",
+          value_parser = crate::domain::count(1, REFERENCE_MOST))]
+    reference: usize,
 }
+
+/// The most untouched frames --reference takes (10 minutes of a board's frames).
+const REFERENCE_MOST: usize = 100_000;
 
 impl SourceArgs {
     fn spec(&self) -> et_host::live::SourceSpec {
@@ -120,6 +130,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
         source: args.source.spec(),
         model: args.source.model.clone(),
         method: args.source.method,
+        reference_frames: args.source.reference,
         realtime: true,
         screenshot: args.screenshot.clone(),
         press: args.press,
@@ -145,6 +156,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         &sheet.physical,
         Settings {
             method: args.source.method,
+            reference_frames: args.source.reference,
             ..Settings::default()
         },
     )?;
@@ -169,10 +181,15 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     if !args.json {
         say!("note: et stream prints JSON lines (--json); streaming them anyway");
     }
+    let reference = match args.source.reference {
+        1 => "the first frame is the untouched reference; each frame's noise is estimated from \
+              the frame itself"
+            .to_string(),
+        n => format!("the first {n} frames are the untouched reference"),
+    };
     say!(
-        "streaming touch events from the {} (the first {} frames are the untouched reference)",
-        source.describe(),
-        Settings::default().reference_frames
+        "streaming touch events from the {} ({reference})",
+        source.describe()
     );
     let limit = args.frames.unwrap_or(u64::MAX);
     let (mut seen, mut imaged) = (0u64, 0u64);
@@ -240,9 +257,18 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                 if seen == 1 { "" } else { "s" }
             )
         };
+        let fewer = if seen >= 2 && seen < limit {
+            format!(
+                "; if fewer of its first frames are untouched, give their count (--reference 1 \
+                 to {})",
+                seen - 1
+            )
+        } else {
+            String::new()
+        };
         anyhow::bail!(
             "{}: {stopped} before the untouched reference ({needed} frames) was complete: no \
-             frame was imaged",
+             frame was imaged{fewer}",
             source.describe()
         );
     }

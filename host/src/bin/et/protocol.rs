@@ -26,8 +26,9 @@ pub(crate) struct ProtocolArgs {
     /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
     #[arg(long)]
     csv: bool,
-    /// With --csv: the current of every row, A.
-    #[arg(long, default_value_t = 1e-3, requires = "csv", value_parser = crate::domain::above(0.0, 1.0))]
+    /// With --csv: the current of every row, A (above 0, at most 0.05: more is a unit slip).
+    #[arg(long, default_value_t = 1e-3, requires = "csv",
+          value_parser = crate::domain::above(0.0, et_core::schedule::MAX_CURRENT_A))]
     current_a: f64,
 }
 
@@ -55,13 +56,6 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
     };
     let protocol = Protocol::new(kind, args.electrodes)?;
     if args.csv {
-        let max = et_core::schedule::MAX_CURRENT_A;
-        if !(args.current_a > 0.0 && args.current_a <= max) {
-            bail!(
-                "--current-a {}: give more than 0 and at most {max} A",
-                args.current_a
-            );
-        }
         out!("{}", protocol.schedule(args.current_a)?.to_csv().trim_end());
         return Ok(());
     }
