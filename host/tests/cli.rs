@@ -1554,6 +1554,18 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         ),
         (
             vec![
+                "train".into(),
+                "--data".into(),
+                p("d.csv"),
+                "--max-minutes".into(),
+                "5".into(),
+                "--out".into(),
+                p("n.json"),
+            ],
+            "--max-minutes apply to any sensor's table",
+        ),
+        (
+            vec![
                 "eval".into(),
                 "--model".into(),
                 p("m.json"),

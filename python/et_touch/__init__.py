@@ -866,7 +866,7 @@ def train(
     shrinkage: Optional[float] = None,
     raw: bool = False,
     keep: Optional[int] = None,
-    budget_s: float = 3600.0,
+    budget_s: Optional[float] = None,
 ) -> Model:
     """Trains a model (et's Trainer; runs without the GIL).
 
@@ -877,20 +877,38 @@ def train(
     ``per_group`` standardises each session by its own statistics; ``cv``: "shuffled" or
     "blocks" (contiguous, for rows in time order); ``grid``: (rows, cols) classes from
     positions; ``folds``: default 5; ``budget_s``: the longest the training may be
-    estimated to take (the Gaussian process and the perceptron time a piece of their work
-    first; past it, refused with the estimate).
+    estimated to take, s (default 3600; the Gaussian process and the perceptron time a piece
+    of their work first; past it, refused with the estimate). ``seed``: the shuffled folds'
+    and the perceptron's starts.
 
     On an et dataset (``X`` a :class:`Dataset` or the path of `et collect`'s .csv/.npz): QDA
     ("auto" or "qda") or LDA for the board, ``shrinkage`` in [0, 1] (None: by
     cross-validation), ``folds`` (default 10), ``raw`` (not minus the untouched frame),
-    ``keep`` (only the best features).
+    ``keep`` (only the best features), ``seed`` (the stratified folds' shuffle); its
+    cross-validation leaves one visit out, so ``groups``, ``cv``, ``grid``, ``per_group`` and
+    ``budget_s`` (for arrays) are refused.
     """
     if isinstance(X, (str, os.PathLike)):
         X = read_dataset(X)
     if isinstance(X, Dataset):
         if y is not None:
             raise EtError("an et dataset carries its classes: train(dataset) without y")
-        return Model(_native.train_dataset(X, kind, shrinkage, folds, raw, keep))
+        given = [
+            name
+            for name, value in (
+                ("groups", groups), ("grid", grid), ("budget_s", budget_s),
+                ("cv", None if cv == "shuffled" else cv), ("per_group", per_group or None),
+            )
+            if value is not None
+        ]
+        if given:
+            raise EtError(
+                f"{', '.join(given)}: for arrays of any sensor; an et dataset's visits are its "
+                "sessions (its cross-validation leaves one out) and its grid is its classes"
+            )
+        return Model(
+            _native.train_dataset(X, kind, shrinkage, folds, raw, keep, _count(seed, "seed"))
+        )
     if y is None:
         raise EtError("give y: n labels, or n x 2 positions (m)")
     if shrinkage is not None or raw or keep is not None:
@@ -907,7 +925,7 @@ def train(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
-            float(budget_s),
+            3600.0 if budget_s is None else float(budget_s),
         )
     )
 

@@ -141,7 +141,8 @@ fn train_table(
 
 /// Trains QDA or LDA for the board on an et dataset; see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (dataset, kind, shrinkage, folds, raw, keep))]
+#[pyo3(signature = (dataset, kind, shrinkage, folds, raw, keep, seed))]
+#[allow(clippy::too_many_arguments)]
 fn train_dataset(
     py: Python<'_>,
     dataset: &Dataset,
@@ -150,6 +151,7 @@ fn train_dataset(
     folds: Option<usize>,
     raw: bool,
     keep: Option<usize>,
+    seed: u64,
 ) -> PyResult<Model> {
     let trainer = Trainer {
         method: choice(kind)?,
@@ -157,6 +159,7 @@ fn train_dataset(
         folds,
         raw,
         keep,
+        seed,
         ..Trainer::default()
     };
     trainer.board_kind().map_err(|e| refused(&e))?;

@@ -114,5 +114,9 @@ def test_bad_training_input_is_refused(table):
         et.train(data.x, data.positions_m, kind="forest")
     with pytest.raises(et.EtError, match="board"):
         et.train(data, kind="ridge")
+    # The arrays' options are refused on a dataset, not ignored.
+    for given in ({"groups": data.visit}, {"budget_s": 60.0}, {"cv": "blocks"}, {"grid": (2, 2)}):
+        with pytest.raises(et.EtError, match=f"{next(iter(given))}: for arrays"):
+            et.train(data, **given)
     with pytest.raises(et.EtError, match="only a board model"):
         et.train(data.x, data.positions_m, kind="ridge").export_blob()

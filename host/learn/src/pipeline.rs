@@ -64,6 +64,8 @@ pub struct TrainOptions {
     pub shrinkage: Option<f64>,
     /// k of the stratified k-fold cross-validation that is reported (docs/method.md §9: 10).
     pub folds: usize,
+    /// The seed of the stratified folds' shuffle (the folds by visit have none).
+    pub seed: u64,
 }
 
 /// A trained model and how well it cross-validates.
@@ -252,7 +254,7 @@ pub fn train_reporting(
     let p = x.ncols();
     let by_visit: Vec<usize> = data.visit.iter().map(|&v| usize::from(v)).collect();
     let several_visits = data.visits() >= 2;
-    let strat = cv::folds(y, options.folds.max(2), 1);
+    let strat = cv::folds(y, options.folds.max(2), options.seed);
     let mut fallbacks = Vec::new();
     let mut rows = fewest_training_rows(&strat);
     if several_visits {

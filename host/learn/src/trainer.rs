@@ -107,7 +107,8 @@ pub struct Trainer {
     pub raw: bool,
     /// Et datasets: keep only this many features, those that separate the classes best.
     pub keep: Option<usize>,
-    /// Tables: the seed of the folds.
+    /// The seed of the shuffled folds (tables; et datasets' stratified k-fold) and of the
+    /// perceptron's starts.
     pub seed: u64,
     /// Tables: standardise each group's (session's) features by its own statistics.
     pub per_group: bool,
@@ -305,6 +306,7 @@ impl Trainer {
                 kind,
                 shrinkage: self.shrinkage,
                 folds: self.folds.unwrap_or(10),
+                seed: self.seed,
             },
             |stage| progress(Progress::Dataset(stage)),
         )?;

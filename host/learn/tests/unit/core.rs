@@ -1147,6 +1147,7 @@ fn two_visit_training_sets_fall_back_and_say_so() {
         kind: ModelKind::Qda,
         shrinkage: None,
         folds: 10,
+        seed: 1,
     };
     let t = train(&data, &options).expect("a two-visit set trains");
     assert_eq!(t.chosen_by, et_learn::pipeline::ChosenBy::LeaveOneVisitOut);
@@ -1214,6 +1215,19 @@ fn two_visit_training_sets_fall_back_and_say_so() {
     assert_eq!(t.chosen_by, et_learn::pipeline::ChosenBy::KFold(10));
     assert_eq!(t.chosen_by.to_string(), "chosen by stratified 10-fold");
     assert!(t.cv.accuracy() > 1.0 / classes as f64);
+    // The seed deals the stratified folds (`et train --seed`): another seed, other folds,
+    // each still a fold of every class (8 rows a class: 8 of the 10 folds hold one each).
+    let other = train(&data, &TrainOptions { seed: 2, ..options }).unwrap();
+    assert_ne!(other.selection_folds, t.selection_folds);
+    for folds in [&t.selection_folds, &other.selection_folds] {
+        for c in 0..classes as u16 {
+            let mut seen = vec![0; 10];
+            for (f, _) in folds.iter().zip(&data.y).filter(|(_, y)| **y == c) {
+                seen[*f] += 1;
+            }
+            assert!(seen.iter().all(|&k| k <= 1), "class {c}: {seen:?}");
+        }
+    }
 }
 
 /// A model with more classes than the blob's u16 field holds is refused before anything is
@@ -1273,6 +1287,7 @@ fn qda_at_full_pooled_shrinkage_is_saved_as_the_lda_it_equals() {
         kind: ModelKind::Qda,
         shrinkage: Some(1.0),
         folds: 5,
+        seed: 1,
     };
     let t = train(&data, &options).unwrap();
     assert_eq!((t.options.kind, t.options.shrinkage), (ModelKind::Lda, 0.0));

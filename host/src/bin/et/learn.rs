@@ -60,9 +60,14 @@ pub(crate) struct TrainArgs {
     /// On --features: the longest the training may take, minutes. The Gaussian process and
     /// the perceptron (alone or in auto) estimate their time from a timed piece of their work
     /// before any fit and say it; a training estimated past this is refused, naming what to
-    /// cut.
-    #[arg(long, default_value_t = 60.0, value_name = "M", value_parser = crate::domain::above(0.0, 10_080.0))]
-    max_minutes: f64,
+    /// cut. Default 60.
+    #[arg(long, value_name = "M", value_parser = crate::domain::above(0.0, 10_080.0))]
+    max_minutes: Option<f64>,
+    /// The seed of the random choices: the shuffled cross-validation folds (the stratified
+    /// k-fold on --data, --cv shuffled on --features) and the perceptron's starting weights.
+    /// Another seed deals the rows to other folds, to see how much a score owes to one split.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched
     /// frames: it cancels electrode movement between sessions, but on the board it needs an
@@ -110,9 +115,11 @@ impl TrainArgs {
                 .transpose()?,
             raw: self.raw,
             keep: self.keep,
-            seed: 1,
+            seed: self.seed,
             per_group: self.per_group,
-            budget_s: self.max_minutes * 60.0,
+            budget_s: self
+                .max_minutes
+                .map_or(et_learn::tabular::BUDGET_S, |m| m * 60.0),
         })
     }
 }
@@ -181,8 +188,10 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     if let Some(flag) = args.table.table_only_flag() {
         bail!("{flag} applies to any sensor's table (--features), not to an et dataset (--data)");
     }
-    if args.grid.is_some() || args.cv.is_some() || args.per_group {
-        bail!("--grid, --cv and --per-group apply to any sensor's table (--features)");
+    if args.grid.is_some() || args.cv.is_some() || args.per_group || args.max_minutes.is_some() {
+        bail!(
+            "--grid, --cv, --per-group and --max-minutes apply to any sensor's table (--features)"
+        );
     }
     let mut outputs = vec![args.out.as_path()];
     outputs.extend(args.curve.as_deref());
