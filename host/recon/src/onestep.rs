@@ -68,8 +68,9 @@ pub struct DataSpace {
     /// sqrt(w_k) per frame value: a frame's values are whitened by it before they meet M
     /// (None: every weight 1).
     root_weights: Option<Vec<f64>>,
-    /// G P^-1, r x T.
-    gp: Mat<f64>,
+    /// G P^-1, r x T: one copy, shared with every one-step matrix made from this space (r
+    /// x T is 33 MB in f64 for 32 electrodes and 8 000 triangles).
+    gp: std::sync::Arc<Mat<f64>>,
     /// A = J P^-1 J^T, K x K (full).
     a: Mat<f64>,
     /// tr(A), V^2 per (S/sq)^2 (the scale of lambda).
@@ -294,7 +295,7 @@ impl DataSpace {
         Self {
             combination,
             root_weights: None,
-            gp,
+            gp: std::sync::Arc::new(gp),
             a,
             trace,
             s,
@@ -385,7 +386,7 @@ impl DataSpace {
             return Err(ReconError::Singular);
         }
         Ok(OneStep {
-            gp: self.gp.clone(),
+            gp: std::sync::Arc::clone(&self.gp),
             xt,
             inverse,
             combination,
@@ -422,7 +423,7 @@ impl DataSpace {
 
     /// G P^-1 (r x T).
     pub(crate) fn gp(&self) -> MatRef<'_, f64> {
-        self.gp.as_ref()
+        Mat::as_ref(&self.gp)
     }
 
     /// tr(A) / K, lambda's scale (V^2 per (S/sq)^2).

@@ -8,8 +8,8 @@ use super::*;
 /// instead of T K, and [`OneStep::matrix`] multiplies it out when a caller wants R itself.
 #[derive(Clone, Debug)]
 pub struct OneStep {
-    /// G P^-1, r x T.
-    pub(crate) gp: Mat<f64>,
+    /// G P^-1, r x T (shared with the data space it was made from, [`DataSpace`]).
+    pub(crate) gp: std::sync::Arc<Mat<f64>>,
     /// X^T = M^T (A + lambda I)^-1, r x K.
     pub(crate) xt: Mat<f64>,
     /// (N H + lambda I)^-1 on N's range, r x r: X^T = `inverse` M^T.
@@ -54,7 +54,7 @@ impl OneStep {
     pub(crate) fn with_columns(self, gp: Mat<f64>) -> OneStep {
         debug_assert_eq!(gp.nrows(), self.gp.nrows());
         OneStep {
-            gp,
+            gp: std::sync::Arc::new(gp),
             squared: NoiseRows::default(),
             ..self
         }
