@@ -74,10 +74,16 @@ pub enum ModelError {
         /// The reason.
         source: std::io::Error,
     },
-    /// Not JSON (the message names the line and column).
+    /// Not JSON, or JSON cut short (the message names the line and column).
     #[error(
-        "{}: not an et model file (et train writes JSON): {}",
-        .path.display(), crate::model_file::json_said(error, false)
+        "{}: {}: {}",
+        .path.display(),
+        if error.classify() == serde_json::error::Category::Eof {
+            "the file ends inside its JSON (a copy cut short? write it again with et train)"
+        } else {
+            "not an et model file (et train writes JSON)"
+        },
+        crate::model_file::json_said(error, false)
     )]
     Json {
         /// The file.
@@ -88,12 +94,29 @@ pub enum ModelError {
     /// JSON, but neither `"format": "et-model"` (a board model) nor `"et-table-model"`.
     #[error(
         "{}: not an et model file (its \"format\" is neither \"et-model\", a board model, nor \
-         \"et-table-model\", a table's model)",
+         \"et-table-model\", a table's model: {found})",
         .path.display()
     )]
     Format {
         /// The file.
         path: PathBuf,
+        /// What it says instead ([`crate::model_file::format_found`]).
+        found: String,
+    },
+    /// A "format" that names one kind of model on the fields of the other (an edited format).
+    #[error(
+        "{}: its \"format\" says \"{said}\" ({}), but its fields ({}) are those of {}, \
+         whose format is \"{}\": was \"format\" edited?",
+        .path.display(),
+        kind_of(.said), fields_of(.holds), kind_of(.holds), .holds
+    )]
+    OtherFormat {
+        /// The file.
+        path: PathBuf,
+        /// The format it says.
+        said: &'static str,
+        /// The format its fields are.
+        holds: &'static str,
     },
     /// A board model's file is not usable.
     #[error(transparent)]
@@ -155,6 +178,24 @@ impl std::fmt::Display for Mismatch {
     }
 }
 
+/// A model file's format in words.
+fn kind_of(format: &str) -> &'static str {
+    if format == "et-model" {
+        "a board model"
+    } else {
+        "a table's model"
+    }
+}
+
+/// The fields that tell a model file's kind.
+fn fields_of(format: &str) -> &'static str {
+    if format == "et-model" {
+        "config, feature_index"
+    } else {
+        "feature_names, tables"
+    }
+}
+
 impl From<Mismatch> for ModelError {
     fn from(m: Mismatch) -> Self {
         ModelError::Mismatch(m)
@@ -178,7 +219,22 @@ impl Model {
                 path: path.into(),
                 error,
             })?;
-        match value.get("format").and_then(serde_json::Value::as_str) {
+        let format = value.get("format").and_then(serde_json::Value::as_str);
+        // Each kind's own fields: a board model's scan and frame indices, a table's tables.
+        let board_fields = value.get("feature_index").is_some() && value.get("config").is_some();
+        let table_fields = value.get("tables").is_some() && value.get("feature_names").is_some();
+        let other = |said, holds| ModelError::OtherFormat {
+            path: path.into(),
+            said,
+            holds,
+        };
+        match format {
+            Some("et-model") if table_fields && !board_fields => {
+                Err(other("et-model", "et-table-model"))
+            }
+            Some("et-table-model") if board_fields && !table_fields => {
+                Err(other("et-table-model", "et-model"))
+            }
             Some("et-model") => {
                 let file = ModelFile::from_value(path, value)?;
                 Ok(Self::board(file).map_err(|error| ModelFileError::Invalid {
@@ -192,7 +248,10 @@ impl Model {
                     source,
                 })?,
             ))),
-            _ => Err(ModelError::Format { path: path.into() }),
+            _ => Err(ModelError::Format {
+                path: path.into(),
+                found: crate::model_file::format_found(&value),
+            }),
         }
     }
 

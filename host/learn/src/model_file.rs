@@ -229,7 +229,10 @@ impl ModelFile {
         let format = value.get("format").and_then(serde_json::Value::as_str);
         let version = value.get("version").and_then(serde_json::Value::as_u64);
         if format != Some("et-model") || !matches!(version, Some(1 | 2)) {
-            return Err(ModelFileError::Format { path: path.into() });
+            return Err(ModelFileError::Format {
+                path: path.into(),
+                found: format_found(&value),
+            });
         }
         // Version 1 kept the centres in mm.
         if let Some(o) = value.as_object_mut() {
@@ -426,10 +429,15 @@ pub enum ModelFileError {
         source: serde_json::Error,
     },
     /// JSON, but not `"format": "et-model"` of version 1 or 2.
-    #[error("{}: not an et-model file of version 1 or 2", .path.display())]
+    #[error(
+        "{}: not an et-model file of version 1 or 2 ({found}; a later version is a newer et's)",
+        .path.display()
+    )]
     Format {
         /// The file.
         path: PathBuf,
+        /// What it says instead ([`format_found`]).
+        found: String,
     },
     /// The tables are not a usable model ([`ModelFile::validate`]).
     #[error("{}: {error}", .path.display())]
@@ -439,6 +447,23 @@ pub enum ModelFileError {
         /// Why.
         error: FitError,
     },
+}
+
+/// What a model file's JSON says of its format and version, for a message that refuses them:
+/// `"format": "et-model", "version": 99`, or `no "version"` (each value cut to 40 characters).
+#[must_use]
+pub fn format_found(value: &serde_json::Value) -> String {
+    let field = |key: &str| match value.get(key) {
+        Some(v) => {
+            let v = v.to_string();
+            match v.char_indices().nth(40) {
+                Some((at, _)) => format!("\"{key}\": {}...", &v[..at]),
+                None => format!("\"{key}\": {v}"),
+            }
+        }
+        None => format!("no \"{key}\""),
+    };
+    format!("{}, {}", field("format"), field("version"))
 }
 
 /// A JSON parser's error for people: what is wrong, then where for text that is not JSON

@@ -371,14 +371,19 @@ impl TableModel {
     /// # Errors
     /// As [`from_json`](Self::from_json).
     pub fn from_value(mut value: serde_json::Value) -> Result<Self, TableModelError> {
+        // The format and version first: a later version's fields are not this one's.
+        let format = value.get("format").and_then(serde_json::Value::as_str);
         let version = value.get("version").and_then(serde_json::Value::as_u64);
+        let known = version == Some(1) || version == Some(u64::from(TABLE_MODEL_VERSION));
+        if format != Some("et-table-model") || !known {
+            return Err(TableModelError::Format(crate::model_file::format_found(
+                &value,
+            )));
+        }
         if version == Some(1) {
             mm_names_to_metres(&mut value);
         }
         let mut m: TableModel = crate::model_file::from_value_named(value)?;
-        if m.format != "et-table-model" || !matches!(m.version, 1 | TABLE_MODEL_VERSION) {
-            return Err(TableModelError::Format);
-        }
         if m.version == 1 {
             m.migrate_to_metres();
         }
@@ -478,9 +483,9 @@ pub enum TableModelError {
     /// Not JSON, or not a table model's fields.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
-    /// Another format or version.
-    #[error("not an et-table-model file of version 1 or 2")]
-    Format,
+    /// Another format or version (what the file says instead).
+    #[error("not an et-table-model file of version 1 or 2 ({0}; a later version is a newer et's)")]
+    Format(String),
     /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
     #[error(transparent)]
     Tables(#[from] TablesError),

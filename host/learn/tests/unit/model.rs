@@ -221,6 +221,36 @@ fn a_file_of_neither_kind_is_refused_naming_it() {
         let e = Model::load(&path).unwrap_err();
         assert!(e.to_string().contains(name), "{e}");
     }
+    // What each damaged file is said to be: cut short, of a later version, or a format
+    // edited to the other kind's (it was read as that kind and said a field's type).
+    for (text, said) in [
+        (r#"{"format": "et-model""#, "the file ends inside its JSON"),
+        (
+            r#"{"format": "et-table-model", "version": 99, "tables": 1}"#,
+            r#"version 1 or 2 ("format": "et-table-model", "version": 99"#,
+        ),
+        (
+            r#"{"format": "et-model", "version": 3}"#,
+            r#""format": "et-model", "version": 3; a later version is a newer et's"#,
+        ),
+        (
+            r#"{"format": "xyz", "version": 2}"#,
+            r#"a table's model: "format": "xyz", "version": 2)"#,
+        ),
+        (
+            r#"{"format": "et-model", "version": 2, "feature_names": [], "tables": {}}"#,
+            r#"its "format" says "et-model" (a board model), but its fields (feature_names, tables) are those of a table's model, whose format is "et-table-model""#,
+        ),
+        (
+            r#"{"format": "et-table-model", "version": 2, "config": {}, "feature_index": []}"#,
+            r#"are those of a board model, whose format is "et-model""#,
+        ),
+    ] {
+        let path = dir.join("damaged.json");
+        std::fs::write(&path, text).unwrap();
+        let e = Model::load(&path).unwrap_err().to_string();
+        assert!(e.contains(said), "{text}: {e}");
+    }
     // A file that is not JSON at all (frames given as the model): said as not a model file,
     // with the place the text stops being JSON.
     let csv = dir.join("frames.csv");
