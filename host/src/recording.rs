@@ -554,4 +554,19 @@ impl Recording {
              file order"
         ))
     }
+
+    /// What a reader of this recording says before using it: a last line cut short and
+    /// skipped ([`Recording::truncated_tail`]), frames out of order ([`Recording::order_note`]).
+    #[must_use]
+    pub fn notes(&self) -> Vec<String> {
+        let cut = self.truncated_tail.then(|| {
+            format!(
+                "its last line was cut short (a recording stopped while it was written) and is \
+                 skipped: {} whole frame{} read",
+                self.records.len(),
+                if self.records.len() == 1 { "" } else { "s" }
+            )
+        });
+        cut.into_iter().chain(self.order_note()).collect()
+    }
 }

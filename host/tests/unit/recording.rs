@@ -102,6 +102,15 @@ fn round_trip_and_a_cut_tail_loses_only_the_last_frame() {
     let cut = read(&path).unwrap();
     assert_eq!(cut.records.len(), 4);
     assert!(cut.truncated_tail);
+    // And readers say so (et reconstruct --frames, et stream --replay print the notes).
+    assert!(rec.notes().is_empty());
+    assert!(
+        cut.notes()
+            .first()
+            .is_some_and(|n| n.contains("cut short") && n.contains("4 whole frames read")),
+        "{:?}",
+        cut.notes()
+    );
     // Damage elsewhere is an error naming the line.
     let text = std::fs::read_to_string(dir.join("a.jsonl"))
         .unwrap()

@@ -303,10 +303,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         (Some(f), None) => Some(recording::read(f)?),
         _ => None,
     };
-    if let Some(note) = recording
-        .as_ref()
-        .and_then(recording::Recording::order_note)
-    {
+    for note in recording.iter().flat_map(recording::Recording::notes) {
         say!(
             "note: {}: {note}",
             args.frames.as_deref().unwrap_or(Path::new("")).display()

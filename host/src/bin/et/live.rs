@@ -172,7 +172,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     }
     if let Source::Replay(r) = &mut source {
         r.looping = false;
-        if let Some(note) = r.recording.order_note() {
+        for note in r.recording.notes() {
             say!("note: {}: {note}", r.name);
         }
         // The reconstruction for the recording's scans, made before its first frame.
