@@ -61,12 +61,17 @@ pub enum FramesFault {
     #[error(transparent)]
     Records(#[from] et_core::text::RecordFault),
     /// A row of another length than the first.
-    #[error("{found} values, the first frame has {first}")]
+    #[error(
+        "{found} values, the first frame has {first}{}",
+        if *last { " (the file's last row: a copy cut short?)" } else { "" }
+    )]
     RowLength {
         /// The row's values.
         found: usize,
         /// The first row's.
         first: usize,
+        /// Whether it is the file's last row, short of values (a file cut short).
+        last: bool,
     },
     /// A cell that is not a number (column from 1).
     #[error("column {column}: '{cell}' is not a number")]
@@ -515,12 +520,13 @@ fn npy_matrix(archive: &Npz, name: &str) -> Result<DMatrix<f64>, NpzError> {
 /// Read record by record: what is kept is the numbers (8 bytes a value), not the cells.
 fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
     let lines = text::lines(text);
-    let mut records = text::RecordIter::new(&lines);
+    let records = text::RecordIter::new(&lines);
     let delimiter = records.delimiter;
     let mut values = Vec::new();
     let mut width = None;
     let mut n = 0;
-    for (i, record) in records.by_ref().enumerate() {
+    let mut records = records.enumerate().peekable();
+    while let Some((i, record)) = records.next() {
         let (line, cells) = record.map_err(|(line, f)| content(path, line, f.into()))?;
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
@@ -531,6 +537,7 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
             let fault = FramesFault::RowLength {
                 found: cells.len(),
                 first: w,
+                last: cells.len() < w && records.peek().is_none(),
             };
             return Err(content(path, line, fault));
         }

@@ -32,6 +32,13 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2\n3,nan\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("not finite"), "{e}");
+    // A short last row is said as a copy cut short; a short row before it is not.
+    for (text, cut) in [("1,2,3\n4,5,6\n7,8", true), ("1,2,3\n4,5\n7,8,9\n", false)] {
+        std::fs::write(&f, text).unwrap();
+        let e = read(&f, 3).unwrap_err().to_string();
+        assert!(e.contains("2 values, the first frame has 3"), "{e}");
+        assert_eq!(e.contains("cut short"), cut, "{e}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

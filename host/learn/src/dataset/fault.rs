@@ -31,8 +31,9 @@ pub enum DatasetFault {
     },
     /// A row of another length than the header (or the first row).
     #[error(
-        "{found} values, {} has {columns} columns",
-        if *header { "the header" } else { "the first row" }
+        "{found} values, {} has {columns} columns{}",
+        if *header { "the header" } else { "the first row" },
+        if *last { " (the file's last row: a copy cut short?)" } else { "" }
     )]
     RowLength {
         /// The row's values.
@@ -41,6 +42,8 @@ pub enum DatasetFault {
         columns: usize,
         /// Whether the file has a header row.
         header: bool,
+        /// Whether it is the file's last row, short of values (a file cut short).
+        last: bool,
     },
     /// A label cell left empty.
     #[error("empty label")]
@@ -97,6 +100,11 @@ pub enum DatasetFault {
     /// The first line is not an et dataset's.
     #[error("not an et dataset (expected '# et-dataset 2', or version 1)")]
     NotDataset,
+    /// An et dataset of a version this et does not read.
+    #[error(
+        "et-dataset version '{0}': this et reads versions 1 and 2 (a later one is a newer et's)"
+    )]
+    DatasetVersion(String),
     /// A column the format needs.
     #[error("column missing")]
     ColumnMissing,

@@ -199,6 +199,15 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let mut lines = text.lines().enumerate().peekable();
     match lines.next() {
         Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
+        Some((_, l)) if l.trim().starts_with("# et-dataset ") => {
+            let version = l.trim()["# et-dataset ".len()..].chars().take(40).collect();
+            return Err(content(
+                path,
+                1,
+                None,
+                DatasetFault::DatasetVersion(version),
+            ));
+        }
         _ => {
             return Err(content(path, 1, None, DatasetFault::NotDataset));
         }

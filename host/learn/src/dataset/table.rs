@@ -143,12 +143,13 @@ pub(super) fn parse_table(
     let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
     let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();
-    let body = head
+    let mut body = head
         .into_iter()
         .skip(usize::from(header))
         .map(Ok)
-        .chain(records.map(read));
-    for record in body {
+        .chain(records.map(read))
+        .peekable();
+    while let Some(record) = body.next() {
         let (i, cells) = record?;
         if cells.len() != names.len() {
             let (found, columns) = (cells.len(), names.len());
@@ -156,6 +157,7 @@ pub(super) fn parse_table(
                 found,
                 columns,
                 header,
+                last: found < columns && body.peek().is_none(),
             };
             return Err(content(path, i, None, fault));
         }

@@ -504,6 +504,23 @@ mod files {
         save_csv(&d, &path, "synthetic, seed 21").unwrap();
         let back = load_csv(&path).unwrap();
         assert_eq!(back.x, d.x, "features round-trip exactly");
+        // A copy cut short, and a later version, are said as that.
+        let text = std::fs::read_to_string(&path).unwrap();
+        let damaged = dir.join("damaged.csv");
+        for (text, said) in [
+            (
+                &text[..text.len() - 20],
+                "(the file's last row: a copy cut short?)",
+            ),
+            (
+                &text.replacen("# et-dataset 2", "# et-dataset 3", 1),
+                "et-dataset version '3': this et reads versions 1 and 2",
+            ),
+        ] {
+            std::fs::write(&damaged, text).unwrap();
+            let e = load_csv(&damaged).unwrap_err().to_string();
+            assert!(e.contains(said), "{e}");
+        }
         assert_eq!(back.baselines, d.baselines, "untouched frames too");
         for (a, b) in back.pressure.iter().zip(&d.pressure) {
             assert!((a - b).abs() < 1e-9);
