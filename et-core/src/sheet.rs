@@ -22,6 +22,7 @@ pub const SHEET_RESISTANCE: f64 = 30e3;
 #[serde(deny_unknown_fields, default)]
 pub struct ElectrodeSpec {
     /// Electrode count L (4 to 32).
+    #[serde(deserialize_with = "electrode_count")]
     pub count: u8,
     /// Width along the outline, m (a clip: about 5 mm).
     pub width: f64,
@@ -44,6 +45,14 @@ pub struct ElectrodeSpec {
     /// How et's finite elements model the electrodes when imaging (the simulator always
     /// models the contact over its width, as the fabric has it).
     pub model: ElectrodeModel,
+}
+
+/// An electrode count as a file or a caller gives it: any whole number is read, and one a
+/// count cannot be (negative, past 255) is said by the rule counts keep, not as the
+/// parser's "expected u8".
+fn electrode_count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u8, D::Error> {
+    let v = i128::deserialize(d)?;
+    u8::try_from(v).map_err(|_| serde::de::Error::custom(format_args!("{v} must be even, 4 to 32")))
 }
 
 /// The way electrode numbers run round the outline.
@@ -407,5 +416,19 @@ mod tests {
                 .to_string()
                 .contains("first_deg")
         );
+    }
+
+    /// A count no electrode count can be is said by the counts' rule, by every reader (a
+    /// scene's TOML, the Python module's JSON), not as the parser's "expected u8".
+    #[test]
+    fn an_electrode_count_past_a_byte_is_said_by_the_rule() {
+        for count in ["300", "-4", "1099511627776"] {
+            let e = serde_json::from_str::<ElectrodeSpec>(&format!(r#"{{"count": {count}}}"#))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{count} must be even, 4 to 32")), "{e}");
+        }
+        let read: ElectrodeSpec = serde_json::from_str(r#"{"count": 16}"#).unwrap();
+        assert_eq!(read.count, 16);
     }
 }

@@ -108,23 +108,32 @@ def _spec_json(spec: Dict[str, Any]) -> str:
     return json.dumps(spec)
 
 
+_COUNT_MOST = 2**64 - 1
+
+
 def _count(value: Any, what: str, least: int = 0) -> int:
-    """``value`` as a whole number of at least ``least``: a fraction, a negative number or a
-    boolean is refused by name rather than truncated or wrapped."""
+    """``value`` as a whole number of at least ``least`` (and at most 2^64 - 1, what the
+    native side's counts and seeds hold; each count's own bound is the native side's): a
+    fraction, a negative number, a boolean or a number too large is refused by name rather
+    than truncated, wrapped or raised as an ``OverflowError``."""
+    said = f"{what} = {value!r}: a whole number of at least {least}"
     if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
-        if value < least:
-            raise EtError(f"{what} = {value!r}: a whole number of at least {least}")
-        return int(value)
-    number = np.asarray(value)
-    if (
-        number.ndim != 0
-        or number.dtype.kind not in "iuf"
-        or not np.isfinite(number)
-        or number != np.round(number)
-        or number < least
-    ):
-        raise EtError(f"{what} = {value!r}: a whole number of at least {least}")
-    return int(number)
+        number = int(value)
+    else:
+        array = np.asarray(value)
+        if (
+            array.ndim != 0
+            or array.dtype.kind not in "iuf"
+            or not np.isfinite(array)
+            or array != np.round(array)
+        ):
+            raise EtError(said)
+        number = int(array)
+    if number < least:
+        raise EtError(said)
+    if number > _COUNT_MOST:
+        raise EtError(f"{what} = {value!r}: too large (at most 2^64 - 1)")
+    return number
 
 
 def _sheet(

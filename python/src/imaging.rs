@@ -23,7 +23,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// The schedule of a built-in protocol, or of rows (source, sink, positive, negative,
 /// 0-based) and their currents (A).
 fn schedule(
-    electrodes: u16,
+    electrodes: u64,
     protocol: Option<&str>,
     current_a: f64,
     rows: Option<PyReadonlyArray2<'_, i64>>,
@@ -70,6 +70,8 @@ fn schedule(
             })
         })
         .collect::<PyResult<Vec<Row>>>()?;
+    let electrodes = u16::try_from(electrodes)
+        .map_err(|_| usage(format!("{electrodes} electrodes: at most 65535")))?;
     Schedule::new(electrodes, rows).map_err(|e| refused(&e))
 }
 
@@ -95,7 +97,7 @@ fn schedule_table<'py>(py: Python<'py>, schedule: &Schedule) -> PyResult<Table<'
 fn protocol_table<'py>(
     py: Python<'py>,
     name: &str,
-    electrodes: u16,
+    electrodes: u64,
     current_a: f64,
 ) -> PyResult<Table<'py>> {
     schedule_table(
@@ -219,7 +221,7 @@ impl Reconstructor {
     fn new(
         py: Python<'_>,
         sheet_json: &str,
-        electrodes: u16,
+        electrodes: u64,
         protocol: Option<&str>,
         current_a: f64,
         rows: Option<PyReadonlyArray2<'_, i64>>,

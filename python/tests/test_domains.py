@@ -152,6 +152,12 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
     [
         (lambda: et.disc(0.1, 2.5), "electrodes = 2.5: a whole number"),
         (lambda: et.disc(0.1, -3), "electrodes = -3: a whole number of at least 0"),
+        (lambda: et.disc(0.1, 2**64), "electrodes = 18446744073709551616: too large (at most 2"),
+        (lambda: et.protocol("adjacent", 2**40), "1099511627776 electrodes: at most 255"),
+        (
+            lambda: et.Reconstructor(et.disc(0.1, 300), et.Protocol.from_rows([[0, 1, 2, 3]], 300)),
+            "electrodes.count: 300 must be even, 4 to 32",
+        ),
         (lambda: et.protocol("adjacent", 16.5), "electrodes = 16.5"),
         (lambda: et.disc(0.1, 16, direction="up"), "direction 'up': 'ccw' or 'cw'"),
         (lambda: et.rectangle(0.1, 0.1, 16, model="x"), "model 'x'"),
