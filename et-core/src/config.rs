@@ -18,19 +18,25 @@ pub const CURRENT_NA_MAX: u32 = 1_000_000;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ScanConfig {
     /// Electrode count L (even, 4 to 32).
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub electrodes: u8,
     /// Injection / measurement protocol (docs/method.md §4).
     pub protocol: ProtocolKind,
     /// Samples acquired per step, S / L (docs/method.md §3), `1..=SAMPLES_PER_STEP_MAX`.
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub samples_per_step: u16,
     /// t_s: samples dropped at the start of each step while the front end settles.
     /// Must leave at least one sample: `settle_samples < samples_per_step`.
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub settle_samples: u16,
     /// Injected current I in nA (10 000 to 32 000 in docs/method.md §2), `1..=CURRENT_NA_MAX`.
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub current_na: u32,
     /// ADC sample rate per channel in Hz (62 500 at the reference point).
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub sample_rate_hz: u32,
     /// Programmable gain of the instrumentation amplifier (1 = unity), at least 1.
+    #[serde(deserialize_with = "crate::whole::whole")]
     pub gain: u8,
 }
 

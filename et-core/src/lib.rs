@@ -50,6 +50,7 @@ pub mod stats;
 #[cfg(feature = "std")]
 pub mod text;
 pub mod time;
+pub mod whole;
 pub mod wire;
 
 pub use config::ScanConfig;

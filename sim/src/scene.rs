@@ -90,15 +90,19 @@ pub struct ScanSpec {
     /// The protocol: a built-in one's name, or a file of any system's measurements.
     pub protocol: ProtocolSpec,
     /// Samples per injection step (S / L).
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub samples_per_step: u16,
     /// t_s, samples dropped per step.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub settle_samples: u16,
     /// Injected current, uA (the simulated board drives up to 1 000; imaging recorded frames
     /// takes up to 50 000, a tank's milliamperes; a protocol file may give a current per row).
     pub current_ua: f64,
     /// Sample rate per channel, Hz.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub sample_rate_hz: u32,
     /// PGIA gain.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub gain: u8,
 }
 
@@ -237,7 +241,7 @@ pub struct Scene {
     #[serde(default)]
     pub description: String,
     /// Seed of every random draw (noise, electrode movement).
-    #[serde(default = "default_seed")]
+    #[serde(default = "default_seed", deserialize_with = "et_core::whole::whole")]
     pub seed: u64,
     /// The sheet.
     pub sheet: SheetSpec,
