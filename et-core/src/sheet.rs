@@ -51,7 +51,7 @@ pub struct ElectrodeSpec {
 /// count cannot be (negative, past 255) is said by the rule counts keep, not as the
 /// parser's "expected u8".
 fn electrode_count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u8, D::Error> {
-    let v = i128::deserialize(d)?;
+    let v = crate::whole::any_whole(d)?;
     u8::try_from(v).map_err(|_| serde::de::Error::custom(format_args!("{v} must be even, 4 to 32")))
 }
 

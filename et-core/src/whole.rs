@@ -3,6 +3,9 @@
 //! 65535"), not by the parser's name for the type ("invalid value: integer `70000`, expected
 //! u16"). Binary formats (the wire's postcard) read the field as they always have.
 
+use core::fmt;
+
+use serde::de::{Error, Visitor};
 use serde::{Deserialize, Deserializer};
 
 /// An unsigned integer type a file's field is read into, with its range.
@@ -18,7 +21,7 @@ macro_rules! whole {
         }
     )*};
 }
-whole!(u8, u16, u32, u64);
+whole!(u8, u16, u32, u64, usize);
 
 /// `#[serde(deserialize_with = "crate::whole::whole")]`: the field read as any integer in a
 /// human-readable format and refused by its type's range when it is past it; as the type
@@ -34,9 +37,44 @@ where
     if !d.is_human_readable() {
         return T::deserialize(d);
     }
-    let v = i128::deserialize(d)?;
-    T::try_from(v)
-        .map_err(|_| serde::de::Error::custom(format_args!("{v} is out of range: 0 to {}", T::MAX)))
+    let v = any_whole(d)?;
+    T::try_from(v).map_err(|_| Error::custom(format_args!("{v} is out of range: 0 to {}", T::MAX)))
+}
+
+/// Any integer a human-readable file holds, as i128, for a field that says its own range; any
+/// other value is "invalid type: ..., expected a whole number" (a string, a fraction, a list).
+///
+/// # Errors
+/// The format's error for a value that is not an integer.
+pub fn any_whole<'de, D: Deserializer<'de>>(d: D) -> Result<i128, D::Error> {
+    d.deserialize_any(AnyWhole)
+}
+
+/// [`any_whole`]'s visitor.
+struct AnyWhole;
+
+impl Visitor<'_> for AnyWhole {
+    type Value = i128;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a whole number")
+    }
+
+    fn visit_i64<E: Error>(self, v: i64) -> Result<i128, E> {
+        Ok(v.into())
+    }
+
+    fn visit_u64<E: Error>(self, v: u64) -> Result<i128, E> {
+        Ok(v.into())
+    }
+
+    fn visit_i128<E: Error>(self, v: i128) -> Result<i128, E> {
+        Ok(v)
+    }
+
+    fn visit_u128<E: Error>(self, v: u128) -> Result<i128, E> {
+        i128::try_from(v).map_err(|_| E::custom(format_args!("{v} is out of range")))
+    }
 }
 
 #[cfg(test)]

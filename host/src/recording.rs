@@ -41,12 +41,16 @@ fn units() -> String {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Column {
     /// Electrode the current enters.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub source: u8,
     /// Electrode the current leaves.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub sink: u8,
     /// Amplifier + input.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub positive: u8,
     /// Amplifier - input.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub negative: u8,
 }
 
@@ -71,6 +75,7 @@ pub struct Header {
     /// Always [`FORMAT`].
     pub format: String,
     /// [`VERSION`].
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub version: u32,
     /// What the numbers are in, for whoever opens the file ([`UNITS`]; files written before
     /// it was added read as the same).
@@ -79,11 +84,12 @@ pub struct Header {
     /// Where the frames come from (`sim:<scene file>`, `port:<path>`, ...).
     pub source: String,
     /// Electrode count L.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub electrodes: u8,
     /// Protocol name.
     pub protocol: String,
     /// Frame length K.
-    #[serde(rename = "K")]
+    #[serde(rename = "K", deserialize_with = "et_core::whole::whole")]
     pub frame_len: usize,
     /// Scan settings.
     pub config: ScanConfig,
@@ -141,12 +147,16 @@ pub struct TouchRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Record {
     /// Sequence number.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub seq: u32,
     /// Device time of the frame, us.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub t_us: u32,
     /// Frame flags (`et_core::wire::FLAG_*`).
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub flags: u8,
     /// Measurements with ADC rail samples.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub rail_count: u16,
     /// V_m, volts, K values. JSON has no NaN: a value the board sent as NaN or infinite is
     /// written as `null` and read back as NaN (Python's `None`, MATLAB's `NaN`), and its

@@ -45,7 +45,7 @@ pub struct ProtocolFile {
     /// The CSV, relative to the scene file.
     pub file: std::path::PathBuf,
     /// The number of the first electrode in the file: 0 (et's), or 1.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "et_core::whole::whole")]
     pub base: u16,
 }
 
@@ -211,6 +211,7 @@ pub enum FaultKind {
 #[serde(deny_unknown_fields)]
 pub struct Fault {
     /// The faulty electrode.
+    #[serde(deserialize_with = "et_core::whole::whole")]
     pub electrode: u8,
     /// What is wrong.
     pub kind: FaultKind,
