@@ -153,8 +153,10 @@ impl Header {
             lines.next();
             let meta = meta.trim();
             if let Some(json) = meta.strip_prefix("config:") {
+                // Parsed, then read with each field's name in its error.
                 config = Some(
                     serde_json::from_str(json.trim())
+                        .and_then(crate::model_file::from_value_named)
                         .map_err(|e| content(path, i + 1, None, DatasetFault::Config(e)))?,
                 );
             } else if let Some(list) = meta.strip_prefix("feature_index:") {
@@ -361,13 +363,12 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
     if z.text("format").map_err(bad)? != "et-dataset 1" {
         return Err(fault(DatasetFault::NotNpzDataset));
     }
-    let config: ScanConfig =
-        serde_json::from_str(&z.text("config").map_err(bad)?).map_err(|source| {
-            DatasetError::Json {
-                path: path.into(),
-                array: "config",
-                source,
-            }
+    let config: ScanConfig = serde_json::from_str(&z.text("config").map_err(bad)?)
+        .and_then(crate::model_file::from_value_named)
+        .map_err(|source| DatasetError::Json {
+            path: path.into(),
+            array: "config",
+            source,
         })?;
     let x = z.matrix("x").map_err(bad)?;
     let (n, p) = x.shape();

@@ -666,7 +666,7 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
             ),
             (
                 text.replace(config, &config.replace("\"gain\":1", "\"gain\":-1")),
-                "expected u8",
+                "config: gain: -1 is out of range: 0 to 255",
             ),
             (
                 text.lines()
