@@ -84,6 +84,10 @@ class Sheet:
 
     spec: Dict[str, Any]
 
+    def __post_init__(self) -> None:
+        # Checked where it is made, as a scene's [sheet] is, not first where it is used.
+        _native.check_sheet(_spec_json(self.spec))
+
     @property
     def electrodes(self) -> int:
         """How many electrodes it has."""

@@ -16,6 +16,7 @@ use crate::{array2, json, matrix, refused, slice, usage};
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(protocol_table, m)?)?;
     m.add_function(wrap_pyfunction!(scene_parts, m)?)?;
+    m.add_function(wrap_pyfunction!(check_sheet, m)?)?;
     m.add_class::<Reconstructor>()?;
     Ok(())
 }
@@ -213,6 +214,28 @@ pub(crate) struct Reconstructor {
     inner: et_recon::Reconstructor,
 }
 
+/// A sheet's spec (JSON the module wrote) read and checked as a scene's `[sheet]` is.
+fn sheet_of(sheet_json: &str) -> PyResult<Sheet> {
+    // Each field named by its place (`electrodes.direction: unknown variant ...`), not by a
+    // column of the JSON the module wrote.
+    let sheet: Sheet = serde_json::from_str(sheet_json)
+        .and_then(et_learn::model_file::from_value_named)
+        .map_err(|e| {
+            usage(format!(
+                "sheet: {}",
+                et_learn::model_file::json_said(&e, false)
+            ))
+        })?;
+    sheet.validate().map_err(|e| refused(&e))?;
+    Ok(sheet)
+}
+
+/// Checks a sheet where it is made (`et.disc`, `et.Sheet(spec)`), not first where it is used.
+#[pyfunction]
+fn check_sheet(sheet_json: &str) -> PyResult<()> {
+    sheet_of(sheet_json).map(|_| ())
+}
+
 #[pymethods]
 impl Reconstructor {
     #[new]
@@ -236,17 +259,7 @@ impl Reconstructor {
         noise_figure: Option<f64>,
         radius_m: Option<f64>,
     ) -> PyResult<Self> {
-        // Each field named by its place (`electrodes.direction: unknown variant ...`), not
-        // by a column of the JSON the module wrote.
-        let sheet: Sheet = serde_json::from_str(sheet_json)
-            .and_then(et_learn::model_file::from_value_named)
-            .map_err(|e| {
-                usage(format!(
-                    "sheet: {}",
-                    et_learn::model_file::json_said(&e, false)
-                ))
-            })?;
-        sheet.validate().map_err(|e| refused(&e))?;
+        let sheet = sheet_of(sheet_json)?;
         let schedule = schedule(electrodes, protocol, current_a, rows, currents)?;
         let method = match Method::from_name(method) {
             Some(Method::GaussNewton { .. }) => Method::GaussNewton { s, iterations },

@@ -154,6 +154,10 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
         (lambda: et.disc(0.1, -3), "electrodes = -3: a whole number of at least 0"),
         (lambda: et.disc(0.1, 2**64), "electrodes = 18446744073709551616: too large (at most 2"),
         (lambda: et.protocol("adjacent", 2**40), "1099511627776 electrodes: at most 255"),
+        # A sheet is checked where it is made, not first where a Reconstructor uses it.
+        (lambda: et.disc(-0.1), "radius = -0.1: must be a positive length"),
+        (lambda: et.disc(0.1, 7), "electrodes.count: 7 must be even, 4 to 32"),
+        (lambda: et.Sheet({"shape": {"kind": "disc", "radius": 0.1}, "sheet_resistance": -1.0}), "sheet_resistance"),
         (
             lambda: et.Reconstructor(et.disc(0.1, 300), et.Protocol.from_rows([[0, 1, 2, 3]], 300)),
             "electrodes.count: 300 must be even, 4 to 32",
