@@ -67,6 +67,26 @@ pub enum OutputError {
         /// Its folder.
         folder: PathBuf,
     },
+    /// `-`, which many tools take as standard output, and et would write as a file named `-`.
+    #[error(
+        "'-' as an output would be a file named '-', not standard output: give /dev/stdout for \
+         standard output, or ./- for a file of that name"
+    )]
+    Dash,
+    /// The output's folder takes no new file (read-only, not permitted, a virtual file system
+    /// such as /proc): found before the work, not after it.
+    #[error(
+        "{}: et cannot create a file in {} ({source}); give another folder",
+        .out.display(), .folder.display()
+    )]
+    Unwritable {
+        /// The output.
+        out: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+        /// Why a file could not be created there.
+        source: std::io::Error,
+    },
     /// Another writer created the output while et was writing it.
     #[error("{} appeared while et was writing it (another run writing the same file?); left it as it is, and et's result is not saved (run again, or --force to replace it)", .out.display())]
     Raced {
@@ -270,7 +290,15 @@ pub fn check_folder(out: &Path, force: bool) -> Result<(), OutputError> {
     check_at(out, &[], force, true)
 }
 
-fn check_at(out: &Path, inputs: &[&Path], force: bool, folder: bool) -> Result<(), OutputError> {
+fn check_at(
+    out: &Path,
+    inputs: &[&Path],
+    force: bool,
+    folder_out: bool,
+) -> Result<(), OutputError> {
+    if out == Path::new("-") {
+        return Err(OutputError::Dash);
+    }
     if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
         return Err(OutputError::Input {
             out: out.into(),
@@ -279,7 +307,7 @@ fn check_at(out: &Path, inputs: &[&Path], force: bool, folder: bool) -> Result<(
     }
     match occupant(out) {
         Occupant::Nothing => new_at_check(out),
-        Occupant::Stream if !folder => return Ok(()),
+        Occupant::Stream if !folder_out => return Ok(()),
         Occupant::Stream => {
             let what = "a device";
             return Err(OutputError::NotAFile {
@@ -287,8 +315,8 @@ fn check_at(out: &Path, inputs: &[&Path], force: bool, folder: bool) -> Result<(
                 what,
             });
         }
-        Occupant::File if folder => return Err(OutputError::NotAFolder { out: out.into() }),
-        Occupant::EmptyFolder | Occupant::Folder if !folder => {
+        Occupant::File if folder_out => return Err(OutputError::NotAFolder { out: out.into() }),
+        Occupant::EmptyFolder | Occupant::Folder if !folder_out => {
             // A file's output is never a folder, even with --force (its files are not et's).
             let what = "a folder";
             return Err(OutputError::NotAFile {
@@ -317,6 +345,20 @@ fn check_at(out: &Path, inputs: &[&Path], force: bool, folder: bool) -> Result<(
             out: out.into(),
             folder: folder.into(),
         });
+    }
+    if !folder_out {
+        // The file it will be written as, made and removed now: a folder that takes no new
+        // file is said before the work (a training of minutes), not when its result is lost.
+        let partial = partial_path(out);
+        std::fs::File::create_new(&partial)
+            .map(|_| {
+                let _ = std::fs::remove_file(&partial);
+            })
+            .map_err(|source| OutputError::Unwritable {
+                out: out.into(),
+                folder: folder.into(),
+                source,
+            })?;
     }
     Ok(())
 }

@@ -1055,6 +1055,38 @@ fn outputs_refuse_inputs_and_existing_files_without_force() {
             .status
             .success()
     );
+    // '-' (a file named '-' was written, where many tools write standard output), and a
+    // folder that takes no new file (said before the work, not when its result is lost:
+    // a training's model was lost after the training).
+    let dash = et(&[
+        "sim",
+        "--scene",
+        &p("s.toml"),
+        "--frames",
+        "2",
+        "--out",
+        "-",
+    ]);
+    let e = String::from_utf8_lossy(&dash.stderr);
+    assert!(
+        !dash.status.success() && e.contains("give /dev/stdout"),
+        "{e}"
+    );
+    #[cfg(target_os = "linux")]
+    {
+        let proc = et(&[
+            "sim",
+            "--scene",
+            &p("s.toml"),
+            "--out",
+            "/proc/et-out.jsonl",
+        ]);
+        let e = String::from_utf8_lossy(&proc.stderr);
+        assert!(
+            !proc.status.success() && e.contains("et cannot create a file in /proc"),
+            "{e}"
+        );
+    }
     // A name whose extension is neither a recording's nor a table's (a recording was
     // written as x.png), and a folder, even forced (it said "--force replaces it").
     let out = et(&[&sim[..], &[&p("x.png")]].concat());
