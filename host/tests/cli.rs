@@ -199,14 +199,19 @@ fn sim_writes_a_recording_that_python_reads() {
     let swipe_csv = dir.join("swipe.csv");
     std::fs::write(&swipe_csv, &csv).unwrap();
     let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
-    let from_csv = et(&[
-        "stream",
-        "--json",
-        "--replay",
-        swipe_csv.to_str().unwrap(),
-        "--scene",
-        scene.to_str().unwrap(),
-    ]);
+    // `et stream` replaying another system's frames of the swipe's scene.
+    let replay = |file: &std::path::Path, extra: &[&str]| {
+        let args = [
+            "stream",
+            "--json",
+            "--replay",
+            file.to_str().unwrap(),
+            "--scene",
+            scene.to_str().unwrap(),
+        ];
+        et(&[&args[..], extra].concat())
+    };
+    let from_csv = replay(&swipe_csv, &[]);
     assert!(
         from_csv.status.success(),
         "{}",
@@ -235,16 +240,7 @@ fn sim_writes_a_recording_that_python_reads() {
             "--frames 2 stopped it before the untouched reference (20 frames)",
         ),
     ] {
-        let short = short.to_str().unwrap();
-        let args = [
-            "stream",
-            "--json",
-            "--replay",
-            short,
-            "--scene",
-            scene.to_str().unwrap(),
-        ];
-        let e = et(&[&args[..], extra].concat());
+        let e = replay(&short, extra);
         let message = String::from_utf8_lossy(&e.stderr);
         assert!(!e.status.success() && message.contains(said), "{message}");
     }
@@ -258,16 +254,7 @@ fn sim_writes_a_recording_that_python_reads() {
         .map(|(_, l)| format!("{l}\n"))
         .collect();
     std::fs::write(&one, kept).unwrap();
-    let from_one = et(&[
-        "stream",
-        "--json",
-        "--replay",
-        one.to_str().unwrap(),
-        "--scene",
-        scene.to_str().unwrap(),
-        "--reference",
-        "1",
-    ]);
+    let from_one = replay(&one, &["--reference", "1"]);
     let (a, b) = (positions(&from_csv.stdout), positions(&from_one.stdout));
     assert_eq!(
         a.len(),

@@ -502,10 +502,12 @@ impl Noise {
             0.0
         };
         Ok(Some(Noise {
+            method: self.method,
+            alpha: self.alpha,
+            v0: self.v0.clone(),
             var_dv: vec![variance; dv.len()],
             inverse_sd: self.inverse_sd.iter().map(|i| i * scale).collect(),
             per_frame: false,
-            ..self.clone()
         }))
     }
 }

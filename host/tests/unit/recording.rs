@@ -111,26 +111,18 @@ fn round_trip_and_a_cut_tail_loses_only_the_last_frame() {
         "{:?}",
         cut.notes()
     );
-    // Damage elsewhere is an error naming the line.
-    let text = std::fs::read_to_string(dir.join("a.jsonl"))
-        .unwrap()
-        .replacen("\"seq\":1", "\"seq\":\"x\"", 1);
-    std::fs::write(&path, text).unwrap();
-    let err = read(&path).unwrap_err().to_string();
-    assert!(
-        err.contains("a.jsonl:3") && err.contains("invalid type: string \"x\""),
-        "{err}"
-    );
-    // A number past its field's type is said with the range, not as serde's "expected u32".
-    let text = std::fs::read_to_string(&path)
-        .unwrap()
-        .replacen("\"seq\":\"x\"", "\"seq\":-1", 1);
-    std::fs::write(&path, text).unwrap();
-    let err = read(&path).unwrap_err().to_string();
-    assert!(
-        err.contains("a.jsonl:3") && err.contains("-1 is out of range: 0 to 4294967295"),
-        "{err}"
-    );
+    // Damage elsewhere is an error naming the line, and the value: a number past its
+    // field's type is said with the range, not as serde's "expected u32".
+    let original = std::fs::read_to_string(&path).unwrap();
+    for (seq, said) in [
+        ("\"x\"", "invalid type: string \"x\""),
+        ("-1", "-1 is out of range: 0 to 4294967295"),
+    ] {
+        let text = original.replacen("\"seq\":1", &format!("\"seq\":{seq}"), 1);
+        std::fs::write(&path, text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(err.contains("a.jsonl:3") && err.contains(said), "{err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

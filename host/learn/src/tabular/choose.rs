@@ -20,6 +20,34 @@ pub const AVERAGE_MOST: usize = 3;
 /// single method's.
 pub const AVERAGE_GAIN: f64 = 0.02;
 
+/// The candidates that cross-validated, best first, and what their ranking says.
+///
+/// A candidate whose fit on every row fails (a covariance that cross-validated but is
+/// singular on the whole set) gives way to the next. Without groups (`grouped` false) nothing
+/// in the rows shows a new session, so regressors are ranked by their plain error and their
+/// error with the held-out channels drifted together (`Candidate::choice_loss`): a model that
+/// latches onto a few channels, or needs every channel as it was, loses there what it would
+/// lose on a new session, and one that holds but is coarse loses by its plain error; `auto`
+/// then puts the steadiest of the close ones first ([`steadiest_close`]).
+pub(super) fn rank(
+    search: &[Candidate],
+    choice: Choice,
+    grouped: bool,
+) -> (Vec<&Candidate>, Vec<String>) {
+    let by_drift = !grouped;
+    let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
+    ranked.sort_by(|a, b| a.choice_loss(by_drift).total_cmp(&b.choice_loss(by_drift)));
+    let mut notes: Vec<String> = drift_note(&ranked, by_drift).into_iter().collect();
+    if !grouped
+        && choice == Choice::Auto
+        && let Some((steadier, why)) = steadiest_close(&ranked, by_drift)
+    {
+        notes.push(why);
+        ranked.insert(0, steadier);
+    }
+    (ranked, notes)
+}
+
 /// Without groups: among the best of each method within [`CLOSE`] of the best error, the one
 /// whose error varies least over the recording's blocks, with why, when it is not the best.
 pub(super) fn steadiest_close<'a>(
@@ -206,4 +234,24 @@ pub(super) fn block_errors(
             .map(|s| s.0 / s.1 as f64)
             .collect(),
     )
+}
+
+/// When no candidate could be fitted: why, in the methods' words (a class of one row, values
+/// beyond single precision), each reason once with the methods that gave it.
+pub(super) fn nothing_fitted(search: &[Candidate]) -> Option<TabularError> {
+    let mut why: Vec<(String, Vec<&str>)> = Vec::new();
+    for c in search {
+        let Some(failure) = &c.failure else { continue };
+        let name = c.method.name();
+        match why.iter_mut().find(|(f, _)| f == failure) {
+            Some((_, methods)) if !methods.contains(&name) => methods.push(name),
+            Some(_) => {}
+            None => why.push((failure.clone(), vec![name])),
+        }
+    }
+    let said: Vec<String> = why
+        .iter()
+        .map(|(f, methods)| format!("{}: {f}", methods.join(", ")))
+        .collect();
+    (!said.is_empty()).then(|| TabularError::NothingFitted(said.join("; ")))
 }

@@ -153,26 +153,8 @@ pub fn train(
         (targets.as_deref(), classes.as_ref()),
         progress,
     )?;
-    // Best first; a candidate whose fit on every row fails (a covariance that cross-validated
-    // but is singular on the whole set) gives way to the next. Without groups nothing in the
-    // rows shows a new session, so regressors are ranked by their plain error and their error
-    // with the held-out channels drifted together (`Candidate::choice_loss`): a model that
-    // latches onto a few channels, or needs every channel as it was, loses there what it would
-    // lose on a new session, and one that holds but is coarse loses by its plain error.
     let by_drift = !cv.grouped;
-    let mut ranked: Vec<&Candidate> = search.iter().filter(|c| c.loss().is_finite()).collect();
-    ranked.sort_by(|a, b| a.choice_loss(by_drift).total_cmp(&b.choice_loss(by_drift)));
-    let mut notes: Vec<String> = Vec::new();
-    if let Some(note) = drift_note(&ranked, by_drift) {
-        notes.push(note);
-    }
-    if !cv.grouped
-        && choice == Choice::Auto
-        && let Some(steadier) = steadiest_close(&ranked, by_drift)
-    {
-        notes.push(steadier.1);
-        ranked.insert(0, steadier.0);
-    }
+    let (mut ranked, mut notes) = rank(&search, choice, cv.grouped);
     let average = match (&targets, choice) {
         (Some(t), Choice::Auto) if opts.grid.is_none() => average_of_best(
             &ranked,
@@ -250,26 +232,6 @@ pub fn train(
         per_group: opts.per_group,
         reference: None,
     })
-}
-
-/// When no candidate could be fitted: why, in the methods' words (a class of one row, values
-/// beyond single precision), each reason once with the methods that gave it.
-fn nothing_fitted(search: &[Candidate]) -> Option<TabularError> {
-    let mut why: Vec<(String, Vec<&str>)> = Vec::new();
-    for c in search {
-        let Some(failure) = &c.failure else { continue };
-        let name = c.method.name();
-        match why.iter_mut().find(|(f, _)| f == failure) {
-            Some((_, methods)) if !methods.contains(&name) => methods.push(name),
-            Some(_) => {}
-            None => why.push((failure.clone(), vec![name])),
-        }
-    }
-    let said: Vec<String> = why
-        .iter()
-        .map(|(f, methods)| format!("{}: {f}", methods.join(", ")))
-        .collect();
-    (!said.is_empty()).then(|| TabularError::NothingFitted(said.join("; ")))
 }
 
 /// QDA at shrinkage 1 toward the pooled covariance gives every class the pooled covariance,
