@@ -20,3 +20,20 @@ pub fn one_line(e: &anyhow::Error) -> String {
     }
     message
 }
+
+/// Whether the error is, at its root, a write to a pipe whose reader went away (`et sim --out
+/// /dev/stdout | head`): a command ends quietly then, as Unix tools do, instead of calling the
+/// reader's choice to stop an error. Looks through the chain, and into JSON's error, which
+/// keeps the I/O error it wraps out of the chain.
+#[must_use]
+pub fn reader_went_away(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            || cause
+                .downcast_ref::<serde_json::Error>()
+                .and_then(serde_json::Error::io_error_kind)
+                == Some(std::io::ErrorKind::BrokenPipe)
+    })
+}

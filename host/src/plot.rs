@@ -94,9 +94,20 @@ pub fn write_png(
         png::ColorType::Rgb
     });
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| fail(path, e))?;
-    writer.write_image_data(pixels).map_err(|e| fail(path, e))?;
-    writer.finish().map_err(|e| fail(path, e))
+    let mut writer = encoder.write_header().map_err(|e| encoding(path, e))?;
+    writer
+        .write_image_data(pixels)
+        .map_err(|e| encoding(path, e))?;
+    writer.finish().map_err(|e| encoding(path, e))
+}
+
+/// The encoder's error, its file system error kept as one (the encoder's hides it from
+/// `source`, so a closed pipe would not be seen as one).
+fn encoding(path: &Path, e: png::EncodingError) -> PlotError {
+    match e {
+        png::EncodingError::IoError(io) => fail(path, io),
+        other => fail(path, other),
+    }
 }
 
 /// Reads a PNG of 8-bit RGB, RGBA, grey or grey-alpha pixels: its width, height and RGB

@@ -1770,21 +1770,59 @@ label,x_mm,y_mm,visit,v0,v3,v3b
 }
 
 /// A reader that stops early (`et protocol --json | head`) ends et quietly: it used to panic
-/// ("failed printing to stdout: Broken pipe").
+/// ("failed printing to stdout: Broken pipe"). So does an output file given as `/dev/stdout`
+/// (`et sim --out /dev/stdout | head`, a model, an image): it ended "error: writing
+/// /dev/stdout: Broken pipe", exit 1.
 #[test]
 fn a_closed_pipe_ends_et_quietly() {
     use std::process::Stdio;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
-        .args(["protocol", "-l", "32", "-p", "pp-pp", "--json"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/square-13cm-16.toml");
+    let scene = scene.to_str().unwrap();
+    let dir = std::env::temp_dir().join(format!("et-cli-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (f, t) = (dir.join("F.csv"), dir.join("T.csv"));
+    et_learn::standin::make(60, 3, 5)
+        .unwrap()
+        .write_all(&f, &t, None)
         .unwrap();
-    // 105 kB of JSON: more than a pipe holds, so et is still writing when the reader goes.
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success() && !err.contains("panicked"), "{err}");
+    let (f, t) = (f.to_str().unwrap(), t.to_str().unwrap());
+    let stdout = "/dev/stdout";
+    for args in [
+        // 105 kB of JSON: more than a pipe holds, so et is still writing when the reader goes.
+        &["protocol", "-l", "32", "-p", "pp-pp", "--json"][..],
+        &["sim", "--scene", scene, "--frames", "50", "--out", stdout],
+        &["reconstruct", "--scene", scene, "--out", stdout],
+        &[
+            "collect", "--scene", scene, "--grid", "3x3", "--out", stdout,
+        ],
+        &[
+            "train",
+            "--features",
+            f,
+            "--targets",
+            t,
+            "--kind",
+            "ridge",
+            "--out",
+            stdout,
+        ],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && !err.contains("panicked") && !err.contains("error:"),
+            "{args:?}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Another lab's e-skin data through the whole CLI path: the stand-in written as that lab

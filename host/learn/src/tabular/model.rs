@@ -489,8 +489,9 @@ pub enum TableModelError {
     /// The tables disagree in shape, hold a non-finite value, or do not fit the method.
     #[error(transparent)]
     Tables(#[from] TablesError),
-    /// The file could not be written or read.
-    #[error(transparent)]
+    /// The file could not be written or read (said as the system says it, and kept as the
+    /// cause, so a closed pipe is seen as one).
+    #[error("{0}")]
     Io(#[from] std::io::Error),
 }
 

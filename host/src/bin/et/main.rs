@@ -347,6 +347,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if et_host::message::reader_went_away(&e) => ExitCode::SUCCESS,
         Err(e) => {
             say!("error: {}", et_host::message::one_line(&e));
             ExitCode::FAILURE
