@@ -76,12 +76,14 @@ pub enum OutputError {
     /// The output's folder takes no new file (read-only, not permitted, a virtual file system
     /// such as /proc): found before the work, not after it.
     #[error(
-        "{}: et cannot create a file in {} ({source}); give another folder",
+        "{}: et cannot create a {kind} in {} ({source}); give another folder",
         .out.display(), .folder.display()
     )]
     Unwritable {
         /// The output.
         out: PathBuf,
+        /// "file", or "folder" for a report folder.
+        kind: &'static str,
         /// Its folder.
         folder: PathBuf,
         /// Why a file could not be created there.
@@ -324,7 +326,7 @@ fn check_at(
                 what,
             });
         }
-        Occupant::EmptyFolder => return Ok(()),
+        Occupant::EmptyFolder => {}
         Occupant::Other(what) => {
             return Err(OutputError::NotAFile {
                 out: out.into(),
@@ -346,21 +348,29 @@ fn check_at(
             folder: folder.into(),
         });
     }
-    if !folder_out {
-        // The file it will be written as, made and removed now: a folder that takes no new
-        // file is said before the work (a training of minutes), not when its result is lost.
+    // The file it will be written as (or the report folder) made and removed now: a folder
+    // that takes no new file is said before the work (a training of minutes), not when its
+    // result is lost.
+    let (made, kind, folder) = if folder_out && out.is_dir() {
+        // A report folder that is there (empty, or replaced with --force): its files are
+        // written inside it.
+        let probe = out.join(format!(".et-probe-{}", std::process::id()));
+        let made = std::fs::File::create_new(&probe).and_then(|_| std::fs::remove_file(&probe));
+        (made, "file", out)
+    } else if folder_out {
+        let made = std::fs::create_dir(out).and_then(|()| std::fs::remove_dir(out));
+        (made, "folder", folder)
+    } else {
         let partial = partial_path(out);
-        std::fs::File::create_new(&partial)
-            .map(|_| {
-                let _ = std::fs::remove_file(&partial);
-            })
-            .map_err(|source| OutputError::Unwritable {
-                out: out.into(),
-                folder: folder.into(),
-                source,
-            })?;
-    }
-    Ok(())
+        let made = std::fs::File::create_new(&partial).and_then(|_| std::fs::remove_file(&partial));
+        (made, "file", folder)
+    };
+    made.map_err(|source| OutputError::Unwritable {
+        out: out.into(),
+        kind,
+        folder: folder.into(),
+        source,
+    })
 }
 
 /// [`check`] for every output of one command at once, before any work: each against every

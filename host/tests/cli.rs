@@ -1073,6 +1073,13 @@ fn outputs_refuse_inputs_and_existing_files_without_force() {
             !proc.status.success() && e.contains("et cannot create a file in /proc"),
             "{e}"
         );
+        // A report folder likewise (it said "/proc/et-report/: No such file or directory").
+        let report = et(&["demo", "--out", "/proc/et-report"]);
+        let e = String::from_utf8_lossy(&report.stderr);
+        assert!(
+            !report.status.success() && e.contains("et cannot create a folder in /proc"),
+            "{e}"
+        );
     }
     // A name whose extension is neither a recording's nor a table's (a recording was
     // written as x.png), and a folder, even forced (it said "--force replaces it").
