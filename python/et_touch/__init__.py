@@ -29,7 +29,7 @@ import os
 import re
 import threading
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -880,6 +880,7 @@ def train(
     raw: bool = False,
     keep: Optional[int] = None,
     budget_s: Optional[float] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Model:
     """Trains a model (et's Trainer; runs without the GIL).
 
@@ -900,7 +901,15 @@ def train(
     ``keep`` (only the best features), ``seed`` (the stratified folds' shuffle); its
     cross-validation leaves one visit out, so ``groups``, ``cv``, ``grid``, ``per_group`` and
     ``budget_s`` (for arrays) are refused.
+
+    ``progress``: a callable taking ``(what, done, total)``, called at every step (``what``
+    changes as each stage starts; ``total`` 0 where steps are not counted), as ``et train``
+    shows its progress; the Gaussian process and the perceptron say their estimated time in
+    ``what`` before their work (``progress=lambda what, done, total: print(what)``). An
+    exception it raises stops the calls and is raised when the training ends.
     """
+    if progress is not None and not callable(progress):
+        raise EtError(f"progress: a callable taking (what, done, total), not {type(progress).__name__}")
     if isinstance(X, (str, os.PathLike)):
         X = read_dataset(X)
     if isinstance(X, Dataset):
@@ -920,7 +929,9 @@ def train(
                 "sessions (its cross-validation leaves one out) and its grid is its classes"
             )
         return Model(
-            _native.train_dataset(X, kind, shrinkage, folds, raw, keep, _count(seed, "seed"))
+            _native.train_dataset(
+                X, kind, shrinkage, folds, raw, keep, _count(seed, "seed"), progress
+            )
         )
     if y is None:
         raise EtError("give y: n labels, or n x 2 positions (m)")
@@ -938,7 +949,7 @@ def train(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
-            3600.0 if budget_s is None else float(budget_s),
+            3600.0 if budget_s is None else float(budget_s), progress,
         )
     )
 

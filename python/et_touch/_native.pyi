@@ -3,7 +3,7 @@ functions take C-contiguous float64 arrays (et_touch makes them so) and return s
 JSON text, with the `et` command's field names. Shapes: K values a frame, T triangles, L
 electrodes, n rows; units SI (m, V, A, S per square)."""
 
-from typing import List, Optional, Tuple
+from typing import Any, Callable, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -153,6 +153,7 @@ def train_table(
     seed: int,
     label_type: Optional[str] = None,
     budget_s: float = 3600.0,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Model: ...
 def train_dataset(
     dataset: Dataset,
@@ -161,6 +162,8 @@ def train_dataset(
     folds: Optional[int],
     raw: bool,
     keep: Optional[int],
+    seed: int,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Model: ...
 def read_recording(path: str) -> Tuple[str, F64, I64, I64, I64, str, bool]: ...
 def read_frames(path: str, k: int) -> Tuple[F64, str]: ...

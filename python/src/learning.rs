@@ -91,7 +91,7 @@ fn table(
 
 /// Trains on any sensor's table (arrays); see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None, budget_s=et_learn::tabular::BUDGET_S))]
+#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None, budget_s=et_learn::tabular::BUDGET_S, progress=None))]
 fn train_table(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
@@ -106,6 +106,7 @@ fn train_table(
     seed: u64,
     label_type: Option<String>,
     budget_s: f64,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Model> {
     if !(budget_s.is_finite() && budget_s > 0.0) {
         return Err(usage(format!(
@@ -127,9 +128,7 @@ fn train_table(
         budget_s,
         ..Trainer::default()
     };
-    let mut trained = py
-        .detach(|| trainer.train(Examples::Table(&table), |_| {}))
-        .map_err(|e| refused(&e))?;
+    let mut trained = train_telling(py, &trainer, Examples::Table(&table), progress)?;
     // The labels' type, so that predictions give them back as they were given.
     if let et_learn::model::Model::Table(t) = &mut trained.model
         && let Some(c) = &mut t.classes
@@ -141,7 +140,7 @@ fn train_table(
 
 /// Trains QDA or LDA for the board on an et dataset; see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (dataset, kind, shrinkage, folds, raw, keep, seed))]
+#[pyo3(signature = (dataset, kind, shrinkage, folds, raw, keep, seed, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn train_dataset(
     py: Python<'_>,
@@ -152,6 +151,7 @@ fn train_dataset(
     raw: bool,
     keep: Option<usize>,
     seed: u64,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Model> {
     let trainer = Trainer {
         method: choice(kind)?,
@@ -165,10 +165,33 @@ fn train_dataset(
     trainer.board_kind().map_err(|e| refused(&e))?;
     let data = &dataset.inner;
     // The trainer refuses a model the board (or any reader of model files) would refuse.
-    let trained = py
-        .detach(|| trainer.train(Examples::Dataset(data), |_| {}))
-        .map_err(|e| refused(&e))?;
+    let trained = train_telling(py, &trainer, Examples::Dataset(data), progress)?;
     Ok(Model::new(trained.model))
+}
+
+/// Trains without the GIL, calling `progress(what, done, total)` (when given) at each step:
+/// a new `what` as each stage starts, the estimated time of the long ones in it. The first
+/// exception the callable raises stops the calls, and is raised when the training ends.
+fn train_telling(
+    py: Python<'_>,
+    trainer: &Trainer,
+    examples: Examples<'_>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<et_learn::trainer::Trained> {
+    let folds = trainer.dataset_folds();
+    let mut raised: Option<PyErr> = None;
+    let trained = py.detach(|| {
+        trainer.train(examples, |stage| {
+            if let (Some(callable), None) = (&progress, &raised) {
+                let (what, done, total) = stage.said(folds);
+                raised = Python::attach(|py| callable.call1(py, (what, done, total)).err());
+            }
+        })
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    trained.map_err(|e| refused(&e))
 }
 
 /// A trained model: QDA or LDA for the board (et's model file), or a table's model.

@@ -2,6 +2,7 @@
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -120,3 +121,25 @@ def test_bad_training_input_is_refused(table):
             et.train(data, **given)
     with pytest.raises(et.EtError, match="only a board model"):
         et.train(data.x, data.positions_m, kind="ridge").export_blob()
+
+
+def test_training_tells_its_progress_and_estimate(table):
+    """`progress` is called at each step, as `et train` shows it: the Gaussian process says
+    its estimated time before its work (Python said nothing before a long training)."""
+    data, _, _ = table
+    calls = []
+    et.train(data.x, data.positions_m, kind="gp", progress=lambda *a: calls.append(a))
+    assert calls and all(0 <= done <= total or total == 0 for _, done, total in calls)
+    assert re.search(r"cross-validating gp .*about \d+ s", calls[0][0]), calls[0]
+    steps = []
+    et.train(data, progress=lambda what, done, total: steps.append(what))
+    assert any("choosing the shrinkage" in s for s in steps), steps
+
+    def fails(*_):
+        raise KeyError("from the callable")
+
+    # Its exception is raised, not lost; something not callable is refused by name.
+    with pytest.raises(KeyError, match="from the callable"):
+        et.train(data.x, data.positions_m, kind="ridge", progress=fails)
+    with pytest.raises(et.EtError, match="progress: a callable"):
+        et.train(data.x, data.positions_m, kind="ridge", progress="yes")

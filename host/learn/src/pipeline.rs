@@ -240,6 +240,35 @@ pub enum Stage {
     Final,
 }
 
+impl Stage {
+    /// The stage in words, for a progress display; `folds` the k of the k-fold
+    /// cross-validation.
+    #[must_use]
+    pub fn said(self, folds: usize) -> String {
+        match self {
+            Self::Statistics => "each fold's statistics".to_string(),
+            Self::Candidate {
+                index,
+                of,
+                shrinkage,
+                by_visit,
+            } => format!(
+                "choosing the shrinkage: {shrinkage} ({} of {of}), {}",
+                index + 1,
+                if by_visit {
+                    "leave-one-visit-out".to_string()
+                } else {
+                    format!("{folds}-fold")
+                }
+            ),
+            Self::Final => format!(
+                "fitting the model beside its {folds}-fold and leave-one-visit-out \
+                 cross-validations"
+            ),
+        }
+    }
+}
+
 /// [`train`], calling `report` as each [`Stage`] starts.
 ///
 /// # Errors

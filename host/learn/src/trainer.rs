@@ -223,7 +223,43 @@ impl BoardTraining {
     }
 }
 
+impl Progress<'_> {
+    /// The stage in words and how far it is (done of total; 0 of 0 where nothing is
+    /// counted), as a progress display shows it; `folds` the k of an et dataset's k-fold
+    /// ([`Trainer::dataset_folds`]). A table's Gaussian process and perceptron say their
+    /// estimated time here before their work.
+    #[must_use]
+    pub fn said(&self, folds: usize) -> (String, usize, usize) {
+        match *self {
+            Self::RawFrames => (
+                "the dataset has no untouched frames: training on raw frames".to_string(),
+                0,
+                0,
+            ),
+            Self::Preparing { rows, features } => (
+                format!("preparing {rows} observations x {features} features"),
+                0,
+                0,
+            ),
+            Self::Dataset(stage) => {
+                let (done, of) = match stage {
+                    Stage::Candidate { index, of, .. } => (index, of),
+                    Stage::Statistics | Stage::Final => (0, 0),
+                };
+                (stage.said(folds), done, of)
+            }
+            Self::Table(what, done, of) => (what.to_string(), done, of),
+        }
+    }
+}
+
 impl Trainer {
+    /// The folds of the cross-validation reported on an et dataset: `folds`, or 10.
+    #[must_use]
+    pub fn dataset_folds(&self) -> usize {
+        self.folds.unwrap_or(10)
+    }
+
     /// QDA (shrinkage and folds as docs/method.md §9) on et datasets.
     #[must_use]
     pub fn qda() -> Self {
@@ -305,7 +341,7 @@ impl Trainer {
             &TrainOptions {
                 kind,
                 shrinkage: self.shrinkage,
-                folds: self.folds.unwrap_or(10),
+                folds: self.dataset_folds(),
                 seed: self.seed,
             },
             |stage| progress(Progress::Dataset(stage)),

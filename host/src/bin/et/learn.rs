@@ -200,7 +200,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
     if let Some(curve) = &args.curve {
         output::check_format(curve, "the learning curve (PNG)", &["png"])?;
     }
-    let folds = args.folds.unwrap_or(10);
+    let folds = trainer.dataset_folds();
     // Each stage on one line that updates in place, with the time so far (stderr, and only
     // on a terminal: scripts and --json see nothing of it). Cleared on every way out.
     let spinner = ProgressBar::new_spinner().with_style(
@@ -226,7 +226,7 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
                 "preparing {rows} observations x {features} features"
             ));
         }
-        Progress::Dataset(stage) => spinner.set_message(training_stage(stage, folds)),
+        Progress::Dataset(stage) => spinner.set_message(stage.said(folds)),
         Progress::Table(..) => {}
     });
     spinner.finish_and_clear();
@@ -260,7 +260,7 @@ fn print_trained(
     let (referenced, mm, classes) = (file.referenced, &file.board_positions(), data.centres.len());
     let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
     let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);
-    let folds = args.folds.unwrap_or(10);
+    let folds = args.trainer()?.dataset_folds();
     let summary = TrainSummary {
         out: &args.out,
         kind,
@@ -323,30 +323,6 @@ fn print_trained(
         }
     }
     Ok(())
-}
-
-/// The spinner's line for a stage of training on an et dataset.
-fn training_stage(stage: pipeline::Stage, folds: usize) -> String {
-    match stage {
-        pipeline::Stage::Statistics => "each fold's statistics".to_string(),
-        pipeline::Stage::Candidate {
-            index,
-            of,
-            shrinkage,
-            by_visit,
-        } => format!(
-            "choosing the shrinkage: {shrinkage} ({} of {of}), {}",
-            index + 1,
-            if by_visit {
-                "leave-one-visit-out".to_string()
-            } else {
-                format!("{folds}-fold")
-            }
-        ),
-        pipeline::Stage::Final => format!(
-            "fitting the model beside its {folds}-fold and leave-one-visit-out cross-validations"
-        ),
-    }
 }
 
 /// `et train --json`.
