@@ -827,8 +827,7 @@ class Model:
             return positions
         if names is None:
             return classes
-        label_type = (self.info.get("classes") or {}).get("label_type")
-        return _as_given(names, label_type)[classes]
+        return _as_given(names, self._native.label_type)[classes]
 
     def predict_positions(self, X: Any, v0: Any = None) -> Optional[np.ndarray]:
         """Each row's position, n x 2 (m): a regressor's estimate, a classifier's class centre

@@ -272,6 +272,17 @@ impl Model {
         self.inner.as_board().is_some()
     }
 
+    /// A table classifier's label type as given ("int", "float", "bool", "str"; None when
+    /// not recorded, or not a table classifier), so predictions give labels back as given
+    /// without writing the whole model file out for each call.
+    #[getter]
+    fn label_type(&self) -> Option<String> {
+        match &self.inner {
+            Estimator::Table(t) => t.classes.as_ref()?.label_type.clone(),
+            Estimator::Board(_) => None,
+        }
+    }
+
     /// The model file's content (JSON).
     fn file_json(&self) -> PyResult<String> {
         match &self.inner {
