@@ -164,7 +164,8 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     let before = std::fs::read(&protocol).unwrap();
     std::fs::create_dir_all(d.join("sub")).unwrap();
     let other = d.join("sub/../protocol.csv");
-    for args in [
+    #[allow(unused_mut)]
+    let mut writers = vec![
         vec![
             "sim",
             "--scene",
@@ -191,7 +192,18 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             protocol.to_str().unwrap(),
             "--force",
         ],
-    ] {
+    ];
+    // The viewer's screenshot too (it listed the scene but not the files it names).
+    #[cfg(feature = "viewer")]
+    writers.push(vec![
+        "view",
+        "--scene",
+        scene_path.to_str().unwrap(),
+        "--screenshot",
+        protocol.to_str().unwrap(),
+        "--force",
+    ]);
+    for args in writers {
         let out = et(&args);
         assert!(!out.status.success(), "{args:?}");
         let text = String::from_utf8_lossy(&out.stderr);

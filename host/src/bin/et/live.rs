@@ -114,11 +114,18 @@ pub(crate) struct StreamArgs {
 #[cfg(feature = "viewer")]
 pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
     if let Some(png) = &args.screenshot {
-        let inputs: Vec<&std::path::Path> =
+        // The scene's own named files (its protocol file) too; a scene that does not load
+        // is said where the viewer reads it.
+        let named = (args.source.scene.as_deref())
+            .and_then(|s| et_sim::scene::Scene::load(s).ok())
+            .map(|s| s.files())
+            .unwrap_or_default();
+        let mut inputs: Vec<&std::path::Path> =
             [&args.source.scene, &args.source.replay, &args.source.model]
                 .into_iter()
                 .filter_map(|p| p.as_deref())
                 .collect();
+        inputs.extend(named.iter().map(PathBuf::as_path));
         crate::output::check(png, &inputs, force)?;
         crate::output::check_format(png, "the screenshot (PNG)", &["png"])?;
     }
