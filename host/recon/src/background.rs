@@ -85,6 +85,15 @@ pub fn one_value(v: &[f64]) -> Option<f64> {
 /// What is said of a frame of one value (`value` in every entry).
 #[must_use]
 pub fn not_measured_said(value: f64) -> String {
+    // Frames are read in single precision: say such a value as it was written (0.01, not
+    // 0.009999999776482582).
+    #[allow(clippy::cast_possible_truncation)]
+    let single = value as f32;
+    let value = if f64::from(single) == value {
+        single.to_string()
+    } else {
+        value.to_string()
+    };
     format!(
         "is {value} in every entry: not measured voltages (a column of another quantity, \
          frames from a DAQ that was not running, or an empty recording?)"

@@ -88,3 +88,19 @@ fn contact_only_where_the_frame_shows_it_and_a_reversed_frame_refused() {
     assert!(et_recon::background::fit(&guess, &mesh, &off_drive, &v0[1..]).is_err());
     assert!(et_recon::background::fit(&guess, &mesh, &off_drive, &vec![0.0; v0.len()]).is_err());
 }
+
+/// A frame of one value is said as it was written: frames are read in single precision, so
+/// 0.01 arrives as 0.009999999776482582, which the message printed.
+#[test]
+fn a_frame_of_one_value_says_the_value_as_written() {
+    for (value, said) in [
+        (f64::from(0.01_f32), "is 0.01 in every entry"),
+        (0.01, "is 0.01 in every entry"),
+        (0.0, "is 0 in every entry"),
+        (1e-7, "is 0.0000001 in every entry"),
+        (0.1 + 0.2, "is 0.30000000000000004 in every entry"),
+    ] {
+        let text = not_measured_said(value);
+        assert!(text.contains(said), "{value}: {text}");
+    }
+}
