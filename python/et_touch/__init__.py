@@ -28,6 +28,7 @@ import json
 import os
 import re
 import threading
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -36,8 +37,20 @@ import numpy as np
 from . import _native
 from ._native import Dataset, EtError
 
+
+class EtWarning(UserWarning):
+    """What et says of a call it carries out, where the result may not be what was meant."""
+
+
+#: How far the untouched frame may be from the model's frame of the sheet (a factor either
+#: way) before a Reconstructor not fitted to the frames says so: frames simulated from the
+#: sheet's own values are within 4 % of it (every scene in sim/scenes), a real tank's against
+#: a disc's default values 40 times it.
+SCALE_SAID = 1.25
+
 __all__ = [
     "EtError",
+    "EtWarning",
     "Sheet",
     "disc",
     "rectangle",
@@ -60,10 +73,28 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 def _f64(a: Any, ndim: int, what: str) -> np.ndarray:
     """`a` as a C-contiguous float64 array of `ndim` dimensions: no copy when it already is."""
-    out = np.ascontiguousarray(a, dtype=np.float64)
+    out = _numbers(a, what)
     if out.ndim != ndim:
         raise EtError(f"{what}: {out.ndim}-D array of shape {out.shape}; expected {ndim}-D")
     return out
+
+
+def _numbers(a: Any, what: str) -> np.ndarray:
+    """`a` as a C-contiguous float64 array of any shape: no copy when it already is. Complex
+    values are refused (their imaginary part would be dropped with only NumPy's warning), and
+    what NumPy cannot make numbers of is said with the argument's name."""
+    try:
+        given = np.asarray(a)
+        if np.iscomplexobj(given):
+            raise EtError(
+                f"{what}: complex values; give the part your system images: the real part "
+                "(np.real), the magnitude (np.abs) or the quadrature (np.imag)"
+            )
+        return np.ascontiguousarray(given, dtype=np.float64)
+    except EtError:
+        raise
+    except (TypeError, ValueError) as e:
+        raise EtError(f"{what}: not an array of numbers ({e})") from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -604,10 +635,26 @@ class Reconstructor:
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None
 
-    @staticmethod
-    def _frames(v0: Any) -> np.ndarray:
-        v0 = np.asarray(v0, dtype=np.float64)
-        return _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
+    def _frames(self, v0: Any, fitting: bool = False) -> np.ndarray:
+        """The untouched frame(s) as n x K, said when far from the model's frame of the sheet
+        and not being fitted to."""
+        v0 = _numbers(v0, "v0")
+        frames = _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
+        if frames.size and not fitting and not self._native.background_fitted:
+            scale = self._native.scale_of(frames)
+            # (Below 0 it runs against the model, which the reference's check refuses.)
+            if scale is not None and 0 < scale and not 1 / SCALE_SAID <= scale <= SCALE_SAID:
+                spec = self.sheet.spec
+                warnings.warn(
+                    f"the untouched frame is {scale:.2g} times the model's frame of the sheet "
+                    f"(sheet_resistance {spec['sheet_resistance']:.4g} ohm/sq, contact_ohm "
+                    f"{spec['electrodes']['contact_ohm']:.4g}, the protocol's currents): "
+                    "the images' values (peaks, z) come out about as many times theirs; "
+                    "fit_background(v0) fits the sheet to the frames, as et reconstruct does",
+                    EtWarning,
+                    stacklevel=3,
+                )
+        return frames
 
     def set_reference(self, v0: Any) -> None:
         """Sets the untouched frame ``v0`` (K values), or several (n x K: their mean is V_0 and
@@ -668,7 +715,7 @@ class Reconstructor:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``
         and images about them from then on (as `et reconstruct` does for measured frames); the
         fit as `et reconstruct --json`'s ``background``."""
-        return json.loads(self._native.fit_background(self._frames(v0)))
+        return json.loads(self._native.fit_background(self._frames(v0, fitting=True)))
 
     def forward(self, sigma: Any) -> np.ndarray:
         """The frame (K values, V) of conductivity ``sigma``: one per triangle, or one number

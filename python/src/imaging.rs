@@ -139,10 +139,10 @@ fn scene_parts<'py>(
 /// et's frames are.
 fn reference_of(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<Reference> {
     let (values, n, k) = matrix(frames, "v0")?;
-    let frames: Vec<Vec<f32>> = values
+    let frames: Vec<Vec<f32>> = single(values, "v0")?
         .chunks(k.max(1))
         .take(n)
-        .map(|f| f.iter().map(|&v| v as f32).collect())
+        .map(<[f32]>::to_vec)
         .collect();
     Reference::from_frames(&frames).map_err(|e| refused(&e))
 }
@@ -170,12 +170,36 @@ type BatchParts<'py> = (
 /// Frames (n x K, V) in single precision, as et's frames are, with n and K.
 fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, usize, usize)> {
     let (values, n, k) = matrix(frames, "V")?;
-    let frames = values
+    let frames = single(values, "V")?
         .chunks(k.max(1))
         .take(n)
-        .map(|f| f.iter().map(|&v| v as f32).collect())
+        .map(<[f32]>::to_vec)
         .collect();
     Ok((frames, n, k))
+}
+
+/// Voltages `what` in single precision, as et's frames are (the board's, and every
+/// reader's). A finite value past its range (it would become infinite: "NaN or infinite"
+/// was said of 1e300), or values all below its normal range (they would become zeros: "0 in
+/// every entry"), are refused as not volts; NaN and infinity pass, to be said where frames
+/// are checked.
+fn single(values: &[f64], what: &str) -> PyResult<Vec<f32>> {
+    let largest = f64::from(f32::MAX);
+    if let Some(v) = values.iter().find(|v| v.is_finite() && v.abs() > largest) {
+        return Err(usage(format!(
+            "{what}: {v:e} is past single precision (at most {largest:.1e}), in which et takes \
+             frames: not volts?"
+        )));
+    }
+    let least = f64::from(f32::MIN_POSITIVE);
+    if values.iter().any(|v| *v != 0.0) && values.iter().all(|v| v.abs() < least) {
+        return Err(usage(format!(
+            "{what}: every value is below {least:.1e}, the least of single precision, in \
+             which et takes frames: not volts?"
+        )));
+    }
+    #[allow(clippy::cast_possible_truncation)]
+    Ok(values.iter().map(|&v| v as f32).collect())
 }
 
 /// One frame's objects and touches (`objects_batch`), as `image`'s summary names them.
@@ -297,7 +321,7 @@ impl Reconstructor {
         reference: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<ImageParts<'py>> {
         // As et's frames are: single precision (the board's, and every reader's).
-        let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
+        let frame = single(slice(&frame, "v")?, "v")?;
         let reference = reference.as_ref().map(reference_of).transpose()?;
         let inner = &mut self.inner;
         let image = py
@@ -361,7 +385,7 @@ impl Reconstructor {
         py: Python<'py>,
         frame: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<PixelParts<'py>> {
-        let frame: Vec<f32> = slice(&frame, "v")?.iter().map(|&v| v as f32).collect();
+        let frame = single(slice(&frame, "v")?, "v")?;
         let inner = &mut self.inner;
         let (w, h) = (inner.grid().width, inner.grid().height);
         let sigma0 = inner.imager().sigma0;
@@ -463,6 +487,19 @@ impl Reconstructor {
     fn set_reference(&mut self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
         let reference = reference_of(&reference)?;
         self.inner.set_reference(reference).map_err(|e| refused(&e))
+    }
+
+    /// Whether the background was fitted (`fit_background`).
+    #[getter]
+    fn background_fitted(&self) -> bool {
+        self.inner.background_fitted()
+    }
+
+    /// How many times the model's frame of the untouched sheet the mean of the untouched
+    /// `reference` frames (n x K, V) is (least squares); None when the model's frame is zero.
+    fn scale_of(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<f64>> {
+        let v0 = reference_of(&reference)?.v0;
+        Ok(self.inner.scale_of(&v0))
     }
 
     /// Fits the background (sheet resistance, contact) to the untouched `reference` frames

@@ -1,6 +1,8 @@
 """Imaging from Python against `et reconstruct` and `et forward` on the same input, and the
 finite-element model against physics it must obey."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -242,6 +244,40 @@ def test_bad_input_is_refused_with_ets_message(disc):
         et.Reconstructor(et.disc(0.065, 16), et.Protocol.from_rows([[0, 0, 2, 3]], 16))
     with pytest.raises(et.EtError, match="alpha 'much'"):
         et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16), alpha="much")
+
+
+def test_frames_that_are_not_volts_are_refused_or_said(disc):
+    """A reference given with the frame is checked as one set once (an all-zero or negated
+    one was imaged); frames that are not voltages in single precision, or complex, are refused
+    by name; untouched frames far from the model's frame of the sheet are said, until the
+    background is fitted to them."""
+    v0 = disc.forward(disc.sigma0)
+    v = v0 * 1.001
+    with pytest.raises(et.EtError, match="is 0 in every entry"):
+        disc.image(v, np.zeros_like(v0))
+    with pytest.raises(et.EtError, match="runs against the model"):
+        disc.image(v, -v0)
+    with pytest.raises(et.EtError, match="v: complex values"):
+        disc.image(v * (1 + 0j), v0)
+    with pytest.raises(et.EtError, match="v0: not an array of numbers"):
+        disc.image(v, [list(v0), list(v0[:-1])])
+    with pytest.raises(et.EtError, match="past single precision"):
+        disc.image(v * 1e300, v0 * 1e300)
+    with pytest.raises(et.EtError, match="below 1.2e-38"):
+        disc.image(v * 1e-300, v0 * 1e-300)
+    # Its own frames are 1 times its model's: nothing said. In mV they are 1 000 times: said,
+    # with the image's values 1 000 times (what the warning says), until the fit.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        in_v = disc.image(v, v0).pixels
+    with pytest.warns(et.EtWarning, match="1e\\+03 times the model's frame"):
+        in_mv = disc.image(v * 1e3, v0 * 1e3).pixels
+    np.testing.assert_allclose(np.nanmax(np.abs(in_mv)), 1e3 * np.nanmax(np.abs(in_v)), rtol=0.05)
+    r = et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16), triangles=1200)
+    r.fit_background(v0 * 1e3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        r.image(v * 1e3, v0 * 1e3)
 
 
 def test_arrays_of_any_layout_are_taken(disc):

@@ -87,6 +87,8 @@ pub fn one_value(v: &[f64]) -> Option<f64> {
 pub fn not_measured_said(value: f64) -> String {
     // Frames are read in single precision: say such a value as it was written (0.01, not
     // 0.009999999776482582).
+    // (-0 is said as 0.)
+    let value = value + 0.0;
     #[allow(clippy::cast_possible_truncation)]
     let single = value as f32;
     let value = if f64::from(single) == value {

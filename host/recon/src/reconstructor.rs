@@ -295,6 +295,29 @@ impl Reconstructor {
         Ok(fit)
     }
 
+    /// Whether the background was fitted to measured frames
+    /// ([`Reconstructor::fit_background`]); if not, the sheet's given resistances are imaged
+    /// about.
+    #[must_use]
+    pub fn background_fitted(&self) -> bool {
+        self.mismatch.is_some()
+    }
+
+    /// How many times the model's frame of the untouched sheet the untouched frame `v0` (K
+    /// values, V) is: the least-squares s of v0 = s V_m, V_m the frame at the background.
+    /// About 1 when the sheet's resistances are the frames' (a fitted background, or frames
+    /// simulated from the same values); frames s times the model's come from a sheet of s
+    /// times its resistance (or s times its current), and the images' values (Delta sigma /
+    /// sigma_0, the peaks, z) come out about s times theirs until the background is fitted.
+    /// None when the model's frame is zero.
+    #[must_use]
+    pub fn scale_of(&self, v0: &[f64]) -> Option<f64> {
+        let model = &self.jac.frame;
+        let mm: f64 = model.iter().map(|m| m * m).sum();
+        let vm: f64 = v0.iter().zip(model).map(|(v, m)| v * m).sum();
+        (mm > 0.0).then(|| vm / mm)
+    }
+
     /// The sheet imaged: the spec's, or with the fitted background
     /// ([`Reconstructor::fit_background`]).
     #[must_use]
@@ -414,9 +437,12 @@ impl Reconstructor {
     ///
     /// # Errors
     /// [`ReconError::FrameLength`] for a frame or reference not of K values,
-    /// [`ReconError::NonFinite`] for NaN or infinity in them; a failed solve.
+    /// [`ReconError::NonFinite`] for NaN or infinity in them; a reference of one value or
+    /// one running against the model's frame of the untouched sheet (as
+    /// [`Reconstructor::set_reference`] refuses); a failed solve.
     pub fn image(&mut self, frame: &[f32], reference: &Reference) -> Result<Image, ImagingError> {
         let dv = self.difference(frame, reference)?;
+        self.runs_with_the_model(&reference.v0)?;
         self.image_dv(dv, &reference.var_dv)
     }
 

@@ -53,20 +53,21 @@ impl Reconstructor {
     /// Whether `v0` (K values, V) runs with the model's frame of the untouched sheet: their
     /// correlation sum_k v0_k m_k / (|v0| |m|) positive. Frames of the other sign (a polarity
     /// or a drive swapped) image every touch as its opposite; one of a single value (all zero,
-    /// a constant) is no measurement. One forward solve.
+    /// a constant) is no measurement. The model's frame is the one the Jacobian was made at:
+    /// K products, no solve.
     ///
     /// # Errors
     /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceAgainstModel`] naming
-    /// the correlation; [`ImagingError::Fem`].
-    fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
-        let model = (self.imager.forward).frame(&self.imager.background(), &self.schedule)?;
+    /// the correlation.
+    pub(super) fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
+        let model = &self.jac.frame;
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let (a, b) = (norm(v0), norm(&model));
+        let (a, b) = (norm(v0), norm(model));
         if let Some(value) = crate::background::one_value(v0) {
             return Err(ImagingError::ReferenceNotMeasured(value));
         }
         let r =
-            v0.iter().zip(&model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE);
+            v0.iter().zip(model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE);
         if r <= 0.0 {
             return Err(ImagingError::ReferenceAgainstModel(format!(
                 "runs against the model's frame of the untouched sheet (their correlation is \

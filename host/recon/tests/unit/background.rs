@@ -97,6 +97,7 @@ fn a_frame_of_one_value_says_the_value_as_written() {
         (f64::from(0.01_f32), "is 0.01 in every entry"),
         (0.01, "is 0.01 in every entry"),
         (0.0, "is 0 in every entry"),
+        (-0.0, "is 0 in every entry"),
         (1e-7, "is 0.0000001 in every entry"),
         (0.1 + 0.2, "is 0.30000000000000004 in every entry"),
     ] {
