@@ -94,6 +94,20 @@ pub enum FramesFault {
         /// Its column.
         column: usize,
     },
+    /// Values that single precision, in which et takes frames, cannot hold ([`Single`]; the
+    /// row and column from 0 of a value past its range).
+    #[error("{}", match fault {
+        Single::Past(_) => format!("row {row}, column {column}: {fault}"),
+        Single::Below => fault.to_string(),
+    })]
+    NotSingle {
+        /// What single precision cannot hold.
+        fault: Single,
+        /// The row of the value past its range.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
     /// Neither dimension is the protocol's K.
     #[error(
         "{rows} x {columns} values: the protocol has K = {k} values per frame, so one dimension \
@@ -468,6 +482,11 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             FramesFault::NotFinite { value, row, column },
         ));
     }
+    if let Some((i, fault)) = Single::check(matrix.as_slice()) {
+        let (row, column) = (i % rows.max(1), i / rows.max(1));
+        let fault = FramesFault::NotSingle { fault, row, column };
+        return Err(content(&path, 0, fault));
+    }
     let by_rows = cols == k;
     let by_columns = !by_rows && rows == k;
     if !by_rows && !by_columns {
@@ -504,6 +523,42 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         frames,
         description,
     })
+}
+
+/// Voltages single precision cannot hold: et takes frames in it (the board's, and every
+/// reader's), and such values are not volts (a unit or a column mistaken).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Single {
+    /// A finite value past its range: it would become infinite.
+    #[error(
+        "{0:e} is past single precision (at most 3.4e38), in which et takes frames: not volts?"
+    )]
+    Past(f64),
+    /// Every value below its normal range, one at least not zero: they would become zeros (or
+    /// keep a few bits).
+    #[error(
+        "every value is below 1.2e-38, the least of single precision, in which et takes frames: \
+         not volts?"
+    )]
+    Below,
+}
+
+impl Single {
+    /// The first fault of `values` and the index of the value it is in (0 for
+    /// [`Single::Below`]), or None when single precision holds them. NaN and infinity pass:
+    /// they are said where values are checked for being finite.
+    #[must_use]
+    pub fn check(values: &[f64]) -> Option<(usize, Self)> {
+        let largest = f64::from(f32::MAX);
+        if let Some((i, &value)) =
+            (values.iter().enumerate()).find(|(_, v)| v.is_finite() && v.abs() > largest)
+        {
+            return Some((i, Self::Past(value)));
+        }
+        let least = f64::from(f32::MIN_POSITIVE);
+        (values.iter().any(|v| *v != 0.0) && values.iter().all(|v| v.abs() < least))
+            .then_some((0, Self::Below))
+    }
 }
 
 /// A 1-D array as one row, a 2-D one as it is.

@@ -139,7 +139,7 @@ fn scene_parts<'py>(
 /// et's frames are.
 fn reference_of(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<Reference> {
     let (values, n, k) = matrix(frames, "v0")?;
-    let frames: Vec<Vec<f32>> = single(values, "v0")?
+    let frames: Vec<Vec<f32>> = single(values, k, "v0")?
         .chunks(k.max(1))
         .take(n)
         .map(<[f32]>::to_vec)
@@ -170,7 +170,7 @@ type BatchParts<'py> = (
 /// Frames (n x K, V) in single precision, as et's frames are, with n and K.
 fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, usize, usize)> {
     let (values, n, k) = matrix(frames, "V")?;
-    let frames = single(values, "V")?
+    let frames = single(values, k, "V")?
         .chunks(k.max(1))
         .take(n)
         .map(<[f32]>::to_vec)
@@ -179,25 +179,21 @@ fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, us
 }
 
 /// Voltages `what` in single precision, as et's frames are (the board's, and every
-/// reader's). A finite value past its range (it would become infinite: "NaN or infinite"
-/// was said of 1e300), or values all below its normal range (they would become zeros: "0 in
-/// every entry"), are refused as not volts; NaN and infinity pass, to be said where frames
-/// are checked.
-fn single(values: &[f64], what: &str) -> PyResult<Vec<f32>> {
-    let largest = f64::from(f32::MAX);
-    if let Some(v) = values.iter().find(|v| v.is_finite() && v.abs() > largest) {
-        return Err(usage(format!(
-            "{what}: {v:e} is past single precision (at most {largest:.1e}), in which et takes \
-             frames: not volts?"
-        )));
-    }
-    let least = f64::from(f32::MIN_POSITIVE);
-    if values.iter().any(|v| *v != 0.0) && values.iter().all(|v| v.abs() < least) {
-        return Err(usage(format!(
-            "{what}: every value is below {least:.1e}, the least of single precision, in \
-             which et takes frames: not volts?"
-        )));
-    }
+/// reader's): values it cannot hold are refused as a frames file's are
+/// ([`et_host::frames::Single`]: 1e300 was said as "NaN or infinite", 1e-300 as "0 in every
+/// entry").
+fn single(values: &[f64], k: usize, what: &str) -> PyResult<Vec<f32>> {
+    use et_host::frames::Single;
+    match Single::check(values) {
+        Some((i, fault @ Single::Past(_))) if values.len() > k => Err(usage(format!(
+            "{what}[{}, {}]: {fault}",
+            i / k.max(1),
+            i % k.max(1)
+        ))),
+        Some((i, fault @ Single::Past(_))) => Err(usage(format!("{what}[{i}]: {fault}"))),
+        Some((_, fault)) => Err(usage(format!("{what}: {fault}"))),
+        None => Ok(()),
+    }?;
     #[allow(clippy::cast_possible_truncation)]
     Ok(values.iter().map(|&v| v as f32).collect())
 }
@@ -321,7 +317,8 @@ impl Reconstructor {
         reference: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<ImageParts<'py>> {
         // As et's frames are: single precision (the board's, and every reader's).
-        let frame = single(slice(&frame, "v")?, "v")?;
+        let frame = slice(&frame, "v")?;
+        let frame = single(frame, frame.len(), "v")?;
         let reference = reference.as_ref().map(reference_of).transpose()?;
         let inner = &mut self.inner;
         let image = py
@@ -385,7 +382,8 @@ impl Reconstructor {
         py: Python<'py>,
         frame: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<PixelParts<'py>> {
-        let frame = single(slice(&frame, "v")?, "v")?;
+        let frame = slice(&frame, "v")?;
+        let frame = single(frame, frame.len(), "v")?;
         let inner = &mut self.inner;
         let (w, h) = (inner.grid().width, inner.grid().height);
         let sigma0 = inner.imager().sigma0;

@@ -32,6 +32,20 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2\n3,nan\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("not finite"), "{e}");
+    // Values single precision cannot hold are said where they are (1e300 was imaged as a
+    // reference of 0 values; 1e-300 everywhere as frames of zeros); at its bounds, taken.
+    std::fs::write(&f, "1,2\n3,1e300\n").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("row 1, column 1: 1e300 is past single precision"),
+        "{e}"
+    );
+    std::fs::write(&f, "1e-300,-2e-300\n0,1e-39\n").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("every value is below 1.2e-38"), "{e}");
+    std::fs::write(&f, "3.4e38,-1.2e-38\n0,1e-300\n").unwrap();
+    let r = read(&f, 2).unwrap();
+    assert_eq!(r.frames[0], vec![3.4e38_f32, -1.2e-38_f32]);
     // A short last row is said as a copy cut short; a short row before it is not.
     for (text, cut) in [("1,2,3\n4,5,6\n7,8", true), ("1,2,3\n4,5\n7,8,9\n", false)] {
         std::fs::write(&f, text).unwrap();

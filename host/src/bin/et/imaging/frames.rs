@@ -179,14 +179,19 @@ pub(super) fn table_frames(
         None => {
             let count = reference_count(args, &path.display().to_string(), n)?;
             let before = frames.frames.get(..count.min(n)).unwrap_or_default();
-            (
-                // An empty reference is refused by `chosen` below with the reason.
-                et_recon::Reference::from_frames(before).unwrap_or(et_recon::Reference {
+            // An empty reference is refused by `chosen` below with the reason; any other
+            // fault of the frames is said (a value past single precision was said as a
+            // reference of 0 values).
+            let reference = if before.is_empty() {
+                et_recon::Reference {
                     v0: Vec::new(),
                     var_dv: Vec::new(),
-                }),
-                count,
-            )
+                }
+            } else {
+                et_recon::Reference::from_frames(before)
+                    .with_context(|| format!("{}: the reference frames", path.display()))?
+            };
+            (reference, count)
         }
     };
     let range = chosen(args, &path.display().to_string(), first, n)?;
