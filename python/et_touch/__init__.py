@@ -87,7 +87,7 @@ def _numbers(a: Any, what: str) -> np.ndarray:
         given = np.asarray(a)
         if np.iscomplexobj(given):
             raise EtError(
-                f"{what}: complex values; give the part your system images: the real part "
+                f"{what}: complex values; give real ones, the part you mean: the real part "
                 "(np.real), the magnitude (np.abs) or the quadrature (np.imag)"
             )
         return np.ascontiguousarray(given, dtype=np.float64)
@@ -777,8 +777,14 @@ class Reconstructor:
 # Learning
 
 
-def _labels(y: np.ndarray) -> List[str]:
-    return [str(v.item() if hasattr(v, "item") else v) for v in y]
+def _labels(y: np.ndarray, what: str, noun: str) -> List[str]:
+    """Labels (or groups) as text; a missing one (None or NaN, as pandas marks them) is
+    refused by its row rather than made a class of its own."""
+    values = [v.item() if hasattr(v, "item") else v for v in y]
+    for i, v in enumerate(values):
+        if v is None or (isinstance(v, float) and v != v):
+            raise EtError(f"{what}[{i}] is {v}: a missing {noun}; drop its row, or give it one")
+    return [str(v) for v in values]
 
 
 def _label_type(y: Any) -> str:
@@ -822,10 +828,10 @@ def _targets(y: Any) -> Tuple[Optional[List[str]], Optional[np.ndarray]]:
     if y is None:
         return None, None
     a = np.asarray(y)
-    if a.ndim == 2 and a.dtype.kind in "fiu":
+    if a.ndim == 2 and a.dtype.kind in "fiuc":
         return None, _f64(a, 2, "y")
     if a.ndim == 1:
-        return _labels(a), None
+        return _labels(a, "y", "label"), None
     raise EtError(f"y: shape {a.shape}; give n labels or n x 2 positions (m)")
 
 
@@ -891,7 +897,7 @@ class Model:
         if isinstance(X, Dataset):
             return json.loads(self._native.evaluate_dataset(X))
         labels, positions = _targets(y)
-        groups = None if groups is None else _labels(np.asarray(groups))
+        groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
         return json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
 
     def save(self, path: PathLike) -> None:
@@ -976,7 +982,8 @@ def train(
             )
         return Model(
             _native.train_dataset(
-                X, kind, shrinkage, folds, raw, keep, _count(seed, "seed"), progress
+                X, kind, shrinkage, None if folds is None else _count(folds, "folds"), raw,
+                None if keep is None else _count(keep, "keep"), _count(seed, "seed"), progress,
             )
         )
     if y is None:
@@ -989,11 +996,12 @@ def train(
             "cv='blocks' with groups: with groups, cross-validation leaves one group out; "
             "give one or the other"
         )
-    groups = None if groups is None else _labels(np.asarray(groups))
+    groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
     grid_pair = None if grid is None else (_count(grid[0], "grid rows"), _count(grid[1], "grid columns"))
     return Model(
         _native.train_table(
-            _f64(X, 2, "X"), labels, positions, groups, kind, folds, cv, grid_pair,
+            _f64(X, 2, "X"), labels, positions, groups, kind,
+            None if folds is None else _count(folds, "folds"), cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
             3600.0 if budget_s is None else float(budget_s), progress,
         )

@@ -234,3 +234,23 @@ def test_what_a_call_cannot_use_is_refused_not_ignored():
     r.image(v0 * 1.001, v0)
     with pytest.raises(et.EtError, match=r"dv\[0\] = NaN"):
         r.frame_median(np.full(len(v0), np.nan), 3)
+
+
+def test_training_arrays_are_checked_as_a_tables_cells_are():
+    """What a table's reader refuses is refused from arrays too, by row and name: a feature
+    not finite (an infinity was trained on), a missing label or group (None and NaN became
+    classes of their own), complex targets, folds that are not a count (an OverflowError)."""
+    rng = np.random.default_rng(5)
+    x, y = rng.standard_normal((60, 4)), np.arange(60) % 3
+    bad = x.copy()
+    bad[19, 3] = np.inf
+    with pytest.raises(et.EtError, match="row 19, feature 3: inf, where a finite number belongs"):
+        et.train(bad, y, kind="lda")
+    with pytest.raises(et.EtError, match=r"y\[2\] is nan: a missing label"):
+        et.train(x, np.where(np.arange(60) == 2, np.nan, y.astype(float)), kind="lda")
+    with pytest.raises(et.EtError, match=r"groups\[0\] is None: a missing group"):
+        et.train(x, y, kind="lda", groups=[None] + [1] * 59)
+    with pytest.raises(et.EtError, match="y: complex values"):
+        et.train(x, rng.standard_normal((60, 2)) * (1 + 1j), kind="ridge")
+    with pytest.raises(et.EtError, match="folds = -1: a whole number"):
+        et.train(x, y, kind="lda", folds=-1)

@@ -71,7 +71,7 @@ pub enum TabularError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Misuse {
-    /// A feature value to predict from that is NaN or infinite.
+    /// A feature value to train on or predict from that is NaN or infinite.
     #[error("row {row}, feature {column}: {value}, where a finite number belongs")]
     NonFiniteFeature {
         /// Its row (0-based among those given).
@@ -93,9 +93,10 @@ pub enum Misuse {
     },
     /// A training estimated to take longer than its budget.
     #[error(
-        "{what} would take about {estimate_s:.0} s, past the budget of {budget_s:.0} s: train \
+        "{what} would take about {} s, past the budget of {} s: train \
          on fewer rows (--rows) or features, choose a faster kind (ridge, knn, kernel-ridge), \
-         or raise the budget (--max-minutes, budget_s=)"
+         or raise the budget (--max-minutes, budget_s=)",
+        seconds_said(*.estimate_s), seconds_said(*.budget_s)
     )]
     OverBudget {
         /// What was estimated.
@@ -273,8 +274,38 @@ pub enum Misuse {
     },
 }
 
+/// Seconds as a person reads them: whole from 10 s, two significant digits below (a budget
+/// of 1e-9 s was said as "0 s", past an estimate of "0 s").
+fn seconds_said(s: f64) -> String {
+    if s >= 10.0 || s <= 0.0 || !s.is_finite() {
+        format!("{s:.0}")
+    } else if s >= 1e-3 {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let decimals = (1.0 - s.log10().floor()).max(0.0) as usize;
+        format!("{s:.decimals$}")
+    } else {
+        format!("{s:.1e}")
+    }
+}
+
 fn usage(misuse: Misuse) -> TabularError {
     TabularError::Usage(misuse)
+}
+
+/// The first NaN or infinite value of features `x` (n x p), refused by its row and column:
+/// what every table trains on and predicts from is finite (a reader checks its cells; an
+/// array from Python was trained on, an infinity said as a feature's mean "beyond single
+/// precision").
+fn finite_features(x: &DMatrix<f64>) -> Result<(), TabularError> {
+    match x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        // Column-major: the i-th value is row i % n of column i / n.
+        Some((i, value)) => Err(usage(Misuse::NonFiniteFeature {
+            row: i % x.nrows().max(1),
+            column: i / x.nrows().max(1),
+            value: *value,
+        })),
+        None => Ok(()),
+    }
 }
 
 /// A learning method.

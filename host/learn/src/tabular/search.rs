@@ -134,6 +134,7 @@ pub fn train(
     progress: Progress<'_>,
 ) -> Result<TableModel, TabularError> {
     let started = std::time::Instant::now();
+    finite_features(&table.x)?;
     let standardised;
     let table = if opts.per_group {
         standardised = table.standardised_per_group()?;

@@ -1086,8 +1086,34 @@ fn a_training_past_its_budget_is_refused_before_any_fit() {
             e.contains("past the budget") && e.contains("--rows") && e.contains("360 rows"),
             "{choice:?}: {e}"
         );
+        // Said to two significant digits below 10 s (it said "about 0 s, past the budget of
+        // 0 s").
+        assert!(
+            e.contains("budget of 1.0e-6 s") && !e.contains("about 0 s"),
+            "{e}"
+        );
     }
     assert!(train(&STANDIN, Choice::One(Kind::Ridge), &tight, &mut quiet()).is_ok());
+}
+
+/// Features are finite where a table is trained on, whoever made it (an array from Python
+/// with an infinity was trained on, and said as a feature's mean "beyond single precision"),
+/// as where it predicts from.
+#[test]
+fn a_table_with_a_feature_not_finite_is_refused_by_its_row_and_column() {
+    for value in [f64::INFINITY, f64::NAN] {
+        let mut table = STANDIN.clone();
+        table.x[(7, 2)] = value;
+        let e = train(&table, Choice::One(Kind::Ridge), &opts(), &mut quiet())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!(
+                "row 7, feature 2: {value}, where a finite number belongs"
+            )),
+            "{e}"
+        );
+    }
 }
 
 /// Features of any magnitude f64 holds keep their spread (their squares under- or

@@ -22,15 +22,7 @@ impl Prepared {
                 model: self.features,
             }));
         }
-        if let Some((i, value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            // Column-major: the i-th value is row i % n of column i / n.
-            let n = x.nrows().max(1);
-            return Err(usage(Misuse::NonFiniteFeature {
-                row: i % n,
-                column: i / n,
-                value: *value,
-            }));
-        }
+        finite_features(x)?;
         let predicted = self.predict_finite(x)?;
         if let Some(row) = predicted
             .iter()
