@@ -12,11 +12,13 @@ pub enum StatsError {
     /// `k` is 0, `frames.len()` is not a multiple of `k`, or two frames differ in length.
     #[error("frames do not have a consistent length")]
     Shape,
-    /// Fewer frames than the statistic needs (2 for a variance).
-    #[error("{frames} frame(s): need at least 2")]
+    /// Fewer frames than the statistic needs (2 for a variance, 1 for a mean).
+    #[error("{frames} frame(s): need at least {needed}")]
     TooFewFrames {
         /// Frames given.
         frames: usize,
+        /// Frames the statistic needs.
+        needed: usize,
     },
     /// A value is NaN or infinite.
     #[error("a voltage is NaN or infinite")]
@@ -45,7 +47,10 @@ fn shape(frames: &[f32], k: usize, min_frames: usize) -> Result<usize, StatsErro
     }
     let n = frames.len() / k;
     if n < min_frames {
-        return Err(StatsError::TooFewFrames { frames: n });
+        return Err(StatsError::TooFewFrames {
+            frames: n,
+            needed: min_frames,
+        });
     }
     if frames.iter().any(|v| !v.is_finite()) {
         return Err(StatsError::NonFinite);
@@ -190,7 +195,10 @@ pub fn reference<F: AsRef<[T]>, T: Copy + Into<f64>>(
     v0: &mut [f64],
 ) -> Result<(), StatsError> {
     if frames.is_empty() {
-        return Err(StatsError::TooFewFrames { frames: 0 });
+        return Err(StatsError::TooFewFrames {
+            frames: 0,
+            needed: 1,
+        });
     }
     let n = frame_count(frames, v0.len())?;
     for (c, out) in v0.iter_mut().enumerate() {
@@ -355,7 +363,10 @@ mod tests {
         assert_eq!(snr(&[1.0, 2.0, 3.0], 2), Err(StatsError::Shape));
         assert_eq!(
             snr(&[1.0, 2.0], 2),
-            Err(StatsError::TooFewFrames { frames: 1 })
+            Err(StatsError::TooFewFrames {
+                frames: 1,
+                needed: 2
+            })
         );
         assert_eq!(
             snr(&[1.0, f32::NAN, 1.0, 1.0], 2),
@@ -386,7 +397,10 @@ mod tests {
         assert_eq!(var, [0.0, 0.0]);
         assert_eq!(
             reference::<[f32; 2], f32>(&[], &mut v0),
-            Err(StatsError::TooFewFrames { frames: 0 })
+            Err(StatsError::TooFewFrames {
+                frames: 0,
+                needed: 1
+            })
         );
         assert_eq!(reference(&frames, &mut [0.0; 3]), Err(StatsError::Shape));
         assert_eq!(

@@ -25,12 +25,13 @@ same frames, and a model's predictions are `et eval`'s. The whole API: docs/pyth
 from __future__ import annotations
 
 import json
+import operator
 import os
 import re
 import threading
 import warnings
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 
@@ -538,7 +539,25 @@ class ImageBatch:
     def __len__(self) -> int:
         return len(self.alpha)
 
-    def __getitem__(self, i: int) -> Image:
+    @overload
+    def __getitem__(self, i: int) -> Image: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> "ImageBatch": ...
+
+    def __getitem__(self, i: Union[int, slice]) -> Union[Image, "ImageBatch"]:
+        if isinstance(i, slice):
+            # The frames it selects, as a batch of their own (what is made is shared).
+            part = ImageBatch(self._r, self._frames[i], self._reference, self.pixels[i],
+                              self.dv[i], self.alpha[i])
+            part._found = None if self._found is None else self._found[i]
+            return part
+        try:
+            i = operator.index(i)
+        except TypeError:
+            raise TypeError(f"batch index {i!r}: a whole number or a slice") from None
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"frame {i} of a batch of {len(self)}")
         frame, reference, native = self._frames[i], self._reference, self._r._native
         found = self._found
         return Image(self.pixels[i], self.dv[i], float(self.alpha[i]), self._r.extent,

@@ -123,8 +123,20 @@ def test_a_batch_is_its_frames_imaged_one_by_one(scene, recording):
                                     for t in alone.touches]
         assert batch[i].touches == batch.touches[i]
     assert len(batch.objects) == len(batch)
+    # A slice is a batch of its frames (it raised a NumPy TypeError); an index past the end,
+    # or not a whole number, is said as the batch's.
+    part = batch[2:5]
+    assert len(part) == 3 and part.objects == batch.objects[2:5]
+    assert part[-1].alpha == batch[4].alpha
+    with pytest.raises(IndexError, match=f"frame {len(batch)} of a batch of {len(batch)}"):
+        batch[len(batch)]
+    with pytest.raises(TypeError, match="a whole number or a slice"):
+        batch[1.5]
     with pytest.raises(et.EtError, match="K"):
         r.images(v[20:, :-1])
+    # No untouched frame: one is needed (it said "need at least 2", though one will do).
+    with pytest.raises(et.EtError, match="0 frame\\(s\\): need at least 1"):
+        r.set_reference(v[:0])
 
 
 def test_the_press_is_found_where_it_was(scene, recording):
