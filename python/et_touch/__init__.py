@@ -277,7 +277,7 @@ def polygon(
 # Protocols
 
 
-@dataclass
+@dataclass(frozen=True)
 class Protocol:
     """Who drives and who measures, value by value of a frame.
 
@@ -292,6 +292,28 @@ class Protocol:
     currents: np.ndarray
     name: Optional[str] = None
 
+    def __post_init__(self) -> None:
+        # Frozen, with its own read-only copies (a row changed afterwards was ignored under a
+        # built-in name), and checked where it is made as a Reconstructor takes it: a current of 0 or NaN,
+        # a drive or measurement pair of one electrode, are refused here, not first there.
+        rows = np.array(_numbers(self.rows, "rows"), dtype=np.int64)
+        currents = np.array(_numbers(self.currents, "currents"))
+        rows.flags.writeable = currents.flags.writeable = False
+        object.__setattr__(self, "electrodes", _count(self.electrodes, "electrodes"))
+        object.__setattr__(self, "rows", rows)
+        object.__setattr__(self, "currents", currents)
+        _native.check_protocol(*self._native_args())
+
+    def _native_args(self) -> Tuple[int, Optional[str], float, Optional[np.ndarray], Optional[np.ndarray]]:
+        """(electrodes, name, current, rows, currents) as the native side takes a protocol:
+        a built-in one by its name unless its currents were changed row by row (then its rows,
+        each with its own current: none is ignored)."""
+        current_a = float(self.currents[0]) if len(self.currents) else 1e-3
+        name = self.name if np.all(self.currents == current_a) else None
+        if name:
+            return self.electrodes, name, current_a, None, None
+        return self.electrodes, None, current_a, self.rows, self.currents
+
     @property
     def K(self) -> int:  # noqa: N802 (the method's symbol)
         """Values a frame."""
@@ -304,7 +326,7 @@ class Protocol:
         """Any system's protocol: ``rows`` N x 4 (source, sink, positive, negative) or N x 5
         (the fifth the current, A), electrodes counted from ``base`` (0, or 1 for systems that
         count from 1); rows without a current drive ``current_a``."""
-        table = np.asarray(rows, dtype=np.float64)
+        table = _numbers(rows, "rows")
         if table.ndim != 2 or table.shape[1] not in (4, 5):
             raise EtError(f"rows: shape {table.shape}; give N x 4 or N x 5")
         if base not in (0, 1) or isinstance(base, bool):
@@ -638,15 +660,9 @@ class Reconstructor:
                 "noise_figure and radius_m are GREIT's (method='greit'); Gauss-Newton's "
                 "smoothing is alpha and s"
             )
-        rows = np.ascontiguousarray(protocol.rows, dtype=np.int64)
-        currents = _f64(protocol.currents, 1, "currents")
-        current_a = float(currents[0]) if len(currents) else 1e-3
-        # A built-in protocol by its name, unless its currents were changed row by row
-        # (then its rows, each with its own current: none is ignored).
-        name = protocol.name if np.all(currents == current_a) else None
+        electrodes, name, current_a, rows, currents = protocol._native_args()
         self._native = _Serialised(_native.Reconstructor(
-            _spec_json(sheet.spec), int(protocol.electrodes), name, current_a,
-            None if name else rows, None if name else currents,
+            _spec_json(sheet.spec), electrodes, name, current_a, rows, currents,
             _count(triangles, "triangles"), method, str(alpha), _count(pixels, "pixels"),
             threshold, 0.5 if s is None else float(s), _count(iterations, "iterations"),
             noise_figure, radius_m,

@@ -17,6 +17,16 @@ class EtError(ValueError):
 def protocol_table(name: str, electrodes: int, current_a: float) -> Tuple[I64, F64]:
     """A built-in protocol's rows (K x 4: source, sink, positive, negative) and currents (K, A)."""
 
+def check_sheet(sheet_json: str) -> None:
+    """Refuses a sheet spec a Reconstructor would refuse (EtError)."""
+def check_protocol(
+    electrodes: int,
+    protocol: Optional[str],
+    current_a: float,
+    rows: Optional[I64],
+    currents: Optional[F64],
+) -> None:
+    """Refuses a protocol a Reconstructor would refuse (EtError)."""
 def scene_parts(path: str) -> Tuple[str, Optional[str], int, float, I64, F64]:
     """A scene file's sheet (JSON), protocol name (None for a protocol file), electrode count,
     current (A), rows (K x 4) and currents (K, A)."""

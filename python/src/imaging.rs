@@ -17,6 +17,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(protocol_table, m)?)?;
     m.add_function(wrap_pyfunction!(scene_parts, m)?)?;
     m.add_function(wrap_pyfunction!(check_sheet, m)?)?;
+    m.add_function(wrap_pyfunction!(check_protocol, m)?)?;
     m.add_class::<Reconstructor>()?;
     Ok(())
 }
@@ -248,6 +249,20 @@ fn sheet_of(sheet_json: &str) -> PyResult<Sheet> {
         })?;
     sheet.validate().map_err(|e| refused(&e))?;
     Ok(sheet)
+}
+
+/// Checks a protocol where it is made (`Protocol.from_rows`, `from_pyeit`, `Protocol(...)`),
+/// as a Reconstructor would take it, not first where it is used.
+#[pyfunction]
+#[pyo3(signature = (electrodes, protocol, current_a, rows, currents))]
+fn check_protocol(
+    electrodes: u64,
+    protocol: Option<&str>,
+    current_a: f64,
+    rows: Option<PyReadonlyArray2<'_, i64>>,
+    currents: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<()> {
+    schedule(electrodes, protocol, current_a, rows, currents).map(|_| ())
 }
 
 /// Checks a sheet where it is made (`et.disc`, `et.Sheet(spec)`), not first where it is used.

@@ -138,8 +138,20 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
     # current was ignored without a word.
     sheet = et.disc(0.1, 16)
     p = et.protocol("adjacent", 16)
-    changed = et.Protocol(p.electrodes, p.rows.copy(), p.currents.copy(), p.name)
-    changed.currents[5] *= 2.0
+    currents = p.currents.copy()
+    currents[5] *= 2.0
+    changed = et.Protocol(p.electrodes, p.rows, currents, p.name)
+    # A protocol is not changed once made: a row changed in place afterwards would be
+    # ignored under its built-in name, so its arrays are read-only and its fields frozen.
+    with pytest.raises(ValueError, match="read-only"):
+        p.currents[5] = 1.0
+    with pytest.raises(AttributeError):
+        p.name = "opposite"
+    # It is checked where it is made, as a Reconstructor would take it.
+    zero = p.currents.copy()
+    zero[3] = 0.0
+    with pytest.raises(et.EtError, match="row 3: current 0 A"):
+        et.Protocol(p.electrodes, p.rows, zero)
     r = et.Reconstructor(sheet, p, triangles=300)
     s = et.Reconstructor(sheet, changed, triangles=300)
     v, w = r.forward(r.sigma0), s.forward(s.sigma0)
