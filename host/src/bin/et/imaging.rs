@@ -372,12 +372,18 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     }
     // With a fitted background the Jacobian and matrix are made once, about the fit.
     let clock = Instant::now();
+    let setting_up = crate::spinner::Spinner::new(if fit_background {
+        "setting up: mesh, background fit, Jacobian"
+    } else {
+        "setting up: mesh, forward model, Jacobian"
+    });
     let (mut recon, fit) = if fit_background {
         let (recon, fit) = spec.set_up_fitted(&reference.v0, weighting)?;
         (recon, Some(fit))
     } else {
         (spec.set_up()?, None)
     };
+    drop(setting_up);
     let set_up = recon.set_up_timings;
     let t_n = recon.imager().triangles();
     stage(&format!("mesh ({t_n} triangles)"), set_up.mesh);
@@ -405,11 +411,14 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         let timings_s = frame_stages(args, &image, &set_up, (0.0, None), |_, _| ());
         return report(args, &recon, &image, &truth, background, timings_s, started);
     }
+    let imaging = crate::spinner::Spinner::new("imaging the frame");
     let image = recon.image(v1, &reference)?;
     // The warm frames' figure is the live pipeline's: through the f32 operator, made here if
     // this one frame did not need it.
+    imaging.say("timing warm frames: the f32 operator, 100 frames");
     let operator = recon.prepare_frames();
     let frame_median = recon.frame_median(&image.dv, 100);
+    drop(imaging);
     let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
     report(args, &recon, &image, &truth, background, timings_s, started)
 }

@@ -201,19 +201,9 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
         output::check_format(curve, "the learning curve (PNG)", &["png"])?;
     }
     let folds = trainer.dataset_folds();
-    // Each stage on one line that updates in place, with the time so far (stderr, and only
-    // on a terminal: scripts and --json see nothing of it). Cleared on every way out.
-    let spinner = ProgressBar::new_spinner().with_style(
-        ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let cleared = |e: anyhow::Error| {
-        spinner.finish_and_clear();
-        e
-    };
-    spinner.set_message(format!("reading {}", data_arg.display()));
-    let data = dataset::load(data_arg).map_err(|e| cleared(e.into()))?;
+    // Each stage on one line that updates in place, with the time so far.
+    let spinner = crate::spinner::Spinner::new(format!("reading {}", data_arg.display()));
+    let data = dataset::load(data_arg)?;
     let trained = trainer.train(Examples::Dataset(&data), |stage| match stage {
         Progress::RawFrames => spinner.suspend(|| {
             say!(
@@ -222,14 +212,14 @@ pub(crate) fn train_cmd(args: &TrainArgs, force: bool) -> Result<()> {
             );
         }),
         Progress::Preparing { rows, features } => {
-            spinner.set_message(format!(
+            spinner.say(format!(
                 "preparing {rows} observations x {features} features"
             ));
         }
-        Progress::Dataset(stage) => spinner.set_message(stage.said(folds)),
+        Progress::Dataset(stage) => spinner.say(stage.said(folds)),
         Progress::Table(..) => {}
     });
-    spinner.finish_and_clear();
+    drop(spinner);
     let trained = trained.map_err(|e| match e {
         TrainError::Data(e) => anyhow::anyhow!("{}: {e}", data_arg.display()),
         other => other.into(),

@@ -56,6 +56,7 @@ mod live;
 mod output;
 mod protocol;
 mod sim;
+mod spinner;
 mod tabular;
 
 /// Touch sensing with electrical tomography: protocols, simulation, imaging and learning.
