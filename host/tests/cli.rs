@@ -865,6 +865,26 @@ fn reconstruct_images_recorded_frames() {
     a.push("--force".into());
     let bad = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("reference"));
+    // The untouched frames from another recording, --reference-file (it was ignored beside a
+    // recording, and refused as a CSV when it was the reference): the recording's first five
+    // frames as their own file image frame 50 as --reference 5 does.
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let untouched = dir.join("untouched.jsonl");
+    let lines: Vec<&str> = text.lines().take(6).collect();
+    std::fs::write(&untouched, lines.join("\n") + "\n").unwrap();
+    let mut a = args("50");
+    let at = a.iter().position(|x| x == "--reference").unwrap();
+    a.splice(at..at + 2, ["--reference-file".to_string(), s(&untouched)]);
+    a.push("--force".into());
+    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let k: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(k["regions"], j["regions"]);
+    assert_eq!(k["alpha"], j["alpha"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

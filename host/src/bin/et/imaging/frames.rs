@@ -117,7 +117,12 @@ pub(super) fn frames(
         .display()
         .to_string();
     let n = r.records.len();
-    let reference = reference_count(args, &path, n)?;
+    // The untouched frames from --reference-file (it was ignored beside a recording), or the
+    // recording's first --reference.
+    let (given, reference) = match &args.reference_file {
+        Some(f) => (Some(reference_file(f, r.header.frame_len)?), 0),
+        None => (None, reference_count(args, &path, n)?),
+    };
     let range = chosen(args, &path, reference, n)?;
     let (Some(before), Some(imaged)) = (r.records.get(..reference), r.records.get(range.clone()))
     else {
@@ -142,6 +147,10 @@ pub(super) fn frames(
         );
     }
     let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
+    let reference = match given {
+        Some(reference) => reference,
+        None => et_recon::Reference::from_frames(&frames)?,
+    };
     let truth = imaged
         .last()
         .and_then(|rec| rec.touches.as_ref())
@@ -150,7 +159,7 @@ pub(super) fn frames(
         .map(|t| ([t.x, t.y], t.radius))
         .collect();
     Ok(Chosen {
-        reference: et_recon::Reference::from_frames(&frames)?,
+        reference,
         frames: imaged
             .iter()
             .enumerate()
@@ -158,6 +167,49 @@ pub(super) fn frames(
             .collect(),
         truth,
     })
+}
+
+/// The untouched frames of `--reference-file` (K values each, averaged): another system's
+/// frames in any format `--frames` reads, or an et recording (every frame of it; a recording
+/// was read as a CSV and refused for its JSON).
+fn reference_file(path: &Path, k: usize) -> Result<et_recon::Reference> {
+    if et_host::frames::is_table(path) {
+        let r = et_host::frames::read(path, k)?;
+        say!("reference {}", r.description);
+        return Ok(et_recon::Reference::from_frames(&r.frames)?);
+    }
+    let r = recording::read(path)?;
+    for note in r.notes() {
+        say!("note: {}: {note}", path.display());
+    }
+    if r.header.frame_len != k {
+        bail!(
+            "{}: frames of K = {} values, the frames imaged have K = {k}",
+            path.display(),
+            r.header.frame_len
+        );
+    }
+    if let Some(rec) = r.records.iter().find(|rec| !rec.invalid.is_empty()) {
+        bail!(
+            "{}: frame seq {} has non-finite values (null in the file) in columns {:?}: \
+             not an untouched reference",
+            path.display(),
+            rec.seq,
+            rec.invalid
+        );
+    }
+    let frames: Vec<&[f32]> = r
+        .records
+        .iter()
+        .map(|rec| rec.voltages.as_slice())
+        .collect();
+    say!(
+        "reference {}: {} frames of {k} values (an et recording)",
+        path.display(),
+        frames.len()
+    );
+    Ok(et_recon::Reference::from_frames(&frames)
+        .with_context(|| format!("{}: the reference frames", path.display()))?)
 }
 
 /// Another system's frames from a table file: V_0 from `--reference-file` or the first
@@ -171,11 +223,7 @@ pub(super) fn table_frames(
     say!("{}", frames.description);
     let n = frames.frames.len();
     let (reference, first) = match &args.reference_file {
-        Some(f) => {
-            let r = et_host::frames::read(f, k)?;
-            say!("reference {}", r.description);
-            (et_recon::Reference::from_frames(&r.frames)?, 0)
-        }
+        Some(f) => (reference_file(f, k)?, 0),
         None => {
             let count = reference_count(args, &path.display().to_string(), n)?;
             let before = frames.frames.get(..count.min(n)).unwrap_or_default();
