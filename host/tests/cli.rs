@@ -885,6 +885,31 @@ fn reconstruct_images_recorded_frames() {
     let k: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(k["regions"], j["regions"]);
     assert_eq!(k["alpha"], j["alpha"]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    // A reference in mV against frames in V was imaged as a press everywhere, without a word.
+    let volts: Vec<serde_json::Value> = lines[1..]
+        .iter()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["voltages"].clone())
+        .collect();
+    let mv: String = volts
+        .iter()
+        .map(|v| {
+            let row: Vec<String> = (v.as_array().unwrap().iter())
+                .map(|x| format!("{}", x.as_f64().unwrap() * 1e3))
+                .collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    let in_mv = dir.join("untouched-mv.csv");
+    std::fs::write(&in_mv, mv).unwrap();
+    let at = a.iter().position(|x| x == "--reference-file").unwrap();
+    a[at + 1] = s(&in_mv);
+    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("warning: frame 50 is 0.001") && e.contains("times the reference V_0"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

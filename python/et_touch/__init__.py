@@ -669,6 +669,7 @@ class Reconstructor:
         ))
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None
+        self._v0: Optional[np.ndarray] = None
 
     def _frames(self, v0: Any, fitting: bool = False) -> np.ndarray:
         """The untouched frame(s) as n x K, said when far from the model's frame of the sheet
@@ -700,6 +701,32 @@ class Reconstructor:
         frames = self._frames(v0)
         self._native.set_reference(frames)
         self._reference = frames
+        self._v0 = frames.mean(axis=0)
+
+    @staticmethod
+    def _say_unlike(frames: np.ndarray, v0: np.ndarray) -> None:
+        """Warns when frames (K, or n x K) are not alike their reference ``v0`` (K): the
+        first past FRAME_SCALE_SAID times it, or under its inverse (least squares), as `et
+        reconstruct` says (a reference in mV against frames in V was imaged as a press
+        everywhere). Called after the native side took them: what it refuses is said as
+        refused, not first warned of."""
+        vv = float(v0 @ v0)
+        if not vv > 0 or frames.shape[-1] != len(v0):
+            return  # (frames of another length are refused by the native side, by K)
+        scale = np.atleast_1d(frames @ v0) / vv
+        bound = _native.FRAME_SCALE_SAID
+        unlike = np.flatnonzero(~((scale >= 1 / bound) & (scale <= bound)))
+        if len(unlike):
+            i = int(unlike[0])
+            which = "the frame" if frames.ndim == 1 else f"frame {i}"
+            warnings.warn(
+                f"{which} is {scale[i]:.3g} times the reference V_0 (least squares; "
+                f"{len(unlike)} of {len(scale)} frames past {bound:g} times either way): are "
+                "the frames and the reference in the same units, at the same current? A press "
+                "changes a frame by a few per cent",
+                EtWarning,
+                stacklevel=3,
+            )
 
     def image(self, v: Any, v0: Any = None) -> Image:
         """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
@@ -716,11 +743,14 @@ class Reconstructor:
                     "once with set_reference(v0)"
                 )
             pixels, dv, alpha = self._native.pixels(v)
+            self._say_unlike(v, self._v0)
             reference = self._reference
             return Image(pixels, dv, alpha, self.extent,
                          lambda: self._native.image(v, reference),
                          lambda: self._found_of(v[None, :], reference)[0])
-        made = self._native.image(v, self._frames(v0))
+        frames = self._frames(v0)
+        made = self._native.image(v, frames)
+        self._say_unlike(v, frames.mean(axis=0))
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
 
@@ -735,6 +765,7 @@ class Reconstructor:
             raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
         frames = _f64(V, 2, "V")
         pixels, dv, alpha = self._native.pixels_batch(frames)
+        self._say_unlike(frames, self._v0)
         rows, cols = self._native.grid[:2]
         return ImageBatch(self, frames, self._reference,
                           pixels.reshape(len(frames), rows, cols), dv, alpha)

@@ -14,6 +14,9 @@ I64 = npt.NDArray[np.int64]
 class EtError(ValueError):
     """et refused an input: the message names the file, field or value and why."""
 
+FRAME_SCALE_SAID: float
+"""How far a frame may be from its reference V_0, a factor either way, before it is said."""
+
 def protocol_table(name: str, electrodes: int, current_a: float) -> Tuple[I64, F64]:
     """A built-in protocol's rows (K x 4: source, sink, positive, negative) and currents (K, A)."""
 

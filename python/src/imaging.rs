@@ -19,6 +19,10 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_sheet, m)?)?;
     m.add_function(wrap_pyfunction!(check_protocol, m)?)?;
     m.add_class::<Reconstructor>()?;
+    m.add(
+        "FRAME_SCALE_SAID",
+        et_recon::reconstructor::FRAME_SCALE_SAID,
+    )?;
     Ok(())
 }
 

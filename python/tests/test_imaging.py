@@ -290,6 +290,15 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     with warnings.catch_warnings():
         warnings.simplefilter("error", et.EtWarning)
         r.image(v * 1e3, v0 * 1e3)
+    # Frames not alike their reference (one in mV, the other in V) are said, as et
+    # reconstruct says them: given with the frame, set once, or in a batch.
+    with pytest.warns(et.EtWarning, match="the frame is 0.001 times the reference V_0"):
+        r.image(v, v0 * 1e3)
+    r.set_reference(v0 * 1e3)
+    with pytest.warns(et.EtWarning, match="the frame is 1e\\+03 times the reference V_0"):
+        r.image(v * 1e6)
+    with pytest.warns(et.EtWarning, match="frame 1 is 0.001 times .* 1 of 2 frames"):
+        r.images(np.vstack([v * 1e3, v]))
 
 
 def test_arrays_of_any_layout_are_taken(disc):

@@ -339,7 +339,29 @@ pub struct Reference {
     pub var_dv: Vec<f64>,
 }
 
+/// How far a frame may be from its reference V_0, a factor either way ([`Reference::scale_of`]),
+/// before it is said as another unit or current: a press changes a frame by a few per cent,
+/// the real tanks' targets (two labs' saline tanks, 26 cases) by at most 8 %.
+pub const FRAME_SCALE_SAID: f64 = 2.0;
+
 impl Reference {
+    /// How many times V_0 `frame` (V, K values) is: the least-squares s of frame = s V_0.
+    /// About 1 for frames of the same sheet, units and current; past
+    /// [`FRAME_SCALE_SAID`] either way, the frame and its reference are not alike (one in mV,
+    /// the other in V; another current), and dV is not the touch's. None when V_0 is zero
+    /// or the lengths differ.
+    #[must_use]
+    pub fn scale_of(&self, frame: &[f32]) -> Option<f64> {
+        if frame.len() != self.v0.len() {
+            return None;
+        }
+        let vv: f64 = self.v0.iter().map(|v| v * v).sum();
+        let fv: f64 = (frame.iter().zip(&self.v0))
+            .map(|(f, v)| f64::from(*f) * v)
+            .sum();
+        (vv > 0.0).then(|| fv / vv)
+    }
+
     /// V_0 as the mean of untouched `frames` (V) and the noise of dV from their spread
     /// ([`et_core::stats::dv_variance`]; zero from one frame).
     ///

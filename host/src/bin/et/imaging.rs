@@ -357,6 +357,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let Some((_, v1)) = chosen.last() else {
         bail!("no frames to image");
     };
+    say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
     let fit_background = args.background.unwrap_or(if args.frames.is_some() {
         Background::Fit
@@ -421,6 +422,30 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     drop(imaging);
     let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
     report(args, &recon, &image, &truth, background, timings_s, started)
+}
+
+/// Says (a warning on standard error) when frames to image are not alike their reference:
+/// the first past [`et_recon::reconstructor::FRAME_SCALE_SAID`] times V_0 or under its
+/// inverse, and how many are (a reference in mV against frames in V was imaged silently as
+/// a press everywhere).
+fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usize, Vec<f32>)]) {
+    use et_recon::reconstructor::FRAME_SCALE_SAID;
+    let unlike: Vec<(usize, f64)> = chosen
+        .iter()
+        .filter_map(|(i, v)| Some((*i, reference.scale_of(v)?)))
+        .filter(|(_, s)| !(1.0 / FRAME_SCALE_SAID..=FRAME_SCALE_SAID).contains(s))
+        .collect();
+    if let Some((i, s)) = unlike.first() {
+        say!(
+            "warning: frame {i} is {} times the reference V_0 (least squares; {} of {} \
+             frames past {FRAME_SCALE_SAID} times either way): are the frames and the \
+             reference in the same units, at the same current? A press changes a frame by a \
+             few per cent",
+            crate::tabular::significant(*s),
+            unlike.len(),
+            chosen.len()
+        );
+    }
 }
 
 /// The fitted background said on standard error: the fit's stage time (`took`, s, with

@@ -150,7 +150,7 @@ fn hyper(h: &std::collections::BTreeMap<String, f64>) -> String {
 }
 
 /// `v` to 4 significant digits, for printing (the model file keeps every digit).
-fn significant(v: f64) -> f64 {
+pub(crate) fn significant(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
     }
