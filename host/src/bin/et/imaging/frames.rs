@@ -208,8 +208,8 @@ fn reference_file(path: &Path, k: usize) -> Result<et_recon::Reference> {
         path.display(),
         frames.len()
     );
-    Ok(et_recon::Reference::from_frames(&frames)
-        .with_context(|| format!("{}: the reference frames", path.display()))?)
+    et_recon::Reference::from_frames(&frames)
+        .with_context(|| format!("{}: the reference frames", path.display()))
 }
 
 /// Another system's frames from a table file: V_0 from `--reference-file` or the first
