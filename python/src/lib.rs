@@ -13,6 +13,7 @@ mod batch;
 mod files;
 mod imaging;
 mod learning;
+mod sheets;
 
 pyo3::create_exception!(
     _native,

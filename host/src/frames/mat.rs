@@ -1,0 +1,201 @@
+//! MATLAB `.mat` files: the version 5/7 reader's input made safe, its numeric arrays read
+//! as frames, and et's own version 5 writer.
+
+use std::path::Path;
+
+use nalgebra::DMatrix;
+
+use super::{FramesError, FramesFault, content};
+
+/// A version 5/7 `.mat` as the MATLAB reader is given it: every compressed variable
+/// inflated in place, each checked to inflate and all of them together to no more than the
+/// data files' limit (matfile reads each to its end, without a limit: a small file could
+/// expand to gigabytes), and each int32 array marked int64 (matfile 0.5 expects an int32
+/// array's values stored as uint32 and refused the int32 ones scipy's `savemat` writes; as
+/// int64 they are read exactly).
+fn plain_mat(bytes: &[u8]) -> Result<Vec<u8>, FramesFault> {
+    use std::io::Read as _;
+    let little = bytes.get(126..128) == Some(b"IM");
+    let word = |b: &[u8], at: usize| -> Option<u32> {
+        let w: [u8; 4] = b.get(at..at + 4)?.try_into().ok()?;
+        Some(if little {
+            u32::from_le_bytes(w)
+        } else {
+            u32::from_be_bytes(w)
+        })
+    };
+    // An array (miMATRIX, 14) starts with its flags (miUINT32, 8 bytes), the class in the
+    // flags word's low byte: int32 (12) becomes int64 (14).
+    let mark_int32 = |out: &mut Vec<u8>, start: usize| {
+        let class_at = start + 16 + if little { 0 } else { 3 };
+        let flags = (
+            word(out, start),
+            word(out, start + 8),
+            word(out, start + 12),
+        );
+        if flags == (Some(14), Some(6), Some(8))
+            && let Some(class) = out.get_mut(class_at)
+            && *class == 12
+        {
+            *class = 14;
+        }
+    };
+    let limit = et_core::text::max_file_bytes();
+    let mut out = bytes.get(..128).unwrap_or(bytes).to_vec();
+    let mut at = 128;
+    while let (Some(kind), Some(size)) = (word(bytes, at), word(bytes, at + 4)) {
+        let size = size as usize;
+        let start = out.len();
+        if kind == 15 {
+            let data = bytes
+                .get(at + 8..(at + 8).saturating_add(size))
+                .ok_or(FramesFault::CutShort)?;
+            let left = limit.saturating_sub(start as u64);
+            libflate::zlib::Decoder::new(data)
+                .map_err(|_| FramesFault::Damaged)?
+                .take(left.saturating_add(1))
+                .read_to_end(&mut out)
+                .map_err(|_| FramesFault::Damaged)?;
+            if out.len() as u64 > limit {
+                return Err(FramesFault::Inflates(limit));
+            }
+            at = at.saturating_add(8).saturating_add(size);
+        } else {
+            // Uncompressed elements are padded to 8 bytes; matfile checks them itself.
+            let end = at.saturating_add(8).saturating_add(size.div_ceil(8) * 8);
+            out.extend_from_slice(bytes.get(at..end.min(bytes.len())).unwrap_or_default());
+            at = end;
+        }
+        mark_int32(&mut out, start);
+    }
+    out.extend_from_slice(bytes.get(at..).unwrap_or_default());
+    Ok(out)
+}
+
+/// The numeric 2-D array `name` of a MATLAB file (or its only one), and what was said.
+pub(super) fn mat_matrix(
+    path: &Path,
+    bytes: &[u8],
+    name: Option<&str>,
+) -> Result<(DMatrix<f64>, String), FramesError> {
+    if bytes.starts_with(b"MATLAB 7.3") {
+        return Err(content(path, 0, FramesFault::Mat73));
+    }
+    // A version 5 file says its byte order at bytes 126 and 127.
+    if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
+        return Err(content(path, 0, FramesFault::NoMatHeader));
+    }
+    let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
+    let bytes = plain.as_slice();
+    // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
+    // found by the fuzzer): such a file is refused like any other it cannot read, silently
+    // for the panic itself.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes));
+    std::panic::set_hook(hook);
+    let file = match parsed {
+        Ok(Ok(file)) => file,
+        Ok(Err(e)) => return Err(content(path, 0, FramesFault::NotMat(e))),
+        Err(_) => return Err(content(path, 0, FramesFault::MatInconsistent)),
+    };
+    let names = || file.arrays().iter().map(|a| a.name().to_string()).collect();
+    let array = match name {
+        Some(n) => file.find_by_name(n).ok_or_else(|| {
+            let (name, names) = (n.to_string(), names());
+            content(path, 0, FramesFault::NoVariable { name, names })
+        })?,
+        None => match file.arrays().as_slice() {
+            [only] => only,
+            [] => {
+                let kind = "numeric arrays";
+                return Err(content(path, 0, FramesFault::Nothing { kind }));
+            }
+            _ => {
+                let fault = FramesFault::Choose {
+                    names: names(),
+                    kind: "numeric arrays",
+                    path: path.into(),
+                    placeholder: "VARIABLE",
+                };
+                return Err(content(path, 0, fault));
+            }
+        },
+    };
+    use matfile::NumericData as D;
+    let values: Vec<f64> = match array.data() {
+        D::Double { real, imag: None } => real.clone(),
+        D::Single { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        // Exact below 2^53 (numpy's default integers are int64).
+        D::Int64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        D::UInt64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        _ => {
+            let fault = FramesFault::NotReal(array.name().to_string());
+            return Err(content(path, 0, fault));
+        }
+    };
+    let (rows, cols) = match array.size().as_slice() {
+        [r, c] => (*r, *c),
+        other => {
+            let (name, dimensions) = (array.name().to_string(), other.len());
+            return Err(content(
+                path,
+                0,
+                FramesFault::Dimensions { name, dimensions },
+            ));
+        }
+    };
+    if rows * cols != values.len() {
+        let fault = FramesFault::Size {
+            name: array.name().to_string(),
+            rows,
+            columns: cols,
+            values: values.len(),
+        };
+        return Err(content(path, 0, fault));
+    }
+    // MATLAB stores by columns.
+    Ok((
+        DMatrix::from_column_slice(rows, cols, &values),
+        format!("variable '{}', ", array.name()),
+    ))
+}
+
+/// A MATLAB version 5 file holding the double matrix `m` as variable `name` (uncompressed;
+/// MATLAB's `load`, SciPy's `loadmat` and [`read`](super::read) take it): how et writes
+/// frames for MATLAB users and its tests write other systems' `.mat` files.
+#[must_use]
+pub fn mat_v5(name: &str, m: &DMatrix<f64>) -> Vec<u8> {
+    fn element(out: &mut Vec<u8>, kind: u32, data: &[u8]) {
+        out.extend(kind.to_le_bytes());
+        out.extend(u32::try_from(data.len()).unwrap_or(u32::MAX).to_le_bytes());
+        out.extend(data);
+        out.resize(out.len().next_multiple_of(8), 0);
+    }
+    let (rows, cols) = m.shape();
+    let mut body = Vec::new();
+    // Array flags: class double (6); dimensions (int32); name (int8); real part (double).
+    element(&mut body, 6, &[6, 0, 0, 0, 0, 0, 0, 0]);
+    let dims: Vec<u8> = [rows, cols]
+        .iter()
+        .flat_map(|d| i32::try_from(*d).unwrap_or(i32::MAX).to_le_bytes())
+        .collect();
+    element(&mut body, 5, &dims);
+    element(&mut body, 1, name.as_bytes());
+    let values: Vec<u8> = m.iter().flat_map(|v| v.to_le_bytes()).collect();
+    element(&mut body, 9, &values);
+    let mut out =
+        format!("MATLAB 5.0 MAT-file, written by et: {name} ({rows} x {cols})").into_bytes();
+    out.resize(116, b' ');
+    out.extend([0u8; 8]);
+    out.extend(0x0100u16.to_le_bytes());
+    out.extend(b"IM");
+    element(&mut out, 14, &body);
+    out
+}
