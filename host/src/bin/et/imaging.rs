@@ -357,8 +357,39 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let Some((_, v1)) = chosen.last() else {
         bail!("no frames to image");
     };
-    say_unlike_frames(&reference, &chosen);
+    frames::say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
+    let (mut recon, background) = set_up(args, spec, &reference, stage)?;
+    let set_up = recon.set_up_timings;
+    if args.all || args.range.is_some() {
+        let image = each_frame(args, &mut recon, reference, &chosen)?;
+        let timings_s = frame_stages(args, &image, &set_up, (0.0, None), |_, _| ());
+        return report(args, &recon, &image, &truth, background, timings_s, started);
+    }
+    let imaging = crate::spinner::Spinner::new("imaging the frame");
+    let image = recon.image(v1, &reference)?;
+    // The warm frames' figure is the live pipeline's: through the f32 operator, made here if
+    // this one frame did not need it.
+    imaging.say("timing warm frames: the f32 operator, 100 frames");
+    let operator = recon.prepare_frames();
+    let frame_median = recon.frame_median(&image.dv, 100);
+    drop(imaging);
+    let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
+    report(args, &recon, &image, &truth, background, timings_s, started)
+}
+
+/// The Reconstructor for `spec`, about the background fitted to `reference` (the default
+/// for measured frames) or the scene's, its stages said as they end (a spinner while they
+/// run); the fit, when made.
+fn set_up(
+    args: &ReconstructArgs,
+    spec: et_recon::Spec,
+    reference: &et_recon::Reference,
+    stage: impl Fn(&str, f64),
+) -> Result<(
+    et_recon::Reconstructor,
+    Option<et_recon::background::BackgroundFit>,
+)> {
     let fit_background = args.background.unwrap_or(if args.frames.is_some() {
         Background::Fit
     } else {
@@ -378,7 +409,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     } else {
         "setting up: mesh, forward model, Jacobian"
     });
-    let (mut recon, fit) = if fit_background {
+    let (recon, fit) = if fit_background {
         let (recon, fit) = spec.set_up_fitted(&reference.v0, weighting)?;
         (recon, Some(fit))
     } else {
@@ -393,59 +424,17 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         recon.jacobian().frame.len(),
         recon.jacobian().pairs()
     );
-    let background = match fit {
+    match &fit {
         Some(fit) => {
             let took = clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix;
-            say_background(&fit, &jacobian, took, stage);
-            Some(fit)
+            say_background(fit, &jacobian, took, stage);
         }
-        None => {
-            stage(
-                &format!("forward + Jacobian {jacobian}"),
-                set_up.forward_jacobian,
-            );
-            None
-        }
-    };
-    if args.all || args.range.is_some() {
-        let image = each_frame(args, &mut recon, reference, &chosen)?;
-        let timings_s = frame_stages(args, &image, &set_up, (0.0, None), |_, _| ());
-        return report(args, &recon, &image, &truth, background, timings_s, started);
+        None => stage(
+            &format!("forward + Jacobian {jacobian}"),
+            set_up.forward_jacobian,
+        ),
     }
-    let imaging = crate::spinner::Spinner::new("imaging the frame");
-    let image = recon.image(v1, &reference)?;
-    // The warm frames' figure is the live pipeline's: through the f32 operator, made here if
-    // this one frame did not need it.
-    imaging.say("timing warm frames: the f32 operator, 100 frames");
-    let operator = recon.prepare_frames();
-    let frame_median = recon.frame_median(&image.dv, 100);
-    drop(imaging);
-    let timings_s = frame_stages(args, &image, &set_up, (operator, frame_median), stage);
-    report(args, &recon, &image, &truth, background, timings_s, started)
-}
-
-/// Says (a warning on standard error) when frames to image are not alike their reference:
-/// the first past [`et_recon::reconstructor::FRAME_SCALE_SAID`] times V_0 or under its
-/// inverse, and how many are (a reference in mV against frames in V was imaged silently as
-/// a press everywhere).
-fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usize, Vec<f32>)]) {
-    use et_recon::reconstructor::FRAME_SCALE_SAID;
-    let unlike: Vec<(usize, f64)> = chosen
-        .iter()
-        .filter_map(|(i, v)| Some((*i, reference.scale_of(v)?)))
-        .filter(|(_, s)| !(1.0 / FRAME_SCALE_SAID..=FRAME_SCALE_SAID).contains(s))
-        .collect();
-    if let Some((i, s)) = unlike.first() {
-        say!(
-            "warning: frame {i} is {} times the reference V_0 (least squares; {} of {} \
-             frames past {FRAME_SCALE_SAID} times either way): are the frames and the \
-             reference in the same units, at the same current? A press changes a frame by a \
-             few per cent",
-            crate::tabular::significant(*s),
-            unlike.len(),
-            chosen.len()
-        );
-    }
+    Ok((recon, fit))
 }
 
 /// The fitted background said on standard error: the fit's stage time (`took`, s, with

@@ -359,3 +359,27 @@ pub(super) fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) ->
     }
     Ok(())
 }
+
+/// Says (a warning on standard error) when frames to image are not alike their reference:
+/// the first past [`et_recon::reconstructor::FRAME_SCALE_SAID`] times V_0 or under its
+/// inverse, and how many are (a reference in mV against frames in V was imaged silently as
+/// a press everywhere).
+pub(super) fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usize, Vec<f32>)]) {
+    use et_recon::reconstructor::FRAME_SCALE_SAID;
+    let unlike: Vec<(usize, f64)> = chosen
+        .iter()
+        .filter_map(|(i, v)| Some((*i, reference.scale_of(v)?)))
+        .filter(|(_, s)| !(1.0 / FRAME_SCALE_SAID..=FRAME_SCALE_SAID).contains(s))
+        .collect();
+    if let Some((i, s)) = unlike.first() {
+        say!(
+            "warning: frame {i} is {} times the reference V_0 (least squares; {} of {} \
+             frames past {FRAME_SCALE_SAID} times either way): are the frames and the \
+             reference in the same units, at the same current? A press changes a frame by a \
+             few per cent",
+            crate::tabular::significant(*s),
+            unlike.len(),
+            chosen.len()
+        );
+    }
+}
