@@ -1100,6 +1100,7 @@ def read_recording(path: PathLike) -> Dict[str, Any]:
 def read_frames(path: PathLike, k: int) -> np.ndarray:
     """Reads any system's frames for a protocol of ``k`` values a frame, n x K (V): a CSV (one
     frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a matrix of frames as
-    columns is read transposed), as `et reconstruct --frames` reads them."""
+    columns is read transposed), or an et recording's voltages, as `et reconstruct --frames`
+    reads them."""
     frames, _ = _native.read_frames(os.fspath(path), _count(k, "k", 1))
     return frames

@@ -8,7 +8,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use crate::array2;
-use crate::{json, refused};
+use crate::{json, refused, usage};
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
@@ -106,6 +106,15 @@ impl Dataset {
     }
 }
 
+/// A recording's voltages, n x K row after row (the reader refuses frames of another
+/// length; NaN would stand in).
+fn volts(r: &et_host::recording::Recording) -> Vec<f64> {
+    let k = r.header.frame_len;
+    (r.records.iter())
+        .flat_map(|rec| (0..k).map(|i| rec.voltages.get(i).map_or(f64::NAN, |&v| f64::from(v))))
+        .collect()
+}
+
 /// A recording: its header (JSON), the voltages (n x K, V; NaN where the board sent NaN or
 /// infinity), seq (n), t_us (n), flags (n), each frame's truth (JSON: a list per frame, null
 /// where unknown), and whether a cut last line was skipped.
@@ -127,17 +136,13 @@ fn read_recording<'py>(
         .detach(|| et_host::recording::read(&path))
         .map_err(|e| refused(&e))?;
     let k = r.header.frame_len;
-    // K values a frame; the reader refuses frames of another length, NaN would stand in.
-    let volts = (r.records.iter())
-        .flat_map(|rec| (0..k).map(|i| rec.voltages.get(i).map_or(f64::NAN, |&v| f64::from(v))))
-        .collect();
     let column = |f: &dyn Fn(&et_host::recording::Record) -> i64| {
         PyArray1::from_vec(py, r.records.iter().map(f).collect())
     };
     let touches: Vec<_> = r.records.iter().map(|rec| &rec.touches).collect();
     Ok((
         json(&r.header)?,
-        array2(py, volts, r.records.len(), k)?,
+        array2(py, volts(&r), r.records.len(), k)?,
         column(&|rec| i64::from(rec.seq)),
         column(&|rec| i64::from(rec.t_us)),
         column(&|rec| i64::from(rec.flags)),
@@ -154,6 +159,26 @@ fn read_frames<'py>(
     path: PathBuf,
     k: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
+    if !et_host::frames::is_table(&path) {
+        // An et recording, as `et reconstruct --frames` takes one (it was read as a CSV and
+        // refused for its JSON): its voltages.
+        let r = py
+            .detach(|| et_host::recording::read(&path))
+            .map_err(|e| refused(&e))?;
+        if r.header.frame_len != k {
+            return Err(usage(format!(
+                "{}: an et recording of K = {} values a frame, not {k}",
+                path.display(),
+                r.header.frame_len
+            )));
+        }
+        let n = r.records.len();
+        let said = format!(
+            "{}: {n} frames of {k} values (an et recording)",
+            path.display()
+        );
+        return Ok((array2(py, volts(&r), n, k)?, said));
+    }
     let frames = py
         .detach(|| et_host::frames::read(&path, k))
         .map_err(|e| refused(&e))?;

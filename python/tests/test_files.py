@@ -30,6 +30,11 @@ def test_a_recording_reads_as_the_standard_library_reads_it(recording):
     np.testing.assert_array_equal(r["t_us"], [f["t_us"] for f in frames])
     assert r["touches"] == [f.get("touches") for f in frames]
     assert r["truncated_tail"] is False
+    # read_frames takes a recording as et reconstruct --frames does (it was read as a CSV
+    # and refused for its JSON), and says its K.
+    np.testing.assert_array_equal(et.read_frames(recording, header["K"]), r["voltages"])
+    with pytest.raises(et.EtError, match="an et recording of K = 208 values a frame, not 32"):
+        et.read_frames(recording, 32)
 
 
 def test_a_cut_recording_keeps_its_whole_frames(recording, work):

@@ -295,12 +295,12 @@ pub enum SceneError {
     },
     /// The file is not valid TOML or does not fit the scene format (the parser's message
     /// names the key and the line).
-    #[error("{path}: {}", source.to_string().trim_end())]
+    #[error("{path}: {}", parse_said(error))]
     Parse {
         /// The file.
         path: String,
-        /// The parser's error.
-        source: toml::de::Error,
+        /// The parser's error (said in the message, shortened; not a cause said again).
+        error: toml::de::Error,
     },
     /// The text is longer than a scene is.
     #[error(
@@ -342,6 +342,30 @@ pub enum SceneError {
     /// A frame could not be encoded.
     #[error("simulation: frame: {0}")]
     Wire(#[from] WireError),
+}
+
+/// The TOML parser's message, each line of its snippet of the file cut at 120 characters (a
+/// CSV given as a scene echoed a line of 5 000), and where the file is not a scene at all
+/// (its first line is no TOML), said so.
+fn parse_said(source: &toml::de::Error) -> String {
+    const WIDE: usize = 120;
+    let text = source.to_string();
+    let mut said: Vec<String> = text
+        .trim_end()
+        .lines()
+        .map(|line| match line.char_indices().nth(WIDE) {
+            Some((at, _)) => format!("{} ...", &line[..at]),
+            None => line.to_string(),
+        })
+        .collect();
+    if source.span().is_some_and(|span| span.start < 200) && text.contains("at line 1,") {
+        said.push(
+            "(is it a scene? a scene is a TOML file of [sheet], [scan] and [[touch]] tables, as \
+             in sim/scenes/)"
+                .to_string(),
+        );
+    }
+    said.join("\n")
 }
 
 /// The deepest nesting of `[` and `{` a scene may have (a scene needs 3).
@@ -432,9 +456,9 @@ impl Scene {
                 line,
             });
         }
-        let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
+        let scene: Scene = toml::from_str(text).map_err(|error| SceneError::Parse {
             path: name.into(),
-            source,
+            error,
         })?;
         scene.validate().map_err(|error| SceneError::Invalid {
             path: name.into(),

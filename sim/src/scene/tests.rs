@@ -150,6 +150,25 @@ fn bad_scenes_name_the_file_and_the_field() {
     assert!(missing.contains("/nonexistent/scene.toml"), "{missing}");
 }
 
+/// A file that is not a scene (a frames CSV given as one) is said as such, and its line is
+/// cut in the parser's snippet (a line of 5 000 characters was echoed whole, twice).
+#[test]
+fn a_file_that_is_no_scene_is_said_shortly() {
+    let csv: String = (0..300).map(|i| format!("{i}.5e-02,")).collect();
+    let e = Scene::parse(&csv, "frames.csv").unwrap_err().to_string();
+    assert!(e.contains("is it a scene?"), "{e}");
+    assert!(e.lines().all(|l| l.chars().count() <= 130), "{e}");
+    assert_eq!(e.matches("TOML parse error").count(), 1, "{e}");
+    // A scene's own mistake past its first line says the line, without the question.
+    let e = Scene::parse(
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1\n",
+        "s.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("line 2") && !e.contains("is it a scene?"), "{e}");
+}
+
 /// An unclosed inline table repeated (`b = {` after a table header, 3 000 times: 30 kB)
 /// overflowed the TOML parser's stack and aborted the process (found by the parser fuzzer).
 /// It is refused by line; brackets inside strings and comments do not count.
