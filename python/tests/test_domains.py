@@ -118,6 +118,11 @@ def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
         et.Reconstructor(et.polygon(many, 16), et.protocol("adjacent", 16))
     # A long strip is not a sliver.
     et.Reconstructor(et.rectangle(0.3, 0.01, 16), et.protocol("adjacent", 16), triangles=300)
+    # Clockwise vertices placed and numbered the electrodes the other way round, silently.
+    square = [[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1]]
+    et.polygon(square, 8)
+    with pytest.raises(et.EtError, match="vertices clockwise: give them counter-clockwise"):
+        et.polygon(square[::-1], 8)
 
 
 def test_currents_up_to_the_unit_current_of_simulated_frames():

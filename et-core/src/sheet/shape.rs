@@ -104,6 +104,14 @@ impl Shape {
                         "edges cross or touch (the outline must be a simple polygon)",
                     ));
                 }
+                if self.signed_area() < 0.0 {
+                    // Walked clockwise, the outline would place and number the electrodes
+                    // the other way round without a word (a mirrored image).
+                    return Err(ShapeError::Polygon(
+                        "vertices clockwise: give them counter-clockwise (the list reversed); \
+                         electrodes.direction = \"cw\" numbers the electrodes clockwise",
+                    ));
+                }
                 self.not_a_sliver()
             }
         }

@@ -142,6 +142,16 @@ fn bad_scenes_name_the_file_and_the_field() {
         bow_tie.contains("sheet.shape") && bow_tie.contains("simple"),
         "{bow_tie}"
     );
+    // A clockwise outline placed and numbered its electrodes the other way round (a
+    // mirrored image) without a word: refused with the fix.
+    let clockwise = err(&SMALL.replace(
+        r#"shape = { kind = "rectangle", width = 0.13, height = 0.13 }"#,
+        r#"shape = { kind = "polygon", vertices = [[0.0, 0.0], [0.0, 0.1], [0.1, 0.1], [0.1, 0.0]] }"#,
+    ));
+    assert!(
+        clockwise.contains("sheet.shape") && clockwise.contains("vertices clockwise"),
+        "{clockwise}"
+    );
     let not_toml = err("[sheet\nshape = 3");
     assert!(not_toml.starts_with("bad.toml"), "{not_toml}");
     let missing = Scene::load(Path::new("/nonexistent/scene.toml"))
