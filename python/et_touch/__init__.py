@@ -49,6 +49,9 @@ class EtWarning(UserWarning):
 #: a disc's default values 40 times it.
 SCALE_SAID = 1.25
 
+# How far a frame may be from its reference V_0 before it is said: et reconstruct's bound.
+_FRAME_SCALE_SAID: float = _native.FRAME_SCALE_SAID
+
 __all__ = [
     "EtError",
     "EtWarning",
@@ -709,24 +712,34 @@ class Reconstructor:
         first past FRAME_SCALE_SAID times it, or under its inverse (least squares), as `et
         reconstruct` says (a reference in mV against frames in V was imaged as a press
         everywhere). Called after the native side took them: what it refuses is said as
-        refused, not first warned of."""
-        vv = float(v0 @ v0)
-        if not vv > 0 or frames.shape[-1] != len(v0):
+        refused, not first warned of. One frame costs two dot products (a few us)."""
+        if frames.shape[-1] != len(v0):
             return  # (frames of another length are refused by the native side, by K)
-        scale = np.atleast_1d(frames @ v0) / vv
-        bound = _native.FRAME_SCALE_SAID
-        unlike = np.flatnonzero(~((scale >= 1 / bound) & (scale <= bound)))
-        if len(unlike):
-            i = int(unlike[0])
-            which = "the frame" if frames.ndim == 1 else f"frame {i}"
-            warnings.warn(
-                f"{which} is {scale[i]:.3g} times the reference V_0 (least squares; "
-                f"{len(unlike)} of {len(scale)} frames past {bound:g} times either way): are "
-                "the frames and the reference in the same units, at the same current? A press "
-                "changes a frame by a few per cent",
-                EtWarning,
-                stacklevel=3,
+        vv = float(v0 @ v0)
+        if not vv > 0:
+            return
+        if frames.ndim == 1:
+            s = float(frames @ v0) / vv
+            if 1 / _FRAME_SCALE_SAID <= s <= _FRAME_SCALE_SAID:
+                return
+            scale, unlike = np.array([s]), np.array([0])
+        else:
+            scale = (frames @ v0) / vv
+            unlike = np.flatnonzero(
+                ~((scale >= 1 / _FRAME_SCALE_SAID) & (scale <= _FRAME_SCALE_SAID))
             )
+            if not len(unlike):
+                return
+        i = int(unlike[0])
+        which = "the frame" if frames.ndim == 1 else f"frame {i}"
+        warnings.warn(
+            f"{which} is {scale[i]:.3g} times the reference V_0 (least squares; "
+            f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
+            "way): are the frames and the reference in the same units, at the same current? "
+            "A press changes a frame by a few per cent",
+            EtWarning,
+            stacklevel=3,
+        )
 
     def image(self, v: Any, v0: Any = None) -> Image:
         """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
