@@ -846,13 +846,16 @@ fn reconstruct_images_recorded_frames() {
             "--json".into(),
         ]
     };
-    let a = args("50");
-    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let run = |a: &[String]| et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    let out = ok(run(&args("50")));
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     // The strongest region lies on the recorded touch (7 mm finger).
     let t = &j["touches_mm"][0];
@@ -863,7 +866,7 @@ fn reconstruct_images_recorded_frames() {
     // A frame inside the reference is refused with a reason.
     let mut a = args("3");
     a.push("--force".into());
-    let bad = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let bad = run(&a);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("reference"));
     // The untouched frames from another recording, --reference-file (it was ignored beside a
     // recording, and refused as a CSV when it was the reference): the recording's first five
@@ -876,12 +879,7 @@ fn reconstruct_images_recorded_frames() {
     let at = a.iter().position(|x| x == "--reference").unwrap();
     a.splice(at..at + 2, ["--reference-file".to_string(), s(&untouched)]);
     a.push("--force".into());
-    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = ok(run(&a));
     let k: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(k["regions"], j["regions"]);
     assert_eq!(k["alpha"], j["alpha"]);
@@ -904,7 +902,7 @@ fn reconstruct_images_recorded_frames() {
     std::fs::write(&in_mv, mv).unwrap();
     let at = a.iter().position(|x| x == "--reference-file").unwrap();
     a[at + 1] = s(&in_mv);
-    let out = et(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let out = run(&a);
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(
         e.contains("warning: frame 50 is 0.001") && e.contains("times the reference V_0"),

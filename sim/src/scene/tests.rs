@@ -134,20 +134,20 @@ fn bad_scenes_name_the_file_and_the_field() {
         "{fine}"
     );
     // An outline whose edges cross is refused before the sheet is built.
-    let bow_tie = err(&SMALL.replace(
-        r#"shape = { kind = "rectangle", width = 0.13, height = 0.13 }"#,
-        r#"shape = { kind = "polygon", vertices = [[0.0, 0.0], [0.1, 0.1], [0.1, 0.0], [0.0, 0.12]] }"#,
-    ));
+    let outline = |vertices: &str| {
+        err(&SMALL.replace(
+            r#"shape = { kind = "rectangle", width = 0.13, height = 0.13 }"#,
+            &format!(r#"shape = {{ kind = "polygon", vertices = {vertices} }}"#),
+        ))
+    };
+    let bow_tie = outline("[[0.0, 0.0], [0.1, 0.1], [0.1, 0.0], [0.0, 0.12]]");
     assert!(
         bow_tie.contains("sheet.shape") && bow_tie.contains("simple"),
         "{bow_tie}"
     );
     // A clockwise outline placed and numbered its electrodes the other way round (a
     // mirrored image) without a word: refused with the fix.
-    let clockwise = err(&SMALL.replace(
-        r#"shape = { kind = "rectangle", width = 0.13, height = 0.13 }"#,
-        r#"shape = { kind = "polygon", vertices = [[0.0, 0.0], [0.0, 0.1], [0.1, 0.1], [0.1, 0.0]] }"#,
-    ));
+    let clockwise = outline("[[0.0, 0.0], [0.0, 0.1], [0.1, 0.1], [0.1, 0.0]]");
     assert!(
         clockwise.contains("sheet.shape") && clockwise.contains("vertices clockwise"),
         "{clockwise}"
