@@ -30,6 +30,11 @@ pub const MAX_CURRENT_A: f64 = 0.05;
 /// scenes are held to [`MAX_CURRENT_A`], where more is a unit slip.
 pub const MAX_UNIT_CURRENT_A: f64 = 1.0;
 
+/// The smallest current a row may drive, A: the board's step (1 nA). Systems drive from
+/// microamperes to milliamperes; far less is a unit slip, and its frames (1e-300 A gave
+/// 1e-297 V) are past the single precision et takes frames in.
+pub const MIN_CURRENT_A: f64 = 1e-9;
+
 /// One value of the frame: who drives, who measures, with how much current.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -111,6 +116,17 @@ pub enum ScheduleError {
     /// A current that is not positive or not finite.
     #[error("row {row}: current {current_a} A: give a current above 0 A")]
     Current {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A current below [`MIN_CURRENT_A`].
+    #[error(
+        "row {row}: current {current_a:e} A is below 1 nA, the smallest a board drives (systems \
+         drive microamperes to milliamperes): currents are in amperes"
+    )]
+    BelowNano {
         /// The row.
         row: usize,
         /// The current given, A.
@@ -303,6 +319,12 @@ impl Schedule {
                     current_a: r.current_a,
                 });
             }
+            if r.current_a < MIN_CURRENT_A {
+                return Err(ScheduleError::BelowNano {
+                    row,
+                    current_a: r.current_a,
+                });
+            }
         }
         Ok(Self {
             electrodes,
@@ -345,6 +367,9 @@ impl Schedule {
     pub fn of_protocol(protocol: &Protocol, current_a: f64) -> Result<Self, ScheduleError> {
         if !(current_a.is_finite() && current_a > 0.0) {
             return Err(ScheduleError::Current { row: 0, current_a });
+        }
+        if current_a < MIN_CURRENT_A {
+            return Err(ScheduleError::BelowNano { row: 0, current_a });
         }
         if current_a > MAX_UNIT_CURRENT_A {
             return Err(ScheduleError::AboveUnit { row: 0, current_a });
@@ -521,6 +546,7 @@ impl Schedule {
                 | ScheduleError::SameMeasure { row, .. }
                 | ScheduleError::Current { row, .. }
                 | ScheduleError::AboveUnit { row, .. }
+                | ScheduleError::BelowNano { row, .. }
                 | ScheduleError::TooLarge { row, .. } => {
                     let line = row_lines.get(row).copied().unwrap_or(0);
                     fail(line, FileFault::Row(Box::new(e)))

@@ -17,6 +17,23 @@ pub use shape::{Shape, ShapeError};
 /// Default sheet resistance of the PPy fabric, ohm per square (docs/method.md §1).
 pub const SHEET_RESISTANCE: f64 = 30e3;
 
+/// The sheet resistances et models, ohm per square: from below a thick metal plate's (1 cm of
+/// copper has 2e-6) to past an antistatic film's (1e11). A frame is the current times the
+/// sheet resistance times a factor of the geometry, and et takes frames in single precision:
+/// 1e-300 ohm/sq gave frames of zeros without a word, 1e300 infinite ones.
+pub const SHEET_OHM_RANGE: (f64, f64) = (1e-9, 1e15);
+
+/// The conductivities of [`SHEET_OHM_RANGE`]'s sheets, S per square.
+pub const SHEET_SIGMA_RANGE: (f64, f64) = (1e-15, 1e9);
+
+/// The largest contact resistance, as a multiple of the sheet resistance (ohm per ohm/sq).
+/// There the frames have reached their limit (the current spreads evenly under each
+/// electrode; from 1e5 to 1e6 they change by 1e-7 of their size), and past it both the finite
+/// elements and the simulator's network lose digits to round-off, ten times more each decade
+/// (1e-5 of the frame at 1e8, 1e-3 at 1e10, nothing right at 1e13):
+/// `et_recon`'s `a_contact_past_its_limit_changes_nothing`.
+pub const MAX_CONTACT_RATIO: f64 = 1e6;
+
 /// Where the electrodes are and how they touch the fabric.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -222,6 +239,33 @@ pub enum FieldFault {
     /// The fields given together break a rule (no one value is at fault).
     #[error("{0}")]
     Rule(&'static str),
+    /// The value is outside `low` to `high` in `unit`, said in powers of ten.
+    #[error("{value:e} {unit} is outside {low:e} to {high:e}: {why}")]
+    Span {
+        /// The value given.
+        value: f64,
+        /// The smallest value taken.
+        low: f64,
+        /// The largest value taken.
+        high: f64,
+        /// The unit.
+        unit: &'static str,
+        /// Why the range, and what a value outside it may mean.
+        why: &'static str,
+    },
+    /// The contact resistance is over [`MAX_CONTACT_RATIO`] times the sheet resistance.
+    #[error(
+        "{contact_ohm:e} ohm is over {MAX_CONTACT_RATIO:e} times the sheet resistance \
+         ({sheet_ohm:e} ohm/sq): past that the frames no longer change (the current spreads \
+         evenly under each electrode) and the solvers lose digits; give at most {:e} ohm, \
+         which gives the same frames", MAX_CONTACT_RATIO * .sheet_ohm
+    )]
+    ContactRatio {
+        /// The contact resistance, ohm.
+        contact_ohm: f64,
+        /// The sheet resistance, ohm per square.
+        sheet_ohm: f64,
+    },
 }
 
 impl Sheet {
@@ -260,6 +304,18 @@ impl Sheet {
             let rule = "positive (ohm per square)";
             return field("sheet.sheet_resistance", value(self.sheet_resistance, rule));
         }
+        let (low, high) = SHEET_OHM_RANGE;
+        if !(low..=high).contains(&self.sheet_resistance) {
+            let fault = FieldFault::Span {
+                value: self.sheet_resistance,
+                low,
+                high,
+                unit: "ohm per square",
+                why: "from a metal plate's (above 1e-6) to an antistatic film's (below \
+                      1e12), so that frames, the current times it, stay within single precision",
+            };
+            return field("sheet.sheet_resistance", fault);
+        }
         let e = &self.electrodes;
         if !(4..=32).contains(&e.count) || !e.count.is_multiple_of(2) {
             let count = f64::from(e.count);
@@ -274,6 +330,13 @@ impl Sheet {
                 "sheet.electrodes.contact_ohm",
                 value(e.contact_ohm, ">= 0 ohm"),
             );
+        }
+        if e.contact_ohm > MAX_CONTACT_RATIO * self.sheet_resistance {
+            let fault = FieldFault::ContactRatio {
+                contact_ohm: e.contact_ohm,
+                sheet_ohm: self.sheet_resistance,
+            };
+            return field("sheet.electrodes.contact_ohm", fault);
         }
         if let Some(deg) = e.first_deg {
             if !deg.is_finite() {
@@ -415,6 +478,36 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("first_deg")
+        );
+    }
+
+    /// A sheet resistance is taken from 1e-9 to 1e15 ohm/sq, ends included (1e-300 gave
+    /// frames of zeros, 1e300 infinite ones), and the contact up to MAX_CONTACT_RATIO times it.
+    #[test]
+    fn sheets_past_the_range_of_real_ones_are_refused_by_name() {
+        let mut sheet = Sheet::disc(0.1, 16);
+        let (low, high) = SHEET_OHM_RANGE;
+        for r in [low, high] {
+            sheet.sheet_resistance = r;
+            sheet.electrodes.contact_ohm = r;
+            assert_eq!(sheet.validate(), Ok(()), "{r}");
+        }
+        for r in [low / 2.0, 2.0 * high, 1e-300, 1e300] {
+            sheet.sheet_resistance = r;
+            let e = sheet.validate().unwrap_err().to_string();
+            assert!(
+                e.starts_with("sheet.sheet_resistance: ") && e.contains("outside 1e-9 to 1e15"),
+                "{e}"
+            );
+        }
+        sheet.sheet_resistance = 1.0;
+        sheet.electrodes.contact_ohm = MAX_CONTACT_RATIO;
+        assert_eq!(sheet.validate(), Ok(()));
+        sheet.electrodes.contact_ohm = 1.5 * MAX_CONTACT_RATIO;
+        let e = sheet.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("1.5e6 ohm is over 1e6 times the sheet resistance (1e0 ohm/sq)"),
+            "{e}"
         );
     }
 

@@ -392,6 +392,20 @@ impl Reconstructor {
                 sigma.len()
             )));
         }
+        // The conductivities of the sheets a scene takes (their resistances' range): outside
+        // it a frame underflows to zeros or overflows single precision.
+        let (low, high) = et_core::sheet::SHEET_SIGMA_RANGE;
+        let (low_ohm, high_ohm) = et_core::sheet::SHEET_OHM_RANGE;
+        if let Some((i, s)) = sigma
+            .iter()
+            .enumerate()
+            .find(|(_, s)| s.is_finite() && **s > 0.0 && !(low..=high).contains(*s))
+        {
+            return Err(usage(format!(
+                "sigma[{i}] = {s:e} S per square: et models sheets of {low:e} to {high:e} S per \
+                 square (sheet resistances {low_ohm:e} to {high_ohm:e} ohm/sq); in other units?"
+            )));
+        }
         let (imager, schedule) = (self.inner.imager(), self.inner.schedule());
         let frame = py
             .detach(|| imager.forward.frame(sigma, schedule))

@@ -109,6 +109,25 @@ def test_a_sheet_with_a_nan_is_refused_by_the_numbers_name():
         et.Reconstructor(et.disc(0.1, 16, contact_ohm=math.inf), et.protocol("adjacent", 16))
 
 
+def test_sheets_and_conductivities_past_single_precisions_frames_are_refused():
+    # 1e-300 ohm/sq gave frames of zeros, 1e300 infinite ones, without a word.
+    for r in (1e-300, 1e300):
+        with pytest.raises(et.EtError, match="ohm per square is outside 1e-9 to 1e15"):
+            et.disc(0.1, 16, sheet_resistance=r)
+    # Past a million times the sheet resistance a contact changes nothing but round-off.
+    with pytest.raises(et.EtError, match="give at most 1e6 ohm, which gives the same frames"):
+        et.disc(0.1, 16, sheet_resistance=1.0, contact_ohm=1e9)
+    r = et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=500)
+    for sigma in (1e300, 1e-300):
+        with pytest.raises(et.EtError, match="S per square: et models sheets of 1e-15 to 1e9"):
+            r.forward(sigma)
+    assert np.all(np.isfinite(r.forward(1e9))) and np.abs(r.forward(1e-15)).max() < 1e15
+    # A reference 1e30 times a sheet's frame fitted a sheet of 3e34 ohm/sq, refused only when
+    # the fitted sheet was first read.
+    with pytest.raises(et.EtError, match="makes the sheet 3.000e34 ohm/sq, where sheets are"):
+        r.fit_background(r.forward(r.sigma0) * 1e30)
+
+
 def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
     with pytest.raises(et.EtError, match="sliver"):
         et.Reconstructor(et.rectangle(0.2, 1e-6, 16), et.protocol("adjacent", 16))

@@ -142,4 +142,15 @@ fn wrong_rows_are_named_by_line_and_cell() {
     assert!(matches!(e, ScheduleError::AboveUnit { .. }), "{e:?}");
     let e = parse("0,1,2,3,1.0\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("50 mA"), "{e}");
+    // And at least 1 nA: 1e-300 A gave frames of 1e-297 V, past single precision.
+    assert!(Schedule::of_protocol(&protocol, MIN_CURRENT_A).is_ok());
+    let e = Schedule::of_protocol(&protocol, 1e-300).unwrap_err();
+    assert!(matches!(e, ScheduleError::BelowNano { .. }), "{e:?}");
+    let e = parse("0,1,2,3,1e-3\n0,1,3,4,1e-300\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(":2:") && e.contains("1e-300 A is below 1 nA"),
+        "{e}"
+    );
 }

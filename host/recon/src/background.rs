@@ -72,6 +72,20 @@ pub enum BackgroundError {
          direction= in Python)?"
     )]
     Sign(f64),
+    /// The fitted sheet resistance is outside the sheets et models
+    /// ([`et_core::sheet::SHEET_OHM_RANGE`]): frames in other units or at another current.
+    #[error(
+        "background fit: the reference makes the sheet {rs:.3e} ohm/sq, where sheets are {:e} \
+         to {:e}: are the frames in volts, at the protocol's current ({current_a:e} A)?",
+        et_core::sheet::SHEET_OHM_RANGE.0,
+        et_core::sheet::SHEET_OHM_RANGE.1
+    )]
+    Scale {
+        /// The fitted sheet resistance, ohm per square.
+        rs: f64,
+        /// The protocol's (first row's) current, A.
+        current_a: f64,
+    },
 }
 
 /// The value of a frame that holds one value throughout (all zero, or a constant): no
@@ -250,6 +264,11 @@ pub fn fit(
     };
     if rs <= 0.0 {
         return Err(BackgroundError::Sign(rs));
+    }
+    let (low, high) = et_core::sheet::SHEET_OHM_RANGE;
+    if !(low..=high).contains(&rs) {
+        let current_a = schedule.rows().first().map_or(0.0, |r| r.current_a);
+        return Err(BackgroundError::Scale { rs, current_a });
     }
     Ok(BackgroundFit {
         sheet_resistance: rs,

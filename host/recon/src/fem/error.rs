@@ -91,8 +91,8 @@ pub enum FemError {
     /// is not numerically positive definite).
     #[error(
         "forward model: factorisation failed: the finite-element system is singular or not \
-         positive definite (a conductivity that is zero, negative or not finite, or a piece of \
-         the mesh that no electrode reaches)"
+         positive definite (conductivities that span too many powers of ten, or a piece of the \
+         mesh that no electrode reaches)"
     )]
     Factorisation,
     /// The solve gave potentials that are not finite.

@@ -300,6 +300,50 @@ fn refining_at_a_touch_spends_the_same_triangles_better() {
     assert!(e_r < 0.5 * e_u, "refined {e_r} against uniform {e_u}");
 }
 
+/// At the other end, a contact resistance of MAX_CONTACT_RATIO times the sheet resistance is
+/// the frames' limit (the current spreads evenly under each electrode): ten times less
+/// changes the frame by about 1e-7 of its size, past the limit round-off grows ten times each
+/// decade, and the sheet's one validation refuses it by name.
+#[test]
+fn a_contact_past_its_limit_changes_nothing() {
+    use et_core::sheet::MAX_CONTACT_RATIO;
+    let mut spec = Sheet::disc(0.1, 16);
+    spec.sheet_resistance = 1.0;
+    let mesh = Mesh::of_sheet(&spec, MeshSize::for_count(&spec, 8_000)).unwrap();
+    let sigma = vec![1.0; mesh.triangles.len()];
+    let schedule = Protocol::new(ProtocolKind::Adjacent, 16)
+        .unwrap()
+        .schedule(1e-3)
+        .unwrap();
+    let w = spec.electrodes.width;
+    let frame = |ratio: f64| {
+        Forward::new(mesh.clone(), Electrodes::Complete(vec![ratio * w; 16]))
+            .unwrap()
+            .frame(&sigma, &schedule)
+            .unwrap()
+    };
+    let change = |a: &[f64], b: &[f64]| {
+        let d: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+        (d / b.iter().map(|y| y * y).sum::<f64>()).sqrt()
+    };
+    let at = frame(MAX_CONTACT_RATIO);
+    let (below, far) = (
+        frame(MAX_CONTACT_RATIO / 10.0),
+        frame(1e3 * MAX_CONTACT_RATIO),
+    );
+    let (converged, lost) = (change(&below, &at), change(&far, &at));
+    println!("contact x 1/10 at the limit: {converged:.1e}; x 1000: {lost:.1e}");
+    assert!(converged < 1e-6, "{converged}");
+    // Past it the frame moves again by round-off alone (the limit's frame is the physics).
+    assert!(lost > 10.0 * converged, "{lost} against {converged}");
+    spec.electrodes.contact_ohm = 2.0 * MAX_CONTACT_RATIO;
+    let e = spec.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("contact_ohm") && e.contains("give at most 1e6 ohm"),
+        "{e}"
+    );
+}
+
 /// The shunt model is the complete model's limit of zero contact resistance: the complete
 /// model's frame approaches it in proportion to z, down to MIN_CONTACT_RATIO; reciprocity
 /// holds for it; a contact resistance below the limit is refused by name.
