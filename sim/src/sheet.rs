@@ -201,7 +201,27 @@ impl SheetSpec {
             .min(electrodes.width / 2.0)
     }
 
-    /// Checks every field.
+    /// The simulator's grid: its spacing's nodes within [`MAX_GRID_NODES`]. Checked when a
+    /// network is built, not with the other fields: a sheet that only images measured frames
+    /// (`et reconstruct --frames`, `et forward`, Python) never builds one, and a 1 m sheet with
+    /// 5 mm electrodes was refused for a grid nothing would make.
+    ///
+    /// # Errors
+    /// [`SheetError::TooManyNodes`].
+    pub fn check_grid(&self) -> Result<(), SheetError> {
+        let h = self.resolution.unwrap_or_else(|| self.default_resolution());
+        let nodes = self.physical.shape.area() / (h * h);
+        if !nodes.is_finite() || nodes > MAX_GRID_NODES as f64 {
+            return Err(SheetError::TooManyNodes {
+                spacing: h,
+                nodes,
+                default: self.resolution.is_none(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks every field (the grid's size is [`SheetSpec::check_grid`]'s).
     ///
     /// # Errors
     /// [`SheetError`] naming the field.
@@ -213,15 +233,6 @@ impl SheetSpec {
             let rule = "a positive spacing below a quarter of the sheet (m)";
             let fault = FieldFault::Value { value: h, rule };
             return Err(SheetError::field("sheet.resolution", fault));
-        }
-        let h = self.resolution.unwrap_or_else(|| self.default_resolution());
-        let nodes = self.physical.shape.area() / (h * h);
-        if !nodes.is_finite() || nodes > MAX_GRID_NODES as f64 {
-            return Err(SheetError::TooManyNodes {
-                spacing: h,
-                nodes,
-                default: self.resolution.is_none(),
-            });
         }
         let p = &self.piezo;
         let high = crate::touch::MAX_MULTIPLIER - 1.0;
@@ -431,6 +442,7 @@ fn build_network_with(
     contacts: Option<&[f64]>,
 ) -> Result<Network, SheetError> {
     spec.validate()?;
+    spec.check_grid()?;
     if let Some(f) = field
         && !f.coefficients.iter().all(|a| a.is_finite())
     {

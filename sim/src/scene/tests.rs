@@ -127,8 +127,17 @@ fn bad_scenes_name_the_file_and_the_field() {
     assert!(settle.contains("settle_samples"), "{settle}");
     let shape = err(&SMALL.replace("width = 0.13, height", "width = -0.13, height"));
     assert!(shape.contains("width"), "{shape}");
-    // Too fine a grid for memory is refused by name, not by an allocation abort.
-    let fine = err(&SMALL.replace("resolution = 0.005", "resolution = 0.0005"));
+    // Too fine a grid for memory is refused by name, not by an allocation abort, where the
+    // simulator would build it; a scene that only images measured frames never does (a 1 m
+    // sheet with 5 mm electrodes was refused for a grid nothing would make).
+    let fine = Scene::parse(
+        &SMALL.replace("resolution = 0.005", "resolution = 0.0005"),
+        "fine.toml",
+    )
+    .unwrap();
+    let fine = crate::sheet::SimulatedSheet::new(&fine.sheet, &[])
+        .unwrap_err()
+        .to_string();
     assert!(
         fine.contains("sheet.resolution") && fine.contains("at most 12000"),
         "{fine}"
