@@ -240,7 +240,7 @@ pub enum FieldFault {
     #[error("{0}")]
     Rule(&'static str),
     /// The value is outside `low` to `high` in `unit`, said in powers of ten.
-    #[error("{value:e} {unit} is outside {low:e} to {high:e}: {why}")]
+    #[error("{} {unit} is outside {} to {}: {why}", Sig(*.value), Sig(*.low), Sig(*.high))]
     Span {
         /// The value given.
         value: f64,
@@ -266,6 +266,23 @@ pub enum FieldFault {
         /// The sheet resistance, ohm per square.
         sheet_ohm: f64,
     },
+}
+
+/// A number said in powers of ten to six significant digits, trailing zeros dropped
+/// (1.3000000000000001e-5 as 1.3e-5).
+struct Sig(f64);
+
+impl core::fmt::Display for Sig {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let said = format!("{:.5e}", self.0);
+        match said.split_once('e') {
+            Some((mantissa, exponent)) if mantissa.contains('.') => {
+                let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+                write!(f, "{mantissa}e{exponent}")
+            }
+            _ => f.write_str(&said),
+        }
+    }
 }
 
 impl Sheet {

@@ -708,6 +708,40 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
     assert!((stage("setup") - sum).abs() < 1e-9, "{t}");
     assert_eq!(j["protocol"], "adjacent");
     assert_eq!(j["touch_matches"].as_array().map(Vec::len), Some(1), "{j}");
+    // Without --json the touch is said; on the untouched sheet, that there is none (it listed
+    // the noise's regions and said nothing of touches).
+    let words = |scene: &str| {
+        let untouched = dir.join("untouched.toml");
+        std::fs::write(&untouched, scene).unwrap();
+        let out = et(&[
+            "reconstruct",
+            "--scene",
+            untouched.to_str().unwrap(),
+            "--triangles",
+            "3000",
+            "--out",
+            png.to_str().unwrap(),
+            "--force",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let x075 = std::fs::read_to_string(root.join("sim/scenes/disc-ref-x075.toml")).unwrap();
+    let touched = words(&x075);
+    assert!(
+        touched.contains("touch 0: at (") && !touched.contains("no touch"),
+        "{touched}"
+    );
+    let untouched = words(x075.split("[[touch]]").next().unwrap());
+    assert!(
+        untouched.contains("no touch: no region reaches 5 times its pixels' noise")
+            && !untouched.contains("touch 0: at"),
+        "{untouched}"
+    );
     let bad = et(&[
         "reconstruct",
         "--scene",
@@ -1795,6 +1829,14 @@ label,x_mm,y_mm,visit,v0,v3,v3b
                 .chain([p("c.csv")])
                 .collect(),
             "sheet 130.0 mm across",
+        ),
+        (
+            ["collect", "--scene", scene, "--radius-mm", "1", "--out"]
+                .map(String::from)
+                .into_iter()
+                .chain([p("c.csv")])
+                .collect(),
+            "under half the simulated sheet's grid spacing (2.5 mm)",
         ),
     ];
     for (args, what) in cases {

@@ -77,6 +77,7 @@ pub fn scene_frames(
 /// # Errors
 /// [`StillError`] if the sheet cannot be built.
 pub fn simulated_sheet(scene: &Scene) -> Result<Arc<SimulatedSheet>, StillError> {
+    scene.check_touches_resolved()?;
     Ok(Arc::new(SimulatedSheet::new(&scene.sheet, &[])?))
 }
 

@@ -67,6 +67,7 @@ impl Run {
             .filter(|f| f.kind == FaultKind::Shorted)
             .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
             .collect();
+        scene.check_touches_resolved()?;
         let sheet = SimulatedSheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
         let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())?;
         // A scene is one measurement set: its junction potentials and conductance.

@@ -142,6 +142,23 @@ fn bad_scenes_name_the_file_and_the_field() {
         fine.contains("sheet.resolution") && fine.contains("at most 12000"),
         "{fine}"
     );
+    // A touch under 1e-4 of the sheet's size changes no frame that single precision holds
+    // (1e-20 m hung the mesher); one under half the grid spacing is kept for imaging (the
+    // truth beside measured frames) and refused where the scene is simulated.
+    let tiny = err(&SMALL.replace("radius = 0.0075", "radius = 1e-20"));
+    assert!(
+        tiny.contains("touch[0].radius: 1e-20 m is outside 1.3e-5 to 1.3e-1"),
+        "{tiny}"
+    );
+    let small = Scene::parse(
+        &SMALL.replace("radius = 0.0075", "radius = 0.001"),
+        "s.toml",
+    )
+    .unwrap();
+    let e = crate::still::simulated_sheet(&small)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("touch[0].radius: 0.001 m is under half"), "{e}");
     // An outline whose edges cross is refused before the sheet is built.
     let outline = |vertices: &str| {
         err(&SMALL.replace(

@@ -465,3 +465,48 @@ fn an_elliptic_touch_is_symmetric_where_the_ellipse_is() {
         "turned {a:.2e} against unturned {b:.2e}"
     );
 }
+
+/// A touch under half the grid spacing changes the edges whose midpoints it happens to reach,
+/// so its frame depends on where it falls between the nodes (at a quarter spacing one place
+/// changed nothing at all); from half the spacing up the change holds to a few tens of per
+/// cent wherever it falls. The simulator refuses the smaller ones by name.
+#[test]
+fn a_touch_under_the_grid_is_refused_not_aliased() {
+    let h = 0.005;
+    let sheet = SimulatedSheet::new(&square(0.13, 16, Some(h)), &[]).unwrap();
+    let (p, src) = (adjacent(16), Source::default());
+    let v0 = frame(&sheet.transfer(&[]).unwrap(), &p, 32e-6, &src);
+    // The change's size at three places a quarter spacing apart.
+    let spread = |radius: f64| {
+        let b: Vec<f64> = [0.0, 0.25, 0.5]
+            .iter()
+            .map(|shift| {
+                let t = Touch {
+                    position: [0.01 + shift * h, 0.0013],
+                    radius,
+                    pressure: 20e3,
+                    footprint: Default::default(),
+                };
+                bvc(&frame(&sheet.transfer(&[t]).unwrap(), &p, 32e-6, &src), &v0)
+            })
+            .collect();
+        let (lo, hi) = b
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(l, u), x| (l.min(*x), u.max(*x)));
+        println!("radius {radius}: changes {b:?}");
+        hi / lo
+    };
+    let (under, at) = (spread(h / 4.0), spread(h / 2.0));
+    assert!(under > 2.0, "a quarter-spacing touch: {under}");
+    assert!(at < 2.0, "a half-spacing touch: {at}");
+    assert!(sheet.spec().check_touch(0, h / 2.0).is_ok());
+    let e = sheet
+        .spec()
+        .check_touch(3, h / 4.0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("touch[3].radius: 0.00125 m is under half") && e.contains("at most 0.0025 m"),
+        "{e}"
+    );
+}

@@ -36,7 +36,8 @@ pub(crate) struct CollectArgs {
     #[arg(long, default_value_t = 60.0, value_parser = crate::domain::real(0.1, 1_000.0))]
     max_kpa: f64,
     /// Finger contact radius (the median over presses), mm (0.5 to 100: a smaller contact
-    /// is no finger's, and below what the simulated sheet resolves).
+    /// is no finger's; and at least half the scene's grid spacing, sheet.resolution, which
+    /// the simulated sheet resolves).
     #[arg(long, default_value_t = 7.5, value_parser = crate::domain::real(0.5, 100.0))]
     radius_mm: f64,
     /// Radius of the target the finger's centre lands in (uniformly) around each class
@@ -160,6 +161,19 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     let config = collect::training_config(scene.scan_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
     let plan = args.plan()?;
+    // The finger against the simulator's grid, as a scene's touches are.
+    let spacing = scene.sheet.spacing();
+    if plan.radius < spacing / 2.0 {
+        bail!(
+            "--radius-mm {}: under half the simulated sheet's grid spacing ({} mm), so the \
+             presses' frames would depend on where each falls between the grid's nodes: set \
+             sheet.resolution in {} to at most {} m (twice the radius)",
+            args.radius_mm,
+            spacing * 1e3,
+            args.scene.display(),
+            2.0 * plan.radius
+        );
+    }
     let bar = ProgressBar::new(args.visits as u64).with_style(
         ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),

@@ -156,6 +156,13 @@ fn say_found(
             r.area * 1e6
         );
     }
+    if found.is_empty() {
+        say!(
+            "no touch: no region reaches {} times its pixels' noise (the untouched sheet, or \
+             frames of noise)",
+            et_recon::TOUCH_Z
+        );
+    }
     for (i, r) in found.iter().enumerate() {
         say!(
             "touch {i}: at ({:.1}, {:.1}) mm{}",
