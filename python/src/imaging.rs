@@ -489,6 +489,13 @@ impl Reconstructor {
             .map_err(|e| refused(&e))?;
         let dv = slice(&dv, "dv")?;
         // A frame that cannot be imaged is refused, not timed as None.
+        let k = self.inner.schedule().frame_len();
+        if dv.len() != k {
+            return Err(usage(format!(
+                "dv: {} values, where the protocol's frame has K = {k}",
+                dv.len()
+            )));
+        }
         if let Some((i, v)) = dv.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(usage(format!("dv[{i}] = {v}: a finite number")));
         }

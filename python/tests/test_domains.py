@@ -38,6 +38,10 @@ def test_timing_repeats_and_electrode_counts_are_checked():
     r.image(v0 * 1.001, v0)
     with pytest.raises(et.EtError, match="repeats = 1000000000"):
         r.frame_median(np.zeros_like(v0), 10**9)
+    # A change of another length was timed as None, as an iterative method's is.
+    with pytest.raises(et.EtError, match="dv: 20 values, where the protocol's frame has K = 208"):
+        r.frame_median(np.zeros(20), 3)
+    assert r.frame_median(np.zeros_like(v0), 3) > 0
     ex = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
     meas = np.array([[2, 3, 0], [3, 0, 1], [0, 1, 2], [1, 2, 3]])
     with pytest.raises(et.EtError, match="whole numbers"):
