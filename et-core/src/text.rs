@@ -320,6 +320,13 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
     if meta.is_file() && meta.len() > limit {
         return Err(too_large());
     }
+    if endless_device(&file, &meta) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "a character device, which never ends (as /dev/zero or /dev/urandom): not a file \
+             et reads",
+        ));
+    }
     let limit = usize::try_from(limit).unwrap_or(usize::MAX);
     let mut bytes = Vec::new();
     if meta.is_file() {
@@ -343,6 +350,22 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
         }
         bytes.extend_from_slice(chunk.get(..n).unwrap_or_default());
     }
+}
+
+/// Whether `file` is a character device other than the null device (read as empty) and a
+/// terminal (typed input ends with Ctrl-D): /dev/zero and /dev/urandom were read to the
+/// data limit, a gigabyte, before they were refused.
+#[cfg(unix)]
+fn endless_device(file: &std::fs::File, meta: &std::fs::Metadata) -> bool {
+    use std::io::IsTerminal as _;
+    use std::os::unix::fs::{FileTypeExt as _, MetadataExt as _};
+    let null = std::fs::metadata("/dev/null").map(|m| m.rdev()).ok();
+    meta.file_type().is_char_device() && !file.is_terminal() && null != Some(meta.rdev())
+}
+
+#[cfg(not(unix))]
+fn endless_device(_: &std::fs::File, _: &std::fs::Metadata) -> bool {
+    false
 }
 
 /// [`read_at_most`] as UTF-8 text, without a leading byte-order mark.
@@ -392,9 +415,35 @@ mod tests {
 
     #[test]
     fn a_reader_stops_at_its_limit_on_an_endless_stream() {
-        let e = super::read_at_most(std::path::Path::new("/dev/zero"), 1 << 16).unwrap_err();
+        // A pipe that never closes is read to the limit, and no further.
+        let fifo = std::env::temp_dir().join(format!("et-text-fifo-{}", std::process::id()));
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+        let writer = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || {
+                use std::io::Write as _;
+                let mut pipe = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
+                // Until the reader goes away (a broken pipe).
+                while pipe.write_all(&[b'1'; 4096]).is_ok() {}
+            })
+        };
+        let e = super::read_at_most(&fifo, 1 << 16).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
         assert!(e.to_string().contains("more than 65536 bytes"), "{e}");
+        writer.join().unwrap();
+        std::fs::remove_file(&fifo).unwrap();
+        // A character device that never ends is refused by its kind, before a byte is read;
+        // the null device reads as empty.
+        for endless in ["/dev/zero", "/dev/urandom"] {
+            let e = super::read_at_most(std::path::Path::new(endless), 1 << 16).unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{endless}: {e}");
+            assert!(
+                e.to_string()
+                    .contains("a character device, which never ends"),
+                "{e}"
+            );
+        }
         let text = super::read_text_at_most(std::path::Path::new("/dev/null"), 10).unwrap();
         assert!(text.is_empty());
         // A regular file is measured before it is read; one at the limit is read whole.

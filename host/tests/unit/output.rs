@@ -109,6 +109,9 @@ fn only_regular_files_are_replaced_and_streams_are_written_through() {
     for stream in ["/dev/null", "/dev/stdout"] {
         check(Path::new(stream), &[], false).unwrap();
     }
+    // The null device as an input too harms nothing (it was refused as overwriting it).
+    let null = Path::new("/dev/null");
+    check(null, &[null], false).unwrap();
     let mut given = None;
     write::<_, OutputError>(Path::new("/dev/null"), |p| {
         given = Some(p.to_path_buf());
