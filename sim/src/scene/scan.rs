@@ -19,13 +19,19 @@ impl Scene {
     /// 1 mA), else a known protocol and a current up to 50 mA for imaging recorded frames.
     pub(super) fn check_scan(&self) -> Result<(), FieldError> {
         let ua = self.scan.current_ua;
-        let max_ua = et_core::schedule::MAX_CURRENT_A * 1e6;
-        if !(ua.is_finite() && ua > 0.0 && ua <= max_ua) {
-            let fault = FieldFault::Range {
+        let (min_ua, max_ua) = (
+            et_core::schedule::MIN_CURRENT_A * 1e6,
+            et_core::schedule::MAX_CURRENT_A * 1e6,
+        );
+        if !(ua.is_finite() && ua >= min_ua && ua <= max_ua) {
+            // (Said in uA, as written: 0.0004 uA was said as the board's "current_na = 0".)
+            let fault = FieldFault::Span {
                 value: ua,
-                low: 0.0,
+                low: min_ua,
                 high: max_ua,
                 unit: "uA",
+                why: "from 1 nA, the smallest a board drives, to 50 mA (systems drive \
+                      microamperes to milliamperes)",
             };
             return Err(FieldError::new("scan.current_ua", fault));
         }

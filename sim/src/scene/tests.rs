@@ -159,6 +159,14 @@ fn bad_scenes_name_the_file_and_the_field() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("touch[0].radius: 0.001 m is under half"), "{e}");
+    // A current is said in the field's own unit (0.0004 uA was "scan: current_na = 0").
+    for (ua, says) in [
+        ("0.0004", "4e-4 uA is outside 1e-3 to 5e4"),
+        ("1e9", "1e9 uA is outside"),
+    ] {
+        let e = err(&format!("{SMALL}\n[scan]\ncurrent_ua = {ua}\n"));
+        assert!(e.contains("scan.current_ua: ") && e.contains(says), "{e}");
+    }
     // An outline whose edges cross is refused before the sheet is built.
     let outline = |vertices: &str| {
         err(&SMALL.replace(
