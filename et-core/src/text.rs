@@ -352,6 +352,31 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
     }
 }
 
+/// Text in UTF-16 with its byte-order mark (a spreadsheet's "Unicode text" export), decoded;
+/// None for any other bytes.
+fn utf16(bytes: &[u8]) -> Option<std::io::Result<String>> {
+    let little = match bytes {
+        [0xFF, 0xFE, ..] => true,
+        [0xFE, 0xFF, ..] => false,
+        _ => return None,
+    };
+    let units: Vec<u16> = bytes[2..]
+        .chunks(2)
+        .map(|c| match (c, little) {
+            ([a, b], true) => u16::from_le_bytes([*a, *b]),
+            ([a, b], false) => u16::from_be_bytes([*a, *b]),
+            // An odd byte at the end: not a UTF-16 character, refused below.
+            _ => 0xDC00,
+        })
+        .collect();
+    Some(String::from_utf16(&units).map_err(|_| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "UTF-16 text (its byte-order mark says so) that does not decode: a copy cut short?",
+        )
+    }))
+}
+
 /// Whether `file` is a character device other than the null device (read as empty) and a
 /// terminal (typed input ends with Ctrl-D): /dev/zero and /dev/urandom were read to the
 /// data limit, a gigabyte, before they were refused.
@@ -368,17 +393,37 @@ fn endless_device(_: &std::fs::File, _: &std::fs::Metadata) -> bool {
     false
 }
 
-/// [`read_at_most`] as UTF-8 text, without a leading byte-order mark.
+/// [`read_at_most`] as text, without a leading byte-order mark: UTF-8, or UTF-16 with its
+/// byte-order mark (what a spreadsheet's "Unicode text" export writes, tab-separated).
 ///
 /// # Errors
-/// As [`read_at_most`], and [`std::io::ErrorKind::InvalidData`] for text that is not UTF-8.
+/// As [`read_at_most`], and [`std::io::ErrorKind::InvalidData`] for text that is neither,
+/// naming the line and byte (Latin-1's accented letters, most often).
 pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<String> {
-    let mut text = String::from_utf8(read_at_most(path, limit)?).map_err(|e| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
-        )
-    })?;
+    let bytes = read_at_most(path, limit)?;
+    let mut text = match utf16(&bytes) {
+        Some(text) => text?,
+        None => String::from_utf8(bytes).map_err(|e| {
+            let at = e.utf8_error().valid_up_to();
+            let bytes = e.as_bytes();
+            let line = 1 + bytes[..at].iter().filter(|b| **b == b'\n').count();
+            let column = at
+                - bytes[..at]
+                    .iter()
+                    .rposition(|b| *b == b'\n')
+                    .map_or(0, |i| i + 1);
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "not UTF-8 text (line {line}, byte {} of the line: 0x{:02x}, as Latin-1 or \
+                     Windows-1252 write an accented letter): save it as UTF-8 (a \
+                     spreadsheet's \"CSV UTF-8\")",
+                    column + 1,
+                    bytes.get(at).copied().unwrap_or(0)
+                ),
+            )
+        })?,
+    };
     // A byte-order mark (Windows editors write one) is not part of the text: every reader
     // of every format accepts it alike.
     if text.starts_with('\u{feff}') {
@@ -452,6 +497,32 @@ mod tests {
         assert_eq!(super::read_at_most(&path, 100_000).unwrap().len(), 100_000);
         let e = super::read_at_most(&path, 99_999).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+        // UTF-16 with its mark (a spreadsheet's "Unicode text") is read as its text, both
+        // byte orders; Latin-1 is refused by line and byte, with the fix.
+        let text = "a\tb\n1\t2\n";
+        for (mark, bytes) in [
+            (
+                [0xFF, 0xFE],
+                text.encode_utf16()
+                    .flat_map(u16::to_le_bytes)
+                    .collect::<Vec<u8>>(),
+            ),
+            (
+                [0xFE, 0xFF],
+                text.encode_utf16().flat_map(u16::to_be_bytes).collect(),
+            ),
+        ] {
+            std::fs::write(&path, [&mark[..], &bytes].concat()).unwrap();
+            assert_eq!(super::read_text_at_most(&path, 100).unwrap(), text);
+        }
+        std::fs::write(&path, b"x,y\ngr\xf6\xdfe,1\n").unwrap();
+        let e = super::read_text_at_most(&path, 100)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 2, byte 3 of the line: 0xf6") && e.contains("CSV UTF-8"),
+            "{e}"
+        );
         // A byte-order mark is dropped, for every format alike.
         std::fs::write(&path, "\u{feff}{\"a\": 1}").unwrap();
         assert_eq!(super::read_text_at_most(&path, 100).unwrap(), "{\"a\": 1}");
