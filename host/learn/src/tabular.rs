@@ -57,6 +57,14 @@ pub enum TabularError {
     /// No candidate could be fitted in cross-validation: the first reason each method gave.
     #[error("no candidate could be fitted in cross-validation: {0}")]
     NothingFitted(String),
+    /// No candidate could be fitted on every row, and some features are constant.
+    #[error("{source}; {constant}")]
+    Constant {
+        /// Why the last candidate failed.
+        source: Box<TabularError>,
+        /// The constant features, said ([`constant_said`]).
+        constant: String,
+    },
     /// A model file that could not be written or read, is not JSON, or not an et table model.
     #[error("{}: {source}", .path.display())]
     Model {

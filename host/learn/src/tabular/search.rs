@@ -135,6 +135,7 @@ pub fn train(
 ) -> Result<TableModel, TabularError> {
     let started = std::time::Instant::now();
     finite_features(&table.x)?;
+    let constant = constant_said(table);
     let standardised;
     let table = if opts.per_group {
         standardised = table.standardised_per_group()?;
@@ -156,6 +157,7 @@ pub fn train(
     )?;
     let by_drift = !cv.grouped;
     let (mut ranked, mut notes) = rank(&search, choice, cv.grouped);
+    notes.extend(constant.clone());
     let average = match (&targets, choice) {
         (Some(t), Choice::Auto) if opts.grid.is_none() => average_of_best(
             &ranked,
@@ -189,7 +191,14 @@ pub fn train(
         (targets.as_deref(), classes.as_ref()),
         (&members, fold_rows),
         (opts.seed, progress),
-    )?;
+    )
+    .map_err(|e| match constant {
+        Some(constant) => TabularError::Constant {
+            source: Box::new(e),
+            constant,
+        },
+        None => e,
+    })?;
     search.extend(average.clone());
     for c in &mut search {
         c.out_of_fold = None;

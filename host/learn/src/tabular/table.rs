@@ -345,3 +345,49 @@ impl Grid {
         format!("r{}c{}", cell / self.cols + 1, cell % self.cols + 1)
     }
 }
+
+/// The features of `table` that hold one value in every row, said (at most five named, then
+/// how many more), or None: they carry nothing to learn from, and they make a class's
+/// covariance singular, which an unusable QDA reported as "(regularise it)" alone.
+pub(super) fn constant_said(table: &Table) -> Option<String> {
+    let x = &table.x;
+    let constant: Vec<(usize, f64)> = (0..x.ncols())
+        .filter_map(|j| {
+            let first = *x.column(j).iter().next()?;
+            x.column(j)
+                .iter()
+                .all(|v| *v == first)
+                .then_some((j, first))
+        })
+        .collect();
+    let named: Vec<String> = constant
+        .iter()
+        .take(5)
+        .map(|&(j, v)| {
+            let name = table.feature_names.get(j).map_or("?", String::as_str);
+            format!("{name} ({v})")
+        })
+        .collect();
+    let more = constant.len().saturating_sub(named.len());
+    let more = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
+    match constant.len() {
+        0 => None,
+        1 => {
+            let (j, v) = constant.first().copied().unwrap_or((0, 0.0));
+            let name = table.feature_names.get(j).map_or("?", String::as_str);
+            Some(format!(
+                "feature {name} is {v} in every row: it carries nothing to learn from (a dead \
+                 channel, or a sensor not connected?); drop it"
+            ))
+        }
+        n => Some(format!(
+            "{n} features hold one value in every row: {}{more}; they carry nothing to learn \
+             from (dead channels, or sensors not connected?); drop them",
+            named.join(", ")
+        )),
+    }
+}

@@ -316,6 +316,39 @@ fn a_grid_of_classes_from_positions() {
 
 /// The substitution itself: only QDA, only at full shrinkage, only toward the pooled
 /// covariance (enough rows for it to have full rank).
+/// A feature of one value in every row (a dead channel) is said in the training's note; when
+/// with a copied feature it leaves no QDA usable, the error names it (it said "(regularise
+/// it)" alone).
+#[test]
+fn features_of_one_value_are_named() {
+    let mut rng = et_core::rng::Rng::new(5);
+    let labels: Vec<String> = (0..60).map(|i| format!("k{}", i / 20)).collect();
+    let mut table = |copied: bool| {
+        let a: Vec<f64> = (0..60).map(|i| (i / 20) as f64 + rng.normal()).collect();
+        let b: Vec<f64> = (0..60).map(|_| rng.normal()).collect();
+        labelled(
+            DMatrix::from_fn(60, 3, |r, j| match j {
+                0 => a[r],
+                1 => 5.0,
+                _ if copied => 2.0 * a[r],
+                _ => b[r],
+            }),
+            labels.clone(),
+        )
+    };
+    let qda = Choice::One(Kind::Qda);
+    let model = train(&table(false), qda, &opts(), &mut quiet()).unwrap();
+    let note = model.note.unwrap_or_default();
+    assert!(note.contains("feature c1 is 5 in every row"), "{note}");
+    let e = train(&table(true), qda, &opts(), &mut quiet())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("; feature c1 is 5 in every row") && e.contains("drop it"),
+        "{e}"
+    );
+}
+
 #[test]
 fn qda_at_full_pooled_shrinkage_is_the_lda() {
     let names: Vec<String> = (0..40).map(|i| ["a", "b"][i % 2].to_string()).collect();
