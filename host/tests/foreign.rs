@@ -713,3 +713,39 @@ fn a_sheet_past_the_simulators_grid_images_measured_frames() {
     );
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// `et sim` to another system's format writes as many frames as asked: one is the empty
+/// sheet's alone (one wrote two, the second pressed).
+#[test]
+fn et_sim_writes_as_many_frames_as_asked() {
+    let d = dir("count");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let scene = root.join("sim/scenes/disc-ref-x050.toml");
+    for n in [1usize, 3] {
+        let (csv, npy) = (d.join(format!("f{n}.csv")), d.join(format!("f{n}.npy")));
+        for out in [&csv, &npy] {
+            let run = et(&[
+                "sim",
+                "--scene",
+                scene.to_str().unwrap(),
+                "--frames",
+                &n.to_string(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let said = String::from_utf8_lossy(&run.stderr);
+            assert!(run.status.success(), "{said}");
+            let words = if n == 1 {
+                "wrote 1 frame of 208 values"
+            } else {
+                "wrote 3 frames"
+            };
+            assert!(said.contains(words), "{said}");
+        }
+        let rows = std::fs::read_to_string(&csv).unwrap().lines().count() - 1;
+        let bytes = std::fs::read(&npy).unwrap();
+        let header = 10 + usize::from(u16::from_le_bytes([bytes[8], bytes[9]]));
+        assert_eq!((rows, (bytes.len() - header) / (208 * 8)), (n, n));
+    }
+    std::fs::remove_dir_all(&d).ok();
+}

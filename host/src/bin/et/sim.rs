@@ -183,7 +183,8 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         .iter()
         .map(|t| et_sim::touch::Inclusion::of_touch(&t.touch(), &scene.sheet.piezo))
         .collect();
-    let n = usize::try_from(args.frames.max(2))?;
+    // As many as asked: one frame is the empty sheet's alone (1 wrote 2).
+    let n = usize::try_from(args.frames)?;
     let k = schedule.frame_len();
     let ext = args
         .out
@@ -260,15 +261,22 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         file.flush()?;
         Ok(())
     })?;
+    let touches = scene.touches.len();
     say!(
-        "wrote {n} frames of {k} values ({}; the empty sheet first, then {} touch{} pressed; \
-         instrument {:?}) to {} in {:.2} s",
+        "wrote {n} frame{} of {k} values ({}; {}; instrument {:?}) to {} in {:.2} s",
+        if n == 1 { "" } else { "s" },
         schedule.kind().map_or_else(
             || "the scene's protocol file".to_string(),
             |p| p.to_string()
         ),
-        scene.touches.len(),
-        if scene.touches.len() == 1 { "" } else { "es" },
+        if n == 1 {
+            "the empty sheet only".to_string()
+        } else {
+            format!(
+                "the empty sheet first, then {touches} touch{} pressed",
+                if touches == 1 { "" } else { "es" }
+            )
+        },
         chosen,
         args.out.display(),
         started.elapsed().as_secs_f64()
