@@ -129,8 +129,21 @@ class Sheet:
         return int(self.spec.get("electrodes", {}).get("count", 16))
 
 
+def _plain(value: Any) -> Any:
+    """``value`` with NumPy's scalars and arrays as Python's numbers and lists (a spec built from
+    arrays: ``np.float32(0.1)`` or an array of vertices was "not JSON serializable")."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.ndarray, np.generic)):
+        return _plain(value.tolist())
+    return value
+
+
 def _spec_json(spec: Dict[str, Any]) -> str:
     """A sheet's spec as JSON, a NaN or infinite number refused by its name (JSON has none)."""
+    spec = _plain(spec)
 
     def bad(value: Any, at: str) -> Optional[str]:
         if isinstance(value, dict):

@@ -132,6 +132,17 @@ def test_sheets_and_conductivities_past_single_precisions_frames_are_refused():
         r.fit_background(r.forward(r.sigma0) * 1e30)
 
 
+def test_a_sheets_spec_takes_numpys_numbers_and_arrays():
+    # They were "not JSON serializable"; a NaN among them is still refused by name.
+    vertices = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1]])
+    sheet = et.Sheet({"shape": {"kind": "polygon", "vertices": vertices},
+                      "sheet_resistance": np.float32(200.0), "electrodes": {"count": np.int64(8)}})
+    r = et.Reconstructor(sheet, et.protocol("adjacent", 8), triangles=300)
+    assert r.sheet.spec["sheet_resistance"] == 200.0 and r.sheet.electrodes == 8
+    with pytest.raises(et.EtError, match="sheet_resistance = nan"):
+        et.Sheet({"shape": {"kind": "disc", "radius": 0.1}, "sheet_resistance": np.float32("nan")})
+
+
 def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
     with pytest.raises(et.EtError, match="sliver"):
         et.Reconstructor(et.rectangle(0.2, 1e-6, 16), et.protocol("adjacent", 16))
