@@ -167,10 +167,9 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         bail!(
             "--radius-mm {}: under half the simulated sheet's grid spacing ({} mm), so the \
              presses' frames would depend on where each falls between the grid's nodes: set \
-             sheet.resolution in {} to at most {} m (twice the radius)",
+             sheet.resolution in the scene to at most {} m (twice the radius)",
             args.radius_mm,
             spacing * 1e3,
-            args.scene.display(),
             2.0 * plan.radius
         );
     }
