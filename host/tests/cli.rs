@@ -1736,7 +1736,13 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
 /// `NonPositivePivot { index: 1161 }`, `Some(..)`): a CamelCase name, or a name right before a
 /// bracket or brace.
 fn debug_text(message: &str) -> Option<String> {
-    let words = message.split(|c: char| !c.is_ascii_alphanumeric() && c != '_');
+    // Paths are the user's (a fresh clone's random folder may read as CamelCase): not words.
+    let unpathed: Vec<&str> = message
+        .split_whitespace()
+        .filter(|w| !w.contains('/'))
+        .collect();
+    let unpathed = unpathed.join(" ");
+    let words = unpathed.split(|c: char| !c.is_ascii_alphanumeric() && c != '_');
     let camel = |w: &&str| {
         let mut chars = w.chars();
         chars.next().is_some_and(|c| c.is_ascii_uppercase())
@@ -1854,6 +1860,11 @@ label,x_mm,y_mm,visit,v0,v3,v3b
     ] {
         assert!(debug_text(debug).is_some(), "{debug}");
     }
+    // ... and not a path's folder: a fresh clone's random /tmp/fresh-ci.GiUHsn failed it.
+    assert_eq!(
+        debug_text("error: /tmp/fresh-ci.GiUHsn/s.toml: no such file"),
+        None
+    );
     // An image to a stream: PNG bytes, whatever the name.
     let o = et(&["reconstruct", "--scene", scene, "--out", "/dev/stdout"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
