@@ -281,93 +281,6 @@ fn default_seed() -> u64 {
     1
 }
 
-/// Why a scene cannot be used.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SceneError {
-    /// The file could not be read.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The reason.
-        source: std::io::Error,
-    },
-    /// The file is not valid TOML or does not fit the scene format (the parser's message
-    /// names the key and the line).
-    #[error("{path}: {}", parse_said(error))]
-    Parse {
-        /// The file.
-        path: String,
-        /// The parser's error (said in the message, shortened; not a cause said again).
-        error: toml::de::Error,
-    },
-    /// The text is longer than a scene is.
-    #[error(
-        "{path}: {bytes} bytes: a scene is at most {MAX_SCENE_BYTES} bytes (scenes are a few hundred)"
-    )]
-    TooLarge {
-        /// The file.
-        path: String,
-        /// Its length.
-        bytes: usize,
-    },
-    /// Brackets and braces nest deeper than [`MAX_NESTING`].
-    #[error(
-        "{path}: line {line}: brackets and braces nest deeper than {MAX_NESTING} (an unclosed '{{' or '['?)"
-    )]
-    TooDeep {
-        /// The file.
-        path: String,
-        /// The 1-based line where the nesting goes too deep.
-        line: usize,
-    },
-    /// A value is out of range.
-    #[error("{path}: {error}")]
-    Invalid {
-        /// The file.
-        path: String,
-        /// The field at fault and why.
-        error: FieldError,
-    },
-    /// The sheet could not be built or solved (e.g. electrodes overlapping at the resolution).
-    #[error("simulation: {0}")]
-    Sheet(#[from] SheetError),
-    /// The simulated acquisition chain refused a request.
-    #[error("simulation: {0}")]
-    Sim(#[from] SimError),
-    /// The scan engine refused the configuration or a scan failed.
-    #[error("simulation: scan: {0}")]
-    Scan(#[from] ScanError<SimError>),
-    /// A frame could not be encoded.
-    #[error("simulation: frame: {0}")]
-    Wire(#[from] WireError),
-}
-
-/// The TOML parser's message, each line of its snippet of the file cut at 120 characters (a
-/// CSV given as a scene echoed a line of 5 000), and where the file is not a scene at all
-/// (its first line is no TOML), said so.
-fn parse_said(source: &toml::de::Error) -> String {
-    const WIDE: usize = 120;
-    let text = source.to_string();
-    let mut said: Vec<String> = text
-        .trim_end()
-        .lines()
-        .map(|line| match line.char_indices().nth(WIDE) {
-            Some((at, _)) => format!("{} ...", &line[..at]),
-            None => line.to_string(),
-        })
-        .collect();
-    if source.span().is_some_and(|span| span.start < 200) && text.contains("at line 1,") {
-        said.push(
-            "(is it a scene? a scene is a TOML file of [sheet], [scan] and [[touch]] tables, as \
-             in sim/scenes/)"
-                .to_string(),
-        );
-    }
-    said.join("\n")
-}
-
 /// The deepest nesting of `[` and `{` a scene may have (a scene needs 3).
 pub const MAX_NESTING: usize = 32;
 
@@ -615,6 +528,9 @@ mod scan;
 pub use fault::{FieldError, SceneFault};
 pub use read_once::ReadOnce;
 pub use run::*;
+
+mod error;
+pub use error::*;
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]

@@ -1,0 +1,163 @@
+//! Why a schedule or a schedule file is refused: each fault with its numbers.
+
+/// Why a schedule is refused. Rows are counted from 0, as the frame's values are.
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
+pub enum ScheduleError {
+    /// No rows at all.
+    #[error("no measurements")]
+    Empty,
+    /// Fewer than two electrodes.
+    #[error("{electrodes} electrodes: a schedule needs 2 or more")]
+    Electrodes {
+        /// The count given.
+        electrodes: u16,
+    },
+    /// An electrode past the sheet's.
+    #[error(
+        "row {row}: electrode {electrode}, the sheet has {electrodes} (0 to {last}){hint}",
+        last = electrodes.saturating_sub(1),
+        hint = if *electrode == *electrodes { ": are the electrodes counted from 1? say base = 1" } else { "" }
+    )]
+    Electrode {
+        /// The row.
+        row: usize,
+        /// The electrode named.
+        electrode: u16,
+        /// The sheet's electrode count.
+        electrodes: u16,
+    },
+    /// The current would enter and leave by one electrode.
+    #[error("row {row}: source and sink are both electrode {electrode}")]
+    SameDrive {
+        /// The row.
+        row: usize,
+        /// The electrode.
+        electrode: u16,
+    },
+    /// The measurement's two electrodes are one.
+    #[error("row {row}: positive and negative are both electrode {electrode}")]
+    SameMeasure {
+        /// The row.
+        row: usize,
+        /// The electrode.
+        electrode: u16,
+    },
+    /// A current that is not positive or not finite.
+    #[error("row {row}: current {current_a} A: give a current above 0 A")]
+    Current {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A current below [`MIN_CURRENT_A`].
+    #[error(
+        "row {row}: current {current_a:e} A is below 1 nA, the smallest a board drives (systems \
+         drive microamperes to milliamperes): currents are in amperes"
+    )]
+    BelowNano {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A current above [`MAX_UNIT_CURRENT_A`], whoever gave it.
+    #[error(
+        "row {row}: current {current_a} A is above 1 A, the unit current of simulated frames \
+         (pyEIT's): currents are in amperes, a system's a few mA"
+    )]
+    AboveUnit {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A user's current above [`MAX_CURRENT_A`] (a file's, a scene's).
+    #[error("row {row}: current {current_a} A is above 0.05 A (50 mA): current_a is in amperes")]
+    TooLarge {
+        /// The row.
+        row: usize,
+        /// The current given, A.
+        current_a: f64,
+    },
+    /// A schedule file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why (shared, so the error stays `Clone`).
+        source: std::sync::Arc<std::io::Error>,
+    },
+    /// A line of a schedule file is wrong.
+    #[error("{}{}: {fault}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// 1-based line (0: the whole file).
+        line: usize,
+        /// What is wrong.
+        fault: FileFault,
+    },
+}
+
+/// What is wrong in a schedule file, at its line.
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
+pub enum FileFault {
+    /// The rows could not be read as CSV.
+    #[error(transparent)]
+    Records(#[from] crate::text::RecordFault),
+    /// No rows.
+    #[error("no rows")]
+    NoRows,
+    /// The header lacks a column.
+    #[error(
+        "the header has no '{0}' column (it needs source, sink, positive, negative and \
+         optionally current_a)"
+    )]
+    MissingColumn(&'static str),
+    /// A header that names a column twice.
+    #[error("the header names {0} twice: which column is meant would be a guess")]
+    SameColumn(&'static str),
+    /// Without a header, a row of another width.
+    #[error(
+        "{0} column{s}: without a header give source, sink, positive, negative and optionally \
+         current_a, separated by ',', ';' or tabs",
+        s = if *.0 == 1 { "" } else { "s" }
+    )]
+    Columns(usize),
+    /// A first row of names, none of them a column's.
+    #[error(
+        "the header names {0}: name the columns source, sink, positive, negative and \
+         optionally current_a (any order)"
+    )]
+    OtherNames(String),
+    /// Electrodes counted from neither 0 nor 1.
+    #[error("base = {0}: electrodes are counted from 0 (et's) or 1")]
+    Base(u16),
+    /// An electrode's cell is not a whole number.
+    #[error("{column}: '{cell}' is not an electrode number")]
+    NotElectrode {
+        /// source, sink, positive or negative.
+        column: &'static str,
+        /// The cell as written.
+        cell: String,
+    },
+    /// An electrode below the first one's number.
+    #[error("{column}: electrode {electrode}, but they are counted from {base}")]
+    BelowBase {
+        /// source, sink, positive or negative.
+        column: &'static str,
+        /// The number written.
+        electrode: u16,
+        /// The first electrode's number.
+        base: u16,
+    },
+    /// The current's cell is not a number.
+    #[error("current_a: '{0}' is not a number")]
+    NotCurrent(String),
+    /// The row, read, is refused by [`Schedule::new`] (row counted among the data rows).
+    #[error(transparent)]
+    Row(Box<ScheduleError>),
+}
