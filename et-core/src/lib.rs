@@ -26,6 +26,7 @@
 //!   sink, positive, negative, current per value), from a built-in protocol or a CSV file.
 //! - `text` (feature `std`): tables as users' tools write them (delimiter, quotes, decimal
 //!   commas), read for every et reader of tables.
+//! - `said` (feature `std`): parsers' messages (serde's type names) in the words of a file's author.
 //! - [`rng`]: the one seedable pseudo-random generator (simulator, QEMU sheet, folds, tests).
 //! - [`precision`], [`time`]: binary16 storage and the injected clock.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -41,6 +42,8 @@ pub mod model;
 pub mod precision;
 pub mod protocol;
 pub mod rng;
+#[cfg(feature = "std")]
+pub mod said;
 pub mod scan;
 #[cfg(feature = "std")]
 pub mod schedule;

@@ -143,6 +143,29 @@ def test_a_sheets_spec_takes_numpys_numbers_and_arrays():
         et.Sheet({"shape": {"kind": "disc", "radius": 0.1}, "sheet_resistance": np.float32("nan")})
 
 
+@pytest.mark.parametrize(
+    "field, value, said",
+    [
+        ("sheet_resistance", "30e3", '"30e3" is text, where a number belongs (write it without quotes)'),
+        ("sheet_resistance", True, "True is a yes-or-no value, where a number belongs"),
+        ("sheet_resistance", None, "an empty value (null), where a number belongs"),
+        ("electrodes", 16, "16 is a whole number, where a table of fields belongs"),
+        ("electrodes", {"count": 16.5}, "16.5 is a number with a fraction, where a whole number belongs"),
+        ("electrodes", {"count": 16, "model": "cem"}, "unknown value `cem`: give one of `complete`"),
+        ("shape", "disc", '"disc" is text, where a table of fields belongs'),
+    ],
+)
+def test_a_sheets_spec_of_the_wrong_kind_is_said_in_pythons_words(field, value, said):
+    # The parser said "invalid type: string "30e3", expected f64", "expected struct
+    # ElectrodeSpec" and "expected Shape": the Rust types the spec is read into.
+    spec = {"shape": {"kind": "disc", "radius": 0.1}, "electrodes": {"count": 16}, field: value}
+    with pytest.raises(et.EtError) as refused:
+        et.Sheet(spec)
+    words = str(refused.value)
+    assert said.replace("True", "true") in words and f"sheet: {field}" in words, words
+    assert not any(internal in words for internal in ("f64", "struct", "enum", "Spec", "expected")), words
+
+
 def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
     with pytest.raises(et.EtError, match="sliver"):
         et.Reconstructor(et.rectangle(0.2, 1e-6, 16), et.protocol("adjacent", 16))

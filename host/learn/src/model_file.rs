@@ -474,7 +474,7 @@ pub fn format_found(value: &serde_json::Value) -> String {
 pub fn json_said(e: &serde_json::Error, within_line: bool) -> String {
     let text = e.to_string();
     let tail = format!(" at line {} column {}", e.line(), e.column());
-    let what = text.strip_suffix(&tail).unwrap_or(&text);
+    let what = et_core::said::serde_said(text.strip_suffix(&tail).unwrap_or(&text));
     match e.classify() {
         serde_json::error::Category::Syntax | serde_json::error::Category::Eof if e.line() > 0 => {
             if within_line {
@@ -489,7 +489,8 @@ pub fn json_said(e: &serde_json::Error, within_line: bool) -> String {
 
 /// `value` read as a `T`, an error naming the field where it went wrong (`tables.method:
 /// missing field`, where serde alone said `missing field` of some table) and without serde's
-/// names for its own types ("internally tagged enum").
+/// names for its own types ("expected internally tagged enum Tables", "expected f64":
+/// [`et_core::said::serde_said`]).
 ///
 /// # Errors
 /// serde_json's error, its field's path in front.
@@ -498,11 +499,7 @@ pub fn from_value_named<T: serde::de::DeserializeOwned>(
 ) -> Result<T, serde_json::Error> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let said = e
-            .into_inner()
-            .to_string()
-            .replace("internally tagged enum ", "")
-            .replace("untagged enum ", "");
+        let said = et_core::said::serde_said(&e.into_inner().to_string());
         let said = if path == "." {
             said
         } else {

@@ -70,7 +70,7 @@ pub enum SceneError {
 /// (its first line is no TOML), said so.
 fn parse_said(source: &toml::de::Error) -> String {
     const WIDE: usize = 120;
-    let text = source.to_string();
+    let text = et_core::said::serde_said(&source.to_string());
     let mut said: Vec<String> = text
         .trim_end()
         .lines()

@@ -456,3 +456,36 @@ fn drift_scales_the_frame_over_time() {
         );
     }
 }
+
+/// A value of the wrong kind is said as what the file holds and what belongs there (the
+/// parser said "expected f64", "expected struct ElectrodeSpec", "expected internally tagged
+/// enum Shape": the types the scene is read into), under the parser's line and snippet.
+#[test]
+fn a_value_of_the_wrong_kind_is_said_in_the_files_words() {
+    let disc = "shape = { kind = \"disc\", radius = 0.1 }";
+    for (sheet, said) in [
+        (
+            format!("{disc}\nelectrodes = {{ count = 16 }}\nsheet_resistance = \"30e3\""),
+            "\"30e3\" is text, where a number belongs (write it without quotes)",
+        ),
+        (
+            format!("{disc}\nelectrodes = 16"),
+            "16 is a whole number, where a table of fields belongs",
+        ),
+        (
+            "shape = \"disc\"\nelectrodes = { count = 16 }".to_string(),
+            "\"disc\" is text, where a table of fields belongs",
+        ),
+    ] {
+        let e = Scene::parse(&format!("[sheet]\n{sheet}\n"), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("TOML parse error at line") && e.contains(said),
+            "{e}"
+        );
+        for internal in ["f64", "struct", "enum", "Spec", "expected"] {
+            assert!(!e.contains(internal), "{e}");
+        }
+    }
+}

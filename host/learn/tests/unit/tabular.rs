@@ -275,12 +275,12 @@ fn a_grid_of_classes_from_positions() {
             (
                 "tables",
                 serde_json::Value::Null,
-                "tables: invalid type: null, expected Tables",
+                "tables: an empty value (null), where a table of fields belongs",
             ),
             (
                 "feature_mean",
                 serde_json::json!(["x"]),
-                "feature_mean[0]: invalid type",
+                "feature_mean[0]: \"x\" is text, where a number belongs",
             ),
         ] {
             let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
