@@ -2238,3 +2238,33 @@ fn any_sensors_table_trains_and_evaluates_through_the_cli() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--force` (replace outputs that exist) is refused by the commands that write no file, as
+/// other flags that change nothing are, rather than accepted and ignored; the commands that
+/// write take it.
+#[test]
+fn force_is_refused_where_nothing_is_written() {
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes/disc-ref-x050.toml");
+    let scene = scene.to_str().unwrap();
+    assert!(et(&["forward", "--scene", scene]).status.success());
+    for args in [
+        &["protocol", "--force"][..],
+        &["forward", "--scene", scene, "--force"],
+        &["ports", "--force"],
+    ] {
+        let out = et(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(
+            err.contains(&format!("--force: et {} writes no file", args[0])),
+            "{args:?}: {err}"
+        );
+    }
+    let out = et(&["protocol"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

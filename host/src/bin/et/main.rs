@@ -73,7 +73,8 @@ struct Cli {
     #[command(subcommand)]
     command: Command,
     /// Replace output files and report folders that exist (never a command's own input;
-    /// without it, et refuses to overwrite anything).
+    /// without it, et refuses to overwrite anything). Refused by the commands that write no
+    /// file (protocol, forward, ports, upload, stream).
     #[arg(long, global = true)]
     force: bool,
 }
@@ -323,6 +324,21 @@ fn parse() -> Cli {
     }
 }
 
+impl Command {
+    /// The command's name where it writes no file (it prints, or talks to a board), for which
+    /// `--force` means nothing.
+    fn writes_nothing(&self) -> Option<&'static str> {
+        match self {
+            Command::Protocol(_) => Some("protocol"),
+            Command::Forward(_) => Some("forward"),
+            Command::Ports => Some("ports"),
+            Command::Upload(_) => Some("upload"),
+            Command::Stream(_) => Some("stream"),
+            _ => None,
+        }
+    }
+}
+
 fn main() -> ExitCode {
     et_host::output::note_standard_streams();
     let cli = parse();
@@ -330,6 +346,13 @@ fn main() -> ExitCode {
         say!("warning: Ctrl-C will not remove partial outputs: {e}");
     }
     let force = cli.force;
+    if let (true, Some(name)) = (force, cli.command.writes_nothing()) {
+        // A flag that changes nothing is refused, not ignored.
+        say!(
+            "error: --force: et {name} writes no file, so there is nothing to replace; drop --force"
+        );
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Demo(args) => demo::run(args, force),
         Command::Protocol(args) => protocol::run(args),
