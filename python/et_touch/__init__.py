@@ -1089,8 +1089,13 @@ def train(
             "give one or the other"
         )
     groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
+    if groups is not None and len(set(groups)) < 2:
+        warnings.warn(
+            f"one group ({groups[0]!r}) only: nothing in the data can show how a model holds on "
+            "a new session", EtWarning, stacklevel=2,
+        )
     grid_pair = None if grid is None else (_count(grid[0], "grid rows"), _count(grid[1], "grid columns"))
-    return Model(
+    model = Model(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind,
             None if folds is None else _count(folds, "folds"), cv, grid_pair,
@@ -1098,6 +1103,12 @@ def train(
             3600.0 if budget_s is None else float(budget_s), progress,
         )
     )
+    # What the training changed from the request, or found in the data (a feature of one
+    # value), as `et train` says it: a warning, not only a field of `Model.info`.
+    note = model._native.note
+    if note:
+        warnings.warn(note, EtWarning, stacklevel=2)
+    return model
 
 
 # ---------------------------------------------------------------------------------------------

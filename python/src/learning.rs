@@ -283,6 +283,16 @@ impl Model {
         }
     }
 
+    /// What the training changed from the request, and why (a table model's note: a feature
+    /// of one value, a QDA saved as the LDA it equals); None when nothing.
+    #[getter]
+    fn note(&self) -> Option<String> {
+        match &self.inner {
+            Estimator::Table(t) => t.note.clone(),
+            Estimator::Board(_) => None,
+        }
+    }
+
     /// The model file's content (JSON).
     fn file_json(&self) -> PyResult<String> {
         match &self.inner {

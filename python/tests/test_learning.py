@@ -3,6 +3,7 @@
 import csv
 import json
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -121,6 +122,23 @@ def test_bad_training_input_is_refused(table):
             et.train(data, **given)
     with pytest.raises(et.EtError, match="only a board model"):
         et.train(data.x, data.positions_m, kind="ridge").export_blob()
+
+
+def test_what_training_finds_or_changes_is_a_warning():
+    # A dead channel was said in Model.info["note"] alone (et train prints it); one group
+    # only, which et train notes, was silent.
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(120, 4))
+    x[:, 3] = 5.0
+    y = (x[:, 0] > 0).astype(int)
+    with pytest.warns(et.EtWarning, match="feature f3 is 5 in every row"):
+        model = et.train(x, y, kind="lda")
+    assert "f3 is 5" in model.info["note"]
+    with pytest.warns(et.EtWarning, match="one group \\('a'\\) only"):
+        et.train(x[:, :3], y, kind="lda", groups=["a"] * len(y))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        et.train(x[:, :3], y, kind="lda", groups=["a", "b"] * (len(y) // 2))
 
 
 def test_training_tells_its_progress_and_estimate(table):
