@@ -111,6 +111,17 @@ fn header_columns(
     Err(FileFault::Columns(first.len()))
 }
 
+/// An electrode's number as a cell writes it: `2`, or a whole number written as a decimal
+/// (`2.0`; `2.000000000000000000e+00`, as NumPy's `savetxt` writes every number by default);
+/// None for a fraction, a negative number or one past `u16`.
+fn whole_cell(cell: &str, delimiter: text::Delimiter) -> Option<u16> {
+    if let Ok(n) = cell.parse::<u16>() {
+        return Some(n);
+    }
+    let x = text::number(cell, delimiter)?;
+    (x.fract() == 0.0 && (0.0..=f64::from(u16::MAX)).contains(&x)).then_some(x as u16)
+}
+
 impl Schedule {
     /// A schedule of `rows` on `electrodes` electrodes, every row checked.
     ///
@@ -289,7 +300,8 @@ impl Schedule {
 
     /// Reads a schedule from CSV text: an optional header naming `source`, `sink`,
     /// `positive`, `negative` and `current_a` (any order, any case; other columns ignored),
-    /// else 4 or 5 columns in that order; cells separated by `,`, `;` or tabs; blank and `#`
+    /// else 4 or 5 columns in that order, every row as wide as the first; electrodes as whole
+    /// numbers (`2`, or `2.0` as NumPy writes them); cells separated by `,`, `;` or tabs; blank and `#`
     /// lines skipped. Electrodes are counted from `base` (0, or 1 for a system that counts
     /// from 1); rows without a current drive `default_current_a`.
     ///
@@ -320,6 +332,7 @@ impl Schedule {
         };
         let (header, columns) =
             header_columns(&first, delimiter).map_err(|fault| fail(first_line, fault))?;
+        let width = first.len();
         // The rows and the file's line of each (for a row's error): the header's record
         // again when it is data.
         let mut rows = Vec::new();
@@ -330,13 +343,17 @@ impl Schedule {
             .chain(records);
         for record in data {
             let (line, cells) = record.map_err(|(line, f)| fail(line, f.into()))?;
+            if cells.len() != width {
+                let (cells, first) = (cells.len(), width);
+                return Err(fail(line, FileFault::Width { cells, first }));
+            }
             row_lines.push(line);
             let cell = |c: usize| cells.get(c).unwrap_or("");
             let electrode = |which: usize| -> Result<u16, ScheduleError> {
                 let c = columns[which].unwrap_or(which);
                 let v = cell(c);
                 let column = COLUMNS[which];
-                let n: u16 = v.parse().map_err(|_| {
+                let n: u16 = whole_cell(v, delimiter).ok_or_else(|| {
                     let cell = v.to_string();
                     fail(line, FileFault::NotElectrode { column, cell })
                 })?;

@@ -749,3 +749,51 @@ fn et_sim_writes_as_many_frames_as_asked() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// A protocol file's own currents are what `et forward` reports and solves with: the rows
+/// of a file driving 1 and 2 mA give frames in that ratio (the second row was solved at the
+/// scene's current when only it gave one, and the report said the scene's current whatever
+/// the file drove); a current in some rows only is refused by line.
+#[test]
+fn et_forward_says_and_drives_a_protocol_files_currents() {
+    let d = dir("currents");
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"p.csv\" }\ncurrent_ua = 32\n",
+    )
+    .unwrap();
+    let forward = |rows: &str| {
+        std::fs::write(d.join("p.csv"), rows).unwrap();
+        et(&[
+            "forward",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--triangles",
+            "500",
+            "--json",
+        ])
+    };
+    let out = forward("0,1,2,3,1e-3\n0,1,2,3,2e-3\n");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["current_a"].is_null(), "{v}");
+    assert_eq!(v["currents_a"], serde_json::json!([1e-3, 2e-3]));
+    let v0 = v["v0"].as_array().unwrap();
+    let ratio = v0[1].as_f64().unwrap() / v0[0].as_f64().unwrap();
+    assert!((ratio - 2.0).abs() < 1e-9, "{ratio}");
+    let out = forward("0,1,2,3,1e-3\n");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["current_a"], serde_json::json!(1e-3));
+    let out = forward("0,1,2,3\n0,1,2,3,2e-3\n");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("p.csv:2: 5 cells, where the first row has 4"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -127,6 +127,19 @@ pub enum FileFault {
         s = if *.0 == 1 { "" } else { "s" }
     )]
     Columns(usize),
+    /// A row of another width than the first (a current in some rows only would be a
+    /// guess: the rows without one took the default and the others' were ignored).
+    #[error(
+        "{cells} cell{s}, where the first row has {first}: give every row the same columns \
+         (a current_a for every row or for none)",
+        s = if *.cells == 1 { "" } else { "s" }
+    )]
+    Width {
+        /// This row's cells.
+        cells: usize,
+        /// The first row's (the header's, or the first data row's).
+        first: usize,
+    },
     /// A first row of names, none of them a column's.
     #[error(
         "the header names {0}: name the columns source, sink, positive, negative and \
@@ -136,7 +149,8 @@ pub enum FileFault {
     /// Electrodes counted from neither 0 nor 1.
     #[error("base = {0}: electrodes are counted from 0 (et's) or 1")]
     Base(u16),
-    /// An electrode's cell is not a whole number.
+    /// An electrode's cell is not a whole number (`2`, or `2.0` and `2.000e+00` as NumPy's
+    /// `savetxt` writes them; `2.5` is refused, not truncated).
     #[error("{column}: '{cell}' is not an electrode number")]
     NotElectrode {
         /// source, sink, positive or negative.

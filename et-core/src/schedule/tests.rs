@@ -154,3 +154,51 @@ fn wrong_rows_are_named_by_line_and_cell() {
         "{e}"
     );
 }
+
+/// A current in some rows only was half read: without a header the first row decides the
+/// columns, so a later row's fifth cell, its current, was ignored (that row drove the default
+/// current), and a short row read its missing cells as empty. Every row is as wide as the
+/// first, or is refused by its line.
+#[test]
+fn rows_of_another_width_are_refused_not_half_read() {
+    for (text, line, cells, first) in [
+        ("0,1,2,3\n1,2,3,4,2e-3\n", 2, 5, 4),
+        ("0,1,2,3,1e-3\n1,2,3,4\n", 2, 4, 5),
+        ("0,1,2,3\n1,2\n", 2, 2, 4),
+        (
+            "source,sink,positive,negative\n0,1,2,3\n1,2,3,4,2e-3\n",
+            3,
+            5,
+            4,
+        ),
+    ] {
+        let e = parse(text, 16, 0).unwrap_err().to_string();
+        let said = format!("p.csv:{line}: {cells} cells, where the first row has {first}");
+        assert!(e.contains(&said), "{text:?}: {e}");
+    }
+    // Each row's own current, where every row gives one.
+    let s = parse("0,1,2,3,1e-3\n1,2,3,4,2e-3\n", 16, 0).unwrap();
+    assert_eq!(s.rows()[1].current_a, 2e-3);
+}
+
+/// Electrodes written as whole decimals, as NumPy's `savetxt` writes every number by default
+/// (`np.savetxt("p.csv", rows, delimiter=",")`), are the same electrodes; a fraction is
+/// refused, not truncated.
+#[test]
+fn electrodes_written_as_whole_decimals_are_read() {
+    let plain = parse("0,1,2,3\n", 16, 0).unwrap();
+    for text in [
+        "0.0,1.0,2.0,3.0\n",
+        "0.000000000000000000e+00,1.000000000000000000e+00,2.000000000000000000e+00,3.000000000000000000e+00\n",
+        "0;1,0;2;3\n",
+    ] {
+        assert_eq!(parse(text, 16, 0).unwrap(), plain, "{text}");
+    }
+    for bad in ["0,1.5,2,3\n", "0,-1.0,2,3\n", "0,1e9,2,3\n", "0,inf,2,3\n"] {
+        let e = parse(bad, 16, 0).unwrap_err().to_string();
+        assert!(
+            e.contains("sink: '") && e.contains("is not an electrode number"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -200,7 +200,12 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         })
         .collect();
     let t_n = mesh.triangles.len();
-    let amps = scene.scan.current_ua * 1e-6;
+    // The rows' currents: the scene's, or the protocol file's own (one per row).
+    let currents: Vec<f64> = schedule.rows().iter().map(|r| r.current_a).collect();
+    let one_current = currents
+        .first()
+        .copied()
+        .filter(|&first| currents.iter().all(|&c| c == first));
     let v0 = fwd.frame(&sigma0, &schedule)?;
     let v1 = fwd.frame(&sigma1, &schedule)?;
     let dv: Vec<f64> = v1.iter().zip(&v0).map(|(a, b)| a - b).collect();
@@ -209,7 +214,8 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         let summary = ForwardSummary {
             triangles: t_n,
             protocol,
-            current_a: amps,
+            current_a: one_current,
+            currents_a: one_current.is_none().then(|| currents.clone()),
             electrodes_m: scene
                 .sheet
                 .physical
@@ -222,12 +228,21 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         };
         out!("{}", serde_json::to_string(&summary)?);
     } else {
+        let least = currents.iter().copied().fold(f64::INFINITY, f64::min);
+        let most = currents.iter().copied().fold(0.0, f64::max);
+        let current = match one_current {
+            Some(a) => format!("{:.1} uA", a * 1e6),
+            None => format!(
+                "{:.1} to {:.1} uA (each row its own)",
+                least * 1e6,
+                most * 1e6
+            ),
+        };
         out!(
-            "{} triangles, {} protocol, K = {}, {:.1} uA",
+            "{} triangles, {} protocol, K = {}, {current}",
             t_n,
             protocol,
             v0.len(),
-            amps * 1e6
         );
         out!("    k        V_0 (V)        V_1 (V)     V_1 - V_0 (V)");
         for (k, (a, b)) in v0.iter().zip(&v1).enumerate() {

@@ -199,8 +199,12 @@ fn say_found(
 pub(super) struct ForwardSummary<'a> {
     pub(super) triangles: usize,
     pub(super) protocol: String,
-    /// The scene's current, A (a protocol file's rows may give their own).
-    pub(super) current_a: f64,
+    /// The current every row drives, A (the scene's, or its protocol file's); None where the
+    /// file's rows drive different currents, then given in `currents_a`.
+    pub(super) current_a: Option<f64>,
+    /// Each row's current, A (K values), where they differ.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) currents_a: Option<Vec<f64>>,
     /// Each electrode's centre, m, in electrode order (where `first_deg` and `direction`
     /// put them).
     pub(super) electrodes_m: Vec<[f64; 2]>,
