@@ -256,6 +256,19 @@ fn a_grid_of_classes_from_positions() {
                 "{what}: {refused}"
             );
         }
+        // Two classes of one name: a label would be predicted as either (it loaded, and
+        // scored the other class's rows as labels the model has no class of).
+        let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let names = &mut value["classes"]["names"];
+        names[1] = names[0].clone();
+        let twice = names[0].as_str().unwrap().to_string();
+        let refused = et_learn::tabular::TableModel::from_value(value).unwrap_err();
+        assert!(
+            refused
+                .to_string()
+                .contains(&format!("classes.names: '{twice}' twice")),
+            "{refused}"
+        );
         let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
         let b = &mut value["classes"]["grid"]["bounds_m"];
         *b = serde_json::json!([b[2].clone(), b[1].clone(), b[0].clone(), b[3].clone()]);

@@ -48,6 +48,9 @@ pub enum TablesError {
     /// Tables that disagree with each other: which, and the rule they break.
     #[error("{0}")]
     Inconsistent(&'static str),
+    /// A class name given to two classes (a label would be predicted as either).
+    #[error("classes.names: '{0}' twice: each class has its own name")]
+    SameClassName(String),
     /// A perceptron's layers that do not chain.
     #[error("mlp: {0}")]
     Mlp(#[source] LayersError),
@@ -253,6 +256,10 @@ impl TableModel {
             return Err(TablesError::Inconsistent(
                 "classes.names (and centres_m) must list every class",
             ));
+        }
+        let mut seen = std::collections::HashSet::with_capacity(info.names.len());
+        if let Some(twice) = info.names.iter().find(|n| !seen.insert(n.as_str())) {
+            return Err(TablesError::SameClassName(twice.clone()));
         }
         if (info.label_type.as_deref())
             .is_some_and(|t| !["int", "float", "bool", "str"].contains(&t))
