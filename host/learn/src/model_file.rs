@@ -245,6 +245,19 @@ impl ModelFile {
         }
         let mut m: ModelFile = from_value_named(value).map_err(json)?;
         m.version = VERSION;
+        // The scan it was trained on as the board takes one, and a shrinkage toward the
+        // pooled covariance as trained (both were loaded and said only beside data).
+        let field = |field, said| ModelFileError::Field {
+            path: path.into(),
+            field,
+            said,
+        };
+        if let Err(e) = m.config.validate() {
+            return Err(field("config", e.to_string()));
+        }
+        if !(0.0..=1.0).contains(&m.shrinkage) {
+            return Err(field("shrinkage", format!("{}: from 0 to 1", m.shrinkage)));
+        }
         Ok(m)
     }
 }
@@ -438,6 +451,16 @@ pub enum ModelFileError {
         path: PathBuf,
         /// What it says instead ([`format_found`]).
         found: String,
+    },
+    /// A field out of its range (the scan's settings, the shrinkage).
+    #[error("{}: {field}: {said}", .path.display())]
+    Field {
+        /// The file.
+        path: PathBuf,
+        /// The field.
+        field: &'static str,
+        /// The value and its range.
+        said: String,
     },
     /// The tables are not a usable model ([`ModelFile::validate`]).
     #[error("{}: {error}", .path.display())]

@@ -1132,6 +1132,18 @@ fn a_corrupt_model_file_is_refused_on_load() {
         matches!(&e, ModelFileError::Invalid { .. }) && e.to_string().contains("m.json"),
         "{e}"
     );
+    // A scan the board would refuse, or a shrinkage past 1, is refused by its field (they
+    // loaded, and a current of 0 was said only beside data, as a scan unlike the data's).
+    let mut bad = file.clone();
+    bad.config.current_na = 0;
+    bad.save(&path).unwrap();
+    let e = ModelFile::load(&path).unwrap_err().to_string();
+    assert!(e.contains("m.json: config: current_na = 0"), "{e}");
+    let mut bad = file.clone();
+    bad.shrinkage = 2.0;
+    bad.save(&path).unwrap();
+    let e = ModelFile::load(&path).unwrap_err().to_string();
+    assert!(e.contains("m.json: shrinkage: 2: from 0 to 1"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
