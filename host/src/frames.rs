@@ -115,7 +115,13 @@ pub enum FramesFault {
     /// Neither dimension is the protocol's K.
     #[error(
         "{rows} x {columns} values: the protocol has K = {k} values per frame, so one dimension \
-         must be {k} (is it the scene's protocol?)"
+         must be {k} ({})",
+        if *rows == k + 1 || *columns == k + 1 {
+            "one more than K: a first column or row of frame numbers or times? write the file \
+             without it"
+        } else {
+            "is it the scene's protocol?"
+        }
     )]
     NoK {
         /// Rows.
@@ -424,11 +430,20 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
     let mut values = Vec::new();
     let mut width = None;
     let mut n = 0;
+    // The header's first cell, where there is a header.
+    let mut first_name = None;
     let mut records = records.enumerate().peekable();
     while let Some((i, record)) = records.next() {
-        let (line, cells) = record.map_err(|(line, f)| content(path, line, f.into()))?;
+        let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
+        // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
+        // row; it is not an empty last value.
+        let mut cells: Vec<&str> = record.iter().collect();
+        if cells.len() > 1 && cells.last() == Some(&"") {
+            cells.pop();
+        }
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
+            first_name = cells.first().map(|c| c.to_string());
             continue;
         }
         let w = *width.get_or_insert(cells.len());
@@ -449,10 +464,21 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
         n += 1;
     }
     let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames))?;
-    let said = match delimiter {
+    let mut said = match delimiter {
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),
     };
     // Row after row is a w x n column-major matrix: transposed, n x w.
-    Ok((DMatrix::from_vec(w, n, values).transpose(), said))
+    let matrix = DMatrix::from_vec(w, n, values).transpose();
+    // pandas' `to_csv` writes each row's number first, under a header cell with no name: a
+    // column unnamed whose values count the rows from 0 is that index, not a value.
+    let unnamed = first_name.is_some_and(|name| {
+        name.is_empty() || name.eq_ignore_ascii_case("index") || name == "Unnamed: 0"
+    });
+    let counts_rows = (0..n).all(|r| matrix[(r, 0)] == r as f64);
+    if unnamed && counts_rows && w > 1 {
+        said.push_str("its first column (unnamed, 0, 1, 2, ...) skipped as the row index, ");
+        return Ok((matrix.remove_column(0), said));
+    }
+    Ok((matrix, said))
 }

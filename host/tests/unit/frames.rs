@@ -56,6 +56,74 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Frames as other tools write them around the values: pandas' `to_csv` with its row index
+/// (an unnamed first column counting from 0), a delimiter ending every line (`fprintf('%g,',
+/// v)` in a loop), and a first column of times, which is not guessed at but said.
+#[test]
+fn csv_as_pandas_and_matlab_loops_write_them() {
+    let dir = tmp("pandas");
+    let f = dir.join("f.csv");
+    let plain = vec![vec![1e-3_f32, 2e-3, 3e-3], vec![4e-3, 5e-3, 6e-3]];
+    for (text, index) in [
+        (
+            ",0,1,2
+0,1e-3,2e-3,3e-3
+1,4e-3,5e-3,6e-3
+",
+            true,
+        ),
+        (
+            "Unnamed: 0,v0,v1,v2
+0,1e-3,2e-3,3e-3
+1,4e-3,5e-3,6e-3
+",
+            true,
+        ),
+        (
+            "1e-3,2e-3,3e-3,
+4e-3,5e-3,6e-3,
+",
+            false,
+        ),
+        (
+            "v0;v1;v2;
+1e-3;2e-3;3e-3;
+4e-3;5e-3;6e-3;
+",
+            false,
+        ),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let r = read(&f, 3).unwrap();
+        assert_eq!(r.frames, plain, "{text}");
+        assert_eq!(
+            r.description.contains("row index"),
+            index,
+            "{}",
+            r.description
+        );
+    }
+    // A first column that does not count the rows from 0, or that has a name, is data.
+    for text in [
+        ",0,1,2
+5,1e-3,2e-3,3e-3
+6,4e-3,5e-3,6e-3
+",
+        "time_s,v0,v1,v2
+0,1e-3,2e-3,3e-3
+1,4e-3,5e-3,6e-3
+",
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let e = read(&f, 3).unwrap_err().to_string();
+        assert!(
+            e.contains("2 x 4 values") && e.contains("one more than K: a first column"),
+            "{e}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn npy_and_npz_as_numpy_writes_them() {
     let dir = tmp("npy");
