@@ -1608,6 +1608,8 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
     let t = et(&["train", "--data", &p("d.csv"), "--out", &p("m.json")]);
     assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
     std::fs::write(p("F.csv"), "x,a,X\n1,2,3\n4,5,6\n7,8,9\n").unwrap();
+    // pandas' `to_csv` with its row index: an unnamed first column.
+    std::fs::write(p("I.csv"), ",a,b,label\n0,1,2,0\n1,4,5,1\n2,7,8,0\n").unwrap();
     // One method's flags beside the other method (the GREIT flags under Gauss-Newton, the
     // NOSER exponent under GREIT, a noise figure beside an alpha that overrides it).
     let image = |extra: &[&str]| -> Vec<String> {
@@ -1710,6 +1712,16 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
                 p("n.json"),
             ],
             "both named",
+        ),
+        (
+            vec![
+                "train".into(),
+                "--features".into(),
+                p("I.csv"),
+                "--out".into(),
+                p("n.json"),
+            ],
+            "I.csv:1: column 1 of the header has no name (pandas' row index?",
         ),
         (
             vec![

@@ -16,9 +16,24 @@ pub enum DatasetFault {
     /// A header and no rows under it.
     #[error("no data rows")]
     NoDataRows,
-    /// A header cell left empty.
-    #[error("empty column name in the header")]
-    EmptyName,
+    /// A header cell left empty: pandas' row index when it is the first, a delimiter ending
+    /// the line when it is the last.
+    #[error(
+        "column {column} of the header has no name{}",
+        if *column == 1 {
+            " (pandas' row index? write the file with to_csv(..., index=False))"
+        } else if *column == *columns {
+            " (a delimiter at the end of the line?)"
+        } else {
+            ""
+        }
+    )]
+    EmptyName {
+        /// The column, from 1.
+        column: usize,
+        /// The header's columns.
+        columns: usize,
+    },
     /// Two columns of one name (letter case aside).
     #[error("columns {first} and {second} are both named '{name}': give each column its own name")]
     SameName {

@@ -122,8 +122,14 @@ pub(super) fn parse_table(
     } else {
         (1..=first.len()).map(|c| c.to_string()).collect()
     };
-    if names.iter().any(String::is_empty) {
-        return Err(content(path, hl, None, DatasetFault::EmptyName));
+    if let Some(c) = names.iter().position(String::is_empty) {
+        let (column, columns) = (c + 1, names.len());
+        return Err(content(
+            path,
+            hl,
+            None,
+            DatasetFault::EmptyName { column, columns },
+        ));
     }
     // Two columns of one name: which one a reader takes would be a guess (a second `x` was
     // dropped silently).
