@@ -461,11 +461,13 @@ impl Npz {
         }
         let width = code.get(1..).and_then(|w| w.parse::<usize>().ok());
         let kind = match (code.get(..1), width) {
-            (Some("f"), Some(s @ (4 | 8))) => Kind::Float(s),
+            (Some("f"), Some(s @ (2 | 4 | 8))) => Kind::Float(s),
             (Some("i"), Some(s @ (1 | 2 | 4 | 8))) => Kind::Int(s),
             (Some("u"), Some(s @ (1 | 2 | 4 | 8))) => Kind::Uint(s),
             (Some("b"), Some(1)) => Kind::Bool,
             (Some("U"), Some(n)) => Kind::Unicode(n),
+            (Some("c"), _) => return Err(fault(NpzFault::Complex(descr.to_string()))),
+            (Some("O"), _) => return Err(fault(NpzFault::Objects)),
             _ => return Err(fault(NpzFault::Type(descr.to_string()))),
         };
         let fortran = value("fortran_order")?.starts_with("True");
@@ -504,6 +506,10 @@ impl Npz {
         let size = a.kind.size();
         let convert: fn(&[u8]) -> f64 = match a.kind {
             Kind::Float(8) => |b| f64::from_le_bytes(b.try_into().unwrap_or_default()),
+            Kind::Float(2) => |b| {
+                let h = u16::from_le_bytes(b.try_into().unwrap_or_default());
+                f64::from(et_core::precision::f16_to_f32(h))
+            },
             Kind::Float(_) => |b| f64::from(f32::from_le_bytes(b.try_into().unwrap_or_default())),
             Kind::Int(1) => |b| f64::from(b.first().map_or(0, |&v| v as i8)),
             Kind::Int(2) => |b| f64::from(i16::from_le_bytes(b.try_into().unwrap_or_default())),

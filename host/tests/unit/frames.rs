@@ -124,6 +124,51 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A `.npy` file of `descr` values as NumPy writes it (format 1.0, C order).
+fn npy_file(descr: &str, shape: (usize, usize), data: &[u8]) -> Vec<u8> {
+    let dict = format!(
+        "{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}, {}), }}",
+        shape.0, shape.1
+    );
+    let pad = 64 - (10 + dict.len() + 1) % 64;
+    let header = format!("{dict}{}\n", " ".repeat(pad % 64));
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend((header.len() as u16).to_le_bytes());
+    out.extend(header.as_bytes());
+    out.extend(data);
+    out
+}
+
+/// Half-precision frames (`np.float16`, as a logger saves to halve its files) are read; complex
+/// ones (a system's magnitude and phase) and Python objects are said as what they are, with
+/// the fix (both were "unsupported type '<c16' (numbers, booleans or text only)").
+#[test]
+fn npy_of_half_complex_or_objects_is_read_or_said() {
+    let dir = tmp("npy-kinds");
+    let f = dir.join("f.npy");
+    let halves: Vec<u8> = [1.0_f32, -0.5, 2.0e-3, 6.0e4]
+        .iter()
+        .flat_map(|&x| et_core::precision::f32_to_f16(x).to_le_bytes())
+        .collect();
+    std::fs::write(&f, npy_file("<f2", (2, 2), &halves)).unwrap();
+    let r = read(&f, 2).unwrap();
+    let back = |x: f32| et_core::precision::f16_to_f32(et_core::precision::f32_to_f16(x));
+    assert_eq!(r.frames, vec![vec![1.0, -0.5], vec![back(2.0e-3), 6.0e4]]);
+    std::fs::write(&f, npy_file("<c16", (2, 2), &[0; 64])).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("complex values ('<c16')") && e.contains("np.abs"),
+        "{e}"
+    );
+    std::fs::write(&f, npy_file("|O", (2, 2), &[0; 32])).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("Python objects") && e.contains("dtype=float"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn npy_and_npz_as_numpy_writes_them() {
     let dir = tmp("npy");

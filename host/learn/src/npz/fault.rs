@@ -50,6 +50,18 @@ pub enum NpzFault {
     /// Big-endian values.
     #[error("big-endian values: save it little-endian ('<')")]
     BigEndian,
+    /// Complex values (a system's magnitude and phase, as one number).
+    #[error(
+        "complex values ('{0}'): save the real voltages, the part you mean: the real part \
+         (np.real), the magnitude (np.abs) or the quadrature (np.imag)"
+    )]
+    Complex(String),
+    /// Python objects (a pickled array), not values.
+    #[error(
+        "Python objects (dtype object, pickled), not numbers: save numbers, \
+         np.save(f, np.asarray(x, dtype=float))"
+    )]
+    Objects,
     /// A type other than numbers, booleans or text.
     #[error("unsupported type '{0}' (numbers, booleans or text only)")]
     Type(String),
