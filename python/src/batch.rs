@@ -19,3 +19,34 @@ pub(crate) fn in_run(
         e => e,
     }
 }
+
+/// Memory the system can give now, bytes (Linux's `MemAvailable`); None where it is not said.
+fn available_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Refuses a batch whose stacked pixels (`n` frames of `per_frame` values, 8 bytes each) would
+/// not fit in the memory free now, naming the size and the run that fits: allocating them
+/// failed inside NumPy and surfaced as a panic ("PyObject pointer is null").
+pub(crate) fn check_fits(n: usize, per_frame: usize) -> Result<(), String> {
+    let need = (n as u128) * (per_frame as u128) * 8;
+    let Some(free) = available_bytes() else {
+        return Ok(());
+    };
+    // Half of what is free: the frames, their differences and the images of a run are held
+    // beside the stack.
+    let budget = u128::from(free / 2);
+    if need <= budget {
+        return Ok(());
+    }
+    let fits = (budget / (per_frame as u128 * 8).max(1)).max(1);
+    Err(format!(
+        "{n} frames' images need {:.1} GB ({per_frame} pixels each, 8 bytes a pixel), over half \
+         the {:.1} GB of memory free: image them in runs, r.images(V[i:i + {fits}])",
+        need as f64 / 1e9,
+        free as f64 / 1e9
+    ))
+}

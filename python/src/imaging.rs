@@ -268,10 +268,11 @@ impl Reconstructor {
         py: Python<'py>,
         frames: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<BatchParts<'py>> {
+        let (w, h) = (self.inner.grid().width, self.inner.grid().height);
+        crate::batch::check_fits(frames.as_array().nrows(), w * h).map_err(usage)?;
         let (frames, n, k) = frames_f32(&frames)?;
         let inner = &mut self.inner;
         let (grid, sigma0) = (inner.grid().clone(), inner.imager().sigma0);
-        let (w, h) = (grid.width, grid.height);
         // The stack in NumPy's own memory: it asks the kernel for huge pages for large
         // arrays, where a Rust Vec's fresh pages cost a fault each 4 kB (8 a 64 x 64 frame,
         // as much as the frame itself at 750 triangles).

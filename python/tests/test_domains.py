@@ -328,3 +328,13 @@ def test_training_arrays_are_checked_as_a_tables_cells_are():
         et.train(x, rng.standard_normal((60, 2)) * (1 + 1j), kind="ridge")
     with pytest.raises(et.EtError, match="folds = -1: a whole number"):
         et.train(x, y, kind="lda", folds=-1)
+
+
+def test_a_batch_whose_images_cannot_fit_in_memory_is_refused_with_the_run_that_fits():
+    # A million frames of 512 x 512 pixels (2 TB of images) panicked inside NumPy's allocation
+    # ("PyObject pointer is null"); the frames themselves are 32 MB.
+    rows = et.protocol("adjacent", 8).rows[:4]
+    r = et.Reconstructor(et.disc(0.1, 8), et.Protocol.from_rows(rows, 8), triangles=300, pixels=512)
+    v0 = r.forward(r.sigma0)
+    with pytest.raises(et.EtError, match=r"1048576 frames' images need .* GB .* image them in runs, r\.images\(V\[i:i \+ \d+\]\)"):
+        r.images(np.broadcast_to(v0 * 1.01, (2**20, 4)), v0)
