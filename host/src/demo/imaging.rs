@@ -65,7 +65,9 @@ struct ImagingSummary<'a> {
     single_touches_found_with_chosen_protocol: (usize, usize),
     two_touches_found_by: &'a [&'static str],
     images: &'a [ImageRow],
-    dynamic: &'a [Decision],
+    /// The protocol chosen for each scene from its adjacent image (docs/method.md §8; the
+    /// key was "dynamic").
+    protocol_choices: &'a [Decision],
 }
 
 /// Short names for the protocols, as the report shows them.
@@ -183,7 +185,7 @@ pub(super) fn imaging(out: &Path, sizes: &Sizes, steps: &Steps) -> Result<Sectio
         single_touches_found_with_chosen_protocol: chosen,
         two_touches_found_by: &two,
         images: &rows,
-        dynamic: &decisions,
+        protocol_choices: &decisions,
     })?;
     Ok(Section {
         markdown: md,
