@@ -192,6 +192,15 @@ pub enum DatasetFault {
     /// The `index`-th value (from 1) of the column is not finite.
     #[error("value {0} is not a finite number")]
     ValueNotFinite(usize),
+    /// A touch's pressure below 0 (row from 1).
+    #[error("row {0}: a pressure below 0 Pa")]
+    NegativePressure(usize),
+    /// A units line other than the SI et writes (its text).
+    #[error(
+        "'{0}': et datasets of version 2 hold SI values (features in V, positions in m, \
+         pressure in Pa); convert the values and keep the line et wrote"
+    )]
+    Units(String),
     /// The features' frame indices out of order.
     #[error(
         "feature {feature} reads frame value {index} after {before}: each frame value once, in \

@@ -133,6 +133,8 @@ struct Header {
     centres: Vec<[f64; 2]>,
     untouched: Vec<Vec<f64>>,
     electrodes: Vec<[f64; 2]>,
+    /// The `# units:` line's text and its line (1-based), where there is one.
+    units: Option<(usize, String)>,
 }
 
 impl Header {
@@ -146,12 +148,16 @@ impl Header {
         let mut centres = Vec::new();
         let mut untouched: Vec<Vec<f64>> = Vec::new();
         let mut electrodes = Vec::new();
+        let mut units = None;
         while let Some((i, l)) = lines.peek().copied() {
             let Some(meta) = l.strip_prefix('#') else {
                 break;
             };
             lines.next();
             let meta = meta.trim();
+            if meta.starts_with("units:") {
+                units = Some((i + 1, meta.to_string()));
+            }
             if let Some(json) = meta.strip_prefix("config:") {
                 // Parsed, then read with each field's name in its error.
                 config = Some(
@@ -188,6 +194,7 @@ impl Header {
             centres,
             untouched,
             electrodes,
+            units,
         })
     }
 }
@@ -199,8 +206,8 @@ impl Header {
 pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
     let text = super::import::read(path)?;
     let mut lines = text.lines().enumerate().peekable();
-    match lines.next() {
-        Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => {}
+    let version_2 = match lines.next() {
+        Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => l.trim() == FORMAT_2,
         Some((_, l)) if l.trim().starts_with("# et-dataset ") => {
             let version = l.trim()["# et-dataset ".len()..].chars().take(40).collect();
             return Err(content(
@@ -213,14 +220,20 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
         _ => {
             return Err(content(path, 1, None, DatasetFault::NotDataset));
         }
-    }
+    };
     let Header {
         config,
         feature_index,
         centres,
         untouched,
         electrodes,
+        units,
     } = Header::read(path, &mut lines)?;
+    // A version 2 file's values are in SI, as its units line says: a line edited to say
+    // other units would be read as SI all the same.
+    if let Some((line, said)) = units.filter(|(_, u)| version_2 && *u != UNITS[2..]) {
+        return Err(content(path, line, None, DatasetFault::Units(said)));
+    }
     let rest: Vec<(usize, &str)> = lines.collect();
     let table = parse_table(path, &rest, &|_, _| false)?;
     let col = |name: &str| {
@@ -506,6 +519,9 @@ fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
     finite("features", data.x.as_slice().iter())?;
     finite("untouched", data.baselines.as_slice().iter())?;
     finite("pressure", data.pressure.iter())?;
+    if let Some(i) = data.pressure.iter().position(|&p| p < 0.0) {
+        return Err(fault("pressure", DatasetFault::NegativePressure(i + 1)));
+    }
     finite("position", data.positions.as_flattened().iter())?;
     let frame_len = et_core::protocol::Protocol::new(data.config.protocol, data.config.electrodes)
         .map_or(usize::MAX, |p| p.frame_len());

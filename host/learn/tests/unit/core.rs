@@ -644,7 +644,8 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
 
     /// A header edited or cut: a configuration et does not scan (it trained, and failed at
     /// export), a class without a centre (it said "observation 0 has class 0, the model
-    /// has 0"), a value of the wrong type (without serde's "at line 1 column 97").
+    /// has 0"), a value of the wrong type (without serde's "at line 1 column 97"), units
+    /// other than the SI the values are read in, a pressure below 0 (both were read).
     #[test]
     fn a_damaged_dataset_header_is_refused_by_its_field() {
         let dir = tmp("header");
@@ -674,6 +675,21 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
                     .collect::<Vec<_>>()
                     .join("\n"),
                 "centres_m lists 0",
+            ),
+            (
+                text.replacen("# units: SI:", "# units: mV:", 1),
+                "d.csv:2: 'units: mV: features",
+            ),
+            (
+                // The first row's pressure, the last cell of its line.
+                {
+                    let first_row = text.lines().find(|l| !l.starts_with('#')).unwrap();
+                    let row = text.lines().skip_while(|l| *l != first_row).nth(1).unwrap();
+                    let (head, pressure) = row.rsplit_once(',').unwrap();
+                    assert!(pressure.parse::<f64>().unwrap() > 0.0, "{row}");
+                    text.replacen(row, &format!("{head},-{pressure}"), 1)
+                },
+                "column pressure: row 1: a pressure below 0 Pa",
             ),
         ] {
             assert_ne!(edited, text, "{said}: the edit took");
