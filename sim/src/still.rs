@@ -78,7 +78,15 @@ pub fn scene_frames(
 /// [`StillError`] if the sheet cannot be built.
 pub fn simulated_sheet(scene: &Scene) -> Result<Arc<SimulatedSheet>, StillError> {
     scene.check_touches_resolved()?;
-    Ok(Arc::new(SimulatedSheet::new(&scene.sheet, &[])?))
+    // The sheet a recording of the scene measures: its electrodes moved as the seed draws
+    // them, its shorted pairs shorted (both were left out here, so a still scene's frames
+    // were of a perfect sheet).
+    let offsets = scene.electrode_offsets();
+    Ok(Arc::new(SimulatedSheet::with_shorts(
+        &scene.sheet,
+        &offsets,
+        &scene.shorts(),
+    )?))
 }
 
 /// [`scene_frames`] on a sheet already built by [`simulated_sheet`] (from a scene with the

@@ -44,6 +44,33 @@ pub struct Run {
     released_at: f64,
 }
 
+impl Scene {
+    /// Each electrode's offset along the outline, m: `[movement]`'s rms times a normal draw
+    /// from `moves` (the scene's seed, forked once, as every simulation of the scene draws
+    /// them).
+    fn offsets_from(&self, moves: &mut Rng) -> Vec<f64> {
+        (0..self.sheet.physical.electrodes.count)
+            .map(|_| self.movement.rms * moves.normal())
+            .collect()
+    }
+
+    /// The electrodes' offsets along the outline as the scene's seed draws them, m (zeros
+    /// without `[movement]`): the sheet every simulation of the scene measures.
+    #[must_use]
+    pub fn electrode_offsets(&self) -> Vec<f64> {
+        self.offsets_from(&mut Rng::new(self.seed).fork())
+    }
+
+    /// The pairs of electrodes `[[fault]]` shorts together (0-based).
+    #[must_use]
+    pub fn shorts(&self) -> Vec<(usize, usize)> {
+        (self.faults.iter())
+            .filter(|f| f.kind == FaultKind::Shorted)
+            .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
+            .collect()
+    }
+}
+
 impl Run {
     /// Builds the sheet (with electrode movement drawn from the seed) and the front end in
     /// one measurement set (junction potentials and conductance drawn from the seed).
@@ -58,17 +85,9 @@ impl Run {
         })?;
         let mut rng = Rng::new(scene.seed);
         let mut moves = rng.fork();
-        let offsets: Vec<f64> = (0..scene.sheet.physical.electrodes.count)
-            .map(|_| scene.movement.rms * moves.normal())
-            .collect();
-        let shorts: Vec<(usize, usize)> = scene
-            .faults
-            .iter()
-            .filter(|f| f.kind == FaultKind::Shorted)
-            .filter_map(|f| f.with.map(|w| (usize::from(f.electrode), usize::from(w))))
-            .collect();
+        let offsets = scene.offsets_from(&mut moves);
         scene.check_touches_resolved()?;
-        let sheet = SimulatedSheet::with_shorts(&scene.sheet, &offsets, &shorts)?;
+        let sheet = SimulatedSheet::with_shorts(&scene.sheet, &offsets, &scene.shorts())?;
         let mut frontend = SimFrontend::new(Arc::new(sheet), scene.frontend, rng.next_u64())?;
         // A scene is one measurement set: its junction potentials and conductance.
         let set = scene.frontend.sets.draw(

@@ -303,6 +303,42 @@ fn electrode_movement_moves_the_frame() {
         .map(|(x, y)| (x - y).abs())
         .sum();
     assert!(diff > 1e-3, "moved electrodes change the frame ({diff} V)");
+    // A still scene's sheet (et sim to another system's file, et reconstruct's simulated
+    // frames) is the recording's: its electrodes moved as the seed draws them (they stayed
+    // at their nominal places there).
+    let z = |sheet: &crate::sheet::SimulatedSheet| sheet.transfer(&[]).unwrap().z;
+    let still_sheet = z(&crate::still::simulated_sheet(&moving).unwrap());
+    let recorded = crate::sheet::SimulatedSheet::new(&moving.sheet, &moving.electrode_offsets());
+    assert_eq!(still_sheet, z(&recorded.unwrap()));
+    assert_ne!(
+        still_sheet,
+        z(&crate::still::simulated_sheet(&still).unwrap())
+    );
+}
+
+/// Electrodes moved so far (a movement of 1 m rms on a 13 cm sheet) that their order along
+/// the outline changes, or so that neighbours overlap, are refused with the two electrodes:
+/// the offsets were added without a look, and the frames were of scrambled electrodes.
+#[test]
+fn electrodes_moved_past_each_other_are_refused() {
+    let still = Scene::parse(SMALL, "small").unwrap();
+    let spacing = still.sheet.physical.shape.perimeter() / 16.0;
+    for rms in [1.0, 0.5 * spacing] {
+        let moving = Scene {
+            movement: Movement { rms },
+            ..still.clone()
+        };
+        let e = crate::still::simulated_sheet(&moving)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("movement: electrodes")
+                && (e.contains("pass each other") || e.contains("overlap")),
+            "{rms}: {e}"
+        );
+        let e = Run::new(&moving).unwrap_err().to_string();
+        assert!(e.contains("movement: electrodes"), "{rms}: {e}");
+    }
 }
 
 #[test]

@@ -28,6 +28,31 @@ pub enum SheetError {
         /// Whether the spacing is the default one.
         default: bool,
     },
+    /// Electrodes moved along the outline (a scene's `movement.rms`, `et collect
+    /// --movement-mm`) so far that two overlap or pass each other: their numbering would no
+    /// longer be their order on the sheet.
+    #[error(
+        "movement: electrodes {a} and {b}, moved {moved_a:.1} and {moved_b:.1} mm along the \
+         outline, {} ({width_mm:.1} mm wide, {spacing_mm:.1} mm apart): the movement's rms is \
+         too large for this spacing (a few per cent of it, as clips put back by hand)",
+        if *crossed { "pass each other" } else { "overlap" }
+    )]
+    Moved {
+        /// One electrode (0-based).
+        a: usize,
+        /// Its neighbour on the outline.
+        b: usize,
+        /// How far each moved, mm.
+        moved_a: f64,
+        /// How far the neighbour moved, mm.
+        moved_b: f64,
+        /// Whether they passed each other (else they overlap).
+        crossed: bool,
+        /// The electrodes' width, mm.
+        width_mm: f64,
+        /// Their nominal spacing, mm (the outline over the count).
+        spacing_mm: f64,
+    },
     /// A touch smaller than the grid resolves ([`SheetSpec::check_touch`]).
     #[error(
         "touch[{touch}].radius: {radius} m is under half the simulator's grid spacing \

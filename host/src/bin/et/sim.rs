@@ -166,6 +166,20 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     use std::io::Write as _;
     let started = Instant::now();
     let schedule = scene.schedule()?;
+    // The sheet as the scene makes it (electrodes moved, shorts); the board's own faults and
+    // the temperature's drift are simulated in recordings only: said, not dropped silently.
+    let board_only: Vec<String> = (scene.faults.iter())
+        .filter(|f| f.kind != et_sim::scene::FaultKind::Shorted)
+        .map(|f| format!("electrode {} {:?}", f.electrode, f.kind).to_lowercase())
+        .chain(scene.drift.map(|_| "[drift]".to_string()))
+        .collect();
+    if !board_only.is_empty() {
+        say!(
+            "note: {} of the scene: simulated in et's board recordings (.jsonl) only; another \
+             system's frames are of the sheet and the instrument alone",
+            board_only.join(", ")
+        );
+    }
     let sheet = et_sim::still::simulated_sheet(scene)?;
     let lab = I::laboratory(scene.seed);
     let chosen = args.instrument.unwrap_or(Instrument::Laboratory);
