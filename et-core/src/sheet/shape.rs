@@ -21,10 +21,22 @@ pub enum Shape {
     },
     /// A simple polygon, vertices counter-clockwise (m).
     Polygon {
-        /// Vertices `[x, y]` in m.
-        #[serde(deserialize_with = "super::xy::many")]
+        /// Vertices `[x, y]` in m (a last one repeating the first, as closed outlines list
+        /// them, is read as the outline's closing).
+        #[serde(deserialize_with = "outline")]
         vertices: Vec<[f64; 2]>,
     },
+}
+
+/// A polygon's vertices as a file lists them: a last vertex equal to the first (a closed
+/// ring, as GIS files and shapely's `exterior.coords` write it) closes the outline and is not
+/// a vertex of its own (it was refused as edges that touch).
+fn outline<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<[f64; 2]>, D::Error> {
+    let mut vertices = super::xy::many(d)?;
+    if vertices.len() > 3 && vertices.first() == vertices.last() {
+        vertices.pop();
+    }
+    Ok(vertices)
 }
 
 /// Why a shape is not usable.
@@ -43,6 +55,15 @@ pub enum ShapeError {
     /// non-zero area.
     #[error("polygon: {0}")]
     Polygon(&'static str),
+    /// Two consecutive vertices at one point (0-based: `vertex` and the one after it).
+    #[error(
+        "polygon: vertices {vertex} and {} are the same point: list each corner once",
+        .vertex + 1
+    )]
+    Repeated {
+        /// The first of the two.
+        vertex: usize,
+    },
     /// An outline too narrow against its longer side to mesh.
     #[error(
         "the outline is a sliver: its area is {slenderness:.1e} of its longer side squared, \
@@ -95,6 +116,11 @@ impl Shape {
                 }
                 if vertices.iter().flatten().any(|v| !v.is_finite()) {
                     return Err(ShapeError::Polygon("a vertex is not finite"));
+                }
+                if let Some(vertex) =
+                    (0..vertices.len() - 1).find(|&i| vertices[i] == vertices[i + 1])
+                {
+                    return Err(ShapeError::Repeated { vertex });
                 }
                 if self.signed_area().abs() < 1e-12 {
                     return Err(ShapeError::Polygon("zero area"));
@@ -474,6 +500,29 @@ mod tests {
             [0.0, 0.1],
         ]);
         l_shape.validate().unwrap();
+    }
+
+    /// A closed ring (its first vertex repeated last, as shapely's `exterior.coords` and GIS
+    /// files list it) is the same outline; a corner listed twice in a row is said by its
+    /// place (both were "edges cross or touch").
+    #[test]
+    fn a_closed_ring_is_its_outline_and_a_repeated_corner_is_named() {
+        let read = |vertices: &str| {
+            let json = format!(r#"{{"kind": "polygon", "vertices": {vertices}}}"#);
+            serde_json::from_str::<Shape>(&json).unwrap()
+        };
+        let open = read("[[0, 0], [0.1, 0], [0.1, 0.1], [0, 0.1]]");
+        assert_eq!(
+            read("[[0, 0], [0.1, 0], [0.1, 0.1], [0, 0.1], [0, 0]]"),
+            open
+        );
+        open.validate().unwrap();
+        let twice = read("[[0, 0], [0.1, 0], [0.1, 0], [0.1, 0.1], [0, 0.1]]");
+        let e = twice.validate().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "polygon: vertices 1 and 2 are the same point: list each corner once"
+        );
     }
 
     #[test]
