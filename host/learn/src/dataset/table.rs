@@ -82,6 +82,12 @@ impl Csv {
     }
 }
 
+/// `r`'s cells, without an empty last one where `trailing` (a delimiter ends the file's lines).
+fn cells_of(r: &StringRecord, trailing: bool) -> Vec<&str> {
+    let ends = trailing && r.len() > 1 && r.get(r.len() - 1) == Some("");
+    r.iter().take(r.len() - usize::from(ends)).collect()
+}
+
 /// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
 /// Cells are read by the `csv` crate: quoted cells (`"1,5"`, `"a ""b"""`), cells separated by
 /// `,`, `;` or tabs (detected from the first row, [`Delimiter::of`]), spaces around cells
@@ -110,17 +116,27 @@ pub(super) fn parse_table(
         .first()
         .map(|(line, cells)| (*line, cells))
         .ok_or_else(|| content(path, 0, None, DatasetFault::NoRows))?;
+    // A delimiter ending the first row's line (`fprintf('%g,', row)` in a loop) ends each
+    // row that has one: it is not an empty last column.
+    let trailing = first.len() > 1 && first.get(first.len() - 1) == Some("");
     let texts = |r: &StringRecord| -> Vec<bool> {
-        r.iter().map(|c| number(c, delimiter).is_none()).collect()
+        cells_of(r, trailing)
+            .iter()
+            .map(|c| number(c, delimiter).is_none())
+            .collect()
     };
     let first_text = texts(first);
     let second_text = head.get(1).map(|(_, r)| texts(r));
     let header =
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
-        first.iter().map(str::to_string).collect()
+        (cells_of(first, trailing).iter())
+            .map(|c| (*c).to_string())
+            .collect()
     } else {
-        (1..=first.len()).map(|c| c.to_string()).collect()
+        (1..=cells_of(first, trailing).len())
+            .map(|c| c.to_string())
+            .collect()
     };
     if let Some(c) = names.iter().position(String::is_empty) {
         let (column, columns) = (c + 1, names.len());
@@ -156,7 +172,8 @@ pub(super) fn parse_table(
         .chain(records.map(read))
         .peekable();
     while let Some(record) = body.next() {
-        let (i, cells) = record?;
+        let (i, record) = record?;
+        let cells = cells_of(&record, trailing);
         if cells.len() != names.len() {
             let (found, columns) = (cells.len(), names.len());
             let fault = DatasetFault::RowLength {

@@ -911,6 +911,13 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 .collect::<Vec<_>>(),
             [0.003, 0.006, 0.009]
         );
+        // A delimiter ending every line (a MATLAB loop's `fprintf('%g,', row)`) is the
+        // line's end, not an empty last column, with a header or without.
+        std::fs::write(&feats, "1.5E-05,2,3,\n4,5,6,\n7,8,9,\n").unwrap();
+        std::fs::write(&targets, "x,y,\n0.01,0.02,\n0.04,0.05,\n0.07,0.08,\n").unwrap();
+        let ended = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
+        assert_eq!((ended.x.clone(), ended.x.ncols()), (imp.x.clone(), 3));
+        assert_eq!(in_mm(&ended.positions), in_mm(&imp.positions));
         // One headerless column of targets is a label, names too.
         std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
         assert_eq!(
