@@ -330,6 +330,9 @@ impl Schedule {
             Some(r) => r.map_err(|(line, f)| fail(line, f.into()))?,
             None => return Err(fail(0, FileFault::NoRows)),
         };
+        // A delimiter ending every line (`0,1,2,3,`) is the line's end, not a fifth column.
+        let line_ends = text::ends_with_delimiter(&first);
+        let first: csv::StringRecord = text::cells(&first, line_ends).into_iter().collect();
         let (header, columns) =
             header_columns(&first, delimiter).map_err(|fault| fail(first_line, fault))?;
         let width = first.len();
@@ -342,13 +345,14 @@ impl Schedule {
             .into_iter()
             .chain(records);
         for record in data {
-            let (line, cells) = record.map_err(|(line, f)| fail(line, f.into()))?;
+            let (line, record) = record.map_err(|(line, f)| fail(line, f.into()))?;
+            let cells = text::cells(&record, line_ends);
             if cells.len() != width {
                 let (cells, first) = (cells.len(), width);
                 return Err(fail(line, FileFault::Width { cells, first }));
             }
             row_lines.push(line);
-            let cell = |c: usize| cells.get(c).unwrap_or("");
+            let cell = |c: usize| cells.get(c).copied().unwrap_or("");
             let electrode = |which: usize| -> Result<u16, ScheduleError> {
                 let c = columns[which].unwrap_or(which);
                 let v = cell(c);

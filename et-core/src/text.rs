@@ -263,6 +263,24 @@ pub fn lines(text: &str) -> Vec<(usize, &str)> {
         .collect()
 }
 
+/// Whether `first`, a file's first record, ends with a delimiter (`1,2,3,`: a MATLAB loop's
+/// `fprintf('%g,', row)`), so that the file's empty last cells are its lines' ends.
+#[must_use]
+pub fn ends_with_delimiter(first: &StringRecord) -> bool {
+    first.len() > 1 && first.get(first.len() - 1) == Some("")
+}
+
+/// `record`'s cells, without the empty last one where the file's lines end with a delimiter
+/// ([`ends_with_delimiter`] of its first record).
+#[must_use]
+pub fn cells(record: &StringRecord, line_ends: bool) -> Vec<&str> {
+    let ends = line_ends && record.len() > 1 && record.get(record.len() - 1) == Some("");
+    record
+        .iter()
+        .take(record.len() - usize::from(ends))
+        .collect()
+}
+
 /// [`read_records`] of a whole text, the rows only.
 ///
 /// # Errors

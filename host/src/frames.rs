@@ -433,14 +433,13 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
     // The header's first cell, where there is a header.
     let mut first_name = None;
     let mut records = records.enumerate().peekable();
+    let mut line_ends = false;
     while let Some((i, record)) = records.next() {
         let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
         // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
         // row; it is not an empty last value.
-        let mut cells: Vec<&str> = record.iter().collect();
-        if cells.len() > 1 && cells.last() == Some(&"") {
-            cells.pop();
-        }
+        line_ends |= i == 0 && text::ends_with_delimiter(&record);
+        let cells = text::cells(&record, line_ends);
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
             first_name = cells.first().map(|c| c.to_string());

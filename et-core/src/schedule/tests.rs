@@ -176,6 +176,9 @@ fn rows_of_another_width_are_refused_not_half_read() {
         let said = format!("p.csv:{line}: {cells} cells, where the first row has {first}");
         assert!(e.contains(&said), "{text:?}: {e}");
     }
+    // A delimiter ending every line is the line's end, not a fifth column.
+    let ended = parse("0,1,2,3,\n1,2,3,4,\n", 16, 0).unwrap();
+    assert_eq!(ended, parse("0,1,2,3\n1,2,3,4\n", 16, 0).unwrap());
     // Each row's own current, where every row gives one.
     let s = parse("0,1,2,3,1e-3\n1,2,3,4,2e-3\n", 16, 0).unwrap();
     assert_eq!(s.rows()[1].current_a, 2e-3);

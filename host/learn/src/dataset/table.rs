@@ -82,12 +82,6 @@ impl Csv {
     }
 }
 
-/// `r`'s cells, without an empty last one where `trailing` (a delimiter ends the file's lines).
-fn cells_of(r: &StringRecord, trailing: bool) -> Vec<&str> {
-    let ends = trailing && r.len() > 1 && r.get(r.len() - 1) == Some("");
-    r.iter().take(r.len() - usize::from(ends)).collect()
-}
-
 /// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
 /// Cells are read by the `csv` crate: quoted cells (`"1,5"`, `"a ""b"""`), cells separated by
 /// `,`, `;` or tabs (detected from the first row, [`Delimiter::of`]), spaces around cells
@@ -118,9 +112,9 @@ pub(super) fn parse_table(
         .ok_or_else(|| content(path, 0, None, DatasetFault::NoRows))?;
     // A delimiter ending the first row's line (`fprintf('%g,', row)` in a loop) ends each
     // row that has one: it is not an empty last column.
-    let trailing = first.len() > 1 && first.get(first.len() - 1) == Some("");
+    let trailing = et_core::text::ends_with_delimiter(first);
     let texts = |r: &StringRecord| -> Vec<bool> {
-        cells_of(r, trailing)
+        et_core::text::cells(r, trailing)
             .iter()
             .map(|c| number(c, delimiter).is_none())
             .collect()
@@ -130,11 +124,11 @@ pub(super) fn parse_table(
     let header =
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
     let names: Vec<String> = if header {
-        (cells_of(first, trailing).iter())
+        (et_core::text::cells(first, trailing).iter())
             .map(|c| (*c).to_string())
             .collect()
     } else {
-        (1..=cells_of(first, trailing).len())
+        (1..=et_core::text::cells(first, trailing).len())
             .map(|c| c.to_string())
             .collect()
     };
@@ -173,7 +167,7 @@ pub(super) fn parse_table(
         .peekable();
     while let Some(record) = body.next() {
         let (i, record) = record?;
-        let cells = cells_of(&record, trailing);
+        let cells = et_core::text::cells(&record, trailing);
         if cells.len() != names.len() {
             let (found, columns) = (cells.len(), names.len());
             let fault = DatasetFault::RowLength {
