@@ -221,6 +221,18 @@ pub(crate) fn median_pair(d2: &Mat<f64>) -> f64 {
 /// Squared distances between the rows of `a` (m x p) and of `b` (n x p), m x n:
 /// |a_i|^2 + |b_j|^2 - 2 a_i . b_j, the cross term one matrix product (one core), clamped at 0
 /// against rounding.
+/// The most memory a block of rows' distances to a support takes, bytes.
+const BLOCK_BYTES: usize = 64 << 20;
+
+/// `n` rows as blocks (start, rows) whose distances to a support of `m` rows (f64, and a copy
+/// as the kernel) take at most [`BLOCK_BYTES`]: memory bounded whatever the table's length.
+pub fn row_blocks(n: usize, m: usize) -> impl Iterator<Item = (usize, usize)> {
+    let block = (BLOCK_BYTES / (16 * m.max(1))).max(1);
+    (0..n)
+        .step_by(block)
+        .map(move |start| (start, block.min(n - start)))
+}
+
 pub(crate) fn squared_distances(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
     let (na, nb) = (squared_norms(a), squared_norms(b));
     let mut d = Mat::<f64>::zeros(a.nrows(), b.nrows());
@@ -394,13 +406,24 @@ impl KernelRidge {
         out
     }
 
-    /// Predicts every row of `x` (n x p, volts) at once: the distances to the support as one
-    /// matrix product, then the kernel times alpha as another (one core).
+    /// Predicts every row of `x` (n x p, volts): the distances to the support as matrix
+    /// products, then the kernel times alpha as another (one core), a block of rows at a time
+    /// ([`row_blocks`]: the n x m kernel at once took 48 kB a row).
     #[must_use]
     pub fn predict_many(&self, x: &DMatrix<f64>) -> Vec<Target3> {
-        let mut k = self.distances(x);
-        gaussian_in_place(&mut k, self.gamma);
-        self.kernel_times_alpha(&k)
+        let mut out = Vec::with_capacity(x.nrows());
+        for (start, rows) in row_blocks(x.nrows(), self.support.nrows()) {
+            let mut k = self.distances(&x.rows(start, rows).into_owned());
+            gaussian_in_place(&mut k, self.gamma);
+            out.extend(self.kernel_times_alpha(&k));
+        }
+        out
+    }
+
+    /// The rows of the support (m).
+    #[must_use]
+    pub fn support_rows(&self) -> usize {
+        self.support.nrows()
     }
 
     /// Squared z-space distances from the rows of `x` (n x p, volts) to the support, n x m.

@@ -518,18 +518,28 @@ fn fold_predictions(
         Kind::KernelRidge => {
             let fits =
                 KernelRidge::fit_grid(xt, tt, KRR_SEARCH_SUPPORT, &KRR_WIDTHS, &KRR_LAMBDAS)?;
-            // Every fit of the grid shares the support: the held-out rows' distances once.
-            let d2 = fits
-                .iter()
-                .flatten()
-                .next()
-                .map(|m| sets.each_ref().map(|x| m.distances(x)));
-            fits.into_iter()
-                .map(|m| {
-                    let (m, d2) = (m?, d2.as_ref()?);
-                    Some(d2.each_ref().map(|d| m.predict_from_distances(d)))
-                })
-                .collect()
+            // Every fit of the grid shares the support: the held-out rows' distances once per
+            // block of rows (memory bounded: all at once took 19 kB a table row), each fit's
+            // predictions from them.
+            let mut pred: Vec<Option<[Vec<Target3>; 2]>> = (fits.iter())
+                .map(|m| m.as_ref().map(|_| [Vec::new(), Vec::new()]))
+                .collect();
+            if let Some(first) = fits.iter().flatten().next() {
+                for (s, x) in sets.iter().enumerate() {
+                    for (start, rows) in crate::regress::row_blocks(x.nrows(), first.support_rows())
+                    {
+                        let d2 = first.distances(&x.rows(start, rows).into_owned());
+                        for (m, p) in fits.iter().zip(&mut pred) {
+                            if let (Some(m), Some(into)) =
+                                (m, p.as_mut().and_then(|p| p.get_mut(s)))
+                            {
+                                into.extend(m.predict_from_distances(&d2));
+                            }
+                        }
+                    }
+                }
+            }
+            pred
         }
         Kind::Knn => {
             let model = Knn::fit(xt, tt, 1, Weighting::Uniform)?;
