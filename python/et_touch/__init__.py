@@ -1035,7 +1035,7 @@ def train(
     ``per_group`` standardises each session by its own statistics; ``cv``: "shuffled" or
     "blocks" (contiguous, for rows in time order); ``grid``: (rows, cols) classes from
     positions; ``folds``: default 5; ``budget_s``: the longest the training may be
-    estimated to take, s (default 3600; the Gaussian process and the perceptron time a piece
+    estimated to take, s (default 3600; the Gaussian process, the perceptron and knn time a piece
     of their work first; past it, refused with the estimate). ``seed``: the shuffled folds'
     and the perceptron's starts.
 
@@ -1048,7 +1048,7 @@ def train(
 
     ``progress``: a callable taking ``(what, done, total)``, called at every step (``what``
     changes as each stage starts; ``total`` 0 where steps are not counted), as ``et train``
-    shows its progress; the Gaussian process and the perceptron say their estimated time in
+    shows its progress; the Gaussian process, the perceptron and knn say their estimated time in
     ``what`` before their work (``progress=lambda what, done, total: print(what)``). An
     exception it raises stops the calls and is raised when the training ends.
     """

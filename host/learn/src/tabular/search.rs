@@ -310,8 +310,8 @@ pub(super) fn drifted_error(pred: &[Target3], t: &[Target3]) -> f64 {
 
 /// Seconds `method`'s cross-validation over `k` folds and its final fit on rows like `x` are
 /// estimated to take, for the methods whose time grows fastest with the table (the Gaussian
-/// process, the perceptron: each times a piece of its work on rows of `x`'s shape); None for
-/// the others.
+/// process, the perceptron, k nearest neighbours: each times a piece of its work on rows of
+/// `x`'s shape); None for the others.
 pub(super) fn estimate_seconds(method: Kind, x: &DMatrix<f64>, k: usize) -> Option<f64> {
     match method {
         Kind::Gp => Some(Gp::estimate_seconds(x, &GP_SEARCH, k) + Gp::estimate_seconds(x, &GP, 1)),
@@ -326,6 +326,14 @@ pub(super) fn estimate_seconds(method: Kind, x: &DMatrix<f64>, k: usize) -> Opti
                 Mlp::estimate_seconds(x, &search, k * grid.len())
                     + Mlp::estimate_seconds(x, &last, 1),
             )
+        }
+        Kind::Knn => {
+            // Each fold: its held-out rows and their drifted copies against the others.
+            let n = x.nrows();
+            let k_max = KNN_KS.iter().copied().max().unwrap_or(1);
+            let held_out = n.div_ceil(k.max(1));
+            let fold = Knn::estimate_seconds(x, n - held_out, held_out * (1 + DRIFT_DRAWS), k_max);
+            Some(fold * k as f64)
         }
         _ => None,
     }

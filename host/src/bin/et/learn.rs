@@ -57,8 +57,8 @@ pub(crate) struct TrainArgs {
     /// needs a session's worth of rows (two or more per group).
     #[arg(long)]
     per_group: bool,
-    /// On --features: the longest the training may take, minutes. The Gaussian process and
-    /// the perceptron (alone or in auto) estimate their time from a timed piece of their work
+    /// On --features: the longest the training may take, minutes. The Gaussian process, the
+    /// perceptron and knn (alone or in auto) estimate their time from a timed piece of their work
     /// before any fit and say it; a training estimated past this is refused, naming what to
     /// cut. Default 60.
     #[arg(long, value_name = "M", value_parser = crate::domain::above(0.0, 10_080.0))]
