@@ -15,6 +15,10 @@ pub enum Delimiter {
     Semicolon,
     /// A tab.
     Tab,
+    /// Runs of spaces, as NumPy's `savetxt` writes by default and MATLAB's `save -ascii`
+    /// (aligned columns, leading spaces): taken where the first row is two or more numbers
+    /// separated by spaces alone.
+    Spaces,
 }
 
 impl Delimiter {
@@ -33,10 +37,18 @@ impl Delimiter {
                 _ => {}
             }
         }
+        let spaced = || {
+            let mut tokens = line.split_whitespace();
+            !line.contains(',')
+                && tokens.clone().count() >= 2
+                && tokens.all(|t| t.parse::<f64>().is_ok())
+        };
         if tab {
             Self::Tab
         } else if semicolon {
             Self::Semicolon
+        } else if spaced() {
+            Self::Spaces
         } else {
             Self::Comma
         }
@@ -49,6 +61,7 @@ impl Delimiter {
             Self::Comma => b',',
             Self::Semicolon => b';',
             Self::Tab => b'\t',
+            Self::Spaces => b' ',
         }
     }
 
@@ -59,6 +72,7 @@ impl Delimiter {
             Self::Comma => "",
             Self::Semicolon => "cells separated by ';'",
             Self::Tab => "cells separated by tabs",
+            Self::Spaces => "cells separated by spaces",
         }
     }
 }
@@ -239,6 +253,10 @@ impl Iterator for RecordIter<'_> {
             Ok(false) => None,
             Ok(true) => {
                 let line = line(record.position());
+                if self.delimiter == Delimiter::Spaces {
+                    // A run of spaces is one separator: its empty cells are not cells.
+                    record = record.iter().filter(|c| !c.is_empty()).collect();
+                }
                 if record.iter().any(|c| c.contains('\n')) {
                     Some(Err((line, RecordFault::RunOn)))
                 } else {

@@ -123,7 +123,7 @@ pub enum FileFault {
     /// Without a header, a row of another width.
     #[error(
         "{0} column{s}: without a header give source, sink, positive, negative and optionally \
-         current_a, separated by ',', ';' or tabs",
+         current_a, separated by ',', ';', tabs or spaces",
         s = if *.0 == 1 { "" } else { "s" }
     )]
     Columns(usize),

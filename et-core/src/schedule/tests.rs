@@ -125,8 +125,13 @@ fn wrong_rows_are_named_by_line_and_cell() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("names source twice"), "{e}");
-    let e = parse("0 1 2 3\n", 16, 0).unwrap_err().to_string();
-    assert!(e.contains("1 column:") && e.contains("tabs"), "{e}");
+    // Numbers separated by spaces (MATLAB's `save -ascii`, NumPy's `savetxt`) are a row.
+    assert_eq!(
+        parse("   0   1   2   3\n", 16, 0).unwrap(),
+        parse("0,1,2,3\n", 16, 0).unwrap()
+    );
+    let e = parse("0/1/2/3\n", 16, 0).unwrap_err().to_string();
+    assert!(e.contains("1 column:") && e.contains("spaces"), "{e}");
     assert_eq!(
         parse("# nothing\n", 16, 0).unwrap_err().to_string(),
         "p.csv: no rows"

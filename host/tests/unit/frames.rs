@@ -58,7 +58,8 @@ fn csv_rows_or_columns_header_or_not() {
 
 /// Frames as other tools write them around the values: pandas' `to_csv` with its row index
 /// (an unnamed first column counting from 0), a delimiter ending every line (`fprintf('%g,',
-/// v)` in a loop), and a first column of times, which is not guessed at but said.
+/// v)` in a loop), numbers separated by spaces (NumPy's `savetxt`, MATLAB's `save -ascii`),
+/// and a first column of times, which is not guessed at but said.
 #[test]
 fn csv_as_pandas_and_matlab_loops_write_them() {
     let dir = tmp("pandas");
@@ -90,6 +91,13 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
 1e-3;2e-3;3e-3;
 4e-3;5e-3;6e-3;
 ",
+            false,
+        ),
+        // NumPy's `savetxt` default and MATLAB's `save -ascii`: runs of spaces (they were one
+        // cell, "not a number", the first row taken as a header).
+        ("1.0e-03 2.0e-03 3.0e-03\n4.0e-03 5.0e-03 6.0e-03\n", false),
+        (
+            "   1.0e-03   2.0e-03   3.0e-03\n   4.0e-03   5.0e-03   6.0e-03\n",
             false,
         ),
     ] {
