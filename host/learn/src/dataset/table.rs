@@ -82,10 +82,91 @@ impl Csv {
     }
 }
 
+/// The columns' names: the header's (`header`), else 1, 2, ... for the `first` row's cells;
+/// refused where one is empty or two are one name (letter case aside), on line `hl`.
+fn column_names(
+    path: &Path,
+    hl: usize,
+    first: &[&str],
+    header: bool,
+) -> Result<Vec<String>, DatasetError> {
+    let names: Vec<String> = if header {
+        first.iter().map(|c| (*c).to_string()).collect()
+    } else {
+        (1..=first.len()).map(|c| c.to_string()).collect()
+    };
+    if let Some(c) = names.iter().position(String::is_empty) {
+        let (column, columns) = (c + 1, names.len());
+        return Err(content(
+            path,
+            hl,
+            None,
+            DatasetFault::EmptyName { column, columns },
+        ));
+    }
+    // Two columns of one name: which one a reader takes would be a guess (a second `x` was
+    // dropped silently).
+    let mut seen = std::collections::HashMap::with_capacity(names.len());
+    for (b, name) in names.iter().enumerate() {
+        if let Some(&a) = seen.get(&name.to_ascii_lowercase()) {
+            let (first, second, name) = (a + 1, b + 1, name.clone());
+            let fault = DatasetFault::SameName {
+                first,
+                second,
+                name: name.clone(),
+            };
+            return Err(content(path, hl, Some(name), fault));
+        }
+        seen.insert(name.to_ascii_lowercase(), b);
+    }
+    Ok(names)
+}
+
+/// Line `i`'s `cells` as numbers, one per column of `names`: a column that keeps its text
+/// (a `Some` of `text`) takes the cell as written (NaN where it is no number; empty refused);
+/// any other cell must be a finite number.
+fn row_values(
+    path: &Path,
+    i: usize,
+    cells: &[&str],
+    names: &[String],
+    text: &mut [Option<Vec<String>>],
+    delimiter: Delimiter,
+) -> Result<Vec<f64>, DatasetError> {
+    let mut values = Vec::with_capacity(cells.len());
+    for ((cell, name), t) in cells.iter().zip(names).zip(text.iter_mut()) {
+        if let Some(t) = t {
+            if cell.is_empty() {
+                return Err(content(
+                    path,
+                    i,
+                    Some(name.clone()),
+                    DatasetFault::EmptyLabel,
+                ));
+            }
+            t.push(cell.to_string());
+            values.push(number(cell, delimiter).unwrap_or(f64::NAN));
+            continue;
+        }
+        values.push(match number(cell, delimiter) {
+            Some(v) if v.is_finite() => v,
+            Some(v) => {
+                let fault = DatasetFault::NotFinite(v);
+                return Err(content(path, i, Some(name.clone()), fault));
+            }
+            None => {
+                let fault = DatasetFault::NotNumber(cell.to_string());
+                return Err(content(path, i, Some(name.clone()), fault));
+            }
+        });
+    }
+    Ok(values)
+}
+
 /// An optional header row, then numeric rows; blank and `#` lines skipped; every value finite.
 /// Cells are read by the `csv` crate: quoted cells (`"1,5"`, `"a ""b"""`), cells separated by
-/// `,`, `;` or tabs (detected from the first row, [`Delimiter::of`]), spaces around cells
-/// trimmed. The first row is a header when it has a cell that is not a number, unless the
+/// `,`, `;`, tabs or runs of spaces (detected from the first row, [`Delimiter::of`]), spaces
+/// around cells trimmed, a delimiter ending every line taken as the line's end. The first row is a header when it has a cell that is not a number, unless the
 /// second row has text in exactly the same columns (a headerless file with text labels).
 /// `text_ok(name, columns)` says which columns may hold text (kept as written besides their
 /// numbers).
@@ -123,39 +204,7 @@ pub(super) fn parse_table(
     let second_text = head.get(1).map(|(_, r)| texts(r));
     let header =
         first_text.iter().any(|&t| t) && second_text.is_none_or(|second| second != first_text);
-    let names: Vec<String> = if header {
-        (et_core::text::cells(first, trailing).iter())
-            .map(|c| (*c).to_string())
-            .collect()
-    } else {
-        (1..=et_core::text::cells(first, trailing).len())
-            .map(|c| c.to_string())
-            .collect()
-    };
-    if let Some(c) = names.iter().position(String::is_empty) {
-        let (column, columns) = (c + 1, names.len());
-        return Err(content(
-            path,
-            hl,
-            None,
-            DatasetFault::EmptyName { column, columns },
-        ));
-    }
-    // Two columns of one name: which one a reader takes would be a guess (a second `x` was
-    // dropped silently).
-    let mut seen = std::collections::HashMap::with_capacity(names.len());
-    for (b, name) in names.iter().enumerate() {
-        if let Some(&a) = seen.get(&name.to_ascii_lowercase()) {
-            let (first, second, name) = (a + 1, b + 1, name.clone());
-            let fault = DatasetFault::SameName {
-                first,
-                second,
-                name: name.clone(),
-            };
-            return Err(content(path, hl, Some(name), fault));
-        }
-        seen.insert(name.to_ascii_lowercase(), b);
-    }
+    let names = column_names(path, hl, &et_core::text::cells(first, trailing), header)?;
     let keep_text: Vec<bool> = names.iter().map(|n| text_ok(n, names.len())).collect();
     let mut text: Vec<Option<Vec<String>>> = keep_text.iter().map(|&k| k.then(Vec::new)).collect();
     let mut rows = Vec::new();
@@ -178,33 +227,7 @@ pub(super) fn parse_table(
             };
             return Err(content(path, i, None, fault));
         }
-        let mut values = Vec::with_capacity(cells.len());
-        for ((cell, name), t) in cells.iter().zip(&names).zip(text.iter_mut()) {
-            if let Some(t) = t {
-                if cell.is_empty() {
-                    return Err(content(
-                        path,
-                        i,
-                        Some(name.clone()),
-                        DatasetFault::EmptyLabel,
-                    ));
-                }
-                t.push(cell.to_string());
-                values.push(number(cell, delimiter).unwrap_or(f64::NAN));
-                continue;
-            }
-            values.push(match number(cell, delimiter) {
-                Some(v) if v.is_finite() => v,
-                Some(v) => {
-                    let fault = DatasetFault::NotFinite(v);
-                    return Err(content(path, i, Some(name.clone()), fault));
-                }
-                None => {
-                    let fault = DatasetFault::NotNumber(cell.to_string());
-                    return Err(content(path, i, Some(name.clone()), fault));
-                }
-            });
-        }
+        let values = row_values(path, i, &cells, &names, &mut text, delimiter)?;
         rows.push((i, values));
     }
     if rows.is_empty() {
