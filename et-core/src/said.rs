@@ -42,8 +42,8 @@ fn words_said(line: &str) -> String {
     if let Some(at) = line.find(INVALID_TYPE) {
         let rest = &line[at + INVALID_TYPE.len()..];
         if let Some((found, expected)) = rest.rsplit_once(", expected ") {
+            let hint = quoted_number_hint(found, expected);
             let expected = expected_said(expected);
-            let hint = quoted_number_hint(found, &expected);
             return format!(
                 "{}{}, where {expected} belongs{hint}",
                 &line[..at],
@@ -189,7 +189,13 @@ fn expected_said(expected: &str) -> String {
 /// An integer type's range in words (`u16` is "a whole number from 0 to 65535"), for a value
 /// past it.
 fn range_said(expected: &str) -> Option<String> {
-    let (least, most): (i128, i128) = match expected {
+    let (least, most) = int_range(expected)?;
+    Some(format!("a whole number from {least} to {most}"))
+}
+
+/// The least and most values of an integer type serde names (`u16`: 0 and 65535).
+fn int_range(expected: &str) -> Option<(i128, i128)> {
+    Some(match expected {
         "u8" => (0, u8::MAX.into()),
         "u16" => (0, u16::MAX.into()),
         "u32" => (0, u32::MAX.into()),
@@ -199,19 +205,24 @@ fn range_said(expected: &str) -> Option<String> {
         "i32" => (i32::MIN.into(), i32::MAX.into()),
         "i64" | "isize" => (i64::MIN.into(), i64::MAX.into()),
         _ => return None,
-    };
-    Some(format!("a whole number from {least} to {most}"))
+    })
 }
 
 /// `" (write it without quotes)"` where text that reads as a number was given for a number;
-/// `" (write it as digits alone: 10000)"` where a whole number was written as a decimal.
-fn quoted_number_hint(found: &str, expected: &str) -> String {
+/// `" (write it as digits alone: 10000)"` where a whole number was written as a decimal, or
+/// the field's range where that number is past it (`expected` is serde's type name).
+fn quoted_number_hint(found: &str, expected_type: &str) -> String {
+    let expected = expected_said(expected_type);
     if let Some(v) = found
         .strip_prefix("floating point `")
         .and_then(|v| v.strip_suffix('`'))
     {
-        return match v.parse::<f64>() {
-            Ok(x) if expected == "a whole number" && x.fract() == 0.0 && x.abs() < 1e19 => {
+        let whole = |x: f64| expected == "a whole number" && x.fract() == 0.0;
+        return match (v.parse::<f64>(), int_range(expected_type)) {
+            (Ok(x), Some((least, most))) if whole(x) && (x < least as f64 || x > most as f64) => {
+                format!(" (this field takes {least} to {most})")
+            }
+            (Ok(x), _) if whole(x) && x.abs() < 1e19 => {
                 format!(" (write it as digits alone: {x:.0})")
             }
             _ => String::new(),
@@ -311,6 +322,14 @@ mod tests {
             (
                 r#"{"inner": {"n": 1e4}}"#,
                 "10000.0 is a decimal number, where a whole number belongs (write it as digits alone: 10000)",
+            ),
+            (
+                r#"{"inner": {"n": 1e12}}"#,
+                "1000000000000.0 is a decimal number, where a whole number belongs (this field takes 0 to 4294967295)",
+            ),
+            (
+                r#"{"inner": {"n": -2.0}}"#,
+                "where a whole number belongs (this field takes 0 to 4294967295)",
             ),
             (
                 r#"{"pair": [1]}"#,
