@@ -324,14 +324,18 @@ impl Schedule {
             return Err(fail(0, FileFault::Base(base)));
         }
         let lines = text::lines(text);
-        let mut records = text::RecordIter::new(&lines);
+        let records = text::RecordIter::new(&lines);
         let delimiter = records.delimiter;
+        let mut records = records.peekable();
         let (first_line, first) = match records.next() {
             Some(r) => r.map_err(|(line, f)| fail(line, f.into()))?,
             None => return Err(fail(0, FileFault::NoRows)),
         };
-        // A delimiter ending every line (`0,1,2,3,`) is the line's end, not a fifth column.
-        let line_ends = text::ends_with_delimiter(&first);
+        // A delimiter ending every line (`0,1,2,3,`) is the line's end, not a fifth column;
+        // the first row (perhaps a header written by hand) or the second says so.
+        let second_ends =
+            matches!(records.peek(), Some(Ok((_, r))) if text::ends_with_delimiter(r));
+        let line_ends = text::ends_with_delimiter(&first) || second_ends;
         let first: csv::StringRecord = text::cells(&first, line_ends).into_iter().collect();
         let (header, columns) =
             header_columns(&first, delimiter).map_err(|fault| fail(first_line, fault))?;

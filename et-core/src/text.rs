@@ -54,6 +54,24 @@ impl Delimiter {
         }
     }
 
+    /// The delimiter of a file whose first two rows are `first` and `second`: as [`Self::of`]
+    /// the first, except that a header of names separated by spaces (`v0 v1 v2`, as pandas'
+    /// `to_csv(sep=" ")` writes) above a row of numbers separated by spaces is [`Self::Spaces`]
+    /// (it was one cell, and every row after it one cell that is not a number).
+    #[must_use]
+    pub fn of_head(first: &str, second: Option<&str>) -> Self {
+        let d = Self::of(first);
+        let names_spaced = d == Self::Comma
+            && !first.contains(',')
+            && !first.contains('"')
+            && first.split_whitespace().count() >= 2;
+        if names_spaced && second.is_some_and(|s| Self::of(s) == Self::Spaces) {
+            Self::Spaces
+        } else {
+            d
+        }
+    }
+
     /// The byte.
     #[must_use]
     pub fn byte(self) -> u8 {
@@ -203,10 +221,10 @@ impl<'a> RecordIter<'a> {
     /// The records of `lines` ((0-based line number, text) pairs, say from [`lines`]).
     #[must_use]
     pub fn new(lines: &'a [(usize, &'a str)]) -> Self {
-        let delimiter = lines
-            .iter()
-            .find(|(_, l)| !skipped(l))
-            .map_or(Delimiter::Comma, |(_, l)| Delimiter::of(l));
+        let mut head = lines.iter().filter(|(_, l)| !skipped(l)).map(|(_, l)| *l);
+        let delimiter = head.next().map_or(Delimiter::Comma, |first| {
+            Delimiter::of_head(first, head.next())
+        });
         let kept = Kept {
             lines,
             pending: &[],
@@ -281,15 +299,17 @@ pub fn lines(text: &str) -> Vec<(usize, &str)> {
         .collect()
 }
 
-/// Whether `first`, a file's first record, ends with a delimiter (`1,2,3,`: a MATLAB loop's
-/// `fprintf('%g,', row)`), so that the file's empty last cells are its lines' ends.
+/// Whether `record`, one of a file's first two records, ends with a delimiter (`1,2,3,`: a
+/// MATLAB loop's `fprintf('%g,', row)`), so that the file's empty last cells are its lines'
+/// ends. Either of the first two decides: a header written by hand without one may stand
+/// above rows written by such a loop.
 #[must_use]
-pub fn ends_with_delimiter(first: &StringRecord) -> bool {
-    first.len() > 1 && first.get(first.len() - 1) == Some("")
+pub fn ends_with_delimiter(record: &StringRecord) -> bool {
+    record.len() > 1 && record.get(record.len() - 1) == Some("")
 }
 
 /// `record`'s cells, without the empty last one where the file's lines end with a delimiter
-/// ([`ends_with_delimiter`] of its first record).
+/// ([`ends_with_delimiter`] of either of its first two records).
 #[must_use]
 pub fn cells(record: &StringRecord, line_ends: bool) -> Vec<&str> {
     let ends = line_ends && record.len() > 1 && record.get(record.len() - 1) == Some("");
@@ -478,6 +498,16 @@ mod tests {
         assert_eq!(Delimiter::of("1,5;2,5"), Delimiter::Semicolon);
         assert_eq!(Delimiter::of("a\tb;c"), Delimiter::Tab);
         assert_eq!(Delimiter::of("\"a;b\",c"), Delimiter::Comma);
+        // Names separated by spaces above numbers separated by spaces; a header alone, or
+        // above one number a row, is one cell.
+        let spaced = Some("1.0 2.0");
+        assert_eq!(Delimiter::of_head("v0 v1", spaced), Delimiter::Spaces);
+        assert_eq!(Delimiter::of_head("v0 v1", None), Delimiter::Comma);
+        assert_eq!(
+            Delimiter::of_head("first value", Some("1.0")),
+            Delimiter::Comma
+        );
+        assert_eq!(Delimiter::of_head("a,b c", spaced), Delimiter::Comma);
         assert_eq!(number("1,5", Delimiter::Semicolon), Some(1.5));
         assert_eq!(number("1,5", Delimiter::Comma), None);
         assert_eq!(number("1,500.5", Delimiter::Tab), None);

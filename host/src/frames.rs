@@ -437,8 +437,9 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
     while let Some((i, record)) = records.next() {
         let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
         // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
-        // row; it is not an empty last value.
-        line_ends |= i == 0 && text::ends_with_delimiter(&record);
+        // row; it is not an empty last value. The first row (a header, perhaps written by
+        // hand) or the second says so.
+        line_ends |= i <= 1 && text::ends_with_delimiter(&record);
         let cells = text::cells(&record, line_ends);
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {

@@ -184,6 +184,9 @@ fn rows_of_another_width_are_refused_not_half_read() {
     // A delimiter ending every line is the line's end, not a fifth column.
     let ended = parse("0,1,2,3,\n1,2,3,4,\n", 16, 0).unwrap();
     assert_eq!(ended, parse("0,1,2,3\n1,2,3,4\n", 16, 0).unwrap());
+    // So it is under a header written by hand without one.
+    let headed = "source,sink,positive,negative\n0,1,2,3,\n1,2,3,4,\n";
+    assert_eq!(ended, parse(headed, 16, 0).unwrap());
     // Each row's own current, where every row gives one.
     let s = parse("0,1,2,3,1e-3\n1,2,3,4,2e-3\n", 16, 0).unwrap();
     assert_eq!(s.rows()[1].current_a, 2e-3);

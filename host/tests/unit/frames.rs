@@ -93,11 +93,24 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
 ",
             false,
         ),
+        // A header written by hand, without the loop's line-ending delimiter.
+        (
+            "v0,v1,v2
+1e-3,2e-3,3e-3,
+4e-3,5e-3,6e-3,
+",
+            false,
+        ),
         // NumPy's `savetxt` default and MATLAB's `save -ascii`: runs of spaces (they were one
         // cell, "not a number", the first row taken as a header).
         ("1.0e-03 2.0e-03 3.0e-03\n4.0e-03 5.0e-03 6.0e-03\n", false),
         (
             "   1.0e-03   2.0e-03   3.0e-03\n   4.0e-03   5.0e-03   6.0e-03\n",
+            false,
+        ),
+        // pandas' `to_csv(sep=" ", index=False)`: names separated by spaces above them.
+        (
+            "v0 v1 v2\n1.0e-03 2.0e-03 3.0e-03\n4.0e-03 5.0e-03 6.0e-03\n",
             false,
         ),
     ] {

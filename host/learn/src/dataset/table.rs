@@ -191,9 +191,12 @@ pub(super) fn parse_table(
         .first()
         .map(|(line, cells)| (*line, cells))
         .ok_or_else(|| content(path, 0, None, DatasetFault::NoRows))?;
-    // A delimiter ending the first row's line (`fprintf('%g,', row)` in a loop) ends each
-    // row that has one: it is not an empty last column.
-    let trailing = et_core::text::ends_with_delimiter(first);
+    // A delimiter ending the first or second row's line (`fprintf('%g,', row)` in a loop,
+    // perhaps under a header written by hand) ends each row that has one: it is not an empty
+    // last column.
+    let trailing = head
+        .iter()
+        .any(|(_, r)| et_core::text::ends_with_delimiter(r));
     let texts = |r: &StringRecord| -> Vec<bool> {
         et_core::text::cells(r, trailing)
             .iter()

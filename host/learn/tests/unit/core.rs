@@ -918,6 +918,10 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         let ended = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
         assert_eq!((ended.x.clone(), ended.x.ncols()), (imp.x.clone(), 3));
         assert_eq!(in_mm(&ended.positions), in_mm(&imp.positions));
+        // So it is under a header written by hand without one.
+        std::fs::write(&targets, "x,y\n0.01,0.02,\n0.04,0.05,\n0.07,0.08,\n").unwrap();
+        let headed = Table::import(&feats, Some(&targets), Unit::Mm).unwrap();
+        assert_eq!(in_mm(&headed.positions), in_mm(&imp.positions));
         // One headerless column of targets is a label, names too.
         std::fs::write(&targets, "\u{feff}2\n0\n1\n").unwrap();
         assert_eq!(
