@@ -255,10 +255,11 @@ pub enum FieldFault {
     },
     /// The contact resistance is over [`MAX_CONTACT_RATIO`] times the sheet resistance.
     #[error(
-        "{contact_ohm:e} ohm is over {MAX_CONTACT_RATIO:e} times the sheet resistance \
-         ({sheet_ohm:e} ohm/sq): past that the frames no longer change (the current spreads \
-         evenly under each electrode) and the solvers lose digits; give at most {:e} ohm, \
-         which gives the same frames", MAX_CONTACT_RATIO * .sheet_ohm
+        "{} ohm is over {} times the sheet resistance ({} ohm/sq): past that the frames no \
+         longer change (the current spreads evenly under each electrode) and the solvers lose \
+         digits; give at most {} ohm, which gives the same frames",
+        Sig(*.contact_ohm), Sig(MAX_CONTACT_RATIO), Sig(*.sheet_ohm),
+        Sig(MAX_CONTACT_RATIO * .sheet_ohm)
     )]
     ContactRatio {
         /// The contact resistance, ohm.
@@ -278,7 +279,12 @@ impl core::fmt::Display for Sig {
         match said.split_once('e') {
             Some((mantissa, exponent)) if mantissa.contains('.') => {
                 let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-                write!(f, "{mantissa}e{exponent}")
+                if exponent == "0" {
+                    // 0, -1, 2.5: no power of ten to say.
+                    f.write_str(mantissa)
+                } else {
+                    write!(f, "{mantissa}e{exponent}")
+                }
             }
             _ => f.write_str(&said),
         }
@@ -523,7 +529,7 @@ mod tests {
         sheet.electrodes.contact_ohm = 1.5 * MAX_CONTACT_RATIO;
         let e = sheet.validate().unwrap_err().to_string();
         assert!(
-            e.contains("1.5e6 ohm is over 1e6 times the sheet resistance (1e0 ohm/sq)"),
+            e.contains("1.5e6 ohm is over 1e6 times the sheet resistance (1 ohm/sq)"),
             "{e}"
         );
     }

@@ -130,6 +130,13 @@ pub struct Movement {
     pub rms: f64,
 }
 
+/// The largest touch pressure a scene takes, Pa: 1 GPa, past which no fabric is pressed
+/// (steel yields near 0.25 GPa); the fabric's law saturates near a finger's tens of kPa.
+pub const MAX_PRESSURE_PA: f64 = 1e9;
+
+/// The longest load or unload time constant a scene takes, s: a day.
+pub const MAX_TIME_CONSTANT_S: f64 = 86_400.0;
+
 /// How the fabric follows pressure: loading is quick, unloading slow (elastic return), and a
 /// pressed fabric stays a little more conductive than on the way in (hysteresis).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -400,9 +407,25 @@ impl Scene {
             ));
         }
         let d = &self.dynamics;
-        if !(d.load_s >= 0.0 && d.unload_s >= 0.0 && (0.0..1.0).contains(&d.hysteresis)) {
-            let rule = "load_s and unload_s >= 0 s, hysteresis in [0, 1)";
-            return Err(FieldError::rule("dynamics", rule));
+        for (field, tau) in [
+            ("dynamics.load_s", d.load_s),
+            ("dynamics.unload_s", d.unload_s),
+        ] {
+            if !(0.0..=MAX_TIME_CONSTANT_S).contains(&tau) {
+                let fault = FieldFault::Span {
+                    value: tau,
+                    low: 0.0,
+                    high: MAX_TIME_CONSTANT_S,
+                    unit: "s",
+                    why: "a fabric follows a press in milliseconds to seconds; a time constant \
+                          past a day is a press that never arrives or never leaves: is it in s?",
+                };
+                return Err(FieldError::new(field, fault));
+            }
+        }
+        if !(0.0..1.0).contains(&d.hysteresis) {
+            let rule = "in [0, 1) (a fraction of the peak pressure)";
+            return Err(FieldError::value("dynamics.hysteresis", d.hysteresis, rule));
         }
         let l = self.sheet.physical.electrodes.count;
         for (i, f) in self.faults.iter().enumerate() {
@@ -457,6 +480,17 @@ impl Scene {
             }
             if !(t.pressure.is_finite() && t.pressure >= 0.0) {
                 return Err(FieldError::value(at("pressure"), t.pressure, ">= 0 Pa"));
+            }
+            if t.pressure > MAX_PRESSURE_PA {
+                let fault = FieldFault::Span {
+                    value: t.pressure,
+                    low: 0.0,
+                    high: MAX_PRESSURE_PA,
+                    unit: "Pa",
+                    why: "a finger presses tens of kPa and the fabric's law saturates near \
+                          them; past 1 GPa (steel yields) no fabric is pressed: is it in Pa?",
+                };
+                return Err(FieldError::new(at("pressure"), fault));
             }
             if !t.position.iter().all(|v| v.is_finite()) || !inside(t.position) {
                 return Err(FieldError::new(

@@ -167,6 +167,29 @@ fn bad_scenes_name_the_file_and_the_field() {
         let e = err(&format!("{SMALL}\n[scan]\ncurrent_ua = {ua}\n"));
         assert!(e.contains("scan.current_ua: ") && e.contains(says), "{e}");
     }
+    // A pressure or a fabric's time constant past anything physical (a press of 1e30 Pa
+    // loaded without a word; a load time of 1e300 s was a press that never arrives).
+    for (edit, says) in [
+        (
+            "pressure = 1e30",
+            "touch[0].pressure: 1e30 Pa is outside 0 to 1e9",
+        ),
+        (
+            "pressure = 20e3\n[dynamics]\nload_s = 1e300",
+            "dynamics.load_s: 1e300 s is outside 0 to 8.64e4",
+        ),
+        (
+            "pressure = 20e3\n[dynamics]\nunload_s = -1",
+            "dynamics.unload_s: -1 s is outside",
+        ),
+        (
+            "pressure = 20e3\n[dynamics]\nhysteresis = 1.5",
+            "dynamics.hysteresis: 1.5 must be in [0, 1)",
+        ),
+    ] {
+        let e = err(&SMALL.replace("pressure = 20e3", edit));
+        assert!(e.contains(says), "{edit}: {e}");
+    }
     // An outline whose edges cross is refused before the sheet is built.
     let outline = |vertices: &str| {
         err(&SMALL.replace(
