@@ -56,16 +56,25 @@ impl Delimiter {
 
     /// The delimiter of a file whose first two rows are `first` and `second`: as [`Self::of`]
     /// the first, except that a header of names separated by spaces (`v0 v1 v2`, as pandas'
-    /// `to_csv(sep=" ")` writes) above a row of numbers separated by spaces is [`Self::Spaces`]
-    /// (it was one cell, and every row after it one cell that is not a number).
+    /// `to_csv(sep=" ")` writes) above a row of numbers separated by spaces, or of as many
+    /// cells separated by spaces with a number among them (`left 0.01 0.02` under `label x
+    /// y`), is [`Self::Spaces`] (it was one cell, and every row after it one cell).
     #[must_use]
     pub fn of_head(first: &str, second: Option<&str>) -> Self {
         let d = Self::of(first);
+        let plain = |l: &str| Self::of(l) != Self::Tab && !l.contains([',', ';', '"']);
+        let names = first.split_whitespace().count();
         let names_spaced = d == Self::Comma
-            && !first.contains(',')
-            && !first.contains('"')
-            && first.split_whitespace().count() >= 2;
-        if names_spaced && second.is_some_and(|s| Self::of(s) == Self::Spaces) {
+            && plain(first)
+            && names >= 2
+            && first.split_whitespace().all(|t| t.parse::<f64>().is_err());
+        let cells_spaced = |s: &str| {
+            Self::of(s) == Self::Spaces
+                || (plain(s)
+                    && s.split_whitespace().count() == names
+                    && s.split_whitespace().any(|t| t.parse::<f64>().is_ok()))
+        };
+        if names_spaced && second.is_some_and(cells_spaced) {
             Self::Spaces
         } else {
             d
@@ -508,6 +517,14 @@ mod tests {
             Delimiter::Comma
         );
         assert_eq!(Delimiter::of_head("a,b c", spaced), Delimiter::Comma);
+        let labelled = Some("left 0.01 0.02");
+        assert_eq!(Delimiter::of_head("label x y", labelled), Delimiter::Spaces);
+        // Labels with spaces under a header with one: as many cells, none a number.
+        assert_eq!(
+            Delimiter::of_head("touch class", Some("upper left")),
+            Delimiter::Comma
+        );
+        assert_eq!(Delimiter::of_head("label x", labelled), Delimiter::Comma);
         assert_eq!(number("1,5", Delimiter::Semicolon), Some(1.5));
         assert_eq!(number("1,5", Delimiter::Comma), None);
         assert_eq!(number("1,500.5", Delimiter::Tab), None);

@@ -262,7 +262,8 @@ fn targets_file<'p>(
     let label_or_only = |name: &str, columns: usize| {
         name.eq_ignore_ascii_case("label") || (columns == 1 && name == "1")
     };
-    let table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
+    let mut table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
+    table.first_row_as_header(main.rows.len(), main.header);
     if table.rows.len() != main.rows.len() {
         let fault = DatasetFault::RowCount {
             rows: table.rows.len(),
@@ -305,7 +306,8 @@ fn group_values(
         }
         GroupsFrom::File(p) => {
             let one = |_: &str, _: usize| true;
-            let g = parse_table(p, &text_lines(&read(p)?), &one)?;
+            let mut g = parse_table(p, &text_lines(&read(p)?), &one)?;
+            g.first_row_as_header(main.rows.len(), main.header);
             if g.rows.len() != main.rows.len() {
                 let fault = DatasetFault::RowCount {
                     rows: g.rows.len(),
@@ -342,8 +344,11 @@ impl Targets {
                 .iter()
                 .position(|c| c.eq_ignore_ascii_case(name))
         };
+        let position = named("x").or(named("y")).is_some();
         let (label_col, x_col, y_col, third_col) = match (side, table.header, table.names.len()) {
+            // A targets file's one column is a label, whatever its header calls it.
             (true, false, 1) => (Some(0), None, None, None),
+            (true, true, 1) if !position => (Some(0), None, None, None),
             (true, false, n) => (None, Some(0), Some(1), (n > 2).then_some(2)),
             _ => (
                 named("label"),

@@ -56,6 +56,39 @@ impl Csv {
         }
     }
 
+    /// A one-column table of text read without a header (its first row text like the rest)
+    /// whose first row is its header after all: it has one row more than `rows` (the
+    /// features', read with a header) and its first cell recurs nowhere below, where the
+    /// cells below do recur (a class or session named `label` or `session` above `left`,
+    /// `right`, `left`, ... as pandas writes `y.to_csv(index=False)`). Whether it was made so.
+    pub(super) fn first_row_as_header(&mut self, rows: usize, features_header: bool) -> bool {
+        let Some(Some(cells)) = self.text.first() else {
+            return false;
+        };
+        let first = cells.first();
+        let below = cells.get(1..).unwrap_or_default();
+        let recurs = {
+            let mut seen = std::collections::HashSet::new();
+            below.iter().any(|c| !seen.insert(c))
+        };
+        let named = first.is_some_and(|f| !below.contains(f) && f.parse::<f64>().is_err());
+        if self.header
+            || !features_header
+            || self.names.len() != 1
+            || self.rows.len() != rows + 1
+            || !named
+            || !recurs
+        {
+            return false;
+        }
+        if let Some(Some(cells)) = self.text.first_mut() {
+            self.names = vec![cells.remove(0)];
+        }
+        self.rows.remove(0);
+        self.header = true;
+        true
+    }
+
     /// Columns `cols`, as an n x cols.len() matrix.
     pub(super) fn matrix(&self, path: &Path, cols: &[usize]) -> Result<DMatrix<f64>, DatasetError> {
         let mut x = DMatrix::zeros(self.rows.len(), cols.len());

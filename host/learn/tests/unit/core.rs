@@ -973,6 +973,54 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         );
         std::fs::remove_dir_all(&dir).unwrap();
     }
+
+    /// Labels and sessions as pandas writes a Series (`y.to_csv("t.csv", index=False)`): a
+    /// header naming the column above text (it was taken as a class, "t.csv: 5 rows, f.csv
+    /// has 4"), and a table written with `sep=" "` with a text column (every row was one
+    /// cell). A labels file one row longer than a headerless features file stays refused:
+    /// there the first row is as likely a label the features lack.
+    #[test]
+    fn csv_import_of_labels_and_sessions_under_a_header() {
+        use et_learn::dataset::GroupsFrom;
+        let dir = tmp("headed-labels");
+        let (feats, targets, groups) = (dir.join("f.csv"), dir.join("t.csv"), dir.join("g.csv"));
+        std::fs::write(&feats, "a,b\n1,2\n3,4\n5,6\n7,8\n").unwrap();
+        let labels = ["left", "right", "left", "right"]
+            .map(String::from)
+            .to_vec();
+        for header in ["label", "class", "touch zone"] {
+            std::fs::write(&targets, format!("{header}\nleft\nright\nleft\nright\n")).unwrap();
+            std::fs::write(&groups, "session\nmon\nmon\ntue\ntue\n").unwrap();
+            let imp = Table::import_grouped(
+                &feats,
+                Some(&targets),
+                Unit::Mm,
+                Some(&GroupsFrom::File(groups.clone())),
+            )
+            .unwrap();
+            assert_eq!(imp.labels.as_ref(), Some(&labels), "{header}");
+            let sessions = ["mon", "mon", "tue", "tue"].map(String::from).to_vec();
+            assert_eq!(imp.groups, Some(sessions), "{header}");
+        }
+        // Spaces between the cells, a text column among them.
+        std::fs::write(&feats, "a b\n1 2\n3 4\n5 6\n7 8\n").unwrap();
+        std::fs::write(
+            &targets,
+            "label x y\nleft 0.01 0.02\nright 0.03 0.04\nleft 0.01 0.02\nright 0.03 0.04\n",
+        )
+        .unwrap();
+        let imp = Table::import(&feats, Some(&targets), Unit::M).unwrap();
+        assert_eq!(imp.labels.as_ref(), Some(&labels));
+        assert_eq!(imp.positions.as_ref().map(|p| p[1]), Some([0.03, 0.04]));
+        // Headerless features: five labels for four rows is a mismatch, said.
+        std::fs::write(&feats, "1,2\n3,4\n5,6\n7,8\n").unwrap();
+        std::fs::write(&targets, "label\nleft\nright\nleft\nright\n").unwrap();
+        let e = Table::import(&feats, Some(&targets), Unit::Mm)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("5 rows, ") && e.contains("has 4"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
 
 #[test]
