@@ -67,7 +67,8 @@ pub enum SceneError {
 
 /// The TOML parser's message, each line of its snippet of the file cut at 120 characters (a
 /// CSV given as a scene echoed a line of 5 000), and where the file is not a scene at all
-/// (its first line is no TOML), said so.
+/// (its first line is no TOML), said so; a field at fault on the first line is not asked
+/// about.
 fn parse_said(source: &toml::de::Error) -> String {
     const WIDE: usize = 120;
     let text = et_core::said::serde_said(&source.to_string());
@@ -79,7 +80,15 @@ fn parse_said(source: &toml::de::Error) -> String {
             None => line.to_string(),
         })
         .collect();
-    if source.span().is_some_and(|span| span.start < 200) && text.contains("at line 1,") {
+    // A scene's own field at fault on its first line (`protocol = ...` outside `[scan]`) is
+    // said by its fields; only a first line that is no TOML asks.
+    let of_fields = ["unknown field", "missing field", "belongs", "unknown value"]
+        .iter()
+        .any(|w| text.contains(w));
+    if source.span().is_some_and(|span| span.start < 200)
+        && text.contains("at line 1,")
+        && !of_fields
+    {
         said.push(
             "(is it a scene? a scene is a TOML file of [sheet], [scan] and [[touch]] tables, as \
              in sim/scenes/)"

@@ -234,6 +234,15 @@ fn a_file_that_is_no_scene_is_said_shortly() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("line 2") && !e.contains("is it a scene?"), "{e}");
+    // A scene's field in the wrong table on its first line is said by the fields, not asked
+    // whether the file is a scene.
+    let e = Scene::parse(&format!("protocol = \"adjacent\"\n{SMALL}"), "s.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("unknown field `protocol`") && !e.contains("is it a scene?"),
+        "{e}"
+    );
 }
 
 /// An unclosed inline table repeated (`b = {` after a table header, 3 000 times: 30 kB)
