@@ -364,6 +364,16 @@ pub fn set_max_file_bytes(limit: u64) {
     MAX_FILE_BYTES_SET.store(limit, std::sync::atomic::Ordering::Relaxed);
 }
 
+/// Memory the system can give now, bytes (Linux's `MemAvailable`); None where it is not said
+/// (another system, or no `/proc`): a check against it then passes.
+#[must_use]
+pub fn available_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
 /// The bytes of `path`, stopping at `limit`: more is an error of kind
 /// [`std::io::ErrorKind::FileTooLarge`] saying so, found before reading for a regular file
 /// and while reading for a stream (an endless stream is never read to its end). The buffer

@@ -20,20 +20,12 @@ pub(crate) fn in_run(
     }
 }
 
-/// Memory the system can give now, bytes (Linux's `MemAvailable`); None where it is not said.
-fn available_bytes() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    kib.checked_mul(1024)
-}
-
 /// Refuses a batch whose stacked pixels (`n` frames of `per_frame` values, 8 bytes each) would
 /// not fit in the memory free now, naming the size and the run that fits: allocating them
 /// failed inside NumPy and surfaced as a panic ("PyObject pointer is null").
 pub(crate) fn check_fits(n: usize, per_frame: usize) -> Result<(), String> {
     let need = (n as u128) * (per_frame as u128) * 8;
-    let Some(free) = available_bytes() else {
+    let Some(free) = et_core::text::available_memory_bytes() else {
         return Ok(());
     };
     // Half of what is free: the frames, their differences and the images of a run are held

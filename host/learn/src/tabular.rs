@@ -99,6 +99,28 @@ pub enum Misuse {
         /// The first such row (0-based).
         row: usize,
     },
+    /// A discriminant whose covariance tables would not fit in the memory free: a table of
+    /// features x features per class (20 000 features: 3.2 GB each) is held several times
+    /// while it is fitted and cross-validated.
+    #[error(
+        "{} on {features} features holds covariance tables of {features} x {features} for \
+         each of {classes} classes while it is fitted, about {} GB, where {} GB is free: give \
+         fewer features (a frame of 32 electrodes has at most 1 024 values; select or average \
+         columns), or positions for a regressor (ridge, knn), which works on wide tables",
+        .method.name(), gb(*.need_bytes), gb(*.free_bytes)
+    )]
+    TooWide {
+        /// The discriminant.
+        method: Kind,
+        /// The table's features.
+        features: usize,
+        /// Its classes.
+        classes: usize,
+        /// The memory the fit would hold, bytes.
+        need_bytes: u64,
+        /// The memory free, bytes.
+        free_bytes: u64,
+    },
     /// A training estimated to take longer than its budget.
     #[error(
         "{what} would take about {} s, past the budget of {} s: train \
@@ -280,6 +302,19 @@ pub enum Misuse {
         /// The class's name.
         class: String,
     },
+}
+
+/// Bytes in GB to two significant digits (0.5, 3.2, 83).
+fn gb(bytes: u64) -> String {
+    let g = bytes as f64 / 1e9;
+    if g >= 10.0 {
+        format!("{g:.0}")
+    } else {
+        format!("{g:.2}")
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    }
 }
 
 /// Seconds as a person reads them: whole from 10 s, two significant digits below (a budget

@@ -466,9 +466,13 @@ fn describe(
     description
 }
 
-/// The unit the positions were read in, and a note when positions read as mm span less than a
-/// millimetre (metres given without `--unit m`).
+/// The unit the positions were read in (nothing without positions), and a note when positions
+/// read as mm span less than a millimetre (metres given without `--unit m`).
 fn positions_note(unit: Unit, positions: Option<&[[f64; 2]]>) -> String {
+    // Class labels alone have no unit to say.
+    if positions.is_none() {
+        return String::new();
+    }
     let mut note = format!(
         "; positions in {}",
         match unit {
