@@ -302,6 +302,18 @@ pub enum Misuse {
         /// The class's name.
         class: String,
     },
+    /// Every class of one row: none can be both learned and tested.
+    #[error(
+        "{classes} classes among {rows} rows, each of one row: a class needs rows to learn \
+         from and rows to test on, at least 2 (are the labels row ids, names or times rather \
+         than touch classes? for positions give x and y columns)"
+    )]
+    OneRowClasses {
+        /// The classes.
+        classes: usize,
+        /// The rows.
+        rows: usize,
+    },
 }
 
 /// Bytes in GB to two significant digits (0.5, 3.2, 83).

@@ -83,6 +83,18 @@ pub(super) fn search_classifier(
             class: labels.names.first().cloned().unwrap_or_default(),
         }));
     }
+    // Each class once: no fold can both learn and test one (it was "cross-validation needs
+    // at least 2 folds (1 given)", of folds nobody gave).
+    let mut count = vec![0_usize; classes];
+    for &c in &labels.index {
+        if let Some(n) = count.get_mut(usize::from(c)) {
+            *n += 1;
+        }
+    }
+    if count.iter().all(|&n| n < 2) {
+        let rows = labels.index.len();
+        return Err(usage(Misuse::OneRowClasses { classes, rows }));
+    }
 
     // QDA and LDA hold their tables in single precision, as the board does: a feature whose
     // level or spread f32 cannot hold is said, not fitted into tables the check refuses.

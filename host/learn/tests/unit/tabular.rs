@@ -1204,6 +1204,24 @@ fn a_discriminant_past_the_memory_free_is_refused_before_any_fit() {
     }
 }
 
+/// Labels of one row each (ids, names, times) are said as that, for every classifier: it
+/// was "cross-validation needs at least 2 folds (1 given)", of folds nobody gave.
+#[test]
+fn classes_of_one_row_each_are_said_as_that() {
+    let mut rng = et_core::rng::Rng::new(6);
+    let x = DMatrix::from_fn(40, 3, |_, _| rng.normal());
+    let table = labelled(x, (0..40).map(|i| format!("c{i}")).collect());
+    for choice in [Choice::One(Kind::Qda), Choice::One(Kind::Lda), Choice::Auto] {
+        let e = train(&table, choice, &opts(), &mut quiet())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("40 classes among 40 rows, each of one row"),
+            "{choice:?}: {e}"
+        );
+    }
+}
+
 /// Features are finite where a table is trained on, whoever made it (an array from Python
 /// with an infinity was trained on, and said as a feature's mean "beyond single precision"),
 /// as where it predicts from.
