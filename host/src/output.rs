@@ -31,6 +31,17 @@ pub enum OutputError {
         /// The output.
         out: PathBuf,
     },
+    /// A file's output whose path ends with a separator, a folder's name by its spelling.
+    #[error(
+        "{}: a path ending in '/' names a folder; give the file's path ({})",
+        .out.display(), .file.display()
+    )]
+    FolderSpelling {
+        /// The output as given.
+        out: PathBuf,
+        /// The path without its trailing separators.
+        file: PathBuf,
+    },
     /// The output is something et does not replace, even with --force.
     #[error("{} is {what}, not a regular file; et replaces only regular files (write to a file, or remove it first)", .out.display())]
     NotAFile {
@@ -302,6 +313,16 @@ fn check_at(
 ) -> Result<(), OutputError> {
     if out == Path::new("-") {
         return Err(OutputError::Dash);
+    }
+    // `m.json/` is written aside as `m.json`'s partial file, and the rename to a folder's
+    // name failed after the work (et sim said the file "appeared while et was writing it").
+    let text = out.as_os_str().as_encoded_bytes();
+    if !folder_out && text.len() > 1 && text.last() == Some(&b'/') {
+        let file = PathBuf::from(out.to_string_lossy().trim_end_matches('/'));
+        return Err(OutputError::FolderSpelling {
+            out: out.into(),
+            file,
+        });
     }
     if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
         return Err(OutputError::Input {

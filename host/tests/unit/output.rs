@@ -104,6 +104,15 @@ fn only_regular_files_are_replaced_and_streams_are_written_through() {
         }
     }
     assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep");
+    // A file's path spelt as a folder's (`m.json/`), there or not, with --force or not: said
+    // before the work (the rename failed after it, or "appeared while et was writing it").
+    for force in [false, true] {
+        for out in [d.join("new.json/"), d.join("target.json/")] {
+            let e = check(&out, &[], force).unwrap_err();
+            assert!(matches!(e, OutputError::FolderSpelling { .. }), "{e}");
+            assert!(e.to_string().contains("names a folder"), "{e}");
+        }
+    }
     // The null device and standard output: allowed without --force, written straight
     // through (no temporary file beside /dev/null).
     for stream in ["/dev/null", "/dev/stdout"] {
