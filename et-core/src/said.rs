@@ -240,6 +240,29 @@ fn quoted_number_hint(found: &str, expected_type: &str) -> String {
     }
 }
 
+/// A number said in powers of ten to six significant digits, trailing zeros dropped
+/// (1.3000000000000001e-5 as 1.3e-5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sig(pub f64);
+
+impl core::fmt::Display for Sig {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let said = format!("{:.5e}", self.0);
+        match said.split_once('e') {
+            Some((mantissa, exponent)) if mantissa.contains('.') => {
+                let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+                if exponent == "0" {
+                    // 0, -1, 2.5: no power of ten to say.
+                    f.write_str(mantissa)
+                } else {
+                    write!(f, "{mantissa}e{exponent}")
+                }
+            }
+            _ => f.write_str(&said),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

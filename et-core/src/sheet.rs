@@ -10,6 +10,7 @@
 pub mod shape;
 pub mod xy;
 
+use crate::said::Sig;
 use serde::{Deserialize, Serialize};
 
 pub use shape::{Shape, ShapeError};
@@ -267,28 +268,6 @@ pub enum FieldFault {
         /// The sheet resistance, ohm per square.
         sheet_ohm: f64,
     },
-}
-
-/// A number said in powers of ten to six significant digits, trailing zeros dropped
-/// (1.3000000000000001e-5 as 1.3e-5).
-struct Sig(f64);
-
-impl core::fmt::Display for Sig {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let said = format!("{:.5e}", self.0);
-        match said.split_once('e') {
-            Some((mantissa, exponent)) if mantissa.contains('.') => {
-                let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-                if exponent == "0" {
-                    // 0, -1, 2.5: no power of ten to say.
-                    f.write_str(mantissa)
-                } else {
-                    write!(f, "{mantissa}e{exponent}")
-                }
-            }
-            _ => f.write_str(&said),
-        }
-    }
 }
 
 impl Sheet {

@@ -140,6 +140,18 @@ pub enum MeshError {
         /// The limit it passes, in words.
         limit: &'static str,
     },
+    /// A refinement region smaller than any frame can show.
+    #[error(
+        "a refinement of radius {} m is under 1e-4 of the sheet's size ({} m): it changes no \
+         frame that single precision resolves (is the radius in mm?)",
+        et_core::said::Sig(*.radius), et_core::said::Sig(*.least)
+    )]
+    RefinementTooSmall {
+        /// Its radius, m.
+        radius: f64,
+        /// The least radius, m.
+        least: f64,
+    },
     /// A refinement region that does not meet the sheet.
     #[error(
         "a refinement at ({}, {}) m of radius {radius} m does not meet the sheet",

@@ -19,6 +19,16 @@ impl Refinement {
                 edge: r.edge,
             });
         }
+        // A disc under 1e-4 of the sheet's size refines nothing a frame can show (as a
+        // touch of that size): 1e-12 m was meshed without a word.
+        let [x_min, y_min, x_max, y_max] = spec.shape.bounds();
+        let least = 1e-4 * (x_max - x_min).max(y_max - y_min);
+        if r.radius < least {
+            return Err(MeshError::RefinementTooSmall {
+                radius: r.radius,
+                least,
+            });
+        }
         if (r.radius / r.edge).powi(2) > 1e6 {
             return Err(MeshError::RefinementTooFine {
                 radius: r.radius,

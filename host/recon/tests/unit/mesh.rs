@@ -115,6 +115,18 @@ fn refined_regions_get_their_edge_and_the_mesh_stays_valid() {
                 | MeshError::RefinementOffSheet { .. })
         ));
     }
+    // A disc under 1e-4 of the sheet's size refines nothing a frame shows (`--refine
+    // 0,0,1e-9`, 1e-12 m, was meshed without a word).
+    let tiny = Refinement {
+        radius: 1e-12,
+        edge: 1e-12 / 6.0,
+        ..inner
+    };
+    let e = Mesh::refined(&spec, MeshSize::for_count(&spec, 2_000), &[tiny]).unwrap_err();
+    assert!(
+        matches!(e, MeshError::RefinementTooSmall { .. }) && e.to_string().contains("in mm?"),
+        "{e}"
+    );
 }
 
 /// Budgets from 200 triangles up are met within 15 % on sheets of 8 to 32 electrodes,
