@@ -394,8 +394,11 @@ pub(crate) fn eval(
             .take(5)
             .map(String::as_str)
             .collect();
+        let missed = table.labels.as_ref().map_or(0, |l| {
+            l.iter().filter(|l| e.unknown_labels.contains(l)).count()
+        });
         say!(
-            "note: {} label{} the model has no class of ({}{}): {} rows counted as missed",
+            "note: {} label{} the model has no class of ({}{}): {missed} row{} counted as missed",
             e.unknown_labels.len(),
             if e.unknown_labels.len() == 1 { "" } else { "s" },
             shown.join(", "),
@@ -404,10 +407,7 @@ pub(crate) fn eval(
             } else {
                 ""
             },
-            table.labels.as_ref().map_or(0, |l| l
-                .iter()
-                .filter(|l| e.unknown_labels.contains(l))
-                .count())
+            if missed == 1 { "" } else { "s" }
         );
     }
     if json {
