@@ -1823,6 +1823,22 @@ label,x_mm,y_mm,visit,v0,v3,v3b
             .collect(),
             "does not meet the sheet",
         ),
+        // Edges no finer than the mesh's own refine nothing (it was taken without a word).
+        (
+            [
+                "reconstruct",
+                "--scene",
+                scene,
+                "--refine",
+                "0,0,1000",
+                "--out",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([p("r.png")])
+            .collect(),
+            "it refines nothing",
+        ),
         (
             [
                 "reconstruct",

@@ -17,7 +17,7 @@ use et_learn::{Examples, Trainer};
 
 use crate::files::Dataset;
 use crate::{array2, matrix};
-use crate::{json, refused, usage};
+use crate::{json, refused, said, usage};
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(train_table, m)?)?;
@@ -255,9 +255,28 @@ impl Model {
             .map_err(|e| refused(&e))
     }
 
-    /// Writes the model file (JSON), as `et train --out` does.
+    /// Writes the model file (JSON), as `et train --out` does: aside, then moved over the
+    /// path, so that a write that fails (a full disk, a folder's name) leaves the file that
+    /// was there and no partial one (it wrote in place).
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        self.inner.save(&path).map_err(|e| refused(&e))
+        /// The save's failure: the model's (as said), or the move's over the path.
+        enum Unsaved {
+            Model(String),
+            Output(et_host::output::OutputError),
+        }
+        impl From<et_host::output::OutputError> for Unsaved {
+            fn from(e: et_host::output::OutputError) -> Self {
+                Self::Output(e)
+            }
+        }
+        et_host::output::write(&path, |aside| {
+            self.inner.save(aside).map_err(|e| Unsaved::Model(said(&e)))
+        })
+        .map_err(|e| match e {
+            // The user's path first, the file written aside only after it (as the CLI says).
+            Unsaved::Model(e) => usage(format!("writing {}: {e}", path.display())),
+            Unsaved::Output(e) => refused(&e),
+        })
     }
 
     /// The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average.

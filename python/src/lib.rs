@@ -25,6 +25,11 @@ pyo3::create_exception!(
 /// `e` as et's message, with the causes it does not already say (as the `et` command
 /// prints them), raised as [`EtError`].
 pub(crate) fn refused(e: &dyn std::error::Error) -> PyErr {
+    EtError::new_err(said(e))
+}
+
+/// `e` with the causes it does not already say, as the `et` command prints them.
+pub(crate) fn said(e: &dyn std::error::Error) -> String {
     let mut message = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {
@@ -34,7 +39,7 @@ pub(crate) fn refused(e: &dyn std::error::Error) -> PyErr {
         }
         cause = c.source();
     }
-    EtError::new_err(message)
+    message
 }
 
 /// A usage error of the Python API (a wrong shape, an unknown name), raised as [`EtError`].

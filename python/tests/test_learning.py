@@ -161,3 +161,41 @@ def test_training_tells_its_progress_and_estimate(table):
         et.train(data.x, data.positions_m, kind="ridge", progress=fails)
     with pytest.raises(et.EtError, match="progress: a callable"):
         et.train(data.x, data.positions_m, kind="ridge", progress="yes")
+
+
+def test_a_save_that_fails_leaves_what_was_there_and_no_partial_file(tmp_path):
+    resource = pytest.importorskip("resource")
+    import signal
+
+    rng = np.random.default_rng(3)
+    X = np.vstack([rng.normal(0, 1, (20, 3)), rng.normal(3, 1, (20, 3))])
+    y = np.array(["a"] * 20 + ["b"] * 20)
+    model = et.train(X, y, kind="lda")
+    # Over a file: replaced whole.
+    path = tmp_path / "m.json"
+    path.write_text("old")
+    model.save(path)
+    assert et.Model.load(path).kind == "lda"
+    saved = path.read_bytes()
+    # A write that fails part way (files limited to 100 bytes, as a full disk stops one):
+    # refused, the file that was there kept, nothing beside it (it was written in place, so
+    # the old model was lost and part of the new one left).
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    was = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    try:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100, hard))
+        with pytest.raises(et.EtError, match="m.json"):
+            model.save(path)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, was)
+    assert path.read_bytes() == saved
+    assert [p.name for p in tmp_path.iterdir()] == ["m.json"]
+    # Onto a folder of files: refused, the folder as it was.
+    folder = tmp_path / "f.json"
+    folder.mkdir()
+    (folder / "keep").write_text("keep")
+    with pytest.raises(et.EtError):
+        model.save(folder)
+    assert (folder / "keep").read_text() == "keep"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.json", "m.json"]

@@ -277,11 +277,26 @@ pub(crate) fn mesh_plan(
             .with_context(|| {
                 format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
             })?;
-        refine.push(Refinement {
+        let region = Refinement {
             centre: [v[0] * 1e-3, v[1] * 1e-3],
             radius: v[2] * 1e-3,
             edge: v[2] * 1e-3 / 6.0,
-        });
+        };
+        // A region whose edges are no finer than the mesh's own refines nothing (`0,0,1000`
+        // on a 0.1 m disc was taken without a word).
+        let h = et_recon::mesh::MeshSize::for_count(&scene.sheet.physical, args.triangles).interior;
+        if args.mesh.is_none() && region.edge >= h {
+            bail!(
+                "--refine '{r}': edges of R/6 = {:.3} mm inside, no finer than the mesh's own \
+                 {:.3} mm at --triangles {}: it refines nothing; give R under {:.1} mm, or \
+                 more triangles",
+                region.edge * 1e3,
+                h * 1e3,
+                args.triangles,
+                6.0 * h * 1e3
+            );
+        }
+        refine.push(region);
     }
     if at_touches {
         refine.extend(
