@@ -188,6 +188,25 @@ def _count(value: Any, what: str, least: int = 0) -> int:
     return number
 
 
+def _real(value: Any, what: str) -> float:
+    """``value`` as a number (what ``float`` takes), refused by name when it is none (``float``
+    said only "could not convert string to float") or a boolean (``True`` was 1)."""
+    if not isinstance(value, (bool, np.bool_)):
+        try:
+            return float(value)
+        except (TypeError, ValueError):
+            pass
+    raise EtError(f"{what} = {value!r}: a number")
+
+
+def _text(value: Any, what: str, choices: str) -> str:
+    """``value`` as one of a parameter's names, refused by name when it is not text (the
+    native side said only "'int' object is not an instance of 'str'")."""
+    if not isinstance(value, str):
+        raise EtError(f"{what} = {value!r}: {choices}")
+    return value
+
+
 def _sheet(
     shape: Dict[str, Any],
     electrodes: int,
@@ -204,15 +223,15 @@ def _sheet(
         raise EtError(f"model {model!r}: 'complete', 'point' or 'shunt'")
     spec_electrodes: Dict[str, Any] = {
         "count": _count(electrodes, "electrodes"),
-        "width": float(width_m),
-        "contact_ohm": float(contact_ohm),
+        "width": _real(width_m, "electrode_width_m"),
+        "contact_ohm": _real(contact_ohm, "contact_ohm"),
         "direction": direction,
         "model": model,
     }
     if first_deg is not None:
-        spec_electrodes["first_deg"] = float(first_deg)
+        spec_electrodes["first_deg"] = _real(first_deg, "first_deg")
     return Sheet(
-        {"shape": shape, "sheet_resistance": float(sheet_resistance), "electrodes": spec_electrodes}
+        {"shape": shape, "sheet_resistance": _real(sheet_resistance, "sheet_resistance"), "electrodes": spec_electrodes}
     )
 
 
@@ -245,7 +264,7 @@ def disc(
             raise EtError("placement='pyeit' sets first_deg and direction: give one or the other")
         first_deg, direction = 180.0, "cw"
     return _sheet(
-        {"kind": "disc", "radius": float(radius_m)},
+        {"kind": "disc", "radius": _real(radius_m, "radius_m")},
         electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction, model,
     )
 
@@ -264,7 +283,11 @@ def rectangle(
 ) -> Sheet:
     """A ``width_m`` x ``height_m`` rectangle (m) centred on the origin; options as :func:`disc`."""
     return _sheet(
-        {"kind": "rectangle", "width": float(width_m), "height": float(height_m)},
+        {
+            "kind": "rectangle",
+            "width": _real(width_m, "width_m"),
+            "height": _real(height_m, "height_m"),
+        },
         electrodes, sheet_resistance, contact_ohm, electrode_width_m, first_deg, direction,
         model,
     )
@@ -405,7 +428,7 @@ class Protocol:
             n = int(max(ex.max(), meas[:, :2].max()) + 1)
         if rows.min() < 0 or rows.max() >= n:
             raise EtError(f"from_pyeit: an electrode outside 0 to {n - 1}")
-        return cls(n, rows, np.full(len(rows), float(current_a)))
+        return cls(n, rows, np.full(len(rows), _real(current_a, "current_a")))
 
 
 def _whole(a: Any, what: str) -> np.ndarray:
@@ -420,7 +443,8 @@ def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protoc
     """et's built-in protocol ``name`` ("adjacent", "pseudo-polar", "pp-pp", "opposite") on
     ``electrodes`` electrodes, driving ``current_a`` (A)."""
     n = _count(electrodes, "electrodes")
-    rows, currents = _native.protocol_table(name, n, float(current_a))
+    name = _text(name, "name", "'adjacent', 'pseudo-polar', 'pp-pp' or 'opposite'")
+    rows, currents = _native.protocol_table(name, n, _real(current_a, "current_a"))
     return Protocol(n, rows, currents, name)
 
 
@@ -660,6 +684,7 @@ class Reconstructor:
                 f"the protocol is of {protocol.electrodes} electrodes, the sheet has "
                 f"{sheet.electrodes}"
             )
+        method = _text(method, "method", "'gn' or 'greit'")
         # One method's options beside the other change nothing: refused, not ignored.
         if method == "greit":
             if s is not None:
@@ -680,8 +705,10 @@ class Reconstructor:
         self._native = _Serialised(_native.Reconstructor(
             _spec_json(sheet.spec), electrodes, name, current_a, rows, currents,
             _count(triangles, "triangles"), method, str(alpha), _count(pixels, "pixels"),
-            threshold, 0.5 if s is None else float(s), _count(iterations, "iterations"),
-            noise_figure, radius_m,
+            None if threshold is None else _real(threshold, "threshold"),
+            0.5 if s is None else _real(s, "s"), _count(iterations, "iterations"),
+            None if noise_figure is None else _real(noise_figure, "noise_figure"),
+            None if radius_m is None else _real(radius_m, "radius_m"),
         ))
         self.protocol = protocol
         self._reference: Optional[np.ndarray] = None
@@ -814,7 +841,7 @@ class Reconstructor:
         for all (S per square)."""
         sigma = np.asarray(sigma, dtype=np.float64)
         if sigma.ndim == 0:
-            sigma = np.full(len(self.triangles), float(sigma))
+            sigma = np.full(len(self.triangles), _real(sigma, "sigma"))
         return self._native.forward(_f64(sigma, 1, "sigma"))
 
     def jacobian(self) -> np.ndarray:
@@ -872,15 +899,24 @@ class Reconstructor:
 def _labels(y: np.ndarray, what: str, noun: str) -> List[str]:
     """Labels (or groups) as text; a missing one (None or NaN, as pandas marks them) is
     refused by its row rather than made a class of its own."""
+    if y.ndim != 1:
+        raise EtError(f"{what}: shape {y.shape}; give one {noun} per row")
     values = [v.item() if hasattr(v, "item") else v for v in y]
     for i, v in enumerate(values):
         if v is None or (isinstance(v, float) and v != v):
             raise EtError(f"{what}[{i}] is {v}: a missing {noun}; drop its row, or give it one")
+        if isinstance(v, bytes):
+            # Bytes (np.genfromtxt's text, NumPy's "S" arrays) as the text they hold: "a",
+            # not "b'a'"; they come back as bytes.
+            try:
+                values[i] = v.decode()
+            except UnicodeDecodeError:
+                raise EtError(f"{what}[{i}] = {v!r}: bytes that are not UTF-8 text") from None
     return [str(v) for v in values]
 
 
 def _label_type(y: Any) -> str:
-    """What labels were before they became text: "int", "float", "bool" or "str" (a model
+    """What labels were before they became text: "int", "float", "bool", "bytes" or "str" (a model
     gives its predictions back as that type)."""
     a = np.asarray(y)
     if a.dtype.kind == "b":
@@ -889,6 +925,8 @@ def _label_type(y: Any) -> str:
         return "int"
     if a.dtype.kind == "f":
         return "float"
+    if a.dtype.kind == "S":
+        return "bytes"
     values = [v.item() if hasattr(v, "item") else v for v in a]
     if values and all(isinstance(v, bool) for v in values):
         return "bool"
@@ -910,6 +948,8 @@ def _as_given(names: Sequence[str], label_type: Optional[str]) -> np.ndarray:
         return np.array([int(n) for n in names] + [-1])
     if label_type == "float":
         return np.array([float(n) for n in names] + [np.nan])
+    if label_type == "bytes":
+        return np.array([n.encode() for n in names] + [b""], dtype=object)
     if label_type == "bool":
         return np.array([n == "True" for n in names] + [None], dtype=object)
     return np.array(list(names) + [""], dtype=object)
@@ -1003,7 +1043,7 @@ class Model:
 
     def export_blob(self, precision: str = "f16") -> bytes:
         """The board's model blob (`et export`; `et upload` sends it): "f16" or "f32" tables."""
-        return self._native.export_blob(precision)
+        return self._native.export_blob(_text(precision, "precision", "'f16' or 'f32'"))
 
     def __repr__(self) -> str:
         return f"et_touch.Model({self.kind}{', board' if self.is_board else ''})"
@@ -1054,6 +1094,10 @@ def train(
     """
     if progress is not None and not callable(progress):
         raise EtError(f"progress: a callable taking (what, done, total), not {type(progress).__name__}")
+    kind = _text(kind, "kind", "'auto', 'qda', 'lda', 'ridge', 'kernel-ridge', 'knn', 'gp' or 'mlp'")
+    if isinstance(cv, (int, np.integer)) and not isinstance(cv, (bool, np.bool_)):
+        raise EtError(f"cv = {cv!r}: 'shuffled' or 'blocks'; the number of folds is folds={cv}")
+    cv = _text(cv, "cv", "'shuffled' or 'blocks'")
     if isinstance(X, (str, os.PathLike)):
         X = read_dataset(X)
     if isinstance(X, Dataset):
@@ -1094,13 +1138,15 @@ def train(
             f"one group ({groups[0]!r}) only: nothing in the data can show how a model holds on "
             "a new session", EtWarning, stacklevel=2,
         )
+    if grid is not None and (isinstance(grid, (str, bytes)) or np.shape(grid) != (2,)):
+        raise EtError(f"grid = {grid!r}: (rows, cols) of classes, e.g. (3, 3)")
     grid_pair = None if grid is None else (_count(grid[0], "grid rows"), _count(grid[1], "grid columns"))
     model = Model(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind,
             None if folds is None else _count(folds, "folds"), cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
-            3600.0 if budget_s is None else float(budget_s), progress,
+            3600.0 if budget_s is None else _real(budget_s, "budget_s"), progress,
         )
     )
     # What the training changed from the request, or found in the data (a feature of one

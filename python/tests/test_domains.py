@@ -82,7 +82,7 @@ def test_one_reconstructor_shared_by_threads_images_as_alone():
 
 @pytest.mark.parametrize(
     "first, second",
-    [(1, 2), ("1", "01"), (1.5, 2.5), (True, False), ("--1", "a"), ("x", "y")],
+    [(1, 2), ("1", "01"), (1.5, 2.5), (True, False), ("--1", "a"), ("x", "y"), (b"a", "é".encode())],
 )
 def test_labels_come_back_as_given(tmp_path, first, second):
     rng = np.random.default_rng(0)
@@ -96,6 +96,33 @@ def test_labels_come_back_as_given(tmp_path, first, second):
         got = m.predict(X[[0, 119]])
         assert list(got) == [first, second]
         assert [type(v) for v in got.tolist()] == [type(first), type(second)]
+
+
+_X = np.random.default_rng(4).standard_normal((40, 3))
+_Y = np.array([0, 1] * 20)
+
+
+@pytest.mark.parametrize(
+    "make, named",
+    [
+        (lambda: et.train(_X, _Y, cv=5), "cv = 5: 'shuffled' or 'blocks'; the number of folds is folds=5"),
+        (lambda: et.train(_X, _Y, kind=None), "kind = None: 'auto', 'qda'"),
+        (lambda: et.train(_X, _Y, grid=5), r"grid = 5: \(rows, cols\)"),
+        (lambda: et.train(_X, _Y, budget_s="x"), "budget_s = 'x': a number"),
+        (lambda: et.train(_X, _Y, groups=np.zeros((40, 2))), r"groups: shape \(40, 2\); give one group per row"),
+        (lambda: et.train(_X, np.array([b"\xff"] * 40)), "y\\[0\\] = b'\\\\xff': bytes that are not UTF-8 text"),
+        (lambda: et.protocol(5), "name = 5: 'adjacent'"),
+        (lambda: et.disc("a"), "radius_m = 'a': a number"),
+        (lambda: et.disc(0.1, contact_ohm=True), "contact_ohm = True: a number"),
+        (lambda: et.Reconstructor(et.disc(0.1), et.protocol("adjacent"), method=None), "method = None: 'gn' or 'greit'"),
+        (lambda: et.train(_X, _Y, kind="lda").export_blob(None), "precision = None: 'f16' or 'f32'"),
+    ],
+)
+def test_a_parameter_of_the_wrong_kind_is_refused_by_its_name(make, named):
+    # They raised "'int' object is not an instance of 'str'", "'int' object is not
+    # subscriptable" or "could not convert string to float", naming no parameter.
+    with pytest.raises(et.EtError, match=named):
+        make()
 
 
 def test_blocks_beside_groups_is_refused():
@@ -338,3 +365,11 @@ def test_a_batch_whose_images_cannot_fit_in_memory_is_refused_with_the_run_that_
     v0 = r.forward(r.sigma0)
     with pytest.raises(et.EtError, match=r"1048576 frames' images need .* GB .* image them in runs, r\.images\(V\[i:i \+ \d+\]\)"):
         r.images(np.broadcast_to(v0 * 1.01, (2**20, 4)), v0)
+
+
+def test_positions_in_mm_where_m_are_taken_are_warned_of():
+    rng = np.random.default_rng(5)
+    positions = rng.uniform(-0.05, 0.05, (60, 2))
+    X = np.hstack([positions, positions**2]) + rng.normal(0, 1e-3, (60, 4))
+    with pytest.warns(et.EtWarning, match=r"more than any touch sheet \(10 m\): are they in mm\?"):
+        et.train(X, positions * 1000, kind="ridge")

@@ -194,7 +194,8 @@ pub struct ClassInfo {
     /// The grid, when the classes were made from positions.
     pub grid: Option<Grid>,
     /// What the names were before they were written as text, so that a reader gives them
-    /// back as given: "int", "float", "bool" or "str" (the Python module writes it; absent
+    /// back as given: "int", "float", "bool", "bytes" (UTF-8 text) or "str" (the Python
+    /// module writes it; absent
     /// from files the command line trained, whose names are the file's text).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label_type: Option<String>,

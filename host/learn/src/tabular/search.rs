@@ -158,6 +158,7 @@ pub fn train(
     let by_drift = !cv.grouped;
     let (mut ranked, mut notes) = rank(&search, choice, cv.grouped);
     notes.extend(constant.clone());
+    notes.extend(table.positions_scale_note());
     let average = match (&targets, choice) {
         (Some(t), Choice::Auto) if opts.grid.is_none() => average_of_best(
             &ranked,

@@ -256,6 +256,43 @@ impl Table {
         Ok(Self { x, ..self.clone() })
     }
 
+    /// A note when the positions span more than any touch sheet (10 m) or less than a finger
+    /// (1 mm): most likely positions in another unit than the one they were read in (mm
+    /// given as m gave errors of metres, m read as mm errors of micrometres, without a word).
+    #[must_use]
+    pub fn positions_scale_note(&self) -> Option<String> {
+        let p = self.positions.as_ref()?;
+        let extent = |along: fn(&[f64; 2]) -> f64| {
+            let (lo, hi) = p
+                .iter()
+                .map(along)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            hi - lo
+        };
+        let span = extent(|q| q[0]).max(extent(|q| q[1]));
+        let (said, other) = match self.unit {
+            Unit::M => (format!("{span:.3} m"), "mm"),
+            Unit::Mm => (format!("{:.3} mm", span * 1e3), "m"),
+        };
+        let what = if span > 10.0 {
+            "more than any touch sheet (10 m)"
+        } else if span > 0.0 && span < 1e-3 {
+            "less than a finger (1 mm)"
+        } else {
+            return None;
+        };
+        Some(format!(
+            "the positions span {said}, {what}: are they in {other}? (positions are read in \
+             {}; errors are reported in mm)",
+            match self.unit {
+                Unit::M => "m",
+                Unit::Mm => "mm",
+            }
+        ))
+    }
+
     /// Targets as (x m, y m, third or 0), when the table has positions.
     #[must_use]
     pub fn targets(&self) -> Option<Vec<Target3>> {

@@ -1316,3 +1316,34 @@ fn scales_constant_columns_and_tiny_classes_are_fitted_or_said() {
         );
     }
 }
+
+/// Positions spanning more than any sheet, or less than a finger, are said as most likely in
+/// another unit than they were read in (mm given as m trained and scored errors of metres
+/// without a word).
+#[test]
+fn positions_in_another_unit_are_noted() {
+    let rows = STANDIN.select("0..120".parse().unwrap()).unwrap();
+    let scaled = |factor: f64, unit: Unit| Table {
+        positions: rows
+            .positions
+            .as_ref()
+            .map(|p| p.iter().map(|q| [q[0] * factor, q[1] * factor]).collect()),
+        unit,
+        ..rows.clone()
+    };
+    assert_eq!(rows.positions_scale_note(), None, "the stand-in is in m");
+    let ridge = Choice::One(Kind::Ridge);
+    let note = train(&scaled(1e3, Unit::M), ridge, &opts(), &mut quiet())
+        .unwrap()
+        .note
+        .unwrap_or_default();
+    assert!(
+        note.contains("more than any touch sheet") && note.contains("are they in mm?"),
+        "{note}"
+    );
+    let note = scaled(1e-3, Unit::Mm).positions_scale_note().unwrap();
+    assert!(
+        note.contains("less than a finger") && note.contains("are they in m?"),
+        "{note}"
+    );
+}

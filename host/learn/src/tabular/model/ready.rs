@@ -262,10 +262,10 @@ impl TableModel {
             return Err(TablesError::SameClassName(twice.clone()));
         }
         if (info.label_type.as_deref())
-            .is_some_and(|t| !["int", "float", "bool", "str"].contains(&t))
+            .is_some_and(|t| !["int", "float", "bool", "bytes", "str"].contains(&t))
         {
             return Err(TablesError::Inconsistent(
-                "classes.label_type: int, float, bool or str",
+                "classes.label_type: int, float, bool, bytes or str",
             ));
         }
         if let Some(g) = &info.grid {
