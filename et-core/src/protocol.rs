@@ -91,6 +91,19 @@ impl Measurement {
     }
 }
 
+/// The skips as `et protocol` takes them, separated by spaces ("0 7"); "none" when empty.
+impl core::fmt::Display for SkipSet {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.is_empty() {
+            return f.write_str("none");
+        }
+        for (i, s) in self.iter().enumerate() {
+            write!(f, "{}{s}", if i == 0 { "" } else { " " })?;
+        }
+        Ok(())
+    }
+}
+
 /// A set of measurement skips, as a bit mask (bit `s` set = skip `s`, i.e. pairs `j, j + s + 1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -227,13 +240,11 @@ impl ProtocolKind {
 impl core::fmt::Display for ProtocolKind {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            ProtocolKind::Custom(p) => {
-                write!(f, "drive skip {}, measure skips", p.drive_skip)?;
-                for s in p.measure_skips.iter() {
-                    write!(f, " {s}")?;
-                }
-                Ok(())
-            }
+            ProtocolKind::Custom(p) => write!(
+                f,
+                "drive skip {}, measure skips {}",
+                p.drive_skip, p.measure_skips
+            ),
             named => f.write_str(named.name()),
         }
     }
@@ -254,17 +265,25 @@ pub enum ProtocolError {
     },
     /// The drive skip puts the sink more than half way round (`drive_skip + 1 > L / 2`).
     #[error(
-        "drive skip {drive_skip} reaches past the opposite electrode: use drive_skip + 1 <= L/2"
+        "drive skip {drive_skip} reaches past the opposite electrode of {electrodes}: use \
+         drive_skip + 1 <= L/2 (at most {} here)", electrodes / 2 - 1
     )]
     DriveSkip {
         /// The skip asked for.
         drive_skip: u8,
+        /// The electrode count L.
+        electrodes: u8,
     },
     /// No measurement skip, more than [`MAX_MEASURE_SKIPS`], or one past half way round.
-    #[error("measure skips {:#x} are not valid: give 1 to {MAX_MEASURE_SKIPS} skips, each with skip + 1 <= L/2", .measure_skips.0)]
+    #[error(
+        "measure skips {measure_skips} do not fit {electrodes} electrodes: give 1 to \
+         {MAX_MEASURE_SKIPS} skips, each with skip + 1 <= L/2 (at most {} here)", electrodes / 2 - 1
+    )]
     MeasureSkips {
         /// The skip set asked for.
         measure_skips: SkipSet,
+        /// The electrode count L.
+        electrodes: u8,
     },
     /// The protocol leaves no usable measurement (every pair touches a current electrode).
     #[error("the protocol leaves no usable measurement")]
@@ -357,6 +376,7 @@ impl Protocol {
         if pattern.drive_skip + 1 > half {
             return Err(ProtocolError::DriveSkip {
                 drive_skip: pattern.drive_skip,
+                electrodes,
             });
         }
         let skips = pattern.measure_skips;
@@ -364,6 +384,7 @@ impl Protocol {
         {
             return Err(ProtocolError::MeasureSkips {
                 measure_skips: skips,
+                electrodes,
             });
         }
         let mut protocol = Self {

@@ -100,6 +100,18 @@ fn protocol_text_and_errors_teach() {
     ]);
     let v: serde_json::Value = serde_json::from_slice(&general.stdout).unwrap();
     assert_eq!(v["K"], 400, "the general form with PP-PP's skips is PP-PP");
+    // A named protocol beside the general form is refused (it was ignored without a word).
+    let both = et(&[
+        "protocol",
+        "-p",
+        "opposite",
+        "--drive-skip",
+        "3",
+        "--measure-skip",
+        "0",
+    ]);
+    assert!(!both.status.success());
+    assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
     let help = et(&["protocol", "--help"]);
     assert!(String::from_utf8_lossy(&help.stdout).contains("Examples:"));
 }

@@ -222,7 +222,10 @@ fn general_patterns_validate() {
     };
     assert_eq!(
         Protocol::new(custom(8, 1), 16),
-        Err(ProtocolError::DriveSkip { drive_skip: 8 })
+        Err(ProtocolError::DriveSkip {
+            drive_skip: 8,
+            electrodes: 16
+        })
     );
     assert!(matches!(
         Protocol::new(custom(1, 0), 16),
@@ -236,6 +239,17 @@ fn general_patterns_validate() {
         Protocol::new(custom(1, 1 << 8), 16),
         Err(ProtocolError::MeasureSkips { .. })
     ));
+    // Said as the skips given and the bound at this L (it was "measure skips 0x20", a mask).
+    assert_eq!(
+        Protocol::new(custom(0, 1 << 5), 8).unwrap_err().to_string(),
+        "measure skips 5 do not fit 8 electrodes: give 1 to 2 skips, each with skip + 1 <= L/2 \
+         (at most 3 here)"
+    );
+    assert_eq!(
+        Protocol::new(custom(0, 0), 8).unwrap_err().to_string(),
+        "measure skips none do not fit 8 electrodes: give 1 to 2 skips, each with skip + 1 <= \
+         L/2 (at most 3 here)"
+    );
     for l in [0, 2, 3, 5, 34, 255] {
         assert_eq!(
             Protocol::new(ProtocolKind::Adjacent, l),

@@ -9,11 +9,11 @@ pub(crate) struct ProtocolArgs {
     /// Electrode count L: even, 4 to 32.
     #[arg(short = 'l', long, default_value_t = 16)]
     electrodes: u8,
-    /// The protocol (docs/method.md §4). Ignored with --drive-skip.
+    /// The protocol (docs/method.md §4); the general form (--drive-skip) is another.
     #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolKind::Adjacent)]
     protocol: ProtocolKind,
     /// General form: inject between i and i + drive_skip + 1 (needs --measure-skip).
-    #[arg(long, requires = "measure_skip")]
+    #[arg(long, requires = "measure_skip", conflicts_with = "protocol")]
     drive_skip: Option<u8>,
     /// General form: measure between j and j + s + 1; give once or twice.
     #[arg(long)]
