@@ -24,6 +24,8 @@ use et_core::protocol::Protocol;
 use et_core::wire::Frame;
 use serde::{Deserialize, Serialize};
 
+mod made_on;
+
 /// The `format` value of a recording's header.
 pub const FORMAT: &str = "et-recording";
 /// The format version this build writes and reads.

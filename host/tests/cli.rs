@@ -954,6 +954,19 @@ fn reconstruct_images_recorded_frames() {
         e.contains("warning: frame 50 is 0.001") && e.contains("times the reference V_0"),
         "{e}"
     );
+    // The frames imaged on another sheet of as many electrodes (a 22 cm disc) were imaged
+    // without a word on the sheet's outline: said, naming the scene they were made on.
+    let mut a = args("50");
+    let at = a.iter().position(|x| x == "--scene").unwrap();
+    a[at + 1] = s(&root.join("sim/scenes/disc-22cm-16.toml"));
+    a.push("--force".into());
+    let e = String::from_utf8_lossy(&run(&a).stderr).to_string();
+    assert!(
+        e.contains("its frames were simulated on")
+            && e.contains("a 130 x 130 mm rectangle")
+            && e.contains(&format!("image them with --scene {}", s(&scene))),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

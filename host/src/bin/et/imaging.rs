@@ -340,6 +340,15 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         );
     }
     let sheet = &scene.sheet.physical;
+    if let Some(other) = recording
+        .as_ref()
+        .and_then(|r| r.made_on_another_sheet(sheet))
+    {
+        say!(
+            "warning: {}: {other}",
+            args.frames.as_deref().unwrap_or(Path::new("")).display()
+        );
+    }
     let (schedule, config) = match &recording {
         Some(r) => {
             if r.header.config.electrodes != sheet.electrodes.count {
@@ -508,7 +517,8 @@ fn say_background(
     if fit.residual > 0.2 {
         say!(
             "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
-             protocol's electrode numbering (electrodes.first_deg, direction) and order",
+             protocol's electrode numbering (electrodes.first_deg, direction) and order, and \
+             that the scene's sheet is the one measured (its outline, size and electrodes)",
             100.0 * fit.residual
         );
     }

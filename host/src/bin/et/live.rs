@@ -182,6 +182,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         for note in r.recording.notes() {
             say!("note: {}: {note}", r.name);
         }
+        if let Some(other) = r.recording.made_on_another_sheet(&r.sheet.physical) {
+            say!("warning: {}: {other}", r.name);
+        }
         // The reconstruction for the recording's scans, made before its first frame.
         processor.prepare(&r.recording.header.config)?;
     }
