@@ -1822,7 +1822,24 @@ label,x_mm,y_mm,visit,v0,v3,v3b
 1,10.1,9.9,0,0.1,0.21,0.33
 ";
     std::fs::write(p("twice.csv"), dataset).unwrap();
+    std::fs::write(p("f-units.csv"), "a,b\n1,2\n3,4\n5,6\n7,8\n").unwrap();
+    std::fs::write(p("t-units.csv"), "x_mm,y_mm\n1,2\n3,4\n5,6\n7,8\n").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
+        // --unit beside columns that name theirs (x_mm) would be two readings of one value.
+        (
+            [
+                "train",
+                "--features",
+                &p("f-units.csv"),
+                "--targets",
+                &p("t-units.csv"),
+            ]
+            .into_iter()
+            .chain(["--unit", "m", "--out", &p("m.json")])
+            .map(String::from)
+            .collect(),
+            "--unit m: the position columns name their unit, mm (x_mm): drop --unit",
+        ),
         (
             vec![
                 "train".into(),

@@ -284,6 +284,27 @@ pub enum DatasetFault {
          that says which session each row was recorded in"
     )]
     GroupIsTarget(String),
+    /// A position column named in a length unit et does not read (`x_cm`).
+    #[error(
+        "{column}: positions in {unit}; et reads them in mm or m: convert the column and name \
+         it {axis}_mm or {axis}_m"
+    )]
+    PositionUnit {
+        /// The column's name.
+        column: String,
+        /// The unit its name gives.
+        unit: String,
+        /// Its axis: x, y or z.
+        axis: char,
+    },
+    /// Position columns naming two units (`x_mm` beside `y_m`).
+    #[error("{first} and {second} name two units: give the positions in one (mm or m)")]
+    PositionUnits {
+        /// The first column's name.
+        first: String,
+        /// The other's.
+        second: String,
+    },
     /// x without y or y without x.
     #[error("give both x and y columns, or neither")]
     HalfPosition,

@@ -41,7 +41,31 @@ impl Unit {
 /// a value kept as written (a force).
 #[must_use]
 pub fn is_length(name: &str) -> bool {
-    name.eq_ignore_ascii_case("z")
+    position_name(name).is_some_and(|(axis, _)| axis == 'z')
+}
+
+/// A position column's axis (`x`, `y` or `z`) and the unit its name gives: bare (`x`, the
+/// unit `--unit` says), or with the unit it is written in (`x_mm`, `y_m`, any case), as et's
+/// own files and most loggers name them (`x_mm` was taken as a feature: the target itself
+/// among the features, a cross-validated error of 0.00 mm). `Err` holds a length unit et does
+/// not read (`x_cm`); `None` for any other name (`x_offset` is a feature).
+fn position_name(name: &str) -> Option<(char, Result<Option<Unit>, String>)> {
+    let n = name.to_ascii_lowercase();
+    let (axis, unit) = n.split_once('_').unwrap_or((n.as_str(), ""));
+    let axis = match axis {
+        "x" => 'x',
+        "y" => 'y',
+        "z" => 'z',
+        _ => return None,
+    };
+    let unit = match unit {
+        "" => Ok(None),
+        "mm" => Ok(Some(Unit::Mm)),
+        "m" => Ok(Some(Unit::M)),
+        "cm" | "um" | "nm" | "km" | "in" | "inch" | "ft" => Err(unit.to_string()),
+        _ => return None,
+    };
+    Some((axis, unit))
 }
 
 /// A table of features and targets from any sensor.
@@ -118,13 +142,14 @@ pub fn read_reference(path: &Path, features: &[String]) -> Result<DMatrix<f64>, 
     csv.matrix(path, &cols)
 }
 
-/// Names a third target column may have, besides the column after y in a headerless file.
-const THIRD_NAMES: [&str; 4] = ["z", "force", "pressure", "pressure_kpa"];
+/// Names a third target column may have besides z (any [`position_name`] of it), and the
+/// column after y in a headerless file.
+const THIRD_NAMES: [&str; 3] = ["force", "pressure", "pressure_kpa"];
 
-/// A target column's name (label, x, y or a third target's), in any case.
+/// A target column's name (label, x, y or a third target's, bare or with a unit), in any case.
 fn is_target_name(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
-    ["label", "x", "y"].contains(&n.as_str()) || THIRD_NAMES.contains(&n.as_str())
+    n == "label" || position_name(&n).is_some() || THIRD_NAMES.contains(&n.as_str())
 }
 
 impl Table {
@@ -204,6 +229,9 @@ impl Table {
                 ttable.names.len() - found.taken()
             );
         }
+        // Columns that name their unit (x_mm) are read in it; --unit beside them is the
+        // caller's to compare (the table says the unit it read).
+        let unit = found.unit.unwrap_or(unit);
         let m = unit.metres();
         let third = found.third.map(|(name, v)| {
             let length = is_length(&name);
@@ -332,6 +360,8 @@ struct Targets {
     third: Option<(String, Vec<f64>)>,
     /// The columns of the label, x, y and the third target.
     columns: [Option<usize>; 4],
+    /// The unit the position columns' names give (`x_mm`), when they give one.
+    unit: Option<Unit>,
 }
 
 impl Targets {
@@ -344,7 +374,12 @@ impl Targets {
                 .iter()
                 .position(|c| c.eq_ignore_ascii_case(name))
         };
-        let position = named("x").or(named("y")).is_some();
+        let axis = |a: char| {
+            (table.names.iter())
+                .position(|c| position_name(c).is_some_and(|(b, _)| a == b))
+                .filter(|_| table.header)
+        };
+        let position = axis('x').or(axis('y')).is_some();
         let (label_col, x_col, y_col, third_col) = match (side, table.header, table.names.len()) {
             // A targets file's one column is a label, whatever its header calls it.
             (true, false, 1) => (Some(0), None, None, None),
@@ -352,11 +387,12 @@ impl Targets {
             (true, false, n) => (None, Some(0), Some(1), (n > 2).then_some(2)),
             _ => (
                 named("label"),
-                named("x"),
-                named("y"),
-                THIRD_NAMES.iter().find_map(|n| named(n)),
+                axis('x'),
+                axis('y'),
+                axis('z').or_else(|| THIRD_NAMES.iter().find_map(|n| named(n))),
             ),
         };
+        let unit = position_unit(path, table, [x_col, y_col, third_col])?;
         let labels = label_col.map(|c| table.text_column(path, c)).transpose()?;
         let positions: Option<Vec<[f64; 2]>> = match (x_col, y_col) {
             (Some(cx), Some(cy)) => Some(
@@ -377,7 +413,7 @@ impl Targets {
                 table
                     .names
                     .get(c)
-                    .filter(|_| table.header)
+                    .filter(|n| table.header && !is_length(n))
                     .cloned()
                     .unwrap_or_else(|| "z".into()),
                 table.column(path, c)?,
@@ -394,6 +430,7 @@ impl Targets {
             positions,
             third,
             columns: [label_col, x_col, y_col, third_col],
+            unit,
         })
     }
 
@@ -401,6 +438,39 @@ impl Targets {
     fn taken(&self) -> usize {
         self.columns.iter().flatten().count()
     }
+}
+
+/// The unit the position columns' names give (`x_mm`, `y_mm`), if any: refused when they give
+/// two, or one et does not read (`x_cm`).
+fn position_unit(
+    path: &Path,
+    table: &Csv,
+    columns: [Option<usize>; 3],
+) -> Result<Option<Unit>, DatasetError> {
+    let mut found: Option<(&str, Unit)> = None;
+    for name in columns.iter().flatten().filter_map(|&c| table.names.get(c)) {
+        let Some((axis, unit)) = position_name(name).filter(|_| table.header) else {
+            continue;
+        };
+        let fault = match (unit, found) {
+            (Err(unit), _) => DatasetFault::PositionUnit {
+                column: name.clone(),
+                unit,
+                axis,
+            },
+            (Ok(Some(u)), Some((first, f))) if u != f => DatasetFault::PositionUnits {
+                first: first.into(),
+                second: name.clone(),
+            },
+            (Ok(Some(u)), None) => {
+                found = Some((name, u));
+                continue;
+            }
+            (Ok(_), _) => continue,
+        };
+        return Err(content(path, 0, None, fault));
+    }
+    Ok(found.map(|(_, u)| u))
 }
 
 /// What was read from where, as `et train` prints it: the features' file, rows and columns,
@@ -466,37 +536,13 @@ fn describe(
     description
 }
 
-/// The unit the positions were read in (nothing without positions), and a note when positions
-/// read as mm span less than a millimetre (metres given without `--unit m`).
+/// The unit the positions were read in (nothing without positions; a span no sheet has is
+/// said by [`Table::positions_scale_note`] when the table is trained on).
 fn positions_note(unit: Unit, positions: Option<&[[f64; 2]]>) -> String {
     // Class labels alone have no unit to say.
-    if positions.is_none() {
-        return String::new();
+    match (positions, unit) {
+        (None, _) => String::new(),
+        (Some(_), Unit::M) => "; positions in m".into(),
+        (Some(_), Unit::Mm) => "; positions in mm".into(),
     }
-    let mut note = format!(
-        "; positions in {}",
-        match unit {
-            Unit::M => "m",
-            Unit::Mm => "mm",
-        }
-    );
-    if let (Unit::Mm, Some(p)) = (unit, positions) {
-        let span = |i: usize| {
-            let (lo, hi) = p
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                    let v = q.get(i).copied().unwrap_or(0.0);
-                    (l.min(v), h.max(v))
-                });
-            hi - lo
-        };
-        let widest = span(0).max(span(1));
-        if widest > 0.0 && widest < 1.0 {
-            note.push_str(&format!(
-                "; note: the positions span only {widest:.3} mm: if they are in metres, give \
-                 --unit m"
-            ));
-        }
-    }
-    note
 }

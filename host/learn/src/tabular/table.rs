@@ -258,7 +258,8 @@ impl Table {
 
     /// A note when the positions span more than any touch sheet (10 m) or less than a finger
     /// (1 mm): most likely positions in another unit than the one they were read in (mm
-    /// given as m gave errors of metres, m read as mm errors of micrometres, without a word).
+    /// given as m trained and scored errors of metres without a word; m read as mm, errors
+    /// of micrometres).
     #[must_use]
     pub fn positions_scale_note(&self) -> Option<String> {
         let p = self.positions.as_ref()?;
@@ -272,23 +273,25 @@ impl Table {
             hi - lo
         };
         let span = extent(|q| q[0]).max(extent(|q| q[1]));
-        let (said, other) = match self.unit {
-            Unit::M => (format!("{span:.3} m"), "mm"),
-            Unit::Mm => (format!("{:.3} mm", span * 1e3), "m"),
-        };
-        let what = if span > 10.0 {
-            "more than any touch sheet (10 m)"
-        } else if span > 0.0 && span < 1e-3 {
-            "less than a finger (1 mm)"
-        } else {
-            return None;
+        let (wide, narrow) = (span > 10.0, span > 0.0 && span < 1e-3);
+        let ask = match (self.unit, wide, narrow) {
+            (Unit::M, true, _) => {
+                "are they in mm? (divide them by 1000; --unit mm on the command line)"
+            }
+            (Unit::Mm, _, true) => "are they in m? (give --unit m on the command line)",
+            (_, true, _) | (_, _, true) => "check their unit",
+            _ => return None,
         };
         Some(format!(
-            "the positions span {said}, {what}: are they in {other}? (positions are read in \
-             {}; errors are reported in mm)",
+            "the positions span {}, {}: {ask}",
             match self.unit {
-                Unit::M => "m",
-                Unit::Mm => "mm",
+                Unit::M => format!("{span:.4} m"),
+                Unit::Mm => format!("{:.4} mm", span * 1e3),
+            },
+            if wide {
+                "more than any touch sheet (10 m)"
+            } else {
+                "less than a finger (1 mm)"
             }
         ))
     }

@@ -974,6 +974,58 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// Position columns named with their unit (`x_mm`, `y_mm`, as et's own files and most
+    /// loggers write them) are targets read in that unit: they were features (the target
+    /// among the features, a cross-validated error of 0.00 mm) and a file of them alone had
+    /// "no target". A unit et does not read, or two units, are refused by the columns.
+    #[test]
+    fn position_columns_named_with_their_unit_are_targets_in_it() {
+        let dir = tmp("units");
+        let (f, t) = (dir.join("f.csv"), dir.join("t.csv"));
+        let write = |feats: &str, targets: &str| {
+            std::fs::write(&f, feats).unwrap();
+            std::fs::write(&t, targets).unwrap();
+        };
+        write(
+            "a,b,x_offset,X_MM,y_mm,z_mm\n1,2,3,10,20,1\n4,5,6,30,40,2\n",
+            "x,y\n0,0\n0,0\n",
+        );
+        let imp = Table::import(&f, None, Unit::M).unwrap();
+        assert_eq!(imp.feature_names, ["a", "b", "x_offset"]);
+        assert_eq!(imp.unit, Unit::Mm, "the columns' unit, not the one passed");
+        assert_eq!(
+            in_mm(&imp.positions),
+            Some(vec![[10.0, 20.0], [30.0, 40.0]])
+        );
+        let (name, z) = imp.third.as_ref().unwrap();
+        assert_eq!((name.as_str(), z.len()), ("z", 2));
+        assert!((z[1] - 2e-3).abs() < 1e-12, "z in m: {z:?}");
+        // Beside a targets file, they are left out of the features (not taken as features).
+        let imp = Table::import(&f, Some(&t), Unit::Mm).unwrap();
+        assert_eq!(imp.feature_names, ["a", "b", "x_offset"]);
+        write("a,b\n1,2\n4,5\n", "x_m,y_m\n0.01,0.02\n0.03,0.04\n");
+        let imp = Table::import(&f, Some(&t), Unit::Mm).unwrap();
+        assert_eq!(imp.unit, Unit::M);
+        assert_eq!(
+            in_mm(&imp.positions),
+            Some(vec![[10.0, 20.0], [30.0, 40.0]])
+        );
+        for (targets, said) in [
+            (
+                "x_cm,y_cm\n1,2\n3,4\n",
+                "x_cm: positions in cm; et reads them in mm or m",
+            ),
+            ("x_mm,y_m\n1,2\n3,4\n", "x_mm and y_m name two units"),
+        ] {
+            write("a,b\n1,2\n4,5\n", targets);
+            let e = Table::import(&f, Some(&t), Unit::Mm)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("t.csv") && e.contains(said), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// Labels and sessions as pandas writes a Series (`y.to_csv("t.csv", index=False)`): a
     /// header naming the column above text (it was taken as a class, "t.csv: 5 rows, f.csv
     /// has 4"), and a table written with `sep=" "` with a text column (every row was one

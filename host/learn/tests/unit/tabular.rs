@@ -71,17 +71,14 @@ fn the_stand_in_reads_as_the_foreign_files_say() {
     assert_eq!(name, "z");
     assert!(z.iter().all(|&z| z <= cz && z >= cz - 2.01e-3), "{}", z[0]);
     assert!(t.description.contains("no header row") && t.description.contains("positions in m"));
-    assert!(!t.description.contains("--unit m"));
+    assert_eq!(t.positions_scale_note(), None);
     // The same metres read as the default mm span a fraction of a millimetre: said.
     let dir = tmp("unit");
     let (f, tf) = (dir.join("features.csv"), dir.join("targets.csv"));
     standin::make(40, 1, 3).unwrap().write(&f, &tf).unwrap();
     let as_mm = Table::import(&f, Some(&tf), Unit::Mm).unwrap();
-    assert!(
-        as_mm.description.contains("give --unit m"),
-        "{}",
-        as_mm.description
-    );
+    let note = as_mm.positions_scale_note().unwrap_or_default();
+    assert!(note.contains("give --unit m"), "{note}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

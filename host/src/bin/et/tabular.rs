@@ -24,7 +24,8 @@ pub(crate) struct TableArgs {
     /// force).
     #[arg(long, value_name = "CSV", requires = "features")]
     targets: Option<PathBuf>,
-    /// Unit of the positions in the files (reports are in mm).
+    /// Unit of the positions in the files (reports are in mm); columns named x_mm or x_m say
+    /// their own.
     #[arg(long, value_enum, requires = "features")]
     unit: Option<Unit>,
     /// Only rows A..B (0-based, B excluded; A.. or ..B), e.g. the first 80 % to train and
@@ -93,6 +94,18 @@ impl TableArgs {
         });
         let mut table =
             Table::import_grouped(features, self.targets.as_deref(), unit, groups.as_ref())?;
+        if let Some(given) = self.unit.filter(|&u| u != table.unit) {
+            let name = |u: Unit| match u {
+                Unit::M => "m",
+                Unit::Mm => "mm",
+            };
+            bail!(
+                "--unit {}: the position columns name their unit, {} (x_{}): drop --unit",
+                name(given),
+                name(table.unit),
+                name(table.unit)
+            );
+        }
         if let (Some(b), Some(how)) = (&self.reference_features, self.referencing()) {
             let reference = et_learn::dataset::read_reference(b, &table.feature_names)?;
             table = table.referenced(&reference, how, &b.display().to_string())?;
