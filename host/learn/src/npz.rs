@@ -419,7 +419,16 @@ impl Npz {
             .iter()
             .find(|(n, _)| n == name)
             .map(|(_, r)| r.clone())
-            .ok_or_else(|| fault(NpzFault::Missing))?;
+            .ok_or_else(|| {
+                let held = self.names().collect::<Vec<_>>().join(", ");
+                fault(NpzFault::Missing {
+                    held: if held.is_empty() {
+                        "no array".into()
+                    } else {
+                        held
+                    },
+                })
+            })?;
         let npy = self
             .bytes
             .get(range)

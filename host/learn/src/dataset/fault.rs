@@ -66,8 +66,8 @@ pub enum DatasetFault {
     /// A number that is not finite (`inf`, `nan`).
     #[error("{0} is not a finite number")]
     NotFinite(f64),
-    /// A cell that is not a number.
-    #[error("'{0}' is not a number")]
+    /// A cell that is not a number (a word: said how a column of text is read).
+    #[error("'{cell}' is not a number{hint}", cell = .0, hint = text_hint(.0))]
     NotNumber(String),
     /// A number needed where a label's text is.
     #[error("missing or not a finite number")]
@@ -322,4 +322,15 @@ pub enum DatasetFault {
         /// Whether the file has a header row.
         header: bool,
     },
+}
+
+/// For a cell of words where a number belongs: how a table reads a column of text (`class`
+/// of `left`, `right` was said only as "'right' is not a number").
+fn text_hint(cell: &str) -> &'static str {
+    if cell.chars().any(char::is_alphabetic) {
+        " (a column of text is read as the class when it is named 'label', or as the session \
+         with --groups NAME)"
+    } else {
+        ""
+    }
 }

@@ -38,9 +38,12 @@ pub enum NpzFault {
          write the archive again"
     )]
     Twice,
-    /// No array of the name.
-    #[error("missing")]
-    Missing,
+    /// No array of the name (the names it holds, said).
+    #[error("not in the archive, which holds {held}")]
+    Missing {
+        /// The archive's arrays' names, separated by commas.
+        held: String,
+    },
     /// The `.npy` inside is damaged (which part).
     #[error("{0}")]
     Npy(&'static str),

@@ -795,6 +795,17 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
             text.contains("one.csv:3") && text.contains("'x' is not a number"),
             "{text}"
         );
+        // A column of words under another name than label: said how text is read.
+        let class = err("a,class\n1,left\n2,right\n");
+        assert!(
+            class.contains(
+                "'left' is not a number (a column of text is read as the class when \
+                 it is named 'label'"
+            ),
+            "{class}"
+        );
+        let digits = err("a,label\n1,0\n1-2,1\n");
+        assert!(!digits.contains("column of text"), "{digits}");
         let short = err("a,b,label\n1,2,0\n1,1\n");
         assert!(
             short.contains("one.csv:3") && short.contains("2 values"),

@@ -32,7 +32,14 @@ fn what_is_written_reads_back() {
     assert_eq!(z.text("config").unwrap(), "{\"a\": \"µ\"}");
     assert!(z.matrix("label").is_err(), "1-d is not a matrix");
     assert!(z.text("x").is_err());
-    assert_eq!(z.vector("nope").unwrap_err().fault, NpzFault::Missing);
+    // Said with the names the archive holds (it was "missing").
+    let e = z.vector("nope").unwrap_err();
+    assert!(matches!(e.fault, NpzFault::Missing { .. }));
+    assert!(
+        e.to_string()
+            .contains("not in the archive, which holds x, "),
+        "{e}"
+    );
 }
 
 #[test]
