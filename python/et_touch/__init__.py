@@ -1090,7 +1090,8 @@ def train(
     changes as each stage starts; ``total`` 0 where steps are not counted), as ``et train``
     shows its progress; the Gaussian process, the perceptron and knn say their estimated time in
     ``what`` before their work (``progress=lambda what, done, total: print(what)``). An
-    exception it raises stops the calls and is raised when the training ends.
+    exception it raises stops the calls and is raised when the training ends. Ctrl-C (or
+    Jupyter's interrupt) ends the training at its next step with ``KeyboardInterrupt``.
     """
     if progress is not None and not callable(progress):
         raise EtError(f"progress: a callable taking (what, done, total), not {type(progress).__name__}")

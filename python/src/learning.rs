@@ -178,20 +178,53 @@ fn train_telling(
     examples: Examples<'_>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<et_learn::trainer::Trained> {
+    /// The unwind that ends a training interrupted by Ctrl-C, caught below (not a panic:
+    /// `resume_unwind` runs no panic hook and prints nothing).
+    struct Interrupted;
     let folds = trainer.dataset_folds();
     let mut raised: Option<PyErr> = None;
+    let mut checked = std::time::Instant::now();
     let trained = py.detach(|| {
-        trainer.train(examples, |stage| {
-            if let (Some(callable), None) = (&progress, &raised) {
-                let (what, done, total) = stage.said(folds);
-                raised = Python::attach(|py| callable.call1(py, (what, done, total)).err());
-            }
-        })
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            trainer.train(examples, |stage| {
+                // Ctrl-C (SIGINT: Jupyter's interrupt too) is taken at the next step, not
+                // when the training ends (it ran on, minutes or an hour, with the signal
+                // pending): Python's handler runs here, and a KeyboardInterrupt, or one the
+                // progress callable raised, ends the training by unwinding out of it (each
+                // step's state is the learner's own, dropped on the way).
+                let mut interrupt = None;
+                if let (Some(callable), None) = (&progress, &raised) {
+                    let (what, done, total) = stage.said(folds);
+                    match Python::attach(|py| callable.call1(py, (what, done, total))) {
+                        Err(e)
+                            if Python::attach(|py| {
+                                e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py)
+                            }) =>
+                        {
+                            interrupt = Some(e);
+                        }
+                        Err(e) => raised = Some(e),
+                        Ok(_) => {}
+                    }
+                } else if checked.elapsed().as_millis() >= 50 {
+                    checked = std::time::Instant::now();
+                    interrupt = Python::attach(|py| py.check_signals()).err();
+                }
+                if let Some(e) = interrupt {
+                    raised = Some(e);
+                    std::panic::resume_unwind(Box::new(Interrupted));
+                }
+            })
+        }))
     });
     if let Some(e) = raised {
         return Err(e);
     }
-    trained.map_err(|e| refused(&e))
+    match trained {
+        Ok(trained) => trained.map_err(|e| refused(&e)),
+        // Only an unwind of ours sets `raised`; any other is a panic, passed on.
+        Err(unwound) => std::panic::resume_unwind(unwound),
+    }
 }
 
 /// A trained model: QDA or LDA for the board (et's model file), or a table's model.

@@ -199,3 +199,27 @@ def test_a_save_that_fails_leaves_what_was_there_and_no_partial_file(tmp_path):
         model.save(folder)
     assert (folder / "keep").read_text() == "keep"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.json", "m.json"]
+
+
+@pytest.mark.parametrize("progress", [None, lambda what, done, total: None])
+def test_ctrl_c_ends_a_training_at_its_next_step(progress):
+    import _thread
+    import threading
+    import time
+
+    rng = np.random.default_rng(0)
+    positions = rng.uniform(-0.05, 0.05, (200, 2))
+    X = np.hstack([positions, positions**2, rng.normal(0, 1, (200, 12))])
+    started = time.monotonic()
+    et.train(X, positions, kind="mlp", progress=progress)
+    whole = time.monotonic() - started
+    # Ctrl-C (SIGINT, as a terminal or Jupyter's interrupt sends it) a tenth of the way in:
+    # raised at the training's next step (the training ran on to its end with the signal
+    # pending, and only then raised it).
+    timer = threading.Timer(whole / 10, _thread.interrupt_main)
+    timer.start()
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        et.train(X, positions, kind="mlp", progress=progress)
+    timer.join()
+    assert time.monotonic() - started < whole / 2
