@@ -24,7 +24,9 @@ use nalgebra::DMatrix;
 use crate::dataset::Dataset;
 
 mod error;
+mod size;
 pub use error::CollectError;
+pub use size::collection_bytes;
 
 /// Class centres on a rows x cols grid over the sheet's bounding box, inset by `margin` m
 /// (cell centres, row-major from the lower left).

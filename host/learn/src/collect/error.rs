@@ -35,6 +35,24 @@ pub enum CollectError {
     /// A built-in scene's scan settings are not usable.
     #[error("scene: {0}")]
     SceneField(#[source] et_sim::scene::FieldError),
+    /// A collection past the memory free.
+    #[error(
+        "{observations} observations of {features} features hold about {} GB while they \
+         are collected, where {} GB is free: collect fewer classes (--grid), scans (--scans), \
+         sub-sections (--subsections) or visits (--visits)",
+        crate::tabular::gb(*need_bytes),
+        crate::tabular::gb(*free_bytes)
+    )]
+    TooLarge {
+        /// Rows asked for.
+        observations: usize,
+        /// Features per row.
+        features: usize,
+        /// Bytes they would hold.
+        need_bytes: u64,
+        /// Bytes free.
+        free_bytes: u64,
+    },
     /// No visit was asked for.
     #[error("no visit to collect: ask for at least one")]
     NoVisits,

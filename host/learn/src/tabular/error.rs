@@ -282,7 +282,7 @@ pub enum Misuse {
 }
 
 /// Bytes in GB to two significant digits (0.5, 3.2, 83).
-fn gb(bytes: u64) -> String {
+pub(crate) fn gb(bytes: u64) -> String {
     let g = bytes as f64 / 1e9;
     if g >= 10.0 {
         format!("{g:.0}")

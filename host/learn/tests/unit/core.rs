@@ -1533,3 +1533,23 @@ fn in_mm(p: &Option<Vec<[f64; 2]>>) -> Option<Vec<[f64; 2]>> {
             .collect()
     })
 }
+
+/// A collection past the memory free is refused before any press, with its size (`--grid
+/// 100x100` at the default scans held 24 million observations and ran for hours).
+#[test]
+fn a_collection_past_the_memory_free_is_refused_before_any_press() {
+    let config = training_config(et_core::ScanConfig::default());
+    let plan = Plan {
+        scans: 10_000,
+        subsections: 1_000,
+        ..Plan::default()
+    };
+    let e = plan.fits_in_memory(config, 10_000, 1_000).unwrap_err();
+    let said = e.to_string();
+    assert!(
+        said.starts_with("100000000000000 observations of ") && said.contains("GB is free"),
+        "{said}"
+    );
+    Plan::default().fits_in_memory(config, 49, 6).unwrap();
+    assert_eq!(Plan::default().observations(49, 6), 49 * 6 * 20 * 20);
+}

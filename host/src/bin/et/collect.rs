@@ -173,6 +173,15 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
             2.0 * plan.radius
         );
     }
+    plan.fits_in_memory(config, centres.len(), args.visits)?;
+    say!(
+        "collecting {} classes x {} visits x {} scans x {} sub-sections: {} observations",
+        centres.len(),
+        args.visits,
+        args.scans,
+        args.subsections,
+        plan.observations(centres.len(), args.visits)
+    );
     let bar = ProgressBar::new(args.visits as u64).with_style(
         ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
