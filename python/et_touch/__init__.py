@@ -1030,7 +1030,19 @@ class Model:
             return json.loads(self._native.evaluate_dataset(X))
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
-        return json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
+        scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
+        unknown = scores.get("unknown_labels") or []
+        if unknown and labels is not None:
+            # As `et eval` notes it: rows of labels the model never saw count as missed (the
+            # dict alone gave an accuracy of 0 without a word).
+            missed = sum(label in set(unknown) for label in labels)
+            shown = ", ".join(unknown[:5]) + (", ..." if len(unknown) > 5 else "")
+            warnings.warn(
+                f"{len(unknown)} label{'' if len(unknown) == 1 else 's'} the model has no class "
+                f"of ({shown}): {missed} row{'' if missed == 1 else 's'} counted as missed",
+                EtWarning, stacklevel=2,
+            )
+        return scores
 
     def save(self, path: PathLike) -> None:
         """Writes et's model file (JSON): `et eval`, `et stream` and `et export` read it."""

@@ -373,3 +373,12 @@ def test_positions_in_mm_where_m_are_taken_are_warned_of():
     X = np.hstack([positions, positions**2]) + rng.normal(0, 1e-3, (60, 4))
     with pytest.warns(et.EtWarning, match=r"more than any touch sheet \(10 m\): are they in mm\?"):
         et.train(X, positions * 1000, kind="ridge")
+
+
+def test_labels_the_model_has_no_class_of_are_warned_of_in_evaluate():
+    rng = np.random.default_rng(6)
+    X = np.vstack([rng.normal(0, 1, (20, 3)), rng.normal(3, 1, (20, 3))])
+    model = et.train(X, np.array(["a"] * 20 + ["b"] * 20), kind="lda")
+    with pytest.warns(et.EtWarning, match=r"1 label the model has no class of \(c\): 20 rows counted as missed"):
+        scores = model.evaluate(X, np.array(["a"] * 20 + ["c"] * 20))
+    assert scores["accuracy"] <= 0.5
