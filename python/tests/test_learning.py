@@ -46,7 +46,8 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     assert (by_dataset == data.y).mean() > 0.8
     # One visit's frames minus its untouched frame, as the board classifies them.
     visit = data.visit == 0
-    k = int(data.feature_index.max()) + 1
+    config = json.loads(data.config_json)
+    k = et.protocol(config["protocol"].lower(), config["electrodes"]).K
     frames = np.full((int(visit.sum()), k), np.nan)
     frames[:, data.feature_index] = data.x[visit]
     v0 = np.zeros(k)
@@ -56,6 +57,13 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     np.testing.assert_allclose(positions, data.centres_m[by_dataset], atol=1e-12)
     with pytest.raises(et.EtError, match="untouched frame"):
         model.predict(frames)
+    # Frames of another length are another protocol's, though the values the model reads
+    # fall inside them (they were classified).
+    with pytest.raises(et.EtError, match=f"the model takes frames of K = {k} values"):
+        model.predict(frames[:, :-1], v0=v0[:-1])
+    # One fold tests on nothing (the command line refused it; Python trained with it).
+    with pytest.raises(et.EtError, match="folds = 1: a cross-validation takes 2 to 1000 folds"):
+        et.train(data, kind="lda", folds=1)
 
 
 def write_table(path, X, header):

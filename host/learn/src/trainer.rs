@@ -51,6 +51,10 @@ pub enum TrainError {
     /// A fixed shrinkage outside [0, 1].
     #[error("shrinkage {0}: a number from 0 to 1 (or none: chosen by cross-validation)")]
     Shrinkage(f64),
+    /// Folds of the cross-validation outside 2 to [`MAX_FOLDS`] (one fold tests on nothing;
+    /// the CLI refused 1, Python trained with it).
+    #[error("folds = {0}: a cross-validation takes 2 to {MAX_FOLDS} folds")]
+    Folds(usize),
     /// A method an et dataset does not train (the board takes QDA or LDA).
     #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
     NotForTheBoard(&'static str),
@@ -253,6 +257,9 @@ impl Progress<'_> {
     }
 }
 
+/// The most folds a cross-validation takes (the command line's bound on `--folds`).
+pub const MAX_FOLDS: usize = 1_000;
+
 impl Trainer {
     /// The folds of the cross-validation reported on an et dataset: `folds`, or 10.
     #[must_use]
@@ -277,6 +284,9 @@ impl Trainer {
     ) -> Result<Trained, TrainError> {
         if let Some(s) = self.shrinkage.filter(|s| !(0.0..=1.0).contains(s)) {
             return Err(TrainError::Shrinkage(s));
+        }
+        if let Some(k) = self.folds.filter(|k| !(2..=MAX_FOLDS).contains(k)) {
+            return Err(TrainError::Folds(k));
         }
         match examples {
             Examples::Dataset(data) => {

@@ -105,9 +105,20 @@ impl Board {
     /// model is referenced.
     ///
     /// # Errors
-    /// [`UseError::FrameLength`] when the frames or `v0` are too short for the model's
-    /// features.
+    /// [`UseError::FrameLength`] when the frames or `v0` are not of the model's K values
+    /// (frames of 100 values were classified when the features the model reads fell inside
+    /// them, though they are another protocol's frames).
     pub fn predict_frames(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Result<Vec<u16>, UseError> {
+        let k = self.file.config.validate().map(|p| p.frame_len()).ok();
+        let wrong = UseError::FrameLength {
+            frame: frames.ncols(),
+            v0: v0.len(),
+            k: k.unwrap_or(0),
+            scan: self.file.config,
+        };
+        if k.is_some_and(|k| frames.ncols() != k || !(v0.is_empty() || v0.len() == k)) {
+            return Err(wrong);
+        }
         let mut frame = vec![0.0; frames.ncols()];
         (0..frames.nrows())
             .map(|r| {
@@ -117,17 +128,7 @@ impl Board {
                 let x = self
                     .file
                     .features(&frame, v0)
-                    .ok_or_else(|| UseError::FrameLength {
-                        frame: frames.ncols(),
-                        v0: v0.len(),
-                        reads: self
-                            .file
-                            .feature_index
-                            .iter()
-                            .max()
-                            .map_or(0, |&i| usize::from(i)),
-                        scan: self.file.config,
-                    })?;
+                    .ok_or_else(|| wrong.clone())?;
                 Ok(self.fitted.predict(&x))
             })
             .collect()
@@ -349,10 +350,10 @@ pub enum UseError {
         /// The data's scan.
         data: et_core::config::ScanConfig,
     },
-    /// A frame (or the untouched frame) is too short for the model's features.
+    /// A frame (or the untouched frame) is not of the model's K values.
     #[error(
-        "frames of {frame} values and an untouched frame of {v0}: the model reads value \
-         {reads} of frames of {}",
+        "frames of {frame} values and an untouched frame of {v0}: the model takes frames of K \
+         = {k} values, of {}",
         said(scan)
     )]
     FrameLength {
@@ -360,8 +361,8 @@ pub enum UseError {
         frame: usize,
         /// Values in the untouched frame given (0 when none).
         v0: usize,
-        /// The largest frame index the model reads.
-        reads: usize,
+        /// Values in the model's frames.
+        k: usize,
         /// The model's scan.
         scan: et_core::config::ScanConfig,
     },

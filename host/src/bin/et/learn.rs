@@ -43,7 +43,7 @@ pub(crate) struct TrainArgs {
     shrinkage: Option<String>,
     /// Folds of the cross-validation: the reported one on --data (default 10), the one that
     /// chooses hyperparameters on --features (default 5).
-    #[arg(long, value_parser = crate::domain::count(2, 1_000))]
+    #[arg(long, value_parser = crate::domain::count(2, et_learn::trainer::MAX_FOLDS))]
     folds: Option<usize>,
     /// How --features rows are dealt to folds: shuffled (stratified by class), or blocks
     /// (contiguous, in file order: for recordings in time order, where a shuffled split
