@@ -62,7 +62,8 @@ impl Delimiter {
     #[must_use]
     pub fn of_head(first: &str, second: Option<&str>) -> Self {
         let d = Self::of(first);
-        let plain = |l: &str| Self::of(l) != Self::Tab && !l.contains([',', ';', '"']);
+        // No other delimiter, and no quote that could hide one.
+        let plain = |l: &str| !l.contains(['\t', ',', ';', '"']);
         let names = first.split_whitespace().count();
         let names_spaced = d == Self::Comma
             && plain(first)
