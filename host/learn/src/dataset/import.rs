@@ -144,7 +144,7 @@ pub fn read_reference(path: &Path, features: &[String]) -> Result<DMatrix<f64>, 
 
 /// Names a third target column may have besides z (any [`position_name`] of it), and the
 /// column after y in a headerless file.
-const THIRD_NAMES: [&str; 3] = ["force", "pressure", "pressure_kpa"];
+const THIRD_NAMES: [&str; 4] = ["force", "pressure", "pressure_kpa", "pressure_pa"];
 
 /// A target column's name (label, x, y or a third target's, bare or with a unit), in any case.
 fn is_target_name(name: &str) -> bool {
@@ -187,6 +187,13 @@ impl Table {
         unit: Unit,
         groups: Option<&GroupsFrom>,
     ) -> Result<Self, DatasetError> {
+        let text = read(features)?;
+        // An et dataset's CSV (`et collect`) names its sessions: its visit column is the
+        // groups unless others are given (it was a feature, the session's number among the
+        // voltages).
+        let visits = GroupsFrom::Column("visit".into());
+        let from_dataset = groups.is_none() && text.starts_with("# et-dataset");
+        let groups = groups.or(from_dataset.then_some(&visits));
         let group_column = match groups {
             Some(GroupsFrom::Column(name)) => Some(name.as_str()),
             _ => None,
@@ -199,7 +206,8 @@ impl Table {
         let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
         let label_text =
             |name: &str, _: usize| name.eq_ignore_ascii_case("label") || is_group(name);
-        let main = parse_table(features, &text_lines(&read(features)?), &label_text)?;
+        let main = parse_table(features, &text_lines(&text), &label_text)?;
+        drop(text);
         let side = targets
             .map(|p| targets_file(p, features, &main))
             .transpose()?;
@@ -259,7 +267,16 @@ impl Table {
                     let mut distinct = g.clone();
                     distinct.sort();
                     distinct.dedup();
-                    format!("{description}; {} groups", distinct.len())
+                    format!(
+                        "{description}; {} group{}{}",
+                        distinct.len(),
+                        if distinct.len() == 1 { "" } else { "s" },
+                        if from_dataset {
+                            " (an et dataset's visits)"
+                        } else {
+                            ""
+                        }
+                    )
                 }
                 None => description,
             },

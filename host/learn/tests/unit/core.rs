@@ -1021,6 +1021,24 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
             in_mm(&imp.positions),
             Some(vec![[10.0, 20.0], [30.0, 40.0]])
         );
+        // An et dataset's CSV as any sensor's table: its visits are the groups and its
+        // pressure a target (both were features).
+        std::fs::write(
+            &f,
+            "# et-dataset 2\nf0,f1,label,x_m,y_m,visit,pressure_pa\n1,2,0,0.01,0.02,0,5000\n\
+             3,4,1,0.03,0.04,1,6000\n",
+        )
+        .unwrap();
+        let imp = Table::import(&f, None, Unit::Mm).unwrap();
+        assert_eq!(imp.feature_names, ["f0", "f1"]);
+        assert_eq!(imp.groups, Some(vec!["0".to_string(), "1".into()]));
+        assert_eq!(imp.third.as_ref().unwrap().0, "pressure_pa");
+        assert!(
+            imp.description
+                .contains("2 groups (an et dataset's visits)"),
+            "{}",
+            imp.description
+        );
         for (targets, said) in [
             (
                 "x_cm,y_cm\n1,2\n3,4\n",
