@@ -429,6 +429,33 @@ fn et_protocol_csv_is_a_protocol_file() {
     let (found, sign) = strongest(&out);
     assert_eq!(sign, 1);
     assert!((found[0] - 40.0).hypot(found[1] - 30.0) < 10.0, "{found:?}");
+    // The same frames as a NumPy archive (it was refused, though every reader takes .npz):
+    // one array, "frames", the .mat's values.
+    let npz = d.join("frames.npz");
+    let out = et(&[
+        "sim",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--out",
+        npz.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // K: the protocol file's rows (a header, then one row a frame value).
+    let k = std::fs::read_to_string(d.join("pp.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    let from_mat = et_host::frames::read(Path::new(&format!("{}:frames", mat.display())), k);
+    let from_npz = et_host::frames::read(&npz, k).unwrap();
+    assert_eq!(from_npz.frames.len(), 3);
+    assert_eq!(from_mat.unwrap().frames, from_npz.frames);
     std::fs::remove_dir_all(&d).unwrap();
 }
 

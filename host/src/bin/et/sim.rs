@@ -1,5 +1,5 @@
 //! `et sim`: the simulated sheet, from a scene file into a recording, or into another
-//! system's frames (CSV, .npy, .mat) under the scene's protocol, whatever it is.
+//! system's frames (CSV, .npy, .npz, .mat) under the scene's protocol, whatever it is.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,13 +18,13 @@ pub(crate) struct SimArgs {
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Where to write: a recording (.jsonl) of et's simulated board, or another system's
-    /// frames in volts (.csv one per row, .npy, or .mat as variable "frames"): the empty
+    /// frames in volts (.csv one per row, .npy, or .npz and .mat as array "frames"): the empty
     /// sheet first, then the scene's touches all pressed (their times ignored), under the
     /// scene's protocol whatever it is (a protocol file, any current), measured by
     /// --instrument. The way to try `et reconstruct --frames` with no system of your own.
     #[arg(long)]
     out: PathBuf,
-    /// With a .csv/.npy/.mat --out: the instrument's noise and drift: ideal (none),
+    /// With a .csv/.npy/.npz/.mat --out: the instrument's noise and drift: ideal (none),
     /// laboratory (0.05 % of the rms white and 0.05 % proportional, 0.01 % gain drift a
     /// frame) or noisy (0.2 % and 0.2 %).
     /// (Default laboratory; a recording's board has its own noise: refused with .jsonl.)
@@ -62,7 +62,7 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     crate::output::check_format(
         &args.out,
         "a recording, or another system's frames,",
-        &["jsonl", "csv", "npy", "mat"],
+        &["jsonl", "csv", "npy", "npz", "mat"],
     )?;
     if et_host::frames::is_table(&args.out) {
         if args.samples {
@@ -76,9 +76,9 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     }
     if let Some(i) = args.instrument {
         anyhow::bail!(
-            "--instrument {} sets another system's noise for a .csv, .npy or .mat --out; a \
+            "--instrument {} sets another system's noise for a .csv, .npy, .npz or .mat --out; a \
              recording (.jsonl) has the simulated board's own noise (the scene's [frontend]): \
-             drop --instrument, or write .csv, .npy or .mat",
+             drop --instrument, or write .csv, .npy, .npz or .mat",
             format!("{i:?}").to_lowercase()
         );
     }
@@ -160,7 +160,7 @@ const MAX_MAT_VALUES: usize = 50_000_000;
 const MAX_STREAMED_VALUES: usize = 1_000_000_000;
 
 /// Another system's frames of `scene` (see `--out`), written as the extension of `--out` says:
-/// .csv and .npy frame by frame as they are measured, .mat whole.
+/// .csv and .npy frame by frame as they are measured, .npz and .mat whole.
 fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
     use et_sim::foreign::Instrument as I;
     use std::io::Write as _;
@@ -206,10 +206,10 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    // Bounded, and said before any work: a .mat is made whole in memory (its values, their
-    // matrix and the file: three copies), the others on disk.
+    // Bounded, and said before any work: a .mat or .npz is made whole in memory (its values,
+    // their matrix and the file: three copies), the others on disk.
     let (limit, copies, held, instead) = match ext.as_str() {
-        "mat" => (
+        "mat" | "npz" => (
             MAX_MAT_VALUES,
             3.0,
             "in memory before it is written",
@@ -222,7 +222,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
             "an et recording (.jsonl, also written frame by frame)",
         ),
         other => anyhow::bail!(
-            "{}: another system's frames are written as .csv, .npy or .mat, not .{other}",
+            "{}: another system's frames are written as .csv, .npy, .npz or .mat, not .{other}",
             args.out.display()
         ),
     };
@@ -244,7 +244,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         })
     };
     crate::output::write(&args.out, |partial| -> Result<()> {
-        if ext == "mat" {
+        if ext == "mat" || ext == "npz" {
             let mut values = Vec::with_capacity(n * k);
             each(Box::new(|f| {
                 values.extend(f);
@@ -252,7 +252,15 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
             }))?;
             let m = nalgebra::DMatrix::from_row_slice(n, k, &values);
             drop(values);
-            std::fs::write(partial, et_host::frames::mat_v5("frames", &m))?;
+            // One variable (MATLAB) or array (NumPy) named "frames", n x K.
+            let bytes = if ext == "mat" {
+                et_host::frames::mat_v5("frames", &m)
+            } else {
+                let mut archive = et_learn::npz::Writer::new();
+                archive.matrix("frames", &m);
+                archive.finish()?
+            };
+            std::fs::write(partial, bytes)?;
             return Ok(());
         }
         let mut file = std::io::BufWriter::new(std::fs::File::create(partial)?);
