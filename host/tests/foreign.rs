@@ -397,21 +397,25 @@ fn et_protocol_csv_is_a_protocol_file() {
          [[touch]]\nposition = [0.04, 0.03]\nradius = 0.01\npressure = 20e3\n",
     )
     .unwrap();
+    // Three frames of the scene into `out`, in the format its name says.
+    let sim_into = |out: &Path| {
+        let run = et(&[
+            "sim",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    };
     let mat = d.join("frames.mat");
-    let out = et(&[
-        "sim",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--frames",
-        "3",
-        "--out",
-        mat.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    sim_into(&mat);
     let out = et(&[
         "reconstruct",
         "--scene",
@@ -432,20 +436,7 @@ fn et_protocol_csv_is_a_protocol_file() {
     // The same frames as a NumPy archive (it was refused, though every reader takes .npz):
     // one array, "frames", the .mat's values.
     let npz = d.join("frames.npz");
-    let out = et(&[
-        "sim",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--frames",
-        "3",
-        "--out",
-        npz.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    sim_into(&npz);
     // K: the protocol file's rows (a header, then one row a frame value).
     let k = std::fs::read_to_string(d.join("pp.csv"))
         .unwrap()
