@@ -195,16 +195,16 @@ fn train_telling(
                 let mut interrupt = None;
                 if let (Some(callable), None) = (&progress, &raised) {
                     let (what, done, total) = stage.said(folds);
-                    match Python::attach(|py| callable.call1(py, (what, done, total))) {
-                        Err(e)
-                            if Python::attach(|py| {
-                                e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py)
-                            }) =>
-                        {
-                            interrupt = Some(e);
-                        }
-                        Err(e) => raised = Some(e),
-                        Ok(_) => {}
+                    // The callable's exception, and whether it is Ctrl-C's.
+                    let failed = Python::attach(|py| {
+                        let e = callable.call1(py, (what, done, total)).err()?;
+                        let ctrl_c = e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py);
+                        Some((e, ctrl_c))
+                    });
+                    match failed {
+                        Some((e, true)) => interrupt = Some(e),
+                        Some((e, false)) => raised = Some(e),
+                        None => {}
                     }
                 } else if checked.elapsed().as_millis() >= 50 {
                     checked = std::time::Instant::now();

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use et_host::recording;
 use et_recon::Method;
 use et_sim::scene::Scene;
@@ -14,6 +14,8 @@ mod frames;
 use frames::{each_frame, frames, table_frames};
 mod method;
 use method::method_and_alpha;
+mod mesh;
+use mesh::mesh_plan;
 
 /// How a command gets its mesh.
 #[derive(Debug, clap::Args)]
@@ -254,72 +256,6 @@ pub(crate) fn forward_cmd(args: &ForwardArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// The mesh plan of a command: `--mesh` (Gmsh `.msh`, or three CSV files separated by commas)
-/// or the scene's sheet meshed to about `--triangles`, refined at `--refine` (and at the
-/// scene's touches when `at_touches`).
-pub(crate) fn mesh_plan(
-    scene: &Scene,
-    args: &MeshArgs,
-    at_touches: bool,
-) -> Result<et_recon::MeshPlan> {
-    use et_recon::MeshPlan;
-    use et_recon::mesh::{Mesh, Refinement};
-    let mut refine = Vec::new();
-    for r in &args.refine {
-        let v: Vec<f64> = r
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .ok()
-            .filter(|v: &Vec<f64>| v.len() == 3)
-            .with_context(|| {
-                format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
-            })?;
-        let region = Refinement {
-            centre: [v[0] * 1e-3, v[1] * 1e-3],
-            radius: v[2] * 1e-3,
-            edge: v[2] * 1e-3 / 6.0,
-        };
-        // A region whose edges are no finer than the mesh's own refines nothing (`0,0,1000`
-        // on a 0.1 m disc was taken without a word).
-        let h = et_recon::mesh::MeshSize::for_count(&scene.sheet.physical, args.triangles).interior;
-        if args.mesh.is_none() && region.edge >= h {
-            bail!(
-                "--refine '{r}': edges of R/6 = {:.3} mm inside, no finer than the mesh's own \
-                 {:.3} mm at --triangles {}: it refines nothing; give R under {:.1} mm, or \
-                 more triangles",
-                region.edge * 1e3,
-                h * 1e3,
-                args.triangles,
-                6.0 * h * 1e3
-            );
-        }
-        refine.push(region);
-    }
-    if at_touches {
-        refine.extend(
-            scene
-                .touches
-                .iter()
-                .map(|t| Refinement::touch(t.position, t.radius)),
-        );
-    }
-    if args.mesh.is_some() && !args.refine.is_empty() {
-        bail!("--refine meshes the scene's sheet; it cannot change an imported --mesh");
-    }
-    Ok(match args.mesh.as_deref() {
-        None => MeshPlan::About {
-            triangles: args.triangles,
-            refine,
-        },
-        Some(f) => MeshPlan::Given(match f.split(',').collect::<Vec<_>>()[..] {
-            [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
-            [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
-            _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
-        }),
-    })
 }
 
 pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()> {
