@@ -166,6 +166,22 @@ pub enum LinkError {
     Encode(WireError),
 }
 
+/// What to check when a board never answers on a port opened at `baud`, for people: the rate
+/// when it is not the firmware's, else the board and the port.
+#[must_use]
+pub fn silent_board_hint(baud: u32) -> String {
+    if baud == et_core::board::BAUD {
+        "is the board powered and flashed with et's firmware, and is this its port? \
+         `et ports` lists the ports"
+            .to_string()
+    } else {
+        format!(
+            "et's firmware talks at {} baud: leave out --baud",
+            et_core::board::BAUD
+        )
+    }
+}
+
 /// The serial ports this machine has (paths), for `et ports` and the viewer's list.
 ///
 /// # Errors

@@ -122,6 +122,19 @@ pub enum LiveError {
         /// What went wrong.
         error: LinkError,
     },
+    /// The board did not answer the first command.
+    #[error(
+        "no answer from the board on {port} at {baud} baud ({error}): {}",
+        crate::link::silent_board_hint(*baud)
+    )]
+    Silent {
+        /// The port.
+        port: String,
+        /// The rate it was opened at.
+        baud: u32,
+        /// The link's timeout.
+        error: LinkError,
+    },
     /// Bytes that are not a model blob.
     #[error("not a valid model blob: {0}")]
     Blob(et_core::model::ModelError),

@@ -1491,6 +1491,37 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             ],
             "--seconds",
         ),
+        // A negative number written as people write it reaches the flag's domain (clap alone
+        // reads "-0.1" as short flags: "unexpected argument '-0'"), and a value is said as
+        // given, not as 300 digits.
+        (
+            vec![
+                "record",
+                "--port",
+                "/dev/null",
+                "--out",
+                out,
+                "--seconds",
+                "-1",
+            ],
+            "-1 is not above 0 and at most",
+        ),
+        (
+            vec![
+                "record",
+                "--port",
+                "/dev/null",
+                "--out",
+                out,
+                "--seconds",
+                "1e300",
+            ],
+            "'1e300' for '--seconds <SECONDS>': 1e300 is not above 0",
+        ),
+        (
+            [&collect[..], &["--drift", "-0.1"]].concat(),
+            "-0.1 is outside 0 to 1",
+        ),
         (
             vec![
                 "record",
@@ -2336,5 +2367,44 @@ fn force_is_refused_where_nothing_is_written() {
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A board that never answers is said with the port and the rate it was asked at, and a rate
+/// other than the firmware's is named as the likely cause.
+#[test]
+fn a_board_that_never_answers_is_said_with_its_rate() {
+    use serialport::{SerialPort as _, TTYPort};
+    let (_master, slave) = TTYPort::pair().unwrap();
+    let port = slave.name().unwrap();
+    let out = std::env::temp_dir().join(format!("et-cli-silent-{}.jsonl", std::process::id()));
+    let out = out.to_str().unwrap();
+    let o = et(&[
+        "record", "--port", &port, "--baud", "9600", "--frames", "1", "--out", out,
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{o:?}");
+    assert!(
+        stderr.contains(&format!("no answer from the board on {port} at 9600 baud"))
+            && stderr.contains(&format!(
+                "et's firmware talks at {} baud: leave out --baud",
+                et_core::board::BAUD
+            )),
+        "{stderr}"
+    );
+    assert!(
+        !std::path::Path::new(out).exists(),
+        "no recording of nothing"
+    );
+    // At the firmware's rate, what else to check; `et stream` says it as `et record` does.
+    let o = et(&["stream", "--json", "--port", &port]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{o:?}");
+    assert!(
+        stderr.contains(&format!(
+            "no answer from the board on {port} at {} baud",
+            et_core::board::BAUD
+        )) && stderr.contains("is this its port?"),
+        "{stderr}"
     );
 }

@@ -237,7 +237,14 @@ impl PortSource {
         };
         let mut link = Link::open(path, baud).map_err(at)?;
         link.request(&Command::Start, Duration::from_secs(2))
-            .map_err(at)?;
+            .map_err(|error| match error {
+                LinkError::Timeout { .. } => LiveError::Silent {
+                    port: path.to_string(),
+                    baud,
+                    error,
+                },
+                error => at(error),
+            })?;
         let keepalive = Keepalive::new(&link, true);
         Ok(Self {
             path: path.to_string(),

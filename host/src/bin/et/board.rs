@@ -72,7 +72,7 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
     crate::output::check_format(&plan.out, "a recording", &["jsonl"])?;
     let mut link = Link::open(&args.port, args.baud)?;
     if !args.no_start {
-        wait_for_board(&mut link)?;
+        wait_for_board(&mut link, args.baud)?;
         link.request(&et_core::wire::Command::Start, Duration::from_secs(1))
             .with_context(|| format!("starting the scan on {}", args.port))?;
     }
@@ -109,8 +109,9 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// Pings until the board answers (one that is still booting loses what it is sent).
-pub(crate) fn wait_for_board(link: &mut et_host::link::Link) -> Result<()> {
+/// Pings until the board answers (one that is still booting loses what it is sent); `baud`
+/// is the rate the port was opened at, named when the board never answers.
+pub(crate) fn wait_for_board(link: &mut et_host::link::Link, baud: u32) -> Result<()> {
     use std::time::Duration;
     let mut last = None;
     for nonce in 0..5 {
@@ -123,9 +124,10 @@ pub(crate) fn wait_for_board(link: &mut et_host::link::Link) -> Result<()> {
         }
     }
     Err(anyhow::anyhow!(
-        "no answer from the board on {}: {}",
+        "no answer from the board on {} at {baud} baud ({}): {}",
         link.path(),
-        last.map_or_else(String::new, |e| e.to_string())
+        last.map_or_else(String::new, |e| e.to_string()),
+        et_host::link::silent_board_hint(baud)
     ))
 }
 
@@ -136,7 +138,7 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     let model = et_core::model::Model::parse(&blob)
         .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e}", args.blob.display()))?;
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;
-    wait_for_board(&mut link)?;
+    wait_for_board(&mut link, args.baud)?;
     let started = Instant::now();
     // Flash erase of a 384 KiB slot takes a few seconds.
     link.upload_model(&blob, Duration::from_secs(2), Duration::from_secs(15))

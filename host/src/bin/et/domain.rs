@@ -8,7 +8,7 @@ pub(crate) fn real(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + C
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else {
-            Err(format!("{v} is outside {lo} to {hi}"))
+            Err(format!("{} is outside {lo} to {hi}", text.trim()))
         }
     }
 }
@@ -20,7 +20,10 @@ pub(crate) fn above(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + 
         if v > lo && v <= hi {
             Ok(v)
         } else {
-            Err(format!("{v} is not above {lo} and at most {hi}"))
+            Err(format!(
+                "{} is not above {lo} and at most {hi}",
+                text.trim()
+            ))
         }
     }
 }
@@ -55,6 +58,6 @@ fn number(text: &str) -> Result<f64, String> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("{v} is not a finite number"))
+        Err(format!("{} is not a finite number", text.trim()))
     }
 }

@@ -292,8 +292,22 @@ enum Command {
 /// The command line, or exit: help and version go to stdout, and a stdout that cannot take
 /// them (a full device) is an error, not a silent success.
 fn parse() -> Cli {
+    use clap::{CommandFactory as _, FromArgMatches as _};
     use std::io::Write as _;
-    match Cli::try_parse() {
+    // A negative number reaches its flag's own domain ("-0.1 is outside 0 to 1"), where clap
+    // would read it as short flags ("unexpected argument '-0' found").
+    let negative = |arg: clap::Arg| {
+        let takes_values = arg.get_action().takes_values();
+        arg.allow_negative_numbers(takes_values)
+    };
+    let mut command = Cli::command()
+        .mut_args(negative)
+        .mut_subcommands(|sub| sub.mut_args(negative));
+    let parsed = command
+        .try_get_matches_from_mut(std::env::args_os())
+        .and_then(|matches| Cli::from_arg_matches(&matches))
+        .map_err(|e| e.format(&mut command));
+    match parsed {
         Ok(cli) => cli,
         Err(e)
             if matches!(
