@@ -47,11 +47,17 @@ pub fn is_length(name: &str) -> bool {
 /// A position column's axis (`x`, `y` or `z`) and the unit its name gives: bare (`x`, the
 /// unit `--unit` says), or with the unit it is written in (`x_mm`, `y_m`, any case), as et's
 /// own files and most loggers name them (`x_mm` was taken as a feature: the target itself
-/// among the features, a cross-validated error of 0.00 mm). `Err` holds a length unit et does
-/// not read (`x_cm`); `None` for any other name (`x_offset` is a feature).
+/// among the features, a cross-validated error of 0.00 mm), or as spreadsheets do (`x (mm)`,
+/// `y [m]`). `Err` holds a length unit et does not read (`x_cm`); `None` for any other name
+/// (`x_offset` is a feature).
 fn position_name(name: &str) -> Option<(char, Result<Option<Unit>, String>)> {
-    let n = name.to_ascii_lowercase();
-    let (axis, unit) = n.split_once('_').unwrap_or((n.as_str(), ""));
+    let n = name.trim().to_ascii_lowercase();
+    let bracketed = (n.strip_suffix(')').and_then(|s| s.split_once('(')))
+        .or_else(|| n.strip_suffix(']').and_then(|s| s.split_once('[')));
+    let (axis, unit) = match bracketed {
+        Some((axis, unit)) => (axis.trim_end(), unit.trim()),
+        None => n.split_once('_').unwrap_or((n.as_str(), "")),
+    };
     let axis = match axis {
         "x" => 'x',
         "y" => 'y',

@@ -1014,13 +1014,19 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         // Beside a targets file, they are left out of the features (not taken as features).
         let imp = Table::import(&f, Some(&t), Unit::Mm).unwrap();
         assert_eq!(imp.feature_names, ["a", "b", "x_offset"]);
-        write("a,b\n1,2\n4,5\n", "x_m,y_m\n0.01,0.02\n0.03,0.04\n");
-        let imp = Table::import(&f, Some(&t), Unit::Mm).unwrap();
-        assert_eq!(imp.unit, Unit::M);
-        assert_eq!(
-            in_mm(&imp.positions),
-            Some(vec![[10.0, 20.0], [30.0, 40.0]])
-        );
+        // As et and loggers name them, and as spreadsheets do (they were "no target").
+        for header in ["x_m,y_m", "x (m),Y [m]"] {
+            write(
+                "a,b\n1,2\n4,5\n",
+                &format!("{header}\n0.01,0.02\n0.03,0.04\n"),
+            );
+            let imp = Table::import(&f, Some(&t), Unit::Mm).unwrap();
+            assert_eq!(imp.unit, Unit::M, "{header}");
+            assert_eq!(
+                in_mm(&imp.positions),
+                Some(vec![[10.0, 20.0], [30.0, 40.0]])
+            );
+        }
         // An et dataset's CSV as any sensor's table: its visits are the groups and its
         // pressure a target (both were features).
         std::fs::write(
@@ -1045,6 +1051,10 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 "x_cm: positions in cm; et reads them in mm or m",
             ),
             ("x_mm,y_m\n1,2\n3,4\n", "x_mm and y_m name two units"),
+            (
+                "x (cm),y (cm)\n1,2\n3,4\n",
+                "x (cm): positions in cm; et reads them in mm or m",
+            ),
         ] {
             write("a,b\n1,2\n4,5\n", targets);
             let e = Table::import(&f, Some(&t), Unit::Mm)
