@@ -662,7 +662,7 @@ class Reconstructor:
     lambda), "corner", "gcv", "discrepancy", "lcurve", "quasi-optimality", or a number. ``pixels``: pixels across the
     image. ``threshold``: the share of the peak a region must reach (default: the protocol's).
     ``s``: the NOSER exponent; ``noise_figure`` and ``radius_m``: GREIT's. Set-up runs without
-    the GIL.
+    the GIL and takes Ctrl-C at once.
     """
 
     def __init__(

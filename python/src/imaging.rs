@@ -161,7 +161,7 @@ impl Reconstructor {
             threshold,
             ..Spec::new(sheet, schedule)
         };
-        let inner = py.detach(|| spec.set_up()).map_err(|e| refused(&e))?;
+        let inner = crate::interruptible(py, move || spec.set_up())?.map_err(|e| refused(&e))?;
         Ok(Self { inner })
     }
 
@@ -285,18 +285,19 @@ impl Reconstructor {
             py.detach(|| {
                 let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
                 let mut out = pixels.chunks_mut((w * h).max(1));
-                // In runs: each run's images are held until copied out.
+                // In runs: each run's images are held until copied out; Ctrl-C between.
                 for (r, run) in frames.chunks(FRAMES_AT_ONCE).enumerate() {
-                    let imaged = inner.image_frames(run, false).map_err(|e| in_run(e, r))?;
+                    crate::interrupted()?;
+                    let imaged =
+                        (inner.image_frames(run, false)).map_err(|e| refused(&in_run(e, r)))?;
                     for (m, to) in imaged.into_iter().zip(&mut out) {
                         grid.top_first_onto(&m.pixels.pixels, 1.0 / sigma0, to);
                         dv.extend(m.pixels.dv);
                         alpha.push(m.pixels.alpha);
                     }
                 }
-                Ok::<(), et_recon::reconstructor::ImagingError>(())
-            })
-            .map_err(|e| refused(&e))?;
+                PyResult::Ok(())
+            })?;
         }
         Ok((stack, array2(py, dv, n, k)?, PyArray1::from_vec(py, alpha)))
     }
@@ -312,20 +313,20 @@ impl Reconstructor {
         let (frames, _, _) = frames_f32(&frames)?;
         let inner = &mut self.inner;
         let sigma0 = inner.imager().sigma0;
-        let imaged = py
-            .detach(|| {
-                let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
-                let mut imaged = Vec::with_capacity(frames.len());
-                for (r, run) in frames.chunks(FRAMES_AT_ONCE).enumerate() {
-                    // Each frame's objects kept, its pixels dropped.
-                    let found = (inner.image_frames(run, true).map_err(|e| in_run(e, r))?)
-                        .into_iter()
-                        .map(|m| m.found);
-                    imaged.extend(found);
-                }
-                Ok::<_, et_recon::reconstructor::ImagingError>(imaged)
-            })
-            .map_err(|e| refused(&e))?;
+        let imaged = py.detach(|| {
+            let frames: Vec<&[f32]> = frames.iter().map(Vec::as_slice).collect();
+            let mut imaged = Vec::with_capacity(frames.len());
+            for (r, run) in frames.chunks(FRAMES_AT_ONCE).enumerate() {
+                crate::interrupted()?;
+                // Each frame's objects kept, its pixels dropped.
+                let found = (inner.image_frames(run, true))
+                    .map_err(|e| refused(&in_run(e, r)))?
+                    .into_iter()
+                    .map(|m| m.found);
+                imaged.extend(found);
+            }
+            PyResult::Ok(imaged)
+        })?;
         let found: Vec<FoundSummary> = imaged
             .iter()
             .map(|found| {

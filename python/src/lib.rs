@@ -42,6 +42,52 @@ pub(crate) fn said(e: &dyn std::error::Error) -> String {
     message
 }
 
+/// Raises `KeyboardInterrupt` when Python was asked to stop (Ctrl-C, Jupyter's interrupt)
+/// since it last looked: what work done without the GIL checks between its steps, taking
+/// the GIL back for the check.
+pub(crate) fn interrupted() -> PyResult<()> {
+    Python::attach(|py| py.check_signals())
+}
+
+/// `work`'s result, made on a thread of its own while this one takes Ctrl-C: one long call
+/// of et's (a set-up) has no steps to check between, so the caller returns at the interrupt
+/// and the work ends on its own in the background, its result dropped.
+///
+/// # Errors
+/// `KeyboardInterrupt` at an interrupt; an [`EtError`] when the thread cannot be started or
+/// `work` panicked (a bug).
+pub(crate) fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    use std::sync::mpsc::RecvTimeoutError;
+    let (tx, mut rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("et set-up".into())
+        // The stack of the Python thread it stands in for.
+        .stack_size(8 << 20)
+        .spawn(move || {
+            // (A receiver gone means the caller was interrupted: nothing to tell.)
+            let _ = tx.send(work());
+        })
+        .map_err(|e| usage(format!("starting a thread for the work: {e}")))?;
+    loop {
+        // (The receiver is moved into the wait and back: it is not `Sync`.)
+        let waited;
+        (rx, waited) = py.detach(move || {
+            let waited = rx.recv_timeout(std::time::Duration::from_millis(50));
+            (rx, waited)
+        });
+        match waited {
+            Ok(done) => return Ok(done),
+            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(usage("the work ended without a result (a bug of et's)"));
+            }
+        }
+    }
+}
+
 /// A usage error of the Python API (a wrong shape, an unknown name), raised as [`EtError`].
 pub(crate) fn usage(message: impl Into<String>) -> PyErr {
     EtError::new_err(message.into())

@@ -335,3 +335,39 @@ def test_set_up_lets_other_python_threads_run():
     worker.join()
     # Held, the GIL would stall this loop for the whole set-up.
     assert longest < 0.5 * took[0], (longest, took[0])
+
+
+def test_ctrl_c_ends_a_set_up_or_a_batch_at_once(scene, recording):
+    import _thread
+    import threading
+    import time
+
+    def interrupted_at_a_tenth(work):
+        """How long `work` ran when Ctrl-C (SIGINT, as a terminal or Jupyter's interrupt
+        sends it) came a tenth of the way into it, against its whole time."""
+        started = time.monotonic()
+        work()
+        whole = time.monotonic() - started
+        timer = threading.Timer(whole / 10, _thread.interrupt_main)
+        timer.start()
+        started = time.monotonic()
+        with pytest.raises(KeyboardInterrupt):
+            work()
+        timer.join()
+        return time.monotonic() - started, whole
+
+    # A set-up is one long call of et's: it ran to its end with the signal pending.
+    disc = et.disc(radius_m=0.1, electrodes=32)
+    took, whole = interrupted_at_a_tenth(
+        lambda: et.Reconstructor(disc, et.protocol("adjacent", 32), triangles=TRIANGLES,
+                                 method="greit"))
+    assert took < whole / 2, (took, whole)
+    # A batch takes it between its runs of frames.
+    sheet, protocol = et.scene(scene)
+    r = et.Reconstructor(sheet, protocol, triangles=TRIANGLES)
+    v = et.read_recording(recording)["voltages"]
+    frames = np.tile(v[20:], (600 // len(v[20:]) + 1, 1))
+    took, whole = interrupted_at_a_tenth(lambda: r.images(frames, v[:20]))
+    assert took < whole / 2, (took, whole)
+    # What was set up and the reconstructor interrupted still work.
+    assert len(r.images(v[20:], v[:20])) == len(v) - 20
