@@ -155,6 +155,31 @@ pub enum MeshError {
         /// The first listing.
         first: usize,
     },
+    /// Two triangles that cover the same corner of a node: they overlap.
+    #[error(
+        "triangles {} and {} overlap at node {node} (a triangle laid over others, or a fold): \
+         the finite elements would add their conductances where they overlap",
+        triangles[0],
+        triangles[1]
+    )]
+    Overlapping {
+        /// The two triangles, in file order.
+        triangles: [usize; 2],
+        /// A node both have, where their corners overlap.
+        node: usize,
+    },
+    /// A piece of the mesh that no electrode reaches.
+    #[error(
+        "triangle {triangle} is in a piece of the mesh that no electrode reaches ({triangles} \
+         of its triangles): no current flows there, and the finite elements' system is \
+         singular (join it to the sheet, or leave it out)"
+    )]
+    Floating {
+        /// The piece's first triangle.
+        triangle: usize,
+        /// Its triangles.
+        triangles: usize,
+    },
     /// A node in no triangle.
     #[error("node {node} is in no triangle (an unused node leaves the system singular)")]
     UnusedNode {

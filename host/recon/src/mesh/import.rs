@@ -21,9 +21,13 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use super::{Mesh, MeshError, dist};
+use super::{Mesh, MeshError};
 
+mod checks;
 mod fault;
+use checks::{
+    centre_node, check_connected, check_topology, check_unshared, orient, point_electrodes,
+};
 pub use fault::{FileFault, ReadError};
 
 fn bad(path: &Path, line: usize, fault: FileFault) -> MeshError {
@@ -222,7 +226,8 @@ impl Mesh {
                 el.clear();
             }
         }
-        check_topology(n, &triangles, &electrodes, &point)?;
+        check_topology(&nodes, &triangles, &electrodes, &point)?;
+        check_connected(n, &triangles, &electrodes, &point)?;
         check_unshared(n, &electrodes, &point)?;
         let centre_nodes = electrodes
             .iter()
@@ -236,180 +241,6 @@ impl Mesh {
             centre_nodes,
         })
     }
-}
-
-/// Node `i` of `nodes` (m), or NaN past their end (which the checks refuse as degenerate).
-fn node(nodes: &[[f64; 2]], i: usize) -> [f64; 2] {
-    nodes.get(i).copied().unwrap_or([f64::NAN; 2])
-}
-
-/// Every triangle turned counter-clockwise; a degenerate one (area below 1e-12 of the mean, or
-/// NaN) refused.
-fn orient(nodes: &[[f64; 2]], triangles: &mut [[usize; 3]]) -> Result<(), MeshError> {
-    let area2 = |t: &[usize; 3]| {
-        let [a, b, c] = t.map(|i| node(nodes, i));
-        (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
-    };
-    let mean = triangles.iter().map(|t| area2(t).abs()).sum::<f64>() / triangles.len() as f64;
-    for (i, t) in triangles.iter_mut().enumerate() {
-        let a = area2(t);
-        if a.is_nan() || a.abs() <= 1e-12 * mean {
-            return Err(MeshError::Degenerate {
-                triangle: i,
-                area: 0.5 * a.abs(),
-            });
-        }
-        if a < 0.0 {
-            t.swap(1, 2);
-        }
-    }
-    Ok(())
-}
-
-/// Each electrode's node when it is a point electrode (only `[i, i]` entries, all the same
-/// node); an electrode that mixes a single node with edges refused.
-fn point_electrodes(electrodes: &[Vec<[usize; 2]>]) -> Result<Vec<Option<usize>>, MeshError> {
-    let point: Vec<Option<usize>> = electrodes
-        .iter()
-        .map(|el| {
-            let first = el.first()?[0];
-            el.iter()
-                .all(|&[a, b]| a == first && b == first)
-                .then_some(first)
-        })
-        .collect();
-    let mixed = electrodes
-        .iter()
-        .zip(&point)
-        .position(|(el, p)| p.is_none() && el.iter().any(|&[a, b]| a == b));
-    if let Some(l) = mixed {
-        return Err(MeshError::MixedElectrode { electrode: l });
-    }
-    Ok(point)
-}
-
-/// Each node under one electrode at most: two that share a node are shorted together.
-fn check_unshared(
-    n: usize,
-    electrodes: &[Vec<[usize; 2]>],
-    point: &[Option<usize>],
-) -> Result<(), MeshError> {
-    let mut owner = vec![None; n];
-    for (l, (edges, p)) in electrodes.iter().zip(point).enumerate() {
-        let under: Vec<usize> = match p {
-            Some(i) => vec![*i],
-            None => edges.iter().flatten().copied().collect(),
-        };
-        for i in under {
-            match owner.get_mut(i) {
-                Some(Some(other)) if *other != l => {
-                    return Err(MeshError::SharedNode {
-                        electrodes: [*other, l],
-                        node: i,
-                    });
-                }
-                Some(o) => *o = Some(l),
-                None => {}
-            }
-        }
-    }
-    Ok(())
-}
-
-/// An electrode's centre node: of the nodes of its `edges`, the one nearest their mean.
-fn centre_node(nodes: &[[f64; 2]], edges: &[[usize; 2]]) -> usize {
-    let mut v: Vec<usize> = edges.iter().flatten().copied().collect();
-    v.sort_unstable();
-    v.dedup();
-    let k = v.len() as f64;
-    let c = v.iter().fold([0.0, 0.0], |[sx, sy], &i| {
-        let [x, y] = node(nodes, i);
-        [sx + x / k, sy + y / k]
-    });
-    v.iter()
-        .copied()
-        .min_by(|&a, &b| dist(node(nodes, a), c).total_cmp(&dist(node(nodes, b), c)))
-        .unwrap_or(0)
-}
-
-/// What the finite elements need of a mesh's topology, each with its cause named: every
-/// triangle once (a repeated one doubles its conductance), every node in a triangle (an unused
-/// node makes the system singular), and every electrode edge an edge of exactly one triangle,
-/// the boundary (an edge inside the mesh, or nodes out of order along an electrode, changed
-/// the voltages by up to 84 % without a word).
-fn check_topology(
-    n: usize,
-    triangles: &[[usize; 3]],
-    electrodes: &[Vec<[usize; 2]>],
-    point: &[Option<usize>],
-) -> Result<(), MeshError> {
-    let mut seen: HashMap<[usize; 3], usize> = HashMap::with_capacity(triangles.len());
-    let mut edges: HashMap<[usize; 2], u32> = HashMap::with_capacity(2 * triangles.len());
-    let mut used = vec![false; n];
-    let edge = |a: usize, b: usize| [a.min(b), a.max(b)];
-    for (i, t) in triangles.iter().enumerate() {
-        let mut key = *t;
-        key.sort_unstable();
-        if let Some(j) = seen.insert(key, i) {
-            return Err(MeshError::RepeatedTriangle {
-                triangle: i,
-                first: j,
-            });
-        }
-        let [a, b, c] = *t;
-        for v in [a, b, c] {
-            if let Some(u) = used.get_mut(v) {
-                *u = true;
-            }
-        }
-        for e in [edge(a, b), edge(b, c), edge(c, a)] {
-            *edges.entry(e).or_default() += 1;
-        }
-    }
-    if let Some(v) = used.iter().position(|&u| !u) {
-        return Err(MeshError::UnusedNode { node: v });
-    }
-    let mut boundary = vec![false; n];
-    for (e, &count) in &edges {
-        if count == 1 {
-            for &v in e {
-                if let Some(b) = boundary.get_mut(v) {
-                    *b = true;
-                }
-            }
-        }
-    }
-    let on_boundary = |v: usize| boundary.get(v).copied().unwrap_or(false);
-    for (l, p) in point.iter().enumerate() {
-        if let Some(v) = *p
-            && !on_boundary(v)
-        {
-            return Err(MeshError::InteriorNode {
-                electrode: l,
-                node: v,
-            });
-        }
-    }
-    for (l, el) in electrodes.iter().enumerate() {
-        for &[a, b] in el {
-            match edges.get(&edge(a, b)) {
-                Some(1) => {}
-                Some(_) => {
-                    return Err(MeshError::InteriorEdge {
-                        electrode: l,
-                        edge: [a, b],
-                    });
-                }
-                None => {
-                    return Err(MeshError::NotAnEdge {
-                        electrode: l,
-                        nodes: [a, b],
-                    });
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The number on line index `i` of a Gmsh file's `lines`, believed only as far as the file

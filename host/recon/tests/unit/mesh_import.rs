@@ -335,7 +335,48 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     let good = vec![vec![[0, 1]], vec![[2, 3]]];
     Mesh::from_parts(square.clone(), two.clone(), good.clone()).unwrap();
     type Parts = (Vec<[f64; 2]>, Vec<[usize; 3]>, Vec<Vec<[usize; 2]>>);
-    let cases: [(Parts, &str); 4] = [
+    // A sheet with a hole (a square ring) is a mesh.
+    let ring = vec![
+        [0.0, 0.0],
+        [3.0, 0.0],
+        [3.0, 3.0],
+        [0.0, 3.0],
+        [1.0, 1.0],
+        [2.0, 1.0],
+        [2.0, 2.0],
+        [1.0, 2.0],
+    ];
+    let ring_triangles = vec![
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
+    ];
+    Mesh::from_parts(ring, ring_triangles, good.clone()).unwrap();
+    let cases: [(Parts, &str); 6] = [
+        // A triangle laid over the two (it shares their edges at node 0), and a piece no
+        // electrode reaches: the first added conductance, the second failed as "conductivities
+        // that span too many powers of ten".
+        (
+            (
+                square.clone(),
+                vec![[0, 1, 2], [0, 2, 3], [0, 1, 3]],
+                good.clone(),
+            ),
+            "triangles 0 and 2 overlap at node 0",
+        ),
+        (
+            (
+                [square.clone(), vec![[3.0, 3.0], [4.0, 3.0], [3.0, 4.0]]].concat(),
+                vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]],
+                good.clone(),
+            ),
+            "triangle 2 is in a piece of the mesh that no electrode reaches (1 of its triangles)",
+        ),
         (
             (
                 square.clone(),
