@@ -336,7 +336,8 @@ fn gmsh_elements(
                     by_tag.entry(tag).or_default().push([a, a]);
                 }
             }
-            _ => {} // points, quadrangles and higher orders are not used
+            // (Types 1, 2 and 15 of other node counts were refused above.)
+            (kind, _) => return Err(bad(path, ln + 1, FileFault::ElementKind { kind })),
         }
     }
     Ok((triangles, by_tag))

@@ -270,6 +270,14 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
         ("1 2 -1 1 2 3", "tags"),
         ("1 2 2 1 1 1 2 3 4", "has 3 nodes, this line gives 4"),
         ("1 1 2 1 1 1", "has 2 nodes, this line gives 1"),
+        // Elements of other types were dropped: a quadrangle left a hole, second-order
+        // triangles "no triangles".
+        (
+            "1 3 2 1 1 1 2 4 3",
+            "type 3, a quadrangle: mesh with triangles",
+        ),
+        ("1 9 2 1 1 1 2 3 1 2 3", "a second- or higher-order element"),
+        ("1 4 2 1 1 1 2 3 4", "a 3-D element: mesh the sheet in 2-D"),
     ] {
         let p = dir.join("el.msh");
         std::fs::write(

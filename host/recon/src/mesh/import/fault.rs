@@ -68,6 +68,17 @@ pub enum FileFault {
         /// The numbers after them.
         numbers: usize,
     },
+    /// An element of a type et does not mesh with (a quadrangle, a second-order or a 3-D
+    /// element), which was dropped, leaving a hole where it was.
+    #[error(
+        "an element of Gmsh type {kind}, {}: et reads 3-node triangles (type 2), lines (1) \
+         and points (15)",
+        unread_element(*kind)
+    )]
+    ElementKind {
+        /// Its Gmsh type.
+        kind: i64,
+    },
     /// An element with the wrong number of nodes for its type.
     #[error("an element of type {kind} has {want} nodes, this line gives {got}")]
     ElementNodes {
@@ -95,5 +106,17 @@ pub struct ReadError(pub(super) std::sync::Arc<std::io::Error>);
 impl PartialEq for ReadError {
     fn eq(&self, other: &Self) -> bool {
         self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
+    }
+}
+
+/// What a Gmsh 2.2 element type et does not read is, and how to write the mesh instead.
+fn unread_element(kind: i64) -> &'static str {
+    match kind {
+        3 | 10 | 16 => "a quadrangle: mesh with triangles (leave out Recombine)",
+        8 | 9 | 20..=28 => {
+            "a second- or higher-order element: save first-order elements (gmsh -order 1)"
+        }
+        4..=7 | 11..=14 | 17..=19 | 29.. => "a 3-D element: mesh the sheet in 2-D (gmsh -2)",
+        _ => "a type Gmsh 2.2 does not define",
     }
 }
