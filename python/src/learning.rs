@@ -364,6 +364,17 @@ impl Model {
     ) -> PyResult<Predicted<'py>> {
         let x = features(&x, "X")?;
         let v0 = v0.as_ref().map(|v0| crate::slice(v0, "v0")).transpose()?;
+        if let Some(note) = self
+            .inner
+            .as_table()
+            .and_then(|t| t.features_scale_note(&x))
+        {
+            // Raised at the user's call (predict or predict_positions, `_predicted`, then
+            // `_Serialised`'s call).
+            let category = py.import("et_touch")?.getattr("EtWarning")?;
+            let note = std::ffi::CString::new(note).map_err(|e| refused(&e))?;
+            PyErr::warn(py, &category, &note, 4)?;
+        }
         let p = match self.inner.as_table() {
             Some(table) => py
                 .detach(|| {

@@ -231,3 +231,20 @@ def test_ctrl_c_ends_a_training_at_its_next_step(progress):
         et.train(X, positions, kind="mlp", progress=progress)
     timer.join()
     assert time.monotonic() - started < whole / 2
+
+
+def test_features_in_another_unit_than_the_trainings_are_warned_of():
+    rng = np.random.default_rng(0)
+    positions = rng.uniform(-0.05, 0.05, (200, 2))
+    X = np.hstack([positions, positions**2, rng.normal(0, 0.01, (200, 4))]) + 0.3
+    model = et.train(X, positions, kind="ridge")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.predict(X)
+        model.evaluate(X, positions)
+    # In mV where V was trained: predicted wrongly without a word.
+    with pytest.warns(et.EtWarning, match="1000 times those the model was trained on") as said:
+        model.predict(X * 1000)
+    assert said[0].filename == __file__, "said at the caller's line"
+    with pytest.warns(et.EtWarning, match="1/1000 of those"):
+        model.evaluate(X / 1000, positions)

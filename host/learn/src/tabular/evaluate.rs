@@ -32,6 +32,10 @@ pub struct Evaluation {
     /// rows count as missed in `accuracy`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub unknown_labels: Vec<String>,
+    /// What to say when the rows' features are far larger or smaller than the training's
+    /// (another unit or gain; [`TableModel::features_scale_note`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale_note: Option<String>,
     /// Per group (session) of the rows, when they have groups: its rows' errors.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_group: Option<Vec<GroupScore>>,
@@ -163,6 +167,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             .collect()
     });
     Ok(Evaluation {
+        scale_note: model.features_scale_note(&table.x),
         unknown_labels: unknown_labels(model, table),
         per_group,
         observations: table.rows(),

@@ -541,6 +541,8 @@ impl TableModel {
 mod fit;
 mod predict;
 mod ready;
+mod scale;
+pub use scale::FEATURE_SCALE_SAID;
 
 pub use ready::TablesError;
 

@@ -1344,3 +1344,36 @@ fn positions_in_another_unit_are_noted() {
         "{note}"
     );
 }
+
+/// Rows in another unit or at another gain than the training's are predicted without an
+/// error, and wrongly: said beside the scores; a session's drift is not.
+#[test]
+fn features_in_another_unit_are_noted() {
+    let train_rows = STANDIN.select("0..240".parse().unwrap()).unwrap();
+    let held_out = STANDIN.select("240..360".parse().unwrap()).unwrap();
+    let model = train(&train_rows, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
+    let times = |x: &DMatrix<f64>, gain: &dyn Fn(usize) -> f64| {
+        DMatrix::from_fn(x.nrows(), x.ncols(), |r, c| x[(r, c)] * gain(c))
+    };
+    let scale = model.features_scale(&held_out.x).unwrap();
+    assert!((0.8..1.25).contains(&scale), "{scale}");
+    assert_eq!(evaluate(&model, &held_out).unwrap().scale_note, None);
+    // Each channel's gain drifted by up to 40 % either way: a session's, not a unit's.
+    let drifted = times(&held_out.x, &|c| [0.6, 1.4, 0.8, 1.2][c % 4]);
+    assert_eq!(model.features_scale_note(&drifted), None);
+    for (gain, said) in [(1e3, " times those"), (1e-3, "of those")] {
+        let rows = Table {
+            x: times(&held_out.x, &|_| gain),
+            ..held_out.clone()
+        };
+        // The root mean squares scale with the rows.
+        let scaled = model.features_scale(&rows.x).unwrap() / (gain * scale);
+        assert!((scaled - 1.0).abs() < 1e-12, "{scaled}");
+        let e = evaluate(&model, &rows).unwrap();
+        let note = e.scale_note.unwrap_or_default();
+        assert!(
+            note.contains(said) && note.contains("another unit"),
+            "{note}"
+        );
+    }
+}

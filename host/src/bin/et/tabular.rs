@@ -400,6 +400,9 @@ pub(crate) fn eval(
             std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
+    if let Some(note) = &e.scale_note {
+        say!("note: {note}");
+    }
     if !e.unknown_labels.is_empty() {
         let shown: Vec<&str> = e
             .unknown_labels
