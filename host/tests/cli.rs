@@ -1522,6 +1522,12 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             [&collect[..], &["--drift", "-0.1"]].concat(),
             "-0.1 is outside 0 to 1",
         ),
+        // A row range from the end, as Python indexes: said as et counts rows (it was
+        // "unexpected argument '-5' found").
+        (
+            vec!["train", "--features", out, "--out", out, "--rows", "-5..10"],
+            "'-5': rows count from 0 at the first row (not from the end)",
+        ),
         (
             vec![
                 "record",

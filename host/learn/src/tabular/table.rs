@@ -26,6 +26,10 @@ impl std::str::FromStr for RowRange {
         let num = |v: &str, default: Option<usize>| -> Result<Option<usize>, String> {
             match v.trim() {
                 "" => Ok(default),
+                v if v.starts_with('-') => Err(format!(
+                    "'{s}': '{v}': rows count from 0 at the first row (not from the end): \
+                     give A..B of those numbers"
+                )),
                 v => v
                     .parse::<usize>()
                     .map(Some)

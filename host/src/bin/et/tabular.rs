@@ -31,7 +31,12 @@ pub(crate) struct TableArgs {
     /// Only rows A..B (0-based, B excluded; A.. or ..B), e.g. the first 80 % to train and
     /// the rest to test: a chronological split (real presses drift: a random split
     /// flatters a model).
-    #[arg(long, value_name = "A..B", requires = "features")]
+    #[arg(
+        long,
+        value_name = "A..B",
+        allow_hyphen_values = true,
+        requires = "features"
+    )]
     rows: Option<RowRange>,
     /// Which session (visit, subject) each row belongs to: a CSV with one column and a row per
     /// row of --features (any text; a header row optional), or the name of a column of
