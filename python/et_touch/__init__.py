@@ -72,7 +72,7 @@ __all__ = [
     "read_frames",
 ]
 
-PathLike = Union[str, "os.PathLike[str]"]
+PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
 
 
 def _f64(a: Any, ndim: int, what: str) -> np.ndarray:
@@ -451,7 +451,7 @@ def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protoc
 def scene(path: PathLike) -> Tuple[Sheet, Protocol]:
     """A scene file's sheet and protocol (the TOML files `et sim` and `et reconstruct` take)."""
     sheet_json, name, electrodes, current_a, rows, currents = _native.scene_parts(
-        os.fspath(path)
+        os.fsdecode(path)
     )
     return Sheet(json.loads(sheet_json)), Protocol(electrodes, rows, currents, name)
 
@@ -990,7 +990,7 @@ class Model:
         return json.loads(self._native.file_json())
 
     def _predicted(self, X: Any, v0: Any) -> Tuple[Any, Any, Any, Any]:
-        if isinstance(X, (str, os.PathLike)):
+        if isinstance(X, (str, bytes, os.PathLike)):
             X = read_dataset(X)
         if isinstance(X, Dataset):
             return self._native.predict_dataset(X)
@@ -1024,7 +1024,7 @@ class Model:
         positions ``y`` (m) for a table model (``mean_error_mm``, ``median_error_mm``,
         ``p90_error_mm``, ``accuracy``, ...), or on an et dataset for a board model (pass it as
         ``X``)."""
-        if isinstance(X, (str, os.PathLike)):
+        if isinstance(X, (str, bytes, os.PathLike)):
             X = read_dataset(X)
         if isinstance(X, Dataset):
             return json.loads(self._native.evaluate_dataset(X))
@@ -1048,12 +1048,12 @@ class Model:
 
     def save(self, path: PathLike) -> None:
         """Writes et's model file (JSON): `et eval`, `et stream` and `et export` read it."""
-        self._native.save(os.fspath(path))
+        self._native.save(os.fsdecode(path))
 
     @classmethod
     def load(cls, path: PathLike) -> "Model":
         """Reads et's model file (a board model or a table's)."""
-        return cls(_native.Model.load(os.fspath(path)))
+        return cls(_native.Model.load(os.fsdecode(path)))
 
     def export_blob(self, precision: str = "f16") -> bytes:
         """The board's model blob (`et export`; `et upload` sends it): "f16" or "f32" tables."""
@@ -1113,7 +1113,7 @@ def train(
     if isinstance(cv, (int, np.integer)) and not isinstance(cv, (bool, np.bool_)):
         raise EtError(f"cv = {cv!r}: 'shuffled' or 'blocks'; the number of folds is folds={cv}")
     cv = _text(cv, "cv", "'shuffled' or 'blocks'")
-    if isinstance(X, (str, os.PathLike)):
+    if isinstance(X, (str, bytes, os.PathLike)):
         X = read_dataset(X)
     if isinstance(X, Dataset):
         if y is not None:
@@ -1180,7 +1180,7 @@ def read_dataset(path: PathLike) -> Dataset:
     """Reads an et dataset (`et collect`'s .csv or .npz): ``x`` (n x p, V), ``y`` (class of
     each row), ``positions_m`` (n x 2), ``pressure_pa``, ``centres_m`` (C x 2), ``electrodes_m``,
     ``visit``, ``feature_index``, ``untouched`` (each visit's untouched frame), ``config_json``."""
-    return Dataset.load(os.fspath(path))
+    return Dataset.load(os.fsdecode(path))
 
 
 def read_recording(path: PathLike) -> Dict[str, Any]:
@@ -1188,7 +1188,7 @@ def read_recording(path: PathLike) -> Dict[str, Any]:
     protocol, K, columns, units), ``voltages`` (n x K, V; NaN where the board sent NaN or
     infinity), ``seq``, ``t_us``, ``flags`` (n each), ``touches`` (per frame, the truth of a
     simulated frame or None) and ``truncated_tail`` (a cut last line was skipped)."""
-    header, volts, seq, t_us, flags, touches, truncated = _native.read_recording(os.fspath(path))
+    header, volts, seq, t_us, flags, touches, truncated = _native.read_recording(os.fsdecode(path))
     return {
         "header": json.loads(header), "voltages": volts, "seq": seq, "t_us": t_us,
         "flags": flags, "touches": json.loads(touches), "truncated_tail": truncated,
@@ -1200,5 +1200,5 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
     frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a matrix of frames as
     columns is read transposed), or an et recording's voltages, as `et reconstruct --frames`
     reads them."""
-    frames, _ = _native.read_frames(os.fspath(path), _count(k, "k", 1))
+    frames, _ = _native.read_frames(os.fsdecode(path), _count(k, "k", 1))
     return frames

@@ -2,6 +2,7 @@
 
 import importlib.util
 import json
+import os
 
 import numpy as np
 import pytest
@@ -35,6 +36,11 @@ def test_a_recording_reads_as_the_standard_library_reads_it(recording):
     np.testing.assert_array_equal(et.read_frames(recording, header["K"]), r["voltages"])
     with pytest.raises(et.EtError, match="an et recording of K = 208 values a frame, not 32"):
         et.read_frames(recording, 32)
+    # A path as bytes (os.listdir(b".") gives them) is a path, as Python's open() takes it
+    # (it raised "'bytes' object is not an instance of 'str'").
+    path = os.fsencode(recording)
+    np.testing.assert_array_equal(et.read_frames(path, header["K"]), r["voltages"])
+    np.testing.assert_array_equal(et.read_recording(path)["voltages"], r["voltages"])
 
 
 def test_a_cut_recording_keeps_its_whole_frames(recording, work):
