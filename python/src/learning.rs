@@ -364,11 +364,12 @@ impl Model {
     ) -> PyResult<Predicted<'py>> {
         let x = features(&x, "X")?;
         let v0 = v0.as_ref().map(|v0| crate::slice(v0, "v0")).transpose()?;
-        if let Some(note) = self
-            .inner
-            .as_table()
-            .and_then(|t| t.features_scale_note(&x))
-        {
+        let note = match (self.inner.as_table(), self.inner.as_board()) {
+            (Some(t), _) => t.features_scale_note(&x),
+            (None, Some(b)) => b.frames_scale_note(&x, v0.unwrap_or_default()),
+            (None, None) => None,
+        };
+        if let Some(note) = note {
             // Raised at the user's call (predict or predict_positions, `_predicted`, then
             // `_Serialised`'s call).
             let category = py.import("et_touch")?.getattr("EtWarning")?;

@@ -52,7 +52,13 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     frames[:, data.feature_index] = data.x[visit]
     v0 = np.zeros(k)
     v0[data.feature_index] = data.untouched[0]
-    np.testing.assert_array_equal(model.predict(frames, v0=v0), by_dataset[visit])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_array_equal(model.predict(frames, v0=v0), by_dataset[visit])
+    # Frames in mV where V was trained were classified without a word, and wrongly.
+    with pytest.warns(et.EtWarning, match="times those the model was trained on") as said:
+        model.predict(frames * 1000, v0=v0 * 1000)
+    assert said[0].filename == __file__
     positions = model.predict_positions(data)
     np.testing.assert_allclose(positions, data.centres_m[by_dataset], atol=1e-12)
     with pytest.raises(et.EtError, match="untouched frame"):

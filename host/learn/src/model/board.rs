@@ -134,6 +134,25 @@ impl Board {
             .collect()
     }
 
+    /// What to say when the features of `frames` (n x K, V; minus `v0` when the model is
+    /// referenced) are past [`FEATURE_SCALE_SAID`](crate::tabular::FEATURE_SCALE_SAID) times
+    /// the training's either way (frames in mV where V was trained, which are classified
+    /// without an error, and wrongly); None when they are alike or do not fit the model.
+    #[must_use]
+    pub fn frames_scale_note(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Option<String> {
+        let file = &self.file;
+        let rows: Vec<Vec<f64>> = (frames.row_iter())
+            .filter_map(|r| file.features(&r.iter().copied().collect::<Vec<f64>>(), v0))
+            .collect();
+        let x = DMatrix::from_row_iterator(
+            rows.len(),
+            file.feature_mean.len(),
+            rows.iter().flatten().copied(),
+        );
+        let s = crate::tabular::features_scale(&file.feature_mean, &file.feature_scale, &x)?;
+        crate::tabular::features_scale_note(s)
+    }
+
     /// The class of each observation of `data` (raw frames as collected: the model's own
     /// features are taken from it, minus each visit's untouched frame if the model is
     /// referenced).

@@ -542,7 +542,7 @@ mod fit;
 mod predict;
 mod ready;
 mod scale;
-pub use scale::FEATURE_SCALE_SAID;
+pub use scale::{FEATURE_SCALE_SAID, features_scale, features_scale_note};
 
 pub use ready::TablesError;
 

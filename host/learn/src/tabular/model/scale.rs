@@ -11,51 +11,66 @@ pub const FEATURE_SCALE_SAID: f64 = 10.0;
 
 impl TableModel {
     /// How many times the training's features those of `x` are (n x p, in the model's column
-    /// order): over the columns, the median of each one's root mean square against the
-    /// training's (from its mean and standard deviation). None when there is nothing to
-    /// compare: no rows, features referenced to frames before each press (relative changes,
-    /// which carry no unit) or standardised by each group's own statistics, or columns all of
-    /// zeros.
+    /// order): [`features_scale`] against its standardisation. None when there is nothing
+    /// to compare: features referenced to frames before each press (relative changes, which
+    /// carry no unit) or standardised by each group's own statistics.
     #[must_use]
     pub fn features_scale(&self, x: &DMatrix<f64>) -> Option<f64> {
-        if x.nrows() == 0 || self.per_group || self.reference.is_some() {
+        if self.per_group || self.reference.is_some() {
             return None;
         }
-        let n = x.nrows() as f64;
-        let mut ratios: Vec<f64> = (x.column_iter().zip(&self.feature_mean))
-            .zip(&self.feature_scale)
-            .filter_map(|((column, mean), scale)| {
-                let trained = mean.hypot(*scale);
-                let rms = (column.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
-                (trained > 0.0 && rms > 0.0 && rms.is_finite()).then(|| rms / trained)
-            })
-            .collect();
-        ratios.sort_by(f64::total_cmp);
-        ratios.get(ratios.len().checked_sub(1)? / 2).copied()
+        features_scale(&self.feature_mean, &self.feature_scale, x)
     }
 
     /// What to say when `x`'s features are past [`FEATURE_SCALE_SAID`] times the training's
     /// either way ([`features_scale`](Self::features_scale)); None when they are alike.
     #[must_use]
     pub fn features_scale_note(&self, x: &DMatrix<f64>) -> Option<String> {
-        let s = self.features_scale(x)?;
-        if (1.0 / FEATURE_SCALE_SAID..=FEATURE_SCALE_SAID).contains(&s) {
-            return None;
-        }
-        // Two significant digits: "1000 times", "1/12 of".
-        let said = |v: f64| {
-            let step = 10f64.powf(v.log10().floor() - 1.0);
-            (v / step).round() * step
-        };
-        let times = if s > 1.0 {
-            format!("{} times", said(s))
-        } else {
-            format!("1/{} of", said(1.0 / s))
-        };
-        Some(format!(
-            "the features are {times} those the model was trained on (the median over the \
-             columns of their root mean square): another unit or gain than the training's \
-             (mV where V was trained)? The predictions are not the model's"
-        ))
+        features_scale_note(self.features_scale(x)?)
     }
+}
+
+/// How many times the training's features, of `mean` and standard deviation `scale` per
+/// column, those of `x` are (n x p): over the columns, the median of each one's root mean
+/// square against the training's. None when `x` has no rows or its columns are all zeros.
+#[must_use]
+pub fn features_scale(mean: &[f64], scale: &[f64], x: &DMatrix<f64>) -> Option<f64> {
+    if x.nrows() == 0 {
+        return None;
+    }
+    let n = x.nrows() as f64;
+    let mut ratios: Vec<f64> = (x.column_iter().zip(mean))
+        .zip(scale)
+        .filter_map(|((column, mean), scale)| {
+            let trained = mean.hypot(*scale);
+            let rms = (column.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+            (trained > 0.0 && rms > 0.0 && rms.is_finite()).then(|| rms / trained)
+        })
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    ratios.get(ratios.len().checked_sub(1)? / 2).copied()
+}
+
+/// What to say of features `s` times the training's ([`features_scale`]) when past
+/// [`FEATURE_SCALE_SAID`] either way; None when they are alike.
+#[must_use]
+pub fn features_scale_note(s: f64) -> Option<String> {
+    if (1.0 / FEATURE_SCALE_SAID..=FEATURE_SCALE_SAID).contains(&s) {
+        return None;
+    }
+    // Two significant digits: "1000 times", "1/12 of".
+    let said = |v: f64| {
+        let step = 10f64.powf(v.log10().floor() - 1.0);
+        (v / step).round() * step
+    };
+    let times = if s > 1.0 {
+        format!("{} times", said(s))
+    } else {
+        format!("1/{} of", said(1.0 / s))
+    };
+    Some(format!(
+        "the features are {times} those the model was trained on (the median over the \
+         columns of their root mean square): another unit or gain than the training's \
+         (mV where V was trained)? The predictions are not the model's"
+    ))
 }
