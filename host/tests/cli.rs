@@ -1479,43 +1479,18 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
     let recon = ["reconstruct", "--scene", scene, "--out", out];
     let dataset = out.replace(".png", ".csv");
     let collect = ["collect", "--scene", scene, "--out", &dataset];
+    let record = ["record", "--port", "/dev/null", "--out", out];
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (
-            vec![
-                "record",
-                "--port",
-                "/dev/null",
-                "--out",
-                out,
-                "--seconds=-1",
-            ],
-            "--seconds",
-        ),
+        ([&record[..], &["--seconds=-1"]].concat(), "--seconds"),
         // A negative number written as people write it reaches the flag's domain (clap alone
         // reads "-0.1" as short flags: "unexpected argument '-0'"), and a value is said as
         // given, not as 300 digits.
         (
-            vec![
-                "record",
-                "--port",
-                "/dev/null",
-                "--out",
-                out,
-                "--seconds",
-                "-1",
-            ],
+            [&record[..], &["--seconds", "-1"]].concat(),
             "-1 is not above 0 and at most",
         ),
         (
-            vec![
-                "record",
-                "--port",
-                "/dev/null",
-                "--out",
-                out,
-                "--seconds",
-                "1e300",
-            ],
+            [&record[..], &["--seconds", "1e300"]].concat(),
             "'1e300' for '--seconds <SECONDS>': 1e300 is not above 0",
         ),
         (
@@ -1529,27 +1504,11 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             "'-5': rows count from 0 at the first row (not from the end)",
         ),
         (
-            vec![
-                "record",
-                "--port",
-                "/dev/null",
-                "--out",
-                out,
-                "--seconds",
-                "nan",
-            ],
+            [&record[..], &["--seconds", "nan"]].concat(),
             "not a finite number",
         ),
         (
-            vec![
-                "record",
-                "--port",
-                "/dev/null",
-                "--out",
-                out,
-                "--seconds",
-                "inf",
-            ],
+            [&record[..], &["--seconds", "inf"]].concat(),
             "not a finite number",
         ),
         (
