@@ -343,6 +343,14 @@ class Protocol:
         object.__setattr__(self, "currents", currents)
         _native.check_protocol(*self._native_args())
 
+    def __repr__(self) -> str:
+        # Its size and current, not its K x 4 rows and K currents (hundreds of lines).
+        currents = np.unique(self.currents)
+        current = (f"{currents[0]:g} A" if len(currents) == 1
+                   else f"{len(currents)} currents from {currents[0]:g} to {currents[-1]:g} A")
+        name = f"{self.name!r}, " if self.name else ""
+        return f"Protocol({name}{self.electrodes} electrodes, K = {len(self.rows)}, {current})"
+
     def _native_args(self) -> Tuple[int, Optional[str], float, Optional[np.ndarray], Optional[np.ndarray]]:
         """(electrodes, name, current, rows, currents) as the native side takes a protocol:
         a built-in one by its name unless its currents were changed row by row (then its rows,
@@ -443,7 +451,7 @@ def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protoc
     """et's built-in protocol ``name`` ("adjacent", "pseudo-polar", "pp-pp", "opposite") on
     ``electrodes`` electrodes, driving ``current_a`` (A)."""
     n = _count(electrodes, "electrodes")
-    name = _text(name, "name", "'adjacent', 'pseudo-polar', 'pp-pp' or 'opposite'")
+    name = _text(name, "name", "'adjacent', 'pseudo-polar', 'pp-pp' or 'opposite'").lower()
     rows, currents = _native.protocol_table(name, n, _real(current_a, "current_a"))
     return Protocol(n, rows, currents, name)
 

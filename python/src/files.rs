@@ -104,6 +104,20 @@ impl Dataset {
     fn config_json(&self) -> PyResult<String> {
         json(&self.inner.config)
     }
+
+    /// Its size and scan, as `et train` says it (it was `<et_touch._native.Dataset object>`).
+    fn __repr__(&self) -> String {
+        let d = &self.inner;
+        format!(
+            "Dataset({} observations of {} features, {} classes, {} visits; {} electrodes, {})",
+            d.x.nrows(),
+            d.x.ncols(),
+            d.centres.len(),
+            d.visits(),
+            d.config.electrodes,
+            format!("{:?}", d.config.protocol).to_lowercase()
+        )
+    }
 }
 
 /// A recording's voltages, n x K row after row (the reader refuses frames of another

@@ -1,6 +1,7 @@
 """The Python module holds every value to the domain the command line's flags do (the
 library checks them where the value is made), naming the value and what it must be."""
 
+import json
 import math
 
 import numpy as np
@@ -382,3 +383,18 @@ def test_labels_the_model_has_no_class_of_are_warned_of_in_evaluate():
     with pytest.warns(et.EtWarning, match=r"1 label the model has no class of \(c\): 20 rows counted as missed"):
         scores = model.evaluate(X, np.array(["a"] * 20 + ["c"] * 20))
     assert scores["accuracy"] <= 0.5
+
+
+def test_protocols_and_datasets_say_what_they_are_in_a_line(dataset):
+    # A protocol printed its K x 4 rows and K currents (hundreds of lines), a dataset
+    # "<et_touch._native.Dataset object at 0x...>"; a name is kept as et spells it.
+    assert repr(et.protocol("ADJACENT", 16)) == "Protocol('adjacent', 16 electrodes, K = 208, 0.001 A)"
+    p = et.protocol("opposite", 16)
+    mixed = et.Protocol(16, p.rows, np.linspace(1e-3, 2e-3, len(p.rows)))
+    assert repr(mixed) == "Protocol(16 electrodes, K = 192, 192 currents from 0.001 to 0.002 A)"
+    data = et.read_dataset(dataset)
+    assert repr(data) == (
+        f"Dataset({len(data.y)} observations of {data.x.shape[1]} features, "
+        f"{len(data.centres_m)} classes, {data.visit.max() + 1} visits; 16 electrodes, "
+        f"{json.loads(data.config_json)['protocol'].lower()})"
+    )
