@@ -719,6 +719,7 @@ class Reconstructor:
             None if radius_m is None else _real(radius_m, "radius_m"),
         ))
         self.protocol = protocol
+        self._method = method
         self._reference: Optional[np.ndarray] = None
         self._v0: Optional[np.ndarray] = None
 
@@ -887,6 +888,11 @@ class Reconstructor:
         """The image's extent (left, right, bottom, top; m) for ``plt.imshow``."""
         rows, cols, x0, y0, size = self._native.grid
         return (x0, x0 + cols * size, y0, y0 + rows * size)
+
+    def __repr__(self) -> str:
+        rows, cols, _, _, _ = self._native.grid
+        return (f"Reconstructor({self._method}, {len(self.triangles)} triangles, "
+                f"{self.protocol!r}, {rows} x {cols} pixels)")
 
     @property
     def set_up_s(self) -> Dict[str, float]:

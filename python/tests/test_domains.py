@@ -386,12 +386,16 @@ def test_labels_the_model_has_no_class_of_are_warned_of_in_evaluate():
 
 
 def test_protocols_and_datasets_say_what_they_are_in_a_line(dataset):
-    # A protocol printed its K x 4 rows and K currents (hundreds of lines), a dataset
-    # "<et_touch._native.Dataset object at 0x...>"; a name is kept as et spells it.
+    # A protocol printed its K x 4 rows and K currents (hundreds of lines), a reconstructor
+    # and a dataset "<... object at 0x...>"; a name is kept as et spells it.
     assert repr(et.protocol("ADJACENT", 16)) == "Protocol('adjacent', 16 electrodes, K = 208, 0.001 A)"
     p = et.protocol("opposite", 16)
     mixed = et.Protocol(16, p.rows, np.linspace(1e-3, 2e-3, len(p.rows)))
     assert repr(mixed) == "Protocol(16 electrodes, K = 192, 192 currents from 0.001 to 0.002 A)"
+    sheet = et.disc(radius_m=0.1, electrodes=16)
+    r = et.Reconstructor(sheet, et.protocol("adjacent", 16), triangles=2000)
+    assert repr(r) == (f"Reconstructor(gn, {len(r.triangles)} triangles, "
+                       "Protocol('adjacent', 16 electrodes, K = 208, 0.001 A), 64 x 64 pixels)")
     data = et.read_dataset(dataset)
     assert repr(data) == (
         f"Dataset({len(data.y)} observations of {data.x.shape[1]} features, "
