@@ -1045,8 +1045,9 @@ class Model:
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
         scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
-        if scores.get("scale_note"):
-            warnings.warn(scores["scale_note"], EtWarning, stacklevel=2)
+        for note in ("scale_note", "trained_note"):
+            if scores.get(note):
+                warnings.warn(scores[note], EtWarning, stacklevel=2)
         unknown = scores.get("unknown_labels") or []
         if unknown and labels is not None:
             # As `et eval` notes it: rows of labels the model never saw count as missed (the

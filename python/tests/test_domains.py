@@ -380,6 +380,7 @@ def test_labels_the_model_has_no_class_of_are_warned_of_in_evaluate():
     rng = np.random.default_rng(6)
     X = np.vstack([rng.normal(0, 1, (20, 3)), rng.normal(3, 1, (20, 3))])
     model = et.train(X, np.array(["a"] * 20 + ["b"] * 20), kind="lda")
+    X = np.vstack([rng.normal(0, 1, (20, 3)), rng.normal(3, 1, (20, 3))])  # rows it has not seen
     with pytest.warns(et.EtWarning, match=r"1 label the model has no class of \(c\): 20 rows counted as missed"):
         scores = model.evaluate(X, np.array(["a"] * 20 + ["c"] * 20))
     assert scores["accuracy"] <= 0.5

@@ -105,7 +105,10 @@ def test_a_regressor_predicts_as_et_eval_does(et_cli, work, table, kind):
     predicted = model.predict(data.x)
     written = np.loadtxt(predictions, delimiter=",", skiprows=1)
     np.testing.assert_allclose(predicted * 1e3, written[:, 1:3], atol=1e-4)
-    mine = model.evaluate(data.x, data.positions_m)
+    # (Its training rows: both say so.)
+    with pytest.warns(et.EtWarning, match="rows the model was trained on"):
+        mine = model.evaluate(data.x, data.positions_m)
+    assert "trained_note" in cli_eval
     assert without_times(mine) == pytest.approx(without_times(cli_eval))
     assert mine["mean_error_mm"] < mine["mean_predictor_error_mm"]
     # A model file et wrote predicts the same from Python.
@@ -117,7 +120,8 @@ def test_a_classifier_returns_the_labels_it_was_given(table):
     names = np.array(["cell-%d" % c for c in data.y])
     model = et.train(data.x, names, kind="lda", groups=data.visit)
     assert set(model.predict(data.x[:20])) <= set(names)
-    assert model.evaluate(data.x, names)["accuracy"] > 0.8
+    with pytest.warns(et.EtWarning, match="rows the model was trained on"):
+        assert model.evaluate(data.x, names)["accuracy"] > 0.8
     by_number = et.train(data.x, data.y, kind="lda")
     assert by_number.predict(data.x[:5]).dtype.kind == "i"
 
@@ -243,7 +247,8 @@ def test_features_in_another_unit_than_the_trainings_are_warned_of():
     rng = np.random.default_rng(0)
     positions = rng.uniform(-0.05, 0.05, (200, 2))
     X = np.hstack([positions, positions**2, rng.normal(0, 0.01, (200, 4))]) + 0.3
-    model = et.train(X, positions, kind="ridge")
+    model = et.train(X[:150], positions[:150], kind="ridge")
+    X, positions = X[150:], positions[150:]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         model.predict(X)
@@ -254,3 +259,18 @@ def test_features_in_another_unit_than_the_trainings_are_warned_of():
     assert said[0].filename == __file__, "said at the caller's line"
     with pytest.warns(et.EtWarning, match="1/1000 of those"):
         model.evaluate(X / 1000, positions)
+
+
+def test_evaluating_on_the_training_rows_is_warned_of():
+    rng = np.random.default_rng(1)
+    positions = rng.uniform(-0.05, 0.05, (300, 2))
+    X = np.hstack([positions, positions**2, rng.normal(0, 0.01, (300, 4))]) + 0.3
+    model = et.train(X[:200], positions[:200], kind="ridge")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.evaluate(X[200:], positions[200:])
+    # The training's own rows scored the training's error as the model's without a word.
+    with pytest.warns(et.EtWarning, match="about 100 % of these rows are rows the model was "
+                                          "trained on") as said:
+        scores = model.evaluate(X[:200], positions[:200])
+    assert said[0].filename == __file__ and "trained_note" in scores

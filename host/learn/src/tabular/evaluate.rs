@@ -32,6 +32,10 @@ pub struct Evaluation {
     /// rows count as missed in `accuracy`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub unknown_labels: Vec<String>,
+    /// What to say when many of the rows are rows the model was trained on
+    /// ([`TableModel::trained_note`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_note: Option<String>,
     /// What to say when the rows' features are far larger or smaller than the training's
     /// (another unit or gain; [`TableModel::features_scale_note`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -74,6 +78,8 @@ pub struct GroupScore {
 pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, TabularError> {
     let reordered = aligned(model, table)?;
     let table = reordered.as_ref().unwrap_or(table);
+    // The rows as given, as the training kept them (before any standardisation per group).
+    let trained_note = model.trained_note(&table.x);
     let standardised;
     let table = if model.per_group {
         standardised = table.standardised_per_group()?;
@@ -168,6 +174,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     });
     Ok(Evaluation {
         scale_note: model.features_scale_note(&table.x),
+        trained_note,
         unknown_labels: unknown_labels(model, table),
         per_group,
         observations: table.rows(),

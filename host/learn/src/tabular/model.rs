@@ -251,6 +251,11 @@ pub struct TableModel {
     /// evaluation's rows need the same references).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference: Option<Referencing>,
+    /// Fingerprints of up to [`SEEN_SAMPLE`] of its training rows (16 hex digits each,
+    /// FNV-1a of the features' bits), by which evaluated rows that are training rows are said
+    /// ([`TableModel::trained_note`]); absent from files written before.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub seen: Vec<String>,
     /// What the training changed from the request, and why (e.g. a QDA saved as the LDA it
     /// equals); absent when nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -542,7 +547,9 @@ mod fit;
 mod predict;
 mod ready;
 mod scale;
+mod seen;
 pub use scale::{FEATURE_SCALE_SAID, features_scale, features_scale_note};
+pub use seen::{SEEN_SAID, SEEN_SAMPLE, seen_sample};
 
 pub use ready::TablesError;
 

@@ -136,6 +136,8 @@ pub fn train(
     let started = std::time::Instant::now();
     finite_features(&table.x)?;
     let constant = constant_said(table);
+    // The rows as given (before any standardisation per group), as evaluation reads them.
+    let seen = seen_sample(&table.x);
     let standardised;
     let table = if opts.per_group {
         standardised = table.standardised_per_group()?;
@@ -242,6 +244,7 @@ pub fn train(
         tables,
         per_group: opts.per_group,
         reference: None,
+        seen,
     })
 }
 

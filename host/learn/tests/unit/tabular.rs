@@ -1377,3 +1377,34 @@ fn features_in_another_unit_are_noted() {
         );
     }
 }
+
+/// Rows a model was trained on score the training's error, lower than rows it has not seen:
+/// said when they are a share of the evaluated rows, by the fingerprints the model keeps.
+#[test]
+fn rows_the_model_trained_on_are_said_when_evaluated() {
+    let trained_on = STANDIN.select("0..240".parse().unwrap()).unwrap();
+    let mut model = train(&trained_on, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
+    assert_eq!(
+        model.seen.len(),
+        240,
+        "every row's, under the sample's size"
+    );
+    let share = |rows: &str| {
+        let rows = STANDIN.select(rows.parse().unwrap()).unwrap();
+        (
+            model.trained_share(&rows.x).unwrap(),
+            evaluate(&model, &rows).unwrap().trained_note,
+        )
+    };
+    let (all, note) = share("0..240");
+    assert!((all - 1.0).abs() < 1e-12, "{all}");
+    assert!(note.is_some_and(|n| {
+        n.contains("about 100 % of these rows are rows the model was trained on (rows 0..240")
+    }),);
+    let (half, _) = share("120..360");
+    assert!((half - 0.5).abs() < 1e-12, "{half}");
+    assert_eq!(share("240..360"), (0.0, None), "rows it has not seen");
+    // A file written before the fingerprints says nothing, rather than a guess.
+    model.seen.clear();
+    assert_eq!(model.trained_note(&trained_on.x), None);
+}

@@ -405,7 +405,7 @@ pub(crate) fn eval(
             std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
-    if let Some(note) = &e.scale_note {
+    for note in [&e.scale_note, &e.trained_note].into_iter().flatten() {
         say!("note: {note}");
     }
     if !e.unknown_labels.is_empty() {

@@ -98,6 +98,7 @@ impl TableModel {
                 chosen_by_drift: false,
                 per_group: false,
                 reference: None,
+                seen: Vec::new(),
                 note: None,
                 tables: m.tables.clone(),
             })
