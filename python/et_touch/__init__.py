@@ -1041,7 +1041,10 @@ class Model:
         if isinstance(X, (str, bytes, os.PathLike)):
             X = read_dataset(X)
         if isinstance(X, Dataset):
-            return json.loads(self._native.evaluate_dataset(X))
+            scores = json.loads(self._native.evaluate_dataset(X))
+            if scores.get("trained_note"):
+                warnings.warn(scores["trained_note"], EtWarning, stacklevel=2)
+            return scores
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
         scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))

@@ -66,6 +66,12 @@ pub struct ModelFile {
     pub feature_scale: Vec<f64>,
     /// Per class.
     pub classes: Vec<ClassRecord>,
+    /// Fingerprints of up to [`crate::tabular::SEEN_SAMPLE`] of its training observations
+    /// (their features as the model reads them: minus their visit's untouched frame when
+    /// referenced), by which a test on them is said ([`crate::tabular::seen_sample`]); absent
+    /// from files written before.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub seen: Vec<String>,
 }
 
 impl ModelFile {
@@ -91,6 +97,7 @@ impl ModelFile {
             feature_mean: model.feature_mean.clone(),
             feature_scale: model.feature_scale.clone(),
             classes: class_records(model),
+            seen: Vec::new(),
         }
     }
 

@@ -357,7 +357,7 @@ impl Trainer {
             |stage| progress(Progress::Dataset(stage)),
         )?;
 
-        let file = ModelFile::new(
+        let mut file = ModelFile::new(
             &training.model,
             training.options.shrinkage,
             data.config,
@@ -365,6 +365,7 @@ impl Trainer {
             data.centres.clone(),
             referenced,
         );
+        file.seen = crate::tabular::seen_sample(&data.x);
         // What every reader of model files checks (et eval, stream, view, export, Python's
         // load): a model they would refuse is not returned.
         let shrinkage = file.shrinkage;

@@ -183,6 +183,21 @@ impl Board {
         let file = &self.file;
         // One prediction per observation serves the confusion, the bands and the errors.
         let predicted = self.predict(data)?;
+        // The features as the model reads them, as the training kept their fingerprints.
+        let observations = analysis::select_columns(
+            &data.features(file.referenced)?,
+            &model_columns(file, data)?,
+        );
+        let trained_note = crate::tabular::seen_share(&file.seen, &observations)
+            .filter(|&share| share > crate::tabular::SEEN_SAID)
+            .map(|share| {
+                format!(
+                    "these observations hold about {:.0} % of those the model was trained on: \
+                     their accuracy is the training's, higher than on a session it has not \
+                     seen; test on another visit's dataset (et collect --seed ...)",
+                    100.0 * share
+                )
+            });
         let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
         // The report is in mm, as people read it.
         let centres_mm = file.board_positions();
@@ -211,6 +226,7 @@ impl Board {
             Vec::new()
         };
         Ok(Tested {
+            trained_note,
             centres_mm,
             confusion,
             outcomes,
@@ -311,6 +327,8 @@ pub struct Tested {
     /// class's centre, mm (what a regressor's error compares with; not 0 when the class is
     /// right). Empty when the dataset has no positions.
     pub errors_from_truth_mm: Vec<f64>,
+    /// What to say when the observations hold many the model was trained on.
+    pub trained_note: Option<String>,
 }
 
 /// How an exported blob did on a test set, evaluated by et-core as the firmware does it.

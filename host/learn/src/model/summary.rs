@@ -26,6 +26,9 @@ pub struct TestSummary<'a> {
     pub by_distance_from_electrodes: &'a [Band],
     /// Rows: true class; columns: predicted class.
     pub confusion: Vec<&'a [u32]>,
+    /// What to say when the observations hold many the model was trained on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trained_note: Option<&'a str>,
 }
 
 impl Tested {
@@ -48,6 +51,7 @@ impl Tested {
             aee_mm: conf.aee(centres_mm),
             by_distance_from_electrodes: &self.bands,
             confusion: conf.counts.chunks(conf.classes.max(1)).collect(),
+            trained_note: self.trained_note.as_deref(),
         }
     }
 }

@@ -110,6 +110,9 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
     if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
         eval_plots(dir, pngs, &tested, data_arg)?;
     }
+    if let Some(note) = &tested.trained_note {
+        say!("note: {note}");
+    }
     let summary = tested.summary();
     let [mean, median, p90] = [
         summary.mean_error_mm,

@@ -31,6 +31,23 @@ pub fn seen_sample(x: &DMatrix<f64>) -> Vec<String> {
         .collect()
 }
 
+/// The share of `seen` (fingerprints from [`seen_sample`]) found among the rows of `x`
+/// (n x p, the features as the model reads them): about the share of the training rows
+/// these rows hold. None when `seen` is empty (files written before it was kept) or `x` has
+/// no rows.
+#[must_use]
+pub fn seen_share(seen: &[String], x: &DMatrix<f64>) -> Option<f64> {
+    if seen.is_empty() || x.nrows() == 0 {
+        return None;
+    }
+    // Every row, not a sample: the evaluated rows may hold the training's anywhere.
+    let rows: std::collections::HashSet<String> = (0..x.nrows())
+        .map(|r| format!("{:016x}", fingerprint(x.row(r).iter().copied())))
+        .collect();
+    let found = seen.iter().filter(|h| rows.contains(*h)).count();
+    Some(found as f64 / seen.len() as f64)
+}
+
 impl TableModel {
     /// About what share of `x`'s rows (n x p, in the model's column order) are rows it was
     /// trained on: the share of its kept fingerprints found among `x`'s rows, times its
@@ -38,16 +55,8 @@ impl TableModel {
     /// before it did) or `x` has no rows.
     #[must_use]
     pub fn trained_share(&self, x: &DMatrix<f64>) -> Option<f64> {
-        if self.seen.is_empty() || x.nrows() == 0 {
-            return None;
-        }
-        // Every row, not a sample: the evaluated rows may hold the training's anywhere.
-        let rows: std::collections::HashSet<String> = (0..x.nrows())
-            .map(|r| format!("{:016x}", fingerprint(x.row(r).iter().copied())))
-            .collect();
-        let found = self.seen.iter().filter(|h| rows.contains(*h)).count();
         let trained = self.trained_rows[1].saturating_sub(self.trained_rows[0]) as f64;
-        let share = found as f64 / self.seen.len() as f64 * trained / x.nrows() as f64;
+        let share = seen_share(&self.seen, x)? * trained / x.nrows() as f64;
         Some(share.min(1.0))
     }
 
