@@ -167,6 +167,13 @@ pub enum FramesFault {
     /// An array of booleans.
     #[error("array '{0}' holds booleans (True, False), not voltages")]
     Booleans(String),
+    /// An et dataset (observations with their labels), not frames.
+    #[error(
+        "an et dataset (`et collect`'s observations with their classes and positions), not \
+         frames: train and evaluate with it (et train --data, et eval --data; Python's \
+         read_dataset)"
+    )]
+    Dataset,
     /// A compressed MATLAB variable that ends early.
     #[error("a compressed variable is cut short")]
     CutShort,
@@ -320,6 +327,13 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         _ => {
             let text = et_core::text::read_text_at_most(&path, et_core::text::max_file_bytes())
                 .map_err(io)?;
+            // (Its comments and header skipped, its columns read as a frame's values.)
+            if text
+                .trim_start_matches('\u{feff}')
+                .starts_with("# et-dataset")
+            {
+                return Err(content(&path, 1, FramesFault::Dataset));
+            }
             csv_matrix(&path, &text)?
         }
     };

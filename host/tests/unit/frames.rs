@@ -382,5 +382,18 @@ fn files_without_frames_say_what_they_hold() {
     std::fs::write(&b, &npy).unwrap();
     let e = read(&b, 3).unwrap_err().to_string();
     assert!(e.contains("booleans") && e.contains("not voltages"), "{e}");
+    // An et dataset's CSV (`et collect`): its columns were read as a frame's values and
+    // refused for its K ("1080 x 101 values").
+    let dataset = dir.join("train.csv");
+    std::fs::write(
+        &dataset,
+        "# et-dataset 2\n# feature_index: 0 1 2\nf0,f1,f2,label,x_m,y_m,visit\n1,2,3,0,0,0,0\n",
+    )
+    .unwrap();
+    let e = read(&dataset, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("train.csv:1: an et dataset") && e.contains("et train --data"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

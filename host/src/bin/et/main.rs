@@ -283,8 +283,8 @@ enum Command {
     /// frame V_0: add --tare (with the sheet untouched and the board scanning).
     ///
     /// Examples:
-    ///   et export --model model.json --precision f16 --out model.bin
-    ///   et upload --port /dev/ttyUSB0 --blob model.bin --tare
+    ///   et export --model model.json --precision f16 --out model.etm
+    ///   et upload --port /dev/ttyUSB0 --blob model.etm --tare
     #[command(verbatim_doc_comment)]
     Upload(board::UploadArgs),
 }
