@@ -161,6 +161,15 @@ impl Board {
     /// [`UseError::Config`] when they were scanned differently, [`UseError::Data`] when the
     /// dataset lacks the model's features or untouched frames.
     pub fn predict(&self, data: &Dataset) -> Result<Vec<u16>, UseError> {
+        Ok(cv::predict_rows(&self.fitted, &self.features_of(data)?)?)
+    }
+
+    /// `data`'s observations as the model reads them (n x p: its features, minus each
+    /// visit's untouched frame when referenced).
+    ///
+    /// # Errors
+    /// As [`predict`](Self::predict).
+    fn features_of(&self, data: &Dataset) -> Result<DMatrix<f64>, UseError> {
         let file = &self.file;
         let (m, d) = (file.config, data.config);
         if (m.electrodes, m.protocol, m.current_na, m.gain)
@@ -169,8 +178,10 @@ impl Board {
             return Err(UseError::Config { model: m, data: d });
         }
         let columns = model_columns(file, data)?;
-        let x = analysis::select_columns(&data.features(file.referenced)?, &columns);
-        Ok(cv::predict_rows(&self.fitted, &x)?)
+        Ok(analysis::select_columns(
+            &data.features(file.referenced)?,
+            &columns,
+        ))
     }
 
     /// Tests the model on `data` ([`predict`](Self::predict)): the confusion, the errors by
@@ -181,13 +192,10 @@ impl Board {
     /// classes.
     pub fn test(&self, data: &Dataset) -> Result<Tested, UseError> {
         let file = &self.file;
-        // One prediction per observation serves the confusion, the bands and the errors.
-        let predicted = self.predict(data)?;
-        // The features as the model reads them, as the training kept their fingerprints.
-        let observations = analysis::select_columns(
-            &data.features(file.referenced)?,
-            &model_columns(file, data)?,
-        );
+        // One prediction per observation serves the confusion, the bands and the errors; the
+        // features it reads are those the training kept fingerprints of.
+        let observations = self.features_of(data)?;
+        let predicted = cv::predict_rows(&self.fitted, &observations)?;
         let trained_note = crate::tabular::seen_share(&file.seen, &observations)
             .filter(|&share| share > crate::tabular::SEEN_SAID)
             .map(|share| {

@@ -41,10 +41,12 @@ pub fn seen_share(seen: &[String], x: &DMatrix<f64>) -> Option<f64> {
         return None;
     }
     // Every row, not a sample: the evaluated rows may hold the training's anywhere.
-    let rows: std::collections::HashSet<String> = (0..x.nrows())
-        .map(|r| format!("{:016x}", fingerprint(x.row(r).iter().copied())))
+    let rows: std::collections::HashSet<u64> = (0..x.nrows())
+        .map(|r| fingerprint(x.row(r).iter().copied()))
         .collect();
-    let found = seen.iter().filter(|h| rows.contains(*h)).count();
+    let found = (seen.iter())
+        .filter(|h| u64::from_str_radix(h, 16).is_ok_and(|h| rows.contains(&h)))
+        .count();
     Some(found as f64 / seen.len() as f64)
 }
 
