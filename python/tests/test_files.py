@@ -79,6 +79,27 @@ def test_frames_of_another_system_read_in_either_orientation(work, layout):
     np.testing.assert_allclose(et.read_frames(csv, 208), frames, rtol=1e-7)
 
 
+def test_compressed_and_big_endian_arrays_read_as_numpy_reads_them(work, dataset):
+    """`savez_compressed` (deflated entries) and big-endian arrays, as numpy writes them."""
+    rng = np.random.default_rng(4)
+    # (Frames are taken in single precision.)
+    frames = rng.normal(1.0, 0.1, size=(5, 208)).astype(np.float32).astype(np.float64)
+    packed = work / "frames-compressed.npz"
+    np.savez_compressed(packed, frames=frames)
+    np.testing.assert_array_equal(et.read_frames(packed, 208), frames)
+    turned = work / "frames-big-endian.npy"
+    np.save(turned, frames.astype(">f8"))
+    np.testing.assert_array_equal(et.read_frames(turned, 208), frames)
+    # A dataset rewritten with savez_compressed, array for array, reads back the same.
+    with np.load(dataset) as raw:
+        arrays = {name: raw[name] for name in raw.files}
+    again = work / "dataset-compressed.npz"
+    np.savez_compressed(again, **arrays)
+    a, b = et.read_dataset(dataset), et.read_dataset(again)
+    np.testing.assert_array_equal(a.x, b.x)
+    np.testing.assert_array_equal(a.y, b.y)
+
+
 def test_bad_files_are_named_in_the_error(work):
     missing = work / "no-such.jsonl"
     with pytest.raises(et.EtError, match="no-such.jsonl"):

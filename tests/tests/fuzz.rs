@@ -356,6 +356,30 @@ fn frames_npz() -> Vec<u8> {
     w.finish().expect("a small archive")
 }
 
+/// A one-array archive of et's ([`frames_npz`]) with its array deflated, as
+/// `numpy.savez_compressed` stores it (zip method 8; the local header, the directory entry's
+/// sizes and the directory's offset rewritten to suit).
+fn deflated_npz(stored: &[u8]) -> Vec<u8> {
+    use std::io::Write as _;
+    let u16_at = |at: usize| usize::from(u16::from_le_bytes([stored[at], stored[at + 1]]));
+    let u32_at = |at: usize| u32::from_le_bytes(stored[at..at + 4].try_into().unwrap()) as usize;
+    let (name_len, extra_len, size) = (u16_at(26), u16_at(28), u32_at(18));
+    let data_at = 30 + name_len + extra_len;
+    let mut encoder = libflate::deflate::Encoder::new(Vec::new());
+    encoder.write_all(&stored[data_at..data_at + size]).unwrap();
+    let packed = encoder.finish().into_result().unwrap();
+    let mut local = stored[..data_at].to_vec();
+    local[8..10].copy_from_slice(&8u16.to_le_bytes());
+    local[18..22].copy_from_slice(&(packed.len() as u32).to_le_bytes());
+    let mut central = stored[data_at + size..].to_vec();
+    central[10..12].copy_from_slice(&8u16.to_le_bytes());
+    central[20..24].copy_from_slice(&(packed.len() as u32).to_le_bytes());
+    let end = central.len() - 22;
+    let offset = (data_at + packed.len()) as u32;
+    central[end + 16..end + 20].copy_from_slice(&offset.to_le_bytes());
+    [local, packed, central].concat()
+}
+
 /// A protocol file as other systems write one: a header, 1-based electrodes, each row's
 /// current (A), 40 rows (the frames' K).
 fn protocol_csv() -> String {
@@ -514,6 +538,12 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "frames NumPy .npz",
             seeds: vec![frames_npz()],
+            parse: |p| read_frames(&p[0], "npz"),
+        },
+        Parser {
+            name: "frames NumPy .npz, deflated",
+            // As numpy.savez_compressed writes: the inflater's input damaged.
+            seeds: vec![deflated_npz(&frames_npz())],
             parse: |p| read_frames(&p[0], "npz"),
         },
         Parser {

@@ -7,10 +7,10 @@
 //! `ast.literal_eval` on the header). Matrices are written in Fortran (column) order, which
 //! is how `nalgebra` keeps them, so writing and reading are copies at disk speed.
 //!
-//! [`Npz::read`] takes back what numpy's `savez` writes as well (stored entries, C or Fortran
-//! order, numbers of any common integer or float width, zip64 size fields); compressed
-//! archives (`savez_compressed`), big-endian and object (pickled) arrays are refused with a
-//! message saying so.
+//! [`Npz::read`] takes back what numpy's `savez` and `savez_compressed` write as well
+//! (stored or deflated entries, C or Fortran order, numbers of any common integer or float
+//! width in either byte order, zip64 size fields); complex and object (pickled) arrays are
+//! refused with a message saying what to save instead.
 //!
 //! Limits: a written archive stays under 4 GiB (no zip64 on write: about 500 million f64
 //! values; more is refused with an error, never a broken file).
@@ -21,215 +21,18 @@
 use nalgebra::DMatrix;
 
 mod fault;
+mod write;
 
 use fault::error;
 pub use fault::{NpzError, NpzFault};
+pub use write::{Writer, npy_header_f64, npy_of_array, npy_of_matrix};
 
-/// Largest offset or size a zip without zip64 holds.
-const ZIP32_MAX: usize = 0xFFFF_FFFE;
-
-/// Builds an archive in memory; [`Writer::finish`] returns its bytes.
-#[derive(Default)]
-#[allow(missing_debug_implementations)] // its bytes, not for printing
-pub struct Writer {
-    bytes: Vec<u8>,
-    central: Vec<u8>,
-    entries: u16,
-    failed: Option<NpzError>,
-}
-
-impl Writer {
-    /// An empty archive.
-    #[must_use]
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Adds `m` as a float64 array of shape (rows, cols).
-    pub fn matrix(&mut self, name: &str, m: &DMatrix<f64>) {
-        let mut data = Vec::with_capacity(8 * m.len());
-        // nalgebra stores column-major: Fortran order is its memory as it is.
-        for v in m.as_slice() {
-            data.extend_from_slice(&v.to_le_bytes());
-        }
-        self.array(name, "<f8", true, &[m.nrows(), m.ncols()], &data);
-    }
-
-    /// Adds rows of pairs as a float64 array of shape (n, 2).
-    pub fn pairs(&mut self, name: &str, rows: &[[f64; 2]]) {
-        let data: Vec<u8> = rows
-            .iter()
-            .flatten()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
-        self.array(name, "<f8", false, &[rows.len(), 2], &data);
-    }
-
-    /// Adds a float64 vector.
-    pub fn f64s(&mut self, name: &str, values: &[f64]) {
-        let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        self.array(name, "<f8", false, &[values.len()], &data);
-    }
-
-    /// Adds a uint16 vector.
-    pub fn u16s(&mut self, name: &str, values: &[u16]) {
-        let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        self.array(name, "<u2", false, &[values.len()], &data);
-    }
-
-    /// Adds a text as a 0-d unicode array (`str(npz[name])` in Python).
-    pub fn text(&mut self, name: &str, text: &str) {
-        let chars = text.chars().count().max(1);
-        let mut data: Vec<u8> = text
-            .chars()
-            .flat_map(|c| u32::from(c).to_le_bytes())
-            .collect();
-        data.resize(4 * chars, 0);
-        self.array(name, &format!("<U{chars}"), false, &[], &data);
-    }
-
-    fn array(&mut self, name: &str, descr: &str, fortran: bool, shape: &[usize], data: &[u8]) {
-        self.entry(&format!("{name}.npy"), &npy(descr, fortran, shape, data));
-    }
-}
-
-/// An `.npy` file's bytes: the header (version 1.0, padded to 64 bytes) and `data`.
-fn npy(descr: &str, fortran: bool, shape: &[usize], data: &[u8]) -> Vec<u8> {
-    let shape = match shape {
-        [] => "()".to_string(),
-        [n] => format!("({n},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(usize::to_string)
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let fortran = if fortran { "True" } else { "False" };
-    let mut header =
-        format!("{{'descr': '{descr}', 'fortran_order': {fortran}, 'shape': {shape}, }}");
-    // Magic (6) + version (2) + header length (2) + header + '\n', to a multiple of 64.
-    let unpadded = 10 + header.len() + 1;
-    header.extend(std::iter::repeat_n(
-        ' ',
-        unpadded.next_multiple_of(64) - unpadded,
-    ));
-    header.push('\n');
-    let mut npy = Vec::with_capacity(10 + header.len() + data.len());
-    npy.extend_from_slice(b"\x93NUMPY\x01\x00");
-    npy.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    npy.extend_from_slice(header.as_bytes());
-    npy.extend_from_slice(data);
-    npy
-}
-
-/// A matrix as an `.npy` file's bytes: little-endian f64, rows in order (C order):
-/// `numpy.load(path)` gives it back with its shape.
-#[must_use]
-pub fn npy_of_matrix(m: &DMatrix<f64>) -> Vec<u8> {
-    let data: Vec<u8> = m
-        .row_iter()
-        .flat_map(|r| r.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>())
-        .collect();
-    npy("<f8", false, &[m.nrows(), m.ncols()], &data)
-}
-
-/// The header of an `.npy` file of little-endian f64 values of `shape` in C order: what a
-/// writer puts before values it streams.
-#[must_use]
-pub fn npy_header_f64(shape: &[usize]) -> Vec<u8> {
-    npy("<f8", false, shape, &[])
-}
-
-/// `values` (C order) as an `.npy` file's bytes of `shape`: little-endian f64. `values.len()`
-/// must be the shape's product (what is missing is written as NaN, what is over dropped).
-#[must_use]
-pub fn npy_of_array(values: &[f64], shape: &[usize]) -> Vec<u8> {
-    let n: usize = shape.iter().product();
-    let data: Vec<u8> = (0..n)
-        .flat_map(|i| values.get(i).copied().unwrap_or(f64::NAN).to_le_bytes())
-        .collect();
-    npy("<f8", false, shape, &data)
-}
-
-impl Writer {
-    fn entry(&mut self, file: &str, data: &[u8]) {
-        if self.failed.is_some() {
-            return;
-        }
-        let offset = self.bytes.len();
-        if offset + data.len() + 30 + file.len() > ZIP32_MAX || self.entries == u16::MAX {
-            self.failed = Some(error(None, NpzFault::TooLarge));
-            return;
-        }
-        // crc32fast, not the wire format's `crc`: 10 to 35 times faster here (Cargo.toml says
-        // by how much and how it was measured).
-        let crc = crc32fast::hash(data);
-        // Version 2.0, no flags, stored, time/date 0 (1980-01-01), crc, sizes, name length.
-        let fixed = |signature: u32| {
-            let mut h = signature.to_le_bytes().to_vec();
-            if signature == 0x0201_4b50 {
-                h.extend_from_slice(&20u16.to_le_bytes()); // made by
-            }
-            for v in [20u16, 0, 0, 0, 0x21] {
-                h.extend_from_slice(&v.to_le_bytes());
-            }
-            h.extend_from_slice(&crc.to_le_bytes());
-            for _ in 0..2 {
-                h.extend_from_slice(&(data.len() as u32).to_le_bytes());
-            }
-            h.extend_from_slice(&(file.len() as u16).to_le_bytes());
-            h.extend_from_slice(&0u16.to_le_bytes()); // extra length
-            h
-        };
-        self.bytes.extend(fixed(0x0403_4b50));
-        self.bytes.extend_from_slice(file.as_bytes());
-        self.bytes.extend_from_slice(data);
-        self.central.extend(fixed(0x0201_4b50));
-        // Comment length, disk, internal and external attributes, local header offset.
-        for v in [0u16, 0, 0] {
-            self.central.extend_from_slice(&v.to_le_bytes());
-        }
-        self.central.extend_from_slice(&0u32.to_le_bytes());
-        self.central
-            .extend_from_slice(&(offset as u32).to_le_bytes());
-        self.central.extend_from_slice(file.as_bytes());
-        self.entries += 1;
-    }
-
-    /// The archive's bytes.
-    ///
-    /// # Errors
-    /// When it would exceed 4 GiB (see the module docs).
-    pub fn finish(mut self) -> Result<Vec<u8>, NpzError> {
-        if let Some(e) = self.failed {
-            return Err(e);
-        }
-        let start = self.bytes.len();
-        if start + self.central.len() > ZIP32_MAX {
-            return Err(error(None, NpzFault::TooLarge));
-        }
-        self.bytes.append(&mut self.central);
-        let size = self.bytes.len() - start;
-        self.bytes.extend_from_slice(&0x0605_4b50u32.to_le_bytes());
-        for v in [0u16, 0, self.entries, self.entries] {
-            self.bytes.extend_from_slice(&v.to_le_bytes());
-        }
-        self.bytes.extend_from_slice(&(size as u32).to_le_bytes());
-        self.bytes.extend_from_slice(&(start as u32).to_le_bytes());
-        self.bytes.extend_from_slice(&0u16.to_le_bytes());
-        Ok(self.bytes)
-    }
-}
-
-/// One array as stored: its element type, shape and raw little-endian values.
+/// One array as stored: its element type, shape and raw values, little-endian.
 struct Array<'a> {
     kind: Kind,
     shape: Vec<usize>,
     fortran: bool,
-    data: &'a [u8],
+    data: std::borrow::Cow<'a, [u8]>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -282,6 +85,21 @@ fn u64_at(b: &[u8], at: usize) -> Option<usize> {
     usize::try_from(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?)).ok()
 }
 
+/// Inflates the raw deflate stream `packed` onto `out`: exactly `size` bytes, as the
+/// archive's directory states (more or fewer is a damaged entry).
+fn inflate(packed: &[u8], size: usize, out: &mut Vec<u8>) -> Result<(), NpzFault> {
+    use std::io::Read as _;
+    let from = out.len();
+    libflate::deflate::Decoder::new(packed)
+        .take(size as u64 + 1)
+        .read_to_end(out)
+        .map_err(|_| NpzFault::Inflate)?;
+    if out.len() - from != size {
+        return Err(NpzFault::Inflate);
+    }
+    Ok(())
+}
+
 impl Npz {
     /// One `.npy` file's bytes as an archive holding one array named `array` (nothing is
     /// copied; the array is checked when read).
@@ -300,11 +118,14 @@ impl Npz {
         &self.entries
     }
 
-    /// Indexes the archive in `bytes` (nothing is copied).
+    /// Indexes the archive in `bytes` (stored entries are not copied; deflated ones, as
+    /// `numpy.savez_compressed` writes them, are inflated once, to no more than
+    /// [`max_file_bytes`](et_core::text::max_file_bytes) together).
     ///
     /// # Errors
-    /// When `bytes` is not a zip archive of stored `.npy` entries.
-    pub fn read(bytes: Vec<u8>) -> Result<Self, NpzError> {
+    /// When `bytes` is not a zip archive of stored or deflated `.npy` entries, or one is
+    /// damaged.
+    pub fn read(mut bytes: Vec<u8>) -> Result<Self, NpzError> {
         let broken = |what| error(None, NpzFault::Broken(what));
         // The end-of-central-directory record: 22 bytes, then a comment of at most 64 KiB.
         let lowest = bytes.len().saturating_sub(22 + 0xFFFF);
@@ -330,6 +151,11 @@ impl Npz {
             start = u64_at(&bytes, record + 48).ok_or_else(|| broken("zip64 record short"))?;
         }
         let mut entries = Vec::new();
+        // Compressed entries inflated, appended to `bytes` once the directory is read; their
+        // ranges point past the archive's own bytes. Their total is bounded by the data files'
+        // limit (a small archive could inflate to gigabytes).
+        let (mut inflated, base, limit) =
+            (Vec::new(), bytes.len(), et_core::text::max_file_bytes());
         let mut at = start;
         for _ in 0..count {
             let short = || broken("directory entry cut short");
@@ -338,23 +164,24 @@ impl Npz {
             }
             let method = u16_at(&bytes, at + 10).ok_or_else(short)?;
             let crc = u32_at(&bytes, at + 16).ok_or_else(short)?;
-            let mut size = u32_at(&bytes, at + 20).ok_or_else(short)?;
-            let stored_size = u32_at(&bytes, at + 24).ok_or_else(short)?;
+            let mut packed = u32_at(&bytes, at + 20).ok_or_else(short)?;
+            let mut size = u32_at(&bytes, at + 24).ok_or_else(short)?;
             let name_len = u16_at(&bytes, at + 28).ok_or_else(short)?;
             let extra_len = u16_at(&bytes, at + 30).ok_or_else(short)?;
             let comment_len = u16_at(&bytes, at + 32).ok_or_else(short)?;
             let mut local = u32_at(&bytes, at + 42).ok_or_else(short)?;
             let name = bytes.get(at + 46..at + 46 + name_len).ok_or_else(short)?;
             let name = String::from_utf8_lossy(name).into_owned();
-            // zip64 extra field: the 64-bit values of the fields set to 0xFFFFFFFF, in order.
+            // zip64 extra field: the 64-bit values of the fields set to 0xFFFFFFFF, in the
+            // order size, packed size, local header offset.
             let extra = bytes
                 .get(at + 46 + name_len..at + 46 + name_len + extra_len)
                 .ok_or_else(short)?;
             let mut e = 0;
             while let (Some(id), Some(len)) = (u16_at(extra, e), u16_at(extra, e + 2)) {
                 if id == 1 {
-                    let (mut v, mut stored) = (e + 4, stored_size);
-                    for field in [&mut size, &mut stored, &mut local] {
+                    let mut v = e + 4;
+                    for field in [&mut size, &mut packed, &mut local] {
                         if *field == 0xFFFF_FFFF {
                             *field = u64_at(extra, v).ok_or_else(short)?;
                             v += 8;
@@ -367,8 +194,8 @@ impl Npz {
             let Some(array) = name.strip_suffix(".npy") else {
                 continue;
             };
-            if method != 0 {
-                return Err(error(Some(array), NpzFault::Compressed));
+            if entries.iter().any(|(n, _)| n == array) {
+                return Err(error(Some(array), NpzFault::Twice));
             }
             let data_at = u16_at(&bytes, local + 26)
                 .zip(u16_at(&bytes, local + 28))
@@ -376,20 +203,36 @@ impl Npz {
                 .map(|(n, x)| local + 30 + n + x)
                 .ok_or_else(|| broken("local header missing"))?;
             let Some(data) = data_at
-                .checked_add(size)
+                .checked_add(packed)
                 .and_then(|end| bytes.get(data_at..end))
             else {
                 return Err(error(Some(array), NpzFault::CutShort));
             };
+            let range = match method {
+                0 => data_at..data_at + data.len(),
+                // Deflated (numpy.savez_compressed), to no more than its stated size.
+                8 => {
+                    let from = inflated.len();
+                    if (from as u64).saturating_add(size as u64) > limit {
+                        return Err(error(Some(array), NpzFault::Inflates(limit)));
+                    }
+                    inflate(data, size, &mut inflated).map_err(|f| error(Some(array), f))?;
+                    base + from..base + inflated.len()
+                }
+                _ => return Err(error(Some(array), NpzFault::Method(method))),
+            };
             // Stored entries carry no other check: a flipped bit would be read as a value.
-            if crc32fast::hash(data) as usize != crc {
+            let entry = if range.start < base {
+                bytes.get(range.clone())
+            } else {
+                inflated.get(range.start - base..)
+            };
+            if crc32fast::hash(entry.unwrap_or_default()) as usize != crc {
                 return Err(error(Some(array), NpzFault::Checksum));
             }
-            if entries.iter().any(|(n, _)| n == array) {
-                return Err(error(Some(array), NpzFault::Twice));
-            }
-            entries.push((array.to_string(), data_at..data_at + size));
+            entries.push((array.to_string(), range));
         }
+        bytes.append(&mut inflated);
         Ok(Self { bytes, entries })
     }
 
@@ -462,10 +305,7 @@ impl Npz {
         // with one of several bytes: splitting at byte 1 inside it panicked).
         let first = descr.chars().next().map_or(0, char::len_utf8);
         let (order, code) = descr.split_at(first);
-        if order == ">" {
-            return Err(fault(NpzFault::BigEndian));
-        }
-        if !matches!(order, "<" | "|" | "=") {
+        if !matches!(order, "<" | "|" | "=" | ">") {
             return Err(fault(NpzFault::Type(descr.to_string())));
         }
         let width = code.get(1..).and_then(|w| w.parse::<usize>().ok());
@@ -501,6 +341,21 @@ impl Npz {
             .get(at + len..)
             .and_then(|d| d.get(..count))
             .ok_or_else(|| bad("fewer values than its shape says"))?;
+        // Big-endian values (`>f8`, as a big-endian machine or `astype('>f8')` saves them)
+        // are turned round once, to the little-endian order the readers take.
+        let data = if order == ">" {
+            let width = match kind {
+                Kind::Unicode(_) => 4,
+                _ => kind.size(),
+            };
+            let mut turned = data.to_vec();
+            turned
+                .chunks_exact_mut(width.max(1))
+                .for_each(<[u8]>::reverse);
+            std::borrow::Cow::Owned(turned)
+        } else {
+            std::borrow::Cow::Borrowed(data)
+        };
         Ok(Array {
             kind,
             shape,

@@ -20,9 +20,24 @@ pub enum NpzFault {
     /// The zip structure is damaged (which part).
     #[error("not a readable .npz: {0}")]
     Broken(&'static str),
-    /// A compressed entry.
-    #[error("compressed (numpy.savez_compressed): write it with numpy.savez")]
-    Compressed,
+    /// An entry compressed otherwise than numpy does (deflate), by the zip method given.
+    #[error(
+        "compressed with zip method {0}, not deflate as numpy.savez_compressed writes: \
+         write it with numpy.savez or numpy.savez_compressed"
+    )]
+    Method(usize),
+    /// A deflated entry that does not inflate to the size the archive states.
+    #[error(
+        "damaged: it does not inflate to the size the archive states (a disk or copy \
+         error?): copy or write the archive again"
+    )]
+    Inflate,
+    /// Deflated entries that inflate past the data files' limit together.
+    #[error(
+        "its compressed arrays inflate past {0} bytes together: more than et reads from \
+         one file"
+    )]
+    Inflates(u64),
     /// An entry the file ends inside.
     #[error("cut short (the file ends inside it)")]
     CutShort,
@@ -50,9 +65,6 @@ pub enum NpzFault {
     /// The `.npy` header lacks a key.
     #[error("header has no '{0}'")]
     NoKey(&'static str),
-    /// Big-endian values.
-    #[error("big-endian values: save it little-endian ('<')")]
-    BigEndian,
     /// Complex values (a system's magnitude and phase, as one number).
     #[error(
         "complex values ('{0}'): save the real voltages, the part you mean: the real part \

@@ -106,10 +106,48 @@ fn broken_archives_are_errors_not_panics() {
     assert!(e.to_string().contains("f8"), "{e}");
     let mut b = bytes.clone();
     let central = bytes.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
-    b[central + 10] = 8; // the first entry's method: deflate
+    b[central + 10] = 12; // the first entry's method: bzip2
     let e = Npz::read(b).unwrap_err();
-    assert_eq!(e.fault, NpzFault::Compressed);
+    assert_eq!(e.fault, NpzFault::Method(12));
     assert!(e.to_string().contains("savez_compressed"), "{e}");
+}
+
+/// What `numpy.savez_compressed` writes (deflated entries, zip64 local headers) reads as
+/// `numpy.load` reads it, a big-endian array included; a damaged deflated entry, one that
+/// inflates to another size than stated, and stated sizes past the data files' limit are
+/// refused by name.
+#[test]
+fn savez_compressed_archives_read_as_numpy_reads_them() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/numpy/savez-compressed.npz");
+    let bytes = std::fs::read(path).unwrap();
+    let z = Npz::read(bytes.clone()).unwrap();
+    let x = z.matrix("x").unwrap();
+    assert_eq!((x.nrows(), x.ncols()), (2, 3));
+    assert_eq!(x[(1, 0)], 0.75); // np.arange(6.0).reshape(2, 3) / 4, row-major
+    assert_eq!(z.whole("label").unwrap(), [3, 1]); // stored '>i4'
+    assert_eq!(z.text("name").unwrap(), "tank");
+
+    let central = bytes.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
+    let local = bytes.windows(4).position(|w| w == b"PK\x03\x04").unwrap();
+    let data_at = local + 30 + usize::from(bytes[local + 26]) + usize::from(bytes[local + 28]);
+    let mut damaged = bytes.clone();
+    damaged[data_at + 2] ^= 0x55;
+    let e = Npz::read(damaged).unwrap_err();
+    assert!(
+        matches!(e.fault, NpzFault::Inflate | NpzFault::Checksum),
+        "{e}"
+    );
+    assert!(e.to_string().contains("damaged"), "{e}");
+    // The first entry's stated size one more than it inflates to; then 2^31 bytes.
+    let size = u32::from_le_bytes(bytes[central + 24..central + 28].try_into().unwrap());
+    let mut longer = bytes.clone();
+    longer[central + 24..central + 28].copy_from_slice(&(size + 1).to_le_bytes());
+    assert_eq!(Npz::read(longer).unwrap_err().fault, NpzFault::Inflate);
+    let mut bomb = bytes;
+    bomb[central + 24..central + 28].copy_from_slice(&(1u32 << 31).to_le_bytes());
+    let e = Npz::read(bomb).unwrap_err();
+    assert!(matches!(e.fault, NpzFault::Inflates(_)), "{e}");
 }
 
 /// Two entries of one name (a zip may hold them; numpy reads the last): refused by name.
