@@ -44,7 +44,7 @@ use nalgebra::DMatrix;
 
 pub use fault::DatasetFault;
 pub use file::{load, load_csv, load_npz, save, save_csv, save_npz};
-pub use import::{GroupsFrom, Table, Unit, is_length, read_reference};
+pub use import::{GroupsFrom, Table, Unit, is_length, not_a_feature, read_reference};
 
 /// A labelled set of observations.
 #[derive(Clone, Debug)]

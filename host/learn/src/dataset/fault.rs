@@ -284,6 +284,30 @@ pub enum DatasetFault {
          that says which session each row was recorded in"
     )]
     GroupIsTarget(String),
+    /// Several columns named as sessions (`subject` and `session`), none chosen.
+    #[error(
+        "columns {} name sessions: choose the one a model must hold across with --groups \
+         NAME (Python: groups=...); none of them is a feature",
+        .0.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
+    )]
+    Sessions(Vec<String>),
+    /// A column of the rows' numbers or times that differs between the features and the
+    /// targets file: their rows are paired by order, and these are not.
+    #[error(
+        "'{here}' here and '{there}' in {} (line {line}): rows are paired by their order, and \
+         these files' rows are in different orders: sort both by this column",
+        .targets.display()
+    )]
+    RowsDiffer {
+        /// The features file's cell.
+        here: String,
+        /// The targets file's cell.
+        there: String,
+        /// The targets file.
+        targets: PathBuf,
+        /// Its line.
+        line: usize,
+    },
     /// A position column named in a length unit et does not read (`x_cm`).
     #[error(
         "{column}: positions in {unit}; et reads them in mm or m: convert the column and name \

@@ -14,6 +14,8 @@ use et_core::text::lines as text_lines;
 use super::table::{Csv, parse_table};
 use super::{DatasetError, DatasetFault, content};
 
+mod roles;
+
 /// The unit of positions in the files.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -152,6 +154,13 @@ pub fn read_reference(path: &Path, features: &[String]) -> Result<DMatrix<f64>, 
 /// column after y in a headerless file.
 const THIRD_NAMES: [&str; 4] = ["force", "pressure", "pressure_kpa", "pressure_pa"];
 
+/// Whether a column named `name` holds the rows' numbers, times or sessions (`id`,
+/// `time_ms`, `session`), which a table's import leaves out of the features.
+#[must_use]
+pub fn not_a_feature(name: &str) -> bool {
+    roles::role(name).is_some()
+}
+
 /// A target column's name (label, x, y or a third target's, bare or with a unit), in any case.
 fn is_target_name(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
@@ -194,37 +203,53 @@ impl Table {
         groups: Option<&GroupsFrom>,
     ) -> Result<Self, DatasetError> {
         let text = read(features)?;
-        // An et dataset's CSV (`et collect`) names its sessions: its visit column is the
-        // groups unless others are given (it was a feature, the session's number among the
-        // voltages).
-        let visits = GroupsFrom::Column("visit".into());
-        let from_dataset = groups.is_none() && text.starts_with("# et-dataset");
-        let groups = groups.or(from_dataset.then_some(&visits));
+        let from_dataset = text.starts_with("# et-dataset");
+        // A target column is no session (every position would be a group of its own).
+        if let Some(GroupsFrom::Column(name)) = groups
+            && is_target_name(name)
+        {
+            let fault = DatasetFault::GroupIsTarget(name.clone());
+            return Err(content(features, 0, Some(name.clone()), fault));
+        }
+        let given = match groups {
+            Some(GroupsFrom::Column(name)) => Some(name.as_str()),
+            _ => None,
+        };
+        // Labels, groups and the columns of rows' numbers, times and sessions may be text.
+        let text_cells = |name: &str, _: usize| {
+            name.eq_ignore_ascii_case("label")
+                || given.is_some_and(|g| g.eq_ignore_ascii_case(name))
+                || roles::role(name).is_some()
+        };
+        let main = parse_table(features, &text_lines(&text), &text_cells)?;
+        drop(text);
+        // A column named as sessions (an et dataset's `visit`, another's `session`) is the
+        // groups unless others are given: as a feature, it was the session's number among
+        // the voltages.
+        let sessions = match groups {
+            None => roles::session_column(features, &main)?.map(GroupsFrom::Column),
+            Some(_) => None,
+        };
+        let groups = groups.or(sessions.as_ref());
         let group_column = match groups {
             Some(GroupsFrom::Column(name)) => Some(name.as_str()),
             _ => None,
         };
-        // A target column is no session (every position would be a group of its own).
-        if let Some(name) = group_column.filter(|n| is_target_name(n)) {
-            let fault = DatasetFault::GroupIsTarget(name.into());
-            return Err(content(features, 0, Some(name.into()), fault));
-        }
         let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
-        let label_text =
-            |name: &str, _: usize| name.eq_ignore_ascii_case("label") || is_group(name);
-        let main = parse_table(features, &text_lines(&text), &label_text)?;
-        drop(text);
         let side = targets
             .map(|p| targets_file(p, features, &main))
             .transpose()?;
-        // Without a header every column of the features file is a feature.
+        if let Some((p, t)) = &side {
+            roles::check_paired(features, &main, p, t)?;
+        }
+        // Without a header every column of the features file is a feature; with one, neither
+        // the targets, the groups nor the rows' numbers, times and sessions are.
         let feature_cols: Vec<usize> = (0..main.names.len())
             .filter(|&c| {
                 !main.header
-                    || main
-                        .names
-                        .get(c)
-                        .is_some_and(|n| !is_target_name(n) && !is_group(n))
+                    || main.names.get(c).is_some_and(|n| {
+                        !is_target_name(n) && !is_group(n) && roles::role(n).is_none()
+                    })
             })
             .collect();
         let group_values = groups
@@ -237,6 +262,7 @@ impl Table {
         let (tpath, ttable) = side.as_ref().map_or((features, &main), |(p, t)| (*p, t));
         let found = Targets::read(tpath, ttable, side.is_some())?;
         let mut description = describe(features, &main, &feature_cols, tpath, ttable, &found);
+        description += &roles::left_out(&main, group_column);
         if side.is_some() && ttable.names.len() > found.taken() {
             description += &format!(
                 " ({} more columns not used)",
@@ -277,10 +303,10 @@ impl Table {
                         "{description}; {} group{}{}",
                         distinct.len(),
                         if distinct.len() == 1 { "" } else { "s" },
-                        if from_dataset {
-                            " (an et dataset's visits)"
-                        } else {
-                            ""
+                        match (&sessions, from_dataset) {
+                            (Some(_), true) => " (an et dataset's visits)".to_string(),
+                            (Some(GroupsFrom::Column(c)), false) => format!(" (its '{c}' column)"),
+                            _ => String::new(),
                         }
                     )
                 }
@@ -311,7 +337,9 @@ fn targets_file<'p>(
     main: &Csv,
 ) -> Result<(&'p Path, Csv), DatasetError> {
     let label_or_only = |name: &str, columns: usize| {
-        name.eq_ignore_ascii_case("label") || (columns == 1 && name == "1")
+        name.eq_ignore_ascii_case("label")
+            || (columns == 1 && name == "1")
+            || roles::role(name).is_some()
     };
     let mut table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
     table.first_row_as_header(main.rows.len(), main.header);

@@ -132,6 +132,17 @@ pub enum Misuse {
         /// The model's.
         model: usize,
     },
+    /// A feature column the model reads that holds the rows' numbers, times or sessions,
+    /// which tables' features no longer include.
+    #[error(
+        "the model reads column '{column}' as a feature, but its name says it holds the rows' \
+         numbers, times or sessions, which et leaves out of the features (as features they \
+         predict from the row's place in the recording): train the model again"
+    )]
+    NotAFeature {
+        /// The column's name.
+        column: String,
+    },
     /// A feature column the model reads that the data does not have.
     #[error(
         "the model reads a feature column '{column}' that the data does not have (its columns must \

@@ -262,6 +262,14 @@ pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, Tabul
     if ours == theirs || positional(ours) || positional(theirs) {
         return Ok(None);
     }
+    // A model trained when such columns were features (the data read now leaves them out).
+    if let Some(name) =
+        (ours.iter()).find(|n| !theirs.contains(n) && crate::dataset::not_a_feature(n))
+    {
+        return Err(usage(Misuse::NotAFeature {
+            column: name.clone(),
+        }));
+    }
     if ours.len() != theirs.len() {
         return Err(usage(Misuse::FeatureCount {
             data: theirs.len(),

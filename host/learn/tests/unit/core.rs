@@ -1065,6 +1065,78 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// Columns of the rows' numbers, times and sessions, known by their names, are not
+    /// features (each was taken as one, and a table recorded position after position
+    /// cross-validated on its row numbers); a
+    /// session column is the groups when none are given; a targets file whose `id` column
+    /// is in another order than the features' is refused at the first row they differ.
+    #[test]
+    fn columns_of_row_numbers_times_and_sessions_are_not_features() {
+        use et_learn::dataset::GroupsFrom;
+        let dir = tmp("roles");
+        let file = |name: &str, text: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let f = file(
+            "f.csv",
+            "id,Time (s),a,b,session,sample_id,x,y\n0,0.00,1,2,s1,p0,1,2\n1,0.02,3,4,s1,p1,3,4\n\
+             2,0.04,5,7,s2,p2,5,6\n3,0.06,7,9,s2,p3,7,8\n",
+        );
+        let imp = Table::import(&f, None, Unit::Mm).unwrap();
+        assert_eq!(imp.feature_names, ["a", "b"]);
+        let sessions = ["s1", "s1", "s2", "s2"].map(String::from);
+        assert_eq!(imp.groups.as_deref(), Some(&sessions[..]));
+        for said in [
+            "not features: 'id', 'sample_id' (the rows' numbers), 'Time (s)' (the rows' times)",
+            "2 groups (its 'session' column)",
+        ] {
+            assert!(imp.description.contains(said), "{}", imp.description);
+        }
+        // Groups given another way: the session column is not a feature either.
+        let by_id = GroupsFrom::Column("sample_id".into());
+        let imp = Table::import_grouped(&f, None, Unit::Mm, Some(&by_id)).unwrap();
+        assert_eq!(imp.feature_names, ["a", "b"]);
+        let said = &imp.description;
+        assert!(said.contains("'session' (sessions)"), "{said}");
+        // Two session columns: which one a model must hold across is asked.
+        let two = file("two.csv", "day,subject,a,x,y\n1,p,1,1,2\n2,q,3,3,4\n");
+        let e = Table::import(&two, None, Unit::Mm).unwrap_err().to_string();
+        assert!(
+            e.contains("'day', 'subject' name sessions") && e.contains("--groups"),
+            "{e}"
+        );
+        let by_day = GroupsFrom::Column("day".into());
+        let imp = Table::import_grouped(&two, None, Unit::Mm, Some(&by_day)).unwrap();
+        assert_eq!(imp.feature_names, ["a"]);
+        // A targets file: rows paired by order, checked where both carry the rows' numbers
+        // (as numbers: 2 and 2.0 are one row).
+        let g = file("g.csv", "ID,a,b\n1,1,2\n2,3,4\n3,5,6\n");
+        let u = file("u.csv", "id,x,y\n1,1,2\n2.0,3,4\n3,5,6\n");
+        let imp = Table::import(&g, Some(&u), Unit::Mm).unwrap();
+        assert_eq!(imp.feature_names, ["a", "b"]);
+        let u = file("u.csv", "id,x,y\n1,1,2\n3,5,6\n2,3,4\n");
+        let e = Table::import(&g, Some(&u), Unit::Mm)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("g.csv:3, column ID: '2' here and '3' in")
+                && e.contains("u.csv (line 3)")
+                && e.contains("sort both"),
+            "{e}"
+        );
+        // Names that only begin like them, or number them as channels, stay features.
+        let t = file(
+            "t.csv",
+            "tx1,identity,rowan,sample_1,t 2,x,y\n1,2,3,4,5,1,2\n4,5,6,7,8,3,4\n",
+        );
+        let imp = Table::import(&t, None, Unit::Mm).unwrap();
+        let names = ["tx1", "identity", "rowan", "sample_1", "t 2"];
+        assert_eq!(imp.feature_names, names);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// Labels and sessions as pandas writes a Series (`y.to_csv("t.csv", index=False)`): a
     /// header naming the column above text (it was taken as a class, "t.csv: 5 rows, f.csv
     /// has 4"), and a table written with `sep=" "` with a text column (every row was one

@@ -1408,3 +1408,20 @@ fn rows_the_model_trained_on_are_said_when_evaluated() {
     model.seen.clear();
     assert_eq!(model.trained_note(&trained_on.x), None);
 }
+
+/// A model trained when a column of the rows' numbers was a feature (et took `id` as one)
+/// meets data read without it: told to train again, not "the data has 6 feature columns,
+/// the model reads 7".
+#[test]
+fn a_model_that_read_row_numbers_as_a_feature_is_told_to_train_again() {
+    let mut rows = STANDIN.select("0..120".parse().unwrap()).unwrap();
+    rows.feature_names = (0..rows.x.ncols()).map(|j| format!("ch{j}")).collect();
+    let mut model = train(&rows, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
+    assert!(evaluate(&model, &rows).is_ok());
+    model.feature_names[0] = "id".into();
+    let e = evaluate(&model, &rows).unwrap_err().to_string();
+    assert!(
+        e.contains("column 'id' as a feature") && e.contains("train the model again"),
+        "{e}"
+    );
+}

@@ -16,7 +16,9 @@ use crate::output;
 pub(crate) struct TableArgs {
     /// Features from any sensor (CSV): one row per observation, any channel count; a header
     /// row is optional, a UTF-8 byte-order mark and CRLF are fine. Columns named label, x, y
-    /// (and z, force or pressure) are targets, the rest features.
+    /// (and z, force or pressure) are targets; id, index, sample or time (the rows' numbers
+    /// and times) and session, visit, subject, day or run (the groups, unless --groups) are
+    /// not features; the rest are.
     #[arg(long, value_name = "CSV")]
     features: Option<PathBuf>,
     /// Targets in a second CSV with the same rows: named columns as above, or without a
@@ -40,9 +42,10 @@ pub(crate) struct TableArgs {
     rows: Option<RowRange>,
     /// Which session (visit, subject) each row belongs to: a CSV with one column and a row per
     /// row of --features (any text; a header row optional), or the name of a column of
-    /// --features. With two groups or more, cross-validation leaves one group out (so `auto`
-    /// chooses the model that holds on a session it never saw), and `et eval` reports the
-    /// error per group.
+    /// --features (a column named session, visit, subject, day or run is taken unless this
+    /// says otherwise). With two groups or more, cross-validation leaves one group out (so
+    /// `auto` chooses the model that holds on a session it never saw), and `et eval` reports
+    /// the error per group.
     #[arg(long, value_name = "CSV|COLUMN", requires = "features")]
     pub(crate) groups: Option<String>,
     /// Frames taken just before each press (or one per session with --groups, or one for all
