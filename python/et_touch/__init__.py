@@ -1042,8 +1042,9 @@ class Model:
             X = read_dataset(X)
         if isinstance(X, Dataset):
             scores = json.loads(self._native.evaluate_dataset(X))
-            if scores.get("trained_note"):
-                warnings.warn(scores["trained_note"], EtWarning, stacklevel=2)
+            for note in ("scale_note", "trained_note"):
+                if scores.get(note):
+                    warnings.warn(scores[note], EtWarning, stacklevel=2)
             return scores
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")

@@ -64,6 +64,14 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     with pytest.warns(et.EtWarning, match="times those the model was trained on") as said:
         model.predict(frames * 1000, v0=v0 * 1000)
     assert said[0].filename == __file__
+    # A dataset in mV likewise (rewritten with numpy, as a user converting their own would).
+    with np.load(dataset) as raw:
+        arrays = {name: raw[name] for name in raw.files}
+    arrays["x"], arrays["untouched"] = arrays["x"] * 1000, arrays["untouched"] * 1000
+    in_mv = dataset.parent / "train-mV.npz"
+    np.savez(in_mv, **arrays)
+    with pytest.warns(et.EtWarning, match="1000 times those the model was trained on"):
+        model.evaluate(et.read_dataset(in_mv))
     positions = model.predict_positions(data)
     np.testing.assert_allclose(positions, data.centres_m[by_dataset], atol=1e-12)
     with pytest.raises(et.EtError, match="untouched frame"):

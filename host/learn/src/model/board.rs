@@ -206,6 +206,10 @@ impl Board {
                     100.0 * share
                 )
             });
+        // A dataset in mV where V was trained is classified without an error, and wrongly.
+        let scale_note =
+            crate::tabular::features_scale(&file.feature_mean, &file.feature_scale, &observations)
+                .and_then(crate::tabular::features_scale_note);
         let confusion = cv::confusion_of(file.classes.len(), &data.y, &predicted)?;
         // The report is in mm, as people read it.
         let centres_mm = file.board_positions();
@@ -235,6 +239,7 @@ impl Board {
         };
         Ok(Tested {
             trained_note,
+            scale_note,
             centres_mm,
             confusion,
             outcomes,
@@ -337,6 +342,9 @@ pub struct Tested {
     pub errors_from_truth_mm: Vec<f64>,
     /// What to say when the observations hold many the model was trained on.
     pub trained_note: Option<String>,
+    /// What to say when the observations' features are another scale than the training's
+    /// (another unit or gain; [`FEATURE_SCALE_SAID`](crate::tabular::FEATURE_SCALE_SAID)).
+    pub scale_note: Option<String>,
 }
 
 /// How an exported blob did on a test set, evaluated by et-core as the firmware does it.

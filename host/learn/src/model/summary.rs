@@ -29,6 +29,9 @@ pub struct TestSummary<'a> {
     /// What to say when the observations hold many the model was trained on.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trained_note: Option<&'a str>,
+    /// What to say when the observations are another scale than the training's (mV for V).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale_note: Option<&'a str>,
 }
 
 impl Tested {
@@ -52,6 +55,7 @@ impl Tested {
             by_distance_from_electrodes: &self.bands,
             confusion: conf.counts.chunks(conf.classes.max(1)).collect(),
             trained_note: self.trained_note.as_deref(),
+            scale_note: self.scale_note.as_deref(),
         }
     }
 }

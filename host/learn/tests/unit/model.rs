@@ -98,6 +98,17 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
         "{}",
         test.confusion.accuracy()
     );
+    assert_eq!(test.scale_note, None);
+    // The dataset in mV (its frames and untouched frames): classified without an error, and
+    // wrongly, so said as the table models say it.
+    let mut in_mv = data.clone();
+    in_mv.x *= 1e3;
+    in_mv.baselines *= 1e3;
+    let said = board.test(&in_mv).unwrap().scale_note.unwrap_or_default();
+    assert!(
+        said.contains("1000 times those the model was trained on"),
+        "{said}"
+    );
     for r in (0..data.x.nrows()).step_by(7) {
         let (v, v0) = frames_of(&data, r);
         let frame = DMatrix::from_row_slice(1, v.len(), &v);

@@ -110,7 +110,10 @@ pub(crate) fn eval_cmd(args: &EvalArgs, force: bool) -> Result<()> {
     if let (Some(dir), Some(pngs)) = (&args.plots, &plots) {
         eval_plots(dir, pngs, &tested, data_arg)?;
     }
-    if let Some(note) = &tested.trained_note {
+    for note in [&tested.scale_note, &tested.trained_note]
+        .into_iter()
+        .flatten()
+    {
         say!("note: {note}");
     }
     let summary = tested.summary();
