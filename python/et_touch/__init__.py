@@ -981,12 +981,22 @@ def _targets(y: Any) -> Tuple[Optional[List[str]], Optional[np.ndarray]]:
     raise EtError(f"y: shape {a.shape}; give n labels or n x 2 positions (m)")
 
 
+def _model_from_json(text: str) -> "Model":
+    """A model from its file's text: how a pickled model is made again."""
+    return Model(_native.Model.from_json(text))
+
+
 class Model:
     """A trained model: a table's (any sensor's features) or the board's (QDA or LDA from an et
     dataset). Made by :func:`train` or :meth:`Model.load`."""
 
     def __init__(self, native: "_native.Model") -> None:
         self._native = _Serialised(native)
+
+    def __reduce__(self) -> Tuple[Any, Tuple[str]]:
+        # Pickled as its model file's JSON, and checked as a file is when unpickled: for
+        # pickle, copy.deepcopy, multiprocessing and joblib (the native object is not).
+        return (_model_from_json, (self._native.file_json(),))
 
     @property
     def kind(self) -> str:

@@ -288,6 +288,16 @@ impl Model {
             .map_err(|e| refused(&e))
     }
 
+    /// A model from its file's text (JSON, as `file_json` gives it): how a pickled model is
+    /// made again, checked as a file is.
+    #[staticmethod]
+    fn from_json(py: Python<'_>, text: String) -> PyResult<Self> {
+        let origin = std::path::Path::new("the pickled model");
+        py.detach(|| Estimator::from_text(&text, origin))
+            .map(Model::new)
+            .map_err(|e| refused(&e))
+    }
+
     /// Writes the model file (JSON), as `et train --out` does: aside, then moved over the
     /// path, so that a write that fails (a full disk, a folder's name) leaves the file that
     /// was there and no partial one (it wrote in place).

@@ -1,7 +1,9 @@
 """Learning from Python against `et train`, `et eval` and `et export` on the same input."""
 
+import copy
 import csv
 import json
+import pickle
 import re
 import warnings
 
@@ -100,6 +102,24 @@ def table(work, dataset):
     write_table(features, data.x, [f"f{i}" for i in range(data.x.shape[1])])
     write_table(targets, data.positions_m, ["x", "y"])
     return data, features, targets
+
+
+def test_models_pickle_and_copy_as_their_files(table, dataset):
+    """pickle, copy.deepcopy, multiprocessing and joblib take a model (they raised "cannot
+    pickle 'et_touch._native.Model' object"): as its model file, checked when made again."""
+    data, _, _ = table
+    names = np.array(["left", "right"])[(data.positions_m[:, 0] > 0).astype(int)]
+    for model, X in [
+        (et.train(data.x, data.positions_m, kind="ridge"), data.x),
+        (et.train(data.x, names, kind="lda"), data.x),
+        (et.train(data, kind="qda"), data),
+    ]:
+        for again in (pickle.loads(pickle.dumps(model)), copy.deepcopy(model)):
+            assert again.kind == model.kind and again.info == model.info
+            np.testing.assert_array_equal(again.predict(X), model.predict(X))
+    damaged = pickle.dumps(model).replace(b'"qda"', b'"qdx"')
+    with pytest.raises(et.EtError, match="the pickled model: kind: unknown value `qdx`"):
+        pickle.loads(damaged)
 
 
 @pytest.mark.parametrize("kind", ["ridge", "knn"])

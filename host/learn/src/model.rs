@@ -214,8 +214,18 @@ impl Model {
                 path: path.into(),
                 source,
             })?;
+        Self::from_text(&text, path)
+    }
+
+    /// A model file's text (JSON, as [`load`](Self::load) reads it from a file), checked as
+    /// the file would be; `origin` names it in errors (a path, or where the text came from).
+    ///
+    /// # Errors
+    /// As [`load`](Self::load).
+    pub fn from_text(text: &str, origin: &Path) -> Result<Self, ModelError> {
+        let path = origin;
         let value: serde_json::Value =
-            serde_json::from_str(&text).map_err(|error| ModelError::Json {
+            serde_json::from_str(text).map_err(|error| ModelError::Json {
                 path: path.into(),
                 error,
             })?;
