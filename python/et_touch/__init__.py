@@ -1171,6 +1171,19 @@ def train(
     if shrinkage is not None or raw or keep is not None:
         raise EtError("shrinkage, raw and keep apply to et datasets; on arrays they are chosen by cross-validation")
     labels, positions = _targets(y)
+    # A table's columns by name (a pandas DataFrame's): the rows' numbers, times and
+    # sessions are not features, as `et train --features` leaves them out (each was trained
+    # on: a table recorded position after position predicted from its row numbers).
+    named = [str(c) for c in getattr(X, "columns", [])]
+    not_features = [n for n in named if _native.not_a_feature(n)]
+    if not_features:
+        said = ", ".join(repr(n) for n in not_features)
+        raise EtError(
+            f"X's columns {said} hold the rows' numbers, times or sessions (by their names), "
+            "not measurements: a model that reads them predicts from the row's place in the "
+            f"recording; leave them out (X.drop(columns=[{said}])), and give a session column "
+            "as groups="
+        )
     if groups is not None and cv == "blocks":
         raise EtError(
             "cv='blocks' with groups: with groups, cross-validation leaves one group out; "

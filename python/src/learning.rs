@@ -22,6 +22,7 @@ use crate::{json, refused, said, usage};
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(train_table, m)?)?;
     m.add_function(wrap_pyfunction!(train_dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(not_a_feature, m)?)?;
     m.add_class::<Model>()?;
     Ok(())
 }
@@ -87,6 +88,13 @@ fn table(
         unit: Unit::M,
         groups,
     })
+}
+
+/// Whether a column named `name` holds the rows' numbers, times or sessions (`id`,
+/// `time_ms`, `session`), which `et train --features` leaves out of the features.
+#[pyfunction]
+fn not_a_feature(name: &str) -> bool {
+    et_learn::dataset::not_a_feature(name)
 }
 
 /// Trains on any sensor's table (arrays); see `et_touch.train`.

@@ -104,6 +104,29 @@ def table(work, dataset):
     return data, features, targets
 
 
+class Frame:
+    """What et reads of a pandas DataFrame: its columns' names and its values."""
+
+    def __init__(self, columns, values):
+        self.columns, self._values = columns, values
+
+    def __array__(self, dtype=None, copy=None):
+        return np.asarray(self._values, dtype=dtype)
+
+
+def test_a_frames_columns_of_row_numbers_times_and_sessions_are_refused(table):
+    """As `et train --features` leaves them out: a DataFrame's `id`, `time_s` or `session`
+    column was trained on as a measurement."""
+    data, _, _ = table
+    channels = [f"f{i}" for i in range(data.x.shape[1])]
+    model = et.train(Frame(channels, data.x), data.positions_m, kind="ridge")
+    assert model.kind == "ridge"
+    rows = np.arange(len(data.x), dtype=float)[:, None]
+    for name in ("id", "time_s", "session"):
+        with pytest.raises(et.EtError, match=f"X's columns '{name}' hold the rows' numbers"):
+            et.train(Frame([name] + channels, np.hstack([rows, data.x])), data.positions_m)
+
+
 def test_models_pickle_and_copy_as_their_files(table, dataset):
     """pickle, copy.deepcopy, multiprocessing and joblib take a model (they raised "cannot
     pickle 'et_touch._native.Model' object"): as its model file, checked when made again."""
