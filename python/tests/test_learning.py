@@ -330,3 +330,17 @@ def test_evaluating_on_the_training_rows_is_warned_of():
                                           "trained on") as said:
         scores = model.evaluate(X[:200], positions[:200])
     assert said[0].filename == __file__ and "trained_note" in scores
+
+
+def test_training_errors_name_pythons_parameters():
+    """The library's messages name the Python parameter beside the command line's flag (they
+    said "--grid 7x7" and "fewer --folds" to a Python caller, who has neither)."""
+    rng = np.random.default_rng(0)
+    X, positions = rng.normal(size=(100, 4)), rng.uniform(-0.05, 0.05, (100, 2))
+    labels = (positions[:, 0] > 0).astype(int)
+    with pytest.raises(et.EtError, match=r"grid \(--grid, grid=\) makes classes"):
+        et.train(X, labels, kind="lda", grid=(2, 2))
+    with pytest.raises(et.EtError, match=r"grid=\(7, 7\)"):
+        et.train(X, positions, kind="qda")
+    with pytest.raises(et.EtError, match=r"fewer folds \(--folds, folds=\)"):
+        et.train(X, np.r_[np.zeros(99, int), 1], kind="lda")

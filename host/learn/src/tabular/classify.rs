@@ -214,7 +214,7 @@ pub(super) fn cv_present_classes(
         if present.len() < 2 {
             return Err(FitError::NoCandidates(
                 "a fold's training rows hold one class only (a class with fewer rows than \
-                 folds: give it more rows, fewer --folds, or leave it out)",
+                 folds: give it more rows, fewer folds (--folds, folds=), or leave it out)",
             ));
         }
         let local: BTreeMap<u16, u16> = present

@@ -162,7 +162,10 @@ pub enum Misuse {
         column: String,
     },
     /// Too few training rows to cross-validate.
-    #[error("{0} training row(s): cross-validation needs at least 2 (more rows with --rows)")]
+    #[error(
+        "{0} training row(s): cross-validation needs at least 2 (give more rows: --rows on \
+         the command line)"
+    )]
     TooFewRows(usize),
     /// More folds than rows, or fewer than 2.
     #[error("{folds} folds for {rows} training rows: use 2 to {rows}")]
@@ -173,12 +176,12 @@ pub enum Misuse {
         rows: usize,
     },
     /// Leaving a group out without groups.
-    #[error("leave-one-group-out cross-validation needs each row's group (--groups)")]
+    #[error("leave-one-group-out cross-validation needs each row's group (--groups, groups=)")]
     NoGroups,
     /// A classifier asked for on rows without labels.
     #[error(
         "{} needs class labels: give a label column, or make classes from the positions with a \
-         grid (--grid 7x7)",
+         grid (--grid 7x7, grid=(7, 7))",
         .0.name()
     )]
     NeedsLabels(Kind),
@@ -259,7 +262,9 @@ pub enum Misuse {
         rows: usize,
     },
     /// A class grid without positions.
-    #[error("--grid makes classes from positions: the targets need x and y columns")]
+    #[error(
+        "a grid (--grid, grid=) makes classes from positions: the targets need x and y columns"
+    )]
     GridNeedsPositions,
     /// A class grid of fewer than two cells, or more rows or columns than [`GRID_MOST`].
     #[error(

@@ -71,7 +71,7 @@ impl TableModel {
             format!(
                 "about {:.0} % of these rows are rows the model was trained on (rows {}..{} \
                  of its training files): their errors are the training's, lower than on rows \
-                 it has not seen; evaluate on other rows (--rows) or another session's file",
+                 it has not seen; evaluate on rows it has not seen (--rows on the command line) or another session's",
                 100.0 * share,
                 self.trained_rows[0],
                 self.trained_rows[1]
