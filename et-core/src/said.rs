@@ -65,6 +65,10 @@ fn words_said(line: &str) -> String {
     if let Some(at) = line.find(INVALID_LENGTH) {
         let rest = &line[at + INVALID_LENGTH.len()..];
         if let Some((count, expected)) = rest.split_once(", expected ") {
+            // A fixed-size list with more values than it holds ("fewer elements in array").
+            if expected.starts_with("fewer elements") {
+                return format!("{}{count} values, more than it holds", &line[..at]);
+            }
             return format!(
                 "{}{count} {}, where {} belongs",
                 &line[..at],
@@ -377,6 +381,14 @@ mod tests {
                 assert!(!got.contains(internal), "{json}: {got}");
             }
         }
+        // A fixed-size list with a value too many, as a file read into a JSON value first
+        // gives it (serde's "expected fewer elements in array").
+        let value: serde_json::Value = serde_json::from_str(r#"{"pair": [1, 2, 3]}"#).unwrap();
+        let e = serde_json::from_value::<Outer>(value)
+            .unwrap_err()
+            .to_string();
+        let got = serde_said(&e);
+        assert!(got.contains("3 values, more than it holds"), "{got}");
         // A TOML parser's snippet: the lines around the message kept as they are.
         let snippet = "TOML parse error at line 4, column 20\n  |\n4 | x = \"3\"\n  |     ^^^\ninvalid type: string \"3\", expected f64\n";
         let got = serde_said(snippet);

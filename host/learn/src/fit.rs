@@ -152,6 +152,9 @@ pub enum FitError {
     /// ill-conditioned class covariance, a feature outside the frame).
     #[error("not a usable model: {0}")]
     Invalid(et_core::model::ModelError),
+    /// A board model file's fingerprint of a training observation that is not one.
+    #[error(transparent)]
+    Seen(#[from] crate::fingerprint::SeenError),
 }
 
 /// Per-feature mean and standard deviation of the rows of `x` (n x p), the z-space every

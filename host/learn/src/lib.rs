@@ -43,6 +43,7 @@ pub mod collect;
 pub mod cv;
 pub mod dataset;
 pub mod fastcv;
+pub mod fingerprint;
 pub mod fit;
 pub mod gp;
 pub mod mlp;

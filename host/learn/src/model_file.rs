@@ -66,9 +66,9 @@ pub struct ModelFile {
     pub feature_scale: Vec<f64>,
     /// Per class.
     pub classes: Vec<ClassRecord>,
-    /// Fingerprints of up to [`crate::tabular::SEEN_SAMPLE`] of its training observations
+    /// Fingerprints of up to [`crate::fingerprint::SEEN_SAMPLE`] of its training observations
     /// (their features as the model reads them: minus their visit's untouched frame when
-    /// referenced), by which a test on them is said ([`crate::tabular::seen_sample`]); absent
+    /// referenced), by which a test on them is said ([`crate::fingerprint::seen_sample`]); absent
     /// from files written before.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub seen: Vec<String>,
@@ -176,6 +176,7 @@ impl ModelFile {
     pub fn validate(&self) -> Result<(), FitError> {
         let blob = self.blob(Precision::F32)?;
         et_core::model::Model::parse(&blob).map_err(FitError::Invalid)?;
+        crate::fingerprint::check_seen(&self.seen)?;
         Ok(())
     }
 

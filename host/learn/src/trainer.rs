@@ -365,7 +365,7 @@ impl Trainer {
             data.centres.clone(),
             referenced,
         );
-        file.seen = crate::tabular::seen_sample(&data.x);
+        file.seen = crate::fingerprint::seen_sample(&data.x);
         // What every reader of model files checks (et eval, stream, view, export, Python's
         // load): a model they would refuse is not returned.
         let shrinkage = file.shrinkage;

@@ -196,8 +196,8 @@ impl Board {
         // features it reads are those the training kept fingerprints of.
         let observations = self.features_of(data)?;
         let predicted = cv::predict_rows(&self.fitted, &observations)?;
-        let trained_note = crate::tabular::seen_share(&file.seen, &observations)
-            .filter(|&share| share > crate::tabular::SEEN_SAID)
+        let trained_note = crate::fingerprint::seen_share(&file.seen, &observations)
+            .filter(|&share| share > crate::fingerprint::SEEN_SAID)
             .map(|share| {
                 format!(
                     "these observations hold about {:.0} % of those the model was trained on: \

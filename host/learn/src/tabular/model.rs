@@ -548,8 +548,8 @@ mod predict;
 mod ready;
 mod scale;
 mod seen;
+pub use crate::fingerprint::{SEEN_SAID, SEEN_SAMPLE, seen_sample, seen_share};
 pub use scale::{FEATURE_SCALE_SAID, features_scale, features_scale_note};
-pub use seen::{SEEN_SAID, SEEN_SAMPLE, seen_sample, seen_share};
 
 pub use ready::TablesError;
 

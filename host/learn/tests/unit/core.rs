@@ -1126,13 +1126,23 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 && e.contains("sort both"),
             "{e}"
         );
-        // Names that only begin like them, or number them as channels, stay features.
+        // Names that only begin like them, number them as channels or add another word stay
+        // features.
         let t = file(
             "t.csv",
-            "tx1,identity,rowan,sample_1,t 2,x,y\n1,2,3,4,5,1,2\n4,5,6,7,8,3,4\n",
+            "tx1,identity,rowan,sample_1,t 2,sample_rate,run_avg,x,y\n1,2,3,4,5,6,7,1,2\n\
+             4,5,6,7,8,9,10,3,4\n",
         );
         let imp = Table::import(&t, None, Unit::Mm).unwrap();
-        let names = ["tx1", "identity", "rowan", "sample_1", "t 2"];
+        let names = [
+            "tx1",
+            "identity",
+            "rowan",
+            "sample_1",
+            "t 2",
+            "sample_rate",
+            "run_avg",
+        ];
         assert_eq!(imp.feature_names, names);
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -1382,6 +1392,15 @@ fn a_corrupt_model_file_is_refused_on_load() {
     bad.save(&path).unwrap();
     let e = ModelFile::load(&path).unwrap_err().to_string();
     assert!(e.contains("m.json: shrinkage: 2: from 0 to 1"), "{e}");
+    // An edited fingerprint of a training observation (it was skipped without a word).
+    let mut bad = file.clone();
+    bad.seen = vec!["xyz".into()];
+    bad.save(&path).unwrap();
+    let e = ModelFile::load(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("seen[0]: 'xyz' is not a training row's fingerprint"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -274,6 +274,10 @@ fn a_grid_of_classes_from_positions() {
             refused.to_string().contains("bounds_m"),
             "reversed: {refused}"
         );
+        let p = model.feature_names.len();
+        let names_twice: Vec<String> = (0..p)
+            .map(|j| if j < 2 { "a".into() } else { format!("f{j}") })
+            .collect();
         // A damaged field is named by its place in the file, in words of the file (serde
         // alone said "missing field" of some table, or "internally tagged enum").
         for (field, damaged, said) in [
@@ -291,6 +295,35 @@ fn a_grid_of_classes_from_positions() {
                 "feature_mean",
                 serde_json::json!(["x"]),
                 "feature_mean[0]: \"x\" is text, where a number belongs",
+            ),
+            // What the file records beside the tables, edited (each loaded: a name twice
+            // was then "a feature column the model was not trained on"; the others silenced
+            // the note of evaluating on training rows).
+            (
+                "feature_names",
+                serde_json::json!(names_twice),
+                "feature_names: 'a' twice",
+            ),
+            (
+                "trained_rows",
+                serde_json::json!([9, 0]),
+                "trained_rows: [9, 0]: the first training row and the one after the last",
+            ),
+            (
+                "trained_rows",
+                serde_json::json!([0, 1, 2]),
+                "trained_rows: 3 values, more than it holds",
+            ),
+            (
+                "seen",
+                serde_json::json!(["zz"]),
+                "seen[0]: 'zz' is not a training row's fingerprint",
+            ),
+            (
+                "seen",
+                serde_json::json!(vec!["0123456789abcdef"; 1001]),
+                "seen[1000]: '0123456789abcdef' is not a training row's fingerprint (16 hex \
+                 digits, at most 1000 of them)",
             ),
         ] {
             let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -32,25 +32,35 @@ impl Role {
     }
 }
 
-/// The role of a column named `name` (any case, with a unit or a suffix after its stem:
-/// `time_ms`, `time (s)`, `sample_id`, `subject-id`); None for any other name, and for a
-/// stem numbered as channels are (`sample_1`, `t 3`: one of many measurements).
+/// The role of a column named `name` (any case): a stem alone, or with a suffix that names
+/// the same thing (`sample_id`, `session no`, `subject-name`) or, for a time, its unit
+/// (`time_ms`, `Time (s)`); any name ending in `_id`. None for every other name: a stem
+/// numbered as channels are (`sample_1`, `t 2`) or with another word after it
+/// (`sample_rate`, `run_avg`: measurements, or a feature of the run).
 pub(super) fn role(name: &str) -> Option<Role> {
     let name = name.trim().to_ascii_lowercase();
-    let separators = ['_', ' ', '(', '[', '-', '.'];
+    let separators = ['_', ' ', '(', '[', '-', '.', ')', ']'];
     let stem = name.split(separators).next().unwrap_or_default();
     let rest = name.get(stem.len()..).unwrap_or_default();
-    if rest.trim_start_matches(separators).parse::<u64>().is_ok() {
-        return None;
-    }
+    let rest = rest.trim_matches(separators);
+    let names_it = matches!(
+        rest,
+        "" | "id" | "no" | "nr" | "num" | "number" | "name" | "#"
+    );
+    let a_unit = matches!(
+        rest,
+        "" | "s" | "ms" | "us" | "µs" | "ns" | "sec" | "secs" | "seconds" | "min" | "h" | "utc"
+    );
     match stem {
-        "session" | "visit" | "subject" | "participant" | "day" | "run" | "group" => {
+        "session" | "visit" | "subject" | "participant" | "day" | "run" | "group" if names_it => {
             Some(Role::Session)
         }
-        "id" | "index" | "idx" | "row" | "sample" | "seq" | "sequence" | "frame" | "#" => {
+        "id" | "index" | "idx" | "row" | "sample" | "seq" | "sequence" | "frame" | "#"
+            if names_it =>
+        {
             Some(Role::Identifier)
         }
-        "time" | "t" | "timestamp" | "datetime" | "date" | "elapsed" => Some(Role::Time),
+        "time" | "t" | "timestamp" | "datetime" | "date" | "elapsed" if a_unit => Some(Role::Time),
         _ if name.ends_with("_id") || name.ends_with(" id") => Some(Role::Identifier),
         _ => None,
     }

@@ -12,6 +12,15 @@ pub enum TablesError {
     /// A standardisation value that is not finite.
     #[error("a non-finite standardisation value ({0})")]
     NonFiniteStandardisation(f64),
+    /// Two features of one name (the data's columns are read by their names).
+    #[error("feature_names: '{0}' twice: each feature column is read by its name")]
+    SameName(String),
+    /// Training rows that are not a rising range.
+    #[error("trained_rows: [{}, {}]: the first training row and the one after the last", .0[0], .0[1])]
+    TrainedRows([usize; 2]),
+    /// A training row's fingerprint that is not one (16 hex digits), or more than et keeps.
+    #[error(transparent)]
+    Seen(#[from] crate::fingerprint::SeenError),
     /// A feature scale that is not positive.
     #[error("feature_scale must be positive")]
     NonPositiveScale,
@@ -133,9 +142,26 @@ impl TableModel {
         Ok(())
     }
 
+    /// Checks what the file records beside the tables: feature names each once (a name twice
+    /// was refused as "a feature column the model was not trained on"), the training rows a
+    /// rising range and the fingerprints of training rows as et writes them (an edited one
+    /// was skipped, and a range backwards silenced the note they make).
+    fn check_record(&self) -> Result<(), TablesError> {
+        let mut names: Vec<&String> = self.feature_names.iter().collect();
+        names.sort();
+        if let Some((twice, _)) = names.iter().zip(names.iter().skip(1)).find(|(a, b)| a == b) {
+            return Err(TablesError::SameName((*twice).clone()));
+        }
+        if self.trained_rows[0] > self.trained_rows[1] {
+            return Err(TablesError::TrainedRows(self.trained_rows));
+        }
+        Ok(crate::fingerprint::check_seen(&self.seen)?)
+    }
+
     /// Rebuilds the fitted model, checking every table's shape.
     pub(super) fn ready(&self) -> Result<Ready, TablesError> {
         self.check_standardisation()?;
+        self.check_record()?;
         let p = self.features();
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
