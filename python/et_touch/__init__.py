@@ -101,6 +101,20 @@ def _numbers(a: Any, what: str) -> np.ndarray:
         raise EtError(f"{what}: not an array of numbers ({e})") from None
 
 
+def _finite_frames(a: np.ndarray, what: str) -> np.ndarray:
+    """Frames (or a frame) refused at their first NaN or infinite value, by its index: a
+    recording holds NaN where the board sent none (the reconstruction said only "a frame value
+    is NaN or infinite", of no frame or channel)."""
+    bad = np.argwhere(~np.isfinite(a))
+    if len(bad):
+        at = tuple(int(i) for i in bad[0])
+        raise EtError(
+            f"{what}[{', '.join(map(str, at))}] = {a[at]}: frames are finite voltages (a "
+            "recording's NaN is a value the board did not send: leave that frame out)"
+        )
+    return a
+
+
 # ---------------------------------------------------------------------------------------------
 # Sheets
 
@@ -726,7 +740,7 @@ class Reconstructor:
     def _frames(self, v0: Any, fitting: bool = False) -> np.ndarray:
         """The untouched frame(s) as n x K, said when far from the model's frame of the sheet
         and not being fitted to."""
-        v0 = _numbers(v0, "v0")
+        v0 = _finite_frames(_numbers(v0, "v0"), "v0")
         frames = _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
         if frames.size and not fitting and not self._native.background_fitted:
             scale = self._native.scale_of(frames)
@@ -797,7 +811,7 @@ class Reconstructor:
         ``v0``, against the reference :meth:`set_reference` set, the fast way to image many
         frames (the image's pixels at once, its noise and objects when first read). Frames
         are taken in single precision, as et's frames are."""
-        v = _f64(v, 1, "v")
+        v = _finite_frames(_f64(v, 1, "v"), "v")
         if v0 is None:
             if self._reference is None:
                 raise EtError(
@@ -825,7 +839,7 @@ class Reconstructor:
             self.set_reference(v0)
         if self._reference is None:
             raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
-        frames = _f64(V, 2, "V")
+        frames = _finite_frames(_f64(V, 2, "V"), "V")
         pixels, dv, alpha = self._native.pixels_batch(frames)
         self._say_unlike(frames, self._v0)
         rows, cols = self._native.grid[:2]

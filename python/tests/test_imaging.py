@@ -277,6 +277,16 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(v * 1e300, v0 * 1e300)
     with pytest.raises(et.EtError, match="below 1.2e-38"):
         disc.image(v * 1e-300, v0 * 1e-300)
+    # A recording's NaN (a value the board did not send), named by its place (it was "a frame
+    # value is NaN or infinite", of no frame or channel).
+    gap = v.copy()
+    gap[7] = np.nan
+    with pytest.raises(et.EtError, match=r"v\[7\] = nan: frames are finite voltages"):
+        disc.image(gap, v0)
+    with pytest.raises(et.EtError, match=r"v0\[7\] = nan"):
+        disc.image(v, gap)
+    with pytest.raises(et.EtError, match=r"V\[1, 7\] = nan"):
+        disc.images(np.vstack([v, gap]), v0)
     # Its own frames are 1 times its model's: nothing said. In mV they are 1 000 times: said,
     # with the image's values 1 000 times (what the warning says), until the fit.
     with warnings.catch_warnings():
