@@ -121,8 +121,9 @@ pub enum GroupsFrom {
 /// header does not name.
 pub fn read_reference(path: &Path, features: &[String]) -> Result<DMatrix<f64>, DatasetError> {
     let text = read(path)?;
-    let none = |_: &str, _: usize| false;
-    let csv = parse_table(path, &text_lines(&text), &none)?;
+    // The rows' numbers, times and sessions may be text, as in the features' file.
+    let text_cells = |name: &str, _: usize| roles::role(name).is_some();
+    let csv = parse_table(path, &text_lines(&text), &text_cells)?;
     // Without a header a table's features are named by their column numbers.
     let named = features
         .iter()

@@ -1164,6 +1164,13 @@ fn reference_features_are_paired_by_name() {
     );
     let e = read("a,b,d\n1,2,4\n", &abc).unwrap_err().to_string();
     assert!(e.contains("no column 'c'") && e.contains("a, b, d"), "{e}");
+    // Its rows' times as a logger writes them, text beside the numbers (it was "not a
+    // number"), are no feature of it.
+    let m = read("time,c,a,b\n12:00:01,3,1,2\n", &abc).unwrap();
+    assert_eq!(
+        m.row(0).iter().copied().collect::<Vec<_>>(),
+        [1.0, 2.0, 3.0]
+    );
     // By position: a reference without a header, or features without one.
     let m = read("3,1,2\n", &abc).unwrap();
     assert_eq!(
