@@ -1232,6 +1232,11 @@ def train(
 # Files
 
 
+def _dataset_from_npz(data: bytes) -> Dataset:
+    """A dataset from its .npz bytes: how a pickled dataset is made again."""
+    return Dataset.from_npz_bytes(data)
+
+
 def read_dataset(path: PathLike) -> Dataset:
     """Reads an et dataset (`et collect`'s .csv or .npz): ``x`` (n x p, V), ``y`` (class of
     each row), ``positions_m`` (n x 2), ``pressure_pa``, ``centres_m`` (C x 2), ``electrodes_m``,

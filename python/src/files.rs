@@ -44,6 +44,28 @@ impl Dataset {
         Ok(Self { inner })
     }
 
+    /// How pickle (copy.deepcopy, multiprocessing, joblib) makes the dataset again: from the
+    /// `.npz` `et collect` writes, by `et_touch._dataset_from_npz`.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, pyo3::types::PyBytes>,))> {
+        let bytes = et_learn::dataset::npz_bytes(&self.inner, "pickled by et_touch")
+            .map_err(|e| refused(&e))?;
+        let make = py.import("et_touch")?.getattr("_dataset_from_npz")?;
+        Ok((make, (pyo3::types::PyBytes::new(py, &bytes),)))
+    }
+
+    /// A dataset from the bytes of its `.npz` (what `__reduce__` gives pickle).
+    #[staticmethod]
+    fn from_npz_bytes(py: Python<'_>, bytes: Vec<u8>) -> PyResult<Self> {
+        let origin = std::path::Path::new("the pickled dataset");
+        let inner = py
+            .detach(|| et_learn::dataset::from_npz_bytes(bytes, origin))
+            .map_err(|e| refused(&e))?;
+        Ok(Self { inner })
+    }
+
     /// Observations, n x p (V).
     #[getter]
     fn x<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {

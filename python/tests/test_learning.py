@@ -128,8 +128,9 @@ def test_a_frames_columns_of_row_numbers_times_and_sessions_are_refused(table):
 
 
 def test_models_pickle_and_copy_as_their_files(table, dataset):
-    """pickle, copy.deepcopy, multiprocessing and joblib take a model (they raised "cannot
-    pickle 'et_touch._native.Model' object"): as its model file, checked when made again."""
+    """pickle, copy.deepcopy, multiprocessing and joblib take a model and a dataset (they
+    raised "cannot pickle 'et_touch._native.Model' object"): as their files, checked when
+    made again."""
     data, _, _ = table
     names = np.array(["left", "right"])[(data.positions_m[:, 0] > 0).astype(int)]
     for model, X in [
@@ -143,6 +144,11 @@ def test_models_pickle_and_copy_as_their_files(table, dataset):
     damaged = pickle.dumps(model).replace(b'"qda"', b'"qdx"')
     with pytest.raises(et.EtError, match="the pickled model: kind: unknown value `qdx`"):
         pickle.loads(damaged)
+    # A dataset likewise, as the .npz et collect writes.
+    for again in (pickle.loads(pickle.dumps(data)), copy.deepcopy(data)):
+        for name in ("x", "y", "positions_m", "centres_m", "visit", "feature_index", "untouched"):
+            np.testing.assert_array_equal(getattr(again, name), getattr(data, name), err_msg=name)
+        assert again.config_json == data.config_json
 
 
 @pytest.mark.parametrize("kind", ["ridge", "knn"])

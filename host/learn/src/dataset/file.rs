@@ -329,6 +329,21 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
 /// # Errors
 /// [`DatasetError::Io`], or [`DatasetError::Content`] for a set over 4 GiB.
 pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), DatasetError> {
+    let bytes = npz_bytes(data, provenance).map_err(|source| DatasetError::Npz {
+        path: path.into(),
+        source,
+    })?;
+    std::fs::write(path, bytes).map_err(|source| DatasetError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+/// The `.npz` [`save_npz`] writes, as bytes (how Python pickles a dataset).
+///
+/// # Errors
+/// [`npz::NpzError`] for a set over 4 GiB.
+pub fn npz_bytes(data: &Dataset, provenance: &str) -> Result<Vec<u8>, npz::NpzError> {
     let mut w = npz::Writer::new();
     w.text("format", "et-dataset 1");
     w.matrix("x", &data.x);
@@ -345,14 +360,7 @@ pub fn save_npz(data: &Dataset, path: &Path, provenance: &str) -> Result<(), Dat
         &serde_json::to_string(&data.config).unwrap_or_default(),
     );
     w.text("provenance", provenance);
-    let bytes = w.finish().map_err(|source| DatasetError::Npz {
-        path: path.into(),
-        source,
-    })?;
-    std::fs::write(path, bytes).map_err(|source| DatasetError::Io {
-        path: path.into(),
-        source,
-    })
+    w.finish()
 }
 
 /// Reads a dataset written by [`save_npz`] (or by numpy with the same arrays).
@@ -367,6 +375,15 @@ pub fn load_npz(path: &Path) -> Result<Dataset, DatasetError> {
                 source,
             }
         })?;
+    from_npz_bytes(bytes, path)
+}
+
+/// A dataset from the bytes of an `.npz` [`save_npz`] writes, checked as [`load_npz`] checks
+/// a file; `path` names them in errors (a file, or where the bytes came from).
+///
+/// # Errors
+/// As [`load_npz`].
+pub fn from_npz_bytes(bytes: Vec<u8>, path: &Path) -> Result<Dataset, DatasetError> {
     let bad = |source: npz::NpzError| DatasetError::Npz {
         path: path.into(),
         source,
