@@ -504,6 +504,17 @@ class _Serialised:
         return call
 
 
+def _reconstructor_again(
+    made: Dict[str, Any], replayed: List[Tuple[str, np.ndarray]]
+) -> "Reconstructor":
+    """A pickled reconstructor made again: set up from its arguments, its background fit and
+    reference replayed in their order."""
+    r = Reconstructor(**made)
+    for call, frames in replayed:
+        getattr(r, call)(frames)
+    return r
+
+
 class Image:
     """One frame imaged.
 
@@ -602,9 +613,27 @@ class Image:
         does not show stays empty (as `et reconstruct --segment` writes it)."""
         return self._details()[3]
 
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        # Pickled whole (a worker's image sent back by multiprocessing or joblib): what is
+        # made when first read is made now, once, and sent with it.
+        return (_image_made, (self.pixels, self.dv, self.alpha, self.extent, self._details()))
+
     def __repr__(self) -> str:
         rows, cols = self.pixels.shape
         return f"Image({rows} x {cols} pixels, alpha {self.alpha:.3g})"
+
+
+def _image_made(
+    pixels: np.ndarray,
+    dv: np.ndarray,
+    alpha: float,
+    extent: Tuple[float, float, float, float],
+    made: Tuple[Dict[str, Any], Any, Any, Any],
+) -> Image:
+    """A pickled image made again, with everything it says."""
+    image = Image(pixels, dv, alpha, extent, None)
+    image._made = made
+    return image
 
 
 class ImageBatch:
@@ -736,6 +765,24 @@ class Reconstructor:
         self._method = method
         self._reference: Optional[np.ndarray] = None
         self._v0: Optional[np.ndarray] = None
+        # What pickle makes it again from: its arguments, then its last background fit and
+        # reference in the order they were made (the native set-up is not pickled).
+        self._made = dict(
+            sheet=sheet, protocol=protocol, triangles=triangles, method=method, alpha=alpha,
+            pixels=pixels, threshold=threshold, s=s, iterations=iterations,
+            noise_figure=noise_figure, radius_m=radius_m,
+        )
+        self._replayed: List[Tuple[str, np.ndarray]] = []
+
+    def _keep(self, call: str, frames: np.ndarray) -> None:
+        """Keeps the last call of its kind for pickle to replay, after the others kept."""
+        self._replayed = [c for c in self._replayed if c[0] != call] + [(call, frames.copy())]
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Dict[str, Any], List[Tuple[str, np.ndarray]]]]:
+        # Made again where unpickled (pickle, copy.deepcopy, multiprocessing, joblib): set up
+        # from its arguments, then its background fit and reference replayed; the set-up's
+        # time is spent again there.
+        return (_reconstructor_again, (self._made, self._replayed))
 
     def _frames(self, v0: Any, fitting: bool = False) -> np.ndarray:
         """The untouched frame(s) as n x K, said when far from the model's frame of the sheet
@@ -768,6 +815,7 @@ class Reconstructor:
         self._native.set_reference(frames)
         self._reference = frames
         self._v0 = frames.mean(axis=0)
+        self._keep("set_reference", frames)
 
     @staticmethod
     def _say_unlike(frames: np.ndarray, v0: np.ndarray) -> None:
@@ -857,7 +905,10 @@ class Reconstructor:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``
         and images about them from then on (as `et reconstruct` does for measured frames); the
         fit as `et reconstruct --json`'s ``background``."""
-        return json.loads(self._native.fit_background(self._frames(v0, fitting=True)))
+        frames = self._frames(v0, fitting=True)
+        fit = json.loads(self._native.fit_background(frames))
+        self._keep("fit_background", frames)
+        return fit
 
     def forward(self, sigma: Any) -> np.ndarray:
         """The frame (K values, V) of conductivity ``sigma``: one per triangle, or one number
