@@ -161,7 +161,8 @@ impl Reconstructor {
             threshold,
             ..Spec::new(sheet, schedule)
         };
-        let inner = crate::interruptible(py, move || spec.set_up())?.map_err(|e| refused(&e))?;
+        let inner = crate::interruptible(py, move |stop| spec.set_up_until(stop))?
+            .map_err(|e| refused(&e))?;
         Ok(Self { inner })
     }
 

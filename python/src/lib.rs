@@ -50,25 +50,30 @@ pub(crate) fn interrupted() -> PyResult<()> {
 }
 
 /// `work`'s result, made on a thread of its own while this one takes Ctrl-C: one long call
-/// of et's (a set-up) has no steps to check between, so the caller returns at the interrupt
-/// and the work ends on its own in the background, its result dropped.
+/// of et's (a set-up) has few steps to check between, so the caller returns at the interrupt
+/// and the work, given a `stop` to ask between its stages, ends in the background at its
+/// next stage, its result dropped.
 ///
 /// # Errors
 /// `KeyboardInterrupt` at an interrupt; an [`EtError`] when the thread cannot be started or
 /// `work` panicked (a bug).
 pub(crate) fn interruptible<T: Send + 'static>(
     py: Python<'_>,
-    work: impl FnOnce() -> T + Send + 'static,
+    work: impl FnOnce(&dyn Fn() -> bool) -> T + Send + 'static,
 ) -> PyResult<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::mpsc::RecvTimeoutError;
     let (tx, mut rx) = std::sync::mpsc::channel();
+    // Set at the interrupt: the work asks it between its stages and ends at the next one.
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let asked = std::sync::Arc::clone(&stop);
     std::thread::Builder::new()
         .name("et set-up".into())
         // The stack of the Python thread it stands in for.
         .stack_size(8 << 20)
         .spawn(move || {
             // (A receiver gone means the caller was interrupted: nothing to tell.)
-            let _ = tx.send(work());
+            let _ = tx.send(work(&|| asked.load(Ordering::Relaxed)));
         })
         .map_err(|e| usage(format!("starting a thread for the work: {e}")))?;
     loop {
@@ -80,7 +85,12 @@ pub(crate) fn interruptible<T: Send + 'static>(
         });
         match waited {
             Ok(done) => return Ok(done),
-            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(interrupt) = py.check_signals() {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(interrupt);
+                }
+            }
             Err(RecvTimeoutError::Disconnected) => {
                 return Err(usage("the work ended without a result (a bug of et's)"));
             }

@@ -82,6 +82,10 @@ pub enum ImagingError {
          (first_deg and direction; placement=\"pyeit\" for pyEIT's frames)?"
     )]
     ReferenceAgainstModel(String),
+    /// The set-up was stopped by its caller between two of its stages
+    /// ([`Spec::set_up_until`]).
+    #[error("the set-up was stopped before its end")]
+    Stopped,
     /// One frame of many failed ([`Reconstructor::image_frames`]).
     #[error("frame {index} (0-based, of those given): {source}")]
     Frame {
@@ -151,22 +155,41 @@ impl std::fmt::Debug for Reconstructor {
     }
 }
 
+/// [`ImagingError::Stopped`] when `stop` says so.
+fn stopped(stop: &dyn Fn() -> bool) -> Result<(), ImagingError> {
+    if stop() {
+        Err(ImagingError::Stopped)
+    } else {
+        Ok(())
+    }
+}
+
 impl Reconstructor {
-    fn new(spec: Spec) -> Result<Self, ImagingError> {
-        let mut r = Self::unprepared(spec, true)?;
+    /// The whole set-up, asking `stop` between its stages (the mesh, the forward model, the
+    /// Jacobian, the method's matrix) whether to end there.
+    fn new(spec: Spec, stop: &dyn Fn() -> bool) -> Result<Self, ImagingError> {
+        let mut r = Self::unprepared(spec, true, stop)?;
+        stopped(stop)?;
         r.prepare()?;
         Ok(r)
     }
 
     /// The mesh and the forward model, and the Jacobian at the spec's background when
     /// `jacobian` (else an empty one: a background fit makes it, about the fitted sheet);
-    /// nothing prepared for the frames ([`Reconstructor::prepare`]).
-    fn unprepared(spec: Spec, jacobian: bool) -> Result<Self, ImagingError> {
+    /// nothing prepared for the frames ([`Reconstructor::prepare`]). `stop` is asked between
+    /// the stages.
+    fn unprepared(
+        spec: Spec,
+        jacobian: bool,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<Self, ImagingError> {
         let clock = Instant::now();
         let mesh = spec.mesh.mesh(&spec.sheet)?;
         let mesh_s = clock.elapsed().as_secs_f64();
+        stopped(stop)?;
         let clock = Instant::now();
         let imager = Imager::new(&spec.sheet, mesh, spec.pixels)?;
+        stopped(stop)?;
         let jac = if jacobian {
             imager.transfer_jacobian(&spec.schedule)?
         } else {

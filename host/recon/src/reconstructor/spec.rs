@@ -293,8 +293,18 @@ impl Spec {
     /// [`ImagingError`] when the sheet cannot be meshed or modelled, the mesh's electrodes are
     /// not the sheet's, or a parameter is out of range.
     pub fn set_up(self) -> Result<Reconstructor, ImagingError> {
+        self.set_up_until(&|| false)
+    }
+
+    /// [`Spec::set_up`], asking `stop` between its stages (the mesh, the forward model, the
+    /// Jacobian, the method's matrix) whether to end there: a caller that no longer wants the
+    /// result (Python's Ctrl-C) ends the work at the next stage, not at its end.
+    ///
+    /// # Errors
+    /// As [`Spec::set_up`]; [`ImagingError::Stopped`] when `stop` said so.
+    pub fn set_up_until(self, stop: &dyn Fn() -> bool) -> Result<Reconstructor, ImagingError> {
         self.check()?;
-        Reconstructor::new(self)
+        Reconstructor::new(self, stop)
     }
 
     /// The sheet meshed by this spec's plan, with its forward model (the sheet's electrodes,
@@ -323,7 +333,7 @@ impl Spec {
         weighting: Weighting,
     ) -> Result<(Reconstructor, BackgroundFit), ImagingError> {
         self.check()?;
-        let mut r = Reconstructor::unprepared(self, false)?;
+        let mut r = Reconstructor::unprepared(self, false, &|| false)?;
         r.set_weighting(weighting);
         let fit = r.fit_background(v0)?;
         Ok((r, fit))

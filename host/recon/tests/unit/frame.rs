@@ -260,3 +260,41 @@ fn a_reference_against_the_model_is_refused() {
         .set_reference(Reference::from_frames(&[v0]).unwrap())
         .unwrap();
 }
+
+/// A set-up asked to stop ends at its next stage (Python's Ctrl-C ran it to its end in the
+/// background): stopped at the n-th of its three asks (after the mesh, the forward model,
+/// the Jacobian), it asks no more and returns `Stopped`; never stopped, it asks three times.
+#[test]
+fn a_set_up_asked_to_stop_ends_at_its_next_stage() {
+    let spec = || {
+        let sheet = Sheet::disc(0.1, 16);
+        let protocol =
+            et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::Adjacent, 16)
+                .unwrap();
+        let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
+        Spec {
+            mesh: MeshPlan::About {
+                triangles: 600,
+                refine: Vec::new(),
+            },
+            ..Spec::new(sheet, schedule)
+        }
+    };
+    for at in 1..=3 {
+        let asked = std::cell::Cell::new(0);
+        let stop = || {
+            asked.set(asked.get() + 1);
+            asked.get() >= at
+        };
+        let e = spec().set_up_until(&stop).unwrap_err();
+        assert!(matches!(e, ImagingError::Stopped), "{e}");
+        assert_eq!(asked.get(), at, "asked again after it said stop");
+    }
+    let asked = std::cell::Cell::new(0);
+    let never = || {
+        asked.set(asked.get() + 1);
+        false
+    };
+    assert!(spec().set_up_until(&never).is_ok());
+    assert_eq!(asked.get(), 3);
+}
