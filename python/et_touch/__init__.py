@@ -1089,7 +1089,30 @@ class Model:
                 "features as given (reference them before training and predicting)"
             )
         v0 = None if v0 is None else _f64(v0, 1, "v0")
-        return self._native.predict(_f64(X, 2, "X"), v0)
+        return self._native.predict(_f64(self._by_name(X), 2, "X"), v0)
+
+    def _by_name(self, X: Any) -> Any:
+        """A DataFrame's columns in the order the model read its training's (a model trained
+        on one predicted another of the same columns in another order by position, without a
+        word); arrays, and models trained on arrays, by position."""
+        given = [str(c) for c in getattr(X, "columns", [])]
+        names = self._native.feature_names
+        if not given or names is None or given == names:
+            return X
+        missing = [n for n in names if n not in given]
+        extra = [n for n in given if n not in names]
+        # (A model trained on arrays names its columns f0, f1, ...: other names are by position.)
+        unnamed = names == [f"f{i}" for i in range(len(names))]
+        if (missing or extra) and unnamed:
+            return X
+        if missing or extra:
+            said = "; ".join(
+                f"{what} {', '.join(repr(n) for n in ns)}"
+                for what, ns in (("the model reads", missing), ("X has, the model never saw", extra))
+                if ns
+            )
+            raise EtError(f"X's columns are not the model's: {said} (the model's: {names})")
+        return np.asarray(X)[:, [given.index(n) for n in names]]
 
     def predict(self, X: Any, v0: Any = None) -> np.ndarray:
         """Predicts each row of ``X``: a table model's features (n x p); a board model's
@@ -1123,6 +1146,7 @@ class Model:
             return scores
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
+        X = self._by_name(X)
         scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
         for note in ("scale_note", "trained_note"):
             if scores.get(note):
@@ -1240,6 +1264,9 @@ def train(
     # sessions are not features, as `et train --features` leaves them out (each was trained
     # on: a table recorded position after position predicted from its row numbers).
     named = [str(c) for c in getattr(X, "columns", [])]
+    twice = sorted({n for n in named if named.count(n) > 1})
+    if twice:
+        raise EtError(f"X's column {twice[0]!r} twice: each feature column is read by its name")
     not_features = [n for n in named if _native.not_a_feature(n)]
     if not_features:
         said = ", ".join(repr(n) for n in not_features)
@@ -1269,6 +1296,7 @@ def train(
             None if folds is None else _count(folds, "folds"), cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
             3600.0 if budget_s is None else _real(budget_s, "budget_s"), progress,
+            named or None,
         )
     )
     # What the training changed from the request, or found in the data (a feature of one

@@ -99,7 +99,7 @@ fn not_a_feature(name: &str) -> bool {
 
 /// Trains on any sensor's table (arrays); see `et_touch.train`.
 #[pyfunction]
-#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None, budget_s=et_learn::tabular::BUDGET_S, progress=None))]
+#[pyo3(signature = (x, labels, positions_m, groups, kind, folds, cv, grid, per_group, seed, label_type=None, budget_s=et_learn::tabular::BUDGET_S, progress=None, feature_names=None))]
 fn train_table(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
@@ -115,13 +115,25 @@ fn train_table(
     label_type: Option<String>,
     budget_s: f64,
     progress: Option<Py<PyAny>>,
+    feature_names: Option<Vec<String>>,
 ) -> PyResult<Model> {
     if !(budget_s.is_finite() && budget_s > 0.0) {
         return Err(usage(format!(
             "budget_s = {budget_s}: a number of seconds above 0"
         )));
     }
-    let table = table(&x, labels, positions_m, groups)?;
+    let mut table = table(&x, labels, positions_m, groups)?;
+    // A DataFrame's columns, so that its predictions' columns are read by name.
+    if let Some(names) = feature_names {
+        if names.len() != table.x.ncols() {
+            return Err(usage(format!(
+                "feature_names: {} for {} columns of X",
+                names.len(),
+                table.x.ncols()
+            )));
+        }
+        table.feature_names = names;
+    }
     let trainer = Trainer {
         method: choice(kind)?,
         folds,
@@ -330,6 +342,16 @@ impl Model {
         })
     }
 
+    /// A table model's feature columns' names (None for a board model): a DataFrame's
+    /// columns when it was trained on one, `f0`, `f1`, ... for arrays.
+    #[getter]
+    fn feature_names(&self) -> Option<Vec<String>> {
+        match &self.inner {
+            Estimator::Table(t) => Some(t.feature_names.clone()),
+            Estimator::Board(_) => None,
+        }
+    }
+
     /// The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average.
     #[getter]
     fn kind(&self) -> &'static str {
@@ -435,7 +457,15 @@ impl Model {
         positions_m: Option<PyReadonlyArray2<'_, f64>>,
         groups: Option<Vec<String>>,
     ) -> PyResult<String> {
-        let table = table(&x, labels, positions_m, groups)?;
+        let mut table = table(&x, labels, positions_m, groups)?;
+        // Columns by position (an array; a DataFrame is put in the model's order first), so
+        // under the model's names: a model trained on a DataFrame scored arrays as "the
+        // model reads a feature column 'ch0' that the data does not have".
+        if let Estimator::Table(t) = &self.inner
+            && t.feature_names.len() == table.x.ncols()
+        {
+            table.feature_names.clone_from(&t.feature_names);
+        }
         self.evaluation(py, Examples::Table(&table))
     }
 

@@ -116,15 +116,29 @@ class Frame:
 
 def test_a_frames_columns_of_row_numbers_times_and_sessions_are_refused(table):
     """As `et train --features` leaves them out: a DataFrame's `id`, `time_s` or `session`
-    column was trained on as a measurement."""
+    column was trained on as a measurement. A DataFrame's columns are read by their names."""
     data, _, _ = table
-    channels = [f"f{i}" for i in range(data.x.shape[1])]
+    channels = [f"ch{i}" for i in range(data.x.shape[1])]
     model = et.train(Frame(channels, data.x), data.positions_m, kind="ridge")
     assert model.kind == "ridge"
     rows = np.arange(len(data.x), dtype=float)[:, None]
     for name in ("id", "time_s", "session"):
         with pytest.raises(et.EtError, match=f"X's columns '{name}' hold the rows' numbers"):
             et.train(Frame([name] + channels, np.hstack([rows, data.x])), data.positions_m)
+    # Its columns are read by name: the same columns in another order predict as the
+    # training's order does (they were taken by position, without a word).
+    order = list(reversed(range(len(channels))))
+    turned = Frame([channels[j] for j in order], data.x[:, order])
+    np.testing.assert_array_equal(model.predict(turned), model.predict(data.x))
+    scores = []
+    for X in (turned, data.x):
+        with pytest.warns(et.EtWarning, match="rows the model was trained on"):
+            scores.append(without_times(model.evaluate(X, data.positions_m)))
+    assert scores[0] == scores[1]
+    with pytest.raises(et.EtError, match="the model reads 'ch0'; X has, the model never saw 'g0'"):
+        model.predict(Frame(["g0"] + channels[1:], data.x))
+    with pytest.raises(et.EtError, match="X's column 'ch1' twice"):
+        et.train(Frame(["ch1"] + channels[1:], data.x), data.positions_m)
 
 
 def test_models_pickle_and_copy_as_their_files(table, dataset):
