@@ -14,7 +14,10 @@ use et_core::text::lines as text_lines;
 use super::table::{Csv, parse_table};
 use super::{DatasetError, DatasetFault, content};
 
+mod groups;
 mod roles;
+
+use groups::group_values;
 
 /// The unit of positions in the files.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -224,12 +227,22 @@ impl Table {
         };
         let main = parse_table(features, &text_lines(&text), &text_cells)?;
         drop(text);
-        // A column named as sessions (an et dataset's `visit`, another's `session`) is the
-        // groups unless others are given: as a feature, it was the session's number among
-        // the voltages.
+        let side = targets
+            .map(|p| targets_file(p, features, &main))
+            .transpose()?;
+        // A column named as sessions (an et dataset's `visit`, another's `session`; in the
+        // features file, else in the targets file) is the groups unless others are given: as
+        // a feature, it was the session's number among the voltages.
         let sessions = match groups {
-            None => roles::session_column(features, &main)?.map(GroupsFrom::Column),
             Some(_) => None,
+            None => match roles::session_column(features, &main)? {
+                Some(column) => Some(column),
+                None => (side.as_ref())
+                    .map(|(p, t)| roles::session_column(p, t))
+                    .transpose()?
+                    .flatten(),
+            }
+            .map(GroupsFrom::Column),
         };
         let groups = groups.or(sessions.as_ref());
         let group_column = match groups {
@@ -237,9 +250,6 @@ impl Table {
             _ => None,
         };
         let is_group = |n: &str| group_column.is_some_and(|g| g.eq_ignore_ascii_case(n));
-        let side = targets
-            .map(|p| targets_file(p, features, &main))
-            .transpose()?;
         if let Some((p, t)) = &side {
             roles::check_paired(features, &main, p, t)?;
         }
@@ -254,7 +264,7 @@ impl Table {
             })
             .collect();
         let group_values = groups
-            .map(|g| group_values(g, features, &main))
+            .map(|g| group_values(g, features, &main, side.as_ref()))
             .transpose()?;
         if feature_cols.is_empty() {
             return Err(content(features, 0, None, DatasetFault::NoFeatures));
@@ -331,16 +341,19 @@ pub(super) fn read(p: &Path) -> Result<String, DatasetError> {
 }
 
 /// The targets file `p`, with the features file's row count. Without a header, its one column
-/// is a label and may be text.
+/// is a label and may be text; under one, every column but the positions and a third target
+/// may be (a label, the groups, an operator's name: the targets' unused columns were refused
+/// as "not a number").
 fn targets_file<'p>(
     p: &'p Path,
     features: &Path,
     main: &Csv,
 ) -> Result<(&'p Path, Csv), DatasetError> {
     let label_or_only = |name: &str, columns: usize| {
+        let headed = name.parse::<usize>().is_err();
         name.eq_ignore_ascii_case("label")
             || (columns == 1 && name == "1")
-            || roles::role(name).is_some()
+            || (headed && (!is_target_name(name) || roles::role(name).is_some()))
     };
     let mut table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
     table.first_row_as_header(main.rows.len(), main.header);
@@ -354,52 +367,6 @@ fn targets_file<'p>(
         return Err(content(p, 0, None, fault));
     }
     Ok((p, table))
-}
-
-/// Each row's group: a named column of the features file (`main`), or a file of one column with
-/// its row count.
-fn group_values(
-    groups: &GroupsFrom,
-    features: &Path,
-    main: &Csv,
-) -> Result<Vec<String>, DatasetError> {
-    match groups {
-        GroupsFrom::Column(name) => {
-            let c = main
-                .names
-                .iter()
-                .position(|n| n.eq_ignore_ascii_case(name))
-                .filter(|_| main.header)
-                .ok_or_else(|| {
-                    let names = main
-                        .header
-                        .then(|| main.names.iter().take(8).cloned().collect());
-                    let name = name.clone();
-                    content(
-                        features,
-                        0,
-                        None,
-                        DatasetFault::NoGroupColumn { name, names },
-                    )
-                })?;
-            main.text_column(features, c)
-        }
-        GroupsFrom::File(p) => {
-            let one = |_: &str, _: usize| true;
-            let mut g = parse_table(p, &text_lines(&read(p)?), &one)?;
-            g.first_row_as_header(main.rows.len(), main.header);
-            if g.rows.len() != main.rows.len() {
-                let fault = DatasetFault::RowCount {
-                    rows: g.rows.len(),
-                    what: "rows of groups",
-                    features: features.into(),
-                    features_rows: main.rows.len(),
-                };
-                return Err(content(p, 0, None, fault));
-            }
-            g.text_column(p, 0)
-        }
-    }
 }
 
 /// The targets a table holds and the columns they came from.

@@ -1126,6 +1126,19 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 && e.contains("sort both"),
             "{e}"
         );
+        // A session column in the targets file is the groups when the features have none,
+        // and --groups names a column of either file (the targets' was "no such column").
+        let g = file("g.csv", "a,b\n1,2\n3,4\n5,6\n7,8\n");
+        let u = file(
+            "u.csv",
+            "x,y,session,operator\n1,2,s1,ann\n3,4,s1,bo\n5,6,s2,ann\n7,8,s2,bo\n",
+        );
+        let imp = Table::import(&g, Some(&u), Unit::Mm).unwrap();
+        assert_eq!(imp.groups.as_deref(), Some(&sessions[..]));
+        let by_operator = GroupsFrom::Column("operator".into());
+        let imp = Table::import_grouped(&g, Some(&u), Unit::Mm, Some(&by_operator)).unwrap();
+        let operators = ["ann", "bo", "ann", "bo"].map(String::from);
+        assert_eq!(imp.groups.as_deref(), Some(&operators[..]));
         // Names that only begin like them, number them as channels or add another word stay
         // features.
         let t = file(

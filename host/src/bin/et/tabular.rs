@@ -42,8 +42,8 @@ pub(crate) struct TableArgs {
     rows: Option<RowRange>,
     /// Which session (visit, subject) each row belongs to: a CSV with one column and a row per
     /// row of --features (any text; a header row optional), or the name of a column of
-    /// --features (a column named session, visit, subject, day or run is taken unless this
-    /// says otherwise). With two groups or more, cross-validation leaves one group out (so
+    /// --features or --targets (a column named session, visit, subject, day or run is taken
+    /// unless this says otherwise). With two groups or more, cross-validation leaves one group out (so
     /// `auto` chooses the model that holds on a session it never saw), and `et eval` reports
     /// the error per group.
     #[arg(long, value_name = "CSV|COLUMN", requires = "features")]
