@@ -1046,6 +1046,16 @@ def _targets(y: Any) -> Tuple[Optional[List[str]], Optional[np.ndarray]]:
     raise EtError(f"y: shape {a.shape}; give n labels or n x 2 positions (m)")
 
 
+def _first_twice(names: Sequence[str]) -> Optional[str]:
+    """The first name that comes again, or None (in one pass: a table may have thousands)."""
+    seen: set = set()
+    for name in names:
+        if name in seen:
+            return name
+        seen.add(name)
+    return None
+
+
 def _model_from_json(text: str) -> "Model":
     """A model from its file's text: how a pickled model is made again."""
     return Model(_native.Model.from_json(text))
@@ -1096,11 +1106,18 @@ class Model:
         on one predicted another of the same columns in another order by position, without a
         word); arrays, and models trained on arrays, by position."""
         given = [str(c) for c in getattr(X, "columns", [])]
+        if not given:
+            return X  # (an array: the names are not fetched for each call)
         names = self._native.feature_names
-        if not given or names is None or given == names:
+        if names is None or given == names:
             return X
-        missing = [n for n in names if n not in given]
-        extra = [n for n in given if n not in names]
+        twice = _first_twice(given)
+        if twice is not None:
+            raise EtError(f"X's column {twice!r} twice: each feature column is read by its name")
+        at = {n: j for j, n in enumerate(given)}
+        known = set(names)
+        missing = [n for n in names if n not in at]
+        extra = [n for n in given if n not in known]
         # (A model trained on arrays names its columns f0, f1, ...: other names are by position.)
         unnamed = names == [f"f{i}" for i in range(len(names))]
         if (missing or extra) and unnamed:
@@ -1112,7 +1129,7 @@ class Model:
                 if ns
             )
             raise EtError(f"X's columns are not the model's: {said} (the model's: {names})")
-        return np.asarray(X)[:, [given.index(n) for n in names]]
+        return np.asarray(X)[:, [at[n] for n in names]]
 
     def predict(self, X: Any, v0: Any = None) -> np.ndarray:
         """Predicts each row of ``X``: a table model's features (n x p); a board model's
@@ -1264,9 +1281,9 @@ def train(
     # sessions are not features, as `et train --features` leaves them out (each was trained
     # on: a table recorded position after position predicted from its row numbers).
     named = [str(c) for c in getattr(X, "columns", [])]
-    twice = sorted({n for n in named if named.count(n) > 1})
-    if twice:
-        raise EtError(f"X's column {twice[0]!r} twice: each feature column is read by its name")
+    twice = _first_twice(named)
+    if twice is not None:
+        raise EtError(f"X's column {twice!r} twice: each feature column is read by its name")
     not_features = [n for n in named if _native.not_a_feature(n)]
     if not_features:
         said = ", ".join(repr(n) for n in not_features)

@@ -355,18 +355,35 @@ fn targets_file<'p>(
             || (columns == 1 && name == "1")
             || (headed && (!is_target_name(name) || roles::role(name).is_some()))
     };
-    let mut table = parse_table(p, &text_lines(&read(p)?), &label_or_only)?;
+    Ok((p, beside(p, features, main, &label_or_only, "rows")?))
+}
+
+/// A file beside the features (`main`, from `features`) with a row for each of theirs, read
+/// with `text` saying which columns may hold text: a targets or a groups file. A first row
+/// that is a header after all is taken as one ([`Csv::first_row_as_header`]).
+///
+/// # Errors
+/// As [`parse_table`]; [`DatasetFault::RowCount`] naming `what` when its rows are not the
+/// features'.
+fn beside(
+    p: &Path,
+    features: &Path,
+    main: &Csv,
+    text: &dyn Fn(&str, usize) -> bool,
+    what: &'static str,
+) -> Result<Csv, DatasetError> {
+    let mut table = parse_table(p, &text_lines(&read(p)?), text)?;
     table.first_row_as_header(main.rows.len(), main.header);
     if table.rows.len() != main.rows.len() {
         let fault = DatasetFault::RowCount {
             rows: table.rows.len(),
-            what: "rows",
+            what,
             features: features.into(),
             features_rows: main.rows.len(),
         };
         return Err(content(p, 0, None, fault));
     }
-    Ok((p, table))
+    Ok(table)
 }
 
 /// The targets a table holds and the columns they came from.

@@ -2,11 +2,9 @@
 
 use std::path::Path;
 
-use et_core::text::lines as text_lines;
-
-use super::super::table::{Csv, parse_table};
+use super::super::table::Csv;
 use super::super::{DatasetError, DatasetFault, content};
-use super::{GroupsFrom, read};
+use super::{GroupsFrom, beside};
 
 /// Each row's group: a named column of the features file (`main`) or else of the targets
 /// file (`side`), or a file of one column with its row count.
@@ -47,18 +45,7 @@ pub(super) fn group_values(
         }
         GroupsFrom::File(p) => {
             let one = |_: &str, _: usize| true;
-            let mut g = parse_table(p, &text_lines(&read(p)?), &one)?;
-            g.first_row_as_header(main.rows.len(), main.header);
-            if g.rows.len() != main.rows.len() {
-                let fault = DatasetFault::RowCount {
-                    rows: g.rows.len(),
-                    what: "rows of groups",
-                    features: features.into(),
-                    features_rows: main.rows.len(),
-                };
-                return Err(content(p, 0, None, fault));
-            }
-            g.text_column(p, 0)
+            beside(p, features, main, &one, "rows of groups")?.text_column(p, 0)
         }
     }
 }
