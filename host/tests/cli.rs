@@ -1820,7 +1820,20 @@ label,x_mm,y_mm,visit,v0,v3,v3b
     std::fs::write(p("twice.csv"), dataset).unwrap();
     std::fs::write(p("f-units.csv"), "a,b\n1,2\n3,4\n5,6\n7,8\n").unwrap();
     std::fs::write(p("t-units.csv"), "x_mm,y_mm\n1,2\n3,4\n5,6\n7,8\n").unwrap();
+    let ridge = root.join("host/learn/tests/data/table-model-v1/ridge.json");
     let cases: Vec<(Vec<String>, &str)> = vec![
+        // New rows without targets, given to eval: what it is for and where they are
+        // predicted (it asked only to "add a 'label' column").
+        (
+            ["eval", "--model", ridge.to_str().unwrap(), "--features"]
+                .map(String::from)
+                .into_iter()
+                .chain([p("f-units.csv")])
+                .collect(),
+            "no target: add a 'label' column or 'x' and 'y' columns (et eval scores a model \
+             against the rows' own targets; rows without them are predicted by Python's \
+             model.predict, or live by et stream)",
+        ),
         // --unit beside columns that name theirs (x_mm) would be two readings of one value.
         (
             [

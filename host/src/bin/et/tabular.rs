@@ -381,7 +381,25 @@ pub(crate) fn eval(
             said(args.referencing())
         );
     }
-    let table = args.load()?;
+    let table = args.load().map_err(|e| {
+        // New rows without their targets are not scored: say what eval is for, and where
+        // such rows are predicted (the file's "add a 'label' column" alone asked for labels
+        // the user does not have).
+        let no_target = e
+            .downcast_ref::<et_learn::dataset::DatasetError>()
+            .is_some_and(|d| {
+                matches!(d, et_learn::dataset::DatasetError::Content { fault, .. }
+                    if matches!(**fault, et_learn::dataset::DatasetFault::NoTarget { .. }))
+            });
+        if no_target {
+            anyhow::anyhow!(
+                "{e:#} (et eval scores a model against the rows' own targets; rows without \
+                 them are predicted by Python's model.predict, or live by et stream)"
+            )
+        } else {
+            e
+        }
+    })?;
     let e = tabular::evaluate(model, &table).map_err(|e| {
         anyhow::anyhow!(
             "{} with {}: {e}",
