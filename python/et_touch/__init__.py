@@ -105,9 +105,9 @@ def _finite_frames(a: np.ndarray, what: str) -> np.ndarray:
     """Frames (or a frame) refused at their first NaN or infinite value, by its index: a
     recording holds NaN where the board sent none (the reconstruction said only "a frame value
     is NaN or infinite", of no frame or channel)."""
-    bad = np.argwhere(~np.isfinite(a))
-    if len(bad):
-        at = tuple(int(i) for i in bad[0])
+    finite = np.isfinite(a)
+    if not finite.all():  # (the place looked for only then: one frame's check is a few us)
+        at = tuple(int(i) for i in np.argwhere(~finite)[0])
         raise EtError(
             f"{what}[{', '.join(map(str, at))}] = {a[at]}: frames are finite voltages (a "
             "recording's NaN is a value the board did not send: leave that frame out)"

@@ -17,7 +17,7 @@ use super::{DatasetError, DatasetFault, content};
 mod groups;
 mod roles;
 
-use groups::group_values;
+use groups::{group_values, groups_said, sessions_as_groups};
 
 /// The unit of positions in the files.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -230,19 +230,9 @@ impl Table {
         let side = targets
             .map(|p| targets_file(p, features, &main))
             .transpose()?;
-        // A column named as sessions (an et dataset's `visit`, another's `session`; in the
-        // features file, else in the targets file) is the groups unless others are given: as
-        // a feature, it was the session's number among the voltages.
         let sessions = match groups {
             Some(_) => None,
-            None => match roles::session_column(features, &main)? {
-                Some(column) => Some(column),
-                None => (side.as_ref())
-                    .map(|(p, t)| roles::session_column(p, t))
-                    .transpose()?
-                    .flatten(),
-            }
-            .map(GroupsFrom::Column),
+            None => sessions_as_groups(features, &main, side.as_ref())?,
         };
         let groups = groups.or(sessions.as_ref());
         let group_column = match groups {
@@ -305,24 +295,8 @@ impl Table {
             labels,
             positions: positions.map(|p| p.iter().map(|q| [q[0] * m, q[1] * m]).collect()),
             third,
-            description: match &group_values {
-                Some(g) => {
-                    let mut distinct = g.clone();
-                    distinct.sort();
-                    distinct.dedup();
-                    format!(
-                        "{description}; {} group{}{}",
-                        distinct.len(),
-                        if distinct.len() == 1 { "" } else { "s" },
-                        match (&sessions, from_dataset) {
-                            (Some(_), true) => " (an et dataset's visits)".to_string(),
-                            (Some(GroupsFrom::Column(c)), false) => format!(" (its '{c}' column)"),
-                            _ => String::new(),
-                        }
-                    )
-                }
-                None => description,
-            },
+            description: description
+                + &groups_said(group_values.as_deref(), sessions.as_ref(), from_dataset),
             first_row: 0,
             unit,
             groups: group_values,

@@ -394,6 +394,7 @@ impl TableModel {
             m.migrate_to_metres();
         }
         m.ready()?;
+        m.check_record()?;
         Ok(m)
     }
 

@@ -49,3 +49,46 @@ pub(super) fn group_values(
         }
     }
 }
+
+/// The groups when none are given: a column named as sessions (an et dataset's `visit`,
+/// another's `session`) of the features file (`main`), else of the targets file (`side`).
+/// As a feature it was the session's number among the voltages.
+///
+/// # Errors
+/// As [`roles::session_column`](super::roles::session_column): several such columns in one
+/// file.
+pub(super) fn sessions_as_groups(
+    features: &Path,
+    main: &Csv,
+    side: Option<&(&Path, Csv)>,
+) -> Result<Option<GroupsFrom>, DatasetError> {
+    let column = match super::roles::session_column(features, main)? {
+        Some(column) => Some(column),
+        None => side
+            .map(|(p, t)| super::roles::session_column(p, t))
+            .transpose()?
+            .flatten(),
+    };
+    Ok(column.map(GroupsFrom::Column))
+}
+
+/// What the read line says of the groups (`values`, one per row): how many, and where they
+/// came from when taken without being given (`sessions`; an et dataset's visits when
+/// `from_dataset`). Empty without groups.
+pub(super) fn groups_said(
+    values: Option<&[String]>,
+    sessions: Option<&GroupsFrom>,
+    from_dataset: bool,
+) -> String {
+    let Some(values) = values else {
+        return String::new();
+    };
+    let distinct: std::collections::BTreeSet<&String> = values.iter().collect();
+    let n = distinct.len();
+    let whence = match (sessions, from_dataset) {
+        (Some(_), true) => " (an et dataset's visits)".to_string(),
+        (Some(GroupsFrom::Column(c)), false) => format!(" (its '{c}' column)"),
+        _ => String::new(),
+    };
+    format!("; {n} group{}{whence}", if n == 1 { "" } else { "s" })
+}

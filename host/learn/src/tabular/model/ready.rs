@@ -145,8 +145,9 @@ impl TableModel {
     /// Checks what the file records beside the tables: feature names each once (a name twice
     /// was refused as "a feature column the model was not trained on"), the training rows a
     /// rising range and the fingerprints of training rows as et writes them (an edited one
-    /// was skipped, and a range backwards silenced the note they make).
-    fn check_record(&self) -> Result<(), TablesError> {
+    /// was skipped, and a range backwards silenced the note they make). Checked when a file
+    /// is read, not each time the model is prepared to predict.
+    pub(super) fn check_record(&self) -> Result<(), TablesError> {
         let mut names: Vec<&String> = self.feature_names.iter().collect();
         names.sort();
         if let Some((twice, _)) = names.iter().zip(names.iter().skip(1)).find(|(a, b)| a == b) {
@@ -161,7 +162,6 @@ impl TableModel {
     /// Rebuilds the fitted model, checking every table's shape.
     pub(super) fn ready(&self) -> Result<Ready, TablesError> {
         self.check_standardisation()?;
-        self.check_record()?;
         let p = self.features();
         Ok(match &self.tables {
             Tables::Discriminant { kind, classes } => {
