@@ -144,17 +144,18 @@ pub enum LiveError {
     /// Another system's frames (CSV, .npy, .npz, .mat) could not be read.
     #[error(transparent)]
     Frames(#[from] crate::frames::FramesError),
-    /// Another system's frames for a protocol the live pipeline does not scan.
+    /// Another system's frames under a scene the live pipeline does not play (a protocol
+    /// file).
     #[error(
-        "{}: {error}; `et stream` and `et view` play frames of et's built-in protocols only: \
-         image this protocol's frames with `et reconstruct --frames {}`",
-        path.display(),
-        path.display()
+        "{scene}: {error}: image the frames with `et reconstruct --scene {scene} --frames {}`",
+        frames.display()
     )]
     Table {
+        /// The scene's file, as the user named it.
+        scene: String,
         /// The frames' file.
-        path: std::path::PathBuf,
-        /// Why its scene's protocol is not one the board scans.
+        frames: std::path::PathBuf,
+        /// Why the scene's scan is not one the live pipeline plays.
         error: et_sim::scene::FieldError,
     },
     /// A recording plays the protocol it was recorded with.

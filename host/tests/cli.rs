@@ -197,9 +197,42 @@ fn sim_writes_a_recording_that_python_reads() {
             assert!(decimals <= 1, "{text} in {e}");
         }
     }
-    // The same frames as another system's CSV (volts, one frame per row) play the same
-    // touches, the scene giving the protocol.
-    let recorded = et_host::recording::read(&swipe).unwrap();
+    another_systems_frames_play_as_the_recording(&root, &dir, &swipe, &stream.stdout);
+    // A bad scene names the file and the field.
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\nelectrodes = { count = 7 }\n",
+    )
+    .unwrap();
+    let err = et(&[
+        "sim",
+        "--scene",
+        bad.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+    ]);
+    assert!(!err.status.success());
+    let msg = String::from_utf8_lossy(&err.stderr);
+    assert!(
+        msg.contains("bad.toml") && msg.contains("sheet.electrodes.count"),
+        "{msg}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The swipe recording's frames written as another system's CSV (volts, one frame per row)
+/// play the touches `et stream` found in the recording (`streamed`, its stdout), the scene
+/// giving the protocol; shorter files, one reference frame, a protocol file and a current
+/// above the board's are played or refused as said.
+fn another_systems_frames_play_as_the_recording(
+    root: &std::path::Path,
+    dir: &std::path::Path,
+    swipe: &std::path::Path,
+    streamed: &[u8],
+) {
+    let recorded = et_host::recording::read(swipe).unwrap();
     let csv: String = recorded
         .records
         .iter()
@@ -235,7 +268,7 @@ fn sim_writes_a_recording_that_python_reads() {
             .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["position_mm"].clone())
             .collect()
     };
-    assert_eq!(positions(&from_csv.stdout), positions(&stream.stdout));
+    assert_eq!(positions(&from_csv.stdout), positions(streamed));
     // A recording shorter than the untouched reference gives no image: said, not silence.
     let short = dir.join("short.csv");
     let first: String = csv.lines().take(3).map(|l| format!("{l}\n")).collect();
@@ -295,29 +328,53 @@ fn sim_writes_a_recording_that_python_reads() {
         file_scene.to_str().unwrap(),
     ]);
     let e = String::from_utf8_lossy(&e.stderr).into_owned();
-    assert!(e.contains("et reconstruct --frames"), "{e}");
-    // A bad scene names the file and the field.
-    let bad = dir.join("bad.toml");
+    // (It named the frames' file as the one holding `scan.protocol`.)
+    assert!(
+        e.contains("file-protocol.toml: scan.protocol: a protocol file")
+            && e.contains("et reconstruct --scene")
+            && e.contains("--frames"),
+        "{e}"
+    );
+    // Another system driving more than the board's 1 mA (a tank at 2 mA, its frames 62.5
+    // times the swipe's 32 uA ones) plays as the board's 1 mA, said: the same touches at the
+    // same places. (It was refused as more than "the simulated board drives".)
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let tank = dir.join("tank-2ma.toml");
     std::fs::write(
-        &bad,
-        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\nelectrodes = { count = 7 }\n",
+        &tank,
+        text.replace("[scan]\n", "[scan]\ncurrent_ua = 2000\n"),
     )
     .unwrap();
-    let err = et(&[
-        "sim",
+    let scaled: String = (recorded.records.iter())
+        .map(|r| {
+            let row: Vec<String> = (r.voltages.iter())
+                .map(|v| format!("{:e}", f64::from(*v) * 62.5))
+                .collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    let tank_csv = dir.join("tank-2ma.csv");
+    std::fs::write(&tank_csv, scaled).unwrap();
+    let played = et(&[
+        "stream",
+        "--json",
+        "--replay",
+        tank_csv.to_str().unwrap(),
         "--scene",
-        bad.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
+        tank.to_str().unwrap(),
     ]);
-    assert!(!err.status.success());
-    let msg = String::from_utf8_lossy(&err.stderr);
+    let said = String::from_utf8_lossy(&played.stderr);
     assert!(
-        msg.contains("bad.toml") && msg.contains("sheet.electrodes.count"),
-        "{msg}"
+        played.status.success()
+            && said.contains("driven at 2000 uA, played as the board's 1000 uA"),
+        "{said}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
+    let (a, b) = (positions(&from_csv.stdout), positions(&played.stdout));
+    assert_eq!(a.len(), b.len(), "{said}");
+    for (a, b) in a.iter().zip(&b) {
+        let d = |i: usize| a[i].as_f64().unwrap() - b[i].as_f64().unwrap();
+        assert!(d(0).hypot(d(1)) < 0.2, "{a} and {b}");
+    }
 }
 
 /// The dataset as Python users read it: `python/et_dataset.py` (standard library), and the

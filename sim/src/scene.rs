@@ -278,6 +278,10 @@ pub struct Scene {
     /// working folder for a scene parsed from text.
     #[serde(skip)]
     pub dir: std::path::PathBuf,
+    /// The scene's file as the user named it (the name [`Scene::parse`] was given), for
+    /// messages about it after loading.
+    #[serde(skip)]
+    pub name: String,
     /// The protocol file's text, read once by [`Scene::schedule`] and kept (a FIFO, or a file
     /// rewritten meanwhile, gives every use the same rows).
     #[serde(skip)]
@@ -383,10 +387,11 @@ impl Scene {
                 line,
             });
         }
-        let scene: Scene = toml::from_str(text).map_err(|error| SceneError::Parse {
+        let mut scene: Scene = toml::from_str(text).map_err(|error| SceneError::Parse {
             path: name.into(),
             error,
         })?;
+        scene.name = name.into();
         scene.validate().map_err(|error| SceneError::Invalid {
             path: name.into(),
             error,

@@ -215,7 +215,7 @@ fn collect_sets(
     sizes: &Sizes,
     steps: &Steps,
 ) -> Result<(Dataset, Dataset)> {
-    let config = collect::training_config(scene.scan_config()?);
+    let config = collect::training_config(scene.board_config()?);
     let plan = Plan {
         visits: 1,
         scans: sizes.scans,

@@ -114,15 +114,19 @@ impl ReplaySource {
     }
 
     /// Another system's frames (a CSV, .npy, .npz or .mat of frames in volts,
-    /// [`crate::frames`]) played as a recording of `scene`'s built-in protocol and current.
+    /// [`crate::frames`]) played as a recording of `scene`'s built-in protocol and current
+    /// (`scene_name`, its file as the user named it, for messages). A current above the
+    /// board's 1 mA plays as 1 mA, the frames scaled to it ([`Scene::replay_config`]) and
+    /// the source's name saying so.
     ///
     /// # Errors
     /// [`LiveError::Table`] for a scene whose protocol is a file (the live pipeline scans et's
     /// built-in protocols; `et reconstruct --frames` images any), [`LiveError::Frames`] naming
     /// the file.
-    pub fn open_table(path: &Path, scene: &Scene) -> Result<Self, LiveError> {
-        let config = scene.scan_config().map_err(|error| LiveError::Table {
-            path: path.into(),
+    pub fn open_table(path: &Path, scene: &Scene, scene_name: &str) -> Result<Self, LiveError> {
+        let (config, scale) = scene.replay_config().map_err(|error| LiveError::Table {
+            scene: scene_name.into(),
+            frames: path.into(),
             error,
         })?;
         let header = recording::Header::new(format!("file:{}", path.display()), &config)?;
@@ -131,18 +135,34 @@ impl ReplaySource {
             .frames
             .into_iter()
             .enumerate()
-            .map(|(i, voltages)| recording::Record {
-                seq: u32::try_from(i).unwrap_or(u32::MAX),
-                t_us: 0,
-                flags: 0,
-                rail_count: 0,
-                voltages,
-                invalid: Vec::new(),
-                touches: None,
+            .map(|(i, mut voltages)| {
+                if scale != 1.0 {
+                    voltages
+                        .iter_mut()
+                        .for_each(|v| *v = (f64::from(*v) * scale) as f32);
+                }
+                recording::Record {
+                    seq: u32::try_from(i).unwrap_or(u32::MAX),
+                    t_us: 0,
+                    flags: 0,
+                    rail_count: 0,
+                    voltages,
+                    invalid: Vec::new(),
+                    touches: None,
+                }
             })
             .collect();
+        let mut name = frames.description;
+        if scale != 1.0 {
+            name += &format!(
+                " (driven at {} uA, played as the board's {} uA: its volts times {scale:.4}, \
+                 the same images, positions and intensities)",
+                scene.scan.current_ua,
+                f64::from(config.current_na) / 1e3
+            );
+        }
         Ok(Self {
-            name: frames.description,
+            name,
             recording: Recording {
                 header,
                 records,
@@ -476,7 +496,7 @@ pub fn open_source(
     let source = match spec {
         SourceSpec::Sim => Source::Sim(Box::new(SimSource::new(&scene, name)?)),
         SourceSpec::Replay(path) if crate::frames::is_table(path) => {
-            Source::Replay(Box::new(ReplaySource::open_table(path, &scene)?))
+            Source::Replay(Box::new(ReplaySource::open_table(path, &scene, &name)?))
         }
         SourceSpec::Replay(path) => {
             Source::Replay(Box::new(ReplaySource::open(path, sheet.clone())?))

@@ -42,10 +42,17 @@ pub enum SceneFault {
          another system's frames with et sim --out frames.csv"
     )]
     NotScanned,
+    /// A protocol file asked of `et stream` or `et view` playing another system's frames.
+    #[error(
+        "a protocol file: `et stream` and `et view` play another system's frames under a \
+         built-in protocol only (adjacent, pseudo-polar, pp-pp or opposite)"
+    )]
+    NotPlayed,
     /// A current above the simulated board's.
     #[error(
-        "{0} uA: the simulated board drives (0, 1000] uA (imaging recorded frames takes up to \
-         50 mA: give them with --frames)"
+        "{0} uA: the simulated board drives up to 1000 uA (another system's frames at this \
+         current are written by `et sim --out frames.csv`, .npy, .npz or .mat, and imaged by \
+         `et reconstruct --frames`)"
     )]
     BoardCurrent(f64),
     /// The protocol file, or the built-in protocol's schedule.

@@ -79,10 +79,7 @@ impl Run {
     /// [`SceneError`] if the sheet cannot be built (e.g. electrodes overlapping at the
     /// chosen resolution).
     pub fn new(scene: &Scene) -> Result<Self, SceneError> {
-        let config = scene.scan_config().map_err(|error| SceneError::Invalid {
-            path: "scene".into(),
-            error,
-        })?;
+        let config = scene.board_config()?;
         let mut rng = Rng::new(scene.seed);
         let mut moves = rng.fork();
         let offsets = scene.offsets_from(&mut moves);

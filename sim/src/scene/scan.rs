@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// The most current the board drives, uA ([`et_core::config::CURRENT_NA_MAX`]).
+const BOARD_MAX_UA: f64 = et_core::config::CURRENT_NA_MAX as f64 / 1e3;
+
 impl Scene {
     /// The built-in protocol named, if it is one.
     pub(super) fn named_protocol(&self) -> Result<Option<ProtocolKind>, FieldError> {
@@ -35,7 +38,7 @@ impl Scene {
             };
             return Err(FieldError::new("scan.current_ua", fault));
         }
-        if self.named_protocol()?.is_some() && ua <= 1000.0 {
+        if self.named_protocol()?.is_some() && ua <= BOARD_MAX_UA {
             self.scan_config()?;
         }
         Ok(())
@@ -92,20 +95,57 @@ impl Scene {
     /// [`FieldError`] naming the `scan.` field at fault: a protocol file (imaged from
     /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
-        let s = &self.scan;
         let protocol = self
             .named_protocol()?
             .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?;
-        if !(s.current_ua.is_finite() && s.current_ua > 0.0 && s.current_ua <= 1000.0) {
-            let fault = SceneFault::BoardCurrent(s.current_ua);
+        let ua = self.scan.current_ua;
+        if !(ua.is_finite() && ua > 0.0 && ua <= BOARD_MAX_UA) {
+            let fault = SceneFault::BoardCurrent(ua);
             return Err(FieldError::new("scan.current_ua", fault));
         }
+        self.config_at(protocol, ua)
+    }
+
+    /// [`Scene::scan_config`], its error naming the scene's file.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the file and the `scan` field at fault.
+    pub fn board_config(&self) -> Result<ScanConfig, SceneError> {
+        self.scan_config().map_err(|error| SceneError::Invalid {
+            path: self.name.clone(),
+            error,
+        })
+    }
+
+    /// The configuration another system's frames of the scene's built-in protocol play at
+    /// as a recording (`et stream --replay`, `et view`), and the factor their voltages are
+    /// multiplied by for it: the scene's own, factor 1, when its current is one the board
+    /// drives (up to 1 mA); else the board's 1 mA and the ratio of the currents (1 mA over
+    /// the scene's), the frames then what the same sheet gives at 1 mA. Images, positions
+    /// and noise-relative intensities are unchanged, a difference image being linear in the
+    /// current.
+    ///
+    /// # Errors
+    /// [`FieldError`] naming `scan.protocol` for a protocol file (its frames are imaged by
+    /// `et reconstruct --frames`), or the `scan` field the board's scan refuses.
+    pub fn replay_config(&self) -> Result<(ScanConfig, f64), FieldError> {
+        let protocol = self
+            .named_protocol()?
+            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotPlayed))?;
+        let ua = self.scan.current_ua;
+        let played = ua.min(BOARD_MAX_UA);
+        Ok((self.config_at(protocol, played)?, played / ua))
+    }
+
+    /// The board's configuration of the scene's scan at `current_ua` (within the board's).
+    fn config_at(&self, protocol: ProtocolKind, current_ua: f64) -> Result<ScanConfig, FieldError> {
+        let s = &self.scan;
         let config = ScanConfig {
             electrodes: self.sheet.physical.electrodes.count,
             protocol,
             samples_per_step: s.samples_per_step,
             settle_samples: s.settle_samples,
-            current_na: (s.current_ua * 1e3).round() as u32,
+            current_na: (current_ua * 1e3).round() as u32,
             sample_rate_hz: s.sample_rate_hz,
             gain: s.gain,
         };

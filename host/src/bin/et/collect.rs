@@ -158,7 +158,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     output::check(&args.out, &inputs, force)?;
     output::check_format(&args.out, "a dataset", &["csv", "npz"])?;
     let (rows, cols) = parse_grid(&args.grid, "--grid")?;
-    let config = collect::training_config(scene.scan_config()?);
+    let config = collect::training_config(scene.board_config()?);
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
     let plan = args.plan()?;
     // The finger against the simulator's grid, as a scene's touches are.

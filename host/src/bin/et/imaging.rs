@@ -299,7 +299,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         // Another system's frames: the scene's protocol (any schedule, any current).
         None if table.is_some() => (scene.schedule()?, None),
         None => {
-            let config = scene.scan_config()?;
+            let config = scene.board_config()?;
             (config.schedule()?, Some(config))
         }
     };
