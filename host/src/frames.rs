@@ -88,8 +88,26 @@ pub enum FramesFault {
     /// No rows of numbers.
     #[error("no frames")]
     NoFrames,
+    /// A cell of a CSV that is a number but not a voltage et takes: NaN, infinite, or past
+    /// single precision (column from 1).
+    #[error("column {column}: '{cell}' {}", if value.is_finite() {
+        "is past single precision (at most 3.4e38), in which et takes frames: not volts?"
+    } else {
+        "is not finite (a value the system did not send? leave that frame out)"
+    })]
+    NotVolts {
+        /// The column, from 1.
+        column: usize,
+        /// The cell as written.
+        cell: String,
+        /// Its value.
+        value: f64,
+    },
     /// A value that is not finite (row and column from 0).
-    #[error("value {value} at row {row}, column {column} is not finite")]
+    #[error(
+        "value {value} at row {row}, column {column} (counted from 0) is not finite (a value \
+         the system did not send? leave that frame out)"
+    )]
     NotFinite {
         /// The value.
         value: f64,
@@ -99,7 +117,7 @@ pub enum FramesFault {
         column: usize,
     },
     /// Values that single precision, in which et takes frames, cannot hold ([`Single`]; the
-    /// row and column from 0 of a value past its range).
+    /// row and column from 0 of a value past its range, in an array).
     #[error("{}", match fault {
         Single::Past(_) => format!("row {row}, column {column}: {fault}"),
         Single::Below => fault.to_string(),
@@ -470,10 +488,27 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
             return Err(content(path, line, fault));
         }
         for (c, cell) in cells.iter().enumerate() {
-            values.push(text::number(cell, delimiter).ok_or_else(|| {
-                let (column, cell) = (c + 1, cell.to_string());
-                content(path, line, FramesFault::NotNumber { column, cell })
-            })?);
+            let (column, written) = (c + 1, || cell.to_string());
+            let v = text::number(cell, delimiter).ok_or_else(|| {
+                content(
+                    path,
+                    line,
+                    FramesFault::NotNumber {
+                        column,
+                        cell: written(),
+                    },
+                )
+            })?;
+            // (Said by the file's line and cell: the matrix's check counts from 0.)
+            if !(v.is_finite() && v.abs() <= f64::from(f32::MAX)) {
+                let fault = FramesFault::NotVolts {
+                    column,
+                    cell: written(),
+                    value: v,
+                };
+                return Err(content(path, line, fault));
+            }
+            values.push(v);
         }
         n += 1;
     }

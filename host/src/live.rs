@@ -158,6 +158,15 @@ pub enum LiveError {
         /// Why the scene's scan is not one the live pipeline plays.
         error: et_sim::scene::FieldError,
     },
+    /// Another system's frames with no scene: they carry neither the sheet nor the protocol.
+    #[error(
+        "{}: another system's frames carry neither the sheet they were measured on nor its \
+         protocol, and imaged on et's default 13 x 13 cm sheet their touches would be in the \
+         wrong places: give a scene with --scene (its [sheet] and [scan] protocol, docs/guide.md \
+         \"Your own system's frames\")",
+        .0.display()
+    )]
+    NoScene(std::path::PathBuf),
     /// A recording plays the protocol it was recorded with.
     #[error("a recording plays the protocol it was recorded with")]
     Recorded,

@@ -269,6 +269,14 @@ fn another_systems_frames_play_as_the_recording(
             .collect()
     };
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
+    // Without --scene they are refused: et's default sheet is not the one they were
+    // measured on (they were imaged on it, touches in the wrong places, without a word).
+    let bare = et(&["stream", "--json", "--replay", swipe_csv.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&bare.stderr);
+    assert!(
+        !bare.status.success() && said.contains("give a scene with --scene"),
+        "{said}"
+    );
     // A recording shorter than the untouched reference gives no image: said, not silence.
     let short = dir.join("short.csv");
     let first: String = csv.lines().take(3).map(|l| format!("{l}\n")).collect();

@@ -1165,7 +1165,7 @@ class Model:
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
         X = self._by_name(X)
         scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
-        for note in ("scale_note", "trained_note"):
+        for note in ("unit_note", "scale_note", "trained_note"):
             if scores.get(note):
                 warnings.warn(scores[note], EtWarning, stacklevel=2)
         unknown = scores.get("unknown_labels") or []

@@ -350,6 +350,10 @@ def test_evaluating_on_the_training_rows_is_warned_of():
                                           "trained on") as said:
         scores = model.evaluate(X[:200], positions[:200])
     assert said[0].filename == __file__ and "trained_note" in scores
+    # Positions in mm where the library takes m: scored errors of metres without a word.
+    with pytest.warns(et.EtWarning, match="more than any touch sheet .* are they in mm"):
+        scores = model.evaluate(X[200:], positions[200:] * 1000)
+    assert "unit_note" in scores
 
 
 def test_training_errors_name_pythons_parameters():

@@ -476,14 +476,21 @@ pub enum SourceSpec {
 
 /// Opens `spec`. `scene` is the scene file to simulate (with its touches), or the sheet a
 /// recording or a board uses (None: the default 13 x 13 cm, 16-electrode sheet, untouched
-/// until something presses it). Returns the source and the sheet.
+/// until something presses it; another system's frames need theirs). Returns the source and
+/// the sheet.
 ///
 /// # Errors
-/// [`LiveError`] naming the file or port.
+/// [`LiveError`] naming the file or port; [`LiveError::NoScene`] for another system's frames
+/// without a scene.
 pub fn open_source(
     spec: &SourceSpec,
     scene: Option<&Path>,
 ) -> Result<(Source, SheetSpec), LiveError> {
+    if let (SourceSpec::Replay(path), None) = (spec, scene)
+        && crate::frames::is_table(path)
+    {
+        return Err(LiveError::NoScene(path.clone()));
+    }
     let (scene, name) = match scene {
         Some(p) => (Scene::load(p)?, p.display().to_string()),
         None => {

@@ -31,13 +31,13 @@ fn csv_rows_or_columns_header_or_not() {
     assert!(e.contains("f.csv:2") && e.contains("'x'"), "{e}");
     std::fs::write(&f, "1,2\n3,nan\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
-    assert!(e.contains("not finite"), "{e}");
+    assert!(e.contains("f.csv:2: column 2: 'nan' is not finite"), "{e}");
     // Values single precision cannot hold are said where they are (1e300 was imaged as a
     // reference of 0 values; 1e-300 everywhere as frames of zeros); at its bounds, taken.
     std::fs::write(&f, "1,2\n3,1e300\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(
-        e.contains("row 1, column 1: 1e300 is past single precision"),
+        e.contains("f.csv:2: column 2: '1e300' is past single precision"),
         "{e}"
     );
     std::fs::write(&f, "1e-300,-2e-300\n0,1e-39\n").unwrap();

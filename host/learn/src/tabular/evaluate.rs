@@ -40,6 +40,10 @@ pub struct Evaluation {
     /// (another unit or gain; [`TableModel::features_scale_note`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale_note: Option<String>,
+    /// What to say when the rows' positions span more than any sheet or less than a finger
+    /// in the unit they were read in (mm read as m, m as mm; [`Table::positions_scale_note`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit_note: Option<String>,
     /// Per group (session) of the rows, when they have groups: its rows' errors.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_group: Option<Vec<GroupScore>>,
@@ -174,6 +178,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
     });
     Ok(Evaluation {
         scale_note: model.features_scale_note(&table.x),
+        unit_note: truth.as_ref().and_then(|_| table.positions_scale_note()),
         trained_note,
         unknown_labels: unknown_labels(model, table),
         per_group,

@@ -1383,6 +1383,18 @@ fn positions_in_another_unit_are_noted() {
         note.contains("less than a finger") && note.contains("are they in m?"),
         "{note}"
     );
+    // Scored on rows in another unit, the same is said beside the scores (`et eval` of m
+    // read as mm scored errors of the positions' size without a word); rows in their own unit
+    // say nothing.
+    let model = train(&rows, ridge, &opts(), &mut quiet()).unwrap();
+    assert_eq!(evaluate(&model, &rows).unwrap().unit_note, None);
+    for (factor, unit, said) in [(1e3, Unit::M, "are they in mm?"), (1e-3, Unit::Mm, "in m?")] {
+        let note = evaluate(&model, &scaled(factor, unit))
+            .unwrap()
+            .unit_note
+            .unwrap_or_default();
+        assert!(note.contains(said), "{note}");
+    }
 }
 
 /// Rows in another unit or at another gain than the training's are predicted without an

@@ -8,7 +8,8 @@ use anyhow::Result;
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct SourceArgs {
     /// The scene to simulate; with --replay or --port, the sheet they were made on (its
-    /// shape and electrodes, for imaging). Default: the 13 x 13 cm, 16-electrode sheet.
+    /// shape and electrodes, for imaging). Default: the 13 x 13 cm, 16-electrode sheet;
+    /// another system's frames (a CSV, .npy, .npz or .mat) need the scene of their own.
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Replay a recording (JSON Lines from `et sim` or `et record`), or another system's

@@ -426,7 +426,10 @@ pub(crate) fn eval(
             std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
-    for note in [&e.scale_note, &e.trained_note].into_iter().flatten() {
+    for note in [&e.unit_note, &e.scale_note, &e.trained_note]
+        .into_iter()
+        .flatten()
+    {
         say!("note: {note}");
     }
     if !e.unknown_labels.is_empty() {
