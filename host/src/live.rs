@@ -209,3 +209,20 @@ pub enum LiveError {
     #[error("reference frames: {0}")]
     Stats(#[from] stats::StatsError),
 }
+
+impl LiveError {
+    /// Whether the untouched reference V_0 itself is refused (one value throughout,
+    /// magnitudes without their sign, or running against the model): every frame after it
+    /// would be refused alike, so a stream ends here rather than skip frame after frame.
+    #[must_use]
+    pub fn is_reference(&self) -> bool {
+        matches!(
+            self,
+            LiveError::Imaging(
+                ImagingError::ReferenceNotMeasured(_)
+                    | ImagingError::ReferenceUnsigned(..)
+                    | ImagingError::ReferenceAgainstModel(_)
+            )
+        )
+    }
+}

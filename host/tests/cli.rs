@@ -269,6 +269,27 @@ fn another_systems_frames_play_as_the_recording(
             .collect()
     };
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
+    // Frames of the other sign (sense wires swapped) are refused at their reference, once,
+    // as `et reconstruct` refuses them (they streamed touches in the wrong places).
+    let negated: String = (csv.lines())
+        .map(|l| {
+            let row: Vec<String> = (l.split(','))
+                .map(|v| format!("{:e}", -v.parse::<f64>().unwrap()))
+                .collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    let negated_csv = dir.join("negated.csv");
+    std::fs::write(&negated_csv, negated).unwrap();
+    let e = replay(&negated_csv, &[]);
+    let said = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success()
+            && said.contains("runs against the model")
+            && !said.contains("skipped")
+            && e.stdout.is_empty(),
+        "{said}"
+    );
     // Without --scene they are refused: et's default sheet is not the one they were
     // measured on (they were imaged on it, touches in the wrong places, without a word).
     let bare = et(&["stream", "--json", "--replay", swipe_csv.to_str().unwrap()]);

@@ -277,6 +277,12 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(v * 1e300, v0 * 1e300)
     with pytest.raises(et.EtError, match="below 1.2e-38"):
         disc.image(v * 1e-300, v0 * 1e-300)
+    # Magnitudes without their sign (some systems write them), under a protocol whose values
+    # change sign around the sheet: refused as that (imaged, they lost the touch).
+    pp = et.Reconstructor(et.disc(0.065, 16), et.protocol("pp-pp", 16), triangles=1200)
+    w0 = pp.forward(pp.sigma0)
+    with pytest.raises(et.EtError, match="magnitudes without their sign"):
+        pp.image(np.abs(w0 * 1.001), np.abs(w0))
     # A recording's NaN (a value the board did not send), named by its place (it was "a frame
     # value is NaN or infinite", of no frame or channel).
     gap = v.copy()

@@ -64,6 +64,10 @@ pub enum BackgroundError {
     /// The reference frame is one value throughout: not measured voltages.
     #[error("background fit: the reference {}", not_measured_said(*.0))]
     NotMeasured(f64),
+    /// The reference frame is magnitudes without their sign ([`unsigned`]: the sign it
+    /// holds, the model's values of the other).
+    #[error("background fit: the reference {}", unsigned_said(*.0, *.1))]
+    Unsigned((i8, usize), usize),
     /// The reference frame runs against the model (the best R_s is negative).
     #[error(
         "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
@@ -86,6 +90,43 @@ pub enum BackgroundError {
         /// The protocol's (first row's) current, A.
         current_a: f64,
     },
+}
+
+/// Whether `v0` reads as magnitudes without their sign: every value of one sign (or zero)
+/// where `model`, the model's frame of the untouched sheet (K values each), has at least a
+/// tenth of its values clearly (beyond 5 % of its largest) of each sign. Some systems write
+/// magnitudes; a protocol's values change sign around the sheet, and a difference of
+/// magnitudes images every change where V_0 is negative with the wrong sign. Returns the
+/// sign `v0` holds (+1 or -1) and how many of the model's values are of the other.
+#[must_use]
+pub fn unsigned(v0: &[f64], model: &[f64]) -> Option<(i8, usize)> {
+    let sign: i8 = if v0.iter().all(|v| *v >= 0.0) {
+        1
+    } else if v0.iter().all(|v| *v <= 0.0) {
+        -1
+    } else {
+        return None;
+    };
+    let clear = 0.05 * model.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let of = |s: f64| model.iter().filter(|m| **m * s > clear).count();
+    let (same, other) = (of(f64::from(sign)), of(-f64::from(sign)));
+    (same * 10 >= model.len() && other * 10 >= model.len()).then_some((sign, other))
+}
+
+/// What is said of a reference read as magnitudes ([`unsigned`]).
+#[must_use]
+pub fn unsigned_said((sign, other): (i8, usize), k: usize) -> String {
+    let (has, lacks) = if sign > 0 {
+        ("positive", "negative")
+    } else {
+        ("negative", "positive")
+    };
+    format!(
+        "has every value {has} or zero, where the model's frame of the untouched sheet has \
+         {other} of its {k} {lacks} (the protocol's values change sign around the sheet): \
+         magnitudes without their sign? et images signed voltages: give the real part, or each \
+         magnitude with the sign of its phase's cosine"
+    )
 }
 
 /// The value of a frame that holds one value throughout (all zero, or a constant): no
@@ -206,6 +247,9 @@ pub fn fit(
     };
     let scene_rho = complete.then_some(ratio);
     let scene_frame = unit.borrow_mut().frame(scene_rho)?;
+    if let Some(said) = unsigned(v0, &scene_frame) {
+        return Err(BackgroundError::Unsigned(said, k));
+    }
     let scene_fit = scale(&scene_frame, v0);
     // The scene's own residual, at its R_s (not the fitted scale).
     let scene_residual = {

@@ -414,7 +414,12 @@ impl Processor {
             &frame.config,
             key,
         )?;
-        let noise = Noise::current(&mut reference.noise, &reference.frames, projection, key)?;
+        let noise = Noise::current(
+            &mut reference.noise,
+            &reference.frames,
+            (&self.recon, projection),
+            key,
+        )?;
         let estimated = noise.of_frame(&self.recon, &frame)?;
         let noise = estimated.as_ref().unwrap_or(noise);
         Imaging {
@@ -432,11 +437,13 @@ impl Processor {
 
 impl Noise {
     /// The noise in `slot` if it was made for `(method, alpha)`, else one made from the
-    /// reference `frames` (each K values, V) through `projection` and put there.
+    /// reference `frames` (each K values, V) through `projection` and put there, their V_0
+    /// checked against `recon`'s model of the untouched sheet as a reconstruction's reference
+    /// is (negated or unsigned frames imaged every touch in the wrong place).
     fn current<'n>(
         slot: &'n mut Option<Noise>,
         frames: &[Vec<f32>],
-        projection: &Projection,
+        (recon, projection): (&Reconstructor, &Projection),
         (method, alpha): (Method, f64),
     ) -> Result<&'n Noise, LiveError> {
         if let Some(kept) = slot
@@ -449,6 +456,7 @@ impl Noise {
         let k = frames.first().map_or(0, Vec::len);
         let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
         stats::reference(frames, &mut v0)?;
+        recon.runs_with_the_model(&v0)?;
         stats::dv_variance(frames, &mut var_dv)?;
         let per_frame = frames.len() < 2;
         // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image filters

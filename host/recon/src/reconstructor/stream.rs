@@ -56,15 +56,20 @@ impl Reconstructor {
     /// a constant) is no measurement. The model's frame is the one the Jacobian was made at:
     /// K products, no solve.
     ///
+    /// Magnitudes without their sign are refused too ([`crate::background::unsigned`]).
+    ///
     /// # Errors
-    /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceAgainstModel`] naming
-    /// the correlation.
-    pub(super) fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
+    /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceUnsigned`];
+    /// [`ImagingError::ReferenceAgainstModel`] naming the correlation.
+    pub fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
         let model = &self.jac.frame;
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let (a, b) = (norm(v0), norm(model));
         if let Some(value) = crate::background::one_value(v0) {
             return Err(ImagingError::ReferenceNotMeasured(value));
+        }
+        if let Some(said) = crate::background::unsigned(v0, model) {
+            return Err(ImagingError::ReferenceUnsigned(said, v0.len()));
         }
         let r =
             v0.iter().zip(model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE);

@@ -85,6 +85,21 @@ fn contact_only_where_the_frame_shows_it_and_a_reversed_frame_refused() {
     let e = et_recon::background::fit(&guess, &mesh, &off_drive, &reversed).unwrap_err();
     assert!(matches!(e, BackgroundError::Sign(_)), "{e}");
     assert!(e.to_string().contains("direction"), "{e}");
+    // Magnitudes without their sign (some systems write them; this protocol's values change
+    // sign around the tank) are said as that, not as a polarity swapped.
+    let negative = v0.iter().filter(|v| **v < 0.0).count();
+    assert!(
+        (v0.len()..=9 * v0.len()).contains(&(10 * negative)),
+        "{negative} of {} negative",
+        v0.len()
+    );
+    let magnitudes: Vec<f64> = v0.iter().map(|v| v.abs()).collect();
+    let e = et_recon::background::fit(&guess, &mesh, &off_drive, &magnitudes).unwrap_err();
+    assert!(matches!(e, BackgroundError::Unsigned((1, _), _)), "{e}");
+    assert!(
+        e.to_string().contains("magnitudes without their sign"),
+        "{e}"
+    );
     assert!(et_recon::background::fit(&guess, &mesh, &off_drive, &v0[1..]).is_err());
     assert!(et_recon::background::fit(&guess, &mesh, &off_drive, &vec![0.0; v0.len()]).is_err());
 }

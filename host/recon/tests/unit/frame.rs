@@ -261,6 +261,44 @@ fn a_reference_against_the_model_is_refused() {
         .unwrap();
 }
 
+/// Magnitudes without their sign under a protocol whose values change sign around the sheet
+/// (PP-PP) are refused as that, either sign; the signed frame is taken. (Its magnitudes
+/// were imaged: no object where the bump was.)
+#[test]
+fn a_reference_of_magnitudes_is_refused() {
+    let sheet = Sheet::disc(0.1, 16);
+    let protocol =
+        et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::PpPp, 16).unwrap();
+    let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
+    let mut recon = Spec {
+        mesh: MeshPlan::About {
+            triangles: 900,
+            refine: Vec::new(),
+        },
+        ..Spec::new(sheet, schedule)
+    }
+    .set_up()
+    .unwrap();
+    let v0 = bump_frame(&recon, 0.0);
+    for sign in [1.0f32, -1.0] {
+        let magnitudes: Vec<f32> = v0.iter().map(|v| sign * v.abs()).collect();
+        let e = recon
+            .set_reference(Reference::from_frames(&[magnitudes]).unwrap())
+            .unwrap_err();
+        assert!(matches!(e, ImagingError::ReferenceUnsigned(..)), "{e:?}");
+        let said = e.to_string();
+        let has = if sign > 0.0 { "positive" } else { "negative" };
+        assert!(
+            said.contains(&format!("every value {has} or zero"))
+                && said.contains("magnitudes without their sign"),
+            "{said}"
+        );
+    }
+    recon
+        .set_reference(Reference::from_frames(&[v0]).unwrap())
+        .unwrap();
+}
+
 /// A set-up asked to stop ends at its next stage (Python's Ctrl-C ran it to its end in the
 /// background): stopped at the n-th of its three asks (after the mesh, the forward model,
 /// the Jacobian), it asks no more and returns `Stopped`; never stopped, it asks three times.

@@ -228,6 +228,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             seen += 1;
             let out = match processor.process(frame) {
                 Ok(o) => o,
+                Err(e) if e.is_reference() => {
+                    anyhow::bail!("{}: {e}", source.describe())
+                }
                 Err(e) => {
                     say!("skipped: {e}");
                     continue;
