@@ -78,7 +78,15 @@ pub enum FramesFault {
         last: bool,
     },
     /// A cell that is not a number (column from 1).
-    #[error("column {column}: '{cell}' is not a number")]
+    #[error(
+        "column {column}: '{cell}' is not a number{}",
+        if complex(cell) {
+            " but a complex one: et images real voltages, so write the real parts (NumPy: \
+             np.savetxt(f, V.real); from magnitude and phase, magnitude * cos(phase))"
+        } else {
+            ""
+        }
+    )]
     NotNumber {
         /// The column, from 1.
         column: usize,
@@ -137,6 +145,9 @@ pub enum FramesFault {
         if *rows == k + 1 || *columns == k + 1 {
             "one more than K: a first column or row of frame numbers or times? write the file \
              without it"
+        } else if *rows == 2 * k || *columns == 2 * k {
+            "twice K: real and imaginary parts, or magnitudes and phases, side by side? et \
+             images real voltages: write the real parts alone (magnitude * cos(phase))"
         } else {
             "is it the scene's protocol?"
         }
@@ -404,6 +415,24 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     Ok(Frames {
         frames,
         description,
+    })
+}
+
+/// Whether `cell` is a complex number as NumPy (`(1.5+0.2j)`), Python (`1.5-0.2j`) or MATLAB
+/// (`1.5+0.2i`) writes it.
+fn complex(cell: &str) -> bool {
+    let c = cell.trim().trim_start_matches('(').trim_end_matches(')');
+    let Some(body) = c.strip_suffix(['j', 'J', 'i', 'I']) else {
+        return false;
+    };
+    // The sign that starts the imaginary part: the last + or - not at the start and not an
+    // exponent's.
+    let split = body
+        .char_indices()
+        .rev()
+        .find(|&(i, ch)| i > 0 && (ch == '+' || ch == '-') && !body[..i].ends_with(['e', 'E']));
+    split.is_some_and(|(i, _)| {
+        body[..i].trim().parse::<f64>().is_ok() && body[i..].trim().parse::<f64>().is_ok()
     })
 }
 

@@ -29,6 +29,22 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2\n3,x\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("f.csv:2") && e.contains("'x'"), "{e}");
+    // Complex values (NumPy's savetxt of a complex array, MATLAB's) are said as that, and a
+    // row of real and imaginary parts side by side as twice K.
+    for cell in ["(9.68e+00+9.68e-01j)", "1.5-2e-3j", "1.5+0.2i"] {
+        std::fs::write(&f, format!("1,2\n3,{cell}\n")).unwrap();
+        let e = read(&f, 2).unwrap_err().to_string();
+        assert!(
+            e.contains("but a complex one") && e.contains("V.real"),
+            "{e}"
+        );
+    }
+    std::fs::write(&f, "1,2\n3,1e\n").unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(!e.contains("complex"), "{e}");
+    std::fs::write(&f, "1,2,3,4\n".repeat(5)).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(e.contains("twice K: real and imaginary parts"), "{e}");
     std::fs::write(&f, "1,2\n3,nan\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("f.csv:2: column 2: 'nan' is not finite"), "{e}");
