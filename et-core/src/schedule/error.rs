@@ -44,7 +44,14 @@ pub enum ScheduleError {
         electrode: u16,
     },
     /// A current that is not positive or not finite.
-    #[error("row {row}: current {current_a} A: give a current above 0 A")]
+    #[error(
+        "row {row}: current {current_a} A: give a current above 0 A{}",
+        if *current_a < 0.0 {
+            " (a current the other way: swap the row's source and sink, and give its size)"
+        } else {
+            ""
+        }
+    )]
     Current {
         /// The row.
         row: usize,

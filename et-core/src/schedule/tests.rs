@@ -95,10 +95,14 @@ fn wrong_rows_are_named_by_line_and_cell() {
         e.contains("p.csv:2") && e.contains("1.4 A") && e.contains("50 mA"),
         "{e}"
     );
+    // A negative current (a system's sign for the other way) is said with its fix.
     let e = parse("0,1,2,3,-1e-3\n", 16, 0).unwrap_err().to_string();
-    assert!(e.contains("above 0 A"), "{e}");
+    assert!(
+        e.contains("above 0 A") && e.contains("swap the row's source and sink"),
+        "{e}"
+    );
     let e = parse("0,1,2,3,nan\n", 16, 0).unwrap_err().to_string();
-    assert!(e.contains("NaN A"), "{e}");
+    assert!(e.contains("NaN A") && !e.contains("swap"), "{e}");
     let e = parse("source,sink,plus,minus\n0,1,2,3\n", 16, 0)
         .unwrap_err()
         .to_string();
