@@ -774,6 +774,18 @@ class Reconstructor:
         )
         self._replayed: List[Tuple[str, np.ndarray]] = []
 
+    def _by_rows(self, frames: np.ndarray, what: str) -> np.ndarray:
+        """``frames`` (n x K) as they are, or refused with the fix when they are K x n: frames
+        as columns, as MATLAB users store them (said as frame 0 having n values)."""
+        k = self.protocol.K
+        n, m = frames.shape
+        if m != k and n == k:
+            raise EtError(
+                f"{what} is {n} x {m}: its columns are the frames, K = {k} values each? give "
+                f"them as rows ({what}.T, {m} x {k})"
+            )
+        return frames
+
     def _keep(self, call: str, frames: np.ndarray) -> None:
         """Keeps the last call of its kind for pickle to replay, after the others kept."""
         self._replayed = [c for c in self._replayed if c[0] != call] + [(call, frames.copy())]
@@ -784,12 +796,16 @@ class Reconstructor:
         # time is spent again there.
         return (_reconstructor_again, (self._made, self._replayed))
 
-    def _frames(self, v0: Any, fitting: bool = False) -> np.ndarray:
-        """The untouched frame(s) as n x K, said when far from the model's frame of the sheet
-        and not being fitted to."""
+    def _frames(self, v0: Any) -> np.ndarray:
+        """The untouched frame(s) as n x K."""
         v0 = _finite_frames(_numbers(v0, "v0"), "v0")
-        frames = _f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0")
-        if frames.size and not fitting and not self._native.background_fitted:
+        return self._by_rows(_f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0"), "v0")
+
+    def _say_scale(self, frames: np.ndarray) -> None:
+        """Warns when the untouched frames (n x K), taken by the native side (what it refuses
+        is said as refused, not first warned of), are far from the model's frame of the sheet
+        and the background was not fitted to them."""
+        if frames.size and not self._native.background_fitted:
             scale = self._native.scale_of(frames)
             # (Below 0 it runs against the model, which the reference's check refuses.)
             if scale is not None and 0 < scale and not 1 / SCALE_SAID <= scale <= SCALE_SAID:
@@ -803,7 +819,6 @@ class Reconstructor:
                     EtWarning,
                     stacklevel=3,
                 )
-        return frames
 
     def set_reference(self, v0: Any) -> None:
         """Sets the untouched frame ``v0`` (K values), or several (n x K: their mean is V_0 and
@@ -813,6 +828,7 @@ class Reconstructor:
         frame."""
         frames = self._frames(v0)
         self._native.set_reference(frames)
+        self._say_scale(frames)
         self._reference = frames
         self._v0 = frames.mean(axis=0)
         self._keep("set_reference", frames)
@@ -874,6 +890,7 @@ class Reconstructor:
                          lambda: self._found_of(v[None, :], reference)[0])
         frames = self._frames(v0)
         made = self._native.image(v, frames)
+        self._say_scale(frames)
         self._say_unlike(v, frames.mean(axis=0))
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
@@ -887,7 +904,7 @@ class Reconstructor:
             self.set_reference(v0)
         if self._reference is None:
             raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
-        frames = _finite_frames(_f64(V, 2, "V"), "V")
+        frames = self._by_rows(_finite_frames(_f64(V, 2, "V"), "V"), "V")
         pixels, dv, alpha = self._native.pixels_batch(frames)
         self._say_unlike(frames, self._v0)
         rows, cols = self._native.grid[:2]
@@ -905,7 +922,7 @@ class Reconstructor:
         """Fits the sheet resistance and contact resistance to the untouched frame(s) ``v0``
         and images about them from then on (as `et reconstruct` does for measured frames); the
         fit as `et reconstruct --json`'s ``background``."""
-        frames = self._frames(v0, fitting=True)
+        frames = self._frames(v0)
         fit = json.loads(self._native.fit_background(frames))
         self._keep("fit_background", frames)
         return fit

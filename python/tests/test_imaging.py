@@ -277,6 +277,12 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(v * 1e300, v0 * 1e300)
     with pytest.raises(et.EtError, match="below 1.2e-38"):
         disc.image(v * 1e-300, v0 * 1e-300)
+    # Frames as columns (MATLAB's way, K x n) are refused with the fix (it was "frame 0
+    # (0-based, of those given): ... frame: 3 values for K = 208").
+    with pytest.raises(et.EtError, match=r"V is 208 x 3: its columns are the frames, K = 208"):
+        disc.images(np.vstack([v, v, v]).T, v0)
+    with pytest.raises(et.EtError, match=r"v0 is 208 x 2: .* \(v0.T, 2 x 208\)"):
+        disc.set_reference(np.vstack([v0, v0]).T)
     # Magnitudes without their sign (some systems write them), under a protocol whose values
     # change sign around the sheet: refused as that (imaged, they lost the touch).
     pp = et.Reconstructor(et.disc(0.065, 16), et.protocol("pp-pp", 16), triangles=1200)
