@@ -1,7 +1,8 @@
 //! Measured frames from other systems' files, for imaging: a CSV (one frame per row, a header
 //! row optional, cells separated by `,`, `;` or tabs), a NumPy `.npy` (2-D, or 1-D for one
 //! frame), an array of an `.npz` (`file.npz:NAME`, or its only array) or a MATLAB `.mat`
-//! of version 5 or 7 (`file.mat:VARIABLE`, or its only numeric array). Values in volts.
+//! of version 5 or 7 (`file.mat:VARIABLE`, a struct's numeric field `file.mat:vi.meas` as
+//! EIDORS keeps its data, or the file's only numeric array). Values in volts.
 //! A matrix whose rows are the protocol's K values and whose columns are not (frames as
 //! columns, as MATLAB users store them) is read as its transpose, and said so. et's own
 //! recordings (`.jsonl`) are read by [`crate::recording`].

@@ -1371,8 +1371,9 @@ def read_recording(path: PathLike) -> Dict[str, Any]:
 
 def read_frames(path: PathLike, k: int) -> np.ndarray:
     """Reads any system's frames for a protocol of ``k`` values a frame, n x K (V): a CSV (one
-    frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a matrix of frames as
-    columns is read transposed), or an et recording's voltages, as `et reconstruct --frames`
+    frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a struct's field too, as
+    EIDORS keeps its data: ``FILE.mat:vi.meas``; a matrix of frames as columns is read
+    transposed), or an et recording's voltages, as `et reconstruct --frames`
     reads them."""
     frames, _ = _native.read_frames(os.fsdecode(path), _count(k, "k", 1))
     return frames

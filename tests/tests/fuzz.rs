@@ -380,6 +380,35 @@ fn deflated_npz(stored: &[u8]) -> Vec<u8> {
     [local, packed, central].concat()
 }
 
+/// The frames as EIDORS keeps its data: a 1 x 1 struct `vi` whose field `meas` holds them
+/// (the array [`et_host::frames::mat_v5`] writes, its name emptied as a struct's fields'
+/// are).
+fn frames_mat_struct() -> Vec<u8> {
+    let plain = et_host::frames::mat_v5("v", &frames_matrix());
+    let word = |v: u32| v.to_le_bytes().to_vec();
+    // The array's sub-elements: flags and dimensions (32 bytes), its name (16), its values.
+    let array = &plain[128 + 8..];
+    let field = [&array[..32], &word(1), &word(0), &array[48..]].concat();
+    let mut names = b"meas".to_vec();
+    names.resize(32, 0);
+    let body = [
+        [word(6), word(8), word(2), word(0)].concat(), // flags: class struct
+        [word(5), word(8), word(1), word(1)].concat(), // 1 x 1
+        [word((2 << 16) | 1), b"vi\0\0".to_vec()].concat(), // its name, a small element
+        [word((4 << 16) | 5), word(32)].concat(),      // field names 32 bytes wide
+        [word(1), word(32), names].concat(),
+        [word(14), word(field.len() as u32), field].concat(),
+    ]
+    .concat();
+    [
+        plain[..128].to_vec(),
+        word(14),
+        word(body.len() as u32),
+        body,
+    ]
+    .concat()
+}
+
 /// A protocol file as other systems write one: a header, 1-based electrodes, each row's
 /// current (A), 40 rows (the frames' K).
 fn protocol_csv() -> String {
@@ -555,6 +584,11 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "frames MATLAB .mat",
             seeds: vec![et_host::frames::mat_v5("v", &frames_matrix())],
+            parse: |p| read_frames(&p[0], "mat"),
+        },
+        Parser {
+            name: "frames MATLAB .mat, a struct's field",
+            seeds: vec![frames_mat_struct()],
             parse: |p| read_frames(&p[0], "mat"),
         },
         Parser {

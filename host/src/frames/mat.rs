@@ -7,6 +7,8 @@ use nalgebra::DMatrix;
 
 use super::{FramesError, FramesFault, content};
 
+mod fields;
+
 /// A version 5/7 `.mat` as the MATLAB reader is given it: every compressed variable
 /// inflated in place, each checked to inflate and all of them together to no more than the
 /// data files' limit (matfile reads each to its end, without a limit: a small file could
@@ -86,42 +88,47 @@ pub(super) fn mat_matrix(
         return Err(content(path, 0, FramesFault::NoMatHeader));
     }
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
-    let bytes = plain.as_slice();
-    // The MATLAB reader panics on some damaged headers (a dimension product that overflows,
-    // found by the fuzzer): such a file is refused like any other it cannot read, silently
-    // for the panic itself.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes));
-    std::panic::set_hook(hook);
-    let file = match parsed {
-        Ok(Ok(file)) => file,
-        Ok(Err(e)) => return Err(content(path, 0, FramesFault::NotMat(e))),
-        Err(_) => return Err(content(path, 0, FramesFault::MatInconsistent)),
+    let file = parse(path, &plain)?;
+    // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
+    let fields = fields::fields(&plain);
+    let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
+        .chain(fields.iter().map(|f| f.name.clone()))
+        .collect();
+    let chosen = match (name, names.as_slice()) {
+        (Some(n), _) if names.iter().any(|m| m == n) => n.to_string(),
+        (Some(n), _) => {
+            let name = n.to_string();
+            return Err(content(path, 0, FramesFault::NoVariable { name, names }));
+        }
+        (None, [only]) => only.clone(),
+        (None, []) => {
+            let kind = "numeric arrays";
+            return Err(content(path, 0, FramesFault::Nothing { kind }));
+        }
+        (None, _) => {
+            let fault = FramesFault::Choose {
+                names,
+                kind: "numeric arrays",
+                path: path.into(),
+                placeholder: "VARIABLE",
+            };
+            return Err(content(path, 0, fault));
+        }
     };
-    let names = || file.arrays().iter().map(|a| a.name().to_string()).collect();
-    let array = match name {
-        Some(n) => file.find_by_name(n).ok_or_else(|| {
-            let (name, names) = (n.to_string(), names());
-            content(path, 0, FramesFault::NoVariable { name, names })
-        })?,
-        None => match file.arrays().as_slice() {
-            [only] => only,
-            [] => {
-                let kind = "numeric arrays";
-                return Err(content(path, 0, FramesFault::Nothing { kind }));
-            }
-            _ => {
-                let fault = FramesFault::Choose {
-                    names: names(),
-                    kind: "numeric arrays",
-                    path: path.into(),
-                    placeholder: "VARIABLE",
-                };
-                return Err(content(path, 0, fault));
-            }
-        },
+    // A struct's field is read as a variable of its own, named by its dotted name.
+    let field = match fields.iter().find(|f| f.name == chosen) {
+        Some(f) if file.find_by_name(&chosen).is_none() => {
+            let alone = fields::alone(&plain, f)
+                .ok_or_else(|| content(path, 0, FramesFault::MatInconsistent))?;
+            Some(parse(path, &alone)?)
+        }
+        _ => None,
     };
+    let array = field
+        .as_ref()
+        .unwrap_or(&file)
+        .find_by_name(&chosen)
+        .ok_or_else(|| content(path, 0, FramesFault::MatInconsistent))?;
     use matfile::NumericData as D;
     let values: Vec<f64> = match array.data() {
         D::Double { real, imag: None } => real.clone(),
@@ -165,6 +172,22 @@ pub(super) fn mat_matrix(
         DMatrix::from_column_slice(rows, cols, &values),
         format!("variable '{}', ", array.name()),
     ))
+}
+
+/// The MATLAB reader's reading of `bytes` (a version 5 file, compressed variables inflated).
+fn parse(path: &Path, bytes: &[u8]) -> Result<matfile::MatFile, FramesError> {
+    // It panics on some damaged headers (a dimension product that overflows, found by the
+    // fuzzer): such a file is refused like any other it cannot read, silently for the panic
+    // itself.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes));
+    std::panic::set_hook(hook);
+    match parsed {
+        Ok(Ok(file)) => Ok(file),
+        Ok(Err(e)) => Err(content(path, 0, FramesFault::NotMat(e))),
+        Err(_) => Err(content(path, 0, FramesFault::MatInconsistent)),
+    }
 }
 
 /// A MATLAB version 5 file holding the double matrix `m` as variable `name` (uncompressed;

@@ -349,6 +349,160 @@ fn int32_matlab_arrays_as_scipy_writes_them() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Writes MATLAB version 5 elements in one byte order, as MATLAB does (small elements for
+/// names of up to 4 bytes, empty names for a struct's fields).
+struct Mat {
+    little: bool,
+}
+
+impl Mat {
+    fn word(&self, v: u32) -> [u8; 4] {
+        if self.little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        }
+    }
+
+    fn element(&self, kind: u32, data: &[u8]) -> Vec<u8> {
+        let mut out = [self.word(kind), self.word(data.len() as u32)].concat();
+        out.extend(data);
+        out.resize(out.len().next_multiple_of(8), 0);
+        out
+    }
+
+    fn array(&self, class: u32, dims: [u32; 2], name: &str, rest: &[u8]) -> Vec<u8> {
+        let mut body = self.element(6, &[self.word(class), self.word(0)].concat());
+        body.extend(self.element(5, &[self.word(dims[0]), self.word(dims[1])].concat()));
+        if (1..=4).contains(&name.len()) {
+            body.extend(self.word(((name.len() as u32) << 16) | 1));
+            let mut padded = name.as_bytes().to_vec();
+            padded.resize(4, 0);
+            body.extend(padded);
+        } else {
+            body.extend(self.element(1, name.as_bytes()));
+        }
+        body.extend(rest);
+        self.element(14, &body)
+    }
+
+    /// A rows x cols double matrix from its values by columns.
+    fn doubles(&self, name: &str, rows: u32, cols: u32, values: &[f64]) -> Vec<u8> {
+        let bytes: Vec<u8> = (values.iter())
+            .flat_map(|v| {
+                if self.little {
+                    v.to_le_bytes()
+                } else {
+                    v.to_be_bytes()
+                }
+            })
+            .collect();
+        self.array(6, [rows, cols], name, &self.element(9, &bytes))
+    }
+
+    /// A 1 x 1 struct of `fields` (each an array element, its name empty).
+    fn structure(&self, name: &str, fields: &[(&str, Vec<u8>)]) -> Vec<u8> {
+        let mut rest = [self.word((4 << 16) | 5), self.word(32)].concat();
+        let names: Vec<u8> = (fields.iter())
+            .flat_map(|(n, _)| {
+                let mut b = n.as_bytes().to_vec();
+                b.resize(32, 0);
+                b
+            })
+            .collect();
+        rest.extend(self.element(1, &names));
+        fields.iter().for_each(|(_, f)| rest.extend(f));
+        self.array(2, [1, 1], name, &rest)
+    }
+
+    fn file(&self, elements: &[Vec<u8>], compressed: bool) -> Vec<u8> {
+        use std::io::Write as _;
+        let mut out = b"MATLAB 5.0 MAT-file, written as MATLAB writes EIDORS data".to_vec();
+        out.resize(124, b' ');
+        out.extend(if self.little { [0, 1] } else { [1, 0] });
+        out.extend(if self.little { b"IM" } else { b"MI" });
+        for e in elements {
+            if compressed {
+                let mut z = libflate::zlib::Encoder::new(Vec::new()).unwrap();
+                z.write_all(e).unwrap();
+                let deflated = z.finish().into_result().unwrap();
+                out.extend(self.word(15));
+                out.extend(self.word(deflated.len() as u32));
+                out.extend(deflated);
+            } else {
+                out.extend(e);
+            }
+        }
+        out
+    }
+}
+
+/// EIDORS keeps its data in structs (`vh.meas`, `vi.meas`), which the MATLAB reader skips:
+/// a struct's numeric fields are read by their dotted names, nested too, in either byte
+/// order, compressed or not, and offered by name when none is given (such a file was "no
+/// numeric arrays", and `data.mat:vh.meas` "no numeric array 'vh.meas' (it has: )").
+#[test]
+fn eidors_structs_fields_are_read_by_their_dotted_names() {
+    let dir = tmp("mat-struct");
+    let f = dir.join("eidors.mat");
+    for (little, compressed) in [(true, false), (true, true), (false, false), (false, true)] {
+        let m = Mat { little };
+        // A char field (the data's name) is text, skipped.
+        let text = m.array(4, [1, 2], "", &m.element(17, &[b'v', 0, b'h', 0]));
+        let vh = m.structure(
+            "vh",
+            &[
+                ("name", text),
+                ("meas", m.doubles("", 2, 1, &[1e-3, 2e-3])),
+                (
+                    "sub",
+                    m.structure("", &[("volts", m.doubles("", 1, 2, &[5e-3, 6e-3]))]),
+                ),
+            ],
+        );
+        let vi = m.structure(
+            "vi",
+            &[(
+                "meas",
+                m.doubles("", 2, 3, &[1e-3, 2e-3, 3e-3, 4e-3, 5e-3, 6e-3]),
+            )],
+        );
+        std::fs::write(&f, m.file(&[vh, vi], compressed)).unwrap();
+        let at = |name: &str| dir.join(format!("eidors.mat:{name}"));
+        let r = read(&at("vi.meas"), 2).unwrap();
+        assert_eq!(
+            r.frames,
+            vec![vec![1e-3, 2e-3], vec![3e-3, 4e-3], vec![5e-3, 6e-3]]
+        );
+        assert!(
+            r.description.contains("variable 'vi.meas'"),
+            "{}",
+            r.description
+        );
+        assert_eq!(
+            read(&at("vh.meas"), 2).unwrap().frames,
+            vec![vec![1e-3, 2e-3]]
+        );
+        assert_eq!(
+            read(&at("vh.sub.volts"), 2).unwrap().frames,
+            vec![vec![5e-3, 6e-3]]
+        );
+        let e = read(&f, 2).unwrap_err().to_string();
+        assert!(
+            e.contains("(vh.meas, vh.sub.volts, vi.meas): name one as"),
+            "{little} {compressed}: {e}"
+        );
+        for name in ["vh", "vh.name"] {
+            let e = read(&at(name), 2).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("no numeric array '{name}' (it has: vh.meas,")),
+                "{e}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 fn read_plain(dir: &Path, bytes: &[u8]) -> Vec<Vec<f32>> {
     let f = dir.join("plain.mat");
     std::fs::write(&f, bytes).unwrap();

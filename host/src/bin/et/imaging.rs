@@ -110,8 +110,9 @@ pub(crate) struct ReconstructArgs {
     /// An et recording (.jsonl, from `et sim` or `et record`), or any system's frames in
     /// volts: a CSV with one frame per row (header optional; `,` `;`, tab or spaces), a NumPy .npy
     /// (2-D, frames as rows), an .npz array (FILE.npz:NAME) or a MATLAB .mat variable
-    /// (version 5 or 7: FILE.mat:VARIABLE). A matrix whose columns are the frames (MATLAB's
-    /// habit) is read transposed.
+    /// (version 5 or 7: FILE.mat:VARIABLE, or a struct's field as EIDORS keeps its data,
+    /// FILE.mat:vi.meas). A matrix whose columns are the frames (MATLAB's habit) is read
+    /// transposed.
     #[arg(long, value_name = "FILE")]
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as

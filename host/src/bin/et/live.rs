@@ -14,7 +14,7 @@ pub(crate) struct SourceArgs {
     scene: Option<PathBuf>,
     /// Replay a recording (JSON Lines from `et sim` or `et record`), or another system's
     /// frames in volts for the scene's built-in protocol: a CSV (one frame per row), .npy,
-    /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE), as `et reconstruct --frames`
+    /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE, or FILE.mat:vi.meas), as `et reconstruct --frames`
     /// reads them.
     #[arg(long, conflicts_with = "port")]
     replay: Option<PathBuf>,
