@@ -469,6 +469,58 @@ fn endless_device(_: &std::fs::File, _: &std::fs::Metadata) -> bool {
     false
 }
 
+/// What a file that is not text is, by the bytes it starts with, and what to do, for the
+/// files users give in place of a text file most often (a spreadsheet, another format's
+/// array, a picture); None for any other.
+#[must_use]
+pub fn binary_kind(bytes: &[u8]) -> Option<&'static str> {
+    const KINDS: [(&[u8], usize, &str); 7] = [
+        (
+            b"PK\x03\x04",
+            0,
+            "a zip archive, not text: an Excel workbook (.xlsx)? save its sheet as CSV \
+             (\"CSV UTF-8\"); a NumPy .npz is read under its own name (FILE.npz:NAME)",
+        ),
+        (
+            b"\xD0\xCF\x11\xE0\xA1\xB1\x1A\xE1",
+            0,
+            "an Excel 97-2003 workbook (.xls), not text: save its sheet as CSV (\"CSV UTF-8\")",
+        ),
+        (
+            b"\x89HDF\r\n\x1a\n",
+            0,
+            "an HDF5 file (h5py, MATLAB's -v7.3), not text: et does not read HDF5; save the \
+             arrays as CSV, .npy or a MATLAB -v7 .mat",
+        ),
+        (
+            b"\x89HDF\r\n\x1a\n",
+            512,
+            "a MATLAB 7.3 .mat file (HDF5), not text: save it with save(..., '-v7'), read as \
+             FILE.mat:VARIABLE",
+        ),
+        (
+            b"\x93NUMPY",
+            0,
+            "a NumPy .npy array, not text: name the file .npy, and et reads it as one",
+        ),
+        (
+            b"MATLAB 5.0 MAT-file",
+            0,
+            "a MATLAB .mat file, not text: name the file .mat, and et reads it as one \
+             (FILE.mat:VARIABLE)",
+        ),
+        (
+            b"\x89PNG\r\n\x1a\n",
+            0,
+            "a PNG picture, not text: a file of another kind given?",
+        ),
+    ];
+    KINDS
+        .iter()
+        .find(|(magic, at, _)| bytes.get(*at..).is_some_and(|b| b.starts_with(magic)))
+        .map(|(_, _, said)| *said)
+}
+
 /// [`read_at_most`] as text, without a leading byte-order mark: UTF-8, or UTF-16 with its
 /// byte-order mark (what a spreadsheet's "Unicode text" export writes, tab-separated).
 ///
@@ -479,6 +531,10 @@ pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<
     let bytes = read_at_most(path, limit)?;
     let mut text = match utf16(&bytes) {
         Some(text) => text?,
+        None if std::str::from_utf8(&bytes).is_err() && binary_kind(&bytes).is_some() => {
+            let said = binary_kind(&bytes).unwrap_or_default();
+            return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, said));
+        }
         None => String::from_utf8(bytes).map_err(|e| {
             let at = e.utf8_error().valid_up_to();
             let bytes = e.as_bytes();
@@ -617,6 +673,32 @@ mod tests {
             e.contains("line 2, byte 3 of the line: 0xf6") && e.contains("CSV UTF-8"),
             "{e}"
         );
+        // Files of another kind given for text (a spreadsheet, another format's array, a
+        // picture) are named as what they are, with the fix (they were said as Latin-1 text).
+        let mut hdf5 = b"MATLAB 7.3 MAT-file, Platform: GLNXA64".to_vec();
+        hdf5.resize(512, b' ');
+        hdf5.extend(b"\x89HDF\r\n\x1a\n\xff");
+        for (bytes, said) in [
+            (
+                &b"PK\x03\x04\x14\x00\x06\x00\x08\x00\xb8"[..],
+                "Excel workbook (.xlsx)",
+            ),
+            (b"\xD0\xCF\x11\xE0\xA1\xB1\x1A\xE1\x00", "Excel 97-2003"),
+            (b"\x89HDF\r\n\x1a\n\x00", "an HDF5 file"),
+            (&hdf5, "MATLAB 7.3 .mat file"),
+            (b"\x93NUMPY\x01\x00v\x00", "name the file .npy"),
+            (b"MATLAB 5.0 MAT-file \xff\x00", "name the file .mat"),
+            (b"\x89PNG\r\n\x1a\n", "a PNG picture"),
+        ] {
+            std::fs::write(&path, bytes).unwrap();
+            let e = super::read_text_at_most(&path, 1000)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(said) && !e.contains("Latin-1"), "{e}");
+        }
+        // Text that starts like one is text.
+        std::fs::write(&path, "PK\x03\x04 is text here\n").unwrap();
+        assert!(super::read_text_at_most(&path, 100).is_ok());
         // A byte-order mark is dropped, for every format alike.
         std::fs::write(&path, "\u{feff}{\"a\": 1}").unwrap();
         assert_eq!(super::read_text_at_most(&path, 100).unwrap(), "{\"a\": 1}");
