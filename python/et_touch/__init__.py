@@ -395,8 +395,7 @@ class Protocol:
         n = _count(electrodes, "electrodes", 2)
         currents = table[:, 4].copy() if table.shape[1] == 5 else np.full(len(table), current_a)
         electrodes_of = table[:, :4] - base
-        if not np.all(electrodes_of == np.round(electrodes_of)):
-            raise EtError("rows: electrode numbers must be whole numbers")
+        _whole(table[:, :4], "rows")
         outside = np.flatnonzero((electrodes_of < 0).any(axis=1) | (electrodes_of >= n).any(axis=1))
         if len(outside):
             row = int(outside[0])
@@ -445,7 +444,7 @@ class Protocol:
             raise EtError("meas_mat: an excitation index outside ex_mat's rows")
         rows = np.column_stack([ex[meas[:, 2], 0], ex[meas[:, 2], 1], meas[:, 0], meas[:, 1]])
         if electrodes is not None:
-            n = int(_whole(np.asarray([electrodes]), "electrodes")[0])
+            n = int(_whole(electrodes, "electrodes"))
         else:
             n = int(max(ex.max(), meas[:, :2].max()) + 1)
         if rows.min() < 0 or rows.max() >= n:
@@ -456,8 +455,14 @@ class Protocol:
 def _whole(a: Any, what: str) -> np.ndarray:
     """``a`` as whole numbers (int64), refusing fractions rather than truncating them."""
     values = np.asarray(a, dtype=np.float64)
-    if not np.all(np.isfinite(values)) or not np.all(values == np.round(values)):
-        raise EtError(f"{what}: electrode numbers and indices must be whole numbers")
+    bad = np.argwhere(~np.isfinite(values) | (values != np.round(values)))
+    if len(bad):
+        # Named by its place (the first of them) and value, as the rows' other checks are.
+        place = f"[{', '.join(str(int(i)) for i in bad[0])}]" if values.ndim else ""
+        value = values[tuple(bad[0])]
+        raise EtError(
+            f"{what}{place} = {value:g}: electrode numbers and indices are whole numbers"
+        )
     return values.astype(np.int64)
 
 

@@ -45,8 +45,14 @@ def test_timing_repeats_and_electrode_counts_are_checked():
     assert r.frame_median(np.zeros_like(v0), 3) > 0
     ex = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
     meas = np.array([[2, 3, 0], [3, 0, 1], [0, 1, 2], [1, 2, 3]])
-    with pytest.raises(et.EtError, match="whole numbers"):
+    with pytest.raises(et.EtError, match="electrodes = 4.5: electrode numbers and indices are whole"):
         et.Protocol.from_pyeit(ex, meas, electrodes=4.5)
+    # A fraction among the rows is named by its place and value (it was "rows: electrode
+    # numbers must be whole numbers", of no row).
+    with pytest.raises(et.EtError, match=r"rows\[1, 2\] = 2.5: electrode numbers"):
+        et.Protocol.from_rows([[0, 1, 2, 3], [0, 1, 2.5, 3]], 16)
+    with pytest.raises(et.EtError, match=r"meas_mat\[0, 1\] = nan"):
+        et.Protocol.from_pyeit(ex, np.where(meas == 3, np.nan, meas), electrodes=4)
     assert et.Protocol.from_pyeit(ex, meas, electrodes=4.0).electrodes == 4
 
 
