@@ -531,13 +531,13 @@ pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<
     let bytes = read_at_most(path, limit)?;
     let mut text = match utf16(&bytes) {
         Some(text) => text?,
-        None if std::str::from_utf8(&bytes).is_err() && binary_kind(&bytes).is_some() => {
-            let said = binary_kind(&bytes).unwrap_or_default();
-            return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, said));
-        }
         None => String::from_utf8(bytes).map_err(|e| {
             let at = e.utf8_error().valid_up_to();
             let bytes = e.as_bytes();
+            // A file of another kind is said as what it is, not as text in another encoding.
+            if let Some(said) = binary_kind(bytes) {
+                return std::io::Error::new(std::io::ErrorKind::InvalidData, said);
+            }
             let line = 1 + bytes[..at].iter().filter(|b| **b == b'\n').count();
             let column = at
                 - bytes[..at]

@@ -1583,6 +1583,12 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             [&collect[..], &["--drift", "-0.1"]].concat(),
             "-0.1 is outside 0 to 1",
         ),
+        // And in an exponent's form, as currents are written (it was "unexpected argument
+        // '-1' found").
+        (
+            vec!["protocol", "-l", "16", "--csv", "--current-a", "-1.4e-3"],
+            "'-1.4e-3' for '--current-a <CURRENT_A>': -1.4e-3 is not above 0",
+        ),
         // A row range from the end, as Python indexes: said as et counts rows (it was
         // "unexpected argument '-5' found").
         (

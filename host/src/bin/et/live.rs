@@ -14,8 +14,8 @@ pub(crate) struct SourceArgs {
     scene: Option<PathBuf>,
     /// Replay a recording (JSON Lines from `et sim` or `et record`), or another system's
     /// frames in volts for the scene's built-in protocol: a CSV (one frame per row), .npy,
-    /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE, or FILE.mat:vi.meas), as `et reconstruct --frames`
-    /// reads them.
+    /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE, or FILE.mat:vi.meas), as
+    /// `et reconstruct --frames` reads them.
     #[arg(long, conflicts_with = "port")]
     replay: Option<PathBuf>,
     /// A board's serial port (`et ports` lists them).

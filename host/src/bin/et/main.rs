@@ -289,6 +289,32 @@ enum Command {
     Upload(board::UploadArgs),
 }
 
+/// `--flag -1e-3` as `--flag=-1e-3`: clap takes a negative number for a value only in its
+/// plain forms (`-1`, `-0.1`), and read the exponent's form as short flags ("unexpected
+/// argument '-1' found"); joined, the value reaches its flag's domain. A number is never a
+/// flag, so nothing else changes (a flag that takes no value still refuses one).
+fn negatives_joined(args: impl IntoIterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    let mut args = args.into_iter().peekable();
+    while let Some(arg) = args.next() {
+        let long = arg
+            .to_str()
+            .filter(|a| a.len() > 2 && a.starts_with("--") && !a.contains('='));
+        let number = args
+            .peek()
+            .and_then(|next| next.to_str())
+            .filter(|next| next.starts_with('-') && next.parse::<f64>().is_ok());
+        match (long, number) {
+            (Some(flag), Some(value)) => {
+                out.push(format!("{flag}={value}").into());
+                args.next();
+            }
+            _ => out.push(arg),
+        }
+    }
+    out
+}
+
 /// The command line, or exit: help and version go to stdout, and a stdout that cannot take
 /// them (a full device) is an error, not a silent success.
 fn parse() -> Cli {
@@ -304,7 +330,7 @@ fn parse() -> Cli {
         .mut_args(negative)
         .mut_subcommands(|sub| sub.mut_args(negative));
     let parsed = command
-        .try_get_matches_from_mut(std::env::args_os())
+        .try_get_matches_from_mut(negatives_joined(std::env::args_os()))
         .and_then(|matches| Cli::from_arg_matches(&matches))
         .map_err(|e| e.format(&mut command));
     match parsed {
