@@ -233,14 +233,18 @@ fn another_systems_frames_play_as_the_recording(
     streamed: &[u8],
 ) {
     let recorded = et_host::recording::read(swipe).unwrap();
-    let csv: String = recorded
-        .records
-        .iter()
-        .map(|r| {
-            let row: Vec<String> = r.voltages.iter().map(|v| format!("{v:e}")).collect();
-            row.join(",") + "\n"
-        })
-        .collect();
+    // The frames times `gain` (a system's other current, or polarity), one a row.
+    let frames_csv = |gain: f64| -> String {
+        (recorded.records.iter())
+            .map(|r| {
+                let row: Vec<String> = (r.voltages.iter())
+                    .map(|v| format!("{:e}", f64::from(*v) * gain))
+                    .collect();
+                row.join(",") + "\n"
+            })
+            .collect()
+    };
+    let csv = frames_csv(1.0);
     let swipe_csv = dir.join("swipe.csv");
     std::fs::write(&swipe_csv, &csv).unwrap();
     let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
@@ -271,16 +275,8 @@ fn another_systems_frames_play_as_the_recording(
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
     // Frames of the other sign (sense wires swapped) are refused at their reference, once,
     // as `et reconstruct` refuses them (they streamed touches in the wrong places).
-    let negated: String = (csv.lines())
-        .map(|l| {
-            let row: Vec<String> = (l.split(','))
-                .map(|v| format!("{:e}", -v.parse::<f64>().unwrap()))
-                .collect();
-            row.join(",") + "\n"
-        })
-        .collect();
     let negated_csv = dir.join("negated.csv");
-    std::fs::write(&negated_csv, negated).unwrap();
+    std::fs::write(&negated_csv, frames_csv(-1.0)).unwrap();
     let e = replay(&negated_csv, &[]);
     let said = String::from_utf8_lossy(&e.stderr);
     assert!(
@@ -374,16 +370,8 @@ fn another_systems_frames_play_as_the_recording(
         text.replace("[scan]\n", "[scan]\ncurrent_ua = 2000\n"),
     )
     .unwrap();
-    let scaled: String = (recorded.records.iter())
-        .map(|r| {
-            let row: Vec<String> = (r.voltages.iter())
-                .map(|v| format!("{:e}", f64::from(*v) * 62.5))
-                .collect();
-            row.join(",") + "\n"
-        })
-        .collect();
     let tank_csv = dir.join("tank-2ma.csv");
-    std::fs::write(&tank_csv, scaled).unwrap();
+    std::fs::write(&tank_csv, frames_csv(62.5)).unwrap();
     let played = et(&[
         "stream",
         "--json",
