@@ -478,8 +478,8 @@ pub fn binary_kind(bytes: &[u8]) -> Option<&'static str> {
         (
             b"PK\x03\x04",
             0,
-            "a zip archive, not text: an Excel workbook (.xlsx)? save its sheet as CSV \
-             (\"CSV UTF-8\"); a NumPy .npz is read under its own name (FILE.npz:NAME)",
+            "a zip archive (an Excel .xlsx workbook, or a NumPy .npz), not text: save a sheet \
+             as CSV (\"CSV UTF-8\"), an array with numpy.savetxt(f, X, delimiter=',')",
         ),
         (
             b"\xD0\xCF\x11\xE0\xA1\xB1\x1A\xE1",
@@ -489,25 +489,26 @@ pub fn binary_kind(bytes: &[u8]) -> Option<&'static str> {
         (
             b"\x89HDF\r\n\x1a\n",
             0,
-            "an HDF5 file (h5py, MATLAB's -v7.3), not text: et does not read HDF5; save the \
-             arrays as CSV, .npy or a MATLAB -v7 .mat",
+            "an HDF5 file (h5py, MATLAB's -v7.3), not text: et reads no HDF5; save the arrays \
+             as CSV (frames also as .npy, or a MATLAB -v7 .mat)",
         ),
         (
             b"\x89HDF\r\n\x1a\n",
             512,
-            "a MATLAB 7.3 .mat file (HDF5), not text: save it with save(..., '-v7'), read as \
-             FILE.mat:VARIABLE",
+            "a MATLAB 7.3 .mat file (HDF5), not text: write a table with writematrix(X, \
+             'f.csv'); frames are also read from a .mat saved with save(..., '-v7')",
         ),
         (
             b"\x93NUMPY",
             0,
-            "a NumPy .npy array, not text: name the file .npy, and et reads it as one",
+            "a NumPy .npy array, not text: write a table with numpy.savetxt(f, X, \
+             delimiter=','); frames are also read from .npy files named .npy",
         ),
         (
             b"MATLAB 5.0 MAT-file",
             0,
-            "a MATLAB .mat file, not text: name the file .mat, and et reads it as one \
-             (FILE.mat:VARIABLE)",
+            "a MATLAB .mat file, not text: write a table with writematrix(X, 'f.csv'); frames \
+             are also read from .mat files named .mat (FILE.mat:VARIABLE)",
         ),
         (
             b"\x89PNG\r\n\x1a\n",
@@ -681,13 +682,13 @@ mod tests {
         for (bytes, said) in [
             (
                 &b"PK\x03\x04\x14\x00\x06\x00\x08\x00\xb8"[..],
-                "Excel workbook (.xlsx)",
+                "an Excel .xlsx workbook, or a NumPy .npz",
             ),
             (b"\xD0\xCF\x11\xE0\xA1\xB1\x1A\xE1\x00", "Excel 97-2003"),
             (b"\x89HDF\r\n\x1a\n\x00", "an HDF5 file"),
             (&hdf5, "MATLAB 7.3 .mat file"),
-            (b"\x93NUMPY\x01\x00v\x00", "name the file .npy"),
-            (b"MATLAB 5.0 MAT-file \xff\x00", "name the file .mat"),
+            (b"\x93NUMPY\x01\x00v\x00", "numpy.savetxt"),
+            (b"MATLAB 5.0 MAT-file \xff\x00", "writematrix"),
             (b"\x89PNG\r\n\x1a\n", "a PNG picture"),
         ] {
             std::fs::write(&path, bytes).unwrap();

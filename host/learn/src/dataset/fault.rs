@@ -141,6 +141,15 @@ pub enum DatasetFault {
         /// The features.
         features: usize,
     },
+    /// An `.npz` without a `format` array: not one `et collect` wrote (a user's own `X`
+    /// and `y`, most often).
+    #[error(
+        "not an et dataset: `et collect` writes its .npz with a 'format' array, and this one \
+         holds {}; a sensor's own features and targets train as tables (--features F.csv \
+         --targets T.csv; numpy.savetxt writes them) or in Python (et.train(X, y))",
+        .0.join(", ")
+    )]
+    NotEtNpz(Vec<String>),
     /// An `.npz` whose `format` array is not an et dataset's.
     #[error("array 'format': not an et dataset ('et-dataset 1')")]
     NotNpzDataset,

@@ -390,6 +390,10 @@ pub fn from_npz_bytes(bytes: Vec<u8>, path: &Path) -> Result<Dataset, DatasetErr
     };
     let z = npz::Npz::read(bytes).map_err(bad)?;
     let fault = |fault| content(path, 0, None, fault);
+    if !z.names().any(|n| n == "format") {
+        let names = z.names().map(str::to_string).collect();
+        return Err(fault(DatasetFault::NotEtNpz(names)));
+    }
     if z.text("format").map_err(bad)? != "et-dataset 1" {
         return Err(fault(DatasetFault::NotNpzDataset));
     }

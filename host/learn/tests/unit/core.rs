@@ -746,6 +746,18 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 "numpy.load reads the same values"
             );
         }
+        // A user's own arrays (X, y) are not an et dataset: said as that, with where they
+        // train (it was "array 'format': not in the archive, which holds X, y").
+        let mut w = et_learn::npz::Writer::new();
+        w.matrix("X", &d.x);
+        w.matrix("y", &DMatrix::zeros(d.x.nrows(), 2));
+        let own = dir.join("own.npz");
+        std::fs::write(&own, w.finish().unwrap()).unwrap();
+        let e = load(&own).unwrap_err().to_string();
+        assert!(
+            e.contains("not an et dataset") && e.contains("holds X, y") && e.contains("--features"),
+            "{e}"
+        );
         // A damaged archive is an error naming the file, not a panic.
         let mut bytes = std::fs::read(&path).unwrap();
         bytes.truncate(bytes.len() / 2);
