@@ -130,8 +130,15 @@ pub enum FileFault {
     /// Without a header, a row of another width.
     #[error(
         "{0} column{s}: without a header give source, sink, positive, negative and optionally \
-         current_a, separated by ',', ';', tabs or spaces",
-        s = if *.0 == 1 { "" } else { "s" }
+         current_a, separated by ',', ';', tabs or spaces{wide}",
+        s = if *.0 == 1 { "" } else { "s" },
+        wide = if *.0 > 5 {
+            " (a row of every electrode's current, an injection pattern as EIDORS's \
+             stim_pattern writes one, is another form: give one row per frame value, its four \
+             electrodes; `et protocol --csv` writes an example)"
+        } else {
+            ""
+        }
     )]
     Columns(usize),
     /// A row of another width than the first (a current in some rows only would be a

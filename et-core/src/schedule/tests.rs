@@ -95,6 +95,17 @@ fn wrong_rows_are_named_by_line_and_cell() {
         e.contains("p.csv:2") && e.contains("1.4 A") && e.contains("50 mA"),
         "{e}"
     );
+    // A current pattern (a row per injection of every electrode's current) is said as
+    // another form, with the one this file takes.
+    let e = parse("1.4,-1.4,0,0,0,0,0,0\n0,1.4,-1.4,0,0,0,0,0\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("8 columns") && e.contains("stim_pattern"), "{e}");
+    let e = parse("0,1,2\n", 16, 0).unwrap_err().to_string();
+    assert!(
+        e.contains("3 columns") && !e.contains("stim_pattern"),
+        "{e}"
+    );
     // A negative current (a system's sign for the other way) is said with its fix.
     let e = parse("0,1,2,3,-1e-3\n", 16, 0).unwrap_err().to_string();
     assert!(
