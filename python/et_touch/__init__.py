@@ -79,7 +79,14 @@ def _f64(a: Any, ndim: int, what: str) -> np.ndarray:
     """`a` as a C-contiguous float64 array of `ndim` dimensions: no copy when it already is."""
     out = _numbers(a, what)
     if out.ndim != ndim:
-        raise EtError(f"{what}: {out.ndim}-D array of shape {out.shape}; expected {ndim}-D")
+        # The two slips of shape with their fix: one row given alone, one row or column given
+        # as a matrix.
+        fix = ""
+        if ndim == 2 and out.ndim == 1:
+            fix = f" (one row? give it as one: [{what}] or {what}.reshape(1, -1))"
+        elif ndim == 1 and out.ndim == 2 and 1 in out.shape:
+            fix = f" (one row or column? give its values: {what}.ravel())"
+        raise EtError(f"{what}: {out.ndim}-D array of shape {out.shape}; expected {ndim}-D{fix}")
     return out
 
 
@@ -92,7 +99,8 @@ def _numbers(a: Any, what: str) -> np.ndarray:
         if np.iscomplexobj(given):
             raise EtError(
                 f"{what}: complex values; give real ones, the part you mean: the real part "
-                "(np.real), the magnitude (np.abs) or the quadrature (np.imag)"
+                "(np.real; frames are signed voltages, so not their magnitude), the quadrature "
+                "(np.imag), or a feature's magnitude (np.abs)"
             )
         return np.ascontiguousarray(given, dtype=np.float64)
     except EtError:

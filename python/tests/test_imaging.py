@@ -283,6 +283,8 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.images(np.vstack([v, v, v]).T, v0)
     with pytest.raises(et.EtError, match=r"v0 is 208 x 2: .* \(v0.T, 2 x 208\)"):
         disc.set_reference(np.vstack([v0, v0]).T)
+    with pytest.raises(et.EtError, match=r"one row or column\? give its values: v.ravel\(\)"):
+        disc.image(v[:, None], v0)
     # Magnitudes without their sign (some systems write them), under a protocol whose values
     # change sign around the sheet: refused as that (imaged, they lost the touch).
     pp = et.Reconstructor(et.disc(0.065, 16), et.protocol("pp-pp", 16), triangles=1200)

@@ -356,6 +356,22 @@ def test_evaluating_on_the_training_rows_is_warned_of():
     assert "unit_note" in scores
 
 
+def test_slips_of_shape_are_refused_with_the_fix():
+    """One observation given alone, or observations as columns, are refused with the fix (they
+    were "X: 1-D array of shape (4,); expected 2-D" and "the data has 200 feature columns, the
+    model reads 4")."""
+    rng = np.random.default_rng(3)
+    positions = rng.uniform(-0.05, 0.05, (200, 2))
+    X = np.hstack([positions, positions**2]) + rng.normal(0, 1e-3, (200, 4))
+    model = et.train(X, positions, kind="ridge")
+    with pytest.raises(et.EtError, match=r"one row\? give it as one: \[X\] or X.reshape\(1, -1\)"):
+        model.predict(X[0])
+    with pytest.raises(et.EtError, match=r"as many rows: are its columns the observations\? give it "
+                                         r"transposed, X.T"):
+        model.predict(X.T)
+    assert model.predict(X[:1]).shape == (1, 2)
+
+
 def test_training_errors_name_pythons_parameters():
     """The library's messages name the Python parameter beside the command line's flag (they
     said "--grid 7x7" and "fewer --folds" to a Python caller, who has neither)."""

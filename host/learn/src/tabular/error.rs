@@ -125,12 +125,22 @@ pub enum Misuse {
     #[error("not a regressor")]
     NotARegressor,
     /// Rows of another feature count than the model's.
-    #[error("the data has {data} feature columns, the model reads {model}")]
+    #[error(
+        "the data has {data} feature columns, the model reads {model}{}",
+        if *rows == Some(*model) {
+            " (and the data has as many rows: are its columns the observations? give it \
+             transposed, X.T in NumPy)"
+        } else {
+            ""
+        }
+    )]
     FeatureCount {
         /// The data's.
         data: usize,
         /// The model's.
         model: usize,
+        /// The data's rows, where known.
+        rows: Option<usize>,
     },
     /// A feature column the model reads that holds the rows' numbers, times or sessions,
     /// which tables' features no longer include.

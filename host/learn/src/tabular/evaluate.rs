@@ -279,6 +279,7 @@ pub fn aligned(model: &TableModel, table: &Table) -> Result<Option<Table>, Tabul
         return Err(usage(Misuse::FeatureCount {
             data: theirs.len(),
             model: ours.len(),
+            rows: None,
         }));
     }
     let mut order = Vec::with_capacity(ours.len());

@@ -330,6 +330,7 @@ impl TableModel {
             return Err(usage(Misuse::FeatureCount {
                 data: x.ncols(),
                 model: self.features(),
+                rows: Some(x.nrows()),
             }));
         }
         self.prepare()?.predict(x)

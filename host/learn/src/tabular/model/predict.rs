@@ -20,6 +20,7 @@ impl Prepared {
             return Err(usage(Misuse::FeatureCount {
                 data: x.ncols(),
                 model: self.features,
+                rows: Some(x.nrows()),
             }));
         }
         finite_features(x)?;
