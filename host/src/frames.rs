@@ -326,28 +326,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
                 et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?,
             )
             .map_err(npz)?;
-            let names: Vec<&str> = archive.names().collect();
-            let name = match (&array, names.as_slice()) {
-                (Some(n), _) => n.clone(),
-                (None, [only]) => (*only).to_string(),
-                (None, []) => {
-                    return Err(content(&path, 0, FramesFault::Nothing { kind: "arrays" }));
-                }
-                (None, _) => {
-                    let fault = FramesFault::Choose {
-                        names: names.iter().map(|n| (*n).to_string()).collect(),
-                        kind: "arrays",
-                        path: path.clone(),
-                        placeholder: "NAME",
-                    };
-                    return Err(content(&path, 0, fault));
-                }
-            };
-            if archive.is_boolean(&name) {
-                return Err(content(&path, 0, FramesFault::Booleans(name)));
-            }
-            let m = npy_matrix(&archive, &name).map_err(npz)?;
-            (m, format!("array '{name}', "))
+            npz_matrix(&path, &archive, array.as_deref())?
         }
         "mat" => mat_matrix(
             &path,
@@ -471,6 +450,37 @@ impl Single {
         (values.iter().any(|v| *v != 0.0) && values.iter().all(|v| v.abs() < least))
             .then_some((0, Self::Below))
     }
+}
+
+/// The array `name` of an `.npz` (or its only one) as a matrix, and what was said of it.
+fn npz_matrix(
+    path: &Path,
+    archive: &Npz,
+    name: Option<&str>,
+) -> Result<(DMatrix<f64>, String), FramesError> {
+    let names: Vec<&str> = archive.names().collect();
+    let name = match (name, names.as_slice()) {
+        (Some(n), _) => n.to_string(),
+        (None, [only]) => (*only).to_string(),
+        (None, []) => return Err(content(path, 0, FramesFault::Nothing { kind: "arrays" })),
+        (None, _) => {
+            let fault = FramesFault::Choose {
+                names: names.iter().map(|n| (*n).to_string()).collect(),
+                kind: "arrays",
+                path: path.into(),
+                placeholder: "NAME",
+            };
+            return Err(content(path, 0, fault));
+        }
+    };
+    if archive.is_boolean(&name) {
+        return Err(content(path, 0, FramesFault::Booleans(name)));
+    }
+    let m = npy_matrix(archive, &name).map_err(|error| FramesError::Npz {
+        path: path.into(),
+        error,
+    })?;
+    Ok((m, format!("array '{name}', ")))
 }
 
 /// A 1-D array as one row, a 2-D one as it is.

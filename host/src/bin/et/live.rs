@@ -263,28 +263,33 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     }
     // A replay that ended before any frame was imaged gave no events: say why, not nothing.
     if imaged == 0 && matches!(source, Source::Replay(_)) {
-        let stopped = if seen >= limit {
-            format!("--frames {limit} stopped it")
-        } else {
-            format!(
-                "it ended after {seen} frame{}",
-                if seen == 1 { "" } else { "s" }
-            )
-        };
-        let fewer = if seen >= 2 && seen < limit {
-            format!(
-                "; if fewer of its first frames are untouched, give their count (--reference 1 \
-                 to {})",
-                seen - 1
-            )
-        } else {
-            String::new()
-        };
-        anyhow::bail!(
-            "{}: {stopped} before the untouched reference ({needed} frames) was complete: no \
-             frame was imaged{fewer}",
-            source.describe()
-        );
+        return Err(nothing_imaged(&source.describe(), seen, limit, needed));
     }
     Ok(())
+}
+
+/// Why a replay (`source`) imaged no frame: it ended, or `--frames` (`limit`) stopped it,
+/// after `seen` frames, before the untouched reference's `needed`.
+fn nothing_imaged(source: &str, seen: u64, limit: u64, needed: usize) -> anyhow::Error {
+    let stopped = if seen >= limit {
+        format!("--frames {limit} stopped it")
+    } else {
+        format!(
+            "it ended after {seen} frame{}",
+            if seen == 1 { "" } else { "s" }
+        )
+    };
+    let fewer = if seen >= 2 && seen < limit {
+        format!(
+            "; if fewer of its first frames are untouched, give their count (--reference 1 to \
+             {})",
+            seen - 1
+        )
+    } else {
+        String::new()
+    };
+    anyhow::anyhow!(
+        "{source}: {stopped} before the untouched reference ({needed} frames) was complete: no \
+         frame was imaged{fewer}"
+    )
 }
