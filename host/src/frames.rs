@@ -360,7 +360,12 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         let fault = FramesFault::NotSingle { fault, row, column };
         return Err(content(&path, 0, fault));
     }
-    let by_rows = cols == k;
+    // A square matrix (K frames of K values, K of 8 or more) reads either way round: a
+    // recording's frames are far more alike than its values across the channels, so the
+    // frames are the way whose lines are clearly alike (read by rows, MATLAB's columns of
+    // frames were taken as rows).
+    let square = rows == k && cols == k && k >= 8;
+    let by_rows = cols == k && !(square && columns_alike(&matrix));
     let by_columns = !by_rows && rows == k;
     if !by_rows && !by_columns {
         let fault = FramesFault::NoK {
@@ -386,10 +391,17 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         path.display(),
         frames.len(),
         if frames.len() == 1 { "" } else { "s" },
-        if by_columns {
-            " (one per column: read transposed)"
-        } else {
-            ""
+        match (by_columns, square) {
+            (true, false) => " (one per column: read transposed)",
+            (true, true) => {
+                " (one per column, read transposed: a K x K matrix, whose columns are alike as \
+                 a recording's frames are)"
+            }
+            (false, true) => {
+                " (one per row: a K x K matrix, whose rows are alike as a recording's frames \
+                 are)"
+            }
+            (false, false) => "",
         }
     );
     Ok(Frames {
@@ -450,6 +462,24 @@ impl Single {
         (values.iter().any(|v| *v != 0.0) && values.iter().all(|v| v.abs() < least))
             .then_some((0, Self::Below))
     }
+}
+
+/// Whether the columns of `m` are clearly more alike than its rows: the squares of each
+/// entry's distance from its row's mean under a quarter of those from its column's mean
+/// (frames of a recording differ by a few per cent, its channels by their whole size; what is
+/// not clear stays read by rows, NumPy's way).
+fn columns_alike(m: &DMatrix<f64>) -> bool {
+    let (row_means, column_means) = (m.column_mean(), m.row_mean());
+    let (mut about_rows, mut about_columns) = (0.0, 0.0);
+    for ((r, c), v) in m
+        .iter()
+        .enumerate()
+        .map(|(i, v)| ((i % m.nrows(), i / m.nrows()), v))
+    {
+        about_rows += (v - row_means[r]).powi(2);
+        about_columns += (v - column_means[c]).powi(2);
+    }
+    4.0 * about_rows < about_columns
 }
 
 /// The array `name` of an `.npz` (or its only one) as a matrix, and what was said of it.

@@ -29,6 +29,42 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2\n3,x\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("f.csv:2") && e.contains("'x'"), "{e}");
+    // K frames of K values read either way round: the frames are the lines that are alike
+    // (MATLAB's columns of frames were read as rows, each "frame" one channel over time).
+    let v0 = [1.0, -2.0, 0.5, 3.0, -0.25, 0.75, -1.5, 2.5];
+    let frames: Vec<Vec<f64>> = (0..8)
+        .map(|i| v0.iter().map(|v| v * (1.0 + 0.01 * f64::from(i))).collect())
+        .collect();
+    let as_rows: String = (frames.iter())
+        .map(|f| {
+            f.iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    let as_columns: String = (0..8)
+        .map(|c| {
+            (frames.iter())
+                .map(|f| f[c].to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    for (text, said) in [
+        (as_rows, "one per row: a K x K"),
+        (as_columns, "read transposed: a K x K"),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let r = read(&f, 8).unwrap();
+        assert!(r.description.contains(said), "{}", r.description);
+        for (got, want) in r.frames.iter().zip(&frames) {
+            let want: Vec<f32> = want.iter().map(|v| *v as f32).collect();
+            assert_eq!(got, &want);
+        }
+    }
     // Complex values (NumPy's savetxt of a complex array, MATLAB's) are said as that, and a
     // row of real and imaginary parts side by side as twice K.
     for cell in ["(9.68e+00+9.68e-01j)", "1.5-2e-3j", "1.5+0.2i"] {
