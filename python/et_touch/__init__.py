@@ -797,6 +797,18 @@ class Reconstructor:
                 f"{what} is {n} x {m}: its columns are the frames, K = {k} values each? give "
                 f"them as rows ({what}.T, {m} x {k})"
             )
+        # K frames of K values: a recording's frames are far more alike than its channels, so
+        # columns clearly alike and rows not are frames as columns (as `et reconstruct` reads
+        # such a file).
+        if n == m == k >= 8:
+            about_rows = float(((frames - frames.mean(axis=1, keepdims=True)) ** 2).sum())
+            about_columns = float(((frames - frames.mean(axis=0)) ** 2).sum())
+            if 4 * about_rows < about_columns:
+                raise EtError(
+                    f"{what} is {k} x {k} and its columns are alike, as a recording's frames "
+                    f"are, where its rows are not: are the columns the frames? give them as "
+                    f"rows ({what}.T)"
+                )
         return frames
 
     def _keep(self, call: str, frames: np.ndarray) -> None:

@@ -285,6 +285,12 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.set_reference(np.vstack([v0, v0]).T)
     with pytest.raises(et.EtError, match=r"one row or column\? give its values: v.ravel\(\)"):
         disc.image(v[:, None], v0)
+    # K frames of K values as columns (scipy.io.loadmat of MATLAB's habit): refused with the fix
+    # (they were imaged as K frames each holding one channel over time); as rows, imaged.
+    square = v0 * (1 + 1e-3 * np.arange(208)[:, None])
+    with pytest.raises(et.EtError, match=r"V is 208 x 208 and its columns are alike"):
+        disc.images(square.T, v0)
+    assert len(disc.images(square, v0)) == 208
     # Magnitudes without their sign (some systems write them), under a protocol whose values
     # change sign around the sheet: refused as that (imaged, they lost the touch).
     pp = et.Reconstructor(et.disc(0.065, 16), et.protocol("pp-pp", 16), triangles=1200)
