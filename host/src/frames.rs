@@ -464,6 +464,18 @@ impl Single {
     }
 }
 
+/// Whether a row's `cells` count its columns from 0 or 1 (eight or more: a frame's values
+/// never do).
+fn counts_columns(cells: &[&str], delimiter: Delimiter) -> bool {
+    let values: Option<Vec<f64>> = cells.iter().map(|c| text::number(c, delimiter)).collect();
+    values.is_some_and(|v| {
+        v.len() >= 8
+            && [0.0, 1.0]
+                .iter()
+                .any(|from| v.iter().enumerate().all(|(j, x)| *x == from + j as f64))
+    })
+}
+
 /// Whether the columns of `m` are clearly more alike than its rows: the squares of each
 /// entry's distance from its row's mean under a quarter of those from its column's mean
 /// (frames of a recording differ by a few per cent, its channels by their whole size; what is
@@ -532,8 +544,9 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
     let mut values = Vec::new();
     let mut width = None;
     let mut n = 0;
-    // The header's first cell, where there is a header.
+    // The header's first cell, where there is a header; whether it is the columns' numbers.
     let mut first_name = None;
+    let mut numbered = false;
     let mut records = records.enumerate().peekable();
     let mut line_ends = false;
     while let Some((i, record)) = records.next() {
@@ -546,6 +559,12 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
             first_name = cells.first().map(|c| c.to_string());
+            continue;
+        }
+        // So is one that counts the columns (0, 1, 2, ... or 1, 2, 3, ...: a DAQ's channel
+        // numbers), which was read as the first frame, the reference.
+        if i == 0 && counts_columns(&cells, delimiter) {
+            numbered = true;
             continue;
         }
         let w = *width.get_or_insert(cells.len());
@@ -587,6 +606,9 @@ fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesE
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),
     };
+    if numbered {
+        said.push_str("its first row (the columns' numbers) skipped as a header, ");
+    }
     // Row after row is a w x n column-major matrix: transposed, n x w.
     let matrix = DMatrix::from_vec(w, n, values).transpose();
     // pandas' `to_csv` writes each row's number first, under a header cell with no name: a

@@ -29,6 +29,21 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2\n3,x\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("f.csv:2") && e.contains("'x'"), "{e}");
+    // A first row counting the columns (a DAQ's channel numbers, from 0 or 1) is a header:
+    // it was read as the first frame, the reference.
+    for (from, d) in [(0, ","), (1, ","), (1, ";")] {
+        let line = |v: &dyn Fn(usize) -> String| (0..8).map(v).collect::<Vec<_>>().join(d);
+        let header = line(&|j| (j + from).to_string());
+        let frame = line(&|j| format!("{}e-3", j + 2));
+        std::fs::write(&f, format!("{header}\n{frame}\n{frame}\n")).unwrap();
+        let r = read(&f, 8).unwrap();
+        assert_eq!(r.frames.len(), 2, "{header}");
+        assert!(
+            r.description.contains("the columns' numbers"),
+            "{}",
+            r.description
+        );
+    }
     // K frames of K values read either way round: the frames are the lines that are alike
     // (MATLAB's columns of frames were read as rows, each "frame" one channel over time).
     let v0 = [1.0, -2.0, 0.5, 3.0, -0.25, 0.75, -1.5, 2.5];
