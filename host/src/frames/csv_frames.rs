@@ -1,0 +1,128 @@
+//! Frames from a CSV: one frame per row, read record by record, a header (names, or the
+//! columns' numbers) and pandas' row index skipped and said.
+
+use std::path::Path;
+
+use et_core::text::{self, Delimiter};
+use nalgebra::DMatrix;
+
+use super::{FramesError, FramesFault, content};
+
+/// A CSV of numbers, a header row skipped; its matrix and what was said of the delimiter.
+/// Read record by record: what is kept is the numbers (8 bytes a value), not the cells.
+pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
+    let lines = text::lines(text);
+    let records = text::RecordIter::new(&lines);
+    let delimiter = records.delimiter;
+    let mut values = Vec::new();
+    let mut width = None;
+    let mut n = 0;
+    // The header's first cell, where there is a header; whether it is the columns' numbers.
+    let mut first_name = None;
+    let mut numbered = false;
+    let mut records = records.enumerate().peekable();
+    let mut line_ends = false;
+    while let Some((i, record)) = records.next() {
+        let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
+        // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
+        // row; it is not an empty last value. The first row (a header, perhaps written by
+        // hand) or the second says so.
+        line_ends |= i <= 1 && text::ends_with_delimiter(&record);
+        let cells = text::cells(&record, line_ends);
+        // A first row with a cell that is not a number is a header.
+        if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
+            first_name = cells.first().map(|c| c.to_string());
+            continue;
+        }
+        // So is one that counts the columns (0, 1, 2, ... or 1, 2, 3, ...: a DAQ's channel
+        // numbers), which was read as the first frame, the reference.
+        if i == 0 && counts_columns(&cells, delimiter) {
+            numbered = true;
+            continue;
+        }
+        let w = *width.get_or_insert(cells.len());
+        if cells.len() != w {
+            let fault = FramesFault::RowLength {
+                found: cells.len(),
+                first: w,
+                last: cells.len() < w && records.peek().is_none(),
+            };
+            return Err(content(path, line, fault));
+        }
+        for (c, cell) in cells.iter().enumerate() {
+            let (column, written) = (c + 1, || cell.to_string());
+            let v = text::number(cell, delimiter).ok_or_else(|| {
+                content(
+                    path,
+                    line,
+                    FramesFault::NotNumber {
+                        column,
+                        cell: written(),
+                    },
+                )
+            })?;
+            // (Said by the file's line and cell: the matrix's check counts from 0.)
+            if !(v.is_finite() && v.abs() <= f64::from(f32::MAX)) {
+                let fault = FramesFault::NotVolts {
+                    column,
+                    cell: written(),
+                    value: v,
+                };
+                return Err(content(path, line, fault));
+            }
+            values.push(v);
+        }
+        n += 1;
+    }
+    let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames))?;
+    let mut said = match delimiter {
+        Delimiter::Comma => String::new(),
+        d => format!("{}, ", d.said()),
+    };
+    if numbered {
+        said.push_str("its first row (the columns' numbers) skipped as a header, ");
+    }
+    // Row after row is a w x n column-major matrix: transposed, n x w.
+    let matrix = DMatrix::from_vec(w, n, values).transpose();
+    // pandas' `to_csv` writes each row's number first, under a header cell with no name: a
+    // column unnamed whose values count the rows from 0 is that index, not a value.
+    let unnamed = first_name.is_some_and(|name| {
+        name.is_empty() || name.eq_ignore_ascii_case("index") || name == "Unnamed: 0"
+    });
+    let counts_rows = (0..n).all(|r| matrix[(r, 0)] == r as f64);
+    if unnamed && counts_rows && w > 1 {
+        said.push_str("its first column (unnamed, 0, 1, 2, ...) skipped as the row index, ");
+        return Ok((matrix.remove_column(0), said));
+    }
+    Ok((matrix, said))
+}
+
+/// Whether a row's `cells` count its columns from 0 or 1 (eight or more: a frame's values
+/// never do).
+fn counts_columns(cells: &[&str], delimiter: Delimiter) -> bool {
+    let values: Option<Vec<f64>> = cells.iter().map(|c| text::number(c, delimiter)).collect();
+    values.is_some_and(|v| {
+        v.len() >= 8
+            && [0.0, 1.0]
+                .iter()
+                .any(|from| v.iter().enumerate().all(|(j, x)| *x == from + j as f64))
+    })
+}
+
+/// Whether `cell` is a complex number as NumPy (`(1.5+0.2j)`), Python (`1.5-0.2j`) or MATLAB
+/// (`1.5+0.2i`) writes it.
+pub(super) fn complex(cell: &str) -> bool {
+    let c = cell.trim().trim_start_matches('(').trim_end_matches(')');
+    let Some(body) = c.strip_suffix(['j', 'J', 'i', 'I']) else {
+        return false;
+    };
+    // The sign that starts the imaginary part: the last + or - not at the start and not an
+    // exponent's.
+    let split = body
+        .char_indices()
+        .rev()
+        .find(|&(i, ch)| i > 0 && (ch == '+' || ch == '-') && !body[..i].ends_with(['e', 'E']));
+    split.is_some_and(|(i, _)| {
+        body[..i].trim().parse::<f64>().is_ok() && body[i..].trim().parse::<f64>().is_ok()
+    })
+}
