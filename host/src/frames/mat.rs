@@ -17,15 +17,8 @@ mod fields;
 /// int64 they are read exactly).
 fn plain_mat(bytes: &[u8]) -> Result<Vec<u8>, FramesFault> {
     use std::io::Read as _;
-    let little = bytes.get(126..128) == Some(b"IM");
-    let word = |b: &[u8], at: usize| -> Option<u32> {
-        let w: [u8; 4] = b.get(at..at + 4)?.try_into().ok()?;
-        Some(if little {
-            u32::from_le_bytes(w)
-        } else {
-            u32::from_be_bytes(w)
-        })
-    };
+    let order = fields::Order::of(bytes);
+    let (little, word) = (order.little, |b: &[u8], at: usize| order.word(b, at));
     // An array (miMATRIX, 14) starts with its flags (miUINT32, 8 bytes), the class in the
     // flags word's low byte: int32 (12) becomes int64 (14).
     let mark_int32 = |out: &mut Vec<u8>, start: usize| {

@@ -32,14 +32,23 @@ struct Tag {
     end: usize,
 }
 
-/// Reads words in the file's byte order.
+/// Reads words in a version 5 file's byte order (the reader's input made safe reads them too).
 #[derive(Clone, Copy)]
-struct Order {
-    little: bool,
+pub(super) struct Order {
+    /// Whether the file is little-endian (bytes 126 and 127 are "IM").
+    pub little: bool,
 }
 
 impl Order {
-    fn word(self, b: &[u8], at: usize) -> Option<u32> {
+    /// The byte order `file` says it is written in.
+    pub fn of(file: &[u8]) -> Self {
+        Self {
+            little: file.get(126..128) == Some(b"IM"),
+        }
+    }
+
+    /// The word at `at` of `b`, if it is all there.
+    pub fn word(self, b: &[u8], at: usize) -> Option<u32> {
         let w: [u8; 4] = b.get(at..at.checked_add(4)?)?.try_into().ok()?;
         Some(if self.little {
             u32::from_le_bytes(w)
@@ -82,9 +91,7 @@ impl Order {
 /// The numeric fields of the file's structs (`plain`: a version 5 file, its compressed
 /// variables inflated), each by its dotted name, in file order.
 pub(super) fn fields(plain: &[u8]) -> Vec<Field> {
-    let order = Order {
-        little: plain.get(126..128) == Some(b"IM"),
-    };
+    let order = Order::of(plain);
     let mut found = Vec::new();
     let mut at = 128;
     while let Some(tag) = order.tag(plain, at) {
@@ -159,9 +166,7 @@ fn struct_fields(
 /// A version 5 file of `plain`'s header and `field` alone, its array named by the field's
 /// dotted name: what the MATLAB reader reads as a variable.
 pub(super) fn alone(plain: &[u8], field: &Field) -> Option<Vec<u8>> {
-    let order = Order {
-        little: plain.get(126..128) == Some(b"IM"),
-    };
+    let order = Order::of(plain);
     let element = plain.get(field.element.clone())?;
     let start = field.element.start;
     let (before, after) = (
