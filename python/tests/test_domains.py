@@ -214,6 +214,9 @@ def test_outlines_the_mesher_cannot_mesh_are_refused_at_once():
     et.polygon(square, 8)
     with pytest.raises(et.EtError, match="vertices clockwise: give them counter-clockwise"):
         et.polygon(square[::-1], 8)
+    # A sheet in millimetres images as one a thousand times larger, without a word.
+    with pytest.raises(et.EtError, match="280.0 m across, past the 10 m .* in mm or cm"):
+        et.disc(140, 16)
 
 
 def test_currents_up_to_the_unit_current_of_simulated_frames():

@@ -73,11 +73,27 @@ pub enum ShapeError {
         /// Area over the square of the bounding box's longer side.
         slenderness: f64,
     },
+    /// An outline wider than [`MAX_SPAN_M`]: lengths given in millimetres or centimetres.
+    #[error(
+        "the outline is {span:.1} m across, past the {max} m et takes: a scene's lengths are \
+         in metres (a 28 cm tank's radius is 0.14): were they given in mm or cm?",
+        max = MAX_SPAN_M
+    )]
+    Span {
+        /// The bounding box's longer side, m.
+        span: f64,
+    },
 }
 
 /// The most vertices an outline may have: the mesher's cost grows with them (3 000 took 43 s,
 /// 10 000 hung), and a sheet's outline needs far fewer (a disc is meshed from 24 to 200).
 pub const MAX_VERTICES: usize = 1_000;
+
+/// The widest an outline may be across (its bounding box's longer side, m). The frames
+/// and images of a sheet do not change with its scale, so lengths given in millimetres image
+/// a sheet a thousand times too large without a word (a 28 cm tank's radius of 140 put its
+/// touch at (44 741, 36 743) mm); no skin, garment or tank is near 10 m across.
+pub const MAX_SPAN_M: f64 = 10.0;
 
 /// The narrowest an outline may be against its longest side (area over the square of the
 /// bounding box's longer side): a strip 1 m x 5 mm passes (0.005), a 0.2 m x 1 um sliver
@@ -98,10 +114,14 @@ impl Shape {
             }
         };
         match self {
-            Shape::Disc { radius } => positive("radius", *radius),
+            Shape::Disc { radius } => {
+                positive("radius", *radius)?;
+                self.not_too_wide()
+            }
             Shape::Rectangle { width, height } => {
                 positive("width", *width)?;
                 positive("height", *height)?;
+                self.not_too_wide()?;
                 self.not_a_sliver()
             }
             Shape::Polygon { vertices } => {
@@ -138,8 +158,20 @@ impl Shape {
                          electrodes.direction = \"cw\" numbers the electrodes clockwise",
                     ));
                 }
+                self.not_too_wide()?;
                 self.not_a_sliver()
             }
+        }
+    }
+
+    /// [`ShapeError::Span`] for an outline wider than [`MAX_SPAN_M`].
+    fn not_too_wide(&self) -> Result<(), ShapeError> {
+        let [x0, y0, x1, y1] = self.bounds();
+        let span = (x1 - x0).max(y1 - y0);
+        if span <= MAX_SPAN_M {
+            Ok(())
+        } else {
+            Err(ShapeError::Span { span })
         }
     }
 
@@ -500,6 +532,39 @@ mod tests {
             [0.0, 0.1],
         ]);
         l_shape.validate().unwrap();
+    }
+
+    /// An outline past 10 m across is a scene's lengths in mm or cm (the frames do not show
+    /// the scale): each kind is refused saying so; one just inside passes.
+    #[test]
+    fn an_outline_in_millimetres_is_refused() {
+        let in_mm = [
+            Shape::Disc { radius: 140.0 },
+            Shape::Rectangle {
+                width: 130.0,
+                height: 130.0,
+            },
+            Shape::Polygon {
+                vertices: vec![[0.0, 0.0], [300.0, 0.0], [0.0, 200.0]],
+            },
+        ];
+        for (shape, span) in in_mm.iter().zip([280.0, 130.0, 300.0]) {
+            let e = shape.validate().unwrap_err();
+            assert_eq!(e, ShapeError::Span { span }, "{shape:?}");
+            assert!(
+                e.to_string().contains("were they given in mm or cm?"),
+                "{e}"
+            );
+        }
+        Shape::Disc {
+            radius: MAX_SPAN_M / 2.0,
+        }
+        .validate()
+        .unwrap();
+        let over = Shape::Disc {
+            radius: MAX_SPAN_M / 2.0 * (1.0 + 1e-9),
+        };
+        assert!(matches!(over.validate(), Err(ShapeError::Span { .. })));
     }
 
     /// A closed ring (its first vertex repeated last, as shapely's `exterior.coords` and GIS
