@@ -317,7 +317,14 @@ impl Viewer {
                             Some(Source::Sim(_)) => {
                                 "V_0 taken: press and hold the mouse on the sheet".into()
                             }
-                            _ => "V_0 taken: touches show on the sheet".into(),
+                            // Frames of another protocol, numbering or sheet than the
+                            // scene's show touches in the wrong places: said here.
+                            _ => match (self.processor.v0_unexplained())
+                                .and_then(et_recon::background::poor_fit_said)
+                            {
+                                Some(said) => format!("V_0 taken; warning: {said}"),
+                                None => "V_0 taken: touches show on the sheet".into(),
+                            },
                         };
                     }
                     for request in self.wizard.observe(&out, &self.processor) {

@@ -273,6 +273,25 @@ fn another_systems_frames_play_as_the_recording(
             .collect()
     };
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
+    let fits = String::from_utf8_lossy(&from_csv.stderr);
+    assert!(!fits.contains("unexplained"), "{fits}");
+    // Frames of a protocol in another order (here each frame's values reversed) streamed
+    // touches in the wrong places without a word: said once the reference is complete, as
+    // `et reconstruct` says it.
+    let reversed_csv = dir.join("reversed.csv");
+    let reversed: String = (csv.lines())
+        .map(|l| l.split(',').rev().collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    std::fs::write(&reversed_csv, reversed).unwrap();
+    let poor = replay(&reversed_csv, &[]);
+    let said = String::from_utf8_lossy(&poor.stderr);
+    assert!(
+        said.matches("warning: the homogeneous model leaves")
+            .count()
+            == 1
+            && said.contains("% of V_0 unexplained (past 20 %): check the protocol's order"),
+        "{said}"
+    );
     // Frames of the other sign (sense wires swapped) are refused at their reference, once,
     // as `et reconstruct` refuses them (they streamed touches in the wrong places).
     let negated_csv = dir.join("negated.csv");

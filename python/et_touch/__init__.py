@@ -826,10 +826,15 @@ class Reconstructor:
         v0 = _finite_frames(_numbers(v0, "v0"), "v0")
         return self._by_rows(_f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0"), "v0")
 
-    def _say_scale(self, frames: np.ndarray) -> None:
+    def _say_fit(self, frames: np.ndarray) -> None:
         """Warns when the untouched frames (n x K), taken by the native side (what it refuses
-        is said as refused, not first warned of), are far from the model's frame of the sheet
-        and the background was not fitted to them."""
+        is said as refused, not first warned of), are far from the model's frame of the sheet:
+        in shape (the model leaves much of them unexplained: another protocol, numbering or
+        sheet, as `et reconstruct` warns) or, where the background was not fitted to them, in
+        scale."""
+        said = self._native.poor_fit(frames) if frames.size else None
+        if said is not None:
+            warnings.warn(said, EtWarning, stacklevel=3)
         if frames.size and not self._native.background_fitted:
             scale = self._native.scale_of(frames)
             # (Below 0 it runs against the model, which the reference's check refuses.)
@@ -853,7 +858,7 @@ class Reconstructor:
         frame."""
         frames = self._frames(v0)
         self._native.set_reference(frames)
-        self._say_scale(frames)
+        self._say_fit(frames)
         self._reference = frames
         self._v0 = frames.mean(axis=0)
         self._keep("set_reference", frames)
@@ -915,7 +920,7 @@ class Reconstructor:
                          lambda: self._found_of(v[None, :], reference)[0])
         frames = self._frames(v0)
         made = self._native.image(v, frames)
-        self._say_scale(frames)
+        self._say_fit(frames)
         self._say_unlike(v, frames.mean(axis=0))
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
@@ -949,6 +954,7 @@ class Reconstructor:
         fit as `et reconstruct --json`'s ``background``."""
         frames = self._frames(v0)
         fit = json.loads(self._native.fit_background(frames))
+        self._say_fit(frames)
         self._keep("fit_background", frames)
         return fit
 

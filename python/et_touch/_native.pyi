@@ -68,6 +68,12 @@ class Reconstructor:
     def pixels(self, frame: F64) -> Tuple[F64, F64, float]:
         """frame (K, V) against the reference set: pixels (rows x cols), dV (K, V), alpha."""
     def fit_background(self, reference: F64) -> str: ...
+    @property
+    def background_fitted(self) -> bool: ...
+    def scale_of(self, reference: F64) -> Optional[float]:
+        """The mean of reference (n x K, V) over the model's frame of the untouched sheet."""
+    def poor_fit(self, reference: F64) -> Optional[str]:
+        """What is said when the model leaves over 20 % of reference's mean unexplained."""
     def forward(self, sigma: F64) -> F64:
         """The frame (K, V) of conductivity sigma (T, S per square)."""
     def jacobian(self) -> F64:

@@ -365,6 +365,16 @@ impl Reconstructor {
         Ok(self.inner.scale_of(&v0))
     }
 
+    /// What is said when the model's frame of the untouched sheet leaves more than
+    /// `et_recon::background::POOR_FIT` of the mean of the untouched `reference` frames
+    /// (n x K, V) unexplained, at its best scale; None within it.
+    fn poor_fit(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {
+        let v0 = reference_of(&reference)?.v0;
+        Ok(et_recon::background::poor_fit_said(
+            self.inner.unexplained(&v0),
+        ))
+    }
+
     /// Fits the background (sheet resistance, contact) to the untouched `reference` frames
     /// (n x K, V) and images about it from then on; the fit as JSON.
     fn fit_background(

@@ -329,6 +329,21 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         r.image(v * 1e6)
     with pytest.warns(et.EtWarning, match="frame 1 is 0.001 times .* 1 of 2 frames"):
         r.images(np.vstack([v * 1e3, v]))
+    # Frames of another protocol of the same K (opposite's under pseudo-polar): imaged about
+    # the wrong model without a word; now said as `et reconstruct` says it, fitted or not.
+    opposite = et.Reconstructor(et.disc(0.065, 16), et.protocol("opposite", 16), triangles=1200)
+    u0 = opposite.forward(opposite.sigma0)
+    pseudo = et.Reconstructor(et.disc(0.065, 16), et.protocol("pseudo-polar", 16), triangles=1200)
+    said = r"the homogeneous model leaves \d+ % of V_0 unexplained \(past 20 %\)"
+    # (Another protocol's frame is not the model's in scale either: said too.)
+    with pytest.warns(et.EtWarning, match="times the model's frame"):
+        with pytest.warns(et.EtWarning, match=said):
+            pseudo.set_reference(u0)
+    with pytest.warns(et.EtWarning, match=said):
+        pseudo.fit_background(u0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        opposite.set_reference(u0)
 
 
 def test_a_reconstructor_pickles_as_it_was_made(scene, recording):

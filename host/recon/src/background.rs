@@ -129,6 +129,28 @@ pub fn unsigned_said((sign, other): (i8, usize), k: usize) -> String {
     )
 }
 
+/// The share of V_0 the homogeneous model may leave unexplained before it is said: the real
+/// tanks' fitted models leave 1.5 and 7.7 %, a simulated tank with a real tank's departures
+/// from the model 16.3 % (docs/measurements.md), frames of another built-in protocol of the
+/// same K 71 %.
+pub const POOR_FIT: f64 = 0.2;
+
+/// What is said when the model leaves `residual` (a share, |V_0 - V(model)| / |V_0|) of V_0
+/// unexplained past [`POOR_FIT`]; None within it.
+#[must_use]
+pub fn poor_fit_said(residual: f64) -> Option<String> {
+    (residual > POOR_FIT).then(|| {
+        format!(
+            "the homogeneous model leaves {:.0} % of V_0 unexplained (past {:.0} %): check the \
+             protocol's order and electrode numbering (electrodes.first_deg, direction), \
+             that the sheet is the one measured (its outline, size and electrodes), and that \
+             no reading is clipped",
+            100.0 * residual,
+            100.0 * POOR_FIT
+        )
+    })
+}
+
 /// The value of a frame that holds one value throughout (all zero, or a constant): no
 /// sheet's measurements do, whatever the protocol, its numbering or its polarity.
 #[must_use]

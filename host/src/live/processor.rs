@@ -339,6 +339,15 @@ impl Processor {
         Some(v0)
     }
 
+    /// The share of V_0 ([`Processor::v0`]) that the model of the untouched sheet, at its
+    /// best scale, leaves unexplained ([`Reconstructor::unexplained`]); None until the
+    /// reference is complete. Past [`et_recon::background::POOR_FIT`] the frames are likely of
+    /// another protocol, numbering or sheet than the scene's.
+    #[must_use]
+    pub fn v0_unexplained(&self) -> Option<f64> {
+        self.v0().map(|v0| self.recon.unexplained(&v0))
+    }
+
     /// Builds the reconstruction for frames of `config` now (the one-step or GREIT matrix on
     /// the pixels), so that the first such frame does not wait for it: a replay or a board
     /// whose configuration is known before its first frame.

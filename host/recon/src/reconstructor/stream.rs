@@ -62,17 +62,13 @@ impl Reconstructor {
     /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceUnsigned`];
     /// [`ImagingError::ReferenceAgainstModel`] naming the correlation.
     pub fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
-        let model = &self.jac.frame;
-        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let (a, b) = (norm(v0), norm(model));
         if let Some(value) = crate::background::one_value(v0) {
             return Err(ImagingError::ReferenceNotMeasured(value));
         }
-        if let Some(said) = crate::background::unsigned(v0, model) {
+        if let Some(said) = crate::background::unsigned(v0, &self.jac.frame) {
             return Err(ImagingError::ReferenceUnsigned(said, v0.len()));
         }
-        let r =
-            v0.iter().zip(model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE);
+        let r = self.correlation(v0);
         if r <= 0.0 {
             return Err(ImagingError::ReferenceAgainstModel(format!(
                 "runs against the model's frame of the untouched sheet (their correlation is \
@@ -80,6 +76,26 @@ impl Reconstructor {
             )));
         }
         Ok(())
+    }
+
+    /// The correlation sum_k v0_k m_k / (|v0| |m|) of `v0` (K values, V) with the model's
+    /// frame of the untouched sheet, m (the one the Jacobian was made at).
+    fn correlation(&self, v0: &[f64]) -> f64 {
+        let model = &self.jac.frame;
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (a, b) = (norm(v0), norm(model));
+        v0.iter().zip(model).map(|(x, y)| x * y).sum::<f64>() / (a * b).max(f64::MIN_POSITIVE)
+    }
+
+    /// The share of `v0` (K values, V) that the model's frame of the untouched sheet, m, at
+    /// its best scale leaves unexplained: min_s |v0 - s m| / |v0| = sqrt(1 - r^2), r their
+    /// [correlation](Self::correlation). The background fit's residual when the model was
+    /// fitted to `v0`; frames of another protocol, or of electrodes numbered otherwise, leave
+    /// far more ([`crate::background::POOR_FIT`]).
+    #[must_use]
+    pub fn unexplained(&self, v0: &[f64]) -> f64 {
+        let r = self.correlation(v0).clamp(-1.0, 1.0);
+        (1.0 - r * r).sqrt()
     }
 
     /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles

@@ -336,3 +336,75 @@ fn a_set_up_asked_to_stop_ends_at_its_next_stage() {
     assert!(spec().set_up_until(&never).is_ok());
     assert_eq!(asked.get(), 3);
 }
+
+/// What the model of the untouched sheet leaves of a reference unexplained
+/// (`Reconstructor::unexplained`): nothing of its own frame at any scale; |e| / |m + e| of
+/// its frame m plus a part e no scale of m makes (the identity sqrt(1 - r^2)); the background
+/// fit's own residual once fitted to a reference of a bump; and more than `POOR_FIT` of the
+/// frame of another protocol of the same K (opposite's under pseudo-polar, 192 values each),
+/// which `et reconstruct`, `et stream`, `et view` and Python warn of.
+#[test]
+fn what_the_model_leaves_of_a_reference_unexplained() {
+    use et_core::protocol::{Protocol, ProtocolKind};
+    use et_recon::background::{POOR_FIT, poor_fit_said};
+    let spec = |kind| {
+        let protocol = Protocol::new(kind, 16).unwrap();
+        let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
+        Spec {
+            mesh: MeshPlan::About {
+                triangles: 900,
+                refine: Vec::new(),
+            },
+            ..Spec::new(Sheet::disc(0.1, 16), schedule)
+        }
+    };
+    let opposite = spec(ProtocolKind::Opposite).set_up().unwrap();
+    let m: Vec<f64> = bump_frame(&opposite, 0.0)
+        .iter()
+        .map(|&v| f64::from(v))
+        .collect();
+    for scale in [1e-3, 1.0, 250.0] {
+        let scaled: Vec<f64> = m.iter().map(|v| v * scale).collect();
+        assert!(opposite.unexplained(&scaled) < 1e-3, "{scale}");
+    }
+    // e: a pattern with m's part taken out.
+    let mm: f64 = m.iter().map(|v| v * v).sum();
+    let rms = (mm / m.len() as f64).sqrt();
+    let w: Vec<f64> = (0..m.len())
+        .map(|k| (k as f64 * 0.7).sin() * 0.1 * rms)
+        .collect();
+    let wm: f64 = w.iter().zip(&m).map(|(a, b)| a * b).sum();
+    let e: Vec<f64> = w.iter().zip(&m).map(|(a, b)| a - wm / mm * b).collect();
+    let ee: f64 = e.iter().map(|v| v * v).sum();
+    let v0: Vec<f64> = m.iter().zip(&e).map(|(a, b)| a + b).collect();
+    let expected = (ee / (mm + ee)).sqrt();
+    let got = opposite.unexplained(&v0);
+    assert!(
+        expected > 0.01 && (got - expected).abs() < 1e-3 * expected,
+        "{got} {expected}"
+    );
+
+    let bumped: Vec<f64> = bump_frame(&opposite, 1.0)
+        .iter()
+        .map(|&v| f64::from(v))
+        .collect();
+    let (fitted, fit) = spec(ProtocolKind::Opposite)
+        .set_up_fitted(&bumped, Weighting::Alike)
+        .unwrap();
+    assert!(fit.residual > 1e-4, "{}", fit.residual);
+    let got = fitted.unexplained(&bumped);
+    assert!(
+        (got - fit.residual).abs() < 0.05 * fit.residual,
+        "{got} {}",
+        fit.residual
+    );
+    assert_eq!(poor_fit_said(fit.residual), None);
+
+    let pseudo_polar = spec(ProtocolKind::PseudoPolar).set_up().unwrap();
+    let other = pseudo_polar.unexplained(&m);
+    let said = poor_fit_said(other).unwrap();
+    assert!(
+        other > POOR_FIT && said.contains("the protocol's order"),
+        "{other}: {said}"
+    );
+}

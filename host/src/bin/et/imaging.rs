@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use et_host::recording;
 use et_recon::Method;
+use et_recon::background::poor_fit_said;
 use et_sim::scene::Scene;
 
 use crate::domain::count;
@@ -405,10 +406,17 @@ fn set_up(
             let took = clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix;
             say_background(fit, &jacobian, took, stage);
         }
-        None => stage(
-            &format!("forward + Jacobian {jacobian}"),
-            set_up.forward_jacobian,
-        ),
+        None => {
+            stage(
+                &format!("forward + Jacobian {jacobian}"),
+                set_up.forward_jacobian,
+            );
+            // Measured frames at the scene's values: the model's frame at its best scale.
+            let residual = recon.unexplained(&reference.v0);
+            if let (Some(said), Some(_)) = (poor_fit_said(residual), &args.frames) {
+                say!("warning: {said}");
+            }
+        }
     }
     Ok((recon, fit))
 }
@@ -451,13 +459,8 @@ fn say_background(
         share(fit.misfit_off_drive),
         et_recon::reconstructor::MISMATCH_FACTOR
     );
-    if fit.residual > 0.2 {
-        say!(
-            "warning: the homogeneous model explains V_0 only to {:.0} %: check the \
-             protocol's electrode numbering (electrodes.first_deg, direction) and order, and \
-             that the scene's sheet is the one measured (its outline, size and electrodes)",
-            100.0 * fit.residual
-        );
+    if let Some(said) = poor_fit_said(fit.residual) {
+        say!("warning: {said}");
     }
 }
 

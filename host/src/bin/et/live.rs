@@ -157,6 +157,7 @@ pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
 
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
+    use et_recon::background::poor_fit_said;
     use std::io::Write as _;
     crate::note_stdout_closed();
     let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
@@ -238,6 +239,13 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             };
             if out.referencing.is_none() {
                 imaged += 1;
+                // Once the reference is complete: frames another protocol, numbering or sheet
+                // than the scene's would stream touches in the wrong places without a word.
+                if imaged == 1
+                    && let Some(said) = processor.v0_unexplained().and_then(poor_fit_said)
+                {
+                    say!("warning: {said}");
+                }
             }
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
