@@ -340,35 +340,7 @@ impl Sheet {
             };
             return field("sheet.electrodes.contact_ohm", fault);
         }
-        if let Some(deg) = e.first_deg {
-            if !deg.is_finite() {
-                let rule = "a finite angle in degrees";
-                return field("sheet.electrodes.first_deg", value(deg, rule));
-            }
-            if e.first.is_some() {
-                let rule = "give first_deg (an angle) or first (an arc fraction), not both";
-                return field("sheet.electrodes.first_deg", FieldFault::Rule(rule));
-            }
-        }
-        // Positions place every electrode: a first place or a direction beside them would
-        // be ignored without a word.
-        if e.positions.is_some()
-            && (e.first.is_some() || e.first_deg.is_some() || e.direction != Direction::Ccw)
-        {
-            let rule = "positions place every electrode: give them, or first/first_deg and \
-                        direction, not both";
-            return field("sheet.electrodes.positions", FieldFault::Rule(rule));
-        }
-        if let Some(p) = &e.positions
-            && (p.len() != usize::from(e.count) || p.iter().any(|x| !x.is_finite()))
-        {
-            let fault = FieldFault::Count {
-                found: p.iter().filter(|x| x.is_finite()).count(),
-                need: usize::from(e.count),
-                what: "finite arc fractions",
-            };
-            return field("sheet.electrodes.positions", fault);
-        }
+        e.placement_checked()?;
         // The electrodes apart on the outline (the simulator and the meshes alike): each
         // covers its width of the outline (a point electrode only its place).
         let perimeter = self.shape.perimeter();
@@ -394,6 +366,59 @@ impl Sheet {
                     perimeter,
                 });
             }
+        }
+        Ok(())
+    }
+}
+
+impl ElectrodeSpec {
+    /// Checks where the electrodes are placed: `first_deg` finite, `first` and each of
+    /// `positions` an arc-length fraction within (-1, 1) (an angle given there, 90 for
+    /// `first_deg = 90` or 6.28 rad, wrapped round the outline to another place: a rotated
+    /// image without a word), one way of placing them at a time.
+    fn placement_checked(&self) -> Result<(), SheetError> {
+        let field = |field, fault| Err(SheetError::Field { field, fault });
+        let value = |value, rule| FieldFault::Value { value, rule };
+        if let Some(deg) = self.first_deg {
+            if !deg.is_finite() {
+                let rule = "a finite angle in degrees";
+                return field("sheet.electrodes.first_deg", value(deg, rule));
+            }
+            if self.first.is_some() {
+                let rule = "give first_deg (an angle) or first (an arc fraction), not both";
+                return field("sheet.electrodes.first_deg", FieldFault::Rule(rule));
+            }
+        }
+        // Positions place every electrode: a first place or a direction beside them would
+        // be ignored without a word.
+        if self.positions.is_some()
+            && (self.first.is_some()
+                || self.first_deg.is_some()
+                || self.direction != Direction::Ccw)
+        {
+            let rule = "positions place every electrode: give them, or first/first_deg and \
+                        direction, not both";
+            return field("sheet.electrodes.positions", FieldFault::Rule(rule));
+        }
+        if let Some(p) = &self.positions
+            && (p.len() != usize::from(self.count) || p.iter().any(|x| !x.is_finite()))
+        {
+            let fault = FieldFault::Count {
+                found: p.iter().filter(|x| x.is_finite()).count(),
+                need: usize::from(self.count),
+                what: "finite arc fractions",
+            };
+            return field("sheet.electrodes.positions", fault);
+        }
+        let fraction = "an arc-length fraction of the outline from its start, between -1 and 1 \
+                        (an angle in degrees is first_deg; positions of angles: each / 360 \
+                        degrees, or / 2 pi radians)";
+        let outside = |f: f64| f.is_nan() || f.abs() >= 1.0;
+        if let Some(first) = self.first.filter(|f| outside(*f)) {
+            return field("sheet.electrodes.first", value(first, fraction));
+        }
+        if let Some(&at) = (self.positions.iter().flatten()).find(|p| outside(**p)) {
+            return field("sheet.electrodes.positions", value(at, fraction));
         }
         Ok(())
     }
@@ -439,6 +464,43 @@ mod tests {
         both.electrodes.first_deg = None;
         both.electrodes.direction = Direction::Cw;
         assert!(both.validate().is_err());
+    }
+
+    /// An angle where an arc-length fraction is read (`first = 90` for `first_deg = 90`,
+    /// positions in radians) wrapped round the outline to another place: the 28 cm tank's
+    /// touch imaged at (36.8, -44.8) mm for (50, 40), with the fit as good as the right
+    /// numbering's (a disc turned fits alike). Refused naming the field and first_deg; a
+    /// fraction a little before the start (-0.03) places as 0.97 does.
+    #[test]
+    fn an_angle_given_as_an_arc_fraction_is_refused() {
+        let mut first = Sheet::disc(0.14, 16);
+        first.electrodes.first = Some(90.0);
+        let e = first.validate().unwrap_err().to_string();
+        assert!(
+            e.starts_with("sheet.electrodes.first: 90 must be an arc-length fraction")
+                && e.contains("an angle in degrees is first_deg"),
+            "{e}"
+        );
+        let mut radians = Sheet::disc(0.14, 16);
+        radians.electrodes.positions = Some(
+            (0..16)
+                .map(|i| f64::from(i) * std::f64::consts::TAU / 16.0)
+                .collect(),
+        );
+        let e = radians.validate().unwrap_err().to_string();
+        assert!(
+            e.starts_with("sheet.electrodes.positions: 1.1780972450961724 must be")
+                && e.contains("/ 2 pi radians"),
+            "{e}"
+        );
+        first.electrodes.first = Some(-0.03);
+        first.validate().unwrap();
+        let before = first.electrodes.centres(&first.shape);
+        first.electrodes.first = Some(0.97);
+        let after = first.electrodes.centres(&first.shape);
+        assert!(before.iter().zip(&after).all(|(a, b)| near(*a, *b)));
+        first.electrodes.first = Some(f64::NAN);
+        assert!(first.validate().is_err());
     }
 
     /// A tank numbered clockwise from the top, on a disc and on a rectangle; et's default.
