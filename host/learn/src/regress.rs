@@ -592,6 +592,7 @@ impl IntensityByClass {
     }
 }
 
+mod kernel_cost;
 mod kernel_exp;
 mod knn;
 mod summary;

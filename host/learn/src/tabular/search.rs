@@ -314,8 +314,8 @@ pub(super) fn drifted_error(pred: &[Target3], t: &[Target3]) -> f64 {
 
 /// Seconds `method`'s cross-validation over `k` folds and its final fit on rows like `x` are
 /// estimated to take, for the methods whose time grows fastest with the table (the Gaussian
-/// process, the perceptron, k nearest neighbours: each times a piece of its work on rows of
-/// `x`'s shape); None for the others.
+/// process, the perceptron, k nearest neighbours, kernel ridge: each times a piece of its
+/// work on rows of `x`'s shape); None for the others.
 pub(super) fn estimate_seconds(method: Kind, x: &DMatrix<f64>, k: usize) -> Option<f64> {
     match method {
         Kind::Gp => Some(Gp::estimate_seconds(x, &GP_SEARCH, k) + Gp::estimate_seconds(x, &GP, 1)),
@@ -331,6 +331,11 @@ pub(super) fn estimate_seconds(method: Kind, x: &DMatrix<f64>, k: usize) -> Opti
                     + Mlp::estimate_seconds(x, &last, 1),
             )
         }
+        Kind::KernelRidge => Some(KernelRidge::estimate_seconds(
+            x,
+            (k, KRR_WIDTHS.len() * KRR_LAMBDAS.len(), DRIFT_DRAWS),
+            (KRR_SEARCH_SUPPORT, KRR_SUPPORT),
+        )),
         Kind::Knn => {
             // Each fold: its held-out rows and their drifted copies against the others.
             let n = x.nrows();
