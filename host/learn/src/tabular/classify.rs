@@ -69,12 +69,14 @@ pub(super) fn class_targets(
 }
 
 /// Every shrinkage of QDA or LDA, scored by cross-validation (accuracy; and the mean distance
-/// from the true position to the predicted class's position when the rows have positions).
+/// from the true position to the predicted class's position when the rows have positions);
+/// `estimate_s` its time, said beforehand.
 pub(super) fn search_classifier(
     table: &Table,
     method: Kind,
     labels: &Labels,
     fold: &[usize],
+    estimate_s: Option<f64>,
     progress: Progress<'_>,
 ) -> Result<Vec<Candidate>, TabularError> {
     let classes = labels.names.len();
@@ -108,10 +110,12 @@ pub(super) fn search_classifier(
             .collect());
     }
     let kind = discriminant(method);
+    let k = fold.iter().max().map_or(0, |m| m + 1);
     let what = format!(
-        "cross-validating {} ({} shrinkages)",
+        "cross-validating {} ({} shrinkages, {k} folds, then the final fit{})",
         method.name(),
-        SHRINKAGES.len()
+        SHRINKAGES.len(),
+        estimate_s.map_or(String::new(), |s| format!(": about {} s", seconds_said(s)))
     );
     let mut out = Vec::new();
     for (i, &lambda) in SHRINKAGES.iter().enumerate() {

@@ -89,7 +89,7 @@ pub enum Misuse {
     /// A training estimated to take longer than its budget.
     #[error(
         "{what} would take about {} s, past the budget of {} s: train \
-         on fewer rows (--rows) or features, choose a faster kind (ridge, knn, kernel-ridge), \
+         on fewer rows (--rows) or features, choose a faster kind (ridge; for labels, lda), \
          or raise the budget (--max-minutes, budget_s=)",
         seconds_said(*.estimate_s), seconds_said(*.budget_s)
     )]
@@ -322,7 +322,7 @@ pub(crate) fn gb(bytes: u64) -> String {
 
 /// Seconds as a person reads them: whole from 10 s, two significant digits below (a budget
 /// of 1e-9 s was said as "0 s", past an estimate of "0 s").
-fn seconds_said(s: f64) -> String {
+pub(super) fn seconds_said(s: f64) -> String {
     if s >= 10.0 || s <= 0.0 || !s.is_finite() {
         format!("{s:.0}")
     } else if s >= 1e-3 {

@@ -1217,6 +1217,37 @@ fn a_training_past_its_budget_is_refused_before_any_fit() {
         );
     }
     assert!(train(&STANDIN, Choice::One(Kind::Ridge), &tight, &mut quiet()).is_ok());
+    // QDA and LDA (2 000 features of 400 rows in 4 classes took 36 and 12 s without a word)
+    // count their factors' work at a timed rate: said and held to the budget likewise.
+    let mut rng = et_core::rng::Rng::new(8);
+    let x = DMatrix::from_fn(60, 30, |_, _| rng.normal());
+    let labels = (0..60)
+        .map(|i| ["a", "b", "c"][i % 3].to_string())
+        .collect();
+    let table = labelled(x, labels);
+    for choice in [Choice::One(Kind::Qda), Choice::One(Kind::Lda), Choice::Auto] {
+        let e = train(&table, choice, &tight, &mut quiet())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("past the budget") && e.contains("on 60 rows x 30 features"),
+            "{choice:?}: {e}"
+        );
+    }
+    let mut said = Vec::new();
+    train(
+        &table,
+        Choice::One(Kind::Qda),
+        &opts(),
+        &mut |what: &str, _, _| said.push(what.to_string()),
+    )
+    .unwrap();
+    assert!(
+        said.iter().any(|w| w.starts_with(
+            "cross-validating qda (6 shrinkages, 3 folds, then the final fit: about "
+        )),
+        "{said:?}"
+    );
 }
 
 /// A discriminant whose covariance tables cannot fit in memory is refused before any fit,
