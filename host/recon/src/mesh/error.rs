@@ -168,6 +168,17 @@ pub enum MeshError {
         /// A node both have, where their corners overlap.
         node: usize,
     },
+    /// The boundary crosses itself where no node is shared: triangles lie over others.
+    #[error(
+        "the mesh's boundary crosses itself: its edge ({}, {}) meets its edge ({}, {}), which \
+         share no node (a sheet meshed folded over itself, or pieces laid over each other): \
+         the finite elements would add their conductances where they overlap",
+        edges[0][0], edges[0][1], edges[1][0], edges[1][1]
+    )]
+    BoundaryCrossing {
+        /// The two boundary edges (node pairs).
+        edges: [[usize; 2]; 2],
+    },
     /// A piece of the mesh that no electrode reaches.
     #[error(
         "triangle {triangle} is in a piece of the mesh that no electrode reaches ({triangles} \

@@ -420,5 +420,47 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
             .to_string();
         assert!(e.contains(what), "{what}: {e}");
     }
+    // Two squares laid over each other with no node in common (a sheet meshed folded, or
+    // pieces stacked), each reached by an electrode: no corner overlaps another at a shared
+    // node, so only their boundaries crossing shows it (the finite elements added their
+    // conductances where they overlap, without a word).
+    let stacked = vec![
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [1.0, 1.0],
+        [0.0, 1.0],
+        [0.5, 0.5],
+        [1.5, 0.5],
+        [1.5, 1.5],
+        [0.5, 1.5],
+    ];
+    let e = Mesh::from_parts(
+        stacked,
+        vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]],
+        vec![vec![[0, 1]], vec![[5, 6]]],
+    )
+    .unwrap_err();
+    assert!(matches!(e, MeshError::BoundaryCrossing { .. }), "{e}");
+    assert!(
+        e.to_string().contains("the mesh's boundary crosses itself"),
+        "{e}"
+    );
+    // A slit cut in from the edge (its nodes doubled along the cut, each side a boundary)
+    // is a sheet: its sides along one line and its doubled nodes at one point cross nothing.
+    let slit = vec![
+        [0.0, 0.0],
+        [2.0, 0.0],
+        [2.0, 2.0],
+        [0.0, 2.0],
+        [0.0, 1.0],
+        [0.0, 1.0],
+        [1.0, 1.0],
+    ];
+    Mesh::from_parts(
+        slit,
+        vec![[0, 1, 6], [0, 6, 4], [1, 2, 6], [2, 3, 6], [3, 5, 6]],
+        vec![vec![[0, 1]], vec![[2, 3]]],
+    )
+    .unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -79,6 +79,68 @@ pub(super) fn check_overlap(nodes: &[[f64; 2]], triangles: &[[usize; 3]]) -> Res
     Ok(())
 }
 
+/// The boundary's `edges` (node pairs) crossing or touching none but their neighbours: a
+/// boundary that crosses itself where no node is shared is triangles laid over others without
+/// a common corner (a sheet meshed folded over itself, or two pieces over each other), which
+/// [`check_overlap`] cannot see. Edges are swept by their leftmost x, each tested against those
+/// whose x range meets its own (orientation tests; an end on another edge counts). A slit
+/// (a cut meshed with its nodes doubled, each side a boundary) is a sheet: nodes at one point
+/// count as one, and edges along one line (a slit's two sides) do not cross.
+pub(super) fn check_boundary_uncrossed(
+    nodes: &[[f64; 2]],
+    edges: &[[usize; 2]],
+) -> Result<(), MeshError> {
+    let side = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).signum()
+    };
+    // Each boundary node's point, by its bits: nodes at one point are one corner.
+    let mut points: HashMap<[u64; 2], usize> = HashMap::new();
+    let mut point_of: HashMap<usize, usize> = HashMap::new();
+    for &v in edges.iter().flatten() {
+        let at = node(nodes, v).map(|x| (x + 0.0).to_bits());
+        let next = points.len();
+        point_of.insert(v, *points.entry(at).or_insert(next));
+    }
+    let point = |v: usize| point_of.get(&v).copied().unwrap_or(usize::MAX);
+    // (x min, x max, y min, y max, edge)
+    let mut spans: Vec<(f64, f64, f64, f64, [usize; 2])> = (edges.iter())
+        .map(|&[a, b]| {
+            let (p, q) = (node(nodes, a), node(nodes, b));
+            (
+                p[0].min(q[0]),
+                p[0].max(q[0]),
+                p[1].min(q[1]),
+                p[1].max(q[1]),
+                [a, b],
+            )
+        })
+        .collect();
+    spans.sort_unstable_by(|u, v| u.0.total_cmp(&v.0));
+    for (i, &(_, x1, y0, y1, [a, b])) in spans.iter().enumerate() {
+        let (p, q) = (node(nodes, a), node(nodes, b));
+        for &(u0, _, v0, v1, [c, d]) in spans.iter().skip(i + 1) {
+            if u0 > x1 {
+                break;
+            }
+            let shared = [c, d]
+                .iter()
+                .any(|&v| point(v) == point(a) || point(v) == point(b));
+            if v0 > y1 || v1 < y0 || shared {
+                continue;
+            }
+            let (r, t) = (node(nodes, c), node(nodes, d));
+            let (sr, st) = (side(p, q, r), side(p, q, t));
+            let along = sr == 0.0 && st == 0.0;
+            if !along && sr * st <= 0.0 && side(r, t, p) * side(r, t, q) <= 0.0 {
+                return Err(MeshError::BoundaryCrossing {
+                    edges: [[a, b], [c, d]],
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Every piece of the mesh (triangles joined through their nodes) reached by an electrode; a
 /// floating piece left the factorisation to fail on a singular system, said as conductivities
 /// spanning too many powers of ten.
@@ -256,6 +318,12 @@ pub(super) fn check_topology(
             }
         }
     }
+    let mut boundary_edges: Vec<[usize; 2]> = (edges.iter())
+        .filter(|(_, count)| **count == 1)
+        .map(|(e, _)| *e)
+        .collect();
+    boundary_edges.sort_unstable();
+    check_boundary_uncrossed(nodes, &boundary_edges)?;
     let on_boundary = |v: usize| boundary.get(v).copied().unwrap_or(false);
     for (l, p) in point.iter().enumerate() {
         if let Some(v) = *p
