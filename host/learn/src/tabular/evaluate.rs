@@ -106,42 +106,14 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         }));
     }
     let z_is_length = model.third_is_length();
-    // The scores are for people: positions (and a z) in mm.
-    let mm = |v: Target3| {
-        [
-            v[0] * 1e3,
-            v[1] * 1e3,
-            v[2] * if z_is_length { 1e3 } else { 1.0 },
-        ]
-    };
-    let mut pairs = Vec::new();
-    let (mut errors, mut errors3, mut third) = (Vec::new(), Vec::new(), Vec::new());
     let groups = table.group_index();
-    let mut group_errors: Vec<Vec<f64>> =
-        vec![Vec::new(); groups.as_ref().map_or(0, |(_, n)| n.len())];
-    if let Some(truth) = &truth {
-        for (r, (t, p)) in truth.iter().zip(&pred).enumerate() {
-            if let Some(q) = p.target {
-                let (t, q) = (mm(*t), mm(q));
-                pairs.push(([t[0], t[1]], [q[0], q[1]]));
-                errors.push((q[0] - t[0]).hypot(q[1] - t[1]));
-                if let Some(g) = groups
-                    .as_ref()
-                    .and_then(|(index, _)| index.get(r))
-                    .and_then(|&g| group_errors.get_mut(g))
-                {
-                    g.push((q[0] - t[0]).hypot(q[1] - t[1]));
-                }
-                if model.third.is_some() && table.third.is_some() {
-                    third.push((q[2] - t[2]).abs());
-                    errors3.push(
-                        ((q[0] - t[0]).powi(2) + (q[1] - t[1]).powi(2) + (q[2] - t[2]).powi(2))
-                            .sqrt(),
-                    );
-                }
-            }
-        }
-    }
+    let Errors {
+        pairs,
+        mut errors,
+        errors3,
+        third,
+        by_group,
+    } = errors(model, table, (truth.as_deref(), &pred), groups.as_ref());
     let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     errors.sort_by(f64::total_cmp);
     let quantile = |f: f64| {
@@ -165,7 +137,7 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
             .iter()
             .enumerate()
             .map(|(g, name)| {
-                let mut e = group_errors.get(g).cloned().unwrap_or_default();
+                let mut e = by_group.get(g).cloned().unwrap_or_default();
                 e.sort_by(f64::total_cmp);
                 GroupScore {
                     group: name.clone(),
@@ -196,6 +168,65 @@ pub fn evaluate(model: &TableModel, table: &Table) -> Result<Evaluation, Tabular
         pairs,
         predictions: pred,
     })
+}
+
+/// Each scored row's errors, mm: (x, y) pairs of truth and prediction for the plots, the
+/// position errors, with z, the third target's, and the position errors of each group.
+struct Errors {
+    pairs: Vec<([f64; 2], [f64; 2])>,
+    errors: Vec<f64>,
+    errors3: Vec<f64>,
+    third: Vec<f64>,
+    by_group: Vec<Vec<f64>>,
+}
+
+/// The errors of the predictions `pred` against the rows' `truth` (m), for the rows whose
+/// prediction has a position; `groups`: each row's group and the groups' names.
+fn errors(
+    model: &TableModel,
+    table: &Table,
+    (truth, pred): (Option<&[Target3]>, &[Prediction]),
+    groups: Option<&(Vec<usize>, Vec<String>)>,
+) -> Errors {
+    let z_is_length = model.third_is_length();
+    // The scores are for people: positions (and a z) in mm.
+    let mm = |v: Target3| {
+        [
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * if z_is_length { 1e3 } else { 1.0 },
+        ]
+    };
+    let mut out = Errors {
+        pairs: Vec::new(),
+        errors: Vec::new(),
+        errors3: Vec::new(),
+        third: Vec::new(),
+        by_group: vec![Vec::new(); groups.map_or(0, |(_, n)| n.len())],
+    };
+    let Some(truth) = truth else {
+        return out;
+    };
+    for (r, (t, p)) in truth.iter().zip(pred).enumerate() {
+        let Some(q) = p.target else {
+            continue;
+        };
+        let (t, q) = (mm(*t), mm(q));
+        let error = (q[0] - t[0]).hypot(q[1] - t[1]);
+        out.pairs.push(([t[0], t[1]], [q[0], q[1]]));
+        out.errors.push(error);
+        if let Some(g) = groups
+            .and_then(|(index, _)| index.get(r))
+            .and_then(|&g| out.by_group.get_mut(g))
+        {
+            g.push(error);
+        }
+        if model.third.is_some() && table.third.is_some() {
+            out.third.push((q[2] - t[2]).abs());
+            out.errors3.push(error.hypot(q[2] - t[2]));
+        }
+    }
+    out
 }
 
 /// The rows' labels a classifier has no class of, each once, in order of first row.

@@ -365,41 +365,8 @@ pub(crate) fn eval(
     if let Some(p) = predictions {
         output::check_format(p, "the predictions (CSV)", &["csv"])?;
     }
-    if model.reference != args.referencing() {
-        let said = |r: Option<Referencing>| match r {
-            None => "raw features".to_string(),
-            Some(Referencing::Ratio) => "features relative to --reference-features (ratio)".into(),
-            Some(Referencing::Difference) => {
-                "features minus --reference-features (difference)".into()
-            }
-        };
-        bail!(
-            "{} was trained on {}; these rows would be {}: give the same --reference-features \
-             and --reference-as as in training",
-            model_path.display(),
-            said(model.reference),
-            said(args.referencing())
-        );
-    }
-    let table = args.load().map_err(|e| {
-        // New rows without their targets are not scored: say what eval is for, and where
-        // such rows are predicted (the file's "add a 'label' column" alone asked for labels
-        // the user does not have).
-        let no_target = e
-            .downcast_ref::<et_learn::dataset::DatasetError>()
-            .is_some_and(|d| {
-                matches!(d, et_learn::dataset::DatasetError::Content { fault, .. }
-                    if matches!(**fault, et_learn::dataset::DatasetFault::NoTarget { .. }))
-            });
-        if no_target {
-            anyhow::anyhow!(
-                "{e:#} (et eval scores a model against the rows' own targets; rows without \
-                 them are predicted by Python's model.predict, or live by et stream)"
-            )
-        } else {
-            e
-        }
-    })?;
+    same_referencing(model, model_path, args)?;
+    let table = scored_rows(args)?;
     let e = tabular::evaluate(model, &table).map_err(|e| {
         anyhow::anyhow!(
             "{} with {}: {e}",
@@ -426,39 +393,95 @@ pub(crate) fn eval(
             std::fs::write(partial, predictions_csv(model, &e, table.first_row))
         })?;
     }
+    say_notes(&e, &table);
+    if json {
+        out!("{}", serde_json::to_string(&e)?);
+    } else {
+        print_scores(model, &e);
+    }
+    Ok(())
+}
+
+/// Refuses rows referenced otherwise than the rows `model` (read from `model_path`) was
+/// trained on.
+fn same_referencing(model: &TableModel, model_path: &Path, args: &TableArgs) -> Result<()> {
+    if model.reference == args.referencing() {
+        return Ok(());
+    }
+    let said = |r: Option<Referencing>| match r {
+        None => "raw features".to_string(),
+        Some(Referencing::Ratio) => "features relative to --reference-features (ratio)".into(),
+        Some(Referencing::Difference) => "features minus --reference-features (difference)".into(),
+    };
+    bail!(
+        "{} was trained on {}; these rows would be {}: give the same --reference-features and \
+         --reference-as as in training",
+        model_path.display(),
+        said(model.reference),
+        said(args.referencing())
+    )
+}
+
+/// The rows to score, read from `args`' files.
+fn scored_rows(args: &TableArgs) -> Result<tabular::Table> {
+    args.load().map_err(|e| {
+        // New rows without their targets are not scored: say what eval is for, and where
+        // such rows are predicted (the file's "add a 'label' column" alone asked for labels
+        // the user does not have).
+        let no_target = e
+            .downcast_ref::<et_learn::dataset::DatasetError>()
+            .is_some_and(|d| {
+                matches!(d, et_learn::dataset::DatasetError::Content { fault, .. }
+                    if matches!(**fault, et_learn::dataset::DatasetFault::NoTarget { .. }))
+            });
+        if no_target {
+            anyhow::anyhow!(
+                "{e:#} (et eval scores a model against the rows' own targets; rows without \
+                 them are predicted by Python's model.predict, or live by et stream)"
+            )
+        } else {
+            e
+        }
+    })
+}
+
+/// The evaluation's notes (another unit, another scale, the training's own rows) and the
+/// labels the model has no class of, on standard error.
+fn say_notes(e: &tabular::Evaluation, table: &tabular::Table) {
     for note in [&e.unit_note, &e.scale_note, &e.trained_note]
         .into_iter()
         .flatten()
     {
         say!("note: {note}");
     }
-    if !e.unknown_labels.is_empty() {
-        let shown: Vec<&str> = e
-            .unknown_labels
-            .iter()
-            .take(5)
-            .map(String::as_str)
-            .collect();
-        let missed = table.labels.as_ref().map_or(0, |l| {
-            l.iter().filter(|l| e.unknown_labels.contains(l)).count()
-        });
-        say!(
-            "note: {} label{} the model has no class of ({}{}): {missed} row{} counted as missed",
-            e.unknown_labels.len(),
-            if e.unknown_labels.len() == 1 { "" } else { "s" },
-            shown.join(", "),
-            if e.unknown_labels.len() > 5 {
-                ", ..."
-            } else {
-                ""
-            },
-            if missed == 1 { "" } else { "s" }
-        );
+    if e.unknown_labels.is_empty() {
+        return;
     }
-    if json {
-        out!("{}", serde_json::to_string(&e)?);
-        return Ok(());
-    }
+    let shown: Vec<&str> = e
+        .unknown_labels
+        .iter()
+        .take(5)
+        .map(String::as_str)
+        .collect();
+    let missed = table.labels.as_ref().map_or(0, |l| {
+        l.iter().filter(|l| e.unknown_labels.contains(l)).count()
+    });
+    say!(
+        "note: {} label{} the model has no class of ({}{}): {missed} row{} counted as missed",
+        e.unknown_labels.len(),
+        if e.unknown_labels.len() == 1 { "" } else { "s" },
+        shown.join(", "),
+        if e.unknown_labels.len() > 5 {
+            ", ..."
+        } else {
+            ""
+        },
+        if missed == 1 { "" } else { "s" }
+    );
+}
+
+/// The scores in a line, and each group's, on standard output.
+fn print_scores(model: &TableModel, e: &tabular::Evaluation) {
     let mut parts = Vec::new();
     if let Some(a) = e.accuracy {
         parts.push(format!("accuracy {:.1} %", 100.0 * a));
@@ -490,7 +513,6 @@ pub(crate) fn eval(
             );
         }
     }
-    Ok(())
 }
 
 /// Every row's prediction as CSV: `row` (0-based, in the file), `class` (classifiers: the
