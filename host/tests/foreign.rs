@@ -795,7 +795,7 @@ fn et_forward_says_and_drives_a_protocol_files_currents() {
     let scene = d.join("s.toml");
     std::fs::write(
         &scene,
-        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"p.csv\" }\ncurrent_ua = 32\n",
+        "[sheet]\nshape = { kind = \"disc\", radius = 0.1 }\n\n[scan]\nprotocol = { file = \"p.csv\" }\n",
     )
     .unwrap();
     let forward = |rows: &str| {
@@ -830,5 +830,32 @@ fn et_forward_says_and_drives_a_protocol_files_currents() {
         !out.status.success() && err.contains("p.csv:2: 5 cells, where the first row has 4"),
         "{err}"
     );
+    // A scene's current beside rows that drive another (1.4142 written for 1.4142 mA): the
+    // rows' were used and the scene's ignored, without a word. Refused; alike, taken.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    for (ua, said) in [
+        (
+            "1.4142",
+            Some("scan.current_ua: 1.4142 uA, but p.csv's rows drive 1000 to 2000 uA"),
+        ),
+        (
+            "32",
+            Some("32 uA, but p.csv's rows drive 1000 to 2000 uA: each row's own current"),
+        ),
+        ("1000", None),
+    ] {
+        std::fs::write(&scene, format!("{text}current_ua = {ua}\n")).unwrap();
+        let rows = if said.is_some() {
+            "0,1,2,3,1e-3\n0,1,2,3,2e-3\n"
+        } else {
+            "0,1,2,3,1e-3\n"
+        };
+        let out = forward(rows);
+        let err = String::from_utf8_lossy(&out.stderr);
+        match said {
+            Some(said) => assert!(!out.status.success() && err.contains(said), "{err}"),
+            None => assert!(out.status.success(), "{err}"),
+        }
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -104,6 +104,10 @@ pub struct ScanSpec {
     /// PGIA gain.
     #[serde(deserialize_with = "et_core::whole::whole")]
     pub gain: u8,
+    /// Whether the file gave `current_ua` (a protocol file's rows may give their own; one
+    /// beside them that differs is refused, not ignored).
+    #[serde(skip)]
+    pub current_given: bool,
 }
 
 impl Default for ScanSpec {
@@ -117,6 +121,7 @@ impl Default for ScanSpec {
             current_ua: f64::from(r.current_na) / 1e3,
             sample_rate_hz: r.sample_rate_hz,
             gain: r.gain,
+            current_given: false,
         }
     }
 }
@@ -392,6 +397,10 @@ impl Scene {
             error,
         })?;
         scene.name = name.into();
+        scene.scan.current_given = toml::from_str::<toml::Table>(text)
+            .ok()
+            .and_then(|t| t.get("scan")?.get("current_ua").cloned())
+            .is_some();
         scene.validate().map_err(|error| SceneError::Invalid {
             path: name.into(),
             error,

@@ -55,6 +55,25 @@ pub enum SceneFault {
          `et reconstruct --frames`)"
     )]
     BoardCurrent(f64),
+    /// A current beside a protocol file whose rows drive others.
+    #[error(
+        "{} uA, but {file}'s rows drive {}: each row's own current is imaged, so this one \
+         would be ignored; drop current_ua, or give the rows' (uA: 1.4 mA is 1400)",
+        ua_said(*.ua),
+        if ua_said(.rows_ua.0) == ua_said(.rows_ua.1) {
+            format!("{} uA", ua_said(.rows_ua.0))
+        } else {
+            format!("{} to {} uA", ua_said(.rows_ua.0), ua_said(.rows_ua.1))
+        }
+    )]
+    CurrentBesideRows {
+        /// The scene's current, uA.
+        ua: f64,
+        /// The protocol file, as the scene names it.
+        file: String,
+        /// The rows' least and most current, uA.
+        rows_ua: (f64, f64),
+    },
     /// The protocol file, or the built-in protocol's schedule.
     #[error(transparent)]
     Schedule(#[from] et_core::schedule::ScheduleError),
@@ -120,4 +139,11 @@ impl From<SheetError> for FieldError {
             other => Self::new("sheet", SceneFault::Sheet(other)),
         }
     }
+}
+
+/// A current in uA as a scene writes it: six decimals at most, no trailing zeros (1414.2, not
+/// 1414.2000000000003 from 1.4142e-3 A).
+fn ua_said(ua: f64) -> String {
+    let said = format!("{ua:.6}");
+    said.trim_end_matches('0').trim_end_matches('.').to_string()
 }

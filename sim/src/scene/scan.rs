@@ -70,14 +70,16 @@ impl Scene {
             (ProtocolSpec::File(f), _) => {
                 let path = self.dir.join(&f.file);
                 let text = self.read.text(&path).map_err(|e| field(e.into()))?;
-                et_core::schedule::Schedule::parse_csv(
+                let schedule = et_core::schedule::Schedule::parse_csv(
                     &path,
                     &text,
                     u16::from(electrodes),
                     f.base,
                     amps,
                 )
-                .map_err(|e| field(e.into()))
+                .map_err(|e| field(e.into()))?;
+                self.current_beside_rows(&schedule, &f.file)?;
+                Ok(schedule)
             }
             (_, Some(kind)) => et_core::protocol::Protocol::new(kind, electrodes)
                 .map_err(|e| field(e.into()))?
@@ -87,6 +89,29 @@ impl Scene {
                 Err(field(SceneFault::UnknownProtocol(name.clone())))
             }
         }
+    }
+
+    /// Refuses a `current_ua` the scene gives beside a protocol `file` whose rows drive
+    /// other currents: the rows' are imaged, and the scene's was ignored without a word (a
+    /// current_ua of 1.4142, meant as mA, beside rows of 1.4142e-3 A).
+    fn current_beside_rows(
+        &self,
+        schedule: &et_core::schedule::Schedule,
+        file: &std::path::Path,
+    ) -> Result<(), FieldError> {
+        let ua = self.scan.current_ua;
+        let rows_ua = schedule.rows().iter().map(|r| r.current_a * 1e6);
+        let (low, high) = rows_ua.fold((f64::INFINITY, 0.0_f64), |(l, h), x| (l.min(x), h.max(x)));
+        let alike = |x: f64| (x - ua).abs() <= 1e-6 * ua;
+        if !self.scan.current_given || (alike(low) && alike(high)) {
+            return Ok(());
+        }
+        let fault = SceneFault::CurrentBesideRows {
+            ua,
+            file: file.display().to_string(),
+            rows_ua: (low, high),
+        };
+        Err(FieldError::new("scan.current_ua", fault))
     }
 
     /// The scan configuration the scene asks of the (simulated) board.
