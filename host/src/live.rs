@@ -220,7 +220,7 @@ impl LiveError {
             self,
             LiveError::Imaging(
                 ImagingError::ReferenceNotMeasured(_)
-                    | ImagingError::ReferenceUnsigned(..)
+                    | ImagingError::ReferenceNotSigned(_)
                     | ImagingError::ReferenceAgainstModel(_)
             )
         )

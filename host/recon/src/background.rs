@@ -64,10 +64,10 @@ pub enum BackgroundError {
     /// The reference frame is one value throughout: not measured voltages.
     #[error("background fit: the reference {}", not_measured_said(*.0))]
     NotMeasured(f64),
-    /// The reference frame is magnitudes without their sign ([`unsigned`]: the sign it
-    /// holds, the model's values of the other).
-    #[error("background fit: the reference {}", unsigned_said(*.0, *.1))]
-    Unsigned((i8, usize), usize),
+    /// The reference frame is not the signed voltages the model gives ([`not_signed`]:
+    /// magnitudes, or the model's frame plus a common level).
+    #[error("background fit: the reference {0}")]
+    NotSigned(NotSigned),
     /// The reference frame runs against the model (the best R_s is negative).
     #[error(
         "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
@@ -92,14 +92,119 @@ pub enum BackgroundError {
     },
 }
 
-/// Whether `v0` reads as magnitudes without their sign: every value of one sign (or zero)
-/// where `model`, the model's frame of the untouched sheet (K values each), has at least a
-/// tenth of its values clearly (beyond 5 % of its largest) of each sign. Some systems write
-/// magnitudes; a protocol's values change sign around the sheet, and a difference of
-/// magnitudes images every change where V_0 is negative with the wrong sign. Returns the
-/// sign `v0` holds (+1 or -1) and how many of the model's values are of the other.
+/// How a reference is not the signed voltages the model of the untouched sheet gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum NotSigned {
+    /// Magnitudes without their sign ([`not_signed`]): every value of `sign` (+1 or -1) or
+    /// zero, where `other` of the model's `k` values are clearly of the other sign.
+    Magnitudes {
+        /// The sign every value holds.
+        sign: i8,
+        /// The model's values clearly of the other sign.
+        other: usize,
+        /// The frame's length, K.
+        k: usize,
+    },
+    /// The model's frame at some scale plus a common `level` (V, or the frames' unit): ADC
+    /// counts about a mid-scale, or an offset added. `with` and `without`: the share of V_0
+    /// the model leaves unexplained with the level and without it.
+    Offset {
+        /// The common level.
+        level: f64,
+        /// The share left with the level.
+        with: f64,
+        /// The share left without it.
+        without: f64,
+    },
+}
+
+impl std::fmt::Display for NotSigned {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            NotSigned::Magnitudes { sign, other, k } => {
+                let (has, lacks) = if sign > 0 {
+                    ("positive", "negative")
+                } else {
+                    ("negative", "positive")
+                };
+                write!(
+                    f,
+                    "has every value {has} or zero, where the model's frame of the untouched \
+                     sheet has {other} of its {k} {lacks} (the protocol's values change sign \
+                     around the sheet): magnitudes without their sign? et images signed \
+                     voltages: give the real part, or each magnitude with the sign of its \
+                     phase's cosine"
+                )
+            }
+            NotSigned::Offset {
+                level,
+                with,
+                without,
+            } => write!(
+                f,
+                "is the model's frame of the untouched sheet plus a common level of {} \
+                 (with it the model leaves {:.1} % of V_0 unexplained, without it {:.0} %): ADC \
+                 counts about a mid-scale, or an offset added? et images signed voltages: \
+                 subtract the level (and scale counts to volts)",
+                level_said(level),
+                100.0 * with,
+                100.0 * without
+            ),
+        }
+    }
+}
+
+/// A level as a frame's values are written: four decimals at most, trimmed (2023.4813,
+/// 1.65), or in powers of ten past them.
+fn level_said(level: f64) -> String {
+    if (1e-3..1e6).contains(&level.abs()) {
+        let said = format!("{level:.4}");
+        said.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{level:.4e}")
+    }
+}
+
+/// Whether `v0` (K values) is not the signed voltages the model gives, `model` being the
+/// model's frame of the untouched sheet:
+/// - [`NotSigned::Offset`] when a common level added to the model's frame at its best scale
+///   explains `v0` (at most [`POOR_FIT`] left, and at most half what the scale alone leaves,
+///   which is past [`POOR_FIT`]): ADC counts about a mid-scale read as magnitudes or as a
+///   polarity swapped, the wrong causes;
+/// - [`NotSigned::Magnitudes`] when every value is of one sign (or zero) where the model has
+///   at least a tenth of its values clearly (beyond 5 % of its largest) of each sign. Some
+///   systems write magnitudes; a protocol's values change sign around the sheet, and a
+///   difference of magnitudes images every change where V_0 is negative with the wrong sign.
 #[must_use]
-pub fn unsigned(v0: &[f64], model: &[f64]) -> Option<(i8, usize)> {
+pub fn not_signed(v0: &[f64], model: &[f64]) -> Option<NotSigned> {
+    offset(v0, model).or_else(|| magnitudes(v0, model))
+}
+
+/// [`NotSigned::Offset`] of [`not_signed`].
+fn offset(v0: &[f64], model: &[f64]) -> Option<NotSigned> {
+    let k = v0.len().max(1) as f64;
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let vv = dot(v0, v0);
+    let left = |proj: f64, of: f64| ((of - proj).max(0.0) / vv).sqrt();
+    let mm = dot(model, model);
+    let without = left(dot(v0, model).powi(2) / mm.max(f64::MIN_POSITIVE), vv);
+    let (mean_v, mean_m) = (v0.iter().sum::<f64>() / k, model.iter().sum::<f64>() / k);
+    let vc: Vec<f64> = v0.iter().map(|v| v - mean_v).collect();
+    let mc: Vec<f64> = model.iter().map(|m| m - mean_m).collect();
+    let mcmc = dot(&mc, &mc).max(f64::MIN_POSITIVE);
+    let slope = dot(&vc, &mc) / mcmc;
+    let with = left(dot(&vc, &mc).powi(2) / mcmc, dot(&vc, &vc));
+    let level = mean_v - slope * mean_m;
+    (without > POOR_FIT && with <= POOR_FIT && with <= 0.5 * without).then_some(NotSigned::Offset {
+        level,
+        with,
+        without,
+    })
+}
+
+/// [`NotSigned::Magnitudes`] of [`not_signed`].
+fn magnitudes(v0: &[f64], model: &[f64]) -> Option<NotSigned> {
     let sign: i8 = if v0.iter().all(|v| *v >= 0.0) {
         1
     } else if v0.iter().all(|v| *v <= 0.0) {
@@ -110,23 +215,11 @@ pub fn unsigned(v0: &[f64], model: &[f64]) -> Option<(i8, usize)> {
     let clear = 0.05 * model.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let of = |s: f64| model.iter().filter(|m| **m * s > clear).count();
     let (same, other) = (of(f64::from(sign)), of(-f64::from(sign)));
-    (same * 10 >= model.len() && other * 10 >= model.len()).then_some((sign, other))
-}
-
-/// What is said of a reference read as magnitudes ([`unsigned`]).
-#[must_use]
-pub fn unsigned_said((sign, other): (i8, usize), k: usize) -> String {
-    let (has, lacks) = if sign > 0 {
-        ("positive", "negative")
-    } else {
-        ("negative", "positive")
-    };
-    format!(
-        "has every value {has} or zero, where the model's frame of the untouched sheet has \
-         {other} of its {k} {lacks} (the protocol's values change sign around the sheet): \
-         magnitudes without their sign? et images signed voltages: give the real part, or each \
-         magnitude with the sign of its phase's cosine"
-    )
+    (same * 10 >= model.len() && other * 10 >= model.len()).then_some(NotSigned::Magnitudes {
+        sign,
+        other,
+        k: v0.len(),
+    })
 }
 
 /// The share of V_0 the homogeneous model may leave unexplained before it is said: the real
@@ -269,8 +362,8 @@ pub fn fit(
     };
     let scene_rho = complete.then_some(ratio);
     let scene_frame = unit.borrow_mut().frame(scene_rho)?;
-    if let Some(said) = unsigned(v0, &scene_frame) {
-        return Err(BackgroundError::Unsigned(said, k));
+    if let Some(not) = not_signed(v0, &scene_frame) {
+        return Err(BackgroundError::NotSigned(not));
     }
     let scene_fit = scale(&scene_frame, v0);
     // The scene's own residual, at its R_s (not the fitted scale).

@@ -75,10 +75,10 @@ pub enum ImagingError {
     /// The reference is one value throughout (all zero, a constant): not measured voltages.
     #[error("the reference V_0 {}", crate::background::not_measured_said(*.0))]
     ReferenceNotMeasured(f64),
-    /// The reference is magnitudes without their sign ([`crate::background::unsigned`]:
-    /// the sign it holds, the model's values of the other; K).
-    #[error("the reference V_0 {}", crate::background::unsigned_said(*.0, *.1))]
-    ReferenceUnsigned((i8, usize), usize),
+    /// The reference is not the signed voltages the model gives
+    /// ([`crate::background::not_signed`]: magnitudes, or an offset).
+    #[error("the reference V_0 {0}")]
+    ReferenceNotSigned(crate::background::NotSigned),
     /// The reference runs against the model's frame of the untouched sheet.
     #[error(
         "the reference V_0 {0}: are the protocol's positive and negative electrodes, or \

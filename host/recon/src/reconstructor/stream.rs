@@ -56,17 +56,18 @@ impl Reconstructor {
     /// a constant) is no measurement. The model's frame is the one the Jacobian was made at:
     /// K products, no solve.
     ///
-    /// Magnitudes without their sign are refused too ([`crate::background::unsigned`]).
+    /// Magnitudes without their sign, and the model's frame plus a common level (ADC counts
+    /// about a mid-scale), are refused too ([`crate::background::not_signed`]).
     ///
     /// # Errors
-    /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceUnsigned`];
+    /// [`ImagingError::ReferenceNotMeasured`]; [`ImagingError::ReferenceNotSigned`];
     /// [`ImagingError::ReferenceAgainstModel`] naming the correlation.
     pub fn runs_with_the_model(&self, v0: &[f64]) -> Result<(), ImagingError> {
         if let Some(value) = crate::background::one_value(v0) {
             return Err(ImagingError::ReferenceNotMeasured(value));
         }
-        if let Some(said) = crate::background::unsigned(v0, &self.jac.frame) {
-            return Err(ImagingError::ReferenceUnsigned(said, v0.len()));
+        if let Some(not) = crate::background::not_signed(v0, &self.jac.frame) {
+            return Err(ImagingError::ReferenceNotSigned(not));
         }
         let r = self.correlation(v0);
         if r <= 0.0 {

@@ -95,7 +95,13 @@ fn contact_only_where_the_frame_shows_it_and_a_reversed_frame_refused() {
     );
     let magnitudes: Vec<f64> = v0.iter().map(|v| v.abs()).collect();
     let e = et_recon::background::fit(&guess, &mesh, &off_drive, &magnitudes).unwrap_err();
-    assert!(matches!(e, BackgroundError::Unsigned((1, _), _)), "{e}");
+    assert!(
+        matches!(
+            e,
+            BackgroundError::NotSigned(NotSigned::Magnitudes { sign: 1, .. })
+        ),
+        "{e}"
+    );
     assert!(
         e.to_string().contains("magnitudes without their sign"),
         "{e}"

@@ -262,8 +262,9 @@ fn a_reference_against_the_model_is_refused() {
 }
 
 /// Magnitudes without their sign under a protocol whose values change sign around the sheet
-/// (PP-PP) are refused as that, either sign; the signed frame is taken. (Its magnitudes
-/// were imaged: no object where the bump was.)
+/// (PP-PP) are refused as that, either sign; ADC counts about a mid-scale as the model's
+/// frame plus a common level, named; the signed frame is taken. (Its magnitudes were imaged:
+/// no object where the bump was.)
 #[test]
 fn a_reference_of_magnitudes_is_refused() {
     let sheet = Sheet::disc(0.1, 16);
@@ -285,7 +286,7 @@ fn a_reference_of_magnitudes_is_refused() {
         let e = recon
             .set_reference(Reference::from_frames(&[magnitudes]).unwrap())
             .unwrap_err();
-        assert!(matches!(e, ImagingError::ReferenceUnsigned(..)), "{e:?}");
+        assert!(matches!(e, ImagingError::ReferenceNotSigned(_)), "{e:?}");
         let said = e.to_string();
         let has = if sign > 0.0 { "positive" } else { "negative" };
         assert!(
@@ -294,6 +295,27 @@ fn a_reference_of_magnitudes_is_refused() {
             "{said}"
         );
     }
+    // ADC counts about a mid-scale (the frame at a gain plus 2048, every value positive): the
+    // model's frame plus a common level, said as that (it was said as magnitudes, or under the
+    // adjacent protocol as a polarity swapped).
+    let largest = v0.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    let counts: Vec<f32> = v0.iter().map(|v| 2048.0 + v / largest * 1000.0).collect();
+    assert!(counts.iter().all(|c| *c > 0.0));
+    let e = recon
+        .set_reference(Reference::from_frames(&[counts]).unwrap())
+        .unwrap_err();
+    let level = match e {
+        ImagingError::ReferenceNotSigned(et_recon::background::NotSigned::Offset {
+            level,
+            with,
+            ..
+        }) => {
+            assert!(with < 1e-4, "{with}");
+            level
+        }
+        other => panic!("{other}"),
+    };
+    assert!((level - 2048.0).abs() < 0.1, "{level}");
     recon
         .set_reference(Reference::from_frames(&[v0]).unwrap())
         .unwrap();
