@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::ScanConfig;
 use crate::config::ConfigError;
-use crate::protocol::{Protocol, ProtocolKind};
+use crate::protocol::{L_MAX, L_MIN, Protocol, ProtocolKind};
 use crate::text;
 
 /// The largest current a row may drive, A (tank systems drive up to a few mA; 50 mA is far
@@ -474,6 +474,38 @@ impl Protocol {
     /// [`ScheduleError::Current`] for a current that is not finite and positive.
     pub fn schedule(&self, current_a: f64) -> Result<Schedule, ScheduleError> {
         Schedule::of_protocol(self, current_a)
+    }
+}
+
+/// What a frame of `n` values may be where the protocol has `k` (`n` != `k`): a built-in
+/// protocol's K at some electrode count, every pair of each of L injections (L x L, drive
+/// electrodes and repeats included), or half of K (the reciprocal values left out); None when
+/// it is none of them. Said beside a frame of the wrong length, whose message named only K.
+#[must_use]
+pub fn other_frame_len(n: usize, k: usize) -> Option<String> {
+    let built_in: Vec<String> = (ProtocolKind::NAMED.iter())
+        .flat_map(|&kind| {
+            (L_MIN..=L_MAX).step_by(2).filter_map(move |l| {
+                let p = Protocol::new(kind, l).ok()?;
+                (p.frame_len() == n).then(|| format!("{} at {l} electrodes", kind.name()))
+            })
+        })
+        .collect();
+    let fix = "give the rows the frames hold in a protocol file (et protocol --csv writes one \
+               to start from)";
+    if !built_in.is_empty() {
+        Some(format!("{n} values a frame are {}", built_in.join(", ")))
+    } else if let Some(l) = (usize::from(L_MIN)..=usize::from(L_MAX)).find(|l| l * l == n) {
+        Some(format!(
+            "{n} = {l} x {l}: every electrode pair's value for each of {l} injections, the \
+             drive electrodes' and repeated ones included? {fix}"
+        ))
+    } else if 2 * n == k {
+        Some(format!(
+            "{n} is half of K: the protocol without its reciprocal (repeated) values? {fix}"
+        ))
+    } else {
+        None
     }
 }
 

@@ -146,12 +146,12 @@ pub enum FramesFault {
          must be {k} ({})",
         if *rows == k + 1 || *columns == k + 1 {
             "one more than K: a first column or row of frame numbers or times? write the file \
-             without it"
+             without it".to_string()
         } else if *rows == 2 * k || *columns == 2 * k {
             "twice K: real and imaginary parts, or magnitudes and phases, side by side? et \
-             images real voltages: write the real parts alone (magnitude * cos(phase))"
+             images real voltages: write the real parts alone (magnitude * cos(phase))".to_string()
         } else {
-            "is it the scene's protocol?"
+            other_protocol(*rows, *columns, *k)
         }
     )]
     NoK {
@@ -289,6 +289,16 @@ fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
         }
     }
     (spec.to_path_buf(), None)
+}
+
+/// Whether frames of `rows` or `columns` values are of another protocol than the scene's
+/// (`k` values), with what they may be ([`et_core::schedule::other_frame_len`]).
+fn other_protocol(rows: usize, columns: usize, k: usize) -> String {
+    let asked = "is it the scene's protocol?";
+    [columns, rows]
+        .into_iter()
+        .find_map(|n| et_core::schedule::other_frame_len(n, k))
+        .map_or_else(|| asked.to_string(), |may| format!("{asked} {may}"))
 }
 
 /// Reads the frames of `spec` for a protocol of `k` values per frame.

@@ -344,6 +344,10 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     with warnings.catch_warnings():
         warnings.simplefilter("error", et.EtWarning)
         opposite.set_reference(u0)
+    # Frames of another built-in protocol's length are said as that (it named K alone).
+    with pytest.raises(et.EtError, match=r"192 values for K = 208 \(of another protocol\? 192 "
+                       r"values a frame are pseudo-polar at 16 electrodes, opposite at 16"):
+        disc.image(u0 * 1.001, u0)
 
 
 def test_a_reconstructor_pickles_as_it_was_made(scene, recording):

@@ -228,3 +228,21 @@ fn electrodes_written_as_whole_decimals_are_read() {
         );
     }
 }
+
+/// A frame of the wrong length is said with what it may be: another built-in protocol's K
+/// (opposite's and pseudo-polar's 192 at 16 electrodes beside adjacent's 208), every pair of
+/// each injection (16 x 16), or half of K; a length that is none of them, nothing.
+#[test]
+fn a_frame_of_another_length_is_said_with_what_it_may_be() {
+    let said = |n| other_frame_len(n, 208).unwrap_or_default();
+    assert_eq!(
+        said(192),
+        "192 values a frame are pseudo-polar at 16 electrodes, opposite at 16 electrodes"
+    );
+    assert!(said(256).starts_with("256 = 16 x 16: every electrode pair's value"));
+    assert!(said(104).starts_with("104 is half of K"));
+    assert_eq!(other_frame_len(241, 208), None);
+    // Every built-in protocol's own K is named as it.
+    let k = Protocol::new(ProtocolKind::PpPp, 32).unwrap().frame_len();
+    assert!(said(k).contains("pp-pp at 32 electrodes"), "{}", said(k));
+}

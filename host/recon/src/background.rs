@@ -51,7 +51,11 @@ pub enum BackgroundError {
     #[error("background fit: {0}")]
     Fem(#[from] FemError),
     /// The reference frame is not of K values.
-    #[error("background fit: the reference has {got} values for K = {k}")]
+    #[error(
+        "background fit: the reference has {got} values for K = {k}{}",
+        et_core::schedule::other_frame_len(*got, *k)
+            .map_or_else(String::new, |may| format!(" (of another protocol? {may})"))
+    )]
     FrameLength {
         /// Its length.
         got: usize,

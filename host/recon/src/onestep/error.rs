@@ -28,7 +28,11 @@ pub enum ReconError {
         hi: usize,
     },
     /// A vector of frame values (K of them) of another length.
-    #[error("reconstruction: {what}: {got} values for K = {k}")]
+    #[error(
+        "reconstruction: {what}: {got} values for K = {k}{}",
+        et_core::schedule::other_frame_len(*got, *k)
+            .map_or_else(String::new, |may| format!(" (of another protocol? {may})"))
+    )]
     FrameLength {
         /// Which vector (the frame, the reference, the noise variances, the weights).
         what: &'static str,
