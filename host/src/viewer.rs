@@ -313,19 +313,7 @@ impl Viewer {
                     let was_referencing =
                         self.last.as_ref().is_none_or(|o| o.referencing.is_some());
                     if was_referencing && out.referencing.is_none() {
-                        self.status = match self.source.as_ref() {
-                            Some(Source::Sim(_)) => {
-                                "V_0 taken: press and hold the mouse on the sheet".into()
-                            }
-                            // Frames of another protocol, numbering or sheet than the
-                            // scene's show touches in the wrong places: said here.
-                            _ => match (self.processor.v0_unexplained())
-                                .and_then(et_recon::background::poor_fit_said)
-                            {
-                                Some(said) => format!("V_0 taken; warning: {said}"),
-                                None => "V_0 taken: touches show on the sheet".into(),
-                            },
-                        };
+                        self.status = self.reference_taken();
                     }
                     for request in self.wizard.observe(&out, &self.processor) {
                         self.apply_wizard_request(request);
@@ -349,6 +337,24 @@ impl Viewer {
                 }
                 Err(e) => self.status = format!("frame skipped: {e}"),
             }
+        }
+    }
+
+    /// The status once V_0 is taken: what to do next, or what is wrong with it (frames of
+    /// another protocol, numbering or sheet than the scene's, or a reference taken while
+    /// the sheet was touched, show touches in the wrong places).
+    fn reference_taken(&self) -> String {
+        let sim = matches!(self.source.as_ref(), Some(Source::Sim(_)));
+        let poor_fit = (!sim)
+            .then(|| self.processor.v0_unexplained())
+            .flatten()
+            .and_then(et_recon::background::poor_fit_said);
+        let changes = (self.processor.reference_changes())
+            .and_then(et_recon::background::reference_changes_said);
+        match (poor_fit.or(changes), sim) {
+            (Some(said), _) => format!("V_0 taken; warning: {said}"),
+            (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
+            (None, false) => "V_0 taken: touches show on the sheet".into(),
         }
     }
 

@@ -274,7 +274,25 @@ fn another_systems_frames_play_as_the_recording(
     };
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
     let fits = String::from_utf8_lossy(&from_csv.stderr);
-    assert!(!fits.contains("unexplained"), "{fits}");
+    assert!(
+        !fits.contains("unexplained") && !fits.contains("was the sheet touched"),
+        "{fits}"
+    );
+    // The swipe from its 40th frame on, then its start: the untouched reference is then 20
+    // frames of the finger moving, said once the reference is complete (its touches were
+    // streamed against it without a word).
+    let touched_first = dir.join("touched-first.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    let moved: String = (lines[40..].iter().chain(&lines[..40]))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&touched_first, moved).unwrap();
+    let touched = replay(&touched_first, &[]);
+    let said = String::from_utf8_lossy(&touched.stderr);
+    assert!(
+        said.matches("was the sheet touched, or drifting").count() == 1,
+        "{said}"
+    );
     // Frames of a protocol in another order (here each frame's values reversed) streamed
     // touches in the wrong places without a word: said once the reference is complete, as
     // `et reconstruct` says it.

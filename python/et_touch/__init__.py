@@ -830,11 +830,12 @@ class Reconstructor:
         """Warns when the untouched frames (n x K), taken by the native side (what it refuses
         is said as refused, not first warned of), are far from the model's frame of the sheet:
         in shape (the model leaves much of them unexplained: another protocol, numbering or
-        sheet, as `et reconstruct` warns) or, where the background was not fitted to them, in
-        scale."""
-        said = self._native.poor_fit(frames) if frames.size else None
-        if said is not None:
-            warnings.warn(said, EtWarning, stacklevel=3)
+        sheet, as `et reconstruct` warns), one of several as a touch or a drift differs from
+        the others, or, where the background was not fitted to them, in scale."""
+        if frames.size:
+            for said in (self._native.poor_fit(frames), self._native.reference_changed(frames)):
+                if said is not None:
+                    warnings.warn(said, EtWarning, stacklevel=3)
         if frames.size and not self._native.background_fitted:
             scale = self._native.scale_of(frames)
             # (Below 0 it runs against the model, which the reference's check refuses.)

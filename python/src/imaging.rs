@@ -375,6 +375,20 @@ impl Reconstructor {
         ))
     }
 
+    /// What is said when one of the untouched `reference` frames (n x K, V) differs from
+    /// their mean as a change of the sheet does, past
+    /// `et_recon::background::REFERENCE_CHANGE_SAID`; None within it or for one frame.
+    fn reference_changed(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {
+        let view = reference.as_array();
+        let frames: Vec<Vec<f32>> = (view.rows().into_iter())
+            .map(|r| r.iter().map(|&v| v as f32).collect())
+            .collect();
+        Ok(self
+            .inner
+            .reference_changes(&frames)
+            .and_then(et_recon::background::reference_changes_said))
+    }
+
     /// Fits the background (sheet resistance, contact) to the untouched `reference` frames
     /// (n x K, V) and images about it from then on; the fit as JSON.
     fn fit_background(

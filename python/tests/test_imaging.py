@@ -344,6 +344,21 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     with warnings.catch_warnings():
         warnings.simplefilter("error", et.EtWarning)
         opposite.set_reference(u0)
+    # Untouched frames of which some were pressed (a bump there, each frame's own noise):
+    # said; noise alone is not.
+    rng = np.random.default_rng(4)
+    sigma = np.full(len(opposite.triangles), opposite.sigma0)
+    centres = opposite.nodes[opposite.triangles].mean(axis=1)
+    sigma[np.hypot(centres[:, 0] - 0.02, centres[:, 1]) < 0.01] *= 2
+    pressed = opposite.forward(sigma)
+    noise = 1e-4 * np.abs(u0).max()
+    still = u0 + noise * rng.standard_normal((20, len(u0)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        opposite.set_reference(still)
+    touched = still + np.where(np.arange(20)[:, None] < 5, pressed - u0, 0)
+    with pytest.warns(et.EtWarning, match="was the sheet touched, or drifting"):
+        opposite.set_reference(touched)
     # Frames of another built-in protocol's length are said as that (it named K alone).
     with pytest.raises(et.EtError, match=r"192 values for K = 208 \(of another protocol\? 192 "
                        r"values a frame are pseudo-polar at 16 electrodes, opposite at 16"):

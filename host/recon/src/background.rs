@@ -248,6 +248,28 @@ pub fn poor_fit_said(residual: f64) -> Option<String> {
     })
 }
 
+/// How far a reference frame may differ from the others as a change of the sheet does
+/// ([`crate::Reconstructor::reference_changes`]: its mean square over that of its part no
+/// conductivity change can make) before it is said: untouched references of et's scenes
+/// under the four protocols reach 3.6, with a laboratory instrument's drift 4.3; a touch
+/// during the reference 15 to 150.
+pub const REFERENCE_CHANGE_SAID: f64 = 10.0;
+
+/// What is said of reference frames of which `frame` (from 0) differs from their mean
+/// `ratio` times as a change of the sheet does, past [`REFERENCE_CHANGE_SAID`]; None within.
+#[must_use]
+pub fn reference_changes_said((frame, ratio): (usize, f64)) -> Option<String> {
+    (ratio > REFERENCE_CHANGE_SAID).then(|| {
+        format!(
+            "the untouched reference's frame {frame} (from 0) differs from their mean as a \
+             change of the sheet does, {ratio:.0} times the noise the protocol's redundancy \
+             shows (noise alone gives about 1; past {REFERENCE_CHANGE_SAID:.0} is said): was \
+             the sheet touched, or drifting, while the reference was taken? every frame is \
+             imaged against it: take it again untouched"
+        )
+    })
+}
+
 /// The value of a frame that holds one value throughout (all zero, or a constant): no
 /// sheet's measurements do, whatever the protocol, its numbering or its polarity.
 #[must_use]

@@ -348,6 +348,18 @@ impl Processor {
         self.v0().map(|v0| self.recon.unexplained(&v0))
     }
 
+    /// Of the untouched reference frames, the one that differs most from their mean as a
+    /// change of conductivity does, and by how much ([`Reconstructor::reference_changes`]);
+    /// None until the reference is complete.
+    #[must_use]
+    pub fn reference_changes(&self) -> Option<(usize, f64)> {
+        let r = self.reference.as_ref()?;
+        if r.frames.len() < self.settings.reference_frames.max(1) {
+            return None;
+        }
+        self.recon.reference_changes(&r.frames)
+    }
+
     /// Builds the reconstruction for frames of `config` now (the one-step or GREIT matrix on
     /// the pixels), so that the first such frame does not wait for it: a replay or a board
     /// whose configuration is known before its first frame.

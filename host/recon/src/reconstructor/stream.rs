@@ -99,6 +99,38 @@ impl Reconstructor {
         (1.0 - r * r).sqrt()
     }
 
+    /// Of untouched reference `frames` (each K values, V), the one that differs most from
+    /// their mean as a change of conductivity does, and by how much: each frame's difference
+    /// from the mean, its mean square over the mean square of its part no conductivity
+    /// change can make (the protocol's redundancy, [`Reconstructor::redundancy_noise`]).
+    /// Noise alone has both alike (about 1); a touch or a drift while the reference was
+    /// taken lies in the changes a sheet can make, far above. None for fewer than two
+    /// frames or a protocol without redundancy.
+    #[must_use]
+    pub fn reference_changes<F: AsRef<[f32]>>(&self, frames: &[F]) -> Option<(usize, f64)> {
+        let k = frames.first()?.as_ref().len();
+        if frames.len() < 2 || frames.iter().any(|f| f.as_ref().len() != k) {
+            return None;
+        }
+        let n = frames.len() as f64;
+        let mean: Vec<f64> = (0..k)
+            .map(|c| frames.iter().map(|f| f64::from(f.as_ref()[c])).sum::<f64>() / n)
+            .collect();
+        let mut most: Option<(usize, f64)> = None;
+        for (i, f) in frames.iter().enumerate() {
+            let dv: Vec<f64> = (f.as_ref().iter().zip(&mean))
+                .map(|(v, m)| f64::from(*v) - m)
+                .collect();
+            let noise = self.redundancy_noise(&dv)?.variance;
+            let ratio =
+                dv.iter().map(|d| d * d).sum::<f64>() / k as f64 / noise.max(f64::MIN_POSITIVE);
+            if most.is_none_or(|(_, r)| ratio > r) {
+                most = Some((i, ratio));
+            }
+        }
+        most
+    }
+
     /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles
     /// ([`Image::mesh_values`]; the default). Without them, a matrix's second frame on is
     /// imaged onto the pixels alone through its f32 operator, as

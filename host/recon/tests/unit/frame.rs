@@ -430,3 +430,53 @@ fn what_the_model_leaves_of_a_reference_unexplained() {
         "{other}: {said}"
     );
 }
+
+/// Reference frames that differ as a change of the sheet does (a touch while the reference
+/// was taken) are told from frames that differ by noise alone: the mean square of each
+/// frame's difference from their mean over that of its part no conductivity change can make
+/// is about 1 for noise and far above for a bump in some of them, said past
+/// `REFERENCE_CHANGE_SAID`.
+#[test]
+fn a_reference_taken_while_touched_is_told_from_noise() {
+    use et_recon::background::{REFERENCE_CHANGE_SAID, reference_changes_said};
+    let sheet = Sheet::disc(0.1, 16);
+    let protocol =
+        et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::Adjacent, 16).unwrap();
+    let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
+    let recon = Spec {
+        mesh: MeshPlan::About {
+            triangles: 900,
+            refine: Vec::new(),
+        },
+        ..Spec::new(sheet, schedule)
+    }
+    .set_up()
+    .unwrap();
+    let (v0, bump) = (bump_frame(&recon, 0.0), bump_frame(&recon, 0.3));
+    let largest = v0.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    let mut rng = et_core::rng::Rng::new(11);
+    let mut noisy = |v: &[f32]| -> Vec<f32> {
+        v.iter()
+            .map(|x| x + (1e-4 * f64::from(largest) * rng.normal()) as f32)
+            .collect()
+    };
+    let untouched: Vec<Vec<f32>> = (0..20).map(|_| noisy(&v0)).collect();
+    let (_, ratio) = recon.reference_changes(&untouched).unwrap();
+    assert!(ratio < 3.0, "{ratio}");
+    assert_eq!(reference_changes_said((0, ratio)), None);
+    // The first five pressed.
+    let touched: Vec<Vec<f32>> = (0..20)
+        .map(|i| noisy(if i < 5 { &bump } else { &v0 }))
+        .collect();
+    let (frame, ratio) = recon.reference_changes(&touched).unwrap();
+    assert!(
+        frame < 5 && ratio > 10.0 * REFERENCE_CHANGE_SAID,
+        "{frame} {ratio}"
+    );
+    let said = reference_changes_said((frame, ratio)).unwrap();
+    assert!(
+        said.contains("was the sheet touched, or drifting"),
+        "{said}"
+    );
+    assert_eq!(recon.reference_changes(&untouched[..1]), None);
+}

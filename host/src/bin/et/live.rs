@@ -246,6 +246,12 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                 {
                     say!("warning: {said}");
                 }
+                if imaged == 1
+                    && let Some(said) = (processor.reference_changes())
+                        .and_then(et_recon::background::reference_changes_said)
+                {
+                    say!("warning: {said}");
+                }
             }
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
