@@ -293,6 +293,26 @@ fn another_systems_frames_play_as_the_recording(
         said.matches("was the sheet touched, or drifting").count() == 1,
         "{said}"
     );
+    // `et reconstruct` of the same frames, V_0 from their first 20, says it too.
+    let picture = dir.join("touched-first.png");
+    let imaged = et(&[
+        "reconstruct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        touched_first.to_str().unwrap(),
+        "--reference",
+        "20",
+        "--frame",
+        "30",
+        "--out",
+        picture.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&imaged.stderr);
+    assert!(
+        imaged.status.success() && said.contains("was the sheet touched, or drifting"),
+        "{said}"
+    );
     // Frames of a protocol in another order (here each frame's values reversed) streamed
     // touches in the wrong places without a word: said once the reference is complete, as
     // `et reconstruct` says it.

@@ -328,6 +328,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     drop(recording);
     let frames::Chosen {
         reference,
+        reference_frames,
         frames: chosen,
         truth,
     } = chosen;
@@ -337,6 +338,13 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     frames::say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
     let (mut recon, background) = set_up(args, spec, &reference, stage)?;
+    // Reference frames of which one differs as a touch or a drift does: every frame is
+    // imaged against them.
+    if let Some(said) = (recon.reference_changes(&reference_frames))
+        .and_then(et_recon::background::reference_changes_said)
+    {
+        say!("warning: {said}");
+    }
     let set_up = recon.set_up_timings;
     if args.all || args.range.is_some() {
         let image = each_frame(args, &mut recon, reference, &chosen)?;

@@ -18,6 +18,9 @@ use super::{ReconstructArgs, RegionSummary};
 /// radius) of the last where known.
 pub(super) struct Chosen {
     pub(super) reference: et_recon::Reference,
+    /// The frames V_0 was made of, when they came with the frames imaged (`--reference N`;
+    /// empty for `--reference-file` and the simulator's).
+    pub(super) reference_frames: Vec<Vec<f32>>,
     pub(super) frames: Vec<(usize, Vec<f32>)>,
     pub(super) truth: Vec<et_sim::still::Truth>,
 }
@@ -106,6 +109,7 @@ pub(super) fn frames(
         };
         return Ok(Chosen {
             reference,
+            reference_frames: Vec::new(),
             frames: vec![(0, f.v1)],
             truth: f.truth,
         });
@@ -147,9 +151,12 @@ pub(super) fn frames(
         );
     }
     let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
-    let reference = match given {
-        Some(reference) => reference,
-        None => et_recon::Reference::from_frames(&frames)?,
+    let (reference, reference_frames) = match given {
+        Some(reference) => (reference, Vec::new()),
+        None => (
+            et_recon::Reference::from_frames(&frames)?,
+            frames.iter().map(|f| f.to_vec()).collect(),
+        ),
     };
     let truth = imaged
         .last()
@@ -160,6 +167,7 @@ pub(super) fn frames(
         .collect();
     Ok(Chosen {
         reference,
+        reference_frames,
         frames: imaged
             .iter()
             .enumerate()
@@ -222,6 +230,7 @@ pub(super) fn table_frames(
     let mut frames = et_host::frames::read(path, k)?;
     say!("{}", frames.description);
     let n = frames.frames.len();
+    let mut reference_frames = Vec::new();
     let (reference, first) = match &args.reference_file {
         Some(f) => (reference_file(f, k)?, 0),
         None => {
@@ -236,6 +245,7 @@ pub(super) fn table_frames(
                     var_dv: Vec::new(),
                 }
             } else {
+                reference_frames = before.to_vec();
                 et_recon::Reference::from_frames(before)
                     .with_context(|| format!("{}: the reference frames", path.display()))?
             };
@@ -246,6 +256,7 @@ pub(super) fn table_frames(
     let imaged = frames.frames.drain(range.clone());
     Ok(Chosen {
         reference,
+        reference_frames,
         frames: range.zip(imaged).collect(),
         truth: Vec::new(),
     })
