@@ -439,20 +439,8 @@ fn what_the_model_leaves_of_a_reference_unexplained() {
 #[test]
 fn a_reference_taken_while_touched_is_told_from_noise() {
     use et_recon::background::{REFERENCE_CHANGE_SAID, reference_changes_said};
-    let sheet = Sheet::disc(0.1, 16);
-    let protocol =
-        et_core::protocol::Protocol::new(et_core::protocol::ProtocolKind::Adjacent, 16).unwrap();
-    let schedule = et_core::schedule::Schedule::of_protocol(&protocol, 1e-3).unwrap();
-    let recon = Spec {
-        mesh: MeshPlan::About {
-            triangles: 900,
-            refine: Vec::new(),
-        },
-        ..Spec::new(sheet, schedule)
-    }
-    .set_up()
-    .unwrap();
-    let (v0, bump) = (bump_frame(&recon, 0.0), bump_frame(&recon, 0.3));
+    let (recon, v0, bumps) = disc_and_bump(AlphaRule::Gcv, &[0.3]);
+    let bump = &bumps[0];
     let largest = v0.iter().fold(0.0f32, |m, v| m.max(v.abs()));
     let mut rng = et_core::rng::Rng::new(11);
     let mut noisy = |v: &[f32]| -> Vec<f32> {
@@ -466,7 +454,7 @@ fn a_reference_taken_while_touched_is_told_from_noise() {
     assert_eq!(reference_changes_said((0, ratio)), None);
     // The first five pressed.
     let touched: Vec<Vec<f32>> = (0..20)
-        .map(|i| noisy(if i < 5 { &bump } else { &v0 }))
+        .map(|i| noisy(if i < 5 { bump } else { &v0 }))
         .collect();
     let (frame, ratio) = recon.reference_changes(&touched).unwrap();
     assert!(
