@@ -313,6 +313,26 @@ fn another_systems_frames_play_as_the_recording(
         imaged.status.success() && said.contains("was the sheet touched, or drifting"),
         "{said}"
     );
+    // And of the same frames given as --reference-file beside the swipe's own.
+    let imaged = et(&[
+        "reconstruct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames",
+        swipe_csv.to_str().unwrap(),
+        "--reference-file",
+        touched_first.to_str().unwrap(),
+        "--frame",
+        "45",
+        "--out",
+        picture.to_str().unwrap(),
+        "--force",
+    ]);
+    let said = String::from_utf8_lossy(&imaged.stderr);
+    assert!(
+        imaged.status.success() && said.contains("was the sheet touched, or drifting"),
+        "{said}"
+    );
     // Frames of a protocol in another order (here each frame's values reversed) streamed
     // touches in the wrong places without a word: said once the reference is complete, as
     // `et reconstruct` says it.

@@ -18,8 +18,8 @@ use super::{ReconstructArgs, RegionSummary};
 /// radius) of the last where known.
 pub(super) struct Chosen {
     pub(super) reference: et_recon::Reference,
-    /// The frames V_0 was made of, when they came with the frames imaged (`--reference N`;
-    /// empty for `--reference-file` and the simulator's).
+    /// The frames V_0 was made of (`--reference N` or `--reference-file`; empty for the
+    /// simulator's).
     pub(super) reference_frames: Vec<Vec<f32>>,
     pub(super) frames: Vec<(usize, Vec<f32>)>,
     pub(super) truth: Vec<et_sim::still::Truth>,
@@ -53,12 +53,12 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
             );
         }
         bail!(
-            "{path}: {asked}: the frames to image are {first} to {last} ({} the reference \
-             V_0)",
-            if first == 1 {
-                "the frame before them is".to_string()
-            } else {
-                format!("the {first} frames before them are")
+            "{path}: {asked}: the frames to image are {first} to {last} ({})",
+            match first {
+                // (--reference-file gives V_0: every frame may be imaged.)
+                0 => "frames count from 0; the reference V_0 is --reference-file's".to_string(),
+                1 => "the frame before them is the reference V_0".to_string(),
+                _ => format!("the {first} frames before them are the reference V_0"),
             }
         );
     }
@@ -152,7 +152,7 @@ pub(super) fn frames(
     }
     let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
     let (reference, reference_frames) = match given {
-        Some(reference) => (reference, Vec::new()),
+        Some(given) => given,
         None => (
             et_recon::Reference::from_frames(&frames)?,
             frames.iter().map(|f| f.to_vec()).collect(),
@@ -177,14 +177,14 @@ pub(super) fn frames(
     })
 }
 
-/// The untouched frames of `--reference-file` (K values each, averaged): another system's
-/// frames in any format `--frames` reads, or an et recording (every frame of it; a recording
-/// was read as a CSV and refused for its JSON).
-fn reference_file(path: &Path, k: usize) -> Result<et_recon::Reference> {
+/// The untouched frames of `--reference-file` (K values each), averaged, and as read:
+/// another system's frames in any format `--frames` reads, or an et recording (every frame
+/// of it; a recording was read as a CSV and refused for its JSON).
+fn reference_file(path: &Path, k: usize) -> Result<(et_recon::Reference, Vec<Vec<f32>>)> {
     if et_host::frames::is_table(path) {
         let r = et_host::frames::read(path, k)?;
         say!("reference {}", r.description);
-        return Ok(et_recon::Reference::from_frames(&r.frames)?);
+        return Ok((et_recon::Reference::from_frames(&r.frames)?, r.frames));
     }
     let r = recording::read(path)?;
     for note in r.notes() {
@@ -216,8 +216,9 @@ fn reference_file(path: &Path, k: usize) -> Result<et_recon::Reference> {
         path.display(),
         frames.len()
     );
-    et_recon::Reference::from_frames(&frames)
-        .with_context(|| format!("{}: the reference frames", path.display()))
+    let reference = et_recon::Reference::from_frames(&frames)
+        .with_context(|| format!("{}: the reference frames", path.display()))?;
+    Ok((reference, frames.iter().map(|f| f.to_vec()).collect()))
 }
 
 /// Another system's frames from a table file: V_0 from `--reference-file` or the first
@@ -232,7 +233,11 @@ pub(super) fn table_frames(
     let n = frames.frames.len();
     let mut reference_frames = Vec::new();
     let (reference, first) = match &args.reference_file {
-        Some(f) => (reference_file(f, k)?, 0),
+        Some(f) => {
+            let (reference, frames) = reference_file(f, k)?;
+            reference_frames = frames;
+            (reference, 0)
+        }
         None => {
             let count = reference_count(args, &path.display().to_string(), n)?;
             let before = frames.frames.get(..count.min(n)).unwrap_or_default();
