@@ -267,9 +267,38 @@ impl core::fmt::Display for Sig {
     }
 }
 
+/// A value as people write it: up to four decimals, trailing zeros trimmed, for magnitudes
+/// from 1e-3 to 1e6 (0.8796, 1414.2, 2023.5254, 25); in powers of ten ([`Sig`]) past them.
+#[derive(Clone, Copy, Debug)]
+pub struct Plain(pub f64);
+
+impl core::fmt::Display for Plain {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if (1e-3..1e6).contains(&self.0.abs()) {
+            let said = format!("{:.4}", self.0);
+            f.write_str(said.trim_end_matches('0').trim_end_matches('.'))
+        } else {
+            Sig(self.0).fmt(f)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Values as people write them: four decimals at most, trimmed; powers of ten past them
+    /// (an outline of 0.8796459430051422 m was said so).
+    #[test]
+    fn plain_values_are_said_as_written() {
+        let said = |v: f64| Plain(v).to_string();
+        assert_eq!(said(0.879_645_943_005_142_2), "0.8796");
+        assert_eq!(said(1_414.200_000_000_000_3), "1414.2");
+        assert_eq!(said(25.0), "25");
+        assert_eq!(said(-2_023.525_4), "-2023.5254");
+        assert_eq!(said(1e-9), "1e-9");
+        assert_eq!(said(2.5e7), "2.5e7");
+    }
 
     /// Each form serde writes, read from the real parsers' errors, is said in the file's
     /// words; the path in front of it and the lines around it are kept.

@@ -10,7 +10,7 @@
 pub mod shape;
 pub mod xy;
 
-use crate::said::Sig;
+use crate::said::{Plain, Sig};
 use serde::{Deserialize, Serialize};
 
 pub use shape::{Shape, ShapeError};
@@ -185,8 +185,9 @@ pub enum SheetError {
     },
     /// Two electrodes overlap (or share a place) on the outline.
     #[error(
-        "sheet.electrodes: electrodes {a} and {b} overlap: {count} electrodes {width} m wide on \
-         an outline {perimeter} m long (narrower electrodes, fewer, or a larger sheet)"
+        "sheet.electrodes: electrodes {a} and {b} overlap: {count} electrodes {} m wide on an \
+         outline {} m long (narrower electrodes, fewer, or a larger sheet)",
+        Plain(*.width), Plain(*.perimeter)
     )]
     Overlap {
         /// One electrode.

@@ -293,63 +293,40 @@ fn another_systems_frames_play_as_the_recording(
         said.matches("was the sheet touched, or drifting").count() == 1,
         "{said}"
     );
-    // `et reconstruct` of the same frames, V_0 from their first 20, says it too.
+    // `et reconstruct` of the same frames, V_0 from their first 20, says it too, and of the
+    // swipe's own frames with them as --reference-file.
     let picture = dir.join("touched-first.png");
-    let imaged = et(&[
-        "reconstruct",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--frames",
-        touched_first.to_str().unwrap(),
-        "--reference",
-        "20",
-        "--frame",
-        "30",
-        "--out",
-        picture.to_str().unwrap(),
-    ]);
-    let said = String::from_utf8_lossy(&imaged.stderr);
-    assert!(
-        imaged.status.success() && said.contains("was the sheet touched, or drifting"),
-        "{said}"
-    );
-    // And of the same frames given as --reference-file beside the swipe's own.
-    let imaged = et(&[
-        "reconstruct",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--frames",
-        swipe_csv.to_str().unwrap(),
-        "--reference-file",
-        touched_first.to_str().unwrap(),
-        "--frame",
-        "45",
-        "--out",
-        picture.to_str().unwrap(),
-        "--force",
-    ]);
-    let said = String::from_utf8_lossy(&imaged.stderr);
-    assert!(
-        imaged.status.success() && said.contains("was the sheet touched, or drifting"),
-        "{said}"
-    );
-    // Frames of a protocol in another order (here each frame's values reversed) streamed
-    // touches in the wrong places without a word: said once the reference is complete, as
-    // `et reconstruct` says it.
-    let reversed_csv = dir.join("reversed.csv");
-    let reversed: String = (csv.lines())
-        .map(|l| l.split(',').rev().collect::<Vec<_>>().join(",") + "\n")
-        .collect();
-    std::fs::write(&reversed_csv, reversed).unwrap();
-    let poor = replay(&reversed_csv, &[]);
-    let said = String::from_utf8_lossy(&poor.stderr);
-    assert!(
-        said.matches("warning: the homogeneous model leaves")
-            .count()
-            == 1
-            && said.contains("% of V_0 unexplained (past 20 %): check the protocol's order"),
-        "{said}"
-    );
+    let reconstruct = |args: &[&str]| {
+        let common = ["reconstruct", "--scene", scene.to_str().unwrap()];
+        let out = ["--out", picture.to_str().unwrap(), "--force"];
+        et(&[&common[..], args, &out[..]].concat())
+    };
+    let touched_first = touched_first.to_str().unwrap();
+    for asked in [
+        [
+            "--frames",
+            touched_first,
+            "--reference",
+            "20",
+            "--frame",
+            "30",
+        ],
+        [
+            "--frames",
+            swipe_csv.to_str().unwrap(),
+            "--reference-file",
+            touched_first,
+            "--frame",
+            "45",
+        ],
+    ] {
+        let imaged = reconstruct(&asked);
+        let said = String::from_utf8_lossy(&imaged.stderr);
+        assert!(
+            imaged.status.success() && said.contains("was the sheet touched, or drifting"),
+            "{asked:?}: {said}"
+        );
+    }
     // Frames of the other sign (sense wires swapped) are refused at their reference, once,
     // as `et reconstruct` refuses them (they streamed touches in the wrong places).
     let negated_csv = dir.join("negated.csv");

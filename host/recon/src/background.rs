@@ -151,22 +151,11 @@ impl std::fmt::Display for NotSigned {
                  (with it the model leaves {:.1} % of V_0 unexplained, without it {:.0} %): ADC \
                  counts about a mid-scale, or an offset added? et images signed voltages: \
                  subtract the level (and scale counts to volts)",
-                level_said(level),
+                et_core::said::Plain(level),
                 100.0 * with,
                 100.0 * without
             ),
         }
-    }
-}
-
-/// A level as a frame's values are written: four decimals at most, trimmed (2023.4813,
-/// 1.65), or in powers of ten past them.
-fn level_said(level: f64) -> String {
-    if (1e-3..1e6).contains(&level.abs()) {
-        let said = format!("{level:.4}");
-        said.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        format!("{level:.4e}")
     }
 }
 

@@ -1,6 +1,7 @@
 //! A scene's field at fault, and why.
 
 use super::*;
+use et_core::said::Plain;
 
 /// A scene value out of range: the field as written in a scene file, and why.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -59,11 +60,11 @@ pub enum SceneFault {
     #[error(
         "{} uA, but {file}'s rows drive {}: each row's own current is imaged, so this one \
          would be ignored; drop current_ua, or give the rows' (uA: 1.4 mA is 1400)",
-        ua_said(*.ua),
-        if ua_said(.rows_ua.0) == ua_said(.rows_ua.1) {
-            format!("{} uA", ua_said(.rows_ua.0))
+        Plain(*.ua),
+        if Plain(.rows_ua.0).to_string() == Plain(.rows_ua.1).to_string() {
+            format!("{} uA", Plain(.rows_ua.0))
         } else {
-            format!("{} to {} uA", ua_said(.rows_ua.0), ua_said(.rows_ua.1))
+            format!("{} to {} uA", Plain(.rows_ua.0), Plain(.rows_ua.1))
         }
     )]
     CurrentBesideRows {
@@ -139,11 +140,4 @@ impl From<SheetError> for FieldError {
             other => Self::new("sheet", SceneFault::Sheet(other)),
         }
     }
-}
-
-/// A current in uA as a scene writes it: six decimals at most, no trailing zeros (1414.2, not
-/// 1414.2000000000003 from 1.4142e-3 A).
-fn ua_said(ua: f64) -> String {
-    let said = format!("{ua:.6}");
-    said.trim_end_matches('0').trim_end_matches('.').to_string()
 }
