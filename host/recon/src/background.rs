@@ -180,8 +180,7 @@ fn offset(v0: &[f64], model: &[f64]) -> Option<NotSigned> {
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let vv = dot(v0, v0);
     let left = |proj: f64, of: f64| ((of - proj).max(0.0) / vv).sqrt();
-    let mm = dot(model, model);
-    let without = left(dot(v0, model).powi(2) / mm.max(f64::MIN_POSITIVE), vv);
+    let (_, without) = best_scale(model, v0);
     let (mean_v, mean_m) = (v0.iter().sum::<f64>() / k, model.iter().sum::<f64>() / k);
     let vc: Vec<f64> = v0.iter().map(|v| v - mean_v).collect();
     let mc: Vec<f64> = model.iter().map(|m| m - mean_m).collect();
@@ -333,8 +332,9 @@ impl<'a> UnitSheet<'a> {
     }
 }
 
-/// (R_s, |V_0 - R_s F| / |V_0|) for the unit frame `f`.
-fn scale(f: &[f64], v0: &[f64]) -> (f64, f64) {
+/// (R_s, |V_0 - R_s F| / |V_0|) for the unit frame `f`: the best scale of `f` for `v0` and
+/// the share of `v0` it leaves unexplained.
+pub(crate) fn best_scale(f: &[f64], v0: &[f64]) -> (f64, f64) {
     let (fv, ff) = f
         .iter()
         .zip(v0)
@@ -373,14 +373,14 @@ pub fn fit(
     let solves = std::cell::Cell::new(1);
     let eval = |rho: Option<f64>| -> Result<(f64, f64), BackgroundError> {
         solves.set(solves.get() + 1);
-        Ok(scale(&unit.borrow_mut().frame(rho)?, v0))
+        Ok(best_scale(&unit.borrow_mut().frame(rho)?, v0))
     };
     let scene_rho = complete.then_some(ratio);
     let scene_frame = unit.borrow_mut().frame(scene_rho)?;
     if let Some(not) = not_signed(v0, &scene_frame) {
         return Err(BackgroundError::NotSigned(not));
     }
-    let scene_fit = scale(&scene_frame, v0);
+    let scene_fit = best_scale(&scene_frame, v0);
     // The scene's own residual, at its R_s (not the fitted scale).
     let scene_residual = {
         let misfit: f64 = scene_frame

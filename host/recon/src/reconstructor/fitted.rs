@@ -50,8 +50,7 @@ impl Reconstructor {
     #[must_use]
     pub fn scale_of(&self, v0: &[f64]) -> Option<f64> {
         let model = &self.jac.frame;
-        let mm: f64 = model.iter().map(|m| m * m).sum();
-        let vm: f64 = v0.iter().zip(model).map(|(v, m)| v * m).sum();
-        (mm > 0.0).then(|| vm / mm)
+        let zero = model.iter().all(|m| *m == 0.0);
+        (!zero).then(|| crate::background::best_scale(model, v0).0)
     }
 }

@@ -89,14 +89,13 @@ impl Reconstructor {
     }
 
     /// The share of `v0` (K values, V) that the model's frame of the untouched sheet, m, at
-    /// its best scale leaves unexplained: min_s |v0 - s m| / |v0| = sqrt(1 - r^2), r their
-    /// [correlation](Self::correlation). The background fit's residual when the model was
+    /// its best scale leaves unexplained: min_s |v0 - s m| / |v0| (sqrt(1 - r^2), r their
+    /// [correlation](Self::correlation)). The background fit's residual when the model was
     /// fitted to `v0`; frames of another protocol, or of electrodes numbered otherwise, leave
     /// far more ([`crate::background::POOR_FIT`]).
     #[must_use]
     pub fn unexplained(&self, v0: &[f64]) -> f64 {
-        let r = self.correlation(v0).clamp(-1.0, 1.0);
-        (1.0 - r * r).sqrt()
+        crate::background::best_scale(&self.jac.frame, v0).1
     }
 
     /// Of untouched reference `frames` (each K values, V), the one that differs most from
@@ -109,13 +108,10 @@ impl Reconstructor {
     #[must_use]
     pub fn reference_changes<F: AsRef<[f32]>>(&self, frames: &[F]) -> Option<(usize, f64)> {
         let k = frames.first()?.as_ref().len();
-        if frames.len() < 2 || frames.iter().any(|f| f.as_ref().len() != k) {
+        let mut mean = vec![0.0; k];
+        if frames.len() < 2 || et_core::stats::reference(frames, &mut mean).is_err() {
             return None;
         }
-        let n = frames.len() as f64;
-        let mean: Vec<f64> = (0..k)
-            .map(|c| frames.iter().map(|f| f64::from(f.as_ref()[c])).sum::<f64>() / n)
-            .collect();
         let mut most: Option<(usize, f64)> = None;
         for (i, f) in frames.iter().enumerate() {
             let dv: Vec<f64> = (f.as_ref().iter().zip(&mean))
