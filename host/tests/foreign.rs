@@ -703,7 +703,7 @@ fn a_protocol_file_is_read_once() {
     }
     writer.join().unwrap().unwrap();
     assert!(status.is_some_and(|s| s.success()), "{status:?}");
-    let _ = std::fs::remove_file(&fifo);
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// A sheet larger than the simulator's grid takes at its electrodes' spacing (a 1.2 m floor

@@ -167,11 +167,9 @@ struct Parser {
     parse: fn(&[PathBuf]) -> bool,
 }
 
-/// A new folder for one test's or one parser's files, under this process's folder.
+/// A new folder for one test's or one parser's files (each test removes its own).
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir()
-        .join(format!("et-fuzz-{}", std::process::id()))
-        .join(name);
+    let d = std::env::temp_dir().join(format!("et-fuzz-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -423,13 +421,14 @@ fn protocol_csv() -> String {
 }
 
 /// `et_host::frames::read` picks the format by extension: the case's file is given one
-/// through a symbolic link (so an endless input stays endless).
+/// through a symbolic link (so an endless input stays endless), removed after.
 fn read_frames(case: &Path, ext: &str) -> bool {
-    static LINKS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let n = LINKS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let named = scratch("links").join(format!("frames-{n}.{ext}"));
+    let named = std::env::temp_dir().join(format!("et-fuzz-{}-link.{ext}", std::process::id()));
     let _ = std::fs::remove_file(&named);
-    std::os::unix::fs::symlink(case, &named).is_ok() && et_host::frames::read(&named, 40).is_ok()
+    let read = std::os::unix::fs::symlink(case, &named).is_ok()
+        && et_host::frames::read(&named, 40).is_ok();
+    let _ = std::fs::remove_file(&named);
+    read
 }
 
 fn recording(dir: &Path) -> Vec<u8> {
@@ -845,6 +844,7 @@ fn compressed_matlab_variables_are_bounded_together() {
     let alone = et_host::frames::read(&one, 256);
     let together = et_host::frames::read(&many, 256);
     et_core::text::set_max_file_bytes(0);
+    let _ = std::fs::remove_dir_all(&dir);
     assert!(alone.is_ok(), "one variable within the limit: {alone:?}");
     let e = together.unwrap_err().to_string();
     assert!(e.contains("inflate past") && e.contains("together"), "{e}");
