@@ -469,66 +469,100 @@ fn endless_device(_: &std::fs::File, _: &std::fs::Metadata) -> bool {
     false
 }
 
-/// What a file that is not text is, by the bytes it starts with, and what to do, for the
-/// files users give in place of a text file most often (a spreadsheet, another format's
-/// array, a picture); None for any other.
+/// What is said of a file of a kind et does not read where it reads text.
+const ANOTHER_KIND: &str = "a file of another kind given?";
+
+/// What a file that is not text is, by the bytes it starts with, and what to do to write it
+/// as a table of text, for the files users give in place of a text file most often (a
+/// spreadsheet, another format's array, a picture); None for any other.
 #[must_use]
-pub fn binary_kind(bytes: &[u8]) -> Option<&'static str> {
-    const KINDS: [(&[u8], usize, &str); 7] = [
+fn binary_kind(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
+    const KINDS: [(&[u8], usize, &str, &str); 8] = [
         (
             b"PK\x03\x04",
             0,
-            "a zip archive (an Excel .xlsx workbook, or a NumPy .npz), not text: save a sheet \
-             as CSV (\"CSV UTF-8\"), an array with numpy.savetxt(f, X, delimiter=',')",
+            "a zip archive (an Excel .xlsx workbook, or a NumPy .npz)",
+            "save a sheet as CSV (\"CSV UTF-8\"), an array with numpy.savetxt(f, X, \
+             delimiter=',')",
         ),
         (
             b"\xD0\xCF\x11\xE0\xA1\xB1\x1A\xE1",
             0,
-            "an Excel 97-2003 workbook (.xls), not text: save its sheet as CSV (\"CSV UTF-8\")",
+            "an Excel 97-2003 workbook (.xls)",
+            "save its sheet as CSV (\"CSV UTF-8\")",
         ),
         (
             b"\x89HDF\r\n\x1a\n",
             0,
-            "an HDF5 file (h5py, MATLAB's -v7.3), not text: et reads no HDF5; save the arrays \
-             as CSV (frames also as .npy, or a MATLAB -v7 .mat)",
+            "an HDF5 file (h5py, MATLAB's -v7.3)",
+            "et reads no HDF5; save the arrays as CSV (frames also as .npy, or a MATLAB -v7 .mat)",
         ),
         (
             b"\x89HDF\r\n\x1a\n",
             512,
-            "a MATLAB 7.3 .mat file (HDF5), not text: write a table with writematrix(X, \
-             'f.csv'); frames are also read from a .mat saved with save(..., '-v7')",
+            "a MATLAB 7.3 .mat file (HDF5)",
+            "write a table with writematrix(X, 'f.csv'); frames are also read from a .mat saved \
+             with save(..., '-v7')",
         ),
         (
             b"\x93NUMPY",
             0,
-            "a NumPy .npy array, not text: write a table with numpy.savetxt(f, X, \
-             delimiter=','); frames are also read from .npy files named .npy",
+            "a NumPy .npy array",
+            "write a table with numpy.savetxt(f, X, delimiter=','); frames are also read from \
+             .npy files named .npy",
         ),
         (
             b"MATLAB 5.0 MAT-file",
             0,
-            "a MATLAB .mat file, not text: write a table with writematrix(X, 'f.csv'); frames \
-             are also read from .mat files named .mat (FILE.mat:VARIABLE)",
+            "a MATLAB .mat file",
+            "write a table with writematrix(X, 'f.csv'); frames are also read from .mat files \
+             named .mat (FILE.mat:VARIABLE)",
         ),
+        (b"\x89PNG\r\n\x1a\n", 0, "a PNG picture", ANOTHER_KIND),
         (
-            b"\x89PNG\r\n\x1a\n",
+            &crate::model::MODEL_MAGIC,
             0,
-            "a PNG picture, not text: a file of another kind given?",
+            "a model blob for the board (et export writes them; et upload takes them)",
+            ANOTHER_KIND,
         ),
     ];
     KINDS
         .iter()
-        .find(|(magic, at, _)| bytes.get(*at..).is_some_and(|b| b.starts_with(magic)))
-        .map(|(_, _, said)| *said)
+        .find(|(magic, at, ..)| bytes.get(*at..).is_some_and(|b| b.starts_with(magic)))
+        .map(|(_, _, what, fix)| (*what, *fix))
 }
 
-/// [`read_at_most`] as text, without a leading byte-order mark: UTF-8, or UTF-16 with its
-/// byte-order mark (what a spreadsheet's "Unicode text" export writes, tab-separated).
+/// What a text file holds, for what is said when another kind of file comes in its place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Holds {
+    /// A table (frames, a protocol, a dataset, a mesh's CSV): a spreadsheet's or an array's
+    /// file is said with how to write it as text.
+    Table,
+    /// One of et's documents (a scene, a model): another kind of file is said as what it is
+    /// (a scene given as a .npy was told to be written with numpy.savetxt).
+    Document,
+}
+
+/// [`read_at_most`] as the text of a table (or of frames: a recording), without a leading byte-order mark: UTF-8, or
+/// UTF-16 with its byte-order mark (what a spreadsheet's "Unicode text" export writes,
+/// tab-separated).
 ///
 /// # Errors
 /// As [`read_at_most`], and [`std::io::ErrorKind::InvalidData`] for text that is neither,
 /// naming the line and byte (Latin-1's accented letters, most often).
 pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<String> {
+    read_holding(path, limit, Holds::Table)
+}
+
+/// [`read_text_at_most`] for a document of et's own (a scene, a model).
+///
+/// # Errors
+/// As [`read_text_at_most`].
+pub fn read_document_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<String> {
+    read_holding(path, limit, Holds::Document)
+}
+
+fn read_holding(path: &std::path::Path, limit: u64, holds: Holds) -> std::io::Result<String> {
     let bytes = read_at_most(path, limit)?;
     let mut text = match utf16(&bytes) {
         Some(text) => text?,
@@ -536,8 +570,16 @@ pub fn read_text_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<
             let at = e.utf8_error().valid_up_to();
             let bytes = e.as_bytes();
             // A file of another kind is said as what it is, not as text in another encoding.
-            if let Some(said) = binary_kind(bytes) {
-                return std::io::Error::new(std::io::ErrorKind::InvalidData, said);
+            if let Some((what, fix)) = binary_kind(bytes) {
+                let fix = if holds == Holds::Table {
+                    fix
+                } else {
+                    ANOTHER_KIND
+                };
+                return std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("{what}, not text: {fix}"),
+                );
             }
             let line = 1 + bytes[..at].iter().filter(|b| **b == b'\n').count();
             let column = at
@@ -690,12 +732,27 @@ mod tests {
             (b"\x93NUMPY\x01\x00v\x00", "numpy.savetxt"),
             (b"MATLAB 5.0 MAT-file \xff\x00", "writematrix"),
             (b"\x89PNG\r\n\x1a\n", "a PNG picture"),
+            (
+                b"ETDA\x01\x00\x00\x00\x09\x00\x60\x00\xc0",
+                "a model blob for the board",
+            ),
         ] {
             std::fs::write(&path, bytes).unwrap();
             let e = super::read_text_at_most(&path, 1000)
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(said) && !e.contains("Latin-1"), "{e}");
+            // A scene or a model is told what the file is, not how to write a
+            // table (a scene given as a .npy was told to use numpy.savetxt).
+            let e = super::read_document_at_most(&path, 1000)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.ends_with("not text: a file of another kind given?")
+                    && !e.contains("savetxt")
+                    && !e.contains("writematrix"),
+                "{e}"
+            );
         }
         // Text that starts like one is text.
         std::fs::write(&path, "PK\x03\x04 is text here\n").unwrap();

@@ -415,6 +415,12 @@ pub fn check_all(
                 input: input.to_path_buf(),
             });
         }
+        // A file where the folder goes failed only after the work ("File exists (os error 17)").
+        if std::fs::metadata(folder).is_ok_and(|m| !m.is_dir()) {
+            return Err(OutputError::NotAFolder {
+                out: folder.to_path_buf(),
+            });
+        }
     }
     for (i, out) in outputs.iter().enumerate() {
         let made = out

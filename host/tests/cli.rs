@@ -2480,6 +2480,81 @@ fn force_is_refused_where_nothing_is_written() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // A rate without a port, and the simulator's pace beside a recording or a board, change
+    // nothing: refused (`--baud 9600 --replay r.jsonl` streamed as if unsaid), and no rate of 0.
+    for (args, said) in [
+        (&["stream", "--json", "--baud", "9600"][..], "--port"),
+        (
+            &["stream", "--json", "--fast", "--replay", "r.jsonl"],
+            "--replay",
+        ),
+        (
+            &["stream", "--json", "--fast", "--port", "/dev/null"],
+            "--port",
+        ),
+        (
+            &["stream", "--json", "--port", "/dev/null", "--baud", "0"],
+            "0",
+        ),
+    ] {
+        let out = et(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(said),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// A file of another kind where et reads one of its own is said as what it is, with the fix
+/// for that reader: a scene given as a .npy is not told to write a table with numpy.savetxt,
+/// frames given as the board's blob are not said as Latin-1 text, and the model file given to
+/// `et upload` is told to be exported first.
+#[test]
+fn a_file_of_another_kind_is_said_as_what_it_is() {
+    let dir = std::env::temp_dir().join(format!("et-cli-kinds-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let npy = dir.join("a.npy");
+    std::fs::write(&npy, b"\x93NUMPY\x01\x00v\x00{'descr': '<f8'}").unwrap();
+    let blob = dir.join("m.etm");
+    std::fs::write(&blob, b"ETDA\x01\x00\x00\x00\x09\x00\x60\x00\xc0\x00").unwrap();
+    let json = dir.join("m.json");
+    std::fs::write(&json, "{\"format\": \"et-model\"}").unwrap();
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes/disc-ref-x050.toml");
+    let [npy, blob, json, scene] = [&npy, &blob, &json, &scene].map(|p| p.to_str().unwrap());
+    for (args, said) in [
+        (
+            &["forward", "--scene", npy][..],
+            "a NumPy .npy array, not text: a file of another kind given?",
+        ),
+        (
+            &[
+                "reconstruct",
+                "--scene",
+                scene,
+                "--frames",
+                blob,
+                "--reference",
+                "1",
+                "--out",
+                "/dev/null",
+            ],
+            "a model blob for the board",
+        ),
+        (
+            &["upload", "--port", "/dev/null", "--blob", json],
+            "et export --model",
+        ),
+    ] {
+        let out = et(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(said) && !err.contains("savetxt"),
+            "{args:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A board that never answers is said with the port and the rate it was asked at, and a rate

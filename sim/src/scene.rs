@@ -358,13 +358,12 @@ impl Scene {
     /// [`SceneError`] naming the file, and the field where one is at fault.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
         let name = path.display().to_string();
-        let text =
-            et_core::text::read_text_at_most(path, MAX_SCENE_BYTES as u64).map_err(|source| {
-                SceneError::Io {
-                    path: name.clone(),
-                    source,
-                }
-            })?;
+        let text = et_core::text::read_document_at_most(path, MAX_SCENE_BYTES as u64).map_err(
+            |source| SceneError::Io {
+                path: name.clone(),
+                source,
+            },
+        )?;
         let mut scene = Self::parse(&text, &name)?;
         scene.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         // A protocol file is read now, so that a scene that loads images.

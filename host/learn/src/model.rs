@@ -209,7 +209,7 @@ impl Model {
     /// # Errors
     /// [`ModelError`] naming the file and what is wrong with it.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
-        let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
+        let text = et_core::text::read_document_at_most(path, et_core::text::max_file_bytes())
             .map_err(|source| ModelError::Io {
                 path: path.into(),
                 source,

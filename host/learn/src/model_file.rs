@@ -206,7 +206,7 @@ impl ModelFile {
     /// # Errors
     /// [`ModelFileError`] naming the file (and for a JSON syntax error, the line and column).
     pub fn load(path: &Path) -> Result<Self, ModelFileError> {
-        let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
+        let text = et_core::text::read_document_at_most(path, et_core::text::max_file_bytes())
             .map_err(|source| ModelFileError::Io {
                 path: path.into(),
                 source,

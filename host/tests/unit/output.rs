@@ -171,6 +171,11 @@ fn outputs_may_not_collide_with_inputs_or_each_other_however_spelled() {
     .unwrap_err();
     assert!(matches!(e, OutputError::Collision { .. }), "{e}");
     check_all(&[&map, &out], &[&plots], &[&mesh], false).unwrap();
+    // A file where the folder of plots goes, said before the work (it failed on creating
+    // the folder, after it, as "File exists (os error 17)"), with --force too.
+    std::fs::write(&plots, "x").unwrap();
+    let e = check_all(&[&map], &[&plots], &[], true).unwrap_err();
+    assert!(matches!(e, OutputError::NotAFolder { .. }), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 

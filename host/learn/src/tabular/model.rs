@@ -360,7 +360,7 @@ impl TableModel {
             path: path.into(),
             source,
         };
-        let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes())
+        let text = et_core::text::read_document_at_most(path, et_core::text::max_file_bytes())
             .map_err(|e| err(e.into()))?;
         Self::from_json(&text).map_err(err)
     }

@@ -15,7 +15,8 @@ pub(crate) struct UploadArgs {
     #[arg(long)]
     blob: PathBuf,
     /// Baud rate (the firmware's is the default).
-    #[arg(long, default_value_t = et_core::board::BAUD)]
+    #[arg(long, default_value_t = et_core::board::BAUD,
+          value_parser = clap::value_parser!(u32).range(1..))]
     baud: u32,
     /// Then take the next frame as V_0 (the sheet must not be touched).
     #[arg(long)]
@@ -31,7 +32,8 @@ pub(crate) struct RecordArgs {
     #[arg(long)]
     out: PathBuf,
     /// Baud rate (the firmware's is the default).
-    #[arg(long, default_value_t = et_core::board::BAUD)]
+    #[arg(long, default_value_t = et_core::board::BAUD,
+          value_parser = clap::value_parser!(u32).range(1..))]
     baud: u32,
     /// Stop after this many frames.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
@@ -135,8 +137,18 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     use std::time::Duration;
     let blob = et_core::text::read_at_most(&args.blob, 1 << 24)
         .with_context(|| format!("reading {}", args.blob.display()))?;
-    let model = et_core::model::Model::parse(&blob)
-        .map_err(|e| anyhow::anyhow!("{}: not a valid model blob: {e}", args.blob.display()))?;
+    let model = et_core::model::Model::parse(&blob).map_err(|e| {
+        let path = args.blob.display();
+        // The model file `et train` wrote, given for the blob made from it.
+        if blob.trim_ascii_start().starts_with(b"{") {
+            anyhow::anyhow!(
+                "{path}: a model file (JSON, as et train writes), not the board's blob: \
+                 `et export --model {path} --out model.etm` makes the blob, then upload that"
+            )
+        } else {
+            anyhow::anyhow!("{path}: not a valid model blob: {e}")
+        }
+    })?;
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;
     wait_for_board(&mut link, args.baud)?;
     let started = Instant::now();

@@ -21,9 +21,9 @@ pub(crate) struct SourceArgs {
     /// A board's serial port (`et ports` lists them).
     #[arg(long)]
     port: Option<String>,
-    /// Baud rate of --port.
-    #[arg(long, default_value_t = et_core::board::BAUD)]
-    baud: u32,
+    /// Baud rate of --port (default: the firmware's, 2000000).
+    #[arg(long, requires = "port", value_parser = clap::value_parser!(u32).range(1..))]
+    baud: Option<u32>,
     /// A trained model (`et train`) to classify each touch with on the host.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -48,7 +48,9 @@ impl SourceArgs {
         use et_host::live::SourceSpec;
         match (&self.replay, &self.port) {
             (Some(path), _) => SourceSpec::Replay(path.clone()),
-            (None, Some(port)) => SourceSpec::Port(port.clone(), self.baud),
+            (None, Some(port)) => {
+                SourceSpec::Port(port.clone(), self.baud.unwrap_or(et_core::board::BAUD))
+            }
             (None, None) => SourceSpec::Sim,
         }
     }
@@ -107,8 +109,9 @@ pub(crate) struct StreamArgs {
     /// Stop after this many frames (default: run until Ctrl-C or the end of a recording).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
-    /// Simulate as fast as possible instead of in real time.
-    #[arg(long)]
+    /// Simulate as fast as possible instead of in real time (the simulator's frames only: a
+    /// recording is streamed as fast as it is read, a board at its own rate).
+    #[arg(long, conflicts_with_all = ["replay", "port"])]
     fast: bool,
 }
 
