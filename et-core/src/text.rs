@@ -391,8 +391,15 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
             format!("more than {limit} bytes: not a file et reads (is it the right one?)"),
         )
     };
-    let mut file = std::fs::File::open(path)?;
+    let mut file = std::fs::File::open(path).map_err(said_plainly)?;
     let meta = file.metadata()?;
+    if meta.is_dir() {
+        // Read, a folder failed as "Is a directory (os error 21)".
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "a folder, not a file: give a file in it",
+        ));
+    }
     if meta.is_file() && meta.len() > limit {
         return Err(too_large());
     }
@@ -451,6 +458,17 @@ fn utf16(bytes: &[u8]) -> Option<std::io::Result<String>> {
             "UTF-16 text (its byte-order mark says so) that does not decode: a copy cut short?",
         )
     }))
+}
+
+/// The two ways opening a file fails most often, said without the system's error number
+/// ("No such file or directory (os error 2)"); any other as it is.
+fn said_plainly(e: std::io::Error) -> std::io::Error {
+    let said = match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file (is the path right?)",
+        std::io::ErrorKind::PermissionDenied => "not allowed to read it (its permissions)",
+        _ => return e,
+    };
+    std::io::Error::new(e.kind(), said)
 }
 
 /// Whether `file` is a character device other than the null device (read as empty) and a
@@ -754,6 +772,14 @@ mod tests {
                 "{e}"
             );
         }
+        // A folder, and a path with nothing at it, said without the system's numbers ("Is a
+        // directory (os error 21)").
+        let folder = path.parent().unwrap();
+        let e = super::read_text_at_most(folder, 100).unwrap_err();
+        assert_eq!(e.to_string(), "a folder, not a file: give a file in it");
+        let e = super::read_text_at_most(&folder.join("none.csv"), 100).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
+        assert_eq!(e.to_string(), "no such file (is the path right?)");
         // Text that starts like one is text.
         std::fs::write(&path, "PK\x03\x04 is text here\n").unwrap();
         assert!(super::read_text_at_most(&path, 100).is_ok());
