@@ -311,6 +311,13 @@ impl Link {
             .map_err(|_| LinkError::Timeout { waiting_for: None })
     }
 
+    /// How many messages [`request`](Self::request) kept (they came before its reply, so
+    /// were sent before the device acted on it): [`next`](Self::next) returns them first.
+    #[must_use]
+    pub fn kept(&self) -> usize {
+        self.pending.len()
+    }
+
     /// Sends `command` and waits up to `timeout` for its reply: `Pong` for a ping, the
     /// acknowledgement otherwise. Messages that arrive meanwhile are kept for [`next`](Self::next).
     ///

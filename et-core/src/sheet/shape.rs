@@ -142,12 +142,21 @@ impl Shape {
                 {
                     return Err(ShapeError::Repeated { vertex });
                 }
-                if self.signed_area().abs() < 1e-12 {
-                    return Err(ShapeError::Polygon("zero area"));
+                // A bow-tie's halves cancel to zero area: it is said as crossing (it was said
+                // as "zero area"), vertices on one line as what they are.
+                if on_one_line(vertices) {
+                    return Err(ShapeError::Polygon(
+                        "zero area: the vertices lie on one line",
+                    ));
                 }
                 if !is_simple(vertices) {
                     return Err(ShapeError::Polygon(
                         "edges cross or touch (the outline must be a simple polygon)",
+                    ));
+                }
+                if self.signed_area().abs() < 1e-12 {
+                    return Err(ShapeError::Polygon(
+                        "zero area (below 1e-12 m^2: lengths are in metres)",
                     ));
                 }
                 if self.signed_area() < 0.0 {
@@ -430,6 +439,17 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     dist(p, [a[0] + t * dx, a[1] + t * dy])
 }
 
+/// Whether every vertex of `v` (at least two, the first two apart) lies on the line through
+/// the first two, to rounding.
+fn on_one_line(v: &[[f64; 2]]) -> bool {
+    let [x0, y0] = v[0];
+    let (dx, dy) = (v[1][0] - x0, v[1][1] - y0);
+    v.iter().all(|&[x, y]| {
+        let (ex, ey) = (x - x0, y - y0);
+        (dx * ey - dy * ex).abs() <= 1e-9 * dx.hypot(dy) * ex.hypot(ey)
+    })
+}
+
 /// Whether the closed polyline `v` is a simple polygon: no two edges meet except neighbours at
 /// their shared vertex (so no crossing, no touching, no repeated vertex). O(n^2): outlines have
 /// tens of vertices.
@@ -532,6 +552,13 @@ mod tests {
             [0.0, 0.1],
         ]);
         l_shape.validate().unwrap();
+        // A symmetric bow tie's halves cancel to zero area: said as crossing, not as "zero
+        // area"; vertices on one line as that.
+        let said = |shape: Shape| shape.validate().unwrap_err().to_string();
+        let e = said(poly(&[[0.0, 0.0], [0.1, 0.1], [0.1, 0.0], [0.0, 0.1]]));
+        assert!(e.contains("edges cross"), "{e}");
+        let e = said(poly(&[[0.0, 0.0], [0.1, 0.0], [0.3, 0.0]]));
+        assert!(e.contains("zero area: the vertices lie on one line"), "{e}");
     }
 
     /// An outline past 10 m across is a scene's lengths in mm or cm (the frames do not show
