@@ -192,6 +192,7 @@ impl Board {
     /// classes.
     pub fn test(&self, data: &Dataset) -> Result<Tested, UseError> {
         let file = &self.file;
+        self.same_places(data)?;
         // One prediction per observation serves the confusion, the bands and the errors; the
         // features it reads are those the training kept fingerprints of.
         let observations = self.features_of(data)?;
@@ -246,6 +247,42 @@ impl Board {
             bands,
             errors_from_truth_mm,
         })
+    }
+
+    /// Whether `data`'s classes are the model's: as many, each at the model's place for it
+    /// (within a twentieth of the closest two classes' spacing; one scene's grid is the same to
+    /// rounding). Data collected on another grid or sheet label other places with the same
+    /// numbers: a 2 x 2 grid scored 25 % on a 3 x 3 model, a 17 cm sheet's 3 x 3 grid 88.9 %
+    /// on the 13 cm sheet's, without a word. Data that do not say their centres pass.
+    fn same_places(&self, data: &Dataset) -> Result<(), UseError> {
+        let (model, theirs) = (&self.file.centres, &data.centres);
+        if model.is_empty() || theirs.is_empty() {
+            return Ok(());
+        }
+        if model.len() != theirs.len() {
+            return Err(UseError::Classes {
+                model: model.len(),
+                data: theirs.len(),
+            });
+        }
+        let apart = |a: &[f64; 2], b: &[f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+        let spacing = model
+            .iter()
+            .enumerate()
+            .flat_map(|(i, a)| model.iter().skip(i + 1).map(move |b| apart(a, b)))
+            .fold(f64::INFINITY, f64::min);
+        let moved = model
+            .iter()
+            .zip(theirs)
+            .position(|(m, d)| apart(m, d) > spacing / 20.0 || !apart(m, d).is_finite());
+        match moved {
+            Some(class) => Err(UseError::Places {
+                class,
+                model_mm: model[class].map(|c| c * 1e3),
+                data_mm: theirs[class].map(|c| c * 1e3),
+            }),
+            None => Ok(()),
+        }
     }
 
     /// The et-core blob at `precision` (what `et upload` sends).
@@ -418,6 +455,34 @@ pub enum UseError {
         k: usize,
         /// The model's scan.
         scan: et_core::config::ScanConfig,
+    },
+    /// The data have another number of classes than the model: their labels name other
+    /// places.
+    #[error(
+        "the data have {data} classes, the model {model}: they were collected on another grid, \
+         so their labels name other places; evaluate on data of the model's grid (the same \
+         scene and et collect --grid)"
+    )]
+    Classes {
+        /// The model's classes.
+        model: usize,
+        /// The data's classes (their centres).
+        data: usize,
+    },
+    /// A class of the data is elsewhere than the model's class of that number.
+    #[error(
+        "the data's class {class} is at ({:.1}, {:.1}) mm, the model's at ({:.1}, {:.1}) mm: \
+         the data were collected on another sheet or grid, so their labels name other places; \
+         evaluate on data of the model's grid (the same scene and et collect --grid)",
+        data_mm[0], data_mm[1], model_mm[0], model_mm[1]
+    )]
+    Places {
+        /// The class.
+        class: usize,
+        /// The model's centre of it, mm.
+        model_mm: [f64; 2],
+        /// The data's centre of it, mm.
+        data_mm: [f64; 2],
     },
     /// Evaluation on the dataset failed (e.g. a class the model does not know).
     #[error(transparent)]

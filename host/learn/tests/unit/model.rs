@@ -109,6 +109,21 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
         said.contains("1000 times those the model was trained on"),
         "{said}"
     );
+    // Data of another grid or sheet label other places with the same numbers: refused (a
+    // 2 x 2 grid scored 25 % on a 3 x 3 model without a word), the same grid to rounding taken.
+    let mut elsewhere = data.clone();
+    elsewhere.centres[2] = [0.045, 0.01];
+    let e = board.test(&elsewhere).unwrap_err().to_string();
+    assert!(
+        e.contains("the data's class 2 is at (45.0, 10.0) mm, the model's at (40.0, 10.0) mm"),
+        "{e}"
+    );
+    elsewhere.centres.pop();
+    let e = board.test(&elsewhere).unwrap_err().to_string();
+    assert!(e.contains("the data have 2 classes, the model 3"), "{e}");
+    let mut rounded = data.clone();
+    rounded.centres[2][0] += 1e-9;
+    board.test(&rounded).unwrap();
     for r in (0..data.x.nrows()).step_by(7) {
         let (v, v0) = frames_of(&data, r);
         let frame = DMatrix::from_row_slice(1, v.len(), &v);
