@@ -1817,12 +1817,25 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
                 "train".into(),
                 "--data".into(),
                 p("d.csv"),
-                "--max-minutes".into(),
-                "5".into(),
+                "--per-group".into(),
                 "--out".into(),
                 p("n.json"),
             ],
-            "--max-minutes apply to any sensor's table",
+            "--per-group apply to any sensor's table",
+        ),
+        // A dataset's training is estimated and held to the budget as a table's is (a 100 x
+        // 100 grid trained for minutes without a word).
+        (
+            vec![
+                "train".into(),
+                "--data".into(),
+                p("d.csv"),
+                "--max-minutes".into(),
+                "1e-6".into(),
+                "--out".into(),
+                p("n.json"),
+            ],
+            "past the budget of under a second: fewer classes (et collect --grid)",
         ),
         (
             vec![

@@ -1280,9 +1280,11 @@ def train(
     On an et dataset (``X`` a :class:`Dataset` or the path of `et collect`'s .csv/.npz): QDA
     ("auto" or "qda") or LDA for the board, ``shrinkage`` in [0, 1] (None: by
     cross-validation), ``folds`` (default 10), ``raw`` (not minus the untouched frame),
-    ``keep`` (only the best features), ``seed`` (the stratified folds' shuffle); its
-    cross-validation leaves one visit out, so ``groups``, ``cv``, ``grid``, ``per_group`` and
-    ``budget_s`` (for arrays) are refused.
+    ``keep`` (only the best features), ``seed`` (the stratified folds' shuffle),
+    ``budget_s`` (QDA and LDA estimate their time, which grows with the classes squared,
+    from a timed piece of their work and say it in ``what`` first); its cross-validation
+    leaves one visit out, so ``groups``, ``cv``, ``grid`` and ``per_group`` (for arrays) are
+    refused.
 
     ``progress``: a callable taking ``(what, done, total)``, called at every step (``what``
     changes as each stage starts; ``total`` 0 where steps are not counted), as ``et train``
@@ -1305,7 +1307,7 @@ def train(
         given = [
             name
             for name, value in (
-                ("groups", groups), ("grid", grid), ("budget_s", budget_s),
+                ("groups", groups), ("grid", grid),
                 ("cv", None if cv == "shuffled" else cv), ("per_group", per_group or None),
             )
             if value is not None
@@ -1318,7 +1320,8 @@ def train(
         return Model(
             _native.train_dataset(
                 X, kind, shrinkage, None if folds is None else _count(folds, "folds"), raw,
-                None if keep is None else _count(keep, "keep"), _count(seed, "seed"), progress,
+                None if keep is None else _count(keep, "keep"), _count(seed, "seed"),
+                3600.0 if budget_s is None else _real(budget_s, "budget_s"), progress,
             )
         )
     if y is None:

@@ -188,6 +188,7 @@ def train_dataset(
     raw: bool,
     keep: Optional[int],
     seed: int,
+    budget_s: float = 3600.0,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Model: ...
 def read_recording(path: str) -> Tuple[str, F64, I64, I64, I64, str, bool]: ...

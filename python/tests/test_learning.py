@@ -211,9 +211,16 @@ def test_bad_training_input_is_refused(table):
     with pytest.raises(et.EtError, match="board"):
         et.train(data, kind="ridge")
     # The arrays' options are refused on a dataset, not ignored.
-    for given in ({"groups": data.visit}, {"budget_s": 60.0}, {"cv": "blocks"}, {"grid": (2, 2)}):
+    for given in ({"groups": data.visit}, {"cv": "blocks"}, {"grid": (2, 2)}):
         with pytest.raises(et.EtError, match=f"{next(iter(given))}: for arrays"):
             et.train(data, **given)
+    # A dataset's training estimates its time as an array's does, and keeps to the budget.
+    with pytest.raises(et.EtError, match="past the budget of under a second"):
+        et.train(data, budget_s=1e-9)
+    said = []
+    et.train(data, progress=lambda what, done, total: said.append(what))
+    first = [w for w in said if w.startswith("training: ") or w == "each fold's statistics"]
+    assert first[0].startswith("training: "), said
     with pytest.raises(et.EtError, match="only a board model"):
         et.train(data.x, data.positions_m, kind="ridge").export_blob()
 

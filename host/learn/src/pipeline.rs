@@ -4,6 +4,8 @@
 //! visits), the fit and its cross-validated accuracy. Its use (prediction, a test on another
 //! session's data, the chip's check) is [`crate::model::Board`]'s.
 
+pub mod cost;
+
 use et_core::model::ModelKind;
 
 use super::analysis;

@@ -61,6 +61,39 @@ pub enum TrainError {
     /// The model file could not be written.
     #[error(transparent)]
     File(#[from] ModelFileError),
+    /// Training on an et dataset would hold more memory than is free.
+    #[error(
+        "training on {} observations of {} classes x {} features holds about {} GB (a {} x {} \
+         table per class in each fold), where {} GB is free: fewer classes (et collect --grid), \
+         fewer features (--keep) or fewer folds (--folds)",
+        .shape.n, .shape.classes, .shape.p, tabular::gb(*.need_bytes), .shape.p, .shape.p,
+        tabular::gb(*.free_bytes)
+    )]
+    TooLarge {
+        /// The training's shape.
+        shape: pipeline::cost::Shape,
+        /// The memory it would hold, bytes.
+        need_bytes: u64,
+        /// The memory free, bytes.
+        free_bytes: u64,
+    },
+    /// Training on an et dataset estimated to take longer than the budget.
+    #[error(
+        "training on {} observations of {} classes x {} features would take {}, past \
+         the budget of {}: fewer classes (et collect --grid), fewer features (--keep), a \
+         shrinkage given (--shrinkage: no search), or raise the budget (--max-minutes, \
+         budget_s=)",
+        .shape.n, .shape.classes, .shape.p, pipeline::cost::about(*.estimate_s),
+        pipeline::cost::time_said(*.budget_s)
+    )]
+    OverBudget {
+        /// The training's shape.
+        shape: pipeline::cost::Shape,
+        /// The estimate, s.
+        estimate_s: f64,
+        /// The budget, s.
+        budget_s: f64,
+    },
     /// The trained tables are not a model the board, or any reader of model files, would
     /// accept (`ModelFile::validate`): `train` refuses to return one.
     #[error("the trained model is not usable: {error}{}", unusable_advice(error, *shrinkage))]
@@ -151,6 +184,11 @@ pub enum Progress<'a> {
         rows: usize,
         /// Features before any are dropped.
         features: usize,
+    },
+    /// Training on an et dataset is estimated to take this long, s (said before its work).
+    Estimate {
+        /// The estimate, s.
+        seconds: f64,
     },
     /// A stage of training on an et dataset.
     Dataset(Stage),
@@ -245,6 +283,11 @@ impl Progress<'_> {
                 0,
                 0,
             ),
+            Self::Estimate { seconds } => (
+                format!("training: {}", pipeline::cost::about(seconds)),
+                0,
+                0,
+            ),
             Self::Dataset(stage) => {
                 let (done, of) = match stage {
                     Stage::Candidate { index, of, .. } => (index, of),
@@ -328,6 +371,43 @@ impl Trainer {
         }
     }
 
+    /// The seconds training `kind` on `data` is estimated to take ([`pipeline::cost`]),
+    /// when it fits in the memory free and within the budget.
+    ///
+    /// # Errors
+    /// [`TrainError::TooLarge`] past the memory free, [`TrainError::OverBudget`] past
+    /// [`budget_s`](Self::budget_s).
+    fn affordable(&self, data: &Dataset, kind: ModelKind) -> Result<f64, TrainError> {
+        let shape = pipeline::cost::Shape {
+            n: data.x.nrows(),
+            p: data.x.ncols(),
+            classes: data.centres.len(),
+            folds: self.dataset_folds(),
+            visits: data.visits(),
+            choose: self.shrinkage.is_none(),
+        };
+        let need_bytes = shape.bytes();
+        if let Some(free_bytes) = et_core::text::available_memory_bytes()
+            && need_bytes > free_bytes
+        {
+            return Err(TrainError::TooLarge {
+                shape,
+                need_bytes,
+                free_bytes,
+            });
+        }
+        let each = pipeline::cost::seconds_per(data, kind, shape.folds, self.seed);
+        let seconds = shape.seconds(kind, each);
+        if seconds > self.budget_s {
+            return Err(TrainError::OverBudget {
+                shape,
+                estimate_s: seconds,
+                budget_s: self.budget_s,
+            });
+        }
+        Ok(seconds)
+    }
+
     /// QDA or LDA on an et dataset: features (referenced when it can be), shrinkage by
     /// cross-validation unless given, the fit, and the model file it makes, checked as the
     /// board would check it ([`TrainError::Unusable`] when it would refuse it).
@@ -346,6 +426,8 @@ impl Trainer {
             features: data.x.ncols(),
         });
         pipeline::prepare(&mut data, referenced, self.keep)?;
+        let seconds = self.affordable(&data, kind)?;
+        progress(Progress::Estimate { seconds });
         let training = pipeline::train_reporting(
             &data,
             &TrainOptions {

@@ -58,6 +58,51 @@ fn dataset() -> Dataset {
     }
 }
 
+/// Training on an et dataset says its estimated time before its work and is held to the
+/// budget as a table's training is (a 100 x 100 grid, 10 000 classes, trained for minutes
+/// and held 11 GB without a word); the memory it holds grows with the classes, each fold's
+/// statistics a p x p table per class.
+#[test]
+fn a_datasets_training_says_its_time_first_and_keeps_to_the_budget() {
+    use et_learn::pipeline::cost::Shape;
+    use et_learn::trainer::{Progress, TrainError};
+    let data = dataset();
+    let mut said = Vec::new();
+    Trainer::qda()
+        .train(Examples::Dataset(&data), |p| said.push(p.said(10).0))
+        .unwrap();
+    let estimate = said.iter().position(|s| s.starts_with("training: "));
+    let statistics = said.iter().position(|s| s == "each fold's statistics");
+    assert!(
+        estimate.is_some() && estimate < statistics,
+        "the estimate before the work: {said:?}"
+    );
+    let tight = Trainer {
+        budget_s: 1e-9,
+        ..Trainer::qda()
+    };
+    let e = tight
+        .train(Examples::Dataset(&data), |_: Progress<'_>| {})
+        .unwrap_err();
+    assert!(matches!(e, TrainError::OverBudget { .. }), "{e}");
+    assert!(
+        e.to_string().contains("fewer classes (et collect --grid)"),
+        "{e}"
+    );
+    // The statistics of 10 000 classes of 96 features in 10 folds alone are 7.4 GB; a tenth
+    // of the classes holds under a tenth of it.
+    let shape = |classes: usize| Shape {
+        n: 20 * classes,
+        p: 96,
+        classes,
+        folds: 10,
+        visits: 1,
+        choose: true,
+    };
+    assert!(shape(10_000).bytes() > 7_400_000_000);
+    assert!(shape(1_000).bytes() < shape(10_000).bytes() / 10);
+}
+
 /// Row `r` of `data` as the whole frame the board sends (K values, its features in place),
 /// and its visit's untouched frame.
 fn frames_of(data: &Dataset, r: usize) -> (Vec<f64>, Vec<f64>) {

@@ -183,28 +183,7 @@ fn discriminant_seconds(method: Kind, (n, p, classes): (usize, usize, usize), k:
     let factor = p.powi(3) / 3.0;
     let per_shrinkage = k * factors * factor / threads.min(k) + n * p * p + n * looked_at * p;
     let madds = SHRINKAGES.len() as f64 * per_shrinkage + factors * factor + n * p * p;
-    madds / cholesky_rate(p as usize)
-}
-
-/// Multiply-adds a second of nalgebra's Cholesky factor of min(`p`, 2000) features, timed
-/// (repeated to at least 5 ms).
-fn cholesky_rate(p: usize) -> f64 {
-    let m = p.clamp(2, 2000);
-    let a = DMatrix::from_fn(m, m, |i, j| {
-        if i == j {
-            m as f64
-        } else {
-            ((i * 31 + j * 17) % 97) as f64 / 97.0
-        }
-    });
-    let started = std::time::Instant::now();
-    let mut repeats = 0_u32;
-    while repeats == 0 || started.elapsed().as_secs_f64() < 5e-3 {
-        let _ = a.clone().cholesky();
-        repeats += 1;
-    }
-    let seconds = started.elapsed().as_secs_f64().max(f64::MIN_POSITIVE);
-    f64::from(repeats) * (m as f64).powi(3) / 3.0 / seconds
+    madds / crate::pipeline::cost::cholesky_rate(p as usize)
 }
 
 /// Refuses `method` (QDA or LDA) on `features` features and `classes` classes where
