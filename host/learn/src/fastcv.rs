@@ -320,12 +320,14 @@ impl FoldClasses {
 const BLOCK: usize = 256;
 
 /// Observations per block of [`FoldModel::predict_block`] among `classes` classes: [`BLOCK`],
-/// fewer where the block's bounds ((C d) x b values) would pass 4 MiB and leave the cache. At
-/// 10 000 classes a block's were 327 MB, made afresh for each block: a third of the
-/// training's time was the system's, mapping them.
+/// fewer (down to 16) where the block's bounds ((C d) x b values) would pass 16 MiB. A
+/// larger product is mapped afresh from the system for every block (glibc reuses freed
+/// blocks up to 32 MB): a 50 x 50 grid's training spent 38 of its 54 s in the system so;
+/// fewer than 16 rows read the class tables too often (at 10 000 classes, 3 rows a block
+/// made it slower).
 fn block_len(classes: usize) -> usize {
-    const BOUNDS_BYTES: usize = 4 << 20;
-    (BOUNDS_BYTES / (classes * LEAD * 8).max(1)).clamp(1, BLOCK)
+    const BOUNDS_BYTES: usize = 16 << 20;
+    (BOUNDS_BYTES / (classes * LEAD * 8).max(1)).clamp(16, BLOCK)
 }
 
 /// Steps of the forward substitution done for all classes at once by a matrix product.

@@ -149,8 +149,9 @@ pub struct Trainer {
     pub seed: u64,
     /// Tables: standardise each group's (session's) features by its own statistics.
     pub per_group: bool,
-    /// Tables: the longest a training may be estimated to take, s: the Gaussian process and
-    /// the perceptron estimate their time before they start, and one past this is refused.
+    /// The longest a training may be estimated to take, s: on tables the Gaussian process,
+    /// the perceptron, knn, kernel ridge and the discriminants estimate their time before
+    /// they start, on et datasets QDA and LDA do; one past this is refused.
     pub budget_s: f64,
 }
 
