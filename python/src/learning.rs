@@ -117,7 +117,6 @@ fn train_table(
     progress: Option<Py<PyAny>>,
     feature_names: Option<Vec<String>>,
 ) -> PyResult<Model> {
-    budget(budget_s)?;
     let mut table = table(&x, labels, positions_m, groups)?;
     // A DataFrame's columns, so that its predictions' columns are read by name.
     if let Some(names) = feature_names {
@@ -154,17 +153,6 @@ fn train_table(
     Ok(Model::new(trained.model))
 }
 
-/// A training's budget, s: a number of seconds above 0.
-fn budget(budget_s: f64) -> PyResult<()> {
-    if budget_s.is_finite() && budget_s > 0.0 {
-        Ok(())
-    } else {
-        Err(usage(format!(
-            "budget_s = {budget_s}: a number of seconds above 0"
-        )))
-    }
-}
-
 /// Trains QDA or LDA for the board on an et dataset; see `et_touch.train`.
 #[pyfunction]
 #[pyo3(signature = (dataset, kind, shrinkage, folds, raw, keep, seed, budget_s=et_learn::tabular::BUDGET_S, progress=None))]
@@ -181,7 +169,6 @@ fn train_dataset(
     budget_s: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Model> {
-    budget(budget_s)?;
     let trainer = Trainer {
         method: choice(kind)?,
         shrinkage,

@@ -55,6 +55,9 @@ pub enum TrainError {
     /// the CLI refused 1, Python trained with it).
     #[error("folds = {0}: a cross-validation takes 2 to {MAX_FOLDS} folds")]
     Folds(usize),
+    /// A budget that is not a number of seconds above 0.
+    #[error("budget_s = {0}: a number of seconds above 0")]
+    Budget(f64),
     /// A method an et dataset does not train (the board takes QDA or LDA).
     #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
     NotForTheBoard(&'static str),
@@ -332,6 +335,10 @@ impl Trainer {
         if let Some(k) = self.folds.filter(|k| !(2..=MAX_FOLDS).contains(k)) {
             return Err(TrainError::Folds(k));
         }
+        // A NaN budget refused nothing (no estimate passes it).
+        if !(self.budget_s.is_finite() && self.budget_s > 0.0) {
+            return Err(TrainError::Budget(self.budget_s));
+        }
         match examples {
             Examples::Dataset(data) => {
                 let (model, training) = self.train_dataset(data.clone(), &mut progress)?;
@@ -397,8 +404,7 @@ impl Trainer {
                 free_bytes,
             });
         }
-        let each = pipeline::cost::seconds_per(data, kind, shape.folds, self.seed);
-        let seconds = shape.seconds(kind, each);
+        let seconds = pipeline::cost::estimate(&shape, data, kind, self.seed);
         if seconds > self.budget_s {
             return Err(TrainError::OverBudget {
                 shape,

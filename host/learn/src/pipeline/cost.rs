@@ -117,6 +117,28 @@ impl Shape {
     }
 }
 
+/// Seconds a training of `shape` on `data` is estimated to take: counted at a Cholesky
+/// factor's rate first (about a third of the time taken), and where that says a second or
+/// more, at the rates of its own timed pieces ([`seconds_per`]). The pieces cost about one
+/// pass over a small training's data, as much as a training of a second or two itself,
+/// whose estimate needs no precision.
+#[must_use]
+pub fn estimate(shape: &Shape, data: &Dataset, kind: ModelKind, seed: u64) -> f64 {
+    const QUICK_S: f64 = 1.0;
+    let quick = shape.seconds(kind, cholesky_seconds_per(shape.p, shape.folds));
+    if quick < QUICK_S {
+        quick
+    } else {
+        shape.seconds(kind, seconds_per(data, kind, shape.folds, seed))
+    }
+}
+
+/// [`seconds_per`] at the Cholesky factor's rate on the threads `folds` folds use.
+fn cholesky_seconds_per(p: usize, folds: usize) -> [f64; 2] {
+    let each = 1.0 / (cholesky_rate(p) * threads().min(folds as f64));
+    [each, each]
+}
+
 /// Seconds a multiply-add of the factors and of the observations' work take in this
 /// training on this machine (on the threads it uses): `data`'s first classes (as many as make
 /// about 3 x 10^8 of the factors' multiply-adds) cross-validated over `folds` twice, as they are and with each
@@ -176,8 +198,7 @@ pub fn seconds_per(data: &Dataset, kind: ModelKind, folds: usize, seed: u64) -> 
             return [per_factor, per_row];
         }
     }
-    let each = 1.0 / (cholesky_rate(p) * threads().min(folds as f64));
-    [each, each]
+    cholesky_seconds_per(p, folds)
 }
 
 /// Multiply-adds a second of nalgebra's Cholesky factor of min(`p`, 2000) features, timed

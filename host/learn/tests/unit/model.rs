@@ -89,6 +89,15 @@ fn a_datasets_training_says_its_time_first_and_keeps_to_the_budget() {
         e.to_string().contains("fewer classes (et collect --grid)"),
         "{e}"
     );
+    // A budget of NaN passed every estimate: refused where the trainer takes it.
+    let none = Trainer {
+        budget_s: f64::NAN,
+        ..Trainer::qda()
+    };
+    let e = none
+        .train(Examples::Dataset(&data), |_: Progress<'_>| {})
+        .unwrap_err();
+    assert!(matches!(e, TrainError::Budget(_)), "{e}");
     // The statistics of 10 000 classes of 96 features in 10 folds alone are 7.4 GB; a tenth
     // of the classes holds under a tenth of it.
     let shape = |classes: usize| Shape {
