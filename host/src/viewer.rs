@@ -152,14 +152,12 @@ impl Viewer {
             },
         )?;
         if let Some(path) = &options.model {
-            let classifier =
-                Model::load(path)?
-                    .into_board()
-                    .map_err(|error| ViewerError::Model {
-                        path: path.clone(),
-                        error,
-                    })?;
-            processor.classifier = Some(classifier);
+            let error = |error| ViewerError::Model {
+                path: path.clone(),
+                error,
+            };
+            let classifier = Model::load(path)?.into_board().map_err(error)?;
+            (processor.set_classifier(classifier)).map_err(|e| error(e.into()))?;
         }
         let b = sheet.physical.shape.bounds();
         let centre = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];

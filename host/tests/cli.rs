@@ -807,6 +807,33 @@ fn collect_train_eval_export_chain() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("ROWSxCOLS"));
     let bad = et(&["eval", "--model", &s(&train), "--data", &s(&test)]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("train.csv"));
+    // The model classifies the live frames of its sheet, each touch with a class; on another
+    // sheet its classes would name its own sheet's places (a 17 cm sheet's model put a touch
+    // 57 mm off at a posterior of 1.0): refused, naming the model.
+    let stream = |scene: &str| {
+        let scene = s(&root.join("sim/scenes").join(scene));
+        et(&[
+            "stream",
+            "--json",
+            "--fast",
+            "--frames",
+            "50",
+            "--scene",
+            &scene,
+            "--model",
+            &s(&model),
+        ])
+    };
+    let events = ok(stream("square-13cm-16.toml"));
+    let last: serde_json::Value = serde_json::from_str(events.lines().last().unwrap()).unwrap();
+    assert!(last["class"].as_u64().is_some_and(|c| c < 4), "{events}");
+    let other = stream("square-17cm-16.toml");
+    let said = String::from_utf8_lossy(&other.stderr);
+    assert!(
+        !other.status.success()
+            && said.contains("model.json: the model was trained on another sheet: its electrode 1"),
+        "{said}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

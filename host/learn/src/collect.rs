@@ -498,13 +498,7 @@ pub fn collect_presses_with(
         y: rows.y,
         positions: rows.positions,
         pressure: rows.pressures,
-        electrodes: spec
-            .physical
-            .electrodes
-            .arc_positions(&spec.physical.shape)
-            .iter()
-            .map(|&t| spec.physical.shape.boundary_point(t))
-            .collect(),
+        electrodes: (spec.physical.electrodes).centres(&spec.physical.shape),
         centres: centres.to_vec(),
         visit: rows.visit,
         baselines: DMatrix::from_row_slice(plan.visits, feature_index.len(), &baselines),

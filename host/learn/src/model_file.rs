@@ -60,6 +60,16 @@ pub struct ModelFile {
     /// Class centres, m (`centres_m` in the file).
     #[serde(rename = "centres_m")]
     pub centres: Vec<[f64; 2]>,
+    /// Nominal electrode centres of the sheet its training data were collected on, m, one
+    /// per electrode (`electrodes_m` in the file, from the dataset's): by them a sheet it is
+    /// used on is compared ([`crate::model::Board::same_sheet`]). Empty when the data did not
+    /// say (files written before it was kept, data without them).
+    #[serde(
+        rename = "electrodes_m",
+        default,
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub electrodes: Vec<[f64; 2]>,
     /// Feature standardisation.
     pub feature_mean: Vec<f64>,
     /// Feature standardisation.
@@ -94,6 +104,7 @@ impl ModelFile {
             referenced,
             feature_index,
             centres,
+            electrodes: Vec::new(),
             feature_mean: model.feature_mean.clone(),
             feature_scale: model.feature_scale.clone(),
             classes: class_records(model),
@@ -265,6 +276,12 @@ impl ModelFile {
         }
         if !(0.0..=1.0).contains(&m.shrinkage) {
             return Err(field("shrinkage", format!("{}: from 0 to 1", m.shrinkage)));
+        }
+        let (given, scan) = (m.electrodes.len(), usize::from(m.config.electrodes));
+        if given != 0 && given != scan {
+            let said =
+                format!("{given} centres for a scan of {scan} electrodes: one per electrode");
+            return Err(field("electrodes_m", said));
         }
         Ok(m)
     }

@@ -455,6 +455,7 @@ impl Trainer {
             referenced,
         );
         file.seen = crate::fingerprint::seen_sample(&data.x);
+        file.electrodes.clone_from(&data.electrodes);
         // What every reader of model files checks (et eval, stream, view, export, Python's
         // load): a model they would refuse is not returned.
         let shrinkage = file.shrinkage;

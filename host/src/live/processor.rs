@@ -238,7 +238,8 @@ pub struct Processor {
     /// Each grid pixel's row in the projection (None outside the sheet).
     inside_index: Vec<Option<usize>>,
     reference: Option<Reference>,
-    /// The board model evaluated on each touched frame.
+    /// The board model evaluated on each touched frame (set through
+    /// [`Processor::set_classifier`], which checks it is of this sheet).
     pub classifier: Option<Board>,
 }
 
@@ -252,6 +253,19 @@ impl std::fmt::Debug for Processor {
 }
 
 impl Processor {
+    /// Classifies each touched frame with `board` from now on, once its classes are found
+    /// to be places on this sheet ([`Board::same_sheet`]: a model of another sheet names its
+    /// own sheet's places).
+    ///
+    /// # Errors
+    /// [`UseError`] when the model was trained on another sheet.
+    pub fn set_classifier(&mut self, board: Board) -> Result<(), et_learn::model::UseError> {
+        let sheet = self.recon.sheet();
+        board.same_sheet(&sheet.electrodes.centres(&sheet.shape))?;
+        self.classifier = Some(board);
+        Ok(())
+    }
+
     /// The pipeline for `sheet`, set up for its electrodes scanned as the reference scan
     /// (adjacent; another configuration is set up when its first frame comes).
     ///

@@ -171,13 +171,7 @@ impl Wizard {
             .map(|k| k as u16)
             .collect();
         self.centres = collect::grid(sheet, self.rows, self.cols, 0.0);
-        self.electrodes = sheet
-            .physical
-            .electrodes
-            .arc_positions(&sheet.physical.shape)
-            .iter()
-            .map(|&t| sheet.physical.shape.boundary_point(t))
-            .collect();
+        self.electrodes = (sheet.physical.electrodes).centres(&sheet.physical.shape);
         self.rows_x.clear();
         self.y.clear();
         self.visit_of.clear();

@@ -106,6 +106,17 @@ pub enum DatasetFault {
         /// The centres listed.
         centres: usize,
     },
+    /// Electrode centres listed for another number of electrodes than the scan's.
+    #[error(
+        "{given} electrode centres for a scan of {scan} electrodes: one centre per electrode, \
+         in the scan's order"
+    )]
+    ElectrodeCount {
+        /// The centres listed.
+        given: usize,
+        /// The scan's electrodes.
+        scan: usize,
+    },
     /// The feature index line holds something that is not a frame index.
     #[error("feature_index: {0}")]
     FeatureIndex(std::num::ParseIntError),

@@ -515,7 +515,7 @@ pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
 }
 
 /// The checks both formats share, after reading: every number finite (features, positions,
-/// pressures, untouched frames), and the visits numbered 0 to T - 1 with none missing (a
+/// pressures, untouched frames, class and electrode centres), one centre per electrode, and the visits numbered 0 to T - 1 with none missing (a
 /// visit number is a fold of leave-one-visit-out: 65 535 of them for three visits would run
 /// 65 535 folds).
 fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
@@ -544,6 +544,15 @@ fn consistent(path: &Path, data: &Dataset) -> Result<(), DatasetError> {
         return Err(fault("pressure", DatasetFault::NegativePressure(i + 1)));
     }
     finite("position", data.positions.as_flattened().iter())?;
+    finite("centres_m", data.centres.as_flattened().iter())?;
+    finite("electrodes_m", data.electrodes.as_flattened().iter())?;
+    let (given, scan) = (data.electrodes.len(), usize::from(data.config.electrodes));
+    if given != 0 && given != scan {
+        return Err(fault(
+            "electrodes_m",
+            DatasetFault::ElectrodeCount { given, scan },
+        ));
+    }
     let frame_len = et_core::protocol::Protocol::new(data.config.protocol, data.config.electrodes)
         .map_or(usize::MAX, |p| p.frame_len());
     for (j, pair) in data.feature_index.windows(2).enumerate() {

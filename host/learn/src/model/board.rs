@@ -192,10 +192,11 @@ impl Board {
     /// classes.
     pub fn test(&self, data: &Dataset) -> Result<Tested, UseError> {
         let file = &self.file;
-        self.same_places(data)?;
         // One prediction per observation serves the confusion, the bands and the errors; the
-        // features it reads are those the training kept fingerprints of.
+        // features it reads are those the training kept fingerprints of. (Another scan is
+        // said first: its sheet differs too.)
         let observations = self.features_of(data)?;
+        self.same_places(data)?;
         let predicted = cv::predict_rows(&self.fitted, &observations)?;
         let trained_note = crate::fingerprint::seen_share(&file.seen, &observations)
             .filter(|&share| share > crate::fingerprint::SEEN_SAID)
@@ -253,11 +254,12 @@ impl Board {
     /// (within a twentieth of the closest two classes' spacing; one scene's grid is the same to
     /// rounding). Data collected on another grid or sheet label other places with the same
     /// numbers: a 2 x 2 grid scored 25 % on a 3 x 3 model, a 17 cm sheet's 3 x 3 grid 88.9 %
-    /// on the 13 cm sheet's, without a word. Data that do not say their centres pass.
+    /// on the 13 cm sheet's, without a word. Data that do not say their centres pass; so does
+    /// their sheet ([`same_sheet`](Self::same_sheet)).
     fn same_places(&self, data: &Dataset) -> Result<(), UseError> {
         let (model, theirs) = (&self.file.centres, &data.centres);
         if model.is_empty() || theirs.is_empty() {
-            return Ok(());
+            return self.same_sheet(&data.electrodes);
         }
         if model.len() != theirs.len() {
             return Err(UseError::Classes {
@@ -265,21 +267,41 @@ impl Board {
                 data: theirs.len(),
             });
         }
-        let apart = |a: &[f64; 2], b: &[f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-        let spacing = model
-            .iter()
-            .enumerate()
-            .flat_map(|(i, a)| model.iter().skip(i + 1).map(move |b| apart(a, b)))
-            .fold(f64::INFINITY, f64::min);
-        let moved = model
-            .iter()
-            .zip(theirs)
-            .position(|(m, d)| apart(m, d) > spacing / 20.0 || !apart(m, d).is_finite());
-        match moved {
+        match first_moved(model, theirs) {
             Some(class) => Err(UseError::Places {
                 class,
                 model_mm: model[class].map(|c| c * 1e3),
                 data_mm: theirs[class].map(|c| c * 1e3),
+            }),
+            None => self.same_sheet(&data.electrodes),
+        }
+    }
+
+    /// Whether the model's classes are places on the sheet whose nominal electrode centres
+    /// are `electrodes` (m, in the scan's order): its training data's electrodes each within a
+    /// twentieth of their closest two's spacing of them. A model trained on a 17 cm sheet
+    /// classified touches on the 13 cm sheet with its own class centres, 56.7 mm out for a
+    /// touch 25 mm from the middle, at a posterior of 1.0, without a word (the frames of two
+    /// squares of one shape differ little). Passes when either side does not say.
+    ///
+    /// # Errors
+    /// [`UseError::Electrodes`] for another count, [`UseError::Sheet`] for another place.
+    pub fn same_sheet(&self, electrodes: &[[f64; 2]]) -> Result<(), UseError> {
+        let model = &self.file.electrodes;
+        if model.is_empty() || electrodes.is_empty() {
+            return Ok(());
+        }
+        if model.len() != electrodes.len() {
+            return Err(UseError::Electrodes {
+                model: model.len(),
+                given: electrodes.len(),
+            });
+        }
+        match first_moved(model, electrodes) {
+            Some(electrode) => Err(UseError::Sheet {
+                electrode,
+                model_mm: model[electrode].map(|c| c * 1e3),
+                given_mm: electrodes[electrode].map(|c| c * 1e3),
             }),
             None => Ok(()),
         }
@@ -419,7 +441,18 @@ fn said(c: &et_core::config::ScanConfig) -> String {
     )
 }
 
-/// Why a model could not be used on a dataset; says which of the two is at fault.
+/// The first point of `theirs` farther from `ours`' point of its number than a twentieth of
+/// the closest two of `ours` (or not finite); `ours` and `theirs` of one length.
+fn first_moved(ours: &[[f64; 2]], theirs: &[[f64; 2]]) -> Option<usize> {
+    let apart = |a: &[f64; 2], b: &[f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let spacing = (ours.iter().enumerate())
+        .flat_map(|(i, a)| ours.iter().skip(i + 1).map(move |b| apart(a, b)))
+        .fold(f64::INFINITY, f64::min);
+    (ours.iter().zip(theirs))
+        .position(|(m, d)| apart(m, d) > spacing / 20.0 || !apart(m, d).is_finite())
+}
+
+/// Why a model could not be used on a dataset or a sheet; says which of the two is at fault.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum UseError {
@@ -483,6 +516,34 @@ pub enum UseError {
         model_mm: [f64; 2],
         /// The data's centre of it, mm.
         data_mm: [f64; 2],
+    },
+    /// The sheet has another number of electrodes than the one the model was trained on.
+    #[error(
+        "the model was trained on a sheet of {model} electrodes, this one has {given}: train a \
+         model on this sheet (et collect --scene, et train)"
+    )]
+    Electrodes {
+        /// The model's sheet's electrodes.
+        model: usize,
+        /// This sheet's.
+        given: usize,
+    },
+    /// An electrode of the sheet is elsewhere than on the sheet the model was trained on:
+    /// the model's classes are places on another sheet.
+    #[error(
+        "the model was trained on another sheet: its electrode {} was at ({:.1}, {:.1}) mm, \
+         this sheet's is at ({:.1}, {:.1}) mm, so its classes name places on that sheet; give \
+         the scene it was trained on (--scene), or train a model on this sheet (et collect \
+         --scene, et train)",
+        electrode + 1, model_mm[0], model_mm[1], given_mm[0], given_mm[1]
+    )]
+    Sheet {
+        /// The electrode (0-based; said from 1).
+        electrode: usize,
+        /// Where it was on the model's sheet, mm.
+        model_mm: [f64; 2],
+        /// Where it is on this sheet, mm.
+        given_mm: [f64; 2],
     },
     /// Evaluation on the dataset failed (e.g. a class the model does not know).
     #[error(transparent)]

@@ -447,7 +447,8 @@ mod files {
                 .collect(),
             centres: vec![[0.01, 0.02], [0.03, 0.04], [-0.05, 0.0]],
             pressure: (0..n).map(|i| 1e3 * (5 + i) as f64).collect(),
-            electrodes: vec![[0.0, 0.0], [0.065, 0.0], [0.13, 0.065]],
+            // One per electrode of the scan, along a 13 cm edge.
+            electrodes: (0..8).map(|e| [0.13 * f64::from(e) / 7.0, 0.0]).collect(),
             visit: (0..n).map(|i| (i % 2) as u16).collect(),
             baselines: DMatrix::from_fn(2, 5, |v, j| 0.01 * (v + 1) as f64 - 0.003 * j as f64),
             feature_index: vec![0, 1, 2, 4, 7],
@@ -645,7 +646,9 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
     /// A header edited or cut: a configuration et does not scan (it trained, and failed at
     /// export), a class without a centre (it said "observation 0 has class 0, the model
     /// has 0"), a value of the wrong type (without serde's "at line 1 column 97"), units
-    /// other than the SI the values are read in, a pressure below 0 (both were read).
+    /// other than the SI the values are read in, a pressure below 0 (both were read), electrode
+    /// centres of another count than the scan's (a model trained on them compares sheets by
+    /// them).
     #[test]
     fn a_damaged_dataset_header_is_refused_by_its_field() {
         let dir = tmp("header");
@@ -675,6 +678,17 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
                     .collect::<Vec<_>>()
                     .join("\n"),
                 "centres_m lists 0",
+            ),
+            (
+                {
+                    let line = text
+                        .lines()
+                        .find(|l| l.starts_with("# electrodes_m:"))
+                        .unwrap();
+                    let (fewer, _) = line.rsplit_once(';').unwrap();
+                    text.replace(line, fewer)
+                },
+                "electrodes_m: 7 electrode centres for a scan of 8 electrodes",
             ),
             (
                 text.replacen("# units: SI:", "# units: mV:", 1),

@@ -44,7 +44,13 @@ fn dataset() -> Dataset {
         x,
         positions: (0..n).map(|r| [0.02 * f64::from(y[r]), 0.01]).collect(),
         pressure: vec![2e4; n],
-        electrodes: Vec::new(),
+        // Eight on a circle of 50 mm radius, from angle 0.
+        electrodes: (0..8)
+            .map(|e| {
+                let a = std::f64::consts::FRAC_PI_4 * f64::from(e);
+                [0.05 * a.cos(), 0.05 * a.sin()]
+            })
+            .collect(),
         centres: vec![[0.0, 0.01], [0.02, 0.01], [0.04, 0.01]],
         y,
         visit,
@@ -178,6 +184,34 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
     let mut rounded = data.clone();
     rounded.centres[2][0] += 1e-9;
     board.test(&rounded).unwrap();
+    // Its classes are places on the sheet it was trained on: another sheet's electrodes (one
+    // 5 mm out, past a twentieth of their 38 mm spacing) refused, beside a dataset or the live
+    // pipeline's sheet; a sheet or data that do not say pass.
+    assert_eq!(board.file().electrodes, data.electrodes);
+    board.same_sheet(&data.electrodes).unwrap();
+    board.same_sheet(&[]).unwrap();
+    let mut wider = data.clone();
+    wider.electrodes[3][0] += 0.005;
+    let e = board.test(&wider).unwrap_err().to_string();
+    assert!(
+        e.contains("its electrode 4 was at (-35.4, 35.4) mm, this sheet's is at (-30.4, 35.4) mm"),
+        "{e}"
+    );
+    let e = (board.same_sheet(&data.electrodes[1..]).unwrap_err()).to_string();
+    assert!(e.contains("a sheet of 8 electrodes, this one has 7"), "{e}");
+    wider.electrodes.clear();
+    board.test(&wider).unwrap();
+    // A file whose electrodes are not one per electrode of its scan is refused where read.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["electrodes_m"].as_array_mut().unwrap().pop();
+    let short = dir.join("short.json");
+    std::fs::write(&short, value.to_string()).unwrap();
+    let e = Model::load(&short).unwrap_err().to_string();
+    assert!(
+        e.contains("electrodes_m") && e.contains("7 centres for a scan of 8 electrodes"),
+        "{e}"
+    );
     for r in (0..data.x.nrows()).step_by(7) {
         let (v, v0) = frames_of(&data, r);
         let frame = DMatrix::from_row_slice(1, v.len(), &v);

@@ -172,7 +172,10 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             ..Settings::default()
         },
     )?;
-    processor.classifier = args.source.classifier()?;
+    if let Some((board, path)) = args.source.classifier()?.zip(args.source.model.as_ref()) {
+        (processor.set_classifier(board))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
     if let Some(c) = &processor.classifier {
         // The model classifies frames of the configuration it was trained on.
         source.configure(c.file().config).map_err(|e| {
