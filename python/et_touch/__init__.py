@@ -1141,6 +1141,12 @@ class Model:
         if isinstance(X, (str, bytes, os.PathLike)):
             X = read_dataset(X)
         if isinstance(X, Dataset):
+            if v0 is not None:
+                # (It was ignored: each observation is referenced to its own visit's.)
+                raise EtError(
+                    "an et dataset carries each visit's untouched frame: predict(dataset) "
+                    "without v0"
+                )
             return self._native.predict_dataset(X)
         if v0 is not None and not self.is_board:
             raise EtError(
@@ -1205,6 +1211,12 @@ class Model:
         if isinstance(X, (str, bytes, os.PathLike)):
             X = read_dataset(X)
         if isinstance(X, Dataset):
+            if y is not None or groups is not None:
+                # (Both were ignored: the dataset's own classes and visits were scored.)
+                raise EtError(
+                    "an et dataset carries its classes and visits: evaluate(dataset) without "
+                    f"{'y' if y is not None else 'groups'}"
+                )
             scores = json.loads(self._native.evaluate_dataset(X))
             for note in ("scale_note", "trained_note"):
                 if scores.get(note):

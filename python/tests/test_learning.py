@@ -74,6 +74,18 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     np.savez(in_mv, **arrays)
     with pytest.warns(et.EtWarning, match="1000 times those the model was trained on"):
         model.evaluate(et.read_dataset(in_mv))
+    # A value it reads that is NaN was the last class; a dataset's own untouched frames,
+    # classes and visits were used beside a v0, y or groups given, without a word.
+    broken = frames[:1].copy()
+    broken[0, data.feature_index[0]] = np.nan
+    with pytest.raises(et.EtError, match=f"frame 0, value {data.feature_index[0]}: NaN"):
+        model.predict(broken, v0=v0)
+    with pytest.raises(et.EtError, match="predict\\(dataset\\) without v0"):
+        model.predict(data, v0=v0)
+    with pytest.raises(et.EtError, match="evaluate\\(dataset\\) without y"):
+        model.evaluate(data, data.y)
+    with pytest.raises(et.EtError, match="evaluate\\(dataset\\) without groups"):
+        model.evaluate(data, groups=data.visit)
     positions = model.predict_positions(data)
     np.testing.assert_allclose(positions, data.centres_m[by_dataset], atol=1e-12)
     with pytest.raises(et.EtError, match="untouched frame"):

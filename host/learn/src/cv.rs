@@ -105,7 +105,8 @@ pub fn evaluate(model: &Fitted, x: &DMatrix<f64>, y: &[u16]) -> Result<Confusion
 /// The model's class for every observation (row of `x`).
 ///
 /// # Errors
-/// [`FitError::FeatureCount`] if `x` does not have the model's feature count.
+/// [`FitError::FeatureCount`] if `x` does not have the model's feature count,
+/// [`FitError::Discriminants`] for a row whose discriminants are not all finite.
 pub fn predict_rows(model: &Fitted, x: &DMatrix<f64>) -> Result<Vec<u16>, FitError> {
     if x.ncols() != model.features() {
         return Err(FitError::FeatureCount {
@@ -114,14 +115,16 @@ pub fn predict_rows(model: &Fitted, x: &DMatrix<f64>) -> Result<Vec<u16>, FitErr
         });
     }
     let mut row = vec![0.0; x.ncols()];
-    Ok((0..x.nrows())
+    (0..x.nrows())
         .map(|r| {
             for (j, v) in row.iter_mut().enumerate() {
                 *v = x[(r, j)];
             }
-            model.predict(&row)
+            model
+                .predict_finite(&row)
+                .ok_or(FitError::Discriminants { row: r })
         })
-        .collect())
+        .collect()
 }
 
 /// Counts `predicted` against the labels `y` (one each, labels in 0..classes).

@@ -107,6 +107,17 @@ pub enum FitError {
     /// A fit's worker panicked (a bug in et).
     #[error("the fit panicked (a bug in et: please report it)")]
     Panicked,
+    /// Discriminants that are not finite from finite features: they are far beyond the
+    /// training's (another unit), or the tables overflow.
+    #[error(
+        "observation {row}: its discriminants are not finite: its features are far beyond \
+         those the model was trained on (frames in another unit?), or the model's tables \
+         overflow (an edited value?)"
+    )]
+    Discriminants {
+        /// Row of the observation (0-based).
+        row: usize,
+    },
     /// A value is NaN or infinite.
     #[error("observation {row}, feature {feature} is NaN or infinite")]
     NonFinite {
@@ -490,10 +501,19 @@ impl Fitted {
     /// If `x.len()` is not p.
     #[must_use]
     pub fn predict(&self, x: &[f64]) -> u16 {
+        argmax(&self.discriminants(x))
+    }
+
+    /// argmax_c delta_c when every delta_c is finite; None when one is not: a feature NaN or
+    /// infinite, or so far beyond the training's that its square overflows, where the argmax
+    /// names whichever class comes last (NaN frames were class 8 of 9).
+    ///
+    /// # Panics
+    /// If `x.len()` is not p.
+    #[must_use]
+    pub fn predict_finite(&self, x: &[f64]) -> Option<u16> {
         let d = self.discriminants(x);
-        (0..d.len())
-            .max_by(|&a, &b| d[a].total_cmp(&d[b]))
-            .unwrap_or(0) as u16
+        d.iter().all(|v| v.is_finite()).then(|| argmax(&d))
     }
 
     /// Exports to the et-core model blob the firmware evaluates. `feature_index` says which
@@ -561,4 +581,11 @@ impl Fitted {
         write_model(&tables, &mut out).map_err(FitError::Export)?;
         Ok(out)
     }
+}
+
+/// The index of the largest of `d` (0 when empty).
+pub(crate) fn argmax(d: &[f64]) -> u16 {
+    (0..d.len())
+        .max_by(|&a, &b| d[a].total_cmp(&d[b]))
+        .unwrap_or(0) as u16
 }

@@ -74,7 +74,7 @@ impl Board {
         if !d.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let class = self.fitted.predict(x);
+        let class = crate::fit::argmax(&d);
         let top = *d.get(usize::from(class))?;
         let total: f64 = d.iter().map(|v| (v - top).exp()).sum();
         Some(Classification {
@@ -107,7 +107,8 @@ impl Board {
     /// # Errors
     /// [`UseError::FrameLength`] when the frames or `v0` are not of the model's K values
     /// (frames of 100 values were classified when the features the model reads fell inside
-    /// them, though they are another protocol's frames).
+    /// them, though they are another protocol's frames); [`UseError::NotFinite`] for a value
+    /// the model reads that is NaN or infinite; [`UseError::Fit`] when a frame's discriminants are not finite.
     pub fn predict_frames(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Result<Vec<u16>, UseError> {
         let k = self.file.config.validate().map(|p| p.frame_len()).ok();
         let wrong = UseError::FrameLength {
@@ -119,17 +120,38 @@ impl Board {
         if k.is_some_and(|k| frames.ncols() != k || !(v0.is_empty() || v0.len() == k)) {
             return Err(wrong);
         }
+        // A value the model reads that is NaN was class 8 of 9 (the argmax of NaN
+        // discriminants); the values it does not read are left alone.
+        let read = &self.file.feature_index;
+        let not_finite = |v: &[f64], frame| {
+            let index = read
+                .iter()
+                .map(|&i| usize::from(i))
+                .find(|&i| v.get(i).is_some_and(|v| !v.is_finite()))?;
+            Some(UseError::NotFinite {
+                frame,
+                index,
+                value: v[index],
+            })
+        };
+        if let Some(e) = not_finite(v0, None) {
+            return Err(e);
+        }
         let mut frame = vec![0.0; frames.ncols()];
         (0..frames.nrows())
             .map(|r| {
                 for (j, v) in frame.iter_mut().enumerate() {
                     *v = frames[(r, j)];
                 }
+                if let Some(e) = not_finite(&frame, Some(r)) {
+                    return Err(e);
+                }
                 let x = self
                     .file
                     .features(&frame, v0)
                     .ok_or_else(|| wrong.clone())?;
-                Ok(self.fitted.predict(&x))
+                (self.fitted.predict_finite(&x))
+                    .ok_or(UseError::Fit(FitError::Discriminants { row: r }))
             })
             .collect()
     }
@@ -488,6 +510,19 @@ pub enum UseError {
         k: usize,
         /// The model's scan.
         scan: et_core::config::ScanConfig,
+    },
+    /// A value the model reads, of a frame or the untouched frame, that is NaN or infinite.
+    #[error(
+        "{}, value {index}: {value}, where a finite number belongs",
+        frame.map_or_else(|| "the untouched frame".to_string(), |r| format!("frame {r}"))
+    )]
+    NotFinite {
+        /// The frame (0-based row; None for the untouched frame).
+        frame: Option<usize>,
+        /// The value's index in the frame (0-based).
+        index: usize,
+        /// The value.
+        value: f64,
     },
     /// The data have another number of classes than the model: their labels name other
     /// places.

@@ -54,11 +54,13 @@ pub enum Misuse {
         /// The value.
         value: f64,
     },
-    /// Predictions that came out NaN or infinite from finite features: the model's tables
+    /// Predictions (or a classifier's discriminants) that came out NaN or infinite from
+    /// finite features: the features are far beyond the training's, or the model's tables
     /// overflow.
     #[error(
-        "row {row}'s prediction is not finite from finite features: the model's tables \
-         overflow (an edited weight of 1e308?); retrain it"
+        "row {row}'s prediction is not finite from finite features: they are far beyond \
+         those the model was trained on (another unit?), or the model's tables overflow (an \
+         edited weight of 1e308? retrain it)"
     )]
     NonFinitePrediction {
         /// The first such row (0-based).

@@ -245,6 +245,38 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
         Err(ModelError::Use(UseError::FrameLength { .. }))
     ));
 
+    // A value it reads that is NaN, or so large its discriminants overflow, names no class
+    // (NaN frames were the last class): refused by its place; values it does not read, and
+    // frames within reach, are classified as before.
+    let read = usize::from(data.feature_index[2]);
+    let unread = (0..v.len())
+        .find(|i| !data.feature_index.contains(&(*i as u16)))
+        .unwrap();
+    let mut nan = v.clone();
+    nan[unread] = f64::NAN;
+    let by_frame =
+        |v: &[f64], v0: &[f64]| board.predict_frames(&DMatrix::from_row_slice(1, v.len(), v), v0);
+    assert_eq!(by_frame(&nan, &v0).unwrap(), by_frame(&v, &v0).unwrap());
+    nan[read] = f64::NAN;
+    let e = by_frame(&nan, &v0).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!("frame 0, value {read}: NaN, where a finite number belongs")
+    );
+    let mut v0_inf = v0.clone();
+    v0_inf[read] = f64::INFINITY;
+    let e = by_frame(&v, &v0_inf).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!("the untouched frame, value {read}: inf")),
+        "{e}"
+    );
+    let huge: Vec<f64> = v.iter().map(|x| x * 1e300).collect();
+    let e = by_frame(&huge, &v0).unwrap_err().to_string();
+    assert!(
+        e.contains("observation 0: its discriminants are not finite"),
+        "{e}"
+    );
+
     // Evaluation is the test; the blob is the file's; a table is refused.
     let Evaluation::Board(evaluated) = model.evaluate(Examples::Dataset(&data)).unwrap() else {
         panic!("a board model's evaluation");

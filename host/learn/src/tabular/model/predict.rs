@@ -53,15 +53,17 @@ impl Prepared {
                         for (j, v) in row.iter_mut().enumerate() {
                             *v = x[(r, j)];
                         }
-                        let class = m.predict(&row);
-                        Prediction {
+                        // The argmax of discriminants that overflow names an arbitrary class.
+                        let class = (m.predict_finite(&row))
+                            .ok_or(usage(Misuse::NonFinitePrediction { row: r }))?;
+                        Ok(Prediction {
                             class: Some(class),
                             target: centres
                                 .and_then(|c| c.get(usize::from(class)))
                                 .map(|c| [c[0], c[1], 0.0]),
-                        }
+                        })
                     })
-                    .collect()
+                    .collect::<Result<_, TabularError>>()?
             }
             Ready::Ridge(m) => regression(m.predict_many(x)),
             Ready::KernelRidge(m) => regression(m.predict_many(x)),

@@ -43,7 +43,14 @@ pub fn features_scale(mean: &[f64], scale: &[f64], x: &DMatrix<f64>) -> Option<f
         .zip(scale)
         .filter_map(|((column, mean), scale)| {
             let trained = mean.hypot(*scale);
-            let rms = (column.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+            // Scaled by the largest, so that values past 1e154 do not overflow their squares
+            // (features of 1e200 were said nothing of).
+            let big = column.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let rms = if big > 0.0 && big.is_finite() {
+                big * (column.iter().map(|v| (v / big).powi(2)).sum::<f64>() / n).sqrt()
+            } else {
+                big
+            };
             (trained > 0.0 && rms > 0.0 && rms.is_finite()).then(|| rms / trained)
         })
         .collect();
@@ -58,10 +65,14 @@ pub fn features_scale_note(s: f64) -> Option<String> {
     if (1.0 / FEATURE_SCALE_SAID..=FEATURE_SCALE_SAID).contains(&s) {
         return None;
     }
-    // Two significant digits: "1000 times", "1/12 of".
+    // Two significant digits: "1000 times", "1/12 of", "1.0e200 times".
     let said = |v: f64| {
         let step = 10f64.powf(v.log10().floor() - 1.0);
-        (v / step).round() * step
+        if v < 1e6 {
+            ((v / step).round() * step).to_string()
+        } else {
+            format!("{v:.1e}")
+        }
     };
     let times = if s > 1.0 {
         format!("{} times", said(s))
