@@ -55,6 +55,21 @@ pub enum TrainError {
     /// the CLI refused 1, Python trained with it).
     #[error("folds = {0}: a cross-validation takes 2 to {MAX_FOLDS} folds")]
     Folds(usize),
+    /// A class of an et dataset with fewer than two observations: a cross-validation holds
+    /// some of each class out and fits on the rest (one observation per class was said as
+    /// "at least 2 folds (1 given)", no folds having been given).
+    #[error(
+        "class {class} has {count} observation{}: a cross-validation holds some of each class \
+         out and fits on the rest, so each class needs at least 2 (collect more: et collect \
+         --scans, --subsections or --visits)",
+        if *count == 1 { "" } else { "s" }
+    )]
+    FewPerClass {
+        /// The first such class.
+        class: usize,
+        /// Its observations.
+        count: usize,
+    },
     /// A budget that is not a number of seconds above 0.
     #[error("budget_s = {0}: a number of seconds above 0")]
     Budget(f64),
@@ -433,6 +448,14 @@ impl Trainer {
             features: data.x.ncols(),
         });
         pipeline::prepare(&mut data, referenced, self.keep)?;
+        let labelled = data.y.iter().max().map_or(0, |&c| usize::from(c) + 1);
+        let mut counts = vec![0usize; data.centres.len().max(labelled)];
+        for &c in &data.y {
+            counts[usize::from(c)] += 1;
+        }
+        if let Some((class, &count)) = counts.iter().enumerate().find(|(_, n)| **n < 2) {
+            return Err(TrainError::FewPerClass { class, count });
+        }
         let seconds = self.affordable(&data, kind)?;
         progress(Progress::Estimate { seconds });
         let training = pipeline::train_reporting(

@@ -173,10 +173,11 @@ pub enum Misuse {
         /// The column's name.
         column: String,
     },
-    /// Too few training rows to cross-validate.
+    /// Too few training rows to cross-validate: each fold fits on at least two rows and tests
+    /// on others.
     #[error(
-        "{0} training row(s): cross-validation needs at least 2 (give more rows: --rows on \
-         the command line)"
+        "{0} training row(s): cross-validation needs at least 3, each fold fitting on 2 or more \
+         and testing on the rest (give more rows: --rows on the command line)"
     )]
     TooFewRows(usize),
     /// More folds than rows, or fewer than 2.

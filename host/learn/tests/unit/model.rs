@@ -95,6 +95,22 @@ fn a_datasets_training_says_its_time_first_and_keeps_to_the_budget() {
         e.to_string().contains("fewer classes (et collect --grid)"),
         "{e}"
     );
+    // One observation of a class leaves it nothing to fit on in the fold holding it out
+    // (said as "at least 2 folds (1 given)", none given): said as what it is.
+    let mut one_each = data.clone();
+    let first: Vec<usize> = (0..3)
+        .map(|c| data.y.iter().position(|&y| y == c).unwrap())
+        .collect();
+    one_each.x = data.x.select_rows(&first);
+    one_each.y = first.iter().map(|&r| data.y[r]).collect();
+    one_each.visit = first.iter().map(|&r| data.visit[r]).collect();
+    one_each.positions = first.iter().map(|&r| data.positions[r]).collect();
+    one_each.pressure = first.iter().map(|&r| data.pressure[r]).collect();
+    let e = (Trainer::qda().train(Examples::Dataset(&one_each), |_| {})).unwrap_err();
+    assert!(
+        matches!(e, TrainError::FewPerClass { class: 0, count: 1 }),
+        "{e}"
+    );
     // A budget of NaN passed every estimate: refused where the trainer takes it.
     let none = Trainer {
         budget_s: f64::NAN,

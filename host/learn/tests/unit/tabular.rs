@@ -472,10 +472,16 @@ fn row_ranges_and_folds() {
     }
     let e = STANDIN.select("300..400".parse().unwrap()).unwrap_err();
     assert!(e.to_string().contains("rows 0..360"), "{e}");
-    // One training row: said as such, not "use 2 to 1".
-    let one = STANDIN.select("0..1".parse().unwrap()).unwrap();
-    let e = train(&one, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap_err();
-    assert!(e.to_string().contains("needs at least 2"), "{e}");
+    // One training row: said as such, not "use 2 to 1"; two, in two folds, fit each fold on
+    // one row and every method failed as "no candidate could be fitted".
+    for rows in ["0..1", "0..2"] {
+        let few = STANDIN.select(rows.parse().unwrap()).unwrap();
+        let opts = TrainOptions { folds: 2, ..opts() };
+        for kind in [Kind::Ridge, Kind::Gp] {
+            let e = train(&few, Choice::One(kind), &opts, &mut quiet()).unwrap_err();
+            assert!(e.to_string().contains("needs at least 3"), "{rows}: {e}");
+        }
+    }
     // Blocks are contiguous and in order; shuffled folds are not.
     let b = folds(10, 3, CvScheme::Blocks, None, 1);
     assert_eq!(b, [0, 0, 0, 0, 1, 1, 1, 2, 2, 2]);

@@ -33,7 +33,9 @@ impl Cv {
         if grouped && k > MAX_GROUPS {
             return Err(usage(Misuse::TooManyGroups { groups: k, rows: n }));
         }
-        if !grouped && n < 2 {
+        // Two rows in two folds fit each fold on one row: every method's error came out
+        // undefined, said as "no candidate could be fitted".
+        if !grouped && n < 3 {
             return Err(usage(Misuse::TooFewRows(n)));
         }
         if !grouped && (opts.folds < 2 || opts.folds > n) {
