@@ -1862,7 +1862,7 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
                 "--out".into(),
                 p("n.json"),
             ],
-            "past the budget of under a second: fewer classes (et collect --grid)",
+            "past the budget of 6.0e-5 s: fewer classes (et collect --grid)",
         ),
         (
             vec![
@@ -2562,7 +2562,9 @@ fn a_file_of_another_kind_is_said_as_what_it_is() {
     std::fs::write(&json, "{\"format\": \"et-model\"}").unwrap();
     let scene =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes/disc-ref-x050.toml");
-    let [npy, blob, json, scene] = [&npy, &blob, &json, &scene].map(|p| p.to_str().unwrap());
+    let out = dir.join("n.json");
+    let [npy, blob, json, scene, out] =
+        [&npy, &blob, &json, &scene, &out].map(|p| p.to_str().unwrap());
     for (args, said) in [
         (
             &["forward", "--scene", npy][..],
@@ -2585,6 +2587,10 @@ fn a_file_of_another_kind_is_said_as_what_it_is() {
         (
             &["upload", "--port", "/dev/null", "--blob", json],
             "et export --model",
+        ),
+        (
+            &["train", "--data", npy, "--out", out],
+            "a NumPy .npy array, not text: a file of another kind given?",
         ),
     ] {
         let out = et(args);

@@ -338,6 +338,9 @@ impl Model {
         match self {
             Model::Table(t) => Ok(t.predict(x)?),
             Model::Board(b) => {
+                // Frames of another scan are said as that first (a table's rows were asked
+                // for their untouched frame).
+                b.frame_lengths(x.ncols(), v0.map_or(0, <[f64]>::len))?;
                 let v0 = match (v0, b.file().referenced) {
                     (Some(v0), _) => v0,
                     (None, true) => return Err(Mismatch::NoUntouchedFrame.into()),

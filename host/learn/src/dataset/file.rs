@@ -204,7 +204,13 @@ impl Header {
 /// # Errors
 /// [`DatasetError`] naming the file, line and column.
 pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
-    let text = super::import::read(path)?;
+    // An et dataset is a document of et's own: a file of another kind is said as what it is,
+    // not told how to write a table (a .npy given was told to use numpy.savetxt).
+    let text = et_core::text::read_document_at_most(path, et_core::text::max_file_bytes())
+        .map_err(|source| DatasetError::Io {
+            path: path.into(),
+            source,
+        })?;
     let mut lines = text.lines().enumerate().peekable();
     let version_2 = match lines.next() {
         Some((_, l)) if [FORMAT_1, FORMAT_2].contains(&l.trim()) => l.trim() == FORMAT_2,

@@ -110,16 +110,13 @@ impl Board {
     /// them, though they are another protocol's frames); [`UseError::NotFinite`] for a value
     /// the model reads that is NaN or infinite; [`UseError::Fit`] when a frame's discriminants are not finite.
     pub fn predict_frames(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Result<Vec<u16>, UseError> {
-        let k = self.file.config.validate().map(|p| p.frame_len()).ok();
+        self.frame_lengths(frames.ncols(), v0.len())?;
         let wrong = UseError::FrameLength {
             frame: frames.ncols(),
             v0: v0.len(),
-            k: k.unwrap_or(0),
+            k: frames.ncols(),
             scan: self.file.config,
         };
-        if k.is_some_and(|k| frames.ncols() != k || !(v0.is_empty() || v0.len() == k)) {
-            return Err(wrong);
-        }
         // A value the model reads that is NaN was class 8 of 9 (the argmax of NaN
         // discriminants); the values it does not read are left alone.
         let read = &self.file.feature_index;
@@ -156,10 +153,29 @@ impl Board {
             .collect()
     }
 
+    /// Whether frames of `frame` values and an untouched frame of `v0` (0: none) are of the
+    /// model's scan, K values each.
+    ///
+    /// # Errors
+    /// [`UseError::FrameLength`] when they are not.
+    pub fn frame_lengths(&self, frame: usize, v0: usize) -> Result<(), UseError> {
+        let k = self.file.config.validate().map(|p| p.frame_len()).ok();
+        if k.is_some_and(|k| frame != k || !(v0 == 0 || v0 == k)) {
+            return Err(UseError::FrameLength {
+                frame,
+                v0,
+                k: k.unwrap_or(0),
+                scan: self.file.config,
+            });
+        }
+        Ok(())
+    }
+
     /// What to say when the features of `frames` (n x K, V; minus `v0` when the model is
     /// referenced) are past [`FEATURE_SCALE_SAID`](crate::tabular::FEATURE_SCALE_SAID) times
     /// the training's either way (frames in mV where V was trained, which are classified
-    /// without an error, and wrongly); None when they are alike or do not fit the model.
+    /// without an error, and wrongly), only larger for a referenced model; None when they are
+    /// alike or do not fit the model.
     #[must_use]
     pub fn frames_scale_note(&self, frames: &DMatrix<f64>, v0: &[f64]) -> Option<String> {
         let file = &self.file;
@@ -172,6 +188,12 @@ impl Board {
             rows.iter().flatten().copied(),
         );
         let s = crate::tabular::features_scale(&file.feature_mean, &file.feature_scale, &x)?;
+        // A referenced model's features are changes: a light touch's, or an untouched
+        // frame's, are rightly smaller than the training's (one pressed frame was said to be
+        // "1/13 of" them); only larger is a unit's.
+        if file.referenced && s < 1.0 {
+            return None;
+        }
         crate::tabular::features_scale_note(s)
     }
 

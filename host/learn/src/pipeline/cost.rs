@@ -222,23 +222,28 @@ pub fn cholesky_rate(p: usize) -> f64 {
     f64::from(repeats) * (m as f64).powi(3) / 3.0 / seconds
 }
 
-/// An estimate as people say it: "about 14 min", or "under a second".
+/// An estimate as people say it: "about 14 min", "about 0.08 s" ([`time_said`]).
 #[must_use]
 pub fn about(seconds: f64) -> String {
-    if seconds < 0.5 {
-        time_said(seconds)
-    } else {
-        format!("about {}", time_said(seconds))
-    }
+    format!("about {}", time_said(seconds))
 }
 
-/// Time as people say it: under a second, seconds under 100 s, then minutes, then hours.
+/// Time as people say it, with its unit: two significant digits below 10 s ("0.08 s",
+/// "1.0e-9 s": a budget of 1e-9 s was "under a second", past an estimate "under a second"),
+/// whole seconds below 100 s, then minutes, then hours. One formatter for every estimate and
+/// budget et says (tables' and datasets' trainings alike).
 #[must_use]
 pub fn time_said(seconds: f64) -> String {
-    if seconds < 0.5 {
-        "under a second".to_string()
+    if seconds <= 0.0 || !seconds.is_finite() {
+        format!("{seconds} s")
+    } else if seconds < 1e-3 {
+        format!("{seconds:.1e} s")
+    } else if seconds < 9.95 {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let decimals = (1.0 - seconds.log10().floor()).max(0.0) as usize;
+        format!("{seconds:.decimals$} s")
     } else if seconds < 99.5 {
-        format!("{} s", seconds.round().max(1.0))
+        format!("{seconds:.0} s")
     } else if seconds < 5940.0 {
         format!("{} min", (seconds / 60.0).round())
     } else {

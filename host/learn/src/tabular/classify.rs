@@ -115,7 +115,10 @@ pub(super) fn search_classifier(
         "cross-validating {} ({} shrinkages, {k} folds, then the final fit{})",
         method.name(),
         SHRINKAGES.len(),
-        estimate_s.map_or(String::new(), |s| format!(": about {} s", seconds_said(s)))
+        estimate_s.map_or(String::new(), |s| format!(
+            ": {}",
+            crate::pipeline::cost::about(s)
+        ))
     );
     let mut out = Vec::new();
     for (i, &lambda) in SHRINKAGES.iter().enumerate() {

@@ -90,10 +90,10 @@ pub enum Misuse {
     },
     /// A training estimated to take longer than its budget.
     #[error(
-        "{what} would take about {} s, past the budget of {} s: train \
+        "{what} would take {}, past the budget of {}: train \
          on fewer rows (--rows) or features, choose a faster kind (ridge; for labels, lda), \
          or raise the budget (--max-minutes, budget_s=)",
-        seconds_said(*.estimate_s), seconds_said(*.budget_s)
+        crate::pipeline::cost::about(*.estimate_s), crate::pipeline::cost::time_said(*.budget_s)
     )]
     OverBudget {
         /// What was estimated.
@@ -320,19 +320,5 @@ pub(crate) fn gb(bytes: u64) -> String {
             .trim_end_matches('0')
             .trim_end_matches('.')
             .to_string()
-    }
-}
-
-/// Seconds as a person reads them: whole from 10 s, two significant digits below (a budget
-/// of 1e-9 s was said as "0 s", past an estimate of "0 s").
-pub(super) fn seconds_said(s: f64) -> String {
-    if s >= 10.0 || s <= 0.0 || !s.is_finite() {
-        format!("{s:.0}")
-    } else if s >= 1e-3 {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let decimals = (1.0 - s.log10().floor()).max(0.0) as usize;
-        format!("{s:.decimals$}")
-    } else {
-        format!("{s:.1e}")
     }
 }

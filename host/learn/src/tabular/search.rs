@@ -8,6 +8,7 @@ use super::*;
 
 mod plan;
 
+use crate::pipeline::cost::about;
 use plan::{Cv, average_note, fit_first, fitted_hyperparameters, search_all};
 
 /// Shrinkage candidates for QDA and LDA.
@@ -373,21 +374,14 @@ pub(super) fn search_regressor(
         Kind::Mlp => grid.len(),
         _ => 1,
     };
-    let what = match estimate_s {
-        Some(seconds) if method == Kind::Mlp => format!(
-            "cross-validating mlp ({} candidates, {k} folds, then the final fit: about {seconds:.0} \
-             s, within a factor of 3: early stopping decides)",
-            grid.len()
+    let (name, candidates) = (method.name(), grid.len());
+    let what = match estimate_s.map(about) {
+        Some(t) if method == Kind::Mlp => format!(
+            "cross-validating mlp ({candidates} candidates, {k} folds, then the final fit: {t}, \
+             within a factor of 3: early stopping decides)"
         ),
-        Some(seconds) => format!(
-            "cross-validating {} ({k} folds, then the final fit: about {seconds:.0} s)",
-            method.name()
-        ),
-        None => format!(
-            "cross-validating {} ({} candidates)",
-            method.name(),
-            grid.len()
-        ),
+        Some(t) => format!("cross-validating {name} ({k} folds, then the final fit: {t})"),
+        None => format!("cross-validating {name} ({candidates} candidates)"),
     };
     let total = k * steps;
     for f in 0..k {

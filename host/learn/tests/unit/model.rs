@@ -260,6 +260,12 @@ fn a_board_model_loads_predicts_and_classifies_frames_one_way() {
         model.predict(&short, Some(&v0)),
         Err(ModelError::Use(UseError::FrameLength { .. }))
     ));
+    // Without V_0 too: the frames are another scan's, whatever V_0 (a table's rows were asked
+    // for their untouched frame).
+    assert!(matches!(
+        model.predict(&short, None),
+        Err(ModelError::Use(UseError::FrameLength { v0: 0, .. }))
+    ));
 
     // A value it reads that is NaN, or so large its discriminants overflow, names no class
     // (NaN frames were the last class): refused by its place; values it does not read, and
