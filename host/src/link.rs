@@ -77,6 +77,10 @@ pub struct Decoder {
     packets: Box<Accumulator<PACKET_MAX>>,
     counters: Counters,
     next_seq: Option<u32>,
+    /// Whether a packet has ended since the stream began (or was resynchronised): the bytes
+    /// before the first end are the tail of a packet sent before the port was opened, not a
+    /// damaged one (`et record` said "1 damaged packets dropped" on a clean link).
+    joined: bool,
 }
 
 impl Default for Decoder {
@@ -93,6 +97,7 @@ impl Decoder {
             packets: Box::new(Accumulator::new()),
             counters: Counters::default(),
             next_seq: None,
+            joined: false,
         }
     }
 
@@ -103,21 +108,29 @@ impl Decoder {
             packets,
             counters,
             next_seq,
+            joined,
         } = self;
-        packets.feed_slice::<HostUplink>(bytes, |result| match result {
-            Ok(message) if message.fits() => {
-                count(counters, next_seq, &message);
-                out.push(message);
+        packets.feed_slice::<HostUplink>(bytes, |result| {
+            let first = !std::mem::replace(joined, true);
+            match result {
+                Ok(message) if message.fits() => {
+                    count(counters, next_seq, &message);
+                    out.push(message);
+                }
+                Err(WireError::Version { .. }) => counters.wrong_version += 1,
+                // The end of a packet whose start was sent before the stream was joined.
+                _ if first => {}
+                // A bad packet, or a frame longer than any board sends.
+                _ => counters.corrupt += 1,
             }
-            Err(WireError::Version { .. }) => counters.wrong_version += 1,
-            // A bad packet, or a frame longer than any board sends.
-            _ => counters.corrupt += 1,
         });
     }
 
-    /// Forgets a packet in progress (after a reconnect: its first half came from before).
+    /// Forgets a packet in progress (after a reconnect: its first half came from before, and
+    /// its end is not counted as damaged).
     pub fn resync(&mut self) {
         self.packets.clear();
+        self.joined = false;
     }
 
     /// The counters so far.

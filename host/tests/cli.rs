@@ -807,6 +807,33 @@ fn collect_train_eval_export_chain() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("ROWSxCOLS"));
     let bad = et(&["eval", "--model", &s(&train), "--data", &s(&test)]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("train.csv"));
+    // A model trained on frames as measured takes no V_0: --tare is refused before the
+    // upload (it took a V_0 the model never reads).
+    let (raw, raw_blob) = (dir.join("raw.json"), dir.join("raw.etm"));
+    ok(et(&[
+        "train",
+        "--data",
+        &s(&train),
+        "--raw",
+        "--shrinkage",
+        "0.3",
+        "--out",
+        &s(&raw),
+    ]));
+    ok(et(&["export", "--model", &s(&raw), "--out", &s(&raw_blob)]));
+    let tare = et(&[
+        "upload",
+        "--port",
+        "/dev/null",
+        "--blob",
+        &s(&raw_blob),
+        "--tare",
+    ]);
+    let said = String::from_utf8_lossy(&tare.stderr);
+    assert!(
+        !tare.status.success() && said.contains("takes no V_0: drop --tare"),
+        "{said}"
+    );
     // The model classifies the live frames of its sheet, each touch with a class; on another
     // sheet its classes would name its own sheet's places (a 17 cm sheet's model put a touch
     // 57 mm off at a posterior of 1.0): refused, naming the model.

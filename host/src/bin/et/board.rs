@@ -149,6 +149,14 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
             anyhow::anyhow!("{path}: not a valid model blob: {e}")
         }
     })?;
+    // A flag that changes nothing is refused (it took a V_0 the model never reads).
+    if args.tare && !model.referenced() {
+        anyhow::bail!(
+            "--tare: {} reads frames as measured (trained with --raw) and takes no V_0: drop \
+             --tare",
+            args.blob.display()
+        );
+    }
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;
     wait_for_board(&mut link, args.baud)?;
     let started = Instant::now();
