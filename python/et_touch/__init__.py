@@ -1285,8 +1285,8 @@ def train(
     ``per_group`` standardises each session by its own statistics; ``cv``: "shuffled" or
     "blocks" (contiguous, for rows in time order); ``grid``: (rows, cols) classes from
     positions; ``folds``: default 5; ``budget_s``: the longest the training may be
-    estimated to take, s (default 3600; the Gaussian process, the perceptron and knn time a piece
-    of their work first; past it, refused with the estimate). ``seed``: the shuffled folds'
+    estimated to take, s (default 3600; ``float("inf")``: no limit; the Gaussian process, the
+    perceptron and knn time a piece of their work first; past it, refused with the estimate). ``seed``: the shuffled folds'
     and the perceptron's starts.
 
     On an et dataset (``X`` a :class:`Dataset` or the path of `et collect`'s .csv/.npz): QDA

@@ -233,6 +233,10 @@ def test_bad_training_input_is_refused(table):
     # (Both were "under a second": the estimate and the budget said in figures.)
     with pytest.raises(et.EtError, match=r"would take about [0-9.]+ s, past the budget of 1\.0e-9 s"):
         et.train(data, budget_s=1e-9)
+    # No limit is infinity (it was refused as "not above 0"); NaN limits nothing and is refused.
+    assert et.train(data, budget_s=float("inf")).is_board
+    with pytest.raises(et.EtError, match="budget_s = NaN: a number of seconds above 0"):
+        et.train(data, budget_s=float("nan"))
     said = []
     et.train(data, progress=lambda what, done, total: said.append(what))
     first = [w for w in said if w.startswith("training: ") or w == "each fold's statistics"]

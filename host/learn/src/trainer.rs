@@ -70,8 +70,8 @@ pub enum TrainError {
         /// Its observations.
         count: usize,
     },
-    /// A budget that is not a number of seconds above 0.
-    #[error("budget_s = {0}: a number of seconds above 0")]
+    /// A budget that is not a number of seconds above 0 (infinity: no limit).
+    #[error("budget_s = {0}: a number of seconds above 0 (inf: no limit)")]
     Budget(f64),
     /// A method an et dataset does not train (the board takes QDA or LDA).
     #[error("{0}: et datasets train qda or lda for the board; regressors take any sensor's table")]
@@ -350,8 +350,9 @@ impl Trainer {
         if let Some(k) = self.folds.filter(|k| !(2..=MAX_FOLDS).contains(k)) {
             return Err(TrainError::Folds(k));
         }
-        // A NaN budget refused nothing (no estimate passes it).
-        if !(self.budget_s.is_finite() && self.budget_s > 0.0) {
+        // A NaN budget refused nothing (no estimate passes it); an infinite one is no limit
+        // (it was refused as "not above 0").
+        if self.budget_s.is_nan() || self.budget_s <= 0.0 {
             return Err(TrainError::Budget(self.budget_s));
         }
         match examples {
