@@ -8,7 +8,7 @@
 //! | --- | --- | --- |
 //! | `usart1` (interrupt) | 3 | received bytes into `rx`; bytes of `tx` out while the transmitter is free |
 //! | `commands` | 2 | reassembles packets from `rx` (resynchronising after garbage), hands them to `Device`, sends the reply |
-//! | `scan` | 1 | rebuilds the `Scanner` on a new configuration, scans, sends the frame and its events, paces to the frame rate, sends a status event every `STATUS_PERIOD_MS` |
+//! | `scan` | 1 | rebuilds the `Scanner` on a new configuration, scans, sends the frame and its events, paces to the frame rate, sends a status event every `STATUS_PERIOD_MS` (and, started on a configuration the front end refused, its fault every 4) |
 //!
 //! The scan samples without holding the `Device`, so commands are answered during a scan; it
 //! locks the device and the transmit queue only to turn the scan into a frame. A frame that
@@ -292,6 +292,7 @@ mod app {
         let mut shared = cx.shared;
         let mut scanner: Option<Scanner> = None;
         let mut last_status = Mono::now();
+        let mut last_refused = Mono::now();
         loop {
             let start = Mono::now();
             let (reconfigure, scanning, seq) = shared
@@ -335,6 +336,13 @@ mod app {
                         fault(&mut shared, seq, packet);
                     }
                 }
+            } else if scanning
+                && (Mono::now() - last_refused).as_millis() >= 4 * board::STATUS_PERIOD_MS
+            {
+                // Started on a configuration the front end refused: said again every 2 s, so
+                // a host that connects later hears why no frames come (it heard nothing).
+                last_refused = Mono::now();
+                fault(&mut shared, seq, packet);
             }
             let now = Mono::now();
             if (now - last_status).as_millis() >= board::STATUS_PERIOD_MS {

@@ -76,6 +76,21 @@ impl From<et_core::wire::HostFrame> for LiveFrame {
     }
 }
 
+/// A board's event that people need to hear of, in words: a fault it found (a front end
+/// that cannot scan its configuration, a saturated or suspect electrode) or a command it
+/// refused; None for the rest (status, replies, touches).
+#[must_use]
+pub fn board_report(event: &et_core::wire::Event) -> Option<String> {
+    use et_core::wire::Event;
+    match event {
+        Event::Fault(f) => Some(format!("the board reports: {f}")),
+        Event::Refused { command, reason } => {
+            Some(format!("the board refused {command}: {reason}"))
+        }
+        _ => None,
+    }
+}
+
 /// The class a board found for a frame, as its `Event::Touch` says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChipClass {

@@ -53,6 +53,9 @@ pub enum Notice {
     },
     /// The link changed.
     Link(LinkChange),
+    /// The board reported a fault or refused a command, in words (a front end that cannot
+    /// scan its configuration sends no frames: `et record` waited without a word).
+    Board(String),
     /// Progress (every 25 frames and while waiting).
     Progress(Tally),
 }
@@ -125,6 +128,12 @@ pub fn record(
         }
         let frame = match link.next(Duration::from_millis(200)) {
             Ok(Uplink::Frame(f)) => f,
+            Ok(Uplink::Event(e)) if crate::live::board_report(&e).is_some() => {
+                notice(Notice::Board(
+                    crate::live::board_report(&e).unwrap_or_default(),
+                ));
+                continue;
+            }
             Ok(Uplink::Event(_)) | Err(_) => {
                 tally.link = link.counters();
                 notice(Notice::Progress(tally));

@@ -433,6 +433,31 @@ fn the_firmware_image_scans_classifies_and_obeys_in_qemu() {
     }
     let (frames, _) = collect(&mut link, 5);
     assert!(frames.iter().all(|f| f.config == reference));
+    // A configuration et scans but this front end cannot (8 electrodes on its 16): accepted,
+    // then no frames, and the front end's fault said at once and again every 2 s (a host
+    // that connected later waited without a word: `et record` on such a board).
+    let eight = ScanConfig {
+        electrodes: 8,
+        ..reference
+    };
+    link.request(&Command::Configure(eight), REPLY).unwrap();
+    let (mut faults, mut frames) = (0, 0);
+    let until = std::time::Instant::now() + Duration::from_millis(3500);
+    while std::time::Instant::now() < until {
+        match link.next(Duration::from_millis(100)) {
+            Ok(Uplink::Event(Event::Fault(wire::Fault::Frontend { .. }))) => faults += 1,
+            // (A frame of the old configuration may be in flight past the reply.)
+            Ok(Uplink::Frame(f)) if f.config == eight => frames += 1,
+            _ => {}
+        }
+    }
+    assert!(
+        faults >= 2 && frames == 0,
+        "{faults} faults, {frames} frames"
+    );
+    link.request(&Command::Configure(reference), REPLY).unwrap();
+    let (frames, _) = collect(&mut link, 3);
+    assert!(frames.iter().all(|f| f.config == reference));
 
     // Health: the device counted the refusals; the link lost nothing.
     let status = loop {

@@ -40,7 +40,12 @@ impl fmt::Display for Refusal {
 impl fmt::Display for Fault {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::Frontend { seq } => write!(f, "the front end failed during scan {seq}"),
+            Self::Frontend { seq } => write!(
+                f,
+                "the front end failed at scan {seq}: that frame was not sent (if no frames \
+                 follow, the front end cannot scan the configuration: another electrode count \
+                 than its own?)"
+            ),
             Self::Saturated { seq, measurements } => write!(
                 f,
                 "frame {seq}: {measurements} measurement(s) on the ADC's rail (lower the gain \

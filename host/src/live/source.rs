@@ -243,6 +243,8 @@ pub struct PortSource {
     keepalive: Keepalive,
     /// Link changes not yet taken by [`Source::link_changes`].
     changes: Vec<LinkChange>,
+    /// The board's reports not yet taken by [`Source::board_reports`].
+    reports: Vec<String>,
 }
 
 impl PortSource {
@@ -274,6 +276,7 @@ impl PortSource {
             pending: VecDeque::new(),
             keepalive,
             changes: Vec::new(),
+            reports: Vec::new(),
         })
     }
 
@@ -325,13 +328,12 @@ impl PortSource {
                     }
                 }
                 Uplink::Event(Event::Status(s)) => self.status = Some(s),
-                Uplink::Event(Event::Refused { command, reason }) => {
-                    self.last_problem = Some(format!("the board refused {command}: {reason}"));
+                Uplink::Event(e) => {
+                    if let Some(report) = super::board_report(&e) {
+                        self.last_problem = Some(report.clone());
+                        self.reports.push(report);
+                    }
                 }
-                Uplink::Event(Event::Fault(f)) => {
-                    self.last_problem = Some(format!("the board reports: {f}"));
-                }
-                Uplink::Event(_) => {}
             }
         }
         if self.pending.len() > before {
@@ -441,6 +443,15 @@ impl Source {
     pub fn link_changes(&mut self) -> Vec<LinkChange> {
         match self {
             Source::Port(p) => std::mem::take(&mut p.changes),
+            _ => Vec::new(),
+        }
+    }
+
+    /// What a board reported since the last call ([`board_report`](super::board_report): its
+    /// faults and refusals, in words); nothing for a simulator or a file.
+    pub fn board_reports(&mut self) -> Vec<String> {
+        match self {
+            Source::Port(p) => std::mem::take(&mut p.reports),
             _ => Vec::new(),
         }
     }

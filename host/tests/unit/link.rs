@@ -320,6 +320,47 @@ fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// A board whose front end cannot scan its configuration sends its fault and no frames:
+/// `et record` says the board's words (it waited without one; its events were dropped).
+#[test]
+fn a_recording_says_what_the_board_reports() {
+    use et_host::recorder::{Notice, Plan, record};
+    let dir = temp_dir("faulty");
+    let (mut master, path) = cable(&dir);
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let board = thread::spawn(move || {
+        let fault = HostUplink::Event(Event::Fault(et_core::wire::Fault::Frontend { seq: 7 }));
+        while !flag.load(Ordering::Relaxed) {
+            let _ = master.write_all(&packet(&fault));
+            thread::sleep(Duration::from_millis(50));
+        }
+    });
+    let mut link = Link::open(path.to_str().unwrap(), et_core::board::BAUD).unwrap();
+    let plan = Plan {
+        out: dir.join("r.jsonl"),
+        frames: Some(1),
+        duration: Some(Duration::from_millis(600)),
+        send_start: false,
+        force: false,
+    };
+    let mut notices = Vec::new();
+    let tally = record(&mut link, &plan, |n| notices.push(n)).unwrap();
+    stop.store(true, Ordering::Relaxed);
+    board.join().unwrap();
+    assert_eq!(tally.written, 0);
+    let said = notices.iter().find_map(|n| match n {
+        Notice::Board(s) => Some(s.clone()),
+        _ => None,
+    });
+    assert!(
+        said.as_deref()
+            .is_some_and(|s| s.contains("the front end failed at scan 7")),
+        "{notices:?}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 /// `et record` through a faulty board and a pulled cable: a frame with the wrong value count
 /// is skipped and counted (it used to end the recording), a NaN is kept and flagged (it used
 /// to make the file unreadable), and a board that comes back idle after the replug is sent

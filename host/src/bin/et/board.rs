@@ -83,8 +83,11 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
     let mut skipped_shown = 0u32;
+    // Lines said above the spinner (its own `println` says nothing where standard error is
+    // not a terminal: a board that sent nothing was waited for without a word in scripts).
+    let said = |line: String| bar.suspend(|| say!("{line}"));
     let tally = recorder::record(&mut link, &plan, |notice| match notice {
-        Notice::Part { path, config } => bar.println(format!(
+        Notice::Part { path, config } => said(format!(
             "recording {} ({} electrodes, {}) into {}",
             args.port,
             config.electrodes,
@@ -95,12 +98,13 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
             // The first few in full; the rest are counted in the summary.
             skipped_shown += 1;
             if skipped_shown <= 5 {
-                bar.println(format!(
+                said(format!(
                     "skipped frame {seq}: {got} values, its configuration has K = {expected}"
                 ));
             }
         }
-        Notice::Link(change) => bar.println(format!("{}: {change}", args.port)),
+        Notice::Link(change) => said(format!("{}: {change}", args.port)),
+        Notice::Board(report) => said(format!("{}: {report}", args.port)),
         Notice::Progress(t) => {
             bar.set_message(t.to_string());
             bar.tick();

@@ -219,6 +219,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         for change in source.link_changes() {
             say!("{}: {change}", source.describe());
         }
+        for report in source.board_reports() {
+            say!("{}: {report}", source.describe());
+        }
         if frames.is_empty() {
             if let Source::Replay(r) = &source
                 && r.position >= r.len()
