@@ -601,7 +601,8 @@ fn et_upload_sends_a_model_the_board_verifies() {
     assert!(!refused.status.success());
     let message = String::from_utf8_lossy(&refused.stderr);
     assert!(
-        message.contains("the model was trained for another scan"),
+        message.contains("the model was trained for pseudo-polar at L = 16")
+            && message.contains("et upload --model model.json"),
         "{message}"
     );
     let accepted = upload(&good);
@@ -622,6 +623,35 @@ fn et_upload_sends_a_model_the_board_verifies() {
         touches >= frames.len() - 2,
         "{touches} classes for {} frames",
         frames.len()
+    );
+    drop(link);
+    // The same model as the file `et train` writes: the board is first set to its scan,
+    // then takes it (a model of et collect's opposite scan could not be put on a fresh board
+    // at all).
+    let pp = ScanConfig {
+        protocol: ProtocolKind::PseudoPolar,
+        ..ScanConfig::REFERENCE
+    };
+    let (fitted, index, _) = train(&sheet, &pp);
+    let centres = (0..sheet.transfers.len())
+        .map(|c| [c as f64 * 1e-3, 0.0])
+        .collect();
+    let file = et_learn::model_file::ModelFile::new(&fitted, 0.1, pp, index, centres, false);
+    let json = dir.join("pp.json");
+    file.save(&json).unwrap();
+    let by_file = Process::new(&et)
+        .args(["upload", "--port", &pty, "--model"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&by_file.stdout);
+    assert!(
+        by_file.status.success()
+            && said.contains(
+                "set the board to the scan the model was trained on: L = 16, pseudo-polar"
+            ),
+        "{said}{}",
+        String::from_utf8_lossy(&by_file.stderr)
     );
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -11,14 +11,21 @@ pub(crate) struct UploadArgs {
     /// The board's serial port (`et ports` lists them).
     #[arg(long)]
     port: String,
-    /// The model blob (`et export --out`).
+    /// The model blob (`et export --out`). The board must be scanning the model's protocol
+    /// and electrode count; a fresh board scans adjacent (see --model).
+    #[arg(long, required_unless_present = "model", conflicts_with = "model")]
+    blob: Option<PathBuf>,
+    /// The model file (`et train --out`) instead of a blob: the board is first set to the scan
+    /// the model was trained on (its protocol, electrodes, samples, rate, current and gain),
+    /// then sent the model's blob (f32 when it fits a slot, else f16).
     #[arg(long)]
-    blob: PathBuf,
+    model: Option<PathBuf>,
     /// Baud rate (the firmware's is the default).
     #[arg(long, default_value_t = et_core::board::BAUD,
           value_parser = clap::value_parser!(u32).range(1..))]
     baud: u32,
-    /// Then take the next frame as V_0 (the sheet must not be touched).
+    /// Then start the scan (if it was not running) and take the next frame as V_0 (the sheet
+    /// must not be touched).
     #[arg(long)]
     tare: bool,
 }
@@ -137,20 +144,37 @@ pub(crate) fn wait_for_board(link: &mut et_host::link::Link, baud: u32) -> Resul
     ))
 }
 
+/// The blob at `path` (at most 16 MiB).
+fn read_blob(path: &std::path::Path) -> Result<Vec<u8>> {
+    et_core::text::read_at_most(path, 1 << 24)
+        .with_context(|| format!("reading {}", path.display()))
+}
+
 pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     use std::time::Duration;
-    let blob = et_core::text::read_at_most(&args.blob, 1 << 24)
-        .with_context(|| format!("reading {}", args.blob.display()))?;
+    let (path, blob, config) = match (&args.blob, &args.model) {
+        (_, Some(path)) => {
+            let board = et_learn::Model::load(path)?
+                .into_board()
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            let blob =
+                (board.slot_blob()).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            (path, blob, Some(board.file().config))
+        }
+        (Some(path), None) => (path, read_blob(path)?, None),
+        (None, None) => anyhow::bail!("give the model: --blob (et export's) or --model"),
+    };
     let model = et_core::model::Model::parse(&blob).map_err(|e| {
-        let path = args.blob.display();
+        let shown = path.display();
         // The model file `et train` wrote, given for the blob made from it.
         if blob.trim_ascii_start().starts_with(b"{") {
             anyhow::anyhow!(
-                "{path}: a model file (JSON, as et train writes), not the board's blob: \
-                 `et export --model {path} --out model.etm` makes the blob, then upload that"
+                "{shown}: a model file (JSON, as et train writes), not the board's blob: \
+                 upload it with --model {shown} (which also sets the board to its scan), or \
+                 `et export --model {shown} --out model.etm` makes the blob"
             )
         } else {
-            anyhow::anyhow!("{path}: not a valid model blob: {e}")
+            anyhow::anyhow!("{shown}: not a valid model blob: {e}")
         }
     })?;
     // A flag that changes nothing is refused (it took a V_0 the model never reads).
@@ -158,27 +182,66 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
         anyhow::bail!(
             "--tare: {} reads frames as measured (trained with --raw) and takes no V_0: drop \
              --tare",
-            args.blob.display()
+            path.display()
         );
     }
     let mut link = et_host::link::Link::open(&args.port, args.baud)?;
     wait_for_board(&mut link, args.baud)?;
+    if let Some(config) = config {
+        link.request(
+            &et_core::wire::Command::Configure(config),
+            Duration::from_secs(2),
+        )
+        .with_context(|| {
+            format!(
+                "setting the board to the scan {} was trained on",
+                path.display()
+            )
+        })?;
+        out!(
+            "set the board to the scan the model was trained on: L = {}, {}, {} samples a step at {} Hz, {} uA, gain {}",
+            config.electrodes,
+            config.protocol.name(),
+            config.samples_per_step,
+            config.sample_rate_hz,
+            f64::from(config.current_na) / 1e3,
+            config.gain
+        );
+    }
     let started = Instant::now();
     // Flash erase of a 384 KiB slot takes a few seconds.
     link.upload_model(&blob, Duration::from_secs(2), Duration::from_secs(15))
-        .with_context(|| format!("uploading {}", args.blob.display()))?;
+        .map_err(|e| match e {
+            et_host::link::LinkError::Refused {
+                reason: et_core::wire::Refusal::ModelMismatch,
+                ..
+            } => anyhow::anyhow!(
+                "uploading {}: the board refused it: the model was trained for {} at L = {}, \
+                 and the board scans another protocol or electrode count (a board starts on \
+                 adjacent): upload the model file instead, `et upload --model model.json`, \
+                 which first sets the board to the scan it was trained on",
+                path.display(),
+                model.protocol().kind().name(),
+                model.protocol().electrodes()
+            ),
+            e => anyhow::Error::new(e).context(format!("uploading {}", path.display())),
+        })?;
     out!(
         "uploaded {} ({} bytes, {} classes, {} features) in {:.1} s; the board verified it",
-        args.blob.display(),
+        path.display(),
         blob.len(),
         model.classes(),
         model.features(),
         started.elapsed().as_secs_f64()
     );
     if args.tare {
+        // V_0 is the next frame: a board that was not scanning (a fresh one) is started
+        // (Start is idempotent; the tare waited for a frame that never came).
+        link.request(&et_core::wire::Command::Start, Duration::from_secs(2))
+            .context("starting the scan for V_0")?;
         link.request(&et_core::wire::Command::Tare, Duration::from_secs(2))
-            .context("taring (is the board scanning? `et record` starts it)")?;
-        out!("V_0 taken: the board classifies every frame from now on");
+            .context("taring")?;
+        out!("V_0 taken: the board scans and classifies every frame from now on");
     } else if model.referenced() {
         out!(
             "this model is referenced: it classifies once the board has V_0 (run again with --tare)"

@@ -275,14 +275,18 @@ enum Command {
     ///   et stream --json --port /dev/ttyUSB0 --model model.json | my-robot
     #[command(verbatim_doc_comment)]
     Stream(live::StreamArgs),
-    /// Upload a model blob to the board (which verifies it before using it).
+    /// Upload a model to the board (which verifies it before using it).
     ///
-    /// Upload a model blob (from `et export`) to the board over its serial port. The board
-    /// verifies it (CRC, model checks, scan configuration) before it replaces the old model;
-    /// a refused upload leaves the old one classifying. A referenced model needs the untouched
-    /// frame V_0: add --tare (with the sheet untouched and the board scanning).
+    /// Upload a model to the board over its serial port: the model file `et train` wrote
+    /// (--model: the board is first set to the scan it was trained on) or a blob from `et
+    /// export` (--blob: the board must already scan its protocol and electrode count; a board
+    /// starts on adjacent). The board verifies it (CRC, model checks, scan configuration)
+    /// before it replaces the old model; a refused upload leaves the old one classifying. A
+    /// referenced model needs the untouched frame V_0: add --tare (with the sheet untouched;
+    /// the scan is started if it was not running).
     ///
     /// Examples:
+    ///   et upload --port /dev/ttyUSB0 --model model.json --tare
     ///   et export --model model.json --precision f16 --out model.etm
     ///   et upload --port /dev/ttyUSB0 --blob model.etm --tare
     #[command(verbatim_doc_comment)]
