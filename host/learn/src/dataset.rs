@@ -32,6 +32,7 @@
 //! a header: one column is a label, two or more are x, y and a third target, e.g. z or force;
 //! further columns unused).
 
+mod check;
 mod fault;
 mod file;
 mod import;
