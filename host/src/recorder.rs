@@ -128,10 +128,8 @@ pub fn record(
         }
         let frame = match link.next(Duration::from_millis(200)) {
             Ok(Uplink::Frame(f)) => f,
-            Ok(Uplink::Event(e)) if crate::live::board_report(&e).is_some() => {
-                notice(Notice::Board(
-                    crate::live::board_report(&e).unwrap_or_default(),
-                ));
+            Ok(Uplink::Event(e)) if let Some(report) = crate::live::board_report(&e) => {
+                notice(Notice::Board(report));
                 continue;
             }
             Ok(Uplink::Event(_)) | Err(_) => {

@@ -247,6 +247,9 @@ pub struct PortSource {
     reports: Vec<String>,
 }
 
+/// The board's reports a [`PortSource`] keeps until they are taken.
+const REPORTS_KEPT: usize = 64;
+
 impl PortSource {
     /// Opens `path` and starts the scan.
     ///
@@ -330,8 +333,12 @@ impl PortSource {
                 Uplink::Event(Event::Status(s)) => self.status = Some(s),
                 Uplink::Event(e) => {
                     if let Some(report) = super::board_report(&e) {
-                        self.last_problem = Some(report.clone());
-                        self.reports.push(report);
+                        // Bounded for a caller that never takes them (the viewer shows the
+                        // last): a fault each frame would grow it without end.
+                        if self.reports.len() < REPORTS_KEPT {
+                            self.reports.push(report.clone());
+                        }
+                        self.last_problem = Some(report);
                     }
                 }
             }
