@@ -218,10 +218,15 @@ impl Viewer {
         };
         match open_source(&spec, self.options.scene.as_deref()) {
             Ok((source, sheet)) => {
+                let mut dropped = None;
                 if sheet != self.sheet {
                     match Processor::new(&sheet.physical, self.processor.settings()) {
                         Ok(mut p) => {
-                            p.classifier = self.processor.classifier.take();
+                            // The model's classes are places on its own sheet: checked
+                            // against the new one (it was moved over unchecked).
+                            if let Some(c) = self.processor.classifier.take() {
+                                dropped = p.set_classifier(c).err();
+                            }
                             self.processor = p;
                             self.sheet = sheet;
                         }
@@ -235,6 +240,9 @@ impl Viewer {
                     "{}: keep the sheet untouched while V_0 is taken",
                     source.describe()
                 );
+                if let Some(e) = dropped {
+                    self.status = format!("{}; the model is no longer used: {e}", self.status);
+                }
                 self.source = Some(source);
                 self.processor.tare();
                 self.monitor = Monitor::default();

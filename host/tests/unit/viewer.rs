@@ -239,6 +239,71 @@ fn sources_switch_between_simulator_and_recording_and_bad_paths_are_refused() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A model's classes are places on the sheet it was trained on: when the scene's sheet
+/// changes under the viewer (its file edited, then the source opened again), the model is
+/// checked against the new sheet and let go, said in the status (it was moved over without
+/// the check `et stream` and the viewer's start make).
+#[test]
+fn a_model_of_another_sheet_is_let_go_when_the_sheet_changes() {
+    use et_learn::collect;
+    let dir = std::env::temp_dir().join(format!("et-viewer-sheet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(scene("square-13cm-16.toml")).unwrap();
+    let path = dir.join("sheet.toml");
+    std::fs::write(&path, &text).unwrap();
+    let spec = et_sim::scene::Scene::load(&path).unwrap();
+    let config = collect::training_config(spec.scan_config().unwrap());
+    let centres = collect::grid(&spec.sheet, 2, 2, 0.0);
+    let plan = collect::Plan {
+        visits: 2,
+        scans: 2,
+        seed: 3,
+        ..collect::Plan::default()
+    };
+    let data = collect::collect(&spec.sheet, spec.frontend, config, &centres, &plan).unwrap();
+    let trained = et_learn::Trainer {
+        shrinkage: Some(0.5),
+        ..et_learn::Trainer::qda()
+    }
+    .train(et_learn::Examples::Dataset(&data), |_| {})
+    .unwrap();
+    let model = dir.join("model.json");
+    trained.model.save(&model).unwrap();
+    let mut h = harness(Options {
+        scene: Some(path.clone()),
+        model: Some(model),
+        ..sim_options()
+    });
+    h.step();
+    assert!(h.state().processor.classifier.is_some());
+    // The same file, opened again: the model stays.
+    h.get_by_label("Simulated sheet").click();
+    h.step();
+    h.get_by_label("Open").click();
+    h.step();
+    assert!(
+        h.state().processor.classifier.is_some(),
+        "{}",
+        h.state().status
+    );
+    // Its sheet made 17 cm: the model is let go, and the status says why.
+    std::fs::write(
+        &path,
+        text.replace("width = 0.13, height = 0.13", "width = 0.17, height = 0.17"),
+    )
+    .unwrap();
+    h.get_by_label("Open").click();
+    h.step();
+    let status = &h.state().status;
+    assert!(
+        h.state().processor.classifier.is_none()
+            && status
+                .contains("the model is no longer used: the model was trained on another sheet"),
+        "{status}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 fn write_recording(path: &std::path::Path, frames: usize) {
     crate::live::write_sim_recording(path, frames);
 }
