@@ -1333,7 +1333,7 @@ def train(
             _native.train_dataset(
                 X, kind, shrinkage, None if folds is None else _count(folds, "folds"), raw,
                 None if keep is None else _count(keep, "keep"), _count(seed, "seed"),
-                3600.0 if budget_s is None else _real(budget_s, "budget_s"), progress,
+                _native.BUDGET_S if budget_s is None else _real(budget_s, "budget_s"), progress,
             )
         )
     if y is None:
@@ -1376,7 +1376,7 @@ def train(
             _f64(X, 2, "X"), labels, positions, groups, kind,
             None if folds is None else _count(folds, "folds"), cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
-            3600.0 if budget_s is None else _real(budget_s, "budget_s"), progress,
+            _native.BUDGET_S if budget_s is None else _real(budget_s, "budget_s"), progress,
             named or None,
         )
     )

@@ -11,6 +11,8 @@ import numpy.typing as npt
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
 
+BUDGET_S: float
+
 class EtError(ValueError):
     """et refused an input: the message names the file, field or value and why."""
 

@@ -145,6 +145,8 @@ pub(crate) fn array2<T: numpy::Element>(
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EtError", m.py().get_type::<EtError>())?;
+    // The training budget's default, s, for the Python side's `budget_s=None`.
+    m.add("BUDGET_S", et_learn::tabular::BUDGET_S)?;
     imaging::register(m)?;
     learning::register(m)?;
     files::register(m)?;

@@ -331,7 +331,7 @@ fn block_len(classes: usize) -> usize {
 }
 
 /// Steps of the forward substitution done for all classes at once by a matrix product.
-const LEAD: usize = 16;
+pub(crate) const LEAD: usize = 16;
 
 /// Reused buffers of [`FoldModel::predict_block`].
 #[derive(Default)]

@@ -34,7 +34,7 @@ pub struct Shape {
 
 /// The first steps of each class's forward substitution taken for a block at once
 /// (`fastcv`'s lead): a product of C d x d per observation.
-const LEAD: f64 = 16.0;
+const LEAD: f64 = crate::fastcv::LEAD as f64;
 
 /// Classes looked at beyond the bounds' product, per observation (about 8 on 49 classes).
 const LOOKED_AT: f64 = 8.0;
@@ -251,6 +251,7 @@ pub fn time_said(seconds: f64) -> String {
     }
 }
 
-fn threads() -> f64 {
+/// The machine's threads (1 when unknown).
+pub(crate) fn threads() -> f64 {
     std::thread::available_parallelism().map_or(1.0, |t| t.get() as f64)
 }

@@ -175,7 +175,7 @@ pub fn discriminant_bytes(features: usize, classes: usize) -> u64 {
 /// without a word.
 fn discriminant_seconds(method: Kind, (n, p, classes): (usize, usize, usize), k: usize) -> f64 {
     let (n, p, c, k) = (n as f64, p as f64, classes as f64, k.max(1) as f64);
-    let threads = std::thread::available_parallelism().map_or(1.0, |t| t.get() as f64);
+    let threads = crate::pipeline::cost::threads();
     let factors = if method == Kind::Qda { c } else { 1.0 };
     let looked_at = if method == Kind::Qda {
         c.min(8.0) * p / 2.0
