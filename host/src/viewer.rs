@@ -84,6 +84,8 @@ pub struct Viewer {
     options: Options,
     /// The source frames come from (None after a failed open).
     pub source: Option<Source>,
+    /// What `source` was opened from (a recording's path is one of the viewer's inputs).
+    opened: SourceSpec,
     /// The sheet shown (the source's, or the scene's).
     pub sheet: SheetSpec,
     /// The live pipeline.
@@ -171,6 +173,7 @@ impl Viewer {
                 source.describe()
             ),
             source: Some(source),
+            opened: options.source.clone(),
             sheet,
             processor,
             source_bar: SourceBar::of(&options.source),
@@ -244,6 +247,7 @@ impl Viewer {
                     self.status = format!("{}; the model is no longer used: {e}", self.status);
                 }
                 self.source = Some(source);
+                self.opened = spec;
                 self.processor.tare();
                 self.monitor = Monitor::default();
                 self.last = None;
@@ -381,7 +385,28 @@ impl Viewer {
                     _ => "export to a board needs a board: open its serial port first".into(),
                 };
             }
+            wizard::Request::Save => {
+                let inputs = self.inputs();
+                self.wizard.message = self.wizard.save(&inputs);
+            }
         }
+    }
+
+    /// The files the viewer reads, which the wizard's Save never replaces: the scene, the
+    /// files it names (its protocol file), the recording played and the model given.
+    fn inputs(&self) -> Vec<PathBuf> {
+        let scene = self.options.scene.as_ref();
+        let mut inputs: Vec<PathBuf> = (scene.into_iter())
+            .chain(&self.options.model)
+            .cloned()
+            .collect();
+        if let Some(scene) = scene.and_then(|s| et_sim::scene::Scene::load(s).ok()) {
+            inputs.extend(scene.files());
+        }
+        if let SourceSpec::Replay(path) = &self.opened {
+            inputs.push(path.clone());
+        }
+        inputs
     }
 
     /// Presses the simulated sheet (nothing for other sources).

@@ -1329,13 +1329,18 @@ def train(
                 f"{', '.join(given)}: for arrays of any sensor; an et dataset's visits are its "
                 "sessions (its cross-validation leaves one out) and its grid is its classes"
             )
-        return Model(
+        model = Model(
             _native.train_dataset(
                 X, kind, shrinkage, None if folds is None else _count(folds, "folds"), raw,
                 None if keep is None else _count(keep, "keep"), _count(seed, "seed"),
                 _native.BUDGET_S if budget_s is None else _real(budget_s, "budget_s"), progress,
             )
         )
+        # What `et train --data` prints as its notes (too few data for the usual recipe, an
+        # accuracy no better than guessing), as on arrays below.
+        if model._native.note:
+            warnings.warn(model._native.note, EtWarning, stacklevel=2)
+        return model
     if y is None:
         raise EtError("give y: n labels, or n x 2 positions (m)")
     if shrinkage is not None or raw or keep is not None:

@@ -183,7 +183,17 @@ fn train_dataset(
     let data = &dataset.inner;
     // The trainer refuses a model the board (or any reader of model files) would refuse.
     let trained = train_telling(py, &trainer, Examples::Dataset(data), progress)?;
-    Ok(Model::new(trained.model))
+    // What `et train --data` prints as its notes: the recipe's changes for too few data, and
+    // an accuracy no better than guessing.
+    let notes: Vec<String> = trained.board.as_ref().map_or(Vec::new(), |b| {
+        let t = &b.training;
+        (t.fallbacks.iter().map(ToString::to_string))
+            .chain(t.cv.no_better_than_guessing().map(|g| g.to_string()))
+            .collect()
+    });
+    let mut model = Model::new(trained.model);
+    model.training_note = (!notes.is_empty()).then(|| notes.join("; "));
+    Ok(model)
 }
 
 /// Trains without the GIL, calling `progress(what, done, total)` (when given) at each step:
@@ -251,6 +261,8 @@ pub(crate) struct Model {
     /// A table model rebuilt from its tables at its first prediction, kept for the next
     /// (a model is not changed once made).
     prepared: OnceLock<Prepared>,
+    /// A board model trained here: what its training said (its file keeps no note).
+    training_note: Option<String>,
 }
 
 /// Predictions: classes (index), the class names, positions (n x 2, m) and a third target.
@@ -372,13 +384,15 @@ impl Model {
         }
     }
 
-    /// What the training changed from the request, and why (a table model's note: a feature
-    /// of one value, a QDA saved as the LDA it equals); None when nothing.
+    /// What the training changed from the request, and why, or found in the data (a table
+    /// model's note: a feature of one value, a QDA saved as the LDA it equals; a board model
+    /// trained here: the recipe's changes for too few data; either: a score no better than
+    /// guessing); None when nothing.
     #[getter]
     fn note(&self) -> Option<String> {
         match &self.inner {
             Estimator::Table(t) => t.note.clone(),
-            Estimator::Board(_) => None,
+            Estimator::Board(_) => self.training_note.clone(),
         }
     }
 
@@ -488,6 +502,7 @@ impl Model {
         Model {
             inner,
             prepared: OnceLock::new(),
+            training_note: None,
         }
     }
 

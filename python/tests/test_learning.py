@@ -41,6 +41,25 @@ def test_a_board_model_is_et_trains(et_cli, work, dataset):
         assert model.export_blob(precision) == blob.read_bytes()
 
 
+def test_a_board_model_no_better_than_guessing_is_said_so(work, dataset):
+    # The dataset's frames know their classes: trained without a word.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        et.train(dataset)
+    # The same frames dealt to other rows of their visit (labels that do not belong to them,
+    # as a sheet pressed other than labelled gives): `et train` notes it, and so does Python.
+    with np.load(dataset) as z:
+        arrays = {k: z[k] for k in z.files}
+    rng = np.random.default_rng(3)
+    for v in np.unique(arrays["visit"]):
+        rows = np.flatnonzero(arrays["visit"] == v)
+        arrays["x"][rows] = arrays["x"][rng.permutation(rows)]
+    dealt = work / "dealt.npz"
+    np.savez(dealt, **arrays)
+    with pytest.warns(et.EtWarning, match="no better than always guessing the commonest class"):
+        et.train(dealt)
+
+
 def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     data = et.read_dataset(dataset)
     model = et.train(data, kind="lda")

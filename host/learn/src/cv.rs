@@ -58,6 +58,21 @@ impl Confusion {
         f64::from(right) / f64::from(self.total().max(1))
     }
 
+    /// Observations of each true class.
+    #[must_use]
+    pub fn class_counts(&self) -> Vec<usize> {
+        (self.counts.chunks(self.classes.max(1)))
+            .map(|row| row.iter().map(|&c| c as usize).sum())
+            .collect()
+    }
+
+    /// Whether the accuracy is no better than always guessing the commonest class
+    /// ([`crate::guess::classes`]).
+    #[must_use]
+    pub fn no_better_than_guessing(&self) -> Option<crate::guess::NoBetter> {
+        crate::guess::classes(self.accuracy(), &self.class_counts())
+    }
+
     /// AEE [5.10-5.11]: for each true class tr, EE_tr = sum over predicted c != tr of
     /// d(tr, c) n_pred(c); AEE = sum_tr EE_tr / C. Units of `positions` (mm).
     #[must_use]

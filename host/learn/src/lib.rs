@@ -46,6 +46,7 @@ pub mod fastcv;
 pub mod fingerprint;
 pub mod fit;
 pub mod gp;
+pub mod guess;
 pub mod mlp;
 pub mod model;
 pub mod model_file;

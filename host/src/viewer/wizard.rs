@@ -7,7 +7,7 @@
 //! Frames are taken with the opposite protocol, whose independent voltages are docs/method.md §9's
 //! features.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use eframe::egui::{self, Color32, Rect, Sense, Stroke, StrokeKind, pos2, vec2};
 use et_core::ScanConfig;
@@ -38,6 +38,8 @@ pub enum Request {
     UseModel(Box<Board>),
     /// Send this blob to the board.
     Upload(Vec<u8>),
+    /// Save the model where the wizard says ([`Wizard::save`], given the viewer's inputs).
+    Save,
 }
 
 /// Where the wizard is.
@@ -344,6 +346,9 @@ impl Wizard {
         );
         for f in &t.fallbacks {
             self.message.push_str(&format!("\nnote: {f}"));
+        }
+        if let Some(g) = t.cv.no_better_than_guessing() {
+            self.message.push_str(&format!("\nnote: {g}"));
         }
         self.trained = Some(TrainedBoard {
             board,

@@ -422,7 +422,27 @@ fn the_wizard_collects_trains_and_the_model_classifies() {
         h.state().wizard.message
     );
     et_learn::model_file::ModelFile::load(&path).unwrap();
-    assert!(dir.join("model.etm").exists());
+    let blob = std::fs::read(dir.join("model.etm")).unwrap();
+    // A model named .etm was written there, then replaced by its own blob.
+    h.state_mut().wizard.save_path = dir.join("model.etm").display().to_string();
+    for _ in 0..2 {
+        h.get_by_label("Save").click();
+        h.step();
+        let message = &h.state().wizard.message;
+        assert!(message.contains("written as .json"), "{message}");
+    }
+    assert_eq!(std::fs::read(dir.join("model.etm")).unwrap(), blob);
+    // The viewer's inputs (here the model it was given) are never replaced, even on a
+    // second Save, as et's commands refuse theirs.
+    let given = dir.join("given.json");
+    std::fs::write(&given, "the model given").unwrap();
+    h.state_mut().wizard.save_path = given.display().to_string();
+    for _ in 0..2 {
+        let message = h.state_mut().wizard.save(std::slice::from_ref(&given));
+        assert!(message.contains("this is the input"), "{message}");
+    }
+    assert_eq!(std::fs::read_to_string(&given).unwrap(), "the model given");
+    assert!(!dir.join("given.etm").exists());
     std::fs::remove_dir_all(&dir).unwrap();
     // Without a board, export is disabled; the model can be used here.
     h.get_by_label("Use this model").click();

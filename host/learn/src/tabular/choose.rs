@@ -255,3 +255,26 @@ pub(super) fn nothing_fitted(search: &[Candidate]) -> Option<TabularError> {
         .collect();
     (!said.is_empty()).then(|| TabularError::NothingFitted(said.join("; ")))
 }
+
+/// A note when the chosen candidate cross-validated no better than guessing
+/// ([`crate::guess`]): a classifier against always the commonest of `labels`, a regressor
+/// against the mean of the `targets` (m) each fold trains on (`fold`, each row's).
+pub(super) fn guessing_note(
+    best: &Candidate,
+    targets: Option<&[Target3]>,
+    labels: Option<&Labels>,
+    fold: impl FnOnce() -> Vec<usize>,
+) -> Option<String> {
+    let no_better = match (best.method.is_classifier(), targets, labels) {
+        (true, _, Some(l)) => {
+            let mut counts = vec![0usize; l.names.len()];
+            for &c in &l.index {
+                *counts.get_mut(usize::from(c))? += 1;
+            }
+            crate::guess::classes(best.cv_accuracy?, &counts)
+        }
+        (false, Some(t), _) => crate::guess::positions(best.cv_mean_error_mm?, t, &fold()),
+        _ => None,
+    };
+    no_better.map(|g| g.to_string())
+}

@@ -203,6 +203,12 @@ pub fn train(
         },
         None => e,
     })?;
+    notes.extend(guessing_note(
+        &best,
+        targets.as_deref(),
+        classes.as_ref().map(|(l, _)| l),
+        || cv.folds(n, None, opts.seed),
+    ));
     search.extend(average.clone());
     for c in &mut search {
         c.out_of_fold = None;

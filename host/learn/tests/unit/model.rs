@@ -74,9 +74,30 @@ fn a_datasets_training_says_its_time_first_and_keeps_to_the_budget() {
     use et_learn::trainer::{Progress, TrainError};
     let data = dataset();
     let mut said = Vec::new();
-    Trainer::qda()
+    let trained = Trainer::qda()
         .train(Examples::Dataset(&data), |p| said.push(p.said(10).0))
         .unwrap();
+    // Frames that tell the classes apart are better than guessing; the same frames dealt to
+    // other rows (labels that do not belong to them) are not, and are said so.
+    let cv = |t: et_learn::trainer::Trained| t.board.unwrap().training.cv;
+    assert_eq!(cv(trained).no_better_than_guessing(), None);
+    let mut dealt = data.clone();
+    let mut rng = Rng::new(8);
+    let mut order: Vec<usize> = (0..data.x.nrows()).collect();
+    for r in (1..order.len()).rev() {
+        order.swap(r, rng.next_u32() as usize % (r + 1));
+    }
+    dealt.x = data.x.select_rows(&order);
+    let guessed = cv(Trainer::qda()
+        .train(Examples::Dataset(&dealt), |_| {})
+        .unwrap());
+    let note = guessed.no_better_than_guessing().map(|g| g.to_string());
+    assert!(
+        note.as_deref()
+            .is_some_and(|n| n.contains("commonest class")),
+        "{note:?} at {} %",
+        100.0 * guessed.accuracy()
+    );
     let estimate = said.iter().position(|s| s.starts_with("training: "));
     let statistics = said.iter().position(|s| s == "each fold's statistics");
     assert!(

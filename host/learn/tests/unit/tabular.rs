@@ -1520,3 +1520,98 @@ fn a_model_that_read_row_numbers_as_a_feature_is_told_to_train_again() {
         "{e}"
     );
 }
+
+/// A model that learnt nothing from its features is said so: features that know the classes
+/// or positions train without the note; the same rows with their targets dealt out at random
+/// (labels that do not belong to their rows) cross-validate about as guessing does, and the
+/// note names the guess.
+#[test]
+fn a_model_no_better_than_guessing_is_said_so() {
+    let said = |m: &TableModel| {
+        m.note
+            .as_deref()
+            .is_some_and(|n| n.contains("no better than always guessing"))
+    };
+    let mut rng = et_core::rng::Rng::new(9);
+    let n = 200;
+    let class: Vec<usize> = (0..n).map(|r| r % 4).collect();
+    let x = DMatrix::from_fn(n, 6, |r, j| {
+        class[r] as f64 * (1.0 + j as f64) + rng.normal()
+    });
+    let names = |c: &[usize]| c.iter().map(|c| c.to_string()).collect::<Vec<_>>();
+    let knowing = train(
+        &labelled(x.clone(), names(&class)),
+        Choice::One(Kind::Lda),
+        &opts(),
+        &mut quiet(),
+    )
+    .unwrap();
+    assert!(!said(&knowing), "{:?}", knowing.note);
+    let dealt: Vec<usize> = (0..n).map(|_| (rng.uniform() * 4.0) as usize % 4).collect();
+    let guessing = train(
+        &labelled(x, names(&dealt)),
+        Choice::One(Kind::Lda),
+        &opts(),
+        &mut quiet(),
+    )
+    .unwrap();
+    let note = guessing.note.clone().unwrap_or_default();
+    assert!(
+        said(&guessing) && note.contains("commonest class"),
+        "{note}"
+    );
+
+    // Positions: the stand-in's, then the same positions dealt to other rows.
+    let rows = STANDIN.select("0..300".parse().unwrap()).unwrap();
+    let ridge = |t: &Table| train(t, Choice::One(Kind::Ridge), &opts(), &mut quiet()).unwrap();
+    let knowing = ridge(&rows);
+    assert!(!said(&knowing), "{:?}", knowing.note);
+    let mut shuffled = rows.clone();
+    let positions = shuffled.positions.as_mut().unwrap();
+    for r in (1..positions.len()).rev() {
+        let other = (rng.uniform() * (r + 1) as f64) as usize % (r + 1);
+        positions.swap(r, other);
+    }
+    let guessing = ridge(&shuffled);
+    let note = guessing.note.clone().unwrap_or_default();
+    assert!(said(&guessing) && note.contains("mean position"), "{note}");
+}
+
+/// The guess's bounds at their edges: nothing to compare (no rows, one class, a NaN score, a
+/// fold holding every row) says nothing; a perfect score is better; the guess's own score is
+/// not.
+#[test]
+fn guessing_is_compared_only_where_it_can_be() {
+    use et_learn::guess::{NoBetter, classes, positions};
+    assert_eq!(classes(0.5, &[]), None);
+    assert_eq!(classes(0.5, &[0, 0]), None);
+    assert_eq!(classes(1.0, &[10]), None);
+    assert_eq!(classes(f64::NAN, &[5, 5]), None);
+    assert_eq!(classes(1.0, &[50, 50]), None);
+    assert!(matches!(
+        classes(0.5, &[50, 50]),
+        Some(NoBetter::Classes { commonest, rows: 100, .. }) if commonest == 0.5
+    ));
+    // 60 of 100 right on two halves is two standard errors above guessing (0.5 + 2 x 0.05):
+    // still within; 61 is not.
+    assert!(classes(0.6, &[50, 50]).is_some());
+    assert_eq!(classes(0.61, &[50, 50]), None);
+    // Four rows at the corners of a 2 m square, two folds: each held-out row's guess is the
+    // other fold's mean.
+    let t = [
+        [0.0, 0.0, 0.0],
+        [2.0, 2.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [0.0, 2.0, 0.0],
+    ];
+    let fold = [0, 0, 1, 1];
+    let Some(NoBetter::Positions { guess_mm, .. }) = positions(1e4, &t, &fold) else {
+        panic!("a 10 m error is no better than guessing");
+    };
+    assert!((guess_mm - 2.0f64.sqrt() * 1e3).abs() < 1e-9, "{guess_mm}");
+    assert_eq!(positions(0.0, &t, &fold), None);
+    assert_eq!(positions(f64::INFINITY, &t, &fold), None);
+    assert_eq!(positions(1e4, &t, &[0, 0, 0, 0]), None);
+    assert_eq!(positions(1e4, &t[..1], &fold[..1]), None);
+    assert_eq!(positions(1e4, &t, &fold[..3]), None);
+}

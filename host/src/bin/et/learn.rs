@@ -255,6 +255,7 @@ fn print_trained(
     let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
     let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);
     let folds = args.trainer()?.dataset_folds();
+    let guessing = cv_conf.no_better_than_guessing();
     let summary = TrainSummary {
         out: &args.out,
         kind,
@@ -278,10 +279,14 @@ fn print_trained(
         cv_aee_mm: cv_conf.aee(mm),
         leave_one_visit_out_accuracy: lovo,
         fallbacks: &trained.fallbacks,
+        no_better_than_guessing: guessing.as_ref().map(ToString::to_string),
         learning_curve: curve,
     };
     for f in &trained.fallbacks {
         say!("note: {f}");
+    }
+    if let Some(g) = &guessing {
+        say!("note: {g}");
     }
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
@@ -340,6 +345,9 @@ struct TrainSummary<'a> {
     leave_one_visit_out_accuracy: Option<f64>,
     /// Where training changed its recipe because the data are too few (empty normally).
     fallbacks: &'a [pipeline::Fallback],
+    /// When the cross-validated accuracy is no better than always guessing the commonest
+    /// class: why the model learnt nothing (`et_learn::guess`).
+    no_better_than_guessing: Option<String>,
     learning_curve: Option<&'a [CurvePoint]>,
 }
 

@@ -154,7 +154,7 @@ impl Wizard {
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path));
             if ui.button("Save").clicked() {
-                self.message = self.save();
+                requests.push(Request::Save);
             }
         });
         if ui.button("Start again").clicked() {
@@ -164,20 +164,31 @@ impl Wizard {
     }
 
     /// Saves the model (JSON) and its blob beside it; says what it did. Existing files are
-    /// replaced only on a second Save (the first one says so); each file is written whole
-    /// (aside, then renamed).
-    pub(super) fn save(&mut self) -> String {
+    /// replaced only on a second Save (the first one says so), and never the viewer's
+    /// `inputs` (its scene, the scene's protocol file, the recording played, the model given),
+    /// as et's commands refuse theirs; each file is written whole (aside, then renamed).
+    pub fn save(&mut self, inputs: &[PathBuf]) -> String {
         let Some(t) = &self.trained else {
             return "train first".into();
         };
         let path = PathBuf::from(self.save_path.trim());
         let blob_path = path.with_extension("etm");
+        // A model named `.etm` was written, then replaced by its own blob.
+        if let Err(e) = crate::output::check_format(&path, "the model (JSON)", &["json"]) {
+            return e.to_string();
+        }
+        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        let confirmed = self.replace_confirmed.as_ref() == Some(&path);
+        match crate::output::check_all(&[&path, &blob_path], &[], &inputs, confirmed) {
+            Err(crate::output::OutputError::Exists { .. }) | Ok(()) => {}
+            Err(e) => return e.to_string(),
+        }
         let existing: Vec<String> = [&path, &blob_path]
             .into_iter()
             .filter(|p| p.exists())
             .map(|p| p.display().to_string())
             .collect();
-        if !existing.is_empty() && self.replace_confirmed.as_ref() != Some(&path) {
+        if !existing.is_empty() && !confirmed {
             self.replace_confirmed = Some(path);
             return format!(
                 "{} already exist(s): Save again to replace, or change the name",
