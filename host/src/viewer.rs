@@ -33,6 +33,7 @@ use et_recon::select::{Selector, Settings as DynamicSettings};
 
 mod controls;
 mod plots;
+mod protocol;
 mod sheet_view;
 pub mod wizard;
 
@@ -95,6 +96,11 @@ pub struct Viewer {
     /// The protocol chosen.
     pub protocol: ProtocolChoice,
     selector: Selector,
+    /// Automatic selection: the protocols whose V_0 is still to take, in turn (empty once
+    /// taken, and for a fixed protocol).
+    round: Vec<ProtocolKind>,
+    /// The configuration last sent to the source, until a frame of it arrives.
+    asked: Option<ScanConfig>,
     /// The latest processed frame.
     pub last: Option<Output>,
     /// Frame rate, BVC, SNR.
@@ -179,6 +185,8 @@ impl Viewer {
             source_bar: SourceBar::of(&options.source),
             protocol: ProtocolChoice::Fixed(ProtocolKind::Adjacent),
             selector,
+            round: Vec::new(),
+            asked: None,
             last: None,
             monitor: Monitor::default(),
             wizard: Wizard::default(),
@@ -249,6 +257,8 @@ impl Viewer {
                 self.source = Some(source);
                 self.opened = spec;
                 self.processor.tare();
+                self.round.clear();
+                self.asked = None;
                 self.monitor = Monitor::default();
                 self.last = None;
                 if let Some(config) = self.source.as_ref().and_then(Source::config) {
@@ -257,50 +267,6 @@ impl Viewer {
             }
             Err(e) => self.status = e.to_string(),
         }
-    }
-
-    /// Scans with `config` from now on (the source is told; V_0 is taken anew).
-    pub fn switch_config(&mut self, config: ScanConfig) {
-        let Some(source) = self.source.as_mut() else {
-            return;
-        };
-        match source.configure(config) {
-            Ok(()) => {
-                self.processor.tare();
-                if self.protocol != ProtocolChoice::Automatic {
-                    self.protocol = ProtocolChoice::Fixed(config.protocol);
-                }
-                self.status = format!(
-                    "scanning {}: keep the sheet untouched while V_0 is taken",
-                    config.protocol.name()
-                );
-            }
-            Err(e) => self.status = e.to_string(),
-        }
-    }
-
-    /// Chooses a protocol (automatic starts on adjacent and follows docs/method.md §8).
-    pub fn choose_protocol(&mut self, choice: ProtocolChoice) {
-        self.protocol = choice;
-        let kind = match choice {
-            ProtocolChoice::Fixed(k) => k,
-            ProtocolChoice::Automatic => {
-                self.selector = Selector::new(*self.selector_settings());
-                ProtocolKind::Adjacent
-            }
-        };
-        if let Some(config) = self.source.as_ref().and_then(Source::config)
-            && config.protocol != kind
-        {
-            self.switch_config(ScanConfig {
-                protocol: kind,
-                ..config
-            });
-        }
-    }
-
-    fn selector_settings(&self) -> &DynamicSettings {
-        self.selector.settings()
     }
 
     /// Takes the frames the source has and runs them through the pipeline (the wizard and
@@ -328,21 +294,8 @@ impl Viewer {
                     for request in self.wizard.observe(&out, &self.processor) {
                         self.apply_wizard_request(request);
                     }
-                    if self.protocol == ProtocolChoice::Automatic && out.referencing.is_none() {
-                        let regions = if out.event.is_some() {
-                            out.regions.clone()
-                        } else {
-                            Vec::new()
-                        };
-                        if let Some(kind) = self.selector.step(&regions)
-                            && let Some(config) = self.source.as_ref().and_then(Source::config)
-                        {
-                            self.switch_config(ScanConfig {
-                                protocol: kind,
-                                ..config
-                            });
-                        }
-                    }
+                    self.follow_the_scan(&out);
+                    self.select_automatically(&out);
                     self.last = Some(out);
                 }
                 Err(e) => self.status = format!("frame skipped: {e}"),
@@ -370,7 +323,12 @@ impl Viewer {
 
     fn apply_wizard_request(&mut self, request: wizard::Request) {
         match request {
-            wizard::Request::Configure(config) => self.switch_config(config),
+            wizard::Request::Configure(config) => {
+                // The wizard's frames are of its one scan: selection would switch it away.
+                self.protocol = ProtocolChoice::Fixed(config.protocol);
+                self.round.clear();
+                self.switch_config(config);
+            }
             wizard::Request::Press(touches) => self.press(touches),
             wizard::Request::UseModel(board) => {
                 // Trained, hence checked as the board checks a model (`Board::new`).

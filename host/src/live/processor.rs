@@ -173,6 +173,9 @@ impl Default for Settings {
     }
 }
 
+/// Scan configurations whose V_0 a [`Processor`] keeps at once: the built-in protocols.
+pub const REFERENCES_KEPT: usize = 4;
+
 /// V_0 and the noise of the untouched frames.
 #[derive(Clone, Debug)]
 pub(super) struct Reference {
@@ -237,7 +240,12 @@ pub struct Processor {
     inside: Vec<usize>,
     /// Each grid pixel's row in the projection (None outside the sheet).
     inside_index: Vec<Option<usize>>,
-    reference: Option<Reference>,
+    /// V_0 of each scan configuration met since the last [`Processor::tare`] (at most
+    /// [`REFERENCES_KEPT`], the oldest let go first): a scan switched back to finds its own
+    /// untouched frames, not frames taken while the touch that made the switch was held.
+    references: Vec<Reference>,
+    /// The configuration of the latest frame: whose reference [`Processor::v0`] gives.
+    current: Option<ScanConfig>,
     /// The board model evaluated on each touched frame (set through
     /// [`Processor::set_classifier`], which checks it is of this sheet).
     pub classifier: Option<Board>,
@@ -307,7 +315,8 @@ impl Processor {
             projection: None,
             inside,
             inside_index,
-            reference: None,
+            references: Vec::new(),
+            current: None,
             classifier: None,
         })
     }
@@ -336,18 +345,22 @@ impl Processor {
         self.settings = settings;
     }
 
-    /// Forgets V_0: the next `reference_frames` frames (the sheet untouched) make a new one.
+    /// Forgets V_0 (of every configuration): the next `reference_frames` frames of each (the
+    /// sheet untouched) make a new one.
     pub fn tare(&mut self) {
-        self.reference = None;
+        self.references.clear();
     }
 
-    /// V_0, when complete.
+    /// The complete reference of the latest frame's configuration.
+    fn reference(&self) -> Option<&Reference> {
+        let r = (self.references.iter()).find(|r| Some(r.config) == self.current)?;
+        (r.frames.len() >= self.settings.reference_frames.max(1)).then_some(r)
+    }
+
+    /// V_0 of the latest frame's configuration, when complete.
     #[must_use]
     pub fn v0(&self) -> Option<Vec<f64>> {
-        let r = self.reference.as_ref()?;
-        if r.frames.len() < self.settings.reference_frames.max(1) {
-            return None;
-        }
+        let r = self.reference()?;
         let mut v0 = vec![0.0; r.frames.first().map_or(0, Vec::len)];
         stats::reference(&r.frames, &mut v0).ok()?;
         Some(v0)
@@ -367,10 +380,7 @@ impl Processor {
     /// None until the reference is complete.
     #[must_use]
     pub fn reference_changes(&self) -> Option<(usize, f64)> {
-        let r = self.reference.as_ref()?;
-        if r.frames.len() < self.settings.reference_frames.max(1) {
-            return None;
-        }
+        let r = self.reference()?;
         self.recon.reference_changes(&r.frames)
     }
 
@@ -416,14 +426,26 @@ impl Processor {
             .threshold
             .unwrap_or_else(|| default_threshold(frame.config.protocol));
         let needed = self.settings.reference_frames.max(1);
-        let reference = match &mut self.reference {
-            Some(r) if r.config == frame.config => r,
-            slot => slot.insert(Reference {
-                config: frame.config,
-                frames: Vec::with_capacity(needed),
-                noise: None,
-            }),
+        self.current = Some(frame.config);
+        let at = match self
+            .references
+            .iter()
+            .position(|r| r.config == frame.config)
+        {
+            Some(at) => at,
+            None => {
+                if self.references.len() >= REFERENCES_KEPT {
+                    self.references.remove(0);
+                }
+                self.references.push(Reference {
+                    config: frame.config,
+                    frames: Vec::with_capacity(needed),
+                    noise: None,
+                });
+                self.references.len() - 1
+            }
         };
+        let reference = &mut self.references[at];
         if reference.frames.len() < needed {
             reference.frames.push(frame.voltages.clone());
             return Ok(Output {

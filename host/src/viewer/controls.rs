@@ -140,8 +140,12 @@ impl Viewer {
             self.processor.set_settings(s);
         }
         if ui.button("Tare (sheet untouched)").clicked() {
-            self.processor.tare();
-            self.status = "taking V_0: keep the sheet untouched".into();
+            if self.protocol == ProtocolChoice::Automatic {
+                self.start_automatic();
+            } else {
+                self.processor.tare();
+                self.status = "taking V_0: keep the sheet untouched".into();
+            }
         }
         if let Some(Source::Replay(r)) = self.source.as_mut() {
             ui.separator();

@@ -110,7 +110,7 @@ fn untouched_then_pressed(method: et_recon::Method) {
 }
 
 #[test]
-fn a_configuration_change_takes_a_new_reference() {
+fn a_configuration_change_takes_a_new_reference_and_keeps_the_old_one() {
     let (mut source, sheet) = sim();
     let mut p = Processor::new(
         &sheet.physical,
@@ -137,6 +137,19 @@ fn a_configuration_change_takes_a_new_reference() {
             needed: 3
         })
     );
+    // Back on AD: its own V_0 is kept, and images at once (it was taken again, from frames
+    // of whatever touched the sheet by then); a tare forgets every configuration's.
+    let adjacent = ScanConfig {
+        protocol: ProtocolKind::Adjacent,
+        ..config
+    };
+    source.configure(adjacent).unwrap();
+    let back = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    assert_eq!(back.frame.config.protocol, ProtocolKind::Adjacent);
+    assert_eq!(back.referencing, None);
+    p.tare();
+    let again = p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    assert!(again.referencing.is_some());
     // Frames of the wrong length and with NaN are refused, not imaged.
     let mut bad = out.frame.clone();
     bad.voltages.pop();

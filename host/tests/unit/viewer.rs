@@ -1,6 +1,7 @@
 //! The viewer driven headless through its real interface (egui_kittest: widgets found by
 //! their labels, clicked, the state checked).
 use eframe::egui::{self, vec2};
+use et_core::ScanConfig;
 use et_core::protocol::ProtocolKind;
 use et_host::live::{ProtocolChoice, Source, SourceSpec};
 use et_sim::touch::Touch;
@@ -83,6 +84,21 @@ fn protocol_buttons_switch_the_scan_and_take_a_new_reference() {
         // A new V_0 for the new protocol.
         assert!(last.referencing.is_some(), "{label}");
     }
+    // A scan the source was put on behind the viewer's back (a board keeps its scan from
+    // before the viewer connected) is the one shown chosen.
+    let config = h.state().source.as_ref().unwrap().config().unwrap();
+    (h.state_mut().source.as_mut().unwrap())
+        .configure(ScanConfig {
+            protocol: ProtocolKind::PpPp,
+            ..config
+        })
+        .unwrap();
+    h.step();
+    h.step();
+    assert_eq!(
+        h.state().protocol,
+        ProtocolChoice::Fixed(ProtocolKind::PpPp)
+    );
     // Automatic: starts on AD.
     h.get_by_label("automatic").click();
     h.step();
@@ -94,6 +110,28 @@ fn protocol_buttons_switch_the_scan_and_take_a_new_reference() {
 fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
     let mut h = harness(sim_options());
     h.get_by_label("automatic").click();
+    // V_0 of AD, PP and PP-PP in turn, the sheet untouched; then AD.
+    let mut scanned = Vec::new();
+    for _ in 0..200 {
+        h.step();
+        if scanned.last() != Some(&scanning(&h)) {
+            scanned.push(scanning(&h));
+        }
+        if h.state().status.contains("taken: touches show") {
+            break;
+        }
+    }
+    assert_eq!(
+        scanned,
+        [
+            ProtocolKind::Adjacent,
+            ProtocolKind::PseudoPolar,
+            ProtocolKind::PpPp,
+            ProtocolKind::Adjacent
+        ],
+        "{}",
+        h.state().status
+    );
     settle(&mut h);
     // A press in the middle of the sheet (docs/method.md §8: central, switch to PP).
     h.state_mut().press(vec![Touch {
@@ -111,6 +149,21 @@ fn automatic_selection_moves_to_pseudo_polar_for_a_central_press() {
         }
     }
     assert!(switched, "{}", h.state().status);
+    // The press held: imaged on PP where it is (against a V_0 of the untouched sheet, not
+    // one taken with the press that made the switch), and the scan stays on PP.
+    for _ in 0..30 {
+        h.step();
+    }
+    let last = h.state().last.as_ref().unwrap();
+    assert_eq!(last.frame.config.protocol, ProtocolKind::PseudoPolar);
+    let e = last.event.clone().unwrap_or_else(|| {
+        panic!(
+            "the held press is not imaged on PP: referencing {:?}, status {}",
+            last.referencing,
+            h.state().status
+        )
+    });
+    assert!(e.position_mm[0].hypot(e.position_mm[1]) < 15.0, "{e:?}");
 }
 
 #[test]
