@@ -12,3 +12,6 @@ pub const BAUD: u32 = 2_000_000;
 /// Bytes of one model slot in the board's flash (three 128 KiB sectors). Uploads go to the
 /// slot that is not in use, so a model blob must fit one slot.
 pub const MODEL_SLOT_BYTES: usize = 384 * 1024;
+
+/// Bytes of one model slot in the firmware's QEMU image, in RAM (QEMU programs no flash).
+pub const QEMU_MODEL_SLOT_BYTES: usize = 16 * 1024;

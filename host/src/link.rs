@@ -174,6 +174,21 @@ pub enum LinkError {
         /// The device's reason.
         reason: Refusal,
     },
+    /// The device refused the start of a model upload for its size (its storage, which it
+    /// does not report, is smaller).
+    #[error(
+        "the device refused the model: its {bytes} bytes ({:.0} KiB) do not fit the device's \
+         model storage (et's firmware holds {} KiB a slot on the board, {} KiB in its QEMU \
+         image); fewer classes or features make it smaller (et train --keep N, et collect \
+         --grid), and half precision halves it (et export --precision f16)",
+        *.bytes as f64 / 1024.0,
+        et_core::board::MODEL_SLOT_BYTES / 1024,
+        et_core::board::QEMU_MODEL_SLOT_BYTES / 1024
+    )]
+    TooLarge {
+        /// The blob's size.
+        bytes: usize,
+    },
     /// A message could not be encoded (a bug: commands always fit).
     #[error("encoding a command: {0}")]
     Encode(WireError),
@@ -384,12 +399,16 @@ impl Link {
         timeout: Duration,
         erase_timeout: Duration,
     ) -> Result<(), LinkError> {
-        let len = u32::try_from(blob.len()).map_err(|_| LinkError::Refused {
-            command: CommandTag::ModelBegin,
-            reason: Refusal::TooLarge,
-        })?;
+        let too_large = LinkError::TooLarge { bytes: blob.len() };
+        let len = u32::try_from(blob.len()).map_err(|_| too_large)?;
         let crc = wire::crc32(blob);
-        self.request(&Command::ModelBegin { len, crc }, erase_timeout)?;
+        (self.request(&Command::ModelBegin { len, crc }, erase_timeout)).map_err(|e| match e {
+            LinkError::Refused {
+                reason: Refusal::TooLarge,
+                ..
+            } => LinkError::TooLarge { bytes: blob.len() },
+            e => e,
+        })?;
         for (i, chunk) in blob.chunks(MODEL_CHUNK).enumerate() {
             let data = heapless::Vec::from_slice(chunk)
                 .map_err(|_| LinkError::Encode(WireError::BufferFull))?;

@@ -503,6 +503,16 @@ fn the_board_refuses_a_blob_whose_sizes_wrap_32_bit_arithmetic() {
         Event::Pong { nonce: 2 },
         "the board still answers"
     );
+    // A blob past the image's slot is refused at its start, said with its size and what
+    // makes it smaller (a 3 x 3 QDA from the viewer's wizard was "does not fit its model
+    // storage" alone).
+    let big = vec![0u8; et_core::board::QEMU_MODEL_SLOT_BYTES + 1];
+    let refused = link.upload_model(&big, REPLY, REPLY).unwrap_err();
+    assert!(
+        matches!(refused, LinkError::TooLarge { bytes } if bytes == big.len())
+            && refused.to_string().contains("et train --keep"),
+        "{refused}"
+    );
 }
 
 /// The `et` command: `$ET_BIN` when set, else built with `cargo build -p et-host`. The test

@@ -74,22 +74,30 @@ pub enum ModelError {
         /// The reason.
         source: std::io::Error,
     },
-    /// Not JSON, or JSON cut short (the message names the line and column).
+    /// Not JSON, or JSON cut short (the message names the line and column, and the first
+    /// line of a file that does not start as JSON does).
     #[error(
-        "{}: {}: {}",
+        "{}: {}: {}{}",
         .path.display(),
         if error.classify() == serde_json::error::Category::Eof {
             "the file ends inside its JSON (a copy cut short? write it again with et train)"
         } else {
             "not an et model file (et train writes JSON)"
         },
-        crate::model_file::json_said(error, false)
+        crate::model_file::json_said(error, false),
+        .first_line.as_ref().map_or(String::new(), |l| format!(
+            ", and its first line reads {l:?}: a file of another kind given?"
+        ))
     )]
     Json {
         /// The file.
         path: PathBuf,
         /// The parser's error (said in the message, not as a cause).
         error: serde_json::Error,
+        /// The file's first line (at most 60 characters) when it is not JSON from its first
+        /// character (a table or a scene given as a model were said as "expected ident"
+        /// alone).
+        first_line: Option<String>,
     },
     /// JSON, but neither `"format": "et-model"` (a board model) nor `"et-table-model"`.
     #[error(
@@ -179,6 +187,26 @@ impl std::fmt::Display for Mismatch {
 }
 
 /// A model file's format in words.
+/// The first line of `text` (at most 60 characters, control characters left out) when
+/// parsing it as JSON failed on its first characters: the text is not JSON at all.
+fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
+    const SHOWN: usize = 60;
+    if error.classify() != serde_json::error::Category::Syntax
+        || error.line() != 1
+        || error.column() > 2
+    {
+        return None;
+    }
+    let line = text.lines().next()?.trim();
+    let mut said: String = (line.chars().filter(|c| !c.is_control()))
+        .take(SHOWN)
+        .collect();
+    if line.chars().count() > SHOWN {
+        said.push_str(" ...");
+    }
+    (!said.is_empty()).then_some(said)
+}
+
 fn kind_of(format: &str) -> &'static str {
     if format == "et-model" {
         "a board model"
@@ -227,6 +255,7 @@ impl Model {
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|error| ModelError::Json {
                 path: path.into(),
+                first_line: first_line_if_not_json(text, &error),
                 error,
             })?;
         let format = value.get("format").and_then(serde_json::Value::as_str);

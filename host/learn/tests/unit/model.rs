@@ -440,15 +440,30 @@ fn a_file_of_neither_kind_is_refused_naming_it() {
         let e = Model::load(&path).unwrap_err().to_string();
         assert!(e.contains(said), "{text}: {e}");
     }
-    // A file that is not JSON at all (frames given as the model): said as not a model file,
-    // with the place the text stops being JSON.
-    let csv = dir.join("frames.csv");
-    std::fs::write(&csv, "v0,v1\n1,2\n").unwrap();
-    let e = Model::load(&csv).unwrap_err().to_string();
-    assert!(
-        e.contains("frames.csv: not an et model file") && e.contains("(line 1, column 1)"),
-        "{e}"
-    );
+    // A file that is not JSON at all (frames, a table or a scene given as the model): said as
+    // not a model file, with the place the text stops being JSON and what its first line
+    // reads (the parser's "expected ident" was all it said of a table).
+    for (name, text, reads) in [
+        ("frames.csv", "v0,v1\n1,2\n", "\"v0,v1\""),
+        ("f.csv", "f0,f1,f2\n1,2,3\n", "\"f0,f1,f2\""),
+        ("scene.toml", "[sheet]\nshape = 1\n", "\"[sheet]\""),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let e = Model::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("{name}: not an et model file"))
+                && e.contains("(line 1, column ")
+                && e.contains(&format!(
+                    "its first line reads {reads}: a file of another kind"
+                )),
+            "{e}"
+        );
+    }
+    // JSON that goes wrong later is said by its place alone.
+    std::fs::write(dir.join("late.json"), "{\"format\": x}").unwrap();
+    let e = Model::load(&dir.join("late.json")).unwrap_err().to_string();
+    assert!(!e.contains("first line"), "{e}");
     let e = Model::load(&dir.join("missing.json")).unwrap_err();
     assert!(matches!(e, ModelError::Io { .. }), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
