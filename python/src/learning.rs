@@ -185,12 +185,7 @@ fn train_dataset(
     let trained = train_telling(py, &trainer, Examples::Dataset(data), progress)?;
     // What `et train --data` prints as its notes: the recipe's changes for too few data, and
     // an accuracy no better than guessing.
-    let notes: Vec<String> = trained.board.as_ref().map_or(Vec::new(), |b| {
-        let t = &b.training;
-        (t.fallbacks.iter().map(ToString::to_string))
-            .chain(t.cv.no_better_than_guessing().map(|g| g.to_string()))
-            .collect()
-    });
+    let notes = (trained.board.as_ref()).map_or(Vec::new(), |b| b.training.notes());
     let mut model = Model::new(trained.model);
     model.training_note = (!notes.is_empty()).then(|| notes.join("; "));
     Ok(model)

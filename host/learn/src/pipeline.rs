@@ -92,6 +92,18 @@ pub struct Training {
     pub fallbacks: Vec<Fallback>,
 }
 
+impl Training {
+    /// What a training says beside its scores, as `et train`, the viewer's wizard and Python
+    /// say it: each change of recipe ([`Training::fallbacks`]), then an accuracy no better than
+    /// guessing ([`Confusion::no_better_than_guessing`]).
+    #[must_use]
+    pub fn notes(&self) -> Vec<String> {
+        (self.fallbacks.iter().map(ToString::to_string))
+            .chain(self.cv.no_better_than_guessing().map(|g| g.to_string()))
+            .collect()
+    }
+}
+
 /// How [`train`] chose the shrinkage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]

@@ -344,11 +344,8 @@ impl Wizard {
                 ""
             }
         );
-        for f in &t.fallbacks {
-            self.message.push_str(&format!("\nnote: {f}"));
-        }
-        if let Some(g) = t.cv.no_better_than_guessing() {
-            self.message.push_str(&format!("\nnote: {g}"));
+        for note in t.notes() {
+            self.message.push_str(&format!("\nnote: {note}"));
         }
         self.trained = Some(TrainedBoard {
             board,

@@ -282,11 +282,8 @@ fn print_trained(
         no_better_than_guessing: guessing.as_ref().map(ToString::to_string),
         learning_curve: curve,
     };
-    for f in &trained.fallbacks {
-        say!("note: {f}");
-    }
-    if let Some(g) = &guessing {
-        say!("note: {g}");
+    for note in trained.notes() {
+        say!("note: {note}");
     }
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
