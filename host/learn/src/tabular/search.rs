@@ -9,7 +9,7 @@ use super::*;
 mod plan;
 
 use crate::pipeline::cost::about;
-use plan::{Cv, average_note, fit_first, fitted_hyperparameters, search_all};
+use plan::{Cv, averaged, fit_first, fitted_hyperparameters, search_all};
 
 /// Shrinkage candidates for QDA and LDA.
 pub(super) const SHRINKAGES: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
@@ -162,21 +162,16 @@ pub fn train(
     let (mut ranked, mut notes) = rank(&search, choice, cv.grouped);
     notes.extend(constant.clone());
     notes.extend(table.positions_scale_note());
-    let average = match (&targets, choice) {
-        (Some(t), Choice::Auto) if opts.grid.is_none() => average_of_best(
+    let (average, members) = match (&targets, choice) {
+        (Some(t), Choice::Auto) if opts.grid.is_none() => averaged(
             &ranked,
             t,
             &cv.folds(n, None, opts.seed),
             cv.grouped,
-            by_drift,
+            &mut notes,
         ),
-        _ => None,
+        _ => (None, Vec::new()),
     };
-    let members = average.as_ref().map_or(Vec::new(), |(_, m)| m.clone());
-    if let Some((avg, members)) = &average {
-        notes.push(average_note(avg, members, by_drift));
-    }
-    let average = average.map(|(c, _)| c);
     if let Some(avg) = &average {
         ranked.insert(0, avg);
     }
@@ -216,12 +211,9 @@ pub fn train(
     if qda_is_lda {
         // Its cross-validation is the QDA's: the same classifier in every fold.
         search.push(best.clone());
-        notes.push(format!(
-            "qda's best shrinkage is 1 toward the pooled covariance: every class then has the \
-             pooled covariance, which is lda (the same decisions); saved the lda, one \
-             covariance instead of {}",
-            classes.as_ref().map_or(0, |(l, _)| l.names.len())
-        ));
+        // Said as a dataset's training says it.
+        let classes = classes.as_ref().map_or(0, |(l, _)| l.names.len());
+        notes.push(crate::pipeline::Fallback::QdaIsLda { classes }.to_string());
     }
     let mut hyperparameters = best.hyperparameters.clone();
     hyperparameters.extend(fitted_hyperparameters(&tables));

@@ -204,6 +204,26 @@ fn discriminant_fits(method: Kind, features: usize, classes: usize) -> Result<()
     }
 }
 
+/// `auto`'s average of the best regressors ([`average_of_best`]) as a training keeps it: the
+/// average, its note said in `notes`, and its members; none when no average cross-validates
+/// better than the best single method.
+pub(super) fn averaged(
+    ranked: &[&Candidate],
+    t: &[Target3],
+    fold: &[usize],
+    grouped: bool,
+    notes: &mut Vec<String>,
+) -> (Option<Candidate>, Vec<Candidate>) {
+    let by_drift = !grouped;
+    match average_of_best(ranked, t, fold, grouped, by_drift) {
+        Some((average, members)) => {
+            notes.push(average_note(&average, &members, by_drift));
+            (Some(average), members)
+        }
+        None => (None, Vec::new()),
+    }
+}
+
 /// What the training says when it chose the average `avg` of `members`.
 pub(super) fn average_note(avg: &Candidate, members: &[Candidate], by_drift: bool) -> String {
     format!(
