@@ -1134,8 +1134,21 @@ class Model:
 
     @property
     def info(self) -> Dict[str, Any]:
-        """The model file's content: the method, hyperparameters, the cross-validation's scores."""
+        """The model file's content: the method, its tables and hyperparameters (a table
+        model's file also keeps its cross-validation's scores; see :attr:`scores`)."""
         return json.loads(self._native.file_json())
+
+    @property
+    def scores(self) -> Optional[Dict[str, Any]]:
+        """What cross-validation said of the model, as ``et train --json`` prints it
+        (accuracies as fractions, errors in mm). A board model trained here: ``cv_accuracy``
+        (stratified k-fold), ``leave_one_visit_out_accuracy`` (what a new session scores),
+        ``cv_mean_error_mm``, ``shrinkage_scores`` (``accuracy`` None where that shrinkage
+        could not be fitted) and the rest; None for a board model loaded from its file,
+        which keeps no scores. A table model: the chosen method's ``cv_accuracy`` or
+        ``cv_mean_error_mm``, and every ``candidates``' scores, from its file."""
+        said = self._native.scores_json()
+        return None if said is None else json.loads(said)
 
     def _predicted(self, X: Any, v0: Any) -> Tuple[Any, Any, Any, Any]:
         if isinstance(X, (str, bytes, os.PathLike)):

@@ -185,9 +185,14 @@ fn train_dataset(
     let trained = train_telling(py, &trainer, Examples::Dataset(data), progress)?;
     // What `et train --data` prints as its notes: the recipe's changes for too few data, and
     // an accuracy no better than guessing.
-    let notes = (trained.board.as_ref()).map_or(Vec::new(), |b| b.training.notes());
-    let mut model = Model::new(trained.model);
+    let (board, training) = trained
+        .into_board()
+        .ok_or_else(|| usage("an et dataset trains a board model"))?;
+    let notes = training.training.notes();
+    let scores = json(&training.scores(&board))?;
+    let mut model = Model::new(Estimator::Board(Box::new(board)));
     model.training_note = (!notes.is_empty()).then(|| notes.join("; "));
+    model.training_scores = Some(scores);
     Ok(model)
 }
 
@@ -258,6 +263,8 @@ pub(crate) struct Model {
     prepared: OnceLock<Prepared>,
     /// A board model trained here: what its training said (its file keeps no note).
     training_note: Option<String>,
+    /// A board model trained here: its cross-validated scores, JSON (its file keeps none).
+    training_scores: Option<String>,
 }
 
 /// Predictions: classes (index), the class names, positions (n x 2, m) and a third target.
@@ -391,6 +398,16 @@ impl Model {
         }
     }
 
+    /// What cross-validation said of the model, as `et train --json` prints it (JSON): a
+    /// table model's from its file; a board model's when trained here (its file keeps no
+    /// scores: None once loaded).
+    fn scores_json(&self) -> PyResult<Option<String>> {
+        match &self.inner {
+            Estimator::Table(t) => json(&t.scores()).map(Some),
+            Estimator::Board(_) => Ok(self.training_scores.clone()),
+        }
+    }
+
     /// The model file's content (JSON).
     fn file_json(&self) -> PyResult<String> {
         match &self.inner {
@@ -498,6 +515,7 @@ impl Model {
             inner,
             prepared: OnceLock::new(),
             training_note: None,
+            training_scores: None,
         }
     }
 

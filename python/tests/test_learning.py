@@ -24,6 +24,11 @@ def test_a_board_model_is_et_trains(et_cli, work, dataset):
     model = et.train(et.read_dataset(dataset))
     assert model.is_board and model.kind == "qda"
     assert model.info["shrinkage"] == trained["shrinkage"]
+    # Its cross-validation's scores, as `et train --json` says them (its file keeps none).
+    said = {k: v for k, v in trained.items() if k not in ("out", "learning_curve")}
+    assert model.scores == said
+    assert 0.5 < said["cv_accuracy"] <= 1 and said["leave_one_visit_out_accuracy"] is not None
+    assert et.Model.load(cli_model).scores is None
     # The same model file, number for number.
     mine = work / "py-model.json"
     model.save(mine)
@@ -212,6 +217,10 @@ def test_a_regressor_predicts_as_et_eval_does(et_cli, work, table, kind):
     model = et.train(data.x, data.positions_m, kind=kind)
     assert model.kind == kind
     assert model.info["hyperparameters"] == json.loads(cli_model.read_text())["hyperparameters"]
+    # The chosen candidate's scores, as `et train --json` says them, here and from its file.
+    scores = model.scores
+    assert scores["cv_mean_error_mm"] in [c["cv_mean_error_mm"] for c in scores["candidates"]]
+    assert scores == et.Model.load(cli_model).scores
     predicted = model.predict(data.x)
     written = np.loadtxt(predictions, delimiter=",", skiprows=1)
     np.testing.assert_allclose(predicted * 1e3, written[:, 1:3], atol=1e-4)

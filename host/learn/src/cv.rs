@@ -244,9 +244,14 @@ pub(crate) fn fold_count(fold: &[usize], n: usize) -> Result<usize, FitError> {
     Ok(k)
 }
 
+/// The shrinkage chosen, and every candidate's (shrinkage, cross-validated accuracy): None
+/// where the candidate's fit is not positive definite in some fold.
+pub type ShrinkageChoice = (f64, Vec<(f64, Option<f64>)>);
+
 /// The shrinkage among `candidates` with the best cross-validated accuracy over `fold`
-/// (ties: the first), with every candidate's accuracy. A candidate whose fit is not positive
-/// definite scores 0.
+/// (ties: the first), with every candidate's accuracy: None for a candidate whose fit is not
+/// positive definite in some fold (when none fits, the first is returned, and its fit says
+/// why).
 ///
 /// # Errors
 /// [`FitError::NoCandidates`] for no candidates, [`FitError::Counts`] or [`FitError::TooFewFolds`] for bad folds.
@@ -257,7 +262,7 @@ pub fn choose_shrinkage(
     base: &FitOptions,
     candidates: &[f64],
     fold: &[usize],
-) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+) -> Result<ShrinkageChoice, FitError> {
     choose_shrinkage_with(
         candidates,
         |o| cross_validate_folds(x, y, classes, o, fold),
@@ -273,7 +278,7 @@ pub fn choose_shrinkage_with(
     candidates: &[f64],
     mut validate: impl FnMut(&FitOptions) -> Result<Confusion, FitError>,
     base: &FitOptions,
-) -> Result<(f64, Vec<(f64, f64)>), FitError> {
+) -> Result<ShrinkageChoice, FitError> {
     let mut scores = Vec::new();
     for &lambda in candidates {
         let opts = FitOptions {
@@ -281,21 +286,25 @@ pub fn choose_shrinkage_with(
             ..*base
         };
         let acc = match validate(&opts) {
-            Ok(c) => c.accuracy(),
-            Err(FitError::NotPositiveDefinite { .. }) => 0.0,
+            Ok(c) => Some(c.accuracy()),
+            Err(FitError::NotPositiveDefinite { .. }) => None,
             Err(e) => return Err(e),
         };
         scores.push((lambda, acc));
     }
+    let first = candidates
+        .first()
+        .copied()
+        .ok_or(FitError::NoCandidates("no shrinkage candidates"))?;
     let best = scores
         .iter()
-        .copied()
+        .filter_map(|&(lambda, acc)| Some((lambda, acc?)))
         .fold(None, |best: Option<(f64, f64)>, s| match best {
             Some(b) if b.1 >= s.1 => Some(b),
             _ => Some(s),
         })
-        .ok_or(FitError::NoCandidates("no shrinkage candidates"))?;
-    Ok((best.0, scores))
+        .map_or(first, |b| b.0);
+    Ok((best, scores))
 }
 
 /// k-fold stratified cross-validation: fits on k-1 folds, predicts the held-out one, k times.

@@ -77,8 +77,11 @@ pub struct Training {
     pub model: Fitted,
     /// Its options (shrinkage included).
     pub options: FitOptions,
-    /// (candidate, cross-validated accuracy) when the shrinkage was chosen.
-    pub shrinkage_scores: Vec<(f64, f64)>,
+    /// (candidate, cross-validated accuracy) when the shrinkage was chosen: None where the
+    /// candidate's fit is not positive definite in some fold.
+    pub shrinkage_scores: Vec<(f64, Option<f64>)>,
+    /// k of the stratified k-fold cross-validation [`Training::cv`] reports.
+    pub folds: usize,
     /// Stratified k-fold confusion.
     pub cv: Confusion,
     /// Leave-one-visit-out accuracy, when there are at least two visits.
@@ -336,7 +339,7 @@ pub fn train_reporting(
         }
     };
     // Leave-one-visit-out chooses when some candidate fits on every visit's complement (a
-    // failing candidate scores 0); otherwise stratified k-fold does.
+    // failing candidate scores None); otherwise stratified k-fold does.
     // None: one visit, nothing to choose by.
     let by_visit_choice = visit_part.as_ref().map(|part| {
         match part {
@@ -344,7 +347,7 @@ pub fn train_reporting(
             Err(e) => Err(VisitFault::from(e.clone())),
         }
         .and_then(|(l, scores)| {
-            if !scores.is_empty() && scores.iter().all(|&(_, a)| a == 0.0) {
+            if !scores.is_empty() && scores.iter().all(|&(_, a)| a.is_none()) {
                 Err(VisitFault::NoCandidateFits)
             } else {
                 Ok((l, scores))
@@ -398,6 +401,7 @@ pub fn train_reporting(
         model,
         options: opts,
         shrinkage_scores,
+        folds: options.folds.max(2),
         cv,
         leave_one_visit_out,
         selection_folds,

@@ -286,6 +286,7 @@ mod classify;
 mod error;
 mod evaluate;
 mod model;
+mod scores;
 mod search;
 mod table;
 
@@ -294,5 +295,6 @@ use classify::*;
 pub use error::*;
 pub use evaluate::*;
 pub use model::*;
+pub use scores::*;
 pub use search::*;
 pub use table::*;

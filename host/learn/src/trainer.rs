@@ -245,7 +245,83 @@ impl Trained {
     }
 }
 
+/// A board model's cross-validated scores, as `et train --data --json` prints them and
+/// Python's `Model.scores` gives them (accuracies are fractions, errors mm).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BoardScores {
+    /// QDA or LDA.
+    pub kind: ModelKind,
+    /// Whether the model classifies frames minus the untouched frame.
+    pub referenced: bool,
+    /// The shrinkage fitted.
+    pub shrinkage: f64,
+    /// "given", "leave-one-visit-out" or {"k-fold": k}.
+    pub shrinkage_chosen_by: pipeline::ChosenBy,
+    /// Cross-validated accuracy of each shrinkage tried (empty when it was given).
+    pub shrinkage_scores: Vec<ShrinkageScore>,
+    /// Classes, observations and features trained on.
+    pub classes: usize,
+    /// Observations (rows) trained on.
+    pub observations: usize,
+    /// Features each observation has.
+    pub features: usize,
+    /// k of the stratified k-fold cross-validation.
+    pub cv_folds: usize,
+    /// Its accuracy.
+    pub cv_accuracy: f64,
+    /// Its mean distance from the true class's centre to the predicted one's, mm.
+    pub cv_mean_error_mm: f64,
+    /// Its average Euclidean error (the misclassified observations only), mm.
+    pub cv_aee_mm: f64,
+    /// Leave-one-visit-out accuracy, with at least two visits: what a new session scores.
+    pub leave_one_visit_out_accuracy: Option<f64>,
+    /// Where training changed its recipe because the data are too few (empty normally).
+    pub fallbacks: Vec<pipeline::Fallback>,
+    /// When the cross-validated accuracy is no better than always guessing the commonest
+    /// class: why the model learnt nothing ([`crate::guess`]).
+    pub no_better_than_guessing: Option<String>,
+}
+
+/// One shrinkage tried and its cross-validated accuracy (None: its fit is not positive
+/// definite in some fold, too few observations for the features).
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct ShrinkageScore {
+    /// The candidate.
+    pub shrinkage: f64,
+    /// Its accuracy.
+    pub accuracy: Option<f64>,
+}
+
 impl BoardTraining {
+    /// The scores of this training of `board` (the model it trained).
+    #[must_use]
+    pub fn scores(&self, board: &Board) -> BoardScores {
+        let (t, file) = (&self.training, board.file());
+        let mm = file.board_positions();
+        BoardScores {
+            kind: t.options.kind,
+            referenced: file.referenced,
+            shrinkage: t.options.shrinkage,
+            shrinkage_chosen_by: t.chosen_by,
+            shrinkage_scores: (t.shrinkage_scores.iter())
+                .map(|&(shrinkage, accuracy)| ShrinkageScore {
+                    shrinkage,
+                    accuracy,
+                })
+                .collect(),
+            classes: self.data.centres.len(),
+            observations: self.data.x.nrows(),
+            features: self.data.x.ncols(),
+            cv_folds: t.folds,
+            cv_accuracy: t.cv.accuracy(),
+            cv_mean_error_mm: t.cv.mean_position_error(&mm),
+            cv_aee_mm: t.cv.aee(&mm),
+            leave_one_visit_out_accuracy: t.leave_one_visit_out,
+            fallbacks: t.fallbacks.clone(),
+            no_better_than_guessing: t.cv.no_better_than_guessing().map(|g| g.to_string()),
+        }
+    }
+
     /// The sizes a learning curve is drawn at: observations per class from 12 up to the
     /// largest class.
     #[must_use]

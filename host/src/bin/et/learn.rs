@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use et_core::model::ModelKind;
 use et_host::plot;
 use et_learn::analysis::CurvePoint;
 use et_learn::model::Board;
@@ -246,72 +245,44 @@ fn print_trained(
     training: &BoardTraining,
     curve: Option<&[CurvePoint]>,
 ) -> Result<()> {
-    let BoardTraining {
-        training: trained,
-        data,
-    } = training;
-    let file = board.file();
-    let (referenced, mm, classes) = (file.referenced, &file.board_positions(), data.centres.len());
-    let (cv_conf, lovo) = (&trained.cv, trained.leave_one_visit_out);
-    let (kind, shrinkage) = (trained.options.kind, trained.options.shrinkage);
-    let folds = args.trainer()?.dataset_folds();
-    let guessing = cv_conf.no_better_than_guessing();
+    let scores = training.scores(board);
     let summary = TrainSummary {
         out: &args.out,
-        kind,
-        referenced,
-        shrinkage,
-        shrinkage_chosen_by: trained.chosen_by,
-        shrinkage_scores: trained
-            .shrinkage_scores
-            .iter()
-            .map(|&(shrinkage, accuracy)| ShrinkageScore {
-                shrinkage,
-                accuracy,
-            })
-            .collect(),
-        classes,
-        observations: data.x.nrows(),
-        features: data.x.ncols(),
-        cv_folds: folds.max(2),
-        cv_accuracy: cv_conf.accuracy(),
-        cv_mean_error_mm: cv_conf.mean_position_error(mm),
-        cv_aee_mm: cv_conf.aee(mm),
-        leave_one_visit_out_accuracy: lovo,
-        fallbacks: &trained.fallbacks,
-        no_better_than_guessing: guessing.as_ref().map(ToString::to_string),
+        scores: &scores,
         learning_curve: curve,
     };
-    for note in trained.notes() {
+    for note in training.training.notes() {
         say!("note: {note}");
     }
     if args.json {
         out!("{}", serde_json::to_string(&summary)?);
     } else {
+        let s = &scores;
         say!(
             "trained {}{} on {} observations ({} classes, {} features), shrinkage {} ({}): {}-fold CV accuracy {:.1} %, mean error {:.2} mm{}; wrote {}",
-            kind.name(),
-            if referenced {
+            s.kind.name(),
+            if s.referenced {
                 " (referenced)"
             } else {
                 " (raw frames)"
             },
-            data.x.nrows(),
-            classes,
-            data.x.ncols(),
-            shrinkage,
-            trained.chosen_by,
-            folds.max(2),
-            100.0 * cv_conf.accuracy(),
-            cv_conf.mean_position_error(mm),
-            lovo.map_or(String::new(), |a| format!(
+            s.observations,
+            s.classes,
+            s.features,
+            s.shrinkage,
+            s.shrinkage_chosen_by,
+            s.cv_folds,
+            100.0 * s.cv_accuracy,
+            s.cv_mean_error_mm,
+            (s.leave_one_visit_out_accuracy).map_or(String::new(), |a| format!(
                 ", leave-one-visit-out {:.1} %",
                 100.0 * a
             )),
             args.out.display()
         );
-        let fit = pipeline::features_that_fit(kind, classes, data.x.ncols());
-        if fit < data.x.ncols() {
+        let (kind, classes, features) = (s.kind, s.classes, s.features);
+        let fit = pipeline::features_that_fit(kind, classes, features);
+        if fit < features {
             say!(
                 "note: for the board, this model is too big for a model slot even in f16; \
                  train with --keep {fit} (the most that fit for {classes} classes) or fewer classes"
@@ -321,38 +292,13 @@ fn print_trained(
     Ok(())
 }
 
-/// `et train --json`.
+/// `et train --json` of a board model.
 #[derive(serde::Serialize)]
 struct TrainSummary<'a> {
     out: &'a std::path::Path,
-    kind: ModelKind,
-    referenced: bool,
-    shrinkage: f64,
-    /// "given", "leave-one-visit-out" or {"k-fold": k}.
-    shrinkage_chosen_by: pipeline::ChosenBy,
-    /// Cross-validated accuracy of each shrinkage tried (empty when it was given).
-    shrinkage_scores: Vec<ShrinkageScore>,
-    classes: usize,
-    observations: usize,
-    features: usize,
-    cv_folds: usize,
-    cv_accuracy: f64,
-    cv_mean_error_mm: f64,
-    cv_aee_mm: f64,
-    leave_one_visit_out_accuracy: Option<f64>,
-    /// Where training changed its recipe because the data are too few (empty normally).
-    fallbacks: &'a [pipeline::Fallback],
-    /// When the cross-validated accuracy is no better than always guessing the commonest
-    /// class: why the model learnt nothing (`et_learn::guess`).
-    no_better_than_guessing: Option<String>,
+    #[serde(flatten)]
+    scores: &'a et_learn::trainer::BoardScores,
     learning_curve: Option<&'a [CurvePoint]>,
-}
-
-/// One shrinkage tried and its cross-validated accuracy.
-#[derive(serde::Serialize)]
-struct ShrinkageScore {
-    shrinkage: f64,
-    accuracy: f64,
 }
 
 use et_learn::tabular::GRID_MOST;

@@ -227,29 +227,14 @@ pub(crate) fn train(
     };
     model.reference = args.referencing();
     output::write(out, |partial| model.save(partial))?;
-    let best = model.chosen();
     if json {
-        out!(
-            "{}",
-            serde_json::to_string(&rounded(serde_json::json!({
-                "out": out,
-                "method": model.method,
-                "hyperparameters": model.hyperparameters,
-                "cv_folds": model.cv_folds,
-                "cv_scheme": model.cv_scheme,
-                "cv_mean_error_mm": best.and_then(|b| b.cv_mean_error_mm),
-                "cv_accuracy": best.and_then(|b| b.cv_accuracy),
-                "cv_drifted_error_mm": best.and_then(|b| b.cv_drifted_error_mm),
-                "chosen_by_drift": model.chosen_by_drift,
-                "candidates": model.search,
-                "rows": model.trained_rows,
-                "features": model.features(),
-                "classes": model.classes.as_ref().map(|c| c.names.len()),
-                "fit_seconds": model.fit_seconds,
-                "source": model.source,
-                "note": model.note,
-            })))?
-        );
+        let mut said = serde_json::to_value(model.scores())?;
+        if let Some(fields) = said.as_object_mut() {
+            fields.insert("out".into(), serde_json::json!(out));
+            fields.insert("fit_seconds".into(), serde_json::json!(model.fit_seconds));
+            fields.insert("source".into(), serde_json::json!(model.source));
+        }
+        out!("{}", serde_json::to_string(&rounded(said))?);
         return Ok(());
     }
     report(&model, out);
