@@ -305,7 +305,8 @@ impl Viewer {
 
     /// The status once V_0 is taken: what to do next, or what is wrong with it (frames of
     /// another protocol, numbering or sheet than the scene's, or a reference taken while
-    /// the sheet was touched, show touches in the wrong places).
+    /// the sheet was touched, show touches in the wrong places; frames in mV, values in the
+    /// wrong unit).
     fn reference_taken(&self) -> String {
         let sim = matches!(self.source.as_ref(), Some(Source::Sim(_)));
         let poor_fit = (!sim)
@@ -314,7 +315,9 @@ impl Viewer {
             .and_then(et_recon::background::poor_fit_said);
         let changes = (self.processor.reference_changes())
             .and_then(et_recon::background::reference_changes_said);
-        match (poor_fit.or(changes), sim) {
+        let not_volts =
+            (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
+        match (poor_fit.or(changes).or(not_volts), sim) {
             (Some(said), _) => format!("V_0 taken; warning: {said}"),
             (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
             (None, false) => "V_0 taken: touches show on the sheet".into(),

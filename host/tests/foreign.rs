@@ -275,6 +275,27 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
             );
         }
     }
+    // Frames in millivolts, as some systems write them: the same places and signs (the fit
+    // takes the unit into the sheet resistance), and a note that they are not volts, which
+    // frames in volts do not get.
+    let mv_path = d.join("frames-mv.csv");
+    let mv: String = (frames.iter())
+        .map(|f| {
+            let row: Vec<String> = f.iter().map(|v| format!("{:e}", v * 1e3)).collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&mv_path, mv).unwrap();
+    let (volts, millivolts) = (run(&csv_path, 1), run(&mv_path, 1));
+    let ((at_v, sign_v), (at_mv, sign_mv)) = (strongest(&volts), strongest(&millivolts));
+    assert!(
+        sign_v == sign_mv && (at_v[0] - at_mv[0]).hypot(at_v[1] - at_mv[1]) < 0.5,
+        "{at_v:?} {at_mv:?}"
+    );
+    let noted = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stderr).contains("past the 100 V an EIT instrument reads")
+    };
+    assert!(noted(&millivolts) && !noted(&volts));
     // The pixel image as .npy, its grid in the JSON: the largest |value| at the first target.
     let npy = d.join("f1.npy");
     let out = run_with(&csv_path, 1, &["--image-out", npy.to_str().unwrap()]);

@@ -831,9 +831,13 @@ class Reconstructor:
         is said as refused, not first warned of), are far from the model's frame of the sheet:
         in shape (the model leaves much of them unexplained: another protocol, numbering or
         sheet, as `et reconstruct` warns), one of several as a touch or a drift differs from
-        the others, or, where the background was not fitted to them, in scale."""
+        the others, in unit (past 100 V: mV or ADC counts), or, where the background was not
+        fitted to them, in scale."""
         if frames.size:
-            for said in (self._native.poor_fit(frames), self._native.reference_changed(frames)):
+            native = self._native
+            for said in (
+                native.poor_fit(frames), native.reference_changed(frames), native.not_volts(frames)
+            ):
                 if said is not None:
                     warnings.warn(said, EtWarning, stacklevel=3)
         if frames.size and not self._native.background_fitted:

@@ -76,6 +76,8 @@ class Reconstructor:
         """The mean of reference (n x K, V) over the model's frame of the untouched sheet."""
     def poor_fit(self, reference: F64) -> Optional[str]:
         """What is said when the model leaves over 20 % of reference's mean unexplained."""
+    def not_volts(self, reference: F64) -> Optional[str]:
+        """What is said when reference's mean passes 100 V: frames in another unit."""
     def reference_changed(self, reference: F64) -> Optional[str]:
         """What is said when one of reference's frames differs from the others as a touch."""
     def forward(self, sigma: F64) -> F64:

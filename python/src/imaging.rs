@@ -375,6 +375,14 @@ impl Reconstructor {
         ))
     }
 
+    /// What is said when the mean of the untouched `reference` frames (n x K) passes
+    /// `et_recon::background::VOLTS_MOST`: frames in another unit than volts; None within.
+    fn not_volts(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {
+        Ok(et_recon::background::not_volts_said(
+            &reference_of(&reference)?.v0,
+        ))
+    }
+
     /// What is said when one of the untouched `reference` frames (n x K, V) differs from
     /// their mean as a change of the sheet does, past
     /// `et_recon::background::REFERENCE_CHANGE_SAID`; None within it or for one frame.

@@ -315,11 +315,22 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     with pytest.warns(et.EtWarning, match="1e\\+03 times the model's frame"):
         in_mv = disc.image(v * 1e3, v0 * 1e3).pixels
     np.testing.assert_allclose(np.nanmax(np.abs(in_mv)), 1e3 * np.nanmax(np.abs(in_v)), rtol=0.05)
+    # Fitted to frames in mV, the unit goes into the sheet resistance (1 000 times): the
+    # scale is no longer said, but V_0 past 100 V is (as `et reconstruct` notes it): no
+    # instrument reads that, and the background and the values are in the wrong unit.
     r = et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16), triangles=1200)
-    r.fit_background(v0 * 1e3)
+    most = f"{np.abs(v0).max() * 1e3:.0f}"
+    unit = f"V_0 reaches {most} V, past the 100 V an EIT instrument reads: frames in millivolts"
+    with pytest.warns(et.EtWarning, match=unit):
+        r.fit_background(v0 * 1e3)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always", et.EtWarning)
+        r.image(v * 1e3, v0 * 1e3)
+    assert [str(w.message).startswith("the reference " + unit) for w in said] == [True]
     with warnings.catch_warnings():
         warnings.simplefilter("error", et.EtWarning)
-        r.image(v * 1e3, v0 * 1e3)
+        et.Reconstructor(et.disc(0.065, 16), et.protocol("adjacent", 16),
+                         triangles=1200).fit_background(v0)
     # Frames not alike their reference (one in mV, the other in V) are said, as et
     # reconstruct says them: given with the frame, set once, or in a batch.
     with pytest.warns(et.EtWarning, match="the frame is 0.001 times the reference V_0"):

@@ -236,6 +236,28 @@ pub fn poor_fit_said(residual: f64) -> Option<String> {
     })
 }
 
+/// The largest |value| (V) a reference frame from an EIT instrument reaches: tank systems
+/// drive 0.1 to 5 mA and read a few volts (the real tanks of docs/measurements.md 3.5 V at
+/// most), et's board reads 3.3 V at most. Frames past it are in another unit.
+pub const VOLTS_MOST: f64 = 100.0;
+
+/// What is said of a reference `v0` (K values) whose largest |value| passes [`VOLTS_MOST`]:
+/// frames in millivolts, microvolts or ADC counts, which image the same places and signs
+/// (the background fit takes the unit into the sheet resistance) but background, noise and
+/// image values in the wrong unit; None within it.
+#[must_use]
+pub fn not_volts_said(v0: &[f64]) -> Option<String> {
+    let most = v0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    (most > VOLTS_MOST).then(|| {
+        format!(
+            "the reference V_0 reaches {most:.0} V, past the {VOLTS_MOST:.0} V an EIT instrument \
+             reads: frames in millivolts, microvolts or ADC counts? et reads volts (mV / \
+             1000); where each object lies and its sign do not depend on the unit, but the \
+             background (ohm/sq), the noise and the images' values do"
+        )
+    })
+}
+
 /// How far a reference frame may differ from the others as a change of the sheet does
 /// ([`crate::Reconstructor::reference_changes`]: its mean square over that of its part no
 /// conductivity change can make) before it is said: untouched references of et's scenes

@@ -409,6 +409,7 @@ fn set_up(
         recon.jacobian().frame.len(),
         recon.jacobian().pairs()
     );
+    let not_volts = et_recon::background::not_volts_said(&reference.v0);
     match &fit {
         Some(fit) => {
             let took = clock.elapsed().as_secs_f64() - set_up.mesh - set_up.matrix;
@@ -425,6 +426,9 @@ fn set_up(
                 say!("warning: {said}");
             }
         }
+    }
+    if let Some(said) = not_volts {
+        say!("note: {said}");
     }
     Ok((recon, fit))
 }

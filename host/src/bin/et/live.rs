@@ -256,6 +256,12 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     say!("warning: {said}");
                 }
                 if imaged == 1
+                    && let Some(said) =
+                        (processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0))
+                {
+                    say!("note: {said}");
+                }
+                if imaged == 1
                     && let Some(said) = (processor.reference_changes())
                         .and_then(et_recon::background::reference_changes_said)
                 {
