@@ -98,6 +98,13 @@ fn header_columns(
         if let Some(missing) = COLUMNS[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
             return Err(FileFault::MissingColumn(missing.0));
         }
+        // Other columns are ignored, but one named as a current would leave its rows driving
+        // the scene's current without a word (a tank's amplitudes in mA, say).
+        if let Some(other) =
+            (first.iter()).find(|c| !c.eq_ignore_ascii_case("current_a") && reads_as_current(c))
+        {
+            return Err(FileFault::OtherCurrent(other.into()));
+        }
         return Ok((true, columns));
     }
     if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
@@ -109,6 +116,16 @@ fn header_columns(
         return Ok((false, [Some(0), Some(1), Some(2), Some(3), current]));
     }
     Err(FileFault::Columns(first.len()))
+}
+
+/// Whether a header's column `name` is named as a current: a word of it (split at anything
+/// but letters and digits) begins with `current` or `amp` (amps, ampere, amplitude).
+fn reads_as_current(name: &str) -> bool {
+    name.split(|c: char| !c.is_ascii_alphanumeric())
+        .any(|word| {
+            let word = word.to_ascii_lowercase();
+            word.starts_with("current") || word.starts_with("amp")
+        })
 }
 
 /// An electrode's number as a cell writes it: `2`, or a whole number written as a decimal

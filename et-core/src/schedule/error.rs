@@ -154,6 +154,13 @@ pub enum FileFault {
         /// The first row's (the header's, or the first data row's).
         first: usize,
     },
+    /// A header column other than current_a named as a current, which would be ignored.
+    #[error(
+        "the column '{0}' reads as a current, but et takes a row's current only from a column \
+         named current_a, in amperes (1.4142 mA is 0.0014142), and without one each row drives \
+         the scene's current_ua: name it current_a in amperes, or leave it out"
+    )]
+    OtherCurrent(String),
     /// A first row of names, none of them a column's.
     #[error(
         "the header names {0}: name the columns source, sink, positive, negative and \

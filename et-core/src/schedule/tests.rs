@@ -44,6 +44,42 @@ fn files_as_other_systems_write_them() {
     let r = s.rows()[0];
     assert_eq!((r.source, r.sink, r.positive, r.negative), (2, 3, 0, 1));
     assert_eq!(r.current_a, 1.4e-3);
+    // A column named as a current that is not current_a (in mA, or a tank's amplitudes) was
+    // ignored, each row driving the default current: refused, naming it. Other columns whose
+    // words only contain the letters (a sample, a timestamp) are still ignored.
+    for header in [
+        "current_ma",
+        "Current (A)",
+        "amplitude_file_units",
+        "amps",
+        "I_current",
+    ] {
+        let e = parse(
+            &format!("source,sink,positive,negative,{header}\n0,1,2,3,1.4\n"),
+            16,
+            0,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(&format!("the column '{header}' reads as a current"))
+                && e.contains("current_a"),
+            "{e}"
+        );
+    }
+    let e = parse(
+        "source,sink,positive,negative,current_a,current_ma\n0,1,2,3,1e-3,1\n",
+        16,
+        0,
+    );
+    assert!(e.is_err(), "two currents: which is meant would be a guess");
+    let s = parse(
+        "sample,timestamp,source,sink,positive,negative\n0,9,0,1,2,3\n",
+        16,
+        0,
+    )
+    .unwrap();
+    assert_eq!(s.rows()[0].current_a, 1e-3);
     // Cells separated by ';' with decimal commas, as a spreadsheet in Europe writes them
     // (the frame readers took them; the protocol reader refused '0,0014').
     let s = parse(
