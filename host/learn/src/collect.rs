@@ -228,7 +228,9 @@ pub struct Press {
 }
 
 /// [`collect`] once per seed in `seeds`, each a visit with its own electrode positions, joined
-/// into one dataset (visit numbers in seed order); `each` is called after each visit. The
+/// into one dataset (visit numbers in seed order); `each(presses, visits)` is called with the
+/// presses scanned and the visits finished so far, after each visit and every fifth of a
+/// second between (a progress bar's ETA from the first seconds of a long visit). The
 /// visits are independent, so they run side by side on the machine's cores; the dataset is the
 /// same as one visit after another would give.
 ///
@@ -242,9 +244,12 @@ pub fn collect_visits(
     centres: &[[f64; 2]],
     plan: &Plan,
     seeds: impl IntoIterator<Item = u64>,
-    mut each: impl FnMut(),
+    mut each: impl FnMut(usize, usize),
 ) -> Result<Dataset, CollectError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::mpsc::RecvTimeoutError;
     let seeds: Vec<u64> = seeds.into_iter().collect();
+    let pressed = AtomicUsize::new(0);
     let threads = std::thread::available_parallelism()
         .map_or(1, std::num::NonZero::get)
         .min(seeds.len());
@@ -253,14 +258,14 @@ pub fn collect_visits(
     std::thread::scope(|scope| {
         let (done, finished) = std::sync::mpsc::channel();
         for t in 0..threads {
-            let (done, seeds) = (done.clone(), &seeds);
+            let (done, seeds, pressed) = (done.clone(), &seeds, &pressed);
             scope.spawn(move || {
                 for (v, &seed) in seeds.iter().enumerate().skip(t).step_by(threads) {
                     let plan = Plan {
                         seed,
                         ..plan.clone()
                     };
-                    let visit = collect(spec, frontend, config, centres, &plan);
+                    let visit = collect_counting(spec, frontend, config, centres, &plan, pressed);
                     if done.send((v, visit)).is_err() {
                         return;
                     }
@@ -268,9 +273,17 @@ pub fn collect_visits(
             });
         }
         drop(done);
-        for (v, visit) in finished {
-            visits[v] = Some(visit);
-            each();
+        let mut finished_visits = 0;
+        loop {
+            match finished.recv_timeout(std::time::Duration::from_millis(200)) {
+                Ok((v, visit)) => {
+                    visits[v] = Some(visit);
+                    finished_visits += 1;
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+            each(pressed.load(Ordering::Relaxed), finished_visits);
         }
     });
     let mut data: Option<Dataset> = None;
@@ -297,6 +310,19 @@ pub fn collect(
     centres: &[[f64; 2]],
     plan: &Plan,
 ) -> Result<Dataset, CollectError> {
+    let pressed = std::sync::atomic::AtomicUsize::new(0);
+    collect_counting(spec, frontend, config, centres, plan, &pressed)
+}
+
+/// [`collect`], adding one to `pressed` after each press is scanned.
+fn collect_counting(
+    spec: &SheetSpec,
+    frontend: FrontendSpec,
+    config: ScanConfig,
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    pressed: &std::sync::atomic::AtomicUsize,
+) -> Result<Dataset, CollectError> {
     let grid_visit = |rng: &mut Rng| {
         let mut presses = Vec::with_capacity(centres.len() * plan.scans);
         for (c, centre) in centres.iter().enumerate() {
@@ -320,7 +346,16 @@ pub fn collect(
         }
         presses
     };
-    collect_presses(spec, frontend, config, centres, plan, grid_visit)
+    let halving = Halving::Reciprocity;
+    collect_presses_counted(
+        spec,
+        (frontend, config),
+        centres,
+        plan,
+        halving,
+        grid_visit,
+        pressed,
+    )
 }
 
 /// `count` presses of `touches` fingers each, anywhere on the sheet (uniform over the outline
@@ -405,7 +440,23 @@ pub fn collect_presses_with(
     centres: &[[f64; 2]],
     plan: &Plan,
     halving: Halving,
+    visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
+) -> Result<Dataset, CollectError> {
+    let pressed = std::sync::atomic::AtomicUsize::new(0);
+    let scan = (frontend, config);
+    collect_presses_counted(spec, scan, centres, plan, halving, visit_presses, &pressed)
+}
+
+/// [`collect_presses_with`] (the front end and its scan configuration as `scan`), adding
+/// one to `pressed` after each press is scanned.
+fn collect_presses_counted(
+    spec: &SheetSpec,
+    (frontend, config): (FrontendSpec, ScanConfig),
+    centres: &[[f64; 2]],
+    plan: &Plan,
+    halving: Halving,
     mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
+    pressed: &std::sync::atomic::AtomicUsize,
 ) -> Result<Dataset, CollectError> {
     let protocol = config.validate()?;
     plan.fits(&spec.physical.shape)?;
@@ -491,6 +542,7 @@ pub fn collect_presses_with(
                 .collect();
             scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
             rows.push(&obs, k, &feature_index, (press.label, first, v as u16));
+            pressed.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
     }
     Ok(Dataset {

@@ -159,7 +159,7 @@ pub fn measure(
     let next_day = if days == 0 {
         0.0
     } else {
-        let test = collect_visits(&spec, frontend, config, &centres, &day, seeds, || {})?;
+        let test = collect_visits(&spec, frontend, config, &centres, &day, seeds, |_, _| {})?;
         evaluate(&model, &test.x, &test.y)?.accuracy()
     };
     Ok(Outcome {

@@ -231,7 +231,7 @@ fn collect_sets(
         centres,
         &plan,
         (0..sizes.visits).map(|v| 1_000 + v as u64),
-        || bar.inc(1),
+        |_, visits| bar.set_position(visits as u64),
     )?;
     let day = Plan {
         scans: 1,
@@ -244,7 +244,7 @@ fn collect_sets(
         centres,
         &day,
         (0..sizes.days).map(|d| 77 + d as u64),
-        || bar.inc(1),
+        |_, days| bar.set_position((sizes.visits + days) as u64),
     )?;
     steps.done(
         &bar,

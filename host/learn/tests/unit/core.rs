@@ -1711,3 +1711,61 @@ fn a_collection_past_the_memory_free_is_refused_before_any_press() {
     Plan::default().fits_in_memory(config, 49, 6).unwrap();
     assert_eq!(Plan::default().observations(49, 6), 49 * 6 * 20 * 20);
 }
+
+/// Visits collected side by side are the visits collected one after another, and the
+/// progress counts every press (a bar's ETA within seconds of a long collection, where it
+/// counted visits and showed nothing until the first ended) and every visit.
+#[test]
+fn visits_side_by_side_are_visits_in_turn_and_count_their_presses() {
+    let spec = SheetSpec {
+        resolution: Some(0.01),
+        ..SheetSpec::rectangle(0.13, 0.13, 16)
+    };
+    let config = training_config(ScanConfig::REFERENCE);
+    let centres = grid(&spec, 2, 2, 0.0);
+    let plan = Plan {
+        visits: 1,
+        scans: 3,
+        subsections: 2,
+        ..Plan::default()
+    };
+    let mut said = Vec::new();
+    let fe = FrontendSpec::default();
+    let seeds = [5, 9, 13];
+    let together =
+        et_learn::collect::collect_visits(&spec, fe, config, &centres, &plan, seeds, |p, v| {
+            said.push((p, v));
+        })
+        .unwrap();
+    let in_turn: Vec<_> = (seeds.iter())
+        .map(|&seed| {
+            collect(
+                &spec,
+                fe,
+                config,
+                &centres,
+                &Plan {
+                    seed,
+                    ..plan.clone()
+                },
+            )
+            .unwrap()
+        })
+        .collect();
+    let x: Vec<f64> = in_turn
+        .iter()
+        .flat_map(|d| d.x.transpose().iter().copied().collect::<Vec<_>>())
+        .collect();
+    assert_eq!(together.x.transpose().as_slice(), x.as_slice());
+    assert_eq!(
+        together.visit,
+        [vec![0u16; 24], vec![1; 24], vec![2; 24]].concat()
+    );
+    // Every press counted (4 classes x 3 scans a visit), never backwards.
+    assert_eq!(said.last(), Some(&(3 * 4 * 3, 3)), "{said:?}");
+    assert!(
+        said.windows(2)
+            .all(|w| w[0].0 <= w[1].0 && w[0].1 <= w[1].1),
+        "{said:?}"
+    );
+}

@@ -182,8 +182,11 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         args.subsections,
         plan.observations(centres.len(), args.visits)
     );
-    let bar = ProgressBar::new(args.visits as u64).with_style(
-        ProgressStyle::with_template("collecting [{bar:30}] visit {pos}/{len} (eta {eta})")
+    // Counted by press (classes x scans a visit), so the ETA shows within seconds of a long
+    // collection, not after its first visit.
+    let presses = centres.len() * args.scans;
+    let bar = ProgressBar::new((args.visits * presses) as u64).with_style(
+        ProgressStyle::with_template("collecting [{bar:30}] {msg} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let started = Instant::now();
@@ -194,7 +197,14 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         &centres,
         &plan,
         (0..args.visits).map(|v| args.seed.wrapping_mul(1_000).wrapping_add(v as u64)),
-        || bar.inc(1),
+        |pressed, visits| {
+            bar.set_message(format!(
+                "{pressed} of {} presses, {visits} of {} visits done",
+                bar.length().unwrap_or(0),
+                args.visits
+            ));
+            bar.set_position(pressed as u64);
+        },
     )?;
     bar.finish_and_clear();
     let provenance = format!(
