@@ -262,7 +262,17 @@ pub enum DatasetFault {
     #[error("no feature columns")]
     NoFeatures,
     /// A second file (targets, groups) of other rows than the features'.
-    #[error("{rows} {what}, {} has {features_rows}", features.display())]
+    #[error(
+        "{rows} {what}, {} has {features_rows}{}",
+        features.display(),
+        header_like.as_ref().map_or(String::new(), |h| format!(
+            ": its first row, '{h}', reads as a header above the rest, but {} has no header \
+             row, so whether that or a row of the features is missing would be a guess: give \
+             {} a header row of its column names, or take this file's off",
+            features.display(),
+            features.display()
+        ))
+    )]
     RowCount {
         /// This file's rows.
         rows: usize,
@@ -272,6 +282,9 @@ pub enum DatasetFault {
         features: PathBuf,
         /// Its rows.
         features_rows: usize,
+        /// This file's first cell when it reads as a header and the features have none
+        /// (the table reader's `header_like`).
+        header_like: Option<String>,
     },
     /// `--groups NAME` that is no column.
     #[error(

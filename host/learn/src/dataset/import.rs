@@ -354,6 +354,8 @@ fn beside(
             what,
             features: features.into(),
             features_rows: main.rows.len(),
+            // (Beside headerless features, which file has the row too many is a guess.)
+            header_like: table.header_like(main.rows.len()).map(String::from),
         };
         return Err(content(p, 0, None, fault));
     }

@@ -62,23 +62,7 @@ impl Csv {
     /// cells below do recur (a class or session named `label` or `session` above `left`,
     /// `right`, `left`, ... as pandas writes `y.to_csv(index=False)`). Whether it was made so.
     pub(super) fn first_row_as_header(&mut self, rows: usize, features_header: bool) -> bool {
-        let Some(Some(cells)) = self.text.first() else {
-            return false;
-        };
-        let first = cells.first();
-        let below = cells.get(1..).unwrap_or_default();
-        let recurs = {
-            let mut seen = std::collections::HashSet::new();
-            below.iter().any(|c| !seen.insert(c))
-        };
-        let named = first.is_some_and(|f| !below.contains(f) && f.parse::<f64>().is_err());
-        if self.header
-            || !features_header
-            || self.names.len() != 1
-            || self.rows.len() != rows + 1
-            || !named
-            || !recurs
-        {
+        if !features_header || self.header_like(rows).is_none() {
             return false;
         }
         if let Some(Some(cells)) = self.text.first_mut() {
@@ -87,6 +71,24 @@ impl Csv {
         self.rows.remove(0);
         self.header = true;
         true
+    }
+
+    /// The first cell of a one-column table of text read without a header, when it reads as
+    /// a header beside features of `rows` rows: one row more than theirs, the cell recurring
+    /// nowhere below and the cells below recurring ([`Csv::first_row_as_header`]).
+    pub(super) fn header_like(&self, rows: usize) -> Option<&str> {
+        let Some(Some(cells)) = self.text.first() else {
+            return None;
+        };
+        let first = cells.first()?;
+        let below = cells.get(1..).unwrap_or_default();
+        let recurs = {
+            let mut seen = std::collections::HashSet::new();
+            below.iter().any(|c| !seen.insert(c))
+        };
+        let named = !below.contains(first) && first.parse::<f64>().is_err();
+        (!self.header && self.names.len() == 1 && self.rows.len() == rows + 1 && named && recurs)
+            .then_some(first.as_str())
     }
 
     /// Columns `cols`, as an n x cols.len() matrix.

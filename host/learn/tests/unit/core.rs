@@ -1231,6 +1231,27 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
             .unwrap_err()
             .to_string();
         assert!(e.contains("5 rows, ") && e.contains("has 4"), "{e}");
+        // ... and said as a header the features lack (it was the counts alone).
+        assert!(
+            e.contains("its first row, 'label', reads as a header")
+                && e.contains("f.csv has no header row"),
+            "{e}"
+        );
+        // Five labels that are all labels beside four rows: the counts alone.
+        std::fs::write(
+            &targets,
+            "left
+right
+left
+right
+up
+",
+        )
+        .unwrap();
+        let e = Table::import(&feats, Some(&targets), Unit::Mm)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("5 rows, ") && !e.contains("header"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
