@@ -7,7 +7,8 @@ use super::*;
 pub struct Monitor {
     /// (wall time s since start, frames/s over the last second).
     pub rate: VecDeque<(f64, f64)>,
-    /// (frame time s, BVC V).
+    /// (wall time s since start, BVC V): as the frame rate's, so that a recording's loops
+    /// and seeks, and another system's frames without times, still run to now.
     pub bvc: VecDeque<(f64, f64)>,
     /// Per-channel SNR over the last `WINDOW` frames, dB (`et_core::stats::channel_snr`); None
     /// for a channel without noise (below one ADC code) or signal.
@@ -36,6 +37,12 @@ impl Monitor {
     /// Points kept per plot.
     pub const HISTORY: usize = 600;
 
+    /// The next frame does not follow the last in sequence (a recording sought to another
+    /// place): its sequence number's jump is no gap.
+    pub fn resume(&mut self) {
+        self.last_seq = None;
+    }
+
     /// Takes one processed frame.
     pub fn add(&mut self, out: &Output) {
         let now = self
@@ -58,7 +65,7 @@ impl Monitor {
         }
         push(&mut self.rate, (now, self.arrivals.len() as f64));
         if out.referencing.is_none() {
-            push(&mut self.bvc, (f64::from(out.frame.t_us) * 1e-6, out.bvc));
+            push(&mut self.bvc, (now, out.bvc));
         }
         let k = out.frame.voltages.len();
         if k != self.k {

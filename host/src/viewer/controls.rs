@@ -147,6 +147,7 @@ impl Viewer {
                 self.status = "taking V_0: keep the sheet untouched".into();
             }
         }
+        let mut sought = false;
         if let Some(Source::Replay(r)) = self.source.as_mut() {
             ui.separator();
             ui.heading("Replay");
@@ -165,10 +166,15 @@ impl Viewer {
                 .changed()
             {
                 r.seek(at);
+                sought = true;
             }
             // The frame shown is the last one played (position counts those).
             ui.label(format!("frame {} of {}", r.position, r.len()));
             ui.checkbox(&mut r.looping, "loop");
+        }
+        // (A frame sought to is no frame lost: "lost (gaps)" counted every seek forward.)
+        if sought {
+            self.monitor.resume();
         }
         ui.separator();
         ui.heading("Touch");

@@ -83,8 +83,21 @@ impl Viewer {
         }
     }
 
-    /// Starts automatic selection: V_0 forgotten, then taken on AD, PP and PP-PP in turn.
+    /// Starts automatic selection: V_0 forgotten, then taken on AD, PP and PP-PP in turn. A
+    /// recording cannot switch its scan: refused there, its V_0 kept (it was taken again
+    /// from the frames playing, a press among them, before the switch to PP failed).
     pub(super) fn start_automatic(&mut self) {
+        if let Some(Source::Replay(r)) = self.source.as_ref() {
+            let recorded = r.recording.header.config.protocol;
+            self.protocol = ProtocolChoice::Fixed(recorded);
+            self.status = format!(
+                "automatic selection switches the scan between protocols, which a recording \
+                 cannot: it plays the {} it was recorded with (the simulated sheet and a board \
+                 switch)",
+                recorded.name()
+            );
+            return;
+        }
         self.selector = Selector::new(*self.selector.settings());
         self.processor.tare();
         self.round = ROUND.to_vec();

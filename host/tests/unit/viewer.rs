@@ -405,6 +405,60 @@ fn replay_pauses_and_seeks() {
     h.step();
     h.step();
     assert!(position(&h) > 30);
+    // A seek forward is no frame lost (link health said "lost (gaps)" 25), and one back keeps
+    // the BVC plot's time running to now (it plotted each frame at its time in the file).
+    assert_eq!(h.state().monitor.gaps, 0);
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "seek")
+        .set_value_accesskit(22.0);
+    for _ in 0..12 {
+        h.step();
+    }
+    let state = h.state();
+    assert_eq!(state.monitor.gaps, 0);
+    let times: Vec<f64> = state.monitor.bvc.iter().map(|p| p.0).collect();
+    assert!(
+        times.len() > 3 && times.windows(2).all(|w| w[0] <= w[1]),
+        "{times:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Automatic selection cannot switch a recording's scan: refused, its V_0 kept and the
+/// recorded protocol still chosen (the V_0 was taken again from the frames playing, a press
+/// among them, and "automatic" stayed lit over an image of noise).
+#[test]
+fn automatic_selection_is_refused_on_a_recording() {
+    let dir = std::env::temp_dir().join(format!("et-viewer-auto-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("r.jsonl");
+    write_recording(&path, 40);
+    let mut h = harness(Options {
+        source: SourceSpec::Replay(path.clone()),
+        reference_frames: 2,
+        ..sim_options()
+    });
+    settle(&mut h);
+    let v0 = h.state().processor.v0();
+    assert!(v0.is_some());
+    h.get_by_label("automatic").click();
+    for _ in 0..25 {
+        h.step();
+    }
+    let state = h.state();
+    assert!(
+        state.processor.v0() == v0,
+        "V_0 taken again: {}",
+        state.status
+    );
+    assert_eq!(
+        state.protocol,
+        ProtocolChoice::Fixed(ProtocolKind::Adjacent)
+    );
+    assert!(
+        state.status.contains("which a recording cannot"),
+        "{}",
+        state.status
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
