@@ -25,6 +25,19 @@ pub enum OutputError {
         /// The other.
         other: PathBuf,
     },
+    /// The output's file name is longer than a file system takes: said before the work, which
+    /// was lost at its end ("File name too long" when the finished file was given its name).
+    #[error(
+        "{}: its file name is {bytes} bytes, past the {NAME_MAX} a file name takes: give a \
+         shorter name",
+        .out.display()
+    )]
+    NameTooLong {
+        /// The output.
+        out: PathBuf,
+        /// Its file name's length in bytes.
+        bytes: usize,
+    },
     /// The output exists and replacing was not asked for.
     #[error("{} already exists; refusing to overwrite it (--force replaces it)", .out.display())]
     Exists {
@@ -322,6 +335,13 @@ fn check_at(
         return Err(OutputError::FolderSpelling {
             out: out.into(),
             file,
+        });
+    }
+    let bytes = out.file_name().map_or(0, |n| n.as_encoded_bytes().len());
+    if bytes > NAME_MAX {
+        return Err(OutputError::NameTooLong {
+            out: out.into(),
+            bytes,
         });
     }
     if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {

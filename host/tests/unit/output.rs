@@ -180,7 +180,7 @@ fn outputs_may_not_collide_with_inputs_or_each_other_however_spelled() {
 }
 
 #[test]
-fn a_new_output_is_created_exclusively_and_long_names_fit() {
+fn a_new_output_is_created_exclusively_and_long_names_fit_or_are_refused() {
     let d = dir("race");
     let out = d.join("model.json");
     // Another run creates the same new file while this one writes: this one fails and
@@ -206,6 +206,17 @@ fn a_new_output_is_created_exclusively_and_long_names_fit() {
         .unwrap();
         assert_eq!(std::fs::read_to_string(&long).unwrap(), "x");
     }
+    // A name of 255 bytes is taken; one past it is refused before the work (its partial file
+    // fitted, so the check passed, and the finished file could not be given its name: the
+    // work lost, "writing N: N: File name too long").
+    let most = d.join(format!("{}.json", "b".repeat(NAME_MAX - 5)));
+    check(&most, &[], false).unwrap();
+    let past = d.join(format!("{}.json", "b".repeat(NAME_MAX - 4)));
+    let e = check(&past, &[], false).unwrap_err();
+    assert!(
+        matches!(e, OutputError::NameTooLong { bytes: 256, .. }),
+        "{e}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
