@@ -1109,9 +1109,12 @@ def _first_twice(names: Sequence[str]) -> Optional[str]:
     return None
 
 
-def _model_from_json(text: str) -> "Model":
-    """A model from its file's text: how a pickled model is made again."""
-    return Model(_native.Model.from_json(text))
+def _model_from_json(
+    text: str, scores: Optional[str] = None, note: Optional[str] = None
+) -> "Model":
+    """A model from its file's text (a board model trained here with its training's scores
+    and note, which its file keeps not): how a pickled model is made again."""
+    return Model(_native.Model.from_json(text, scores, note))
 
 
 class Model:
@@ -1121,9 +1124,13 @@ class Model:
     def __init__(self, native: "_native.Model") -> None:
         self._native = _Serialised(native)
 
-    def __reduce__(self) -> Tuple[Any, Tuple[str]]:
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
         # Pickled as its model file's JSON, and checked as a file is when unpickled: for
-        # pickle, copy.deepcopy, multiprocessing and joblib (the native object is not).
+        # pickle, copy.deepcopy, multiprocessing and joblib (the native object is not). A
+        # board model trained here keeps its training's scores and note beside it.
+        if self.is_board:
+            said = (self._native.scores_json(), self._native.note)
+            return (_model_from_json, (self._native.file_json(), *said))
         return (_model_from_json, (self._native.file_json(),))
 
     @property
@@ -1149,7 +1156,7 @@ class Model:
         (stratified k-fold), ``leave_one_visit_out_accuracy`` (what a new session scores),
         ``cv_mean_error_mm``, ``shrinkage_scores`` (``accuracy`` None where that shrinkage
         could not be fitted) and the rest; None for a board model loaded from its file,
-        which keeps no scores. A table model: the chosen method's ``cv_accuracy`` or
+        which keeps no scores (a pickle or copy keeps them). A table model: the chosen method's ``cv_accuracy`` or
         ``cv_mean_error_mm``, and every ``candidates``' scores, from its file."""
         said = self._native.scores_json()
         return None if said is None else json.loads(said)

@@ -320,13 +320,26 @@ impl Model {
     }
 
     /// A model from its file's text (JSON, as `file_json` gives it): how a pickled model is
-    /// made again, checked as a file is.
+    /// made again, checked as a file is; a board model trained here with its training's
+    /// `scores` (JSON) and `note` (its file keeps neither).
     #[staticmethod]
-    fn from_json(py: Python<'_>, text: String) -> PyResult<Self> {
+    #[pyo3(signature = (text, scores=None, note=None))]
+    fn from_json(
+        py: Python<'_>,
+        text: String,
+        scores: Option<String>,
+        note: Option<String>,
+    ) -> PyResult<Self> {
         let origin = std::path::Path::new("the pickled model");
-        py.detach(|| Estimator::from_text(&text, origin))
+        let mut model = py
+            .detach(|| Estimator::from_text(&text, origin))
             .map(Model::new)
-            .map_err(|e| refused(&e))
+            .map_err(|e| refused(&e))?;
+        if matches!(model.inner, Estimator::Board(_)) {
+            model.training_scores = scores;
+            model.training_note = note;
+        }
+        Ok(model)
     }
 
     /// Writes the model file (JSON), as `et train --out` does: aside, then moved over the

@@ -193,6 +193,8 @@ def test_models_pickle_and_copy_as_their_files(table, dataset):
     ]:
         for again in (pickle.loads(pickle.dumps(model)), copy.deepcopy(model)):
             assert again.kind == model.kind and again.info == model.info
+            # (A board model's training scores, which its file keeps not, go with it.)
+            assert model.scores is not None and again.scores == model.scores
             np.testing.assert_array_equal(again.predict(X), model.predict(X))
     damaged = pickle.dumps(model).replace(b'"qda"', b'"qdx"')
     with pytest.raises(et.EtError, match="the pickled model: kind: unknown value `qdx`"):
