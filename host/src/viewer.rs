@@ -201,7 +201,7 @@ impl Viewer {
         }
         if let Some(c) = &viewer.processor.classifier {
             let config = c.file().config;
-            viewer.switch_config(config);
+            let _ = viewer.switch_config(config);
         }
         Ok(viewer)
     }
@@ -330,7 +330,16 @@ impl Viewer {
                 // The wizard's frames are of its one scan: selection would switch it away.
                 self.protocol = ProtocolChoice::Fixed(config.protocol);
                 self.round.clear();
-                self.switch_config(config);
+                // A source that refuses the scan sends none of its frames: the wizard would
+                // wait for them without end.
+                if !self.switch_config(config) {
+                    self.wizard.step = wizard::Step::Setup;
+                    self.wizard.message = format!(
+                        "the wizard scans {}, which the source refused: {}",
+                        config.protocol.name(),
+                        self.status
+                    );
+                }
             }
             wizard::Request::Press(touches) => self.press(touches),
             wizard::Request::UseModel(board) => {

@@ -16,15 +16,18 @@ const ROUND: [ProtocolKind; 3] = [
 ];
 
 impl Viewer {
-    /// Scans with `config` from now on (the source is told; V_0 is taken anew).
-    pub fn switch_config(&mut self, config: ScanConfig) {
-        if self.configure(config) {
+    /// Scans with `config` from now on (the source is told; V_0 is taken anew); whether the
+    /// source took it (else the status says why).
+    pub fn switch_config(&mut self, config: ScanConfig) -> bool {
+        let taken = self.configure(config);
+        if taken {
             self.processor.tare();
             self.status = format!(
                 "scanning {}: keep the sheet untouched while V_0 is taken",
                 config.protocol.name()
             );
         }
+        taken
     }
 
     /// Tells the source to scan with `config`, keeping every V_0 taken (a configuration
@@ -59,7 +62,7 @@ impl Viewer {
         if let Some(config) = self.source.as_ref().and_then(Source::config)
             && config.protocol != kind
         {
-            self.switch_config(ScanConfig {
+            let _ = self.switch_config(ScanConfig {
                 protocol: kind,
                 ..config
             });

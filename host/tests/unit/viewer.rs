@@ -423,11 +423,11 @@ fn replay_pauses_and_seeks() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Automatic selection cannot switch a recording's scan: refused, its V_0 kept and the
-/// recorded protocol still chosen (the V_0 was taken again from the frames playing, a press
+/// Automatic selection (and the wizard) cannot switch a recording's scan: refused, its V_0
+/// kept and the recorded protocol still chosen (the V_0 was taken again from the frames playing, a press
 /// among them, and "automatic" stayed lit over an image of noise).
 #[test]
-fn automatic_selection_is_refused_on_a_recording() {
+fn automatic_selection_and_the_wizard_are_refused_on_a_recording() {
     let dir = std::env::temp_dir().join(format!("et-viewer-auto-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("r.jsonl");
@@ -459,6 +459,29 @@ fn automatic_selection_is_refused_on_a_recording() {
         "{}",
         state.status
     );
+    // The wizard likewise: it waited without end for frames of its scan (opposite), which a
+    // recording of adjacent never sends.
+    h.state_mut().wizard.open = true;
+    h.step();
+    h.step();
+    h.get_by_label("Start").click();
+    for _ in 0..5 {
+        h.step();
+    }
+    let wizard = &h.state().wizard;
+    assert!(
+        matches!(wizard.step, wizard::Step::Setup),
+        "{:?}",
+        wizard.step
+    );
+    assert!(
+        wizard
+            .message
+            .contains("open the simulated sheet or a board"),
+        "{}",
+        wizard.message
+    );
+    assert!(h.state().processor.v0() == v0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -106,6 +106,15 @@ impl Wizard {
             row("frames per press", &mut self.frames_per_press, 2..=100);
         });
         if ui.button("Start").clicked() {
+            if let Some(Source::Replay(_)) = source {
+                // (It waited without end for frames of its scan, which a recording of another
+                // never sends, and would label a recording's presses as cells asked for.)
+                self.message = "the wizard records presses as you make them, cell by cell: \
+                                open the simulated sheet or a board (a recording plays the \
+                                presses it holds)"
+                    .into();
+                return None;
+            }
             match source.and_then(Source::config) {
                 Some(base) => match self.start(sheet, base) {
                     Ok(r) => return Some(r),
