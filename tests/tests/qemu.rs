@@ -729,3 +729,95 @@ fn the_live_board_source_installs_a_model_and_delivers_the_chips_classes() {
         .count();
     assert!(right * 100 >= classified * 95, "{right}/{classified} right");
 }
+
+/// `et stream --model` of a model trained on another sheet (8 electrodes) than the QEMU
+/// board's (16): the board cannot scan the model's scan and reports a fault every second; the
+/// stream ends with the reason and the way back (it said the fault without end).
+#[test]
+fn a_stream_whose_model_the_board_cannot_scan_ends_with_the_reason() {
+    let Some(image) =
+        image_or_skip("a_stream_whose_model_the_board_cannot_scan_ends_with_the_reason")
+    else {
+        return;
+    };
+    let et = build_et();
+    let dir = std::env::temp_dir().join(format!("et-qemu-unscanned-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = repo().join("sim/scenes/square-13cm-8.toml");
+    let (data, model) = (dir.join("d8.npz"), dir.join("m8.json"));
+    for args in [
+        vec![
+            "collect",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--grid",
+            "2x2",
+            "--visits",
+            "1",
+        ],
+        vec![
+            "train",
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            model.to_str().unwrap(),
+        ],
+    ] {
+        let mut args = args;
+        if args[0] == "collect" {
+            args.extend([
+                "--scans",
+                "3",
+                "--subsections",
+                "3",
+                "--out",
+                data.to_str().unwrap(),
+            ]);
+        }
+        let done = Process::new(&et).args(&args).output().unwrap();
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+    }
+    let mut qemu = Qemu::boot(&image);
+    qemu.run();
+    let mut stream = Process::new(&et)
+        .args(["stream", "--port", &qemu.pty, "--reference", "2", "--scene"])
+        .arg(&scene)
+        .arg("--model")
+        .arg(&model)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = stream.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut said = String::new();
+        let _ = std::io::Read::read_to_string(&mut stderr, &mut said);
+        said
+    });
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    let status = loop {
+        if let Some(status) = stream.try_wait().unwrap() {
+            break Some(status);
+        }
+        if std::time::Instant::now() > deadline {
+            stream.kill().unwrap();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let said = reader.join().unwrap();
+    let Some(status) = status else {
+        panic!("the stream was still running after 60 s: {said}");
+    };
+    assert!(!status.success(), "{said}");
+    assert!(
+        said.contains("the board cannot scan the model's scan (8 electrodes, opposite)")
+            && said.contains("until it is reset"),
+        "{said}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -158,6 +158,10 @@ pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
     )
 }
 
+/// Faults or refusals a board may report with no frame between them before `et stream`
+/// ends: one is a scan that failed, several in a row (one a second) a scan it cannot make.
+const FAULTS_BEFORE_ANY_FRAME: usize = 5;
+
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
     use et_recon::background::poor_fit_said;
@@ -214,13 +218,38 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let needed = processor.settings().reference_frames.max(1);
     let started = std::time::Instant::now();
     let mut stdout = std::io::stdout().lock();
+    // Faults and refusals a board reported since its last frame: past a few, it cannot scan
+    // what was asked (it said so every second, without end).
+    let mut unscanned = 0;
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
             say!("{}: {change}", source.describe());
         }
+        if !frames.is_empty() {
+            unscanned = 0;
+        }
         for report in source.board_reports() {
             say!("{}: {report}", source.describe());
+            unscanned += 1;
+        }
+        if unscanned >= FAULTS_BEFORE_ANY_FRAME {
+            let asked = match &processor.classifier {
+                Some(c) => format!(
+                    "the model's scan ({} electrodes, {}): a model trained on another sheet \
+                     than the board's? Train on data of this board's sheet",
+                    c.file().config.electrodes,
+                    c.file().config.protocol.name()
+                ),
+                None => "the scan it was last given (see its reports above)".into(),
+            };
+            anyhow::bail!(
+                "{}: {unscanned} faults or refusals reported and no frame since: the board cannot \
+                 scan {asked}. It keeps that scan until it is reset (it starts on its own) or \
+                 given one it can make (et upload --model, et stream --model with a model of \
+                 its sheet)",
+                source.describe()
+            );
         }
         if frames.is_empty() {
             if let Source::Replay(r) = &source
