@@ -11,6 +11,7 @@
 //! reciprocity-halved set by default: p = L (L - 4) / 2).
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use et_core::extract::Extracted;
 use et_core::protocol::Halving;
@@ -25,8 +26,10 @@ use crate::dataset::Dataset;
 
 mod error;
 mod size;
+mod visits;
 pub use error::CollectError;
 pub use size::collection_bytes;
+pub use visits::collect_visits;
 
 /// Class centres on a rows x cols grid over the sheet's bounding box, inset by `margin` m
 /// (cell centres, row-major from the lower left).
@@ -227,77 +230,6 @@ pub struct Press {
     pub touches: Vec<Touch>,
 }
 
-/// [`collect`] once per seed in `seeds`, each a visit with its own electrode positions, joined
-/// into one dataset (visit numbers in seed order); `each(presses, visits)` is called with the
-/// presses scanned and the visits finished so far, after each visit and every fifth of a
-/// second between (a progress bar's ETA from the first seconds of a long visit). The
-/// visits are independent, so they run side by side on the machine's cores; the dataset is the
-/// same as one visit after another would give.
-///
-/// # Errors
-/// [`CollectError::NoVisits`] for no seeds; as [`collect`] (the first failing visit's error,
-/// in seed order).
-pub fn collect_visits(
-    spec: &SheetSpec,
-    frontend: FrontendSpec,
-    config: ScanConfig,
-    centres: &[[f64; 2]],
-    plan: &Plan,
-    seeds: impl IntoIterator<Item = u64>,
-    mut each: impl FnMut(usize, usize),
-) -> Result<Dataset, CollectError> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::mpsc::RecvTimeoutError;
-    let seeds: Vec<u64> = seeds.into_iter().collect();
-    let pressed = AtomicUsize::new(0);
-    let threads = std::thread::available_parallelism()
-        .map_or(1, std::num::NonZero::get)
-        .min(seeds.len());
-    let mut visits: Vec<Option<Result<Dataset, CollectError>>> = Vec::new();
-    visits.resize_with(seeds.len(), || None);
-    std::thread::scope(|scope| {
-        let (done, finished) = std::sync::mpsc::channel();
-        for t in 0..threads {
-            let (done, seeds, pressed) = (done.clone(), &seeds, &pressed);
-            scope.spawn(move || {
-                for (v, &seed) in seeds.iter().enumerate().skip(t).step_by(threads) {
-                    let plan = Plan {
-                        seed,
-                        ..plan.clone()
-                    };
-                    let visit = collect_counting(spec, frontend, config, centres, &plan, pressed);
-                    if done.send((v, visit)).is_err() {
-                        return;
-                    }
-                }
-            });
-        }
-        drop(done);
-        let mut finished_visits = 0;
-        loop {
-            match finished.recv_timeout(std::time::Duration::from_millis(200)) {
-                Ok((v, visit)) => {
-                    visits[v] = Some(visit);
-                    finished_visits += 1;
-                }
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => break,
-            }
-            each(pressed.load(Ordering::Relaxed), finished_visits);
-        }
-    });
-    let mut data: Option<Dataset> = None;
-    for visit in visits {
-        // Every visit sent its result unless a worker panicked (which the scope re-raises).
-        let visit = visit.ok_or(CollectError::NoVisits)??;
-        match data.as_mut() {
-            None => data = Some(visit),
-            Some(d) => d.append(visit).map_err(CollectError::Data)?,
-        }
-    }
-    data.ok_or(CollectError::NoVisits)
-}
-
 /// Runs the procedure on a simulated sheet. Every visit draws its own electrode positions from
 /// `plan.seed`, so a second call with another seed is a "next day" test set.
 ///
@@ -310,7 +242,7 @@ pub fn collect(
     centres: &[[f64; 2]],
     plan: &Plan,
 ) -> Result<Dataset, CollectError> {
-    let pressed = std::sync::atomic::AtomicUsize::new(0);
+    let pressed = AtomicUsize::new(0);
     collect_counting(spec, frontend, config, centres, plan, &pressed)
 }
 
@@ -321,7 +253,7 @@ fn collect_counting(
     config: ScanConfig,
     centres: &[[f64; 2]],
     plan: &Plan,
-    pressed: &std::sync::atomic::AtomicUsize,
+    pressed: &AtomicUsize,
 ) -> Result<Dataset, CollectError> {
     let grid_visit = |rng: &mut Rng| {
         let mut presses = Vec::with_capacity(centres.len() * plan.scans);
@@ -442,7 +374,7 @@ pub fn collect_presses_with(
     halving: Halving,
     visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
 ) -> Result<Dataset, CollectError> {
-    let pressed = std::sync::atomic::AtomicUsize::new(0);
+    let pressed = AtomicUsize::new(0);
     let scan = (frontend, config);
     collect_presses_counted(spec, scan, centres, plan, halving, visit_presses, &pressed)
 }
@@ -456,7 +388,7 @@ fn collect_presses_counted(
     plan: &Plan,
     halving: Halving,
     mut visit_presses: impl FnMut(&mut Rng) -> Vec<Press>,
-    pressed: &std::sync::atomic::AtomicUsize,
+    pressed: &AtomicUsize,
 ) -> Result<Dataset, CollectError> {
     let protocol = config.validate()?;
     plan.fits(&spec.physical.shape)?;
@@ -542,7 +474,7 @@ fn collect_presses_counted(
                 .collect();
             scanner.scan_subsections(fe, &mut burst, s_sub, &mut scratch, &mut obs)?;
             rows.push(&obs, k, &feature_index, (press.label, first, v as u16));
-            pressed.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            pressed.fetch_add(1, Ordering::Relaxed);
         }
     }
     Ok(Dataset {
