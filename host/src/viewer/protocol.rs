@@ -95,8 +95,8 @@ impl Viewer {
             self.protocol = ProtocolChoice::Fixed(recorded);
             self.status = format!(
                 "automatic selection switches the scan between protocols, which a recording \
-                 cannot: it plays the {} it was recorded with (the simulated sheet and a board \
-                 switch)",
+                 cannot: it plays the {} protocol it was recorded with (the simulated sheet \
+                 and a board switch)",
                 recorded.name()
             );
             return;

@@ -160,7 +160,7 @@ pub(crate) fn view_cmd(_: &ViewArgs, _force: bool) -> Result<()> {
 
 /// Faults or refusals a board may report with no frame between them before `et stream`
 /// ends: one is a scan that failed, several in a row (one a second) a scan it cannot make.
-const FAULTS_BEFORE_ANY_FRAME: usize = 5;
+const FAULTS_WITHOUT_A_FRAME: usize = 5;
 
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
@@ -233,7 +233,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             say!("{}: {report}", source.describe());
             unscanned += 1;
         }
-        if unscanned >= FAULTS_BEFORE_ANY_FRAME {
+        if unscanned >= FAULTS_WITHOUT_A_FRAME {
             let asked = match &processor.classifier {
                 Some(c) => format!(
                     "the model's scan ({} electrodes, {}): a model trained on another sheet \
