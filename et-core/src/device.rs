@@ -152,6 +152,9 @@ pub struct Device<S> {
     protocol: Protocol,
     /// The scan task has not yet picked up `config`.
     reconfigure: bool,
+    /// The configuration of the last frame scanned, which the device goes back to when the
+    /// front end refuses a new one ([`Device::front_end_refused`]).
+    last_scanned: Option<ScanConfig>,
     scanning: bool,
     upload: Option<Upload>,
     active: Option<Active>,
@@ -186,6 +189,7 @@ impl<S: ModelStore> Device<S> {
             config,
             protocol,
             reconfigure: true,
+            last_scanned: None,
             scanning: false,
             upload: None,
             active: None,
@@ -214,6 +218,22 @@ impl<S: ModelStore> Device<S> {
     /// [`Scanner`](crate::Scanner) with it); `None` when nothing changed.
     pub fn take_reconfigure(&mut self) -> Option<ScanConfig> {
         core::mem::take(&mut self.reconfigure).then_some(self.config)
+    }
+
+    /// The front end refused the configuration [`Device::take_reconfigure`] gave (the scan
+    /// task could not build its scanner: another electrode count than the sheet it emulates,
+    /// a gain it lacks): the device goes back to the configuration of the last frame it
+    /// scanned, which the scan task picks up next, and returns it; None when it has scanned
+    /// none or that one was refused (it stayed on a scan it could not make until reset, and
+    /// every host after it got no frames).
+    pub fn front_end_refused(&mut self) -> Option<ScanConfig> {
+        let last = self.last_scanned.filter(|last| *last != self.config)?;
+        self.protocol = last.validate().ok()?;
+        self.config = last;
+        self.reference.clear();
+        self.status.suspect_electrodes = 0;
+        self.reconfigure = true;
+        Some(last)
     }
 
     /// The sequence number the next frame will carry.
@@ -420,6 +440,7 @@ impl<S: ModelStore> Device<S> {
             0
         };
         let frame = Frame::from_scan(seq, timestamp, *config, report, flags | dropped, v_m)?;
+        self.last_scanned = Some(*config);
         let current = *config == self.config;
         self.status.frames = self.status.frames.saturating_add(1);
         let mut events = Vec::new();

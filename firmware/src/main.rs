@@ -303,6 +303,9 @@ mod app {
                 if scanner.is_none() {
                     defmt::error!("the front end refused {}", config);
                     fault(&mut shared, seq, packet);
+                    // Back to the last scan made (picked up on the next pass), so the board
+                    // is not left on one it cannot make until reset.
+                    shared.device.lock(|d| d.front_end_refused());
                 } else {
                     defmt::info!("scanning with {}", config);
                 }

@@ -731,8 +731,9 @@ fn the_live_board_source_installs_a_model_and_delivers_the_chips_classes() {
 }
 
 /// `et stream --model` of a model trained on another sheet (8 electrodes) than the QEMU
-/// board's (16): the board cannot scan the model's scan and reports a fault every second; the
-/// stream ends with the reason and the way back (it said the fault without end).
+/// board's (16): the board's front end refuses the model's scan, the board says so and goes
+/// back to the scan it made before, and the stream ends with the reason (it said the fault
+/// every second without end, and the board kept the scan it could not make until reset).
 #[test]
 fn a_stream_whose_model_the_board_cannot_scan_ends_with_the_reason() {
     let Some(image) =
@@ -815,9 +816,31 @@ fn a_stream_whose_model_the_board_cannot_scan_ends_with_the_reason() {
     };
     assert!(!status.success(), "{said}");
     assert!(
-        said.contains("the board cannot scan the model's scan (8 electrodes, opposite)")
-            && said.contains("until it is reset"),
+        said.contains(
+            "the board reported a fault and scans 16 electrodes, adjacent, not the model's scan \
+             (8 electrodes, opposite)"
+        ),
         "{said}"
+    );
+    // The board went back to the scan it made before (it stayed on the one it cannot make
+    // until reset, and every stream after it got no frames).
+    let after = Process::new(&et)
+        .args([
+            "stream",
+            "--port",
+            &qemu.pty,
+            "--reference",
+            "2",
+            "--frames",
+            "6",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        after.status.success() && String::from_utf8_lossy(&after.stdout).lines().count() > 0,
+        "{}",
+        String::from_utf8_lossy(&after.stderr)
     );
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -484,3 +484,31 @@ proptest::proptest! {
         proptest::prop_assert_eq!(out.frame.voltages.len(), k);
     }
 }
+
+/// A configuration the front end refuses (the scan task could not build its scanner) sends
+/// the device back to the configuration of the last frame it scanned, which the scan task
+/// picks up next (the board stayed on a scan it could not make until reset); before any frame
+/// there is nothing to go back to.
+#[test]
+fn a_configuration_the_front_end_refuses_goes_back_to_the_last_scanned() {
+    let mut d = device();
+    assert_eq!(d.take_reconfigure(), Some(config()));
+    assert_eq!(d.front_end_refused(), None, "no frame scanned yet");
+    let v = vec![0.0; K];
+    d.frame(&config(), Micros(1), &ScanReport::default(), &v, 0)
+        .unwrap();
+    let sixteen = ScanConfig {
+        electrodes: 16,
+        ..config()
+    };
+    assert_eq!(
+        d.handle(Command::Configure(sixteen)),
+        ack(CommandTag::Configure)
+    );
+    assert_eq!(d.take_reconfigure(), Some(sixteen));
+    assert_eq!(d.front_end_refused(), Some(config()));
+    assert_eq!(d.config(), &config());
+    assert_eq!(d.take_reconfigure(), Some(config()));
+    // Refused again (the last frame's is the configuration now): nothing more to go back to.
+    assert_eq!(d.front_end_refused(), None);
+}

@@ -42,9 +42,9 @@ impl fmt::Display for Fault {
         match *self {
             Self::Frontend { seq } => write!(
                 f,
-                "the front end failed at scan {seq}: that frame was not sent (if no frames \
-                 follow, the front end cannot scan the configuration: another electrode count \
-                 than its own?)"
+                "the front end failed at scan {seq}: that frame was not sent (just after a new \
+                 configuration, the front end cannot scan it: another electrode count than its \
+                 own? the board goes back to the scan it made before)"
             ),
             Self::Saturated { seq, measurements } => write!(
                 f,

@@ -220,7 +220,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
     // Faults and refusals a board reported since its last frame: past a few, it cannot scan
     // what was asked (it said so every second, without end).
-    let mut unscanned = 0;
+    let (mut unscanned, mut reported) = (0, 0);
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
@@ -232,6 +232,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         for report in source.board_reports() {
             say!("{}: {report}", source.describe());
             unscanned += 1;
+            reported += 1;
         }
         if unscanned >= FAULTS_WITHOUT_A_FRAME {
             let asked = match &processor.classifier {
@@ -263,6 +264,24 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         for frame in frames {
             if seen >= limit {
                 break;
+            }
+            // A board whose front end refused the model's scan goes back to the one it made
+            // before and reports the fault: its frames would stream unclassified.
+            if let Some(c) = &processor.classifier
+                && reported > 0
+                && frame.config != c.file().config
+            {
+                anyhow::bail!(
+                    "{}: the board reported a fault and scans {} electrodes, {}, not the \
+                     model's scan ({} electrodes, {}), which its front end cannot make: a model \
+                     trained on another sheet than the board's? Train on data of this board's \
+                     sheet",
+                    source.describe(),
+                    frame.config.electrodes,
+                    frame.config.protocol.name(),
+                    c.file().config.electrodes,
+                    c.file().config.protocol.name()
+                );
             }
             seen += 1;
             let out = match processor.process(frame) {
