@@ -414,6 +414,13 @@ impl Source {
         }
     }
 
+    /// Whether the source can scan another configuration (the simulator and a board; a
+    /// recording plays the one it was recorded with, [`Source::configure`]).
+    #[must_use]
+    pub fn switches_scan(&self) -> bool {
+        !matches!(self, Source::Replay(_))
+    }
+
     /// The scan configuration frames come with now (a board's once it has sent a frame).
     #[must_use]
     pub fn config(&self) -> Option<ScanConfig> {

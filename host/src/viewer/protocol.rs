@@ -90,8 +90,10 @@ impl Viewer {
     /// recording cannot switch its scan: refused there, its V_0 kept (it was taken again
     /// from the frames playing, a press among them, before the switch to PP failed).
     pub(super) fn start_automatic(&mut self) {
-        if let Some(Source::Replay(r)) = self.source.as_ref() {
-            let recorded = r.recording.header.config.protocol;
+        if let Some(source) = self.source.as_ref().filter(|s| !s.switches_scan())
+            && let Some(config) = source.config()
+        {
+            let recorded = config.protocol;
             self.protocol = ProtocolChoice::Fixed(recorded);
             self.status = format!(
                 "automatic selection switches the scan between protocols, which a recording \

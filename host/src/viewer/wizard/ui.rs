@@ -106,7 +106,7 @@ impl Wizard {
             row("frames per press", &mut self.frames_per_press, 2..=100);
         });
         if ui.button("Start").clicked() {
-            if let Some(Source::Replay(_)) = source {
+            if source.is_some_and(|s| !s.switches_scan()) {
                 // (It waited without end for frames of its scan, which a recording of another
                 // never sends, and would label a recording's presses as cells asked for.)
                 self.message = "the wizard records presses as you make them, cell by cell: \
