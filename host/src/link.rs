@@ -399,14 +399,14 @@ impl Link {
         timeout: Duration,
         erase_timeout: Duration,
     ) -> Result<(), LinkError> {
-        let too_large = LinkError::TooLarge { bytes: blob.len() };
-        let len = u32::try_from(blob.len()).map_err(|_| too_large)?;
+        let too_large = || LinkError::TooLarge { bytes: blob.len() };
+        let len = u32::try_from(blob.len()).map_err(|_| too_large())?;
         let crc = wire::crc32(blob);
         (self.request(&Command::ModelBegin { len, crc }, erase_timeout)).map_err(|e| match e {
             LinkError::Refused {
                 reason: Refusal::TooLarge,
                 ..
-            } => LinkError::TooLarge { bytes: blob.len() },
+            } => too_large(),
             e => e,
         })?;
         for (i, chunk) in blob.chunks(MODEL_CHUNK).enumerate() {

@@ -186,7 +186,6 @@ impl std::fmt::Display for Mismatch {
     }
 }
 
-/// A model file's format in words.
 /// The first line of `text` (at most 60 characters, control characters left out) when
 /// parsing it as JSON failed on its first characters: the text is not JSON at all.
 fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
@@ -207,6 +206,7 @@ fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<Strin
     (!said.is_empty()).then_some(said)
 }
 
+/// A model file's format in words.
 fn kind_of(format: &str) -> &'static str {
     if format == "et-model" {
         "a board model"
