@@ -306,6 +306,31 @@ impl Schedule {
         (distinct, of_row)
     }
 
+    /// The schedule without every value that `electrodes` (0-based) drive or measure, and the
+    /// index in this frame of each value kept: a detached or broken electrode's values left
+    /// out. A built-in protocol's rows stay as they are, its name dropped.
+    ///
+    /// # Errors
+    /// [`ScheduleError::Absent`] for an electrode past the sheet's, [`ScheduleError::Empty`]
+    /// when every value involves one of them.
+    pub fn without(&self, electrodes: &[u16]) -> Result<(Self, Vec<usize>), ScheduleError> {
+        if let Some(&electrode) = electrodes.iter().find(|e| **e >= self.electrodes) {
+            return Err(ScheduleError::Absent {
+                electrode,
+                electrodes: self.electrodes,
+            });
+        }
+        let (kept, rows): (Vec<usize>, Vec<Row>) = (self.rows.iter().enumerate())
+            .filter(|(_, r)| {
+                ![r.source, r.sink, r.positive, r.negative]
+                    .iter()
+                    .any(|e| electrodes.contains(e))
+            })
+            .map(|(k, r)| (k, *r))
+            .unzip();
+        Ok((Self::new(self.electrodes, rows)?, kept))
+    }
+
     /// The first row that measures on one of its drive electrodes, and that electrode.
     #[must_use]
     pub fn first_on_drive(&self) -> Option<(usize, u16)> {

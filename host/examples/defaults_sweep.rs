@@ -33,10 +33,12 @@ type Rule = (&'static str, AlphaRule, Option<f64>);
 /// An instrument, and the tank's departures from its model (None: the network as drawn).
 type Setting = (&'static str, Instrument, Option<Mismatch>);
 
-/// The real tank's mismatch: [`Mismatch::tank`], or ET_SWEEP_MISMATCH="position, width,
-/// contact spread, contact drift, unevenness" to try others.
+/// The real tank's mismatch: [`Mismatch::tank`] (its draw seeded by ET_SWEEP_SEED, default
+/// 5), or ET_SWEEP_MISMATCH="position, width, contact spread, contact drift, unevenness" to
+/// try others.
 fn mismatch() -> Mismatch {
-    let mut m = Mismatch::tank(5);
+    let seed = std::env::var("ET_SWEEP_SEED").map_or(5, |s| s.parse().unwrap_or(5));
+    let mut m = Mismatch::tank(seed);
     if let Ok(text) = std::env::var("ET_SWEEP_MISMATCH") {
         let v: Vec<f64> = text
             .split(',')
@@ -92,14 +94,21 @@ fn main() -> anyhow::Result<()> {
             // As `et reconstruct --frames` does by default.
             let fit = recon.fit_background(&reference.v0)?;
             eprintln!(
-                "{}, {instrument_name}: background {:.1} ohm/sq (truth 230), contact {:.1} ohm (truth 60; the models' electrodes differ), residual {:.2} % ({:.2} % on drive electrodes, {:.2} % off them; the scene's guess: {:.1} %)",
+                "{}, {instrument_name}: background {:.1} ohm/sq (truth 230), contact {:.1} ohm (truth 60; the models' electrodes differ), residual {:.2} % ({:.2} % on drive electrodes, {:.2} % off them; the scene's guess: {:.1} %); worst electrode {}",
                 tank.name,
                 fit.sheet_resistance,
                 fit.contact_ohm,
                 100.0 * fit.residual,
                 100.0 * fit.misfit_on_drive.unwrap_or(f64::NAN),
                 100.0 * fit.misfit_off_drive.unwrap_or(f64::NAN),
-                100.0 * fit.scene_residual
+                100.0 * fit.scene_residual,
+                fit.worst_electrode.map_or("none".into(), |w| format!(
+                    "{} (0-based): its values {:.1} % off the model, the rest {:.1} %{}",
+                    w.electrode,
+                    100.0 * w.own,
+                    100.0 * w.rest,
+                    if w.stands_out() { ", named" } else { "" }
+                ))
             );
             for &rule in &rules {
                 let run = Run {

@@ -10,7 +10,9 @@
 //! Run: `cargo run --release -p et-host --example tanks` (ET_TANKS_RULES picks rules by name,
 //! `;` between; ET_TANKS_LEVELS the segmentation's shares; ET_LINEAR=1 prints the
 //! linearisation's misfit at each rule's images, `Reconstructor::linearisation_misfit`;
-//! ET_TANKS_WRITE=dir writes each tank's scene, protocol and frames there and stops).
+//! ET_TANKS_WRITE=dir writes each tank's scene, protocol and frames there and stops;
+//! ET_TANKS_ELECTRODES=1 prints the electrode each tank's fitted model explains worst, as
+//! measured and with electrode 7 detached in five ways, and stops).
 
 #[path = "../tests/support/tanks.rs"]
 mod tanks;
@@ -39,6 +41,9 @@ fn main() -> anyhow::Result<()> {
             println!("{}: {} {}", tank.name, scene.display(), frames.display());
         }
         return Ok(());
+    }
+    if std::env::var_os("ET_TANKS_ELECTRODES").is_some() {
+        return worst_electrodes(&all);
     }
     let only = std::env::var("ET_TANKS_RULES").unwrap_or_default();
     let mut all_rules = rules();
@@ -302,4 +307,85 @@ fn say_case(name: &str, case: &Case, recon: &Reconstructor, image: &Image) {
             1e3 * t.radius
         );
     }
+}
+
+/// A fault of one value: its row's electrodes (source, sink, positive, negative; 0-based), its
+/// value as measured (V) and a generator of noise give the value the fault leaves.
+type Fault = fn(&[u16; 4], f64, &mut et_core::rng::Rng) -> f64;
+
+/// Each tank's worst electrode ([`et_recon::background::electrode_misfit`], counted from 1 as
+/// the tanks' protocol files count) after the background fit to its reference as measured,
+/// and to the reference with electrode 7 detached: reading noise of 0.5 V rms (a floating
+/// input), reading 0 V, driving no current (its injections' values 10 uV of noise), or reading
+/// 50 or 90 % of its potential (a poor contact).
+fn worst_electrodes(all: &[Tank]) -> anyhow::Result<()> {
+    println!(
+        "| tank | electrode 7 | worst electrode | its values off the model (own) | the rest | stands out |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- |");
+    let work = std::env::temp_dir().join(format!("et-tanks-{}", std::process::id()));
+    let mut rng = et_core::rng::Rng::new(7);
+    for tank in all {
+        let dir = work.join(tank.name.split(' ').next().unwrap_or("tank"));
+        let (scene_path, _) = tank.write(&dir);
+        let scene = Scene::load(&scene_path)?;
+        let schedule = scene.schedule()?;
+        let measured: Vec<f64> = tank.reference.iter().map(|v| f64::from(*v)).collect();
+        let faults: [(&str, Fault); 6] = [
+            ("as measured", |_, v, _| v),
+            ("reads noise (0.5 V rms)", |r, v, rng| {
+                if r[2..].contains(&6) {
+                    0.5 * rng.normal()
+                } else {
+                    v
+                }
+            }),
+            (
+                "reads 0 V",
+                |r, v, _| {
+                    if r[2..].contains(&6) { 0.0 } else { v }
+                },
+            ),
+            ("drives no current", |r, v, rng| {
+                if r[..2].contains(&6) {
+                    1e-5 * rng.normal()
+                } else {
+                    v
+                }
+            }),
+            (
+                "reads 50 %",
+                |r, v, _| {
+                    if r[2..].contains(&6) { 0.5 * v } else { v }
+                },
+            ),
+            (
+                "reads 90 %",
+                |r, v, _| {
+                    if r[2..].contains(&6) { 0.9 * v } else { v }
+                },
+            ),
+        ];
+        for (name, fault) in faults {
+            let v0: Vec<f64> = (schedule.rows().iter().zip(&measured))
+                .map(|(r, v)| fault(&[r.source, r.sink, r.positive, r.negative], *v, &mut rng))
+                .collect();
+            let mut recon = Spec::new(scene.sheet.physical.clone(), schedule.clone()).set_up()?;
+            let fit = recon.fit_background(&v0)?;
+            let Some(w) = fit.worst_electrode else {
+                continue;
+            };
+            println!(
+                "| {} | {name} | {} ({} values) | {:.1} % | {:.1} % | {} |",
+                tank.name,
+                w.electrode + 1,
+                w.values,
+                100.0 * w.own,
+                100.0 * w.rest,
+                if w.stands_out() { "yes" } else { "no" }
+            );
+        }
+    }
+    std::fs::remove_dir_all(&work).ok();
+    Ok(())
 }

@@ -317,7 +317,8 @@ impl Viewer {
             .and_then(et_recon::background::reference_changes_said);
         let not_volts =
             (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
-        match (poor_fit.or(changes).or(not_volts), sim) {
+        let electrode = self.processor.v0_electrode_said();
+        match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
             (Some(said), _) => format!("V_0 taken; warning: {said}"),
             (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
             (None, false) => "V_0 taken: touches show on the sheet".into(),

@@ -2668,3 +2668,85 @@ fn a_board_that_never_answers_is_said_with_its_rate() {
         "{stderr}"
     );
 }
+
+/// A recording of the simulated board with electrode 3 disconnected (the simulator's fault:
+/// its measurements float to a rail, its injections drive nothing): `et reconstruct` names
+/// electrode 3, `--skip-electrodes 3` leaves its 52 values out and is not warned, an electrode
+/// the sheet lacks is refused in the scene's numbering. The same board sound names none.
+#[test]
+fn a_disconnected_electrode_is_named_and_left_out() {
+    let dir = std::env::temp_dir().join(format!("et-cli-disconnected-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let sound = std::fs::read_to_string(root.join("sim/scenes/square-13cm-16.toml")).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    for faulty in [false, true] {
+        let mut text = sound.clone();
+        if faulty {
+            text.push_str("\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n");
+        }
+        let (scene, rec) = (dir.join("scene.toml"), dir.join("r.jsonl"));
+        std::fs::write(&scene, text).unwrap();
+        let out = et(&[
+            "sim",
+            "--scene",
+            &s(&scene),
+            "--frames",
+            "8",
+            "--force",
+            "--out",
+            &s(&rec),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let reconstruct = |extra: &[&str]| {
+            let (scene, rec, png) = (s(&scene), s(&rec), s(&dir.join("x.png")));
+            let mut args = vec!["reconstruct", "--scene", &scene, "--frames", &rec];
+            args.extend([
+                "--reference",
+                "4",
+                "--triangles",
+                "2000",
+                "--force",
+                "--out",
+                &png,
+            ]);
+            args.extend(extra);
+            let out = et(&args);
+            (
+                out.status.success(),
+                String::from_utf8_lossy(&out.stderr).into_owned(),
+            )
+        };
+        let (ok, said) = reconstruct(&[]);
+        assert!(ok, "{said}");
+        assert_eq!(
+            said.contains("warning: electrode 3's 52 values"),
+            faulty,
+            "{said}"
+        );
+        assert_eq!(
+            said.contains("--skip-electrodes 3 leaves its values out"),
+            faulty,
+            "{said}"
+        );
+        if faulty {
+            let (ok, said) = reconstruct(&["--skip-electrodes", "3"]);
+            assert!(ok, "{said}");
+            assert!(
+                said.contains("--skip-electrodes 3: 52 of the frame's 208 values left out"),
+                "{said}"
+            );
+            assert!(!said.contains("warning: electrode"), "{said}");
+            let (ok, said) = reconstruct(&["--skip-electrodes", "3,16"]);
+            assert!(
+                !ok && said.contains("--skip-electrodes 16: the scene's electrodes are 0 to 15"),
+                "{said}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

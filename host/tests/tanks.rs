@@ -145,3 +145,134 @@ fn defaults_hold_on(which: usize) {
         SEGMENT_BAR * n
     );
 }
+
+/// A detached electrode, as other labs' instruments show one, on both real tanks: electrode 7
+/// (as the protocol files count, from 1) reads noise (a floating input, 0.5 V rms) and drives no current
+/// (its injections' values a few microvolts of noise). `et reconstruct` names it, on neither
+/// tank as measured, and `--skip-electrodes 7` images each case as the tank as measured does
+/// (the strongest object within 5 mm, its sign the same); without it the first case's image
+/// has no object or another.
+#[test]
+fn a_detached_electrode_is_named_and_left_out() {
+    let Some(all) = tanks::both() else {
+        eprintln!("skipped: no ../shared/data/tanks beside the project");
+        return;
+    };
+    for (which, tank) in all.iter().enumerate() {
+        let work =
+            std::env::temp_dir().join(format!("et-tanks-detached-{}-{which}", std::process::id()));
+        let (scene, frames) = tank.write(&work);
+        let broken = work.join("broken.csv");
+        std::fs::write(&broken, detached(&tank.protocol_csv, &frames, 7)).expect("frames");
+        let run = |frames: &std::path::Path, case: &tanks::Case, skip: bool| {
+            let mut command = Command::new(env!("CARGO_BIN_EXE_et"));
+            command
+                .args(["reconstruct", "--scene"])
+                .arg(&scene)
+                .arg("--frames")
+                .arg(frames)
+                .args(["--reference", "1", "--frame", &case.frame.to_string()])
+                .args(["--json", "--force", "--out"])
+                .arg(work.join("x.png"));
+            if skip {
+                command.args(["--skip-electrodes", "7"]);
+            }
+            let out = command.output().expect("run et");
+            let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+            assert!(out.status.success(), "{}: {stderr}", tank.name);
+            let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+            let strongest = json["objects"]
+                .as_array()
+                .expect("objects")
+                .first()
+                .map(|o| {
+                    let at = [o["x_m"].as_f64().unwrap(), o["y_m"].as_f64().unwrap()];
+                    (at, o["sign"].as_i64().unwrap())
+                });
+            (strongest, stderr)
+        };
+        for (k, case) in tank.cases.iter().take(2).enumerate() {
+            let (measured, said) = run(&frames, case, false);
+            assert!(
+                !said.contains("warning: electrode"),
+                "{}: {said}",
+                tank.name
+            );
+            let (left_out, said) = run(&broken, case, true);
+            assert!(
+                said.contains("284 of the frame's 1264")
+                    || said.contains("326 of the frame's 2356"),
+                "{said}"
+            );
+            let ((a, sign_a), (b, sign_b)) = (measured.unwrap(), left_out.unwrap());
+            let apart = (a[0] - b[0]).hypot(a[1] - b[1]);
+            assert!(
+                apart < 5e-3 && sign_a == sign_b,
+                "{} {}: {apart} m apart, signs {sign_a} {sign_b}",
+                tank.name,
+                case.id
+            );
+            if k == 0 {
+                let (broken_image, said) = run(&broken, case, false);
+                assert!(
+                    said.contains("warning: electrode 7's")
+                        && said.contains("--skip-electrodes 7 leaves its values out"),
+                    "{}: {said}",
+                    tank.name
+                );
+                assert!(
+                    broken_image.is_none_or(|(c, s)| (c[0] - a[0]).hypot(c[1] - a[1]) > 5e-3
+                        || s != sign_a),
+                    "{}: the detached electrode did not change the image",
+                    tank.name
+                );
+            }
+        }
+        std::fs::remove_dir_all(&work).ok();
+    }
+}
+
+/// The frames of `frames_csv` (one per line, V) with `electrode` (counted from 1, as
+/// `protocol_csv` counts) detached: every value it measures noise of 0.5 V rms, every value
+/// under its injections noise of 10 uV rms.
+fn detached(protocol_csv: &str, frames_csv: &std::path::Path, electrode: u16) -> String {
+    let rows: Vec<[u16; 4]> = protocol_csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<u16> = l.split(',').take(4).map(|c| c.parse().unwrap()).collect();
+            [c[0], c[1], c[2], c[3]]
+        })
+        .collect();
+    // A fixed-seed generator of about normal noise (the sum of 12 uniforms less 6).
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut normal = move || {
+        (0..12)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            })
+            .sum::<f64>()
+            - 6.0
+    };
+    let text = std::fs::read_to_string(frames_csv).expect("frames");
+    let mut out = String::new();
+    for line in text.lines() {
+        let values: Vec<String> = (line.split(',').zip(&rows))
+            .map(|(v, [source, sink, positive, negative])| {
+                if [source, sink].contains(&&electrode) {
+                    format!("{:e}", 1e-5 * normal())
+                } else if [positive, negative].contains(&&electrode) {
+                    format!("{:e}", 0.5 * normal())
+                } else {
+                    v.to_string()
+                }
+            })
+            .collect();
+        out.push_str(&values.join(","));
+        out.push('\n');
+    }
+    out
+}

@@ -388,6 +388,23 @@ class Protocol:
         """Values a frame."""
         return int(self.rows.shape[0])
 
+    def without(self, electrodes: Sequence[int]) -> Tuple["Protocol", np.ndarray]:
+        """This protocol without every value that ``electrodes`` (0-based) drive or measure,
+        and the indices of the values kept: a detached or broken electrode left out, as
+        ``et reconstruct --skip-electrodes`` does. Image ``v[..., keep]`` with the protocol
+        returned (a built-in protocol's name is dropped: its rows are no longer all of it)."""
+        skip = _whole(np.atleast_1d(np.asarray(electrodes, dtype=np.float64)), "electrodes")
+        outside = skip[(skip < 0) | (skip >= self.electrodes)]
+        if len(outside):
+            raise EtError(
+                f"electrodes: {int(outside[0])} is not one of this protocol's 0 to "
+                f"{self.electrodes - 1}"
+            )
+        keep = np.flatnonzero(~np.isin(self.rows, skip).any(axis=1))
+        if len(keep) == 0:
+            raise EtError("electrodes: every value of the frame involves one of them")
+        return Protocol(self.electrodes, self.rows[keep], self.currents[keep]), keep
+
     @classmethod
     def from_rows(
         cls, rows: Any, electrodes: int, current_a: float = 1e-3, base: int = 0
@@ -836,7 +853,8 @@ class Reconstructor:
         if frames.size:
             native = self._native
             for said in (
-                native.poor_fit(frames), native.reference_changed(frames), native.not_volts(frames)
+                native.electrode_off(frames), native.poor_fit(frames),
+                native.reference_changed(frames), native.not_volts(frames),
             ):
                 if said is not None:
                     warnings.warn(said, EtWarning, stacklevel=3)

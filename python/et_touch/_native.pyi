@@ -78,6 +78,8 @@ class Reconstructor:
         """What is said when the model leaves over 20 % of reference's mean unexplained."""
     def not_volts(self, reference: F64) -> Optional[str]:
         """What is said when reference's mean passes 100 V: frames in another unit."""
+    def electrode_off(self, reference: F64) -> Optional[str]:
+        """What is said of an electrode whose values stand out from the model (0-based), or None."""
     def reference_changed(self, reference: F64) -> Optional[str]:
         """What is said when one of reference's frames differs from the others as a touch."""
     def forward(self, sigma: F64) -> F64:

@@ -375,6 +375,21 @@ impl Reconstructor {
         ))
     }
 
+    /// What is said when one electrode's values in the mean of the untouched `reference`
+    /// frames (n x K, V) stand out from the model's frame as a detached or broken
+    /// electrode's (`et_recon::background::ElectrodeMisfit::stands_out`, numbered from 0);
+    /// None otherwise.
+    fn electrode_off(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {
+        let v0 = reference_of(&reference)?.v0;
+        Ok(self.inner.electrode_misfit(&v0).and_then(|m| {
+            let said = m.said(0)?;
+            Some(format!(
+                "{said} Protocol.without([{}]) leaves its values out",
+                m.electrode
+            ))
+        }))
+    }
+
     /// What is said when the mean of the untouched `reference` frames (n x K) passes
     /// `et_recon::background::VOLTS_MOST`: frames in another unit than volts; None within.
     fn not_volts(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {

@@ -473,3 +473,40 @@ def test_ctrl_c_ends_a_set_up_or_a_batch_at_once(scene, recording):
     assert took < whole / 2, (took, whole)
     # What was set up and the reconstructor interrupted still work.
     assert len(r.images(v[20:], v[:20])) == len(v) - 20
+
+
+def test_a_detached_electrode_is_said_and_left_out():
+    """Electrode 5's values (those it drives or measures) of the untouched frame read as a
+    floating input reads (noise of 0.5 V): set_reference names it and the way to leave it
+    out; Protocol.without gives the protocol and the values kept, whose reconstructor
+    images the press as the sound sheet's does, and says nothing."""
+    protocol = et.protocol("adjacent", 16, current_a=1e-3)
+    disc = et.Reconstructor(et.disc(0.065, 16), protocol, triangles=1200)
+    v0 = disc.forward(disc.sigma0)
+    rows = protocol.rows
+    of5 = (rows == 5).any(axis=1)
+    broken = v0.copy()
+    broken[of5] = np.random.default_rng(3).normal(0.0, 0.5, of5.sum())
+    with pytest.warns(et.EtWarning) as said:
+        disc.set_reference(broken)
+    first = str(said[0].message)
+    assert first.startswith("electrode 5's 52 values") and "Protocol.without([5])" in first
+    without, keep = protocol.without([5])
+    assert without.K == 156 and len(keep) == 156 and not (without.rows == 5).any()
+    assert np.array_equal(without.rows, rows[keep]) and without.name is None
+    left_out = et.Reconstructor(et.disc(0.065, 16), without, triangles=1200)
+    # A press: the sound sheet's frame under a conductive bump.
+    sigma = np.full(len(disc.triangles), disc.sigma0)
+    centres = disc.nodes[disc.triangles].mean(axis=1)
+    sigma[np.hypot(centres[:, 0] - 0.02, centres[:, 1] - 0.01) < 0.01] *= 1.5
+    pressed = disc.forward(sigma)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", et.EtWarning)
+        left_out.set_reference(broken[keep])
+        found = left_out.image(pressed[keep]).objects
+        whole = disc.image(pressed, v0).objects
+    at = [[o["x_m"], o["y_m"]] for o in (found[0], whole[0])]
+    assert np.hypot(*np.subtract(*at)) < 3e-3, (found, whole)
+    for bad, match in ([16], "not one of this protocol's 0 to 15"), (range(16), "every value"):
+        with pytest.raises(et.EtError, match=match):
+            protocol.without(bad)

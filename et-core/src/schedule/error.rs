@@ -27,6 +27,17 @@ pub enum ScheduleError {
         /// The sheet's electrode count.
         electrodes: u16,
     },
+    /// An electrode to leave out ([`super::Schedule::without`]) past the sheet's.
+    #[error(
+        "electrode {electrode} to leave out: the sheet has {electrodes} (0 to {last})",
+        last = electrodes.saturating_sub(1)
+    )]
+    Absent {
+        /// The electrode named.
+        electrode: u16,
+        /// The sheet's electrode count.
+        electrodes: u16,
+    },
     /// The current would enter and leave by one electrode.
     #[error("row {row}: source and sink are both electrode {electrode}")]
     SameDrive {

@@ -282,3 +282,32 @@ fn a_frame_of_another_length_is_said_with_what_it_may_be() {
     let k = Protocol::new(ProtocolKind::PpPp, 32).unwrap().frame_len();
     assert!(said(k).contains("pp-pp at 32 electrodes"), "{}", said(k));
 }
+
+#[test]
+fn an_electrode_left_out_takes_every_value_it_drives_or_measures() {
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let s = Schedule::of_protocol(&protocol, 1e-3).unwrap();
+    let (without, kept) = s.without(&[7]).unwrap();
+    // Adjacent on 16: the two injections by electrode 7 go (26 values); the two beside them
+    // lose one pair (the other already touches their drive), the other twelve two: 2 x 12 +
+    // 12 x 11 = 156 kept.
+    assert_eq!(without.frame_len(), 156);
+    assert_eq!(kept.len(), 156);
+    assert_eq!(without.kind(), None);
+    for (row, k) in without.rows().iter().zip(&kept) {
+        assert_eq!(row, &s.rows()[*k]);
+        assert!(![row.source, row.sink, row.positive, row.negative].contains(&7));
+    }
+    assert!(kept.windows(2).all(|w| w[0] < w[1]));
+    // None left out: the same rows; past the sheet, or every electrode, refused.
+    assert_eq!(s.without(&[]).unwrap().0.rows(), s.rows());
+    assert!(matches!(
+        s.without(&[16]),
+        Err(ScheduleError::Absent {
+            electrode: 16,
+            electrodes: 16
+        })
+    ));
+    let every: Vec<u16> = (0..16).collect();
+    assert!(matches!(s.without(&every), Err(ScheduleError::Empty)));
+}

@@ -19,6 +19,9 @@ use et_core::sheet::{ElectrodeModel, Sheet};
 use crate::fem::{Electrodes, FemError, Forward, MIN_CONTACT_RATIO};
 use crate::mesh::Mesh;
 
+mod electrode;
+pub use electrode::{ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, electrode_misfit};
+
 /// The background fitted to a reference frame.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct BackgroundFit {
@@ -41,6 +44,10 @@ pub struct BackgroundFit {
     pub misfit_on_drive: Option<f64>,
     /// The same over the values off the drive electrodes.
     pub misfit_off_drive: Option<f64>,
+    /// The electrode whose values the fitted model explains worst beside the rest (None
+    /// before the reconstructor has made the fitted model's frame); a detached or broken
+    /// electrode [stands out](ElectrodeMisfit::stands_out).
+    pub worst_electrode: Option<ElectrodeMisfit>,
 }
 
 /// Why a background could not be fitted.
@@ -475,6 +482,7 @@ pub fn fit(
         solves: solves.get(),
         misfit_on_drive: None,
         misfit_off_drive: None,
+        worst_electrode: None,
     })
 }
 

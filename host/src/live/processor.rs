@@ -375,6 +375,15 @@ impl Processor {
         self.v0().map(|v0| self.recon.unexplained(&v0))
     }
 
+    /// What is said of the electrode whose values in V_0 stand out from the model as a
+    /// detached or broken electrode's ([`Reconstructor::electrode_misfit`]), numbered from 0
+    /// as the board counts; None until the reference is complete, or when none stands out.
+    #[must_use]
+    pub fn v0_electrode_said(&self) -> Option<String> {
+        let said = self.recon.electrode_misfit(&self.v0()?)?.said(0)?;
+        Some(format!("{said} Check its clip and wire"))
+    }
+
     /// Of the untouched reference frames, the one that differs most from their mean as a
     /// change of conductivity does, and by how much ([`Reconstructor::reference_changes`]);
     /// None until the reference is complete.

@@ -770,3 +770,31 @@ fn a_screenshot_presses_only_where_asked() {
     assert!(h.state().last.as_ref().unwrap().event.is_none());
     assert_eq!((d.touches.len(), d.outlines, d.truth), (0, 0, 0), "{d:?}");
 }
+
+/// The simulated sheet with electrode 3 disconnected (the simulator's fault: its input floats
+/// to a rail, its injections drive nothing): once V_0 is taken the status line names
+/// electrode 3; the sound sheet's names none.
+#[test]
+fn a_disconnected_electrode_is_named_in_the_status() {
+    let dir = std::env::temp_dir().join(format!("et-viewer-fault-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let sound = std::fs::read_to_string(scene("square-13cm-16.toml")).unwrap();
+    for faulty in [false, true] {
+        let path = dir.join(format!("fault-{faulty}.toml"));
+        let fault = "\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n";
+        std::fs::write(&path, sound.clone() + if faulty { fault } else { "" }).unwrap();
+        let mut h = harness(Options {
+            scene: Some(path),
+            reference_frames: 4,
+            ..sim_options()
+        });
+        settle(&mut h);
+        let status = &h.state().status;
+        assert_eq!(
+            status.contains("warning: electrode 3's 52 values"),
+            faulty,
+            "{status}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -54,6 +54,16 @@ impl Scene {
         }
     }
 
+    /// The number the scene's user gives its first electrode: its protocol file's `base` (0,
+    /// or 1 for a system that counts from 1), else et's 0.
+    #[must_use]
+    pub fn electrode_base(&self) -> u16 {
+        match &self.scan.protocol {
+            ProtocolSpec::File(f) => f.base,
+            ProtocolSpec::Named(_) => 0,
+        }
+    }
+
     /// What each frame value measures: the built-in protocol's rows at the scene's current,
     /// or the protocol file's (relative to [`Scene::dir`]), its rows without a current at
     /// the scene's.

@@ -26,6 +26,7 @@ impl Reconstructor {
             mismatch_and_weights(self.schedule.rows(), v0, &self.jac.frame, self.weighting);
         fit.misfit_on_drive = mismatch.on_drive;
         fit.misfit_off_drive = mismatch.off_drive;
+        fit.worst_electrode = self.electrode_misfit(v0);
         self.mismatch = Some(mismatch.shares);
         self.weights = weights;
         self.prepare()?;

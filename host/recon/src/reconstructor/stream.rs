@@ -98,6 +98,16 @@ impl Reconstructor {
         crate::background::best_scale(&self.jac.frame, v0).1
     }
 
+    /// The electrode whose values (those it drives or measures) leave the most of `v0` (K
+    /// values, V) the model's frame of the untouched sheet cannot explain, and how much is
+    /// left without them ([`crate::background::electrode_misfit`]).
+    #[must_use]
+    pub fn electrode_misfit(&self, v0: &[f64]) -> Option<crate::background::ElectrodeMisfit> {
+        let schedule = self.schedule();
+        let electrodes = u16::try_from(schedule.electrodes()).ok()?;
+        crate::background::electrode_misfit(schedule.rows(), electrodes, v0, &self.jac.frame)
+    }
+
     /// Of untouched reference `frames` (each K values, V), the one that differs most from
     /// their mean as a change of conductivity does, and by how much: each frame's difference
     /// from the mean, its mean square over the mean square of its part no conductivity

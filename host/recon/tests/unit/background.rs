@@ -126,3 +126,45 @@ fn a_frame_of_one_value_says_the_value_as_written() {
         assert!(text.contains(said), "{value}: {text}");
     }
 }
+
+/// The model's own frame with electrode 3's values off by a gain g (a contact that reads a
+/// share of its potential): the rest is the model's exactly at scale 1, so `rest` is 0 and
+/// `own` is |g|, electrode 3 the worst; it stands out from half its size on, and is named as
+/// the user counts (from 1 with base = 1). The model's frame as it is leaves nothing.
+#[test]
+fn an_electrode_off_the_model_is_the_worst_by_its_own_share() {
+    let (sheet, mesh, schedule) = tank();
+    let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
+    let n = mesh.triangles.len();
+    let model = forward.frame(&vec![1e-3; n], &schedule).unwrap();
+    let of = |r: &Row, e: u16| [r.source, r.sink, r.positive, r.negative].contains(&e);
+    let values = schedule.rows().iter().filter(|r| of(r, 3)).count();
+    for (gain, stands_out) in [
+        (-0.3, false),
+        (-0.45, false),
+        (-0.6, true),
+        (-1.0, true),
+        (2.0, true),
+    ] {
+        let v0: Vec<f64> = (schedule.rows().iter().zip(&model))
+            .map(|(r, m)| if of(r, 3) { m * (1.0 + gain) } else { *m })
+            .collect();
+        let worst = electrode_misfit(schedule.rows(), 8, &v0, &model).unwrap();
+        assert_eq!(worst.electrode, 3, "{gain}: {worst:?}");
+        assert_eq!(worst.values, values);
+        assert!(worst.rest < 1e-12, "{gain}: {worst:?}");
+        assert!(
+            (worst.own - f64::abs(gain)).abs() < 1e-9,
+            "{gain}: {worst:?}"
+        );
+        assert_eq!(worst.stands_out(), stands_out, "{gain}: {worst:?}");
+        if stands_out {
+            assert!(worst.said(1).unwrap().starts_with("electrode 4's"));
+            assert!(worst.said(0).unwrap().starts_with("electrode 3's"));
+        } else {
+            assert_eq!(worst.said(0), None);
+        }
+    }
+    let same = electrode_misfit(schedule.rows(), 8, &model, &model).unwrap();
+    assert!(same.own < 1e-12 && !same.stands_out(), "{same:?}");
+}

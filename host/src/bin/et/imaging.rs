@@ -141,6 +141,12 @@ pub(crate) struct ReconstructArgs {
     /// EIDORS offers it). Needs the fitted background. docs/measurements.md measures them.
     #[arg(long, default_value = "alike", value_parser = ["alike", "kind", "normalised"])]
     weights: String,
+    /// With --frames: leave out every value these electrodes drive or measure (a detached or
+    /// broken electrode, which the background fit names when its values stand out), counted
+    /// as the scene's protocol file counts them (from 1 with `base = 1`), else from 0.
+    /// Several: 3,7.
+    #[arg(long, value_name = "E,...", value_delimiter = ',', requires = "frames")]
+    skip_electrodes: Vec<u16>,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long, requires = "frames", conflicts_with_all = ["all", "range"])]
     frame: Option<usize>,
@@ -307,7 +313,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     };
     let started = Instant::now();
     let (method, alpha) = method_and_alpha(args)?;
-    let spec = et_recon::Spec {
+    let mut spec = et_recon::Spec {
         mesh: mesh_plan(&scene, &args.mesh, false)?,
         method,
         alpha,
@@ -320,12 +326,14 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         false => say!("{what:<44} {dt:>8.3} s"),
     };
     let clock = Instant::now();
-    let chosen = match (table, config) {
+    let mut chosen = match (table, config) {
         (Some(path), _) => table_frames(args, path, spec.schedule.frame_len())?,
         (None, Some(config)) => frames(args, &scene, recording.as_ref(), &config)?,
         (None, None) => bail!("no frames to image"),
     };
     drop(recording);
+    let base = scene.electrode_base();
+    frames::skip_electrodes(&args.skip_electrodes, base, &mut spec.schedule, &mut chosen)?;
     let frames::Chosen {
         reference,
         reference_frames,
@@ -338,6 +346,13 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     frames::say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
     let (mut recon, background) = set_up(args, spec, &reference, stage)?;
+    if let Some(said) = (recon.electrode_misfit(&reference.v0)).and_then(|m| {
+        let number = u32::from(m.electrode) + u32::from(base);
+        m.said(base)
+            .map(|said| format!("{said} --skip-electrodes {number} leaves its values out"))
+    }) {
+        say!("warning: {said}");
+    }
     // Reference frames of which one differs as a touch or a drift does: every frame is
     // imaged against them.
     if let Some(said) = (recon.reference_changes(&reference_frames))

@@ -304,6 +304,11 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     say!("warning: {said}");
                 }
                 if imaged == 1
+                    && let Some(said) = processor.v0_electrode_said()
+                {
+                    say!("warning: {said}");
+                }
+                if imaged == 1
                     && let Some(said) =
                         (processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0))
                 {

@@ -399,3 +399,59 @@ pub(super) fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usiz
         );
     }
 }
+
+/// `schedule` and `chosen` without every value the electrodes `skip` (counted from `base`,
+/// as the scene's user counts them) drive or measure (`--skip-electrodes`): a detached or
+/// broken electrode's values left out. Says what is left out.
+pub(super) fn skip_electrodes(
+    skip: &[u16],
+    base: u16,
+    schedule: &mut et_core::schedule::Schedule,
+    chosen: &mut Chosen,
+) -> Result<()> {
+    if skip.is_empty() {
+        return Ok(());
+    }
+    let l = schedule.electrodes();
+    let last = l - 1 + usize::from(base);
+    let zero_based = (skip.iter())
+        .map(
+            |&e| match e.checked_sub(base).filter(|e| usize::from(*e) < l) {
+                Some(e) => Ok(e),
+                None => bail!(
+                    "--skip-electrodes {e}: the scene's electrodes are {base} to {last}{}",
+                    if base == 0 {
+                        ""
+                    } else {
+                        " (its protocol file counts them from 1)"
+                    }
+                ),
+            },
+        )
+        .collect::<Result<Vec<u16>>>()?;
+    let k = schedule.frame_len();
+    let (without, kept) = (schedule.without(&zero_based))
+        .context("--skip-electrodes: every value of the frame involves one of them")?;
+    let keep = |v: &[f32]| kept.iter().map(|k| v[*k]).collect::<Vec<f32>>();
+    let reference = &mut chosen.reference;
+    reference.v0 = kept.iter().map(|k| reference.v0[*k]).collect();
+    if reference.var_dv.len() == k {
+        reference.var_dv = kept.iter().map(|k| reference.var_dv[*k]).collect();
+    }
+    for frame in &mut chosen.reference_frames {
+        *frame = keep(frame);
+    }
+    for (_, frame) in &mut chosen.frames {
+        *frame = keep(frame);
+    }
+    let named: Vec<String> = skip.iter().map(u16::to_string).collect();
+    say!(
+        "note: --skip-electrodes {}: {} of the frame's {k} values left out (every value they \
+         drive or measure), {} imaged",
+        named.join(","),
+        k - kept.len(),
+        kept.len()
+    );
+    *schedule = without;
+    Ok(())
+}
