@@ -9,6 +9,18 @@ fn et(args: &[&str]) -> std::process::Output {
         .expect("run et")
 }
 
+/// `et ARGS`, which must succeed (its standard error shown if not).
+fn et_ok(args: &[&str]) -> std::process::Output {
+    let out = et(args);
+    assert!(
+        out.status.success(),
+        "et {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// What a Python script of the repository prints for one file (it must succeed).
 fn python_script(script: &std::path::Path, file: &std::path::Path) -> String {
     let py = Command::new("python3")
@@ -1041,7 +1053,7 @@ fn reconstruct_images_recorded_frames() {
     let scene = root.join("sim/scenes/square-13cm-16-swipe.toml");
     let rec = dir.join("swipe.jsonl");
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    let out = et(&[
+    et_ok(&[
         "sim",
         "--scene",
         &s(&scene),
@@ -1050,11 +1062,6 @@ fn reconstruct_images_recorded_frames() {
         "--out",
         &s(&rec),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let png = dir.join("f50.png");
     let args = |frame: &str| {
         vec![
@@ -2687,7 +2694,7 @@ fn a_disconnected_electrode_is_named_and_left_out() {
         }
         let (scene, rec) = (dir.join("scene.toml"), dir.join("r.jsonl"));
         std::fs::write(&scene, text).unwrap();
-        let out = et(&[
+        et_ok(&[
             "sim",
             "--scene",
             &s(&scene),
@@ -2697,11 +2704,6 @@ fn a_disconnected_electrode_is_named_and_left_out() {
             "--out",
             &s(&rec),
         ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
         let reconstruct = |extra: &[&str]| {
             let (scene, rec, png) = (s(&scene), s(&rec), s(&dir.join("x.png")));
             let mut args = vec!["reconstruct", "--scene", &scene, "--frames", &rec];

@@ -151,7 +151,7 @@ fn defaults_hold_on(which: usize) {
 /// (its injections' values a few microvolts of noise). `et reconstruct` names it, on neither
 /// tank as measured, and `--skip-electrodes 7` images each case as the tank as measured does
 /// (the strongest object within 5 mm, its sign the same); without it the first case's image
-/// has no object or another.
+/// has no object or another. Detached after the reference, it is named in the frames.
 #[test]
 fn a_detached_electrode_is_named_and_left_out() {
     let Some(all) = tanks::both() else {
@@ -163,7 +163,10 @@ fn a_detached_electrode_is_named_and_left_out() {
             std::env::temp_dir().join(format!("et-tanks-detached-{}-{which}", std::process::id()));
         let (scene, frames) = tank.write(&work);
         let broken = work.join("broken.csv");
-        std::fs::write(&broken, detached(&tank.protocol_csv, &frames, 7)).expect("frames");
+        std::fs::write(&broken, detached(&tank.protocol_csv, &frames, 7, 0)).expect("frames");
+        // Detached after the reference was taken (every frame but the first).
+        let later = work.join("later.csv");
+        std::fs::write(&later, detached(&tank.protocol_csv, &frames, 7, 1)).expect("frames");
         let run = |frames: &std::path::Path, case: &tanks::Case, skip: bool| {
             let mut command = Command::new(env!("CARGO_BIN_EXE_et"));
             command
@@ -226,6 +229,17 @@ fn a_detached_electrode_is_named_and_left_out() {
                     "{}: the detached electrode did not change the image",
                     tank.name
                 );
+                let (_, said) = run(&later, case, false);
+                let from = format!(
+                    "warning: electrode 7's values stand out in 1 of the 1 frames to image, from \
+                     frame {}",
+                    case.frame
+                );
+                assert!(
+                    said.contains(&from) && !said.contains("warning: electrode 7's 2"),
+                    "{}: {said}",
+                    tank.name
+                );
             }
         }
         std::fs::remove_dir_all(&work).ok();
@@ -234,8 +248,14 @@ fn a_detached_electrode_is_named_and_left_out() {
 
 /// The frames of `frames_csv` (one per line, V) with `electrode` (counted from 1, as
 /// `protocol_csv` counts) detached: every value it measures noise of 0.5 V rms, every value
-/// under its injections noise of 10 uV rms.
-fn detached(protocol_csv: &str, frames_csv: &std::path::Path, electrode: u16) -> String {
+/// under its injections noise of 10 uV rms; from the frame `from` on (0-based, the earlier
+/// ones as they are).
+fn detached(
+    protocol_csv: &str,
+    frames_csv: &std::path::Path,
+    electrode: u16,
+    from: usize,
+) -> String {
     let rows: Vec<[u16; 4]> = protocol_csv
         .lines()
         .skip(1)
@@ -259,7 +279,12 @@ fn detached(protocol_csv: &str, frames_csv: &std::path::Path, electrode: u16) ->
     };
     let text = std::fs::read_to_string(frames_csv).expect("frames");
     let mut out = String::new();
-    for line in text.lines() {
+    for (index, line) in text.lines().enumerate() {
+        if index < from {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
         let values: Vec<String> = (line.split(',').zip(&rows))
             .map(|(v, [source, sink, positive, negative])| {
                 if [source, sink].contains(&&electrode) {

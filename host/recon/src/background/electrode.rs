@@ -63,7 +63,9 @@ impl ElectrodeMisfit {
 /// Of the `electrodes` electrodes of `rows` (the frame's K rows), the one whose values the
 /// model's frame `model` (K values, V) explains worst beside the rest of `v0` (K values, V):
 /// the largest [`ElectrodeMisfit::own`] over [`ElectrodeMisfit::rest`]. None when no electrode
-/// has values and leaves others.
+/// has values and leaves others. One pass over the frame (the sums of v0^2, v0 m and m^2 each
+/// electrode's values and all of them give every electrode's scale and misfits), so it may
+/// weigh every frame of a recording.
 #[must_use]
 pub fn electrode_misfit(
     rows: &[Row],
@@ -71,33 +73,33 @@ pub fn electrode_misfit(
     v0: &[f64],
     model: &[f64],
 ) -> Option<ElectrodeMisfit> {
+    // Per electrode, over the values it drives or measures: (sum v0^2, sum v0 m, sum m^2, n).
+    let mut of = vec![Sums::default(); usize::from(electrodes)];
+    let mut all = Sums::default();
+    for ((row, m), v) in rows.iter().zip(model).zip(v0) {
+        all.add(*v, *m);
+        let four = [row.source, row.sink, row.positive, row.negative];
+        for (i, e) in four.iter().enumerate() {
+            if !four[..i].contains(e)
+                && let Some(sums) = of.get_mut(usize::from(*e))
+            {
+                sums.add(*v, *m);
+            }
+        }
+    }
     let mut worst: Option<ElectrodeMisfit> = None;
-    for electrode in 0..electrodes {
-        let of =
-            |row: &Row| [row.source, row.sink, row.positive, row.negative].contains(&electrode);
-        let values = rows.iter().filter(|row| of(row)).count();
-        // The model's best scale for the rest: <m, V_0> / |m|^2 over the values without it.
-        let (mv, mm) = (rows.iter().zip(model).zip(v0))
-            .filter(|((row, _), _)| !of(row))
-            .fold((0.0, 0.0), |(mv, mm), ((_, m), v)| (mv + m * v, mm + m * m));
-        if values == 0 || values == rows.len() || mm == 0.0 {
+    for (electrode, own) in (0..electrodes).zip(&of) {
+        let rest = all.less(own);
+        if own.n == 0 || rest.n == 0 || rest.mm == 0.0 {
             continue;
         }
-        let scale = mv / mm;
-        // |V_0 - s m| / |s m| over the values for which `own` says.
-        let off = |own: bool| {
-            let (r2, m2) = (rows.iter().zip(model).zip(v0))
-                .filter(|((row, _), _)| of(row) == own)
-                .fold((0.0, 0.0), |(r2, m2), ((_, m), v)| {
-                    (r2 + (v - scale * m).powi(2), m2 + (scale * m).powi(2))
-                });
-            (r2 / m2).sqrt()
-        };
+        // The model's best scale for the rest, and each side's |V_0 - s m| / |s m|.
+        let scale = rest.vm / rest.mm;
         let found = ElectrodeMisfit {
             electrode,
-            values,
-            own: off(true),
-            rest: off(false),
+            values: own.n,
+            own: own.off(scale),
+            rest: rest.off(scale),
         };
         if !(found.own.is_finite() && found.rest.is_finite()) {
             continue;
@@ -107,4 +109,38 @@ pub fn electrode_misfit(
         }
     }
     worst
+}
+
+/// Sums over some values of a frame `v0` and the model's `m`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    vv: f64,
+    vm: f64,
+    mm: f64,
+    n: usize,
+}
+
+impl Sums {
+    fn add(&mut self, v: f64, m: f64) {
+        self.vv += v * v;
+        self.vm += v * m;
+        self.mm += m * m;
+        self.n += 1;
+    }
+
+    /// These sums without `part`'s (a subset of the values).
+    fn less(&self, part: &Sums) -> Sums {
+        Sums {
+            vv: self.vv - part.vv,
+            vm: self.vm - part.vm,
+            mm: self.mm - part.mm,
+            n: self.n - part.n,
+        }
+    }
+
+    /// |v0 - s m| / |s m| over these values, at scale `s`.
+    fn off(&self, s: f64) -> f64 {
+        let r2 = (self.vv - 2.0 * s * self.vm + s * s * self.mm).max(0.0);
+        (r2 / (s * s * self.mm)).sqrt()
+    }
 }

@@ -98,9 +98,10 @@ impl Reconstructor {
         crate::background::best_scale(&self.jac.frame, v0).1
     }
 
-    /// The electrode whose values (those it drives or measures) leave the most of `v0` (K
-    /// values, V) the model's frame of the untouched sheet cannot explain, and how much is
-    /// left without them ([`crate::background::electrode_misfit`]).
+    /// The electrode whose values (those it drives or measures) in `v0` (K values, V) the
+    /// model's frame of the untouched sheet explains worst beside the rest, and how far off
+    /// each is ([`crate::background::electrode_misfit`]); a detached or broken electrode
+    /// [stands out](crate::background::ElectrodeMisfit::stands_out).
     #[must_use]
     pub fn electrode_misfit(&self, v0: &[f64]) -> Option<crate::background::ElectrodeMisfit> {
         let schedule = self.schedule();

@@ -346,13 +346,16 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     frames::say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
     let (mut recon, background) = set_up(args, spec, &reference, stage)?;
-    if let Some(said) = (recon.electrode_misfit(&reference.v0)).and_then(|m| {
+    let in_reference = recon
+        .electrode_misfit(&reference.v0)
+        .filter(|m| m.stands_out());
+    if let Some(m) = in_reference
+        && let Some(said) = m.said(base)
+    {
         let number = u32::from(m.electrode) + u32::from(base);
-        m.said(base)
-            .map(|said| format!("{said} --skip-electrodes {number} leaves its values out"))
-    }) {
-        say!("warning: {said}");
+        say!("warning: {said} --skip-electrodes {number} leaves its values out");
     }
+    frames::say_detached_in_frames(&recon, base, &chosen, in_reference.map(|m| m.electrode));
     // Reference frames of which one differs as a touch or a drift does: every frame is
     // imaged against them.
     if let Some(said) = (recon.reference_changes(&reference_frames))

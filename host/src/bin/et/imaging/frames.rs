@@ -455,3 +455,43 @@ pub(super) fn skip_electrodes(
     *schedule = without;
     Ok(())
 }
+
+/// Warns of an electrode whose values stand out in the frames to image (`chosen`, each K
+/// values) as a detached or broken electrode's, when V_0's did not name it (`in_reference`):
+/// a clip that came off during the recording. Names the electrode most frames show (counted
+/// from `base`), its first frame and how many.
+pub(super) fn say_detached_in_frames(
+    recon: &et_recon::Reconstructor,
+    base: u16,
+    chosen: &[(usize, Vec<f32>)],
+    in_reference: Option<u16>,
+) {
+    // Per electrode: (frames it stands out in, the first, its values' misfit there).
+    let mut seen: std::collections::BTreeMap<u16, (usize, usize, f64, f64)> = Default::default();
+    for (index, frame) in chosen {
+        let v: Vec<f64> = frame.iter().map(|x| f64::from(*x)).collect();
+        if let Some(m) = (recon.electrode_misfit(&v))
+            .filter(|m| m.stands_out() && Some(m.electrode) != in_reference)
+        {
+            let entry = seen
+                .entry(m.electrode)
+                .or_insert((0, *index, m.own, m.rest));
+            entry.0 += 1;
+        }
+    }
+    let Some((electrode, (count, first, own, rest))) =
+        seen.into_iter().max_by_key(|(_, (count, ..))| *count)
+    else {
+        return;
+    };
+    let number = u32::from(electrode) + u32::from(base);
+    say!(
+        "warning: electrode {number}'s values stand out in {count} of the {} frames to image, \
+         from frame {first} ({:.0} % off the model there, the rest {:.1} %), not in the \
+         reference: a clip or wire that came off during the recording? Those frames are \
+         imaged with its wrong values: --skip-electrodes {number} leaves them out",
+        chosen.len(),
+        100.0 * own,
+        100.0 * rest
+    );
+}
