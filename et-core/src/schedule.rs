@@ -311,12 +311,22 @@ impl Schedule {
     /// out. A built-in protocol's rows stay as they are, its name dropped.
     ///
     /// # Errors
-    /// [`ScheduleError::Absent`] for an electrode past the sheet's, [`ScheduleError::Empty`]
-    /// when every value involves one of them.
+    /// [`ScheduleError::Absent`] for an electrode past the sheet's,
+    /// [`ScheduleError::TooManyLeftOut`] for more than half the sheet's,
+    /// [`ScheduleError::Empty`] when every value involves one of them.
     pub fn without(&self, electrodes: &[u16]) -> Result<(Self, Vec<usize>), ScheduleError> {
         if let Some(&electrode) = electrodes.iter().find(|e| **e >= self.electrodes) {
             return Err(ScheduleError::Absent {
                 electrode,
+                electrodes: self.electrodes,
+            });
+        }
+        let left_out = (0..self.electrodes)
+            .filter(|e| electrodes.contains(e))
+            .count() as u16;
+        if 2 * left_out > self.electrodes {
+            return Err(ScheduleError::TooManyLeftOut {
+                left_out,
                 electrodes: self.electrodes,
             });
         }

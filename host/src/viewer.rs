@@ -402,9 +402,13 @@ impl Viewer {
         egui::Panel::bottom("status").show(ui, |ui| {
             ui.label(&self.status);
         });
+        // Scrolled: a window lower than the controls (a recording's Replay section, the
+        // wizard's steps) would cut the last ones off.
         egui::Panel::left("controls")
             .resizable(false)
-            .show(ui, |ui| self.controls(ui));
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+            });
         egui::Panel::right("plots").resizable(false).show(ui, |ui| {
             self.plots.show(ui, &self.monitor, self.source.as_ref());
         });

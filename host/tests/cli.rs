@@ -2743,6 +2743,11 @@ fn a_disconnected_electrode_is_named_and_left_out() {
                 "{said}"
             );
             assert!(!said.contains("warning: electrode"), "{said}");
+            let (ok, said) = reconstruct(&["--skip-electrodes", "0,1,2,3,4,5,6,7,8"]);
+            assert!(
+                !ok && said.contains("9 of the 16 electrodes to leave out: at most half (8)"),
+                "{said}"
+            );
             let (ok, said) = reconstruct(&["--skip-electrodes", "3,16"]);
             assert!(
                 !ok && said.contains("--skip-electrodes 16: the scene's electrodes are 0 to 15"),

@@ -400,6 +400,12 @@ class Protocol:
                 f"electrodes: {int(outside[0])} is not one of this protocol's 0 to "
                 f"{self.electrodes - 1}"
             )
+        left_out = len(np.unique(skip))
+        if 2 * left_out > self.electrodes:
+            raise EtError(
+                f"electrodes: {left_out} of the {self.electrodes} to leave out: at most half "
+                f"({self.electrodes // 2}) may be, the image being made of the rest's values alone"
+            )
         keep = np.flatnonzero(~np.isin(self.rows, skip).any(axis=1))
         if len(keep) == 0:
             raise EtError("electrodes: every value of the frame involves one of them")

@@ -38,6 +38,18 @@ pub enum ScheduleError {
         /// The sheet's electrode count.
         electrodes: u16,
     },
+    /// More electrodes to leave out ([`super::Schedule::without`]) than half the sheet's.
+    #[error(
+        "{left_out} of the {electrodes} electrodes to leave out: at most half ({}) may be, \
+         the image being made of the rest's values alone",
+        electrodes / 2
+    )]
+    TooManyLeftOut {
+        /// Distinct electrodes to leave out.
+        left_out: u16,
+        /// The sheet's electrode count.
+        electrodes: u16,
+    },
     /// The current would enter and leave by one electrode.
     #[error("row {row}: source and sink are both electrode {electrode}")]
     SameDrive {

@@ -299,7 +299,7 @@ fn an_electrode_left_out_takes_every_value_it_drives_or_measures() {
         assert!(![row.source, row.sink, row.positive, row.negative].contains(&7));
     }
     assert!(kept.windows(2).all(|w| w[0] < w[1]));
-    // None left out: the same rows; past the sheet, or every electrode, refused.
+    // None left out: the same rows; past the sheet refused.
     assert_eq!(s.without(&[]).unwrap().0.rows(), s.rows());
     assert!(matches!(
         s.without(&[16]),
@@ -308,6 +308,27 @@ fn an_electrode_left_out_takes_every_value_it_drives_or_measures() {
             electrodes: 16
         })
     ));
-    let every: Vec<u16> = (0..16).collect();
-    assert!(matches!(s.without(&every), Err(ScheduleError::Empty)));
+    // Half the electrodes may be left out, not more.
+    let half: Vec<u16> = (0..8).collect();
+    assert!(s.without(&half).is_ok());
+    let more: Vec<u16> = (0..9).collect();
+    assert!(matches!(
+        s.without(&more),
+        Err(ScheduleError::TooManyLeftOut {
+            left_out: 9,
+            electrodes: 16
+        })
+    ));
+    // A protocol whose every value involves electrode 0 (all against it): nothing left.
+    let rows = (1..4)
+        .map(|e| Row {
+            source: e,
+            sink: 0,
+            positive: e,
+            negative: 0,
+            current_a: 1e-3,
+        })
+        .collect();
+    let star = Schedule::new(4, rows).unwrap();
+    assert!(matches!(star.without(&[0]), Err(ScheduleError::Empty)));
 }

@@ -178,28 +178,7 @@ impl Viewer {
         }
         ui.separator();
         ui.heading("Touch");
-        match self.last.as_ref().and_then(|o| o.event.as_ref()) {
-            Some(e) => {
-                ui.label(format!(
-                    "at ({:.0}, {:.0}) mm",
-                    e.position_mm[0], e.position_mm[1]
-                ));
-                ui.label(format!("intensity z = {:.1}", e.intensity));
-                if let Some(c) = e.class {
-                    ui.label(format!("class {c}"));
-                }
-                if let Some(p) = e.confidence {
-                    ui.label(format!("confidence {:.0} %", 100.0 * p));
-                }
-                ui.label(format!("{} region(s)", e.regions));
-            }
-            None => {
-                ui.label(match self.last.as_ref().and_then(|o| o.referencing) {
-                    Some(r) => format!("taking V_0: {} of {} frames", r.frames, r.needed),
-                    None => "no touch".into(),
-                });
-            }
-        }
+        self.touch_lines(ui);
         ui.separator();
         if ui.button("Open the training wizard").clicked() {
             self.wizard.open = true;
@@ -208,4 +187,36 @@ impl Viewer {
             ui.label("a model classifies each touch");
         }
     }
+
+    /// The last frame's touch, or why there is none, in [`TOUCH_LINES`] lines whatever it
+    /// shows: the controls below stay where they are as touches come and go (the wizard's
+    /// button moved four lines up and down under a pointer, and clicks missed it).
+    fn touch_lines(&self, ui: &mut egui::Ui) {
+        let lines: [String; TOUCH_LINES] = match self.last.as_ref().and_then(|o| o.event.as_ref()) {
+            Some(e) => [
+                format!("at ({:.0}, {:.0}) mm", e.position_mm[0], e.position_mm[1]),
+                format!("intensity z = {:.1}", e.intensity),
+                e.class.map_or(String::new(), |c| format!("class {c}")),
+                (e.confidence).map_or(String::new(), |p| format!("confidence {:.0} %", 100.0 * p)),
+                format!("{} region(s)", e.regions),
+            ],
+            None => [
+                match self.last.as_ref().and_then(|o| o.referencing) {
+                    Some(r) => format!("taking V_0: {} of {} frames", r.frames, r.needed),
+                    None => "no touch".into(),
+                },
+                String::new(),
+                String::new(),
+                String::new(),
+                String::new(),
+            ],
+        };
+        for line in lines {
+            // (An empty label is a line high, as the text's.)
+            ui.label(if line.is_empty() { " ".into() } else { line });
+        }
+    }
 }
+
+/// Lines the touch section always takes.
+const TOUCH_LINES: usize = 5;
