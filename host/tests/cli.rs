@@ -2680,6 +2680,7 @@ fn a_board_that_never_answers_is_said_with_its_rate() {
 /// its measurements float to a rail, its injections drive nothing): `et reconstruct` names
 /// electrode 3, `--skip-electrodes 3` leaves its 52 values out and is not warned, an electrode
 /// the sheet lacks is refused in the scene's numbering. The same board sound names none.
+/// A built-in protocol without an electrode keeps its family's threshold.
 #[test]
 fn a_disconnected_electrode_is_named_and_left_out() {
     let dir = std::env::temp_dir().join(format!("et-cli-disconnected-{}", std::process::id()));
@@ -2755,5 +2756,44 @@ fn a_disconnected_electrode_is_named_and_left_out() {
             );
         }
     }
+    // Pseudo-polar without electrode 3 keeps pseudo-polar's threshold (0.08; a protocol
+    // of no family takes 0.10).
+    let (scene, rec, png) = (
+        dir.join("pp.toml"),
+        dir.join("pp.jsonl"),
+        dir.join("pp.png"),
+    );
+    std::fs::write(
+        &scene,
+        sound.replace("protocol = \"adjacent\"", "protocol = \"pseudo-polar\""),
+    )
+    .unwrap();
+    et_ok(&[
+        "sim",
+        "--scene",
+        &s(&scene),
+        "--frames",
+        "6",
+        "--out",
+        &s(&rec),
+    ]);
+    let out = et_ok(&[
+        "reconstruct",
+        "--scene",
+        &s(&scene),
+        "--frames",
+        &s(&rec),
+        "--reference",
+        "3",
+        "--triangles",
+        "2000",
+        "--skip-electrodes",
+        "3",
+        "--json",
+        "--out",
+        &s(&png),
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["threshold"], 0.08, "{json}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

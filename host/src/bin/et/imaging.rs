@@ -333,6 +333,11 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     };
     drop(recording);
     let base = scene.electrode_base();
+    // A built-in protocol without an electrode is still of its family: its threshold kept.
+    if !args.skip_electrodes.is_empty() {
+        let kind = spec.schedule.kind();
+        spec.threshold = spec.threshold.or(kind.map(et_recon::default_threshold));
+    }
     frames::skip_electrodes(&args.skip_electrodes, base, &mut spec.schedule, &mut chosen)?;
     let frames::Chosen {
         reference,
