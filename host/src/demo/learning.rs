@@ -223,7 +223,14 @@ fn collect_sets(
         target_radius: radius,
         ..Plan::default()
     };
-    let bar = steps.bar(sizes.visits + sizes.days, "collecting (visits, next days)");
+    // Counted in presses, so the bar moves within a visit (by visits it sat at 0 for the
+    // first seconds of each, saying "eta 0s").
+    let (visit_presses, day_presses) = (centres.len() * sizes.scans, centres.len());
+    let trained = sizes.visits * visit_presses;
+    let bar = steps.bar(
+        trained + sizes.days * day_presses,
+        "collecting presses (visits, next days)",
+    );
     let train = collect::collect_visits(
         &scene.sheet,
         scene.frontend,
@@ -231,7 +238,7 @@ fn collect_sets(
         centres,
         &plan,
         (0..sizes.visits).map(|v| 1_000 + v as u64),
-        |_, visits| bar.set_position(visits as u64),
+        |pressed, _| bar.set_position(pressed as u64),
     )?;
     let day = Plan {
         scans: 1,
@@ -244,7 +251,7 @@ fn collect_sets(
         centres,
         &day,
         (0..sizes.days).map(|d| 77 + d as u64),
-        |_, days| bar.set_position((sizes.visits + days) as u64),
+        |pressed, _| bar.set_position((trained + pressed) as u64),
     )?;
     steps.done(
         &bar,
