@@ -381,13 +381,14 @@ impl Reconstructor {
     /// None otherwise.
     fn electrode_off(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {
         let v0 = reference_of(&reference)?.v0;
-        Ok(self.inner.electrode_misfit(&v0).and_then(|m| {
-            let said = m.said(0)?;
-            Some(format!(
-                "{said} Protocol.without([{}]) leaves its values out",
-                m.electrode
-            ))
-        }))
+        let detached = self.inner.detached_electrodes(&v0);
+        Ok(
+            et_recon::background::detached_said(&detached, 0).map(|(said, numbers)| {
+                let numbers = numbers.replace(',', ", ");
+                let whose = if detached.len() == 1 { "its" } else { "their" };
+                format!("{said} Protocol.without([{numbers}]) leaves {whose} values out")
+            }),
+        )
     }
 
     /// What is said when the mean of the untouched `reference` frames (n x K) passes

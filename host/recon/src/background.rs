@@ -20,7 +20,10 @@ use crate::fem::{Electrodes, FemError, Forward, MIN_CONTACT_RATIO};
 use crate::mesh::Mesh;
 
 mod electrode;
-pub use electrode::{ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, electrode_misfit};
+pub use electrode::{
+    ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, detached_electrodes, detached_said,
+    electrode_misfit,
+};
 
 /// The background fitted to a reference frame.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]

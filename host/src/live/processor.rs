@@ -375,13 +375,19 @@ impl Processor {
         self.v0().map(|v0| self.recon.unexplained(&v0))
     }
 
-    /// What is said of the electrode whose values in V_0 stand out from the model as a
-    /// detached or broken electrode's ([`Reconstructor::electrode_misfit`]), numbered from 0
+    /// What is said of the electrodes whose values in V_0 stand out from the model as a
+    /// detached or broken electrode's ([`Reconstructor::detached_electrodes`]), numbered from 0
     /// as the board counts; None until the reference is complete, or when none stands out.
     #[must_use]
     pub fn v0_electrode_said(&self) -> Option<String> {
-        let said = self.recon.electrode_misfit(&self.v0()?)?.said(0)?;
-        Some(format!("{said} Check its clip and wire"))
+        let detached = self.recon.detached_electrodes(&self.v0()?);
+        let (said, _) = et_recon::background::detached_said(&detached, 0)?;
+        let check = if detached.len() == 1 {
+            "its clip and wire"
+        } else {
+            "their clips and wires"
+        };
+        Some(format!("{said} Check {check}"))
     }
 
     /// Of the untouched reference frames, the one that differs most from their mean as a

@@ -34,6 +34,10 @@ pub const ELECTRODE_OWN: f64 = 0.5;
 /// off: [`ELECTRODE_OWN`] holds them), 2.2 on et's simulated sheets.
 pub const ELECTRODE_FACTOR: f64 = 3.0;
 
+/// At most one electrode in this many is named detached at once ([`detached_electrodes`]; at
+/// least one).
+pub const DETACHED_PER: u16 = 8;
+
 impl ElectrodeMisfit {
     /// Whether its values stand out as a detached or broken electrode's: off the model by
     /// [`ELECTRODE_OWN`] of their size and [`ELECTRODE_FACTOR`] times the rest.
@@ -60,6 +64,35 @@ impl ElectrodeMisfit {
     }
 }
 
+/// What is said of the electrodes `detached` ([`detached_electrodes`]), their numbers counted
+/// from `base`, and those numbers as `--skip-electrodes` takes them ("7,12"); None when there
+/// are none.
+#[must_use]
+pub fn detached_said(detached: &[ElectrodeMisfit], base: u16) -> Option<(String, String)> {
+    let number = |m: &ElectrodeMisfit| u32::from(m.electrode) + u32::from(base);
+    let numbers: Vec<String> = detached.iter().map(|m| number(m).to_string()).collect();
+    let said = match detached {
+        [] => return None,
+        [one] => one.said(base)?,
+        several => {
+            let rest = several.iter().fold(0.0f64, |r, m| r.max(m.rest));
+            let off: Vec<String> = several
+                .iter()
+                .map(|m| format!("{:.0}", 100.0 * m.own))
+                .collect();
+            format!(
+                "electrodes {}: the values each drives or measures are {} % off the model, the \
+                 rest at most {:.1} %: detached or broken electrodes (clips off the sheet, \
+                 wires off their channels)?",
+                numbers.join(", "),
+                off.join(", "),
+                100.0 * rest
+            )
+        }
+    };
+    Some((said, numbers.join(",")))
+}
+
 /// Of the `electrodes` electrodes of `rows` (the frame's K rows), the one whose values the
 /// model's frame `model` (K values, V) explains worst beside the rest of `v0` (K values, V):
 /// the largest [`ElectrodeMisfit::own`] over [`ElectrodeMisfit::rest`]. None when no electrode
@@ -73,12 +106,76 @@ pub fn electrode_misfit(
     v0: &[f64],
     model: &[f64],
 ) -> Option<ElectrodeMisfit> {
+    worst(&each_misfit(rows, electrodes, (v0, model), &[]))
+}
+
+/// Every electrode of `rows` that [stands out](ElectrodeMisfit::stands_out) as detached or
+/// broken, each weighed without the others' values (two detached electrodes each raise the
+/// misfit of the rest against which the other is weighed, and neither stood out alone): the
+/// worst electrode is taken while its values are [`ELECTRODE_OWN`] off the model, the next
+/// weighed without it, at most one in [`DETACHED_PER`] (more, and the misfit is the whole
+/// frame's: frames of another protocol of the same K left 8 of 16 electrodes far off, and two
+/// of them stood out once the other six were left out); then each is kept if it stands out
+/// beside the values of none of them.
+#[must_use]
+pub fn detached_electrodes(
+    rows: &[Row],
+    electrodes: u16,
+    v0: &[f64],
+    model: &[f64],
+) -> Vec<ElectrodeMisfit> {
+    let mut candidates: Vec<u16> = Vec::new();
+    loop {
+        match worst(&each_misfit(rows, electrodes, (v0, model), &candidates)) {
+            Some(w) if w.own >= ELECTRODE_OWN => candidates.push(w.electrode),
+            _ => break,
+        }
+        // More electrodes far off than a few: the misfit is the whole frame's (another
+        // protocol, numbering or sheet), which the poor fit says; none is named.
+        if candidates.len() > usize::from(electrodes / DETACHED_PER).max(1) {
+            return Vec::new();
+        }
+    }
+    let mut found: Vec<ElectrodeMisfit> = (candidates.iter())
+        .filter_map(|&e| {
+            let others: Vec<u16> = candidates.iter().copied().filter(|o| *o != e).collect();
+            each_misfit(rows, electrodes, (v0, model), &others)[usize::from(e)]
+        })
+        .filter(ElectrodeMisfit::stands_out)
+        .collect();
+    found.sort_by_key(|m| m.electrode);
+    found
+}
+
+/// The largest [`ElectrodeMisfit::own`] over [`ElectrodeMisfit::rest`] of `misfits`.
+fn worst(misfits: &[Option<ElectrodeMisfit>]) -> Option<ElectrodeMisfit> {
+    misfits
+        .iter()
+        .flatten()
+        .fold(None, |worst: Option<ElectrodeMisfit>, &m| match worst {
+            Some(w) if m.own * w.rest <= w.own * m.rest => Some(w),
+            _ => Some(m),
+        })
+}
+
+/// Each electrode's misfit ([`ElectrodeMisfit`]) over the values of `rows` that none of
+/// `without` drives or measures; None for an electrode with no such values, or none left
+/// beside them. `(v0, model)`: the frame and the model's, K values each, V.
+fn each_misfit(
+    rows: &[Row],
+    electrodes: u16,
+    (v0, model): (&[f64], &[f64]),
+    without: &[u16],
+) -> Vec<Option<ElectrodeMisfit>> {
     // Per electrode, over the values it drives or measures: (sum v0^2, sum v0 m, sum m^2, n).
     let mut of = vec![Sums::default(); usize::from(electrodes)];
     let mut all = Sums::default();
     for ((row, m), v) in rows.iter().zip(model).zip(v0) {
-        all.add(*v, *m);
         let four = [row.source, row.sink, row.positive, row.negative];
+        if four.iter().any(|e| without.contains(e)) {
+            continue;
+        }
+        all.add(*v, *m);
         for (i, e) in four.iter().enumerate() {
             if !four[..i].contains(e)
                 && let Some(sums) = of.get_mut(usize::from(*e))
@@ -87,28 +184,24 @@ pub fn electrode_misfit(
             }
         }
     }
-    let mut worst: Option<ElectrodeMisfit> = None;
-    for (electrode, own) in (0..electrodes).zip(&of) {
-        let rest = all.less(own);
-        if own.n == 0 || rest.n == 0 || rest.mm == 0.0 {
-            continue;
-        }
-        // The model's best scale for the rest, and each side's |V_0 - s m| / |s m|.
-        let scale = rest.vm / rest.mm;
-        let found = ElectrodeMisfit {
-            electrode,
-            values: own.n,
-            own: own.off(scale),
-            rest: rest.off(scale),
-        };
-        if !(found.own.is_finite() && found.rest.is_finite()) {
-            continue;
-        }
-        if worst.is_none_or(|w| found.own * w.rest > w.own * found.rest) {
-            worst = Some(found);
-        }
-    }
-    worst
+    (0..electrodes)
+        .zip(&of)
+        .map(|(electrode, own)| {
+            let rest = all.less(own);
+            if own.n == 0 || rest.n == 0 || rest.mm == 0.0 {
+                return None;
+            }
+            // The model's best scale for the rest, and each side's |V_0 - s m| / |s m|.
+            let scale = rest.vm / rest.mm;
+            let found = ElectrodeMisfit {
+                electrode,
+                values: own.n,
+                own: own.off(scale),
+                rest: rest.off(scale),
+            };
+            (found.own.is_finite() && found.rest.is_finite()).then_some(found)
+        })
+        .collect()
 }
 
 /// Sums over some values of a frame `v0` and the model's `m`.

@@ -109,6 +109,18 @@ impl Reconstructor {
         crate::background::electrode_misfit(schedule.rows(), electrodes, v0, &self.jac.frame)
     }
 
+    /// Every electrode whose values in `v0` (K values, V) stand out from the model's frame of
+    /// the untouched sheet as a detached or broken electrode's, each weighed without the
+    /// others' ([`crate::background::detached_electrodes`]).
+    #[must_use]
+    pub fn detached_electrodes(&self, v0: &[f64]) -> Vec<crate::background::ElectrodeMisfit> {
+        let schedule = self.schedule();
+        let Ok(electrodes) = u16::try_from(schedule.electrodes()) else {
+            return Vec::new();
+        };
+        crate::background::detached_electrodes(schedule.rows(), electrodes, v0, &self.jac.frame)
+    }
+
     /// Of untouched reference `frames` (each K values, V), the one that differs most from
     /// their mean as a change of conductivity does, and by how much: each frame's difference
     /// from the mean, its mean square over the mean square of its part no conductivity

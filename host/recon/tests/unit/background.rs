@@ -168,3 +168,54 @@ fn an_electrode_off_the_model_is_the_worst_by_its_own_share() {
     let same = electrode_misfit(schedule.rows(), 8, &model, &model).unwrap();
     assert!(same.own < 1e-6 && !same.stands_out(), "{same:?}");
 }
+
+/// Two electrodes read as detached (their values' sign flipped and doubled, as far off as
+/// noise on a floating input is) on 16 electrodes: each raises the misfit of the rest against
+/// which the other is weighed, so the worst electrode alone does not stand out, and
+/// `detached_electrodes` names both; one alone is named alone; a frame far off everywhere (of
+/// another protocol, say) names none, nor does the model's own frame.
+#[test]
+fn two_detached_electrodes_are_both_named_and_a_frame_off_everywhere_none() {
+    use et_core::protocol::{Protocol, ProtocolKind};
+    let sheet = Sheet::disc(0.1, 16);
+    let mesh = Mesh::with_about(&sheet, 1_500).unwrap();
+    let protocol = Protocol::new(ProtocolKind::Adjacent, 16).unwrap();
+    let schedule = Schedule::of_protocol(&protocol, 1e-3).unwrap();
+    let forward = Forward::new(mesh.clone(), Electrodes::of_sheet(&sheet).unwrap()).unwrap();
+    let model = forward
+        .frame(&vec![1e-3; mesh.triangles.len()], &schedule)
+        .unwrap();
+    let rows = schedule.rows();
+    let off = |dead: &[u16]| -> Vec<f64> {
+        (rows.iter().zip(&model))
+            .map(|(r, m)| {
+                let of = [r.source, r.sink, r.positive, r.negative]
+                    .iter()
+                    .any(|e| dead.contains(e));
+                if of { -2.0 * m } else { *m }
+            })
+            .collect()
+    };
+    let named = |v0: &[f64]| -> Vec<u16> {
+        detached_electrodes(rows, 16, v0, &model)
+            .iter()
+            .map(|m| m.electrode)
+            .collect()
+    };
+    let two = off(&[3, 11]);
+    assert!(
+        !electrode_misfit(rows, 16, &two, &model)
+            .unwrap()
+            .stands_out()
+    );
+    assert_eq!(named(&two), [3, 11]);
+    assert_eq!(named(&off(&[5])), [5]);
+    assert_eq!(named(&model), Vec::<u16>::new());
+    let everywhere: Vec<f64> = (model.iter().enumerate())
+        .map(|(k, m)| m * (1.0 + 0.9 * (k as f64 * 1.7).sin()))
+        .collect();
+    assert_eq!(named(&everywhere), Vec::<u16>::new());
+    let (said, numbers) = detached_said(&detached_electrodes(rows, 16, &two, &model), 1).unwrap();
+    assert!(said.starts_with("electrodes 4, 12:"), "{said}");
+    assert_eq!(numbers, "4,12");
+}

@@ -351,16 +351,17 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     frames::say_unlike_frames(&reference, &chosen);
     stage("frames", clock.elapsed().as_secs_f64());
     let (mut recon, background) = set_up(args, spec, &reference, stage)?;
-    let in_reference = recon
-        .electrode_misfit(&reference.v0)
-        .filter(|m| m.stands_out());
-    if let Some(m) = in_reference
-        && let Some(said) = m.said(base)
-    {
-        let number = u32::from(m.electrode) + u32::from(base);
-        say!("warning: {said} --skip-electrodes {number} leaves its values out");
+    let in_reference = recon.detached_electrodes(&reference.v0);
+    if let Some((said, numbers)) = et_recon::background::detached_said(&in_reference, base) {
+        let whose = if in_reference.len() == 1 {
+            "its"
+        } else {
+            "their"
+        };
+        say!("warning: {said} --skip-electrodes {numbers} leaves {whose} values out");
     }
-    frames::say_detached_in_frames(&recon, base, &chosen, in_reference.map(|m| m.electrode));
+    let named: Vec<u16> = in_reference.iter().map(|m| m.electrode).collect();
+    frames::say_detached_in_frames(&recon, base, &chosen, &named);
     // Reference frames of which one differs as a touch or a drift does: every frame is
     // imaged against them.
     if let Some(said) = (recon.reference_changes(&reference_frames))

@@ -461,21 +461,22 @@ pub(super) fn skip_electrodes(
 }
 
 /// Warns of an electrode whose values stand out in the frames to image (`chosen`, each K
-/// values) as a detached or broken electrode's, when V_0's did not name it (`in_reference`):
+/// values) as a detached or broken electrode's, when V_0's did not name it (`in_reference`,
+/// 0-based):
 /// a clip that came off during the recording. Names the electrode most frames show (counted
 /// from `base`), its first frame and how many.
 pub(super) fn say_detached_in_frames(
     recon: &et_recon::Reconstructor,
     base: u16,
     chosen: &[(usize, Vec<f32>)],
-    in_reference: Option<u16>,
+    in_reference: &[u16],
 ) {
     // Per electrode: (frames it stands out in, the first, its values' misfit there).
     let mut seen: std::collections::BTreeMap<u16, (usize, usize, f64, f64)> = Default::default();
     for (index, frame) in chosen {
         let v: Vec<f64> = frame.iter().map(|x| f64::from(*x)).collect();
         if let Some(m) = (recon.electrode_misfit(&v))
-            .filter(|m| m.stands_out() && Some(m.electrode) != in_reference)
+            .filter(|m| m.stands_out() && !in_reference.contains(&m.electrode))
         {
             let entry = seen
                 .entry(m.electrode)
