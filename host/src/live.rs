@@ -188,6 +188,9 @@ pub enum LiveError {
     /// A scan configuration the board cannot scan.
     #[error("scan configuration: {0}")]
     Config(#[from] ConfigError),
+    /// Electrodes that cannot be left out of the images (`Processor::set_left_out`).
+    #[error("leaving electrodes out: {0}")]
+    LeftOut(#[from] et_core::schedule::ScheduleError),
     /// A frame whose value count is not its protocol's K.
     #[error("frame {seq}: {got} values, its protocol has {expected}")]
     FrameLength {

@@ -66,6 +66,9 @@ pub struct Options {
     /// With `screenshot`: press the simulated sheet here (mm, a 7.5 mm fingertip at 30 kPa)
     /// once V_0 is taken. None presses nothing (a scene's own touches, a recording's frames).
     pub press: Option<[f64; 2]>,
+    /// Electrodes whose values are left out of the images, 0-based ([`Processor::set_left_out`];
+    /// the side panel changes them).
+    pub left_out: Vec<u16>,
 }
 
 /// Which kind of source the top bar is set to.
@@ -109,6 +112,9 @@ pub struct Viewer {
     pub status: String,
     /// The training wizard (open or not).
     pub wizard: Wizard,
+    /// The electrodes V_0 names detached or broken, which the side panel offers to leave out
+    /// (0-based; found when V_0 is taken).
+    detached: Vec<u16>,
     shot_frames: u32,
     /// How the screenshot went: None until it is taken, then its error, if any.
     shot: std::sync::Arc<std::sync::Mutex<Option<Result<(), ShotError>>>>,
@@ -167,6 +173,12 @@ impl Viewer {
             let classifier = Model::load(path)?.into_board().map_err(error)?;
             (processor.set_classifier(classifier)).map_err(|e| error(e.into()))?;
         }
+        if !options.left_out.is_empty() {
+            (processor.set_left_out(&options.left_out, source.config())).map_err(|e| match e {
+                LiveError::LeftOut(e) => ViewerError::LeftOut(e),
+                other => other.into(),
+            })?;
+        }
         let b = sheet.physical.shape.bounds();
         let centre = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
         let selector = Selector::new(DynamicSettings::new(
@@ -190,6 +202,7 @@ impl Viewer {
             last: None,
             monitor: Monitor::default(),
             wizard: Wizard::default(),
+            detached: Vec::new(),
             shot_frames: 0,
             shot: std::sync::Arc::default(),
             sheet_view: SheetView::default(),
@@ -238,6 +251,8 @@ impl Viewer {
                             if let Some(c) = self.processor.classifier.take() {
                                 dropped = p.set_classifier(c).err();
                             }
+                            // The electrodes left out stay out where the new sheet has them.
+                            let _ = p.set_left_out(self.processor.left_out(), source.config());
                             self.processor = p;
                             self.sheet = sheet;
                         }
@@ -307,7 +322,7 @@ impl Viewer {
     /// another protocol, numbering or sheet than the scene's, or a reference taken while
     /// the sheet was touched, show touches in the wrong places; frames in mV, values in the
     /// wrong unit).
-    fn reference_taken(&self) -> String {
+    fn reference_taken(&mut self) -> String {
         let sim = matches!(self.source.as_ref(), Some(Source::Sim(_)));
         let poor_fit = (!sim)
             .then(|| self.processor.v0_unexplained())
@@ -317,7 +332,8 @@ impl Viewer {
             .and_then(et_recon::background::reference_changes_said);
         let not_volts =
             (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
-        let electrode = self.processor.v0_electrode_said();
+        let (electrode, detached) = self.processor.v0_electrode_said().unzip();
+        self.detached = detached.unwrap_or_default();
         match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
             (Some(said), _) => format!("V_0 taken; warning: {said}"),
             (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
@@ -551,6 +567,9 @@ pub enum ViewerError {
         /// Why.
         error: ModelError,
     },
+    /// Electrodes that cannot be left out (past the sheet's, or more than half of them).
+    #[error("--skip-electrodes: {0}")]
+    LeftOut(et_core::schedule::ScheduleError),
     /// `press` is not on the sheet.
     #[error("--press {},{} mm is not on the sheet (give a point inside it, in the scene's coordinates)", .0[0], .0[1])]
     Press([f64; 2]),

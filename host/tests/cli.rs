@@ -2676,6 +2676,101 @@ fn a_board_that_never_answers_is_said_with_its_rate() {
     );
 }
 
+/// An electrode whose contact opens now and then (the simulator's intermittent fault, open
+/// one step in 20) under a press: `et stream` names it once V_0 is taken and says how to
+/// leave it out; its values moved the press's events (most touched frames gave none, the rest
+/// tens of mm off) until `--skip-electrodes 3` leaves them out of the images, when each
+/// touched frame gives its press within 5 mm. Electrodes past the sheet, or more than half of
+/// them, are refused by the flag's name.
+#[test]
+fn an_electrode_left_out_live_streams_the_presses_it_hid() {
+    let dir = std::env::temp_dir().join(format!("et-cli-live-skip-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let sound = std::fs::read_to_string(root.join("sim/scenes/square-13cm-16.toml")).unwrap();
+    // The press from 0.5 s (frame 40 of 12.8 ms each), after the 20 reference frames.
+    let text = sound.replace("start = 0.05", "start = 0.5")
+        + "\n[[fault]]\nelectrode = 3\nkind = \"intermittent\"\nprobability = 0.05\n";
+    let (scene, rec) = (dir.join("scene.toml"), dir.join("r.jsonl"));
+    std::fs::write(&scene, text).unwrap();
+    let (scene, rec) = (scene.to_str().unwrap(), rec.to_str().unwrap());
+    et_ok(&["sim", "--scene", scene, "--frames", "80", "--out", rec]);
+    // Each touched frame's press, by sequence number (m).
+    let pressed: std::collections::HashMap<u64, [f64; 2]> = std::fs::read_to_string(rec)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .filter_map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let p = v["touches"].get(0)?;
+            Some((v["seq"].as_u64()?, [p["x"].as_f64()?, p["y"].as_f64()?]))
+        })
+        .collect();
+    assert!(pressed.len() >= 30, "{}", pressed.len());
+    let stream = |extra: &[&str]| {
+        let mut args = vec!["stream", "--json", "--replay", rec, "--scene", scene];
+        args.extend(extra);
+        let out = et(&args);
+        let said = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{said}");
+        // Touched frames whose event places the press within 5 mm.
+        let placed = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter(|l| {
+                let e: serde_json::Value = serde_json::from_str(l).unwrap();
+                let at = &e["position_mm"];
+                pressed.get(&e["seq"].as_u64().unwrap()).is_some_and(|p| {
+                    (at[0].as_f64().unwrap() - 1e3 * p[0])
+                        .hypot(at[1].as_f64().unwrap() - 1e3 * p[1])
+                        < 5.0
+                })
+            })
+            .count();
+        (said, placed)
+    };
+    let (said, placed) = stream(&[]);
+    assert!(said.contains("warning: electrode 3's 52 values"), "{said}");
+    assert!(
+        said.contains("--skip-electrodes 3 leaves its values out"),
+        "{said}"
+    );
+    assert!(2 * placed < pressed.len(), "{placed} of {}", pressed.len());
+    let (said, placed) = stream(&["--skip-electrodes", "3"]);
+    assert!(
+        said.contains("note: --skip-electrodes 3: 52 of adjacent's 208 values left out"),
+        "{said}"
+    );
+    assert!(!said.contains("warning: electrode"), "{said}");
+    assert!(
+        10 * placed >= 9 * pressed.len(),
+        "{placed} of {}",
+        pressed.len()
+    );
+    for (skip, refused) in [
+        (
+            "16",
+            "--skip-electrodes: electrode 16 to leave out: the sheet has 16 (0 to 15)",
+        ),
+        (
+            "0,1,2,3,4,5,6,7,8",
+            "--skip-electrodes: 9 of the 16 electrodes to leave out",
+        ),
+    ] {
+        let out = et(&[
+            "stream",
+            "--replay",
+            rec,
+            "--scene",
+            scene,
+            "--skip-electrodes",
+            skip,
+        ]);
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && said.contains(refused), "{said}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A recording of the simulated board with electrode 3 disconnected (the simulator's fault:
 /// its measurements float to a rail, its injections drive nothing): `et reconstruct` names
 /// electrode 3, `--skip-electrodes 3` leaves its 52 values out and is not warned, an electrode

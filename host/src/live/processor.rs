@@ -4,8 +4,10 @@
 use super::*;
 
 mod imaging;
+mod noise;
 
 use imaging::Imaging;
+use noise::Noise;
 
 /// What a touch looks like to a downstream program (`et stream --json` prints these).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -66,13 +68,58 @@ pub struct Referencing {
     pub needed: usize,
 }
 
-/// The pixel projection of the reconstruction matrix for one configuration, method and
-/// alpha.
-struct Projection {
+/// What the reconstruction is set up for: a scan configuration, less the electrodes left out
+/// (a detached or broken electrode's values, [`Processor::set_left_out`]).
+#[derive(Clone, Debug, PartialEq)]
+struct At {
     config: ScanConfig,
+    /// Electrodes left out, 0-based, ascending.
+    left_out: Vec<u16>,
+    /// The index in the configuration's frame of each value imaged; None: all of them.
+    kept: Option<Vec<usize>>,
+}
+
+impl At {
+    /// `config` less `left_out`'s values, whose reconstruction schedule this is.
+    ///
+    /// # Errors
+    /// [`LiveError::Config`] for a configuration that is not valid, [`LiveError::LeftOut`]
+    /// when the electrodes cannot be left out of its protocol.
+    fn new(
+        config: ScanConfig,
+        left_out: &[u16],
+    ) -> Result<(Self, et_core::schedule::Schedule), LiveError> {
+        let schedule = config.schedule()?;
+        let (schedule, kept) = if left_out.is_empty() {
+            (schedule, None)
+        } else {
+            let (without, kept) = schedule.without(left_out)?;
+            (without, Some(kept))
+        };
+        let at = Self {
+            config,
+            left_out: left_out.to_vec(),
+            kept,
+        };
+        Ok((at, schedule))
+    }
+
+    /// Of `v` (a frame's K values of this configuration), the values imaged.
+    fn keep<T: Copy>(&self, v: &[T]) -> Vec<T> {
+        match &self.kept {
+            Some(kept) => kept.iter().filter_map(|&k| v.get(k).copied()).collect(),
+            None => v.to_vec(),
+        }
+    }
+}
+
+/// The pixel projection of the reconstruction matrix for one configuration (its electrodes
+/// left out), method and alpha.
+struct Projection {
+    at: At,
     method: Method,
     alpha: f64,
-    /// Pixels inside the sheet x K, in thin factors.
+    /// Pixels inside the sheet x K (the values kept), in thin factors.
     matrix: FrameOperator,
     /// Its entries squared: a pixel's noise under a touched frame's channel variances,
     /// made for its regions' pixels alone.
@@ -80,32 +127,35 @@ struct Projection {
 }
 
 impl Projection {
-    /// The projection in `slot` if it is for `config` and `(method, alpha)`, else a new one put
-    /// there, from `recon` moved to the configuration (`at`: the one it is set up for) and the
-    /// method.
+    /// The projection in `slot` if it is for `config` less `left_out` and `(method, alpha)`,
+    /// else a new one put there, from `recon` moved to them (`at`: what it is set up for) and
+    /// the method.
     fn current<'p>(
         slot: &'p mut Option<Projection>,
-        recon: &mut Reconstructor,
-        at: &mut ScanConfig,
-        config: &ScanConfig,
+        (recon, at): (&mut Reconstructor, &mut At),
+        (config, left_out): (&ScanConfig, &[u16]),
         (method, alpha): (Method, f64),
     ) -> Result<&'p Projection, LiveError> {
-        let kept = slot
-            .take()
-            .filter(|p| p.config == *config && p.method == method && p.alpha == alpha);
+        let kept = slot.take().filter(|p| {
+            p.at.config == *config
+                && p.at.left_out == left_out
+                && p.method == method
+                && p.alpha == alpha
+        });
         let projection = match kept {
             Some(p) => p,
             None => {
-                if *at != *config {
-                    recon.set_schedule(config.schedule()?)?;
-                    *at = *config;
+                if at.config != *config || at.left_out != left_out {
+                    let (new, schedule) = At::new(*config, left_out)?;
+                    recon.set_schedule(schedule)?;
+                    *at = new;
                 }
                 let (method_of, rule) = live_reconstruction(method, alpha);
                 recon.set_method(method_of, rule)?;
                 let matrix = recon.pixel_operator()?;
                 let squares = SquaredRows::of(&matrix);
                 Projection {
-                    config: *config,
+                    at: at.clone(),
                     method,
                     alpha,
                     matrix,
@@ -178,29 +228,13 @@ pub const REFERENCES_KEPT: usize = 4;
 
 /// V_0 and the noise of the untouched frames.
 #[derive(Clone, Debug)]
-pub(super) struct Reference {
-    pub(super) config: ScanConfig,
+struct Reference {
+    config: ScanConfig,
     /// The untouched frames so far, V.
-    pub(super) frames: Vec<Vec<f32>>,
-    /// What the complete reference gives, made once (and again when the method or alpha
-    /// change).
-    pub(super) noise: Option<Noise>,
-}
-
-/// V_0, the noise of dV per channel, and each pixel's noise through the projection built
-/// with (method, alpha).
-#[derive(Clone, Debug)]
-pub(super) struct Noise {
-    pub(super) method: Method,
-    pub(super) alpha: f64,
-    pub(super) v0: Vec<f64>,
-    pub(super) var_dv: Vec<f64>,
-    /// 1 / each pixel's noise (0 where the noise is 0), for the frames' z-scores.
-    pub(super) inverse_sd: Vec<f32>,
-    /// A reference of one frame carries no noise: `var_dv` is then 0 and `inverse_sd` is for
-    /// a variance of 1 V^2 on every channel, and each frame's noise is estimated from its own
-    /// dV ([`Noise::of_frame`]), as `et reconstruct` images such frames.
-    pub(super) per_frame: bool,
+    frames: Vec<Vec<f32>>,
+    /// What the complete reference gives, made once (and again when the method, alpha or
+    /// the electrodes left out change).
+    noise: Option<Noise>,
 }
 
 /// One frame processed.
@@ -232,7 +266,10 @@ pub struct Output {
 pub struct Processor {
     /// The sheet's reconstruction, set up for `at`.
     recon: Reconstructor,
-    at: ScanConfig,
+    at: At,
+    /// Electrodes whose values are left out of the images, 0-based, ascending
+    /// ([`Processor::set_left_out`]).
+    left_out: Vec<u16>,
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
     projection: Option<Projection>,
@@ -280,10 +317,13 @@ impl Processor {
     /// # Errors
     /// [`LiveError::Imaging`] if the sheet cannot be meshed or modelled.
     pub fn new(sheet: &Sheet, settings: Settings) -> Result<Self, LiveError> {
-        let at = ScanConfig {
-            electrodes: sheet.electrodes.count,
-            ..ScanConfig::REFERENCE
-        };
+        let (at, schedule) = At::new(
+            ScanConfig {
+                electrodes: sheet.electrodes.count,
+                ..ScanConfig::REFERENCE
+            },
+            &[],
+        )?;
         let (method, alpha) = live_reconstruction(settings.method, settings.alpha);
         let recon = et_recon::Spec {
             mesh: MeshPlan::About {
@@ -294,7 +334,7 @@ impl Processor {
             alpha,
             pixels: settings.pixels,
             threshold: settings.threshold,
-            ..et_recon::Spec::new(sheet.clone(), at.schedule()?)
+            ..et_recon::Spec::new(sheet.clone(), schedule)
         }
         .set_up()?;
         let inside: Vec<usize> = recon
@@ -311,6 +351,7 @@ impl Processor {
         Ok(Self {
             recon,
             at,
+            left_out: Vec::new(),
             settings,
             projection: None,
             inside,
@@ -372,22 +413,25 @@ impl Processor {
     /// another protocol, numbering or sheet than the scene's.
     #[must_use]
     pub fn v0_unexplained(&self) -> Option<f64> {
-        self.v0().map(|v0| self.recon.unexplained(&v0))
+        self.v0()
+            .map(|v0| self.recon.unexplained(&self.at.keep(&v0)))
     }
 
     /// What is said of the electrodes whose values in V_0 stand out from the model as a
-    /// detached or broken electrode's ([`Reconstructor::detached_electrodes`]), numbered from 0
-    /// as the board counts; None until the reference is complete, or when none stands out.
+    /// detached or broken electrode's ([`Reconstructor::detached_electrodes`]; of the values
+    /// imaged, so not those left out), numbered from 0 as the board counts, and those
+    /// electrodes; None until the reference is complete, or when none stands out.
     #[must_use]
-    pub fn v0_electrode_said(&self) -> Option<String> {
-        let detached = self.recon.detached_electrodes(&self.v0()?);
+    pub fn v0_electrode_said(&self) -> Option<(String, Vec<u16>)> {
+        let detached = self.recon.detached_electrodes(&self.at.keep(&self.v0()?));
         let (said, _) = et_recon::background::detached_said(&detached, 0)?;
         let check = if detached.len() == 1 {
             "its clip and wire"
         } else {
             "their clips and wires"
         };
-        Some(format!("{said} Check {check}"))
+        let electrodes = detached.iter().map(|m| m.electrode).collect();
+        Some((format!("{said} Check {check}"), electrodes))
     }
 
     /// Of the untouched reference frames, the one that differs most from their mean as a
@@ -396,7 +440,45 @@ impl Processor {
     #[must_use]
     pub fn reference_changes(&self) -> Option<(usize, f64)> {
         let r = self.reference()?;
-        self.recon.reference_changes(&r.frames)
+        let frames: Vec<Vec<f32>> = r.frames.iter().map(|f| self.at.keep(f)).collect();
+        self.recon.reference_changes(&frames)
+    }
+
+    /// Leaves every value that `electrodes` (0-based, as the board counts) drive or measure
+    /// out of the images from the next frame on (none: every value imaged again): a detached
+    /// or broken electrode ([`Processor::v0_electrode_said`] names one). V_0 is kept; the
+    /// classifier still sees whole frames. The reconstruction is set up for `scan` without
+    /// them now (its matrix made at the next frame).
+    ///
+    /// Returns how many values of a frame of `scan` (None: the latest frame's scan) are left
+    /// out, and its K.
+    ///
+    /// # Errors
+    /// [`LiveError::LeftOut`] for an electrode past the sheet's, more than half of them, or
+    /// electrodes every value of the scan involves; the images then stay as they were.
+    pub fn set_left_out(
+        &mut self,
+        electrodes: &[u16],
+        scan: Option<ScanConfig>,
+    ) -> Result<(usize, usize), LiveError> {
+        let mut left_out = electrodes.to_vec();
+        left_out.sort_unstable();
+        left_out.dedup();
+        let config = scan.or(self.current).unwrap_or(self.at.config);
+        let (at, schedule) = At::new(config, &left_out)?;
+        let k = config.validate()?.frame_len();
+        let kept = at.kept.as_ref().map_or(k, Vec::len);
+        // Set up now: what is said of V_0 from here on is of the values imaged.
+        self.recon.set_schedule(schedule)?;
+        self.at = at;
+        self.left_out = left_out;
+        Ok((k - kept, k))
+    }
+
+    /// The electrodes whose values are left out of the images (0-based, ascending).
+    #[must_use]
+    pub fn left_out(&self) -> &[u16] {
+        &self.left_out
     }
 
     /// Builds the reconstruction for frames of `config` now (the one-step or GREIT matrix on
@@ -410,9 +492,8 @@ impl Processor {
         let Settings { method, alpha, .. } = self.settings;
         Projection::current(
             &mut self.projection,
-            &mut self.recon,
-            &mut self.at,
-            config,
+            (&mut self.recon, &mut self.at),
+            (config, &self.left_out),
             (method, alpha),
         )?;
         Ok(())
@@ -481,9 +562,8 @@ impl Processor {
         let key = (self.settings.method, self.settings.alpha);
         let projection = Projection::current(
             &mut self.projection,
-            &mut self.recon,
-            &mut self.at,
-            &frame.config,
+            (&mut self.recon, &mut self.at),
+            (&frame.config, &self.left_out),
             key,
         )?;
         let noise = Noise::current(
@@ -492,7 +572,7 @@ impl Processor {
             (&self.recon, projection),
             key,
         )?;
-        let estimated = noise.of_frame(&self.recon, &frame)?;
+        let estimated = noise.of_frame((&self.recon, &projection.at), &frame)?;
         let noise = estimated.as_ref().unwrap_or(noise);
         Imaging {
             recon: &self.recon,
@@ -504,90 +584,5 @@ impl Processor {
             classifier: self.classifier.as_ref(),
         }
         .frame(frame, threshold)
-    }
-}
-
-impl Noise {
-    /// The noise in `slot` if it was made for `(method, alpha)`, else one made from the
-    /// reference `frames` (each K values, V) through `projection` and put there, their V_0
-    /// checked against `recon`'s model of the untouched sheet as a reconstruction's reference
-    /// is (negated or unsigned frames imaged every touch in the wrong place).
-    fn current<'n>(
-        slot: &'n mut Option<Noise>,
-        frames: &[Vec<f32>],
-        (recon, projection): (&Reconstructor, &Projection),
-        (method, alpha): (Method, f64),
-    ) -> Result<&'n Noise, LiveError> {
-        if let Some(kept) = slot
-            .take()
-            .filter(|n| n.method == method && n.alpha == alpha)
-        {
-            return Ok(slot.insert(kept));
-        }
-        // V_0 and the channel variances of an untouched frame's dV.
-        let k = frames.first().map_or(0, Vec::len);
-        let (mut v0, mut var_dv) = (vec![0.0; k], vec![0.0; k]);
-        stats::reference(frames, &mut v0)?;
-        recon.runs_with_the_model(&v0)?;
-        stats::dv_variance(frames, &mut var_dv)?;
-        let per_frame = frames.len() < 2;
-        // The image's own noise level, E|P n|^2 = sum_p sum_k P_pk^2 var_k: the image filters
-        // the noise the data carry, so a touch stands out better here than in |dV|.
-        let pixel_sd = if per_frame {
-            projection.matrix.noise_sd(&vec![1.0; k])?
-        } else {
-            projection.matrix.noise_sd(&var_dv)?
-        };
-        let inverse_sd = pixel_sd
-            .iter()
-            .map(|&sd| if sd > 0.0 { (1.0 / sd) as f32 } else { 0.0 })
-            .collect();
-        Ok(slot.insert(Noise {
-            method,
-            alpha,
-            v0,
-            var_dv,
-            inverse_sd,
-            per_frame,
-        }))
-    }
-
-    /// For a reference of one frame ([`Noise::per_frame`]): this noise with each channel's
-    /// variance estimated from the frame's own dV (the part no conductivity change can make,
-    /// [`Reconstructor::redundancy_noise`]); None for a reference of two or more frames,
-    /// whose noise is measured.
-    ///
-    /// # Errors
-    /// [`LiveError::UnknownNoise`] when the protocol has too little redundancy to tell noise
-    /// from a change.
-    fn of_frame(
-        &self,
-        recon: &Reconstructor,
-        frame: &LiveFrame,
-    ) -> Result<Option<Noise>, LiveError> {
-        if !self.per_frame {
-            return Ok(None);
-        }
-        let dv: Vec<f64> = (frame.voltages.iter().zip(&self.v0))
-            .map(|(a, b)| f64::from(*a) - b)
-            .collect();
-        let variance = recon
-            .redundancy_noise(&dv)
-            .map(|n| n.variance)
-            .ok_or(LiveError::UnknownNoise { seq: frame.seq })?;
-        // A frame equal to V_0 has no noise to see and nothing to image: no touch.
-        let scale = if variance > 0.0 {
-            (1.0 / variance.sqrt()) as f32
-        } else {
-            0.0
-        };
-        Ok(Some(Noise {
-            method: self.method,
-            alpha: self.alpha,
-            v0: self.v0.clone(),
-            var_dv: vec![variance; dv.len()],
-            inverse_sd: self.inverse_sd.iter().map(|i| i * scale).collect(),
-            per_frame: false,
-        }))
     }
 }

@@ -147,6 +147,7 @@ impl Viewer {
                 self.status = "taking V_0: keep the sheet untouched".into();
             }
         }
+        self.left_out_line(ui);
         let mut sought = false;
         if let Some(Source::Replay(r)) = self.source.as_mut() {
             ui.separator();
@@ -186,6 +187,55 @@ impl Viewer {
         if self.processor.classifier.is_some() {
             ui.label("a model classifies each touch");
         }
+    }
+
+    /// The electrodes left out of the images, with a button to put them back, and one to
+    /// leave out those V_0 names detached or broken (a clip off the sheet, a wire off its
+    /// channel: their values would place touches wrongly, or hide them).
+    fn left_out_line(&mut self, ui: &mut egui::Ui) {
+        let named = |electrodes: &[u16]| {
+            let numbers: Vec<String> = electrodes.iter().map(u16::to_string).collect();
+            let noun = if electrodes.len() == 1 {
+                "electrode"
+            } else {
+                "electrodes"
+            };
+            format!("{noun} {}", numbers.join(", "))
+        };
+        let left_out = self.processor.left_out().to_vec();
+        let mut asked = None;
+        ui.horizontal_wrapped(|ui| {
+            if left_out.is_empty() {
+                ui.label("every electrode imaged");
+            } else {
+                ui.label(format!("left out: {}", named(&left_out)));
+                if ui.button("Put back").clicked() {
+                    asked = Some(Vec::new());
+                }
+            }
+            if !self.detached.is_empty()
+                && ui
+                    .button(format!("Leave out {}", named(&self.detached)))
+                    .on_hover_text("V_0 names them detached or broken: image without their values")
+                    .clicked()
+            {
+                asked = Some([&left_out[..], &self.detached[..]].concat());
+            }
+        });
+        let Some(asked) = asked else {
+            return;
+        };
+        self.status = match self.processor.set_left_out(&asked, None) {
+            Ok(_) if asked.is_empty() => "every electrode imaged again".into(),
+            Ok((values, k)) => format!(
+                "{} left out of the images: {values} of the frame's {k} values (every value \
+                 they drive or measure)",
+                named(self.processor.left_out())
+            ),
+            Err(e) => e.to_string(),
+        };
+        // Those still standing out among the values imaged (put back: those named before).
+        self.detached = (self.processor.v0_electrode_said()).map_or(Vec::new(), |(_, e)| e);
     }
 
     /// The last frame's touch, or why there is none, in [`TOUCH_LINES`] lines whatever it

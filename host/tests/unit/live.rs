@@ -109,6 +109,67 @@ fn untouched_then_pressed(method: et_recon::Method) {
     press_at(&mut source, None);
 }
 
+/// Electrode 3 left out (`Processor::set_left_out`): a pressed frame images the same, bit
+/// for bit, whatever its 52 values that electrode drives or measures hold (0.5 V added to each,
+/// which moves the image when it is not left out); put back, the frame images as before.
+#[test]
+fn values_left_out_do_not_reach_the_image() {
+    let (mut source, sheet) = sim();
+    let mut p = Processor::new(
+        &sheet.physical,
+        Settings {
+            reference_frames: 4,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    for _ in 0..4 {
+        p.process(source.poll(1, false).unwrap().remove(0)).unwrap();
+    }
+    press_at(&mut source, Some([0.03, 0.02]));
+    let frame = source.poll(1, false).unwrap().remove(0);
+    let mut broken = frame.clone();
+    let rows = frame.config.schedule().unwrap();
+    let mut touched = 0;
+    for (v, r) in broken.voltages.iter_mut().zip(rows.rows()) {
+        if [r.source, r.sink, r.positive, r.negative].contains(&3) {
+            *v += 0.5;
+            touched += 1;
+        }
+    }
+    assert_eq!(touched, 52);
+    let image = |p: &mut Processor, f: &LiveFrame| p.process(f.clone()).unwrap().image;
+    let whole = image(&mut p, &frame);
+    let moved = image(&mut p, &broken);
+    let most = |a: &[Option<f64>], b: &[Option<f64>]| {
+        (a.iter().zip(b))
+            .filter_map(|(a, b)| Some((a.as_ref()? - b.as_ref()?).abs()))
+            .fold(0.0f64, f64::max)
+    };
+    let peak = most(&whole, &vec![Some(0.0); whole.len()]);
+    assert!(
+        most(&whole, &moved) > 0.1 * peak,
+        "{} of {peak}",
+        most(&whole, &moved)
+    );
+    assert_eq!(p.set_left_out(&[3], None).unwrap(), (52, 208));
+    assert_eq!(p.left_out(), [3]);
+    let without = image(&mut p, &frame);
+    assert_eq!(without, image(&mut p, &broken));
+    assert!(most(&whole, &without) > 0.0);
+    assert_eq!(p.set_left_out(&[], None).unwrap(), (0, 208));
+    let again = image(&mut p, &frame);
+    assert!(
+        most(&whole, &again) <= 1e-6 * peak,
+        "{}",
+        most(&whole, &again)
+    );
+    assert!(matches!(
+        p.set_left_out(&[16], None),
+        Err(LiveError::LeftOut(_))
+    ));
+}
+
 #[test]
 fn a_configuration_change_takes_a_new_reference_and_keeps_the_old_one() {
     let (mut source, sheet) = sim();

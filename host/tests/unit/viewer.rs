@@ -34,6 +34,7 @@ fn sim_options() -> Options {
         realtime: false,
         screenshot: None,
         press: None,
+        left_out: Vec::new(),
     }
 }
 
@@ -370,12 +371,7 @@ fn replay_pauses_and_seeks() {
     let mut h = harness(Options {
         scene: None,
         source: SourceSpec::Replay(path.clone()),
-        model: None,
-        method: et_recon::Method::default(),
-        reference_frames: 20,
-        realtime: false,
-        screenshot: None,
-        press: None,
+        ..sim_options()
     });
     for _ in 0..5 {
         h.step();
@@ -776,9 +772,10 @@ fn a_screenshot_presses_only_where_asked() {
 
 /// The simulated sheet with electrode 3 disconnected (the simulator's fault: its input floats
 /// to a rail, its injections drive nothing): once V_0 is taken the status line names
-/// electrode 3; the sound sheet's names none.
+/// electrode 3 and the side panel offers to leave it out, which leaves its 52 values out of
+/// the images; put back, it is offered again. The sound sheet's names none and offers none.
 #[test]
-fn a_disconnected_electrode_is_named_in_the_status() {
+fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
     let dir = std::env::temp_dir().join(format!("et-viewer-fault-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let sound = std::fs::read_to_string(scene("square-13cm-16.toml")).unwrap();
@@ -798,6 +795,30 @@ fn a_disconnected_electrode_is_named_in_the_status() {
             faulty,
             "{status}"
         );
+        h.step();
+        let offered = h.query_by_label("Leave out electrode 3").is_some();
+        assert_eq!(offered, faulty);
+        if !faulty {
+            continue;
+        }
+        h.get_by_label("Leave out electrode 3").click();
+        h.step();
+        h.step();
+        let v = h.state();
+        assert_eq!(v.processor.left_out(), [3]);
+        assert!(
+            v.status
+                == "electrode 3 left out of the images: 52 of the frame's 208 values \
+                         (every value they drive or measure)",
+            "{}",
+            v.status
+        );
+        assert!(h.query_by_label("Leave out electrode 3").is_none());
+        h.get_by_label("Put back").click();
+        h.step();
+        h.step();
+        assert!(h.state().processor.left_out().is_empty());
+        assert!(h.query_by_label("Leave out electrode 3").is_some());
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

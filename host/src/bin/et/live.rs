@@ -38,6 +38,12 @@ pub(crate) struct SourceArgs {
     #[arg(long, default_value_t = 20, value_name = "FRAMES",
           value_parser = crate::domain::count(1, REFERENCE_MOST))]
     reference: usize,
+    /// Leave out of the images every value these electrodes drive or measure, counted from 0
+    /// as the board counts them (several: 3,7): a detached or broken electrode, which is
+    /// named once V_0 is taken. At most half the electrodes; a model still classifies whole
+    /// frames.
+    #[arg(long, value_name = "E,...", value_delimiter = ',')]
+    skip_electrodes: Vec<u16>,
 }
 
 /// The most untouched frames --reference takes (10 minutes of a board's frames).
@@ -53,6 +59,32 @@ impl SourceArgs {
             }
             (None, None) => SourceSpec::Sim,
         }
+    }
+
+    /// Leaves `--skip-electrodes` out of `processor`'s images, saying how many values of
+    /// `scan`'s frames (the source's first, when known) that is.
+    fn leave_out(
+        &self,
+        processor: &mut et_host::live::Processor,
+        scan: Option<et_core::ScanConfig>,
+    ) -> Result<()> {
+        if self.skip_electrodes.is_empty() {
+            return Ok(());
+        }
+        let (left_out, k) = processor
+            .set_left_out(&self.skip_electrodes, scan)
+            .map_err(|e| match e {
+                et_host::live::LiveError::LeftOut(e) => anyhow::anyhow!("--skip-electrodes: {e}"),
+                other => other.into(),
+            })?;
+        let named: Vec<String> = processor.left_out().iter().map(u16::to_string).collect();
+        say!(
+            "note: --skip-electrodes {}: {left_out} of {}'s {k} values left out of the images \
+             (every value they drive or measure)",
+            named.join(","),
+            scan.map_or("the frame", |c| c.protocol.name())
+        );
+        Ok(())
     }
 
     fn classifier(&self) -> Result<Option<et_learn::model::Board>> {
@@ -145,6 +177,7 @@ pub(crate) fn view_cmd(args: &ViewArgs, force: bool) -> Result<()> {
         realtime: true,
         screenshot: args.screenshot.clone(),
         press: args.press,
+        left_out: args.source.skip_electrodes.clone(),
     })?;
     Ok(())
 }
@@ -189,6 +222,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             )
         })?;
     }
+    args.source.leave_out(&mut processor, source.config())?;
     if let Source::Replay(r) = &mut source {
         r.looping = false;
         for note in r.recording.notes() {
@@ -304,9 +338,17 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     say!("warning: {said}");
                 }
                 if imaged == 1
-                    && let Some(said) = processor.v0_electrode_said()
+                    && let Some((said, electrodes)) = processor.v0_electrode_said()
                 {
-                    say!("warning: {said}");
+                    let mut skip = processor.left_out().to_vec();
+                    skip.extend(electrodes);
+                    skip.sort_unstable();
+                    let skip: Vec<String> = skip.iter().map(u16::to_string).collect();
+                    say!(
+                        "warning: {said}; --skip-electrodes {} leaves {} values out",
+                        skip.join(","),
+                        if skip.len() == 1 { "its" } else { "their" }
+                    );
                 }
                 if imaged == 1
                     && let Some(said) =

@@ -21,17 +21,9 @@ impl Imaging<'_> {
     /// `frame` imaged against the reference, its touches found and, when touched, its event.
     pub(super) fn frame(&self, frame: LiveFrame, threshold: f64) -> Result<Output, LiveError> {
         let Noise {
-            v0,
-            var_dv,
-            inverse_sd,
-            ..
+            var_dv, inverse_sd, ..
         } = self.noise;
-        let dv: Vec<f64> = frame
-            .voltages
-            .iter()
-            .zip(v0)
-            .map(|(a, b)| f64::from(*a) - b)
-            .collect();
+        let dv = self.noise.dv(&self.projection.at, &frame.voltages);
         let values = self.projection.matrix.image(&dv)?;
         // The strongest pixel in units of its own noise (a touch raises the conductivity).
         let intensity = f64::from(
