@@ -12,7 +12,9 @@
 //! linearisation's misfit at each rule's images, `Reconstructor::linearisation_misfit`;
 //! ET_TANKS_WRITE=dir writes each tank's scene, protocol and frames there and stops;
 //! ET_TANKS_ELECTRODES=1 prints the electrode each tank's fitted model explains worst, as
-//! measured and with electrode 7 detached in five ways, and stops).
+//! measured and with electrode 7 detached in five ways, the worst in its case frames as
+//! measured and with electrode 7 detached, and electrodes 7 and 12 detached at once, and
+//! stops).
 
 #[path = "../tests/support/tanks.rs"]
 mod tanks;
@@ -385,7 +387,108 @@ fn worst_electrodes(all: &[Tank]) -> anyhow::Result<()> {
                 if w.stands_out() { "yes" } else { "no" }
             );
         }
+        detached_in_frames(tank, &scene, &mut rng)?;
     }
     std::fs::remove_dir_all(&work).ok();
+    Ok(())
+}
+
+/// Of `tank`'s case frames (their targets in the tank) against the model fitted to its
+/// reference, as `et reconstruct` weighs the frames it images: the worst electrode as measured
+/// and with electrode 7 detached (reading noise, driving no current; from 1 as the protocol
+/// file counts), and electrodes 7 and 12 detached at once in the reference.
+fn detached_in_frames(
+    tank: &Tank,
+    scene: &Scene,
+    rng: &mut et_core::rng::Rng,
+) -> anyhow::Result<()> {
+    let schedule = scene.schedule()?;
+    let rows = schedule.rows();
+    let mut detach = |v: &[f32], electrodes: &[u16]| -> Vec<f64> {
+        (rows.iter().zip(v))
+            .map(|(r, v)| {
+                if electrodes
+                    .iter()
+                    .any(|e| [r.positive, r.negative].contains(e))
+                {
+                    0.5 * rng.normal()
+                } else if electrodes.iter().any(|e| [r.source, r.sink].contains(e)) {
+                    1e-5 * rng.normal()
+                } else {
+                    f64::from(*v)
+                }
+            })
+            .collect()
+    };
+    let mut recon = Spec::new(scene.sheet.physical.clone(), schedule.clone()).set_up()?;
+    let reference: Vec<f64> = tank.reference.iter().map(|v| f64::from(*v)).collect();
+    recon.fit_background(&reference)?;
+    // (own, rest, electrode from 1) of each frame's worst electrode: the largest own, and
+    // the smallest with electrode 7 detached.
+    let mut sound = (0.0f64, 0.0f64, 0u16);
+    let mut off = (f64::INFINITY, 0.0f64, 0u16);
+    for case in &tank.cases {
+        let frame: Vec<f64> = case.values.iter().map(|v| f64::from(*v)).collect();
+        if let Some(w) = recon.electrode_misfit(&frame).filter(|w| w.own > sound.0) {
+            sound = (w.own, w.rest, w.electrode + 1);
+        }
+        if let Some(w) = recon.electrode_misfit(&detach(&case.values, &[6])) {
+            if !w.stands_out() || w.electrode != 6 {
+                println!(
+                    "{}: {}: electrode 7 detached not named: {w:?}",
+                    tank.name, case.id
+                );
+            }
+            off = if w.own < off.0 {
+                (w.own, w.rest, w.electrode + 1)
+            } else {
+                off
+            };
+        }
+    }
+    println!(
+        "{}: its {} case frames as measured: the worst electrode at most {:.1} % off (electrode \
+         {}, the rest {:.1} %); electrode 7 detached in them: at least {:.1} % off (electrode {}, \
+         the rest {:.1} %)",
+        tank.name,
+        tank.cases.len(),
+        100.0 * sound.0,
+        sound.2,
+        100.0 * sound.1,
+        100.0 * off.0,
+        off.2,
+        100.0 * off.1
+    );
+    let both = detach(&tank.reference, &[6, 11]);
+    let mut recon = Spec::new(scene.sheet.physical.clone(), schedule.clone()).set_up()?;
+    let fit = recon.fit_background(&both)?;
+    let named: Vec<String> = (recon.detached_electrodes(&both).iter())
+        .map(|m| {
+            format!(
+                "{} ({:.1} %, the rest {:.1} %)",
+                m.electrode + 1,
+                100.0 * m.own,
+                100.0 * m.rest
+            )
+        })
+        .collect();
+    let worst = fit.worst_electrode.map_or("none".into(), |w| {
+        format!(
+            "electrode {}, {:.1} %, the rest {:.1} %",
+            w.electrode + 1,
+            100.0 * w.own,
+            100.0 * w.rest
+        )
+    });
+    let named = if named.is_empty() {
+        "none".to_string()
+    } else {
+        named.join(", ")
+    };
+    println!(
+        "{}: electrodes 7 and 12 detached in the reference: {named} named; the worst weighed \
+         beside all the rest: {worst}",
+        tank.name,
+    );
     Ok(())
 }

@@ -27,6 +27,7 @@ use crate::link::{Counters, Keepalive, Link, LinkChange, LinkError};
 use crate::recording::{self, Recording};
 use et_core::sheet::Sheet;
 use et_learn::model::Board;
+use et_recon::background::ElectrodeMisfit;
 use et_recon::{
     AlphaRule, FrameOperator, Imager, ImagingError, MeshPlan, Method, PixelGrid, ReconError,
     Reconstructor, Region, SquaredRows, TOUCH_Z, default_threshold, touch_rule,

@@ -35,6 +35,7 @@ mod controls;
 mod plots;
 mod protocol;
 mod sheet_view;
+mod status;
 pub mod wizard;
 
 pub use controls::SourceBar;
@@ -306,6 +307,7 @@ impl Viewer {
                     if was_referencing && out.referencing.is_none() {
                         self.status = self.reference_taken();
                     }
+                    self.electrode_came_off(&out);
                     for request in self.wizard.observe(&out, &self.processor) {
                         self.apply_wizard_request(request);
                     }
@@ -315,29 +317,6 @@ impl Viewer {
                 }
                 Err(e) => self.status = format!("frame skipped: {e}"),
             }
-        }
-    }
-
-    /// The status once V_0 is taken: what to do next, or what is wrong with it (frames of
-    /// another protocol, numbering or sheet than the scene's, or a reference taken while
-    /// the sheet was touched, show touches in the wrong places; frames in mV, values in the
-    /// wrong unit).
-    fn reference_taken(&mut self) -> String {
-        let sim = matches!(self.source.as_ref(), Some(Source::Sim(_)));
-        let poor_fit = (!sim)
-            .then(|| self.processor.v0_unexplained())
-            .flatten()
-            .and_then(et_recon::background::poor_fit_said);
-        let changes = (self.processor.reference_changes())
-            .and_then(et_recon::background::reference_changes_said);
-        let not_volts =
-            (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
-        let (electrode, detached) = self.processor.v0_electrode_said().unzip();
-        self.detached = detached.unwrap_or_default();
-        match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
-            (Some(said), _) => format!("V_0 taken; warning: {said}"),
-            (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
-            (None, false) => "V_0 taken: touches show on the sheet".into(),
         }
     }
 

@@ -2681,7 +2681,8 @@ fn a_board_that_never_answers_is_said_with_its_rate() {
 /// leave it out; its values moved the press's events (most touched frames gave none, the rest
 /// tens of mm off) until `--skip-electrodes 3` leaves them out of the images, when each
 /// touched frame gives its press within 5 mm. Electrodes past the sheet, or more than half of
-/// them, are refused by the flag's name.
+/// them, are refused by the flag's name. An electrode that comes off after V_0 is named once,
+/// in the first frame it is off in.
 #[test]
 fn an_electrode_left_out_live_streams_the_presses_it_hid() {
     let dir = std::env::temp_dir().join(format!("et-cli-live-skip-{}", std::process::id()));
@@ -2729,7 +2730,8 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         (said, placed)
     };
     let (said, placed) = stream(&[]);
-    assert!(said.contains("warning: electrode 3's 52 values"), "{said}");
+    // (Named in V_0, or in the first frame it is open in.)
+    assert!(said.contains("electrode 3's 52 values"), "{said}");
     assert!(
         said.contains("--skip-electrodes 3 leaves its values out"),
         "{said}"
@@ -2768,6 +2770,38 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         let said = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && said.contains(refused), "{said}");
     }
+    // Sound while V_0 is taken, electrode 3 off from frame 30 on (the sound sheet's first 30
+    // frames, the disconnected one's after them: one seed, one press): named once, at frame 30.
+    let recorded = |name: &str, fault: &str| {
+        let (scene, rec) = (
+            dir.join(format!("{name}.toml")),
+            dir.join(format!("{name}.jsonl")),
+        );
+        let text = sound.replace("start = 0.05", "start = 0.5") + fault;
+        std::fs::write(&scene, text).unwrap();
+        let (s, r) = (scene.to_str().unwrap(), rec.to_str().unwrap());
+        et_ok(&["sim", "--scene", s, "--frames", "80", "--out", r]);
+        (scene, std::fs::read_to_string(rec).unwrap())
+    };
+    let (scene, before) = recorded("sound", "");
+    let (_, after) = recorded(
+        "off",
+        "\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n",
+    );
+    let lines: Vec<&str> = (before.lines().take(31))
+        .chain(after.lines().skip(31))
+        .collect();
+    let rec = dir.join("off-later.jsonl");
+    std::fs::write(&rec, lines.join("\n") + "\n").unwrap();
+    let (scene, rec) = (scene.to_str().unwrap(), rec.to_str().unwrap());
+    let out = et_ok(&["stream", "--json", "--replay", rec, "--scene", scene]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(said.matches("electrode 3's").count(), 1, "{said}");
+    assert!(
+        said.contains("warning: frame 30: electrode 3's 52 values"),
+        "{said}"
+    );
+    assert!(said.contains("Not in V_0"), "{said}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

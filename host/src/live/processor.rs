@@ -260,6 +260,10 @@ pub struct Output {
     pub event: Option<TouchEvent>,
     /// ROI threshold used.
     pub threshold: f64,
+    /// The electrode whose values in this frame stand out from the model as a detached or
+    /// broken electrode's (0-based; of the values imaged, so never one left out): a clip come
+    /// off since V_0 was taken, or one V_0 named and still imaged.
+    pub electrode_off: Option<ElectrodeMisfit>,
 }
 
 /// The live pipeline for one sheet (see the module docs).
@@ -556,6 +560,7 @@ impl Processor {
                 noise: 0.0,
                 event: None,
                 threshold,
+                electrode_off: None,
                 frame,
             });
         }

@@ -111,7 +111,8 @@ fn untouched_then_pressed(method: et_recon::Method) {
 
 /// Electrode 3 left out (`Processor::set_left_out`): a pressed frame images the same, bit
 /// for bit, whatever its 52 values that electrode drives or measures hold (0.5 V added to each,
-/// which moves the image when it is not left out); put back, the frame images as before.
+/// which moves the image when it is not left out, and names electrode 3 in the frame's
+/// `electrode_off`); put back, the frame images as before.
 #[test]
 fn values_left_out_do_not_reach_the_image() {
     let (mut source, sheet) = sim();
@@ -139,6 +140,12 @@ fn values_left_out_do_not_reach_the_image() {
     }
     assert_eq!(touched, 52);
     let image = |p: &mut Processor, f: &LiveFrame| p.process(f.clone()).unwrap().image;
+    // The broken frame's electrode 3 stands out from the model; the pressed frame's none.
+    let off = |p: &mut Processor, f: &LiveFrame| {
+        (p.process(f.clone()).unwrap().electrode_off).map(|m| m.electrode)
+    };
+    assert_eq!(off(&mut p, &frame), None);
+    assert_eq!(off(&mut p, &broken), Some(3));
     let whole = image(&mut p, &frame);
     let moved = image(&mut p, &broken);
     let most = |a: &[Option<f64>], b: &[Option<f64>]| {
@@ -156,6 +163,7 @@ fn values_left_out_do_not_reach_the_image() {
     assert_eq!(p.left_out(), [3]);
     let without = image(&mut p, &frame);
     assert_eq!(without, image(&mut p, &broken));
+    assert_eq!(off(&mut p, &broken), None);
     assert!(most(&whole, &without) > 0.0);
     assert_eq!(p.set_left_out(&[], None).unwrap(), (0, 208));
     let again = image(&mut p, &frame);

@@ -129,8 +129,10 @@ fn a_frame_of_one_value_says_the_value_as_written() {
 
 /// The model's own frame with electrode 3's values off by a gain g (a contact that reads a
 /// share of its potential): the rest is the model's exactly at scale 1, so `rest` is 0 (to the
-/// sums' rounding, 1e-8 of the frame) and `own` is |g|, electrode 3 the worst; it stands out from half its size on, and is named as
-/// the user counts (from 1 with base = 1). The model's frame as it is leaves nothing.
+/// sums' rounding, 1e-8 of the frame) and `own` is |g|, electrode 3 the worst; it stands out
+/// from half its size on, and is named as the user counts (from 1 with base = 1). The model's
+/// frame as it is leaves nothing; one reading far off names no electrode, two of one
+/// electrode's name it.
 #[test]
 fn an_electrode_off_the_model_is_the_worst_by_its_own_share() {
     let (sheet, mesh, schedule) = tank();
@@ -167,6 +169,29 @@ fn an_electrode_off_the_model_is_the_worst_by_its_own_share() {
     }
     let same = electrode_misfit(schedule.rows(), 8, &model, &model).unwrap();
     assert!(same.own < 1e-6 && !same.stands_out(), "{same:?}");
+    // One reading far off (a rail: 20 times the largest value) is in four electrodes'
+    // values and names none of them; two of one electrode's readings so far off name it.
+    let largest = model.iter().fold(0.0f64, |a, m| a.max(m.abs()));
+    let rows = schedule.rows();
+    let mut glitch = model.clone();
+    let k = (0..rows.len()).find(|&k| of(&rows[k], 3)).unwrap();
+    glitch[k] = 20.0 * largest;
+    let worst = electrode_misfit(rows, 8, &glitch, &model).unwrap();
+    assert!(!worst.stands_out(), "{worst:?}");
+    assert!(detached_electrodes(rows, 8, &glitch, &model).is_empty());
+    // Another of electrode 3's readings, sharing no other electrode with the first.
+    let shares = |j: usize| {
+        let r = &rows[j];
+        [r.source, r.sink, r.positive, r.negative]
+            .iter()
+            .any(|&e| e != 3 && of(&rows[k], e))
+    };
+    let other = (k + 1..rows.len())
+        .find(|&j| of(&rows[j], 3) && !shares(j))
+        .unwrap();
+    glitch[other] = 20.0 * largest;
+    let worst = electrode_misfit(rows, 8, &glitch, &model).unwrap();
+    assert!(worst.electrode == 3 && worst.stands_out(), "{worst:?}");
 }
 
 /// Two electrodes read as detached (their values' sign flipped and doubled, as far off as

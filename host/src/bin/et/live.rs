@@ -197,7 +197,6 @@ const FAULTS_WITHOUT_A_FRAME: usize = 5;
 
 pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     use et_host::live::{Processor, Settings, Source, open_source};
-    use et_recon::background::poor_fit_said;
     use std::io::Write as _;
     crate::note_stdout_closed();
     let (mut source, sheet) = open_source(&args.source.spec(), args.source.scene.as_deref())?;
@@ -255,6 +254,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     // Faults and refusals a board reported since its last frame: past a few, it cannot scan
     // what was asked (it said so every second, without end).
     let (mut unscanned, mut reported) = (0, 0);
+    // Electrodes said to stand out as detached (in V_0, or in a frame since).
+    let mut said_off: Vec<u16> = Vec::new();
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
@@ -330,37 +331,24 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             };
             if out.referencing.is_none() {
                 imaged += 1;
-                // Once the reference is complete: frames another protocol, numbering or sheet
-                // than the scene's would stream touches in the wrong places without a word.
-                if imaged == 1
-                    && let Some(said) = processor.v0_unexplained().and_then(poor_fit_said)
-                {
-                    say!("warning: {said}");
+                // Once the reference is complete: what is wrong with it.
+                if imaged == 1 {
+                    said_off = say_of_the_reference(&processor);
                 }
-                if imaged == 1
-                    && let Some((said, electrodes)) = processor.v0_electrode_said()
-                {
-                    let mut skip = processor.left_out().to_vec();
-                    skip.extend(electrodes);
-                    skip.sort_unstable();
-                    let skip: Vec<String> = skip.iter().map(u16::to_string).collect();
+            }
+            // An electrode that came off since (or one V_0 named, said once).
+            if let Some(m) = &out.electrode_off
+                && !said_off.contains(&m.electrode)
+            {
+                said_off.push(m.electrode);
+                if let Some(said) = m.said(0) {
                     say!(
-                        "warning: {said}; --skip-electrodes {} leaves {} values out",
-                        skip.join(","),
-                        if skip.len() == 1 { "its" } else { "their" }
+                        "warning: frame {}: {said} Not in V_0: a clip or wire come off while \
+                         streaming? Its values place touches wrongly: --skip-electrodes {} \
+                         leaves its values out",
+                        out.frame.seq,
+                        skip_with(processor.left_out(), &[m.electrode])
                     );
-                }
-                if imaged == 1
-                    && let Some(said) =
-                        (processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0))
-                {
-                    say!("note: {said}");
-                }
-                if imaged == 1
-                    && let Some(said) = (processor.reference_changes())
-                        .and_then(et_recon::background::reference_changes_said)
-                {
-                    say!("warning: {said}");
                 }
             }
             if let Some(event) = out.event {
@@ -390,6 +378,45 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         return Err(nothing_imaged(&source.describe(), seen, limit, needed));
     }
     Ok(())
+}
+
+/// What is wrong with the reference just taken, said: frames of another protocol, numbering
+/// or sheet than the scene's (which would stream touches in the wrong places without a word),
+/// a detached electrode, frames not in volts, a reference taken while touched. Returns the
+/// electrodes said to be detached.
+fn say_of_the_reference(processor: &et_host::live::Processor) -> Vec<u16> {
+    use et_recon::background::{not_volts_said, poor_fit_said, reference_changes_said};
+    if let Some(said) = processor.v0_unexplained().and_then(poor_fit_said) {
+        say!("warning: {said}");
+    }
+    let detached = processor.v0_electrode_said().map(|(said, electrodes)| {
+        say!(
+            "warning: {said}; --skip-electrodes {} leaves {} values out",
+            skip_with(processor.left_out(), &electrodes),
+            if electrodes.len() + processor.left_out().len() == 1 {
+                "its"
+            } else {
+                "their"
+            }
+        );
+        electrodes
+    });
+    if let Some(said) = (processor.v0()).and_then(|v0| not_volts_said(&v0)) {
+        say!("note: {said}");
+    }
+    if let Some(said) = (processor.reference_changes()).and_then(reference_changes_said) {
+        say!("warning: {said}");
+    }
+    detached.unwrap_or_default()
+}
+
+/// `--skip-electrodes`' value for the electrodes `left_out` and `more`: "3,7".
+fn skip_with(left_out: &[u16], more: &[u16]) -> String {
+    let mut skip = [left_out, more].concat();
+    skip.sort_unstable();
+    skip.dedup();
+    let skip: Vec<String> = skip.iter().map(u16::to_string).collect();
+    skip.join(",")
 }
 
 /// Why a replay (`source`) imaged no frame: it ended, or `--frames` (`limit`) stopped it,

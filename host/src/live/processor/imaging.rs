@@ -48,6 +48,10 @@ impl Imaging<'_> {
         );
         let event =
             (!regions.is_empty()).then(|| self.event(&frame, &regions, touches.len(), intensity));
+        let volts: Vec<f64> = frame.voltages.iter().map(|v| f64::from(*v)).collect();
+        let electrode_off = (self.recon)
+            .electrode_misfit(&self.projection.at.keep(&volts))
+            .filter(ElectrodeMisfit::stands_out);
         Ok(Output {
             referencing: None,
             image,
@@ -57,6 +61,7 @@ impl Imaging<'_> {
             noise: var_dv.iter().sum::<f64>().sqrt(),
             event,
             threshold,
+            electrode_off,
             frame,
         })
     }

@@ -1,0 +1,45 @@
+//! What the status line says of the frames: what is wrong with V_0 once it is taken, and an
+//! electrode that comes off after it.
+
+use super::*;
+
+impl Viewer {
+    /// The status once V_0 is taken: what to do next, or what is wrong with it (frames of
+    /// another protocol, numbering or sheet than the scene's, or a reference taken while
+    /// the sheet was touched, show touches in the wrong places; frames in mV, values in the
+    /// wrong unit).
+    pub(super) fn reference_taken(&mut self) -> String {
+        let sim = matches!(self.source.as_ref(), Some(Source::Sim(_)));
+        let poor_fit = (!sim)
+            .then(|| self.processor.v0_unexplained())
+            .flatten()
+            .and_then(et_recon::background::poor_fit_said);
+        let changes = (self.processor.reference_changes())
+            .and_then(et_recon::background::reference_changes_said);
+        let not_volts =
+            (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
+        let (electrode, detached) = self.processor.v0_electrode_said().unzip();
+        self.detached = detached.unwrap_or_default();
+        match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
+            (Some(said), _) => format!("V_0 taken; warning: {said}"),
+            (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
+            (None, false) => "V_0 taken: touches show on the sheet".into(),
+        }
+    }
+
+    /// Says of an electrode whose values stand out in the frame `out` as a detached one's,
+    /// not said before (come off since V_0 was taken), and offers to leave it out.
+    pub(super) fn electrode_came_off(&mut self, out: &Output) {
+        if let Some(m) = &out.electrode_off
+            && !self.detached.contains(&m.electrode)
+            && let Some(said) = m.said(0)
+        {
+            self.detached.push(m.electrode);
+            self.status = format!(
+                "frame {}: {said} Not in V_0: a clip or wire come off? Check it, or leave it out \
+                 (the side panel)",
+                out.frame.seq
+            );
+        }
+    }
+}
