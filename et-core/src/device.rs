@@ -11,12 +11,19 @@
 //! Models are uploaded into one of two slots of a [`ModelStore`] (flash on the board, RAM under
 //! QEMU): the upload always goes to the slot that is not active, and only a blob that passes
 //! its CRC-32, [`Model::parse`] and matches the scan configuration replaces the old model. A
-//! failed or abandoned upload leaves the old model classifying.
+//! failed or abandoned upload leaves the old model classifying. A commit is recorded at the
+//! slot's end ([`commit`]), so a device that restarts classifies with its last model, under
+//! the scan it was committed with, until it is cleared.
 
 // Reads untrusted bytes (a file or the wire): no unwrap, expect or unchecked indexing.
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use heapless::Vec;
+
+mod commit;
+
+pub use commit::RECORD_BYTES;
+use commit::{CLEARED_AT, Record, restorable};
 
 use crate::config::ScanConfig;
 use crate::model::Model;
@@ -158,9 +165,14 @@ pub struct Device<S> {
     scanning: bool,
     upload: Option<Upload>,
     active: Option<Active>,
+    /// The generation of the last commit recorded ([`commit`]).
+    generation: u32,
     /// V_0 for referenced models (empty until tared).
     reference: Vec<f32, K_MAX>,
     tare_pending: bool,
+    /// The pending tare is a restored referenced model's, which no host asked for (its
+    /// V_0 is taken unacknowledged).
+    tare_unasked: bool,
     seq: u32,
     dropped_since_last: bool,
     status: Status,
@@ -178,13 +190,16 @@ pub struct Output {
 }
 
 impl<S: ModelStore> Device<S> {
-    /// A stopped device with `config` (which must be valid: it is the firmware's default).
+    /// A stopped device with `config` (which must be valid: it is the firmware's default), or,
+    /// when `store` holds a committed model that was not cleared, with that model active
+    /// under the scan it was committed with (the latest commit of the two slots; a referenced
+    /// model takes V_0 from the first frame it scans).
     ///
     /// # Errors
     /// The configuration's error if it is invalid.
     pub fn new(store: S, config: ScanConfig) -> Result<Self, crate::config::ConfigError> {
         let protocol = config.validate()?;
-        Ok(Self {
+        let mut device = Self {
             store,
             config,
             protocol,
@@ -193,13 +208,29 @@ impl<S: ModelStore> Device<S> {
             scanning: false,
             upload: None,
             active: None,
+            generation: 0,
             reference: Vec::new(),
             tare_pending: false,
+            tare_unasked: false,
             seq: 0,
             dropped_since_last: false,
             status: Status::default(),
             scratch: [0.0; 2 * FEATURES_MAX],
-        })
+        };
+        let latest = (0..2)
+            .filter_map(|slot| restorable(&device.store, slot))
+            .max_by_key(|(_, record, _)| record.generation);
+        if let Some((active, record, referenced)) = latest
+            && let Ok(protocol) = record.config.validate()
+        {
+            device.active = Some(active);
+            device.generation = record.generation;
+            device.config = record.config;
+            device.protocol = protocol;
+            device.tare_pending = referenced;
+            device.tare_unasked = referenced;
+        }
+        Ok(device)
     }
 
     /// The configuration scans use.
@@ -304,12 +335,10 @@ impl<S: ModelStore> Device<S> {
             Command::ModelBegin { len, crc } => self.begin(len as usize, crc),
             Command::ModelChunk { offset, data } => self.chunk(offset as usize, &data),
             Command::ModelCommit => self.commit(),
-            Command::ModelClear => {
-                self.active = None;
-                Ok(())
-            }
+            Command::ModelClear => self.clear(),
             Command::Tare => {
                 self.tare_pending = true;
+                self.tare_unasked = false;
                 return None;
             }
         };
@@ -339,7 +368,7 @@ impl<S: ModelStore> Device<S> {
 
     fn begin(&mut self, len: usize, crc: u32) -> Result<(), Refusal> {
         self.upload = None;
-        if len > self.store.capacity() {
+        if len > self.store.capacity().saturating_sub(RECORD_BYTES) {
             return Err(Refusal::TooLarge);
         }
         let slot = self.active.map_or(0, |a| 1 - a.slot);
@@ -402,11 +431,39 @@ impl<S: ModelStore> Device<S> {
         if model.check_config(&self.config).is_err() {
             return Err(Refusal::ModelMismatch);
         }
+        // Recorded, so that a restart finds it; a model that cannot be is not taken.
+        let record = Record {
+            generation: self.generation.wrapping_add(1),
+            len: up.len,
+            crc: up.crc,
+            config: self.config,
+        };
+        let at = self.store.capacity().saturating_sub(RECORD_BYTES);
+        let bytes = record.encode().ok_or(Refusal::Storage)?;
+        self.store
+            .write(up.slot, at, &bytes)
+            .map_err(|_| Refusal::Storage)?;
+        self.generation = record.generation;
         self.active = Some(Active {
             slot: up.slot,
             len: up.len,
         });
         Ok(())
+    }
+
+    /// No model from now on, nor after a restart: both slots' records marked cleared (an
+    /// upload in progress is abandoned: its slot is erased again when the next begins).
+    fn clear(&mut self) -> Result<(), Refusal> {
+        self.active = None;
+        self.upload = None;
+        let at = self.store.capacity().saturating_sub(RECORD_BYTES) + CLEARED_AT;
+        let mut written = Ok(());
+        for slot in 0..2 {
+            if self.store.read(slot).get(at..at + 4) != Some(&[0; 4]) {
+                written = written.and(self.store.write(slot, at, &[0; 4]));
+            }
+        }
+        written.map_err(|_| Refusal::Storage)
     }
 
     /// Records that a frame was produced but could not be sent (the link was busy): it counts
@@ -461,9 +518,11 @@ impl<S: ModelStore> Device<S> {
             self.tare_pending = false;
             self.reference.clear();
             let _ = self.reference.extend_from_slice(v_m);
-            let _ = events.push(Event::Ack {
-                command: CommandTag::Tare,
-            });
+            if !core::mem::take(&mut self.tare_unasked) {
+                let _ = events.push(Event::Ack {
+                    command: CommandTag::Tare,
+                });
+            }
         }
         if let Some(touch) = self.classify(seq, v_m) {
             let _ = events.push(touch);

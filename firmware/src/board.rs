@@ -144,7 +144,7 @@ mod emulated {
     }
 
     /// Bytes per model slot in RAM (QEMU has no flash programming).
-    pub const SLOT_BYTES: usize = et_core::board::QEMU_MODEL_SLOT_BYTES;
+    pub const SLOT_BYTES: usize = et_core::board::QEMU_SLOT_BYTES;
 
     /// Two RAM slots (a static of `init`).
     pub type Slots = RamStore<SLOT_BYTES>;

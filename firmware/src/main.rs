@@ -161,11 +161,17 @@ mod app {
 
         let (tx, tx_out) = cx.local.txq.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
+        // A model committed before the restart scans and classifies again.
         defmt::info!(
-            "et firmware {=str} up: {} at {=u32} baud",
+            "et firmware {=str} up: {} at {=u32} baud{=str}",
             env!("CARGO_PKG_VERSION"),
-            board::DEFAULT_CONFIG,
-            board::BAUD
+            *device.config(),
+            board::BAUD,
+            if device.model().is_some() {
+                ", its stored model restored"
+            } else {
+                ""
+            }
         );
         scan::spawn().ok();
         commands::spawn().ok();

@@ -14,8 +14,9 @@ use et_core::device::ModelStore;
 use stm32f4xx_hal::flash::{Error, FlashExt as _};
 use stm32f4xx_hal::pac::FLASH;
 
-/// Bytes per slot (`et_core::board::MODEL_SLOT_BYTES`, as the host sizes models).
-pub use et_core::board::MODEL_SLOT_BYTES as SLOT_BYTES;
+/// Bytes per slot (`et_core::board::SLOT_BYTES`: a model of up to `MODEL_SLOT_BYTES`, as the
+/// host sizes models, and the record of its commit at the slot's end).
+pub use et_core::board::SLOT_BYTES;
 /// Offset of slot 0 from the start of flash.
 const SLOT0: usize = 0x4_0000;
 /// First sector of each slot.

@@ -663,6 +663,32 @@ fn et_upload_sends_a_model_the_board_verifies() {
         "{said}{}",
         String::from_utf8_lossy(&by_file.stderr)
     );
+    // Cleared: the board says so in its status and classifies no frame.
+    let cleared = Process::new(&et)
+        .args(["upload", "--port", &pty, "--clear"])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&cleared.stdout);
+    assert!(
+        cleared.status.success() && said.contains("cleared the board's model"),
+        "{said}{}",
+        String::from_utf8_lossy(&cleared.stderr)
+    );
+    let mut link = Link::open(&qemu.pty, BAUD).unwrap();
+    link.request(&Command::Start, REPLY).unwrap();
+    // (Over a second of frames: a status comes twice a second.)
+    let (frames, events) = collect(&mut link, 100);
+    assert!(!frames.is_empty());
+    assert!(
+        !events.iter().any(|e| matches!(e, Event::Touch { .. })),
+        "{events:?}"
+    );
+    assert!(
+        events
+            .iter()
+            .any(|e| matches!(e, Event::Status(s) if !s.model_loaded)),
+        "{events:?}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 

@@ -48,7 +48,7 @@ fn blob(referenced: bool, protocol: ProtocolKind) -> StdVec<u8> {
 }
 
 /// Sends `blob` as an upload and returns the replies (begin, chunks, commit).
-fn upload(d: &mut Device<RamStore<4096>>, blob: &[u8], crc: u32) -> StdVec<Option<Event>> {
+fn upload<S: ModelStore>(d: &mut Device<S>, blob: &[u8], crc: u32) -> StdVec<Option<Event>> {
     let mut replies = vec![d.handle(Command::ModelBegin {
         len: blob.len() as u32,
         crc,
@@ -231,7 +231,10 @@ fn a_bad_upload_keeps_the_old_model() {
         refused(CommandTag::ModelChunk, Refusal::UploadOrder)
     );
     assert_eq!(
-        d.handle(Command::ModelBegin { len: 4097, crc: 0 }),
+        d.handle(Command::ModelBegin {
+            len: (4096 - RECORD_BYTES + 1) as u32,
+            crc: 0
+        }),
         refused(CommandTag::ModelBegin, Refusal::TooLarge)
     );
     // Commit before the last byte.
@@ -511,4 +514,121 @@ fn a_configuration_the_front_end_refuses_goes_back_to_the_last_scanned() {
     assert_eq!(d.take_reconfigure(), Some(config()));
     // Refused again (the last frame's is the configuration now): nothing more to go back to.
     assert_eq!(d.front_end_refused(), None);
+}
+
+/// The firmware's default at a restart, other than [`config`] (the scan models are committed
+/// under here).
+fn default_at_restart() -> ScanConfig {
+    ScanConfig {
+        electrodes: 8,
+        protocol: ProtocolKind::Adjacent,
+        ..ScanConfig::REFERENCE
+    }
+}
+
+/// A device restarted on the store of the last (a reset, a power cycle): the model committed
+/// classifies again under the scan it was committed with, not the firmware's default, and is
+/// what `model()` and the status report; a referenced one takes V_0 from its first frame,
+/// unacknowledged (no host asked).
+#[test]
+fn a_committed_model_survives_a_restart() {
+    for referenced in [false, true] {
+        let mut store = RamStore::<4096>::new();
+        let b = blob(referenced, ProtocolKind::Opposite);
+        let mut d = Device::new(&mut store, config()).unwrap();
+        assert_eq!(
+            upload(&mut d, &b, wire::crc32(&b)).last().unwrap(),
+            &ack(CommandTag::ModelCommit)
+        );
+        drop(d);
+        let mut d = Device::new(&mut store, default_at_restart()).unwrap();
+        assert_eq!(*d.config(), config());
+        assert_eq!(d.take_reconfigure(), Some(config()));
+        assert!(d.status(Micros(0)).model_loaded);
+        assert_eq!(d.model().unwrap().referenced(), referenced);
+        let report = ScanReport::default();
+        let mut v_0 = vec![0.0; K];
+        v_0[1] = 5.0;
+        let out = d.frame(&config(), Micros(1), &report, &v_0, 0).unwrap();
+        assert!(
+            !out.events.contains(&ack(CommandTag::Tare).unwrap()),
+            "{:?}",
+            out.events
+        );
+        let v: StdVec<f32> = frame_of(0).iter().zip(&v_0).map(|(a, b)| a + b).collect();
+        let out = d.frame(&config(), Micros(2), &report, &v, 0).unwrap();
+        // Referenced: V_0 taken from the first frame, so class 0; raw, feature 1's 5 V wins.
+        assert_eq!(touches(&out), [if referenced { 0 } else { 1 }]);
+        // A Tare asked for after it is acknowledged as before.
+        assert_eq!(d.handle(Command::Tare), None);
+        let out = d.frame(&config(), Micros(3), &report, &v_0, 0).unwrap();
+        assert!(out.events.contains(&ack(CommandTag::Tare).unwrap()));
+    }
+}
+
+/// Two commits, then a restart: the latest is restored (the two slots both hold a record);
+/// cleared, neither comes back at the next restart, and the firmware's default is scanned.
+/// A new upload after the clear is restored again.
+#[test]
+fn the_latest_commit_is_restored_and_a_cleared_model_stays_cleared() {
+    let mut store = RamStore::<4096>::new();
+    let (plain, referenced) = (
+        blob(false, ProtocolKind::Opposite),
+        blob(true, ProtocolKind::Opposite),
+    );
+    let mut d = Device::new(&mut store, config()).unwrap();
+    upload(&mut d, &plain, wire::crc32(&plain));
+    upload(&mut d, &referenced, wire::crc32(&referenced));
+    drop(d);
+    let mut d = Device::new(&mut store, default_at_restart()).unwrap();
+    assert!(d.model().unwrap().referenced());
+    assert_eq!(d.handle(Command::ModelClear), ack(CommandTag::ModelClear));
+    assert!(d.model().is_none());
+    drop(d);
+    let mut d = Device::new(&mut store, default_at_restart()).unwrap();
+    assert!(d.model().is_none() && !d.status(Micros(0)).model_loaded);
+    assert_eq!(*d.config(), default_at_restart());
+    d.handle(Command::Configure(config()));
+    upload(&mut d, &plain, wire::crc32(&plain));
+    drop(d);
+    let d = Device::new(&mut store, default_at_restart()).unwrap();
+    assert!(!d.model().unwrap().referenced());
+    assert_eq!(*d.config(), config());
+}
+
+/// Nothing is restored from a damaged slot (a byte of the blob, or the record's mark,
+/// changed) nor from an upload a restart cut short; an upload cut short leaves the model
+/// before it restored.
+#[test]
+fn a_damaged_slot_or_an_unfinished_upload_restores_nothing_of_it() {
+    let b = blob(false, ProtocolKind::Opposite);
+    for damage in [5, 4096 - RECORD_BYTES] {
+        let mut store = RamStore::<4096>::new();
+        let mut d = Device::new(&mut store, config()).unwrap();
+        upload(&mut d, &b, wire::crc32(&b));
+        let slot = d.active.unwrap().slot;
+        drop(d);
+        let byte = store.read(slot)[damage];
+        store.write(slot, damage, &[byte ^ 0x10]).unwrap();
+        let d = Device::new(&mut store, default_at_restart()).unwrap();
+        assert!(d.model().is_none(), "damaged at {damage}");
+        assert_eq!(*d.config(), default_at_restart());
+    }
+    let mut store = RamStore::<4096>::new();
+    let mut d = Device::new(&mut store, config()).unwrap();
+    upload(&mut d, &b, wire::crc32(&b));
+    let first = d.active.unwrap().slot;
+    let referenced = blob(true, ProtocolKind::Opposite);
+    d.handle(Command::ModelBegin {
+        len: referenced.len() as u32,
+        crc: wire::crc32(&referenced),
+    });
+    d.handle(Command::ModelChunk {
+        offset: 0,
+        data: Vec::from_slice(&referenced[..CHUNK]).unwrap(),
+    });
+    drop(d);
+    let d = Device::new(&mut store, default_at_restart()).unwrap();
+    assert_eq!(d.active.unwrap().slot, first);
+    assert!(!d.model().unwrap().referenced());
 }

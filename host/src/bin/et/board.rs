@@ -12,8 +12,9 @@ pub(crate) struct UploadArgs {
     #[arg(long)]
     port: String,
     /// The model blob (`et export --out`). The board must be scanning the model's protocol
-    /// and electrode count; a fresh board scans adjacent (see --model).
-    #[arg(long, required_unless_present = "model", conflicts_with = "model")]
+    /// and electrode count; a fresh board scans adjacent (see --model). The board keeps the
+    /// model across resets and power cycles, scanning the scan it took it under.
+    #[arg(long, required_unless_present_any = ["model", "clear"], conflicts_with = "model")]
     blob: Option<PathBuf>,
     /// The model file (`et train --out`) instead of a blob: the board is first set to the scan
     /// the model was trained on (its protocol, electrodes, samples, rate, current and gain),
@@ -28,6 +29,10 @@ pub(crate) struct UploadArgs {
     /// must not be touched).
     #[arg(long)]
     tare: bool,
+    /// Instead of uploading: remove the board's model, which it keeps across restarts
+    /// otherwise (its frames go on, unclassified).
+    #[arg(long, conflicts_with_all = ["blob", "model", "tare"])]
+    clear: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -150,8 +155,27 @@ fn read_blob(path: &std::path::Path) -> Result<Vec<u8>> {
         .with_context(|| format!("reading {}", path.display()))
 }
 
+/// `et upload --clear`: the board's model removed, for good.
+fn clear_model(args: &UploadArgs) -> Result<()> {
+    let mut link = et_host::link::Link::open(&args.port, args.baud)?;
+    wait_for_board(&mut link, args.baud)?;
+    link.request(
+        &et_core::wire::Command::ModelClear,
+        std::time::Duration::from_secs(2),
+    )
+    .context("clearing the board's model")?;
+    out!(
+        "cleared the board's model: it classifies no frame from now on, nor after a restart \
+         (its frames go on)"
+    );
+    Ok(())
+}
+
 pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
     use std::time::Duration;
+    if args.clear {
+        return clear_model(args);
+    }
     let (path, blob, config) = match (&args.blob, &args.model) {
         (_, Some(path)) => {
             let board = et_learn::Model::load(path)?
@@ -227,7 +251,8 @@ pub(crate) fn upload_cmd(args: &UploadArgs) -> Result<()> {
             e => anyhow::Error::new(e).context(format!("uploading {}", path.display())),
         })?;
     out!(
-        "uploaded {} ({} bytes, {} classes, {} features) in {:.1} s; the board verified it",
+        "uploaded {} ({} bytes, {} classes, {} features) in {:.1} s; the board verified it \
+         and keeps it across restarts (et upload --clear removes it)",
         path.display(),
         blob.len(),
         model.classes(),
