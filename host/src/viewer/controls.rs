@@ -227,11 +227,16 @@ impl Viewer {
         };
         self.status = match self.processor.set_left_out(&asked, None) {
             Ok(_) if asked.is_empty() => "every electrode imaged again".into(),
-            Ok((values, k)) => format!(
-                "{} left out of the images: {values} of the frame's {k} values (every value \
-                 they drive or measure)",
-                named(self.processor.left_out())
-            ),
+            Ok((values, k)) => {
+                let left_out = self.processor.left_out();
+                let model = (self.processor.classifier_reads_said(left_out))
+                    .map_or(String::new(), |said| format!("; {said}"));
+                format!(
+                    "{} left out of the images: {values} of the frame's {k} values (every \
+                     value they drive or measure){model}",
+                    named(left_out)
+                )
+            }
             Err(e) => e.to_string(),
         };
         // Those still standing out among the values imaged (put back: those named before).

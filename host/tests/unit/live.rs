@@ -353,4 +353,30 @@ fn a_trained_model_classifies_live_presses() {
             .classify(&other, &[0.0; 208], &[0.0; 208])
             .is_none()
     );
+    // Leaving out an electrode the model reads is said (its features keep its values), one
+    // it does not read is not; the features' electrodes counted here from the scan's rows.
+    let file = p.classifier.as_ref().unwrap().file();
+    let schedule = file.config.schedule().unwrap();
+    let reads = |e: u16| {
+        (file.feature_index.iter())
+            .filter(|&&j| {
+                let r = schedule.rows()[usize::from(j)];
+                [r.source, r.sink, r.positive, r.negative].contains(&e)
+            })
+            .count()
+    };
+    let p_features = file.feature_index.len();
+    for e in 0..16 {
+        let said = p.classifier_reads_said(&[e]);
+        match reads(e) {
+            0 => assert_eq!(said, None, "electrode {e}"),
+            n => assert!(
+                said.as_deref().is_some_and(|s| s.starts_with(&format!(
+                    "the model classifies with {n} of its {p_features} features"
+                ))),
+                "electrode {e}: {said:?}"
+            ),
+        }
+    }
+    assert_eq!(p.classifier_reads_said(&[]), None);
 }

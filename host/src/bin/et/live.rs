@@ -222,6 +222,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         })?;
     }
     args.source.leave_out(&mut processor, source.config())?;
+    if let Some(said) = processor.classifier_reads_said(processor.left_out()) {
+        say!("warning: --skip-electrodes: {said}");
+    }
     if let Source::Replay(r) = &mut source {
         r.looping = false;
         for note in r.recording.notes() {
@@ -349,6 +352,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                         out.frame.seq,
                         skip_with(processor.left_out(), &[m.electrode])
                     );
+                    if let Some(said) = processor.classifier_reads_said(&[m.electrode]) {
+                        say!("warning: {said}");
+                    }
                 }
             }
             if let Some(event) = out.event {
@@ -399,6 +405,9 @@ fn say_of_the_reference(processor: &et_host::live::Processor) -> Vec<u16> {
                 "their"
             }
         );
+        if let Some(said) = processor.classifier_reads_said(&electrodes) {
+            say!("warning: {said}");
+        }
         electrodes
     });
     if let Some(said) = (processor.v0()).and_then(|v0| not_volts_said(&v0)) {
