@@ -113,8 +113,8 @@ pub struct Viewer {
     pub status: String,
     /// The training wizard (open or not).
     pub wizard: Wizard,
-    /// The electrodes V_0 names detached or broken, which the side panel offers to leave out
-    /// (0-based; found when V_0 is taken).
+    /// The electrodes named detached or broken, which the side panel offers to leave out
+    /// (0-based; found when V_0 is taken, or in a frame after it).
     detached: Vec<u16>,
     shot_frames: u32,
     /// How the screenshot went: None until it is taken, then its error, if any.

@@ -19,6 +19,7 @@ impl Viewer {
         let not_volts =
             (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
         let (electrode, detached) = self.processor.v0_electrode_said().unzip();
+        let electrode = electrode.map(|said| format!("{said}, or leave it out (the side panel)"));
         self.detached = detached.unwrap_or_default();
         match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
             (Some(said), _) => format!("V_0 taken; warning: {said}"),
