@@ -335,6 +335,8 @@ impl Viewer {
                         config.protocol.name(),
                         self.status
                     );
+                } else if let Some(said) = self.trains_on_detached() {
+                    self.status = said;
                 }
             }
             wizard::Request::Press(touches) => self.press(touches),

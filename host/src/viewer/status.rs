@@ -28,6 +28,26 @@ impl Viewer {
         }
     }
 
+    /// What is said when the wizard starts while electrodes are left out of the images or named
+    /// detached: its model trains on whole frames, their values among them. None otherwise.
+    pub(super) fn trains_on_detached(&self) -> Option<String> {
+        let mut off = [self.processor.left_out(), &self.detached].concat();
+        off.sort_unstable();
+        off.dedup();
+        let numbers: Vec<String> = off.iter().map(u16::to_string).collect();
+        let (noun, them) = match off.len() {
+            0 => return None,
+            1 => ("electrode", "it"),
+            _ => ("electrodes", "them"),
+        };
+        Some(format!(
+            "warning: the wizard's model trains on whole frames, and {noun} {} is left out of \
+             the images or named detached: its classes would learn a detached electrode's \
+             values; fix {them} before collecting",
+            numbers.join(", ")
+        ))
+    }
+
     /// Says of an electrode whose values stand out in the frame `out` as a detached one's,
     /// not said before (come off since V_0 was taken), and offers to leave it out.
     pub(super) fn electrode_came_off(&mut self, out: &Output) {

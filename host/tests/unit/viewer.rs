@@ -814,6 +814,21 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
             v.status
         );
         assert!(h.query_by_label("Leave out electrode 3").is_none());
+        // The wizard started now would train on its values: said.
+        h.get_by_label("Open the training wizard").click();
+        h.step();
+        h.step();
+        h.get_by_label("Start").click();
+        h.step();
+        h.step();
+        let status = &h.state().status;
+        assert!(
+            status
+                .starts_with("warning: the wizard's model trains on whole frames, and electrode 3"),
+            "{status}"
+        );
+        h.state_mut().wizard.open = false;
+        h.step();
         h.get_by_label("Put back").click();
         h.step();
         h.step();
