@@ -143,6 +143,23 @@ fn active_model<S: ModelStore>(store: &S, active: Option<Active>) -> Option<Mode
     Model::parse_header(store.read(a.slot).get(..a.len)?).ok()
 }
 
+/// `blob` as a model the device takes under `config`: its CRC-32 is `crc`, it parses, its
+/// features fit the evaluation's scratch, and it classifies frames of `config` (checked at
+/// commit, and again at a restart before it is restored).
+fn verified<'b>(blob: &'b [u8], crc: u32, config: &ScanConfig) -> Result<Model<'b>, Refusal> {
+    if wire::crc32(blob) != crc {
+        return Err(Refusal::BadModel);
+    }
+    let model = Model::parse(blob).map_err(|_| Refusal::BadModel)?;
+    if model.features() > FEATURES_MAX {
+        return Err(Refusal::TooLarge);
+    }
+    if model.check_config(config).is_err() {
+        return Err(Refusal::ModelMismatch);
+    }
+    Ok(model)
+}
+
 /// Most features an on-chip model may use (its evaluation scratch is 2 p values).
 pub const FEATURES_MAX: usize = 512;
 
@@ -219,16 +236,14 @@ impl<S: ModelStore> Device<S> {
         };
         let latest = (0..2)
             .filter_map(|slot| restorable(&device.store, slot))
-            .max_by_key(|(_, record, _)| record.generation);
-        if let Some((active, record, referenced)) = latest
-            && let Ok(protocol) = record.config.validate()
-        {
-            device.active = Some(active);
-            device.generation = record.generation;
-            device.config = record.config;
-            device.protocol = protocol;
-            device.tare_pending = referenced;
-            device.tare_unasked = referenced;
+            .max_by_key(|r| r.record.generation);
+        if let Some(r) = latest {
+            device.active = Some(r.active);
+            device.generation = r.record.generation;
+            device.config = r.record.config;
+            device.protocol = r.protocol;
+            device.tare_pending = r.referenced;
+            device.tare_unasked = r.referenced;
         }
         Ok(device)
     }
@@ -421,16 +436,7 @@ impl<S: ModelStore> Device<S> {
             .read(up.slot)
             .get(..up.len)
             .ok_or(Refusal::BadModel)?;
-        if wire::crc32(bytes) != up.crc {
-            return Err(Refusal::BadModel);
-        }
-        let model = Model::parse(bytes).map_err(|_| Refusal::BadModel)?;
-        if model.features() > FEATURES_MAX {
-            return Err(Refusal::TooLarge);
-        }
-        if model.check_config(&self.config).is_err() {
-            return Err(Refusal::ModelMismatch);
-        }
+        verified(bytes, up.crc, &self.config)?;
         // Recorded, so that a restart finds it; a model that cannot be is not taken.
         let record = Record {
             generation: self.generation.wrapping_add(1),

@@ -15,10 +15,9 @@
 //! It is written after the blob and the cleared word after it (offsets only grow in a slot
 //! between erases); erased flash reads all ones, so a slot never committed has no record.
 
-use super::{Active, FEATURES_MAX, ModelStore};
+use super::{Active, ModelStore, verified};
 use crate::config::ScanConfig;
-use crate::model::Model;
-use crate::wire;
+use crate::protocol::Protocol;
 
 /// Bytes the record takes at the end of each slot; a model blob may use the rest.
 pub const RECORD_BYTES: usize = 64;
@@ -46,8 +45,13 @@ impl Record {
     pub(super) fn encode(&self) -> Option<[u8; CLEARED_AT]> {
         let mut out = [0xff; CLEARED_AT];
         let len = u32::try_from(self.len).ok()?;
-        let fields = [MAGIC, self.generation.to_le_bytes(), len.to_le_bytes()];
-        for (i, field) in fields.iter().chain([&self.crc.to_le_bytes()]).enumerate() {
+        let fields = [
+            MAGIC,
+            self.generation.to_le_bytes(),
+            len.to_le_bytes(),
+            self.crc.to_le_bytes(),
+        ];
+        for (i, field) in fields.iter().enumerate() {
             out.get_mut(4 * i..4 * i + 4)?.copy_from_slice(field);
         }
         let used = postcard::to_slice(&self.config, out.get_mut(CONFIG_AT..)?)
@@ -77,24 +81,32 @@ impl Record {
     }
 }
 
+/// A model found at a restart: where it is, its record, its scan's protocol, and whether it
+/// is referenced.
+pub(super) struct Restored {
+    pub(super) active: Active,
+    pub(super) record: Record,
+    pub(super) protocol: Protocol,
+    pub(super) referenced: bool,
+}
+
 /// Of a slot's record (a commit, not cleared), the model it names if the blob is there whole
-/// and classifies frames of the record's scan: its place and whether it is referenced.
-pub(super) fn restorable<S: ModelStore>(store: &S, slot: usize) -> Option<(Active, Record, bool)> {
+/// and passes the checks of a commit under the record's scan.
+pub(super) fn restorable<S: ModelStore>(store: &S, slot: usize) -> Option<Restored> {
     let bytes = store.read(slot);
     let record = Record::read(bytes)?;
-    let blob = bytes.get(..record.len)?;
-    if record.len > store.capacity().saturating_sub(RECORD_BYTES) || wire::crc32(blob) != record.crc
-    {
+    if record.len > store.capacity().saturating_sub(RECORD_BYTES) {
         return None;
     }
-    let model = Model::parse(blob).ok()?;
-    record.config.validate().ok()?;
-    if model.features() > FEATURES_MAX || model.check_config(&record.config).is_err() {
-        return None;
-    }
-    let active = Active {
-        slot,
-        len: record.len,
-    };
-    Some((active, record, model.referenced()))
+    let protocol = record.config.validate().ok()?;
+    let model = verified(bytes.get(..record.len)?, record.crc, &record.config).ok()?;
+    Some(Restored {
+        active: Active {
+            slot,
+            len: record.len,
+        },
+        record,
+        protocol,
+        referenced: model.referenced(),
+    })
 }
