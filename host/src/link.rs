@@ -23,6 +23,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use et_core::ScanConfig;
 use et_core::wire::{
     self, Accumulator, Command, CommandTag, Event, HostUplink, MODEL_CHUNK, PACKET_MAX, Refusal,
     Uplink, WireError,
@@ -495,10 +496,11 @@ impl Reader {
 pub enum LinkChange {
     /// The port went away (cable pulled, board reset): waiting for it to come back.
     Vanished,
-    /// The port is back (Start sent again when the [`Keepalive`] sends it).
+    /// The port is back (the scan asked for and Start sent again when the [`Keepalive`]
+    /// sends them).
     Back,
-    /// No frame for [`Keepalive::SILENCE`] while connected: Start sent again (a board that
-    /// came back idle).
+    /// No frame for [`Keepalive::SILENCE`] while connected: the scan asked for and Start sent
+    /// again (a board that came back idle).
     Restarted,
 }
 
@@ -507,17 +509,21 @@ impl std::fmt::Display for LinkChange {
         f.write_str(match self {
             LinkChange::Vanished => "the port went away; waiting for it to come back",
             LinkChange::Back => "the port is back",
-            LinkChange::Restarted => "no frames for a second: sent Start again",
+            LinkChange::Restarted => "no frames for a second: asked the board to scan again",
         })
     }
 }
 
 /// Keeps a board scanning across pulled cables and resets: notices when the port vanishes
 /// and comes back, and (when it may send commands) sends Start again to a board that is
-/// silent. Call [`frame`](Self::frame) for every frame and [`check`](Self::check) often.
+/// silent, after the scan it was asked for ([`keep_scan`](Self::keep_scan)): a board that
+/// restarted scans its stored model's configuration, or adjacent. Call
+/// [`frame`](Self::frame) for every frame and [`check`](Self::check) often.
 #[derive(Debug)]
 pub struct Keepalive {
     send_start: bool,
+    /// The configuration last asked for, sent again before Start.
+    scan: Option<ScanConfig>,
     connected: bool,
     reconnects: u64,
     quiet_since: Instant,
@@ -533,10 +539,17 @@ impl Keepalive {
     pub fn new(link: &Link, send_start: bool) -> Self {
         Self {
             send_start,
+            scan: None,
             connected: link.connected(),
             reconnects: link.counters().reconnects,
             quiet_since: Instant::now(),
         }
+    }
+
+    /// The board was asked to scan `config` (and acknowledged it): a board that comes back is
+    /// asked for it again before Start.
+    pub fn keep_scan(&mut self, config: ScanConfig) {
+        self.scan = Some(config);
     }
 
     /// A frame arrived.
@@ -544,7 +557,8 @@ impl Keepalive {
         self.quiet_since = Instant::now();
     }
 
-    /// Looks at the link; sends Start where needed. Returns what changed, if anything.
+    /// Looks at the link; sends the scan asked for and Start where needed. Returns what
+    /// changed, if anything.
     pub fn check(&mut self, link: &Link) -> Option<LinkChange> {
         let now = Instant::now();
         let (connected, reconnects) = (link.connected(), link.counters().reconnects);
@@ -564,7 +578,11 @@ impl Keepalive {
             None
         }?;
         if self.send_start {
-            // Start is idempotent on the board; a failed send is retried after SILENCE.
+            // Both are idempotent on the board (Configure clears V_0 only for another scan);
+            // a failed send is retried after SILENCE.
+            if let Some(config) = self.scan {
+                let _ = link.send(&Command::Configure(config));
+            }
             let _ = link.send(&Command::Start);
         }
         self.quiet_since = now;

@@ -431,8 +431,8 @@ impl Source {
         }
     }
 
-    /// Switches the scan to `config` (a board is sent `Configure`). A recording cannot
-    /// change what it recorded.
+    /// Switches the scan to `config` (a board is sent `Configure`, and again when it comes
+    /// back from a reset or a pulled cable). A recording cannot change what it recorded.
     ///
     /// # Errors
     /// [`LiveError`] saying why not.
@@ -441,14 +441,17 @@ impl Source {
             Source::Sim(s) => Ok(s.run.set_config(config)?),
             Source::Replay(r) if r.recording.header.config == config => Ok(()),
             Source::Replay(_) => Err(LiveError::Recorded),
-            Source::Port(p) => p
-                .link
-                .request(&Command::Configure(config), Duration::from_secs(2))
-                .map(|_| ())
-                .map_err(|error| LiveError::Link {
-                    port: p.path.clone(),
-                    error,
-                }),
+            Source::Port(p) => {
+                (p.link)
+                    .request(&Command::Configure(config), Duration::from_secs(2))
+                    .map_err(|error| LiveError::Link {
+                        port: p.path.clone(),
+                        error,
+                    })?;
+                // A board that restarts (a reset, a power cycle) is asked for it again.
+                p.keepalive.keep_scan(config);
+                Ok(())
+            }
         }
     }
 

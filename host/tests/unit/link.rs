@@ -123,7 +123,7 @@ fn a_frame_longer_than_k_max_is_refused() {
 }
 
 /// A device on the master side of a pty: the real `et_core::device::Device` answering
-/// commands, and a frame every 2 ms while started (each passed through `mangle` first: a
+/// commands, booting on adjacent, and a frame of its configuration every 2 ms while started (each passed through `mangle` first: a
 /// faulty board).
 struct FakeDevice {
     stop: Arc<AtomicBool>,
@@ -143,7 +143,6 @@ impl FakeDevice {
             let mut device = Device::new(RamStore::<4096>::new(), ScanConfig::REFERENCE).unwrap();
             let mut packets = Box::new(Accumulator::<COMMAND_PACKET_MAX>::new());
             let mut buf = [0u8; 512];
-            let v_m = vec![0.01f32; 208];
             while !flag.load(Ordering::Relaxed) {
                 if let Ok(n) = master.read(&mut buf) {
                     for &b in &buf[..n] {
@@ -155,14 +154,12 @@ impl FakeDevice {
                     }
                 }
                 if device.scanning() {
+                    // The scan it is configured for (a real board's scan task rebuilds its
+                    // scanner when the configuration changes).
+                    let config = *device.config();
+                    let v_m = vec![0.01f32; config.validate().unwrap().frame_len()];
                     let mut out = device
-                        .frame(
-                            &ScanConfig::REFERENCE,
-                            et_core::Micros(0),
-                            &ScanReport::default(),
-                            &v_m,
-                            0,
-                        )
+                        .frame(&config, et_core::Micros(0), &ScanReport::default(), &v_m, 0)
                         .unwrap();
                     mangle(&mut out.frame);
                     let _ = master.write_all(&packet(&Uplink::Frame(out.frame)));
@@ -316,6 +313,63 @@ fn a_pulled_cable_is_reconnected_and_frames_flow_again() {
             .all(|w| w[1].seq == w[0].seq + 1)
     );
     drop(link);
+    device.stop();
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A board that restarts (here: the cable pulled and a board just booted plugged in) scans
+/// adjacent, or its stored model's configuration, and waits; `et stream` and `et view` ask it
+/// for the scan they set again before Start (they used to send Start only, and went on with
+/// the board's scan without a word: a host model's classes lost).
+#[test]
+fn a_board_that_restarts_is_asked_for_the_scan_it_was_given() {
+    use et_core::protocol::ProtocolKind;
+    use et_host::live::{Source, SourceSpec, open_source};
+    let dir = temp_dir("rescan");
+    let (master, path) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let spec = SourceSpec::Port(path.to_str().unwrap().into(), et_core::board::BAUD);
+    let (mut source, _) = open_source(&spec, None).unwrap();
+    let opposite = ScanConfig {
+        protocol: ProtocolKind::Opposite,
+        ..ScanConfig::REFERENCE
+    };
+    source.configure(opposite).unwrap();
+    // The configurations and sequence numbers of the next `n` frames numbered up to `below`
+    // (those of a board before waiting may follow: a new board numbers from 0 again), and the
+    // link's changes.
+    let next = |source: &mut Source, n: usize, below: u32| {
+        let (mut frames, mut changes) = (Vec::new(), Vec::new());
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while frames.len() < n && Instant::now() < deadline {
+            for f in source.poll(64, true).unwrap() {
+                if f.seq < below && frames.len() < n {
+                    frames.push((f.config, f.seq));
+                }
+            }
+            changes.extend(source.link_changes());
+            thread::sleep(Duration::from_millis(5));
+        }
+        assert_eq!(frames.len(), n, "frames within 10 s; changes {changes:?}");
+        (frames, changes)
+    };
+    let (frames, _) = next(&mut source, 40, u32::MAX);
+    assert_eq!(frames[39].0, opposite);
+    drop(device.stop());
+    thread::sleep(Duration::from_millis(300));
+    let (master, _) = cable(&dir);
+    let device = FakeDevice::start(master);
+    let (frames, changes) = next(&mut source, 20, frames[39].1);
+    assert!(
+        frames.iter().all(|(c, _)| *c == opposite),
+        "the restarted board's frames: {:?}",
+        frames
+            .iter()
+            .map(|(c, _)| c.protocol.name())
+            .collect::<Vec<_>>()
+    );
+    assert!(changes.contains(&LinkChange::Back), "{changes:?}");
+    drop(source);
     device.stop();
     let _ = std::fs::remove_dir_all(dir);
 }
