@@ -313,7 +313,7 @@ impl Schedule {
     /// # Errors
     /// [`ScheduleError::Absent`] for an electrode past the sheet's,
     /// [`ScheduleError::TooManyLeftOut`] for more than half the sheet's,
-    /// [`ScheduleError::Empty`] when every value involves one of them.
+    /// [`ScheduleError::NothingLeft`] when every value involves one of them.
     pub fn without(&self, electrodes: &[u16]) -> Result<(Self, Vec<usize>), ScheduleError> {
         if let Some(&electrode) = electrodes.iter().find(|e| **e >= self.electrodes) {
             return Err(ScheduleError::Absent {
@@ -338,6 +338,12 @@ impl Schedule {
             })
             .map(|(k, r)| (k, *r))
             .unzip();
+        if rows.is_empty() {
+            return Err(ScheduleError::NothingLeft {
+                rows: self.rows.len(),
+                left_out,
+            });
+        }
         Ok((Self::new(self.electrodes, rows)?, kept))
     }
 

@@ -1708,7 +1708,7 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         ),
         (
             vec!["train", "--features", out, "--out", out, "--folds", "1"],
-            "outside 2 to",
+            "1 is below 2, the least it takes",
         ),
         // Another system's frames: streamed files bounded on disk, a .mat in memory, said
         // before any work with what to write instead.
@@ -1746,7 +1746,21 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
                 "--folds",
                 "1000000",
             ],
-            "outside 2 to",
+            "1000000 is above",
+        ),
+        // A whole-number flag of any width says the value and the bound, not a parser's
+        // words ("invalid digit found in string", "-3 is not in 1..=4294967295").
+        (
+            vec!["sim", "--scene", scene, "--out", out, "--frames", "-3"],
+            "-3 is below 1, the least it takes",
+        ),
+        (
+            vec!["sim", "--scene", scene, "--out", out, "--frames", "1e3"],
+            "'1e3' is not a whole number as written: write 1000",
+        ),
+        (
+            [&record[..], &["--frames", "99999999999999999999"]].concat(),
+            "99999999999999999999 is above 18446744073709551615",
         ),
         ([&recon[..], &["--threshold", "2"]].concat(), "--threshold"),
         (
@@ -2737,7 +2751,8 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         "{said}"
     );
     assert!(2 * placed < pressed.len(), "{placed} of {}", pressed.len());
-    let (said, placed) = stream(&["--skip-electrodes", "3"]);
+    // (Written with a space, as people list them.)
+    let (said, placed) = stream(&["--skip-electrodes", "3, 3"]);
     assert!(
         said.contains("note: --skip-electrodes 3: 52 of adjacent's 208 values left out"),
         "{said}"
@@ -2757,6 +2772,9 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
             "0,1,2,3,4,5,6,7,8",
             "--skip-electrodes: 9 of the 16 electrodes to leave out",
         ),
+        // A list with a gap or a word: its place named, not a parser's words.
+        ("3,,7", "an empty place in the list"),
+        ("3,x", "'x' is not an electrode's number"),
     ] {
         let out = et(&[
             "stream",

@@ -50,6 +50,18 @@ pub enum ScheduleError {
         /// The sheet's electrode count.
         electrodes: u16,
     },
+    /// Every row involves an electrode to leave out ([`super::Schedule::without`]): nothing
+    /// would be left to image (opposite's rows each touch four electrodes half a sheet apart).
+    #[error(
+        "every one of the {rows} values involves one of the {left_out} electrodes to leave out: \
+         nothing would be left to image; leave fewer out"
+    )]
+    NothingLeft {
+        /// The schedule's rows.
+        rows: usize,
+        /// Distinct electrodes to leave out.
+        left_out: u16,
+    },
     /// The current would enter and leave by one electrode.
     #[error("row {row}: source and sink are both electrode {electrode}")]
     SameDrive {

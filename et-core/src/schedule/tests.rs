@@ -330,5 +330,20 @@ fn an_electrode_left_out_takes_every_value_it_drives_or_measures() {
         })
         .collect();
     let star = Schedule::new(4, rows).unwrap();
-    assert!(matches!(star.without(&[0]), Err(ScheduleError::Empty)));
+    assert!(matches!(
+        star.without(&[0]),
+        Err(ScheduleError::NothingLeft {
+            rows: 3,
+            left_out: 1
+        })
+    ));
+    // Opposite on 16 without half its electrodes (0 to 7): each row's four electrodes are two
+    // pairs half a sheet apart, so one of them is always among 0 to 7.
+    let opposite = Protocol::new(ProtocolKind::Opposite, 16).unwrap();
+    let o = Schedule::of_protocol(&opposite, 1e-3).unwrap();
+    let e = o.without(&half).unwrap_err().to_string();
+    assert!(
+        e.contains("every one of the 192 values") && e.contains("leave fewer out"),
+        "{e}"
+    );
 }

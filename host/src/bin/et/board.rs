@@ -23,7 +23,7 @@ pub(crate) struct UploadArgs {
     model: Option<PathBuf>,
     /// Baud rate (the firmware's is the default).
     #[arg(long, default_value_t = et_core::board::BAUD,
-          value_parser = clap::value_parser!(u32).range(1..))]
+          value_parser = crate::domain::whole(1, u32::MAX))]
     baud: u32,
     /// Then start the scan (if it was not running) and take the next frame as V_0 (the sheet
     /// must not be touched).
@@ -45,10 +45,10 @@ pub(crate) struct RecordArgs {
     out: PathBuf,
     /// Baud rate (the firmware's is the default).
     #[arg(long, default_value_t = et_core::board::BAUD,
-          value_parser = clap::value_parser!(u32).range(1..))]
+          value_parser = crate::domain::whole(1, u32::MAX))]
     baud: u32,
     /// Stop after this many frames.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = crate::domain::whole(1, u64::MAX))]
     frames: Option<u64>,
     /// Stop after this many seconds.
     #[arg(long, value_parser = crate::domain::above(0.0, 31_536_000.0))]

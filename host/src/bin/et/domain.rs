@@ -30,17 +30,48 @@ pub(crate) fn above(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + 
 
 /// A whole number from `lo` to `hi`, both included.
 pub(crate) fn count(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + Clone {
+    whole(lo, hi)
+}
+
+/// A whole number of the flag's type from `lo` to `hi`, both included.
+pub(crate) fn whole<T>(lo: T, hi: T) -> impl Fn(&str) -> Result<T, String> + Clone
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy,
+{
     move |text| {
-        let v: usize = text
-            .trim()
+        let t = text.trim();
+        let v: T = t
             .parse()
-            .map_err(|_| format!("'{text}' is not a whole number"))?;
-        if (lo..=hi).contains(&v) {
-            Ok(v)
+            .map_err(|_| match (t.parse::<i128>(), t.parse::<f64>()) {
+                // A whole number past the flag's type.
+                (Ok(n), _) if n < 0 => format!("{n} is below {lo}, the least it takes"),
+                (Ok(n), _) => format!("{n} is above {hi}, the most it takes"),
+                (_, Ok(x)) if x.is_finite() && x.fract() == 0.0 && x.abs() < 1e30 => {
+                    format!("'{t}' is not a whole number as written: write {x:.0}")
+                }
+                _ => format!("'{t}' is not a whole number"),
+            })?;
+        if v < lo {
+            Err(format!("{v} is below {lo}, the least it takes"))
+        } else if v > hi {
+            Err(format!("{v} is above {hi}, the most it takes"))
         } else {
-            Err(format!("{v} is outside {lo} to {hi}"))
+            Ok(v)
         }
     }
+}
+
+/// One electrode's number of a list (`3,7`; spaces around it allowed, as in "3, 7").
+pub(crate) fn electrode(text: &str) -> Result<u16, String> {
+    let t = text.trim();
+    if t.is_empty() {
+        return Err(
+            "an empty place in the list: electrode numbers separated by commas, as 3,7".into(),
+        );
+    }
+    t.parse().map_err(|_| {
+        format!("'{t}' is not an electrode's number (whole numbers separated by commas, as 3,7)")
+    })
 }
 
 /// A whole number within `range` (a library's domain, [`et_recon::limits`]).

@@ -145,7 +145,8 @@ pub(crate) struct ReconstructArgs {
     /// broken electrode, which the background fit names when its values stand out), counted
     /// as the scene's protocol file counts them (from 1 with `base = 1`), else from 0.
     /// Several: 3,7.
-    #[arg(long, value_name = "E,...", value_delimiter = ',', requires = "frames")]
+    #[arg(long, value_name = "E,...", value_delimiter = ',',
+          value_parser = crate::domain::electrode, requires = "frames")]
     skip_electrodes: Vec<u16>,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long, requires = "frames", conflicts_with_all = ["all", "range"])]

@@ -22,7 +22,7 @@ pub(crate) struct SourceArgs {
     #[arg(long)]
     port: Option<String>,
     /// Baud rate of --port (default: the firmware's, 2000000).
-    #[arg(long, requires = "port", value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, requires = "port", value_parser = crate::domain::whole(1, u32::MAX))]
     baud: Option<u32>,
     /// A trained model (`et train`) to classify each touch with on the host.
     #[arg(long)]
@@ -42,7 +42,8 @@ pub(crate) struct SourceArgs {
     /// as the board counts them (several: 3,7): a detached or broken electrode, which is
     /// named once V_0 is taken. At most half the electrodes; a model still classifies whole
     /// frames.
-    #[arg(long, value_name = "E,...", value_delimiter = ',')]
+    #[arg(long, value_name = "E,...", value_delimiter = ',',
+          value_parser = crate::domain::electrode)]
     skip_electrodes: Vec<u16>,
 }
 
@@ -139,7 +140,7 @@ pub(crate) struct StreamArgs {
     #[arg(long)]
     json: bool,
     /// Stop after this many frames (default: run until Ctrl-C or the end of a recording).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = crate::domain::whole(1, u64::MAX))]
     frames: Option<u64>,
     /// Simulate as fast as possible instead of in real time (the simulator's frames only: a
     /// recording is streamed as fast as it is read, a board at its own rate).

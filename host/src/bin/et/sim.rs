@@ -15,7 +15,7 @@ pub(crate) struct SimArgs {
     #[arg(long)]
     scene: PathBuf,
     /// How many frames to simulate.
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 100, value_parser = crate::domain::whole(1, u32::MAX))]
     frames: u32,
     /// Where to write: a recording (.jsonl) of et's simulated board, or another system's
     /// frames in volts (.csv one per row, .npy, or .npz and .mat as array "frames"): the empty

@@ -430,12 +430,8 @@ pub(super) fn skip_electrodes(
         )
         .collect::<Result<Vec<u16>>>()?;
     let k = schedule.frame_len();
-    let (without, kept) = schedule.without(&zero_based).map_err(|e| match e {
-        et_core::schedule::ScheduleError::Empty => {
-            anyhow::anyhow!("--skip-electrodes: every value of the frame involves one of them")
-        }
-        other => anyhow::anyhow!("--skip-electrodes: {other}"),
-    })?;
+    let (without, kept) =
+        (schedule.without(&zero_based)).map_err(|e| anyhow::anyhow!("--skip-electrodes: {e}"))?;
     let keep = |v: &[f32]| kept.iter().map(|k| v[*k]).collect::<Vec<f32>>();
     let reference = &mut chosen.reference;
     reference.v0 = kept.iter().map(|k| reference.v0[*k]).collect();
