@@ -92,6 +92,32 @@ pub fn board_report(event: &et_core::wire::Event) -> Option<String> {
     }
 }
 
+/// What a frame's flags (`et_core::wire::FLAG_*`) say of its readings, in words: the board
+/// found samples on an ADC rail, or its current source in compliance, while scanning it; None
+/// when they say neither. Its values are then not what the sheet gave, and an image of them
+/// places touches wrongly.
+#[must_use]
+pub fn flagged_readings(flags: u8) -> Option<String> {
+    use et_core::wire::{FLAG_COMPLIANCE, FLAG_RAIL};
+    let kinds: Vec<&str> = [
+        (
+            FLAG_RAIL,
+            "readings with samples on an ADC rail (clipped: a gain too high for the sheet, or \
+             a contact that opens)",
+        ),
+        (
+            FLAG_COMPLIANCE,
+            "the current source in compliance (a load more than it can drive: a contact come \
+             loose or dry; the readings too small)",
+        ),
+    ]
+    .into_iter()
+    .filter(|(flag, _)| flags & flag != 0)
+    .map(|(_, said)| said)
+    .collect();
+    (!kinds.is_empty()).then(|| format!("the board flagged {}", kinds.join(" and ")))
+}
+
 /// The class a board found for a frame, as its `Event::Touch` says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChipClass {

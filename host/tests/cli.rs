@@ -2751,6 +2751,12 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         "{said}"
     );
     assert!(2 * placed < pressed.len(), "{placed} of {}", pressed.len());
+    // The board's flags (the contact open in a step rails its probe and puts the source in
+    // compliance) said once each, and counted at the end.
+    for kind in ["samples on an ADC rail", "the current source in compliance"] {
+        assert_eq!(said.matches(kind).count(), 1, "{kind}: {said}");
+    }
+    assert!(said.contains("flagged by the board) in"), "{said}");
     // (Written with a space, as people list them.)
     let (said, placed) = stream(&["--skip-electrodes", "3, 3"]);
     assert!(
@@ -2820,6 +2826,12 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         "{said}"
     );
     assert!(said.contains("Not in V_0"), "{said}");
+    // The sound sheet's frames flagged none.
+    let sound = dir.join("sound.jsonl");
+    let sound = sound.to_str().unwrap();
+    let out = et_ok(&["stream", "--json", "--replay", sound, "--scene", scene]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(!said.contains("flagged"), "{said}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -2880,6 +2892,20 @@ fn a_disconnected_electrode_is_named_and_left_out() {
         );
         assert_eq!(
             said.contains("--skip-electrodes 3 leaves its values out"),
+            faulty,
+            "{said}"
+        );
+        // The board's own flags on the frames used (its open probe floats to a rail, its
+        // injections in compliance), said with which frames: every one of them here.
+        assert_eq!(
+            said.contains(
+                "r.jsonl: the board flagged readings with samples on an ADC rail (clipped"
+            ),
+            faulty,
+            "{said}"
+        );
+        assert_eq!(
+            said.contains("in 4 of the 4 reference frames and 1 of the 1 imaged"),
             faulty,
             "{said}"
         );

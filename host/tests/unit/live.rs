@@ -380,3 +380,25 @@ fn a_trained_model_classifies_live_presses() {
     }
     assert_eq!(p.classifier_reads_said(&[]), None);
 }
+
+/// The board's flags that make a frame's values wrong are said, each in its words; those that
+/// do not (a gap before it, sub-section values) are not.
+#[test]
+fn the_flags_that_make_values_wrong_are_said() {
+    use et_core::wire::{FLAG_COMPLIANCE, FLAG_DROPPED_BEFORE, FLAG_RAIL, FLAG_SUBSECTION};
+    assert_eq!(flagged_readings(0), None);
+    assert_eq!(
+        flagged_readings(FLAG_DROPPED_BEFORE | FLAG_SUBSECTION),
+        None
+    );
+    let rail = flagged_readings(FLAG_RAIL | FLAG_SUBSECTION).unwrap();
+    assert!(
+        rail.contains("on an ADC rail") && !rail.contains("compliance"),
+        "{rail}"
+    );
+    let both = flagged_readings(FLAG_RAIL | FLAG_COMPLIANCE).unwrap();
+    assert!(
+        both.contains("on an ADC rail") && both.contains("current source in compliance"),
+        "{both}"
+    );
+}

@@ -260,6 +260,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let (mut unscanned, mut reported) = (0, 0);
     // Electrodes said to stand out as detached (in V_0, or in a frame since).
     let mut said_off: Vec<u16> = Vec::new();
+    // The board's flags said (`FLAG_*` bits), and the frames flagged.
+    let (mut said_flags, mut flagged) = (0u8, 0u64);
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
@@ -333,6 +335,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                     continue;
                 }
             };
+            flagged += u64::from(say_flagged(&mut said_flags, &out));
             if out.referencing.is_none() {
                 imaged += 1;
                 // Once the reference is complete: what is wrong with it.
@@ -374,9 +377,13 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     let elapsed = started.elapsed().as_secs_f64();
     if matches!(source, Source::Replay(_)) && seen > 0 {
         say!(
-            "{seen} frames ({imaged} imaged) in {elapsed:.3} s: {:.0} frames/s on one core (each \
-             referenced, imaged, searched for touches and its event written; the recording \
-             was read before the clock started)",
+            "{seen} frames ({imaged} imaged{}) in {elapsed:.3} s: {:.0} frames/s on one core \
+             (each referenced, imaged, searched for touches and its event written; the \
+             recording was read before the clock started)",
+            match flagged {
+                0 => String::new(),
+                n => format!(", {n} flagged by the board"),
+            },
             seen as f64 / elapsed
         );
     }
@@ -385,6 +392,27 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         return Err(nothing_imaged(&source.describe(), seen, limit, needed));
     }
     Ok(())
+}
+
+/// Says what the board flagged in `out`'s frame (readings on an ADC rail, the current source
+/// in compliance) the first time it flags each; `said` holds the flags said. Returns whether
+/// the frame was flagged.
+fn say_flagged(said: &mut u8, out: &et_host::live::Output) -> bool {
+    let flags = out.frame.flags;
+    if let Some(words) = et_host::live::flagged_readings(flags & !*said) {
+        *said |= flags;
+        say!(
+            "warning: frame {}{}: {words}: such frames' values may not be the sheet's, and \
+             their images place touches wrongly (said once; a replay counts them at its end)",
+            out.frame.seq,
+            if out.referencing.is_some() {
+                " (of V_0)"
+            } else {
+                ""
+            }
+        );
+    }
+    et_host::live::flagged_readings(flags).is_some()
 }
 
 /// What is wrong with the reference just taken, said: frames of another protocol, numbering

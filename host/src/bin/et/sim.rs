@@ -134,18 +134,26 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
         setup.as_secs_f64(),
         f64::from(args.frames) / elapsed.max(1e-9)
     );
+    // A scene's faults (open or loose contacts) do both, as real ones do.
+    let cause = |fix: &str| {
+        if scene.faults.is_empty() {
+            fix.to_string()
+        } else {
+            format!("the scene's [[fault]] contacts do that, as real ones do (else {fix})")
+        }
+    };
     if rail > 0 {
         say!(
-            "warning: {rail} frames have readings on an ADC rail (flagged in the recording): \
-             lower the scene's gain or current"
+            "warning: {rail} frames have readings on an ADC rail (flagged in the recording): {}",
+            cause("lower the scene's gain or current")
         );
     }
     if compliance > 0 {
         say!(
             "warning: in {compliance} frames the current source was in compliance (flagged in \
              the recording): the drive load is above V_out_max / (2 I), from contacts too \
-             resistive or open, so those readings are too small; lower the current or fix \
-             the contacts"
+             resistive or open, so those readings are too small; {}",
+            cause("lower the current or fix the contacts")
         );
     }
     Ok(())

@@ -150,6 +150,7 @@ pub(super) fn frames(
             rec.invalid
         );
     }
+    say_flagged(&path, before, imaged, args.reference_file.is_some());
     let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
     let (reference, reference_frames) = match given {
         Some(given) => given,
@@ -175,6 +176,42 @@ pub(super) fn frames(
             .collect(),
         truth,
     })
+}
+
+/// Says which of the frames used the board flagged (readings on an ADC rail, the current
+/// source in compliance): `before` the reference frames (unused beside `reference_file`),
+/// `imaged` those imaged.
+fn say_flagged(
+    path: &str,
+    before: &[recording::Record],
+    imaged: &[recording::Record],
+    reference_file: bool,
+) {
+    let before = if reference_file { &[][..] } else { before };
+    let flags = |recs: &[recording::Record]| recs.iter().fold(0u8, |f, rec| f | rec.flags);
+    let count = |recs: &[recording::Record]| {
+        let flagged = recs
+            .iter()
+            .filter(|rec| et_host::live::flagged_readings(rec.flags).is_some())
+            .count();
+        (flagged > 0).then(|| format!("{flagged} of the {} ", recs.len()))
+    };
+    let Some(words) = et_host::live::flagged_readings(flags(before) | flags(imaged)) else {
+        return;
+    };
+    let which: Vec<String> = [
+        count(before).map(|n| format!("{n}reference frames")),
+        count(imaged).map(|n| format!("{n}imaged")),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    say!(
+        "warning: {path}: {words} in {}: their values may not be the sheet's, and images of \
+         them place touches wrongly; choose frames it did not flag (--reference, --frame, \
+         --range) or fix what it flags",
+        which.join(" and ")
+    );
 }
 
 /// The untouched frames of `--reference-file` (K values each), averaged, and as read:
