@@ -56,6 +56,14 @@ pub enum Notice {
     /// The board reported a fault or refused a command, in words (a front end that cannot
     /// scan its configuration sends no frames: `et record` waited without a word).
     Board(String),
+    /// The first frame the board flagged with a kind of fault in its readings (on an ADC
+    /// rail, the current source in compliance: [`crate::live::flagged_readings`]), in words.
+    Flagged {
+        /// Its sequence number.
+        seq: u32,
+        /// What the board flagged.
+        said: String,
+    },
     /// Progress (every 25 frames and while waiting).
     Progress(Tally),
 }
@@ -69,6 +77,9 @@ pub struct Tally {
     pub flagged: u64,
     /// Frames skipped (wrong value count).
     pub skipped: u64,
+    /// Frames written whose readings the board flagged (on an ADC rail, its source in
+    /// compliance).
+    pub board_flagged: u64,
     /// The link's counters (lost, damaged, reconnects).
     pub link: Counters,
 }
@@ -77,10 +88,12 @@ impl std::fmt::Display for Tally {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} frames ({} with non-finite values, flagged), {} skipped for a wrong value count, \
-             {} lost on the way, {} damaged packets dropped, {} reconnects",
+            "{} frames ({} with non-finite values, flagged; {} with readings the board \
+             flagged), {} skipped for a wrong value count, {} lost on the way, {} damaged \
+             packets dropped, {} reconnects",
             self.written,
             self.flagged,
+            self.board_flagged,
             self.skipped,
             self.link.lost_frames,
             self.link.corrupt,
@@ -120,6 +133,8 @@ pub fn record(
     let mut tally = Tally::default();
     let mut part = 0u32;
     let mut writer: Option<(ScanConfig, recording::Writer)> = None;
+    // The board's flags said so far (`FLAG_*` bits).
+    let mut said_flags = 0u8;
     while plan.frames.is_none_or(|n| tally.written < n)
         && deadline.is_none_or(|d| Instant::now() < d)
     {
@@ -176,6 +191,14 @@ pub fn record(
             };
         let record = Record::new(&frame, None);
         tally.flagged += u64::from(!record.invalid.is_empty());
+        if let Some(said) = crate::live::flagged_readings(frame.flags & !said_flags) {
+            said_flags |= frame.flags;
+            notice(Notice::Flagged {
+                seq: frame.seq,
+                said,
+            });
+        }
+        tally.board_flagged += u64::from(crate::live::flagged_readings(frame.flags).is_some());
         w.append(&record)?;
         tally.written += 1;
         if tally.written % 25 == 0 {

@@ -428,6 +428,11 @@ fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
     let mangle: fn(&mut Frame) = |f| match f.seq {
         3 => f.voltages.truncate(100),
         5 => f.voltages[2] = f32::NAN,
+        // The board's own flag: a reading with samples on an ADC rail.
+        7 | 8 => {
+            f.flags |= wire::FLAG_RAIL;
+            f.rail_count = 1;
+        }
         _ => {}
     };
     let device = FakeDevice::start_mangling(master, mangle);
@@ -457,6 +462,17 @@ fn a_recording_rides_out_bad_frames_and_a_replug_to_an_idle_board() {
     device.stop();
     assert_eq!(tally.written, 400, "{tally}");
     assert_eq!((tally.skipped, tally.flagged), (2, 2), "{tally}");
+    // Frames 7 and 8 of each board flagged, said once (the first), and counted.
+    assert_eq!(tally.board_flagged, 4, "{tally}");
+    let said: Vec<_> = (notices.iter())
+        .filter_map(|n| match n {
+            Notice::Flagged { seq, said } => Some((*seq, said.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(said.len(), 1, "{said:?}");
+    assert_eq!(said[0].0, 7);
+    assert!(said[0].1.contains("on an ADC rail"), "{said:?}");
     assert_eq!(tally.link.reconnects, 1);
     for change in [LinkChange::Vanished, LinkChange::Back] {
         assert!(

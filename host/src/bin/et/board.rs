@@ -117,6 +117,10 @@ pub(crate) fn record_cmd(args: &RecordArgs, force: bool) -> Result<()> {
         }
         Notice::Link(change) => said(format!("{}: {change}", args.port)),
         Notice::Board(report) => said(format!("{}: {report}", args.port)),
+        Notice::Flagged { seq, said: words } => said(format!(
+            "warning: frame {seq}: {words} (said once; the summary counts them): such frames' \
+             values may not be the sheet's"
+        )),
         Notice::Progress(t) => {
             bar.set_message(t.to_string());
             bar.tick();
