@@ -477,7 +477,7 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
                 ));
             }
             Err(e) if i + 1 == last && e.is_eof() => truncated_tail = true,
-            Err(e) => return Err(bad(i + 1, LineFault::Frame(e))),
+            Err(e) => return Err(bad(i + 1, LineFault::Frame(named(text, e)))),
         }
     }
     Ok(Recording {
@@ -485,6 +485,16 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         records,
         truncated_tail,
     })
+}
+
+/// `error`, the error of a frame line `text` that is JSON, again with the field it is of in
+/// front (`flags: 256 is out of range`, which said no field); as it was for text that is not
+/// JSON. Read again only when a line fails, so the frames' fast path stays as it is.
+fn named(text: &str, error: serde_json::Error) -> serde_json::Error {
+    serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .and_then(|v| et_learn::model_file::from_value_named::<Record>(v).err())
+        .unwrap_or(error)
 }
 
 impl Header {

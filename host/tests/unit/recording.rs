@@ -111,17 +111,26 @@ fn round_trip_and_a_cut_tail_loses_only_the_last_frame() {
         "{:?}",
         cut.notes()
     );
-    // Damage elsewhere is an error naming the line, and the value: a number past its
-    // field's type is said with the range, not as serde's "expected u32".
+    // Damage elsewhere is an error naming the line, the field and the value: a number past
+    // its field's type is said with the range, not as serde's "expected u32" (and the field
+    // was not named: "256 is out of range: 0 to 255" of which?).
     let original = std::fs::read_to_string(&path).unwrap();
-    for (seq, said) in [
-        ("\"x\"", "\"x\" is text, where a whole number belongs"),
-        ("-1", "-1 is out of range: 0 to 4294967295"),
+    for (field, value, line, said) in [
+        (
+            "seq",
+            "\"x\"",
+            3,
+            "seq: \"x\" is text, where a whole number belongs",
+        ),
+        ("seq", "-1", 3, "seq: -1 is out of range: 0 to 4294967295"),
+        ("flags", "256", 2, "flags: 256 is out of range: 0 to 255"),
     ] {
-        let text = original.replacen("\"seq\":1", &format!("\"seq\":{seq}"), 1);
+        let was = format!("\"{field}\":{}", if field == "seq" { "1" } else { "0" });
+        assert!(original.contains(&was), "{was}");
+        let text = original.replacen(&was, &format!("\"{field}\":{value}"), 1);
         std::fs::write(&path, text).unwrap();
         let err = read(&path).unwrap_err().to_string();
-        assert!(err.contains("a.jsonl:3") && err.contains(said), "{err}");
+        assert!(err.contains(&format!("a.jsonl:{line}: {said}")), "{err}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

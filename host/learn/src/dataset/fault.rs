@@ -118,8 +118,11 @@ pub enum DatasetFault {
         scan: usize,
     },
     /// The feature index line holds something that is not a frame index.
-    #[error("feature_index: {0}")]
-    FeatureIndex(std::num::ParseIntError),
+    #[error(
+        "feature_index: '{0}' is not a frame value's index (whole numbers from 0 to 65535, \
+         separated by spaces)"
+    )]
+    FeatureIndex(String),
     /// The header has no configuration line.
     #[error("no '# config:' line")]
     NoConfig,

@@ -170,8 +170,9 @@ impl Header {
                 feature_index = list
                     .split_whitespace()
                     .map(|v| {
-                        v.parse::<u16>()
-                            .map_err(|e| content(path, i + 1, None, DatasetFault::FeatureIndex(e)))
+                        v.parse::<u16>().map_err(|_| {
+                            content(path, i + 1, None, DatasetFault::FeatureIndex(v.into()))
+                        })
                     })
                     .collect::<Result<_, _>>()?;
             } else if let Some(list) = meta.strip_prefix("untouched:") {

@@ -694,6 +694,18 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
                 text.replacen("# units: SI:", "# units: mV:", 1),
                 "d.csv:2: 'units: mV: features",
             ),
+            // An index that is not one, said as written (it was "invalid digit found in
+            // string").
+            (
+                {
+                    let line = text
+                        .lines()
+                        .find(|l| l.starts_with("# feature_index:"))
+                        .unwrap();
+                    text.replace(line, &format!("{line} x7"))
+                },
+                "feature_index: 'x7' is not a frame value's index",
+            ),
             (
                 // The first row's pressure, the last cell of its line.
                 {
