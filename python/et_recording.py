@@ -7,9 +7,15 @@
     frames[0].get("touches")                               # the truth, for simulated frames
     header.get("units")                                    # SI: m, Pa (recordings before it too)
     frames[0].get("invalid", [])                           # columns the board sent as NaN/inf
+    frames[0]["flags"] & RAIL, frames[0]["flags"] & COMPLIANCE   # readings the board flagged
 
 Every number is SI (the header's "units" says so): voltages in V, the truth's x, y and radius in
 m and its pressure in Pa, t_us in microseconds.
+
+A frame's "flags" carry the board's word on its scan: RAIL (bit 0) a reading with samples on an
+ADC rail (clipped: a gain too high, or a contact that opens), COMPLIANCE (bit 3) the current
+source unable to drive its load (a contact loose or dry: readings too small). Such frames'
+values may not be the sheet's; the summary counts them.
 
 JSON has no NaN: a value the board sent as NaN or infinite is written as null; load() turns it
 into float("nan") and the frame lists its columns in "invalid".
@@ -26,6 +32,8 @@ import sys
 
 FORMAT = "et-recording"
 VERSION = 1
+RAIL = 1 << 0
+COMPLIANCE = 1 << 3
 
 
 def load(path):
@@ -64,11 +72,15 @@ def main(argv):
     touched = sum(1 for f in frames if f.get("touches"))
     peak = max((abs(v) for f in frames for v in f["voltages"] if math.isfinite(v)), default=0.0)
     invalid = sum(1 for f in frames if f["invalid"])
+    rail = sum(1 for f in frames if f.get("flags", 0) & RAIL)
+    compliance = sum(1 for f in frames if f.get("flags", 0) & COMPLIANCE)
     print(f"frames {len(frames)}")
     print(f"K {header['K']}")
     print(f"protocol {header['protocol']} L {header['electrodes']}")
     print(f"touched {touched}")
     print(f"invalid_frames {invalid}")
+    print(f"rail_frames {rail}")
+    print(f"compliance_frames {compliance}")
     print(f"peak_volts {peak:.6f}")
     return 0
 

@@ -408,7 +408,10 @@ class Protocol:
             )
         keep = np.flatnonzero(~np.isin(self.rows, skip).any(axis=1))
         if len(keep) == 0:
-            raise EtError("electrodes: every value of the frame involves one of them")
+            raise EtError(
+                f"electrodes: every one of the {self.K} values involves one of the {left_out} "
+                "electrodes to leave out: nothing would be left to image; leave fewer out"
+            )
         return Protocol(self.electrodes, self.rows[keep], self.currents[keep]), keep
 
     @classmethod

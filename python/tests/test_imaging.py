@@ -510,3 +510,6 @@ def test_a_detached_electrode_is_said_and_left_out():
     for bad, match in ([16], "not one of this protocol's 0 to 15"), (range(9), "at most half"):
         with pytest.raises(et.EtError, match=match):
             protocol.without(bad)
+    # Opposite's rows each touch electrodes half the sheet apart: without 0 to 7, none is left.
+    with pytest.raises(et.EtError, match="every one of the 192 values involves one of the 8"):
+        et.protocol("opposite", 16).without(range(8))

@@ -147,7 +147,10 @@ fn a_frame_with_nan_or_inf_stays_readable_and_flagged() {
     let mut bad = frame(1, 208);
     bad.voltages[3] = f32::NAN;
     bad.voltages[7] = f32::INFINITY;
-    for f in [frame(0, 208), bad, frame(2, 208)] {
+    // The last one flagged by the board (a reading on a rail, its source in compliance).
+    let mut railed = frame(2, 208);
+    railed.flags = et_core::wire::FLAG_RAIL | et_core::wire::FLAG_COMPLIANCE;
+    for f in [frame(0, 208), bad, railed] {
         w.append(&Record::new(&f, None)).unwrap();
     }
     drop(w);
@@ -178,10 +181,14 @@ fn a_frame_with_nan_or_inf_stays_readable_and_flagged() {
         "{out}{}",
         String::from_utf8_lossy(&py.stderr)
     );
-    assert!(
-        out.contains("frames 3") && out.contains("invalid_frames 1"),
-        "{out}"
-    );
+    for said in [
+        "frames 3",
+        "invalid_frames 1",
+        "rail_frames 1",
+        "compliance_frames 1",
+    ] {
+        assert!(out.contains(said), "{said}: {out}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
