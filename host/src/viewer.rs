@@ -116,6 +116,10 @@ pub struct Viewer {
     /// The electrodes named detached or broken, which the side panel offers to leave out
     /// (0-based; found when V_0 is taken, or in a frame after it).
     detached: Vec<u16>,
+    /// The board's frame flags said in the status (`et_core::wire::FLAG_*` bits), and those
+    /// of the frames V_0 is being taken from (said once it is taken).
+    flags_said: u8,
+    v0_flags: u8,
     shot_frames: u32,
     /// How the screenshot went: None until it is taken, then its error, if any.
     shot: std::sync::Arc<std::sync::Mutex<Option<Result<(), ShotError>>>>,
@@ -204,6 +208,8 @@ impl Viewer {
             monitor: Monitor::default(),
             wizard: Wizard::default(),
             detached: Vec::new(),
+            flags_said: 0,
+            v0_flags: 0,
             shot_frames: 0,
             shot: std::sync::Arc::default(),
             sheet_view: SheetView::default(),
@@ -307,6 +313,7 @@ impl Viewer {
                     if was_referencing && out.referencing.is_none() {
                         self.status = self.reference_taken();
                     }
+                    self.board_flagged(&out);
                     self.electrode_came_off(&out);
                     for request in self.wizard.observe(&out, &self.processor) {
                         self.apply_wizard_request(request);

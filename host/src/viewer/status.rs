@@ -1,5 +1,5 @@
-//! What the status line says of the frames: what is wrong with V_0 once it is taken, and an
-//! electrode that comes off after it.
+//! What the status line says of the frames: what is wrong with V_0 once it is taken, an
+//! electrode that comes off after it, and what the board flags in them.
 
 use super::*;
 
@@ -21,7 +21,15 @@ impl Viewer {
         let (electrode, detached) = self.processor.v0_electrode_said().unzip();
         let electrode = electrode.map(|said| format!("{said}, or leave it out (the side panel)"));
         self.detached = detached.unwrap_or_default();
-        match (electrode.or(poor_fit).or(changes).or(not_volts), sim) {
+        // Said here, or the cause said above: not again for the frames after V_0.
+        let v0_flags = std::mem::take(&mut self.v0_flags);
+        self.flags_said |= v0_flags;
+        let flagged = crate::live::flagged_readings(v0_flags)
+            .map(|words| format!("{words} in frames of V_0: take it again once that is fixed"));
+        let said = (electrode.or(flagged).or(poor_fit))
+            .or(changes)
+            .or(not_volts);
+        match (said, sim) {
             (Some(said), _) => format!("V_0 taken; warning: {said}"),
             (None, true) => "V_0 taken: press and hold the mouse on the sheet".into(),
             (None, false) => "V_0 taken: touches show on the sheet".into(),
@@ -46,6 +54,25 @@ impl Viewer {
              values; fix {them} before collecting",
             numbers.join(", ")
         ))
+    }
+
+    /// Says what the board flagged in `out`'s frame (readings on an ADC rail, its current
+    /// source in compliance), the first time it flags each after V_0 (V_0's are said with
+    /// it); the link health counts them.
+    pub(super) fn board_flagged(&mut self, out: &Output) {
+        let flags = out.frame.flags;
+        if out.referencing.is_some() {
+            self.v0_flags |= flags;
+            return;
+        }
+        if let Some(words) = crate::live::flagged_readings(flags & !self.flags_said) {
+            self.flags_said |= flags;
+            self.status = format!(
+                "frame {}: {words}: such frames' values may not be the sheet's (the link's \
+                 health counts them)",
+                out.frame.seq
+            );
+        }
     }
 
     /// Says of an electrode whose values stand out in the frame `out` as a detached one's,

@@ -835,5 +835,23 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
         assert!(h.state().processor.left_out().is_empty());
         assert!(h.query_by_label("Leave out electrode 3").is_some());
     }
+    // A gain four times the sheet's: its largest readings clip, which the board flags, and
+    // V_0 says so (before the poor fit the clipped values also leave).
+    let path = dir.join("gain.toml");
+    assert!(sound.contains("\ngain = 8 "));
+    std::fs::write(&path, sound.replace("\ngain = 8 ", "\ngain = 32 ")).unwrap();
+    let mut h = harness(Options {
+        scene: Some(path),
+        reference_frames: 4,
+        ..sim_options()
+    });
+    settle(&mut h);
+    let status = &h.state().status;
+    assert!(
+        status.starts_with(
+            "V_0 taken; warning: the board flagged readings with samples on an ADC rail"
+        ) && status.contains("in frames of V_0"),
+        "{status}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
