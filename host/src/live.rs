@@ -118,6 +118,21 @@ pub fn flagged_readings(flags: u8) -> Option<String> {
     (!kinds.is_empty()).then(|| format!("the board flagged {}", kinds.join(" and ")))
 }
 
+/// The board's flags said so far, each kind once: a stream flagged frame after frame says
+/// the first of each.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FlagsSaid(u8);
+
+impl FlagsSaid {
+    /// The words ([`flagged_readings`]) of the kinds `flags` carries that were not said
+    /// before, which are said from now on; None when there are none.
+    pub fn first(&mut self, flags: u8) -> Option<String> {
+        let words = flagged_readings(flags & !self.0)?;
+        self.0 |= flags;
+        Some(words)
+    }
+}
+
 /// The class a board found for a frame, as its `Event::Touch` says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChipClass {

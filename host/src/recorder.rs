@@ -133,8 +133,7 @@ pub fn record(
     let mut tally = Tally::default();
     let mut part = 0u32;
     let mut writer: Option<(ScanConfig, recording::Writer)> = None;
-    // The board's flags said so far (`FLAG_*` bits).
-    let mut said_flags = 0u8;
+    let mut said_flags = crate::live::FlagsSaid::default();
     while plan.frames.is_none_or(|n| tally.written < n)
         && deadline.is_none_or(|d| Instant::now() < d)
     {
@@ -191,8 +190,7 @@ pub fn record(
             };
         let record = Record::new(&frame, None);
         tally.flagged += u64::from(!record.invalid.is_empty());
-        if let Some(said) = crate::live::flagged_readings(frame.flags & !said_flags) {
-            said_flags |= frame.flags;
+        if let Some(said) = said_flags.first(frame.flags) {
             notice(Notice::Flagged {
                 seq: frame.seq,
                 said,

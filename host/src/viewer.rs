@@ -116,9 +116,9 @@ pub struct Viewer {
     /// The electrodes named detached or broken, which the side panel offers to leave out
     /// (0-based; found when V_0 is taken, or in a frame after it).
     detached: Vec<u16>,
-    /// The board's frame flags said in the status (`et_core::wire::FLAG_*` bits), and those
-    /// of the frames V_0 is being taken from (said once it is taken).
-    flags_said: u8,
+    /// The board's frame flags said in the status, and those of the frames V_0 is being
+    /// taken from (`et_core::wire::FLAG_*` bits, said once it is taken).
+    flags_said: crate::live::FlagsSaid,
     v0_flags: u8,
     shot_frames: u32,
     /// How the screenshot went: None until it is taken, then its error, if any.
@@ -208,7 +208,7 @@ impl Viewer {
             monitor: Monitor::default(),
             wizard: Wizard::default(),
             detached: Vec::new(),
-            flags_said: 0,
+            flags_said: crate::live::FlagsSaid::default(),
             v0_flags: 0,
             shot_frames: 0,
             shot: std::sync::Arc::default(),

@@ -2910,6 +2910,28 @@ fn a_disconnected_electrode_is_named_and_left_out() {
             "{said}"
         );
         if faulty {
+            // Its frames as another's untouched reference: said of the reference file.
+            let (scene, rec, png) = (s(&scene), s(&rec), s(&dir.join("y.png")));
+            let out = et(&[
+                "reconstruct",
+                "--scene",
+                &scene,
+                "--frames",
+                &rec,
+                "--reference-file",
+                &rec,
+                "--triangles",
+                "2000",
+                "--force",
+                "--out",
+                &png,
+            ]);
+            let said = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                said.contains("in 8 of the 8 reference frames")
+                    && said.contains("(another --reference-file)"),
+                "{said}"
+            );
             let (ok, said) = reconstruct(&["--skip-electrodes", "3"]);
             assert!(ok, "{said}");
             assert!(

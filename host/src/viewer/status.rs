@@ -23,7 +23,7 @@ impl Viewer {
         self.detached = detached.unwrap_or_default();
         // Said here, or the cause said above: not again for the frames after V_0.
         let v0_flags = std::mem::take(&mut self.v0_flags);
-        self.flags_said |= v0_flags;
+        let _ = self.flags_said.first(v0_flags);
         let flagged = crate::live::flagged_readings(v0_flags)
             .map(|words| format!("{words} in frames of V_0: take it again once that is fixed"));
         let said = (electrode.or(flagged).or(poor_fit))
@@ -60,13 +60,11 @@ impl Viewer {
     /// source in compliance), the first time it flags each after V_0 (V_0's are said with
     /// it); the link health counts them.
     pub(super) fn board_flagged(&mut self, out: &Output) {
-        let flags = out.frame.flags;
         if out.referencing.is_some() {
-            self.v0_flags |= flags;
+            self.v0_flags |= out.frame.flags;
             return;
         }
-        if let Some(words) = crate::live::flagged_readings(flags & !self.flags_said) {
-            self.flags_said |= flags;
+        if let Some(words) = self.flags_said.first(out.frame.flags) {
             self.status = format!(
                 "frame {}: {words}: such frames' values may not be the sheet's (the link's \
                  health counts them)",

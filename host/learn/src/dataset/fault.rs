@@ -126,9 +126,10 @@ pub enum DatasetFault {
     /// The header has no configuration line.
     #[error("no '# config:' line")]
     NoConfig,
-    /// The first line is not an et dataset's.
-    #[error("not an et dataset (expected '# et-dataset 2', or version 1)")]
-    NotDataset,
+    /// The first line is not an et dataset's; the format it names, if it is JSON that names
+    /// one (an et recording's, a model file's).
+    #[error("not an et dataset (expected '# et-dataset 2', or version 1){}", other_format(.0.as_deref()))]
+    NotDataset(Option<String>),
     /// An et dataset of a version this et does not read.
     #[error(
         "et-dataset version '{0}': this et reads versions 1 and 2 (a later one is a newer et's)"
@@ -392,5 +393,20 @@ fn text_hint(cell: &str) -> &'static str {
          with --groups NAME)"
     } else {
         ""
+    }
+}
+
+/// What is said of a file given as a dataset whose first line names `format`.
+fn other_format(format: Option<&str>) -> String {
+    match format {
+        None => String::new(),
+        Some("et-recording") => ": it is an et recording (et sim, et record); `et stream \
+                                 --replay FILE --model MODEL` classifies its frames, and et \
+                                 collect writes datasets"
+            .into(),
+        Some("et-model" | "et-table-model") => ": it is a model file (et train); give it as \
+                                                  --model, and the dataset as --data"
+            .into(),
+        Some(other) => format!(": its first line names the format '{other}'"),
     }
 }

@@ -225,8 +225,12 @@ pub fn load_csv(path: &Path) -> Result<Dataset, DatasetError> {
                 DatasetFault::DatasetVersion(version),
             ));
         }
-        _ => {
-            return Err(content(path, 1, None, DatasetFault::NotDataset));
+        other => {
+            // JSON naming its format (a recording's header, a model file's first line).
+            let format = other
+                .and_then(|(_, l)| serde_json::from_str::<serde_json::Value>(l).ok())
+                .and_then(|v| Some(v.get("format")?.as_str()?.chars().take(40).collect()));
+            return Err(content(path, 1, None, DatasetFault::NotDataset(format)));
         }
     };
     let Header {

@@ -649,6 +649,31 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
     /// other than the SI the values are read in, a pressure below 0 (both were read), electrode
     /// centres of another count than the scan's (a model trained on them compares sheets by
     /// them).
+    /// A recording or a model file given as a dataset is said to be one, with where it goes
+    /// (it was "not an et dataset" alone).
+    #[test]
+    fn a_recording_or_model_given_as_a_dataset_is_named() {
+        let dir = tmp("named");
+        for (first, said) in [
+            (
+                r#"{"format":"et-recording","version":1}"#,
+                "it is an et recording (et sim, et record)",
+            ),
+            (
+                r#"{"centres_m":[[0,0]],"format":"et-model","version":2}"#,
+                "it is a model file (et train); give it as --model",
+            ),
+            (r#"{"format":"x"}"#, "its first line names the format 'x'"),
+            ("a,b,c", "(expected '# et-dataset 2', or version 1)"),
+        ] {
+            let path = dir.join("f.csv");
+            std::fs::write(&path, format!("{first}\n1,2,3\n")).unwrap();
+            let e = load(&path).unwrap_err().to_string();
+            assert!(e.contains("not an et dataset") && e.contains(said), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn a_damaged_dataset_header_is_refused_by_its_field() {
         let dir = tmp("header");

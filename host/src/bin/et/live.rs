@@ -261,7 +261,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     // Electrodes said to stand out as detached (in V_0, or in a frame since).
     let mut said_off: Vec<u16> = Vec::new();
     // The board's flags said (`FLAG_*` bits), and the frames flagged.
-    let (mut said_flags, mut flagged) = (0u8, 0u64);
+    let (mut said_flags, mut flagged) = (et_host::live::FlagsSaid::default(), 0u64);
     while seen < limit {
         let frames = source.poll(64, !args.fast)?;
         for change in source.link_changes() {
@@ -395,12 +395,9 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
 }
 
 /// Says what the board flagged in `out`'s frame (readings on an ADC rail, the current source
-/// in compliance) the first time it flags each; `said` holds the flags said. Returns whether
-/// the frame was flagged.
-fn say_flagged(said: &mut u8, out: &et_host::live::Output) -> bool {
-    let flags = out.frame.flags;
-    if let Some(words) = et_host::live::flagged_readings(flags & !*said) {
-        *said |= flags;
+/// in compliance) the first time it flags each. Returns whether the frame was flagged.
+fn say_flagged(said: &mut et_host::live::FlagsSaid, out: &et_host::live::Output) -> bool {
+    if let Some(words) = said.first(out.frame.flags) {
         say!(
             "warning: frame {}{}: {words}: such frames' values may not be the sheet's, and \
              their images place touches wrongly (said once; a replay counts them at its end)",
@@ -412,7 +409,7 @@ fn say_flagged(said: &mut u8, out: &et_host::live::Output) -> bool {
             }
         );
     }
-    et_host::live::flagged_readings(flags).is_some()
+    et_host::live::flagged_readings(out.frame.flags).is_some()
 }
 
 /// What is wrong with the reference just taken, said: frames of another protocol, numbering

@@ -150,7 +150,8 @@ pub(super) fn frames(
             rec.invalid
         );
     }
-    say_flagged(&path, before, imaged, args.reference_file.is_some());
+    // (Beside --reference-file, `before` is empty.)
+    say_flagged(&path, before, imaged, "--reference, --frame, --range");
     let frames: Vec<&[f32]> = before.iter().map(|rec| rec.voltages.as_slice()).collect();
     let (reference, reference_frames) = match given {
         Some(given) => given,
@@ -179,15 +180,14 @@ pub(super) fn frames(
 }
 
 /// Says which of the frames used the board flagged (readings on an ADC rail, the current
-/// source in compliance): `before` the reference frames (unused beside `reference_file`),
-/// `imaged` those imaged.
+/// source in compliance): `before` the reference frames, `imaged` those imaged, of the
+/// recording `path`; `choose` the flags that choose others.
 fn say_flagged(
     path: &str,
     before: &[recording::Record],
     imaged: &[recording::Record],
-    reference_file: bool,
+    choose: &str,
 ) {
-    let before = if reference_file { &[][..] } else { before };
     let flags = |recs: &[recording::Record]| recs.iter().fold(0u8, |f, rec| f | rec.flags);
     let count = |recs: &[recording::Record]| {
         let flagged = recs
@@ -208,8 +208,8 @@ fn say_flagged(
     .collect();
     say!(
         "warning: {path}: {words} in {}: their values may not be the sheet's, and images of \
-         them place touches wrongly; choose frames it did not flag (--reference, --frame, \
-         --range) or fix what it flags",
+         them place touches wrongly; choose frames it did not flag ({choose}) or fix what it \
+         flags",
         which.join(" and ")
     );
 }
@@ -243,6 +243,8 @@ fn reference_file(path: &Path, k: usize) -> Result<(et_recon::Reference, Vec<Vec
             rec.invalid
         );
     }
+    let shown = path.display().to_string();
+    say_flagged(&shown, &r.records, &[], "another --reference-file");
     let frames: Vec<&[f32]> = r
         .records
         .iter()
