@@ -93,6 +93,17 @@ fn protocol_text_and_errors_teach() {
     let bad = et(&["protocol", "-l", "7"]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("even number from 4 to 32"));
+    // Past the range, or written as a decimal: the bound, not "300 is not in 0..=255" or
+    // "invalid digit found in string".
+    for (l, said) in [
+        ("300", "300 is above 32, the most it takes"),
+        ("2", "2 is below 4, the least it takes"),
+        ("16.0", "'16.0' is not a whole number as written: write 16"),
+    ] {
+        let bad = et(&["protocol", "-l", l]);
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert!(!bad.status.success() && err.contains(said), "{err}");
+    }
     let unknown = et(&["protocol", "-p", "spiral"]);
     assert!(
         String::from_utf8_lossy(&unknown.stderr)

@@ -78,7 +78,7 @@ pub(crate) struct CollectArgs {
     #[arg(long, default_value_t = collect::Plan::default().elongation, value_parser = crate::domain::real(1.0, 10.0))]
     elongation: f64,
     /// Seed of the session.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::domain::whole(0, u64::MAX))]
     seed: u64,
     /// Where to write the dataset: NAME.csv (text, with its provenance in `#` lines) or
     /// NAME.npz (the same content as NumPy arrays: `numpy.load`, and et reads it at disk

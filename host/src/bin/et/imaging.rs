@@ -149,7 +149,8 @@ pub(crate) struct ReconstructArgs {
           value_parser = crate::domain::electrode, requires = "frames")]
     skip_electrodes: Vec<u16>,
     /// With --frames: which frame to image (0-based; default the last).
-    #[arg(long, requires = "frames", conflicts_with_all = ["all", "range"])]
+    #[arg(long, requires = "frames", conflicts_with_all = ["all", "range"],
+          value_parser = crate::domain::count(0, usize::MAX))]
     frame: Option<usize>,
     /// With --frames: image every frame after the reference, set up once: each frame's
     /// objects and touches as a JSON line on standard output (`frame`, `alpha`, `noise`,

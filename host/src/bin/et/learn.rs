@@ -66,7 +66,7 @@ pub(crate) struct TrainArgs {
     /// The seed of the random choices: the shuffled cross-validation folds (the stratified
     /// k-fold on --data, --cv shuffled on --features) and the perceptron's starting weights.
     /// Another seed deals the rows to other folds, to see how much a score owes to one split.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::domain::whole(0, u64::MAX))]
     seed: u64,
     /// Train on the frames as measured (docs/method.md §9 exactly) instead of each frame minus its
     /// session's untouched frame. Referenced is the default when the dataset has untouched

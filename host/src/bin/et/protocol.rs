@@ -7,16 +7,18 @@ use et_host::tables::ProtocolTables;
 #[derive(Debug, clap::Args)]
 pub(crate) struct ProtocolArgs {
     /// Electrode count L: even, 4 to 32.
-    #[arg(short = 'l', long, default_value_t = 16)]
+    #[arg(short = 'l', long, default_value_t = 16,
+          value_parser = crate::domain::whole(et_core::protocol::L_MIN, et_core::protocol::L_MAX))]
     electrodes: u8,
     /// The protocol (docs/method.md §4); the general form (--drive-skip) is another.
     #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolKind::Adjacent)]
     protocol: ProtocolKind,
     /// General form: inject between i and i + drive_skip + 1 (needs --measure-skip).
-    #[arg(long, requires = "measure_skip", conflicts_with = "protocol")]
+    #[arg(long, requires = "measure_skip", conflicts_with = "protocol",
+          value_parser = crate::domain::whole(0, u8::MAX))]
     drive_skip: Option<u8>,
     /// General form: measure between j and j + s + 1; give once or twice.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::whole(0, u8::MAX))]
     measure_skip: Vec<u8>,
     /// Print JSON (all tables, machine-readable) instead of text.
     #[arg(long, conflicts_with = "csv")]

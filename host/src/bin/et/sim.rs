@@ -35,7 +35,7 @@ pub(crate) struct SimArgs {
     #[arg(long)]
     samples: bool,
     /// Override the scene's seed.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::domain::whole(0, u64::MAX))]
     seed: Option<u64>,
 }
 
