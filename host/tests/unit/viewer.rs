@@ -38,6 +38,17 @@ fn sim_options() -> Options {
     }
 }
 
+/// The viewer on the simulated sheet of the scene `path`, V_0 taken from 4 frames.
+fn settled_on(path: std::path::PathBuf) -> Harness<'static, Viewer> {
+    let mut h = harness(Options {
+        scene: Some(path),
+        reference_frames: 4,
+        ..sim_options()
+    });
+    settle(&mut h);
+    h
+}
+
 /// The protocol the source scans now.
 fn scanning(h: &Harness<'static, Viewer>) -> ProtocolKind {
     h.state()
@@ -783,12 +794,7 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
         let path = dir.join(format!("fault-{faulty}.toml"));
         let fault = "\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n";
         std::fs::write(&path, sound.clone() + if faulty { fault } else { "" }).unwrap();
-        let mut h = harness(Options {
-            scene: Some(path),
-            reference_frames: 4,
-            ..sim_options()
-        });
-        settle(&mut h);
+        let mut h = settled_on(path);
         let status = &h.state().status;
         assert_eq!(
             status.contains("warning: electrode 3's 52 values"),
@@ -840,12 +846,7 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
     let path = dir.join("gain.toml");
     assert!(sound.contains("\ngain = 8 "));
     std::fs::write(&path, sound.replace("\ngain = 8 ", "\ngain = 32 ")).unwrap();
-    let mut h = harness(Options {
-        scene: Some(path),
-        reference_frames: 4,
-        ..sim_options()
-    });
-    settle(&mut h);
+    let h = settled_on(path);
     let status = &h.state().status;
     assert!(
         status.starts_with(
