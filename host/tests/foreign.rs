@@ -677,6 +677,17 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
         "{}",
         String::from_utf8_lossy(&before.stderr)
     );
+    // Past the last frame: refused with the open range to write, as --rows refuses it (it
+    // imaged frames 2 to 5 of the 2 to 9 asked, without a word).
+    let past = run(&["--range", "2..10"]);
+    let said = String::from_utf8_lossy(&past.stderr);
+    assert!(
+        !past.status.success()
+            && said.contains(
+                "--range 2..10: 6 frames (0 to 5), so frame 9 is not among them; write 2.."
+            ),
+        "{said}"
+    );
 }
 
 /// A scene's protocol file is read once per run, however often the run asks for the

@@ -158,7 +158,8 @@ pub(crate) struct ReconstructArgs {
     /// every frame's pixels (frames x rows x cols).
     #[arg(long, requires = "frames", conflicts_with_all = ["json", "segment"])]
     all: bool,
-    /// With --frames: as --all, for frames A..B only (0-based, B excluded; A.. to the end).
+    /// With --frames: as --all, for frames A..B only (0-based, B excluded and at most the
+    /// count of frames; A.. to the end).
     #[arg(long, value_name = "A..B", allow_hyphen_values = true, requires = "frames", conflicts_with_all = ["all", "json", "segment"])]
     range: Option<et_learn::tabular::RowRange>,
     /// Where to write the image (PNG).

@@ -31,7 +31,23 @@ fn chosen(args: &ReconstructArgs, path: &str, first: usize, n: usize) -> Result<
     let last = n.saturating_sub(1);
     let range = match (args.all, args.range, args.frame) {
         (true, _, _) => first..n,
-        (_, Some(r), _) => r.start..r.end.unwrap_or(n).min(n),
+        (_, Some(r), _) => {
+            // Past the end: refused as --rows refuses it (it imaged fewer frames than asked,
+            // without a word).
+            if let Some(end) = r
+                .end
+                .filter(|&end| end > n && (first..n).contains(&r.start))
+            {
+                bail!(
+                    "{path}: --range {r}: {n} frames (0 to {last}), so frame {} is not among \
+                     them; write {}.. for every frame from {} to the end",
+                    end - 1,
+                    r.start,
+                    r.start
+                );
+            }
+            r.start..r.end.unwrap_or(n).min(n)
+        }
         (_, None, frame) => {
             let frame = frame.unwrap_or(last);
             frame..frame + 1
