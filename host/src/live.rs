@@ -99,6 +99,9 @@ pub fn board_report(event: &et_core::wire::Event) -> Option<String> {
 #[must_use]
 pub fn flagged_readings(flags: u8) -> Option<String> {
     use et_core::wire::{FLAG_COMPLIANCE, FLAG_RAIL};
+    if !readings_flagged(flags) {
+        return None;
+    }
     let kinds: Vec<&str> = [
         (
             FLAG_RAIL,
@@ -118,6 +121,13 @@ pub fn flagged_readings(flags: u8) -> Option<String> {
     (!kinds.is_empty()).then(|| format!("the board flagged {}", kinds.join(" and ")))
 }
 
+/// Whether a frame's flags say its readings are wrong ([`flagged_readings`] has words for
+/// them): a test of bits, for counting every frame.
+#[must_use]
+pub fn readings_flagged(flags: u8) -> bool {
+    flags & (et_core::wire::FLAG_RAIL | et_core::wire::FLAG_COMPLIANCE) != 0
+}
+
 /// The board's flags said so far, each kind once: a stream flagged frame after frame says
 /// the first of each.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -128,8 +138,13 @@ impl FlagsSaid {
     /// before, which are said from now on; None when there are none.
     pub fn first(&mut self, flags: u8) -> Option<String> {
         let words = flagged_readings(flags & !self.0)?;
-        self.0 |= flags;
+        self.mark(flags);
         Some(words)
+    }
+
+    /// The kinds `flags` carries, said elsewhere (with V_0's status): not said again.
+    pub fn mark(&mut self, flags: u8) {
+        self.0 |= flags;
     }
 }
 

@@ -196,7 +196,7 @@ pub fn record(
                 said,
             });
         }
-        tally.board_flagged += u64::from(crate::live::flagged_readings(frame.flags).is_some());
+        tally.board_flagged += u64::from(crate::live::readings_flagged(frame.flags));
         w.append(&record)?;
         tally.written += 1;
         if tally.written % 25 == 0 {

@@ -23,7 +23,7 @@ impl Viewer {
         self.detached = detached.unwrap_or_default();
         // Said here, or the cause said above: not again for the frames after V_0.
         let v0_flags = std::mem::take(&mut self.v0_flags);
-        let _ = self.flags_said.first(v0_flags);
+        self.flags_said.mark(v0_flags);
         let flagged = crate::live::flagged_readings(v0_flags)
             .map(|words| format!("{words} in frames of V_0: take it again once that is fixed"));
         let said = (electrode.or(flagged).or(poor_fit))

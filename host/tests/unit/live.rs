@@ -401,4 +401,12 @@ fn the_flags_that_make_values_wrong_are_said() {
         both.contains("on an ADC rail") && both.contains("current source in compliance"),
         "{both}"
     );
+    // The counting test of bits agrees with the words for every flag byte.
+    for flags in 0..=u8::MAX {
+        assert_eq!(
+            readings_flagged(flags),
+            flagged_readings(flags).is_some(),
+            "{flags:#010b}"
+        );
+    }
 }

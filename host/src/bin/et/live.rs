@@ -409,7 +409,7 @@ fn say_flagged(said: &mut et_host::live::FlagsSaid, out: &et_host::live::Output)
             }
         );
     }
-    et_host::live::flagged_readings(out.frame.flags).is_some()
+    et_host::live::readings_flagged(out.frame.flags)
 }
 
 /// What is wrong with the reference just taken, said: frames of another protocol, numbering

@@ -208,7 +208,7 @@ fn say_flagged(
     let count = |recs: &[recording::Record]| {
         let flagged = recs
             .iter()
-            .filter(|rec| et_host::live::flagged_readings(rec.flags).is_some())
+            .filter(|rec| et_host::live::readings_flagged(rec.flags))
             .count();
         (flagged > 0).then(|| format!("{flagged} of the {} ", recs.len()))
     };
