@@ -485,6 +485,35 @@ fn et_protocol_csv_is_a_protocol_file() {
     let from_npz = et_host::frames::read(&npz, k).unwrap();
     assert_eq!(from_npz.frames.len(), 3);
     assert_eq!(from_mat.unwrap().frames, from_npz.frames);
+    // More frames than `et reconstruct`'s 20 of V_0 by default: et sim says to image them
+    // against the first, untouched, and the default reference (19 touched frames beside it)
+    // is said with the frame where the touch began and the count to give (it named frame 0,
+    // the one untouched, as the frame that differed).
+    let csv = d.join("frames.csv");
+    let (scene, csv_s) = (scene.to_str().unwrap(), csv.to_str().unwrap());
+    let run = et(&["sim", "--scene", scene, "--frames", "22", "--out", csv_s]);
+    let told = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        run.status.success() && told.contains("--frames") && told.contains("--reference 1 --all"),
+        "{told}"
+    );
+    let png = d.join("f.png");
+    let args = [
+        "--triangles",
+        "2000",
+        "--force",
+        "--out",
+        png.to_str().unwrap(),
+    ];
+    let common = ["reconstruct", "--scene", scene, "--frames", csv_s];
+    let out = et(&[&common[..], &args[..]].concat());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success()
+            && said.contains("frame 1 (from 0) is the first to differ from those before it")
+            && said.contains("take it alone (--reference 1)"),
+        "{said}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 

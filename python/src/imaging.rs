@@ -407,10 +407,12 @@ impl Reconstructor {
         let frames: Vec<Vec<f32>> = (view.rows().into_iter())
             .map(|r| r.iter().map(|&v| v as f32).collect())
             .collect();
-        Ok(self
-            .inner
-            .reference_changes(&frames)
-            .and_then(et_recon::background::reference_changes_said))
+        Ok(self.inner.reference_changes(&frames).and_then(|c| {
+            et_recon::background::reference_changes_said(
+                c,
+                Some(|n| format!("the reference's first {n} rows, v0[:{n}]")),
+            )
+        }))
     }
 
     /// Fits the background (sheet resistance, contact) to the untouched `reference` frames

@@ -370,6 +370,11 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     touched = still + np.where(np.arange(20)[:, None] < 5, pressed - u0, 0)
     with pytest.warns(et.EtWarning, match="was the sheet touched, or drifting"):
         opposite.set_reference(touched)
+    # Pressed from frame 12 on: the frame is named, with the rows to take alone.
+    pressed = still + np.where(np.arange(20)[:, None] >= 12, pressed - u0, 0)
+    with pytest.warns(et.EtWarning, match=r"frame 12 \(from 0\) is the first to differ.*"
+                      r"the reference's first 12 rows, v0\[:12\]"):
+        opposite.set_reference(pressed)
     # Frames of another built-in protocol's length are said as that (it named K alone).
     with pytest.raises(et.EtError, match=r"192 values for K = 208 \(of another protocol\? 192 "
                        r"values a frame are pseudo-polar at 16 electrodes, opposite at 16"):

@@ -275,17 +275,47 @@ pub fn not_volts_said(v0: &[f64]) -> Option<String> {
 /// during the reference 15 to 150.
 pub const REFERENCE_CHANGE_SAID: f64 = 10.0;
 
-/// What is said of reference frames of which `frame` (from 0) differs from their mean
-/// `ratio` times as a change of the sheet does, past [`REFERENCE_CHANGE_SAID`]; None within.
+/// What is said of untouched reference frames that differ as a change of the sheet does
+/// past [`REFERENCE_CHANGE_SAID`] ([`crate::Reconstructor::reference_changes`]); None
+/// within. Where one frame is the first to differ from those before it, it is named, and
+/// `fewer` (given the count of frames before it) says how to take those alone, where the
+/// caller can (`--reference N`).
 #[must_use]
-pub fn reference_changes_said((frame, ratio): (usize, f64)) -> Option<String> {
+pub fn reference_changes_said(
+    changes: crate::ReferenceChanges,
+    fewer: Option<fn(usize) -> String>,
+) -> Option<String> {
+    let tail = "was the sheet touched, or drifting, while the reference was taken? every frame \
+                is imaged against it";
+    let noise = format!(
+        "times the noise the protocol's redundancy shows (noise alone gives about 1; past \
+         {REFERENCE_CHANGE_SAID:.0} is said)"
+    );
+    if let Some((n, ratio)) = changes.first_unlike {
+        let fix = match fewer {
+            Some(fewer) => {
+                let before = if n == 1 {
+                    "frame 0 before it is untouched, take it".to_string()
+                } else {
+                    format!("the {n} frames before it are untouched, take them")
+                };
+                format!(
+                    "if only {before} alone ({}); else take it again untouched",
+                    fewer(n)
+                )
+            }
+            None => "take it again untouched".into(),
+        };
+        return Some(format!(
+            "the untouched reference's frame {n} (from 0) is the first to differ from those \
+             before it as a change of the sheet does, {ratio:.0} {noise}: {tail}: {fix}"
+        ));
+    }
+    let (frame, ratio) = (changes.frame, changes.ratio);
     (ratio > REFERENCE_CHANGE_SAID).then(|| {
         format!(
             "the untouched reference's frame {frame} (from 0) differs from their mean as a \
-             change of the sheet does, {ratio:.0} times the noise the protocol's redundancy \
-             shows (noise alone gives about 1; past {REFERENCE_CHANGE_SAID:.0} is said): was \
-             the sheet touched, or drifting, while the reference was taken? every frame is \
-             imaged against it: take it again untouched"
+             change of the sheet does, {ratio:.0} {noise}: {tail}: take it again untouched"
         )
     })
 }

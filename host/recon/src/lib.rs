@@ -59,7 +59,7 @@ pub use operator::{FrameOperator, SquaredRows};
 pub use pixels::{PixelGrid, PixelOperator};
 pub use reconstructor::{
     AlphaRule, Found, FrameNoise, FrameObjects, FramePixels, Image, ImagingError, MeshPlan, Method,
-    NoiseSource, Reconstructor, Reference, Spec,
+    NoiseSource, Reconstructor, Reference, ReferenceChanges, Spec,
 };
 pub use segment::{Class, SEGMENT_LEVEL, segment};
 pub use touches::{

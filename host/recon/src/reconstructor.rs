@@ -592,6 +592,6 @@ pub use batch::{Found, FrameObjects};
 pub use frame::*;
 use model_error::mismatch_and_weights;
 pub use model_error::{MISMATCH_FACTOR, Weighting};
-pub use stream::FramePixels;
+pub use stream::{FramePixels, ReferenceChanges};
 mod spec;
 pub use spec::*;

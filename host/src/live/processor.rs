@@ -394,7 +394,7 @@ impl Processor {
     /// change of conductivity does, and by how much ([`Reconstructor::reference_changes`]);
     /// None until the reference is complete.
     #[must_use]
-    pub fn reference_changes(&self) -> Option<(usize, f64)> {
+    pub fn reference_changes(&self) -> Option<et_recon::ReferenceChanges> {
         let r = self.reference()?;
         let frames: Vec<Vec<f32>> = r.frames.iter().map(|f| self.at.keep(f)).collect();
         self.recon.reference_changes(&frames)

@@ -15,7 +15,7 @@ impl Viewer {
             .flatten()
             .and_then(et_recon::background::poor_fit_said);
         let changes = (self.processor.reference_changes())
-            .and_then(et_recon::background::reference_changes_said);
+            .and_then(|c| et_recon::background::reference_changes_said(c, None));
         let not_volts =
             (self.processor.v0()).and_then(|v0| et_recon::background::not_volts_said(&v0));
         let (electrode, detached) = self.processor.v0_electrode_said().unzip();

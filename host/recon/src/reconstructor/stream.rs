@@ -6,6 +6,21 @@ use crate::onestep::ReconError;
 use crate::pixels::PixelGrid;
 use crate::reconstructor::spec::Method;
 
+/// How untouched reference frames differ as a change of the sheet does
+/// ([`Reconstructor::reference_changes`]); each share is a difference's mean square over its
+/// part no conductivity change can make (about 1 for noise alone).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceChanges {
+    /// The frame (from 0) that differs most from the frames' mean.
+    pub frame: usize,
+    /// How far it differs.
+    pub ratio: f64,
+    /// The first frame (from 0) that differs from the mean of those before it past
+    /// [`crate::background::REFERENCE_CHANGE_SAID`], and how far: where a touch or a drift
+    /// began. None when none does.
+    pub first_unlike: Option<(usize, f64)>,
+}
+
 /// One frame's pixels against the reference set ([`Reconstructor::frame_pixels`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePixels {
@@ -121,15 +136,15 @@ impl Reconstructor {
         crate::background::detached_electrodes(schedule.rows(), electrodes, v0, &self.jac.frame)
     }
 
-    /// Of untouched reference `frames` (each K values, V), the one that differs most from
-    /// their mean as a change of conductivity does, and by how much: each frame's difference
-    /// from the mean, its mean square over the mean square of its part no conductivity
-    /// change can make (the protocol's redundancy, [`Reconstructor::redundancy_noise`]).
-    /// Noise alone has both alike (about 1); a touch or a drift while the reference was
-    /// taken lies in the changes a sheet can make, far above. None for fewer than two
-    /// frames or a protocol without redundancy.
+    /// How untouched reference `frames` (each K values, V) differ as a change of
+    /// conductivity does: the one that differs most from their mean, and the first that
+    /// differs from those before it. A difference's share is its mean square over the mean
+    /// square of its part no conductivity change can make (the protocol's redundancy,
+    /// [`Reconstructor::redundancy_noise`]). Noise alone has both alike (about 1); a touch or
+    /// a drift while the reference was taken lies in the changes a sheet can make, far
+    /// above. None for fewer than two frames or a protocol without redundancy.
     #[must_use]
-    pub fn reference_changes<F: AsRef<[f32]>>(&self, frames: &[F]) -> Option<(usize, f64)> {
+    pub fn reference_changes<F: AsRef<[f32]>>(&self, frames: &[F]) -> Option<ReferenceChanges> {
         let k = frames.first()?.as_ref().len();
         let mut mean = vec![0.0; k];
         if frames.len() < 2 || et_core::stats::reference(frames, &mut mean).is_err() {
@@ -137,17 +152,47 @@ impl Reconstructor {
         }
         let mut most: Option<(usize, f64)> = None;
         for (i, f) in frames.iter().enumerate() {
-            let dv: Vec<f64> = (f.as_ref().iter().zip(&mean))
-                .map(|(v, m)| f64::from(*v) - m)
-                .collect();
-            let noise = self.redundancy_noise(&dv)?.variance;
-            let ratio =
-                dv.iter().map(|d| d * d).sum::<f64>() / k as f64 / noise.max(f64::MIN_POSITIVE);
+            let ratio = self.change_ratio(f.as_ref(), &mean)?;
             if most.is_none_or(|(_, r)| ratio > r) {
                 most = Some((i, ratio));
             }
         }
-        most
+        let (frame, ratio) = most?;
+        // The mean of the frames before each, kept as it grows.
+        let mut before = vec![0.0; k];
+        let mut first_unlike = None;
+        for (i, f) in frames.iter().enumerate() {
+            let f = f.as_ref();
+            if i > 0 {
+                let r = self.change_ratio(f, &before)?;
+                if r > crate::background::REFERENCE_CHANGE_SAID {
+                    first_unlike = Some((i, r));
+                    break;
+                }
+            }
+            for (b, v) in before.iter_mut().zip(f) {
+                *b += (f64::from(*v) - *b) / (i + 1) as f64;
+            }
+        }
+        Some(ReferenceChanges {
+            frame,
+            ratio,
+            first_unlike,
+        })
+    }
+
+    /// The share of `frame - mean` (K values, V) that lies in the changes a sheet can make:
+    /// its mean square over its redundancy noise's variance ([`Reconstructor::reference_changes`]).
+    fn change_ratio(&self, frame: &[f32], mean: &[f64]) -> Option<f64> {
+        let dv: Vec<f64> = (frame.iter().zip(mean))
+            .map(|(v, m)| f64::from(*v) - m)
+            .collect();
+        let noise = self.redundancy_noise(&dv)?.variance;
+        Some(
+            dv.iter().map(|d| d * d).sum::<f64>()
+                / dv.len().max(1) as f64
+                / noise.max(f64::MIN_POSITIVE),
+        )
     }
 
     /// Whether one-step Gauss-Newton's images keep their values on the mesh's triangles

@@ -449,22 +449,44 @@ fn a_reference_taken_while_touched_is_told_from_noise() {
             .collect()
     };
     let untouched: Vec<Vec<f32>> = (0..20).map(|_| noisy(&v0)).collect();
-    let (_, ratio) = recon.reference_changes(&untouched).unwrap();
-    assert!(ratio < 3.0, "{ratio}");
-    assert_eq!(reference_changes_said((0, ratio)), None);
+    let fewer = Some((|n| format!("--reference {n}")) as fn(usize) -> String);
+    let changes = recon.reference_changes(&untouched).unwrap();
+    assert!(changes.ratio < 3.0, "{changes:?}");
+    assert_eq!(changes.first_unlike, None);
+    assert_eq!(reference_changes_said(changes, fewer), None);
     // The first five pressed.
     let touched: Vec<Vec<f32>> = (0..20)
         .map(|i| noisy(if i < 5 { bump } else { &v0 }))
         .collect();
-    let (frame, ratio) = recon.reference_changes(&touched).unwrap();
+    let changes = recon.reference_changes(&touched).unwrap();
     assert!(
-        frame < 5 && ratio > 10.0 * REFERENCE_CHANGE_SAID,
-        "{frame} {ratio}"
+        changes.frame < 5 && changes.ratio > 10.0 * REFERENCE_CHANGE_SAID,
+        "{changes:?}"
     );
-    let said = reference_changes_said((frame, ratio)).unwrap();
+    let said = reference_changes_said(changes, None).unwrap();
     assert!(
-        said.contains("was the sheet touched, or drifting"),
+        said.contains("was the sheet touched, or drifting") && !said.contains("--reference"),
         "{said}"
     );
+    // Pressed from frame `from` on (an untouched frame, then a file's touches; a press
+    // while the reference is taken): the frame where it began is named, with the count
+    // of frames before it to take alone.
+    for from in [1, 12] {
+        let pressed: Vec<Vec<f32>> = (0..20)
+            .map(|i| noisy(if i < from { &v0 } else { bump }))
+            .collect();
+        let changes = recon.reference_changes(&pressed).unwrap();
+        let (first, ratio) = changes.first_unlike.unwrap();
+        assert!(
+            first == from && ratio > 10.0 * REFERENCE_CHANGE_SAID,
+            "{from}: {changes:?}"
+        );
+        let said = reference_changes_said(changes, fewer).unwrap();
+        assert!(
+            said.contains(&format!("frame {from} (from 0) is the first to differ"))
+                && said.contains(&format!("alone (--reference {from})")),
+            "{said}"
+        );
+    }
     assert_eq!(recon.reference_changes(&untouched[..1]), None);
 }

@@ -367,9 +367,9 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     frames::say_detached_in_frames(&recon, base, &chosen, &named);
     // Reference frames of which one differs as a touch or a drift does: every frame is
     // imaged against them.
-    if let Some(said) = (recon.reference_changes(&reference_frames))
-        .and_then(et_recon::background::reference_changes_said)
-    {
+    if let Some(said) = (recon.reference_changes(&reference_frames)).and_then(|c| {
+        et_recon::background::reference_changes_said(c, Some(|n| format!("--reference {n}")))
+    }) {
         say!("warning: {said}");
     }
     let set_up = recon.set_up_timings;

@@ -439,7 +439,10 @@ fn say_of_the_reference(processor: &et_host::live::Processor) -> Vec<u16> {
     if let Some(said) = (processor.v0()).and_then(|v0| not_volts_said(&v0)) {
         say!("note: {said}");
     }
-    if let Some(said) = (processor.reference_changes()).and_then(reference_changes_said) {
+    let fewer = |n| format!("--reference {n}");
+    if let Some(said) =
+        (processor.reference_changes()).and_then(|c| reference_changes_said(c, Some(fewer)))
+    {
         say!("warning: {said}");
     }
     detached.unwrap_or_default()

@@ -311,5 +311,14 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         args.out.display(),
         started.elapsed().as_secs_f64()
     );
+    if n >= 2 && touches > 0 {
+        // Its one untouched frame is the reference (`et reconstruct` averages 20 by default).
+        say!(
+            "image them against the first, untouched frame: et reconstruct --scene {} --frames \
+             {} --reference 1 --all --out last.png",
+            args.scene.display(),
+            args.out.display()
+        );
+    }
     Ok(())
 }
