@@ -43,6 +43,7 @@ pub use plots::Plots;
 pub use sheet_view::{Drawn, SheetView};
 use sheet_view::{Press, Shown};
 
+pub use status::StatusLog;
 use wizard::Wizard;
 
 /// How the viewer starts.
@@ -111,6 +112,8 @@ pub struct Viewer {
     pub monitor: Monitor,
     /// The status line (what just happened, or what went wrong).
     pub status: String,
+    /// What the status line said before, kept to read after the next message replaced it.
+    pub said: StatusLog,
     /// The training wizard (open or not).
     pub wizard: Wizard,
     /// The electrodes named detached or broken, which the side panel offers to leave out
@@ -208,6 +211,7 @@ impl Viewer {
             monitor: Monitor::default(),
             wizard: Wizard::default(),
             detached: Vec::new(),
+            said: StatusLog::default(),
             flags_said: crate::live::FlagsSaid::default(),
             v0_flags: 0,
             shot_frames: 0,
@@ -403,9 +407,7 @@ impl Viewer {
                 self.open_chosen_source();
             }
         });
-        egui::Panel::bottom("status").show(ui, |ui| {
-            ui.label(&self.status);
-        });
+        egui::Panel::bottom("status").show(ui, |ui| self.show_status(ui));
         // Scrolled: a window lower than the controls (a recording's Replay section, the
         // wizard's steps) would cut the last ones off.
         egui::Panel::left("controls")

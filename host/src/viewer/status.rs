@@ -1,9 +1,66 @@
 //! What the status line says of the frames: what is wrong with V_0 once it is taken, an
-//! electrode that comes off after it, and what the board flags in them.
+//! electrode that comes off after it, and what the board flags in them; and what it said
+//! before, to read after the next message replaced it.
 
 use super::*;
 
+/// What the status line said, each message once with how many times, the most recent last
+/// (at most [`StatusLog::KEPT`]): a warning that the next message replaced within a frame
+/// (V_0's, an electrode come off, the board's flags) stays to read under "Earlier messages".
+#[derive(Debug, Default)]
+pub struct StatusLog {
+    said: std::collections::VecDeque<(String, u32)>,
+}
+
+impl StatusLog {
+    /// The most messages kept: the oldest go first.
+    pub const KEPT: usize = 30;
+
+    /// Notes the status line `now`: a message other than the last noted joins the log at its
+    /// end (one said before moves there, counted again).
+    pub fn note(&mut self, now: &str) {
+        if now.is_empty() || self.said.back().is_some_and(|(last, _)| last == now) {
+            return;
+        }
+        let times = match self.said.iter().position(|(said, _)| said == now) {
+            Some(i) => self.said.remove(i).map_or(1, |(_, times)| times + 1),
+            None => 1,
+        };
+        self.said.push_back((now.to_string(), times));
+        while self.said.len() > Self::KEPT {
+            self.said.pop_front();
+        }
+    }
+
+    /// The messages before the last noted (the status line now), the most recent first, with
+    /// how many times each was said.
+    pub fn earlier(&self) -> impl Iterator<Item = (&str, u32)> {
+        (self.said.iter().rev().skip(1)).map(|(said, times)| (said.as_str(), *times))
+    }
+}
+
 impl Viewer {
+    /// The bottom panel: the status line, and what it said before (folded).
+    pub(super) fn show_status(&mut self, ui: &mut egui::Ui) {
+        self.said.note(&self.status);
+        let earlier: Vec<(&str, u32)> = self.said.earlier().collect();
+        if !earlier.is_empty() {
+            ui.collapsing(format!("Earlier messages ({})", earlier.len()), |ui| {
+                egui::ScrollArea::vertical()
+                    .max_height(160.0)
+                    .show(ui, |ui| {
+                        for (said, times) in earlier {
+                            match times {
+                                1 => ui.label(said),
+                                _ => ui.label(format!("{said} (said {times} times)")),
+                            };
+                        }
+                    });
+            });
+        }
+        ui.label(&self.status);
+    }
+
     /// The status once V_0 is taken: what to do next, or what is wrong with it (frames of
     /// another protocol, numbering or sheet than the scene's, or a reference taken while
     /// the sheet was touched, show touches in the wrong places; frames in mV, values in the

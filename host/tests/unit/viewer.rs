@@ -840,6 +840,18 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
         h.step();
         assert!(h.state().processor.left_out().is_empty());
         assert!(h.query_by_label("Leave out electrode 3").is_some());
+        // What the status said of V_0, replaced since, stays to read.
+        assert!(
+            h.query_by_label_contains("warning: electrode 3's 52 values")
+                .is_none()
+        );
+        h.get_by_label_contains("Earlier messages").click();
+        h.step();
+        h.step();
+        assert!(
+            h.query_by_label_contains("warning: electrode 3's 52 values")
+                .is_some()
+        );
     }
     // A gain four times the sheet's: its largest readings clip, which the board flags, and
     // V_0 says so (before the poor fit the clipped values also leave).
@@ -855,4 +867,24 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
         "{status}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The status log keeps each message once, the most recent last, counts one said again, and
+/// keeps at most `StatusLog::KEPT`, the oldest going first.
+#[test]
+fn the_status_line_s_earlier_messages_stay_to_read() {
+    use et_host::viewer::StatusLog;
+    let mut log = StatusLog::default();
+    for now in ["a", "a", "", "b", "a", "c"] {
+        log.note(now);
+    }
+    let earlier: Vec<(&str, u32)> = log.earlier().collect();
+    assert_eq!(earlier, [("a", 2), ("b", 1)]);
+    for i in 0..2 * StatusLog::KEPT {
+        log.note(&i.to_string());
+    }
+    let earlier: Vec<(&str, u32)> = log.earlier().collect();
+    assert_eq!(earlier.len(), StatusLog::KEPT - 1);
+    let newest = (2 * StatusLog::KEPT - 2).to_string();
+    assert_eq!(earlier.first(), Some(&(newest.as_str(), 1)));
 }
