@@ -185,12 +185,18 @@ def _spec_json(spec: Dict[str, Any]) -> str:
 _COUNT_MOST = 2**64 - 1
 
 
-def _count(value: Any, what: str, least: int = 0) -> int:
+def _count(value: Any, what: str, least: int = 0, domain: Optional[str] = None) -> int:
     """``value`` as a whole number of at least ``least`` (and at most 2^64 - 1, what the
     native side's counts and seeds hold; each count's own bound is the native side's): a
     fraction, a negative number, a boolean or a number too large is refused by name rather
-    than truncated, wrapped or raised as an ``OverflowError``."""
+    than truncated, wrapped or raised as an ``OverflowError``. A count with a native
+    ``domain`` (a key of ``_native.COUNTS``) says its bounds when it is refused here, as the
+    native side says them (it said "at least 0", then the native side "4 to 32")."""
     said = f"{what} = {value!r}: a whole number of at least {least}"
+    if domain is not None:
+        lo, hi = _native.COUNTS[domain]
+        even = "an even whole number" if domain == "electrodes" else "a whole number"
+        said = f"{what} = {value!r}: {even} from {lo} to {hi}"
     if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
         number = int(value)
     else:
@@ -244,7 +250,7 @@ def _sheet(
     if model not in ("complete", "point", "shunt"):
         raise EtError(f"model {model!r}: 'complete', 'point' or 'shunt'")
     spec_electrodes: Dict[str, Any] = {
-        "count": _count(electrodes, "electrodes"),
+        "count": _count(electrodes, "electrodes", domain="electrodes"),
         "width": _real(width_m, "electrode_width_m"),
         "contact_ohm": _real(contact_ohm, "contact_ohm"),
         "direction": direction,
@@ -503,7 +509,7 @@ def _whole(a: Any, what: str) -> np.ndarray:
 def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protocol:
     """et's built-in protocol ``name`` ("adjacent", "pseudo-polar", "pp-pp", "opposite") on
     ``electrodes`` electrodes, driving ``current_a`` (A)."""
-    n = _count(electrodes, "electrodes")
+    n = _count(electrodes, "electrodes", domain="electrodes")
     name = _text(name, "name", "'adjacent', 'pseudo-polar', 'pp-pp' or 'opposite'").lower()
     rows, currents = _native.protocol_table(name, n, _real(current_a, "current_a"))
     return Protocol(n, rows, currents, name)
@@ -794,9 +800,11 @@ class Reconstructor:
         electrodes, name, current_a, rows, currents = protocol._native_args()
         self._native = _Serialised(_native.Reconstructor(
             _spec_json(sheet.spec), electrodes, name, current_a, rows, currents,
-            _count(triangles, "triangles"), method, str(alpha), _count(pixels, "pixels"),
+            _count(triangles, "triangles", domain="triangles"), method, str(alpha),
+            _count(pixels, "pixels", domain="pixels"),
             None if threshold is None else _real(threshold, "threshold"),
-            0.5 if s is None else _real(s, "s"), _count(iterations, "iterations"),
+            0.5 if s is None else _real(s, "s"),
+            _count(iterations, "iterations", domain="iterations"),
             None if noise_figure is None else _real(noise_figure, "noise_figure"),
             None if radius_m is None else _real(radius_m, "radius_m"),
         ))
@@ -1048,7 +1056,7 @@ class Reconstructor:
     def frame_median(self, dv: Any, repeats: int = 100) -> Optional[float]:
         """The median time (s) of ``repeats`` warm applications of the last frame's
         reconstruction to ``dv``: `et reconstruct --json`'s ``timings_s.frame``."""
-        return self._native.frame_median(_f64(dv, 1, "dv"), _count(repeats, "repeats"))
+        return self._native.frame_median(_f64(dv, 1, "dv"), _count(repeats, "repeats", domain="repeats"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1382,7 +1390,7 @@ def train(
             )
         model = Model(
             _native.train_dataset(
-                X, kind, shrinkage, None if folds is None else _count(folds, "folds"), raw,
+                X, kind, shrinkage, None if folds is None else _count(folds, "folds", domain="folds"), raw,
                 None if keep is None else _count(keep, "keep"), _count(seed, "seed"),
                 _native.BUDGET_S if budget_s is None else _real(budget_s, "budget_s"), progress,
             )
@@ -1430,7 +1438,7 @@ def train(
     model = Model(
         _native.train_table(
             _f64(X, 2, "X"), labels, positions, groups, kind,
-            None if folds is None else _count(folds, "folds"), cv, grid_pair,
+            None if folds is None else _count(folds, "folds", domain="folds"), cv, grid_pair,
             bool(per_group), _count(seed, "seed"), _label_type(y) if labels is not None else None,
             _native.BUDGET_S if budget_s is None else _real(budget_s, "budget_s"), progress,
             named or None,

@@ -147,6 +147,22 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EtError", m.py().get_type::<EtError>())?;
     // The training budget's default, s, for the Python side's `budget_s=None`.
     m.add("BUDGET_S", et_learn::tabular::BUDGET_S)?;
+    // The native bounds of the counts that the Python side checks first (a negative number or
+    // a fraction cannot reach the native side), (least, most), to say them when it refuses.
+    let counts = pyo3::types::PyDict::new(m.py());
+    let (l_min, l_max) = (et_core::protocol::L_MIN, et_core::protocol::L_MAX);
+    counts.set_item("electrodes", (usize::from(l_min), usize::from(l_max)))?;
+    use et_recon::limits::{ITERATIONS, PIXELS, REPEATS, TRIANGLES};
+    for (name, range) in [
+        ("triangles", TRIANGLES),
+        ("pixels", PIXELS),
+        ("iterations", ITERATIONS),
+        ("repeats", REPEATS),
+        ("folds", 2..=et_learn::trainer::MAX_FOLDS),
+    ] {
+        counts.set_item(name, (*range.start(), *range.end()))?;
+    }
+    m.add("COUNTS", counts)?;
     imaging::register(m)?;
     learning::register(m)?;
     files::register(m)?;

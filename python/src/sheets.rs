@@ -34,8 +34,13 @@ pub(crate) fn schedule(
                  rows (Protocol.from_rows)"
             ))
         })?;
-        let electrodes = u8::try_from(electrodes)
-            .map_err(|_| usage(format!("{electrodes} electrodes: at most 255")))?;
+        let electrodes = u8::try_from(electrodes).map_err(|_| {
+            usage(format!(
+                "electrodes = {electrodes}: an even whole number from {} to {}",
+                et_core::protocol::L_MIN,
+                et_core::protocol::L_MAX
+            ))
+        })?;
         let p = Protocol::new(kind, electrodes).map_err(|e| refused(&e))?;
         return Schedule::of_protocol(&p, current_a).map_err(|e| refused(&e));
     }

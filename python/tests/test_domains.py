@@ -105,8 +105,9 @@ def test_labels_come_back_as_given(tmp_path, first, second):
         assert [type(v) for v in got.tolist()] == [type(first), type(second)]
 
 
-_X = np.random.default_rng(4).standard_normal((40, 3))
 _Y = np.array([0, 1] * 20)
+# Classes the features tell apart (random ones warn that the model guesses).
+_X = np.random.default_rng(4).standard_normal((40, 3)) + 3.0 * _Y[:, None]
 
 
 @pytest.mark.parametrize(
@@ -261,10 +262,17 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
 @pytest.mark.parametrize(
     "make, named",
     [
-        (lambda: et.disc(0.1, 2.5), "electrodes = 2.5: a whole number"),
-        (lambda: et.disc(0.1, -3), "electrodes = -3: a whole number of at least 0"),
+        (lambda: et.disc(0.1, 2.5), "electrodes = 2.5: an even whole number from 4 to 32"),
+        (lambda: et.disc(0.1, -3), "electrodes = -3: an even whole number from 4 to 32"),
         (lambda: et.disc(0.1, 2**64), "electrodes = 18446744073709551616: too large (at most 2"),
-        (lambda: et.protocol("adjacent", 2**40), "1099511627776 electrodes: at most 255"),
+        (lambda: et.protocol("adjacent", 2**40), "electrodes = 1099511627776: an even whole number from 4 to 32"),
+        # A negative count says the native side's bounds (it said "at least 0", then the
+        # native side "20 to 500000").
+        (
+            lambda: et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=-1),
+            "triangles = -1: a whole number from 20 to 500000",
+        ),
+        (lambda: et.protocol("adjacent", -16), "electrodes = -16: an even whole number from 4 to 32"),
         # A sheet is checked where it is made, not first where a Reconstructor uses it.
         (lambda: et.disc(-0.1), "radius = -0.1: must be a positive length"),
         (lambda: et.disc(0.1, 7), "electrodes.count: 7 must be even, 4 to 32"),
@@ -337,7 +345,8 @@ def test_a_grid_of_fewer_than_two_cells_or_past_its_bound_is_refused(grid):
 def test_what_a_call_cannot_use_is_refused_not_ignored():
     # v0 beside a table's model was ignored; a NaN frame was timed as None.
     rng = np.random.default_rng(3)
-    model = et.train(rng.standard_normal((60, 3)), np.arange(60) % 3, kind="lda")
+    labels = np.arange(60) % 3
+    model = et.train(rng.standard_normal((60, 3)) + 3.0 * labels[:, None], labels, kind="lda")
     with pytest.raises(et.EtError, match="v0 is a board model's"):
         model.predict(rng.standard_normal((2, 3)), v0=np.zeros(3))
     r = et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), triangles=300)
