@@ -390,6 +390,8 @@ fn another_systems_frames_play_as_the_recording(
         let e = replay(&short, extra);
         let message = String::from_utf8_lossy(&e.stderr);
         assert!(!e.status.success() && message.contains(said), "{message}");
+        // No pace of frames "each referenced, imaged, searched for touches" is said.
+        assert!(!message.contains("frames/s"), "{message}");
     }
     // Another system's file with one untouched frame at its start (as many tanks' are): with
     // --reference 1 each frame's noise is estimated from the frame itself, and the swipe

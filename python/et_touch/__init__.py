@@ -93,7 +93,17 @@ def _f64(a: Any, ndim: int, what: str) -> np.ndarray:
 def _numbers(a: Any, what: str) -> np.ndarray:
     """`a` as a C-contiguous float64 array of any shape: no copy when it already is. Complex
     values are refused (their imaginary part would be dropped with only NumPy's warning), and
-    what NumPy cannot make numbers of is said with the argument's name."""
+    what NumPy cannot make numbers of is said with the argument's name. None is refused by
+    name (it became one NaN, said as a recording's), and a masked array's masked values are
+    NaN (NumPy hands over the values under the mask), which frames and features refuse by
+    their index."""
+    if a is None:
+        raise EtError(f"{what} = None: give an array of numbers")
+    if np.ma.isMaskedArray(a):
+        data = np.ma.getdata(a)
+        # (Complex values are refused below, masked or not.)
+        masked = np.ma.is_masked(a) and not np.iscomplexobj(data)
+        a = np.ma.filled(a.astype(np.float64), np.nan) if masked else data
     try:
         given = np.asarray(a)
         if np.iscomplexobj(given):
@@ -1084,8 +1094,11 @@ def _labels(y: np.ndarray, what: str, noun: str) -> List[str]:
 
 def _label_type(y: Any) -> str:
     """What labels were before they became text: "int", "float", "bool", "bytes" or "str" (a model
-    gives its predictions back as that type)."""
-    a = np.asarray(y)
+    gives its predictions back as that type). Whole numbers beside fractions are "float"; text
+    beside numbers (or booleans beside either) is refused: NumPy makes a list of them text, so
+    1 came back as "1"."""
+    # A list as it was given: NumPy would make ["a", 1] text before its kinds are seen.
+    a = y if isinstance(y, np.ndarray) else np.asarray(y, dtype=object)
     if a.dtype.kind == "b":
         return "bool"
     if a.dtype.kind in "iu":
@@ -1095,13 +1108,23 @@ def _label_type(y: Any) -> str:
     if a.dtype.kind == "S":
         return "bytes"
     values = [v.item() if hasattr(v, "item") else v for v in a]
-    if values and all(isinstance(v, bool) for v in values):
-        return "bool"
-    if values and all(isinstance(v, int) and not isinstance(v, bool) for v in values):
-        return "int"
-    if values and all(isinstance(v, float) for v in values):
+    kinds: Dict[str, Any] = {}
+    for v in values:
+        kind = (
+            "bool" if isinstance(v, bool) else "int" if isinstance(v, int)
+            else "float" if isinstance(v, float) else "bytes" if isinstance(v, bytes) else "str"
+        )
+        kinds.setdefault(kind, v)
+    if set(kinds) == {"int", "float"}:
         return "float"
-    return "str"
+    if len(kinds) > 1:
+        (one, a_value), (other, b_value) = list(kinds.items())[:2]
+        raise EtError(
+            f"y mixes labels of two kinds, {a_value!r} ({one}) and {b_value!r} ({other}): a "
+            "model gives its classes back as one kind; give every label as the same kind "
+            "(str(v) for each, if text is meant)"
+        )
+    return next(iter(kinds), "str")
 
 
 def _as_given(names: Sequence[str], label_type: Optional[str]) -> np.ndarray:

@@ -56,9 +56,15 @@ fn table(
         Some(p) => {
             let (values, rows, cols) = matrix(p, "y")?;
             if rows != n || !(2..=3).contains(&cols) {
+                // One column: labels kept as a matrix's column (a table's column, y[:, None]).
+                let labels = if cols == 1 {
+                    " (a column of labels? give them as one row: y.ravel())"
+                } else {
+                    ""
+                };
                 return Err(usage(format!(
                     "y: positions {rows} x {cols} for {n} rows of X; give n x 2 (x, y in m) or \
-                     n x 3 (x, y, z in m)"
+                     n x 3 (x, y, z in m){labels}"
                 )));
             }
             let row = |r: &[f64]| [r[0], r[1]];

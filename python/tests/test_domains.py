@@ -3,6 +3,7 @@ library checks them where the value is made), naming the value and what it must 
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -103,6 +104,20 @@ def test_labels_come_back_as_given(tmp_path, first, second):
         got = m.predict(X[[0, 119]])
         assert list(got) == [first, second]
         assert [type(v) for v in got.tolist()] == [type(first), type(second)]
+
+
+def test_labels_of_two_kinds_are_refused_and_whole_numbers_beside_fractions_are_floats():
+    # A list of text and numbers was made text by NumPy: 1 came back as "1".
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((60, 3)) + 3.0 * (np.arange(60) % 3)[:, None]
+    for mixed, said in [(["a", 1, "b"], "'a' (str) and 1 (int)"), ([True, 1, 2], "True (bool)")]:
+        with pytest.raises(et.EtError, match=re.escape(f"y mixes labels of two kinds, {said}")):
+            et.train(X, mixed * 20, kind="lda")
+    got = et.train(X, [1, 2.5, 3] * 20, kind="lda").predict(X[:3])
+    assert got.tolist() == [1.0, 2.5, 3.0] and got.dtype == np.float64
+    # A column of labels is read as positions of one coordinate: said with the fix.
+    with pytest.raises(et.EtError, match=re.escape("a column of labels? give them as one row")):
+        et.train(X, (np.arange(60) % 3)[:, None], kind="lda")
 
 
 _Y = np.array([0, 1] * 20)
@@ -354,6 +369,14 @@ def test_what_a_call_cannot_use_is_refused_not_ignored():
     r.image(v0 * 1.001, v0)
     with pytest.raises(et.EtError, match=r"dv\[0\] = NaN"):
         r.frame_median(np.full(len(v0), np.nan), 3)
+    # None as a frame is said as None (it was one NaN: "v[0] = nan"); a masked array's
+    # masked values are missing, not the values under the mask (they were imaged as given).
+    with pytest.raises(et.EtError, match="v = None: give an array of numbers"):
+        r.image(None, v0)
+    masked = np.ma.masked_array(v0 * 1.001, mask=np.arange(len(v0)) == 5)
+    with pytest.raises(et.EtError, match=r"v\[5\] = nan"):
+        r.image(masked, v0)
+    r.image(np.ma.masked_array(v0 * 1.001), v0)
 
 
 def test_training_arrays_are_checked_as_a_tables_cells_are():

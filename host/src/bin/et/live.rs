@@ -373,9 +373,10 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         }
     }
     // A replay's pace: every frame through the whole pipeline on one core (reading the
-    // recording and setting up the reconstruction not counted).
+    // recording and setting up the reconstruction not counted); none when none was imaged
+    // (the reference's frames alone are not that pipeline).
     let elapsed = started.elapsed().as_secs_f64();
-    if matches!(source, Source::Replay(_)) && seen > 0 {
+    if matches!(source, Source::Replay(_)) && imaged > 0 {
         say!(
             "{seen} frames ({imaged} imaged{}) in {elapsed:.3} s: {:.0} frames/s on one core \
              (each referenced, imaged, searched for touches and its event written; the \
