@@ -1196,6 +1196,13 @@ class Model:
         """The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average."""
         return self._native.kind
 
+    def __repr__(self) -> str:
+        # Its method and size, not its tables (`info` is the whole file: megabytes).
+        classes, features = self._native.size
+        what = "positions" if classes is None else f"{classes} classes"
+        board = "board, " if self.is_board else ""
+        return f"et_touch.Model({self.kind}, {board}{what}, {features} features)"
+
     @property
     def is_board(self) -> bool:
         """Whether it is a board model (it classifies frames on the board: export_blob)."""
@@ -1336,9 +1343,6 @@ class Model:
     def export_blob(self, precision: str = "f16") -> bytes:
         """The board's model blob (`et export`; `et upload` sends it): "f16" or "f32" tables."""
         return self._native.export_blob(_text(precision, "precision", "'f16' or 'f32'"))
-
-    def __repr__(self) -> str:
-        return f"et_touch.Model({self.kind}{', board' if self.is_board else ''})"
 
 
 def train(

@@ -382,6 +382,17 @@ impl Model {
         }
     }
 
+    /// Its classes (None for a table's regression) and the features it reads per row: what
+    /// its repr says, without writing the model file out (a board model of 49 classes is
+    /// megabytes of it).
+    #[getter]
+    fn size(&self) -> (Option<usize>, usize) {
+        match &self.inner {
+            Estimator::Table(t) => (t.classes.as_ref().map(|c| c.names.len()), t.features()),
+            Estimator::Board(b) => (Some(b.file().classes.len()), b.file().feature_index.len()),
+        }
+    }
+
     /// The method: qda, lda, ridge, kernel-ridge, knn, gp, mlp or average.
     #[getter]
     fn kind(&self) -> &'static str {

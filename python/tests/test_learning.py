@@ -24,6 +24,10 @@ def test_a_board_model_is_et_trains(et_cli, work, dataset):
     model = et.train(et.read_dataset(dataset))
     assert model.is_board and model.kind == "qda"
     assert model.info["shrinkage"] == trained["shrinkage"]
+    # Its repr says its size, not its tables.
+    info = model.info
+    size = f"{len(info['classes'])} classes, {len(info['feature_index'])} features"
+    assert repr(model) == f"et_touch.Model(qda, board, {size})"
     # Its cross-validation's scores, as `et train --json` says them (its file keeps none).
     said = {k: v for k, v in trained.items() if k not in ("out", "learning_curve")}
     assert model.scores == said

@@ -275,9 +275,10 @@ pub fn not_volts_said(v0: &[f64]) -> Option<String> {
 /// during the reference 15 to 150.
 pub const REFERENCE_CHANGE_SAID: f64 = 10.0;
 
-/// What is said of untouched reference frames that differ as a change of the sheet does
-/// past [`REFERENCE_CHANGE_SAID`] ([`crate::Reconstructor::reference_changes`]); None
-/// within. Where one frame is the first to differ from those before it, it is named, and
+/// What is said of untouched reference frames of which one differs from their mean as a
+/// change of the sheet does past [`REFERENCE_CHANGE_SAID`]
+/// ([`crate::Reconstructor::reference_changes`]); None within. Where one frame is the first
+/// to differ from those before it, it is named (the words, not when they are said), and
 /// `fewer` (given the count of frames before it) says how to take those alone, where the
 /// caller can (`--reference N`).
 #[must_use]
@@ -291,6 +292,9 @@ pub fn reference_changes_said(
         "times the noise the protocol's redundancy shows (noise alone gives about 1; past \
          {REFERENCE_CHANGE_SAID:.0} is said)"
     );
+    if changes.ratio <= REFERENCE_CHANGE_SAID {
+        return None;
+    }
     if let Some((n, ratio)) = changes.first_unlike {
         let fix = match fewer {
             Some(fewer) => {
@@ -312,12 +316,10 @@ pub fn reference_changes_said(
         ));
     }
     let (frame, ratio) = (changes.frame, changes.ratio);
-    (ratio > REFERENCE_CHANGE_SAID).then(|| {
-        format!(
-            "the untouched reference's frame {frame} (from 0) differs from their mean as a \
-             change of the sheet does, {ratio:.0} {noise}: {tail}: take it again untouched"
-        )
-    })
+    Some(format!(
+        "the untouched reference's frame {frame} (from 0) differs from their mean as a change \
+         of the sheet does, {ratio:.0} {noise}: {tail}: take it again untouched"
+    ))
 }
 
 /// The value of a frame that holds one value throughout (all zero, or a constant): no

@@ -454,6 +454,14 @@ fn a_reference_taken_while_touched_is_told_from_noise() {
     assert!(changes.ratio < 3.0, "{changes:?}");
     assert_eq!(changes.first_unlike, None);
     assert_eq!(reference_changes_said(changes, fewer), None);
+    // Said only where a frame differs from their mean past the bound (as before the first to
+    // differ was named): a step within it says nothing.
+    let within = et_recon::ReferenceChanges {
+        frame: 0,
+        ratio: REFERENCE_CHANGE_SAID,
+        first_unlike: Some((3, 2.0 * REFERENCE_CHANGE_SAID)),
+    };
+    assert_eq!(reference_changes_said(within, fewer), None);
     // The first five pressed.
     let touched: Vec<Vec<f32>> = (0..20)
         .map(|i| noisy(if i < 5 { bump } else { &v0 }))
