@@ -224,8 +224,13 @@ pub fn list_ports() -> Result<Vec<String>, serialport::Error> {
 
 type Port = Box<dyn serialport::SerialPort>;
 
+/// Opens the port at `path`, the bytes already waiting in it dropped: what a board sent
+/// while no one read (a board that streamed to nobody) is not this link's, and its frames
+/// were taken as the first, then the gap to the board's frames now as frames lost.
 fn open(path: &str, baud: u32) -> Result<Port, serialport::Error> {
-    serialport::new(path, baud).timeout(READ_TIMEOUT).open()
+    let port = serialport::new(path, baud).timeout(READ_TIMEOUT).open()?;
+    port.clear(serialport::ClearBuffer::Input)?;
+    Ok(port)
 }
 
 /// A device on a serial port (see the module docs).

@@ -210,6 +210,27 @@ fn frames(link: &mut Link, n: usize) -> Vec<HostFrame> {
     out
 }
 
+/// Frames a board sent while no one read them, waiting in the port, are dropped when a link
+/// opens it: its first frame is one the board sends now (they were taken, and the gap from
+/// them to the board's frames now counted as frames lost: the viewer's "lost" on connecting).
+#[test]
+fn frames_left_in_the_port_from_before_are_not_this_links() {
+    let dir = temp_dir("left");
+    let (mut master, path) = cable(&dir);
+    for seq in 0..3 {
+        master.write_all(&packet(&frame(seq))).unwrap();
+    }
+    let mut link = Link::open(path.to_str().unwrap(), 115_200).unwrap();
+    for seq in 40..43 {
+        master.write_all(&packet(&frame(seq))).unwrap();
+    }
+    let seqs: Vec<u32> = frames(&mut link, 3).iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, [40, 41, 42]);
+    assert_eq!(link.counters().lost_frames, 0);
+    drop(link);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn commands_get_their_replies_over_a_pty() {
     let dir = temp_dir("commands");
