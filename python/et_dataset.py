@@ -43,7 +43,15 @@ def _numbers(text):
 
 
 def load(path):
-    """Return (meta, names, rows): the parsed '#' lines, the column names, the rows as floats."""
+    """Return (meta, names, rows): the parsed '#' lines, the column names, the rows as floats.
+    What is not an et data set raises ValueError naming the file (and line)."""
+    try:
+        return _load(path)
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not text (UTF-8), so not an et data set") from None
+
+
+def _load(path):
     meta = {}
     with open(path, encoding="utf-8-sig") as f:
         first = f.readline().rstrip("\r\n")
@@ -56,15 +64,18 @@ def load(path):
             if line.startswith("#"):
                 key, _, value = line[1:].strip().partition(":")
                 value = value.strip()
-                if key == "config":
-                    meta[key] = json.loads(value)
-                elif key == "feature_index":
-                    meta[key] = [int(v) for v in value.split()]
-                elif key in ("centres_m", "electrodes_m", "centres_mm", "electrodes_mm",
-                             "untouched"):
-                    meta[key] = [_numbers(part) for part in value.split(";") if part.strip()]
-                else:
-                    meta[key] = value
+                try:
+                    if key == "config":
+                        meta[key] = json.loads(value)
+                    elif key == "feature_index":
+                        meta[key] = [int(v) for v in value.split()]
+                    elif key in ("centres_m", "electrodes_m", "centres_mm", "electrodes_mm",
+                                 "untouched"):
+                        meta[key] = [_numbers(part) for part in value.split(";") if part.strip()]
+                    else:
+                        meta[key] = value
+                except ValueError as e:
+                    raise ValueError(f"{path}:{number}: {key}: {e}") from None
                 continue
             names = line.split(",")
             break
@@ -77,15 +88,33 @@ def load(path):
             values = line.rstrip("\r\n").split(",")
             if len(values) != len(names):
                 raise ValueError(f"{path}:{number}: {len(values)} values, {len(names)} columns")
-            rows.append([float(v) for v in values])
+            try:
+                rows.append([float(v) for v in values])
+            except ValueError:
+                column = next(i for i, v in enumerate(values) if not _is_number(v))
+                raise ValueError(
+                    f"{path}:{number}: column {names[column]!r}: {values[column]!r} is not a number"
+                ) from None
     return meta, names, rows
+
+
+def _is_number(text):
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 def main(argv):
     if len(argv) != 2:
         print("usage: python3 et_dataset.py DATASET.csv", file=sys.stderr)
         return 2
-    meta, names, rows = load(argv[1])
+    try:
+        meta, names, rows = load(argv[1])
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     features = sum(1 for n in names if n.startswith("f"))
     label = names.index("label")
     classes = len({int(r[label]) for r in rows})

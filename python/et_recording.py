@@ -37,13 +37,23 @@ COMPLIANCE = 1 << 3
 
 
 def load(path):
-    """Return (header, frames). A last line cut short by a crash is skipped with a warning."""
-    with open(path, encoding="utf-8") as f:
+    """Return (header, frames). A last line cut short by a crash is skipped with a warning;
+    anything else that is not a recording's raises ValueError naming the file and line."""
+    with open(path, encoding="utf-8", errors="replace") as f:
         lines = f.read().splitlines()
     if not lines:
         raise ValueError(f"{path}: empty file, no header")
-    header = json.loads(lines[0])
-    if header.get("format") != FORMAT or header.get("version") != VERSION:
+    try:
+        header = json.loads(lines[0])
+    except json.JSONDecodeError as e:
+        raise ValueError(
+            f"{path}:1: not an et recording: its first line is not JSON ({e.msg}, column "
+            f"{e.colno}); et sim and et record write recordings, and `et reconstruct --frames` "
+            "reads another system's frames (.csv, .npy, .npz, .mat)"
+        ) from None
+    if not isinstance(header, dict) or (
+        header.get("format") != FORMAT or header.get("version") != VERSION
+    ):
         raise ValueError(f"{path}:1: not an {FORMAT} version {VERSION} header")
     frames = []
     for number, line in enumerate(lines[1:], start=2):
@@ -51,11 +61,14 @@ def load(path):
             continue
         try:
             frame = json.loads(line)
-        except json.JSONDecodeError:
+        except json.JSONDecodeError as e:
             if number == len(lines):
                 print(f"{path}:{number}: last line cut short, skipped", file=sys.stderr)
                 break
-            raise
+            said = f"{path}:{number}: not a JSON frame ({e.msg}, column {e.colno})"
+            raise ValueError(said) from None
+        if not isinstance(frame, dict) or not isinstance(frame.get("voltages"), list):
+            raise ValueError(f"{path}:{number}: a frame without its list of voltages")
         if len(frame["voltages"]) != header["K"]:
             raise ValueError(f"{path}:{number}: {len(frame['voltages'])} values, K = {header['K']}")
         frame["voltages"] = [math.nan if v is None else v for v in frame["voltages"]]
@@ -68,7 +81,11 @@ def main(argv):
     if len(argv) != 2:
         print("usage: python3 et_recording.py RECORDING.jsonl", file=sys.stderr)
         return 2
-    header, frames = load(argv[1])
+    try:
+        header, frames = load(argv[1])
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     touched = sum(1 for f in frames if f.get("touches"))
     peak = max((abs(v) for f in frames for v in f["voltages"] if math.isfinite(v)), default=0.0)
     invalid = sum(1 for f in frames if f["invalid"])

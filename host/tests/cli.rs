@@ -386,6 +386,14 @@ fn another_systems_frames_play_as_the_recording(
             &["--frames", "2"],
             "--frames 2 stopped it before the untouched reference (20 frames)",
         ),
+        // Its three frames all the reference: said as that (it said the reference was not
+        // complete).
+        (
+            &["--reference", "3"],
+            "it ended after 3 frames, and every frame went into the untouched reference \
+             (--reference 3): no frame was imaged; if fewer of its first frames are untouched, \
+             give their count (--reference 1 to 2)",
+        ),
     ] {
         let e = replay(&short, extra);
         let message = String::from_utf8_lossy(&e.stderr);

@@ -19,6 +19,47 @@ def stdlib_reader(name):
     return module
 
 
+def test_the_standard_librarys_reader_says_what_is_not_a_recording(recording, tmp_path):
+    # It raised json's own JSONDecodeError ("Expecting value: line 1 column 1"), of no file.
+    reader = stdlib_reader("et_recording")
+    frames_csv = tmp_path / "frames.csv"
+    frames_csv.write_text("v0,v1\n0.1,0.2\n")
+    with pytest.raises(ValueError, match="frames.csv:1: not an et recording: its first line is "
+                       "not JSON .*et reconstruct --frames"):
+        reader.load(frames_csv)
+    lines = open(recording).read().splitlines()
+    damaged = tmp_path / "damaged.jsonl"
+    damaged.write_text("\n".join(lines[:3] + ['{"seq": 2, oops}'] + lines[4:]) + "\n")
+    with pytest.raises(ValueError, match="damaged.jsonl:4: not a JSON frame"):
+        reader.load(damaged)
+    assert reader.main(["et_recording.py", str(damaged)]) == 1
+
+
+def test_the_standard_librarys_dataset_reader_names_the_cell(et_cli, tmp_path):
+    # A cell that is not a number raised float()'s "could not convert string to float: 'x'",
+    # of no line or column, and the script ended in a traceback.
+    reader = stdlib_reader("et_dataset")
+    dataset = tmp_path / "d.csv"
+    et_cli(
+        "collect", "--scene", SCENES / "square-13cm-16.toml", "--grid", "2x2", "--visits", 1,
+        "--scans", 1, "--subsections", 2, "--out", dataset,
+    )
+    lines = open(dataset).read().splitlines()
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    cells = lines[header + 1].split(",")
+    cells[-1] = "x"
+    damaged = tmp_path / "damaged.csv"
+    damaged.write_text("\n".join(lines[:header + 1] + [",".join(cells)] + lines[header + 2:]))
+    last = lines[header].split(",")[-1]
+    with pytest.raises(ValueError, match=f"damaged.csv:{header + 2}: column '{last}': 'x' is not"):
+        reader.load(damaged)
+    assert reader.main(["et_dataset.py", str(damaged)]) == 1
+    binary = tmp_path / "frames.npy"
+    binary.write_bytes(b"\x93NUMPY\x01\x00")
+    with pytest.raises(ValueError, match="frames.npy: not text"):
+        reader.load(binary)
+
+
 def test_a_recording_reads_as_the_standard_library_reads_it(recording):
     r = et.read_recording(recording)
     header, frames = stdlib_reader("et_recording").load(recording)

@@ -478,6 +478,17 @@ fn nothing_imaged(source: &str, seen: u64, limit: u64, needed: usize) -> anyhow:
     } else {
         String::new()
     };
+    if seen >= needed as u64 {
+        // The reference complete, nothing after it (its frames were all it took).
+        let what = if seen == needed as u64 {
+            "every frame went into the untouched reference"
+        } else {
+            "no frame after the untouched reference was imaged"
+        };
+        return anyhow::anyhow!(
+            "{source}: {stopped}, and {what} (--reference {needed}): no frame was imaged{fewer}"
+        );
+    }
     anyhow::anyhow!(
         "{source}: {stopped} before the untouched reference ({needed} frames) was complete: no \
          frame was imaged{fewer}"
