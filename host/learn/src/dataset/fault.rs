@@ -130,6 +130,10 @@ pub enum DatasetFault {
     /// one (an et recording's, a model file's).
     #[error("not an et dataset (expected '# et-dataset 2', or version 1){}", other_format(.0.as_deref()))]
     NotDataset(Option<String>),
+    /// JSON given as a table: the format its first line names, if it names one (an et
+    /// recording's, a model file's).
+    #[error("{}", not_table(.0.as_deref()))]
+    NotTable(Option<String>),
     /// An et dataset of a version this et does not read.
     #[error(
         "et-dataset version '{0}': this et reads versions 1 and 2 (a later one is a newer et's)"
@@ -393,6 +397,23 @@ fn text_hint(cell: &str) -> &'static str {
          with --groups NAME)"
     } else {
         ""
+    }
+}
+
+/// What is said of JSON given as a table, whose first line names `format`.
+fn not_table(format: Option<&str>) -> String {
+    match format {
+        Some("et-recording") => "an et recording (et sim, et record), not a table: `et \
+                                 reconstruct --frames FILE` images its frames, and `et stream \
+                                 --replay FILE --model MODEL` classifies them"
+            .into(),
+        Some("et-model" | "et-table-model") => {
+            "a model file (et train), not a table: give it as --model".into()
+        }
+        Some(other) => format!("JSON naming the format '{other}', not a table of numbers"),
+        None => "JSON, not a table of numbers (a CSV: a header row, then a row of numbers per \
+                 observation)"
+            .into(),
     }
 }
 

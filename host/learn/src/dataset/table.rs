@@ -210,6 +210,16 @@ pub(super) fn parse_table(
     lines: &[(usize, &str)],
     text_ok: &dyn Fn(&str, usize) -> bool,
 ) -> Result<Csv, DatasetError> {
+    // JSON (an et recording, a model file) is said as what it is: its text was read as cells
+    // ("columns 8 and 11 are both named 'protocol:\"Adjacent\"'").
+    if let Some((line, first)) = lines.first()
+        && first.trim_start().starts_with('{')
+    {
+        let format = serde_json::from_str::<serde_json::Value>(first)
+            .ok()
+            .and_then(|v| Some(v.get("format")?.as_str()?.chars().take(40).collect()));
+        return Err(content(path, *line, None, DatasetFault::NotTable(format)));
+    }
     let mut records = RecordIter::new(lines);
     let delimiter = records.delimiter;
     let read = |r: Result<(usize, StringRecord), (usize, RecordFault)>| {

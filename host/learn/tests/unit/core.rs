@@ -674,6 +674,36 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// An et recording or model file given as a table is said as what it is (its JSON was read
+    /// as a header of cells: "columns 8 and 11 are both named 'protocol:\"Adjacent\"'").
+    #[test]
+    fn a_recording_or_model_given_as_a_table_is_named() {
+        let dir = tmp("as-table");
+        let features = dir.join("f.csv");
+        std::fs::write(&features, "a,b\n1,2\n3,4\n").unwrap();
+        for (first, said) in [
+            (
+                r#"{"format":"et-recording","protocol":"Adjacent","config":{"protocol":"Adjacent"}}"#,
+                "an et recording (et sim, et record), not a table: `et reconstruct --frames",
+            ),
+            (
+                r#"{"format":"et-table-model","version":2}"#,
+                "a model file (et train), not a table: give it as --model",
+            ),
+            (r#"{"a": 1}"#, "JSON, not a table of numbers"),
+        ] {
+            let json = dir.join("f.json");
+            std::fs::write(&json, format!("{first}\n{{\"seq\":0}}\n")).unwrap();
+            let as_features = Table::import(&json, None, Unit::Mm)
+                .unwrap_err()
+                .to_string();
+            assert!(as_features.contains(said), "{as_features}");
+            let as_targets = Table::import(&features, Some(&json), Unit::Mm).unwrap_err();
+            assert!(as_targets.to_string().contains(said), "{as_targets}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn a_damaged_dataset_header_is_refused_by_its_field() {
         let dir = tmp("header");
