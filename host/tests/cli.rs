@@ -1821,6 +1821,11 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         // write grids: the same error, not "write ROWSxCOLS").
         ([&collect[..], &["--grid", "1x1"]].concat(), "one class"),
         ([&collect[..], &["--grid", " 1 X 1"]].concat(), "one class"),
+        // No row: said as that (it was "write ROWSxCOLS", as if written wrongly).
+        (
+            [&collect[..], &["--grid", "0x3"]].concat(),
+            "--grid '0x3': a grid of no cells; at least 1 row and 1 column",
+        ),
         (
             vec!["reconstruct", "--scene", "/dev/zero", "--out", out],
             "a character device, which never ends",

@@ -99,6 +99,17 @@ pub enum ModelError {
         /// alone).
         first_line: Option<String>,
     },
+    /// Another of et's files (a dataset, a recording) given as a model: said as what it is
+    /// (a recording was "trailing characters (line 2, column 1)", a dataset "expected value").
+    #[error("{}: {what}, not a model file: {fix}", .path.display())]
+    OtherFile {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        what: &'static str,
+        /// Where it goes.
+        fix: &'static str,
+    },
     /// JSON, but neither `"format": "et-model"` (a board model) nor `"et-table-model"`.
     #[error(
         "{}: not an et model file (its \"format\" is neither \"et-model\", a board model, nor \
@@ -186,6 +197,27 @@ impl std::fmt::Display for Mismatch {
     }
 }
 
+/// What `text` is, and where it goes, when it is another of et's files than a model (by its
+/// first line): an et dataset (`# et-dataset N`), an et recording (a JSON line naming
+/// "et-recording", then one per frame); None for any other text.
+fn other_file(text: &str) -> Option<(&'static str, &'static str)> {
+    let first = text.lines().next()?.trim();
+    if first.starts_with("# et-dataset") {
+        return Some((
+            "an et dataset (et collect)",
+            "give it as --data (et train --data makes a model of it, et eval --data tests one)",
+        ));
+    }
+    let recording = first.starts_with('{')
+        && serde_json::from_str::<serde_json::Value>(first)
+            .is_ok_and(|v| v.get("format").and_then(|f| f.as_str()) == Some("et-recording"));
+    recording.then_some((
+        "an et recording (et sim, et record)",
+        "`et stream --replay FILE --model MODEL` classifies its frames, and `et reconstruct \
+         --frames FILE` images them",
+    ))
+}
+
 /// The first line of `text` (at most 60 characters, control characters left out) when
 /// parsing it as JSON failed on its first characters: the text is not JSON at all.
 fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
@@ -252,6 +284,13 @@ impl Model {
     /// As [`load`](Self::load).
     pub fn from_text(text: &str, origin: &Path) -> Result<Self, ModelError> {
         let path = origin;
+        if let Some((what, fix)) = other_file(text) {
+            return Err(ModelError::OtherFile {
+                path: path.into(),
+                what,
+                fix,
+            });
+        }
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|error| ModelError::Json {
                 path: path.into(),

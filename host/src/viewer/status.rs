@@ -139,8 +139,8 @@ impl Viewer {
         {
             self.detached.push(m.electrode);
             self.status = format!(
-                "frame {}: {said} Not in V_0: a clip or wire come off? Check it, or leave it out \
-                 (the side panel)",
+                "frame {}: {said} Not in V_0: a clip or wire come off, or a contact that opens \
+                 now and then? Check it, or leave it out (the side panel)",
                 out.frame.seq
             );
         }

@@ -460,6 +460,25 @@ fn a_file_of_neither_kind_is_refused_naming_it() {
             "{e}"
         );
     }
+    // A dataset or a recording given as the model: said as what it is and where it goes (a
+    // recording was "trailing characters (line 2, column 1)", a dataset "expected value").
+    for (name, text, said) in [
+        (
+            "d.csv",
+            "# et-dataset 2\n# config: {}\nlabel,f0\n",
+            "d.csv: an et dataset (et collect), not a model file: give it as --data",
+        ),
+        (
+            "r.jsonl",
+            "{\"format\":\"et-recording\",\"version\":1}\n{\"seq\":0}\n",
+            "r.jsonl: an et recording (et sim, et record), not a model file: `et stream --replay",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let e = Model::load(&path).unwrap_err().to_string();
+        assert!(e.contains(said), "{e}");
+    }
     // JSON that goes wrong later is said by its place alone.
     std::fs::write(dir.join("late.json"), "{\"format\": x}").unwrap();
     let e = Model::load(&dir.join("late.json")).unwrap_err().to_string();

@@ -311,8 +311,11 @@ pub(crate) fn parse_grid(text: &str, flag: &str) -> Result<(usize, usize)> {
         .split_once(['x', 'X'])
         .map(|(r, c)| (r.trim(), c.trim()))
         .and_then(|(r, c)| Some((r.parse::<usize>().ok()?, c.parse::<usize>().ok()?)))
-        .filter(|&(r, c)| r > 0 && c > 0)
         .with_context(|| format!("{flag} '{text}': write ROWSxCOLS, e.g. 7x7"))?;
+    if r == 0 || c == 0 {
+        // (It was said as written wrongly.)
+        bail!("{flag} '{text}': a grid of no cells; at least 1 row and 1 column (2x1 or more)");
+    }
     if r > GRID_MOST || c > GRID_MOST {
         bail!("{flag} '{text}': at most {GRID_MOST} rows and {GRID_MOST} columns");
     }

@@ -351,8 +351,8 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                 if let Some(said) = m.said(0) {
                     say!(
                         "warning: frame {}: {said} Not in V_0: a clip or wire come off while \
-                         streaming? Its values place touches wrongly: --skip-electrodes {} \
-                         leaves its values out",
+                         streaming, or a contact that opens now and then? Its values place \
+                         touches wrongly: --skip-electrodes {} leaves its values out",
                         out.frame.seq,
                         skip_with(processor.left_out(), &[m.electrode])
                     );
