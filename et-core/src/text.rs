@@ -339,6 +339,8 @@ pub fn records(text: &str) -> Result<Vec<Record>, (usize, RecordFault)> {
 
 mod file;
 pub use file::*;
+mod kind;
+pub use kind::EtFile;
 
 #[cfg(test)]
 mod tests {

@@ -391,9 +391,18 @@ impl Scene {
                 line,
             });
         }
-        let mut scene: Scene = toml::from_str(text).map_err(|error| SceneError::Parse {
-            path: name.into(),
-            error,
+        let mut scene: Scene = toml::from_str(text).map_err(|error| {
+            // Another of et's files is said as what it is (no scene's first line is one's).
+            match et_core::text::EtFile::of(text) {
+                Some(kind) => SceneError::OtherFile {
+                    path: name.into(),
+                    kind,
+                },
+                None => SceneError::Parse {
+                    path: name.into(),
+                    error,
+                },
+            }
         })?;
         scene.name = name.into();
         scene.scan.current_given = toml::from_str::<toml::Table>(text)

@@ -197,25 +197,23 @@ impl std::fmt::Display for Mismatch {
     }
 }
 
-/// What `text` is, and where it goes, when it is another of et's files than a model (by its
-/// first line): an et dataset (`# et-dataset N`), an et recording (a JSON line naming
-/// "et-recording", then one per frame); None for any other text.
+/// What `text` is, and where it goes, when it is another of et's files than a model
+/// ([`et_core::text::EtFile`]); None for any other text.
 fn other_file(text: &str) -> Option<(&'static str, &'static str)> {
-    let first = text.lines().next()?.trim();
-    if first.starts_with("# et-dataset") {
-        return Some((
-            "an et dataset (et collect)",
-            "give it as --data (et train --data makes a model of it, et eval --data tests one)",
-        ));
-    }
-    let recording = first.starts_with('{')
-        && serde_json::from_str::<serde_json::Value>(first)
-            .is_ok_and(|v| v.get("format").and_then(|f| f.as_str()) == Some("et-recording"));
-    recording.then_some((
-        "an et recording (et sim, et record)",
-        "`et stream --replay FILE --model MODEL` classifies its frames, and `et reconstruct \
-         --frames FILE` images them",
-    ))
+    use et_core::text::EtFile;
+    let kind = EtFile::of(text)?;
+    let fix = match kind {
+        EtFile::Dataset => {
+            "give it as --data (et train --data makes a model of it, et eval --data tests one)"
+        }
+        EtFile::Recording => {
+            "`et stream --replay FILE --model MODEL` classifies its frames, and `et reconstruct \
+             --frames FILE` images them"
+        }
+        EtFile::Protocol => "a scene names it as [scan] protocol = { file = \"FILE\" }",
+        EtFile::Model => return None,
+    };
+    Some((kind.said(), fix))
 }
 
 /// The first line of `text` (at most 60 characters, control characters left out) when

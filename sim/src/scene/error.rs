@@ -14,6 +14,30 @@ pub enum SceneError {
         /// The reason.
         source: std::io::Error,
     },
+    /// Another of et's files given as a scene (a recording, a dataset, a model file, a
+    /// protocol file): said as what it is and where it goes (the TOML parser's "invalid
+    /// key-value pair" was all it said).
+    #[error(
+        "{path}: {}, not a scene (a TOML file of [sheet], [scan] and [[touch]] tables, as in \
+         sim/scenes/): {}",
+        kind.said(),
+        match kind {
+            et_core::text::EtFile::Protocol =>
+                "a scene names it as [scan] protocol = { file = \"FILE\" }",
+            et_core::text::EtFile::Recording =>
+                "give it as --frames (et reconstruct) or --replay (et stream, et view), and the \
+                 scene of its sheet as --scene",
+            et_core::text::EtFile::Dataset => "give it as --data (et train, et eval)",
+            et_core::text::EtFile::Model =>
+                "give it as --model, and the scene of its sheet as --scene",
+        }
+    )]
+    OtherFile {
+        /// The file.
+        path: String,
+        /// What it is.
+        kind: et_core::text::EtFile,
+    },
     /// The file is not valid TOML or does not fit the scene format (the parser's message
     /// names the key and the line).
     #[error("{path}: {}", parse_said(error))]

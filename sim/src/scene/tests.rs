@@ -245,6 +245,31 @@ fn a_file_that_is_no_scene_is_said_shortly() {
     );
 }
 
+/// Another of et's files given as a scene is said as what it is (the parser's "invalid
+/// key-value pair, expected key" was all it said of a recording).
+#[test]
+fn another_of_ets_files_given_as_a_scene_is_named() {
+    for (text, said) in [
+        (
+            "{\"format\":\"et-recording\",\"version\":1}\n",
+            "r: an et recording (et sim, et record), not a scene",
+        ),
+        (
+            "# et-dataset 2\n",
+            "r: an et dataset (et collect), not a scene",
+        ),
+        (
+            "source,sink,positive,negative\n0,1,2,3\n",
+            "r: a protocol file (et protocol --csv), not a scene (a TOML file of [sheet], [scan] \
+             and [[touch]] tables, as in sim/scenes/): a scene names it as [scan] protocol = { \
+             file = \"FILE\" }",
+        ),
+    ] {
+        let e = Scene::parse(text, "r").unwrap_err().to_string();
+        assert!(e.contains(said), "{e}");
+    }
+}
+
 /// An unclosed inline table repeated (`b = {` after a table header, 3 000 times: 30 kB)
 /// overflowed the TOML parser's stack and aborted the process (found by the parser fuzzer).
 /// It is refused by line; brackets inside strings and comments do not count.

@@ -1,0 +1,103 @@
+//! Which of et's own files a text is, by its first line: said where another of them is given
+//! in its place (a recording as a scene or a model, a dataset as a model), instead of the
+//! parser's words for text it does not expect.
+
+/// One of et's own files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EtFile {
+    /// A recording (`et sim`, `et record`): a JSON header naming "et-recording", then a frame
+    /// a line.
+    Recording,
+    /// A dataset (`et collect`): `# et-dataset N`, then `#` lines and a table.
+    Dataset,
+    /// A model file (`et train`): JSON naming "et-model" or "et-table-model".
+    Model,
+    /// A protocol file (`et protocol --csv`): a header of source, sink, positive, negative.
+    Protocol,
+}
+
+impl EtFile {
+    /// Which of et's files `text` is, by its first line that is not blank; None for any
+    /// other text.
+    #[must_use]
+    pub fn of(text: &str) -> Option<Self> {
+        let first = text
+            .trim_start_matches('\u{feff}')
+            .lines()
+            .find(|l| !l.trim().is_empty())?;
+        let first = first.trim();
+        let names = |format: &str| {
+            // The format's value, as JSON writes it (spaces after the colon or not).
+            first.starts_with('{')
+                && first.contains(&format!("\"{format}\""))
+                && first.contains("\"format\"")
+        };
+        if first.starts_with("# et-dataset") {
+            Some(Self::Dataset)
+        } else if names("et-recording") {
+            Some(Self::Recording)
+        } else if names("et-model") || names("et-table-model") {
+            Some(Self::Model)
+        } else {
+            let header = first.to_ascii_lowercase();
+            let cells: Vec<&str> = header.split([',', ';', '\t']).map(str::trim).collect();
+            let protocol = ["source", "sink", "positive", "negative"]
+                .iter()
+                .all(|c| cells.contains(c));
+            protocol.then_some(Self::Protocol)
+        }
+    }
+
+    /// What it is, and what writes it: "an et recording (et sim, et record)".
+    #[must_use]
+    pub fn said(self) -> &'static str {
+        match self {
+            Self::Recording => "an et recording (et sim, et record)",
+            Self::Dataset => "an et dataset (et collect)",
+            Self::Model => "an et model file (et train)",
+            Self::Protocol => "a protocol file (et protocol --csv)",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::EtFile;
+
+    #[test]
+    fn et_s_files_are_told_by_their_first_line() {
+        let cases = [
+            (
+                "{\"format\":\"et-recording\",\"version\":1}\n{\"seq\":0}",
+                Some(EtFile::Recording),
+            ),
+            (
+                "{\"format\": \"et-table-model\", \"version\": 2}",
+                Some(EtFile::Model),
+            ),
+            (
+                "{\"centres_m\":[],\"format\":\"et-model\"}",
+                Some(EtFile::Model),
+            ),
+            (
+                "\u{feff}# et-dataset 2\n# config: {}\n",
+                Some(EtFile::Dataset),
+            ),
+            (
+                "\nSource;Sink;Positive;Negative\n0;1;2;3\n",
+                Some(EtFile::Protocol),
+            ),
+            (
+                "source,sink,positive,negative,current_a\n",
+                Some(EtFile::Protocol),
+            ),
+            ("[sheet]\nshape = 1\n", None),
+            ("v0,v1\n1,2\n", None),
+            ("{\"format\":\"other\"}", None),
+            ("", None),
+        ];
+        for (text, kind) in cases {
+            assert_eq!(EtFile::of(text), kind, "{text:?}");
+        }
+    }
+}
