@@ -205,6 +205,13 @@ pub enum FramesFault {
          read_dataset)"
     )]
     Dataset,
+    /// A protocol file (its rows of electrodes were read as frames, one per column), or a
+    /// hardware log of each value's electrodes beside `others` columns of values.
+    #[error("{}", protocol_said(*others))]
+    Protocol {
+        /// Columns beside the electrodes' and the current's.
+        others: usize,
+    },
     /// A compressed MATLAB variable that ends early.
     #[error("a compressed variable is cut short")]
     CutShort,
@@ -251,6 +258,24 @@ pub enum FramesFault {
         /// Its values.
         values: usize,
     },
+}
+
+/// What is said of a protocol file given as frames, or of a hardware log (each value's four
+/// electrodes, then `others` columns of values).
+fn protocol_said(others: usize) -> String {
+    let scene = "a scene names it as [scan] protocol = { file = \"FILE\" }";
+    match others {
+        0 => format!(
+            "a protocol file (et protocol --csv), not frames: {scene}, and the frames measured \
+             under it go to --frames"
+        ),
+        n => format!(
+            "each row's four electrodes (source, sink, positive, negative) and {n} more \
+             column{}: a hardware log? et reads them apart: the four electrodes' columns as \
+             a protocol file ({scene}), the values alone, one frame a column, as --frames",
+            if n == 1 { "" } else { "s" }
+        ),
+    }
 }
 
 fn content(path: &Path, line: usize, fault: FramesFault) -> FramesError {
@@ -347,12 +372,29 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         _ => {
             let text = et_core::text::read_text_at_most(&path, et_core::text::max_file_bytes())
                 .map_err(io)?;
-            // (Its comments and header skipped, its columns read as a frame's values.)
-            if text
-                .trim_start_matches('\u{feff}')
-                .starts_with("# et-dataset")
-            {
-                return Err(content(&path, 1, FramesFault::Dataset));
+            // (Its comments and header skipped, its columns read as a frame's values: a
+            // protocol file's 5 columns were 5 frames.)
+            match et_core::text::EtFile::of(&text) {
+                Some(et_core::text::EtFile::Dataset) => {
+                    return Err(content(&path, 1, FramesFault::Dataset));
+                }
+                Some(et_core::text::EtFile::Protocol) => {
+                    // A hardware log's value columns beside the electrodes' (not current_a).
+                    let header = et_core::text::lines(&text)
+                        .first()
+                        .map(|(_, l)| l.to_string());
+                    let others = header.map_or(0, |h| {
+                        (h.split([',', ';', '\t'])
+                            .map(|c| c.trim().to_ascii_lowercase()))
+                        .filter(|c| {
+                            !["source", "sink", "positive", "negative", "current_a"]
+                                .contains(&c.as_str())
+                        })
+                        .count()
+                    });
+                    return Err(content(&path, 1, FramesFault::Protocol { others }));
+                }
+                _ => {}
             }
             csv_matrix(&path, &text)?
         }

@@ -249,8 +249,9 @@ pub enum LineFault {
     /// The header is JSON but not the format's fields (named by their place).
     #[error("header: {}", et_learn::model_file::json_said(.0, true))]
     Header(serde_json::Error),
-    /// Another format's file.
-    #[error("format '{0}' is not {FORMAT}")]
+    /// Another format's file (a model file said as what it is: "format 'et-table-model' is
+    /// not et-recording" was all it said).
+    #[error("format '{}' is not {FORMAT}{}", .0, model_said(.0))]
     Format(String),
     /// Another version of the format.
     #[error("version {0} (this build reads {VERSION})")]
@@ -312,6 +313,16 @@ pub enum LineFault {
     /// A frame line is not the format's JSON.
     #[error("{}", et_learn::model_file::json_said(.0, true))]
     Frame(serde_json::Error),
+}
+
+/// What is said of a file of `format` given as a recording beside "is not et-recording".
+fn model_said(format: &str) -> &'static str {
+    match format {
+        "et-model" | "et-table-model" => {
+            ": an et model file (et train), not a recording: give it as --model"
+        }
+        _ => "",
+    }
 }
 
 /// Writes a recording line by line, flushing each line.

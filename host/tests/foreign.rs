@@ -514,6 +514,41 @@ fn et_protocol_csv_is_a_protocol_file() {
             && said.contains("take it alone (--reference 1)"),
         "{said}"
     );
+    // The protocol file given as frames (its 5 columns were read as 5 frames, one per
+    // column, then refused as running against the model): said as what it is, and a hardware
+    // log of each value's electrodes beside its values as that.
+    let protocol = d.join("pp.csv");
+    let log = d.join("log.csv");
+    let text = std::fs::read_to_string(&protocol).unwrap();
+    let logged: String = (text.lines().enumerate())
+        .map(|(i, l)| format!("{l},{}\n", if i == 0 { "v".into() } else { i.to_string() }))
+        .collect();
+    std::fs::write(&log, logged).unwrap();
+    // A model file alike (it said "format 'et-table-model' is not et-recording" alone).
+    let model = d.join("model.json");
+    std::fs::write(&model, "{\"format\":\"et-table-model\",\"version\":2}\n").unwrap();
+    for (file, said) in [
+        (
+            &protocol,
+            "pp.csv:1: a protocol file (et protocol --csv), not frames",
+        ),
+        (&log, "and 1 more column: a hardware log?"),
+        (
+            &model,
+            "an et model file (et train), not a recording: give it as --model",
+        ),
+    ] {
+        let common = [
+            "reconstruct",
+            "--scene",
+            scene,
+            "--frames",
+            file.to_str().unwrap(),
+        ];
+        let out = et(&[&common[..], &["--reference", "1"], &args[..]].concat());
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && e.contains(said), "{e}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
