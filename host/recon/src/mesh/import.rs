@@ -51,7 +51,7 @@ fn read(path: &Path) -> Result<String, MeshError> {
 /// given; blank lines and `#` comments are skipped, and a non-numeric first row is a header.
 fn csv_rows<T: std::str::FromStr>(
     path: &Path,
-    width: Option<usize>,
+    width: Option<(usize, &'static str)>,
 ) -> Result<Vec<(usize, Vec<T>)>, MeshError> {
     let text = read(path)?;
     let mut out = Vec::new();
@@ -62,10 +62,22 @@ fn csv_rows<T: std::str::FromStr>(
         }
         let v: Result<Vec<T>, _> = line.split(',').map(|x| x.trim().parse::<T>()).collect();
         match v {
-            Ok(v) if width.is_none_or(|w| v.len() == w) => out.push((i + 1, v)),
+            Ok(v) if width.is_none_or(|(w, _)| v.len() == w) => out.push((i + 1, v)),
             Err(_) if first => {}
             _ => {
-                let fault = width.map_or(FileFault::NumberList, FileFault::Numbers);
+                let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+                let fault = match width {
+                    Some((_, what)) => FileFault::Numbers {
+                        found: cells.len(),
+                        what,
+                    },
+                    None => {
+                        let cell = cells.iter().find(|c| c.parse::<T>().is_err());
+                        FileFault::NumberList(
+                            cell.map_or(String::new(), |c| c.chars().take(40).collect()),
+                        )
+                    }
+                };
                 return Err(bad(path, i + 1, fault));
             }
         }
@@ -129,11 +141,12 @@ impl Mesh {
     /// [`MeshError::Read`] or [`MeshError::File`] naming the file (and line), or what
     /// [`Mesh::from_parts`] finds.
     pub fn from_csv(nodes: &Path, triangles: &Path, electrodes: &Path) -> Result<Self, MeshError> {
-        let xy: Vec<(usize, Vec<f64>)> = csv_rows(nodes, Some(2))?;
+        let xy: Vec<(usize, Vec<f64>)> = csv_rows(nodes, Some((2, "a node's x, y (m)")))?;
         if let Some((line, _)) = xy.iter().find(|(_, r)| r.iter().any(|v| !v.is_finite())) {
             return Err(bad(nodes, *line, FileFault::NonFinite));
         }
-        let tri: Vec<(usize, Vec<usize>)> = csv_rows(triangles, Some(3))?;
+        let tri: Vec<(usize, Vec<usize>)> =
+            csv_rows(triangles, Some((3, "a triangle's three node numbers")))?;
         let el: Vec<(usize, Vec<usize>)> = csv_rows(electrodes, None)?;
         // Node numbers past the nodes, named by file and line (from 0, as in the docs).
         let n = xy.len();

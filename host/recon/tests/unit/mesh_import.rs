@@ -295,6 +295,18 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     std::fs::write(&p, "a,b,c\n0,1,2\n0,1\n").unwrap();
     let e = Mesh::from_csv(&p, &p, &p).unwrap_err().to_string();
     assert!(e.contains("t.csv:2"), "{e}");
+    // A row of the wrong width says what it holds and what each row is (a frame given as the
+    // nodes was "expected 2 numbers"); a cell that is no number is named.
+    assert!(
+        e.contains("3 cells, where each row is a node's x, y (m)"),
+        "{e}"
+    );
+    let (tri3, els) = (dir.join("tri3.csv"), dir.join("e.csv"));
+    std::fs::write(&p, "0,0\n1,0\n0,1\n").unwrap();
+    std::fs::write(&tri3, "0,1,2\n").unwrap();
+    std::fs::write(&els, "0,1\n1,x\n").unwrap();
+    let e = Mesh::from_csv(&p, &tri3, &els).unwrap_err().to_string();
+    assert!(e.contains("e.csv:2: 'x' is not a number"), "{e}");
     // Line numbers are the file's, past comments, blank lines and the header; a node number
     // past the nodes is named by the file and line that gives it.
     let (nodes, tris, els) = (dir.join("n.csv"), dir.join("tri.csv"), dir.join("el.csv"));

@@ -4,12 +4,19 @@
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FileFault {
-    /// A CSV row of another width, or with a value that is not a number.
-    #[error("expected {0} numbers")]
-    Numbers(usize),
-    /// A CSV row with a value that is not a number.
-    #[error("expected a list of numbers")]
-    NumberList,
+    /// A CSV row of another width, or with a value that is not a number: what the row holds
+    /// (`found` cells), and what each row of the file is (it said "expected 2 numbers" of a
+    /// frame's 208 values).
+    #[error("{found} cells, where each row is {what}")]
+    Numbers {
+        /// The row's cells.
+        found: usize,
+        /// What each row of the file is.
+        what: &'static str,
+    },
+    /// A CSV row with a cell that is not a number.
+    #[error("'{0}' is not a number (each row is an electrode's node numbers)")]
+    NumberList(String),
     /// A coordinate that is NaN or infinite.
     #[error("non-finite coordinate")]
     NonFinite,
