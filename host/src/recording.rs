@@ -24,7 +24,9 @@ use et_core::protocol::Protocol;
 use et_core::wire::Frame;
 use serde::{Deserialize, Serialize};
 
+mod error;
 mod made_on;
+pub use error::{LineFault, RecordingError};
 
 /// The `format` value of a recording's header.
 pub const FORMAT: &str = "et-recording";
@@ -203,126 +205,6 @@ fn invalid_columns(v: &[f32]) -> Vec<usize> {
 fn volts_or_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::Error> {
     let v: Vec<Option<f32>> = Deserialize::deserialize(d)?;
     Ok(v.into_iter().map(|x| x.unwrap_or(f32::NAN)).collect())
-}
-
-/// Why a recording could not be written or read.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum RecordingError {
-    /// The file could not be created, written or read.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The reason.
-        source: std::io::Error,
-    },
-    /// A line is not what the format says.
-    #[error("{}:{line}: {fault}", path.display())]
-    Line {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number (0: a frame being appended).
-        line: usize,
-        /// What is wrong.
-        fault: LineFault,
-    },
-    /// The file may not be written (it exists, or it is an input).
-    #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
-}
-
-/// What is wrong with one line of a recording (or a frame appended to one).
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum LineFault {
-    /// The file has no line.
-    #[error("empty file: no header")]
-    Empty,
-    /// The first line is not JSON: not an et recording.
-    #[error(
-        "not an et recording: its first line is not JSON ({}); et sim and et record write \
-         JSON lines, another system's frames are read from .csv, .npy, .npz or .mat",
-        et_learn::model_file::json_said(.0, true)
-    )]
-    NotJson(serde_json::Error),
-    /// The header is JSON but not the format's fields (named by their place).
-    #[error("header: {}", et_learn::model_file::json_said(.0, true))]
-    Header(serde_json::Error),
-    /// Another format's file (a model file said as what it is: "format 'et-table-model' is
-    /// not et-recording" was all it said).
-    #[error("format '{}' is not {FORMAT}{}", .0, model_said(.0))]
-    Format(String),
-    /// Another version of the format.
-    #[error("version {0} (this build reads {VERSION})")]
-    Version(u32),
-    /// The header's configuration is not one et scans.
-    #[error("header config: {0}")]
-    Config(et_core::config::ConfigError),
-    /// The header's K and electrodes disagree with its configuration.
-    #[error(
-        "header says K = {k} on {electrodes} electrodes, its config ({protocol} on \
-         {config_electrodes}) gives K = {config_k}"
-    )]
-    HeaderK {
-        /// The header's K.
-        k: usize,
-        /// The header's electrode count.
-        electrodes: u8,
-        /// The configuration's protocol.
-        protocol: &'static str,
-        /// The configuration's electrode count.
-        config_electrodes: u8,
-        /// The configuration's K.
-        config_k: usize,
-    },
-    /// The header lists another number of columns than its protocol's K.
-    #[error("header lists {listed} columns, its protocol has K = {k}")]
-    ColumnCount {
-        /// Columns listed.
-        listed: usize,
-        /// The protocol's K.
-        k: usize,
-    },
-    /// A header column is not the protocol's column there.
-    #[error(
-        "header column {column} is ({got}) but the {protocol} protocol's column {column} is \
-         ({want}): the columns must follow the protocol's order (another system's frames in \
-         another order: give them as a table with a protocol file, et reconstruct --frames)"
-    )]
-    ColumnOrder {
-        /// The column (0-based).
-        column: usize,
-        /// The header's.
-        got: Column,
-        /// The protocol's name.
-        protocol: &'static str,
-        /// The protocol's.
-        want: Column,
-    },
-    /// A frame of another length than the header's K.
-    #[error("frame {seq} has {values} values, the header says K = {k}")]
-    FrameLength {
-        /// Its sequence number.
-        seq: u32,
-        /// Its values.
-        values: usize,
-        /// The header's K.
-        k: usize,
-    },
-    /// A frame line is not the format's JSON.
-    #[error("{}", et_learn::model_file::json_said(.0, true))]
-    Frame(serde_json::Error),
-}
-
-/// What is said of a file of `format` given as a recording beside "is not et-recording".
-fn model_said(format: &str) -> &'static str {
-    match format {
-        "et-model" | "et-table-model" => {
-            ": an et model file (et train), not a recording: give it as --model"
-        }
-        _ => "",
-    }
 }
 
 /// Writes a recording line by line, flushing each line.
