@@ -134,6 +134,12 @@ pub enum DatasetFault {
     /// recording's, a model file's).
     #[error("{}", not_table(.0.as_deref()))]
     NotTable(Option<String>),
+    /// A protocol file given as a table.
+    #[error(
+        "a protocol file (et protocol --csv), not a table of a sensor's values: a scene names \
+         it as [scan] protocol = {{ file = \"FILE\" }}"
+    )]
+    ProtocolTable,
     /// An et dataset of a version this et does not read.
     #[error(
         "et-dataset version '{0}': this et reads versions 1 and 2 (a later one is a newer et's)"

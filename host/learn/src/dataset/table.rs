@@ -220,6 +220,17 @@ pub(super) fn parse_table(
             .and_then(|v| Some(v.get("format")?.as_str()?.chars().take(40).collect()));
         return Err(content(path, *line, None, DatasetFault::NotTable(format)));
     }
+    // A protocol file (its four electrode columns, and the current): read as features, its
+    // electrode numbers were a sensor's values.
+    if let Some((line, first)) = lines.first()
+        && et_core::text::EtFile::of(first) == Some(et_core::text::EtFile::Protocol)
+        && (first
+            .split([',', ';', '\t'])
+            .map(|c| c.trim().to_ascii_lowercase()))
+        .all(|c| ["source", "sink", "positive", "negative", "current_a"].contains(&c.as_str()))
+    {
+        return Err(content(path, *line, None, DatasetFault::ProtocolTable));
+    }
     let mut records = RecordIter::new(lines);
     let delimiter = records.delimiter;
     let read = |r: Result<(usize, StringRecord), (usize, RecordFault)>| {

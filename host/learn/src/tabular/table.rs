@@ -38,8 +38,17 @@ impl std::str::FromStr for RowRange {
         };
         let start = num(a, Some(0))?.unwrap_or(0);
         let end = num(b, None)?;
-        if end.is_some_and(|e| e <= start) {
-            return Err(format!("'{s}': the range is empty"));
+        if let Some(end) = end.filter(|e| *e <= start) {
+            // (B is excluded: A..A holds nothing, and B below A is A and B swapped?)
+            let why = if end == start {
+                format!(
+                    "{start}..{end} holds nothing (B is excluded): {start}..{} is {start} alone",
+                    start + 1
+                )
+            } else {
+                format!("B ({end}) is below A ({start}): {end}..{start}?")
+            };
+            return Err(format!("'{s}': the range is empty: {why}"));
         }
         Ok(Self { start, end })
     }

@@ -691,6 +691,11 @@ print(len(data), len(h), sum(int(r[li]) for r in data), float(data[3][2]), float
                 "a model file (et train), not a table: give it as --model",
             ),
             (r#"{"a": 1}"#, "JSON, not a table of numbers"),
+            // A protocol file: its electrode numbers were read as features.
+            (
+                "source,sink,positive,negative,current_a\n0,1,2,3,1e-3",
+                "a protocol file (et protocol --csv), not a table of a sensor's values",
+            ),
         ] {
             let json = dir.join("f.json");
             std::fs::write(&json, format!("{first}\n{{\"seq\":0}}\n")).unwrap();

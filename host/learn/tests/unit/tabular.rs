@@ -470,6 +470,17 @@ fn row_ranges_and_folds() {
     for bad in ["5", "a..b", "10..10", "9..3"] {
         assert!(bad.parse::<RowRange>().is_err(), "{bad}");
     }
+    // An empty range says why (it said "the range is empty" alone).
+    for (bad, why) in [
+        (
+            "10..10",
+            "10..10 holds nothing (B is excluded): 10..11 is 10 alone",
+        ),
+        ("9..3", "B (3) is below A (9): 3..9?"),
+    ] {
+        let e = bad.parse::<RowRange>().unwrap_err();
+        assert!(e.contains(why), "{e}");
+    }
     let e = STANDIN.select("300..400".parse().unwrap()).unwrap_err();
     assert!(e.to_string().contains("rows 0..360"), "{e}");
     // One training row: said as such, not "use 2 to 1"; two, in two folds, fit each fold on
