@@ -71,7 +71,7 @@ pub struct Schedule {
 }
 
 /// A schedule file's columns, in this order.
-const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
+pub(crate) const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
 
 /// Whether the `first` record is a header, and where each of [`COLUMNS`] is: named by a
 /// header (any order; a name twice, or one of the four missing, refused), or, without one, the

@@ -380,18 +380,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
                 }
                 Some(et_core::text::EtFile::Protocol) => {
                     // A hardware log's value columns beside the electrodes' (not current_a).
-                    let header = et_core::text::lines(&text)
-                        .first()
-                        .map(|(_, l)| l.to_string());
-                    let others = header.map_or(0, |h| {
-                        (h.split([',', ';', '\t'])
-                            .map(|c| c.trim().to_ascii_lowercase()))
-                        .filter(|c| {
-                            !["source", "sink", "positive", "negative", "current_a"]
-                                .contains(&c.as_str())
-                        })
-                        .count()
-                    });
+                    let others = et_core::text::EtFile::columns_beside_protocol(&text).unwrap_or(0);
                     return Err(content(&path, 1, FramesFault::Protocol { others }));
                 }
                 _ => {}

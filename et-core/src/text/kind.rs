@@ -21,11 +21,7 @@ impl EtFile {
     /// other text.
     #[must_use]
     pub fn of(text: &str) -> Option<Self> {
-        let first = text
-            .trim_start_matches('\u{feff}')
-            .lines()
-            .find(|l| !l.trim().is_empty())?;
-        let first = first.trim();
+        let first = first_line(text)?;
         let names = |format: &str| {
             // The format's value, as JSON writes it (spaces after the colon or not).
             first.starts_with('{')
@@ -39,13 +35,21 @@ impl EtFile {
         } else if names("et-model") || names("et-table-model") {
             Some(Self::Model)
         } else {
-            let header = first.to_ascii_lowercase();
-            let cells: Vec<&str> = header.split([',', ';', '\t']).map(str::trim).collect();
-            let protocol = ["source", "sink", "positive", "negative"]
-                .iter()
-                .all(|c| cells.contains(c));
-            protocol.then_some(Self::Protocol)
+            Self::columns_beside_protocol(first).map(|_| Self::Protocol)
         }
+    }
+
+    /// Of a protocol file's header (`text`'s first line that is not blank), how many columns
+    /// stand beside a protocol file's own (source, sink, positive, negative, current_a): a
+    /// hardware log's values. None when it has not the four electrodes' columns.
+    #[must_use]
+    pub fn columns_beside_protocol(text: &str) -> Option<usize> {
+        let header = first_line(text)?.to_ascii_lowercase();
+        let cells: Vec<&str> = header.split([',', ';', '\t']).map(str::trim).collect();
+        let columns = &crate::schedule::COLUMNS;
+        let electrodes = columns.get(..4).unwrap_or_default();
+        (electrodes.iter().all(|c| cells.contains(c)))
+            .then(|| cells.iter().filter(|c| !columns.contains(c)).count())
     }
 
     /// What it is, and what writes it: "an et recording (et sim, et record)".
@@ -58,6 +62,15 @@ impl EtFile {
             Self::Protocol => "a protocol file (et protocol --csv)",
         }
     }
+}
+
+/// `text`'s first line that is not blank, trimmed (a byte-order mark left out).
+fn first_line(text: &str) -> Option<&str> {
+    let first = text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .find(|l| !l.trim().is_empty())?;
+    Some(first.trim())
 }
 
 #[cfg(test)]
@@ -99,5 +112,13 @@ mod tests {
         for (text, kind) in cases {
             assert_eq!(EtFile::of(text), kind, "{text:?}");
         }
+        // A hardware log: the electrodes' columns and its values beside them.
+        let beside = EtFile::columns_beside_protocol;
+        assert_eq!(
+            beside("source,sink,positive,negative,current_a,v0,v1\n"),
+            Some(2)
+        );
+        assert_eq!(beside("source,sink,positive,negative,current_a\n"), Some(0));
+        assert_eq!(beside("v0,v1\n"), None);
     }
 }

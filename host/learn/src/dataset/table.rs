@@ -223,11 +223,7 @@ pub(super) fn parse_table(
     // A protocol file (its four electrode columns, and the current): read as features, its
     // electrode numbers were a sensor's values.
     if let Some((line, first)) = lines.first()
-        && et_core::text::EtFile::of(first) == Some(et_core::text::EtFile::Protocol)
-        && (first
-            .split([',', ';', '\t'])
-            .map(|c| c.trim().to_ascii_lowercase()))
-        .all(|c| ["source", "sink", "positive", "negative", "current_a"].contains(&c.as_str()))
+        && et_core::text::EtFile::columns_beside_protocol(first) == Some(0)
     {
         return Err(content(path, *line, None, DatasetFault::ProtocolTable));
     }
