@@ -33,10 +33,12 @@ use et_recon::{
     Reconstructor, Region, SquaredRows, TOUCH_Z, default_threshold, touch_rule,
 };
 
+mod contacts;
 mod monitor;
 mod processor;
 mod source;
 
+pub use contacts::{BACK_AFTER, Contact, Contacts, SAID_TIMES};
 pub use monitor::Monitor;
 pub use processor::{Output, Processor, Referencing, Settings, TouchEvent};
 pub use source::{

@@ -119,6 +119,8 @@ pub struct Viewer {
     /// The electrodes named detached or broken, which the side panel offers to leave out
     /// (0-based; found when V_0 is taken, or in a frame after it).
     detached: Vec<u16>,
+    /// Each electrode named off since V_0, followed until it is back.
+    contacts: crate::live::Contacts,
     /// The board's frame flags said in the status, and those of the frames V_0 is being
     /// taken from (`et_core::wire::FLAG_*` bits, said once it is taken).
     flags_said: crate::live::FlagsSaid,
@@ -211,6 +213,7 @@ impl Viewer {
             monitor: Monitor::default(),
             wizard: Wizard::default(),
             detached: Vec::new(),
+            contacts: crate::live::Contacts::default(),
             said: StatusLog::default(),
             flags_said: crate::live::FlagsSaid::default(),
             v0_flags: 0,
@@ -318,7 +321,7 @@ impl Viewer {
                         self.status = self.reference_taken();
                     }
                     self.board_flagged(&out);
-                    self.electrode_came_off(&out);
+                    self.electrode_contact(&out);
                     for request in self.wizard.observe(&out, &self.processor) {
                         self.apply_wizard_request(request);
                     }

@@ -2722,7 +2722,9 @@ fn a_board_that_never_answers_is_said_with_its_rate() {
 /// tens of mm off) until `--skip-electrodes 3` leaves them out of the images, when each
 /// touched frame gives its press within 5 mm. Electrodes past the sheet, or more than half of
 /// them, are refused by the flag's name. An electrode that comes off after V_0 is named once,
-/// in the first frame it is off in.
+/// in the first frame it is off in; put back, it is said back once it fits the model 10 frames
+/// in a row, and off again when it comes off again; one off while V_0 was taken is said back
+/// with V_0 to take again.
 #[test]
 fn an_electrode_left_out_live_streams_the_presses_it_hid() {
     let dir = std::env::temp_dir().join(format!("et-cli-live-skip-{}", std::process::id()));
@@ -2838,20 +2840,56 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
         "off",
         "\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n",
     );
-    let lines: Vec<&str> = (before.lines().take(31))
-        .chain(after.lines().skip(31))
-        .collect();
-    let rec = dir.join("off-later.jsonl");
-    std::fs::write(&rec, lines.join("\n") + "\n").unwrap();
-    let (scene, rec) = (scene.to_str().unwrap(), rec.to_str().unwrap());
-    let out = et_ok(&["stream", "--json", "--replay", rec, "--scene", scene]);
-    let said = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(said.matches("electrode 3's").count(), 1, "{said}");
+    // The sound recording's header, then `runs` of (frames, off or sound) in turn, each from
+    // its recording's frames of those numbers; what `et stream` says of them.
+    let splice = |name: &str, runs: &[(usize, bool)]| {
+        let (sound, off): (Vec<&str>, Vec<&str>) =
+            (before.lines().collect(), after.lines().collect());
+        let mut lines = vec![sound[0]];
+        for &(n, is_off) in runs {
+            let from = lines.len();
+            lines.extend_from_slice(&(if is_off { &off } else { &sound })[from..from + n]);
+        }
+        let rec = dir.join(name);
+        std::fs::write(&rec, lines.join("\n") + "\n").unwrap();
+        let (rec, scene) = (rec.to_str().unwrap(), scene.to_str().unwrap());
+        let out = et_ok(&["stream", "--json", "--replay", rec, "--scene", scene]);
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let said = splice("off-later.jsonl", &[(30, false), (50, true)]);
+    assert_eq!(said.matches("electrode 3").count(), 1, "{said}");
     assert!(
         said.contains("warning: frame 30: electrode 3's 52 values"),
         "{said}"
     );
     assert!(said.contains("Not in V_0"), "{said}");
+    // Put back at frame 50: said back once it fits 10 frames in a row; off again at 65.
+    let runs = [(30, false), (20, true), (15, false), (15, true)];
+    let said = splice("off-and-back.jsonl", &runs);
+    assert!(
+        said.contains(
+            "note: frame 59: electrode 3's values fit the model again from frame 50 (off since \
+             frame 30): it is back"
+        ),
+        "{said}"
+    );
+    assert!(
+        said.contains(
+            "warning: frame 65: electrode 3 is off again (the 2nd time, back at frame 59;"
+        ),
+        "{said}"
+    );
+    assert_eq!(said.matches("electrode 3").count(), 3, "{said}");
+    // Off while V_0 was taken, back at frame 30: V_0 is to be taken again.
+    let said = splice("off-in-v0.jsonl", &[(30, true), (50, false)]);
+    assert!(
+        said.contains(
+            "frame 39: electrode 3's values fit the model again from frame 30, but V_0 was taken \
+             while it was off"
+        ),
+        "{said}"
+    );
+    let scene = scene.to_str().unwrap();
     // The sound sheet's frames flagged none.
     let sound = dir.join("sound.jsonl");
     let sound = sound.to_str().unwrap();

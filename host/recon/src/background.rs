@@ -22,7 +22,7 @@ use crate::mesh::Mesh;
 mod electrode;
 pub use electrode::{
     ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, detached_electrodes, detached_said,
-    electrode_misfit,
+    electrode_misfit, misfit_of,
 };
 
 /// The background fitted to a reference frame.

@@ -390,6 +390,24 @@ impl Processor {
         Some((format!("{said} Check {check}"), electrodes))
     }
 
+    /// Electrode `electrode`'s misfit in `frame` beside the model of the untouched sheet,
+    /// weighed without the values `without` drive or measure ([`Reconstructor::misfit_of`]):
+    /// whether one that came off is back. None for a frame of another scan than the one set up
+    /// last, or an electrode left out.
+    #[must_use]
+    pub fn misfit_of(
+        &self,
+        frame: &LiveFrame,
+        electrode: u16,
+        without: &[u16],
+    ) -> Option<ElectrodeMisfit> {
+        let volts: Vec<f64> = frame.voltages.iter().map(|v| f64::from(*v)).collect();
+        (frame.config == self.at.config).then(|| {
+            self.recon
+                .misfit_of(&self.at.keep(&volts), electrode, without)
+        })?
+    }
+
     /// Of the untouched reference frames, the one that differs most from their mean as a
     /// change of conductivity does, and by how much ([`Reconstructor::reference_changes`]);
     /// None until the reference is complete.

@@ -78,6 +78,7 @@ impl Viewer {
         let (electrode, detached) = self.processor.v0_electrode_said().unzip();
         let electrode = electrode.map(|said| format!("{said}, or leave it out (the side panel)"));
         self.detached = detached.unwrap_or_default();
+        self.contacts.reference(&self.detached);
         // Said here, or the cause said above: not again for the frames after V_0.
         let v0_flags = std::mem::take(&mut self.v0_flags);
         self.flags_said.mark(v0_flags);
@@ -131,18 +132,36 @@ impl Viewer {
     }
 
     /// Says of an electrode whose values stand out in the frame `out` as a detached one's,
-    /// not said before (come off since V_0 was taken), and offers to leave it out.
-    pub(super) fn electrode_came_off(&mut self, out: &Output) {
-        if let Some(m) = &out.electrode_off
-            && !self.detached.contains(&m.electrode)
-            && let Some(said) = m.said(0)
-        {
-            self.detached.push(m.electrode);
-            self.status = format!(
-                "frame {}: {said} Not in V_0: a clip or wire come off, or a contact that opens \
-                 now and then? Check it, or leave it out (the side panel)",
-                out.frame.seq
-            );
+    /// not said before (come off since V_0 was taken), and offers to leave it out; says it
+    /// back when it fits the model again, or off again ([`crate::live::Contacts`]).
+    pub(super) fn electrode_contact(&mut self, out: &Output) {
+        use crate::live::Contact;
+        let Some(contact) = self.contacts.watch(out, &self.processor) else {
+            return;
+        };
+        let electrode = contact.electrode();
+        // Offered to leave out while off, and while V_0 holds it off.
+        match contact {
+            Contact::Back { in_v0: false, .. } => self.detached.retain(|e| *e != electrode),
+            _ if !self.detached.contains(&electrode) => self.detached.push(electrode),
+            _ => {}
+        }
+        let said = match &contact {
+            Contact::Off {
+                misfit, times: 1, ..
+            } => misfit.said(0).map(|said| {
+                format!(
+                    "{said} Not in V_0: a clip or wire come off, or a contact that opens now \
+                     and then? Check it, or leave it out (the side panel)"
+                )
+            }),
+            other => other.said(
+                "take V_0 again untouched (Tare)",
+                "leave it out (the side panel)",
+            ),
+        };
+        if let Some(said) = said {
+            self.status = format!("frame {}: {said}", out.frame.seq);
         }
     }
 }

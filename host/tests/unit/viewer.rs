@@ -869,6 +869,84 @@ fn a_disconnected_electrode_is_named_in_the_status_and_left_out() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A replay of the simulated sheet whose electrode 3 comes off at frame 10 and is put back at
+/// frame 30 (frames of the sound and the disconnected sheet, one seed): the status names it
+/// off, the side panel offers to leave it out; once it fits the model 10 frames in a row the
+/// status says it back and the offer goes.
+#[test]
+fn an_electrode_put_back_is_said_back_and_no_longer_offered_to_leave_out() {
+    let dir = std::env::temp_dir().join(format!("et-viewer-back-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let sound = std::fs::read_to_string(scene("square-13cm-16.toml")).unwrap();
+    let (sound_path, off_path) = (dir.join("sound.toml"), dir.join("off.toml"));
+    std::fs::write(&sound_path, &sound).unwrap();
+    let fault = "\n[[fault]]\nelectrode = 3\nkind = \"disconnected\"\n";
+    std::fs::write(&off_path, sound + fault).unwrap();
+    let frames = |path: &std::path::Path| {
+        let (mut source, _) = et_host::live::open_source(&SourceSpec::Sim, Some(path)).unwrap();
+        let frames: Vec<_> = (0..60)
+            .flat_map(|_| source.poll(1, false).unwrap())
+            .collect();
+        frames
+    };
+    let (sound, off) = (frames(&sound_path), frames(&off_path));
+    let spliced: Vec<_> = (0..60)
+        .map(|i| {
+            if (10..30).contains(&i) {
+                &off[i]
+            } else {
+                &sound[i]
+            }
+        })
+        .collect();
+    let header = et_host::recording::Header::new("test", &spliced[0].config).unwrap();
+    let path = dir.join("back.jsonl");
+    let mut w = et_host::recording::Writer::create(&path, &header).unwrap();
+    for f in &spliced {
+        w.append(&et_host::recording::Record {
+            seq: f.seq,
+            t_us: f.t_us,
+            flags: 0,
+            rail_count: 0,
+            voltages: f.voltages.clone(),
+            invalid: Vec::new(),
+            touches: None,
+        })
+        .unwrap();
+    }
+    drop(w);
+    let mut h = harness(Options {
+        scene: Some(sound_path),
+        source: SourceSpec::Replay(path),
+        reference_frames: 4,
+        ..sim_options()
+    });
+    let mut offered = false;
+    for _ in 0..40 {
+        h.step();
+        offered |= h.query_by_label("Leave out electrode 3").is_some();
+    }
+    let state = h.state();
+    let said: Vec<&str> = std::iter::once(state.status.as_str())
+        .chain(state.said.earlier().map(|(said, _)| said))
+        .collect();
+    assert!(
+        said.iter()
+            .any(|s| s.starts_with("frame 10: electrode 3's 52 values")),
+        "{said:?}"
+    );
+    assert!(offered);
+    assert!(
+        said.iter().any(|s| s.starts_with(
+            "frame 39: electrode 3's values fit the model again from frame 30 (off since \
+             frame 10): it is back"
+        )),
+        "{said:?}"
+    );
+    assert!(h.query_by_label("Leave out electrode 3").is_none());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The status log keeps each message once, the most recent last, counts one said again, and
 /// keeps at most `StatusLog::KEPT`, the oldest going first.
 #[test]

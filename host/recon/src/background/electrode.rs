@@ -112,6 +112,26 @@ pub fn electrode_misfit(
     worst(&each_misfit(rows, electrodes, (v0, model), &[]))
 }
 
+/// Electrode `electrode`'s misfit ([`ElectrodeMisfit`]) in `v` (K values of `rows`, V)
+/// beside the model's frame `model`, over the values none of `without` drives or measures (other
+/// electrodes off, which would raise the rest it is weighed against): whether an electrode
+/// that came off is back. None when it has fewer than two such values (one left out, say).
+#[must_use]
+pub fn misfit_of(
+    rows: &[Row],
+    electrodes: u16,
+    (v, model): (&[f64], &[f64]),
+    electrode: u16,
+    without: &[u16],
+) -> Option<ElectrodeMisfit> {
+    let without: Vec<u16> = without
+        .iter()
+        .copied()
+        .filter(|e| *e != electrode)
+        .collect();
+    *each_misfit(rows, electrodes, (v, model), &without).get(usize::from(electrode))?
+}
+
 /// Every electrode of `rows` that [stands out](ElectrodeMisfit::stands_out) as detached or
 /// broken, each weighed without the others' values (two detached electrodes each raise the
 /// misfit of the rest against which the other is weighed, and neither stood out alone): the

@@ -124,6 +124,22 @@ impl Reconstructor {
         crate::background::electrode_misfit(schedule.rows(), electrodes, v0, &self.jac.frame)
     }
 
+    /// Electrode `electrode`'s misfit in `v` (K values, V) beside the model's frame of the
+    /// untouched sheet, leaving out the values `without` drive or measure
+    /// ([`crate::background::misfit_of`]); None for an electrode the schedule leaves out.
+    #[must_use]
+    pub fn misfit_of(
+        &self,
+        v: &[f64],
+        electrode: u16,
+        without: &[u16],
+    ) -> Option<crate::background::ElectrodeMisfit> {
+        let schedule = self.schedule();
+        let electrodes = u16::try_from(schedule.electrodes()).ok()?;
+        let rows = schedule.rows();
+        crate::background::misfit_of(rows, electrodes, (v, &self.jac.frame), electrode, without)
+    }
+
     /// Every electrode whose values in `v0` (K values, V) stand out from the model's frame of
     /// the untouched sheet as a detached or broken electrode's, each weighed without the
     /// others' ([`crate::background::detached_electrodes`]).

@@ -259,7 +259,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     // what was asked (it said so every second, without end).
     let (mut unscanned, mut reported) = (0, 0);
     // Electrodes said to stand out as detached (in V_0, or in a frame since).
-    let mut said_off: Vec<u16> = Vec::new();
+    let mut contacts = et_host::live::Contacts::default();
     // The board's flags said (`FLAG_*` bits), and the frames flagged.
     let (mut said_flags, mut flagged) = (et_host::live::FlagsSaid::default(), 0u64);
     while seen < limit {
@@ -340,26 +340,12 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
                 imaged += 1;
                 // Once the reference is complete: what is wrong with it.
                 if imaged == 1 {
-                    said_off = say_of_the_reference(&processor);
+                    contacts.reference(&say_of_the_reference(&processor));
                 }
             }
-            // An electrode that came off since (or one V_0 named, said once).
-            if let Some(m) = &out.electrode_off
-                && !said_off.contains(&m.electrode)
-            {
-                said_off.push(m.electrode);
-                if let Some(said) = m.said(0) {
-                    say!(
-                        "warning: frame {}: {said} Not in V_0: a clip or wire come off while \
-                         streaming, or a contact that opens now and then? Its values place \
-                         touches wrongly: --skip-electrodes {} leaves its values out",
-                        out.frame.seq,
-                        skip_with(processor.left_out(), &[m.electrode])
-                    );
-                    if let Some(said) = processor.classifier_reads_said(&[m.electrode]) {
-                        say!("warning: {said}");
-                    }
-                }
+            // An electrode that came off since V_0, or came back, or off again.
+            if let Some(contact) = contacts.watch(&out, &processor) {
+                say_contact(&contact, &processor, out.frame.seq);
             }
             if let Some(event) = out.event {
                 let line = serde_json::to_string(&event)?;
@@ -447,6 +433,38 @@ fn say_of_the_reference(processor: &et_host::live::Processor) -> Vec<u16> {
         say!("warning: {said}");
     }
     detached.unwrap_or_default()
+}
+
+/// Says what changed of an electrode's contact at frame `seq` ([`et_host::live::Contacts`]):
+/// come off since V_0 was taken (with what the classifier reads of it), back, or off again.
+fn say_contact(contact: &et_host::live::Contact, processor: &et_host::live::Processor, seq: u32) {
+    use et_host::live::Contact;
+    let electrode = contact.electrode();
+    let leave = format!(
+        "--skip-electrodes {} leaves its values out",
+        skip_with(processor.left_out(), &[electrode])
+    );
+    let said = match contact {
+        Contact::Off {
+            misfit, times: 1, ..
+        } => misfit.said(0).map(|said| {
+            format!(
+                "{said} Not in V_0: a clip or wire come off while streaming, or a contact that \
+                 opens now and then? Its values place touches wrongly: {leave}"
+            )
+        }),
+        other => other.said("start et stream again with the sheet untouched", &leave),
+    };
+    let Some(said) = said else { return };
+    match contact {
+        Contact::Back { in_v0: false, .. } => say!("note: frame {seq}: {said}"),
+        _ => say!("warning: frame {seq}: {said}"),
+    }
+    if matches!(contact, Contact::Off { times: 1, .. })
+        && let Some(said) = processor.classifier_reads_said(&[electrode])
+    {
+        say!("warning: {said}");
+    }
 }
 
 /// `--skip-electrodes`' value for the electrodes `left_out` and `more`: "3,7".
