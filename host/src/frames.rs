@@ -9,9 +9,10 @@
 
 use std::path::{Path, PathBuf};
 
-use et_learn::npz::{Npz, NpzError};
+use et_learn::npz::NpzError;
 use nalgebra::DMatrix;
 
+mod arrays;
 mod csv_frames;
 mod mat;
 use csv_frames::csv_matrix;
@@ -177,6 +178,19 @@ pub enum FramesFault {
         /// NAME, VARIABLE.
         placeholder: &'static str,
     },
+    /// A file of another kind named as an array file (a picture, a spreadsheet, HDF5).
+    #[error("{what}, though named .{ext}: {fix}")]
+    OtherKind {
+        /// What it is.
+        what: String,
+        /// Its name's ending.
+        ext: String,
+        /// How to write frames from it.
+        fix: String,
+    },
+    /// An array named in a `.npy`, which holds one.
+    #[error("a .npy holds one array, not one named '{0}': give the file alone")]
+    NpyName(String),
     /// A MATLAB 7.3 file.
     #[error("a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV")]
     Mat73,
@@ -286,6 +300,27 @@ fn content(path: &Path, line: usize, fault: FramesFault) -> FramesError {
     }
 }
 
+/// The matrix of a table of text and what is said of it: et's other files refused as what they are (its comments
+/// and header skipped and its columns read as a frame's values, a protocol file's 5 columns
+/// were 5 frames).
+fn text_matrix(path: &Path) -> Result<(DMatrix<f64>, String), FramesError> {
+    let text = et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(
+        |source| FramesError::Io {
+            path: path.into(),
+            source,
+        },
+    )?;
+    match et_core::text::EtFile::of(&text) {
+        Some(et_core::text::EtFile::Dataset) => Err(content(path, 1, FramesFault::Dataset)),
+        Some(et_core::text::EtFile::Protocol) => {
+            // A hardware log's value columns beside the electrodes' (not current_a).
+            let others = et_core::text::EtFile::columns_beside_protocol(&text).unwrap_or(0);
+            Err(content(path, 1, FramesFault::Protocol { others }))
+        }
+        _ => csv_matrix(path, &text),
+    }
+}
+
 /// Whether `spec` names a table of frames this module reads (by its extension), rather than
 /// an et recording.
 #[must_use]
@@ -301,9 +336,10 @@ pub fn is_table(spec: &Path) -> bool {
 }
 
 /// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).
+/// (`file.npy:NAME` too: a file named .npy may hold an archive or a MATLAB file.)
 fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
     let s = spec.to_string_lossy();
-    for ext in [".npz:", ".mat:"] {
+    for ext in [".npz:", ".mat:", ".npy:"] {
         if let Some((file, name)) = s.rsplit_once(ext)
             && !name.is_empty()
         {
@@ -338,55 +374,9 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    let io = |source| FramesError::Io {
-        path: path.clone(),
-        source,
-    };
-    let npz = |error| FramesError::Npz {
-        path: path.clone(),
-        error,
-    };
     let (matrix, said) = match ext.as_str() {
-        "npy" => {
-            let bytes =
-                et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?;
-            let archive = Npz::from_npy(bytes);
-            if archive.is_boolean("array") {
-                let fault = FramesFault::Booleans("array".into());
-                return Err(content(&path, 0, fault));
-            }
-            (npy_matrix(&archive, "array").map_err(npz)?, String::new())
-        }
-        "npz" => {
-            let archive = Npz::read(
-                et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?,
-            )
-            .map_err(npz)?;
-            npz_matrix(&path, &archive, array.as_deref())?
-        }
-        "mat" => mat_matrix(
-            &path,
-            &et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(io)?,
-            array.as_deref(),
-        )?,
-        _ => {
-            let text = et_core::text::read_text_at_most(&path, et_core::text::max_file_bytes())
-                .map_err(io)?;
-            // (Its comments and header skipped, its columns read as a frame's values: a
-            // protocol file's 5 columns were 5 frames.)
-            match et_core::text::EtFile::of(&text) {
-                Some(et_core::text::EtFile::Dataset) => {
-                    return Err(content(&path, 1, FramesFault::Dataset));
-                }
-                Some(et_core::text::EtFile::Protocol) => {
-                    // A hardware log's value columns beside the electrodes' (not current_a).
-                    let others = et_core::text::EtFile::columns_beside_protocol(&text).unwrap_or(0);
-                    return Err(content(&path, 1, FramesFault::Protocol { others }));
-                }
-                _ => {}
-            }
-            csv_matrix(&path, &text)?
-        }
+        "npy" | "npz" | "mat" => arrays::matrix(&path, &ext, array.as_deref())?,
+        _ => text_matrix(&path)?,
     };
     let (rows, cols) = matrix.shape();
     if let Some((i, v)) = matrix.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -504,45 +494,4 @@ fn columns_alike(m: &DMatrix<f64>) -> bool {
         about_columns += (v - column_means[c]).powi(2);
     }
     4.0 * about_rows < about_columns
-}
-
-/// The array `name` of an `.npz` (or its only one) as a matrix, and what was said of it.
-fn npz_matrix(
-    path: &Path,
-    archive: &Npz,
-    name: Option<&str>,
-) -> Result<(DMatrix<f64>, String), FramesError> {
-    let names: Vec<&str> = archive.names().collect();
-    let name = match (name, names.as_slice()) {
-        (Some(n), _) => n.to_string(),
-        (None, [only]) => (*only).to_string(),
-        (None, []) => return Err(content(path, 0, FramesFault::Nothing { kind: "arrays" })),
-        (None, _) => {
-            let fault = FramesFault::Choose {
-                names: names.iter().map(|n| (*n).to_string()).collect(),
-                kind: "arrays",
-                path: path.into(),
-                placeholder: "NAME",
-            };
-            return Err(content(path, 0, fault));
-        }
-    };
-    if archive.is_boolean(&name) {
-        return Err(content(path, 0, FramesFault::Booleans(name)));
-    }
-    let m = npy_matrix(archive, &name).map_err(|error| FramesError::Npz {
-        path: path.into(),
-        error,
-    })?;
-    Ok((m, format!("array '{name}', ")))
-}
-
-/// A 1-D array as one row, a 2-D one as it is.
-fn npy_matrix(archive: &Npz, name: &str) -> Result<DMatrix<f64>, NpzError> {
-    archive
-        .matrix(name)
-        .or_else(|e| match archive.vector(name) {
-            Ok(v) => Ok(DMatrix::from_row_slice(1, v.len(), &v)),
-            Err(_) => Err(e),
-        })
 }

@@ -341,6 +341,8 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         Some(format) if format != FORMAT => {
             return Err(bad(1, LineFault::Format(format.to_string())));
         }
+        // (A JSON file of another tool's was said as "missing field `format`".)
+        None if header.get("format").is_none() => return Err(bad(1, LineFault::NoFormat)),
         _ => {}
     }
     let header: Header =

@@ -391,6 +391,7 @@ impl Scene {
                 line,
             });
         }
+        let blank = |l: &str| l.trim().is_empty() || l.trim_start().starts_with('#');
         let mut scene: Scene = toml::from_str(text).map_err(|error| {
             // Another of et's files is said as what it is (no scene's first line is one's).
             match et_core::text::EtFile::of(text) {
@@ -398,6 +399,9 @@ impl Scene {
                     path: name.into(),
                     kind,
                 },
+                None if text.trim_start_matches('\u{feff}').lines().all(blank) => {
+                    SceneError::Empty { path: name.into() }
+                }
                 None => SceneError::Parse {
                     path: name.into(),
                     error,

@@ -159,7 +159,7 @@ const ANOTHER_KIND: &str = "a file of another kind given?";
 /// as a table of text, for the files users give in place of a text file most often (a
 /// spreadsheet, another format's array, a picture); None for any other.
 #[must_use]
-fn binary_kind(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
+pub fn binary_kind(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
     const KINDS: [(&[u8], usize, &str, &str); 8] = [
         (
             b"PK\x03\x04",

@@ -45,6 +45,13 @@ pub enum LineFault {
         et_learn::model_file::json_said(.0, true)
     )]
     NotJson(serde_json::Error),
+    /// The first line is JSON without a "format": another tool's JSON.
+    #[error(
+        "not an et recording: its first line is JSON without et's \"format\": \"{FORMAT}\" \
+         (another tool's file?); et sim and et record write recordings, another system's \
+         frames are read from .csv, .npy, .npz or .mat"
+    )]
+    NoFormat,
     /// The header is JSON but not the format's fields (named by their place).
     #[error("header: {}", et_learn::model_file::json_said(.0, true))]
     Header(serde_json::Error),

@@ -316,9 +316,92 @@ fn matlab_files_by_variable() {
     std::fs::write(&f, b"MATLAB 7.3 MAT-file, Platform: GLNXA64").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("-v7"), "{e}");
-    std::fs::write(&f, b"not a mat file at all").unwrap();
+    std::fs::write(&f, b"\x00\x01not a mat file at all").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("tank.mat") && e.contains("not a MATLAB"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A file named for one array format and holding another (`scipy.io.savemat("f.npy")`, a
+/// renamed file) is read as what its first bytes say, and said so; one holding text is read
+/// as a table (each was refused as "no magic" or "not a MATLAB version 5 or 7 file: a
+/// version 4 file?"); a picture or an HDF5 file is named as what it is. A name given to a
+/// .npy, which holds one array, is refused (it was not split from the path).
+#[test]
+fn array_files_are_read_by_what_they_hold_not_their_name() {
+    let dir = tmp("held");
+    let m = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    let mut w = et_learn::npz::Writer::new();
+    w.matrix("frames", &m);
+    let npz = w.finish().unwrap();
+    let mat = mat_v5("v", &m);
+    let csv = b"1,2,3\n4,5,6\n".to_vec();
+    let frames = [vec![1.0, 2.0, 3.0], vec![4.0, 5.0, 6.0]];
+    for (name, bytes, said) in [
+        (
+            "a.npy",
+            &mat,
+            "a MATLAB .mat file by its first bytes, though named .npy",
+        ),
+        (
+            "a.mat",
+            &npz,
+            "a NumPy .npz archive by its first bytes, though named .mat",
+        ),
+        (
+            "b.npz",
+            &mat,
+            "a MATLAB .mat file by its first bytes, though named .npz",
+        ),
+        ("t.npy", &csv, "text, though named .npy, read as a table"),
+        ("t.mat", &csv, "text, though named .mat, read as a table"),
+    ] {
+        let f = dir.join(name);
+        std::fs::write(&f, bytes).unwrap();
+        let r = read(&f, 3).unwrap();
+        assert_eq!(r.frames, frames, "{name}");
+        assert!(r.description.contains(said), "{}", r.description);
+    }
+    // Its array named as its own format's are.
+    let two = [mat.clone(), mat_v5("w", &m)[128..].to_vec()].concat();
+    std::fs::write(dir.join("two.npy"), &two).unwrap();
+    let e = read(&dir.join("two.npy"), 3).unwrap_err().to_string();
+    assert!(e.contains("two.npy:VARIABLE"), "{e}");
+    assert_eq!(read(&dir.join("two.npy:w"), 3).unwrap().frames, frames);
+    std::fs::write(dir.join("one.npy"), npy_file("<f8", (2, 3), &[0; 48])).unwrap();
+    let e = read(&dir.join("one.npy:x"), 3).unwrap_err().to_string();
+    assert!(
+        e.contains("a .npy holds one array, not one named 'x'"),
+        "{e}"
+    );
+    for (bytes, said) in [
+        (
+            &b"\x89PNG\r\n\x1a\n\x00\x00"[..],
+            "a PNG picture, though named .mat",
+        ),
+        (
+            b"\x89HDF\r\n\x1a\n\x00\x00",
+            "an HDF5 file (h5py, MATLAB's -v7.3), though named .mat",
+        ),
+    ] {
+        std::fs::write(dir.join("x.mat"), bytes).unwrap();
+        let e = read(&dir.join("x.mat"), 3).unwrap_err().to_string();
+        assert!(e.contains(said), "{e}");
+    }
+    // A workbook (a zip archive of parts such as Excel writes, no .npy among them), named
+    // .npz or .mat: an archive whose one entry is renamed as an Office part.
+    let mut xlsx = et_learn::npz::Writer::new();
+    xlsx.matrix("[Content_Types]", &m);
+    let mut xlsx = xlsx.finish().unwrap();
+    let (npy, xml) = (b"[Content_Types].npy", b"[Content_Types].xml");
+    while let Some(at) = xlsx.windows(npy.len()).position(|w| w == npy) {
+        xlsx[at..at + npy.len()].copy_from_slice(xml);
+    }
+    for name in ["book.npz", "book.mat"] {
+        std::fs::write(dir.join(name), &xlsx).unwrap();
+        let e = read(&dir.join(name), 3).unwrap_err().to_string();
+        assert!(e.contains("an Excel .xlsx workbook"), "{e}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -260,6 +260,17 @@ fn what_is_not_a_recording_is_said_so() {
         "{err}"
     );
     assert!(!err.contains("at line"), "{err}");
+    // Another tool's JSON, without a "format": said as not et's ("header: missing field
+    // `format`" was all it said).
+    for json in ["{\"a\": 1}", "[1, 2, 3]"] {
+        std::fs::write(&path, format!("{json}\n")).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("r.jsonl:1: not an et recording: its first line is JSON without et's")
+                && !err.contains("missing field"),
+            "{err}"
+        );
+    }
     // Another JSON format: said by its format before its fields are asked for.
     std::fs::write(&path, "{\"format\":\"et-model\",\"version\":2}\n").unwrap();
     let err = read(&path).unwrap_err().to_string();

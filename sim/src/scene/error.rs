@@ -14,6 +14,17 @@ pub enum SceneError {
         /// The reason.
         source: std::io::Error,
     },
+    /// A file of no table or key (empty, or comments alone): the TOML parser's "missing
+    /// field `sheet`" pointed at its first line.
+    #[error(
+        "{path}: an empty scene (no table or key in it): a scene is a TOML file of [sheet], \
+         [scan] and [[touch]] tables, as in sim/scenes/; its [sheet] at least (shape and \
+         electrodes)"
+    )]
+    Empty {
+        /// The file.
+        path: String,
+    },
     /// Another of et's files given as a scene (a recording, a dataset, a model file, a
     /// protocol file): said as what it is and where it goes (the TOML parser's "invalid
     /// key-value pair" was all it said).

@@ -246,7 +246,7 @@ fn a_file_that_is_no_scene_is_said_shortly() {
 }
 
 /// Another of et's files given as a scene is said as what it is (the parser's "invalid
-/// key-value pair, expected key" was all it said of a recording).
+/// key-value pair, expected key" was all it said of a recording), and an empty one as empty.
 #[test]
 fn another_of_ets_files_given_as_a_scene_is_named() {
     for (text, said) in [
@@ -264,6 +264,9 @@ fn another_of_ets_files_given_as_a_scene_is_named() {
              and [[touch]] tables, as in sim/scenes/): a scene names it as [scan] protocol = { \
              file = \"FILE\" }",
         ),
+        // An empty file, or one of comments alone ("missing field `sheet`" at line 1).
+        ("", "r: an empty scene (no table or key in it)"),
+        ("\u{feff}# a scene\n\n  # to write\n", "r: an empty scene"),
     ] {
         let e = Scene::parse(text, "r").unwrap_err().to_string();
         assert!(e.contains(said), "{e}");

@@ -238,6 +238,14 @@ pub enum MeshError {
         /// Why.
         source: import::ReadError,
     },
+    /// A file of another kind given as a mesh file: what it is, and what a mesh file is.
+    #[error("{}: {said}; {}", path.display(), import::MESH_FILES)]
+    NotMesh {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What it is.
+        said: String,
+    },
     /// A mesh file that is not a mesh at a line.
     #[error("{}:{line}: {fault}", path.display())]
     File {

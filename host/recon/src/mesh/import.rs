@@ -28,7 +28,7 @@ mod fault;
 use checks::{
     centre_node, check_connected, check_topology, check_unshared, orient, point_electrodes,
 };
-pub use fault::{FileFault, ReadError};
+pub use fault::{FileFault, MESH_FILES, ReadError};
 
 fn bad(path: &Path, line: usize, fault: FileFault) -> MeshError {
     MeshError::File {
@@ -93,7 +93,23 @@ impl Mesh {
     /// [`MeshError::Read`] or [`MeshError::File`] naming the file (and line), or what
     /// [`Mesh::from_parts`] finds.
     pub fn from_gmsh(path: &Path) -> Result<Self, MeshError> {
-        let text = read(path)?;
+        // A file that is not text (an .npz of pyEIT's arrays, a .mat of EIDORS') is said with
+        // what a mesh file is.
+        let limit = et_core::text::max_file_bytes();
+        let text = et_core::text::read_document_at_most(path, limit).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::InvalidData {
+                let said = e.to_string();
+                MeshError::NotMesh {
+                    path: path.into(),
+                    said,
+                }
+            } else {
+                MeshError::Read {
+                    path: path.into(),
+                    source: ReadError(std::sync::Arc::new(e)),
+                }
+            }
+        })?;
         let lines: Vec<&str> = text.lines().collect();
         let find = |tag: &str| lines.iter().position(|l| l.trim() == tag);
         let fmt = find("$MeshFormat").ok_or_else(|| bad(path, 1, FileFault::NotGmsh))?;

@@ -235,6 +235,31 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     std::fs::write(&p, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n").unwrap();
     let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
     assert!(e.contains("v4.msh:2") && e.contains("msh22"), "{e}");
+    // One CSV alone, and a file that is not text (pyEIT's arrays in an .npz): said with what a
+    // mesh file is ("no $MeshFormat: not a Gmsh file" alone; the table reader's "save a sheet
+    // as CSV").
+    for (name, bytes, said) in [
+        (
+            "nodes.csv",
+            &b"0,0\n1,0\n"[..],
+            "nodes.csv:1: no $MeshFormat: not a Gmsh file; a mesh is",
+        ),
+        (
+            "mesh.npz",
+            b"PK\x03\x04\x14\x00\xb8\xff",
+            "mesh.npz: a zip archive",
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(said)
+                && e.contains("nodes.csv,triangles.csv,electrodes.csv")
+                && !e.contains("save a sheet"),
+            "{e}"
+        );
+    }
     let p = dir.join("n.msh");
     std::fs::write(
         &p,

@@ -1,5 +1,10 @@
 //! What is wrong with a mesh file: the fault at a line, or why it could not be read.
 
+/// What a mesh file is, said where another file came in its place.
+pub const MESH_FILES: &str = "a mesh is a Gmsh 2.2 ASCII .msh file (gmsh -format msh22), or three \
+     CSV files given together, nodes.csv,triangles.csv,electrodes.csv (each row a node's x, y \
+     in m; a triangle's three node numbers, from 0; an electrode's boundary nodes)";
+
 /// What is wrong at a line of a mesh file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -34,7 +39,7 @@ pub enum FileFault {
         count: usize,
     },
     /// No `$MeshFormat`.
-    #[error("no $MeshFormat: not a Gmsh file")]
+    #[error("no $MeshFormat: not a Gmsh file; {MESH_FILES}")]
     NotGmsh,
     /// A Gmsh version other than 2.
     #[error("Gmsh format {version}: only 2.2 ASCII is read; save with `gmsh -format msh22`")]

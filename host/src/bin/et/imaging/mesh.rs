@@ -67,7 +67,7 @@ pub(super) fn mesh_plan(
         Some(f) => MeshPlan::Given(match f.split(',').collect::<Vec<_>>()[..] {
             [one] => Mesh::from_gmsh(std::path::Path::new(one))?,
             [n, t, e] => Mesh::from_csv(n.as_ref(), t.as_ref(), e.as_ref())?,
-            _ => bail!("--mesh '{f}': a .msh file, or nodes.csv,triangles.csv,electrodes.csv"),
+            _ => bail!("--mesh '{f}': {}", et_recon::mesh::import::MESH_FILES),
         }),
     })
 }
