@@ -145,12 +145,12 @@ impl Decoder {
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
     /// The port could not be opened.
-    #[error("cannot open serial port {path}: {source} (`et ports` lists the ports)")]
+    #[error("{}", open_said(path, error))]
     Open {
         /// The port's path.
         path: String,
-        /// Why.
-        source: serialport::Error,
+        /// Why (said in the message where it adds to it; not a cause said again).
+        error: serialport::Error,
     },
     /// Writing to the port failed (the cable may be out: the reader reconnects).
     #[error("writing to the serial port: {0}")]
@@ -227,6 +227,43 @@ type Port = Box<dyn serialport::SerialPort>;
 /// Opens the port at `path`, the bytes already waiting in it dropped: what a board sent
 /// while no one read (a board that streamed to nobody) is not this link's, and its frames
 /// were taken as the first, then the gap to the board's frames now as frames lost.
+/// Why the port at `path` could not be opened, in words, with what to do: a path that is a
+/// file, a folder or a device that is no terminal is not a port; a port another program holds,
+/// or one the user may not open (Linux: the `dialout` group), is said so (the system's "Not a
+/// typewriter" and "Permission denied" were all they said).
+fn open_said(path: &str, error: &serialport::Error) -> String {
+    const LIST: &str = "`et ports` lists the ports";
+    let said = error.to_string();
+    let meta = std::fs::metadata(path);
+    let why = if path.trim().is_empty() {
+        return format!("no serial port given: give the board's port ({LIST})");
+    } else if meta.as_ref().is_ok_and(std::fs::Metadata::is_dir) {
+        "a folder, not a port".to_string()
+    } else if meta.as_ref().is_ok_and(std::fs::Metadata::is_file) {
+        "a file, not a port (a recording is played with --replay: et stream, et view)".to_string()
+    } else if meta.is_err() {
+        "no such port: is the board plugged in, and the path right?".to_string()
+    } else if said.contains("typewriter") || said.contains("Inappropriate ioctl") {
+        format!("not a serial port ({said})")
+    } else if matches!(
+        error.kind(),
+        serialport::ErrorKind::Io(std::io::ErrorKind::PermissionDenied)
+    ) || said.contains("Permission denied")
+    {
+        "permission denied: on Linux, join the group that owns the port (often dialout: \
+         sudo usermod -aG dialout $USER, then log in again)"
+            .to_string()
+    } else if said.contains("busy") {
+        format!(
+            "{said}: another program holds it (a viewer or et stream left open, a serial \
+                 monitor?)"
+        )
+    } else {
+        said
+    };
+    format!("cannot open serial port {path}: {why} ({LIST})")
+}
+
 fn open(path: &str, baud: u32) -> Result<Port, serialport::Error> {
     let port = serialport::new(path, baud).timeout(READ_TIMEOUT).open()?;
     port.clear(serialport::ClearBuffer::Input)?;
@@ -251,13 +288,13 @@ impl Link {
     /// # Errors
     /// [`LinkError::Open`] if the port cannot be opened.
     pub fn open(path: &str, baud: u32) -> Result<Self, LinkError> {
-        let port = open(path, baud).map_err(|source| LinkError::Open {
+        let port = open(path, baud).map_err(|error| LinkError::Open {
             path: path.to_string(),
-            source,
+            error,
         })?;
-        let writer = port.try_clone().map_err(|source| LinkError::Open {
+        let writer = port.try_clone().map_err(|error| LinkError::Open {
             path: path.to_string(),
-            source,
+            error,
         })?;
         let writer = Arc::new(Mutex::new(Some(writer)));
         let counters = Arc::new(Mutex::new(Counters::default()));
@@ -276,7 +313,7 @@ impl Link {
             .spawn(move || reader.run(port))
             .map_err(|e| LinkError::Open {
                 path: path.to_string(),
-                source: e.into(),
+                error: e.into(),
             })?;
         Ok(Self {
             path: path.to_string(),

@@ -210,6 +210,42 @@ fn frames(link: &mut Link, n: usize) -> Vec<HostFrame> {
     out
 }
 
+/// A path that is no port is said as what it is, with what to do: no path, a file (a
+/// recording given as the port), a folder, a device that is no terminal, nothing there (the
+/// system's "Not a typewriter", "Is a directory" and "No such file or directory" were all they
+/// said).
+#[test]
+fn a_path_that_is_no_port_is_said_as_what_it_is() {
+    let dir = temp_dir("noport");
+    let file = dir.join("r.jsonl");
+    std::fs::write(&file, "{}\n").unwrap();
+    let (file, folder) = (file.display().to_string(), dir.display().to_string());
+    let missing = dir.join("ttyACM9").display().to_string();
+    for (path, said) in [
+        (
+            "",
+            "no serial port given: give the board's port (`et ports` lists the ports)",
+        ),
+        (
+            file.as_str(),
+            "a file, not a port (a recording is played with --replay",
+        ),
+        (folder.as_str(), "a folder, not a port"),
+        ("/dev/null", "not a serial port"),
+        (
+            missing.as_str(),
+            "no such port: is the board plugged in, and the path right?",
+        ),
+    ] {
+        let e = Link::open(path, 115_200).unwrap_err().to_string();
+        assert!(
+            e.contains(said) && e.ends_with("(`et ports` lists the ports)"),
+            "{path}: {e}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Frames a board sent while no one read them, waiting in the port, are dropped when a link
 /// opens it: its first frame is one the board sends now (they were taken, and the gap from
 /// them to the board's frames now counted as frames lost: the viewer's "lost" on connecting).

@@ -112,7 +112,16 @@ impl Mesh {
         })?;
         let lines: Vec<&str> = text.lines().collect();
         let find = |tag: &str| lines.iter().position(|l| l.trim() == tag);
-        let fmt = find("$MeshFormat").ok_or_else(|| bad(path, 1, FileFault::NotGmsh))?;
+        let Some(fmt) = find("$MeshFormat") else {
+            // Another of et's files (a recording, a protocol file) said as what it is.
+            return Err(match et_core::text::EtFile::of(&text) {
+                Some(kind) => MeshError::NotMesh {
+                    path: path.into(),
+                    said: format!("{}, not a mesh", kind.said()),
+                },
+                None => bad(path, 1, FileFault::NotGmsh),
+            });
+        };
         let head: Vec<&str> = lines
             .get(fmt + 1)
             .map(|l| l.split_whitespace().collect())

@@ -235,14 +235,19 @@ fn bad_files_name_the_file_and_line_and_slivers_stay_finite() {
     std::fs::write(&p, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n").unwrap();
     let e = Mesh::from_gmsh(&p).unwrap_err().to_string();
     assert!(e.contains("v4.msh:2") && e.contains("msh22"), "{e}");
-    // One CSV alone, and a file that is not text (pyEIT's arrays in an .npz): said with what a
-    // mesh file is ("no $MeshFormat: not a Gmsh file" alone; the table reader's "save a sheet
+    // One CSV alone, an et recording, and a file that is not text (pyEIT's arrays in an .npz):
+    // said with what a mesh file is ("no $MeshFormat: not a Gmsh file" alone; the table reader's "save a sheet
     // as CSV").
     for (name, bytes, said) in [
         (
             "nodes.csv",
             &b"0,0\n1,0\n"[..],
             "nodes.csv:1: no $MeshFormat: not a Gmsh file; a mesh is",
+        ),
+        (
+            "r.jsonl",
+            b"{\"format\":\"et-recording\",\"version\":1}\n",
+            "r.jsonl: an et recording (et sim, et record), not a mesh; a mesh is",
         ),
         (
             "mesh.npz",
