@@ -334,8 +334,13 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
         et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(io)?;
     let lines: Vec<&str> = text.lines().collect();
     let first = lines.first().ok_or_else(|| bad(1, LineFault::Empty))?;
-    let header = serde_json::from_str::<serde_json::Value>(first)
-        .map_err(|e| bad(1, LineFault::NotJson(e)))?;
+    let header = serde_json::from_str::<serde_json::Value>(first).map_err(|e| {
+        match et_core::text::EtFile::of(&text) {
+            // Another of et's files (a dataset, a protocol file) said as what it is.
+            Some(kind) => bad(1, LineFault::OtherFile(kind)),
+            None => bad(1, LineFault::NotJson(e)),
+        }
+    })?;
     // Another format's JSON is said as such before its fields are asked for.
     match header.get("format").and_then(serde_json::Value::as_str) {
         Some(format) if format != FORMAT => {

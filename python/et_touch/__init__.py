@@ -439,7 +439,12 @@ class Protocol:
         count from 1); rows without a current drive ``current_a``."""
         table = _numbers(rows, "rows")
         if table.ndim != 2 or table.shape[1] not in (4, 5):
-            raise EtError(f"rows: shape {table.shape}; give N x 4 or N x 5")
+            # A number first (the arguments swapped) said as one, not as "shape (1,)".
+            given = f"rows = {rows!r}: a number" if np.ndim(rows) == 0 else f"rows: shape {table.shape}"
+            raise EtError(
+                f"{given}; give the rows, N x 4 (source, sink, positive, negative) or N x 5 (a "
+                "current last), then the electrodes: Protocol.from_rows(rows, electrodes)"
+            )
         if base not in (0, 1) or isinstance(base, bool):
             raise EtError(f"base = {base!r}: electrodes are counted from 0 (et's) or 1")
         n = _count(electrodes, "electrodes", 2)
@@ -521,7 +526,11 @@ def protocol(name: str, electrodes: int = 16, current_a: float = 1e-3) -> Protoc
     ``electrodes`` electrodes, driving ``current_a`` (A)."""
     n = _count(electrodes, "electrodes", domain="electrodes")
     name = _text(name, "name", "'adjacent', 'pseudo-polar', 'pp-pp' or 'opposite'").lower()
-    rows, currents = _native.protocol_table(name, n, _real(current_a, "current_a"))
+    current = _real(current_a, "current_a")
+    if not current > 0 or not np.isfinite(current):
+        # (The table's rows said it: "row 0: current 0 A".)
+        raise EtError(f"current_a = {current!r}: give the current driven, above 0 A (1e-3 is 1 mA)")
+    rows, currents = _native.protocol_table(name, n, current)
     return Protocol(n, rows, currents, name)
 
 

@@ -362,6 +362,10 @@ impl Model {
                 Self::Output(e)
             }
         }
+        // Checked as the CLI's outputs are (a folder, a path whose folder is missing: the
+        // system's "Is a directory (os error 21)" and the file aside's name were said); a
+        // file there is replaced, as Python's writers do.
+        et_host::output::check(&path, &[], true).map_err(|e| refused(&e))?;
         et_host::output::write(&path, |aside| {
             self.inner.save(aside).map_err(|e| Unsaved::Model(said(&e)))
         })

@@ -304,6 +304,11 @@ def test_a_built_in_protocol_with_a_row_current_changed_keeps_it():
         (lambda: et.Protocol.from_rows([[0, 1, 2, 16]], 16), "give base=1"),
         (lambda: et.Protocol.from_rows([[0, 1, 2, -1]], 16), "electrodes are 0 to 15"),
         (lambda: et.Protocol.from_rows([[0, 1, 2, 3]], 0), "electrodes = 0: a whole number of at least 2"),
+        # The arguments swapped: the number said as one ("rows: shape (1,)"); a built-in
+        # protocol's current said by its name ("row 0: current 0 A").
+        (lambda: et.Protocol.from_rows(16, [[0, 1, 2, 3]]), "rows = 16: a number; give the rows"),
+        (lambda: et.protocol("adjacent", 16, 0.0), "current_a = 0.0: give the current driven, above 0 A"),
+        (lambda: et.protocol("adjacent", 16, float("nan")), "current_a = nan"),
         (
             lambda: et.Reconstructor(et.disc(0.1, 16), et.protocol("adjacent", 16), iterations=1.5),
             "iterations = 1.5",

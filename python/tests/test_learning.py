@@ -350,10 +350,15 @@ def test_a_save_that_fails_leaves_what_was_there_and_no_partial_file(tmp_path):
     folder = tmp_path / "f.json"
     folder.mkdir()
     (folder / "keep").write_text("keep")
-    with pytest.raises(et.EtError):
+    # (Said as the CLI says it: "Is a directory (os error 21)" was all it said.)
+    with pytest.raises(et.EtError, match="f.json is a folder, not a regular file"):
         model.save(folder)
     assert (folder / "keep").read_text() == "keep"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.json", "m.json"]
+    # Into a folder that is not there: said so (the file aside's name and the system's "No
+    # such file or directory (os error 2)" were).
+    with pytest.raises(et.EtError, match="the folder .*none does not exist"):
+        model.save(tmp_path / "none" / "m.json")
 
 
 @pytest.mark.parametrize("progress", [None, lambda what, done, total: None])

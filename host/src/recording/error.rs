@@ -52,6 +52,18 @@ pub enum LineFault {
          frames are read from .csv, .npy, .npz or .mat"
     )]
     NoFormat,
+    /// Another of et's files than a recording (a dataset, a protocol file).
+    #[error(
+        "{}, not a recording: {}",
+        .0.said(),
+        match .0 {
+            et_core::text::EtFile::Dataset => "give it as --data (et train, et eval)",
+            et_core::text::EtFile::Protocol =>
+                "a scene names it as [scan] protocol = { file = \"FILE\" }",
+            _ => "et sim and et record write recordings",
+        }
+    )]
+    OtherFile(et_core::text::EtFile),
     /// The header is JSON but not the format's fields (named by their place).
     #[error("header: {}", et_learn::model_file::json_said(.0, true))]
     Header(serde_json::Error),

@@ -271,6 +271,21 @@ fn what_is_not_a_recording_is_said_so() {
             "{err}"
         );
     }
+    // Another of et's files: said as what it is (a dataset was "its first line is not JSON").
+    for (text, said) in [
+        (
+            "# et-dataset 2\nf0,label\n1,0\n",
+            "r.jsonl:1: an et dataset (et collect), not a recording: give it as --data",
+        ),
+        (
+            "source,sink,positive,negative\n0,1,2,3\n",
+            "r.jsonl:1: a protocol file (et protocol --csv), not a recording",
+        ),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(err.contains(said), "{err}");
+    }
     // Another JSON format: said by its format before its fields are asked for.
     std::fs::write(&path, "{\"format\":\"et-model\",\"version\":2}\n").unwrap();
     let err = read(&path).unwrap_err().to_string();
