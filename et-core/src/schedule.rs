@@ -108,7 +108,11 @@ fn header_columns(
         return Ok((true, columns));
     }
     if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
-        let names = first.iter().collect::<Vec<_>>().join(", ");
+        // (A dataset's 200 feature names were all said.)
+        let mut names = first.iter().take(6).collect::<Vec<_>>().join(", ");
+        if first.len() > 6 {
+            names += &format!(", ... ({} columns)", first.len());
+        }
         return Err(FileFault::OtherNames(names));
     }
     if first.len() == 4 || first.len() == 5 {
@@ -380,6 +384,10 @@ impl Schedule {
         };
         if base > 1 {
             return Err(fail(0, FileFault::Base(base)));
+        }
+        // Another of et's files (a recording, a dataset, a model file) said as what it is.
+        if let Some(kind) = text::EtFile::of(text).filter(|k| *k != text::EtFile::Protocol) {
+            return Err(fail(1, FileFault::OtherFile(kind)));
         }
         let lines = text::lines(text);
         let records = text::RecordIter::new(&lines);

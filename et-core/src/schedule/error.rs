@@ -202,6 +202,13 @@ pub enum FileFault {
          optionally current_a (any order)"
     )]
     OtherNames(String),
+    /// Another of et's files given as a protocol file.
+    #[error(
+        "{}, not a protocol file (a CSV of source, sink, positive, negative and optionally \
+         current_a, as et protocol --csv writes)",
+        .0.said()
+    )]
+    OtherFile(crate::text::EtFile),
     /// Electrodes counted from neither 0 nor 1.
     #[error("base = {0}: electrodes are counted from 0 (et's) or 1")]
     Base(u16),

@@ -102,6 +102,23 @@ fn files_as_other_systems_write_them() {
 
 #[test]
 fn wrong_rows_are_named_by_line_and_cell() {
+    // Another of et's files said as what it is (a recording's JSON header was echoed whole),
+    // and a header of many other names cut short (a dataset's 200 feature names were said).
+    let e = parse("{\"format\":\"et-recording\",\"version\":1}\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.csv:1: an et recording (et sim, et record), not a protocol file"),
+        "{e}"
+    );
+    let names: Vec<String> = (0..200).map(|i| format!("f{i}")).collect();
+    let e = parse(&format!("{}\n", names.join(",")), 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the header names f0, f1, f2, f3, f4, f5, ... (200 columns): name the columns"),
+        "{e}"
+    );
     let e = parse("source,sink,positive,negative\n0,1,2,3\n0,1,2,16\n", 16, 0)
         .unwrap_err()
         .to_string();
