@@ -514,6 +514,47 @@ fn et_protocol_csv_is_a_protocol_file() {
             && said.contains("take it alone (--reference 1)"),
         "{said}"
     );
+    // `et stream` plays them: the protocol file's rows are pp-pp's, in et's order (it was
+    // refused as a protocol file); the same rows in another order are not, and are refused.
+    let stream = |scene: &str| {
+        et(&[
+            "stream",
+            "--json",
+            "--replay",
+            csv_s,
+            "--scene",
+            scene,
+            "--reference",
+            "1",
+        ])
+    };
+    let out = stream(scene);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && said.contains("(its protocol file's rows are pp-pp's)"),
+        "{said}"
+    );
+    let events = String::from_utf8_lossy(&out.stdout).lines().count();
+    assert!(events >= 15, "{events} of 21 frames placed a touch: {said}");
+    let text = std::fs::read_to_string(d.join("pp.csv")).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.swap(1, 2);
+    std::fs::write(d.join("swapped.csv"), lines.join("\n") + "\n").unwrap();
+    let other = d.join("swapped.toml");
+    std::fs::write(
+        &other,
+        std::fs::read_to_string(scene)
+            .unwrap()
+            .replace("pp.csv", "swapped.csv"),
+    )
+    .unwrap();
+    let out = stream(other.to_str().unwrap());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success()
+            && said.contains("a protocol file whose rows are none of the built-in protocols'"),
+        "{said}"
+    );
     // The protocol file given as frames (its 5 columns were read as 5 frames, one per
     // column, then refused as running against the model): said as what it is, and a hardware
     // log of each value's electrodes beside its values as that.

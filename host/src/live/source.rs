@@ -114,15 +114,16 @@ impl ReplaySource {
     }
 
     /// Another system's frames (a CSV, .npy, .npz or .mat of frames in volts,
-    /// [`crate::frames`]) played as a recording of `scene`'s built-in protocol and current
+    /// [`crate::frames`]) played as a recording of `scene`'s built-in protocol (or the one its
+    /// protocol file's rows are) and current
     /// (`scene_name`, its file as the user named it, for messages). A current above the
     /// board's 1 mA plays as 1 mA, the frames scaled to it ([`Scene::replay_config`]) and
     /// the source's name saying so.
     ///
     /// # Errors
-    /// [`LiveError::Table`] for a scene whose protocol is a file (the live pipeline scans et's
-    /// built-in protocols; `et reconstruct --frames` images any), [`LiveError::Frames`] naming
-    /// the file.
+    /// [`LiveError::Table`] for a scene whose protocol is a file of rows no built-in
+    /// protocol's (the live pipeline scans et's built-in protocols; `et reconstruct --frames`
+    /// images any), [`LiveError::Frames`] naming the file.
     pub fn open_table(path: &Path, scene: &Scene, scene_name: &str) -> Result<Self, LiveError> {
         let (config, scale) = scene.replay_config().map_err(|error| LiveError::Table {
             scene: scene_name.into(),
@@ -153,12 +154,18 @@ impl ReplaySource {
             })
             .collect();
         let mut name = frames.description;
+        let played_ua = f64::from(config.current_na) / 1e3;
+        if matches!(scene.scan.protocol, et_sim::scene::ProtocolSpec::File(_)) {
+            name += &format!(
+                " (its protocol file's rows are {}'s)",
+                config.protocol.name()
+            );
+        }
         if scale != 1.0 {
             name += &format!(
-                " (driven at {} uA, played as the board's {} uA: its volts times {scale:.4}, \
-                 the same images, positions and intensities)",
-                scene.scan.current_ua,
-                f64::from(config.current_na) / 1e3
+                " (driven at {} uA, played as the board's {played_ua} uA: its volts times \
+                 {scale:.4}, the same images, positions and intensities)",
+                played_ua / scale,
             );
         }
         Ok(Self {

@@ -12,9 +12,15 @@ pub(crate) fn write_sim_recording(path: &Path, n: usize) -> Vec<LiveFrame> {
     let frames: Vec<LiveFrame> = (0..n)
         .map(|_| source.poll(1, false).unwrap().remove(0))
         .collect();
+    write_recording(path, &frames.iter().collect::<Vec<_>>());
+    frames
+}
+
+/// Writes `frames` (of one configuration, unflagged) as a recording at `path`.
+pub(crate) fn write_recording(path: &Path, frames: &[&LiveFrame]) {
     let header = recording::Header::new("test", &frames[0].config).unwrap();
     let mut w = recording::Writer::create(path, &header).unwrap();
-    for f in &frames {
+    for f in frames {
         w.append(&recording::Record {
             seq: f.seq,
             t_us: f.t_us,
@@ -26,7 +32,6 @@ pub(crate) fn write_sim_recording(path: &Path, n: usize) -> Vec<LiveFrame> {
         })
         .unwrap();
     }
-    frames
 }
 
 fn sim() -> (Source, SheetSpec) {

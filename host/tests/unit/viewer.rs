@@ -899,22 +899,8 @@ fn an_electrode_put_back_is_said_back_and_no_longer_offered_to_leave_out() {
             }
         })
         .collect();
-    let header = et_host::recording::Header::new("test", &spliced[0].config).unwrap();
     let path = dir.join("back.jsonl");
-    let mut w = et_host::recording::Writer::create(&path, &header).unwrap();
-    for f in &spliced {
-        w.append(&et_host::recording::Record {
-            seq: f.seq,
-            t_us: f.t_us,
-            flags: 0,
-            rail_count: 0,
-            voltages: f.voltages.clone(),
-            invalid: Vec::new(),
-            touches: None,
-        })
-        .unwrap();
-    }
-    drop(w);
+    crate::live::write_recording(&path, &spliced);
     let mut h = harness(Options {
         scene: Some(sound_path),
         source: SourceSpec::Replay(path),

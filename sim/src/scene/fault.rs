@@ -45,8 +45,9 @@ pub enum SceneFault {
     NotScanned,
     /// A protocol file asked of `et stream` or `et view` playing another system's frames.
     #[error(
-        "a protocol file: `et stream` and `et view` play another system's frames under a \
-         built-in protocol only (adjacent, pseudo-polar, pp-pp or opposite)"
+        "a protocol file whose rows are none of the built-in protocols' (adjacent, \
+         pseudo-polar, pp-pp or opposite, each in et's order and at one current): `et stream` \
+         and `et view` play another system's frames under those only"
     )]
     NotPlayed,
     /// A current above the simulated board's.

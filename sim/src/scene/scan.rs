@@ -161,15 +161,43 @@ impl Scene {
     /// current.
     ///
     /// # Errors
-    /// [`FieldError`] naming `scan.protocol` for a protocol file (its frames are imaged by
-    /// `et reconstruct --frames`), or the `scan` field the board's scan refuses.
+    /// [`FieldError`] naming `scan.protocol` for a protocol file whose rows are no built-in
+    /// protocol's (its frames are imaged by `et reconstruct --frames`), or the `scan` field
+    /// the board's scan refuses.
     pub fn replay_config(&self) -> Result<(ScanConfig, f64), FieldError> {
-        let protocol = self
-            .named_protocol()?
-            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotPlayed))?;
-        let ua = self.scan.current_ua;
+        let (protocol, ua) = match self.named_protocol()? {
+            Some(kind) => (kind, self.scan.current_ua),
+            None => self.file_as_built_in()?,
+        };
         let played = ua.min(BOARD_MAX_UA);
         Ok((self.config_at(protocol, played)?, played / ua))
+    }
+
+    /// The built-in protocol whose rows, in their order, a protocol file's are (`et protocol
+    /// --csv` writes them so; another system's file of adjacent in et's order), and the one
+    /// current they drive, uA: such a file plays as that protocol.
+    ///
+    /// # Errors
+    /// [`SceneFault::NotPlayed`] for rows of no built-in protocol, or of several currents;
+    /// what [`Scene::schedule`] finds wrong with the file.
+    fn file_as_built_in(&self) -> Result<(ProtocolKind, f64), FieldError> {
+        let schedule = self.schedule()?;
+        let rows = schedule.rows();
+        let ua = rows.first().map_or(0.0, |r| r.current_a * 1e6);
+        let one_current = rows
+            .iter()
+            .all(|r| (r.current_a * 1e6 - ua).abs() <= 1e-6 * ua);
+        let four = |r: &et_core::schedule::Row| (r.source, r.sink, r.positive, r.negative);
+        let electrodes = self.sheet.physical.electrodes.count;
+        let same = |kind: ProtocolKind| {
+            let built_in = et_core::protocol::Protocol::new(kind, electrodes).ok();
+            let built_in = built_in.and_then(|p| p.schedule(ua * 1e-6).ok());
+            built_in.is_some_and(|b| b.rows().iter().map(four).eq(rows.iter().map(four)))
+        };
+        (ProtocolKind::NAMED.into_iter())
+            .find(|&kind| one_current && same(kind))
+            .map(|kind| (kind, ua))
+            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotPlayed))
     }
 
     /// The board's configuration of the scene's scan at `current_ua` (within the board's).
