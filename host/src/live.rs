@@ -298,7 +298,7 @@ impl LiveError {
             LiveError::Imaging(
                 ImagingError::ReferenceNotMeasured(_)
                     | ImagingError::ReferenceNotSigned(_)
-                    | ImagingError::ReferenceAgainstModel(_)
+                    | ImagingError::ReferenceAgainstModel(..)
             )
         )
     }

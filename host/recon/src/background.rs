@@ -84,12 +84,18 @@ pub enum BackgroundError {
     NotSigned(NotSigned),
     /// The reference frame runs against the model (the best R_s is negative).
     #[error(
-        "background fit: the reference frame runs against the model (R_s would be {0:.3e} \
+        "background fit: the reference frame runs against the model (R_s would be {rs:.3e} \
          ohm/sq < 0): are the protocol's positive and negative electrodes, or source and sink, \
          swapped, or the electrodes numbered the other way (electrodes.direction in a scene, \
-         direction= in Python)?"
+         direction= in Python)?{}",
+        if *one_sign { ONE_SIGN } else { "" }
     )]
-    Sign(f64),
+    Sign {
+        /// The best sheet resistance, ohm/sq (negative).
+        rs: f64,
+        /// Whether every value of the reference is of one sign (the model's of the other).
+        one_sign: bool,
+    },
     /// The fitted sheet resistance is outside the sheets et models
     /// ([`et_core::sheet::SHEET_OHM_RANGE`]): frames in other units or at another current.
     #[error(
@@ -222,6 +228,18 @@ fn magnitudes(v0: &[f64], model: &[f64]) -> Option<NotSigned> {
         other,
         k: v0.len(),
     })
+}
+
+/// What is added where a reference that runs against the model is of one sign throughout (a
+/// protocol whose values the model gives all of one sign, adjacent's, read as magnitudes is
+/// the model's frame negated: a system that writes magnitudes, not a swap).
+pub const ONE_SIGN: &str = " Or magnitudes without their sign: every value of the reference is \
+     of one sign, the model's all of the other; et images signed voltages (the real part)";
+
+/// Whether every value of `v` is of one sign (zeros aside).
+#[must_use]
+pub fn one_sign(v: &[f64]) -> bool {
+    v.iter().all(|x| *x >= 0.0) || v.iter().all(|x| *x <= 0.0)
 }
 
 /// The share of V_0 the homogeneous model may leave unexplained before it is said: the real
@@ -470,7 +488,10 @@ pub fn fit(
         let best = (0..grid.len())
             .filter(|&i| scores[i].0 > 0.0)
             .min_by(|&a, &b| scores[a].1.total_cmp(&scores[b].1))
-            .ok_or(BackgroundError::Sign(scores[0].0))?;
+            .ok_or(BackgroundError::Sign {
+                rs: scores[0].0,
+                one_sign: one_sign(v0),
+            })?;
         // Golden section on [grid[best - 1], grid[best + 1]].
         let (mut a, mut b) = (
             grid[best.saturating_sub(1)],
@@ -501,7 +522,8 @@ pub fn fit(
         (scene_rho, scene_fit)
     };
     if rs <= 0.0 {
-        return Err(BackgroundError::Sign(rs));
+        let one_sign = one_sign(v0);
+        return Err(BackgroundError::Sign { rs, one_sign });
     }
     let (low, high) = et_core::sheet::SHEET_OHM_RANGE;
     if !(low..=high).contains(&rs) {

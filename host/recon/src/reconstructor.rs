@@ -83,9 +83,10 @@ pub enum ImagingError {
     #[error(
         "the reference V_0 {0}: are the protocol's positive and negative electrodes, or \
          source and sink, swapped, or the electrodes placed or numbered the other way \
-         (first_deg and direction; placement=\"pyeit\" for pyEIT's frames)?"
+         (first_deg and direction; placement=\"pyeit\" for pyEIT's frames)?{one_sign}",
+        one_sign = if *.1 { crate::background::ONE_SIGN } else { "" }
     )]
-    ReferenceAgainstModel(String),
+    ReferenceAgainstModel(String, bool),
     /// The set-up was stopped by its caller between two of its stages
     /// ([`Spec::set_up_until`]).
     #[error("the set-up was stopped before its end")]

@@ -86,10 +86,13 @@ impl Reconstructor {
         }
         let r = self.correlation(v0);
         if r <= 0.0 {
-            return Err(ImagingError::ReferenceAgainstModel(format!(
-                "runs against the model's frame of the untouched sheet (their correlation is \
-                 {r:.2}, where a reference that fits has about +1)"
-            )));
+            return Err(ImagingError::ReferenceAgainstModel(
+                format!(
+                    "runs against the model's frame of the untouched sheet (their correlation \
+                     is {r:.2}, where a reference that fits has about +1)"
+                ),
+                crate::background::one_sign(v0),
+            ));
         }
         Ok(())
     }

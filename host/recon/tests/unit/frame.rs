@@ -225,8 +225,8 @@ fn a_batch_of_frames_finds_what_each_frame_alone_finds() {
     assert!(e.to_string().contains("frame 1"), "{e}");
 }
 
-/// A reference of the other sign (a polarity or a drive swapped) or all zero is refused when
-/// set, naming what to check; the model's own reference, and one 30 % off in scale, are taken.
+/// A reference of the other sign (a polarity or a drive swapped, or magnitudes of a protocol
+/// whose values are all of one sign) or all zero is refused when set, naming what to check; the model's own reference, and one 30 % off in scale, are taken.
 #[test]
 fn a_reference_against_the_model_is_refused() {
     let (mut recon, v0, _) = disc_and_bump(AlphaRule::Fixed(0.1), &[]);
@@ -234,9 +234,19 @@ fn a_reference_against_the_model_is_refused() {
     let e = recon
         .set_reference(Reference::from_frames(&[negated]).unwrap())
         .unwrap_err();
-    assert!(matches!(e, ImagingError::ReferenceAgainstModel(_)), "{e:?}");
+    assert!(
+        matches!(e, ImagingError::ReferenceAgainstModel(..)),
+        "{e:?}"
+    );
     assert!(e.to_string().contains("-1.00"), "{e}");
     assert!(e.to_string().contains("direction"), "{e}");
+    // Adjacent's values are all of one sign, so magnitudes of its frames are this frame: said
+    // as a cause too (magnitudes were asked about only where the model has both signs).
+    assert!(
+        e.to_string()
+            .ends_with("? Or magnitudes without their sign: every value of the reference is of one sign, the model's all of the other; et images signed voltages (the real part)"),
+        "{e}"
+    );
     assert!(recon.reference().is_none(), "nothing set");
     // One value throughout (all zero, a constant) is no measurement: not asked about
     // swapped electrodes.
