@@ -427,6 +427,11 @@ fn et_protocol_csv_is_a_protocol_file() {
     ]);
     let e = String::from_utf8_lossy(&e.stderr).into_owned();
     assert!(e.contains("--frames") && e.contains("frames.csv"), "{e}");
+    // (Its rows are pp-pp's, which the board scans: said so.)
+    assert!(
+        e.contains("(its rows are pp-pp's: protocol = \"pp-pp\" scans them)"),
+        "{e}"
+    );
     // It writes another system's frames of any protocol instead, and they image: a touch
     // pressed at (40, 30) mm, frames as a MATLAB variable.
     std::fs::write(
@@ -537,6 +542,31 @@ fn et_protocol_csv_is_a_protocol_file() {
     let events = String::from_utf8_lossy(&out.stdout).lines().count();
     assert!(events >= 15, "{events} of 21 frames placed a touch: {said}");
     let text = std::fs::read_to_string(d.join("pp.csv")).unwrap();
+    // Counted from 1 (a system that does, `base = 1`): played alike, the numbering said.
+    let from_1: Vec<String> = (text.lines().enumerate())
+        .map(|(i, l)| match i {
+            0 => l.to_string(),
+            _ => {
+                let cells: Vec<&str> = l.split(',').collect();
+                let one = |c: &str| (c.parse::<u16>().unwrap() + 1).to_string();
+                let four: Vec<String> = cells[..4].iter().map(|c| one(c)).collect();
+                [four.join(","), cells[4..].join(",")].join(",")
+            }
+        })
+        .collect();
+    std::fs::write(d.join("pp1.csv"), from_1.join("\n") + "\n").unwrap();
+    let counted_from_1 = d.join("pp1.toml");
+    let scene_text = std::fs::read_to_string(scene).unwrap();
+    let scene_1 = scene_text.replace("file = \"pp.csv\"", "file = \"pp1.csv\", base = 1");
+    std::fs::write(&counted_from_1, scene_1).unwrap();
+    let out = stream(counted_from_1.to_str().unwrap());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success()
+            && said.contains("(its protocol file's rows are pp-pp's; its electrodes, counted from 1, are numbered from 0 here")
+            && String::from_utf8_lossy(&out.stdout).lines().count() == events,
+        "{said}"
+    );
     let mut lines: Vec<&str> = text.lines().collect();
     lines.swap(1, 2);
     std::fs::write(d.join("swapped.csv"), lines.join("\n") + "\n").unwrap();

@@ -130,9 +130,14 @@ impl Scene {
     /// [`FieldError`] naming the `scan.` field at fault: a protocol file (imaged from
     /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
-        let protocol = self
-            .named_protocol()?
-            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?;
+        let Some(protocol) = self.named_protocol()? else {
+            // (A file of a built-in protocol's rows is said as that one.)
+            let rows_of = self.file_as_built_in().ok().map(|(kind, _)| kind);
+            return Err(FieldError::new(
+                "scan.protocol",
+                SceneFault::NotScanned(rows_of),
+            ));
+        };
         let ua = self.scan.current_ua;
         if !(ua.is_finite() && ua > 0.0 && ua <= BOARD_MAX_UA) {
             let fault = SceneFault::BoardCurrent(ua);

@@ -13,7 +13,8 @@ pub(crate) struct SourceArgs {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Replay a recording (JSON Lines from `et sim` or `et record`), or another system's
-    /// frames in volts for the scene's built-in protocol: a CSV (one frame per row), .npy,
+    /// frames in volts for the scene's built-in protocol (or a protocol file of one's rows,
+    /// as `et protocol --csv` writes them): a CSV (one frame per row), .npy,
     /// .npz (FILE.npz:NAME) or MATLAB .mat (FILE.mat:VARIABLE, or FILE.mat:vi.meas), as
     /// `et reconstruct --frames` reads them.
     #[arg(long, conflicts_with = "port")]
