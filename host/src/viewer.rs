@@ -534,7 +534,7 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
         ..Default::default()
     };
     eframe::run_native("et view", native, Box::new(|_cc| Ok(Box::new(viewer))))
-        .map_err(|e| ViewerError::Window(e.to_string()))?;
+        .map_err(|e| ViewerError::Window(window_said(&e.to_string())))?;
     match shot.map(|s| s.lock().map(|mut s| s.take()).unwrap_or(None)) {
         None | Some(Some(Ok(()))) => Ok(()),
         Some(Some(Err(e))) => Err(ViewerError::Screenshot(e)),
@@ -576,6 +576,23 @@ pub enum ViewerError {
     /// The window closed before the screenshot was taken.
     #[error("screenshot not written: the window closed before the screenshot was taken")]
     NoScreenshot,
+}
+
+/// eframe's error without winit's type and source place ("winit EventLoopError: os error at
+/// /root/.cargo/registry/.../mod.rs:765: neither WAYLAND_DISPLAY nor ... is set.").
+#[must_use]
+pub fn window_said(error: &str) -> String {
+    let said = error
+        .strip_prefix("winit EventLoopError: ")
+        .unwrap_or(error);
+    let said = match said
+        .strip_prefix("os error at ")
+        .and_then(|r| r.split_once(".rs:"))
+    {
+        Some((_, rest)) => rest.split_once(": ").map_or(rest, |(_, why)| why),
+        None => said,
+    };
+    said.trim_end_matches('.').to_string()
 }
 
 /// Why a screenshot's file was not written (the PNG encoder's or the output's error).

@@ -933,6 +933,18 @@ fn an_electrode_put_back_is_said_back_and_no_longer_offered_to_leave_out() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The window's error is said without winit's type and the place in its source (a path
+/// under ~/.cargo and a line number were said to the user); another error as it is.
+#[test]
+fn the_window_s_error_is_said_without_winit_s_source_place() {
+    let e = "winit EventLoopError: os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set.";
+    assert_eq!(
+        window_said(e),
+        "neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set"
+    );
+    assert_eq!(window_said("no GPU adapter found"), "no GPU adapter found");
+}
+
 /// The status log keeps each message once, the most recent last, counts one said again, and
 /// keeps at most `StatusLog::KEPT`, the oldest going first.
 #[test]
