@@ -51,12 +51,27 @@ def load(path):
         raise ValueError(f"{path}: not text (UTF-8), so not an et data set") from None
 
 
+def _other_kind(first):
+    """What another of et's files is, by its first line, said before "not an et data set"."""
+    if first.replace(" ", "").lower().startswith("source,sink,positive,negative"):
+        return "a protocol file (et protocol --csv), "
+    try:
+        kind = json.loads(first).get("format")
+    except (ValueError, AttributeError):
+        return ""
+    return {
+        "et-recording": "an et recording (et sim, et record: read it with et_recording.py), ",
+        "et-model": "an et model file (et train), ",
+        "et-table-model": "an et model file (et train), ",
+    }.get(kind, "")
+
+
 def _load(path):
     meta = {}
     with open(path, encoding="utf-8-sig") as f:
         first = f.readline().rstrip("\r\n")
         if first not in FORMATS:
-            raise ValueError(f"{path}:1: not an et data set (expected {FORMATS[0]!r})")
+            raise ValueError(f"{path}:1: {_other_kind(first)}not an et data set (expected {FORMATS[0]!r})")
         number = 1
         for line in f:
             number += 1

@@ -43,18 +43,30 @@ def load(path):
         lines = f.read().splitlines()
     if not lines:
         raise ValueError(f"{path}: empty file, no header")
+    first = lines[0].lstrip("\ufeff")
     try:
-        header = json.loads(lines[0])
+        header = json.loads(first)
     except json.JSONDecodeError as e:
+        # Another of et's text files is said as what it is.
+        if first.startswith("# et-dataset"):
+            raise ValueError(f"{path}:1: an et dataset (et collect), not a recording: read it with et_dataset.py") from None
+        if first.replace(" ", "").lower().startswith("source,sink,positive,negative"):
+            raise ValueError(f"{path}:1: a protocol file (et protocol --csv), not a recording") from None
         raise ValueError(
             f"{path}:1: not an et recording: its first line is not JSON ({e.msg}, column "
             f"{e.colno}); et sim and et record write recordings, and `et reconstruct --frames` "
             "reads another system's frames (.csv, .npy, .npz, .mat)"
         ) from None
-    if not isinstance(header, dict) or (
-        header.get("format") != FORMAT or header.get("version") != VERSION
-    ):
-        raise ValueError(f"{path}:1: not an {FORMAT} version {VERSION} header")
+    kind = header.get("format") if isinstance(header, dict) else None
+    if kind in ("et-model", "et-table-model"):
+        raise ValueError(f"{path}:1: an et model file (et train), not a recording")
+    if kind != FORMAT:
+        raise ValueError(
+            f"{path}:1: not an et recording: its first line is JSON without et's "
+            f'"format": "{FORMAT}" (another tool\'s file?)'
+        )
+    if header.get("version") != VERSION:
+        raise ValueError(f"{path}:1: {FORMAT} version {header.get('version')!r}: this reader reads version {VERSION}")
     frames = []
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():

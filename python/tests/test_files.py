@@ -3,6 +3,7 @@
 import importlib.util
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -33,6 +34,21 @@ def test_the_standard_librarys_reader_says_what_is_not_a_recording(recording, tm
     with pytest.raises(ValueError, match="damaged.jsonl:4: not a JSON frame"):
         reader.load(damaged)
     assert reader.main(["et_recording.py", str(damaged)]) == 1
+    # Another of et's files, or another tool's JSON, said as what it is ("not an et-recording
+    # version 1 header" said of each).
+    for text, said in [
+        ("# et-dataset 2\n", "an et dataset (et collect), not a recording: read it with et_dataset.py"),
+        ("source,sink,positive,negative\n0,1,2,3\n", "a protocol file (et protocol --csv), not a recording"),
+        ('{"format": "et-table-model", "version": 2}\n', "an et model file (et train), not a recording"),
+        ('{"a": 1}\n', "not an et recording: its first line is JSON without et's \"format\": \"et-recording\""),
+    ]:
+        other = tmp_path / "other.txt"
+        other.write_text(text)
+        with pytest.raises(ValueError, match=re.escape(f"other.txt:1: {said}")):
+            reader.load(other)
+    # And to the dataset reader, a recording said as one.
+    with pytest.raises(ValueError, match=re.escape("an et recording (et sim, et record: read it with et_recording.py), not an et data set")):
+        stdlib_reader("et_dataset").load(recording)
 
 
 def test_the_standard_librarys_dataset_reader_names_the_cell(et_cli, tmp_path):
