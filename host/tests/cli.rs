@@ -1160,8 +1160,12 @@ fn reconstruct_images_recorded_frames() {
     a[at + 1] = s(&in_mv);
     let out = run(&a);
     let e = String::from_utf8_lossy(&out.stderr);
+    // (About a thousandth: the press in frame 50 moves its values' ratios a little.)
+    let scale: Option<f64> =
+        (e.split("warning: frame 50 is ").nth(1)).and_then(|r| r.split(' ').next()?.parse().ok());
     assert!(
-        e.contains("warning: frame 50 is 0.001") && e.contains("times the reference V_0"),
+        scale.is_some_and(|s| (s / 1e-3 - 1.0).abs() < 0.02)
+            && e.contains("times the reference V_0"),
         "{e}"
     );
     // The frames imaged on another sheet of as many electrodes (a 22 cm disc) were imaged

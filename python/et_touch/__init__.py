@@ -925,37 +925,41 @@ class Reconstructor:
     @staticmethod
     def _say_unlike(frames: np.ndarray, v0: np.ndarray) -> None:
         """Warns when frames (K, or n x K) are not alike their reference ``v0`` (K): the
-        first past FRAME_SCALE_SAID times it, or under its inverse (least squares), as `et
-        reconstruct` says (a reference in mV against frames in V was imaged as a press
-        everywhere). Called after the native side took them: what it refuses is said as
-        refused, not first warned of. One frame costs two dot products (a few us)."""
+        first past FRAME_SCALE_SAID times it, or under its inverse (the median of its values'
+        ratios), as `et reconstruct` says (a reference in mV against frames in V was imaged
+        as a press everywhere). Called after the native side took them: what it refuses is
+        said as refused, not first warned of. One frame costs a median of K ratios."""
         if frames.shape[-1] != len(v0):
             return  # (frames of another length are refused by the native side, by K)
-        vv = float(v0 @ v0)
-        if not vv > 0:
+        # The median of the values' ratios to V_0's (those at least a thousandth of its
+        # largest): a detached electrode's railed values, a quarter of a frame, moved a
+        # least-squares scale to 0.29, said as another unit.
+        largest = float(np.abs(v0).max())
+        if not largest > 0:
             return
-        if frames.ndim == 1:
-            s = float(frames @ v0) / vv
-            if 1 / _FRAME_SCALE_SAID <= s <= _FRAME_SCALE_SAID:
-                return
-            scale, unlike = np.array([s]), np.array([0])
-        else:
-            scale = (frames @ v0) / vv
-            unlike = np.flatnonzero(
-                ~((scale >= 1 / _FRAME_SCALE_SAID) & (scale <= _FRAME_SCALE_SAID))
-            )
-            if not len(unlike):
-                return
+        kept = np.abs(v0) >= 1e-3 * largest
+        scale = np.atleast_1d(np.median(np.atleast_2d(frames)[:, kept] / v0[kept], axis=1))
+        unlike = np.flatnonzero(~((scale >= 1 / _FRAME_SCALE_SAID) & (scale <= _FRAME_SCALE_SAID)))
+        if not len(unlike):
+            return
         i = int(unlike[0])
         which = "the frame" if frames.ndim == 1 else f"frame {i}"
         warnings.warn(
-            f"{which} is {scale[i]:.3g} times the reference V_0 (least squares; "
+            f"{which} is {scale[i]:.3g} times the reference V_0 (the median of its values' ratios; "
             f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
             "way): are the frames and the reference in the same units, at the same current? "
             "A press changes a frame by a few per cent",
             EtWarning,
             stacklevel=3,
         )
+
+    def _say_came_off(self, frames: np.ndarray, reference: np.ndarray) -> None:
+        """Warns when an electrode's values stand out as a detached electrode's in the frames
+        to image (n x K), not in their ``reference`` (n x K), as `et reconstruct` says: a clip
+        that came off during the recording."""
+        said = self._native.came_off(frames, reference) if len(frames) else None
+        if said is not None:
+            warnings.warn(said, EtWarning, stacklevel=3)
 
     def image(self, v: Any, v0: Any = None) -> Image:
         """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
@@ -973,6 +977,7 @@ class Reconstructor:
                 )
             pixels, dv, alpha = self._native.pixels(v)
             self._say_unlike(v, self._v0)
+            self._say_came_off(v[None, :], self._reference)
             reference = self._reference
             return Image(pixels, dv, alpha, self.extent,
                          lambda: self._native.image(v, reference),
@@ -981,6 +986,7 @@ class Reconstructor:
         made = self._native.image(v, frames)
         self._say_fit(frames)
         self._say_unlike(v, frames.mean(axis=0))
+        self._say_came_off(v[None, :], frames)
         s = json.loads(made[0])
         return Image(made[1], made[4], s["alpha"], self.extent, lambda: made)
 
@@ -996,6 +1002,7 @@ class Reconstructor:
         frames = self._by_rows(_finite_frames(_f64(V, 2, "V"), "V"), "V")
         pixels, dv, alpha = self._native.pixels_batch(frames)
         self._say_unlike(frames, self._v0)
+        self._say_came_off(frames, self._reference)
         rows, cols = self._native.grid[:2]
         return ImageBatch(self, frames, self._reference,
                           pixels.reshape(len(frames), rows, cols), dv, alpha)

@@ -391,6 +391,33 @@ impl Reconstructor {
         )
     }
 
+    /// What is said when one electrode's values stand out as a detached or broken
+    /// electrode's in frames to image (n x K, V, numbered from 0), not in the mean of the
+    /// untouched `reference` frames (n x K): a clip that came off during the recording
+    /// (`et_recon::Reconstructor::came_off`, as `et reconstruct` says it); None otherwise.
+    fn came_off(
+        &self,
+        frames: PyReadonlyArray2<'_, f64>,
+        reference: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<Option<String>> {
+        let v0 = reference_of(&reference)?.v0;
+        let named: Vec<u16> = (self.inner.detached_electrodes(&v0).iter())
+            .map(|m| m.electrode)
+            .collect();
+        let (values, n, k) = matrix(&frames, "V")?;
+        let frames: Vec<(usize, Vec<f32>)> = single(values, k, "V")?
+            .chunks(k.max(1))
+            .take(n)
+            .map(<[f32]>::to_vec)
+            .enumerate()
+            .collect();
+        let leave_out = |n| format!("Protocol.without([{n}]) leaves them out");
+        Ok(self
+            .inner
+            .came_off(&frames, &named)
+            .map(|off| off.said(0, leave_out)))
+    }
+
     /// What is said when the mean of the untouched `reference` frames (n x K) passes
     /// `et_recon::background::VOLTS_MOST`: frames in another unit than volts; None within.
     fn not_volts(&self, reference: PyReadonlyArray2<'_, f64>) -> PyResult<Option<String>> {

@@ -522,3 +522,15 @@ def test_a_detached_electrode_is_said_and_left_out():
     # Opposite's rows each touch electrodes half the sheet apart: without 0 to 7, none is left.
     with pytest.raises(et.EtError, match="every one of the 192 values involves one of the 8"):
         et.protocol("opposite", 16).without(range(8))
+    # Sound in the reference, off in the frames to image from the third: said as come off
+    # during the recording, as `et reconstruct` says it, and not as frames of another unit
+    # (the railed values moved a least-squares scale past 2 times V_0: "same units?").
+    railed = v0.copy()
+    railed[of5] = 3.3  # (its input at the ADC's rail)
+    frames = np.vstack([pressed, pressed, railed, railed])
+    with pytest.warns(et.EtWarning) as said:
+        disc.images(frames, v0)
+    messages = [str(w.message) for w in said]
+    assert any(m.startswith("electrode 5's values stand out in 2 of the 4 frames to image, from frame 2")
+               and "Protocol.without([5]) leaves them out" in m for m in messages), messages
+    assert not any("same units" in m for m in messages), messages

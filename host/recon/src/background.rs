@@ -21,7 +21,7 @@ use crate::mesh::Mesh;
 
 mod electrode;
 pub use electrode::{
-    ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, detached_electrodes, detached_said,
+    CameOff, ELECTRODE_FACTOR, ELECTRODE_OWN, ElectrodeMisfit, detached_electrodes, detached_said,
     electrode_misfit, misfit_of,
 };
 

@@ -112,6 +112,43 @@ pub fn electrode_misfit(
     worst(&each_misfit(rows, electrodes, (v0, model), &[]))
 }
 
+/// An electrode whose values stand out as a detached or broken electrode's in frames to
+/// image, not in their reference ([`crate::Reconstructor::came_off`]): a clip that came off
+/// during the recording.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameOff {
+    /// Its misfit in the first frame it stands out in.
+    pub misfit: ElectrodeMisfit,
+    /// How many of the frames it stands out in.
+    pub count: usize,
+    /// The first of them, as the frames are numbered.
+    pub first: usize,
+    /// The frames weighed.
+    pub frames: usize,
+}
+
+impl CameOff {
+    /// What is said of it, its number counted from `base` (0, or 1 as a protocol file with
+    /// `base = 1` counts); `leave_out` says how its values are left out, given the number
+    /// ("--skip-electrodes 3 leaves them out").
+    #[must_use]
+    pub fn said(&self, base: u16, leave_out: impl Fn(u32) -> String) -> String {
+        let number = u32::from(self.misfit.electrode) + u32::from(base);
+        format!(
+            "electrode {number}'s values stand out in {} of the {} frames to image, from frame \
+             {} ({:.0} % off the model there, the rest {:.1} %), not in the reference: a clip \
+             or wire that came off during the recording? Those frames are imaged with its wrong \
+             values: {}",
+            self.count,
+            self.frames,
+            self.first,
+            100.0 * self.misfit.own,
+            100.0 * self.misfit.rest,
+            leave_out(number)
+        )
+    }
+}
+
 /// Electrode `electrode`'s misfit ([`ElectrodeMisfit`]) in `v` (K values of `rows`, V)
 /// beside the model's frame `model`, over the values none of `without` drives or measures (other
 /// electrodes off, which would raise the rest it is weighed against): whether an electrode

@@ -143,6 +143,36 @@ impl Reconstructor {
         crate::background::misfit_of(rows, electrodes, (v, &self.jac.frame), electrode, without)
     }
 
+    /// Of `frames` to image (each numbered, K values, V), the electrode whose values stand out
+    /// as a detached or broken electrode's ([`Reconstructor::electrode_misfit`]) in most of
+    /// them, none of `in_reference` (0-based: V_0 named them already): one that came off
+    /// during the recording. None when none does.
+    #[must_use]
+    pub fn came_off<F: AsRef<[f32]>>(
+        &self,
+        frames: &[(usize, F)],
+        in_reference: &[u16],
+    ) -> Option<crate::background::CameOff> {
+        use crate::background::CameOff;
+        let mut seen: std::collections::BTreeMap<u16, CameOff> = Default::default();
+        for (index, frame) in frames {
+            let v: Vec<f64> = frame.as_ref().iter().map(|x| f64::from(*x)).collect();
+            if let Some(m) = (self.electrode_misfit(&v))
+                .filter(|m| m.stands_out() && !in_reference.contains(&m.electrode))
+            {
+                seen.entry(m.electrode)
+                    .or_insert(CameOff {
+                        misfit: m,
+                        count: 0,
+                        first: *index,
+                        frames: frames.len(),
+                    })
+                    .count += 1;
+            }
+        }
+        seen.into_values().max_by_key(|c| c.count)
+    }
+
     /// Every electrode whose values in `v0` (K values, V) stand out from the model's frame of
     /// the untouched sheet as a detached or broken electrode's, each weighed without the
     /// others' ([`crate::background::detached_electrodes`]).

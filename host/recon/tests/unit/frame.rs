@@ -225,6 +225,46 @@ fn a_batch_of_frames_finds_what_each_frame_alone_finds() {
     assert!(e.to_string().contains("frame 1"), "{e}");
 }
 
+/// A frame's scale to its reference is the median of its values' ratios: a frame in mV
+/// against V_0 in V is 1000 times it, a press a few per cent, and a frame whose detached
+/// electrode's values sit at a rail (a quarter of adjacent's on 16) is still 1 (the
+/// least-squares scale was 0.27, and the frame was said as of another unit).
+#[test]
+fn a_frames_scale_to_its_reference_holds_past_an_electrode_off() {
+    let (recon, v0, frames) = disc_and_bump(AlphaRule::Fixed(0.1), &[0.2]);
+    let reference = Reference::from_frames(std::slice::from_ref(&v0)).unwrap();
+    let near = |s: Option<f64>, want: f64| s.is_some_and(|s| (s / want - 1.0).abs() < 0.05);
+    let mv: Vec<f32> = v0.iter().map(|v| v * 1e3).collect();
+    assert!(near(reference.scale_of(&mv), 1e3));
+    assert!(
+        near(reference.scale_of(&frames[0]), 1.0),
+        "{:?}",
+        reference.scale_of(&frames[0])
+    );
+    let rows = recon.schedule().rows();
+    let railed: Vec<f32> = (v0.iter().zip(rows))
+        .map(
+            |(v, r)| match [r.source, r.sink, r.positive, r.negative].contains(&5) {
+                true => 3.3,
+                false => *v,
+            },
+        )
+        .collect();
+    let dot = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| f64::from(*x) * f64::from(*y))
+            .sum::<f64>()
+    };
+    let least_squares = dot(&railed, &v0) / dot(&v0, &v0);
+    assert!(!(0.5..=2.0).contains(&least_squares), "{least_squares}");
+    assert!(
+        near(reference.scale_of(&railed), 1.0),
+        "{:?}",
+        reference.scale_of(&railed)
+    );
+}
+
 /// A reference of the other sign (a polarity or a drive swapped, or magnitudes of a protocol
 /// whose values are all of one sign) or all zero is refused when set, naming what to check; the model's own reference, and one 30 % off in scale, are taken.
 #[test]

@@ -444,10 +444,10 @@ pub(super) fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usiz
         .collect();
     if let Some((i, s)) = unlike.first() {
         say!(
-            "warning: frame {i} is {} times the reference V_0 (least squares; {} of {} \
-             frames past {FRAME_SCALE_SAID} times either way): are the frames and the \
-             reference in the same units, at the same current? A press changes a frame by a \
-             few per cent",
+            "warning: frame {i} is {} times the reference V_0 (the median of its values' \
+             ratios; {} of {} frames past {FRAME_SCALE_SAID} times either way): are the frames \
+             and the reference in the same units, at the same current? A press changes a frame \
+             by a few per cent",
             crate::tabular::significant(*s),
             unlike.len(),
             chosen.len()
@@ -513,41 +513,16 @@ pub(super) fn skip_electrodes(
 
 /// Warns of an electrode whose values stand out in the frames to image (`chosen`, each K
 /// values) as a detached or broken electrode's, when V_0's did not name it (`in_reference`,
-/// 0-based):
-/// a clip that came off during the recording. Names the electrode most frames show (counted
-/// from `base`), its first frame and how many.
+/// 0-based): a clip that came off during the recording ([`et_recon::Reconstructor::came_off`],
+/// counted from `base`).
 pub(super) fn say_detached_in_frames(
     recon: &et_recon::Reconstructor,
     base: u16,
     chosen: &[(usize, Vec<f32>)],
     in_reference: &[u16],
 ) {
-    // Per electrode: (frames it stands out in, the first, its values' misfit there).
-    let mut seen: std::collections::BTreeMap<u16, (usize, usize, f64, f64)> = Default::default();
-    for (index, frame) in chosen {
-        let v: Vec<f64> = frame.iter().map(|x| f64::from(*x)).collect();
-        if let Some(m) = (recon.electrode_misfit(&v))
-            .filter(|m| m.stands_out() && !in_reference.contains(&m.electrode))
-        {
-            let entry = seen
-                .entry(m.electrode)
-                .or_insert((0, *index, m.own, m.rest));
-            entry.0 += 1;
-        }
+    if let Some(off) = recon.came_off(chosen, in_reference) {
+        let leave_out = |n| format!("--skip-electrodes {n} leaves them out");
+        say!("warning: {}", off.said(base, leave_out));
     }
-    let Some((electrode, (count, first, own, rest))) =
-        seen.into_iter().max_by_key(|(_, (count, ..))| *count)
-    else {
-        return;
-    };
-    let number = u32::from(electrode) + u32::from(base);
-    say!(
-        "warning: electrode {number}'s values stand out in {count} of the {} frames to image, \
-         from frame {first} ({:.0} % off the model there, the rest {:.1} %), not in the \
-         reference: a clip or wire that came off during the recording? Those frames are \
-         imaged with its wrong values: --skip-electrodes {number} leaves them out",
-        chosen.len(),
-        100.0 * own,
-        100.0 * rest
-    );
 }
