@@ -310,14 +310,19 @@ fn text_matrix(path: &Path) -> Result<(DMatrix<f64>, String), FramesError> {
             source,
         },
     )?;
-    match et_core::text::EtFile::of(&text) {
+    table_matrix(path, &text)
+}
+
+/// [`text_matrix`] of the `text` read from `path`.
+fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
+    match et_core::text::EtFile::of(text) {
         Some(et_core::text::EtFile::Dataset) => Err(content(path, 1, FramesFault::Dataset)),
         Some(et_core::text::EtFile::Protocol) => {
             // A hardware log's value columns beside the electrodes' (not current_a).
-            let others = et_core::text::EtFile::columns_beside_protocol(&text).unwrap_or(0);
+            let others = et_core::text::EtFile::columns_beside_protocol(text).unwrap_or(0);
             Err(content(path, 1, FramesFault::Protocol { others }))
         }
-        _ => csv_matrix(path, &text),
+        _ => csv_matrix(path, text),
     }
 }
 

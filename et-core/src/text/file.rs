@@ -246,7 +246,19 @@ pub fn read_document_at_most(path: &std::path::Path, limit: u64) -> std::io::Res
 }
 
 fn read_holding(path: &std::path::Path, limit: u64, holds: Holds) -> std::io::Result<String> {
-    let bytes = read_at_most(path, limit)?;
+    text_of(read_at_most(path, limit)?, holds)
+}
+
+/// The text of a table's `bytes` already read (a file named for an array format that holds
+/// text: read once, as a FIFO can be), as [`read_text_at_most`] reads a file's.
+///
+/// # Errors
+/// As [`read_text_at_most`], but for reading.
+pub fn table_text_of(bytes: Vec<u8>) -> std::io::Result<String> {
+    text_of(bytes, Holds::Table)
+}
+
+fn text_of(bytes: Vec<u8>, holds: Holds) -> std::io::Result<String> {
     let mut text = match utf16(&bytes) {
         Some(text) => text?,
         None => String::from_utf8(bytes).map_err(|e| {

@@ -8,7 +8,7 @@ use std::path::Path;
 use et_learn::npz::{Npz, NpzError};
 use nalgebra::DMatrix;
 
-use super::{FramesError, FramesFault, content, mat_matrix, text_matrix};
+use super::{FramesError, FramesFault, content, mat_matrix, table_matrix};
 
 /// The array format `bytes` hold by their first bytes: "npy", "npz" (a zip archive; an Excel
 /// workbook is one too, and is named when its arrays are not found) or "mat" (a MATLAB
@@ -58,7 +58,12 @@ pub(super) fn matrix(
     let held = match format(&bytes) {
         Some(held) => held,
         None if is_text(&bytes) => {
-            let (matrix, said) = text_matrix(path)?;
+            // (From the bytes read: a FIFO is read once.)
+            let text = et_core::text::table_text_of(bytes).map_err(|source| FramesError::Io {
+                path: path.into(),
+                source,
+            })?;
+            let (matrix, said) = table_matrix(path, &text)?;
             return Ok((
                 matrix,
                 format!("text, though named .{ext}, read as a table; {said}"),

@@ -362,6 +362,16 @@ fn array_files_are_read_by_what_they_hold_not_their_name() {
         assert_eq!(r.frames, frames, "{name}");
         assert!(r.description.contains(said), "{}", r.description);
     }
+    // Text through a FIFO named .npy: its bytes read once (a second read would wait forever).
+    let fifo = dir.join("fifo.npy");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let writer = {
+        let (fifo, csv) = (fifo.clone(), csv.clone());
+        std::thread::spawn(move || std::fs::write(fifo, csv).unwrap())
+    };
+    assert_eq!(read(&fifo, 3).unwrap().frames, frames);
+    writer.join().unwrap();
     // Its array named as its own format's are.
     let two = [mat.clone(), mat_v5("w", &m)[128..].to_vec()].concat();
     std::fs::write(dir.join("two.npy"), &two).unwrap();
