@@ -922,24 +922,21 @@ class Reconstructor:
         self._v0 = frames.mean(axis=0)
         self._keep("set_reference", frames)
 
-    @staticmethod
-    def _say_unlike(frames: np.ndarray, v0: np.ndarray) -> None:
+    def _say_unlike(self, frames: np.ndarray, v0: np.ndarray) -> None:
         """Warns when frames (K, or n x K) are not alike their reference ``v0`` (K): the
         first past FRAME_SCALE_SAID times it, or under its inverse (the median of its values'
-        ratios), as `et reconstruct` says (a reference in mV against frames in V was imaged
-        as a press everywhere). Called after the native side took them: what it refuses is
-        said as refused, not first warned of. One frame costs a median of K ratios."""
+        ratios, the native rule `et reconstruct` warns with), as `et reconstruct` says (a
+        reference in mV against frames in V was imaged as a press everywhere). Called after the
+        native side took them: what it refuses is said as refused, not first warned of."""
         if frames.shape[-1] != len(v0):
             return  # (frames of another length are refused by the native side, by K)
-        # The median of the values' ratios to V_0's (those at least a thousandth of its
-        # largest): a detached electrode's railed values, a quarter of a frame, moved a
-        # least-squares scale to 0.29, said as another unit.
-        largest = float(np.abs(v0).max())
-        if not largest > 0:
-            return
-        kept = np.abs(v0) >= 1e-3 * largest
-        scale = np.atleast_1d(np.median(np.atleast_2d(frames)[:, kept] / v0[kept], axis=1))
-        unlike = np.flatnonzero(~((scale >= 1 / _FRAME_SCALE_SAID) & (scale <= _FRAME_SCALE_SAID)))
+        native = self._native
+        scale = np.asarray(native.frame_scales(
+            np.ascontiguousarray(np.atleast_2d(frames), dtype=np.float64),
+            np.ascontiguousarray(v0, dtype=np.float64),
+        ))
+        unlike = np.flatnonzero(~((scale >= 1 / _FRAME_SCALE_SAID) & (scale <= _FRAME_SCALE_SAID))
+                                & ~np.isnan(scale))
         if not len(unlike):
             return
         i = int(unlike[0])

@@ -80,6 +80,8 @@ class Reconstructor:
         """What is said when reference's mean passes 100 V: frames in another unit."""
     def electrode_off(self, reference: F64) -> Optional[str]:
         """What is said of an electrode whose values stand out from the model (0-based), or None."""
+    def frame_scales(self, frames: F64, v0: F64) -> List[float]:
+        """Each frame's scale to v0: the median of its values' ratios (NaN where none)."""
     def came_off(self, frames: F64, reference: F64) -> Optional[str]:
         """What is said of an electrode whose values stand out in frames, not in reference, or None."""
     def reference_changed(self, reference: F64) -> Optional[str]:

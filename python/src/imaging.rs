@@ -391,6 +391,27 @@ impl Reconstructor {
         )
     }
 
+    /// Each of `frames`' (n x K, V) scale to the reference `v0` (K, V): the median of its
+    /// values' ratios, `et_recon::Reference::scale_of`, the rule `et reconstruct` warns with;
+    /// NaN where there is none (V_0 zero).
+    fn frame_scales(
+        &self,
+        frames: PyReadonlyArray2<'_, f64>,
+        v0: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Vec<f64>> {
+        let reference = Reference {
+            v0: slice(&v0, "v0")?.to_vec(),
+            var_dv: Vec::new(),
+        };
+        let (values, n, k) = matrix(&frames, "V")?;
+        Ok((values.chunks(k.max(1)).take(n))
+            .map(|f| {
+                let f: Vec<f32> = f.iter().map(|&v| v as f32).collect();
+                reference.scale_of(&f).unwrap_or(f64::NAN)
+            })
+            .collect())
+    }
+
     /// What is said when one electrode's values stand out as a detached or broken
     /// electrode's in frames to image (n x K, V, numbered from 0), not in the mean of the
     /// untouched `reference` frames (n x K): a clip that came off during the recording
