@@ -170,9 +170,16 @@ impl Steps {
 /// When the folder cannot be written, or a stage fails (with the stage named).
 pub fn run(options: &Options) -> Result<Report> {
     let started = Instant::now();
+    crate::output::check_folder(&options.out, options.force)?;
+    // (Made aside and renamed at the end, unless a report is there to replace in place.)
+    let summary = crate::output::write_folder(&options.out, |out| make(out, options, started))?;
+    let index = options.out.join("index.md");
+    Ok(Report { index, summary })
+}
+
+/// The report made in the folder `out`, and its summary.
+fn make(out: &Path, options: &Options, started: Instant) -> Result<serde_json::Value> {
     let sizes = if options.quick { QUICK } else { FULL };
-    let out = &options.out;
-    crate::output::check_folder(out, options.force)?;
     for stale in ["index.md", "summary.json"] {
         match std::fs::remove_file(out.join(stale)) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -239,7 +246,7 @@ pub fn run(options: &Options) -> Result<Report> {
     crate::output::write(&index, |partial| {
         std::fs::write(partial, &page).map_err(io(&index))
     })?;
-    Ok(Report { index, summary })
+    Ok(summary)
 }
 
 fn load(scene: (&str, &str)) -> Result<Scene> {

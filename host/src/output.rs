@@ -152,6 +152,17 @@ fn occupant(out: &Path) -> Occupant {
     }
 }
 
+/// Whether the command checked a file (or folder) to write, not a stream ([`check`]).
+static FILES_TO_WRITE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether the command has checked a file or folder to write ([`check`], [`check_folder`],
+/// [`check_all`]), not only streams: standard output's reader going away (`| head`) does not
+/// end such a command before its files are written.
+#[must_use]
+pub fn files_to_write() -> bool {
+    FILES_TO_WRITE.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Checks the file `out` before a command writes it: not one of `inputs` (even with
 /// `force`); a regular file only with `force`; never a folder, symbolic link, FIFO, socket or
 /// device (except the null device and standard output or error, written through); and its
@@ -292,7 +303,9 @@ fn check_at(
         kind,
         folder: folder.into(),
         source,
-    })
+    })?;
+    FILES_TO_WRITE.store(true, std::sync::atomic::Ordering::Relaxed);
+    Ok(())
 }
 
 /// [`check`] for every output of one command at once, before any work: each against every
@@ -416,7 +429,8 @@ pub fn clean_up_on_signals() -> std::io::Result<()> {
                     .lock()
                     .map_or_else(|e| e.into_inner().clone(), |p| p.clone());
                 for p in partials {
-                    let _ = std::fs::remove_file(p);
+                    // (A report folder's partial is a folder: `write_folder`.)
+                    let _ = std::fs::remove_file(&p).or_else(|_| std::fs::remove_dir_all(&p));
                 }
                 std::process::exit(128 + signal);
             }
@@ -461,6 +475,49 @@ pub fn write<T, E: From<OutputError>>(
     });
     if result.is_err() {
         let _ = std::fs::remove_file(&partial);
+    }
+    track(&partial, false);
+    result
+}
+
+/// Makes the report folder `out` with `make` (which writes into the folder it is given): a
+/// new folder, or an empty one, is made under [`partial_path`] and renamed to `out` at the
+/// end, so a run stopped part way (a stage's error, Ctrl-C) leaves no half report, which the
+/// next run refused without `--force` (`et demo`); a folder with files (replaced with
+/// `--force`, as [`check_folder`] allowed) is written in place, its other files left alone.
+///
+/// # Errors
+/// `make`'s error, or an [`OutputError`] converted into it: [`OutputError::Raced`] when a
+/// folder with files appeared at `out` meanwhile.
+pub fn write_folder<T, E: From<OutputError>>(
+    out: &Path,
+    make: impl FnOnce(&Path) -> Result<T, E>,
+) -> Result<T, E> {
+    if std::fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some()) {
+        return make(out);
+    }
+    let partial = partial_path(out);
+    track(&partial, true);
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| OutputError::Io { path, source }
+    };
+    let result = (std::fs::create_dir(&partial).map_err(io(&partial)))
+        .map_err(E::from)
+        .and_then(|()| make(&partial))
+        .and_then(|value| {
+            // (Over an empty folder, or none; one that got files meanwhile is another's.)
+            std::fs::rename(&partial, out).map_err(|e| {
+                if std::fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some()) {
+                    OutputError::Raced { out: out.into() }
+                } else {
+                    io(out)(e)
+                }
+            })?;
+            Ok(value)
+        });
+    if result.is_err() {
+        let _ = std::fs::remove_dir_all(&partial);
     }
     track(&partial, false);
     result

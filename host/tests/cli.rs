@@ -1619,6 +1619,34 @@ fn outputs_are_checked_together_and_never_lost_silently() {
             "{signal}: {names:?}"
         );
     }
+    // So does a report folder made part way (`et demo`): it was left, and the next run
+    // refused it without --force ("rep already exists").
+    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args(["demo", "--quick", "--out", &p("rep")])
+        .stderr(Stdio::null())
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let names = || -> Vec<String> {
+        (std::fs::read_dir(&dir).unwrap())
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    let made_aside = (0..200).any(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        names().iter().any(|n| n.starts_with(".rep.partial"))
+    });
+    assert!(made_aside, "et demo makes its report aside: {:?}", names());
+    assert!(
+        Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    assert_eq!(child.wait().unwrap().code(), Some(128 + 15));
+    let left = names();
+    assert!(!left.iter().any(|n| n.contains("rep")), "{left:?}");
     // A closed standard output takes nothing (Rust puts the null device in its place: the
     // result vanished without a word): said, once; one a shell sent to the null device asks
     // for that, unsaid.
@@ -2256,6 +2284,34 @@ fn a_closed_pipe_ends_et_quietly() {
             "{args:?}: {err}"
         );
     }
+    // A command with files still to write goes on without its reader and writes them, said
+    // (`et reconstruct --all ... | head -1` ended at its first line, exit 0, without them).
+    let name = |file: &str| dir.join(file).to_str().unwrap().to_string();
+    let (frames, last, stack) = (name("frames.csv"), name("last.png"), name("stack.npy"));
+    let made = et(&["sim", "--scene", scene, "--frames", "12", "--out", &frames]);
+    assert!(made.status.success());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+        .args([
+            "reconstruct",
+            "--scene",
+            scene,
+            "--frames",
+            &frames,
+            "--reference",
+            "2",
+        ])
+        .args(["--all", "--out", &last, "--image-out", &stack])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("standard output's reader went away"), "{err}");
+    let written = |p: &str| std::path::Path::new(p).is_file();
+    assert!(written(&last) && written(&stack), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -119,6 +119,18 @@ def _numbers(a: Any, what: str) -> np.ndarray:
         raise EtError(f"{what}: not an array of numbers ({e})") from None
 
 
+def _volts(a: Any, what: str) -> Any:
+    """``a`` as given, refused when it holds booleans (``v > 0``, a mask): not voltages, as
+    `et reconstruct` refuses a boolean .npy (they were imaged as frames of 0 and 1 V)."""
+    try:
+        kind = np.asarray(a).dtype.kind
+    except (TypeError, ValueError):
+        return a  # (what makes no array is said by the conversion, by name)
+    if kind == "b":
+        raise EtError(f"{what} holds booleans (True, False), not voltages")
+    return a
+
+
 def _finite_frames(a: np.ndarray, what: str) -> np.ndarray:
     """Frames (or a frame) refused at their first NaN or infinite value, by its index: a
     recording holds NaN where the board sent none (the reconstruction said only "a frame value
@@ -876,7 +888,7 @@ class Reconstructor:
 
     def _frames(self, v0: Any) -> np.ndarray:
         """The untouched frame(s) as n x K."""
-        v0 = _finite_frames(_numbers(v0, "v0"), "v0")
+        v0 = _finite_frames(_numbers(_volts(v0, "v0"), "v0"), "v0")
         return self._by_rows(_f64(v0[None, :] if v0.ndim == 1 else v0, 2, "v0"), "v0")
 
     def _say_fit(self, frames: np.ndarray) -> None:
@@ -942,7 +954,7 @@ class Reconstructor:
         i = int(unlike[0])
         which = "the frame" if frames.ndim == 1 else f"frame {i}"
         warnings.warn(
-            f"{which} is {scale[i]:.3g} times the reference V_0 (the median of its values' ratios; "
+            f"{which} is {scale[i] + 0.0:.3g} times the reference V_0 (the median of its values' ratios; "
             f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
             "way): are the frames and the reference in the same units, at the same current? "
             "A press changes a frame by a few per cent",
@@ -965,7 +977,7 @@ class Reconstructor:
         ``v0``, against the reference :meth:`set_reference` set, the fast way to image many
         frames (the image's pixels at once, its noise and objects when first read). Frames
         are taken in single precision, as et's frames are."""
-        v = _finite_frames(_f64(v, 1, "v"), "v")
+        v = _finite_frames(_f64(_volts(v, "v"), 1, "v"), "v")
         if v0 is None:
             if self._reference is None:
                 raise EtError(
@@ -996,7 +1008,7 @@ class Reconstructor:
             self.set_reference(v0)
         if self._reference is None:
             raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
-        frames = self._by_rows(_finite_frames(_f64(V, 2, "V"), "V"), "V")
+        frames = self._by_rows(_finite_frames(_f64(_volts(V, "V"), 2, "V"), "V"), "V")
         pixels, dv, alpha = self._native.pixels_batch(frames)
         self._say_unlike(frames, self._v0)
         self._say_came_off(frames, self._reference)
@@ -1255,8 +1267,11 @@ class Model:
                 "v0 is a board model's untouched frame; a table's model predicts its own "
                 "features as given (reference them before training and predicting)"
             )
-        v0 = None if v0 is None else _f64(v0, 1, "v0")
-        return self._native.predict(_f64(self._by_name(X), 2, "X"), v0)
+        v0 = None if v0 is None else _f64(_volts(v0, "v0"), 1, "v0")
+        X = self._by_name(X)
+        if self.is_board:  # (a board model's X are frames; a table's booleans are features)
+            _volts(X, "X")
+        return self._native.predict(_f64(X, 2, "X"), v0)
 
     def _by_name(self, X: Any) -> Any:
         """A DataFrame's columns in the order the model read its training's (a model trained
@@ -1282,7 +1297,7 @@ class Model:
         if missing or extra:
             said = "; ".join(
                 f"{what} {', '.join(repr(n) for n in ns)}"
-                for what, ns in (("the model reads", missing), ("X has, the model never saw", extra))
+                for what, ns in (("X lacks", missing), ("X has, the model never saw", extra))
                 if ns
             )
             raise EtError(f"X's columns are not the model's: {said} (the model's: {names})")

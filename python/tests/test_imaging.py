@@ -273,6 +273,11 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(v * (1 + 0j), v0)
     with pytest.raises(et.EtError, match="v0: not an array of numbers"):
         disc.image(v, [list(v0), list(v0[:-1])])
+    # A mask is not voltages (it was imaged as frames of 0 and 1 V), as a boolean .npy is not.
+    with pytest.raises(et.EtError, match=r"v holds booleans \(True, False\), not voltages"):
+        disc.image(v > v0, v0)
+    with pytest.raises(et.EtError, match="V holds booleans"):
+        disc.images(np.vstack([v, v]) > 0, v0)
     with pytest.raises(et.EtError, match="past single precision"):
         disc.image(v * 1e300, v0 * 1e300)
     with pytest.raises(et.EtError, match="below 1.2e-38"):
@@ -344,6 +349,9 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         r.image(v * 1e6)
     with pytest.warns(et.EtWarning, match="frame 1 is 0.001 times .* 1 of 2 frames"):
         r.images(np.vstack([v * 1e3, v]))
+    # A frame of zeros against a reference of negative values: 0 times, not "-0 times".
+    with pytest.warns(et.EtWarning, match="the frame is 0 times the reference V_0"):
+        r.image(np.where(v0 < 0, 0.0, v0), v0)
     # Frames of another protocol of the same K (opposite's under pseudo-polar): imaged about
     # the wrong model without a word; now said as `et reconstruct` says it, fitted or not.
     opposite = et.Reconstructor(et.disc(0.065, 16), et.protocol("opposite", 16), triangles=1200)

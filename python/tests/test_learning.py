@@ -178,7 +178,7 @@ def test_a_frames_columns_of_row_numbers_times_and_sessions_are_refused(table):
         with pytest.warns(et.EtWarning, match="rows the model was trained on"):
             scores.append(without_times(model.evaluate(X, data.positions_m)))
     assert scores[0] == scores[1]
-    with pytest.raises(et.EtError, match="the model reads 'ch0'; X has, the model never saw 'g0'"):
+    with pytest.raises(et.EtError, match="X lacks 'ch0'; X has, the model never saw 'g0'"):
         model.predict(Frame(["g0"] + channels[1:], data.x))
     with pytest.raises(et.EtError, match="X's column 'ch1' twice"):
         et.train(Frame(["ch1"] + channels[1:], data.x), data.positions_m)

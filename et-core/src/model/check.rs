@@ -41,7 +41,7 @@ pub fn check_class_tables(t: &impl ClassTables) -> Result<(), ModelError> {
     }
     for j in 0..p {
         if !t.mean(j).is_finite() || !t.scale(j).is_finite() {
-            return Err(ModelError::NonFinite);
+            return Err(ModelError::NonFiniteFeature { feature: j as u16 });
         }
         if t.scale(j) <= 0.0 {
             return Err(ModelError::Scale { feature: j as u16 });
@@ -53,11 +53,11 @@ pub fn check_class_tables(t: &impl ClassTables) -> Result<(), ModelError> {
             .iter()
             .all(|v| v.is_finite());
         if !finite || (0..p).any(|j| !t.vector(c, j).is_finite()) {
-            return Err(ModelError::NonFinite);
+            return Err(ModelError::NonFinite { class: c as u16 });
         }
         if t.kind() == ModelKind::Qda {
             if (0..p).any(|r| (0..=r).any(|q| !t.factor(c, r, q).is_finite())) {
-                return Err(ModelError::NonFinite);
+                return Err(ModelError::NonFinite { class: c as u16 });
             }
             let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
             for r in 0..p {

@@ -50,9 +50,26 @@ pub enum ModelError {
         /// Which feature.
         feature: u16,
     },
-    /// A stored value is NaN or infinite.
-    #[error("model holds a NaN or infinite value")]
-    NonFinite,
+    /// A feature's mean or scale is NaN or infinite (past single precision, in which the
+    /// tables are held: an edited 1e300 is infinite there).
+    #[error(
+        "feature {feature}'s mean or scale is NaN or infinite in single precision (past \
+         3.4e38), in which the tables are held"
+    )]
+    NonFiniteFeature {
+        /// Which feature.
+        feature: u16,
+    },
+    /// A class's table holds a NaN or infinite value (its position, prior, constant, vector
+    /// or factor; past single precision).
+    #[error(
+        "class {class}'s table (position, prior, mean or weights, factor) holds a NaN or \
+         infinite value in single precision (past 3.4e38), in which the tables are held"
+    )]
+    NonFinite {
+        /// Which class.
+        class: u16,
+    },
     /// A feature's frame index is not above the one before: each frame value is a feature at
     /// most once, in frame order (a repeated index would read one channel twice).
     #[error(

@@ -428,7 +428,21 @@ fn singular_and_ill_conditioned_models_are_refused_at_load() {
     let ok = with_diagonal(&blob, |r| if r == 4 { 1e-4 } else { 1.0 });
     assert!(Model::parse(&ok).is_ok());
     let nan = with_diagonal(&blob, |r| if r == 2 { f32::NAN } else { 1.0 });
-    assert_eq!(Model::parse(&nan).unwrap_err(), ModelError::NonFinite);
+    assert_eq!(
+        Model::parse(&nan).unwrap_err(),
+        ModelError::NonFinite { class: 1 }
+    );
+    // A feature's mean past single precision is named by its feature.
+    let mut mean = blob.clone();
+    let (lay, at) = (Model::parse(&blob).unwrap().layout, 3);
+    let m = lay.mean + 4 * at;
+    mean[m..m + 4].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    let crc = crc32(&mean[..lay.crc]);
+    mean[lay.crc..].copy_from_slice(&crc.to_le_bytes());
+    assert_eq!(
+        Model::parse(&mean).unwrap_err(),
+        ModelError::NonFiniteFeature { feature: 3 }
+    );
 }
 
 #[test]

@@ -76,19 +76,7 @@ pub enum ModelError {
     },
     /// Not JSON, or JSON cut short (the message names the line and column, and the first
     /// line of a file that does not start as JSON does).
-    #[error(
-        "{}: {}: {}{}",
-        .path.display(),
-        if error.classify() == serde_json::error::Category::Eof {
-            "the file ends inside its JSON (a copy cut short? write it again with et train)"
-        } else {
-            "not an et model file (et train writes JSON)"
-        },
-        crate::model_file::json_said(error, false),
-        .first_line.as_ref().map_or(String::new(), |l| format!(
-            ", and its first line reads {l:?}: a file of another kind given?"
-        ))
-    )]
+    #[error("{}: {}", .path.display(), json_fault(.error, .first_line.as_deref(), *.non_finite))]
     Json {
         /// The file.
         path: PathBuf,
@@ -98,6 +86,10 @@ pub enum ModelError {
         /// character (a table or a scene given as a model were said as "expected ident"
         /// alone).
         first_line: Option<String>,
+        /// `NaN`, `Infinity` or `-Infinity` where the parser stopped: what Python's `json`
+        /// writes for a value past a float's range (an edited model was "not an et model
+        /// file ... expected value").
+        non_finite: Option<&'static str>,
     },
     /// Another of et's files (a dataset, a recording) given as a model: said as what it is
     /// (a recording was "trailing characters (line 2, column 1)", a dataset "expected value").
@@ -218,6 +210,53 @@ fn other_file(text: &str) -> Option<(&'static str, &'static str)> {
 
 /// The first line of `text` (at most 60 characters, control characters left out) when
 /// parsing it as JSON failed on its first characters: the text is not JSON at all.
+/// [`ModelError::Json`]'s words after the file's name.
+fn json_fault(
+    error: &serde_json::Error,
+    first_line: Option<&str>,
+    non_finite: Option<&str>,
+) -> String {
+    let at = || format!("line {}, column {}", error.line(), error.column());
+    if let Some(token) = non_finite {
+        return format!(
+            "{token} at {}: not JSON, which has no NaN or infinity (Python's json writes them \
+             for values past a float's range; an edit?): a model's values are finite numbers",
+            at()
+        );
+    }
+    let what = if error.classify() == serde_json::error::Category::Eof {
+        "the file ends inside its JSON (a copy cut short? write it again with et train)"
+    } else {
+        "not an et model file (et train writes JSON)"
+    };
+    let first = first_line.map_or(String::new(), |l| {
+        format!(", and its first line reads {l:?}: a file of another kind given?")
+    });
+    format!(
+        "{what}: {}{first}",
+        crate::model_file::json_said(error, false)
+    )
+}
+
+/// `NaN`, `Infinity` or `-Infinity` where the JSON parser stopped (its line and column).
+fn non_finite_at(text: &str, error: &serde_json::Error) -> Option<&'static str> {
+    let line = text.lines().nth(error.line().checked_sub(1)?)?;
+    // (The column counts characters from 1; the parser stops at the token's first.)
+    let from = line.char_indices().nth(error.column().saturating_sub(1))?.0;
+    let (before, rest) = line.split_at_checked(from)?;
+    // (`-Infinity` stops the parser at its `I`, after the sign.)
+    let signed = before.ends_with('-');
+    (["-Infinity", "Infinity", "NaN"].into_iter())
+        .find(|t| rest.starts_with(t))
+        .map(|t| {
+            if t == "Infinity" && signed {
+                "-Infinity"
+            } else {
+                t
+            }
+        })
+}
+
 fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
     const SHOWN: usize = 60;
     if error.classify() != serde_json::error::Category::Syntax
@@ -293,6 +332,7 @@ impl Model {
             serde_json::from_str(text).map_err(|error| ModelError::Json {
                 path: path.into(),
                 first_line: first_line_if_not_json(text, &error),
+                non_finite: non_finite_at(text, &error),
                 error,
             })?;
         let format = value.get("format").and_then(serde_json::Value::as_str);

@@ -460,6 +460,29 @@ fn a_file_of_neither_kind_is_refused_naming_it() {
             "{e}"
         );
     }
+    // A model edited in Python with a value past a float's range (json writes NaN and
+    // Infinity, which are not JSON): said as that, by its place (it was "not an et model file
+    // (et train writes JSON): expected value").
+    for (token, text) in [
+        (
+            "NaN",
+            "{\"format\": \"et-table-model\",\n \"feature_mean\": [1.0, NaN]}",
+        ),
+        (
+            "-Infinity",
+            "{\"format\": \"et-table-model\",\n \"feature_mean\": [-Infinity]}",
+        ),
+    ] {
+        let path = dir.join("edited.json");
+        std::fs::write(&path, text).unwrap();
+        let e = Model::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("edited.json: {token} at line 2, column "))
+                && e.contains("not JSON, which has no NaN or infinity")
+                && !e.contains("not an et model file"),
+            "{e}"
+        );
+    }
     // A dataset or a recording given as the model: said as what it is and where it goes (a
     // recording was "trailing characters (line 2, column 1)", a dataset "expected value").
     for (name, text, said) in [

@@ -27,20 +27,44 @@ fn note_stdout_closed() {
     }
 }
 
-/// `println!` for a command's output on stdout: when the reader goes away (`et protocol
-/// --json | head`) the program ends quietly, as Unix tools do, instead of panicking; where
-/// the caller closed standard output (`>&-`) the result is dropped, said once.
+/// Whether standard output's reader went away while the command had files to write: what it
+/// prints there is dropped from then on ([`reader_went_away`]).
+static READER_GONE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Standard output's reader went away (a closed pipe: `et protocol --json | head`): the program
+/// ends quietly, as Unix tools do, unless it has files to write (`et reconstruct --all --out
+/// last.png --image-out stack.npy | head -1` ended without them, exit 0); then it goes on
+/// without standard output, said once, and writes them.
+fn reader_went_away() {
+    use std::sync::atomic::Ordering::Relaxed;
+    if !et_host::output::files_to_write() {
+        std::process::exit(0);
+    }
+    if !READER_GONE.swap(true, Relaxed) {
+        say!(
+            "note: standard output's reader went away (| head?): the rest of what et prints \
+             there is dropped; the files asked for are still written"
+        );
+    }
+}
+
+/// `println!` for a command's output on stdout: when the reader goes away the program ends
+/// quietly or goes on without it ([`reader_went_away`]), instead of panicking; where the caller
+/// closed standard output (`>&-`) the result is dropped, said once.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         crate::note_stdout_closed();
-        let mut stdout = std::io::stdout().lock();
-        if let Err(e) = writeln!(stdout, $($arg)*).and_then(|()| stdout.flush()) {
-            if e.kind() == std::io::ErrorKind::BrokenPipe {
-                std::process::exit(0);
+        if !crate::READER_GONE.load(std::sync::atomic::Ordering::Relaxed) {
+            let mut stdout = std::io::stdout().lock();
+            if let Err(e) = writeln!(stdout, $($arg)*).and_then(|()| stdout.flush()) {
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    crate::reader_went_away();
+                } else {
+                    say!("error: writing to stdout: {e}");
+                    std::process::exit(1);
+                }
             }
-            say!("error: writing to stdout: {e}");
-            std::process::exit(1);
         }
     }};
 }
