@@ -653,11 +653,15 @@ fn collect_train_eval_export_chain() {
         "--subsections",
         "5",
     ];
-    let c = json(ok(et(&[
-        &base[..],
-        &["--visits", "2", "--out", &s(&train), "--json"],
-    ]
-    .concat())));
+    let collected = et(&[&base[..], &["--visits", "2", "--out", &s(&train), "--json"]].concat());
+    // The scene's adjacent is not what is collected: said (it was replaced without a word).
+    let said = String::from_utf8_lossy(&collected.stderr).into_owned();
+    assert!(
+        said.contains("et collect scans the opposite protocol, the method's training scan")
+            && said.contains("the scene's adjacent is not used here"),
+        "{said}"
+    );
+    let c = json(ok(collected));
     assert_eq!(
         (
             c["observations"].as_u64(),

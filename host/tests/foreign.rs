@@ -415,21 +415,35 @@ fn et_protocol_csv_is_a_protocol_file() {
         .schedule(2e-4)
         .unwrap();
     assert_eq!(read.rows(), built.rows());
-    // The simulated board scans named protocols only, and says what to do instead.
-    let e = et(&[
-        "sim",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--frames",
-        "2",
-        "--out",
-        d.join("r.jsonl").to_str().unwrap(),
-    ]);
-    let e = String::from_utf8_lossy(&e.stderr).into_owned();
-    assert!(e.contains("--frames") && e.contains("frames.csv"), "{e}");
-    // (Its rows are pp-pp's, which the board scans: said so.)
+    // The simulated board scans a file of a built-in protocol's rows as that one, said (it
+    // was refused, naming the protocol to give instead); other rows it does not scan, and says
+    // what to do instead.
+    let sim = |scene: &Path| {
+        let out = d.join("r.jsonl");
+        let _ = std::fs::remove_file(&out);
+        let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+        et(&["sim", "--scene", scene, "--frames", "2", "--out", out])
+    };
+    let o = sim(&scene);
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(
-        e.contains("(its rows are pp-pp's: protocol = \"pp-pp\" scans them)"),
+        o.status.success()
+            && e.contains("the simulated board scans pp-pp (its protocol file's rows are pp-pp's)"),
+        "{e}"
+    );
+    let mut rows: Vec<&str> = std::str::from_utf8(&out.stdout).unwrap().lines().collect();
+    rows.swap(1, 2);
+    std::fs::write(d.join("pp-swapped.csv"), rows.join("\n") + "\n").unwrap();
+    let swapped = d.join("s-swapped.toml");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&swapped, text.replace("pp.csv", "pp-swapped.csv")).unwrap();
+    let o = sim(&swapped);
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !o.status.success()
+            && e.contains("rows are none of the built-in protocols'")
+            && e.contains("--frames")
+            && e.contains("frames.csv"),
         "{e}"
     );
     // It writes another system's frames of any protocol instead, and they image: a touch

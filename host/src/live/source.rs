@@ -155,20 +155,8 @@ impl ReplaySource {
             .collect();
         let mut name = frames.description;
         let played_ua = f64::from(config.current_na) / 1e3;
-        if matches!(scene.scan.protocol, et_sim::scene::ProtocolSpec::File(_)) {
-            // Streamed electrodes are the board's, from 0, whatever the file counts from.
-            let base = match scene.electrode_base() {
-                0 => String::new(),
-                b => format!(
-                    "; its electrodes, counted from {b}, are numbered from 0 here, as the board \
-                     counts them: its electrode {b} is electrode 0"
-                ),
-            };
-            name += &format!(
-                " (its protocol file's rows are {}'s{base})",
-                config.protocol.name()
-            );
-        }
+        // (Streamed electrodes are the board's, from 0, whatever the file counts from.)
+        name += &scene.file_said().unwrap_or_default();
         if scale != 1.0 {
             name += &format!(
                 " (driven at {} uA, played as the board's {played_ua} uA: its volts times \

@@ -36,18 +36,15 @@ pub enum SceneFault {
          as {{ file = \"protocol.csv\" }})"
     )]
     UnknownProtocol(String),
-    /// A protocol file asked of the simulated board.
+    /// A protocol file of no built-in protocol's rows asked of the simulated board.
     #[error(
-        "a protocol file is imaged from measured frames (et reconstruct --frames), not scanned \
-         by the simulated board: name a built-in protocol to simulate the board{}, or write \
-         another system's frames with et sim --out frames.csv",
-        .0.map_or(String::new(), |k| format!(
-            " (its rows are {}'s: protocol = \"{}\" scans them)",
-            k.name(),
-            k.name()
-        ))
+        "a protocol file whose rows are none of the built-in protocols' (adjacent, \
+         pseudo-polar, pp-pp or opposite, each in et's order and at one current) is imaged \
+         from measured frames (et reconstruct --frames), not scanned by the simulated board: \
+         name a built-in protocol to simulate the board, or write another system's frames \
+         with et sim --out frames.csv"
     )]
-    NotScanned(Option<ProtocolKind>),
+    NotScanned,
     /// A protocol file asked of `et stream` or `et view` playing another system's frames.
     #[error(
         "a protocol file whose rows are none of the built-in protocols' (adjacent, \

@@ -130,15 +130,13 @@ impl Scene {
     /// [`FieldError`] naming the `scan.` field at fault: a protocol file (imaged from
     /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
-        let Some(protocol) = self.named_protocol()? else {
-            // (A file of a built-in protocol's rows is said as that one.)
-            let rows_of = self.file_as_built_in().ok().map(|(kind, _)| kind);
-            return Err(FieldError::new(
-                "scan.protocol",
-                SceneFault::NotScanned(rows_of),
-            ));
+        let (protocol, ua) = match self.named_protocol()? {
+            Some(kind) => (kind, self.scan.current_ua),
+            // (A file of a built-in protocol's rows is scanned as that one: `file_said`.)
+            None => self
+                .built_in_of_file()?
+                .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?,
         };
-        let ua = self.scan.current_ua;
         if !(ua.is_finite() && ua > 0.0 && ua <= BOARD_MAX_UA) {
             let fault = SceneFault::BoardCurrent(ua);
             return Err(FieldError::new("scan.current_ua", fault));
@@ -186,6 +184,35 @@ impl Scene {
     /// [`SceneFault::NotPlayed`] for rows of no built-in protocol, or of several currents;
     /// what [`Scene::schedule`] finds wrong with the file.
     fn file_as_built_in(&self) -> Result<(ProtocolKind, f64), FieldError> {
+        self.built_in_of_file()?
+            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotPlayed))
+    }
+
+    /// Where the scene's protocol is a file whose rows are a built-in protocol's (scanned and
+    /// played as that one), the words saying so and how its electrodes are numbered here, the
+    /// board's way: " (its protocol file's rows are pp-pp's)".
+    #[must_use]
+    pub fn file_said(&self) -> Option<String> {
+        if !matches!(self.scan.protocol, ProtocolSpec::File(_)) {
+            return None;
+        }
+        let (kind, _) = self.built_in_of_file().ok()??;
+        let base = match self.electrode_base() {
+            0 => String::new(),
+            b => format!(
+                "; its electrodes, counted from {b}, are numbered from 0 here, as the board \
+                 counts them: its electrode {b} is electrode 0"
+            ),
+        };
+        Some(format!(
+            " (its protocol file's rows are {}'s{base})",
+            kind.name()
+        ))
+    }
+
+    /// [`Scene::file_as_built_in`], `None` for rows of no built-in protocol or of several
+    /// currents.
+    fn built_in_of_file(&self) -> Result<Option<(ProtocolKind, f64)>, FieldError> {
         let schedule = self.schedule()?;
         let rows = schedule.rows();
         let ua = rows.first().map_or(0.0, |r| r.current_a * 1e6);
@@ -199,10 +226,9 @@ impl Scene {
             let built_in = built_in.and_then(|p| p.schedule(ua * 1e-6).ok());
             built_in.is_some_and(|b| b.rows().iter().map(four).eq(rows.iter().map(four)))
         };
-        (ProtocolKind::NAMED.into_iter())
+        Ok((ProtocolKind::NAMED.into_iter())
             .find(|&kind| one_current && same(kind))
-            .map(|kind| (kind, ua))
-            .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotPlayed))
+            .map(|kind| (kind, ua)))
     }
 
     /// The board's configuration of the scene's scan at `current_ua` (within the board's).

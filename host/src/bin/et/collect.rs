@@ -158,7 +158,18 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     output::check(&args.out, &inputs, force)?;
     output::check_format(&args.out, "a dataset", &["csv", "npz"])?;
     let (rows, cols) = parse_grid(&args.grid, "--grid")?;
-    let config = collect::training_config(scene.board_config()?);
+    let base = scene.board_config()?;
+    let config = collect::training_config(base);
+    // (The scene's protocol was replaced without a word.)
+    if base.protocol != config.protocol {
+        say!(
+            "note: et collect scans the {} protocol, the method's training scan (docs/method.md \
+             §9); the scene's {}{} is not used here",
+            config.protocol.name(),
+            base.protocol.name(),
+            scene.file_said().unwrap_or_default()
+        );
+    }
     let centres = collect::grid(&scene.sheet, rows, cols, 0.0);
     let plan = args.plan()?;
     // The finger against the simulator's grid, as a scene's touches are.

@@ -86,6 +86,9 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     let mut run = Run::new(&scene)?;
     let setup = started.elapsed();
     let header = Header::new(format!("sim:{}", args.scene.display()), run.config())?;
+    if let Some(said) = scene.file_said() {
+        say!("note: the simulated board scans {}{said}", header.protocol);
+    }
     let detail = if args.samples {
         Detail::Samples
     } else {
