@@ -1747,7 +1747,13 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
         // '-1' found").
         (
             vec!["protocol", "-l", "16", "--csv", "--current-a", "-1.4e-3"],
-            "'-1.4e-3' for '--current-a <CURRENT_A>': -1.4e-3 is not above 0",
+            "'-1.4e-3' for '--current-a <CURRENT_A>': -1.4e-3 is outside 1e-9 to 0.05",
+        ),
+        // Below a board's least current, said at the flag (it was "row 0: current 1e-12 A is
+        // below 1 nA"), its bounds as written (not 0.000000001).
+        (
+            vec!["protocol", "--csv", "--current-a", "1e-12"],
+            "1e-12 is outside 1e-9 to 0.05",
         ),
         // A row range from the end, as Python indexes: said as et counts rows (it was
         // "unexpected argument '-5' found").
@@ -2173,6 +2179,22 @@ label,x_mm,y_mm,visit,v0,v3,v3b
             .chain([p("r.png")])
             .collect(),
             "it refines nothing",
+        ),
+        // A radius of 0 in the flag's mm (it was said in m, "radius 0 m, edge 0 m").
+        (
+            [
+                "reconstruct",
+                "--scene",
+                scene,
+                "--refine",
+                "0,0,0",
+                "--out",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([p("r.png")])
+            .collect(),
+            "--refine '0,0,0': a finite centre X,Y and a radius R above 0, in mm",
         ),
         (
             [

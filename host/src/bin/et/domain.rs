@@ -8,7 +8,12 @@ pub(crate) fn real(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + C
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else {
-            Err(format!("{} is outside {lo} to {hi}", text.trim()))
+            Err(format!(
+                "{} is outside {} to {}",
+                text.trim(),
+                short(lo),
+                short(hi)
+            ))
         }
     }
 }
@@ -21,8 +26,10 @@ pub(crate) fn above(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + 
             Ok(v)
         } else {
             Err(format!(
-                "{} is not above {lo} and at most {hi}",
-                text.trim()
+                "{} is not above {} and at most {}",
+                text.trim(),
+                short(lo),
+                short(hi)
             ))
         }
     }
@@ -79,6 +86,15 @@ pub(crate) fn within(
     range: std::ops::RangeInclusive<usize>,
 ) -> impl Fn(&str) -> Result<usize, String> + Clone {
     count(*range.start(), *range.end())
+}
+
+/// `x` as a reader writes it: 1e-9, not 0.000000001.
+fn short(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
+    }
 }
 
 fn number(text: &str) -> Result<f64, String> {

@@ -28,9 +28,11 @@ pub(crate) struct ProtocolArgs {
     /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
     #[arg(long)]
     csv: bool,
-    /// With --csv: the current of every row, A (above 0, at most 0.05: more is a unit slip).
+    /// With --csv: the current of every row, A (1e-9, a board's least, to 0.05: more is a
+    /// unit slip).
     #[arg(long, default_value_t = 1e-3, requires = "csv",
-          value_parser = crate::domain::above(0.0, et_core::schedule::MAX_CURRENT_A))]
+          value_parser = crate::domain::real(et_core::schedule::MIN_CURRENT_A,
+                                             et_core::schedule::MAX_CURRENT_A))]
     current_a: f64,
 }
 

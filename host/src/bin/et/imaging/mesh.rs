@@ -27,6 +27,12 @@ pub(super) fn mesh_plan(
             .with_context(|| {
                 format!("--refine '{r}': three numbers X,Y,R in mm, e.g. 20,-15,12")
             })?;
+        // (Said in the flag's mm: the mesh's check said "centre (0, 0) m, radius 0 m".)
+        if !(v.iter().all(|x| x.is_finite()) && v[2] > 0.0) {
+            bail!(
+                "--refine '{r}': a finite centre X,Y and a radius R above 0, in mm (e.g. 20,-15,12)"
+            );
+        }
         let region = Refinement {
             centre: [v[0] * 1e-3, v[1] * 1e-3],
             radius: v[2] * 1e-3,
