@@ -156,26 +156,28 @@ fn eval_plots(
     data_arg: &Path,
 ) -> Result<()> {
     let conf = &tested.confusion;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let title = format!(
         "confusion: accuracy {:.1} % on {}",
         100.0 * conf.accuracy(),
         data_arg.display()
     );
-    output::write(confusion_png, |partial| {
-        plot::confusion(partial, conf, &title)
-    })?;
-    if tested.outcomes.is_empty() {
-        say!(
-            "note: {} does not say where the electrodes are: no error-vs-distance plot",
-            data_arg.display()
-        );
-    } else {
-        output::write(error_png, |partial| {
-            plot::error_vs_distance(partial, tested)
+    let inside = |d: &Path, png: &Path| d.join(png.file_name().unwrap_or_default());
+    crate::plots_folder(dir, |d| {
+        output::write(&inside(d, confusion_png), |partial| {
+            plot::confusion(partial, conf, &title)
         })?;
-    }
-    Ok(())
+        if tested.outcomes.is_empty() {
+            say!(
+                "note: {} does not say where the electrodes are: no error-vs-distance plot",
+                data_arg.display()
+            );
+        } else {
+            output::write(&inside(d, error_png), |partial| {
+                plot::error_vs_distance(partial, tested)
+            })?;
+        }
+        Ok(())
+    })
 }
 
 pub(crate) fn export_cmd(args: &ExportArgs, force: bool) -> Result<()> {

@@ -48,6 +48,21 @@ fn reader_went_away() {
     }
 }
 
+/// Writes a `--plots` folder with `write` (given the folder to write into): a new one made
+/// aside and renamed when complete (`output::write_folder`: a stopped run left a folder of
+/// one plot, which the next run refused without --force), its parent folders made first.
+fn plots_folder(
+    dir: &std::path::Path,
+    write: impl FnOnce(&std::path::Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("creating {}", parent.display()))?;
+    }
+    et_host::output::write_folder(dir, write)
+}
+
 /// `println!` for a command's output on stdout: when the reader goes away the program ends
 /// quietly or goes on without it ([`reader_went_away`]), instead of panicking; where the caller
 /// closed standard output (`>&-`) the result is dropped, said once.

@@ -365,11 +365,15 @@ pub(crate) fn eval(
         if e.pairs.is_empty() {
             say!("note: no positions to plot (the rows or the model have none)");
         } else {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
             let title = format!("{} on {} rows", model.method.name(), e.observations);
-            output::write(map, |partial| plot::error_map(partial, &e.pairs, &title))?;
-            output::write(scatter, |partial| {
-                plot::predicted_vs_true(partial, &e.pairs, &title)
+            let inside = |d: &Path, png: &Path| d.join(png.file_name().unwrap_or_default());
+            crate::plots_folder(dir, |d| {
+                output::write(&inside(d, map), |partial| {
+                    plot::error_map(partial, &e.pairs, &title)
+                })?;
+                output::write(&inside(d, scatter), |partial| {
+                    plot::predicted_vs_true(partial, &e.pairs, &title)
+                })
             })?;
         }
     }
