@@ -125,6 +125,10 @@ def test_a_board_model_predicts_frames_minus_the_untouched_frame(dataset):
     # fall inside them (they were classified).
     with pytest.raises(et.EtError, match=f"the model takes frames of K = {k} values"):
         model.predict(frames[:, :-1], v0=v0[:-1])
+    # A dataset's features given for frames: said as that (it was "frames of 96 values and an
+    # untouched frame of 0").
+    with pytest.raises(et.EtError, match=r"without an untouched frame: .* the features the model reads"):
+        model.predict(data.x[:3])
     # One fold tests on nothing (the command line refused it; Python trained with it).
     with pytest.raises(et.EtError, match="folds = 1: a cross-validation takes 2 to 1000 folds"):
         et.train(data, kind="lda", folds=1)

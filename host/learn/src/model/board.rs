@@ -118,6 +118,7 @@ impl Board {
             frame: frames.ncols(),
             v0: v0.len(),
             k: frames.ncols(),
+            features: self.file.feature_index.len(),
             scan: self.file.config,
         };
         // A value the model reads that is NaN was class 8 of 9 (the argmax of NaN
@@ -168,6 +169,7 @@ impl Board {
                 frame,
                 v0,
                 k: k.unwrap_or(0),
+                features: self.file.feature_index.len(),
                 scan: self.file.config,
             });
         }

@@ -16,6 +16,35 @@ fn said(c: &et_core::config::ScanConfig) -> String {
     )
 }
 
+/// [`UseError::FrameLength`]'s words: the frames' length, the untouched frame's (none was
+/// said as "an untouched frame of 0"), and rows of the model's feature count said as its
+/// features given for frames (a dataset's `x`).
+fn frame_length_said(
+    frame: usize,
+    v0: usize,
+    k: usize,
+    features: usize,
+    scan: &et_core::config::ScanConfig,
+) -> String {
+    let untouched = match v0 {
+        0 => " without an untouched frame".to_string(),
+        n if n == frame => String::new(),
+        n => format!(" and an untouched frame of {n}"),
+    };
+    let features = if frame == features && frame != k {
+        format!(
+            " ({frame} values are the features the model reads: its features given for frames? \
+             It reads them from whole frames; an et dataset is given whole)"
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "frames of {frame} values{untouched}: the model takes frames of K = {k} values, of {}{features}",
+        said(scan)
+    )
+}
+
 /// Why a model could not be used on a dataset or a sheet; says which of the two is at fault.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -38,11 +67,7 @@ pub enum UseError {
         data: et_core::config::ScanConfig,
     },
     /// A frame (or the untouched frame) is not of the model's K values.
-    #[error(
-        "frames of {frame} values and an untouched frame of {v0}: the model takes frames of K \
-         = {k} values, of {}",
-        said(scan)
-    )]
+    #[error("{}", frame_length_said(*.frame, *.v0, *.k, *.features, .scan))]
     FrameLength {
         /// Values in each frame given.
         frame: usize,
@@ -50,6 +75,8 @@ pub enum UseError {
         v0: usize,
         /// Values in the model's frames.
         k: usize,
+        /// The features the model reads of each frame.
+        features: usize,
         /// The model's scan.
         scan: et_core::config::ScanConfig,
     },
