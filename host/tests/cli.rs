@@ -3142,3 +3142,43 @@ fn a_disconnected_electrode_is_named_and_left_out() {
     assert_eq!(json["threshold"], 0.08, "{json}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A table of class labels alone, trained without --groups: the note says what holds for
+/// classes (it spoke of positions chosen on two figures, which labels do not have).
+#[test]
+fn a_table_of_labels_alone_is_not_told_of_positions() {
+    let dir = std::env::temp_dir().join(format!("et-cli-labels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let rows: String = (0..40)
+        .map(|i| {
+            format!(
+                "{},{}\n",
+                f64::from(i % 2) * 3.0 + f64::from(i % 7) * 0.1,
+                i % 5
+            )
+        })
+        .collect();
+    std::fs::write(p("F.csv"), format!("a,b\n{rows}")).unwrap();
+    let labels: String = (0..40).map(|i| format!("{}\n", i % 2)).collect();
+    std::fs::write(p("T.csv"), format!("label\n{labels}")).unwrap();
+    let t = et(&[
+        "train",
+        "--features",
+        &p("F.csv"),
+        "--targets",
+        &p("T.csv"),
+        "--kind",
+        "lda",
+        "--out",
+        &p("m.json"),
+    ]);
+    let said = String::from_utf8_lossy(&t.stderr);
+    assert!(
+        t.status.success()
+            && said.contains("note: no --groups: every row is taken as one session")
+            && !said.contains("positions"),
+        "{said}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -244,13 +244,19 @@ pub(crate) fn train(
 /// What the groups of `table` mean for its cross-validation, said on standard error.
 fn say_groups(table: &tabular::Table) {
     match table.group_index() {
-        None => say!(
+        // (Of classes alone the drifted figure is not weighed: said only of positions.)
+        None if table.positions.is_some() => say!(
             "note: no --groups: every row is taken as one session, and nothing in the data can \
              show how a model holds on a new session; sensors drift between sessions, so \
              positions are predicted by the model best on two figures together ({}): its \
              cross-validated error P, and D, the same with each channel's gain and level \
              drifted (give --groups to choose by leaving a session out)",
             tabular::drift_weighting()
+        ),
+        None => say!(
+            "note: no --groups: every row is taken as one session, and nothing in the data can \
+             show how a model holds on a new session (give --groups to cross-validate by \
+             leaving a session out)"
         ),
         Some((_, names)) if names.len() < 2 => say!(
             "note: one group ('{}') only: nothing in the data can show how a model holds on a \
