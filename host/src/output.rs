@@ -480,11 +480,12 @@ pub fn write<T, E: From<OutputError>>(
     result
 }
 
-/// Makes the report folder `out` with `make` (which writes into the folder it is given): a
-/// new folder, or an empty one, is made under [`partial_path`] and renamed to `out` at the
-/// end, so a run stopped part way (a stage's error, Ctrl-C) leaves no half report, which the
-/// next run refused without `--force` (`et demo`); a folder with files (replaced with
-/// `--force`, as [`check_folder`] allowed) is written in place, its other files left alone.
+/// Makes the folder `out` (`et demo`'s report, a `--plots` folder) with `make`, which writes
+/// into the folder it is given: a new folder, or an empty one, is made under
+/// [`partial_path`] and renamed to `out` at the end, so a run stopped part way (a stage's
+/// error, Ctrl-C) leaves no half of one, which the next run refused without `--force`; a
+/// folder with files (replaced with `--force`, as [`check_folder`] allowed) is written in
+/// place, its other files left alone.
 ///
 /// # Errors
 /// `make`'s error, or an [`OutputError`] converted into it: [`OutputError::Raced`] when a

@@ -2111,6 +2111,13 @@ label,x_mm,y_mm,visit,v0,v3,v3b
     std::fs::write(p("f-units.csv"), "a,b\n1,2\n3,4\n5,6\n7,8\n").unwrap();
     std::fs::write(p("t-units.csv"), "x_mm,y_mm\n1,2\n3,4\n5,6\n7,8\n").unwrap();
     let ridge = root.join("host/learn/tests/data/table-model-v1/ridge.json");
+    let refine = |r: &str| -> Vec<String> {
+        ["reconstruct", "--scene", scene, "--refine", r, "--out"]
+            .map(String::from)
+            .into_iter()
+            .chain([p("r.png")])
+            .collect()
+    };
     let cases: Vec<(Vec<String>, &str)> = vec![
         // New rows without targets, given to eval: what it is for and where they are
         // predicted (it asked only to "add a 'label' column").
@@ -2149,51 +2156,12 @@ label,x_mm,y_mm,visit,v0,v3,v3b
             ],
             "each frame value once",
         ),
-        (
-            [
-                "reconstruct",
-                "--scene",
-                scene,
-                "--refine",
-                "500,500,10",
-                "--out",
-            ]
-            .map(String::from)
-            .into_iter()
-            .chain([p("r.png")])
-            .collect(),
-            "does not meet the sheet",
-        ),
+        (refine("500,500,10"), "does not meet the sheet"),
         // Edges no finer than the mesh's own refine nothing (it was taken without a word).
-        (
-            [
-                "reconstruct",
-                "--scene",
-                scene,
-                "--refine",
-                "0,0,1000",
-                "--out",
-            ]
-            .map(String::from)
-            .into_iter()
-            .chain([p("r.png")])
-            .collect(),
-            "it refines nothing",
-        ),
+        (refine("0,0,1000"), "it refines nothing"),
         // A radius of 0 in the flag's mm (it was said in m, "radius 0 m, edge 0 m").
         (
-            [
-                "reconstruct",
-                "--scene",
-                scene,
-                "--refine",
-                "0,0,0",
-                "--out",
-            ]
-            .map(String::from)
-            .into_iter()
-            .chain([p("r.png")])
-            .collect(),
+            refine("0,0,0"),
             "--refine '0,0,0': a finite centre X,Y and a radius R above 0, in mm",
         ),
         (

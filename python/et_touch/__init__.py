@@ -953,8 +953,9 @@ class Reconstructor:
             return
         i = int(unlike[0])
         which = "the frame" if frames.ndim == 1 else f"frame {i}"
+        times = scale[i] + 0.0  # (-0, a frame of zeros against negative values, said as 0)
         warnings.warn(
-            f"{which} is {scale[i] + 0.0:.3g} times the reference V_0 (the median of its values' ratios; "
+            f"{which} is {times:.3g} times the reference V_0 (the median of its values' ratios; "
             f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
             "way): are the frames and the reference in the same units, at the same current? "
             "A press changes a frame by a few per cent",

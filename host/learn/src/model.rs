@@ -208,8 +208,6 @@ fn other_file(text: &str) -> Option<(&'static str, &'static str)> {
     Some((kind.said(), fix))
 }
 
-/// The first line of `text` (at most 60 characters, control characters left out) when
-/// parsing it as JSON failed on its first characters: the text is not JSON at all.
 /// [`ModelError::Json`]'s words after the file's name.
 fn json_fault(
     error: &serde_json::Error,
@@ -257,6 +255,8 @@ fn non_finite_at(text: &str, error: &serde_json::Error) -> Option<&'static str> 
         })
 }
 
+/// The first line of `text` (at most 60 characters, control characters left out) when
+/// parsing it as JSON failed on its first characters: the text is not JSON at all.
 fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
     const SHOWN: usize = 60;
     if error.classify() != serde_json::error::Category::Syntax

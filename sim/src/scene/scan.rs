@@ -127,19 +127,22 @@ impl Scene {
     /// The scan configuration the scene asks of the (simulated) board.
     ///
     /// # Errors
-    /// [`FieldError`] naming the `scan.` field at fault: a protocol file (imaged from
-    /// recorded frames, not scanned by the board), or a current above the board's 1 mA.
+    /// [`FieldError`] naming the `scan.` field at fault: a protocol file whose rows are no
+    /// built-in protocol's (imaged from recorded frames, not scanned by the board), or a
+    /// current above the board's 1 mA (the file's rows', or `current_ua`).
     pub fn scan_config(&self) -> Result<ScanConfig, FieldError> {
-        let (protocol, ua) = match self.named_protocol()? {
-            Some(kind) => (kind, self.scan.current_ua),
+        let ((protocol, ua), field) = match self.named_protocol()? {
+            Some(kind) => ((kind, self.scan.current_ua), "scan.current_ua"),
             // (A file of a built-in protocol's rows is scanned as that one: `file_said`.)
-            None => self
-                .built_in_of_file()?
-                .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?,
+            None => (
+                (self.built_in_of_file()?)
+                    .ok_or_else(|| FieldError::new("scan.protocol", SceneFault::NotScanned))?,
+                "scan.protocol",
+            ),
         };
         if !(ua.is_finite() && ua > 0.0 && ua <= BOARD_MAX_UA) {
             let fault = SceneFault::BoardCurrent(ua);
-            return Err(FieldError::new("scan.current_ua", fault));
+            return Err(FieldError::new(field, fault));
         }
         self.config_at(protocol, ua)
     }
