@@ -377,7 +377,16 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
                 ));
             }
             Err(e) if i + 1 == last && e.is_eof() => truncated_tail = true,
-            Err(e) => return Err(bad(i + 1, LineFault::Frame(named(text, e)))),
+            Err(e) => {
+                let fault = match et_learn::model_file::non_finite_at(text, &e) {
+                    Some(token) => LineFault::NonFinite {
+                        token,
+                        column: e.column(),
+                    },
+                    None => LineFault::Frame(named(text, e)),
+                };
+                return Err(bad(i + 1, fault));
+            }
         }
     }
     Ok(Recording {

@@ -236,25 +236,6 @@ fn json_fault(
     )
 }
 
-/// `NaN`, `Infinity` or `-Infinity` where the JSON parser stopped (its line and column).
-fn non_finite_at(text: &str, error: &serde_json::Error) -> Option<&'static str> {
-    let line = text.lines().nth(error.line().checked_sub(1)?)?;
-    // (The column counts characters from 1; the parser stops at the token's first.)
-    let from = line.char_indices().nth(error.column().saturating_sub(1))?.0;
-    let (before, rest) = line.split_at_checked(from)?;
-    // (`-Infinity` stops the parser at its `I`, after the sign.)
-    let signed = before.ends_with('-');
-    (["-Infinity", "Infinity", "NaN"].into_iter())
-        .find(|t| rest.starts_with(t))
-        .map(|t| {
-            if t == "Infinity" && signed {
-                "-Infinity"
-            } else {
-                t
-            }
-        })
-}
-
 /// The first line of `text` (at most 60 characters, control characters left out) when
 /// parsing it as JSON failed on its first characters: the text is not JSON at all.
 fn first_line_if_not_json(text: &str, error: &serde_json::Error) -> Option<String> {
@@ -332,7 +313,7 @@ impl Model {
             serde_json::from_str(text).map_err(|error| ModelError::Json {
                 path: path.into(),
                 first_line: first_line_if_not_json(text, &error),
-                non_finite: non_finite_at(text, &error),
+                non_finite: crate::model_file::non_finite_at(text, &error),
                 error,
             })?;
         let format = value.get("format").and_then(serde_json::Value::as_str);

@@ -535,6 +535,27 @@ pub fn json_said(e: &serde_json::Error, within_line: bool) -> String {
     }
 }
 
+/// `NaN`, `Infinity` or `-Infinity` where the JSON parser stopped in `text` (its line and
+/// column): what Python's `json` writes for a value past a float's range, which JSON has not
+/// (a model file or a recording edited in Python).
+pub fn non_finite_at(text: &str, error: &serde_json::Error) -> Option<&'static str> {
+    let line = text.lines().nth(error.line().checked_sub(1)?)?;
+    // (The column counts characters from 1; the parser stops at the token's first.)
+    let from = line.char_indices().nth(error.column().saturating_sub(1))?.0;
+    let (before, rest) = line.split_at_checked(from)?;
+    // (`-Infinity` stops the parser at its `I`, after the sign.)
+    let signed = before.ends_with('-');
+    (["-Infinity", "Infinity", "NaN"].into_iter())
+        .find(|t| rest.starts_with(t))
+        .map(|t| {
+            if t == "Infinity" && signed {
+                "-Infinity"
+            } else {
+                t
+            }
+        })
+}
+
 /// `value` read as a `T`, an error naming the field where it went wrong (`tables.method:
 /// missing field`, where serde alone said `missing field` of some table) and without serde's
 /// names for its own types ("expected internally tagged enum Tables", "expected f64":

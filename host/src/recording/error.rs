@@ -131,6 +131,19 @@ pub enum LineFault {
     /// A frame line is not the format's JSON.
     #[error("{}", et_learn::model_file::json_said(.0, true))]
     Frame(serde_json::Error),
+    /// A frame line holding `NaN` or `Infinity`, which JSON has not (Python's `json` writes
+    /// them): it was "expected value (column 60)".
+    #[error(
+        "{token} at column {column}: not JSON, which has no NaN or infinity (Python's json \
+         writes them; json.dump(..., allow_nan=False) refuses them): a value not measured is \
+         written null, as et writes it"
+    )]
+    NonFinite {
+        /// `NaN`, `Infinity` or `-Infinity`.
+        token: &'static str,
+        /// Where on the line, from 1.
+        column: usize,
+    },
 }
 
 /// What is said of a file of `format` given as a recording beside "is not et-recording".

@@ -189,6 +189,17 @@ fn a_frame_with_nan_or_inf_stays_readable_and_flagged() {
     ] {
         assert!(out.contains(said), "{said}: {out}");
     }
+    // Written by Python's json, a NaN is the token NaN, which JSON has not: said as that, by
+    // its place (it was "expected value (column 60)").
+    let python = dir.join("python.jsonl");
+    std::fs::write(&python, text.replacen("null", "NaN", 1)).unwrap();
+    let e = read(&python).unwrap_err().to_string();
+    assert!(
+        e.contains("python.jsonl:3: NaN at column ")
+            && e.contains("not JSON, which has no NaN or infinity")
+            && e.contains("written null"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
