@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use et_learn::{collect, dataset};
 use et_sim::scene::Scene;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressStyle;
 
 use crate::learn::parse_grid;
 use crate::output;
@@ -150,9 +150,6 @@ impl CollectArgs {
     }
 }
 
-/// Seconds into a collection after which the whole's time is said, at the pace so far.
-const PACE_AFTER_S: f64 = 3.0;
-
 pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let named = scene.files();
@@ -199,19 +196,16 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     // Counted by press (classes x scans a visit), so the ETA shows within seconds of a long
     // collection, not after its first visit.
     let presses = centres.len() * args.scans;
-    let bar = ProgressBar::new((args.visits * presses) as u64).with_style(
+    let pace = std::cell::RefCell::new(crate::pace::Pace::new(
+        "collect",
+        "presses",
+        (args.visits * presses) as u64,
+    ));
+    let bar = pace.borrow().bar(
         ProgressStyle::with_template("collecting [{bar:30}] {msg} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    if !interactive {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
     let started = Instant::now();
-    // Said once, a few seconds in: the time the whole will take at the pace so far (a large
-    // collection ran for hours without a word where standard error is not a terminal); and
-    // there, from then on, each visit's end.
-    let (said_pace, said_visits) = (std::cell::Cell::new(false), std::cell::Cell::new(0));
     let data = collect::collect_visits(
         &scene.sheet,
         scene.frontend,
@@ -220,31 +214,13 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
         &plan,
         (0..args.visits).map(|v| args.seed.wrapping_mul(1_000).wrapping_add(v as u64)),
         |pressed, visits| {
-            let all = bar.length().unwrap_or(0);
             bar.set_message(format!(
-                "{pressed} of {all} presses, {visits} of {} visits done",
+                "{pressed} of {} presses, {visits} of {} visits done",
+                bar.length().unwrap_or(0),
                 args.visits
             ));
             bar.set_position(pressed as u64);
-            let seconds = started.elapsed().as_secs_f64();
-            if !said_pace.get() && pressed > 0 && seconds >= PACE_AFTER_S {
-                said_pace.set(true);
-                let whole = seconds * all as f64 / pressed as f64;
-                bar.suspend(|| {
-                    say!(
-                        "{} to collect in all, at the pace of its first {pressed} presses",
-                        et_learn::pipeline::cost::about(whole)
-                    );
-                });
-            }
-            if !interactive && visits > said_visits.get() && seconds >= PACE_AFTER_S {
-                said_visits.set(visits);
-                say!(
-                    "visit {visits} of {} collected ({})",
-                    args.visits,
-                    et_learn::pipeline::cost::time_said(seconds)
-                );
-            }
+            pace.borrow_mut().at(pressed as u64, &bar);
         },
     )?;
     bar.finish_and_clear();

@@ -93,6 +93,7 @@ mod imaging;
 mod learn;
 mod live;
 mod output;
+mod pace;
 mod protocol;
 mod sim;
 mod spinner;

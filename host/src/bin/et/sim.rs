@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use et_host::recording::{self, Header, Record, TouchRecord};
 use et_sim::scene::{Detail, Run, Scene};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressStyle;
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct SimArgs {
@@ -94,7 +94,8 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     } else {
         Detail::Frames
     };
-    let bar = ProgressBar::new(u64::from(args.frames)).with_style(
+    let mut pace = crate::pace::Pace::new("simulate", "frames", u64::from(args.frames));
+    let bar = pace.bar(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
@@ -120,6 +121,7 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
                 .collect();
             writer.append(&Record::new(&frame, Some(touches)))?;
             bar.inc(1);
+            pace.at(bar.position(), &bar);
         }
         anyhow::Ok(())
     })?;
@@ -247,11 +249,19 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
             limit / k.max(1)
         );
     }
+    let pace = std::cell::RefCell::new(crate::pace::Pace::new("simulate", "frames", n as u64));
+    let bar = pace.borrow().bar(
+        ProgressStyle::with_template("simulating [{bar:30}] {pos}/{len} frames (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     // The touched scene once, measured n - 1 times (solved once).
     let each = |mut frame: Box<dyn FnMut(Vec<f64>) -> Result<()> + '_>| {
         let scenes = std::iter::repeat_n(touched.as_slice(), n - 1);
         et_sim::foreign::each_frame_between(&sheet, &sheet, &schedule, scenes, &instrument, |f| {
-            frame(f)
+            frame(f)?;
+            bar.inc(1);
+            pace.borrow_mut().at(bar.position(), &bar);
+            anyhow::Ok(())
         })
     };
     crate::output::write(&args.out, |partial| -> Result<()> {
@@ -294,6 +304,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
         file.flush()?;
         Ok(())
     })?;
+    bar.finish_and_clear();
     let touches = scene.touches.len();
     say!(
         "wrote {n} frame{} of {k} values ({}; {}; instrument {:?}) to {} in {:.2} s",

@@ -349,9 +349,14 @@ pub(super) fn each_frame(
     let sigma0 = recon.imager().sigma0;
     let (grid, n) = (recon.grid().clone(), chosen.len());
     let mut stack: Vec<f64> = Vec::new();
+    // Its time said a few seconds in (no bar: the lines go to standard output).
+    let (mut pace, no_bar) = (
+        crate::pace::Pace::new("image", "frames", n as u64),
+        indicatif::ProgressBar::hidden(),
+    );
     // In runs (a recording's frames need not all be held imaged at once), each run over
     // every core.
-    for run in chosen.chunks(FRAMES_AT_ONCE) {
+    for (done, run) in chosen.chunks(FRAMES_AT_ONCE).enumerate() {
         let frames: Vec<&[f32]> = run.iter().map(|(_, v)| v.as_slice()).collect();
         let imaged = recon.image_frames(&frames, true).map_err(|e| match e {
             et_recon::ImagingError::Frame { index, source } => {
@@ -378,6 +383,7 @@ pub(super) fn each_frame(
                 grid.top_first_into(&image.pixels.pixels, 1.0 / sigma0, &mut stack);
             }
         }
+        pace.at(((done * FRAMES_AT_ONCE) + run.len()) as u64, &no_bar);
     }
     let took = clock.elapsed().as_secs_f64();
     say!(
