@@ -29,6 +29,7 @@ pub mod link;
 pub mod live;
 pub mod message;
 pub mod output;
+pub mod pace;
 pub mod plot;
 pub mod recorder;
 pub mod recording;

@@ -8,6 +8,7 @@ mod link;
 mod live;
 mod message;
 mod output;
+mod pace;
 mod plot;
 mod recording;
 mod tables;

@@ -196,7 +196,7 @@ pub(crate) fn collect_cmd(args: &CollectArgs, force: bool) -> Result<()> {
     // Counted by press (classes x scans a visit), so the ETA shows within seconds of a long
     // collection, not after its first visit.
     let presses = centres.len() * args.scans;
-    let pace = std::cell::RefCell::new(crate::pace::Pace::new(
+    let pace = std::cell::RefCell::new(et_host::pace::Pace::new(
         "collect",
         "presses",
         (args.visits * presses) as u64,

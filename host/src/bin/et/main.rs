@@ -93,7 +93,6 @@ mod imaging;
 mod learn;
 mod live;
 mod output;
-mod pace;
 mod protocol;
 mod sim;
 mod spinner;

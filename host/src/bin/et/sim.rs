@@ -94,7 +94,7 @@ pub(crate) fn run(args: &SimArgs, force: bool) -> Result<()> {
     } else {
         Detail::Frames
     };
-    let mut pace = crate::pace::Pace::new("simulate", "frames", u64::from(args.frames));
+    let mut pace = et_host::pace::Pace::new("simulate", "frames", u64::from(args.frames));
     let bar = pace.bar(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -249,7 +249,7 @@ fn foreign_frames(args: &SimArgs, scene: &Scene) -> Result<()> {
             limit / k.max(1)
         );
     }
-    let pace = std::cell::RefCell::new(crate::pace::Pace::new("simulate", "frames", n as u64));
+    let pace = std::cell::RefCell::new(et_host::pace::Pace::new("simulate", "frames", n as u64));
     let bar = pace.borrow().bar(
         ProgressStyle::with_template("simulating [{bar:30}] {pos}/{len} frames (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),

@@ -351,7 +351,7 @@ pub(super) fn each_frame(
     let mut stack: Vec<f64> = Vec::new();
     // Its time said a few seconds in (no bar: the lines go to standard output).
     let (mut pace, no_bar) = (
-        crate::pace::Pace::new("image", "frames", n as u64),
+        et_host::pace::Pace::new("image", "frames", n as u64),
         indicatif::ProgressBar::hidden(),
     );
     // In runs (a recording's frames need not all be held imaged at once), each run over

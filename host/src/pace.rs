@@ -11,7 +11,8 @@ use indicatif::ProgressBar;
 const SAY_AFTER_S: f64 = 3.0;
 
 /// The pace of `total` units of work begun now.
-pub(crate) struct Pace {
+#[derive(Debug)]
+pub struct Pace {
     /// What is done, as a verb: "collect".
     what: &'static str,
     /// The unit counted: "presses".
@@ -26,7 +27,8 @@ pub(crate) struct Pace {
 
 impl Pace {
     /// Starts the clock on `total` `unit`s of work that `what`s.
-    pub(crate) fn new(what: &'static str, unit: &'static str, total: u64) -> Self {
+    #[must_use]
+    pub fn new(what: &'static str, unit: &'static str, total: u64) -> Self {
         Self {
             what,
             unit,
@@ -39,7 +41,8 @@ impl Pace {
     }
 
     /// A progress bar of the work, drawn on a terminal only.
-    pub(crate) fn bar(&self, style: indicatif::ProgressStyle) -> ProgressBar {
+    #[must_use]
+    pub fn bar(&self, style: indicatif::ProgressStyle) -> ProgressBar {
         let bar = ProgressBar::new(self.total).with_style(style);
         if !self.interactive {
             bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -47,17 +50,28 @@ impl Pace {
         bar
     }
 
-    /// `done` units are done: says what is due, the bar hidden while it does.
-    pub(crate) fn at(&mut self, done: u64, bar: &ProgressBar) {
+    /// Whether standard error is a terminal, where a bar shows the tenths (`new` asks it).
+    #[must_use]
+    pub fn on_terminal(mut self, on_terminal: bool) -> Self {
+        self.interactive = on_terminal;
+        self
+    }
+
+    /// `done` units are done: says what is due on standard error, the bar hidden while it
+    /// does (a line that cannot be written is dropped).
+    pub fn at(&mut self, done: u64, bar: &ProgressBar) {
+        use std::io::Write as _;
         let seconds = self.started.elapsed().as_secs_f64();
         for line in self.due(done, seconds) {
-            bar.suspend(|| say!("{line}"));
+            bar.suspend(|| {
+                let _ = writeln!(std::io::stderr(), "{line}");
+            });
         }
     }
 
     /// What is due to be said when `done` units are done after `seconds`: the whole's time
     /// once, past [`SAY_AFTER_S`]; off a terminal, each tenth newly reached from then on.
-    fn due(&mut self, done: u64, seconds: f64) -> Vec<String> {
+    pub fn due(&mut self, done: u64, seconds: f64) -> Vec<String> {
         let mut said = Vec::new();
         if done == 0 || seconds < SAY_AFTER_S {
             return said;
@@ -86,37 +100,5 @@ impl Pace {
             ));
         }
         said
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Pace;
-
-    /// Short work says nothing; long work says its whole time once, at the pace so far, and
-    /// off a terminal each tenth it reaches, once.
-    #[test]
-    fn long_work_says_its_time_once_and_its_tenths() {
-        let mut pace = Pace::new("simulate", "frames", 1000);
-        pace.interactive = false;
-        assert!(pace.due(500, 2.9).is_empty());
-        let first = pace.due(100, 4.0);
-        assert_eq!(
-            first,
-            [
-                "about 40 s to simulate in all, at the pace of its first 100 frames",
-                "simulate: 10 % (100 of 1000 frames, 4.0 s)"
-            ]
-        );
-        assert!(pace.due(150, 5.0).is_empty());
-        assert_eq!(
-            pace.due(420, 9.0),
-            ["simulate: 40 % (420 of 1000 frames, 9.0 s)"]
-        );
-        // On a terminal the bar shows the tenths: only the whole's time is said.
-        let mut drawn = Pace::new("collect", "presses", 10);
-        drawn.interactive = true;
-        assert_eq!(drawn.due(5, 3.0).len(), 1);
-        assert!(drawn.due(10, 6.0).is_empty());
     }
 }
