@@ -2244,6 +2244,17 @@ fn a_closed_pipe_ends_et_quietly() {
         .unwrap();
     let (f, t) = (f.to_str().unwrap(), t.to_str().unwrap());
     let stdout = "/dev/stdout";
+    // et run with its standard output's reader gone from the start.
+    let reader_gone = |args: &[&str]| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        child.wait_with_output().unwrap()
+    };
     for args in [
         // 105 kB of JSON: more than a pipe holds, so et is still writing when the reader goes.
         &["protocol", "-l", "32", "-p", "pp-pp", "--json"][..],
@@ -2264,14 +2275,7 @@ fn a_closed_pipe_ends_et_quietly() {
             stdout,
         ],
     ] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        drop(child.stdout.take());
-        let out = child.wait_with_output().unwrap();
+        let out = reader_gone(args);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
             out.status.success() && !err.contains("panicked") && !err.contains("error:"),
@@ -2284,23 +2288,20 @@ fn a_closed_pipe_ends_et_quietly() {
     let (frames, last, stack) = (name("frames.csv"), name("last.png"), name("stack.npy"));
     let made = et(&["sim", "--scene", scene, "--frames", "12", "--out", &frames]);
     assert!(made.status.success());
-    let mut child = Command::new(env!("CARGO_BIN_EXE_et"))
-        .args([
-            "reconstruct",
-            "--scene",
-            scene,
-            "--frames",
-            &frames,
-            "--reference",
-            "2",
-        ])
-        .args(["--all", "--out", &last, "--image-out", &stack])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
+    let out = reader_gone(&[
+        "reconstruct",
+        "--scene",
+        scene,
+        "--frames",
+        &frames,
+        "--reference",
+        "2",
+        "--all",
+        "--out",
+        &last,
+        "--image-out",
+        &stack,
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("standard output's reader went away"), "{err}");
