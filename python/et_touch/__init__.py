@@ -421,7 +421,7 @@ class Protocol:
         and the indices of the values kept: a detached or broken electrode left out, as
         ``et reconstruct --skip-electrodes`` does. Image ``v[..., keep]`` with the protocol
         returned (a built-in protocol's name is dropped: its rows are no longer all of it)."""
-        skip = _whole(np.atleast_1d(np.asarray(electrodes, dtype=np.float64)), "electrodes")
+        skip = np.atleast_1d(_whole(electrodes, "electrodes"))
         outside = skip[(skip < 0) | (skip >= self.electrodes)]
         if len(outside):
             raise EtError(
@@ -520,8 +520,12 @@ class Protocol:
 
 
 def _whole(a: Any, what: str) -> np.ndarray:
-    """``a`` as whole numbers (int64), refusing fractions rather than truncating them."""
-    values = np.asarray(a, dtype=np.float64)
+    """``a`` as whole numbers (int64), refusing fractions rather than truncating them, and
+    what is no number by name (``["a"]`` raised NumPy's ValueError)."""
+    try:
+        values = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise EtError(f"{what}: not whole numbers ({e})") from None
     bad = np.argwhere(~np.isfinite(values) | (values != np.round(values)))
     if len(bad):
         # Named by its place (the first of them) and value, as the rows' other checks are.
