@@ -1,5 +1,12 @@
-//! How a batch of frames goes through the reconstruction: in runs, each failure named by
-//! its frame's place among all.
+//! How frames from Python go through the reconstruction: taken in single precision, as
+//! et's frames are, and a batch in runs, each failure named by its frame's place among all.
+
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+
+use et_recon::Reference;
+
+use crate::{matrix, refused, usage};
 
 /// Frames a batch images at once (their pixels held until copied out).
 pub(crate) const FRAMES_AT_ONCE: usize = 64;
@@ -41,4 +48,49 @@ pub(crate) fn check_fits(n: usize, per_frame: usize) -> Result<(), String> {
         need as f64 / 1e9,
         free as f64 / 1e9
     ))
+}
+
+/// V_0 and the noise of dV from untouched frames (n x K, V), taken in single precision as
+/// et's frames are.
+pub(crate) fn reference_of(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<Reference> {
+    let (values, n, k) = matrix(frames, "v0")?;
+    let frames: Vec<Vec<f32>> = single(values, k, "v0")?
+        .chunks(k.max(1))
+        .take(n)
+        .map(<[f32]>::to_vec)
+        .collect();
+    Reference::from_frames(&frames).map_err(|e| refused(&e))
+}
+
+/// Frames (n x K, V) in single precision, as et's frames are, with n and K.
+pub(crate) fn frames_f32(
+    frames: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<(Vec<Vec<f32>>, usize, usize)> {
+    let (values, n, k) = matrix(frames, "V")?;
+    let frames = single(values, k, "V")?
+        .chunks(k.max(1))
+        .take(n)
+        .map(<[f32]>::to_vec)
+        .collect();
+    Ok((frames, n, k))
+}
+
+/// Voltages `what` in single precision, as et's frames are (the board's, and every
+/// reader's): values it cannot hold are refused as a frames file's are
+/// ([`et_host::frames::Single`]: 1e300 was said as "NaN or infinite", 1e-300 as "0 in every
+/// entry").
+pub(crate) fn single(values: &[f64], k: usize, what: &str) -> PyResult<Vec<f32>> {
+    use et_host::frames::Single;
+    match Single::check(values) {
+        Some((i, fault @ Single::Past(_))) if values.len() > k => Err(usage(format!(
+            "{what}[{}, {}]: {fault}",
+            i / k.max(1),
+            i % k.max(1)
+        ))),
+        Some((i, fault @ Single::Past(_))) => Err(usage(format!("{what}[{i}]: {fault}"))),
+        Some((_, fault)) => Err(usage(format!("{what}: {fault}"))),
+        None => Ok(()),
+    }?;
+    #[allow(clippy::cast_possible_truncation)]
+    Ok(values.iter().map(|&v| v as f32).collect())
 }

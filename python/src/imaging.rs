@@ -1,6 +1,6 @@
 //! Imaging from Python: [`Reconstructor`] over [`et_recon::Reconstructor`].
 
-use crate::batch::{FRAMES_AT_ONCE, in_run};
+use crate::batch::{FRAMES_AT_ONCE, frames_f32, in_run, reference_of, single};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
@@ -17,18 +17,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
         et_recon::reconstructor::FRAME_SCALE_SAID,
     )?;
     Ok(())
-}
-
-/// V_0 and the noise of dV from untouched frames (n x K, V), taken in single precision as
-/// et's frames are.
-fn reference_of(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<Reference> {
-    let (values, n, k) = matrix(frames, "v0")?;
-    let frames: Vec<Vec<f32>> = single(values, k, "v0")?
-        .chunks(k.max(1))
-        .take(n)
-        .map(<[f32]>::to_vec)
-        .collect();
-    Reference::from_frames(&frames).map_err(|e| refused(&e))
 }
 
 /// One frame's image as the Python side receives it: the summary (JSON) and the arrays.
@@ -50,37 +38,6 @@ type BatchParts<'py> = (
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray1<f64>>,
 );
-
-/// Frames (n x K, V) in single precision, as et's frames are, with n and K.
-fn frames_f32(frames: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<Vec<f32>>, usize, usize)> {
-    let (values, n, k) = matrix(frames, "V")?;
-    let frames = single(values, k, "V")?
-        .chunks(k.max(1))
-        .take(n)
-        .map(<[f32]>::to_vec)
-        .collect();
-    Ok((frames, n, k))
-}
-
-/// Voltages `what` in single precision, as et's frames are (the board's, and every
-/// reader's): values it cannot hold are refused as a frames file's are
-/// ([`et_host::frames::Single`]: 1e300 was said as "NaN or infinite", 1e-300 as "0 in every
-/// entry").
-fn single(values: &[f64], k: usize, what: &str) -> PyResult<Vec<f32>> {
-    use et_host::frames::Single;
-    match Single::check(values) {
-        Some((i, fault @ Single::Past(_))) if values.len() > k => Err(usage(format!(
-            "{what}[{}, {}]: {fault}",
-            i / k.max(1),
-            i % k.max(1)
-        ))),
-        Some((i, fault @ Single::Past(_))) => Err(usage(format!("{what}[{i}]: {fault}"))),
-        Some((_, fault)) => Err(usage(format!("{what}: {fault}"))),
-        None => Ok(()),
-    }?;
-    #[allow(clippy::cast_possible_truncation)]
-    Ok(values.iter().map(|&v| v as f32).collect())
-}
 
 /// One frame's objects and touches (`objects_batch`), as `image`'s summary names them.
 #[derive(serde::Serialize)]
