@@ -227,13 +227,37 @@ impl std::io::Read for Kept<'_> {
     }
 }
 
+/// The delimiter Excel's first line `sep=;` names (written so that Excel reads the file in
+/// any locale; "Save as CSV" with it, or a script for Excel users): not a record. None for
+/// any other line.
+#[must_use]
+pub fn excel_sep(line: &str) -> Option<Delimiter> {
+    let l = line.trim_start();
+    let named = l.get(..4).filter(|s| s.eq_ignore_ascii_case("sep="))?;
+    match l[named.len()..].trim_end_matches(['\r', '\n', ' ']) {
+        "," => Some(Delimiter::Comma),
+        ";" => Some(Delimiter::Semicolon),
+        "\t" => Some(Delimiter::Tab),
+        _ => None,
+    }
+}
+
 impl<'a> RecordIter<'a> {
-    /// The records of `lines` ((0-based line number, text) pairs, say from [`lines`]).
+    /// The records of `lines` ((0-based line number, text) pairs, say from [`lines`]). A
+    /// first line `sep=X` ([`excel_sep`]) names the delimiter and is left out.
     #[must_use]
     pub fn new(lines: &'a [(usize, &'a str)]) -> Self {
+        let first = lines.iter().position(|(_, l)| !skipped(l));
+        let named = first.and_then(|i| Some((i, excel_sep(lines.get(i)?.1)?)));
+        let (lines, named) = match named {
+            Some((i, d)) => (lines.get(i + 1..).unwrap_or_default(), Some(d)),
+            None => (lines, None),
+        };
         let mut head = lines.iter().filter(|(_, l)| !skipped(l)).map(|(_, l)| *l);
-        let delimiter = head.next().map_or(Delimiter::Comma, |first| {
-            Delimiter::of_head(first, head.next())
+        let delimiter = named.unwrap_or_else(|| {
+            head.next().map_or(Delimiter::Comma, |first| {
+                Delimiter::of_head(first, head.next())
+            })
         });
         let kept = Kept {
             lines,
@@ -380,6 +404,30 @@ mod tests {
                 (3, vec!["a".to_string(), "b,c".to_string()]),
                 (4, vec!["1".to_string(), "2".to_string()]),
             ]
+        );
+        // Excel's `sep=;` line names the delimiter and is no record (it was the header, and
+        // the real header a row of text where numbers belong); its line numbers kept.
+        for (text, delimiter) in [
+            ("sep=;\r\nx;y\r\n1,5;2\r\n", Delimiter::Semicolon),
+            ("# note\nSEP=,\nx,y\n1.5,2\n", Delimiter::Comma),
+            ("sep=\t\nx\ty\n1.5\t2\n", Delimiter::Tab),
+        ] {
+            let r = read_records(&lines(text)).unwrap();
+            assert_eq!(r.delimiter, delimiter, "{text:?}");
+            let (at, header) = (r.rows[0].0, &r.rows[0].1);
+            assert_eq!(
+                (header[0].as_str(), header[1].as_str()),
+                ("x", "y"),
+                "{text:?}"
+            );
+            assert_eq!(r.rows.len(), 2, "{text:?}");
+            assert_eq!(at + 1, r.rows[1].0);
+            assert_eq!(number(&r.rows[1].1[0], r.delimiter), Some(1.5));
+        }
+        assert_eq!(excel_sep("sep=|"), None);
+        assert_eq!(
+            EtFile::of("sep=,\nsource,sink,positive,negative\n"),
+            Some(EtFile::Protocol)
         );
         let (line, fault) = records("a,b\n\"1,2\n3,4\n").unwrap_err();
         assert_eq!((line, fault), (2, super::RecordFault::RunOn));

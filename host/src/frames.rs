@@ -340,6 +340,33 @@ pub fn is_table(spec: &Path) -> bool {
     )
 }
 
+/// Whether the frames given as `spec` are read as a table rather than as an et recording: by
+/// name ([`is_table`]), and a file named otherwise (a DAQ's `.dat` or `.log`, no extension)
+/// by what it holds: a recording's first line is a JSON object, anything else is read as a
+/// table (`.dat` was read as a recording and refused for its first line). Only a regular
+/// file is read ahead; a stream (a FIFO, `/dev/stdin`) can be read once, and is taken by
+/// its name. Not for outputs, whose format is their name's.
+#[must_use]
+pub fn reads_as_table(spec: &Path) -> bool {
+    use std::io::Read as _;
+    if is_table(spec) {
+        return true;
+    }
+    let (path, _) = split_array(spec);
+    let ext = path.extension().and_then(|e| e.to_str());
+    if ext.is_some_and(|e| ["jsonl", "json", "ndjson"].contains(&e.to_ascii_lowercase().as_str()))
+        || !std::fs::metadata(&path).is_ok_and(|m| m.is_file())
+    {
+        return false;
+    }
+    let mut head = Vec::with_capacity(4096);
+    let read = std::fs::File::open(&path).and_then(|f| f.take(4096).read_to_end(&mut head));
+    let text = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&head);
+    let first = text.iter().find(|b| !b.is_ascii_whitespace());
+    // (Unreadable or empty: the recording reader says why, as before.)
+    read.is_ok() && first.is_some_and(|&b| b != b'{')
+}
+
 /// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).
 /// (`file.npy:NAME` too: a file named .npy may hold an archive or a MATLAB file.)
 fn split_array(spec: &Path) -> (PathBuf, Option<String>) {

@@ -296,6 +296,11 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
         String::from_utf8_lossy(&o.stderr).contains("past the 100 V an EIT instrument reads")
     };
     assert!(noted(&millivolts) && !noted(&volts));
+    // The same table under a DAQ's name (.dat): read by what it holds (it was read as a
+    // recording and refused for its first line).
+    let dat_path = d.join("frames.dat");
+    std::fs::copy(&csv_path, &dat_path).unwrap();
+    assert_eq!(strongest(&run(&dat_path, 1)), strongest(&volts));
     // The pixel image as .npy, its grid in the JSON: the largest |value| at the first target.
     let npy = d.join("f1.npy");
     let out = run_with(&csv_path, 1, &["--image-out", npy.to_str().unwrap()]);

@@ -99,6 +99,12 @@ def _numbers(a: Any, what: str) -> np.ndarray:
     their index."""
     if a is None:
         raise EtError(f"{what} = None: give an array of numbers")
+    if isinstance(a, (bytes, bytearray, memoryview)):
+        # (NumPy's words held the whole of them, thousands of characters.)
+        raise EtError(
+            f"{what}: {len(a)} bytes, not numbers (a port's or a file's raw bytes? "
+            "np.frombuffer(b, dtype='<f4') reads them as little-endian float32)"
+        )
     if np.ma.isMaskedArray(a):
         data = np.ma.getdata(a)
         # (Complex values are refused below, masked or not.)
@@ -116,7 +122,8 @@ def _numbers(a: Any, what: str) -> np.ndarray:
     except EtError:
         raise
     except (TypeError, ValueError) as e:
-        raise EtError(f"{what}: not an array of numbers ({e})") from None
+        said = str(e) if len(str(e)) <= 200 else str(e)[:200] + " ..."
+        raise EtError(f"{what}: not an array of numbers ({said})") from None
 
 
 def _volts(a: Any, what: str) -> Any:

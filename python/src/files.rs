@@ -195,7 +195,7 @@ fn read_frames<'py>(
     path: PathBuf,
     k: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
-    if !et_host::frames::is_table(&path) {
+    if !et_host::frames::reads_as_table(&path) {
         // An et recording, as `et reconstruct --frames` takes one (it was read as a CSV and
         // refused for its JSON): its voltages.
         let r = py

@@ -134,6 +134,10 @@ def test_frames_of_another_system_read_in_either_orientation(work, layout):
     csv = work / f"frames-{layout}.csv"
     np.savetxt(csv, frames, delimiter=",", fmt="%.9g")
     np.testing.assert_allclose(et.read_frames(csv, 208), frames, rtol=1e-7)
+    # A DAQ's name (.dat) holding the same text: read by what it holds, not as a recording.
+    dat = work / f"frames-{layout}.dat"
+    np.savetxt(dat, frames, fmt="%.9g")
+    np.testing.assert_allclose(et.read_frames(dat, 208), frames, rtol=1e-7)
 
 
 def test_compressed_and_big_endian_arrays_read_as_numpy_reads_them(work, dataset):

@@ -273,6 +273,10 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(v * (1 + 0j), v0)
     with pytest.raises(et.EtError, match="v0: not an array of numbers"):
         disc.image(v, [list(v0), list(v0[:-1])])
+    # A port's raw bytes, said by their count (NumPy's words held every byte of them).
+    with pytest.raises(et.EtError, match=r"v: 1664 bytes, not numbers .*np.frombuffer") as e:
+        disc.image(v.tobytes(), v0)
+    assert len(str(e.value)) < 200
     # A mask is not voltages (it was imaged as frames of 0 and 1 V), as a boolean .npy is not.
     with pytest.raises(et.EtError, match=r"v holds booleans \(True, False\), not voltages"):
         disc.image(v > v0, v0)

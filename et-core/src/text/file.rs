@@ -56,7 +56,7 @@ pub fn read_at_most(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u
             format!("more than {limit} bytes: not a file et reads (is it the right one?)"),
         )
     };
-    let mut file = std::fs::File::open(path).map_err(said_plainly)?;
+    let mut file = std::fs::File::open(path).map_err(|e| said_plainly(e, path))?;
     let meta = file.metadata()?;
     if meta.is_dir() {
         // Read, a folder failed as "Is a directory (os error 21)".
@@ -126,9 +126,14 @@ fn utf16(bytes: &[u8]) -> Option<std::io::Result<String>> {
 }
 
 /// The two ways opening a file fails most often, said without the system's error number
-/// ("No such file or directory (os error 2)"); any other as it is.
-fn said_plainly(e: std::io::Error) -> std::io::Error {
+/// ("No such file or directory (os error 2)"); any other as it is. `-`, standard input to
+/// many Unix tools, is a file's name to et.
+fn said_plainly(e: std::io::Error, path: &std::path::Path) -> std::io::Error {
     let said = match e.kind() {
+        std::io::ErrorKind::NotFound if path.as_os_str() == "-" => {
+            "no such file: et reads files, not standard input ('-'); write what you pipe to a \
+             file and give its path"
+        }
         std::io::ErrorKind::NotFound => "no such file (is the path right?)",
         std::io::ErrorKind::PermissionDenied => "not allowed to read it (its permissions)",
         _ => return e,
@@ -276,6 +281,24 @@ fn text_of(bytes: Vec<u8>, holds: Holds) -> std::io::Result<String> {
                     format!("{what}, not text: {fix}"),
                 );
             }
+            // Text in another encoding has no control bytes but tab, line ends and form feed:
+            // a file with them is binary (a raw dump of numbers), not Latin-1's letters.
+            let head = &bytes[..bytes.len().min(1024)];
+            if head
+                .iter()
+                .any(|&b| (b < 0x20 && !b"\t\n\r\x0c".contains(&b)) || b == 0x7f)
+            {
+                let fix = if holds == Holds::Table {
+                    "a table is text (CSV); raw numbers as a program dumps them are read as a \
+                     .npy array (numpy.fromfile(path, dtype) then numpy.save)"
+                } else {
+                    ANOTHER_KIND
+                };
+                return std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("binary, not text: {fix}"),
+                );
+            }
             let line = 1 + bytes[..at].iter().filter(|b| **b == b'\n').count();
             let column = at
                 - bytes[..at]
@@ -407,6 +430,23 @@ mod tests {
                 "{e}"
             );
         }
+        // Raw numbers as a program dumps them (float32, little-endian): binary, not Latin-1.
+        let raw: Vec<u8> = [-0.056_f32, 1.5, -2e-3, 0.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        std::fs::write(&path, &raw).unwrap();
+        let e = super::read_text_at_most(&path, 1000)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("binary, not text") && e.contains("numpy.save"),
+            "{e}"
+        );
+        let e = super::read_document_at_most(&path, 1000)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "binary, not text: a file of another kind given?");
         // A folder, and a path with nothing at it, said without the system's numbers ("Is a
         // directory (os error 21)").
         let folder = path.parent().unwrap();
@@ -415,6 +455,9 @@ mod tests {
         let e = super::read_text_at_most(&folder.join("none.csv"), 100).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
         assert_eq!(e.to_string(), "no such file (is the path right?)");
+        // `-`, standard input to many tools, is said not to be read as that.
+        let e = super::read_text_at_most(std::path::Path::new("-"), 100).unwrap_err();
+        assert!(e.to_string().contains("not standard input ('-')"), "{e}");
         // Text that starts like one is text.
         std::fs::write(&path, "PK\x03\x04 is text here\n").unwrap();
         assert!(super::read_text_at_most(&path, 100).is_ok());

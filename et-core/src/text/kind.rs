@@ -64,12 +64,13 @@ impl EtFile {
     }
 }
 
-/// `text`'s first line that is not blank, trimmed (a byte-order mark left out).
+/// `text`'s first line that is not blank, trimmed (a byte-order mark and Excel's `sep=;`
+/// left out).
 fn first_line(text: &str) -> Option<&str> {
     let first = text
         .trim_start_matches('\u{feff}')
         .lines()
-        .find(|l| !l.trim().is_empty())?;
+        .find(|l| !l.trim().is_empty() && super::excel_sep(l).is_none())?;
     Some(first.trim())
 }
 

@@ -518,7 +518,7 @@ pub fn open_source(
     scene: Option<&Path>,
 ) -> Result<(Source, SheetSpec), LiveError> {
     if let (SourceSpec::Replay(path), None) = (spec, scene)
-        && crate::frames::is_table(path)
+        && crate::frames::reads_as_table(path)
     {
         return Err(LiveError::NoScene(path.clone()));
     }
@@ -533,7 +533,7 @@ pub fn open_source(
     let sheet = scene.sheet.clone();
     let source = match spec {
         SourceSpec::Sim => Source::Sim(Box::new(SimSource::new(&scene, name)?)),
-        SourceSpec::Replay(path) if crate::frames::is_table(path) => {
+        SourceSpec::Replay(path) if crate::frames::reads_as_table(path) => {
             Source::Replay(Box::new(ReplaySource::open_table(path, &scene, &name)?))
         }
         SourceSpec::Replay(path) => {

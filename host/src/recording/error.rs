@@ -41,7 +41,8 @@ pub enum LineFault {
     /// The first line is not JSON: not an et recording.
     #[error(
         "not an et recording: its first line is not JSON ({}); et sim and et record write \
-         JSON lines, another system's frames are read from .csv, .npy, .npz or .mat",
+         JSON lines, another system's frames are read from .csv, .npy, .npz or .mat (and a \
+         file of any other name that is no recording; a pipe is read as one by its name)",
         et_learn::model_file::json_said(.0, true)
     )]
     NotJson(serde_json::Error),

@@ -415,6 +415,43 @@ fn array_files_are_read_by_what_they_hold_not_their_name() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A file named neither as a table nor as a recording (a DAQ's `.dat`, no extension) is read
+/// as what it holds: a table unless its first line is a JSON object (`.dat` was read as a
+/// recording and refused for its first line). A stream is taken by its name, unread.
+#[test]
+fn frames_named_otherwise_are_read_by_what_they_hold() {
+    let dir = tmp("named-otherwise");
+    let table = [
+        ("f.dat", "1,2,3\n4,5,6\n"),
+        ("frames", "\u{feff}  1 2 3\n4 5 6\n"),
+    ];
+    for (name, text) in table {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        assert!(reads_as_table(&f), "{name}");
+        let frames = read(&f, 3).unwrap().frames;
+        assert_eq!(frames, [vec![1.0, 2.0, 3.0], vec![4.0, 5.0, 6.0]], "{name}");
+    }
+    for (name, text) in [
+        ("r.dat", " {\"format\":\"et-recording\"}\n"),
+        ("r.jsonl", "1,2,3\n"),
+        ("empty.dat", ""),
+        ("none.dat", "-"),
+    ] {
+        let f = dir.join(name);
+        if name != "none.dat" {
+            std::fs::write(&f, text).unwrap();
+        }
+        assert!(!reads_as_table(&f), "{name}");
+    }
+    assert!(reads_as_table(&dir.join("none.csv")), "by name");
+    let fifo = dir.join("fifo");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    assert!(!reads_as_table(&fifo), "a FIFO is not read ahead");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// MATLAB's default `save` compresses each variable: such a file is read as the plain one,
 /// and a damaged compressed variable is refused in words before matfile inflates it (matfile
 /// reads a compressed variable to its end, without a limit, and prints debug text on errors).

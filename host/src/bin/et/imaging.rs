@@ -275,7 +275,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     let table = args
         .frames
         .as_deref()
-        .filter(|f| et_host::frames::is_table(f));
+        .filter(|f| et_host::frames::reads_as_table(f));
     let recording = match (&args.frames, table) {
         (Some(f), None) => Some(recording::read(f)?),
         _ => None,

@@ -234,7 +234,7 @@ fn say_flagged(
 /// another system's frames in any format `--frames` reads, or an et recording (every frame
 /// of it; a recording was read as a CSV and refused for its JSON).
 fn reference_file(path: &Path, k: usize) -> Result<(et_recon::Reference, Vec<Vec<f32>>)> {
-    if et_host::frames::is_table(path) {
+    if et_host::frames::reads_as_table(path) {
         let r = et_host::frames::read(path, k)?;
         say!("reference {}", r.description);
         return Ok((et_recon::Reference::from_frames(&r.frames)?, r.frames));
