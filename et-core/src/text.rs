@@ -118,6 +118,26 @@ pub fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
     })
 }
 
+/// Whether `cell` is a number in Fortran's double-precision form (`1.0D-03`, `-3.24d0`),
+/// which no other reader takes: said where a cell is not a number, with the fix.
+#[must_use]
+pub fn fortran_exponent(cell: &str) -> bool {
+    let c = cell.trim();
+    c.matches(['D', 'd']).count() == 1
+        && c.replace(['D', 'd'], "E").parse::<f64>().is_ok()
+        && c.starts_with(|ch: char| ch.is_ascii_digit() || "+-.".contains(ch))
+}
+
+/// What is said after "'CELL' is not a number" of a Fortran number ("" of any other cell).
+#[must_use]
+pub fn fortran_said(cell: &str) -> &'static str {
+    if fortran_exponent(cell) {
+        " but Fortran's D exponent: write E (1.0E-03), as sed 's/D/E/g' does"
+    } else {
+        ""
+    }
+}
+
 /// One record's cells, as [`RecordIter`] gives them.
 pub use csv::StringRecord;
 
@@ -425,6 +445,15 @@ mod tests {
             assert_eq!(number(&r.rows[1].1[0], r.delimiter), Some(1.5));
         }
         assert_eq!(excel_sep("sep=|"), None);
+        for (cell, fortran) in [
+            ("1.0D-03", true),
+            ("-3.24d0", true),
+            ("1.5", false),
+            ("D1", false),
+        ] {
+            assert_eq!(fortran_exponent(cell), fortran, "{cell}");
+        }
+        assert!(fortran_said("1.0D-03").contains("write E"));
         assert_eq!(
             EtFile::of("sep=,\nsource,sink,positive,negative\n"),
             Some(EtFile::Protocol)

@@ -87,7 +87,7 @@ pub enum FramesFault {
             " but a complex one: et images real voltages, so write the real parts (NumPy: \
              np.savetxt(f, V.real); from magnitude and phase, magnitude * cos(phase))"
         } else {
-            ""
+            et_core::text::fortran_said(cell)
         }
     )]
     NotNumber {
@@ -147,7 +147,8 @@ pub enum FramesFault {
          must be {k} ({})",
         if *rows == k + 1 || *columns == k + 1 {
             "one more than K: a first column or row of frame numbers or times? write the file \
-             without it".to_string()
+             without it, or name its column time or frame in a header, which et leaves out"
+                .to_string()
         } else if *rows == 2 * k || *columns == 2 * k {
             "twice K: real and imaginary parts, or magnitudes and phases, side by side? et \
              images real voltages: write the real parts alone (magnitude * cos(phase))".to_string()

@@ -232,7 +232,7 @@ pub enum FileFault {
         base: u16,
     },
     /// The current's cell is not a number.
-    #[error("current_a: '{0}' is not a number")]
+    #[error("current_a: '{cell}' is not a number{hint}", cell = .0, hint = crate::text::fortran_said(.0))]
     NotCurrent(String),
     /// The row, read, is refused by [`Schedule::new`] (row counted among the data rows).
     #[error(transparent)]

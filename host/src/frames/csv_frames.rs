@@ -20,6 +20,10 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     // The header's first cell, where there is a header; whether it is the columns' numbers.
     let mut first_name = None;
     let mut numbered = false;
+    // The header's columns of the rows' numbers, times or sessions (a DAQ's `Time` first):
+    // left out of every row (they were refused as one column too many, or as text).
+    let mut skipped: Vec<(usize, String)> = Vec::new();
+    let mut units_row = false;
     let mut records = records.enumerate().peekable();
     let mut line_ends = false;
     while let Some((i, record)) = records.next() {
@@ -32,6 +36,26 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
             first_name = cells.first().map(|c| c.to_string());
+            skipped = (cells.iter().enumerate())
+                .filter(|(_, name)| et_learn::dataset::not_a_feature(name))
+                .map(|(c, name)| (c, name.to_string()))
+                .collect();
+            continue;
+        }
+        let values_of = |cells: &[&str]| -> Vec<(usize, String)> {
+            (cells.iter().enumerate())
+                .filter(|(c, _)| !skipped.iter().any(|(s, _)| s == c))
+                .map(|(c, cell)| (c, cell.to_string()))
+                .collect()
+        };
+        // A second header row under the names, of words alone (a DAQ's units: `V,V,V`; a
+        // row of numbers written wrongly, `1.0D-03`, is said by its cell).
+        if i == 1 && first_name.is_some() && {
+            let kept = values_of(&cells);
+            let word = |c: &str| !c.is_empty() && !c.contains(|ch: char| ch.is_ascii_digit());
+            !kept.is_empty() && kept.iter().all(|(_, c)| word(c))
+        } {
+            units_row = true;
             continue;
         }
         // So is one that counts the columns (0, 1, 2, ... or 1, 2, 3, ...: a DAQ's channel
@@ -49,9 +73,9 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
             };
             return Err(content(path, line, fault));
         }
-        for (c, cell) in cells.iter().enumerate() {
-            let (column, written) = (c + 1, || cell.to_string());
-            let v = text::number(cell, delimiter).ok_or_else(|| {
+        for (c, cell) in values_of(&cells) {
+            let (column, written) = (c + 1, || cell.clone());
+            let v = text::number(&cell, delimiter).ok_or_else(|| {
                 content(
                     path,
                     line,
@@ -75,12 +99,25 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         n += 1;
     }
     let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames))?;
+    let w = w - skipped.iter().filter(|(c, _)| *c < w).count();
     let mut said = match delimiter {
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),
     };
     if numbered {
         said.push_str("its first row (the columns' numbers) skipped as a header, ");
+    }
+    if units_row {
+        said.push_str("its second row (text under the names: units?) skipped as a header, ");
+    }
+    if !skipped.is_empty() {
+        let names: Vec<String> = skipped.iter().map(|(_, n)| format!("'{n}'")).collect();
+        said.push_str(&format!(
+            "its column{} {} skipped (the rows' numbers, times or sessions by name, not a \
+             frame's values), ",
+            if names.len() == 1 { "" } else { "s" },
+            names.join(", ")
+        ));
     }
     // Row after row is a w x n column-major matrix: transposed, n x w.
     let matrix = DMatrix::from_vec(w, n, values).transpose();

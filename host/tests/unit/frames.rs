@@ -191,24 +191,48 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
             r.description
         );
     }
-    // A first column that does not count the rows from 0, or that has a name, is data.
-    for text in [
-        ",0,1,2
-5,1e-3,2e-3,3e-3
-6,4e-3,5e-3,6e-3
-",
-        "time_s,v0,v1,v2
-0,1e-3,2e-3,3e-3
-1,4e-3,5e-3,6e-3
-",
+    // An unnamed first column that does not count the rows from 0 is data.
+    std::fs::write(&f, ",0,1,2\n5,1e-3,2e-3,3e-3\n6,4e-3,5e-3,6e-3\n").unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("2 x 4 values") && e.contains("one more than K: a first column"),
+        "{e}"
+    );
+    // A DAQ's columns of the rows' times or numbers, named as the table reader knows them,
+    // anywhere and of text too, and a row of units under the names: left out and said (they
+    // were one column too many, or "'V' is not a number").
+    for (text, said) in [
+        (
+            "time_s,v0,v1,v2\n0,1e-3,2e-3,3e-3\n1,4e-3,5e-3,6e-3\n",
+            "its column 'time_s' skipped (the rows' numbers, times or sessions",
+        ),
+        (
+            "Timestamp;v0;v1;v2;Frame\n2026-12-07 10:00:00;1e-3;2e-3;3e-3;1\n\
+             2026-12-07 10:00:01;4e-3;5e-3;6e-3;2\n",
+            "its columns 'Timestamp', 'Frame' skipped",
+        ),
+        (
+            "Time,ch1,ch2,ch3\ns,V,V,V\n0.0,1e-3,2e-3,3e-3\n0.1,4e-3,5e-3,6e-3\n",
+            "its second row (text under the names: units?) skipped as a header, its column \
+             'Time' skipped",
+        ),
     ] {
         std::fs::write(&f, text).unwrap();
-        let e = read(&f, 3).unwrap_err().to_string();
-        assert!(
-            e.contains("2 x 4 values") && e.contains("one more than K: a first column"),
-            "{e}"
-        );
+        let r = read(&f, 3).unwrap();
+        assert_eq!(r.frames, plain, "{text}");
+        assert!(r.description.contains(said), "{}", r.description);
     }
+    // A second row of text and numbers is no units row: said by its cell.
+    std::fs::write(&f, "v0,v1,v2\nV,2e-3,V\n4e-3,5e-3,6e-3\n").unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(e.contains(":2: column 1: 'V' is not a number"), "{e}");
+    // Fortran's numbers under a header: no units row, said by the first cell with the fix.
+    std::fs::write(&f, "v0,v1,v2\n1.0D-03,2.0D-03,3.0D-03\n").unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(
+        e.contains(":2: column 1: '1.0D-03' is not a number but Fortran's D exponent: write E"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -902,6 +902,13 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
             ),
             "{class}"
         );
+        // Fortran's numbers: said with the fix, not as a column of text.
+        let fortran = err("a,label\n1,0\n-3.24D0,1\n");
+        assert!(
+            fortran.contains("'-3.24D0' is not a number but Fortran's D exponent")
+                && !fortran.contains("column of text"),
+            "{fortran}"
+        );
         let digits = err("a,label\n1,0\n1-2,1\n");
         assert!(!digits.contains("column of text"), "{digits}");
         let short = err("a,b,label\n1,2,0\n1,1\n");
