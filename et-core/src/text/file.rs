@@ -134,11 +134,30 @@ fn said_plainly(e: std::io::Error, path: &std::path::Path) -> std::io::Error {
             "no such file: et reads files, not standard input ('-'); write what you pipe to a \
              file and give its path"
         }
+        std::io::ErrorKind::NotFound if path.components().any(|c| c.as_os_str() == "~") => {
+            "no such file: '~' is the shell's word for the home folder, which the shell \
+             expands only outside quotes and never in a file et reads; write the folder's \
+             path ($HOME/...)"
+        }
+        std::io::ErrorKind::NotFound if spaced_twin(path) => {
+            "no such file, but there is one of the name without the spaces around it (a \
+             space copied with the path?)"
+        }
         std::io::ErrorKind::NotFound => "no such file (is the path right?)",
         std::io::ErrorKind::PermissionDenied => "not allowed to read it (its permissions)",
         _ => return e,
     };
     std::io::Error::new(e.kind(), said)
+}
+
+/// Whether `path`'s file name has spaces around it and a file of the name without them is
+/// there.
+fn spaced_twin(path: &std::path::Path) -> bool {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+        return false;
+    };
+    let trimmed = name.trim();
+    trimmed != name && !trimmed.is_empty() && path.with_file_name(trimmed).is_file()
 }
 
 /// Whether `file` is a character device other than the null device (read as empty) and a
@@ -455,9 +474,18 @@ mod tests {
         let e = super::read_text_at_most(&folder.join("none.csv"), 100).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
         assert_eq!(e.to_string(), "no such file (is the path right?)");
-        // `-`, standard input to many tools, is said not to be read as that.
+        // `-`, standard input to many tools, is said not to be read as that; `~`, the shell's
+        // word, said as the shell's; a name with a space copied after it, said beside the file.
         let e = super::read_text_at_most(std::path::Path::new("-"), 100).unwrap_err();
         assert!(e.to_string().contains("not standard input ('-')"), "{e}");
+        let e = super::read_text_at_most(&folder.join("~/none.csv"), 100).unwrap_err();
+        assert!(e.to_string().contains("'~' is the shell's word"), "{e}");
+        let spaced = folder.join(format!("{} ", path.file_name().unwrap().to_str().unwrap()));
+        let e = super::read_text_at_most(&spaced, 100).unwrap_err();
+        assert!(
+            e.to_string().contains("without the spaces around it"),
+            "{e}"
+        );
         // Text that starts like one is text.
         std::fs::write(&path, "PK\x03\x04 is text here\n").unwrap();
         assert!(super::read_text_at_most(&path, 100).is_ok());

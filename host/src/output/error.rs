@@ -83,7 +83,17 @@ pub enum OutputError {
         out: PathBuf,
     },
     /// The folder the output goes into does not exist or is not a folder.
-    #[error("{}: the folder {} does not exist (create it first)", .out.display(), .folder.display())]
+    #[error(
+        "{}: the folder {} does not exist ({})",
+        .out.display(),
+        .folder.display(),
+        if folder.components().any(|c| c.as_os_str() == "~") {
+            "'~' is the shell's word for the home folder, which it expands only outside quotes: \
+             write the folder's path ($HOME/...)"
+        } else {
+            "create it first"
+        }
+    )]
     NoFolder {
         /// The output.
         out: PathBuf,

@@ -134,6 +134,10 @@ fn only_regular_files_are_replaced_and_streams_are_written_through() {
     // A folder that does not exist.
     let e = check(&d.join("nodir").join("v.png"), &[], true).unwrap_err();
     assert!(matches!(e, OutputError::NoFolder { .. }), "{e}");
+    assert!(e.to_string().ends_with("(create it first)"), "{e}");
+    // `~` in quotes, which the shell left as it is: said as the shell's word.
+    let e = check(Path::new("~/v.png"), &[], true).unwrap_err();
+    assert!(e.to_string().contains("'~' is the shell's word"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 
