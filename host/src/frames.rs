@@ -327,6 +327,30 @@ fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), Frame
     }
 }
 
+/// Of a file's several arrays, unnamed by the user, the one of `k` values along a dimension
+/// (`np.savez(f, frames=F, t=t)`), where it is the only one and every array's shape is known;
+/// what is said of the choice with it.
+fn only_of_k(shapes: &[(String, Option<Vec<usize>>)], k: usize) -> Option<(String, String)> {
+    if shapes.iter().any(|(_, s)| s.is_none()) {
+        return None;
+    }
+    let mut fit = shapes
+        .iter()
+        .filter(|(_, s)| s.as_ref().is_some_and(|s| s.len() <= 2 && s.contains(&k)));
+    let (name, _) = fit.next()?;
+    if fit.next().is_some() {
+        return None;
+    }
+    let others: Vec<&str> = (shapes.iter().map(|(n, _)| n.as_str()))
+        .filter(|n| n != name)
+        .collect();
+    let said = format!(
+        "the only one of its arrays with K = {k} values a frame (the others: {}), ",
+        others.join(", ")
+    );
+    Some((name.clone(), said))
+}
+
 /// Whether `spec` names a table of frames this module reads (by its extension), rather than
 /// an et recording.
 #[must_use]
@@ -408,7 +432,7 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     let (matrix, said) = match ext.as_str() {
-        "npy" | "npz" | "mat" => arrays::matrix(&path, &ext, array.as_deref())?,
+        "npy" | "npz" | "mat" => arrays::matrix(&path, &ext, array.as_deref(), k)?,
         _ => text_matrix(&path)?,
     };
     let (rows, cols) = matrix.shape();

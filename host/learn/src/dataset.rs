@@ -45,7 +45,9 @@ use nalgebra::DMatrix;
 
 pub use fault::DatasetFault;
 pub use file::{from_npz_bytes, load, load_csv, load_npz, npz_bytes, save, save_csv, save_npz};
-pub use import::{GroupsFrom, Table, Unit, is_length, not_a_feature, read_reference};
+pub use import::{
+    GroupsFrom, Table, Unit, is_length, is_target_name, not_a_feature, read_reference,
+};
 
 /// A labelled set of observations.
 #[derive(Clone, Debug)]

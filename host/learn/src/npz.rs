@@ -254,6 +254,15 @@ impl Npz {
         self.array(name).is_ok_and(|a| a.kind == Kind::Bool)
     }
 
+    /// The shape of the array `name` as its header says it, and whether it holds numbers
+    /// (not booleans or text); None where it does not read.
+    #[must_use]
+    pub fn shape(&self, name: &str) -> Option<(Vec<usize>, bool)> {
+        let a = self.array(name).ok()?;
+        let numbers = !matches!(a.kind, Kind::Bool | Kind::Unicode(_));
+        Some((a.shape, numbers))
+    }
+
     fn array(&self, name: &str) -> Result<Array<'_>, NpzError> {
         let fault = |f| error(Some(name), f);
         let bad = |m| fault(NpzFault::Npy(m));

@@ -8,7 +8,7 @@ use std::path::Path;
 use et_learn::npz::{Npz, NpzError};
 use nalgebra::DMatrix;
 
-use super::{FramesError, FramesFault, content, mat_matrix, table_matrix};
+use super::{FramesError, FramesFault, content, mat_matrix, only_of_k, table_matrix};
 
 /// The array format `bytes` hold by their first bytes: "npy", "npz" (a zip archive; an Excel
 /// workbook is one too, and is named when its arrays are not found) or "mat" (a MATLAB
@@ -42,11 +42,13 @@ fn is_text(bytes: &[u8]) -> bool {
 }
 
 /// The matrix of the array file at `path`, named `.{ext}`, and what is said of it: the array
-/// `array` (an `.npz`'s or a `.mat`'s; its only one when None).
+/// `array` (an `.npz`'s or a `.mat`'s; its only one when None, or its only one of `k`
+/// values a frame).
 pub(super) fn matrix(
     path: &Path,
     ext: &str,
     array: Option<&str>,
+    k: usize,
 ) -> Result<(DMatrix<f64>, String), FramesError> {
     let bytes =
         et_core::text::read_at_most(path, et_core::text::max_file_bytes()).map_err(|source| {
@@ -117,9 +119,9 @@ pub(super) fn matrix(
                 };
                 return Err(content(path, 0, fault));
             }
-            npz_matrix(path, &archive, array)?
+            npz_matrix(path, &archive, array, k)?
         }
-        _ => mat_matrix(path, &bytes, array)?,
+        _ => mat_matrix(path, &bytes, array, k)?,
     };
     Ok((matrix, format!("{named}{said}")))
 }
@@ -129,12 +131,27 @@ fn npz_matrix(
     path: &Path,
     archive: &Npz,
     name: Option<&str>,
+    k: usize,
 ) -> Result<(DMatrix<f64>, String), FramesError> {
     let names: Vec<&str> = archive.names().collect();
+    let shapes: Vec<_> = (names.iter())
+        .map(|n| {
+            // (Booleans and text are known, and hold no frames.)
+            let shape = archive
+                .shape(n)
+                .map(|(s, numbers)| if numbers { s } else { vec![] });
+            ((*n).to_string(), shape)
+        })
+        .collect();
+    let mut chosen = String::new();
     let name = match (name, names.as_slice()) {
         (Some(n), _) => n.to_string(),
         (None, [only]) => (*only).to_string(),
         (None, []) => return Err(content(path, 0, FramesFault::Nothing { kind: "arrays" })),
+        (None, _) if let Some((name, said)) = only_of_k(&shapes, k) => {
+            chosen = said;
+            name
+        }
         (None, _) => {
             let fault = FramesFault::Choose {
                 names: names.iter().map(|n| (*n).to_string()).collect(),
@@ -152,7 +169,7 @@ fn npz_matrix(
         path: path.into(),
         error,
     })?;
-    Ok((m, format!("array '{name}', ")))
+    Ok((m, format!("array '{name}', {chosen}")))
 }
 
 /// A 1-D array as one row, a 2-D one as it is.

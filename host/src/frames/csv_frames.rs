@@ -20,24 +20,32 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     // The header's first cell, where there is a header; whether it is the columns' numbers.
     let mut first_name = None;
     let mut numbered = false;
-    // The header's columns of the rows' numbers, times or sessions (a DAQ's `Time` first):
-    // left out of every row (they were refused as one column too many, or as text).
+    // The header's columns of the rows' numbers, times or sessions (a DAQ's `Time` first),
+    // or of targets (a recording annotated with `label`, `x`, `y`): left out of every row
+    // (they were refused as one column too many, or as text).
     let mut skipped: Vec<(usize, String)> = Vec::new();
     let mut units_row = false;
     let mut records = records.enumerate().peekable();
     let mut line_ends = false;
+    let mut first_len = 0;
     while let Some((i, record)) = records.next() {
         let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
         // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
         // row; it is not an empty last value. The first row (a header, perhaps written by
-        // hand) or the second says so.
-        line_ends |= i <= 1 && text::ends_with_delimiter(&record);
+        // hand) or the second says so; the second not where a header names as many cells
+        // (an annotated row's empty last cell, `none,,` under `label,x,y`).
+        first_len = if i == 0 { record.len() } else { first_len };
+        let named_as_many = i == 1 && first_name.is_some() && record.len() == first_len;
+        line_ends |= i <= 1 && text::ends_with_delimiter(&record) && !named_as_many;
         let cells = text::cells(&record, line_ends);
         // A first row with a cell that is not a number is a header.
         if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
             first_name = cells.first().map(|c| c.to_string());
             skipped = (cells.iter().enumerate())
-                .filter(|(_, name)| et_learn::dataset::not_a_feature(name))
+                .filter(|(_, name)| {
+                    et_learn::dataset::not_a_feature(name)
+                        || et_learn::dataset::is_target_name(name)
+                })
                 .map(|(c, name)| (c, name.to_string()))
                 .collect();
             continue;
@@ -113,8 +121,8 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     if !skipped.is_empty() {
         let names: Vec<String> = skipped.iter().map(|(_, n)| format!("'{n}'")).collect();
         said.push_str(&format!(
-            "its column{} {} skipped (the rows' numbers, times or sessions by name, not a \
-             frame's values), ",
+            "its column{} {} skipped (the rows' numbers, times, sessions or targets by name, \
+             not a frame's values), ",
             if names.len() == 1 { "" } else { "s" },
             names.join(", ")
         ));

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use nalgebra::DMatrix;
 
-use super::{FramesError, FramesFault, content};
+use super::{FramesError, FramesFault, content, only_of_k};
 
 mod fields;
 
@@ -72,6 +72,7 @@ pub(super) fn mat_matrix(
     path: &Path,
     bytes: &[u8],
     name: Option<&str>,
+    k: usize,
 ) -> Result<(DMatrix<f64>, String), FramesError> {
     if bytes.starts_with(b"MATLAB 7.3") {
         return Err(content(path, 0, FramesFault::Mat73));
@@ -87,6 +88,12 @@ pub(super) fn mat_matrix(
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
         .chain(fields.iter().map(|f| f.name.clone()))
         .collect();
+    // (A struct's field's shape is not known here: with one, the user names the array.)
+    let shapes: Vec<_> = (file.arrays().iter())
+        .map(|a| (a.name().to_string(), Some(a.size().clone())))
+        .chain(fields.iter().map(|f| (f.name.clone(), None)))
+        .collect();
+    let mut said_chosen = String::new();
     let chosen = match (name, names.as_slice()) {
         (Some(n), _) if names.iter().any(|m| m == n) => n.to_string(),
         (Some(n), _) => {
@@ -97,6 +104,10 @@ pub(super) fn mat_matrix(
         (None, []) => {
             let kind = "numeric arrays";
             return Err(content(path, 0, FramesFault::Nothing { kind }));
+        }
+        (None, _) if let Some((name, said)) = only_of_k(&shapes, k) => {
+            said_chosen = said;
+            name
         }
         (None, _) => {
             let fault = FramesFault::Choose {
@@ -163,7 +174,7 @@ pub(super) fn mat_matrix(
     // MATLAB stores by columns.
     Ok((
         DMatrix::from_column_slice(rows, cols, &values),
-        format!("variable '{}', ", array.name()),
+        format!("variable '{}', {said_chosen}", array.name()),
     ))
 }
 

@@ -204,12 +204,18 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
     for (text, said) in [
         (
             "time_s,v0,v1,v2\n0,1e-3,2e-3,3e-3\n1,4e-3,5e-3,6e-3\n",
-            "its column 'time_s' skipped (the rows' numbers, times or sessions",
+            "its column 'time_s' skipped (the rows' numbers, times, sessions or targets",
         ),
         (
             "Timestamp;v0;v1;v2;Frame\n2026-12-07 10:00:00;1e-3;2e-3;3e-3;1\n\
              2026-12-07 10:00:01;4e-3;5e-3;6e-3;2\n",
             "its columns 'Timestamp', 'Frame' skipped",
+        ),
+        // A recording annotated with what was pressed where.
+        (
+            "v0,v1,v2,label,x,y\n1e-3,2e-3,3e-3,none,,\n4e-3,5e-3,6e-3,left,0.01,0.02\n",
+            "its columns 'label', 'x', 'y' skipped (the rows' numbers, times, sessions or \
+             targets by name",
         ),
         (
             "Time,ch1,ch2,ch3\ns,V,V,V\n0.0,1e-3,2e-3,3e-3\n0.1,4e-3,5e-3,6e-3\n",
@@ -298,6 +304,20 @@ fn npy_and_npz_as_numpy_writes_them() {
     assert!(e.contains("2 arrays") && e.contains(":NAME"), "{e}");
     let e = read(&PathBuf::from(format!("{}:none", npz.display())), 3).unwrap_err();
     assert!(e.to_string().contains("none"), "{e}");
+    // `np.savez(f, frames=F, t=t, labels=...)`: the one array of K values a frame is the
+    // frames, said; two of them still asked (above), as is one of none.
+    let mut w = et_learn::npz::Writer::new();
+    w.matrix("v", &m);
+    w.f64s("t", &[0.0, 0.1]);
+    w.text("labels", "none");
+    std::fs::write(&npz, w.finish().unwrap()).unwrap();
+    let r = read(&npz, 3).unwrap();
+    assert_eq!(r.frames[1], vec![4.0, 5.0, 6.0]);
+    let said = "array 'v', the only one of its arrays with K = 3 values a frame (the others: t, \
+                labels)";
+    assert!(r.description.contains(said), "{}", r.description);
+    let e = read(&npz, 4).unwrap_err().to_string();
+    assert!(e.contains("3 arrays") && e.contains(":NAME"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -323,7 +343,15 @@ fn matlab_files_by_variable() {
     );
     let by_name = read(&dir.join("tank.mat:v"), 2).unwrap();
     assert_eq!(by_name.frames, r.frames);
-    // Two variables: the frames' must be named.
+    // Two variables of K values a frame: the frames' must be named; beside a variable of
+    // another length, the one of K is the frames, said.
+    let mut two = mat_v5("v", &v);
+    two.extend_from_slice(&mat_v5("t", &DMatrix::from_element(1, 3, 0.1))[128..]);
+    std::fs::write(&f, &two).unwrap();
+    let r = read(&f, 2).unwrap();
+    assert_eq!(r.frames.len(), 3);
+    let said = "variable 'v', the only one of its arrays with K = 2 values a frame (the others: t)";
+    assert!(r.description.contains(said), "{}", r.description);
     let mut two = mat_v5("v", &v);
     two.extend_from_slice(&mat_v5("ref", &DMatrix::from_element(2, 1, 1.0))[128..]);
     std::fs::write(&f, &two).unwrap();

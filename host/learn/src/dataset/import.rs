@@ -166,7 +166,8 @@ pub fn not_a_feature(name: &str) -> bool {
 }
 
 /// A target column's name (label, x, y or a third target's, bare or with a unit), in any case.
-fn is_target_name(name: &str) -> bool {
+#[must_use]
+pub fn is_target_name(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
     n == "label" || position_name(&n).is_some() || THIRD_NAMES.contains(&n.as_str())
 }
