@@ -24,8 +24,37 @@ pub use mat::mat_v5;
 pub struct Frames {
     /// The frames, in file order.
     pub frames: Vec<Vec<f32>>,
+    /// The frames (from 0) with values missing, NaN in them (an empty or NaN cell, a NaN in an
+    /// array: a value the system did not send): kept in their place, and taken by no image.
+    pub gaps: Vec<usize>,
     /// What was read, in words (the file, the shape, the orientation).
     pub description: String,
+}
+
+impl Frames {
+    /// The first of `frames` (indices from 0) with values missing, and its values' columns
+    /// (from 0), said as an error of the file at `path`: "choose other frames with `how`".
+    ///
+    /// # Errors
+    /// [`FramesError::Content`] naming that frame.
+    pub fn check_whole(
+        &self,
+        path: &Path,
+        frames: std::ops::Range<usize>,
+        how: &str,
+    ) -> Result<(), FramesError> {
+        let Some(&frame) = self.gaps.iter().find(|i| frames.contains(i)) else {
+            return Ok(());
+        };
+        let columns = (self.frames.get(frame))
+            .map_or_else(Vec::new, |f| crate::recording::invalid_columns(f));
+        let fault = FramesFault::Missing {
+            frame,
+            columns,
+            how: how.to_string(),
+        };
+        Err(content(path, 0, fault))
+    }
 }
 
 /// Why frames could not be read.
@@ -113,6 +142,21 @@ pub enum FramesFault {
         cell: String,
         /// Its value.
         value: f64,
+    },
+    /// A frame asked for with values missing (NaN; from 0).
+    #[error(
+        "frame {frame} (from 0) has values missing (empty or NaN cells: values the system did \
+         not send) in column{} {} (from 0): choose other frames with {how}",
+        if columns.len() == 1 { "" } else { "s" },
+        said_list(columns)
+    )]
+    Missing {
+        /// The frame.
+        frame: usize,
+        /// Its values missing.
+        columns: Vec<usize>,
+        /// How other frames are chosen.
+        how: String,
     },
     /// A value that is not finite (row and column from 0).
     #[error(
@@ -436,7 +480,8 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         _ => text_matrix(&path)?,
     };
     let (rows, cols) = matrix.shape();
-    if let Some((i, v)) = matrix.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+    // (NaN is a value not measured, its frame kept: see `gaps`.)
+    if let Some((i, v)) = matrix.iter().enumerate().find(|(_, v)| v.is_infinite()) {
         let (value, row, column) = (*v, i % rows, i / rows);
         return Err(content(
             &path,
@@ -475,8 +520,12 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
             .map(|c| c.iter().map(|&v| v as f32).collect())
             .collect()
     };
+    let gaps: Vec<usize> = (frames.iter().enumerate())
+        .filter(|(_, f)| f.iter().any(|v| v.is_nan()))
+        .map(|(i, _)| i)
+        .collect();
     let description = format!(
-        "{}: {said}{} frame{} of {k} values{}",
+        "{}: {said}{} frame{} of {k} values{}{}",
         path.display(),
         frames.len(),
         if frames.len() == 1 { "" } else { "s" },
@@ -491,12 +540,31 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
                  are)"
             }
             (false, false) => "",
+        },
+        match gaps.as_slice() {
+            [] => String::new(),
+            [one] => format!(" (frame {one}, from 0, with values missing: empty or NaN)"),
+            many => format!(
+                " ({} with values missing, empty or NaN: frames {}, from 0)",
+                many.len(),
+                said_list(many)
+            ),
         }
     );
     Ok(Frames {
         frames,
+        gaps,
         description,
     })
+}
+
+/// Indices as a list, the first eight and how many more.
+fn said_list(indices: &[usize]) -> String {
+    let shown: Vec<String> = indices.iter().take(8).map(ToString::to_string).collect();
+    match indices.len() {
+        n if n > 8 => format!("{}, ... ({n} in all)", shown.join(", ")),
+        _ => shown.join(", "),
+    }
 }
 
 /// Voltages single precision cannot hold: et takes frames in it (the board's, and every

@@ -193,7 +193,8 @@ impl Record {
 }
 
 /// The columns of `v` that are NaN or infinite.
-fn invalid_columns(v: &[f32]) -> Vec<usize> {
+#[must_use]
+pub fn invalid_columns(v: &[f32]) -> Vec<usize> {
     v.iter()
         .enumerate()
         .filter(|(_, x)| !x.is_finite())

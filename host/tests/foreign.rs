@@ -354,21 +354,29 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
         "{e}"
     );
     // A value that is not a voltage is named by its line and cell, as a cell that is not a
-    // number is (it was "row 1, column 1", counted from 0 of the numbers' rows alone).
+    // number is (it was "row 1, column 1", counted from 0 of the numbers' rows alone); a
+    // value missing (NaN, an empty cell) keeps the file, and its frame is named when asked.
     for (cell, said) in [
-        ("NaN", "'NaN' is not finite"),
-        ("-inf", "'-inf' is not finite"),
-        ("1e39", "'1e39' is past single precision"),
+        (
+            "NaN",
+            "frames.csv: frame 1 (from 0) has values missing (empty or NaN cells",
+        ),
+        (
+            "",
+            "in column 1 (from 0): choose other frames with --frame or --range",
+        ),
+        ("-inf", "frames.csv:4: column 2: '-inf' is not finite"),
+        (
+            "1e39",
+            "frames.csv:4: column 2: '1e39' is past single precision",
+        ),
     ] {
         let mut two = one.clone();
         two[1] = cell.into();
         let text = format!("# a comment\nv0,v1\n{}\n{}\n", one.join(","), two.join(","));
         std::fs::write(&csv_path, text).unwrap();
         let e = String::from_utf8_lossy(&run(&csv_path, 1).stderr).into_owned();
-        assert!(
-            e.contains(&format!("frames.csv:4: column 2: {said}")),
-            "{e}"
-        );
+        assert!(e.contains(said), "{e}");
     }
     // A protocol file's mistakes are named by file, line and cell.
     std::fs::write(

@@ -1552,6 +1552,7 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
     frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a struct's field too, as
     EIDORS keeps its data: ``FILE.mat:vi.meas``; a matrix of frames as columns is read
     transposed), or an et recording's voltages, as `et reconstruct --frames`
-    reads them."""
+    reads them; NaN where a value is missing (an empty or NaN cell, a recording's null), as
+    ``read_recording`` gives them."""
     frames, _ = _native.read_frames(os.fsdecode(path), _count(k, "k", 1))
     return frames

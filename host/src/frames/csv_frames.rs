@@ -83,6 +83,12 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         }
         for (c, cell) in values_of(&cells) {
             let (column, written) = (c + 1, || cell.clone());
+            // An empty cell is a value not measured (a DAQ's dropped sample), as NaN is: its
+            // frame is kept with it, NaN, and no image takes it.
+            if cell.is_empty() {
+                values.push(f64::NAN);
+                continue;
+            }
             let v = text::number(&cell, delimiter).ok_or_else(|| {
                 content(
                     path,
@@ -94,7 +100,8 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
                 )
             })?;
             // (Said by the file's line and cell: the matrix's check counts from 0.)
-            if !(v.is_finite() && v.abs() <= f64::from(f32::MAX)) {
+            let volts = v.is_finite() && v.abs() <= f64::from(f32::MAX);
+            if !(v.is_nan() || volts) {
                 let fault = FramesFault::NotVolts {
                     column,
                     cell: written(),

@@ -142,13 +142,16 @@ impl ReplaySource {
                         .iter_mut()
                         .for_each(|v| *v = (f64::from(*v) * scale) as f32);
                 }
+                // (A value missing, NaN, is one the board did not send: the frame is
+                // skipped and said when played, as a recording's.)
+                let invalid = recording::invalid_columns(&voltages);
                 recording::Record {
                     seq: u32::try_from(i).unwrap_or(u32::MAX),
                     t_us: 0,
                     flags: 0,
                     rail_count: 0,
                     voltages,
-                    invalid: Vec::new(),
+                    invalid,
                     touches: None,
                 }
             })

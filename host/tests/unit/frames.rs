@@ -96,9 +96,24 @@ fn csv_rows_or_columns_header_or_not() {
     std::fs::write(&f, "1,2,3,4\n".repeat(5)).unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("twice K: real and imaginary parts"), "{e}");
-    std::fs::write(&f, "1,2\n3,nan\n").unwrap();
+    // A value missing (an empty or NaN cell, a DAQ's dropped sample) keeps its frame, NaN
+    // there, said; the file was refused whole. An infinite one is refused where it is.
+    std::fs::write(&f, "1,2\n3,nan\n5,6\n,8\n").unwrap();
+    let r = read(&f, 2).unwrap();
+    assert_eq!(r.frames.len(), 4);
+    assert_eq!(r.gaps, [1, 3]);
+    assert!(r.frames[1][1].is_nan() && r.frames[3][0].is_nan() && r.frames[2][0] == 5.0);
+    let said = "(2 with values missing, empty or NaN: frames 1, 3, from 0)";
+    assert!(r.description.contains(said), "{}", r.description);
+    assert!(r.check_whole(&f, 0..1, "--frame").is_ok());
+    let e = r.check_whole(&f, 2..4, "--frame").unwrap_err().to_string();
+    assert!(
+        e.contains("frame 3 (from 0) has values missing") && e.contains("in column 0 (from 0)"),
+        "{e}"
+    );
+    std::fs::write(&f, "1,2\n3,-inf\n").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
-    assert!(e.contains("f.csv:2: column 2: 'nan' is not finite"), "{e}");
+    assert!(e.contains("f.csv:2: column 2: '-inf' is not finite"), "{e}");
     // Values single precision cannot hold are said where they are (1e300 was imaged as a
     // reference of 0 values; 1e-300 everywhere as frames of zeros); at its bounds, taken.
     std::fs::write(&f, "1,2\n3,1e300\n").unwrap();

@@ -236,6 +236,7 @@ fn say_flagged(
 fn reference_file(path: &Path, k: usize) -> Result<(et_recon::Reference, Vec<Vec<f32>>)> {
     if et_host::frames::reads_as_table(path) {
         let r = et_host::frames::read(path, k)?;
+        r.check_whole(path, 0..r.frames.len(), "another --reference-file")?;
         say!("reference {}", r.description);
         return Ok((et_recon::Reference::from_frames(&r.frames)?, r.frames));
     }
@@ -295,6 +296,7 @@ pub(super) fn table_frames(
         }
         None => {
             let count = reference_count(args, &path.display().to_string(), n)?;
+            frames.check_whole(path, 0..count, "--reference (frames 0 to N-1 are V_0)")?;
             let before = frames.frames.get(..count.min(n)).unwrap_or_default();
             // An empty reference is refused by `chosen` below with the reason; any other
             // fault of the frames is said (a value past single precision was said as a
@@ -313,6 +315,7 @@ pub(super) fn table_frames(
         }
     };
     let range = chosen(args, &path.display().to_string(), first, n)?;
+    frames.check_whole(path, range.clone(), "--frame or --range")?;
     let imaged = frames.frames.drain(range.clone());
     Ok(Chosen {
         reference,
