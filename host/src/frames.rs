@@ -115,6 +115,9 @@ pub enum FramesFault {
         if csv_frames::complex(cell) {
             " but a complex one: et images real voltages, so write the real parts (NumPy: \
              np.savetxt(f, V.real); from magnitude and phase, magnitude * cos(phase))"
+        } else if *first_row && et_core::text::fortran_said(cell).is_empty() {
+            " (a header of more lines than one, as some loggers write? et reads one row of \
+             names above the numbers: write # before the others)"
         } else {
             et_core::text::fortran_said(cell)
         }
@@ -124,10 +127,15 @@ pub enum FramesFault {
         column: usize,
         /// The cell as written.
         cell: String,
+        /// Whether it is on the row after a header, before any frame.
+        first_row: bool,
     },
-    /// No rows of numbers.
-    #[error("no frames")]
-    NoFrames,
+    /// No rows of numbers (under a header, or none).
+    #[error("no frames{}", if *header { " (a header row alone)" } else { "" })]
+    NoFrames {
+        /// Whether a header was read.
+        header: bool,
+    },
     /// A cell of a CSV that is a number but not a voltage et takes: NaN, infinite, or past
     /// single precision (column from 1).
     #[error("column {column}: '{cell}' {}", if value.is_finite() {

@@ -145,9 +145,12 @@ def _finite_frames(a: np.ndarray, what: str) -> np.ndarray:
     finite = np.isfinite(a)
     if not finite.all():  # (the place looked for only then: one frame's check is a few us)
         at = tuple(int(i) for i in np.argwhere(~finite)[0])
+        # (Of many frames, the rows to keep, written out.)
+        keep = f": {what}[np.isfinite({what}).all(axis=1)] keeps the others" if a.ndim == 2 else ""
         raise EtError(
             f"{what}[{', '.join(map(str, at))}] = {a[at]}: frames are finite voltages (a "
-            "recording's NaN is a value the board did not send: leave that frame out)"
+            "recording's or a file's NaN is a value the system did not send: leave that frame "
+            f"out{keep})"
         )
     return a
 

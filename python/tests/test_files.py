@@ -138,6 +138,15 @@ def test_frames_of_another_system_read_in_either_orientation(work, layout):
     dat = work / f"frames-{layout}.dat"
     np.savetxt(dat, frames, fmt="%.9g")
     np.testing.assert_allclose(et.read_frames(dat, 208), frames, rtol=1e-7)
+    # A value missing (an empty cell, a DAQ's dropped sample): NaN there, the rest read.
+    if layout == "rows":
+        lines = dat.read_text().splitlines()
+        cells = lines[2].split(" ")
+        cells[5] = "nan"
+        lines[2] = " ".join(cells)
+        dat.write_text("\n".join(lines) + "\n")
+        read = et.read_frames(dat, 208)
+        assert np.isnan(read[2, 5]) and np.isnan(read).sum() == 1
 
 
 def test_compressed_and_big_endian_arrays_read_as_numpy_reads_them(work, dataset):

@@ -96,6 +96,7 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
                     FramesFault::NotNumber {
                         column,
                         cell: written(),
+                        first_row: n == 0 && (first_name.is_some() || numbered),
                     },
                 )
             })?;
@@ -113,7 +114,8 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         }
         n += 1;
     }
-    let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames))?;
+    let header = first_name.is_some() || numbered;
+    let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames { header }))?;
     let w = w - skipped.iter().filter(|(c, _)| *c < w).count();
     let mut said = match delimiter {
         Delimiter::Comma => String::new(),

@@ -247,6 +247,17 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
     std::fs::write(&f, "v0,v1,v2\nV,2e-3,V\n4e-3,5e-3,6e-3\n").unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
     assert!(e.contains(":2: column 1: 'V' is not a number"), "{e}");
+    // A logger's header of several lines: the line under the names is asked about; a header
+    // alone is said as that.
+    std::fs::write(&f, "v0,v1,v2\nrate: 1 kHz,gain 8,\n1e-3,2e-3,3e-3\n").unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(
+        e.contains(":2: column 1: 'rate: 1 kHz' is not a number (a header of more lines"),
+        "{e}"
+    );
+    std::fs::write(&f, "v0,v1,v2\n").unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(e.ends_with("no frames (a header row alone)"), "{e}");
     // Fortran's numbers under a header: no units row, said by the first cell with the fix.
     std::fs::write(&f, "v0,v1,v2\n1.0D-03,2.0D-03,3.0D-03\n").unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
