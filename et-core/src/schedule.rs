@@ -73,65 +73,6 @@ pub struct Schedule {
 /// A schedule file's columns, in this order.
 pub(crate) const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
 
-/// Whether the `first` record is a header, and where each of [`COLUMNS`] is: named by a
-/// header (any order; a name twice, or one of the four missing, refused), or, without one, the
-/// first four or five columns. A header names at least one column (a row of numbers with a typo
-/// is data); a first row with no number and none of the names is a header of other names.
-fn header_columns(
-    first: &csv::StringRecord,
-    delimiter: text::Delimiter,
-) -> Result<(bool, [Option<usize>; 5]), FileFault> {
-    let header = first
-        .iter()
-        .any(|c| COLUMNS.iter().any(|n| c.eq_ignore_ascii_case(n)));
-    if header {
-        let find = |n: &str| first.iter().position(|c| c.eq_ignore_ascii_case(n));
-        let columns = COLUMNS.map(find);
-        // A column named twice: which one is meant would be a guess (said before the column a
-        // misspelt second name leaves missing).
-        if let Some(name) = COLUMNS
-            .iter()
-            .find(|n| first.iter().filter(|c| c.eq_ignore_ascii_case(n)).count() > 1)
-        {
-            return Err(FileFault::SameColumn(name));
-        }
-        if let Some(missing) = COLUMNS[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
-            return Err(FileFault::MissingColumn(missing.0));
-        }
-        // Other columns are ignored, but one named as a current would leave its rows driving
-        // the scene's current without a word (a tank's amplitudes in mA, say).
-        if let Some(other) =
-            (first.iter()).find(|c| !c.eq_ignore_ascii_case("current_a") && reads_as_current(c))
-        {
-            return Err(FileFault::OtherCurrent(other.into()));
-        }
-        return Ok((true, columns));
-    }
-    if first.len() > 1 && first.iter().all(|c| text::number(c, delimiter).is_none()) {
-        // (A dataset's 200 feature names were all said.)
-        let mut names = first.iter().take(6).collect::<Vec<_>>().join(", ");
-        if first.len() > 6 {
-            names += &format!(", ... ({} columns)", first.len());
-        }
-        return Err(FileFault::OtherNames(names));
-    }
-    if first.len() == 4 || first.len() == 5 {
-        let current = (first.len() == 5).then_some(4);
-        return Ok((false, [Some(0), Some(1), Some(2), Some(3), current]));
-    }
-    Err(FileFault::Columns(first.len()))
-}
-
-/// Whether a header's column `name` is named as a current: a word of it (split at anything
-/// but letters and digits) begins with `current` or `amp` (amps, ampere, amplitude).
-fn reads_as_current(name: &str) -> bool {
-    name.split(|c: char| !c.is_ascii_alphanumeric())
-        .any(|word| {
-            let word = word.to_ascii_lowercase();
-            word.starts_with("current") || word.starts_with("amp")
-        })
-}
-
 /// An electrode's number as a cell writes it: `2`, or a whole number written as a decimal
 /// (`2.0`; `2.000000000000000000e+00`, as NumPy's `savetxt` writes every number by default);
 /// None for a fraction, a negative number or one past `u16`.
@@ -577,6 +518,8 @@ pub fn other_frame_len(n: usize, k: usize) -> Option<String> {
 
 mod error;
 pub use error::*;
+mod header;
+use header::header_columns;
 
 #[cfg(test)]
 mod tests;

@@ -199,7 +199,8 @@ pub enum FileFault {
     /// A first row of names, none of them a column's.
     #[error(
         "the header names {0}: name the columns source, sink, positive, negative and \
-         optionally current_a (any order)"
+         optionally current_a (any order; I+, I-, V+, V- and A, B, M, N are read as the four \
+         too)"
     )]
     OtherNames(String),
     /// Another of et's files given as a protocol file.

@@ -167,10 +167,10 @@ fn wrong_rows_are_named_by_line_and_cell() {
     );
     let e = parse("0,1,2,3,nan\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("NaN A") && !e.contains("swap"), "{e}");
-    let e = parse("source,sink,plus,minus\n0,1,2,3\n", 16, 0)
+    let e = parse("source,sink,plus,negative_v\n0,1,2,3\n", 16, 0)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("no 'positive' column"), "{e}");
+    assert!(e.contains("no 'negative' column"), "{e}");
     let e = parse("0,1,2\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("3 columns"), "{e}");
     let e = parse("0,1,x,3\n", 16, 0).unwrap_err().to_string();
@@ -180,16 +180,36 @@ fn wrong_rows_are_named_by_line_and_cell() {
     // Counted from 2 would shift every electrode by one more than any system does.
     let e = parse("2,3,4,5\n", 16, 2).unwrap_err().to_string();
     assert!(e.contains("base = 2") && e.contains("0 (et's) or 1"), "{e}");
+    // The names other tools write for the four columns (hardware logs' I+ I- V+ V-,
+    // resistivity tomography's A B M N and C1 C2 P1 P2, short forms), in any order.
+    let named = parse("source,sink,positive,negative\n0,1,2,3\n", 16, 0).unwrap();
+    for header in [
+        "src,snk,pos,neg",
+        "I+,I-,V+,V-",
+        "V-;V+;I-;I+",
+        "a,b,m,n",
+        "C1,C2,P1,P2",
+        "Source,Sink,Plus,Minus",
+    ] {
+        let reversed = header.contains(';');
+        let row = if reversed { "3;2;1;0" } else { "0,1,2,3" };
+        let got = parse(&format!("{header}\n{row}\n"), 16, 0);
+        assert_eq!(got.as_ref().ok(), Some(&named), "{header}: {got:?}");
+    }
     // A header of other names is said as a header, not as a row whose cell is not a number;
-    // a name twice beside a missing one is said as twice.
-    let e = parse("src,snk,pos,neg\n0,1,2,3\n", 16, 0)
+    // a name twice beside a missing one is said as twice, by any of its names.
+    let e = parse("from,to,hi,lo\n0,1,2,3\n", 16, 0)
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("p.csv:1") && e.contains("names src, snk, pos, neg") && e.contains("source"),
+        e.contains("p.csv:1") && e.contains("names from, to, hi, lo") && e.contains("I+, I-, V+"),
         "{e}"
     );
     let e = parse("source,source,positive,negative\n0,1,2,3\n", 16, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("names source twice"), "{e}");
+    let e = parse("source,I+,positive,negative\n0,1,2,3\n", 16, 0)
         .unwrap_err()
         .to_string();
     assert!(e.contains("names source twice"), "{e}");
