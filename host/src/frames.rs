@@ -130,6 +130,13 @@ pub enum FramesFault {
         /// Whether it is on the row after a header, before any frame.
         first_row: bool,
     },
+    /// Every column named as no frame's values.
+    #[error(
+        "no values: its columns {} are named as the rows' numbers, times, sessions or targets, \
+         which frames are read without",
+        .0.join(", ")
+    )]
+    NoValues(Vec<String>),
     /// No rows of numbers (under a header, or none).
     #[error("no frames{}", if *header { " (a header row alone)" } else { "" })]
     NoFrames {

@@ -347,6 +347,26 @@ fn frames_csv() -> String {
         .collect()
 }
 
+/// The frames as a DAQ writes them: Excel's `sep=` line, a header naming a time column and a
+/// label, a row of units, a value missing (the paths that leave columns and rows out).
+fn frames_daq_csv() -> String {
+    let m = frames_matrix();
+    let names: Vec<String> = (0..m.ncols()).map(|k| format!("ch{k}")).collect();
+    let mut text = format!(
+        "sep=;\nTime;{};label\ns;{};\n",
+        names.join(";"),
+        ["V"; 40].join(";")
+    );
+    for f in 0..m.nrows() {
+        let mut row: Vec<String> = m.row(f).iter().map(|v| format!("{v:e}")).collect();
+        if f == 2 {
+            row[7] = String::new();
+        }
+        text += &format!("{};{};none\n", f as f64 * 0.01, row.join(";"));
+    }
+    text
+}
+
 /// The frames as another system's `.npz` (one array, "frames").
 fn frames_npz() -> Vec<u8> {
     let mut w = et_learn::npz::Writer::new();
@@ -556,6 +576,11 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "frames CSV",
             seeds: vec![frames_csv().into()],
+            parse: |p| read_frames(&p[0], "csv"),
+        },
+        Parser {
+            name: "frames CSV as a DAQ writes it",
+            seeds: vec![frames_daq_csv().into()],
             parse: |p| read_frames(&p[0], "csv"),
         },
         Parser {

@@ -117,6 +117,10 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     let header = first_name.is_some() || numbered;
     let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames { header }))?;
     let w = w - skipped.iter().filter(|(c, _)| *c < w).count();
+    if w == 0 {
+        let names = skipped.iter().map(|(_, n)| n.clone()).collect();
+        return Err(content(path, 0, FramesFault::NoValues(names)));
+    }
     let mut said = match delimiter {
         Delimiter::Comma => String::new(),
         d => format!("{}, ", d.said()),

@@ -258,6 +258,15 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
     std::fs::write(&f, "v0,v1,v2\n").unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
     assert!(e.ends_with("no frames (a header row alone)"), "{e}");
+    // Every column named as no frame's values (it indexed a matrix of no columns).
+    for text in ["time,label\n1,a\n2,b\n", "time,label\ns,\n"] {
+        std::fs::write(&f, text).unwrap();
+        let e = read(&f, 3).unwrap_err().to_string();
+        assert!(
+            e.contains("no values: its columns time, label are named"),
+            "{e}"
+        );
+    }
     // Fortran's numbers under a header: no units row, said by the first cell with the fix.
     std::fs::write(&f, "v0,v1,v2\n1.0D-03,2.0D-03,3.0D-03\n").unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
