@@ -38,8 +38,10 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         let named_as_many = i == 1 && first_name.is_some() && record.len() == first_len;
         line_ends |= i <= 1 && text::ends_with_delimiter(&record) && !named_as_many;
         let cells = text::cells(&record, line_ends);
-        // A first row with a cell that is not a number is a header.
-        if i == 0 && cells.iter().any(|c| text::number(c, delimiter).is_none()) {
+        // A first row with a cell that is not a number is a header, as is pandas' over
+        // columns numbered 0, 1, 2, ... (its first cell empty); an empty cell alone is a value
+        // missing from the first frame (it was taken as a header: the reference lost).
+        if i == 0 && (named_row(&cells, delimiter) || pandas_header(&cells, delimiter)) {
             first_name = cells.first().map(|c| c.to_string());
             skipped = (cells.iter().enumerate())
                 .filter(|(_, name)| {
@@ -60,7 +62,12 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         // row of numbers written wrongly, `1.0D-03`, is said by its cell).
         if i == 1 && first_name.is_some() && {
             let kept = values_of(&cells);
-            let word = |c: &str| !c.is_empty() && !c.contains(|ch: char| ch.is_ascii_digit());
+            // (`NaN` is a value missing, not a unit: a frame the system did not send.)
+            let word = |c: &str| {
+                !c.is_empty()
+                    && !c.contains(|ch: char| ch.is_ascii_digit())
+                    && text::number(c, delimiter).is_none()
+            };
             !kept.is_empty() && kept.iter().all(|(_, c)| word(c))
         } {
             units_row = true;
@@ -153,6 +160,23 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         return Ok((matrix.remove_column(0), said));
     }
     Ok((matrix, said))
+}
+
+/// Whether a row has a cell that is text, not a number (an empty cell is a value missing).
+fn named_row(cells: &[&str], delimiter: Delimiter) -> bool {
+    (cells.iter()).any(|c| !c.is_empty() && text::number(c, delimiter).is_none())
+}
+
+/// Whether a row is pandas' header over columns named by their numbers: an empty first cell
+/// (its index's), then 0, 1, 2, ... (or from 1).
+fn pandas_header(cells: &[&str], delimiter: Delimiter) -> bool {
+    let rest = cells.get(1..).unwrap_or_default();
+    cells.first() == Some(&"")
+        && !rest.is_empty()
+        && [0.0, 1.0].iter().any(|from| {
+            (rest.iter().enumerate())
+                .all(|(j, c)| text::number(c, delimiter) == Some(from + j as f64))
+        })
 }
 
 /// Whether a row's `cells` count its columns from 0 or 1 (eight or more: a frame's values

@@ -243,6 +243,15 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
         assert_eq!(r.frames, plain, "{text}");
         assert!(r.description.contains(said), "{}", r.description);
     }
+    // A first frame with a value missing, headerless, is a frame (it was taken as a header).
+    std::fs::write(&f, "1e-3,,3e-3\n4e-3,5e-3,6e-3\n").unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!((r.frames.len(), r.gaps.as_slice()), (2, &[0][..]));
+    // A first frame of NaN alone is a frame with values missing, not a units row (the frames
+    // after it would have been counted from it).
+    std::fs::write(&f, "v0,v1,v2\nNaN,nan,NAN\n4e-3,5e-3,6e-3\n").unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!((r.frames.len(), r.gaps.as_slice()), (2, &[0][..]));
     // A second row of text and numbers is no units row: said by its cell.
     std::fs::write(&f, "v0,v1,v2\nV,2e-3,V\n4e-3,5e-3,6e-3\n").unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
