@@ -101,8 +101,9 @@ def _numbers(a: Any, what: str) -> np.ndarray:
         raise EtError(f"{what} = None: give an array of numbers")
     if isinstance(a, (bytes, bytearray, memoryview)):
         # (NumPy's words held the whole of them, thousands of characters.)
+        size = a.nbytes if isinstance(a, memoryview) else len(a)
         raise EtError(
-            f"{what}: {len(a)} bytes, not numbers (a port's or a file's raw bytes? "
+            f"{what}: {size} bytes, not numbers (a port's or a file's raw bytes? "
             "np.frombuffer(b, dtype='<f4') reads them as little-endian float32)"
         )
     if np.ma.isMaskedArray(a):

@@ -1,5 +1,6 @@
 //! Frames from a CSV: one frame per row, read record by record, a header (names, or the
-//! columns' numbers) and pandas' row index skipped and said.
+//! columns' numbers), a row of units, pandas' row index and columns named as no frame's
+//! values skipped and said; an empty or NaN cell a value missing.
 
 use std::path::Path;
 
@@ -7,6 +8,122 @@ use et_core::text::{self, Delimiter};
 use nalgebra::DMatrix;
 
 use super::{FramesError, FramesFault, content};
+
+/// What stands above a CSV's frames, and what it says of them: a header (its first cell, and
+/// the columns it names as no frame's values), a row of units under it, or a row of the
+/// columns' numbers; whether every line ends with a delimiter.
+#[derive(Default)]
+struct Head {
+    /// The header's first cell, where there is a header.
+    first_name: Option<String>,
+    /// Whether the first row counts the columns (0, 1, 2, ... or 1, 2, 3, ...: a DAQ's
+    /// channel numbers), which was read as the first frame, the reference.
+    numbered: bool,
+    /// The header's columns (from 0) of the rows' numbers, times or sessions (a DAQ's `Time`
+    /// first), or of targets (a recording annotated with `label`, `x`, `y`): left out of
+    /// every row (they were refused as one column too many, or as text).
+    skipped: Vec<(usize, String)>,
+    /// Whether a row of units stood under the header.
+    units_row: bool,
+    /// Whether each line ends with a delimiter.
+    line_ends: bool,
+    /// The first record's cells.
+    first_len: usize,
+}
+
+impl Head {
+    /// Notes the `i`th record: a delimiter at the end of each line (`fprintf('%g,', frame)`
+    /// in a loop) ends the row, not an empty last value. The first row (a header, perhaps
+    /// written by hand) or the second says so; the second not where a header names as many
+    /// cells (an annotated row's empty last cell, `none,,` under `label,x,y`).
+    fn see(&mut self, i: usize, record: &text::StringRecord) {
+        if i == 0 {
+            self.first_len = record.len();
+        }
+        let named_as_many = i == 1 && self.first_name.is_some() && record.len() == self.first_len;
+        self.line_ends |= i <= 1 && text::ends_with_delimiter(record) && !named_as_many;
+    }
+
+    /// Whether the `i`th record's `cells` stand above the frames (taken here), not a frame.
+    fn takes(&mut self, i: usize, cells: &[&str], delimiter: Delimiter) -> bool {
+        // A first row with a cell of text is a header, as is pandas' over columns numbered
+        // 0, 1, 2, ... (its first cell empty); an empty cell alone is a value missing from the
+        // first frame (it was taken as a header: the reference lost).
+        if i == 0 && (named_row(cells, delimiter) || pandas_header(cells, delimiter)) {
+            self.first_name = cells.first().map(|c| (*c).to_string());
+            self.skipped = (cells.iter().enumerate())
+                .filter(|(_, name)| {
+                    et_learn::dataset::not_a_feature(name)
+                        || et_learn::dataset::is_target_name(name)
+                })
+                .map(|(c, name)| (c, (*name).to_string()))
+                .collect();
+            return true;
+        }
+        // A second header row under the names, of words alone (a DAQ's units: `V,V,V`; a row
+        // of numbers written wrongly, `1.0D-03`, is said by its cell, and `NaN` is a value
+        // missing, a frame the system did not send).
+        let word = |c: &str| {
+            !c.is_empty()
+                && !c.contains(|ch: char| ch.is_ascii_digit())
+                && text::number(c, delimiter).is_none()
+        };
+        if i == 1 && self.first_name.is_some() {
+            let units = {
+                let mut kept = self.values(cells).peekable();
+                kept.peek().is_some() && kept.all(|(_, c)| word(c))
+            };
+            if units {
+                self.units_row = true;
+                return true;
+            }
+        }
+        if i == 0 && counts_columns(cells, delimiter) {
+            self.numbered = true;
+            return true;
+        }
+        false
+    }
+
+    /// A frame row's cells of values, with their columns (from 0): the skipped ones left out.
+    fn values<'c>(&self, cells: &[&'c str]) -> impl Iterator<Item = (usize, &'c str)> {
+        let skipped = &self.skipped;
+        (cells.iter().enumerate())
+            .filter(move |(c, _)| !skipped.iter().any(|(s, _)| s == c))
+            .map(|(c, cell)| (c, *cell))
+    }
+
+    /// Whether a header (of names or numbers) was read.
+    fn header(&self) -> bool {
+        self.first_name.is_some() || self.numbered
+    }
+
+    /// What is said of what stood above the frames.
+    fn said(&self, delimiter: Delimiter) -> String {
+        let mut said = match delimiter {
+            Delimiter::Comma => String::new(),
+            d => format!("{}, ", d.said()),
+        };
+        if self.numbered {
+            said.push_str("its first row (the columns' numbers) skipped as a header, ");
+        }
+        if self.units_row {
+            said.push_str("its second row (text under the names: units?) skipped as a header, ");
+        }
+        if !self.skipped.is_empty() {
+            let names: Vec<String> = (self.skipped.iter())
+                .map(|(_, n)| format!("'{n}'"))
+                .collect();
+            said.push_str(&format!(
+                "its column{} {} skipped (the rows' numbers, times, sessions or targets by name, \
+                 not a frame's values), ",
+                if names.len() == 1 { "" } else { "s" },
+                names.join(", ")
+            ));
+        }
+        said
+    }
+}
 
 /// A CSV of numbers, a header row skipped; its matrix and what was said of the delimiter.
 /// Read record by record: what is kept is the numbers (8 bytes a value), not the cells.
@@ -17,66 +134,13 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     let mut values = Vec::new();
     let mut width = None;
     let mut n = 0;
-    // The header's first cell, where there is a header; whether it is the columns' numbers.
-    let mut first_name = None;
-    let mut numbered = false;
-    // The header's columns of the rows' numbers, times or sessions (a DAQ's `Time` first),
-    // or of targets (a recording annotated with `label`, `x`, `y`): left out of every row
-    // (they were refused as one column too many, or as text).
-    let mut skipped: Vec<(usize, String)> = Vec::new();
-    let mut units_row = false;
+    let mut head = Head::default();
     let mut records = records.enumerate().peekable();
-    let mut line_ends = false;
-    let mut first_len = 0;
     while let Some((i, record)) = records.next() {
         let (line, record) = record.map_err(|(line, f)| content(path, line, f.into()))?;
-        // A delimiter at the end of each line (`fprintf('%g,', frame)` in a loop) ends the
-        // row; it is not an empty last value. The first row (a header, perhaps written by
-        // hand) or the second says so; the second not where a header names as many cells
-        // (an annotated row's empty last cell, `none,,` under `label,x,y`).
-        first_len = if i == 0 { record.len() } else { first_len };
-        let named_as_many = i == 1 && first_name.is_some() && record.len() == first_len;
-        line_ends |= i <= 1 && text::ends_with_delimiter(&record) && !named_as_many;
-        let cells = text::cells(&record, line_ends);
-        // A first row with a cell that is not a number is a header, as is pandas' over
-        // columns numbered 0, 1, 2, ... (its first cell empty); an empty cell alone is a value
-        // missing from the first frame (it was taken as a header: the reference lost).
-        if i == 0 && (named_row(&cells, delimiter) || pandas_header(&cells, delimiter)) {
-            first_name = cells.first().map(|c| c.to_string());
-            skipped = (cells.iter().enumerate())
-                .filter(|(_, name)| {
-                    et_learn::dataset::not_a_feature(name)
-                        || et_learn::dataset::is_target_name(name)
-                })
-                .map(|(c, name)| (c, name.to_string()))
-                .collect();
-            continue;
-        }
-        let values_of = |cells: &[&str]| -> Vec<(usize, String)> {
-            (cells.iter().enumerate())
-                .filter(|(c, _)| !skipped.iter().any(|(s, _)| s == c))
-                .map(|(c, cell)| (c, cell.to_string()))
-                .collect()
-        };
-        // A second header row under the names, of words alone (a DAQ's units: `V,V,V`; a
-        // row of numbers written wrongly, `1.0D-03`, is said by its cell).
-        if i == 1 && first_name.is_some() && {
-            let kept = values_of(&cells);
-            // (`NaN` is a value missing, not a unit: a frame the system did not send.)
-            let word = |c: &str| {
-                !c.is_empty()
-                    && !c.contains(|ch: char| ch.is_ascii_digit())
-                    && text::number(c, delimiter).is_none()
-            };
-            !kept.is_empty() && kept.iter().all(|(_, c)| word(c))
-        } {
-            units_row = true;
-            continue;
-        }
-        // So is one that counts the columns (0, 1, 2, ... or 1, 2, 3, ...: a DAQ's channel
-        // numbers), which was read as the first frame, the reference.
-        if i == 0 && counts_columns(&cells, delimiter) {
-            numbered = true;
+        head.see(i, &record);
+        let cells = text::cells(&record, head.line_ends);
+        if head.takes(i, &cells, delimiter) {
             continue;
         }
         let w = *width.get_or_insert(cells.len());
@@ -88,22 +152,22 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
             };
             return Err(content(path, line, fault));
         }
-        for (c, cell) in values_of(&cells) {
-            let (column, written) = (c + 1, || cell.clone());
+        for (c, cell) in head.values(&cells) {
+            let (column, written) = (c + 1, || cell.to_string());
             // An empty cell is a value not measured (a DAQ's dropped sample), as NaN is: its
             // frame is kept with it, NaN, and no image takes it.
             if cell.is_empty() {
                 values.push(f64::NAN);
                 continue;
             }
-            let v = text::number(&cell, delimiter).ok_or_else(|| {
+            let v = text::number(cell, delimiter).ok_or_else(|| {
                 content(
                     path,
                     line,
                     FramesFault::NotNumber {
                         column,
                         cell: written(),
-                        first_row: n == 0 && (first_name.is_some() || numbered),
+                        first_row: n == 0 && head.header(),
                     },
                 )
             })?;
@@ -121,37 +185,19 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         }
         n += 1;
     }
-    let header = first_name.is_some() || numbered;
+    let header = head.header();
     let w = width.ok_or_else(|| content(path, 0, FramesFault::NoFrames { header }))?;
-    let w = w - skipped.iter().filter(|(c, _)| *c < w).count();
+    let w = w - head.skipped.iter().filter(|(c, _)| *c < w).count();
     if w == 0 {
-        let names = skipped.iter().map(|(_, n)| n.clone()).collect();
+        let names = head.skipped.iter().map(|(_, n)| n.clone()).collect();
         return Err(content(path, 0, FramesFault::NoValues(names)));
     }
-    let mut said = match delimiter {
-        Delimiter::Comma => String::new(),
-        d => format!("{}, ", d.said()),
-    };
-    if numbered {
-        said.push_str("its first row (the columns' numbers) skipped as a header, ");
-    }
-    if units_row {
-        said.push_str("its second row (text under the names: units?) skipped as a header, ");
-    }
-    if !skipped.is_empty() {
-        let names: Vec<String> = skipped.iter().map(|(_, n)| format!("'{n}'")).collect();
-        said.push_str(&format!(
-            "its column{} {} skipped (the rows' numbers, times, sessions or targets by name, \
-             not a frame's values), ",
-            if names.len() == 1 { "" } else { "s" },
-            names.join(", ")
-        ));
-    }
+    let mut said = head.said(delimiter);
     // Row after row is a w x n column-major matrix: transposed, n x w.
     let matrix = DMatrix::from_vec(w, n, values).transpose();
     // pandas' `to_csv` writes each row's number first, under a header cell with no name: a
     // column unnamed whose values count the rows from 0 is that index, not a value.
-    let unnamed = first_name.is_some_and(|name| {
+    let unnamed = head.first_name.is_some_and(|name| {
         name.is_empty() || name.eq_ignore_ascii_case("index") || name == "Unnamed: 0"
     });
     let counts_rows = (0..n).all(|r| matrix[(r, 0)] == r as f64);
