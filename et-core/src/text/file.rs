@@ -184,7 +184,18 @@ const ANOTHER_KIND: &str = "a file of another kind given?";
 /// spreadsheet, another format's array, a picture); None for any other.
 #[must_use]
 pub fn binary_kind(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
-    const KINDS: [(&[u8], usize, &str, &str); 8] = [
+    const UNPACK: &str = "decompress it first (gunzip -k, unxz -k, bunzip2 -k or unzstd \
+                          FILE): et reads files as written, not packed";
+    const KINDS: [(&[u8], usize, &str, &str); 12] = [
+        (b"\x1f\x8b", 0, "a gzip-compressed file (.gz)", UNPACK),
+        (b"\xFD7zXZ\x00", 0, "an xz-compressed file (.xz)", UNPACK),
+        (b"BZh", 0, "a bzip2-compressed file (.bz2)", UNPACK),
+        (
+            b"\x28\xB5\x2F\xFD",
+            0,
+            "a zstd-compressed file (.zst)",
+            UNPACK,
+        ),
         (
             b"PK\x03\x04",
             0,
@@ -427,6 +438,8 @@ mod tests {
             (b"\x93NUMPY\x01\x00v\x00", "numpy.savetxt"),
             (b"MATLAB 5.0 MAT-file \xff\x00", "writematrix"),
             (b"\x89PNG\r\n\x1a\n", "a PNG picture"),
+            (b"\x1f\x8b\x08\x00\xff", "a gzip-compressed file"),
+            (b"\xFD7zXZ\x00\x00\xff", "an xz-compressed file"),
             (
                 b"ETDA\x01\x00\x00\x00\x09\x00\x60\x00\xc0",
                 "a model blob for the board",
