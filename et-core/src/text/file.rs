@@ -134,10 +134,8 @@ fn said_plainly(e: std::io::Error, path: &std::path::Path) -> std::io::Error {
             "no such file: et reads files, not standard input ('-'); write what you pipe to a \
              file and give its path"
         }
-        std::io::ErrorKind::NotFound if path.components().any(|c| c.as_os_str() == "~") => {
-            "no such file: '~' is the shell's word for the home folder, which the shell \
-             expands only outside quotes and never in a file et reads; write the folder's \
-             path ($HOME/...)"
+        std::io::ErrorKind::NotFound if has_tilde(path) => {
+            return std::io::Error::new(e.kind(), format!("no such file: {TILDE_SAID}"));
         }
         std::io::ErrorKind::NotFound if spaced_twin(path) => {
             "no such file, but there is one of the name without the spaces around it (a \
@@ -148,6 +146,18 @@ fn said_plainly(e: std::io::Error, path: &std::path::Path) -> std::io::Error {
         _ => return e,
     };
     std::io::Error::new(e.kind(), said)
+}
+
+/// What is said of a path with `~` in it that is not there (given in quotes, or in a file
+/// et reads): the shell's word, which et does not expand.
+pub const TILDE_SAID: &str = "'~' is the shell's word for the home folder, which the shell \
+                              expands only outside quotes and never in a file et reads; write \
+                              the folder's path ($HOME/...)";
+
+/// Whether `path` has a component `~` (the home folder, as the shell writes it).
+#[must_use]
+pub fn has_tilde(path: &std::path::Path) -> bool {
+    path.components().any(|c| c.as_os_str() == "~")
 }
 
 /// Whether `path`'s file name has spaces around it and a file of the name without them is

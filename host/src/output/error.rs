@@ -87,9 +87,8 @@ pub enum OutputError {
         "{}: the folder {} does not exist ({})",
         .out.display(),
         .folder.display(),
-        if folder.components().any(|c| c.as_os_str() == "~") {
-            "'~' is the shell's word for the home folder, which it expands only outside quotes: \
-             write the folder's path ($HOME/...)"
+        if et_core::text::has_tilde(folder) {
+            et_core::text::TILDE_SAID
         } else {
             "create it first"
         }
