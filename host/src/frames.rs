@@ -14,6 +14,7 @@ use nalgebra::DMatrix;
 mod arrays;
 mod csv_frames;
 mod error;
+mod json_frames;
 mod mat;
 use csv_frames::csv_matrix;
 use error::said_list;
@@ -89,6 +90,14 @@ fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), Frame
             let others = et_core::text::EtFile::columns_beside_protocol(text).unwrap_or(0);
             Err(content(path, 1, FramesFault::Protocol { others }))
         }
+        // A JSON array (`json.dump(F.tolist())`): an et recording's lines are objects.
+        _ if text
+            .trim_start_matches('\u{feff}')
+            .trim_start()
+            .starts_with('[') =>
+        {
+            json_frames::json_matrix(path, text)
+        }
         _ => csv_matrix(path, text),
     }
 }
@@ -144,10 +153,7 @@ pub fn reads_as_table(spec: &Path) -> bool {
         return true;
     }
     let (path, _) = split_array(spec);
-    let ext = path.extension().and_then(|e| e.to_str());
-    if ext.is_some_and(|e| ["jsonl", "json", "ndjson"].contains(&e.to_ascii_lowercase().as_str()))
-        || !std::fs::metadata(&path).is_ok_and(|m| m.is_file())
-    {
+    if !std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
         return false;
     }
     let mut head = Vec::with_capacity(4096);
@@ -155,7 +161,11 @@ pub fn reads_as_table(spec: &Path) -> bool {
     let text = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&head);
     let first = text.iter().find(|b| !b.is_ascii_whitespace());
     // (Unreadable or empty: the recording reader says why, as before.)
-    read.is_ok() && first.is_some_and(|&b| b != b'{')
+    let ext = path.extension().and_then(|e| e.to_str());
+    let json =
+        ext.is_some_and(|e| ["jsonl", "json", "ndjson"].contains(&e.to_ascii_lowercase().as_str()));
+    // (A `.json` of an array is frames, `json.dump(F.tolist())`; of an object, a recording's.)
+    read.is_ok() && first.is_some_and(|&b| b == b'[' || (b != b'{' && !json))
 }
 
 /// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).

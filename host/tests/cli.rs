@@ -1825,6 +1825,12 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
             [&record[..], &["--frames", "99999999999999999999"]].concat(),
             "99999999999999999999 is above 18446744073709551615",
         ),
+        // Python's last frame: said as not counted from the end.
+        (
+            [&recon[..], &["--frames", "f.csv", "--frame", "-1"]].concat(),
+            "-1 is below 0, the least it takes (frames are counted from 0 at the file's first, \
+             not from its end: without --frame the last is imaged)",
+        ),
         ([&recon[..], &["--threshold", "2"]].concat(), "--threshold"),
         (
             [&recon[..], &["--threshold", "nan"]].concat(),

@@ -147,6 +147,19 @@ def test_frames_of_another_system_read_in_either_orientation(work, layout):
         dat.write_text("\n".join(lines) + "\n")
         read = et.read_frames(dat, 208)
         assert np.isnan(read[2, 5]) and np.isnan(read).sum() == 1
+        # As JSON, Python's NaN in it (json.dump writes it), and as a CSV in millivolts whose
+        # row of units says so: the same volts.
+        gappy = frames.copy()
+        gappy[2, 5] = np.nan
+        as_json = work / "frames.json"
+        as_json.write_text(json.dumps(gappy.tolist()))
+        np.testing.assert_array_equal(et.read_frames(as_json, 208), gappy)
+        mv = work / "frames-mv.csv"
+        names = ",".join(f"ch{k}" for k in range(208))
+        units = ",".join(["mV"] * 208)
+        np.savetxt(mv, frames * 1e3, delimiter=",", fmt="%.9g", header=names + "\n" + units,
+                   comments="")
+        np.testing.assert_allclose(et.read_frames(mv, 208), frames, rtol=1e-6)
 
 
 def test_compressed_and_big_endian_arrays_read_as_numpy_reads_them(work, dataset):

@@ -355,7 +355,7 @@ fn frames_daq_csv() -> String {
     let mut text = format!(
         "sep=;\nTime;{};label\ns;{};\n",
         names.join(";"),
-        ["V"; 40].join(";")
+        ["mV"; 40].join(";")
     );
     for f in 0..m.nrows() {
         let mut row: Vec<String> = m.row(f).iter().map(|v| format!("{v:e}")).collect();
@@ -365,6 +365,24 @@ fn frames_daq_csv() -> String {
         text += &format!("{};{};none\n", f as f64 * 0.01, row.join(";"));
     }
     text
+}
+
+/// The frames as JSON records, as pandas' `to_json(orient="records")` and Python's
+/// `json.dump` write them: named values, a time, one value NaN.
+fn frames_json() -> String {
+    let m = frames_matrix();
+    let rows: Vec<String> = (0..m.nrows())
+        .map(|f| {
+            let values: Vec<String> = (m.row(f).iter().enumerate())
+                .map(|(k, v)| match (f, k) {
+                    (1, 3) => format!("\"ch{k} (mV)\": NaN"),
+                    _ => format!("\"ch{k} (mV)\": {:e}", v * 1e3),
+                })
+                .collect();
+            format!("{{\"t\": {f}, {}}}", values.join(", "))
+        })
+        .collect();
+    format!("[{}]", rows.join(",\n "))
 }
 
 /// The frames as another system's `.npz` (one array, "frames").
@@ -582,6 +600,11 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             name: "frames CSV as a DAQ writes it",
             seeds: vec![frames_daq_csv().into()],
             parse: |p| read_frames(&p[0], "csv"),
+        },
+        Parser {
+            name: "frames JSON",
+            seeds: vec![frames_json().into()],
+            parse: |p| read_frames(&p[0], "json"),
         },
         Parser {
             name: "frames NumPy .npy",
@@ -896,8 +919,14 @@ fn tables_are_read_within_a_small_multiple_of_the_numbers_kept() {
     let names: Vec<String> = (0..k - 1).map(|j| format!("f{j}")).collect();
     let features = format!("{},label\n", names.join(","))
         + &(0..rows).map(|_| row(&mut rng) + "\n").collect::<String>();
-    let (f, t) = (dir.join("frames.csv"), dir.join("features.csv"));
+    let json = format!("[[{}]]\n", frames.trim_end().replace('\n', "],\n ["));
+    let (f, t, j) = (
+        dir.join("frames.csv"),
+        dir.join("features.csv"),
+        dir.join("frames.json"),
+    );
     std::fs::write(&f, &frames).unwrap();
+    std::fs::write(&j, &json).unwrap();
     std::fs::write(&t, &features).unwrap();
     let values = rows * k;
     let allowed = |text: usize| text + 4 * 8 * values + (1 << 20);
@@ -906,6 +935,11 @@ fn tables_are_read_within_a_small_multiple_of_the_numbers_kept() {
             "frames CSV",
             frames.len(),
             Box::new(|| et_host::frames::read(&f, k).is_ok()) as Box<dyn Fn() -> bool>,
+        ),
+        (
+            "frames JSON",
+            json.len(),
+            Box::new(|| et_host::frames::read(&j, k).is_ok()),
         ),
         (
             "features CSV",

@@ -1,6 +1,7 @@
 //! Frames from a CSV: one frame per row, read record by record, a header (names, or the
 //! columns' numbers), a row of units, pandas' row index and columns named as no frame's
-//! values skipped and said; an empty or NaN cell a value missing.
+//! values skipped and said; values in a unit of voltage the file names (`mV` under or in a
+//! column's name) read as volts; an empty or NaN cell a value missing.
 
 use std::path::Path;
 
@@ -25,6 +26,11 @@ struct Head {
     skipped: Vec<(usize, String)>,
     /// Whether a row of units stood under the header.
     units_row: bool,
+    /// Each column's unit of voltage as the file names it (under its name, or in it:
+    /// `ch1 (mV)`), with its factor to volts; empty where none is named.
+    units: Vec<Option<(String, f64)>>,
+    /// The first word of a row of units that is not a unit of voltage (`Ohm`, `counts`).
+    not_volts: Option<String>,
     /// Whether each line ends with a delimiter.
     line_ends: bool,
     /// The first record's cells.
@@ -58,6 +64,7 @@ impl Head {
                 })
                 .map(|(c, name)| (c, (*name).to_string()))
                 .collect();
+            self.units = cells.iter().map(|name| in_name(name)).collect();
             return true;
         }
         // A second header row under the names, of words alone (a DAQ's units: `V,V,V`; a row
@@ -75,6 +82,19 @@ impl Head {
             };
             if units {
                 self.units_row = true;
+                let named: Vec<_> = (self.values(cells))
+                    .map(|(c, word)| (c, word, volts_per(word)))
+                    .collect();
+                self.not_volts = (named.iter())
+                    .find(|(_, _, per)| per.is_none())
+                    .map(|(_, word, _)| (*word).to_string());
+                // A row of units of voltage names each column's (over units in the names).
+                if self.not_volts.is_none() {
+                    self.units.resize(cells.len(), None);
+                    for (c, word, per) in named {
+                        self.units[c] = per.map(|per| (word.trim().to_string(), per));
+                    }
+                }
                 return true;
             }
         }
@@ -93,6 +113,14 @@ impl Head {
             .map(|(c, cell)| (c, *cell))
     }
 
+    /// The factor from column `c`'s unit to volts (1 where the file names none).
+    fn volts_per(&self, c: usize) -> f64 {
+        self.units
+            .get(c)
+            .and_then(|u| u.as_ref())
+            .map_or(1.0, |u| u.1)
+    }
+
     /// Whether a header (of names or numbers) was read.
     fn header(&self) -> bool {
         self.first_name.is_some() || self.numbered
@@ -107,8 +135,37 @@ impl Head {
         if self.numbered {
             said.push_str("its first row (the columns' numbers) skipped as a header, ");
         }
-        if self.units_row {
-            said.push_str("its second row (text under the names: units?) skipped as a header, ");
+        let mut units: Vec<&(String, f64)> = Vec::new();
+        for u in self.units.iter().flatten() {
+            if !units.iter().any(|k| k.0 == u.0) {
+                units.push(u);
+            }
+        }
+        let words: Vec<&str> = units.iter().map(|u| u.0.as_str()).collect();
+        if let Some(word) = &self.not_volts {
+            said.push_str(&format!(
+                "its second row (units? '{word}', not a unit of voltage: the values are taken as \
+                 volts) skipped as a header, "
+            ));
+        } else if self.units_row {
+            said.push_str(&format!(
+                "its second row (units: {}) skipped as a header, ",
+                words.join(", ")
+            ));
+        }
+        if units.iter().any(|u| u.1 != 1.0) {
+            let factors: Vec<String> = (units.iter())
+                .map(|(word, per)| format!("{word} x {per:e}"))
+                .collect();
+            said.push_str(&format!(
+                "its values read as volts ({}{}), ",
+                factors.join(", "),
+                if self.units_row {
+                    ""
+                } else {
+                    ", as its columns' names say"
+                }
+            ));
         }
         if !self.skipped.is_empty() {
             let names: Vec<String> = (self.skipped.iter())
@@ -160,17 +217,18 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
                 values.push(f64::NAN);
                 continue;
             }
-            let v = text::number(cell, delimiter).ok_or_else(|| {
-                content(
-                    path,
-                    line,
-                    FramesFault::NotNumber {
-                        column,
-                        cell: written(),
-                        first_row: n == 0 && head.header(),
-                    },
-                )
-            })?;
+            let v = head.volts_per(c)
+                * text::number(cell, delimiter).ok_or_else(|| {
+                    content(
+                        path,
+                        line,
+                        FramesFault::NotNumber {
+                            column,
+                            cell: written(),
+                            first_row: n == 0 && head.header(),
+                        },
+                    )
+                })?;
             // (Said by the file's line and cell: the matrix's check counts from 0.)
             let volts = v.is_finite() && v.abs() <= f64::from(f32::MAX);
             if !(v.is_nan() || volts) {
@@ -253,4 +311,36 @@ pub(super) fn complex(cell: &str) -> bool {
     split.is_some_and(|(i, _)| {
         body[..i].trim().parse::<f64>().is_ok() && body[i..].trim().parse::<f64>().is_ok()
     })
+}
+
+/// The factor to volts of a unit of voltage as a DAQ writes it under a column's name (`mV`,
+/// `[uV]`, `(V)`, `µV`, `volts`); None for any other word (`Ohm`, `counts`, `MV`).
+fn volts_per(unit: &str) -> Option<f64> {
+    let u = (unit.trim())
+        .trim_start_matches(['(', '['])
+        .trim_end_matches([')', ']'])
+        .trim();
+    let word = u.to_ascii_lowercase();
+    let word = word.trim_end_matches('s');
+    match (u, word) {
+        ("V" | "v", _) | (_, "volt") => Some(1.0),
+        ("mV" | "mv", _) | (_, "millivolt") => Some(1e-3),
+        ("uV" | "uv" | "µV" | "μV", _) | (_, "microvolt") => Some(1e-6),
+        ("nV", _) | (_, "nanovolt") => Some(1e-9),
+        ("kV", _) | (_, "kilovolt") => Some(1e3),
+        _ => None,
+    }
+}
+
+/// The unit of voltage a column's `name` ends with in brackets (`ch1 (mV)`, `U1 [uV]`), as
+/// named and with its factor to volts.
+pub(super) fn in_name(name: &str) -> Option<(String, f64)> {
+    let name = name.trim_end();
+    let open = match name.chars().last()? {
+        ')' => '(',
+        ']' => '[',
+        _ => return None,
+    };
+    let unit = &name[name.rfind(open)? + 1..name.len() - 1];
+    volts_per(unit).map(|per| (unit.trim().to_string(), per))
 }

@@ -86,6 +86,9 @@ pub enum FramesFault {
         .0.join(", ")
     )]
     NoValues(Vec<String>),
+    /// A JSON file that is not an array of frames (what is wrong, where).
+    #[error("{0}")]
+    Json(String),
     /// No rows of numbers (under a header, or none).
     #[error("no frames{}", if *header { " (a header row alone)" } else { "" })]
     NoFrames {

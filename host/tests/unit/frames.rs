@@ -234,8 +234,7 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
         ),
         (
             "Time,ch1,ch2,ch3\ns,V,V,V\n0.0,1e-3,2e-3,3e-3\n0.1,4e-3,5e-3,6e-3\n",
-            "its second row (text under the names: units?) skipped as a header, its column \
-             'Time' skipped",
+            "its second row (units: V) skipped as a header, its column 'Time' skipped",
         ),
     ] {
         std::fs::write(&f, text).unwrap();
@@ -243,6 +242,42 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
         assert_eq!(r.frames, plain, "{text}");
         assert!(r.description.contains(said), "{}", r.description);
     }
+    // Values in a unit of voltage the file names, under the names or in them, read as volts
+    // (mV were read as volts: 1000 times the sheet's background, past 100 V a note, under it
+    // nothing); another unit (impedances, counts) is said and the values taken as they are.
+    for (text, said) in [
+        (
+            "Time,ch1,ch2,ch3\ns,mV,mV,mV\n0.0,1,2,3\n0.1,4,5,6\n",
+            "its second row (units: mV) skipped as a header, its values read as volts (mV x 1e-3)",
+        ),
+        (
+            "U1 [uV];U2 [uV];U3 [uV]\n1000;2000;3000\n4000;5000;6000\n",
+            "its values read as volts (uV x 1e-6, as its columns' names say)",
+        ),
+        (
+            "a (V),b (mV),c (mV)\n1e-3,2,3\n4e-3,5,6\n",
+            "its values read as volts (V x 1e0, mV x 1e-3, as its columns' names say)",
+        ),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let r = read(&f, 3).unwrap();
+        let near = (r.frames.iter().flatten().zip(plain.iter().flatten()))
+            .all(|(a, b)| (a - b).abs() <= 1e-6 * b.abs());
+        assert!(near, "{text}: {:?}", r.frames);
+        assert!(r.description.contains(said), "{}", r.description);
+    }
+    std::fs::write(
+        &f,
+        "ch1,ch2,ch3\nOhm,Ohm,Ohm\n1e-3,2e-3,3e-3\n4e-3,5e-3,6e-3\n",
+    )
+    .unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!(r.frames, plain);
+    assert!(
+        (r.description).contains("(units? 'Ohm', not a unit of voltage: the values are taken as"),
+        "{}",
+        r.description
+    );
     // A first frame with a value missing, headerless, is a frame (it was taken as a header).
     std::fs::write(&f, "1e-3,,3e-3\n4e-3,5e-3,6e-3\n").unwrap();
     let r = read(&f, 3).unwrap();
@@ -545,6 +580,88 @@ fn frames_named_otherwise_are_read_by_what_they_hold() {
     let made = std::process::Command::new("mkfifo").arg(&fifo).status();
     assert!(made.is_ok_and(|s| s.success()), "mkfifo");
     assert!(!reads_as_table(&fifo), "a FIFO is not read ahead");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Frames as JSON (`json.dump(F.tolist())`, `jsonencode(F)`, pandas' `orient="records"`):
+/// they were "not an et recording" as `.json` and "no frames (a header row alone)" as `.txt`.
+#[test]
+fn frames_as_json_arrays_are_read() {
+    let dir = tmp("json");
+    let plain = [vec![1.0_f32, 2.0, 3.0], vec![4.0, 5.0, 6.0]];
+    for (name, text, said) in [
+        (
+            "f.json",
+            "[[1, 2, 3], [4, 5.0, 6e0]]",
+            "a JSON array of frames, 2 frames",
+        ),
+        (
+            "f.txt",
+            "\u{feff}[\n [1,2,3],\n [4,5,6]\n]\n",
+            "a JSON array of frames, 2",
+        ),
+        (
+            "r.json",
+            r#"[{"t": 0, "a (mV)": 1000, "b (mV)": 2000, "c (mV)": 3000, "label": "none"},
+                {"t": 1, "a (mV)": 4000, "b (mV)": 5000, "c (mV)": 6000, "label": "x"}]"#,
+            "the values named 't', 'label' skipped (the rows' numbers, times, sessions or \
+             targets by name, not a frame's values), its values read as volts (mV x 1e-3, as \
+             their names say)",
+        ),
+    ] {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        assert!(reads_as_table(&f), "{name}");
+        let r = read(&f, 3).unwrap();
+        assert_eq!(r.frames, plain, "{name}");
+        assert!(r.description.contains(said), "{}", r.description);
+    }
+    let f = dir.join("g.json");
+    // Python's NaN and JSON's null are values missing (outside strings only); one array is
+    // one frame.
+    std::fs::write(&f, r#"[[1, NaN, 3], [4, 5, null]]"#).unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!(r.gaps, [0, 1]);
+    std::fs::write(&f, "[1, 2, 3]").unwrap();
+    assert_eq!(read(&f, 3).unwrap().frames, [vec![1.0_f32, 2.0, 3.0]]);
+    for (text, said) in [
+        (
+            "[[1, 2, 3], [4, Infinity, 6]]",
+            "not JSON at line 1, column 17 (at 'Infinity, 6]]'): an infinite value",
+        ),
+        (
+            "[[1, 2, 3], [4, 5",
+            "not JSON: it ends at line 1 before its arrays close",
+        ),
+        (
+            r#"[[1, 2, 3], [4, "NaN", 6]]"#,
+            "frame 1, value 1 (from 0): \"NaN\" is not a number",
+        ),
+        (
+            "[[1, 2, 3], [4, [5], 6]]",
+            "frame 1, value 1 (from 0): an array is not a number",
+        ),
+        (
+            "[[1, 2, 3], [4, 5]]",
+            "frame 1 (from 0) has 2 values, the first 3",
+        ),
+        (
+            "[[1, 2, 3], 4]",
+            "element 1 (from 0) is a value among frames",
+        ),
+        (
+            r#"[{"a": 1, "b": 2}, {"b": 2, "a": 1}]"#,
+            "frame 1 (from 0) names other values than the first (its keys, in order: b, a)",
+        ),
+        ("[]", "no frames"),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let e = read(&f, 3).unwrap_err().to_string();
+        assert!(e.contains(said), "{text}: {e}");
+    }
+    // A JSON object is a recording's first line, by name .json or not.
+    std::fs::write(&f, r#"{"frames": [[1, 2, 3]]}"#).unwrap();
+    assert!(!reads_as_table(&f));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

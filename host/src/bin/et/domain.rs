@@ -40,6 +40,22 @@ pub(crate) fn count(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, Stri
     whole(lo, hi)
 }
 
+/// A frame's index, from 0: `-1` (Python's last) is said as not counted from the end.
+pub(crate) fn frame_index() -> impl Fn(&str) -> Result<usize, String> + Clone {
+    move |text| {
+        count(0, usize::MAX)(text).map_err(|e| {
+            if text.trim().starts_with('-') {
+                format!(
+                    "{e} (frames are counted from 0 at the file's first, not from its end: \
+                     without --frame the last is imaged)"
+                )
+            } else {
+                e
+            }
+        })
+    }
+}
+
 /// A whole number of the flag's type from `lo` to `hi`, both included.
 pub(crate) fn whole<T>(lo: T, hi: T) -> impl Fn(&str) -> Result<T, String> + Clone
 where

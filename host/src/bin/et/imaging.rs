@@ -112,8 +112,8 @@ pub(crate) struct ReconstructArgs {
     /// volts: a CSV with one frame per row (header optional; `,` `;`, tab or spaces), a NumPy .npy
     /// (2-D, frames as rows), an .npz array (FILE.npz:NAME) or a MATLAB .mat variable
     /// (version 5 or 7: FILE.mat:VARIABLE, or a struct's field as EIDORS keeps its data,
-    /// FILE.mat:vi.meas). A matrix whose columns are the frames (MATLAB's habit) is read
-    /// transposed.
+    /// FILE.mat:vi.meas), or a JSON array of frames (json.dump(F.tolist())). A matrix whose
+    /// columns are the frames (MATLAB's habit) is read transposed.
     #[arg(long, value_name = "FILE")]
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as
@@ -150,7 +150,7 @@ pub(crate) struct ReconstructArgs {
     skip_electrodes: Vec<u16>,
     /// With --frames: which frame to image (0-based; default the last).
     #[arg(long, requires = "frames", conflicts_with_all = ["all", "range"],
-          value_parser = crate::domain::count(0, usize::MAX))]
+          value_parser = crate::domain::frame_index())]
     frame: Option<usize>,
     /// With --frames: image every frame after the reference, set up once: each frame's
     /// objects and touches as a JSON line on standard output (`frame`, `alpha`, `noise`,

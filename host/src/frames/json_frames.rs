@@ -1,0 +1,287 @@
+//! Frames from JSON: an array of frames, each an array of numbers (Python's
+//! `json.dump(F.tolist())`, MATLAB's `jsonencode(F)`, pandas' `to_json(orient="values")`) or
+//! an object of named values (pandas' `orient="records"`, its columns named as no frame's
+//! values skipped as a CSV's are), or one frame's array of numbers; `null` (and Python's
+//! `NaN`) a value missing.
+
+use std::fmt;
+use std::path::Path;
+
+use nalgebra::DMatrix;
+use serde::Deserialize;
+use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
+
+use super::{FramesError, FramesFault, content};
+
+/// One value of a frame as the file writes it.
+enum Cell {
+    /// A number.
+    Number(f64),
+    /// `null`: a value missing.
+    Missing,
+    /// Anything else, as said: `"text"`, `true`, an array, an object.
+    Other(Box<str>),
+}
+
+/// One element of the top-level array: a frame (by position or by name), or a value (the
+/// file is then one frame).
+enum Item {
+    /// `[v0, v1, ...]`.
+    Values(Vec<Cell>),
+    /// `{"v0": ..., "v1": ...}`, in the file's order.
+    Named(Vec<(String, Cell)>),
+    /// A value alone.
+    Value(Cell),
+}
+
+/// The visitor of a [`Cell`] or an [`Item`]: `nested` says whether arrays and objects are
+/// frames (an item) or values in the wrong place (a cell).
+struct Visit {
+    nested: bool,
+}
+
+impl<'de> Visitor<'de> for Visit {
+    type Value = Item;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a frame or a value")
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Item, E> {
+        Ok(Item::Value(Cell::Number(v)))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Item, E> {
+        Ok(Item::Value(Cell::Number(v as f64)))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Item, E> {
+        Ok(Item::Value(Cell::Number(v as f64)))
+    }
+    fn visit_unit<E>(self) -> Result<Item, E> {
+        Ok(Item::Value(Cell::Missing))
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Item, E> {
+        Ok(Item::Value(Cell::Other(v.to_string().into())))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Item, E> {
+        let shown: String = v.chars().take(40).collect();
+        Ok(Item::Value(Cell::Other(format!("\"{shown}\"").into())))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Item, A::Error> {
+        if !self.nested {
+            while seq.next_element::<IgnoredAny>()?.is_some() {}
+            return Ok(Item::Value(Cell::Other("an array".into())));
+        }
+        let mut cells = Vec::with_capacity(seq.size_hint().unwrap_or(0));
+        while let Some(CellOf(cell)) = seq.next_element()? {
+            cells.push(cell);
+        }
+        Ok(Item::Values(cells))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Item, A::Error> {
+        if !self.nested {
+            while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+            return Ok(Item::Value(Cell::Other("an object".into())));
+        }
+        let mut cells = Vec::new();
+        while let Some((name, CellOf(cell))) = map.next_entry::<String, CellOf>()? {
+            cells.push((name, cell));
+        }
+        Ok(Item::Named(cells))
+    }
+}
+
+/// A [`Cell`], deserialized.
+struct CellOf(Cell);
+
+impl<'de> Deserialize<'de> for CellOf {
+    fn deserialize<D: de::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match d.deserialize_any(Visit { nested: false })? {
+            Item::Value(cell) => Ok(Self(cell)),
+            _ => Ok(Self(Cell::Other("an array".into()))),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Item {
+    fn deserialize<D: de::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(Visit { nested: true })
+    }
+}
+
+/// The frames of a JSON array, one per row, and what is said of them.
+pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
+    let fault = |detail: String| content(path, 0, FramesFault::Json(detail));
+    let unquoted = python_nan(text);
+    let items: Vec<Item> = serde_json::from_str(unquoted.as_deref().unwrap_or(text))
+        .map_err(|e| fault(not_json(text, &e)))?;
+    if items.is_empty() {
+        return Err(content(path, 0, FramesFault::NoFrames { header: false }));
+    }
+    let mut said = String::from("a JSON array of frames, ");
+    if items.iter().all(|i| matches!(i, Item::Value(_))) {
+        said = String::from("a JSON array of values (one frame), ");
+        let cells: Vec<Cell> = (items.into_iter())
+            .filter_map(|i| match i {
+                Item::Value(c) => Some(c),
+                _ => None,
+            })
+            .collect();
+        let values = numbers(&cells, |j| format!("value {j} (from 0)")).map_err(fault)?;
+        return Ok((DMatrix::from_row_slice(1, values.len(), &values), said));
+    }
+    let mut names: Option<Vec<String>> = None;
+    let (mut values, mut width) = (Vec::new(), None);
+    let n = items.len();
+    // (Each frame's cells freed as it is read: 24 bytes a value, then 8.)
+    for (r, item) in items.into_iter().enumerate() {
+        let row: Vec<f64> = match &item {
+            Item::Value(_) => {
+                let detail = format!("element {r} (from 0) is a value among frames (arrays)");
+                return Err(fault(detail));
+            }
+            Item::Values(cells) => numbers(cells, |j| format!("frame {r}, value {j} (from 0)")),
+            Item::Named(cells) => {
+                let keys: Vec<String> = cells.iter().map(|(k, _)| k.clone()).collect();
+                let first = names.get_or_insert_with(|| keys.clone());
+                if *first != keys {
+                    let detail = format!(
+                        "frame {r} (from 0) names other values than the first (its keys, in \
+                         order: {})",
+                        keys.join(", ")
+                    );
+                    return Err(fault(detail));
+                }
+                let kept: Vec<Cell> = (cells.iter())
+                    .filter(|(k, _)| !skipped(k))
+                    .map(|(k, c)| match c {
+                        Cell::Number(v) => {
+                            Cell::Number(*v * super::csv_frames::in_name(k).map_or(1.0, |u| u.1))
+                        }
+                        Cell::Missing => Cell::Missing,
+                        Cell::Other(o) => Cell::Other(o.clone()),
+                    })
+                    .collect();
+                numbers(&kept, |j| format!("frame {r}, value {j} (from 0)"))
+            }
+        }
+        .map_err(fault)?;
+        let w = *width.get_or_insert(row.len());
+        if row.len() != w {
+            let detail = format!("frame {r} (from 0) has {} values, the first {w}", row.len());
+            return Err(fault(detail));
+        }
+        values.extend(row);
+    }
+    if let Some(names) = names {
+        let units: Vec<String> = (names.iter())
+            .filter(|n| !skipped(n))
+            .filter_map(|n| super::csv_frames::in_name(n))
+            .filter(|(_, per)| *per != 1.0)
+            .map(|(word, per)| format!("{word} x {per:e}"))
+            .fold(Vec::new(), |mut all, u| {
+                if !all.contains(&u) {
+                    all.push(u);
+                }
+                all
+            });
+        let left: Vec<String> = (names.iter())
+            .filter(|n| skipped(n))
+            .map(|n| format!("'{n}'"))
+            .collect();
+        said = String::from("a JSON array of frames by name, ");
+        if !left.is_empty() {
+            said.push_str(&format!(
+                "the values named {} skipped (the rows' numbers, times, sessions or targets by \
+                 name, not a frame's values), ",
+                left.join(", ")
+            ));
+        }
+        if !units.is_empty() {
+            said.push_str(&format!(
+                "its values read as volts ({}, as their names say), ",
+                units.join(", ")
+            ));
+        }
+    }
+    let w = width.unwrap_or(0);
+    if w == 0 {
+        return Err(content(path, 0, FramesFault::NoFrames { header: false }));
+    }
+    // Row after row is a w x n column-major matrix: transposed, n x w.
+    Ok((DMatrix::from_vec(w, n, values).transpose(), said))
+}
+
+/// Whether a frame's value of this name is left out, as a CSV's column of the name is.
+fn skipped(name: &str) -> bool {
+    et_learn::dataset::not_a_feature(name) || et_learn::dataset::is_target_name(name)
+}
+
+/// The numbers of `cells` (NaN where missing), or what is wrong with the first that is not
+/// one (`at` names it).
+fn numbers(cells: &[Cell], at: impl Fn(usize) -> String) -> Result<Vec<f64>, String> {
+    (cells.iter().enumerate())
+        .map(|(j, c)| match c {
+            Cell::Number(v) => Ok(*v),
+            Cell::Missing => Ok(f64::NAN),
+            Cell::Other(o) => Err(format!("{}: {o} is not a number", at(j))),
+        })
+        .collect()
+}
+
+/// `text` with Python's `NaN` (which `json.dump` writes, and JSON has not) as `null` outside
+/// strings; None where there is none.
+fn python_nan(text: &str) -> Option<String> {
+    let b = text.as_bytes();
+    let (mut in_string, mut escaped, mut found) = (false, false, Vec::new());
+    for i in 0..b.len() {
+        match (in_string, b[i]) {
+            (true, _) if escaped => escaped = false,
+            (true, b'\\') => escaped = true,
+            (_, b'"') => in_string = !in_string,
+            (false, b'N') if b[i..].starts_with(b"NaN") => found.push(i),
+            _ => {}
+        }
+    }
+    if found.is_empty() {
+        return None;
+    }
+    let mut out = String::with_capacity(text.len() + found.len());
+    let mut from = 0;
+    for i in found {
+        out.push_str(&text[from..i]);
+        out.push_str("null");
+        from = i + 3;
+    }
+    out.push_str(&text[from..]);
+    Some(out)
+}
+
+/// What is said of a file that is not JSON where `e` stopped reading it: the line and column,
+/// the text there, and Python's infinities named.
+fn not_json(text: &str, e: &serde_json::Error) -> String {
+    let line = text.lines().nth(e.line().saturating_sub(1)).unwrap_or("");
+    let near: String = (line.chars())
+        .skip(e.column().saturating_sub(1))
+        .take(24)
+        .collect();
+    let near = near.trim();
+    if e.is_eof() {
+        return format!(
+            "not JSON: it ends at line {} before its arrays close (a copy cut short?)",
+            e.line()
+        );
+    }
+    let infinite = ["Infinity", "-Infinity", "inf", "-inf"]
+        .iter()
+        .any(|w| near.starts_with(w));
+    format!(
+        "not JSON at line {}, column {} (at '{near}'){}",
+        e.line(),
+        e.column(),
+        if infinite {
+            ": an infinite value (Python's json.dump writes Infinity), which et refuses in a \
+             frame: leave that frame out"
+        } else {
+            ""
+        }
+    )
+}
