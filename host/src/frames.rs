@@ -17,7 +17,7 @@ mod error;
 mod json_frames;
 mod mat;
 use csv_frames::csv_matrix;
-use error::said_list;
+pub use error::said_list;
 pub use error::{FramesError, FramesFault};
 use mat::mat_matrix;
 pub use mat::mat_v5;

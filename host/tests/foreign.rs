@@ -853,6 +853,47 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
             ),
         "{said}"
     );
+    // A frame with values missing (a NaN: a DAQ's dropped sample) is skipped by --all and
+    // said, its image NaN in the stack in its place, every other frame imaged (one such
+    // frame refused the whole run).
+    let mut m = et_host::frames::read(Path::new(npy), 2_304).unwrap().frames;
+    m[3][7] = f32::NAN;
+    let gappy = d.join("gappy.npy");
+    let matrix = nalgebra::DMatrix::from_fn(m.len(), 2_304, |i, k| f64::from(m[i][k]));
+    std::fs::write(&gappy, et_learn::npz::npy_of_matrix(&matrix)).unwrap();
+    let mut args = base.to_vec();
+    args[4] = gappy.to_str().unwrap();
+    args.extend(["--all", "--image-out", stack.to_str().unwrap()]);
+    let out = et(&args);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    let imaged: Vec<u64> = (String::from_utf8_lossy(&out.stdout).lines())
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["frame"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(imaged, [1, 2, 4, 5]);
+    assert!(
+        said.contains("gappy.npy: 1 frame skipped, with values missing")
+            && said.contains("frame 3 (from 0); its image in")
+            && said.contains("(5 x 64 x 64 pixels"),
+        "{said}"
+    );
+    let bytes = std::fs::read(&stack).unwrap();
+    let values: Vec<f64> = (bytes[bytes.len() - 5 * 64 * 64 * 8..].chunks(8))
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    let image = |i: usize| &values[i * 64 * 64..(i + 1) * 64 * 64];
+    assert!(
+        image(2).iter().all(|v| v.is_nan()),
+        "frame 3's image is NaN"
+    );
+    assert!(
+        image(3).iter().any(|v| v.is_finite()),
+        "frame 4's is imaged"
+    );
 }
 
 /// A scene's protocol file is read once per run, however often the run asks for the

@@ -305,7 +305,7 @@ fn protocol_said(others: usize) -> String {
 }
 
 /// Indices as a list, the first eight and how many more.
-pub(super) fn said_list(indices: &[usize]) -> String {
+pub fn said_list(indices: &[usize]) -> String {
     let shown: Vec<String> = indices.iter().take(8).map(ToString::to_string).collect();
     match indices.len() {
         n if n > 8 => format!("{}, ... ({n} in all)", shown.join(", ")),

@@ -347,6 +347,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
         reference_frames,
         frames: chosen,
         truth,
+        skipped,
     } = chosen;
     let Some((_, v1)) = chosen.last() else {
         bail!("no frames to image");
@@ -374,7 +375,7 @@ pub(crate) fn reconstruct_cmd(args: &ReconstructArgs, force: bool) -> Result<()>
     }
     let set_up = recon.set_up_timings;
     if args.all || args.range.is_some() {
-        let image = each_frame(args, &mut recon, reference, &chosen)?;
+        let image = each_frame(args, &mut recon, reference, &chosen, &skipped)?;
         let timings_s = frame_stages(args, &image, &set_up, (0.0, None), |_, _| ());
         return report(args, &recon, &image, &truth, background, timings_s, started);
     }

@@ -23,6 +23,8 @@ pub(super) struct Chosen {
     pub(super) reference_frames: Vec<Vec<f32>>,
     pub(super) frames: Vec<(usize, Vec<f32>)>,
     pub(super) truth: Vec<et_sim::still::Truth>,
+    /// The frames of `--all` or `--range` left out for values missing (0-based, ascending).
+    pub(super) skipped: Vec<usize>,
 }
 
 /// The frames to image among `n`, of which those from `first` on may be imaged (the ones
@@ -128,6 +130,7 @@ pub(super) fn frames(
             reference_frames: Vec::new(),
             frames: vec![(0, f.v1)],
             truth: f.truth,
+            skipped: Vec::new(),
         });
     };
     let path = args
@@ -148,15 +151,15 @@ pub(super) fn frames(
     else {
         bail!("{path}: {n} frames; need the reference frames 0..{reference} and later ones");
     };
+    let gaps: Vec<usize> = (range.clone().zip(imaged))
+        .filter(|(_, rec)| !rec.invalid.is_empty())
+        .map(|(i, _)| i)
+        .collect();
+    let skipped = skip_gaps(args, &path, &gaps, range.len());
     if let Some((i, rec)) = before
         .iter()
         .enumerate()
-        .chain(
-            imaged
-                .iter()
-                .enumerate()
-                .map(|(i, rec)| (range.start + i, rec)),
-        )
+        .chain((range.clone().zip(imaged)).filter(|(i, _)| !skipped.contains(i)))
         .find(|(_, rec)| !rec.invalid.is_empty())
     {
         bail!(
@@ -186,12 +189,12 @@ pub(super) fn frames(
     Ok(Chosen {
         reference,
         reference_frames,
-        frames: imaged
-            .iter()
-            .enumerate()
-            .map(|(i, rec)| (range.start + i, rec.voltages.clone()))
+        frames: (range.zip(imaged))
+            .filter(|(i, _)| !skipped.contains(i))
+            .map(|(i, rec)| (i, rec.voltages.clone()))
             .collect(),
         truth,
+        skipped,
     })
 }
 
@@ -315,14 +318,54 @@ pub(super) fn table_frames(
         }
     };
     let range = chosen(args, &path.display().to_string(), first, n)?;
-    frames.check_whole(path, range.clone(), "--frame or --range")?;
+    let gaps: Vec<usize> = (frames.gaps.iter().copied())
+        .filter(|i| range.contains(i))
+        .collect();
+    let skipped = skip_gaps(args, &path.display().to_string(), &gaps, range.len());
+    if skipped.is_empty() {
+        frames.check_whole(path, range.clone(), "--frame or --range")?;
+    }
     let imaged = frames.frames.drain(range.clone());
     Ok(Chosen {
         reference,
         reference_frames,
-        frames: range.zip(imaged).collect(),
+        frames: (range.zip(imaged))
+            .filter(|(i, _)| !skipped.contains(i))
+            .collect(),
         truth: Vec::new(),
+        skipped,
     })
+}
+
+/// Of `--all` or `--range`'s `chosen` frames, those with values missing (`gaps`: a DAQ's
+/// dropped sample, a recording's null) left out of the images and said: every other frame is
+/// imaged (one such frame refused the whole file). None under `--frame`, which names one
+/// frame, or where every frame chosen has values missing: those are refused by the frame.
+fn skip_gaps(args: &ReconstructArgs, path: &str, gaps: &[usize], chosen: usize) -> Vec<usize> {
+    if !(args.all || args.range.is_some()) || gaps.is_empty() || gaps.len() == chosen {
+        return Vec::new();
+    }
+    let one = gaps.len() == 1;
+    say!(
+        "note: {path}: {} skipped, with values missing (empty or NaN cells, a recording's null: \
+         values the system did not send): frame{} {} (from 0){}",
+        if one {
+            "1 frame".to_string()
+        } else {
+            format!("{} frames", gaps.len())
+        },
+        if one { "" } else { "s" },
+        et_host::frames::said_list(gaps),
+        args.image_out
+            .as_ref()
+            .map_or_else(String::new, |p| format!(
+                "; {} in {} {} NaN, so that it keeps one image a frame",
+                if one { "its image" } else { "their images" },
+                p.display(),
+                if one { "is" } else { "are" }
+            ))
+    );
+    gaps.to_vec()
 }
 
 /// One frame's line of `et reconstruct --all`.
@@ -344,6 +387,7 @@ pub(super) fn each_frame(
     recon: &mut et_recon::Reconstructor,
     reference: et_recon::Reference,
     chosen: &[(usize, Vec<f32>)],
+    skipped: &[usize],
 ) -> Result<et_recon::Image> {
     recon.set_reference(reference)?;
     // Objects and pixels are read, not the values on the mesh.
@@ -352,6 +396,8 @@ pub(super) fn each_frame(
     let sigma0 = recon.imager().sigma0;
     let (grid, n) = (recon.grid().clone(), chosen.len());
     let mut stack: Vec<f64> = Vec::new();
+    // A frame skipped (values missing) is a NaN image in the stack, in its place.
+    let (mut gaps, pixels) = (skipped.iter().peekable(), grid.height * grid.width);
     // Its time said a few seconds in (no bar: the lines go to standard output).
     let (mut pace, no_bar) = (
         et_host::pace::Pace::new("image", "frames", n as u64),
@@ -383,6 +429,9 @@ pub(super) fn each_frame(
             };
             out!("{}", serde_json::to_string(&line)?);
             if args.image_out.is_some() {
+                while gaps.next_if(|g| *g < i).is_some() {
+                    stack.extend(std::iter::repeat_n(f64::NAN, pixels));
+                }
                 grid.top_first_into(&image.pixels.pixels, 1.0 / sigma0, &mut stack);
             }
         }
@@ -394,13 +443,22 @@ pub(super) fn each_frame(
         1e3 * took / n.max(1) as f64
     );
     if let Some(path) = &args.image_out {
+        stack.extend(std::iter::repeat_n(f64::NAN, pixels * gaps.count()));
+        let n = n + skipped.len();
         let bytes = et_learn::npz::npy_of_array(&stack, &[n, grid.height, grid.width]);
         crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
         say!(
-            "wrote {} ({n} x {} x {} pixels, Delta sigma / sigma_0, top row first)",
+            "wrote {} ({n} x {} x {} pixels, Delta sigma / sigma_0, top row first{})",
             path.display(),
             grid.height,
-            grid.width
+            grid.width,
+            match skipped {
+                [] => String::new(),
+                gaps => format!(
+                    "; NaN for the frames skipped: {}",
+                    et_host::frames::said_list(gaps)
+                ),
+            }
         );
     }
     // The last frame's whole image, for --out.
