@@ -247,6 +247,21 @@ pub enum LiveError {
     /// A scan configuration the board cannot scan.
     #[error("scan configuration: {0}")]
     Config(#[from] ConfigError),
+    /// An electrode to leave out that is not the sheet's, as its user counts them
+    /// (`Processor::counted_from_zero`).
+    #[error(
+        "electrode {electrode}: the sheet's electrodes are {base} to {}{}",
+        u32::from(*base) + u32::from(*count) - 1,
+        if *base == 0 { String::new() } else { format!(" (its protocol file counts them from {base})") }
+    )]
+    Counted {
+        /// The electrode named.
+        electrode: u16,
+        /// The number of the first.
+        base: u16,
+        /// How many the sheet has.
+        count: u16,
+    },
     /// Electrodes that cannot be left out of the images (`Processor::set_left_out`).
     #[error("leaving electrodes out: {0}")]
     LeftOut(#[from] et_core::schedule::ScheduleError),

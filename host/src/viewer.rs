@@ -183,8 +183,10 @@ impl Viewer {
             let classifier = Model::load(path)?.into_board().map_err(error)?;
             (processor.set_classifier(classifier)).map_err(|e| error(e.into()))?;
         }
+        processor.set_electrode_base(source.electrode_base());
         if !options.left_out.is_empty() {
-            (processor.set_left_out(&options.left_out, source.config())).map_err(|e| match e {
+            let left_out = processor.counted_from_zero(&options.left_out)?;
+            (processor.set_left_out(&left_out, source.config())).map_err(|e| match e {
                 LiveError::LeftOut(e) => ViewerError::LeftOut(e),
                 other => other.into(),
             })?;
@@ -260,6 +262,7 @@ impl Viewer {
                 if sheet != self.sheet {
                     match Processor::new(&sheet.physical, self.processor.settings()) {
                         Ok(mut p) => {
+                            p.set_electrode_base(source.electrode_base());
                             // The model's classes are places on its own sheet: checked
                             // against the new one (it was moved over unchecked).
                             if let Some(c) = self.processor.classifier.take() {
@@ -427,11 +430,9 @@ impl Viewer {
                 sigma0: self.processor.imager().sigma0,
                 last: self.last.as_ref(),
                 sheet: &self.sheet.physical,
-                class_centres: self
-                    .processor
-                    .classifier
-                    .as_ref()
+                class_centres: (self.processor.classifier.as_ref())
                     .map(|c| c.file().centres.as_slice()),
+                electrode_base: self.processor.electrode_base(),
                 pressable: matches!(self.source, Some(Source::Sim(_))),
                 hint: self.options.screenshot.is_none(),
             };

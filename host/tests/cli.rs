@@ -2861,7 +2861,7 @@ fn an_electrode_left_out_live_streams_the_presses_it_hid() {
     for (skip, refused) in [
         (
             "16",
-            "--skip-electrodes: electrode 16 to leave out: the sheet has 16 (0 to 15)",
+            "--skip-electrodes: electrode 16: the sheet's electrodes are 0 to 15",
         ),
         (
             "0,1,2,3,4,5,6,7,8",

@@ -593,10 +593,39 @@ fn et_protocol_csv_is_a_protocol_file() {
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(
         out.status.success()
-            && said.contains("(its protocol file's rows are pp-pp's; its electrodes, counted from 1, are numbered from 0 here")
+            && said.contains(
+                "(its protocol file's rows are pp-pp's; its electrodes numbered from 1 here, as \
+                 the file counts them)"
+            )
             && String::from_utf8_lossy(&out.stdout).lines().count() == events,
         "{said}"
     );
+    // `--skip-electrodes` counts as the file does, and so does what is said of them (they
+    // were counted from 0 whatever the file: its electrode 4 was "3").
+    for (skip, said_of_it) in [
+        ("4", "note: --skip-electrodes 4: "),
+        (
+            "0",
+            "--skip-electrodes: electrode 0: the sheet's electrodes are 1 to 16 (its protocol \
+             file counts them from 1)",
+        ),
+        ("17", "electrode 17: the sheet's electrodes are 1 to 16"),
+    ] {
+        let path = counted_from_1.to_str().unwrap();
+        let out = et(&[
+            "stream",
+            "--replay",
+            csv_s,
+            "--scene",
+            path,
+            "--reference",
+            "1",
+            "--skip-electrodes",
+            skip,
+        ]);
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(said.contains(said_of_it), "{skip}: {said}");
+    }
     let mut lines: Vec<&str> = text.lines().collect();
     lines.swap(1, 2);
     std::fs::write(d.join("swapped.csv"), lines.join("\n") + "\n").unwrap();

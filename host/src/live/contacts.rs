@@ -52,12 +52,14 @@ impl Contact {
         }
     }
 
-    /// What is said of it beside a frame, numbered from 0 as the board counts: `retake`
-    /// says how V_0 is taken again (et stream: start it again; the viewer: Tare), `leave`
-    /// how an electrode is left out. None for the first coming off (the caller says it with
-    /// its misfit, [`ElectrodeMisfit::said`]).
+    /// What is said of it beside a frame, numbered from `base` (0 as the board counts, 1 as
+    /// a protocol file counting from 1 does): `retake` says how V_0 is taken again (et
+    /// stream: start it again; the viewer: Tare), `leave` how an electrode is left out. None
+    /// for the first coming off (the caller says it with its misfit,
+    /// [`ElectrodeMisfit::said`]).
     #[must_use]
-    pub fn said(&self, retake: &str, leave: &str) -> Option<String> {
+    pub fn said(&self, base: u16, retake: &str, leave: &str) -> Option<String> {
+        let electrode = u32::from(self.electrode()) + u32::from(base);
         match self {
             Self::Off { times: 1, .. } => None,
             Self::Off {
@@ -77,28 +79,24 @@ impl Contact {
                     n => format!("{n}th"),
                 };
                 Some(format!(
-                    "electrode {} is off again (the {time} time{back}; its values {:.0} % off \
+                    "electrode {electrode} is off again (the {time} time{back}; its values {:.0} % off \
                      the model): a contact that opens now and then? Fix its clip, or \
                      {leave}{more}",
-                    misfit.electrode,
                     100.0 * misfit.own
                 ))
             }
             Self::Back {
-                electrode,
                 off_since,
                 since,
                 in_v0: false,
+                ..
             } => Some(format!(
                 "electrode {electrode}'s values fit the model again from frame {since}{}: it \
                  is back, and the images with it",
                 off_since.map_or(String::new(), |f| format!(" (off since frame {f})"))
             )),
             Self::Back {
-                electrode,
-                since,
-                in_v0: true,
-                ..
+                since, in_v0: true, ..
             } => Some(format!(
                 "electrode {electrode}'s values fit the model again from frame {since}, but \
                  V_0 was taken while it was off: its changes from V_0 are the contact's, not \

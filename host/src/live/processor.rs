@@ -228,6 +228,9 @@ pub struct Processor {
     left_out: Vec<u16>,
     /// Settings; change `alpha` or `s` through [`Processor::set_settings`].
     settings: Settings,
+    /// The number of the first electrode in what is said of electrodes (the source's,
+    /// [`crate::live::Source::electrode_base`]); 0-based everywhere else.
+    electrode_base: u16,
     projection: Option<Projection>,
     /// The grid's pixels inside the sheet, in the projection's row order.
     inside: Vec<usize>,
@@ -309,6 +312,7 @@ impl Processor {
             at,
             left_out: Vec::new(),
             settings,
+            electrode_base: 0,
             projection: None,
             inside,
             inside_index,
@@ -380,7 +384,7 @@ impl Processor {
     #[must_use]
     pub fn v0_electrode_said(&self) -> Option<(String, Vec<u16>)> {
         let detached = self.recon.detached_electrodes(&self.at.keep(&self.v0()?));
-        let (said, _) = et_recon::background::detached_said(&detached, 0)?;
+        let (said, _) = et_recon::background::detached_said(&detached, self.electrode_base)?;
         let check = if detached.len() == 1 {
             "its clip and wire"
         } else {
@@ -447,6 +451,36 @@ impl Processor {
         self.at = at;
         self.left_out = left_out;
         Ok((k - kept, k))
+    }
+
+    /// Numbers electrodes from `base` in what it says of them (the source's,
+    /// [`crate::live::Source::electrode_base`]: a protocol file counting from 1).
+    pub fn set_electrode_base(&mut self, base: u16) {
+        self.electrode_base = base;
+    }
+
+    /// The number of the first electrode in what is said of electrodes.
+    #[must_use]
+    pub fn electrode_base(&self) -> u16 {
+        self.electrode_base
+    }
+
+    /// `electrodes` as the source's user counts them (from [`Self::electrode_base`]: 1 for
+    /// a protocol file counting from 1) as the board does, from 0 ([`Self::set_left_out`]).
+    ///
+    /// # Errors
+    /// [`LiveError::Counted`] for one outside the sheet's, said as the user counts.
+    pub fn counted_from_zero(&self, electrodes: &[u16]) -> Result<Vec<u16>, LiveError> {
+        let (base, count) = (self.electrode_base, u16::from(self.at.config.electrodes));
+        (electrodes.iter())
+            .map(|&e| {
+                (e.checked_sub(base).filter(|z| *z < count)).ok_or(LiveError::Counted {
+                    electrode: e,
+                    base,
+                    count,
+                })
+            })
+            .collect()
     }
 
     /// The electrodes whose values are left out of the images (0-based, ascending).

@@ -18,6 +18,8 @@ pub fn default_scene() -> Result<Scene, SceneError> {
 pub struct SimSource {
     /// The scene's name.
     pub name: String,
+    /// The number of its first electrode as its user counts them (its protocol file's base).
+    pub electrode_base: u16,
     run: Run,
     started: Instant,
     produced: u64,
@@ -38,6 +40,7 @@ impl SimSource {
         run.hold_scene(true);
         Ok(Self {
             name: name.into(),
+            electrode_base: scene.electrode_base(),
             run,
             started: Instant::now(),
             produced: 0,
@@ -86,6 +89,9 @@ pub struct ReplaySource {
     pub paused: bool,
     /// Start again at the end.
     pub looping: bool,
+    /// The number of its first electrode as its user counts them: 0 for a recording (et's),
+    /// the scene's protocol file's base for another system's frames.
+    pub electrode_base: u16,
 }
 
 impl ReplaySource {
@@ -110,6 +116,7 @@ impl ReplaySource {
             position: 0,
             paused: false,
             looping: true,
+            electrode_base: 0,
         })
     }
 
@@ -178,6 +185,7 @@ impl ReplaySource {
             position: 0,
             paused: false,
             looping: true,
+            electrode_base: scene.electrode_base(),
         })
     }
 
@@ -384,6 +392,18 @@ pub struct Health {
 }
 
 impl Source {
+    /// The number of the first electrode as the source's user counts them, in what is said
+    /// of electrodes: a scene's protocol file's base (1 for a file counting from 1), else 0
+    /// (et's and the board's numbering).
+    #[must_use]
+    pub fn electrode_base(&self) -> u16 {
+        match self {
+            Source::Sim(s) => s.electrode_base,
+            Source::Replay(r) => r.electrode_base,
+            Source::Port(_) => 0,
+        }
+    }
+
     /// What it is, for people.
     #[must_use]
     pub fn describe(&self) -> String {

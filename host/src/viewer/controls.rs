@@ -193,8 +193,11 @@ impl Viewer {
     /// leave out those V_0 names detached or broken (a clip off the sheet, a wire off its
     /// channel: their values would place touches wrongly, or hide them).
     fn left_out_line(&mut self, ui: &mut egui::Ui) {
+        let base = u32::from(self.processor.electrode_base());
         let named = |electrodes: &[u16]| {
-            let numbers: Vec<String> = electrodes.iter().map(u16::to_string).collect();
+            let numbers: Vec<String> = (electrodes.iter())
+                .map(|&e| (u32::from(e) + base).to_string())
+                .collect();
             let noun = if electrodes.len() == 1 {
                 "electrode"
             } else {

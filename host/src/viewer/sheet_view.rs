@@ -79,6 +79,8 @@ pub(super) struct Shown<'a> {
     pub pressable: bool,
     /// Say what the mouse does when hovered (not in screenshots).
     pub hint: bool,
+    /// The number of the first electrode (1 where the scene's protocol file counts from 1).
+    pub electrode_base: u16,
 }
 
 /// What the mouse did to the sheet.
@@ -174,7 +176,7 @@ impl SheetView {
             .max(1e-6);
         self.image(ui.ctx(), &canvas, &values, hi);
         let mut drawn = Drawn::default();
-        electrodes(&canvas, shown.sheet, &mut drawn);
+        electrodes(&canvas, shown.sheet, shown.electrode_base, &mut drawn);
         let x_axis = axes(&canvas, &mut drawn);
         if self.show_specks {
             drawn.specks = specks(&canvas, shown.last, &values);
@@ -252,8 +254,8 @@ impl SheetView {
     }
 }
 
-/// The outline and the electrodes, numbered outside it.
-fn electrodes(canvas: &Canvas, sheet: &et_core::sheet::Sheet, drawn: &mut Drawn) {
+/// The outline and the electrodes, numbered outside it from `base`.
+fn electrodes(canvas: &Canvas, sheet: &et_core::sheet::Sheet, base: u16, drawn: &mut Drawn) {
     let shape = &sheet.shape;
     let outline: Vec<Pos2> = (0..=240)
         .map(|k| canvas.to_screen(shape.boundary_point(f64::from(k) / 240.0)))
@@ -268,7 +270,7 @@ fn electrodes(canvas: &Canvas, sheet: &et_core::sheet::Sheet, drawn: &mut Drawn)
         .into_iter()
         .enumerate()
     {
-        let p = shape.boundary_point(t);
+        let (p, e) = (shape.boundary_point(t), e + usize::from(base));
         let (a, b) = (
             shape.boundary_point(t - 1e-3),
             shape.boundary_point(t + 1e-3),

@@ -149,13 +149,14 @@ impl Viewer {
         let said = match &contact {
             Contact::Off {
                 misfit, times: 1, ..
-            } => misfit.said(0).map(|said| {
+            } => misfit.said(self.processor.electrode_base()).map(|said| {
                 format!(
                     "{said} Not in V_0: a clip or wire come off, or a contact that opens now \
                      and then? Check it, or leave it out (the side panel)"
                 )
             }),
             other => other.said(
+                self.processor.electrode_base(),
                 "take V_0 again untouched (Tare)",
                 "leave it out (the side panel)",
             ),

@@ -415,3 +415,19 @@ fn the_flags_that_make_values_wrong_are_said() {
         );
     }
 }
+
+/// What is said of an electrode's contact numbers it as the source's user counts (a protocol
+/// file's from 1): it was counted from 0 whatever the file.
+#[test]
+fn contacts_are_said_as_their_user_counts_electrodes() {
+    let back = Contact::Back {
+        electrode: 3,
+        off_since: Some(5),
+        since: 20,
+        in_v0: false,
+    };
+    for (base, said) in [(0, "electrode 3's values"), (1, "electrode 4's values")] {
+        let s = back.said(base, "retake", "leave").unwrap();
+        assert!(s.starts_with(said), "{s}");
+    }
+}

@@ -192,8 +192,8 @@ impl Scene {
     }
 
     /// Where the scene's protocol is a file whose rows are a built-in protocol's (scanned and
-    /// played as that one), the words saying so and how its electrodes are numbered here, the
-    /// board's way: " (its protocol file's rows are pp-pp's)".
+    /// played as that one), the words saying so and how its electrodes are numbered in what
+    /// is said of them (as the file counts them): " (its protocol file's rows are pp-pp's)".
     #[must_use]
     pub fn file_said(&self) -> Option<String> {
         if !matches!(self.scan.protocol, ProtocolSpec::File(_)) {
@@ -202,10 +202,7 @@ impl Scene {
         let (kind, _) = self.built_in_of_file().ok()??;
         let base = match self.electrode_base() {
             0 => String::new(),
-            b => format!(
-                "; its electrodes, counted from {b}, are numbered from 0 here, as the board \
-                 counts them: its electrode {b} is electrode 0"
-            ),
+            b => format!("; its electrodes numbered from {b} here, as the file counts them"),
         };
         Some(format!(
             " (its protocol file's rows are {}'s{base})",

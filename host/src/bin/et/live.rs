@@ -40,8 +40,8 @@ pub(crate) struct SourceArgs {
           value_parser = crate::domain::count(1, REFERENCE_MOST))]
     reference: usize,
     /// Leave out of the images every value these electrodes drive or measure, counted from 0
-    /// as the board counts them (several: 3,7): a detached or broken electrode, which is
-    /// named once V_0 is taken. At most half the electrodes; a model still classifies whole
+    /// as the board counts them, or from 1 where the scene's protocol file does (several:
+    /// 3,7): a detached or broken electrode, which is named once V_0 is taken. At most half the electrodes; a model still classifies whole
     /// frames.
     #[arg(long, value_name = "E,...", value_delimiter = ',',
           value_parser = crate::domain::electrode)]
@@ -73,17 +73,22 @@ impl SourceArgs {
         if self.skip_electrodes.is_empty() {
             return Ok(());
         }
+        // As the source's user counts them (a protocol file's from 1), as every electrode
+        // et stream names is.
+        let said = |e: et_host::live::LiveError| anyhow::anyhow!("--skip-electrodes: {e}");
+        let zero_based = processor
+            .counted_from_zero(&self.skip_electrodes)
+            .map_err(said)?;
         let (left_out, k) = processor
-            .set_left_out(&self.skip_electrodes, scan)
+            .set_left_out(&zero_based, scan)
             .map_err(|e| match e {
                 et_host::live::LiveError::LeftOut(e) => anyhow::anyhow!("--skip-electrodes: {e}"),
                 other => other.into(),
             })?;
-        let named: Vec<String> = processor.left_out().iter().map(u16::to_string).collect();
         say!(
             "note: --skip-electrodes {}: {left_out} of {}'s {k} values left out of the images \
              (every value they drive or measure)",
-            named.join(","),
+            skip_with(processor, &[]),
             scan.map_or("the frame", |c| c.protocol.name())
         );
         Ok(())
@@ -223,6 +228,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
             )
         })?;
     }
+    processor.set_electrode_base(source.electrode_base());
     args.source.leave_out(&mut processor, source.config())?;
     if let Some(said) = processor.classifier_reads_said(processor.left_out()) {
         say!("warning: --skip-electrodes: {said}");
@@ -412,7 +418,7 @@ fn say_of_the_reference(processor: &et_host::live::Processor) -> Vec<u16> {
     let detached = processor.v0_electrode_said().map(|(said, electrodes)| {
         say!(
             "warning: {said}; --skip-electrodes {} leaves {} values out",
-            skip_with(processor.left_out(), &electrodes),
+            skip_with(processor, &electrodes),
             if electrodes.len() + processor.left_out().len() == 1 {
                 "its"
             } else {
@@ -443,18 +449,22 @@ fn say_contact(contact: &et_host::live::Contact, processor: &et_host::live::Proc
     let electrode = contact.electrode();
     let leave = format!(
         "--skip-electrodes {} leaves its values out",
-        skip_with(processor.left_out(), &[electrode])
+        skip_with(processor, &[electrode])
     );
     let said = match contact {
         Contact::Off {
             misfit, times: 1, ..
-        } => misfit.said(0).map(|said| {
+        } => misfit.said(processor.electrode_base()).map(|said| {
             format!(
                 "{said} Not in V_0: a clip or wire come off while streaming, or a contact that \
                  opens now and then? Its values place touches wrongly: {leave}"
             )
         }),
-        other => other.said("start et stream again with the sheet untouched", &leave),
+        other => other.said(
+            processor.electrode_base(),
+            "start et stream again with the sheet untouched",
+            &leave,
+        ),
     };
     let Some(said) = said else { return };
     match contact {
@@ -468,12 +478,16 @@ fn say_contact(contact: &et_host::live::Contact, processor: &et_host::live::Proc
     }
 }
 
-/// `--skip-electrodes`' value for the electrodes `left_out` and `more`: "3,7".
-fn skip_with(left_out: &[u16], more: &[u16]) -> String {
-    let mut skip = [left_out, more].concat();
+/// `--skip-electrodes`' value for the electrodes `processor` leaves out and `more` (0-based),
+/// as the source's user counts them: "3,7".
+fn skip_with(processor: &et_host::live::Processor, more: &[u16]) -> String {
+    let mut skip = [processor.left_out(), more].concat();
     skip.sort_unstable();
     skip.dedup();
-    let skip: Vec<String> = skip.iter().map(u16::to_string).collect();
+    let base = u32::from(processor.electrode_base());
+    let skip: Vec<String> = (skip.iter())
+        .map(|&e| (u32::from(e) + base).to_string())
+        .collect();
     skip.join(",")
 }
 
