@@ -15,6 +15,7 @@ mod arrays;
 mod csv_frames;
 mod error;
 mod json_frames;
+mod lvm;
 mod mat;
 use csv_frames::csv_matrix;
 pub use error::said_list;
@@ -97,6 +98,10 @@ fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), Frame
             .starts_with('[') =>
         {
             json_frames::json_matrix(path, text)
+        }
+        _ if lvm::is_lvm(text) => {
+            let (matrix, said) = csv_matrix(path, &lvm::as_csv(text))?;
+            Ok((matrix, format!("a LabVIEW measurement file, {said}")))
         }
         _ => csv_matrix(path, text),
     }

@@ -385,6 +385,35 @@ fn frames_json() -> String {
     format!("[{}]", rows.join(",\n "))
 }
 
+/// The frames as LabVIEW's Write To Measurement File writes them (`.lvm`): its headers, a time
+/// column, units, a comment on one row, two segments.
+fn frames_lvm() -> String {
+    let m = frames_matrix();
+    let tabs = |cells: Vec<String>| cells.join("\t");
+    let each = |word: &str| tabs(vec![word.to_string(); m.ncols()]);
+    let mut text = "LabVIEW Measurement\t\nWriter_Version\t2\nSeparator\tTab\n\
+                    Decimal_Separator\t.\n***End_of_Header***\t\n\t\n"
+        .to_string();
+    for (segment, rows) in [(0, 0..3), (1, 3..m.nrows())] {
+        text += &format!(
+            "Channels\t{}\nY_Unit_Label\t{}\n***End_of_Header***\t\nX_Value\t{}\tComment\n",
+            m.ncols(),
+            each("mV"),
+            each("Untitled")
+        );
+        for f in rows {
+            let row: Vec<String> = m.row(f).iter().map(|v| format!("{:e}", v * 1e3)).collect();
+            let comment = if segment == 0 && f == 1 {
+                "\tpressed"
+            } else {
+                ""
+            };
+            text += &format!("{}\t{}{comment}\n", f as f64 * 0.01, tabs(row));
+        }
+    }
+    text
+}
+
 /// The frames as another system's `.npz` (one array, "frames").
 fn frames_npz() -> Vec<u8> {
     let mut w = et_learn::npz::Writer::new();
@@ -600,6 +629,11 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             name: "frames CSV as a DAQ writes it",
             seeds: vec![frames_daq_csv().into()],
             parse: |p| read_frames(&p[0], "csv"),
+        },
+        Parser {
+            name: "frames LabVIEW .lvm",
+            seeds: vec![frames_lvm().into()],
+            parse: |p| read_frames(&p[0], "lvm"),
         },
         Parser {
             name: "frames JSON",

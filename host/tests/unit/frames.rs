@@ -665,6 +665,76 @@ fn frames_as_json_arrays_are_read() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// LabVIEW's measurement files (`.lvm`, Write To Measurement File): its headers, time and
+/// comment columns left out, its units read, its segments one after another, decimal commas;
+/// a message names the file's own line (they were "'Writer_Version' is not a number").
+#[test]
+fn labview_measurement_files_are_read() {
+    let dir = tmp("lvm");
+    let f = dir.join("run.lvm");
+    let head = |separator: &str, decimal: &str| {
+        format!(
+            "LabVIEW Measurement\t\nWriter_Version\t2\nReader_Version\t2\nSeparator\t{separator}\n\
+             Decimal_Separator\t{decimal}\nMulti_Headings\tNo\nX_Columns\tOne\n\
+             Time_Pref\tRelative\nDate\t2026/12/07\nTime\t10:00:00.000\n***End_of_Header***\t\n\t\n"
+        )
+    };
+    let segment = |units: &str| {
+        format!(
+            "Channels\t3\t\nSamples\t2\t2\t2\t\nY_Unit_Label\t{units}\t{units}\t{units}\t\n\
+             X_Dimension\tTime\tTime\tTime\t\nDelta_X\t1.0\t1.0\t1.0\t\n***End_of_Header***\t\n"
+        )
+    };
+    let names = "X_Value\tUntitled\tUntitled 1\tUntitled 2\tComment\n";
+    // Tab-separated, in mV, two segments, a comment on one row, a value missing.
+    let text = head("Tab", ".")
+        + &segment("mV")
+        + names
+        + "0.0\t1.0\t2.0\t3.0\tfirst press\n1.0\t4.0\t5.0\t6.0\n"
+        + &segment("mV")
+        + names
+        + "2.0\t7.0\t\t9.0\n";
+    std::fs::write(&f, &text).unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!(r.frames.len(), 3);
+    assert!((r.frames[1][2] - 6e-3).abs() < 1e-9, "{:?}", r.frames);
+    assert_eq!(r.gaps, [2]);
+    assert!(
+        r.description.contains("a LabVIEW measurement file, ")
+            && r.description
+                .contains("its values read as volts (mV x 1e-3, as its columns' names say)"),
+        "{}",
+        r.description
+    );
+    // Commas between cells, in volts; tabs with decimal commas.
+    let comma = head("Comma", ".").replace('\t', ",")
+        + &segment("Volts").replace('\t', ",")
+        + &names.replace('\t', ",")
+        + "0.0,1e-3,2e-3,3e-3\n1.0,4e-3,5e-3,6e-3,\n";
+    let decimal = head("Tab", ",")
+        + &segment("V")
+        + names
+        + "0,0\t0,001\t0,002\t0,003\n1,0\t0,004\t0,005\t0,006\n";
+    for text in [comma, decimal] {
+        std::fs::write(&f, &text).unwrap();
+        let r = read(&f, 3).unwrap();
+        assert_eq!(
+            r.frames,
+            [vec![1e-3_f32, 2e-3, 3e-3], vec![4e-3, 5e-3, 6e-3]],
+            "{text}"
+        );
+    }
+    // A damaged sample is named by the file's line.
+    let text = head("Tab", ".") + &segment("V") + names + "0.0\t1.0\t2.0\t3.0\n1.0\t4.0\tx\t6.0\n";
+    std::fs::write(&f, &text).unwrap();
+    let e = read(&f, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("run.lvm:21: column 2: 'x' is not a number"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// MATLAB's default `save` compresses each variable: such a file is read as the plain one,
 /// and a damaged compressed variable is refused in words before matfile inflates it (matfile
 /// reads a compressed variable to its end, without a limit, and prints debug text on errors).

@@ -109,11 +109,11 @@ pub(crate) struct ReconstructArgs {
     /// Image measured frames instead of simulating the scene's touches; the scene gives the
     /// sheet, the electrodes and the protocol (a built-in one, or any system's as a file).
     /// An et recording (.jsonl, from `et sim` or `et record`), or any system's frames in
-    /// volts: a CSV with one frame per row (header optional; `,` `;`, tab or spaces), a NumPy .npy
-    /// (2-D, frames as rows), an .npz array (FILE.npz:NAME) or a MATLAB .mat variable
-    /// (version 5 or 7: FILE.mat:VARIABLE, or a struct's field as EIDORS keeps its data,
-    /// FILE.mat:vi.meas), or a JSON array of frames (json.dump(F.tolist())). A matrix whose
-    /// columns are the frames (MATLAB's habit) is read transposed.
+    /// volts: a CSV with one frame per row (header optional; `,` `;`, tab or spaces; LabVIEW's
+    /// .lvm), a NumPy .npy (2-D, frames as rows), an .npz array (FILE.npz:NAME) or a MATLAB
+    /// .mat variable (version 5 or 7: FILE.mat:VARIABLE, or a struct's field as EIDORS keeps
+    /// its data, FILE.mat:vi.meas), or a JSON array of frames (json.dump(F.tolist())). A
+    /// matrix whose columns are the frames (MATLAB's habit) is read transposed.
     #[arg(long, value_name = "FILE")]
     frames: Option<PathBuf>,
     /// With --frames: average the first N frames as the untouched reference V_0 (as

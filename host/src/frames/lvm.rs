@@ -1,0 +1,114 @@
+//! LabVIEW's measurement files (`.lvm`, as its Write To Measurement File writes them): a
+//! file header and a header per segment, each ending `***End_of_Header***`, then the
+//! channels' names (`X_Value` columns of the time, a `Comment` last) and one row per sample.
+//! Read as a CSV of its channels, line for line (a header's lines as comments, so that every
+//! message names the file's own line), each channel's `Y_Unit_Label` as its unit.
+
+use super::csv_frames::in_name;
+
+/// The line that ends a header.
+const END: &str = "***End_of_Header***";
+
+/// Whether `text` is a LabVIEW measurement file (by its first line).
+pub(super) fn is_lvm(text: &str) -> bool {
+    text.trim_start_matches('\u{feff}')
+        .starts_with("LabVIEW Measurement")
+}
+
+/// Where a line of the file stands.
+#[derive(Clone, Copy, PartialEq)]
+enum At {
+    /// In a header (the file's or a segment's).
+    Header,
+    /// After a header: the names, a segment's header or the samples come next.
+    After,
+    /// Among the samples.
+    Samples,
+}
+
+/// `text`, a LabVIEW measurement file, as the CSV (tab-separated) of its channels, line for
+/// line: its headers as comments, its time and comment columns left out, its units in its
+/// channels' names (`Untitled (mV)`), decimal commas as points.
+pub(super) fn as_csv(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let (mut separator, mut decimal_comma) = ('\t', false);
+    let (mut at, mut units, mut kept) = (At::Header, Vec::<String>::new(), None::<Vec<usize>>);
+    for line in text.trim_start_matches('\u{feff}').lines() {
+        let (key, rest) = line.split_once(['\t', ',']).unwrap_or((line, ""));
+        let key = key.trim();
+        let number = key.replace(',', ".").parse::<f64>().is_ok();
+        let said = match at {
+            _ if key == END => {
+                at = At::After;
+                None
+            }
+            At::After | At::Samples if key == "Channels" => {
+                at = At::Header;
+                None
+            }
+            At::Header => {
+                match key {
+                    "Separator" if rest.trim() == "Comma" => separator = ',',
+                    "Decimal_Separator" => decimal_comma = rest.trim_matches('\t') == ",",
+                    "Y_Unit_Label" if units.is_empty() => {
+                        units = rest
+                            .split(separator)
+                            .map(|u| u.trim().to_string())
+                            .collect();
+                    }
+                    _ => {}
+                }
+                None
+            }
+            _ if key.is_empty() && rest.trim().is_empty() => None,
+            At::After if !number => {
+                at = At::Samples;
+                // The first segment's names; a later one's are its own again.
+                kept.is_none()
+                    .then(|| names(line, separator, &units, &mut kept))
+            }
+            At::After | At::Samples => {
+                at = At::Samples;
+                let cells: Vec<&str> = line.split(separator).collect();
+                let columns = kept.get_or_insert_with(|| (0..cells.len()).collect());
+                let row: Vec<String> = (columns.iter())
+                    .map(|&c| {
+                        let cell = cells.get(c).copied().unwrap_or("").trim();
+                        match decimal_comma {
+                            true => cell.replace(',', "."),
+                            false => cell.to_string(),
+                        }
+                    })
+                    .collect();
+                Some(row.join("\t"))
+            }
+        };
+        match said {
+            Some(l) => out.push_str(&l),
+            None => out.push('#'),
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The names row `line`: its channels' names with their units where a voltage's, tab-
+/// separated; `kept` set to the columns of the channels (not `X_Value`, not `Comment`).
+fn names(line: &str, separator: char, units: &[String], kept: &mut Option<Vec<usize>>) -> String {
+    let cells: Vec<&str> = line.split(separator).map(str::trim).collect();
+    let last = cells.len().saturating_sub(1);
+    let columns: Vec<usize> = (0..cells.len())
+        .filter(|&c| cells[c] != "X_Value" && !(c == last && cells[c] == "Comment"))
+        .collect();
+    let named: Vec<String> = (columns.iter().enumerate())
+        .map(|(j, &c)| {
+            let unit = units.get(j).map(String::as_str).unwrap_or("");
+            match in_name(&format!("({unit})")) {
+                Some((word, _)) if in_name(cells[c]).is_none() => format!("{} ({word})", cells[c]),
+                _ => cells[c].to_string(),
+            }
+        })
+        .collect();
+    *kept = Some(columns);
+    named.join("\t")
+}
