@@ -332,15 +332,15 @@ fn volts_per(unit: &str) -> Option<f64> {
     }
 }
 
-/// The unit of voltage a column's `name` ends with in brackets (`ch1 (mV)`, `U1 [uV]`), as
-/// named and with its factor to volts.
+/// The unit of voltage a column's `name` ends with: in brackets (`ch1 (mV)`, `U1 [uV]`),
+/// after a slash as a quantity over its unit (`U1/mV`), or after an underscore (`ch1_mV`,
+/// as et's own `x_mm`); as named and with its factor to volts.
 pub(super) fn in_name(name: &str) -> Option<(String, f64)> {
     let name = name.trim_end();
-    let open = match name.chars().last()? {
-        ')' => '(',
-        ']' => '[',
-        _ => return None,
+    let unit = match name.chars().last()? {
+        ')' => &name[name.rfind('(')? + 1..name.len() - 1],
+        ']' => &name[name.rfind('[')? + 1..name.len() - 1],
+        _ => &name[name.rfind(['/', '_'])? + 1..],
     };
-    let unit = &name[name.rfind(open)? + 1..name.len() - 1];
     volts_per(unit).map(|per| (unit.trim().to_string(), per))
 }

@@ -258,6 +258,11 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
             "a (V),b (mV),c (mV)\n1e-3,2,3\n4e-3,5,6\n",
             "its values read as volts (V x 1e0, mV x 1e-3, as its columns' names say)",
         ),
+        // A quantity over its unit (ISO 80000's way), a unit after an underscore.
+        (
+            "U1/mV,U2/mV,ch3_mV\n1,2,3\n4,5,6\n",
+            "its values read as volts (mV x 1e-3, as its columns' names say)",
+        ),
     ] {
         std::fs::write(&f, text).unwrap();
         let r = read(&f, 3).unwrap();
