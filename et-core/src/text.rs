@@ -208,10 +208,15 @@ struct Kept<'a> {
     kept: Vec<usize>,
 }
 
-/// A blank or `#` line: not a record.
+/// A blank or `#` line: not a record. A row whose first cell is Excel's `#N/A` (a value
+/// missing) is a record: it was dropped as a comment, its frame or observation lost.
 fn skipped(line: &str) -> bool {
     let t = line.trim_start();
-    t.is_empty() || t.starts_with('#')
+    let excel_na = ["#N/A", "#NA"].iter().any(|na| {
+        t.strip_prefix(na)
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with([',', ';', '\t', ' ']))
+    });
+    t.is_empty() || (t.starts_with('#') && !excel_na)
 }
 
 impl std::io::Read for Kept<'_> {

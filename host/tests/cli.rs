@@ -2038,7 +2038,7 @@ fn flags_outside_their_domain_and_endless_inputs_are_refused() {
                 "--out".into(),
                 p("n.json"),
             ],
-            "I.csv:1: column 1 of the header has no name (pandas' row index?",
+            "I.csv:1: column 1 of the header has no name (pandas' row index or R's row names?",
         ),
         (
             vec![

@@ -254,6 +254,15 @@ pub fn binary_kind(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
             ANOTHER_KIND,
         ),
     ];
+    // Python's pickle (protocols 2 to 5: `pickle.dump`, pandas' `to_pickle`): its first
+    // opcode PROTO, its last STOP.
+    if let [0x80, 2..=5, .., b'.'] = bytes {
+        return Some((
+            "a Python pickle (pickle.dump, pandas' to_pickle)",
+            "et reads no pickles (loading one runs its code): save an array with \
+             numpy.save(path, X) (frames), a table with numpy.savetxt(f, X, delimiter=',')",
+        ));
+    }
     KINDS
         .iter()
         .find(|(magic, at, ..)| bytes.get(*at..).is_some_and(|b| b.starts_with(magic)))
@@ -450,6 +459,8 @@ mod tests {
             (b"\x89PNG\r\n\x1a\n", "a PNG picture"),
             (b"\x1f\x8b\x08\x00\xff", "a gzip-compressed file"),
             (b"\xFD7zXZ\x00\x00\xff", "an xz-compressed file"),
+            // `pickle.dump(np.zeros(2), f)`'s first and last bytes.
+            (b"\x80\x04\x95\x9b\x00\xff.", "a Python pickle"),
             (
                 b"ETDA\x01\x00\x00\x00\x09\x00\x60\x00\xc0",
                 "a model blob for the board",

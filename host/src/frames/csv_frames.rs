@@ -71,7 +71,7 @@ impl Head {
         // of numbers written wrongly, `1.0D-03`, is said by its cell, and `NaN` is a value
         // missing, a frame the system did not send).
         let word = |c: &str| {
-            !c.is_empty()
+            !missing(c)
                 && !c.contains(|ch: char| ch.is_ascii_digit())
                 && text::number(c, delimiter).is_none()
         };
@@ -211,9 +211,9 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         }
         for (c, cell) in head.values(&cells) {
             let (column, written) = (c + 1, || cell.to_string());
-            // An empty cell is a value not measured (a DAQ's dropped sample), as NaN is: its
-            // frame is kept with it, NaN, and no image takes it.
-            if cell.is_empty() {
+            // An empty cell is a value not measured (a DAQ's dropped sample), as NaN is, and R's
+            // NA, Excel's #N/A: its frame is kept with it, NaN, and no image takes it.
+            if missing(cell) {
                 values.push(f64::NAN);
                 continue;
             }
@@ -253,14 +253,22 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
     let mut said = head.said(delimiter);
     // Row after row is a w x n column-major matrix: transposed, n x w.
     let matrix = DMatrix::from_vec(w, n, values).transpose();
-    // pandas' `to_csv` writes each row's number first, under a header cell with no name: a
-    // column unnamed whose values count the rows from 0 is that index, not a value.
+    // pandas' `to_csv` writes each row's number first, under a header cell with no name, and
+    // R's `write.csv` its row names, "1", "2", ...: a column unnamed whose values count the
+    // rows from 0 or 1 is that index, not a value.
     let unnamed = head.first_name.is_some_and(|name| {
         name.is_empty() || name.eq_ignore_ascii_case("index") || name == "Unnamed: 0"
     });
-    let counts_rows = (0..n).all(|r| matrix[(r, 0)] == r as f64);
-    if unnamed && counts_rows && w > 1 {
-        said.push_str("its first column (unnamed, 0, 1, 2, ...) skipped as the row index, ");
+    let counts_rows = |from: f64| (0..n).all(|r| matrix[(r, 0)] == from + r as f64);
+    if let Some(from) = [0, 1].into_iter().find(|&f| counts_rows(f64::from(f)))
+        && unnamed
+        && w > 1
+    {
+        said.push_str(&format!(
+            "its first column (unnamed, {from}, {}, {}, ...) skipped as the rows' index, ",
+            from + 1,
+            from + 2
+        ));
         return Ok((matrix.remove_column(0), said));
     }
     Ok((matrix, said))
@@ -268,7 +276,7 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
 
 /// Whether a row has a cell that is text, not a number (an empty cell is a value missing).
 fn named_row(cells: &[&str], delimiter: Delimiter) -> bool {
-    (cells.iter()).any(|c| !c.is_empty() && text::number(c, delimiter).is_none())
+    (cells.iter()).any(|c| !missing(c) && text::number(c, delimiter).is_none())
 }
 
 /// Whether a row is pandas' header over columns named by their numbers: an empty first cell
@@ -293,6 +301,18 @@ fn counts_columns(cells: &[&str], delimiter: Delimiter) -> bool {
                 .iter()
                 .any(|from| v.iter().enumerate().all(|(j, x)| *x == from + j as f64))
     })
+}
+
+/// Whether `cell` says a value is missing: empty, or a word tools write for it (R's `NA`,
+/// Excel's `#N/A`, `null`, `None`, a Windows C library's `-1.#IND`: pandas' list of them).
+/// NaN is read as a number.
+fn missing(cell: &str) -> bool {
+    const WORDS: [&str; 16] = [
+        "NA", "N/A", "n/a", "#N/A", "#NA", "#N/A N/A", "<NA>", "NULL", "null", "None", "1.#IND",
+        "-1.#IND", "1.#QNAN", "-1.#QNAN", "-NaN", "-nan",
+    ];
+    let c = cell.trim();
+    c.is_empty() || WORDS.contains(&c)
 }
 
 /// Whether `cell` is a complex number as NumPy (`(1.5+0.2j)`), Python (`1.5-0.2j`) or MATLAB

@@ -34,6 +34,18 @@ enum Item {
     Value(Cell),
 }
 
+impl Item {
+    /// The item as one value of a frame (a frame of JSON Lines): an array in a value's place
+    /// said as that.
+    fn into_cell(self) -> Cell {
+        match self {
+            Item::Value(cell) => cell,
+            Item::Values(_) => Cell::Other("an array".into()),
+            Item::Named(_) => Cell::Other("an object".into()),
+        }
+    }
+}
+
 /// The visitor of a [`Cell`] or an [`Item`]: `nested` says whether arrays and objects are
 /// frames (an item) or values in the wrong place (a cell).
 struct Visit {
@@ -111,12 +123,27 @@ impl<'de> Deserialize<'de> for Item {
 pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
     let fault = |detail: String| content(path, 0, FramesFault::Json(detail));
     let unquoted = python_nan(text);
-    let items: Vec<Item> = serde_json::from_str(unquoted.as_deref().unwrap_or(text))
-        .map_err(|e| fault(not_json(text, &e)))?;
+    // One array of frames, or JSON Lines of them: an array a line (a logger's
+    // `json.dumps(frame)` each frame), each a frame.
+    let mut tops: Vec<Vec<Item>> =
+        serde_json::Deserializer::from_str(unquoted.as_deref().unwrap_or(text))
+            .into_iter()
+            .collect::<Result<_, _>>()
+            .map_err(|e| fault(not_json(text, &e)))?;
+    let lines = tops.len() > 1;
+    let items: Vec<Item> = match tops.len() {
+        1 => tops.remove(0),
+        _ => (tops.into_iter())
+            .map(|top| Item::Values((top.into_iter()).map(Item::into_cell).collect()))
+            .collect(),
+    };
     if items.is_empty() {
         return Err(content(path, 0, FramesFault::NoFrames { header: false }));
     }
-    let mut said = String::from("a JSON array of frames, ");
+    let mut said = String::from(match lines {
+        true => "JSON Lines, an array a frame, ",
+        false => "a JSON array of frames, ",
+    });
     if items.iter().all(|i| matches!(i, Item::Value(_))) {
         said = String::from("a JSON array of values (one frame), ");
         let cells: Vec<Cell> = (items.into_iter())

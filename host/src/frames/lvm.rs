@@ -1,13 +1,11 @@
 //! LabVIEW's measurement files (`.lvm`, as its Write To Measurement File writes them): a
-//! file header and a header per segment, each ending `***End_of_Header***`, then the
-//! channels' names (`X_Value` columns of the time, a `Comment` last) and one row per sample.
-//! Read as a CSV of its channels, line for line (a header's lines as comments, so that every
-//! message names the file's own line), each channel's `Y_Unit_Label` as its unit.
+//! file header and a header per segment, each ending `***End_of_Header***` (special headers
+//! run from `***Start_Special***` to `***End_Special***`), then the channels' names
+//! (`X_Value` columns of the time, a `Comment` last) and one row per sample. Read as a CSV of
+//! its channels, line for line (a header's lines as comments, so that every message names
+//! the file's own line), each channel's `Y_Unit_Label` as its unit.
 
 use super::csv_frames::in_name;
-
-/// The line that ends a header.
-const END: &str = "***End_of_Header***";
 
 /// Whether `text` is a LabVIEW measurement file (by its first line).
 pub(super) fn is_lvm(text: &str) -> bool {
@@ -38,8 +36,13 @@ pub(super) fn as_csv(text: &str) -> String {
         let key = key.trim();
         let number = key.replace(',', ".").parse::<f64>().is_ok();
         let said = match at {
-            _ if key == END => {
+            // (A special header, `***Start_Special***` to `***End_Special***`, likewise.)
+            _ if key.starts_with("***End") => {
                 at = At::After;
+                None
+            }
+            _ if key.starts_with("***Start") => {
+                at = At::Header;
                 None
             }
             At::After | At::Samples if key == "Channels" => {

@@ -139,7 +139,7 @@ fn csv_rows_or_columns_header_or_not() {
 }
 
 /// Frames as other tools write them around the values: pandas' `to_csv` with its row index
-/// (an unnamed first column counting from 0), a delimiter ending every line (`fprintf('%g,',
+/// (an unnamed first column counting from 0) and R's `write.csv` with its row names (from 1), a delimiter ending every line (`fprintf('%g,',
 /// v)` in a loop), numbers separated by spaces (NumPy's `savetxt`, MATLAB's `save -ascii`),
 /// and a first column of times, which is not guessed at but said.
 #[test]
@@ -159,6 +159,14 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
             "Unnamed: 0,v0,v1,v2
 0,1e-3,2e-3,3e-3
 1,4e-3,5e-3,6e-3
+",
+            true,
+        ),
+        // R's `write.csv`: its row names, quoted, from 1 (one column too many before).
+        (
+            "\"\",\"V1\",\"V2\",\"V3\"
+\"1\",1e-3,2e-3,3e-3
+\"2\",4e-3,5e-3,6e-3
 ",
             true,
         ),
@@ -200,7 +208,7 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
         let r = read(&f, 3).unwrap();
         assert_eq!(r.frames, plain, "{text}");
         assert_eq!(
-            r.description.contains("row index"),
+            r.description.contains("skipped as the rows' index"),
             index,
             "{}",
             r.description
@@ -283,6 +291,15 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
         "{}",
         r.description
     );
+    // The words tools write for a value missing (R's NA, Excel's #N/A, a Windows C
+    // library's -1.#IND) are values missing, as an empty cell is (they were "not a number",
+    // or a first row of them a header).
+    std::fs::write(&f, "1e-3,NA,3e-3\n#N/A,5e-3,-1.#IND\n").unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!((r.frames.len(), r.gaps.as_slice()), (2, &[0, 1][..]));
+    std::fs::write(&f, "v0,v1,v2\nNA,null,None\n4e-3,5e-3,6e-3\n").unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!((r.frames.len(), r.gaps.as_slice()), (2, &[0][..]));
     // A first frame with a value missing, headerless, is a frame (it was taken as a header).
     std::fs::write(&f, "1e-3,,3e-3\n4e-3,5e-3,6e-3\n").unwrap();
     let r = read(&f, 3).unwrap();
@@ -605,6 +622,12 @@ fn frames_as_json_arrays_are_read() {
             "\u{feff}[\n [1,2,3],\n [4,5,6]\n]\n",
             "a JSON array of frames, 2",
         ),
+        // JSON Lines, an array a frame (a logger's `json.dumps(frame)` each frame).
+        (
+            "l.jsonl",
+            "[1, 2, 3]\n[4, 5, 6]\n",
+            "JSON Lines, an array a frame, 2",
+        ),
         (
             "r.json",
             r#"[{"t": 0, "a (mV)": 1000, "b (mV)": 2000, "c (mV)": 3000, "label": "none"},
@@ -644,6 +667,10 @@ fn frames_as_json_arrays_are_read() {
         ),
         (
             "[[1, 2, 3], [4, [5], 6]]",
+            "frame 1, value 1 (from 0): an array is not a number",
+        ),
+        (
+            "[1, 2, 3]\n[4, [5], 6]\n",
             "frame 1, value 1 (from 0): an array is not a number",
         ),
         (
@@ -710,6 +737,17 @@ fn labview_measurement_files_are_read() {
                 .contains("its values read as volts (mV x 1e-3, as its columns' names say)"),
         "{}",
         r.description
+    );
+    // A special header between the file's and the segment's is a header too.
+    let special = head("Tab", ".")
+        + "***Start_Special***\nNotes\tpressed by hand\n***End_Special***\n"
+        + &segment("V")
+        + names
+        + "0.0\t1e-3\t2e-3\t3e-3\n1.0\t4e-3\t5e-3\t6e-3\n";
+    std::fs::write(&f, &special).unwrap();
+    assert_eq!(
+        read(&f, 3).unwrap().frames,
+        [vec![1e-3_f32, 2e-3, 3e-3], vec![4e-3, 5e-3, 6e-3]]
     );
     // Commas between cells, in volts; tabs with decimal commas.
     let comma = head("Comma", ".").replace('\t', ",")

@@ -16,12 +16,13 @@ pub enum DatasetFault {
     /// A header and no rows under it.
     #[error("no data rows")]
     NoDataRows,
-    /// A header cell left empty: pandas' row index when it is the first, a delimiter ending
-    /// the line when it is the last.
+    /// A header cell left empty: pandas' row index (or R's row names) when it is the first,
+    /// a delimiter ending the line when it is the last.
     #[error(
         "column {column} of the header has no name{}",
         if *column == 1 {
-            " (pandas' row index? write the file with to_csv(..., index=False))"
+            " (pandas' row index or R's row names? write the file with to_csv(..., \
+             index=False) or write.csv(..., row.names = FALSE))"
         } else if *column == *columns {
             " (a delimiter at the end of the line?)"
         } else {
