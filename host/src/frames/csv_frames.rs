@@ -113,6 +113,18 @@ impl Head {
             .map(|(c, cell)| (c, *cell))
     }
 
+    /// Notes, at the first frame's `cells`, a first column unnamed whose cells are text: the
+    /// rows' index pandas writes for a frame of times (a `DatetimeIndex`, `2026-12-07
+    /// 10:00:00`) or labels, left out as a named time column is (it was "not a number").
+    fn index_of_text(&mut self, cells: &[&str], delimiter: Delimiter) {
+        let text = cells
+            .first()
+            .is_some_and(|c| !missing(c) && text::number(c, delimiter).is_none());
+        if self.first_name.as_deref() == Some("") && text && cells.len() > 1 {
+            self.skipped.insert(0, (0, String::new()));
+        }
+    }
+
     /// The factor from column `c`'s unit to volts (1 where the file names none).
     fn volts_per(&self, c: usize) -> f64 {
         self.units
@@ -167,10 +179,13 @@ impl Head {
                 }
             ));
         }
-        if !self.skipped.is_empty() {
-            let names: Vec<String> = (self.skipped.iter())
-                .map(|(_, n)| format!("'{n}'"))
-                .collect();
+        if self.skipped.first().is_some_and(|(_, n)| n.is_empty()) {
+            said.push_str("its first column (unnamed, of text: pandas' index of times?) skipped as the rows' index, ");
+        }
+        let named: Vec<&(usize, String)> =
+            self.skipped.iter().filter(|(_, n)| !n.is_empty()).collect();
+        if !named.is_empty() {
+            let names: Vec<String> = (named.iter()).map(|(_, n)| format!("'{n}'")).collect();
             said.push_str(&format!(
                 "its column{} {} skipped (the rows' numbers, times, sessions or targets by name, \
                  not a frame's values), ",
@@ -199,6 +214,9 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         let cells = text::cells(&record, head.line_ends);
         if head.takes(i, &cells, delimiter) {
             continue;
+        }
+        if n == 0 {
+            head.index_of_text(&cells, delimiter);
         }
         let w = *width.get_or_insert(cells.len());
         if cells.len() != w {

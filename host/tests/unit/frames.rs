@@ -234,6 +234,12 @@ fn csv_as_pandas_and_matlab_loops_write_them() {
              2026-12-07 10:00:01;4e-3;5e-3;6e-3;2\n",
             "its columns 'Timestamp', 'Frame' skipped",
         ),
+        // pandas' index of times (a `DatetimeIndex`), unnamed.
+        (
+            ",v0,v1,v2\n2026-12-07 10:00:00,1e-3,2e-3,3e-3\n2026-12-07 10:00:01,4e-3,5e-3,6e-3\n",
+            "its first column (unnamed, of text: pandas' index of times?) skipped as the rows' \
+             index",
+        ),
         // A recording annotated with what was pressed where.
         (
             "v0,v1,v2,label,x,y\n1e-3,2e-3,3e-3,none,,\n4e-3,5e-3,6e-3,left,0.01,0.02\n",
