@@ -148,7 +148,8 @@ pub fn is_table(spec: &Path) -> bool {
 /// Whether the frames given as `spec` are read as a table rather than as an et recording: by
 /// name ([`is_table`]), and a file named otherwise (a DAQ's `.dat` or `.log`, no extension)
 /// by what it holds: a recording's first line is a JSON object, anything else is read as a
-/// table (`.dat` was read as a recording and refused for its first line). Only a regular
+/// table (`.dat` was read as a recording and refused for its first line); one named `.json`
+/// or `.jsonl` is a table where it holds JSON arrays of frames. Only a regular
 /// file is read ahead; a stream (a FIFO, `/dev/stdin`) can be read once, and is taken by
 /// its name. Not for outputs, whose format is their name's.
 #[must_use]

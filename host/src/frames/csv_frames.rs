@@ -180,7 +180,10 @@ impl Head {
             ));
         }
         if self.skipped.first().is_some_and(|(_, n)| n.is_empty()) {
-            said.push_str("its first column (unnamed, of text: pandas' index of times?) skipped as the rows' index, ");
+            said.push_str(
+                "its first column (unnamed, of text: pandas' index of times?) skipped as the \
+                 rows' index, ",
+            );
         }
         let named: Vec<&(usize, String)> =
             self.skipped.iter().filter(|(_, n)| !n.is_empty()).collect();

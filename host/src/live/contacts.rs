@@ -79,8 +79,8 @@ impl Contact {
                     n => format!("{n}th"),
                 };
                 Some(format!(
-                    "electrode {electrode} is off again (the {time} time{back}; its values {:.0} % off \
-                     the model): a contact that opens now and then? Fix its clip, or \
+                    "electrode {electrode} is off again (the {time} time{back}; its values {:.0} \
+                     % off the model): a contact that opens now and then? Fix its clip, or \
                      {leave}{more}",
                     100.0 * misfit.own
                 ))

@@ -41,8 +41,8 @@ pub(crate) struct SourceArgs {
     reference: usize,
     /// Leave out of the images every value these electrodes drive or measure, counted from 0
     /// as the board counts them, or from 1 where the scene's protocol file does (several:
-    /// 3,7): a detached or broken electrode, which is named once V_0 is taken. At most half the electrodes; a model still classifies whole
-    /// frames.
+    /// 3,7): a detached or broken electrode, which is named once V_0 is taken. At most half
+    /// the electrodes; a model still classifies whole frames.
     #[arg(long, value_name = "E,...", value_delimiter = ',',
           value_parser = crate::domain::electrode)]
     skip_electrodes: Vec<u16>,

@@ -6,8 +6,9 @@ use super::*;
 impl Processor {
     /// What is said of the electrodes whose values in V_0 stand out from the model as a
     /// detached or broken electrode's ([`Reconstructor::detached_electrodes`]; of the values
-    /// imaged, so not those left out), numbered from 0 as the board counts, and those
-    /// electrodes; None until the reference is complete, or when none stands out.
+    /// imaged, so not those left out), numbered as the source's user counts them (from
+    /// [`Processor::electrode_base`]), and those electrodes (0-based); None until the
+    /// reference is complete, or when none stands out.
     #[must_use]
     pub fn v0_electrode_said(&self) -> Option<(String, Vec<u16>)> {
         let detached = self.recon.detached_electrodes(&self.at.keep(&self.v0()?));
