@@ -297,6 +297,17 @@ fn not_json(text: &str, e: &serde_json::Error) -> String {
             e.line()
         );
     }
+    // JSON, but a number past a double's range: serde_json stops at its last character.
+    if e.to_string().starts_with("number out of range") {
+        let to: String = line.chars().take(e.column()).collect();
+        let number = to.rsplit([',', '[', ' ', '\t', ':']).next().unwrap_or("");
+        return format!(
+            "line {}, column {}: '{number}' is past the range of a number (at most 1.8e308): \
+             not volts?",
+            e.line(),
+            e.column()
+        );
+    }
     let infinite = ["Infinity", "-Infinity", "inf", "-inf"]
         .iter()
         .any(|w| near.starts_with(w));

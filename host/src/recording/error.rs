@@ -51,7 +51,8 @@ pub enum LineFault {
         "not an et recording: its first line is JSON without et's \"format\": \"{FORMAT}\" \
          (another tool's file?); et sim and et record write recordings, another system's \
          frames are read from .csv, .npy, .npz or .mat, or JSON as an array of frames \
-         ([[v0, v1, ...], ...], as json.dump(F.tolist()) writes it)"
+         ([[v0, v1, ...], ...], as json.dump(F.tolist()) and pandas' \
+         to_json(orient=\"values\") write it)"
     )]
     NoFormat,
     /// Another of et's files than a recording (a dataset, a protocol file).

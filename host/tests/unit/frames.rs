@@ -692,6 +692,11 @@ fn frames_as_json_arrays_are_read() {
             "frame 1 (from 0) names other values than the first (its keys, in order: b, a)",
         ),
         ("[]", "no frames"),
+        // JSON, but past a double's range (it was "not JSON" at the next value).
+        (
+            "[[1e400, 2, 3], [4, 5, 6]]",
+            "line 1, column 7: '1e400' is past the range of a number (at most 1.8e308)",
+        ),
     ] {
         std::fs::write(&f, text).unwrap();
         let e = read(&f, 3).unwrap_err().to_string();
