@@ -118,6 +118,19 @@ pub fn number(cell: &str, delimiter: Delimiter) -> Option<f64> {
     })
 }
 
+/// Whether `cell` says a value is missing: empty, or a word tools write for it (R's `NA`,
+/// Excel's `#N/A`, `null`, `None`, a Windows C library's `-1.#IND`: pandas' list of them).
+/// NaN is read as a number.
+#[must_use]
+pub fn says_missing(cell: &str) -> bool {
+    const WORDS: [&str; 16] = [
+        "NA", "N/A", "n/a", "#N/A", "#NA", "#N/A N/A", "<NA>", "NULL", "null", "None", "1.#IND",
+        "-1.#IND", "1.#QNAN", "-1.#QNAN", "-NaN", "-nan",
+    ];
+    let c = cell.trim();
+    c.is_empty() || WORDS.contains(&c)
+}
+
 /// Whether `cell` is a number in Fortran's double-precision form (`1.0D-03`, `-3.24d0`),
 /// which no other reader takes: said where a cell is not a number, with the fix.
 #[must_use]

@@ -71,7 +71,7 @@ impl Head {
         // of numbers written wrongly, `1.0D-03`, is said by its cell, and `NaN` is a value
         // missing, a frame the system did not send).
         let word = |c: &str| {
-            !missing(c)
+            !text::says_missing(c)
                 && !c.contains(|ch: char| ch.is_ascii_digit())
                 && text::number(c, delimiter).is_none()
         };
@@ -119,7 +119,7 @@ impl Head {
     fn index_of_text(&mut self, cells: &[&str], delimiter: Delimiter) {
         let text = cells
             .first()
-            .is_some_and(|c| !missing(c) && text::number(c, delimiter).is_none());
+            .is_some_and(|c| !text::says_missing(c) && text::number(c, delimiter).is_none());
         if self.first_name.as_deref() == Some("") && text && cells.len() > 1 {
             self.skipped.insert(0, (0, String::new()));
         }
@@ -234,7 +234,7 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
             let (column, written) = (c + 1, || cell.to_string());
             // An empty cell is a value not measured (a DAQ's dropped sample), as NaN is, and R's
             // NA, Excel's #N/A: its frame is kept with it, NaN, and no image takes it.
-            if missing(cell) {
+            if text::says_missing(cell) {
                 values.push(f64::NAN);
                 continue;
             }
@@ -297,7 +297,7 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
 
 /// Whether a row has a cell that is text, not a number (an empty cell is a value missing).
 fn named_row(cells: &[&str], delimiter: Delimiter) -> bool {
-    (cells.iter()).any(|c| !missing(c) && text::number(c, delimiter).is_none())
+    (cells.iter()).any(|c| !text::says_missing(c) && text::number(c, delimiter).is_none())
 }
 
 /// Whether a row is pandas' header over columns named by their numbers: an empty first cell
@@ -322,18 +322,6 @@ fn counts_columns(cells: &[&str], delimiter: Delimiter) -> bool {
                 .iter()
                 .any(|from| v.iter().enumerate().all(|(j, x)| *x == from + j as f64))
     })
-}
-
-/// Whether `cell` says a value is missing: empty, or a word tools write for it (R's `NA`,
-/// Excel's `#N/A`, `null`, `None`, a Windows C library's `-1.#IND`: pandas' list of them).
-/// NaN is read as a number.
-fn missing(cell: &str) -> bool {
-    const WORDS: [&str; 16] = [
-        "NA", "N/A", "n/a", "#N/A", "#NA", "#N/A N/A", "<NA>", "NULL", "null", "None", "1.#IND",
-        "-1.#IND", "1.#QNAN", "-1.#QNAN", "-NaN", "-nan",
-    ];
-    let c = cell.trim();
-    c.is_empty() || WORDS.contains(&c)
 }
 
 /// Whether `cell` is a complex number as NumPy (`(1.5+0.2j)`), Python (`1.5-0.2j`) or MATLAB

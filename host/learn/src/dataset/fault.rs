@@ -399,7 +399,10 @@ pub enum DatasetFault {
 /// For a cell of words where a number belongs: how a table reads a column of text (`class`
 /// of `left`, `right` was said only as "'right' is not a number").
 fn text_hint(cell: &str) -> &'static str {
-    if et_core::text::fortran_exponent(cell) {
+    if et_core::text::says_missing(cell) {
+        " but a value missing: every row needs each of its features; leave the row out (as \
+         pandas' df.dropna() does) or fill the value in"
+    } else if et_core::text::fortran_exponent(cell) {
         et_core::text::fortran_said(cell)
     } else if cell.chars().any(char::is_alphabetic) {
         " (a column of text is read as the class when it is named 'label', or as the session \

@@ -909,6 +909,20 @@ else: import numpy as np; a=np.load(sys.argv[1]); print(float(a['x'][3,2]), int(
                 && !fortran.contains("column of text"),
             "{fortran}"
         );
+        // A value missing (R's NA, an empty cell): said as that with the fix, not as a
+        // column of text.
+        for (table, cell) in [
+            ("a,b,label\n1,2,0\n1,NA,1\n", "'NA'"),
+            ("a,b,label\n1,2,0\n1,,1\n", "''"),
+        ] {
+            let missing = err(table);
+            assert!(
+                missing.contains(&format!(
+                    "{cell} is not a number but a value missing: every row"
+                )) && !missing.contains("column of text"),
+                "{missing}"
+            );
+        }
         let digits = err("a,label\n1,0\n1-2,1\n");
         assert!(!digits.contains("column of text"), "{digits}");
         let short = err("a,b,label\n1,2,0\n1,1\n");
