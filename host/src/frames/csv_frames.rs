@@ -58,10 +58,7 @@ impl Head {
         if i == 0 && (named_row(cells, delimiter) || pandas_header(cells, delimiter)) {
             self.first_name = cells.first().map(|c| (*c).to_string());
             self.skipped = (cells.iter().enumerate())
-                .filter(|(_, name)| {
-                    et_learn::dataset::not_a_feature(name)
-                        || et_learn::dataset::is_target_name(name)
-                })
+                .filter(|(_, name)| left_out_by_name(name))
                 .map(|(c, name)| (c, (*name).to_string()))
                 .collect();
             self.units = cells.iter().map(|name| in_name(name)).collect();
@@ -187,15 +184,8 @@ impl Head {
         }
         let named: Vec<&(usize, String)> =
             self.skipped.iter().filter(|(_, n)| !n.is_empty()).collect();
-        if !named.is_empty() {
-            let names: Vec<String> = (named.iter()).map(|(_, n)| format!("'{n}'")).collect();
-            said.push_str(&format!(
-                "its column{} {} skipped (the rows' numbers, times, sessions or targets by name, \
-                 not a frame's values), ",
-                if names.len() == 1 { "" } else { "s" },
-                names.join(", ")
-            ));
-        }
+        let names: Vec<&str> = named.iter().map(|(_, n)| n.as_str()).collect();
+        said.push_str(&left_out_said("its column", &names));
         said
     }
 }
@@ -293,6 +283,27 @@ pub(super) fn csv_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Strin
         return Ok((matrix.remove_column(0), said));
     }
     Ok((matrix, said))
+}
+
+/// Whether a column (or a JSON frame's value) of this name is left out of the frames: the
+/// rows' numbers, times or sessions (a DAQ's `Time`), or targets (`label`, `x`, `y`), by the
+/// names `et train --features` takes as no feature.
+pub(super) fn left_out_by_name(name: &str) -> bool {
+    et_learn::dataset::not_a_feature(name) || et_learn::dataset::is_target_name(name)
+}
+
+/// What is said of the columns (`what`: "its column") left out by name; empty for none.
+pub(super) fn left_out_said(what: &str, names: &[&str]) -> String {
+    let quoted: Vec<String> = names.iter().map(|n| format!("'{n}'")).collect();
+    match quoted.len() {
+        0 => String::new(),
+        n => format!(
+            "{what}{} {} skipped (the rows' numbers, times, sessions or targets by name, not a \
+             frame's values), ",
+            if n == 1 { "" } else { "s" },
+            quoted.join(", ")
+        ),
+    }
 }
 
 /// Whether a row has a cell that is text, not a number (an empty cell is a value missing).

@@ -11,6 +11,7 @@ use nalgebra::DMatrix;
 use serde::Deserialize;
 use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
 
+use super::csv_frames::{in_name, left_out_by_name, left_out_said};
 use super::{FramesError, FramesFault, content};
 
 /// One value of a frame as the file writes it.
@@ -155,7 +156,9 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
         let values = numbers(&cells, |j| format!("value {j} (from 0)")).map_err(fault)?;
         return Ok((DMatrix::from_row_slice(1, values.len(), &values), said));
     }
-    let mut names: Option<Vec<String>> = None;
+    // The first frame's names, and each one's factor to volts (None: left out by its name),
+    // worked out once.
+    let mut names: Option<(Vec<String>, Vec<Option<f64>>)> = None;
     let (mut values, mut width) = (Vec::new(), None);
     let n = items.len();
     // (Each frame's cells freed as it is read: 24 bytes a value, then 8.)
@@ -167,9 +170,15 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
             }
             Item::Values(cells) => numbers(cells, |j| format!("frame {r}, value {j} (from 0)")),
             Item::Named(cells) => {
-                let keys: Vec<String> = cells.iter().map(|(k, _)| k.clone()).collect();
-                let first = names.get_or_insert_with(|| keys.clone());
-                if *first != keys {
+                let (first, per) = names.get_or_insert_with(|| {
+                    let keys: Vec<String> = cells.iter().map(|(k, _)| k.clone()).collect();
+                    let per = (keys.iter())
+                        .map(|k| (!left_out_by_name(k)).then(|| in_name(k).map_or(1.0, |u| u.1)))
+                        .collect();
+                    (keys, per)
+                });
+                if !cells.iter().map(|(k, _)| k).eq(first.iter()) {
+                    let keys: Vec<&str> = cells.iter().map(|(k, _)| k.as_str()).collect();
                     let detail = format!(
                         "frame {r} (from 0) names other values than the first (its keys, in \
                          order: {})",
@@ -177,14 +186,13 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
                     );
                     return Err(fault(detail));
                 }
-                let kept: Vec<Cell> = (cells.iter())
-                    .filter(|(k, _)| !skipped(k))
-                    .map(|(k, c)| match c {
-                        Cell::Number(v) => {
-                            Cell::Number(*v * super::csv_frames::in_name(k).map_or(1.0, |u| u.1))
-                        }
-                        Cell::Missing => Cell::Missing,
-                        Cell::Other(o) => Cell::Other(o.clone()),
+                let kept: Vec<Cell> = (cells.iter().zip(per.iter()))
+                    .filter_map(|((_, c), per)| {
+                        per.map(|per| match c {
+                            Cell::Number(v) => Cell::Number(*v * per),
+                            Cell::Missing => Cell::Missing,
+                            Cell::Other(o) => Cell::Other(o.clone()),
+                        })
                     })
                     .collect();
                 numbers(&kept, |j| format!("frame {r}, value {j} (from 0)"))
@@ -198,10 +206,10 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
         }
         values.extend(row);
     }
-    if let Some(names) = names {
+    if let Some((names, _)) = names {
         let units: Vec<String> = (names.iter())
-            .filter(|n| !skipped(n))
-            .filter_map(|n| super::csv_frames::in_name(n))
+            .filter(|n| !left_out_by_name(n))
+            .filter_map(|n| in_name(n))
             .filter(|(_, per)| *per != 1.0)
             .map(|(word, per)| format!("{word} x {per:e}"))
             .fold(Vec::new(), |mut all, u| {
@@ -210,18 +218,12 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
                 }
                 all
             });
-        let left: Vec<String> = (names.iter())
-            .filter(|n| skipped(n))
-            .map(|n| format!("'{n}'"))
+        let left: Vec<&str> = (names.iter())
+            .filter(|n| left_out_by_name(n))
+            .map(String::as_str)
             .collect();
         said = String::from("a JSON array of frames by name, ");
-        if !left.is_empty() {
-            said.push_str(&format!(
-                "the values named {} skipped (the rows' numbers, times, sessions or targets by \
-                 name, not a frame's values), ",
-                left.join(", ")
-            ));
-        }
+        said.push_str(&left_out_said("its value", &left));
         if !units.is_empty() {
             said.push_str(&format!(
                 "its values read as volts ({}, as their names say), ",
@@ -235,11 +237,6 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
     }
     // Row after row is a w x n column-major matrix: transposed, n x w.
     Ok((DMatrix::from_vec(w, n, values).transpose(), said))
-}
-
-/// Whether a frame's value of this name is left out, as a CSV's column of the name is.
-fn skipped(name: &str) -> bool {
-    et_learn::dataset::not_a_feature(name) || et_learn::dataset::is_target_name(name)
 }
 
 /// The numbers of `cells` (NaN where missing), or what is wrong with the first that is not

@@ -638,7 +638,7 @@ fn frames_as_json_arrays_are_read() {
             "r.json",
             r#"[{"t": 0, "a (mV)": 1000, "b (mV)": 2000, "c (mV)": 3000, "label": "none"},
                 {"t": 1, "a (mV)": 4000, "b (mV)": 5000, "c (mV)": 6000, "label": "x"}]"#,
-            "the values named 't', 'label' skipped (the rows' numbers, times, sessions or \
+            "its values 't', 'label' skipped (the rows' numbers, times, sessions or \
              targets by name, not a frame's values), its values read as volts (mV x 1e-3, as \
              their names say)",
         ),
