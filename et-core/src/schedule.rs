@@ -71,7 +71,7 @@ pub struct Schedule {
 }
 
 /// A schedule file's columns, in this order.
-pub(crate) const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
+pub const COLUMNS: [&str; 5] = ["source", "sink", "positive", "negative", "current_a"];
 
 /// An electrode's number as a cell writes it: `2`, or a whole number written as a decimal
 /// (`2.0`; `2.000000000000000000e+00`, as NumPy's `savetxt` writes every number by default);
@@ -449,12 +449,17 @@ impl Schedule {
     /// reads back (Python: `numpy.loadtxt(path, delimiter=",", skiprows=1)`).
     #[must_use]
     pub fn to_csv(&self) -> String {
+        self.to_csv_counted_from(0)
+    }
+
+    /// [`Schedule::to_csv`] with electrodes counted from `base` (0, or 1 for a system that
+    /// counts from 1: read back with `base = 1`).
+    #[must_use]
+    pub fn to_csv_counted_from(&self, base: u16) -> String {
         let mut out = String::from("source,sink,positive,negative,current_a\n");
         for r in &self.rows {
-            out += &format!(
-                "{},{},{},{},{:e}\n",
-                r.source, r.sink, r.positive, r.negative, r.current_a
-            );
+            let [s, k, p, n] = [r.source, r.sink, r.positive, r.negative].map(|e| e + base);
+            out += &format!("{s},{k},{p},{n},{:e}\n", r.current_a);
         }
         out
     }
@@ -520,6 +525,7 @@ mod error;
 pub use error::*;
 mod header;
 use header::header_columns;
+pub use header::role as column_role;
 
 #[cfg(test)]
 mod tests;

@@ -18,6 +18,7 @@ mod json_frames;
 mod lvm;
 mod mat;
 use csv_frames::csv_matrix;
+pub(crate) use csv_frames::unit_in_name;
 pub use error::said_list;
 pub use error::{FramesError, FramesFault};
 use mat::mat_matrix;
@@ -82,8 +83,12 @@ fn text_matrix(path: &Path) -> Result<(DMatrix<f64>, String), FramesError> {
     table_matrix(path, &text)
 }
 
-/// [`text_matrix`] of the `text` read from `path`.
-fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
+/// The numbers of a table's `text`, read from `path`, as a matrix of its rows, and what was
+/// read in words (its header, columns left out by name, units), as frames' tables are read.
+///
+/// # Errors
+/// [`FramesError`] naming the file and the line.
+pub fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), FramesError> {
     match et_core::text::EtFile::of(text) {
         Some(et_core::text::EtFile::Dataset) => Err(content(path, 1, FramesFault::Dataset)),
         Some(et_core::text::EtFile::Protocol) => {
@@ -208,11 +213,7 @@ fn other_protocol(rows: usize, columns: usize, k: usize) -> String {
 /// non-finite value, or no dimension of K values.
 pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     let (path, array) = split_array(spec);
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
+    let ext = extension(&path);
     let (matrix, said) = match ext.as_str() {
         "npy" | "npz" | "mat" => arrays::matrix(&path, &ext, array.as_deref(), k)?,
         _ => text_matrix(&path)?,
@@ -294,6 +295,27 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
         gaps,
         description,
     })
+}
+
+/// `path`'s extension in lower case (empty for none).
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default()
+}
+
+/// The numbers of an array file (`.npy`, `.npz:NAME`, `.mat:VARIABLE`) as a matrix, rows as
+/// stored, and what was read in words; None for any other name, whose text the caller reads
+/// once and gives to [`table_matrix`]. For tables that are not frames (a protocol's patterns).
+///
+/// # Errors
+/// [`FramesError`] naming the file (and the array): unreadable, or not numbers.
+pub fn array_matrix(spec: &Path) -> Option<Result<(DMatrix<f64>, String), FramesError>> {
+    let (path, array) = split_array(spec);
+    let ext = extension(&path);
+    matches!(ext.as_str(), "npy" | "npz" | "mat")
+        .then(|| arrays::matrix(&path, &ext, array.as_deref(), 0))
 }
 
 /// Voltages single precision cannot hold: et takes frames in it (the board's, and every

@@ -30,6 +30,7 @@ pub mod live;
 pub mod message;
 pub mod output;
 pub mod pace;
+pub mod pairs;
 pub mod plot;
 pub mod recorder;
 pub mod recording;

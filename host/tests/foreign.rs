@@ -392,6 +392,87 @@ fn a_tanks_own_protocol_and_frames_from_csv_and_npz() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// A system's protocol as two lists (the tank archives' way: counted from 1 under their own
+/// names, the currents in mA): given as a scene's protocol file each is said as half of one,
+/// naming the command; `et protocol --injections --measurements` crosses them into the file a
+/// scene with `base = 1` reads as the tank's protocol, row for row.
+#[test]
+fn a_systems_pair_lists_are_crossed_into_its_protocol_file() {
+    let d = dir("pairs");
+    let (inj, meas) = (
+        d.join("injection_pairs.csv"),
+        d.join("measurement_pairs.csv"),
+    );
+    let mut text = String::from("injection,source_electrode(+),sink_electrode(-),amplitude\n");
+    let drives = (0..4u16)
+        .flat_map(|skip| (0..16).map(move |i| (i, (i + skip + 1) % 16)))
+        .chain((1..16).map(|i| (i, 0)));
+    for (n, (s, k)) in drives.enumerate() {
+        writeln!(text, "{},{},{},1.4142", n + 1, s + 1, k + 1).unwrap();
+    }
+    std::fs::write(&inj, text).unwrap();
+    let text: String = (1..=16)
+        .map(|m| format!("{m},{m},{}\n", m % 16 + 1))
+        .collect();
+    std::fs::write(
+        &meas,
+        format!("measurement,plus_electrode,minus_electrode\n{text}"),
+    )
+    .unwrap();
+    let scene = d.join("tank.toml");
+    for (list, half) in [(&inj, "injections"), (&meas, "measurements")] {
+        let name = list.file_name().unwrap().to_str().unwrap();
+        let toml = TANK.replace(
+            "file = \"protocol.csv\"",
+            &format!("file = \"{name}\", base = 1"),
+        );
+        std::fs::write(&scene, toml).unwrap();
+        let e = Scene::load(&scene).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("names the {half} alone"))
+                && e.contains("et protocol --injections"),
+            "{e}"
+        );
+    }
+    let (inj, meas) = (inj.to_str().unwrap(), meas.to_str().unwrap());
+    let unitless = et(&["protocol", "--injections", inj, "--measurements", meas]);
+    let e = String::from_utf8_lossy(&unitless.stderr);
+    assert!(
+        !unitless.status.success() && e.contains("--current-unit mA"),
+        "{e}"
+    );
+    let out = et(&[
+        "protocol",
+        "--injections",
+        inj,
+        "--measurements",
+        meas,
+        "--current-unit",
+        "mA",
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && said.contains("base = 1"), "{said}");
+    std::fs::write(d.join("protocol.csv"), &out.stdout).unwrap();
+    let toml = TANK.replace(
+        "file = \"protocol.csv\"",
+        "file = \"protocol.csv\", base = 1",
+    );
+    std::fs::write(&scene, toml.replace("current_ua = 1414.2\n", "")).unwrap();
+    let read = Scene::load(&scene).unwrap().schedule().unwrap();
+    let built = Schedule::parse_csv(Path::new("p.csv"), &protocol_csv(), 16, 0, 1e-3).unwrap();
+    assert_eq!(read.rows(), built.rows());
+    // Flags of the crossing alone are refused beside a built-in protocol, not ignored.
+    for flags in [
+        &["--csv", "--base", "1"][..],
+        &["--no-meas-current"][..],
+        &["--current-a", "1e-3"][..],
+    ] {
+        let out = et(&[&["protocol"][..], flags].concat());
+        assert!(!out.status.success(), "{flags:?}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// `et protocol --csv` writes a protocol file a scene takes back row for row.
 #[test]
 fn et_protocol_csv_is_a_protocol_file() {

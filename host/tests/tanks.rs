@@ -301,3 +301,51 @@ fn detached(
     }
     out
 }
+
+/// `et protocol --injections --measurements` on each tank's own two lists of pairs (counted
+/// from 1, their currents in mA) writes the protocol file this test's support crosses from
+/// the data set's description, row for row, and says how a scene reads it.
+#[test]
+fn the_tanks_pair_lists_cross_into_their_protocol_files() {
+    let Some(all) = tanks::both() else {
+        eprintln!("skipped: no ../shared/data/tanks beside the project");
+        return;
+    };
+    let parse = |text: &str| -> Vec<(Vec<u16>, f64)> {
+        (text.lines().skip(1))
+            .map(|line| {
+                let cells: Vec<&str> = line.split(',').collect();
+                let electrodes = cells[..4].iter().map(|c| c.parse().expect("an electrode"));
+                (electrodes.collect(), cells[4].parse().expect("a current"))
+            })
+            .collect()
+    };
+    for tank in &all {
+        let out = Command::new(env!("CARGO_BIN_EXE_et"))
+            .args(["protocol", "--current-unit", "mA", "--injections"])
+            .arg(tank.dir.join("injection_pairs.csv"))
+            .arg("--measurements")
+            .arg(tank.dir.join("measurement_pairs.csv"))
+            .output()
+            .expect("et runs");
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{}: {said}", tank.name);
+        let (made, expected) = (
+            parse(&String::from_utf8_lossy(&out.stdout)),
+            parse(&tank.protocol_csv),
+        );
+        assert_eq!(made.len(), expected.len(), "{}", tank.name);
+        for (k, ((e, c), (e0, c0))) in made.iter().zip(&expected).enumerate() {
+            assert_eq!(e, e0, "{}: value {k}", tank.name);
+            assert!(
+                (c - c0).abs() <= 1e-12 * c0,
+                "{}: value {k}: {c} A, not {c0}",
+                tank.name
+            );
+        }
+        assert!(
+            said.contains("base = 1") && said.contains(&format!("K = {}", expected.len())),
+            "{said}"
+        );
+    }
+}

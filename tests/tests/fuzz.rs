@@ -487,6 +487,29 @@ fn protocol_csv() -> String {
     text
 }
 
+/// A system's protocol as two lists, the tank archives' way: injection pairs counted from 1
+/// under names of their own with currents in mA, and measurement patterns a row (+1, -1).
+fn protocol_pairs() -> [String; 2] {
+    let mut injections =
+        String::from("injection,source_electrode(+),sink_electrode(-),amplitude\n");
+    for i in 0..16 {
+        injections += &format!("{},{},{},1.41\n", i + 1, i + 1, (i + 1) % 16 + 1);
+    }
+    // (8 of the 16 adjacent pairs: a square matrix would read either way round, and be asked.)
+    let mut patterns = String::new();
+    for m in 0..8 {
+        let row: Vec<&str> = (0..16)
+            .map(|e| match e {
+                _ if e == m => "1",
+                _ if e == (m + 1) % 16 => "-1",
+                _ => "0",
+            })
+            .collect();
+        patterns += &(row.join(",") + "\n");
+    }
+    [injections, patterns]
+}
+
 /// `et_host::frames::read` picks the format by extension: the case's file is given one
 /// through a symbolic link (so an endless input stays endless), removed after.
 fn read_frames(case: &Path, ext: &str) -> bool {
@@ -661,6 +684,18 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             seeds: vec![protocol_csv().into()],
             // As a scene's `protocol = { file = ... }` reads it: 16 electrodes, 1-based.
             parse: |p| et_core::schedule::Schedule::read_csv(&p[0], 16, 1, 1e-3).is_ok(),
+        },
+        Parser {
+            name: "protocol pair lists",
+            seeds: protocol_pairs().map(String::into_bytes).to_vec(),
+            // As `et protocol --injections --measurements --current-unit mA` crosses them.
+            parse: |p| {
+                let crossing = et_host::pairs::Crossing {
+                    current_unit: Some(("mA".into(), 1e-3)),
+                    ..et_host::pairs::Crossing::default()
+                };
+                et_host::pairs::cross(&p[0], &p[1], &crossing).is_ok()
+            },
         },
         Parser {
             name: "frames MATLAB .mat",

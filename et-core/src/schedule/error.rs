@@ -159,6 +159,15 @@ pub enum FileFault {
          optionally current_a)"
     )]
     MissingColumn(&'static str),
+    /// A header naming a list of injections alone (source and sink) or of measurements
+    /// alone (positive and negative), as tank archives list them apart.
+    #[error(
+        "the header names the {0} alone: a protocol file has a row per frame value, its four \
+         electrodes; a list of injections and one of measurements, each measured under every \
+         injection, are crossed into one by `et protocol --injections injection_pairs.csv \
+         --measurements measurement_pairs.csv > protocol.csv`"
+    )]
+    PairsOnly(&'static str),
     /// A header that names a column twice.
     #[error("the header names {0} twice: which column is meant would be a guess")]
     SameColumn(&'static str),

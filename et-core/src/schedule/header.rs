@@ -14,15 +14,34 @@ const ALSO: [&[&str]; 4] = [
     &["neg", "minus", "v-", "meas-", "n", "p2"],
 ];
 
-/// Which of [`COLUMNS`] a header's cell names, by et's name or another of [`ALSO`].
-fn role(cell: &str) -> Option<usize> {
+/// Names a column of [`COLUMNS`] may begin with, before words of its own
+/// (`source_electrode(+)`, `plus_electrode`, as tank archives' pair lists name them).
+const BEGINS: [&[&str]; 4] = [
+    &["source"],
+    &["sink"],
+    &["positive", "plus"],
+    &["negative", "minus"],
+];
+
+/// Which of [`COLUMNS`] a header's cell names: by et's name or another of [`ALSO`], or as
+/// its first word (split at anything but letters and digits) one of [`BEGINS`].
+pub fn role(cell: &str) -> Option<usize> {
     let c = cell.trim();
+    let first = c
+        .split(|ch: char| !ch.is_ascii_alphanumeric())
+        .next()
+        .unwrap_or("");
     COLUMNS
         .iter()
         .position(|n| c.eq_ignore_ascii_case(n))
         .or_else(|| {
             ALSO.iter()
                 .position(|names| names.iter().any(|n| c.eq_ignore_ascii_case(n)))
+        })
+        .or_else(|| {
+            BEGINS
+                .iter()
+                .position(|names| names.iter().any(|n| first.eq_ignore_ascii_case(n)))
         })
 }
 
@@ -45,6 +64,13 @@ pub(super) fn header_columns(
             .and_then(|i| COLUMNS.get(i))
         {
             return Err(FileFault::SameColumn(name));
+        }
+        // A list of injections alone (source, sink) or of measurements alone, as tank
+        // archives give them apart: crossed into a protocol file by `et protocol`.
+        match columns[..4] {
+            [Some(_), Some(_), None, None] => return Err(FileFault::PairsOnly("injections")),
+            [None, None, Some(_), Some(_)] => return Err(FileFault::PairsOnly("measurements")),
+            _ => {}
         }
         if let Some(missing) = COLUMNS[..4].iter().zip(&columns).find(|(_, c)| c.is_none()) {
             return Err(FileFault::MissingColumn(missing.0));

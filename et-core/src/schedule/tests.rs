@@ -167,10 +167,30 @@ fn wrong_rows_are_named_by_line_and_cell() {
     );
     let e = parse("0,1,2,3,nan\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("NaN A") && !e.contains("swap"), "{e}");
-    let e = parse("source,sink,plus,negative_v\n0,1,2,3\n", 16, 0)
+    let e = parse("source,sink,plus,neg_v\n0,1,2,3\n", 16, 0)
         .unwrap_err()
         .to_string();
     assert!(e.contains("no 'negative' column"), "{e}");
+    // Names beginning with a column's (the tank archives' `source_electrode(+)`), read.
+    let begun = "source_electrode(+),sink_electrode(-),plus_electrode,negative_v\n0,1,2,3\n";
+    assert_eq!(parse(begun, 16, 0).unwrap().rows()[0].negative, 3);
+    // A list of injections or of measurements alone, said as half a protocol with the command
+    // that crosses two.
+    let e = parse(
+        "injection,source_electrode(+),sink_electrode(-)\n1,1,2\n",
+        16,
+        1,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("the injections alone") && e.contains("et protocol --injections"),
+        "{e}"
+    );
+    let e = parse("measurement,plus_electrode,minus_electrode\n1,1,2\n", 16, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("the measurements alone"), "{e}");
     let e = parse("0,1,2\n", 16, 0).unwrap_err().to_string();
     assert!(e.contains("3 columns"), "{e}");
     let e = parse("0,1,x,3\n", 16, 0).unwrap_err().to_string();

@@ -376,11 +376,17 @@ fn volts_per(unit: &str) -> Option<f64> {
 /// after a slash as a quantity over its unit (`U1/mV`), or after an underscore (`ch1_mV`,
 /// as et's own `x_mm`); as named and with its factor to volts.
 pub(super) fn in_name(name: &str) -> Option<(String, f64)> {
+    unit_in_name(name, volts_per)
+}
+
+/// The unit a column's `name` ends with as [`in_name`] finds it, for any quantity: `per`
+/// gives a unit's factor to the quantity's SI unit (None: not one of its units).
+pub(crate) fn unit_in_name(name: &str, per: fn(&str) -> Option<f64>) -> Option<(String, f64)> {
     let name = name.trim_end();
     let unit = match name.chars().last()? {
         ')' => &name[name.rfind('(')? + 1..name.len() - 1],
         ']' => &name[name.rfind('[')? + 1..name.len() - 1],
         _ => &name[name.rfind(['/', '_'])? + 1..],
     };
-    volts_per(unit).map(|per| (unit.trim().to_string(), per))
+    per(unit).map(|factor| (unit.trim().to_string(), factor))
 }

@@ -9,6 +9,7 @@ mod live;
 mod message;
 mod output;
 mod pace;
+mod pairs;
 mod plot;
 mod recording;
 mod tables;

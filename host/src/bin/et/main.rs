@@ -136,11 +136,18 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Print a protocol's tables: injection pairs, measurement pairs, K and p (docs/method.md §4).
     ///
+    /// Print a protocol's tables (docs/method.md §4), or a protocol file: a built-in one
+    /// (--csv), or one crossed from another system's lists of injections and measurements
+    /// (--injections, --measurements: pairs or patterns), for a scene's
+    /// `[scan] protocol = { file = "protocol.csv" }`.
+    ///
     /// Examples:
     ///   et protocol --electrodes 16 --protocol adjacent
     ///   et protocol -l 16 -p opposite --json > opposite16.json
     ///   et protocol -l 16 --drive-skip 3 --measure-skip 0 --measure-skip 3
     ///   et protocol -l 16 -p adjacent --csv --current-a 1.4e-3 > protocol.csv
+    ///   et protocol --injections inj.csv --measurements meas.csv --current-unit mA > protocol.csv
+    ///   et protocol --injections ref.mat:Injref --measurements ref.mat:Mpat --patterns columns
     #[command(verbatim_doc_comment)]
     Protocol(protocol::ProtocolArgs),
     /// Simulate a scene into a recording of frames (JSON Lines).

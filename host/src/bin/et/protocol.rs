@@ -1,15 +1,28 @@
-//! `et protocol`: a protocol's tables for people and programs.
+//! `et protocol`: a protocol's tables for people and programs, and a protocol file crossed
+//! from a system's lists of injections and measurements.
+
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use et_core::protocol::{Pattern, Protocol, ProtocolKind, SkipSet};
+use et_host::pairs::{self, By, Crossing};
 use et_host::tables::ProtocolTables;
+
+/// How a matrix's patterns lie (`--patterns`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Lie {
+    /// A pattern a row (EIDORS's meas_pattern; a CSV of one pattern a line).
+    Rows,
+    /// A pattern a column (KIT4's and the Kuopio challenge's Injref and Mpat).
+    Columns,
+}
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct ProtocolArgs {
-    /// Electrode count L: even, 4 to 32.
-    #[arg(short = 'l', long, default_value_t = 16,
+    /// Electrode count L: even, 4 to 32 [default: 16; with --injections, the files'].
+    #[arg(short = 'l', long,
           value_parser = crate::domain::whole(et_core::protocol::L_MIN, et_core::protocol::L_MAX))]
-    electrodes: u8,
+    electrodes: Option<u8>,
     /// The protocol (docs/method.md §4); the general form (--drive-skip) is another.
     #[arg(short, long, value_enum, ignore_case = true, default_value_t = ProtocolKind::Adjacent)]
     protocol: ProtocolKind,
@@ -28,15 +41,84 @@ pub(crate) struct ProtocolArgs {
     /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
     #[arg(long)]
     csv: bool,
-    /// With --csv: the current of every row, A (1e-9, a board's least, to 0.05: more is a
-    /// unit slip).
-    #[arg(long, default_value_t = 1e-3, requires = "csv",
+    /// With --csv or --injections: the current of every row, A (1e-9, a board's least, to
+    /// 0.05: more is a unit slip) [default: 1e-3, or the injections file's].
+    #[arg(long,
           value_parser = crate::domain::real(et_core::schedule::MIN_CURRENT_A,
                                              et_core::schedule::MAX_CURRENT_A))]
-    current_a: f64,
+    current_a: Option<f64>,
+    /// A system's injections, to cross with --measurements into a protocol file (printed as
+    /// --csv prints one): a list of pairs (a row each: source, sink and optionally its
+    /// current, named in a header or in that order; KIT4's and the Kuopio challenge's
+    /// injection_pairs.csv, pyEIT's ex_mat saved) or a matrix of current patterns (+I at the
+    /// source, -I at the sink, 0 elsewhere: injections.csv, Injref, EIDORS's stim_pattern),
+    /// as a CSV, .npy, .npz:NAME or .mat:VARIABLE. Every measurement is taken under every
+    /// injection, injection by injection, as those systems' frames are.
+    #[arg(long, requires = "measurements", value_name = "FILE",
+          conflicts_with_all = ["protocol", "drive_skip", "measure_skip", "json"])]
+    injections: Option<PathBuf>,
+    /// The measurements under each injection, with --injections: a list of pairs (positive,
+    /// negative: the value is U_positive - U_negative; measurement_pairs.csv) or a matrix of
+    /// patterns (+1 and -1: Mpat, EIDORS's meas_pattern).
+    #[arg(long, requires = "injections", value_name = "FILE")]
+    measurements: Option<PathBuf>,
+    /// With --injections: what the lists count electrodes from, 0 or 1 [default: 0 where a
+    /// list holds an electrode 0, else 1]. The protocol file keeps the lists' numbering.
+    #[arg(long, requires = "injections", value_parser = crate::domain::whole(0u16, 1u16))]
+    base: Option<u16>,
+    /// With --injections: the unit of the file's currents, where its column's name does not
+    /// say it (`amplitude`; KIT4's and the Kuopio challenge's are mA): A, mA, uA or nA.
+    #[arg(long, requires = "injections", conflicts_with = "current_a", value_parser = current_unit)]
+    current_unit: Option<(String, f64)>,
+    /// With --injections: how a square matrix whose rows and columns both read as patterns
+    /// holds them (asked for only then).
+    #[arg(long, requires = "injections", value_enum, ignore_case = true)]
+    patterns: Option<Lie>,
+    /// With --injections: leave out each injection's measurements on its own drive
+    /// electrodes, as EIDORS's no_meas_current (they carry the contact's impedance).
+    #[arg(long, requires = "injections")]
+    no_meas_current: bool,
+}
+
+/// `--current-unit`: a unit of current, as named and in amperes.
+fn current_unit(text: &str) -> Result<(String, f64), String> {
+    pairs::amperes_per(text)
+        .map(|per| (text.trim().to_string(), per))
+        .ok_or_else(|| format!("'{text}' is not a unit of current: give A, mA, uA or nA"))
+}
+
+/// Prints the protocol file crossed from `--injections` and `--measurements`; what was read
+/// and done to standard error.
+fn crossed(args: &ProtocolArgs, injections: &std::path::Path) -> Result<()> {
+    let Some(measurements) = &args.measurements else {
+        bail!("--injections needs --measurements");
+    };
+    let crossing = Crossing {
+        electrodes: args.electrodes.map(u16::from),
+        base: args.base,
+        current_a: args.current_a,
+        current_unit: args.current_unit.clone(),
+        by: args.patterns.map(|p| match p {
+            Lie::Rows => By::Rows,
+            Lie::Columns => By::Columns,
+        }),
+        no_meas_current: args.no_meas_current,
+    };
+    let crossed = pairs::cross(injections, measurements, &crossing)?;
+    for line in &crossed.said {
+        say!("{line}");
+    }
+    out!("{}", crossed.to_csv().trim_end());
+    Ok(())
 }
 
 pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
+    if let Some(injections) = &args.injections {
+        return crossed(args, injections);
+    }
+    if args.current_a.is_some() && !args.csv {
+        bail!("--current-a is the current of --csv's rows or of --injections': give it with one");
+    }
     let kind = match args.drive_skip {
         Some(drive_skip) => {
             let mut skips = SkipSet(0);
@@ -58,9 +140,10 @@ pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
             args.protocol
         }
     };
-    let protocol = Protocol::new(kind, args.electrodes)?;
+    let protocol = Protocol::new(kind, args.electrodes.unwrap_or(16))?;
     if args.csv {
-        out!("{}", protocol.schedule(args.current_a)?.to_csv().trim_end());
+        let current_a = args.current_a.unwrap_or(1e-3);
+        out!("{}", protocol.schedule(current_a)?.to_csv().trim_end());
         return Ok(());
     }
     let tables = ProtocolTables::new(&protocol);
