@@ -15,6 +15,7 @@ mod arrays;
 mod csv_frames;
 mod error;
 mod json_frames;
+mod json_objects;
 mod lvm;
 mod mat;
 use csv_frames::csv_matrix;
@@ -96,16 +97,25 @@ pub fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), F
             let others = et_core::text::EtFile::columns_beside_protocol(text).unwrap_or(0);
             Err(content(path, 1, FramesFault::Protocol { others }))
         }
-        // A JSON array (`json.dump(F.tolist())`): an et recording's lines are objects.
-        _ if text
+        // A JSON array (`json.dump(F.tolist())`) or an object other than et's files' (a
+        // recording, a model: said as what they are by the CSV reader).
+        None if text
             .trim_start_matches('\u{feff}')
             .trim_start()
-            .starts_with('[') =>
+            .starts_with(['[', '{']) =>
         {
             json_frames::json_matrix(path, text)
         }
         _ if lvm::is_lvm(text) => {
-            let (matrix, said) = csv_matrix(path, &lvm::as_csv(text))?;
+            let (csv, not_volts) = lvm::as_csv(text);
+            let (matrix, said) = csv_matrix(path, &csv)?;
+            if let Some(unit) = not_volts {
+                let said = format!(
+                    "a LabVIEW measurement file (its Y_Unit_Label '{unit}' not a unit of \
+                     voltage: the values are taken as volts), {said}"
+                );
+                return Ok((matrix, said));
+            }
             Ok((matrix, format!("a LabVIEW measurement file, {said}")))
         }
         _ => csv_matrix(path, text),
@@ -152,9 +162,10 @@ pub fn is_table(spec: &Path) -> bool {
 
 /// Whether the frames given as `spec` are read as a table rather than as an et recording: by
 /// name ([`is_table`]), and a file named otherwise (a DAQ's `.dat` or `.log`, no extension)
-/// by what it holds: a recording's first line is a JSON object, anything else is read as a
-/// table (`.dat` was read as a recording and refused for its first line); one named `.json`
-/// or `.jsonl` is a table where it holds JSON arrays of frames. Only a regular
+/// by what it holds: a recording's first line is a JSON object naming its "format", anything
+/// else is read as a table (`.dat` was read as a recording and refused for its first line);
+/// one named `.json` or `.jsonl` is a table where it holds JSON arrays of frames or objects
+/// other than a recording's (pandas' `to_json()`). Only a regular
 /// file is read ahead; a stream (a FIFO, `/dev/stdin`) can be read once, and is taken by
 /// its name. Not for outputs, whose format is their name's.
 #[must_use]
@@ -175,8 +186,12 @@ pub fn reads_as_table(spec: &Path) -> bool {
     let ext = path.extension().and_then(|e| e.to_str());
     let json =
         ext.is_some_and(|e| ["jsonl", "json", "ndjson"].contains(&e.to_ascii_lowercase().as_str()));
-    // (A `.json` of an array is frames, `json.dump(F.tolist())`; of an object, a recording's.)
-    read.is_ok() && first.is_some_and(|&b| b == b'[' || (b != b'{' && !json))
+    // A recording's first line is an object whose first key is "format"; another object (a
+    // pandas `to_json()`, `{"frames": [...]}`) holds frames, as an array does.
+    let line = text.split(|&b| b == b'\n').next().unwrap_or(&[]);
+    let recording = line.windows(8).any(|w| w == b"\"format\"");
+    read.is_ok()
+        && first.is_some_and(|&b| b == b'[' || (b == b'{' && !recording) || (b != b'{' && !json))
 }
 
 /// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).

@@ -218,14 +218,17 @@ fn listed(
         return Err(fail(PairsFault::NotFinite { row, column }));
     }
     let shape = format!("{} x {}", m.nrows(), m.ncols());
-    if m.iter().any(|&v| v < 0.0) {
+    // (A list is 2 or 3 columns wide: a negative number there, not a pattern, is said as a
+    // list's, by its row.)
+    let as_patterns = m.iter().any(|&v| v < 0.0).then(|| patterns(m, side, by));
+    if let Some(read) = as_patterns.filter(|p| p.is_ok() || m.ncols() > 3) {
         let patterns::Patterns {
             pairs,
             sizes: currents,
             electrodes,
             by: read_by,
             either_way,
-        } = patterns(m, side, by).map_err(fail)?;
+        } = read.map_err(fail)?;
         let n = pairs.len();
         let said = format!(
             "{}: {said}{shape}, {n} {} patterns of {electrodes} electrodes, one a {}",
@@ -261,6 +264,9 @@ fn listed(
                 .ok_or(PairsFault::NotElectrode { row, value: v })
         };
         pairs.push([electrode(0).map_err(fail)?, electrode(1).map_err(fail)?]);
+        if m.ncols() == 3 && r[2] < 0.0 {
+            return Err(fail(PairsFault::Negative { row, value: r[2] }));
+        }
     }
     let currents = (m.ncols() == 3).then(|| (m.column(2).iter().copied().collect(), Unit::Unsaid));
     let said = format!(

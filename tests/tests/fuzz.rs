@@ -385,6 +385,24 @@ fn frames_json() -> String {
     format!("[{}]", rows.join(",\n "))
 }
 
+/// The frames as pandas' `to_json()` writes them by default (`orient="columns"`: a key a
+/// column, each an object of its values by the rows' index), a value missing among them.
+fn frames_json_columns() -> String {
+    let m = frames_matrix();
+    let columns: Vec<String> = (0..m.ncols())
+        .map(|k| {
+            let rows: Vec<String> = (0..m.nrows())
+                .map(|f| match (f, k) {
+                    (1, 3) => format!("\"{f}\":null"),
+                    _ => format!("\"{f}\":{:e}", m[(f, k)]),
+                })
+                .collect();
+            format!("\"v{k}\":{{{}}}", rows.join(","))
+        })
+        .collect();
+    format!("{{{}}}", columns.join(","))
+}
+
 /// The frames as LabVIEW's Write To Measurement File writes them (`.lvm`): its headers, a time
 /// column, units, a comment on one row, two segments.
 fn frames_lvm() -> String {
@@ -661,6 +679,11 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "frames JSON",
             seeds: vec![frames_json().into()],
+            parse: |p| read_frames(&p[0], "json"),
+        },
+        Parser {
+            name: "frames JSON, pandas' columns",
+            seeds: vec![frames_json_columns().into()],
             parse: |p| read_frames(&p[0], "json"),
         },
         Parser {
@@ -989,13 +1012,27 @@ fn tables_are_read_within_a_small_multiple_of_the_numbers_kept() {
     let features = format!("{},label\n", names.join(","))
         + &(0..rows).map(|_| row(&mut rng) + "\n").collect::<String>();
     let json = format!("[[{}]]\n", frames.trim_end().replace('\n', "],\n ["));
-    let (f, t, j) = (
+    // pandas' to_json() default (a key a column, an object of its rows by index): a key a
+    // value in the file, not in memory.
+    let cells: Vec<Vec<&str>> = frames.lines().map(|l| l.split(',').collect()).collect();
+    let columns: Vec<String> = (0..k)
+        .map(|c| {
+            let rows: Vec<String> = (0..rows)
+                .map(|r| format!("\"{r}\":{}", cells[r][c]))
+                .collect();
+            format!("\"v{c}\":{{{}}}", rows.join(","))
+        })
+        .collect();
+    let pandas = format!("{{{}}}", columns.join(","));
+    let (f, t, j, p) = (
         dir.join("frames.csv"),
         dir.join("features.csv"),
         dir.join("frames.json"),
+        dir.join("pandas.json"),
     );
     std::fs::write(&f, &frames).unwrap();
     std::fs::write(&j, &json).unwrap();
+    std::fs::write(&p, &pandas).unwrap();
     std::fs::write(&t, &features).unwrap();
     let values = rows * k;
     let allowed = |text: usize| text + 4 * 8 * values + (1 << 20);
@@ -1009,6 +1046,11 @@ fn tables_are_read_within_a_small_multiple_of_the_numbers_kept() {
             "frames JSON",
             json.len(),
             Box::new(|| et_host::frames::read(&j, k).is_ok()),
+        ),
+        (
+            "frames JSON, pandas' columns",
+            pandas.len(),
+            Box::new(|| et_host::frames::read(&p, k).is_ok()),
         ),
         (
             "features CSV",

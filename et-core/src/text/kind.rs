@@ -44,12 +44,18 @@ impl EtFile {
     /// hardware log's values. None when it has not the four electrodes' columns.
     #[must_use]
     pub fn columns_beside_protocol(text: &str) -> Option<usize> {
-        let header = first_line(text)?.to_ascii_lowercase();
-        let cells: Vec<&str> = header.split([',', ';', '\t']).map(str::trim).collect();
+        // (Read in place: a file of one long line, a JSON object of every frame, was copied
+        // and split into a list of its cells, several times its size.)
+        let header = first_line(text)?;
+        let cells = || header.split([',', ';', '\t']).map(str::trim);
         let columns = &crate::schedule::COLUMNS;
+        let is = |cell: &str, c: &&str| cell.eq_ignore_ascii_case(c);
         let electrodes = columns.get(..4).unwrap_or_default();
-        (electrodes.iter().all(|c| cells.contains(c)))
-            .then(|| cells.iter().filter(|c| !columns.contains(c)).count())
+        (electrodes.iter().all(|c| cells().any(|cell| is(cell, c)))).then(|| {
+            cells()
+                .filter(|cell| !columns.iter().any(|c| is(cell, c)))
+                .count()
+        })
     }
 
     /// What it is, and what writes it: "an et recording (et sim, et record)".

@@ -25,9 +25,10 @@ enum At {
 }
 
 /// `text`, a LabVIEW measurement file, as the CSV (tab-separated) of its channels, line for
-/// line: its headers as comments, its time and comment columns left out, its units in its
-/// channels' names (`Untitled (mV)`), decimal commas as points.
-pub(super) fn as_csv(text: &str) -> String {
+/// line: its headers as comments, its time and comment columns left out, its units of
+/// voltage in its channels' names (`Untitled (mV)`), decimal commas as points; and the first
+/// `Y_Unit_Label` that is no unit of voltage (`Ohm`), whose values are taken as volts.
+pub(super) fn as_csv(text: &str) -> (String, Option<String>) {
     let mut out = String::with_capacity(text.len());
     let (mut separator, mut decimal_comma) = ('\t', false);
     let (mut at, mut units, mut kept) = (At::Header, Vec::<String>::new(), None::<Vec<usize>>);
@@ -92,7 +93,10 @@ pub(super) fn as_csv(text: &str) -> String {
         }
         out.push('\n');
     }
-    out
+    let not_volts = (units.iter())
+        .find(|u| !u.is_empty() && in_name(&format!("({u})")).is_none())
+        .cloned();
+    (out, not_volts)
 }
 
 /// The names row `line`: its channels' names with their units where a voltage's, tab-

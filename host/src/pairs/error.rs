@@ -94,6 +94,17 @@ pub enum PairsFault {
         /// The value.
         value: f64,
     },
+    /// A list's current below 0 (a system's sign for the other way round).
+    #[error(
+        "row {row} (from 0): a current of {value}: currents are above 0 (a system's sign for \
+         the current the other way round: swap the row's source and sink)"
+    )]
+    Negative {
+        /// Row (from 0).
+        row: usize,
+        /// The value.
+        value: f64,
+    },
     /// A named list's cell that is not a number.
     #[error("{column}: '{cell}' is not {}", if *column == "its current" { "a number" } else { "an electrode's number" })]
     NotNumber {

@@ -702,8 +702,81 @@ fn frames_as_json_arrays_are_read() {
         let e = read(&f, 3).unwrap_err().to_string();
         assert!(e.contains(said), "{text}: {e}");
     }
-    // A JSON object is a recording's first line, by name .json or not.
-    std::fs::write(&f, r#"{"frames": [[1, 2, 3]]}"#).unwrap();
+    // An object holding frames is read as pandas' orientations and other tools write it (it
+    // was taken as a recording's first line and refused); a recording's, which names its
+    // "format" first, is still a recording.
+    for (text, said) in [
+        (
+            // pandas' to_json() default, orient="columns": a key a column, rows by index.
+            r#"{"a":{"0":1,"1":4},"b":{"0":2,"1":5},"c":{"0":3,"1":6}}"#,
+            "an object of objects, a key a column",
+        ),
+        // Its columns left out or read as volts by their names, as a CSV's.
+        (
+            r#"{"t":{"0":0,"1":1},"a (mV)":{"0":1000,"1":4000},"b (mV)":{"0":2000,"1":5000},"c (mV)":{"0":3000,"1":6000}}"#,
+            "its value 't' skipped",
+        ),
+        // orient="index": a key a row, read transposed by K.
+        (
+            r#"{"0":{"a":1,"b":2,"c":3},"1":{"a":4,"b":5,"c":6}}"#,
+            "one per column: read transposed",
+        ),
+        (
+            r#"{"columns":["t","a","b","c"],"index":[0,1],"data":[[0,1,2,3],[1,4,5,6]]}"#,
+            "pandas' orient=\"split\" (its columns by name, its index skipped), its value 't' skipped",
+        ),
+        (
+            r#"{"schema":{"fields":[]},"data":[{"index":0,"a":1,"b":2,"c":3},{"index":1,"a":4,"b":5,"c":6}]}"#,
+            "pandas' orient=\"table\"",
+        ),
+        // MATLAB's jsonencode(struct("frames", F, "fs", 10)).
+        (
+            r#"{"frames":[[1,2,3],[4,5,6]],"fs":10}"#,
+            "its key 'frames'",
+        ),
+        // pandas' to_json(orient="records", lines=True), and a logger's record a line.
+        (
+            "{\"a\":1,\"b\":2,\"c\":3}\n{\"a\":4,\"b\":5,\"c\":6}\n",
+            "an object a frame (pandas' orient=\"records\", lines=True)",
+        ),
+        (
+            "{\"t\":0.0,\"v\":[1,2,3]}\n{\"t\":0.1,\"v\":[4,5,6]}\n",
+            "each frame its line's 'v'",
+        ),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        assert!(reads_as_table(&f), "{text}");
+        let r = read(&f, 3).unwrap();
+        assert_eq!(r.frames, plain, "{text}");
+        assert!(r.description.contains(said), "{text}: {}", r.description);
+    }
+    // A Series (one object of values) is one frame; objects of several arrays, or of a column
+    // with other rows, are said.
+    std::fs::write(&f, r#"{"a":1,"b":2,"c":3}"#).unwrap();
+    assert_eq!(read(&f, 3).unwrap().frames, [vec![1.0_f32, 2.0, 3.0]]);
+    for (text, said) in [
+        (
+            r#"{"a":[[1,2,3]],"b":[[4,5,6]]}"#,
+            "an object of 2 arrays (a, b)",
+        ),
+        (
+            r#"{"a":{"0":1,"1":4},"b":{"0":2,"2":5}}"#,
+            "its column 'b' has other rows",
+        ),
+        (
+            "{\"v\":[1,2,3]}\n7\n",
+            "JSON line 2 (from 1) is a value alone",
+        ),
+        (
+            r#"{"a":{"0":1,"1":4},"b":{"0":2,"1":"x"}}"#,
+            "'b', its '1': \"x\" is not a number",
+        ),
+    ] {
+        std::fs::write(&f, text).unwrap();
+        let e = read(&f, 3).unwrap_err().to_string();
+        assert!(e.contains(said), "{text}: {e}");
+    }
+    std::fs::write(&f, "{\"format\": \"et-recording\", \"version\": 1}\n").unwrap();
     assert!(!reads_as_table(&f));
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -778,6 +851,18 @@ fn labview_measurement_files_are_read() {
             "{text}"
         );
     }
+    // A channel in another unit (an impedance's Ohm) is said, its values taken as volts (it
+    // was left in the name without a word).
+    let text = head("Tab", ".") + &segment("Ohm") + names + "0.0\t1.0\t2.0\t3.0\n";
+    std::fs::write(&f, &text).unwrap();
+    let r = read(&f, 3).unwrap();
+    assert_eq!(r.frames, [vec![1.0_f32, 2.0, 3.0]]);
+    assert!(
+        r.description
+            .contains("Y_Unit_Label 'Ohm' not a unit of voltage"),
+        "{}",
+        r.description
+    );
     // A damaged sample is named by the file's line.
     let text = head("Tab", ".") + &segment("V") + names + "0.0\t1.0\t2.0\t3.0\n1.0\t4.0\tx\t6.0\n";
     std::fs::write(&f, &text).unwrap();

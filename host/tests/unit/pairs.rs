@@ -217,6 +217,16 @@ fn pyeit_lists_units_and_faults_are_said() {
     };
     let e = cross(&inj, &meas, &crossing).unwrap_err().to_string();
     assert!(e.contains("names its currents' unit A"), "{e}");
+    // A current below 0 in a list (not a matrix of patterns) said as the list's, by its row.
+    std::fs::write(&inj, "0,4,1e-3\n1,5,-1e-3\n").unwrap();
+    let e = cross(&inj, &meas, &Crossing::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("row 1") && e.contains("swap the row's source and sink"),
+        "{e}"
+    );
+    std::fs::write(&inj, "source,sink,current_a\n0,4,1.4e-3\n").unwrap();
     // A measurement pattern against ground, and one of two sizes.
     let m = dir.join("m.csv");
     std::fs::write(&m, "1,-1,0,0\n0,1,0,0\n").unwrap();
