@@ -434,6 +434,13 @@ fn numbering(
                  counted from {base}: leave --base out, or give --base 0"
             ));
         }
+        (Some(0), Some(least)) if least > 0 => {
+            said.push(format!(
+                "the lists count electrodes from 0 (--base 0), though none is electrode 0 (the \
+                 least is {least}): do they count from 1? then leave --base out"
+            ));
+            0
+        }
         (Some(base), _) => base,
         (None, Some(0)) => {
             said.push("the lists count electrodes from 0 (they hold an electrode 0)".into());
@@ -539,8 +546,8 @@ fn currents_a(
                 ));
             }
             said.push(format!(
-                "every injection drives {a:e} A (--current-a; the file's {:e} a pattern left as its \
-                 shape)",
+                "every injection drives {a:e} A (--current-a, in place of the file's {:e} for \
+                 each)",
                 file[0]
             ));
             return Ok(vec![a; n]);

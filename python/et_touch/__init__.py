@@ -1555,7 +1555,8 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
     """Reads any system's frames for a protocol of ``k`` values a frame, n x K (V): a CSV (one
     frame a row), a .npy, ``FILE.npz:NAME`` or ``FILE.mat:VARIABLE`` (a struct's field too, as
     EIDORS keeps its data: ``FILE.mat:vi.meas``; a matrix of frames as columns is read
-    transposed), a JSON array of frames (``json.dump(F.tolist())``), or an et recording's
+    transposed), a JSON array of frames (``json.dump(F.tolist())``) or pandas' ``to_json()``,
+    or an et recording's
     voltages, as `et reconstruct --frames` reads them (values in a unit of voltage a CSV names,
     ``mV`` in a row of units or ``ch1 (mV)``, in volts); NaN where a value is missing (an empty or NaN cell, a recording's null), as
     ``read_recording`` gives them."""

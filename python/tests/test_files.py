@@ -154,6 +154,12 @@ def test_frames_of_another_system_read_in_either_orientation(work, layout):
         as_json = work / "frames.json"
         as_json.write_text(json.dumps(gappy.tolist()))
         np.testing.assert_array_equal(et.read_frames(as_json, 208), gappy)
+        # As pandas' default to_json() writes a DataFrame (a key a column, each its values by
+        # the rows' index), written here without pandas.
+        as_columns = work / "frames-columns.json"
+        columns = {f"ch{k}": {str(i): v for i, v in enumerate(gappy[:, k])} for k in range(208)}
+        as_columns.write_text(json.dumps(columns))
+        np.testing.assert_array_equal(et.read_frames(as_columns, 208), gappy)
         mv = work / "frames-mv.csv"
         names = ",".join(f"ch{k}" for k in range(208))
         units = ",".join(["mV"] * 208)
