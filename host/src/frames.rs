@@ -19,7 +19,7 @@ mod json_objects;
 mod lvm;
 mod mat;
 use csv_frames::csv_matrix;
-pub(crate) use csv_frames::unit_in_name;
+pub(crate) use csv_frames::{unit_in_name, unit_words};
 pub use error::said_list;
 pub use error::{FramesError, FramesFault};
 use mat::mat_matrix;

@@ -356,13 +356,8 @@ pub(super) fn complex(cell: &str) -> bool {
 /// The factor to volts of a unit of voltage as a DAQ writes it under a column's name (`mV`,
 /// `[uV]`, `(V)`, `µV`, `volts`); None for any other word (`Ohm`, `counts`, `MV`).
 fn volts_per(unit: &str) -> Option<f64> {
-    let u = (unit.trim())
-        .trim_start_matches(['(', '['])
-        .trim_end_matches([')', ']'])
-        .trim();
-    let word = u.to_ascii_lowercase();
-    let word = word.trim_end_matches('s');
-    match (u, word) {
+    let (u, word) = unit_words(unit);
+    match (u, word.as_str()) {
         ("V" | "v", _) | (_, "volt") => Some(1.0),
         ("mV" | "mv", _) | (_, "millivolt") => Some(1e-3),
         ("uV" | "uv" | "µV" | "μV", _) | (_, "microvolt") => Some(1e-6),
@@ -370,6 +365,17 @@ fn volts_per(unit: &str) -> Option<f64> {
         ("kV", _) | (_, "kilovolt") => Some(1e3),
         _ => None,
     }
+}
+
+/// A unit as written, without its brackets (`(mV)` is `mV`), and as a word: in lower case,
+/// without a plural's `s` (`Volts` is `volt`).
+pub(crate) fn unit_words(unit: &str) -> (&str, String) {
+    let u = (unit.trim())
+        .trim_start_matches(['(', '['])
+        .trim_end_matches([')', ']'])
+        .trim();
+    let word = u.to_ascii_lowercase();
+    (u, word.trim_end_matches('s').to_string())
 }
 
 /// The unit of voltage a column's `name` ends with: in brackets (`ch1 (mV)`, `U1 [uV]`),

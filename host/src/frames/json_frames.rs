@@ -259,6 +259,9 @@ impl<'de> Visitor<'de> for Entry<'_> {
             let value = match cell {
                 Cell::Number(v) => v,
                 Cell::Missing => f64::NAN,
+                // (A column left out by its name, `label`, may hold text: pandas' default
+                // holds a column under its key, `orient="index"` under each row's.)
+                _ if left_out_by_name(self.key) || left_out_by_name(&key) => f64::NAN,
                 other => {
                     let place = format!("'{}', its '{key}'", self.key);
                     let said = numbers(&[other], |_| place.clone()).err();
@@ -301,12 +304,12 @@ pub(super) fn json_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, Stri
         names,
         columns,
     } = super::json_objects::items(tops).map_err(fault)?;
-    if let (Some(columns), Some(names)) = (columns, &names) {
-        let matrix = by_columns(columns, names);
+    if let (Some((columns, keys)), Some(names)) = (columns, &names) {
+        let matrix = by_columns(columns, names, &keys);
         if matrix.is_empty() {
             return Err(content(path, 0, FramesFault::NoFrames { header: false }));
         }
-        names_said(names, &mut said);
+        names_said(&[names.as_slice(), &keys].concat(), &mut said);
         return Ok((matrix, said));
     }
     if items.is_empty() {
@@ -410,17 +413,21 @@ fn names_said(names: &[String], said: &mut String) {
     }
 }
 
-/// The matrix of `columns` (each its values by the rows, named by `names`), a column left
-/// out or read as volts by its name: as pandas' default `to_json()` holds them, read column
-/// by column without turning them into rows first.
-fn by_columns(columns: Vec<Vec<f64>>, names: &[String]) -> DMatrix<f64> {
-    let height = columns.first().map_or(0, Vec::len);
+/// The matrix of `columns` (each its values by the rows, named by `names`; the rows by
+/// `keys`), a column or a row left out or read as volts by its name: as pandas' default
+/// `to_json()` holds them (a key a column, its rows' keys their index), read column by column
+/// without turning them into rows first; `orient="index"` (a key a row, its columns' keys the
+/// names) the same way round, read transposed.
+fn by_columns(columns: Vec<Vec<f64>>, names: &[String], keys: &[String]) -> DMatrix<f64> {
+    let per = |name: &String| (!left_out_by_name(name)).then(|| in_name(name).map_or(1.0, |u| u.1));
+    let rows: Vec<Option<f64>> = keys.iter().map(per).collect();
+    let height = rows.iter().flatten().count();
     let kept = names.iter().filter(|n| !left_out_by_name(n)).count();
     let mut values = Vec::with_capacity(height * kept);
     for (column, name) in columns.into_iter().zip(names) {
-        if !left_out_by_name(name) {
-            let per = in_name(name).map_or(1.0, |u| u.1);
-            values.extend(column.into_iter().map(|v| v * per));
+        if let Some(per) = per(name) {
+            let kept_rows = column.into_iter().zip(&rows);
+            values.extend(kept_rows.filter_map(|(v, row)| row.map(|r| v * r * per)));
         }
     }
     DMatrix::from_vec(height, kept, values)

@@ -21,8 +21,8 @@ pub(super) struct Found {
     /// `"columns"`): each name once, not once a value.
     pub names: Option<Vec<String>>,
     /// The frames' columns instead of rows, each named by `names` (pandas' `"columns"`):
-    /// their values, NaN where missing.
-    pub columns: Option<Vec<Vec<f64>>>,
+    /// their values (NaN where missing), and their rows' keys.
+    pub columns: Option<(Vec<Vec<f64>>, Vec<String>)>,
 }
 
 impl Found {
@@ -260,6 +260,6 @@ fn columns(object: Object) -> Result<Found, String> {
                orient=\"columns\"; orient=\"index\" reads transposed), "
             .into(),
         names: Some(names),
-        columns: Some(columns),
+        columns: Some((columns, object.keys)),
     })
 }

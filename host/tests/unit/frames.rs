@@ -713,12 +713,12 @@ fn frames_as_json_arrays_are_read() {
         ),
         // Its columns left out or read as volts by their names, as a CSV's.
         (
-            r#"{"t":{"0":0,"1":1},"a (mV)":{"0":1000,"1":4000},"b (mV)":{"0":2000,"1":5000},"c (mV)":{"0":3000,"1":6000}}"#,
-            "its value 't' skipped",
+            r#"{"t":{"0":0,"1":1},"a (mV)":{"0":1000,"1":4000},"b (mV)":{"0":2000,"1":5000},"c (mV)":{"0":3000,"1":6000},"label":{"0":"none","1":"x"}}"#,
+            "its values 't', 'label' skipped",
         ),
         // orient="index": a key a row, read transposed by K.
         (
-            r#"{"0":{"a":1,"b":2,"c":3},"1":{"a":4,"b":5,"c":6}}"#,
+            r#"{"0":{"a":1,"b":2,"c":3,"label":"none"},"1":{"a":4,"b":5,"c":6,"label":"x"}}"#,
             "one per column: read transposed",
         ),
         (

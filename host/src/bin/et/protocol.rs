@@ -50,7 +50,7 @@ pub(crate) struct ProtocolArgs {
     /// A system's injections, to cross with --measurements into a protocol file (printed as
     /// --csv prints one): a list of pairs (a row each: source, sink and optionally its
     /// current, named in a header or in that order; KIT4's and the Kuopio challenge's
-    /// injection_pairs.csv, pyEIT's ex_mat saved) or a matrix of current patterns (+I at the
+    /// injection_pairs.csv) or a matrix of current patterns (+I at the
     /// source, -I at the sink, 0 elsewhere: injections.csv, Injref, EIDORS's stim_pattern),
     /// as a CSV, .npy, .npz:NAME or .mat:VARIABLE. Every measurement is taken under every
     /// injection, injection by injection, as those systems' frames are.
