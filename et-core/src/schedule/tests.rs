@@ -171,6 +171,18 @@ fn wrong_rows_are_named_by_line_and_cell() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("no 'negative' column"), "{e}");
+    // A current under a unit's name (`I (mA)`) is refused as current_ma is: its rows would
+    // have driven the scene's current without a word.
+    for name in ["I (mA)", "I_uA", "I [A]"] {
+        let e = parse(
+            &format!("source,sink,positive,negative,{name}\n0,1,2,3,1.4\n"),
+            16,
+            0,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(&format!("'{name}' reads as a current")), "{e}");
+    }
     // Names beginning with a column's (the tank archives' `source_electrode(+)`), read.
     let begun = "source_electrode(+),sink_electrode(-),plus_electrode,negative_v\n0,1,2,3\n";
     assert_eq!(parse(begun, 16, 0).unwrap().rows()[0].negative, 3);

@@ -66,14 +66,15 @@ pub(super) fn named(path: &Path, text: &str, side: Side) -> Result<Named, PairsE
         }
         return Err(fail(first_line, fault));
     };
-    // An injection's current: current_a in amperes, or another name read as a current in
-    // the unit it says (`current_ma`, `amplitude (mA)`), else in a unit to be given.
+    // An injection's current: current_a in amperes, or another name read as a current (by a
+    // word, or a unit of current: `I (mA)`) in the unit it says (`current_ma`, `amplitude
+    // (mA)`), else in a unit to be given.
     let current = (side == Side::Injections)
         .then(|| {
             first.iter().enumerate().find_map(|(c, name)| {
                 if column_role(name) == Some(4) {
                     Some((c, name, Unit::Named("A".to_string(), 1.0)))
-                } else if reads_as_current(name) {
+                } else if reads_as_current(name) || unit_in_name(name, amperes_per).is_some() {
                     let unit = unit_in_name(name, amperes_per).map_or_else(
                         || Unit::Asked(name.to_string()),
                         |(u, per)| Unit::Named(u, per),
@@ -116,8 +117,15 @@ pub(super) fn named(path: &Path, text: &str, side: Side) -> Result<Named, PairsE
         return Err(fail(first_line, PairsFault::Empty));
     }
     let name = |c: usize| format!("'{}'", first.get(c).unwrap_or(""));
+    // The columns read for none of these, said (a current under a name not read as one would
+    // otherwise drive the default without a word).
+    let used = [Some(ca), Some(cb), current.as_ref().map(|(c, _, _)| *c)];
+    let ignored: Vec<String> = (0..first.len())
+        .filter(|c| !used.contains(&Some(*c)))
+        .map(name)
+        .collect();
     let said = format!(
-        "{}: {} {} pairs under a header ({}, {}{})",
+        "{}: {} {} pairs under a header ({}, {}{}{})",
         path.display(),
         pairs.len(),
         side.noun(),
@@ -129,7 +137,12 @@ pub(super) fn named(path: &Path, text: &str, side: Side) -> Result<Named, PairsE
                 _ => String::new(),
             };
             format!("; currents from '{name}'{unit}")
-        })
+        }),
+        match ignored.as_slice() {
+            [] => String::new(),
+            [one] => format!("; its column {one} ignored"),
+            many => format!("; its columns {} ignored", many.join(", ")),
+        }
     );
     Ok(Named::Listed(Listed {
         pairs,

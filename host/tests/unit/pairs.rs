@@ -217,6 +217,25 @@ fn pyeit_lists_units_and_faults_are_said() {
     };
     let e = cross(&inj, &meas, &crossing).unwrap_err().to_string();
     assert!(e.contains("names its currents' unit A"), "{e}");
+    // A current named by its unit alone (`I (mA)`) is read in it (it was ignored, every
+    // injection driving 1 mA); a column read for nothing is said.
+    std::fs::write(
+        &inj,
+        "\"I+\";\"I-\";\"I (mA)\";note\n0;4;1,414;a\n1;5;1,414;b\n",
+    )
+    .unwrap();
+    let c = cross(&inj, &meas, &Crossing::default()).unwrap();
+    assert!(
+        c.schedule
+            .rows()
+            .iter()
+            .all(|r| (r.current_a - 1.414e-3).abs() < 1e-12)
+    );
+    assert!(
+        c.said[0].contains("its column 'note' ignored"),
+        "{}",
+        c.said[0]
+    );
     // A current below 0 in a list (not a matrix of patterns) said as the list's, by its row.
     std::fs::write(&inj, "0,4,1e-3\n1,5,-1e-3\n").unwrap();
     let e = cross(&inj, &meas, &Crossing::default())
