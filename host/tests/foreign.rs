@@ -860,6 +860,20 @@ current_ua = 1000
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// The values of a little-endian f8 `.npy` file's `bytes`, in order (its shape read apart).
+fn npy_f64(bytes: &[u8]) -> Vec<f64> {
+    let (len, at) = match bytes[6] {
+        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        _ => (
+            u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+            12,
+        ),
+    };
+    (bytes[at + len..].chunks_exact(8))
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect()
+}
+
 /// `--all` images every frame after the reference with one set-up: a JSON line each whose
 /// strongest object is where imaging the frame alone put it (within a pixel: from a matrix's
 /// second frame the pixels come through its f32 operator), and every frame's pixels in one
@@ -887,7 +901,14 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
         png,
     ];
     let run = |extra: &[&str]| et(&[&base[..], extra].concat());
-    let out = run(&["--all", "--image-out", stack.to_str().unwrap()]);
+    let classes = d.join("classes.npy");
+    let out = run(&[
+        "--all",
+        "--image-out",
+        stack.to_str().unwrap(),
+        "--segment",
+        classes.to_str().unwrap(),
+    ]);
     assert!(
         out.status.success(),
         "{}",
@@ -923,6 +944,35 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
     assert!(
         bytes.len() > data && (bytes.len() - data).is_multiple_of(16),
         "f8 values after the header"
+    );
+    // Every frame's three classes beside its pixels (--segment was refused with --all): the
+    // last frame's as imaging it alone draws them, but for pixels at an object's half-peak
+    // edge (the warm frames go through the f32 operator).
+    let last = d.join("last-classes.npy");
+    let alone = run(&["--frame", "5", "--segment", last.to_str().unwrap()]);
+    assert!(
+        alone.status.success(),
+        "{}",
+        String::from_utf8_lossy(&alone.stderr)
+    );
+    let (all, one) = (
+        npy_f64(&std::fs::read(&classes).unwrap()),
+        npy_f64(&std::fs::read(&last).unwrap()),
+    );
+    assert_eq!(all.len(), 5 * 64 * 64);
+    let tail = &all[4 * 64 * 64..];
+    let differ = tail
+        .iter()
+        .zip(&one)
+        .filter(|(a, b)| !(a == b || (a.is_nan() && b.is_nan())))
+        .count();
+    assert!(
+        differ <= 64 * 64 / 100,
+        "{differ} of the last frame's pixels classed otherwise alone"
+    );
+    assert!(
+        tail.iter().any(|c| *c == 1.0 || *c == 2.0),
+        "the last frame's object classed"
     );
     let part = run(&["--range", "2..4"]);
     assert!(
@@ -973,7 +1023,14 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
     std::fs::write(&gappy, et_learn::npz::npy_of_matrix(&matrix)).unwrap();
     let mut args = base.to_vec();
     args[4] = gappy.to_str().unwrap();
-    args.extend(["--all", "--image-out", stack.to_str().unwrap()]);
+    let classes = d.join("gappy-classes.npy");
+    args.extend([
+        "--all",
+        "--image-out",
+        stack.to_str().unwrap(),
+        "--segment",
+        classes.to_str().unwrap(),
+    ]);
     let out = et(&args);
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{said}");
@@ -1003,6 +1060,14 @@ fn every_frame_set_up_once(d: &Path, scene: &Path, npy: &Path, one_by_one: &[([f
     assert!(
         image(3).iter().any(|v| v.is_finite()),
         "frame 4's is imaged"
+    );
+    // Its classes likewise NaN in their stack, the others classed.
+    let classes = npy_f64(&std::fs::read(&classes).unwrap());
+    assert!(classes[2 * 64 * 64..3 * 64 * 64].iter().all(|v| v.is_nan()));
+    assert!(classes[3 * 64 * 64..4 * 64 * 64].contains(&0.0));
+    assert!(
+        said.contains("gappy-classes.npy are NaN") || said.contains("gappy-classes.npy is NaN"),
+        "{said}"
     );
 }
 

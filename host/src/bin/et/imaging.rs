@@ -154,13 +154,13 @@ pub(crate) struct ReconstructArgs {
     frame: Option<usize>,
     /// With --frames: image every frame after the reference, set up once: each frame's
     /// objects and touches as a JSON line on standard output (`frame`, `alpha`, `noise`,
-    /// `objects`, `found_touches`, as --json names them); --out draws the last, --image-out writes
-    /// every frame's pixels (frames x rows x cols).
-    #[arg(long, requires = "frames", conflicts_with_all = ["json", "segment"])]
+    /// `objects`, `found_touches`, as --json names them); --out draws the last, --image-out and
+    /// --segment write every frame's pixels and classes (frames x rows x cols).
+    #[arg(long, requires = "frames", conflicts_with_all = ["json"])]
     all: bool,
     /// With --frames: as --all, for frames A..B only (0-based, B excluded and at most the
     /// count of frames; A.. to the end).
-    #[arg(long, value_name = "A..B", allow_hyphen_values = true, requires = "frames", conflicts_with_all = ["all", "json", "segment"])]
+    #[arg(long, value_name = "A..B", allow_hyphen_values = true, requires = "frames", conflicts_with_all = ["all", "json"])]
     range: Option<et_learn::tabular::RowRange>,
     /// Where to write the image (PNG).
     #[arg(long)]
@@ -177,7 +177,8 @@ pub(crate) struct ReconstructArgs {
     /// conductivity fell), 2 conductive (it rose), NaN outside the sheet, top row first, on
     /// --image-out's grid. Each object's pixels at or above half its own peak take its
     /// class, so a kind of target the image does not show stays empty (the picture
-    /// tomography challenges score; docs/method.md §6.5).
+    /// tomography challenges score; docs/method.md §6.5). With --all or --range, every
+    /// frame's (frames x rows x cols).
     #[arg(long, value_name = "NPY")]
     segment: Option<PathBuf>,
 }

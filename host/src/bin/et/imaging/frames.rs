@@ -356,14 +356,20 @@ fn skip_gaps(args: &ReconstructArgs, path: &str, gaps: &[usize], chosen: usize) 
         },
         if one { "" } else { "s" },
         et_host::frames::said_list(gaps),
-        args.image_out
-            .as_ref()
-            .map_or_else(String::new, |p| format!(
+        match [&args.image_out, &args.segment].map(|p| p.as_ref().map(|p| p.display())) {
+            [None, None] => String::new(),
+            [a, b] => format!(
                 "; {} in {} {} NaN, so that it keeps one image a frame",
                 if one { "its image" } else { "their images" },
-                p.display(),
+                [a, b]
+                    .into_iter()
+                    .flatten()
+                    .map(|p| p.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" and "),
                 if one { "is" } else { "are" }
-            ))
+            ),
+        }
     );
     gaps.to_vec()
 }
@@ -395,8 +401,9 @@ pub(super) fn each_frame(
     let clock = Instant::now();
     let sigma0 = recon.imager().sigma0;
     let (grid, n) = (recon.grid().clone(), chosen.len());
-    let mut stack: Vec<f64> = Vec::new();
-    // A frame skipped (values missing) is a NaN image in the stack, in its place.
+    // The pixels (--image-out) and the classes (--segment) of every frame, as asked.
+    let (mut stack, mut classes): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    // A frame skipped (values missing) is a NaN image in the stacks, in its place.
     let (mut gaps, pixels) = (skipped.iter().peekable(), grid.height * grid.width);
     // Its time said a few seconds in (no bar: the lines go to standard output).
     let (mut pace, no_bar) = (
@@ -428,11 +435,20 @@ pub(super) fn each_frame(
                 found_touches: found.touches.iter().map(RegionSummary::of).collect(),
             };
             out!("{}", serde_json::to_string(&line)?);
+            let before = std::iter::from_fn(|| gaps.next_if(|g| *g < i)).count();
             if args.image_out.is_some() {
-                while gaps.next_if(|g| *g < i).is_some() {
-                    stack.extend(std::iter::repeat_n(f64::NAN, pixels));
-                }
+                stack.extend(std::iter::repeat_n(f64::NAN, pixels * before));
                 grid.top_first_into(&image.pixels.pixels, 1.0 / sigma0, &mut stack);
+            }
+            if args.segment.is_some() {
+                classes.extend(std::iter::repeat_n(f64::NAN, pixels * before));
+                let segmented = et_recon::segment(
+                    &image.pixels.pixels,
+                    &found.objects,
+                    et_recon::SEGMENT_LEVEL,
+                );
+                let values = et_recon::segment::as_values(&segmented);
+                grid.top_first_into(&values, 1.0, &mut classes);
             }
         }
         pace.at(((done * FRAMES_AT_ONCE) + run.len()) as u64, &no_bar);
@@ -442,13 +458,23 @@ pub(super) fn each_frame(
         "imaged {n} frames in {took:.3} s after the set-up ({:.2} ms a frame, objects included)",
         1e3 * took / n.max(1) as f64
     );
-    if let Some(path) = &args.image_out {
-        stack.extend(std::iter::repeat_n(f64::NAN, pixels * gaps.count()));
+    let after = gaps.count();
+    let outputs = [
+        (&args.image_out, stack, "pixels, Delta sigma / sigma_0"),
+        (
+            &args.segment,
+            classes,
+            "classes: 0 background, 1 resistive, 2 conductive",
+        ),
+    ];
+    for (path, mut values, what) in outputs {
+        let Some(path) = path else { continue };
+        values.extend(std::iter::repeat_n(f64::NAN, pixels * after));
         let n = n + skipped.len();
-        let bytes = et_learn::npz::npy_of_array(&stack, &[n, grid.height, grid.width]);
+        let bytes = et_learn::npz::npy_of_array(&values, &[n, grid.height, grid.width]);
         crate::output::write(path, |partial| std::fs::write(partial, &bytes))?;
         say!(
-            "wrote {} ({n} x {} x {} pixels, Delta sigma / sigma_0, top row first{})",
+            "wrote {} ({n} x {} x {} {what}, top row first{})",
             path.display(),
             grid.height,
             grid.width,

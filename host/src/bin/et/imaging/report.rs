@@ -45,7 +45,7 @@ pub(super) fn report(
         None => None,
     };
     let objects = recon.objects(image);
-    let segment = match &args.segment {
+    let segment = match args.segment.as_ref().filter(|_| !batch) {
         Some(path) => Some(write_segment(path, grid, image, &objects)?),
         None => None,
     };
