@@ -11,8 +11,10 @@ use et_sim::scene::Scene;
 
 use crate::domain::count;
 
+mod batch;
 mod frames;
-use frames::{each_frame, frames, table_frames};
+use batch::each_frame;
+use frames::{frames, table_frames};
 mod method;
 use method::method_and_alpha;
 mod mesh;
