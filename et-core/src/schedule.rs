@@ -525,7 +525,7 @@ mod error;
 pub use error::*;
 mod header;
 use header::header_columns;
-pub use header::role as column_role;
+pub use header::{reads_as_current, role as column_role};
 
 #[cfg(test)]
 mod tests;

@@ -99,10 +99,13 @@ pub(super) fn header_columns(
 
 /// Whether a header's column `name` is named as a current: a word of it (split at anything
 /// but letters and digits) begins with `current` or `amp` (amps, ampere, amplitude), or is a
-/// unit of current (`I (mA)`, `I_uA`, `I [A]`).
-fn reads_as_current(name: &str) -> bool {
+/// unit of current (`I (mA)`, `I_uA`, `I [A]`, `I_A`, `I/A`).
+#[must_use]
+pub fn reads_as_current(name: &str) -> bool {
     let units = ["mA", "uA", "nA", "µA", "μA"];
-    let bracketed = ["(A)", "[A]"].iter().any(|u| name.trim_end().ends_with(u));
+    let bracketed = ["(A)", "[A]", "_A", "/A"]
+        .iter()
+        .any(|u| name.trim_end().ends_with(u));
     bracketed
         || name.split(|c: char| !c.is_alphanumeric()).any(|word| {
             let lower = word.to_ascii_lowercase();

@@ -173,7 +173,7 @@ fn wrong_rows_are_named_by_line_and_cell() {
     assert!(e.contains("no 'negative' column"), "{e}");
     // A current under a unit's name (`I (mA)`) is refused as current_ma is: its rows would
     // have driven the scene's current without a word.
-    for name in ["I (mA)", "I_uA", "I [A]"] {
+    for name in ["I (mA)", "I_uA", "I [A]", "I_A"] {
         let e = parse(
             &format!("source,sink,positive,negative,{name}\n0,1,2,3,1.4\n"),
             16,

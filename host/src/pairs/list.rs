@@ -3,21 +3,11 @@
 
 use std::path::Path;
 
-use et_core::schedule::{COLUMNS, column_role};
+use et_core::schedule::{COLUMNS, column_role, reads_as_current};
 use et_core::text;
 
 use super::{Listed, PairsError, PairsFault, Side, Unit, amperes_per};
 use crate::frames::unit_in_name;
-
-/// Whether a header's `name` reads as a current: a word of it (split at anything but
-/// letters and digits) begins with `current` or `amp` (amps, ampere, amplitude).
-fn reads_as_current(name: &str) -> bool {
-    name.split(|c: char| !c.is_ascii_alphanumeric())
-        .any(|word| {
-            let word = word.to_ascii_lowercase();
-            word.starts_with("current") || word.starts_with("amp")
-        })
-}
 
 /// What a table's first row says.
 pub(super) enum Named {
@@ -67,14 +57,14 @@ pub(super) fn named(path: &Path, text: &str, side: Side) -> Result<Named, PairsE
         return Err(fail(first_line, fault));
     };
     // An injection's current: current_a in amperes, or another name read as a current (by a
-    // word, or a unit of current: `I (mA)`) in the unit it says (`current_ma`, `amplitude
+    // word, or a unit of current: `I (mA)`; the protocol file's rule) in the unit it says (`current_ma`, `amplitude
     // (mA)`), else in a unit to be given.
     let current = (side == Side::Injections)
         .then(|| {
             first.iter().enumerate().find_map(|(c, name)| {
                 if column_role(name) == Some(4) {
                     Some((c, name, Unit::Named("A".to_string(), 1.0)))
-                } else if reads_as_current(name) || unit_in_name(name, amperes_per).is_some() {
+                } else if reads_as_current(name) {
                     let unit = unit_in_name(name, amperes_per).map_or_else(
                         || Unit::Asked(name.to_string()),
                         |(u, per)| Unit::Named(u, per),
