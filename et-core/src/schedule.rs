@@ -435,13 +435,7 @@ impl Schedule {
         base: u16,
         default_current_a: f64,
     ) -> Result<Self, ScheduleError> {
-        let text =
-            crate::text::read_text_at_most(path, crate::text::max_file_bytes()).map_err(|e| {
-                ScheduleError::Read {
-                    path: path.to_path_buf(),
-                    source: std::sync::Arc::new(e),
-                }
-            })?;
+        let text = read_text(path)?;
         Self::parse_csv(path, &text, electrodes, base, default_current_a)
     }
 
@@ -463,6 +457,32 @@ impl Schedule {
         }
         out
     }
+}
+
+/// The text of the protocol file `path` (up to the data files' limit), as
+/// [`Schedule::read_csv`] reads it: a MATLAB file given for it is said with the command
+/// that writes a protocol file from it.
+///
+/// # Errors
+/// [`ScheduleError::Read`]: unreadable, not text, or a MATLAB file.
+pub fn read_text(path: &Path) -> Result<String, ScheduleError> {
+    let read = |e: std::io::Error| ScheduleError::Read {
+        path: path.to_path_buf(),
+        source: std::sync::Arc::new(e),
+    };
+    let bytes = crate::text::read_at_most(path, crate::text::max_file_bytes()).map_err(read)?;
+    // A MATLAB file holds the protocol as another tool keeps it (EIDORS's stimulation, KIT4's
+    // patterns), which et's CLI writes out as a protocol file.
+    if bytes.starts_with(b"MATLAB 5.0 MAT-file") {
+        return Err(read(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "a MATLAB .mat file, not a protocol file (text): write one from it with et protocol \
+             --stimulation FILE.mat > protocol.csv (EIDORS's stimulation struct array), or with \
+             --injections FILE.mat:VAR --measurements FILE.mat:VAR (current and measurement \
+             patterns)",
+        )));
+    }
+    crate::text::table_text_of(bytes).map_err(read)
 }
 
 impl ScanConfig {

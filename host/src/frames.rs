@@ -23,7 +23,7 @@ pub(crate) use csv_frames::{unit_in_name, unit_words};
 pub use error::said_list;
 pub use error::{FramesError, FramesFault};
 use mat::mat_matrix;
-pub use mat::mat_v5;
+pub use mat::{Numeric, StructArray, mat_v5};
 
 /// Frames read from a file, each of K values, V.
 #[derive(Clone, Debug, PartialEq)]
@@ -331,6 +331,25 @@ pub fn array_matrix(spec: &Path) -> Option<Result<(DMatrix<f64>, String), Frames
     let ext = extension(&path);
     matches!(ext.as_str(), "npy" | "npz" | "mat")
         .then(|| arrays::matrix(&path, &ext, array.as_deref(), 0))
+}
+
+/// The struct array of `spec` (`file.mat`, or `file.mat:NAME`, a dotted name for a
+/// struct's field: `fmdl.stimulation`) having every field of `wanted`, each element's
+/// fields as numeric matrices (dense or sparse), and what was said.
+///
+/// # Errors
+/// [`FramesError`] naming the file: unreadable, not a version 5 or 7 MATLAB file, no such
+/// struct array, or several and none named.
+pub fn struct_array(spec: &Path, wanted: &[&str]) -> Result<(StructArray, String), FramesError> {
+    let (path, name) = split_array(spec);
+    let bytes =
+        et_core::text::read_at_most(&path, et_core::text::max_file_bytes()).map_err(|source| {
+            FramesError::Io {
+                path: path.clone(),
+                source,
+            }
+        })?;
+    mat::mat_struct_array(&path, &bytes, name.as_deref(), wanted)
 }
 
 /// Voltages single precision cannot hold: et takes frames in it (the board's, and every

@@ -24,10 +24,12 @@ use nalgebra::DMatrix;
 use crate::frames::{self, FramesError};
 
 mod cross;
+mod eidors;
 mod error;
 mod list;
 mod patterns;
 pub use cross::cross;
+pub use eidors::stimulation;
 pub use error::{PairsError, PairsFault};
 use patterns::patterns;
 

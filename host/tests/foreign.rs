@@ -473,6 +473,52 @@ fn a_systems_pair_lists_are_crossed_into_its_protocol_file() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// An EIDORS user's path: the stimulation struct array `mk_stim_patterns` returns, saved by
+/// another writer of MATLAB files (SciPy, tests/data), turned into a protocol file by `et
+/// protocol --stimulation` (a scene given the .mat itself is told so), and the frames
+/// measured under it, as a MATLAB matrix a frame a column, imaged: each rod where it is,
+/// of its sign (EIDORS's source is its +I electrode, the second of each adjacent pair).
+#[test]
+fn an_eidors_stimulation_images_as_its_frames_were_measured() {
+    let d = dir("eidors");
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/eidors_stim.mat");
+    std::fs::copy(&fixture, d.join("stim.mat")).unwrap();
+    let scene_path = d.join("tank.toml");
+    let scene = TANK.replace("current_ua = 1414.2\n", "");
+    std::fs::write(&scene_path, scene.replace("protocol.csv", "stim.mat")).unwrap();
+    let e = Scene::load(&scene_path).unwrap_err().to_string();
+    assert!(e.contains("et protocol --stimulation"), "{e}");
+    let stim = format!("{}:stim", d.join("stim.mat").display());
+    let out = et(&["protocol", "--stimulation", &stim]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && said.contains("K = 208"), "{said}");
+    std::fs::write(d.join("protocol.csv"), &out.stdout).unwrap();
+    std::fs::write(&scene_path, &scene).unwrap();
+    let loaded = Scene::load(&scene_path).unwrap();
+    let schedule = loaded.schedule().unwrap();
+    assert!(schedule.rows().iter().all(|r| r.current_a == 0.010));
+    let (first, second) = (&schedule.rows()[0], &schedule.rows()[13]);
+    assert_eq!([first.source, first.sink, first.positive], [1, 0, 2]);
+    assert_eq!([second.source, second.sink, second.positive], [2, 1, 3]);
+    let targets = [([0.05, 0.03], 10.0), ([-0.06, -0.02], 0.1)];
+    let one_each: Vec<Vec<([f64; 2], f64)>> = targets.iter().map(|t| vec![*t]).collect();
+    let frames = frames(&loaded, &one_each, &Instrument::ideal());
+    let m = nalgebra::DMatrix::from_fn(208, frames.len(), |k, j| frames[j][k]);
+    let mat = d.join("vi.mat");
+    std::fs::write(&mat, et_host::frames::mat_v5("vi", &m)).unwrap();
+    let png = d.join("f.png");
+    for (i, (t, multiplier)) in targets.iter().enumerate() {
+        let (found, sign) = strongest(&reconstruct(&scene_path, &mat, i + 1, &png, &[]));
+        let miss = (found[0] - t[0] * 1e3).hypot(found[1] - t[1] * 1e3);
+        assert_eq!(sign, if *multiplier > 1.0 { 1 } else { -1 }, "{t:?}");
+        assert!(
+            miss < 14.0,
+            "{t:?}: strongest at {found:?} mm, {miss:.1} mm away"
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// `et protocol --csv` writes a protocol file a scene takes back row for row.
 #[test]
 fn et_protocol_csv_is_a_protocol_file() {

@@ -721,6 +721,28 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             },
         },
         Parser {
+            name: "EIDORS stimulation .mat",
+            // SciPy's writing of EIDORS's struct arrays, uncompressed (tests/data).
+            seeds: vec![
+                std::fs::read(
+                    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/eidors_stim_v6.mat"),
+                )
+                .unwrap(),
+            ],
+            // As `et protocol --stimulation FILE.mat:stim` reads it.
+            parse: |p| {
+                let named =
+                    std::env::temp_dir().join(format!("et-fuzz-{}-stim.mat", std::process::id()));
+                let _ = std::fs::remove_file(&named);
+                let spec = PathBuf::from(format!("{}:stim", named.display()));
+                let crossing = et_host::pairs::Crossing::default();
+                let read = std::os::unix::fs::symlink(&p[0], &named).is_ok()
+                    && et_host::pairs::stimulation(&spec, &crossing).is_ok();
+                let _ = std::fs::remove_file(&named);
+                read
+            },
+        },
+        Parser {
             name: "frames MATLAB .mat",
             seeds: vec![et_host::frames::mat_v5("v", &frames_matrix())],
             parse: |p| read_frames(&p[0], "mat"),

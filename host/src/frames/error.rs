@@ -261,6 +261,26 @@ pub enum FramesFault {
         /// The ones there are.
         names: Vec<String>,
     },
+    /// No struct array of the name, or none with the fields asked for.
+    #[error(
+        "no struct array {}with the fields {fields}{}",
+        name.as_ref().map(|n| format!("'{n}' ")).unwrap_or_default(),
+        if names.is_empty() {
+            " (EIDORS's fwd_model.stimulation, what mk_stim_patterns returns: save it with \
+             save('stim.mat', 'stim'), or the forward model with its name)"
+                .to_string()
+        } else {
+            format!(" (it has: {})", names.join(", "))
+        }
+    )]
+    NoStructArray {
+        /// The name asked for.
+        name: Option<String>,
+        /// The fields asked for, in words.
+        fields: String,
+        /// The ones there are with those fields.
+        names: Vec<String>,
+    },
     /// A variable that is not real doubles, singles or 8 to 32-bit integers.
     #[error("'{0}' is complex or 64-bit integer: store the frames' real voltages as double")]
     NotReal(String),

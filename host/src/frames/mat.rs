@@ -8,6 +8,8 @@ use nalgebra::DMatrix;
 use super::{FramesError, FramesFault, content, only_of_k};
 
 mod fields;
+mod structs;
+pub use structs::{Numeric, StructArray};
 
 /// A version 5/7 `.mat` as the MATLAB reader is given it: every compressed variable
 /// inflated in place, each checked to inflate and all of them together to no more than the
@@ -176,6 +178,56 @@ pub(super) fn mat_matrix(
         DMatrix::from_column_slice(rows, cols, &values),
         format!("variable '{}', {said_chosen}", array.name()),
     ))
+}
+
+/// The struct array `name` of a MATLAB file having every field of `wanted` (or its only
+/// one), and what was said.
+pub(super) fn mat_struct_array(
+    path: &Path,
+    bytes: &[u8],
+    name: Option<&str>,
+    wanted: &[&str],
+) -> Result<(StructArray, String), FramesError> {
+    if bytes.starts_with(b"MATLAB 7.3") {
+        return Err(content(path, 0, FramesFault::Mat73));
+    }
+    if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
+        return Err(content(path, 0, FramesFault::NoMatHeader));
+    }
+    let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
+    let mut found = structs::struct_arrays(&plain, wanted);
+    let names: Vec<String> = found.iter().map(|s| s.name.clone()).collect();
+    let fields = wanted.join(" and ");
+    let at = match (name, found.len()) {
+        (Some(n), _) => names.iter().position(|m| m == n),
+        (None, 1) => Some(0),
+        (None, 0) => None,
+        (None, _) => {
+            let fault = FramesFault::Choose {
+                names,
+                kind: "struct arrays",
+                path: path.into(),
+                placeholder: "NAME",
+            };
+            return Err(content(path, 0, fault));
+        }
+    };
+    let Some(at) = at else {
+        let name = name.map(str::to_string);
+        let fault = FramesFault::NoStructArray {
+            name,
+            fields,
+            names,
+        };
+        return Err(content(path, 0, fault));
+    };
+    let array = found.swap_remove(at);
+    let said = format!(
+        "struct array '{}' of {} elements with {fields}",
+        array.name,
+        array.elements.len()
+    );
+    Ok((array, said))
 }
 
 /// The MATLAB reader's reading of `bytes` (a version 5 file, compressed variables inflated).

@@ -72,9 +72,58 @@ pub fn cross(
             .collect()
     };
     let (drives, measured) = (from_zero(&sides[0].1), from_zero(&sides[1].1));
+    let counted = if sides.iter().any(|(_, l)| l.patterns.is_none()) {
+        "as the lists count them"
+    } else {
+        counted_from(base)
+    };
+    let injections: Vec<_> = (drives.iter().zip(&currents))
+        .map(|(&drive, &current_a)| (drive, current_a, measured.as_slice()))
+        .collect();
+    let what = format!(
+        "{} injections x {} measurements, injection by injection",
+        drives.len(),
+        measured.len()
+    );
+    finish(
+        &injections,
+        crossing,
+        (electrodes, base),
+        &what,
+        counted,
+        said,
+    )
+}
+
+/// How patterns' electrodes (from 0) are written, counted from `base`.
+pub(super) fn counted_from(base: u16) -> &'static str {
+    if base == 1 {
+        "counted from 1 (--base 1)"
+    } else {
+        "counted from 0, et's way (--base 1 writes them from 1)"
+    }
+}
+
+/// An injection's pair (source, sink, from 0), its current, A, and the measurements (positive,
+/// negative) taken under it.
+pub(super) type Injection<'a> = ([u16; 2], f64, &'a [[u16; 2]]);
+
+/// The protocol of `injections` (each its pair, its current, A, and the measurements taken
+/// under it; electrodes from 0), less each one's measurements on its drive electrodes where
+/// `crossing` says so, on `(electrodes, base)`; its K said after `said` with `what` was
+/// crossed and how its electrodes are `counted`.
+pub(super) fn finish(
+    injections: &[Injection<'_>],
+    crossing: &Crossing,
+    (electrodes, base): (u16, u16),
+    what: &str,
+    counted: &str,
+    mut said: Vec<String>,
+) -> Result<Crossed, PairsError> {
+    let values: usize = injections.iter().map(|(_, _, m)| m.len()).sum();
     let mut rows = Vec::with_capacity(values);
-    for (&[source, sink], &current_a) in drives.iter().zip(&currents) {
-        for &[positive, negative] in &measured {
+    for &([source, sink], current_a, measured) in injections {
+        for &[positive, negative] in measured {
             let on_drive = [positive, negative]
                 .iter()
                 .any(|e| *e == source || *e == sink);
@@ -92,27 +141,17 @@ pub fn cross(
     }
     let left_out = values - rows.len();
     if crossing.no_meas_current && rows.is_empty() {
-        return fail(format!(
+        return Err(PairsError::Crossing(format!(
             "--no-meas-current leaves none of the {values} values: every measurement uses a \
              drive electrode"
-        ));
+        )));
     }
     let k = rows.len();
     let schedule = Schedule::new(electrodes, rows)?;
     let (first, last) = (base, electrodes - 1 + base);
-    let counted = if sides.iter().any(|(_, l)| l.patterns.is_none()) {
-        "as the lists count them"
-    } else if base == 1 {
-        "counted from 1 (--base 1)"
-    } else {
-        "counted from 0, et's way (--base 1 writes them from 1)"
-    };
     said.push(format!(
-        "K = {k} values a frame: {} injections x {} measurements, injection by injection{}; \
-         electrodes {first} to {last}, {counted} (a scene reads the file as [scan] protocol = \
-         {{ file = \"protocol.csv\"{} }})",
-        drives.len(),
-        measured.len(),
+        "K = {k} values a frame: {what}{}; electrodes {first} to {last}, {counted} (a scene \
+         reads the file as [scan] protocol = {{ file = \"protocol.csv\"{} }})",
         if left_out > 0 {
             format!(", less the {left_out} on an injection's drive electrodes (--no-meas-current)")
         } else {
@@ -228,7 +267,7 @@ fn numbering(
 
 /// Each injection's current, A: as given (`--current-a`), else the file's in its unit (its
 /// name's, or as given), else 1 mA; each in et's range, a unit slip said with the fix.
-fn currents_a(
+pub(super) fn currents_a(
     path: &Path,
     injections: &Listed,
     crossing: &Crossing,

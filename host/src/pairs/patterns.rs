@@ -7,7 +7,7 @@ use super::{By, PairsFault, Side};
 
 /// A pattern's two electrodes and its size, or why it is not one: one entry above 0 and
 /// one below, of one size (within 1e-6), every other 0.
-fn pattern(values: &[f64]) -> Result<([u32; 2], f64), String> {
+pub(super) fn pattern(values: &[f64]) -> Result<([u32; 2], f64), String> {
     let largest = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let nonzero: Vec<usize> = (0..values.len())
         .filter(|&i| values[i].abs() > 1e-9 * largest)

@@ -3,6 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 mod demo;
+mod eidors;
 mod frames;
 mod link;
 mod live;

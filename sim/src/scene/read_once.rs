@@ -32,13 +32,7 @@ impl ReadOnce {
         {
             return text.clone();
         }
-        let text =
-            et_core::text::read_text_at_most(path, et_core::text::max_file_bytes()).map_err(|e| {
-                et_core::schedule::ScheduleError::Read {
-                    path: path.to_path_buf(),
-                    source: std::sync::Arc::new(e),
-                }
-            });
+        let text = et_core::schedule::read_text(path);
         *kept = Some((path.to_path_buf(), text.clone()));
         text
     }

@@ -138,8 +138,8 @@ enum Command {
     ///
     /// Print a protocol's tables (docs/method.md §4), or a protocol file: a built-in one
     /// (--csv), or one crossed from another system's lists of injections and measurements
-    /// (--injections, --measurements: pairs or patterns), for a scene's
-    /// `[scan] protocol = { file = "protocol.csv" }`.
+    /// (--injections, --measurements: pairs or patterns) or read from EIDORS's stimulation
+    /// struct array (--stimulation), for a scene's `[scan] protocol = { file = "protocol.csv" }`.
     ///
     /// Examples:
     ///   et protocol --electrodes 16 --protocol adjacent
@@ -148,6 +148,7 @@ enum Command {
     ///   et protocol -l 16 -p adjacent --csv --current-a 1.4e-3 > protocol.csv
     ///   et protocol --injections inj.csv --measurements meas.csv --current-unit mA > protocol.csv
     ///   et protocol --injections ref.mat:Injref --measurements ref.mat:Mpat --patterns columns
+    ///   et protocol --stimulation stim.mat > protocol.csv      (EIDORS's mk_stim_patterns)
     #[command(verbatim_doc_comment)]
     Protocol(protocol::ProtocolArgs),
     /// Simulate a scene into a recording of frames (JSON Lines).

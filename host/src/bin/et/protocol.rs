@@ -18,8 +18,10 @@ enum Lie {
 }
 
 #[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("lists").args(["injections", "stimulation"])))]
 pub(crate) struct ProtocolArgs {
-    /// Electrode count L: even, 4 to 32 [default: 16; with --injections, the files'].
+    /// Electrode count L: even, 4 to 32 [default: 16; with --injections or --stimulation,
+    /// the files'].
     #[arg(short = 'l', long,
           value_parser = crate::domain::whole(et_core::protocol::L_MIN, et_core::protocol::L_MAX))]
     electrodes: Option<u8>,
@@ -41,7 +43,7 @@ pub(crate) struct ProtocolArgs {
     /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
     #[arg(long)]
     csv: bool,
-    /// With --csv or --injections: the current of every row, A (1e-9, a board's least, to
+    /// With --csv, --injections or --stimulation: the current of every row, A (1e-9, a board's least, to
     /// 0.05: more is a unit slip) [default: 1e-3, or the injections file's].
     #[arg(long,
           value_parser = crate::domain::real(et_core::schedule::MIN_CURRENT_A,
@@ -62,21 +64,31 @@ pub(crate) struct ProtocolArgs {
     /// patterns (+1 and -1: Mpat, EIDORS's meas_pattern).
     #[arg(long, requires = "injections", value_name = "FILE")]
     measurements: Option<PathBuf>,
+    /// EIDORS's protocol, printed as a protocol file: the struct array mk_stim_patterns
+    /// returns (a forward model's stimulation), saved in a .mat (`save stim.mat stim`; name
+    /// one of several as stim.mat:stim, or a model's as model.mat:fmdl.stimulation). Each
+    /// element is an injection (its stim_pattern) with its own measurements (its
+    /// meas_pattern's rows), in EIDORS's order, rotate_meas and no_redundant included.
+    #[arg(long, value_name = "FILE.mat[:NAME]",
+          conflicts_with_all = ["protocol", "drive_skip", "measure_skip", "json", "injections",
+                                "measurements", "patterns"])]
+    stimulation: Option<PathBuf>,
     /// With --injections: what the lists count electrodes from, 0 or 1 [default: 0 where a
     /// list holds an electrode 0, else 1]. The protocol file keeps the lists' numbering.
-    #[arg(long, requires = "injections", value_parser = crate::domain::whole(0u16, 1u16))]
+    /// Patterns' electrodes are written from 0 (--base 1: from 1, as MATLAB counts them).
+    #[arg(long, requires = "lists", value_parser = crate::domain::whole(0u16, 1u16))]
     base: Option<u16>,
     /// With --injections: the unit of the file's currents, where its column's name does not
     /// say it (`amplitude`; KIT4's and the Kuopio challenge's are mA): A, mA, uA or nA.
-    #[arg(long, requires = "injections", conflicts_with = "current_a", value_parser = current_unit)]
+    #[arg(long, requires = "lists", conflicts_with = "current_a", value_parser = current_unit)]
     current_unit: Option<(String, f64)>,
     /// With --injections: how a square matrix whose rows and columns both read as patterns
     /// holds them (asked for only then).
     #[arg(long, requires = "injections", value_enum, ignore_case = true)]
     patterns: Option<Lie>,
-    /// With --injections: leave out each injection's measurements on its own drive
-    /// electrodes, as EIDORS's no_meas_current (they carry the contact's impedance).
-    #[arg(long, requires = "injections")]
+    /// With --injections or --stimulation: leave out each injection's measurements on its
+    /// own drive electrodes, as EIDORS's no_meas_current (they carry the contact's impedance).
+    #[arg(long, requires = "lists")]
     no_meas_current: bool,
 }
 
@@ -87,12 +99,9 @@ fn current_unit(text: &str) -> Result<(String, f64), String> {
         .ok_or_else(|| format!("'{text}' is not a unit of current: give A, mA, uA or nA"))
 }
 
-/// Prints the protocol file crossed from `--injections` and `--measurements`; what was read
-/// and done to standard error.
-fn crossed(args: &ProtocolArgs, injections: &std::path::Path) -> Result<()> {
-    let Some(measurements) = &args.measurements else {
-        bail!("--injections needs --measurements");
-    };
+/// Prints the protocol file crossed from `--injections` and `--measurements`, or read from
+/// `--stimulation`; what was read and done to standard error.
+fn crossed(args: &ProtocolArgs) -> Result<()> {
     let crossing = Crossing {
         electrodes: args.electrodes.map(u16::from),
         base: args.base,
@@ -104,7 +113,13 @@ fn crossed(args: &ProtocolArgs, injections: &std::path::Path) -> Result<()> {
         }),
         no_meas_current: args.no_meas_current,
     };
-    let crossed = pairs::cross(injections, measurements, &crossing)?;
+    let crossed = match (&args.stimulation, &args.injections, &args.measurements) {
+        (Some(stimulation), _, _) => pairs::stimulation(stimulation, &crossing)?,
+        (None, Some(injections), Some(measurements)) => {
+            pairs::cross(injections, measurements, &crossing)?
+        }
+        _ => bail!("--injections needs --measurements"),
+    };
     for line in &crossed.said {
         say!("{line}");
     }
@@ -113,11 +128,14 @@ fn crossed(args: &ProtocolArgs, injections: &std::path::Path) -> Result<()> {
 }
 
 pub(crate) fn run(args: &ProtocolArgs) -> Result<()> {
-    if let Some(injections) = &args.injections {
-        return crossed(args, injections);
+    if args.injections.is_some() || args.stimulation.is_some() {
+        return crossed(args);
     }
     if args.current_a.is_some() && !args.csv {
-        bail!("--current-a is the current of --csv's rows or of --injections': give it with one");
+        bail!(
+            "--current-a is the current of --csv's rows, or of --injections' or \
+             --stimulation's: give it with one"
+        );
     }
     let kind = match args.drive_skip {
         Some(drive_skip) => {

@@ -6,12 +6,12 @@
 use std::ops::Range;
 
 /// Nested structs followed at most this deep (a damaged file could nest without end).
-const DEPTH: usize = 8;
+pub(super) const DEPTH: usize = 8;
 
 /// miMATRIX, the array element.
-const MATRIX: u32 = 14;
+pub(super) const MATRIX: u32 = 14;
 /// The struct class.
-const STRUCT: u8 = 2;
+pub(super) const STRUCT: u8 = 2;
 
 /// A numeric field of a 1 x 1 struct: its dotted name and where its array element and,
 /// inside it, its (empty) name sub-element lie in the file.
@@ -26,10 +26,10 @@ pub(super) struct Field {
 }
 
 /// One element's tag: its type, its data's place and where the next element starts.
-struct Tag {
-    kind: u32,
-    data: Range<usize>,
-    end: usize,
+pub(super) struct Tag {
+    pub kind: u32,
+    pub data: Range<usize>,
+    pub end: usize,
 }
 
 /// Reads words in a version 5 file's byte order (the reader's input made safe reads them too).
@@ -67,7 +67,7 @@ impl Order {
 
     /// The element whose tag starts at `at` (long form: type and size words, the data
     /// padded to 8 bytes; small form: both in one word, the data in the next 4 bytes).
-    fn tag(self, b: &[u8], at: usize) -> Option<Tag> {
+    pub fn tag(self, b: &[u8], at: usize) -> Option<Tag> {
         let first = self.word(b, at)?;
         let (kind, data, end) = if first >> 16 == 0 {
             let size = self.word(b, at.checked_add(4)?)? as usize;
