@@ -281,8 +281,11 @@ pub enum FramesFault {
         /// The ones there are with those fields.
         names: Vec<String>,
     },
-    /// A variable that is not real doubles, singles or 8 to 32-bit integers.
-    #[error("'{0}' is complex or 64-bit integer: store the frames' real voltages as double")]
+    /// A variable of complex values.
+    #[error(
+        "'{0}' holds complex values: save the real voltages, the part you mean: the real part \
+         (real(V)), the magnitude (abs(V)) or the quadrature (imag(V))"
+    )]
     NotReal(String),
     /// A variable of other than 2 dimensions.
     #[error("'{name}' has {dimensions} dimensions: frames are a 2-D matrix")]

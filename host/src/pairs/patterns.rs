@@ -31,17 +31,25 @@ pub(super) fn pattern(values: &[f64]) -> Result<([u32; 2], f64), String> {
             values[*p], values[*n]
         )),
         ([], _) | (_, []) => Err(format!(
-            "{} entries above 0 and {} below: a pattern has one of each (+ at the source or \
-             positive electrode, - at the sink or negative; one electrode against ground is \
-             not a pair)",
-            above.len(),
-            below.len()
+            "{} above 0 and {} below: a pattern has one of each (+ at the source or positive \
+             electrode, - at the sink or negative; one electrode against ground is not a pair)",
+            entries(above.len()),
+            entries(below.len())
         )),
         _ => Err(format!(
-            "{} entries above 0 and {} below, where a pattern has one of each",
-            above.len(),
-            below.len()
+            "{} above 0 and {} below, where a pattern has one of each",
+            entries(above.len()),
+            entries(below.len())
         )),
+    }
+}
+
+/// `n` entries, in words ("no entry", "1 entry", "3 entries").
+fn entries(n: usize) -> String {
+    match n {
+        0 => "no entry".into(),
+        1 => "1 entry".into(),
+        n => format!("{n} entries"),
     }
 }
 

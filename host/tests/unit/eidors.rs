@@ -262,7 +262,7 @@ fn matlab_compact_struct_arrays_and_their_faults() {
                 Value::Dense(4, 1, vec![1, 0, 0, 0]),
                 Value::Dense(1, 4, vec![0, 0, 1, -1]),
             ],
-            "stim(2).stim_pattern: 1 entries above 0 and 0 below",
+            "stim(2).stim_pattern: 1 entry above 0 and no entry below",
         ),
         (
             "transposed",

@@ -472,6 +472,22 @@ fn matlab_files_by_variable() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("no numeric array 'volts'"), "{e}");
+    // Complex frames (an impedance system's): the part to save is asked, as of a .npy's
+    // (they were "complex or 64-bit integer", though 64-bit integers are read).
+    let mut complex = mat_v5("z", &v);
+    complex[145] = 0x08; // the array flags' complex bit
+    let imag: Vec<u8> = v.iter().flat_map(|x| (x * 0.5).to_le_bytes()).collect();
+    complex.extend(9u32.to_le_bytes());
+    complex.extend((imag.len() as u32).to_le_bytes());
+    complex.extend(&imag);
+    let size = u32::from_le_bytes(complex[132..136].try_into().unwrap()) + 8 + imag.len() as u32;
+    complex[132..136].copy_from_slice(&size.to_le_bytes());
+    std::fs::write(&f, &complex).unwrap();
+    let e = read(&f, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("'z' holds complex values") && e.contains("real(V)"),
+        "{e}"
+    );
     std::fs::write(&f, b"MATLAB 7.3 MAT-file, Platform: GLNXA64").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("-v7"), "{e}");

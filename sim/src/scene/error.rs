@@ -100,13 +100,49 @@ pub enum SceneError {
     Wire(#[from] WireError),
 }
 
+/// What a scene's field that must be given is, with a value to start from (sim/scenes/ has
+/// a scene of every shape).
+fn field_said(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "sheet" => {
+            "the sheet's table, [sheet], with its outline (shape = { kind = \"disc\", radius = 0.11 })"
+        }
+        "shape" => {
+            "the sheet's outline, m: shape = { kind = \"disc\", radius = 0.11 }, { kind = \
+             \"rectangle\", width = 0.13, height = 0.13 } or { kind = \"polygon\", vertices = \
+             [[x, y], ...] }"
+        }
+        "radius" => "a radius, m (a disc sheet's: 0.11; a touch's contact: 0.008, a fingertip)",
+        "width" | "height" => "the rectangle's extent along x (width) and y (height), m",
+        "vertices" => "the polygon's corners, [[x, y], ...] in m, counter-clockwise",
+        "position" => "the touch's centre, [x, y] in m from the outline's centre",
+        "pressure" => "the touch's pressure while on, Pa (a firm press: 20e3)",
+        "electrode" => "the faulty electrode's number, from 0",
+        "per_kelvin" => "the relative change of conductance per kelvin (PPy fabric: about 0.01)",
+        "kelvin_per_minute" => "the temperature's ramp, K per minute",
+        "file" => "the protocol file's path, relative to the scene (et protocol --csv writes one)",
+        _ => return None,
+    })
+}
+
 /// The TOML parser's message, each line of its snippet of the file cut at 120 characters (a
 /// CSV given as a scene echoed a line of 5 000), and where the file is not a scene at all
 /// (its first line is no TOML), said so; a field at fault on the first line is not asked
 /// about.
 fn parse_said(source: &toml::de::Error) -> String {
     const WIDE: usize = 120;
-    let text = et_core::said::serde_said(&source.to_string());
+    let mut text = et_core::said::serde_said(&source.to_string());
+    // A field left out is said with what it is and a value to start from (serde names it
+    // alone: "missing field `pressure`" left its unit to guess).
+    if let Some(at) = text.find("missing field `") {
+        let rest = &text[at + "missing field `".len()..];
+        if let Some((field, _)) = rest.split_once('`')
+            && let Some(what) = field_said(field)
+        {
+            let end = at + "missing field `".len() + field.len() + 1;
+            text.insert_str(end, &format!(": {what}"));
+        }
+    }
     let mut said: Vec<String> = text
         .trim_end()
         .lines()

@@ -273,6 +273,34 @@ fn another_of_ets_files_given_as_a_scene_is_named() {
     }
 }
 
+/// A field left out is said with what it is, in its unit, and a value to start from (serde's
+/// "missing field `pressure`" left the unit to guess); a field of no such help as serde says it.
+#[test]
+fn a_field_left_out_is_said_with_its_unit() {
+    let disc = "[sheet]\nshape = { kind = \"disc\", radius = 0.11 }\n";
+    for (text, said) in [
+        (
+            format!("{disc}[[touch]]\nposition = [0.02, 0.0]\nradius = 0.008\n"),
+            "missing field `pressure`: the touch's pressure while on, Pa",
+        ),
+        (
+            format!("{disc}[[touch]]\nradius = 0.008\npressure = 2e4\n"),
+            "missing field `position`: the touch's centre, [x, y] in m",
+        ),
+        (
+            "[sheet]\nshape = { kind = \"rectangle\", width = 0.1 }\n".into(),
+            "missing field `height`: the rectangle's extent",
+        ),
+        (
+            "seed = 3\n".into(),
+            "missing field `sheet`: the sheet's table",
+        ),
+    ] {
+        let e = Scene::parse(&text, "s.toml").unwrap_err().to_string();
+        assert!(e.contains(said), "{e}");
+    }
+}
+
 /// An unclosed inline table repeated (`b = {` after a table header, 3 000 times: 30 kB)
 /// overflowed the TOML parser's stack and aborted the process (found by the parser fuzzer).
 /// It is refused by line; brackets inside strings and comments do not count.
