@@ -939,6 +939,23 @@ fn reconstruct_writes_an_image_and_finds_the_touch() {
     assert!((stage("setup") - sum).abs() < 1e-9, "{t}");
     assert_eq!(j["protocol"], "adjacent");
     assert_eq!(j["touch_matches"].as_array().map(Vec::len), Some(1), "{j}");
+    assert_eq!(j["out"], png.to_str().unwrap());
+    // The summary alone: no picture drawn (`out` null), the same regions; without --json (or
+    // another output) the picture is asked for.
+    let scene = root.join("sim/scenes/disc-ref-x075.toml");
+    let args = [
+        "reconstruct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--triangles",
+        "3000",
+    ];
+    let alone = et(&[&args[..], &["--json"]].concat());
+    let k: serde_json::Value = serde_json::from_slice(&alone.stdout).unwrap();
+    assert!(k["out"].is_null() && k["regions"] == j["regions"], "{k}");
+    let refused = et(&args);
+    let e = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && e.contains("--out"), "{e}");
     // Without --json the touch is said; on the untouched sheet, that there is none (it listed
     // the noise's regions and said nothing of touches).
     let words = |scene: &str| {

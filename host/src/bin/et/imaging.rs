@@ -164,9 +164,10 @@ pub(crate) struct ReconstructArgs {
     /// count of frames; A.. to the end).
     #[arg(long, value_name = "A..B", allow_hyphen_values = true, requires = "frames", conflicts_with_all = ["all", "json"])]
     range: Option<et_learn::tabular::RowRange>,
-    /// Where to write the image (PNG).
-    #[arg(long)]
-    out: PathBuf,
+    /// Where to write the image (PNG); it may be left out where --json, --image-out,
+    /// --segment, --all or --range give what was found.
+    #[arg(long, required_unless_present_any = ["json", "image_out", "segment", "all", "range"])]
+    out: Option<PathBuf>,
     /// Print a JSON summary (regions, metrics, timings).
     #[arg(long)]
     json: bool,

@@ -388,11 +388,13 @@ pub(super) fn check_paths(args: &ReconstructArgs, scene: &Scene, force: bool) ->
         .map(|m| m.split(',').map(|f| Path::new(f.trim())).collect())
         .unwrap_or_default();
     inputs.extend(mesh_files);
-    let mut outputs = vec![args.out.as_path()];
+    let mut outputs: Vec<&Path> = args.out.as_deref().into_iter().collect();
     outputs.extend(args.image_out.as_deref());
     outputs.extend(args.segment.as_deref());
     crate::output::check_all(&outputs, &[], &inputs, force)?;
-    crate::output::check_format(&args.out, "the image (PNG)", &["png"])?;
+    if let Some(out) = &args.out {
+        crate::output::check_format(out, "the image (PNG)", &["png"])?;
+    }
     for npy in [&args.image_out, &args.segment].into_iter().flatten() {
         crate::output::check_format(npy, "a NumPy array", &["npy"])?;
     }

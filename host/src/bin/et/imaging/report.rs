@@ -49,28 +49,31 @@ pub(super) fn report(
         Some(path) => Some(write_segment(path, grid, image, &objects)?),
         None => None,
     };
-    crate::output::write(&args.out, |partial| {
-        et_host::plot::sheet_image(
-            recon.imager(),
-            partial,
-            &format!(
-                "{}: {} found (f = {f})",
-                args.scene
-                    .file_name()
-                    .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
-                et_host::plot::touches(found.len())
-            ),
-            &image.pixels,
-            &et_host::plot::SheetMarks {
-                truth: truth.to_vec(),
-                found: found.iter().map(|g| g.centroid).collect(),
-                roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
-                half_range: None,
-            },
-        )
-    })?;
+    let picture = args.out.as_deref().map(|out| {
+        crate::output::write(out, |partial| {
+            et_host::plot::sheet_image(
+                recon.imager(),
+                partial,
+                &format!(
+                    "{}: {} found (f = {f})",
+                    args.scene
+                        .file_name()
+                        .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+                    et_host::plot::touches(found.len())
+                ),
+                &image.pixels,
+                &et_host::plot::SheetMarks {
+                    truth: truth.to_vec(),
+                    found: found.iter().map(|g| g.centroid).collect(),
+                    roi: rois.iter().flat_map(|g| g.pixels.iter().copied()).collect(),
+                    half_range: None,
+                },
+            )
+        })
+    });
+    picture.transpose()?;
     let summary = ReconstructSummary {
-        out: &args.out,
+        out: args.out.as_deref(),
         triangles: recon.imager().triangles(),
         protocol: recon
             .schedule()
@@ -113,7 +116,9 @@ pub(super) fn report(
         return Ok(());
     }
     say_found(rois, found, m.as_ref(), truth.len(), &matches);
-    say!("wrote {}", args.out.display());
+    if let Some(out) = &args.out {
+        say!("wrote {}", out.display());
+    }
     Ok(())
 }
 
@@ -220,7 +225,8 @@ pub(super) struct ForwardSummary<'a> {
 /// `et reconstruct --json`.
 #[derive(serde::Serialize)]
 pub(super) struct ReconstructSummary<'a> {
-    out: &'a std::path::Path,
+    /// The picture's path (None: none drawn).
+    out: Option<&'a std::path::Path>,
     triangles: usize,
     protocol: String,
     /// "gn" or "greit".
