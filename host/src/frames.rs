@@ -107,9 +107,9 @@ pub fn table_matrix(path: &Path, text: &str) -> Result<(DMatrix<f64>, String), F
             json_frames::json_matrix(path, text)
         }
         _ if lvm::is_lvm(text) => {
-            let (csv, not_volts) = lvm::as_csv(text);
-            let (matrix, said) = csv_matrix(path, &csv)?;
-            if let Some(unit) = not_volts {
+            let lvm = lvm::as_csv(text);
+            let (matrix, said) = csv_matrix(path, &lvm.csv).map_err(|e| lvm.in_file_columns(e))?;
+            if let Some(unit) = lvm.not_volts {
                 let said = format!(
                     "a LabVIEW measurement file (its Y_Unit_Label '{unit}' not a unit of \
                      voltage: the values are taken as volts), {said}"
@@ -350,6 +350,20 @@ pub fn struct_array(spec: &Path, wanted: &[&str]) -> Result<(StructArray, String
             }
         })?;
     mat::mat_struct_array(&path, &bytes, name.as_deref(), wanted)
+}
+
+/// The names of the struct arrays of the MATLAB file `spec` names (its `:NAME` left aside)
+/// having every field of `wanted`; none for a file that is no regular MATLAB file (a FIFO is
+/// not read again).
+#[must_use]
+pub fn struct_array_names(spec: &Path, wanted: &[&str]) -> Vec<String> {
+    let (path, _) = split_array(spec);
+    if !path.metadata().is_ok_and(|m| m.is_file()) {
+        return Vec::new();
+    }
+    et_core::text::read_at_most(&path, et_core::text::max_file_bytes())
+        .map(|bytes| mat::struct_array_names(&bytes, wanted))
+        .unwrap_or_default()
 }
 
 /// Voltages single precision cannot hold: et takes frames in it (the board's, and every

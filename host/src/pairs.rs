@@ -171,8 +171,9 @@ pub fn amperes_per(unit: &str) -> Option<f64> {
 /// [`PairsError`] naming the file (its line or pattern) and the fix.
 pub fn read(spec: &Path, side: Side, by: Option<By>) -> Result<Listed, PairsError> {
     if let Some(matrix) = frames::array_matrix(spec) {
-        let (matrix, said) = matrix.map_err(PairsError::Frames)?;
-        return listed(spec, side, &matrix, &said, by);
+        let read = (matrix.map_err(PairsError::Frames))
+            .and_then(|(matrix, said)| listed(spec, side, &matrix, &said, by));
+        return read.map_err(|e| eidors::given_as_lists(spec, e));
     }
     let text = et_core::text::read_text_at_most(spec, et_core::text::max_file_bytes()).map_err(
         |source| {

@@ -261,6 +261,13 @@ pub enum FramesFault {
         /// The ones there are.
         names: Vec<String>,
     },
+    /// A file of another kind, or text, where a MATLAB file's struct array is read.
+    #[error(
+        "{0}, not a MATLAB .mat file: EIDORS's stimulation is read from the struct array saved \
+         from MATLAB (save('stim.mat', 'stim')); lists or patterns of pairs go to --injections \
+         and --measurements, and a protocol file to a scene as it is"
+    )]
+    NotMatStruct(String),
     /// No struct array of the name, or none with the fields asked for.
     #[error(
         "no struct array {}with the fields {fields}{}",

@@ -24,11 +24,38 @@ enum At {
     Samples,
 }
 
+/// A LabVIEW measurement file read as the CSV of its channels.
+pub(super) struct AsCsv {
+    /// The CSV (tab-separated), line for line.
+    pub csv: String,
+    /// The first `Y_Unit_Label` that is no unit of voltage (`Ohm`).
+    pub not_volts: Option<String>,
+    /// The file's column (from 0) of each of the CSV's.
+    columns: Vec<usize>,
+}
+
+impl AsCsv {
+    /// `error`, a cell's, with its column the file's (from 1), not the CSV's (which leaves
+    /// the time out).
+    pub fn in_file_columns(&self, mut error: super::FramesError) -> super::FramesError {
+        use super::FramesFault::{NotNumber, NotVolts};
+        if let super::FramesError::Content {
+            fault: NotNumber { column, .. } | NotVolts { column, .. },
+            ..
+        } = &mut error
+            && let Some(c) = column.checked_sub(1).and_then(|c| self.columns.get(c))
+        {
+            *column = c + 1;
+        }
+        error
+    }
+}
+
 /// `text`, a LabVIEW measurement file, as the CSV (tab-separated) of its channels, line for
 /// line: its headers as comments, its time and comment columns left out, its units of
 /// voltage in its channels' names (`Untitled (mV)`), decimal commas as points; and the first
 /// `Y_Unit_Label` that is no unit of voltage (`Ohm`), whose values are taken as volts.
-pub(super) fn as_csv(text: &str) -> (String, Option<String>) {
+pub(super) fn as_csv(text: &str) -> AsCsv {
     let mut out = String::with_capacity(text.len());
     let (mut separator, mut decimal_comma) = ('\t', false);
     let (mut at, mut units, mut kept) = (At::Header, Vec::<String>::new(), None::<Vec<usize>>);
@@ -96,7 +123,11 @@ pub(super) fn as_csv(text: &str) -> (String, Option<String>) {
     let not_volts = (units.iter())
         .find(|u| !u.is_empty() && in_name(&format!("({u})")).is_none())
         .cloned();
-    (out, not_volts)
+    AsCsv {
+        csv: out,
+        not_volts,
+        columns: kept.unwrap_or_default(),
+    }
 }
 
 /// The names row `line`: its channels' names with their units where a voltage's, tab-

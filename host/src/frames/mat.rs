@@ -192,7 +192,19 @@ pub(super) fn mat_struct_array(
         return Err(content(path, 0, FramesFault::Mat73));
     }
     if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
-        return Err(content(path, 0, FramesFault::NoMatHeader));
+        // A file of another kind, or text (a protocol file, a list of pairs), said as what it
+        // is: only MATLAB keeps struct arrays.
+        let what = match et_core::text::binary_kind(bytes) {
+            Some((what, _)) => what.to_string(),
+            None if bytes.is_empty() => "an empty file".to_string(),
+            None if std::str::from_utf8(bytes.get(..bytes.len().min(4096)).unwrap_or(bytes))
+                .is_ok_and(|t| !t.contains('\0')) =>
+            {
+                "text".to_string()
+            }
+            None => return Err(content(path, 0, FramesFault::NoMatHeader)),
+        };
+        return Err(content(path, 0, FramesFault::NotMatStruct(what)));
     }
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
     let mut found = structs::struct_arrays(&plain, wanted);
@@ -228,6 +240,20 @@ pub(super) fn mat_struct_array(
         array.elements.len()
     );
     Ok((array, said))
+}
+
+/// The names of `bytes`' struct arrays having every field of `wanted` (none for a file that
+/// is no version 5 or 7 MATLAB file).
+pub(super) fn struct_array_names(bytes: &[u8], wanted: &[&str]) -> Vec<String> {
+    if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
+        return Vec::new();
+    }
+    let Ok(plain) = plain_mat(bytes) else {
+        return Vec::new();
+    };
+    (structs::struct_arrays(&plain, wanted).into_iter())
+        .map(|s| s.name)
+        .collect()
 }
 
 /// The MATLAB reader's reading of `bytes` (a version 5 file, compressed variables inflated).

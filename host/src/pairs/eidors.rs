@@ -156,6 +156,26 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
     )
 }
 
+/// `error`, or where `spec`'s MATLAB file holds EIDORS's stimulation struct array (given as
+/// a list of injections or measurements), what it holds and the command that reads it whole.
+pub(super) fn given_as_lists(spec: &Path, error: PairsError) -> PairsError {
+    let names = frames::struct_array_names(spec, &FIELDS);
+    let Some(first) = names.first() else {
+        return error;
+    };
+    let file = spec.to_string_lossy();
+    let file = file
+        .rsplit_once(".mat:")
+        .map_or(file.to_string(), |(f, _)| format!("{f}.mat"));
+    PairsError::Crossing(format!(
+        "{file} holds EIDORS's stimulation, the struct array{} {}: each injection with its \
+         own measurements, which et protocol --stimulation {file}:{first} reads whole (it is \
+         neither list alone)",
+        if names.len() > 1 { "s" } else { "" },
+        names.join(", ")
+    ))
+}
+
 /// Each row of `meas` as a pair (+1 at its positive electrode, -1 at its negative), from 0;
 /// or the row (from 1) that is not one and why. `line`: an L-vector to fill.
 fn rows_of(meas: &Numeric, line: &mut [f64]) -> Result<Vec<[u16; 2]>, (usize, String)> {

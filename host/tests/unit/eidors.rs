@@ -90,6 +90,35 @@ fn scipy_stimulation_struct_arrays_are_eidors_protocols() {
         e.contains("no struct array 'fmdl'") && e.contains("it has: stim"),
         "{e}"
     );
+    // Given as a list of injections or measurements: the command that reads it whole.
+    let e = cross(&spec("stim"), &spec("stim"), &Crossing::default()).unwrap_err();
+    let e = e.to_string();
+    assert!(
+        e.contains("struct arrays stim, fmdl.stimulation") && e.contains("--stimulation"),
+        "{e}"
+    );
+    // Other files given for it, said as what they are.
+    let dir = std::env::temp_dir().join(format!("et-eidors-other-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (bytes, said) in [
+        (
+            &b"source,sink,positive,negative\n0,1,2,3\n"[..],
+            "text, not a MATLAB .mat file",
+        ),
+        (
+            &b"\x93NUMPY\x01\x00"[..],
+            "a NumPy .npy array, not a MATLAB .mat file",
+        ),
+        (&b""[..], "an empty file, not a MATLAB .mat file"),
+    ] {
+        let other = dir.join("other.mat");
+        std::fs::write(&other, bytes).unwrap();
+        let e = stimulation(&other, &Crossing::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(said) && e.contains("--injections"), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
     // Flags that do not fit: another sheet's electrodes, a pattern's orientation.
     let crossing = Crossing {
         electrodes: Some(32),

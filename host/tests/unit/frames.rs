@@ -879,12 +879,13 @@ fn labview_measurement_files_are_read() {
         "{}",
         r.description
     );
-    // A damaged sample is named by the file's line.
+    // A damaged sample is named by the file's line and column (its time's counted: it was
+    // the column among the channels, one less).
     let text = head("Tab", ".") + &segment("V") + names + "0.0\t1.0\t2.0\t3.0\n1.0\t4.0\tx\t6.0\n";
     std::fs::write(&f, &text).unwrap();
     let e = read(&f, 3).unwrap_err().to_string();
     assert!(
-        e.contains("run.lvm:21: column 2: 'x' is not a number"),
+        e.contains("run.lvm:21: column 3: 'x' is not a number"),
         "{e}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
