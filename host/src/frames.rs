@@ -256,7 +256,13 @@ pub fn read(spec: &Path, k: usize) -> Result<Frames, FramesError> {
     let by_rows = cols == k && !(square && columns_alike(&matrix));
     let by_columns = !by_rows && rows == k;
     if !by_rows && !by_columns {
+        // (The array read where none was named: a file's only numeric array may not be the
+        // frames, a model's nodes beside structs.)
+        let chosen = (array.is_none() && matches!(ext.as_str(), "npz" | "mat"))
+            .then(|| said.split(", ").next().unwrap_or_default().to_string())
+            .filter(|c| !c.is_empty());
         let fault = FramesFault::NoK {
+            chosen,
             rows,
             columns: cols,
             k,

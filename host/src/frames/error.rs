@@ -154,8 +154,9 @@ pub enum FramesFault {
     },
     /// Neither dimension is the protocol's K.
     #[error(
-        "{rows} x {columns} values: the protocol has K = {k} values per frame, so one dimension \
-         must be {k} ({})",
+        "{}{rows} x {columns} values: the protocol has K = {k} values per frame, so one \
+         dimension must be {k} ({})",
+        chosen.as_ref().map(|c| format!("{c} read: ")).unwrap_or_default(),
         if *rows == k + 1 || *columns == k + 1 {
             "one more than K: a first column or row of frame numbers or times? write the file \
              without it, or name its column time or frame in a header, which et leaves out"
@@ -168,6 +169,8 @@ pub enum FramesFault {
         }
     )]
     NoK {
+        /// The array read where the file has several and none was named (`variable 'v'`).
+        chosen: Option<String>,
         /// Rows.
         rows: usize,
         /// Columns.

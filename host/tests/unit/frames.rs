@@ -488,6 +488,11 @@ fn matlab_files_by_variable() {
         e.contains("'z' holds complex values") && e.contains("real(V)"),
         "{e}"
     );
+    // The array read, unnamed, is said with a size that is no frame's (a model's nodes, the
+    // only numeric array beside its structs, were said by their size alone).
+    std::fs::write(&f, mat_v5("nodes", &DMatrix::from_element(20, 2, 0.5))).unwrap();
+    let e = read(&f, 208).unwrap_err().to_string();
+    assert!(e.contains("variable 'nodes' read: 20 x 2 values"), "{e}");
     std::fs::write(&f, b"MATLAB 7.3 MAT-file, Platform: GLNXA64").unwrap();
     let e = read(&f, 2).unwrap_err().to_string();
     assert!(e.contains("-v7"), "{e}");
