@@ -197,8 +197,10 @@ pub(super) fn mat_struct_array(
         let what = match et_core::text::binary_kind(bytes) {
             Some((what, _)) => what.to_string(),
             None if bytes.is_empty() => "an empty file".to_string(),
-            None if std::str::from_utf8(bytes.get(..bytes.len().min(4096)).unwrap_or(bytes))
-                .is_ok_and(|t| !t.contains('\0')) =>
+            // (Its first 4 KB: a character cut at their end is still text.)
+            None if !bytes.iter().take(4096).any(|&b| b == 0)
+                && std::str::from_utf8(bytes.get(..bytes.len().min(4096)).unwrap_or(bytes))
+                    .map_or_else(|e| e.error_len().is_none(), |_| true) =>
             {
                 "text".to_string()
             }

@@ -43,8 +43,8 @@ pub(crate) struct ProtocolArgs {
     /// `[scan] protocol = { file = "protocol.csv" }`. Edit it into your own system's.
     #[arg(long)]
     csv: bool,
-    /// With --csv, --injections or --stimulation: the current of every row, A (1e-9, a board's least, to
-    /// 0.05: more is a unit slip) [default: 1e-3, or the injections file's].
+    /// With --csv, --injections or --stimulation: the current of every row, A (1e-9, a
+    /// board's least, to 0.05: more is a unit slip) [default: 1e-3, or the files'].
     #[arg(long,
           value_parser = crate::domain::real(et_core::schedule::MIN_CURRENT_A,
                                              et_core::schedule::MAX_CURRENT_A))]
@@ -73,13 +73,15 @@ pub(crate) struct ProtocolArgs {
           conflicts_with_all = ["protocol", "drive_skip", "measure_skip", "json", "injections",
                                 "measurements", "patterns"])]
     stimulation: Option<PathBuf>,
-    /// With --injections: what the lists count electrodes from, 0 or 1 [default: 0 where a
-    /// list holds an electrode 0, else 1]. The protocol file keeps the lists' numbering.
-    /// Patterns' electrodes are written from 0 (--base 1: from 1, as MATLAB counts them).
+    /// With --injections or --stimulation: what the lists count electrodes from, 0 or 1
+    /// [default: 0 where a list holds an electrode 0, else 1]. The protocol file keeps the
+    /// lists' numbering; patterns' electrodes are written from 0 (--base 1: from 1, as
+    /// MATLAB counts them).
     #[arg(long, requires = "lists", value_parser = crate::domain::whole(0u16, 1u16))]
     base: Option<u16>,
-    /// With --injections: the unit of the file's currents, where its column's name does not
-    /// say it (`amplitude`; KIT4's and the Kuopio challenge's are mA): A, mA, uA or nA.
+    /// With --injections or --stimulation: the unit of the file's currents, where its
+    /// column's name does not say it (`amplitude`; KIT4's and the Kuopio challenge's are
+    /// mA; patterns' are A unless given): A, mA, uA or nA.
     #[arg(long, requires = "lists", conflicts_with = "current_a", value_parser = current_unit)]
     current_unit: Option<(String, f64)>,
     /// With --injections: how a square matrix whose rows and columns both read as patterns
