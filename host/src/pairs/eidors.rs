@@ -36,13 +36,15 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
     }
     let (array, read) = frames::struct_array(spec, &FIELDS).map_err(PairsError::Frames)?;
     let name = &array.name;
+    // The file, its struct array named by the messages (`stim.mat: stim(3).stim_pattern`).
+    let file = file_of(spec);
     let mut electrodes: Option<usize> = None;
     let mut drives = Vec::with_capacity(array.elements.len());
     let mut sizes = Vec::with_capacity(array.elements.len());
     let mut measured: Vec<Vec<[u16; 2]>> = Vec::with_capacity(array.elements.len());
     let mut values = 0_usize;
     for (k, element) in array.elements.iter().enumerate() {
-        let field = |i: usize| format!("{}: {name}({}).{}", spec.display(), k + 1, FIELDS[i]);
+        let field = |i: usize| format!("{file}: {name}({}).{}", k + 1, FIELDS[i]);
         let (Some(stim), Some(meas)) = (&element[0], &element[1]) else {
             let i = usize::from(element[0].is_some());
             return fail(format!(
@@ -97,9 +99,8 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
         values = values.saturating_add(meas.rows);
         if values > MAX_VALUES {
             return fail(format!(
-                "{}: past {MAX_VALUES} values a frame with its element {}, more than et takes: \
-                 is it EIDORS's stimulation?",
-                spec.display(),
+                "{file}: past {MAX_VALUES} values a frame with {name}({}), more than et takes: is \
+                 it EIDORS's stimulation?",
                 k + 1
             ));
         }
@@ -110,7 +111,7 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
         sizes.push(size);
     }
     let Some(l) = electrodes else {
-        return fail(format!("{}: '{name}' has no elements", spec.display()));
+        return fail(format!("{file}: '{name}' has no elements"));
     };
     if let Some(given) = crossing.electrodes
         && usize::from(given) != l
@@ -119,7 +120,7 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
             "-l {given}, but {name}'s patterns are of {l} electrodes: leave -l out, or give -l {l}"
         ));
     }
-    let mut said = vec![format!("{}: {read}", spec.display())];
+    let mut said = vec![format!("{file}: {read}")];
     let injections = Listed {
         pairs: drives.clone(),
         currents: Some((sizes, Unit::Unsaid)),
@@ -174,6 +175,13 @@ pub(super) fn given_as_lists(spec: &Path, error: PairsError) -> PairsError {
         if names.len() > 1 { "s" } else { "" },
         names.join(", ")
     ))
+}
+
+/// The file `spec` names (`stim.mat` of `stim.mat:stim`).
+fn file_of(spec: &Path) -> String {
+    let spec = spec.to_string_lossy();
+    spec.rsplit_once(".mat:")
+        .map_or(spec.to_string(), |(f, _)| format!("{f}.mat"))
 }
 
 /// Each row of `meas` as a pair (+1 at its positive electrode, -1 at its negative), from 0;
