@@ -209,6 +209,12 @@ pub enum FramesFault {
     /// A MATLAB 7.3 file.
     #[error("a MATLAB 7.3 file (HDF5): save it with save(..., '-v7') or as CSV")]
     Mat73,
+    /// A MATLAB 7.3 file where a struct array is read.
+    #[error(
+        "a MATLAB 7.3 file (HDF5), which et does not read: save the struct array with \
+         save('stim.mat', 'stim', '-v7')"
+    )]
+    Mat73Struct,
     /// A file without a version 5 header: MATLAB's version 4 format, or not MATLAB's.
     #[error(
         "not a MATLAB version 5 or 7 file (no such header: a version 4 file, from save -v4 \

@@ -189,7 +189,7 @@ pub(super) fn mat_struct_array(
     wanted: &[&str],
 ) -> Result<(StructArray, String), FramesError> {
     if bytes.starts_with(b"MATLAB 7.3") {
-        return Err(content(path, 0, FramesFault::Mat73));
+        return Err(content(path, 0, FramesFault::Mat73Struct));
     }
     if !matches!(bytes.get(126..128), Some(b"IM" | b"MI")) {
         // A file of another kind, or text (a protocol file, a list of pairs), said as what it
