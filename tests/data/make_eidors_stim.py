@@ -18,6 +18,9 @@ Variables:
   fmdl   a forward model's struct whose `stimulation` is
          `mk_stim_patterns(8,1,'{op}','{ad}',{'rotate_meas','meas_current'},0.001)`, beside
          other fields (`name`, `nodes`) as a fwd_model has
+  vi     frames as a loop's `vi(k) = fwd_solve(img)` keeps them: a 1 x 3 struct array of
+         EIDORS data structs (`name`, `meas` 208 x 1 V, `time`), meas(j) of frame k being
+         1e-3 * (k + 1) + 1e-6 * j
 Run: python make_eidors_stim.py (needs numpy and scipy); the files are committed (a run
 writes its date into the files' headers, the rest byte for byte).
 """
@@ -56,6 +59,9 @@ fmdl = {
     "nodes": np.random.default_rng(1).random((20, 2)),
     "stimulation": mk_stim_patterns(8, (0, 4), (0, 1), True, True, 0.001),
 }
+vi = np.empty((1, 3), dtype=[("name", object), ("meas", object), ("time", object)])
+for k in range(3):
+    vi[0, k] = ("solved", (1e-3 * (k + 1) + 1e-6 * np.arange(208)).reshape(208, 1), float(k))
 for name, compressed in [("eidors_stim.mat", True), ("eidors_stim_v6.mat", False)]:
-    scipy.io.savemat(name, {"stim": stim, "fmdl": fmdl}, do_compression=compressed,
+    scipy.io.savemat(name, {"stim": stim, "fmdl": fmdl, "vi": vi}, do_compression=compressed,
                      oned_as="column")

@@ -743,6 +743,27 @@ fn parsers(dir: &Path) -> Vec<Parser> {
             },
         },
         Parser {
+            name: "frames MATLAB .mat, struct array",
+            // SciPy's writing of EIDORS's frames as a loop keeps them (tests/data: vi(k).meas).
+            seeds: vec![
+                std::fs::read(
+                    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/eidors_stim_v6.mat"),
+                )
+                .unwrap(),
+            ],
+            // As `et reconstruct --frames FILE.mat:vi.meas` reads it.
+            parse: |p| {
+                let named =
+                    std::env::temp_dir().join(format!("et-fuzz-{}-vi.mat", std::process::id()));
+                let _ = std::fs::remove_file(&named);
+                let spec = PathBuf::from(format!("{}:vi.meas", named.display()));
+                let read = std::os::unix::fs::symlink(&p[0], &named).is_ok()
+                    && et_host::frames::read(&spec, 208).is_ok();
+                let _ = std::fs::remove_file(&named);
+                read
+            },
+        },
+        Parser {
             name: "frames MATLAB .mat",
             seeds: vec![et_host::frames::mat_v5("v", &frames_matrix())],
             parse: |p| read_frames(&p[0], "mat"),

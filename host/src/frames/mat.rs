@@ -87,13 +87,18 @@ pub(super) fn mat_matrix(
     let file = parse(path, &plain)?;
     // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
     let fields = fields::fields(&plain);
+    // A struct array's field of one vector an element (a loop's `vi(k) = fwd_solve(...)`:
+    // `vi.meas`), its vectors the columns of a matrix.
+    let arrays = stacked_fields(&plain);
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
         .chain(fields.iter().map(|f| f.name.clone()))
+        .chain(arrays.iter().map(|(name, _, _)| name.clone()))
         .collect();
     // (A struct's field's shape is not known here: with one, the user names the array.)
     let shapes: Vec<_> = (file.arrays().iter())
         .map(|a| (a.name().to_string(), Some(a.size().clone())))
         .chain(fields.iter().map(|f| (f.name.clone(), None)))
+        .chain((arrays.iter()).map(|(name, n, v)| (name.clone(), Some(vec![*n, v.len()]))))
         .collect();
     let mut said_chosen = String::new();
     let chosen = match (name, names.as_slice()) {
@@ -121,6 +126,19 @@ pub(super) fn mat_matrix(
             return Err(content(path, 0, fault));
         }
     };
+    if let Some((name, n, vectors)) = (arrays.iter()).find(|(name, _, _)| *name == chosen)
+        && file.find_by_name(&chosen).is_none()
+    {
+        let m = stacked(*n, vectors);
+        let said = format!(
+            "struct array '{}''s field '{}', {} elements of {} values, {said_chosen}",
+            name.rsplit_once('.').map_or("", |(a, _)| a),
+            name.rsplit_once('.').map_or("", |(_, f)| f),
+            m.ncols(),
+            m.nrows()
+        );
+        return Ok((m, said));
+    }
     // A struct's field is read as a variable of its own, named by its dotted name.
     let field = match fields.iter().find(|f| f.name == chosen) {
         Some(f) if file.find_by_name(&chosen).is_none() => {
@@ -242,6 +260,50 @@ pub(super) fn mat_struct_array(
         array.elements.len()
     );
     Ok((array, said))
+}
+
+/// Each field of the struct arrays of `plain` (a version 5 file, inflated) that holds a
+/// vector of one length n in every element, by its dotted name (`vi.meas`): n and the
+/// vectors, at most as many values in all as the file has bytes (a sparse vector's length
+/// is a claim).
+fn stacked_fields(plain: &[u8]) -> Vec<(String, usize, Vec<Numeric>)> {
+    let mut out = Vec::new();
+    for array in structs::struct_arrays(plain, &[]) {
+        let mut columns: Vec<Vec<Option<Numeric>>> = vec![Vec::new(); array.fields.len()];
+        for element in array.elements {
+            for (i, value) in element.into_iter().enumerate() {
+                if let Some(column) = columns.get_mut(i) {
+                    column.push(value);
+                }
+            }
+        }
+        for (field, column) in array.fields.iter().zip(columns) {
+            let vectors: Option<Vec<Numeric>> = (column.into_iter())
+                .map(|v| v.filter(|v| v.rows == 1 || v.columns == 1))
+                .collect();
+            let Some(vectors) = vectors else { continue };
+            let n = vectors
+                .first()
+                .map_or(0, |v| v.rows.saturating_mul(v.columns));
+            let values = n.saturating_mul(vectors.len());
+            if n == 0 || values > plain.len() || vectors.iter().any(|v| v.rows * v.columns != n) {
+                continue;
+            }
+            out.push((format!("{}.{field}", array.name), n, vectors));
+        }
+    }
+    out
+}
+
+/// `vectors` (each of `n` values) as the columns of a matrix.
+fn stacked(n: usize, vectors: &[Numeric]) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(n, vectors.len());
+    for (j, v) in vectors.iter().enumerate() {
+        for &(r, c, x) in &v.nonzero {
+            m[(r + c, j)] = x;
+        }
+    }
+    m
 }
 
 /// The names of `bytes`' struct arrays having every field of `wanted` (none for a file that

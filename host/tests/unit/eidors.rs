@@ -346,3 +346,30 @@ fn matlab_compact_struct_arrays_and_their_faults() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// EIDORS's frames as a loop keeps them (`vi(k) = fwd_solve(img)`: a struct array of data
+/// structs, each its `meas`), read as frames by the field's dotted name, compressed or not,
+/// each element a frame in order; the file's several arrays asked to be named.
+#[test]
+fn a_struct_arrays_field_of_frames_is_read() {
+    for file in ["eidors_stim.mat", "eidors_stim_v6.mat"] {
+        let path = scipy_file().with_file_name(file);
+        let spec = PathBuf::from(format!("{}:vi.meas", path.display()));
+        let r = et_host::frames::read(&spec, 208).unwrap();
+        let expected: Vec<Vec<f32>> = (0..3)
+            .map(|k| {
+                (0..208)
+                    .map(|j| (1e-3 * f64::from(k + 1) + 1e-6 * f64::from(j)) as f32)
+                    .collect()
+            })
+            .collect();
+        assert_eq!(r.frames, expected, "{file}");
+        assert!(
+            r.description.contains("struct array 'vi''s field 'meas'"),
+            "{}",
+            r.description
+        );
+        let e = et_host::frames::read(&path, 208).unwrap_err().to_string();
+        assert!(e.contains("vi.meas") && e.contains(":VARIABLE"), "{e}");
+    }
+}

@@ -16,19 +16,22 @@ pub struct Numeric {
     pub nonzero: Vec<(usize, usize, f64)>,
 }
 
-/// A struct array of a file: its name and, for each of its elements, the fields asked for.
+/// A struct array of a file: its name and, for each of its elements, the fields read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructArray {
     /// Its name (dotted where it is a field of a 1 x 1 struct: `fmdl.stimulation`).
     pub name: String,
-    /// Each element's fields asked for, in the order asked: None where the field is not a
-    /// real numeric matrix (text, a cell, a complex or empty value).
+    /// The fields read, in order (those asked for, or every one).
+    pub fields: Vec<String>,
+    /// Each element's fields read, in `fields`' order: None where the field is not a real
+    /// numeric matrix (text, a cell, a complex or empty value).
     pub elements: Vec<Vec<Option<Numeric>>>,
 }
 
 /// The struct arrays of a version 5 file (`plain`: its compressed variables inflated) that
 /// have every field of `wanted`, in file order: variables, and fields of 1 x 1 structs
-/// (`fmdl.stimulation`, `imdl.fwd_model.stimulation`).
+/// (`fmdl.stimulation`, `imdl.fwd_model.stimulation`); with none wanted, every struct array
+/// of other than one element, with all its fields.
 pub(super) fn struct_arrays(plain: &[u8], wanted: &[&str]) -> Vec<StructArray> {
     let order = Order::of(plain);
     let mut found = Vec::new();
@@ -86,10 +89,16 @@ fn walk(
         at = field.end;
         (field.kind == MATRIX && field.end <= tag.end).then_some(field)
     };
-    let places: Vec<Option<usize>> = (wanted.iter())
-        .map(|w| names.iter().position(|n| n == w))
-        .collect();
-    if places.iter().all(Option::is_some) {
+    // No field asked for: every field of every struct array but a 1 x 1 struct (whose
+    // fields are followed, as `fields.rs` reads them).
+    let every = wanted.is_empty();
+    let places: Vec<Option<usize>> = match every {
+        true => (0..names.len()).map(Some).collect(),
+        false => (wanted.iter())
+            .map(|w| names.iter().position(|n| n == w))
+            .collect(),
+    };
+    if (every && count != 1) || (!every && places.iter().all(Option::is_some)) {
         // Every element's fields, one after another; each tag takes 8 bytes at least, so the
         // loop ends with the element's bytes whatever the dimensions claim.
         let mut elements = Vec::new();
@@ -101,7 +110,12 @@ fn walk(
                     .collect(),
             );
         }
-        found.push(StructArray { name, elements });
+        let fields = places.iter().flatten().map(|&i| names[i].clone()).collect();
+        found.push(StructArray {
+            name,
+            fields,
+            elements,
+        });
     } else if count == 1 {
         for n in &names {
             let value = field()?;
