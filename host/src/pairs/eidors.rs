@@ -52,6 +52,16 @@ pub fn stimulation(spec: &Path, crossing: &Crossing) -> Result<Crossed, PairsErr
                 field(i)
             ));
         };
+        for (i, value) in [stim, meas].into_iter().enumerate() {
+            if let Some(&(r, c, v)) = value.nonzero.iter().find(|e| !e.2.is_finite()) {
+                return fail(format!(
+                    "{}: its entry ({}, {}) is {v}: a pattern's entries are numbers",
+                    field(i),
+                    r + 1,
+                    c + 1
+                ));
+            }
+        }
         let l = match (stim.rows, stim.columns) {
             (l, 1) | (1, l) => l,
             (r, c) => {

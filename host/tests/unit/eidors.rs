@@ -306,7 +306,13 @@ fn matlab_compact_struct_arrays_and_their_faults() {
     assert!(c.said.join(" ").contains("(1 to 2)"), "{:?}", c.said);
     // Faults, each named by its element and field.
     let drive = Value::Dense(4, 1, vec![2, 0, -2, 0]);
-    let cases: [(&str, [Value; 2], &str); 4] = [
+    let nan = Value::Sparse(1, 4, vec![(0, 1, f64::NAN), (0, 2, 1.0), (0, 3, -1.0)]);
+    let cases: [(&str, [Value; 2], &str); 5] = [
+        (
+            "nan",
+            [Value::Dense(4, 1, vec![-1, 1, 0, 0]), nan],
+            "stim(2).meas_pattern: its entry (1, 2) is NaN",
+        ),
         (
             "mono",
             [
