@@ -131,18 +131,7 @@ fn field_said(field: &str) -> Option<&'static str> {
 /// about.
 fn parse_said(source: &toml::de::Error) -> String {
     const WIDE: usize = 120;
-    let mut text = et_core::said::serde_said(&source.to_string());
-    // A field left out is said with what it is and a value to start from (serde names it
-    // alone: "missing field `pressure`" left its unit to guess).
-    if let Some(at) = text.find("missing field `") {
-        let rest = &text[at + "missing field `".len()..];
-        if let Some((field, _)) = rest.split_once('`')
-            && let Some(what) = field_said(field)
-        {
-            let end = at + "missing field `".len() + field.len() + 1;
-            text.insert_str(end, &format!(": {what}"));
-        }
-    }
+    let text = et_core::said::serde_said(&source.to_string());
     let mut said: Vec<String> = text
         .trim_end()
         .lines()
@@ -151,6 +140,18 @@ fn parse_said(source: &toml::de::Error) -> String {
             None => line.to_string(),
         })
         .collect();
+    // A field left out is said with what it is and a value to start from (serde names it
+    // alone: "missing field `pressure`" left its unit to guess), after the lines are cut.
+    const MISSING: &str = "missing field `";
+    for line in &mut said {
+        if let Some(at) = line.find(MISSING)
+            && let Some((field, _)) = line[at + MISSING.len()..].split_once('`')
+            && let Some(what) = field_said(field)
+        {
+            let end = at + MISSING.len() + field.len() + 1;
+            line.insert_str(end, &format!(": {what}"));
+        }
+    }
     // A scene's own field at fault on its first line (`protocol = ...` outside `[scan]`) is
     // said by its fields; only a first line that is no TOML asks.
     let of_fields = ["unknown field", "missing field", "belongs", "unknown value"]

@@ -295,6 +295,13 @@ fn a_field_left_out_is_said_with_its_unit() {
             "seed = 3\n".into(),
             "missing field `sheet`: the sheet's table",
         ),
+        // A help past the snippet's 120 characters is said whole.
+        (
+            "[sheet]\nsheet_resistance = 200.0\n".into(),
+            "missing field `shape`: the sheet's outline, m: shape = { kind = \"disc\", radius = \
+             0.11 }, { kind = \"rectangle\", width = 0.13, height = 0.13 } or { kind = \
+             \"polygon\", vertices = [[x, y], ...] }",
+        ),
     ] {
         let e = Scene::parse(&text, "s.toml").unwrap_err().to_string();
         assert!(e.contains(said), "{e}");
