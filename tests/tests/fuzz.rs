@@ -539,6 +539,22 @@ fn read_frames(case: &Path, ext: &str) -> bool {
     read
 }
 
+/// tests/data's SciPy writing of EIDORS's struct arrays, uncompressed.
+fn eidors_v6() -> Vec<u8> {
+    std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/eidors_stim_v6.mat")).unwrap()
+}
+
+/// `read` of the damaged file `case`'s array `name`, linked under a `.mat` name (as
+/// `FILE.mat:NAME` is read).
+fn named_mat(case: &Path, name: &str, read: impl Fn(&Path) -> bool) -> bool {
+    let named = std::env::temp_dir().join(format!("et-fuzz-{}-named.mat", std::process::id()));
+    let _ = std::fs::remove_file(&named);
+    let spec = PathBuf::from(format!("{}:{name}", named.display()));
+    let ok = std::os::unix::fs::symlink(case, &named).is_ok() && read(&spec);
+    let _ = std::fs::remove_file(&named);
+    ok
+}
+
 fn recording(dir: &Path) -> Vec<u8> {
     let config = small_config();
     let header = Header::new("fuzz", &config).unwrap();
@@ -723,44 +739,23 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "EIDORS stimulation .mat",
             // SciPy's writing of EIDORS's struct arrays, uncompressed (tests/data).
-            seeds: vec![
-                std::fs::read(
-                    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/eidors_stim_v6.mat"),
-                )
-                .unwrap(),
-            ],
+            seeds: vec![eidors_v6()],
             // As `et protocol --stimulation FILE.mat:stim` reads it.
             parse: |p| {
-                let named =
-                    std::env::temp_dir().join(format!("et-fuzz-{}-stim.mat", std::process::id()));
-                let _ = std::fs::remove_file(&named);
-                let spec = PathBuf::from(format!("{}:stim", named.display()));
-                let crossing = et_host::pairs::Crossing::default();
-                let read = std::os::unix::fs::symlink(&p[0], &named).is_ok()
-                    && et_host::pairs::stimulation(&spec, &crossing).is_ok();
-                let _ = std::fs::remove_file(&named);
-                read
+                named_mat(&p[0], "stim", |spec| {
+                    et_host::pairs::stimulation(spec, &et_host::pairs::Crossing::default()).is_ok()
+                })
             },
         },
         Parser {
             name: "frames MATLAB .mat, struct array",
-            // SciPy's writing of EIDORS's frames as a loop keeps them (tests/data: vi(k).meas).
-            seeds: vec![
-                std::fs::read(
-                    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/eidors_stim_v6.mat"),
-                )
-                .unwrap(),
-            ],
+            // The same file's frames as a loop keeps them (vi(k).meas).
+            seeds: vec![eidors_v6()],
             // As `et reconstruct --frames FILE.mat:vi.meas` reads it.
             parse: |p| {
-                let named =
-                    std::env::temp_dir().join(format!("et-fuzz-{}-vi.mat", std::process::id()));
-                let _ = std::fs::remove_file(&named);
-                let spec = PathBuf::from(format!("{}:vi.meas", named.display()));
-                let read = std::os::unix::fs::symlink(&p[0], &named).is_ok()
-                    && et_host::frames::read(&spec, 208).is_ok();
-                let _ = std::fs::remove_file(&named);
-                read
+                named_mat(&p[0], "vi.meas", |spec| {
+                    et_host::frames::read(spec, 208).is_ok()
+                })
             },
         },
         Parser {
