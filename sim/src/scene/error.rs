@@ -117,6 +117,10 @@ fn field_said(field: &str) -> Option<&'static str> {
         "vertices" => "the polygon's corners, [[x, y], ...] in m, counter-clockwise",
         "position" => "the touch's centre, [x, y] in m from the outline's centre",
         "pressure" => "the touch's pressure while on, Pa (a firm press: 20e3)",
+        "kind" => {
+            "what it is: an outline's \"disc\", \"rectangle\" or \"polygon\"; an electrode \
+             fault's \"disconnected\", \"intermittent\" or \"shorted\""
+        }
         "electrode" => "the faulty electrode's number, from 0",
         "per_kelvin" => "the relative change of conductance per kelvin (PPy fabric: about 0.01)",
         "kelvin_per_minute" => "the temperature's ramp, K per minute",

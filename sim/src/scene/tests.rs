@@ -295,6 +295,10 @@ fn a_field_left_out_is_said_with_its_unit() {
             "seed = 3\n".into(),
             "missing field `sheet`: the sheet's table",
         ),
+        (
+            "[sheet]\nshape = { radius = 0.1 }\n".into(),
+            "missing field `kind`: what it is: an outline's \"disc\"",
+        ),
         // A help past the snippet's 120 characters is said whole.
         (
             "[sheet]\nsheet_resistance = 200.0\n".into(),
