@@ -88,8 +88,15 @@ pub(super) fn mat_matrix(
     // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
     let fields = fields::fields(&plain);
     // A struct array's field of one vector an element (a loop's `vi(k) = fwd_solve(...)`:
-    // `vi.meas`), its vectors the columns of a matrix.
-    let arrays = stacked_fields(&plain);
+    // `vi.meas`), its vectors the columns of a matrix: its elements are parsed only where the
+    // array asked for is none of the others (a file's named frames beside a model's struct
+    // arrays were parsed too).
+    let named_elsewhere =
+        name.is_some_and(|n| file.find_by_name(n).is_some() || fields.iter().any(|f| f.name == n));
+    let arrays = match named_elsewhere {
+        true => Vec::new(),
+        false => stacked_fields(&plain),
+    };
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
         .chain(fields.iter().map(|f| f.name.clone()))
         .chain(arrays.iter().map(|(name, _, _)| name.clone()))
