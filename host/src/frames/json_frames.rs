@@ -478,7 +478,12 @@ fn python_nan(text: &str) -> Option<String> {
             (true, _) if escaped => escaped = false,
             (true, b'\\') => escaped = true,
             (_, b'"') => in_string = !in_string,
-            (false, b'N') if b[i..].starts_with(b"NaN") => found.push(i),
+            // (Not inside the last one: "NaNaN" overlapped it and sliced past its end.)
+            (false, b'N')
+                if b[i..].starts_with(b"NaN") && found.last().is_none_or(|&l| i >= l + 3) =>
+            {
+                found.push(i)
+            }
             _ => {}
         }
     }
