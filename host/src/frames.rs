@@ -187,9 +187,20 @@ pub fn reads_as_table(spec: &Path) -> bool {
     let json =
         ext.is_some_and(|e| ["jsonl", "json", "ndjson"].contains(&e.to_ascii_lowercase().as_str()));
     // A recording's first line is an object whose first key is "format"; another object (a
-    // pandas `to_json()`, `{"frames": [...]}`) holds frames, as an array does.
+    // pandas `to_json()`, `{"frames": [...]}`) holds frames, as an array does. A header
+    // written without its "format" (by hand, from Python) is known by its "K" and "columns"
+    // or "config" keys, and the recording reader asks for the field.
     let line = text.split(|&b| b == b'\n').next().unwrap_or(&[]);
-    let recording = line.windows(8).any(|w| w == b"\"format\"");
+    let key = |name: &str| {
+        let quoted = format!("\"{name}\"");
+        let found = |at: usize| {
+            let rest = &line[at + quoted.len()..];
+            rest.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b':')
+        };
+        (line.windows(quoted.len()).enumerate()).any(|(at, w)| w == quoted.as_bytes() && found(at))
+    };
+    let recording = line.windows(8).any(|w| w == b"\"format\"")
+        || (key("K") && (key("columns") || key("config")));
     read.is_ok()
         && first.is_some_and(|&b| b == b'[' || (b == b'{' && !recording) || (b != b'{' && !json))
 }

@@ -348,7 +348,14 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
             return Err(bad(1, LineFault::Format(format.to_string())));
         }
         // (A JSON file of another tool's was said as "missing field `format`".)
-        None if header.get("format").is_none() => return Err(bad(1, LineFault::NoFormat)),
+        // (A header of et's fields without its "format", written by hand, is asked for it
+        // below.)
+        None if header.get("format").is_none()
+            && !(header.get("K").is_some()
+                && (header.get("columns").is_some() || header.get("config").is_some())) =>
+        {
+            return Err(bad(1, LineFault::NoFormat));
+        }
         _ => {}
     }
     let header: Header =

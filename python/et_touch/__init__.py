@@ -38,6 +38,9 @@ import numpy as np
 from . import _native
 from ._native import Dataset, EtError
 
+# What the imports above bound: left out of `dir(et_touch)` (`__dir__` below).
+_IMPORTED = frozenset(globals())
+
 
 class EtWarning(UserWarning):
     """What et says of a call it carries out, where the result may not be what was meant."""
@@ -1562,3 +1565,13 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
     ``read_recording`` gives them."""
     frames, _ = _native.read_frames(os.fsdecode(path), _count(k, "k", 1))
     return frames
+
+
+def __dir__() -> List[str]:
+    """What ``dir(et_touch)`` lists: the module's own names and its API (``__all__``), not
+    the modules and types it imports (``np``, ``json``, ``Any``), nor its private names."""
+    own = (
+        n for n in globals()
+        if (n not in _IMPORTED and not n.startswith("_")) or (n.startswith("__") and n.endswith("__"))
+    )
+    return sorted(set(own) | set(__all__))

@@ -201,3 +201,13 @@ def test_bad_files_are_named_in_the_error(work):
     np.save(wrong, np.zeros((3, 5)))
     with pytest.raises(et.EtError, match="wrong.npy"):
         et.read_frames(wrong, 208)
+
+
+def test_dir_lists_the_api_not_the_imports():
+    # `dir(et_touch)` showed `np`, `json`, `os`, `Any`, ... beside the API.
+    names = dir(et)
+    assert set(et.__all__) <= set(names)
+    assert "SCALE_SAID" in names and "__doc__" in names
+    for imported in ["np", "json", "os", "re", "Any", "Optional", "dataclass", "annotations"]:
+        assert imported not in names, imported
+    assert not [n for n in names if n.startswith("_") and not n.endswith("__")]

@@ -403,6 +403,34 @@ fn frames_json_columns() -> String {
     format!("{{{}}}", columns.join(","))
 }
 
+/// The frames as a logger writes them, a JSON object a line (`{"t": 0.1, "v": [...]}`), and
+/// as pandas' `to_json(orient="split")` writes them: the readers of JSON objects'.
+fn frames_json_objects() -> [String; 2] {
+    let m = frames_matrix();
+    let row = |f: usize| -> Vec<String> { m.row(f).iter().map(|v| format!("{v:e}")).collect() };
+    let lines: Vec<String> = (0..m.nrows())
+        .map(|f| {
+            format!(
+                "{{\"t\": {}, \"v\": [{}]}}",
+                f as f64 * 0.1,
+                row(f).join(", ")
+            )
+        })
+        .collect();
+    let names: Vec<String> = (0..m.ncols()).map(|k| format!("\"v{k}\"")).collect();
+    let rows: Vec<String> = (0..m.nrows())
+        .map(|f| format!("[{}]", row(f).join(",")))
+        .collect();
+    let index: Vec<String> = (0..m.nrows()).map(|f| f.to_string()).collect();
+    let split = format!(
+        "{{\"columns\":[{}],\"index\":[{}],\"data\":[{}]}}",
+        names.join(","),
+        index.join(","),
+        rows.join(",")
+    );
+    [lines.join("\n") + "\n", split]
+}
+
 /// The frames as LabVIEW's Write To Measurement File writes them (`.lvm`): its headers, a time
 /// column, units, a comment on one row, two segments.
 fn frames_lvm() -> String {
@@ -700,6 +728,16 @@ fn parsers(dir: &Path) -> Vec<Parser> {
         Parser {
             name: "frames JSON, pandas' columns",
             seeds: vec![frames_json_columns().into()],
+            parse: |p| read_frames(&p[0], "json"),
+        },
+        Parser {
+            name: "frames JSON Lines, a logger's",
+            seeds: vec![frames_json_objects()[0].clone().into_bytes()],
+            parse: |p| read_frames(&p[0], "jsonl"),
+        },
+        Parser {
+            name: "frames JSON, pandas' split",
+            seeds: vec![frames_json_objects()[1].clone().into_bytes()],
             parse: |p| read_frames(&p[0], "json"),
         },
         Parser {

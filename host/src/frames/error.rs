@@ -230,6 +230,20 @@ pub enum FramesFault {
         /// "numeric arrays" or "arrays".
         kind: &'static str,
     },
+    /// EIDORS's stimulation struct array alone: a protocol, not frames.
+    #[error(
+        "holds EIDORS's stimulation '{name}' (what mk_stim_patterns returns), a protocol, \
+         and no frames: et protocol --stimulation {file}:{name} > protocol.csv writes it as \
+         the protocol file a scene names ([scan] protocol = {{ file = \"protocol.csv\" }}); \
+         the frames measured under it are another array (EIDORS's data: vi.meas, a frame a \
+         column)"
+    )]
+    Stimulation {
+        /// The file, as given.
+        file: String,
+        /// The struct array.
+        name: String,
+    },
     /// An array of booleans.
     #[error("array '{0}' holds booleans (True, False), not voltages")]
     Booleans(String),

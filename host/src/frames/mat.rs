@@ -93,8 +93,8 @@ pub(super) fn mat_matrix(
     // arrays were parsed too).
     let named_elsewhere =
         name.is_some_and(|n| file.find_by_name(n).is_some() || fields.iter().any(|f| f.name == n));
-    let arrays = match named_elsewhere {
-        true => Vec::new(),
+    let (arrays, stimulations) = match named_elsewhere {
+        true => (Vec::new(), Vec::new()),
         false => stacked_fields(&plain),
     };
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
@@ -107,6 +107,12 @@ pub(super) fn mat_matrix(
         .chain(fields.iter().map(|f| (f.name.clone(), None)))
         .chain((arrays.iter()).map(|(name, n, v)| (name.clone(), Some(vec![*n, v.len()]))))
         .collect();
+    // A model's nodes beside its stimulation (EIDORS's `fmdl`) read unasked, of no frame's
+    // size, are said as the stimulation's file ("variable 'fmdl.nodes' read: 20 x 2 values"
+    // was said).
+    let beside = stimulations
+        .first()
+        .filter(|_| name.is_none() && names.len() == 1);
     let mut said_chosen = String::new();
     let chosen = match (name, names.as_slice()) {
         (Some(n), _) if names.iter().any(|m| m == n) => n.to_string(),
@@ -115,6 +121,9 @@ pub(super) fn mat_matrix(
             return Err(content(path, 0, FramesFault::NoVariable { name, names }));
         }
         (None, [only]) => only.clone(),
+        (None, []) if let Some(name) = stimulations.first() => {
+            return Err(stimulation(path, name));
+        }
         (None, []) => {
             let kind = "numeric arrays";
             return Err(content(path, 0, FramesFault::Nothing { kind }));
@@ -189,6 +198,12 @@ pub(super) fn mat_matrix(
             ));
         }
     };
+    if let Some(name) = beside
+        && rows != k
+        && cols != k
+    {
+        return Err(stimulation(path, name));
+    }
     if rows * cols != values.len() {
         let fault = FramesFault::Size {
             name: array.name().to_string(),
@@ -203,6 +218,12 @@ pub(super) fn mat_matrix(
         DMatrix::from_column_slice(rows, cols, &values),
         format!("variable '{}', {said_chosen}", array.name()),
     ))
+}
+
+/// The error of `path`, a file of EIDORS's stimulation `name` and no frames.
+fn stimulation(path: &Path, name: &str) -> FramesError {
+    let (file, name) = (path.display().to_string(), name.to_string());
+    content(path, 0, FramesFault::Stimulation { file, name })
 }
 
 /// The struct array `name` of a MATLAB file having every field of `wanted` (or its only
@@ -269,13 +290,25 @@ pub(super) fn mat_struct_array(
     Ok((array, said))
 }
 
+/// A struct array's field of a vector an element: its dotted name, n, and the vectors.
+type Stacked = (String, usize, Vec<Numeric>);
+
 /// Each field of the struct arrays of `plain` (a version 5 file, inflated) that holds a
 /// vector of one length n in every element, by its dotted name (`vi.meas`): n and the
 /// vectors, at most as many values in all as the file has bytes (a sparse vector's length
-/// is a claim).
-fn stacked_fields(plain: &[u8]) -> Vec<(String, usize, Vec<Numeric>)> {
+/// is a claim). And the names of EIDORS's stimulation struct arrays, a protocol's patterns,
+/// not frames, whose fields are not among them (`stim.stim_pattern` was read as 16 frames).
+fn stacked_fields(plain: &[u8]) -> (Vec<Stacked>, Vec<String>) {
     let mut out = Vec::new();
+    let mut stimulations = Vec::new();
     for array in structs::struct_arrays(plain, &[]) {
+        if ["stim_pattern", "meas_pattern"]
+            .iter()
+            .all(|f| array.fields.iter().any(|g| g == f))
+        {
+            stimulations.push(array.name);
+            continue;
+        }
         let mut columns: Vec<Vec<Option<Numeric>>> = vec![Vec::new(); array.fields.len()];
         for element in array.elements {
             for (i, value) in element.into_iter().enumerate() {
@@ -299,7 +332,7 @@ fn stacked_fields(plain: &[u8]) -> Vec<(String, usize, Vec<Numeric>)> {
             out.push((format!("{}.{field}", array.name), n, vectors));
         }
     }
-    out
+    (out, stimulations)
 }
 
 /// `vectors` (each of `n` values) as the columns of a matrix.

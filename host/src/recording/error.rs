@@ -68,7 +68,7 @@ pub enum LineFault {
     )]
     OtherFile(et_core::text::EtFile),
     /// The header is JSON but not the format's fields (named by their place).
-    #[error("header: {}", et_learn::model_file::json_said(.0, true))]
+    #[error("header: {}", missing_said(.0))]
     Header(serde_json::Error),
     /// Another format's file (a model file said as what it is: "format 'et-table-model' is
     /// not et-recording" was all it said).
@@ -132,7 +132,7 @@ pub enum LineFault {
         k: usize,
     },
     /// A frame line is not the format's JSON.
-    #[error("{}", et_learn::model_file::json_said(.0, true))]
+    #[error("{}", missing_said(.0))]
     Frame(serde_json::Error),
     /// A frame line holding `NaN` or `Infinity`, which JSON has not (Python's `json` writes
     /// them): it was "expected value (column 60)".
@@ -157,4 +157,64 @@ fn model_said(format: &str) -> &'static str {
         }
         _ => "",
     }
+}
+
+/// The JSON error of a line, a field left out said with what it holds, its unit and a value
+/// to start from (serde said "missing field `t_us`" alone).
+fn missing_said(error: &serde_json::Error) -> String {
+    const MISSING: &str = "missing field `";
+    let said = et_learn::model_file::json_said(error, true);
+    let Some(at) = said.find(MISSING) else {
+        return said;
+    };
+    let field = said[at + MISSING.len()..]
+        .split('`')
+        .next()
+        .unwrap_or_default();
+    // (The field's place in front, as `from_value_named` writes it: `columns[3]: `.)
+    let place = said[..at].trim_end_matches([':', ' ']);
+    match field_said(place, field) {
+        Some(what) => format!("{said}: {what}"),
+        None => said,
+    }
+}
+
+/// What a recording's `field` holds, at `place` (`config`, `columns[3]`, `touches[0]`, or
+/// empty: the header's or a frame's own fields).
+fn field_said(place: &str, field: &str) -> Option<&'static str> {
+    let in_list = |list: &str| place.starts_with(list);
+    Some(match field {
+        "source" | "sink" if in_list("columns") => {
+            "the electrode the current enters (source) or leaves (sink), from 0"
+        }
+        "positive" | "negative" => "the amplifier's + (positive) or - (negative) electrode, from 0",
+        "x" | "y" | "radius" => "the touch's centre (x, y) or contact radius, m",
+        "pressure" => "the touch's pressure, Pa",
+        "format" => "\"et-recording\", the format's name",
+        "version" => "the format's version (1)",
+        "source" => "where the frames come from (\"sim:scene.toml\", \"port:/dev/ttyACM0\")",
+        "electrodes" => "the electrode count L (16)",
+        "protocol" => "the protocol's name (\"adjacent\", \"opposite\")",
+        "K" => "the frame's length, values a frame (208 for adjacent on 16 electrodes)",
+        "config" => {
+            "the board's scan settings: {\"electrodes\", \"protocol\", \"samples_per_step\", \
+             \"settle_samples\", \"current_na\", \"sample_rate_hz\", \"gain\"}, as et record \
+             writes them"
+        }
+        "columns" => {
+            "each of the K values' electrodes, in order: [{\"source\", \"sink\", \"positive\", \
+             \"negative\"}, ...]"
+        }
+        "samples_per_step" => "ADC samples a measurement (50)",
+        "settle_samples" => "samples skipped after each switch (25)",
+        "current_na" => "the current injected, nA (32000)",
+        "sample_rate_hz" => "the ADC's sample rate, Hz (62500)",
+        "gain" => "the amplifier's gain (8)",
+        "seq" => "the frame's sequence number, from 0",
+        "t_us" => "the frame's time on the board, microseconds",
+        "flags" => "the board's frame flags (0: none)",
+        "rail_count" => "measurements with samples on an ADC rail (0: none)",
+        "voltages" => "the frame's K values, V",
+        _ => return None,
+    })
 }

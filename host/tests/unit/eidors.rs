@@ -288,6 +288,9 @@ fn matlab_compact_struct_arrays_and_their_faults() {
     let c = stimulation(&file, &crossing).unwrap();
     let expected = [[1, 0, 2, 3], [2, 1, 3, 0], [3, 2, 0, 1], [0, 3, 1, 2]];
     assert_eq!(rows(&c), expected);
+    // Given as frames, said as a protocol (its 4 stim_patterns were read as 4 frames).
+    let e = et_host::frames::read(&file, 16).unwrap_err().to_string();
+    assert!(e.contains("holds EIDORS's stimulation 'stim'"), "{e}");
     // Injections of other measurement counts (EIDORS's no_redundant keeps fewer under the
     // later ones): each its own, in order; a second injection measuring on its drive
     // electrodes too (meas_current), two rows, the second -1 before +1.
@@ -378,4 +381,20 @@ fn a_struct_arrays_field_of_frames_is_read() {
         let e = et_host::frames::read(&path, 208).unwrap_err().to_string();
         assert!(e.contains("vi.meas") && e.contains(":VARIABLE"), "{e}");
     }
+    // A model alone, its nodes beside its stimulation: said as the protocol's file, not its
+    // nodes read as frames ("variable 'fmdl.nodes' read: 20 x 2 values"); the nodes named,
+    // they are read as asked.
+    let path = scipy_file().with_file_name("eidors_fmdl.mat");
+    let e = et_host::frames::read(&path, 208).unwrap_err().to_string();
+    let command = format!(
+        "et protocol --stimulation {}:fmdl.stimulation",
+        path.display()
+    );
+    assert!(
+        e.contains("holds EIDORS's stimulation 'fmdl.stimulation'") && e.contains(&command),
+        "{e}"
+    );
+    let nodes = PathBuf::from(format!("{}:fmdl.nodes", path.display()));
+    let e = et_host::frames::read(&nodes, 208).unwrap_err().to_string();
+    assert!(e.contains("20 x 2 values"), "{e}");
 }

@@ -604,6 +604,11 @@ fn frames_named_otherwise_are_read_by_what_they_hold() {
     let table = [
         ("f.dat", "1,2,3\n4,5,6\n"),
         ("frames", "\u{feff}  1 2 3\n4 5 6\n"),
+        // (pandas' "split", a column named K: frames, not a recording's header.)
+        (
+            "split.json",
+            "{\"columns\":[\"K\",\"b\",\"c\"],\"index\":[0,1],\"data\":[[1,2,3],[4,5,6]]}",
+        ),
     ];
     for (name, text) in table {
         let f = dir.join(name);
@@ -614,6 +619,12 @@ fn frames_named_otherwise_are_read_by_what_they_hold() {
     }
     for (name, text) in [
         ("r.dat", " {\"format\":\"et-recording\"}\n"),
+        // A recording's header written without its "format" (sorted keys, as Python's
+        // json.dumps(..., sort_keys=True) writes them): the recording reader asks for it.
+        (
+            "no-format.jsonl",
+            "{\"K\" : 208, \"columns\": [{\"negative\": 3}]}\n",
+        ),
         ("r.jsonl", "1,2,3\n"),
         ("empty.dat", ""),
         ("none.dat", "-"),

@@ -282,6 +282,16 @@ fn what_is_not_a_recording_is_said_so() {
             "{err}"
         );
     }
+    // et's header written without its "format" (by hand, from Python): asked for the field.
+    let header = Header::new("test", &ScanConfig::REFERENCE).unwrap();
+    let mut value = serde_json::to_value(&header).unwrap();
+    value.as_object_mut().unwrap().remove("format");
+    std::fs::write(&path, format!("{value}\n")).unwrap();
+    let err = read(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("r.jsonl:1: header: missing field `format`: \"et-recording\""),
+        "{err}"
+    );
     // Another of et's files: said as what it is (a dataset was "its first line is not JSON").
     for (text, said) in [
         (
@@ -309,15 +319,44 @@ fn what_is_not_a_recording_is_said_so() {
     std::fs::write(&path, format!("{value}\n")).unwrap();
     let err = read(&path).unwrap_err().to_string();
     assert!(
-        err.contains("missing field `config`") && !err.contains("at line"),
+        err.contains("missing field `config`: the board's scan settings")
+            && !err.contains("at line"),
         "{err}"
     );
+    // Left out deeper, said with what it is and its unit, by its place (a column's `source`
+    // is an electrode, the header's a file's origin).
+    for (pointer, field, said) in [
+        (
+            "/config",
+            "gain",
+            "config: missing field `gain`: the amplifier's gain",
+        ),
+        (
+            "/columns/3",
+            "source",
+            "columns[3]: missing field `source`: the electrode the current",
+        ),
+        (
+            "",
+            "source",
+            "header: missing field `source`: where the frames come from",
+        ),
+    ] {
+        let mut value = serde_json::to_value(&header).unwrap();
+        let table = value.pointer_mut(pointer).unwrap().as_object_mut().unwrap();
+        table.remove(field).unwrap();
+        std::fs::write(&path, format!("{value}\n")).unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        assert!(err.contains(said), "{err}");
+    }
     let mut text = serde_json::to_string(&header).unwrap();
     text.push_str("\n{\"seq\":1}\n{\"seq\":2}\n");
     std::fs::write(&path, text).unwrap();
     let err = read(&path).unwrap_err().to_string();
     assert!(
-        err.contains("r.jsonl:2") && err.contains("missing field") && !err.contains("column"),
+        err.contains("r.jsonl:2")
+            && err.contains("missing field `t_us`: the frame's time on the board, microseconds")
+            && !err.contains("column"),
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
