@@ -206,17 +206,19 @@ pub fn reads_as_table(spec: &Path) -> bool {
 }
 
 /// `file.npz:NAME` or `file.mat:NAME` as (file, Some(NAME)); anything else as (spec, None).
-/// (`file.npy:NAME` too: a file named .npy may hold an archive or a MATLAB file.)
-fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
+/// (`file.npy:NAME` too: a file named .npy may hold an archive or a MATLAB file.) The
+/// extension in any case, as Windows tools write it (`RUN.MAT:V` was looked for as a file of
+/// that name).
+pub(crate) fn split_array(spec: &Path) -> (PathBuf, Option<String>) {
     let s = spec.to_string_lossy();
+    // (ASCII's lower case keeps every byte's place.)
+    let lower = s.to_ascii_lowercase();
     for ext in [".npz:", ".mat:", ".npy:"] {
-        if let Some((file, name)) = s.rsplit_once(ext)
-            && !name.is_empty()
+        if let Some(at) = lower.rfind(ext)
+            && at + ext.len() < s.len()
         {
-            return (
-                PathBuf::from(format!("{file}{}", &ext[..4])),
-                Some(name.to_string()),
-            );
+            let (file, name) = (&s[..at + ext.len() - 1], &s[at + ext.len()..]);
+            return (PathBuf::from(file), Some(name.to_string()));
         }
     }
     (spec.to_path_buf(), None)

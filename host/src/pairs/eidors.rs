@@ -174,10 +174,7 @@ pub(super) fn given_as_lists(spec: &Path, error: PairsError) -> PairsError {
     let Some(first) = names.first() else {
         return error;
     };
-    let file = spec.to_string_lossy();
-    let file = file
-        .rsplit_once(".mat:")
-        .map_or(file.to_string(), |(f, _)| format!("{f}.mat"));
+    let file = file_of(spec);
     PairsError::Crossing(format!(
         "{file} holds EIDORS's stimulation, the struct array{} {}: each injection with its \
          own measurements, which et protocol --stimulation {file}:{first} reads whole (it is \
@@ -189,9 +186,7 @@ pub(super) fn given_as_lists(spec: &Path, error: PairsError) -> PairsError {
 
 /// The file `spec` names (`stim.mat` of `stim.mat:stim`).
 fn file_of(spec: &Path) -> String {
-    let spec = spec.to_string_lossy();
-    spec.rsplit_once(".mat:")
-        .map_or(spec.to_string(), |(f, _)| format!("{f}.mat"))
+    frames::split_array(spec).0.display().to_string()
 }
 
 /// Each row of `meas` as a pair (+1 at its positive electrode, -1 at its negative), from 0;

@@ -381,6 +381,24 @@ fn a_struct_arrays_field_of_frames_is_read() {
         let e = et_host::frames::read(&path, 208).unwrap_err().to_string();
         assert!(e.contains("vi.meas") && e.contains(":VARIABLE"), "{e}");
     }
+    // The extension in capitals, as Windows tools write it (`RUN.MAT:vi.meas` was looked for
+    // as a file of that name): read alike, frames and stimulation.
+    let dir = std::env::temp_dir().join(format!("et-eidors-caps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let caps = dir.join("RUN.MAT");
+    std::fs::copy(scipy_file(), &caps).unwrap();
+    let spec = PathBuf::from(format!("{}:vi.meas", caps.display()));
+    assert_eq!(et_host::frames::read(&spec, 208).unwrap().frames.len(), 3);
+    let spec = PathBuf::from(format!("{}:stim", caps.display()));
+    assert_eq!(
+        stimulation(&spec, &Crossing::default())
+            .unwrap()
+            .schedule
+            .rows()
+            .len(),
+        208
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
     // A model alone, its nodes beside its stimulation: said as the protocol's file, not its
     // nodes read as frames ("variable 'fmdl.nodes' read: 20 x 2 values"); the nodes named,
     // they are read as asked.
