@@ -297,6 +297,11 @@ fn another_systems_frames_play_as_the_recording(
     };
     assert_eq!(positions(&from_csv.stdout), positions(streamed));
     let fits = String::from_utf8_lossy(&from_csv.stderr);
+    // Its events' t_us, 0 without a board's clock, said as that.
+    assert!(
+        fits.contains("no board clock in the file: every event's t_us is 0"),
+        "{fits}"
+    );
     assert!(
         !fits.contains("unexplained") && !fits.contains("was the sheet touched"),
         "{fits}"

@@ -238,6 +238,13 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         for note in r.recording.notes() {
             say!("note: {}: {note}", r.name);
         }
+        // Another system's frames come without the board's clock (every event said t_us 0).
+        if let Some(file) = r.recording.header.source.strip_prefix("file:") {
+            say!(
+                "note: {file}: no board clock in the file: every event's t_us is 0, and its seq \
+                 is the frame's number in the file, from 0"
+            );
+        }
         if let Some(other) = r.recording.made_on_another_sheet(&r.sheet.physical) {
             say!("warning: {}: {other}", r.name);
         }
