@@ -181,7 +181,10 @@ pub enum Misuse {
     )]
     TooFewRows(usize),
     /// More folds than rows, or fewer than 2.
-    #[error("{folds} folds for {rows} training rows: use 2 to {rows}")]
+    #[error(
+        "{folds} folds for {rows} training rows: use 2 to {rows} (--folds on the command line, \
+         folds= in Python), or give more rows"
+    )]
     Folds {
         /// The folds asked for.
         folds: usize,

@@ -493,6 +493,16 @@ fn row_ranges_and_folds() {
             assert!(e.to_string().contains("needs at least 3"), "{rows}: {e}");
         }
     }
+    // Three rows in the default 5 folds: said with the flag that sets them (it said "use 2 to
+    // 3" of a number not given).
+    let three = STANDIN.select("0..3".parse().unwrap()).unwrap();
+    let five = TrainOptions { folds: 5, ..opts() };
+    let e = train(&three, Choice::One(Kind::Ridge), &five, &mut quiet()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("5 folds for 3 training rows: use 2 to 3 (--folds"),
+        "{e}"
+    );
     // Blocks are contiguous and in order; shuffled folds are not.
     let b = folds(10, 3, CvScheme::Blocks, None, 1);
     assert_eq!(b, [0, 0, 0, 0, 1, 1, 1, 2, 2, 2]);
