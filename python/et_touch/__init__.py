@@ -159,6 +159,43 @@ def _finite_frames(a: np.ndarray, what: str) -> np.ndarray:
     return a
 
 
+def _imaged_rows(frames: np.ndarray, what: str) -> np.ndarray:
+    """Which rows of the frames (n x K) are imaged: those without a value missing (NaN, a
+    value the system did not send), said in a warning by their numbers; an infinite value
+    is refused by its place, and frames all missing."""
+    nan = np.isnan(frames)
+    if not nan.any():
+        _finite_frames(frames, what)
+        return np.ones(len(frames), dtype=bool)
+    _finite_frames(np.where(nan, 0.0, frames), what)
+    imaged = ~nan.any(axis=1)
+    skipped = np.flatnonzero(~imaged)
+    if not imaged.any():
+        raise EtError(
+            f"{what}: every frame has values missing (NaN: values the system did not send): "
+            "nothing to image"
+        )
+    first = [int(i) for i in skipped[:5]]
+    more = ", ..." if len(skipped) > 5 else ""
+    warnings.warn(
+        f"{what}: {len(skipped)} of {len(frames)} frames have values missing (NaN: values the "
+        f"system did not send) and are not imaged (frames {', '.join(map(str, first))}{more}): "
+        "their pixels, dv and alpha are NaN, batch[i] and their objects None, as et "
+        "reconstruct --all skips them",
+        EtWarning,
+        stacklevel=3,
+    )
+    return imaged
+
+
+def _in_place(a: np.ndarray, imaged: np.ndarray, n: int) -> np.ndarray:
+    """The rows of ``a`` (one per imaged frame) in their frames' places among ``n``, NaN in
+    the others."""
+    out = np.full((n,) + a.shape[1:], np.nan, dtype=np.result_type(a.dtype, np.float32))
+    out[imaged] = a
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # Sheets
 
@@ -735,13 +772,18 @@ class ImageBatch:
     (Delta sigma / sigma_0, top row first, NaN outside), ``dv`` n x K (V), ``alpha`` (n);
     ``batch[i]`` (and iterating) gives each frame's :class:`Image`, whose noise, objects and
     segmentation are made when first read, against the reference the batch was imaged
-    against."""
+    against. A frame with values missing (NaN: values the system did not send) is not
+    imaged, as `et reconstruct --all` skips it: its pixels, dv and alpha are NaN, its
+    ``batch[i]`` and its objects and touches None; ``imaged`` says which frames were."""
 
     def __init__(self, r: "Reconstructor", frames: np.ndarray, reference: np.ndarray,
-                 pixels: np.ndarray, dv: np.ndarray, alpha: np.ndarray) -> None:
+                 pixels: np.ndarray, dv: np.ndarray, alpha: np.ndarray,
+                 imaged: Optional[np.ndarray] = None) -> None:
         self._r, self._frames, self._reference = r, frames, reference
         self.pixels, self.dv, self.alpha = pixels, dv, alpha
-        self._found: Optional[List[Dict[str, Any]]] = None
+        #: Which frames were imaged (n booleans): False where a value was missing.
+        self.imaged = np.ones(len(alpha), dtype=bool) if imaged is None else imaged
+        self._found: Optional[List[Optional[Dict[str, Any]]]] = None
 
     def __len__(self) -> int:
         return len(self.alpha)
@@ -752,11 +794,11 @@ class ImageBatch:
     @overload
     def __getitem__(self, i: slice) -> "ImageBatch": ...
 
-    def __getitem__(self, i: Union[int, slice]) -> Union[Image, "ImageBatch"]:
+    def __getitem__(self, i: Union[int, slice]) -> Union[Optional[Image], "ImageBatch"]:
         if isinstance(i, slice):
             # The frames it selects, as a batch of their own (what is made is shared).
             part = ImageBatch(self._r, self._frames[i], self._reference, self.pixels[i],
-                              self.dv[i], self.alpha[i])
+                              self.dv[i], self.alpha[i], self.imaged[i])
             part._found = None if self._found is None else self._found[i]
             return part
         try:
@@ -765,6 +807,8 @@ class ImageBatch:
             raise TypeError(f"batch index {i!r}: a whole number or a slice") from None
         if not -len(self) <= i < len(self):
             raise IndexError(f"frame {i} of a batch of {len(self)}")
+        if not self.imaged[i]:
+            return None
         frame, reference, native = self._frames[i], self._reference, self._r._native
         found = self._found
         return Image(self.pixels[i], self.dv[i], float(self.alpha[i]), self._r.extent,
@@ -773,19 +817,22 @@ class ImageBatch:
                      else lambda: self._r._found_of(frame[None, :], reference)[0])
 
     @property
-    def objects(self) -> List[List[Dict[str, Any]]]:
-        """Each frame's objects (a list per frame, strongest first, as ``Image.objects``),
-        made for every frame at the first read, over every core."""
-        return [f["objects"] for f in self._found_all()]
+    def objects(self) -> List[Optional[List[Dict[str, Any]]]]:
+        """Each frame's objects (a list per frame, strongest first, as ``Image.objects``;
+        None for a frame not imaged), made for every frame at the first read, over every
+        core."""
+        return [None if f is None else f["objects"] for f in self._found_all()]
 
     @property
-    def touches(self) -> List[List[Dict[str, Any]]]:
-        """Each frame's touches (a list per frame, as ``Image.touches``)."""
-        return [f["touches"] for f in self._found_all()]
+    def touches(self) -> List[Optional[List[Dict[str, Any]]]]:
+        """Each frame's touches (a list per frame, as ``Image.touches``; None for a frame not
+        imaged)."""
+        return [None if f is None else f["touches"] for f in self._found_all()]
 
-    def _found_all(self) -> List[Dict[str, Any]]:
+    def _found_all(self) -> List[Optional[Dict[str, Any]]]:
         if self._found is None:
-            self._found = self._r._found_of(self._frames, self._reference)
+            found = iter(self._r._found_of(self._frames[self.imaged], self._reference))
+            self._found = [next(found) if kept else None for kept in self.imaged]
         return self._found
 
     def __iter__(self) -> Any:
@@ -793,7 +840,9 @@ class ImageBatch:
 
     def __repr__(self) -> str:
         n, rows, cols = self.pixels.shape
-        return f"ImageBatch({n} frames of {rows} x {cols} pixels)"
+        skipped = int((~self.imaged).sum())
+        missing = f", {skipped} not imaged (values missing)" if skipped else ""
+        return f"ImageBatch({n} frames of {rows} x {cols} pixels{missing})"
 
 
 class Reconstructor:
@@ -1022,18 +1071,28 @@ class Reconstructor:
         """Images every frame of ``V`` (n x K, V) against the reference set (or ``v0``, set as
         the reference first) in one call without the GIL: an :class:`ImageBatch` of stacked
         ``pixels`` (n x rows x cols), ``dv`` (n x K) and ``alpha`` (n); ``batch[i]`` is frame
-        i's :class:`Image`, its noise and objects made when first read."""
+        i's :class:`Image`, its noise and objects made when first read. A frame with values
+        missing (NaN, as :func:`read_recording` and :func:`read_frames` give a value the system
+        did not send) is not imaged and said in a warning: NaN in the stacks, None as its
+        ``batch[i]``, objects and touches (``batch.imaged``)."""
         if v0 is not None:
             self.set_reference(v0)
         if self._reference is None:
             raise EtError("no reference set: images(V, v0), or set_reference(v0) first")
-        frames = self._by_rows(_finite_frames(_f64(_volts(V, "V"), 2, "V"), "V"), "V")
-        pixels, dv, alpha = self._native.pixels_batch(frames)
-        self._say_unlike(frames, self._v0)
-        self._say_came_off(frames, self._reference)
+        frames = self._by_rows(_f64(_volts(V, "V"), 2, "V"), "V")
+        imaged = _imaged_rows(frames, "V")
+        kept = frames if imaged.all() else frames[imaged]
+        pixels, dv, alpha = self._native.pixels_batch(kept)
+        self._say_unlike(kept, self._v0)
+        self._say_came_off(kept, self._reference)
         rows, cols = self._native.grid[:2]
-        return ImageBatch(self, frames, self._reference,
-                          pixels.reshape(len(frames), rows, cols), dv, alpha)
+        pixels = pixels.reshape(len(kept), rows, cols)
+        if not imaged.all():
+            # The frames not imaged kept in their places, NaN (as `et reconstruct --all`'s
+            # stack), so that frame i is still row i.
+            n = len(frames)
+            pixels, dv, alpha = (_in_place(a, imaged, n) for a in (pixels, dv, alpha))
+        return ImageBatch(self, frames, self._reference, pixels, dv, alpha, imaged)
 
     def _found_of(self, frames: np.ndarray, reference: Any) -> List[Dict[str, Any]]:
         """Each frame's objects and touches against ``reference`` (set again if another was

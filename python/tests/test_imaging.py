@@ -314,8 +314,28 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
         disc.image(gap, v0)
     with pytest.raises(et.EtError, match=r"v0\[7\] = nan"):
         disc.image(v, gap)
-    with pytest.raises(et.EtError, match=r"V\[1, 7\] = nan: .*V\[np.isfinite\(V\).all\(axis=1\)\]"):
-        disc.images(np.vstack([v, gap]), v0)
+    # Among frames, one with a value missing is not imaged, as `et reconstruct --all` skips
+    # it, in its place (it refused the batch): said, NaN in the stacks, None as its image and
+    # its objects; the others as imaged alone.
+    with pytest.warns(et.EtWarning, match=r"V: 1 of 3 frames have values missing .*frames 1\)"):
+        batch = disc.images(np.vstack([v, gap, v]), v0)
+    assert list(batch.imaged) == [True, False, True] and len(batch) == 3
+    assert np.isnan(batch.pixels[1]).all() and np.isnan(batch.dv[1]).all()
+    assert np.isnan(batch.alpha[1]) and batch[1] is None and [b is None for b in batch] == [
+        False, True, False]
+    assert batch.objects[1] is None and batch.touches[1] is None
+    alone = disc.images(v[None, :], v0)
+    np.testing.assert_array_equal(batch.pixels[2], alone.pixels[0])
+    assert batch.objects[0] == batch.objects[2] == alone.objects[0]
+    assert batch[2].touches == alone[0].touches and "1 not imaged" in repr(batch)
+    assert batch[1:].imaged.tolist() == [False, True] and batch[1:].objects[0] is None
+    # Every frame missing values: nothing to image; an infinite value is refused by place.
+    with pytest.raises(et.EtError, match="every frame has values missing"):
+        disc.images(np.vstack([gap, gap]), v0)
+    infinite = v.copy()
+    infinite[5] = np.inf
+    with pytest.raises(et.EtError, match=r"V\[2, 5\] = inf"):
+        disc.images(np.vstack([v, gap, infinite]), v0)
     # Its own frames are 1 times its model's: nothing said. In mV they are 1 000 times: said,
     # with the image's values 1 000 times (what the warning says), until the fit.
     with warnings.catch_warnings():
