@@ -28,6 +28,7 @@ import json
 import operator
 import os
 import re
+import sys
 import threading
 import warnings
 from dataclasses import dataclass
@@ -44,6 +45,16 @@ _IMPORTED = frozenset(globals())
 
 class EtWarning(UserWarning):
     """What et says of a call it carries out, where the result may not be what was meant."""
+
+
+def _warn(message: str) -> None:
+    """Warns (:class:`EtWarning`) at the caller's line that called into this module, however
+    deep the call that says it (a reference set by ``images(V, v0)`` was said at this
+    module's own line)."""
+    level, frame = 2, sys._getframe(1)
+    while frame is not None and frame.f_code.co_filename == __file__:
+        level, frame = level + 1, frame.f_back
+    warnings.warn(message, EtWarning, stacklevel=level)
 
 
 #: How far the untouched frame may be from the model's frame of the sheet (a factor either
@@ -177,13 +188,11 @@ def _imaged_rows(frames: np.ndarray, what: str) -> np.ndarray:
         )
     first = [int(i) for i in skipped[:5]]
     more = ", ..." if len(skipped) > 5 else ""
-    warnings.warn(
+    _warn(
         f"{what}: {len(skipped)} of {len(frames)} frames have values missing (NaN: values the "
         f"system did not send) and are not imaged (frames {', '.join(map(str, first))}{more}): "
         "their pixels, dv and alpha are NaN, batch[i] and their objects None, as et "
-        "reconstruct --all skips them",
-        EtWarning,
-        stacklevel=3,
+        "reconstruct --all skips them"
     )
     return imaged
 
@@ -972,20 +981,18 @@ class Reconstructor:
                 native.reference_changed(frames), native.not_volts(frames),
             ):
                 if said is not None:
-                    warnings.warn(said, EtWarning, stacklevel=3)
+                    _warn(said)
         if frames.size and not self._native.background_fitted:
             scale = self._native.scale_of(frames)
             # (Below 0 it runs against the model, which the reference's check refuses.)
             if scale is not None and 0 < scale and not 1 / SCALE_SAID <= scale <= SCALE_SAID:
                 spec = self.sheet.spec
-                warnings.warn(
+                _warn(
                     f"the untouched frame is {scale:.2g} times the model's frame of the sheet "
                     f"(sheet_resistance {spec['sheet_resistance']:.4g} ohm/sq, contact_ohm "
                     f"{spec['electrodes']['contact_ohm']:.4g}, the protocol's currents): "
                     "the images' values (peaks, z) come out about as many times theirs; "
-                    "fit_background(v0) fits the sheet to the frames, as et reconstruct does",
-                    EtWarning,
-                    stacklevel=3,
+                    "fit_background(v0) fits the sheet to the frames, as et reconstruct does"
                 )
 
     def set_reference(self, v0: Any) -> None:
@@ -1021,13 +1028,11 @@ class Reconstructor:
         i = int(unlike[0])
         which = "the frame" if frames.ndim == 1 else f"frame {i}"
         times = scale[i] + 0.0  # (-0, a frame of zeros against negative values, said as 0)
-        warnings.warn(
+        _warn(
             f"{which} is {times:.3g} times the reference V_0 (the median of its values' ratios; "
             f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
             "way): are the frames and the reference in the same units, at the same current? "
-            "A press changes a frame by a few per cent",
-            EtWarning,
-            stacklevel=3,
+            "A press changes a frame by a few per cent"
         )
 
     def _say_came_off(self, frames: np.ndarray, reference: np.ndarray) -> None:
@@ -1036,7 +1041,7 @@ class Reconstructor:
         that came off during the recording."""
         said = self._native.came_off(frames, reference) if len(frames) else None
         if said is not None:
-            warnings.warn(said, EtWarning, stacklevel=3)
+            _warn(said)
 
     def image(self, v: Any, v0: Any = None) -> Image:
         """Images frame ``v`` (K values, V) against ``v0``: the untouched frame (K values), or
@@ -1415,7 +1420,7 @@ class Model:
             scores = json.loads(self._native.evaluate_dataset(X))
             for note in ("scale_note", "trained_note"):
                 if scores.get(note):
-                    warnings.warn(scores[note], EtWarning, stacklevel=2)
+                    _warn(scores[note])
             return scores
         labels, positions = _targets(y)
         groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
@@ -1423,17 +1428,16 @@ class Model:
         scores = json.loads(self._native.evaluate_table(_f64(X, 2, "X"), labels, positions, groups))
         for note in ("unit_note", "scale_note", "trained_note"):
             if scores.get(note):
-                warnings.warn(scores[note], EtWarning, stacklevel=2)
+                _warn(scores[note])
         unknown = scores.get("unknown_labels") or []
         if unknown and labels is not None:
             # As `et eval` notes it: rows of labels the model never saw count as missed (the
             # dict alone gave an accuracy of 0 without a word).
             missed = sum(label in set(unknown) for label in labels)
             shown = ", ".join(unknown[:5]) + (", ..." if len(unknown) > 5 else "")
-            warnings.warn(
+            _warn(
                 f"{len(unknown)} label{'' if len(unknown) == 1 else 's'} the model has no class "
-                f"of ({shown}): {missed} row{'' if missed == 1 else 's'} counted as missed",
-                EtWarning, stacklevel=2,
+                f"of ({shown}): {missed} row{'' if missed == 1 else 's'} counted as missed"
             )
         return scores
 
@@ -1531,7 +1535,7 @@ def train(
         # What `et train --data` prints as its notes (too few data for the usual recipe, an
         # accuracy no better than guessing), as on arrays below.
         if model._native.note:
-            warnings.warn(model._native.note, EtWarning, stacklevel=2)
+            _warn(model._native.note)
         return model
     if y is None:
         raise EtError("give y: n labels, or n x 2 positions (m)")
@@ -1561,9 +1565,9 @@ def train(
         )
     groups = None if groups is None else _labels(np.asarray(groups), "groups", "group")
     if groups is not None and len(set(groups)) < 2:
-        warnings.warn(
+        _warn(
             f"one group ({groups[0]!r}) only: nothing in the data can show how a model holds on "
-            "a new session", EtWarning, stacklevel=2,
+            "a new session"
         )
     if grid is not None and (isinstance(grid, (str, bytes)) or np.shape(grid) != (2,)):
         raise EtError(f"grid = {grid!r}: (rows, cols) of classes, e.g. (3, 3)")
@@ -1581,7 +1585,7 @@ def train(
     # value), as `et train` says it: a warning, not only a field of `Model.info`.
     note = model._native.note
     if note:
-        warnings.warn(note, EtWarning, stacklevel=2)
+        _warn(note)
     return model
 
 

@@ -320,6 +320,13 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     with pytest.warns(et.EtWarning, match=r"V: 1 of 3 frames have values missing .*frames 1\)"):
         batch = disc.images(np.vstack([v, gap, v]), v0)
     assert list(batch.imaged) == [True, False, True] and len(batch) == 3
+    # Every warning is said at the caller's line, however deep the call that says it (the
+    # reference's, set by images(V, v0), was said at the module's own line).
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        disc.images(np.vstack([v, gap]), v0 * 1e3)
+    assert len(said) >= 2 and {w.filename for w in said} == {__file__}, [
+        (w.filename, str(w.message)[:40]) for w in said]
     assert np.isnan(batch.pixels[1]).all() and np.isnan(batch.dv[1]).all()
     assert np.isnan(batch.alpha[1]) and batch[1] is None and [b is None for b in batch] == [
         False, True, False]
