@@ -403,8 +403,9 @@ fn frames_json_columns() -> String {
     format!("{{{}}}", columns.join(","))
 }
 
-/// The frames as a logger writes them, a JSON object a line (`{"t": 0.1, "v": [...]}`), and
-/// as pandas' `to_json(orient="split")` writes them: the readers of JSON objects'.
+/// The frames as a logger writes them, a JSON object a line (`{"t": 0.1, "v": [...]}`) after
+/// a record of its own, and as pandas' `to_json(orient="split")` writes them: the readers of
+/// JSON objects'.
 fn frames_json_objects() -> [String; 2] {
     let m = frames_matrix();
     let row = |f: usize| -> Vec<String> { m.row(f).iter().map(|v| format!("{v:e}")).collect() };
@@ -428,7 +429,9 @@ fn frames_json_objects() -> [String; 2] {
         index.join(","),
         rows.join(",")
     );
-    [lines.join("\n") + "\n", split]
+    // (A logger's other records among its frames' lines, skipped.)
+    let logged = format!("{{\"event\": \"start\"}}\n{}\n", lines.join("\n"));
+    [logged, split]
 }
 
 /// The frames as LabVIEW's Write To Measurement File writes them (`.lvm`): its headers, a time

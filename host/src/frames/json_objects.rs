@@ -49,8 +49,22 @@ pub(super) fn items(mut tops: Vec<Top>) -> Result<Found, String> {
     // logger's record holding its frame's array).
     let mut items = Vec::with_capacity(tops.len());
     let mut key: Option<String> = None;
+    // A logger's lines of frames (an object holding one array) among its other records (`{"event":
+    // "start"}`, a status): those hold no array, and are skipped and said (the first was read
+    // as a frame of named values, "\"start\" is not a number").
+    let arrays = |o: &Object| {
+        (o.entries.iter())
+            .filter(|(_, t)| matches!(t, Top::Array(_)))
+            .count()
+    };
+    let logger = (tops.iter()).any(|t| matches!(t, Top::Object(o) if arrays(o) == 1));
+    let mut skipped: Vec<usize> = Vec::new();
     for (n, top) in tops.into_iter().enumerate() {
         let item = match top {
+            Top::Object(object) if logger && arrays(&object) == 0 => {
+                skipped.push(n + 1);
+                continue;
+            }
             Top::Array(cells) => Item::Values(cells.into_iter().map(Item::into_cell).collect()),
             Top::Object(object) => match line_record(object.entries) {
                 Ok((item, k)) => {
@@ -69,6 +83,18 @@ pub(super) fn items(mut tops: Vec<Top>) -> Result<Found, String> {
         items.push(item);
     }
     let said = match (&key, items.first()) {
+        (Some(k), _) if !skipped.is_empty() => {
+            let first: Vec<String> = skipped.iter().take(5).map(usize::to_string).collect();
+            format!(
+                "JSON Lines, each frame its line's '{k}', its other keys skipped, and {} line{} \
+                 without '{k}' (line{} {}{}, from 1: a logger's other records), ",
+                skipped.len(),
+                if skipped.len() == 1 { "" } else { "s" },
+                if skipped.len() == 1 { "" } else { "s" },
+                first.join(", "),
+                if skipped.len() > 5 { ", ..." } else { "" }
+            )
+        }
         (Some(k), _) => {
             format!("JSON Lines, each frame its line's '{k}', its other keys skipped, ")
         }

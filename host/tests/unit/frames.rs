@@ -775,6 +775,13 @@ fn frames_as_json_arrays_are_read() {
             "{\"t\":0.0,\"v\":[1,2,3]}\n{\"t\":0.1,\"v\":[4,5,6]}\n",
             "each frame its line's 'v'",
         ),
+        // A logger's events among its frames' lines: skipped and said (the first was read as
+        // a frame of named values, "\"start\" is not a number").
+        (
+            "{\"event\":\"start\",\"rate_hz\":10}\n{\"t\":0.0,\"v\":[1,2,3]}\n\
+             {\"event\":\"calibrated\"}\n{\"t\":0.1,\"v\":[4,5,6]}\n",
+            "and 2 lines without 'v' (lines 1, 3, from 1: a logger's other records)",
+        ),
     ] {
         std::fs::write(&f, text).unwrap();
         assert!(reads_as_table(&f), "{text}");
