@@ -1191,7 +1191,24 @@ fn reconstruct_images_recorded_frames() {
         (e.split("warning: frame 50 is ").nth(1)).and_then(|r| r.split(' ').next()?.parse().ok());
     assert!(
         scale.is_some_and(|s| (s / 1e-3 - 1.0).abs() < 0.02)
-            && e.contains("times the reference V_0"),
+            && e.contains("times the reference V_0")
+            && e.contains("in the same units"),
+        "{e}"
+    );
+    // A reference of the other sign (another session's wires the other way round): said as
+    // that, not asked for its units.
+    let negated: String = (volts.iter())
+        .map(|v| {
+            let row: Vec<String> = (v.as_array().unwrap().iter())
+                .map(|x| format!("{}", -x.as_f64().unwrap()))
+                .collect();
+            row.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&in_mv, negated).unwrap();
+    let e = String::from_utf8_lossy(&run(&a).stderr).to_string();
+    assert!(
+        e.contains("times the reference V_0") && e.contains("the other sign: were the frames'"),
         "{e}"
     );
     // The frames imaged on another sheet of as many electrodes (a 22 cm disc) were imaged

@@ -63,8 +63,12 @@ def _warn(message: str) -> None:
 #: a disc's default values 40 times it.
 SCALE_SAID = 1.25
 
-# How far a frame may be from its reference V_0 before it is said: et reconstruct's bound.
+# How far a frame may be from its reference V_0 before it is said: et reconstruct's bound,
+# and what it asks (a frame of the other sign was asked for its units).
 _FRAME_SCALE_SAID: float = _native.FRAME_SCALE_SAID
+_UNLIKE_UNITS = "are the frames and the reference in the same units, at the same current?"
+_UNLIKE_SIGN = ("the other sign: were the frames' or the reference's measurement wires swapped, "
+                "or their current driven the other way?")
 
 __all__ = [
     "EtError",
@@ -1031,8 +1035,8 @@ class Reconstructor:
         _warn(
             f"{which} is {times:.3g} times the reference V_0 (the median of its values' ratios; "
             f"{len(unlike)} of {len(scale)} frames past {_FRAME_SCALE_SAID:g} times either "
-            "way): are the frames and the reference in the same units, at the same current? "
-            "A press changes a frame by a few per cent"
+            f"way): {_UNLIKE_SIGN if times < 0 else _UNLIKE_UNITS} A press changes a frame by "
+            "a few per cent"
         )
 
     def _say_came_off(self, frames: np.ndarray, reference: np.ndarray) -> None:

@@ -383,6 +383,9 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     # A frame of zeros against a reference of negative values: 0 times, not "-0 times".
     with pytest.warns(et.EtWarning, match="the frame is 0 times the reference V_0"):
         r.image(np.where(v0 < 0, 0.0, v0), v0)
+    # A frame of the other sign: said as that, not asked for its units.
+    with pytest.warns(et.EtWarning, match=r"the frame is -1 times .*the other sign: were the"):
+        r.image(-v0, v0)
     # Frames of another protocol of the same K (opposite's under pseudo-polar): imaged about
     # the wrong model without a word; now said as `et reconstruct` says it, fitted or not.
     opposite = et.Reconstructor(et.disc(0.065, 16), et.protocol("opposite", 16), triangles=1200)

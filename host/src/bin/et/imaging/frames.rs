@@ -415,13 +415,25 @@ pub(super) fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usiz
     if let Some((i, s)) = unlike.first() {
         say!(
             "warning: frame {i} is {} times the reference V_0 (the median of its values' \
-             ratios; {} of {} frames past {FRAME_SCALE_SAID} times either way): are the frames \
-             and the reference in the same units, at the same current? A press changes a frame \
-             by a few per cent",
+             ratios; {} of {} frames past {FRAME_SCALE_SAID} times either way): {} A press \
+             changes a frame by a few per cent",
             crate::tabular::significant(*s),
             unlike.len(),
-            chosen.len()
+            chosen.len(),
+            unlike_why(*s)
         );
+    }
+}
+
+/// What a frame `scale` times its reference asks: another unit or current, or where the
+/// scale is negative, the other sign (it asked a reference of the other sign for units).
+#[must_use]
+pub(crate) fn unlike_why(scale: f64) -> &'static str {
+    if scale < 0.0 {
+        "the other sign: were the frames' or the reference's measurement wires swapped, or \
+         their current driven the other way?"
+    } else {
+        "are the frames and the reference in the same units, at the same current?"
     }
 }
 
