@@ -1092,8 +1092,11 @@ class Reconstructor:
         imaged = _imaged_rows(frames, "V")
         kept = frames if imaged.all() else frames[imaged]
         pixels, dv, alpha = self._native.pixels_batch(kept)
-        self._say_unlike(kept, self._v0)
-        self._say_came_off(kept, self._reference)
+        # (Said of each frame by its number in V: a frame not imaged stands as V_0, which
+        # says nothing.)
+        said = frames if imaged.all() else np.where(imaged[:, None], frames, self._v0)
+        self._say_unlike(said, self._v0)
+        self._say_came_off(said, self._reference)
         rows, cols = self._native.grid[:2]
         pixels = pixels.reshape(len(kept), rows, cols)
         if not imaged.all():
@@ -1637,8 +1640,6 @@ def read_frames(path: PathLike, k: int) -> np.ndarray:
 def __dir__() -> List[str]:
     """What ``dir(et_touch)`` lists: the module's own names and its API (``__all__``), not
     the modules and types it imports (``np``, ``json``, ``Any``), nor its private names."""
-    own = (
-        n for n in globals()
-        if (n not in _IMPORTED and not n.startswith("_")) or (n.startswith("__") and n.endswith("__"))
-    )
-    return sorted(set(own) | set(__all__))
+    dunder = [n for n in globals() if n.startswith("__") and n.endswith("__")]
+    own = [n for n in globals() if n not in _IMPORTED and not n.startswith("_")]
+    return sorted(set(own) | set(dunder) | set(__all__))

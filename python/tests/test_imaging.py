@@ -336,6 +336,10 @@ def test_frames_that_are_not_volts_are_refused_or_said(disc):
     assert batch.objects[0] == batch.objects[2] == alone.objects[0]
     assert batch[2].touches == alone[0].touches and "1 not imaged" in repr(batch)
     assert batch[1:].imaged.tolist() == [False, True] and batch[1:].objects[0] is None
+    # What is said of the others names them by their numbers in V, past the one skipped.
+    with pytest.warns(et.EtWarning, match=r"frame 2 is 1e\+03 times the reference V_0"), \
+            pytest.warns(et.EtWarning, match="values missing"):
+        disc.images(np.vstack([v, gap, v * 1e3]), v0)
     # Every frame missing values: nothing to image; an infinite value is refused by place.
     with pytest.raises(et.EtError, match="every frame has values missing"):
         disc.images(np.vstack([gap, gap]), v0)

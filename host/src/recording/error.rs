@@ -194,6 +194,9 @@ fn field_said(place: &str, field: &str) -> Option<&'static str> {
         "version" => "the format's version (1)",
         "source" => "where the frames come from (\"sim:scene.toml\", \"port:/dev/ttyACM0\")",
         "electrodes" => "the electrode count L (16)",
+        "protocol" if in_list("config") => {
+            "the protocol the board scans (\"Adjacent\", \"Opposite\")"
+        }
         "protocol" => "the protocol's name (\"adjacent\", \"opposite\")",
         "K" => "the frame's length, values a frame (208 for adjacent on 16 electrodes)",
         "config" => {

@@ -332,6 +332,11 @@ fn what_is_not_a_recording_is_said_so() {
             "config: missing field `gain`: the amplifier's gain",
         ),
         (
+            "/config",
+            "protocol",
+            "config: missing field `protocol`: the protocol the board scans",
+        ),
+        (
             "/columns/3",
             "source",
             "columns[3]: missing field `source`: the electrode the current",

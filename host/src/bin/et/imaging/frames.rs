@@ -427,8 +427,7 @@ pub(super) fn say_unlike_frames(reference: &et_recon::Reference, chosen: &[(usiz
 
 /// What a frame `scale` times its reference asks: another unit or current, or where the
 /// scale is negative, the other sign (it asked a reference of the other sign for units).
-#[must_use]
-pub(crate) fn unlike_why(scale: f64) -> &'static str {
+fn unlike_why(scale: f64) -> &'static str {
     if scale < 0.0 {
         "the other sign: were the frames' or the reference's measurement wires swapped, or \
          their current driven the other way?"
