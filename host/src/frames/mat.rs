@@ -101,10 +101,16 @@ pub(super) fn mat_matrix(
         .chain(fields.iter().map(|f| f.name.clone()))
         .chain(arrays.iter().map(|(name, _, _)| name.clone()))
         .collect();
-    // (A struct's field's shape is not known here: with one, the user names the array.)
+    // (A struct's field's shape is read from the field alone, so that the one array of K
+    // values is found beside a model's `fmdl.nodes`: "name one" was asked.)
+    let field_shape = |f: &fields::Field| {
+        let alone = fields::alone(&plain, f)?;
+        let file = parse(path, &alone).ok()?;
+        Some(file.find_by_name(&f.name)?.size().clone())
+    };
     let shapes: Vec<_> = (file.arrays().iter())
         .map(|a| (a.name().to_string(), Some(a.size().clone())))
-        .chain(fields.iter().map(|f| (f.name.clone(), None)))
+        .chain(fields.iter().map(|f| (f.name.clone(), field_shape(f))))
         .chain((arrays.iter()).map(|(name, n, v)| (name.clone(), Some(vec![*n, v.len()]))))
         .collect();
     // A model's nodes beside its stimulation (EIDORS's `fmdl`) read unasked, of no frame's
