@@ -86,17 +86,37 @@ pub(super) fn mat_matrix(
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
     let file = parse(path, &plain)?;
     // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
-    let fields = fields::fields(&plain);
+    let mut fields = fields::fields(&plain);
+    // A stimulation of one injection is a 1 x 1 struct: its patterns are no frames either
+    // (unless named).
+    let single: Vec<String> = (fields.iter())
+        .filter_map(|f| f.name.strip_suffix(".stim_pattern"))
+        .filter(|p| (fields.iter()).any(|g| g.name == format!("{p}.meas_pattern")))
+        .map(str::to_string)
+        .collect();
+    if name.is_none() {
+        fields.retain(|f| {
+            let of = |p: &String| {
+                f.name
+                    .strip_prefix(p.as_str())
+                    .and_then(|r| r.strip_prefix('.'))
+            };
+            !single
+                .iter()
+                .any(|p| matches!(of(p), Some("stim_pattern" | "meas_pattern")))
+        });
+    }
     // A struct array's field of one vector an element (a loop's `vi(k) = fwd_solve(...)`:
     // `vi.meas`), its vectors the columns of a matrix: its elements are parsed only where the
     // array asked for is none of the others (a file's named frames beside a model's struct
     // arrays were parsed too).
     let named_elsewhere =
         name.is_some_and(|n| file.find_by_name(n).is_some() || fields.iter().any(|f| f.name == n));
-    let (arrays, stimulations) = match named_elsewhere {
+    let (arrays, mut stimulations) = match named_elsewhere {
         true => (Vec::new(), Vec::new()),
         false => stacked_fields(&plain),
     };
+    stimulations.extend(single);
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
         .chain(fields.iter().map(|f| f.name.clone()))
         .chain(arrays.iter().map(|(name, _, _)| name.clone()))
@@ -115,10 +135,10 @@ pub(super) fn mat_matrix(
         .collect();
     // A model's nodes beside its stimulation (EIDORS's `fmdl`) read unasked, of no frame's
     // size, are said as the stimulation's file ("variable 'fmdl.nodes' read: 20 x 2 values"
-    // was said).
-    let beside = stimulations
-        .first()
-        .filter(|_| name.is_none() && names.len() == 1);
+    // was said); a variable of its own is frames, said by its size.
+    let beside = (stimulations.first()).filter(|_| {
+        name.is_none() && names.len() == 1 && fields.iter().any(|f| f.name == names[0])
+    });
     let mut said_chosen = String::new();
     let chosen = match (name, names.as_slice()) {
         (Some(n), _) if names.iter().any(|m| m == n) => n.to_string(),

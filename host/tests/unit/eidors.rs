@@ -428,3 +428,32 @@ fn a_struct_arrays_field_of_frames_is_read() {
     let e = et_host::frames::read(&nodes, 208).unwrap_err().to_string();
     assert!(e.contains("20 x 2 values"), "{e}");
 }
+
+/// EIDORS's stimulation of one injection (a 1 x 1 struct) is said as a stimulation; beside a
+/// variable of its own of no frame's size, that variable is said by its size (frames of
+/// another protocol?), not the file as the stimulation's alone.
+#[test]
+fn a_variable_beside_a_stimulation_is_said_by_its_size() {
+    let dir = std::env::temp_dir().join(format!("et-eidors-beside-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pattern = [
+        Value::Dense(4, 1, vec![-1, 1, 0, 0]),
+        Value::Dense(1, 4, vec![0, 0, 1, -1]),
+    ];
+    let file = mat_stim(&dir, "stim", &[pattern]);
+    // Of one injection, a 1 x 1 struct: alone, said as the stimulation too.
+    let e = et_host::frames::read(&file, 16).unwrap_err().to_string();
+    assert!(e.contains("holds EIDORS's stimulation 'stim'"), "{e}");
+    let mut bytes = std::fs::read(&file).unwrap();
+    let mut body = Vec::new();
+    let values: Vec<u8> = (0..6).flat_map(|v| f64::from(v).to_le_bytes()).collect();
+    element(&mut body, 9, &values);
+    bytes.extend(array(6, 0, [3, 2], "V", &body));
+    std::fs::write(&file, bytes).unwrap();
+    let e = et_host::frames::read(&file, 16).unwrap_err().to_string();
+    assert!(
+        e.contains("variable 'V' read: 3 x 2 values") && !e.contains("EIDORS's stimulation"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
