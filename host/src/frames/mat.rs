@@ -86,26 +86,7 @@ pub(super) fn mat_matrix(
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
     let file = parse(path, &plain)?;
     // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
-    let mut fields = fields::fields(&plain);
-    // A stimulation of one injection is a 1 x 1 struct: its patterns are no frames either
-    // (unless named).
-    let single: Vec<String> = (fields.iter())
-        .filter_map(|f| f.name.strip_suffix(".stim_pattern"))
-        .filter(|p| (fields.iter()).any(|g| g.name == format!("{p}.meas_pattern")))
-        .map(str::to_string)
-        .collect();
-    if name.is_none() {
-        fields.retain(|f| {
-            let of = |p: &String| {
-                f.name
-                    .strip_prefix(p.as_str())
-                    .and_then(|r| r.strip_prefix('.'))
-            };
-            !single
-                .iter()
-                .any(|p| matches!(of(p), Some("stim_pattern" | "meas_pattern")))
-        });
-    }
+    let (fields, single) = fields_of(&plain, name.is_none());
     // A struct array's field of one vector an element (a loop's `vi(k) = fwd_solve(...)`:
     // `vi.meas`), its vectors the columns of a matrix: its elements are parsed only where the
     // array asked for is none of the others (a file's named frames beside a model's struct
@@ -121,18 +102,7 @@ pub(super) fn mat_matrix(
         .chain(fields.iter().map(|f| f.name.clone()))
         .chain(arrays.iter().map(|(name, _, _)| name.clone()))
         .collect();
-    // (A struct's field's shape is read from the field alone, so that the one array of K
-    // values is found beside a model's `fmdl.nodes`: "name one" was asked.)
-    let field_shape = |f: &fields::Field| {
-        let alone = fields::alone(&plain, f)?;
-        let file = parse(path, &alone).ok()?;
-        Some(file.find_by_name(&f.name)?.size().clone())
-    };
-    let shapes: Vec<_> = (file.arrays().iter())
-        .map(|a| (a.name().to_string(), Some(a.size().clone())))
-        .chain(fields.iter().map(|f| (f.name.clone(), field_shape(f))))
-        .chain((arrays.iter()).map(|(name, n, v)| (name.clone(), Some(vec![*n, v.len()]))))
-        .collect();
+    let shapes = shapes_of(path, &plain, &file, &fields, &arrays);
     // A model's nodes beside its stimulation (EIDORS's `fmdl`) read unasked, of no frame's
     // size, are said as the stimulation's file ("variable 'fmdl.nodes' read: 20 x 2 values"
     // was said); a variable of its own is frames, said by its size.
@@ -195,24 +165,45 @@ pub(super) fn mat_matrix(
         .unwrap_or(&file)
         .find_by_name(&chosen)
         .ok_or_else(|| content(path, 0, FramesFault::MatInconsistent))?;
-    use matfile::NumericData as D;
-    let values: Vec<f64> = match array.data() {
-        D::Double { real, imag: None } => real.clone(),
-        D::Single { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::Int8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::UInt8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::Int16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::UInt16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
-        // Exact below 2^53 (numpy's default integers are int64).
-        D::Int64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
-        D::UInt64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
-        _ => {
-            let fault = FramesFault::NotReal(array.name().to_string());
-            return Err(content(path, 0, fault));
-        }
+    let Some(values) = real_values(array) else {
+        let fault = FramesFault::NotReal(array.name().to_string());
+        return Err(content(path, 0, fault));
     };
+    let m = matrix_of(path, array, &values, beside.map(|n| (n.as_str(), k)))?;
+    Ok((m, format!("variable '{}', {said_chosen}", array.name())))
+}
+
+/// Each candidate array's name and shape where known: the variables', the 1 x 1 structs'
+/// fields' (read from the field alone, so that the one array of K values is found beside a
+/// model's `fmdl.nodes`: "name one" was asked) and the struct arrays' stacked fields'.
+fn shapes_of(
+    path: &Path,
+    plain: &[u8],
+    file: &matfile::MatFile,
+    fields: &[fields::Field],
+    arrays: &[Stacked],
+) -> Vec<(String, Option<Vec<usize>>)> {
+    let field_shape = |f: &fields::Field| {
+        let alone = fields::alone(plain, f)?;
+        let file = parse(path, &alone).ok()?;
+        Some(file.find_by_name(&f.name)?.size().clone())
+    };
+    (file.arrays().iter())
+        .map(|a| (a.name().to_string(), Some(a.size().clone())))
+        .chain(fields.iter().map(|f| (f.name.clone(), field_shape(f))))
+        .chain((arrays.iter()).map(|(name, n, v)| (name.clone(), Some(vec![*n, v.len()]))))
+        .collect()
+}
+
+/// `array`'s `values` as its matrix (2-D, MATLAB's order by columns); where it was read
+/// unasked beside a stimulation (its name, and K), one of no frame's size is said as the
+/// stimulation's file.
+fn matrix_of(
+    path: &Path,
+    array: &matfile::Array,
+    values: &[f64],
+    beside: Option<(&str, usize)>,
+) -> Result<DMatrix<f64>, FramesError> {
     let (rows, cols) = match array.size().as_slice() {
         [r, c] => (*r, *c),
         other => {
@@ -224,7 +215,7 @@ pub(super) fn mat_matrix(
             ));
         }
     };
-    if let Some(name) = beside
+    if let Some((name, k)) = beside
         && rows != k
         && cols != k
     {
@@ -239,11 +230,52 @@ pub(super) fn mat_matrix(
         };
         return Err(content(path, 0, fault));
     }
-    // MATLAB stores by columns.
-    Ok((
-        DMatrix::from_column_slice(rows, cols, &values),
-        format!("variable '{}', {said_chosen}", array.name()),
-    ))
+    Ok(DMatrix::from_column_slice(rows, cols, values))
+}
+
+/// The numeric fields of `plain`'s 1 x 1 structs, and the stimulations among them (EIDORS's
+/// of one injection is a 1 x 1 struct): their patterns are no frames either, and are left
+/// out `unnamed` (where the user named no array).
+fn fields_of(plain: &[u8], unnamed: bool) -> (Vec<fields::Field>, Vec<String>) {
+    let mut fields = fields::fields(plain);
+    let single: Vec<String> = (fields.iter())
+        .filter_map(|f| f.name.strip_suffix(".stim_pattern"))
+        .filter(|p| (fields.iter()).any(|g| g.name == format!("{p}.meas_pattern")))
+        .map(str::to_string)
+        .collect();
+    if unnamed {
+        fields.retain(|f| {
+            let of = |p: &String| {
+                f.name
+                    .strip_prefix(p.as_str())
+                    .and_then(|r| r.strip_prefix('.'))
+            };
+            !single
+                .iter()
+                .any(|p| matches!(of(p), Some("stim_pattern" | "meas_pattern")))
+        });
+    }
+    (fields, single)
+}
+
+/// `array`'s values as doubles, in MATLAB's order (by columns); None for complex values or
+/// another class.
+fn real_values(array: &matfile::Array) -> Option<Vec<f64>> {
+    use matfile::NumericData as D;
+    Some(match array.data() {
+        D::Double { real, imag: None } => real.clone(),
+        D::Single { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt8 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt16 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::Int32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        D::UInt32 { real, imag: None } => real.iter().map(|&v| f64::from(v)).collect(),
+        // Exact below 2^53 (numpy's default integers are int64).
+        D::Int64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        D::UInt64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        _ => return None,
+    })
 }
 
 /// The error of `path`, a file of EIDORS's stimulation `name` and no frames.

@@ -235,19 +235,7 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
     }
     if let Source::Replay(r) = &mut source {
         r.looping = false;
-        for note in r.recording.notes() {
-            say!("note: {}: {note}", r.name);
-        }
-        // Another system's frames come without the board's clock (every event said t_us 0).
-        if let Some(file) = r.recording.header.source.strip_prefix("file:") {
-            say!(
-                "note: {file}: no board clock in the file: every event's t_us is 0, and its seq \
-                 is the frame's number in the file, from 0"
-            );
-        }
-        if let Some(other) = r.recording.made_on_another_sheet(&r.sheet.physical) {
-            say!("warning: {}: {other}", r.name);
-        }
+        say_replay(r);
         // The reconstruction for the recording's scans, made before its first frame.
         processor.prepare(&r.recording.header.config)?;
     }
@@ -393,6 +381,24 @@ pub(crate) fn stream_cmd(args: &StreamArgs) -> Result<()> {
         return Err(nothing_imaged(&source.describe(), seen, limit, needed));
     }
     Ok(())
+}
+
+/// What `et stream` says of a recording or file it replays before its first frame: the
+/// recording's notes, another system's frames' missing clock (every event said t_us 0), and
+/// a sheet other than the one it was made on.
+fn say_replay(r: &et_host::live::ReplaySource) {
+    for note in r.recording.notes() {
+        say!("note: {}: {note}", r.name);
+    }
+    if let Some(file) = r.recording.header.source.strip_prefix("file:") {
+        say!(
+            "note: {file}: no board clock in the file: every event's t_us is 0, and its seq is \
+             the frame's number in the file, from 0"
+        );
+    }
+    if let Some(other) = r.recording.made_on_another_sheet(&r.sheet.physical) {
+        say!("warning: {}: {other}", r.name);
+    }
 }
 
 /// Says what the board flagged in `out`'s frame (readings on an ADC rail, the current source
