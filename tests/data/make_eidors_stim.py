@@ -1,7 +1,7 @@
 """Writes eidors_stim.mat and eidors_stim_v6.mat: EIDORS's stimulation struct arrays as
 MATLAB keeps them, written by SciPy's savemat (an independent writer of the MATLAB format),
-for et's tests: compressed (MATLAB's default, -v7) and not (-v6; the fuzz target's seed); and
-eidors_fmdl.mat, the forward model alone.
+for et's tests: compressed (MATLAB's default, -v7) and not (-v6; the fuzz target's seed);
+eidors_fmdl.mat, the forward model alone; and eidors_one.mat, a stimulation of one injection.
 
 EIDORS's mk_stim_patterns(n_elec, 1, inj, meas, options, amplitude), ported from its
 documented behaviour (its own unit tests: mk_stim_patterns(4,1,[0,1],[0,1],{},1) gives
@@ -66,6 +66,8 @@ for k in range(3):
 for name, compressed in [("eidors_stim.mat", True), ("eidors_stim_v6.mat", False)]:
     scipy.io.savemat(name, {"stim": stim, "fmdl": fmdl, "vi": vi}, do_compression=compressed,
                      oned_as="column")
-# A forward model alone (its nodes and its stimulation, no frames): said as a protocol's file
-# where frames are read.
+# A forward model alone (its nodes and its stimulation, no frames), and a stimulation of one
+# injection (a 1 x 1 struct): said as a protocol's file where frames are read.
 scipy.io.savemat("eidors_fmdl.mat", {"fmdl": fmdl}, do_compression=True, oned_as="column")
+one = mk_stim_patterns(4, (0, 1), (0, 1), False, False, 0.001)[:, :1]
+scipy.io.savemat("eidors_one.mat", {"one": one}, do_compression=True, oned_as="column")

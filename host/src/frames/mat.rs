@@ -120,6 +120,11 @@ pub(super) fn mat_matrix(
         (None, []) if let Some(name) = stimulations.first() => {
             return Err(stimulation(path, name));
         }
+        // (One of one injection, a 1 x 1 struct of sparse patterns as SciPy and EIDORS
+        // write them, is found only by its fields: looked for where nothing else is.)
+        (None, []) if let Some(one) = structs::struct_arrays(&plain, &STIMULATION).first() => {
+            return Err(stimulation(path, &one.name));
+        }
         (None, []) => {
             let kind = "numeric arrays";
             return Err(content(path, 0, FramesFault::Nothing { kind }));
@@ -348,6 +353,9 @@ pub(super) fn mat_struct_array(
     Ok((array, said))
 }
 
+/// The fields of EIDORS's stimulation struct array, a protocol's patterns.
+const STIMULATION: [&str; 2] = ["stim_pattern", "meas_pattern"];
+
 /// A struct array's field of a vector an element: its dotted name, n, and the vectors.
 type Stacked = (String, usize, Vec<Numeric>);
 
@@ -360,7 +368,7 @@ fn stacked_fields(plain: &[u8]) -> (Vec<Stacked>, Vec<String>) {
     let mut out = Vec::new();
     let mut stimulations = Vec::new();
     for array in structs::struct_arrays(plain, &[]) {
-        if ["stim_pattern", "meas_pattern"]
+        if STIMULATION
             .iter()
             .all(|f| array.fields.iter().any(|g| g == f))
         {

@@ -424,6 +424,11 @@ fn a_struct_arrays_field_of_frames_is_read() {
         e.contains("holds EIDORS's stimulation 'fmdl.stimulation'") && e.contains(&command),
         "{e}"
     );
+    // A stimulation of one injection, a 1 x 1 struct of sparse patterns as SciPy writes it:
+    // said as one too (it was "no numeric arrays").
+    let one = scipy_file().with_file_name("eidors_one.mat");
+    let e = et_host::frames::read(&one, 208).unwrap_err().to_string();
+    assert!(e.contains("holds EIDORS's stimulation 'one'"), "{e}");
     let nodes = PathBuf::from(format!("{}:fmdl.nodes", path.display()));
     let e = et_host::frames::read(&nodes, 208).unwrap_err().to_string();
     assert!(e.contains("20 x 2 values"), "{e}");
