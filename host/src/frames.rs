@@ -22,6 +22,7 @@ use csv_frames::csv_matrix;
 pub(crate) use csv_frames::{unit_in_name, unit_words};
 pub use error::said_list;
 pub use error::{FramesError, FramesFault};
+pub(crate) use mat::STIMULATION;
 use mat::mat_matrix;
 pub use mat::{Numeric, StructArray, mat_v5};
 

@@ -85,24 +85,30 @@ pub(super) fn mat_matrix(
     }
     let plain = plain_mat(bytes).map_err(|fault| content(path, 0, fault))?;
     let file = parse(path, &plain)?;
-    // The numeric variables and the structs' numeric fields (`vh.meas`), one of which is read.
-    let (fields, single) = fields_of(&plain, name.is_none());
+    // EIDORS's stimulations, protocols whose patterns are no frames (looked for only where
+    // no array is named), and the numeric variables and structs' fields (`vh.meas`) but
+    // theirs, one of which is read.
+    let stimulations = match name {
+        None => structs::struct_arrays(&plain, &STIMULATION),
+        Some(_) => Vec::new(),
+    };
+    let stimulations: Vec<String> = stimulations.into_iter().map(|s| s.name).collect();
+    let mut fields = fields::fields(&plain);
+    fields.retain(|f| !(stimulations.iter()).any(|s| is_field_of(&f.name, s)));
     // A struct array's field of one vector an element (a loop's `vi(k) = fwd_solve(...)`:
     // `vi.meas`), its vectors the columns of a matrix: its elements are parsed only where the
     // array asked for is none of the others (a file's named frames beside a model's struct
     // arrays were parsed too).
     let named_elsewhere =
         name.is_some_and(|n| file.find_by_name(n).is_some() || fields.iter().any(|f| f.name == n));
-    let (arrays, mut stimulations) = match named_elsewhere {
-        true => (Vec::new(), Vec::new()),
+    let arrays = match named_elsewhere {
+        true => Vec::new(),
         false => stacked_fields(&plain),
     };
-    stimulations.extend(single);
     let names: Vec<String> = (file.arrays().iter().map(|a| a.name().to_string()))
         .chain(fields.iter().map(|f| f.name.clone()))
         .chain(arrays.iter().map(|(name, _, _)| name.clone()))
         .collect();
-    let shapes = shapes_of(path, &plain, &file, &fields, &arrays);
     // A model's nodes beside its stimulation (EIDORS's `fmdl`) read unasked, of no frame's
     // size, are said as the stimulation's file ("variable 'fmdl.nodes' read: 20 x 2 values"
     // was said); a variable of its own is frames, said by its size.
@@ -120,16 +126,15 @@ pub(super) fn mat_matrix(
         (None, []) if let Some(name) = stimulations.first() => {
             return Err(stimulation(path, name));
         }
-        // (One of one injection, a 1 x 1 struct of sparse patterns as SciPy and EIDORS
-        // write them, is found only by its fields: looked for where nothing else is.)
-        (None, []) if let Some(one) = structs::struct_arrays(&plain, &STIMULATION).first() => {
-            return Err(stimulation(path, &one.name));
-        }
         (None, []) => {
             let kind = "numeric arrays";
             return Err(content(path, 0, FramesFault::Nothing { kind }));
         }
-        (None, _) if let Some((name, said)) = only_of_k(&shapes, k) => {
+        // (The shapes, fields read alone, only where one is to be chosen.)
+        (None, _)
+            if let Some((name, said)) =
+                only_of_k(&shapes_of(path, &plain, &file, &fields, &arrays), k) =>
+        {
             said_chosen = said;
             name
         }
@@ -238,29 +243,11 @@ fn matrix_of(
     Ok(DMatrix::from_column_slice(rows, cols, values))
 }
 
-/// The numeric fields of `plain`'s 1 x 1 structs, and the stimulations among them (EIDORS's
-/// of one injection is a 1 x 1 struct): their patterns are no frames either, and are left
-/// out `unnamed` (where the user named no array).
-fn fields_of(plain: &[u8], unnamed: bool) -> (Vec<fields::Field>, Vec<String>) {
-    let mut fields = fields::fields(plain);
-    let single: Vec<String> = (fields.iter())
-        .filter_map(|f| f.name.strip_suffix(".stim_pattern"))
-        .filter(|p| (fields.iter()).any(|g| g.name == format!("{p}.meas_pattern")))
-        .map(str::to_string)
-        .collect();
-    if unnamed {
-        fields.retain(|f| {
-            let of = |p: &String| {
-                f.name
-                    .strip_prefix(p.as_str())
-                    .and_then(|r| r.strip_prefix('.'))
-            };
-            !single
-                .iter()
-                .any(|p| matches!(of(p), Some("stim_pattern" | "meas_pattern")))
-        });
-    }
-    (fields, single)
+/// Whether the dotted name `field` is a field of `array` (`stim.stim_pattern` of `stim`).
+fn is_field_of(field: &str, array: &str) -> bool {
+    field
+        .strip_prefix(array)
+        .is_some_and(|rest| rest.starts_with('.'))
 }
 
 /// `array`'s values as doubles, in MATLAB's order (by columns); None for complex values or
@@ -354,7 +341,7 @@ pub(super) fn mat_struct_array(
 }
 
 /// The fields of EIDORS's stimulation struct array, a protocol's patterns.
-const STIMULATION: [&str; 2] = ["stim_pattern", "meas_pattern"];
+pub(crate) const STIMULATION: [&str; 2] = ["stim_pattern", "meas_pattern"];
 
 /// A struct array's field of a vector an element: its dotted name, n, and the vectors.
 type Stacked = (String, usize, Vec<Numeric>);
@@ -362,17 +349,15 @@ type Stacked = (String, usize, Vec<Numeric>);
 /// Each field of the struct arrays of `plain` (a version 5 file, inflated) that holds a
 /// vector of one length n in every element, by its dotted name (`vi.meas`): n and the
 /// vectors, at most as many values in all as the file has bytes (a sparse vector's length
-/// is a claim). And the names of EIDORS's stimulation struct arrays, a protocol's patterns,
-/// not frames, whose fields are not among them (`stim.stim_pattern` was read as 16 frames).
-fn stacked_fields(plain: &[u8]) -> (Vec<Stacked>, Vec<String>) {
+/// is a claim). EIDORS's stimulations' patterns are not frames, and are left out
+/// (`stim.stim_pattern` was read as 16 frames).
+fn stacked_fields(plain: &[u8]) -> Vec<Stacked> {
     let mut out = Vec::new();
-    let mut stimulations = Vec::new();
     for array in structs::struct_arrays(plain, &[]) {
         if STIMULATION
             .iter()
             .all(|f| array.fields.iter().any(|g| g == f))
         {
-            stimulations.push(array.name);
             continue;
         }
         let mut columns: Vec<Vec<Option<Numeric>>> = vec![Vec::new(); array.fields.len()];
@@ -398,7 +383,7 @@ fn stacked_fields(plain: &[u8]) -> (Vec<Stacked>, Vec<String>) {
             out.push((format!("{}.{field}", array.name), n, vectors));
         }
     }
-    (out, stimulations)
+    out
 }
 
 /// `vectors` (each of `n` values) as the columns of a matrix.

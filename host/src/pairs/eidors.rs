@@ -12,10 +12,9 @@ use std::path::Path;
 use super::cross::{counted_from, currents_a, finish};
 use super::patterns::pattern;
 use super::{Crossed, Crossing, Listed, MAX_VALUES, PairsError, Unit};
+// The fields read of each element.
+use crate::frames::STIMULATION as FIELDS;
 use crate::frames::{self, Numeric};
-
-/// The fields read of each element.
-const FIELDS: [&str; 2] = ["stim_pattern", "meas_pattern"];
 
 /// The protocol of the EIDORS stimulation struct array `spec` (`file.mat`, or
 /// `file.mat:NAME`: `stim.mat:stim`, `model.mat:fmdl.stimulation`), as `crossing` tells
